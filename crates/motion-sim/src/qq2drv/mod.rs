@@ -1,0 +1,1 @@
+//! Simulated qq2drv board (work in progress).

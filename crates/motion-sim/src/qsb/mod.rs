@@ -1,0 +1,1 @@
+//! Simulated qsb board (work in progress).

@@ -1,0 +1,1 @@
+//! Simulated spimotor board (work in progress).

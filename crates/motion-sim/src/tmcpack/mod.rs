@@ -1,0 +1,1 @@
+//! Simulated tmcpack board (work in progress).

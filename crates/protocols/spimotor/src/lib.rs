@@ -1,0 +1,2 @@
+//! Sans-I/O codec for the `spimotor` board (work in progress).
+#![forbid(unsafe_code)]
