@@ -78,10 +78,7 @@ impl StreamBus {
         let mut talkers = 0usize;
         for i in 0..self.devices.len() {
             let mut talked = false;
-            loop {
-                let Some(device) = self.devices.get_mut(i) else {
-                    break;
-                };
+            while let Some(device) = self.devices.get_mut(i) {
                 let n = device
                     .transmit(now, &mut self.scratch)
                     .min(self.scratch.len());
