@@ -1,0 +1,123 @@
+//! The one trait every byte transport implements.
+
+use core::fmt;
+use core::time::Duration;
+
+use crate::error::LinkError;
+
+/// Whether a link carries a byte stream or SPI transactions.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum LinkKind {
+    /// A byte stream (RS-232, RS-485, USB CDC). Writes queue bytes; reads return whatever
+    /// the device sent.
+    Stream,
+    /// SPI: every write is one chip-select assertion, and the same number of MISO bytes
+    /// becomes readable.
+    Spi,
+}
+
+impl fmt::Display for LinkKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Self::Stream => "stream",
+            Self::Spi => "spi",
+        })
+    }
+}
+
+/// Counters of one link since it was created (they survive [`Link::reopen`]).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct LinkStats {
+    /// Bytes handed to the caller by [`Link::read`].
+    pub bytes_in: u64,
+    /// Bytes accepted from the caller by [`Link::write`].
+    pub bytes_out: u64,
+    /// SPI transactions performed (always 0 on a stream link).
+    pub transactions: u64,
+    /// Calls that returned an error.
+    pub errors: u64,
+    /// Successful [`Link::reopen`] calls.
+    pub reconnects: u64,
+}
+
+/// A byte transport to one device or bus: serial port, spidev, SPI socket or simulated wire.
+///
+/// Every call is non-blocking unless documented otherwise, so an I/O thread can service
+/// many links and the tick loop is never held up. `now` is the caller's monotonic time since
+/// an arbitrary epoch, never decreasing; the real transports ignore it, the simulated wire
+/// uses it as its only clock.
+///
+/// After a [`LinkErrorKind::Disconnected`](crate::LinkErrorKind::Disconnected) error the link
+/// stays disconnected (every call returns the error again, without a system call) until
+/// [`reopen`](Self::reopen) succeeds.
+pub trait Link: Send + fmt::Debug {
+    /// Stream or SPI.
+    fn kind(&self) -> LinkKind;
+
+    /// A human description naming the transport and its path, e.g.
+    /// `serial /dev/ttyUSB0 @ 19200 8N1`.
+    fn name(&self) -> &str;
+
+    /// Stream: queues or sends `bytes`, returning how many were accepted (possibly fewer,
+    /// possibly 0 when the transmit buffer is full). SPI: performs exactly one transaction
+    /// (one chip-select assertion) clocking out all of `bytes` and queues as many MISO
+    /// bytes for [`read`](Self::read); returns `bytes.len()`.
+    fn write(&mut self, now: Duration, bytes: &[u8]) -> Result<usize, LinkError>;
+
+    /// Like [`write`](Self::write) with the bytes of `parts` in order. On an SPI link the
+    /// parts form ONE transaction (chip select held across them); a stream link writes as
+    /// much as it can and returns the total accepted.
+    fn write_parts(&mut self, now: Duration, parts: &[&[u8]]) -> Result<usize, LinkError>;
+
+    /// Moves bytes received so far into `buf`; `Ok(0)` means nothing yet. Never blocks.
+    fn read(&mut self, now: Duration, buf: &mut [u8]) -> Result<usize, LinkError>;
+
+    /// Pushes queued outgoing bytes towards the device. May block until the operating
+    /// system has taken them (serial: until transmitted); never used on the tick thread.
+    fn flush(&mut self, now: Duration) -> Result<(), LinkError>;
+
+    /// Closes and opens the underlying transport again (after a disconnection, or to
+    /// resynchronise). Pending bytes in both directions are discarded.
+    fn reopen(&mut self, now: Duration) -> Result<(), LinkError>;
+
+    /// The earliest instant at which something may become readable without further writes
+    /// (a simulated byte finishing its wire time, a device's scheduled reply). `None` when
+    /// the link cannot tell (the real transports: poll their file descriptor instead).
+    fn next_event(&self, now: Duration) -> Option<Duration> {
+        let _ = now;
+        None
+    }
+
+    /// Counters since creation.
+    fn stats(&self) -> LinkStats;
+}
+
+impl<L: Link + ?Sized> Link for Box<L> {
+    fn kind(&self) -> LinkKind {
+        (**self).kind()
+    }
+    fn name(&self) -> &str {
+        (**self).name()
+    }
+    fn write(&mut self, now: Duration, bytes: &[u8]) -> Result<usize, LinkError> {
+        (**self).write(now, bytes)
+    }
+    fn write_parts(&mut self, now: Duration, parts: &[&[u8]]) -> Result<usize, LinkError> {
+        (**self).write_parts(now, parts)
+    }
+    fn read(&mut self, now: Duration, buf: &mut [u8]) -> Result<usize, LinkError> {
+        (**self).read(now, buf)
+    }
+    fn flush(&mut self, now: Duration) -> Result<(), LinkError> {
+        (**self).flush(now)
+    }
+    fn reopen(&mut self, now: Duration) -> Result<(), LinkError> {
+        (**self).reopen(now)
+    }
+    fn next_event(&self, now: Duration) -> Option<Duration> {
+        (**self).next_event(now)
+    }
+    fn stats(&self) -> LinkStats {
+        (**self).stats()
+    }
+}
