@@ -22,11 +22,11 @@ pub struct SpiSocketConfig {
 }
 
 impl SpiSocketConfig {
-    /// A configuration for `path` with a 64 KiB outgoing buffer.
+    /// A configuration for `path` with room for two longest transactions outgoing.
     pub fn new(path: impl Into<String>) -> Self {
         Self {
             path: path.into(),
-            tx_capacity: 64 * 1024,
+            tx_capacity: 2 * (2 + usize::from(u16::MAX)),
         }
     }
 }
