@@ -1,0 +1,413 @@
+//! Commands: [`CommandRequest`] → [`CommandReply`] on `motiond/<name>/command`.
+
+use core::fmt;
+
+use iceoryx2::prelude::ZeroCopySend;
+
+use crate::SCHEMA_VERSION;
+
+/// A raw enum value this build of the contract does not know.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct UnknownValue(pub u32);
+
+impl fmt::Display for UnknownValue {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "unknown value {} (client and server schema differ?)",
+            self.0
+        )
+    }
+}
+
+impl std::error::Error for UnknownValue {}
+
+/// The iceoryx2 node id of a client (`Node::id().value()`, a u128), split into two
+/// little halves so that the layout is the same for every C ABI. Zero means "no client".
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, ZeroCopySend)]
+#[type_name("motiond::ClientId")]
+#[repr(C)]
+pub struct ClientId {
+    /// Low 64 bits of the node id.
+    pub lo: u64,
+    /// High 64 bits of the node id.
+    pub hi: u64,
+}
+
+impl ClientId {
+    /// No client.
+    pub const NONE: Self = Self { lo: 0, hi: 0 };
+
+    /// From an iceoryx2 `UniqueNodeId::value()`.
+    pub const fn from_u128(value: u128) -> Self {
+        Self {
+            lo: value as u64,
+            hi: (value >> 64) as u64,
+        }
+    }
+
+    /// Back to the node id value.
+    pub const fn as_u128(self) -> u128 {
+        ((self.hi as u128) << 64) | self.lo as u128
+    }
+
+    /// Whether this is [`ClientId::NONE`].
+    pub const fn is_none(self) -> bool {
+        self.lo == 0 && self.hi == 0
+    }
+}
+
+/// What a request asks for. Travels as `u32` in [`CommandRequest::kind`].
+///
+/// Meaning of `values` per kind (0.0 in a velocity/acceleration slot means "the axis's
+/// configured maximum"):
+///
+/// | kind | values[0] | values[1] | values[2] |
+/// |---|---|---|---|
+/// | `Stop` | – | – | – |
+/// | `Power` | power, −1.0..=1.0 of full scale | – | – |
+/// | `Position` | position, units | – | – |
+/// | `Velocity` | velocity, units/s | – | – |
+/// | `RampPosition` | position, units | max velocity, units/s | acceleration, units/s² |
+/// | `RampVelocity` | velocity, units/s | acceleration, units/s² | – |
+/// | `Home` | search velocity, units/s | – | – |
+/// | `SetPosition` | the position the axis is now at, units | – | – |
+/// | `Claim`, `Release`, `EStop`, `Reset` | – | – | – |
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[repr(u32)]
+pub enum CommandKind {
+    /// Decelerate to a stop and hold. With [`CommandRequest::ALL_AXES`], every axis.
+    Stop = 1,
+    /// Open-loop power (deadman applies).
+    Power = 2,
+    /// Position target for the board's own controller.
+    Position = 3,
+    /// Velocity (deadman applies).
+    Velocity = 4,
+    /// Position along a velocity- and acceleration-limited profile.
+    RampPosition = 5,
+    /// Velocity along an acceleration-limited profile (deadman applies).
+    RampVelocity = 6,
+    /// Reference search.
+    Home = 7,
+    /// Declare the current position to be `values[0]` (no motion).
+    SetPosition = 8,
+    /// Take an exclusive claim on the axis for the requesting client.
+    Claim = 9,
+    /// Give a claim back.
+    Release = 10,
+    /// Emergency stop: every axis stops and holds, latched until `Reset`.
+    EStop = 11,
+    /// Clear a latched e-stop and faults; targets become the current positions.
+    Reset = 12,
+}
+
+impl CommandKind {
+    /// Every kind, in value order.
+    pub const ALL: [Self; 12] = [
+        Self::Stop,
+        Self::Power,
+        Self::Position,
+        Self::Velocity,
+        Self::RampPosition,
+        Self::RampVelocity,
+        Self::Home,
+        Self::SetPosition,
+        Self::Claim,
+        Self::Release,
+        Self::EStop,
+        Self::Reset,
+    ];
+
+    /// The command's name as the CLI and logs spell it.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Stop => "stop",
+            Self::Power => "power",
+            Self::Position => "position",
+            Self::Velocity => "velocity",
+            Self::RampPosition => "ramp-position",
+            Self::RampVelocity => "ramp-velocity",
+            Self::Home => "home",
+            Self::SetPosition => "set-position",
+            Self::Claim => "claim",
+            Self::Release => "release",
+            Self::EStop => "e-stop",
+            Self::Reset => "reset",
+        }
+    }
+}
+
+impl TryFrom<u32> for CommandKind {
+    type Error = UnknownValue;
+    fn try_from(value: u32) -> Result<Self, Self::Error> {
+        Self::ALL
+            .iter()
+            .copied()
+            .find(|kind| *kind as u32 == value)
+            .ok_or(UnknownValue(value))
+    }
+}
+
+/// Why a request was refused. Travels as `u32` in [`CommandReply::reason`]; 0 = accepted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[repr(u32)]
+pub enum Reason {
+    /// Accepted.
+    Accepted = 0,
+    /// The request's `schema_version` differs from the server's.
+    SchemaMismatch = 1,
+    /// `kind` is not a known [`CommandKind`].
+    UnknownKind = 2,
+    /// `axis` is not an axis of this server.
+    UnknownAxis = 3,
+    /// The axis's board cannot do this kind of goal.
+    Unsupported = 4,
+    /// A value is NaN or infinite.
+    NotFinite = 5,
+    /// The position is outside the axis's `min..=max`.
+    OutOfRange = 6,
+    /// The velocity exceeds the axis's `max_velocity`.
+    VelocityLimit = 7,
+    /// The acceleration exceeds the axis's `max_accel`, or is not positive.
+    AccelLimit = 8,
+    /// The power is outside −1.0..=1.0.
+    PowerLimit = 9,
+    /// Another client holds a claim on the axis.
+    ClaimedByOther = 10,
+    /// A release from a client that does not hold the claim.
+    NotClaimed = 11,
+    /// The e-stop is latched; only `Reset`, `EStop`, `Stop` and claims are taken.
+    EstopLatched = 12,
+    /// The axis is faulted; a `Reset` (after the cause is gone) is needed.
+    AxisFaulted = 13,
+    /// The axis's link is down.
+    LinkDown = 14,
+    /// The server's command queue is full this tick; send again.
+    Busy = 15,
+    /// The server is shutting down.
+    ShuttingDown = 16,
+    /// A claim or release without a client id.
+    NoClientId = 17,
+}
+
+impl Reason {
+    /// Every reason, in value order.
+    pub const ALL: [Self; 18] = [
+        Self::Accepted,
+        Self::SchemaMismatch,
+        Self::UnknownKind,
+        Self::UnknownAxis,
+        Self::Unsupported,
+        Self::NotFinite,
+        Self::OutOfRange,
+        Self::VelocityLimit,
+        Self::AccelLimit,
+        Self::PowerLimit,
+        Self::ClaimedByOther,
+        Self::NotClaimed,
+        Self::EstopLatched,
+        Self::AxisFaulted,
+        Self::LinkDown,
+        Self::Busy,
+        Self::ShuttingDown,
+        Self::NoClientId,
+    ];
+
+    /// One line saying what is wrong and what to do.
+    pub const fn message(self) -> &'static str {
+        match self {
+            Self::Accepted => "accepted",
+            Self::SchemaMismatch => "client and server use different motion-ipc schema versions",
+            Self::UnknownKind => "unknown command kind",
+            Self::UnknownAxis => "no such axis on this server",
+            Self::Unsupported => "the axis's board cannot do this command",
+            Self::NotFinite => "a value is NaN or infinite",
+            Self::OutOfRange => "position outside the axis's min..max soft limits",
+            Self::VelocityLimit => "velocity above the axis's max_velocity",
+            Self::AccelLimit => "acceleration above the axis's max_accel or not positive",
+            Self::PowerLimit => "power outside -1.0..1.0",
+            Self::ClaimedByOther => "the axis is claimed by another client",
+            Self::NotClaimed => "this client holds no claim on the axis",
+            Self::EstopLatched => "e-stop is latched: send reset first",
+            Self::AxisFaulted => "the axis is faulted: clear the cause, then reset",
+            Self::LinkDown => "the axis's link is down",
+            Self::Busy => "the server's command queue is full: retry",
+            Self::ShuttingDown => "the server is shutting down",
+            Self::NoClientId => "claim and release need a client id",
+        }
+    }
+}
+
+impl fmt::Display for Reason {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.message())
+    }
+}
+
+impl TryFrom<u32> for Reason {
+    type Error = UnknownValue;
+    fn try_from(value: u32) -> Result<Self, Self::Error> {
+        Self::ALL
+            .iter()
+            .copied()
+            .find(|reason| *reason as u32 == value)
+            .ok_or(UnknownValue(value))
+    }
+}
+
+/// A command to the server. 64 bytes, alignment 8. Fields in memory order:
+///
+/// | offset | field | type | meaning |
+/// |---|---|---|---|
+/// | 0 | `schema_version` | u32 | [`SCHEMA_VERSION`] |
+/// | 4 | `kind` | u32 | [`CommandKind`] |
+/// | 8 | `client` | [`ClientId`] | the sender's iceoryx2 node id |
+/// | 24 | `sequence` | u64 | the client's own sequence number, echoed in the reply |
+/// | 32 | `axis` | u32 | axis index (config order), or [`CommandRequest::ALL_AXES`] |
+/// | 36 | `reserved` | u32 | zero |
+/// | 40 | `values` | f64; 3 | see [`CommandKind`] |
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
+#[type_name("motiond::CommandRequest")]
+#[repr(C)]
+pub struct CommandRequest {
+    /// [`SCHEMA_VERSION`] of the sender.
+    pub schema_version: u32,
+    /// [`CommandKind`] value.
+    pub kind: u32,
+    /// The sender's iceoryx2 node id.
+    pub client: ClientId,
+    /// The client's sequence number, echoed in the reply.
+    pub sequence: u64,
+    /// Axis index, or [`CommandRequest::ALL_AXES`].
+    pub axis: u32,
+    /// Zero.
+    pub reserved: u32,
+    /// Arguments; see [`CommandKind`].
+    pub values: [f64; 3],
+}
+
+impl CommandRequest {
+    /// `axis` value addressing every axis (stop, e-stop, reset).
+    pub const ALL_AXES: u32 = u32::MAX;
+
+    /// A request of the current schema with zero values.
+    pub const fn new(client: ClientId, sequence: u64, axis: u32, kind: CommandKind) -> Self {
+        Self {
+            schema_version: SCHEMA_VERSION,
+            kind: kind as u32,
+            client,
+            sequence,
+            axis,
+            reserved: 0,
+            values: [0.0; 3],
+        }
+    }
+
+    /// The same request with `values`.
+    #[must_use]
+    pub const fn with_values(mut self, values: [f64; 3]) -> Self {
+        self.values = values;
+        self
+    }
+
+    /// The typed kind.
+    pub fn kind(&self) -> Result<CommandKind, UnknownValue> {
+        CommandKind::try_from(self.kind)
+    }
+}
+
+/// The server's answer to one [`CommandRequest`]; every request gets exactly one.
+/// 32 bytes, alignment 8. Fields in memory order:
+///
+/// | offset | field | type | meaning |
+/// |---|---|---|---|
+/// | 0 | `schema_version` | u32 | [`SCHEMA_VERSION`] |
+/// | 4 | `reason` | u32 | [`Reason`]; 0 = accepted |
+/// | 8 | `sequence` | u64 | the request's sequence |
+/// | 16 | `tick_applied` | u64 | tick in which the command took effect (or was refused) |
+/// | 24 | `axis` | u32 | the request's axis |
+/// | 28 | `kind` | u32 | the request's kind |
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ZeroCopySend)]
+#[type_name("motiond::CommandReply")]
+#[repr(C)]
+pub struct CommandReply {
+    /// [`SCHEMA_VERSION`] of the server.
+    pub schema_version: u32,
+    /// [`Reason`] value; 0 = accepted.
+    pub reason: u32,
+    /// The request's sequence.
+    pub sequence: u64,
+    /// Tick in which the command took effect (or was refused).
+    pub tick_applied: u64,
+    /// The request's axis.
+    pub axis: u32,
+    /// The request's kind.
+    pub kind: u32,
+}
+
+impl CommandReply {
+    /// The reply to `request` with `reason`, applied at `tick`.
+    pub const fn to(request: &CommandRequest, reason: Reason, tick: u64) -> Self {
+        Self {
+            schema_version: SCHEMA_VERSION,
+            reason: reason as u32,
+            sequence: request.sequence,
+            tick_applied: tick,
+            axis: request.axis,
+            kind: request.kind,
+        }
+    }
+
+    /// `Ok(())` when accepted, the typed reason otherwise.
+    pub fn result(&self) -> Result<(), Reason> {
+        match Reason::try_from(self.reason) {
+            Ok(Reason::Accepted) => Ok(()),
+            Ok(reason) => Err(reason),
+            Err(_) => Err(Reason::SchemaMismatch),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn client_id_round_trips_u128() {
+        let value = 0x0123_4567_89AB_CDEF_FEDC_BA98_7654_3210_u128;
+        assert_eq!(ClientId::from_u128(value).as_u128(), value);
+        assert!(ClientId::NONE.is_none());
+        assert!(!ClientId::from_u128(1).is_none());
+    }
+
+    #[test]
+    fn enums_round_trip_and_reject_unknown_values() {
+        for kind in CommandKind::ALL {
+            assert_eq!(CommandKind::try_from(kind as u32), Ok(kind));
+        }
+        assert_eq!(CommandKind::try_from(0), Err(UnknownValue(0)));
+        assert_eq!(CommandKind::try_from(13), Err(UnknownValue(13)));
+        for (index, reason) in Reason::ALL.iter().enumerate() {
+            assert_eq!(*reason as usize, index);
+            assert_eq!(Reason::try_from(*reason as u32), Ok(*reason));
+            assert!(!reason.message().is_empty());
+        }
+        assert!(Reason::try_from(Reason::ALL.len() as u32).is_err());
+    }
+
+    #[test]
+    fn reply_echoes_request_and_reports_result() {
+        let request = CommandRequest::new(ClientId::from_u128(9), 42, 3, CommandKind::Velocity);
+        let ok = CommandReply::to(&request, Reason::Accepted, 7);
+        assert_eq!((ok.sequence, ok.axis, ok.tick_applied), (42, 3, 7));
+        assert_eq!(ok.result(), Ok(()));
+        let refused = CommandReply::to(&request, Reason::VelocityLimit, 7);
+        assert_eq!(refused.result(), Err(Reason::VelocityLimit));
+        let garbled = CommandReply {
+            reason: 999,
+            ..refused
+        };
+        assert_eq!(garbled.result(), Err(Reason::SchemaMismatch));
+    }
+}

@@ -1,0 +1,280 @@
+//! What the server drives: [`ServerInfo`], published with history 1 on `motiond/<name>/info`.
+
+use iceoryx2::prelude::ZeroCopySend;
+
+use crate::command::{CommandKind, UnknownValue};
+use crate::text::read_text;
+use crate::{MAX_AXES, MAX_DEVICES, NAME_LEN, SCHEMA_VERSION, UNIT_LEN};
+
+/// The board model of a device. Travels as `u32` in [`DeviceInfo::model`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[repr(u32)]
+pub enum DeviceModel {
+    /// QuadQuad2Drv (SPI, 4 DC motors with PID).
+    Qq2drv = 1,
+    /// Trinamic SIXpack / QUADpack (RS-232/RS-485 steppers).
+    Tmcpack = 2,
+    /// SPI_motor (SPI, 2 brushed motors or 1 stepper).
+    Spimotor = 3,
+    /// US Digital QSB (USB serial encoder interface, stepper on -M).
+    Qsb = 4,
+}
+
+impl DeviceModel {
+    /// The model id used in the config (`model = "qq2drv"`).
+    pub const fn id(self) -> &'static str {
+        match self {
+            Self::Qq2drv => "qq2drv",
+            Self::Tmcpack => "tmcpack",
+            Self::Spimotor => "spimotor",
+            Self::Qsb => "qsb",
+        }
+    }
+}
+
+impl TryFrom<u32> for DeviceModel {
+    type Error = UnknownValue;
+    fn try_from(value: u32) -> Result<Self, Self::Error> {
+        Ok(match value {
+            1 => Self::Qq2drv,
+            2 => Self::Tmcpack,
+            3 => Self::Spimotor,
+            4 => Self::Qsb,
+            other => return Err(UnknownValue(other)),
+        })
+    }
+}
+
+/// Bit set of the [`CommandKind`]s an axis accepts: bit `kind as u32` is set.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct Capabilities(pub u32);
+
+impl Capabilities {
+    /// No command.
+    pub const NONE: Self = Self(0);
+
+    /// `self` with `kind` added.
+    #[must_use]
+    pub const fn with(self, kind: CommandKind) -> Self {
+        Self(self.0 | (1 << kind as u32))
+    }
+
+    /// Whether `kind` is accepted.
+    pub const fn supports(self, kind: CommandKind) -> bool {
+        self.0 & (1 << kind as u32) != 0
+    }
+}
+
+/// One axis's static description. 128 bytes, alignment 8. Fields in memory order:
+///
+/// | offset | field | type | meaning |
+/// |---|---|---|---|
+/// | 0 | `name` | u8; 32 | axis name, UTF-8, zero padded |
+/// | 32 | `unit` | u8; 16 | unit, UTF-8, zero padded |
+/// | 48 | `device` | u8; 32 | device name |
+/// | 80 | `counts_per_unit` | f64 | device counts per unit |
+/// | 88 | `min` | f64 | soft limit, units |
+/// | 96 | `max` | f64 | soft limit, units |
+/// | 104 | `max_velocity` | f64 | units/s |
+/// | 112 | `max_accel` | f64 | units/s² |
+/// | 120 | `capabilities` | u32 | [`Capabilities`] bits |
+/// | 124 | `channel` | u16 | motor number on the device |
+/// | 126 | `device_index` | u16 | index into [`ServerInfo::devices`] |
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
+#[type_name("motiond::AxisInfo")]
+#[repr(C)]
+pub struct AxisInfo {
+    /// Axis name.
+    pub name: [u8; NAME_LEN],
+    /// Unit of positions ("mm", "deg").
+    pub unit: [u8; UNIT_LEN],
+    /// Name of the device that drives the axis.
+    pub device: [u8; NAME_LEN],
+    /// Device counts per unit.
+    pub counts_per_unit: f64,
+    /// Lower soft limit, units.
+    pub min: f64,
+    /// Upper soft limit, units.
+    pub max: f64,
+    /// Velocity limit, units/s.
+    pub max_velocity: f64,
+    /// Acceleration limit, units/s².
+    pub max_accel: f64,
+    /// [`Capabilities`] bits.
+    pub capabilities: u32,
+    /// Motor number on the device.
+    pub channel: u16,
+    /// Index into [`ServerInfo::devices`].
+    pub device_index: u16,
+}
+
+impl AxisInfo {
+    /// An unused entry.
+    pub const EMPTY: Self = Self {
+        name: [0; NAME_LEN],
+        unit: [0; UNIT_LEN],
+        device: [0; NAME_LEN],
+        counts_per_unit: 0.0,
+        min: 0.0,
+        max: 0.0,
+        max_velocity: 0.0,
+        max_accel: 0.0,
+        capabilities: 0,
+        channel: 0,
+        device_index: 0,
+    };
+
+    /// The axis name.
+    pub fn name(&self) -> &str {
+        read_text(&self.name)
+    }
+
+    /// The unit.
+    pub fn unit(&self) -> &str {
+        read_text(&self.unit)
+    }
+
+    /// The typed capabilities.
+    pub const fn capabilities(&self) -> Capabilities {
+        Capabilities(self.capabilities)
+    }
+}
+
+/// One device's description. 112 bytes, alignment 4. Fields in memory order:
+///
+/// | offset | field | type | meaning |
+/// |---|---|---|---|
+/// | 0 | `name` | u8; 32 | device name |
+/// | 32 | `link` | u8; 32 | link name |
+/// | 64 | `firmware` | u8; 32 | firmware version as the board reported it ("" until known) |
+/// | 96 | `model` | u32 | [`DeviceModel`] |
+/// | 100 | `address` | u32 | bus address (0 when the model has none) |
+/// | 104 | `axis_count` | u32 | axes configured on the device |
+/// | 108 | `online` | u32 | 1 when the board answers, 0 otherwise |
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ZeroCopySend)]
+#[type_name("motiond::DeviceInfo")]
+#[repr(C)]
+pub struct DeviceInfo {
+    /// Device name.
+    pub name: [u8; NAME_LEN],
+    /// Link name.
+    pub link: [u8; NAME_LEN],
+    /// Firmware version as reported by the board.
+    pub firmware: [u8; NAME_LEN],
+    /// [`DeviceModel`] value.
+    pub model: u32,
+    /// Bus address, 0 when the model has none.
+    pub address: u32,
+    /// Axes configured on the device.
+    pub axis_count: u32,
+    /// 1 when the board answers.
+    pub online: u32,
+}
+
+impl DeviceInfo {
+    /// An unused entry.
+    pub const EMPTY: Self = Self {
+        name: [0; NAME_LEN],
+        link: [0; NAME_LEN],
+        firmware: [0; NAME_LEN],
+        model: 0,
+        address: 0,
+        axis_count: 0,
+        online: 0,
+    };
+
+    /// The device name.
+    pub fn name(&self) -> &str {
+        read_text(&self.name)
+    }
+
+    /// The typed model.
+    pub fn model(&self) -> Result<DeviceModel, UnknownValue> {
+        DeviceModel::try_from(self.model)
+    }
+}
+
+/// The server's static description. 20040 bytes, alignment 8. Fields in memory order:
+///
+/// | offset | field | type | meaning |
+/// |---|---|---|---|
+/// | 0 | `schema_version` | u32 | [`SCHEMA_VERSION`] |
+/// | 4 | `axis_count` | u32 | valid entries in `axes` |
+/// | 8 | `device_count` | u32 | valid entries in `devices` |
+/// | 12 | `tick_hz` | u32 | tick rate |
+/// | 16 | `command_timeout_ms` | u32 | deadman; 0 = disabled |
+/// | 20 | `max_clients` | u32 | configured client limit |
+/// | 24 | `server_pid` | u32 | process id of motiond |
+/// | 28 | `reserved` | u32 | zero |
+/// | 32 | `name` | u8; 32 | instance name |
+/// | 64 | `start_time_ns` | u64 | CLOCK_MONOTONIC ns of tick 0 |
+/// | 72 | `axes` | [`AxisInfo`]; [`MAX_AXES`] | axes in config order |
+/// | 16456 | `devices` | [`DeviceInfo`]; [`MAX_DEVICES`] | devices in config order |
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
+#[type_name("motiond::ServerInfo")]
+#[repr(C)]
+pub struct ServerInfo {
+    /// [`SCHEMA_VERSION`] of the server.
+    pub schema_version: u32,
+    /// Valid entries in `axes`.
+    pub axis_count: u32,
+    /// Valid entries in `devices`.
+    pub device_count: u32,
+    /// Tick rate, Hz.
+    pub tick_hz: u32,
+    /// Deadman for velocity and power goals, ms; 0 = disabled.
+    pub command_timeout_ms: u32,
+    /// Configured client limit.
+    pub max_clients: u32,
+    /// Process id of motiond.
+    pub server_pid: u32,
+    /// Zero.
+    pub reserved: u32,
+    /// Instance name.
+    pub name: [u8; NAME_LEN],
+    /// CLOCK_MONOTONIC ns of tick 0.
+    pub start_time_ns: u64,
+    /// Axes in config order.
+    pub axes: [AxisInfo; MAX_AXES],
+    /// Devices in config order.
+    pub devices: [DeviceInfo; MAX_DEVICES],
+}
+
+impl ServerInfo {
+    /// An empty description of the current schema.
+    pub const EMPTY: Self = Self {
+        schema_version: SCHEMA_VERSION,
+        axis_count: 0,
+        device_count: 0,
+        tick_hz: 0,
+        command_timeout_ms: 0,
+        max_clients: 0,
+        server_pid: 0,
+        reserved: 0,
+        name: [0; NAME_LEN],
+        start_time_ns: 0,
+        axes: [AxisInfo::EMPTY; MAX_AXES],
+        devices: [DeviceInfo::EMPTY; MAX_DEVICES],
+    };
+
+    /// The valid axes.
+    pub fn axes(&self) -> &[AxisInfo] {
+        &self.axes[..(self.axis_count as usize).min(MAX_AXES)]
+    }
+
+    /// The valid devices.
+    pub fn devices(&self) -> &[DeviceInfo] {
+        &self.devices[..(self.device_count as usize).min(MAX_DEVICES)]
+    }
+
+    /// Index of the axis called `name`.
+    pub fn axis_index(&self, name: &str) -> Option<usize> {
+        self.axes().iter().position(|axis| axis.name() == name)
+    }
+}
+
+impl Default for ServerInfo {
+    fn default() -> Self {
+        Self::EMPTY
+    }
+}

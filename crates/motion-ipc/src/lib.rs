@@ -1,0 +1,54 @@
+//! The shared-memory contract between `motiond` and its clients.
+//!
+//! This is the only crate a client shares with the server. It defines the payload types of
+//! the iceoryx2 services listed in DESIGN.md ("Shared-memory contract"), their service
+//! names, the command kinds and the reason codes, and the schema version. Every payload is
+//! `#[repr(C)]`, fixed size, [`ZeroCopySend`](iceoryx2::prelude::ZeroCopySend) and carries
+//! an explicit iceoryx2 type name, so that C, C++ and Python iceoryx2 clients can mirror
+//! the layout field by field (each type documents its fields in order; sizes and offsets
+//! are pinned by `tests/layout.rs`).
+//!
+//! Enumerations travel as plain integers (`u8`/`u16`/`u32` fields) so that a value unknown
+//! to an older client is never undefined behaviour; the typed view is obtained with
+//! `TryFrom`, and helpers such as [`AxisState::mode`] do that for you.
+//!
+//! ```
+//! use motion_ipc::{CommandKind, CommandRequest, ClientId, ServiceNames};
+//!
+//! let names = ServiceNames::new("demo");
+//! assert_eq!(names.frame(), "motiond/demo/frame");
+//!
+//! let request = CommandRequest::new(ClientId::from_u128(7), 1, 3, CommandKind::RampPosition)
+//!     .with_values([12.5, 40.0, 200.0]);
+//! assert_eq!(request.kind(), Ok(CommandKind::RampPosition));
+//! ```
+#![forbid(unsafe_code)]
+
+mod command;
+mod frame;
+mod info;
+mod service;
+mod stats;
+mod text;
+
+pub use command::{ClientId, CommandKind, CommandReply, CommandRequest, Reason, UnknownValue};
+pub use frame::{AxisFlags, AxisMode, AxisState, FaultCode, FrameFlags, MotionFrame};
+pub use info::{AxisInfo, Capabilities, DeviceInfo, DeviceModel, ServerInfo};
+pub use service::ServiceNames;
+pub use stats::{LatencySummary, LinkStats, ServerStats};
+pub use text::{read_text, write_text};
+
+/// Version of this contract. Bumped on every layout or meaning change; every payload
+/// carries it so that a client built against another version can refuse politely.
+pub const SCHEMA_VERSION: u32 = 1;
+
+/// Capacity of the axis arrays in [`MotionFrame`] and [`ServerInfo`].
+pub const MAX_AXES: usize = 128;
+/// Capacity of the device array in [`ServerInfo`].
+pub const MAX_DEVICES: usize = 32;
+/// Capacity of the link array in [`ServerStats`].
+pub const MAX_LINKS: usize = 16;
+/// Bytes of a name field (axis, device, link, server): UTF-8, zero padded.
+pub const NAME_LEN: usize = 32;
+/// Bytes of a unit field ("mm", "deg"): UTF-8, zero padded.
+pub const UNIT_LEN: usize = 16;

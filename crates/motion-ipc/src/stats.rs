@@ -1,0 +1,184 @@
+//! Running figures: [`ServerStats`], published about once a second on `motiond/<name>/stats`.
+
+use iceoryx2::prelude::ZeroCopySend;
+
+use crate::text::read_text;
+use crate::{MAX_LINKS, NAME_LEN, SCHEMA_VERSION};
+
+/// Percentiles of one latency distribution, in nanoseconds. 40 bytes.
+///
+/// | offset | field | type |
+/// |---|---|---|
+/// | 0 | `samples` | u64 |
+/// | 8 | `p50_ns` | u64 |
+/// | 16 | `p99_ns` | u64 |
+/// | 24 | `p999_ns` | u64 |
+/// | 32 | `max_ns` | u64 |
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ZeroCopySend)]
+#[type_name("motiond::LatencySummary")]
+#[repr(C)]
+pub struct LatencySummary {
+    /// Number of samples.
+    pub samples: u64,
+    /// Median.
+    pub p50_ns: u64,
+    /// 99th percentile.
+    pub p99_ns: u64,
+    /// 99.9th percentile.
+    pub p999_ns: u64,
+    /// Maximum.
+    pub max_ns: u64,
+}
+
+/// Counters of one link since start. 80 bytes, alignment 8.
+///
+/// | offset | field | type | meaning |
+/// |---|---|---|---|
+/// | 0 | `name` | u8; 32 | link name |
+/// | 32 | `bytes_in` | u64 | bytes received |
+/// | 40 | `bytes_out` | u64 | bytes sent |
+/// | 48 | `frames` | u64 | replies decoded |
+/// | 56 | `errors` | u64 | bad frames, I/O errors, timeouts |
+/// | 64 | `reconnects` | u64 | successful reopens |
+/// | 72 | `up` | u32 | 1 when the link is open |
+/// | 76 | `reserved` | u32 | zero |
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ZeroCopySend)]
+#[type_name("motiond::LinkStats")]
+#[repr(C)]
+pub struct LinkStats {
+    /// Link name.
+    pub name: [u8; NAME_LEN],
+    /// Bytes received.
+    pub bytes_in: u64,
+    /// Bytes sent.
+    pub bytes_out: u64,
+    /// Replies decoded.
+    pub frames: u64,
+    /// Bad frames, I/O errors, timeouts.
+    pub errors: u64,
+    /// Successful reopens.
+    pub reconnects: u64,
+    /// 1 when the link is open.
+    pub up: u32,
+    /// Zero.
+    pub reserved: u32,
+}
+
+impl LinkStats {
+    /// An unused entry.
+    pub const EMPTY: Self = Self {
+        name: [0; NAME_LEN],
+        bytes_in: 0,
+        bytes_out: 0,
+        frames: 0,
+        errors: 0,
+        reconnects: 0,
+        up: 0,
+        reserved: 0,
+    };
+
+    /// The link name.
+    pub fn name(&self) -> &str {
+        read_text(&self.name)
+    }
+}
+
+/// Server figures. 1424 bytes, alignment 8. Fields in memory order:
+///
+/// | offset | field | type | meaning |
+/// |---|---|---|---|
+/// | 0 | `schema_version` | u32 | [`SCHEMA_VERSION`] |
+/// | 4 | `link_count` | u32 | valid entries in `links` |
+/// | 8 | `tick` | u64 | tick at which these figures were taken |
+/// | 16 | `time_ns` | u64 | CLOCK_MONOTONIC ns of that tick |
+/// | 24 | `wakeup` | [`LatencySummary`] | actual wake − deadline, since start |
+/// | 64 | `work` | [`LatencySummary`] | tick work time, since start |
+/// | 104 | `overruns` | u64 | ticks that missed their deadline, since start |
+/// | 112 | `max_consecutive_overruns` | u64 | longest run of overruns |
+/// | 120 | `commands` | u64 | requests answered |
+/// | 128 | `rejected` | u64 | requests refused |
+/// | 136 | `clients` | u32 | live client nodes seen at the last liveness check |
+/// | 140 | `rt_flags` | u32 | bit 0 SCHED_FIFO, 1 memory locked, 2 pinned, 3 cpu_dma_latency held |
+/// | 144 | `links` | [`LinkStats`]; [`MAX_LINKS`] | per link |
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ZeroCopySend)]
+#[type_name("motiond::ServerStats")]
+#[repr(C)]
+pub struct ServerStats {
+    /// [`SCHEMA_VERSION`] of the server.
+    pub schema_version: u32,
+    /// Valid entries in `links`.
+    pub link_count: u32,
+    /// Tick at which these figures were taken.
+    pub tick: u64,
+    /// CLOCK_MONOTONIC ns of that tick.
+    pub time_ns: u64,
+    /// Wake-up latency (actual wake − deadline) since start.
+    pub wakeup: LatencySummary,
+    /// Tick work time since start.
+    pub work: LatencySummary,
+    /// Ticks that missed their deadline since start.
+    pub overruns: u64,
+    /// Longest run of consecutive overruns.
+    pub max_consecutive_overruns: u64,
+    /// Requests answered.
+    pub commands: u64,
+    /// Requests refused.
+    pub rejected: u64,
+    /// Live client nodes at the last liveness check.
+    pub clients: u32,
+    /// Bit 0 SCHED_FIFO, bit 1 memory locked, bit 2 pinned, bit 3 cpu_dma_latency held.
+    pub rt_flags: u32,
+    /// Per-link counters.
+    pub links: [LinkStats; MAX_LINKS],
+}
+
+impl ServerStats {
+    /// Bit of `rt_flags`: the tick thread runs SCHED_FIFO.
+    pub const RT_FIFO: u32 = 1 << 0;
+    /// Bit of `rt_flags`: memory is locked.
+    pub const RT_LOCKED: u32 = 1 << 1;
+    /// Bit of `rt_flags`: the tick thread is pinned to a core.
+    pub const RT_PINNED: u32 = 1 << 2;
+    /// Bit of `rt_flags`: `/dev/cpu_dma_latency` is held at 0.
+    pub const RT_DMA_LATENCY: u32 = 1 << 3;
+
+    /// Empty figures of the current schema.
+    pub const EMPTY: Self = Self {
+        schema_version: SCHEMA_VERSION,
+        link_count: 0,
+        tick: 0,
+        time_ns: 0,
+        wakeup: LatencySummary {
+            samples: 0,
+            p50_ns: 0,
+            p99_ns: 0,
+            p999_ns: 0,
+            max_ns: 0,
+        },
+        work: LatencySummary {
+            samples: 0,
+            p50_ns: 0,
+            p99_ns: 0,
+            p999_ns: 0,
+            max_ns: 0,
+        },
+        overruns: 0,
+        max_consecutive_overruns: 0,
+        commands: 0,
+        rejected: 0,
+        clients: 0,
+        rt_flags: 0,
+        links: [LinkStats::EMPTY; MAX_LINKS],
+    };
+
+    /// The valid link entries.
+    pub fn links(&self) -> &[LinkStats] {
+        &self.links[..(self.link_count as usize).min(MAX_LINKS)]
+    }
+}
+
+impl Default for ServerStats {
+    fn default() -> Self {
+        Self::EMPTY
+    }
+}

@@ -1,0 +1,103 @@
+//! Pins the shared-memory layout: a C, C++ or Python mirror of these types relies on every
+//! size and offset below (they are also tabled in each type's docs). Checked at compile
+//! time; the test functions exist so the suite reports them.
+
+use core::mem::{align_of, offset_of, size_of};
+
+use motion_ipc::*;
+
+macro_rules! pin {
+    ($ty:ty, size $size:expr, align $align:expr, { $($field:ident @ $offset:expr),* $(,)? }) => {
+        const _: () = assert!(size_of::<$ty>() == $size);
+        const _: () = assert!(align_of::<$ty>() == $align);
+        $(const _: () = assert!(offset_of!($ty, $field) == $offset);)*
+    };
+}
+
+pin!(ClientId, size 16, align 8, { lo @ 0, hi @ 8 });
+pin!(AxisState, size 64, align 8, {
+    position @ 0, velocity @ 8, target @ 16, raw_counts @ 24, last_refresh_tick @ 32,
+    flags @ 40, fault @ 44, mode @ 46, reserved @ 47, claimed_by @ 48,
+});
+pin!(MotionFrame, size 8232, align 8, {
+    schema_version @ 0, axis_count @ 4, tick @ 8, time_ns @ 16, publish_ns @ 24,
+    flags @ 32, reserved @ 36, axes @ 40,
+});
+pin!(CommandRequest, size 64, align 8, {
+    schema_version @ 0, kind @ 4, client @ 8, sequence @ 24, axis @ 32, reserved @ 36,
+    values @ 40,
+});
+pin!(CommandReply, size 32, align 8, {
+    schema_version @ 0, reason @ 4, sequence @ 8, tick_applied @ 16, axis @ 24, kind @ 28,
+});
+pin!(AxisInfo, size 128, align 8, {
+    name @ 0, unit @ 32, device @ 48, counts_per_unit @ 80, min @ 88, max @ 96,
+    max_velocity @ 104, max_accel @ 112, capabilities @ 120, channel @ 124, device_index @ 126,
+});
+pin!(DeviceInfo, size 112, align 4, {
+    name @ 0, link @ 32, firmware @ 64, model @ 96, address @ 100, axis_count @ 104, online @ 108,
+});
+pin!(ServerInfo, size 20040, align 8, {
+    schema_version @ 0, axis_count @ 4, device_count @ 8, tick_hz @ 12,
+    command_timeout_ms @ 16, max_clients @ 20, server_pid @ 24, reserved @ 28, name @ 32,
+    start_time_ns @ 64, axes @ 72, devices @ 16456,
+});
+pin!(LatencySummary, size 40, align 8, {
+    samples @ 0, p50_ns @ 8, p99_ns @ 16, p999_ns @ 24, max_ns @ 32,
+});
+pin!(LinkStats, size 80, align 8, {
+    name @ 0, bytes_in @ 32, bytes_out @ 40, frames @ 48, errors @ 56, reconnects @ 64,
+    up @ 72, reserved @ 76,
+});
+pin!(ServerStats, size 1424, align 8, {
+    schema_version @ 0, link_count @ 4, tick @ 8, time_ns @ 16, wakeup @ 24, work @ 64,
+    overruns @ 104, max_consecutive_overruns @ 112, commands @ 120, rejected @ 128,
+    clients @ 136, rt_flags @ 140, links @ 144,
+});
+
+#[test]
+fn layout_is_pinned() {
+    // The assertions above run at compile time; this checks the constants they rely on.
+    assert_eq!(
+        (MAX_AXES, MAX_DEVICES, MAX_LINKS, NAME_LEN, UNIT_LEN),
+        (128, 32, 16, 32, 16)
+    );
+    assert_eq!(SCHEMA_VERSION, 1);
+}
+
+#[test]
+#[allow(unsafe_code)] // calling iceoryx2's `type_name`, see the SAFETY note
+fn iceoryx2_type_names_are_explicit() {
+    use iceoryx2::prelude::ZeroCopySend;
+    let names = [
+        <MotionFrame as ZeroCopySend>::type_name as unsafe fn() -> &'static str,
+        <CommandRequest as ZeroCopySend>::type_name,
+        <CommandReply as ZeroCopySend>::type_name,
+        <ServerInfo as ZeroCopySend>::type_name,
+        <ServerStats as ZeroCopySend>::type_name,
+    ];
+    let expected = [
+        "motiond::MotionFrame",
+        "motiond::CommandRequest",
+        "motiond::CommandReply",
+        "motiond::ServerInfo",
+        "motiond::ServerStats",
+    ];
+    for (name, want) in names.iter().zip(expected) {
+        // SAFETY: `type_name` has no preconditions; it is `unsafe` in iceoryx2 only so that
+        // implementing it is a promise about the payload layout.
+        let got = unsafe { name() };
+        assert_eq!(got, want);
+    }
+}
+
+#[test]
+fn empty_payloads_are_consistent() {
+    let frame = MotionFrame::default();
+    assert_eq!(frame.schema_version, SCHEMA_VERSION);
+    assert!(frame.axes().is_empty());
+    assert!(frame.axes[0].flags().contains(AxisFlags::STALE));
+    let info = ServerInfo::default();
+    assert_eq!(info.axis_index("x"), None);
+    assert!(ServerStats::default().links().is_empty());
+}
