@@ -46,9 +46,9 @@
 //! link.write(t0, b"hello")?;
 //! let mut buf = [0u8; 16];
 //! // Full duplex, 10 bits a byte: each byte echoes as soon as it has arrived, so the
-//! // last echo ends 6 byte times (3.125 ms) after the first start bit.
+//! // last echo ends 6 byte times (3.125 ms, rounded up to the ns) after the first start bit.
 //! assert_eq!(link.read(t0 + Duration::from_micros(3_124), &mut buf)?, 4);
-//! assert_eq!(link.read(t0 + Duration::from_micros(3_125), &mut buf)?, 1);
+//! assert_eq!(link.read(t0 + Duration::from_micros(3_126), &mut buf)?, 1);
 //! faults.unplug();
 //! let err = link.read(t0 + Duration::from_millis(6), &mut buf).unwrap_err();
 //! assert_eq!(err.kind(), LinkErrorKind::Disconnected);
