@@ -1,0 +1,226 @@
+//! Several drivers on one link: who may send next, and whose bytes are these.
+//!
+//! A [`LinkBus`] owns the drivers of one link and enforces the wire rules that no single
+//! driver can see:
+//! - stream links (RS-232/RS-485/USB serial): at most one request in flight on the whole
+//!   bus (Trinamic manual 7.1); the next sender is the driver with the most urgent
+//!   message ([`Priority`]), round-robin among equals, so commands go before polls;
+//!   received bytes belong to the driver whose reply is awaited (or, when none is, to the
+//!   last one that sent: a late reply) — with one driver, everything is its own;
+//! - SPI links: every transaction is owned by the driver that wrote it, and the same
+//!   number of MISO bytes is routed back to it in order.
+//!
+//! No allocation after construction: the SPI ownership queue has a fixed capacity and a
+//! full queue holds senders back until MISO bytes drain it.
+
+use core::time::Duration;
+
+use crate::driver::{Driver, Priority, Transmit};
+
+/// Transactions whose MISO bytes may be outstanding at once on an SPI bus.
+pub const SPI_PENDING_CAPACITY: usize = 64;
+
+/// Messages one bus may send in one step (bounds the work of a step).
+pub const MAX_SENDS_PER_STEP: usize = 16;
+
+/// Whether the link carries a byte stream or SPI transactions.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum BusKind {
+    /// A byte stream: one request in flight on the bus.
+    Stream,
+    /// SPI: MISO bytes routed to the transaction's owner.
+    Spi,
+}
+
+#[derive(Debug, Clone, Copy, Default)]
+struct PendingMiso {
+    driver: usize,
+    remaining: usize,
+}
+
+/// The drivers of one link and the arbitration between them.
+#[derive(Debug)]
+pub struct LinkBus {
+    kind: BusKind,
+    drivers: Vec<Box<dyn Driver>>,
+    /// Stream: the driver whose reply is awaited.
+    in_flight: Option<usize>,
+    /// Stream: the driver that sent last (receives unsolicited bytes).
+    last_sender: usize,
+    /// Round-robin start for the next pick.
+    next_turn: usize,
+    /// SPI: ring of transactions whose MISO bytes have not come back yet.
+    pending: [PendingMiso; SPI_PENDING_CAPACITY],
+    pending_head: usize,
+    pending_len: usize,
+    /// Received bytes no driver could take (SPI bytes beyond every pending transaction).
+    stray_bytes: u64,
+}
+
+impl LinkBus {
+    /// A bus of `kind` with `drivers` (in config order; at least one).
+    pub fn new(kind: BusKind, drivers: Vec<Box<dyn Driver>>) -> Self {
+        Self {
+            kind,
+            drivers,
+            in_flight: None,
+            last_sender: 0,
+            next_turn: 0,
+            pending: [PendingMiso::default(); SPI_PENDING_CAPACITY],
+            pending_head: 0,
+            pending_len: 0,
+            stray_bytes: 0,
+        }
+    }
+
+    /// Stream or SPI.
+    pub fn kind(&self) -> BusKind {
+        self.kind
+    }
+
+    /// The drivers in config order.
+    pub fn drivers(&self) -> &[Box<dyn Driver>] {
+        &self.drivers
+    }
+
+    /// Mutable access to one driver (goals).
+    pub fn driver_mut(&mut self, index: usize) -> Option<&mut (dyn Driver + 'static)> {
+        self.drivers.get_mut(index).map(|driver| &mut **driver)
+    }
+
+    /// Received bytes that belonged to no driver.
+    pub fn stray_bytes(&self) -> u64 {
+        self.stray_bytes
+    }
+
+    /// Routes bytes received from the link to their drivers.
+    pub fn handle_rx(&mut self, now: Duration, mut bytes: &[u8]) {
+        match self.kind {
+            BusKind::Stream => {
+                let owner = self.in_flight.unwrap_or(self.last_sender);
+                if let Some(driver) = self.drivers.get_mut(owner) {
+                    driver.handle_rx(now, bytes);
+                } else {
+                    self.stray_bytes += bytes.len() as u64;
+                }
+                self.release_if_answered();
+            }
+            BusKind::Spi => {
+                while !bytes.is_empty() {
+                    if self.pending_len == 0 {
+                        self.stray_bytes += bytes.len() as u64;
+                        return;
+                    }
+                    let head = &mut self.pending[self.pending_head];
+                    let take = head.remaining.min(bytes.len());
+                    let (mine, rest) = bytes.split_at(take);
+                    if let Some(driver) = self.drivers.get_mut(head.driver) {
+                        driver.handle_rx(now, mine);
+                    }
+                    head.remaining -= take;
+                    if head.remaining == 0 {
+                        self.pending_head = (self.pending_head + 1) % SPI_PENDING_CAPACITY;
+                        self.pending_len -= 1;
+                    }
+                    bytes = rest;
+                }
+            }
+        }
+    }
+
+    /// Lets time pass for every driver.
+    pub fn handle_timeout(&mut self, now: Duration) {
+        for driver in &mut self.drivers {
+            driver.handle_timeout(now);
+        }
+        self.release_if_answered();
+    }
+
+    /// The earliest instant any driver has timed work.
+    pub fn poll_timeout(&self) -> Option<Duration> {
+        self.drivers
+            .iter()
+            .filter_map(|driver| driver.poll_timeout())
+            .min()
+    }
+
+    /// The next message to put on the link, with the index of the driver that wrote it.
+    /// `None` when nobody may or wants to send now.
+    pub fn poll_transmit(&mut self, now: Duration, buf: &mut [u8]) -> Option<(usize, Transmit)> {
+        self.release_if_answered();
+        if self.kind == BusKind::Stream && self.in_flight.is_some() {
+            return None;
+        }
+        if self.kind == BusKind::Spi && self.pending_len == SPI_PENDING_CAPACITY {
+            return None;
+        }
+        let count = self.drivers.len();
+        let mut best: Option<(usize, Priority)> = None;
+        for offset in 0..count {
+            let index = (self.next_turn + offset) % count;
+            if let Some(priority) = self.drivers[index].wants_transmit(now)
+                && best.is_none_or(|(_, best_priority)| priority > best_priority)
+            {
+                best = Some((index, priority));
+            }
+        }
+        let (index, _) = best?;
+        let transmit = self.drivers[index].poll_transmit(now, buf)?;
+        if transmit.len > buf.len() {
+            // A driver bug; never put a truncated message on the wire.
+            return None;
+        }
+        self.next_turn = (index + 1) % count;
+        self.last_sender = index;
+        match self.kind {
+            BusKind::Stream => {
+                if transmit.expects_reply {
+                    self.in_flight = Some(index);
+                }
+            }
+            BusKind::Spi => {
+                if transmit.len > 0 {
+                    let slot = (self.pending_head + self.pending_len) % SPI_PENDING_CAPACITY;
+                    self.pending[slot] = PendingMiso {
+                        driver: index,
+                        remaining: transmit.len,
+                    };
+                    self.pending_len += 1;
+                }
+            }
+        }
+        Some((index, transmit))
+    }
+
+    /// The link went down: every driver is told, outstanding routing is dropped.
+    pub fn link_down(&mut self, now: Duration) {
+        self.in_flight = None;
+        self.pending_len = 0;
+        for driver in &mut self.drivers {
+            driver.link_down(now);
+        }
+    }
+
+    /// The link is open again: every driver restarts its board.
+    pub fn link_up(&mut self, now: Duration) {
+        self.in_flight = None;
+        self.pending_len = 0;
+        for driver in &mut self.drivers {
+            driver.link_up(now);
+        }
+    }
+
+    fn release_if_answered(&mut self) {
+        if let Some(index) = self.in_flight
+            && !self
+                .drivers
+                .get(index)
+                .is_some_and(|driver| driver.awaiting_reply())
+        {
+            self.in_flight = None;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,126 @@
+//! The one trait every board driver implements: [`Driver`].
+
+use core::fmt;
+use core::time::Duration;
+
+use crate::goal::{Goal, GoalError, GoalKinds};
+use crate::state::{ChannelState, DeviceStatus};
+
+/// Which board a driver speaks to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Model {
+    /// QuadQuad2Drv (SPI).
+    Qq2drv,
+    /// Trinamic SIXpack / QUADpack (RS-232 / RS-485).
+    Tmcpack,
+    /// SPI_motor (SPI).
+    Spimotor,
+    /// US Digital QSB (USB serial).
+    Qsb,
+}
+
+impl Model {
+    /// The model id of the config (`model = "tmcpack"`).
+    pub const fn id(self) -> &'static str {
+        match self {
+            Self::Qq2drv => "qq2drv",
+            Self::Tmcpack => "tmcpack",
+            Self::Spimotor => "spimotor",
+            Self::Qsb => "qsb",
+        }
+    }
+}
+
+impl fmt::Display for Model {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.id())
+    }
+}
+
+/// How urgent a driver's next message is; a shared bus serves higher priorities first.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Priority {
+    /// Periodic status/position polling.
+    Poll = 0,
+    /// Start-up and recovery traffic (version reads, configuration).
+    Setup = 1,
+    /// A goal the engine set: goes before every poll (DESIGN.md: commands before polls).
+    Command = 2,
+}
+
+/// One message a driver wrote in [`Driver::poll_transmit`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Transmit {
+    /// Bytes written at the start of the buffer. On an SPI link this is one transaction
+    /// (one chip-select assertion) and exactly as many MISO bytes will come back.
+    pub len: usize,
+    /// The driver now waits for a reply: on a shared stream bus nobody else may send until
+    /// [`Driver::awaiting_reply`] turns false (manual 7.1 "Interlacing of Requests").
+    pub expects_reply: bool,
+}
+
+/// A sans-I/O board driver: axis goals, received bytes and `now` in; bytes to send and
+/// channel state out. It never reads a clock and never touches a file descriptor: the
+/// engine (or a test) moves the bytes and passes the time. The shape follows quinn-proto:
+/// `handle_rx` / `handle_timeout` feed it, `poll_transmit` / `poll_timeout` drain it.
+///
+/// Call order within one engine step: `handle_rx` with everything received for this
+/// driver, then `handle_timeout(now)`, then goals (`set_goal`), then `poll_transmit` until
+/// it returns `None` or the bus holds the driver back.
+pub trait Driver: Send + fmt::Debug {
+    /// The board model.
+    fn model(&self) -> Model;
+
+    /// Channels (motors / encoders) on the board as configured.
+    fn channel_count(&self) -> usize;
+
+    /// The goals `channel` accepts; empty for a channel the board does not have.
+    fn capabilities(&self, channel: usize) -> GoalKinds;
+
+    /// How old a channel's data may become in normal operation before the engine marks
+    /// the axis stale (the board's polling or streaming period plus wire time and margin).
+    fn refresh_budget(&self) -> Duration;
+
+    /// Bytes received from the link that belong to this driver, in wire order and any
+    /// chunking (on SPI: the MISO bytes of this driver's own transactions).
+    fn handle_rx(&mut self, now: Duration, bytes: &[u8]);
+
+    /// Lets time pass: reply timeouts, poll periods, start-up retries.
+    fn handle_timeout(&mut self, now: Duration);
+
+    /// The earliest instant at which [`handle_timeout`](Self::handle_timeout) has work.
+    fn poll_timeout(&self) -> Option<Duration>;
+
+    /// The priority of the message the driver would send now, or `None`.
+    fn wants_transmit(&self, now: Duration) -> Option<Priority>;
+
+    /// Writes the next message into `buf` (which holds at least 256 bytes).
+    fn poll_transmit(&mut self, now: Duration, buf: &mut [u8]) -> Option<Transmit>;
+
+    /// Whether the driver still waits for the reply to its last request.
+    fn awaiting_reply(&self) -> bool;
+
+    /// Whether a goal set with [`set_goal`](Self::set_goal) has not yet been acknowledged
+    /// by the board (sent and answered, or for boards without answers, sent). A shutdown
+    /// waits for this to turn false on every driver.
+    fn goals_pending(&self) -> bool;
+
+    /// Sets a channel's goal; the driver turns it into wire traffic on its next
+    /// `poll_transmit` calls. A goal replaces the previous one.
+    fn set_goal(&mut self, now: Duration, channel: usize, goal: Goal) -> Result<(), GoalError>;
+
+    /// The channel's last known state (`ChannelState::UNKNOWN` for an unknown channel).
+    fn channel(&self, channel: usize) -> ChannelState;
+
+    /// The board's status.
+    fn status(&self) -> DeviceStatus;
+
+    /// The link went down: in-flight requests are void, channels are faulted
+    /// ([`DeviceFault::LinkDown`](crate::DeviceFault::LinkDown)) but keep their last known
+    /// state.
+    fn link_down(&mut self, now: Duration);
+
+    /// The link is (re)open: start the board's start-up sequence again. Channels stay
+    /// faulted until fresh data arrives and need a new goal.
+    fn link_up(&mut self, now: Duration);
+}

@@ -1,0 +1,18 @@
+//! Sans-I/O drivers for the boards motiond drives.
+//!
+//! One driver per board model implements [`Driver`]: goals in counts ([`Goal`]), received
+//! bytes and `now` in; bytes to send and [`ChannelState`] out. Drivers never read a clock
+//! and never touch a file descriptor. A [`LinkBus`] puts several drivers on one link and
+//! enforces what no single driver sees: one request in flight on a shared serial bus,
+//! commands before polls, MISO bytes back to the transaction's owner.
+#![forbid(unsafe_code)]
+
+mod bus;
+mod driver;
+mod goal;
+mod state;
+
+pub use bus::{BusKind, LinkBus, MAX_SENDS_PER_STEP, SPI_PENDING_CAPACITY};
+pub use driver::{Driver, Model, Priority, Transmit};
+pub use goal::{Goal, GoalError, GoalKind, GoalKinds};
+pub use state::{ChannelState, DeviceFault, DeviceStatus, FIRMWARE_LEN};

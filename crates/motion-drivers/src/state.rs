@@ -1,0 +1,140 @@
+//! What a driver knows about its board and channels.
+
+use core::time::Duration;
+
+/// A fault a driver reports for its board or one channel.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum DeviceFault {
+    /// The link is down.
+    LinkDown,
+    /// The board did not answer within its reply budget (several times in a row).
+    NotResponding,
+    /// The board rebooted (reset flag, version re-read, unexpected start-up state): goals
+    /// were lost and need a new command.
+    Reset,
+    /// The board answered a request with an error status.
+    BoardError,
+    /// Replies could not be decoded for too long.
+    Protocol,
+    /// The board reported overspeed or an encoder glitch.
+    Overspeed,
+    /// A limit or reference switch stopped the channel.
+    LimitSwitch,
+}
+
+/// The state of one channel, in counts, as last reported by the board.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ChannelState {
+    /// Measured (or, for open-loop steppers, commanded) position, counts.
+    pub position: f64,
+    /// Velocity, counts/s.
+    pub velocity: f64,
+    /// The board's own position register, counts.
+    pub raw_counts: i64,
+    /// When fresh data last arrived from the board for this channel (`None`: never).
+    pub refreshed_at: Option<Duration>,
+    /// The channel is moving.
+    pub moving: bool,
+    /// The channel has a reference (homed or position set).
+    pub homed: bool,
+    /// A limit or reference switch is active.
+    pub at_limit: bool,
+    /// The last position goal has been reached (board's own criterion or the driver's).
+    pub arrived: bool,
+    /// A fault on this channel (or its board).
+    pub fault: Option<DeviceFault>,
+}
+
+impl ChannelState {
+    /// A channel never heard from.
+    pub const UNKNOWN: Self = Self {
+        position: 0.0,
+        velocity: 0.0,
+        raw_counts: 0,
+        refreshed_at: None,
+        moving: false,
+        homed: false,
+        at_limit: false,
+        arrived: false,
+        fault: None,
+    };
+}
+
+impl Default for ChannelState {
+    fn default() -> Self {
+        Self::UNKNOWN
+    }
+}
+
+/// Capacity of a board's firmware description.
+pub const FIRMWARE_LEN: usize = 32;
+
+/// What the driver knows about its board as a whole.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct DeviceStatus {
+    /// The board answered its start-up sequence and has not been declared dead since.
+    pub online: bool,
+    /// Firmware version as the board reported it, UTF-8, `firmware_len` bytes valid.
+    pub firmware: [u8; FIRMWARE_LEN],
+    /// Valid bytes in `firmware`.
+    pub firmware_len: u8,
+    /// A board-level fault.
+    pub fault: Option<DeviceFault>,
+    /// Requests that got no reply in time, since creation.
+    pub timeouts: u32,
+    /// Replies that could not be decoded or did not match, since creation.
+    pub bad_replies: u32,
+    /// Times the board was seen to reboot, since creation.
+    pub resets: u32,
+}
+
+impl DeviceStatus {
+    /// Nothing known yet.
+    pub const UNKNOWN: Self = Self {
+        online: false,
+        firmware: [0; FIRMWARE_LEN],
+        firmware_len: 0,
+        fault: None,
+        timeouts: 0,
+        bad_replies: 0,
+        resets: 0,
+    };
+
+    /// The firmware description ("" until known).
+    pub fn firmware(&self) -> &str {
+        let len = usize::from(self.firmware_len).min(FIRMWARE_LEN);
+        core::str::from_utf8(&self.firmware[..len]).unwrap_or("")
+    }
+
+    /// Records `text` as the firmware description (cut to [`FIRMWARE_LEN`] bytes on a
+    /// character boundary).
+    pub fn set_firmware(&mut self, text: &str) {
+        let mut end = text.len().min(FIRMWARE_LEN);
+        while !text.is_char_boundary(end) {
+            end -= 1;
+        }
+        self.firmware = [0; FIRMWARE_LEN];
+        self.firmware[..end].copy_from_slice(&text.as_bytes()[..end]);
+        self.firmware_len = end as u8;
+    }
+}
+
+impl Default for DeviceStatus {
+    fn default() -> Self {
+        Self::UNKNOWN
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::DeviceStatus;
+
+    #[test]
+    fn firmware_text_is_cut_on_char_boundaries() {
+        let mut status = DeviceStatus::UNKNOWN;
+        status.set_firmware("TMC v1.23");
+        assert_eq!(status.firmware(), "TMC v1.23");
+        status.set_firmware(&"é".repeat(40));
+        assert_eq!(status.firmware(), "é".repeat(16));
+    }
+}

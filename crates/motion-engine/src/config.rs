@@ -1,0 +1,251 @@
+//! The validated description an [`Engine`](crate::Engine) is built from.
+//!
+//! motiond's config loader turns the TOML file into this (with file/line errors); tests
+//! build it directly. Construction checks what the engine itself relies on and reports a
+//! typed [`EngineConfigError`].
+
+use core::time::Duration;
+
+use motion_drivers::BusKind;
+use motion_ipc::{MAX_AXES, MAX_DEVICES, MAX_LINKS};
+
+/// One link: a serial line, a bus or an SPI bus.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LinkConfig {
+    /// Link name (config `[[link]] name`).
+    pub name: String,
+    /// Stream or SPI.
+    pub kind: BusKind,
+}
+
+/// One board on a link.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DeviceConfig {
+    /// Device name.
+    pub name: String,
+    /// Index into [`EngineConfig::links`].
+    pub link: usize,
+    /// Bus address (0 when the model has none).
+    pub address: u32,
+}
+
+/// One axis: a channel of a device, with units and limits.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AxisConfig {
+    /// Axis name.
+    pub name: String,
+    /// Unit of positions.
+    pub unit: String,
+    /// Index into [`EngineConfig::devices`].
+    pub device: usize,
+    /// Channel (motor number) on the device.
+    pub channel: usize,
+    /// Device counts per unit (non-zero, finite; negative reverses the direction).
+    pub counts_per_unit: f64,
+    /// Lower soft limit, units.
+    pub min: f64,
+    /// Upper soft limit, units.
+    pub max: f64,
+    /// Velocity limit, units/s (> 0).
+    pub max_velocity: f64,
+    /// Acceleration limit, units/s² (> 0).
+    pub max_accel: f64,
+    /// Distance from the target within which a position goal counts as reached, units
+    /// (> 0).
+    pub position_tolerance: f64,
+}
+
+/// Everything the engine needs to know.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EngineConfig {
+    /// Instance name.
+    pub name: String,
+    /// Tick rate, 1..=20000 Hz.
+    pub tick_hz: u32,
+    /// Deadman for velocity and power goals; zero disables it.
+    pub command_timeout: Duration,
+    /// Links in config order.
+    pub links: Vec<LinkConfig>,
+    /// Devices in config order; the engine gets one driver per device, same order.
+    pub devices: Vec<DeviceConfig>,
+    /// Axes in config order; this is the order of axes in every frame.
+    pub axes: Vec<AxisConfig>,
+}
+
+impl EngineConfig {
+    /// The tick period.
+    pub fn period(&self) -> Duration {
+        Duration::from_nanos(1_000_000_000 / u64::from(self.tick_hz.max(1)))
+    }
+}
+
+/// A description the engine cannot run.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum EngineConfigError {
+    /// `tick_hz` outside 1..=20000.
+    #[error("tick_hz {0} is outside 1..=20000")]
+    TickRate(u32),
+    /// More links, devices or axes than the shared-memory contract can carry.
+    #[error("{what}: {count} configured, at most {max} are supported")]
+    TooMany {
+        /// "links", "devices" or "axes".
+        what: &'static str,
+        /// How many were configured.
+        count: usize,
+        /// The limit.
+        max: usize,
+    },
+    /// A device names a link index that does not exist.
+    #[error("device `{device}` refers to link #{link}, which does not exist")]
+    UnknownLink {
+        /// Device name.
+        device: String,
+        /// The bad index.
+        link: usize,
+    },
+    /// An axis names a device index that does not exist.
+    #[error("axis `{axis}` refers to device #{device}, which does not exist")]
+    UnknownDevice {
+        /// Axis name.
+        axis: String,
+        /// The bad index.
+        device: usize,
+    },
+    /// The number of drivers differs from the number of devices.
+    #[error("{drivers} drivers were given for {devices} devices")]
+    DriverCount {
+        /// Drivers given.
+        drivers: usize,
+        /// Devices configured.
+        devices: usize,
+    },
+    /// An axis names a channel its device does not have.
+    #[error("axis `{axis}`: device `{device}` has no channel {channel} (it has {count})")]
+    NoSuchChannel {
+        /// Axis name.
+        axis: String,
+        /// Device name.
+        device: String,
+        /// The bad channel.
+        channel: usize,
+        /// Channels the device has.
+        count: usize,
+    },
+    /// Two axes drive the same channel.
+    #[error("axes `{first}` and `{second}` both drive channel {channel} of device `{device}`")]
+    SharedChannel {
+        /// First axis.
+        first: String,
+        /// Second axis.
+        second: String,
+        /// Device name.
+        device: String,
+        /// The channel.
+        channel: usize,
+    },
+    /// Two items of one kind share a name.
+    #[error("two {what} are called `{name}`")]
+    DuplicateName {
+        /// "links", "devices" or "axes".
+        what: &'static str,
+        /// The name.
+        name: String,
+    },
+    /// A numeric axis parameter is invalid.
+    #[error("axis `{axis}`: {what}")]
+    BadAxisValue {
+        /// Axis name.
+        axis: String,
+        /// What is wrong.
+        what: &'static str,
+    },
+}
+
+pub(crate) fn validate(
+    config: &EngineConfig,
+    driver_count: usize,
+) -> Result<(), EngineConfigError> {
+    if !(1..=20_000).contains(&config.tick_hz) {
+        return Err(EngineConfigError::TickRate(config.tick_hz));
+    }
+    for (what, count, max) in [
+        ("links", config.links.len(), MAX_LINKS),
+        ("devices", config.devices.len(), MAX_DEVICES),
+        ("axes", config.axes.len(), MAX_AXES),
+    ] {
+        if count > max {
+            return Err(EngineConfigError::TooMany { what, count, max });
+        }
+    }
+    if driver_count != config.devices.len() {
+        return Err(EngineConfigError::DriverCount {
+            drivers: driver_count,
+            devices: config.devices.len(),
+        });
+    }
+    check_unique("links", config.links.iter().map(|l| l.name.as_str()))?;
+    check_unique("devices", config.devices.iter().map(|d| d.name.as_str()))?;
+    check_unique("axes", config.axes.iter().map(|a| a.name.as_str()))?;
+    for device in &config.devices {
+        if device.link >= config.links.len() {
+            return Err(EngineConfigError::UnknownLink {
+                device: device.name.clone(),
+                link: device.link,
+            });
+        }
+    }
+    for (index, axis) in config.axes.iter().enumerate() {
+        if axis.device >= config.devices.len() {
+            return Err(EngineConfigError::UnknownDevice {
+                axis: axis.name.clone(),
+                device: axis.device,
+            });
+        }
+        let bad = |what| EngineConfigError::BadAxisValue {
+            axis: axis.name.clone(),
+            what,
+        };
+        if !axis.counts_per_unit.is_finite() || axis.counts_per_unit == 0.0 {
+            return Err(bad("counts_per_unit must be finite and not zero"));
+        }
+        if !(axis.min.is_finite() && axis.max.is_finite() && axis.min < axis.max) {
+            return Err(bad("min and max must be finite with min < max"));
+        }
+        if !(axis.max_velocity.is_finite() && axis.max_velocity > 0.0) {
+            return Err(bad("max_velocity must be finite and > 0"));
+        }
+        if !(axis.max_accel.is_finite() && axis.max_accel > 0.0) {
+            return Err(bad("max_accel must be finite and > 0"));
+        }
+        if !(axis.position_tolerance.is_finite() && axis.position_tolerance > 0.0) {
+            return Err(bad("position_tolerance must be finite and > 0"));
+        }
+        if let Some(other) = config.axes[..index]
+            .iter()
+            .find(|other| other.device == axis.device && other.channel == axis.channel)
+        {
+            return Err(EngineConfigError::SharedChannel {
+                first: other.name.clone(),
+                second: axis.name.clone(),
+                device: config.devices[axis.device].name.clone(),
+                channel: axis.channel,
+            });
+        }
+    }
+    Ok(())
+}
+
+fn check_unique<'a>(
+    what: &'static str,
+    names: impl Iterator<Item = &'a str> + Clone,
+) -> Result<(), EngineConfigError> {
+    for (index, name) in names.clone().enumerate() {
+        if names.clone().take(index).any(|earlier| earlier == name) {
+            return Err(EngineConfigError::DuplicateName {
+                what,
+                name: name.to_owned(),
+            });
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,103 @@
+//! Writing the frame and the server description.
+
+use motion_ipc::{
+    AxisFlags, AxisInfo, AxisMode, AxisState, DeviceInfo, DeviceModel, FrameFlags, MotionFrame,
+    SCHEMA_VERSION, ServerInfo, write_text,
+};
+
+use crate::Engine;
+
+impl Engine {
+    /// Step 5: the frame of this tick. Entries past the axis count are left untouched.
+    pub(crate) fn write_frame(&self, frame: &mut MotionFrame) {
+        frame.schema_version = SCHEMA_VERSION;
+        frame.tick = self.tick;
+        frame.time_ns = u64::try_from(self.now.as_nanos()).unwrap_or(u64::MAX);
+        frame.axis_count = self.axes.len() as u32;
+        let mut flags = 0;
+        if self.estop {
+            flags |= FrameFlags::ESTOP_LATCHED.0;
+        }
+        if self.shutting_down {
+            flags |= FrameFlags::SHUTTING_DOWN.0;
+        }
+        frame.flags = flags;
+        for (axis, out) in self.axes.iter().zip(frame.axes.iter_mut()) {
+            let position = axis.position();
+            let position_mode = matches!(axis.mode, AxisMode::Position | AxisMode::RampPosition);
+            let arrived = position_mode
+                && !axis.state.moving
+                && (position - axis.target).abs() <= axis.tolerance;
+            let at_limit = axis.state.at_limit
+                || position <= axis.min - axis.tolerance
+                || position >= axis.max + axis.tolerance;
+            let flags = AxisFlags::default()
+                .with(AxisFlags::MOVING, axis.state.moving)
+                .with(AxisFlags::HOMED, axis.state.homed || axis.position_set)
+                .with(AxisFlags::AT_LIMIT, at_limit)
+                .with(AxisFlags::STALE, axis.stale)
+                .with(AxisFlags::FAULT, axis.fault.is_some())
+                .with(AxisFlags::CLAIMED, !axis.claimed_by.is_none())
+                .with(AxisFlags::ARRIVED, arrived)
+                .with(AxisFlags::ESTOPPED, axis.estopped)
+                .with(AxisFlags::DEADMAN_EXPIRED, axis.deadman_expired);
+            *out = AxisState {
+                position,
+                velocity: axis.velocity(),
+                target: axis.target,
+                raw_counts: axis.state.raw_counts,
+                last_refresh_tick: axis.last_refresh_tick,
+                flags: flags.0,
+                fault: axis.fault.map_or(0, |fault| fault as u16),
+                mode: axis.mode as u8,
+                reserved: 0,
+                claimed_by: axis.claimed_by,
+            };
+        }
+    }
+
+    /// Fills the static server description (names, units, limits, capabilities, device
+    /// models and firmware versions as the drivers know them now).
+    pub fn fill_info(&self, info: &mut ServerInfo) {
+        let config = &self.config;
+        info.schema_version = SCHEMA_VERSION;
+        info.axis_count = self.axes.len() as u32;
+        info.device_count = config.devices.len() as u32;
+        info.tick_hz = config.tick_hz;
+        info.command_timeout_ms =
+            u32::try_from(config.command_timeout.as_millis()).unwrap_or(u32::MAX);
+        write_text(&mut info.name, &config.name);
+        for ((axis, axis_config), out) in self.axes.iter().zip(&config.axes).zip(&mut info.axes) {
+            *out = AxisInfo::EMPTY;
+            write_text(&mut out.name, &axis_config.name);
+            write_text(&mut out.unit, &axis_config.unit);
+            write_text(&mut out.device, &config.devices[axis_config.device].name);
+            out.counts_per_unit = axis.counts_per_unit;
+            out.min = axis.min;
+            out.max = axis.max;
+            out.max_velocity = axis.max_velocity;
+            out.max_accel = axis.max_accel;
+            out.capabilities = axis.capabilities.0;
+            out.channel = axis.channel as u16;
+            out.device_index = axis_config.device as u16;
+        }
+        for (index, (device, out)) in config.devices.iter().zip(&mut info.devices).enumerate() {
+            *out = DeviceInfo::EMPTY;
+            write_text(&mut out.name, &device.name);
+            write_text(&mut out.link, &config.links[device.link].name);
+            out.address = device.address;
+            out.axis_count = config.axes.iter().filter(|a| a.device == index).count() as u32;
+            if let Some(driver) = self.driver(index) {
+                let status = driver.status();
+                write_text(&mut out.firmware, status.firmware());
+                out.online = u32::from(status.online);
+                out.model = match driver.model() {
+                    motion_drivers::Model::Qq2drv => DeviceModel::Qq2drv,
+                    motion_drivers::Model::Tmcpack => DeviceModel::Tmcpack,
+                    motion_drivers::Model::Spimotor => DeviceModel::Spimotor,
+                    motion_drivers::Model::Qsb => DeviceModel::Qsb,
+                } as u32;
+            }
+        }
+    }
+}

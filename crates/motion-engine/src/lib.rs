@@ -1,0 +1,283 @@
+//! The deterministic tick of motiond.
+//!
+//! [`Engine::step`] takes the time, the client commands and what the links received, runs
+//! the safety rules and writes one [`MotionFrame`] — no clock, no thread, no file, no
+//! iceoryx2 call, no allocation after construction. The same inputs in the same ticks give
+//! the same frames, so a run can be tested tick by tick and replayed bit for bit.
+//!
+//! One tick, as motiond drives it (DESIGN.md "The tick"):
+//! 1. [`Engine::handle_link_rx`] for every link with the bytes received since the last tick
+//!    (and [`Engine::link_down`] / [`Engine::link_up`] for link events);
+//! 2. [`Engine::step`]: drivers update their channels, commands are validated and answered
+//!    exactly once through the [`CommandPort`], safety runs (deadman, soft limits, faults,
+//!    e-stop), and the frame is written into the caller's (shared-memory) `&mut MotionFrame`;
+//! 3. [`Engine::poll_link_transmit`] for every link until it returns `None`: the bytes the
+//!    drivers want on the wire.
+//!
+//! ```
+//! use core::time::Duration;
+//! use motion_engine::{Engine, EngineConfig, CommandPort};
+//! use motion_ipc::{CommandReply, CommandRequest, MotionFrame};
+//!
+//! struct NoCommands;
+//! impl CommandPort for NoCommands {
+//!     fn next_request(&mut self) -> Option<CommandRequest> { None }
+//!     fn reply(&mut self, _: CommandReply) {}
+//! }
+//!
+//! let config = EngineConfig {
+//!     name: "empty".into(),
+//!     tick_hz: 1000,
+//!     command_timeout: Duration::from_millis(250),
+//!     links: vec![],
+//!     devices: vec![],
+//!     axes: vec![],
+//! };
+//! let mut engine = Engine::new(config, vec![]).expect("valid config");
+//! let mut frame = MotionFrame::EMPTY;
+//! engine.step(Duration::ZERO, &mut NoCommands, &mut frame);
+//! engine.step(Duration::from_millis(1), &mut NoCommands, &mut frame);
+//! assert_eq!(frame.tick, 1);
+//! ```
+#![forbid(unsafe_code)]
+
+mod axis;
+mod command;
+mod config;
+mod frame;
+mod safety;
+
+use core::time::Duration;
+
+use motion_drivers::{BusKind, Driver, LinkBus, MAX_SENDS_PER_STEP};
+use motion_ipc::{ClientId, MotionFrame};
+
+use crate::axis::Axis;
+pub use crate::command::{CommandPort, HOME_FRACTION_OF_MAX, MAX_COMMANDS_PER_STEP};
+pub use crate::config::{AxisConfig, DeviceConfig, EngineConfig, EngineConfigError, LinkConfig};
+
+/// Counters since construction.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct EngineCounters {
+    /// Requests answered.
+    pub commands: u64,
+    /// Requests refused.
+    pub rejected: u64,
+    /// Deadman expiries.
+    pub deadman_stops: u64,
+    /// Soft-limit stops of velocity and power goals.
+    pub limit_stops: u64,
+}
+
+/// The deterministic motion engine.
+#[derive(Debug)]
+pub struct Engine {
+    config: EngineConfig,
+    buses: Vec<LinkBus>,
+    /// Per device: (bus index, driver index within the bus).
+    device_slots: Vec<(usize, usize)>,
+    axes: Vec<Axis>,
+    /// Messages sent on each bus in the current tick.
+    sends: Vec<usize>,
+    tick: u64,
+    started: bool,
+    now: Duration,
+    estop: bool,
+    shutting_down: bool,
+    counters: EngineCounters,
+}
+
+impl Engine {
+    /// Builds the engine from a validated description and one driver per device (same
+    /// order as `config.devices`).
+    pub fn new(
+        config: EngineConfig,
+        drivers: Vec<Box<dyn Driver>>,
+    ) -> Result<Self, EngineConfigError> {
+        config::validate(&config, drivers.len())?;
+        let mut per_link: Vec<Vec<Box<dyn Driver>>> =
+            config.links.iter().map(|_| Vec::new()).collect();
+        let mut device_slots = Vec::with_capacity(drivers.len());
+        for (device, driver) in config.devices.iter().zip(drivers) {
+            device_slots.push((device.link, per_link[device.link].len()));
+            per_link[device.link].push(driver);
+        }
+        let mut axes = Vec::with_capacity(config.axes.len());
+        for axis in &config.axes {
+            let (bus, slot) = device_slots[axis.device];
+            let driver = &per_link[bus][slot];
+            if axis.channel >= driver.channel_count() {
+                return Err(EngineConfigError::NoSuchChannel {
+                    axis: axis.name.clone(),
+                    device: config.devices[axis.device].name.clone(),
+                    channel: axis.channel,
+                    count: driver.channel_count(),
+                });
+            }
+            axes.push(Axis::new(
+                axis,
+                bus,
+                slot,
+                driver.capabilities(axis.channel),
+            ));
+        }
+        let buses: Vec<LinkBus> = config
+            .links
+            .iter()
+            .zip(per_link)
+            .map(|(link, drivers)| LinkBus::new(link.kind, drivers))
+            .collect();
+        Ok(Self {
+            sends: vec![0; buses.len()],
+            buses,
+            device_slots,
+            axes,
+            tick: 0,
+            started: false,
+            now: Duration::ZERO,
+            estop: false,
+            shutting_down: false,
+            counters: EngineCounters::default(),
+            config,
+        })
+    }
+
+    /// The description the engine was built from.
+    pub fn config(&self) -> &EngineConfig {
+        &self.config
+    }
+
+    /// The tick of the last step (0 before and during the first).
+    pub fn tick(&self) -> u64 {
+        self.tick
+    }
+
+    /// Whether the e-stop is latched.
+    pub fn estop_latched(&self) -> bool {
+        self.estop
+    }
+
+    /// Counters since construction.
+    pub fn counters(&self) -> EngineCounters {
+        self.counters
+    }
+
+    /// The driver of device `index` (config order).
+    pub fn driver(&self, device: usize) -> Option<&dyn Driver> {
+        let (bus, slot) = *self.device_slots.get(device)?;
+        self.buses
+            .get(bus)?
+            .drivers()
+            .get(slot)
+            .map(|driver| &**driver)
+    }
+
+    /// Stream or SPI, per link.
+    pub fn link_kind(&self, link: usize) -> Option<BusKind> {
+        self.buses.get(link).map(LinkBus::kind)
+    }
+
+    /// Bytes received on `link` since the last tick (call before [`step`](Self::step)).
+    pub fn handle_link_rx(&mut self, link: usize, now: Duration, bytes: &[u8]) {
+        if let Some(bus) = self.buses.get_mut(link) {
+            bus.handle_rx(now, bytes);
+        }
+    }
+
+    /// `link` failed (unplugged, closed, I/O error): its axes fault and stop being driven.
+    pub fn link_down(&mut self, link: usize, now: Duration) {
+        if let Some(bus) = self.buses.get_mut(link) {
+            bus.link_down(now);
+        }
+    }
+
+    /// `link` is open again: its boards restart; axes stay stale until fresh data and need
+    /// a new command.
+    pub fn link_up(&mut self, link: usize, now: Duration) {
+        if let Some(bus) = self.buses.get_mut(link) {
+            bus.link_up(now);
+        }
+    }
+
+    /// One tick at `now`: drivers update, commands from `port` are answered, safety runs,
+    /// and the frame for this tick is written into `frame`.
+    pub fn step(&mut self, now: Duration, port: &mut dyn CommandPort, frame: &mut MotionFrame) {
+        if self.started {
+            self.tick += 1;
+        }
+        self.started = true;
+        self.now = now;
+        self.sends.fill(0);
+        for bus in &mut self.buses {
+            bus.handle_timeout(now);
+        }
+        self.update_from_drivers();
+        self.take_commands(port);
+        self.run_safety();
+        self.write_frame(frame);
+    }
+
+    /// The next message for `link`, written into `buf` (at least 256 bytes); `None` when
+    /// the link has nothing to send this tick. On an SPI link each message is one
+    /// transaction.
+    pub fn poll_link_transmit(
+        &mut self,
+        link: usize,
+        now: Duration,
+        buf: &mut [u8],
+    ) -> Option<usize> {
+        let sends = self.sends.get_mut(link)?;
+        if *sends >= MAX_SENDS_PER_STEP {
+            return None;
+        }
+        let bus = self.buses.get_mut(link)?;
+        let (_, transmit) = bus.poll_transmit(now, buf)?;
+        *sends += 1;
+        Some(transmit.len)
+    }
+
+    /// The earliest instant a driver has timed work (a reply timeout, a poll period).
+    pub fn poll_timeout(&self) -> Option<Duration> {
+        self.buses.iter().filter_map(LinkBus::poll_timeout).min()
+    }
+
+    /// The client node `client` is dead: its claims are released and its goals voided
+    /// (the axes decelerate and hold).
+    pub fn client_dead(&mut self, client: ClientId) {
+        if client.is_none() {
+            return;
+        }
+        for index in 0..self.axes.len() {
+            let axis = &mut self.axes[index];
+            if axis.claimed_by == client {
+                axis.claimed_by = ClientId::NONE;
+            }
+            if axis.goal_owner == client && axis.has_active_goal() {
+                self.stop_axis(index, None);
+            }
+        }
+    }
+
+    /// Stops every axis and refuses new motion commands (for SIGINT/SIGTERM). Wait for
+    /// [`all_at_rest`](Self::all_at_rest) with further steps.
+    pub fn begin_shutdown(&mut self) {
+        self.shutting_down = true;
+        for index in 0..self.axes.len() {
+            self.stop_axis(index, None);
+        }
+    }
+
+    /// Whether every board has acknowledged its goals and no axis with a live link moves.
+    pub fn all_at_rest(&self) -> bool {
+        let drivers_settled = self
+            .buses
+            .iter()
+            .flat_map(|bus| bus.drivers())
+            .all(|driver| !driver.goals_pending() || !driver.status().online);
+        drivers_settled
+            && self
+                .axes
+                .iter()
+                .all(|axis| !axis.state.moving || axis.fault.is_some())
+    }
+}
