@@ -1,0 +1,233 @@
+//! Unit conversions of manual 8.2 (microstep frequency), 8.3 ($14 acceleration, $10 current),
+//! 8.5 (supply voltage) and 8.6 ($40 baud rate, 2 ms time units).
+//!
+//! Microstep frequency: `f = 20 MHz / (clkdiv + 1) · v / 2^(14 + div)`, with clkdiv 0..=31,
+//! div 0..=3, v −511..=511, and f at most 200 kHz. Acceleration: `amax / 64` is added to the
+//! velocity 500 times a second.
+
+use core::time::Duration;
+
+use crate::Error;
+use crate::request::{MAX_AMAX, MAX_CLKDIV, MAX_DIV, MAX_VELOCITY};
+
+/// The pack's clock, 20 MHz.
+pub const F_CLK_HZ: u32 = 20_000_000;
+/// Upper limit of the microstep frequency (manual 8.2 note).
+pub const MAX_MICROSTEP_HZ: f64 = 200_000.0;
+/// Rate of the velocity accumulation and of the PI controller, 500 Hz.
+pub const RAMP_HZ: u32 = 500;
+/// One ramp tick, 2 ms; also the unit of T0, $40 delays and $41 timeouts.
+pub const TICK: Duration = Duration::from_millis(2);
+/// `amax / AMAX_DIVISOR` is accumulated per tick.
+pub const AMAX_DIVISOR: u32 = 64;
+/// Microsteps per full step (resolution 1/16).
+pub const MICROSTEPS_PER_FULLSTEP: u32 = 16;
+/// Clock cycles per ramp tick: 20 MHz / 500 Hz. A motor at velocity v advances
+/// `TICK_CYCLES · v / ((clkdiv+1) · 2^(14+div))` microsteps per tick.
+pub const TICK_CYCLES: i64 = (F_CLK_HZ / RAMP_HZ) as i64;
+/// The factory baud rate (manual 6.1).
+pub const DEFAULT_BAUD: u32 = 19_200;
+/// The factory transmitter switch-over delay, 3 × 2 ms = 6 ms (manual 6.1, $40).
+pub const DEFAULT_SWITCHOVER_UNITS: u16 = 3;
+/// Supply-voltage channel 7 scale: "1V equals value 22" (manual 8.5).
+pub const SUPPLY_COUNTS_PER_VOLT: f64 = 22.0;
+
+/// `clkdiv` and `div_i`: the two settings that turn a velocity into a step rate.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct StepClock {
+    clkdiv: u8,
+    div: u8,
+}
+
+impl StepClock {
+    /// The factory setting, clkdiv = 5 and div = 2 (manual 7.1 "Default Values").
+    pub const DEFAULT: Self = Self { clkdiv: 5, div: 2 };
+
+    /// Checks clkdiv 0..=31 and div 0..=3.
+    pub const fn new(clkdiv: u8, div: u8) -> Result<Self, Error> {
+        if clkdiv > MAX_CLKDIV {
+            Err(Error::OutOfRange { field: "clkdiv" })
+        } else if div > MAX_DIV {
+            Err(Error::OutOfRange { field: "div" })
+        } else {
+            Ok(Self { clkdiv, div })
+        }
+    }
+
+    /// clkdiv.
+    pub const fn clkdiv(self) -> u8 {
+        self.clkdiv
+    }
+
+    /// div_i.
+    pub const fn div(self) -> u8 {
+        self.div
+    }
+
+    /// `(clkdiv + 1) · 2^(14 + div)`: the denominator of the step rate. A velocity v moves
+    /// `TICK_CYCLES · v / denominator()` microsteps per 2 ms tick.
+    pub const fn denominator(self) -> i64 {
+        (self.clkdiv as i64 + 1) << (14 + self.div as u32)
+    }
+
+    /// Microstep frequency of velocity 1.
+    pub fn hz_per_unit(self) -> f64 {
+        f64::from(F_CLK_HZ) / self.denominator() as f64
+    }
+
+    /// The microstep frequency of velocity `v` (signed: negative is the other direction).
+    pub fn microstep_hz(self, v: i16) -> Result<f64, Error> {
+        if v.unsigned_abs() > MAX_VELOCITY {
+            return Err(Error::OutOfRange { field: "velocity" });
+        }
+        let f = self.hz_per_unit() * f64::from(v);
+        if f.abs() > MAX_MICROSTEP_HZ {
+            return Err(Error::FrequencyTooHigh);
+        }
+        Ok(f)
+    }
+
+    /// The velocity value closest to a microstep frequency.
+    pub fn velocity_for_hz(self, hz: f64) -> Result<i16, Error> {
+        if !hz.is_finite() {
+            return Err(Error::OutOfRange { field: "frequency" });
+        }
+        if hz.abs() > MAX_MICROSTEP_HZ {
+            return Err(Error::FrequencyTooHigh);
+        }
+        let v = (hz / self.hz_per_unit()).round();
+        if v.abs() > f64::from(MAX_VELOCITY) {
+            return Err(Error::OutOfRange { field: "velocity" });
+        }
+        Ok(v as i16)
+    }
+
+    /// The microstep acceleration (Hz/s) of `amax`: amax/64 velocity units per 2 ms.
+    pub fn accel_hz_per_s(self, amax: u16) -> Result<f64, Error> {
+        if amax == 0 || amax > MAX_AMAX {
+            return Err(Error::OutOfRange { field: "amax" });
+        }
+        Ok(f64::from(amax) / f64::from(AMAX_DIVISOR) * f64::from(RAMP_HZ) * self.hz_per_unit())
+    }
+
+    /// The `amax` closest to a microstep acceleration in Hz/s.
+    pub fn amax_for_accel(self, hz_per_s: f64) -> Result<u16, Error> {
+        if !hz_per_s.is_finite() || hz_per_s <= 0.0 {
+            return Err(Error::OutOfRange {
+                field: "acceleration",
+            });
+        }
+        let amax =
+            (hz_per_s * f64::from(AMAX_DIVISOR) / f64::from(RAMP_HZ) / self.hz_per_unit()).round();
+        if amax < 1.0 || amax > f64::from(MAX_AMAX) {
+            return Err(Error::OutOfRange { field: "amax" });
+        }
+        Ok(amax as u16)
+    }
+}
+
+/// Checks the relations between ramp parameters that manual 8.3 states:
+/// `0 < amax <= vstart · 64`, `vmin <= vstart`, `vstart <= vrefmax <= vmax <= 511`.
+pub fn check_ramp_relations(
+    vmin: u16,
+    vstart: u16,
+    vmax: u16,
+    vrefmax: u16,
+    amax: u16,
+) -> Result<(), Error> {
+    let ok = |c: bool, field| {
+        if c {
+            Ok(())
+        } else {
+            Err(Error::OutOfRange { field })
+        }
+    };
+    ok(
+        amax > 0 && u32::from(amax) <= u32::from(vstart) * AMAX_DIVISOR,
+        "amax",
+    )?;
+    ok(vmin <= vstart, "vmin")?;
+    ok(vstart <= vrefmax && vrefmax <= vmax, "vrefmax")?;
+    ok(vmax <= MAX_VELOCITY, "vmax")
+}
+
+/// The $40 divisor for a baud rate: `20 MHz / (16 · baud)`, rounded.
+pub fn baud_divisor(baud: u32) -> Result<u16, Error> {
+    if baud == 0 {
+        return Err(Error::OutOfRange { field: "baud rate" });
+    }
+    let d = (f64::from(F_CLK_HZ) / (16.0 * f64::from(baud))).round();
+    if !(1.0..=65535.0).contains(&d) {
+        return Err(Error::OutOfRange {
+            field: "baud rate divisor",
+        });
+    }
+    Ok(d as u16)
+}
+
+/// The exact baud rate a divisor gives.
+pub fn baud_of_divisor(divisor: u16) -> f64 {
+    f64::from(F_CLK_HZ) / (16.0 * f64::from(divisor.max(1)))
+}
+
+/// Standard rates a divisor is matched against by [`nominal_baud`].
+pub const STANDARD_BAUDS: &[u32] = &[
+    300, 600, 1200, 2400, 4800, 9600, 14_400, 19_200, 28_800, 38_400, 57_600, 76_800, 115_200,
+    230_400, 250_000, 312_500, 416_667, 625_000, 1_250_000,
+];
+
+/// The standard rate a divisor stands for when within 2.5 % (what a UART tolerates), or the
+/// exact rate rounded (divisor 65 → 19200, since 20 MHz/(16·65) = 19231).
+pub fn nominal_baud(divisor: u16) -> u32 {
+    let exact = baud_of_divisor(divisor);
+    STANDARD_BAUDS
+        .iter()
+        .copied()
+        .find(|&b| (exact - f64::from(b)).abs() <= f64::from(b) * 0.025)
+        .unwrap_or(exact.round() as u32)
+}
+
+/// The wire time of one byte, 8N1 (10 bit times).
+pub fn byte_time(baud: u32) -> Duration {
+    Duration::from_nanos(10_000_000_000 / u64::from(baud.max(1)))
+}
+
+/// A count of 2 ms units as a duration (T0, $40 delay, $41 timeout).
+pub const fn units(n: u16) -> Duration {
+    Duration::from_millis(2 * n as u64)
+}
+
+/// The board variant: SIXpack drives six motors of up to 0.8 A, QUADpack four of 1.5 A.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum Variant {
+    /// SIXpack, 6 channels, 800 mA peak.
+    #[default]
+    SixPack,
+    /// QUADpack, 4 channels, 1500 mA peak (scaled by its DIP switches).
+    QuadPack,
+}
+
+impl Variant {
+    /// Number of motors.
+    pub const fn motors(self) -> u8 {
+        match self {
+            Self::SixPack => 6,
+            Self::QuadPack => 4,
+        }
+    }
+
+    /// Peak coil current in A for a $10 value: SIXpack 0.8 A · value/256; QUADpack
+    /// 1.5 A · value/256 · DIP setting (`dip_percent` 0, 33, 66 or 100; ignored on SIXpack).
+    pub fn peak_current_amps(self, value: u8, dip_percent: u8) -> f64 {
+        let v = f64::from(value) / 256.0;
+        match self {
+            Self::SixPack => 0.8 * v,
+            Self::QuadPack => 1.5 * v * f64::from(dip_percent.min(100)) / 100.0,
+        }
+    }
+}
+
+/// Supply voltage from an analogue channel 7 value.
+pub fn supply_volts(value: u16) -> f64 {
+    f64::from(value) / SUPPLY_COUNTS_PER_VOLT
+}
