@@ -85,7 +85,7 @@ impl Default for SpimotorSimConfig {
 
 impl SpimotorSimConfig {
     /// The identification as the protocol type: cut at the first NUL and to capacity.
-    pub(super) fn identification(&self) -> Identification {
+    pub(super) fn wire_identification(&self) -> Identification {
         let bytes = self.identification.as_bytes();
         let end = bytes
             .iter()
@@ -96,7 +96,32 @@ impl SpimotorSimConfig {
     }
 
     /// The serial number as the protocol type.
-    pub(super) fn serial(&self) -> SerialNumber {
+    pub(super) fn wire_serial(&self) -> SerialNumber {
         SerialNumber(self.serial)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn identification_is_cut_at_nul_and_capacity() {
+        let with = |s: &str| SpimotorSimConfig {
+            identification: s.into(),
+            ..Default::default()
+        };
+        assert_eq!(
+            with("spi_motor").wire_identification().as_bytes(),
+            b"spi_motor"
+        );
+        assert_eq!(with("ab\0cd").wire_identification().as_bytes(), b"ab");
+        let long = "x".repeat(100);
+        assert_eq!(
+            with(&long).wire_identification().as_bytes().len(),
+            spimotor::IDENTIFICATION_CAPACITY
+        );
+        assert_eq!(SpimotorSimConfig::default().address, 0x90);
+        assert_eq!(Drive::default(), Drive::Stepper);
     }
 }
