@@ -101,6 +101,9 @@ impl Engine {
                 if v0.abs() > 1.0 {
                     return Reason::PowerLimit;
                 }
+                if heads_into_limit(axis, v0, axis.max_accel) {
+                    return Reason::OutOfRange;
+                }
                 (Goal::Power { fraction: v0 }, AxisMode::Power, v0, true)
             }
             CommandKind::Position => {
@@ -123,6 +126,9 @@ impl Engine {
                 }
                 if accel <= 0.0 || accel > axis.max_accel {
                     return Reason::AccelLimit;
+                }
+                if heads_into_limit(axis, v0, accel) {
+                    return Reason::OutOfRange;
                 }
                 let goal = Goal::Velocity {
                     velocity: axis.rate_to_counts(v0),
@@ -223,6 +229,18 @@ impl Engine {
             port.reply(CommandReply::to(&request, reason, self.tick));
         }
     }
+}
+
+/// Whether a velocity (or power, by its sign) goal of `velocity` could not stop before the
+/// soft limit it heads for, from where the axis is now.
+fn heads_into_limit(axis: &crate::axis::Axis, velocity: f64, accel: f64) -> bool {
+    if axis.stale {
+        return false;
+    }
+    let reach = velocity * velocity / (2.0 * accel);
+    let position = axis.position();
+    (velocity > 0.0 && position + reach.max(axis.tolerance) >= axis.max)
+        || (velocity < 0.0 && position - reach.max(axis.tolerance) <= axis.min)
 }
 
 /// Search velocity of a home command that gives none, as a fraction of max_velocity.

@@ -19,7 +19,12 @@ impl Engine {
             let Some(driver) = self.buses[axis.bus].drivers().get(axis.slot) else {
                 continue;
             };
-            let state = driver.channel(axis.channel);
+            let mut state = driver.channel(axis.channel);
+            if !(state.position.is_finite() && state.velocity.is_finite()) {
+                // A driver bug must never put NaN into a frame: keep the last good values.
+                state.position = axis.state.position;
+                state.velocity = axis.state.velocity;
+            }
             let status = driver.status();
             let budget = driver.refresh_budget();
             let tick = self.tick;

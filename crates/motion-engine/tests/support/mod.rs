@@ -1,0 +1,372 @@
+//! Test support: an ideal board driver and a queue command port.
+#![allow(dead_code)]
+
+use core::time::Duration;
+use std::collections::VecDeque;
+use std::sync::{Arc, Mutex, MutexGuard};
+
+use motion_drivers::{
+    BusKind, ChannelState, DeviceFault, DeviceStatus, Driver, Goal, GoalError, GoalKind, GoalKinds,
+    Model, Priority, Transmit,
+};
+use motion_engine::{AxisConfig, CommandPort, DeviceConfig, Engine, EngineConfig, LinkConfig};
+use motion_ipc::{ClientId, CommandKind, CommandReply, CommandRequest, MotionFrame};
+
+/// What a test can see and change of an [`IdealBoard`] while the engine owns it.
+#[derive(Debug, Default)]
+pub struct BoardControl {
+    /// Every message the driver put on the wire: (channel, goal kind).
+    pub wire: Vec<(u8, u8)>,
+    /// The board stops answering (no refresh) while set.
+    pub silent: bool,
+    /// A channel fault the board reports.
+    pub fault: Option<DeviceFault>,
+}
+
+/// A board whose channels follow their goals with ideal trapezoidal physics, refreshing
+/// every `handle_timeout`. Every goal becomes one 3-byte message on the wire.
+#[derive(Debug)]
+pub struct IdealBoard {
+    channels: Vec<Channel>,
+    supports: GoalKinds,
+    control: Arc<Mutex<BoardControl>>,
+    last: Option<Duration>,
+    queue: VecDeque<(u8, u8)>,
+    link_up: bool,
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Channel {
+    position: f64,
+    velocity: f64,
+    goal: Goal,
+    refreshed_at: Option<Duration>,
+}
+
+impl IdealBoard {
+    pub fn new(channels: usize, supports: &[GoalKind]) -> (Box<Self>, Arc<Mutex<BoardControl>>) {
+        let control = Arc::new(Mutex::new(BoardControl::default()));
+        let board = Box::new(Self {
+            channels: vec![
+                Channel {
+                    position: 0.0,
+                    velocity: 0.0,
+                    goal: Goal::Off,
+                    refreshed_at: None,
+                };
+                channels
+            ],
+            supports: GoalKinds::of(supports),
+            control: Arc::clone(&control),
+            last: None,
+            queue: VecDeque::with_capacity(64),
+            link_up: true,
+        });
+        (board, control)
+    }
+
+    fn control(&self) -> MutexGuard<'_, BoardControl> {
+        self.control.lock().expect("control lock")
+    }
+}
+
+fn approach(current: f64, target: f64, step: f64) -> f64 {
+    if step == f64::INFINITY || (target - current).abs() <= step {
+        target
+    } else {
+        current + step.copysign(target - current)
+    }
+}
+
+impl Driver for IdealBoard {
+    fn model(&self) -> Model {
+        Model::Tmcpack
+    }
+    fn channel_count(&self) -> usize {
+        self.channels.len()
+    }
+    fn capabilities(&self, channel: usize) -> GoalKinds {
+        if channel < self.channels.len() {
+            self.supports
+        } else {
+            GoalKinds::NONE
+        }
+    }
+    fn refresh_budget(&self) -> Duration {
+        Duration::from_millis(20)
+    }
+    fn handle_rx(&mut self, _: Duration, _: &[u8]) {}
+    fn handle_timeout(&mut self, now: Duration) {
+        let dt = self.last.map_or(0.0, |last| (now - last).as_secs_f64());
+        self.last = Some(now);
+        let (silent, fault) = {
+            let control = self.control();
+            (control.silent, control.fault)
+        };
+        for channel in &mut self.channels {
+            let (target_velocity, accel) = match channel.goal {
+                Goal::Off
+                | Goal::Power { .. }
+                | Goal::Position { .. }
+                | Goal::SetPosition { .. } => (0.0, f64::INFINITY),
+                Goal::Stop { decel } => (0.0, decel),
+                Goal::Velocity { velocity, accel } => (velocity, accel),
+                Goal::RampPosition {
+                    counts,
+                    velocity,
+                    accel,
+                } => {
+                    let remaining = counts - channel.position;
+                    let brake = (2.0 * accel * remaining.abs()).sqrt();
+                    (velocity.min(brake).copysign(remaining), accel)
+                }
+                Goal::Home { velocity } => (-velocity, f64::INFINITY),
+            };
+            if let Goal::Power { fraction } = channel.goal {
+                channel.velocity = fraction * 1000.0;
+            } else {
+                let step = if accel.is_infinite() {
+                    accel
+                } else {
+                    accel * dt
+                };
+                channel.velocity = approach(channel.velocity, target_velocity, step);
+            }
+            channel.position += channel.velocity * dt;
+            if let Goal::RampPosition { counts, .. } = channel.goal
+                && ((counts - channel.position).abs() < 1e-6
+                    || channel.velocity == 0.0 && (counts - channel.position).abs() < 1.0)
+            {
+                channel.position = counts;
+                channel.velocity = 0.0;
+            }
+            if let Goal::Position { counts } = channel.goal {
+                channel.position = counts;
+            }
+            if !silent && self.link_up && fault.is_none() {
+                channel.refreshed_at = Some(now);
+            }
+        }
+    }
+    fn poll_timeout(&self) -> Option<Duration> {
+        None
+    }
+    fn wants_transmit(&self, _: Duration) -> Option<Priority> {
+        (!self.queue.is_empty() && self.link_up).then_some(Priority::Command)
+    }
+    fn poll_transmit(&mut self, _: Duration, buf: &mut [u8]) -> Option<Transmit> {
+        if !self.link_up {
+            return None;
+        }
+        let (channel, kind) = self.queue.pop_front()?;
+        buf[..3].copy_from_slice(&[0xA5, channel, kind]);
+        self.control().wire.push((channel, kind));
+        Some(Transmit {
+            len: 3,
+            expects_reply: false,
+        })
+    }
+    fn awaiting_reply(&self) -> bool {
+        false
+    }
+    fn goals_pending(&self) -> bool {
+        !self.queue.is_empty()
+    }
+    fn set_goal(&mut self, _: Duration, channel: usize, goal: Goal) -> Result<(), GoalError> {
+        if !self.link_up {
+            return Err(GoalError::Offline);
+        }
+        if !self.supports.contains(goal.kind()) && goal.kind() != GoalKind::Stop {
+            return Err(GoalError::Unsupported(goal.kind()));
+        }
+        let slot = self
+            .channels
+            .get_mut(channel)
+            .ok_or(GoalError::NoSuchChannel(channel))?;
+        if let Goal::SetPosition { counts } = goal {
+            slot.position = counts;
+        } else {
+            slot.goal = goal;
+        }
+        if self.queue.len() < 64 {
+            self.queue.push_back((channel as u8, goal.kind() as u8));
+        }
+        Ok(())
+    }
+    fn channel(&self, channel: usize) -> ChannelState {
+        let Some(slot) = self.channels.get(channel) else {
+            return ChannelState::UNKNOWN;
+        };
+        ChannelState {
+            position: slot.position,
+            velocity: slot.velocity,
+            raw_counts: slot.position.round() as i64,
+            refreshed_at: slot.refreshed_at,
+            moving: slot.velocity != 0.0,
+            homed: false,
+            at_limit: false,
+            arrived: false,
+            fault: if self.link_up {
+                self.control().fault
+            } else {
+                Some(DeviceFault::LinkDown)
+            },
+        }
+    }
+    fn status(&self) -> DeviceStatus {
+        let mut status = DeviceStatus::UNKNOWN;
+        status.online = self.link_up;
+        status.set_firmware("ideal 1.0");
+        status
+    }
+    fn link_down(&mut self, _: Duration) {
+        self.link_up = false;
+        self.queue.clear();
+    }
+    fn link_up(&mut self, _: Duration) {
+        self.link_up = true;
+        for channel in &mut self.channels {
+            channel.goal = Goal::Off;
+            channel.velocity = 0.0;
+        }
+    }
+}
+
+/// A command port over a queue; replies are collected.
+#[derive(Debug, Default)]
+pub struct Queue {
+    pub requests: VecDeque<CommandRequest>,
+    pub replies: Vec<CommandReply>,
+}
+
+impl CommandPort for Queue {
+    fn next_request(&mut self) -> Option<CommandRequest> {
+        self.requests.pop_front()
+    }
+    fn reply(&mut self, reply: CommandReply) {
+        self.replies.push(reply);
+    }
+}
+
+pub const ALL_GOALS: [GoalKind; 8] = GoalKind::ALL;
+pub const PERIOD: Duration = Duration::from_millis(1);
+pub const CLIENT_A: ClientId = ClientId { lo: 1, hi: 0 };
+pub const CLIENT_B: ClientId = ClientId { lo: 2, hi: 0 };
+
+pub fn axis(name: &str, device: usize, channel: usize) -> AxisConfig {
+    AxisConfig {
+        name: name.into(),
+        unit: "mm".into(),
+        device,
+        channel,
+        counts_per_unit: 100.0,
+        min: -100.0,
+        max: 100.0,
+        max_velocity: 50.0,
+        max_accel: 500.0,
+        position_tolerance: 0.01,
+    }
+}
+
+/// Two links, one ideal board each, two axes per board: x, y on link 0; z, w on link 1.
+pub fn two_link_engine() -> (Engine, Vec<Arc<Mutex<BoardControl>>>) {
+    let config = EngineConfig {
+        name: "test".into(),
+        tick_hz: 1000,
+        command_timeout: Duration::from_millis(250),
+        links: vec![
+            LinkConfig {
+                name: "bus0".into(),
+                kind: BusKind::Stream,
+            },
+            LinkConfig {
+                name: "bus1".into(),
+                kind: BusKind::Stream,
+            },
+        ],
+        devices: vec![
+            DeviceConfig {
+                name: "board0".into(),
+                link: 0,
+                address: 1,
+            },
+            DeviceConfig {
+                name: "board1".into(),
+                link: 1,
+                address: 2,
+            },
+        ],
+        axes: vec![
+            axis("x", 0, 0),
+            axis("y", 0, 1),
+            axis("z", 1, 0),
+            axis("w", 1, 1),
+        ],
+    };
+    let (board0, control0) = IdealBoard::new(2, &ALL_GOALS);
+    let (board1, control1) = IdealBoard::new(2, &ALL_GOALS);
+    let engine = Engine::new(config, vec![board0, board1]).expect("valid config");
+    (engine, vec![control0, control1])
+}
+
+/// Drives an engine tick by tick with a fake clock.
+pub struct Harness {
+    pub engine: Engine,
+    pub frame: Box<MotionFrame>,
+    pub port: Queue,
+    pub now: Duration,
+    pub sequence: u64,
+}
+
+impl Harness {
+    pub fn new(engine: Engine) -> Self {
+        Self {
+            engine,
+            frame: Box::new(MotionFrame::EMPTY),
+            port: Queue::default(),
+            now: Duration::ZERO,
+            sequence: 0,
+        }
+    }
+
+    /// One tick: step, then drain every link's transmit queue. Returns bytes sent.
+    pub fn tick(&mut self) -> usize {
+        self.engine.step(self.now, &mut self.port, &mut self.frame);
+        let mut sent = 0;
+        let mut buf = [0u8; 256];
+        for link in 0..self.engine.config().links.len() {
+            while let Some(len) = self.engine.poll_link_transmit(link, self.now, &mut buf) {
+                sent += len;
+            }
+        }
+        self.now += PERIOD;
+        sent
+    }
+
+    pub fn ticks(&mut self, count: usize) {
+        for _ in 0..count {
+            self.tick();
+        }
+    }
+
+    /// Sends one command in the next tick and returns its reply.
+    pub fn command(
+        &mut self,
+        client: ClientId,
+        axis: u32,
+        kind: CommandKind,
+        values: [f64; 3],
+    ) -> CommandReply {
+        self.sequence += 1;
+        let request = CommandRequest::new(client, self.sequence, axis, kind).with_values(values);
+        self.port.requests.push_back(request);
+        self.tick();
+        let reply = self.port.replies.pop().expect("every request is answered");
+        assert_eq!(reply.sequence, self.sequence);
+        reply
+    }
+
+    pub fn axis(&self, index: usize) -> motion_ipc::AxisState {
+        self.frame.axes[index]
+    }
+}
