@@ -657,3 +657,89 @@ fn power_cycle_clears_ram_but_not_eeprom_or_the_rotor() {
     };
     assert_eq!(id.as_str(), Some("spi_motor"));
 }
+
+mod random_commands {
+    use super::*;
+    use proptest::prelude::*;
+
+    #[derive(Debug, Clone, Copy)]
+    enum Op {
+        Target(i32),
+        Relative(i32),
+        Current(i32),
+        Delay(u8),
+    }
+
+    fn op() -> impl Strategy<Value = Op> {
+        prop_oneof![
+            (-40..40i32).prop_map(Op::Target),
+            (-40..40i32).prop_map(Op::Relative),
+            (-40..40i32).prop_map(Op::Current),
+            (0..30u8).prop_map(Op::Delay),
+        ]
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(48))]
+
+        /// Under any sequence of commands, sampled every 50 µs (half the shortest step
+        /// delay): one step at most per sample, each step towards the target, and never
+        /// closer to the previous step than the step delay in force.
+        #[test]
+        fn steps_never_come_faster_than_the_delay_in_force(
+            ops in proptest::collection::vec((0u64..8_000, op()), 1..16)
+        ) {
+            let mut sim = stepper();
+            let mut now = Duration::ZERO;
+            let mut delay = StepDelay::DEFAULT;
+            let mut last_step: Option<Duration> = None;
+            let check = |sim: &mut SpimotorSim, last_step: &mut Option<Duration>, now: Duration, delay: StepDelay| {
+                let before = (sim.current_position(), sim.target_position());
+                sim.advance(now);
+                let after = sim.current_position();
+                let step = sim.last_step_at();
+                if step != *last_step {
+                    let at = step.expect("a step was made");
+                    prop_assert_eq!((after - before.0).abs(), 1);
+                    prop_assert!((before.1 - after).abs() < (before.1 - before.0).abs());
+                    if let Some(prev) = *last_step {
+                        let min = delay.duration().max(StepDelay::UNIT);
+                        prop_assert!(at - prev >= min, "{:?} after {:?}", at - prev, prev);
+                    }
+                    *last_step = step;
+                } else {
+                    prop_assert_eq!(after, before.0);
+                }
+                Ok(())
+            };
+            for (dt_us, op) in ops {
+                let until = now + Duration::from_micros(dt_us);
+                while now < until {
+                    now = (now + Duration::from_micros(50)).min(until);
+                    check(&mut sim, &mut last_step, now, delay)?;
+                }
+                let w = match op {
+                    Op::Target(p) => Write::TargetPosition(p),
+                    Op::Relative(d) => Write::RelativePosition(d),
+                    Op::Current(p) => Write::CurrentPosition(p),
+                    Op::Delay(d) => {
+                        delay = StepDelay::from_tenths_ms(d);
+                        Write::StepDelay(delay)
+                    }
+                };
+                let before = sim.current_position();
+                write(&mut sim, now, BOARD, w);
+                // A shorter delay can make one step due at once, never more.
+                if sim.last_step_at() != last_step {
+                    let at = sim.last_step_at().expect("stepped");
+                    prop_assert_eq!(at, now);
+                    prop_assert!((sim.current_position() - before).abs() <= 1);
+                    if let Some(prev) = last_step {
+                        prop_assert!(at - prev >= delay.duration().max(StepDelay::UNIT));
+                    }
+                    last_step = Some(at);
+                }
+            }
+        }
+    }
+}
