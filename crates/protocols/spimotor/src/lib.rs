@@ -31,6 +31,10 @@
 //! clocks out the answer for as long as the host clocks, so a host reads a value by
 //! clocking as many [`DUMMY`] bytes as the value is long ([`ReadPort::default_len`]).
 //!
+//! Nothing in an answer tells a present board from an absent one: an undriven MISO line
+//! reads 0xFF, which decodes as position −1. A driver identifies its boards by reading
+//! port 0x01: 0xFF bytes never terminate the string ([`Error::Unterminated`]).
+//!
 //! (A real board's AVR must reload its shift register between the port byte and the first
 //! answer byte; a host on real hardware may need a short pause there. The simulator
 //! answers at any clock rate.)
