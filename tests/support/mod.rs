@@ -1,0 +1,4 @@
+//! Shared support of the cross-crate tests.
+#![allow(dead_code)]
+
+pub mod rig;

@@ -1,0 +1,246 @@
+//! A test rig: the engine, real `SimLink`s to simulated boards, and a fake clock.
+//!
+//! [`Rig::tick`] does what motiond's loop does each tick — read every link, feed the engine,
+//! step, write what the drivers want to send — with time advanced by the test, never slept.
+//! Link faults (a `SimFaults` unplug) surface as `Disconnected` errors; the rig reports
+//! them to the engine and tries to reopen the link every [`REOPEN_EVERY`], as motiond's
+//! I/O threads do.
+
+use core::time::Duration;
+use std::collections::VecDeque;
+use std::sync::{Arc, Mutex, MutexGuard};
+
+use motion_drivers::Driver;
+use motion_engine::{CommandPort, Engine, EngineConfig};
+use motion_ipc::{AxisState, ClientId, CommandKind, CommandReply, CommandRequest, MotionFrame};
+use motion_link::sim::{SpiDevice, StreamDevice};
+use motion_link::{Link, LinkErrorKind};
+
+/// How often the rig retries opening a disconnected link.
+pub const REOPEN_EVERY: Duration = Duration::from_millis(100);
+
+/// A device model shared between the simulated wire and the test, so the test can look at
+/// (and poke) the model's true state while the link owns it.
+#[derive(Debug)]
+pub struct Shared<T>(pub Arc<Mutex<T>>);
+
+impl<T> Shared<T> {
+    /// Wraps `model`; returns the wire side and the test's handle.
+    pub fn new(model: T) -> (Box<Self>, Arc<Mutex<T>>) {
+        let inner = Arc::new(Mutex::new(model));
+        (Box::new(Self(Arc::clone(&inner))), inner)
+    }
+
+    fn lock(&self) -> MutexGuard<'_, T> {
+        self.0.lock().expect("model lock")
+    }
+}
+
+impl<T: StreamDevice> StreamDevice for Shared<T> {
+    fn receive(&mut self, now: Duration, bytes: &[u8]) {
+        self.lock().receive(now, bytes);
+    }
+    fn transmit(&mut self, now: Duration, out: &mut [u8]) -> usize {
+        self.lock().transmit(now, out)
+    }
+    fn next_event(&self, now: Duration) -> Option<Duration> {
+        self.lock().next_event(now)
+    }
+    fn baud(&self) -> Option<u32> {
+        self.lock().baud()
+    }
+}
+
+impl<T: SpiDevice> SpiDevice for Shared<T> {
+    fn transfer(&mut self, now: Duration, mosi: &[u8], miso: &mut [u8]) -> bool {
+        self.lock().transfer(now, mosi, miso)
+    }
+    fn advance(&mut self, now: Duration) {
+        self.lock().advance(now);
+    }
+}
+
+/// Commands in, replies out.
+#[derive(Debug, Default)]
+pub struct Queue {
+    pub requests: VecDeque<CommandRequest>,
+    pub replies: Vec<CommandReply>,
+}
+
+impl CommandPort for Queue {
+    fn next_request(&mut self) -> Option<CommandRequest> {
+        self.requests.pop_front()
+    }
+    fn reply(&mut self, reply: CommandReply) {
+        self.replies.push(reply);
+    }
+}
+
+/// Every message written to one link, with the time it was written.
+pub type WireLog = Vec<(Duration, Vec<u8>)>;
+
+struct RigLink {
+    link: Box<dyn Link>,
+    down: bool,
+    next_reopen: Duration,
+    log: WireLog,
+}
+
+/// The engine wired to simulated links.
+pub struct Rig {
+    pub engine: Engine,
+    links: Vec<RigLink>,
+    pub frame: Box<MotionFrame>,
+    pub port: Queue,
+    pub now: Duration,
+    pub period: Duration,
+    pub client: ClientId,
+    sequence: u64,
+    /// Record every written message per link (off by default: costs memory).
+    pub log_wire: bool,
+}
+
+impl Rig {
+    /// `links` in config order (one `SimLink` or other `Link` per `config.links` entry),
+    /// `drivers` in `config.devices` order.
+    pub fn new(
+        config: EngineConfig,
+        drivers: Vec<Box<dyn Driver>>,
+        links: Vec<Box<dyn Link>>,
+    ) -> Self {
+        assert_eq!(
+            config.links.len(),
+            links.len(),
+            "one link per configured link"
+        );
+        let period = config.period();
+        let engine = Engine::new(config, drivers).expect("valid engine config");
+        Self {
+            engine,
+            links: links
+                .into_iter()
+                .map(|link| RigLink {
+                    link,
+                    down: false,
+                    next_reopen: Duration::ZERO,
+                    log: Vec::new(),
+                })
+                .collect(),
+            frame: Box::new(MotionFrame::EMPTY),
+            port: Queue::default(),
+            now: Duration::ZERO,
+            period,
+            client: ClientId::from_u128(0xC11E_27),
+            sequence: 0,
+            log_wire: false,
+        }
+    }
+
+    /// One tick at `self.now`, then time advances by one period.
+    pub fn tick(&mut self) {
+        let now = self.now;
+        let mut buf = [0u8; 4096];
+        for (index, rig_link) in self.links.iter_mut().enumerate() {
+            if rig_link.down {
+                if now >= rig_link.next_reopen {
+                    if rig_link.link.reopen(now).is_ok() {
+                        rig_link.down = false;
+                        self.engine.link_up(index, now);
+                    } else {
+                        rig_link.next_reopen = now + REOPEN_EVERY;
+                    }
+                }
+                continue;
+            }
+            loop {
+                match rig_link.link.read(now, &mut buf) {
+                    Ok(0) => break,
+                    Ok(len) => self.engine.handle_link_rx(index, now, &buf[..len]),
+                    Err(error) => {
+                        if error.kind() == LinkErrorKind::Disconnected {
+                            rig_link.down = true;
+                            rig_link.next_reopen = now + REOPEN_EVERY;
+                            self.engine.link_down(index, now);
+                        }
+                        break;
+                    }
+                }
+            }
+        }
+        self.engine.step(now, &mut self.port, &mut self.frame);
+        for (index, rig_link) in self.links.iter_mut().enumerate() {
+            while let Some(len) = self.engine.poll_link_transmit(index, now, &mut buf) {
+                if rig_link.down {
+                    continue;
+                }
+                match rig_link.link.write(now, &buf[..len]) {
+                    Ok(written) => {
+                        assert_eq!(written, len, "the sim link took a partial message");
+                        if self.log_wire {
+                            rig_link.log.push((now, buf[..len].to_vec()));
+                        }
+                    }
+                    Err(error) => {
+                        if error.kind() == LinkErrorKind::Disconnected {
+                            rig_link.down = true;
+                            rig_link.next_reopen = now + REOPEN_EVERY;
+                            self.engine.link_down(index, now);
+                        }
+                    }
+                }
+            }
+        }
+        self.now += self.period;
+    }
+
+    /// `count` ticks.
+    pub fn run(&mut self, count: usize) {
+        for _ in 0..count {
+            self.tick();
+        }
+    }
+
+    /// Ticks until `done(frame)` holds or `limit` of simulated time passes; returns whether
+    /// it held.
+    pub fn run_until(
+        &mut self,
+        limit: Duration,
+        mut done: impl FnMut(&MotionFrame) -> bool,
+    ) -> bool {
+        let end = self.now + limit;
+        while self.now < end {
+            self.tick();
+            if done(&self.frame) {
+                return true;
+            }
+        }
+        false
+    }
+
+    /// Sends one command in the next tick and returns the engine's reply.
+    pub fn command(&mut self, axis: u32, kind: CommandKind, values: [f64; 3]) -> CommandReply {
+        self.sequence += 1;
+        let request =
+            CommandRequest::new(self.client, self.sequence, axis, kind).with_values(values);
+        self.port.requests.push_back(request);
+        self.tick();
+        let reply = self.port.replies.pop().expect("every request is answered");
+        assert_eq!(reply.sequence, self.sequence);
+        reply
+    }
+
+    /// Axis `index` in the last frame.
+    pub fn axis(&self, index: usize) -> AxisState {
+        self.frame.axes[index]
+    }
+
+    /// Messages written to link `index` (when `log_wire` is on).
+    pub fn wire_log(&self, index: usize) -> &WireLog {
+        &self.links[index].log
+    }
+
+    /// Whether link `index` is currently considered down by the rig.
+    pub fn link_is_down(&self, index: usize) -> bool {
+        self.links[index].down
+    }
+}
