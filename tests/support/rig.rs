@@ -130,7 +130,7 @@ impl Rig {
             port: Queue::default(),
             now: Duration::ZERO,
             period,
-            client: ClientId::from_u128(0xC11E_27),
+            client: ClientId::from_u128(0x00C1_1E27),
             sequence: 0,
             log_wire: false,
         }
