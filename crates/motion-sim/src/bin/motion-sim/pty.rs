@@ -167,3 +167,60 @@ fn flush_out(pty: &Pty, outbound: &mut Vec<u8>) -> Result<()> {
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use motion_link::serial::{SerialConfig, SerialLink};
+    use motion_link::sim::StreamDevice;
+
+    /// Answers every byte with its upper-case form.
+    #[derive(Default)]
+    struct Shout(Vec<u8>);
+
+    impl StreamDevice for Shout {
+        fn receive(&mut self, _now: Duration, bytes: &[u8]) {
+            self.0.extend(bytes.iter().map(u8::to_ascii_uppercase));
+        }
+        fn transmit(&mut self, _now: Duration, out: &mut [u8]) -> usize {
+            let n = out.len().min(self.0.len());
+            out[..n].copy_from_slice(&self.0[..n]);
+            self.0.drain(..n);
+            n
+        }
+        fn next_event(&self, now: Duration) -> Option<Duration> {
+            (!self.0.is_empty()).then_some(now)
+        }
+    }
+
+    #[test]
+    fn a_serial_client_talks_to_the_model_through_the_pty_at_the_wire_rate() {
+        let pty = Pty::open(9600).expect("pty");
+        let path = pty.path().to_string_lossy().into_owned();
+        let stop = AtomicBool::new(false);
+        std::thread::scope(|scope| {
+            let server = scope.spawn(|| {
+                let mut link = SimLink::stream("test", 9600, Box::new(Shout::default()));
+                let mut trace = Trace::new("test", false);
+                serve(&pty, &mut link, &stop, &mut trace)
+            });
+            let mut client = SerialLink::open(SerialConfig::new(&path, 9600)).expect("open");
+            let start = Instant::now();
+            let message = b"hello, pty";
+            assert_eq!(client.write(start.elapsed(), message).expect("write"), 10);
+            let mut got = Vec::new();
+            let mut buf = [0u8; 64];
+            while got.len() < message.len() && start.elapsed() < Duration::from_secs(5) {
+                let n = client.read(start.elapsed(), &mut buf).expect("read");
+                got.extend_from_slice(&buf[..n]);
+                std::thread::sleep(Duration::from_millis(1));
+            }
+            let took = start.elapsed();
+            stop.store(true, Ordering::SeqCst);
+            assert_eq!(got, b"HELLO, PTY");
+            // 10 bytes out, the last echo one byte time later: 11 × 10 / 9600 s ≈ 11.5 ms.
+            assert!(took >= Duration::from_micros(11_458), "{took:?}");
+            server.join().expect("server thread").expect("serve");
+        });
+    }
+}
