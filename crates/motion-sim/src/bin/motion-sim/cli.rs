@@ -24,7 +24,7 @@ Examples:
         python3 -c \"import os,time; f=os.open('/tmp/qsb',os.O_RDWR); os.write(f,b'R14\\r\\n'); time.sleep(0.1); print(os.read(f,64))\"
   motion-sim --model tmcpack --address 1 --model tmcpack --address 2 --variant quadpack --pty
       two packs on one RS-485 bus. Unit info ($43) of pack 1, 9-byte request:
-        python3 -c \"import os,time,sys; f=os.open(sys.argv[1],os.O_RDWR); os.write(f,bytes([1,0x43,0,0,0,0,0,0,0])); time.sleep(0.1); print(os.read(f,64).hex())\" /dev/pts/N
+        python3 -c \"import os,time,sys; f=os.open(sys.argv[1],os.O_RDWR); os.write(f,bytes([1,0x43,0xFE,0,0,0,0,0,0])); time.sleep(0.1); print(os.read(f,64).hex())\" /dev/pts/N
   motion-sim --model qq2drv --spi-socket /tmp/qq2drv.sock
       one transaction = u16 little-endian length + MOSI bytes; the answer is as many MISO
       bytes. Version request (packet 1) then filler to clock the reply out:
