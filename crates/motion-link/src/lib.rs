@@ -56,6 +56,7 @@
 //! ```
 #![forbid(unsafe_code)]
 
+mod config;
 mod error;
 mod link;
 pub mod serial;
@@ -63,5 +64,6 @@ pub mod sim;
 pub mod spi_socket;
 pub mod spidev;
 
+pub use config::LinkConfig;
 pub use error::{LinkError, LinkErrorKind};
 pub use link::{Link, LinkKind, LinkStats};

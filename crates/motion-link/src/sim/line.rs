@@ -46,8 +46,8 @@ impl Line {
             self.free = earliest;
         }
         let start = self.free;
-        self.bits += bits;
-        self.free = self.origin + bits_time(self.bits, self.rate);
+        self.bits = self.bits.saturating_add(bits);
+        self.free = self.origin.saturating_add(bits_time(self.bits, self.rate));
         (start, self.free)
     }
 
@@ -142,7 +142,7 @@ pub(crate) fn resample(
         let framing_error = !sample(9);
         let end = edge + (10 * NANOS_PER_SEC).div_ceil(rx);
         out(Received {
-            at: start + Duration::from_nanos(u64::try_from(end).unwrap_or(u64::MAX)),
+            at: start.saturating_add(Duration::from_nanos(u64::try_from(end).unwrap_or(u64::MAX))),
             byte,
             framing_error,
         });

@@ -329,7 +329,7 @@ impl SimLink {
             total += n;
             let mut burst = std::mem::take(&mut self.scratch);
             let delay = self.faults.lock().reply_delay;
-            self.send_to_host(t + delay, burst.get(..n).unwrap_or_default());
+            self.send_to_host(t.saturating_add(delay), burst.get(..n).unwrap_or_default());
             burst.resize(256, 0);
             self.scratch = burst;
         }
@@ -536,7 +536,7 @@ impl SimLink {
                 byte
             };
             arrivals.push(Received {
-                at: start + super::line::bits_time(8 * (i as u64 + 1), rate),
+                at: start.saturating_add(super::line::bits_time(8 * (i as u64 + 1), rate)),
                 byte,
                 framing_error: false,
             });
