@@ -1,0 +1,120 @@
+//! The pack's UART side: receiving words and scheduling replies on a half-duplex pair.
+//!
+//! Timing rules (manual 6.1): a reply starts only after the transmitter switch-over time
+//! ($40, 6 ms by default) "has passed", measured from the end of the request; "the PACK
+//! continues to drive the line for a pre-set time after transmitting a message". While the
+//! pack drives the pair its receiver is off (RS-485 half duplex with the driver enable and
+//! receiver enable tied, our reading), so bytes sent to it then are lost.
+
+use core::time::Duration;
+use std::collections::VecDeque;
+
+use tmcpack::{FRAME_LEN, Word};
+
+/// Why something is on the transmit queue.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Kind {
+    /// The answer to the request just received.
+    Immediate,
+    /// A delayed $28 answer.
+    Delayed,
+    /// The 0 byte a reset puts on the line.
+    Glitch,
+}
+
+#[derive(Debug, Clone)]
+struct Outgoing {
+    start: Duration,
+    bytes: Word,
+    len: usize,
+    sent: usize,
+    byte_time: Duration,
+    hold: Duration,
+    kind: Kind,
+}
+
+impl Outgoing {
+    fn byte_start(&self, i: usize) -> Duration {
+        self.start + self.byte_time * i as u32
+    }
+
+    fn end(&self) -> Duration {
+        self.byte_start(self.len)
+    }
+
+    fn window_end(&self) -> Duration {
+        self.end() + self.hold
+    }
+}
+
+/// The transmit side.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Transmitter {
+    queue: VecDeque<Outgoing>,
+    last_window: Option<(Duration, Duration)>,
+}
+
+impl Transmitter {
+    /// `true` while the pack drives the pair at `t`.
+    pub fn driving(&self, t: Duration) -> bool {
+        let inside = |s: Duration, e: Duration| s <= t && t < e;
+        self.last_window.is_some_and(|(s, e)| inside(s, e))
+            || self.queue.iter().any(|o| inside(o.start, o.window_end()))
+    }
+
+    /// Queues `bytes` to start at `ready` (or after what is already queued). An immediate
+    /// answer replaces one that has not started yet; returns `true` if it did.
+    pub fn schedule(
+        &mut self,
+        ready: Duration,
+        bytes: &[u8],
+        byte_time: Duration,
+        hold: Duration,
+        kind: Kind,
+    ) -> bool {
+        let mut replaced = false;
+        if kind == Kind::Immediate {
+            let before = self.queue.len();
+            self.queue.retain(|o| !(o.kind == Kind::Immediate && o.sent == 0));
+            replaced = self.queue.len() != before;
+        }
+        let start = self.queue.iter().map(Outgoing::end).fold(ready, Duration::max);
+        let mut word = [0u8; FRAME_LEN];
+        let len = bytes.len().min(FRAME_LEN);
+        word.get_mut(..len).unwrap_or_default().copy_from_slice(bytes.get(..len).unwrap_or_default());
+        self.queue.push_back(Outgoing { start, bytes: word, len, sent: 0, byte_time, hold, kind });
+        replaced
+    }
+
+    /// Moves into `out` the bytes whose transmission started at or before `now`.
+    pub fn transmit(&mut self, now: Duration, out: &mut [u8]) -> usize {
+        let mut n = 0;
+        for o in &mut self.queue {
+            while o.sent < o.len && o.byte_start(o.sent) <= now {
+                let Some(slot) = out.get_mut(n) else { return n };
+                *slot = o.bytes.get(o.sent).copied().unwrap_or(0);
+                o.sent += 1;
+                n += 1;
+            }
+            if o.sent < o.len {
+                break;
+            }
+        }
+        while self.queue.front().is_some_and(|o| o.sent == o.len && o.window_end() <= now) {
+            if let Some(o) = self.queue.pop_front() {
+                self.last_window = Some((o.start, o.window_end()));
+            }
+        }
+        n
+    }
+
+    /// When the next byte starts.
+    pub fn next_byte(&self) -> Option<Duration> {
+        self.queue.iter().find(|o| o.sent < o.len).map(|o| o.byte_start(o.sent))
+    }
+
+    /// Forgets everything queued (reset).
+    pub fn clear(&mut self) {
+        self.queue.clear();
+    }
+}
