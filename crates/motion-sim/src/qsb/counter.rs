@@ -91,7 +91,11 @@ impl Counter {
             CycleMode::FreeRunning | CycleMode::SingleCycle => {
                 // Counts until the wrap, and until CNTR first equals DTR.
                 let to_wrap = if up { WRAP - c } else { c + 1 };
-                let to_dtr = match if up { (dtr + WRAP - c) % WRAP } else { (c + WRAP - dtr) % WRAP } {
+                let to_dtr = match if up {
+                    (dtr + WRAP - c) % WRAP
+                } else {
+                    (c + WRAP - dtr) % WRAP
+                } {
                     0 => WRAP,
                     d => d,
                 };
@@ -131,7 +135,11 @@ impl Counter {
             CycleMode::ModuloN => {
                 let modulus = dtr + 1;
                 let c = c % modulus;
-                let to_dtr = match if up { (dtr + modulus - c) % modulus } else { (c + modulus - dtr) % modulus } {
+                let to_dtr = match if up {
+                    (dtr + modulus - c) % modulus
+                } else {
+                    (c + modulus - dtr) % modulus
+                } {
                     0 => modulus,
                     d => d,
                 };
@@ -251,7 +259,11 @@ mod tests {
                 for n in 0..25u64 {
                     for up in [true, false] {
                         let mut c = counter(cycle, 10);
-                        c.cntr = if cycle == CycleMode::ModuloN { start % 11 } else { start };
+                        c.cntr = if cycle == CycleMode::ModuloN {
+                            start % 11
+                        } else {
+                            start
+                        };
                         let (slow, slow_ev) = one_by_one(c.clone(), n, up);
                         let fast_ev = c.count(n, up);
                         let what = format!("{cycle:?} start {start} n {n} up {up}");

@@ -49,17 +49,22 @@ impl QsbSim {
     fn apply(&mut self, line: &CommandLine, now: Duration) -> Response {
         let data = line.data.unwrap_or(0);
         let refuse = |ty| Response::new(ty, line.register, data);
-        let request = match Request::from_line(line).and_then(|r| r.check(self.config.variant).map(|()| r)) {
-            Ok(r) => r,
-            Err(Error::UnknownRegister | Error::NotPermitted) => {
-                return refuse(ResponseType::Unsupported);
-            }
-            Err(_) => return refuse(ResponseType::Error),
-        };
+        let request =
+            match Request::from_line(line).and_then(|r| r.check(self.config.variant).map(|()| r)) {
+                Ok(r) => r,
+                Err(Error::UnknownRegister | Error::NotPermitted) => {
+                    return refuse(ResponseType::Unsupported);
+                }
+                Err(_) => return refuse(ResponseType::Error),
+            };
         match request {
             Request::Read(register) => {
                 self.streams.cancel(register);
-                Response::new(ResponseType::Read, line.register, self.read_register(register))
+                Response::new(
+                    ResponseType::Read,
+                    line.register,
+                    self.read_register(register),
+                )
             }
             Request::Stream(register) => {
                 let value = self.stream_value(register);

@@ -52,8 +52,7 @@ impl Output {
             self.dropped_lines += 1;
             return None;
         }
-        self.queue
-            .extend(buf.iter().take(n).map(|b| (ready, *b)));
+        self.queue.extend(buf.iter().take(n).map(|b| (ready, *b)));
         let start = self.uart_free.max(ready);
         self.uart_free = start + byte_time(baud) * n as u32;
         self.lines += 1;

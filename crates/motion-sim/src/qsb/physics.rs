@@ -57,7 +57,8 @@ impl QsbSim {
             let p0 = self.encoder_at(self.t);
             if self.config.variant == super::Variant::M {
                 let (vmax, accel) = self.motor_limits_internal();
-                self.motor.advance((next - self.t).as_secs_f64(), vmax, accel);
+                self.motor
+                    .advance((next - self.t).as_secs_f64(), vmax, accel);
                 if self.motor.velocity != 0.0 && self.dio.drive.is_some() {
                     self.set_direction(self.motor.velocity > 0.0);
                 }
@@ -152,7 +153,11 @@ impl QsbSim {
     /// The PWM encoder's reading: the position within a revolution at 10 or 12 bits.
     pub(super) fn pwm_value(&self) -> u32 {
         let cpr = f64::from(self.config.cycles_per_rev.max(1));
-        let full = if self.config.pwm_12bit { 4096.0 } else { 1024.0 };
+        let full = if self.config.pwm_12bit {
+            4096.0
+        } else {
+            1024.0
+        };
         let turn = (self.encoder_at(self.t) / cpr).rem_euclid(1.0);
         ((turn * full) as u32).min(full as u32 - 1)
     }

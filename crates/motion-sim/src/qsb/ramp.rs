@@ -124,7 +124,11 @@ impl Stepper {
                     self.goal = Goal::Idle;
                     return None;
                 }
-                let s = if d.abs() <= EPS { -v.signum() } else { d.signum() };
+                let s = if d.abs() <= EPS {
+                    -v.signum()
+                } else {
+                    d.signum()
+                };
                 let dist = d.abs();
                 let u = s * v; // speed towards the target
                 if u < 0.0 {
@@ -225,7 +229,11 @@ mod tests {
             while s.moving() {
                 s.advance(dt, vmax, accel);
                 t += dt;
-                assert!(s.velocity.abs() <= vmax * (1.0 + 1e-9), "{steps} v {}", s.velocity);
+                assert!(
+                    s.velocity.abs() <= vmax * (1.0 + 1e-9),
+                    "{steps} v {}",
+                    s.velocity
+                );
                 assert!((s.velocity - last_v).abs() <= accel * dt * (1.0 + 1e-6) + 1e-9);
                 last_v = s.velocity;
                 assert!(t < 1000.0, "never arrives");

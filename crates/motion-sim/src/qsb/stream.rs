@@ -61,7 +61,9 @@ impl QsbSim {
     /// The measurement time of one value in the current MODE.
     pub(super) fn measurement_delay(&self) -> Duration {
         if self.regs.mode.encoder == EncoderMode::Analog {
-            self.config.processing_delay.max(qsb::ANALOG_PROCESSING_DELAY)
+            self.config
+                .processing_delay
+                .max(qsb::ANALOG_PROCESSING_DELAY)
         } else {
             self.config.processing_delay
         }
