@@ -188,6 +188,12 @@ pub struct PacketBuf {
 }
 
 impl PacketBuf {
+    /// Copies one whole packet after checking its framing (STX, size, checksum).
+    pub fn from_packet(packet: &[u8]) -> Result<Self, Error> {
+        Frame::parse(packet)?;
+        Self::copy_from(packet).ok_or(Error::BadSize)
+    }
+
     /// Copies a whole, already validated packet.
     pub(crate) fn copy_from(packet: &[u8]) -> Option<Self> {
         let mut bytes = [0u8; MAX_PACKET_LEN];
