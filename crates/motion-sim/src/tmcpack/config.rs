@@ -49,7 +49,11 @@ impl Default for MotorConfig {
         Self {
             // Half a revolution (3200 microsteps) from the start, in the positive direction:
             // where the default flags (NullLeft clear) search for it.
-            ref_switch: Some(RefSwitch { from: 3200, to: 3519, opener: false }),
+            ref_switch: Some(RefSwitch {
+                from: 3200,
+                to: 3519,
+                opener: false,
+            }),
             travel: None,
             analog: 512,
         }

@@ -8,10 +8,10 @@ use tmcpack::{
     Reply, ReplyFrame, Request,
 };
 
+use super::TmcpackSim;
 use super::motor::{Mode, Motor};
 use super::pack::{Delayed, Interp, PackState};
 use super::wire::Kind;
-use super::TmcpackSim;
 
 impl TmcpackSim {
     /// Executes a request that completed at `t`.
@@ -22,23 +22,32 @@ impl TmcpackSim {
         match req {
             Request::PeakCurrent { motor, value } => {
                 // "Only the values set for motor-numbers 0,2 and 4 are valid."
-                if motor % 2 == 0 {
-                    if let Some(p) = self.st.peak.get_mut(usize::from(motor / 2)) {
-                        *p = value;
-                    }
+                if motor % 2 == 0
+                    && let Some(p) = self.st.peak.get_mut(usize::from(motor / 2))
+                {
+                    *p = value;
                 }
             }
-            Request::CurrentControl { i0, i1, i2, i3, t0, .. } => self.with_motor(idx, |m| {
+            Request::CurrentControl {
+                i0, i1, i2, i3, t0, ..
+            } => self.with_motor(idx, |m| {
                 (m.p.i0, m.p.i1, m.p.i2, m.p.i3, m.p.t0) = (i0, i1, i2, i3, t0);
             }),
             Request::VelocitySetting { clkdiv } => self.st.clkdiv = clkdiv,
-            Request::StartingVelocity { vmin, vstart, div, .. } => self.with_motor(idx, |m| {
+            Request::StartingVelocity {
+                vmin, vstart, div, ..
+            } => self.with_motor(idx, |m| {
                 (m.p.vmin, m.p.vstart, m.p.div) = (vmin, vstart, div);
             }),
             Request::VelocityAcceleration { amax, vmax, .. } => {
                 self.with_motor(idx, |m| (m.p.amax, m.p.vmax) = (amax, vmax));
             }
-            Request::MotorParameters { poslimit, motor_type, options, .. } => {
+            Request::MotorParameters {
+                poslimit,
+                motor_type,
+                options,
+                ..
+            } => {
                 self.with_motor(idx, |m| {
                     m.p.poslimit = poslimit;
                     m.p.motor_type = motor_type.with(MotorType::AUTO_NULL_CMD, false);
@@ -48,9 +57,15 @@ impl TmcpackSim {
                     }
                 });
             }
-            Request::ReferenceParameters { vrefmax, debounce_mask, flags, .. } => {
+            Request::ReferenceParameters {
+                vrefmax,
+                debounce_mask,
+                flags,
+                ..
+            } => {
                 self.with_motor(idx, |m| {
-                    (m.p.vrefmax, m.p.debounce_mask, m.p.ref_flags) = (vrefmax, debounce_mask, flags);
+                    (m.p.vrefmax, m.p.debounce_mask, m.p.ref_flags) =
+                        (vrefmax, debounce_mask, flags);
                 });
             }
             Request::MicrostepTable { pointer, entries } => {
@@ -59,10 +74,22 @@ impl TmcpackSim {
                     slots.copy_from_slice(&entries);
                 }
             }
-            Request::NullOffset { nulloffset, testnullrange, .. } => {
-                self.with_motor(idx, |m| (m.p.nulloffset, m.p.testnullrange) = (nulloffset, testnullrange));
+            Request::NullOffset {
+                nulloffset,
+                testnullrange,
+                ..
+            } => {
+                self.with_motor(idx, |m| {
+                    (m.p.nulloffset, m.p.testnullrange) = (nulloffset, testnullrange)
+                });
             }
-            Request::PiParameters { propdiv, intdiv, intclip, intinpclip, .. } => {
+            Request::PiParameters {
+                propdiv,
+                intdiv,
+                intclip,
+                intinpclip,
+                ..
+            } => {
                 self.with_motor(idx, |m| {
                     (m.p.propdiv, m.p.intdiv, m.p.intclip, m.p.intinpclip) =
                         (propdiv, intdiv, intclip, intinpclip);
@@ -71,24 +98,41 @@ impl TmcpackSim {
             Request::QueryPosition { motor, reply_to } => {
                 if let Some(m) = self.motors.get_mut(idx) {
                     let stopped = core::mem::take(&mut m.stop_flag);
-                    let reply = Reply::Position { motor, position: m.reported(), action: m.action(), stopped };
+                    let reply = Reply::Position {
+                        motor,
+                        position: m.reported(),
+                        action: m.action(),
+                        stopped,
+                    };
                     self.send(t, reply_to, reply, Kind::Immediate);
                 }
             }
             Request::QueryVelocity { motor, reply_to } => {
                 if let Some(m) = self.motors.get(idx) {
-                    let reply = Reply::Velocity { motor, velocity: m.vact(), action: m.action() };
+                    let reply = Reply::Velocity {
+                        motor,
+                        velocity: m.vact(),
+                        action: m.action(),
+                    };
                     self.send(t, reply_to, reply, Kind::Immediate);
                 }
             }
-            Request::ReferenceSearch { .. } if enabled => self.with_motor(idx, Motor::start_reference),
+            Request::ReferenceSearch { .. } if enabled => {
+                self.with_motor(idx, Motor::start_reference)
+            }
             Request::StartRamp { target, .. } if enabled => self.start_ramp(idx, target),
             Request::PiTarget { target, .. } if enabled => self.with_motor(idx, |m| {
                 m.target = target;
                 let t = m.internal_target(target);
                 m.mode = match m.mode {
-                    Mode::Pi { integral, .. } => Mode::Pi { target: t, integral },
-                    _ => Mode::Pi { target: t, integral: 0 },
+                    Mode::Pi { integral, .. } => Mode::Pi {
+                        target: t,
+                        integral,
+                    },
+                    _ => Mode::Pi {
+                        target: t,
+                        integral: 0,
+                    },
                 };
             }),
             Request::Rotate { velocity, .. } if enabled => {
@@ -99,20 +143,31 @@ impl TmcpackSim {
                 let t = m.internal_target(target);
                 match m.mode {
                     Mode::Ramp { .. } => m.mode = Mode::Ramp { target: t },
-                    Mode::Pi { integral, .. } => m.mode = Mode::Pi { target: t, integral },
+                    Mode::Pi { integral, .. } => {
+                        m.mode = Mode::Pi {
+                            target: t,
+                            integral,
+                        }
+                    }
                     _ => {}
                 }
             }),
             Request::SetPosition { position, .. } => {
                 self.with_motor(idx, |m| m.set_position(i64::from(position)));
             }
-            Request::QueryActions { reply_to, delay_mask } => {
+            Request::QueryActions {
+                reply_to,
+                delay_mask,
+            } => {
                 self.st.delayed = None;
                 if delay_mask.bits() == 0 {
                     let reply = self.actions_reply();
                     self.send(t, reply_to, reply, Kind::Immediate);
                 } else {
-                    self.st.delayed = Some(Delayed { reply_to, mask: delay_mask });
+                    self.st.delayed = Some(Delayed {
+                        reply_to,
+                        mask: delay_mask,
+                    });
                     self.check_delayed(t);
                 }
             }
@@ -127,7 +182,11 @@ impl TmcpackSim {
                 let reply = self.input_reply(channel);
                 self.send(t, reply_to, reply, Kind::Immediate);
             }
-            Request::StopLimits { channel, left_min, right_max } => match channel {
+            Request::StopLimits {
+                channel,
+                left_min,
+                right_max,
+            } => match channel {
                 0..=5 => self.with_motor(usize::from(channel), |m| {
                     (m.p.stop_left_min, m.p.stop_right_max) = (left_min, right_max);
                 }),
@@ -137,17 +196,28 @@ impl TmcpackSim {
                     }
                 }
             },
-            Request::Outputs { ttlout1, ttlio1_input, ttlio1, ttlout1_ready } => {
+            Request::Outputs {
+                ttlout1,
+                ttlio1_input,
+                ttlio1,
+                ttlout1_ready,
+            } => {
                 self.st.ttlout1 = ttlout1;
                 self.st.ttlio1_is_input = ttlio1_input;
                 self.st.ttlio1_out = ttlio1;
                 self.st.ttlout1_ready = ttlout1_ready;
             }
-            Request::ReadyOutput { active_mask, reference_mask } => {
+            Request::ReadyOutput {
+                active_mask,
+                reference_mask,
+            } => {
                 self.st.ready_active = active_mask;
                 self.st.ready_ref = reference_mask;
             }
-            Request::SetBaud { divisor, switchover } => {
+            Request::SetBaud {
+                divisor,
+                switchover,
+            } => {
                 self.st.divisor = divisor;
                 self.st.switchover_units = switchover;
                 self.decoder.set_byte_time(byte_time(nominal_baud(divisor)));
@@ -166,9 +236,16 @@ impl TmcpackSim {
                 };
                 self.send(t, reply_to, reply, Kind::Immediate);
             }
-            Request::CanRs232 { reply_to, rs232_reply_to, forward_count } => {
+            Request::CanRs232 {
+                reply_to,
+                rs232_reply_to,
+                forward_count,
+            } => {
                 self.st.can_rs232 = (rs232_reply_to, forward_count);
-                let reply = Reply::CanRs232 { tx_pending: 0, cts: self.cfg.cts };
+                let reply = Reply::CanRs232 {
+                    tx_pending: 0,
+                    cts: self.cfg.cts,
+                };
                 self.send(t, reply_to, reply, Kind::Immediate);
             }
             Request::PowerDown { reply_to, flags } => {
@@ -200,7 +277,9 @@ impl TmcpackSim {
             Request::FlashChecksum { reply_to } => {
                 self.st.flash_enabled = false;
                 self.st.flash_read = 0;
-                let reply = Reply::FlashChecksum { checksum: self.nv.checksum() };
+                let reply = Reply::FlashChecksum {
+                    checksum: self.nv.checksum(),
+                };
                 self.send(t, reply_to, reply, Kind::Immediate);
             }
             Request::FlashRead { reply_to } => {
@@ -212,7 +291,12 @@ impl TmcpackSim {
                 self.st.flash_read = at + data.len();
                 self.send(t, reply_to, Reply::FlashData { data }, Kind::Immediate);
             }
-            Request::EepromWrite { reply_to, magic, address, value } => {
+            Request::EepromWrite {
+                reply_to,
+                magic,
+                address,
+                value,
+            } => {
                 let slot = self.nv.eeprom.get_mut(usize::from(address));
                 let ok = magic == self.cfg.eeprom_magic && slot.is_some();
                 if let (true, Some(slot)) = (ok, slot) {
@@ -220,8 +304,14 @@ impl TmcpackSim {
                 }
                 self.send(t, reply_to, Reply::EepromWrite { ok }, Kind::Immediate);
             }
-            Request::EepromRead { reply_to, magic, address, .. } => {
-                let ok = magic == self.cfg.eeprom_magic && usize::from(address) < self.nv.eeprom.len();
+            Request::EepromRead {
+                reply_to,
+                magic,
+                address,
+                ..
+            } => {
+                let ok =
+                    magic == self.cfg.eeprom_magic && usize::from(address) < self.nv.eeprom.len();
                 self.send(t, reply_to, Reply::EepromRead { ok }, Kind::Immediate);
             }
             // Motion commands while the power-down mode holds the motors.
@@ -242,9 +332,13 @@ impl TmcpackSim {
 
     /// Queues `reply` to `reply_to`, `processing + switch-over` after `t`.
     pub(super) fn send(&mut self, t: Duration, reply_to: u8, reply: Reply, kind: Kind) {
-        let Ok(word) = ReplyFrame::new(reply_to, reply).to_word() else { return };
+        let Ok(word) = ReplyFrame::new(reply_to, reply).to_word() else {
+            return;
+        };
         let ready = t + self.cfg.processing_time + self.switchover();
-        let replaced = self.tx.schedule(ready, &word, self.byte_time(), self.switchover(), kind);
+        let replaced = self
+            .tx
+            .schedule(ready, &word, self.byte_time(), self.switchover(), kind);
         self.stats.replaced_replies += u64::from(replaced);
         self.stats.replies += 1;
     }
@@ -255,9 +349,15 @@ impl TmcpackSim {
         self.with_motor(i, |m| match m.mode {
             Mode::Inactive => {
                 m.target = target;
-                m.mode = Mode::Ramp { target: m.internal_target(target) };
+                m.mode = Mode::Ramp {
+                    target: m.internal_target(target),
+                };
             }
-            Mode::Rotation { .. } => m.mode = Mode::Halt { action: Action::Rotation },
+            Mode::Rotation { .. } => {
+                m.mode = Mode::Halt {
+                    action: Action::Rotation,
+                }
+            }
             _ => {}
         });
     }
@@ -268,14 +368,15 @@ impl TmcpackSim {
             if !mask.has(i as u8) {
                 continue;
             }
-            if let (Some(ip), Some(m)) = (self.st.interp, self.motors.get(i)) {
-                if ip.mask.has(i as u8) && m.mode == Mode::Interp {
-                    // Stopping any axis of an interpolation stops the master; the others
-                    // follow its progress and stop with it.
-                    let master = ip.master;
-                    self.with_motor(master, |mm| mm.target = mm.reported());
-                    continue;
-                }
+            if let (Some(ip), Some(m)) = (self.st.interp, self.motors.get(i))
+                && ip.mask.has(i as u8)
+                && m.mode == Mode::Interp
+            {
+                // Stopping any axis of an interpolation stops the master; the others
+                // follow its progress and stop with it.
+                let master = ip.master;
+                self.with_motor(master, |mm| mm.target = mm.pos as i32);
+                continue;
             }
             self.with_motor(i, |m| {
                 let mut pos = m.pos;
@@ -287,7 +388,12 @@ impl TmcpackSim {
                     Mode::Ramp { .. } | Mode::Rotation { .. } | Mode::Halt { .. } => {
                         m.mode = Mode::Ramp { target: pos };
                     }
-                    Mode::Pi { integral, .. } => m.mode = Mode::Pi { target: pos, integral },
+                    Mode::Pi { integral, .. } => {
+                        m.mode = Mode::Pi {
+                            target: pos,
+                            integral,
+                        }
+                    }
                     Mode::Inactive | Mode::Reference(_) | Mode::Interp => {}
                 }
             });
@@ -299,19 +405,31 @@ impl TmcpackSim {
     fn interpolate_start(&mut self, mask: MotorMask) {
         let n = usize::from(self.cfg.variant.motors());
         let used: Vec<usize> = (0..n).filter(|&i| mask.has(i as u8)).collect();
-        if used.is_empty() || used.iter().any(|&i| self.motors.get(i).is_some_and(|m| m.mode != Mode::Inactive)) {
+        if used.is_empty()
+            || used
+                .iter()
+                .any(|&i| self.motors.get(i).is_some_and(|m| m.mode != Mode::Inactive))
+        {
             return;
         }
-        let mut ip = Interp { master: 0, start: [0; 6], dist: [0; 6], mask };
+        let mut ip = Interp {
+            master: 0,
+            start: [0; 6],
+            dist: [0; 6],
+            mask,
+        };
         let mut longest = -1.0f64;
         for &i in &used {
             let clkdiv = self.st.clkdiv;
-            let Some(m) = self.motors.get(i) else { continue };
+            let Some(m) = self.motors.get(i) else {
+                continue;
+            };
             let start = m.pos;
             let dist = m.internal_target(m.target) - start;
-            let hz = m.limits(m.p.vmax).vmax as f64 * tmcpack::StepClock::new(clkdiv, m.p.div)
-                .map(tmcpack::StepClock::hz_per_unit)
-                .unwrap_or(1.0);
+            let hz = m.limits(m.p.vmax).vmax as f64
+                * tmcpack::StepClock::new(clkdiv, m.p.div)
+                    .map(tmcpack::StepClock::hz_per_unit)
+                    .unwrap_or(1.0);
             let time = dist.unsigned_abs() as f64 / hz.max(1e-9);
             if time > longest {
                 longest = time;
@@ -343,9 +461,14 @@ impl TmcpackSim {
     /// The $30 answer. Reference inputs are reported inverted (8.5).
     fn input_reply(&mut self, channel: u8) -> Reply {
         let raw = match channel {
-            0..=5 => self.motors.get(usize::from(channel)).map_or(0, |m| m.hw.analog),
+            0..=5 => self
+                .motors
+                .get(usize::from(channel))
+                .map_or(0, |m| m.hw.analog),
             6 => self.cfg.external_analog,
-            _ => (self.supply_volts * tmcpack::convert::SUPPLY_COUNTS_PER_VOLT).round().clamp(0.0, 1023.0) as u16,
+            _ => (self.supply_volts * tmcpack::convert::SUPPLY_COUNTS_PER_VOLT)
+                .round()
+                .clamp(0.0, 1023.0) as u16,
         };
         let value = (i32::from(raw) + self.noise()).clamp(0, i32::from(tmcpack::MAX_ANALOG)) as u16;
         let mut inputs = RefInputs::EMPTY;
@@ -353,22 +476,35 @@ impl TmcpackSim {
             inputs = inputs.with(RefInputs::from_bits_retain(1 << i), !m.ref_level());
         }
         let (jp1, jp2) = self.cfg.can_bitrate.jumpers();
-        inputs = inputs.with(RefInputs::JUMPER1, jp1).with(RefInputs::JUMPER2, jp2);
+        inputs = inputs
+            .with(RefInputs::JUMPER1, jp1)
+            .with(RefInputs::JUMPER2, jp2);
         let reference = channel < 6 && inputs.contains(RefInputs::from_bits_retain(1 << channel));
-        let ttlio1 = if self.st.ttlio1_is_input { self.ttlio1_in } else { self.st.ttlio1_out };
-        Reply::Input { channel, value, reference, inputs, ttlio1 }
+        let ttlio1 = if self.st.ttlio1_is_input {
+            self.ttlio1_in
+        } else {
+            self.st.ttlio1_out
+        };
+        Reply::Input {
+            channel,
+            value,
+            reference,
+            inputs,
+            ttlio1,
+        }
     }
 
     /// $45, bits handled in the order load, invalidate, activate, reset.
     fn power_down(&mut self, flags: PowerDownRequest) -> PowerDownStatus {
-        let mut status = PowerDownStatus::EMPTY.with(PowerDownStatus::DOWN_BEFORE, self.power_down_state);
-        if flags.contains(PowerDownRequest::LOAD_POSITIONS) {
-            if let Some(saved) = self.nv.saved_positions {
-                for (m, p) in self.motors.iter_mut().zip(saved) {
-                    m.set_position(i64::from(p));
-                }
-                status = status.with(PowerDownStatus::LOADED, true);
+        let mut status =
+            PowerDownStatus::EMPTY.with(PowerDownStatus::DOWN_BEFORE, self.power_down_state);
+        if flags.contains(PowerDownRequest::LOAD_POSITIONS)
+            && let Some(saved) = self.nv.saved_positions
+        {
+            for (m, p) in self.motors.iter_mut().zip(saved) {
+                m.set_position(i64::from(p));
             }
+            status = status.with(PowerDownStatus::LOADED, true);
         }
         if flags.contains(PowerDownRequest::INVALIDATE_POSITIONS) {
             self.nv.saved_positions = None;
@@ -376,11 +512,16 @@ impl TmcpackSim {
         if flags.contains(PowerDownRequest::ACTIVATE) {
             self.st.power_down_enabled = true;
         }
-        if flags.contains(PowerDownRequest::RESET_STATE) && self.supply_volts >= self.cfg.power_down_volts {
+        if flags.contains(PowerDownRequest::RESET_STATE)
+            && self.supply_volts >= self.cfg.power_down_volts
+        {
             self.power_down_state = false;
         }
         status
-            .with(PowerDownStatus::VALID_IN_EEPROM, self.nv.saved_positions.is_some())
+            .with(
+                PowerDownStatus::VALID_IN_EEPROM,
+                self.nv.saved_positions.is_some(),
+            )
             .with(PowerDownStatus::DOWN_AFTER, self.power_down_state)
     }
 
@@ -397,7 +538,8 @@ impl TmcpackSim {
         self.decoder.set_byte_time(self.byte_time());
         self.power_down_state = false;
         // "The RS232 usually receives a 0-byte during execution."
-        self.tx.schedule(t, &[0], self.byte_time(), Duration::ZERO, Kind::Glitch);
+        self.tx
+            .schedule(t, &[0], self.byte_time(), Duration::ZERO, Kind::Glitch);
         self.deaf_until = Some(t + self.cfg.boot_time);
         self.check_supply();
     }

@@ -122,7 +122,8 @@ impl TmcpackSim {
     pub fn new(config: TmcpackSimConfig) -> Self {
         let st = PackState::new(config.address);
         let motors = config.motors.map(|hw| Motor::new(hw, 0));
-        let decoder = FrameDecoder::new(units(st.timeout_units), byte_time(nominal_baud(st.divisor)));
+        let decoder =
+            FrameDecoder::new(units(st.timeout_units), byte_time(nominal_baud(st.divisor)));
         Self {
             rng: SimRng::new(config.seed),
             nv: NonVolatile::new(config.flash_size, config.variant),
@@ -199,14 +200,21 @@ impl TmcpackSim {
     /// The 7-segment display: number of active motors, decimal point during a reference
     /// search (manual 2).
     pub fn display(&self) -> (u8, bool) {
-        let active = self.active_motors().filter(|m| m.action().is_active()).count() as u8;
+        let active = self
+            .active_motors()
+            .filter(|m| m.action().is_active())
+            .count() as u8;
         let dp = self.active_motors().any(|m| m.action().is_referencing());
         (active, dp)
     }
 
     /// Logic level at TTLOUT1 (the ready output when $32 P3 says so: 1 = ready).
     pub fn ttlout1(&self) -> bool {
-        if self.st.ttlout1_ready { self.ready } else { self.st.ttlout1 }
+        if self.st.ttlout1_ready {
+            self.ready
+        } else {
+            self.st.ttlout1
+        }
     }
 
     /// Motor positions saved in EEPROM by the power-down mode, if valid.
@@ -305,13 +313,18 @@ impl TmcpackSim {
     }
 
     fn active_motors(&self) -> impl Iterator<Item = &Motor> {
-        self.motors.iter().take(usize::from(self.cfg.variant.motors()))
+        self.motors
+            .iter()
+            .take(usize::from(self.cfg.variant.motors()))
     }
 
     fn ctx(&self, i: usize) -> TickCtx {
         let value = self.st.peak.get(i / 2).copied().unwrap_or(0);
         let dip = self.cfg.quadpack_dip_percent.get(i).copied().unwrap_or(100);
-        TickCtx { clkdiv: self.st.clkdiv, peak_amps: self.cfg.variant.peak_current_amps(value, dip) }
+        TickCtx {
+            clkdiv: self.st.clkdiv,
+            peak_amps: self.cfg.variant.peak_current_amps(value, dip),
+        }
     }
 
     /// One 2 ms firmware cycle at `t`.
@@ -327,7 +340,8 @@ impl TmcpackSim {
         let (act, refm) = (self.st.ready_active, self.st.ready_ref);
         let busy = self.active_motors().enumerate().any(|(i, m)| {
             let bit = i as u8;
-            (act.has(bit) && m.action().is_active()) || (refm.has(bit) && m.action().is_referencing())
+            (act.has(bit) && m.action().is_active())
+                || (refm.has(bit) && m.action().is_referencing())
         });
         self.ready = !busy;
         self.check_delayed(t);
@@ -337,7 +351,9 @@ impl TmcpackSim {
     fn interpolate(&mut self) {
         let Some(ip) = self.st.interp else { return };
         let master_ctx = self.ctx(ip.master);
-        let Some(master) = self.motors.get_mut(ip.master) else { return };
+        let Some(master) = self.motors.get_mut(ip.master) else {
+            return;
+        };
         if master.mode != Mode::Interp {
             self.end_interp(ip);
             return;
@@ -353,8 +369,13 @@ impl TmcpackSim {
                 continue;
             }
             let ctx = self.ctx(i);
-            let (start, dist) = (ip.start.get(i).copied().unwrap_or(0), ip.dist.get(i).copied().unwrap_or(0));
-            let Some(m) = self.motors.get_mut(i) else { continue };
+            let (start, dist) = (
+                ip.start.get(i).copied().unwrap_or(0),
+                ip.dist.get(i).copied().unwrap_or(0),
+            );
+            let Some(m) = self.motors.get_mut(i) else {
+                continue;
+            };
             if m.mode != Mode::Interp {
                 continue;
             }
@@ -377,7 +398,9 @@ impl TmcpackSim {
     fn end_interp(&mut self, ip: pack::Interp) {
         for (i, m) in self.motors.iter_mut().enumerate() {
             if ip.mask.has(i as u8) && m.mode == Mode::Interp {
-                m.mode = Mode::Halt { action: Action::Ramp };
+                m.mode = Mode::Halt {
+                    action: Action::Ramp,
+                };
             }
         }
         self.st.interp = None;
@@ -428,7 +451,11 @@ impl TmcpackSim {
             return;
         }
         match RequestFrame::decode(&w) {
-            Ok(f) if f.request.motor().is_none_or(|m| m < self.cfg.variant.motors()) => {
+            Ok(f)
+                if f.request
+                    .motor()
+                    .is_none_or(|m| m < self.cfg.variant.motors()) =>
+            {
                 self.stats.executed += 1;
                 self.execute(t, f.request);
             }
@@ -476,11 +503,19 @@ impl StreamDevice for TmcpackSim {
     }
 
     fn next_event(&self, now: Duration) -> Option<Duration> {
-        let tick = self.st.delayed.map(|_| self.next_tick.unwrap_or(now).max(now));
-        [self.tx.next_byte(), tick, self.decoder.deadline(), self.deaf_until.filter(|&d| d > now)]
-            .into_iter()
-            .flatten()
-            .min()
+        let tick = self
+            .st
+            .delayed
+            .map(|_| self.next_tick.unwrap_or(now).max(now));
+        [
+            self.tx.next_byte(),
+            tick,
+            self.decoder.deadline().filter(|&d| d > now),
+            self.deaf_until.filter(|&d| d > now),
+        ]
+        .into_iter()
+        .flatten()
+        .min()
     }
 
     fn baud(&self) -> Option<u32> {

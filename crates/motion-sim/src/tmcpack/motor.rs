@@ -14,14 +14,23 @@ use super::reference::{RefSearch, Resume};
 pub(crate) enum Mode {
     Inactive,
     /// Trapezoidal ramp to an internal (unwrapped) target.
-    Ramp { target: i64 },
+    Ramp {
+        target: i64,
+    },
     /// PI controller ($24).
-    Pi { target: i64, integral: i64 },
+    Pi {
+        target: i64,
+        integral: i64,
+    },
     /// Rotation ($25).
-    Rotation { velocity: i16 },
+    Rotation {
+        velocity: i16,
+    },
     /// Decelerating with amax to standstill, then inactive (a soft stop, or $23 on a
     /// rotating motor: "the motor is only stopped by this command"). Reports `action`.
-    Halt { action: Action },
+    Halt {
+        action: Action,
+    },
     /// Reference search.
     Reference(RefSearch),
     /// Part of a $50 interpolation, moved by the pack.
@@ -43,8 +52,11 @@ pub(crate) struct Motor {
     pub mode: Mode,
     /// Position counter (unwrapped; cyclic axes report it wrapped).
     pub pos: i64,
-    /// Fraction of a microstep in 1/denominator units.
+    /// Phase of the step generator towards the next microstep in direction `phase_dir`,
+    /// in 1/denominator units (0..denominator): like the hardware's accumulator it counts
+    /// magnitude, so both directions step alike.
     frac: i128,
+    phase_dir: i64,
     denom: i128,
     /// Velocity · 64 in units of `vdiv`.
     pub vq: i64,
@@ -72,6 +84,7 @@ impl Motor {
             mode: Mode::Inactive,
             pos: 0,
             frac: 0,
+            phase_dir: 1,
             denom: StepClock::DEFAULT.denominator().into(),
             vq: 0,
             vdiv: p.div,
@@ -149,7 +162,11 @@ impl Motor {
 
     pub fn limits(&self, vmax: u16) -> Limits {
         let vmax = i64::from(vmax.max(1));
-        Limits { vs: i64::from(self.p.vstart).min(vmax) * Q, vmax: vmax * Q, d: i64::from(self.p.amax.max(1)) }
+        Limits {
+            vs: i64::from(self.p.vstart).min(vmax) * Q,
+            vmax: vmax * Q,
+            d: i64::from(self.p.amax.max(1)),
+        }
     }
 
     fn raw_switch(&self) -> bool {
@@ -192,16 +209,28 @@ impl Motor {
 
     /// Moves by `fine` units of the current divider.
     fn advance(&mut self, fine: i128, ctx: &TickCtx) {
-        let acc = self.frac + fine;
-        let steps = acc.div_euclid(self.denom);
-        self.frac = acc.rem_euclid(self.denom);
-        let steps = i64::try_from(steps).unwrap_or(0);
+        if fine == 0 {
+            return;
+        }
+        self.phase_dir = if fine > 0 { 1 } else { -1 };
+        let acc = self.frac + fine.abs();
+        let steps = i64::try_from(acc / self.denom).unwrap_or(0) * self.phase_dir;
+        self.frac = acc % self.denom;
         self.pos = self.pos.saturating_add(steps);
         self.move_rotor(steps, ctx);
     }
 
+    /// The position in fine units.
+    fn fine_pos(&self) -> i128 {
+        i128::from(self.pos) * self.denom + i128::from(self.phase_dir) * self.frac
+    }
+
     fn move_rotor(&mut self, steps: i64, ctx: &TickCtx) {
-        let level = if self.accelerating { self.p.i3 } else { self.p.i2 };
+        let level = if self.accelerating {
+            self.p.i3
+        } else {
+            self.p.i2
+        };
         if ctx.peak_amps * f64::from(level.percent()) <= 0.0 {
             return; // no current: the rotor does not follow
         }
@@ -236,7 +265,7 @@ impl Motor {
         if self.vq == 0 || self.vdiv == self.p.div {
             self.set_div(ctx.clkdiv, self.p.div);
         }
-        let rem = i128::from(target) * self.denom - (i128::from(self.pos) * self.denom + self.frac);
+        let rem = i128::from(target) * self.denom - self.fine_pos();
         if rem == 0 && self.vq == 0 {
             return true;
         }
@@ -364,7 +393,11 @@ impl Motor {
             self.standstill_ticks = 0;
         }
         let level = if self.vq != 0 {
-            if self.accelerating { self.p.i3 } else { self.p.i2 }
+            if self.accelerating {
+                self.p.i3
+            } else {
+                self.p.i2
+            }
         } else if self.standstill_ticks < u32::from(self.p.t0) {
             self.p.i1
         } else {
@@ -403,14 +436,20 @@ impl Motor {
             self.halt_now();
         }
         if self.p.options.contains(MotorOptions::STOP_NO_REF) {
-            self.mode = if soft { Mode::Halt { action } } else { Mode::Inactive };
+            self.mode = if soft {
+                Mode::Halt { action }
+            } else {
+                Mode::Inactive
+            };
         } else {
             self.start_reference();
         }
     }
 
     fn check_testnull(&mut self) {
-        let Some(left) = self.testnull_timer else { return };
+        let Some(left) = self.testnull_timer else {
+            return;
+        };
         if self.mode != Mode::Inactive {
             self.testnull_timer = None;
             return;

@@ -1,7 +1,7 @@
 //! Pack-wide firmware state (everything $CC resets) and the non-volatile memory (what it
 //! keeps).
 
-use tmcpack::convert::{DEFAULT_SWITCHOVER_UNITS, baud_divisor, DEFAULT_BAUD};
+use tmcpack::convert::{DEFAULT_BAUD, DEFAULT_SWITCHOVER_UNITS, baud_divisor};
 use tmcpack::{DEFAULT_PACKET_TIMEOUT, MotorMask, Variant};
 
 /// A $50 interpolation in progress.
@@ -109,11 +109,17 @@ impl NonVolatile {
         let flash = (0..flash_size)
             .map(|i| (i as u32).wrapping_mul(2_654_435_761).to_le_bytes()[3] ^ variant.motors())
             .collect();
-        Self { eeprom: vec![0xFFFF; EEPROM_WORDS], saved_positions: None, flash }
+        Self {
+            eeprom: vec![0xFFFF; EEPROM_WORDS],
+            saved_positions: None,
+            flash,
+        }
     }
 
     /// $F4: 16-bit sum of the flash bytes.
     pub fn checksum(&self) -> u16 {
-        self.flash.iter().fold(0u16, |s, &b| s.wrapping_add(u16::from(b)))
+        self.flash
+            .iter()
+            .fold(0u16, |s, &b| s.wrapping_add(u16::from(b)))
     }
 }

@@ -72,7 +72,11 @@ impl MotorParams {
     /// (NullLeft clear: "the driving range is in the area of negative numbers"), −1 when it
     /// lies left (NullLeft set).
     pub fn toward_zero(&self) -> i64 {
-        if self.motor_type.contains(MotorType::NULL_LEFT) { -1 } else { 1 }
+        if self.motor_type.contains(MotorType::NULL_LEFT) {
+            -1
+        } else {
+            1
+        }
     }
 
     /// `true` for a rotary axis with a usable poslimit.

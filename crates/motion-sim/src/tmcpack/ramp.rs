@@ -81,10 +81,18 @@ pub(crate) fn slew(cur: i64, want: i64, lim: Limits) -> i64 {
         let m = cur.abs() - lim.d;
         return if m <= lim.vs { 0 } else { cur.signum() * m };
     }
-    let s = if want != 0 { want.signum() } else { cur.signum() };
+    let s = if want != 0 {
+        want.signum()
+    } else {
+        cur.signum()
+    };
     let (c, w) = (cur.abs(), want.abs());
     let n = if w > c {
-        if c < lim.vs { lim.vs.min(w) } else { (c + lim.d).min(w) }
+        if c < lim.vs {
+            lim.vs.min(w)
+        } else {
+            (c + lim.d).min(w)
+        }
     } else {
         let m = c - lim.d;
         if m > lim.vs { m.max(w) } else { w }
@@ -96,7 +104,11 @@ pub(crate) fn slew(cur: i64, want: i64, lim: Limits) -> i64 {
 mod tests {
     use super::*;
 
-    const LIM: Limits = Limits { vs: 5 * Q, vmax: 511 * Q, d: 128 };
+    const LIM: Limits = Limits {
+        vs: 5 * Q,
+        vmax: 511 * Q,
+        d: 128,
+    };
     const DENOM: i128 = 6 << 16; // clkdiv 5, div 2
 
     /// Runs a ramp over `dist` microsteps; returns (ticks, peak |v|, max |Δvq| outside the
@@ -146,7 +158,9 @@ mod tests {
         assert_eq!(v, 300 * Q);
         for _ in 0..1000 {
             v = slew(v, -20 * Q, LIM);
-            assert!((v - prev).abs() <= LIM.d || (v.abs() <= LIM.vs && prev.abs() <= LIM.vs + LIM.d));
+            assert!(
+                (v - prev).abs() <= LIM.d || (v.abs() <= LIM.vs && prev.abs() <= LIM.vs + LIM.d)
+            );
             prev = v;
         }
         assert_eq!(v, -20 * Q);

@@ -61,7 +61,12 @@ pub(crate) struct RefSearch {
 
 impl RefSearch {
     pub fn new(resume: Resume) -> Self {
-        Self { phase: Phase::Stop, resume, travelled: 0, backoff: 0 }
+        Self {
+            phase: Phase::Stop,
+            resume,
+            travelled: 0,
+            backoff: 0,
+        }
     }
 
     pub fn action(&self) -> Action {
@@ -87,7 +92,9 @@ pub(crate) fn effective_vmin(m: &Motor, clkdiv: u8) -> i64 {
     if m.p.vmin > 0 {
         return i64::from(m.p.vmin);
     }
-    let f1 = StepClock::new(clkdiv, 3).map(StepClock::hz_per_unit).unwrap_or(1.0);
+    let f1 = StepClock::new(clkdiv, 3)
+        .map(StepClock::hz_per_unit)
+        .unwrap_or(1.0);
     ((250.0 / f1).floor() as i64).clamp(1, 511)
 }
 
@@ -107,7 +114,9 @@ pub(crate) fn tick(m: &mut Motor, mut r: RefSearch, ctx: &TickCtx) {
             m.drive(0, m.vdiv, ctx);
             if m.vq == 0 {
                 if m.p.options.contains(MotorOptions::MECH_REF) {
-                    r.enter(Phase::Mech { target: m.pos + toward * limit.max(1) });
+                    r.enter(Phase::Mech {
+                        target: m.pos + toward * limit.max(1),
+                    });
                 } else if m.switch_active {
                     r.enter(Phase::Backoff);
                 } else {
@@ -169,7 +178,11 @@ pub(crate) fn tick(m: &mut Motor, mut r: RefSearch, ctx: &TickCtx) {
             }
         }
         Phase::Mech { target } => {
-            let vmax = if m.p.options.contains(MotorOptions::FAST_REF) { m.p.vrefmax } else { m.p.vmax };
+            let vmax = if m.p.options.contains(MotorOptions::FAST_REF) {
+                m.p.vrefmax
+            } else {
+                m.p.vmax
+            };
             if m.ramp_step(target, vmax, ctx) {
                 finish(m, &mut r, m.pos);
             }
@@ -191,6 +204,9 @@ fn finish(m: &mut Motor, r: &mut RefSearch, at: i64) {
     m.mode = match r.resume {
         Resume::Ramp(target) => Mode::Ramp { target },
         Resume::Rotation(velocity) => Mode::Rotation { velocity },
-        Resume::Pi(target) => Mode::Pi { target, integral: 0 },
+        Resume::Pi(target) => Mode::Pi {
+            target,
+            integral: 0,
+        },
     };
 }

@@ -75,14 +75,29 @@ impl Transmitter {
         let mut replaced = false;
         if kind == Kind::Immediate {
             let before = self.queue.len();
-            self.queue.retain(|o| !(o.kind == Kind::Immediate && o.sent == 0));
+            self.queue
+                .retain(|o| !(o.kind == Kind::Immediate && o.sent == 0));
             replaced = self.queue.len() != before;
         }
-        let start = self.queue.iter().map(Outgoing::end).fold(ready, Duration::max);
+        let start = self
+            .queue
+            .iter()
+            .map(Outgoing::end)
+            .fold(ready, Duration::max);
         let mut word = [0u8; FRAME_LEN];
         let len = bytes.len().min(FRAME_LEN);
-        word.get_mut(..len).unwrap_or_default().copy_from_slice(bytes.get(..len).unwrap_or_default());
-        self.queue.push_back(Outgoing { start, bytes: word, len, sent: 0, byte_time, hold, kind });
+        word.get_mut(..len)
+            .unwrap_or_default()
+            .copy_from_slice(bytes.get(..len).unwrap_or_default());
+        self.queue.push_back(Outgoing {
+            start,
+            bytes: word,
+            len,
+            sent: 0,
+            byte_time,
+            hold,
+            kind,
+        });
         replaced
     }
 
@@ -100,7 +115,11 @@ impl Transmitter {
                 break;
             }
         }
-        while self.queue.front().is_some_and(|o| o.sent == o.len && o.window_end() <= now) {
+        while self
+            .queue
+            .front()
+            .is_some_and(|o| o.sent == o.len && o.window_end() <= now)
+        {
             if let Some(o) = self.queue.pop_front() {
                 self.last_window = Some((o.start, o.window_end()));
             }
@@ -110,7 +129,10 @@ impl Transmitter {
 
     /// When the next byte starts.
     pub fn next_byte(&self) -> Option<Duration> {
-        self.queue.iter().find(|o| o.sent < o.len).map(|o| o.byte_start(o.sent))
+        self.queue
+            .iter()
+            .find(|o| o.sent < o.len)
+            .map(|o| o.byte_start(o.sent))
     }
 
     /// Forgets everything queued (reset).
