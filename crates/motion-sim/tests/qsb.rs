@@ -675,3 +675,122 @@ fn same_inputs_same_bytes() {
     assert_eq!(run(), run());
     let _ = Register::ALL;
 }
+
+mod random {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn any_command() -> impl Strategy<Value = String> {
+        (
+            prop_oneof![Just('R'), Just('W'), Just('S'), Just('Q')],
+            // INTERVAL RATE (0C) is left at its factory value, so the only `s` lines are
+            // acknowledgements and every line has exactly one answer.
+            (0u8..0x1A).prop_filter("not 0C", |r| *r != 0x0C),
+            prop_oneof![
+                Just(None),
+                (0u32..0x20).prop_map(Some),
+                (0u32..0x800).prop_map(Some),
+                any::<u32>().prop_map(Some),
+            ],
+        )
+            .prop_map(|(ty, reg, data)| match data {
+                Some(d) => format!("{ty}{reg:02X}{d:X}\r"),
+                None => format!("{ty}{reg:02X}\n"),
+            })
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(48))]
+
+        #[test]
+        fn every_line_is_answered_once_and_the_motor_stays_in_limits(
+            variant in prop_oneof![Just(Variant::S), Just(Variant::D), Just(Variant::M)],
+            commands in proptest::collection::vec((any_command(), 0u64..200_000), 1..40),
+        ) {
+            let mut host = Host::new(QsbSimConfig { variant, ..QsbSimConfig::default() });
+            let mut sent = 0usize;
+            for (command, gap_us) in &commands {
+                host.sim.receive(host.now, command.as_bytes());
+                sent += 1;
+                let mut left = *gap_us;
+                while left > 0 {
+                    let step = left.min(500);
+                    host.run_for(Duration::from_micros(step));
+                    left -= step;
+                    let v = host.sim.motor_velocity();
+                    prop_assert!(v.abs() <= 13_000.0 * (1.0 + 1e-9), "{}", v);
+                    prop_assert!(host.sim.motor_position().is_finite());
+                }
+            }
+            host.run_for(10 * MS);
+            prop_assert_eq!(host.log.len(), sent);
+            prop_assert_eq!(host.decoder.bad_frames(), 0);
+            prop_assert_eq!(host.sim.stats().commands, sent as u64);
+        }
+
+        #[test]
+        fn random_bytes_never_panic(
+            chunks in proptest::collection::vec(
+                (proptest::collection::vec(any::<u8>(), 0..40), 0u64..5_000),
+                1..30,
+            ),
+        ) {
+            let mut sim = QsbSim::new(QsbSimConfig::default());
+            let mut now = Duration::ZERO;
+            let mut out = [0u8; 64];
+            for (bytes, gap) in &chunks {
+                sim.receive(now, bytes);
+                now += Duration::from_micros(*gap);
+                while sim.transmit(now, &mut out) > 0 {}
+                let _ = sim.next_event(now);
+            }
+        }
+    }
+}
+
+mod on_a_sim_link {
+    use super::*;
+    use motion_link::Link;
+    use motion_link::sim::SimLink;
+
+    fn read_all(link: &mut SimLink, now: Duration, into: &mut Vec<u8>) {
+        let mut buf = [0u8; 128];
+        while let Ok(n) = link.read(now, &mut buf) {
+            if n == 0 {
+                break;
+            }
+            into.extend_from_slice(&buf[..n]);
+        }
+    }
+
+    #[test]
+    fn r14_round_trip_takes_its_wire_time_and_a_baud_change_garbles_the_old_rate() {
+        // DESIGN.md: `R0E\r\n` 5 bytes + ~14 bytes answer ≈ 0.8 ms at 230400 baud.
+        let sim = QsbSim::new(QsbSimConfig::default());
+        let mut link = SimLink::stream("qsb", 230_400, Box::new(sim));
+        let byte = Duration::from_nanos(10_000_000_000 / 230_400);
+        link.write(Duration::ZERO, b"R14\r\n").unwrap();
+        // The line ends at its CR (the 4th byte); the LF is an empty line.
+        let done = byte * 4 + 100 * US + byte * 17;
+        let mut got = Vec::new();
+        read_all(&mut link, done - US, &mut got);
+        assert!(got.len() < 17, "{got:?}");
+        read_all(&mut link, done + US, &mut got);
+        assert_eq!(got, b"r 14 00001113 !\r\n");
+
+        // W1640A: answered at 230400, then the board listens at 115200.
+        let t = Duration::from_millis(10);
+        link.write(t, b"W1640A\r\n").unwrap();
+        got.clear();
+        read_all(&mut link, t + 5 * MS, &mut got);
+        assert_eq!(got, b"w 16 0000040A !\r\n");
+        let t = t + 10 * MS;
+        link.write(t, b"R14\r\n").unwrap();
+        got.clear();
+        read_all(&mut link, t + 10 * MS, &mut got);
+        assert!(
+            !got.windows(4).any(|w| w == b"r 14"),
+            "a 230400 baud host cannot talk to a 115200 baud board: {got:?}"
+        );
+    }
+}

@@ -30,7 +30,7 @@ impl QsbSim {
         } else {
             self.config.processing_delay
         };
-        self.cpu_free = start + delay;
+        self.cpu_free = start.saturating_add(delay);
         let end = self.send(response, self.cpu_free);
         if let (Some(rate), Some(end)) = (self.baud_change.take(), end) {
             self.pending_baud = Some((end, rate));

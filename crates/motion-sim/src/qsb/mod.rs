@@ -59,8 +59,6 @@
 //!   and bit 2 the direction (1 = positive). The -D has bit 0 only, the -S none; missing
 //!   pins read 0.
 //! - STR powers up as the factory table says (0x0A: counting enabled, up).
-#![allow(clippy::module_name_repetitions)]
-
 mod config;
 mod counter;
 mod dio;
@@ -162,7 +160,7 @@ pub struct QsbSim {
     config: QsbSimConfig,
     rng: SimRng,
     rx: CommandDecoder,
-    /// Model time; `None` before the first call.
+    /// Whether the first call has fixed the power-up instant.
     started: bool,
     t: Duration,
     ts_epoch: Duration,

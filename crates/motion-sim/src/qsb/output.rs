@@ -54,7 +54,7 @@ impl Output {
         }
         self.queue.extend(buf.iter().take(n).map(|b| (ready, *b)));
         let start = self.uart_free.max(ready);
-        self.uart_free = start + byte_time(baud) * n as u32;
+        self.uart_free = start.saturating_add(byte_time(baud) * n as u32);
         self.lines += 1;
         Some(self.uart_free)
     }

@@ -53,7 +53,7 @@ impl QsbSim {
             } else {
                 to - self.t
             };
-            let next = (self.t + step).min(to);
+            let next = self.t.saturating_add(step).min(to);
             let p0 = self.encoder_at(self.t);
             if self.config.variant == super::Variant::M {
                 let (vmax, accel) = self.motor_limits_internal();
@@ -139,7 +139,7 @@ impl QsbSim {
         }
         self.toggle_bit0();
         let ticks = u32::from(self.regs.interval.0);
-        self.pulse_end = (ticks > 0).then(|| self.t + qsb::TICK * ticks);
+        self.pulse_end = (ticks > 0).then(|| self.t.saturating_add(qsb::TICK * ticks));
     }
 
     pub(super) fn toggle_bit0(&mut self) {

@@ -80,7 +80,7 @@ impl QsbSim {
     /// (Re)starts the data output timer at `now` when something streams.
     pub(super) fn restart_stream_timer(&mut self, now: Duration) {
         self.streams.next_tick = if self.streams.any() {
-            self.stream_period().map(|p| now + p)
+            self.stream_period().map(|p| now.saturating_add(p))
         } else {
             None
         };
@@ -105,7 +105,7 @@ impl QsbSim {
         let delay = self.measurement_delay();
         // The firmware cannot get ahead of its UART: a sample the line has no room for
         // is not taken.
-        let busy = self.output.uart_free > now + delay;
+        let busy = self.output.uart_free > now.saturating_add(delay);
         for (i, register) in STREAMABLE.into_iter().enumerate() {
             let Some(last) = self.streams.active.get(i).copied().flatten() else {
                 continue;
@@ -132,9 +132,9 @@ impl QsbSim {
                     *s = Some(value);
                 }
                 let response = Response::new(ResponseType::Stream, register.number(), value);
-                self.send(response, now + delay);
+                self.send(response, now.saturating_add(delay));
             }
         }
-        self.streams.next_tick = self.stream_period().map(|p| now + p);
+        self.streams.next_tick = self.stream_period().map(|p| now.saturating_add(p));
     }
 }
