@@ -794,3 +794,66 @@ mod on_a_sim_link {
         );
     }
 }
+
+#[test]
+fn s_and_d_encoders_follow_the_configured_motion() {
+    let motion = EncoderMotion {
+        velocity: 50.0,
+        amplitude: 100.0,
+        frequency_hz: 2.0,
+    };
+    let mut host = Host::new(QsbSimConfig {
+        variant: Variant::D,
+        motion,
+        cycles_per_rev: 1_000_000, // no index in the way
+        ..QsbSimConfig::default()
+    });
+    host.ask("W0303");
+    let cleared = host.now;
+    host.ask("W092");
+    let zero = motion.position(cleared.as_secs_f64());
+    for _ in 0..20 {
+        host.run_for(Duration::from_millis(37));
+        let t = host.now;
+        let expected = ((motion.position(t.as_secs_f64()) - zero) * 4.0).round() as i32;
+        let got = host.value("R0E") as i32;
+        assert!((got - expected).abs() <= 1, "{got} vs {expected}");
+        assert!(
+            (host.sim.encoder_position() - motion.position(host.now.as_secs_f64())).abs() < 1e-9
+        );
+    }
+}
+
+#[test]
+fn on_change_streams_report_only_changes() {
+    // DIG I/O: "In stream mode, a new I/O state is output only if the I/O bit state has
+    // changed." CAPTURE: "a new value is output when the register value changes."
+    let mut host = Host::still(Variant::M);
+    host.ask("W0C1");
+    host.ask("W02010"); // interrupt on bit 0, low-to-high
+    let since = host.log.len();
+    host.ask("S01");
+    host.ask("S05");
+    host.run_for(50 * MS);
+    assert_eq!(host.streamed(0x01, since).len(), 1, "acknowledgement only");
+    assert_eq!(host.streamed(0x05, since).len(), 1);
+    let now = host.now;
+    host.sim.set_digital_inputs(now, 0b1110);
+    host.run_for(10 * MS);
+    host.sim.nudge_encoder(host.now, 3.0);
+    let now = host.now;
+    host.sim.set_digital_inputs(now, 0b1111); // rising edge on bit 0: capture
+    host.run_for(10 * MS);
+    let dio: Vec<u32> = host
+        .streamed(0x01, since)
+        .iter()
+        .map(|(_, r)| r.data)
+        .collect();
+    assert_eq!(dio, vec![0xF, 0xE, 0xF]);
+    let capture: Vec<u32> = host
+        .streamed(0x05, since)
+        .iter()
+        .map(|(_, r)| r.data)
+        .collect();
+    assert_eq!(capture, vec![0, 12 % 500]);
+}
