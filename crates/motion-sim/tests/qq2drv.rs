@@ -8,10 +8,10 @@ use motion_sim::qq2drv::{
 };
 use qq2drv::{
     AccelerationLimitEntry, ChannelMask, ControlMode, ControlModeEntry, DataMask, DataMaskEntry,
-    EdgeAction, Entries, GetPosition, HistoryDimensions, InputConfig, InputMode, InputModeEntry,
-    MotionLayout, MotorPowerEntry, PacketId, PositionLayout, PositionRampEntry, PositionSize,
-    PositionValue, PowerLimitEntry, Reply, ReplyLayout, Request, SetPositionEntry, Status,
-    StreamConfig, StreamDecoder, VelocityLimitEntry, VelocityRampEntry,
+    EdgeAction, Entries, HistoryDimensions, InputConfig, InputMode, InputModeEntry,
+    MotorPowerEntry, PacketId, PositionRampEntry, PositionSize, PositionValue, PowerLimitEntry,
+    Reply, ReplyLayout, Request, Status, StreamConfig, StreamDecoder, VelocityLimitEntry,
+    VelocityRampEntry,
 };
 
 /// 500 kHz SPI: 16 µs a byte.
@@ -114,6 +114,24 @@ impl Host {
             Reply::MotionData { code, data } if code.is_success() => data,
             other => panic!("{other:?}"),
         }
+    }
+
+    /// Packet 16 for the channels in `mask`.
+    fn mode(&mut self, mask: u8, mode: ControlMode) {
+        let e = [ControlModeEntry {
+            channels: ChannelMask(mask),
+            mode,
+        }];
+        self.ok(&Request::SetControlMode(Entries::new(&e)));
+    }
+
+    /// Packet 18 for the channels in `mask`.
+    fn power(&mut self, mask: u8, power: i16) {
+        let e = [MotorPowerEntry {
+            channels: ChannelMask(mask),
+            power,
+        }];
+        self.ok(&Request::SetMotorPower(Entries::new(&e)));
     }
 
     /// Lets time pass without a transaction.
@@ -243,143 +261,6 @@ fn malformed_and_out_of_range_requests_get_a_non_zero_code() {
 }
 
 #[test]
-fn registers_read_back() {
-    let mut h = Host::new(Qq2drvSimConfig::default());
-    assert_eq!(
-        h.request(&Request::GetDataMask),
-        Reply::DataMasks {
-            code: Default::default(),
-            masks: [DataMask(0x0B); 4]
-        }
-    );
-    assert_eq!(
-        h.request(&Request::GetStreamPeriod),
-        Reply::StreamPeriod {
-            code: Default::default(),
-            period: 0
-        }
-    );
-    assert_eq!(
-        h.request(&Request::GetStreamConfig),
-        Reply::StreamConfig {
-            code: Default::default(),
-            config: StreamConfig(0)
-        }
-    );
-    assert_eq!(
-        h.request(&Request::GetHistoryDimensions),
-        Reply::HistoryDimensions {
-            code: Default::default(),
-            dimensions: HistoryDimensions {
-                history_length: 31,
-                averaging_bits: 20
-            }
-        }
-    );
-    // "If any mask conflicts occur, any latter bit value will override the former."
-    h.set_masks(&[
-        DataMaskEntry {
-            channels: ChannelMask::ALL,
-            mask: DataMask(0x21),
-        },
-        DataMaskEntry {
-            channels: ChannelMask(0b0110),
-            mask: DataMask(0x0E),
-        },
-    ]);
-    assert_eq!(
-        h.request(&Request::GetDataMask),
-        Reply::DataMasks {
-            code: Default::default(),
-            masks: [
-                DataMask(0x21),
-                DataMask(0x0E),
-                DataMask(0x0E),
-                DataMask(0x21)
-            ]
-        }
-    );
-    h.ok(&Request::SetStreamConfig(StreamConfig(3)));
-    assert_eq!(
-        h.request(&Request::GetStreamConfig),
-        Reply::StreamConfig {
-            code: Default::default(),
-            config: StreamConfig(3)
-        }
-    );
-    let dims = HistoryDimensions {
-        history_length: 7,
-        averaging_bits: 16,
-    };
-    h.ok(&Request::SetHistoryDimensions(dims));
-    assert_eq!(
-        h.request(&Request::GetHistoryDimensions),
-        Reply::HistoryDimensions {
-            code: Default::default(),
-            dimensions: dims
-        }
-    );
-}
-
-#[test]
-fn set_position_and_the_three_get_position_forms() {
-    let mut h = Host::new(Qq2drvSimConfig::default());
-    let e = [
-        SetPositionEntry {
-            channels: ChannelMask(0b0011),
-            position: Some(PositionValue::I16(-300)),
-        },
-        SetPositionEntry {
-            channels: ChannelMask(0b0100),
-            position: Some(PositionValue::I32(100_000)),
-        },
-        SetPositionEntry {
-            channels: ChannelMask(0b1000),
-            position: None,
-        },
-    ];
-    h.ok(&Request::SetPosition(Entries::new(&e)));
-    let all = |code| Reply::Positions {
-        code,
-        positions: [
-            Some(PositionValue::I32(-300)),
-            Some(PositionValue::I32(-300)),
-            Some(PositionValue::I32(100_000)),
-            Some(PositionValue::I32(0)),
-        ],
-    };
-    assert_eq!(
-        h.request(&Request::GetPosition(GetPosition::Configured)),
-        all(Default::default())
-    );
-    assert_eq!(
-        h.request(&Request::GetPosition(GetPosition::Channels(
-            ChannelMask::ALL
-        ))),
-        all(Default::default())
-    );
-    let sizes = [
-        PositionSize::I8,
-        PositionSize::Omitted,
-        PositionSize::I16,
-        PositionSize::I32,
-    ];
-    assert_eq!(
-        h.request(&Request::GetPosition(GetPosition::Sizes(sizes))),
-        Reply::Positions {
-            code: Default::default(),
-            positions: [
-                Some(PositionValue::I8(-300i32 as i8)),
-                None,
-                Some(PositionValue::I16(100_000i32 as i16)),
-                Some(PositionValue::I32(0))
-            ],
-        }
-    );
-    assert_eq!(h.sim.counter(2), Some(100_000));
-}
-
-#[test]
 fn power_mode_limits_and_motion_data_layouts() {
     let config = Qq2drvSimConfig {
         motors: [MotorConfig {
@@ -389,16 +270,8 @@ fn power_mode_limits_and_motion_data_layouts() {
         ..Default::default()
     };
     let mut h = Host::new(config);
-    let modes = [ControlModeEntry {
-        channels: ChannelMask(0b0011),
-        mode: ControlMode::Power,
-    }];
-    h.ok(&Request::SetControlMode(Entries::new(&modes)));
-    let power = [MotorPowerEntry {
-        channels: ChannelMask(0b0011),
-        power: 4096,
-    }];
-    h.ok(&Request::SetMotorPower(Entries::new(&power)));
+    h.mode(0b0011, ControlMode::Power);
+    h.power(0b0011, 4096);
     let limit = [PowerLimitEntry {
         channels: ChannelMask(0b0010),
         limit: 2048,
@@ -438,11 +311,7 @@ fn power_mode_limits_and_motion_data_layouts() {
     assert!((sum - moved).abs() <= 8, "{sum} vs {moved}");
     assert!(moved > 30, "{moved}");
     // Off: output zero.
-    let off = [ControlModeEntry {
-        channels: ChannelMask::ALL,
-        mode: ControlMode::Off,
-    }];
-    h.ok(&Request::SetControlMode(Entries::new(&off)));
+    h.mode(0x0F, ControlMode::Off);
     h.wait(Duration::from_millis(5));
     assert_eq!(h.sim.motor_power(0), Some(0));
 }
@@ -477,11 +346,7 @@ fn position_ramp_arrives_within_limits() {
     let mut h = Host::new(Qq2drvSimConfig::default());
     let vmax = 2000.0;
     let amax = 8000.0;
-    let m = [ControlModeEntry {
-        channels: ch1(),
-        mode: ControlMode::PositionPid,
-    }];
-    h.ok(&Request::SetControlMode(Entries::new(&m)));
+    h.mode(1, ControlMode::PositionPid);
     let r = [PositionRampEntry {
         channels: ch1(),
         position: 6000,
@@ -525,11 +390,7 @@ fn position_ramp_arrives_within_limits() {
 #[test]
 fn position_target_under_configured_velocity_and_acceleration_limits() {
     let mut h = Host::new(Qq2drvSimConfig::default());
-    let m = [ControlModeEntry {
-        channels: ChannelMask(0b0100),
-        mode: ControlMode::PositionPid,
-    }];
-    h.ok(&Request::SetControlMode(Entries::new(&m)));
+    h.mode(0b0100, ControlMode::PositionPid);
     let vl = [VelocityLimitEntry {
         channels: ChannelMask(0b0100),
         limit: 1500 << 12,
@@ -558,11 +419,7 @@ fn position_target_under_configured_velocity_and_acceleration_limits() {
 #[test]
 fn velocity_ramp_reaches_target_and_measured_velocity_follows() {
     let mut h = Host::new(Qq2drvSimConfig::default());
-    let m = [ControlModeEntry {
-        channels: ChannelMask(0b1000),
-        mode: ControlMode::VelocityPid,
-    }];
-    h.ok(&Request::SetControlMode(Entries::new(&m)));
+    h.mode(0b1000, ControlMode::VelocityPid);
     // Packet 36: velocity in plain transitions/s, acceleration shl 12.
     let r = [VelocityRampEntry {
         channels: ChannelMask(0b1000),
@@ -722,16 +579,8 @@ fn home_switch_sets_the_position_counter_and_status_bits() {
     }]);
     let data = h.motion();
     assert_eq!(data.channels[0].status, Some(Status(0)));
-    let m = [ControlModeEntry {
-        channels: ch1(),
-        mode: ControlMode::Power,
-    }];
-    h.ok(&Request::SetControlMode(Entries::new(&m)));
-    let p = [MotorPowerEntry {
-        channels: ch1(),
-        power: 2000,
-    }];
-    h.ok(&Request::SetMotorPower(Entries::new(&p)));
+    h.mode(1, ControlMode::Power);
+    h.power(1, 2000);
     let mut hit = None;
     for _ in 0..200 {
         h.wait(Duration::from_millis(5));
@@ -778,11 +627,7 @@ fn index_input_and_forced_levels() {
         position: 0,
     }];
     h.ok(&Request::SetInputMode(Entries::new(&e)));
-    let m = [ControlModeEntry {
-        channels: ChannelMask(0b0010),
-        mode: ControlMode::VelocityPid,
-    }];
-    h.ok(&Request::SetControlMode(Entries::new(&m)));
+    h.mode(0b0010, ControlMode::VelocityPid);
     let r = [VelocityRampEntry {
         channels: ChannelMask(0b0010),
         velocity: 300,
@@ -826,73 +671,116 @@ fn glitch_and_overspeed_status_bits() {
         !h.motion().channels[0].status.expect("status").glitch(),
         "cleared once transmitted"
     );
-    let m = [ControlModeEntry {
-        channels: ChannelMask(0b1000),
-        mode: ControlMode::Power,
-    }];
-    h.ok(&Request::SetControlMode(Entries::new(&m)));
-    let p = [MotorPowerEntry {
-        channels: ChannelMask(0b1000),
-        power: 8191,
-    }];
-    h.ok(&Request::SetMotorPower(Entries::new(&p)));
+    h.mode(0b1000, ControlMode::Power);
+    h.power(0b1000, 8191);
     h.wait(Duration::from_millis(200));
     let s = h.motion().channels[3].status.expect("status");
     assert!(s.overspeed() && s.glitch(), "{s:?}");
 }
 
 #[test]
-fn random_glitches_are_deterministic_under_the_seed() {
-    let run = |seed| {
-        let config = Qq2drvSimConfig {
-            seed,
-            glitch_rate: 50.0,
-            ..Default::default()
-        };
-        let mut h = Host::new(config);
-        h.set_masks(&[DataMaskEntry {
-            channels: ChannelMask::ALL,
-            mask: DataMask(0x20),
-        }]);
-        let mut bits = Vec::new();
-        for _ in 0..30 {
-            h.wait(Duration::from_millis(3));
-            bits.push(h.motion().channels.map(|c| c.status.map(|s| s.glitch())));
-        }
-        bits
-    };
-    assert_eq!(run(3), run(3));
-    assert_ne!(run(3), run(4));
+fn pid_constants_drive_the_position_loop() {
+    // Packet 30 with P = I = D = 0: the loop outputs nothing and the target is not reached.
+    let mut h = Host::new(Qq2drvSimConfig::default());
+    let pid = [qq2drv::PositionPidEntry {
+        channels: ch1(),
+        p: 0,
+        i: 0,
+        d: 0,
+        windup: 0,
+    }];
+    h.ok(&Request::SetPositionPid(Entries::new(&pid)));
+    h.mode(1, ControlMode::PositionPid);
+    let t = [qq2drv::PositionTargetEntry {
+        channels: ChannelMask(0b0011),
+        position: 500,
+    }];
+    h.ok(&Request::SetPositionTarget(Entries::new(&t)));
+    h.wait(Duration::from_millis(500));
+    assert_eq!(h.sim.motor_power(0), Some(0));
+    assert_eq!(h.sim.counter(0), Some(0));
+    // Channel 2 got the target but is Off: stored, no motion.
+    assert_eq!(h.sim.counter(1), Some(0));
+    // Default constants restored: the target is reached.
+    let pid = [qq2drv::PositionPidEntry {
+        channels: ch1(),
+        p: 100,
+        i: 500,
+        d: 500,
+        windup: 600,
+    }];
+    h.ok(&Request::SetPositionPid(Entries::new(&pid)));
+    h.wait(Duration::from_millis(800));
+    let c = h.sim.counter(0).expect("ch");
+    assert!((c - 500).abs() <= 4, "{c} {:?}", h.sim.true_velocity(0));
+    // Windup above 8191 is out of range.
+    let pid = [qq2drv::PositionPidEntry {
+        channels: ch1(),
+        p: 1,
+        i: 1,
+        d: 1,
+        windup: 9000,
+    }];
+    let reply = h.request(&Request::SetPositionPid(Entries::new(&pid)));
+    assert_eq!(reply.code(), Some(qq2drv::ReturnCode(RC_OUT_OF_RANGE)));
+    let vpid = [qq2drv::VelocityPidEntry {
+        channels: ch1(),
+        p: 100,
+        i: 200,
+        d: 500,
+    }];
+    h.ok(&Request::SetVelocityPid(Entries::new(&vpid)));
 }
 
 #[test]
-fn reset_returns_registers_to_start_up() {
-    let mut h = Host::new(Qq2drvSimConfig::default());
-    h.set_masks(&[DataMaskEntry {
-        channels: ChannelMask::ALL,
-        mask: DataMask(0x21),
-    }]);
-    let e = [SetPositionEntry {
-        channels: ChannelMask::ALL,
-        position: Some(PositionValue::I32(77)),
-    }];
-    h.ok(&Request::SetPosition(Entries::new(&e)));
-    h.ok(&Request::SetStreamPeriod(10));
-    assert_eq!(h.sim.counter(0), Some(77));
-    h.sim.reset();
-    h.layout = ReplyLayout {
-        motion: MotionLayout::default(),
-        position: PositionLayout::default(),
+fn history_dimensions_shape_the_measured_velocity() {
+    // A shorter averaging time winds the reported velocity down sooner after a stop.
+    let config = Qq2drvSimConfig {
+        motors: [MotorConfig {
+            friction: 0.0,
+            time_constant: Duration::from_millis(2),
+            ..MotorConfig::default()
+        }; 4],
+        ..Default::default()
     };
-    h.decoder.clear();
-    assert_eq!(h.sim.stream_period(), 0);
-    assert_eq!(h.sim.data_masks(), [DataMask(0x0B); 4]);
-    assert_eq!(h.sim.counter(0), Some(0));
-    assert_eq!(
-        h.request(&Request::GetStreamPeriod),
-        Reply::StreamPeriod {
-            code: Default::default(),
-            period: 0
-        }
-    );
+    let run = |bits: u8| {
+        let mut h = Host::new(config.clone());
+        let dims = HistoryDimensions {
+            history_length: 31,
+            averaging_bits: bits,
+        };
+        h.ok(&Request::SetHistoryDimensions(dims));
+        h.mode(1, ControlMode::Power);
+        h.power(1, 200);
+        h.wait(Duration::from_millis(500));
+        h.power(1, 0);
+        h.wait(Duration::from_millis(30));
+        h.motion().channels[0].velocity.expect("velocity")
+    };
+    // At ~140 transitions/s one capture event every ~28 ms: 14 bits (10.5 ms) sees too
+    // few events and reads 0; the default 20 bits still averages the last events.
+    assert_eq!(run(14), 0);
+    assert!(run(20) > 0);
+}
+
+#[test]
+fn srdy_and_next_event_tell_when_to_read() {
+    let mut sim = Qq2drvSim::new(Qq2drvSimConfig::default());
+    assert_eq!(sim.next_event(), None);
+    let t = BYTE * 6;
+    let mut miso = [0u8; 6];
+    let mut buf = [0u8; 8];
+    let n = Request::SetStreamPeriod(25)
+        .encode(&mut buf)
+        .expect("encode");
+    sim.transfer(t, &buf[..n], &mut miso);
+    let ready = sim.next_event().expect("a reply is pending");
+    assert_eq!(ready, t + Qq2drvSimConfig::default().processing_time);
+    assert!(!sim.packet_ready(ready - Duration::from_nanos(1)));
+    assert!(sim.packet_ready(ready));
+    sim.advance(Duration::from_millis(10));
+    assert_eq!(sim.stream_period(), 25);
+    // The stream has produced one packet (unread: later periods are missed).
+    assert_eq!(sim.stats().stream_packets, 1);
+    assert!(sim.stats().stream_missed >= 7);
 }

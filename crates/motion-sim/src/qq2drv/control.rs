@@ -5,18 +5,13 @@
 //! them so that the defaults give a well-damped loop on the default motor:
 //! position `power = P/4·e + I/5·∫e dt − D/1200·v` (e in transitions, v the measured
 //! velocity in transitions/s, integral term clipped to ±Windup Limit and integrating only
-//! while the setpoint is at rest), velocity `power = P/100·e + I/5·∫e dt + D/100000·de/dt`
+//! while the setpoint is at rest and P·e is within the windup limit), velocity `power = P/100·e + I/5·∫e dt + D/100000·de/dt`
 //! (e in transitions/s, integral term clipped to ±8191).
 
-use qq2drv::limits::{FIXED_SHIFT, POSITION_PID_DEFAULT, POWER_MAX, VELOCITY_PID_DEFAULT};
+use qq2drv::limits::{POSITION_PID_DEFAULT, POWER_MAX, VELOCITY_PID_DEFAULT, from_fixed};
 use qq2drv::{ControlMode, PositionPidEntry, VelocityPidEntry};
 
 use super::ramp::{PositionProfile, VelocityRamp, min_limit};
-
-/// Converts a shl-12 fixed-point quantity to a float.
-pub(crate) fn from_fixed(v: u32) -> f64 {
-    f64::from(v) / f64::from(1u32 << FIXED_SHIFT)
-}
 
 /// Default velocity limit (packet 26): the top of its range, i.e. no limit.
 pub(crate) const DEFAULT_VELOCITY_LIMIT: u32 = qq2drv::limits::VELOCITY_LIMIT_MAX;
@@ -176,16 +171,17 @@ impl Controller {
         self.profile.step(dt);
         let pid = self.position_pid;
         let error = self.profile.position - count;
-        // The integrator only runs once the setpoint has arrived (it removes the friction
-        // offset at rest without winding up during a move and overshooting at its end).
-        if self.profile.done() {
-            let windup = f64::from(pid.windup);
+        // The integrator only runs once the setpoint has arrived and the error is inside the
+        // band where P alone stays below the windup limit: it removes the friction offset at
+        // rest without winding up during a move and overshooting at its end.
+        let kp = f64::from(pid.p) / 4.0;
+        let windup = f64::from(pid.windup);
+        if self.profile.done() && kp * error.abs() <= windup {
             self.integral =
                 (self.integral + f64::from(pid.i) / 5.0 * error * dt).clamp(-windup, windup);
         }
         // Derivative on the measured velocity, not on the error: no kick from the setpoint.
-        f64::from(pid.p) / 4.0 * error + self.integral
-            - f64::from(pid.d) / 1200.0 * self.velocity_estimate
+        kp * error + self.integral - f64::from(pid.d) / 1200.0 * self.velocity_estimate
     }
 
     fn velocity_loop(&mut self, dt: f64) -> f64 {

@@ -27,6 +27,8 @@ mod inputs;
 mod physics;
 mod ramp;
 mod registers;
+#[cfg(test)]
+mod tests;
 mod wire;
 
 use core::time::Duration;
@@ -277,8 +279,7 @@ impl Qq2drvSim {
 
     fn history_params(&self) -> (u8, f64) {
         let h = self.regs.history;
-        let bits = i32::from(h.averaging_bits.min(32));
-        let avg = 2f64.powi(bits) * qq2drv::limits::AVERAGING_TICK_NS as f64 * 1e-9;
+        let avg = qq2drv::limits::averaging_time(h.averaging_bits).as_secs_f64();
         (h.history_length, avg)
     }
 

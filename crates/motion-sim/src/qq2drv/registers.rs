@@ -80,7 +80,7 @@ impl Qq2drvSim {
     }
 
     /// Applies `req` (received at `at`) and builds its reply.
-    fn handle(&mut self, at: Duration, req: &Request<'_>) -> Reply {
+    pub(super) fn handle(&mut self, at: Duration, req: &Request<'_>) -> Reply {
         let id = req.id();
         let code = ReturnCode::SUCCESS;
         if !in_range(req) {

@@ -160,7 +160,7 @@ pub(crate) struct StreamClock {
 
 impl StreamClock {
     fn period_duration(&self) -> Duration {
-        Duration::from_nanos(u64::from(self.period) * qq2drv::limits::STREAM_TICK_NS)
+        qq2drv::limits::stream_units_to_duration(self.period)
     }
 
     /// Packet 4 at `now`.
@@ -208,14 +208,10 @@ impl StreamClock {
         let age = (t + overhead)
             .saturating_sub(self.prev_calc)
             .saturating_sub(missed_time);
-        let units = (age.as_nanos() + u128::from(qq2drv::limits::STREAM_TICK_NS / 2))
-            / u128::from(qq2drv::limits::STREAM_TICK_NS);
+        let units = qq2drv::limits::duration_to_stream_units(age);
         self.last_index = index;
         self.prev_calc = t;
         self.produced += 1;
-        Some((
-            u16::try_from(units).unwrap_or(u16::MAX),
-            u8::try_from(elapsed).unwrap_or(u8::MAX),
-        ))
+        Some((units, u8::try_from(elapsed).unwrap_or(u8::MAX)))
     }
 }

@@ -40,3 +40,59 @@ pub const AVERAGING_BITS_RANGE: core::ops::RangeInclusive<u8> = 14..=32;
 pub const POSITION_PID_DEFAULT: (u16, u16, u16, u16) = (100, 500, 500, 600);
 /// Packet 32 defaults: P, I, D.
 pub const VELOCITY_PID_DEFAULT: (u16, u16, u16) = (100, 200, 500);
+
+/// A shl-12 fixed-point value (packets 26, 34 velocities; 28, 34, 36 accelerations) as a
+/// plain number of transitions/s or transitions/s².
+pub fn from_fixed(value: u32) -> f64 {
+    f64::from(value) / f64::from(1u32 << FIXED_SHIFT)
+}
+
+/// Transitions/s (or /s²) as a shl-12 fixed-point value, rounded; `None` when negative,
+/// not finite or beyond `u32`.
+pub fn to_fixed(value: f64) -> Option<u32> {
+    let scaled = (value * f64::from(1u32 << FIXED_SHIFT)).round();
+    (scaled.is_finite() && (0.0..=f64::from(u32::MAX)).contains(&scaled)).then_some(scaled as u32)
+}
+
+/// A Stream Period / Stream Period Timing value as a duration (units of 40.96 µs).
+pub const fn stream_units_to_duration(units: u16) -> core::time::Duration {
+    core::time::Duration::from_nanos(units as u64 * STREAM_TICK_NS)
+}
+
+/// A duration in whole 40.96 µs units, rounded to nearest and clipped at 0xFFFF (as Stream
+/// Period Timing clips).
+pub fn duration_to_stream_units(d: core::time::Duration) -> u16 {
+    let units = (d.as_nanos() + u128::from(STREAM_TICK_NS / 2)) / u128::from(STREAM_TICK_NS);
+    u16::try_from(units).unwrap_or(u16::MAX)
+}
+
+/// Maximum Averaging Time for a "Maximum Averaging Time in Bits" value (2^bits × 0.64 µs).
+pub fn averaging_time(bits: u8) -> core::time::Duration {
+    let ticks = 1u128 << bits.min(64);
+    let nanos = ticks.saturating_mul(u128::from(AVERAGING_TICK_NS));
+    core::time::Duration::from_nanos(u64::try_from(nanos).unwrap_or(u64::MAX))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unit_conversions() {
+        // Packet 26: "Velocity Limit = <transitions/s> shl 12".
+        assert_eq!(to_fixed(2000.0), Some(2000 << 12));
+        assert_eq!(from_fixed(2000 << 12), 2000.0);
+        assert_eq!(to_fixed(-1.0), None);
+        assert_eq!(to_fixed(0.5), Some(2048));
+        // Packet 4: "Stream Period in Microseconds = Stream Period x 40.96".
+        assert_eq!(stream_units_to_duration(100).as_nanos(), 4_096_000);
+        assert_eq!(duration_to_stream_units(stream_units_to_duration(108)), 108);
+        assert_eq!(
+            duration_to_stream_units(core::time::Duration::from_secs(10)),
+            0xFFFF
+        );
+        // Packet 12 table: 20 bits → 671.1 ms, 14 bits → 10.5 ms.
+        assert_eq!(averaging_time(20).as_micros(), 671_088);
+        assert_eq!(averaging_time(14).as_micros(), 10_485);
+    }
+}
