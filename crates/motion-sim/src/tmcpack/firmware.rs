@@ -335,7 +335,9 @@ impl TmcpackSim {
         let Ok(word) = ReplyFrame::new(reply_to, reply).to_word() else {
             return;
         };
-        let ready = t + self.cfg.processing_time + self.switchover();
+        let ready = t
+            .saturating_add(self.cfg.processing_time)
+            .saturating_add(self.switchover());
         let replaced = self
             .tx
             .schedule(ready, &word, self.byte_time(), self.switchover(), kind);
@@ -540,7 +542,7 @@ impl TmcpackSim {
         // "The RS232 usually receives a 0-byte during execution."
         self.tx
             .schedule(t, &[0], self.byte_time(), Duration::ZERO, Kind::Glitch);
-        self.deaf_until = Some(t + self.cfg.boot_time);
+        self.deaf_until = Some(t.saturating_add(self.cfg.boot_time));
         self.check_supply();
     }
 }

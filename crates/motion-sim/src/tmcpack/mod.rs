@@ -290,14 +290,14 @@ impl TmcpackSim {
                 .map(|k: u64| Duration::from_nanos(k.saturating_mul(TICK.as_nanos() as u64)))
                 .unwrap_or(now),
         };
-        while next <= now {
+        while next <= now && next < Duration::MAX {
             if self.quiet() {
                 let skip = ((now - next).as_nanos() / TICK.as_nanos()) as u32 + 1;
-                next += TICK * skip;
+                next = next.saturating_add(TICK.saturating_mul(skip));
                 break;
             }
             self.tick(next);
-            next += TICK;
+            next = next.saturating_add(TICK);
         }
         self.next_tick = Some(next);
     }
@@ -485,7 +485,7 @@ impl StreamDevice for TmcpackSim {
     fn receive(&mut self, now: Duration, bytes: &[u8]) {
         let n = bytes.len();
         for (j, &b) in bytes.iter().enumerate() {
-            let at = now.saturating_sub(self.byte_time() * (n - 1 - j) as u32);
+            let at = now.saturating_sub(self.byte_time().saturating_mul((n - 1 - j) as u32));
             if self.deaf_until.is_some_and(|d| at < d) || self.tx.driving(at) {
                 self.stats.lost_bytes += 1;
                 continue;

@@ -35,7 +35,8 @@ struct Outgoing {
 
 impl Outgoing {
     fn byte_start(&self, i: usize) -> Duration {
-        self.start + self.byte_time * i as u32
+        self.start
+            .saturating_add(self.byte_time.saturating_mul(i as u32))
     }
 
     fn end(&self) -> Duration {
@@ -43,7 +44,7 @@ impl Outgoing {
     }
 
     fn window_end(&self) -> Duration {
-        self.end() + self.hold
+        self.end().saturating_add(self.hold)
     }
 }
 
@@ -138,5 +139,49 @@ impl Transmitter {
     /// Forgets everything queued (reset).
     pub fn clear(&mut self) {
         self.queue.clear();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const BT: Duration = Duration::from_micros(500);
+    const HOLD: Duration = Duration::from_millis(6);
+
+    #[test]
+    fn bytes_start_on_time_and_the_line_is_held_after() {
+        let mut tx = Transmitter::default();
+        let t = Duration::from_millis(10);
+        assert!(!tx.schedule(t, &[1, 2, 3], BT, HOLD, Kind::Immediate));
+        let mut out = [0u8; 8];
+        assert_eq!(tx.transmit(t - Duration::from_nanos(1), &mut out), 0);
+        assert_eq!(tx.next_byte(), Some(t));
+        assert_eq!(tx.transmit(t + BT, &mut out), 2);
+        assert_eq!(out[..2], [1, 2]);
+        assert_eq!(tx.transmit(t + BT * 2, &mut out), 1);
+        assert!(tx.driving(t + BT * 3 + HOLD - Duration::from_nanos(1)));
+        assert!(!tx.driving(t + BT * 3 + HOLD));
+        assert!(!tx.driving(t - Duration::from_nanos(1)));
+        assert_eq!(tx.transmit(t + BT * 4 + HOLD, &mut out), 0);
+        assert!(tx.driving(t + BT), "remembered after it left the queue");
+    }
+
+    #[test]
+    fn a_waiting_answer_is_replaced_and_others_queue_behind() {
+        let mut tx = Transmitter::default();
+        let t = Duration::from_millis(10);
+        tx.schedule(t, &[1; 9], BT, HOLD, Kind::Delayed);
+        assert!(!tx.schedule(t, &[2; 9], BT, HOLD, Kind::Immediate));
+        assert!(tx.schedule(t, &[3; 9], BT, HOLD, Kind::Immediate));
+        let mut out = [0u8; 32];
+        let n = tx.transmit(t + BT * 17, &mut out);
+        assert_eq!(n, 18);
+        assert_eq!(out[..9], [1; 9]);
+        assert_eq!(
+            out[9..18],
+            [3; 9],
+            "the later answer replaced the waiting one"
+        );
     }
 }
