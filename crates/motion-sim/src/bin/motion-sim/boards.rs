@@ -2,12 +2,15 @@
 
 use anyhow::{Result, bail};
 use motion_link::sim::{Duplex, SimLimits, SimLink, SpiBus, SpiDevice, StreamBus, StreamDevice};
+use motion_sim::qq2drv::{Qq2drvSim, Qq2drvSimConfig};
+use motion_sim::qsb::{QsbSim, QsbSimConfig, Variant as QsbVariant};
 use motion_sim::spimotor::{Drive, SpimotorSim, SpimotorSimConfig};
+use motion_sim::tmcpack::{TmcpackSim, TmcpackSimConfig};
+use tmcpack::Variant as PackVariant;
 
 use crate::cli::{BoardSpec, ModelId};
 
 /// A built model, on the wire its board uses.
-#[allow(dead_code)] // Stream: until the serial models are in this build
 pub enum Board {
     /// A serial board.
     Stream(Box<dyn StreamDevice>),
@@ -33,14 +36,6 @@ pub fn describe(spec: &BoardSpec) -> String {
     text
 }
 
-/// The board's own line rate, for serial boards.
-pub fn native_baud(model: ModelId) -> u32 {
-    match model {
-        ModelId::Tmcpack => 19_200,
-        _ => 230_400,
-    }
-}
-
 fn refuse_option(spec: &BoardSpec, option: &str, given: bool) -> Result<()> {
     if given {
         bail!("--model {} has no --{option}", spec.model.as_str());
@@ -48,9 +43,68 @@ fn refuse_option(spec: &BoardSpec, option: &str, given: bool) -> Result<()> {
     Ok(())
 }
 
-/// Builds one model.
-pub fn build(spec: &BoardSpec) -> Result<Board> {
+/// Builds one model. `baud` is the pty's rate when `--baud` was given: a QSB is set to
+/// start at it (its BAUD RATE command has the same rates); a pack always starts at its
+/// factory 19200 baud, as after power-up.
+pub fn build(spec: &BoardSpec, baud: Option<u32>, spi_hz: u32) -> Result<Board> {
     match spec.model {
+        ModelId::Qsb => {
+            refuse_option(spec, "address", spec.address.is_some())?;
+            refuse_option(spec, "drive", spec.drive.is_some())?;
+            let mut config = QsbSimConfig::default();
+            config.variant = match spec.variant.as_deref() {
+                None => config.variant,
+                Some("s" | "S" | "qsb-s") => QsbVariant::S,
+                Some("d" | "D" | "qsb-d") => QsbVariant::D,
+                Some("m" | "M" | "qsb-m") => QsbVariant::M,
+                Some(other) => bail!("qsb --variant {other}: use s, d or m"),
+            };
+            if let Some(rate) = baud {
+                let Some(selected) = qsb::BaudRate::ALL
+                    .iter()
+                    .copied()
+                    .find(|r| r.bits_per_second() == rate)
+                else {
+                    bail!(
+                        "--baud {rate}: a QSB runs at 9600, 19200, 38400, 56000, 115200, 128000, 230400 or 256000"
+                    );
+                };
+                config.baud = selected;
+            }
+            if let Some(seed) = spec.seed {
+                config.seed = seed;
+            }
+            Ok(Board::Stream(Box::new(QsbSim::new(config))))
+        }
+        ModelId::Tmcpack => {
+            refuse_option(spec, "drive", spec.drive.is_some())?;
+            let mut config = TmcpackSimConfig::default();
+            if let Some(address) = spec.address {
+                config.address = address;
+            }
+            config.variant = match spec.variant.as_deref() {
+                None | Some("sixpack") => PackVariant::SixPack,
+                Some("quadpack") => PackVariant::QuadPack,
+                Some(other) => bail!("tmcpack --variant {other}: use sixpack or quadpack"),
+            };
+            if let Some(seed) = spec.seed {
+                config.seed = seed;
+            }
+            Ok(Board::Stream(Box::new(TmcpackSim::new(config))))
+        }
+        ModelId::Qq2drv => {
+            refuse_option(spec, "address", spec.address.is_some())?;
+            refuse_option(spec, "variant", spec.variant.is_some())?;
+            refuse_option(spec, "drive", spec.drive.is_some())?;
+            let mut config = Qq2drvSimConfig {
+                spi_clock_hz: spi_hz,
+                ..Qq2drvSimConfig::default()
+            };
+            if let Some(seed) = spec.seed {
+                config.seed = seed;
+            }
+            Ok(Board::Spi(Box::new(Qq2drvSim::new(config))))
+        }
         ModelId::Spimotor => {
             refuse_option(spec, "variant", spec.variant.is_some())?;
             let mut config = SpimotorSimConfig::default();
@@ -73,9 +127,6 @@ pub fn build(spec: &BoardSpec) -> Result<Board> {
                 config.seed = seed;
             }
             Ok(Board::Spi(Box::new(SpimotorSim::new(config))))
-        }
-        ModelId::Qq2drv | ModelId::Tmcpack | ModelId::Qsb => {
-            bail!("the {} model is not in this build yet", spec.model.as_str())
         }
     }
 }

@@ -31,6 +31,9 @@ Examples:
         python3 -c \"import socket; s=socket.socket(socket.AF_UNIX); s.connect('/tmp/qq2drv.sock'); s.send(bytes([4,0,2,4,1,249])); print(s.recv(4).hex()); s.send(bytes([16,0])+bytes(16)); print(s.recv(16).hex())\"
   motion-sim --model spimotor --address 0x90 --model spimotor --address 0x92 --drive brushed --spi-socket /tmp/motors.sock
 
+A board told to change its rate (tmcpack $40, QSB COMMAND baud selection) then talks
+at the new rate while the pty stays at --baud: its bytes arrive garbled, as on a real line.
+
 Runs until SIGINT or SIGTERM (exit status 0). Logs what it serves on stderr; --trace also
 logs every byte with its time.";
 

@@ -57,7 +57,7 @@ fn run(options: &cli::Options) -> Result<()> {
     let mut serial_names = Vec::new();
     let mut spi_names = Vec::new();
     for spec in &options.boards {
-        match boards::build(spec)? {
+        match boards::build(spec, cli.baud, cli.spi_hz)? {
             Board::Stream(device) => {
                 serial.push(device);
                 serial_names.push(boards::describe(spec));
@@ -73,18 +73,27 @@ fn run(options: &cli::Options) -> Result<()> {
     let pty_endpoint = if serial.is_empty() {
         None
     } else {
-        let first = options.boards.iter().find(|b| !b.model.is_spi());
+        // The wire runs at --baud, else at the rate the boards listen at after power-up.
         let baud = cli
             .baud
-            .or_else(|| first.map(|b| boards::native_baud(b.model)))
+            .or_else(|| serial.iter().find_map(|d| d.baud()))
             .unwrap_or(230_400);
+        for (device, name) in serial.iter().zip(&serial_names) {
+            if let Some(own) = device.baud().filter(|&own| own != baud) {
+                eprintln!(
+                    "motion-sim: warning: {name} listens at {own} baud, the pty runs at {baud}: \
+                     its bytes will be garbled, as on a real line"
+                );
+            }
+        }
         let pty = pty::Pty::open(baud)?;
-        writeln!(stdout, "{}", pty.path().display())?;
-        stdout.flush()?;
+        // The link exists before the path is printed: a client may use either at once.
         let link = match &cli.link {
             Some(path) => Some(Symlink::create(path, pty.path())?),
             None => None,
         };
+        writeln!(stdout, "{}", pty.path().display())?;
+        stdout.flush()?;
         let shown = link
             .as_ref()
             .map(|l| format!(" (also {})", l.path.display()))
@@ -116,9 +125,11 @@ fn run(options: &cli::Options) -> Result<()> {
 
     std::thread::scope(|scope| -> Result<()> {
         let mut workers = Vec::new();
-        if let Some((pty, _link, mut wire)) = pty_endpoint {
+        if let Some((pty, symlink, mut wire)) = pty_endpoint {
             let stop = &stop;
             workers.push(scope.spawn(move || {
+                // The symlink lives as long as the server: it is removed when this ends.
+                let _symlink = symlink;
                 let mut trace = Trace::new("pty", cli.trace);
                 let outcome = pty::serve(&pty, &mut wire, stop, &mut trace);
                 stop.store(true, Ordering::SeqCst);
