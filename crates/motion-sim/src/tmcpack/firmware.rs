@@ -346,13 +346,20 @@ impl TmcpackSim {
     }
 
     /// $23 (and $29 per motor): "does not influence the motor, if the motor is still active";
-    /// "If rotation has been active, the motor is only stopped by this command."
+    /// "If rotation has been active, the motor is only stopped by this command." A motor
+    /// whose $15 type has PiMode ("1=PI-controller") positions with the PI controller.
     fn start_ramp(&mut self, i: usize, target: i32) {
         self.with_motor(i, |m| match m.mode {
             Mode::Inactive => {
                 m.target = target;
-                m.mode = Mode::Ramp {
-                    target: m.internal_target(target),
+                let t = m.internal_target(target);
+                m.mode = if m.p.motor_type.contains(MotorType::PI_MODE) {
+                    Mode::Pi {
+                        target: t,
+                        integral: 0,
+                    }
+                } else {
+                    Mode::Ramp { target: t }
                 };
             }
             Mode::Rotation { .. } => {

@@ -291,3 +291,137 @@ fn manual_8_4_delayed_response_28() {
     assert_eq!(f.address, 7);
     assert!(done > Duration::ZERO);
 }
+
+/// $15 P5 bit 0 "PiMode: 0=trapezoidal ramp, 1=PI-controller": $23 then positions with
+/// the PI controller.
+#[test]
+fn manual_8_3_pi_mode_bit_makes_23_use_the_pi_controller() {
+    let mut h = pack();
+    h.send(
+        1,
+        Request::MotorParameters {
+            motor: 4,
+            poslimit: 6400,
+            motor_type: MotorType::PI_MODE,
+            options: MotorOptions::EMPTY,
+        },
+    );
+    h.send(
+        1,
+        Request::StartRamp {
+            motor: 4,
+            target: 2000,
+        },
+    );
+    h.wait(4 * MS);
+    assert_eq!(h.dev.motor(4).expect("m4").action, Action::PiController);
+    h.wait(3000 * MS);
+    assert!((h.dev.motor(4).expect("m4").position - 2000).abs() <= 8);
+}
+
+/// Rotary axis (8.3 $15 P5 bit 1): rotation wraps the position into 0..poslimit (NullLeft);
+/// with way optimisation (P6 bit 0) a ramp takes the shorter way round.
+#[test]
+fn manual_8_3_rotary_axis_wraps_and_optimises_the_way() {
+    let mut h = pack();
+    h.send(
+        1,
+        Request::MotorParameters {
+            motor: 0,
+            poslimit: 6400,
+            motor_type: MotorType::ROTARY | MotorType::NULL_LEFT,
+            options: MotorOptions::WAY_OPTIMIZATION,
+        },
+    );
+    h.send(
+        1,
+        Request::Rotate {
+            motor: 0,
+            velocity: -300,
+        },
+    );
+    for _ in 0..300 {
+        h.wait(10 * MS);
+        let p = h.dev.motor(0).expect("m0").position;
+        assert!((0..6400).contains(&p), "wrapped: {p}");
+    }
+    assert!(
+        h.dev.motor(0).expect("m0").physical < -6400,
+        "more than a turn"
+    );
+    h.send(
+        1,
+        Request::StartRamp {
+            motor: 0,
+            target: 0,
+        },
+    );
+    h.wait(1000 * MS);
+    h.send(
+        1,
+        Request::SetPosition {
+            motor: 0,
+            position: 100,
+        },
+    );
+    let before = h.dev.motor(0).expect("m0").physical;
+    h.send(
+        1,
+        Request::StartRamp {
+            motor: 0,
+            target: 6300,
+        },
+    );
+    h.wait(2000 * MS);
+    let v = h.dev.motor(0).expect("m0");
+    assert_eq!((v.position, v.action), (6300, Action::Inactive));
+    assert_eq!(
+        v.physical - before,
+        -200,
+        "the short way, backwards through 0"
+    );
+}
+
+/// $32/$33: TTLOUT1 as ready output goes low while a motor of the mask is active; the
+/// display shows the number of active motors (manual 2, 8.5).
+#[test]
+fn manual_8_5_ready_output_32_33() {
+    let mut h = pack();
+    h.send(
+        1,
+        Request::Outputs {
+            ttlout1: false,
+            ttlio1_input: true,
+            ttlio1: false,
+            ttlout1_ready: true,
+        },
+    );
+    h.send(
+        1,
+        Request::ReadyOutput {
+            active_mask: MotorMask::M2,
+            reference_mask: MotorMask::EMPTY,
+        },
+    );
+    h.wait(4 * MS);
+    assert!(h.dev.ttlout1(), "ready");
+    h.send(
+        1,
+        Request::Rotate {
+            motor: 1,
+            velocity: 50,
+        },
+    );
+    h.wait(4 * MS);
+    assert!(h.dev.ttlout1(), "motor 1 is not in the mask");
+    h.send(
+        1,
+        Request::Rotate {
+            motor: 2,
+            velocity: 50,
+        },
+    );
+    h.wait(4 * MS);
+    assert!(!h.dev.ttlout1(), "active");
+    assert_eq!(h.dev.display(), (2, false));
+}

@@ -146,7 +146,9 @@ impl FrameDecoder {
     }
 
     /// Bytes that finished arriving at `now`, back to back (the last at `now`, each earlier
-    /// one a byte time before). Iterate the result for the words they complete.
+    /// one a byte time before). Iterate the result to the end for the words they complete:
+    /// bytes are consumed only as the iterator is driven.
+    #[must_use = "bytes are consumed only as the returned iterator is driven"]
     pub fn push<'a>(&'a mut self, now: Duration, bytes: &'a [u8]) -> Words<'a> {
         Words {
             decoder: self,
@@ -159,6 +161,7 @@ impl FrameDecoder {
 
 /// The words completed by one [`FrameDecoder::push`].
 #[derive(Debug)]
+#[must_use = "bytes are consumed only as the iterator is driven"]
 pub struct Words<'a> {
     decoder: &'a mut FrameDecoder,
     bytes: &'a [u8],
