@@ -72,6 +72,20 @@ pub trait Link: Send + fmt::Debug {
     /// Moves bytes received so far into `buf`; `Ok(0)` means nothing yet. Never blocks.
     fn read(&mut self, now: Duration, buf: &mut [u8]) -> Result<usize, LinkError>;
 
+    /// Like [`read`](Self::read), but when nothing has arrived yet it waits up to `timeout`
+    /// for the first byte (a blocking call for a link's own I/O thread, so it can sleep in
+    /// the kernel instead of polling). A simulated link has no clock and never waits: ask
+    /// it for [`next_event`](Self::next_event) instead. The default does not wait.
+    fn read_wait(
+        &mut self,
+        now: Duration,
+        buf: &mut [u8],
+        timeout: Duration,
+    ) -> Result<usize, LinkError> {
+        let _ = timeout;
+        self.read(now, buf)
+    }
+
     /// Pushes queued outgoing bytes towards the device. May block until the operating
     /// system has taken them (serial: until transmitted); never used on the tick thread.
     fn flush(&mut self, now: Duration) -> Result<(), LinkError>;
@@ -107,6 +121,14 @@ impl<L: Link + ?Sized> Link for Box<L> {
     }
     fn read(&mut self, now: Duration, buf: &mut [u8]) -> Result<usize, LinkError> {
         (**self).read(now, buf)
+    }
+    fn read_wait(
+        &mut self,
+        now: Duration,
+        buf: &mut [u8],
+        timeout: Duration,
+    ) -> Result<usize, LinkError> {
+        (**self).read_wait(now, buf, timeout)
     }
     fn flush(&mut self, now: Duration) -> Result<(), LinkError> {
         (**self).flush(now)

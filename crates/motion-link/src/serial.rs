@@ -206,14 +206,27 @@ impl Link for SerialLink {
         Ok(total)
     }
 
-    fn read(&mut self, _now: Duration, buf: &mut [u8]) -> Result<usize, LinkError> {
+    fn read(&mut self, now: Duration, buf: &mut [u8]) -> Result<usize, LinkError> {
+        self.read_wait(now, buf, Duration::ZERO)
+    }
+
+    fn read_wait(
+        &mut self,
+        _now: Duration,
+        buf: &mut [u8],
+        timeout: Duration,
+    ) -> Result<usize, LinkError> {
         let Some(port) = self.port.as_mut() else {
             return Err(self.closed());
         };
         if buf.is_empty() {
             return Ok(0);
         }
-        match port.read(buf) {
+        // The port's timeout is the poll before its read; it is zero except right here.
+        let _ = port.set_timeout(timeout);
+        let outcome = port.read(buf);
+        let _ = port.set_timeout(Duration::ZERO);
+        match outcome {
             Ok(0) => {
                 self.stats.errors += 1;
                 self.port = None;

@@ -6,7 +6,11 @@
 
 use core::time::Duration;
 use std::io::{self, Read, Write};
+use std::os::fd::AsFd;
 use std::os::unix::net::UnixStream;
+
+use nix::poll::{PollFd, PollFlags, ppoll};
+use nix::sys::time::TimeSpec;
 use std::sync::Arc;
 
 use crate::error::LinkError;
@@ -200,8 +204,25 @@ impl Link for SpiSocketLink {
         self.transact(parts)
     }
 
-    fn read(&mut self, _now: Duration, buf: &mut [u8]) -> Result<usize, LinkError> {
+    fn read(&mut self, now: Duration, buf: &mut [u8]) -> Result<usize, LinkError> {
+        self.read_wait(now, buf, Duration::ZERO)
+    }
+
+    fn read_wait(
+        &mut self,
+        _now: Duration,
+        buf: &mut [u8],
+        timeout: Duration,
+    ) -> Result<usize, LinkError> {
         self.push_tx()?;
+        if !timeout.is_zero()
+            && let Some(stream) = self.stream.as_ref()
+        {
+            let mut fds = [PollFd::new(stream.as_fd(), PollFlags::POLLIN)];
+            let spec = TimeSpec::from_duration(timeout);
+            // Whatever poll says, the read below tells data, hang-up and errors apart.
+            let _ = ppoll(&mut fds, Some(spec), None);
+        }
         let Some(stream) = self.stream.as_mut() else {
             return Err(self.closed());
         };

@@ -35,6 +35,11 @@ trait Harness {
     fn unplug(&mut self);
     /// Brings the device back at the same path.
     fn replug(&mut self);
+    /// Whether `read_wait` really waits (the real transports; a simulated wire has no
+    /// clock and never does).
+    fn blocks(&self) -> bool {
+        true
+    }
 }
 
 fn read_exactly(h: &mut dyn Harness, n: usize, chunk: usize) -> Vec<u8> {
@@ -113,6 +118,28 @@ fn conformance(h: &mut dyn Harness) {
         "{name}"
     );
 
+    // read_wait: idle, it gives up after its timeout with nothing; a byte on its way ends
+    // the wait (real transports; a simulated wire never waits).
+    let now = h.now();
+    assert_eq!(
+        h.link()
+            .read_wait(now, &mut [0u8; 8], Duration::from_millis(5))
+            .expect("idle read_wait"),
+        0
+    );
+    if h.blocks() {
+        write_all(h, b"wake");
+        let now = h.now();
+        let mut buf = [0u8; 8];
+        let n = h
+            .link()
+            .read_wait(now, &mut buf, Duration::from_secs(5))
+            .expect("read_wait");
+        assert!(n >= 1, "{name}: read_wait returned without the echo");
+        let rest = read_exactly(h, 4 - n, 8);
+        assert_eq!([&buf[..n], &rest[..]].concat(), b"wake");
+    }
+
     // Round trip of every byte value, then every chunk size from 1 to 64.
     let all: Vec<u8> = (0..=255u8).collect();
     round_trip(h, &all, 256);
@@ -133,6 +160,7 @@ fn conformance(h: &mut dyn Harness) {
     assert_eq!(read_exactly(h, 5, 16), b"abcde");
     let stats = h.link().stats();
     assert!(stats.bytes_out >= 256 + 64 * 200 + 5, "{stats:?}");
+    assert!(stats.bytes_out <= 256 + 64 * 200 + 5 + 4, "{stats:?}");
     assert_eq!(stats.bytes_in, stats.bytes_out, "{stats:?}");
     if h.link().kind() == LinkKind::Spi {
         assert!(stats.transactions > 64, "{stats:?}");
@@ -224,6 +252,9 @@ impl Harness for SimHarness {
     }
     fn replug(&mut self) {
         self.faults.replug();
+    }
+    fn blocks(&self) -> bool {
+        false
     }
 }
 
