@@ -230,3 +230,44 @@ fn manual_8_8_service_functions() {
     };
     assert_eq!(r(&mut h, rd), Reply::EepromRead { ok: false });
 }
+
+/// Random words (commands of the section 9 table with random parameters, some garbage) at
+/// random times: the model never panics and its registers stay in their documented ranges.
+#[test]
+fn random_traffic_never_breaks_the_model() {
+    let mut rng = motion_sim::rng::SimRng::new(42);
+    for variant in [Variant::SixPack, Variant::QuadPack] {
+        let mut h = Host::new(TmcpackSim::new(TmcpackSimConfig {
+            variant,
+            ..TmcpackSimConfig::default()
+        }));
+        for _ in 0..4000 {
+            let mut w = [0u8; 9];
+            for b in &mut w {
+                *b = rng.next_u64() as u8;
+            }
+            let commands = tmcpack::Command::ALL;
+            let pick = (rng.next_u64() % commands.len() as u64) as usize;
+            w[1] = commands[pick].code();
+            if (w[1] == 0xCC && rng.next_u64() % 8 != 0) || (0x40..=0x42).contains(&w[1]) {
+                // Keep resets rare (each deafens the pack for a second) and the line
+                // settings (address, baud, switch-over, timeout) as they are.
+                w[1] = 0x20;
+            }
+            w[0] = if rng.next_u64() % 10 == 0 { 2 } else { 1 };
+            w[2] %= 6; // mostly valid motor numbers
+            let len = if rng.next_u64() % 20 == 0 { 4 } else { 9 };
+            h.send_raw(&w[..len]);
+            h.wait(Duration::from_micros(rng.next_u64() % 30_000));
+            for m in 0..6 {
+                if let Some(v) = h.dev.motor(m) {
+                    assert!(v.velocity.unsigned_abs() <= 511, "{v:?}");
+                    assert!(v.microstep_hz.is_finite());
+                    assert!(v.coil_current_amps >= 0.0);
+                }
+            }
+        }
+        let s = h.dev.stats();
+        assert!(s.executed > 1000 && s.invalid > 0 && s.foreign > 0, "{s:?}");
+    }
+}
