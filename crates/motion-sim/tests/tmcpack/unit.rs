@@ -249,14 +249,23 @@ fn random_traffic_never_breaks_the_model() {
             let commands = tmcpack::Command::ALL;
             let pick = (rng.next_u64() % commands.len() as u64) as usize;
             w[1] = commands[pick].code();
-            if (w[1] == 0xCC && rng.next_u64() % 8 != 0) || (0x40..=0x42).contains(&w[1]) {
+            if (w[1] == 0xCC && !rng.next_u64().is_multiple_of(8)) || (0x40..=0x42).contains(&w[1])
+            {
                 // Keep resets rare (each deafens the pack for a second) and the line
                 // settings (address, baud, switch-over, timeout) as they are.
                 w[1] = 0x20;
             }
-            w[0] = if rng.next_u64() % 10 == 0 { 2 } else { 1 };
+            w[0] = if rng.next_u64().is_multiple_of(10) {
+                2
+            } else {
+                1
+            };
             w[2] %= 6; // mostly valid motor numbers
-            let len = if rng.next_u64() % 20 == 0 { 4 } else { 9 };
+            let len = if rng.next_u64().is_multiple_of(20) {
+                4
+            } else {
+                9
+            };
             h.send_raw(&w[..len]);
             h.wait(Duration::from_micros(rng.next_u64() % 30_000));
             for m in 0..6 {
