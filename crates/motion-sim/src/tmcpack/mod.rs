@@ -28,6 +28,25 @@
 //! - $CC and [`TmcpackSim::power_cycle`] put one 0 byte on the line (5.1, 8.6) and leave the
 //!   pack deaf for [`TmcpackSimConfig::boot_time`]; the address comes back from the rotary
 //!   switches and the baud rate to 19200.
+//! - The response address a host gives must be one no pack on the bus uses: like the
+//!   firmware, the model cannot tell a reply from a request, so a reply addressed to a pack
+//!   is executed by it.
+//! - $15 PiMode makes $23/$29 position with the PI controller; the PI output is limited to
+//!   ±vmax and changes by at most amax/64 per tick outside ±vstart (the manual states no
+//!   acceleration limit for it). The analogue stop ($31) works whenever its limits are set,
+//!   without StopNull. TestNull checks the switch the filter delay (plus T0 with
+//!   DelayTestNull) after the motor came to rest at position 0.
+//! - Reference search (8.4): actions 20 stopping, 21 seeking the switch (vrefmax with
+//!   FastRef, else vmin at divider 3), 22 backing off at vstart until it releases, 23 slow
+//!   approach at vmin, 24 crossing it for the far edge (NullCenter: zero at the centre),
+//!   25 driving to the new zero ($16 "stop after search"), 30 mechanical reference (5/4 ·
+//!   poslimit against [`MotorConfig::travel`]). The fast search stops abruptly on the
+//!   switch; zero lies `nulloffset` beyond the edge in the search direction; no switch within
+//!   5/4 · poslimit, or none again on the slow approach, restarts the search; afterwards
+//!   the motor resumes its previous action (an idle motor drives back to where it started).
+//! - Not modelled: the CAN interface (and RS-232 forwarding via CAN, $44 only stores its
+//!   settings), the microstep table's effect on the current ($17 is stored), thermal
+//!   shutdown. The $F2/$F6 magic codes are not published; the config holds invented ones.
 
 mod config;
 mod firmware;
