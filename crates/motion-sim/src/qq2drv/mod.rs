@@ -16,9 +16,15 @@
 //! Return codes other than 0 are not documented; this model answers 1 when a payload does
 //! not decode ([`RC_MALFORMED`]) and 2 when a value is outside its documented range
 //! ([`RC_OUT_OF_RANGE`]), applying nothing of that packet. Targets sent while the channel is
-//! in another control mode are stored and succeed (the datasheet only says the mode "must be
-//! set"). Entering a PID mode holds the current position (or velocity) until a new target
-//! arrives, as a real loop must.
+//! in another control mode succeed and are forgotten on the next mode change (the datasheet
+//! only says the mode "must be set"): entering position mode holds the current position,
+//! entering velocity mode ramps from the current velocity towards 0, until a target arrives.
+//!
+//! Physics and loop: each channel is a first-order DC motor (dead band for static friction)
+//! driving an encoder; velocity is reported from capture events (one per detent) averaged
+//! over the History Dimensions; the loop runs every 2 ms on the integer counter with the
+//! PID scaling documented in `control.rs`; the velocity and acceleration limits bound the
+//! loop's setpoint profile, the power limit its output.
 
 mod channel;
 mod config;
