@@ -104,6 +104,16 @@ pub struct Cli {
     /// SPI clock used for wire time on the socket (default 500000).
     #[arg(long, value_name = "HZ", default_value_t = 500_000)]
     pub spi_hz: u32,
+    /// Fault injection: probability that a byte is lost, each way (0 to 1).
+    #[arg(long, value_name = "P", default_value_t = 0.0)]
+    pub drop_rate: f64,
+    /// Fault injection: put one random byte on the wire to the client every MS
+    /// milliseconds (SPI: corrupt one MISO byte as often).
+    #[arg(long, value_name = "MS", default_value_t = 0)]
+    pub noise_every: u64,
+    /// Fault injection: hold every reply back by MS milliseconds.
+    #[arg(long, value_name = "MS", default_value_t = 0)]
+    pub reply_delay: u64,
     /// Log every byte in and out on stderr, with its time.
     #[arg(long)]
     pub trace: bool,
@@ -222,6 +232,12 @@ fn group(matches: &ArgMatches, cli: &Cli) -> Result<Vec<BoardSpec>> {
     if cli.spi_socket.is_some() && !spi {
         bail!("--spi-socket given but no SPI board (qq2drv, spimotor) to serve on it");
     }
+    if !(0.0..=1.0).contains(&cli.drop_rate) {
+        bail!(
+            "--drop-rate {} is not a probability (0 to 1)",
+            cli.drop_rate
+        );
+    }
     if cli.baud == Some(0) || cli.spi_hz == 0 {
         bail!("--baud and --spi-hz must be positive");
     }
@@ -268,6 +284,7 @@ mod tests {
             ("--model tmcpack --address 300 --pty", "not a byte"),
             ("--model nosuch --pty", "nosuch"),
             ("--model qsb --link /tmp/x", "--pty"),
+            ("--model qsb --pty --drop-rate 2", "probability"),
         ] {
             let err = boards(args).unwrap_err();
             assert!(err.contains(why), "{args}: {err}");

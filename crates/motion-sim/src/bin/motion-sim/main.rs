@@ -5,6 +5,7 @@
 
 mod boards;
 mod cli;
+mod faults;
 mod pty;
 mod socket;
 mod trace;
@@ -14,6 +15,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
 
 use anyhow::{Context, Result, bail};
 use nix::sys::signal::{SigSet, Signal};
@@ -122,6 +124,14 @@ fn run(options: &cli::Options) -> Result<()> {
         _ => None,
     };
     drop(stdout);
+    let plan = faults::FaultPlan::new(
+        cli.drop_rate,
+        Duration::from_millis(cli.noise_every),
+        Duration::from_millis(cli.reply_delay),
+    );
+    if plan.is_active() {
+        eprintln!("motion-sim: {}", plan.describe());
+    }
 
     std::thread::scope(|scope| -> Result<()> {
         let mut workers = Vec::new();
@@ -131,7 +141,9 @@ fn run(options: &cli::Options) -> Result<()> {
                 // The symlink lives as long as the server: it is removed when this ends.
                 let _symlink = symlink;
                 let mut trace = Trace::new("pty", cli.trace);
-                let outcome = pty::serve(&pty, &mut wire, stop, &mut trace);
+                let mut plan = plan;
+                plan.apply(&wire.faults());
+                let outcome = pty::serve(&pty, &mut wire, stop, &mut trace, &mut plan);
                 stop.store(true, Ordering::SeqCst);
                 outcome
             }));
@@ -140,7 +152,9 @@ fn run(options: &cli::Options) -> Result<()> {
             let stop = &stop;
             workers.push(scope.spawn(move || {
                 let mut trace = Trace::new("spi", cli.trace);
-                let outcome = socket::serve(&socket, &mut wire, stop, &mut trace);
+                let mut plan = plan;
+                plan.apply(&wire.faults());
+                let outcome = socket::serve(&socket, &mut wire, stop, &mut trace, &mut plan);
                 stop.store(true, Ordering::SeqCst);
                 outcome
             }));

@@ -19,6 +19,7 @@ use nix::poll::{PollFd, PollFlags, ppoll};
 use nix::sys::termios::{self, BaudRate, SetArg};
 use nix::sys::time::TimeSpec;
 
+use crate::faults::FaultPlan;
 use crate::trace::Trace;
 
 /// The longest the loop sleeps, so a stop request is seen quickly.
@@ -82,13 +83,21 @@ fn baud_rate(baud: u32) -> Option<BaudRate> {
 }
 
 /// Moves bytes between the pty and the simulated wire until `stop` is set.
-pub fn serve(pty: &Pty, link: &mut SimLink, stop: &AtomicBool, trace: &mut Trace) -> Result<()> {
+pub fn serve(
+    pty: &Pty,
+    link: &mut SimLink,
+    stop: &AtomicBool,
+    trace: &mut Trace,
+    plan: &mut FaultPlan,
+) -> Result<()> {
     let start = Instant::now();
+    let faults = link.faults();
     let mut inbound: Vec<u8> = Vec::new();
     let mut outbound: Vec<u8> = Vec::new();
     let mut buf = [0u8; 1024];
     while !stop.load(Ordering::SeqCst) {
         let now = start.elapsed();
+        plan.tick(now, &faults, 64);
         // Client to wire: what the wire accepts now; the rest waits in `inbound`.
         if !inbound.is_empty() {
             let n = link
@@ -116,9 +125,11 @@ pub fn serve(pty: &Pty, link: &mut SimLink, stop: &AtomicBool, trace: &mut Trace
 
         // Sleep until the client writes, the wire has something, or MAX_SLEEP.
         let now = start.elapsed();
-        let wake = link
-            .next_event(now)
-            .map_or(MAX_SLEEP, |t| t.saturating_sub(now).min(MAX_SLEEP));
+        let next = [link.next_event(now), plan.next_event()]
+            .into_iter()
+            .flatten()
+            .min();
+        let wake = next.map_or(MAX_SLEEP, |t| t.saturating_sub(now).min(MAX_SLEEP));
         let mut flags = PollFlags::empty();
         if inbound.len() < 4096 {
             flags |= PollFlags::POLLIN;
@@ -202,7 +213,8 @@ mod tests {
             let server = scope.spawn(|| {
                 let mut link = SimLink::stream("test", 9600, Box::new(Shout::default()));
                 let mut trace = Trace::new("test", false);
-                serve(&pty, &mut link, &stop, &mut trace)
+                let mut plan = FaultPlan::new(0.0, Duration::ZERO, Duration::ZERO);
+                serve(&pty, &mut link, &stop, &mut trace, &mut plan)
             });
             let mut client = SerialLink::open(SerialConfig::new(&path, 9600)).expect("open");
             let start = Instant::now();

@@ -13,6 +13,7 @@ use anyhow::{Context, Result, bail};
 use motion_link::Link;
 use motion_link::sim::SimLink;
 
+use crate::faults::FaultPlan;
 use crate::trace::Trace;
 
 /// How often a blocked accept or read looks at the stop flag.
@@ -65,13 +66,14 @@ pub fn serve(
     link: &mut SimLink,
     stop: &AtomicBool,
     trace: &mut Trace,
+    plan: &mut FaultPlan,
 ) -> Result<()> {
     let start = Instant::now();
     while !stop.load(Ordering::SeqCst) {
         match socket.listener.accept() {
             Ok((conn, _)) => {
                 trace.note(start.elapsed(), "client connected");
-                let outcome = serve_client(conn, link, stop, trace, start);
+                let outcome = serve_client(conn, link, stop, trace, plan, start);
                 let why = match outcome {
                     Ok(()) => "client disconnected".to_owned(),
                     Err(e) => format!("client dropped: {e:#}"),
@@ -95,8 +97,10 @@ fn serve_client(
     link: &mut SimLink,
     stop: &AtomicBool,
     trace: &mut Trace,
+    plan: &mut FaultPlan,
     start: Instant,
 ) -> Result<()> {
+    let faults = link.faults();
     conn.set_nonblocking(false)?;
     conn.set_read_timeout(Some(POLL))?;
     let mut pending: Vec<u8> = Vec::new();
@@ -124,6 +128,7 @@ fn serve_client(
                 break;
             };
             let now = start.elapsed();
+            plan.tick(now, &faults, 1);
             trace.bytes(now, "<-", mosi);
             transact(link, start, mosi, &mut miso)?;
             trace.bytes(start.elapsed(), "->", &miso);
