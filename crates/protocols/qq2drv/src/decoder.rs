@@ -1,8 +1,8 @@
 //! Incremental decoder for the byte stream clocked out on MISO.
 //!
 //! The slave clocks filler while it has nothing to say, so the decoder skips everything up
-//! to an STX, then checks the size (at least 4 bytes), the id (a documented one) and the
-//! checksum. A failed candidate is dropped one byte at a time, so a real packet hidden
+//! to an STX, then checks the id (a documented one), the size (possible for that id, see
+//! [`PacketId::max_packet_len`]) and the checksum. A failed candidate is dropped one byte at a time, so a real packet hidden
 //! inside garbage is still found (resync one byte after the false STX).
 
 use crate::frame::{MAX_PACKET_LEN, MIN_PACKET_LEN, PacketBuf, PacketId, STX, checksum};
@@ -16,7 +16,8 @@ pub struct DecoderStats {
     pub packets: u64,
     /// Bytes skipped while looking for STX (filler, noise).
     pub skipped: u64,
-    /// Candidates rejected for an impossible Packet Size (below 4).
+    /// Candidates rejected for an impossible Packet Size (below 4, or outside what the id
+    /// allows).
     pub bad_size: u64,
     /// Candidates rejected for an undocumented Packet ID.
     pub bad_id: u64,
@@ -110,8 +111,13 @@ impl StreamDecoder {
                 continue;
             }
             let &id = pending.get(2)?;
-            if PacketId::try_from(id).is_err() {
+            let Ok(id) = PacketId::try_from(id) else {
                 self.stats.bad_id += 1;
+                self.start += 1;
+                continue;
+            };
+            if !(id.min_packet_len()..=id.max_packet_len()).contains(&size) {
+                self.stats.bad_size += 1;
                 self.start += 1;
                 continue;
             }
@@ -189,6 +195,15 @@ mod tests {
         assert!(d.next_packet().is_some());
         assert_eq!(d.stats().bad_size, 1);
         assert_eq!(d.stats().bad_id, 1);
+    }
+
+    #[test]
+    fn a_size_impossible_for_the_id_is_rejected_without_waiting() {
+        // Packet 1 is never longer than 8 bytes: STX 200 1 is rejected at once.
+        let mut d = StreamDecoder::new();
+        d.push(&[2, 200, 1, 0, 0, 2, 4, 1, 249]);
+        assert_eq!(d.next_packet().map(|p| p.frame().id), Some(1));
+        assert_eq!(d.stats().bad_size, 1);
     }
 
     #[test]

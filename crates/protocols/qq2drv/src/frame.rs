@@ -129,6 +129,36 @@ impl PacketId {
     }
 }
 
+impl PacketId {
+    /// The longest packet this id can have in either direction: the largest layout of the
+    /// get replies and of packet 3 (all four channels with 32-bit position, velocity and
+    /// status, plus the stream timing fields), 255 for the multi-entry packets.
+    pub const fn max_packet_len(self) -> usize {
+        const CHANNEL: usize = 4 + 4 + 1;
+        match self {
+            Self::GetVersion => MIN_PACKET_LEN + 4,
+            Self::GetMotionData => MIN_PACKET_LEN + 1 + 4 * CHANNEL,
+            Self::StreamData => MIN_PACKET_LEN + 3 + 4 * CHANNEL,
+            Self::SetStreamPeriod | Self::GetStreamPeriod => MIN_PACKET_LEN + 3,
+            Self::GetDataMask => MIN_PACKET_LEN + 5,
+            Self::SetStreamConfig | Self::GetStreamConfig => MIN_PACKET_LEN + 2,
+            Self::GetPosition => MIN_PACKET_LEN + 1 + 4 * 4,
+            Self::SetHistoryDimensions | Self::GetHistoryDimensions => MIN_PACKET_LEN + 3,
+            _ => MAX_PACKET_LEN,
+        }
+    }
+
+    /// The shortest packet this id can have in either direction (a set request carries at
+    /// least one byte, its reply the Return Code).
+    pub const fn min_packet_len(self) -> usize {
+        if self.reply_is_return_code_only() {
+            MIN_PACKET_LEN + 1
+        } else {
+            MIN_PACKET_LEN
+        }
+    }
+}
+
 impl TryFrom<u8> for PacketId {
     type Error = Error;
 
