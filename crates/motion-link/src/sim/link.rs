@@ -42,7 +42,9 @@ pub enum SimWire {
 pub enum Duplex {
     /// Separate transmit and receive lines.
     Full,
-    /// One shared pair.
+    /// One shared pair: the host's bytes and the devices' replies take turns on it. The
+    /// host does not hear its own bytes (its receiver is off while it transmits, as on
+    /// USB RS-485 adapters with automatic direction control).
     Half,
 }
 
