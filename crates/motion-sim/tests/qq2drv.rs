@@ -101,12 +101,9 @@ impl Host {
     }
 
     fn set_masks(&mut self, entries: &[DataMaskEntry]) {
-        self.ok(&Request::SetDataMask(Entries::new(entries)));
-        for e in entries {
-            for ch in e.channels.channels() {
-                self.layout.motion.data_masks[ch] = e.mask;
-            }
-        }
+        let req = Request::SetDataMask(Entries::new(entries));
+        self.ok(&req);
+        assert!(self.layout.motion.apply(&req));
     }
 
     fn motion(&mut self) -> qq2drv::MotionData {
@@ -457,8 +454,9 @@ fn streaming_at_the_configured_period_with_timing_fields() {
         channels: ChannelMask::ALL,
         mask: DataMask::new(PositionSize::I32, false, true, true),
     }]);
-    h.ok(&Request::SetStreamConfig(StreamConfig::new(true, true)));
-    h.layout.motion.stream_config = StreamConfig::new(true, true);
+    let config = Request::SetStreamConfig(StreamConfig::new(true, true));
+    h.ok(&config);
+    h.layout.motion.apply(&config);
     h.ok(&Request::SetStreamPeriod(100)); // 4.096 ms
     let t_set = h.now;
     // Poll 48 bytes every 1 ms for 500 ms; collect stream packets.
@@ -515,8 +513,9 @@ fn stream_periods_elapsed_counts_missed_periods() {
         channels: ChannelMask::ALL,
         mask: DataMask(0),
     }]);
-    h.ok(&Request::SetStreamConfig(StreamConfig::new(true, true)));
-    h.layout.motion.stream_config = StreamConfig::new(true, true);
+    let config = Request::SetStreamConfig(StreamConfig::new(true, true));
+    h.ok(&config);
+    h.layout.motion.apply(&config);
     h.ok(&Request::SetStreamPeriod(50)); // 2.048 ms
     // Do not read for 20 ms: one packet waits, the periods after it are missed.
     h.wait(Duration::from_millis(20));

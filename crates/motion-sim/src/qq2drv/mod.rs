@@ -40,7 +40,7 @@ mod wire;
 use core::time::Duration;
 
 use motion_link::sim::SpiDevice;
-use qq2drv::{CHANNELS, ControlMode, DataMask, HistoryDimensions, StreamConfig};
+use qq2drv::{CHANNELS, ControlMode, DataMask, HistoryDimensions, MotionLayout};
 
 pub use config::{InputPin, InputSource, MotorConfig, Qq2drvSimConfig};
 
@@ -59,21 +59,11 @@ const CONTROL_PERIOD: Duration = Duration::from_millis(2);
 const SUBSTEP: Duration = Duration::from_micros(100);
 
 /// Board registers that survive between packets.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, Default)]
 struct Registers {
-    data_masks: [DataMask; CHANNELS],
-    stream_config: StreamConfig,
+    /// Data masks (packet 6) and stream config (packet 8).
+    layout: MotionLayout,
     history: HistoryDimensions,
-}
-
-impl Default for Registers {
-    fn default() -> Self {
-        Self {
-            data_masks: [DataMask::DEFAULT; CHANNELS],
-            stream_config: StreamConfig::default(),
-            history: HistoryDimensions::default(),
-        }
-    }
 }
 
 /// Counters of what the model has done on the wire.
@@ -209,7 +199,7 @@ impl Qq2drvSim {
 
     /// The configured data masks (packet 6/7).
     pub fn data_masks(&self) -> [DataMask; CHANNELS] {
-        self.regs.data_masks
+        self.regs.layout.data_masks
     }
 
     /// The configured Stream Period (packet 4/5).

@@ -109,29 +109,32 @@ impl Qq2drvSim {
                 code,
                 period: self.stream.period,
             },
-            Request::SetDataMask(entries) => {
-                for e in entries.iter() {
-                    self.for_channels(e.channels, |sim, ch| {
-                        let was = sim.regs.data_masks[ch];
-                        sim.regs.data_masks[ch] = e.mask;
-                        if e.mask.relative() && !was.relative() {
-                            sim.channels[ch].last_read = sim.channels[ch].counter();
-                        }
-                    });
+            Request::SetDataMask(_) => {
+                let before = self.regs.layout.data_masks;
+                self.regs.layout.apply(req);
+                for ((c, was), now) in self
+                    .channels
+                    .iter_mut()
+                    .zip(before)
+                    .zip(self.regs.layout.data_masks)
+                {
+                    if now.relative() && !was.relative() {
+                        c.last_read = c.counter();
+                    }
                 }
                 ack
             }
             Request::GetDataMask => Reply::DataMasks {
                 code,
-                masks: self.regs.data_masks,
+                masks: self.regs.layout.data_masks,
             },
-            Request::SetStreamConfig(c) => {
-                self.regs.stream_config = *c;
+            Request::SetStreamConfig(_) => {
+                self.regs.layout.apply(req);
                 ack
             }
             Request::GetStreamConfig => Reply::StreamConfig {
                 code,
-                config: self.regs.stream_config,
+                config: self.regs.layout.stream_config,
             },
             Request::SetPosition(entries) => {
                 for e in entries.iter() {
@@ -142,7 +145,7 @@ impl Qq2drvSim {
                 ack
             }
             Request::GetPosition(form) => {
-                let layout = form.reply_layout(&self.regs.data_masks);
+                let layout = form.reply_layout(&self.regs.layout.data_masks);
                 let mut positions = [None; CHANNELS];
                 for ((p, size), ch) in positions.iter_mut().zip(layout.0).zip(&self.channels) {
                     *p = PositionValue::truncate(size, ch.counter_i32());
@@ -279,7 +282,7 @@ impl Qq2drvSim {
             .channels
             .iter_mut()
             .zip(&mut self.channels)
-            .zip(self.regs.data_masks)
+            .zip(self.regs.layout.data_masks)
         {
             let position = if mask.position_size().is_omitted() {
                 0
@@ -299,7 +302,7 @@ impl Qq2drvSim {
 
     /// A packet-3 stream packet with the configured optional fields.
     pub(super) fn stream_packet(&mut self, timing: u16, elapsed: u8) -> Option<PacketBuf> {
-        let config = self.regs.stream_config;
+        let config = self.regs.layout.stream_config;
         let data = self.sample_motion();
         encode(&Reply::StreamData(StreamData {
             timing: config.timing().then_some(timing),

@@ -20,6 +20,29 @@ pub struct MotionLayout {
 }
 
 impl MotionLayout {
+    /// Updates the layout for a request that changes it once acknowledged: packet 6 (each
+    /// entry's mask on its channels, in order, so "any latter bit value will override the
+    /// former") and packet 8. Returns whether `req` was one of them.
+    pub fn apply(&mut self, req: &crate::Request<'_>) -> bool {
+        match req {
+            crate::Request::SetDataMask(entries) => {
+                for e in entries.iter() {
+                    for ch in e.channels.channels() {
+                        if let Some(m) = self.data_masks.get_mut(ch) {
+                            *m = e.mask;
+                        }
+                    }
+                }
+                true
+            }
+            crate::Request::SetStreamConfig(c) => {
+                self.stream_config = *c;
+                true
+            }
+            _ => false,
+        }
+    }
+
     /// Channel data bytes for all four channels.
     pub fn channels_len(&self) -> usize {
         self.data_masks.iter().map(|m| m.channel_len()).sum()

@@ -189,6 +189,21 @@ fn packet_6_multiple_channel_mask_pairs() {
         panic!()
     };
     assert_eq!(got.iter().collect::<Vec<_>>(), entries);
+    // "If any mask conflicts occur, any latter bit value will override the former."
+    let mut layout = MotionLayout::default();
+    assert!(layout.apply(&Request::SetDataMask(Entries::new(&entries))));
+    assert_eq!(
+        layout.data_masks,
+        [
+            DataMask(0x0B),
+            DataMask(0x0B),
+            DataMask(0x21),
+            DataMask(0x0B)
+        ]
+    );
+    assert!(layout.apply(&Request::SetStreamConfig(StreamConfig(2))));
+    assert!(!layout.apply(&Request::GetVersion));
+    assert_eq!(layout.stream_payload_len(), 1 + 3 * 8 + 2);
     // An odd payload is not a whole number of pairs.
     let mut bad = vec![2, 7, 6, 0x0F, 0x0B, 0x04];
     bad.push(checksum(&bad));
