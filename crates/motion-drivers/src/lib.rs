@@ -12,6 +12,8 @@ mod driver;
 mod goal;
 mod state;
 
+pub mod spimotor;
+
 pub use bus::{BusKind, LinkBus, MAX_SENDS_PER_STEP, SPI_PENDING_CAPACITY};
 pub use driver::{Driver, Model, Priority, Transmit};
 pub use goal::{Goal, GoalError, GoalKind, GoalKinds};

@@ -1,0 +1,750 @@
+//! Driver of the **SPI_motor** board (model id `spimotor`): one stepper, or two brushed DC
+//! motors, on an SPI bus shared by address byte.
+//!
+//! Every byte goes through the `spimotor` protocol crate; this module decides *what* to
+//! send and *when*, and what the answers mean. It never reads a clock, never touches a file
+//! descriptor and allocates nothing after [`SpimotorDriver::new`].
+//!
+//! # The wire
+//!
+//! Every exchange is one SPI transaction (address byte, port byte, data). A read's answer
+//! starts at MISO offset 2 ([`spimotor::REPLY_OFFSET`]); the [`LinkBus`](crate::LinkBus)
+//! hands each transaction's MISO bytes back to the driver that wrote it, so several boards
+//! (distinct addresses) share one bus. Nothing on the wire tells a present board from an
+//! absent one — an undriven MISO reads 0xFF, so a position read of an absent board returns
+//! −1 — therefore the driver identifies its board by reading port 0x01 (an identification
+//! string terminated by 0; 0xFF bytes never terminate it) at start-up and periodically.
+//!
+//! # Start-up
+//!
+//! 1. Read the identification (0x01). A missing or invalid string is retried every
+//!    [`RETRY_PERIOD`]; after [`START_ATTEMPTS`] failures the board is reported
+//!    [`DeviceFault::NotResponding`] and retried every [`OFFLINE_RETRY_PERIOD`].
+//! 2. Read the serial number (0x02); the firmware text becomes `"<identification> sn
+//!    <serial, hex>"`.
+//! 3. Stop all motion and configure. Stepper: 0x42 ← 0 (target = current position: stop
+//!    where it is), 0x44 ← coils, 0x43 ← the step delay of the axis's `max_velocity`, 0x10
+//!    ← intensity. Brushed: 0x22 and 0x32 (stop A and B).
+//! 4. Poll. The first consistent poll after start-up clears the channel faults; goals from
+//!    before are gone (the engine needs a new command).
+//!
+//! # Stepper (channel 0), counts = full steps of the board's position counter
+//!
+//! The board steps towards its target (0x41) at one constant rate, one step per step
+//! delay (0x43, 0.1 ms … 25.5 ms), and has no acceleration of its own. The driver ramps
+//! that rate ([`ramp`]) so that moves respect the axis's velocity and acceleration: the
+//! step delay is rewritten every `poll_period`, always rounded to step no faster than the
+//! profile, and never faster than the goal's velocity. The board's slowest rate, 39.2
+//! steps/s, is its start/stop rate (reached and left within one step).
+//!
+//! | goal | what the board gets |
+//! |---|---|
+//! | `Position` | target 0x41 ← counts, rate ramped with the axis's `max_velocity` / `max_accel` |
+//! | `RampPosition` | target 0x41 ← counts, rate ramped with the goal's velocity (≥ 39.2 steps/s, capped at 10 000) and acceleration |
+//! | `Velocity` | target 2³⁰ steps ahead in the direction of travel, rate ramped to \|v\| (39.2 ≤ \|v\| ≤ 10 000 steps/s, else `OutOfBoardRange`; 0 stops); the board runs at the fastest rate 10 000/n not above \|v\| |
+//! | `Stop` | rate ramped down at `decel`, then 0x42 ← 0 (stop where it is) |
+//! | `SetPosition` | 0x43 ← 255 (so no step can slip in), 0x40 ← counts, 0x41 ← counts, 0x43 ← the resting delay (writing 0x40 alone would walk back to the old target); stops motion |
+//! | `Off` | 0x42 ← 0, then intensity 0x10 ← 0 (coils de-energised); the next motion goal re-energises |
+//! | `Home` | unsupported: the board has no reference input |
+//!
+//! Reported state: position = the board's position counter (open loop, no encoder);
+//! velocity = ±(rate of the step delay read back) while position ≠ target; moving while
+//! the board's position differs from its target or a run/stop ramp is in progress;
+//! `homed` after a set-position (until the board resets); `arrived` when a position goal's
+//! target is reached.
+//!
+//! # Brushed (channel 0 = motor A, 1 = motor B)
+//!
+//! `Power { fraction }` spins the motor in direction A (fraction > 0, ports 0x20/0x30) or
+//! B (< 0, 0x21/0x31) with intensity `round(|fraction| × 255)`; a fraction that rounds to
+//! 0, `Stop` and `Off` write the stop port (0x22/0x32) at once: the board has no speed
+//! ramp and no coasting mode, so a stop's deceleration cannot be chosen. Every other goal
+//! is `Unsupported`. The board has no encoder: position and velocity are reported as 0
+//! (configure brushed axes with `min < 0 < max`), `moving` means "the bridge is driven",
+//! and a channel is fresh when its board answered the last identification read.
+//!
+//! # Faults
+//!
+//! - Polls are checked against what the driver wrote: the step delay and target read back
+//!   must be the ones in force when the read was sent, and the position may not move
+//!   faster than the board can step. A poll that disagrees is discarded (the channel keeps
+//!   its last known state) and counted in [`DeviceStatus::bad_replies`]; garbage on MISO
+//!   therefore never reaches the axis.
+//! - The same disagreeing poll [`CONFIRMATIONS`] times in a row is real: all bytes 0xFF
+//!   (position −1, target −1, delay 255) is an absent board ([`DeviceFault::NotResponding`]),
+//!   anything else a board that lost its registers ([`DeviceFault::Reset`]: power cycle).
+//!   [`PROTOCOL_LIMIT`] disagreeing polls in a row without a repeat raise
+//!   [`DeviceFault::Protocol`] until a good poll arrives.
+//! - [`CONFIRMATIONS`] failed identification reads in a row (periodic presence check)
+//!   raise `NotResponding`; MISO bytes that never come back within the reply timeout too.
+//! - After any of these the board is started again from step 1.
+
+mod brushed;
+mod config;
+pub mod ramp;
+mod stepper;
+mod wire;
+
+use core::fmt::{self, Write as _};
+use core::time::Duration;
+
+use spimotor::{Identification, ReadPort, Reply, SerialNumber, Write};
+
+use crate::driver::{Driver, Model, Priority, Transmit};
+use crate::goal::{Goal, GoalError, GoalKind, GoalKinds};
+use crate::state::{ChannelState, DeviceFault, DeviceStatus, FIRMWARE_LEN};
+
+pub use config::{AxisLimits, SpimotorDrive, SpimotorDriverConfig};
+
+use brushed::BrushedMotor;
+use stepper::Stepper;
+use wire::{Expect, InFlight, Op, OpQueue, Queued, Sent};
+
+/// Retry period of the identification read during start-up.
+pub const RETRY_PERIOD: Duration = Duration::from_millis(20);
+/// Retry period once the board has been declared not responding.
+pub const OFFLINE_RETRY_PERIOD: Duration = Duration::from_millis(200);
+/// Identification attempts before the board is declared not responding.
+pub const START_ATTEMPTS: u32 = 3;
+/// Identical disagreeing polls (or failed presence reads) in a row that are taken as real.
+pub const CONFIRMATIONS: u32 = 3;
+/// Disagreeing polls in a row that raise [`DeviceFault::Protocol`].
+pub const PROTOCOL_LIMIT: u32 = 20;
+/// Every this many stepper polls, the identification is read as a presence check.
+pub const PRESENCE_EVERY: u32 = 16;
+/// Margin of the reply timeout beyond the wire time of what is in flight.
+pub const REPLY_MARGIN: Duration = Duration::from_millis(100);
+
+/// Start-up and running phases.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Phase {
+    /// Reading the identification string.
+    Identify { attempts: u32, next_at: Duration },
+    /// Reading the serial number.
+    Serial,
+    /// Configured; polling.
+    Running,
+}
+
+/// Board registers as the driver's writes leave them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Registers {
+    delay: spimotor::StepDelay,
+    /// `None`: unknown (after 0x42 ← 0, until a poll reads it).
+    target: Option<i32>,
+    intensity: Option<u8>,
+    /// Bumped by every write that changes the target.
+    target_seq: u32,
+}
+
+impl Registers {
+    const UNKNOWN: Self = Self {
+        delay: spimotor::StepDelay::DEFAULT,
+        target: None,
+        intensity: None,
+        target_seq: 0,
+    };
+
+    /// The registers after `write`.
+    fn apply(&mut self, write: Write) {
+        match write {
+            Write::StepDelay(delay) => self.delay = delay,
+            Write::TargetPosition(target) => {
+                self.target = Some(target);
+                self.target_seq = self.target_seq.wrapping_add(1);
+            }
+            Write::RelativePosition(_) => {
+                self.target = None;
+                self.target_seq = self.target_seq.wrapping_add(1);
+            }
+            Write::StepperIntensity(value) => self.intensity = Some(value),
+            _ => {}
+        }
+    }
+}
+
+/// Sans-I/O driver of one SPI_motor board. See the module docs.
+#[derive(Debug, Clone)]
+pub struct SpimotorDriver {
+    config: SpimotorDriverConfig,
+    status: DeviceStatus,
+    phase: Phase,
+    link_up: bool,
+    identification: Option<Identification>,
+    /// Setup and goal traffic, in order.
+    commands: OpQueue<24>,
+    /// Poll reads.
+    polls: OpQueue<8>,
+    in_flight: InFlight<32>,
+    /// Registers as transmitted (what reads are checked against).
+    written: Registers,
+    /// Registers after every queued write.
+    planned: Registers,
+    /// Bumped by every write of the position counter.
+    epoch: u32,
+    next_poll_at: Duration,
+    polls_done: u32,
+    presence_misses: u32,
+    /// Last time the board answered a presence read or a consistent poll.
+    refreshed_at: Option<Duration>,
+    stepper: Stepper,
+    motors: [BrushedMotor; 2],
+}
+
+impl SpimotorDriver {
+    /// A driver for the board `config` describes; it starts the board on its first
+    /// `poll_transmit`.
+    pub fn new(config: SpimotorDriverConfig) -> Self {
+        let stepper = Stepper::new(&config);
+        Self {
+            config,
+            status: DeviceStatus::UNKNOWN,
+            phase: Phase::Identify {
+                attempts: 0,
+                next_at: Duration::ZERO,
+            },
+            link_up: true,
+            identification: None,
+            commands: OpQueue::new(),
+            polls: OpQueue::new(),
+            in_flight: InFlight::new(),
+            written: Registers::UNKNOWN,
+            planned: Registers::UNKNOWN,
+            epoch: 0,
+            next_poll_at: Duration::ZERO,
+            polls_done: 0,
+            presence_misses: 0,
+            refreshed_at: None,
+            stepper,
+            motors: [BrushedMotor::default(); 2],
+        }
+    }
+
+    /// The configuration the driver was built from.
+    pub fn config(&self) -> &SpimotorDriverConfig {
+        &self.config
+    }
+
+    /// The identification string the board answered at start-up.
+    pub fn identification(&self) -> Option<Identification> {
+        self.identification
+    }
+
+    fn is_stepper(&self) -> bool {
+        self.config.drive == SpimotorDrive::Stepper
+    }
+
+    fn running(&self) -> bool {
+        self.link_up && self.phase == Phase::Running
+    }
+
+    /// Queues a setup or goal transaction; `false` when the queue is full.
+    fn push_command(&mut self, op: Op, priority: Priority, channel: u8) -> bool {
+        let pushed = self.commands.push(Queued {
+            op,
+            priority,
+            channel,
+        });
+        if pushed && let Op::Write(write) = op {
+            self.planned.apply(write);
+        }
+        pushed
+    }
+
+    /// Drops the unsent goal ops of `channel` and recomputes the planned registers.
+    fn drop_goals(&mut self, channel: u8) {
+        self.commands.drop_goals(channel);
+        self.planned = self.written;
+        let mut planned = self.written;
+        for queued in self.commands.iter() {
+            if let Op::Write(write) = queued.op {
+                planned.apply(write);
+            }
+        }
+        self.planned = planned;
+    }
+
+    /// Reply timeout: the wire time of everything in flight plus [`REPLY_MARGIN`].
+    fn reply_timeout(&self) -> Duration {
+        self.config
+            .wire_time(self.in_flight.len() * wire::MAX_TRANSACTION)
+            .saturating_add(REPLY_MARGIN)
+    }
+
+    /// Raises `fault` on the board (and so on every channel).
+    fn raise(&mut self, fault: DeviceFault) {
+        if self.link_up || fault == DeviceFault::LinkDown {
+            self.status.fault = Some(fault);
+        }
+    }
+
+    /// Fresh, consistent data arrived: faults other than a down link clear.
+    fn refreshed(&mut self, now: Duration) {
+        self.refreshed_at = Some(now);
+        self.presence_misses = 0;
+        if self.link_up {
+            self.status.fault = None;
+        }
+    }
+
+    /// Starts the board again from the identification read (goals are lost).
+    fn restart(&mut self, now: Duration, attempts: u32) {
+        self.phase = Phase::Identify {
+            attempts,
+            next_at: now,
+        };
+        self.status.online = false;
+        self.commands.clear();
+        self.polls.clear();
+        self.planned = self.written;
+        self.presence_misses = 0;
+        self.stepper.forget(now);
+    }
+
+    /// The board does not answer.
+    fn absent(&mut self, now: Duration) {
+        self.status.timeouts = self.status.timeouts.saturating_add(1);
+        self.raise(DeviceFault::NotResponding);
+        self.restart(now, START_ATTEMPTS);
+    }
+
+    /// The board lost its registers (power cycle).
+    fn board_reset(&mut self, now: Duration) {
+        self.status.resets = self.status.resets.saturating_add(1);
+        self.raise(DeviceFault::Reset);
+        self.stepper.homed = false;
+        self.restart(now, 0);
+    }
+
+    fn bad_reply(&mut self) {
+        self.status.bad_replies = self.status.bad_replies.saturating_add(1);
+    }
+
+    /// Queues the start-up writes: stop everything, configure.
+    fn configure(&mut self) {
+        if self.is_stepper() {
+            let intensity = if self.stepper.is_off() {
+                0
+            } else {
+                self.config.stepper_intensity
+            };
+            for write in [
+                Write::RelativePosition(0),
+                Write::Coils(self.config.coils),
+                Write::StepDelay(self.stepper.rest_delay),
+                Write::StepperIntensity(intensity),
+            ] {
+                self.push_command(Op::Write(write), Priority::Setup, 0);
+            }
+        } else {
+            for motor in spimotor::Motor::ALL {
+                self.push_command(
+                    Op::Write(Write::Stop(motor)),
+                    Priority::Setup,
+                    motor.channel(),
+                );
+            }
+        }
+    }
+
+    /// Handles one completed transaction.
+    fn complete(&mut self, now: Duration, sent: Sent, miso: &[u8]) {
+        let Op::Read(port, _) = sent.op else {
+            return; // MISO of a write carries nothing.
+        };
+        let reply = Reply::decode(port, miso);
+        match (self.phase, port) {
+            (Phase::Identify { attempts, .. }, ReadPort::Identification) => {
+                match reply.ok().and_then(valid_identification) {
+                    Some(id) => {
+                        self.identification = Some(id);
+                        self.phase = Phase::Serial;
+                    }
+                    None => {
+                        let attempts = attempts.saturating_add(1);
+                        let retry = if attempts >= START_ATTEMPTS {
+                            self.status.timeouts = self.status.timeouts.saturating_add(1);
+                            self.raise(DeviceFault::NotResponding);
+                            self.status.online = false;
+                            OFFLINE_RETRY_PERIOD
+                        } else {
+                            RETRY_PERIOD
+                        };
+                        self.phase = Phase::Identify {
+                            attempts,
+                            next_at: now.saturating_add(retry),
+                        };
+                    }
+                }
+            }
+            (Phase::Serial, ReadPort::Serial) => {
+                let serial = match reply {
+                    Ok(Reply::Serial(serial)) => serial,
+                    _ => SerialNumber::default(),
+                };
+                self.set_firmware(serial);
+                self.status.online = true;
+                self.phase = Phase::Running;
+                self.next_poll_at = now;
+                self.polls_done = 0;
+                self.configure();
+            }
+            (Phase::Running, ReadPort::Identification) => {
+                let matches = reply.ok().and_then(valid_identification).is_some_and(|id| {
+                    self.identification
+                        .is_some_and(|known| known.as_bytes() == id.as_bytes())
+                });
+                if matches {
+                    self.presence_misses = 0;
+                    if !self.is_stepper() {
+                        self.refreshed(now);
+                    }
+                } else {
+                    self.bad_reply();
+                    self.presence_misses = self.presence_misses.saturating_add(1);
+                    if self.presence_misses >= CONFIRMATIONS {
+                        self.absent(now);
+                    }
+                }
+            }
+            (Phase::Running, _) if self.is_stepper() => match reply {
+                Ok(reply) => self.stepper_reading(now, reply, sent.expect),
+                Err(_) => self.bad_reply(),
+            },
+            // An answer to a read of an earlier phase: nothing to learn from it.
+            _ => {}
+        }
+    }
+
+    fn set_firmware(&mut self, serial: SerialNumber) {
+        let mut text = FixedText::default();
+        let identification = self.identification;
+        let id = identification
+            .as_ref()
+            .and_then(Identification::as_str)
+            .unwrap_or("?");
+        let _ = write!(text, "{id} sn {:08x}", serial.0);
+        self.status.set_firmware(text.as_str());
+    }
+
+    /// Queues the reads of one poll when due.
+    fn schedule_poll(&mut self, now: Duration) {
+        if !self.running() || now < self.next_poll_at || !self.polls.is_empty() {
+            return;
+        }
+        let poll_reads_in_flight = self.in_flight.reading(ReadPort::StepDelay)
+            || (!self.is_stepper() && self.in_flight.reading(ReadPort::Identification));
+        if poll_reads_in_flight {
+            return;
+        }
+        self.next_poll_at = now.saturating_add(self.config.poll_period);
+        let presence_len = self
+            .identification
+            .map_or(spimotor::IDENTIFICATION_READ_LEN, |id| {
+                u16::try_from(id.wire_len()).unwrap_or(spimotor::IDENTIFICATION_READ_LEN)
+            });
+        let presence = Op::Read(ReadPort::Identification, presence_len);
+        let poll = |op| Queued {
+            op,
+            priority: Priority::Poll,
+            channel: 0,
+        };
+        if self.is_stepper() {
+            if self.polls_done % PRESENCE_EVERY == PRESENCE_EVERY - 1 {
+                self.polls.push(poll(presence));
+            }
+            for port in [
+                ReadPort::CurrentPosition,
+                ReadPort::TargetPosition,
+                ReadPort::StepDelay,
+            ] {
+                self.polls.push(poll(Op::read(port)));
+            }
+        } else {
+            self.polls.push(poll(presence));
+        }
+        self.polls_done = self.polls_done.wrapping_add(1);
+    }
+
+    /// Queues the start-up read of the current phase when due.
+    fn schedule_startup(&mut self, now: Duration) {
+        if !self.link_up || !self.commands.is_empty() {
+            return;
+        }
+        let op = match self.phase {
+            Phase::Identify { next_at, .. }
+                if now >= next_at && !self.in_flight.reading(ReadPort::Identification) =>
+            {
+                Op::read(ReadPort::Identification)
+            }
+            Phase::Serial if !self.in_flight.reading(ReadPort::Serial) => {
+                Op::read(ReadPort::Serial)
+            }
+            _ => return,
+        };
+        if let Phase::Identify { attempts, .. } = self.phase {
+            // No second read before this one is answered or times out.
+            self.phase = Phase::Identify {
+                attempts,
+                next_at: now.saturating_add(self.reply_timeout()),
+            };
+        }
+        self.push_command(op, Priority::Setup, 0);
+    }
+
+    /// The queue the next transaction comes from (commands before polls).
+    fn next_queued(&self) -> Option<Queued> {
+        if !self.link_up || !self.in_flight.has_room() {
+            return None;
+        }
+        self.commands.front().or_else(|| self.polls.front())
+    }
+}
+
+/// An identification worth believing: non-empty printable ASCII.
+fn valid_identification(reply: Reply) -> Option<Identification> {
+    match reply {
+        Reply::Identification(id)
+            if !id.as_bytes().is_empty()
+                && id
+                    .as_bytes()
+                    .iter()
+                    .all(|b| b.is_ascii_graphic() || *b == b' ') =>
+        {
+            Some(id)
+        }
+        _ => None,
+    }
+}
+
+/// A string in a fixed buffer (no allocation), cut at [`FIRMWARE_LEN`] bytes.
+#[derive(Debug, Clone, Copy, Default)]
+struct FixedText {
+    bytes: [u8; FIRMWARE_LEN],
+    len: usize,
+}
+
+impl FixedText {
+    fn as_str(&self) -> &str {
+        core::str::from_utf8(self.bytes.get(..self.len).unwrap_or(&[])).unwrap_or("")
+    }
+}
+
+impl fmt::Write for FixedText {
+    fn write_str(&mut self, text: &str) -> fmt::Result {
+        for ch in text.chars() {
+            let mut utf8 = [0u8; 4];
+            let encoded = ch.encode_utf8(&mut utf8).as_bytes();
+            let end = self.len + encoded.len();
+            match self.bytes.get_mut(self.len..end) {
+                Some(slot) => {
+                    slot.copy_from_slice(encoded);
+                    self.len = end;
+                }
+                None => break,
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Driver for SpimotorDriver {
+    fn model(&self) -> Model {
+        Model::Spimotor
+    }
+
+    fn channel_count(&self) -> usize {
+        self.config.drive.channels()
+    }
+
+    fn capabilities(&self, channel: usize) -> GoalKinds {
+        if channel >= self.channel_count() {
+            return GoalKinds::NONE;
+        }
+        if !self.is_stepper() {
+            return GoalKinds::of(&[GoalKind::Off, GoalKind::Stop, GoalKind::Power]);
+        }
+        if self.stepper.can_move() {
+            GoalKinds::of(&[
+                GoalKind::Off,
+                GoalKind::Stop,
+                GoalKind::Position,
+                GoalKind::Velocity,
+                GoalKind::RampPosition,
+                GoalKind::SetPosition,
+            ])
+        } else {
+            GoalKinds::of(&[GoalKind::Off, GoalKind::Stop, GoalKind::SetPosition])
+        }
+    }
+
+    fn refresh_budget(&self) -> Duration {
+        self.config
+            .poll_period
+            .saturating_mul(3)
+            .saturating_add(Duration::from_millis(25))
+    }
+
+    fn handle_rx(&mut self, now: Duration, mut bytes: &[u8]) {
+        while !bytes.is_empty() {
+            let (taken, complete) = self.in_flight.take(bytes);
+            if taken == 0 {
+                // Bytes for nothing in flight (late MISO after a timeout): ignore them.
+                self.bad_reply();
+                return;
+            }
+            let rest = bytes.get(taken..).unwrap_or(&[]);
+            if let Some((sent, miso)) = complete {
+                let mut copy = [0u8; wire::MAX_TRANSACTION];
+                let len = miso.len().min(copy.len());
+                copy[..len].copy_from_slice(&miso[..len]);
+                self.complete(now, sent, &copy[..len]);
+            }
+            bytes = rest;
+        }
+    }
+
+    fn handle_timeout(&mut self, now: Duration) {
+        if !self.link_up {
+            return;
+        }
+        if let Some(oldest) = self.in_flight.oldest()
+            && now.saturating_sub(oldest.at) > self.reply_timeout()
+        {
+            self.in_flight.clear();
+            self.absent(now);
+        }
+        if self.phase == Phase::Running {
+            if self.is_stepper() {
+                self.drive_stepper(now, false);
+            }
+            self.schedule_poll(now);
+        } else {
+            self.schedule_startup(now);
+        }
+    }
+
+    fn poll_timeout(&self) -> Option<Duration> {
+        let timeout = self
+            .in_flight
+            .oldest()
+            .map(|sent| sent.at.saturating_add(self.reply_timeout()));
+        let phase = match self.phase {
+            _ if !self.link_up => None,
+            Phase::Identify { next_at, .. } => Some(next_at),
+            Phase::Serial => None,
+            Phase::Running => Some(self.next_poll_at),
+        };
+        match (timeout, phase) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
+    }
+
+    fn wants_transmit(&self, _now: Duration) -> Option<Priority> {
+        self.next_queued().map(|queued| queued.priority)
+    }
+
+    fn poll_transmit(&mut self, now: Duration, buf: &mut [u8]) -> Option<Transmit> {
+        let queued = self.next_queued()?;
+        let len = queued
+            .op
+            .transaction(self.config.address)
+            .encode(buf)
+            .ok()?;
+        if self.commands.front() == Some(queued) {
+            self.commands.pop();
+        } else {
+            self.polls.pop();
+        }
+        if let Op::Write(write) = queued.op {
+            self.written.apply(write);
+            if let Write::CurrentPosition(position) = write {
+                self.epoch = self.epoch.wrapping_add(1);
+                self.stepper.position_written(now, position);
+            }
+            if let Write::Spin { motor, .. } | Write::Stop(motor) = write
+                && let Some(state) = self.motors.get_mut(usize::from(motor.channel()))
+            {
+                state.written(write);
+            }
+        }
+        let expect = Expect {
+            delay: self.written.delay,
+            target: self.written.target,
+            epoch: self.epoch,
+            target_seq: self.written.target_seq,
+        };
+        self.in_flight.push(Sent {
+            op: queued.op,
+            at: now,
+            expect,
+        });
+        Some(Transmit {
+            len,
+            expects_reply: matches!(queued.op, Op::Read(..)),
+        })
+    }
+
+    fn awaiting_reply(&self) -> bool {
+        !self.in_flight.is_empty()
+    }
+
+    fn goals_pending(&self) -> bool {
+        self.commands.any(Priority::Command) || self.stepper.ramping()
+    }
+
+    fn set_goal(&mut self, now: Duration, channel: usize, goal: Goal) -> Result<(), GoalError> {
+        if channel >= self.channel_count() {
+            return Err(GoalError::NoSuchChannel(channel));
+        }
+        let kind = goal.kind();
+        if !self.capabilities(channel).contains(kind) {
+            return Err(GoalError::Unsupported(kind));
+        }
+        if !self.link_up {
+            return Err(GoalError::Offline);
+        }
+        if self.is_stepper() {
+            self.stepper_goal(now, goal)
+        } else {
+            self.brushed_goal(channel, goal)
+        }
+    }
+
+    fn channel(&self, channel: usize) -> ChannelState {
+        if channel >= self.channel_count() {
+            return ChannelState::UNKNOWN;
+        }
+        let mut state = if self.is_stepper() {
+            self.stepper.state()
+        } else {
+            let mut state = ChannelState::UNKNOWN;
+            state.refreshed_at = self.refreshed_at;
+            state.moving = self.motors.get(channel).is_some_and(|m| m.driven());
+            state
+        };
+        state.fault = self.status.fault;
+        state
+    }
+
+    fn status(&self) -> DeviceStatus {
+        self.status
+    }
+
+    fn link_down(&mut self, now: Duration) {
+        self.link_up = false;
+        self.in_flight.clear();
+        self.raise(DeviceFault::LinkDown);
+        self.restart(now, 0);
+    }
+
+    fn link_up(&mut self, now: Duration) {
+        self.link_up = true;
+        self.in_flight.clear();
+        self.restart(now, 0);
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,343 @@
+//! The driver's side of the SPI wire: transactions waiting to be sent, transactions whose
+//! MISO bytes are still due, and reassembly of those bytes (which the link may deliver in
+//! any chunking).
+
+use core::time::Duration;
+
+use spimotor::{Address, Header, Read, ReadPort, StepDelay, Transaction, Write};
+
+use crate::driver::Priority;
+
+/// One transaction the driver wants on the wire.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Op {
+    /// A write port.
+    Write(Write),
+    /// A read of `len` data bytes of a port.
+    Read(ReadPort, u16),
+}
+
+impl Op {
+    /// A read of the whole value of `port`.
+    pub const fn read(port: ReadPort) -> Self {
+        Self::Read(port, port.default_len())
+    }
+
+    /// The transaction to board `address`.
+    pub const fn transaction(self, address: Address) -> Transaction {
+        match self {
+            Self::Write(write) => Transaction::write(address, write),
+            Self::Read(port, len) => Transaction {
+                address,
+                request: spimotor::Request::Read(Read { port, len }),
+            },
+        }
+    }
+
+    /// Bytes on the wire (and of the MISO answer), header included.
+    pub const fn len(self) -> usize {
+        match self {
+            Self::Write(write) => Header::LEN + write.data_len(),
+            Self::Read(_, len) => Header::LEN + len as usize,
+        }
+    }
+}
+
+/// A queued op and who it belongs to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Queued {
+    /// The transaction.
+    pub op: Op,
+    /// Its urgency on the bus.
+    pub priority: Priority,
+    /// The channel whose goal it serves (a new goal drops the channel's unsent ops).
+    pub channel: u8,
+}
+
+/// A bounded FIFO of ops (no allocation; a full queue refuses).
+#[derive(Debug, Clone, Copy)]
+pub struct OpQueue<const N: usize> {
+    items: [Option<Queued>; N],
+    len: usize,
+}
+
+impl<const N: usize> OpQueue<N> {
+    /// An empty queue.
+    pub const fn new() -> Self {
+        Self {
+            items: [None; N],
+            len: 0,
+        }
+    }
+
+    /// Appends; `false` when full.
+    pub fn push(&mut self, item: Queued) -> bool {
+        match self.items.get_mut(self.len) {
+            Some(slot) => {
+                *slot = Some(item);
+                self.len += 1;
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// The op that goes out next.
+    pub fn front(&self) -> Option<Queued> {
+        self.items.first().copied().flatten()
+    }
+
+    /// Takes the op that goes out next.
+    pub fn pop(&mut self) -> Option<Queued> {
+        let first = self.front()?;
+        self.items.copy_within(1.., 0);
+        if let Some(last) = self.items.last_mut() {
+            *last = None;
+        }
+        self.len -= 1;
+        Some(first)
+    }
+
+    /// The queued ops, next first.
+    pub fn iter(&self) -> impl Iterator<Item = Queued> + '_ {
+        self.items.iter().take(self.len).flatten().copied()
+    }
+
+    /// Drops the unsent goal ops ([`Priority::Command`]) of `channel`; setup ops stay.
+    pub fn drop_goals(&mut self, channel: u8) {
+        let mut kept = 0;
+        for index in 0..self.len {
+            let item = self.items.get(index).copied().flatten();
+            if let Some(item) =
+                item.filter(|item| item.channel != channel || item.priority != Priority::Command)
+                && let Some(slot) = self.items.get_mut(kept)
+            {
+                *slot = Some(item);
+                kept += 1;
+            }
+        }
+        for slot in self.items.iter_mut().skip(kept) {
+            *slot = None;
+        }
+        self.len = kept;
+    }
+
+    /// Drops everything.
+    pub fn clear(&mut self) {
+        self.items = [None; N];
+        self.len = 0;
+    }
+
+    /// Whether any queued op has `priority`.
+    pub fn any(&self, priority: Priority) -> bool {
+        self.items
+            .iter()
+            .flatten()
+            .any(|item| item.priority == priority)
+    }
+
+    /// Whether nothing is queued.
+    pub const fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+}
+
+/// What the board should answer to a read, as the driver's writes left it when the read
+/// was sent.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Expect {
+    /// Step delay in force.
+    pub delay: StepDelay,
+    /// Target in force (`None`: unknown, after a stop).
+    pub target: Option<i32>,
+    /// Position epoch: bumped by every write of the position counter.
+    pub epoch: u32,
+    /// Target sequence: bumped by every write that changes the target.
+    pub target_seq: u32,
+}
+
+/// A transaction on the wire whose MISO bytes are due.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Sent {
+    /// What was sent.
+    pub op: Op,
+    /// When.
+    pub at: Duration,
+    /// The board state the answer should agree with.
+    pub expect: Expect,
+}
+
+/// Longest transaction the driver sends: an identification read (2 + 33 bytes).
+pub const MAX_TRANSACTION: usize = Header::LEN + spimotor::IDENTIFICATION_READ_LEN as usize;
+
+/// Transactions whose MISO bytes have not all come back, oldest first, and the bytes of
+/// the oldest received so far.
+#[derive(Debug, Clone)]
+pub struct InFlight<const N: usize> {
+    ring: [Option<Sent>; N],
+    head: usize,
+    len: usize,
+    miso: [u8; MAX_TRANSACTION],
+    received: usize,
+}
+
+impl<const N: usize> InFlight<N> {
+    /// Nothing in flight.
+    pub const fn new() -> Self {
+        Self {
+            ring: [None; N],
+            head: 0,
+            len: 0,
+            miso: [0; MAX_TRANSACTION],
+            received: 0,
+        }
+    }
+
+    /// Records a transaction just written; `false` when full (the caller checks first).
+    pub fn push(&mut self, sent: Sent) -> bool {
+        if self.len >= N {
+            return false;
+        }
+        if let Some(slot) = self.ring.get_mut((self.head + self.len) % N) {
+            *slot = Some(sent);
+            self.len += 1;
+            return true;
+        }
+        false
+    }
+
+    /// Whether another transaction may be recorded.
+    pub const fn has_room(&self) -> bool {
+        self.len < N
+    }
+
+    /// Transactions in flight.
+    pub const fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Whether nothing is in flight.
+    pub const fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// The oldest transaction in flight.
+    pub fn oldest(&self) -> Option<Sent> {
+        if self.len == 0 {
+            return None;
+        }
+        self.ring.get(self.head).copied().flatten()
+    }
+
+    /// Whether a read of `port` is in flight.
+    pub fn reading(&self, port: ReadPort) -> bool {
+        (0..self.len).any(|k| {
+            self.ring
+                .get((self.head + k) % N)
+                .copied()
+                .flatten()
+                .is_some_and(|sent| matches!(sent.op, Op::Read(p, _) if p == port))
+        })
+    }
+
+    /// Forgets everything in flight (link down, reply timeout).
+    pub fn clear(&mut self) {
+        self.ring = [None; N];
+        self.head = 0;
+        self.len = 0;
+        self.received = 0;
+    }
+
+    /// Takes MISO bytes from the front of `bytes` for the oldest transaction. Returns how
+    /// many were taken and, when that completed the transaction, the transaction with its
+    /// MISO bytes (which stay valid until the next call). Takes nothing when nothing is in
+    /// flight.
+    pub fn take(&mut self, bytes: &[u8]) -> (usize, Option<(Sent, &[u8])>) {
+        let Some(sent) = self.oldest() else {
+            return (0, None);
+        };
+        let len = sent.op.len();
+        let want = len.saturating_sub(self.received);
+        let take = want.min(bytes.len());
+        for (offset, byte) in bytes.iter().take(take).enumerate() {
+            if let Some(slot) = self.miso.get_mut(self.received + offset) {
+                *slot = *byte;
+            }
+        }
+        self.received += take;
+        if self.received < len {
+            return (take, None);
+        }
+        self.received = 0;
+        if let Some(slot) = self.ring.get_mut(self.head) {
+            *slot = None;
+        }
+        self.head = (self.head + 1) % N;
+        self.len -= 1;
+        let miso = self.miso.get(..len.min(MAX_TRANSACTION)).unwrap_or(&[]);
+        (take, Some((sent, miso)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sent(op: Op) -> Sent {
+        Sent {
+            op,
+            at: Duration::ZERO,
+            expect: Expect {
+                delay: StepDelay::DEFAULT,
+                target: None,
+                epoch: 0,
+                target_seq: 0,
+            },
+        }
+    }
+
+    #[test]
+    fn miso_bytes_are_reassembled_per_transaction_in_any_chunking() {
+        let mut flight = InFlight::<4>::new();
+        assert!(flight.push(sent(Op::read(ReadPort::CurrentPosition))));
+        assert!(flight.push(sent(Op::Write(Write::Stop(spimotor::Motor::A)))));
+        let stream = [0xFF, 0x00, 1, 2, 3, 4, 0xFF, 0x00];
+        for chunk in 1..=stream.len() {
+            let mut flight = flight.clone();
+            let mut done = Vec::new();
+            for piece in stream.chunks(chunk) {
+                let mut rest = piece;
+                while !rest.is_empty() {
+                    let (taken, complete) = flight.take(rest);
+                    if let Some((sent, miso)) = complete {
+                        done.push((sent.op, miso.to_vec()));
+                    }
+                    rest = &rest[taken..];
+                    if taken == 0 {
+                        break;
+                    }
+                }
+            }
+            assert_eq!(done.len(), 2, "chunk {chunk}");
+            assert_eq!(done[0].1, [0xFF, 0x00, 1, 2, 3, 4]);
+            assert_eq!(done[1].1, [0xFF, 0x00]);
+            assert!(flight.is_empty());
+        }
+        assert_eq!(InFlight::<4>::new().take(&[1, 2]).0, 0);
+    }
+
+    #[test]
+    fn queue_is_bounded_and_drops_a_channel() {
+        let mut queue = OpQueue::<3>::new();
+        let op = |channel| Queued {
+            op: Op::Write(Write::StepperIntensity(channel)),
+            priority: Priority::Command,
+            channel,
+        };
+        assert!(queue.push(op(0)) && queue.push(op(1)) && queue.push(op(0)));
+        assert!(!queue.push(op(1)));
+        queue.drop_goals(0);
+        assert_eq!(queue.pop(), Some(op(1)));
+        assert!(queue.is_empty() && queue.pop().is_none());
+    }
+}
