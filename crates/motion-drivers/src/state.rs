@@ -80,6 +80,8 @@ pub struct DeviceStatus {
     pub firmware_len: u8,
     /// A board-level fault.
     pub fault: Option<DeviceFault>,
+    /// Replies decoded and accepted, since creation.
+    pub replies: u64,
     /// Requests that got no reply in time, since creation.
     pub timeouts: u32,
     /// Replies that could not be decoded or did not match, since creation.
@@ -95,6 +97,7 @@ impl DeviceStatus {
         firmware: [0; FIRMWARE_LEN],
         firmware_len: 0,
         fault: None,
+        replies: 0,
         timeouts: 0,
         bad_replies: 0,
         resets: 0,

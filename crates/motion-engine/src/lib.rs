@@ -217,6 +217,12 @@ impl Engine {
         self.write_frame(frame);
     }
 
+    /// Accounts for `ticks` missed deadlines (an overrun the shell skipped instead of
+    /// running late ticks back to back), so that tick `k` keeps meaning `t0 + k·period`.
+    pub fn skip_ticks(&mut self, ticks: u64) {
+        self.tick += ticks;
+    }
+
     /// The next message for `link`, written into `buf` (at least 256 bytes); `None` when
     /// the link has nothing to send this tick. On an SPI link each message is one
     /// transaction.

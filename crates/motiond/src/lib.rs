@@ -1,5 +1,13 @@
 //! motiond, the real-time motion server: config, links, the timed loop around
 //! `motion_engine::Engine::step`, iceoryx2 services.
-#![forbid(unsafe_code)]
+#![deny(unsafe_code)] // one exception: rt.rs (sched_setscheduler), with SAFETY notes
 
+pub mod app;
 pub mod config;
+pub mod drivers;
+pub mod io;
+pub mod rt;
+pub mod services;
+pub mod sim_models;
+pub mod stats;
+pub mod tick;

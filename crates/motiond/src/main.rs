@@ -27,6 +27,7 @@ struct Cli {
 }
 
 fn main() -> ExitCode {
+    iceoryx2::prelude::set_log_level_from_env_or(iceoryx2::prelude::LogLevel::Error);
     let cli = Cli::parse();
     let path = cli.check_config.as_ref().unwrap_or(&cli.config);
     let config = match ServerConfig::load(path) {
@@ -40,18 +41,34 @@ fn main() -> ExitCode {
             return ExitCode::from(1);
         }
     };
-    print_summary(&config);
     if cli.check_config.is_some() {
+        print_summary(&config);
         println!("config ok");
         return ExitCode::SUCCESS;
     }
-    eprintln!(
-        "motiond: the real-time loop and the iceoryx2 services are not built yet (open issue \
-         \"motiond: the real-time server over iceoryx2\"); the config above is valid.\n\
-         Try a simulated board by hand: cargo run -p motion-sim -- --help"
-    );
-    let _ = cli.require_rt;
-    ExitCode::SUCCESS
+    init_logging();
+    match motiond::app::run(
+        config,
+        motiond::app::RunOptions {
+            require_rt: cli.require_rt,
+        },
+    ) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(error) => {
+            eprintln!("motiond: {error:#}");
+            ExitCode::from(1)
+        }
+    }
+}
+
+fn init_logging() {
+    let filter = tracing_subscriber::EnvFilter::try_from_env("MOTIOND_LOG")
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info"));
+    tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .with_target(false)
+        .init();
 }
 
 fn print_summary(config: &ServerConfig) {

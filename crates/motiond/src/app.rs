@@ -1,0 +1,295 @@
+//! Putting the server together: links, drivers, threads, the main thread's housekeeping
+//! (liveness checks, logs, status line) and the shutdown.
+
+use core::time::Duration;
+use std::io::{IsTerminal, Write};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+
+use anyhow::{Context, bail};
+use motion_drivers::Driver;
+use motion_engine::Engine;
+use motion_ipc::{ClientId, read_text};
+use motion_link::{Link, LinkConfig};
+use rtrb::RingBuffer;
+
+use crate::config::{ServerConfig, Transport};
+use crate::io::{self, IoThread, LinkPort};
+use crate::rt::monotonic_now;
+use crate::services;
+use crate::sim_models::sim_link;
+use crate::stats::format_ns;
+use crate::tick::{self, Report, StatusLine, TickSetup};
+
+/// How the server was asked to run.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct RunOptions {
+    /// Fail instead of warning when real-time set-up is incomplete.
+    pub require_rt: bool,
+}
+
+/// Opens every link of `config` (sim links with their models).
+fn open_links(config: &ServerConfig) -> anyhow::Result<Vec<Box<dyn Link>>> {
+    let mut links: Vec<Box<dyn Link>> = Vec::with_capacity(config.links.len());
+    for (index, spec) in config.links.iter().enumerate() {
+        let link: Box<dyn Link> = match &spec.transport {
+            Transport::Sim { rate } => {
+                let devices: Vec<_> = config.devices.iter().filter(|d| d.link == index).collect();
+                Box::new(sim_link(&spec.name, *rate, &devices))
+            }
+            Transport::Serial { path, baud } => LinkConfig::Serial(
+                motion_link::serial::SerialConfig::new(path.to_string_lossy(), *baud),
+            )
+            .create()
+            .with_context(|| format!("link `{}`", spec.name))?,
+            Transport::Spidev {
+                path,
+                speed_hz,
+                mode,
+            } => LinkConfig::Spidev(motion_link::spidev::SpidevConfig::new(
+                path.to_string_lossy(),
+                *mode,
+                *speed_hz,
+            ))
+            .create()
+            .with_context(|| format!("link `{}`", spec.name))?,
+            Transport::SpiSocket { path } => LinkConfig::SpiSocket(
+                motion_link::spi_socket::SpiSocketConfig::new(path.to_string_lossy()),
+            )
+            .create()
+            .with_context(|| format!("link `{}`", spec.name))?,
+        };
+        links.push(link);
+    }
+    Ok(links)
+}
+
+/// Runs the server until SIGINT/SIGTERM. A second signal exits at once.
+pub fn run(config: ServerConfig, options: RunOptions) -> anyhow::Result<()> {
+    let shutdown = Arc::new(AtomicBool::new(false));
+    for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
+        // Order matters: the conditional exit sees the flag set by an earlier signal.
+        signal_hook::flag::register_conditional_shutdown(signal, 130, Arc::clone(&shutdown))
+            .context("installing signal handlers")?;
+        signal_hook::flag::register(signal, Arc::clone(&shutdown))
+            .context("installing signal handlers")?;
+    }
+
+    let dead = services::clean_dead_nodes();
+    if !dead.is_empty() {
+        tracing::info!(
+            "removed the shared-memory leftovers of {} dead iceoryx2 node(s)",
+            dead.len()
+        );
+    }
+
+    let drivers: Vec<Box<dyn Driver>> = crate::drivers::build(&config)?;
+    let engine = Engine::new(config.engine_config(), drivers).context("building the engine")?;
+    let links = open_links(&config)?;
+
+    let epoch = monotonic_now();
+    let period = engine.config().period();
+    let io_poll = (period / 4).clamp(Duration::from_micros(100), Duration::from_micros(500));
+    let io_stop = Arc::new(AtomicBool::new(false));
+    let mut ports: Vec<LinkPort> = Vec::with_capacity(links.len());
+    let mut io_threads: Vec<IoThread> = Vec::with_capacity(links.len());
+    for (spec, link) in config.links.iter().zip(links) {
+        let (port, thread) = io::spawn(&spec.name, link, epoch, io_poll, Arc::clone(&io_stop))
+            .with_context(|| format!("starting the I/O thread of link `{}`", spec.name))?;
+        ports.push(port);
+        io_threads.push(thread);
+    }
+
+    let (dead_tx, dead_rx) = RingBuffer::<ClientId>::new(256);
+    let (report_tx, mut report_rx) = RingBuffer::<Report>::new(64);
+    let clients_alive = Arc::new(AtomicU32::new(0));
+    let setup = TickSetup {
+        engine,
+        ports,
+        link_names: config.links.iter().map(|l| l.name.clone()).collect(),
+        settings: config.server.clone(),
+        epoch,
+        shutdown: Arc::clone(&shutdown),
+        dead_clients: dead_rx,
+        clients_alive: Arc::clone(&clients_alive),
+        reports: report_tx,
+        require_rt: options.require_rt,
+    };
+    let tick_thread = std::thread::Builder::new()
+        .name("tick".into())
+        .spawn(move || tick::run(setup))
+        .context("starting the tick thread")?;
+
+    let result = housekeeping(&config, &mut report_rx, dead_tx, &clients_alive);
+    io_stop.store(true, Ordering::Relaxed);
+    let _ = tick_thread.join();
+    for thread in io_threads {
+        thread.join();
+    }
+    result
+}
+
+/// The main thread's work while the tick runs: reports, logs, the status line, client
+/// liveness. Returns when the tick thread stops.
+fn housekeeping(
+    config: &ServerConfig,
+    reports: &mut rtrb::Consumer<Report>,
+    mut dead_clients: rtrb::Producer<ClientId>,
+    clients_alive: &AtomicU32,
+) -> anyhow::Result<()> {
+    let status_line = std::io::stderr().is_terminal();
+    let mut server_node = 0u128;
+    let mut next_liveness = monotonic_now();
+    let mut firmware: Vec<String> = vec![String::new(); config.devices.len()];
+    let mut summary_printed = false;
+    let started = monotonic_now();
+    loop {
+        while let Ok(report) = reports.pop() {
+            match report {
+                Report::Failed(error) => bail!("{error}"),
+                Report::Started { rt, node_id } => {
+                    server_node = node_id;
+                    for problem in &rt.problems {
+                        tracing::warn!("real-time: {problem}; continuing without it");
+                    }
+                    tracing::info!("real-time: {}", rt.summary());
+                }
+                Report::Device {
+                    index,
+                    online,
+                    firmware: text,
+                } => {
+                    let name = config.devices.get(index).map_or("?", |d| d.name.as_str());
+                    let text = read_text(&text).to_owned();
+                    if online {
+                        tracing::info!("device `{name}` online, firmware {text:?}");
+                    } else {
+                        tracing::warn!("device `{name}` is not answering");
+                    }
+                    if let Some(slot) = firmware.get_mut(index) {
+                        *slot = if online {
+                            text
+                        } else {
+                            "(not answering)".into()
+                        };
+                    }
+                }
+                Report::Stats(stats) => {
+                    if !summary_printed
+                        && monotonic_now().saturating_sub(started) >= Duration::from_secs(1)
+                    {
+                        print_summary(config, &firmware);
+                        summary_printed = true;
+                    }
+                    if status_line {
+                        let mut err = std::io::stderr().lock();
+                        let _ = write!(err, "\r\x1b[2K{}", status(&stats, config));
+                        let _ = err.flush();
+                    }
+                }
+                Report::Stopped { at_rest } => {
+                    if status_line {
+                        eprintln!();
+                    }
+                    if at_rest {
+                        tracing::info!("every axis stopped; shared memory released");
+                    } else {
+                        tracing::warn!(
+                            "shutdown: not every board acknowledged its stop within {:?}",
+                            tick::SHUTDOWN_TIMEOUT
+                        );
+                    }
+                    return Ok(());
+                }
+            }
+        }
+        let now = monotonic_now();
+        if now >= next_liveness && server_node != 0 {
+            next_liveness = now + config.server.liveness_check;
+            for id in services::clean_dead_nodes() {
+                if id != server_node && dead_clients.push(ClientId::from_u128(id)).is_err() {
+                    tracing::warn!("dead-client queue full; retrying at the next check");
+                }
+            }
+            clients_alive.store(services::count_live_nodes(server_node), Ordering::Relaxed);
+        }
+        std::thread::sleep(Duration::from_millis(10).min(config.server.liveness_check));
+    }
+}
+
+fn status(stats: &StatusLine, config: &ServerConfig) -> String {
+    let links: Vec<String> = config
+        .links
+        .iter()
+        .enumerate()
+        .map(|(i, l)| {
+            format!(
+                "{}:{}",
+                l.name,
+                if stats.links_up & (1 << i) != 0 {
+                    "up"
+                } else {
+                    "DOWN"
+                }
+            )
+        })
+        .collect();
+    format!(
+        "tick {} | wake p50 {} p99 {} max {} | work p99 {} | overruns {} | clients {} | {}",
+        stats.tick,
+        format_ns(stats.wakeup.p50_ns),
+        format_ns(stats.wakeup.p99_ns),
+        format_ns(stats.wakeup.max_ns),
+        format_ns(stats.work.p99_ns),
+        stats.overruns,
+        stats.clients,
+        links.join(" ")
+    )
+}
+
+fn print_summary(config: &ServerConfig, firmware: &[String]) {
+    let server = &config.server;
+    let mut lines = vec![format!(
+        "motiond `{}`: {} Hz tick, deadman {} ms, {} links, {} devices, {} axes; services motiond/{}/{{frame,tick,command,info,stats}}",
+        server.name,
+        server.tick_hz,
+        server.command_timeout.as_millis(),
+        config.links.len(),
+        config.devices.len(),
+        config.axes.len(),
+        server.name
+    )];
+    for (index, link) in config.links.iter().enumerate() {
+        lines.push(format!("  link {} ({:?})", link.name, link.transport));
+        for (d, device) in config
+            .devices
+            .iter()
+            .enumerate()
+            .filter(|(_, d)| d.link == index)
+        {
+            let fw = firmware.get(d).map_or("", String::as_str);
+            let fw = if fw.is_empty() {
+                "(waiting for the board)"
+            } else {
+                fw
+            };
+            lines.push(format!(
+                "    device {} {} @ {} firmware {fw}",
+                device.name, device.model, device.address
+            ));
+            for axis in config.axes.iter().filter(|a| a.device == d) {
+                lines.push(format!(
+                    "      axis {} ch {} [{}, {}] {} max {} {}/s",
+                    axis.name,
+                    axis.channel,
+                    axis.min,
+                    axis.max,
+                    axis.unit,
+                    axis.max_velocity,
+                    axis.unit
+                ));
+            }
+        }
+    }
+    eprintln!("\r\x1b[2K{}", lines.join("\n"));
+}

@@ -1,0 +1,446 @@
+//! The tick thread: absolute deadlines, the engine step written into a loaned sample, the
+//! link queues, statistics, overruns and the shutdown sequence.
+
+use core::time::Duration;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+
+use iceoryx2::active_request::ActiveRequest;
+use iceoryx2::port::server::Server;
+use motion_engine::{CommandPort, Engine};
+use motion_ipc::{
+    ClientId, CommandReply, CommandRequest, FaultCode, MotionFrame, ServerInfo, ServerStats,
+    write_text,
+};
+use rtrb::{Consumer, Producer};
+
+use crate::config::ServerSettings;
+use crate::io::{LinkEvent, LinkPort, PACKET_LEN, Packet};
+use crate::rt::{self, RtStatus, monotonic_now, sleep_until};
+use crate::services::{Ipc, Services};
+use crate::stats::Latency;
+
+/// How long a shutdown waits for the boards to acknowledge their stop goals.
+pub const SHUTDOWN_TIMEOUT: Duration = Duration::from_secs(2);
+
+/// What the tick thread tells the main thread.
+#[derive(Debug)]
+pub enum Report {
+    /// The services exist and the loop runs.
+    Started {
+        /// Real-time set-up achieved.
+        rt: RtStatus,
+        /// The server's own node id (not a client).
+        node_id: u128,
+    },
+    /// The thread could not start.
+    Failed(String),
+    /// A device's status changed.
+    Device {
+        /// Device index (config order).
+        index: usize,
+        /// Answers.
+        online: bool,
+        /// Firmware string, zero padded.
+        firmware: [u8; 32],
+    },
+    /// Once a second.
+    Stats(StatusLine),
+    /// The loop ended (shutdown complete or timed out).
+    Stopped {
+        /// Whether every board acknowledged before the timeout.
+        at_rest: bool,
+    },
+}
+
+/// The figures of the status line (small and `Copy`: no allocation to report them).
+#[derive(Debug, Clone, Copy)]
+pub struct StatusLine {
+    pub tick: u64,
+    pub wakeup: motion_ipc::LatencySummary,
+    pub work: motion_ipc::LatencySummary,
+    pub overruns: u64,
+    pub clients: u32,
+    /// Bit i: link i is up.
+    pub links_up: u32,
+}
+
+impl StatusLine {
+    fn of(stats: &ServerStats) -> Self {
+        let mut links_up = 0;
+        for (index, link) in stats.links().iter().enumerate().take(32) {
+            if link.up == 1 {
+                links_up |= 1 << index;
+            }
+        }
+        Self {
+            tick: stats.tick,
+            wakeup: stats.wakeup,
+            work: stats.work,
+            overruns: stats.overruns,
+            clients: stats.clients,
+            links_up,
+        }
+    }
+}
+
+/// Everything the tick thread owns.
+#[derive(Debug)]
+pub struct TickSetup {
+    pub engine: Engine,
+    pub ports: Vec<LinkPort>,
+    pub link_names: Vec<String>,
+    pub settings: ServerSettings,
+    pub epoch: Duration,
+    pub shutdown: Arc<AtomicBool>,
+    pub dead_clients: Consumer<ClientId>,
+    pub clients_alive: Arc<AtomicU32>,
+    pub reports: Producer<Report>,
+    pub require_rt: bool,
+}
+
+/// The command port over the iceoryx2 server: one active request at a time, answered
+/// exactly once.
+struct IpcCommands<'a> {
+    server: &'a Server<Ipc, CommandRequest, (), CommandReply, ()>,
+    current: Option<ActiveRequest<Ipc, CommandRequest, (), CommandReply, ()>>,
+}
+
+impl CommandPort for IpcCommands<'_> {
+    fn next_request(&mut self) -> Option<CommandRequest> {
+        let active = self.server.receive().ok().flatten()?;
+        let request = *active.payload();
+        self.current = Some(active);
+        Some(request)
+    }
+
+    fn reply(&mut self, reply: CommandReply) {
+        if let Some(active) = self.current.take() {
+            // A client that vanished meanwhile cannot be answered; nothing else to do.
+            let _ = active.send_copy(reply);
+        }
+    }
+}
+
+fn set_up_rt(
+    settings: &ServerSettings,
+    require_rt: bool,
+) -> Result<(RtStatus, Option<rt::DmaLatencyGuard>), String> {
+    let mut status = RtStatus::default();
+    let problem = |status: &mut RtStatus, text: String| status.problems.push(text);
+    if let Some(priority) = settings.rt_priority {
+        match rt::set_fifo(priority) {
+            Ok(()) => status.fifo = Some(priority),
+            Err(e) => problem(&mut status, e),
+        }
+    }
+    if let Some(cpu) = settings.cpu {
+        match rt::pin_to(cpu) {
+            Ok(()) => status.pinned = Some(cpu),
+            Err(e) => problem(&mut status, e),
+        }
+    }
+    match rt::set_timer_slack() {
+        Ok(()) => status.timer_slack = true,
+        Err(e) => problem(&mut status, e),
+    }
+    let guard = match rt::hold_cpu_dma_latency() {
+        Ok(guard) => {
+            status.dma_latency = true;
+            Some(guard)
+        }
+        Err(e) => {
+            problem(&mut status, e);
+            None
+        }
+    };
+    if settings.lock_memory {
+        match rt::lock_memory() {
+            Ok(()) => status.locked = true,
+            Err(e) => problem(&mut status, e),
+        }
+    }
+    rt::prefault_stack();
+    let wanted_fifo = settings.rt_priority.is_some() && status.fifo.is_none();
+    let wanted_lock = settings.lock_memory && !status.locked;
+    if require_rt && (wanted_fifo || wanted_lock || settings.rt_priority.is_none()) {
+        return Err(format!(
+            "--require-rt: real-time set-up incomplete ({}); {}",
+            status.summary(),
+            if settings.rt_priority.is_none() {
+                "set [server] rt_priority".to_owned()
+            } else {
+                status.problems.join("; ")
+            }
+        ));
+    }
+    Ok((status, guard))
+}
+
+/// Runs the tick loop until shutdown. Never returns early without a `Failed` or `Stopped`
+/// report.
+pub fn run(mut setup: TickSetup) {
+    let services = match Services::create(&setup.settings.name, setup.settings.max_clients as usize)
+    {
+        Ok(services) => services,
+        Err(error) => {
+            let _ = setup.reports.push(Report::Failed(error));
+            return;
+        }
+    };
+    let (rt_status, _dma_guard) = match set_up_rt(&setup.settings, setup.require_rt) {
+        Ok(done) => done,
+        Err(error) => {
+            let _ = setup.reports.push(Report::Failed(error));
+            return;
+        }
+    };
+    let rt_flags = rt_status.flags();
+    let node_id = services.node.id().value();
+    let _ = setup.reports.push(Report::Started {
+        rt: rt_status,
+        node_id,
+    });
+    Loop::new(setup, services, rt_flags).run();
+}
+
+struct Loop {
+    setup: TickSetup,
+    services: Services,
+    wakeup: Latency,
+    work: Latency,
+    stats: Box<ServerStats>,
+    spare_frame: Box<MotionFrame>,
+    device_seen: Vec<(bool, [u8; 32])>,
+    consecutive_overruns: u64,
+    overrun_fault_latched: bool,
+}
+
+impl Loop {
+    fn new(setup: TickSetup, services: Services, rt_flags: u32) -> Self {
+        let mut stats = Box::new(ServerStats::EMPTY);
+        stats.rt_flags = rt_flags;
+        stats.link_count = setup.ports.len().min(stats.links.len()) as u32;
+        for (name, out) in setup.link_names.iter().zip(stats.links.iter_mut()) {
+            write_text(&mut out.name, name);
+        }
+        let devices = setup.engine.config().devices.len();
+        Self {
+            setup,
+            services,
+            wakeup: Latency::new(),
+            work: Latency::new(),
+            stats,
+            spare_frame: Box::new(MotionFrame::EMPTY),
+            device_seen: vec![(false, [0; 32]); devices],
+            consecutive_overruns: 0,
+            overrun_fault_latched: false,
+        }
+    }
+
+    fn run(mut self) {
+        let period = self.setup.engine.config().period();
+        let epoch = self.setup.epoch;
+        let mut deadline = monotonic_now() + period;
+        let mut last_stats = Duration::ZERO;
+        let mut shutting_since: Option<Duration> = None;
+        let mut buf = [0u8; PACKET_LEN];
+        self.publish_info();
+        loop {
+            sleep_until(deadline);
+            let wake = monotonic_now();
+            self.wakeup
+                .record(duration_ns(wake.saturating_sub(deadline)));
+            let now = deadline.saturating_sub(epoch);
+
+            self.take_link_input(now);
+            while let Ok(client) = self.setup.dead_clients.pop() {
+                self.setup.engine.client_dead(client);
+            }
+            if shutting_since.is_none() && self.setup.shutdown.load(Ordering::Relaxed) {
+                self.setup.engine.begin_shutdown();
+                shutting_since = Some(now);
+            }
+            self.step_and_publish(now, deadline);
+            self.queue_link_output(now, &mut buf);
+
+            if now.saturating_sub(last_stats) >= Duration::from_secs(1) {
+                last_stats = now;
+                self.publish_stats(deadline);
+                self.report_devices();
+            }
+            if let Some(since) = shutting_since {
+                let at_rest = self.setup.engine.all_at_rest();
+                if at_rest || now.saturating_sub(since) >= SHUTDOWN_TIMEOUT {
+                    let _ = self.setup.reports.push(Report::Stopped { at_rest });
+                    return;
+                }
+            }
+            let done = monotonic_now();
+            self.work.record(duration_ns(done.saturating_sub(wake)));
+            deadline += period;
+            if done > deadline {
+                // Missed at least one deadline: skip the missed ticks (no burst of
+                // catch-up ticks) and count the overrun.
+                let mut skipped = 0;
+                while deadline <= done {
+                    deadline += period;
+                    skipped += 1;
+                }
+                self.setup.engine.skip_ticks(skipped);
+                self.stats.overruns += 1;
+                self.consecutive_overruns += 1;
+                self.stats.max_consecutive_overruns = self
+                    .stats
+                    .max_consecutive_overruns
+                    .max(self.consecutive_overruns);
+                let limit = u64::from(self.setup.settings.max_consecutive_overruns);
+                if limit > 0 && self.consecutive_overruns >= limit && !self.overrun_fault_latched {
+                    self.setup.engine.stop_all_with_fault(FaultCode::Overrun);
+                    self.overrun_fault_latched = true;
+                }
+            } else {
+                self.consecutive_overruns = 0;
+                self.overrun_fault_latched = false;
+            }
+        }
+    }
+
+    fn take_link_input(&mut self, now: Duration) {
+        for (index, port) in self.setup.ports.iter_mut().enumerate() {
+            while let Ok(event) = port.events.pop() {
+                match event {
+                    LinkEvent::Down => self.setup.engine.link_down(index, now),
+                    LinkEvent::Up => self.setup.engine.link_up(index, now),
+                }
+            }
+            while let Ok(packet) = port.rx.pop() {
+                self.setup.engine.handle_link_rx(index, now, packet.bytes());
+            }
+        }
+    }
+
+    fn step_and_publish(&mut self, now: Duration, deadline: Duration) {
+        let mut commands = IpcCommands {
+            server: &self.services.command,
+            current: None,
+        };
+        match self.services.frame.loan_uninit() {
+            Ok(sample) => {
+                let mut sample = sample.write_payload(MotionFrame::EMPTY);
+                let frame = sample.payload_mut();
+                self.setup.engine.step(now, &mut commands, frame);
+                frame.time_ns = duration_ns(deadline);
+                frame.publish_ns = duration_ns(monotonic_now());
+                let _ = sample.send();
+            }
+            Err(_) => {
+                // No sample to loan (every one held by slow subscribers): the tick goes on.
+                self.setup
+                    .engine
+                    .step(now, &mut commands, &mut self.spare_frame);
+            }
+        }
+        let _ = self.services.tick.notify();
+    }
+
+    fn queue_link_output(&mut self, now: Duration, buf: &mut [u8; PACKET_LEN]) {
+        for (index, port) in self.setup.ports.iter_mut().enumerate() {
+            let mut queued = false;
+            while port.tx.slots() > 0 {
+                let Some(len) = self.setup.engine.poll_link_transmit(index, now, buf) else {
+                    break;
+                };
+                let _ = port.tx.push(Packet::new(&buf[..len]));
+                queued = true;
+            }
+            if queued {
+                port.thread.unpark();
+            }
+        }
+    }
+
+    fn publish_stats(&mut self, deadline: Duration) {
+        let engine = &self.setup.engine;
+        let stats = &mut self.stats;
+        stats.tick = engine.tick();
+        stats.time_ns = duration_ns(deadline);
+        stats.wakeup = self.wakeup.summary();
+        stats.work = self.work.summary();
+        let counters = engine.counters();
+        stats.commands = counters.commands;
+        stats.rejected = counters.rejected;
+        stats.clients = self.setup.clients_alive.load(Ordering::Relaxed);
+        let config = engine.config();
+        for (index, (port, out)) in self
+            .setup
+            .ports
+            .iter()
+            .zip(stats.links.iter_mut())
+            .enumerate()
+        {
+            let (mut replies, mut bad) = (0u64, 0u64);
+            for device in (0..config.devices.len()).filter(|&d| config.devices[d].link == index) {
+                if let Some(driver) = engine.driver(device) {
+                    let status = driver.status();
+                    replies += status.replies;
+                    bad += u64::from(status.timeouts) + u64::from(status.bad_replies);
+                }
+            }
+            let c = &port.counters;
+            out.bytes_in = c.bytes_in.load(Ordering::Relaxed);
+            out.bytes_out = c.bytes_out.load(Ordering::Relaxed);
+            out.errors = c.errors.load(Ordering::Relaxed) + c.dropped.load(Ordering::Relaxed) + bad;
+            out.reconnects = c.reconnects.load(Ordering::Relaxed);
+            out.up = u32::from(c.up.load(Ordering::Relaxed));
+            out.frames = replies;
+        }
+        if let Ok(sample) = self.services.stats.loan_uninit() {
+            let _ = sample.write_payload(**stats).send();
+        }
+        let _ = self
+            .setup
+            .reports
+            .push(Report::Stats(StatusLine::of(stats)));
+    }
+
+    fn report_devices(&mut self) {
+        let mut changed = false;
+        for (index, seen) in self.device_seen.iter_mut().enumerate() {
+            let Some(driver) = self.setup.engine.driver(index) else {
+                continue;
+            };
+            let status = driver.status();
+            let mut firmware = [0u8; 32];
+            write_text(&mut firmware, status.firmware());
+            if (status.online, firmware) != *seen {
+                *seen = (status.online, firmware);
+                changed = true;
+                let _ = self.setup.reports.push(Report::Device {
+                    index,
+                    online: status.online,
+                    firmware,
+                });
+            }
+        }
+        if changed {
+            self.publish_info();
+        }
+    }
+
+    fn publish_info(&mut self) {
+        if let Ok(sample) = self.services.info.loan_uninit() {
+            let mut sample = sample.write_payload(ServerInfo::EMPTY);
+            let info = sample.payload_mut();
+            self.setup.engine.fill_info(info);
+            info.max_clients = self.setup.settings.max_clients;
+            info.server_pid = std::process::id();
+            info.start_time_ns = duration_ns(self.setup.epoch);
+            let _ = sample.send();
+        }
+    }
+}
+
+fn duration_ns(duration: Duration) -> u64 {
+    u64::try_from(duration.as_nanos()).unwrap_or(u64::MAX)
+}
