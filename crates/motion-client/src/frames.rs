@@ -1,0 +1,181 @@
+//! Reading frames: the newest one, every one in order, or a callback in a `WaitSet`.
+
+use core::ops::ControlFlow;
+use core::time::Duration;
+use std::time::Instant;
+
+use iceoryx2::port::listener::Listener;
+use iceoryx2::prelude::{CallbackProgression, SynchronousMultiplexing, WaitSetBuilder};
+use iceoryx2::service::Service;
+use iceoryx2::waitset::WaitSetRunResult;
+
+use crate::{Client, ClientError, Frame};
+
+/// How long [`Client::latest`] waits when no frame has been received yet.
+pub const FIRST_FRAME_TIMEOUT: Duration = Duration::from_secs(1);
+
+impl<S: Service> Client<S> {
+    /// The newest frame, zero-copy. Takes every frame waiting and keeps the newest; if none
+    /// was ever received, waits up to [`FIRST_FRAME_TIMEOUT`] for one.
+    pub fn latest(&self) -> Result<Frame<S>, ClientError> {
+        self.service_jogs();
+        if let Some(frame) = self.frames.refresh()? {
+            return Ok(frame);
+        }
+        self.next_frame(FIRST_FRAME_TIMEOUT)
+    }
+
+    /// The next frame in publication order if one is waiting, without blocking.
+    pub fn try_next_frame(&self) -> Result<Option<Frame<S>>, ClientError> {
+        self.service_jogs();
+        self.frames.take_next()
+    }
+
+    /// The next frame in publication order, blocking on the tick event (no busy polling)
+    /// for up to `timeout`. A frame already waiting is returned at once. Frames the client
+    /// was too slow for are lost (the server never waits for a client): compare `tick`s.
+    pub fn next_frame(&self, timeout: Duration) -> Result<Frame<S>, ClientError> {
+        let deadline = Instant::now() + timeout;
+        loop {
+            self.service_jogs();
+            if let Some(frame) = self.frames.take_next()? {
+                return Ok(frame);
+            }
+            let now = Instant::now();
+            if now >= deadline {
+                return Err(ClientError::NoFrame(timeout));
+            }
+            self.wait_tick(self.jog_wait_cap(deadline - now))?;
+        }
+    }
+
+    /// The next frame by busy polling (no sleeping), for latency measurements on a
+    /// dedicated core. Spins for up to `timeout`.
+    pub fn next_frame_spinning(&self, timeout: Duration) -> Result<Frame<S>, ClientError> {
+        let deadline = Instant::now() + timeout;
+        loop {
+            if let Some(frame) = self.frames.take_next()? {
+                return Ok(frame);
+            }
+            if Instant::now() >= deadline {
+                return Err(ClientError::NoFrame(timeout));
+            }
+            core::hint::spin_loop();
+        }
+    }
+
+    /// Every frame in order, each waited for up to `timeout`. The iterator yields
+    /// `Err(NoFrame)` (and then ends) when the server stays silent, and ends without an
+    /// error after SIGINT/SIGTERM.
+    pub fn frames(&self, timeout: Duration) -> Frames<'_, S> {
+        Frames {
+            client: self,
+            timeout,
+            done: false,
+        }
+    }
+
+    /// Calls `on_frame` for every frame, sleeping in an iceoryx2 `WaitSet` on the tick event
+    /// in between. Returns `Ok(())` when `on_frame` breaks or on SIGINT/SIGTERM, and
+    /// `Err(NoFrame)` when no tick came for `timeout`.
+    pub fn for_each_frame(
+        &self,
+        timeout: Duration,
+        mut on_frame: impl FnMut(&Frame<S>) -> ControlFlow<()>,
+    ) -> Result<(), ClientError>
+    where
+        Listener<S>: SynchronousMultiplexing,
+    {
+        let waitset = WaitSetBuilder::new()
+            .create::<S>()
+            .map_err(|error| ClientError::ipc("create a wait set", error))?;
+        let guard = waitset
+            .attach_deadline(&self.tick, timeout)
+            .map_err(|error| ClientError::ipc("attach the tick event to a wait set", error))?;
+        let refresh = self.jog_refresh_period();
+        let _interval = match refresh {
+            Some(period) => Some(
+                waitset
+                    .attach_interval(period)
+                    .map_err(|error| ClientError::ipc("attach the jog refresh interval", error))?,
+            ),
+            None => None,
+        };
+        let mut outcome = Ok(());
+        let mut stop = false;
+        // Frames that arrived before the first wake-up.
+        while let Some(frame) = self.try_next_frame()? {
+            if on_frame(&frame).is_break() {
+                return Ok(());
+            }
+        }
+        while !stop {
+            let mut deadline_missed = false;
+            let run = waitset
+                .wait_and_process_once(|id| {
+                    if id.has_missed_deadline(&guard) {
+                        deadline_missed = true;
+                        return CallbackProgression::Stop;
+                    }
+                    if id.has_event_from(&guard) {
+                        // Consume the notifications; the frames themselves are read below.
+                        if let Err(error) = self.tick.try_wait(|_| {}) {
+                            outcome = Err(ClientError::ipc("take tick notifications", error));
+                            return CallbackProgression::Stop;
+                        }
+                    }
+                    CallbackProgression::Continue
+                })
+                .map_err(|error| ClientError::ipc("wait in the wait set", error))?;
+            if outcome.is_err() {
+                break;
+            }
+            if matches!(
+                run,
+                WaitSetRunResult::Interrupt | WaitSetRunResult::TerminationRequest
+            ) {
+                break;
+            }
+            if deadline_missed {
+                outcome = Err(ClientError::NoFrame(timeout));
+                break;
+            }
+            while let Some(frame) = self.try_next_frame()? {
+                if on_frame(&frame).is_break() {
+                    stop = true;
+                    break;
+                }
+            }
+        }
+        outcome
+    }
+}
+
+/// Iterator over every frame; see [`Client::frames`].
+#[derive(Debug)]
+pub struct Frames<'c, S: Service> {
+    client: &'c Client<S>,
+    timeout: Duration,
+    done: bool,
+}
+
+impl<S: Service> Iterator for Frames<'_, S> {
+    type Item = Result<Frame<S>, ClientError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        if self.done {
+            return None;
+        }
+        match self.client.next_frame(self.timeout) {
+            Ok(frame) => Some(Ok(frame)),
+            Err(ClientError::Interrupted) => {
+                self.done = true;
+                None
+            }
+            Err(error) => {
+                self.done = true;
+                Some(Err(error))
+            }
+        }
+    }
+}

@@ -1,0 +1,77 @@
+//! Client library for motiond: connect to a running server, read its per-tick
+//! [`MotionFrame`](motion_ipc::MotionFrame)s straight from shared memory, command its axes
+//! and wait for them.
+//!
+//! Everything goes through the iceoryx2 services of DESIGN.md's shared-memory contract
+//! (`motiond/<name>/{frame,tick,command,info,stats}`, types from [`motion_ipc`], re-exported
+//! here as [`ipc`]). The client is generic over the iceoryx2 service type: use
+//! `iceoryx2::prelude::ipc::Service` to talk to a real server, `local::Service` in tests.
+//!
+//! - Connect: [`Client::connect`] (retries for a while, then says clearly that no server
+//!   runs), or [`ClientBuilder`] for timeouts and signal handling.
+//! - Describe: [`Client::info`] (axes, units, limits, capabilities, devices),
+//!   [`Client::axis`] for a handle by name, [`Client::stats`].
+//! - Read: [`Client::latest`] (the newest frame, zero-copy), [`Client::next_frame`] and
+//!   [`Client::frames`] (every frame in order, sleeping on the tick event),
+//!   [`Client::for_each_frame`] (a callback driven by an iceoryx2 `WaitSet`), or attach
+//!   [`Client::tick_listener`] to your own `WaitSet`.
+//! - Command: typed methods on [`Axis`] (`move_to`, `ramp_to`, `velocity`, `ramp_velocity`,
+//!   `power`, `stop`, `home`, `set_position`, `claim`, `release`) and on [`Client`]
+//!   (`estop`, `reset`, `stop_all`); each returns [`Accepted`] or
+//!   [`ClientError::Refused`] with the server's typed [`Reason`](motion_ipc::Reason).
+//! - Wait: [`Axis::wait_until_arrived`], [`Axis::wait_until_homed`].
+//! - Jog: [`Axis::jog`] returns a [`JogGuard`] that renews the server's deadman while your
+//!   program keeps calling into the client, and stops the axis when dropped.
+//!
+//! ```no_run
+//! use core::time::Duration;
+//! use iceoryx2::prelude::ipc;
+//! use motion_client::{Client, ClientError};
+//!
+//! fn main() -> Result<(), Box<dyn std::error::Error>> {
+//!     let client = Client::<ipc::Service>::connect("demo")?;
+//!     let x = client.axis("x")?;
+//!     println!("x is at {} {}", x.state()?.position, x.info().unit());
+//!
+//!     x.ramp_to(10.0, 0.0, 0.0)?; // 0.0: the axis's max velocity and acceleration
+//!     x.wait_until_arrived(Duration::from_secs(10))?;
+//!
+//!     match x.move_to(1e9) {
+//!         Err(ClientError::Refused { reason, .. }) => println!("refused: {reason}"),
+//!         other => println!("unexpected: {other:?}"),
+//!     }
+//!
+//!     let jog = x.jog(-2.0, 0.0)?; // stops when `jog` is dropped
+//!     for frame in client.frames(Duration::from_secs(1)).take(500) {
+//!         let frame = frame?;
+//!         println!("tick {} x {:.3}", frame.tick, frame.axes()[0].position);
+//!     }
+//!     jog.stop()?;
+//!     Ok(())
+//! }
+//! ```
+//!
+//! `examples/jog_and_move.rs` is a complete program doing the same against a running
+//! server.
+#![forbid(unsafe_code)]
+
+mod axis;
+mod client;
+mod command;
+mod error;
+mod frames;
+mod jog;
+mod received;
+#[cfg(feature = "testing")]
+pub mod testing;
+
+pub use axis::Axis;
+pub use client::{
+    Client, ClientBuilder, DEFAULT_CONNECT_TIMEOUT, DEFAULT_REPLY_TIMEOUT, Frame, Info, Stats,
+};
+pub use command::Accepted;
+pub use error::{ClientError, ConnectError};
+pub use frames::{FIRST_FRAME_TIMEOUT, Frames};
+pub use jog::JogGuard;
+pub use motion_ipc as ipc;
+pub use received::Received;
