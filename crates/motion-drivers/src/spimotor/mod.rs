@@ -71,10 +71,11 @@
 //!   its last known state) and counted in [`DeviceStatus::bad_replies`]; garbage on MISO
 //!   therefore never reaches the axis.
 //! - The same disagreeing poll [`CONFIRMATIONS`] times in a row is real: all bytes 0xFF
-//!   (position −1, target −1, delay 255) is an absent board ([`DeviceFault::NotResponding`]),
-//!   anything else a board that lost its registers ([`DeviceFault::Reset`]: power cycle).
-//!   [`PROTOCOL_LIMIT`] disagreeing polls in a row without a repeat raise
-//!   [`DeviceFault::Protocol`] until a good poll arrives.
+//!   (position −1, target −1, delay 255) is an absent board ([`DeviceFault::NotResponding`]);
+//!   power-on registers (position and target 0, or the step delay 200) a board that lost
+//!   its registers ([`DeviceFault::Reset`]: power cycle); anything else somebody else writing the board or a stuck MISO line
+//!   ([`DeviceFault::Protocol`]). [`PROTOCOL_LIMIT`] disagreeing polls in a row without a
+//!   repeat raise [`DeviceFault::Protocol`] too, until a good poll arrives.
 //! - [`CONFIRMATIONS`] failed identification reads in a row (periodic presence check)
 //!   raise `NotResponding`; MISO bytes that never come back within the reply timeout too.
 //! - After any of these the board is started again from step 1.

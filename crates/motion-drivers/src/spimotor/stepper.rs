@@ -358,8 +358,14 @@ impl SpimotorDriver {
         if stepper.repeats >= CONFIRMATIONS {
             if reading == ABSENT_READING {
                 self.absent(now);
-            } else {
+            } else if (position == 0 && target == 0) || delay == StepDelay::DEFAULT {
+                // Power-on registers (counter and target 0, "default 200" step delay):
+                // the board lost its registers.
                 self.board_reset(now);
+            } else {
+                // Somebody else writes the board, or MISO is stuck: start it over.
+                self.raise(DeviceFault::Protocol);
+                self.restart(now, 0);
             }
         } else if stepper.bad_in_row >= PROTOCOL_LIMIT {
             self.raise(DeviceFault::Protocol);

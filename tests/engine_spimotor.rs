@@ -1,0 +1,523 @@
+//! Engine + SPI_motor driver + simulated SPI_motor boards on real `SimLink`s, stepped with a
+//! fake clock (what motiond's loop does, without sleeping).
+
+mod support;
+
+use core::time::Duration;
+use std::sync::{Arc, Mutex};
+
+use motion_drivers::spimotor::{AxisLimits, SpimotorDrive, SpimotorDriver, SpimotorDriverConfig};
+use motion_drivers::{BusKind, Driver};
+use motion_engine::{AxisConfig, DeviceConfig, EngineConfig, LinkConfig};
+use motion_ipc::{AxisFlags, AxisMode, CommandKind, FaultCode, Reason};
+use motion_link::Link;
+use motion_link::sim::{SimFaults, SimLink, SpiBus};
+use motion_sim::spimotor::{Bridge, Drive, SpimotorSim, SpimotorSimConfig};
+use spimotor::{Address, Direction, Motor, Request, Transaction};
+use support::rig::{Rig, Shared};
+
+/// SPI clock of the simulated bus.
+const SPEED_HZ: u32 = 1_000_000;
+/// Stepper axis: 100 full steps per mm.
+const STEPS_PER_MM: f64 = 100.0;
+const MAX_VELOCITY_MM: f64 = 20.0;
+const MAX_ACCEL_MM: f64 = 200.0;
+/// The board's slowest step rate (delay 25.5 ms): its start/stop rate.
+const SLOWEST_RATE: f64 = 10_000.0 / 255.0;
+
+type Board = Arc<Mutex<SpimotorSim>>;
+
+fn stepper_axis(name: &str, device: usize) -> AxisConfig {
+    AxisConfig {
+        name: name.into(),
+        unit: "mm".into(),
+        device,
+        channel: 0,
+        counts_per_unit: STEPS_PER_MM,
+        min: -100.0,
+        max: 100.0,
+        max_velocity: MAX_VELOCITY_MM,
+        max_accel: MAX_ACCEL_MM,
+        position_tolerance: 0.01,
+    }
+}
+
+fn brushed_axis(name: &str, device: usize, channel: usize) -> AxisConfig {
+    AxisConfig {
+        name: name.into(),
+        unit: "rev".into(),
+        device,
+        channel,
+        counts_per_unit: 1.0,
+        min: -1e6,
+        max: 1e6,
+        max_velocity: 100.0,
+        max_accel: 1_000.0,
+        position_tolerance: 0.1,
+    }
+}
+
+fn driver_config(address: u8, drive: SpimotorDrive) -> SpimotorDriverConfig {
+    SpimotorDriverConfig {
+        address: Address::new(address).expect("even address"),
+        drive,
+        speed_hz: SPEED_HZ,
+        limits: [AxisLimits {
+            max_velocity: MAX_VELOCITY_MM * STEPS_PER_MM,
+            max_accel: MAX_ACCEL_MM * STEPS_PER_MM,
+        }; 2],
+        ..SpimotorDriverConfig::default()
+    }
+}
+
+fn sim(address: u8, drive: Drive) -> SpimotorSim {
+    SpimotorSim::new(SpimotorSimConfig {
+        address,
+        drive,
+        seed: 7,
+        ..SpimotorSimConfig::default()
+    })
+}
+
+fn engine_config(devices: Vec<DeviceConfig>, axes: Vec<AxisConfig>) -> EngineConfig {
+    EngineConfig {
+        name: "spimotor".into(),
+        tick_hz: 1000,
+        command_timeout: Duration::from_millis(250),
+        links: vec![LinkConfig {
+            name: "spi0".into(),
+            kind: BusKind::Spi,
+        }],
+        devices,
+        axes,
+    }
+}
+
+fn device(name: &str, address: u8) -> DeviceConfig {
+    DeviceConfig {
+        name: name.into(),
+        link: 0,
+        address: u32::from(address),
+    }
+}
+
+/// One stepper board at 0x90 (the driver may be told another address).
+fn stepper_rig(driver_address: u8) -> (Rig, Board, SimFaults) {
+    let (wire, board) = Shared::new(sim(0x90, Drive::Stepper));
+    let link = SimLink::spi("spi0", SPEED_HZ, wire);
+    let faults = link.faults();
+    let driver = SpimotorDriver::new(driver_config(driver_address, SpimotorDrive::Stepper));
+    let config = engine_config(
+        vec![device("motor", driver_address)],
+        vec![stepper_axis("x", 0)],
+    );
+    let rig = Rig::new(config, vec![Box::new(driver)], vec![Box::new(link)]);
+    (rig, board, faults)
+}
+
+fn brushed_rig() -> (Rig, Board) {
+    let (wire, board) = Shared::new(sim(0x90, Drive::Brushed));
+    let link = SimLink::spi("spi0", SPEED_HZ, wire);
+    let driver = SpimotorDriver::new(driver_config(0x90, SpimotorDrive::Brushed));
+    let config = engine_config(
+        vec![device("wheels", 0x90)],
+        vec![brushed_axis("left", 0, 0), brushed_axis("right", 0, 1)],
+    );
+    let rig = Rig::new(config, vec![Box::new(driver)], vec![Box::new(link)]);
+    (rig, board)
+}
+
+fn flag(rig: &Rig, axis: usize, flag: AxisFlags) -> bool {
+    rig.axis(axis).flags & flag.0 != 0
+}
+
+fn fresh(rig: &Rig, axis: usize) -> bool {
+    !flag(rig, axis, AxisFlags::STALE) && !flag(rig, axis, AxisFlags::FAULT)
+}
+
+fn wait_online(rig: &mut Rig, axes: usize) {
+    assert!(
+        rig.run_until(Duration::from_millis(200), |frame| {
+            (0..axes).all(|i| frame.axes[i].flags & (AxisFlags::STALE.0 | AxisFlags::FAULT.0) == 0)
+        }),
+        "the boards start within 200 ms"
+    );
+}
+
+fn accepted(rig: &mut Rig, axis: u32, kind: CommandKind, values: [f64; 3]) {
+    let reply = rig.command(axis, kind, values);
+    assert_eq!(reply.result(), Ok(()), "{kind:?} {values:?}");
+}
+
+fn rejected(rig: &mut Rig, axis: u32, kind: CommandKind, values: [f64; 3]) -> Reason {
+    let reply = rig.command(axis, kind, values);
+    reply.result().expect_err("refused")
+}
+
+/// Ticks until the stepper axis arrives, checking the limits on the simulated motor every
+/// tick: never faster than `max_velocity`, never faster than a ramp from its start/stop
+/// rate at `max_accel` allows, never past `target` (steps).
+fn move_and_check(rig: &mut Rig, board: &Board, target_mm: f64, limit: Duration) {
+    let start = rig.now;
+    let from = board.lock().unwrap().rotor_steps();
+    let target = (target_mm * STEPS_PER_MM).round() as i64;
+    let max_rate = MAX_VELOCITY_MM * STEPS_PER_MM;
+    let accel = MAX_ACCEL_MM * STEPS_PER_MM;
+    let end = rig.now + limit;
+    while rig.now < end {
+        rig.tick();
+        let sim = board.lock().unwrap();
+        let rate = sim.velocity(0).unwrap().abs();
+        let elapsed = (rig.now - start).as_secs_f64();
+        assert!(rate <= max_rate + 1e-6, "{rate} steps/s over the limit");
+        assert!(
+            rate <= SLOWEST_RATE + accel * elapsed + 1e-6,
+            "{rate} steps/s after {elapsed} s: faster than the ramp"
+        );
+        let rotor = sim.rotor_steps();
+        assert!(
+            (rotor - from).signum() * (target - rotor).signum() >= 0,
+            "overshoot: rotor {rotor}, target {target}"
+        );
+        drop(sim);
+        if flag(rig, 0, AxisFlags::ARRIVED) {
+            break;
+        }
+    }
+    assert!(flag(rig, 0, AxisFlags::ARRIVED), "arrived within {limit:?}");
+    assert!((rig.axis(0).position - target_mm).abs() <= 0.01);
+    assert_eq!(board.lock().unwrap().rotor_steps(), target);
+}
+
+#[test]
+fn the_board_starts_and_reports_its_identification() {
+    let (mut rig, board, _) = stepper_rig(0x90);
+    wait_online(&mut rig, 1);
+    let driver = rig.engine.driver(0).expect("device 0");
+    let status = driver.status();
+    assert!(status.online);
+    assert_eq!(status.firmware(), "spi_motor sn 00000001");
+    let sim = board.lock().unwrap();
+    assert_eq!(sim.step_delay().tenths_ms(), 5, "2000 steps/s configured");
+    assert_eq!(sim.stepper_intensity(), 0x20);
+    assert_eq!(sim.coils(), spimotor::Coils::Two);
+    assert_eq!(sim.stats().malformed, 0);
+}
+
+#[test]
+fn a_move_arrives_within_the_axis_limits() {
+    let (mut rig, board, _) = stepper_rig(0x90);
+    wait_online(&mut rig, 1);
+    accepted(&mut rig, 0, CommandKind::Position, [5.0, 0.0, 0.0]);
+    move_and_check(&mut rig, &board, 5.0, Duration::from_secs(2));
+    // And back, along a slower profile of the client's own.
+    accepted(&mut rig, 0, CommandKind::RampPosition, [-2.5, 5.0, 50.0]);
+    let start = rig.now;
+    let mut fastest: f64 = 0.0;
+    while !flag(&rig, 0, AxisFlags::ARRIVED) && rig.now < start + Duration::from_secs(4) {
+        rig.tick();
+        let rate = board.lock().unwrap().velocity(0).unwrap().abs();
+        assert!(rate <= 500.0 + 1e-6, "ramp velocity 5 mm/s = 500 steps/s");
+        fastest = fastest.max(rate);
+    }
+    assert!(flag(&rig, 0, AxisFlags::ARRIVED));
+    assert_eq!(board.lock().unwrap().rotor_steps(), -250);
+    assert!(
+        fastest >= 450.0,
+        "it did cruise near 500 steps/s: {fastest}"
+    );
+    assert_eq!(rig.axis(0).mode, AxisMode::RampPosition as u8);
+}
+
+#[test]
+fn velocity_then_stop() {
+    let (mut rig, board, _) = stepper_rig(0x90);
+    wait_online(&mut rig, 1);
+    for _ in 0..3 {
+        // Refreshed before the 250 ms deadman.
+        accepted(&mut rig, 0, CommandKind::Velocity, [-10.0, 0.0, 0.0]);
+        rig.run(199);
+    }
+    let rate = board.lock().unwrap().velocity(0).unwrap();
+    assert_eq!(
+        rate, -1_000.0,
+        "10 mm/s = 1000 steps/s = a step every 1.0 ms"
+    );
+    assert!((rig.axis(0).velocity + 10.0).abs() < 1e-9);
+    assert!(flag(&rig, 0, AxisFlags::MOVING));
+    let at_stop = board.lock().unwrap().rotor_steps();
+    accepted(&mut rig, 0, CommandKind::Stop, [0.0; 3]);
+    assert!(rig.run_until(Duration::from_millis(500), |frame| {
+        frame.axes[0].mode == AxisMode::Hold as u8
+    }));
+    rig.run(20);
+    let sim = board.lock().unwrap();
+    assert!(!sim.is_moving());
+    // 1000 steps/s braked at 20 000 steps/s²: 25 steps, plus a poll period of travel.
+    let travelled = (sim.rotor_steps() - at_stop).abs();
+    assert!(travelled <= 35, "stopped within {travelled} steps");
+    assert!((rig.axis(0).position * STEPS_PER_MM - sim.rotor_steps() as f64).abs() < 1e-9);
+}
+
+#[test]
+fn the_deadman_stops_a_jog() {
+    let (mut rig, board, _) = stepper_rig(0x90);
+    wait_online(&mut rig, 1);
+    accepted(&mut rig, 0, CommandKind::Velocity, [5.0, 0.0, 0.0]);
+    rig.run(400);
+    assert!(flag(&rig, 0, AxisFlags::DEADMAN_EXPIRED));
+    assert!(!board.lock().unwrap().is_moving());
+}
+
+#[test]
+fn set_position_redefines_here_without_moving() {
+    let (mut rig, board, _) = stepper_rig(0x90);
+    wait_online(&mut rig, 1);
+    accepted(&mut rig, 0, CommandKind::Position, [1.0, 0.0, 0.0]);
+    move_and_check(&mut rig, &board, 1.0, Duration::from_secs(1));
+    accepted(&mut rig, 0, CommandKind::SetPosition, [12.5, 0.0, 0.0]);
+    rig.run(10);
+    let sim = board.lock().unwrap();
+    assert_eq!(sim.rotor_steps(), 100, "the rotor did not move");
+    assert_eq!(sim.current_position(), 1_250);
+    assert_eq!(sim.target_position(), 1_250);
+    assert!(!sim.is_moving());
+    drop(sim);
+    assert_eq!(rig.axis(0).position, 12.5);
+    assert!(flag(&rig, 0, AxisFlags::HOMED));
+    // Moves are relative to the new origin.
+    accepted(&mut rig, 0, CommandKind::Position, [12.0, 0.0, 0.0]);
+    assert!(rig.run_until(Duration::from_secs(1), |frame| {
+        frame.axes[0].flags & AxisFlags::ARRIVED.0 != 0
+    }));
+    assert_eq!(board.lock().unwrap().rotor_steps(), 50);
+}
+
+#[test]
+fn goals_the_stepper_cannot_do_are_refused() {
+    let (mut rig, _, _) = stepper_rig(0x90);
+    wait_online(&mut rig, 1);
+    let home = rejected(&mut rig, 0, CommandKind::Home, [0.0; 3]);
+    assert_eq!(home, Reason::Unsupported);
+    let power = rejected(&mut rig, 0, CommandKind::Power, [0.5, 0.0, 0.0]);
+    assert_eq!(power, Reason::Unsupported);
+    // 0.2 mm/s = 20 steps/s: slower than the board's slowest step rate.
+    let slow = rejected(&mut rig, 0, CommandKind::Velocity, [0.2, 0.0, 0.0]);
+    assert_eq!(slow, Reason::VelocityLimit);
+}
+
+#[test]
+fn bytes_on_the_wire_decode_with_the_protocol_crate() {
+    let (mut rig, board, _) = stepper_rig(0x90);
+    rig.log_wire = true;
+    wait_online(&mut rig, 1);
+    accepted(&mut rig, 0, CommandKind::Position, [3.0, 0.0, 0.0]);
+    move_and_check(&mut rig, &board, 3.0, Duration::from_secs(2));
+    accepted(&mut rig, 0, CommandKind::SetPosition, [0.0, 0.0, 0.0]);
+    rig.run(10);
+    let log = rig.wire_log(0);
+    assert!(log.len() > 100);
+    let mut targets = Vec::new();
+    for (_, mosi) in log {
+        let transaction = Transaction::decode(mosi).expect("valid transaction");
+        assert_eq!(transaction.address, Address::DEFAULT);
+        let mut again = [0u8; 64];
+        let len = transaction.encode(&mut again).expect("encodes");
+        assert_eq!(
+            &again[..len],
+            &mosi[..],
+            "the protocol crate's own encoding"
+        );
+        if let Request::Write(spimotor::Write::TargetPosition(target)) = transaction.request {
+            targets.push(target);
+        }
+    }
+    assert_eq!(targets, [300, 0], "the move and the set-position");
+    assert_eq!(board.lock().unwrap().stats().malformed, 0);
+}
+
+#[test]
+fn a_garbage_burst_is_survived_without_losing_the_position() {
+    let (mut rig, board, faults) = stepper_rig(0x90);
+    wait_online(&mut rig, 1);
+    accepted(&mut rig, 0, CommandKind::Position, [2.0, 0.0, 0.0]);
+    move_and_check(&mut rig, &board, 2.0, Duration::from_secs(1));
+    faults.inject_noise(300);
+    for _ in 0..100 {
+        rig.tick();
+        assert_eq!(rig.axis(0).position, 2.0, "garbage never reaches the axis");
+        assert!(!flag(&rig, 0, AxisFlags::FAULT));
+    }
+    rig.run(50);
+    assert!(fresh(&rig, 0));
+    let driver = rig.engine.driver(0).unwrap();
+    assert!(driver.status().bad_replies > 0);
+    assert_eq!(driver.status().resets, 0);
+    // Still drivable.
+    accepted(&mut rig, 0, CommandKind::Position, [0.5, 0.0, 0.0]);
+    move_and_check(&mut rig, &board, 0.5, Duration::from_secs(1));
+}
+
+#[test]
+fn unplug_and_replug_fault_the_axis_then_it_needs_a_new_command() {
+    let (mut rig, board, faults) = stepper_rig(0x90);
+    wait_online(&mut rig, 1);
+    accepted(&mut rig, 0, CommandKind::Position, [1.0, 0.0, 0.0]);
+    rig.run(20);
+    faults.unplug();
+    rig.run(300);
+    assert!(rig.link_is_down(0));
+    assert!(flag(&rig, 0, AxisFlags::STALE));
+    assert!(flag(&rig, 0, AxisFlags::FAULT));
+    assert_eq!(rig.axis(0).fault, FaultCode::LinkDown as u16);
+    let reason = rejected(&mut rig, 0, CommandKind::Position, [0.0, 0.0, 0.0]);
+    assert_eq!(reason, Reason::LinkDown);
+    faults.replug();
+    assert!(rig.run_until(Duration::from_secs(1), |frame| {
+        frame.axes[0].flags & (AxisFlags::STALE.0 | AxisFlags::FAULT.0) == 0
+    }));
+    // The board kept its position; the axis holds and needs a new command.
+    let axis = rig.axis(0);
+    assert_ne!(axis.mode, AxisMode::Position as u8);
+    assert!(!board.lock().unwrap().is_moving());
+    let here = board.lock().unwrap().rotor_steps();
+    assert!((axis.position * STEPS_PER_MM - here as f64).abs() < 1e-9);
+    accepted(&mut rig, 0, CommandKind::Position, [-1.0, 0.0, 0.0]);
+    move_and_check(&mut rig, &board, -1.0, Duration::from_secs(2));
+}
+
+#[test]
+fn a_board_that_does_not_answer_is_faulted() {
+    // The driver looks for a board at 0x92; the only board on the bus is at 0x90.
+    let (mut rig, board, _) = stepper_rig(0x92);
+    assert!(rig.run_until(Duration::from_secs(1), |frame| {
+        frame.axes[0].fault == FaultCode::BoardNotResponding as u16
+    }));
+    assert!(flag(&rig, 0, AxisFlags::STALE));
+    let driver = rig.engine.driver(0).unwrap();
+    assert!(!driver.status().online);
+    let reason = rejected(&mut rig, 0, CommandKind::Position, [1.0, 0.0, 0.0]);
+    assert_eq!(reason, Reason::AxisFaulted);
+    assert_eq!(board.lock().unwrap().stats().addressed, 0);
+}
+
+#[test]
+fn a_power_cycled_board_is_reported_reset() {
+    let (mut rig, board, _) = stepper_rig(0x90);
+    wait_online(&mut rig, 1);
+    accepted(&mut rig, 0, CommandKind::Position, [1.5, 0.0, 0.0]);
+    move_and_check(&mut rig, &board, 1.5, Duration::from_secs(1));
+    let now = rig.now;
+    board.lock().unwrap().power_cycle(now);
+    assert!(rig.run_until(Duration::from_millis(100), |frame| {
+        frame.axes[0].fault == FaultCode::BoardReset as u16
+    }));
+    assert!(rig.run_until(Duration::from_millis(200), |frame| {
+        frame.axes[0].flags & (AxisFlags::STALE.0 | AxisFlags::FAULT.0) == 0
+    }));
+    assert_eq!(
+        rig.axis(0).position,
+        0.0,
+        "the board's counter restarted at 0"
+    );
+    assert!(!flag(&rig, 0, AxisFlags::HOMED));
+    assert_eq!(rig.engine.driver(0).unwrap().status().resets, 1);
+    assert_eq!(
+        board.lock().unwrap().coils(),
+        spimotor::Coils::Two,
+        "configured again (the board powers on with one coil)"
+    );
+}
+
+#[test]
+fn brushed_power_spins_and_stops_each_motor() {
+    let (mut rig, board) = brushed_rig();
+    wait_online(&mut rig, 2);
+    accepted(&mut rig, 0, CommandKind::Power, [0.5, 0.0, 0.0]);
+    accepted(&mut rig, 1, CommandKind::Power, [-0.3, 0.0, 0.0]);
+    rig.run(100);
+    {
+        let sim = board.lock().unwrap();
+        assert_eq!(
+            sim.bridge(Motor::A),
+            Bridge::Spin {
+                direction: Direction::A,
+                intensity: 128
+            }
+        );
+        assert_eq!(
+            sim.bridge(Motor::B),
+            Bridge::Spin {
+                direction: Direction::B,
+                intensity: 77
+            }
+        );
+        assert!(sim.motor_velocity(Motor::A) > 40.0);
+        assert!(sim.motor_velocity(Motor::B) < -20.0);
+    }
+    assert!(flag(&rig, 0, AxisFlags::MOVING) && flag(&rig, 1, AxisFlags::MOVING));
+    assert_eq!(rig.axis(0).position, 0.0, "no encoder: nothing measured");
+    accepted(&mut rig, 0, CommandKind::Stop, [0.0; 3]);
+    rig.run(5);
+    assert_eq!(board.lock().unwrap().bridge(Motor::A), Bridge::Stopped);
+    assert_eq!(rig.axis(0).mode, AxisMode::Hold as u8);
+    // Motor B's power expires with the deadman.
+    rig.run(300);
+    assert_eq!(board.lock().unwrap().bridge(Motor::B), Bridge::Stopped);
+    assert!(flag(&rig, 1, AxisFlags::DEADMAN_EXPIRED));
+    for kind in [
+        CommandKind::Position,
+        CommandKind::Velocity,
+        CommandKind::Home,
+        CommandKind::SetPosition,
+    ] {
+        assert_eq!(
+            rejected(&mut rig, 0, kind, [1.0, 0.0, 0.0]),
+            Reason::Unsupported,
+            "{kind:?}"
+        );
+    }
+    assert!(fresh(&rig, 0) && fresh(&rig, 1));
+}
+
+#[test]
+fn two_boards_share_one_bus_by_address() {
+    let (stepper_wire, stepper) = Shared::new(sim(0x90, Drive::Stepper));
+    let (brushed_wire, brushed) = Shared::new(sim(0x92, Drive::Brushed));
+    let bus = SpiBus::new().with(stepper_wire).with(brushed_wire);
+    let link = SimLink::spi("spi0", SPEED_HZ, Box::new(bus));
+    let drivers: Vec<Box<dyn Driver>> = vec![
+        Box::new(SpimotorDriver::new(driver_config(
+            0x90,
+            SpimotorDrive::Stepper,
+        ))),
+        Box::new(SpimotorDriver::new(driver_config(
+            0x92,
+            SpimotorDrive::Brushed,
+        ))),
+    ];
+    let config = engine_config(
+        vec![device("stepper", 0x90), device("wheels", 0x92)],
+        vec![stepper_axis("x", 0), brushed_axis("left", 1, 0)],
+    );
+    let mut rig = Rig::new(config, drivers, vec![Box::new(link) as Box<dyn Link>]);
+    wait_online(&mut rig, 2);
+    accepted(&mut rig, 1, CommandKind::Power, [1.0, 0.0, 0.0]);
+    rig.run(5);
+    assert_eq!(
+        brushed.lock().unwrap().bridge(Motor::A),
+        Bridge::Spin {
+            direction: Direction::A,
+            intensity: 255
+        }
+    );
+    accepted(&mut rig, 0, CommandKind::Position, [4.0, 0.0, 0.0]);
+    move_and_check(&mut rig, &stepper, 4.0, Duration::from_secs(2));
+    assert_eq!(stepper.lock().unwrap().bridge(Motor::A), Bridge::Stopped);
+    assert!(fresh(&rig, 0) && fresh(&rig, 1));
+    for index in 0..2 {
+        assert_eq!(rig.engine.driver(index).unwrap().status().bad_replies, 0);
+    }
+    assert_eq!(stepper.lock().unwrap().stats().malformed, 0);
+    assert_eq!(brushed.lock().unwrap().stats().malformed, 0);
+}
