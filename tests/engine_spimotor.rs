@@ -1,9 +1,15 @@
 //! Engine + SPI_motor driver + simulated SPI_motor boards on real `SimLink`s, stepped with a
 //! fake clock (what motiond's loop does, without sleeping).
+//!
+//! The counting global allocator (for the driver's zero-allocation test) counts on the
+//! calling thread only, so the other tests of this binary do not disturb it.
+#![allow(unsafe_code)] // the counting global allocator
 
 mod support;
 
 use core::time::Duration;
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
 use std::sync::{Arc, Mutex};
 
 use motion_drivers::spimotor::{AxisLimits, SpimotorDrive, SpimotorDriver, SpimotorDriverConfig};
@@ -15,6 +21,38 @@ use motion_link::sim::{SimFaults, SimLink, SpiBus};
 use motion_sim::spimotor::{Bridge, Drive, SpimotorSim, SpimotorSimConfig};
 use spimotor::{Address, Direction, Motor, Request, Transaction};
 use support::rig::{Rig, Shared};
+
+struct CountingAllocator;
+
+thread_local! {
+    static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
+}
+
+// SAFETY: every call is forwarded unchanged to the system allocator; the only addition is
+// a thread-local counter that does not allocate.
+unsafe impl GlobalAlloc for CountingAllocator {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        let _ = ALLOCATIONS.try_with(|count| count.set(count.get() + 1));
+        // SAFETY: same contract as our caller's.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as our caller's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        let _ = ALLOCATIONS.try_with(|count| count.set(count.get() + 1));
+        // SAFETY: same contract as our caller's.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: CountingAllocator = CountingAllocator;
+
+fn allocations() -> u64 {
+    ALLOCATIONS.with(Cell::get)
+}
 
 /// SPI clock of the simulated bus.
 const SPEED_HZ: u32 = 1_000_000;
@@ -520,4 +558,54 @@ fn two_boards_share_one_bus_by_address() {
     }
     assert_eq!(stepper.lock().unwrap().stats().malformed, 0);
     assert_eq!(brushed.lock().unwrap().stats().malformed, 0);
+}
+
+#[test]
+fn the_driver_allocates_nothing_after_construction() {
+    use motion_drivers::Goal;
+    use motion_link::sim::SpiDevice;
+
+    let mut driver = SpimotorDriver::new(driver_config(0x90, SpimotorDrive::Stepper));
+    let mut board = sim(0x90, Drive::Stepper);
+    let mut mosi = [0u8; 256];
+    let mut miso = [0u8; 256];
+    let mut in_driver = 0;
+    let period = Duration::from_millis(1);
+    for tick in 0..10_000u32 {
+        let now = period * tick;
+        let goal = match tick % 2_000 {
+            100 => Some(Goal::Position { counts: 400.0 }),
+            700 => Some(Goal::Velocity {
+                velocity: -800.0,
+                accel: 10_000.0,
+            }),
+            1_000 => Some(Goal::Stop { decel: 20_000.0 }),
+            1_300 => Some(Goal::SetPosition { counts: 0.0 }),
+            1_500 => Some(Goal::Off),
+            _ => None,
+        };
+        let before = allocations();
+        driver.handle_timeout(now);
+        if let Some(goal) = goal {
+            let _ = driver.set_goal(now, 0, goal);
+        }
+        in_driver += allocations() - before;
+        loop {
+            let before = allocations();
+            let transmit = driver.poll_transmit(now, &mut mosi);
+            in_driver += allocations() - before;
+            let Some(transmit) = transmit else { break };
+            let len = transmit.len;
+            miso[..len].fill(0xFF);
+            board.transfer(now, &mosi[..len], &mut miso[..len]);
+            let before = allocations();
+            driver.handle_rx(now + Duration::from_micros(100), &miso[..len]);
+            let _ = driver.channel(0);
+            let _ = driver.status();
+            in_driver += allocations() - before;
+        }
+    }
+    assert!(driver.status().online);
+    assert_eq!(driver.status().bad_replies, 0);
+    assert_eq!(in_driver, 0, "allocations inside the driver");
 }

@@ -42,7 +42,7 @@
 //! | `Position` | target 0x41 ← counts, rate ramped with the axis's `max_velocity` / `max_accel` |
 //! | `RampPosition` | target 0x41 ← counts, rate ramped with the goal's velocity (≥ 39.2 steps/s, capped at 10 000) and acceleration |
 //! | `Velocity` | target 2³⁰ steps ahead in the direction of travel, rate ramped to \|v\| (39.2 ≤ \|v\| ≤ 10 000 steps/s, else `OutOfBoardRange`; 0 stops); the board runs at the fastest rate 10 000/n not above \|v\| |
-//! | `Stop` | rate ramped down at `decel`, then 0x42 ← 0 (stop where it is) |
+//! | `Stop` | rate ramped down at `decel`, then 0x42 ← 0 (stop where it is); should the next poll show the target elsewhere (a firmware that counts 0x42 from the old target), 0x41 ← the position read |
 //! | `SetPosition` | 0x43 ← 255 (so no step can slip in), 0x40 ← counts, 0x41 ← counts, 0x43 ← the resting delay (writing 0x40 alone would walk back to the old target); stops motion |
 //! | `Off` | 0x42 ← 0, then intensity 0x10 ← 0 (coils de-energised); the next motion goal re-energises |
 //! | `Home` | unsupported: the board has no reference input |

@@ -337,6 +337,12 @@ impl SpimotorDriver {
                 self.written.target = Some(target);
                 if self.planned.target_seq == self.written.target_seq {
                     self.planned.target = Some(target);
+                    let stopped = matches!(self.stepper.motion, Motion::Hold | Motion::Off);
+                    if stopped && target != position {
+                        // 0x42 ← 0 did not stop it (a firmware that counts the relative
+                        // target from the old target): pin the target where it is now.
+                        self.push_goal_write(Write::TargetPosition(position));
+                    }
                 }
             }
             if target == position && self.stepper.motion == Motion::Hold {

@@ -27,6 +27,8 @@ struct Board {
     delay: u8,
     intensity: u8,
     spins: Vec<Write>,
+    /// Port 0x42 counts from the old target instead of the current position.
+    relative_to_target: bool,
 }
 
 impl Board {
@@ -38,6 +40,7 @@ impl Board {
             delay: 200,
             intensity: 0x20,
             spins: Vec::new(),
+            relative_to_target: false,
         }
     }
 
@@ -66,6 +69,9 @@ impl Board {
             } => match write {
                 Write::CurrentPosition(p) => self.position = p,
                 Write::TargetPosition(p) => self.target = p,
+                Write::RelativePosition(p) if self.relative_to_target => {
+                    self.target = self.target.wrapping_add(p);
+                }
                 Write::RelativePosition(p) => self.target = self.position.wrapping_add(p),
                 Write::StepDelay(d) => self.delay = d.tenths_ms(),
                 Write::StepperIntensity(i) => self.intensity = i,
@@ -571,4 +577,26 @@ fn nothing_allocates_and_nothing_panics_on_random_miso() {
         bench.now += MS;
     }
     let _ = bench.driver.channel(0);
+}
+
+#[test]
+fn a_stop_is_pinned_when_the_relative_port_counts_from_the_target() {
+    let mut bench = Bench::started(stepper());
+    bench.board.relative_to_target = true;
+    bench
+        .driver
+        .set_goal(bench.now, 0, Goal::Position { counts: 5_000.0 })
+        .unwrap();
+    bench.steps(3);
+    // The board has walked a little (this scripted board jumps).
+    bench.board.position = 20;
+    bench.steps(2);
+    bench
+        .driver
+        .set_goal(bench.now, 0, Goal::Stop { decel: 1e9 })
+        .unwrap();
+    bench.steps(4);
+    assert_eq!(bench.board.target, 20, "pinned where it was");
+    assert!(!bench.driver.channel(0).moving);
+    assert_eq!(bench.driver.status().bad_replies, 0);
 }
