@@ -275,7 +275,8 @@ fn serve_inner<S: Service>(
         }
         model.step(period.as_secs_f64(), config.command_timeout_ms);
         let mut frame = MotionFrame::EMPTY;
-        model.write_frame(&mut frame, start.elapsed());
+        // Like the real server: the tick's deadline, then the time just before sending.
+        model.write_frame(&mut frame, period * model.tick_u32(), start.elapsed());
         frames
             .send_copy(frame)
             .map_err(|e| fail("frame send")(&e))?;
@@ -587,11 +588,15 @@ impl Model {
         }
     }
 
-    fn write_frame(&self, frame: &mut MotionFrame, since_start: Duration) {
+    fn tick_u32(&self) -> u32 {
+        u32::try_from(self.tick).unwrap_or(u32::MAX)
+    }
+
+    fn write_frame(&self, frame: &mut MotionFrame, deadline: Duration, now: Duration) {
+        let nanos = |time: Duration| u64::try_from(time.as_nanos()).unwrap_or(u64::MAX);
         frame.tick = self.tick;
-        let nanos = u64::try_from(since_start.as_nanos()).unwrap_or(u64::MAX);
-        frame.time_ns = nanos;
-        frame.publish_ns = nanos;
+        frame.time_ns = nanos(deadline);
+        frame.publish_ns = nanos(now);
         frame.axis_count = self.axes.len() as u32;
         frame.flags = if self.estop {
             FrameFlags::ESTOP_LATCHED.0

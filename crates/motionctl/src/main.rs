@@ -1,2 +1,148 @@
+//! `motionctl`: the command-line client of motiond (DESIGN.md "CLI contract").
+//!
+//! Every subcommand connects to the instance given by `--server` (default `demo`) over
+//! iceoryx2 shared memory through `motion-client`. Errors are one line naming what failed
+//! and, for refused commands, the reason the server gave; the exit status says which kind
+//! of failure it was (see `motionctl --help`).
 #![forbid(unsafe_code)]
-fn main() {}
+
+mod act;
+mod cli;
+mod describe;
+mod record;
+mod scope;
+mod terminal;
+mod watch;
+
+use std::process::ExitCode;
+
+use anyhow::Context as _;
+use clap::Parser;
+use iceoryx2::prelude::{LogLevel, ipc, set_log_level};
+use motion_client::{Client, ClientBuilder, ClientError, ConnectError};
+
+use crate::cli::{Cli, Command, exit};
+
+/// The service type of a real server.
+pub type Service = ipc::Service;
+
+fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(error) => {
+            let _ = error.print();
+            // --help and --version are not errors.
+            return ExitCode::from(if error.use_stderr() {
+                exit::USAGE
+            } else {
+                exit::OK
+            });
+        }
+    };
+    // iceoryx2 logs its own warnings (e.g. "no config file") on stderr; keep one-line errors.
+    set_log_level(LogLevel::Error);
+    match run(&cli) {
+        Ok(()) => ExitCode::from(exit::OK),
+        Err(error) => {
+            eprintln!("motionctl: {error:#}");
+            ExitCode::from(exit_status(&error))
+        }
+    }
+}
+
+fn connect(cli: &Cli) -> anyhow::Result<Client<Service>> {
+    Ok(ClientBuilder::new(&cli.server)
+        .node_name("motionctl")
+        .connect_timeout(cli.connect_timeout)
+        .connect()?)
+}
+
+fn run(cli: &Cli) -> anyhow::Result<()> {
+    let client = connect(cli)?;
+    let client = &client;
+    match &cli.command {
+        Command::List { json } => describe::list(client, *json),
+        Command::Status { axes, json } => describe::status(client, axes, *json),
+        Command::Watch { json, interval } => watch::run(client, *json, *interval),
+        Command::Move {
+            axis,
+            position,
+            velocity,
+            accel,
+            wait,
+            timeout,
+        } => act::move_axis(
+            client,
+            axis,
+            *position,
+            *velocity,
+            *accel,
+            wait.then_some(*timeout),
+        ),
+        Command::Jog {
+            axis,
+            velocity,
+            accel,
+        } => act::jog(client, axis, *velocity, *accel),
+        Command::Power { axis, power } => act::power(client, axis, *power),
+        Command::Stop { axes } => act::stop(client, axes),
+        Command::Estop => {
+            client.estop()?;
+            println!("e-stop latched: every axis stopped; `motionctl reset` clears it");
+            Ok(())
+        }
+        Command::Reset => {
+            client.reset()?;
+            println!("reset: e-stop and faults cleared");
+            Ok(())
+        }
+        Command::Home {
+            axis,
+            velocity,
+            wait,
+            timeout,
+        } => act::home(client, axis, *velocity, wait.then_some(*timeout)),
+        Command::SetPosition { axis, position } => {
+            let handle = client.axis(axis)?;
+            handle.set_position(*position)?;
+            println!(
+                "{axis}: position set to {position} {}",
+                handle.info().unit()
+            );
+            Ok(())
+        }
+        Command::Claim { axes, duration } => act::claim(client, axes, *duration),
+        Command::Release { axes } => act::release(client, axes),
+        Command::Scope { axes, window } => scope::run(client, axes, *window),
+        Command::Record {
+            duration,
+            out,
+            axes,
+        } => record::run(client, *duration, out, axes)
+            .with_context(|| format!("record to {}", out.display())),
+    }
+}
+
+/// The documented exit status of an error.
+fn exit_status(error: &anyhow::Error) -> u8 {
+    for cause in error.chain() {
+        if let Some(connect) = cause.downcast_ref::<ConnectError>() {
+            return match connect {
+                ConnectError::NoServer { .. } | ConnectError::NoInfo { .. } => exit::NO_SERVER,
+                _ => exit::FAILURE,
+            };
+        }
+        if let Some(client) = cause.downcast_ref::<ClientError>() {
+            return match client {
+                ClientError::Refused { .. } | ClientError::UnknownAxis(_) => exit::REFUSED,
+                ClientError::NoReply { .. }
+                | ClientError::NoFrame(_)
+                | ClientError::WaitTimeout { .. }
+                | ClientError::WaitAborted { .. } => exit::TIMEOUT,
+                ClientError::Interrupted => exit::INTERRUPTED,
+                ClientError::Ipc { .. } => exit::FAILURE,
+            };
+        }
+    }
+    exit::FAILURE
+}

@@ -1,0 +1,244 @@
+//! The command line (DESIGN.md "CLI contract").
+
+use core::time::Duration;
+use std::path::PathBuf;
+
+use clap::{Parser, Subcommand};
+
+/// Exit statuses, documented in `--help`.
+pub mod exit {
+    /// Success.
+    pub const OK: u8 = 0;
+    /// Any other failure (iceoryx2, terminal, file).
+    pub const FAILURE: u8 = 1;
+    /// Bad command line (clap's own status).
+    pub const USAGE: u8 = 2;
+    /// No server of that name runs, or it could not be reached.
+    pub const NO_SERVER: u8 = 3;
+    /// The server refused the command (the reason is printed), or no such axis.
+    pub const REFUSED: u8 = 4;
+    /// A wait ran out of time, the axis could not get there, or the server went silent.
+    pub const TIMEOUT: u8 = 5;
+    /// Interrupted by Ctrl-C / SIGTERM while waiting (not for jog, watch, scope, claim).
+    pub const INTERRUPTED: u8 = 130;
+}
+
+const AFTER_HELP: &str = "\
+Exit status:
+  0    success
+  1    other failure (iceoryx2, terminal, file)
+  2    bad command line
+  3    no motiond server of that name is running
+  4    the server refused the command (its reason is printed), or no such axis
+  5    timed out, or the axis stopped before reaching its goal, or the server went silent
+  130  interrupted by Ctrl-C or SIGTERM while waiting
+
+Durations take a unit: 500ms, 10s, 2m (a bare number is seconds).
+Examples:
+  motionctl list
+  motionctl watch
+  motionctl move x 10 --velocity 5 --wait
+  motionctl jog y -2.5          (Ctrl-C stops the axis)
+  motionctl record --duration 5s --out run.csv";
+
+/// Command-line client of motiond.
+#[derive(Debug, Parser)]
+#[command(name = "motionctl", version, about, after_help = AFTER_HELP)]
+pub struct Cli {
+    /// Instance name of the server (`[server] name` in its config).
+    #[arg(long, global = true, default_value = "demo", value_name = "NAME")]
+    pub server: String,
+
+    /// How long to wait for the server to appear.
+    #[arg(long, global = true, default_value = "2s", value_parser = parse_duration, value_name = "DURATION")]
+    pub connect_timeout: Duration,
+
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// List the server's axes (units, limits, capabilities) and devices.
+    List {
+        /// Print JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Show the state of every axis (or the ones named) in the newest frame.
+    Status {
+        /// Axes to show (default: all).
+        axes: Vec<String>,
+        /// Print JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Live table of every axis and the server's tick statistics; q or Ctrl-C exits.
+    Watch {
+        /// Print one JSON object per frame sampled, every --interval, instead of a table.
+        #[arg(long)]
+        json: bool,
+        /// Refresh interval.
+        #[arg(long, default_value = "100ms", value_parser = parse_duration)]
+        interval: Duration,
+    },
+    /// Move an axis to a position along a velocity- and acceleration-limited ramp.
+    Move {
+        /// Axis name.
+        axis: String,
+        /// Target position, axis units.
+        position: f64,
+        /// Ramp velocity, units/s (default: the axis's maximum).
+        #[arg(long)]
+        velocity: Option<f64>,
+        /// Ramp acceleration, units/s² (default: the axis's maximum).
+        #[arg(long)]
+        accel: Option<f64>,
+        /// Wait until the axis has arrived.
+        #[arg(long)]
+        wait: bool,
+        /// Longest wait with --wait.
+        #[arg(long, default_value = "60s", value_parser = parse_duration)]
+        timeout: Duration,
+    },
+    /// Run an axis at a velocity until Ctrl-C, then stop it.
+    Jog {
+        /// Axis name.
+        axis: String,
+        /// Velocity, units/s (negative: backwards).
+        #[arg(allow_negative_numbers = true)]
+        velocity: f64,
+        /// Acceleration, units/s² (default: the axis's maximum).
+        #[arg(long)]
+        accel: Option<f64>,
+    },
+    /// Open-loop power (−1.0..1.0 of full scale) until Ctrl-C, then stop.
+    Power {
+        /// Axis name.
+        axis: String,
+        /// Power, −1.0..1.0.
+        #[arg(allow_negative_numbers = true)]
+        power: f64,
+    },
+    /// Stop the named axes (all axes when none is named).
+    Stop {
+        /// Axes to stop.
+        axes: Vec<String>,
+    },
+    /// Emergency stop: every axis stops; latched until `reset`.
+    Estop,
+    /// Clear a latched e-stop and faults.
+    Reset,
+    /// Reference search.
+    Home {
+        /// Axis name.
+        axis: String,
+        /// Search velocity, units/s (default: the server's).
+        #[arg(long)]
+        velocity: Option<f64>,
+        /// Wait until the axis is homed.
+        #[arg(long)]
+        wait: bool,
+        /// Longest wait with --wait.
+        #[arg(long, default_value = "120s", value_parser = parse_duration)]
+        timeout: Duration,
+    },
+    /// Declare the axis's current position to be POS (no motion).
+    SetPosition {
+        /// Axis name.
+        axis: String,
+        /// The position the axis is at now, units.
+        #[arg(allow_negative_numbers = true)]
+        position: f64,
+    },
+    /// Claim axes for this process until Ctrl-C (or --duration), then release them.
+    /// Claims die with the process that made them: other clients are refused meanwhile.
+    Claim {
+        /// Axes to claim.
+        #[arg(required = true)]
+        axes: Vec<String>,
+        /// Release after this long instead of waiting for Ctrl-C.
+        #[arg(long, value_parser = parse_duration)]
+        duration: Option<Duration>,
+    },
+    /// Release claims held by this process. A claim belongs to the process that made it, so
+    /// from a new process this only reports who holds the axis; end the claiming process
+    /// (Ctrl-C) to release.
+    Release {
+        /// Axes to release.
+        #[arg(required = true)]
+        axes: Vec<String>,
+    },
+    /// Live plot of position and velocity of the named axes; q or Ctrl-C exits.
+    Scope {
+        /// Axes to plot.
+        #[arg(required = true)]
+        axes: Vec<String>,
+        /// Time window shown.
+        #[arg(long, default_value = "10s", value_parser = parse_duration)]
+        window: Duration,
+    },
+    /// Record every frame to CSV, one row per tick, for a duration.
+    Record {
+        /// How long to record (server time).
+        #[arg(long, value_parser = parse_duration)]
+        duration: Duration,
+        /// The CSV file to write.
+        #[arg(long)]
+        out: PathBuf,
+        /// Axes to record (default: all).
+        axes: Vec<String>,
+    },
+}
+
+/// `500ms`, `10s`, `2m`, `1h`, `250us`, or a bare number of seconds.
+pub fn parse_duration(text: &str) -> Result<Duration, String> {
+    let text = text.trim();
+    let split = text
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .unwrap_or(text.len());
+    let (number, unit) = text.split_at(split);
+    let value: f64 = number
+        .parse()
+        .map_err(|_| format!("`{text}` is not a duration (try 500ms, 10s, 2m)"))?;
+    let seconds = match unit.trim() {
+        "" | "s" => value,
+        "ms" => value / 1e3,
+        "us" | "µs" => value / 1e6,
+        "m" | "min" => value * 60.0,
+        "h" => value * 3600.0,
+        other => {
+            return Err(format!(
+                "unknown duration unit `{other}` (use ms, s, m or h)"
+            ));
+        }
+    };
+    Duration::try_from_secs_f64(seconds).map_err(|error| format!("`{text}`: {error}"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn durations_parse_with_units() {
+        assert_eq!(parse_duration("500ms"), Ok(Duration::from_millis(500)));
+        assert_eq!(parse_duration("10s"), Ok(Duration::from_secs(10)));
+        assert_eq!(parse_duration("1.5"), Ok(Duration::from_millis(1500)));
+        assert_eq!(parse_duration("2m"), Ok(Duration::from_secs(120)));
+        assert!(parse_duration("soon").is_err());
+        assert!(parse_duration("5 parsecs").is_err());
+    }
+
+    #[test]
+    fn command_line_is_consistent() {
+        use clap::CommandFactory;
+        Cli::command().debug_assert();
+        let cli = Cli::try_parse_from(["motionctl", "jog", "x", "-2.5"]).map_err(|e| e.to_string());
+        assert!(
+            matches!(cli, Ok(Cli { command: Command::Jog { velocity, .. }, .. }) if velocity == -2.5)
+        );
+    }
+}

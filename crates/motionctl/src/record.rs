@@ -1,0 +1,98 @@
+//! `motionctl record --duration D --out FILE.csv`: every frame, one CSV row per tick.
+
+use core::time::Duration;
+use std::fs::File;
+use std::io::{BufWriter, Write as _};
+use std::path::Path;
+
+use anyhow::Context as _;
+use motion_client::{Client, ClientError};
+
+use crate::Service;
+use crate::describe::{flag_names, mode_name, select_axes};
+
+/// How long to wait for a frame before calling the server silent.
+const FRAME_TIMEOUT: Duration = Duration::from_secs(2);
+
+/// The CSV header: tick and time, then per axis position, velocity, target (with units),
+/// mode and flags.
+fn header(client: &Client<Service>, axes: &[usize]) -> anyhow::Result<String> {
+    let info = client.info()?;
+    let mut line = String::from("tick,time_s");
+    for &index in axes {
+        let axis = info.axes().get(index).context("axis list changed")?;
+        let (name, unit) = (axis.name(), axis.unit());
+        line.push_str(&format!(
+            ",{name}.position[{unit}],{name}.velocity[{unit}/s],{name}.target[{unit}],{name}.mode,{name}.flags"
+        ));
+    }
+    Ok(line)
+}
+
+/// Records frames for `duration` of server time (ticks `first .. first + duration·rate`).
+pub fn run(
+    client: &Client<Service>,
+    duration: Duration,
+    out: &Path,
+    names: &[String],
+) -> anyhow::Result<()> {
+    let axes = select_axes(client, names)?;
+    let mut file = BufWriter::new(File::create(out).context("create the file")?);
+    writeln!(file, "{}", header(client, &axes)?)?;
+    let span_ns = u64::try_from(duration.as_nanos()).unwrap_or(u64::MAX);
+    let mut first: Option<(u64, u64)> = None; // (tick, time_ns)
+    let mut last_tick = None;
+    let mut rows = 0u64;
+    let mut missed = 0u64;
+    let mut interrupted = false;
+    // Start from fresh frames, not from whatever waited in the buffer.
+    drop(client.latest()?);
+    loop {
+        let frame = match client.next_frame(FRAME_TIMEOUT) {
+            Ok(frame) => frame,
+            Err(ClientError::Interrupted) => {
+                interrupted = true;
+                break;
+            }
+            Err(error) => return Err(error.into()),
+        };
+        let (_, start_ns) = *first.get_or_insert((frame.tick, frame.time_ns));
+        if frame.time_ns.saturating_sub(start_ns) >= span_ns {
+            break;
+        }
+        if let Some(previous) = last_tick {
+            missed += frame.tick.saturating_sub(previous + 1);
+        }
+        last_tick = Some(frame.tick);
+        let mut line = format!("{},{:.9}", frame.tick, frame.time_ns as f64 / 1e9);
+        for &index in &axes {
+            let state = frame.axes().get(index).copied().unwrap_or_default();
+            line.push_str(&format!(
+                ",{},{},{},{},{}",
+                state.position,
+                state.velocity,
+                state.target,
+                mode_name(&state),
+                flag_names(state.flags()).join("|")
+            ));
+        }
+        writeln!(file, "{line}")?;
+        rows += 1;
+    }
+    file.flush()?;
+    let span = match (first, last_tick) {
+        (Some((from, _)), Some(to)) => format!("ticks {from}..={to}"),
+        _ => "no ticks".to_owned(),
+    };
+    eprintln!("recorded {rows} rows ({span}) to {}", out.display());
+    if missed > 0 {
+        eprintln!(
+            "warning: {missed} ticks were missed (motionctl was descheduled for longer than \
+             the server's frame buffer); their rows are absent"
+        );
+    }
+    if interrupted {
+        eprintln!("stopped early by a signal");
+    }
+    Ok(())
+}

@@ -1,0 +1,148 @@
+//! `motionctl watch`: a live table of every axis plus the server's tick statistics.
+
+use core::time::Duration;
+
+use motion_client::ipc::{FrameFlags, MotionFrame, ServerInfo, ServerStats, read_text};
+use motion_client::{Client, ClientError};
+use ratatui::Frame;
+use ratatui::layout::{Constraint, Layout};
+use ratatui::style::{Color, Modifier, Style};
+use ratatui::text::Line;
+use ratatui::widgets::{Block, Borders, Cell, Paragraph, Row, Table};
+
+use crate::Service;
+use crate::describe::{fault_name, flag_names, frame_json, mode_name};
+use crate::terminal::{Screen, quit_requested};
+
+/// Runs `watch` until q / Ctrl-C (table) or SIGINT/SIGTERM (`--json`).
+pub fn run(client: &Client<Service>, json: bool, interval: Duration) -> anyhow::Result<()> {
+    if json {
+        return run_json(client, interval);
+    }
+    let mut screen = Screen::enter("watch")?;
+    loop {
+        let frame = client.latest()?;
+        let info = client.info()?;
+        let stats = client.stats()?;
+        screen
+            .terminal()
+            .draw(|ui| draw(ui, &info, &frame, stats.as_deref()))?;
+        drop(frame);
+        if quit_requested(interval)? {
+            return Ok(());
+        }
+        match client.check_interrupted() {
+            Err(ClientError::Interrupted) => return Ok(()),
+            other => other?,
+        }
+    }
+}
+
+fn run_json(client: &Client<Service>, interval: Duration) -> anyhow::Result<()> {
+    let axes: Vec<usize> = (0..client.axes().len()).collect();
+    loop {
+        let frame = client.latest()?;
+        let info = client.info()?;
+        println!("{}", frame_json(&info, &frame, &axes));
+        drop(frame);
+        if client.node().wait(interval).is_err() {
+            return Ok(());
+        }
+    }
+}
+
+fn micros(ns: u64) -> String {
+    format!("{:.1}µs", ns as f64 / 1e3)
+}
+
+fn draw(ui: &mut Frame<'_>, info: &ServerInfo, frame: &MotionFrame, stats: Option<&ServerStats>) {
+    let [head, table, foot] = Layout::vertical([
+        Constraint::Length(3),
+        Constraint::Min(3),
+        Constraint::Length(1),
+    ])
+    .areas(ui.area());
+
+    let mut banner = format!(
+        "motiond \"{}\"  tick {}  {} Hz  deadman {} ms",
+        read_text(&info.name),
+        frame.tick,
+        info.tick_hz,
+        info.command_timeout_ms
+    );
+    if frame.flags().contains(FrameFlags::ESTOP_LATCHED) {
+        banner.push_str("  E-STOP LATCHED");
+    }
+    let figures = match stats {
+        Some(stats) => format!(
+            "wake-up p50 {} p99 {} p99.9 {} max {}   work p50 {} max {}   overruns {}   clients {}",
+            micros(stats.wakeup.p50_ns),
+            micros(stats.wakeup.p99_ns),
+            micros(stats.wakeup.p999_ns),
+            micros(stats.wakeup.max_ns),
+            micros(stats.work.p50_ns),
+            micros(stats.work.max_ns),
+            stats.overruns,
+            stats.clients
+        ),
+        None => "tick statistics: none yet (published about once a second)".to_owned(),
+    };
+    let estop_style = if frame.flags().contains(FrameFlags::ESTOP_LATCHED) {
+        Style::default().fg(Color::Red).add_modifier(Modifier::BOLD)
+    } else {
+        Style::default().add_modifier(Modifier::BOLD)
+    };
+    ui.render_widget(
+        Paragraph::new(vec![Line::styled(banner, estop_style), Line::raw(figures)])
+            .block(Block::default().borders(Borders::BOTTOM)),
+        head,
+    );
+
+    let rows = info.axes().iter().zip(frame.axes()).map(|(axis, state)| {
+        let mut flags = flag_names(state.flags()).join(",");
+        let fault = fault_name(state);
+        if !fault.is_empty() {
+            flags = format!("{flags} [{fault}]");
+        }
+        let style = if fault.is_empty() {
+            Style::default()
+        } else {
+            Style::default().fg(Color::Red)
+        };
+        Row::new(vec![
+            Cell::from(axis.name().to_owned()),
+            Cell::from(format!("{:.4}", state.position)),
+            Cell::from(format!("{:.4}", state.velocity)),
+            Cell::from(format!("{:.4}", state.target)),
+            Cell::from(axis.unit().to_owned()),
+            Cell::from(mode_name(state)),
+            Cell::from(
+                frame
+                    .tick
+                    .saturating_sub(state.last_refresh_tick)
+                    .to_string(),
+            ),
+            Cell::from(flags),
+        ])
+        .style(style)
+    });
+    let widths = [
+        Constraint::Length(14),
+        Constraint::Length(12),
+        Constraint::Length(12),
+        Constraint::Length(12),
+        Constraint::Length(6),
+        Constraint::Length(14),
+        Constraint::Length(6),
+        Constraint::Min(10),
+    ];
+    let header = Row::new([
+        "axis", "position", "velocity", "target", "unit", "mode", "age", "flags",
+    ])
+    .style(Style::default().add_modifier(Modifier::BOLD));
+    ui.render_widget(Table::new(rows, widths).header(header), table);
+    ui.render_widget(
+        Paragraph::new("age: ticks since fresh board data   q or Ctrl-C quits"),
+        foot,
+    );
+}
