@@ -10,6 +10,7 @@
 mod bus;
 mod driver;
 mod goal;
+pub mod qsb;
 mod state;
 
 pub mod spimotor;

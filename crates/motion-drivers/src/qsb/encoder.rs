@@ -1,0 +1,126 @@
+//! The encoder counter as the stream reports it: the latest count, and the velocity from
+//! successive time-stamped samples.
+
+use ::qsb::TICK;
+
+/// Samples the velocity is measured over (8 × 1.95 ms ≈ 16 ms at the fastest stream):
+/// long enough that one count of quantisation is small, short enough to follow a ramp.
+pub(crate) const VELOCITY_WINDOW: usize = 8;
+
+/// One streamed READ ENCODER value.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub(crate) struct Sample {
+    /// CNTR as a signed 32-bit count.
+    pub count: i32,
+    /// Board time stamp, 1/512 s ticks.
+    pub time_stamp: u32,
+}
+
+/// The latest samples.
+#[derive(Debug, Clone)]
+pub(crate) struct EncoderTrack {
+    ring: [Sample; VELOCITY_WINDOW],
+    /// Next slot to write.
+    next: usize,
+    /// Valid samples in the ring.
+    len: usize,
+    velocity: f64,
+}
+
+impl EncoderTrack {
+    pub(crate) const fn new() -> Self {
+        Self {
+            ring: [Sample {
+                count: 0,
+                time_stamp: 0,
+            }; VELOCITY_WINDOW],
+            next: 0,
+            len: 0,
+            velocity: 0.0,
+        }
+    }
+
+    /// The newest sample.
+    pub(crate) fn latest(&self) -> Option<Sample> {
+        (self.len > 0).then(|| self.ring[(self.next + VELOCITY_WINDOW - 1) % VELOCITY_WINDOW])
+    }
+
+    /// Counts per second over the window (0 until two samples with different time
+    /// stamps arrived).
+    pub(crate) fn velocity(&self) -> f64 {
+        self.velocity
+    }
+
+    /// Forgets everything (a new start-up, or the counter was loaded or reset: a jump,
+    /// not a motion).
+    pub(crate) fn clear(&mut self) {
+        *self = Self::new();
+    }
+
+    /// Takes a sample. Samples with the same time stamp as the newest replace it.
+    pub(crate) fn push(&mut self, sample: Sample) {
+        if let Some(latest) = self.latest()
+            && latest.time_stamp == sample.time_stamp
+        {
+            let slot = (self.next + VELOCITY_WINDOW - 1) % VELOCITY_WINDOW;
+            self.ring[slot] = sample;
+        } else {
+            self.ring[self.next] = sample;
+            self.next = (self.next + 1) % VELOCITY_WINDOW;
+            self.len = (self.len + 1).min(VELOCITY_WINDOW);
+        }
+        let oldest = self.ring[(self.next + VELOCITY_WINDOW - self.len) % VELOCITY_WINDOW];
+        let ticks = sample.time_stamp.wrapping_sub(oldest.time_stamp);
+        if self.len >= 2 && ticks > 0 && ticks < u32::MAX / 2 {
+            let counts = f64::from(sample.count.wrapping_sub(oldest.count));
+            self.velocity = counts / (TICK.as_secs_f64() * f64::from(ticks));
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample(count: i32, time_stamp: u32) -> Sample {
+        Sample { count, time_stamp }
+    }
+
+    #[test]
+    fn velocity_over_the_window_from_time_stamps() {
+        let mut track = EncoderTrack::new();
+        track.push(sample(0, 100));
+        assert_eq!(track.velocity(), 0.0);
+        // 512 counts per tick = 512 × 512 counts/s.
+        for k in 1..20 {
+            track.push(sample(512 * k, 100 + k as u32));
+        }
+        assert_eq!(track.velocity(), 512.0 * 512.0);
+        assert_eq!(track.latest(), Some(sample(512 * 19, 119)));
+    }
+
+    #[test]
+    fn a_counter_wrap_is_a_small_step_and_a_still_encoder_reads_zero() {
+        let mut track = EncoderTrack::new();
+        track.push(sample(i32::MAX - 1, 0));
+        track.push(sample(i32::MIN + 1, 2));
+        assert_eq!(track.velocity(), 3.0 / (2.0 * TICK.as_secs_f64()));
+        for k in 3..3 + VELOCITY_WINDOW as u32 {
+            track.push(sample(i32::MIN + 1, k));
+        }
+        assert_eq!(track.velocity(), 0.0);
+    }
+
+    #[test]
+    fn clear_forgets_history() {
+        let mut track = EncoderTrack::new();
+        track.push(sample(0, 0));
+        track.push(sample(1000, 1));
+        track.clear();
+        assert_eq!(track.latest(), None);
+        track.push(sample(-5, 2));
+        assert_eq!(track.velocity(), 0.0);
+        track.push(sample(-3, 4));
+        assert_eq!(track.velocity(), 2.0 / (2.0 * TICK.as_secs_f64()));
+    }
+}

@@ -1,0 +1,658 @@
+//! The US Digital QSB-S/-D/-M driver: [`QsbDriver`].
+//!
+//! One channel (0): the encoder counter, and on the -M the stepper drive that moves it.
+//! Every byte goes through the `qsb` protocol crate.
+//!
+//! # Start-up
+//!
+//! `W161` (COMMAND 1: stop any streams left running, so the line is quiet), `R14`
+//! (VERSION: serial number, product type, firmware), then the configuration for the
+//! product reported: EOR 0x5 (LF and the time stamp: `s0E00001234000ABCDE!\n`), MODE
+//! quadrature, MDR0 0x43 (x4, free-running, index disabled, synchronous index), MDR1 0
+//! (counting up, enabled, no triggers), THRESHOLD 0 (a value at every tick), INTERVAL
+//! RATE from the line rate (1 tick = 1.95 ms at 230400 baud); on the -M also COMMAND 4
+//! (stop whatever the motor was doing), MD STEP RATE and MD ACCEL from the axis limits,
+//! COMMAND 2 (enable the drive) and `S13` (stream MD STATUS); last `S0E` (stream the
+//! counter). The board is online when all of that was acknowledged. Nothing is saved
+//! (COMMAND 3 is never sent).
+//!
+//! # Goals
+//!
+//! | goal | -M | -S / -D |
+//! |---|---|---|
+//! | `Off` | COMMAND 5 (quit: step pulses stop at once; the QSB cannot de-energise the motor driver) | accepted, nothing to do: nothing is driven |
+//! | `Stop{decel}` | MD ACCEL = decel, COMMAND 4 | accepted, nothing to do |
+//! | `Position`, `RampPosition` | MD STEP RATE / MD ACCEL (axis limits, or the goal's), COMMAND 4 and wait if moving, then MD MOVE STEPS = the whole steps from the encoder reading to the target, COMMAND 8; after the drive reports done, up to two correcting moves | `Unsupported` |
+//! | `Velocity` | MD ACCEL, MD JOG RATE, COMMAND 9 (0 = COMMAND 4) | `Unsupported` |
+//! | `Home{velocity}` | MDR0 0x63 (index resets CNTR), clear STR, stream STR, jog; the first index latch (STR IDX) is the reference: MDR0 back to 0x43, COMMAND 4. Stops not homed after `home_max_travel` | `Unsupported` (no drive to search with) |
+//! | `SetPosition` | DTR = counts, LOAD REG 0 (DTR → CNTR); then COMMAND 4 if the motor moves (the engine holds after a set-position) | DTR, LOAD REG 0 |
+//! | `Power` | `Unsupported` (step and direction only) | `Unsupported` |
+//!
+//! Counts are encoder counts; the -M's registers are in motor steps
+//! ([`QsbDriverConfig::counts_per_step`]). Rates and accelerations are rounded down to
+//! the board's 16-step increments, so a profile never exceeds the limits it was given;
+//! a limit below the board's minimum is `OutOfBoardRange`, a stop below it stops at the
+//! minimum (a stop always works).
+//!
+//! # Wire, liveness and resets
+//!
+//! One request in flight; its answer is matched by type and register among the streamed
+//! lines. Position is the streamed counter, velocity the count difference over the last
+//! [`encoder::VELOCITY_WINDOW`] samples divided by their time-stamp difference. A board
+//! reset shows as a line without the time stamp (EOR lost), a time stamp going backwards,
+//! a -M drive found disabled, or the stream gone silent while the board still answers
+//! `R14`; it is reported as [`DeviceFault::Reset`] and the start-up runs again. A board
+//! that does not answer three times in a row is [`DeviceFault::NotResponding`]; the
+//! driver retries its start-up every [`RESTART_DELAY`]. Garbage is skipped by the
+//! response decoder; a request whose answer it swallowed times out and is sent again —
+//! except COMMAND 8 (a move must never run twice): the driver measures instead and
+//! corrects.
+#![allow(clippy::module_name_repetitions)]
+
+mod config;
+mod encoder;
+mod goals;
+mod program;
+mod rx;
+#[cfg(test)]
+mod tests;
+
+use core::fmt::Write as _;
+use core::time::Duration;
+
+use ::qsb::{
+    CountMode, CycleMode, IndexMode, MdStatus, Mdr0, Mdr1, Mode, ProductType, QsbCommand, Register,
+    Request, ResponseDecoder, Write,
+};
+
+pub use config::QsbDriverConfig;
+
+use crate::driver::{Driver, Model, Priority, Transmit};
+use crate::goal::{Goal, GoalError, GoalKind, GoalKinds};
+use crate::state::{ChannelState, DeviceFault, DeviceStatus, FIRMWARE_LEN};
+use config::DRIVER_EOR;
+use encoder::EncoderTrack;
+use program::{Program, Step};
+
+/// Tries of one request before the board is declared not responding.
+pub const MAX_ATTEMPTS: u8 = 3;
+
+/// Pause before a start-up is tried again after the board stopped answering.
+pub const RESTART_DELAY: Duration = Duration::from_millis(100);
+
+/// MDR0 in normal operation: x4 quadrature, free-running, index disabled, synchronous
+/// index (0x43).
+const NORMAL_MDR0: Mdr0 = Mdr0 {
+    count: CountMode::X4,
+    cycle: CycleMode::FreeRunning,
+    index: IndexMode::Disabled,
+    synchronous_index: true,
+    filter_div2: false,
+};
+
+/// MDR0 during a home search: the index resets CNTR (0x63, the command list's "Sync
+/// Index, Reset on Index, Free Running, X4 mode, W0363").
+const HOMING_MDR0: Mdr0 = Mdr0 {
+    index: IndexMode::ResetCntr,
+    ..NORMAL_MDR0
+};
+
+/// Registers the driver remembers the board's value of (00–16).
+const REGISTERS: usize = 0x17;
+
+/// Who sent the request in flight.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Origin {
+    Setup,
+    Preset,
+    Goal,
+    Probe,
+}
+
+/// The request awaiting its answer.
+#[derive(Debug, Clone, Copy)]
+struct InFlight {
+    request: Request,
+    origin: Origin,
+    generation: u32,
+    deadline: Duration,
+}
+
+/// A sans-I/O driver for one US Digital QSB (see the module docs).
+#[derive(Debug, Clone)]
+pub struct QsbDriver {
+    config: QsbDriverConfig,
+    decoder: ResponseDecoder,
+    decoder_bad_seen: u64,
+    status: DeviceStatus,
+    link_up: bool,
+    /// Product and serial number VERSION reported.
+    product: Option<ProductType>,
+    serial: Option<u32>,
+    setup: Program,
+    /// Set-position requests: kept apart so that a stop right after a set-position
+    /// cannot void it.
+    preset: Program,
+    goal: Program,
+    goal_kind: Option<GoalKind>,
+    in_flight: Option<InFlight>,
+    attempts: u8,
+    restart_at: Option<Duration>,
+    probe_due: bool,
+    samples_since_probe: bool,
+    /// What the board holds, per register number, as far as the driver knows.
+    board: [Option<u32>; REGISTERS],
+    eor_configured: bool,
+    last_time_stamp: Option<u32>,
+    encoder: EncoderTrack,
+    /// The next encoder sample follows a load or an index reset of the counter.
+    rebase_pending: bool,
+    position: i32,
+    last_sample_at: Option<Duration>,
+    online_at: Duration,
+    md: Option<MdStatus>,
+    /// The drive's done flag counts only from samples with this time stamp on (two data
+    /// output ticks after the last motor command).
+    done_after: u32,
+    str_streaming: bool,
+    index_armed: bool,
+    index_seen: bool,
+    home_start: Option<i32>,
+    homed: bool,
+    arrived: bool,
+}
+
+impl QsbDriver {
+    /// A driver for the board of `config`; its start-up begins with the first
+    /// [`poll_transmit`](Driver::poll_transmit).
+    pub fn new(config: QsbDriverConfig) -> Self {
+        let mut driver = Self {
+            config,
+            decoder: ResponseDecoder::new(),
+            decoder_bad_seen: 0,
+            status: DeviceStatus::UNKNOWN,
+            link_up: true,
+            product: None,
+            serial: None,
+            setup: Program::new(),
+            preset: Program::new(),
+            goal: Program::new(),
+            goal_kind: None,
+            in_flight: None,
+            attempts: 0,
+            restart_at: None,
+            probe_due: false,
+            samples_since_probe: false,
+            board: [None; REGISTERS],
+            eor_configured: false,
+            last_time_stamp: None,
+            encoder: EncoderTrack::new(),
+            rebase_pending: false,
+            position: 0,
+            last_sample_at: None,
+            online_at: Duration::ZERO,
+            md: None,
+            done_after: 0,
+            str_streaming: false,
+            index_armed: false,
+            index_seen: false,
+            home_start: None,
+            homed: false,
+            arrived: false,
+        };
+        driver.begin_startup();
+        driver
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &QsbDriverConfig {
+        &self.config
+    }
+
+    /// The product VERSION reported (`None` before the first answer).
+    pub fn product(&self) -> Option<ProductType> {
+        self.product
+    }
+
+    /// The product whose goals apply: the reported one, else the configured one.
+    fn effective_product(&self) -> ProductType {
+        self.product.unwrap_or(self.config.variant)
+    }
+
+    /// Whether the drive runs a motor command (MD STATUS moving or jogging).
+    fn drive_moving(&self) -> bool {
+        self.md.is_some_and(|md| md.moving || md.jogging)
+    }
+
+    /// Whether the drive reports done, from samples taken after the last motor command.
+    fn drive_done(&self) -> bool {
+        let fresh = self
+            .encoder
+            .latest()
+            .is_some_and(|s| s.time_stamp.wrapping_sub(self.done_after) < u32::MAX / 2);
+        fresh
+            && self
+                .md
+                .is_some_and(|md| md.done && !md.moving && !md.jogging)
+    }
+
+    /// Whether the board is known to hold `write`'s value already.
+    fn holds(&self, write: Write) -> bool {
+        self.board
+            .get(usize::from(write.register().number()))
+            .copied()
+            .flatten()
+            == Some(write.data())
+    }
+
+    /// The request a step sends now, `None` for a step with nothing to send.
+    fn request_of(&self, step: Step) -> Option<Request> {
+        match step {
+            Step::Send(request) => Some(request),
+            Step::Ensure(write) => (!self.holds(write)).then_some(Request::Write(write)),
+            Step::EndStrStream => self.str_streaming.then_some(Request::Read(Register::Str)),
+            // Unless the drive is known to be done (a motor command just sent may not show
+            // in MD STATUS yet), stop it.
+            Step::StopIfMoving => (!self.drive_done())
+                .then_some(Request::Write(Write::Command(QsbCommand::MotorStop))),
+            Step::Configure
+            | Step::Online
+            | Step::WaitDone
+            | Step::MoveTo { .. }
+            | Step::WaitIndex => None,
+        }
+    }
+
+    /// Whether `origin`'s plan has its front step in flight (it must not move on).
+    fn busy(&self, origin: Origin, generation: u32) -> bool {
+        self.in_flight
+            .is_some_and(|f| f.origin == origin && f.generation == generation)
+    }
+
+    /// The next request to send, who sends it and how urgent it is.
+    fn next_request(&self) -> Option<(Request, Origin, Priority)> {
+        if !self.link_up || self.in_flight.is_some() {
+            return None;
+        }
+        if let Some(step) = self.setup.front() {
+            return self
+                .request_of(step)
+                .map(|r| (r, Origin::Setup, Priority::Setup));
+        }
+        if !self.status.online {
+            return None;
+        }
+        for (program, origin) in [(&self.preset, Origin::Preset), (&self.goal, Origin::Goal)] {
+            if let Some(request) = program.front().and_then(|step| self.request_of(step)) {
+                return Some((request, origin, Priority::Command));
+            }
+        }
+        self.probe_due.then_some((
+            Request::Read(Register::Version),
+            Origin::Probe,
+            Priority::Poll,
+        ))
+    }
+
+    /// (Re)starts the start-up sequence; the last known position stays.
+    fn begin_startup(&mut self) {
+        self.setup.replace(&[
+            Step::Send(Request::Write(Write::Command(QsbCommand::StopStreaming))),
+            Step::Send(Request::Read(Register::Version)),
+            Step::Configure,
+        ]);
+        self.preset.clear();
+        self.goal.clear();
+        self.goal_kind = None;
+        self.in_flight = None;
+        self.attempts = 0;
+        self.restart_at = None;
+        self.probe_due = false;
+        self.status.online = false;
+        self.board = [None; REGISTERS];
+        self.eor_configured = false;
+        self.rebase_pending = true;
+        self.md = None;
+        self.str_streaming = false;
+        self.index_armed = false;
+        self.index_seen = false;
+        self.home_start = None;
+    }
+
+    /// The configuration of the product VERSION reported.
+    fn configure(&mut self, product: ProductType) {
+        let (rate, accel) = self.config.default_profile();
+        let common = [
+            Step::Ensure(Write::Eor(DRIVER_EOR)),
+            Step::Ensure(Write::Mode(Mode::default())),
+            Step::Ensure(Write::Mdr0(NORMAL_MDR0)),
+            Step::Ensure(Write::Mdr1(Mdr1::default())),
+            Step::Ensure(Write::Threshold(0)),
+            Step::Ensure(Write::IntervalRate(self.config.interval())),
+        ];
+        let mut steps = [Step::Online; 16];
+        let mut len = 0;
+        let mut push = |step: Step| {
+            if let Some(slot) = steps.get_mut(len) {
+                *slot = step;
+                len += 1;
+            }
+        };
+        if product == ProductType::M {
+            push(Step::Send(Request::Write(Write::Command(
+                QsbCommand::MotorStop,
+            ))));
+        }
+        common.into_iter().for_each(&mut push);
+        if product == ProductType::M {
+            push(Step::Ensure(Write::StepRate(rate)));
+            push(Step::Ensure(Write::Accel(accel)));
+            push(Step::Send(Request::Write(Write::Command(
+                QsbCommand::EnableMotorDrive,
+            ))));
+            push(Step::Send(Request::Stream(Register::MdStatus)));
+        }
+        push(Step::Send(Request::Stream(Register::ReadEncoder)));
+        push(Step::Online);
+        self.setup.expand_front(&steps[..len]);
+    }
+
+    /// The board stopped answering: everything in progress is void; try again later.
+    fn declare_dead(&mut self, now: Duration) {
+        self.begin_startup();
+        self.setup.clear();
+        self.status.fault = Some(DeviceFault::NotResponding);
+        self.restart_at = Some(now.saturating_add(RESTART_DELAY));
+    }
+
+    /// The board rebooted (or another board answers): goals are lost, start again.
+    fn board_reset(&mut self) {
+        self.status.resets = self.status.resets.saturating_add(1);
+        self.status.fault = Some(DeviceFault::Reset);
+        self.homed = false;
+        self.last_time_stamp = None;
+        self.begin_startup();
+    }
+
+    /// Records the VERSION answer as the firmware description.
+    fn record_version(&mut self, version: ::qsb::Version) {
+        let mut text = FirmwareText::default();
+        let product = match version.product {
+            ProductType::D => 'D',
+            ProductType::M => 'M',
+            ProductType::S => 'S',
+        };
+        // The buffer is larger than the longest description; a failure only cuts it.
+        let _ = write!(
+            text,
+            "QSB-{product} SN {:05X} fw {:02X}",
+            version.serial, version.firmware
+        );
+        self.status.set_firmware(text.as_str());
+        self.product = Some(version.product);
+        self.serial = Some(version.serial);
+    }
+
+    /// Lets every plan move on as far as it can without the board.
+    fn settle(&mut self, now: Duration) {
+        for _ in 0..4 * program::PROGRAM_CAPACITY {
+            if self.busy(Origin::Setup, self.setup.generation()) {
+                break;
+            }
+            match self.setup.front() {
+                Some(Step::Configure) => match self.product {
+                    Some(product) => self.configure(product),
+                    None => self.setup.clear(),
+                },
+                Some(Step::Online) => {
+                    self.setup.pop();
+                    self.status.online = true;
+                    self.online_at = now;
+                }
+                Some(step) if self.request_of(step).is_none() => self.setup.pop(),
+                _ => break,
+            }
+        }
+        if !self.status.online {
+            return;
+        }
+        for _ in 0..4 * program::PROGRAM_CAPACITY {
+            if self.busy(Origin::Preset, self.preset.generation()) {
+                break;
+            }
+            match self.preset.front() {
+                Some(step) if self.request_of(step).is_none() => self.preset.pop(),
+                _ => break,
+            }
+        }
+        for _ in 0..4 * program::PROGRAM_CAPACITY {
+            if self.busy(Origin::Goal, self.goal.generation()) || !self.settle_goal_step() {
+                break;
+            }
+        }
+    }
+
+    /// Channel state of channel 0.
+    fn channel_state(&self) -> ChannelState {
+        let motion_pending = !self.goal.is_empty()
+            && matches!(
+                self.goal_kind,
+                Some(
+                    GoalKind::Position
+                        | GoalKind::RampPosition
+                        | GoalKind::Velocity
+                        | GoalKind::Home
+                )
+            );
+        let velocity = self.encoder.velocity();
+        ChannelState {
+            position: f64::from(self.position),
+            velocity,
+            raw_counts: i64::from(self.position),
+            refreshed_at: self.last_sample_at,
+            moving: motion_pending || self.drive_moving() || velocity != 0.0,
+            homed: self.homed,
+            at_limit: false,
+            arrived: self.arrived,
+            fault: self.status.fault,
+        }
+    }
+}
+
+/// A fixed buffer the firmware description is formatted into.
+#[derive(Default)]
+struct FirmwareText {
+    buf: [u8; FIRMWARE_LEN],
+    len: usize,
+}
+
+impl FirmwareText {
+    fn as_str(&self) -> &str {
+        core::str::from_utf8(self.buf.get(..self.len).unwrap_or_default()).unwrap_or("")
+    }
+}
+
+impl core::fmt::Write for FirmwareText {
+    fn write_str(&mut self, s: &str) -> core::fmt::Result {
+        let end = self.len + s.len();
+        let slot = self.buf.get_mut(self.len..end).ok_or(core::fmt::Error)?;
+        slot.copy_from_slice(s.as_bytes());
+        self.len = end;
+        Ok(())
+    }
+}
+
+/// The goals a product takes.
+fn kinds_for(product: ProductType) -> GoalKinds {
+    match product {
+        ProductType::M => GoalKinds::of(&[
+            GoalKind::Off,
+            GoalKind::Stop,
+            GoalKind::Position,
+            GoalKind::Velocity,
+            GoalKind::RampPosition,
+            GoalKind::Home,
+            GoalKind::SetPosition,
+        ]),
+        ProductType::D | ProductType::S => {
+            GoalKinds::of(&[GoalKind::Off, GoalKind::Stop, GoalKind::SetPosition])
+        }
+    }
+}
+
+impl Driver for QsbDriver {
+    fn model(&self) -> Model {
+        Model::Qsb
+    }
+
+    fn channel_count(&self) -> usize {
+        1
+    }
+
+    fn capabilities(&self, channel: usize) -> GoalKinds {
+        if channel == 0 {
+            kinds_for(self.effective_product())
+        } else {
+            GoalKinds::NONE
+        }
+    }
+
+    fn refresh_budget(&self) -> Duration {
+        self.config.refresh_budget()
+    }
+
+    fn handle_rx(&mut self, now: Duration, mut bytes: &[u8]) {
+        if !self.link_up {
+            return;
+        }
+        while !bytes.is_empty() {
+            let (used, response) = self.decoder.decode(bytes);
+            bytes = bytes.get(used..).unwrap_or_default();
+            if let Some(response) = response {
+                self.on_response(now, response);
+            }
+        }
+        let bad = self.decoder.bad_frames();
+        let new_bad = bad.saturating_sub(self.decoder_bad_seen);
+        self.decoder_bad_seen = bad;
+        self.status.bad_replies = self
+            .status
+            .bad_replies
+            .saturating_add(u32::try_from(new_bad).unwrap_or(u32::MAX));
+        self.settle(now);
+    }
+
+    fn handle_timeout(&mut self, now: Duration) {
+        if !self.link_up {
+            return;
+        }
+        if self.restart_at.is_some_and(|at| now >= at) {
+            self.begin_startup();
+        }
+        if let Some(flight) = self.in_flight
+            && now >= flight.deadline
+        {
+            self.timed_out(now, flight);
+        }
+        let quiet_since = self
+            .last_sample_at
+            .map_or(self.online_at, |at| at.max(self.online_at));
+        if self.status.online
+            && self.in_flight.is_none()
+            && !self.probe_due
+            && now >= quiet_since.saturating_add(self.config.refresh_budget())
+        {
+            self.probe_due = true;
+            self.samples_since_probe = false;
+        }
+        self.settle(now);
+    }
+
+    fn poll_timeout(&self) -> Option<Duration> {
+        if !self.link_up {
+            return None;
+        }
+        let probe =
+            (self.status.online && !self.probe_due && self.in_flight.is_none()).then(|| {
+                self.last_sample_at
+                    .map_or(self.online_at, |at| at.max(self.online_at))
+                    .saturating_add(self.config.refresh_budget())
+            });
+        [self.in_flight.map(|f| f.deadline), self.restart_at, probe]
+            .into_iter()
+            .flatten()
+            .min()
+    }
+
+    fn wants_transmit(&self, _now: Duration) -> Option<Priority> {
+        self.next_request().map(|(_, _, priority)| priority)
+    }
+
+    fn poll_transmit(&mut self, now: Duration, buf: &mut [u8]) -> Option<Transmit> {
+        let (request, origin, _) = self.next_request()?;
+        let len = request.encode(buf).ok()?;
+        let generation = match origin {
+            Origin::Setup => self.setup.generation(),
+            Origin::Preset => self.preset.generation(),
+            Origin::Goal => self.goal.generation(),
+            Origin::Probe => {
+                self.probe_due = false;
+                self.samples_since_probe = false;
+                0
+            }
+        };
+        self.in_flight = Some(InFlight {
+            request,
+            origin,
+            generation,
+            deadline: now.saturating_add(self.config.reply_timeout()),
+        });
+        Some(Transmit {
+            len,
+            expects_reply: true,
+        })
+    }
+
+    fn awaiting_reply(&self) -> bool {
+        self.in_flight.is_some()
+    }
+
+    fn goals_pending(&self) -> bool {
+        let in_flight = self
+            .in_flight
+            .is_some_and(|f| matches!(f.origin, Origin::Preset | Origin::Goal));
+        in_flight || !self.preset.is_empty() || !self.goal.is_empty()
+    }
+
+    fn set_goal(&mut self, now: Duration, channel: usize, goal: Goal) -> Result<(), GoalError> {
+        let result = self.plan_goal(now, channel, goal);
+        self.settle(now);
+        result
+    }
+
+    fn channel(&self, channel: usize) -> ChannelState {
+        if channel == 0 {
+            self.channel_state()
+        } else {
+            ChannelState::UNKNOWN
+        }
+    }
+
+    fn status(&self) -> DeviceStatus {
+        self.status
+    }
+
+    fn link_down(&mut self, _now: Duration) {
+        self.begin_startup();
+        self.setup.clear();
+        self.link_up = false;
+        self.decoder.clear();
+        self.status.fault = Some(DeviceFault::LinkDown);
+    }
+
+    fn link_up(&mut self, _now: Duration) {
+        self.link_up = true;
+        self.decoder.clear();
+        self.begin_startup();
+    }
+}

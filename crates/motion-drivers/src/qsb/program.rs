@@ -1,0 +1,144 @@
+//! A driver's plan of requests: a short fixed-capacity queue of [`Step`]s, some of which
+//! are resolved only when they reach the front (what to move by is computed from the
+//! encoder reading at that moment, not when the goal was set).
+
+use ::qsb::{Request, Write};
+
+/// One step of a plan.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Step {
+    /// Send this request.
+    Send(Request),
+    /// Write the register unless the board is known to hold the value already.
+    Ensure(Write),
+    /// Cancel the STR stream (a read of STR) if it runs.
+    EndStrStream,
+    /// Start-up: the configuration for the product VERSION reported.
+    Configure,
+    /// Start-up: done; the board is online.
+    Online,
+    /// -M: COMMAND 4 if the drive reports motion.
+    StopIfMoving,
+    /// -M: wait until the drive reports done after the last motor command.
+    WaitDone,
+    /// -M: move by the whole steps that remain to `target` counts (`attempt` moves made).
+    MoveTo {
+        /// Target, counts.
+        target: f64,
+        /// Moves made so far for this goal.
+        attempt: u8,
+    },
+    /// -M home search: wait for the index latch (or give up after the travel limit).
+    WaitIndex,
+}
+
+/// Steps a plan can hold.
+pub(crate) const PROGRAM_CAPACITY: usize = 24;
+
+/// A fixed-capacity queue of steps.
+#[derive(Debug, Clone)]
+pub(crate) struct Program {
+    steps: [Step; PROGRAM_CAPACITY],
+    len: usize,
+    /// Changes whenever the plan is replaced, so that the answer to a request of an old
+    /// plan never advances a new one.
+    generation: u32,
+}
+
+impl Program {
+    pub(crate) const fn new() -> Self {
+        Self {
+            steps: [Step::Online; PROGRAM_CAPACITY],
+            len: 0,
+            generation: 0,
+        }
+    }
+
+    pub(crate) fn generation(&self) -> u32 {
+        self.generation
+    }
+
+    pub(crate) fn front(&self) -> Option<Step> {
+        (self.len > 0).then(|| self.steps[0])
+    }
+
+    pub(crate) fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    #[cfg(test)]
+    pub(crate) fn iter(&self) -> impl Iterator<Item = &Step> {
+        self.steps.iter().take(self.len)
+    }
+
+    /// Replaces the whole plan with `steps` (cut to the capacity).
+    pub(crate) fn replace(&mut self, steps: &[Step]) {
+        self.generation = self.generation.wrapping_add(1);
+        let len = steps.len().min(PROGRAM_CAPACITY);
+        self.steps[..len].copy_from_slice(&steps[..len]);
+        self.len = len;
+    }
+
+    /// Empties the plan.
+    pub(crate) fn clear(&mut self) {
+        self.replace(&[]);
+    }
+
+    /// Removes the front step.
+    pub(crate) fn pop(&mut self) {
+        if self.len > 0 {
+            self.steps.copy_within(1..self.len, 0);
+            self.len -= 1;
+        }
+    }
+
+    /// Replaces the front step with `steps` (keeping the rest behind them, as far as the
+    /// capacity allows). The generation stays: this is the same plan unfolding.
+    pub(crate) fn expand_front(&mut self, steps: &[Step]) {
+        if self.len == 0 {
+            return;
+        }
+        let rest = self.len - 1;
+        let add = steps.len().min(PROGRAM_CAPACITY);
+        let kept = rest.min(PROGRAM_CAPACITY - add);
+        self.steps.copy_within(1..1 + kept, add);
+        self.steps[..add].copy_from_slice(&steps[..add]);
+        self.len = add + kept;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use ::qsb::Register;
+
+    #[test]
+    fn expand_front_keeps_the_rest_in_order() {
+        let mut program = Program::new();
+        program.replace(&[Step::Configure, Step::Online]);
+        let generation = program.generation();
+        let read = Step::Send(Request::Read(Register::Version));
+        program.expand_front(&[read, Step::EndStrStream]);
+        let steps: Vec<Step> = program.iter().copied().collect();
+        assert_eq!(steps, [read, Step::EndStrStream, Step::Online]);
+        assert_eq!(program.generation(), generation);
+        program.pop();
+        program.pop();
+        assert_eq!(program.front(), Some(Step::Online));
+        program.pop();
+        program.pop();
+        assert!(program.is_empty());
+        program.clear();
+        assert_ne!(program.generation(), generation);
+    }
+
+    #[test]
+    fn a_full_program_drops_what_does_not_fit() {
+        let mut program = Program::new();
+        program.replace(&[Step::WaitDone; PROGRAM_CAPACITY + 3]);
+        assert_eq!(program.iter().count(), PROGRAM_CAPACITY);
+        program.expand_front(&[Step::Online; 4]);
+        assert_eq!(program.iter().count(), PROGRAM_CAPACITY);
+        assert_eq!(program.front(), Some(Step::Online));
+    }
+}

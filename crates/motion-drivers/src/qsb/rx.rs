@@ -1,0 +1,277 @@
+//! What the driver does with each response line: answers to its requests, streamed
+//! samples, and the signs of a reset.
+
+use core::time::Duration;
+
+use ::qsb::{
+    IndexMode, LoadTarget, MdStatus, ProductType, QsbCommand, Register, Request, Response,
+    ResponseType, Str, Version, Write,
+};
+
+use super::encoder::Sample;
+use super::{InFlight, MAX_ATTEMPTS, Origin, QsbDriver};
+use crate::state::DeviceFault;
+
+/// Data output ticks after a motor command before MD STATUS is trusted: the first tick
+/// after the command may report the drive before it started, its MD STATUS line follows
+/// the encoder line of that tick.
+const DONE_AFTER_TICKS: u32 = 2;
+
+/// Whether `response` answers `request`: same register, and the matching lower-case type
+/// (a write echoes its data), or an `e`/`x` refusal.
+fn answers(request: Request, response: &Response) -> bool {
+    if response.register != request.register().number() {
+        return false;
+    }
+    match (request, response.ty) {
+        (_, ResponseType::Error | ResponseType::Unsupported) => true,
+        (Request::Read(_), ResponseType::Read) | (Request::Stream(_), ResponseType::Stream) => true,
+        (Request::Write(write), ResponseType::Write) => response.data == write.data(),
+        _ => false,
+    }
+}
+
+/// Whether a write only changes a register (the driver may remember its value), rather
+/// than doing something.
+fn is_setting(write: Write) -> bool {
+    !matches!(
+        write,
+        Write::Clear(_) | Write::Load(_) | Write::TimeStamp(_) | Write::Command(_)
+    )
+}
+
+impl QsbDriver {
+    /// One decoded line.
+    pub(super) fn on_response(&mut self, now: Duration, response: Response) {
+        match response.time_stamp {
+            Some(stamp) => {
+                if let Some(last) = self.last_time_stamp
+                    && stamp.wrapping_sub(last) > u32::MAX / 2
+                {
+                    // The time stamp went backwards: it restarts at power-up.
+                    self.board_reset();
+                    return;
+                }
+                self.last_time_stamp = Some(stamp);
+            }
+            None if self.eor_configured => {
+                // The board answers in another EOR format: it lost its settings.
+                self.board_reset();
+                return;
+            }
+            None => {}
+        }
+        let flight = self
+            .in_flight
+            .filter(|flight| answers(flight.request, &response));
+        if response.ty == ResponseType::Stream {
+            self.on_stream(now, &response);
+        }
+        match flight {
+            Some(flight) => self.on_answer(now, flight, &response),
+            None if response.ty != ResponseType::Stream => {
+                self.status.bad_replies = self.status.bad_replies.saturating_add(1);
+            }
+            None => {}
+        }
+    }
+
+    /// A streamed line (or the `s` answer that starts a stream).
+    fn on_stream(&mut self, now: Duration, response: &Response) {
+        match Register::from_u8(response.register) {
+            Some(Register::ReadEncoder) => {
+                let Some(time_stamp) = response.time_stamp else {
+                    // A line of a stream left running before start-up configured EOR.
+                    return;
+                };
+                if self.rebase_pending {
+                    self.rebase_pending = false;
+                    self.encoder.clear();
+                }
+                let count = response.signed();
+                self.encoder.push(Sample { count, time_stamp });
+                self.position = count;
+                self.last_sample_at = Some(now);
+                self.samples_since_probe = true;
+                if self.status.online
+                    && matches!(
+                        self.status.fault,
+                        Some(
+                            DeviceFault::LinkDown
+                                | DeviceFault::NotResponding
+                                | DeviceFault::Reset
+                                | DeviceFault::Protocol
+                        )
+                    )
+                {
+                    self.status.fault = None;
+                }
+            }
+            Some(Register::MdStatus) => {
+                if let Ok(md) = MdStatus::from_data(response.data) {
+                    if self.status.online && self.product == Some(ProductType::M) && !md.enabled {
+                        // The drive was enabled at start-up: a board that reports it
+                        // disabled has been reset (or stopped with COMMAND 0).
+                        self.board_reset();
+                        return;
+                    }
+                    self.md = Some(md);
+                }
+            }
+            Some(Register::Str) => {
+                if let Ok(status) = Str::from_data(response.data)
+                    && status.index
+                    && self.index_armed
+                {
+                    // The index reset CNTR (MDR0 0x63); this tick's encoder line is the
+                    // first after the jump.
+                    self.index_seen = true;
+                    self.index_armed = false;
+                    self.rebase_pending = true;
+                }
+            }
+            _ => {}
+        }
+    }
+
+    /// The answer to the request in flight.
+    fn on_answer(&mut self, now: Duration, flight: InFlight, response: &Response) {
+        self.in_flight = None;
+        if matches!(response.ty, ResponseType::Error | ResponseType::Unsupported) {
+            self.refused(now, flight);
+            return;
+        }
+        self.attempts = 0;
+        if self.status.fault == Some(DeviceFault::BoardError) {
+            self.status.fault = None;
+        }
+        match flight.request {
+            Request::Write(write) => self.written(write, response.time_stamp),
+            Request::Read(Register::Version) => {
+                if !self.version_read(now, flight.origin, response.data) {
+                    return;
+                }
+            }
+            Request::Read(Register::Str) => self.str_streaming = false,
+            Request::Stream(Register::Str) => self.str_streaming = true,
+            Request::Read(_) | Request::Stream(_) => {}
+        }
+        self.advance(flight);
+    }
+
+    /// Pops the step whose request was answered, if its plan is still the same.
+    fn advance(&mut self, flight: InFlight) {
+        let program = match flight.origin {
+            Origin::Setup => &mut self.setup,
+            Origin::Preset => &mut self.preset,
+            Origin::Goal => &mut self.goal,
+            Origin::Probe => return,
+        };
+        if program.generation() == flight.generation {
+            program.pop();
+        }
+    }
+
+    /// What an accepted write changed.
+    fn written(&mut self, write: Write, time_stamp: Option<u32>) {
+        if is_setting(write)
+            && let Some(slot) = self.board.get_mut(usize::from(write.register().number()))
+        {
+            *slot = Some(write.data());
+        }
+        match write {
+            Write::Command(
+                QsbCommand::MotorMove
+                | QsbCommand::MotorJog
+                | QsbCommand::MotorStop
+                | QsbCommand::MotorQuit,
+            ) => self.motor_commanded(time_stamp),
+            Write::Command(QsbCommand::StopStreaming) => self.str_streaming = false,
+            Write::Load(LoadTarget::DtrToCntr) => {
+                self.rebase_pending = true;
+                self.homed = true;
+            }
+            Write::Clear(::qsb::ClearTarget::Str) => {
+                self.index_armed = self.board[usize::from(Register::Mdr0.number())]
+                    == Some(super::HOMING_MDR0.data());
+                self.index_seen = false;
+            }
+            Write::Mdr0(mdr0) if mdr0.index == IndexMode::Disabled => self.index_armed = false,
+            Write::Eor(eor) => self.eor_configured = eor.time_stamp,
+            _ => {}
+        }
+    }
+
+    /// A motor command was executed at `time_stamp`: MD STATUS counts from two ticks on.
+    fn motor_commanded(&mut self, time_stamp: Option<u32>) {
+        let base = time_stamp
+            .or(self.last_time_stamp)
+            .or(self.encoder.latest().map(|s| s.time_stamp))
+            .unwrap_or(0);
+        self.done_after = base.wrapping_add(DONE_AFTER_TICKS);
+    }
+
+    /// The VERSION answer (start-up or liveness probe). Returns whether the request's plan
+    /// goes on.
+    fn version_read(&mut self, now: Duration, origin: Origin, data: u32) -> bool {
+        let Ok(version) = Version::from_data(data) else {
+            // Not a product type of the command list: not a QSB we know.
+            self.declare_dead(now);
+            self.status.fault = Some(DeviceFault::Protocol);
+            return false;
+        };
+        if self.serial.is_some_and(|serial| serial != version.serial) {
+            // Another board on this port: whatever the old one was told is lost.
+            self.record_version(version);
+            self.board_reset();
+            return false;
+        }
+        self.record_version(version);
+        if origin == Origin::Probe && !self.samples_since_probe {
+            // The board answers but no longer streams: it lost its settings.
+            self.board_reset();
+            return false;
+        }
+        true
+    }
+
+    /// The board refused a request (`e`: data out of range; `x`: not supported).
+    fn refused(&mut self, now: Duration, flight: InFlight) {
+        self.status.bad_replies = self.status.bad_replies.saturating_add(1);
+        self.status.fault = Some(DeviceFault::BoardError);
+        match flight.origin {
+            Origin::Setup => {
+                // A board that refuses its configuration is not usable as configured;
+                // try again later rather than run half configured.
+                self.declare_dead(now);
+                self.status.fault = Some(DeviceFault::BoardError);
+            }
+            Origin::Preset if self.preset.generation() == flight.generation => {
+                self.preset.clear();
+            }
+            Origin::Goal if self.goal.generation() == flight.generation => self.goal.clear(),
+            Origin::Preset | Origin::Goal | Origin::Probe => {}
+        }
+    }
+
+    /// No answer in time.
+    pub(super) fn timed_out(&mut self, now: Duration, flight: InFlight) {
+        self.in_flight = None;
+        self.status.timeouts = self.status.timeouts.saturating_add(1);
+        self.attempts = self.attempts.saturating_add(1);
+        if self.attempts >= MAX_ATTEMPTS {
+            self.declare_dead(now);
+            return;
+        }
+        match (flight.origin, flight.request) {
+            (Origin::Goal, Request::Write(Write::Command(QsbCommand::MotorMove))) => {
+                // The answer may be what was lost, not the command: a move must never run
+                // twice. Carry on; the encoder tells what happened and the plan corrects.
+                self.motor_commanded(None);
+                self.advance(flight);
+            }
+            (Origin::Probe, _) => self.probe_due = true,
+            _ => {}
+        }
+    }
+}
