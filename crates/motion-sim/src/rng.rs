@@ -32,7 +32,11 @@ impl SimRng {
 
     /// A uniform value in `[lo, hi)`; `lo` when the range is empty.
     pub fn range_f64(&mut self, lo: f64, hi: f64) -> f64 {
-        if hi > lo { lo + (hi - lo) * self.next_f64() } else { lo }
+        if hi > lo {
+            lo + (hi - lo) * self.next_f64()
+        } else {
+            lo
+        }
     }
 }
 
