@@ -10,10 +10,12 @@
 mod bus;
 mod driver;
 mod goal;
+pub mod qq2drv;
 pub mod qsb;
 mod state;
 
 pub mod spimotor;
+pub mod tmcpack;
 
 pub use bus::{BusKind, LinkBus, MAX_SENDS_PER_STEP, SPI_PENDING_CAPACITY};
 pub use driver::{Driver, Model, Priority, Transmit};

@@ -1,0 +1,476 @@
+//! One channel: its goal as steps on the board, the step's progress, and the channel's last
+//! known data.
+
+use core::time::Duration;
+
+use qq2drv::limits::{ACCELERATION_MAX, POWER_MAX, VELOCITY_LIMIT_MAX, VELOCITY_TARGET_MAX};
+use qq2drv::{ControlMode, EdgeAction, InputConfig, InputMode, Status};
+
+use super::config::{ChannelConfig, HomeInput};
+use super::packet::{Packet, Packets};
+use crate::goal::{Goal, GoalError, GoalKind};
+use crate::state::{ChannelState, DeviceFault};
+
+/// After a stop's ramp time, how long to wait for the reported velocity to reach standstill
+/// before holding anyway.
+pub const STOP_SETTLE: Duration = Duration::from_millis(300);
+/// Reported speeds up to this (one step of the board's 4 transitions/s resolution) are
+/// standstill.
+pub const STANDSTILL: i32 = 4;
+/// Within this many transitions of its target, a channel at standstill has arrived.
+pub const ARRIVED_WITHIN: i64 = 2;
+
+/// What the board is asked to do for one channel, one step of a goal at a time.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Step {
+    /// Nothing commanded since start-up or a board reset.
+    Idle,
+    /// Control mode Off.
+    Off,
+    /// Power mode at ±8191.
+    Power(i16),
+    /// Position PID towards a target (configured velocity / acceleration limits).
+    Position(i32),
+    /// Position ramp (velocity and acceleration shl 12).
+    Ramp {
+        position: i32,
+        velocity: u32,
+        accel: u32,
+    },
+    /// Velocity PID, ramped (velocity plain, acceleration shl 12).
+    Velocity { velocity: i32, accel: u32 },
+    /// Velocity ramp to 0, then [`Step::Hold`].
+    Stop { accel: u32, ramp: Duration },
+    /// Position PID holding where the channel is when the step is sent.
+    Hold,
+    /// Counter ← value; holds there unless the motor is off.
+    SetCounter(i32),
+    /// Home with an edge input already active: move off the switch first.
+    HomeBackoff { velocity: i32, accel: u32 },
+    /// Home: run towards the switch with the input armed.
+    HomeSearch { velocity: i32, accel: u32 },
+    /// Home: trigger seen, input disarmed, ramp to 0, then [`Step::Hold`].
+    HomeStop { accel: u32, ramp: Duration },
+}
+
+/// One channel of the board.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Channel {
+    pub(super) config: ChannelConfig,
+    pub(super) step: Step,
+    /// The step's packets have yet to be sent.
+    pub(super) unsent: bool,
+    /// Packets of the step sent and not yet answered.
+    pub(super) unacked: u8,
+    /// Generation of the step: answers to packets of older steps do not advance it.
+    pub(super) seq: u32,
+    /// When the board acknowledged the step's last packet.
+    pub(super) done_at: Option<Duration>,
+    /// Position the channel holds or goes to (for `arrived`).
+    pub(super) target: Option<i32>,
+    /// Control mode as the board last acknowledged it (Off at power-up and after a reset).
+    pub(super) board_mode: ControlMode,
+    /// Error answer to a goal packet, or overspeed/glitch: until the next goal.
+    pub(super) fault: Option<DeviceFault>,
+    pub(super) position: i32,
+    pub(super) velocity: i32,
+    pub(super) status: Status,
+    pub(super) refreshed_at: Option<Duration>,
+    pub(super) homed: bool,
+}
+
+impl Channel {
+    pub(super) fn new(config: ChannelConfig) -> Self {
+        Self {
+            config,
+            step: Step::Idle,
+            unsent: false,
+            unacked: 0,
+            seq: 0,
+            done_at: None,
+            target: None,
+            board_mode: ControlMode::Off,
+            fault: None,
+            position: 0,
+            velocity: 0,
+            status: Status(0),
+            refreshed_at: None,
+            homed: false,
+        }
+    }
+
+    /// The step that carries out `goal`, or why the board cannot.
+    pub(super) fn plan(&self, goal: Goal) -> Result<Step, GoalError> {
+        let kind = goal.kind();
+        Ok(match goal {
+            Goal::Off => Step::Off,
+            Goal::Power { fraction } => {
+                if !(fraction.is_finite() && (-1.0..=1.0).contains(&fraction)) {
+                    return Err(GoalError::OutOfBoardRange(kind));
+                }
+                // Packet 18: "Power … Range: -8,191 - 8,191".
+                Step::Power((fraction * f64::from(POWER_MAX)).round() as i16)
+            }
+            Goal::Position { counts } => Step::Position(position(kind, counts)?),
+            Goal::RampPosition {
+                counts,
+                velocity,
+                accel,
+            } => Step::Ramp {
+                position: position(kind, counts)?,
+                velocity: fixed(kind, velocity, VELOCITY_LIMIT_MAX)?,
+                accel: fixed(kind, accel, ACCELERATION_MAX)?,
+            },
+            Goal::Velocity { velocity, accel } => Step::Velocity {
+                velocity: velocity_target(kind, velocity)?,
+                accel: fixed(kind, accel, ACCELERATION_MAX)?,
+            },
+            Goal::Stop { decel } => Step::Stop {
+                accel: self.stop_accel(decel),
+                ramp: self.ramp_time(decel),
+            },
+            Goal::SetPosition { counts } => Step::SetCounter(position(kind, counts)?),
+            Goal::Home { velocity } => {
+                let home = self.home().ok_or(GoalError::Unsupported(kind))?;
+                let speed = velocity_target(kind, velocity)?;
+                if speed <= 0 {
+                    return Err(GoalError::OutOfBoardRange(kind));
+                }
+                let toward = if home.positive_end { speed } else { -speed };
+                let accel = self.stop_accel(self.config.limits.max_accel);
+                let already_on = home.mode == InputMode::Edge && self.status.input_active();
+                if already_on {
+                    Step::HomeBackoff {
+                        velocity: -toward,
+                        accel,
+                    }
+                } else {
+                    Step::HomeSearch {
+                        velocity: toward,
+                        accel,
+                    }
+                }
+            }
+        })
+    }
+
+    /// The home input, when one is configured and enabled.
+    pub(super) fn home(&self) -> Option<HomeInput> {
+        self.config
+            .home
+            .filter(|home| home.mode != InputMode::Disabled)
+    }
+
+    /// A stop's deceleration in shl-12, always representable: clipped to the board's range,
+    /// the axis's own when `decel` is not a positive number.
+    fn stop_accel(&self, decel: f64) -> u32 {
+        let decel = if decel.is_finite() && decel > 0.0 {
+            decel
+        } else {
+            self.config.limits.max_accel
+        };
+        qq2drv::limits::to_fixed(decel)
+            .unwrap_or(ACCELERATION_MAX)
+            .clamp(1, ACCELERATION_MAX)
+    }
+
+    /// How long a ramp from the current velocity to 0 at `decel` takes.
+    fn ramp_time(&self, decel: f64) -> Duration {
+        let decel = qq2drv::limits::from_fixed(self.stop_accel(decel));
+        let seconds = f64::from(self.velocity).abs() / decel;
+        Duration::try_from_secs_f64(seconds).unwrap_or(STOP_SETTLE)
+    }
+
+    /// Makes `step` the channel's step; its packets go out next.
+    pub(super) fn set_step(&mut self, step: Step) {
+        self.step = step;
+        self.unsent = step != Step::Idle;
+        self.unacked = 0;
+        self.seq = self.seq.wrapping_add(1);
+        self.done_at = None;
+        self.target = match step {
+            Step::Position(target) | Step::SetCounter(target) => Some(target),
+            Step::Ramp { position, .. } => Some(position),
+            _ => None,
+        };
+    }
+
+    /// A new goal from the engine: its error latch clears.
+    pub(super) fn set_goal(&mut self, step: Step) {
+        self.fault = None;
+        self.set_step(step);
+    }
+
+    /// The packets of the current step, in order.
+    pub(super) fn packets(&self) -> Packets {
+        use Packet::{Mode, Target};
+        let position_mode = Mode(ControlMode::PositionPid);
+        let velocity_mode = Mode(ControlMode::VelocityPid);
+        match self.step {
+            Step::Idle => Packets::default(),
+            Step::Off => Packets::of(&[Mode(ControlMode::Off)]),
+            Step::Power(power) => Packets::of(&[Mode(ControlMode::Power), Packet::Power(power)]),
+            Step::Position(target) => Packets::of(&[position_mode, Target(target)]),
+            Step::Ramp {
+                position,
+                velocity,
+                accel,
+            } => Packets::of(&[
+                position_mode,
+                Packet::PositionRamp {
+                    position,
+                    velocity,
+                    accel,
+                },
+            ]),
+            Step::Velocity { velocity, accel } => {
+                Packets::of(&[velocity_mode, Packet::VelocityRamp { velocity, accel }])
+            }
+            Step::Stop { accel, .. } => Packets::of(&[
+                velocity_mode,
+                Packet::VelocityRamp { velocity: 0, accel },
+            ]),
+            Step::Hold => Packets::of(&[position_mode, Target(self.position)]),
+            Step::SetCounter(value) if self.board_mode == ControlMode::Off => {
+                Packets::of(&[Packet::SetCounter(value)])
+            }
+            Step::SetCounter(value) => {
+                Packets::of(&[Packet::SetCounter(value), position_mode, Target(value)])
+            }
+            Step::HomeBackoff { velocity, accel } => Packets::of(&[
+                self.input(false),
+                velocity_mode,
+                Packet::VelocityRamp { velocity, accel },
+            ]),
+            Step::HomeSearch { velocity, accel } => Packets::of(&[
+                self.input(true),
+                velocity_mode,
+                Packet::VelocityRamp { velocity, accel },
+            ]),
+            Step::HomeStop { accel, .. } => Packets::of(&[
+                self.input(false),
+                velocity_mode,
+                Packet::VelocityRamp { velocity: 0, accel },
+            ]),
+        }
+    }
+
+    /// Packet 14 for the home input: armed (mode, polarity, set the counter on the
+    /// switch's end) or disarmed (Disabled, polarity kept so Input Active stays meaningful).
+    pub(super) fn input(&self, armed: bool) -> Packet {
+        let home = self.config.home.unwrap_or(HomeInput {
+            mode: InputMode::Disabled,
+            active_high: false,
+            positive_end: true,
+            position: 0,
+        });
+        let edge = if home.positive_end {
+            EdgeAction::SetOnPositive
+        } else {
+            EdgeAction::SetOnNegative
+        };
+        let mode = if armed { home.mode } else { InputMode::Disabled };
+        Packet::Input {
+            config: InputConfig::new(mode, home.active_high, edge),
+            position: home.position,
+        }
+    }
+
+    /// The step's packets went out (`count` of them).
+    pub(super) fn sent(&mut self, count: u8) {
+        self.unsent = false;
+        self.unacked = count;
+        if self.step == Step::Hold {
+            self.target = Some(self.position);
+        }
+    }
+
+    /// The board answered `packet` of step generation `seq` with `code`.
+    pub(super) fn answered(&mut self, now: Duration, seq: u32, packet: Packet, code: u8) {
+        if code != 0 {
+            if seq == self.seq {
+                self.fault = Some(DeviceFault::BoardError);
+                self.unacked = 0;
+            }
+            return;
+        }
+        if let Packet::Mode(mode) = packet {
+            self.board_mode = mode;
+        }
+        if seq == self.seq && self.unacked > 0 {
+            self.unacked -= 1;
+            if self.unacked == 0 && !self.unsent {
+                self.done_at = Some(now);
+            }
+        }
+    }
+
+    /// A packet of step generation `seq` got no answer: send the step again.
+    pub(super) fn lost(&mut self, seq: u32) {
+        if seq == self.seq && self.step != Step::Idle && self.fault.is_none() {
+            self.unsent = true;
+            self.unacked = 0;
+        }
+    }
+
+    /// Fresh stream data. Home steps advance on the status bits.
+    pub(super) fn data(&mut self, now: Duration, position: i32, velocity: i32, status: Status) {
+        self.position = position;
+        self.velocity = velocity;
+        self.status = status;
+        self.refreshed_at = Some(now);
+        if status.glitch() || status.overspeed() {
+            self.fault = Some(DeviceFault::Overspeed);
+        }
+        if self.done_at.is_none() {
+            return;
+        }
+        match self.step {
+            Step::HomeBackoff { velocity, accel } if !status.input_active() => {
+                self.set_step(Step::HomeSearch {
+                    velocity: -velocity,
+                    accel,
+                });
+            }
+            Step::HomeSearch { accel, .. } if self.triggered(status) => {
+                self.homed = true;
+                let decel = qq2drv::limits::from_fixed(accel);
+                self.set_step(Step::HomeStop {
+                    accel,
+                    ramp: self.ramp_time(decel),
+                });
+            }
+            _ => {}
+        }
+    }
+
+    /// The Input Trigger Accumulator shows the trigger the search waits for: the switch's
+    /// end, or the positive trigger that INDEX mode always uses.
+    fn triggered(&self, status: Status) -> bool {
+        let Some(home) = self.home() else {
+            return false;
+        };
+        let wanted = if home.positive_end || home.mode == InputMode::Index {
+            Status::TRIGGER_POSITIVE
+        } else {
+            Status::TRIGGER_NEGATIVE
+        };
+        status.trigger_accumulator() & wanted != 0
+    }
+
+    /// Time-driven progress: a finished stop ramp turns into a hold.
+    pub(super) fn progress(&mut self, now: Duration) {
+        let (Step::Stop { ramp, .. } | Step::HomeStop { ramp, .. }) = self.step else {
+            return;
+        };
+        let Some(done_at) = self.done_at else {
+            return;
+        };
+        let elapsed = now.saturating_sub(done_at);
+        let still = self.velocity.abs() <= STANDSTILL;
+        if (elapsed >= ramp && still) || elapsed >= ramp.saturating_add(STOP_SETTLE) {
+            self.set_step(Step::Hold);
+        }
+    }
+
+    /// The board lost its state (reset): it is Off and forgot every goal.
+    pub(super) fn board_reset(&mut self) {
+        self.set_step(Step::Idle);
+        self.board_mode = ControlMode::Off;
+        self.homed = false;
+    }
+
+    /// Requests in flight were voided (restart): what was not answered goes again.
+    pub(super) fn void_in_flight(&mut self) {
+        if self.unacked > 0 {
+            self.unsent = true;
+            self.unacked = 0;
+        }
+    }
+
+    /// The link went down: a channel that may be driving its motor gets a stop (at its
+    /// axis's max acceleration) that goes out once the board is back.
+    pub(super) fn stop_after_link_loss(&mut self) {
+        let driving = !matches!(self.step, Step::Idle | Step::Off | Step::Hold)
+            || matches!(
+                self.board_mode,
+                ControlMode::Power | ControlMode::VelocityPid
+            );
+        if driving {
+            let decel = self.config.limits.max_accel;
+            self.set_step(Step::Stop {
+                accel: self.stop_accel(decel),
+                ramp: self.ramp_time(decel),
+            });
+        }
+    }
+
+    /// Whether the motor moves (or a stop / home is still under way).
+    pub(super) fn moving(&self) -> bool {
+        matches!(
+            self.step,
+            Step::Stop { .. }
+                | Step::HomeBackoff { .. }
+                | Step::HomeSearch { .. }
+                | Step::HomeStop { .. }
+        ) || self.velocity.abs() > STANDSTILL
+    }
+
+    /// Whether the goal is not yet acknowledged, or a stop still has its hold to send.
+    pub(super) fn pending(&self) -> bool {
+        self.unsent
+            || self.unacked > 0
+            || matches!(self.step, Step::Stop { .. } | Step::HomeStop { .. })
+    }
+
+    /// The engine's view.
+    pub(super) fn state(&self) -> ChannelState {
+        let moving = self.moving();
+        let arrived = !moving
+            && !self.unsent
+            && self.unacked == 0
+            && self.target.is_some_and(|target| {
+                (i64::from(self.position) - i64::from(target)).abs() <= ARRIVED_WITHIN
+            });
+        ChannelState {
+            position: f64::from(self.position),
+            velocity: f64::from(self.velocity),
+            raw_counts: i64::from(self.position),
+            refreshed_at: self.refreshed_at,
+            moving,
+            homed: self.homed,
+            at_limit: self.home().is_some() && self.status.input_active(),
+            arrived,
+            fault: self.fault,
+        }
+    }
+}
+
+/// A position in counts as the board's I32.
+fn position(kind: GoalKind, counts: f64) -> Result<i32, GoalError> {
+    let rounded = counts.round();
+    if rounded.is_finite() && (f64::from(i32::MIN)..=f64::from(i32::MAX)).contains(&rounded) {
+        Ok(rounded as i32)
+    } else {
+        Err(GoalError::OutOfBoardRange(kind))
+    }
+}
+
+/// A velocity target of packet 36: plain transitions/s, ±100 000.
+fn velocity_target(kind: GoalKind, velocity: f64) -> Result<i32, GoalError> {
+    let rounded = velocity.round();
+    let max = f64::from(VELOCITY_TARGET_MAX);
+    if rounded.is_finite() && (-max..=max).contains(&rounded) {
+        Ok(rounded as i32)
+    } else {
+        Err(GoalError::OutOfBoardRange(kind))
+    }
+}
+
+/// A shl-12 velocity (packet 34) or acceleration (packets 34, 36): at least 1 (0 would
+/// mean "not limited") and at most `max`.
+fn fixed(kind: GoalKind, value: f64, max: u32) -> Result<u32, GoalError> {
+    qq2drv::limits::to_fixed(value)
+        .filter(|fixed| (1..=max).contains(fixed))
+        .ok_or(GoalError::OutOfBoardRange(kind))
+}

@@ -1,0 +1,122 @@
+//! What a [`Qq2drvDriver`](super::Qq2drvDriver) is built from.
+
+use core::time::Duration;
+
+use qq2drv::limits::{POWER_LIMIT_MAX, STREAM_TICK_NS};
+use qq2drv::{CHANNELS, HistoryDimensions, InputMode};
+
+/// One axis's limits in board counts (quadrature transitions), as configured for the axis
+/// on that channel. Start-up writes them as the channel's velocity limit (packet 26) and
+/// acceleration limit (packet 28), clipped to the board's ranges.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AxisLimits {
+    /// Velocity limit, transitions/s (> 0).
+    pub max_velocity: f64,
+    /// Acceleration limit, transitions/s² (> 0).
+    pub max_accel: f64,
+}
+
+impl Default for AxisLimits {
+    fn default() -> Self {
+        Self {
+            max_velocity: 5_000.0,
+            max_accel: 50_000.0,
+        }
+    }
+}
+
+/// How a channel's IN pin finds home (packet 14), when something is wired to it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct HomeInput {
+    /// Home (acts while active), Index (active and A = B = 0) or Edge (inactive → active).
+    /// `Disabled` makes the channel unable to home.
+    pub mode: InputMode,
+    /// Input Polarity: the pin is active when high (`true`) or low (`false`).
+    pub active_high: bool,
+    /// The switch is at the positive end: the search runs in the positive direction and the
+    /// counter is set on a positive-end trigger (Edge `SetOnPositive`, Spacing 0: a single
+    /// end-stop). `false`: negative direction, `SetOnNegative`.
+    pub positive_end: bool,
+    /// The value the board writes into the position counter on the trigger, transitions.
+    pub position: i32,
+}
+
+/// One of the board's four channels.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ChannelConfig {
+    /// An axis is connected: the channel is streamed and takes goals. A disabled channel
+    /// has no capabilities and is left out of the stream (its data mask is 0).
+    pub enabled: bool,
+    /// The axis limits in counts.
+    pub limits: AxisLimits,
+    /// Power limit written at start-up (packet 24), 0..=8191.
+    pub power_limit: u16,
+    /// The channel's home input; `None`: `Goal::Home` is unsupported.
+    pub home: Option<HomeInput>,
+}
+
+impl Default for ChannelConfig {
+    fn default() -> Self {
+        Self {
+            enabled: true,
+            limits: AxisLimits::default(),
+            power_limit: POWER_LIMIT_MAX,
+            home: None,
+        }
+    }
+}
+
+/// Everything the driver needs to know about one QuadQuad2Drv board (it has no address:
+/// one board per chip select).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Qq2drvDriverConfig {
+    /// SPI clock of the link, Hz (the datasheet recommends up to 500 kHz): sizes the wire
+    /// budget and the reply timeout.
+    pub speed_hz: u32,
+    /// How often the driver clocks out filler to read what the board has (no SRDY). The
+    /// stream period is set to the largest whole number of 40.96 µs units not above it.
+    pub poll_period: Duration,
+    /// Velocity averaging written at start-up (packet 12). The default keeps the History
+    /// Length of 31 but averages over at most 2^16 × 0.64 µs ≈ 42 ms instead of 671 ms, so
+    /// the reported velocity reaches 0 soon after a stop.
+    pub history: HistoryDimensions,
+    /// The board's request processing time budget (the datasheet gives none).
+    pub processing_time: Duration,
+    /// Channels 1..4 (index 0..3).
+    pub channels: [ChannelConfig; CHANNELS],
+}
+
+impl Default for Qq2drvDriverConfig {
+    fn default() -> Self {
+        Self {
+            speed_hz: 500_000,
+            poll_period: Duration::from_millis(1),
+            history: HistoryDimensions {
+                history_length: 31,
+                averaging_bits: 16,
+            },
+            processing_time: Duration::from_millis(1),
+            channels: [ChannelConfig::default(); CHANNELS],
+        }
+    }
+}
+
+impl Qq2drvDriverConfig {
+    /// Wire time of `bytes` at the configured SPI clock.
+    pub fn wire_time(&self, bytes: usize) -> Duration {
+        let bits = 8 * bytes as u64;
+        Duration::from_nanos(bits.saturating_mul(1_000_000_000) / u64::from(self.speed_hz.max(1)))
+    }
+
+    /// The Stream Period written by start-up (packet 4), in 40.96 µs units: the largest
+    /// whole number of units not above `poll_period`, at least 1.
+    pub fn stream_period_units(&self) -> u16 {
+        let units = self.poll_period.as_nanos() / u128::from(STREAM_TICK_NS);
+        u16::try_from(units).unwrap_or(u16::MAX).max(1)
+    }
+
+    /// The stream period as a duration.
+    pub fn stream_period(&self) -> Duration {
+        qq2drv::limits::stream_units_to_duration(self.stream_period_units())
+    }
+}

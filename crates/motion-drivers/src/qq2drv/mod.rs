@@ -1,0 +1,904 @@
+//! Driver of the **QuadQuad2Drv** board (model id `qq2drv`): four DC motors with
+//! quadrature encoders and the board's own PID loops, an SPI slave (mode 1, ≤ 500 kHz).
+//!
+//! Every byte goes through the `qq2drv` protocol crate; this module decides *what* to send
+//! and *when*, and what the answers mean. It never reads a clock, never touches a file
+//! descriptor and allocates nothing after [`Qq2drvDriver::new`].
+//!
+//! # The wire (no SRDY)
+//!
+//! The driver does not use the SRDY line. MISO is clocked while MOSI comes in, so the board
+//! can only answer in a later transaction than the request (DESIGN.md); it clocks filler
+//! while it has nothing ready. Every [`Qq2drvDriverConfig::poll_period`] the driver clocks
+//! out one transaction of filler (0x00) as long as one stream packet plus a reply
+//! ([`POLL_SLACK`] bytes), and feeds *every* MISO byte of its transactions — polls and
+//! commands alike — to a [`StreamDecoder`], which finds STX after filler or garbage and
+//! drops bad sizes, ids and checksums. At 500 kHz a 4-channel stream packet with
+//! position, velocity, status and the timing field is 42 bytes ≈ 0.7 ms, so a 48-byte poll
+//! per 1 ms tick keeps up. The driver tracks the wire time of what it has sent and skips a
+//! poll while the bus is still busy with earlier transactions. Requests go out as their
+//! own transactions, before polls ([`Priority::Setup`] / [`Priority::Command`]); the board
+//! answers requests in order, each with its packet id, so answers are matched to the
+//! oldest unanswered request with that id (skipped ones are lost).
+//!
+//! # Start-up
+//!
+//! 1. Probe: Get Version (1), Get Data Mask (7), Get Stream Config (9), Get Stream Period
+//!    (5) in one transaction. The firmware text becomes `"fw <major>.<minor> protocol <p>"`.
+//!    No complete answer after [`START_ATTEMPTS`] tries (each one reply timeout apart) is
+//!    [`DeviceFault::NotResponding`]; the probe then repeats every
+//!    [`OFFLINE_RETRY_PERIOD`]. The answers give the layout the board streams in now.
+//! 2. If the board had been configured by this driver before and the masks, stream config
+//!    or stream period are no longer ours (power-up defaults: period 0), the board has
+//!    reset: [`DeviceFault::Reset`], every channel's goal is gone (the motors are Off).
+//! 3. Configure, in one transaction: history dimensions (12), data masks (6: 32-bit
+//!    absolute position, velocity and status for enabled channels, nothing for the
+//!    others), stream config (8: Stream Period Timing), power limit (24), velocity limit
+//!    (26) and acceleration limit (28) of each enabled channel from its axis limits
+//!    (transitions/s and /s² shl 12, clipped to the board's ranges), the home inputs'
+//!    polarity (14, Disabled), and last the stream period (4): the largest whole number of
+//!    40.96 µs units not above the poll period. Any non-zero return code is
+//!    [`DeviceFault::BoardError`] and the start-up is retried.
+//! 4. Running: stream packets refresh the channels; the first one clears board faults.
+//!
+//! # Goals (counts = quadrature transitions)
+//!
+//! Each goal is one transaction of up to three one-entry packets for its channel:
+//!
+//! | goal | packets |
+//! |---|---|
+//! | `Off` | 16 Off |
+//! | `Power` | 16 Power, 18 round(fraction × 8191) (I16) |
+//! | `Position` | 16 Position PID, 20 target (the start-up limits shape the move) |
+//! | `RampPosition` | 16 Position PID, 34 target, velocity shl 12, acceleration shl 12 |
+//! | `Velocity` | 16 Velocity PID, 36 velocity (plain transitions/s, ±100 000), acceleration shl 12 |
+//! | `Stop` | 16 Velocity PID, 36 velocity 0 at `decel` (clipped to the board's range); once the ramp time has passed and the reported velocity is at standstill (or [`STOP_SETTLE`] later), 16 Position PID and 20 target = the last reported position |
+//! | `SetPosition` | 10 position counter ← counts (I32); unless the motor is Off, 16 Position PID and 20 target = counts (hold there) |
+//! | `Home` | with a [`HomeInput`] configured: 14 armed (mode, polarity, Spacing 0, set the counter to `position` on the switch's end), 16 Velocity PID, 36 ± velocity towards the switch; on the Input Trigger Accumulator bit of that end (positive for INDEX) in a stream status: 14 Disabled, ramp to 0, hold. An EDGE input already active first backs off the switch. Without a home input: `Unsupported` |
+//!
+//! Values the board cannot represent are `OutOfBoardRange`: positions beyond I32, velocity
+//! targets beyond ±100 000 transitions/s, shl-12 velocities and accelerations that round to
+//! 0 (which would mean "not limited") or exceed 100 000 / 1 000 000 shl 12.
+//!
+//! # Faults
+//!
+//! - No stream packet for the stall time (4 stream periods + 2 polls + 2 ms): the driver
+//!   probes again (start-up step 1) — a board that reset is found in step 2.
+//! - No valid packet at all for [`Driver::refresh_budget`]: [`DeviceFault::NotResponding`].
+//! - A goal answered with a non-zero return code: [`DeviceFault::BoardError`] on that
+//!   channel; a status with the glitch or overspeed bit: [`DeviceFault::Overspeed`]. Both
+//!   stay until the channel's next goal.
+//! - A request unanswered within its reply timeout is lost: a goal's packets are sent
+//!   again, a start-up is restarted.
+//! - Garbage on MISO costs the packets it hides; the channels keep their last state.
+
+mod channel;
+mod config;
+mod in_flight;
+mod packet;
+
+use core::fmt::{self, Write as _};
+use core::time::Duration;
+
+use qq2drv::limits::{ACCELERATION_MAX, POWER_LIMIT_MAX, VELOCITY_LIMIT_MAX, to_fixed};
+use qq2drv::{
+    AccelerationLimitEntry, CHANNELS, ChannelMask, DataMask, DataMaskEntry, Entries,
+    InputModeEntry, MotionLayout, PacketBuf, PacketId, PositionSize, PowerLimitEntry, Reply,
+    ReplyLayout, Request, StreamConfig, StreamData, StreamDecoder, VelocityLimitEntry,
+};
+
+use crate::driver::{Driver, Model, Priority, Transmit};
+use crate::goal::{Goal, GoalError, GoalKind, GoalKinds};
+use crate::state::{ChannelState, DeviceFault, DeviceStatus, FIRMWARE_LEN};
+
+pub use channel::{ARRIVED_WITHIN, STANDSTILL, STOP_SETTLE};
+pub use config::{AxisLimits, ChannelConfig, HomeInput, Qq2drvDriverConfig};
+pub use in_flight::IN_FLIGHT_CAPACITY;
+
+use channel::Channel;
+use in_flight::{InFlight, Sent, Tag};
+
+/// Probe attempts before the board is declared not responding.
+pub const START_ATTEMPTS: u32 = 3;
+/// Probe period once the board has been declared not responding.
+pub const OFFLINE_RETRY_PERIOD: Duration = Duration::from_millis(100);
+/// Bytes a poll clocks beyond one stream packet (room for a reply).
+pub const POLL_SLACK: usize = 6;
+/// The MOSI filler byte of a poll.
+pub const FILLER: u8 = 0x00;
+/// Data mask of an enabled channel: 32-bit absolute position, velocity, status.
+pub const STREAM_MASK: DataMask = DataMask::new(PositionSize::I32, false, true, true);
+/// Stream config: Stream Period Timing only.
+pub const STREAM_CONFIG: StreamConfig = StreamConfig::new(true, false);
+
+/// Start-up and running phases.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Phase {
+    /// Reading version and stream layout; the next probe at `next_at`.
+    Probe { attempts: u32, next_at: Duration },
+    /// The configuration is written; waiting for its answers.
+    Configure,
+    /// Streaming.
+    Running,
+}
+
+/// What the probe has learnt so far.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+struct ProbeReplies {
+    version: Option<(u8, u8, u8)>,
+    masks: Option<[DataMask; CHANNELS]>,
+    config: Option<StreamConfig>,
+    period: Option<u16>,
+}
+
+/// What the next transaction would be.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Next {
+    Probe,
+    Configure,
+    Goals,
+    Poll,
+}
+
+/// Sans-I/O driver of one QuadQuad2Drv board. See the module docs.
+#[derive(Debug, Clone)]
+pub struct Qq2drvDriver {
+    config: Qq2drvDriverConfig,
+    status: DeviceStatus,
+    phase: Phase,
+    link_up: bool,
+    channels: [Channel; CHANNELS],
+    decoder: StreamDecoder,
+    in_flight: InFlight,
+    /// The layout the board streams in, as acknowledged.
+    layout: MotionLayout,
+    probe: ProbeReplies,
+    probe_due: bool,
+    configure_due: bool,
+    /// Configuration writes not yet answered.
+    setup_unanswered: u32,
+    configured_once: bool,
+    next_poll_at: Duration,
+    /// When the bus is done with the transactions this driver wrote.
+    line_free_at: Duration,
+    last_valid_at: Option<Duration>,
+    last_stream_at: Duration,
+    stream_packets: u64,
+}
+
+impl Qq2drvDriver {
+    /// A driver for the board `config` describes; it starts the board on its first
+    /// `handle_timeout` / `poll_transmit`.
+    pub fn new(config: Qq2drvDriverConfig) -> Self {
+        let channels = config.channels.map(Channel::new);
+        Self {
+            config,
+            status: DeviceStatus::UNKNOWN,
+            phase: Phase::Probe {
+                attempts: 0,
+                next_at: Duration::ZERO,
+            },
+            link_up: true,
+            channels,
+            decoder: StreamDecoder::new(),
+            in_flight: InFlight::new(),
+            layout: MotionLayout::default(),
+            probe: ProbeReplies::default(),
+            probe_due: false,
+            configure_due: false,
+            setup_unanswered: 0,
+            configured_once: false,
+            next_poll_at: Duration::ZERO,
+            line_free_at: Duration::ZERO,
+            last_valid_at: None,
+            last_stream_at: Duration::ZERO,
+            stream_packets: 0,
+        }
+    }
+
+    /// The configuration the driver was built from.
+    pub fn config(&self) -> &Qq2drvDriverConfig {
+        &self.config
+    }
+
+    /// Stream packets decoded since creation.
+    pub fn stream_packets(&self) -> u64 {
+        self.stream_packets
+    }
+
+    /// The MISO decoder's counters (filler skipped, bad packets).
+    pub fn decoder_stats(&self) -> qq2drv::DecoderStats {
+        self.decoder.stats()
+    }
+
+    /// Whether the board is configured and streaming.
+    pub fn running(&self) -> bool {
+        self.link_up && self.phase == Phase::Running
+    }
+
+    /// The data masks start-up writes.
+    pub fn stream_masks(&self) -> [DataMask; CHANNELS] {
+        self.config
+            .channels
+            .map(|c| if c.enabled { STREAM_MASK } else { DataMask(0) })
+    }
+
+    /// Length of one poll transaction: a stream packet in our layout plus [`POLL_SLACK`].
+    pub fn poll_len(&self) -> usize {
+        let layout = MotionLayout {
+            data_masks: self.stream_masks(),
+            stream_config: STREAM_CONFIG,
+        };
+        (qq2drv::MIN_PACKET_LEN + layout.stream_payload_len() + POLL_SLACK).clamp(16, 255)
+    }
+
+    /// Reply timeout: polls to read it, the wire time of two long transactions, the
+    /// board's processing time and a margin.
+    pub fn reply_timeout(&self) -> Duration {
+        self.config
+            .poll_period
+            .saturating_mul(4)
+            .saturating_add(self.config.wire_time(2 * qq2drv::MAX_PACKET_LEN))
+            .saturating_add(self.config.processing_time)
+            .saturating_add(Duration::from_millis(2))
+    }
+
+    /// Without a stream packet for this long the driver probes the board again.
+    pub fn stall_timeout(&self) -> Duration {
+        self.config
+            .stream_period()
+            .saturating_mul(4)
+            .saturating_add(self.config.poll_period.saturating_mul(2))
+            .saturating_add(Duration::from_millis(2))
+    }
+
+    fn raise(&mut self, fault: DeviceFault) {
+        if self.link_up || fault == DeviceFault::LinkDown {
+            self.status.fault = Some(fault);
+        }
+    }
+
+    /// Starts again from the probe; unanswered requests are void (goals go again).
+    fn restart(&mut self, now: Duration) {
+        self.phase = Phase::Probe {
+            attempts: 0,
+            next_at: now,
+        };
+        self.in_flight.clear();
+        for channel in &mut self.channels {
+            channel.void_in_flight();
+        }
+        self.probe = ProbeReplies::default();
+        self.probe_due = false;
+        self.configure_due = false;
+        self.setup_unanswered = 0;
+        self.decoder.clear();
+    }
+
+    fn not_responding(&mut self) {
+        if self.status.fault != Some(DeviceFault::NotResponding) {
+            self.status.timeouts = self.status.timeouts.saturating_add(1);
+        }
+        self.raise(DeviceFault::NotResponding);
+        self.status.online = false;
+    }
+
+    fn next(&self, now: Duration) -> Option<(Next, Priority)> {
+        if !self.link_up {
+            return None;
+        }
+        if self.probe_due && self.in_flight.has_room(4) {
+            return Some((Next::Probe, Priority::Setup));
+        }
+        if self.configure_due && self.in_flight.has_room(8) {
+            return Some((Next::Configure, Priority::Setup));
+        }
+        let goals = self.phase == Phase::Running
+            && self.in_flight.has_room(3)
+            && self.channels.iter().any(|c| c.config.enabled && c.unsent);
+        if goals {
+            return Some((Next::Goals, Priority::Command));
+        }
+        let reading = self.phase == Phase::Running || !self.in_flight.is_empty();
+        let bus_free = self.line_free_at <= now.saturating_add(self.config.poll_period / 2);
+        if reading && now >= self.next_poll_at && bus_free {
+            return Some((Next::Poll, Priority::Poll));
+        }
+        None
+    }
+
+    /// Writes the probe requests.
+    fn write_probe(&mut self, now: Duration, buf: &mut [u8]) -> Option<usize> {
+        let mut len = 0;
+        for request in [
+            Request::GetVersion,
+            Request::GetDataMask,
+            Request::GetStreamConfig,
+            Request::GetStreamPeriod,
+        ] {
+            len += request.encode(buf.get_mut(len..)?).ok()?;
+            self.in_flight.push(Sent {
+                id: request.id(),
+                at: now,
+                tag: Tag::Probe,
+            });
+        }
+        self.probe_due = false;
+        Some(len)
+    }
+
+    /// Writes the configuration (start-up step 3).
+    fn write_configure(&mut self, now: Duration, buf: &mut [u8]) -> Option<usize> {
+        let enabled = self
+            .config
+            .channels
+            .iter()
+            .enumerate()
+            .filter(|(_, c)| c.enabled)
+            .fold(0u8, |mask, (i, _)| mask | ChannelMask::single(i).0);
+        let masks = [
+            DataMaskEntry {
+                channels: ChannelMask(enabled),
+                mask: STREAM_MASK,
+            },
+            DataMaskEntry {
+                channels: ChannelMask(!enabled & 0x0F),
+                mask: DataMask(0),
+            },
+        ];
+        let masks = match (enabled, enabled == 0x0F) {
+            (0, _) => masks.get(1..),
+            (_, true) => masks.get(..1),
+            _ => masks.get(..),
+        }?;
+        let mut power = [PowerLimitEntry {
+            channels: ChannelMask(0),
+            limit: 0,
+        }; CHANNELS];
+        let mut velocity = [VelocityLimitEntry {
+            channels: ChannelMask(0),
+            limit: 0,
+        }; CHANNELS];
+        let mut accel = [AccelerationLimitEntry {
+            channels: ChannelMask(0),
+            limit: 0,
+        }; CHANNELS];
+        let mut inputs = [InputModeEntry {
+            channels: ChannelMask(0),
+            config: qq2drv::InputConfig(0),
+            spacing: 0,
+            position: 0,
+        }; CHANNELS];
+        let (mut limits_len, mut inputs_len) = (0, 0);
+        for (index, channel) in self.channels.iter().enumerate() {
+            if !channel.config.enabled {
+                continue;
+            }
+            let channels = ChannelMask::single(index);
+            let limits = channel.config.limits;
+            if let (Some(p), Some(v), Some(a)) = (
+                power.get_mut(limits_len),
+                velocity.get_mut(limits_len),
+                accel.get_mut(limits_len),
+            ) {
+                *p = PowerLimitEntry {
+                    channels,
+                    limit: channel.config.power_limit.min(POWER_LIMIT_MAX),
+                };
+                *v = VelocityLimitEntry {
+                    channels,
+                    limit: to_fixed(limits.max_velocity)
+                        .unwrap_or(VELOCITY_LIMIT_MAX)
+                        .clamp(1, VELOCITY_LIMIT_MAX),
+                };
+                *a = AccelerationLimitEntry {
+                    channels,
+                    limit: to_fixed(limits.max_accel)
+                        .unwrap_or(ACCELERATION_MAX)
+                        .clamp(1, ACCELERATION_MAX),
+                };
+                limits_len += 1;
+            }
+            if channel.home().is_some()
+                && let (Some(slot), packet::Packet::Input { config, .. }) =
+                    (inputs.get_mut(inputs_len), channel.input(false))
+            {
+                *slot = InputModeEntry {
+                    channels,
+                    config,
+                    spacing: 0,
+                    position: 0,
+                };
+                inputs_len += 1;
+            }
+        }
+        let mut requests = [None; 8];
+        let list = [
+            Some(Request::SetHistoryDimensions(self.config.history)),
+            Some(Request::SetDataMask(Entries::new(masks))),
+            Some(Request::SetStreamConfig(STREAM_CONFIG)),
+            (limits_len > 0).then(|| Request::SetPowerLimit(Entries::new(&power[..limits_len]))),
+            (limits_len > 0)
+                .then(|| Request::SetVelocityLimit(Entries::new(&velocity[..limits_len]))),
+            (limits_len > 0)
+                .then(|| Request::SetAccelerationLimit(Entries::new(&accel[..limits_len]))),
+            (inputs_len > 0).then(|| Request::SetInputMode(Entries::new(&inputs[..inputs_len]))),
+            Some(Request::SetStreamPeriod(self.config.stream_period_units())),
+        ];
+        for (slot, request) in requests.iter_mut().zip(list) {
+            *slot = request;
+        }
+        let mut len = 0;
+        for request in requests.iter().flatten() {
+            len += request.encode(buf.get_mut(len..)?).ok()?;
+        }
+        let mut count = 0;
+        for request in requests.iter().flatten() {
+            self.in_flight.push(Sent {
+                id: request.id(),
+                at: now,
+                tag: Tag::Setup,
+            });
+            count += 1;
+        }
+        self.setup_unanswered = count;
+        self.configure_due = false;
+        Some(len)
+    }
+
+    /// Writes the unsent goal packets of every channel that fit.
+    fn write_goals(&mut self, now: Duration, buf: &mut [u8]) -> usize {
+        let mut len = 0;
+        for (index, channel) in self.channels.iter_mut().enumerate() {
+            if !(channel.config.enabled && channel.unsent) {
+                continue;
+            }
+            let packets = channel.packets();
+            let count = packets.iter().count();
+            if !self.in_flight.has_room(count) {
+                break;
+            }
+            let mut end = len;
+            let mut fits = true;
+            for packet in packets.iter() {
+                match buf
+                    .get_mut(end..)
+                    .and_then(|rest| packet.encode(index, rest).ok())
+                {
+                    Some(n) => end += n,
+                    None => {
+                        fits = false;
+                        break;
+                    }
+                }
+            }
+            if !fits {
+                break;
+            }
+            len = end;
+            for packet in packets.iter() {
+                self.in_flight.push(Sent {
+                    id: packet.id(),
+                    at: now,
+                    tag: Tag::Goal {
+                        channel: index as u8,
+                        seq: channel.seq,
+                        packet,
+                    },
+                });
+            }
+            channel.sent(count as u8);
+        }
+        len
+    }
+
+    fn on_packet(&mut self, now: Duration, packet: &PacketBuf) {
+        self.last_valid_at = Some(now);
+        let frame = packet.frame();
+        if frame.id == PacketId::StreamData.as_u8() && self.phase != Phase::Running {
+            return; // Its layout is not known yet.
+        }
+        let layout = ReplyLayout {
+            motion: self.layout,
+            ..ReplyLayout::default()
+        };
+        let Ok(reply) = Reply::decode(frame, &layout) else {
+            self.status.bad_replies = self.status.bad_replies.saturating_add(1);
+            return;
+        };
+        if let Reply::StreamData(data) = reply {
+            self.on_stream(now, &data);
+            return;
+        }
+        let Some(index) = self.in_flight.find(reply.id()) else {
+            self.status.bad_replies = self.status.bad_replies.saturating_add(1);
+            return;
+        };
+        for _ in 0..index {
+            if let Some(lost) = self.in_flight.pop() {
+                self.status.bad_replies = self.status.bad_replies.saturating_add(1);
+                self.on_lost(now, lost);
+            }
+        }
+        if let Some(sent) = self.in_flight.pop() {
+            self.status.replies = self.status.replies.saturating_add(1);
+            self.on_reply(now, sent, reply);
+        }
+    }
+
+    fn on_stream(&mut self, now: Duration, data: &StreamData) {
+        self.last_stream_at = now;
+        self.stream_packets = self.stream_packets.saturating_add(1);
+        for (channel, sample) in self.channels.iter_mut().zip(data.data.channels) {
+            if let (true, Some(position), Some(velocity)) =
+                (channel.config.enabled, sample.position, sample.velocity)
+            {
+                let status = sample.status.unwrap_or_default();
+                channel.data(now, position.get(), velocity, status);
+            }
+        }
+        if self.link_up {
+            self.status.fault = None;
+            self.status.online = true;
+        }
+    }
+
+    fn on_reply(&mut self, now: Duration, sent: Sent, reply: Reply) {
+        let code = reply.code().map_or(0, |code| code.0);
+        match sent.tag {
+            Tag::Probe => {
+                match reply {
+                    Reply::Version {
+                        code,
+                        firmware_major,
+                        firmware_minor,
+                        protocol,
+                    } if code.is_success() => {
+                        self.probe.version = Some((firmware_major, firmware_minor, protocol));
+                    }
+                    Reply::DataMasks { code, masks } if code.is_success() => {
+                        self.probe.masks = Some(masks);
+                    }
+                    Reply::StreamConfig { code, config } if code.is_success() => {
+                        self.probe.config = Some(config);
+                    }
+                    Reply::StreamPeriod { code, period } if code.is_success() => {
+                        self.probe.period = Some(period);
+                    }
+                    _ => {}
+                }
+                self.evaluate_probe(now);
+            }
+            Tag::Setup => {
+                if code != 0 {
+                    self.raise(DeviceFault::BoardError);
+                    self.restart(now);
+                    self.phase = Phase::Probe {
+                        attempts: 0,
+                        next_at: now.saturating_add(OFFLINE_RETRY_PERIOD),
+                    };
+                    return;
+                }
+                match sent.id {
+                    PacketId::SetDataMask => self.layout.data_masks = self.stream_masks(),
+                    PacketId::SetStreamConfig => self.layout.stream_config = STREAM_CONFIG,
+                    _ => {}
+                }
+                self.setup_unanswered = self.setup_unanswered.saturating_sub(1);
+                if self.setup_unanswered == 0 && self.phase == Phase::Configure {
+                    self.phase = Phase::Running;
+                    self.configured_once = true;
+                    self.status.online = true;
+                    self.last_stream_at = now;
+                    self.next_poll_at = now;
+                }
+            }
+            Tag::Goal {
+                channel,
+                seq,
+                packet,
+            } => {
+                if let Some(channel) = self.channels.get_mut(usize::from(channel)) {
+                    channel.answered(now, seq, packet, code);
+                }
+            }
+        }
+    }
+
+    /// Start-up step 2, once the probe is complete.
+    fn evaluate_probe(&mut self, now: Duration) {
+        let ProbeReplies {
+            version: Some((major, minor, protocol)),
+            masks: Some(masks),
+            config: Some(config),
+            period: Some(period),
+        } = self.probe
+        else {
+            return;
+        };
+        if !matches!(self.phase, Phase::Probe { .. }) {
+            return;
+        }
+        let mut text = Text::default();
+        let _ = write!(text, "fw {major}.{minor} protocol {protocol}");
+        self.status.set_firmware(text.as_str());
+        let ours = masks == self.stream_masks()
+            && config == STREAM_CONFIG
+            && period == self.config.stream_period_units();
+        if self.configured_once && !ours {
+            self.status.resets = self.status.resets.saturating_add(1);
+            self.raise(DeviceFault::Reset);
+            for channel in &mut self.channels {
+                channel.board_reset();
+            }
+        }
+        self.layout = MotionLayout {
+            data_masks: masks,
+            stream_config: config,
+        };
+        self.phase = Phase::Configure;
+        self.configure_due = true;
+        self.next_poll_at = now;
+    }
+
+    fn on_lost(&mut self, now: Duration, sent: Sent) {
+        match sent.tag {
+            Tag::Probe => {}
+            Tag::Setup => {
+                if self.phase == Phase::Configure {
+                    self.restart(now);
+                }
+            }
+            Tag::Goal { channel, seq, .. } => {
+                if let Some(channel) = self.channels.get_mut(usize::from(channel)) {
+                    channel.lost(seq);
+                }
+            }
+        }
+    }
+}
+
+/// A string in a fixed buffer (no allocation), cut at [`FIRMWARE_LEN`] bytes.
+#[derive(Debug, Clone, Copy, Default)]
+struct Text {
+    bytes: [u8; FIRMWARE_LEN],
+    len: usize,
+}
+
+impl Text {
+    fn as_str(&self) -> &str {
+        core::str::from_utf8(self.bytes.get(..self.len).unwrap_or(&[])).unwrap_or("")
+    }
+}
+
+impl fmt::Write for Text {
+    fn write_str(&mut self, text: &str) -> fmt::Result {
+        for byte in text.bytes() {
+            match self.bytes.get_mut(self.len) {
+                Some(slot) => {
+                    *slot = byte;
+                    self.len += 1;
+                }
+                None => break,
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Driver for Qq2drvDriver {
+    fn model(&self) -> Model {
+        Model::Qq2drv
+    }
+
+    fn channel_count(&self) -> usize {
+        CHANNELS
+    }
+
+    fn capabilities(&self, channel: usize) -> GoalKinds {
+        match self.channels.get(channel) {
+            Some(c) if c.config.enabled && c.home().is_some() => GoalKinds::of(&GoalKind::ALL),
+            Some(c) if c.config.enabled => GoalKinds::of(&[
+                GoalKind::Off,
+                GoalKind::Stop,
+                GoalKind::Power,
+                GoalKind::Position,
+                GoalKind::Velocity,
+                GoalKind::RampPosition,
+                GoalKind::SetPosition,
+            ]),
+            _ => GoalKinds::NONE,
+        }
+    }
+
+    fn refresh_budget(&self) -> Duration {
+        self.stall_timeout()
+            .saturating_add(self.config.poll_period.saturating_mul(4))
+            .saturating_add(Duration::from_millis(4))
+    }
+
+    fn handle_rx(&mut self, now: Duration, mut bytes: &[u8]) {
+        if !self.link_up {
+            return;
+        }
+        while !bytes.is_empty() {
+            let taken = self.decoder.push(bytes);
+            bytes = bytes.get(taken..).unwrap_or(&[]);
+            while let Some(packet) = self.decoder.next_packet() {
+                self.on_packet(now, &packet);
+            }
+            if taken == 0 {
+                break;
+            }
+        }
+    }
+
+    fn handle_timeout(&mut self, now: Duration) {
+        if !self.link_up {
+            return;
+        }
+        let timeout = self.reply_timeout();
+        while let Some(oldest) = self.in_flight.oldest()
+            && now.saturating_sub(oldest.at) > timeout
+        {
+            self.in_flight.pop();
+            self.status.timeouts = self.status.timeouts.saturating_add(1);
+            self.on_lost(now, oldest);
+        }
+        let silent = self
+            .last_valid_at
+            .is_some_and(|at| now.saturating_sub(at) > self.refresh_budget());
+        if silent && self.status.fault != Some(DeviceFault::NotResponding) {
+            self.not_responding();
+            if self.phase != Phase::Running {
+                // Keep probing at the offline pace.
+            } else {
+                self.restart(now);
+            }
+        }
+        match self.phase {
+            Phase::Probe { attempts, next_at } if now >= next_at => {
+                if attempts >= START_ATTEMPTS {
+                    self.not_responding();
+                }
+                self.probe_due = true;
+                let attempts = attempts.saturating_add(1);
+                let wait = if attempts >= START_ATTEMPTS {
+                    OFFLINE_RETRY_PERIOD
+                } else {
+                    timeout
+                };
+                self.phase = Phase::Probe {
+                    attempts,
+                    next_at: now.saturating_add(wait),
+                };
+            }
+            Phase::Running => {
+                if now.saturating_sub(self.last_stream_at) > self.stall_timeout() {
+                    self.restart(now);
+                } else {
+                    for channel in &mut self.channels {
+                        channel.progress(now);
+                    }
+                }
+            }
+            Phase::Probe { .. } | Phase::Configure => {}
+        }
+    }
+
+    fn poll_timeout(&self) -> Option<Duration> {
+        if !self.link_up {
+            return None;
+        }
+        let reply = self
+            .in_flight
+            .oldest()
+            .map(|sent| sent.at.saturating_add(self.reply_timeout()));
+        let phase = match self.phase {
+            Phase::Probe { next_at, .. } => Some(next_at),
+            Phase::Configure => None,
+            Phase::Running => Some(
+                self.next_poll_at
+                    .min(self.last_stream_at.saturating_add(self.stall_timeout())),
+            ),
+        };
+        let poll = (!self.in_flight.is_empty()).then_some(self.next_poll_at);
+        [reply, phase, poll].into_iter().flatten().min()
+    }
+
+    fn wants_transmit(&self, now: Duration) -> Option<Priority> {
+        self.next(now).map(|(_, priority)| priority)
+    }
+
+    fn poll_transmit(&mut self, now: Duration, buf: &mut [u8]) -> Option<Transmit> {
+        let (next, _) = self.next(now)?;
+        let len = match next {
+            Next::Probe => self.write_probe(now, buf)?,
+            Next::Configure => self.write_configure(now, buf)?,
+            Next::Goals => self.write_goals(now, buf),
+            Next::Poll => {
+                let len = self.poll_len();
+                buf.get_mut(..len)?.fill(FILLER);
+                self.next_poll_at = now.saturating_add(self.config.poll_period);
+                len
+            }
+        };
+        if len == 0 {
+            return None;
+        }
+        self.line_free_at = self
+            .line_free_at
+            .max(now)
+            .saturating_add(self.config.wire_time(len));
+        Some(Transmit {
+            len,
+            expects_reply: next != Next::Poll,
+        })
+    }
+
+    fn awaiting_reply(&self) -> bool {
+        !self.in_flight.is_empty()
+    }
+
+    fn goals_pending(&self) -> bool {
+        self.channels
+            .iter()
+            .any(|c| c.config.enabled && c.pending())
+    }
+
+    fn set_goal(&mut self, _now: Duration, channel: usize, goal: Goal) -> Result<(), GoalError> {
+        let kind = goal.kind();
+        if channel >= CHANNELS {
+            return Err(GoalError::NoSuchChannel(channel));
+        }
+        if !self.capabilities(channel).contains(kind) {
+            return Err(GoalError::Unsupported(kind));
+        }
+        if !self.link_up {
+            return Err(GoalError::Offline);
+        }
+        let slot = self
+            .channels
+            .get_mut(channel)
+            .ok_or(GoalError::NoSuchChannel(channel))?;
+        let step = slot.plan(goal)?;
+        slot.set_goal(step);
+        Ok(())
+    }
+
+    fn channel(&self, channel: usize) -> ChannelState {
+        match self.channels.get(channel) {
+            Some(c) if c.config.enabled => {
+                let mut state = c.state();
+                state.fault = self.status.fault.or(state.fault);
+                state
+            }
+            _ => ChannelState::UNKNOWN,
+        }
+    }
+
+    fn status(&self) -> DeviceStatus {
+        self.status
+    }
+
+    fn link_down(&mut self, now: Duration) {
+        self.link_up = false;
+        self.raise(DeviceFault::LinkDown);
+        self.status.online = false;
+        self.restart(now);
+        for channel in &mut self.channels {
+            channel.stop_after_link_loss();
+        }
+    }
+
+    fn link_up(&mut self, now: Duration) {
+        self.link_up = true;
+        self.line_free_at = now;
+        self.next_poll_at = now;
+        self.last_valid_at = None;
+        self.restart(now);
+    }
+}
+
+#[cfg(test)]
+mod tests;
