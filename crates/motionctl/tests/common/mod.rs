@@ -1,0 +1,120 @@
+//! Helpers shared by the end-to-end tests: run motionctl with a deadline, read
+//! `status --json`, drive it in a pseudo-terminal.
+#![allow(dead_code)]
+
+use core::time::Duration;
+use std::io::{Read as _, Write as _};
+use std::process::{Child, Command, Output, Stdio};
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+use iceoryx2::prelude::ipc;
+use motion_client::testing::{FakeConfig, FakeServer, unique_name};
+use serde_json::Value;
+
+pub type Result<T = ()> = core::result::Result<T, Box<dyn std::error::Error>>;
+
+pub const DEADLINE: Duration = Duration::from_secs(20);
+
+pub fn fake(prefix: &str) -> Result<FakeServer> {
+    Ok(FakeServer::start::<ipc::Service>(FakeConfig::demo(
+        &unique_name(prefix),
+    ))?)
+}
+
+pub fn command(server: &str, args: &[&str]) -> Command {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_motionctl"));
+    command.arg("--server").arg(server).args(args);
+    command
+}
+
+/// Waits for `child` up to `deadline`, killing it past that.
+pub fn finish(mut child: Child, deadline: Duration) -> Result<Output> {
+    let until = Instant::now() + deadline;
+    while child.try_wait()?.is_none() {
+        if Instant::now() > until {
+            child.kill()?;
+            let output = child.wait_with_output()?;
+            return Err(format!("motionctl did not finish in {deadline:?}: {output:?}").into());
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    Ok(child.wait_with_output()?)
+}
+
+pub fn run(server: &str, args: &[&str]) -> Result<Output> {
+    let child = command(server, args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()?;
+    finish(child, DEADLINE)
+}
+
+pub fn stdout(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stdout).into_owned()
+}
+
+pub fn stderr(output: &Output) -> String {
+    String::from_utf8_lossy(&output.stderr).into_owned()
+}
+
+pub fn status_json(server: &str) -> Result<Value> {
+    let output = run(server, &["status", "--json"])?;
+    assert!(output.status.success(), "{output:?}");
+    Ok(serde_json::from_slice(&output.stdout)?)
+}
+
+pub fn axis_field(status: &Value, axis: usize, field: &str) -> Value {
+    status["axes"][axis][field].clone()
+}
+
+/// Runs motionctl in a pseudo-terminal, waits until the screen shows `expect`, types
+/// `keys`, and returns the exit status and everything drawn.
+pub fn in_pty(server: &str, args: &[&str], expect: &str, keys: &[u8]) -> Result<(Output, String)> {
+    use nix::pty::{Winsize, openpty};
+    let size = Winsize {
+        ws_row: 30,
+        ws_col: 120,
+        ws_xpixel: 0,
+        ws_ypixel: 0,
+    };
+    let pty = openpty(Some(&size), None)?;
+    let child = command(server, args)
+        .env("TERM", "xterm-256color")
+        .stdin(Stdio::from(pty.slave.try_clone()?))
+        .stdout(Stdio::from(pty.slave.try_clone()?))
+        .stderr(Stdio::piped())
+        .spawn()?;
+    drop(pty.slave);
+    let mut reader = std::fs::File::from(pty.master);
+    let mut writer = reader.try_clone()?;
+    let screen = Arc::new(Mutex::new(Vec::new()));
+    let sink = Arc::clone(&screen);
+    std::thread::spawn(move || {
+        let mut buffer = [0u8; 4096];
+        while let Ok(read @ 1..) = reader.read(&mut buffer) {
+            if let (Ok(mut screen), Some(bytes)) = (sink.lock(), buffer.get(..read)) {
+                screen.extend_from_slice(bytes);
+            }
+        }
+    });
+    let drawn = || {
+        screen
+            .lock()
+            .map(|bytes| String::from_utf8_lossy(&bytes).into_owned())
+            .unwrap_or_default()
+    };
+    let until = Instant::now() + DEADLINE;
+    while !drawn().contains(expect) {
+        if Instant::now() > until {
+            let mut child = child;
+            child.kill()?;
+            return Err(format!("never drew {expect:?}: {:?}", drawn()).into());
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    writer.write_all(keys)?;
+    let output = finish(child, DEADLINE)?;
+    Ok((output, drawn()))
+}
