@@ -1,0 +1,336 @@
+//! `[[device]]` and `[[axis]]` tables.
+
+use motion_drivers::Model;
+use motion_engine::AxisConfig;
+use motion_ipc::{NAME_LEN, UNIT_LEN};
+use toml::Spanned;
+
+use super::Validator;
+use crate::config::raw::{RawAxis, RawDevice};
+use crate::config::{DeviceSpec, PackVariant, SpiDrive};
+
+impl Validator<'_, '_> {
+    pub(super) fn device(
+        &mut self,
+        index: usize,
+        raw: &Spanned<RawDevice>,
+        link_names: &[Option<String>],
+    ) -> Option<DeviceSpec> {
+        let table = raw.span();
+        let d = raw.get_ref();
+        let key = |k: &str| format!("device[{index}].{k}");
+        let name = self
+            .required(&d.name, &table, &key("name"), "every device needs a name")
+            .and_then(|name| self.name(name, &key("name"), NAME_LEN));
+        let link = self
+            .required(&d.link, &table, &key("link"), "the name of a [[link]]")
+            .and_then(|link| {
+                let found = link_names
+                    .iter()
+                    .position(|name| name.as_deref() == Some(link.get_ref().as_str()));
+                if found.is_none() {
+                    let known: Vec<&str> =
+                        link_names.iter().flatten().map(String::as_str).collect();
+                    self.issue(
+                        link.span(),
+                        &key("link"),
+                        format!(
+                            "no link called `{}`; links defined: {}",
+                            link.get_ref(),
+                            known.join(", ")
+                        ),
+                    );
+                }
+                found
+            });
+        let model = self
+            .required(
+                &d.model,
+                &table,
+                &key("model"),
+                "one of qq2drv, tmcpack, spimotor, qsb",
+            )
+            .and_then(|model| {
+                let parsed = match model.get_ref().as_str() {
+                    "qq2drv" => Some(Model::Qq2drv),
+                    "tmcpack" => Some(Model::Tmcpack),
+                    "spimotor" => Some(Model::Spimotor),
+                    "qsb" => Some(Model::Qsb),
+                    _ => None,
+                };
+                if parsed.is_none() {
+                    self.issue(
+                        model.span(),
+                        &key("model"),
+                        format!(
+                            "unknown model {:?}; allowed: qq2drv, tmcpack, spimotor, qsb",
+                            model.get_ref()
+                        ),
+                    );
+                }
+                parsed
+            });
+        let mut variant = PackVariant::Sixpack;
+        if let Some(v) = &d.variant {
+            match (model, v.get_ref().as_str()) {
+                (Some(Model::Tmcpack), "sixpack") => variant = PackVariant::Sixpack,
+                (Some(Model::Tmcpack), "quadpack") => variant = PackVariant::Quadpack,
+                (Some(Model::Tmcpack), other) => self.issue(
+                    v.span(),
+                    &key("variant"),
+                    format!("unknown variant {other:?}; allowed: \"sixpack\" (6 motors), \"quadpack\" (4)"),
+                ),
+                _ => self.issue(v.span(), &key("variant"), "only tmcpack devices have a variant"),
+            }
+        }
+        let mut drive = SpiDrive::Stepper;
+        if let Some(v) = &d.drive {
+            match (model, v.get_ref().as_str()) {
+                (Some(Model::Spimotor), "stepper") => drive = SpiDrive::Stepper,
+                (Some(Model::Spimotor), "brushed") => drive = SpiDrive::Brushed,
+                (Some(Model::Spimotor), other) => self.issue(
+                    v.span(),
+                    &key("drive"),
+                    format!("unknown drive {other:?}; allowed: \"stepper\" (one axis, channel 0), \"brushed\" (channels 0 = A, 1 = B)"),
+                ),
+                _ => self.issue(v.span(), &key("drive"), "only spimotor devices have a drive"),
+            }
+        }
+        let address = match (model, &d.address) {
+            (Some(Model::Tmcpack), None) => Some(1),
+            (Some(Model::Tmcpack), Some(a)) => {
+                self.int_in(a, &key("address"), 0..=255).map(|a| a as u32)
+            }
+            (Some(Model::Spimotor), None) => Some(0x90),
+            (Some(Model::Spimotor), Some(a)) => {
+                let value = *a.get_ref();
+                if (2..=254).contains(&value) && value % 2 == 0 {
+                    Some(value as u32)
+                } else {
+                    self.issue(
+                        a.span(),
+                        &key("address"),
+                        format!("{value} is not an SPI_motor address; allowed: an even number 2..=254 (bit 0 is the read flag), default 0x90 = 144"),
+                    );
+                    None
+                }
+            }
+            (Some(_), Some(a)) => {
+                self.issue(
+                    a.span(),
+                    &key("address"),
+                    "only tmcpack and spimotor devices have an address",
+                );
+                None
+            }
+            (_, None) => Some(0),
+            (None, Some(_)) => None,
+        };
+        let mut sim_seed = index as u64 + 1;
+        if let Some(sim) = &d.sim
+            && let Some(seed) = &sim.get_ref().seed
+            && let Some(seed) = self.int_in(seed, &key("sim.seed"), 0..=i64::MAX)
+        {
+            sim_seed = seed as u64;
+        }
+        Some(DeviceSpec {
+            name: name?,
+            link: link?,
+            model: model?,
+            address: address?,
+            variant,
+            drive,
+            sim_seed,
+        })
+    }
+
+    pub(super) fn axis(
+        &mut self,
+        index: usize,
+        raw: &Spanned<RawAxis>,
+        devices: &[Option<DeviceSpec>],
+        raw_devices: &[Spanned<RawDevice>],
+    ) -> Option<AxisConfig> {
+        let table = raw.span();
+        let a = raw.get_ref();
+        let key = |k: &str| format!("axis[{index}].{k}");
+        let name = self
+            .required(&a.name, &table, &key("name"), "every axis needs a name")
+            .and_then(|name| self.name(name, &key("name"), NAME_LEN));
+        let device = self
+            .required(
+                &a.device,
+                &table,
+                &key("device"),
+                "the name of a [[device]]",
+            )
+            .and_then(|device| {
+                let named = raw_devices.iter().position(|raw| {
+                    raw.get_ref()
+                        .name
+                        .as_ref()
+                        .is_some_and(|n| n.get_ref() == device.get_ref())
+                });
+                let found = named.filter(|&index| devices[index].is_some());
+                if named.is_none() {
+                    let known: Vec<&str> =
+                        devices.iter().flatten().map(|d| d.name.as_str()).collect();
+                    self.issue(
+                        device.span(),
+                        &key("device"),
+                        format!(
+                            "no device called `{}`; devices defined: {}",
+                            device.get_ref(),
+                            known.join(", ")
+                        ),
+                    );
+                }
+                found
+            });
+        let channel = self
+            .required(
+                &a.channel,
+                &table,
+                &key("channel"),
+                "the motor number on the device, from 0",
+            )
+            .and_then(|channel| {
+                let spec = device.and_then(|d| devices[d].as_ref())?;
+                let count = spec.channel_count();
+                let value = *channel.get_ref();
+                if (0..count as i64).contains(&value) {
+                    Some(value as usize)
+                } else {
+                    self.issue(
+                        channel.span(),
+                        &key("channel"),
+                        format!(
+                            "{value} is not a channel of {} device `{}`; allowed: 0..={}",
+                            spec.model,
+                            spec.name,
+                            count - 1
+                        ),
+                    );
+                    None
+                }
+            });
+        let unit = match &a.unit {
+            Some(unit) if !unit.get_ref().is_empty() && unit.get_ref().len() <= UNIT_LEN => {
+                Some(unit.get_ref().clone())
+            }
+            Some(unit) => {
+                self.issue(
+                    unit.span(),
+                    &key("unit"),
+                    format!(
+                        "{:?}: allowed: 1..={UNIT_LEN} bytes, e.g. \"mm\" or \"deg\"",
+                        unit.get_ref()
+                    ),
+                );
+                None
+            }
+            None => {
+                self.issue(
+                    table.clone(),
+                    &key("unit"),
+                    "missing; the unit of positions, e.g. \"mm\" or \"deg\"",
+                );
+                None
+            }
+        };
+        let number = |me: &mut Self,
+                      value: &Option<Spanned<f64>>,
+                      k: &str,
+                      allowed: &str,
+                      ok: &dyn Fn(f64) -> bool|
+         -> Option<f64> {
+            let value = me.required(value, &table, &key(k), allowed)?;
+            let v = *value.get_ref();
+            if ok(v) {
+                Some(v)
+            } else {
+                me.issue(
+                    value.span(),
+                    &key(k),
+                    format!("{v} is not allowed; {allowed}"),
+                );
+                None
+            }
+        };
+        let cpu = number(
+            self,
+            &a.counts_per_unit,
+            "counts_per_unit",
+            "a finite number, not 0 (negative reverses the direction)",
+            &|v| v.is_finite() && v != 0.0,
+        );
+        let min = number(
+            self,
+            &a.min,
+            "min",
+            "a finite number (soft limit, units)",
+            &|v| v.is_finite(),
+        );
+        let max = number(
+            self,
+            &a.max,
+            "max",
+            "a finite number (soft limit, units)",
+            &|v| v.is_finite(),
+        );
+        let max_velocity = number(
+            self,
+            &a.max_velocity,
+            "max_velocity",
+            "a finite number > 0 (units/s)",
+            &|v| v.is_finite() && v > 0.0,
+        );
+        let max_accel = number(
+            self,
+            &a.max_accel,
+            "max_accel",
+            "a finite number > 0 (units/s²)",
+            &|v| v.is_finite() && v > 0.0,
+        );
+        if let (Some(lo), Some(hi), Some(value)) = (min, max, &a.max)
+            && lo >= hi
+        {
+            self.issue(
+                value.span(),
+                &key("max"),
+                format!("max ({hi}) must be greater than min ({lo})"),
+            );
+        }
+        let tolerance = match &a.position_tolerance {
+            Some(t) if t.get_ref().is_finite() && *t.get_ref() > 0.0 => Some(*t.get_ref()),
+            Some(t) => {
+                self.issue(
+                    t.span(),
+                    &key("position_tolerance"),
+                    format!(
+                        "{} is not allowed; a finite number > 0 (units)",
+                        t.get_ref()
+                    ),
+                );
+                None
+            }
+            None => cpu.map(|cpu| 2.0 / cpu.abs()),
+        };
+        let (min, max) = (min?, max?);
+        if min >= max {
+            return None;
+        }
+        Some(AxisConfig {
+            name: name?,
+            unit: unit?,
+            device: device?,
+            channel: channel?,
+            counts_per_unit: cpu?,
+            min,
+            max,
+            max_velocity: max_velocity?,
+            max_accel: max_accel?,
+            position_tolerance: tolerance?,
+        })
+    }
+}

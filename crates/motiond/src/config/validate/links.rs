@@ -1,0 +1,262 @@
+//! `[[link]]` tables, checked against the devices on them.
+
+use std::path::PathBuf;
+
+use motion_drivers::{BusKind, Model};
+use toml::Spanned;
+
+use super::Validator;
+use crate::config::raw::{RawDevice, RawLink};
+use crate::config::{DeviceSpec, LinkSpec, Transport};
+
+impl Validator<'_, '_> {
+    /// Links, checked against the devices on them (transport fits the model, sharing rules,
+    /// addresses distinct, sim tables only on sim links).
+    pub(super) fn links(
+        &mut self,
+        links: &[Option<(String, Spanned<RawLink>)>],
+        devices: &[Option<DeviceSpec>],
+        raw_devices: &[Spanned<RawDevice>],
+    ) -> Vec<LinkSpec> {
+        let mut specs = Vec::new();
+        for (index, entry) in links.iter().enumerate() {
+            let Some((name, raw)) = entry else { continue };
+            let table = raw.span();
+            let l = raw.get_ref();
+            let key = |k: &str| format!("link[{index}].{k}");
+            let on_link: Vec<(usize, &DeviceSpec)> = devices
+                .iter()
+                .enumerate()
+                .filter_map(|(i, d)| d.as_ref().filter(|d| d.link == index).map(|d| (i, d)))
+                .collect();
+            let models: Vec<Model> = on_link.iter().map(|(_, d)| d.model).collect();
+            let spi = models
+                .first()
+                .is_some_and(|m| matches!(m, Model::Qq2drv | Model::Spimotor));
+            if let Some((_, first)) = on_link.first() {
+                for (i, device) in &on_link[1..] {
+                    if device.model != first.model {
+                        self.issue(
+                            raw_devices[*i].span(),
+                            &format!("device[{i}].link"),
+                            format!(
+                                "link `{name}` already carries a {} device; one model per link",
+                                first.model
+                            ),
+                        );
+                    } else if matches!(device.model, Model::Qq2drv | Model::Qsb) {
+                        self.issue(
+                            raw_devices[*i].span(),
+                            &format!("device[{i}].link"),
+                            format!(
+                                "a {} board cannot share its link; give it its own [[link]]",
+                                device.model
+                            ),
+                        );
+                    }
+                }
+                for (n, (i, device)) in on_link.iter().enumerate() {
+                    if on_link[..n].iter().any(|(_, other)| {
+                        other.address == device.address && other.model == device.model
+                    }) {
+                        let span = raw_devices[*i]
+                            .get_ref()
+                            .address
+                            .as_ref()
+                            .map_or(raw_devices[*i].span(), Spanned::span);
+                        self.issue(span, &format!("device[{i}].address"),
+                            format!("address {} is already used on link `{name}`; addresses on one bus must differ", device.address));
+                    }
+                }
+            }
+            let Some(kind) = self.required(
+                &l.kind,
+                &table,
+                &key("type"),
+                "one of serial, spidev, spi-socket, sim",
+            ) else {
+                continue;
+            };
+            let kind_name = kind.get_ref().as_str();
+            let path = |me: &mut Self, required: bool| -> Option<PathBuf> {
+                match (&l.path, required) {
+                    (Some(p), true) if !p.get_ref().is_empty() => Some(PathBuf::from(p.get_ref())),
+                    (Some(p), true) => {
+                        me.issue(p.span(), &key("path"), "empty path");
+                        None
+                    }
+                    (None, true) => {
+                        me.issue(
+                            table.clone(),
+                            &key("path"),
+                            format!("missing; a {kind_name} link needs a path"),
+                        );
+                        None
+                    }
+                    (Some(p), false) => {
+                        me.issue(p.span(), &key("path"), "a sim link has no path");
+                        None
+                    }
+                    (None, false) => None,
+                }
+            };
+            let forbid = |me: &mut Self, value: &Option<Spanned<i64>>, k: &str, why: &str| {
+                if let Some(v) = value {
+                    me.issue(v.span(), &key(k), why.to_owned());
+                }
+            };
+            let serial_models_ok = models
+                .iter()
+                .all(|m| matches!(m, Model::Tmcpack | Model::Qsb));
+            let spi_models_ok = models
+                .iter()
+                .all(|m| matches!(m, Model::Qq2drv | Model::Spimotor));
+            let transport = match kind_name {
+                "serial" => {
+                    if !serial_models_ok {
+                        self.issue(kind.span(), &key("type"), "serial links carry tmcpack or qsb boards; qq2drv and spimotor need spidev, spi-socket or sim");
+                    }
+                    forbid(
+                        self,
+                        &l.speed_hz,
+                        "speed_hz",
+                        "speed_hz is for spidev and SPI sim links; a serial link has baud",
+                    );
+                    forbid(self, &l.mode, "mode", "mode is for spidev links");
+                    let baud = self
+                        .required(
+                            &l.baud,
+                            &table,
+                            &key("baud"),
+                            "the line rate, e.g. 19200 (tmcpack) or 230400 (qsb)",
+                        )
+                        .and_then(|b| self.int_in(b, &key("baud"), 300..=4_000_000));
+                    let path = path(self, true);
+                    match (path, baud) {
+                        (Some(path), Some(baud)) => Some(Transport::Serial {
+                            path,
+                            baud: baud as u32,
+                        }),
+                        _ => None,
+                    }
+                }
+                "spidev" | "spi-socket" => {
+                    if !spi_models_ok {
+                        self.issue(kind.span(), &key("type"), "SPI links carry qq2drv or spimotor boards; tmcpack and qsb need serial or sim");
+                    }
+                    forbid(
+                        self,
+                        &l.baud,
+                        "baud",
+                        "baud is for serial and serial sim links; SPI links have speed_hz",
+                    );
+                    let path = path(self, true);
+                    if kind_name == "spi-socket" {
+                        forbid(
+                            self,
+                            &l.speed_hz,
+                            "speed_hz",
+                            "the SPI socket peer sets its own clock",
+                        );
+                        forbid(
+                            self,
+                            &l.mode,
+                            "mode",
+                            "the SPI socket peer sets its own mode",
+                        );
+                        path.map(|path| Transport::SpiSocket { path })
+                    } else {
+                        let speed = match &l.speed_hz {
+                            Some(s) => self.int_in(s, &key("speed_hz"), 1_000..=50_000_000),
+                            None => Some(500_000),
+                        };
+                        let default_mode = if models.contains(&Model::Qq2drv) {
+                            1
+                        } else {
+                            0
+                        };
+                        let mode = match &l.mode {
+                            Some(m) => self.int_in(m, &key("mode"), 0..=3),
+                            None => Some(default_mode),
+                        };
+                        match (path, speed, mode) {
+                            (Some(path), Some(speed), Some(mode)) => Some(Transport::Spidev {
+                                path,
+                                speed_hz: speed as u32,
+                                mode: mode as u8,
+                            }),
+                            _ => None,
+                        }
+                    }
+                }
+                "sim" => {
+                    let _ = path(self, false);
+                    forbid(self, &l.mode, "mode", "mode is for spidev links");
+                    if spi {
+                        forbid(
+                            self,
+                            &l.baud,
+                            "baud",
+                            "this sim link carries SPI boards: give speed_hz, not baud",
+                        );
+                        let speed = match &l.speed_hz {
+                            Some(s) => self.int_in(s, &key("speed_hz"), 1_000..=50_000_000),
+                            None => Some(500_000),
+                        };
+                        speed.map(|rate| Transport::Sim { rate: rate as u32 })
+                    } else {
+                        forbid(
+                            self,
+                            &l.speed_hz,
+                            "speed_hz",
+                            "this sim link carries serial boards: give baud, not speed_hz",
+                        );
+                        let default = if models.contains(&Model::Qsb) {
+                            230_400
+                        } else {
+                            19_200
+                        };
+                        let baud = match &l.baud {
+                            Some(b) => self.int_in(b, &key("baud"), 300..=4_000_000),
+                            None => Some(default),
+                        };
+                        baud.map(|rate| Transport::Sim { rate: rate as u32 })
+                    }
+                }
+                other => {
+                    self.issue(
+                        kind.span(),
+                        &key("type"),
+                        format!(
+                            "unknown link type {other:?}; allowed: serial, spidev, spi-socket, sim"
+                        ),
+                    );
+                    None
+                }
+            };
+            if kind_name != "sim" {
+                for (i, _) in &on_link {
+                    if let Some(sim) = &raw_devices[*i].get_ref().sim {
+                        self.issue(
+                            sim.span(),
+                            &format!("device[{i}].sim"),
+                            format!("sim parameters need a sim link; link `{name}` is {kind_name}"),
+                        );
+                    }
+                }
+            }
+            if let Some(transport) = transport {
+                specs.push(LinkSpec {
+                    name: name.clone(),
+                    transport,
+                    kind: if spi || matches!(kind_name, "spidev" | "spi-socket") {
+                        BusKind::Spi
+                    } else {
+                        BusKind::Stream
+                    },
+                });
+            }
+        }
+        specs
+    }
+}

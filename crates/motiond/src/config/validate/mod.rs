@@ -1,0 +1,306 @@
+//! Raw TOML → validated [`ServerConfig`], collecting every issue with its location.
+
+use core::ops::Range;
+use core::time::Duration;
+use std::path::PathBuf;
+
+use motion_engine::AxisConfig;
+use motion_ipc::{MAX_AXES, MAX_DEVICES, MAX_LINKS, NAME_LEN};
+use toml::Spanned;
+
+mod items;
+mod links;
+
+use super::error::{ConfigIssue, Issues};
+use super::raw::{RawConfig, RawLink, RawServer};
+use super::{DeviceSpec, ServerConfig, ServerSettings};
+
+pub(crate) fn parse(source: &str) -> Result<ServerConfig, Vec<ConfigIssue>> {
+    let mut issues = Issues::new(source);
+    let raw: RawConfig = match toml::from_str(source) {
+        Ok(raw) => raw,
+        Err(error) => {
+            let span = error.span().unwrap_or(0..0);
+            let key = issues.key_at(span.start);
+            let message = error
+                .message()
+                .trim()
+                .replace('\n', " ")
+                .replace("expected i64", "expected an integer")
+                .replace("expected f64", "expected a number");
+            issues.push(span, key, message);
+            return Err(issues.list);
+        }
+    };
+    let config = Validator {
+        issues: &mut issues,
+    }
+    .run(raw);
+    if issues.list.is_empty() {
+        Ok(config)
+    } else {
+        issues.list.sort_by_key(|issue| (issue.line, issue.column));
+        Err(issues.list)
+    }
+}
+
+pub(super) struct Validator<'i, 's> {
+    issues: &'i mut Issues<'s>,
+}
+
+/// The span of a whole table, for "missing key" issues.
+pub(super) type TableSpan = Range<usize>;
+
+impl Validator<'_, '_> {
+    pub(super) fn issue(&mut self, span: Range<usize>, key: &str, message: impl Into<String>) {
+        self.issues.push(span, key, message);
+    }
+
+    pub(super) fn required<'v, T>(
+        &mut self,
+        value: &'v Option<Spanned<T>>,
+        table: &TableSpan,
+        key: &str,
+        allowed: &str,
+    ) -> Option<&'v Spanned<T>> {
+        if value.is_none() {
+            self.issue(table.clone(), key, format!("missing; {allowed}"));
+        }
+        value.as_ref()
+    }
+
+    pub(super) fn int_in(
+        &mut self,
+        value: &Spanned<i64>,
+        key: &str,
+        range: core::ops::RangeInclusive<i64>,
+    ) -> Option<i64> {
+        let v = *value.get_ref();
+        if range.contains(&v) {
+            Some(v)
+        } else {
+            self.issue(
+                value.span(),
+                key,
+                format!(
+                    "{v} is out of range; allowed: {}..={}",
+                    range.start(),
+                    range.end()
+                ),
+            );
+            None
+        }
+    }
+
+    pub(super) fn name(
+        &mut self,
+        value: &Spanned<String>,
+        key: &str,
+        max: usize,
+    ) -> Option<String> {
+        let text = value.get_ref();
+        let ok = !text.is_empty()
+            && text.len() <= max
+            && text
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-' || c == '.');
+        if ok {
+            Some(text.clone())
+        } else {
+            self.issue(
+                value.span(),
+                key,
+                format!(
+                    "{text:?} is not a valid name; allowed: 1..={max} characters of A-Z a-z 0-9 _ - ."
+                ),
+            );
+            None
+        }
+    }
+
+    fn run(mut self, raw: RawConfig) -> ServerConfig {
+        let server = self.server(raw.server.as_ref());
+        for (what, count, max, items) in [
+            (
+                "link",
+                raw.link.len(),
+                MAX_LINKS,
+                raw.link.first().map(Spanned::span),
+            ),
+            (
+                "device",
+                raw.device.len(),
+                MAX_DEVICES,
+                raw.device.first().map(Spanned::span),
+            ),
+            (
+                "axis",
+                raw.axis.len(),
+                MAX_AXES,
+                raw.axis.first().map(Spanned::span),
+            ),
+        ] {
+            if count > max {
+                self.issue(
+                    items.unwrap_or(0..0),
+                    what,
+                    format!("{count} [[{what}]] tables; at most {max} are supported"),
+                );
+            }
+        }
+        let links: Vec<Option<(String, Spanned<RawLink>)>> = raw
+            .link
+            .into_iter()
+            .enumerate()
+            .map(|(index, link)| {
+                let key = format!("link[{index}].name");
+                let table = link.span();
+                let name = self
+                    .required(
+                        &link.get_ref().name,
+                        &table,
+                        &key,
+                        "every link needs a name",
+                    )
+                    .and_then(|name| self.name(name, &key, NAME_LEN));
+                name.map(|name| (name, link))
+            })
+            .collect();
+        self.duplicates(
+            "link",
+            links
+                .iter()
+                .flatten()
+                .map(|(name, link)| (name.as_str(), link.span())),
+        );
+        let link_names: Vec<Option<String>> = links
+            .iter()
+            .map(|link| link.as_ref().map(|(name, _)| name.clone()))
+            .collect();
+
+        let devices: Vec<Option<DeviceSpec>> = raw
+            .device
+            .iter()
+            .enumerate()
+            .map(|(index, device)| self.device(index, device, &link_names))
+            .collect();
+        self.duplicates(
+            "device",
+            devices.iter().zip(&raw.device).filter_map(|(spec, raw)| {
+                spec.as_ref().map(|spec| (spec.name.as_str(), raw.span()))
+            }),
+        );
+        let links = self.links(&links, &devices, &raw.device);
+        let axes: Vec<Option<AxisConfig>> = raw
+            .axis
+            .iter()
+            .enumerate()
+            .map(|(index, axis)| self.axis(index, axis, &devices, &raw.device))
+            .collect();
+        self.duplicates(
+            "axis",
+            axes.iter().zip(&raw.axis).filter_map(|(axis, raw)| {
+                axis.as_ref().map(|axis| (axis.name.as_str(), raw.span()))
+            }),
+        );
+        for (index, axis) in axes.iter().enumerate() {
+            let Some(axis) = axis else { continue };
+            if let Some(first) = axes[..index]
+                .iter()
+                .flatten()
+                .find(|other| other.device == axis.device && other.channel == axis.channel)
+            {
+                let span = raw.axis[index]
+                    .get_ref()
+                    .channel
+                    .as_ref()
+                    .map_or(raw.axis[index].span(), Spanned::span);
+                let message = format!(
+                    "channel {} of this device is already driven by axis `{}`; one axis per channel",
+                    axis.channel, first.name
+                );
+                self.issue(span, &format!("axis[{index}].channel"), message);
+            }
+        }
+        ServerConfig {
+            path: PathBuf::new(),
+            server,
+            links,
+            devices: devices.into_iter().flatten().collect(),
+            axes: axes.into_iter().flatten().collect(),
+        }
+    }
+
+    fn duplicates<'a>(&mut self, what: &str, items: impl Iterator<Item = (&'a str, Range<usize>)>) {
+        let items: Vec<_> = items.collect();
+        for (index, (name, span)) in items.iter().enumerate() {
+            if items[..index].iter().any(|(earlier, _)| earlier == name) {
+                self.issue(
+                    span.clone(),
+                    &format!("{what}.name"),
+                    format!("a {what} called `{name}` is already defined; names must be unique"),
+                );
+            }
+        }
+    }
+
+    fn server(&mut self, raw: Option<&Spanned<RawServer>>) -> ServerSettings {
+        let mut settings = ServerSettings {
+            name: "motiond".into(),
+            tick_hz: 1000,
+            command_timeout: Duration::from_millis(250),
+            rt_priority: None,
+            cpu: None,
+            lock_memory: false,
+            max_clients: 32,
+            max_consecutive_overruns: 10,
+            liveness_check: Duration::from_millis(100),
+        };
+        let Some(raw) = raw else {
+            return settings;
+        };
+        let raw = raw.get_ref();
+        if let Some(name) = &raw.name
+            && let Some(name) = self.name(name, "server.name", NAME_LEN)
+        {
+            settings.name = name;
+        }
+        if let Some(v) = &raw.tick_hz
+            && let Some(v) = self.int_in(v, "server.tick_hz", 1..=20_000)
+        {
+            settings.tick_hz = v as u32;
+        }
+        if let Some(v) = &raw.command_timeout_ms
+            && let Some(v) = self.int_in(v, "server.command_timeout_ms", 0..=60_000)
+        {
+            settings.command_timeout = Duration::from_millis(v as u64);
+        }
+        if let Some(v) = &raw.rt_priority {
+            settings.rt_priority = self
+                .int_in(v, "server.rt_priority", 1..=99)
+                .map(|v| v as u8);
+        }
+        if let Some(v) = &raw.cpu {
+            settings.cpu = self.int_in(v, "server.cpu", 0..=1023).map(|v| v as usize);
+        }
+        if let Some(v) = &raw.lock_memory {
+            settings.lock_memory = *v.get_ref();
+        }
+        if let Some(v) = &raw.max_clients
+            && let Some(v) = self.int_in(v, "server.max_clients", 1..=1024)
+        {
+            settings.max_clients = v as u32;
+        }
+        if let Some(v) = &raw.max_consecutive_overruns
+            && let Some(v) = self.int_in(v, "server.max_consecutive_overruns", 0..=1_000_000)
+        {
+            settings.max_consecutive_overruns = v as u32;
+        }
+        if let Some(v) = &raw.liveness_check_ms
+            && let Some(v) = self.int_in(v, "server.liveness_check_ms", 10..=10_000)
+        {
+            settings.liveness_check = Duration::from_millis(v as u64);
+        }
+        settings
+    }
+}
