@@ -15,6 +15,7 @@ pub mod qsb;
 mod state;
 
 pub mod spimotor;
+pub mod tmcpack;
 
 pub use bus::{BusKind, LinkBus, MAX_SENDS_PER_STEP, SPI_PENDING_CAPACITY};
 pub use driver::{Driver, Model, Priority, Transmit};
