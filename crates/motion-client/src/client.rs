@@ -9,6 +9,7 @@ use iceoryx2::node::{Node, NodeBuilder};
 use iceoryx2::port::listener::Listener;
 use iceoryx2::prelude::{NodeName, ServiceName, SignalHandlingMode};
 use iceoryx2::service::Service;
+use iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError;
 use motion_ipc::{
     AxisInfo, ClientId, CommandReply, CommandRequest, MotionFrame, SCHEMA_VERSION, ServerInfo,
     ServerStats, ServiceNames,
@@ -170,10 +171,24 @@ impl<S: Service> Client<S> {
                 .publish_subscribe::<MotionFrame>()
                 .open()
         })
-        .map_err(|_| ConnectError::NoServer {
-            name: server.clone(),
-            service: names.frame(),
-            waited: options.connect_timeout,
+        .map_err(|error| match error {
+            PublishSubscribeOpenError::DoesNotExist
+            | PublishSubscribeOpenError::IsMarkedForDestruction
+            | PublishSubscribeOpenError::HangsInCreation => ConnectError::NoServer {
+                name: server.clone(),
+                service: names.frame(),
+                waited: options.connect_timeout,
+            },
+            PublishSubscribeOpenError::IncompatibleTypes => ConnectError::SchemaMismatch {
+                name: server.clone(),
+                server: 0,
+                client: SCHEMA_VERSION,
+            },
+            PublishSubscribeOpenError::ExceedsMaxNumberOfNodes => ConnectError::Ipc {
+                what: "join the frame service",
+                detail: "the server's client limit is reached ([server] max_clients)".to_owned(),
+            },
+            other => ConnectError::ipc("open the frame service", other),
         })?;
         let frames = frame_service
             .subscriber_builder()

@@ -38,6 +38,9 @@ impl<S: Service> Client<S> {
             .commands
             .send_copy(request)
             .map_err(|error| ClientError::ipc("send a command", error))?;
+        if pending.number_of_server_connections() == 0 {
+            return Err(ClientError::NoServer { kind: kind.name() });
+        }
         let started = Instant::now();
         let deadline = started + self.reply_timeout;
         loop {

@@ -36,13 +36,14 @@ pub enum ConnectError {
     },
     /// The server was built against another version of the shared-memory contract.
     #[error(
-        "motiond \"{name}\" speaks motion-ipc schema {server}, this client schema {client}: \
-         rebuild the client or the server from the same source"
+        "motiond \"{name}\" speaks another motion-ipc schema (server {server}, this client \
+         {client}; 0 = payload types differ): rebuild the client or the server from the same \
+         source"
     )]
     SchemaMismatch {
         /// The instance name.
         name: String,
-        /// The server's schema version.
+        /// The server's schema version; 0 when the payload types themselves differ.
         server: u32,
         /// This client's schema version.
         client: u32,
@@ -82,6 +83,12 @@ pub enum ClientError {
         reason: Reason,
         /// The tick in which the server refused it.
         tick: u64,
+    },
+    /// No server listens on the command service any more.
+    #[error("{kind} not sent: no motiond serves the command service any more (did it stop?)")]
+    NoServer {
+        /// The command.
+        kind: &'static str,
     },
     /// The server did not answer a command in time.
     #[error("no reply from the server to {kind} within {waited:?}; is motiond still running?")]

@@ -235,3 +235,23 @@ fn raw_send_returns_the_reply_as_is() -> Result {
     assert_eq!(error.reason(), Some(Reason::NotFinite));
     Ok(())
 }
+
+#[test]
+fn a_stopped_server_is_reported_not_waited_for_forever() -> Result {
+    let (server, client) = start::<ipc::Service>("gone")?;
+    let x = client.axis("x")?;
+    x.stop()?;
+    server.shutdown()?;
+    let error = x.move_to(1.0).expect_err("no server");
+    assert!(
+        matches!(
+            error,
+            ClientError::NoServer { .. } | ClientError::NoReply { .. }
+        ),
+        "{error:?}"
+    );
+    client.latest()?; // the last frame received stays readable
+    let silent = client.next_frame(Duration::from_millis(100));
+    assert!(matches!(silent, Err(ClientError::NoFrame(_))), "{silent:?}");
+    Ok(())
+}

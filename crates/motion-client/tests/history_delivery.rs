@@ -26,9 +26,14 @@ fn late_subscriber_gets_history_only_after_the_publisher_updates_connections()
     publisher.send_copy(info)?;
 
     let late = service.subscriber_builder().create()?;
-    assert!(late.receive()?.is_none(), "history arrives before the publisher acts?");
+    assert!(
+        late.receive()?.is_none(),
+        "history arrives before the publisher acts?"
+    );
     publisher.update_connections()?;
-    let received = late.receive()?.ok_or("no history after update_connections")?;
+    let received = late
+        .receive()?
+        .ok_or("no history after update_connections")?;
     assert_eq!(received.tick_hz, 1234);
     Ok(())
 }

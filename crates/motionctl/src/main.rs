@@ -135,6 +135,7 @@ fn exit_status(error: &anyhow::Error) -> u8 {
         if let Some(client) = cause.downcast_ref::<ClientError>() {
             return match client {
                 ClientError::Refused { .. } | ClientError::UnknownAxis(_) => exit::REFUSED,
+                ClientError::NoServer { .. } => exit::NO_SERVER,
                 ClientError::NoReply { .. }
                 | ClientError::NoFrame(_)
                 | ClientError::WaitTimeout { .. }
