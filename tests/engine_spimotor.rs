@@ -194,7 +194,7 @@ fn rejected(rig: &mut Rig, axis: u32, kind: CommandKind, values: [f64; 3]) -> Re
 
 /// Ticks until the stepper axis arrives, checking the limits on the simulated motor every
 /// tick: never faster than `max_velocity`, never faster than a ramp from its start/stop
-/// rate at `max_accel` allows, never past `target` (steps).
+/// rate at `max_accel` allows (speeding up and braking), never past `target` (steps).
 fn move_and_check(rig: &mut Rig, board: &Board, target_mm: f64, limit: Duration) {
     let start = rig.now;
     let from = board.lock().unwrap().rotor_steps();
@@ -213,6 +213,14 @@ fn move_and_check(rig: &mut Rig, board: &Board, target_mm: f64, limit: Duration)
             "{rate} steps/s after {elapsed} s: faster than the ramp"
         );
         let rotor = sim.rotor_steps();
+        // Braking: never faster than the curve from which it can stop at the target
+        // (give or take the one step in progress).
+        let brake = (2.0 * accel * ((target - rotor).abs() + 1) as f64).sqrt();
+        assert!(
+            rate <= brake + SLOWEST_RATE,
+            "{rate} steps/s {} steps before the target: cannot brake in time",
+            target - rotor
+        );
         assert!(
             (rotor - from).signum() * (target - rotor).signum() >= 0,
             "overshoot: rotor {rotor}, target {target}"

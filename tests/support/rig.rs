@@ -19,6 +19,12 @@ use motion_link::{Link, LinkErrorKind};
 /// How often the rig retries opening a disconnected link.
 pub const REOPEN_EVERY: Duration = Duration::from_millis(100);
 
+fn scope(hook: Option<fn(bool)>, entering: bool) {
+    if let Some(hook) = hook {
+        hook(entering);
+    }
+}
+
 /// A device model shared between the simulated wire and the test, so the test can look at
 /// (and poke) the model's true state while the link owns it.
 #[derive(Debug)]
@@ -98,6 +104,10 @@ pub struct Rig {
     sequence: u64,
     /// Record every written message per link (off by default: costs memory).
     pub log_wire: bool,
+    /// Called with `true` before and `false` after each stretch of engine work in a tick
+    /// (feeding received bytes, stepping, polling transmits), so that a test can count
+    /// what the engine alone does (e.g. allocations) apart from the simulated links.
+    pub engine_scope: Option<fn(bool)>,
 }
 
 impl Rig {
@@ -133,6 +143,7 @@ impl Rig {
             client: ClientId::from_u128(0x00C1_1E27),
             sequence: 0,
             log_wire: false,
+            engine_scope: None,
         }
     }
 
@@ -155,7 +166,11 @@ impl Rig {
             loop {
                 match rig_link.link.read(now, &mut buf) {
                     Ok(0) => break,
-                    Ok(len) => self.engine.handle_link_rx(index, now, &buf[..len]),
+                    Ok(len) => {
+                        scope(self.engine_scope, true);
+                        self.engine.handle_link_rx(index, now, &buf[..len]);
+                        scope(self.engine_scope, false);
+                    }
                     Err(error) => {
                         if error.kind() == LinkErrorKind::Disconnected {
                             rig_link.down = true;
@@ -167,9 +182,17 @@ impl Rig {
                 }
             }
         }
+        scope(self.engine_scope, true);
         self.engine.step(now, &mut self.port, &mut self.frame);
+        scope(self.engine_scope, false);
         for (index, rig_link) in self.links.iter_mut().enumerate() {
-            while let Some(len) = self.engine.poll_link_transmit(index, now, &mut buf) {
+            loop {
+                scope(self.engine_scope, true);
+                let next = self.engine.poll_link_transmit(index, now, &mut buf);
+                scope(self.engine_scope, false);
+                let Some(len) = next else {
+                    break;
+                };
                 if rig_link.down {
                     continue;
                 }
