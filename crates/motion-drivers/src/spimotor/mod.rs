@@ -409,7 +409,7 @@ impl SpimotorDriver {
                 }
             }
             (Phase::Running, _) if self.is_stepper() => match reply {
-                Ok(reply) => self.stepper_reading(now, reply, sent.expect),
+                Ok(reply) => self.stepper_reading(now, reply, sent),
                 Err(_) => self.bad_reply(),
             },
             // An answer to a read of an earlier phase: nothing to learn from it.

@@ -111,6 +111,8 @@ pub struct Observed {
     pub target: Option<i32>,
     /// The board was seen standing (position = target) and no write changed it since.
     pub standing: bool,
+    /// Time until the next update: a move brakes as if it were that much further on.
+    pub lookahead: Duration,
 }
 
 /// The signed step rate of the profile and when it was last integrated.
@@ -225,7 +227,11 @@ impl Ramp {
                 let desired = if reversing && self.rate.abs() > slowest {
                     0.0
                 } else {
-                    let brake = (2.0 * accel * remaining.unsigned_abs() as f64).sqrt();
+                    // Brake where the motor will be at the next update, so that the
+                    // rate in force until then stays under the braking curve.
+                    let ahead = self.rate.abs() * board.lookahead.as_secs_f64();
+                    let reach = (remaining.unsigned_abs() as f64 - ahead).max(0.0);
+                    let brake = (2.0 * accel * reach).sqrt();
                     direction * velocity.min(brake)
                 };
                 let mut rate = approach(self.rate, desired, accel * dt);
@@ -286,6 +292,7 @@ mod tests {
             position: 0,
             target: None,
             standing: true,
+            lookahead: Duration::ZERO,
         };
         let first = ramp.update(Duration::ZERO, &mut motion, board).unwrap();
         assert_eq!(first.target, TargetCommand::Set(10_000));
@@ -322,6 +329,7 @@ mod tests {
             position: 50,
             target: Some(50 + RUN_DISTANCE as i32),
             standing: false,
+            lookahead: Duration::ZERO,
         };
         let step = ramp.update(5 * MS, &mut motion, board).unwrap();
         assert_eq!(step.target, TargetCommand::Keep, "still running forwards");
@@ -346,6 +354,7 @@ mod tests {
             position: 0,
             target: Some(1 << 30),
             standing: false,
+            lookahead: Duration::ZERO,
         };
         let step = ramp.update(10 * MS, &mut motion, board).unwrap();
         assert_eq!(step.target, TargetCommand::Keep);

@@ -6,7 +6,7 @@ use spimotor::{Reply, StepDelay, Write};
 
 use super::config::SpimotorDriverConfig;
 use super::ramp::{self, Motion, Observed, Ramp, TargetCommand};
-use super::wire::{Expect, Op};
+use super::wire::{Expect, Op, Sent};
 use super::{CONFIRMATIONS, PROTOCOL_LIMIT, SpimotorDriver};
 use crate::driver::Priority;
 use crate::goal::{Goal, GoalError, GoalKind};
@@ -22,7 +22,8 @@ const ABSENT_READING: (i32, i32, u8) = (-1, -1, u8::MAX);
 /// One poll's readings, gathered as its reads complete.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 struct Cycle {
-    position: Option<(i32, Expect)>,
+    /// The position read, what it should agree with, and when the board sampled it.
+    position: Option<(i32, Expect, Duration)>,
     target: Option<(i32, Expect)>,
 }
 
@@ -36,6 +37,8 @@ pub(super) struct Stepper {
     /// Step delay read back.
     delay: StepDelay,
     refreshed_at: Option<Duration>,
+    /// When the board sampled the position read last (the read's transaction).
+    sampled_at: Duration,
     /// A position was set since the board last (re)started.
     pub homed: bool,
     /// Step delay written at start-up and after a set-position.
@@ -72,6 +75,7 @@ impl Stepper {
             target: None,
             delay: StepDelay::DEFAULT,
             refreshed_at: None,
+            sampled_at: Duration::ZERO,
             homed: false,
             rest_delay: ramp::delay_for(limits.max_velocity.min(ramp::fastest_rate())),
             max_velocity: limits.max_velocity,
@@ -121,6 +125,7 @@ impl Stepper {
     /// A write of the position counter (0x40) went out at `now`.
     pub fn position_written(&mut self, now: Duration, position: i32) {
         self.position = position;
+        self.sampled_at = now;
         self.target = Some(position);
         self.baseline = Some((position, now));
         self.cycle = Cycle::default();
@@ -267,10 +272,11 @@ impl SpimotorDriver {
         self.stepper.next_profile_at = now.saturating_add(self.config.poll_period);
         let position = self.stepper.position;
         let observed = Observed {
-            position,
+            position: self.estimated_position(now),
             target: self.planned.target,
             standing: self.stepper.target == Some(position)
                 && self.planned.target == Some(position),
+            lookahead: self.config.poll_period,
         };
         let stepper = &mut self.stepper;
         let Some(step) = stepper.ramp.update(now, &mut stepper.motion, observed) else {
@@ -287,11 +293,31 @@ impl SpimotorDriver {
         }
     }
 
+    /// Where the board is now at the latest: the last position read, plus what the
+    /// step delay in force lets it walk towards the target it had since that read was
+    /// sampled (never past that target). Braking on this errs on the early side.
+    fn estimated_position(&self, now: Duration) -> i32 {
+        let stepper = &self.stepper;
+        let Some(target) = stepper.target else {
+            return stepper.position;
+        };
+        let gap = i64::from(target) - i64::from(stepper.position);
+        let age = now.saturating_sub(stepper.sampled_at).as_secs_f64();
+        let rate = ramp::rate_of(self.written.delay).max(ramp::rate_of(stepper.delay));
+        // `travel` ≤ |gap| < 2^32: the sum stays between position and target.
+        let travel = ((rate * age).floor() as i64).min(gap.abs());
+        i32::try_from(i64::from(stepper.position) + gap.signum() * travel)
+            .unwrap_or(stepper.position)
+    }
+
     /// A stepper poll read completed.
-    pub(super) fn stepper_reading(&mut self, now: Duration, reply: Reply, expect: Expect) {
+    pub(super) fn stepper_reading(&mut self, now: Duration, reply: Reply, sent: Sent) {
+        let expect = sent.expect;
         let cycle = &mut self.stepper.cycle;
         match reply {
-            Reply::CurrentPosition(position) => cycle.position = Some((position, expect)),
+            Reply::CurrentPosition(position) => {
+                cycle.position = Some((position, expect, sent.at));
+            }
             Reply::TargetPosition(target) => cycle.target = Some((target, expect)),
             Reply::StepDelay(delay) => {
                 let taken = core::mem::take(cycle);
@@ -307,7 +333,7 @@ impl SpimotorDriver {
     fn check_poll(
         &mut self,
         now: Duration,
-        (position, position_expect): (i32, Expect),
+        (position, position_expect, sampled_at): (i32, Expect, Duration),
         (target, target_expect): (i32, Expect),
         (delay, delay_expect): (StepDelay, Expect),
     ) {
@@ -327,6 +353,7 @@ impl SpimotorDriver {
             stepper.target = Some(target);
             stepper.delay = delay;
             stepper.refreshed_at = Some(now);
+            stepper.sampled_at = sampled_at;
             stepper.baseline = Some((position, now));
             stepper.suspect = None;
             stepper.repeats = 0;
