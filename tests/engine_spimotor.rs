@@ -617,3 +617,84 @@ fn the_driver_allocates_nothing_after_construction() {
     assert_eq!(driver.status().bad_replies, 0);
     assert_eq!(in_driver, 0, "allocations inside the driver");
 }
+
+/// A small deterministic generator for the random-goal test.
+struct XorShift(u64);
+
+impl XorShift {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        self.0
+    }
+
+    fn range(&mut self, low: f64, high: f64) -> f64 {
+        low + (high - low) * (self.next() >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+#[test]
+fn random_goal_sequences_never_step_too_fast_nor_raise_false_faults() {
+    use motion_drivers::Goal;
+    use motion_link::sim::SpiDevice;
+
+    let max_rate = MAX_VELOCITY_MM * STEPS_PER_MM;
+    let accel = MAX_ACCEL_MM * STEPS_PER_MM;
+    let mut mosi = [0u8; 256];
+    let mut miso = [0u8; 256];
+    for seed in 1..=12u64 {
+        let mut rng = XorShift(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15));
+        let mut driver = SpimotorDriver::new(driver_config(0x90, SpimotorDrive::Stepper));
+        let mut board = sim(0x90, Drive::Stepper);
+        let period = Duration::from_millis(1);
+        for tick in 0..3_000u32 {
+            let now = period * tick;
+            driver.handle_timeout(now);
+            if tick > 20 && rng.next() % 60 == 0 {
+                let goal = match rng.next() % 6 {
+                    0 => Goal::Position {
+                        counts: rng.range(-3_000.0, 3_000.0).round(),
+                    },
+                    1 => Goal::RampPosition {
+                        counts: rng.range(-3_000.0, 3_000.0).round(),
+                        velocity: rng.range(SLOWEST_RATE, max_rate),
+                        accel: rng.range(100.0, accel),
+                    },
+                    2 => Goal::Velocity {
+                        velocity: rng.range(SLOWEST_RATE, max_rate)
+                            * if rng.next() % 2 == 0 { 1.0 } else { -1.0 },
+                        accel: rng.range(100.0, accel),
+                    },
+                    3 => Goal::Stop {
+                        decel: rng.range(100.0, accel),
+                    },
+                    4 => Goal::SetPosition {
+                        counts: rng.range(-3_000.0, 3_000.0).round(),
+                    },
+                    _ => Goal::Off,
+                };
+                driver
+                    .set_goal(now, 0, goal)
+                    .expect("a goal within the limits");
+            }
+            while let Some(transmit) = driver.poll_transmit(now, &mut mosi) {
+                let len = transmit.len;
+                miso[..len].fill(0xFF);
+                board.transfer(now, &mosi[..len], &mut miso[..len]);
+                driver.handle_rx(now + Duration::from_micros(200), &miso[..len]);
+            }
+            board.advance(now + Duration::from_micros(999));
+            let rate = board.velocity(0).unwrap().abs();
+            assert!(rate <= max_rate + 1e-6, "seed {seed} tick {tick}: {rate}");
+            let status = driver.status();
+            assert_eq!(status.fault, None, "seed {seed} tick {tick}");
+            assert_eq!(status.bad_replies, 0, "seed {seed} tick {tick}");
+        }
+        // The driver's idea of the position is the board's counter.
+        driver.handle_timeout(Duration::from_secs(3));
+        let state = driver.channel(0);
+        assert!(state.refreshed_at.is_some());
+        assert!((state.position - f64::from(board.current_position())).abs() <= 20.0);
+    }
+}
