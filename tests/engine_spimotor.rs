@@ -651,7 +651,7 @@ fn random_goal_sequences_never_step_too_fast_nor_raise_false_faults() {
         for tick in 0..3_000u32 {
             let now = period * tick;
             driver.handle_timeout(now);
-            if tick > 20 && rng.next() % 60 == 0 {
+            if tick > 20 && rng.next().is_multiple_of(60) {
                 let goal = match rng.next() % 6 {
                     0 => Goal::Position {
                         counts: rng.range(-3_000.0, 3_000.0).round(),
@@ -663,7 +663,11 @@ fn random_goal_sequences_never_step_too_fast_nor_raise_false_faults() {
                     },
                     2 => Goal::Velocity {
                         velocity: rng.range(SLOWEST_RATE, max_rate)
-                            * if rng.next() % 2 == 0 { 1.0 } else { -1.0 },
+                            * if rng.next().is_multiple_of(2) {
+                                1.0
+                            } else {
+                                -1.0
+                            },
                         accel: rng.range(100.0, accel),
                     },
                     3 => Goal::Stop {
