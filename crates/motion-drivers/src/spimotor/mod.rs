@@ -69,7 +69,8 @@
 //!   must be the ones in force when the read was sent, and the position may not move
 //!   faster than the board can step. A poll that disagrees is discarded (the channel keeps
 //!   its last known state) and counted in [`DeviceStatus::bad_replies`]; garbage on MISO
-//!   therefore never reaches the axis.
+//!   therefore never reaches the axis. (A stepper poll — three reads — counts as one reply
+//!   in [`DeviceStatus::replies`] or `bad_replies`.)
 //! - The same disagreeing poll [`CONFIRMATIONS`] times in a row is real: all bytes 0xFF
 //!   (position −1, target −1, delay 255) is an absent board ([`DeviceFault::NotResponding`]);
 //!   power-on registers (position and target 0, or the step delay 200) a board that lost
@@ -317,6 +318,10 @@ impl SpimotorDriver {
         self.restart(now, 0);
     }
 
+    fn good_reply(&mut self) {
+        self.status.replies = self.status.replies.saturating_add(1);
+    }
+
     fn bad_reply(&mut self) {
         self.status.bad_replies = self.status.bad_replies.saturating_add(1);
     }
@@ -358,6 +363,7 @@ impl SpimotorDriver {
             (Phase::Identify { attempts, .. }, ReadPort::Identification) => {
                 match reply.ok().and_then(valid_identification) {
                     Some(id) => {
+                        self.good_reply();
                         self.identification = Some(id);
                         self.phase = Phase::Serial;
                     }
@@ -380,7 +386,10 @@ impl SpimotorDriver {
             }
             (Phase::Serial, ReadPort::Serial) => {
                 let serial = match reply {
-                    Ok(Reply::Serial(serial)) => serial,
+                    Ok(Reply::Serial(serial)) => {
+                        self.good_reply();
+                        serial
+                    }
                     _ => SerialNumber::default(),
                 };
                 self.set_firmware(serial);
@@ -396,6 +405,7 @@ impl SpimotorDriver {
                         .is_some_and(|known| known.as_bytes() == id.as_bytes())
                 });
                 if matches {
+                    self.good_reply();
                     self.presence_misses = 0;
                     if !self.is_stepper() {
                         self.refreshed(now);

@@ -375,6 +375,7 @@ impl SpimotorDriver {
             if target == position && self.stepper.motion == Motion::Hold {
                 self.stepper.ramp.rest(now);
             }
+            self.good_reply();
             self.refreshed(now);
             return;
         }

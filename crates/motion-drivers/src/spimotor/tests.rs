@@ -198,6 +198,7 @@ fn start_up_reads_identification_as_the_datasheet_example_then_configures() {
     let state = bench.driver.channel(0);
     assert_eq!(state.fault, None);
     assert_eq!(state.refreshed_at, Some(3 * MS));
+    assert_eq!(status.replies, 3, "identification, serial number, one poll");
     assert_eq!(bench.board.delay, rest);
     assert_eq!(Coils::from_byte(0x01), Coils::Two);
 }
