@@ -7,6 +7,7 @@ use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 
 use iceoryx2::active_request::ActiveRequest;
 use iceoryx2::port::server::Server;
+use iceoryx2::port::update_connections::UpdateConnections;
 use motion_engine::{CommandPort, Engine};
 use motion_ipc::{
     ClientId, CommandReply, CommandRequest, FaultCode, MotionFrame, ServerInfo, ServerStats,
@@ -342,6 +343,11 @@ impl Loop {
             }
         }
         let _ = self.services.tick.notify();
+        // Late subscribers of the rarely published info and stats get their history sample
+        // only when the publisher looks at its connections; this is cheap when nothing
+        // changed.
+        let _ = self.services.info.update_connections();
+        let _ = self.services.stats.update_connections();
     }
 
     fn queue_link_output(&mut self, now: Duration, buf: &mut [u8; PACKET_LEN]) {
