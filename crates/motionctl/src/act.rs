@@ -25,7 +25,7 @@ pub fn move_axis(
     axis.ramp_to(position, velocity.unwrap_or(0.0), accel.unwrap_or(0.0))
         .with_context(|| format!("move {name} to {position} {unit}"))?;
     let Some(timeout) = wait else {
-        println!("{name}: moving to {position} {unit}");
+        out!("{name}: moving to {position} {unit}");
         return Ok(());
     };
     let frame = axis
@@ -35,7 +35,7 @@ pub fn move_axis(
         .axes()
         .get(axis.index() as usize)
         .map_or(f64::NAN, |state| state.position);
-    println!("{name}: arrived at {reached} {unit} (tick {})", frame.tick);
+    out!("{name}: arrived at {reached} {unit} (tick {})", frame.tick);
     Ok(())
 }
 
@@ -107,12 +107,12 @@ pub fn power(client: &Client<Service>, name: &str, power: f64) -> anyhow::Result
 pub fn stop(client: &Client<Service>, names: &[String]) -> anyhow::Result<()> {
     if names.is_empty() {
         client.stop_all()?;
-        println!("all axes stopping");
+        out!("all axes stopping");
         return Ok(());
     }
     for name in names {
         client.axis(name)?.stop()?;
-        println!("{name}: stopping");
+        out!("{name}: stopping");
     }
     Ok(())
 }
@@ -128,13 +128,13 @@ pub fn home(
     axis.home(velocity.unwrap_or(0.0))
         .with_context(|| format!("home {name}"))?;
     let Some(timeout) = wait else {
-        println!("{name}: homing");
+        out!("{name}: homing");
         return Ok(());
     };
     let frame = axis
         .wait_until_homed(timeout)
         .with_context(|| format!("home {name}"))?;
-    println!("{name}: homed (tick {})", frame.tick);
+    out!("{name}: homed (tick {})", frame.tick);
     Ok(())
 }
 
@@ -194,7 +194,7 @@ pub fn release(client: &Client<Service>, names: &[String]) -> anyhow::Result<()>
             .axis(name)?
             .release()
             .with_context(|| format!("release {name} (a claim belongs to the process that made it: end that process to release)"))?;
-        println!("{name}: released");
+        out!("{name}: released");
     }
     Ok(())
 }

@@ -89,6 +89,7 @@ pub enum Command {
         /// Axis name.
         axis: String,
         /// Target position, axis units.
+        #[arg(allow_negative_numbers = true)]
         position: f64,
         /// Ramp velocity, units/s (default: the axis's maximum).
         #[arg(long)]
@@ -239,6 +240,11 @@ mod tests {
         let cli = Cli::try_parse_from(["motionctl", "jog", "x", "-2.5"]).map_err(|e| e.to_string());
         assert!(
             matches!(cli, Ok(Cli { command: Command::Jog { velocity, .. }, .. }) if velocity == -2.5)
+        );
+        let cli = Cli::try_parse_from(["motionctl", "move", "x", "-30", "--velocity", "5"]);
+        assert!(
+            matches!(cli, Ok(Cli { command: Command::Move { position, .. }, .. }) if position == -30.0),
+            "{cli:?}"
         );
     }
 }

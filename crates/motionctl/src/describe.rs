@@ -199,10 +199,10 @@ pub fn select_axes(client: &Client<Service>, names: &[String]) -> anyhow::Result
 pub fn list(client: &Client<Service>, json: bool) -> anyhow::Result<()> {
     let info = client.info()?;
     if json {
-        println!("{}", serde_json::to_string_pretty(&info_json(&info))?);
+        out!("{}", serde_json::to_string_pretty(&info_json(&info))?);
         return Ok(());
     }
-    println!(
+    out!(
         "motiond \"{}\": {} Hz tick, deadman {} ms, {} axes, {} devices",
         read_text(&info.name),
         info.tick_hz,
@@ -210,12 +210,19 @@ pub fn list(client: &Client<Service>, json: bool) -> anyhow::Result<()> {
         info.axes().len(),
         info.devices().len()
     );
-    println!(
+    out!(
         "{:<4} {:<14} {:<6} {:<12} {:>10} {:>10} {:>10} {:>11}",
-        "#", "axis", "unit", "device", "min", "max", "max vel", "max accel"
+        "#",
+        "axis",
+        "unit",
+        "device",
+        "min",
+        "max",
+        "max vel",
+        "max accel"
     );
     for (index, axis) in info.axes().iter().enumerate() {
-        println!(
+        out!(
             "{:<4} {:<14} {:<6} {:<12} {:>10} {:>10} {:>10} {:>11}",
             index,
             axis.name(),
@@ -227,12 +234,15 @@ pub fn list(client: &Client<Service>, json: bool) -> anyhow::Result<()> {
             axis.max_accel
         );
     }
-    println!(
+    out!(
         "{:<14} {:<10} {:<10} {:<8} firmware",
-        "device", "model", "link", "online"
+        "device",
+        "model",
+        "link",
+        "online"
     );
     for device in info.devices() {
-        println!(
+        out!(
             "{:<14} {:<10} {:<10} {:<8} {}",
             device.name(),
             device.model().map_or("unknown", DeviceModel::id),
@@ -254,7 +264,7 @@ pub fn status(client: &Client<Service>, names: &[String], json: bool) -> anyhow:
         if let Some(stats) = client.stats()? {
             value["stats"] = stats_json(&stats);
         }
-        println!("{}", serde_json::to_string_pretty(&value)?);
+        out!("{}", serde_json::to_string_pretty(&value)?);
         return Ok(());
     }
     let estop = if frame.flags().contains(FrameFlags::ESTOP_LATCHED) {
@@ -262,11 +272,11 @@ pub fn status(client: &Client<Service>, names: &[String], json: bool) -> anyhow:
     } else {
         ""
     };
-    println!("tick {}{estop}", frame.tick);
-    println!("{}", table_header());
+    out!("tick {}{estop}", frame.tick);
+    out!("{}", table_header());
     for index in axes {
         if let (Some(axis), Some(state)) = (info.axes().get(index), frame.axes().get(index)) {
-            println!("{}", table_row(axis, state, frame.tick));
+            out!("{}", table_row(axis, state, frame.tick));
         }
     }
     Ok(())

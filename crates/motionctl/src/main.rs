@@ -6,6 +6,15 @@
 //! of failure it was (see `motionctl --help`).
 #![forbid(unsafe_code)]
 
+/// `println!` that returns the write error instead of panicking (a closed pipe, as in
+/// `motionctl watch --json | head`, ends the command quietly: see `main`).
+macro_rules! out {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        writeln!(std::io::stdout().lock(), $($arg)*)?
+    }};
+}
+
 mod act;
 mod cli;
 mod describe;
@@ -43,6 +52,7 @@ fn main() -> ExitCode {
     set_log_level(LogLevel::Error);
     match run(&cli) {
         Ok(()) => ExitCode::from(exit::OK),
+        Err(error) if closed_pipe(&error) => ExitCode::from(exit::OK),
         Err(error) => {
             eprintln!("motionctl: {error:#}");
             ExitCode::from(exit_status(&error))
@@ -88,12 +98,12 @@ fn run(cli: &Cli) -> anyhow::Result<()> {
         Command::Stop { axes } => act::stop(client, axes),
         Command::Estop => {
             client.estop()?;
-            println!("e-stop latched: every axis stopped; `motionctl reset` clears it");
+            out!("e-stop latched: every axis stopped; `motionctl reset` clears it");
             Ok(())
         }
         Command::Reset => {
             client.reset()?;
-            println!("reset: e-stop and faults cleared");
+            out!("reset: e-stop and faults cleared");
             Ok(())
         }
         Command::Home {
@@ -105,7 +115,7 @@ fn run(cli: &Cli) -> anyhow::Result<()> {
         Command::SetPosition { axis, position } => {
             let handle = client.axis(axis)?;
             handle.set_position(*position)?;
-            println!(
+            out!(
                 "{axis}: position set to {position} {}",
                 handle.info().unit()
             );
@@ -121,6 +131,15 @@ fn run(cli: &Cli) -> anyhow::Result<()> {
         } => record::run(client, *duration, out, axes)
             .with_context(|| format!("record to {}", out.display())),
     }
+}
+
+/// Whether the error is stdout being closed by its reader.
+fn closed_pipe(error: &anyhow::Error) -> bool {
+    error.chain().any(|cause| {
+        cause
+            .downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
 }
 
 /// The documented exit status of an error.

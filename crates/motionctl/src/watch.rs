@@ -43,7 +43,7 @@ fn run_json(client: &Client<Service>, interval: Duration) -> anyhow::Result<()> 
     loop {
         let frame = client.latest()?;
         let info = client.info()?;
-        println!("{}", frame_json(&info, &frame, &axes));
+        out!("{}", frame_json(&info, &frame, &axes));
         drop(frame);
         if client.node().wait(interval).is_err() {
             return Ok(());
