@@ -5,6 +5,30 @@
 //! send and *when*, and what the answers mean. It never reads a clock, never touches a file
 //! descriptor and allocates nothing after [`SpimotorDriver::new`].
 //!
+//! ```
+//! use core::time::Duration;
+//! use motion_drivers::spimotor::{AxisLimits, SpimotorDriver, SpimotorDriverConfig};
+//! use motion_drivers::{Driver, Goal, GoalKind};
+//!
+//! let driver_config = SpimotorDriverConfig {
+//!     limits: [AxisLimits { max_velocity: 2_000.0, max_accel: 20_000.0 }; 2],
+//!     ..SpimotorDriverConfig::default() // stepper at 0x90, 1 MHz, polled every 2 ms
+//! };
+//! let mut driver = SpimotorDriver::new(driver_config);
+//! assert!(driver.capabilities(0).contains(GoalKind::RampPosition));
+//! assert!(!driver.capabilities(0).contains(GoalKind::Home));
+//!
+//! // Start-up begins with the datasheet's "read identification": 0x91, 0x01, then xx.
+//! let mut buf = [0u8; 256];
+//! driver.handle_timeout(Duration::ZERO);
+//! let transmit = driver.poll_transmit(Duration::ZERO, &mut buf).expect("a read");
+//! assert_eq!(&buf[..2], &[0x91, 0x01]);
+//! // The MISO bytes of that transaction go back through `handle_rx`; until the board has
+//! // answered, motion goals are refused.
+//! assert!(driver.set_goal(Duration::ZERO, 0, Goal::Position { counts: 10.0 }).is_err());
+//! # let _ = transmit;
+//! ```
+//!
 //! # The wire
 //!
 //! Every exchange is one SPI transaction (address byte, port byte, data). A read's answer
