@@ -29,7 +29,7 @@ fn header(client: &Client<Service>, axes: &[usize]) -> anyhow::Result<String> {
     Ok(line)
 }
 
-/// Records frames for `duration` of server time (ticks `first .. first + duration·rate`).
+/// Records the ticks `first .. first + duration × tick_hz` (server time), one row each.
 pub fn run(
     client: &Client<Service>,
     duration: Duration,
@@ -37,13 +37,15 @@ pub fn run(
     names: &[String],
 ) -> anyhow::Result<()> {
     let axes = select_axes(client, names)?;
+    let tick_hz = client.info()?.tick_hz.max(1);
+    let wanted = (duration.as_secs_f64() * f64::from(tick_hz))
+        .round()
+        .max(1.0) as u64;
     let mut file = BufWriter::new(File::create(out).context("create the file")?);
     writeln!(file, "{}", header(client, &axes)?)?;
-    let span_ns = u64::try_from(duration.as_nanos()).unwrap_or(u64::MAX);
-    let mut first: Option<(u64, u64)> = None; // (tick, time_ns)
-    let mut last_tick = None;
+    let mut first = None;
+    let mut last = None;
     let mut rows = 0u64;
-    let mut missed = 0u64;
     let mut interrupted = false;
     // Start from fresh frames, not from whatever waited in the buffer.
     drop(client.latest()?);
@@ -56,14 +58,11 @@ pub fn run(
             }
             Err(error) => return Err(error.into()),
         };
-        let (_, start_ns) = *first.get_or_insert((frame.tick, frame.time_ns));
-        if frame.time_ns.saturating_sub(start_ns) >= span_ns {
+        let start = *first.get_or_insert(frame.tick);
+        if frame.tick.saturating_sub(start) >= wanted {
             break;
         }
-        if let Some(previous) = last_tick {
-            missed += frame.tick.saturating_sub(previous + 1);
-        }
-        last_tick = Some(frame.tick);
+        last = Some(frame.tick);
         let mut line = format!("{},{:.9}", frame.tick, frame.time_ns as f64 / 1e9);
         for &index in &axes {
             let state = frame.axes().get(index).copied().unwrap_or_default();
@@ -80,19 +79,19 @@ pub fn run(
         rows += 1;
     }
     file.flush()?;
-    let span = match (first, last_tick) {
-        (Some((from, _)), Some(to)) => format!("ticks {from}..={to}"),
+    let span = match (first, last) {
+        (Some(from), Some(to)) => format!("ticks {from}..={to}"),
         _ => "no ticks".to_owned(),
     };
     eprintln!("recorded {rows} rows ({span}) to {}", out.display());
-    if missed > 0 {
-        eprintln!(
-            "warning: {missed} ticks were missed (motionctl was descheduled for longer than \
-             the server's frame buffer); their rows are absent"
-        );
-    }
     if interrupted {
         eprintln!("stopped early by a signal");
+    } else if rows < wanted {
+        eprintln!(
+            "warning: {} ticks were missed (motionctl was descheduled for longer than the \
+             server's frame buffer); their rows are absent",
+            wanted - rows
+        );
     }
     Ok(())
 }
