@@ -154,15 +154,21 @@ fn stepper_rig(driver_address: u8) -> (Rig, Board, SimFaults) {
 }
 
 fn brushed_rig() -> (Rig, Board) {
+    let (rig, board, _) = brushed_rig_with_faults();
+    (rig, board)
+}
+
+fn brushed_rig_with_faults() -> (Rig, Board, SimFaults) {
     let (wire, board) = Shared::new(sim(0x90, Drive::Brushed));
     let link = SimLink::spi("spi0", SPEED_HZ, wire);
+    let faults = link.faults();
     let driver = SpimotorDriver::new(driver_config(0x90, SpimotorDrive::Brushed));
     let config = engine_config(
         vec![device("wheels", 0x90)],
         vec![brushed_axis("left", 0, 0), brushed_axis("right", 0, 1)],
     );
     let rig = Rig::new(config, vec![Box::new(driver)], vec![Box::new(link)]);
-    (rig, board)
+    (rig, board, faults)
 }
 
 fn flag(rig: &Rig, axis: usize, flag: AxisFlags) -> bool {
@@ -524,6 +530,40 @@ fn brushed_power_spins_and_stops_each_motor() {
         );
     }
     assert!(fresh(&rig, 0) && fresh(&rig, 1));
+}
+
+#[test]
+fn a_replugged_brushed_board_is_stopped_by_its_start_up() {
+    let (mut rig, board, faults) = brushed_rig_with_faults();
+    wait_online(&mut rig, 2);
+    accepted(&mut rig, 0, CommandKind::Power, [0.8, 0.0, 0.0]);
+    rig.run(20);
+    faults.unplug();
+    rig.run(150);
+    assert_eq!(rig.axis(0).fault, FaultCode::LinkDown as u16);
+    assert!(flag(&rig, 0, AxisFlags::STALE) && flag(&rig, 1, AxisFlags::STALE));
+    // The board itself knows nothing of the link: motor A still spins.
+    assert_ne!(board.lock().unwrap().bridge(Motor::A), Bridge::Stopped);
+    faults.replug();
+    assert!(rig.run_until(Duration::from_secs(1), |frame| {
+        (0..2).all(|i| frame.axes[i].flags & (AxisFlags::STALE.0 | AxisFlags::FAULT.0) == 0)
+    }));
+    assert_eq!(board.lock().unwrap().bridge(Motor::A), Bridge::Stopped);
+    assert!(!flag(&rig, 0, AxisFlags::MOVING));
+    assert_ne!(
+        rig.axis(0).mode,
+        AxisMode::Power as u8,
+        "needs a new command"
+    );
+    accepted(&mut rig, 0, CommandKind::Power, [-0.2, 0.0, 0.0]);
+    rig.run(3);
+    assert_eq!(
+        board.lock().unwrap().bridge(Motor::A),
+        Bridge::Spin {
+            direction: Direction::B,
+            intensity: 51
+        }
+    );
 }
 
 #[test]
