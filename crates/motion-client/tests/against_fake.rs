@@ -255,3 +255,43 @@ fn a_stopped_server_is_reported_not_waited_for_forever() -> Result {
     assert!(matches!(silent, Err(ClientError::NoFrame(_))), "{silent:?}");
     Ok(())
 }
+
+#[test]
+fn a_refused_renewal_is_reported_by_the_guard() -> Result {
+    let (server, client) = start::<local::Service>("renewal")?;
+    let y = client.axis("y")?;
+    let jog = y.jog(-5.0, 0.0)?;
+    client.estop()?;
+    // Read frames past one renewal period (a third of the 250 ms deadman).
+    let until = std::time::Instant::now() + Duration::from_millis(200);
+    while std::time::Instant::now() < until {
+        client.next_frame(WAIT)?;
+    }
+    assert_eq!(jog.refused(), Some(Reason::EstopLatched));
+    let renewals_before = server.requests().len();
+    let until = std::time::Instant::now() + Duration::from_millis(200);
+    while std::time::Instant::now() < until {
+        client.next_frame(WAIT)?;
+    }
+    assert_eq!(
+        server.requests().len(),
+        renewals_before,
+        "no renewals once refused"
+    );
+    jog.stop()?; // a stop is always taken
+    Ok(())
+}
+
+#[test]
+fn for_each_frame_reports_a_silent_server() -> Result {
+    let (server, client) = start::<ipc::Service>("silent")?;
+    server.shutdown()?;
+    let mut seen = 0;
+    let result = client.for_each_frame(Duration::from_millis(200), |_| {
+        seen += 1;
+        ControlFlow::Continue(())
+    });
+    assert!(matches!(result, Err(ClientError::NoFrame(_))), "{result:?}");
+    assert!(seen <= 4, "only the frames buffered before the stop");
+    Ok(())
+}
