@@ -50,7 +50,8 @@ impl<S: Service> Client<S> {
     }
 
     /// The next frame by busy polling (no sleeping), for latency measurements on a
-    /// dedicated core. Spins for up to `timeout`.
+    /// dedicated core. Spins for up to `timeout`. Jog guards are not renewed while spinning
+    /// (call [`Client::keep_alive`] between frames if you hold one).
     pub fn next_frame_spinning(&self, timeout: Duration) -> Result<Frame<S>, ClientError> {
         let deadline = Instant::now() + timeout;
         loop {

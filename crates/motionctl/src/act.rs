@@ -4,7 +4,7 @@ use core::time::Duration;
 use std::time::Instant;
 
 use anyhow::Context as _;
-use motion_client::{Client, ClientError, JogGuard};
+use motion_client::{Axis, Client, ClientError, JogGuard};
 
 use crate::Service;
 
@@ -28,8 +28,7 @@ pub fn move_axis(
         out!("{name}: moving to {position} {unit}");
         return Ok(());
     };
-    let frame = axis
-        .wait_until_arrived(timeout)
+    let frame = stop_if_interrupted(&axis, axis.wait_until_arrived(timeout))
         .with_context(|| format!("move {name} to {position} {unit}"))?;
     let reached = frame
         .axes()
@@ -37,6 +36,23 @@ pub fn move_axis(
         .map_or(f64::NAN, |state| state.position);
     out!("{name}: arrived at {reached} {unit} (tick {})", frame.tick);
     Ok(())
+}
+
+/// Ctrl-C while waiting for a move means "abort": the axis is stopped before exiting.
+fn stop_if_interrupted<T>(
+    axis: &Axis<'_, Service>,
+    result: Result<T, ClientError>,
+) -> anyhow::Result<T> {
+    match result {
+        Err(ClientError::Interrupted) => {
+            let stopped = match axis.stop() {
+                Ok(_) => "axis stopped".to_owned(),
+                Err(error) => format!("stopping it failed too: {error}"),
+            };
+            Err(anyhow::Error::new(ClientError::Interrupted).context(stopped))
+        }
+        other => Ok(other?),
+    }
 }
 
 /// Holds `guard` until Ctrl-C/SIGTERM, renewing it as frames come, then stops the axis.
@@ -131,8 +147,7 @@ pub fn home(
         out!("{name}: homing");
         return Ok(());
     };
-    let frame = axis
-        .wait_until_homed(timeout)
+    let frame = stop_if_interrupted(&axis, axis.wait_until_homed(timeout))
         .with_context(|| format!("home {name}"))?;
     out!("{name}: homed (tick {})", frame.tick);
     Ok(())

@@ -271,3 +271,32 @@ fn watch_needs_a_terminal() -> Result {
     assert!(stderr(&output).contains("watch --json"), "{output:?}");
     Ok(())
 }
+
+#[test]
+fn ctrl_c_during_move_wait_stops_the_axis_and_exits_130() -> Result {
+    let server = fake("abort")?;
+    let child = command(
+        server.name(),
+        &["move", "x", "90", "--velocity", "1", "--wait"],
+    )
+    .stdin(Stdio::null())
+    .stdout(Stdio::piped())
+    .stderr(Stdio::piped())
+    .spawn()?;
+    let until = Instant::now() + DEADLINE;
+    while !server
+        .requests()
+        .iter()
+        .any(|request| request.kind() == Ok(CommandKind::RampPosition))
+    {
+        assert!(Instant::now() < until, "move never sent");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    kill(Pid::from_raw(i32::try_from(child.id())?), Signal::SIGINT)?;
+    let output = finish(child, DEADLINE)?;
+    assert_eq!(output.status.code(), Some(130), "{output:?}");
+    assert!(stderr(&output).contains("axis stopped"), "{output:?}");
+    let last = server.requests().last().copied().ok_or("no requests")?;
+    assert_eq!((last.kind(), last.axis), (Ok(CommandKind::Stop), 0));
+    Ok(())
+}
