@@ -226,10 +226,9 @@ impl Channel {
             Step::Velocity { velocity, accel } => {
                 Packets::of(&[velocity_mode, Packet::VelocityRamp { velocity, accel }])
             }
-            Step::Stop { accel, .. } => Packets::of(&[
-                velocity_mode,
-                Packet::VelocityRamp { velocity: 0, accel },
-            ]),
+            Step::Stop { accel, .. } => {
+                Packets::of(&[velocity_mode, Packet::VelocityRamp { velocity: 0, accel }])
+            }
             Step::Hold => Packets::of(&[position_mode, Target(self.position)]),
             Step::SetCounter(value) if self.board_mode == ControlMode::Off => {
                 Packets::of(&[Packet::SetCounter(value)])
@@ -269,7 +268,11 @@ impl Channel {
         } else {
             EdgeAction::SetOnNegative
         };
-        let mode = if armed { home.mode } else { InputMode::Disabled };
+        let mode = if armed {
+            home.mode
+        } else {
+            InputMode::Disabled
+        };
         Packet::Input {
             config: InputConfig::new(mode, home.active_high, edge),
             position: home.position,

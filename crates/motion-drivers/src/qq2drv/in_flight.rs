@@ -70,7 +70,11 @@ impl InFlight {
 
     /// The oldest.
     pub(super) fn oldest(&self) -> Option<Sent> {
-        self.items.first().copied().flatten().filter(|_| self.len > 0)
+        self.items
+            .first()
+            .copied()
+            .flatten()
+            .filter(|_| self.len > 0)
     }
 
     /// Removes and returns the oldest.

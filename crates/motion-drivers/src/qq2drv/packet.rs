@@ -56,10 +56,13 @@ impl Packet {
                 Request::SetMotorPower(Entries::new(&[MotorPowerEntry { channels, power }]))
                     .encode(buf)
             }
-            Self::Target(position) => Request::SetPositionTarget(Entries::new(&[
-                PositionTargetEntry { channels, position },
-            ]))
-            .encode(buf),
+            Self::Target(position) => {
+                Request::SetPositionTarget(Entries::new(&[PositionTargetEntry {
+                    channels,
+                    position,
+                }]))
+                .encode(buf)
+            }
             Self::PositionRamp {
                 position,
                 velocity,
