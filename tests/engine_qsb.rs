@@ -460,3 +460,21 @@ fn a_qsb_s_reads_its_encoder_and_sets_position_but_drives_nothing() {
     let sim = qsb.sim.lock().expect("sim");
     assert_eq!(sim.stats().errors + sim.stats().unsupported, 0, "no e or x");
 }
+
+#[test]
+fn the_deadman_stops_a_jog_on_the_board() {
+    let mut qsb = Qsb::m();
+    assert_eq!(
+        qsb.command(CommandKind::Velocity, [20.0, 0.0, 0.0]),
+        Reason::Accepted
+    );
+    qsb.rig.run(200);
+    assert!(qsb.sim.lock().expect("sim").motor_velocity() > 150.0);
+    qsb.run_within_limits(Duration::from_millis(400), |axis| {
+        axis.mode() == Ok(AxisMode::Hold)
+    });
+    let axis = qsb.axis();
+    assert!(flags(&axis).contains(AxisFlags::DEADMAN_EXPIRED));
+    assert_eq!(qsb.sim.lock().expect("sim").motor_velocity(), 0.0);
+    assert!(!qsb.sim.lock().expect("sim").md_status().jogging);
+}

@@ -3,6 +3,24 @@
 //! One channel (0): the encoder counter, and on the -M the stepper drive that moves it.
 //! Every byte goes through the `qsb` protocol crate.
 //!
+//! ```
+//! use core::time::Duration;
+//! use motion_drivers::Driver;
+//! use motion_drivers::qsb::{QsbDriver, QsbDriverConfig};
+//!
+//! let mut driver = QsbDriver::new(QsbDriverConfig::default()); // a QSB-M at 230400 baud
+//! let mut buf = [0u8; 256];
+//! let now = Duration::ZERO;
+//! let sent = driver.poll_transmit(now, &mut buf).expect("start-up");
+//! assert_eq!(&buf[..sent.len], b"W161\r\n"); // COMMAND 1: quiet any old streams
+//! driver.handle_rx(Duration::from_micros(700), b"w 16 00000001 !\r\n");
+//! let sent = driver.poll_transmit(Duration::from_micros(700), &mut buf).expect("version");
+//! assert_eq!(&buf[..sent.len], b"R14\r\n");
+//! driver.handle_rx(Duration::from_millis(1), b"r 14 00001113 !\r\n");
+//! assert_eq!(driver.product(), Some(qsb::ProductType::M));
+//! assert_eq!(driver.status().firmware(), "QSB-M SN 00001 fw 13");
+//! ```
+//!
 //! # Start-up
 //!
 //! `W161` (COMMAND 1: stop any streams left running, so the line is quiet), `R14`

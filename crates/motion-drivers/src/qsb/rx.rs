@@ -65,6 +65,7 @@ impl QsbDriver {
             .in_flight
             .filter(|flight| answers(flight.request, &response));
         if response.ty == ResponseType::Stream {
+            self.status.replies = self.status.replies.saturating_add(1);
             self.on_stream(now, &response);
         }
         match flight {
@@ -142,6 +143,10 @@ impl QsbDriver {
             return;
         }
         self.attempts = 0;
+        if response.ty != ResponseType::Stream {
+            // (A stream's `s` answer was counted as a streamed line.)
+            self.status.replies = self.status.replies.saturating_add(1);
+        }
         if self.status.fault == Some(DeviceFault::BoardError) {
             self.status.fault = None;
         }

@@ -578,3 +578,124 @@ fn link_down_faults_and_link_up_starts_again() {
     bench.driver.link_up(bench.now);
     bench.expect(b"W161\r\n");
 }
+
+mod random {
+    use super::*;
+    use ::qsb::Request;
+    use proptest::prelude::*;
+
+    #[derive(Debug, Clone)]
+    enum Op {
+        Noise(Vec<u8>),
+        Line(u8, u8, u32, Option<u32>),
+        Advance(u32),
+        AnswerLast(u32),
+        SetGoal(u8, f64, f64),
+        Link(bool),
+    }
+
+    fn op() -> impl Strategy<Value = Op> {
+        prop_oneof![
+            proptest::collection::vec(any::<u8>(), 1..40).prop_map(Op::Noise),
+            (
+                0u8..5,
+                0u8..0x18,
+                any::<u32>(),
+                proptest::option::of(any::<u32>())
+            )
+                .prop_map(|(t, r, d, ts)| Op::Line(t, r, d, ts)),
+            (0u32..30_000).prop_map(Op::Advance),
+            any::<u32>().prop_map(Op::AnswerLast),
+            (0u8..9, any::<f64>(), -1e6f64..1e6).prop_map(|(k, a, b)| Op::SetGoal(k, a, b)),
+            any::<bool>().prop_map(Op::Link),
+        ]
+    }
+
+    fn goal(kind: u8, a: f64, b: f64) -> Goal {
+        match kind {
+            0 => Goal::Off,
+            1 => Goal::Stop { decel: b.abs() },
+            2 => Goal::Power { fraction: a },
+            3 => Goal::Position { counts: a },
+            4 => Goal::Velocity {
+                velocity: b,
+                accel: a.abs(),
+            },
+            5 => Goal::RampPosition {
+                counts: b,
+                velocity: a.abs(),
+                accel: b.abs(),
+            },
+            6 => Goal::Home { velocity: b.abs() },
+            _ => Goal::SetPosition { counts: b },
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(96))]
+
+        /// Whatever the board sends, whatever the goals and the time: no panic, every
+        /// message is a command line of the codec, at most one request in flight, and the
+        /// channel state stays finite.
+        #[test]
+        fn any_traffic_goals_and_times_keep_the_driver_sane(
+            started in any::<bool>(),
+            ops in proptest::collection::vec(op(), 0..120),
+        ) {
+            let mut bench = if started {
+                Bench::started(ProductType::M)
+            } else {
+                Bench::new(ProductType::M)
+            };
+            let mut last: Option<Vec<u8>> = None;
+            for op in ops {
+                match op {
+                    Op::Noise(bytes) => bench.rx(&bytes),
+                    Op::Line(ty, register, data, ts) => {
+                        let ty = [
+                            ResponseType::Read,
+                            ResponseType::Write,
+                            ResponseType::Stream,
+                            ResponseType::Error,
+                            ResponseType::Unsupported,
+                        ][usize::from(ty)];
+                        let mut response = Response::new(ty, register, data);
+                        response.time_stamp = ts;
+                        let mut buf = [0u8; ::qsb::MAX_RESPONSE_LEN];
+                        let len = response.encode(DRIVER_EOR, &mut buf).expect("fits");
+                        bench.rx(&buf[..len]);
+                    }
+                    Op::Advance(micros) => bench.advance(Duration::from_micros(u64::from(micros))),
+                    Op::AnswerLast(value) => {
+                        if let Some(sent) = last.take() {
+                            bench.answer(&sent, value);
+                        }
+                    }
+                    Op::SetGoal(kind, a, b) => {
+                        let online = bench.driver.status().online;
+                        let result = bench.driver.set_goal(bench.now, 0, goal(kind, a, b));
+                        if !online {
+                            prop_assert!(result.is_err());
+                        }
+                    }
+                    Op::Link(up) => {
+                        if up {
+                            bench.driver.link_up(bench.now);
+                        } else {
+                            bench.driver.link_down(bench.now);
+                        }
+                    }
+                }
+                if let Some(sent) = bench.sent() {
+                    let line = sent.strip_suffix(b"\r\n").expect("EOC");
+                    prop_assert!(Request::decode(line).is_ok(), "{:?}", sent);
+                    prop_assert!(bench.driver.awaiting_reply());
+                    prop_assert_eq!(bench.sent(), None, "one request in flight");
+                    last = Some(sent);
+                }
+                let state = bench.driver.channel(0);
+                prop_assert!(state.position.is_finite() && state.velocity.is_finite());
+            }
+        }
+    }
+}
