@@ -420,7 +420,8 @@ impl QsbDriver {
             match self.setup.front() {
                 Some(Step::Configure) => match self.product {
                     Some(product) => self.configure(product),
-                    None => self.setup.clear(),
+                    // (Cannot happen: VERSION is read first.) Never sit offline for good.
+                    None => self.declare_dead(now),
                 },
                 Some(Step::Online) => {
                     self.setup.pop();
