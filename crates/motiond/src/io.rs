@@ -12,7 +12,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::thread::JoinHandle;
 
-use motion_link::{Link, LinkErrorKind};
+use motion_link::{Link, LinkErrorKind, LinkKind};
 use rtrb::{Consumer, Producer, RingBuffer};
 
 use crate::rt::monotonic_now;
@@ -233,6 +233,21 @@ impl Worker {
                     }
                 }
                 Err(error) => {
+                    if self.link.kind() == LinkKind::Spi
+                        && error.kind() != LinkErrorKind::Disconnected
+                    {
+                        // The transaction did not happen; the driver still waits for its
+                        // MISO bytes. Hand it a floating bus (0xFF) of the same length so
+                        // the bytes of later transactions reach their owners, never a
+                        // neighbour's.
+                        let floating = [0xFF; PACKET_LEN];
+                        let len = bytes.len().min(PACKET_LEN);
+                        if self.rx.push(Packet::new(&floating[..len])).is_err() {
+                            self.counters
+                                .dropped
+                                .fetch_add(len as u64, Ordering::Relaxed);
+                        }
+                    }
                     self.fail(now, error.kind());
                     return;
                 }

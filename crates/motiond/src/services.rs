@@ -54,26 +54,18 @@ impl Services {
                 .map_err(|e| format!("service name {n:?}: {e:?}"))
         };
         let max_nodes = max_clients + 2;
-        let frame = node
-            .service_builder(&service_name(names.frame())?)
+        let frame_name = service_name(names.frame())?;
+        if node
+            .service_builder(&frame_name)
             .publish_subscribe::<MotionFrame>()
-            .history_size(1)
-            .subscriber_max_buffer_size(2)
-            .max_subscribers(max_clients)
-            .max_publishers(1)
-            .max_nodes(max_nodes)
-            .enable_safe_overflow(true)
-            .create()
-            .map_err(|e| {
-                format!(
-                    "service {}: {e:?} — is another motiond serving instance `{name}`? Stop it or pick another [server] name",
-                    names.frame()
-                )
-            })?;
-        let frame = frame
-            .publisher_builder()
-            .create()
-            .map_err(|e| format!("frame publisher: {e:?}"))?;
+            .open()
+            .is_ok()
+        {
+            return Err(format!(
+                "service {} exists: another motiond is serving instance `{name}`; stop it or pick another [server] name",
+                names.frame()
+            ));
+        }
         let tick = node
             .service_builder(&service_name(names.tick())?)
             .event()
@@ -125,6 +117,26 @@ impl Services {
             .publisher_builder()
             .create()
             .map_err(|e| format!("stats publisher: {e:?}"))?;
+        // The frame service comes last: a client that sees it can open every other one.
+        let frame = node
+            .service_builder(&frame_name)
+            .publish_subscribe::<MotionFrame>()
+            .history_size(1)
+            .subscriber_max_buffer_size(2)
+            .max_subscribers(max_clients)
+            .max_publishers(1)
+            .max_nodes(max_nodes)
+            .enable_safe_overflow(true)
+            .create()
+            .map_err(|e| {
+                format!(
+                    "service {}: {e:?} — is another motiond serving instance `{name}`? Stop it or pick another [server] name",
+                    names.frame()
+                )
+            })?
+            .publisher_builder()
+            .create()
+            .map_err(|e| format!("frame publisher: {e:?}"))?;
         Ok(Self {
             node,
             frame,

@@ -1,6 +1,8 @@
 //! Starting motiond as a child process and talking to it with plain iceoryx2.
 #![allow(dead_code)]
 
+pub mod pty_board;
+
 use core::time::Duration;
 use std::io::{BufRead, BufReader};
 use std::path::PathBuf;
@@ -154,4 +156,94 @@ pub fn next_frame(
         std::thread::sleep(Duration::from_millis(2));
     }
     None
+}
+
+/// A plain iceoryx2 client of one motiond instance: frames and commands.
+pub struct RawClient {
+    pub node: Node<ipc::Service>,
+    pub frames: iceoryx2::port::subscriber::Subscriber<ipc::Service, MotionFrame, ()>,
+    pub commands: iceoryx2::port::client::Client<
+        ipc::Service,
+        motion_ipc::CommandRequest,
+        (),
+        motion_ipc::CommandReply,
+        (),
+    >,
+    sequence: u64,
+}
+
+impl RawClient {
+    /// Connects to instance `name`, waiting up to `timeout` for it to appear.
+    pub fn connect(name: &str, timeout: Duration) -> Self {
+        set_log_level(LogLevel::Error);
+        let node = NodeBuilder::new()
+            .create::<ipc::Service>()
+            .expect("client node");
+        let frames = open_frames(&node, name, timeout).expect("frame service");
+        let service_name: ServiceName = ServiceNames::new(name)
+            .command()
+            .as_str()
+            .try_into()
+            .expect("name");
+        let commands = node
+            .service_builder(&service_name)
+            .request_response::<motion_ipc::CommandRequest, motion_ipc::CommandReply>()
+            .open()
+            .expect("command service")
+            .client_builder()
+            .create()
+            .expect("command client");
+        Self {
+            node,
+            frames,
+            commands,
+            sequence: 0,
+        }
+    }
+
+    /// Sends one command and waits (up to 2 s) for its reply.
+    pub fn command(
+        &mut self,
+        axis: u32,
+        kind: motion_ipc::CommandKind,
+        values: [f64; 3],
+    ) -> motion_ipc::CommandReply {
+        self.sequence += 1;
+        let client = motion_ipc::ClientId::from_u128(self.node.id().value());
+        let request =
+            motion_ipc::CommandRequest::new(client, self.sequence, axis, kind).with_values(values);
+        let pending = self.commands.send_copy(request).expect("send command");
+        let end = Instant::now() + Duration::from_secs(2);
+        while Instant::now() < end {
+            if let Ok(Some(reply)) = pending.receive() {
+                return *reply;
+            }
+            std::thread::sleep(Duration::from_micros(200));
+        }
+        panic!("no reply to {request:?} within 2 s");
+    }
+
+    /// The newest frame (waiting up to 2 s).
+    pub fn frame(&self) -> MotionFrame {
+        next_frame(&self.frames, Duration::from_secs(2)).expect("a frame")
+    }
+
+    /// Polls frames until `done` holds or `timeout` passes; returns the last frame and
+    /// whether `done` held.
+    pub fn wait_frame(
+        &self,
+        timeout: Duration,
+        mut done: impl FnMut(&MotionFrame) -> bool,
+    ) -> (MotionFrame, bool) {
+        let end = Instant::now() + timeout;
+        let mut last = self.frame();
+        while Instant::now() < end {
+            last = self.frame();
+            if done(&last) {
+                return (last, true);
+            }
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        (last, false)
+    }
 }

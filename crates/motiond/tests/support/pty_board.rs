@@ -1,0 +1,126 @@
+//! A simulated serial board served on a pseudo-terminal by a thread of the test process, so
+//! that motiond (a child process) opens a real tty through serialport while the test watches
+//! the model's true state — and can "unplug" it by closing the master side.
+
+use core::time::Duration;
+use std::collections::VecDeque;
+use std::os::fd::{AsFd, OwnedFd};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+use std::time::Instant;
+
+use motion_link::sim::StreamDevice;
+use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
+
+/// A board model on a pty, reachable at `link` (a symlink to the pty's slave).
+pub struct PtyBoard {
+    stop: Arc<AtomicBool>,
+    thread: Option<JoinHandle<()>>,
+    /// The symlink the server's config names.
+    pub link: PathBuf,
+}
+
+impl PtyBoard {
+    /// Serves `device` on a new pty and points `link` at it (replacing an old symlink).
+    /// Bytes the board sends reach the tty at `baud` (10 bits a byte), as on a real line:
+    /// a byte is written when its last bit would have arrived.
+    pub fn start<D: StreamDevice + 'static>(
+        link: &Path,
+        device: Arc<Mutex<D>>,
+        epoch: Instant,
+        baud: u32,
+    ) -> Self {
+        let pty = nix::pty::openpty(None, None).expect("openpty");
+        // Child processes (the server under test) must not inherit the master: an
+        // inherited copy would keep the "adapter" plugged in after `unplug`.
+        for fd in [&pty.master, &pty.slave] {
+            nix::fcntl::fcntl(
+                fd,
+                nix::fcntl::FcntlArg::F_SETFD(nix::fcntl::FdFlag::FD_CLOEXEC),
+            )
+            .expect("FD_CLOEXEC");
+        }
+        let slave_path = nix::unistd::ttyname(pty.slave.as_fd()).expect("ttyname");
+        let _ = std::fs::remove_file(link);
+        std::os::unix::fs::symlink(&slave_path, link).expect("symlink to the pty");
+        let stop = Arc::new(AtomicBool::new(false));
+        let thread = {
+            let stop = Arc::clone(&stop);
+            let master = pty.master;
+            // Keep our own slave fd open so the master never reads EIO while the server is
+            // between opens.
+            let slave = pty.slave;
+            std::thread::spawn(move || serve(master, slave, device, stop, epoch, baud))
+        };
+        Self {
+            stop,
+            thread: Some(thread),
+            link: link.to_owned(),
+        }
+    }
+
+    /// Closes the master side: the server's tty reports a hang-up, as an unplugged adapter.
+    pub fn unplug(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(thread) = self.thread.take() {
+            let _ = thread.join();
+        }
+    }
+}
+
+impl Drop for PtyBoard {
+    fn drop(&mut self) {
+        self.unplug();
+    }
+}
+
+fn serve<D: StreamDevice>(
+    master: OwnedFd,
+    slave: OwnedFd,
+    device: Arc<Mutex<D>>,
+    stop: Arc<AtomicBool>,
+    epoch: Instant,
+    baud: u32,
+) {
+    let byte_time = Duration::from_nanos(10_000_000_000 / u64::from(baud.max(1)));
+    let mut buf = [0u8; 512];
+    let mut line: VecDeque<(Duration, u8)> = VecDeque::new();
+    let mut line_free_at = Duration::ZERO;
+    while !stop.load(Ordering::Relaxed) {
+        let mut fds = [PollFd::new(master.as_fd(), PollFlags::POLLIN)];
+        let wait: u8 = if line.is_empty() { 1 } else { 0 };
+        let ready = poll(&mut fds, PollTimeout::from(wait)).unwrap_or(0);
+        let now = epoch.elapsed();
+        if ready > 0 {
+            match nix::unistd::read(&master, &mut buf) {
+                Ok(len) if len > 0 => device.lock().unwrap().receive(now, &buf[..len]),
+                _ => std::thread::sleep(Duration::from_millis(1)),
+            }
+        }
+        let len = device.lock().unwrap().transmit(now, &mut buf);
+        for &byte in &buf[..len] {
+            line_free_at = line_free_at.max(now) + byte_time;
+            line.push_back((line_free_at, byte));
+        }
+        let mut due = Vec::new();
+        while line.front().is_some_and(|(at, _)| *at <= now) {
+            if let Some((_, byte)) = line.pop_front() {
+                due.push(byte);
+            }
+        }
+        let mut sent = 0;
+        while sent < due.len() {
+            match nix::unistd::write(&master, &due[sent..]) {
+                Ok(n) => sent += n,
+                Err(_) => break,
+            }
+        }
+        if !line.is_empty() {
+            std::thread::sleep(Duration::from_micros(100));
+        }
+    }
+    drop(slave);
+    drop(master);
+}
