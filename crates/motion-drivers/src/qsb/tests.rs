@@ -429,6 +429,31 @@ fn an_e_answer_is_a_board_error_until_the_next_goal() {
 }
 
 #[test]
+fn an_e_line_right_after_garbage_is_still_surfaced_and_a_lost_answer_asked_again() {
+    let mut bench = Bench::started(ProductType::M);
+    bench.tick(Some(MD_DONE));
+    let goal = Goal::Velocity {
+        velocity: 5_000.0,
+        accel: 100_000.0,
+    };
+    bench.driver.set_goal(bench.now, 0, goal).expect("jog");
+    bench.expect(b"W121F0\r\n");
+    // The answer is lost on the wire: asked again after the reply timeout.
+    let deadline = bench.driver.poll_timeout().expect("deadline");
+    bench.advance(deadline - bench.now);
+    assert_eq!(bench.driver.status().timeouts, 1);
+    bench.expect(b"W121F0\r\n");
+    // "s0" + "e12000001F0<time stamp>!": the `e` first reads as a register digit of
+    // the garbage line; in the driver's EOR (time stamp, no spaces) that line cannot
+    // complete, and the decoder finds the `e` line in what it had buffered.
+    let mut bytes = b"s0".to_vec();
+    bytes.extend(bench.line(ResponseType::Error, 0x12, 0x1F0));
+    bench.rx(&bytes);
+    assert_eq!(bench.driver.status().fault, Some(DeviceFault::BoardError));
+    assert!(!bench.driver.awaiting_reply());
+}
+
+#[test]
 fn garbage_between_lines_is_skipped_and_counted() {
     let mut bench = Bench::started(ProductType::S);
     let before = bench.driver.status().bad_replies;
