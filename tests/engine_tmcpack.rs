@@ -1,9 +1,15 @@
 //! Engine + Trinamic SIXpack/QUADpack driver + simulated packs on a simulated RS-485 pair
 //! (half duplex, 19200 baud), stepped with a fake clock.
+//!
+//! The counting global allocator (for the driver's zero-allocation test) counts on the
+//! calling thread only, so the other tests of this binary do not disturb it.
+#![allow(unsafe_code)] // the counting global allocator
 
 mod support;
 
 use core::time::Duration;
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
 use std::sync::{Arc, Mutex};
 
 use motion_drivers::tmcpack::{TmcpackChannel, TmcpackDriver, TmcpackDriverConfig};
@@ -15,6 +21,38 @@ use motion_sim::tmcpack::{TmcpackSim, TmcpackSimConfig};
 use support::rig::{Rig, Shared};
 use tmcpack::convert::byte_time;
 use tmcpack::{Action, Request, RequestFrame, Variant};
+
+struct CountingAllocator;
+
+thread_local! {
+    static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
+}
+
+// SAFETY: every call is forwarded unchanged to the system allocator; the only addition is
+// a thread-local counter that does not allocate.
+unsafe impl GlobalAlloc for CountingAllocator {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        let _ = ALLOCATIONS.try_with(|count| count.set(count.get() + 1));
+        // SAFETY: same contract as our caller's.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as our caller's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        let _ = ALLOCATIONS.try_with(|count| count.set(count.get() + 1));
+        // SAFETY: same contract as our caller's.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: CountingAllocator = CountingAllocator;
+
+fn allocations() -> u64 {
+    ALLOCATIONS.with(Cell::get)
+}
 
 const BAUD: u32 = 19_200;
 /// Microsteps per mm.
@@ -538,4 +576,54 @@ fn two_packs_on_one_bus_never_have_two_requests_in_flight() {
         assert!(stats.foreign > 0, "each pack heard the other's traffic");
     }
     assert_eq!(bus.lock().unwrap().collisions(), 0);
+}
+
+#[test]
+fn the_driver_allocates_nothing_after_construction() {
+    use motion_drivers::Goal;
+    use motion_link::Link;
+
+    let mut driver = driver(1, Variant::SixPack, &[0, 1], 0);
+    let mut link = SimLink::stream_with(
+        "rs485",
+        BAUD,
+        Duplex::Half,
+        Box::new(pack(1, Variant::SixPack)),
+    );
+    let mut buf = [0u8; 256];
+    let mut rx = [0u8; 256];
+    let mut in_driver = 0;
+    let mut online = false;
+    let period = Duration::from_millis(1);
+    for tick in 0..10_000u32 {
+        let now = period * tick;
+        let goal = match tick % 2_500 {
+            400 => Some(Goal::Position { counts: 400.0 }),
+            900 => Some(Goal::Velocity {
+                velocity: -800.0,
+                accel: 10_000.0,
+            }),
+            1_200 => Some(Goal::Stop { decel: 20_000.0 }),
+            1_600 => Some(Goal::Home { velocity: 1000.0 }),
+            2_000 => Some(Goal::SetPosition { counts: 0.0 }),
+            2_200 => Some(Goal::Off),
+            _ => None,
+        };
+        let len = link.read(now, &mut rx).expect("sim link");
+        let before = allocations();
+        driver.handle_rx(now, &rx[..len]);
+        driver.handle_timeout(now);
+        if let Some(goal) = goal {
+            let _ = driver.set_goal(now, 0, goal);
+        }
+        let transmit = driver.poll_transmit(now, &mut buf);
+        let _ = driver.channel(0);
+        online |= driver.status().online;
+        in_driver += allocations() - before;
+        if let Some(transmit) = transmit {
+            link.write(now, &buf[..transmit.len]).expect("sim link");
+        }
+    }
+    assert!(online);
+    assert_eq!(in_driver, 0, "allocations inside the driver");
 }
