@@ -1,6 +1,8 @@
 //! One driver per configured device, configured from its axes.
 
 use anyhow::bail;
+use motion_drivers::qq2drv::{Qq2drvDriver, Qq2drvDriverConfig};
+use motion_drivers::qsb::{QsbDriver, QsbDriverConfig};
 use motion_drivers::spimotor::{AxisLimits, SpimotorDrive, SpimotorDriver, SpimotorDriverConfig};
 use motion_drivers::tmcpack::{TmcpackChannel, TmcpackDriver, TmcpackDriverConfig};
 use motion_drivers::{Driver, Model};
@@ -95,6 +97,36 @@ fn spimotor(
     Ok(Box::new(SpimotorDriver::new(driver)))
 }
 
+fn qq2drv(config: &ServerConfig, index: usize, device: &DeviceSpec) -> Box<dyn Driver> {
+    let mut driver = Qq2drvDriverConfig::default();
+    if let Some(speed) = line_rate(config, device) {
+        driver.speed_hz = speed;
+    }
+    for (channel, slot) in driver.channels.iter_mut().enumerate() {
+        match channel_limits(config, index, channel) {
+            Some((max_velocity, max_accel)) => {
+                slot.enabled = true;
+                slot.limits.max_velocity = max_velocity;
+                slot.limits.max_accel = max_accel;
+            }
+            None => slot.enabled = false,
+        }
+    }
+    Box::new(Qq2drvDriver::new(driver))
+}
+
+fn qsb(config: &ServerConfig, index: usize, device: &DeviceSpec) -> Box<dyn Driver> {
+    let mut driver = QsbDriverConfig::default();
+    if let Some(baud) = line_rate(config, device) {
+        driver.baud = baud;
+    }
+    if let Some((max_velocity, max_accel)) = channel_limits(config, index, 0) {
+        driver.max_velocity = max_velocity;
+        driver.max_accel = max_accel;
+    }
+    Box::new(QsbDriver::new(driver))
+}
+
 /// Builds the drivers of `config`'s devices, in config order.
 pub fn build(config: &ServerConfig) -> anyhow::Result<Vec<Box<dyn Driver>>> {
     let mut drivers: Vec<Box<dyn Driver>> = Vec::with_capacity(config.devices.len());
@@ -102,11 +134,8 @@ pub fn build(config: &ServerConfig) -> anyhow::Result<Vec<Box<dyn Driver>>> {
         drivers.push(match device.model {
             Model::Tmcpack => tmcpack(config, index, device),
             Model::Spimotor => spimotor(config, index, device)?,
-            Model::Qq2drv | Model::Qsb => bail!(
-                "device `{}`: the {} driver is not built yet (issue \"Board drivers and the deterministic engine\")",
-                device.name,
-                device.model
-            ),
+            Model::Qq2drv => qq2drv(config, index, device),
+            Model::Qsb => qsb(config, index, device),
         });
     }
     Ok(drivers)

@@ -30,6 +30,9 @@ pub struct Services {
     pub stats: Publisher<Ipc, ServerStats, ()>,
 }
 
+/// Frames a subscriber can fall behind before the oldest is dropped (safe overflow).
+pub const FRAME_BUFFER: usize = 32;
+
 /// Requests a client may have outstanding at once.
 pub const MAX_REQUESTS_PER_CLIENT: usize = 8;
 
@@ -122,7 +125,8 @@ impl Services {
             .service_builder(&frame_name)
             .publish_subscribe::<MotionFrame>()
             .history_size(1)
-            .subscriber_max_buffer_size(2)
+            // A client that is late by up to FRAME_BUFFER ticks loses nothing (8 KiB each).
+            .subscriber_max_buffer_size(FRAME_BUFFER)
             .max_subscribers(max_clients)
             .max_publishers(1)
             .max_nodes(max_nodes)
