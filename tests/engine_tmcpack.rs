@@ -627,3 +627,41 @@ fn the_driver_allocates_nothing_after_construction() {
     assert!(online);
     assert_eq!(in_driver, 0, "allocations inside the driver");
 }
+
+/// The sim.toml bus: a SIXpack and a QUADpack, ten motors polled on one 19200-baud pair.
+/// With moves going on, no axis ever goes stale: the refresh budget fits a real bus.
+#[test]
+fn ten_motors_on_one_bus_stay_fresh_within_the_refresh_budget() {
+    let (six, six_board) = Shared::new(pack(1, Variant::SixPack));
+    let (quad, quad_board) = Shared::new(pack(2, Variant::QuadPack));
+    let (wire, bus) = Shared::new(StreamBus::new().with(six).with(quad));
+    let link = SimLink::stream_with("rs485", BAUD, Duplex::Half, wire);
+    let mut axes: Vec<AxisConfig> = (0..6).map(|m| axis(&format!("six{m}"), 0, m)).collect();
+    axes.extend((0..4).map(|m| axis(&format!("quad{m}"), 1, m)));
+    let config = engine_config(vec![device("six", 1), device("quad", 2)], axes);
+    let drivers: Vec<Box<dyn Driver>> = vec![
+        Box::new(driver(1, Variant::SixPack, &[0, 1, 2, 3, 4, 5], 10)),
+        Box::new(driver(2, Variant::QuadPack, &[0, 1, 2, 3], 10)),
+    ];
+    let mut rig = Rig::new(config, drivers, vec![Box::new(link)]);
+    wait_online(&mut rig, 10);
+    let budget = rig.engine.driver(0).unwrap().refresh_budget();
+    assert!(budget < Duration::from_millis(500), "{budget:?}");
+    for index in 0..10u32 {
+        let target = f64::from(index) - 4.5;
+        accepted(&mut rig, index, CommandKind::Position, [target, 0.0, 0.0]);
+    }
+    let end = rig.now + Duration::from_secs(3);
+    while rig.now < end {
+        rig.tick();
+        for index in 0..10 {
+            assert!(fresh(&rig, index), "axis {index} stale at {:?}", rig.now);
+        }
+    }
+    for index in 0..10usize {
+        assert!(flag(&rig, index, AxisFlags::ARRIVED), "axis {index}");
+    }
+    assert_eq!(motor(&six_board, 5).position, 50);
+    assert_eq!(motor(&quad_board, 3).position, 450);
+    assert_eq!(bus.lock().unwrap().collisions(), 0);
+}
