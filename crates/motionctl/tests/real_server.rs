@@ -119,9 +119,24 @@ impl RealServer {
             {
                 return Err(format!("motiond exited ({status}):\n{}", server.log()).into());
             }
-            let ready = run(&server.name, &["--connect-timeout", "500ms", "list"])?;
+            // Ready = every board answered: no axis stale or faulted (the simulated packs
+            // take a second to boot, as real ones do).
+            let ready = run(
+                &server.name,
+                &["--connect-timeout", "500ms", "status", "--json"],
+            )?;
             if ready.status.success() {
-                return Ok(server);
+                let status: Value = serde_json::from_slice(&ready.stdout)?;
+                let settled = status["axes"].as_array().is_some_and(|axes| {
+                    axes.iter().all(|axis| {
+                        axis["flags"].as_array().is_some_and(|flags| {
+                            !flags.iter().any(|f| f == "stale" || f == "fault")
+                        })
+                    })
+                });
+                if settled {
+                    return Ok(server);
+                }
             }
             if Instant::now() > until {
                 return Err(format!("motiond did not come up: {ready:?}\n{}", server.log()).into());
@@ -165,7 +180,6 @@ fn position(server: &str, axis: &str) -> Result<f64> {
 }
 
 #[test]
-#[ignore = "needs a motiond that runs config/sim.toml"]
 fn real_list_json_shows_every_configured_axis() -> Result {
     let server = RealServer::start()?;
     let output = run(&server.name, &["list", "--json"])?;
@@ -182,7 +196,6 @@ fn real_list_json_shows_every_configured_axis() -> Result {
 }
 
 #[test]
-#[ignore = "needs a motiond that runs config/sim.toml"]
 fn real_move_wait_ends_at_the_target() -> Result {
     let server = RealServer::start()?;
     let output = run(
@@ -205,7 +218,6 @@ fn real_move_wait_ends_at_the_target() -> Result {
 }
 
 #[test]
-#[ignore = "needs a motiond that runs config/sim.toml"]
 fn real_out_of_limit_move_is_refused_and_nothing_moves() -> Result {
     let server = RealServer::start()?;
     let before = position(&server.name, "x")?;
@@ -221,7 +233,6 @@ fn real_out_of_limit_move_is_refused_and_nothing_moves() -> Result {
 }
 
 #[test]
-#[ignore = "needs a motiond that runs config/sim.toml"]
 fn real_estop_refuses_moves_until_reset() -> Result {
     let server = RealServer::start()?;
     assert!(run(&server.name, &["estop"])?.status.success());
@@ -238,7 +249,6 @@ fn real_estop_refuses_moves_until_reset() -> Result {
 }
 
 #[test]
-#[ignore = "needs a motiond that runs config/sim.toml"]
 fn real_record_writes_one_row_per_tick() -> Result {
     let server = RealServer::start()?;
     let out = std::env::temp_dir().join(format!("{}.csv", unique_name("real-record")));
@@ -271,7 +281,6 @@ fn real_record_writes_one_row_per_tick() -> Result {
 }
 
 #[test]
-#[ignore = "needs a motiond that runs config/sim.toml"]
 fn real_claim_refuses_the_other_client() -> Result {
     let server = RealServer::start()?;
     let holder = command(&server.name, &["claim", "y", "--duration", "20s"])
@@ -318,7 +327,6 @@ fn wait_stopped(server: &str, axis: &str, within: Duration) -> Result<Duration> 
 }
 
 #[test]
-#[ignore = "needs a motiond that runs config/sim.toml"]
 fn real_jog_stops_on_ctrl_c_and_when_the_client_is_killed() -> Result {
     let server = RealServer::start()?;
     for signal in [Signal::SIGINT, Signal::SIGKILL] {

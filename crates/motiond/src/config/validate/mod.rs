@@ -253,7 +253,7 @@ impl Validator<'_, '_> {
             cpu: None,
             lock_memory: false,
             max_clients: 32,
-            max_consecutive_overruns: 10,
+            max_consecutive_overruns: 50,
             liveness_check: Duration::from_millis(100),
         };
         let Some(raw) = raw else {
