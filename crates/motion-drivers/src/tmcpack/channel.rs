@@ -25,7 +25,7 @@
 
 use core::time::Duration;
 
-use tmcpack::{Action, CurrentLevel, Request};
+use tmcpack::{Action, CurrentLevel, MAX_VELOCITY, Request};
 
 use super::config::{Scale, TmcpackChannel};
 use crate::goal::{Goal, GoalError, GoalKind};
@@ -384,6 +384,13 @@ impl Channel {
             }
             _ => 0.0,
         };
+        // Faster than the motor can run: the coordinates jumped (a reference search set
+        // the new zero point), not the rotor.
+        let velocity = if velocity.abs() > self.scale.hz * f64::from(MAX_VELOCITY) {
+            0.0
+        } else {
+            velocity
+        };
         let still = self.prev.is_some_and(|(p, _)| p == position);
         let mut refused = false;
         self.prev = Some((position, now));
@@ -415,7 +422,7 @@ impl Channel {
         if self.current() == Some(Step::AwaitRest)
             && self
                 .rest_at
-                .is_some_and(|at| sent_at >= at || rotation_rest)
+                .is_some_and(|at| sent_at >= at || rotation_rest || action == Action::Inactive)
         {
             self.advance();
             if action == Action::Rotation {
