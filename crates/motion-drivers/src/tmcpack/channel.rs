@@ -78,6 +78,8 @@ pub(crate) struct Channel {
     /// Last polled action (`None`: not polled since (re)start).
     pub action: Option<Action>,
     pub motion: Motion,
+    /// Sequence number of the request that set `motion`.
+    motion_seq: u64,
     pub homing: Homing,
     /// vmax and amax as last written with `$14`, vrefmax with `$16`.
     pub board_vmax: u16,
@@ -110,6 +112,7 @@ impl Channel {
             state: ChannelState::UNKNOWN,
             action: None,
             motion: Motion::Unknown,
+            motion_seq: 0,
             homing: Homing::Idle,
             board_vmax: scale.vmax,
             board_amax: scale.amax,
@@ -281,13 +284,14 @@ impl Channel {
         Ok(())
     }
 
-    /// Whether a ramp start would only stop the motor (rotation, reference search, PI).
+    /// Whether a ramp start would only stop the motor (rotation, reference search, PI):
+    /// what the last poll saw if it is newer than the last motion command, else that
+    /// command.
     fn needs_stop(&self) -> bool {
-        match self.motion {
-            Motion::Rotation(_) | Motion::Reference => true,
-            Motion::Ramp => false,
-            Motion::Unknown => !matches!(self.action, Some(Action::Inactive | Action::Ramp)),
+        if self.polled_seq > self.motion_seq || self.motion == Motion::Unknown {
+            return !matches!(self.action, Some(Action::Inactive | Action::Ramp));
         }
+        !matches!(self.motion, Motion::Ramp)
     }
 
     fn plan_stop(&self, script: &mut Script, motor: u8, amax: u16) {
@@ -343,6 +347,7 @@ impl Channel {
             }
             Request::Rotate { velocity, .. } => {
                 self.motion = Motion::Rotation(velocity);
+                self.motion_seq = seq;
                 self.target = None;
                 if velocity == 0 {
                     let bound = Scale::stop_time(self.board_vmax, self.board_amax);
@@ -351,10 +356,12 @@ impl Channel {
             }
             Request::StartRamp { target, .. } => {
                 self.motion = Motion::Ramp;
+                self.motion_seq = seq;
                 self.target = Some((target, seq));
             }
             Request::ReferenceSearch { .. } => {
                 self.motion = Motion::Reference;
+                self.motion_seq = seq;
                 self.homing = Homing::Sent(seq);
                 self.target = None;
             }

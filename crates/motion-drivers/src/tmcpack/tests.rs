@@ -578,3 +578,81 @@ fn the_reply_address_never_equals_the_pack_address() {
     });
     assert_eq!(driver.reply_address(), 0xFF);
 }
+
+#[test]
+fn a_position_goal_on_a_rotating_motor_stops_the_rotation_first() {
+    let mut bench = Bench::new(config());
+    bench.online();
+    bench
+        .driver
+        .set_goal(
+            bench.now,
+            0,
+            Goal::Velocity {
+                velocity: 8000.0,
+                accel: 160_000.0,
+            },
+        )
+        .expect("jog");
+    let mut pos = 0;
+    bench.serve(60, |motor| {
+        pos += 50;
+        position(motor, pos, Action::Rotation)
+    });
+    bench
+        .driver
+        .set_goal(bench.now, 0, Goal::Position { counts: 0.0 })
+        .expect("position");
+    // The motor decelerates to rest at 4000, then $23 ends the rotation, then the ramp.
+    let mut rest = false;
+    let sent = bench.serve(500, |motor| {
+        let action = if rest {
+            Action::Inactive
+        } else {
+            Action::Rotation
+        };
+        position(motor, 4000, action)
+    });
+    let rotate = sent.iter().position(|r| {
+        *r == Request::Rotate {
+            motor: 0,
+            velocity: 0,
+        }
+    });
+    let end = sent.iter().position(|r| {
+        *r == Request::StartRamp {
+            motor: 0,
+            target: 4000,
+        }
+    });
+    let target = sent.iter().position(|r| {
+        *r == Request::SetTarget {
+            motor: 0,
+            target: 0,
+        }
+    });
+    let start = sent.iter().position(|r| {
+        *r == Request::StartRamp {
+            motor: 0,
+            target: 0,
+        }
+    });
+    assert!(rotate < end && end < target && target < start, "{sent:?}");
+    assert!(rotate.is_some());
+    // The ramp ran and ended at 0.
+    bench.serve(40, |motor| position(motor, 0, Action::Inactive));
+    // An inactive motor needs no stop before the next ramp.
+    bench
+        .driver
+        .set_goal(bench.now, 0, Goal::Position { counts: 10.0 })
+        .expect("position");
+    let sent = bench.serve(50, |motor| position(motor, 0, Action::Ramp));
+    assert!(!sent.contains(&Request::Rotate {
+        motor: 0,
+        velocity: 0
+    }));
+    assert!(sent.contains(&Request::StartRamp {
+        motor: 0,
+        target: 10
+    }));
+}
