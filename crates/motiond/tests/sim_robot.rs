@@ -1,0 +1,267 @@
+//! The default robot (`config/sim.toml`: all four boards, 18 axes) stepped in one process
+//! with a fake clock: the engine and the four drivers allocate nothing in steady state, and
+//! the same commands at the same ticks give byte-identical frames.
+#![allow(unsafe_code)] // the counting global allocator
+
+use core::time::Duration;
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
+use std::path::PathBuf;
+
+use motion_engine::{CommandPort, Engine};
+use motion_ipc::{AxisFlags, ClientId, CommandKind, CommandReply, CommandRequest, MotionFrame};
+use motion_link::Link;
+use motiond::config::ServerConfig;
+
+struct CountingAllocator;
+
+thread_local! {
+    static COUNTING: Cell<bool> = const { Cell::new(false) };
+    static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
+}
+
+fn note_allocation() {
+    let _ = COUNTING.try_with(|counting| {
+        if counting.get() {
+            let _ = ALLOCATIONS.try_with(|count| count.set(count.get() + 1));
+        }
+    });
+}
+
+// SAFETY: every call is forwarded unchanged to the system allocator; the only addition is
+// a thread-local counter that does not allocate.
+unsafe impl GlobalAlloc for CountingAllocator {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        note_allocation();
+        // SAFETY: same contract as our caller's.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as our caller's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        note_allocation();
+        // SAFETY: same contract as our caller's.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: CountingAllocator = CountingAllocator;
+
+/// Counts allocations of the engine (and its drivers) only, not of the simulated links.
+fn engine<T>(work: impl FnOnce() -> T) -> T {
+    COUNTING.with(|c| c.set(true));
+    let result = work();
+    COUNTING.with(|c| c.set(false));
+    result
+}
+
+#[derive(Default)]
+struct Queue {
+    requests: std::collections::VecDeque<CommandRequest>,
+    replies: Vec<CommandReply>,
+}
+
+impl CommandPort for Queue {
+    fn next_request(&mut self) -> Option<CommandRequest> {
+        self.requests.pop_front()
+    }
+    fn reply(&mut self, reply: CommandReply) {
+        self.replies.push(reply);
+    }
+}
+
+struct Robot {
+    engine: Engine,
+    links: Vec<Box<dyn Link>>,
+    frame: Box<MotionFrame>,
+    port: Queue,
+    now: Duration,
+    period: Duration,
+}
+
+impl Robot {
+    fn new() -> Self {
+        let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../config/sim.toml");
+        let config = ServerConfig::load(&path).expect("config/sim.toml is valid");
+        let drivers = motiond::drivers::build(&config).expect("drivers");
+        let engine = Engine::new(config.engine_config(), drivers).expect("engine");
+        let links: Vec<Box<dyn Link>> = config
+            .links
+            .iter()
+            .enumerate()
+            .map(|(index, spec)| {
+                let motiond::config::Transport::Sim { rate } = spec.transport else {
+                    panic!("sim.toml has only sim links");
+                };
+                let devices: Vec<_> = config.devices.iter().filter(|d| d.link == index).collect();
+                Box::new(motiond::sim_models::sim_link(&spec.name, rate, &devices)) as Box<dyn Link>
+            })
+            .collect();
+        let period = engine.config().period();
+        let mut port = Queue::default();
+        port.replies.reserve(100_000);
+        port.requests.reserve(64);
+        Self {
+            engine,
+            links,
+            frame: Box::new(MotionFrame::EMPTY),
+            port,
+            now: Duration::ZERO,
+            period,
+        }
+    }
+
+    fn tick(&mut self) {
+        let now = self.now;
+        let mut buf = [0u8; 512];
+        for (index, link) in self.links.iter_mut().enumerate() {
+            while let Ok(len) = link.read(now, &mut buf) {
+                if len == 0 {
+                    break;
+                }
+                engine(|| self.engine.handle_link_rx(index, now, &buf[..len]));
+            }
+        }
+        engine(|| self.engine.step(now, &mut self.port, &mut self.frame));
+        for (index, link) in self.links.iter_mut().enumerate() {
+            while let Some(len) = engine(|| self.engine.poll_link_transmit(index, now, &mut buf)) {
+                link.write(now, &buf[..len]).expect("sim link write");
+            }
+        }
+        self.now += self.period;
+    }
+
+    fn axis(&self, name: &str) -> u32 {
+        self.engine
+            .config()
+            .axes
+            .iter()
+            .position(|a| a.name == name)
+            .expect("axis exists") as u32
+    }
+}
+
+/// Commands at fixed ticks: moves, jogs (refreshed), power, a home, a set-position, an
+/// e-stop and a reset across all four boards.
+fn script(robot: &Robot, tick: u64) -> Vec<(u32, CommandKind, [f64; 3])> {
+    let phase = tick % 4000;
+    let mut commands = Vec::new();
+    let mut at = |when: u64, axis: &str, kind: CommandKind, values: [f64; 3]| {
+        if phase == when {
+            commands.push((robot.axis(axis), kind, values));
+        }
+    };
+    at(
+        10,
+        "wheel_left",
+        CommandKind::RampPosition,
+        [90.0, 0.0, 0.0],
+    );
+    at(10, "x", CommandKind::RampPosition, [5.0, 0.0, 0.0]);
+    at(10, "focus", CommandKind::RampPosition, [200.0, 0.0, 0.0]);
+    at(10, "feeder", CommandKind::RampPosition, [3.0, 0.0, 0.0]);
+    at(20, "pump_a", CommandKind::Power, [0.5, 0.0, 0.0]);
+    for refresh in [30, 130, 230] {
+        at(refresh, "lift", CommandKind::Velocity, [5.0, 0.0, 0.0]);
+        at(refresh, "conveyor", CommandKind::Velocity, [20.0, 0.0, 0.0]);
+    }
+    at(1500, "turret", CommandKind::SetPosition, [0.0, 0.0, 0.0]);
+    at(
+        2000,
+        "wheel_left",
+        CommandKind::RampPosition,
+        [0.0, 0.0, 0.0],
+    );
+    at(2000, "x", CommandKind::RampPosition, [0.0, 0.0, 0.0]);
+    at(2000, "focus", CommandKind::RampPosition, [0.0, 0.0, 0.0]);
+    at(2000, "feeder", CommandKind::RampPosition, [0.0, 0.0, 0.0]);
+    at(3000, "y", CommandKind::EStop, [0.0; 3]);
+    at(3500, "y", CommandKind::Reset, [0.0; 3]);
+    commands
+}
+
+fn run(robot: &mut Robot, from: u64, ticks: u64, mut each: impl FnMut(&Robot)) {
+    let client = ClientId::from_u128(42);
+    for tick in from..from + ticks {
+        for (axis, kind, values) in script(robot, tick) {
+            let request = CommandRequest::new(client, tick, axis, kind).with_values(values);
+            robot.port.requests.push_back(request);
+        }
+        robot.tick();
+        each(robot);
+    }
+}
+
+#[test]
+fn the_engine_and_all_four_drivers_allocate_nothing_in_steady_state() {
+    let mut robot = Robot::new();
+    // Start-up (boards boot, drivers configure them) is allowed to allocate nothing too,
+    // but the claim is about steady state: warm up first.
+    run(&mut robot, 0, 4000, |_| {});
+    let online = robot
+        .frame
+        .axes()
+        .iter()
+        .all(|a| !a.flags().contains(AxisFlags::STALE));
+    assert!(online, "every board answers: {:?}", robot.frame.axes());
+    let before = ALLOCATIONS.with(Cell::get);
+    run(&mut robot, 4000, 10_000, |_| {});
+    let allocations = ALLOCATIONS.with(Cell::get) - before;
+    assert_eq!(
+        allocations, 0,
+        "the engine allocated {allocations} times in 10 000 steps"
+    );
+    let accepted = robot
+        .port
+        .replies
+        .iter()
+        .filter(|r| r.result().is_ok())
+        .count();
+    assert!(
+        accepted > 30,
+        "the script's commands were taken: {accepted}"
+    );
+}
+
+#[test]
+fn same_commands_same_ticks_give_byte_identical_frames() {
+    let record = || {
+        let mut robot = Robot::new();
+        let mut frames: Vec<u8> = Vec::new();
+        run(&mut robot, 0, 6000, |robot| {
+            let frame = &robot.frame;
+            frames.extend_from_slice(&frame.tick.to_le_bytes());
+            for axis in frame.axes() {
+                for value in [axis.position, axis.velocity, axis.target] {
+                    frames.extend_from_slice(&value.to_bits().to_le_bytes());
+                }
+                frames.extend_from_slice(&axis.raw_counts.to_le_bytes());
+                frames.extend_from_slice(&axis.last_refresh_tick.to_le_bytes());
+                frames.extend_from_slice(&axis.flags.to_le_bytes());
+                frames.extend_from_slice(&[axis.mode, axis.fault as u8]);
+            }
+        });
+        let replies: Vec<(u64, u32, u64)> = robot
+            .port
+            .replies
+            .iter()
+            .map(|r| (r.sequence, r.reason, r.tick_applied))
+            .collect();
+        (frames, replies)
+    };
+    let first = record();
+    let second = record();
+    assert_eq!(first.1, second.1, "same replies");
+    assert!(
+        first.0 == second.0,
+        "frames differ between two identical runs"
+    );
+    // And the robot really moved.
+    let mut robot = Robot::new();
+    run(&mut robot, 0, 1500, |_| {});
+    let wheel = robot.frame.axes()[robot.axis("wheel_left") as usize];
+    assert!(wheel.position > 1.0, "{wheel:?}");
+}
