@@ -604,15 +604,7 @@ fn a_position_goal_on_a_rotating_motor_stops_the_rotation_first() {
         .set_goal(bench.now, 0, Goal::Position { counts: 0.0 })
         .expect("position");
     // The motor decelerates to rest at 4000, then $23 ends the rotation, then the ramp.
-    let mut rest = false;
-    let sent = bench.serve(500, |motor| {
-        let action = if rest {
-            Action::Inactive
-        } else {
-            Action::Rotation
-        };
-        position(motor, 4000, action)
-    });
+    let sent = bench.serve(500, |motor| position(motor, 4000, Action::Rotation));
     let rotate = sent.iter().position(|r| {
         *r == Request::Rotate {
             motor: 0,
