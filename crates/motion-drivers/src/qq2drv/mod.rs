@@ -62,8 +62,11 @@
 //!
 //! # Faults
 //!
-//! - No stream packet for the stall time (4 stream periods + 2 polls + 2 ms): the driver
-//!   probes again (start-up step 1) — a board that reset is found in step 2.
+//! - No stream packet for the stall time (4 stream periods + 3 × the cadence + 2 ms): the
+//!   driver probes again (start-up step 1) — a board that reset is found in step 2. The
+//!   cadence is the poll period, or the interval between the caller's last two
+//!   `handle_timeout` calls when that is longer: a slow or late tick leaves data as old as
+//!   the tick, which is not the board's fault.
 //! - No valid packet at all for [`Driver::refresh_budget`]: [`DeviceFault::NotResponding`].
 //! - A goal answered with a non-zero return code: [`DeviceFault::BoardError`] on that
 //!   channel; a status with the glitch or overspeed bit: [`DeviceFault::Overspeed`]. Both
@@ -164,6 +167,9 @@ pub struct Qq2drvDriver {
     last_valid_at: Option<Duration>,
     last_stream_at: Duration,
     stream_packets: u64,
+    /// The previous `handle_timeout` call and the interval before this one.
+    last_call_at: Option<Duration>,
+    call_interval: Duration,
 }
 
 impl Qq2drvDriver {
@@ -193,6 +199,8 @@ impl Qq2drvDriver {
             last_valid_at: None,
             last_stream_at: Duration::ZERO,
             stream_packets: 0,
+            last_call_at: None,
+            call_interval: Duration::ZERO,
         }
     }
 
@@ -232,11 +240,17 @@ impl Qq2drvDriver {
         (qq2drv::MIN_PACKET_LEN + layout.stream_payload_len() + POLL_SLACK).clamp(16, 255)
     }
 
+    /// How often the driver actually gets to read: the poll period, or the interval
+    /// between the last two `handle_timeout` calls when that is longer (a slow tick, or a
+    /// late one: the data is as old as the caller's lateness, not the board's fault).
+    pub fn cadence(&self) -> Duration {
+        self.config.poll_period.max(self.call_interval)
+    }
+
     /// Reply timeout: polls to read it, the wire time of two long transactions, the
     /// board's processing time and a margin.
     pub fn reply_timeout(&self) -> Duration {
-        self.config
-            .poll_period
+        self.cadence()
             .saturating_mul(4)
             .saturating_add(self.config.wire_time(2 * qq2drv::MAX_PACKET_LEN))
             .saturating_add(self.config.processing_time)
@@ -248,7 +262,7 @@ impl Qq2drvDriver {
         self.config
             .stream_period()
             .saturating_mul(4)
-            .saturating_add(self.config.poll_period.saturating_mul(2))
+            .saturating_add(self.cadence().saturating_mul(3))
             .saturating_add(Duration::from_millis(2))
     }
 
@@ -713,7 +727,7 @@ impl Driver for Qq2drvDriver {
 
     fn refresh_budget(&self) -> Duration {
         self.stall_timeout()
-            .saturating_add(self.config.poll_period.saturating_mul(4))
+            .saturating_add(self.cadence().saturating_mul(4))
             .saturating_add(Duration::from_millis(4))
     }
 
@@ -734,6 +748,10 @@ impl Driver for Qq2drvDriver {
     }
 
     fn handle_timeout(&mut self, now: Duration) {
+        if let Some(last) = self.last_call_at {
+            self.call_interval = now.saturating_sub(last).min(Duration::from_secs(1));
+        }
+        self.last_call_at = Some(now);
         if !self.link_up {
             return;
         }
@@ -819,7 +837,9 @@ impl Driver for Qq2drvDriver {
             Next::Poll => {
                 let len = self.poll_len();
                 buf.get_mut(..len)?.fill(FILLER);
-                self.next_poll_at = now.saturating_add(self.config.poll_period);
+                // Three quarters: a tick at exactly the poll period always polls.
+                let period = self.config.poll_period;
+                self.next_poll_at = now.saturating_add(period - period / 4);
                 len
             }
         };

@@ -594,3 +594,25 @@ fn link_down_faults_and_stops_what_was_moving_once_back() {
         other => panic!("{other:?}"),
     }
 }
+
+#[test]
+fn a_late_tick_is_not_a_stalled_board() {
+    let (mut driver, mut now) = running();
+    now += MS;
+    drain(&mut driver, now);
+    // The caller comes back 100 ms late (host noise); the board's packet is waiting.
+    now += 100 * MS;
+    driver.handle_rx(now, &ours_stream([4, 5, 6], [0; 3], [0; 3]));
+    let sent = drain(&mut driver, now);
+    assert!(
+        sent.iter().all(|t| t.iter().all(|b| *b == FILLER)),
+        "no probe"
+    );
+    assert!(driver.running());
+    assert_eq!(driver.status().fault, None);
+    assert!(driver.refresh_budget() > 100 * MS);
+    // Back to a 1 ms tick: the budget shrinks again.
+    now += MS;
+    drain(&mut driver, now);
+    assert!(driver.refresh_budget() < 20 * MS);
+}
