@@ -223,6 +223,10 @@ impl Channel {
             }
             Goal::Velocity { velocity, accel } => {
                 let v = self.scale.velocity(velocity).ok_or(range)?;
+                if v == 0 && velocity != 0.0 {
+                    // Slower than one velocity unit: the pack cannot run it.
+                    return Err(range);
+                }
                 let amax = self.scale.amax(accel).ok_or(range)?;
                 let signed = if velocity < 0.0 {
                     -(v as i16)

@@ -485,6 +485,18 @@ fn unsupported_and_unrepresentable_goals_are_refused() {
         ),
         Err(GoalError::OutOfBoardRange(GoalKind::Velocity))
     );
+    // 8.2: one velocity unit at clkdiv 18, div 0 is 64.25 µsteps/s.
+    assert_eq!(
+        d.set_goal(
+            Duration::ZERO,
+            0,
+            Goal::Velocity {
+                velocity: 30.0,
+                accel: 1000.0
+            }
+        ),
+        Err(GoalError::OutOfBoardRange(GoalKind::Velocity))
+    );
     assert_eq!(
         d.set_goal(Duration::ZERO, 0, Goal::Home { velocity: 10.0 }),
         Err(GoalError::OutOfBoardRange(GoalKind::Home))
