@@ -665,3 +665,44 @@ fn ten_motors_on_one_bus_stay_fresh_within_the_refresh_budget() {
     assert_eq!(motor(&quad_board, 3).position, 450);
     assert_eq!(bus.lock().unwrap().collisions(), 0);
 }
+
+#[test]
+fn a_lost_answer_or_a_torn_request_costs_one_timeout_and_no_state() {
+    use motion_link::sim::Direction;
+
+    let (mut rig, board, faults) = single(1);
+    wait_online(&mut rig, 2);
+    accepted(&mut rig, 0, CommandKind::Position, [1.5, 0.0, 0.0]);
+    move_and_check(
+        &mut rig,
+        &board,
+        0,
+        0,
+        1.5,
+        MAX_VELOCITY_MM,
+        Duration::from_secs(2),
+    );
+    // Half an answer lost, then half a request: the pack's packet timeout and the driver's
+    // silence after a timeout resynchronise both sides.
+    faults.drop_next(Direction::ToHost, 4);
+    rig.run(100);
+    faults.drop_next(Direction::ToDevice, 5);
+    rig.run(300);
+    let status = rig.engine.driver(0).unwrap().status();
+    assert!(status.online);
+    assert_eq!(status.timeouts, 2);
+    assert_eq!(status.resets, 0);
+    assert!(fresh(&rig, 0) && fresh(&rig, 1));
+    assert_eq!(rig.axis(0).position, 1.5);
+    assert_eq!(board.lock().unwrap().stats().invalid, 0);
+    accepted(&mut rig, 0, CommandKind::Position, [0.0, 0.0, 0.0]);
+    move_and_check(
+        &mut rig,
+        &board,
+        0,
+        0,
+        0.0,
+        MAX_VELOCITY_MM,
+        Duration::from_secs(2),
+    );
+}
