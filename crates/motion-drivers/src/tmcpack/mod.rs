@@ -1,9 +1,9 @@
 //! Driver for the Trinamic SIXpack / QUADpack on RS-232 / RS-485 ([`TmcpackDriver`]).
 //!
 //! Start-up: `$43` unit information (firmware revision and serial for
-//! [`DeviceStatus::firmware`], the reset flag), then the configuration of
-//! [`startup`](self) — `$40` with the link's own baud divisor and a 2 ms switch-over delay
-//! (the baud rate is never changed), `$12` clkdiv chosen for the fastest motor, and per
+//! [`DeviceStatus::firmware`], the reset flag), then the configuration — `$40` with the
+//! link's own baud divisor and a 2 ms switch-over delay (the baud rate is never changed:
+//! the link would have to follow), `$12` clkdiv chosen for the fastest motor, and per
 //! configured motor `$11`, `$13`, `$14`, `$15`, `$16`, `$18` from its axis limits. Motors
 //! found active afterwards are stopped: whatever they were doing was not commanded by this
 //! run.
