@@ -1,22 +1,60 @@
 //! Engine + QuadQuad2Drv driver + simulated QuadQuad2Drv board on a real `SimLink` (SPI,
 //! 500 kHz), stepped with a fake clock (what motiond's loop does, without sleeping).
+//!
+//! The counting global allocator (for the driver's zero-allocation test) counts on the
+//! calling thread only, so the other tests of this binary do not disturb it.
+#![allow(unsafe_code)] // the counting global allocator
 
 mod support;
 
 use core::time::Duration;
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
 use std::sync::{Arc, Mutex};
 
-use motion_drivers::BusKind;
 use motion_drivers::qq2drv::{
     AxisLimits, ChannelConfig, FILLER, HomeInput, POLL_SLACK, Qq2drvDriver, Qq2drvDriverConfig,
     STREAM_MASK,
 };
+use motion_drivers::{BusKind, Driver, Goal};
 use motion_engine::{AxisConfig, DeviceConfig, EngineConfig, LinkConfig};
 use motion_ipc::{AxisFlags, AxisMode, CommandKind, FaultCode, Reason};
 use motion_link::sim::{Direction, SimFaults, SimLink};
 use motion_sim::qq2drv::{InputPin, InputSource, Qq2drvSim, Qq2drvSimConfig};
 use qq2drv::{ControlMode, InputMode, Request, StreamDecoder};
 use support::rig::{Rig, Shared};
+
+struct CountingAllocator;
+
+thread_local! {
+    static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
+}
+
+// SAFETY: every call is forwarded unchanged to the system allocator; the only addition is
+// a thread-local counter that does not allocate.
+unsafe impl GlobalAlloc for CountingAllocator {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        let _ = ALLOCATIONS.try_with(|count| count.set(count.get() + 1));
+        // SAFETY: same contract as our caller's.
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: same contract as our caller's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        let _ = ALLOCATIONS.try_with(|count| count.set(count.get() + 1));
+        // SAFETY: same contract as our caller's.
+        unsafe { System.realloc(ptr, layout, new_size) }
+    }
+}
+
+#[global_allocator]
+static GLOBAL: CountingAllocator = CountingAllocator;
+
+fn allocations() -> u64 {
+    ALLOCATIONS.with(Cell::get)
+}
 
 /// SPI clock of the simulated link (the datasheet's recommended maximum).
 const SPEED_HZ: u32 = 500_000;
@@ -205,7 +243,8 @@ fn the_board_starts_streams_and_reports_its_version() {
     drop(sim);
     // Data keeps flowing, refreshed every few ticks.
     rig.run(200);
-    assert!(board.lock().unwrap().stats().stream_packets > 150);
+    let stats = board.lock().unwrap().stats();
+    assert!(stats.stream_packets > 150, "{stats:?}");
     assert!(fresh(&rig.frame, 2));
     let tick = rig.engine.tick();
     assert!(tick - rig.axis(0).last_refresh_tick <= 3);
@@ -503,4 +542,172 @@ fn a_board_that_dies_while_running_is_faulted() {
     }));
     let budget = rig.engine.driver(0).unwrap().refresh_budget();
     assert!(rig.now - start <= budget + Duration::from_millis(5));
+}
+
+/// The driver straight on the simulated board (no link, no engine), one transaction at a
+/// time; `garbage` corrupts MISO bytes. Returns the allocations made inside the driver.
+fn drive_directly(
+    driver: &mut Qq2drvDriver,
+    board: &mut Qq2drvSim,
+    ticks: u32,
+    mut goal_at: impl FnMut(u32) -> Option<(usize, Goal)>,
+    mut garbage: impl FnMut(u32, &mut [u8]),
+) -> u64 {
+    use motion_link::sim::SpiDevice;
+
+    let mut mosi = [0u8; 256];
+    let mut miso = [0u8; 256];
+    let mut in_driver = 0;
+    let period = Duration::from_millis(1);
+    for tick in 0..ticks {
+        let now = period * tick;
+        let goal = goal_at(tick);
+        let before = allocations();
+        driver.handle_timeout(now);
+        if let Some((channel, goal)) = goal {
+            let _ = driver.set_goal(now, channel, goal);
+        }
+        in_driver += allocations() - before;
+        loop {
+            let before = allocations();
+            let transmit = driver.poll_transmit(now, &mut mosi);
+            in_driver += allocations() - before;
+            let Some(transmit) = transmit else { break };
+            let len = transmit.len;
+            board.transfer(now, &mosi[..len], &mut miso[..len]);
+            garbage(tick, &mut miso[..len]);
+            let before = allocations();
+            driver.handle_rx(now + Duration::from_micros(100), &miso[..len]);
+            for channel in 0..4 {
+                let _ = driver.channel(channel);
+            }
+            let _ = driver.status();
+            let _ = driver.poll_timeout();
+            in_driver += allocations() - before;
+        }
+    }
+    in_driver
+}
+
+#[test]
+fn the_driver_allocates_nothing_after_construction() {
+    let mut driver = Qq2drvDriver::new(driver_config());
+    let mut board = sim();
+    let in_driver = drive_directly(
+        &mut driver,
+        &mut board,
+        10_000,
+        |tick| match tick % 2_000 {
+            100 => Some((0, Goal::Position { counts: 400.0 })),
+            300 => Some((1, Goal::Home { velocity: 1_000.0 })),
+            700 => Some((
+                0,
+                Goal::Velocity {
+                    velocity: -800.0,
+                    accel: 10_000.0,
+                },
+            )),
+            1_000 => Some((0, Goal::Stop { decel: 20_000.0 })),
+            1_200 => Some((0, Goal::Power { fraction: 0.1 })),
+            1_300 => Some((0, Goal::SetPosition { counts: 0.0 })),
+            1_400 => Some((
+                1,
+                Goal::RampPosition {
+                    counts: 0.0,
+                    velocity: 500.0,
+                    accel: 5_000.0,
+                },
+            )),
+            1_500 => Some((0, Goal::Off)),
+            _ => None,
+        },
+        |_, _| {},
+    );
+    assert!(driver.status().online);
+    assert_eq!(driver.status().bad_replies, 0);
+    let packets = driver.stream_packets();
+    assert!(packets > 8_000, "{packets} stream packets in 10 s");
+    assert_eq!(in_driver, 0, "allocations inside the driver");
+}
+
+/// A small deterministic generator for the random-traffic test.
+struct XorShift(u64);
+
+impl XorShift {
+    fn next(&mut self) -> u64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        self.0
+    }
+
+    fn value(&mut self) -> f64 {
+        match self.next() % 8 {
+            0 => f64::NAN,
+            1 => f64::INFINITY,
+            2 => -1e12,
+            3 => 0.0,
+            _ => (self.next() % 20_001) as f64 - 10_000.0,
+        }
+    }
+}
+
+#[test]
+fn random_goals_and_noise_never_break_the_driver() {
+    let mut driver = Qq2drvDriver::new(driver_config());
+    let mut board = sim();
+    let mut rng = XorShift(0x5EED_1234);
+    let mut goals = XorShift(0xC0FF_EE00);
+    drive_directly(
+        &mut driver,
+        &mut board,
+        6_000,
+        |tick| {
+            (tick % 37 == 0).then(|| {
+                let channel = (goals.next() % 5) as usize;
+                let (a, b, c) = (goals.value(), goals.value(), goals.value());
+                let goal = match goals.next() % 8 {
+                    0 => Goal::Off,
+                    1 => Goal::Stop { decel: a },
+                    2 => Goal::Power {
+                        fraction: a / 10_000.0,
+                    },
+                    3 => Goal::Position { counts: a },
+                    4 => Goal::Velocity {
+                        velocity: a,
+                        accel: b,
+                    },
+                    5 => Goal::RampPosition {
+                        counts: a,
+                        velocity: b,
+                        accel: c,
+                    },
+                    6 => Goal::Home { velocity: a },
+                    _ => Goal::SetPosition { counts: a },
+                };
+                (channel, goal)
+            })
+        },
+        |tick, miso| {
+            // Noise for the first 4 s, clean after.
+            if tick < 4_000 && rng.next() % 5 == 0 {
+                for byte in miso.iter_mut() {
+                    if rng.next() % 7 == 0 {
+                        *byte = rng.next() as u8;
+                    }
+                }
+            }
+        },
+    );
+    // Clean traffic for the last 2 s: the board is back and streaming.
+    let status = driver.status();
+    assert!(status.online, "{status:?}");
+    assert_eq!(status.fault, None);
+    assert!(status.bad_replies > 0, "the noise was seen");
+    for channel in 0..2 {
+        let state = driver.channel(channel);
+        assert!(state.position.is_finite() && state.velocity.is_finite());
+        assert!(state.refreshed_at.is_some());
+    }
+    assert_eq!(board.stats().bad_packets, 0, "MOSI stayed clean");
 }
