@@ -663,7 +663,7 @@ fn random_goals_and_noise_never_break_the_driver() {
         &mut board,
         6_000,
         |tick| {
-            (tick % 37 == 0).then(|| {
+            tick.is_multiple_of(37).then(|| {
                 let channel = (goals.next() % 5) as usize;
                 let (a, b, c) = (goals.value(), goals.value(), goals.value());
                 let goal = match goals.next() % 8 {
@@ -690,9 +690,9 @@ fn random_goals_and_noise_never_break_the_driver() {
         },
         |tick, miso| {
             // Noise for the first 4 s, clean after.
-            if tick < 4_000 && rng.next() % 5 == 0 {
+            if tick < 4_000 && rng.next().is_multiple_of(5) {
                 for byte in miso.iter_mut() {
-                    if rng.next() % 7 == 0 {
+                    if rng.next().is_multiple_of(7) {
                         *byte = rng.next() as u8;
                     }
                 }
