@@ -33,10 +33,7 @@ fn open_links(config: &ServerConfig) -> anyhow::Result<Vec<Box<dyn Link>>> {
     let mut links: Vec<Box<dyn Link>> = Vec::with_capacity(config.links.len());
     for (index, spec) in config.links.iter().enumerate() {
         let link: Box<dyn Link> = match &spec.transport {
-            Transport::Sim { rate } => {
-                let devices: Vec<_> = config.devices.iter().filter(|d| d.link == index).collect();
-                Box::new(sim_link(&spec.name, *rate, &devices))
-            }
+            Transport::Sim { .. } => Box::new(sim_link(config, index)),
             Transport::Serial { path, baud } => LinkConfig::Serial(
                 motion_link::serial::SerialConfig::new(path.to_string_lossy(), *baud),
             )

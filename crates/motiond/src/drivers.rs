@@ -1,13 +1,13 @@
 //! One driver per configured device, configured from its axes.
 
 use anyhow::bail;
-use motion_drivers::qq2drv::{Qq2drvDriver, Qq2drvDriverConfig};
+use motion_drivers::qq2drv::{HomeInput, Qq2drvDriver, Qq2drvDriverConfig};
 use motion_drivers::qsb::{QsbDriver, QsbDriverConfig};
 use motion_drivers::spimotor::{AxisLimits, SpimotorDrive, SpimotorDriver, SpimotorDriverConfig};
 use motion_drivers::tmcpack::{TmcpackChannel, TmcpackDriver, TmcpackDriverConfig};
 use motion_drivers::{Driver, Model};
 
-use crate::config::{DeviceSpec, PackVariant, ServerConfig, SpiDrive, Transport};
+use crate::config::{DeviceSpec, HomeInputKind, PackVariant, ServerConfig, SpiDrive, Transport};
 
 /// Velocity and acceleration limits of `device`'s channel `channel` in counts, from the axis
 /// that drives it.
@@ -111,6 +111,22 @@ fn qq2drv(config: &ServerConfig, index: usize, device: &DeviceSpec) -> Box<dyn D
             }
             None => slot.enabled = false,
         }
+        let home = config
+            .axes
+            .iter()
+            .zip(&config.homes)
+            .find(|(axis, _)| axis.device == index && axis.channel == channel)
+            .and_then(|(axis, home)| home.map(|home| (axis.counts_per_unit, home)));
+        slot.home = home.map(|(counts_per_unit, home)| HomeInput {
+            mode: match home.input {
+                HomeInputKind::Home => qq2drv::InputMode::Home,
+                HomeInputKind::Index => qq2drv::InputMode::Index,
+                HomeInputKind::Edge => qq2drv::InputMode::Edge,
+            },
+            active_high: home.active_high,
+            positive_end: home.positive_end == (counts_per_unit > 0.0),
+            position: (home.position * counts_per_unit).round() as i32,
+        });
     }
     Box::new(Qq2drvDriver::new(driver))
 }

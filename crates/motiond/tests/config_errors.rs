@@ -294,3 +294,52 @@ fn the_shipped_configs_are_valid() {
         );
     }
 }
+
+#[test]
+fn home_inputs_are_for_qq2drv_axes_only_and_named() {
+    let text = GOOD.replace(
+        "max_accel = 100.0",
+        "max_accel = 100.0\nhome = { input = \"index\" }",
+    );
+    assert_fails(
+        "home_model.toml",
+        &text,
+        "home = {",
+        "axis[0].home",
+        "only qq2drv axes",
+    );
+    let qq2drv = r#"
+[[link]]
+name = "spi"
+type = "sim"
+
+[[device]]
+name = "drive"
+link = "spi"
+model = "qq2drv"
+
+[[axis]]
+name = "w"
+device = "drive"
+channel = 0
+unit = "deg"
+counts_per_unit = 55.0
+min = -10.0
+max = 10.0
+max_velocity = 1.0
+max_accel = 1.0
+home = { input = "switch" }
+"#;
+    assert_fails(
+        "home_input.toml",
+        qq2drv,
+        "\"switch\"",
+        "axis[0].home.input",
+        "allowed: \"home\"",
+    );
+    let (code, stderr) = check(
+        "home_ok.toml",
+        &qq2drv.replace("\"switch\"", "\"edge\", active_high = false"),
+    );
+    assert_eq!(code, Some(0), "{stderr}");
+}

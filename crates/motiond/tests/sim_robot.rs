@@ -93,11 +93,11 @@ impl Robot {
             .iter()
             .enumerate()
             .map(|(index, spec)| {
-                let motiond::config::Transport::Sim { rate } = spec.transport else {
-                    panic!("sim.toml has only sim links");
-                };
-                let devices: Vec<_> = config.devices.iter().filter(|d| d.link == index).collect();
-                Box::new(motiond::sim_models::sim_link(&spec.name, rate, &devices)) as Box<dyn Link>
+                assert!(matches!(
+                    spec.transport,
+                    motiond::config::Transport::Sim { .. }
+                ));
+                Box::new(motiond::sim_models::sim_link(&config, index)) as Box<dyn Link>
             })
             .collect();
         let period = engine.config().period();

@@ -140,6 +140,30 @@ pub fn channel_count(model: Model, variant: PackVariant, drive: SpiDrive) -> usi
     }
 }
 
+/// What a qq2drv channel's IN pin is wired to (datasheet packet 14 Input Mode).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum HomeInputKind {
+    /// A home switch: acts while active.
+    Home,
+    /// The encoder index: acts while active and A = B = 0.
+    Index,
+    /// An edge: acts on the inactive-to-active transition.
+    Edge,
+}
+
+/// `home = { input = "index", ... }` of a qq2drv axis: how it homes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HomeSpec {
+    /// What the pin is wired to.
+    pub input: HomeInputKind,
+    /// The pin is active high (default true).
+    pub active_high: bool,
+    /// The switch sits at the positive end: the search runs positive (default false).
+    pub positive_end: bool,
+    /// The position the axis takes at the trigger, units (default 0).
+    pub position: f64,
+}
+
 /// A validated config file.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ServerConfig {
@@ -153,6 +177,8 @@ pub struct ServerConfig {
     pub devices: Vec<DeviceSpec>,
     /// `[[axis]]`s in file order, as the engine takes them.
     pub axes: Vec<AxisConfig>,
+    /// Per axis (same order): its home input, for qq2drv axes that have one.
+    pub homes: Vec<Option<HomeSpec>>,
 }
 
 impl ServerConfig {

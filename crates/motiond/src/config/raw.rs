@@ -74,4 +74,14 @@ pub(crate) struct RawAxis {
     pub max_velocity: Option<Spanned<f64>>,
     pub max_accel: Option<Spanned<f64>>,
     pub position_tolerance: Option<Spanned<f64>>,
+    pub home: Option<Spanned<RawHome>>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawHome {
+    pub input: Option<Spanned<String>>,
+    pub active_high: Option<Spanned<bool>>,
+    pub positive_end: Option<Spanned<bool>>,
+    pub position: Option<Spanned<f64>>,
 }

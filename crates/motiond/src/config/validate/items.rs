@@ -7,7 +7,7 @@ use toml::Spanned;
 
 use super::Validator;
 use crate::config::raw::{RawAxis, RawDevice};
-use crate::config::{DeviceSpec, PackVariant, SpiDrive};
+use crate::config::{DeviceSpec, HomeInputKind, HomeSpec, PackVariant, SpiDrive};
 
 impl Validator<'_, '_> {
     pub(super) fn device(
@@ -150,7 +150,7 @@ impl Validator<'_, '_> {
         raw: &Spanned<RawAxis>,
         devices: &[Option<DeviceSpec>],
         raw_devices: &[Spanned<RawDevice>],
-    ) -> Option<AxisConfig> {
+    ) -> Option<(AxisConfig, Option<HomeSpec>)> {
         let table = raw.span();
         let a = raw.get_ref();
         let key = |k: &str| format!("axis[{index}].{k}");
@@ -316,11 +316,12 @@ impl Validator<'_, '_> {
             }
             None => cpu.map(|cpu| 2.0 / cpu.abs()),
         };
+        let home = self.home(index, a, device.and_then(|d| devices[d].as_ref()), cpu);
         let (min, max) = (min?, max?);
         if min >= max {
             return None;
         }
-        Some(AxisConfig {
+        let axis = AxisConfig {
             name: name?,
             unit: unit?,
             device: device?,
@@ -331,6 +332,71 @@ impl Validator<'_, '_> {
             max_velocity: max_velocity?,
             max_accel: max_accel?,
             position_tolerance: tolerance?,
-        })
+        };
+        Some((axis, home?))
+    }
+
+    /// The `home` table of axis `index`: `Some(None)` when absent, `None` when invalid.
+    fn home(
+        &mut self,
+        index: usize,
+        a: &RawAxis,
+        device: Option<&DeviceSpec>,
+        counts_per_unit: Option<f64>,
+    ) -> Option<Option<HomeSpec>> {
+        let Some(raw) = &a.home else {
+            return Some(None);
+        };
+        let key = |k: &str| format!("axis[{index}].home.{k}");
+        if device.is_some_and(|d| d.model != Model::Qq2drv) {
+            self.issue(
+                raw.span(),
+                &format!("axis[{index}].home"),
+                "only qq2drv axes take a home input; Trinamic packs search their reference switch and QSBs their index by themselves",
+            );
+            return None;
+        }
+        let h = raw.get_ref();
+        let table = raw.span();
+        let input = self
+            .required(&h.input, &table, &key("input"), "one of \"home\", \"index\", \"edge\"")
+            .and_then(|input| match input.get_ref().as_str() {
+                "home" => Some(HomeInputKind::Home),
+                "index" => Some(HomeInputKind::Index),
+                "edge" => Some(HomeInputKind::Edge),
+                other => {
+                    self.issue(
+                        input.span(),
+                        &key("input"),
+                        format!("unknown input {other:?}; allowed: \"home\" (switch, acts while active), \"index\" (encoder index), \"edge\" (inactive-to-active edge)"),
+                    );
+                    None
+                }
+            });
+        let position = match &h.position {
+            Some(p) if p.get_ref().is_finite() => Some(*p.get_ref()),
+            Some(p) => {
+                self.issue(p.span(), &key("position"), "a finite number (units)");
+                None
+            }
+            None => Some(0.0),
+        };
+        if let (Some(position), Some(cpu)) = (position, counts_per_unit)
+            && (position * cpu).abs() > f64::from(i32::MAX)
+        {
+            let span = h.position.as_ref().map_or(table.clone(), Spanned::span);
+            self.issue(
+                span,
+                &key("position"),
+                "beyond the board's 32-bit position counter",
+            );
+            return None;
+        }
+        Some(Some(HomeSpec {
+            input: input?,
+            active_high: h.active_high.as_ref().is_none_or(|v| *v.get_ref()),
+            positive_end: h.positive_end.as_ref().is_some_and(|v| *v.get_ref()),
+            position: position?,
+        }))
     }
 }

@@ -13,7 +13,7 @@ mod links;
 
 use super::error::{ConfigIssue, Issues};
 use super::raw::{RawConfig, RawLink, RawServer};
-use super::{DeviceSpec, ServerConfig, ServerSettings};
+use super::{DeviceSpec, HomeSpec, ServerConfig, ServerSettings};
 
 pub(crate) fn parse(source: &str) -> Result<ServerConfig, Vec<ConfigIssue>> {
     let mut issues = Issues::new(source);
@@ -191,11 +191,16 @@ impl Validator<'_, '_> {
             }),
         );
         let links = self.links(&links, &devices, &raw.device);
-        let axes: Vec<Option<AxisConfig>> = raw
+        let axes: Vec<Option<(AxisConfig, Option<HomeSpec>)>> = raw
             .axis
             .iter()
             .enumerate()
             .map(|(index, axis)| self.axis(index, axis, &devices, &raw.device))
+            .collect();
+        let homes: Vec<Option<HomeSpec>> = axes.iter().flatten().map(|(_, home)| *home).collect();
+        let axes: Vec<Option<AxisConfig>> = axes
+            .into_iter()
+            .map(|axis| axis.map(|(axis, _)| axis))
             .collect();
         self.duplicates(
             "axis",
@@ -228,6 +233,7 @@ impl Validator<'_, '_> {
             links,
             devices: devices.into_iter().flatten().collect(),
             axes: axes.into_iter().flatten().collect(),
+            homes,
         }
     }
 
