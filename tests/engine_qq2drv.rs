@@ -353,6 +353,22 @@ fn home_finds_the_end_stop_and_sets_the_counter() {
     assert_eq!(sim.control_mode(1), Some(ControlMode::PositionPid));
     drop(sim);
     assert!((rig.axis(1).position * COUNTS_PER_MM - counter).abs() <= 4.0);
+    // From beyond the switch (EDGE needs an inactive → active transition): it backs off
+    // first, then finds the switch again.
+    board.lock().unwrap().displace_shaft(1, 300.0);
+    rig.run(20);
+    assert!(flag(&rig, 1, AxisFlags::AT_LIMIT), "the switch is pressed");
+    accepted(&mut rig, 1, CommandKind::Home, [10.0, 0.0, 0.0]);
+    assert!(rig.run_until(Duration::from_secs(3), |frame| {
+        frame.axes[1].mode == AxisMode::Hold as u8
+    }));
+    let sim = board.lock().unwrap();
+    let shaft = sim.true_position(1).unwrap();
+    let counter = f64::from(sim.counter(1).unwrap());
+    let offset = counter - (shaft - SWITCH_AT) - f64::from(HOME_COUNTS);
+    assert!(offset.abs() <= 4.0, "counter {counter} shaft {shaft}");
+    assert!((shaft - SWITCH_AT).abs() < 80.0, "near the switch: {shaft}");
+    drop(sim);
     // Channel 1 has no home input.
     let reason = rejected(&mut rig, 0, CommandKind::Home, [5.0, 0.0, 0.0]);
     assert_eq!(reason, Reason::Unsupported);

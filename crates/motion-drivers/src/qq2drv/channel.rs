@@ -442,7 +442,11 @@ impl Channel {
             refreshed_at: self.refreshed_at,
             moving,
             homed: self.homed,
-            at_limit: self.home().is_some() && self.status.input_active(),
+            // An end-stop switch (HOME / EDGE input) is pressed; an index pulse is not a limit.
+            at_limit: self
+                .home()
+                .is_some_and(|home| home.mode != InputMode::Index)
+                && self.status.input_active(),
             arrived,
             fault: self.fault,
         }

@@ -616,3 +616,51 @@ fn a_late_tick_is_not_a_stalled_board() {
     drain(&mut driver, now);
     assert!(driver.refresh_budget() < 20 * MS);
 }
+
+#[test]
+fn home_on_an_active_edge_input_backs_off_first() {
+    let (mut driver, now) = running();
+    driver.handle_rx(
+        now,
+        &ours_stream([0, 700, 0], [0; 3], [0, Status::INPUT_ACTIVE, 0]),
+    );
+    let mosi = acked(&mut driver, now, 1, Goal::Home { velocity: 800.0 });
+    let p = packets(&mosi);
+    match (
+        Request::parse(&p[0]).unwrap(),
+        Request::parse(&p[2]).unwrap(),
+    ) {
+        (Request::SetInputMode(input), Request::VelocityRamp(ramp)) => {
+            let input = input.iter().next().unwrap();
+            assert_eq!(
+                input.config.mode(),
+                qq2drv::InputMode::Disabled,
+                "not armed yet"
+            );
+            assert_eq!(
+                ramp.iter().next().unwrap().velocity,
+                -800,
+                "away from the switch"
+            );
+        }
+        other => panic!("{other:?}"),
+    }
+    assert!(driver.channel(1).at_limit);
+    // Off the switch: the search starts, armed, towards it.
+    driver.handle_rx(now + MS, &ours_stream([0, 650, 0], [0, -800, 0], [0; 3]));
+    let sent = drain(&mut driver, now + MS);
+    let p = packets(&sent[0]);
+    match (
+        Request::parse(&p[0]).unwrap(),
+        Request::parse(&p[2]).unwrap(),
+    ) {
+        (Request::SetInputMode(input), Request::VelocityRamp(ramp)) => {
+            assert_eq!(
+                input.iter().next().unwrap().config.mode(),
+                qq2drv::InputMode::Edge
+            );
+            assert_eq!(ramp.iter().next().unwrap().velocity, 800);
+        }
+        other => panic!("{other:?}"),
+    }
+}
