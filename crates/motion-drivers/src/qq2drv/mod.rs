@@ -15,8 +15,10 @@
 //! commands alike — to a [`StreamDecoder`], which finds STX after filler or garbage and
 //! drops bad sizes, ids and checksums. At 500 kHz a 4-channel stream packet with
 //! position, velocity, status and the timing field is 42 bytes ≈ 0.7 ms, so a 48-byte poll
-//! per 1 ms tick keeps up. The driver tracks the wire time of what it has sent and skips a
-//! poll while the bus is still busy with earlier transactions. Requests go out as their
+//! per 1 ms tick keeps up. The driver tracks the wire time of what it has sent: a poll is
+//! skipped while half a poll period of earlier bytes is still on the wire, and goals wait
+//! while a whole one is (a newer goal for a channel replaces its unsent one), so a client
+//! sending goals every tick cannot build an ever-growing backlog on the bus. Requests go out as their
 //! own transactions, before polls ([`Priority::Setup`] / [`Priority::Command`]); the board
 //! answers requests in order, each with its packet id, so answers are matched to the
 //! oldest unanswered request with that id (skipped ones are lost).
@@ -307,14 +309,19 @@ impl Qq2drvDriver {
         if self.configure_due && self.in_flight.has_room(8) {
             return Some((Next::Configure, Priority::Setup));
         }
+        // Goals wait while a whole poll period of earlier bytes is still on the wire (a
+        // newer goal of the same channel replaces an unsent one meanwhile), polls while
+        // half of one is.
+        let backlog = self.line_free_at.saturating_sub(now);
         let goals = self.phase == Phase::Running
+            && backlog <= self.config.poll_period
             && self.in_flight.has_room(3)
             && self.channels.iter().any(|c| c.config.enabled && c.unsent);
         if goals {
             return Some((Next::Goals, Priority::Command));
         }
         let reading = self.phase == Phase::Running || !self.in_flight.is_empty();
-        let bus_free = self.line_free_at <= now.saturating_add(self.config.poll_period / 2);
+        let bus_free = backlog <= self.config.poll_period / 2;
         if reading && now >= self.next_poll_at && bus_free {
             return Some((Next::Poll, Priority::Poll));
         }

@@ -233,20 +233,32 @@ fn goal_packets(driver: &mut Qq2drvDriver, now: Duration, channel: usize, goal: 
     sent[0].clone()
 }
 
+/// 2 ms later (the wire is idle again).
+fn later(now: &mut Duration) -> Duration {
+    *now += 2 * MS;
+    *now
+}
+
 /// Sets a goal, takes its transaction and answers it.
 fn acked(driver: &mut Qq2drvDriver, now: Duration, channel: usize, goal: Goal) -> Vec<u8> {
     let mosi = goal_packets(driver, now, channel, goal);
     driver.handle_rx(now + MS, &acks(&mosi, 0));
+    driver.handle_rx(now + MS, &ours_stream([10, 20, 30], [0; 3], [0; 3]));
     assert!(!driver.goals_pending());
     mosi
 }
 
 #[test]
 fn goals_become_the_documented_packets() {
-    let (mut driver, now) = running();
+    let (mut driver, mut now) = running();
     let ch1 = ChannelMask(0b01).0;
     // Position: 16 (Position PID), 20 target.
-    let mosi = goal_packets(&mut driver, now, 0, Goal::Position { counts: 1_000.4 });
+    let mosi = goal_packets(
+        &mut driver,
+        later(&mut now),
+        0,
+        Goal::Position { counts: 1_000.4 },
+    );
     let p = packets(&mosi);
     assert_eq!(
         p[0],
@@ -270,7 +282,12 @@ fn goals_become_the_documented_packets() {
     driver.handle_rx(now + MS, &acks(&mosi, 0));
     assert!(!driver.goals_pending());
     // Power: 16 Power, 18 I16 round(0.5 × 8191).
-    let mosi = acked(&mut driver, now, 0, Goal::Power { fraction: -0.5 });
+    let mosi = acked(
+        &mut driver,
+        later(&mut now),
+        0,
+        Goal::Power { fraction: -0.5 },
+    );
     match Request::parse(&packets(&mosi)[1]).unwrap() {
         Request::SetMotorPower(e) => {
             assert_eq!(e.iter().next().unwrap().power, -4_096);
@@ -280,7 +297,7 @@ fn goals_become_the_documented_packets() {
     // Velocity: 16 Velocity PID, 36 plain transitions/s, acceleration shl 12.
     let mosi = acked(
         &mut driver,
-        now,
+        later(&mut now),
         2,
         Goal::Velocity {
             velocity: -1_500.0,
@@ -299,7 +316,7 @@ fn goals_become_the_documented_packets() {
     // Ramp position: 16 Position PID, 34 with shl-12 velocity and acceleration.
     let mosi = acked(
         &mut driver,
-        now,
+        later(&mut now),
         1,
         Goal::RampPosition {
             counts: -300.0,
@@ -318,7 +335,12 @@ fn goals_become_the_documented_packets() {
         other => panic!("{other:?}"),
     }
     // Set position while the motor is held: 10, then hold there (16, 20).
-    let mosi = goal_packets(&mut driver, now, 1, Goal::SetPosition { counts: -7.0 });
+    let mosi = goal_packets(
+        &mut driver,
+        later(&mut now),
+        1,
+        Goal::SetPosition { counts: -7.0 },
+    );
     let p = packets(&mosi);
     assert_eq!(p.len(), 3);
     assert_eq!(
@@ -331,7 +353,7 @@ fn goals_become_the_documented_packets() {
         }]
     );
     // Off: 16 Off.
-    let mosi = goal_packets(&mut driver, now, 2, Goal::Off);
+    let mosi = goal_packets(&mut driver, later(&mut now), 2, Goal::Off);
     assert_eq!(packets(&mosi).len(), 1);
     assert_eq!(mosi[4], ControlMode::Off as u8);
 }
@@ -624,7 +646,8 @@ fn home_on_an_active_edge_input_backs_off_first() {
         now,
         &ours_stream([0, 700, 0], [0; 3], [0, Status::INPUT_ACTIVE, 0]),
     );
-    let mosi = acked(&mut driver, now, 1, Goal::Home { velocity: 800.0 });
+    let mosi = goal_packets(&mut driver, now, 1, Goal::Home { velocity: 800.0 });
+    driver.handle_rx(now, &acks(&mosi, 0));
     let p = packets(&mosi);
     match (
         Request::parse(&p[0]).unwrap(),
@@ -663,4 +686,39 @@ fn home_on_an_active_edge_input_backs_off_first() {
         }
         other => panic!("{other:?}"),
     }
+}
+
+#[test]
+fn goals_every_tick_never_build_a_backlog_on_the_wire() {
+    let (mut driver, mut now) = running();
+    let mut bytes = 0usize;
+    let start = now;
+    for tick in 0..200 {
+        now += MS;
+        for channel in 0..3 {
+            let counts = f64::from(tick * 10 + channel);
+            driver
+                .set_goal(
+                    now,
+                    channel as usize,
+                    Goal::RampPosition {
+                        counts,
+                        velocity: 1_000.0,
+                        accel: 10_000.0,
+                    },
+                )
+                .unwrap();
+        }
+        driver.handle_rx(now, &ours_stream([0; 3], [0; 3], [0; 3]));
+        for transaction in drain(&mut driver, now) {
+            bytes += transaction.len();
+            if transaction.iter().any(|b| *b != FILLER) {
+                driver.handle_rx(now, &acks(&transaction, 0));
+            }
+        }
+    }
+    // 500 kHz carries 62.5 bytes per ms: what was sent fits the time that passed.
+    let elapsed = (now - start).as_secs_f64();
+    let wire = bytes as f64 * 8.0 / 500_000.0;
+    assert!(wire <= elapsed + 0.002, "{wire} s of bytes in {elapsed} s");
 }
