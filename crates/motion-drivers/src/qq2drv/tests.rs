@@ -4,8 +4,8 @@ use core::time::Duration;
 
 use qq2drv::limits::{FIXED_SHIFT, POWER_MAX};
 use qq2drv::{
-    ChannelData, ChannelMask, ControlMode, DataMask, MotionData, PacketId, PositionValue, Reply,
-    Request, ReturnCode, Status, StreamConfig, StreamData,
+    ChannelData, ChannelMask, ControlMode, DataMask, Entries, MotionData, PacketId, PositionValue,
+    Reply, Request, ReturnCode, Status, StreamConfig, StreamData,
 };
 
 use super::*;
