@@ -297,8 +297,11 @@ impl Channel {
             }
             return;
         }
-        if let Packet::Mode(mode) = packet {
-            self.board_mode = mode;
+        match packet {
+            Packet::Mode(mode) => self.board_mode = mode,
+            // "Set absolute position value": the channel now has a reference.
+            Packet::SetCounter(_) => self.homed = true,
+            _ => {}
         }
         if seq == self.seq && self.unacked > 0 {
             self.unacked -= 1;

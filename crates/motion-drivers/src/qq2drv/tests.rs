@@ -352,6 +352,9 @@ fn goals_become_the_documented_packets() {
             sum.wrapping_neg()
         }]
     );
+    assert!(!driver.channel(1).homed);
+    driver.handle_rx(now + MS, &acks(&mosi, 0));
+    assert!(driver.channel(1).homed, "a set position is a reference");
     // Off: 16 Off.
     let mosi = goal_packets(&mut driver, later(&mut now), 2, Goal::Off);
     assert_eq!(packets(&mosi).len(), 1);
