@@ -562,9 +562,8 @@ impl Driver for Qq2drvDriver {
             .is_some_and(|at| now.saturating_sub(at) > self.refresh_budget());
         if silent && self.status.fault != Some(DeviceFault::NotResponding) {
             self.not_responding();
-            if self.phase != Phase::Running {
-                // Keep probing at the offline pace.
-            } else {
+            // Probe again; a probe already under way keeps its pace.
+            if self.phase == Phase::Running {
                 self.restart(now);
             }
         }
