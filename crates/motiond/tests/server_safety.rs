@@ -291,7 +291,14 @@ fn an_unplugged_serial_adapter_recovers_without_a_restart() {
     let after = client.frame();
     assert!(after.tick > before.tick);
     assert!(after.axes()[0].last_refresh_tick > before.axes()[0].last_refresh_tick);
-    assert!(after.axes()[1].flags().contains(AxisFlags::STALE));
+    let (frame, stale) = client.wait_frame(Duration::from_secs(3), |f| {
+        f.axes()[1].flags().contains(AxisFlags::STALE)
+    });
+    assert!(
+        stale,
+        "no fresh data from an unplugged pack: {:?}",
+        frame.axes()[1]
+    );
     let refused = client.command(1, CommandKind::Velocity, [2.0, 0.0, 0.0]);
     assert_eq!(refused.result(), Err(motion_ipc::Reason::LinkDown));
 

@@ -43,6 +43,11 @@ impl PtyBoard {
             .expect("FD_CLOEXEC");
         }
         let slave_path = nix::unistd::ttyname(pty.slave.as_fd()).expect("ttyname");
+        // Raw from the start (no echo, no line discipline), as a UART is.
+        let mut termios = nix::sys::termios::tcgetattr(&pty.slave).expect("tcgetattr");
+        nix::sys::termios::cfmakeraw(&mut termios);
+        nix::sys::termios::tcsetattr(&pty.slave, nix::sys::termios::SetArg::TCSANOW, &termios)
+            .expect("tcsetattr");
         let _ = std::fs::remove_file(link);
         std::os::unix::fs::symlink(&slave_path, link).expect("symlink to the pty");
         let stop = Arc::new(AtomicBool::new(false));
@@ -61,8 +66,11 @@ impl PtyBoard {
         }
     }
 
-    /// Closes the master side: the server's tty reports a hang-up, as an unplugged adapter.
+    /// Closes the master side and removes the link: the server's tty reports a hang-up and
+    /// the path is gone, as with an unplugged USB adapter (and the pty number cannot be
+    /// reused under the old path by another test's pty).
     pub fn unplug(&mut self) {
+        let _ = std::fs::remove_file(&self.link);
         self.stop.store(true, Ordering::Relaxed);
         if let Some(thread) = self.thread.take() {
             let _ = thread.join();
@@ -88,16 +96,43 @@ fn serve<D: StreamDevice>(
     let mut buf = [0u8; 512];
     let mut line: VecDeque<(Duration, u8)> = VecDeque::new();
     let mut line_free_at = Duration::ZERO;
+    let mut incoming: VecDeque<(Duration, u8)> = VecDeque::new();
+    let mut incoming_free_at = Duration::ZERO;
     while !stop.load(Ordering::Relaxed) {
         let mut fds = [PollFd::new(master.as_fd(), PollFlags::POLLIN)];
-        let wait: u8 = if line.is_empty() { 1 } else { 0 };
+        let wait: u8 = if line.is_empty() && incoming.is_empty() {
+            1
+        } else {
+            0
+        };
         let ready = poll(&mut fds, PollTimeout::from(wait)).unwrap_or(0);
         let now = epoch.elapsed();
         if ready > 0 {
             match nix::unistd::read(&master, &mut buf) {
-                Ok(len) if len > 0 => device.lock().unwrap().receive(now, &buf[..len]),
+                Ok(len) if len > 0 => {
+                    if std::env::var_os("PTY_TRACE").is_some() {
+                        eprintln!(
+                            "{:>10.3} ms  in  {:02x?}",
+                            now.as_secs_f64() * 1e3,
+                            &buf[..len]
+                        );
+                    }
+                    // The host wrote these at once; on the wire they arrive one byte time
+                    // apart, which is what the model's receiver times.
+                    for &byte in &buf[..len] {
+                        incoming_free_at = incoming_free_at.max(now) + byte_time;
+                        incoming.push_back((incoming_free_at, byte));
+                    }
+                }
                 _ => std::thread::sleep(Duration::from_millis(1)),
             }
+        }
+        while let Some(&(at, byte)) = incoming.front() {
+            if at > now {
+                break;
+            }
+            incoming.pop_front();
+            device.lock().unwrap().receive(at, &[byte]);
         }
         let len = device.lock().unwrap().transmit(now, &mut buf);
         for &byte in &buf[..len] {
@@ -110,6 +145,9 @@ fn serve<D: StreamDevice>(
                 due.push(byte);
             }
         }
+        if !due.is_empty() && std::env::var_os("PTY_TRACE").is_some() {
+            eprintln!("{:>10.3} ms  out {:02x?}", now.as_secs_f64() * 1e3, &due);
+        }
         let mut sent = 0;
         while sent < due.len() {
             match nix::unistd::write(&master, &due[sent..]) {
@@ -117,7 +155,7 @@ fn serve<D: StreamDevice>(
                 Err(_) => break,
             }
         }
-        if !line.is_empty() {
+        if !line.is_empty() || !incoming.is_empty() {
             std::thread::sleep(Duration::from_micros(100));
         }
     }
