@@ -164,6 +164,12 @@ impl<S: Service> Client<S> {
             .signal_handling_mode(options.signal_handling)
             .create::<S>()
             .map_err(|error| ConnectError::ipc("create a node", error))?;
+        if options.signal_handling == SignalHandlingMode::HandleTerminationRequests {
+            // iceoryx2 installs its SIGINT/SIGTERM capture on the first look at the
+            // signal state; look now, so that a Ctrl-C between here and the first wait is
+            // caught (and the axis stopped) instead of killing the process mid-command.
+            let _ = node.wait(Duration::ZERO);
+        }
 
         let frame_name = service_name(&names.frame(), &server)?;
         let frame_service = retry(deadline, || {
