@@ -3,13 +3,10 @@
 //!
 //! The counting global allocator (for the driver's zero-allocation test) counts on the
 //! calling thread only, so the other tests of this binary do not disturb it.
-#![allow(unsafe_code)] // the counting global allocator
 
 mod support;
 
 use core::time::Duration;
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 use std::sync::{Arc, Mutex};
 
 use motion_drivers::qq2drv::{
@@ -22,39 +19,11 @@ use motion_ipc::{AxisFlags, AxisMode, CommandKind, FaultCode, Reason};
 use motion_link::sim::{Direction, SimFaults, SimLink};
 use motion_sim::qq2drv::{InputPin, InputSource, Qq2drvSim, Qq2drvSimConfig};
 use qq2drv::{ControlMode, InputMode, Request, StreamDecoder};
+use support::counting_alloc::{CountingAllocator, allocations};
 use support::rig::{Rig, Shared};
-
-struct CountingAllocator;
-
-thread_local! {
-    static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
-}
-
-// SAFETY: every call is forwarded unchanged to the system allocator; the only addition is
-// a thread-local counter that does not allocate.
-unsafe impl GlobalAlloc for CountingAllocator {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let _ = ALLOCATIONS.try_with(|count| count.set(count.get() + 1));
-        // SAFETY: same contract as our caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as our caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        let _ = ALLOCATIONS.try_with(|count| count.set(count.get() + 1));
-        // SAFETY: same contract as our caller's.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
 
 #[global_allocator]
 static GLOBAL: CountingAllocator = CountingAllocator;
-
-fn allocations() -> u64 {
-    ALLOCATIONS.with(Cell::get)
-}
 
 /// SPI clock of the simulated link (the datasheet's recommended maximum).
 const SPEED_HZ: u32 = 500_000;

@@ -3,13 +3,10 @@
 //!
 //! The counting global allocator (for the driver's zero-allocation test) counts on the
 //! calling thread only, so the other tests of this binary do not disturb it.
-#![allow(unsafe_code)] // the counting global allocator
 
 mod support;
 
 use core::time::Duration;
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 use std::sync::{Arc, Mutex};
 
 use motion_drivers::spimotor::{AxisLimits, SpimotorDrive, SpimotorDriver, SpimotorDriverConfig};
@@ -20,39 +17,11 @@ use motion_link::Link;
 use motion_link::sim::{SimFaults, SimLink, SpiBus};
 use motion_sim::spimotor::{Bridge, Drive, SpimotorSim, SpimotorSimConfig};
 use spimotor::{Address, Direction, Motor, Request, Transaction};
+use support::counting_alloc::{CountingAllocator, allocations};
 use support::rig::{Rig, Shared};
-
-struct CountingAllocator;
-
-thread_local! {
-    static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
-}
-
-// SAFETY: every call is forwarded unchanged to the system allocator; the only addition is
-// a thread-local counter that does not allocate.
-unsafe impl GlobalAlloc for CountingAllocator {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        let _ = ALLOCATIONS.try_with(|count| count.set(count.get() + 1));
-        // SAFETY: same contract as our caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as our caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        let _ = ALLOCATIONS.try_with(|count| count.set(count.get() + 1));
-        // SAFETY: same contract as our caller's.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
 
 #[global_allocator]
 static GLOBAL: CountingAllocator = CountingAllocator;
-
-fn allocations() -> u64 {
-    ALLOCATIONS.with(Cell::get)
-}
 
 /// SPI clock of the simulated bus.
 const SPEED_HZ: u32 = 1_000_000;

@@ -1,4 +1,5 @@
 //! Shared support of the cross-crate tests.
 #![allow(dead_code)]
 
+pub mod counting_alloc;
 pub mod rig;
