@@ -94,32 +94,9 @@ impl Services {
             .server_builder()
             .create()
             .map_err(|e| format!("command server: {e:?}"))?;
-        let info = node
-            .service_builder(&service_name(names.info())?)
-            .publish_subscribe::<ServerInfo>()
-            .history_size(1)
-            .subscriber_max_buffer_size(1)
-            .max_subscribers(max_clients)
-            .max_publishers(1)
-            .max_nodes(max_nodes)
-            .open_or_create()
-            .map_err(|e| format!("service {}: {e:?}", names.info()))?
-            .publisher_builder()
-            .create()
-            .map_err(|e| format!("info publisher: {e:?}"))?;
-        let stats = node
-            .service_builder(&service_name(names.stats())?)
-            .publish_subscribe::<ServerStats>()
-            .history_size(1)
-            .subscriber_max_buffer_size(1)
-            .max_subscribers(max_clients)
-            .max_publishers(1)
-            .max_nodes(max_nodes)
-            .open_or_create()
-            .map_err(|e| format!("service {}: {e:?}", names.stats()))?
-            .publisher_builder()
-            .create()
-            .map_err(|e| format!("stats publisher: {e:?}"))?;
+        let info = state_publisher::<ServerInfo>(&node, &service_name(names.info())?, max_clients)?;
+        let stats =
+            state_publisher::<ServerStats>(&node, &service_name(names.stats())?, max_clients)?;
         // The frame service comes last: a client that sees it can open every other one.
         let frame = node
             .service_builder(&frame_name)
@@ -150,6 +127,27 @@ impl Services {
             stats,
         })
     }
+}
+
+/// A publisher of a rarely changing state (info, stats): history 1, so a late subscriber
+/// gets the current value at once.
+fn state_publisher<T: core::fmt::Debug + ZeroCopySend + 'static>(
+    node: &Node<Ipc>,
+    name: &ServiceName,
+    max_clients: usize,
+) -> Result<Publisher<Ipc, T, ()>, String> {
+    node.service_builder(name)
+        .publish_subscribe::<T>()
+        .history_size(1)
+        .subscriber_max_buffer_size(1)
+        .max_subscribers(max_clients)
+        .max_publishers(1)
+        .max_nodes(max_clients + 2)
+        .open_or_create()
+        .map_err(|e| format!("service {name}: {e:?}"))?
+        .publisher_builder()
+        .create()
+        .map_err(|e| format!("{name} publisher: {e:?}"))
 }
 
 /// Removes the shared-memory leftovers of dead processes (a crashed motiond or client) and
