@@ -1,0 +1,305 @@
+//! The baseline peer: this bench binary re-executed with `--peer`, a plain process that
+//! does with iceoryx2 what motiond does, minus everything motiond adds (engine, links,
+//! drivers): its own services with motiond's settings, an absolute-deadline tick at the
+//! same rate, requests answered at the start of each tick, a frame-sized sample published
+//! and the tick event notified. `busy-rr` mode answers requests as fast as it can instead.
+//!
+//! Protocol with the bench: the peer prints `ready` once its services exist, runs until
+//! its stdin closes, then prints `wakeup <summary>` and `work <summary>` and exits.
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+use iceoryx2::prelude::*;
+use motion_ipc::{CommandReply, CommandRequest, MotionFrame, Reason, ServiceNames};
+
+use crate::cli::PeerMode;
+use crate::dist::{Dist, Summary};
+use crate::ipc::Ipc;
+use crate::rt::{self, now_ns, sleep_until_ns};
+
+/// Clients the peer's services admit (as motiond's default).
+const MAX_CLIENTS: usize = 32;
+
+/// A running peer process.
+#[derive(Debug)]
+pub struct Peer {
+    child: Child,
+    stdin: Option<ChildStdin>,
+    stdout: BufReader<ChildStdout>,
+    /// Its services.
+    pub names: ServiceNames,
+}
+
+/// The peer's own tick figures, reported when it stops.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct PeerFigures {
+    /// Wake-up latency of its tick.
+    pub wakeup: Summary,
+    /// Its per-tick work (answer requests, loan, write 8 KiB, send, notify).
+    pub work: Summary,
+}
+
+impl Peer {
+    /// Starts `mode` at `hz` under a fresh instance name and waits until it serves.
+    pub fn start(
+        mode: PeerMode,
+        hz: u32,
+        rt_priority: Option<u8>,
+        cpu: Option<usize>,
+    ) -> Result<Self, String> {
+        let exe = std::env::current_exe().map_err(|e| format!("own executable: {e}"))?;
+        let name = format!("bench-peer-{}-{}", std::process::id(), now_ns() % 1_000_000);
+        let mut command = Command::new(exe);
+        command
+            .arg("--peer")
+            .arg(match mode {
+                PeerMode::Ticking => "ticking",
+                PeerMode::BusyRr => "busy-rr",
+            })
+            .arg("--peer-name")
+            .arg(&name)
+            .arg("--peer-hz")
+            .arg(hz.to_string());
+        if let Some(priority) = rt_priority {
+            command.arg("--rt-priority").arg(priority.to_string());
+        }
+        if let Some(cpu) = cpu {
+            command.arg("--cpu").arg(cpu.to_string());
+        }
+        let mut child = command
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::inherit())
+            .spawn()
+            .map_err(|e| format!("start the baseline peer: {e}"))?;
+        let stdin = child.stdin.take();
+        let stdout = child
+            .stdout
+            .take()
+            .ok_or_else(|| "baseline peer: no stdout".to_owned())?;
+        let mut peer = Self {
+            child,
+            stdin,
+            stdout: BufReader::new(stdout),
+            names: ServiceNames::new(&name),
+        };
+        let mut line = String::new();
+        let _ = peer.stdout.read_line(&mut line);
+        if line.trim() != "ready" {
+            let _ = peer.child.kill();
+            let _ = peer.child.wait();
+            return Err(format!(
+                "the baseline peer did not start (said {:?})",
+                line.trim()
+            ));
+        }
+        Ok(peer)
+    }
+
+    /// Stops the peer and collects its figures.
+    pub fn stop(mut self) -> Result<PeerFigures, String> {
+        drop(self.stdin.take());
+        let mut text = String::new();
+        let _ = self.stdout.read_to_string(&mut text);
+        let status = self
+            .child
+            .wait()
+            .map_err(|e| format!("baseline peer: {e}"))?;
+        if !status.success() {
+            return Err(format!("the baseline peer failed: {status}"));
+        }
+        let mut figures = PeerFigures::default();
+        for line in text.lines() {
+            if let Some(rest) = line.strip_prefix("wakeup ") {
+                figures.wakeup = Summary::from_line(rest).unwrap_or_default();
+            } else if let Some(rest) = line.strip_prefix("work ") {
+                figures.work = Summary::from_line(rest).unwrap_or_default();
+            }
+        }
+        Ok(figures)
+    }
+}
+
+impl Drop for Peer {
+    fn drop(&mut self) {
+        if self.stdin.is_some() {
+            drop(self.stdin.take());
+            let _ = self.child.wait();
+        }
+    }
+}
+
+/// The peer process's `main`: returns the exit status.
+pub fn run(mode: PeerMode, name: &str, hz: u32, rt_priority: Option<u8>, cpu: Option<usize>) -> u8 {
+    match serve(mode, name, hz, rt_priority, cpu) {
+        Ok(()) => 0,
+        Err(error) => {
+            eprintln!("latency bench peer: {error}");
+            1
+        }
+    }
+}
+
+struct PeerServices {
+    _node: Node<Ipc>,
+    frame: iceoryx2::port::publisher::Publisher<Ipc, MotionFrame, ()>,
+    tick: iceoryx2::port::notifier::Notifier<Ipc>,
+    command: iceoryx2::port::server::Server<Ipc, CommandRequest, (), CommandReply, ()>,
+}
+
+/// motiond's service settings (crates/motiond/src/services.rs).
+fn create(name: &str) -> Result<PeerServices, String> {
+    let names = ServiceNames::new(name);
+    let node = crate::ipc::node("peer")?;
+    let service = |n: String| ServiceName::new(&n).map_err(|e| format!("{n:?}: {e:?}"));
+    let max_nodes = MAX_CLIENTS + 2;
+    let frame = node
+        .service_builder(&service(names.frame())?)
+        .publish_subscribe::<MotionFrame>()
+        .history_size(1)
+        .subscriber_max_buffer_size(2)
+        .max_subscribers(MAX_CLIENTS)
+        .max_publishers(1)
+        .max_nodes(max_nodes)
+        .enable_safe_overflow(true)
+        .create()
+        .map_err(|e| format!("{}: {e:?}", names.frame()))?
+        .publisher_builder()
+        .create()
+        .map_err(|e| format!("frame publisher: {e:?}"))?;
+    let tick = node
+        .service_builder(&service(names.tick())?)
+        .event()
+        .max_notifiers(1)
+        .max_listeners(MAX_CLIENTS)
+        .max_nodes(max_nodes)
+        .create()
+        .map_err(|e| format!("{}: {e:?}", names.tick()))?
+        .notifier_builder()
+        .create()
+        .map_err(|e| format!("tick notifier: {e:?}"))?;
+    let command = node
+        .service_builder(&service(names.command())?)
+        .request_response::<CommandRequest, CommandReply>()
+        .max_servers(1)
+        .max_clients(MAX_CLIENTS)
+        .max_nodes(max_nodes)
+        .max_active_requests_per_client(8)
+        .max_response_buffer_size(8)
+        .enable_safe_overflow_for_responses(true)
+        .create()
+        .map_err(|e| format!("{}: {e:?}", names.command()))?
+        .server_builder()
+        .create()
+        .map_err(|e| format!("command server: {e:?}"))?;
+    Ok(PeerServices {
+        _node: node,
+        frame,
+        tick,
+        command,
+    })
+}
+
+fn serve(
+    mode: PeerMode,
+    name: &str,
+    hz: u32,
+    rt_priority: Option<u8>,
+    cpu: Option<usize>,
+) -> Result<(), String> {
+    if name.is_empty() || hz == 0 {
+        return Err("--peer needs --peer-name and a --peer-hz above 0".to_owned());
+    }
+    let services = create(name)?;
+    let stop = Arc::new(AtomicBool::new(false));
+    let watcher = Arc::clone(&stop);
+    std::thread::spawn(move || {
+        let mut sink = Vec::new();
+        let _ = std::io::stdin().read_to_end(&mut sink);
+        watcher.store(true, Ordering::Relaxed);
+    });
+    let mut wakeup = Dist::new();
+    let mut work = Dist::new();
+    match mode {
+        PeerMode::Ticking => {
+            let _ = rt::set_up_thread(rt_priority, cpu);
+            say("ready")?;
+            tick_loop(&services, hz, &stop, &mut wakeup, &mut work)?;
+        }
+        PeerMode::BusyRr => {
+            say("ready")?;
+            busy_loop(&services, &stop)?;
+        }
+    }
+    say(&format!("wakeup {}", wakeup.summary().to_line()))?;
+    say(&format!("work {}", work.summary().to_line()))
+}
+
+fn say(line: &str) -> Result<(), String> {
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "{line}")
+        .and_then(|()| out.flush())
+        .map_err(|e| format!("stdout: {e}"))
+}
+
+fn answer(services: &PeerServices, tick: u64) {
+    while let Ok(Some(active)) = services.command.receive() {
+        let reply = CommandReply::to(active.payload(), Reason::UnknownAxis, tick);
+        let _ = active.send_copy(reply);
+    }
+}
+
+fn tick_loop(
+    services: &PeerServices,
+    hz: u32,
+    stop: &AtomicBool,
+    wakeup: &mut Dist,
+    work: &mut Dist,
+) -> Result<(), String> {
+    let period = 1_000_000_000 / u64::from(hz);
+    let mut deadline = now_ns() + period;
+    let mut tick = 0u64;
+    while !stop.load(Ordering::Relaxed) {
+        sleep_until_ns(deadline);
+        let wake = now_ns();
+        wakeup.record(wake.saturating_sub(deadline));
+        tick += 1;
+        answer(services, tick);
+        if let Ok(sample) = services.frame.loan_uninit() {
+            let mut sample = sample.write_payload(MotionFrame::EMPTY);
+            let frame = sample.payload_mut();
+            frame.tick = tick;
+            frame.time_ns = deadline;
+            frame.publish_ns = now_ns();
+            let _ = sample.send();
+        }
+        let _ = services.tick.notify();
+        let done = now_ns();
+        work.record(done.saturating_sub(wake));
+        deadline += period;
+        while deadline <= done {
+            deadline += period;
+            tick += 1;
+        }
+    }
+    Ok(())
+}
+
+fn busy_loop(services: &PeerServices, stop: &AtomicBool) -> Result<(), String> {
+    let mut spins = 0u32;
+    while !(spins.is_multiple_of(4096) && stop.load(Ordering::Relaxed)) {
+        spins = spins.wrapping_add(1);
+        match services.command.receive() {
+            Ok(Some(active)) => {
+                let reply = CommandReply::to(active.payload(), Reason::UnknownAxis, 0);
+                let _ = active.send_copy(reply);
+            }
+            Ok(None) => std::hint::spin_loop(),
+            Err(e) => return Err(format!("receive a request: {e:?}")),
+        }
+    }
+    Ok(())
+}
