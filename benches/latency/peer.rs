@@ -160,7 +160,7 @@ fn create(name: &str) -> Result<PeerServices, String> {
         .service_builder(&service(names.frame())?)
         .publish_subscribe::<MotionFrame>()
         .history_size(1)
-        .subscriber_max_buffer_size(2)
+        .subscriber_max_buffer_size(32) // motiond's FRAME_BUFFER
         .max_subscribers(MAX_CLIENTS)
         .max_publishers(1)
         .max_nodes(max_nodes)

@@ -119,7 +119,7 @@ impl Report {
         if !self.sweep.is_empty() {
             let _ = writeln!(
                 out,
-                "\nTick work versus axes (ServerStats.work of a motiond started per point):"
+                "\nTick work versus axes (ServerStats.work since start of a motiond started per point on generated QUADpack configs; start-up included):"
             );
             if let Some(base) = self.sweep_baseline {
                 let _ = writeln!(
@@ -135,6 +135,8 @@ impl Report {
                         work,
                         wakeup,
                         overruns,
+                        fresh,
+                        all_fresh_after,
                     } => {
                         let ratio = self
                             .sweep_baseline
@@ -143,9 +145,13 @@ impl Report {
                             .unwrap_or_default();
                         let _ = writeln!(
                             out,
-                            "   {axes:>3} axes  work {}{ratio}; wake-up p99 {}; overruns {overruns}",
+                            "   {axes:>3} axes  work {}{ratio}; wake-up p99 {}; overruns {overruns}; {fresh}/{axes} axes fresh at the end, {}",
                             cell(Unit::Ns, *work),
-                            format_ns(wakeup.p99)
+                            format_ns(wakeup.p99),
+                            all_fresh_after.map_or(
+                                "not all fresh within 10 s".to_owned(),
+                                |d| format!("all fresh after {:.1} s", d.as_secs_f64())
+                            )
                         );
                     }
                     SweepPoint::Skipped { axes, reason } => {
@@ -194,9 +200,12 @@ impl Report {
                     work,
                     wakeup,
                     overruns,
+                    fresh,
+                    all_fresh_after,
                 } => json!({
                     "axes": axes, "work_ns": summary(*work), "wakeup_ns": summary(*wakeup),
-                    "overruns": overruns,
+                    "overruns": overruns, "fresh_axes_at_end": fresh,
+                    "all_fresh_after_s": all_fresh_after.map(|d| d.as_secs_f64()),
                 }),
                 SweepPoint::Skipped { axes, reason } => json!({"axes": axes, "skipped": reason}),
             })

@@ -29,6 +29,10 @@ pub enum SweepPoint {
         wakeup: Summary,
         /// Overruns since start.
         overruns: u64,
+        /// Axes not stale in the last frame.
+        fresh: u32,
+        /// How long until every axis was fresh (None: not within 10 s).
+        all_fresh_after: Option<Duration>,
     },
     /// motiond refused or failed; why.
     Skipped {
@@ -151,7 +155,11 @@ fn one(
             });
         }
     };
+    let frames = ipc::open_frames(&node, &names, ipc::OPEN_TIMEOUT)?;
+    let all_fresh_after = wait_fresh(&frames, axes, started)?;
     std::thread::sleep(duration);
+    let fresh = ipc::latest(&frames)?.map_or(0, |frame| fresh_axes(&frame));
+    drop(frames);
     let figures: Option<ServerStats> = ipc::wait_stats(&stats, 0, Duration::from_secs(3))?;
     drop(stats);
     drop(node);
@@ -167,7 +175,37 @@ fn one(
         work: figures.work.into(),
         wakeup: figures.wakeup.into(),
         overruns: figures.overruns,
+        fresh,
+        all_fresh_after,
     })
+}
+
+fn fresh_axes(frame: &motion_ipc::MotionFrame) -> u32 {
+    let fresh = frame
+        .axes()
+        .iter()
+        .filter(|axis| !axis.flags().contains(motion_ipc::AxisFlags::STALE))
+        .count();
+    u32::try_from(fresh).unwrap_or(u32::MAX)
+}
+
+/// Waits (up to 10 s) until every axis is fresh, so that most of the measured ticks are
+/// steady state rather than board start-up.
+fn wait_fresh(
+    frames: &ipc::Frames,
+    axes: u32,
+    started: Instant,
+) -> Result<Option<Duration>, String> {
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while Instant::now() < deadline {
+        if let Some(frame) = ipc::latest(frames)?
+            && fresh_axes(&frame) >= axes
+        {
+            return Ok(Some(started.elapsed()));
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    Ok(None)
 }
 
 fn last_line(log: &Path) -> String {
