@@ -261,7 +261,17 @@ pub fn status(client: &Client<Service>, names: &[String], json: bool) -> anyhow:
     let frame = client.latest()?;
     if json {
         let mut value = frame_json(&info, &frame, &axes);
-        if let Some(stats) = client.stats()? {
+        // The stats service is opened on first use; the server hands a new subscriber its
+        // latest sample within a tick or two.
+        let mut stats = client.stats()?;
+        for _ in 0..40 {
+            if stats.is_some() {
+                break;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(5));
+            stats = client.stats()?;
+        }
+        if let Some(stats) = stats {
             value["stats"] = stats_json(&stats);
         }
         out!("{}", serde_json::to_string_pretty(&value)?);
