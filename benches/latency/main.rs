@@ -154,15 +154,22 @@ fn run(cli: &Cli) -> Result<Report, String> {
 
     progress("1/8", "wake-up baseline: clock_nanosleep loop", cli);
     let sleeper = wakeup::measure(period_ns, cli.duration, cli.rt_priority, cli.cpu)?;
+    // Wake-up: read before the bench's own busy-polling phases load the machine.
+    let stats_quiet = ipc::wait_stats(
+        &stats,
+        stats_start.map_or(0, |s| s.tick),
+        core::time::Duration::from_millis(2500),
+    )?;
     progress("2/8", "motiond frames, WaitSet client", cli);
     let ours_ws = delivery::measure(&names, Waiting::WaitSet, cli.duration, cli.rt_priority)?;
     progress("3/8", "motiond frames, busy-polling client", cli);
     let ours_busy = delivery::measure(&names, Waiting::BusyPoll, cli.duration, cli.rt_priority)?;
     progress("4/8", "motiond command round trip", cli);
     let ours_rtt = roundtrip::measure(&names, probe, axis_count, true, period_ns, cli.duration)?;
-    let stats_end = ipc::wait_stats(
+    // Work: read after the client phases, as the peer's own work covers its client phases.
+    let stats_loaded = ipc::wait_stats(
         &stats,
-        stats_start.map_or(0, |s| s.tick),
+        stats_quiet.map_or(0, |s| s.tick),
         core::time::Duration::from_millis(2500),
     )?;
 
@@ -209,10 +216,10 @@ fn run(cli: &Cli) -> Result<Report, String> {
         }
     }
 
-    let server_window = match (stats_start, stats_end) {
+    let window = |read: Option<ServerStats>, when: &str| match (stats_start, read) {
         (_, None) => "no ServerStats received".to_owned(),
         (start, Some(end)) => format!(
-            "ServerStats since motiond started (read at tick {}{}), {} overruns",
+            "ServerStats since motiond started, read at tick {} {when}{}; {} overruns",
             end.tick,
             start.map_or(String::new(), |s| format!(
                 "; tick {} when the bench began",
@@ -221,7 +228,8 @@ fn run(cli: &Cli) -> Result<Report, String> {
             end.overruns
         ),
     };
-    let end = stats_end.unwrap_or(ServerStats::EMPTY);
+    let quiet = stats_quiet.unwrap_or(ServerStats::EMPTY);
+    let loaded = stats_loaded.unwrap_or(ServerStats::EMPTY);
     let ticks_of = |run: &roundtrip::RoundTripRun| run.ticks.as_ref().map(dist::Dist::summary);
     let reasons = |run: &roundtrip::RoundTripRun| {
         let list: Vec<String> = run
@@ -245,14 +253,15 @@ fn run(cli: &Cli) -> Result<Report, String> {
         Row {
             figure: "tick wake-up latency (actual wake − deadline)".to_owned(),
             unit: Unit::Ns,
-            ours: end.wakeup.into(),
+            ours: quiet.wakeup.into(),
             baseline: Some(sleeper.latency.summary()),
             baseline_label: format!(
                 "bare clock_nanosleep(TIMER_ABSTIME) loop at {hz} Hz in this bench: {}; {} overruns",
                 sleeper.thread, sleeper.overruns
             ),
             note: format!(
-                "server: {server_window}; the baseline ran for {:?} while motiond kept ticking",
+                "server: {}; the baseline ran for {:?} while motiond kept ticking",
+                window(stats_quiet, "right after the wake-up baseline phase"),
                 cli.duration
             ),
         },
@@ -319,10 +328,13 @@ fn run(cli: &Cli) -> Result<Report, String> {
         Row {
             figure: "tick work time (wake → end of the tick's work)".to_owned(),
             unit: Unit::Ns,
-            ours: end.work.into(),
+            ours: loaded.work.into(),
             baseline: Some(peer_figures.work),
             baseline_label: "the plain peer's own tick: answer requests, loan, write 8232 bytes, send, notify".to_owned(),
-            note: format!("server: {server_window}; {axis_count} axes"),
+            note: format!(
+                "server: {}; {axis_count} axes; the baseline is the peer's work during its own client phases",
+                window(stats_loaded, "after the client phases (frames, commands)")
+            ),
         },
     ];
     report.notes.push(
