@@ -438,7 +438,7 @@ fn run(cli: &Cli) -> Result<Report, String> {
 
 fn summary_line(s: &Summary) -> String {
     format!(
-        "plain peer tick wake-up p50 {} p99 {} max {}",
+        "p50 {} p99 {} max {} (the plain peer's own tick, during its client phases)",
         format_ns(s.p50),
         format_ns(s.p99),
         format_ns(s.max)
