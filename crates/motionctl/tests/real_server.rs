@@ -30,7 +30,13 @@ struct RealServer {
     name: String,
     child: Option<Child>,
     dir: PathBuf,
+    /// One server at a time in this binary: each runs the whole simulated robot (18 axes,
+    /// six boards, a tick thread and four I/O threads), and several at once on a 2-core
+    /// machine starve each other's ticks until the boards look stale.
+    _turn: std::sync::MutexGuard<'static, ()>,
 }
+
+static ONE_SERVER_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
 fn motiond_binary() -> Result<PathBuf> {
     if let Some(path) = std::env::var_os("MOTIOND_BIN") {
@@ -79,6 +85,9 @@ impl RealServer {
 
     /// motiond on `config` (its first `name = "demo"` line becomes a unique name).
     fn start_with(config: &str) -> Result<Self> {
+        let turn = ONE_SERVER_AT_A_TIME
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
         let binary = motiond_binary()?;
         let name = unique_name("real");
         let mut renamed = String::new();
@@ -107,6 +116,7 @@ impl RealServer {
             name,
             child: Some(child),
             dir,
+            _turn: turn,
         };
         let until = Instant::now() + DEADLINE;
         loop {
