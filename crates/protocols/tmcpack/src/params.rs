@@ -2,6 +2,8 @@
 //! "Parameters with more than 1 byte are to be transmitted with the least significant byte
 //! first").
 
+use crate::{Command, Error, FRAME_LEN, Word};
+
 /// Number of parameter bytes in a frame.
 pub(crate) const PARAMS: usize = 7;
 
@@ -35,4 +37,35 @@ pub(crate) fn put(p: &mut [u8; PARAMS], i: usize, bytes: &[u8]) {
 
 pub(crate) fn bit0(p: &[u8; PARAMS], i: usize) -> bool {
     byte(p, i) & 1 != 0
+}
+
+/// The 9-byte word of `address`, `command` and the parameters `p` (manual 6.1): the
+/// framing requests and replies share.
+pub(crate) fn assemble(address: u8, command: Command, p: &[u8; PARAMS]) -> Word {
+    let mut w = [0u8; FRAME_LEN];
+    w[0] = address;
+    w[1] = command.code();
+    w[2..].copy_from_slice(p);
+    w
+}
+
+/// Writes `word` at the start of `buf`; returns 9.
+pub(crate) fn write_word(word: &Word, buf: &mut [u8]) -> Result<usize, Error> {
+    let out = buf
+        .get_mut(..FRAME_LEN)
+        .ok_or(Error::BufferTooSmall { needed: FRAME_LEN })?;
+    out.copy_from_slice(word);
+    Ok(FRAME_LEN)
+}
+
+/// Splits exactly one 9-byte word into address, command and parameters.
+pub(crate) fn split_word(bytes: &[u8]) -> Result<(u8, Command, [u8; PARAMS]), Error> {
+    let w: &Word = bytes.try_into().map_err(|_| Error::WrongLength {
+        expected: FRAME_LEN,
+        got: bytes.len(),
+    })?;
+    let command = Command::from_u8(w[1])?;
+    let mut p = [0u8; PARAMS];
+    p.copy_from_slice(&w[2..]);
+    Ok((w[0], command, p))
 }

@@ -1,9 +1,11 @@
 //! Typed replies (pack → host): the responses tabled in manual section 8.
 
-use crate::params::{PARAMS, bit0, byte, i16_at, i32_at, put, u16_at};
+use crate::params::{
+    PARAMS, assemble, bit0, byte, i16_at, i32_at, put, split_word, u16_at, write_word,
+};
 use crate::request::MAX_CHANNEL;
 use crate::types::{Action, PowerDownStatus, RefInputs, check_motor};
-use crate::{Command, Error, FRAME_LEN, Word};
+use crate::{Command, Error, Word};
 
 /// Highest analogue value ($30: "unsigned 0..1023").
 pub const MAX_ANALOG: u16 = 1023;
@@ -290,33 +292,19 @@ impl ReplyFrame {
     /// The 9-byte word.
     pub fn to_word(&self) -> Result<Word, Error> {
         let p = self.reply.encode_params()?;
-        let mut w = [0u8; FRAME_LEN];
-        w[0] = self.address;
-        w[1] = self.reply.command().code();
-        w[2..].copy_from_slice(&p);
-        Ok(w)
+        Ok(assemble(self.address, self.reply.command(), &p))
     }
 
     /// Encodes the 9-byte word into `buf`; returns 9.
     pub fn encode(&self, buf: &mut [u8]) -> Result<usize, Error> {
-        let out = buf
-            .get_mut(..FRAME_LEN)
-            .ok_or(Error::BufferTooSmall { needed: FRAME_LEN })?;
-        out.copy_from_slice(&self.to_word()?);
-        Ok(FRAME_LEN)
+        write_word(&self.to_word()?, buf)
     }
 
     /// Decodes exactly one 9-byte word.
     pub fn decode(bytes: &[u8]) -> Result<Self, Error> {
-        let w: &Word = bytes.try_into().map_err(|_| Error::WrongLength {
-            expected: FRAME_LEN,
-            got: bytes.len(),
-        })?;
-        let command = Command::from_u8(w[1])?;
-        let mut p = [0u8; PARAMS];
-        p.copy_from_slice(&w[2..]);
+        let (address, command, p) = split_word(bytes)?;
         Ok(Self {
-            address: w[0],
+            address,
             reply: Reply::decode_params(command, &p)?,
         })
     }
