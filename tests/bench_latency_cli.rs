@@ -36,7 +36,26 @@ fn documented_invocation_parses() {
     assert_eq!(cli.rt_priority, Some(80));
     assert_eq!(cli.cpu, Some(1));
     assert_eq!(cli.command, CommandProbe::UnknownAxis);
+    assert!(
+        cli.command_to_wire,
+        "the command-to-wire phase runs by default"
+    );
     assert!(cli.peer.is_none());
+}
+
+#[test]
+fn command_to_wire_is_on_by_default_and_can_be_switched_off() {
+    let parse = |args: &[&str]| {
+        Cli::try_parse_from(args)
+            .unwrap_or_else(|e| panic!("{args:?}: {e}"))
+            .command_to_wire
+    };
+    assert!(parse(&["latency"]));
+    assert!(parse(&["latency", "--command-to-wire"]));
+    assert!(parse(&["latency", "--command-to-wire=true"]));
+    assert!(!parse(&["latency", "--command-to-wire=false"]));
+    assert!(!parse(&["latency", "--command-to-wire", "false", "--json"]));
+    assert!(Cli::try_parse_from(["latency", "--command-to-wire=maybe"]).is_err());
 }
 
 #[test]
@@ -52,6 +71,8 @@ fn help_lists_the_options_but_not_the_peer_flags() {
         "--rt-priority",
         "--cpu",
         "--axes-sweep",
+        "--command-to-wire",
+        "--motiond",
     ] {
         assert!(
             help.contains(option),

@@ -43,7 +43,14 @@ pub struct Cli {
     /// 4, 16, 64 and 128 simulated axes (each for DURATION).
     #[arg(long)]
     pub axes_sweep: bool,
-    /// The motiond binary the sweep starts (default: `motiond` beside this bench in the
+    /// Measure "command to wire": start a motiond of the bench's own on a generated config
+    /// whose serial link is a pty served by a simulated QSB in this bench, and time request →
+    /// first byte of the board command at the pty (DURATION, plus a third of it for the
+    /// baseline). On by default; `--command-to-wire=false` skips it.
+    #[arg(long, value_name = "BOOL", default_value_t = true, num_args = 0..=1,
+          default_missing_value = "true", action = clap::ArgAction::Set)]
+    pub command_to_wire: bool,
+    /// The motiond binary the sweep and the command-to-wire phase start (default: `motiond` beside this bench in the
     /// target directory, else on PATH).
     #[arg(long, value_name = "PATH")]
     pub motiond: Option<PathBuf>,

@@ -17,11 +17,13 @@ mod delivery;
 mod dist;
 mod ipc;
 mod peer;
+mod pty;
 mod report;
 mod roundtrip;
 mod rt;
 mod sweep;
 mod wakeup;
+mod wire;
 
 use std::process::ExitCode;
 
@@ -145,10 +147,11 @@ fn run(cli: &Cli) -> Result<Report, String> {
         "latency bench: motiond/{} at {hz} Hz, {axis_count} axes; 8 phases of {:?}{}",
         cli.server,
         cli.duration,
-        if cli.axes_sweep {
-            " plus the axes sweep"
-        } else {
-            ""
+        match (cli.command_to_wire, cli.axes_sweep) {
+            (true, true) => ", the command-to-wire phase and the axes sweep",
+            (true, false) => " and the command-to-wire phase",
+            (false, true) => " and the axes sweep",
+            (false, false) => "",
         }
     );
 
@@ -195,6 +198,38 @@ fn run(cli: &Cli) -> Result<Report, String> {
     let floor_rtt = roundtrip::measure(&busy_peer.names, probe, 0, false, period_ns, cli.duration)?;
     busy_peer.stop()?;
 
+    let scratch = || -> Result<std::path::PathBuf, String> {
+        let dir = match out {
+            Some(dir) => dir.to_path_buf(),
+            None => std::env::temp_dir().join(format!("motiond-bench-{}", std::process::id())),
+        };
+        std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        Ok(dir)
+    };
+    let wire_run = if cli.command_to_wire {
+        eprintln!(
+            "[wire] command to wire: own motiond on a pty-served QSB ({:?}), then the pty baseline ({:?})",
+            cli.duration,
+            (cli.duration / 3).max(core::time::Duration::from_secs(1))
+        );
+        match sweep::find_motiond(cli.motiond.as_deref())
+            .and_then(|motiond| wire::run(&motiond, hz, cli.duration, &scratch()?))
+        {
+            Ok(run) => Some(run),
+            Err(e) => {
+                report.notes.push(format!(
+                    "command → first byte on the wire (µs): not measured this run: {e}"
+                ));
+                None
+            }
+        }
+    } else {
+        report.notes.push(
+            "command → first byte on the wire (µs): skipped (--command-to-wire=false)".to_owned(),
+        );
+        None
+    };
+
     if cli.axes_sweep {
         eprintln!(
             "[sweep] motiond at 4, 16, 64, 128 simulated axes ({:?} each)",
@@ -202,13 +237,7 @@ fn run(cli: &Cli) -> Result<Report, String> {
         );
         match sweep::find_motiond(cli.motiond.as_deref()) {
             Ok(motiond) => {
-                let dir = match out {
-                    Some(dir) => dir.to_path_buf(),
-                    None => {
-                        std::env::temp_dir().join(format!("motiond-bench-{}", std::process::id()))
-                    }
-                };
-                std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+                let dir = scratch()?;
                 report.sweep = sweep::run(&motiond, hz, cli.duration, &dir);
                 report.sweep_baseline = Some(peer_figures.work);
             }
@@ -323,7 +352,7 @@ fn run(cli: &Cli) -> Result<Report, String> {
             ours: ticks_of(&ours_rtt).unwrap_or_default(),
             baseline: ticks_of(&base_rtt),
             baseline_label: "the ticking plain peer, same computation".to_owned(),
-            note: "stands in for \"command to wire\": motiond does not report when the first byte reached the link".to_owned(),
+            note: "the unknown-axis (or claim/release) probe of row 5, against the running server".to_owned(),
         },
         Row {
             figure: "tick work time (wake → end of the tick's work)".to_owned(),
@@ -337,12 +366,38 @@ fn run(cli: &Cli) -> Result<Report, String> {
             ),
         },
     ];
-    report.notes.push(
-        "command → first byte on the wire (µs): not measured. motiond publishes no time stamp for \
-         the moment a board command is written to its link (the sim link keeps none either), so \
-         the figure is given in ticks (row 7); the link's own wire time adds to it."
-            .to_owned(),
-    );
+    if let Some(run) = &wire_run {
+        let refused: Vec<String> = run
+            .refused
+            .iter()
+            .map(|(k, v)| format!("{k} ×{v}"))
+            .collect();
+        report.rows.push(Row {
+            figure: "command → first byte of the board command at the link (Velocity → `W12…` line at the pty)".to_owned(),
+            unit: Unit::Ns,
+            ours: run.ours.summary(),
+            baseline: Some(run.baseline.summary()),
+            baseline_label: "the bench writing the same `W12…` line into the pty slave itself: pty + 230400-baud pacing thread, no motiond".to_owned(),
+            note: format!(
+                "a motiond started by the bench on a serial link to a pty served by a simulated QSB-M in the bench \
+                 (online after {:.1} s); t0 = CLOCK_MONOTONIC before send_copy, t1 = the pty thread's read of the \
+                 line's first byte; Velocity ±{} mm/s alternating; lost {}, refused [{}]; baseline lost {}",
+                run.online_after.as_secs_f64(),
+                wire::VELOCITY,
+                run.lost,
+                refused.join(", "),
+                run.baseline_lost
+            ),
+        });
+        report.rows.push(Row {
+            figure: "command → applied in ticks, same Velocity requests (reply.tick_applied − newest frame tick at send)".to_owned(),
+            unit: Unit::Ticks,
+            ours: run.ticks.summary(),
+            baseline: ticks_of(&base_rtt),
+            baseline_label: "the ticking plain peer of row 7, same computation".to_owned(),
+            note: "the µs figure above includes this wait for the tick plus the driver's turn on the line".to_owned(),
+        });
+    }
     report.notes.push(format!(
         "the server's wake-up and work figures (rows 1, 8) are motiond's own since it started \
          (ServerStats has percentiles, not histograms), while the baselines cover this run only; \
@@ -412,6 +467,29 @@ fn run(cli: &Cli) -> Result<Report, String> {
     for (slug, title, dist) in files {
         if let Some(error) = write_dist(out, slug, title, dist) {
             report.notes.push(format!("could not write {error}"));
+        }
+    }
+    if let Some(run) = &wire_run {
+        for (slug, title, dist) in [
+            (
+                "command-to-wire-motiond",
+                "command → first byte at the link, motiond",
+                &run.ours,
+            ),
+            (
+                "command-to-wire-baseline",
+                "line written into the pty by the bench → first byte at the master",
+                &run.baseline,
+            ),
+            (
+                "command-to-wire-ticks-motiond",
+                "Velocity → applied, ticks",
+                &run.ticks,
+            ),
+        ] {
+            if let Some(error) = write_dist(out, slug, title, dist) {
+                report.notes.push(format!("could not write {error}"));
+            }
         }
     }
     for (slug, run) in [

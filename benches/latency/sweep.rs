@@ -125,16 +125,7 @@ fn one(
     let log = dir.join(format!("sweep-{axes}-axes.log"));
     std::fs::write(&config, config_text(&name, tick_hz, axes))
         .map_err(|e| format!("{}: {e}", config.display()))?;
-    let log_file = std::fs::File::create(&log).map_err(|e| format!("{}: {e}", log.display()))?;
-    let child = Command::new(motiond)
-        .arg("--config")
-        .arg(&config)
-        .stdin(Stdio::null())
-        .stdout(Stdio::null())
-        .stderr(log_file)
-        .spawn()
-        .map_err(|e| format!("start {}: {e}", motiond.display()))?;
-    let mut server = Server { child };
+    let mut server = Server::start(motiond, &config, &log)?;
     let names = ServiceNames::new(&name);
     let node = ipc::node("sweep")?;
     let started = Instant::now();
@@ -208,7 +199,8 @@ fn wait_fresh(
     Ok(None)
 }
 
-fn last_line(log: &Path) -> String {
+/// The last non-empty line of a motiond log (its reason for exiting, usually).
+pub fn last_line(log: &Path) -> String {
     std::fs::read_to_string(log)
         .ok()
         .and_then(|text| {
@@ -221,12 +213,29 @@ fn last_line(log: &Path) -> String {
 }
 
 /// A motiond child that is stopped with SIGTERM (then SIGKILL) when dropped.
-struct Server {
-    child: Child,
+#[derive(Debug)]
+pub struct Server {
+    /// The process.
+    pub child: Child,
 }
 
 impl Server {
-    fn stop(&mut self) {
+    /// Starts `motiond --config CONFIG`, its stderr to `log`.
+    pub fn start(motiond: &Path, config: &Path, log: &Path) -> Result<Self, String> {
+        let log_file = std::fs::File::create(log).map_err(|e| format!("{}: {e}", log.display()))?;
+        let child = Command::new(motiond)
+            .arg("--config")
+            .arg(config)
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(log_file)
+            .spawn()
+            .map_err(|e| format!("start {}: {e}", motiond.display()))?;
+        Ok(Self { child })
+    }
+
+    /// SIGTERM, then SIGKILL after 5 s.
+    pub fn stop(&mut self) {
         if matches!(self.child.try_wait(), Ok(Some(_))) {
             return;
         }

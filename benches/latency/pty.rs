@@ -1,0 +1,233 @@
+//! A simulated QSB served on a pseudo-terminal by a thread of the bench, so that a motiond
+//! child opens a real tty (its `[[link]] type = "serial"`) while the bench stamps, on
+//! CLOCK_MONOTONIC, the moment the first byte of each command line reaches the master side.
+//!
+//! The technique of `crates/motiond/tests/support/pty_board.rs`, written again here (a bench
+//! does not import test code): both fds close-on-exec so the server cannot inherit the master,
+//! the tty raw from the start, and pacing both ways at the baud — bytes the host writes at
+//! once are handed to the model one byte time apart, and the model's bytes reach the tty one
+//! byte time apart, as on a real line.
+
+use core::time::Duration;
+use std::collections::VecDeque;
+use std::os::fd::{AsFd, OwnedFd};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::Sender;
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+use std::time::Instant;
+
+use motion_link::sim::StreamDevice;
+use motion_sim::qsb::{QsbSim, QsbSimConfig};
+use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
+
+use crate::rt::now_ns;
+
+/// The QSB's line rate (factory setting), 8N1.
+pub const BAUD: u32 = 230_400;
+
+/// One command line the host wrote, with the CLOCK_MONOTONIC instant (ns) at which the
+/// read that returned its first byte came back on the master side.
+#[derive(Debug, Clone)]
+pub struct LineSeen {
+    /// First byte at the master, ns.
+    pub first_byte_ns: u64,
+    /// The line without its end-of-command bytes.
+    pub line: Vec<u8>,
+}
+
+/// A simulated QSB on a pty, reachable at `link` (a symlink to the slave side).
+#[derive(Debug)]
+pub struct PtyBoard {
+    stop: Arc<AtomicBool>,
+    thread: Option<JoinHandle<()>>,
+    link: PathBuf,
+    /// What went wrong in the serving thread, if anything.
+    pub failure: Arc<Mutex<Option<String>>>,
+}
+
+impl PtyBoard {
+    /// Serves a fresh QSB model on a new pty and points `link` at its slave (replacing an
+    /// old symlink). Every command line the host writes whose bytes start with `prefix` is
+    /// sent to `lines` with its first-byte stamp.
+    pub fn start(
+        link: &Path,
+        prefix: &'static [u8],
+        lines: Sender<LineSeen>,
+    ) -> Result<Self, String> {
+        let pty = nix::pty::openpty(None, None).map_err(|e| format!("openpty: {e}"))?;
+        for fd in [&pty.master, &pty.slave] {
+            nix::fcntl::fcntl(
+                fd,
+                nix::fcntl::FcntlArg::F_SETFD(nix::fcntl::FdFlag::FD_CLOEXEC),
+            )
+            .map_err(|e| format!("FD_CLOEXEC on the pty: {e}"))?;
+        }
+        let slave_path =
+            nix::unistd::ttyname(pty.slave.as_fd()).map_err(|e| format!("ttyname: {e}"))?;
+        let mut termios =
+            nix::sys::termios::tcgetattr(&pty.slave).map_err(|e| format!("tcgetattr: {e}"))?;
+        nix::sys::termios::cfmakeraw(&mut termios);
+        nix::sys::termios::tcsetattr(&pty.slave, nix::sys::termios::SetArg::TCSANOW, &termios)
+            .map_err(|e| format!("tcsetattr: {e}"))?;
+        let _ = std::fs::remove_file(link);
+        std::os::unix::fs::symlink(&slave_path, link)
+            .map_err(|e| format!("symlink {} → {}: {e}", link.display(), slave_path.display()))?;
+        let stop = Arc::new(AtomicBool::new(false));
+        let failure = Arc::new(Mutex::new(None));
+        let thread = {
+            let stop = Arc::clone(&stop);
+            let failure = Arc::clone(&failure);
+            let master = pty.master;
+            // Our own slave fd stays open so the master never reads EIO while the server is
+            // between opens.
+            let slave = pty.slave;
+            std::thread::Builder::new()
+                .name("pty-board".to_owned())
+                .spawn(move || {
+                    let _ = crate::rt::set_up_thread(None, None);
+                    let device = QsbSim::new(QsbSimConfig::default());
+                    if let Err(e) = serve(&master, device, &stop, prefix, &lines)
+                        && let Ok(mut slot) = failure.lock()
+                    {
+                        *slot = Some(e);
+                    }
+                    drop(slave);
+                })
+                .map_err(|e| format!("spawn the pty thread: {e}"))?
+        };
+        Ok(Self {
+            stop,
+            thread: Some(thread),
+            link: link.to_owned(),
+            failure,
+        })
+    }
+
+    /// Stops the thread, closes the pty and removes the link.
+    pub fn stop(&mut self) {
+        let _ = std::fs::remove_file(&self.link);
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(thread) = self.thread.take() {
+            let _ = thread.join();
+        }
+    }
+}
+
+impl Drop for PtyBoard {
+    fn drop(&mut self) {
+        self.stop();
+    }
+}
+
+/// Splits the host's bytes into lines and reports the ones that start with a prefix.
+struct LineWatch {
+    current: Vec<u8>,
+    first_byte_ns: u64,
+}
+
+impl LineWatch {
+    fn push(&mut self, byte: u8, read_ns: u64, prefix: &[u8], lines: &Sender<LineSeen>) {
+        if byte == b'\r' || byte == b'\n' {
+            if !self.current.is_empty() {
+                let line = core::mem::take(&mut self.current);
+                if line.starts_with(prefix) {
+                    let _ = lines.send(LineSeen {
+                        first_byte_ns: self.first_byte_ns,
+                        line,
+                    });
+                }
+            }
+            return;
+        }
+        if self.current.is_empty() {
+            self.first_byte_ns = read_ns;
+        }
+        // A QSB command line is at most a dozen bytes; garbage is not allowed to grow.
+        if self.current.len() < 64 {
+            self.current.push(byte);
+        }
+    }
+}
+
+fn serve(
+    master: &OwnedFd,
+    mut device: QsbSim,
+    stop: &AtomicBool,
+    prefix: &[u8],
+    lines: &Sender<LineSeen>,
+) -> Result<(), String> {
+    let epoch = Instant::now();
+    let byte_time = Duration::from_nanos(10_000_000_000 / u64::from(BAUD));
+    let mut buf = [0u8; 512];
+    let mut watch = LineWatch {
+        current: Vec::new(),
+        first_byte_ns: 0,
+    };
+    let mut outgoing: VecDeque<(Duration, u8)> = VecDeque::new();
+    let mut outgoing_free_at = Duration::ZERO;
+    let mut incoming: VecDeque<(Duration, u8)> = VecDeque::new();
+    let mut incoming_free_at = Duration::ZERO;
+    let mut due = Vec::with_capacity(512);
+    while !stop.load(Ordering::Relaxed) {
+        let mut fds = [PollFd::new(master.as_fd(), PollFlags::POLLIN)];
+        let wait: u8 = if outgoing.is_empty() && incoming.is_empty() {
+            1
+        } else {
+            0
+        };
+        let ready = poll(&mut fds, PollTimeout::from(wait)).unwrap_or(0);
+        if ready > 0 {
+            match nix::unistd::read(master, &mut buf) {
+                Ok(len) if len > 0 => {
+                    let read_ns = now_ns();
+                    let now = epoch.elapsed();
+                    for &byte in buf.get(..len).unwrap_or(&[]) {
+                        watch.push(byte, read_ns, prefix, lines);
+                        // Written at once by the host; on the wire one byte time apart,
+                        // which is what the model's receiver times.
+                        incoming_free_at = incoming_free_at.max(now) + byte_time;
+                        incoming.push_back((incoming_free_at, byte));
+                    }
+                }
+                Ok(_) | Err(nix::errno::Errno::EAGAIN | nix::errno::Errno::EINTR) => {}
+                // EIO: no slave open right now (the server between opens).
+                Err(nix::errno::Errno::EIO) => std::thread::sleep(Duration::from_millis(1)),
+                Err(e) => return Err(format!("read the pty master: {e}")),
+            }
+        }
+        let now = epoch.elapsed();
+        while let Some(&(at, byte)) = incoming.front() {
+            if at > now {
+                break;
+            }
+            incoming.pop_front();
+            device.receive(at, &[byte]);
+        }
+        let len = device.transmit(now, &mut buf);
+        for &byte in buf.get(..len).unwrap_or(&[]) {
+            outgoing_free_at = outgoing_free_at.max(now) + byte_time;
+            outgoing.push_back((outgoing_free_at, byte));
+        }
+        due.clear();
+        while let Some(&(at, byte)) = outgoing.front() {
+            if at > now {
+                break;
+            }
+            outgoing.pop_front();
+            due.push(byte);
+        }
+        let mut sent = 0;
+        while sent < due.len() {
+            match nix::unistd::write(master, due.get(sent..).unwrap_or(&[])) {
+                Ok(n) if n > 0 => sent += n,
+                _ => break,
+            }
+        }
+        if !outgoing.is_empty() || !incoming.is_empty() {
+            std::thread::sleep(Duration::from_micros(100));
+        }
+    }
+    Ok(())
+}
