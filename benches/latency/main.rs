@@ -10,6 +10,8 @@
 //! services as any client would. Baselines: a bare `clock_nanosleep` loop (wake-up), and a
 //! plain peer process (this binary re-executed with a hidden `--peer` flag) that ticks,
 //! publishes a frame-sized sample and answers requests like motiond minus its engine.
+//! Command to wire is timed on a motiond the bench starts itself, its serial link a pty the
+//! bench serves with a simulated QSB (`wire.rs`, `pty.rs`).
 //! docs/PERFORMANCE.md explains every figure.
 
 mod cli;
