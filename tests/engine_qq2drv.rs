@@ -20,7 +20,7 @@ use motion_link::sim::{Direction, SimFaults, SimLink};
 use motion_sim::qq2drv::{InputPin, InputSource, Qq2drvSim, Qq2drvSimConfig};
 use qq2drv::{ControlMode, InputMode, Request, StreamDecoder};
 use support::counting_alloc::{CountingAllocator, allocations};
-use support::rig::{Rig, Shared};
+use support::rig::{Rig, Shared, accepted, all_fresh, flag};
 
 #[global_allocator]
 static GLOBAL: CountingAllocator = CountingAllocator;
@@ -127,24 +127,11 @@ fn rig() -> (Rig, Board, SimFaults) {
     rig_with(Qq2drvDriver::new(driver_config()), sim())
 }
 
-fn flag(rig: &Rig, axis: usize, flag: AxisFlags) -> bool {
-    rig.axis(axis).flags & flag.0 != 0
-}
-
-fn fresh(frame: &motion_ipc::MotionFrame, axes: usize) -> bool {
-    (0..axes).all(|i| frame.axes[i].flags & (AxisFlags::STALE.0 | AxisFlags::FAULT.0) == 0)
-}
-
 fn wait_online(rig: &mut Rig) {
     assert!(
-        rig.run_until(Duration::from_millis(100), |frame| fresh(frame, 2)),
+        rig.run_until(Duration::from_millis(100), |frame| all_fresh(frame, 2)),
         "the board starts within 100 ms"
     );
-}
-
-fn accepted(rig: &mut Rig, axis: u32, kind: CommandKind, values: [f64; 3]) {
-    let reply = rig.command(axis, kind, values);
-    assert_eq!(reply.result(), Ok(()), "{kind:?} {values:?}");
 }
 
 fn rejected(rig: &mut Rig, axis: u32, kind: CommandKind, values: [f64; 3]) -> Reason {
@@ -214,7 +201,7 @@ fn the_board_starts_streams_and_reports_its_version() {
     rig.run(200);
     let stats = board.lock().unwrap().stats();
     assert!(stats.stream_packets > 150, "{stats:?}");
-    assert!(fresh(&rig.frame, 2));
+    assert!(all_fresh(&rig.frame, 2));
     let tick = rig.engine.tick();
     assert!(tick - rig.axis(0).last_refresh_tick <= 3);
 }
@@ -426,7 +413,7 @@ fn a_garbage_burst_is_survived_and_then_needs_a_new_command() {
         rig.tick();
         assert!((rig.axis(0).position - 2.0).abs() <= TOLERANCE_MM);
     }
-    assert!(fresh(&rig.frame, 2));
+    assert!(all_fresh(&rig.frame, 2));
     // A long one (≈ 60 ms of MISO) makes the axes stale and faulted, keeping their state.
     faults.inject_noise(3_000);
     assert!(rig.run_until(Duration::from_millis(200), |frame| {
@@ -437,7 +424,7 @@ fn a_garbage_burst_is_survived_and_then_needs_a_new_command() {
         (rig.axis(0).position - 2.0).abs() <= TOLERANCE_MM,
         "last state kept"
     );
-    assert!(rig.run_until(Duration::from_secs(1), |frame| fresh(frame, 2)));
+    assert!(rig.run_until(Duration::from_secs(1), |frame| all_fresh(frame, 2)));
     assert_ne!(rig.axis(0).mode, AxisMode::Position as u8);
     let status = rig.engine.driver(0).unwrap().status();
     assert!(status.online);
@@ -464,7 +451,7 @@ fn unplug_and_replug_fault_the_axes_then_they_need_a_new_command() {
         Reason::LinkDown
     );
     faults.replug();
-    assert!(rig.run_until(Duration::from_secs(1), |frame| fresh(frame, 2)));
+    assert!(rig.run_until(Duration::from_secs(1), |frame| all_fresh(frame, 2)));
     // The jog that was running when the link died is stopped once the board is back.
     rig.run(300);
     assert!(board.lock().unwrap().true_velocity(1).unwrap().abs() < 5.0);
@@ -483,7 +470,7 @@ fn a_reset_board_is_reported_and_configured_again() {
     assert!(rig.run_until(Duration::from_millis(100), |frame| {
         frame.axes[0].fault == FaultCode::BoardReset as u16
     }));
-    assert!(rig.run_until(Duration::from_millis(200), |frame| fresh(frame, 2)));
+    assert!(rig.run_until(Duration::from_millis(200), |frame| all_fresh(frame, 2)));
     assert_eq!(rig.engine.driver(0).unwrap().status().resets, 1);
     let sim = board.lock().unwrap();
     assert_eq!(sim.stream_period(), 24, "configured again");
@@ -513,7 +500,7 @@ fn a_board_that_does_not_answer_is_faulted() {
     );
     // It answers again: the axes come back.
     faults.set_drop_probability(Direction::ToHost, 0.0);
-    assert!(rig.run_until(Duration::from_secs(1), |frame| fresh(frame, 2)));
+    assert!(rig.run_until(Duration::from_secs(1), |frame| all_fresh(frame, 2)));
 }
 
 #[test]

@@ -18,7 +18,7 @@ use motion_link::sim::{SimFaults, SimLink, SpiBus};
 use motion_sim::spimotor::{Bridge, Drive, SpimotorSim, SpimotorSimConfig};
 use spimotor::{Address, Direction, Motor, Request, Transaction};
 use support::counting_alloc::{CountingAllocator, allocations};
-use support::rig::{Rig, Shared};
+use support::rig::{Rig, Shared, accepted, all_fresh, flag, fresh};
 
 #[global_allocator]
 static GLOBAL: CountingAllocator = CountingAllocator;
@@ -140,26 +140,13 @@ fn brushed_rig_with_faults() -> (Rig, Board, SimFaults) {
     (rig, board, faults)
 }
 
-fn flag(rig: &Rig, axis: usize, flag: AxisFlags) -> bool {
-    rig.axis(axis).flags & flag.0 != 0
-}
-
-fn fresh(rig: &Rig, axis: usize) -> bool {
-    !flag(rig, axis, AxisFlags::STALE) && !flag(rig, axis, AxisFlags::FAULT)
-}
-
 fn wait_online(rig: &mut Rig, axes: usize) {
     assert!(
         rig.run_until(Duration::from_millis(200), |frame| {
-            (0..axes).all(|i| frame.axes[i].flags & (AxisFlags::STALE.0 | AxisFlags::FAULT.0) == 0)
+            all_fresh(frame, axes)
         }),
         "the boards start within 200 ms"
     );
-}
-
-fn accepted(rig: &mut Rig, axis: u32, kind: CommandKind, values: [f64; 3]) {
-    let reply = rig.command(axis, kind, values);
-    assert_eq!(reply.result(), Ok(()), "{kind:?} {values:?}");
 }
 
 fn rejected(rig: &mut Rig, axis: u32, kind: CommandKind, values: [f64; 3]) -> Reason {

@@ -16,7 +16,7 @@ use motion_ipc::{AxisFlags, AxisMode, CommandKind, FaultCode, Reason};
 use motion_link::sim::{Duplex, SimFaults, SimLink, StreamBus};
 use motion_sim::tmcpack::{TmcpackSim, TmcpackSimConfig};
 use support::counting_alloc::{CountingAllocator, allocations};
-use support::rig::{Rig, Shared};
+use support::rig::{Rig, Shared, accepted, all_fresh, flag, fresh};
 use tmcpack::convert::byte_time;
 use tmcpack::{Action, Request, RequestFrame, Variant};
 
@@ -110,26 +110,11 @@ fn single(driver_address: u8) -> (Rig, Pack, SimFaults) {
     (rig, board, faults)
 }
 
-fn flag(rig: &Rig, axis: usize, flag: AxisFlags) -> bool {
-    rig.axis(axis).flags & flag.0 != 0
-}
-
-fn fresh(rig: &Rig, axis: usize) -> bool {
-    !flag(rig, axis, AxisFlags::STALE) && !flag(rig, axis, AxisFlags::FAULT)
-}
-
 fn wait_online(rig: &mut Rig, axes: usize) {
     assert!(
-        rig.run_until(Duration::from_secs(2), |frame| {
-            (0..axes).all(|i| frame.axes[i].flags & (AxisFlags::STALE.0 | AxisFlags::FAULT.0) == 0)
-        }),
+        rig.run_until(Duration::from_secs(2), |frame| { all_fresh(frame, axes) }),
         "the packs start within 2 s"
     );
-}
-
-fn accepted(rig: &mut Rig, axis: u32, kind: CommandKind, values: [f64; 3]) {
-    let reply = rig.command(axis, kind, values);
-    assert_eq!(reply.result(), Ok(()), "{kind:?} {values:?}");
 }
 
 fn motor(board: &Pack, motor: u8) -> motion_sim::tmcpack::MotorView {

@@ -12,7 +12,9 @@ use std::sync::{Arc, Mutex, MutexGuard};
 
 use motion_drivers::{BusKind, Driver};
 use motion_engine::{CommandPort, Engine, EngineConfig};
-use motion_ipc::{AxisState, ClientId, CommandKind, CommandReply, CommandRequest, MotionFrame};
+use motion_ipc::{
+    AxisFlags, AxisState, ClientId, CommandKind, CommandReply, CommandRequest, MotionFrame,
+};
 use motion_link::sim::{SpiDevice, StreamDevice};
 use motion_link::{Link, LinkErrorKind};
 
@@ -271,4 +273,25 @@ impl Rig {
     pub fn link_is_down(&self, index: usize) -> bool {
         self.links[index].down
     }
+}
+
+/// Whether axis `axis` of the last frame has `flag` set.
+pub fn flag(rig: &Rig, axis: usize, flag: AxisFlags) -> bool {
+    rig.axis(axis).flags & flag.0 != 0
+}
+
+/// Whether axis `axis` of the last frame is neither stale nor faulted.
+pub fn fresh(rig: &Rig, axis: usize) -> bool {
+    !flag(rig, axis, AxisFlags::STALE) && !flag(rig, axis, AxisFlags::FAULT)
+}
+
+/// Whether the first `axes` axes of `frame` are neither stale nor faulted.
+pub fn all_fresh(frame: &MotionFrame, axes: usize) -> bool {
+    (0..axes).all(|i| frame.axes[i].flags & (AxisFlags::STALE.0 | AxisFlags::FAULT.0) == 0)
+}
+
+/// Sends a command and asserts the engine accepted it.
+pub fn accepted(rig: &mut Rig, axis: u32, kind: CommandKind, values: [f64; 3]) {
+    let reply = rig.command(axis, kind, values);
+    assert_eq!(reply.result(), Ok(()), "{kind:?} {values:?}");
 }
