@@ -52,6 +52,7 @@ fn axis(name: &str, channel: usize) -> AxisConfig {
         max_velocity: MAX_VELOCITY_MM,
         max_accel: MAX_ACCEL_MM,
         position_tolerance: TOLERANCE_MM,
+        ..AxisConfig::default()
     }
 }
 

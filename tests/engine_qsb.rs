@@ -60,6 +60,7 @@ fn rig(variant: Variant, motion: EncoderMotion, command_timeout: Duration) -> Qs
             max_velocity: MAX_VELOCITY,
             max_accel: MAX_ACCEL,
             position_tolerance: TOLERANCE,
+            ..AxisConfig::default()
         }],
     };
     let driver = QsbDriver::new(QsbDriverConfig {

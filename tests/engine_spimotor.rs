@@ -46,6 +46,7 @@ fn stepper_axis(name: &str, device: usize) -> AxisConfig {
         max_velocity: MAX_VELOCITY_MM,
         max_accel: MAX_ACCEL_MM,
         position_tolerance: 0.01,
+        ..AxisConfig::default()
     }
 }
 
@@ -61,6 +62,7 @@ fn brushed_axis(name: &str, device: usize, channel: usize) -> AxisConfig {
         max_velocity: 100.0,
         max_accel: 1_000.0,
         position_tolerance: 0.1,
+        ..AxisConfig::default()
     }
 }
 

@@ -43,6 +43,7 @@ fn axis(name: &str, device: usize, channel: usize) -> AxisConfig {
         max_velocity: MAX_VELOCITY_MM,
         max_accel: MAX_ACCEL_MM,
         position_tolerance: 0.01,
+        ..AxisConfig::default()
     }
 }
 

@@ -4,6 +4,7 @@ use core::fmt;
 use core::time::Duration;
 
 use crate::goal::{Goal, GoalError, GoalKinds};
+use crate::pin::{Pin, PinReading};
 use crate::state::{ChannelState, DeviceStatus};
 
 /// Which board a driver speaks to.
@@ -123,4 +124,20 @@ pub trait Driver: Send + fmt::Debug {
     /// The link is (re)open: start the board's start-up sequence again. Channels stay
     /// faulted until fresh data arrives and need a new goal.
     fn link_up(&mut self, now: Duration);
+
+    /// The last known value of `pin` (an index into the board's pin table), for a pin the
+    /// driver was configured to read or drive; `None` for any other pin. Inputs are polled
+    /// or streamed by the driver within its wire budget.
+    fn read_pin(&self, pin: Pin) -> Option<PinReading> {
+        let _ = pin;
+        None
+    }
+
+    /// Drives the digital output `pin` to the electrical level `high`; the driver turns it
+    /// into wire traffic (commands before polls). Errors: `NoSuchPin` for a pin the driver
+    /// was not configured to drive, `Offline` while the board is not online.
+    fn set_output(&mut self, now: Duration, pin: Pin, high: bool) -> Result<(), GoalError> {
+        let _ = (now, high);
+        Err(GoalError::NoSuchPin(pin))
+    }
 }

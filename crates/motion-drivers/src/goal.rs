@@ -146,6 +146,11 @@ pub enum GoalError {
     OutOfBoardRange(GoalKind),
     /// The board is offline (not answering, or its link is down).
     Offline,
+    /// The board is still starting (probing, configuring, its start-up stop not yet
+    /// acknowledged).
+    Starting,
+    /// No such I/O pin on the board, or not one the driver was configured to drive.
+    NoSuchPin(crate::Pin),
 }
 
 impl fmt::Display for GoalError {
@@ -160,6 +165,8 @@ impl fmt::Display for GoalError {
                 )
             }
             Self::Offline => f.write_str("the board is offline"),
+            Self::Starting => f.write_str("the board is starting"),
+            Self::NoSuchPin(pin) => write!(f, "the board has no output pin #{}", pin.0),
         }
     }
 }

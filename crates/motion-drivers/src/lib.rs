@@ -10,6 +10,7 @@
 mod bus;
 mod driver;
 mod goal;
+mod pin;
 pub mod qq2drv;
 pub mod qsb;
 mod state;
@@ -20,4 +21,5 @@ pub mod tmcpack;
 pub use bus::{BusKind, LinkBus, MAX_SENDS_PER_STEP, SPI_PENDING_CAPACITY};
 pub use driver::{Driver, Model, Priority, Transmit};
 pub use goal::{Goal, GoalError, GoalKind, GoalKinds};
+pub use pin::{Pin, PinInfo, PinReading, SignalKind, SignalKinds, find_pin};
 pub use state::{ChannelState, DeviceFault, DeviceStatus, FIRMWARE_LEN};

@@ -20,6 +20,9 @@ pub enum DeviceFault {
     Overspeed,
     /// A limit or reference switch stopped the channel.
     LimitSwitch,
+    /// A reference search ended without finding its switch or index (travel limit
+    /// reached, the board reported a search error).
+    HomeFailed,
 }
 
 /// The state of one channel, in counts, as last reported by the board.

@@ -164,5 +164,6 @@ pub(crate) fn fault_code(fault: DeviceFault) -> FaultCode {
         DeviceFault::Protocol => FaultCode::Protocol,
         DeviceFault::Overspeed => FaultCode::Overspeed,
         DeviceFault::LimitSwitch => FaultCode::LimitSwitch,
+        DeviceFault::HomeFailed => FaultCode::HomeFailed,
     }
 }

@@ -199,7 +199,9 @@ impl Engine {
                     Reason::VelocityLimit
                 }
                 GoalError::OutOfBoardRange(_) => Reason::OutOfRange,
-                GoalError::Offline => Reason::LinkDown,
+                GoalError::Offline | GoalError::Starting | GoalError::NoSuchPin(_) => {
+                    Reason::LinkDown
+                }
             };
         }
         let timeout = self.config.command_timeout;

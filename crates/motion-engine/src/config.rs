@@ -53,6 +53,66 @@ pub struct AxisConfig {
     /// Distance from the target within which a position goal counts as reached, units
     /// (> 0).
     pub position_tolerance: f64,
+    /// How far the measured position may be from where the axis should be (the held
+    /// target, the segment of a move, the soft limits) before the axis faults, units;
+    /// 0 disables the check.
+    pub following_error: f64,
+    /// A measured speed above `overspeed_factor × max_velocity` for three fresh samples in
+    /// a row faults the axis; 0 disables the check.
+    pub overspeed_factor: f64,
+    /// What an e-stop (and a fault) does to this axis.
+    pub estop: EstopCategory,
+    /// A reference search that travels this far from where it started faults the axis
+    /// (`HomeFailed`), units; 0 disables the check.
+    pub home_max_travel: f64,
+}
+
+impl Default for AxisConfig {
+    /// A 1:1 axis on channel 0 of device 0 with limits ±1000 units, 100 units/s,
+    /// 1000 units/s², supervision off and e-stop category `Hold`. For tests and examples:
+    /// override what matters with struct update syntax.
+    fn default() -> Self {
+        Self {
+            name: String::new(),
+            unit: "mm".into(),
+            device: 0,
+            channel: 0,
+            counts_per_unit: 1.0,
+            min: -1000.0,
+            max: 1000.0,
+            max_velocity: 100.0,
+            max_accel: 1000.0,
+            position_tolerance: 2.0,
+            following_error: 0.0,
+            overspeed_factor: 0.0,
+            estop: EstopCategory::Hold,
+            home_max_travel: 0.0,
+        }
+    }
+}
+
+/// What an e-stop does to an axis: the stop categories of IEC 60204-1.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum EstopCategory {
+    /// Category 2: decelerate and hold, energised (default; the right choice for an axis
+    /// that gravity would move, e.g. a vertical axis).
+    #[default]
+    Hold,
+    /// Category 1: decelerate, then de-energise.
+    StopOff,
+    /// Category 0: de-energise at once (the motor coasts).
+    Off,
+}
+
+impl EstopCategory {
+    /// The config name (`estop = "stop-off"`).
+    pub const fn id(self) -> &'static str {
+        match self {
+            Self::Hold => "hold",
+            Self::StopOff => "stop-off",
+            Self::Off => "off",
+        }
+    }
 }
 
 /// Everything the engine needs to know.
@@ -219,6 +279,15 @@ pub(crate) fn validate(
         }
         if !(axis.position_tolerance.is_finite() && axis.position_tolerance > 0.0) {
             return Err(bad("position_tolerance must be finite and > 0"));
+        }
+        for (value, what) in [
+            (axis.following_error, "following_error must be finite and >= 0"),
+            (axis.overspeed_factor, "overspeed_factor must be finite and >= 0"),
+            (axis.home_max_travel, "home_max_travel must be finite and >= 0"),
+        ] {
+            if !(value.is_finite() && value >= 0.0) {
+                return Err(bad(what));
+            }
         }
         if let Some(other) = config.axes[..index]
             .iter()

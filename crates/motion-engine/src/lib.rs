@@ -54,7 +54,9 @@ use motion_ipc::{ClientId, MotionFrame};
 
 use crate::axis::Axis;
 pub use crate::command::{CommandPort, HOME_FRACTION_OF_MAX, MAX_COMMANDS_PER_STEP};
-pub use crate::config::{AxisConfig, DeviceConfig, EngineConfig, EngineConfigError, LinkConfig};
+pub use crate::config::{
+    AxisConfig, DeviceConfig, EngineConfig, EngineConfigError, EstopCategory, LinkConfig,
+};
 
 /// Counters since construction.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]

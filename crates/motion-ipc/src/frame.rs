@@ -69,6 +69,14 @@ pub enum FaultCode {
     LimitSwitch = 7,
     /// Stopped because the server overran its tick too many times in a row.
     Overrun = 8,
+    /// The measured position left where the axis should be by more than its
+    /// `following_error`: away from the held target, or out of the segment of a move.
+    FollowingError = 9,
+    /// The measured position is beyond a soft limit by more than `following_error`.
+    LimitExceeded = 10,
+    /// A reference search ended without finding its switch or index (travel limit
+    /// reached, or the board reported a search error).
+    HomeFailed = 11,
 }
 
 impl TryFrom<u16> for FaultCode {
@@ -84,6 +92,9 @@ impl TryFrom<u16> for FaultCode {
             6 => Self::Overspeed,
             7 => Self::LimitSwitch,
             8 => Self::Overrun,
+            9 => Self::FollowingError,
+            10 => Self::LimitExceeded,
+            11 => Self::HomeFailed,
             other => return Err(UnknownValue(u32::from(other))),
         })
     }

@@ -48,6 +48,8 @@ pub const MAX_AXES: usize = 128;
 pub const MAX_DEVICES: usize = 32;
 /// Capacity of the link array in [`ServerStats`].
 pub const MAX_LINKS: usize = 16;
+/// Capacity of the signal arrays in [`MotionFrame`] and [`ServerInfo`].
+pub const MAX_SIGNALS: usize = 64;
 /// Bytes of a name field (axis, device, link, server): UTF-8, zero padded.
 pub const NAME_LEN: usize = 32;
 /// Bytes of a unit field ("mm", "deg"): UTF-8, zero padded.

@@ -305,8 +305,8 @@ fn home_inputs_are_for_qq2drv_axes_only_and_named() {
         "home_model.toml",
         &text,
         "home = {",
-        "axis[0].home",
-        "only qq2drv axes",
+        "axis[0].home.input",
+        "is not a key of tmcpack axes; it is valid on: qq2drv",
     );
     let qq2drv = r#"
 [[link]]

@@ -715,3 +715,7 @@ impl Driver for Qq2drvDriver {
 
 #[cfg(test)]
 mod tests;
+
+/// The board's I/O pins (the IN pin and status bits of each channel). Filled in with the
+/// board's I/O support; empty until then.
+pub const PINS: &[crate::PinInfo] = &[];

@@ -675,3 +675,10 @@ impl Driver for QsbDriver {
         self.begin_startup();
     }
 }
+
+/// The QSB's I/O pins for `product` (command list DIG I/O, MODE). Filled in with the
+/// board's I/O support; empty until then.
+pub fn pins(product: ::qsb::ProductType) -> &'static [crate::PinInfo] {
+    let _ = product;
+    &[]
+}

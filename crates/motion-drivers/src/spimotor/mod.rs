@@ -783,3 +783,6 @@ impl Driver for SpimotorDriver {
 
 #[cfg(test)]
 mod tests;
+
+/// The SPI_motor protocol page defines no I/O port: no pins.
+pub const PINS: &[crate::PinInfo] = &[];

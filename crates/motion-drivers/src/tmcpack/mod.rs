@@ -583,3 +583,10 @@ impl Driver for TmcpackDriver {
         self.switchover = units(FACTORY_SWITCHOVER);
     }
 }
+
+/// The pack's I/O pins for `variant` (manual 8.5). Filled in with the board's I/O
+/// support; empty until then.
+pub fn pins(variant: ::tmcpack::Variant) -> &'static [crate::PinInfo] {
+    let _ = variant;
+    &[]
+}

@@ -265,6 +265,7 @@ pub fn axis(name: &str, device: usize, channel: usize) -> AxisConfig {
         max_velocity: 50.0,
         max_accel: 500.0,
         position_tolerance: 0.01,
+        ..AxisConfig::default()
     }
 }
 

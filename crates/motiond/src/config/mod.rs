@@ -7,16 +7,22 @@
 //! nothing is opened.
 
 mod error;
+mod given;
 mod raw;
 mod validate;
 
 use core::time::Duration;
 use std::path::{Path, PathBuf};
 
-use motion_drivers::{BusKind, Model};
+use motion_drivers::{BusKind, Model, Pin, PinInfo, SignalKind};
 use motion_engine::{AxisConfig, DeviceConfig, EngineConfig, LinkConfig};
 
 pub use error::{ConfigError, ConfigIssue};
+pub use given::{GivenKeys, Owner};
+pub use validate::machine::{
+    AxisMachine, DeviceMachine, qq2drv::Qq2drvAxisKeys, qsb::QsbDeviceKeys,
+    spimotor::SpimotorDeviceKeys, tmcpack::TmcpackAxisKeys, tmcpack::TmcpackDeviceKeys,
+};
 
 /// `[server]`.
 #[derive(Debug, Clone, PartialEq)]
@@ -92,6 +98,29 @@ pub enum PackVariant {
     Quadpack,
 }
 
+/// QSB product variant (command list "QSB Variations").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum QsbVariant {
+    /// QSB-M: single-ended encoder, 4-bit digital I/O, stepper step/direction outputs.
+    #[default]
+    M,
+    /// QSB-S: single-ended encoder only.
+    S,
+    /// QSB-D: differential encoder, 1-bit digital I/O.
+    D,
+}
+
+impl QsbVariant {
+    /// The config name.
+    pub const fn id(self) -> &'static str {
+        match self {
+            Self::M => "qsb-m",
+            Self::S => "qsb-s",
+            Self::D => "qsb-d",
+        }
+    }
+}
+
 /// SPI_motor drive.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum SpiDrive {
@@ -102,7 +131,7 @@ pub enum SpiDrive {
 }
 
 /// `[[device]]`, validated.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct DeviceSpec {
     /// Device name.
     pub name: String,
@@ -116,14 +145,35 @@ pub struct DeviceSpec {
     pub variant: PackVariant,
     /// spimotor drive.
     pub drive: SpiDrive,
+    /// qsb product variant (`variant = "qsb-m"`, default).
+    pub qsb_variant: QsbVariant,
     /// Seed of the simulated model (sim links).
     pub sim_seed: u64,
+    /// The model's machine keys.
+    pub machine: DeviceMachine,
 }
 
 impl DeviceSpec {
     /// Channels the device has as configured.
     pub fn channel_count(&self) -> usize {
         channel_count(self.model, self.variant, self.drive)
+    }
+
+    /// The device's I/O pins (the model's pin table for its variant).
+    pub fn pins(&self) -> &'static [PinInfo] {
+        match self.model {
+            Model::Qq2drv => motion_drivers::qq2drv::PINS,
+            Model::Spimotor => motion_drivers::spimotor::PINS,
+            Model::Tmcpack => motion_drivers::tmcpack::pins(match self.variant {
+                PackVariant::Sixpack => tmcpack::Variant::SixPack,
+                PackVariant::Quadpack => tmcpack::Variant::QuadPack,
+            }),
+            Model::Qsb => motion_drivers::qsb::pins(match self.qsb_variant {
+                QsbVariant::M => qsb::ProductType::M,
+                QsbVariant::S => qsb::ProductType::S,
+                QsbVariant::D => qsb::ProductType::D,
+            }),
+        }
     }
 }
 
@@ -151,17 +201,88 @@ pub enum HomeInputKind {
     Edge,
 }
 
-/// `home = { input = "index", ... }` of a qq2drv axis: how it homes.
+/// Which way a reference search runs, in axis units (after `counts_per_unit`'s sign).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum Direction {
+    /// Towards decreasing positions (the default: the switch sits at `min`).
+    #[default]
+    Negative,
+    /// Towards increasing positions.
+    Positive,
+}
+
+impl Direction {
+    /// The config name.
+    pub const fn id(self) -> &'static str {
+        match self {
+            Self::Negative => "negative",
+            Self::Positive => "positive",
+        }
+    }
+}
+
+/// A qq2drv channel's IN pin as a home input (`home = { input = "index", ... }`).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct HomeSpec {
+pub struct HomeInput {
     /// What the pin is wired to.
-    pub input: HomeInputKind,
+    pub kind: HomeInputKind,
     /// The pin is active high (default true).
     pub active_high: bool,
-    /// The switch sits at the positive end: the search runs positive (default false).
-    pub positive_end: bool,
-    /// The position the axis takes at the trigger, units (default 0).
+    /// Packet 14 Spacing: the hysteresis between a positive-end and a negative-end trigger
+    /// when two end-stops (or a rotary sensor) share the input, units; `None`: a single
+    /// end-stop (Spacing 0).
+    pub spacing: Option<f64>,
+}
+
+/// How an axis homes: the general `home` table with every default resolved. Every axis has
+/// one; a board that cannot home ignores it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HomeSpec {
+    /// Search direction (qsb `home_direction`, tmcpack `reference.side`: left = negative).
+    pub direction: Direction,
+    /// A search that travels farther than this from where it started fails with
+    /// `HomeFailed`, units (> 0). Default: 1.25 × (max − min), the Trinamic manual's 5/4 of
+    /// the drive range.
+    pub max_travel: f64,
+    /// The position the axis takes at the switch or index, units (qsb `home_offset`).
     pub position: f64,
+    /// qq2drv: what the channel's IN pin is wired to; `None`: the channel cannot home.
+    pub input: Option<HomeInput>,
+}
+
+/// Per axis (same order as [`ServerConfig::axes`]): what the engine's [`AxisConfig`] does not
+/// carry.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AxisSpec {
+    /// How the axis homes.
+    pub home: HomeSpec,
+    /// The model's machine keys.
+    pub machine: AxisMachine,
+}
+
+/// `[[signal]]`, validated: a named board I/O pin.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SignalSpec {
+    /// Signal name.
+    pub name: String,
+    /// Index into [`ServerConfig::devices`].
+    pub device: usize,
+    /// What it is used as.
+    pub kind: SignalKind,
+    /// The pin (index into the device model's pin table).
+    pub pin: Pin,
+    /// The pin's config name (`"ttlio1"`).
+    pub pin_name: String,
+    /// Digital: the logical value is the inverse of the electrical level.
+    pub invert: bool,
+    /// Analogue: value = raw × scale + offset.
+    pub scale: f64,
+    /// Analogue: value = raw × scale + offset.
+    pub offset: f64,
+    /// Unit of the value ("V", "mm"; "" for digital).
+    pub unit: String,
+    /// Digital output: the logical value it takes on e-stop; `None`: left as it is.
+    pub safe: Option<bool>,
 }
 
 /// A validated config file.
@@ -177,8 +298,12 @@ pub struct ServerConfig {
     pub devices: Vec<DeviceSpec>,
     /// `[[axis]]`s in file order, as the engine takes them.
     pub axes: Vec<AxisConfig>,
-    /// Per axis (same order): its home input, for qq2drv axes that have one.
-    pub homes: Vec<Option<HomeSpec>>,
+    /// Per axis (same order): homing and machine keys.
+    pub axis_specs: Vec<AxisSpec>,
+    /// `[[signal]]`s in file order.
+    pub signals: Vec<SignalSpec>,
+    /// Every key the file set, for telling configured values from defaults.
+    pub given: GivenKeys,
 }
 
 impl ServerConfig {

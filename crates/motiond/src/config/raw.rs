@@ -15,6 +15,8 @@ pub(crate) struct RawConfig {
     pub device: Vec<Spanned<RawDevice>>,
     #[serde(default)]
     pub axis: Vec<Spanned<RawAxis>>,
+    #[serde(default)]
+    pub signal: Vec<Spanned<RawSignal>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -53,6 +55,33 @@ pub(crate) struct RawDevice {
     pub variant: Option<Spanned<String>>,
     pub drive: Option<Spanned<String>>,
     pub sim: Option<Spanned<RawSim>>,
+    // qsb machine keys (config/machine/qsb.rs)
+    pub counts_per_step: Option<Spanned<f64>>,
+    pub home_direction: Option<Spanned<String>>,
+    pub home_max_travel: Option<Spanned<f64>>,
+    pub home_offset: Option<Spanned<f64>>,
+    pub index_polarity: Option<Spanned<String>>,
+    pub stream_interval_ms: Option<Spanned<f64>>,
+    pub host_latency_ms: Option<Spanned<f64>>,
+    pub enable_output: Option<Spanned<i64>>,
+    pub enable_active: Option<Spanned<String>>,
+    // tmcpack machine keys (config/machine/tmcpack.rs)
+    pub reply_address: Option<Spanned<i64>>,
+    pub switchover_ms: Option<Spanned<i64>>,
+    pub packet_timeout_ms: Option<Spanned<i64>>,
+    pub ready_output: Option<Spanned<RawReadyOutput>>,
+    // spimotor machine keys (config/machine/spimotor.rs)
+    pub intensity: Option<Spanned<i64>>,
+    pub coils: Option<Spanned<i64>>,
+}
+
+/// tmcpack `ready_output = { motors = [0, 1], reference = [0] }`: TTLOUT1 as the ready
+/// output ($32 P3) with the $33 masks.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawReadyOutput {
+    pub motors: Option<Spanned<Vec<Spanned<i64>>>>,
+    pub reference: Option<Spanned<Vec<Spanned<i64>>>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -75,13 +104,96 @@ pub(crate) struct RawAxis {
     pub max_accel: Option<Spanned<f64>>,
     pub position_tolerance: Option<Spanned<f64>>,
     pub home: Option<Spanned<RawHome>>,
+    // supervision and stop category (every model)
+    pub following_error: Option<Spanned<f64>>,
+    pub overspeed_factor: Option<Spanned<f64>>,
+    pub estop: Option<Spanned<String>>,
+    // tmcpack machine keys (config/machine/tmcpack.rs)
+    pub current: Option<Spanned<RawCurrent>>,
+    pub reference: Option<Spanned<RawReference>>,
+    pub rotary: Option<Spanned<bool>>,
+    pub revolution: Option<Spanned<f64>>,
+    pub analog_stop: Option<Spanned<RawAnalogStop>>,
+    // qq2drv machine keys (config/machine/qq2drv.rs)
+    pub pid_position: Option<Spanned<RawPid>>,
+    pub pid_velocity: Option<Spanned<RawPid>>,
+    pub power_limit: Option<Spanned<f64>>,
+}
+
+/// tmcpack `current = { peak, standby, standstill, constant, accel, standby_delay_ms }`
+/// ($10, $11).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawCurrent {
+    pub peak: Option<Spanned<f64>>,
+    pub standby: Option<Spanned<f64>>,
+    pub standstill: Option<Spanned<f64>>,
+    pub constant: Option<Spanned<f64>>,
+    pub accel: Option<Spanned<f64>>,
+    pub standby_delay_ms: Option<Spanned<i64>>,
+}
+
+/// tmcpack `reference = { side, active, center, stop_at_switch, soft_stop, debounce_ms,
+/// null_offset, test_range, fast, mechanical }` ($15, $16, $18).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawReference {
+    pub side: Option<Spanned<String>>,
+    pub active: Option<Spanned<String>>,
+    pub center: Option<Spanned<bool>>,
+    pub stop_at_switch: Option<Spanned<bool>>,
+    pub soft_stop: Option<Spanned<bool>>,
+    pub debounce_ms: Option<Spanned<i64>>,
+    pub null_offset: Option<Spanned<f64>>,
+    pub test_range: Option<Spanned<f64>>,
+    pub fast: Option<Spanned<bool>>,
+    pub mechanical: Option<Spanned<bool>>,
+}
+
+/// tmcpack `analog_stop = { left, right }` ($31), ADC counts 0..=1023.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawAnalogStop {
+    pub left: Option<Spanned<i64>>,
+    pub right: Option<Spanned<i64>>,
+}
+
+/// qq2drv `pid_position = { p, i, d, windup }` (packet 30) / `pid_velocity = { p, i, d }`
+/// (packet 32).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawPid {
+    pub p: Option<Spanned<i64>>,
+    pub i: Option<Spanned<i64>>,
+    pub d: Option<Spanned<i64>>,
+    pub windup: Option<Spanned<i64>>,
+}
+
+/// `[[signal]]`: a named board I/O pin.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawSignal {
+    pub name: Option<Spanned<String>>,
+    pub device: Option<Spanned<String>>,
+    pub kind: Option<Spanned<String>>,
+    pub pin: Option<Spanned<String>>,
+    pub invert: Option<Spanned<bool>>,
+    pub scale: Option<Spanned<f64>>,
+    pub offset: Option<Spanned<f64>>,
+    pub unit: Option<Spanned<String>>,
+    pub safe: Option<Spanned<bool>>,
 }
 
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawHome {
+    // every model that homes (qq2drv, tmcpack, qsb)
+    pub direction: Option<Spanned<String>>,
+    pub max_travel: Option<Spanned<f64>>,
+    pub position: Option<Spanned<f64>>,
+    // qq2drv only
     pub input: Option<Spanned<String>>,
     pub active_high: Option<Spanned<bool>>,
     pub positive_end: Option<Spanned<bool>>,
-    pub position: Option<Spanned<f64>>,
+    pub spacing: Option<Spanned<f64>>,
 }

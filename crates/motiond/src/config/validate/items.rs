@@ -7,7 +7,8 @@ use toml::Spanned;
 
 use super::Validator;
 use crate::config::raw::{RawAxis, RawDevice};
-use crate::config::{DeviceSpec, HomeInputKind, HomeSpec, PackVariant, SpiDrive};
+use super::machine::{AxisContext, DeviceContext};
+use crate::config::{AxisSpec, DeviceSpec, PackVariant, QsbVariant, SpiDrive};
 
 impl Validator<'_, '_> {
     pub(super) fn device(
@@ -70,7 +71,9 @@ impl Validator<'_, '_> {
                 }
                 parsed
             });
+        let fits = model.is_none_or(|model| self.device_keys_fit(index, d, model));
         let mut variant = PackVariant::Sixpack;
+        let mut qsb_variant = QsbVariant::M;
         if let Some(v) = &d.variant {
             match (model, v.get_ref().as_str()) {
                 (Some(Model::Tmcpack), "sixpack") => variant = PackVariant::Sixpack,
@@ -80,7 +83,15 @@ impl Validator<'_, '_> {
                     &key("variant"),
                     format!("unknown variant {other:?}; allowed: \"sixpack\" (6 motors), \"quadpack\" (4)"),
                 ),
-                _ => self.issue(v.span(), &key("variant"), "only tmcpack devices have a variant"),
+                (Some(Model::Qsb), "qsb-m") => qsb_variant = QsbVariant::M,
+                (Some(Model::Qsb), "qsb-s") => qsb_variant = QsbVariant::S,
+                (Some(Model::Qsb), "qsb-d") => qsb_variant = QsbVariant::D,
+                (Some(Model::Qsb), other) => self.issue(
+                    v.span(),
+                    &key("variant"),
+                    format!("unknown variant {other:?}; allowed: \"qsb-m\" (encoder, 4 digital I/O, stepper drive; default), \"qsb-s\" (encoder only), \"qsb-d\" (differential encoder, 1 digital I/O)"),
+                ),
+                _ => {}
             }
         }
         let mut drive = SpiDrive::Stepper;
@@ -93,7 +104,7 @@ impl Validator<'_, '_> {
                     &key("drive"),
                     format!("unknown drive {other:?}; allowed: \"stepper\" (one axis, channel 0), \"brushed\" (channels 0 = A, 1 = B)"),
                 ),
-                _ => self.issue(v.span(), &key("drive"), "only spimotor devices have a drive"),
+                _ => {}
             }
         }
         let address = match (model, &d.address) {
@@ -115,14 +126,7 @@ impl Validator<'_, '_> {
                     None
                 }
             }
-            (Some(_), Some(a)) => {
-                self.issue(
-                    a.span(),
-                    &key("address"),
-                    "only tmcpack and spimotor devices have an address",
-                );
-                None
-            }
+            (Some(_), Some(_)) => None,
             (_, None) => Some(0),
             (None, Some(_)) => None,
         };
@@ -133,6 +137,14 @@ impl Validator<'_, '_> {
         {
             sim_seed = seed as u64;
         }
+        let ctx = DeviceContext {
+            index,
+            table: table.clone(),
+        };
+        let machine = match model {
+            Some(model) if fits => self.device_machine(&ctx, model, d),
+            _ => None,
+        };
         Some(DeviceSpec {
             name: name?,
             link: link?,
@@ -140,7 +152,9 @@ impl Validator<'_, '_> {
             address: address?,
             variant,
             drive,
+            qsb_variant,
             sim_seed,
+            machine: machine?,
         })
     }
 
@@ -150,7 +164,7 @@ impl Validator<'_, '_> {
         raw: &Spanned<RawAxis>,
         devices: &[Option<DeviceSpec>],
         raw_devices: &[Spanned<RawDevice>],
-    ) -> Option<(AxisConfig, Option<HomeSpec>)> {
+    ) -> Option<(AxisConfig, AxisSpec)> {
         let table = raw.span();
         let a = raw.get_ref();
         let key = |k: &str| format!("axis[{index}].{k}");
@@ -316,11 +330,33 @@ impl Validator<'_, '_> {
             }
             None => cpu.map(|cpu| 2.0 / cpu.abs()),
         };
-        let home = self.home(index, a, device.and_then(|d| devices[d].as_ref()), cpu);
+        let spec = device.and_then(|d| devices[d].as_ref());
+        let fits = spec.is_none_or(|spec| self.axis_keys_fit(index, a, spec.model));
+        let supervision = self.supervision(index, a, cpu, min, max, tolerance);
+        let home = device.zip(spec).and_then(|(d, spec)| {
+            let raw_device = Some(raw_devices[d].get_ref());
+            self.home(index, a, spec, d, raw_device, cpu, min, max)
+        });
+        let ctx = AxisContext {
+            index,
+            table: table.clone(),
+            device: spec,
+            counts_per_unit: cpu,
+            min,
+            max,
+            unit: unit.as_deref(),
+            channel,
+        };
+        let machine = match spec {
+            Some(spec) if fits => self.axis_machine(&ctx, spec.model, a),
+            _ => None,
+        };
         let (min, max) = (min?, max?);
         if min >= max {
             return None;
         }
+        let (following_error, overspeed_factor, estop) = supervision?;
+        let home = home?;
         let axis = AxisConfig {
             name: name?,
             unit: unit?,
@@ -332,71 +368,17 @@ impl Validator<'_, '_> {
             max_velocity: max_velocity?,
             max_accel: max_accel?,
             position_tolerance: tolerance?,
+            following_error,
+            overspeed_factor,
+            estop,
+            home_max_travel: home.max_travel,
         };
-        Some((axis, home?))
-    }
-
-    /// The `home` table of axis `index`: `Some(None)` when absent, `None` when invalid.
-    fn home(
-        &mut self,
-        index: usize,
-        a: &RawAxis,
-        device: Option<&DeviceSpec>,
-        counts_per_unit: Option<f64>,
-    ) -> Option<Option<HomeSpec>> {
-        let Some(raw) = &a.home else {
-            return Some(None);
-        };
-        let key = |k: &str| format!("axis[{index}].home.{k}");
-        if device.is_some_and(|d| d.model != Model::Qq2drv) {
-            self.issue(
-                raw.span(),
-                &format!("axis[{index}].home"),
-                "only qq2drv axes take a home input; Trinamic packs search their reference switch and QSBs their index by themselves",
-            );
-            return None;
-        }
-        let h = raw.get_ref();
-        let table = raw.span();
-        let input = self
-            .required(&h.input, &table, &key("input"), "one of \"home\", \"index\", \"edge\"")
-            .and_then(|input| match input.get_ref().as_str() {
-                "home" => Some(HomeInputKind::Home),
-                "index" => Some(HomeInputKind::Index),
-                "edge" => Some(HomeInputKind::Edge),
-                other => {
-                    self.issue(
-                        input.span(),
-                        &key("input"),
-                        format!("unknown input {other:?}; allowed: \"home\" (switch, acts while active), \"index\" (encoder index), \"edge\" (inactive-to-active edge)"),
-                    );
-                    None
-                }
-            });
-        let position = match &h.position {
-            Some(p) if p.get_ref().is_finite() => Some(*p.get_ref()),
-            Some(p) => {
-                self.issue(p.span(), &key("position"), "a finite number (units)");
-                None
-            }
-            None => Some(0.0),
-        };
-        if let (Some(position), Some(cpu)) = (position, counts_per_unit)
-            && (position * cpu).abs() > f64::from(i32::MAX)
-        {
-            let span = h.position.as_ref().map_or(table.clone(), Spanned::span);
-            self.issue(
-                span,
-                &key("position"),
-                "beyond the board's 32-bit position counter",
-            );
-            return None;
-        }
-        Some(Some(HomeSpec {
-            input: input?,
-            active_high: h.active_high.as_ref().is_none_or(|v| *v.get_ref()),
-            positive_end: h.positive_end.as_ref().is_some_and(|v| *v.get_ref()),
-            position: position?,
-        }))
+        Some((
+            axis,
+            AxisSpec {
+                home,
+                machine: machine?,
+            },
+        ))
     }
 }

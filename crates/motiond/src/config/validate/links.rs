@@ -14,7 +14,7 @@ impl Validator<'_, '_> {
     /// addresses distinct, sim tables only on sim links).
     pub(super) fn links(
         &mut self,
-        links: &[Option<(String, Spanned<RawLink>)>],
+        links: &[Option<(String, &Spanned<RawLink>)>],
         devices: &[Option<DeviceSpec>],
         raw_devices: &[Spanned<RawDevice>],
     ) -> Vec<LinkSpec> {

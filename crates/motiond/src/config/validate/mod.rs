@@ -8,12 +8,16 @@ use motion_engine::AxisConfig;
 use motion_ipc::{MAX_AXES, MAX_DEVICES, MAX_LINKS, NAME_LEN};
 use toml::Spanned;
 
+mod home;
 mod items;
 mod links;
+pub mod machine;
+mod signals;
+mod supervision;
 
 use super::error::{ConfigIssue, Issues};
 use super::raw::{RawConfig, RawLink, RawServer};
-use super::{DeviceSpec, HomeSpec, ServerConfig, ServerSettings};
+use super::{AxisSpec, DeviceSpec, GivenKeys, ServerConfig, ServerSettings};
 
 pub(crate) fn parse(source: &str) -> Result<ServerConfig, Vec<ConfigIssue>> {
     let mut issues = Issues::new(source);
@@ -32,10 +36,12 @@ pub(crate) fn parse(source: &str) -> Result<ServerConfig, Vec<ConfigIssue>> {
             return Err(issues.list);
         }
     };
-    let config = Validator {
+    let mut validator = Validator {
         issues: &mut issues,
-    }
-    .run(raw);
+    };
+    let mut config = validator.run(&raw);
+    validator.machine_cross_checks(&config, &raw);
+    config.given = GivenKeys::of(source);
     if issues.list.is_empty() {
         Ok(config)
     } else {
@@ -44,19 +50,19 @@ pub(crate) fn parse(source: &str) -> Result<ServerConfig, Vec<ConfigIssue>> {
     }
 }
 
-pub(super) struct Validator<'i, 's> {
+pub(crate) struct Validator<'i, 's> {
     issues: &'i mut Issues<'s>,
 }
 
 /// The span of a whole table, for "missing key" issues.
-pub(super) type TableSpan = Range<usize>;
+pub(crate) type TableSpan = Range<usize>;
 
 impl Validator<'_, '_> {
-    pub(super) fn issue(&mut self, span: Range<usize>, key: &str, message: impl Into<String>) {
+    pub(crate) fn issue(&mut self, span: Range<usize>, key: &str, message: impl Into<String>) {
         self.issues.push(span, key, message);
     }
 
-    pub(super) fn required<'v, T>(
+    pub(crate) fn required<'v, T>(
         &mut self,
         value: &'v Option<Spanned<T>>,
         table: &TableSpan,
@@ -69,7 +75,7 @@ impl Validator<'_, '_> {
         value.as_ref()
     }
 
-    pub(super) fn int_in(
+    pub(crate) fn int_in(
         &mut self,
         value: &Spanned<i64>,
         key: &str,
@@ -118,7 +124,7 @@ impl Validator<'_, '_> {
         }
     }
 
-    fn run(mut self, raw: RawConfig) -> ServerConfig {
+    fn run(&mut self, raw: &RawConfig) -> ServerConfig {
         let server = self.server(raw.server.as_ref());
         for (what, count, max, items) in [
             (
@@ -148,9 +154,9 @@ impl Validator<'_, '_> {
                 );
             }
         }
-        let links: Vec<Option<(String, Spanned<RawLink>)>> = raw
+        let links: Vec<Option<(String, &Spanned<RawLink>)>> = raw
             .link
-            .into_iter()
+            .iter()
             .enumerate()
             .map(|(index, link)| {
                 let key = format!("link[{index}].name");
@@ -191,17 +197,22 @@ impl Validator<'_, '_> {
             }),
         );
         let links = self.links(&links, &devices, &raw.device);
-        let axes: Vec<Option<(AxisConfig, Option<HomeSpec>)>> = raw
+        let axes: Vec<Option<(AxisConfig, AxisSpec)>> = raw
             .axis
             .iter()
             .enumerate()
             .map(|(index, axis)| self.axis(index, axis, &devices, &raw.device))
             .collect();
-        let homes: Vec<Option<HomeSpec>> = axes.iter().flatten().map(|(_, home)| *home).collect();
+        let axis_specs: Vec<AxisSpec> = axes
+            .iter()
+            .flatten()
+            .map(|(_, spec)| spec.clone())
+            .collect();
         let axes: Vec<Option<AxisConfig>> = axes
             .into_iter()
             .map(|axis| axis.map(|(axis, _)| axis))
             .collect();
+        let signals = self.signals(&raw.signal, &devices, &raw.device);
         self.duplicates(
             "axis",
             axes.iter().zip(&raw.axis).filter_map(|(axis, raw)| {
@@ -233,7 +244,9 @@ impl Validator<'_, '_> {
             links,
             devices: devices.into_iter().flatten().collect(),
             axes: axes.into_iter().flatten().collect(),
-            homes,
+            axis_specs,
+            signals,
+            given: GivenKeys::default(),
         }
     }
 

@@ -1,0 +1,48 @@
+//! One driver per configured device, configured from its axes and machine keys (one module
+//! per board model).
+
+mod qq2drv;
+mod qsb;
+mod spimotor;
+mod tmcpack;
+
+use motion_drivers::{Driver, Model};
+
+use crate::config::{DeviceSpec, ServerConfig, Transport};
+
+/// Velocity and acceleration limits of `device`'s channel `channel` in counts, from the axis
+/// that drives it.
+fn channel_limits(config: &ServerConfig, device: usize, channel: usize) -> Option<(f64, f64)> {
+    config
+        .axes
+        .iter()
+        .find(|axis| axis.device == device && axis.channel == channel)
+        .map(|axis| {
+            let scale = axis.counts_per_unit.abs();
+            (axis.max_velocity * scale, axis.max_accel * scale)
+        })
+}
+
+/// The line rate of `device`'s link (baud or SPI clock), when the config gives one.
+fn line_rate(config: &ServerConfig, device: &DeviceSpec) -> Option<u32> {
+    match &config.links.get(device.link)?.transport {
+        Transport::Serial { baud, .. } => Some(*baud),
+        Transport::Spidev { speed_hz, .. } => Some(*speed_hz),
+        Transport::Sim { rate } => Some(*rate),
+        Transport::SpiSocket { .. } => None,
+    }
+}
+
+/// Builds the drivers of `config`'s devices, in config order.
+pub fn build(config: &ServerConfig) -> anyhow::Result<Vec<Box<dyn Driver>>> {
+    let mut drivers: Vec<Box<dyn Driver>> = Vec::with_capacity(config.devices.len());
+    for (index, device) in config.devices.iter().enumerate() {
+        drivers.push(match device.model {
+            Model::Tmcpack => tmcpack::build(config, index, device),
+            Model::Spimotor => spimotor::build(config, index, device)?,
+            Model::Qq2drv => qq2drv::build(config, index, device),
+            Model::Qsb => qsb::build(config, index, device),
+        });
+    }
+    Ok(drivers)
+}

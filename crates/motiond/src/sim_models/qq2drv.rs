@@ -1,0 +1,42 @@
+//! A simulated QuadQuad2Drv as its `[[device]]` and axes describe it.
+
+use motion_sim::qq2drv::{InputPin, InputSource, Qq2drvSim, Qq2drvSimConfig};
+
+use crate::config::{DeviceSpec, Direction, HomeInputKind, ServerConfig};
+
+/// The IN pins of a simulated QuadQuad2Drv, wired as its axes' `home` tables say: an
+/// encoder index once per revolution, or a switch at the end of travel the search runs to.
+fn inputs(config: &ServerConfig, device: usize) -> [InputPin; 4] {
+    let mut inputs = [InputPin::default(); 4];
+    for (axis, spec) in config.axes.iter().zip(&config.axis_specs) {
+        let (Some(input), true) = (spec.home.input, axis.device == device) else {
+            continue;
+        };
+        let Some(pin) = inputs.get_mut(axis.channel) else {
+            continue;
+        };
+        let positive = spec.home.direction == Direction::Positive;
+        let end = if positive { axis.max } else { axis.min };
+        pin.actuated_high = input.active_high;
+        pin.source = match input.kind {
+            HomeInputKind::Index => InputSource::Index {
+                offset: 0.0,
+                width: 4.0,
+            },
+            HomeInputKind::Home | HomeInputKind::Edge => InputSource::EndStop {
+                position: end * axis.counts_per_unit,
+                positive_end: positive == (axis.counts_per_unit > 0.0),
+            },
+        };
+    }
+    inputs
+}
+
+/// The model of qq2drv device `index`.
+pub(super) fn model(config: &ServerConfig, index: usize, device: &DeviceSpec) -> Qq2drvSim {
+    Qq2drvSim::new(Qq2drvSimConfig {
+        seed: device.sim_seed,
+        inputs: inputs(config, index),
+        ..Qq2drvSimConfig::default()
+    })
+}
