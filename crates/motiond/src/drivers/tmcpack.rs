@@ -3,7 +3,7 @@
 use motion_drivers::Driver;
 use motion_drivers::tmcpack::{TmcpackChannel, TmcpackDriver, TmcpackDriverConfig};
 
-use super::{channel_limits, line_rate};
+use super::{ParamRow, channel_limits, line_rate};
 use crate::config::{DeviceSpec, PackVariant, ServerConfig};
 
 /// The driver of tmcpack device `index`.
@@ -36,4 +36,14 @@ pub(super) fn build(config: &ServerConfig, index: usize, device: &DeviceSpec) ->
         }
     }
     Box::new(TmcpackDriver::new(driver))
+}
+
+/// The machine parameters of tmcpack device `index` and its axes, as the driver uses them.
+pub(super) fn describe(
+    config: &ServerConfig,
+    index: usize,
+    device: &DeviceSpec,
+    out: &mut Vec<ParamRow>,
+) {
+    let _ = (config, index, device, out);
 }
