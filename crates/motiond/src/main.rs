@@ -41,6 +41,9 @@ fn main() -> ExitCode {
             return ExitCode::from(1);
         }
     };
+    for warning in &config.warnings {
+        eprintln!("{}", warning.warning_line(&config.path));
+    }
     if cli.check_config.is_some() {
         print_summary(&config);
         println!("config ok");

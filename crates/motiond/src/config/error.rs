@@ -46,6 +46,20 @@ impl fmt::Display for ConfigError {
     }
 }
 
+impl ConfigIssue {
+    /// `file:line:column: warning: `key`: message`, for a warning about `path`.
+    pub fn warning_line(&self, path: &Path) -> String {
+        format!(
+            "{}:{}:{}: warning: `{}`: {}",
+            path.display(),
+            self.line,
+            self.column,
+            self.key,
+            self.message
+        )
+    }
+}
+
 impl ConfigError {
     /// A file that could not be read at all.
     pub fn unreadable(path: &Path, error: &std::io::Error) -> Self {
@@ -65,6 +79,8 @@ impl ConfigError {
 pub(crate) struct Issues<'a> {
     source: &'a str,
     pub list: Vec<ConfigIssue>,
+    /// Things that work but are probably not what the user wants.
+    pub warnings: Vec<ConfigIssue>,
 }
 
 impl<'a> Issues<'a> {
@@ -72,18 +88,35 @@ impl<'a> Issues<'a> {
         Self {
             source,
             list: Vec::new(),
+            warnings: Vec::new(),
         }
     }
 
     /// Records `message` about `key` at byte range `span`.
     pub fn push(&mut self, span: Range<usize>, key: impl Into<String>, message: impl Into<String>) {
+        let issue = self.at(span, key, message);
+        self.list.push(issue);
+    }
+
+    /// Records a warning (the config is used anyway).
+    pub fn warn(&mut self, span: Range<usize>, key: impl Into<String>, message: impl Into<String>) {
+        let issue = self.at(span, key, message);
+        self.warnings.push(issue);
+    }
+
+    fn at(
+        &self,
+        span: Range<usize>,
+        key: impl Into<String>,
+        message: impl Into<String>,
+    ) -> ConfigIssue {
         let (line, column) = line_column(self.source, span.start);
-        self.list.push(ConfigIssue {
+        ConfigIssue {
             line,
             column,
             key: key.into(),
             message: message.into(),
-        });
+        }
     }
 
     /// The key written at the start of the line holding byte `offset` (`key = value`), for

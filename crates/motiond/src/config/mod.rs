@@ -304,6 +304,9 @@ pub struct ServerConfig {
     pub signals: Vec<SignalSpec>,
     /// Every key the file set, for telling configured values from defaults.
     pub given: GivenKeys,
+    /// What works but is probably not what the user wants (printed at start and by
+    /// `--check-config`), in file order.
+    pub warnings: Vec<ConfigIssue>,
 }
 
 impl ServerConfig {

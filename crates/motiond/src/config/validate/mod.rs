@@ -42,6 +42,8 @@ pub(crate) fn parse(source: &str) -> Result<ServerConfig, Vec<ConfigIssue>> {
     let mut config = validator.run(&raw);
     validator.machine_cross_checks(&config, &raw);
     config.given = GivenKeys::of(source);
+    config.warnings = core::mem::take(&mut issues.warnings);
+    config.warnings.sort_by_key(|issue| (issue.line, issue.column));
     if issues.list.is_empty() {
         Ok(config)
     } else {
@@ -60,6 +62,11 @@ pub(crate) type TableSpan = Range<usize>;
 impl Validator<'_, '_> {
     pub(crate) fn issue(&mut self, span: Range<usize>, key: &str, message: impl Into<String>) {
         self.issues.push(span, key, message);
+    }
+
+    /// A warning: the config is used, and motiond (and `--check-config`) print it.
+    pub(crate) fn warn(&mut self, span: Range<usize>, key: &str, message: impl Into<String>) {
+        self.issues.warn(span, key, message);
     }
 
     pub(crate) fn required<'v, T>(
@@ -247,6 +254,7 @@ impl Validator<'_, '_> {
             axis_specs,
             signals,
             given: GivenKeys::default(),
+            warnings: Vec::new(),
         }
     }
 
