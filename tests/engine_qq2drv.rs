@@ -119,6 +119,7 @@ fn rig_with(driver: Qq2drvDriver, model: Qq2drvSim) -> (Rig, Board, SimFaults) {
             address: 0,
         }],
         axes: vec![axis("x", 0), axis("y", 1)],
+        ..EngineConfig::default()
     };
     let rig = Rig::new(config, vec![Box::new(driver)], vec![Box::new(link)]);
     (rig, board, faults)

@@ -62,6 +62,7 @@ fn rig(variant: Variant, motion: EncoderMotion, command_timeout: Duration) -> Qs
             position_tolerance: TOLERANCE,
             ..AxisConfig::default()
         }],
+        ..EngineConfig::default()
     };
     let driver = QsbDriver::new(QsbDriverConfig {
         variant,

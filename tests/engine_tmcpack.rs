@@ -85,6 +85,7 @@ fn engine_config(devices: Vec<DeviceConfig>, axes: Vec<AxisConfig>) -> EngineCon
         }],
         devices,
         axes,
+        ..EngineConfig::default()
     }
 }
 

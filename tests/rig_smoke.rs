@@ -16,6 +16,7 @@ fn an_empty_engine_ticks() {
         links: vec![],
         devices: vec![],
         axes: vec![],
+        ..EngineConfig::default()
     };
     let mut rig = Rig::new(config, vec![], vec![]);
     rig.run(10);

@@ -369,7 +369,7 @@ impl Model {
         write_text(&mut device.link, "none");
         write_text(&mut device.firmware, "fake 1.0");
         device.axis_count = info.axis_count;
-        device.online = 1;
+        device.state = u32::from(motion_ipc::DeviceState::Online as u8);
         info.devices[0] = device;
         info
     }

@@ -39,6 +39,7 @@ fn engine_with(axes: usize) -> Engine {
         axes: (0..axes)
             .map(|a| axis(&format!("a{a}"), a / 8, a % 8))
             .collect(),
+        ..EngineConfig::default()
     };
     let drivers: Vec<Box<dyn Driver>> = (0..boards)
         .map(|_| IdealBoard::new(8, &ALL_GOALS).0 as Box<dyn Driver>)

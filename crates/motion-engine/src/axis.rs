@@ -5,7 +5,22 @@ use core::time::Duration;
 use motion_drivers::{ChannelState, DeviceFault, GoalKind, GoalKinds};
 use motion_ipc::{AxisMode, Capabilities, ClientId, CommandKind, FaultCode};
 
-use crate::config::AxisConfig;
+use crate::config::{AxisConfig, EstopCategory};
+
+/// A latched fault: its code, who raised it, and the figure and tolerance it broke.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Fault {
+    pub code: FaultCode,
+    /// Raised by the engine's supervision (cleared only by a reset once its cause is
+    /// gone) rather than reported by the driver (cleared when the driver clears it).
+    pub by_engine: bool,
+    /// The measured figure (units, units/s), 0 when none.
+    pub value: f64,
+    /// The tolerance or limit it broke, 0 when none.
+    pub limit: f64,
+    /// When it was latched.
+    pub at: Duration,
+}
 
 /// Runtime state of one axis. Plain data; the engine drives it.
 #[derive(Debug, Clone)]
@@ -20,6 +35,12 @@ pub(crate) struct Axis {
     pub max_velocity: f64,
     pub max_accel: f64,
     pub tolerance: f64,
+    pub following_error: f64,
+    pub overspeed_factor: f64,
+    pub estop: EstopCategory,
+    pub home_max_travel: f64,
+    /// Index of the axis's device.
+    pub device: usize,
     pub capabilities: Capabilities,
     /// What the engine is doing with the axis.
     pub mode: AxisMode,
@@ -30,13 +51,30 @@ pub(crate) struct Axis {
     /// Deadman expiry of a velocity/power goal.
     pub deadman_at: Option<Duration>,
     pub claimed_by: ClientId,
+    /// When the claim was last renewed by a command of its owner (claim lease).
+    pub claim_renewed_at: Duration,
     /// Last refresh instant seen from the driver, and the tick it was seen in.
     pub refreshed_at: Option<Duration>,
     pub last_refresh_tick: u64,
-    /// Fault latched by the engine (cleared when the driver clears it and data is fresh).
-    pub fault: Option<FaultCode>,
-    /// When the fault was latched: it clears only on data refreshed after this instant.
-    pub fault_at: Duration,
+    /// Fresh data arrived from the board in this step.
+    pub fresh: bool,
+    /// When supervision last looked at a fresh sample.
+    pub last_sample_at: Duration,
+    /// The latched fault.
+    pub fault: Option<Fault>,
+    /// Position where the current position goal started, units.
+    pub move_start: f64,
+    /// The current position goal has been reached once (the hold rule applies from then on).
+    pub arrived: bool,
+    /// Fresh samples in a row above the overspeed limit.
+    pub overspeed_samples: u8,
+    /// Reference search: distance travelled so far, units; last position seen.
+    pub home_travel: f64,
+    pub home_last: f64,
+    /// Reference search of an axis that was already referenced when it started.
+    pub home_referenced: bool,
+    /// Stop-off category in progress: de-energise once the stop has come to rest.
+    pub off_after_stop: bool,
     pub deadman_expired: bool,
     pub estopped: bool,
     pub stale: bool,
@@ -58,16 +96,30 @@ impl Axis {
             max_velocity: config.max_velocity,
             max_accel: config.max_accel,
             tolerance: config.position_tolerance,
+            following_error: config.following_error,
+            overspeed_factor: config.overspeed_factor,
+            estop: config.estop,
+            home_max_travel: config.home_max_travel,
+            device: config.device,
             capabilities: capabilities_of(goals),
             mode: AxisMode::Off,
             target: 0.0,
             goal_owner: ClientId::NONE,
             deadman_at: None,
             claimed_by: ClientId::NONE,
+            claim_renewed_at: Duration::ZERO,
             refreshed_at: None,
             last_refresh_tick: 0,
+            fresh: false,
+            last_sample_at: Duration::ZERO,
             fault: None,
-            fault_at: Duration::ZERO,
+            move_start: 0.0,
+            arrived: false,
+            overspeed_samples: 0,
+            home_travel: 0.0,
+            home_last: 0.0,
+            home_referenced: false,
+            off_after_stop: false,
             deadman_expired: false,
             estopped: false,
             stale: true,
@@ -124,6 +176,16 @@ impl Axis {
         let velocity = self.velocity();
         velocity * velocity / (2.0 * self.max_accel)
     }
+
+    /// The latched fault's code.
+    pub fn fault_code(&self) -> Option<FaultCode> {
+        self.fault.map(|fault| fault.code)
+    }
+
+    /// Whether the axis has a reference (homed by the board, or its position was set).
+    pub fn referenced(&self) -> bool {
+        self.state.homed || self.position_set
+    }
 }
 
 /// The command kinds an axis accepts, from the goals its driver supports.
@@ -135,6 +197,7 @@ pub(crate) fn capabilities_of(goals: GoalKinds) -> Capabilities {
         .with(CommandKind::EStop)
         .with(CommandKind::Reset);
     for (goal, kinds) in [
+        (GoalKind::Off, &[CommandKind::Off][..]),
         (GoalKind::Power, &[CommandKind::Power][..]),
         (GoalKind::Position, &[CommandKind::Position][..]),
         (

@@ -6,8 +6,8 @@
 
 use core::time::Duration;
 
-use motion_drivers::BusKind;
-use motion_ipc::{MAX_AXES, MAX_DEVICES, MAX_LINKS};
+use motion_drivers::{BusKind, Pin, SignalKind};
+use motion_ipc::{MAX_AXES, MAX_DEVICES, MAX_LINKS, MAX_SIGNALS};
 
 /// One link: a serial line, a bus or an SPI bus.
 #[derive(Debug, Clone, PartialEq)]
@@ -115,6 +115,33 @@ impl EstopCategory {
     }
 }
 
+/// One named board I/O pin.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SignalConfig {
+    /// Signal name.
+    pub name: String,
+    /// Unit of an analogue value ("" for digital).
+    pub unit: String,
+    /// Index into [`EngineConfig::devices`].
+    pub device: usize,
+    /// The pin (index into the device model's pin table).
+    pub pin: Pin,
+    /// The pin's name on the board ("ttlio1").
+    pub pin_name: String,
+    /// What it is used as (the pin must support it).
+    pub kind: SignalKind,
+    /// Digital: the logical value is the inverse of the electrical level.
+    pub invert: bool,
+    /// Analogue: value = raw × scale + offset.
+    pub scale: f64,
+    /// Analogue: value = raw × scale + offset.
+    pub offset: f64,
+    /// Raw full scale (ADC counts; 1 for digital), for clients.
+    pub full_scale: f64,
+    /// Digital output: the logical value an e-stop sets; `None`: left alone.
+    pub safe: Option<bool>,
+}
+
 /// Everything the engine needs to know.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EngineConfig {
@@ -130,6 +157,27 @@ pub struct EngineConfig {
     pub devices: Vec<DeviceConfig>,
     /// Axes in config order; this is the order of axes in every frame.
     pub axes: Vec<AxisConfig>,
+    /// Signals in config order; this is the order of signals in every frame.
+    pub signals: Vec<SignalConfig>,
+    /// A claim not renewed by a command of its owner within this time ends; zero: claims
+    /// last as long as their owner is connected.
+    pub claim_lease: Duration,
+}
+
+impl Default for EngineConfig {
+    /// An empty 1 kHz engine with a 250 ms deadman and no claim lease.
+    fn default() -> Self {
+        Self {
+            name: String::new(),
+            tick_hz: 1000,
+            command_timeout: Duration::from_millis(250),
+            links: Vec::new(),
+            devices: Vec::new(),
+            axes: Vec::new(),
+            signals: Vec::new(),
+            claim_lease: Duration::ZERO,
+        }
+    }
 }
 
 impl EngineConfig {
@@ -163,8 +211,8 @@ pub enum EngineConfigError {
         /// The bad index.
         link: usize,
     },
-    /// An axis names a device index that does not exist.
-    #[error("axis `{axis}` refers to device #{device}, which does not exist")]
+    /// An axis (or signal) names a device index that does not exist.
+    #[error("axis or signal `{axis}` refers to device #{device}, which does not exist")]
     UnknownDevice {
         /// Axis name.
         axis: String,
@@ -232,6 +280,7 @@ pub(crate) fn validate(
         ("links", config.links.len(), MAX_LINKS),
         ("devices", config.devices.len(), MAX_DEVICES),
         ("axes", config.axes.len(), MAX_AXES),
+        ("signals", config.signals.len(), MAX_SIGNALS),
     ] {
         if count > max {
             return Err(EngineConfigError::TooMany { what, count, max });
@@ -246,6 +295,21 @@ pub(crate) fn validate(
     check_unique("links", config.links.iter().map(|l| l.name.as_str()))?;
     check_unique("devices", config.devices.iter().map(|d| d.name.as_str()))?;
     check_unique("axes", config.axes.iter().map(|a| a.name.as_str()))?;
+    check_unique("signals", config.signals.iter().map(|s| s.name.as_str()))?;
+    for signal in &config.signals {
+        if signal.device >= config.devices.len() {
+            return Err(EngineConfigError::UnknownDevice {
+                axis: signal.name.clone(),
+                device: signal.device,
+            });
+        }
+        if !(signal.scale.is_finite() && signal.offset.is_finite()) {
+            return Err(EngineConfigError::BadAxisValue {
+                axis: signal.name.clone(),
+                what: "a signal's scale and offset must be finite",
+            });
+        }
+    }
     for device in &config.devices {
         if device.link >= config.links.len() {
             return Err(EngineConfigError::UnknownLink {

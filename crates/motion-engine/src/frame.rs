@@ -1,11 +1,22 @@
 //! Writing the frame and the server description.
 
+use motion_drivers::SignalKind;
 use motion_ipc::{
     AxisFlags, AxisInfo, AxisMode, AxisState, DeviceInfo, DeviceModel, FrameFlags, MotionFrame,
-    SCHEMA_VERSION, ServerInfo, write_text,
+    SCHEMA_VERSION, ServerInfo, SignalFlags, SignalInfo, SignalInfoFlags, SignalState, write_text,
 };
 
 use crate::Engine;
+use crate::config::EstopCategory;
+
+/// The shared-memory code of a signal kind.
+fn signal_kind(kind: SignalKind) -> motion_ipc::SignalKind {
+    match kind {
+        SignalKind::DigitalIn => motion_ipc::SignalKind::DigitalIn,
+        SignalKind::DigitalOut => motion_ipc::SignalKind::DigitalOut,
+        SignalKind::AnalogIn => motion_ipc::SignalKind::AnalogIn,
+    }
+}
 
 impl Engine {
     /// Step 5: the frame of this tick. Entries past the axis count are left untouched.
@@ -22,6 +33,27 @@ impl Engine {
             flags |= FrameFlags::SHUTTING_DOWN.0;
         }
         frame.flags = flags;
+        frame.device_count = self.devices.len() as u32;
+        for (device, out) in self.devices.iter().zip(frame.devices.iter_mut()) {
+            *out = device.state as u8;
+        }
+        frame.signal_count = self.signals.len() as u32;
+        for (signal, out) in self.signals.iter().zip(frame.signals.iter_mut()) {
+            let flags = SignalFlags::default()
+                .with(SignalFlags::STALE, signal.stale)
+                .with(SignalFlags::CLAIMED, !signal.claimed_by.is_none())
+                .with(SignalFlags::SAFE_STATE, signal.safe_applied)
+                .with(SignalFlags::PENDING, signal.pending());
+            *out = SignalState {
+                value: signal.value(),
+                raw: signal.raw,
+                last_refresh_tick: signal.last_refresh_tick,
+                flags: flags.0,
+                kind: signal_kind(signal.config.kind) as u8,
+                reserved: [0; 3],
+                claimed_by: signal.claimed_by,
+            };
+        }
         for (axis, out) in self.axes.iter().zip(frame.axes.iter_mut()) {
             let position = axis.position();
             let position_mode = matches!(axis.mode, AxisMode::Position | AxisMode::RampPosition);
@@ -48,10 +80,12 @@ impl Engine {
                 raw_counts: axis.state.raw_counts,
                 last_refresh_tick: axis.last_refresh_tick,
                 flags: flags.0,
-                fault: axis.fault.map_or(0, |fault| fault as u16),
+                fault: axis.fault.map_or(0, |fault| fault.code as u16),
                 mode: axis.mode as u8,
-                reserved: 0,
+                device_state: self.devices[axis.device].state as u8,
                 claimed_by: axis.claimed_by,
+                fault_value: axis.fault.map_or(0.0, |fault| fault.value),
+                fault_limit: axis.fault.map_or(0.0, |fault| fault.limit),
             };
         }
     }
@@ -80,6 +114,39 @@ impl Engine {
             out.capabilities = axis.capabilities.0;
             out.channel = axis.channel as u16;
             out.device_index = axis_config.device as u16;
+            out.following_error = axis.following_error;
+            out.overspeed_factor = axis.overspeed_factor;
+            out.home_max_travel = axis.home_max_travel;
+            out.estop = match axis.estop {
+                EstopCategory::Hold => motion_ipc::EstopCategory::Hold,
+                EstopCategory::StopOff => motion_ipc::EstopCategory::StopOff,
+                EstopCategory::Off => motion_ipc::EstopCategory::Off,
+            } as u32;
+        }
+        info.signal_count = self.signals.len() as u32;
+        for (signal, out) in self.signals.iter().zip(&mut info.signals) {
+            let config = &signal.config;
+            *out = SignalInfo::EMPTY;
+            write_text(&mut out.name, &config.name);
+            write_text(&mut out.unit, &config.unit);
+            write_text(&mut out.device, &self.config.devices[config.device].name);
+            write_text(&mut out.pin, &config.pin_name);
+            out.scale = config.scale;
+            out.offset = config.offset;
+            out.full_scale = config.full_scale;
+            out.kind = signal_kind(config.kind) as u8;
+            let mut flags = 0;
+            if config.invert {
+                flags |= SignalInfoFlags::INVERT.0;
+            }
+            if let Some(safe) = config.safe {
+                flags |= SignalInfoFlags::HAS_SAFE_STATE.0;
+                if safe {
+                    flags |= SignalInfoFlags::SAFE_ON.0;
+                }
+            }
+            out.flags = flags;
+            out.device_index = config.device as u16;
         }
         for (index, (device, out)) in config.devices.iter().zip(&mut info.devices).enumerate() {
             *out = DeviceInfo::EMPTY;
@@ -90,7 +157,7 @@ impl Engine {
             if let Some(driver) = self.driver(index) {
                 let status = driver.status();
                 write_text(&mut out.firmware, status.firmware());
-                out.online = u32::from(status.online);
+                out.state = u32::from(self.devices[index].state as u8);
                 out.model = match driver.model() {
                     motion_drivers::Model::Qq2drv => DeviceModel::Qq2drv,
                     motion_drivers::Model::Tmcpack => DeviceModel::Tmcpack,

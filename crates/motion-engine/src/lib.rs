@@ -32,6 +32,7 @@
 //!     links: vec![],
 //!     devices: vec![],
 //!     axes: vec![],
+//!     ..EngineConfig::default()
 //! };
 //! let mut engine = Engine::new(config, vec![]).expect("valid config");
 //! let mut frame = MotionFrame::EMPTY;
@@ -44,8 +45,11 @@
 mod axis;
 mod command;
 mod config;
+mod device;
 mod frame;
 mod safety;
+mod signal;
+mod supervision;
 
 use core::time::Duration;
 
@@ -56,7 +60,11 @@ use crate::axis::Axis;
 pub use crate::command::{CommandPort, HOME_FRACTION_OF_MAX, MAX_COMMANDS_PER_STEP};
 pub use crate::config::{
     AxisConfig, DeviceConfig, EngineConfig, EngineConfigError, EstopCategory, LinkConfig,
+    SignalConfig,
 };
+use crate::device::Device;
+use crate::signal::Signal;
+pub use crate::supervision::OVERSPEED_SAMPLES;
 
 /// Counters since construction.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -69,6 +77,9 @@ pub struct EngineCounters {
     pub deadman_stops: u64,
     /// Soft-limit stops of velocity and power goals.
     pub limit_stops: u64,
+    /// Faults latched by the engine's supervision (following error, overspeed, limits,
+    /// search travel, overruns).
+    pub faults: u64,
 }
 
 /// The deterministic motion engine.
@@ -76,9 +87,12 @@ pub struct EngineCounters {
 pub struct Engine {
     config: EngineConfig,
     buses: Vec<LinkBus>,
-    /// Per device: (bus index, driver index within the bus).
-    device_slots: Vec<(usize, usize)>,
+    /// Per device: where its driver is, and its readiness.
+    devices: Vec<Device>,
     axes: Vec<Axis>,
+    signals: Vec<Signal>,
+    /// Per link: up (the shell reports down/up events).
+    link_up: Vec<bool>,
     /// Messages sent on each bus in the current tick.
     sends: Vec<usize>,
     tick: u64,
@@ -99,14 +113,14 @@ impl Engine {
         config::validate(&config, drivers.len())?;
         let mut per_link: Vec<Vec<Box<dyn Driver>>> =
             config.links.iter().map(|_| Vec::new()).collect();
-        let mut device_slots = Vec::with_capacity(drivers.len());
+        let mut devices = Vec::with_capacity(drivers.len());
         for (device, driver) in config.devices.iter().zip(drivers) {
-            device_slots.push((device.link, per_link[device.link].len()));
+            devices.push(Device::new(device.link, per_link[device.link].len()));
             per_link[device.link].push(driver);
         }
         let mut axes = Vec::with_capacity(config.axes.len());
         for axis in &config.axes {
-            let (bus, slot) = device_slots[axis.device];
+            let (bus, slot) = (devices[axis.device].bus, devices[axis.device].slot);
             let driver = &per_link[bus][slot];
             if axis.channel >= driver.channel_count() {
                 return Err(EngineConfigError::NoSuchChannel {
@@ -116,13 +130,24 @@ impl Engine {
                     count: driver.channel_count(),
                 });
             }
-            axes.push(Axis::new(
-                axis,
-                bus,
-                slot,
-                driver.capabilities(axis.channel),
-            ));
+            let goals = driver.capabilities(axis.channel);
+            if axis.estop != EstopCategory::Hold && !goals.contains(motion_drivers::GoalKind::Off)
+            {
+                return Err(EngineConfigError::BadAxisValue {
+                    axis: axis.name.clone(),
+                    what: "estop = \"stop-off\" or \"off\" needs a board that can de-energise the motor; this one cannot (use \"hold\")",
+                });
+            }
+            axes.push(Axis::new(axis, bus, slot, goals));
         }
+        let signals = config
+            .signals
+            .iter()
+            .map(|signal| {
+                let device = &devices[signal.device];
+                Signal::new(signal.clone(), device.bus, device.slot)
+            })
+            .collect();
         let buses: Vec<LinkBus> = config
             .links
             .iter()
@@ -131,9 +156,11 @@ impl Engine {
             .collect();
         Ok(Self {
             sends: vec![0; buses.len()],
+            link_up: vec![true; buses.len()],
             buses,
-            device_slots,
+            devices,
             axes,
+            signals,
             tick: 0,
             started: false,
             now: Duration::ZERO,
@@ -166,7 +193,7 @@ impl Engine {
 
     /// The driver of device `index` (config order).
     pub fn driver(&self, device: usize) -> Option<&dyn Driver> {
-        let (bus, slot) = *self.device_slots.get(device)?;
+        let (bus, slot) = self.devices.get(device).map(|d| (d.bus, d.slot))?;
         self.buses
             .get(bus)?
             .drivers()
@@ -190,6 +217,7 @@ impl Engine {
     pub fn link_down(&mut self, link: usize, now: Duration) {
         if let Some(bus) = self.buses.get_mut(link) {
             bus.link_down(now);
+            self.link_up[link] = false;
         }
     }
 
@@ -198,7 +226,13 @@ impl Engine {
     pub fn link_up(&mut self, link: usize, now: Duration) {
         if let Some(bus) = self.buses.get_mut(link) {
             bus.link_up(now);
+            self.link_up[link] = true;
         }
+    }
+
+    /// The readiness of device `index` (config order) as of the last step.
+    pub fn device_state(&self, index: usize) -> Option<motion_ipc::DeviceState> {
+        self.devices.get(index).map(|device| device.state)
     }
 
     /// One tick at `now`: drivers update, commands from `port` are answered, safety runs,
@@ -213,7 +247,11 @@ impl Engine {
         for bus in &mut self.buses {
             bus.handle_timeout(now);
         }
+        self.update_devices();
         self.update_from_drivers();
+        self.update_signals();
+        self.supervise();
+        self.expire_claims();
         self.take_commands(port);
         self.run_safety();
         self.write_frame(frame);
@@ -249,9 +287,9 @@ impl Engine {
         self.buses.iter().filter_map(LinkBus::poll_timeout).min()
     }
 
-    /// The client node `client` is dead: its claims are released and its goals voided
-    /// (the axes decelerate and hold).
-    pub fn client_dead(&mut self, client: ClientId) {
+    /// The client node `client` is gone (it died, exited, or closed its command port): its
+    /// claims end and its goals are voided (the axes decelerate and hold).
+    pub fn client_gone(&mut self, client: ClientId) {
         if client.is_none() {
             return;
         }
@@ -261,18 +299,25 @@ impl Engine {
                 axis.claimed_by = ClientId::NONE;
             }
             if axis.goal_owner == client && axis.has_active_goal() {
-                self.stop_axis(index, None);
+                self.stop_axis(index, false);
+            }
+        }
+        for signal in &mut self.signals {
+            if signal.claimed_by == client {
+                signal.claimed_by = ClientId::NONE;
             }
         }
     }
 
-    /// Stops every axis and refuses new motion commands (for SIGINT/SIGTERM). Wait for
-    /// [`all_at_rest`](Self::all_at_rest) with further steps.
-    pub fn begin_shutdown(&mut self) {
-        self.shutting_down = true;
-        for index in 0..self.axes.len() {
-            self.stop_axis(index, None);
-        }
+    /// The claim holders of every axis and signal (for the shell, which checks them against
+    /// the nodes connected to the command service).
+    pub fn claim_holders(&self) -> impl Iterator<Item = ClientId> + '_ {
+        self.axes
+            .iter()
+            .map(|axis| axis.claimed_by)
+            .chain(self.signals.iter().map(|signal| signal.claimed_by))
+            .chain(self.axes.iter().map(|axis| axis.goal_owner))
+            .filter(|client| !client.is_none())
     }
 
     /// Whether every board has acknowledged its goals and no axis with a live link moves.

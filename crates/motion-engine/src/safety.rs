@@ -1,17 +1,19 @@
-//! Safety: faults from drivers, deadman, soft limits, e-stop, stops.
+//! Safety: faults from drivers, deadman, soft limits, e-stop and its stop categories,
+//! stops, reset and shutdown.
 
-use motion_drivers::Goal;
+use motion_drivers::{Goal, GoalError};
 use motion_ipc::{AxisMode, ClientId, FaultCode, Reason};
 
 use crate::Engine;
-use crate::axis::fault_code;
+use crate::axis::{Fault, fault_code};
+use crate::config::EstopCategory;
 
 /// Below this speed (units/s) a stopping axis whose board says it stands still holds.
 const STANDSTILL_FRACTION_OF_MAX: f64 = 1e-3;
 
 impl Engine {
-    /// Step 1: take every channel's state from its driver; refresh ticks, staleness and
-    /// fault transitions.
+    /// Step 1b: take every channel's state from its driver; refresh ticks, staleness and
+    /// driver fault transitions.
     pub(crate) fn update_from_drivers(&mut self) {
         let now = self.now;
         for index in 0..self.axes.len() {
@@ -29,7 +31,8 @@ impl Engine {
             let budget = driver.refresh_budget();
             let tick = self.tick;
             let axis = &mut self.axes[index];
-            if state.refreshed_at > axis.refreshed_at {
+            axis.fresh = state.refreshed_at > axis.refreshed_at;
+            if axis.fresh {
                 axis.refreshed_at = state.refreshed_at;
                 axis.last_refresh_tick = tick;
             }
@@ -39,32 +42,40 @@ impl Engine {
             axis.state = state;
             let driver_fault = state.fault.or(status.fault).map(fault_code);
             match (axis.fault, driver_fault) {
-                (None, Some(fault)) => {
-                    axis.fault = Some(fault);
-                    axis.fault_at = now;
-                    self.stop_axis(index, None);
+                (None, Some(code)) => {
+                    axis.fault = Some(Fault {
+                        code,
+                        by_engine: false,
+                        value: 0.0,
+                        limit: 0.0,
+                        at: now,
+                    });
+                    self.stop_by_category(index);
                 }
                 (Some(latched), None)
-                    if latched != FaultCode::Overrun
-                        && axis.refreshed_at.is_some_and(|at| at > axis.fault_at) =>
+                    if !latched.by_engine
+                        && axis.refreshed_at.is_some_and(|at| at > latched.at) =>
                 {
                     // The cause is gone and fresh data arrived: the axis stays stopped
                     // and needs a new command.
                     axis.fault = None;
                 }
-                (Some(_), Some(fault)) => axis.fault = Some(fault),
+                (Some(latched), Some(code)) if !latched.by_engine => {
+                    axis.fault = Some(Fault { code, ..latched });
+                }
                 _ => {}
             }
         }
     }
 
-    /// Step 3: deadman expiry, soft limits, stopping → hold, homing done.
+    /// Step 4: deadman expiry, soft limits of open-loop goals, stopping → hold (or off),
+    /// homing done.
     pub(crate) fn run_safety(&mut self) {
         let now = self.now;
         for index in 0..self.axes.len() {
             let axis = &self.axes[index];
             if axis.deadman_at.is_some_and(|at| now >= at) {
-                self.stop_axis(index, None);
+                self.stop_axis(index, false);
                 self.axes[index].deadman_expired = true;
                 self.counters.deadman_stops += 1;
                 continue;
@@ -82,7 +93,7 @@ impl Engine {
                 if (heading_up && position + reach >= axis.max)
                     || (heading_down && position - reach <= axis.min)
                 {
-                    self.stop_axis(index, None);
+                    self.stop_axis(index, false);
                     self.counters.limit_stops += 1;
                     continue;
                 }
@@ -91,13 +102,18 @@ impl Engine {
             let still = !axis.state.moving
                 && axis.velocity().abs() <= axis.max_velocity * STANDSTILL_FRACTION_OF_MAX;
             match axis.mode {
+                AxisMode::Stopping if still && axis.off_after_stop => {
+                    let _ = self.off_axis(index);
+                }
                 AxisMode::Stopping if still => {
                     axis.mode = AxisMode::Hold;
                     axis.target = axis.position();
+                    axis.arrived = true;
                 }
                 AxisMode::Homing if still && axis.state.homed => {
                     axis.mode = AxisMode::Hold;
                     axis.target = axis.position();
+                    axis.arrived = true;
                     axis.goal_owner = ClientId::NONE;
                 }
                 _ => {}
@@ -105,9 +121,10 @@ impl Engine {
         }
     }
 
-    /// Decelerates axis `index` at its max acceleration and holds; `fault` latches an
-    /// engine fault (cleared only by reset).
-    pub(crate) fn stop_axis(&mut self, index: usize, fault: Option<FaultCode>) {
+    /// Decelerates axis `index` at its max acceleration and holds. An axis the engine
+    /// believes off and at rest is left alone unless `force` (start-up and shutdown stops
+    /// reach every channel, whatever the engine believed).
+    pub(crate) fn stop_axis(&mut self, index: usize, force: bool) {
         let now = self.now;
         let Some(axis) = self.axes.get(index) else {
             return;
@@ -116,7 +133,7 @@ impl Engine {
         let (bus, slot, channel) = (axis.bus, axis.slot, axis.channel);
         let was_off = axis.mode == AxisMode::Off;
         let stopped = match self.buses[bus].driver_mut(slot) {
-            Some(driver) if !was_off || axis.state.moving => {
+            Some(driver) if force || !was_off || axis.state.moving => {
                 driver.set_goal(now, channel, Goal::Stop { decel }).is_ok()
             }
             _ => false,
@@ -130,33 +147,90 @@ impl Engine {
             AxisMode::Hold
         };
         axis.target = axis.position();
+        axis.arrived = true;
         axis.deadman_at = None;
         axis.goal_owner = ClientId::NONE;
-        if let Some(fault) = fault {
-            axis.fault = Some(fault);
-            axis.fault_at = now;
+        axis.off_after_stop = false;
+    }
+
+    /// De-energises axis `index` (its motor coasts).
+    pub(crate) fn off_axis(&mut self, index: usize) -> Result<(), GoalError> {
+        let now = self.now;
+        let axis = &self.axes[index];
+        let (bus, slot, channel) = (axis.bus, axis.slot, axis.channel);
+        let driver = self.buses[bus].driver_mut(slot).ok_or(GoalError::Offline)?;
+        driver.set_goal(now, channel, Goal::Off)?;
+        let axis = &mut self.axes[index];
+        axis.mode = AxisMode::Off;
+        axis.target = axis.position();
+        axis.deadman_at = None;
+        axis.goal_owner = ClientId::NONE;
+        axis.off_after_stop = false;
+        Ok(())
+    }
+
+    /// Stops axis `index` the way its e-stop category says: hold (category 2), stop then
+    /// off (category 1), off at once (category 0). A board that cannot de-energise holds.
+    pub(crate) fn stop_by_category(&mut self, index: usize) {
+        let Some(axis) = self.axes.get(index) else {
+            return;
+        };
+        match axis.estop {
+            EstopCategory::Hold => self.stop_axis(index, false),
+            EstopCategory::StopOff => {
+                self.stop_axis(index, false);
+                let axis = &mut self.axes[index];
+                if axis.mode == AxisMode::Stopping {
+                    axis.off_after_stop = true;
+                } else if self.off_axis(index).is_err() {
+                    self.stop_axis(index, false);
+                }
+            }
+            EstopCategory::Off => {
+                if self.off_axis(index).is_err() {
+                    self.stop_axis(index, false);
+                }
+            }
         }
     }
 
-    /// E-stop: latch, and stop every axis.
+    /// Latches an engine fault on axis `index` and stops it by its category.
+    pub(crate) fn fault_axis(&mut self, index: usize, code: FaultCode, value: f64, limit: f64) {
+        let now = self.now;
+        let Some(axis) = self.axes.get_mut(index) else {
+            return;
+        };
+        axis.fault = Some(Fault {
+            code,
+            by_engine: true,
+            value,
+            limit,
+            at: now,
+        });
+        self.counters.faults += 1;
+        self.stop_by_category(index);
+    }
+
+    /// E-stop: latch, stop every axis by its category, outputs to their safe states.
     pub(crate) fn estop_all(&mut self) {
         self.estop = true;
         for index in 0..self.axes.len() {
-            self.stop_axis(index, None);
+            self.stop_by_category(index);
             self.axes[index].estopped = true;
         }
+        self.outputs_to_safe_state();
     }
 
     /// Stops every axis and latches `fault` on each (e.g. too many overruns); a reset
     /// clears it.
     pub fn stop_all_with_fault(&mut self, fault: FaultCode) {
         for index in 0..self.axes.len() {
-            self.stop_axis(index, Some(fault));
+            self.fault_axis(index, fault, 0.0, 0.0);
         }
     }
 
-    /// Clears the e-stop latch and engine-latched faults; targets become the current
-    /// positions (nothing resumes).
+    /// Clears the e-stop latch, every claim, and the latched faults whose cause is gone;
+    /// targets become the current positions (nothing resumes).
     pub(crate) fn reset(&mut self) -> Reason {
         if self.shutting_down {
             return Reason::ShuttingDown;
@@ -165,15 +239,49 @@ impl Engine {
         for axis in &mut self.axes {
             axis.estopped = false;
             axis.deadman_expired = false;
-            let driver_fault = axis.state.fault.is_some();
-            if !driver_fault {
+            axis.claimed_by = ClientId::NONE;
+            let position = axis.position();
+            let cause_gone = match axis.fault {
+                None => true,
+                Some(fault) if !fault.by_engine => axis.state.fault.is_none(),
+                Some(fault) => match fault.code {
+                    FaultCode::Overspeed => axis.velocity().abs() <= fault.limit,
+                    FaultCode::LimitExceeded => {
+                        let tolerance = axis.following_error;
+                        position >= axis.min - tolerance && position <= axis.max + tolerance
+                    }
+                    _ => true,
+                },
+            };
+            if cause_gone {
                 axis.fault = None;
             }
-            axis.target = axis.position();
+            axis.target = position;
+            axis.arrived = true;
+            axis.overspeed_samples = 0;
             if axis.mode != AxisMode::Off && axis.mode != AxisMode::Stopping {
                 axis.mode = AxisMode::Hold;
             }
         }
+        for signal in &mut self.signals {
+            signal.claimed_by = ClientId::NONE;
+            signal.safe_applied = false;
+        }
         Reason::Accepted
+    }
+
+    /// Stops every configured axis whatever mode the engine believed (an axis it believed
+    /// off is switched off again), outputs to their safe states, and refuses new motion
+    /// commands (for SIGINT/SIGTERM). Wait for [`all_at_rest`](Self::all_at_rest) with
+    /// further steps.
+    pub fn begin_shutdown(&mut self) {
+        self.shutting_down = true;
+        for index in 0..self.axes.len() {
+            if self.axes[index].mode == AxisMode::Off && self.off_axis(index).is_ok() {
+                continue;
+            }
+            self.stop_axis(index, true);
+        }
+        self.outputs_to_safe_state();
     }
 }

@@ -122,7 +122,7 @@ fn claims_are_exclusive_and_die_with_their_client() {
     );
     h.ticks(50);
     // The owner dies: claim released, its jog stopped.
-    h.engine.client_dead(CLIENT_A);
+    h.engine.client_gone(CLIENT_A);
     h.ticks(200);
     let state = h.axis(1);
     assert!(!state.flags().contains(AxisFlags::CLAIMED));
@@ -140,6 +140,12 @@ fn bad_values_are_refused_and_nothing_reaches_the_wire() {
     let (engine, controls) = two_link_engine();
     let mut h = Harness::new(engine);
     h.ticks(2);
+    // The start-up stop of every channel went out; nothing else may follow.
+    for control in &controls {
+        let mut control = control.lock().unwrap();
+        assert_eq!(control.wire.len(), 2, "one start-up stop per channel");
+        control.wire.clear();
+    }
     let cases = [
         (
             CommandKind::Velocity,
@@ -214,7 +220,7 @@ fn bad_values_are_refused_and_nothing_reaches_the_wire() {
             "a refused command reached the wire"
         );
     }
-    assert_eq!(h.axis(0).mode().unwrap(), AxisMode::Off);
+    assert_eq!(h.axis(0).mode().unwrap(), AxisMode::Hold);
 }
 
 #[test]
@@ -236,6 +242,7 @@ fn unsupported_goals_are_refused_with_a_reason() {
             address: 0x90,
         }],
         axes: vec![axis("a", 0, 0)],
+        ..EngineConfig::default()
     };
     let mut h = Harness::new(Engine::new(config, vec![board]).unwrap());
     h.tick();

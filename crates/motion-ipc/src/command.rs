@@ -72,7 +72,12 @@ impl ClientId {
 /// | `RampVelocity` | velocity, units/s | acceleration, units/s² | – |
 /// | `Home` | search velocity, units/s | – | – |
 /// | `SetPosition` | the position the axis is now at, units | – | – |
-/// | `Claim`, `Release`, `EStop`, `Reset` | – | – | – |
+/// | `SetOutput` | the output's logical value, 0.0 (off) or 1.0 (on) | – | – |
+/// | `Claim`, `Release`, `EStop`, `Reset`, `Off` | – | – | – |
+///
+/// `SetOutput`, and `Claim` / `Release` with [`Target::Signal`], address a signal:
+/// [`CommandRequest::axis`] is then a signal index (config order) and
+/// [`CommandRequest::target`] is [`Target::Signal`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[repr(u32)]
 pub enum CommandKind {
@@ -100,11 +105,17 @@ pub enum CommandKind {
     EStop = 11,
     /// Clear a latched e-stop and faults; targets become the current positions.
     Reset = 12,
+    /// De-energise the motor (it coasts; no holding torque). With
+    /// [`CommandRequest::ALL_AXES`], every axis. A board that cannot de-energise refuses
+    /// with [`Reason::Unsupported`].
+    Off = 13,
+    /// Set a digital output signal (`axis` = signal index, `target` = [`Target::Signal`]).
+    SetOutput = 14,
 }
 
 impl CommandKind {
     /// Every kind, in value order.
-    pub const ALL: [Self; 12] = [
+    pub const ALL: [Self; 14] = [
         Self::Stop,
         Self::Power,
         Self::Position,
@@ -117,6 +128,8 @@ impl CommandKind {
         Self::Release,
         Self::EStop,
         Self::Reset,
+        Self::Off,
+        Self::SetOutput,
     ];
 
     /// The command's name as the CLI and logs spell it.
@@ -134,6 +147,8 @@ impl CommandKind {
             Self::Release => "release",
             Self::EStop => "e-stop",
             Self::Reset => "reset",
+            Self::Off => "off",
+            Self::SetOutput => "set-output",
         }
     }
 }
@@ -189,11 +204,23 @@ pub enum Reason {
     ShuttingDown = 16,
     /// A claim or release without a client id.
     NoClientId = 17,
+    /// The request's `client` is not the node the server received it from.
+    IdentityMismatch = 18,
+    /// The axis's board is still starting (first answer, configuration, start-up stop).
+    DeviceStarting = 19,
+    /// The axis's board is not answering.
+    DeviceOffline = 20,
+    /// `axis` is not a signal of this server (for a signal request).
+    UnknownSignal = 21,
+    /// The signal is not a digital output.
+    NotAnOutput = 22,
+    /// `target` is not a known [`Target`].
+    UnknownTarget = 23,
 }
 
 impl Reason {
     /// Every reason, in value order.
-    pub const ALL: [Self; 18] = [
+    pub const ALL: [Self; 24] = [
         Self::Accepted,
         Self::SchemaMismatch,
         Self::UnknownKind,
@@ -212,6 +239,12 @@ impl Reason {
         Self::Busy,
         Self::ShuttingDown,
         Self::NoClientId,
+        Self::IdentityMismatch,
+        Self::DeviceStarting,
+        Self::DeviceOffline,
+        Self::UnknownSignal,
+        Self::NotAnOutput,
+        Self::UnknownTarget,
     ];
 
     /// One line saying what is wrong and what to do.
@@ -235,6 +268,16 @@ impl Reason {
             Self::Busy => "the server's command queue is full: retry",
             Self::ShuttingDown => "the server is shutting down",
             Self::NoClientId => "claim and release need a client id",
+            Self::IdentityMismatch => {
+                "the request's client id is not the sender's iceoryx2 node: ids cannot be borrowed"
+            }
+            Self::DeviceStarting => {
+                "the axis's board is starting: waiting for its first answer and its start-up stop"
+            }
+            Self::DeviceOffline => "the axis's board is not answering",
+            Self::UnknownSignal => "no such signal on this server",
+            Self::NotAnOutput => "the signal is not a digital output",
+            Self::UnknownTarget => "unknown target: 0 = axis, 1 = signal",
         }
     }
 }
@@ -256,17 +299,43 @@ impl TryFrom<u32> for Reason {
     }
 }
 
+/// What [`CommandRequest::axis`] indexes. Travels as `u32` in [`CommandRequest::target`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[repr(u32)]
+pub enum Target {
+    /// An axis (config order); every kind but `SetOutput`.
+    #[default]
+    Axis = 0,
+    /// A signal (config order): `SetOutput`, `Claim`, `Release`.
+    Signal = 1,
+}
+
+impl TryFrom<u32> for Target {
+    type Error = UnknownValue;
+    fn try_from(value: u32) -> Result<Self, Self::Error> {
+        match value {
+            0 => Ok(Self::Axis),
+            1 => Ok(Self::Signal),
+            other => Err(UnknownValue(other)),
+        }
+    }
+}
+
 /// A command to the server. 64 bytes, alignment 8. Fields in memory order:
 ///
 /// | offset | field | type | meaning |
 /// |---|---|---|---|
 /// | 0 | `schema_version` | u32 | [`SCHEMA_VERSION`] |
 /// | 4 | `kind` | u32 | [`CommandKind`] |
-/// | 8 | `client` | [`ClientId`] | the sender's iceoryx2 node id |
+/// | 8 | `client` | [`ClientId`] | the sender's iceoryx2 node id, or zero |
 /// | 24 | `sequence` | u64 | the client's own sequence number, echoed in the reply |
-/// | 32 | `axis` | u32 | axis index (config order), or [`CommandRequest::ALL_AXES`] |
-/// | 36 | `reserved` | u32 | zero |
+/// | 32 | `axis` | u32 | axis (or signal) index, config order, or [`CommandRequest::ALL_AXES`] |
+/// | 36 | `target` | u32 | [`Target`]: 0 = axis, 1 = signal |
 /// | 40 | `values` | f64; 3 | see [`CommandKind`] |
+///
+/// Identity comes from the transport: the server knows which iceoryx2 node sent a request
+/// and owns every claim by that node. `client` may be zero ("the sender"); a non-zero
+/// `client` that is not the sender's node is refused with [`Reason::IdentityMismatch`].
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
 #[type_name("motiond::CommandRequest")]
 #[repr(C)]
@@ -275,14 +344,14 @@ pub struct CommandRequest {
     pub schema_version: u32,
     /// [`CommandKind`] value.
     pub kind: u32,
-    /// The sender's iceoryx2 node id.
+    /// The sender's iceoryx2 node id, or zero.
     pub client: ClientId,
     /// The client's sequence number, echoed in the reply.
     pub sequence: u64,
-    /// Axis index, or [`CommandRequest::ALL_AXES`].
+    /// Axis (or signal) index, or [`CommandRequest::ALL_AXES`].
     pub axis: u32,
-    /// Zero.
-    pub reserved: u32,
+    /// [`Target`] value.
+    pub target: u32,
     /// Arguments; see [`CommandKind`].
     pub values: [f64; 3],
 }
@@ -299,9 +368,21 @@ impl CommandRequest {
             client,
             sequence,
             axis,
-            reserved: 0,
+            target: Target::Axis as u32,
             values: [0.0; 3],
         }
+    }
+
+    /// A request of the current schema about signal `signal`.
+    pub const fn for_signal(client: ClientId, sequence: u64, signal: u32, kind: CommandKind) -> Self {
+        let mut request = Self::new(client, sequence, signal, kind);
+        request.target = Target::Signal as u32;
+        request
+    }
+
+    /// The typed target.
+    pub fn target(&self) -> Result<Target, UnknownValue> {
+        Target::try_from(self.target)
     }
 
     /// The same request with `values`.
@@ -387,7 +468,8 @@ mod tests {
             assert_eq!(CommandKind::try_from(kind as u32), Ok(kind));
         }
         assert_eq!(CommandKind::try_from(0), Err(UnknownValue(0)));
-        assert_eq!(CommandKind::try_from(13), Err(UnknownValue(13)));
+        assert_eq!(CommandKind::try_from(15), Err(UnknownValue(15)));
+        assert_eq!(Target::try_from(2), Err(UnknownValue(2)));
         for (index, reason) in Reason::ALL.iter().enumerate() {
             assert_eq!(*reason as usize, index);
             assert_eq!(Reason::try_from(*reason as u32), Ok(*reason));

@@ -3,7 +3,51 @@
 use iceoryx2::prelude::ZeroCopySend;
 
 use crate::command::{ClientId, UnknownValue};
-use crate::{MAX_AXES, SCHEMA_VERSION};
+use crate::signal::SignalState;
+use crate::{MAX_AXES, MAX_DEVICES, MAX_SIGNALS, SCHEMA_VERSION};
+
+/// Where a board is in its life, as the server sees it. Travels as `u8` in
+/// [`MotionFrame::devices`] and [`AxisState::device_state`], and as `u32` in
+/// [`DeviceInfo::state`](crate::DeviceInfo::state).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[repr(u8)]
+pub enum DeviceState {
+    /// Not answering, or its link is down: goals are refused (`DeviceOffline` / `LinkDown`).
+    #[default]
+    Offline = 0,
+    /// Answering, configured, start-up stop acknowledged: takes goals.
+    Online = 1,
+    /// Link up, the board is being probed and configured, or its start-up stop is not yet
+    /// acknowledged: goals are refused with `DeviceStarting`.
+    Starting = 2,
+    /// Answering, but a board-level fault is latched (it rebooted, reported an error).
+    Faulted = 3,
+}
+
+impl DeviceState {
+    /// The name the CLI prints.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Offline => "offline",
+            Self::Online => "online",
+            Self::Starting => "starting",
+            Self::Faulted => "faulted",
+        }
+    }
+}
+
+impl TryFrom<u8> for DeviceState {
+    type Error = UnknownValue;
+    fn try_from(value: u8) -> Result<Self, Self::Error> {
+        Ok(match value {
+            0 => Self::Offline,
+            1 => Self::Online,
+            2 => Self::Starting,
+            3 => Self::Faulted,
+            other => return Err(UnknownValue(u32::from(other))),
+        })
+    }
+}
 
 /// What an axis is doing, as the server drives it. Travels as `u8` in [`AxisState::mode`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -48,6 +92,25 @@ impl TryFrom<u8> for AxisMode {
 }
 
 /// Why an axis is faulted. Travels as `u16` in [`AxisState::fault`]; 0 means no fault.
+///
+/// Every fault stops the axis at once with its e-stop category (hold, stop-off or off) and
+/// stays latched until a `Reset` that finds its cause gone. [`AxisState::fault_value`] and
+/// [`AxisState::fault_limit`] carry the measured figure and the tolerance where the fault
+/// has one ([`FaultCode::explain`] turns them into a sentence).
+///
+/// | code | name | raised by | figure / tolerance | cleared when |
+/// |---|---|---|---|---|
+/// | 1 | `LinkDown` | the link failed (unplugged, I/O error) | – | link up and fresh data |
+/// | 2 | `BoardNotResponding` | the board missed its reply budget repeatedly | – | fresh data |
+/// | 3 | `BoardReset` | the board rebooted (goals lost) | – | fresh data, then reset |
+/// | 4 | `BoardError` | the board answered with an error status | – | fresh data |
+/// | 5 | `Protocol` | undecodable replies for too long | – | fresh data |
+/// | 6 | `Overspeed` | board overspeed flag, or measured \|v\| > `overspeed_factor` × `max_velocity` for 3 fresh samples | \|v\| / limit, units/s | reset with \|v\| within the limit |
+/// | 7 | `LimitSwitch` | a limit or reference switch stopped the axis | – | switch released |
+/// | 8 | `Overrun` | the server overran `max_consecutive_overruns` ticks in a row | – | reset |
+/// | 9 | `FollowingError` | holding: \|position − target\| > `following_error`; moving: position left the segment [start, target] widened by `following_error` | distance / `following_error`, units | reset (the target becomes the position) |
+/// | 10 | `LimitExceeded` | position beyond a soft limit by more than `following_error` | position / the limit passed, units | reset once back within the limits (moves back inside are accepted meanwhile) |
+/// | 11 | `HomeFailed` | a reference search travelled `home_max_travel` without its switch or index, or the board reported a search error | travel / `home_max_travel`, units | reset |
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[repr(u16)]
 pub enum FaultCode {
@@ -77,6 +140,60 @@ pub enum FaultCode {
     /// A reference search ended without finding its switch or index (travel limit
     /// reached, or the board reported a search error).
     HomeFailed = 11,
+}
+
+impl FaultCode {
+    /// The name the CLI and logs print.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::None => "none",
+            Self::LinkDown => "link-down",
+            Self::BoardNotResponding => "board-not-responding",
+            Self::BoardReset => "board-reset",
+            Self::BoardError => "board-error",
+            Self::Protocol => "protocol",
+            Self::Overspeed => "overspeed",
+            Self::LimitSwitch => "limit-switch",
+            Self::Overrun => "overrun",
+            Self::FollowingError => "following-error",
+            Self::LimitExceeded => "limit-exceeded",
+            Self::HomeFailed => "home-failed",
+        }
+    }
+
+    /// One sentence about axis `axis` with this fault, the measured `value` and the
+    /// `limit` it broke (as in [`AxisState::fault_value`] / [`AxisState::fault_limit`]),
+    /// in `unit`.
+    pub fn explain(self, axis: &str, value: f64, limit: f64, unit: &str) -> String {
+        match self {
+            Self::None => format!("axis `{axis}` has no fault"),
+            Self::LinkDown => format!("axis `{axis}`: its link is down"),
+            Self::BoardNotResponding => format!("axis `{axis}`: its board is not answering"),
+            Self::BoardReset => {
+                format!("axis `{axis}`: its board rebooted; its goals were lost (reset, then command again)")
+            }
+            Self::BoardError => format!("axis `{axis}`: its board reported an error"),
+            Self::Protocol => format!("axis `{axis}`: its board's replies could not be decoded"),
+            Self::Overspeed if limit > 0.0 => format!(
+                "axis `{axis}`: overspeed: measured {value:.4} {unit}/s, limit {limit:.4} {unit}/s"
+            ),
+            Self::Overspeed => format!("axis `{axis}`: its board reported overspeed or an encoder glitch"),
+            Self::LimitSwitch => format!("axis `{axis}`: a limit or reference switch stopped it"),
+            Self::Overrun => format!("axis `{axis}`: stopped because the server overran its tick"),
+            Self::FollowingError => format!(
+                "axis `{axis}`: following error: {value:.4} {unit} from where it should be, tolerance {limit:.4} {unit}"
+            ),
+            Self::LimitExceeded => format!(
+                "axis `{axis}`: position {value:.4} {unit} is beyond its soft limit {limit:.4} {unit}"
+            ),
+            Self::HomeFailed if limit > 0.0 => format!(
+                "axis `{axis}`: home search failed: travelled {value:.4} {unit} without finding its reference, limit {limit:.4} {unit}"
+            ),
+            Self::HomeFailed => {
+                format!("axis `{axis}`: home search failed: the board reported a search error")
+            }
+        }
+    }
 }
 
 impl TryFrom<u16> for FaultCode {
@@ -140,7 +257,7 @@ impl AxisFlags {
     }
 }
 
-/// One axis in a frame. 64 bytes, alignment 8. Fields in memory order:
+/// One axis in a frame. 80 bytes, alignment 8. Fields in memory order:
 ///
 /// | offset | field | type | meaning |
 /// |---|---|---|---|
@@ -152,8 +269,10 @@ impl AxisFlags {
 /// | 40 | `flags` | u32 | [`AxisFlags`] bits |
 /// | 44 | `fault` | u16 | [`FaultCode`] |
 /// | 46 | `mode` | u8 | [`AxisMode`] |
-/// | 47 | `reserved` | u8 | zero |
+/// | 47 | `device_state` | u8 | [`DeviceState`] of the axis's board |
 /// | 48 | `claimed_by` | [`ClientId`] | claim holder, zero when unclaimed |
+/// | 64 | `fault_value` | f64 | the measured figure of the fault (units, units/s), 0 when none |
+/// | 72 | `fault_limit` | f64 | the tolerance or limit it broke, 0 when none |
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
 #[type_name("motiond::AxisState")]
 #[repr(C)]
@@ -174,10 +293,14 @@ pub struct AxisState {
     pub fault: u16,
     /// [`AxisMode`] value.
     pub mode: u8,
-    /// Zero.
-    pub reserved: u8,
+    /// [`DeviceState`] value of the axis's board.
+    pub device_state: u8,
     /// The client holding a claim on the axis; zero when unclaimed.
     pub claimed_by: ClientId,
+    /// The measured figure of the latched fault (see [`FaultCode`]), 0 when none.
+    pub fault_value: f64,
+    /// The tolerance or limit the fault broke, 0 when none.
+    pub fault_limit: f64,
 }
 
 impl AxisState {
@@ -191,8 +314,10 @@ impl AxisState {
         flags: AxisFlags::STALE.0,
         fault: 0,
         mode: 0,
-        reserved: 0,
+        device_state: 0,
         claimed_by: ClientId::NONE,
+        fault_value: 0.0,
+        fault_limit: 0.0,
     };
 
     /// The typed flags.
@@ -208,6 +333,11 @@ impl AxisState {
     /// The typed fault code; `Err` for a value this build does not know.
     pub fn fault(&self) -> Result<FaultCode, UnknownValue> {
         FaultCode::try_from(self.fault)
+    }
+
+    /// The typed state of the axis's board; `Err` for a value this build does not know.
+    pub fn device_state(&self) -> Result<DeviceState, UnknownValue> {
+        DeviceState::try_from(self.device_state)
     }
 }
 
@@ -235,8 +365,8 @@ impl FrameFlags {
     }
 }
 
-/// One consistent snapshot of every axis, published once per tick on
-/// `motiond/<name>/frame`. 8232 bytes, alignment 8. Fields in memory order:
+/// One consistent snapshot of every axis, board and signal, published once per tick on
+/// `motiond/<name>/frame`. 13392 bytes, alignment 8. Fields in memory order:
 ///
 /// | offset | field | type | meaning |
 /// |---|---|---|---|
@@ -246,8 +376,12 @@ impl FrameFlags {
 /// | 16 | `time_ns` | u64 | the tick's deadline, CLOCK_MONOTONIC ns |
 /// | 24 | `publish_ns` | u64 | CLOCK_MONOTONIC ns just before the frame was sent |
 /// | 32 | `flags` | u32 | [`FrameFlags`] bits |
-/// | 36 | `reserved` | u32 | zero |
-/// | 40 | `axes` | [`AxisState`]; [`MAX_AXES`] | axes in config order |
+/// | 36 | `signal_count` | u32 | valid entries at the start of `signals` |
+/// | 40 | `device_count` | u32 | valid entries at the start of `devices` |
+/// | 44 | `reserved` | u32 | zero |
+/// | 48 | `devices` | u8; [`MAX_DEVICES`] | [`DeviceState`] per device, config order |
+/// | 80 | `axes` | [`AxisState`]; [`MAX_AXES`] | axes in config order |
+/// | 10320 | `signals` | [`SignalState`]; [`MAX_SIGNALS`] | signals in config order |
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
 #[type_name("motiond::MotionFrame")]
 #[repr(C)]
@@ -264,10 +398,18 @@ pub struct MotionFrame {
     pub publish_ns: u64,
     /// [`FrameFlags`] bits.
     pub flags: u32,
+    /// Number of valid entries at the start of `signals`.
+    pub signal_count: u32,
+    /// Number of valid entries at the start of `devices`.
+    pub device_count: u32,
     /// Zero.
     pub reserved: u32,
+    /// [`DeviceState`] per device, config order.
+    pub devices: [u8; MAX_DEVICES],
     /// Axes in config order; entries past `axis_count` are [`AxisState::UNKNOWN`].
     pub axes: [AxisState; MAX_AXES],
+    /// Signals in config order; entries past `signal_count` are [`SignalState::UNKNOWN`].
+    pub signals: [SignalState; MAX_SIGNALS],
 }
 
 impl MotionFrame {
@@ -279,14 +421,33 @@ impl MotionFrame {
         time_ns: 0,
         publish_ns: 0,
         flags: 0,
+        signal_count: 0,
+        device_count: 0,
         reserved: 0,
+        devices: [0; MAX_DEVICES],
         axes: [AxisState::UNKNOWN; MAX_AXES],
+        signals: [SignalState::UNKNOWN; MAX_SIGNALS],
     };
 
     /// The valid axes.
     pub fn axes(&self) -> &[AxisState] {
         let count = (self.axis_count as usize).min(MAX_AXES);
         &self.axes[..count]
+    }
+
+    /// The valid signals.
+    pub fn signals(&self) -> &[SignalState] {
+        let count = (self.signal_count as usize).min(MAX_SIGNALS);
+        &self.signals[..count]
+    }
+
+    /// The state of device `index` (`Offline` for an index past `device_count` or a value
+    /// this build does not know).
+    pub fn device_state(&self, index: usize) -> DeviceState {
+        if index >= (self.device_count as usize).min(MAX_DEVICES) {
+            return DeviceState::Offline;
+        }
+        DeviceState::try_from(self.devices[index]).unwrap_or_default()
     }
 
     /// The typed server flags.

@@ -3,8 +3,47 @@
 use iceoryx2::prelude::ZeroCopySend;
 
 use crate::command::{CommandKind, UnknownValue};
+use crate::frame::DeviceState;
+use crate::signal::SignalInfo;
 use crate::text::read_text;
-use crate::{MAX_AXES, MAX_DEVICES, NAME_LEN, SCHEMA_VERSION, UNIT_LEN};
+use crate::{MAX_AXES, MAX_DEVICES, MAX_SIGNALS, NAME_LEN, SCHEMA_VERSION, UNIT_LEN};
+
+/// What an e-stop (and a fault) does to an axis: IEC 60204-1 stop categories. Travels as
+/// `u32` in [`AxisInfo::estop`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[repr(u32)]
+pub enum EstopCategory {
+    /// Category 2: decelerate and hold, energised.
+    #[default]
+    Hold = 0,
+    /// Category 1: decelerate, then de-energise.
+    StopOff = 1,
+    /// Category 0: de-energise at once.
+    Off = 2,
+}
+
+impl EstopCategory {
+    /// The config name.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Hold => "hold",
+            Self::StopOff => "stop-off",
+            Self::Off => "off",
+        }
+    }
+}
+
+impl TryFrom<u32> for EstopCategory {
+    type Error = UnknownValue;
+    fn try_from(value: u32) -> Result<Self, Self::Error> {
+        Ok(match value {
+            0 => Self::Hold,
+            1 => Self::StopOff,
+            2 => Self::Off,
+            other => return Err(UnknownValue(other)),
+        })
+    }
+}
 
 /// The board model of a device. Travels as `u32` in [`DeviceInfo::model`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -65,7 +104,7 @@ impl Capabilities {
     }
 }
 
-/// One axis's static description. 128 bytes, alignment 8. Fields in memory order:
+/// One axis's static description. 160 bytes, alignment 8. Fields in memory order:
 ///
 /// | offset | field | type | meaning |
 /// |---|---|---|---|
@@ -80,6 +119,11 @@ impl Capabilities {
 /// | 120 | `capabilities` | u32 | [`Capabilities`] bits |
 /// | 124 | `channel` | u16 | motor number on the device |
 /// | 126 | `device_index` | u16 | index into [`ServerInfo::devices`] |
+/// | 128 | `following_error` | f64 | units; 0 = not supervised |
+/// | 136 | `overspeed_factor` | f64 | × max_velocity; 0 = not supervised |
+/// | 144 | `home_max_travel` | f64 | units; 0 = not supervised |
+/// | 152 | `estop` | u32 | [`EstopCategory`] |
+/// | 156 | `reserved` | u32 | zero |
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
 #[type_name("motiond::AxisInfo")]
 #[repr(C)]
@@ -106,6 +150,16 @@ pub struct AxisInfo {
     pub channel: u16,
     /// Index into [`ServerInfo::devices`].
     pub device_index: u16,
+    /// Following error tolerance, units; 0 = not supervised.
+    pub following_error: f64,
+    /// Overspeed factor; 0 = not supervised.
+    pub overspeed_factor: f64,
+    /// Travel limit of a reference search, units; 0 = not supervised.
+    pub home_max_travel: f64,
+    /// [`EstopCategory`] value.
+    pub estop: u32,
+    /// Zero.
+    pub reserved: u32,
 }
 
 impl AxisInfo {
@@ -122,6 +176,11 @@ impl AxisInfo {
         capabilities: 0,
         channel: 0,
         device_index: 0,
+        following_error: 0.0,
+        overspeed_factor: 0.0,
+        home_max_travel: 0.0,
+        estop: 0,
+        reserved: 0,
     };
 
     /// The axis name.
@@ -138,6 +197,16 @@ impl AxisInfo {
     pub const fn capabilities(&self) -> Capabilities {
         Capabilities(self.capabilities)
     }
+
+    /// The device name.
+    pub fn device(&self) -> &str {
+        read_text(&self.device)
+    }
+
+    /// The typed e-stop category; `Err` for a value this build does not know.
+    pub fn estop(&self) -> Result<EstopCategory, UnknownValue> {
+        EstopCategory::try_from(self.estop)
+    }
 }
 
 /// One device's description. 112 bytes, alignment 4. Fields in memory order:
@@ -150,7 +219,7 @@ impl AxisInfo {
 /// | 96 | `model` | u32 | [`DeviceModel`] |
 /// | 100 | `address` | u32 | bus address (0 when the model has none) |
 /// | 104 | `axis_count` | u32 | axes configured on the device |
-/// | 108 | `online` | u32 | 1 when the board answers, 0 otherwise |
+/// | 108 | `state` | u32 | [`DeviceState`] when the info was published (the frame has the current one) |
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ZeroCopySend)]
 #[type_name("motiond::DeviceInfo")]
 #[repr(C)]
@@ -167,8 +236,8 @@ pub struct DeviceInfo {
     pub address: u32,
     /// Axes configured on the device.
     pub axis_count: u32,
-    /// 1 when the board answers.
-    pub online: u32,
+    /// [`DeviceState`] value when the info was published.
+    pub state: u32,
 }
 
 impl DeviceInfo {
@@ -180,7 +249,7 @@ impl DeviceInfo {
         model: 0,
         address: 0,
         axis_count: 0,
-        online: 0,
+        state: 0,
     };
 
     /// The device name.
@@ -192,9 +261,22 @@ impl DeviceInfo {
     pub fn model(&self) -> Result<DeviceModel, UnknownValue> {
         DeviceModel::try_from(self.model)
     }
+
+    /// The firmware text ("" until known).
+    pub fn firmware(&self) -> &str {
+        read_text(&self.firmware)
+    }
+
+    /// The typed state (`Offline` for a value this build does not know).
+    pub fn state(&self) -> DeviceState {
+        u8::try_from(self.state)
+            .ok()
+            .and_then(|state| DeviceState::try_from(state).ok())
+            .unwrap_or_default()
+    }
 }
 
-/// The server's static description. 20040 bytes, alignment 8. Fields in memory order:
+/// The server's static description. 32328 bytes, alignment 8. Fields in memory order:
 ///
 /// | offset | field | type | meaning |
 /// |---|---|---|---|
@@ -205,11 +287,12 @@ impl DeviceInfo {
 /// | 16 | `command_timeout_ms` | u32 | deadman; 0 = disabled |
 /// | 20 | `max_clients` | u32 | configured client limit |
 /// | 24 | `server_pid` | u32 | process id of motiond |
-/// | 28 | `reserved` | u32 | zero |
+/// | 28 | `signal_count` | u32 | valid entries in `signals` |
 /// | 32 | `name` | u8; 32 | instance name |
 /// | 64 | `start_time_ns` | u64 | CLOCK_MONOTONIC ns of tick 0 |
 /// | 72 | `axes` | [`AxisInfo`]; [`MAX_AXES`] | axes in config order |
-/// | 16456 | `devices` | [`DeviceInfo`]; [`MAX_DEVICES`] | devices in config order |
+/// | 20552 | `devices` | [`DeviceInfo`]; [`MAX_DEVICES`] | devices in config order |
+/// | 24136 | `signals` | [`SignalInfo`]; [`MAX_SIGNALS`] | signals in config order |
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
 #[type_name("motiond::ServerInfo")]
 #[repr(C)]
@@ -228,8 +311,8 @@ pub struct ServerInfo {
     pub max_clients: u32,
     /// Process id of motiond.
     pub server_pid: u32,
-    /// Zero.
-    pub reserved: u32,
+    /// Valid entries in `signals`.
+    pub signal_count: u32,
     /// Instance name.
     pub name: [u8; NAME_LEN],
     /// CLOCK_MONOTONIC ns of tick 0.
@@ -238,6 +321,8 @@ pub struct ServerInfo {
     pub axes: [AxisInfo; MAX_AXES],
     /// Devices in config order.
     pub devices: [DeviceInfo; MAX_DEVICES],
+    /// Signals in config order.
+    pub signals: [SignalInfo; MAX_SIGNALS],
 }
 
 impl ServerInfo {
@@ -250,11 +335,12 @@ impl ServerInfo {
         command_timeout_ms: 0,
         max_clients: 0,
         server_pid: 0,
-        reserved: 0,
+        signal_count: 0,
         name: [0; NAME_LEN],
         start_time_ns: 0,
         axes: [AxisInfo::EMPTY; MAX_AXES],
         devices: [DeviceInfo::EMPTY; MAX_DEVICES],
+        signals: [SignalInfo::EMPTY; MAX_SIGNALS],
     };
 
     /// The valid axes.
@@ -267,9 +353,24 @@ impl ServerInfo {
         &self.devices[..(self.device_count as usize).min(MAX_DEVICES)]
     }
 
+    /// The valid signals.
+    pub fn signals(&self) -> &[SignalInfo] {
+        &self.signals[..(self.signal_count as usize).min(MAX_SIGNALS)]
+    }
+
     /// Index of the axis called `name`.
     pub fn axis_index(&self, name: &str) -> Option<usize> {
         self.axes().iter().position(|axis| axis.name() == name)
+    }
+
+    /// Index of the signal called `name`.
+    pub fn signal_index(&self, name: &str) -> Option<usize> {
+        self.signals().iter().position(|signal| signal.name() == name)
+    }
+
+    /// The instance name.
+    pub fn name(&self) -> &str {
+        read_text(&self.name)
     }
 }
 

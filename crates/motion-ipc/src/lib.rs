@@ -27,20 +27,26 @@
 mod command;
 mod frame;
 mod info;
+mod params;
 mod service;
+mod signal;
 mod stats;
 mod text;
 
-pub use command::{ClientId, CommandKind, CommandReply, CommandRequest, Reason, UnknownValue};
-pub use frame::{AxisFlags, AxisMode, AxisState, FaultCode, FrameFlags, MotionFrame};
-pub use info::{AxisInfo, Capabilities, DeviceInfo, DeviceModel, ServerInfo};
+pub use command::{
+    ClientId, CommandKind, CommandReply, CommandRequest, Reason, Target, UnknownValue,
+};
+pub use frame::{AxisFlags, AxisMode, AxisState, DeviceState, FaultCode, FrameFlags, MotionFrame};
+pub use info::{AxisInfo, Capabilities, DeviceInfo, DeviceModel, EstopCategory, ServerInfo};
+pub use params::{MAX_PARAMS, MachineParam, MachineParams, PARAM_TEXT_LEN, ParamOwner};
+pub use signal::{SignalFlags, SignalInfo, SignalInfoFlags, SignalKind, SignalState};
 pub use service::ServiceNames;
 pub use stats::{LatencySummary, LinkStats, ServerStats};
 pub use text::{read_text, write_text};
 
 /// Version of this contract. Bumped on every layout or meaning change; every payload
 /// carries it so that a client built against another version can refuse politely.
-pub const SCHEMA_VERSION: u32 = 1;
+pub const SCHEMA_VERSION: u32 = 2;
 
 /// Capacity of the axis arrays in [`MotionFrame`] and [`ServerInfo`].
 pub const MAX_AXES: usize = 128;

@@ -15,32 +15,50 @@ macro_rules! pin {
 }
 
 pin!(ClientId, size 16, align 8, { lo @ 0, hi @ 8 });
-pin!(AxisState, size 64, align 8, {
+pin!(AxisState, size 80, align 8, {
     position @ 0, velocity @ 8, target @ 16, raw_counts @ 24, last_refresh_tick @ 32,
-    flags @ 40, fault @ 44, mode @ 46, reserved @ 47, claimed_by @ 48,
+    flags @ 40, fault @ 44, mode @ 46, device_state @ 47, claimed_by @ 48,
+    fault_value @ 64, fault_limit @ 72,
 });
-pin!(MotionFrame, size 8232, align 8, {
+pin!(SignalState, size 48, align 8, {
+    value @ 0, raw @ 8, last_refresh_tick @ 16, flags @ 24, kind @ 28, reserved @ 29,
+    claimed_by @ 32,
+});
+pin!(MotionFrame, size 13392, align 8, {
     schema_version @ 0, axis_count @ 4, tick @ 8, time_ns @ 16, publish_ns @ 24,
-    flags @ 32, reserved @ 36, axes @ 40,
+    flags @ 32, signal_count @ 36, device_count @ 40, reserved @ 44, devices @ 48,
+    axes @ 80, signals @ 10320,
 });
 pin!(CommandRequest, size 64, align 8, {
-    schema_version @ 0, kind @ 4, client @ 8, sequence @ 24, axis @ 32, reserved @ 36,
+    schema_version @ 0, kind @ 4, client @ 8, sequence @ 24, axis @ 32, target @ 36,
     values @ 40,
 });
 pin!(CommandReply, size 32, align 8, {
     schema_version @ 0, reason @ 4, sequence @ 8, tick_applied @ 16, axis @ 24, kind @ 28,
 });
-pin!(AxisInfo, size 128, align 8, {
+pin!(AxisInfo, size 160, align 8, {
     name @ 0, unit @ 32, device @ 48, counts_per_unit @ 80, min @ 88, max @ 96,
     max_velocity @ 104, max_accel @ 112, capabilities @ 120, channel @ 124, device_index @ 126,
+    following_error @ 128, overspeed_factor @ 136, home_max_travel @ 144, estop @ 152,
+    reserved @ 156,
 });
 pin!(DeviceInfo, size 112, align 4, {
-    name @ 0, link @ 32, firmware @ 64, model @ 96, address @ 100, axis_count @ 104, online @ 108,
+    name @ 0, link @ 32, firmware @ 64, model @ 96, address @ 100, axis_count @ 104, state @ 108,
 });
-pin!(ServerInfo, size 20040, align 8, {
+pin!(SignalInfo, size 128, align 8, {
+    name @ 0, unit @ 32, device @ 48, scale @ 80, offset @ 88, full_scale @ 96, kind @ 104,
+    flags @ 105, device_index @ 106, pin @ 108, reserved @ 124,
+});
+pin!(ServerInfo, size 32328, align 8, {
     schema_version @ 0, axis_count @ 4, device_count @ 8, tick_hz @ 12,
-    command_timeout_ms @ 16, max_clients @ 20, server_pid @ 24, reserved @ 28, name @ 32,
-    start_time_ns @ 64, axes @ 72, devices @ 16456,
+    command_timeout_ms @ 16, max_clients @ 20, server_pid @ 24, signal_count @ 28, name @ 32,
+    start_time_ns @ 64, axes @ 72, devices @ 20552, signals @ 24136,
+});
+pin!(MachineParam, size 88, align 4, {
+    key @ 0, value @ 40, owner_index @ 80, owner_kind @ 82, from_config @ 83, reserved @ 84,
+});
+pin!(MachineParams, size 180240, align 4, {
+    schema_version @ 0, count @ 4, truncated @ 8, reserved @ 12, entries @ 16,
 });
 pin!(LatencySummary, size 40, align 8, {
     samples @ 0, p50_ns @ 8, p99_ns @ 16, p999_ns @ 24, max_ns @ 32,
@@ -59,10 +77,11 @@ pin!(ServerStats, size 1424, align 8, {
 fn layout_is_pinned() {
     // The assertions above run at compile time; this checks the constants they rely on.
     assert_eq!(
-        (MAX_AXES, MAX_DEVICES, MAX_LINKS, NAME_LEN, UNIT_LEN),
-        (128, 32, 16, 32, 16)
+        (MAX_AXES, MAX_DEVICES, MAX_LINKS, MAX_SIGNALS, MAX_PARAMS),
+        (128, 32, 16, 64, 2048)
     );
-    assert_eq!(SCHEMA_VERSION, 1);
+    assert_eq!((NAME_LEN, UNIT_LEN, PARAM_TEXT_LEN), (32, 16, 40));
+    assert_eq!(SCHEMA_VERSION, 2);
 }
 
 #[test]
@@ -75,6 +94,9 @@ fn iceoryx2_type_names_are_explicit() {
         <CommandReply as ZeroCopySend>::type_name,
         <ServerInfo as ZeroCopySend>::type_name,
         <ServerStats as ZeroCopySend>::type_name,
+        <MachineParams as ZeroCopySend>::type_name,
+        <SignalState as ZeroCopySend>::type_name,
+        <SignalInfo as ZeroCopySend>::type_name,
     ];
     let expected = [
         "motiond::MotionFrame",
@@ -82,6 +104,9 @@ fn iceoryx2_type_names_are_explicit() {
         "motiond::CommandReply",
         "motiond::ServerInfo",
         "motiond::ServerStats",
+        "motiond::MachineParams",
+        "motiond::SignalState",
+        "motiond::SignalInfo",
     ];
     for (name, want) in names.iter().zip(expected) {
         // SAFETY: `type_name` has no preconditions; it is `unsafe` in iceoryx2 only so that

@@ -91,7 +91,8 @@ pub fn info_json(info: &ServerInfo) -> Value {
                 "address": device.address,
                 "firmware": read_text(&device.firmware),
                 "axis_count": device.axis_count,
-                "online": device.online != 0,
+                "online": device.state() == motion_client::ipc::DeviceState::Online,
+                "state": device.state().name(),
             })
         })
         .collect();
@@ -247,7 +248,7 @@ pub fn list(client: &Client<Service>, json: bool) -> anyhow::Result<()> {
             device.name(),
             device.model().map_or("unknown", DeviceModel::id),
             read_text(&device.link),
-            if device.online != 0 { "yes" } else { "no" },
+            device.state().name(),
             read_text(&device.firmware)
         );
     }

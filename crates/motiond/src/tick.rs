@@ -256,7 +256,7 @@ impl Loop {
 
             self.take_link_input(now);
             while let Ok(client) = self.setup.dead_clients.pop() {
-                self.setup.engine.client_dead(client);
+                self.setup.engine.client_gone(client);
             }
             if shutting_since.is_none() && self.setup.shutdown.load(Ordering::Relaxed) {
                 self.setup.engine.begin_shutdown();

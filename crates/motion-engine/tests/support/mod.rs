@@ -303,6 +303,7 @@ pub fn two_link_engine() -> (Engine, Vec<Arc<Mutex<BoardControl>>>) {
             axis("z", 1, 0),
             axis("w", 1, 1),
         ],
+        ..EngineConfig::default()
     };
     let (board0, control0) = IdealBoard::new(2, &ALL_GOALS);
     let (board1, control1) = IdealBoard::new(2, &ALL_GOALS);

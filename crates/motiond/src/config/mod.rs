@@ -15,7 +15,7 @@ use core::time::Duration;
 use std::path::{Path, PathBuf};
 
 use motion_drivers::{BusKind, Model, Pin, PinInfo, SignalKind};
-use motion_engine::{AxisConfig, DeviceConfig, EngineConfig, LinkConfig};
+use motion_engine::{AxisConfig, DeviceConfig, EngineConfig, LinkConfig, SignalConfig};
 
 pub use error::{ConfigError, ConfigIssue};
 pub use given::{GivenKeys, Owner};
@@ -45,6 +45,8 @@ pub struct ServerSettings {
     pub max_consecutive_overruns: u32,
     /// How often dead client nodes are looked for.
     pub liveness_check: Duration,
+    /// A claim not renewed by a command of its owner within this time ends (zero: never).
+    pub claim_lease: Duration,
 }
 
 /// How a link reaches its devices.
@@ -354,6 +356,27 @@ impl ServerConfig {
                 })
                 .collect(),
             axes: self.axes.clone(),
+            signals: self
+                .signals
+                .iter()
+                .map(|signal| SignalConfig {
+                    name: signal.name.clone(),
+                    unit: signal.unit.clone(),
+                    device: signal.device,
+                    pin: signal.pin,
+                    pin_name: signal.pin_name.clone(),
+                    kind: signal.kind,
+                    invert: signal.invert,
+                    scale: signal.scale,
+                    offset: signal.offset,
+                    full_scale: self.devices[signal.device]
+                        .pins()
+                        .get(usize::from(signal.pin.0))
+                        .map_or(1.0, |pin| pin.full_scale),
+                    safe: signal.safe,
+                })
+                .collect(),
+            claim_lease: self.server.claim_lease,
         }
     }
 }

@@ -31,6 +31,7 @@ pub(crate) struct RawServer {
     pub max_clients: Option<Spanned<i64>>,
     pub max_consecutive_overruns: Option<Spanned<i64>>,
     pub liveness_check_ms: Option<Spanned<i64>>,
+    pub claim_lease_ms: Option<Spanned<i64>>,
 }
 
 #[derive(Debug, Deserialize)]

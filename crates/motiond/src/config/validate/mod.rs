@@ -282,6 +282,7 @@ impl Validator<'_, '_> {
             max_clients: 32,
             max_consecutive_overruns: 50,
             liveness_check: Duration::from_millis(100),
+            claim_lease: Duration::ZERO,
         };
         let Some(raw) = raw else {
             return settings;
@@ -327,6 +328,11 @@ impl Validator<'_, '_> {
             && let Some(v) = self.int_in(v, "server.liveness_check_ms", 10..=10_000)
         {
             settings.liveness_check = Duration::from_millis(v as u64);
+        }
+        if let Some(v) = &raw.claim_lease_ms
+            && let Some(v) = self.int_in(v, "server.claim_lease_ms", 0..=3_600_000)
+        {
+            settings.claim_lease = Duration::from_millis(v as u64);
         }
         settings
     }

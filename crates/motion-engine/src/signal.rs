@@ -1,0 +1,184 @@
+//! Named board I/O: inputs read from the drivers every step, digital outputs set by
+//! clients (claims apply, as for axes) and put into their safe state by an e-stop.
+
+use core::time::Duration;
+
+use motion_drivers::{GoalError, PinReading, SignalKind};
+use motion_ipc::{ClientId, CommandKind, DeviceState, Reason};
+
+use crate::Engine;
+use crate::config::SignalConfig;
+
+/// Runtime state of one signal.
+#[derive(Debug, Clone)]
+pub(crate) struct Signal {
+    pub config: SignalConfig,
+    /// Link (bus) and driver index of its device.
+    pub bus: usize,
+    pub slot: usize,
+    /// Raw value as last read (electrical level, ADC counts).
+    pub raw: f64,
+    pub refreshed_at: Option<Duration>,
+    pub last_refresh_tick: u64,
+    pub stale: bool,
+    pub claimed_by: ClientId,
+    pub claim_renewed_at: Duration,
+    /// Output: the logical value last commanded (by a client or the e-stop).
+    pub commanded: Option<bool>,
+    /// Output: the e-stop put it into its safe state (until the next command or reset).
+    pub safe_applied: bool,
+}
+
+impl Signal {
+    pub fn new(config: SignalConfig, bus: usize, slot: usize) -> Self {
+        Self {
+            config,
+            bus,
+            slot,
+            raw: 0.0,
+            refreshed_at: None,
+            last_refresh_tick: 0,
+            stale: true,
+            claimed_by: ClientId::NONE,
+            claim_renewed_at: Duration::ZERO,
+            commanded: None,
+            safe_applied: false,
+        }
+    }
+
+    /// The logical value: digital 0/1 after `invert`, analogue raw × scale + offset.
+    pub fn value(&self) -> f64 {
+        match self.config.kind {
+            SignalKind::AnalogIn => self.raw * self.config.scale + self.config.offset,
+            SignalKind::DigitalIn | SignalKind::DigitalOut => {
+                f64::from(u8::from((self.raw >= 0.5) != self.config.invert))
+            }
+        }
+    }
+
+    /// An output whose commanded value the board has not confirmed yet.
+    pub fn pending(&self) -> bool {
+        self.commanded.is_some_and(|on| {
+            self.refreshed_at.is_none() || (self.raw >= 0.5) != (on != self.config.invert)
+        })
+    }
+}
+
+impl Engine {
+    /// Step 1c: every signal's reading from its driver.
+    pub(crate) fn update_signals(&mut self) {
+        let (now, tick) = (self.now, self.tick);
+        for signal in &mut self.signals {
+            let Some(driver) = self.buses[signal.bus].drivers().get(signal.slot) else {
+                continue;
+            };
+            let reading = driver.read_pin(signal.config.pin).unwrap_or(PinReading::UNKNOWN);
+            if reading.value.is_finite() {
+                signal.raw = reading.value;
+            }
+            if reading.refreshed_at > signal.refreshed_at {
+                signal.refreshed_at = reading.refreshed_at;
+                signal.last_refresh_tick = tick;
+            }
+            let budget = driver.refresh_budget();
+            signal.stale = signal
+                .refreshed_at
+                .is_none_or(|at| now.saturating_sub(at) > budget);
+        }
+    }
+
+    /// A request about signal `index`: `SetOutput`, `Claim`, `Release`.
+    pub(crate) fn signal_command(
+        &mut self,
+        kind: CommandKind,
+        index: usize,
+        client: ClientId,
+        value: f64,
+    ) -> Reason {
+        let Some(signal) = self.signals.get(index) else {
+            return Reason::UnknownSignal;
+        };
+        match kind {
+            CommandKind::Claim | CommandKind::Release if client.is_none() => Reason::NoClientId,
+            CommandKind::Claim => {
+                if !signal.claimed_by.is_none() && signal.claimed_by != client {
+                    return Reason::ClaimedByOther;
+                }
+                let now = self.now;
+                let signal = &mut self.signals[index];
+                signal.claimed_by = client;
+                signal.claim_renewed_at = now;
+                Reason::Accepted
+            }
+            CommandKind::Release => {
+                if signal.claimed_by != client {
+                    return Reason::NotClaimed;
+                }
+                self.signals[index].claimed_by = ClientId::NONE;
+                Reason::Accepted
+            }
+            CommandKind::SetOutput => self.set_output(index, client, value >= 0.5),
+            _ => Reason::UnknownKind,
+        }
+    }
+
+    fn set_output(&mut self, index: usize, client: ClientId, on: bool) -> Reason {
+        let signal = &self.signals[index];
+        if signal.config.kind != SignalKind::DigitalOut {
+            return Reason::NotAnOutput;
+        }
+        if self.shutting_down {
+            return Reason::ShuttingDown;
+        }
+        if self.estop {
+            return Reason::EstopLatched;
+        }
+        if !signal.claimed_by.is_none() && signal.claimed_by != client {
+            return Reason::ClaimedByOther;
+        }
+        match self.devices[signal.config.device].state {
+            DeviceState::Starting => return Reason::DeviceStarting,
+            DeviceState::Offline if !self.device_link_up(signal.config.device) => {
+                return Reason::LinkDown;
+            }
+            DeviceState::Offline => return Reason::DeviceOffline,
+            DeviceState::Online | DeviceState::Faulted => {}
+        }
+        match self.drive_output(index, on) {
+            Ok(()) => {
+                self.signals[index].safe_applied = false;
+                Reason::Accepted
+            }
+            Err(GoalError::Starting) => Reason::DeviceStarting,
+            Err(GoalError::Offline) => Reason::DeviceOffline,
+            Err(_) => Reason::Unsupported,
+        }
+    }
+
+    /// Hands the logical value `on` of output `index` to its driver.
+    fn drive_output(&mut self, index: usize, on: bool) -> Result<(), GoalError> {
+        let now = self.now;
+        let signal = &self.signals[index];
+        let (bus, slot, pin) = (signal.bus, signal.slot, signal.config.pin);
+        let level = on != signal.config.invert;
+        let driver = self.buses[bus].driver_mut(slot).ok_or(GoalError::Offline)?;
+        driver.set_output(now, pin, level)?;
+        self.signals[index].commanded = Some(on);
+        Ok(())
+    }
+
+    /// E-stop: every output with a safe state takes it.
+    pub(crate) fn outputs_to_safe_state(&mut self) {
+        for index in 0..self.signals.len() {
+            let signal = &self.signals[index];
+            if signal.config.kind != SignalKind::DigitalOut {
+                continue;
+            }
+            if let Some(safe) = signal.config.safe
+                && self.drive_output(index, safe).is_ok()
+            {
+                self.signals[index].safe_applied = true;
+            }
+        }
+    }
+}

@@ -1,0 +1,136 @@
+//! The effective machine parameters: [`MachineParams`], published with history 1 on
+//! `motiond/<name>/params`.
+
+use iceoryx2::prelude::ZeroCopySend;
+
+use crate::command::UnknownValue;
+use crate::text::read_text;
+use crate::SCHEMA_VERSION;
+
+/// Capacity of [`MachineParams::entries`].
+pub const MAX_PARAMS: usize = 2048;
+/// Bytes of a parameter key or value text.
+pub const PARAM_TEXT_LEN: usize = 40;
+
+/// What a parameter belongs to. Travels as `u8` in [`MachineParam::owner_kind`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[repr(u8)]
+pub enum ParamOwner {
+    /// A device (`owner_index` into `ServerInfo::devices`).
+    Device = 1,
+    /// An axis (`owner_index` into `ServerInfo::axes`).
+    Axis = 2,
+}
+
+impl TryFrom<u8> for ParamOwner {
+    type Error = UnknownValue;
+    fn try_from(value: u8) -> Result<Self, Self::Error> {
+        match value {
+            1 => Ok(Self::Device),
+            2 => Ok(Self::Axis),
+            other => Err(UnknownValue(u32::from(other))),
+        }
+    }
+}
+
+/// One effective machine parameter. 88 bytes, alignment 4. Fields in memory order:
+///
+/// | offset | field | type | meaning |
+/// |---|---|---|---|
+/// | 0 | `key` | u8; 40 | the config key, dotted for tables (`current.standstill`) |
+/// | 40 | `value` | u8; 40 | the value in effect, with its unit (`50 %`) |
+/// | 80 | `owner_index` | u16 | device or axis index |
+/// | 82 | `owner_kind` | u8 | [`ParamOwner`] |
+/// | 83 | `from_config` | u8 | 1: the config file set it; 0: the default |
+/// | 84 | `reserved` | u32 | zero |
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ZeroCopySend)]
+#[type_name("motiond::MachineParam")]
+#[repr(C)]
+pub struct MachineParam {
+    /// Config key.
+    pub key: [u8; PARAM_TEXT_LEN],
+    /// Effective value.
+    pub value: [u8; PARAM_TEXT_LEN],
+    /// Device or axis index.
+    pub owner_index: u16,
+    /// [`ParamOwner`] value.
+    pub owner_kind: u8,
+    /// 1 when the config file set it.
+    pub from_config: u8,
+    /// Zero.
+    pub reserved: u32,
+}
+
+impl MachineParam {
+    /// An unused entry.
+    pub const EMPTY: Self = Self {
+        key: [0; PARAM_TEXT_LEN],
+        value: [0; PARAM_TEXT_LEN],
+        owner_index: 0,
+        owner_kind: 0,
+        from_config: 0,
+        reserved: 0,
+    };
+
+    /// The key.
+    pub fn key(&self) -> &str {
+        read_text(&self.key)
+    }
+
+    /// The value.
+    pub fn value(&self) -> &str {
+        read_text(&self.value)
+    }
+
+    /// The typed owner kind.
+    pub fn owner(&self) -> Result<ParamOwner, UnknownValue> {
+        ParamOwner::try_from(self.owner_kind)
+    }
+}
+
+/// Every machine parameter in effect. 180240 bytes, alignment 4. Fields in memory order:
+///
+/// | offset | field | type | meaning |
+/// |---|---|---|---|
+/// | 0 | `schema_version` | u32 | [`SCHEMA_VERSION`] |
+/// | 4 | `count` | u32 | valid entries |
+/// | 8 | `truncated` | u32 | 1 when more parameters existed than [`MAX_PARAMS`] |
+/// | 12 | `reserved` | u32 | zero |
+/// | 16 | `entries` | [`MachineParam`]; [`MAX_PARAMS`] | devices' then axes' parameters, config order |
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ZeroCopySend)]
+#[type_name("motiond::MachineParams")]
+#[repr(C)]
+pub struct MachineParams {
+    /// [`SCHEMA_VERSION`] of the server.
+    pub schema_version: u32,
+    /// Valid entries.
+    pub count: u32,
+    /// 1 when entries were left out for lack of room.
+    pub truncated: u32,
+    /// Zero.
+    pub reserved: u32,
+    /// The parameters.
+    pub entries: [MachineParam; MAX_PARAMS],
+}
+
+impl MachineParams {
+    /// No parameters, of the current schema.
+    pub const EMPTY: Self = Self {
+        schema_version: SCHEMA_VERSION,
+        count: 0,
+        truncated: 0,
+        reserved: 0,
+        entries: [MachineParam::EMPTY; MAX_PARAMS],
+    };
+
+    /// The valid entries.
+    pub fn entries(&self) -> &[MachineParam] {
+        &self.entries[..(self.count as usize).min(MAX_PARAMS)]
+    }
+}
+
+impl Default for MachineParams {
+    fn default() -> Self {
+        Self::EMPTY
+    }
+}

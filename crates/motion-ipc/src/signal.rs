@@ -1,0 +1,242 @@
+//! Board I/O as named signals: [`SignalState`] in every frame, [`SignalInfo`] in the server
+//! description.
+
+use iceoryx2::prelude::ZeroCopySend;
+
+use crate::command::{ClientId, UnknownValue};
+use crate::text::read_text;
+use crate::{NAME_LEN, UNIT_LEN};
+
+/// What a signal is. Travels as `u8` in [`SignalState::kind`] and [`SignalInfo::kind`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[repr(u8)]
+pub enum SignalKind {
+    /// A digital input: value 0.0 or 1.0 after `invert`.
+    DigitalIn = 1,
+    /// A digital output: value 0.0 or 1.0 as commanded (after `invert`), set with
+    /// `SetOutput`.
+    DigitalOut = 2,
+    /// An analogue input: value = raw × scale + offset, in the signal's unit.
+    AnalogIn = 3,
+}
+
+impl SignalKind {
+    /// The config and CLI name.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::DigitalIn => "digital-in",
+            Self::DigitalOut => "digital-out",
+            Self::AnalogIn => "analog-in",
+        }
+    }
+}
+
+impl TryFrom<u8> for SignalKind {
+    type Error = UnknownValue;
+    fn try_from(value: u8) -> Result<Self, Self::Error> {
+        Ok(match value {
+            1 => Self::DigitalIn,
+            2 => Self::DigitalOut,
+            3 => Self::AnalogIn,
+            other => return Err(UnknownValue(u32::from(other))),
+        })
+    }
+}
+
+/// Bit set of a signal's state flags ([`SignalState::flags`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct SignalFlags(pub u32);
+
+impl SignalFlags {
+    /// The value is older than its board's refresh budget (or was never read).
+    pub const STALE: Self = Self(1 << 0);
+    /// A client holds an exclusive claim on the output ([`SignalState::claimed_by`]).
+    pub const CLAIMED: Self = Self(1 << 1);
+    /// The e-stop put the output into its configured safe state.
+    pub const SAFE_STATE: Self = Self(1 << 2);
+    /// An output value was commanded and the board has not acknowledged it yet.
+    pub const PENDING: Self = Self(1 << 3);
+
+    /// Whether every bit of `other` is set.
+    pub const fn contains(self, other: Self) -> bool {
+        self.0 & other.0 == other.0
+    }
+
+    /// `self` with the bits of `other` set (`on`) or cleared.
+    #[must_use]
+    pub const fn with(self, other: Self, on: bool) -> Self {
+        if on {
+            Self(self.0 | other.0)
+        } else {
+            Self(self.0 & !other.0)
+        }
+    }
+}
+
+/// One signal in a frame. 48 bytes, alignment 8. Fields in memory order:
+///
+/// | offset | field | type | meaning |
+/// |---|---|---|---|
+/// | 0 | `value` | f64 | logical value: digital 0.0/1.0 after `invert`; analogue raw × scale + offset |
+/// | 8 | `raw` | f64 | as the board reports it: electrical level 0/1, or ADC counts |
+/// | 16 | `last_refresh_tick` | u64 | tick at which the board last reported it (outputs: acknowledged it) |
+/// | 24 | `flags` | u32 | [`SignalFlags`] bits |
+/// | 28 | `kind` | u8 | [`SignalKind`] |
+/// | 29 | `reserved` | u8; 3 | zero |
+/// | 32 | `claimed_by` | [`ClientId`] | claim holder of an output, zero when unclaimed |
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
+#[type_name("motiond::SignalState")]
+#[repr(C)]
+pub struct SignalState {
+    /// Logical value.
+    pub value: f64,
+    /// Raw value as the board reports it.
+    pub raw: f64,
+    /// Tick at which the board last reported (or acknowledged) it.
+    pub last_refresh_tick: u64,
+    /// [`SignalFlags`] bits.
+    pub flags: u32,
+    /// [`SignalKind`] value.
+    pub kind: u8,
+    /// Zero.
+    pub reserved: [u8; 3],
+    /// Claim holder of an output; zero when unclaimed.
+    pub claimed_by: ClientId,
+}
+
+impl SignalState {
+    /// A signal never heard from: stale, value 0.
+    pub const UNKNOWN: Self = Self {
+        value: 0.0,
+        raw: 0.0,
+        last_refresh_tick: 0,
+        flags: SignalFlags::STALE.0,
+        kind: 0,
+        reserved: [0; 3],
+        claimed_by: ClientId::NONE,
+    };
+
+    /// The typed flags.
+    pub const fn flags(&self) -> SignalFlags {
+        SignalFlags(self.flags)
+    }
+
+    /// A digital signal's logical value (`value >= 0.5`).
+    pub fn is_on(&self) -> bool {
+        self.value >= 0.5
+    }
+}
+
+impl Default for SignalState {
+    fn default() -> Self {
+        Self::UNKNOWN
+    }
+}
+
+/// Bit set of a signal's configuration ([`SignalInfo::flags`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct SignalInfoFlags(pub u8);
+
+impl SignalInfoFlags {
+    /// Digital: the logical value is the inverse of the electrical level.
+    pub const INVERT: Self = Self(1 << 0);
+    /// Digital output: the e-stop puts it into [`SignalInfoFlags::SAFE_ON`] (set) or off.
+    pub const HAS_SAFE_STATE: Self = Self(1 << 1);
+    /// Digital output: the safe state is on.
+    pub const SAFE_ON: Self = Self(1 << 2);
+
+    /// Whether every bit of `other` is set.
+    pub const fn contains(self, other: Self) -> bool {
+        self.0 & other.0 == other.0
+    }
+}
+
+/// One signal's static description. 128 bytes, alignment 8. Fields in memory order:
+///
+/// | offset | field | type | meaning |
+/// |---|---|---|---|
+/// | 0 | `name` | u8; 32 | signal name, UTF-8, zero padded |
+/// | 32 | `unit` | u8; 16 | unit of an analogue value ("" for digital) |
+/// | 48 | `device` | u8; 32 | device name |
+/// | 80 | `scale` | f64 | analogue: value = raw × scale + offset |
+/// | 88 | `offset` | f64 | analogue: value = raw × scale + offset |
+/// | 96 | `full_scale` | f64 | raw full scale (1023 for a 10-bit converter; 1 for digital) |
+/// | 104 | `kind` | u8 | [`SignalKind`] |
+/// | 105 | `flags` | u8 | [`SignalInfoFlags`] bits |
+/// | 106 | `device_index` | u16 | index into [`ServerInfo::devices`](crate::ServerInfo::devices) |
+/// | 108 | `pin` | u8; 16 | the board's pin name ("ttlio1"), zero padded |
+/// | 124 | `reserved` | u32 | zero |
+#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
+#[type_name("motiond::SignalInfo")]
+#[repr(C)]
+pub struct SignalInfo {
+    /// Signal name.
+    pub name: [u8; NAME_LEN],
+    /// Unit of an analogue value.
+    pub unit: [u8; UNIT_LEN],
+    /// Device name.
+    pub device: [u8; NAME_LEN],
+    /// Analogue scale.
+    pub scale: f64,
+    /// Analogue offset.
+    pub offset: f64,
+    /// Raw full scale.
+    pub full_scale: f64,
+    /// [`SignalKind`] value.
+    pub kind: u8,
+    /// [`SignalInfoFlags`] bits.
+    pub flags: u8,
+    /// Index into the device array.
+    pub device_index: u16,
+    /// The board's pin name.
+    pub pin: [u8; UNIT_LEN],
+    /// Zero.
+    pub reserved: u32,
+}
+
+impl SignalInfo {
+    /// An unused entry.
+    pub const EMPTY: Self = Self {
+        name: [0; NAME_LEN],
+        unit: [0; UNIT_LEN],
+        device: [0; NAME_LEN],
+        scale: 1.0,
+        offset: 0.0,
+        full_scale: 1.0,
+        kind: 0,
+        flags: 0,
+        device_index: 0,
+        pin: [0; UNIT_LEN],
+        reserved: 0,
+    };
+
+    /// The signal name.
+    pub fn name(&self) -> &str {
+        read_text(&self.name)
+    }
+
+    /// The unit.
+    pub fn unit(&self) -> &str {
+        read_text(&self.unit)
+    }
+
+    /// The device name.
+    pub fn device(&self) -> &str {
+        read_text(&self.device)
+    }
+
+    /// The pin name.
+    pub fn pin(&self) -> &str {
+        read_text(&self.pin)
+    }
+
+    /// The typed kind; `Err` for a value this build does not know.
+    pub fn kind(&self) -> Result<SignalKind, UnknownValue> {
+        SignalKind::try_from(self.kind)
+    }
+
+    /// The typed flags.
+    pub const fn flags(&self) -> SignalInfoFlags {
+        SignalInfoFlags(self.flags)
+    }
+}
