@@ -391,7 +391,10 @@ fn bytes_on_the_wire_decode_with_the_protocol_crate() {
     assert!(polls > 100);
     // Start-up: probe 1, 7, 9, 5; configure 12, 6, 8, 24, 26, 28, 14, 4; then the goals.
     assert_eq!(&ids[..12], &[1, 7, 9, 5, 12, 6, 8, 24, 26, 28, 14, 4]);
-    assert_eq!(&ids[12..], &[16, 20, 16, 36, 16, 36, 16, 20]);
+    // The engine's start-up stop of both channels (velocity ramp to 0, then hold at rest),
+    // then the test's goals.
+    assert_eq!(&ids[12..20], &[16, 36, 16, 36, 16, 20, 16, 20]);
+    assert_eq!(&ids[20..], &[16, 20, 16, 36, 16, 36, 16, 20]);
     let sim = board.lock().unwrap();
     assert_eq!(sim.stats().bad_packets, 0);
     assert_eq!(sim.stats().rejected, 0);
@@ -498,7 +501,8 @@ fn a_board_that_does_not_answer_is_faulted() {
     assert!(status.timeouts > 0);
     assert_eq!(
         rejected(&mut rig, 0, CommandKind::Position, [1.0, 0.0, 0.0]),
-        Reason::AxisFaulted
+        Reason::DeviceOffline,
+        "a board that stopped answering is offline"
     );
     // It answers again: the axes come back.
     faults.set_drop_probability(Direction::ToHost, 0.0);

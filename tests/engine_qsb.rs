@@ -88,8 +88,11 @@ fn flags(axis: &AxisState) -> AxisFlags {
     axis.flags()
 }
 
+/// Fresh, not faulted, and on an online board (its start-up stop acknowledged).
 fn healthy(axis: &AxisState) -> bool {
-    !flags(axis).contains(AxisFlags::STALE) && !flags(axis).contains(AxisFlags::FAULT)
+    !flags(axis).contains(AxisFlags::STALE)
+        && !flags(axis).contains(AxisFlags::FAULT)
+        && axis.device_state() == Ok(motion_ipc::DeviceState::Online)
 }
 
 impl Qsb {
@@ -371,7 +374,8 @@ fn a_board_that_stops_answering_is_not_responding_then_comes_back() {
     assert!(status.timeouts >= 3);
     assert_eq!(
         qsb.command(CommandKind::Position, [1.0, 0.0, 0.0]),
-        Reason::AxisFaulted
+        Reason::DeviceOffline,
+        "a board that stopped answering is offline"
     );
     qsb.faults.set_drop_probability(Direction::ToHost, 0.0);
     assert!(

@@ -209,7 +209,13 @@ fn the_board_starts_and_reports_its_identification() {
     assert!(status.online);
     assert_eq!(status.firmware(), "spi_motor sn 00000001");
     let sim = board.lock().unwrap();
-    assert_eq!(sim.step_delay().tenths_ms(), 5, "2000 steps/s configured");
+    // The engine's start-up stop leaves the stepper at rest, at the board's slowest step
+    // delay (the driver's resting delay).
+    assert_eq!(
+        sim.step_delay().tenths_ms(),
+        255,
+        "at rest after the start-up stop"
+    );
     assert_eq!(sim.stepper_intensity(), 0x20);
     assert_eq!(sim.coils(), spimotor::Coils::Two);
     assert_eq!(sim.stats().malformed, 0);
@@ -408,7 +414,11 @@ fn a_board_that_does_not_answer_is_faulted() {
     let driver = rig.engine.driver(0).unwrap();
     assert!(!driver.status().online);
     let reason = rejected(&mut rig, 0, CommandKind::Position, [1.0, 0.0, 0.0]);
-    assert_eq!(reason, Reason::AxisFaulted);
+    assert_eq!(
+        reason,
+        Reason::DeviceOffline,
+        "a board that does not answer is offline"
+    );
     assert_eq!(board.lock().unwrap().stats().addressed, 0);
 }
 

@@ -131,8 +131,7 @@ impl Engine {
                 });
             }
             let goals = driver.capabilities(axis.channel);
-            if axis.estop != EstopCategory::Hold && !goals.contains(motion_drivers::GoalKind::Off)
-            {
+            if axis.estop != EstopCategory::Hold && !goals.contains(motion_drivers::GoalKind::Off) {
                 return Err(EngineConfigError::BadAxisValue {
                     axis: axis.name.clone(),
                     what: "estop = \"stop-off\" or \"off\" needs a board that can de-energise the motor; this one cannot (use \"hold\")",

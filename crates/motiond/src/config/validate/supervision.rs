@@ -39,7 +39,9 @@ impl Validator<'_, '_> {
                 me.issue(
                     value.span(),
                     &key(k),
-                    format!("{v} is not allowed; a finite number >= 0 ({what}; 0 disables the check)"),
+                    format!(
+                        "{v} is not allowed; a finite number >= 0 ({what}; 0 disables the check)"
+                    ),
                 );
                 None
             }
