@@ -174,7 +174,9 @@ fn housekeeping(
                             tracing::info!("device `{name}` online, firmware {text:?}");
                         }
                         DeviceState::Starting => {
-                            tracing::info!("device `{name}` starting (probing, configuring, start-up stop)");
+                            tracing::info!(
+                                "device `{name}` starting (probing, configuring, start-up stop)"
+                            );
                         }
                         DeviceState::Faulted => tracing::warn!("device `{name}` faulted"),
                         DeviceState::Offline => tracing::warn!("device `{name}` is not answering"),
@@ -288,7 +290,7 @@ fn status(stats: &StatusLine, config: &ServerConfig) -> String {
 fn print_summary(config: &ServerConfig, firmware: &[String]) {
     let server = &config.server;
     let mut lines = vec![format!(
-        "motiond `{}`: {} Hz tick, deadman {} ms, {} links, {} devices, {} axes; services motiond/{}/{{frame,tick,command,info,stats}}",
+        "motiond `{}`: {} Hz tick, deadman {} ms, {} links, {} devices, {} axes; services motiond/{}/{{frame,tick,command,info,stats,params,estop}}",
         server.name,
         server.tick_hz,
         server.command_timeout.as_millis(),

@@ -374,7 +374,11 @@ impl Loop {
         let signalled = self.setup.estop_signal.swap(false, Ordering::Relaxed);
         if notified || signalled {
             self.setup.engine.estop();
-            let by = if notified { "the estop event" } else { "SIGUSR1" };
+            let by = if notified {
+                "the estop event"
+            } else {
+                "SIGUSR1"
+            };
             let _ = self.setup.reports.push(Report::EstopBy(by));
         }
     }
@@ -398,11 +402,7 @@ impl Loop {
     /// some free up, and counts it in the stats.
     fn check_slots(&mut self) {
         let mut full = 0;
-        for slots in self
-            .services
-            .factories
-            .slot_use(self.services.max_clients)
-        {
+        for slots in self.services.factories.slot_use(self.services.max_clients) {
             if slots.used >= slots.limit {
                 full |= slots.bit;
                 if self.stats.full_services & slots.bit == 0 {

@@ -85,8 +85,16 @@ impl Validator<'_, '_> {
             None => Some(DEFAULT_OVERSPEED_FACTOR),
         };
         for (value, k, what) in [
-            (&a.following_error, "following_error", "the following-error and soft-limit supervision"),
-            (&a.overspeed_factor, "overspeed_factor", "the overspeed supervision"),
+            (
+                &a.following_error,
+                "following_error",
+                "the following-error and soft-limit supervision",
+            ),
+            (
+                &a.overspeed_factor,
+                "overspeed_factor",
+                "the overspeed supervision",
+            ),
         ] {
             if let Some(value) = value
                 && *value.get_ref() == 0.0
