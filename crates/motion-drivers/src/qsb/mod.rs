@@ -70,26 +70,32 @@
 mod config;
 mod encoder;
 mod goals;
+mod io;
 mod program;
 mod rx;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_machine;
 
 use core::fmt::Write as _;
 use core::time::Duration;
 
 use ::qsb::{
-    CountMode, CycleMode, IndexMode, MdStatus, Mdr0, Mdr1, Mode, ProductType, QsbCommand, Register,
-    Request, ResponseDecoder, Write,
+    CountMode, CycleMode, EncoderMode, IndexMode, MdStatus, Mdr0, Mdr1, Mode, ProductType,
+    QsbCommand, Register, Request, ResponseDecoder, Write,
 };
 
 pub use config::QsbDriverConfig;
+pub use io::{CaptureInput, EnableOutput, MOTOR_DRIVE_BITS, PinRole, QsbIo, pins};
 
 use crate::driver::{Driver, Model, Priority, Transmit};
 use crate::goal::{Goal, GoalError, GoalKind, GoalKinds};
+use crate::pin::{Pin, PinReading};
 use crate::state::{ChannelState, DeviceFault, DeviceStatus, FIRMWARE_LEN};
 use config::DRIVER_EOR;
 use encoder::EncoderTrack;
+use io::IoState;
 use program::{Program, Step};
 
 /// Tries of one request before the board is declared not responding.
@@ -108,10 +114,17 @@ const NORMAL_MDR0: Mdr0 = Mdr0 {
     filter_div2: false,
 };
 
-/// MDR0 during a home search: the index resets CNTR (0x63, the command list's "Sync
-/// Index, Reset on Index, Free Running, X4 mode, W0363").
+/// MDR0 during a home search to counter value 0: the index resets CNTR (0x63, the
+/// command list's "Sync Index, Reset on Index, Free Running, X4 mode, W0363").
 const HOMING_MDR0: Mdr0 = Mdr0 {
     index: IndexMode::ResetCntr,
+    ..NORMAL_MDR0
+};
+
+/// MDR0 during a home search to any other counter value: the index loads CNTR from DTR
+/// ("configure index as the "load CNTR" input (transfers DTR to CNTR)", 0x53).
+const HOMING_LOAD_MDR0: Mdr0 = Mdr0 {
+    index: IndexMode::LoadCntr,
     ..NORMAL_MDR0
 };
 
@@ -124,6 +137,8 @@ enum Origin {
     Setup,
     Preset,
     Goal,
+    /// A DIG I/O write of the signal outputs.
+    Io,
     Probe,
 }
 
@@ -176,14 +191,22 @@ pub struct QsbDriver {
     index_armed: bool,
     index_seen: bool,
     home_start: Option<i32>,
+    /// A search that has not found the index by then has failed (the encoder may not
+    /// count at all).
+    home_deadline: Option<Duration>,
+    /// The last home search ended without an index; cleared once its stop is complete
+    /// or by the next goal other than `Stop`.
+    home_failed: bool,
     homed: bool,
     arrived: bool,
+    io: IoState,
 }
 
 impl QsbDriver {
     /// A driver for the board of `config`; its start-up begins with the first
     /// [`poll_transmit`](Driver::poll_transmit).
-    pub fn new(config: QsbDriverConfig) -> Self {
+    pub fn new(mut config: QsbDriverConfig) -> Self {
+        io::sanitise(&mut config);
         let mut driver = Self {
             config,
             decoder: ResponseDecoder::new(),
@@ -215,8 +238,11 @@ impl QsbDriver {
             index_armed: false,
             index_seen: false,
             home_start: None,
+            home_deadline: None,
+            home_failed: false,
             homed: false,
             arrived: false,
+            io: IoState::new(),
         };
         driver.begin_startup();
         driver
@@ -235,6 +261,48 @@ impl QsbDriver {
     /// The product whose goals apply: the reported one, else the configured one.
     fn effective_product(&self) -> ProductType {
         self.product.unwrap_or(self.config.variant)
+    }
+
+    /// Whether channel 0 drives the -M's stepper: a -M (as reported), its motor drive
+    /// configured, counting quadrature.
+    fn drive_active(&self) -> bool {
+        self.effective_product() == ProductType::M
+            && self.config.motor_drive
+            && self.config.input_mode == EncoderMode::Quadrature
+    }
+
+    /// `Ok` when goals and outputs can be taken: `Starting` during the start-up,
+    /// `Offline` when the link is down or the board stopped answering.
+    fn check_online(&self) -> Result<(), GoalError> {
+        if self.link_up && self.status.online {
+            Ok(())
+        } else if self.link_up && self.restart_at.is_none() && !self.setup.is_empty() {
+            Err(GoalError::Starting)
+        } else {
+            Err(GoalError::Offline)
+        }
+    }
+
+    /// The goals channel 0 takes.
+    fn kinds(&self) -> GoalKinds {
+        if self.config.input_mode != EncoderMode::Quadrature {
+            // PWM / analog: an absolute value read as the `encoder` pin, no axis.
+            return GoalKinds::NONE;
+        }
+        if !self.drive_active() {
+            return GoalKinds::of(&[GoalKind::Stop, GoalKind::SetPosition]);
+        }
+        let moves = [
+            GoalKind::Stop,
+            GoalKind::Position,
+            GoalKind::Velocity,
+            GoalKind::RampPosition,
+            GoalKind::Home,
+            GoalKind::SetPosition,
+            GoalKind::Off,
+        ];
+        let with_off = if self.config.enable.is_some() { 7 } else { 6 };
+        GoalKinds::of(moves.get(..with_off).unwrap_or(&moves))
     }
 
     /// Whether the drive runs a motor command (MD STATUS moving or jogging).
@@ -268,6 +336,12 @@ impl QsbDriver {
         match step {
             Step::Send(request) => Some(request),
             Step::Ensure(write) => (!self.holds(write)).then_some(Request::Write(write)),
+            Step::Outputs => self.outputs_due().map(Request::Write),
+            Step::Enable(on) => {
+                let write = Write::DigIo(::qsb::DigIo(self.latch_with(on)));
+                (self.config.enable.is_some() && !self.holds(write))
+                    .then_some(Request::Write(write))
+            }
             Step::EndStrStream => self.str_streaming.then_some(Request::Read(Register::Str)),
             // Unless the drive is known to be done (a motor command just sent may not show
             // in MD STATUS yet), stop it.
@@ -305,6 +379,9 @@ impl QsbDriver {
                 return Some((request, origin, Priority::Command));
             }
         }
+        if let Some(write) = self.outputs_due() {
+            return Some((Request::Write(write), Origin::Io, Priority::Command));
+        }
         self.probe_due.then_some((
             Request::Read(Register::Version),
             Origin::Probe,
@@ -335,20 +412,36 @@ impl QsbDriver {
         self.index_armed = false;
         self.index_seen = false;
         self.home_start = None;
+        self.home_deadline = None;
+        self.home_failed = false;
+        // Outputs keep the levels the signals asked for; the enable line comes up active
+        // (the engine's start-up stop holds the motor energised).
+        self.io.energised = true;
+        self.io.refused = None;
+        self.io.dio_streaming = false;
+        self.io.capture_streaming = false;
     }
 
-    /// The configuration of the product VERSION reported.
+    /// The configuration of the product VERSION reported (module docs, "Start-up").
     fn configure(&mut self, product: ProductType) {
         let (rate, accel) = self.config.default_profile();
+        let drive = self.drive_active();
+        let mdr1 = Mdr1 {
+            invert_index: self.config.invert_index,
+            ..Mdr1::default()
+        };
         let common = [
             Step::Ensure(Write::Eor(DRIVER_EOR)),
-            Step::Ensure(Write::Mode(Mode::default())),
+            Step::Ensure(Write::Mode(Mode {
+                encoder: self.config.input_mode,
+                pwm_12bit: false,
+            })),
             Step::Ensure(Write::Mdr0(NORMAL_MDR0)),
-            Step::Ensure(Write::Mdr1(Mdr1::default())),
+            Step::Ensure(Write::Mdr1(mdr1)),
             Step::Ensure(Write::Threshold(0)),
             Step::Ensure(Write::IntervalRate(self.config.interval())),
         ];
-        let mut steps = [Step::Online; 16];
+        let mut steps = [Step::Online; program::PROGRAM_CAPACITY];
         let mut len = 0;
         let mut push = |step: Step| {
             if let Some(slot) = steps.get_mut(len) {
@@ -356,19 +449,36 @@ impl QsbDriver {
                 len += 1;
             }
         };
+        let has_dio = product.digital_io_bits() > 0;
         if product == ProductType::M {
+            // Whatever the motor was doing, it stops, at the axis's acceleration.
+            push(Step::Ensure(Write::Accel(accel)));
             push(Step::Send(Request::Write(Write::Command(
                 QsbCommand::MotorStop,
             ))));
         }
         common.into_iter().for_each(&mut push);
-        if product == ProductType::M {
+        if drive {
             push(Step::Ensure(Write::StepRate(rate)));
-            push(Step::Ensure(Write::Accel(accel)));
+        }
+        if has_dio && self.dio_used() {
+            // Read first: a configuration the board already holds is not written again,
+            // because a write sets every pin high for a moment.
+            push(Step::Send(Request::Read(Register::DigIoConfig)));
+            push(Step::Ensure(Write::DigIoConfig(self.dio_config())));
+            push(Step::Outputs);
+        }
+        if drive {
             push(Step::Send(Request::Write(Write::Command(
                 QsbCommand::EnableMotorDrive,
             ))));
             push(Step::Send(Request::Stream(Register::MdStatus)));
+        }
+        if has_dio && self.dio_streamed() {
+            push(Step::Send(Request::Stream(Register::DigIo)));
+        }
+        if self.config.io.capture.is_some() {
+            push(Step::Send(Request::Stream(Register::Capture)));
         }
         push(Step::Send(Request::Stream(Register::ReadEncoder)));
         push(Step::Online);
@@ -413,6 +523,11 @@ impl QsbDriver {
 
     /// Lets every plan move on as far as it can without the board.
     fn settle(&mut self, now: Duration) {
+        if self.home_failed && self.goal.is_empty() && (!self.drive_active() || self.drive_done())
+        {
+            // The failed search's stop is complete.
+            self.home_failed = false;
+        }
         for _ in 0..4 * program::PROGRAM_CAPACITY {
             if self.busy(Origin::Setup, self.setup.generation()) {
                 break;
@@ -445,7 +560,7 @@ impl QsbDriver {
             }
         }
         for _ in 0..4 * program::PROGRAM_CAPACITY {
-            if self.busy(Origin::Goal, self.goal.generation()) || !self.settle_goal_step() {
+            if self.busy(Origin::Goal, self.goal.generation()) || !self.settle_goal_step(now) {
                 break;
             }
         }
@@ -473,7 +588,10 @@ impl QsbDriver {
             homed: self.homed,
             at_limit: false,
             arrived: self.arrived,
-            fault: self.status.fault,
+            fault: self
+                .status
+                .fault
+                .or(self.home_failed.then_some(DeviceFault::HomeFailed)),
         }
     }
 }
@@ -501,24 +619,6 @@ impl core::fmt::Write for FirmwareText {
     }
 }
 
-/// The goals a product takes.
-fn kinds_for(product: ProductType) -> GoalKinds {
-    match product {
-        ProductType::M => GoalKinds::of(&[
-            GoalKind::Off,
-            GoalKind::Stop,
-            GoalKind::Position,
-            GoalKind::Velocity,
-            GoalKind::RampPosition,
-            GoalKind::Home,
-            GoalKind::SetPosition,
-        ]),
-        ProductType::D | ProductType::S => {
-            GoalKinds::of(&[GoalKind::Off, GoalKind::Stop, GoalKind::SetPosition])
-        }
-    }
-}
-
 impl Driver for QsbDriver {
     fn model(&self) -> Model {
         Model::Qsb
@@ -530,7 +630,7 @@ impl Driver for QsbDriver {
 
     fn capabilities(&self, channel: usize) -> GoalKinds {
         if channel == 0 {
-            kinds_for(self.effective_product())
+            self.kinds()
         } else {
             GoalKinds::NONE
         }
@@ -614,6 +714,7 @@ impl Driver for QsbDriver {
             Origin::Setup => self.setup.generation(),
             Origin::Preset => self.preset.generation(),
             Origin::Goal => self.goal.generation(),
+            Origin::Io => 0,
             Origin::Probe => {
                 self.probe_due = false;
                 self.samples_since_probe = false;
@@ -639,8 +740,9 @@ impl Driver for QsbDriver {
     fn goals_pending(&self) -> bool {
         let in_flight = self
             .in_flight
-            .is_some_and(|f| matches!(f.origin, Origin::Preset | Origin::Goal));
-        in_flight || !self.preset.is_empty() || !self.goal.is_empty()
+            .is_some_and(|f| matches!(f.origin, Origin::Preset | Origin::Goal | Origin::Io));
+        let outputs = self.status.online && self.outputs_due().is_some();
+        in_flight || outputs || !self.preset.is_empty() || !self.goal.is_empty()
     }
 
     fn set_goal(&mut self, now: Duration, channel: usize, goal: Goal) -> Result<(), GoalError> {
@@ -674,11 +776,14 @@ impl Driver for QsbDriver {
         self.decoder.clear();
         self.begin_startup();
     }
-}
 
-/// The QSB's I/O pins for `product` (command list DIG I/O, MODE). Filled in with the
-/// board's I/O support; empty until then.
-pub fn pins(product: ::qsb::ProductType) -> &'static [crate::PinInfo] {
-    let _ = product;
-    &[]
+    fn read_pin(&self, pin: Pin) -> Option<PinReading> {
+        self.pin_reading(pin)
+    }
+
+    fn set_output(&mut self, now: Duration, pin: Pin, high: bool) -> Result<(), GoalError> {
+        let result = self.drive_output(pin, high);
+        self.settle(now);
+        result
+    }
 }

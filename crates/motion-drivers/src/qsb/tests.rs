@@ -146,16 +146,17 @@ fn start_up_of_a_qsb_m_golden_lines() {
         Some(Priority::Setup)
     );
     let lines = bench.run();
-    // COMMAND 1 "Deactivate … streaming", VERSION, COMMAND 4, EOR 5 (LF + time stamp),
+    // COMMAND 1 "Deactivate … streaming", VERSION, MD ACCEL 10000 then COMMAND 4 (a
+    // motor left running stops at the axis's acceleration), EOR 5 (LF + time stamp),
     // MODE quadrature, MDR0 "Sync Index, … Free Running, X4" without the index reset,
     // MDR1 "Count Up No Triggers", THRESHOLD 0, INTERVAL RATE 1 tick, MD STEP RATE 992
-    // (1000 rounded down to 16), MD ACCEL 10000, COMMAND 2, stream MD STATUS, stream
-    // READ ENCODER ("Stream Encoder Value, S0E").
+    // (1000 rounded down to 16), COMMAND 2, stream MD STATUS, stream READ ENCODER
+    // ("Stream Encoder Value, S0E").
     assert_eq!(
         lines,
         [
-            "W161", "R14", "W164", "W155", "W000", "W0343", "W040", "W0B0", "W0C1", "W0F3E0",
-            "W102710", "W162", "S13", "S0E"
+            "W161", "R14", "W102710", "W164", "W155", "W000", "W0343", "W040", "W0B0", "W0C1",
+            "W0F3E0", "W162", "S13", "S0E"
         ]
     );
     let status = bench.driver.status();
@@ -164,16 +165,17 @@ fn start_up_of_a_qsb_m_golden_lines() {
     assert_eq!(status.fault, None);
     assert_eq!(bench.driver.product(), Some(ProductType::M));
     for kind in GoalKind::ALL {
+        // Off needs the drive's enable line (`enable_output`).
         assert_eq!(
             bench.driver.capabilities(0).contains(kind),
-            kind != GoalKind::Power
+            !matches!(kind, GoalKind::Power | GoalKind::Off)
         );
     }
     assert!(!bench.driver.capabilities(1).contains(GoalKind::Stop));
 }
 
 #[test]
-fn start_up_of_a_qsb_s_has_no_drive_and_stop_is_a_no_op() {
+fn start_up_of_a_qsb_s_has_no_drive_stop_is_a_no_op_and_off_unsupported() {
     let mut bench = Bench::new(ProductType::M); // configured -M, the board says -S
     bench.version = 0x0004_2213;
     let lines = bench.run();
@@ -199,7 +201,11 @@ fn start_up_of_a_qsb_s_has_no_drive_and_stop_is_a_no_op() {
         bench.driver.set_goal(now, 0, Goal::Stop { decel: 1.0 }),
         Ok(())
     );
-    assert_eq!(bench.driver.set_goal(now, 0, Goal::Off), Ok(()));
+    // Nothing to de-energise: boards that cannot, refuse.
+    assert_eq!(
+        bench.driver.set_goal(now, 0, Goal::Off),
+        Err(GoalError::Unsupported(GoalKind::Off))
+    );
     assert!(!bench.driver.goals_pending());
     assert_eq!(bench.sent(), None, "nothing is driven, nothing to send");
     assert!(!bench.driver.capabilities(0).contains(GoalKind::Velocity));
@@ -316,11 +322,15 @@ fn ramp_position_velocity_and_stop_write_the_rates_in_steps() {
         .driver
         .set_goal(bench.now, 0, Goal::Stop { decel: 50_000.0 })
         .expect("stop");
-    // COMMAND 4 "Motor Stop - Stop the motor using the MD ACCEL rate".
-    assert_eq!(bench.run(), ["W101380", "W164"]);
+    // COMMAND 4 "Motor Stop - Stop the motor using the MD ACCEL rate": 5000 steps/s²
+    // rounded up to 5008 = 0x1390 (a stop is never gentler than asked).
+    assert_eq!(bench.run(), ["W101390", "W164"]);
     bench.tick(Some(MD_DONE));
-    bench.driver.set_goal(bench.now, 0, Goal::Off).expect("off");
-    assert_eq!(bench.run(), ["W165"], "COMMAND 5 Motor Quit");
+    assert_eq!(
+        bench.driver.set_goal(bench.now, 0, Goal::Off),
+        Err(GoalError::Unsupported(GoalKind::Off)),
+        "no enable line configured"
+    );
     assert_eq!(
         bench.driver.set_goal(
             bench.now,
@@ -543,7 +553,7 @@ fn a_line_in_the_factory_format_or_an_older_time_stamp_means_a_reset() {
     assert_eq!(status.fault, Some(DeviceFault::Reset));
     assert_eq!(status.resets, 1);
     assert!(!bench.driver.channel(0).homed);
-    assert_eq!(bench.run()[..3], ["W161", "R14", "W164"]);
+    assert_eq!(bench.run()[..4], ["W161", "R14", "W102710", "W164"]);
     // A time stamp that goes backwards: the counter restarted at power-up.
     bench.tick(Some(MD_DONE));
     bench.ts -= 100;
