@@ -134,7 +134,9 @@ impl QsbDriverConfig {
     /// Streams that may each send a line at one data output tick: READ ENCODER, and (as
     /// configured) MD STATUS and STR (home search) on a driving -M, DIG I/O, CAPTURE.
     fn streams(&self) -> u64 {
-        let drive = self.variant == ProductType::M && self.motor_drive;
+        let drive = self.variant == ProductType::M
+            && self.motor_drive
+            && self.input_mode == EncoderMode::Quadrature;
         let dio = self.io.digital_in | self.io.digital_out != 0;
         1 + 2 * u64::from(drive) + u64::from(dio) + u64::from(self.io.capture.is_some())
     }

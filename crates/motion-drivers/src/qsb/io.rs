@@ -214,7 +214,10 @@ const fn bits_of(product: ProductType) -> u8 {
 pub(crate) fn sanitise(config: &mut super::QsbDriverConfig) {
     let product = config.variant;
     let mut allowed = bits_of(product);
-    if product == ProductType::M && config.motor_drive {
+    if product == ProductType::M
+        && config.motor_drive
+        && config.input_mode == EncoderMode::Quadrature
+    {
         allowed &= !MOTOR_DRIVE_BITS;
     }
     config.enable = config

@@ -226,8 +226,14 @@ impl QsbDriver {
                 self.homed = true;
             }
             Write::Clear(::qsb::ClearTarget::Str) => {
-                self.index_armed = self.board[usize::from(Register::Mdr0.number())]
-                    == Some(super::HOMING_MDR0.data());
+                // Armed when the index acts on the counter (a home search's MDR0).
+                self.index_armed = self
+                    .board
+                    .get(usize::from(Register::Mdr0.number()))
+                    .copied()
+                    .flatten()
+                    .and_then(|data| ::qsb::Mdr0::from_data(data).ok())
+                    .is_some_and(|mdr0| mdr0.index != IndexMode::Disabled);
                 self.index_seen = false;
             }
             Write::Mdr0(mdr0) if mdr0.index == IndexMode::Disabled => self.index_armed = false,

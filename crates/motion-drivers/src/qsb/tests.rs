@@ -12,25 +12,32 @@ use crate::goal::{Goal, GoalError, GoalKind};
 use crate::state::DeviceFault;
 
 /// A driver on a bench: the test plays the board.
-struct Bench {
-    driver: QsbDriver,
-    now: Duration,
+pub(super) struct Bench {
+    pub(super) driver: QsbDriver,
+    pub(super) now: Duration,
     /// Board time stamp, 1/512 s ticks.
-    ts: u32,
+    pub(super) ts: u32,
     /// Whether the board answers with the driver's EOR (else the factory format).
-    configured: bool,
-    counter: i32,
+    pub(super) configured: bool,
+    pub(super) counter: i32,
     /// VERSION data the board answers.
-    version: u32,
+    pub(super) version: u32,
+    /// What reads and streams of other registers answer (register, data); 0 otherwise.
+    pub(super) values: Vec<(u8, u32)>,
 }
 
 impl Bench {
-    fn new(variant: ProductType) -> Self {
+    pub(super) fn new(variant: ProductType) -> Self {
+        Self::with_config(QsbDriverConfig {
+            variant,
+            ..QsbDriverConfig::default()
+        })
+    }
+
+    pub(super) fn with_config(config: QsbDriverConfig) -> Self {
+        let variant = config.variant;
         Self {
-            driver: QsbDriver::new(QsbDriverConfig {
-                variant,
-                ..QsbDriverConfig::default()
-            }),
+            driver: QsbDriver::new(config),
             now: Duration::ZERO,
             ts: 1000,
             configured: false,
@@ -40,17 +47,18 @@ impl Bench {
                 ProductType::M => 0x0000_1113,
                 ProductType::S => 0x0000_1213,
             },
+            values: Vec::new(),
         }
     }
 
-    fn advance(&mut self, by: Duration) {
+    pub(super) fn advance(&mut self, by: Duration) {
         self.now += by;
         self.ts += (by.as_nanos() / TICK.as_nanos()) as u32;
         self.driver.handle_timeout(self.now);
     }
 
     /// What the driver sends now, if anything.
-    fn sent(&mut self) -> Option<Vec<u8>> {
+    pub(super) fn sent(&mut self) -> Option<Vec<u8>> {
         self.driver.handle_timeout(self.now);
         let mut buf = [0u8; 256];
         let transmit = self.driver.poll_transmit(self.now, &mut buf)?;
@@ -58,7 +66,7 @@ impl Bench {
         Some(buf[..transmit.len].to_vec())
     }
 
-    fn expect(&mut self, line: &[u8]) {
+    pub(super) fn expect(&mut self, line: &[u8]) {
         let sent = self.sent();
         assert_eq!(
             sent.as_deref().map(String::from_utf8_lossy),
@@ -66,7 +74,7 @@ impl Bench {
         );
     }
 
-    fn line(&self, ty: ResponseType, register: u8, data: u32) -> Vec<u8> {
+    pub(super) fn line(&self, ty: ResponseType, register: u8, data: u32) -> Vec<u8> {
         let mut response = Response::new(ty, register, data);
         let eor = if self.configured {
             response.time_stamp = Some(self.ts);
@@ -79,12 +87,12 @@ impl Bench {
         buf[..len].to_vec()
     }
 
-    fn rx(&mut self, bytes: &[u8]) {
+    pub(super) fn rx(&mut self, bytes: &[u8]) {
         self.driver.handle_rx(self.now, bytes);
     }
 
     /// Answers `sent` as a board would: writes echo, reads and streams return `value`.
-    fn answer(&mut self, sent: &[u8], value: u32) {
+    pub(super) fn answer(&mut self, sent: &[u8], value: u32) {
         let line = CommandLine::decode(sent.strip_suffix(b"\r\n").expect("EOC")).expect("line");
         let (ty, data) = match line.ty {
             CommandType::Write => (ResponseType::Write, line.data.expect("data")),
@@ -99,15 +107,19 @@ impl Bench {
     }
 
     /// Sends and answers everything the driver wants until it is quiet; returns the lines.
-    fn run(&mut self) -> Vec<String> {
+    pub(super) fn run(&mut self) -> Vec<String> {
         let mut lines = Vec::new();
         for _ in 0..64 {
             let Some(sent) = self.sent() else { break };
+            let register = CommandLine::decode(sent.strip_suffix(b"\r\n").expect("EOC"))
+                .expect("line")
+                .register;
+            let extra = self.values.iter().find(|(r, _)| *r == register).map(|(_, v)| *v);
             let value = match &sent[..3] {
                 b"R14" => self.version,
                 b"S13" => 0x11,
                 b"S0E" => self.counter as u32,
-                _ => 0,
+                _ => extra.unwrap_or(0),
             };
             self.advance(Duration::from_micros(500));
             self.answer(&sent, value);
@@ -117,7 +129,7 @@ impl Bench {
     }
 
     /// One stream tick: the encoder line, then MD STATUS (-M order of the board).
-    fn tick(&mut self, md: Option<u32>) {
+    pub(super) fn tick(&mut self, md: Option<u32>) {
         self.advance(TICK);
         let mut bytes = self.line(ResponseType::Stream, 0x0E, self.counter as u32);
         if let Some(md) = md {
@@ -126,17 +138,24 @@ impl Bench {
         self.rx(&bytes);
     }
 
-    fn started(variant: ProductType) -> Self {
-        let mut bench = Self::new(variant);
+    pub(super) fn started(variant: ProductType) -> Self {
+        Self::started_with(QsbDriverConfig {
+            variant,
+            ..QsbDriverConfig::default()
+        })
+    }
+
+    pub(super) fn started_with(config: QsbDriverConfig) -> Self {
+        let mut bench = Self::with_config(config);
         bench.run();
         assert!(bench.driver.status().online, "start-up completes");
         bench
     }
 }
 
-const MD_DONE: u32 = 0x11; // done, drive enabled
-const MD_MOVING: u32 = 0x12; // moving, drive enabled
-const MD_JOGGING: u32 = 0x1A; // moving, jogging, drive enabled
+pub(super) const MD_DONE: u32 = 0x11; // done, drive enabled
+pub(super) const MD_MOVING: u32 = 0x12; // moving, drive enabled
+pub(super) const MD_JOGGING: u32 = 0x1A; // moving, jogging, drive enabled
 
 #[test]
 fn start_up_of_a_qsb_m_golden_lines() {
