@@ -4,16 +4,14 @@
 use core::time::Duration;
 
 use ::qsb::{
-    ACCEL_RANGE, EncoderMode, Eor, IntervalRate, JOG_RATE_RANGE, MAX_COMMAND_LEN,
-    MAX_RESPONSE_LEN, PROCESSING_DELAY, ProductType, RATE_INCREMENT, STEP_RATE_RANGE, TICK,
-    effective_rate,
+    ACCEL_RANGE, EncoderMode, Eor, IntervalRate, JOG_RATE_RANGE, MAX_COMMAND_LEN, MAX_RESPONSE_LEN,
+    PROCESSING_DELAY, ProductType, RATE_INCREMENT, STEP_RATE_RANGE, TICK, effective_rate,
 };
 
 pub use super::io::{EnableOutput, QsbIo};
 
 /// Bits on the wire per byte (8N1).
 const BITS_PER_BYTE: u64 = 10;
-
 
 /// Stream periods without a sample before the driver asks the board whether it is still
 /// there (and still streaming).

@@ -2,11 +2,11 @@
 
 use core::time::Duration;
 
-use ::qsb::{LoadTarget, QsbCommand, Register, Request, Write};
+use ::qsb::{EncoderMode, LoadTarget, ProductType, QsbCommand, Register, Request, Write};
 
 use super::program::Step;
 use super::{HOMING_LOAD_MDR0, HOMING_MDR0, NORMAL_MDR0, QsbDriver};
-use crate::goal::{Goal, GoalError, GoalKind};
+use crate::goal::{Goal, GoalError, GoalKind, GoalKinds};
 use crate::state::DeviceFault;
 
 /// Moves one position goal may make: the move and two corrections (lost steps, a move
@@ -36,6 +36,48 @@ fn counter_value(counts: f64) -> Option<i32> {
 }
 
 impl QsbDriver {
+    /// Whether channel 0 drives the -M's stepper: a -M (as reported), its motor drive
+    /// configured, counting quadrature.
+    pub(super) fn drive_active(&self) -> bool {
+        self.effective_product() == ProductType::M
+            && self.config.motor_drive
+            && self.config.input_mode == EncoderMode::Quadrature
+    }
+
+    /// `Ok` when goals and outputs can be taken: `Starting` during the start-up,
+    /// `Offline` when the link is down or the board stopped answering.
+    pub(super) fn check_online(&self) -> Result<(), GoalError> {
+        if self.link_up && self.status.online {
+            Ok(())
+        } else if self.link_up && self.restart_at.is_none() && !self.setup.is_empty() {
+            Err(GoalError::Starting)
+        } else {
+            Err(GoalError::Offline)
+        }
+    }
+
+    /// The goals channel 0 takes.
+    pub(super) fn kinds(&self) -> GoalKinds {
+        if self.config.input_mode != EncoderMode::Quadrature {
+            // PWM / analog: an absolute value read as the `encoder` pin, no axis.
+            return GoalKinds::NONE;
+        }
+        if !self.drive_active() {
+            return GoalKinds::of(&[GoalKind::Stop, GoalKind::SetPosition]);
+        }
+        let moves = [
+            GoalKind::Stop,
+            GoalKind::Position,
+            GoalKind::Velocity,
+            GoalKind::RampPosition,
+            GoalKind::Home,
+            GoalKind::SetPosition,
+            GoalKind::Off,
+        ];
+        let with_off = if self.config.enable.is_some() { 7 } else { 6 };
+        GoalKinds::of(moves.get(..with_off).unwrap_or(&moves))
+    }
+
     /// Checks `goal` and turns it into the plan of requests (replacing the previous one).
     pub(super) fn plan_goal(
         &mut self,

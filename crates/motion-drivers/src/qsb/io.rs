@@ -240,9 +240,7 @@ impl QsbDriver {
     /// and 02).
     pub(super) fn dio_used(&self) -> bool {
         let io = self.config.io;
-        self.config.enable.is_some()
-            || io.digital_in | io.digital_out != 0
-            || io.capture.is_some()
+        self.config.enable.is_some() || io.digital_in | io.digital_out != 0 || io.capture.is_some()
     }
 
     /// Whether the DIG I/O register is streamed (the levels of the digital signals; in
@@ -327,7 +325,9 @@ impl QsbDriver {
     /// When a value streamed on change was last known to hold: the line that brought it,
     /// or any later stream line while its stream runs (the board would have sent a change).
     fn on_change_at(&self, at: Option<Duration>, streaming: bool) -> Option<Duration> {
-        let alive = self.last_sample_at.filter(|_| streaming && self.status.online);
+        let alive = self
+            .last_sample_at
+            .filter(|_| streaming && self.status.online);
         at.max(alive.filter(|_| at.is_some()))
     }
 
@@ -344,14 +344,16 @@ impl QsbDriver {
         match PinRole::of(self.config.variant, pin)? {
             PinRole::Io(bit) if (io.digital_in | io.digital_out) & (1 << bit) != 0 => {
                 let level = self.io.levels.map(|l| f64::from((l >> bit) & 1));
-                let streamed = self.io.dio_streaming
-                    || self.config.input_mode == EncoderMode::Analog;
-                Some(reading(level, self.on_change_at(self.io.levels_at, streamed)))
+                let streamed =
+                    self.io.dio_streaming || self.config.input_mode == EncoderMode::Analog;
+                Some(reading(
+                    level,
+                    self.on_change_at(self.io.levels_at, streamed),
+                ))
             }
-            PinRole::Encoder if io.encoder => Some(reading(
-                self.io.encoder.map(f64::from),
-                self.io.encoder_at,
-            )),
+            PinRole::Encoder if io.encoder => {
+                Some(reading(self.io.encoder.map(f64::from), self.io.encoder_at))
+            }
             PinRole::Capture if io.capture.is_some() => Some(reading(
                 self.io.capture.map(f64::from),
                 self.on_change_at(self.io.capture_at, self.io.capture_streaming),

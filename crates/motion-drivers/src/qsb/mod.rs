@@ -25,32 +25,58 @@
 //!
 //! `W161` (COMMAND 1: stop any streams left running, so the line is quiet), `R14`
 //! (VERSION: serial number, product type, firmware), then the configuration for the
-//! product reported: EOR 0x5 (LF and the time stamp: `s0E00001234000ABCDE!\n`), MODE
-//! quadrature, MDR0 0x43 (x4, free-running, index disabled, synchronous index), MDR1 0
-//! (counting up, enabled, no triggers), THRESHOLD 0 (a value at every tick), INTERVAL
-//! RATE from the line rate (1 tick = 1.95 ms at 230400 baud); on the -M also COMMAND 4
-//! (stop whatever the motor was doing), MD STEP RATE and MD ACCEL from the axis limits,
-//! COMMAND 2 (enable the drive) and `S13` (stream MD STATUS); last `S0E` (stream the
-//! counter). The board is online when all of that was acknowledged. Nothing is saved
-//! (COMMAND 3 is never sent).
+//! product reported, each register written unless known to hold its value:
+//!
+//! 1. -M: MD ACCEL from the axis's acceleration, then COMMAND 4 (a motor left running by
+//!    a previous server stops, at that acceleration);
+//! 2. EOR 0x5 (LF and the time stamp: `s0E00001234000ABCDE!\n`), MODE (`input_mode`:
+//!    quadrature, PWM or analog), MDR0 0x43 (x4, free-running, index disabled,
+//!    synchronous index), MDR1 (counting up, no triggers; B3 = `invert_index`),
+//!    THRESHOLD 0 (a value at every tick), INTERVAL RATE (`stream_interval`, or from the
+//!    line rate: 1 tick = 1.95 ms at 230400 baud);
+//! 3. driving -M: MD STEP RATE from the axis's velocity;
+//! 4. when DIG I/O is used (enable line, signals, capture): `R02`, DIG I/O CONFIG if the
+//!    board does not hold it already (directions, capture interrupt), DIG I/O (the
+//!    outputs' levels, the enable line active);
+//! 5. driving -M: COMMAND 2 (motor drive mode) and `S13` (stream MD STATUS);
+//! 6. `S01` (digital signals, not in analog mode), `S05` (capture), last `S0E` (stream the
+//!    counter / the PWM or analog value).
+//!
+//! The board is online when all of that was acknowledged; goals and outputs before that
+//! are refused with [`GoalError::Starting`]. Nothing is saved (COMMAND 3 is never sent).
+//! After a reset the whole sequence runs again, outputs at their last levels.
 //!
 //! # Goals
 //!
-//! | goal | -M | -S / -D |
+//! A "driving -M" is a -M with [`QsbDriverConfig::motor_drive`] counting quadrature.
+//!
+//! | goal | driving -M | -S / -D / -M without drive |
 //! |---|---|---|
-//! | `Off` | COMMAND 5 (quit: step pulses stop at once; the QSB cannot de-energise the motor driver) | accepted, nothing to do: nothing is driven |
-//! | `Stop{decel}` | MD ACCEL = decel, COMMAND 4 | accepted, nothing to do |
-//! | `Position`, `RampPosition` | MD STEP RATE / MD ACCEL (axis limits, or the goal's), COMMAND 4 and wait if moving, then MD MOVE STEPS = the whole steps from the encoder reading to the target, COMMAND 8; after the drive reports done, up to two correcting moves | `Unsupported` |
-//! | `Velocity` | MD ACCEL, MD JOG RATE, COMMAND 9 (0 = COMMAND 4) | `Unsupported` |
-//! | `Home{velocity}` | MDR0 0x63 (index resets CNTR), clear STR, stream STR, jog; the first index latch (STR IDX) is the reference: MDR0 back to 0x43, COMMAND 4. Stops not homed after `home_max_travel` | `Unsupported` (no drive to search with) |
+//! | `Off` | COMMAND 5 (quit: no more step pulses), then the enable line inactive. `Unsupported` without [`QsbDriverConfig::enable`]: the QSB itself cannot de-energise the motor (set `enable_output` to the drive's enable line) | `Unsupported`: nothing to de-energise |
+//! | `Stop{decel}` | MD ACCEL = decel (rounded *up* to 16, written when it differs), COMMAND 4 — always sent, even if the motor is believed idle —, then the enable line active (a stop holds) | accepted, nothing to do |
+//! | `Position`, `RampPosition` | enable line active, MD STEP RATE / MD ACCEL (axis limits, or the goal's), COMMAND 4 and wait if moving, then MD MOVE STEPS = the whole steps from the encoder reading to the target, COMMAND 8; after the drive reports done, up to two correcting moves | `Unsupported` |
+//! | `Velocity` | enable line active, MD ACCEL, MD JOG RATE, COMMAND 9 (0 = COMMAND 4) | `Unsupported` |
+//! | `Home{velocity}` | enable line active; MDR0 0x63 (index resets CNTR) for a home position of 0, else DTR = the home position and MDR0 0x53 (index loads CNTR from DTR); clear STR, stream STR, jog in the configured direction; the first index latch (STR IDX) is the reference: MDR0 back to 0x43, COMMAND 4. A search that travels `home_max_travel` (or runs twice the time that takes) without an index stops and reports [`DeviceFault::HomeFailed`] until its stop is complete | `Unsupported` (no drive to search with) |
 //! | `SetPosition` | DTR = counts, LOAD REG 0 (DTR → CNTR); then COMMAND 4 if the motor moves (the engine holds after a set-position) | DTR, LOAD REG 0 |
 //! | `Power` | `Unsupported` (step and direction only) | `Unsupported` |
 //!
+//! In PWM and analog input modes the channel takes no goal: it is not an axis.
+//!
 //! Counts are encoder counts; the -M's registers are in motor steps
-//! ([`QsbDriverConfig::counts_per_step`]). Rates and accelerations are rounded down to
-//! the board's 16-step increments, so a profile never exceeds the limits it was given;
-//! a limit below the board's minimum is `OutOfBoardRange`, a stop below it stops at the
-//! minimum (a stop always works).
+//! ([`QsbDriverConfig::counts_per_step`], negative when the encoder counts down as the
+//! motor steps forward). Rates and accelerations of motions are rounded down to the
+//! board's 16-step increments, so a profile never exceeds the limits it was given; a limit
+//! below the board's minimum is `OutOfBoardRange`. A stop rounds up and never refuses, so
+//! it ends within |v| / decel once its two lines are on the wire.
+//!
+//! # I/O pins
+//!
+//! [`pins`]: `io0`..`io3` (-M), `io0` (-D): digital in or open-drain out (DIG I/O, set
+//! with [`Driver::set_output`], read back as the level measured at the pin from the `S01`
+//! stream, sent on change); `encoder` (-S, -M): the PWM or analog value of READ ENCODER;
+//! `capture` (-M, -D): CAPTURE, the count an edge of [`QsbIo::capture`]'s input loaded.
+//! While the -M drives its motor, io1 and io2 are its step and direction lines and are no
+//! signals; the enable line's bit is no signal either.
 //!
 //! # Wire, liveness and resets
 //!
@@ -77,13 +103,13 @@ mod rx;
 mod tests;
 #[cfg(test)]
 mod tests_machine;
+mod version;
 
-use core::fmt::Write as _;
 use core::time::Duration;
 
 use ::qsb::{
-    CountMode, CycleMode, EncoderMode, IndexMode, MdStatus, Mdr0, Mdr1, Mode, ProductType,
-    QsbCommand, Register, Request, ResponseDecoder, Write,
+    CountMode, CycleMode, IndexMode, MdStatus, Mdr0, Mdr1, Mode, ProductType, QsbCommand, Register,
+    Request, ResponseDecoder, Write,
 };
 
 pub use config::QsbDriverConfig;
@@ -92,7 +118,7 @@ pub use io::{CaptureInput, EnableOutput, MOTOR_DRIVE_BITS, PinRole, QsbIo, pins}
 use crate::driver::{Driver, Model, Priority, Transmit};
 use crate::goal::{Goal, GoalError, GoalKind, GoalKinds};
 use crate::pin::{Pin, PinReading};
-use crate::state::{ChannelState, DeviceFault, DeviceStatus, FIRMWARE_LEN};
+use crate::state::{ChannelState, DeviceFault, DeviceStatus};
 use config::DRIVER_EOR;
 use encoder::EncoderTrack;
 use io::IoState;
@@ -261,48 +287,6 @@ impl QsbDriver {
     /// The product whose goals apply: the reported one, else the configured one.
     fn effective_product(&self) -> ProductType {
         self.product.unwrap_or(self.config.variant)
-    }
-
-    /// Whether channel 0 drives the -M's stepper: a -M (as reported), its motor drive
-    /// configured, counting quadrature.
-    fn drive_active(&self) -> bool {
-        self.effective_product() == ProductType::M
-            && self.config.motor_drive
-            && self.config.input_mode == EncoderMode::Quadrature
-    }
-
-    /// `Ok` when goals and outputs can be taken: `Starting` during the start-up,
-    /// `Offline` when the link is down or the board stopped answering.
-    fn check_online(&self) -> Result<(), GoalError> {
-        if self.link_up && self.status.online {
-            Ok(())
-        } else if self.link_up && self.restart_at.is_none() && !self.setup.is_empty() {
-            Err(GoalError::Starting)
-        } else {
-            Err(GoalError::Offline)
-        }
-    }
-
-    /// The goals channel 0 takes.
-    fn kinds(&self) -> GoalKinds {
-        if self.config.input_mode != EncoderMode::Quadrature {
-            // PWM / analog: an absolute value read as the `encoder` pin, no axis.
-            return GoalKinds::NONE;
-        }
-        if !self.drive_active() {
-            return GoalKinds::of(&[GoalKind::Stop, GoalKind::SetPosition]);
-        }
-        let moves = [
-            GoalKind::Stop,
-            GoalKind::Position,
-            GoalKind::Velocity,
-            GoalKind::RampPosition,
-            GoalKind::Home,
-            GoalKind::SetPosition,
-            GoalKind::Off,
-        ];
-        let with_off = if self.config.enable.is_some() { 7 } else { 6 };
-        GoalKinds::of(moves.get(..with_off).unwrap_or(&moves))
     }
 
     /// Whether the drive runs a motor command (MD STATUS moving or jogging).
@@ -502,29 +486,9 @@ impl QsbDriver {
         self.begin_startup();
     }
 
-    /// Records the VERSION answer as the firmware description.
-    fn record_version(&mut self, version: ::qsb::Version) {
-        let mut text = FirmwareText::default();
-        let product = match version.product {
-            ProductType::D => 'D',
-            ProductType::M => 'M',
-            ProductType::S => 'S',
-        };
-        // The buffer is larger than the longest description; a failure only cuts it.
-        let _ = write!(
-            text,
-            "QSB-{product} SN {:05X} fw {:02X}",
-            version.serial, version.firmware
-        );
-        self.status.set_firmware(text.as_str());
-        self.product = Some(version.product);
-        self.serial = Some(version.serial);
-    }
-
     /// Lets every plan move on as far as it can without the board.
     fn settle(&mut self, now: Duration) {
-        if self.home_failed && self.goal.is_empty() && (!self.drive_active() || self.drive_done())
-        {
+        if self.home_failed && self.goal.is_empty() && (!self.drive_active() || self.drive_done()) {
             // The failed search's stop is complete.
             self.home_failed = false;
         }
@@ -593,29 +557,6 @@ impl QsbDriver {
                 .fault
                 .or(self.home_failed.then_some(DeviceFault::HomeFailed)),
         }
-    }
-}
-
-/// A fixed buffer the firmware description is formatted into.
-#[derive(Default)]
-struct FirmwareText {
-    buf: [u8; FIRMWARE_LEN],
-    len: usize,
-}
-
-impl FirmwareText {
-    fn as_str(&self) -> &str {
-        core::str::from_utf8(self.buf.get(..self.len).unwrap_or_default()).unwrap_or("")
-    }
-}
-
-impl core::fmt::Write for FirmwareText {
-    fn write_str(&mut self, s: &str) -> core::fmt::Result {
-        let end = self.len + s.len();
-        let slot = self.buf.get_mut(self.len..end).ok_or(core::fmt::Error)?;
-        slot.copy_from_slice(s.as_bytes());
-        self.len = end;
-        Ok(())
     }
 }
 

@@ -135,10 +135,10 @@ impl QsbDriver {
                     self.rebase_pending = true;
                 }
             }
-            Some(register @ (Register::DigIo | Register::Capture)) => {
-                if response.time_stamp.is_some() {
-                    self.io_line(now, register, response.data);
-                }
+            Some(register @ (Register::DigIo | Register::Capture))
+                if response.time_stamp.is_some() =>
+            {
+                self.io_line(now, register, response.data);
             }
             _ => {}
         }
@@ -172,7 +172,9 @@ impl QsbDriver {
             Request::Stream(Register::Capture) => self.io.capture_streaming = true,
             Request::Read(Register::DigIoConfig) => {
                 // What the board holds: an equal configuration is not written again.
-                if let Some(slot) = self.board.get_mut(usize::from(Register::DigIoConfig.number()))
+                if let Some(slot) = self
+                    .board
+                    .get_mut(usize::from(Register::DigIoConfig.number()))
                 {
                     *slot = Some(response.data);
                 }

@@ -114,7 +114,11 @@ impl Bench {
             let register = CommandLine::decode(sent.strip_suffix(b"\r\n").expect("EOC"))
                 .expect("line")
                 .register;
-            let extra = self.values.iter().find(|(r, _)| *r == register).map(|(_, v)| *v);
+            let extra = self
+                .values
+                .iter()
+                .find(|(r, _)| *r == register)
+                .map(|(_, v)| *v);
             let value = match &sent[..3] {
                 b"R14" => self.version,
                 b"S13" => 0x11,

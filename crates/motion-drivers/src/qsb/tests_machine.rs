@@ -49,15 +49,15 @@ fn machine() -> QsbDriverConfig {
 const MACHINE_START_UP: [&str; 19] = [
     "W161", "R14", // quiet the streams, VERSION
     "W1061A0", "W164", // MD ACCEL, COMMAND 4 "Motor Stop"
-    "W155", "W000", "W0343", // EOR, MODE quadrature, MDR0
-    "W048",  // MDR1 B3 "Invert Index"
-    "W0B0",  // THRESHOLD
-    "W0C5",  // INTERVAL RATE 5 ticks ("Set 9.8ms Interval, W0C5")
+    "W155", "W000", "W0343",  // EOR, MODE quadrature, MDR0
+    "W048",   // MDR1 B3 "Invert Index"
+    "W0B0",   // THRESHOLD
+    "W0C5",   // INTERVAL RATE 5 ticks ("Set 9.8ms Interval, W0C5")
     "W0F9C0", // MD STEP RATE
-    "R02",   // DIG I/O CONFIG as the board holds it
+    "R02",    // DIG I/O CONFIG as the board holds it
     // B11 io3 an output, B4 interrupt on io0, B0 "1= high-low"
     "W02811", // then "All I/O port pins will be set high"
-    "W017",  // io3 low: the drive enabled
+    "W017",   // io3 low: the drive enabled
     "W162", "S13", // COMMAND 2 "Activate motor drive mode", stream MD STATUS
     "S01", "S05", "S0E", // stream DIG I/O, CAPTURE, READ ENCODER
 ];
@@ -207,20 +207,14 @@ fn a_search_past_its_travel_stops_and_reports_home_failed_until_its_stop_is_done
     }
     bench.counter -= 100;
     bench.tick(None);
-    assert_eq!(
-        bench.driver.channel(0).fault,
-        Some(DeviceFault::HomeFailed)
-    );
+    assert_eq!(bench.driver.channel(0).fault, Some(DeviceFault::HomeFailed));
     assert_eq!(bench.driver.status().fault, None, "a channel fault");
     // The engine stops the faulted axis: the fault stays while the motor stops.
     let stop = Goal::Stop { decel: 100_000.0 };
     bench.driver.set_goal(bench.now, 0, stop).expect("stop");
     assert_eq!(bench.run(), ["W164", "W0343", "R06"]);
     bench.tick(Some(MD_JOGGING));
-    assert_eq!(
-        bench.driver.channel(0).fault,
-        Some(DeviceFault::HomeFailed)
-    );
+    assert_eq!(bench.driver.channel(0).fault, Some(DeviceFault::HomeFailed));
     bench.tick(Some(MD_DONE));
     bench.tick(None);
     bench.tick(None);
@@ -247,10 +241,7 @@ fn a_search_whose_encoder_does_not_count_fails_after_its_time_limit() {
     while bench.now < started + limit + Duration::from_millis(20) {
         bench.tick(None);
     }
-    assert_eq!(
-        bench.driver.channel(0).fault,
-        Some(DeviceFault::HomeFailed)
-    );
+    assert_eq!(bench.driver.channel(0).fault, Some(DeviceFault::HomeFailed));
     assert_eq!(bench.run(), ["W164", "W0343", "R06"]);
 }
 
@@ -285,7 +276,10 @@ fn digital_inputs_outputs_and_capture_are_read_and_driven() {
         })
     );
     assert_eq!(bench.driver.read_pin(IO3).map(|r| r.value), Some(1.0));
-    assert_eq!(bench.driver.read_pin(M_CAPTURE).map(|r| r.value), Some(-5.0));
+    assert_eq!(
+        bench.driver.read_pin(M_CAPTURE).map(|r| r.value),
+        Some(-5.0)
+    );
     // Streamed on change: a later encoder line says the levels still hold.
     bench.tick(None);
     assert_eq!(
@@ -331,7 +325,10 @@ fn outputs_are_written_again_after_a_reset() {
     let bytes = bench.line(ResponseType::Stream, 0x0E, 0);
     bench.rx(&bytes);
     let lines = bench.run();
-    let config_at = lines.iter().position(|l| l == "W02100").expect("io0 output");
+    let config_at = lines
+        .iter()
+        .position(|l| l == "W02100")
+        .expect("io0 output");
     assert_eq!(lines[config_at + 1], "W01E", "{lines:?}");
 }
 
@@ -376,7 +373,9 @@ fn analog_mode_reads_the_special_data_format_and_carries_no_axis() {
     });
     assert_eq!(
         bench.run(),
-        ["W161", "R14", "W155", "W002", "W0343", "W040", "W0B0", "W0C1", "S0E"],
+        [
+            "W161", "R14", "W155", "W002", "W0343", "W040", "W0B0", "W0C1", "S0E"
+        ],
         "MODE 10 = ANALOG MODE"
     );
     assert_eq!(bench.driver.capabilities(0), crate::GoalKinds::NONE);
@@ -413,7 +412,10 @@ fn analog_mode_on_a_qsb_m_takes_the_digital_inputs_from_the_samples() {
     let bytes = bench.line(ResponseType::Stream, 0x0E, sample.data());
     bench.rx(&bytes);
     assert_eq!(bench.driver.read_pin(IO1).map(|r| r.value), Some(0.0));
-    assert_eq!(bench.driver.read_pin(M_ENCODER).map(|r| r.value), Some(1023.0));
+    assert_eq!(
+        bench.driver.read_pin(M_ENCODER).map(|r| r.value),
+        Some(1023.0)
+    );
 }
 
 #[test]
@@ -431,12 +433,18 @@ fn pwm_mode_on_a_qsb_m_has_no_motor_drive_and_frees_io1_and_io2() {
     });
     let lines = bench.run();
     assert!(lines.contains(&"W001".to_owned()), "MODE 01 = PWM MODE");
-    assert!(lines.contains(&"W02200".to_owned()), "io1 an output: {lines:?}");
+    assert!(
+        lines.contains(&"W02200".to_owned()),
+        "io1 an output: {lines:?}"
+    );
     assert!(!lines.contains(&"W162".to_owned()), "no motor drive");
     bench.advance(TICK);
     let bytes = bench.line(ResponseType::Stream, 0x0E, 3000);
     bench.rx(&bytes);
-    assert_eq!(bench.driver.read_pin(M_ENCODER).map(|r| r.value), Some(3000.0));
+    assert_eq!(
+        bench.driver.read_pin(M_ENCODER).map(|r| r.value),
+        Some(3000.0)
+    );
     bench.driver.set_output(bench.now, IO1, false).expect("io1");
     assert_eq!(bench.run(), ["W01D"]);
 }
