@@ -129,6 +129,14 @@ impl QsbDriverConfig {
         TICK * u32::from(self.interval().0)
     }
 
+    /// The fraction of the line one READ ENCODER line (sent at every data output tick)
+    /// takes at this interval: above 1 the board skips samples. 0.47 at 230400 baud and
+    /// 1 tick.
+    pub fn stream_load(&self) -> f64 {
+        let line = wire_time(self.baud, DRIVER_LINE_LEN).as_secs_f64();
+        line / self.stream_period().as_secs_f64().max(f64::MIN_POSITIVE)
+    }
+
     /// Streams that may each send a line at one data output tick: READ ENCODER, and (as
     /// configured) MD STATUS and STR (home search) on a driving -M, DIG I/O, CAPTURE.
     fn streams(&self) -> u64 {

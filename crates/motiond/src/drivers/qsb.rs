@@ -1,14 +1,57 @@
-//! The QSB driver of a `[[device]]`, configured from its axis and machine keys.
+//! The QSB driver of a `[[device]]`, configured from its axis, its machine keys
+//! (`docs/keys/qsb.md`) and its signals.
 
 use motion_drivers::Driver;
-use motion_drivers::qsb::{QsbDriver, QsbDriverConfig};
+use motion_drivers::qsb::{CaptureInput, EnableOutput, QsbDriver, QsbDriverConfig, QsbIo};
+use qsb::{EncoderMode, TICK};
 
 use super::{ParamRow, channel_limits, line_rate};
-use crate::config::{DeviceSpec, ServerConfig};
+use crate::config::{
+    AxisSpec, DeviceMachine, DeviceSpec, Direction, Owner, QsbDeviceKeys, QsbVariant, ServerConfig,
+};
 
-/// The driver of qsb device `index`.
-pub(super) fn build(config: &ServerConfig, index: usize, device: &DeviceSpec) -> Box<dyn Driver> {
-    let mut driver = QsbDriverConfig::default();
+/// The product of a configured variant.
+fn product(variant: QsbVariant) -> qsb::ProductType {
+    match variant {
+        QsbVariant::M => qsb::ProductType::M,
+        QsbVariant::S => qsb::ProductType::S,
+        QsbVariant::D => qsb::ProductType::D,
+    }
+}
+
+/// The axis on channel 0 of qsb device `index`, with its spec.
+fn axis_of<'c>(
+    config: &'c ServerConfig,
+    index: usize,
+) -> Option<(&'c motion_engine::AxisConfig, &'c AxisSpec)> {
+    config
+        .axes
+        .iter()
+        .zip(&config.axis_specs)
+        .find(|(axis, _)| axis.device == index && axis.channel == 0)
+}
+
+/// The device's qsb keys (all `None` for a device without them).
+fn keys_of(device: &DeviceSpec) -> QsbDeviceKeys {
+    match &device.machine {
+        DeviceMachine::Qsb(keys) => keys.clone(),
+        _ => QsbDeviceKeys::default(),
+    }
+}
+
+/// The driver config of qsb device `index`: the link's baud, the axis's limits and
+/// `HomeSpec`, the machine keys, the signals. Shared by [`build`] and [`describe`].
+pub(crate) fn driver_config(
+    config: &ServerConfig,
+    index: usize,
+    device: &DeviceSpec,
+) -> QsbDriverConfig {
+    let keys = keys_of(device);
+    let variant = product(device.qsb_variant);
+    let mut driver = QsbDriverConfig {
+        variant,
+        ..QsbDriverConfig::default()
+    };
     if let Some(baud) = line_rate(config, device) {
         driver.baud = baud;
     }
@@ -16,15 +59,127 @@ pub(super) fn build(config: &ServerConfig, index: usize, device: &DeviceSpec) ->
         driver.max_velocity = max_velocity;
         driver.max_accel = max_accel;
     }
-    Box::new(QsbDriver::new(driver))
+    let axis = axis_of(config, index);
+    if let Some((axis, spec)) = axis {
+        let cpu = axis.counts_per_unit;
+        // The search direction in counts: a negative counts_per_unit turns it round.
+        driver.home_positive = (spec.home.direction == Direction::Positive) == (cpu > 0.0);
+        driver.home_max_travel = spec.home.max_travel * cpu.abs();
+        // (Validation keeps it within the 32-bit counter.)
+        driver.home_position = (spec.home.position * cpu).round() as i32;
+    }
+    if let Some(c) = keys.counts_per_step {
+        driver.counts_per_step = c;
+    }
+    driver.invert_index = keys.index_inverted.unwrap_or(false);
+    driver.stream_interval = keys.stream_interval_ticks;
+    if let Some(latency) = keys.host_latency {
+        driver.latency = latency;
+    }
+    driver.input_mode = keys.input_mode.unwrap_or_default();
+    driver.motor_drive = driver.input_mode == EncoderMode::Quadrature && axis.is_some();
+    driver.enable = keys.enable_output.map(|bit| EnableOutput {
+        bit,
+        active_high: keys.enable_active_high.unwrap_or(false),
+    });
+    let mut io = QsbIo {
+        capture: keys.capture_input.map(|bit| CaptureInput {
+            bit,
+            falling: keys.capture_falling.unwrap_or(false),
+        }),
+        ..QsbIo::default()
+    };
+    for signal in config.signals.iter().filter(|s| s.device == index) {
+        io.add(variant, signal.pin, signal.kind);
+    }
+    driver.io = io;
+    driver
 }
 
-/// The machine parameters of qsb device `index` and its axes, as the driver uses them.
+/// The driver of qsb device `index`.
+pub(super) fn build(config: &ServerConfig, index: usize, device: &DeviceSpec) -> Box<dyn Driver> {
+    Box::new(QsbDriver::new(driver_config(config, index, device)))
+}
+
+/// A number as the config would write it (no trailing `.0` noise, full precision).
+fn number(value: f64) -> String {
+    format!("{value}")
+}
+
+/// The machine parameters of qsb device `index`, as the driver uses them.
 pub(super) fn describe(
     config: &ServerConfig,
     index: usize,
     device: &DeviceSpec,
     out: &mut Vec<ParamRow>,
 ) {
-    let _ = (config, index, device, out);
+    let driver = driver_config(config, index, device);
+    let mut row = |key: &str, value: String| {
+        out.push(ParamRow {
+            owner: Owner::Device(index),
+            key: key.to_owned(),
+            value,
+        });
+    };
+    row("counts_per_step", number(driver.counts_per_step));
+    if let Some((axis, spec)) = axis_of(config, index) {
+        row("home_direction", spec.home.direction.id().to_owned());
+        row(
+            "home_max_travel",
+            format!("{} {}", number(spec.home.max_travel), axis.unit),
+        );
+        row(
+            "home_offset",
+            format!("{} {}", number(spec.home.position), axis.unit),
+        );
+    }
+    let polarity = if driver.invert_index {
+        "inverted"
+    } else {
+        "normal"
+    };
+    row("index_polarity", polarity.to_owned());
+    let ticks = driver.interval().0;
+    let ms = f64::from(ticks) * TICK.as_secs_f64() * 1000.0;
+    let plural = if ticks == 1 { "" } else { "s" };
+    row(
+        "stream_interval_ms",
+        format!("{} ms ({ticks} tick{plural})", number(ms)),
+    );
+    row(
+        "host_latency_ms",
+        format!("{} ms", number(driver.latency.as_secs_f64() * 1000.0)),
+    );
+    let enable = driver.enable;
+    row(
+        "enable_output",
+        enable.map_or_else(|| "none".to_owned(), |e| e.bit.to_string()),
+    );
+    let active = enable.map_or_else(
+        || keys_of(device).enable_active_high.unwrap_or(false),
+        |e| e.active_high,
+    );
+    row(
+        "enable_active",
+        if active { "high" } else { "low" }.to_owned(),
+    );
+    let mode = match driver.input_mode {
+        EncoderMode::Quadrature => "quadrature",
+        EncoderMode::Pwm => "pwm",
+        EncoderMode::Analog => "analog",
+    };
+    row("input_mode", mode.to_owned());
+    let capture = driver.io.capture;
+    row(
+        "capture_input",
+        capture.map_or_else(|| "none".to_owned(), |c| c.bit.to_string()),
+    );
+    let falling = capture.map_or_else(
+        || keys_of(device).capture_falling.unwrap_or(false),
+        |c| c.falling,
+    );
+    row(
+        "capture_edge",
+        if falling { "falling" } else { "rising" }.to_owned(),
+    );
 }
