@@ -92,13 +92,11 @@ pub(in crate::config) fn device_keys(
 ) -> Option<QsbDeviceKeys> {
     let product = variant_of(raw);
     let mut keys = QsbDeviceKeys::default();
-    let mut ok = true;
     if let Some(value) = &raw.counts_per_step {
         let c = *value.get_ref();
         if c.is_finite() && c != 0.0 {
             keys.counts_per_step = Some(c);
         } else {
-            ok = false;
             v.issue(
                 value.span(),
                 &ctx.key("counts_per_step"),
@@ -109,18 +107,15 @@ pub(in crate::config) fn device_keys(
     if let Some(value) = &raw.index_polarity {
         let allowed = [("normal", false), ("inverted", true)];
         keys.index_inverted = choice(v, value, &ctx.key("index_polarity"), &allowed);
-        ok &= keys.index_inverted.is_some();
     }
     if let Some(value) = &raw.stream_interval_ms {
         keys.stream_interval_ticks = stream_interval(v, value, &ctx.key("stream_interval_ms"));
-        ok &= keys.stream_interval_ticks.is_some();
     }
     if let Some(value) = &raw.host_latency_ms {
         let ms = *value.get_ref();
         if ms.is_finite() && (0.0..=1000.0).contains(&ms) {
             keys.host_latency = Some(Duration::from_secs_f64(ms / 1000.0));
         } else {
-            ok = false;
             v.issue(
                 value.span(),
                 &ctx.key("host_latency_ms"),
@@ -130,12 +125,10 @@ pub(in crate::config) fn device_keys(
     }
     if let Some(value) = &raw.enable_output {
         keys.enable_output = enable_output(v, value, &ctx.key("enable_output"), product);
-        ok &= keys.enable_output.is_some();
     }
     if let Some(value) = &raw.enable_active {
         let allowed = [("low", false), ("high", true)];
         keys.enable_active_high = choice(v, value, &ctx.key("enable_active"), &allowed);
-        ok &= keys.enable_active_high.is_some();
         if raw.enable_output.is_none() {
             v.warn(
                 value.span(),
@@ -151,13 +144,11 @@ pub(in crate::config) fn device_keys(
             ("analog", EncoderMode::Analog),
         ];
         keys.input_mode = choice(v, value, &ctx.key("input_mode"), &allowed);
-        ok &= keys.input_mode.is_some();
         if product == ProductType::D
             && keys
                 .input_mode
                 .is_some_and(|m| m != EncoderMode::Quadrature)
         {
-            ok = false;
             v.issue(
                 value.span(),
                 &ctx.key("input_mode"),
@@ -167,9 +158,7 @@ pub(in crate::config) fn device_keys(
     }
     if let Some(value) = &raw.capture_input {
         keys.capture_input = capture_input(v, value, &ctx.key("capture_input"), product);
-        ok &= keys.capture_input.is_some();
         if keys.capture_input.is_some() && keys.capture_input == keys.enable_output {
-            ok = false;
             v.issue(
                 value.span(),
                 &ctx.key("capture_input"),
@@ -180,7 +169,6 @@ pub(in crate::config) fn device_keys(
     if let Some(value) = &raw.capture_edge {
         let allowed = [("rising", false), ("falling", true)];
         keys.capture_falling = choice(v, value, &ctx.key("capture_edge"), &allowed);
-        ok &= keys.capture_falling.is_some();
         if raw.capture_input.is_none() {
             v.warn(
                 value.span(),
@@ -189,7 +177,9 @@ pub(in crate::config) fn device_keys(
             );
         }
     }
-    ok.then_some(keys)
+    // Keys in error stay unset here; the issues already refuse the file, and the other
+    // tables are still checked against the rest (every issue at once).
+    Some(keys)
 }
 
 /// `stream_interval_ms`: whole ticks of 1/512 s, 1..=0xFFFE.
