@@ -355,12 +355,11 @@ impl QsbDriver {
         let Some(latest) = self.encoder.latest() else {
             return false;
         };
-        let steps = self
-            .config
-            .steps(target - f64::from(latest.count))
-            .map(f64::round);
-        match steps {
-            Some(0.0) => {
+        let steps = self.config.steps(target - f64::from(latest.count));
+        match steps.map(f64::round) {
+            // Within half a step: as close as whole steps get (a target half-way between
+            // two steps must not make the motor hop between them).
+            _ if steps.is_some_and(|s| s.abs() <= 0.5) => {
                 self.goal.pop();
                 self.arrived = true;
             }

@@ -483,3 +483,20 @@ fn what_the_board_or_the_drive_cannot_have_is_dropped() {
     assert!(!s.driver.capabilities(0).contains(GoalKind::Off));
     assert_eq!(s.driver.read_pin(IO0), None);
 }
+
+#[test]
+fn a_target_half_a_step_away_is_as_close_as_whole_steps_get() {
+    // 4 counts per step: 2 counts is half a step — moving would land 2 counts beyond, and
+    // the correction back where it started, forever.
+    let mut bench = Bench::started_with(machine());
+    for _ in 0..3 {
+        bench.tick(Some(MD_DONE));
+    }
+    let goal = Goal::Position { counts: 2.0 };
+    bench.driver.set_goal(bench.now, 0, goal).expect("position");
+    assert_eq!(bench.run(), Vec::<String>::new());
+    assert!(bench.driver.channel(0).arrived);
+    let goal = Goal::Position { counts: 3.0 };
+    bench.driver.set_goal(bench.now, 0, goal).expect("position");
+    assert_eq!(bench.run(), ["W111", "W168"], "three quarters: one step");
+}
