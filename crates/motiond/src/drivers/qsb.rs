@@ -20,10 +20,7 @@ fn product(variant: QsbVariant) -> qsb::ProductType {
 }
 
 /// The axis on channel 0 of qsb device `index`, with its spec.
-fn axis_of<'c>(
-    config: &'c ServerConfig,
-    index: usize,
-) -> Option<(&'c motion_engine::AxisConfig, &'c AxisSpec)> {
+fn axis_of(config: &ServerConfig, index: usize) -> Option<(&motion_engine::AxisConfig, &AxisSpec)> {
     config
         .axes
         .iter()
