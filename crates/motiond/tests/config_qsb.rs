@@ -478,3 +478,25 @@ fn the_built_driver_writes_the_configured_parameters_to_the_simulated_board() {
         "no digital signal to stream"
     );
 }
+
+#[test]
+fn the_real_hardware_example_is_valid_and_means_what_its_comments_say() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../config/examples/qsb-real.toml");
+    let config = ServerConfig::load(&path).expect("the example is valid");
+    assert!(config.warnings.is_empty(), "{:?}", config.warnings);
+    let rows = rows(&config);
+    for (key, value) in [
+        ("counts_per_step", "4"),
+        ("home_direction", "positive"),
+        ("home_max_travel", "60 mm"),
+        ("home_offset", "0 mm"),
+        ("enable_output", "3"),
+        ("enable_active", "low"),
+    ] {
+        assert!(
+            rows.contains(&(key.to_owned(), value.to_owned())),
+            "{key} = {value} in {rows:?}"
+        );
+    }
+    assert_eq!(config.signals.len(), 2);
+}
