@@ -180,3 +180,73 @@ pub(super) fn describe(
         if falling { "falling" } else { "rising" }.to_owned(),
     );
 }
+
+#[cfg(test)]
+mod tests {
+    use std::path::Path;
+
+    use motion_drivers::{Pin, qsb::EnableOutput};
+
+    use super::*;
+
+    fn config(device_keys: &str, counts_per_unit: f64, signals: &str) -> ServerConfig {
+        let text = format!(
+            "[[link]]\nname = \"usb\"\ntype = \"serial\"\npath = \"/dev/null-qsb\"\nbaud = 115200\n\n[[device]]\nname = \"q\"\nlink = \"usb\"\nmodel = \"qsb\"\n{device_keys}\n\n[[axis]]\nname = \"a\"\ndevice = \"q\"\nchannel = 0\nunit = \"mm\"\ncounts_per_unit = {counts_per_unit}\nmin = -10.0\nmax = 30.0\nmax_velocity = 5.0\nmax_accel = 50.0\n{signals}"
+        );
+        ServerConfig::parse(Path::new("t.toml"), &text).expect("valid")
+    }
+
+    #[test]
+    fn home_spec_maps_to_counts_with_the_sign_of_counts_per_unit() {
+        let keys = "home_direction = \"positive\"\nhome_max_travel = 12.5\nhome_offset = -1.25";
+        let up = config(keys, 100.0, "");
+        let driver = driver_config(&up, 0, &up.devices[0]);
+        assert!(driver.home_positive);
+        assert_eq!(driver.home_max_travel, 1250.0);
+        assert_eq!(driver.home_position, -125);
+        assert_eq!(driver.baud, 115_200);
+        assert_eq!((driver.max_velocity, driver.max_accel), (500.0, 5000.0));
+        assert!(driver.motor_drive);
+        // counts_per_unit < 0: positive units are negative counts.
+        let down = config(keys, -100.0, "");
+        let driver = driver_config(&down, 0, &down.devices[0]);
+        assert!(!driver.home_positive);
+        assert_eq!(driver.home_max_travel, 1250.0);
+        assert_eq!(driver.home_position, 125);
+        // Defaults: negative, 1.25 × the 40 mm range, 0.
+        let plain = config("", 100.0, "");
+        let driver = driver_config(&plain, 0, &plain.devices[0]);
+        assert!(!driver.home_positive);
+        assert_eq!(driver.home_max_travel, 5000.0);
+        assert_eq!(driver.home_position, 0);
+    }
+
+    #[test]
+    fn machine_keys_and_signals_reach_the_driver_config() {
+        let keys = "counts_per_step = -2.5\nindex_polarity = \"inverted\"\nstream_interval_ms = 3.9\nhost_latency_ms = 12.0\nenable_output = 0\nenable_active = \"high\"\ncapture_input = 3\ncapture_edge = \"falling\"";
+        let signals =
+            "\n[[signal]]\nname = \"door\"\ndevice = \"q\"\nkind = \"digital-in\"\npin = \"io3\"\n";
+        let set = config(keys, 100.0, signals);
+        let driver = driver_config(&set, 0, &set.devices[0]);
+        assert_eq!(driver.counts_per_step, -2.5);
+        assert!(driver.invert_index);
+        assert_eq!(driver.stream_interval, Some(2));
+        assert_eq!(driver.latency, core::time::Duration::from_millis(12));
+        assert_eq!(
+            driver.enable,
+            Some(EnableOutput {
+                bit: 0,
+                active_high: true
+            })
+        );
+        assert_eq!(driver.io.digital_in, 0b1000);
+        assert_eq!(
+            driver.io.capture,
+            Some(CaptureInput {
+                bit: 3,
+                falling: true
+            })
+        );
+        assert_eq!(set.signals[0].pin, Pin(3));
+    }
+}
