@@ -343,7 +343,7 @@ fn warnings_for_keys_without_effect_and_a_stream_the_line_cannot_carry() {
     warned(
         &with_device_keys("stream_interval_ms = 2.0"),
         "device[0].stream_interval_ms",
-        "1 ticks = 1.953125 ms",
+        "1 tick = 1.953125 ms",
     );
     warned(
         &with_device_keys("enable_active = \"high\""),

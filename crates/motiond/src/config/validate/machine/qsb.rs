@@ -205,7 +205,11 @@ fn stream_interval(v: &mut Validator<'_, '_>, value: &Spanned<f64>, key: &str) -
         v.warn(
             value.span(),
             key,
-            format!("{ms} ms is not a whole number of 1/512 s ticks; the board gets {} ticks = {effective} ms", rate.0),
+            format!(
+                "{ms} ms is not a whole number of 1/512 s ticks; the board gets {} tick{} = {effective} ms",
+                rate.0,
+                if rate.0 == 1 { "" } else { "s" }
+            ),
         );
     }
     Some(rate.0)
