@@ -650,6 +650,7 @@ mod random {
         AnswerLast(u32),
         SetGoal(u8, f64, f64),
         Link(bool),
+        Output(u16, bool),
     }
 
     fn op() -> impl Strategy<Value = Op> {
@@ -666,6 +667,7 @@ mod random {
             any::<u32>().prop_map(Op::AnswerLast),
             (0u8..9, any::<f64>(), -1e6f64..1e6).prop_map(|(k, a, b)| Op::SetGoal(k, a, b)),
             any::<bool>().prop_map(Op::Link),
+            (0u16..8, any::<bool>()).prop_map(|(pin, high)| Op::Output(pin, high)),
         ]
     }
 
@@ -698,12 +700,29 @@ mod random {
         #[test]
         fn any_traffic_goals_and_times_keep_the_driver_sane(
             started in any::<bool>(),
+            machine in any::<bool>(),
             ops in proptest::collection::vec(op(), 0..120),
         ) {
-            let mut bench = if started {
-                Bench::started(ProductType::M)
+            // Plain, or with an enable line, digital signals and the capture input.
+            let config = if machine {
+                QsbDriverConfig {
+                    counts_per_step: -4.0,
+                    home_position: 77,
+                    enable: Some(super::super::EnableOutput { bit: 3, active_high: false }),
+                    io: super::super::QsbIo {
+                        digital_in: 1,
+                        capture: Some(super::super::CaptureInput { bit: 0, falling: true }),
+                        ..super::super::QsbIo::default()
+                    },
+                    ..QsbDriverConfig::default()
+                }
             } else {
-                Bench::new(ProductType::M)
+                QsbDriverConfig::default()
+            };
+            let mut bench = if started {
+                Bench::started_with(config)
+            } else {
+                Bench::with_config(config)
             };
             let mut last: Option<Vec<u8>> = None;
             for op in ops {
@@ -735,6 +754,14 @@ mod random {
                         if !online {
                             prop_assert!(result.is_err());
                         }
+                    }
+                    Op::Output(pin, high) => {
+                        let pin = crate::Pin(pin);
+                        let result = bench.driver.set_output(bench.now, pin, high);
+                        if !bench.driver.status().online {
+                            prop_assert!(result.is_err());
+                        }
+                        let _ = bench.driver.read_pin(pin);
                     }
                     Op::Link(up) => {
                         if up {
