@@ -82,7 +82,7 @@
 //!
 //! One request in flight; its answer is matched by type and register among the streamed
 //! lines. Position is the streamed counter, velocity the count difference over the last
-//! [`encoder::VELOCITY_WINDOW`] samples divided by their time-stamp difference. A board
+//! 8 samples (`VELOCITY_WINDOW`) divided by their time-stamp difference. A board
 //! reset shows as a line without the time stamp (EOR lost), a time stamp going backwards,
 //! a -M drive found disabled, or the stream gone silent while the board still answers
 //! `R14`; it is reported as [`DeviceFault::Reset`] and the start-up runs again. A board
