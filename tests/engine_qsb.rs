@@ -3,6 +3,11 @@
 
 mod support;
 
+#[path = "engine_qsb/io.rs"]
+mod io;
+#[path = "engine_qsb/machine.rs"]
+mod machine;
+
 use core::time::Duration;
 use std::sync::{Arc, Mutex};
 
@@ -26,14 +31,30 @@ struct Qsb {
     rig: Rig,
     sim: Arc<Mutex<QsbSim>>,
     faults: SimFaults,
+    /// Motor steps per axis unit.
+    steps_per_unit: f64,
 }
 
 fn rig(variant: Variant, motion: EncoderMotion, command_timeout: Duration) -> Qsb {
-    let (device, sim) = Shared::new(QsbSim::new(QsbSimConfig {
+    let sim = QsbSimConfig {
         variant,
         motion,
         ..QsbSimConfig::default()
-    }));
+    };
+    let driver = QsbDriverConfig {
+        variant,
+        counts_per_step: 10.0,
+        max_velocity: MAX_VELOCITY * COUNTS_PER_UNIT,
+        max_accel: MAX_ACCEL * COUNTS_PER_UNIT,
+        ..QsbDriverConfig::default()
+    };
+    rig_with(sim, driver, command_timeout)
+}
+
+/// The engine with one QSB axis (the constants above) on a simulated board `sim` driven by
+/// a driver of `driver`.
+fn rig_with(sim: QsbSimConfig, driver: QsbDriverConfig, command_timeout: Duration) -> Qsb {
+    let (device, sim) = Shared::new(QsbSim::new(sim));
     let link = SimLink::stream("usb0", 230_400, device);
     let faults = link.faults();
     let config = EngineConfig {
@@ -64,16 +85,16 @@ fn rig(variant: Variant, motion: EncoderMotion, command_timeout: Duration) -> Qs
         }],
         ..EngineConfig::default()
     };
-    let driver = QsbDriver::new(QsbDriverConfig {
-        variant,
-        counts_per_step: 10.0,
-        max_velocity: MAX_VELOCITY * COUNTS_PER_UNIT,
-        max_accel: MAX_ACCEL * COUNTS_PER_UNIT,
-        ..QsbDriverConfig::default()
-    });
+    let steps_per_unit = COUNTS_PER_UNIT / driver.counts_per_step.abs();
+    let driver = QsbDriver::new(driver);
     let mut rig = Rig::new(config, vec![Box::new(driver)], vec![Box::new(link)]);
     rig.log_wire = true;
-    Qsb { rig, sim, faults }
+    Qsb {
+        rig,
+        sim,
+        faults,
+        steps_per_unit,
+    }
 }
 
 fn still() -> EncoderMotion {
@@ -135,11 +156,11 @@ impl Qsb {
             // Rounding of the simulator's exact phase arithmetic aside.
             let margin = 1.0 + 1e-6;
             assert!(
-                velocity.abs() <= MAX_VELOCITY * 10.0 * margin,
+                velocity.abs() <= MAX_VELOCITY * self.steps_per_unit * margin,
                 "v {velocity} steps/s"
             );
             assert!(
-                acceleration.abs() <= MAX_ACCEL * 10.0 * margin,
+                acceleration.abs() <= MAX_ACCEL * self.steps_per_unit * margin,
                 "a {acceleration} steps/s²"
             );
             if done(&self.rig.axis(0)) {

@@ -114,6 +114,9 @@ pub(crate) struct RawDevice {
     pub host_latency_ms: Option<Spanned<f64>>,
     pub enable_output: Option<Spanned<i64>>,
     pub enable_active: Option<Spanned<String>>,
+    pub input_mode: Option<Spanned<String>>,
+    pub capture_input: Option<Spanned<i64>>,
+    pub capture_edge: Option<Spanned<String>>,
     // tmcpack machine keys (config/machine/tmcpack.rs)
     pub reply_address: Option<Spanned<i64>>,
     pub switchover_ms: Option<Spanned<i64>>,
