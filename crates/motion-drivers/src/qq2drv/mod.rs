@@ -81,7 +81,9 @@ mod channel;
 mod config;
 mod in_flight;
 mod packet;
+mod pins;
 mod startup;
+mod step;
 
 use core::time::Duration;
 
@@ -92,14 +94,20 @@ use qq2drv::{
 
 use crate::driver::{Driver, Model, Priority, Transmit};
 use crate::goal::{Goal, GoalError, GoalKind, GoalKinds};
+use crate::pin::{Pin, PinReading};
 use crate::state::{ChannelState, DeviceFault, DeviceStatus};
 
-pub use channel::{ARRIVED_WITHIN, STANDSTILL, STOP_SETTLE};
-pub use config::{AxisLimits, ChannelConfig, HomeInput, Qq2drvDriverConfig};
+pub use channel::{ARRIVED_WITHIN, LOOP_PERIOD, STANDSTILL, STOP_SETTLE};
+pub use config::{
+    AxisLimits, ChannelConfig, HomeInput, PositionPid, Qq2drvDriverConfig, VelocityPid,
+};
 pub use in_flight::IN_FLIGHT_CAPACITY;
+pub use pins::{PINS, PINS_PER_CHANNEL, pin_of};
 
 use channel::Channel;
 use in_flight::{InFlight, Sent, Tag};
+use packet::MAX_STEP_PACKETS;
+use pins::InputBits;
 use startup::ProbeReplies;
 
 /// Probe attempts before the board is declared not responding.
@@ -112,8 +120,12 @@ pub const POLL_SLACK: usize = 6;
 pub const FILLER: u8 = 0x00;
 /// Data mask of an enabled channel: 32-bit absolute position, velocity, status.
 pub const STREAM_MASK: DataMask = DataMask::new(PositionSize::I32, false, true, true);
+/// Data mask of a channel without an axis whose pins a signal reads: Status only.
+pub const STATUS_MASK: DataMask = DataMask::new(PositionSize::Omitted, false, false, true);
 /// Stream config: Stream Period Timing only.
 pub const STREAM_CONFIG: StreamConfig = StreamConfig::new(true, false);
+/// Configuration requests written at start-up, at most.
+const CONFIGURE_REQUESTS: usize = 10;
 
 /// Start-up and running phases.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -143,6 +155,8 @@ pub struct Qq2drvDriver {
     phase: Phase,
     link_up: bool,
     channels: [Channel; CHANNELS],
+    /// The Status bits of each channel, for the pins.
+    inputs: [InputBits; CHANNELS],
     decoder: StreamDecoder,
     in_flight: InFlight,
     /// The layout the board streams in, as acknowledged.
@@ -178,6 +192,7 @@ impl Qq2drvDriver {
             },
             link_up: true,
             channels,
+            inputs: [InputBits::default(); CHANNELS],
             decoder: StreamDecoder::new(),
             in_flight: InFlight::new(),
             layout: MotionLayout::default(),
@@ -216,11 +231,18 @@ impl Qq2drvDriver {
         self.link_up && self.phase == Phase::Running
     }
 
-    /// The data masks start-up writes.
+    /// The data masks start-up writes: position, velocity and status for a channel with
+    /// an axis, status alone for one whose pins a signal reads, nothing otherwise.
     pub fn stream_masks(&self) -> [DataMask; CHANNELS] {
-        self.config
-            .channels
-            .map(|c| if c.enabled { STREAM_MASK } else { DataMask(0) })
+        self.config.channels.map(|c| {
+            if c.enabled {
+                STREAM_MASK
+            } else if c.pins != 0 {
+                STATUS_MASK
+            } else {
+                DataMask(0)
+            }
+        })
     }
 
     /// Length of one poll transaction: a stream packet in our layout plus [`POLL_SLACK`].
@@ -274,6 +296,10 @@ impl Qq2drvDriver {
         for channel in &mut self.channels {
             channel.void_in_flight();
         }
+        for channel in &mut self.channels {
+            // The stop and the hold wait for data measured after the restart.
+            channel.data_valid = false;
+        }
         self.probe = ProbeReplies::default();
         self.probe_due = false;
         self.configure_due = false;
@@ -296,7 +322,7 @@ impl Qq2drvDriver {
         if self.probe_due && self.in_flight.has_room(4) {
             return Some((Next::Probe, Priority::Setup));
         }
-        if self.configure_due && self.in_flight.has_room(8) {
+        if self.configure_due && self.in_flight.has_room(CONFIGURE_REQUESTS) {
             return Some((Next::Configure, Priority::Setup));
         }
         // Goals wait while a whole poll period of earlier bytes is still on the wire (a
@@ -305,8 +331,11 @@ impl Qq2drvDriver {
         let backlog = self.line_free_at.saturating_sub(now);
         let goals = self.phase == Phase::Running
             && backlog <= self.config.poll_period
-            && self.in_flight.has_room(3)
-            && self.channels.iter().any(|c| c.config.enabled && c.unsent);
+            && self.in_flight.has_room(MAX_STEP_PACKETS)
+            && self
+                .channels
+                .iter()
+                .any(|c| c.config.enabled && c.unsent && c.ready());
         if goals {
             return Some((Next::Goals, Priority::Command));
         }
@@ -322,9 +351,10 @@ impl Qq2drvDriver {
     fn write_goals(&mut self, now: Duration, buf: &mut [u8]) -> usize {
         let mut len = 0;
         for (index, channel) in self.channels.iter_mut().enumerate() {
-            if !(channel.config.enabled && channel.unsent) {
+            if !(channel.config.enabled && channel.unsent && channel.ready()) {
                 continue;
             }
+            channel.resolve();
             let packets = channel.packets();
             let count = packets.iter().count();
             if !self.in_flight.has_room(count) {
@@ -359,7 +389,7 @@ impl Qq2drvDriver {
                     },
                 });
             }
-            channel.sent(count as u8);
+            channel.sent(&packets);
         }
         len
     }
@@ -401,7 +431,15 @@ impl Qq2drvDriver {
     fn on_stream(&mut self, now: Duration, data: &StreamData) {
         self.last_stream_at = now;
         self.stream_packets = self.stream_packets.saturating_add(1);
-        for (channel, sample) in self.channels.iter_mut().zip(data.data.channels) {
+        for ((channel, inputs), sample) in self
+            .channels
+            .iter_mut()
+            .zip(&mut self.inputs)
+            .zip(data.data.channels)
+        {
+            if let Some(status) = sample.status {
+                inputs.update(now, status);
+            }
             if let (true, Some(position), Some(velocity)) =
                 (channel.config.enabled, sample.position, sample.velocity)
             {
@@ -454,6 +492,17 @@ impl Qq2drvDriver {
                 match sent.id {
                     PacketId::SetDataMask => self.layout.data_masks = self.stream_masks(),
                     PacketId::SetStreamConfig => self.layout.stream_config = STREAM_CONFIG,
+                    // The configured limits and disarmed inputs are in force again.
+                    PacketId::SetAccelerationLimit => {
+                        for channel in &mut self.channels {
+                            channel.lifted = false;
+                        }
+                    }
+                    PacketId::SetInputMode => {
+                        for channel in &mut self.channels {
+                            channel.armed = false;
+                        }
+                    }
                     _ => {}
                 }
                 self.setup_unanswered = self.setup_unanswered.saturating_sub(1);
@@ -546,6 +595,9 @@ impl Driver for Qq2drvDriver {
             self.call_interval = now.saturating_sub(last).min(Duration::from_secs(1));
         }
         self.last_call_at = Some(now);
+        for inputs in &mut self.inputs {
+            inputs.tick();
+        }
         if !self.link_up {
             return;
         }
@@ -711,11 +763,13 @@ impl Driver for Qq2drvDriver {
         self.last_valid_at = None;
         self.restart(now);
     }
+
+    fn read_pin(&self, pin: Pin) -> Option<PinReading> {
+        let (channel, index) = pins::locate(pin)?;
+        let configured = self.config.channels.get(channel)?.pins & (1 << index) != 0;
+        configured.then(|| self.inputs.get(channel).map(|bits| bits.reading(index)))?
+    }
 }
 
 #[cfg(test)]
 mod tests;
-
-/// The board's I/O pins (the IN pin and status bits of each channel). Filled in with the
-/// board's I/O support; empty until then.
-pub const PINS: &[crate::PinInfo] = &[];

@@ -25,6 +25,7 @@ fn config() -> Qq2drvDriverConfig {
         active_high: false,
         positive_end: true,
         position: 500,
+        spacing: 0,
     });
     config.channels[3].enabled = false;
     config
@@ -116,6 +117,8 @@ fn running() -> (Qq2drvDriver, Duration) {
     now += MS;
     driver.handle_rx(now, &acks(configure, 0));
     assert!(driver.running());
+    // The configuration (about 200 bytes, 3.2 ms at 500 kHz) has left the wire.
+    now += 4 * MS;
     driver.handle_rx(now, &ours_stream([10, 20, 30], [0, 0, 0], [0; 3]));
     (driver, now)
 }
@@ -177,6 +180,23 @@ fn configuration_follows_the_axis_limits_in_shl_12() {
                 assert!(entries.iter().all(|e| e.limit == 30_000 << FIXED_SHIFT));
             }
             Request::SetPowerLimit(entries) => assert!(entries.iter().all(|e| e.limit == 8_191)),
+            // Packet 30: "P … Default: 100", "I … Default: 500", "D … Default: 500",
+            // "Windup Limit … Default: 600"; written for every channel with an axis.
+            Request::SetPositionPid(entries) => {
+                let e: Vec<_> = entries
+                    .iter()
+                    .map(|e| (e.channels.0, e.p, e.i, e.d, e.windup))
+                    .collect();
+                assert_eq!(
+                    e,
+                    [(1, 100, 500, 500, 600), (2, 100, 500, 500, 600), (4, 100, 500, 500, 600)]
+                );
+            }
+            // Packet 32: P 100, I 200, D 500.
+            Request::SetVelocityPid(entries) => {
+                assert_eq!(entries.len(), 3);
+                assert!(entries.iter().all(|e| (e.p, e.i, e.d) == (100, 200, 500)));
+            }
             Request::SetInputMode(entries) => {
                 let e: Vec<_> = entries.iter().collect();
                 assert_eq!(e.len(), 1);
@@ -189,7 +209,7 @@ fn configuration_follows_the_axis_limits_in_shl_12() {
             other => panic!("unexpected {other:?}"),
         }
     }
-    assert_eq!(ids, [12, 6, 8, 24, 26, 28, 14, 4]);
+    assert_eq!(ids, [12, 6, 8, 24, 26, 28, 30, 32, 14, 4]);
     // Until every write is answered the driver is not running.
     let sent_bytes = sent[0].clone();
     let all = acks(&sent_bytes, 0);
@@ -421,30 +441,92 @@ fn values_the_board_cannot_represent_are_refused() {
     assert_eq!(POWER_MAX, 8_191);
 }
 
+/// The parsed requests of one transaction.
+fn requests(mosi: &[u8]) -> Vec<Request<'_>> {
+    let mut out = Vec::new();
+    let mut rest = mosi;
+    while !rest.is_empty() {
+        let len = usize::from(rest[1]);
+        out.push(Request::parse(&rest[..len]).expect("a valid request"));
+        rest = &rest[len..];
+    }
+    out
+}
+
+fn one<T: qq2drv::Entry + Copy>(entries: &Entries<'_, T>) -> T {
+    let all: Vec<T> = entries.iter().collect();
+    assert_eq!(all.len(), 1, "one entry");
+    all[0]
+}
+
 #[test]
-fn stop_ramps_to_zero_then_holds_where_the_channel_is() {
+fn stop_resets_the_setpoint_to_the_measured_velocity_then_ramps_and_holds() {
     let (mut driver, mut now) = running();
-    driver.handle_rx(now, &ours_stream([100, 0, 0], [2_000, 0, 0], [0; 3]));
+    // The channel was asked for 3000 transitions/s but really runs at 900 (saturated).
+    let mosi = acked(
+        &mut driver,
+        now,
+        0,
+        Goal::Velocity {
+            velocity: 3_000.0,
+            accel: 30_000.0,
+        },
+    );
+    assert_eq!(requests(&mosi).len(), 2);
+    now += 4 * MS;
+    driver.handle_rx(now, &ours_stream([100, 0, 0], [900, 0, 0], [0; 3]));
     let mosi = goal_packets(&mut driver, now, 0, Goal::Stop { decel: 20_000.0 });
-    match Request::parse(&packets(&mosi)[1]).unwrap() {
-        Request::VelocityRamp(e) => {
-            let e = e.iter().next().unwrap();
-            assert_eq!((e.velocity, e.acceleration), (0, 20_000 << 12));
+    // First transaction: Off, Velocity PID (the loop starts afresh), acceleration limit
+    // lifted (packet 28: "A value of zero disables acceleration limiting") and the
+    // velocity target = the measured 900 with no ramp (packet 36: "Set to 0 to ignore").
+    let r = requests(&mosi);
+    assert_eq!(r.len(), 4);
+    match (&r[0], &r[1], &r[2], &r[3]) {
+        (
+            Request::SetControlMode(off),
+            Request::SetControlMode(velocity),
+            Request::SetAccelerationLimit(limit),
+            Request::VelocityRamp(ramp),
+        ) => {
+            assert_eq!(one(off).mode, ControlMode::Off);
+            assert_eq!(one(velocity).mode, ControlMode::VelocityPid);
+            assert_eq!(one(limit).limit, 0);
+            assert_eq!((one(ramp).velocity, one(ramp).acceleration), (900, 0));
         }
         other => panic!("{other:?}"),
     }
+    assert!(driver.channel(0).moving);
     now += MS;
     driver.handle_rx(now, &acks(&mosi, 0));
-    assert!(driver.channel(0).moving);
+    // Not before one board loop period (2 ms) after the answers.
+    assert!(drain(&mut driver, now + MS).iter().all(|t| t.iter().all(|b| *b == FILLER)));
+    now += LOOP_PERIOD;
+    let sent = drain(&mut driver, now);
+    let r = requests(&sent[0]);
+    match r.as_slice() {
+        [Request::VelocityRamp(ramp)] => {
+            assert_eq!((one(ramp).velocity, one(ramp).acceleration), (0, 20_000 << 12));
+        }
+        other => panic!("{other:?}"),
+    }
+    driver.handle_rx(now + MS, &acks(&sent[0], 0));
     assert!(driver.goals_pending(), "the hold is still to come");
-    // 2000 / 20 000 = 100 ms of ramp; the channel reports standstill at 150.
-    now += 150 * MS;
+    // 900 / 20 000 = 45 ms of ramp; the channel reports standstill at 60.
+    now += 60 * MS;
     driver.handle_rx(now, &ours_stream([150, 0, 0], [0, 0, 0], [0; 3]));
     let sent = drain(&mut driver, now);
-    let p = packets(&sent[0]);
-    assert_eq!(p[0][4], ControlMode::PositionPid as u8);
-    match Request::parse(&p[1]).unwrap() {
-        Request::SetPositionTarget(e) => assert_eq!(e.iter().next().unwrap().position, 150),
+    let r = requests(&sent[0]);
+    // The hold restores the acceleration limit (30 000 shl 12) first.
+    match r.as_slice() {
+        [
+            Request::SetAccelerationLimit(limit),
+            Request::SetControlMode(mode),
+            Request::SetPositionTarget(target),
+        ] => {
+            assert_eq!(one(limit).limit, 30_000 << 12);
+            assert_eq!(one(mode).mode, ControlMode::PositionPid);
+            assert_eq!(one(target).position, 150);
+        }
         other => panic!("{other:?}"),
     }
     driver.handle_rx(now + MS, &acks(&sent[0], 0));
@@ -452,6 +534,49 @@ fn stop_ramps_to_zero_then_holds_where_the_channel_is() {
     assert!(!state.moving);
     assert!(state.arrived);
     assert!(!driver.goals_pending());
+    // The next goal has nothing to restore.
+    let mosi = acked(&mut driver, later(&mut now), 0, Goal::Off);
+    assert_eq!(requests(&mosi).len(), 1);
+}
+
+#[test]
+fn a_stop_is_always_sent_even_on_an_idle_channel() {
+    let (mut driver, now) = running();
+    // Nothing was ever commanded on channel 3 (index 2); it stands still: a hold where
+    // it is, at once.
+    let mosi = goal_packets(&mut driver, now, 2, Goal::Stop { decel: 10_000.0 });
+    match requests(&mosi).as_slice() {
+        [Request::SetControlMode(mode), Request::SetPositionTarget(target)] => {
+            assert_eq!(one(mode).mode, ControlMode::PositionPid);
+            assert_eq!(one(target).position, 30);
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn a_stop_waits_for_data_measured_after_a_restart() {
+    let (mut driver, mut now) = running();
+    driver.link_down(now);
+    now += 10 * MS;
+    driver.link_up(now);
+    let probe = drain(&mut driver, now);
+    assert!(probe[0].starts_with(&[2, 4, 1, 249]));
+    now += MS;
+    let masks = driver.stream_masks();
+    driver.handle_rx(now, &probe_answers(masks, STREAM_CONFIG, 24));
+    let sent = drain(&mut driver, now);
+    now += MS;
+    driver.handle_rx(now, &acks(&sent[0], 0));
+    now += 4 * MS;
+    driver.set_goal(now, 0, Goal::Stop { decel: 10_000.0 }).unwrap();
+    assert_eq!(driver.wants_transmit(now), Some(Priority::Poll), "no data yet");
+    driver.handle_rx(now, &ours_stream([70, 0, 0], [-600, 0, 0], [0; 3]));
+    let sent = drain(&mut driver, now);
+    match requests(&sent[0]).as_slice() {
+        [_, _, _, Request::VelocityRamp(ramp)] => assert_eq!(one(ramp).velocity, -600),
+        other => panic!("{other:?}"),
+    }
 }
 
 #[test]
@@ -486,17 +611,20 @@ fn home_arms_the_input_and_stops_on_its_trigger() {
     driver.handle_rx(now, &ours_stream([0, 505, 0], [0, 800, 0], [0, bits, 0]));
     assert!(driver.channel(1).homed);
     let sent = drain(&mut driver, now);
-    let p = packets(&sent[0]);
-    match Request::parse(&p[0]).unwrap() {
-        Request::SetInputMode(e) => {
-            assert_eq!(
-                e.iter().next().unwrap().config.mode(),
-                qq2drv::InputMode::Disabled
-            );
+    // The stop from the measured 800: input disarmed, then the setpoint reset.
+    match requests(&sent[0]).as_slice() {
+        [
+            Request::SetInputMode(input),
+            Request::SetControlMode(_),
+            Request::SetControlMode(_),
+            Request::SetAccelerationLimit(_),
+            Request::VelocityRamp(ramp),
+        ] => {
+            assert_eq!(one(input).config.mode(), qq2drv::InputMode::Disabled);
+            assert_eq!(one(ramp).velocity, 800);
         }
         other => panic!("{other:?}"),
     }
-    assert_eq!(p[2][2], PacketId::VelocityRamp.as_u8());
 }
 
 #[test]
@@ -555,7 +683,7 @@ fn a_stalled_stream_probes_and_finds_a_reset_board() {
     assert_eq!(driver.status().resets, 1);
     assert_eq!(driver.channel(0).fault, Some(DeviceFault::Reset));
     let sent = drain(&mut driver, now);
-    assert_eq!(packets(&sent[0]).len(), 8, "configured again");
+    assert_eq!(packets(&sent[0]).len(), 10, "configured again");
     driver.handle_rx(now + MS, &acks(&sent[0], 0));
     driver.handle_rx(now + MS, &ours_stream([1, 2, 3], [0; 3], [0; 3]));
     assert_eq!(driver.status().fault, None);
@@ -613,9 +741,12 @@ fn link_down_faults_and_stops_what_was_moving_once_back() {
     driver.handle_rx(t + 2 * MS, &acks(&sent[0], 0));
     driver.handle_rx(t + 2 * MS, &ours_stream([0; 3], [0, 0, 900], [0; 3]));
     assert_eq!(driver.channel(2).fault, None);
-    let sent = drain(&mut driver, t + 2 * MS);
-    match Request::parse(&packets(&sent[0])[1]).unwrap() {
-        Request::VelocityRamp(e) => assert_eq!(e.iter().next().unwrap().velocity, 0),
+    // Once the configuration has left the wire.
+    let sent = drain(&mut driver, t + 6 * MS);
+    match requests(&sent[0]).as_slice() {
+        [.., Request::VelocityRamp(ramp)] => {
+            assert_eq!(one(ramp).velocity, 900, "from the measured velocity");
+        }
         other => panic!("{other:?}"),
     }
 }
