@@ -314,11 +314,8 @@ impl Channel {
                 let ramp = Duration::try_from_secs_f64(seconds).unwrap_or(STOP_SETTLE);
                 self.set_step(Step::StopRamp { accel, ramp });
             }
-            Step::StopRamp { ramp, .. } => {
-                let still = self.velocity.abs() <= STANDSTILL;
-                if (elapsed >= ramp && still) || elapsed >= ramp.saturating_add(STOP_SETTLE) {
-                    self.set_step(Step::Hold);
-                }
+            Step::StopRamp { ramp, .. } if elapsed >= ramp.saturating_add(LOOP_PERIOD) => {
+                self.set_step(Step::Hold);
             }
             _ => {}
         }
