@@ -11,7 +11,7 @@ use std::sync::{Arc, Mutex};
 
 use motion_drivers::qq2drv::{
     AxisLimits, ChannelConfig, FILLER, HomeInput, POLL_SLACK, Qq2drvDriver, Qq2drvDriverConfig,
-    STREAM_MASK,
+    STATUS_MASK, STREAM_MASK,
 };
 use motion_drivers::{BusKind, Driver, Goal};
 use motion_engine::{AxisConfig, DeviceConfig, EngineConfig, LinkConfig};
@@ -916,4 +916,124 @@ fn a_stop_on_a_channel_at_rest_still_goes_on_the_wire() {
         }
         other => panic!("{other:?}"),
     }
+}
+
+#[test]
+fn a_switch_on_an_in_pin_is_read_within_the_refresh_budget() {
+    use motion_drivers::qq2drv::{PINS, pin_of};
+    use motion_drivers::find_pin;
+    // Signals on QUAD2's IN pin (the axis y's home switch) and on QUAD4, which has no axis.
+    let mut config = driver_config();
+    let in2 = find_pin(PINS, "in2").unwrap();
+    let in4 = find_pin(PINS, "in4").unwrap();
+    let in4_seen = find_pin(PINS, "in4_seen").unwrap();
+    assert_eq!(in4, pin_of(3, 0).unwrap());
+    config.channels[1].pins = 1 << 0;
+    config.channels[3].pins = (1 << 0) | (1 << 1);
+    let (mut rig, board, _) = rig_with(Qq2drvDriver::new(config), sim());
+    wait_online(&mut rig);
+    rig.run(10);
+    let driver = rig.engine.driver(0).unwrap();
+    let budget = driver.refresh_budget();
+    // QUAD4 is streamed with its Status byte alone.
+    assert_eq!(board.lock().unwrap().data_masks()[3], STATUS_MASK);
+    // Nothing pulls QUAD4's pin: it idles high, and the board's power-up polarity (0x00,
+    // "Input is active when low") makes that inactive.
+    let reading = driver.read_pin(in4).expect("configured");
+    assert_eq!(reading.value, 0.0);
+    assert!(reading.refreshed_at.is_some());
+    assert_eq!(driver.read_pin(find_pin(PINS, "in3").unwrap()), None, "no signal there");
+    // y's switch (active low, polarity written by the driver) is open.
+    assert_eq!(driver.read_pin(in2).unwrap().value, 0.0);
+    // Close QUAD4's switch to ground, and press y's.
+    board.lock().unwrap().force_input_level(3, Some(false));
+    board.lock().unwrap().force_input_level(1, Some(false));
+    let closed_at = rig.now;
+    let mut seen = None;
+    while rig.now - closed_at <= budget {
+        rig.tick();
+        let driver = rig.engine.driver(0).unwrap();
+        if driver.read_pin(in4).unwrap().value == 1.0 && driver.read_pin(in2).unwrap().value == 1.0 {
+            seen = Some(rig.now - closed_at);
+            break;
+        }
+    }
+    let seen = seen.expect("seen within the refresh budget");
+    assert!(seen <= budget);
+    let driver = rig.engine.driver(0).unwrap();
+    assert_eq!(driver.read_pin(in4_seen).unwrap().value, 1.0);
+    // Released: the level follows; the accumulator saw it active in the last packet.
+    board.lock().unwrap().force_input_level(3, Some(true));
+    rig.run(5);
+    let driver = rig.engine.driver(0).unwrap();
+    assert_eq!(driver.read_pin(in4).unwrap().value, 0.0);
+    assert_eq!(driver.read_pin(in4_seen).unwrap().value, 0.0);
+    // No outputs on this board.
+    assert!(PINS.iter().all(|p| !p.kinds.contains(motion_drivers::SignalKind::DigitalOut)));
+}
+
+#[test]
+fn a_home_search_stopped_midway_disarms_the_input_and_stops() {
+    let (mut rig, board, _) = rig();
+    wait_online(&mut rig);
+    accepted(&mut rig, 1, CommandKind::Home, [10.0, 0.0, 0.0]);
+    rig.run(150);
+    {
+        let sim = board.lock().unwrap();
+        assert_eq!(sim.input_config(1).unwrap().0.mode(), InputMode::Edge, "armed");
+        let shaft = sim.true_position(1).unwrap();
+        assert!(shaft > 50.0 && shaft < SWITCH_AT - 200.0, "on its way: {shaft}");
+    }
+    // The engine's travel supervision (or a client) stops it before the switch.
+    let measured = rig.axis(1).velocity * COUNTS_PER_MM;
+    accepted(&mut rig, 1, CommandKind::Stop, [0.0; 3]);
+    let trace = trace_stop(&mut rig, &board, 1, Duration::from_millis(300));
+    let bound = setpoint_bound(measured);
+    assert!(trace.setpoint_zero.is_some_and(|at| at <= bound), "{:?}", trace.setpoint_zero);
+    assert!(trace.still.is_some_and(|at| at <= bound + MOTOR_SETTLE));
+    let sim = board.lock().unwrap();
+    assert_eq!(
+        sim.input_config(1).unwrap().0.mode(),
+        InputMode::Disabled,
+        "the input is disarmed: the switch will not set the counter later"
+    );
+    assert!(sim.true_position(1).unwrap() < SWITCH_AT);
+    drop(sim);
+    assert!(!flag(&rig, 1, AxisFlags::HOMED));
+    assert_ne!(rig.axis(1).mode, AxisMode::Homing as u8);
+}
+
+#[test]
+fn home_with_two_end_stops_on_one_input_uses_the_spacing() {
+    let mut config = driver_config();
+    if let Some(home) = &mut config.channels[1].home {
+        home.spacing = 100;
+    }
+    let mut model = Qq2drvSimConfig {
+        seed: 11,
+        spi_clock_hz: SPEED_HZ,
+        ..Qq2drvSimConfig::default()
+    };
+    model.inputs[1] = InputPin {
+        source: InputSource::TwoEndStops {
+            negative: -SWITCH_AT,
+            positive: SWITCH_AT,
+        },
+        actuated_high: false,
+    };
+    let (mut rig, board, _) = rig_with(Qq2drvDriver::new(config), Qq2drvSim::new(model));
+    wait_online(&mut rig);
+    assert_eq!(board.lock().unwrap().input_config(1).unwrap().1, 100, "Spacing");
+    accepted(&mut rig, 1, CommandKind::Home, [10.0, 0.0, 0.0]);
+    assert!(rig.run_until(Duration::from_secs(3), |frame| {
+        frame.axes[1].mode == AxisMode::Hold as u8
+    }));
+    assert!(flag(&rig, 1, AxisFlags::HOMED));
+    let sim = board.lock().unwrap();
+    let shaft = sim.true_position(1).unwrap();
+    let counter = f64::from(sim.counter(1).unwrap());
+    // Found at the positive end (the search direction), where the counter was set.
+    assert!((shaft - SWITCH_AT).abs() < 80.0, "{shaft}");
+    let offset = counter - (shaft - SWITCH_AT) - f64::from(HOME_COUNTS);
+    assert!(offset.abs() <= 4.0, "counter {counter} shaft {shaft}");
 }
