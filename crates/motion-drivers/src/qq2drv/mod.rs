@@ -34,33 +34,44 @@
 //!    or stream period are no longer ours (power-up defaults: period 0), the board has
 //!    reset: [`DeviceFault::Reset`], every channel's goal is gone (the motors are Off).
 //! 3. Configure, in one transaction: history dimensions (12), data masks (6: 32-bit
-//!    absolute position, velocity and status for enabled channels, nothing for the
-//!    others), stream config (8: Stream Period Timing), power limit (24), velocity limit
-//!    (26) and acceleration limit (28) of each enabled channel from its axis limits
-//!    (transitions/s and /s² shl 12, clipped to the board's ranges), the home inputs'
-//!    polarity (14, Disabled), and last the stream period (4): the largest whole number of
-//!    40.96 µs units not above the poll period. Any non-zero return code is
-//!    [`DeviceFault::BoardError`] and the start-up is retried.
+//!    absolute position, velocity and status for channels with an axis, the Status byte
+//!    alone for a channel whose pins a signal reads, nothing for the others), stream
+//!    config (8: Stream Period Timing), and for each channel with an axis its power limit
+//!    (24, [`ChannelConfig::power_limit`]), velocity limit (26) and acceleration limit (28)
+//!    from its axis limits (transitions/s and /s² shl 12, clipped to the board's ranges),
+//!    position and velocity PID constants (30, 32: always written, the datasheet defaults
+//!    unless configured, so a board left with other gains is put right), the home inputs'
+//!    polarity and Spacing (14, Disabled), and last the stream period (4): the largest
+//!    whole number of 40.96 µs units not above the poll period. Any non-zero return code
+//!    is [`DeviceFault::BoardError`] and the start-up is retried. All of it is written
+//!    again after every probe, so after a board reset too.
 //! 4. Running: stream packets refresh the channels; the first one clears board faults.
 //!
 //! # Goals (counts = quadrature transitions)
 //!
-//! Each goal is one transaction of up to three one-entry packets for its channel:
+//! Each goal is one transaction of up to five one-entry packets for its channel. A step
+//! first puts back what an earlier one left: a home input still armed (14 Disabled) and an
+//! acceleration limit a stop lifted (28 ← the axis's).
 //!
 //! | goal | packets |
 //! |---|---|
-//! | `Off` | 16 Off |
+//! | `Off` | 16 Off: "Motor output will be set to zero / off"; the next goal sets its own mode again |
 //! | `Power` | 16 Power, 18 round(fraction × 8191) (I16) |
 //! | `Position` | 16 Position PID, 20 target (the start-up limits shape the move) |
 //! | `RampPosition` | 16 Position PID, 34 target, velocity shl 12, acceleration shl 12 |
 //! | `Velocity` | 16 Velocity PID, 36 velocity (plain transitions/s, ±100 000), acceleration shl 12 |
-//! | `Stop` | 16 Velocity PID, 36 velocity 0 at `decel` (clipped to the board's range); once the ramp time has passed and the reported velocity is at standstill (or [`STOP_SETTLE`] later), 16 Position PID and 20 target = the last reported position |
+//! | `Stop` | planned when it is sent, from the velocity the board measures then (never from a commanded one). At standstill (≤ [`STANDSTILL`]): 16 Position PID, 20 target = the reported position. Else three transactions: (1) 16 Off, 16 Velocity PID (the loop starts afresh), 28 ← 0 ("A value of zero disables acceleration limiting") and 36 velocity = the measured one with acceleration 0 ("Set to 0 to ignore this parameter"): the board's velocity setpoint is now where the motor really runs, not where the last goal asked it to run (a saturated motor would otherwise keep full power while the setpoint ramps down from the commanded speed); (2) one loop period ([`LOOP_PERIOD`]) after (1) was answered, 36 velocity 0 at `decel` (clipped to the board's range); (3) when that ramp has run (\|v\| / decel) plus a loop period, 28 ← the axis's limit, 16 Position PID, 20 target = the reported position. Always sent, also on a channel the driver believes idle; it waits for data measured after start-up, a restart or a reset |
 //! | `SetPosition` | 10 position counter ← counts (I32); unless the motor is Off, 16 Position PID and 20 target = counts (hold there) |
-//! | `Home` | with a [`HomeInput`] configured: 14 armed (mode, polarity, Spacing 0, set the counter to `position` on the switch's end), 16 Velocity PID, 36 ± velocity towards the switch; on the Input Trigger Accumulator bit of that end (positive for INDEX) in a stream status: 14 Disabled, ramp to 0, hold. An EDGE input already active first backs off the switch. Without a home input: `Unsupported` |
+//! | `Home` | with a [`HomeInput`] configured: 14 armed (mode, polarity, Spacing, set the counter to `position` on the switch's end), 16 Velocity PID, 36 ± velocity towards the switch; on the Input Trigger Accumulator bit of that end (positive for INDEX) in a stream status: a `Stop` at the axis's max acceleration, whose first packet disarms the input (14 Disabled). An EDGE input already active first backs off the switch. A stop or any other goal mid-search disarms the input first. Without a home input: `Unsupported` |
 //!
 //! Values the board cannot represent are `OutOfBoardRange`: positions beyond I32, velocity
 //! targets beyond ±100 000 transitions/s, shl-12 velocities and accelerations that round to
 //! 0 (which would mean "not limited") or exceed 100 000 / 1 000 000 shl 12.
+//!
+//! # I/O
+//!
+//! [`PINS`]: per channel the IN pin (Input Active) and the Status accumulators (see the
+//! `pins` module docs), read from the stream; no outputs.
 //!
 //! # Faults
 //!
