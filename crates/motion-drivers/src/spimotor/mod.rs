@@ -109,6 +109,7 @@ mod brushed;
 mod config;
 pub mod ramp;
 mod stepper;
+mod survey;
 mod wire;
 
 use core::fmt::{self, Write as _};
@@ -148,6 +149,9 @@ enum Phase {
     Identify { attempts: u32, next_at: Duration },
     /// Reading the serial number.
     Serial,
+    /// Stepper: reading what the board does now (position, target, step delay) before
+    /// anything is written, so that a motor left running is ramped down from its rate.
+    Survey,
     /// Configured; polling.
     Running,
 }
@@ -215,6 +219,8 @@ pub struct SpimotorDriver {
     refreshed_at: Option<Duration>,
     stepper: Stepper,
     motors: [BrushedMotor; 2],
+    /// The start-up survey's readings so far.
+    survey: survey::Survey,
 }
 
 impl SpimotorDriver {
@@ -243,6 +249,7 @@ impl SpimotorDriver {
             refreshed_at: None,
             stepper,
             motors: [BrushedMotor::default(); 2],
+            survey: survey::Survey::default(),
         }
     }
 
@@ -350,33 +357,6 @@ impl SpimotorDriver {
         self.status.bad_replies = self.status.bad_replies.saturating_add(1);
     }
 
-    /// Queues the start-up writes: stop everything, configure.
-    fn configure(&mut self) {
-        if self.is_stepper() {
-            let intensity = if self.stepper.is_off() {
-                0
-            } else {
-                self.config.stepper_intensity
-            };
-            for write in [
-                Write::RelativePosition(0),
-                Write::Coils(self.config.coils),
-                Write::StepDelay(self.stepper.rest_delay),
-                Write::StepperIntensity(intensity),
-            ] {
-                self.push_command(Op::Write(write), Priority::Setup, 0);
-            }
-        } else {
-            for motor in spimotor::Motor::ALL {
-                self.push_command(
-                    Op::Write(Write::Stop(motor)),
-                    Priority::Setup,
-                    motor.channel(),
-                );
-            }
-        }
-    }
-
     /// Handles one completed transaction.
     fn complete(&mut self, now: Duration, sent: Sent, miso: &[u8]) {
         let Op::Read(port, _) = sent.op else {
@@ -417,12 +397,20 @@ impl SpimotorDriver {
                     _ => SerialNumber::default(),
                 };
                 self.set_firmware(serial);
-                self.status.online = true;
-                self.phase = Phase::Running;
-                self.next_poll_at = now;
-                self.polls_done = 0;
-                self.configure();
+                if self.is_stepper() {
+                    self.begin_survey();
+                } else {
+                    self.status.online = true;
+                    self.phase = Phase::Running;
+                    self.next_poll_at = now;
+                    self.polls_done = 0;
+                    self.configure(now, false);
+                }
             }
+            (Phase::Survey, _) => match reply {
+                Ok(reply) => self.survey_reading(now, reply, sent.at),
+                Err(_) => self.bad_reply(),
+            },
             (Phase::Running, ReadPort::Identification) => {
                 let matches = reply.ok().and_then(valid_identification).is_some_and(|id| {
                     self.identification
@@ -667,7 +655,7 @@ impl Driver for SpimotorDriver {
         let phase = match self.phase {
             _ if !self.link_up => None,
             Phase::Identify { next_at, .. } => Some(next_at),
-            Phase::Serial => None,
+            Phase::Serial | Phase::Survey => None,
             Phase::Running => Some(self.next_poll_at),
         };
         match (timeout, phase) {
