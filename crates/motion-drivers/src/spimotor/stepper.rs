@@ -411,9 +411,12 @@ impl SpimotorDriver {
         }
         let delay_ok = delay == delay_expect.delay;
         let target_ok = target_expect.target.is_none_or(|t| t == target);
+        // The board steps no faster than the step delay in force: the one read last, or the
+        // one in force when this read went out, whichever is faster.
+        let rate = ramp::rate_of(position_expect.delay).max(ramp::rate_of(self.stepper.delay));
         let plausible = self.stepper.baseline.is_none_or(|(before, at)| {
             let window = now.saturating_sub(at).saturating_add(PLAUSIBILITY_SLACK);
-            let reach = ramp::fastest_rate() * window.as_secs_f64() + PLAUSIBILITY_STEPS;
+            let reach = rate * window.as_secs_f64() + PLAUSIBILITY_STEPS;
             (i64::from(position) - i64::from(before)).unsigned_abs() as f64 <= reach
         });
         if delay_ok && target_ok && plausible {
