@@ -364,3 +364,199 @@ fn qq2drv_describe_lists_every_key_with_its_value() {
     assert!(config.given.contains(x, "pid_position.p"));
     assert!(!config.given.contains(y, "pid_position.p"));
 }
+
+// --- spimotor -------------------------------------------------------------------------
+
+const SPIMOTOR: &str = r#"
+[server]
+name = "t"
+
+[[link]]
+name = "spi"
+type = "sim"
+speed_hz = 250000
+
+[[device]]
+name = "focus_drv"
+link = "spi"
+model = "spimotor"
+address = 0x90
+drive = "stepper"
+intensity = 96
+coils = 1
+
+[[device]]
+name = "pumps"
+link = "spi"
+model = "spimotor"
+address = 0x92
+drive = "brushed"
+
+[[axis]]
+name = "focus"
+device = "focus_drv"
+channel = 0
+unit = "step"
+counts_per_unit = 1.0
+min = -5000.0
+max = 5000.0
+max_velocity = 500.0
+max_accel = 5000.0
+"#;
+
+#[test]
+fn spimotor_the_example_config_passes() {
+    let (code, stderr) = check("spimotor_good.toml", SPIMOTOR);
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(!stderr.contains("warning"), "{stderr}");
+}
+
+#[test]
+fn spimotor_an_intensity_beyond_a_byte() {
+    let text = SPIMOTOR.replace("intensity = 96", "intensity = 256");
+    assert_fails(
+        "spimotor_intensity.toml",
+        &text,
+        "intensity = 256",
+        "device[0].intensity",
+        "256 is out of range; allowed: 0..=255",
+    );
+}
+
+#[test]
+fn spimotor_coils_are_one_or_two() {
+    let text = SPIMOTOR.replace("coils = 1", "coils = 0");
+    assert_fails(
+        "spimotor_coils.toml",
+        &text,
+        "coils = 0",
+        "device[0].coils",
+        "0 is not allowed; allowed: 1 (one coil at a time, port 0x44 ← 0x00) or 2",
+    );
+    let text = SPIMOTOR.replace("coils = 1", "coils = \"two\"");
+    assert_fails(
+        "spimotor_coils_type.toml",
+        &text,
+        "coils = \"two\"",
+        "coils",
+        "expected an integer",
+    );
+}
+
+#[test]
+fn spimotor_stepper_keys_on_a_brushed_board_are_errors() {
+    let text = SPIMOTOR.replace(
+        "drive = \"brushed\"",
+        "drive = \"brushed\"\nintensity = 50\ncoils = 2",
+    );
+    assert_fails(
+        "spimotor_brushed.toml",
+        &text,
+        "intensity = 50",
+        "device[1].intensity",
+        "`intensity` applies to drive = \"stepper\" only (port 0x10",
+    );
+    assert_fails(
+        "spimotor_brushed.toml",
+        &text,
+        "coils = 2",
+        "device[1].coils",
+        "`coils` applies to drive = \"stepper\" only (port 0x44",
+    );
+}
+
+#[test]
+fn spimotor_keys_on_a_qq2drv_name_spimotor() {
+    let text = QQ2DRV.replace("model = \"qq2drv\"", "model = \"qq2drv\"\nintensity = 32");
+    assert_fails(
+        "spimotor_on_qq2drv.toml",
+        &text,
+        "intensity = 32",
+        "device[0].intensity",
+        "`intensity` is not a key of qq2drv devices; it is valid on: spimotor",
+    );
+}
+
+#[test]
+fn spimotor_an_intensity_of_zero_is_a_warning() {
+    let text = SPIMOTOR.replace("intensity = 96", "intensity = 0");
+    let (code, stderr) = check("spimotor_zero.toml", &text);
+    assert_eq!(code, Some(0), "{stderr}");
+    let location = format!("spimotor_zero.toml:{}:", line_of(&text, "intensity = 0"));
+    assert!(stderr.contains(&location), "{stderr}");
+    assert!(stderr.contains("warning: `device[0].intensity`"), "{stderr}");
+}
+
+/// Drives `driver` against `board` for `ticks` milliseconds from `from`; returns every
+/// write it made, decoded with the `spimotor` crate.
+fn run_spimotor(
+    driver: &mut dyn Driver,
+    board: &mut motion_sim::spimotor::SpimotorSim,
+    from: Duration,
+    ticks: u32,
+) -> Vec<spimotor::Write> {
+    let mut out = Vec::new();
+    let mut mosi = [0u8; 256];
+    let mut miso = [0u8; 256];
+    for tick in 0..ticks {
+        let now = from + Duration::from_millis(u64::from(tick));
+        driver.handle_timeout(now);
+        while let Some(transmit) = driver.poll_transmit(now, &mut mosi) {
+            let len = transmit.len;
+            miso[..len].fill(0xFF);
+            board.transfer(now, &mosi[..len], &mut miso[..len]);
+            driver.handle_rx(now, &miso[..len]);
+            if let spimotor::Transaction {
+                request: spimotor::Request::Write(write),
+                ..
+            } = spimotor::Transaction::decode(&mosi[..len]).expect("valid")
+            {
+                out.push(write);
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn spimotor_keys_are_written_at_start_up_and_again_after_a_power_cycle() {
+    use spimotor::{Coils, Write};
+    let config = parse(SPIMOTOR);
+    let mut drivers = motiond::drivers::build(&config).expect("drivers");
+    let driver = drivers[0].as_mut();
+    let mut board = motion_sim::spimotor::SpimotorSim::default();
+    let writes = run_spimotor(driver, &mut board, Duration::ZERO, 30);
+    // Port 0x10 "Set drive intensity for stepper mode" ← 96; port 0x44 ← 0x00 (one coil).
+    assert!(writes.contains(&Write::StepperIntensity(96)), "{writes:?}");
+    assert!(writes.contains(&Write::Coils(Coils::One)), "{writes:?}");
+    assert!(driver.status().online);
+    assert_eq!(board.stepper_intensity(), 96);
+    assert_eq!(board.coils(), Coils::One);
+    // Power cycle: the board is back at 0x20 and its power-on coils; the driver notices
+    // (its polls read power-on registers) and writes both again.
+    board.power_cycle(Duration::from_millis(30));
+    let writes = run_spimotor(driver, &mut board, Duration::from_millis(30), 200);
+    assert!(driver.status().resets >= 1);
+    assert!(writes.contains(&Write::StepperIntensity(96)), "{writes:?}");
+    assert!(writes.contains(&Write::Coils(Coils::One)), "{writes:?}");
+    assert_eq!(board.stepper_intensity(), 96);
+}
+
+#[test]
+fn spimotor_describe_lists_the_stepper_keys() {
+    let config = parse(SPIMOTOR);
+    let stepper = Owner::Device(0);
+    assert_eq!(described(&config, stepper, "intensity"), "96 (0x60 of 0xff)");
+    assert_eq!(described(&config, stepper, "coils"), "1 (port 0x44 ← 0x00)");
+    // Left at the defaults: 0x20 (the page's "default is 0x20") and two coils.
+    let text = SPIMOTOR.replace("intensity = 96\ncoils = 1\n", "");
+    let config = parse(&text);
+    assert_eq!(described(&config, stepper, "intensity"), "32 (0x20 of 0xff)");
+    assert_eq!(described(&config, stepper, "coils"), "2 (port 0x44 ← 0x01)");
+    assert!(
+        motiond::drivers::describe(&config)
+            .iter()
+            .all(|row| row.owner != Owner::Device(1)),
+        "a brushed board has no machine keys"
+    );
+}
