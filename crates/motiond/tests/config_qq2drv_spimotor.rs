@@ -560,3 +560,77 @@ fn spimotor_describe_lists_the_stepper_keys() {
         "a brushed board has no machine keys"
     );
 }
+
+// --- the example configs and the I/O ----------------------------------------------------
+
+fn example(name: &str) -> ServerConfig {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../config/examples")
+        .join(name);
+    ServerConfig::load(&path).unwrap_or_else(|e| panic!("{e}"))
+}
+
+#[test]
+fn the_real_machine_examples_are_valid_and_warning_free() {
+    let qq = example("qq2drv-real.toml");
+    assert!(qq.warnings.is_empty(), "{:?}", qq.warnings);
+    assert_eq!(
+        described(&qq, Owner::Axis(0), "power_limit"),
+        "0.800 (6553 of 8191)"
+    );
+    assert_eq!(described(&qq, Owner::Axis(0), "pid_velocity.d"), "500");
+    assert_eq!(
+        described(&qq, Owner::Axis(3), "home.spacing"),
+        "5 deg (278 transitions)"
+    );
+    assert_eq!(qq.signals.len(), 2);
+    let spi = example("spimotor-real.toml");
+    assert!(spi.warnings.is_empty(), "{:?}", spi.warnings);
+    assert_eq!(described(&spi, Owner::Device(0), "intensity"), "64 (0x40 of 0xff)");
+    motiond::drivers::build(&qq).expect("qq2drv drivers");
+    motiond::drivers::build(&spi).expect("spimotor drivers");
+}
+
+#[test]
+fn a_signal_on_an_spi_motor_is_refused_and_on_a_qq2drv_streams_its_channel() {
+    let text = format!(
+        "{SPIMOTOR}\n[[signal]]\nname = \"s\"\ndevice = \"focus_drv\"\nkind = \"digital-in\"\npin = \"in1\"\n"
+    );
+    assert_fails(
+        "spimotor_signal.toml",
+        &text,
+        "pin = \"in1\"",
+        "signal[0].pin",
+        "a spimotor board has no I/O pins",
+    );
+    // On a qq2drv: QUAD2 has no axis in QQ2DRV; its signal makes the driver stream it.
+    let text = format!(
+        "{QQ2DRV}\n[[signal]]\nname = \"door\"\ndevice = \"quad\"\nkind = \"digital-in\"\npin = \"in2\"\ninvert = true\n"
+    );
+    let config = parse(&text);
+    let mut drivers = motiond::drivers::build(&config).expect("drivers");
+    let driver = drivers[0].as_mut();
+    let mut board = motion_sim::qq2drv::Qq2drvSim::default();
+    run_qq2drv(driver, &mut board, Duration::ZERO, 50);
+    assert_eq!(
+        board.data_masks()[1],
+        motion_drivers::qq2drv::STATUS_MASK,
+        "channel 2 streams its Status byte"
+    );
+    let pin = config.signals[0].pin;
+    let reading = driver.read_pin(pin).expect("the signal's pin is read");
+    assert!(reading.refreshed_at.is_some());
+    // Nothing pulls the pin: idle high, inactive under the power-up polarity (active low).
+    assert_eq!(reading.value, 0.0);
+    // A digital-out on this board cannot be configured.
+    let text = format!(
+        "{QQ2DRV}\n[[signal]]\nname = \"lamp\"\ndevice = \"quad\"\nkind = \"digital-out\"\npin = \"in2\"\n"
+    );
+    assert_fails(
+        "qq2drv_output.toml",
+        &text,
+        "pin = \"in2\"",
+        "signal[0].pin",
+        "cannot be digital-out",
+    );
+}
