@@ -392,7 +392,10 @@ fn bytes_on_the_wire_decode_with_the_protocol_crate() {
     // Start-up: probe 1, 7, 9, 5; configure 12, 6, 8, 24, 26, 28, 30, 32, 14, 4; then the
     // goals: position (16, 20), velocity (16, 36), and the stop: setpoint reset (16 Off,
     // 16 Velocity PID, 28 ← 0, 36 measured), ramp (36), hold (28 restored, 16, 20).
-    assert_eq!(&ids[..14], &[1, 7, 9, 5, 12, 6, 8, 24, 26, 28, 30, 32, 14, 4]);
+    assert_eq!(
+        &ids[..14],
+        &[1, 7, 9, 5, 12, 6, 8, 24, 26, 28, 30, 32, 14, 4]
+    );
     assert_eq!(
         &ids[14..],
         &[16, 20, 16, 36, 16, 16, 28, 36, 36, 28, 16, 20]
@@ -691,7 +694,6 @@ fn random_goals_and_noise_never_break_the_driver() {
     assert_eq!(board.stats().bad_packets, 0, "MOSI stayed clean");
 }
 
-
 /// Every request the driver wrote on the wire from the `from`-th logged transaction on.
 fn logged_requests(rig: &Rig, from: usize) -> Vec<(Duration, Vec<u8>)> {
     let mut out = Vec::new();
@@ -906,11 +908,11 @@ fn a_stop_on_a_channel_at_rest_still_goes_on_the_wire() {
     let requests = requests_for(&log, 0);
     let counter = board.lock().unwrap().counter(0).unwrap();
     match requests.as_slice() {
-        [Request::SetControlMode(mode), Request::SetPositionTarget(target)] => {
-            assert_eq!(
-                mode.iter().next().unwrap().mode,
-                ControlMode::PositionPid
-            );
+        [
+            Request::SetControlMode(mode),
+            Request::SetPositionTarget(target),
+        ] => {
+            assert_eq!(mode.iter().next().unwrap().mode, ControlMode::PositionPid);
             let at = target.iter().next().unwrap().position;
             assert!((at - counter).abs() <= 2, "held at {at}, counter {counter}");
         }
@@ -920,8 +922,8 @@ fn a_stop_on_a_channel_at_rest_still_goes_on_the_wire() {
 
 #[test]
 fn a_switch_on_an_in_pin_is_read_within_the_refresh_budget() {
-    use motion_drivers::qq2drv::{PINS, pin_of};
     use motion_drivers::find_pin;
+    use motion_drivers::qq2drv::{PINS, pin_of};
     // Signals on QUAD2's IN pin (the axis y's home switch) and on QUAD4, which has no axis.
     let mut config = driver_config();
     let in2 = find_pin(PINS, "in2").unwrap();
@@ -942,7 +944,11 @@ fn a_switch_on_an_in_pin_is_read_within_the_refresh_budget() {
     let reading = driver.read_pin(in4).expect("configured");
     assert_eq!(reading.value, 0.0);
     assert!(reading.refreshed_at.is_some());
-    assert_eq!(driver.read_pin(find_pin(PINS, "in3").unwrap()), None, "no signal there");
+    assert_eq!(
+        driver.read_pin(find_pin(PINS, "in3").unwrap()),
+        None,
+        "no signal there"
+    );
     // y's switch (active low, polarity written by the driver) is open.
     assert_eq!(driver.read_pin(in2).unwrap().value, 0.0);
     // Close QUAD4's switch to ground, and press y's.
@@ -953,7 +959,8 @@ fn a_switch_on_an_in_pin_is_read_within_the_refresh_budget() {
     while rig.now - closed_at <= budget {
         rig.tick();
         let driver = rig.engine.driver(0).unwrap();
-        if driver.read_pin(in4).unwrap().value == 1.0 && driver.read_pin(in2).unwrap().value == 1.0 {
+        if driver.read_pin(in4).unwrap().value == 1.0 && driver.read_pin(in2).unwrap().value == 1.0
+        {
             seen = Some(rig.now - closed_at);
             break;
         }
@@ -969,7 +976,10 @@ fn a_switch_on_an_in_pin_is_read_within_the_refresh_budget() {
     assert_eq!(driver.read_pin(in4).unwrap().value, 0.0);
     assert_eq!(driver.read_pin(in4_seen).unwrap().value, 0.0);
     // No outputs on this board.
-    assert!(PINS.iter().all(|p| !p.kinds.contains(motion_drivers::SignalKind::DigitalOut)));
+    assert!(
+        PINS.iter()
+            .all(|p| !p.kinds.contains(motion_drivers::SignalKind::DigitalOut))
+    );
 }
 
 #[test]
@@ -980,16 +990,27 @@ fn a_home_search_stopped_midway_disarms_the_input_and_stops() {
     rig.run(150);
     {
         let sim = board.lock().unwrap();
-        assert_eq!(sim.input_config(1).unwrap().0.mode(), InputMode::Edge, "armed");
+        assert_eq!(
+            sim.input_config(1).unwrap().0.mode(),
+            InputMode::Edge,
+            "armed"
+        );
         let shaft = sim.true_position(1).unwrap();
-        assert!(shaft > 50.0 && shaft < SWITCH_AT - 200.0, "on its way: {shaft}");
+        assert!(
+            shaft > 50.0 && shaft < SWITCH_AT - 200.0,
+            "on its way: {shaft}"
+        );
     }
     // The engine's travel supervision (or a client) stops it before the switch.
     let measured = rig.axis(1).velocity * COUNTS_PER_MM;
     accepted(&mut rig, 1, CommandKind::Stop, [0.0; 3]);
     let trace = trace_stop(&mut rig, &board, 1, Duration::from_millis(300));
     let bound = setpoint_bound(measured);
-    assert!(trace.setpoint_zero.is_some_and(|at| at <= bound), "{:?}", trace.setpoint_zero);
+    assert!(
+        trace.setpoint_zero.is_some_and(|at| at <= bound),
+        "{:?}",
+        trace.setpoint_zero
+    );
     assert!(trace.still.is_some_and(|at| at <= bound + MOTOR_SETTLE));
     let sim = board.lock().unwrap();
     assert_eq!(
@@ -1023,7 +1044,11 @@ fn home_with_two_end_stops_on_one_input_uses_the_spacing() {
     };
     let (mut rig, board, _) = rig_with(Qq2drvDriver::new(config), Qq2drvSim::new(model));
     wait_online(&mut rig);
-    assert_eq!(board.lock().unwrap().input_config(1).unwrap().1, 100, "Spacing");
+    assert_eq!(
+        board.lock().unwrap().input_config(1).unwrap().1,
+        100,
+        "Spacing"
+    );
     accepted(&mut rig, 1, CommandKind::Home, [10.0, 0.0, 0.0]);
     assert!(rig.run_until(Duration::from_secs(3), |frame| {
         frame.axes[1].mode == AxisMode::Hold as u8

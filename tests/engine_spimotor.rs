@@ -712,7 +712,10 @@ fn poke(board: &Board, now: Duration, writes: &[spimotor::Write]) {
             .encode(&mut mosi)
             .expect("encodes");
         let mut miso = [0u8; 16];
-        board.lock().unwrap().transfer(now, &mosi[..n], &mut miso[..n]);
+        board
+            .lock()
+            .unwrap()
+            .transfer(now, &mosi[..n], &mut miso[..n]);
     }
 }
 
@@ -758,7 +761,10 @@ fn the_deadman_ramps_a_jog_down_from_its_step_rate() {
     let bound = Duration::from_secs_f64((rate - SLOWEST_RATE) / decel) + Duration::from_millis(6);
     let took = watch_stop(&mut rig, &board, rate, decel, Duration::from_millis(500));
     assert!(took <= bound, "{took:?} > {bound:?}");
-    assert!(took >= Duration::from_millis(80), "ramped, not stopped dead: {took:?}");
+    assert!(
+        took >= Duration::from_millis(80),
+        "ramped, not stopped dead: {took:?}"
+    );
     rig.run(20);
     assert_eq!(rig.axis(0).mode, AxisMode::Hold as u8);
 }
@@ -790,7 +796,11 @@ fn a_stepper_left_running_is_ramped_down_once_online() {
     assert!(took <= bound, "{took:?} > {bound:?}");
     let sim = board.lock().unwrap();
     assert!(!sim.is_moving());
-    assert_eq!(sim.current_position(), sim.target_position(), "stopped where it was");
+    assert_eq!(
+        sim.current_position(),
+        sim.target_position(),
+        "stopped where it was"
+    );
     assert_eq!(sim.stepper_intensity(), 0x20, "energised: a stop holds");
 }
 
@@ -807,13 +817,15 @@ fn a_stop_on_a_standing_stepper_still_goes_on_the_wire() {
     rig.run(5);
     let writes: Vec<spimotor::Write> = rig.wire_log(0)[from..]
         .iter()
-        .filter_map(|(_, mosi)| match Transaction::decode(mosi).expect("valid") {
-            Transaction {
-                request: Request::Write(write),
-                ..
-            } => Some(write),
-            _ => None,
-        })
+        .filter_map(
+            |(_, mosi)| match Transaction::decode(mosi).expect("valid") {
+                Transaction {
+                    request: Request::Write(write),
+                    ..
+                } => Some(write),
+                _ => None,
+            },
+        )
         .collect();
     assert!(
         writes.contains(&spimotor::Write::RelativePosition(0)),

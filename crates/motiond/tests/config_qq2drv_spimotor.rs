@@ -233,7 +233,10 @@ fn qq2drv_a_clock_above_500_khz_is_a_warning() {
     let location = format!("qq2drv_fast.toml:{}:", line_of(&text, "speed_hz = 1000000"));
     assert!(stderr.contains(&location), "{stderr}");
     assert!(stderr.contains("warning: `link[0].speed_hz`"), "{stderr}");
-    assert!(stderr.contains("recommend clocking SPI up to 500kHz"), "{stderr}");
+    assert!(
+        stderr.contains("recommend clocking SPI up to 500kHz"),
+        "{stderr}"
+    );
 }
 
 // --- qq2drv: the keys on the wire ------------------------------------------------------
@@ -288,7 +291,10 @@ fn assert_qq2drv_keys(requests: &[qq2drv::Request<'_>]) {
                     .iter()
                     .map(|e| (e.channels.0, e.p, e.i, e.d, e.windup))
                     .collect();
-                assert_eq!(e, [(0b0001, 120, 400, 650, 900), (0b0100, 100, 500, 500, 600)]);
+                assert_eq!(
+                    e,
+                    [(0b0001, 120, 400, 650, 900), (0b0100, 100, 500, 500, 600)]
+                );
                 seen |= 1;
             }
             // Packet 32: x as given, y at P 100, I 200, D 500.
@@ -353,14 +359,20 @@ fn qq2drv_describe_lists_every_key_with_its_value() {
     assert_eq!(described(&config, x, "pid_position.windup"), "900");
     assert_eq!(described(&config, x, "pid_velocity.d"), "0");
     assert_eq!(described(&config, x, "power_limit"), "0.500 (4096 of 8191)");
-    assert_eq!(described(&config, x, "home.input"), "none (the axis cannot home)");
+    assert_eq!(
+        described(&config, x, "home.input"),
+        "none (the axis cannot home)"
+    );
     // Left at their defaults.
     assert_eq!(described(&config, y, "pid_position.i"), "500");
     assert_eq!(described(&config, y, "pid_velocity.i"), "200");
     assert_eq!(described(&config, y, "power_limit"), "1.000 (8191 of 8191)");
     assert_eq!(described(&config, y, "home.input"), "edge");
     assert_eq!(described(&config, y, "home.active_high"), "false");
-    assert_eq!(described(&config, y, "home.spacing"), "2.5 mm (500 transitions)");
+    assert_eq!(
+        described(&config, y, "home.spacing"),
+        "2.5 mm (500 transitions)"
+    );
     assert!(config.given.contains(x, "pid_position.p"));
     assert!(!config.given.contains(y, "pid_position.p"));
 }
@@ -484,7 +496,10 @@ fn spimotor_an_intensity_of_zero_is_a_warning() {
     assert_eq!(code, Some(0), "{stderr}");
     let location = format!("spimotor_zero.toml:{}:", line_of(&text, "intensity = 0"));
     assert!(stderr.contains(&location), "{stderr}");
-    assert!(stderr.contains("warning: `device[0].intensity`"), "{stderr}");
+    assert!(
+        stderr.contains("warning: `device[0].intensity`"),
+        "{stderr}"
+    );
 }
 
 /// Drives `driver` against `board` for `ticks` milliseconds from `from`; returns every
@@ -546,12 +561,18 @@ fn spimotor_keys_are_written_at_start_up_and_again_after_a_power_cycle() {
 fn spimotor_describe_lists_the_stepper_keys() {
     let config = parse(SPIMOTOR);
     let stepper = Owner::Device(0);
-    assert_eq!(described(&config, stepper, "intensity"), "96 (0x60 of 0xff)");
+    assert_eq!(
+        described(&config, stepper, "intensity"),
+        "96 (0x60 of 0xff)"
+    );
     assert_eq!(described(&config, stepper, "coils"), "1 (port 0x44 ← 0x00)");
     // Left at the defaults: 0x20 (the page's "default is 0x20") and two coils.
     let text = SPIMOTOR.replace("intensity = 96\ncoils = 1\n", "");
     let config = parse(&text);
-    assert_eq!(described(&config, stepper, "intensity"), "32 (0x20 of 0xff)");
+    assert_eq!(
+        described(&config, stepper, "intensity"),
+        "32 (0x20 of 0xff)"
+    );
     assert_eq!(described(&config, stepper, "coils"), "2 (port 0x44 ← 0x01)");
     assert!(
         motiond::drivers::describe(&config)
@@ -586,7 +607,10 @@ fn the_real_machine_examples_are_valid_and_warning_free() {
     assert_eq!(qq.signals.len(), 2);
     let spi = example("spimotor-real.toml");
     assert!(spi.warnings.is_empty(), "{:?}", spi.warnings);
-    assert_eq!(described(&spi, Owner::Device(0), "intensity"), "64 (0x40 of 0xff)");
+    assert_eq!(
+        described(&spi, Owner::Device(0), "intensity"),
+        "64 (0x40 of 0xff)"
+    );
     motiond::drivers::build(&qq).expect("qq2drv drivers");
     motiond::drivers::build(&spi).expect("spimotor drivers");
 }

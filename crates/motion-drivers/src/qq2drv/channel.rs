@@ -359,7 +359,10 @@ impl Channel {
     /// Whether the motor moves (or a stop / home is still under way).
     pub(super) fn moving(&self) -> bool {
         self.step.stopping()
-            || matches!(self.step, Step::HomeBackoff { .. } | Step::HomeSearch { .. })
+            || matches!(
+                self.step,
+                Step::HomeBackoff { .. } | Step::HomeSearch { .. }
+            )
             || self.velocity.abs() > STANDSTILL
     }
 

@@ -2,9 +2,7 @@
 
 use core::time::Duration;
 
-use qq2drv::limits::{
-    POSITION_PID_DEFAULT, POWER_LIMIT_MAX, STREAM_TICK_NS, VELOCITY_PID_DEFAULT,
-};
+use qq2drv::limits::{POSITION_PID_DEFAULT, POWER_LIMIT_MAX, STREAM_TICK_NS, VELOCITY_PID_DEFAULT};
 use qq2drv::{CHANNELS, HistoryDimensions, InputMode};
 
 /// One axis's limits in board counts (quadrature transitions), as configured for the axis

@@ -40,42 +40,54 @@ macro_rules! channel_pins {
             pin(
                 concat!("in", $n),
                 concat!(
-                    "QUAD", $n, " IN pin: Status bit 3 Input Active (packet 2), after the ",
+                    "QUAD",
+                    $n,
+                    " IN pin: Status bit 3 Input Active (packet 2), after the ",
                     "board's Input Polarity (packet 14; power-up: active when low)"
                 ),
             ),
             pin(
                 concat!("in", $n, "_seen"),
                 concat!(
-                    "QUAD", $n, " IN pin: Status bit 2 Input Active Accumulator (active at ",
+                    "QUAD",
+                    $n,
+                    " IN pin: Status bit 2 Input Active Accumulator (active at ",
                     "least once since the last stream packet)"
                 ),
             ),
             pin(
                 concat!("in", $n, "_trig_pos"),
                 concat!(
-                    "QUAD", $n, " IN pin: Status bit 0 Input Trigger Accumulator, positive ",
+                    "QUAD",
+                    $n,
+                    " IN pin: Status bit 0 Input Trigger Accumulator, positive ",
                     "end (only while an input mode is armed, i.e. during a home search)"
                 ),
             ),
             pin(
                 concat!("in", $n, "_trig_neg"),
                 concat!(
-                    "QUAD", $n, " IN pin: Status bit 1 Input Trigger Accumulator, negative ",
+                    "QUAD",
+                    $n,
+                    " IN pin: Status bit 1 Input Trigger Accumulator, negative ",
                     "end (only while an input mode is armed, i.e. during a home search)"
                 ),
             ),
             pin(
                 concat!("glitch", $n),
                 concat!(
-                    "QUAD", $n, " encoder: Status bit 7 Glitch (invalid A/B transition ",
+                    "QUAD",
+                    $n,
+                    " encoder: Status bit 7 Glitch (invalid A/B transition ",
                     "since the last stream packet)"
                 ),
             ),
             pin(
                 concat!("overspeed", $n),
                 concat!(
-                    "QUAD", $n, " encoder: Status bit 6 Overspeed (above the rated ",
+                    "QUAD",
+                    $n,
+                    " encoder: Status bit 6 Overspeed (above the rated ",
                     "50 000 transitions/s)"
                 ),
             ),

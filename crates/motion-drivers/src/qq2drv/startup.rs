@@ -3,9 +3,7 @@
 use core::fmt::{self, Write as _};
 use core::time::Duration;
 
-use qq2drv::limits::{
-    ACCELERATION_MAX, POWER_LIMIT_MAX, VELOCITY_LIMIT_MAX, WINDUP_MAX, to_fixed,
-};
+use qq2drv::limits::{ACCELERATION_MAX, POWER_LIMIT_MAX, VELOCITY_LIMIT_MAX, WINDUP_MAX, to_fixed};
 use qq2drv::{
     AccelerationLimitEntry, CHANNELS, ChannelMask, DataMask, DataMaskEntry, Entries,
     InputModeEntry, MotionLayout, PositionPidEntry, PowerLimitEntry, Request, StreamConfig,

@@ -117,7 +117,11 @@ impl Channel {
         }
         // Whatever was armed or lifted before is put back first (a home search's input,
         // a stop's lifted acceleration limit), except by the steps that need it so.
-        if self.armed && !matches!(self.step, Step::HomeSearch { .. } | Step::HomeBackoff { .. })
+        if self.armed
+            && !matches!(
+                self.step,
+                Step::HomeSearch { .. } | Step::HomeBackoff { .. }
+            )
         {
             out.push(self.input(false));
         }

@@ -189,7 +189,11 @@ fn configuration_follows_the_axis_limits_in_shl_12() {
                     .collect();
                 assert_eq!(
                     e,
-                    [(1, 100, 500, 500, 600), (2, 100, 500, 500, 600), (4, 100, 500, 500, 600)]
+                    [
+                        (1, 100, 500, 500, 600),
+                        (2, 100, 500, 500, 600),
+                        (4, 100, 500, 500, 600)
+                    ]
                 );
             }
             // Packet 32: P 100, I 200, D 500.
@@ -499,13 +503,20 @@ fn stop_resets_the_setpoint_to_the_measured_velocity_then_ramps_and_holds() {
     now += MS;
     driver.handle_rx(now, &acks(&mosi, 0));
     // Not before one board loop period (2 ms) after the answers.
-    assert!(drain(&mut driver, now + MS).iter().all(|t| t.iter().all(|b| *b == FILLER)));
+    assert!(
+        drain(&mut driver, now + MS)
+            .iter()
+            .all(|t| t.iter().all(|b| *b == FILLER))
+    );
     now += LOOP_PERIOD;
     let sent = drain(&mut driver, now);
     let r = requests(&sent[0]);
     match r.as_slice() {
         [Request::VelocityRamp(ramp)] => {
-            assert_eq!((one(ramp).velocity, one(ramp).acceleration), (0, 20_000 << 12));
+            assert_eq!(
+                (one(ramp).velocity, one(ramp).acceleration),
+                (0, 20_000 << 12)
+            );
         }
         other => panic!("{other:?}"),
     }
@@ -546,7 +557,10 @@ fn a_stop_is_always_sent_even_on_an_idle_channel() {
     // it is, at once.
     let mosi = goal_packets(&mut driver, now, 2, Goal::Stop { decel: 10_000.0 });
     match requests(&mosi).as_slice() {
-        [Request::SetControlMode(mode), Request::SetPositionTarget(target)] => {
+        [
+            Request::SetControlMode(mode),
+            Request::SetPositionTarget(target),
+        ] => {
             assert_eq!(one(mode).mode, ControlMode::PositionPid);
             assert_eq!(one(target).position, 30);
         }
@@ -569,8 +583,14 @@ fn a_stop_waits_for_data_measured_after_a_restart() {
     now += MS;
     driver.handle_rx(now, &acks(&sent[0], 0));
     now += 4 * MS;
-    driver.set_goal(now, 0, Goal::Stop { decel: 10_000.0 }).unwrap();
-    assert_eq!(driver.wants_transmit(now), Some(Priority::Poll), "no data yet");
+    driver
+        .set_goal(now, 0, Goal::Stop { decel: 10_000.0 })
+        .unwrap();
+    assert_eq!(
+        driver.wants_transmit(now),
+        Some(Priority::Poll),
+        "no data yet"
+    );
     driver.handle_rx(now, &ours_stream([70, 0, 0], [-600, 0, 0], [0; 3]));
     let sent = drain(&mut driver, now);
     match requests(&sent[0]).as_slice() {

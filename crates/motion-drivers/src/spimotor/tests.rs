@@ -184,7 +184,10 @@ fn start_up_reads_identification_as_the_datasheet_example_then_configures() {
             ]
         );
     }
-    assert!(bench.driver.status().online, "online once the survey is answered");
+    assert!(
+        bench.driver.status().online,
+        "online once the survey is answered"
+    );
     let configure = bench.step();
     let rest = ramp::delay_for(2_000.0).tenths_ms();
     assert_eq!(rest, 5, "2000 steps/s is a step every 0.5 ms");
@@ -658,11 +661,20 @@ fn a_stepper_left_running_is_ramped_down_from_its_own_rate() {
     let first = ramp::rate_of(StepDelay::from_tenths_ms(delays[0]));
     // 20 000 steps/s² (the axis's max acceleration) over one 2 ms profile period.
     assert!(first >= 5_000.0 - 40.0 - 1_700.0, "first rate {first}");
-    assert!(delays.windows(2).all(|w| w[1] >= w[0]), "monotonic slow-down");
+    assert!(
+        delays.windows(2).all(|w| w[1] >= w[0]),
+        "monotonic slow-down"
+    );
     // From 5000 steps/s at 20 000 steps/s²: 0.25 s (plus a profile period or two).
     let stopped_at = bench.now;
-    assert!(stopped_at <= Duration::from_millis(4 + 250 + 10), "{stopped_at:?}");
-    assert!(stopped_at >= Duration::from_millis(200), "not abrupt: {stopped_at:?}");
+    assert!(
+        stopped_at <= Duration::from_millis(4 + 250 + 10),
+        "{stopped_at:?}"
+    );
+    assert!(
+        stopped_at >= Duration::from_millis(200),
+        "not abrupt: {stopped_at:?}"
+    );
     // The coils and intensity were written at start-up all the same.
     assert!(sent.contains(&vec![0x90, 0x44, 0x01]));
     assert!(sent.contains(&vec![0x90, 0x10, 0x20]));
@@ -716,7 +728,10 @@ fn off_de_energises_and_the_next_goal_energises_first() {
     config.stepper_intensity = 0x60;
     config.coils = Coils::One;
     let mut bench = Bench::started(config);
-    assert_eq!(bench.board.intensity, 0x60, "configured intensity at start-up");
+    assert_eq!(
+        bench.board.intensity, 0x60,
+        "configured intensity at start-up"
+    );
     assert!(bench.sent.contains(&vec![0x90, 0x44, 0x00]), "one coil");
     bench.driver.set_goal(bench.now, 0, Goal::Off).unwrap();
     let sent = bench.step();
