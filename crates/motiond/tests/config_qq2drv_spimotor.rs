@@ -321,6 +321,9 @@ fn assert_qq2drv_keys(requests: &[qq2drv::Request<'_>]) {
                 assert_eq!(e[0].config.mode(), qq2drv::InputMode::Disabled);
                 assert!(!e[0].config.active_high());
                 assert_eq!(e[0].spacing, 500);
+                // `direction = "positive"` in axis units with counts_per_unit = -200 is the
+                // negative end in board counts.
+                assert_eq!(e[0].config.edge(), qq2drv::EdgeAction::SetOnNegative);
                 seen |= 8;
             }
             _ => {}
@@ -348,6 +351,45 @@ fn qq2drv_keys_are_written_at_start_up_and_again_after_a_reset() {
     assert_qq2drv_keys(&requests);
     assert_eq!(driver.status().resets, 1);
     assert!(driver.status().online);
+}
+
+#[test]
+fn qq2drv_a_home_search_runs_the_configured_way_in_board_counts() {
+    use motion_drivers::Goal;
+    let config = parse(QQ2DRV);
+    let mut drivers = motiond::drivers::build(&config).expect("drivers");
+    let driver = drivers[0].as_mut();
+    let mut board = motion_sim::qq2drv::Qq2drvSim::default();
+    run_qq2drv(driver, &mut board, Duration::ZERO, 50);
+    // Axis y homes towards its max (positive in mm); 200 transitions/mm reversed.
+    driver
+        .set_goal(Duration::from_millis(50), 2, Goal::Home { velocity: 400.0 })
+        .expect("y can home");
+    let packets = run_qq2drv(driver, &mut board, Duration::from_millis(50), 5);
+    let (_, requests) = qq2drv_start_up_requests(&packets);
+    let (armed, ramp) =
+        requests
+            .iter()
+            .fold((None, None), |(armed, ramp), request| match request {
+                qq2drv::Request::SetInputMode(e) => (e.iter().next(), ramp),
+                qq2drv::Request::VelocityRamp(e) => (armed, e.iter().next()),
+                _ => (armed, ramp),
+            });
+    let armed = armed.expect("packet 14 armed");
+    assert_eq!(armed.config.mode(), qq2drv::InputMode::Edge);
+    assert_eq!(armed.config.edge(), qq2drv::EdgeAction::SetOnNegative);
+    assert_eq!(armed.spacing, 500);
+    assert_eq!(
+        ramp.expect("packet 36").velocity,
+        -400,
+        "towards decreasing counts"
+    );
+    // Axis x has no home input.
+    assert!(
+        driver
+            .set_goal(Duration::from_millis(55), 0, Goal::Home { velocity: 400.0 })
+            .is_err()
+    );
 }
 
 #[test]
