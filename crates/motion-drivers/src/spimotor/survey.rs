@@ -158,6 +158,10 @@ impl SpimotorDriver {
             self.stepper.stop_from(now, decel, rate);
             return;
         }
+        if let Motion::Stopping { decel } = self.stepper.motion() {
+            // A stop asked for while starting: the board stands, nothing to ramp.
+            self.stepper.stop_from(now, decel, 0.0);
+        }
         for write in [
             Write::RelativePosition(0),
             Write::Coils(self.config.coils),
