@@ -191,7 +191,7 @@ mod tests {
 
     fn config(device_keys: &str, counts_per_unit: f64, signals: &str) -> ServerConfig {
         let text = format!(
-            "[[link]]\nname = \"usb\"\ntype = \"serial\"\npath = \"/dev/null-qsb\"\nbaud = 115200\n\n[[device]]\nname = \"q\"\nlink = \"usb\"\nmodel = \"qsb\"\n{device_keys}\n\n[[axis]]\nname = \"a\"\ndevice = \"q\"\nchannel = 0\nunit = \"mm\"\ncounts_per_unit = {counts_per_unit}\nmin = -10.0\nmax = 30.0\nmax_velocity = 5.0\nmax_accel = 50.0\n{signals}"
+            "[server]\nname = \"q\"\n\n[[link]]\nname = \"usb\"\ntype = \"serial\"\npath = \"/dev/null-qsb\"\nbaud = 115200\n\n[[device]]\nname = \"q\"\nlink = \"usb\"\nmodel = \"qsb\"\n{device_keys}\n\n[[axis]]\nname = \"a\"\ndevice = \"q\"\nchannel = 0\nunit = \"mm\"\ncounts_per_unit = {counts_per_unit}\nmin = -10.0\nmax = 30.0\nmax_velocity = 5.0\nmax_accel = 50.0\n{signals}"
         );
         ServerConfig::parse(Path::new("t.toml"), &text).expect("valid")
     }
