@@ -186,8 +186,7 @@ fn a_motor_left_running_by_another_program_is_stopped_once_online() {
     wait_online(&mut rig);
     assert!(flag(&rig, 0, AxisFlags::MOVING), "the driver sees it run");
     let measured = rig.axis(0).velocity * COUNTS_PER_MM;
-    // The stop (the engine's start-up stop, or a client's).
-    let _ = rig.command(0, CommandKind::Stop, [0.0; 3]);
+    // No command: the engine's start-up stop (sent when the board came online) does it.
     let trace = trace_stop(&mut rig, &board, 0, Duration::from_millis(400));
     assert!(trace.peak_setpoint <= measured.abs() * 1.1 + 10.0);
     let bound = setpoint_bound(measured);
