@@ -97,17 +97,31 @@ impl Bench {
         self.driver.handle_rx(self.now, bytes);
     }
 
-    /// Answers `$43` and lets the start-up run; returns the configuration requests.
+    /// Answers `$43` and the `$28` survey (every motor inactive) and lets the start-up
+    /// run; returns the configuration requests.
     fn online(&mut self) -> Vec<Request> {
         let (_, w) = self.next(10).expect("$43");
         assert_eq!(w, [0x01, 0x43, 0xFE, 0, 0, 0, 0, 0, 0]);
         self.now += 11 * MS;
         self.rx(&UNIT_INFO);
+        self.survey([Action::Inactive; 6]);
         let mut sent = Vec::new();
-        while !self.driver.status().online {
+        for _ in 0..100 {
+            if self.driver.status().online {
+                return sent;
+            }
             sent.push(self.request());
         }
-        sent
+        panic!("not online after {sent:?}");
+    }
+
+    /// Answers the `$28` survey with `actions`.
+    fn survey(&mut self, actions: [Action; 6]) {
+        let (_, w) = self.next(20).expect("$28");
+        // Manual 8.4 $28: P0 response address, P1 mask for delayed response (none).
+        assert_eq!(w, [0x01, 0x28, 0xFE, 0, 0, 0, 0, 0, 0]);
+        self.now += 11 * MS;
+        self.rx(&word(Reply::Actions { actions }));
     }
 
     /// Answers every `$20` poll with `answer(motor)` until `done`, at most `limit` ticks.
@@ -117,6 +131,12 @@ impl Bench {
             if let Some(w) = self.tick() {
                 let request = RequestFrame::decode(&w).expect("decodes").request;
                 match request {
+                    Request::QueryActions { .. } => {
+                        self.now += 10 * MS;
+                        self.rx(&word(Reply::Actions {
+                            actions: [Action::Inactive; 6],
+                        }));
+                    }
                     Request::QueryPosition { motor, .. } => {
                         self.now += 10 * MS;
                         let reply = answer(motor);
@@ -150,8 +170,10 @@ fn startup_reads_unit_info_then_writes_the_manual_parameters() {
             switchover: 1
         }
     );
+    // $41: 11 byte times at 19200 baud = 5.7 ms → 3 units of 2 ms.
+    assert_eq!(sent[1], Request::PacketTimeout { timeout: 3 });
     // $12 clkdiv for 32000 µsteps/s at v = 511, div = 0 (8.2).
-    assert_eq!(sent[1], Request::VelocitySetting { clkdiv: 18 });
+    assert_eq!(sent[2], Request::VelocitySetting { clkdiv: 18 });
     assert!(sent.contains(&Request::VelocityAcceleration {
         motor: 0,
         amax: 318,
@@ -207,15 +229,24 @@ fn the_line_stays_reserved_for_the_switchover_after_an_answer() {
 }
 
 #[test]
-fn a_request_without_answer_reserves_the_line_for_its_wire_time() {
+fn a_request_without_answer_reserves_the_line_for_the_packet_timeout() {
     let mut bench = Bench::new(config());
     bench.next(5).expect("$43");
     bench.now += 11 * MS;
     bench.rx(&UNIT_INFO);
-    let (t40, _) = bench.next(20).expect("$40");
-    let (t12, _) = bench.next(20).expect("$12");
-    // 9 bytes · 10 bits at 19200 baud = 4.69 ms: the next word starts on the next tick.
-    assert_eq!(t12 - t40, 5 * MS);
+    bench.survey([Action::Inactive; 6]);
+    let (t40, _) = bench.next(40).expect("$40");
+    let (t41, w41) = bench.next(40).expect("$41");
+    let (t12, _) = bench.next(40).expect("$12");
+    let (t10, _) = bench.next(40).expect("$11");
+    // Manual 8.6 $41: P0,P1 timeout in 2 ms units, LSB first.
+    assert_eq!(w41, [0x01, 0x41, 3, 0, 0, 0, 0, 0, 0]);
+    // Until $41 the pack may have its factory timeout (assumed 20 ms): a word torn by noise
+    // must be aborted before the next word starts, so the next one waits for it.
+    assert_eq!(t41 - t40, 20 * MS);
+    // Then 6 ms: longer than one word's 4.69 ms wire time, and the pack's new timeout.
+    assert_eq!(t12 - t41, 6 * MS);
+    assert_eq!(t10 - t12, 6 * MS);
 }
 
 #[test]
@@ -530,6 +561,12 @@ fn a_set_reset_flag_after_start_up_is_a_reset_fault_and_the_pack_is_reconfigured
                     assert_eq!(bench.driver.status().fault, Some(DeviceFault::Reset));
                     assert_eq!(bench.driver.status().resets, 1);
                     assert_eq!(bench.driver.channel(0).fault, Some(DeviceFault::Reset));
+                }
+                Request::QueryActions { .. } => {
+                    bench.now += 10 * MS;
+                    bench.rx(&word(Reply::Actions {
+                        actions: [Action::Inactive; 6],
+                    }));
                 }
                 Request::QueryPosition { motor, .. } => {
                     bench.now += 10 * MS;

@@ -1,0 +1,1 @@
+//! I/O tests of the tmcpack driver.
