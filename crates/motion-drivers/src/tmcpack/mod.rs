@@ -44,7 +44,11 @@ mod startup;
 mod wire;
 
 #[cfg(test)]
+mod bench;
+#[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_goals;
 #[cfg(test)]
 mod tests_io;
 
