@@ -107,7 +107,13 @@ fn an_input_change_shows_in_read_pin_within_the_refresh_budget() {
 #[test]
 fn set_output_reaches_the_pack() {
     let variant = Variant::QuadPack;
-    let mut driver = driver_with_io(2, variant, &[0], 0, io_config(variant, &[], &["ttlio1", "ttlout1"]));
+    let mut driver = driver_with_io(
+        2,
+        variant,
+        &[0],
+        0,
+        io_config(variant, &[], &["ttlio1", "ttlout1"]),
+    );
     let (wire, board) = Shared::new(pack(2, variant));
     let mut link = SimLink::stream_with("rs485", BAUD, Duplex::Half, wire);
     let mut buf = [0u8; 256];
@@ -146,7 +152,10 @@ fn set_output_reaches_the_pack() {
             ttlout1_ready: false
         }
     );
-    assert!(outputs[1].0 - set_at < Duration::from_millis(20), "commands before polls");
+    assert!(
+        outputs[1].0 - set_at < Duration::from_millis(20),
+        "commands before polls"
+    );
     let sim = board.lock().unwrap();
     assert_eq!(sim.ttlio1_output(), Some(true));
     assert!(!sim.ttlout1());
@@ -171,11 +180,27 @@ fn ten_motors_with_inputs_on_one_bus_stay_fresh_within_the_refresh_budget() {
     let config = engine_config(vec![device("six", 1), device("quad", 2)], axes);
     // Ten motors and one input poll per pack on the bus.
     let polls = 12;
-    let six_io = io_config(Variant::SixPack, &["ref0", "ref5", "analog6", "jumper1"], &["ttlout1"]);
+    let six_io = io_config(
+        Variant::SixPack,
+        &["ref0", "ref5", "analog6", "jumper1"],
+        &["ttlout1"],
+    );
     let quad_io = io_config(Variant::QuadPack, &["analog7", "ttlio1"], &[]);
     let drivers: Vec<Box<dyn Driver>> = vec![
-        Box::new(driver_with_io(1, Variant::SixPack, &[0, 1, 2, 3, 4, 5], polls, six_io)),
-        Box::new(driver_with_io(2, Variant::QuadPack, &[0, 1, 2, 3], polls, quad_io)),
+        Box::new(driver_with_io(
+            1,
+            Variant::SixPack,
+            &[0, 1, 2, 3, 4, 5],
+            polls,
+            six_io,
+        )),
+        Box::new(driver_with_io(
+            2,
+            Variant::QuadPack,
+            &[0, 1, 2, 3],
+            polls,
+            quad_io,
+        )),
     ];
     let mut rig = Rig::new(config, drivers, vec![Box::new(link)]);
     wait_online(&mut rig, 10);

@@ -86,7 +86,10 @@ fn a_motor_left_running_before_the_driver_started_is_stopped() {
     let mut rig = Rig::new(config, vec![Box::new(driver)], vec![Box::new(link)]);
     rig.now = Duration::from_millis(500);
     rig.log_wire = true;
-    assert!(motor(&board, 0).microstep_hz > 1000.0, "running at the start");
+    assert!(
+        motor(&board, 0).microstep_hz > 1000.0,
+        "running at the start"
+    );
     wait_online(&mut rig, 2);
     assert_eq!(
         motor(&board, 0).microstep_hz,

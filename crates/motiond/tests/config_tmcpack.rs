@@ -97,7 +97,11 @@ fn fails_at(name: &str, text: &str, needle: &str, nth: usize, key: &str, says: &
 
 /// `GOOD` with `extra` added to axis `x` (after its max_accel).
 fn on_x(extra: &str) -> String {
-    GOOD.replacen("max_accel = 100.0", &format!("max_accel = 100.0\n{extra}"), 1)
+    GOOD.replacen(
+        "max_accel = 100.0",
+        &format!("max_accel = 100.0\n{extra}"),
+        1,
+    )
 }
 
 /// `GOOD` with `extra` added to the device.
@@ -111,8 +115,8 @@ fn the_good_config_and_every_key_set_pass() {
     assert_eq!(code, Some(0), "{stderr}");
     let (code, stderr) = check("all.toml", mapping::ALL_KEYS);
     assert_eq!(code, Some(0), "{stderr}");
-    let example = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../config/examples/tmcpack-real.toml");
+    let example =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../config/examples/tmcpack-real.toml");
     let output = Command::new(env!("CARGO_BIN_EXE_motiond"))
         .arg("--check-config")
         .arg(&example)
@@ -120,13 +124,23 @@ fn the_good_config_and_every_key_set_pass() {
         .expect("run motiond");
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(output.status.success(), "{stderr}");
-    assert!(!stderr.contains("warning"), "the example is clean: {stderr}");
+    assert!(
+        !stderr.contains("warning"),
+        "the example is clean: {stderr}"
+    );
 }
 
 #[test]
 fn current_values_outside_the_manual_are_refused() {
     let text = on_x("current = { peak = 120.0 }");
-    fails_at("peak.toml", &text, "current =", 0, "axis[0].current.peak", "0..=100");
+    fails_at(
+        "peak.toml",
+        &text,
+        "current =",
+        0,
+        "axis[0].current.peak",
+        "0..=100",
+    );
     let text = on_x("current = { standstill = 40.0 }");
     fails_at(
         "level.toml",
@@ -137,7 +151,14 @@ fn current_values_outside_the_manual_are_refused() {
         "allowed: 100, 75, 50, 38, 25, 19, 13, 9, 0",
     );
     let text = on_x("current = { accel = 37.5 }");
-    fails_at("accel.toml", &text, "current =", 0, "axis[0].current.accel", "not a current level");
+    fails_at(
+        "accel.toml",
+        &text,
+        "current =",
+        0,
+        "axis[0].current.accel",
+        "not a current level",
+    );
     for bad in ["3", "0", "131072"] {
         let text = on_x(&format!("current = {{ standby_delay_ms = {bad} }}"));
         fails_at(
@@ -182,13 +203,41 @@ fn a_motor_pair_takes_one_peak_current() {
 #[test]
 fn reference_values_outside_the_manual_are_refused() {
     let cases = [
-        ("active = \"maybe\"", "axis[0].reference.active", "allowed: \"low\""),
-        ("debounce_ms = 31", "axis[0].reference.debounce_ms", "0..=30"),
-        ("debounce_ms = 5", "axis[0].reference.debounce_ms", "even number"),
-        ("test_range = 200.0", "axis[0].reference.test_range", "65535 microsteps"),
-        ("test_range = -1.0", "axis[0].reference.test_range", "a distance >= 0"),
-        ("null_offset = nan", "axis[0].reference.null_offset", "a finite distance"),
-        ("null_offset = 1e7", "axis[0].reference.null_offset", "signed 32-bit"),
+        (
+            "active = \"maybe\"",
+            "axis[0].reference.active",
+            "allowed: \"low\"",
+        ),
+        (
+            "debounce_ms = 31",
+            "axis[0].reference.debounce_ms",
+            "0..=30",
+        ),
+        (
+            "debounce_ms = 5",
+            "axis[0].reference.debounce_ms",
+            "even number",
+        ),
+        (
+            "test_range = 200.0",
+            "axis[0].reference.test_range",
+            "65535 microsteps",
+        ),
+        (
+            "test_range = -1.0",
+            "axis[0].reference.test_range",
+            "a distance >= 0",
+        ),
+        (
+            "null_offset = nan",
+            "axis[0].reference.null_offset",
+            "a finite distance",
+        ),
+        (
+            "null_offset = 1e7",
+            "axis[0].reference.null_offset",
+            "signed 32-bit",
+        ),
         ("side = \"up\"", "axis[0].reference.side", "unknown side"),
         ("fast = 1", "reference", "invalid type"),
     ];
@@ -210,12 +259,33 @@ fn rotary_revolution_and_poslimit_are_checked() {
         "missing; a rotary axis needs its units per revolution",
     );
     let text = on_x("revolution = 5.0");
-    fails_at("linear.toml", &text, "revolution", 0, "axis[0].revolution", "applies only to an axis with `rotary = true`");
+    fails_at(
+        "linear.toml",
+        &text,
+        "revolution",
+        0,
+        "axis[0].revolution",
+        "applies only to an axis with `rotary = true`",
+    );
     let text = on_x("rotary = true\nrevolution = -5.0");
-    fails_at("negative.toml", &text, "revolution", 0, "axis[0].revolution", "a finite distance > 0");
+    fails_at(
+        "negative.toml",
+        &text,
+        "revolution",
+        0,
+        "axis[0].revolution",
+        "a finite distance > 0",
+    );
     // 100 mm at 3e7 µsteps/mm: 3e9 > 0x7FFFFFFF.
     let text = GOOD.replacen("counts_per_unit = 640.0", "counts_per_unit = 3e7", 1);
-    fails_at("poslimit.toml", &text, "max = 100.0", 0, "axis[0].max", "poslimit allows at most 2147483647");
+    fails_at(
+        "poslimit.toml",
+        &text,
+        "max = 100.0",
+        0,
+        "axis[0].max",
+        "poslimit allows at most 2147483647",
+    );
     // A "deg" axis turns 360 per revolution unless told otherwise.
     let text = GOOD.replacen("max_accel = 360.0", "max_accel = 360.0\nrotary = true", 1);
     let (code, stderr) = check("deg.toml", &text);
@@ -225,9 +295,23 @@ fn rotary_revolution_and_poslimit_are_checked() {
 #[test]
 fn analog_stop_limits_are_adc_counts_rising_to_the_right() {
     let text = on_x("analog_stop = { left = 2000 }");
-    fails_at("left.toml", &text, "analog_stop", 0, "axis[0].analog_stop.left", "allowed: 0..=1023");
+    fails_at(
+        "left.toml",
+        &text,
+        "analog_stop",
+        0,
+        "axis[0].analog_stop.left",
+        "allowed: 0..=1023",
+    );
     let text = on_x("analog_stop = { left = 600, right = 400 }");
-    fails_at("order.toml", &text, "analog_stop", 0, "axis[0].analog_stop.right", "must be above left");
+    fails_at(
+        "order.toml",
+        &text,
+        "analog_stop",
+        0,
+        "axis[0].analog_stop.right",
+        "must be above left",
+    );
     let text = on_x("analog_stop = { left = 600, right = 1023 }");
     let (code, stderr) = check("left_only.toml", &text);
     assert_eq!(code, Some(0), "{stderr}");
@@ -236,7 +320,14 @@ fn analog_stop_limits_are_adc_counts_rising_to_the_right() {
 #[test]
 fn reply_addresses_never_collide_with_a_pack_address() {
     let text = on_device("reply_address = 300");
-    fails_at("range.toml", &text, "reply_address", 0, "device[0].reply_address", "allowed: 0..=255");
+    fails_at(
+        "range.toml",
+        &text,
+        "reply_address",
+        0,
+        "device[0].reply_address",
+        "allowed: 0..=255",
+    );
     let text = on_device("reply_address = 1");
     fails_at(
         "own.toml",
@@ -280,12 +371,32 @@ address = 254
 #[test]
 fn line_timing_keys_are_in_2_ms_units_and_fit_a_word() {
     let cases = [
-        ("switchover_ms = 3", "device[0].switchover_ms", "an even number of ms 2..=2000"),
-        ("switchover_ms = 2002", "device[0].switchover_ms", "2..=2000"),
-        ("packet_timeout_ms = 2", "device[0].packet_timeout_ms", "4..=131070"),
-        ("packet_timeout_ms = 7", "device[0].packet_timeout_ms", "even number"),
+        (
+            "switchover_ms = 3",
+            "device[0].switchover_ms",
+            "an even number of ms 2..=2000",
+        ),
+        (
+            "switchover_ms = 2002",
+            "device[0].switchover_ms",
+            "2..=2000",
+        ),
+        (
+            "packet_timeout_ms = 2",
+            "device[0].packet_timeout_ms",
+            "4..=131070",
+        ),
+        (
+            "packet_timeout_ms = 7",
+            "device[0].packet_timeout_ms",
+            "even number",
+        ),
         // One 9-byte word at 19200 baud takes 4.7 ms.
-        ("packet_timeout_ms = 4", "device[0].packet_timeout_ms", "shorter than one 9-byte word"),
+        (
+            "packet_timeout_ms = 4",
+            "device[0].packet_timeout_ms",
+            "shorter than one 9-byte word",
+        ),
     ];
     for (value, key, says) in cases {
         let text = on_device(value);
@@ -297,11 +408,32 @@ fn line_timing_keys_are_in_2_ms_units_and_fit_a_word() {
 #[test]
 fn the_ready_output_names_motors_of_the_variant_and_owns_ttlout1() {
     let text = on_device("ready_output = { motors = [0, 7] }");
-    fails_at("motor.toml", &text, "ready_output", 0, "device[0].ready_output.motors", "allowed: 0..=5");
+    fails_at(
+        "motor.toml",
+        &text,
+        "ready_output",
+        0,
+        "device[0].ready_output.motors",
+        "allowed: 0..=5",
+    );
     let quad = on_device("variant = \"quadpack\"\nready_output = { reference = [4] }");
-    fails_at("quad.toml", &quad, "ready_output", 0, "device[0].ready_output.reference", "allowed: 0..=3");
+    fails_at(
+        "quad.toml",
+        &quad,
+        "ready_output",
+        0,
+        "device[0].ready_output.reference",
+        "allowed: 0..=3",
+    );
     let twice = on_device("ready_output = { motors = [1, 1] }");
-    fails_at("twice.toml", &twice, "ready_output", 0, "device[0].ready_output.motors", "listed twice");
+    fails_at(
+        "twice.toml",
+        &twice,
+        "ready_output",
+        0,
+        "device[0].ready_output.motors",
+        "listed twice",
+    );
     let signal = r#"
 [[signal]]
 name = "lamp"
@@ -310,7 +442,14 @@ kind = "digital-out"
 pin = "ttlout1"
 "#;
     let text = format!("{}{signal}", on_device("ready_output = {}"));
-    fails_at("ttlout1.toml", &text, "pin = \"ttlout1\"", 0, "signal[0].pin", "is its ready output");
+    fails_at(
+        "ttlout1.toml",
+        &text,
+        "pin = \"ttlout1\"",
+        0,
+        "signal[0].pin",
+        "is its ready output",
+    );
     let (code, stderr) = check("lamp.toml", &format!("{GOOD}{signal}"));
     assert_eq!(code, Some(0), "{stderr}");
 }
@@ -356,7 +495,12 @@ analog_stop = { left = 10 }
         "model = \"qq2drv\"",
         "model = \"qq2drv\"\nreply_address = 3\nswitchover_ms = 4\npacket_timeout_ms = 10\nready_output = {}",
     );
-    for key in ["reply_address", "switchover_ms", "packet_timeout_ms", "ready_output"] {
+    for key in [
+        "reply_address",
+        "switchover_ms",
+        "packet_timeout_ms",
+        "ready_output",
+    ] {
         fails_at(
             "device_model.toml",
             &device,

@@ -7,8 +7,8 @@ use tmcpack::convert::{
     AMAX_DIVISOR, DEFAULT_BAUD, F_CLK_HZ, MAX_MICROSTEP_HZ, RAMP_HZ, TICK, byte_time,
 };
 use tmcpack::{
-    CurrentLevel, FRAME_LEN, MAX_AMAX, MAX_ANALOG, MAX_CLKDIV, MAX_DIV, MAX_VELOCITY,
-    MotorOptions, MotorType, StepClock, Variant,
+    CurrentLevel, FRAME_LEN, MAX_AMAX, MAX_ANALOG, MAX_CLKDIV, MAX_DIV, MAX_VELOCITY, MotorOptions,
+    MotorType, StepClock, Variant,
 };
 
 use super::io::TmcpackIo;

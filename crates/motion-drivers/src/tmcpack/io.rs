@@ -61,24 +61,88 @@ const fn digital(name: &'static str, kinds: SignalKinds, description: &'static s
     }
 }
 
-const A0: PinInfo = analog("analog0", "motor 0's analogue input A_In, ADC counts 0..1023 (manual 8.5 $30 channel 0)");
-const A1: PinInfo = analog("analog1", "motor 1's analogue input A_In, ADC counts 0..1023 (manual 8.5 $30 channel 1)");
-const A2: PinInfo = analog("analog2", "motor 2's analogue input A_In, ADC counts 0..1023 (manual 8.5 $30 channel 2)");
-const A3: PinInfo = analog("analog3", "motor 3's analogue input A_In, ADC counts 0..1023 (manual 8.5 $30 channel 3)");
-const A4: PinInfo = analog("analog4", "motor 4's analogue input A_In, ADC counts 0..1023 (manual 8.5 $30 channel 4)");
-const A5: PinInfo = analog("analog5", "motor 5's analogue input A_In, ADC counts 0..1023 (manual 8.5 $30 channel 5)");
-const A6: PinInfo = analog("analog6", "external analogue input, ADC counts 0..1023 (manual 8.5 $30 channel 6)");
-const A7: PinInfo = analog("analog7", "supply voltage, 22 counts per volt: scale = 0.04545 for V (manual 8.5 $30 channel 7, \"1V equals value 22\")");
-const R0: PinInfo = digital("ref0", DIN, "motor 0's reference switch input Ref_In, electrical level 1 = high (manual 8.5 $30 P4 bit 0 reports it inverted; the driver undoes that)");
-const R1: PinInfo = digital("ref1", DIN, "motor 1's reference switch input Ref_In, electrical level 1 = high (manual 8.5 $30 P4 bit 1, inverted on the wire)");
-const R2: PinInfo = digital("ref2", DIN, "motor 2's reference switch input Ref_In, electrical level 1 = high (manual 8.5 $30 P4 bit 2, inverted on the wire)");
-const R3: PinInfo = digital("ref3", DIN, "motor 3's reference switch input Ref_In, electrical level 1 = high (manual 8.5 $30 P4 bit 3, inverted on the wire)");
-const R4: PinInfo = digital("ref4", DIN, "motor 4's reference switch input Ref_In, electrical level 1 = high (manual 8.5 $30 P4 bit 4, inverted on the wire)");
-const R5: PinInfo = digital("ref5", DIN, "motor 5's reference switch input Ref_In, electrical level 1 = high (manual 8.5 $30 P4 bit 5, inverted on the wire)");
-const J1: PinInfo = digital("jumper1", DIN, "jumper JP1, 1 = set (manual 8.5 $30 P4 bit 6; 6.2 CAN bit rate)");
-const J2: PinInfo = digital("jumper2", DIN, "jumper JP2, 1 = set (manual 8.5 $30 P4 bit 7; 6.2 CAN bit rate)");
-const IO1: PinInfo = digital("ttlio1", DIO, "TTLIO1, digital input ($30 P5) or output ($32 P1 direction, P2 level) (manual 8.5)");
-const OUT1: PinInfo = digital("ttlout1", DOUT, "TTLOUT1 digital output ($32 P0, manual 8.5); not available when the device has a ready_output");
+const A0: PinInfo = analog(
+    "analog0",
+    "motor 0's analogue input A_In, ADC counts 0..1023 (manual 8.5 $30 channel 0)",
+);
+const A1: PinInfo = analog(
+    "analog1",
+    "motor 1's analogue input A_In, ADC counts 0..1023 (manual 8.5 $30 channel 1)",
+);
+const A2: PinInfo = analog(
+    "analog2",
+    "motor 2's analogue input A_In, ADC counts 0..1023 (manual 8.5 $30 channel 2)",
+);
+const A3: PinInfo = analog(
+    "analog3",
+    "motor 3's analogue input A_In, ADC counts 0..1023 (manual 8.5 $30 channel 3)",
+);
+const A4: PinInfo = analog(
+    "analog4",
+    "motor 4's analogue input A_In, ADC counts 0..1023 (manual 8.5 $30 channel 4)",
+);
+const A5: PinInfo = analog(
+    "analog5",
+    "motor 5's analogue input A_In, ADC counts 0..1023 (manual 8.5 $30 channel 5)",
+);
+const A6: PinInfo = analog(
+    "analog6",
+    "external analogue input, ADC counts 0..1023 (manual 8.5 $30 channel 6)",
+);
+const A7: PinInfo = analog(
+    "analog7",
+    "supply voltage, 22 counts per volt: scale = 0.04545 for V (manual 8.5 $30 channel 7, \"1V equals value 22\")",
+);
+const R0: PinInfo = digital(
+    "ref0",
+    DIN,
+    "motor 0's reference switch input Ref_In, electrical level 1 = high (manual 8.5 $30 P4 bit 0 reports it inverted; the driver undoes that)",
+);
+const R1: PinInfo = digital(
+    "ref1",
+    DIN,
+    "motor 1's reference switch input Ref_In, electrical level 1 = high (manual 8.5 $30 P4 bit 1, inverted on the wire)",
+);
+const R2: PinInfo = digital(
+    "ref2",
+    DIN,
+    "motor 2's reference switch input Ref_In, electrical level 1 = high (manual 8.5 $30 P4 bit 2, inverted on the wire)",
+);
+const R3: PinInfo = digital(
+    "ref3",
+    DIN,
+    "motor 3's reference switch input Ref_In, electrical level 1 = high (manual 8.5 $30 P4 bit 3, inverted on the wire)",
+);
+const R4: PinInfo = digital(
+    "ref4",
+    DIN,
+    "motor 4's reference switch input Ref_In, electrical level 1 = high (manual 8.5 $30 P4 bit 4, inverted on the wire)",
+);
+const R5: PinInfo = digital(
+    "ref5",
+    DIN,
+    "motor 5's reference switch input Ref_In, electrical level 1 = high (manual 8.5 $30 P4 bit 5, inverted on the wire)",
+);
+const J1: PinInfo = digital(
+    "jumper1",
+    DIN,
+    "jumper JP1, 1 = set (manual 8.5 $30 P4 bit 6; 6.2 CAN bit rate)",
+);
+const J2: PinInfo = digital(
+    "jumper2",
+    DIN,
+    "jumper JP2, 1 = set (manual 8.5 $30 P4 bit 7; 6.2 CAN bit rate)",
+);
+const IO1: PinInfo = digital(
+    "ttlio1",
+    DIO,
+    "TTLIO1, digital input ($30 P5) or output ($32 P1 direction, P2 level) (manual 8.5)",
+);
+const OUT1: PinInfo = digital(
+    "ttlout1",
+    DOUT,
+    "TTLOUT1 digital output ($32 P0, manual 8.5); not available when the device has a ready_output",
+);
 
 static SIXPACK: [PinInfo; 18] = [
     A0, A1, A2, A3, A4, A5, A6, A7, R0, R1, R2, R3, R4, R5, J1, J2, IO1, OUT1,
@@ -382,7 +446,13 @@ mod tests {
     fn tables_name_every_pin_of_8_5_once_per_variant() {
         let six: Vec<&str> = pins(Variant::SixPack).iter().map(|p| p.name).collect();
         assert_eq!(six.len(), 18);
-        assert_eq!(&six[..8], &["analog0", "analog1", "analog2", "analog3", "analog4", "analog5", "analog6", "analog7"]);
+        assert_eq!(
+            &six[..8],
+            &[
+                "analog0", "analog1", "analog2", "analog3", "analog4", "analog5", "analog6",
+                "analog7"
+            ]
+        );
         assert!(six.contains(&"ref5") && six.contains(&"ttlout1"));
         let quad: Vec<&str> = pins(Variant::QuadPack).iter().map(|p| p.name).collect();
         assert_eq!(quad.len(), 14);

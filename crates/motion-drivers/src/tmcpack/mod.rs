@@ -279,7 +279,13 @@ impl TmcpackDriver {
         }
     }
 
-    fn query(&self, request: Request, command: Command, motor: Option<u8>, purpose: Purpose) -> Pick {
+    fn query(
+        &self,
+        request: Request,
+        command: Command,
+        motor: Option<u8>,
+        purpose: Purpose,
+    ) -> Pick {
         Pick {
             request,
             expect: Some(Expect {

@@ -31,7 +31,13 @@ impl TmcpackDriver {
         self.retry_at = now + RETRY_PERIOD;
     }
 
-    pub(super) fn on_reply(&mut self, now: Duration, expect: Expect, sent_at: Duration, reply: Reply) {
+    pub(super) fn on_reply(
+        &mut self,
+        now: Duration,
+        expect: Expect,
+        sent_at: Duration,
+        reply: Reply,
+    ) {
         self.status.replies = self.status.replies.saturating_add(1);
         self.timeouts_in_row = 0;
         match (reply, expect.purpose) {
@@ -65,7 +71,12 @@ impl TmcpackDriver {
                     Phase::Configure(0)
                 };
             }
-            (Reply::Velocity { motor, velocity, .. }, Purpose::Quiesce) => {
+            (
+                Reply::Velocity {
+                    motor, velocity, ..
+                },
+                Purpose::Quiesce,
+            ) => {
                 if let Some(quiesce) = self.quiesce.as_mut() {
                     quiesce.on_velocity(motor, velocity);
                 }

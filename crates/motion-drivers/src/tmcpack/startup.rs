@@ -190,7 +190,10 @@ impl Quiesce {
         let mut longest = Duration::ZERO;
         for channel in channels.iter().flatten() {
             let motor = channel.motor;
-            if !actions.get(usize::from(motor)).is_some_and(|a| a.is_active()) {
+            if !actions
+                .get(usize::from(motor))
+                .is_some_and(|a| a.is_active())
+            {
                 continue;
             }
             let amax = channel

@@ -143,7 +143,10 @@ fn motors_found_running_are_stopped_before_the_configuration() {
     );
     // Motor 2's axis: 6400 µsteps/s² at 8.2's scale for its divider.
     let amax = bench.request();
-    assert!(matches!(amax, Request::VelocityAcceleration { motor: 2, .. }), "{amax:?}");
+    assert!(
+        matches!(amax, Request::VelocityAcceleration { motor: 2, .. }),
+        "{amax:?}"
+    );
     assert_eq!(bench.request(), rotate(2, 0));
     let mut asked = 0;
     let mut configured = Vec::new();
@@ -172,7 +175,10 @@ fn motors_found_running_are_stopped_before_the_configuration() {
         }
     }
     assert_eq!(asked, 3, "asked until vact read 0");
-    assert!(matches!(configured[0], Request::SetBaud { .. }), "{configured:?}");
+    assert!(
+        matches!(configured[0], Request::SetBaud { .. }),
+        "{configured:?}"
+    );
     assert!(configured.contains(&Request::VelocitySetting { clkdiv: 18 }));
     assert!(bench.driver.status().online);
 }
@@ -233,7 +239,11 @@ fn a_reference_search_that_starts_over_is_home_failed_and_stopped() {
         let request = RequestFrame::decode(&w).expect("decodes").request;
         if let Request::QueryPosition { motor, .. } = request {
             bench.now += 10 * MS;
-            let p = if motor == 0 { phase.next().unwrap_or(1) } else { 0 };
+            let p = if motor == 0 {
+                phase.next().unwrap_or(1)
+            } else {
+                0
+            };
             bench.rx(&position(motor, 100, Action::ReferenceSearch(p)));
             if bench.driver.channel(0).fault == Some(DeviceFault::HomeFailed) {
                 failed_at.get_or_insert(sent.len());

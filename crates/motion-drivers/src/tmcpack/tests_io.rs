@@ -220,7 +220,9 @@ fn the_ready_output_writes_33_and_32_p3() {
         .expect("$32 P3 = 1");
     assert!(ready < outputs);
     // Manual 8.5 $33: P0 mask for active motors, P1 mask for reference search.
-    let w = RequestFrame::new(1, startup[ready]).to_word().expect("valid");
+    let w = RequestFrame::new(1, startup[ready])
+        .to_word()
+        .expect("valid");
     assert_eq!(w, [0x01, 0x33, 0b101, 0b001, 0, 0, 0, 0, 0]);
 }
 
@@ -228,7 +230,9 @@ fn the_ready_output_writes_33_and_32_p3() {
 fn outputs_and_pins_are_refused_while_the_pack_is_not_online() {
     let mut bench = Bench::new(io_config(&["ref0"], &["ttlout1"]));
     assert_eq!(
-        bench.driver.set_output(Duration::ZERO, pin("ttlout1"), true),
+        bench
+            .driver
+            .set_output(Duration::ZERO, pin("ttlout1"), true),
         Err(GoalError::Offline)
     );
     assert_eq!(

@@ -45,8 +45,14 @@ fn manual_8_5_inputs_follow_what_the_test_drives() {
         panic!("not a $30 answer");
     };
     assert_eq!(value, 700);
-    assert!(inputs.contains(tmcpack::RefInputs::REF0), "low level reads 1");
-    assert!(!inputs.contains(tmcpack::RefInputs::REF1), "nothing connected floats high");
+    assert!(
+        inputs.contains(tmcpack::RefInputs::REF0),
+        "low level reads 1"
+    );
+    assert!(
+        !inputs.contains(tmcpack::RefInputs::REF1),
+        "nothing connected floats high"
+    );
     assert!(ttlio1);
     // The switch opens (actuated): high level → the bit reads 0.
     h.dev.set_ref_switch(
@@ -92,5 +98,9 @@ fn manual_8_5_outputs_and_stop_limits_can_be_read_back() {
     );
     h.wait(2 * MS);
     assert_eq!(h.dev.stop_limits(2), Some((100, 900)));
-    assert_eq!(h.dev.stop_limits(0), Some((0, 1023)), "no function by default");
+    assert_eq!(
+        h.dev.stop_limits(0),
+        Some((0, 1023)),
+        "no function by default"
+    );
 }

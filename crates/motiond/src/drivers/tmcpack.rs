@@ -2,8 +2,8 @@
 //! signals (docs/keys/tmcpack.md).
 
 use motion_drivers::tmcpack::{
-    Currents, DEFAULT_REPLY_ADDRESS, DEFAULT_SWITCHOVER_UNITS, PinSet, ReadyOutput,
-    TmcpackChannel, TmcpackDriver, TmcpackDriverConfig, TmcpackIo, default_packet_timeout_units,
+    Currents, DEFAULT_REPLY_ADDRESS, DEFAULT_SWITCHOVER_UNITS, PinSet, ReadyOutput, TmcpackChannel,
+    TmcpackDriver, TmcpackDriverConfig, TmcpackIo, default_packet_timeout_units,
 };
 use motion_drivers::{Driver, SignalKind};
 use motion_engine::AxisConfig;
@@ -123,11 +123,9 @@ fn channel_config(axis: &AxisConfig, spec: &AxisSpec) -> TmcpackChannel {
             .debounce_ms
             .and_then(|ms| debounce_mask(ms).ok())
             .unwrap_or(d.debounce_mask),
-        nulloffset: r
-            .null_offset
-            .map_or(d.nulloffset, |u| {
-                counts(u).clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32
-            }),
+        nulloffset: r.null_offset.map_or(d.nulloffset, |u| {
+            counts(u).clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32
+        }),
         testnullrange: r
             .test_range
             .map_or(d.testnullrange, |u| counts(u).clamp(0.0, 65535.0) as u16),
@@ -189,7 +187,9 @@ pub fn driver_config(
         .count();
     let input_polls = on_link
         .iter()
-        .filter(|(i, d)| d.model == motion_drivers::Model::Tmcpack && io(config, *i, d).inputs != PinSet::EMPTY)
+        .filter(|(i, d)| {
+            d.model == motion_drivers::Model::Tmcpack && io(config, *i, d).inputs != PinSet::EMPTY
+        })
         .count();
     driver.bus_motors = (axes + input_polls).min(usize::from(u8::MAX)) as u8;
     driver.bus_packet_timeout_units = on_link
@@ -225,7 +225,11 @@ fn yes(b: bool) -> String {
 fn num(x: f64) -> String {
     let text = format!("{x:.3}");
     let text = text.trim_end_matches('0').trim_end_matches('.');
-    if text == "-0" { "0".into() } else { text.into() }
+    if text == "-0" {
+        "0".into()
+    } else {
+        text.into()
+    }
 }
 
 fn mask_list(mask: MotorMask) -> String {
@@ -258,7 +262,11 @@ pub(super) fn describe(
         format!("{0} (0x{0:02X})", driver.reply_address),
     );
     let switchover = driver.switchover_units.unwrap_or(DEFAULT_SWITCHOVER_UNITS);
-    row(dev, "switchover_ms", format!("{} ms ($40)", 2 * u32::from(switchover)));
+    row(
+        dev,
+        "switchover_ms",
+        format!("{} ms ($40)", 2 * u32::from(switchover)),
+    );
     row(
         dev,
         "packet_timeout_ms",
@@ -289,9 +297,14 @@ pub(super) fn describe(
         let per_unit = axis.counts_per_unit.abs();
         // The pair's value: the even motor's, else the odd one's (manual 8.3 $10).
         let pair = axis.channel & !1;
-        let peak = [pair, pair + 1]
-            .into_iter()
-            .find_map(|m| driver.channels.get(m).copied().flatten().and_then(|c| c.peak_current));
+        let peak = [pair, pair + 1].into_iter().find_map(|m| {
+            driver
+                .channels
+                .get(m)
+                .copied()
+                .flatten()
+                .and_then(|c| c.peak_current)
+        });
         row(
             owner,
             "current.peak",

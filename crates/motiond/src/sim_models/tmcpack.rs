@@ -19,9 +19,10 @@ pub(super) fn model(config: &ServerConfig, index: usize, device: &DeviceSpec) ->
     let driver = tmcpack_driver_config(config, index, device);
     let mut motors = [MotorConfig::default(); 6];
     for axis in config.axes.iter().filter(|a| a.device == index) {
-        let (Some(slot), Some(Some(channel))) =
-            (motors.get_mut(axis.channel), driver.channels.get(axis.channel))
-        else {
+        let (Some(slot), Some(Some(channel))) = (
+            motors.get_mut(axis.channel),
+            driver.channels.get(axis.channel),
+        ) else {
             continue;
         };
         let cpu = axis.counts_per_unit;
@@ -32,9 +33,7 @@ pub(super) fn model(config: &ServerConfig, index: usize, device: &DeviceSpec) ->
         let width = switch_width(cpu);
         // The rotor starts at physical 0 = position 0; the search runs towards decreasing
         // microsteps with NullLeft (manual 8.3 $15).
-        let toward_lower = channel
-            .motor_type
-            .contains(tmcpack::MotorType::NULL_LEFT);
+        let toward_lower = channel.motor_type.contains(tmcpack::MotorType::NULL_LEFT);
         let (from, to) = if toward_lower {
             (lo - width, lo - 1)
         } else {

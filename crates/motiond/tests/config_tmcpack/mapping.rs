@@ -13,7 +13,9 @@ use motion_link::sim::{Duplex, SimLink, StreamDevice};
 use motion_sim::tmcpack::{TmcpackSim, TmcpackSimConfig};
 use motiond::config::{Owner, ServerConfig};
 use motiond::drivers::{ParamRow, describe, tmcpack_driver_config};
-use tmcpack::{CurrentLevel, MotorMask, MotorOptions, MotorType, ReferenceFlags, Request, RequestFrame};
+use tmcpack::{
+    CurrentLevel, MotorMask, MotorOptions, MotorType, ReferenceFlags, Request, RequestFrame,
+};
 
 /// Every tmcpack key set to something other than its default, on a simulated link.
 pub const ALL_KEYS: &str = r#"
@@ -157,7 +159,9 @@ fn expected() -> Vec<Request> {
             motor: 0,
             poslimit: 64_000,
             motor_type: MotorType::FILTER_SWITCH | MotorType::NULL_CENTER | MotorType::STOP_NULL,
-            options: MotorOptions::NULL_POSITIVE | MotorOptions::STOP_SOFT | MotorOptions::STOP_NO_REF,
+            options: MotorOptions::NULL_POSITIVE
+                | MotorOptions::STOP_SOFT
+                | MotorOptions::STOP_NO_REF,
         },
         // debounce_ms = 10: 6 mask bits.
         Request::ReferenceParameters {
@@ -237,7 +241,11 @@ fn every_key_reaches_the_wire_at_start_up_and_again_after_a_power_cycle() {
         assert!(has(&requests, &want), "{want:?} not in {requests:?}");
     }
     // Queries carry reply_address = 200; the inputs are polled with $30 channel 6.
-    assert!(requests.iter().all(|r| r.reply_to().is_none_or(|a| a == 200)));
+    assert!(
+        requests
+            .iter()
+            .all(|r| r.reply_to().is_none_or(|a| a == 200))
+    );
     assert!(requests.contains(&Request::ReadInput {
         channel: 6,
         reply_to: 200
@@ -267,7 +275,10 @@ fn every_key_reaches_the_wire_at_start_up_and_again_after_a_power_cycle() {
     let again = run(&mut **driver, &mut link, cycled_at, 6000, |_, _| {});
     let requests: Vec<Request> = again.iter().map(|(_, r)| *r).collect();
     for want in expected() {
-        assert!(has(&requests, &want), "{want:?} not written again: {requests:?}");
+        assert!(
+            has(&requests, &want),
+            "{want:?} not written again: {requests:?}"
+        );
     }
     assert!(driver.status().online);
     assert!(driver.status().resets >= 1 || driver.status().timeouts >= 3);
@@ -281,7 +292,12 @@ fn value<'r>(rows: &'r [ParamRow], owner: Owner, key: &str) -> &'r str {
         .unwrap_or_else(|| panic!("no row {owner:?} {key}"))
 }
 
-const DEVICE_KEYS: [&str; 4] = ["reply_address", "switchover_ms", "packet_timeout_ms", "ready_output"];
+const DEVICE_KEYS: [&str; 4] = [
+    "reply_address",
+    "switchover_ms",
+    "packet_timeout_ms",
+    "ready_output",
+];
 const AXIS_KEYS: [&str; 20] = [
     "current.peak",
     "current.standby",
@@ -325,14 +341,29 @@ fn describe_lists_every_key_with_the_value_in_effect() {
     assert_eq!(value(&rows, dev, "switchover_ms"), "4 ms ($40)");
     assert_eq!(value(&rows, dev, "packet_timeout_ms"), "10 ms ($41)");
     assert!(value(&rows, dev, "ready_output").starts_with("motors [0, 1], reference [0]"));
-    assert_eq!(value(&rows, x, "current.peak"), "60.2 % ($10 = 154, 0.48 A)");
+    assert_eq!(
+        value(&rows, x, "current.peak"),
+        "60.2 % ($10 = 154, 0.48 A)"
+    );
     assert_eq!(value(&rows, x, "current.standby"), "0 %");
     assert_eq!(value(&rows, x, "current.standstill"), "38 %");
-    assert_eq!(value(&rows, x, "current.standby_delay_ms"), "500 ms (T0 = 250)");
-    assert_eq!(value(&rows, x, "reference.side"), "right ($15 NullLeft clear)");
+    assert_eq!(
+        value(&rows, x, "current.standby_delay_ms"),
+        "500 ms (T0 = 250)"
+    );
+    assert_eq!(
+        value(&rows, x, "reference.side"),
+        "right ($15 NullLeft clear)"
+    );
     assert_eq!(value(&rows, x, "reference.active"), "high");
-    assert_eq!(value(&rows, x, "reference.debounce_ms"), "10 ms ($16 mask $003F)");
-    assert_eq!(value(&rows, x, "reference.null_offset"), "0.5 mm (320 µsteps)");
+    assert_eq!(
+        value(&rows, x, "reference.debounce_ms"),
+        "10 ms ($16 mask $003F)"
+    );
+    assert_eq!(
+        value(&rows, x, "reference.null_offset"),
+        "0.5 mm (320 µsteps)"
+    );
     assert_eq!(value(&rows, x, "reference.test_range"), "1 mm (640 µsteps)");
     assert_eq!(value(&rows, x, "reference.fast"), "false");
     assert_eq!(value(&rows, x, "analog_stop.left"), "100");
@@ -382,11 +413,13 @@ fn unset_keys_keep_the_driver_defaults() {
 #[test]
 fn the_simulated_pack_has_the_switch_on_the_configured_side() {
     for side in ["left", "right"] {
-        let text = super::GOOD.replacen("baud = 19200", "baud = 19200", 1).replacen(
-            "type = \"serial\"\npath = \"/dev/does-not-exist-motiond-test\"",
-            "type = \"sim\"",
-            1,
-        );
+        let text = super::GOOD
+            .replacen("baud = 19200", "baud = 19200", 1)
+            .replacen(
+                "type = \"serial\"\npath = \"/dev/does-not-exist-motiond-test\"",
+                "type = \"sim\"",
+                1,
+            );
         let text = text.replacen(
             "max_accel = 100.0",
             &format!("max_accel = 100.0\nreference = {{ side = \"{side}\", active = \"high\" }}"),
@@ -398,17 +431,29 @@ fn the_simulated_pack_has_the_switch_on_the_configured_side() {
         let mut link = motiond::sim_models::sim_link(&config, 0);
         let mut homing = false;
         let mut done = None;
-        run(&mut **driver, &mut link, Duration::ZERO, 15_000, |now, d| {
-            if !homing && d.status().online && now > Duration::from_millis(1500) {
-                d.set_goal(now, 0, Goal::Home { velocity: 20.0 * 640.0 })
+        run(
+            &mut **driver,
+            &mut link,
+            Duration::ZERO,
+            15_000,
+            |now, d| {
+                if !homing && d.status().online && now > Duration::from_millis(1500) {
+                    d.set_goal(
+                        now,
+                        0,
+                        Goal::Home {
+                            velocity: 20.0 * 640.0,
+                        },
+                    )
                     .expect("home");
-                homing = true;
-            }
-            let state = d.channel(0);
-            if homing && done.is_none() && (state.homed || state.fault.is_some()) {
-                done = Some((state.homed, state.fault));
-            }
-        });
+                    homing = true;
+                }
+                let state = d.channel(0);
+                if homing && done.is_none() && (state.homed || state.fault.is_some()) {
+                    done = Some((state.homed, state.fault));
+                }
+            },
+        );
         assert_eq!(done, Some((true, None)), "side {side}: homed, no fault");
     }
 }

@@ -210,7 +210,11 @@ pub const fn debounce_mask(ms: u16) -> Result<u16, Error> {
         });
     }
     let bits = ms / 2 + 1;
-    Ok(if bits >= 16 { u16::MAX } else { (1 << bits) - 1 })
+    Ok(if bits >= 16 {
+        u16::MAX
+    } else {
+        (1 << bits) - 1
+    })
 }
 
 /// The de-bounce delay in ms a $16 mask gives: (mask bits − 1) · 2 ms.

@@ -438,7 +438,10 @@ fn manual_8_3_peak_current_10_and_levels_11() {
     assert_eq!(CurrentLevel::from_percent(40), None);
     // "Power consumption can be reduced drastically when power-down current (I0) is set to
     // 0%, i.e. P1=8".
-    assert_eq!(CurrentLevel::from_percent(0).map(CurrentLevel::index), Some(8));
+    assert_eq!(
+        CurrentLevel::from_percent(0).map(CurrentLevel::index),
+        Some(8)
+    );
     assert_eq!(convert::units_of_ms(1000), Some(500));
     assert_eq!(convert::units_of_ms(3), None);
 }

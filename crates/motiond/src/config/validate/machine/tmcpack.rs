@@ -3,9 +3,9 @@
 //! the Trinamic SIXpack/QUADpack manual (V2.43) gives for the instruction it becomes.
 
 use motion_drivers::{Model, SignalKind};
-use toml::Spanned;
 use tmcpack::CurrentLevel;
 use tmcpack::convert::{MAX_DEBOUNCE_MS, byte_time};
+use toml::Spanned;
 
 use super::{AxisContext, DeviceContext};
 use crate::config::raw::{RawAxis, RawConfig, RawDevice};
@@ -150,13 +150,25 @@ pub(in crate::config) fn device_keys(
         }
     }
     if let Some(value) = &raw.switchover_ms {
-        match even_ms(v, value, &ctx.key("switchover_ms"), 2..=2000, "$40 switch-over delay") {
+        match even_ms(
+            v,
+            value,
+            &ctx.key("switchover_ms"),
+            2..=2000,
+            "$40 switch-over delay",
+        ) {
             Some(ms) => keys.switchover_ms = Some(ms as u16),
             None => ok = false,
         }
     }
     if let Some(value) = &raw.packet_timeout_ms {
-        match even_ms(v, value, &ctx.key("packet_timeout_ms"), 4..=131_070, "$41 packet timeout") {
+        match even_ms(
+            v,
+            value,
+            &ctx.key("packet_timeout_ms"),
+            4..=131_070,
+            "$41 packet timeout",
+        ) {
             Some(ms) => keys.packet_timeout_ms = Some(ms as u32),
             None => ok = false,
         }
@@ -178,7 +190,10 @@ pub(in crate::config) fn device_keys(
                     v.issue(
                         item.span(),
                         &key,
-                        format!("{m} is not a motor of this pack; allowed: 0..={}", motors - 1),
+                        format!(
+                            "{m} is not a motor of this pack; allowed: 0..={}",
+                            motors - 1
+                        ),
                     );
                     fine = false;
                 } else if bits & (1 << m) != 0 {
@@ -204,11 +219,7 @@ pub(in crate::config) fn device_keys(
 }
 
 /// A current level of $11 from a percentage.
-fn level(
-    v: &mut Validator<'_, '_>,
-    value: &Spanned<f64>,
-    key: &str,
-) -> Option<CurrentLevel> {
+fn level(v: &mut Validator<'_, '_>, value: &Spanned<f64>, key: &str) -> Option<CurrentLevel> {
     let p = *value.get_ref();
     let found = (p.is_finite() && p.fract() == 0.0 && (0.0..=100.0).contains(&p))
         .then(|| CurrentLevel::from_percent(p as u8))
@@ -432,7 +443,9 @@ fn poslimit_fits(
     let (units, span, key, what) = match (revolution, ctx.min, ctx.max) {
         (Some(r), _, _) => (
             r,
-            raw.revolution.as_ref().map_or(ctx.table.clone(), Spanned::span),
+            raw.revolution
+                .as_ref()
+                .map_or(ctx.table.clone(), Spanned::span),
             ctx.key("revolution"),
             "one revolution",
         ),
@@ -515,11 +528,13 @@ fn reply_addresses(v: &mut Validator<'_, '_>, config: &ServerConfig, raw: &RawCo
             if other.address != u32::from(reply) {
                 continue;
             }
-            let link = config.links.get(asking.link).map_or("?", |l| l.name.as_str());
+            let link = config
+                .links
+                .get(asking.link)
+                .map_or("?", |l| l.name.as_str());
             let asking_raw = raw_device(raw, &asking.name);
-            let explicit = asking_raw.and_then(|(i, d)| {
-                d.reply_address.as_ref().map(|s| (i, s.span()))
-            });
+            let explicit =
+                asking_raw.and_then(|(i, d)| d.reply_address.as_ref().map(|s| (i, s.span())));
             match explicit {
                 Some((i, span)) => v.issue(
                     span,
@@ -595,7 +610,10 @@ fn ready_output_signals(v: &mut Validator<'_, '_>, config: &ServerConfig, raw: &
         {
             continue;
         }
-        let device = config.devices.get(signal.device).map_or("?", |d| d.name.as_str());
+        let device = config
+            .devices
+            .get(signal.device)
+            .map_or("?", |d| d.name.as_str());
         let span = raw
             .signal
             .get(s)
