@@ -413,13 +413,11 @@ fn unset_keys_keep_the_driver_defaults() {
 #[test]
 fn the_simulated_pack_has_the_switch_on_the_configured_side() {
     for side in ["left", "right"] {
-        let text = super::GOOD
-            .replacen("baud = 19200", "baud = 19200", 1)
-            .replacen(
-                "type = \"serial\"\npath = \"/dev/does-not-exist-motiond-test\"",
-                "type = \"sim\"",
-                1,
-            );
+        let text = super::GOOD.replacen(
+            "type = \"serial\"\npath = \"/dev/does-not-exist-motiond-test\"",
+            "type = \"sim\"",
+            1,
+        );
         let text = text.replacen(
             "max_accel = 100.0",
             &format!("max_accel = 100.0\nreference = {{ side = \"{side}\", active = \"high\" }}"),

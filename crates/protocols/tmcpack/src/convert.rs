@@ -204,7 +204,7 @@ pub const MAX_DEBOUNCE_MS: u16 = 30;
 /// $0003=2ms, $FFFF=30ms", one more mask bit per 2 ms cycle (the 7.1 default $0FFF is
 /// "Filter delay 12-1 cycles = 22 ms").
 pub const fn debounce_mask(ms: u16) -> Result<u16, Error> {
-    if ms > MAX_DEBOUNCE_MS || ms % 2 != 0 {
+    if ms > MAX_DEBOUNCE_MS || !ms.is_multiple_of(2) {
         return Err(Error::OutOfRange {
             field: "de-bounce delay",
         });
@@ -242,7 +242,11 @@ pub fn peak_percent(value: u8) -> f64 {
 /// A time in ms as a count of 2 ms units (T0, $40 delays, $41 timeouts): `None` unless it
 /// is an even number of ms.
 pub const fn units_of_ms(ms: u32) -> Option<u32> {
-    if ms % 2 == 0 { Some(ms / 2) } else { None }
+    if ms.is_multiple_of(2) {
+        Some(ms / 2)
+    } else {
+        None
+    }
 }
 
 /// The board variant: SIXpack drives six motors of up to 0.8 A, QUADpack four of 1.5 A.
