@@ -87,7 +87,9 @@ fn fails_at(name: &str, text: &str, needle: &str, nth: usize, key: &str, says: &
     assert_eq!(code, Some(1), "{name}: exit status; stderr:\n{stderr}");
     let location = format!("{name}:{}:", line_of(text, needle, nth));
     let found = stderr.lines().any(|line| {
-        line.contains(&location) && line.contains(&format!("`{key}`")) && line.contains(says)
+        line.contains(&location)
+            && (line.contains(&format!("`{key}`")) || line.contains(&format!(".{key}`")))
+            && line.contains(says)
     });
     assert!(
         found,
