@@ -624,7 +624,12 @@ fn ten_motors_on_one_bus_stay_fresh_within_the_refresh_budget() {
     while rig.now < end {
         rig.tick();
         for index in 0..10 {
-            assert!(fresh(&rig, index), "axis {index} stale at {:?}", rig.now);
+            assert!(
+                fresh(&rig, index),
+                "axis {index} stale at {:?}: {:?}",
+                rig.now,
+                rig.axis(index)
+            );
         }
     }
     for index in 0..10usize {

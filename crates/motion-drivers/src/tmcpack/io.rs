@@ -348,6 +348,24 @@ impl IoState {
             .unwrap_or(7)
     }
 
+    /// The configured input read longest ago (that has been read at all), and the `$30`
+    /// channel whose answer refreshes it.
+    pub fn stalest(&self) -> Option<(Duration, u8)> {
+        sources(self.variant)
+            .iter()
+            .enumerate()
+            .filter(|(index, _)| self.cfg.inputs.contains(Pin(*index as u16)))
+            .filter_map(|(index, src)| {
+                let at = self.readings.get(index)?.refreshed_at?;
+                let channel = match *src {
+                    Source::Analog(ch) => ch,
+                    _ => self.next_channel(),
+                };
+                Some((at, channel))
+            })
+            .min_by_key(|(at, _)| *at)
+    }
+
     /// A `$30` answer that arrived at `now`.
     pub fn on_input(&mut self, now: Duration, reply: Reply) {
         let Reply::Input {

@@ -156,6 +156,15 @@ pub struct TmcpackDriver {
     budget: Duration,
 }
 
+/// What has waited too long for its poll.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Starved {
+    /// A motor's `$20`.
+    Motor(u8),
+    /// A `$30` of this channel.
+    Input(u8),
+}
+
 impl TmcpackDriver {
     /// A driver for the pack `config` describes; it starts talking at the first
     /// `poll_transmit`.
@@ -262,6 +271,28 @@ impl TmcpackDriver {
         self.io.outputs_pending || self.channels.iter().flatten().any(Channel::ready)
     }
 
+    /// A configured motor (or input) whose data is older than half the refresh budget: its
+    /// poll goes before every command but a stop, so that goals for every motor of the bus
+    /// at once (the engine's start-up stops, a client's coordinated move) never make an
+    /// axis or a signal stale.
+    fn starved(&self, now: Duration) -> Option<Starved> {
+        let limit = self.budget / 2;
+        let motor = self
+            .channels
+            .iter()
+            .flatten()
+            .filter_map(|c| c.state.refreshed_at.map(|at| (at, Starved::Motor(c.motor))));
+        let input = self
+            .io
+            .stalest()
+            .map(|(at, channel)| (at, Starved::Input(channel)));
+        motor
+            .chain(input)
+            .filter(|(at, _)| now.saturating_sub(*at) > limit)
+            .min_by_key(|(at, _)| *at)
+            .map(|(_, starved)| starved)
+    }
+
     /// What the driver would send now.
     fn next_message(&self, now: Duration) -> Option<Priority> {
         if self.wire != Wire::Idle {
@@ -271,7 +302,9 @@ impl TmcpackDriver {
             Phase::Down => None,
             Phase::Identify => (now >= self.retry_at).then_some(Priority::Setup),
             Phase::Survey | Phase::Quiesce | Phase::Configure(_) => Some(Priority::Setup),
-            Phase::Online if self.any_ready() => Some(Priority::Command),
+            Phase::Online if self.any_ready() || self.starved(now).is_some() => {
+                Some(Priority::Command)
+            }
             Phase::Online => {
                 let polls = self.channels.iter().any(Option::is_some) || self.io.polls();
                 (polls || now >= self.reset_check_at).then_some(Priority::Poll)
@@ -327,7 +360,24 @@ impl TmcpackDriver {
                     channel: None,
                 })
             }
-            Phase::Online if priority == Priority::Command => self.pick_command(),
+            Phase::Online if priority == Priority::Command => {
+                let urgent = self.channels.iter().flatten().any(Channel::urgent);
+                match self.starved(now) {
+                    Some(Starved::Motor(motor)) if !urgent => Some(self.query(
+                        Request::QueryPosition { motor, reply_to },
+                        Command::QueryPosition,
+                        Some(motor),
+                        Purpose::Poll,
+                    )),
+                    Some(Starved::Input(channel)) if !urgent => Some(self.query(
+                        Request::ReadInput { channel, reply_to },
+                        Command::ReadInput,
+                        Some(channel),
+                        Purpose::Io,
+                    )),
+                    _ => self.pick_command(),
+                }
+            }
             Phase::Online => self.pick_poll(now),
         }
     }
