@@ -2,7 +2,7 @@
 //! [`MotionFrame`](motion_ipc::MotionFrame)s straight from shared memory, command its axes
 //! and wait for them.
 //!
-//! Everything goes through the iceoryx2 services of DESIGN.md's shared-memory contract
+//! Everything goes through the iceoryx2 services of docs/ARCHITECTURE.md's shared-memory contract
 //! (`motiond/<name>/{frame,tick,command,info,stats}`, types from [`motion_ipc`], re-exported
 //! here as [`ipc`]). The client is generic over the iceoryx2 service type: use
 //! `iceoryx2::prelude::ipc::Service` to talk to a real server, `local::Service` in tests.

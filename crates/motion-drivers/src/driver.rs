@@ -45,7 +45,7 @@ pub enum Priority {
     Poll = 0,
     /// Start-up and recovery traffic (version reads, configuration).
     Setup = 1,
-    /// A goal the engine set: goes before every poll (DESIGN.md: commands before polls).
+    /// A goal the engine set: goes before every poll (docs/ARCHITECTURE.md: commands before polls).
     Command = 2,
 }
 

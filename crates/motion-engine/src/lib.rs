@@ -5,7 +5,7 @@
 //! iceoryx2 call, no allocation after construction. The same inputs in the same ticks give
 //! the same frames, so a run can be tested tick by tick and replayed bit for bit.
 //!
-//! One tick, as motiond drives it (DESIGN.md "The tick"):
+//! One tick, as motiond drives it (docs/ARCHITECTURE.md "The tick"):
 //! 1. [`Engine::handle_link_rx`] for every link with the bytes received since the last tick
 //!    (and [`Engine::link_down`] / [`Engine::link_up`] for link events);
 //! 2. [`Engine::step`]: drivers update their channels, commands are validated and answered

@@ -1,7 +1,7 @@
 //! The shared-memory contract between `motiond` and its clients.
 //!
 //! This is the only crate a client shares with the server. It defines the payload types of
-//! the iceoryx2 services listed in DESIGN.md ("Shared-memory contract"), their service
+//! the iceoryx2 services listed in docs/ARCHITECTURE.md ("Shared-memory contract"), their service
 //! names, the command kinds and the reason codes, and the schema version. Every payload is
 //! `#[repr(C)]`, fixed size, [`ZeroCopySend`](iceoryx2::prelude::ZeroCopySend) and carries
 //! an explicit iceoryx2 type name, so that C, C++ and Python iceoryx2 clients can mirror

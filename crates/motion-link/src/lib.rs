@@ -4,7 +4,7 @@
 //! |---|---|
 //! | [`serial`] | a tty through `serialport` (RS-232, RS-485 adapters, USB CDC), 8N1 |
 //! | [`spidev`] | a Linux spidev device, full-duplex transactions |
-//! | [`spi_socket`] | SPI transactions over a Unix socket (DESIGN.md "SPI socket contract") |
+//! | [`spi_socket`] | SPI transactions over a Unix socket (docs/ARCHITECTURE.md "SPI socket contract") |
 //! | [`sim`] | an in-process wire to a device model, with wire time and fault injection |
 //!
 //! Links know no protocol: they move bytes, report honest fault kinds ([`LinkErrorKind`])

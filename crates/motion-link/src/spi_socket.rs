@@ -1,4 +1,4 @@
-//! SPI transactions over a Unix stream socket (DESIGN.md, "SPI socket contract").
+//! SPI transactions over a Unix stream socket (docs/ARCHITECTURE.md, "SPI socket contract").
 //!
 //! Each transaction is sent as a `u16` little-endian length followed by that many MOSI
 //! bytes; the peer (a simulator such as `motion-sim --spi-socket`, or a hardware bridge)

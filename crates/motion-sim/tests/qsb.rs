@@ -138,7 +138,7 @@ fn version_r14_golden_exchange() {
         firmware_version: 0x01,
         ..QsbSimConfig::default()
     });
-    // Factory EOR 0x0B: spaces, CR, LF (DESIGN.md: `r 14 00001201 !`).
+    // Factory EOR 0x0B: spaces, CR, LF (docs/ARCHITECTURE.md: `r 14 00001201 !`).
     assert_eq!(host.raw_answer("R14"), b"r 14 00001201 !\r\n");
     let Value::Version(v) = host.log[0].1.value().unwrap() else {
         panic!()
@@ -765,7 +765,7 @@ mod on_a_sim_link {
 
     #[test]
     fn r14_round_trip_takes_its_wire_time_and_a_baud_change_garbles_the_old_rate() {
-        // DESIGN.md: `R0E\r\n` 5 bytes + ~14 bytes answer ≈ 0.8 ms at 230400 baud.
+        // docs/ARCHITECTURE.md: `R0E\r\n` 5 bytes + ~14 bytes answer ≈ 0.8 ms at 230400 baud.
         let sim = QsbSim::new(QsbSimConfig::default());
         let mut link = SimLink::stream("qsb", 230_400, Box::new(sim));
         let byte = Duration::from_nanos(10_000_000_000 / 230_400);

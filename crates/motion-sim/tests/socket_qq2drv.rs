@@ -30,7 +30,7 @@ fn qq2drv_on_a_socket_answers_the_version_request_after_filler() {
     let mut decoder = qq2drv::StreamDecoder::new();
     decoder.push(&first);
     assert!(decoder.next_packet().is_none(), "{first:02x?}");
-    // Poll with filler (DESIGN.md: without SRDY the master clocks out 0x00 and looks for STX).
+    // Poll with filler (docs/ARCHITECTURE.md: without SRDY the master clocks out 0x00 and looks for STX).
     let start = Instant::now();
     let packet = loop {
         assert!(

@@ -1,6 +1,6 @@
 //! Real-time set-up of the tick thread and the monotonic clock.
 //!
-//! Each measure is one that DESIGN.md reports measured on our machines: SCHED_FIFO,
+//! Each measure is one that docs/ARCHITECTURE.md reports measured on our machines: SCHED_FIFO,
 //! pinning, `mlockall` (after the shared memory exists), `/dev/cpu_dma_latency` held at 0,
 //! and a 1 ns timer slack. Every step reports what it achieved; a missing privilege is a
 //! warning unless the operator asked for `--require-rt`.

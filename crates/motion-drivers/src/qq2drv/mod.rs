@@ -8,7 +8,7 @@
 //! # The wire (no SRDY)
 //!
 //! The driver does not use the SRDY line. MISO is clocked while MOSI comes in, so the board
-//! can only answer in a later transaction than the request (DESIGN.md); it clocks filler
+//! can only answer in a later transaction than the request (docs/ARCHITECTURE.md); it clocks filler
 //! while it has nothing ready. Every [`Qq2drvDriverConfig::poll_period`] the driver clocks
 //! out one transaction of filler (0x00) as long as one stream packet plus a reply
 //! ([`POLL_SLACK`] bytes), and feeds *every* MISO byte of its transactions — polls and

@@ -72,7 +72,7 @@ fn a_stop_at_a_harder_rate_than_the_pack_has_writes_amax_first() {
     assert_eq!(bench.request(), rotate(0, 0));
 }
 
-/// DESIGN.md "Commands go before polls"; a stop also goes before other queued commands.
+/// docs/ARCHITECTURE.md "Commands go before polls"; a stop also goes before other queued commands.
 #[test]
 fn a_stop_overtakes_the_queued_commands_of_other_motors() {
     let mut bench = Bench::new(config());

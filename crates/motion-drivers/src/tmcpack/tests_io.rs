@@ -249,7 +249,7 @@ fn outputs_and_pins_are_refused_while_the_pack_is_not_online() {
     );
 }
 
-/// DESIGN.md: the refresh budget covers a round of polls; the input poll is part of it.
+/// docs/ARCHITECTURE.md: the refresh budget covers a round of polls; the input poll is part of it.
 #[test]
 fn the_input_poll_is_counted_in_the_refresh_budget() {
     let plain = TmcpackDriver::new(config()).refresh_budget();

@@ -1,7 +1,7 @@
 //! The board's SPI slave: request bytes in on MOSI, queued packets (or filler) out on MISO.
 //!
 //! A packet queued while a transaction is under way can only start in a later transaction
-//! (MISO is clocked while MOSI comes in, DESIGN.md), and only once it is ready.
+//! (MISO is clocked while MOSI comes in, docs/ARCHITECTURE.md), and only once it is ready.
 
 use core::time::Duration;
 use std::collections::VecDeque;

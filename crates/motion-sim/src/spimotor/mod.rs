@@ -154,7 +154,7 @@
 //!
 //! # Readings where the datasheet is silent
 //!
-//! Beyond DESIGN.md ("How we read the datasheets", SPI_motor) and the `spimotor` crate's
+//! Beyond docs/ARCHITECTURE.md ("How we read the datasheets", SPI_motor) and the `spimotor` crate's
 //! readings (answer at MISO offset 2, 4-byte LE serial number, stop ports without data,
 //! last byte wins), this model assumes: MISO fill bytes as in the table above; the first
 //! step one delay after a move starts; step delay 0 = 0.1 ms; power-on coil setting one

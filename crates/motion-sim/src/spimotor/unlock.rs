@@ -1,6 +1,6 @@
 //! The address-change unlock sequence (ports 0xf1, 0xf2, 0xf0).
 //!
-//! DESIGN.md: write 0x55 to 0xf1, then 0xaa to 0xf2, then the new address to 0xf0. The
+//! docs/ARCHITECTURE.md: write 0x55 to 0xf1, then 0xaa to 0xf2, then the new address to 0xf0. The
 //! three writes must be the next three transactions addressed to the board: anything else
 //! addressed to it in between (another write, a read, a malformed transaction, a wrong key)
 //! aborts the sequence, and 0xf0 outside the sequence is ignored. Transactions to other

@@ -252,7 +252,7 @@ fn a_reply_sent_to_a_pack_address_is_a_request_for_that_pack() {
 }
 
 /// End to end through motion-link's simulated RS-485 pair at 19200 baud: a $43 round trip
-/// takes a word each way plus the 6 ms switch-over (DESIGN.md: ~15 ms).
+/// takes a word each way plus the 6 ms switch-over (docs/ARCHITECTURE.md: ~15 ms).
 #[test]
 fn round_trip_through_a_half_duplex_sim_link() {
     use motion_link::Link;

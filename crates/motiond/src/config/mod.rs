@@ -1,4 +1,4 @@
-//! The config file (DESIGN.md "Config contract"): loading, validation, and the validated
+//! The config file (docs/ARCHITECTURE.md "Config contract"): loading, validation, and the validated
 //! description the server is built from.
 //!
 //! Every mistake — unknown key, wrong type, missing key, duplicate name, unknown link or
@@ -68,7 +68,7 @@ pub enum Transport {
         /// SPI mode 0..=3 (default per model: 1 for qq2drv, 0 for spimotor).
         mode: u8,
     },
-    /// The SPI socket contract of DESIGN.md.
+    /// The SPI socket contract of docs/ARCHITECTURE.md.
     SpiSocket {
         /// Unix socket path.
         path: PathBuf,

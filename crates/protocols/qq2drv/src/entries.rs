@@ -182,7 +182,7 @@ macro_rules! fixed_entry {
 }
 
 fixed_entry!(
-    /// Packet 18 entry: motor output power, sign is direction, range ±8191 (I16, DESIGN.md).
+    /// Packet 18 entry: motor output power, sign is direction, range ±8191 (I16, docs/ARCHITECTURE.md).
     MotorPowerEntry { /** Power. */ power: i16 }
 );
 fixed_entry!(
@@ -190,7 +190,7 @@ fixed_entry!(
     PositionTargetEntry { /** Position Target. */ position: i32 }
 );
 fixed_entry!(
-    /// Packet 22 entry: velocity target in plain transitions/s (DESIGN.md).
+    /// Packet 22 entry: velocity target in plain transitions/s (docs/ARCHITECTURE.md).
     VelocityTargetEntry { /** Velocity Target, transitions/s. */ velocity: i32 }
 );
 fixed_entry!(
@@ -345,7 +345,7 @@ impl Entry for SetPositionEntry {
 
 /// Packet 14 entry: Channel Mask, Input Configuration, Spacing and Position.
 ///
-/// Position is not sent when the Input Mode is Disabled (DESIGN.md); it then decodes as 0
+/// Position is not sent when the Input Mode is Disabled (docs/ARCHITECTURE.md); it then decodes as 0
 /// and must be 0 to encode.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct InputModeEntry {

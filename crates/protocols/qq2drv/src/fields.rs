@@ -393,7 +393,7 @@ impl TryFrom<u8> for ControlMode {
     }
 }
 
-/// Return Code of a reply: 0 is success, anything else an error to report (DESIGN.md).
+/// Return Code of a reply: 0 is success, anything else an error to report (docs/ARCHITECTURE.md).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct ReturnCode(pub u8);
 

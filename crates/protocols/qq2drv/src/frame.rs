@@ -1,7 +1,7 @@
 //! Packet framing (datasheet "Packet Format"): STX, Packet Size, Packet ID, Payload, Checksum.
 //!
 //! Packet Size counts the whole packet. The checksum is chosen so that the 8-bit sum of every
-//! byte of the packet, checksum included, is zero (DESIGN.md; worked example `2,4,1,249`).
+//! byte of the packet, checksum included, is zero (docs/ARCHITECTURE.md; worked example `2,4,1,249`).
 
 use crate::error::Error;
 use crate::wire::Writer;

@@ -2,7 +2,7 @@
 
 /// Protocol version this crate implements ("Applicable interface protocol version: v1").
 pub const PROTOCOL_VERSION: u8 = 1;
-/// Fixed-point shift of packets 26 and 34 velocities and of every acceleration (DESIGN.md).
+/// Fixed-point shift of packets 26 and 34 velocities and of every acceleration (docs/ARCHITECTURE.md).
 pub const FIXED_SHIFT: u32 = 12;
 /// One Stream Period / Stream Period Timing unit, in nanoseconds (40.96 µs).
 pub const STREAM_TICK_NS: u64 = 40_960;

@@ -180,7 +180,7 @@ impl MotionData {
     }
 }
 
-/// Packet 3 - Binary Stream Data (no Return Code, DESIGN.md).
+/// Packet 3 - Binary Stream Data (no Return Code, docs/ARCHITECTURE.md).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct StreamData {
     /// Stream Period Timing in 40.96 µs units, clipped at 0xFFFF.

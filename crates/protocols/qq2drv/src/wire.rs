@@ -1,4 +1,4 @@
-//! Little-endian cursors over caller slices (multi-byte fields are little-endian, DESIGN.md).
+//! Little-endian cursors over caller slices (multi-byte fields are little-endian, docs/ARCHITECTURE.md).
 
 use crate::error::Error;
 

@@ -50,7 +50,7 @@ fn worked_example_read_version_numbers_reply() {
 
 #[test]
 fn packet_format_checksum_sums_to_zero() {
-    // "Checksum is the 8-bit checksum of the entire packet" (DESIGN.md: the sum is zero).
+    // "Checksum is the 8-bit checksum of the entire packet" (docs/ARCHITECTURE.md: the sum is zero).
     assert_eq!(checksum(&[2, 4, 1]), 249);
     assert_eq!(checksum(&[2, 8, 1, 0, 0, 1, 0]), 244);
     assert_eq!(Frame::parse(&[2, 4, 1, 248]), Err(Error::BadChecksum));
@@ -307,7 +307,7 @@ fn packet_11_three_request_forms() {
 
 #[test]
 fn packet_14_position_omitted_when_disabled() {
-    // DESIGN.md: Position is omitted when Input Mode is Disabled; Edge is bits 5..4.
+    // docs/ARCHITECTURE.md: Position is omitted when Input Mode is Disabled; Edge is bits 5..4.
     let home = InputConfig::new(InputMode::Home, true, EdgeAction::SetOnNegative);
     assert_eq!(home.0, 0x39);
     let entries = [
@@ -338,7 +338,7 @@ fn packet_14_position_omitted_when_disabled() {
 
 #[test]
 fn packet_18_power_is_i16() {
-    // DESIGN.md: packet 18 Power is I16, range ±8191.
+    // docs/ARCHITECTURE.md: packet 18 Power is I16, range ±8191.
     let e = [MotorPowerEntry {
         channels: ChannelMask(0x0F),
         power: -8191,
@@ -362,7 +362,7 @@ fn packet_16_rejects_undefined_control_mode() {
 
 #[test]
 fn packet_36_velocity_plain_acceleration_shl_12() {
-    // DESIGN.md: packet 36 velocity target plain transitions/s, acceleration shl 12.
+    // docs/ARCHITECTURE.md: packet 36 velocity target plain transitions/s, acceleration shl 12.
     let e = [VelocityRampEntry {
         channels: ChannelMask(2),
         velocity: 1000,

@@ -61,7 +61,7 @@
 //! # Interpretations
 //!
 //! Where the command list is silent or contradicts itself, this crate follows the
-//! decisions in the shared `DESIGN.md` ("How we read the datasheets", QSB), and these:
+//! decisions in `docs/ARCHITECTURE.md` ("How we read the datasheets", QSB), and these:
 //!
 //! - Time stamp ticks are 1/512 s (1.953125 ms), as the TIME STAMP and INTERVAL RATE
 //!   registers say; the "(1/256 Hz)" of the acknowledgement section is a slip.

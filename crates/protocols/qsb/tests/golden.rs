@@ -1,5 +1,5 @@
 //! Golden vectors: the examples of the QSB Command List (document version 1.28), quoted by
-//! section, plus the response formats of DESIGN.md ("How we read the datasheets", QSB).
+//! section, plus the response formats of docs/ARCHITECTURE.md ("How we read the datasheets", QSB).
 
 use core::time::Duration;
 use qsb::*;
@@ -139,7 +139,7 @@ fn version_example_r14_00001201() {
 
 #[test]
 fn factory_eor_0b_formats_with_spaces_cr_lf() {
-    // Factory Default table: EOR 15 = B (CR, LF, spaces); DESIGN.md: `r 14 00001201 !`
+    // Factory Default table: EOR 15 = B (CR, LF, spaces); docs/ARCHITECTURE.md: `r 14 00001201 !`
     let eor = Eor::from_data(defaults::EOR).unwrap();
     assert_eq!(eor, Eor::FACTORY);
     let mut buf = [0u8; MAX_RESPONSE_LEN];
@@ -147,7 +147,7 @@ fn factory_eor_0b_formats_with_spaces_cr_lf() {
         .encode(eor, &mut buf)
         .unwrap();
     assert_eq!(&buf[..n], b"r 14 00001201 !\r\n");
-    // DESIGN.md wire budget example: `r0E00001234!\r\n` with EOR 3.
+    // docs/ARCHITECTURE.md wire budget example: `r0E00001234!\r\n` with EOR 3.
     let n = Response::new(ResponseType::Read, 0x0E, 0x1234)
         .encode(Eor::from_data(3).unwrap(), &mut buf)
         .unwrap();

@@ -85,7 +85,7 @@
 //!
 //! # Interpretations
 //!
-//! Where the datasheet is silent or contradicts itself, this crate follows `DESIGN.md`
+//! Where the datasheet is silent or contradicts itself, this crate follows `docs/ARCHITECTURE.md`
 //! ("How we read the datasheets", SPI_motor): little-endian values; ports 0x43 and 0x44 take
 //! one byte; the step delay is in tenths of a millisecond both ways; the unlock sequence is
 //! 0x55 → 0xf1, 0xaa → 0xf2, new address → 0xf0. Further readings of this crate:

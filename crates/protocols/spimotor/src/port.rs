@@ -33,7 +33,7 @@ pub const CHANGE_ADDRESS: u8 = 0xf0;
 /// Write 0xf1: write [`UNLOCK_KEY_1`] here to start unlocking the change-address register.
 pub const UNLOCK_1: u8 = 0xf1;
 /// Write 0xf2: write [`UNLOCK_KEY_2`] here to unlock the change-address register (the
-/// datasheet's table prints this row as 0xf0 a second time; DESIGN.md reads it as 0xf2).
+/// datasheet's table prints this row as 0xf0 a second time; docs/ARCHITECTURE.md reads it as 0xf2).
 pub const UNLOCK_2: u8 = 0xf2;
 /// Read 0x01: identification string, terminated with 0.
 pub const IDENTIFICATION: u8 = 0x01;

@@ -70,7 +70,7 @@ impl Coils {
 }
 
 /// Port 0x43: time between two steps, one byte in tenths of a millisecond both ways
-/// (DESIGN.md: the read table's "microsecond" is a slip). Default 200 = 20 ms.
+/// (docs/ARCHITECTURE.md: the read table's "microsecond" is a slip). Default 200 = 20 ms.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct StepDelay(u8);
 

@@ -145,7 +145,7 @@ fn write_ports_table() {
         (Write::Coils(Coils::Two), &[0x90, 0x44, 0x01]),
         // "0xf1 write 0x55 here to start unlocking the change address register."
         (Write::UnlockAddress1, &[0x90, 0xf1, 0x55]),
-        // "write 0xaa here to unlock the change address register." (0xf2, see DESIGN.md)
+        // "write 0xaa here to unlock the change address register." (0xf2, see docs/ARCHITECTURE.md)
         (Write::UnlockAddress2, &[0x90, 0xf2, 0xaa]),
         // "0xf0 change address. Requires a write to 0xf1 and 0xf2 first."
         (
@@ -220,7 +220,7 @@ fn read_ports_table() {
 }
 
 /// "0x43 set stepdelay. (in tenths of a millisecond, default 200: 20ms between steps)";
-/// the read table's "tenths of a microsecond" is a slip (DESIGN.md).
+/// the read table's "tenths of a microsecond" is a slip (docs/ARCHITECTURE.md).
 #[test]
 fn step_delay_is_tenths_of_a_millisecond_both_ways() {
     assert_eq!(StepDelay::DEFAULT.tenths_ms(), 200);

@@ -41,7 +41,7 @@
 //!
 //! # Interpretations
 //!
-//! The team's readings of the manual are in `DESIGN.md`, "How we read the datasheets"
+//! The team's readings of the manual are in `docs/ARCHITECTURE.md`, "How we read the datasheets"
 //! (9-byte words both ways, LSB first, unused bytes zero; the step-rate formula; one request
 //! in flight). Where the manual is silent this crate chooses, and says so:
 //!

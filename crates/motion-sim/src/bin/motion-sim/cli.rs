@@ -98,7 +98,7 @@ pub struct Cli {
     /// rate, 230400 for qsb, 19200 for tmcpack).
     #[arg(long)]
     pub baud: Option<u32>,
-    /// Serve the SPI boards on a Unix socket at PATH (DESIGN.md SPI socket contract).
+    /// Serve the SPI boards on a Unix socket at PATH (docs/ARCHITECTURE.md SPI socket contract).
     #[arg(long, value_name = "PATH")]
     pub spi_socket: Option<PathBuf>,
     /// SPI clock used for wire time on the socket (default 500000).

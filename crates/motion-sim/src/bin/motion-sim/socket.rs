@@ -1,4 +1,4 @@
-//! Serves an SPI device (or a bus of them) on a Unix socket, per the DESIGN.md SPI socket
+//! Serves an SPI device (or a bus of them) on a Unix socket, per the docs/ARCHITECTURE.md SPI socket
 //! contract: each transaction arrives as a `u16` little-endian length and that many MOSI
 //! bytes; the answer is exactly `length` MISO bytes, sent once the transaction's last
 //! clock would have ticked at the configured SPI rate.
