@@ -203,7 +203,7 @@ fn sigterm_mid_move_stops_every_board_then_exits_zero() {
     let body = format!("{}{}", spimotor_section(250), tmcpack_section(&link));
     let mut server = Server::start(&config(&name, &body));
     let mut client = RawClient::connect(&name, Duration::from_secs(10));
-    let (frame, online) = client.wait_frame(Duration::from_secs(10), |f| ready(f));
+    let (frame, online) = client.wait_frame(Duration::from_secs(10), ready);
     assert!(online, "every board reports in: {:?}", frame.axes());
     // Long moves on both boards.
     assert_eq!(
@@ -258,7 +258,7 @@ fn an_unplugged_serial_adapter_recovers_without_a_restart() {
     let body = format!("{}{}", spimotor_section(250), tmcpack_section(&link));
     let mut server = Server::start(&config(&name, &body));
     let mut client = RawClient::connect(&name, Duration::from_secs(10));
-    let (frame, online) = client.wait_frame(Duration::from_secs(10), |f| ready(f));
+    let (frame, online) = client.wait_frame(Duration::from_secs(10), ready);
     assert!(online, "{:?}", frame.axes());
     assert_eq!(
         client

@@ -1,7 +1,7 @@
-//! A simulated SPI board served on a Unix socket (the SPI socket contract: `u16` LE length
-//! + MOSI in, as many MISO bytes out) by a thread of the test process, so that motiond (a
-//! child process) talks to it through a `spi-socket` link while the test watches — and
-//! changes — the model, and reads every transaction the server clocked out.
+//! A simulated SPI board served on a Unix socket by a thread of the test process (the SPI
+//! socket contract: a `u16` LE length and the MOSI bytes in, as many MISO bytes out), so that
+//! motiond (a child process) talks to it through a `spi-socket` link while the test watches
+//! and changes the model, and reads every transaction the server clocked out.
 
 use core::time::Duration;
 use std::io::{ErrorKind, Read, Write};

@@ -137,10 +137,7 @@ impl Validator<'_, '_> {
         {
             sim_seed = seed as u64;
         }
-        let ctx = DeviceContext {
-            index,
-            table: table.clone(),
-        };
+        let ctx = DeviceContext { index };
         let machine = match model {
             Some(model) if fits => self.device_machine(&ctx, model, d),
             _ => None,
@@ -340,12 +337,10 @@ impl Validator<'_, '_> {
         let ctx = AxisContext {
             index,
             table: table.clone(),
-            device: spec,
             counts_per_unit: cpu,
             min,
             max,
             unit: unit.as_deref(),
-            channel,
         };
         let machine = match spec {
             Some(spec) if fits => self.axis_machine(&ctx, spec.model, a),

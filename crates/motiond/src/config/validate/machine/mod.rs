@@ -13,7 +13,7 @@ use toml::Spanned;
 
 use super::{TableSpan, Validator};
 use crate::config::raw::{RawAxis, RawConfig, RawDevice};
-use crate::config::{DeviceSpec, ServerConfig};
+use crate::config::ServerConfig;
 
 /// A device's model-specific keys, validated.
 #[derive(Debug, Clone, PartialEq)]
@@ -46,8 +46,6 @@ pub enum AxisMachine {
 pub(in crate::config) struct DeviceContext {
     /// Index of the `[[device]]` table.
     pub index: usize,
-    /// Span of the whole table (for "missing" issues).
-    pub table: TableSpan,
 }
 
 impl DeviceContext {
@@ -64,8 +62,6 @@ pub(in crate::config) struct AxisContext<'a> {
     pub index: usize,
     /// Span of the whole table.
     pub table: TableSpan,
-    /// The device the axis is on (`None` when that device was invalid).
-    pub device: Option<&'a DeviceSpec>,
     /// The axis's `counts_per_unit`, when valid.
     pub counts_per_unit: Option<f64>,
     /// The axis's soft limits, when valid.
@@ -74,8 +70,6 @@ pub(in crate::config) struct AxisContext<'a> {
     pub max: Option<f64>,
     /// The axis's unit, when valid.
     pub unit: Option<&'a str>,
-    /// The axis's channel, when valid.
-    pub channel: Option<usize>,
 }
 
 impl AxisContext<'_> {
