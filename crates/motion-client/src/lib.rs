@@ -56,22 +56,32 @@
 #![forbid(unsafe_code)]
 
 mod axis;
+mod claim;
 mod client;
 mod command;
+mod emergency;
 mod error;
 mod frames;
 mod jog;
+mod ports;
+mod ready;
 mod received;
+mod session;
+mod signal;
 #[cfg(feature = "testing")]
 pub mod testing;
 
 pub use axis::Axis;
+pub use claim::ClaimGuard;
 pub use client::{
-    Client, ClientBuilder, DEFAULT_CONNECT_TIMEOUT, DEFAULT_REPLY_TIMEOUT, Frame, Info, Stats,
+    Client, ClientBuilder, DEFAULT_CONNECT_TIMEOUT, DEFAULT_REPLY_TIMEOUT, Frame, Info, Params,
+    Stats, TickListener,
 };
 pub use command::Accepted;
-pub use error::{ClientError, ConnectError};
+pub use emergency::{EstopPath, estop, stop_all};
+pub use error::{ClientError, ConnectError, DeviceStatus, EstopError, Restart};
 pub use frames::{FIRST_FRAME_TIMEOUT, Frames};
 pub use jog::JogGuard;
 pub use motion_ipc as ipc;
 pub use received::Received;
+pub use signal::{Signal, signal_value_text};
