@@ -4,7 +4,9 @@ use core::time::Duration;
 use std::time::Instant;
 
 use iceoryx2::service::Service;
-use motion_ipc::{AxisFlags, AxisInfo, AxisMode, AxisState, CommandKind, FaultCode, FrameFlags, Target};
+use motion_ipc::{
+    AxisFlags, AxisInfo, AxisMode, AxisState, CommandKind, FaultCode, FrameFlags, Target,
+};
 
 use crate::{Accepted, ClaimGuard, Client, ClientError, Frame, JogGuard};
 
@@ -263,7 +265,12 @@ impl<'c, S: Service> Axis<'c, S> {
         let (fault, text) = match state.fault() {
             Ok(code) => (
                 code,
-                code.explain(info.name(), state.fault_value, state.fault_limit, info.unit()),
+                code.explain(
+                    info.name(),
+                    state.fault_value,
+                    state.fault_limit,
+                    info.unit(),
+                ),
             ),
             Err(error) => (
                 FaultCode::None,

@@ -34,7 +34,11 @@ impl<S: Service> fmt::Debug for ClaimGuard<'_, S> {
 }
 
 impl<'c, S: Service> ClaimGuard<'c, S> {
-    pub(crate) fn take(client: &'c Client<S>, target: Target, index: u32) -> Result<Self, ClientError> {
+    pub(crate) fn take(
+        client: &'c Client<S>,
+        target: Target,
+        index: u32,
+    ) -> Result<Self, ClientError> {
         client.command_to(target, index, CommandKind::Claim, [0.0; 3])?;
         Ok(Self {
             client,

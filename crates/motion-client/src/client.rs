@@ -179,7 +179,8 @@ impl<S: Service> Client<S> {
         }
 
         let opening = Opening::new(&server, options.connect_timeout);
-        let (subscriber, _) = ports::open_subscriber::<S, ServerInfo>(&node, &opening, &names.info())?;
+        let (subscriber, _) =
+            ports::open_subscriber::<S, ServerInfo>(&node, &opening, &names.info())?;
         let info = LatestCache::new(subscriber);
         // The server delivers its history sample when it next updates its connections.
         let info_timeout = options.connect_timeout.max(Duration::from_millis(500));
@@ -264,7 +265,11 @@ impl<S: Service> Client<S> {
             return Ok(Rc::clone(ports));
         }
         let opening = Opening::new(&self.server, self.connect_timeout);
-        let ports = Rc::new(ports::open_commands(&self.node, &opening, &self.names.command())?);
+        let ports = Rc::new(ports::open_commands(
+            &self.node,
+            &opening,
+            &self.names.command(),
+        )?);
         *self.commands.borrow_mut() = Some(Rc::clone(&ports));
         Ok(ports)
     }

@@ -5,9 +5,7 @@ use std::time::Instant;
 
 use iceoryx2::prelude::PayloadHeader as _;
 use iceoryx2::service::Service;
-use motion_ipc::{
-    AxisFlags, CommandKind, CommandReply, CommandRequest, FaultCode, Reason, Target,
-};
+use motion_ipc::{AxisFlags, CommandKind, CommandReply, CommandRequest, FaultCode, Reason, Target};
 
 use crate::session::Seen;
 use crate::{Axis, Client, ClientError};
@@ -51,7 +49,11 @@ impl<S: Service> Client<S> {
     }
 
     /// Sends `request` once and waits for its reply.
-    fn exchange(&self, request: CommandRequest, kind: CommandKind) -> Result<Exchange, ClientError> {
+    fn exchange(
+        &self,
+        request: CommandRequest,
+        kind: CommandKind,
+    ) -> Result<Exchange, ClientError> {
         let ports = self.command_ports()?;
         let pending = ports
             .port
@@ -160,15 +162,16 @@ impl<S: Service> Client<S> {
             return Err(ClientError::ServerRestarted(restart));
         }
         let epoch = self.session.epoch();
-        let mut request = CommandRequest::new(self.id, self.next_sequence(), index, kind)
-            .with_values(values);
+        let mut request =
+            CommandRequest::new(self.id, self.next_sequence(), index, kind).with_values(values);
         request.target = target as u32;
         let reply = self.send_request(request)?;
         if self.session.epoch() != epoch && !always_sent(kind) {
             if reply.result().is_ok() && target == Target::Axis && index != CommandRequest::ALL_AXES
             {
                 // Sent to a new server before we knew: take the goal back.
-                let stop = CommandRequest::new(self.id, self.next_sequence(), index, CommandKind::Stop);
+                let stop =
+                    CommandRequest::new(self.id, self.next_sequence(), index, CommandKind::Stop);
                 let _ = self.send_request(stop);
             }
             if let Some(restart) = self.session.unacknowledged() {
@@ -239,7 +242,12 @@ impl<S: Service> Client<S> {
         }
         let info = self.axis_info(index as usize);
         let code = state.fault().ok().filter(|code| *code != FaultCode::None)?;
-        Some(code.explain(info.name(), state.fault_value, state.fault_limit, info.unit()))
+        Some(code.explain(
+            info.name(),
+            state.fault_value,
+            state.fault_limit,
+            info.unit(),
+        ))
     }
 
     /// Emergency stop through this client's command port: every axis stops with its e-stop

@@ -164,24 +164,27 @@ pub fn estop<S: Service>(server: &str, timeout: Duration) -> Result<EstopPath, E
             // 1. The command service.
             let deadline = started + (timeout / 2).max(Duration::from_millis(20));
             let opening = Opening::once(server);
-            let command =
-                match command_all(&node, server, &opening, CommandKind::EStop, deadline) {
-                    Ok(reply) => match reply.result() {
-                        Ok(()) => {
-                            return Ok(EstopPath::Command {
-                                tick: reply.tick_applied,
-                            });
-                        }
-                        Err(reason) => {
-                            server_found = true;
-                            refused(reason)
-                        }
-                    },
-                    Err(error) => {
-                        server_found |= !matches!(error, ClientError::NoServer { .. });
-                        error.to_string()
+            let command = match command_all(&node, server, &opening, CommandKind::EStop, deadline) {
+                Ok(reply) => match reply.result() {
+                    Ok(()) => {
+                        return Ok(EstopPath::Command {
+                            tick: reply.tick_applied,
+                        });
                     }
-                };
+                    Err(reason) => {
+                        server_found = true;
+                        refused(reason)
+                    }
+                },
+                Err(error) => {
+                    server_found |= !matches!(
+                        error,
+                        ClientError::NoServer { .. }
+                            | ClientError::Connect(ConnectError::NoServer { .. })
+                    );
+                    error.to_string()
+                }
+            };
             // 2. The estop event service.
             let event = match notify_estop(&node, &names) {
                 Ok(listeners) => return Ok(EstopPath::Event { listeners }),
@@ -220,17 +223,20 @@ fn notify_estop<S: Service>(node: &Node<S>, names: &ServiceNames) -> Result<usiz
         .event()
         .open()
         .map_err(|error| (false, format!("cannot open {service}: {error:?}")))?;
-    let notifier = factory.notifier_builder().create().map_err(|error| match error {
-        NotifierCreateError::ExceedsMaxSupportedNotifiers => (
-            true,
-            ConnectError::PortsExhausted {
-                service: service.clone(),
-                port: "notifier slot",
-            }
-            .to_string(),
-        ),
-        other => (true, format!("cannot create a notifier: {other:?}")),
-    })?;
+    let notifier = factory
+        .notifier_builder()
+        .create()
+        .map_err(|error| match error {
+            NotifierCreateError::ExceedsMaxSupportedNotifiers => (
+                true,
+                ConnectError::PortsExhausted {
+                    service: service.clone(),
+                    port: "notifier slot",
+                }
+                .to_string(),
+            ),
+            other => (true, format!("cannot create a notifier: {other:?}")),
+        })?;
     match notifier.notify() {
         Ok(0) => Err((true, format!("nobody listens on {service}"))),
         Ok(listeners) => Ok(listeners),

@@ -98,7 +98,11 @@ pub struct Restart {
 
 impl fmt::Display for Restart {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "motiond \"{}\" restarted (pid {}", self.server, self.old_pid)?;
+        write!(
+            f,
+            "motiond \"{}\" restarted (pid {}",
+            self.server, self.old_pid
+        )?;
         match self.new_pid {
             Some(pid) => write!(f, " → {pid}")?,
             None => f.write_str(" → a new process")?,
@@ -131,7 +135,9 @@ impl fmt::Display for DeviceStatus {
                 " (waiting for the board's first answer, its configuration and its start-up stop)"
             }
             DeviceState::Offline => " (its board is not answering or its link is down)",
-            DeviceState::Faulted => " (a board-level fault is latched: reset once its cause is gone)",
+            DeviceState::Faulted => {
+                " (a board-level fault is latched: reset once its cause is gone)"
+            }
             DeviceState::Online => "",
         })
     }
@@ -154,7 +160,9 @@ fn not_ready_text(devices: &[DeviceStatus], waited: &Duration) -> String {
 }
 
 fn refusal_text(reason: &Reason, detail: &Option<String>) -> String {
-    detail.clone().unwrap_or_else(|| reason.message().to_owned())
+    detail
+        .clone()
+        .unwrap_or_else(|| reason.message().to_owned())
 }
 
 /// Why a read, a command or a wait failed.
@@ -263,17 +271,9 @@ pub enum ClientError {
         /// How long the client waited.
         waited: Duration,
     },
-    /// Every port of a kind that a service allows is taken.
-    #[error(
-        "the server's service {service} has no free {port} ([server] max_clients is reached): \
-         end another client or raise max_clients"
-    )]
-    PortsExhausted {
-        /// The service.
-        service: String,
-        /// The kind of port.
-        port: &'static str,
-    },
+    /// A service could not be opened (the server is gone, or its port slots are taken).
+    #[error(transparent)]
+    Connect(#[from] ConnectError),
     /// SIGINT or SIGTERM arrived while waiting (iceoryx2's signal handling is on).
     #[error("interrupted")]
     Interrupted,
@@ -324,19 +324,6 @@ impl ClientError {
             reason,
             tick,
             detail,
-        }
-    }
-}
-
-impl From<ConnectError> for ClientError {
-    fn from(error: ConnectError) -> Self {
-        match error {
-            ConnectError::PortsExhausted { service, port } => Self::PortsExhausted { service, port },
-            ConnectError::NoServer { .. } => Self::NoServer { kind: "open" },
-            other => Self::Ipc {
-                what: "reach the server",
-                detail: other.to_string(),
-            },
         }
     }
 }

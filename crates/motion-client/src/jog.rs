@@ -210,7 +210,9 @@ impl<'c, S: Service> JogGuard<'c, S> {
         match self.refused() {
             Some(reason) => Err(ClientError::Refused {
                 kind: "renewal",
-                target: self.client.target_label(motion_ipc::Target::Axis, self.axis),
+                target: self
+                    .client
+                    .target_label(motion_ipc::Target::Axis, self.axis),
                 reason,
                 tick: 0,
                 detail: None,

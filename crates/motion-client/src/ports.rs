@@ -180,7 +180,9 @@ pub(crate) fn open_frames<S: Service>(
     .listener_builder()
     .create()
     .map_err(|error| match error {
-        ListenerCreateError::ExceedsMaxSupportedListeners => exhausted(tick_service, "listener slot"),
+        ListenerCreateError::ExceedsMaxSupportedListeners => {
+            exhausted(tick_service, "listener slot")
+        }
         other => ConnectError::ipc("listen to the tick event", other),
     })?;
     Ok(FramePorts {
@@ -244,10 +246,7 @@ pub(crate) fn pubsub_id_now<S: Service, T: fmt::Debug + ZeroCopySend + 'static>(
 }
 
 /// Like [`pubsub_id_now`] for the command service.
-pub(crate) fn command_id_now<S: Service>(
-    node: &Node<S>,
-    service: &str,
-) -> Option<UniqueServiceId> {
+pub(crate) fn command_id_now<S: Service>(node: &Node<S>, service: &str) -> Option<UniqueServiceId> {
     let name = ServiceName::new(service).ok()?;
     node.service_builder(&name)
         .request_response::<CommandRequest, CommandReply>()

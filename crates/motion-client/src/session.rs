@@ -120,8 +120,8 @@ impl Session {
         if self.is_retired(node) {
             return Seen::Retired;
         }
-        let changed = self.described.get()
-            && (pid != self.pid.get() || start_ns != self.start_ns.get());
+        let changed =
+            self.described.get() && (pid != self.pid.get() || start_ns != self.start_ns.get());
         let seen = if node != self.node.get() || changed {
             self.restart(node, "server description")
         } else {

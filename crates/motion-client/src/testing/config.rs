@@ -128,7 +128,14 @@ impl FakeSignal {
     }
 
     /// An analogue input, value = raw × `scale` + `offset` in `unit`, 10-bit converter.
-    pub fn analog(name: &str, device: usize, pin: &str, unit: &str, scale: f64, offset: f64) -> Self {
+    pub fn analog(
+        name: &str,
+        device: usize,
+        pin: &str,
+        unit: &str,
+        scale: f64,
+        offset: f64,
+    ) -> Self {
         Self {
             name: name.to_owned(),
             device,
@@ -186,6 +193,9 @@ pub struct FakeConfig {
     pub max_clients: usize,
     /// Devices report `starting` for this many ticks after (re)start, and refuse goals.
     pub starting_ticks: u64,
+    /// Publish the server description this many ticks after (re)start instead of at once,
+    /// to test a client that learns of a restart from a frame or a reply first.
+    pub info_delay_ticks: u64,
     /// Latch the e-stop on SIGUSR1 like the real server. Installs a process-wide handler:
     /// only for a test binary where no other fake runs meanwhile.
     pub latch_on_sigusr1: bool,
@@ -234,6 +244,7 @@ impl FakeConfig {
             command_timeout_ms: 250,
             max_clients: 8,
             starting_ticks: 0,
+            info_delay_ticks: 0,
             latch_on_sigusr1: false,
             devices: vec![
                 FakeDevice::new("pack", DeviceModel::Tmcpack, "fake pack 1.0"),

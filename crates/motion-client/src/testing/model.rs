@@ -4,13 +4,13 @@ use core::time::Duration;
 
 use motion_ipc::{
     AxisFlags, AxisInfo, AxisMode, AxisState, ClientId, CommandKind, CommandRequest, DeviceInfo,
-    DeviceState, EstopCategory, FaultCode, FrameFlags, MachineParams, MotionFrame,
-    Reason, SCHEMA_VERSION, ServerInfo, SignalFlags, SignalInfo, SignalInfoFlags, SignalKind,
-    SignalState, Target, write_text,
+    DeviceState, EstopCategory, FaultCode, FrameFlags, MachineParams, MotionFrame, Reason,
+    SCHEMA_VERSION, ServerInfo, SignalFlags, SignalInfo, SignalInfoFlags, SignalKind, SignalState,
+    Target, write_text,
 };
 
-use super::config::{FakeAxis, FakeConfig, FakeSignal};
 use super::FakeControl;
+use super::config::{FakeAxis, FakeConfig, FakeSignal};
 
 #[derive(Debug, Clone, Copy)]
 struct SimAxis {
@@ -83,7 +83,9 @@ impl Model {
     }
 
     pub(super) fn device_states(&self) -> Vec<DeviceState> {
-        (0..self.forced.len()).map(|d| self.device_state(d)).collect()
+        (0..self.forced.len())
+            .map(|d| self.device_state(d))
+            .collect()
     }
 
     pub(super) fn info(&self, config: &FakeConfig, start_ns: u64) -> ServerInfo {
@@ -116,7 +118,12 @@ impl Model {
             out.home_max_travel = axis.home_max_travel;
             out.estop = axis.estop as u32;
         }
-        for (index, (device, out)) in config.devices.iter().zip(info.devices.iter_mut()).enumerate() {
+        for (index, (device, out)) in config
+            .devices
+            .iter()
+            .zip(info.devices.iter_mut())
+            .enumerate()
+        {
             let state = self.device_state(index);
             *out = DeviceInfo::EMPTY;
             write_text(&mut out.name, &device.name);
@@ -236,7 +243,13 @@ impl Model {
         }
     }
 
-    fn signal_command(&mut self, kind: CommandKind, index: usize, client: ClientId, value: f64) -> Reason {
+    fn signal_command(
+        &mut self,
+        kind: CommandKind,
+        index: usize,
+        client: ClientId,
+        value: f64,
+    ) -> Reason {
         let device_state = match self.signals.get(index) {
             Some((signal, _)) => self.device_state(signal.device),
             None => return Reason::UnknownSignal,
@@ -390,7 +403,13 @@ impl Model {
         Self::goal(axis, sim, kind, request.values, tick)
     }
 
-    fn goal(axis: &FakeAxis, sim: &mut SimAxis, kind: CommandKind, values: [f64; 3], tick: u64) -> Reason {
+    fn goal(
+        axis: &FakeAxis,
+        sim: &mut SimAxis,
+        kind: CommandKind,
+        values: [f64; 3],
+        tick: u64,
+    ) -> Reason {
         let [v0, v1, v2] = values;
         let or_max = |value: f64, max: f64| if value == 0.0 { max } else { value };
         let in_range = |position: f64| position >= axis.min && position <= axis.max;
@@ -533,11 +552,17 @@ impl Model {
         let (value, raw) = match signal.kind {
             SignalKind::DigitalIn => {
                 let level = sim.raw >= 0.5;
-                (f64::from(u8::from(level != signal.invert)), f64::from(u8::from(level)))
+                (
+                    f64::from(u8::from(level != signal.invert)),
+                    f64::from(u8::from(level)),
+                )
             }
             SignalKind::DigitalOut => {
                 let on = sim.raw >= 0.5;
-                (f64::from(u8::from(on)), f64::from(u8::from(on != signal.invert)))
+                (
+                    f64::from(u8::from(on)),
+                    f64::from(u8::from(on != signal.invert)),
+                )
             }
             SignalKind::AnalogIn => (sim.raw * signal.scale + signal.offset, sim.raw),
         };
@@ -557,7 +582,12 @@ impl Model {
         }
     }
 
-    pub(super) fn write_frame(&mut self, frame: &mut MotionFrame, deadline: Duration, now: Duration) {
+    pub(super) fn write_frame(
+        &mut self,
+        frame: &mut MotionFrame,
+        deadline: Duration,
+        now: Duration,
+    ) {
         let nanos = |time: Duration| u64::try_from(time.as_nanos()).unwrap_or(u64::MAX);
         frame.tick = self.tick;
         frame.time_ns = nanos(deadline);

@@ -6,16 +6,18 @@ use std::sync::{Arc, mpsc};
 use std::time::Instant;
 
 use iceoryx2::port::update_connections::UpdateConnections;
-use iceoryx2::prelude::{NodeBuilder, NodeName, PayloadHeader as _, ServiceName, SignalHandlingMode};
+use iceoryx2::prelude::{
+    NodeBuilder, NodeName, PayloadHeader as _, ServiceName, SignalHandlingMode,
+};
 use iceoryx2::service::Service;
 use motion_ipc::{
     ClientId, CommandReply, CommandRequest, MachineParams, MotionFrame, ServerInfo, ServerStats,
     ServiceNames,
 };
 
+use super::Shared;
 use super::config::FakeConfig;
 use super::model::Model;
-use super::Shared;
 
 fn fail(what: &str) -> impl Fn(&dyn core::fmt::Debug) -> String + '_ {
     move |error| format!("fake server: {what}: {error:?}")
@@ -170,11 +172,15 @@ fn serve_inner<S: Service>(
 
     let start_ns = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
-        .map_or(1, |since| u64::try_from(since.as_nanos()).unwrap_or(u64::MAX));
+        .map_or(1, |since| {
+            u64::try_from(since.as_nanos()).unwrap_or(u64::MAX)
+        });
     let mut model = Model::new(config);
-    info_publisher
-        .send_copy(model.info(config, start_ns))
-        .map_err(|e| fail("info send")(&e))?;
+    if config.info_delay_ticks == 0 {
+        info_publisher
+            .send_copy(model.info(config, start_ns))
+            .map_err(|e| fail("info send")(&e))?;
+    }
     params_publisher
         .send_copy(Model::params(config))
         .map_err(|e| fail("params send")(&e))?;
@@ -228,7 +234,9 @@ fn serve_inner<S: Service>(
             .map_err(|e| fail("frame send")(&e))?;
         tick.notify().map_err(|e| fail("notify")(&e))?;
         let states = model.device_states();
-        if states != published_states {
+        if states != published_states
+            || (config.info_delay_ticks > 0 && model.tick == config.info_delay_ticks)
+        {
             info_publisher
                 .send_copy(model.info(config, start_ns))
                 .map_err(|e| fail("info send")(&e))?;
