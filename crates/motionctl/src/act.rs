@@ -170,20 +170,21 @@ pub fn off(client: &Client<Service>, names: &[String], all: bool) -> anyhow::Res
             .collect::<Result<Vec<_>, _>>()?
     };
     let mut first_error = None;
+    let mut refused = Vec::new();
     for axis in axes {
         let name = axis.name();
         match axis.off() {
             Ok(_) => out!("{name}: off"),
             Err(error) => {
-                eprintln!("motionctl: off {name}: {error}");
+                refused.push(name);
                 first_error.get_or_insert(error);
             }
         }
     }
     match first_error {
-        Some(error) => {
-            Err(anyhow::Error::new(error).context("off: not every axis was de-energised"))
-        }
+        // One line: which axes stayed energised, then the first refusal's reason.
+        Some(error) => Err(anyhow::Error::new(error)
+            .context(format!("off: not de-energised: {}", refused.join(", ")))),
         None => Ok(()),
     }
 }

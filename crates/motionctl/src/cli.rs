@@ -252,7 +252,7 @@ pub enum IoCommand {
         /// Signal name.
         name: String,
         /// `on` or `off` (also 1/0, true/false, high/low).
-        #[arg(value_parser = parse_on_off)]
+        #[arg(value_parser = parse_on_off, action = clap::ArgAction::Set, value_name = "on|off")]
         value: bool,
     },
     /// Live table of every signal; q or Ctrl-C exits.

@@ -22,6 +22,48 @@ pub fn fake(prefix: &str) -> Result<FakeServer> {
     ))?)
 }
 
+/// The demo fake with `change` applied to its config.
+pub fn fake_with(prefix: &str, change: impl FnOnce(&mut FakeConfig)) -> Result<FakeServer> {
+    let mut config = FakeConfig::demo(&unique_name(prefix));
+    change(&mut config);
+    Ok(FakeServer::start::<ipc::Service>(config)?)
+}
+
+/// The stdout of a successful run, as JSON.
+pub fn json_of(output: &Output) -> Result<Value> {
+    if !output.status.success() {
+        return Err(format!("motionctl failed: {output:?}").into());
+    }
+    Ok(serde_json::from_slice(&output.stdout)?)
+}
+
+/// Runs `args` until `check` holds for its JSON output, up to DEADLINE.
+pub fn poll_json(
+    server: &str,
+    args: &[&str],
+    mut check: impl FnMut(&Value) -> bool,
+) -> Result<Value> {
+    let until = Instant::now() + DEADLINE;
+    loop {
+        let value = json_of(&run(server, args)?)?;
+        if check(&value) {
+            return Ok(value);
+        }
+        if Instant::now() > until {
+            return Err(format!("never held: {args:?} → {value}").into());
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// Asserts a one-line error with `status` that contains `text`.
+pub fn assert_fails(output: &Output, status: i32, text: &str) {
+    assert_eq!(output.status.code(), Some(status), "{output:?}");
+    let message = stderr(output);
+    assert_eq!(message.trim_end().lines().count(), 1, "one line: {message}");
+    assert!(message.contains(text), "{text:?} not in {message}");
+}
+
 pub fn command(server: &str, args: &[&str]) -> Command {
     let mut command = Command::new(env!("CARGO_BIN_EXE_motionctl"));
     command.arg("--server").arg(server).args(args);
