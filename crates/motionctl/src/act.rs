@@ -107,7 +107,7 @@ fn hold_until_interrupted(
     let stopped = guard.stop();
     if let Err(error @ ClientError::ServerRestarted(_)) = outcome {
         return Err(anyhow::Error::new(error).context(format!(
-            "jog {name}: the jog was not renewed on the new server, nothing was sent to it"
+            "jog {name} ended: nothing more is sent to the new server"
         )));
     }
     let position = client

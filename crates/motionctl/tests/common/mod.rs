@@ -56,12 +56,17 @@ pub fn poll_json(
     }
 }
 
-/// Asserts a one-line error with `status` that contains `text`.
+/// Asserts a one-line error (`motionctl: …` on stderr, beside any progress lines) with
+/// `status` that contains `text`.
 pub fn assert_fails(output: &Output, status: i32, text: &str) {
     assert_eq!(output.status.code(), Some(status), "{output:?}");
-    let message = stderr(output);
-    assert_eq!(message.trim_end().lines().count(), 1, "one line: {message}");
-    assert!(message.contains(text), "{text:?} not in {message}");
+    let all = stderr(output);
+    let errors: Vec<&str> = all
+        .lines()
+        .filter(|line| line.starts_with("motionctl:"))
+        .collect();
+    assert_eq!(errors.len(), 1, "one error line: {all}");
+    assert!(errors[0].contains(text), "{text:?} not in {all}");
 }
 
 pub fn command(server: &str, args: &[&str]) -> Command {
