@@ -393,7 +393,9 @@ impl<S: Service> Client<S> {
                             ConnectError::NoServer { .. } => ClientError::NotPublished {
                                 what: "machine parameters",
                                 service: service.clone(),
-                                waited: Duration::ZERO,
+                                why: "the service does not exist (a server older than \
+                                      motion-ipc schema 2?)"
+                                    .to_owned(),
                             },
                             other => other.into(),
                         })?;
@@ -411,7 +413,7 @@ impl<S: Service> Client<S> {
                 return Err(ClientError::NotPublished {
                     what: "machine parameters",
                     service: self.names.params(),
-                    waited: self.reply_timeout,
+                    why: format!("nothing arrived within {:?}", self.reply_timeout),
                 });
             }
             std::thread::sleep(Duration::from_millis(5));

@@ -152,7 +152,9 @@ pub fn stop_all<S: Service>(server: &str, timeout: Duration) -> Result<Accepted,
 ///    notification on the `estop` event service (own ports, so it works when the command
 ///    service's client slots are exhausted);
 /// 3. when that fails too: SIGUSR1 to the server process, found by its iceoryx2 node name
-///    ([`ServiceNames::server_node`]) without opening any service.
+///    ([`ServiceNames::server_node`]) without opening any service. Not sent to a process
+///    that does not catch SIGUSR1 (its `/proc/<pid>/status` says so): the signal's default
+///    action would end that server instead of latching its e-stop.
 ///
 /// Returns the path that delivered it, or every path's failure.
 pub fn estop<S: Service>(server: &str, timeout: Duration) -> Result<EstopPath, EstopError> {
@@ -244,6 +246,17 @@ fn notify_estop<S: Service>(node: &Node<S>, names: &ServiceNames) -> Result<usiz
     }
 }
 
+/// Whether process `pid` catches SIGUSR1, from the `SigCgt` mask of `/proc/<pid>/status`;
+/// `None` when that cannot be read.
+fn catches_sigusr1(pid: i32) -> Option<bool> {
+    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
+    let mask = status
+        .lines()
+        .find_map(|line| line.strip_prefix("SigCgt:"))
+        .and_then(|hex| u64::from_str_radix(hex.trim(), 16).ok())?;
+    Some(mask & (1 << (Signal::SIGUSR1 as u64 - 1)) != 0)
+}
+
 /// Sends SIGUSR1 to every live process whose iceoryx2 node is the server's; its pid, or
 /// (a server node was seen, why not).
 fn signal_server<S: Service>(names: &ServiceNames) -> Result<i32, (bool, String)> {
@@ -266,6 +279,16 @@ fn signal_server<S: Service>(names: &ServiceNames) -> Result<i32, (bool, String)
     }
     let mut last = Err((true, String::new()));
     for pid in pids {
+        if catches_sigusr1(pid) == Some(false) {
+            // SIGUSR1's default action would end the server instead of latching its e-stop.
+            last = Err((
+                true,
+                format!(
+                    "the server process (pid {pid}) does not handle SIGUSR1 (an older motiond?): not sent"
+                ),
+            ));
+            continue;
+        }
         last = match kill(Pid::from_raw(pid), Signal::SIGUSR1) {
             Ok(()) => return Ok(pid),
             Err(error) => Err((true, format!("kill({pid}, SIGUSR1): {error}"))),

@@ -262,14 +262,14 @@ pub enum ClientError {
         waited: Duration,
     },
     /// The server does not publish something this client asked for.
-    #[error("motiond published no {what} on {service} within {waited:?} (an older server?)")]
+    #[error("motiond published no {what} on {service}: {why}")]
     NotPublished {
         /// What ("machine parameters").
         what: &'static str,
         /// The service.
         service: String,
-        /// How long the client waited.
-        waited: Duration,
+        /// Why: the service does not exist, or nothing arrived in time.
+        why: String,
     },
     /// A service could not be opened (the server is gone, or its port slots are taken).
     #[error(transparent)]

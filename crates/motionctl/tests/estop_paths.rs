@@ -15,6 +15,33 @@ use common::*;
 
 #[test]
 fn estop_gets_through_exhausted_frame_command_and_event_slots() -> Result {
+    // 0. A server process that does not catch SIGUSR1 (this one, before any fake installs
+    //    the handler) is never sent it: the default action would end it.
+    {
+        let server = fake("nosigusr1")?;
+        let names = ServiceNames::new(server.name());
+        let hog = NodeBuilder::new().create::<ipc::Service>()?;
+        let commands = hog
+            .service_builder(&ServiceName::new(&names.command())?)
+            .request_response::<CommandRequest, CommandReply>()
+            .open()?;
+        let event = hog
+            .service_builder(&ServiceName::new(&names.estop())?)
+            .event()
+            .open()?;
+        let mut held_clients = Vec::new();
+        while let Ok(client) = commands.client_builder().create() {
+            held_clients.push(client);
+        }
+        let mut held_notifiers = Vec::new();
+        while let Ok(notifier) = event.notifier_builder().create() {
+            held_notifiers.push(notifier);
+        }
+        let refused = run(server.name(), &["estop"])?;
+        assert_fails(&refused, 1, "does not handle SIGUSR1");
+        assert!(!server.estop_latched());
+    }
+
     let server = fake_with("paths", |config| config.latch_on_sigusr1 = true)?;
     let names = ServiceNames::new(server.name());
     let slots = server.config().max_clients;

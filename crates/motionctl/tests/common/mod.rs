@@ -2,6 +2,8 @@
 //! `status --json`, drive it in a pseudo-terminal.
 #![allow(dead_code)]
 
+pub mod real;
+
 use core::time::Duration;
 use std::io::{Read as _, Write as _};
 use std::process::{Child, Command, Output, Stdio};
