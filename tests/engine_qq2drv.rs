@@ -11,7 +11,7 @@ use std::sync::{Arc, Mutex};
 
 use motion_drivers::qq2drv::{
     AxisLimits, ChannelConfig, FILLER, HomeInput, POLL_SLACK, Qq2drvDriver, Qq2drvDriverConfig,
-    STREAM_MASK,
+    STATUS_MASK, STREAM_MASK,
 };
 use motion_drivers::{BusKind, Driver, Goal};
 use motion_engine::{AxisConfig, DeviceConfig, EngineConfig, LinkConfig};
@@ -73,6 +73,7 @@ fn driver_config() -> Qq2drvDriverConfig {
         active_high: false,
         positive_end: true,
         position: HOME_COUNTS,
+        spacing: 0,
     });
     config.channels[2] = ChannelConfig {
         enabled: false,
@@ -362,7 +363,7 @@ fn bytes_on_the_wire_decode_with_the_protocol_crate() {
     accepted(&mut rig, 0, CommandKind::Position, [2.0, 0.0, 0.0]);
     move_and_check(&mut rig, &board, 0, 2.0, MAX_VELOCITY_MM);
     accepted(&mut rig, 1, CommandKind::Velocity, [4.0, 0.0, 0.0]);
-    rig.run(20);
+    rig.run(100);
     accepted(&mut rig, 1, CommandKind::Stop, [0.0; 3]);
     rig.run(200);
     let log = rig.wire_log(0);
@@ -389,9 +390,19 @@ fn bytes_on_the_wire_decode_with_the_protocol_crate() {
         }
     }
     assert!(polls > 100);
-    // Start-up: probe 1, 7, 9, 5; configure 12, 6, 8, 24, 26, 28, 14, 4; then the goals.
-    assert_eq!(&ids[..12], &[1, 7, 9, 5, 12, 6, 8, 24, 26, 28, 14, 4]);
-    assert_eq!(&ids[12..], &[16, 20, 16, 36, 16, 36, 16, 20]);
+    // Start-up: probe 1, 7, 9, 5; configure 12, 6, 8, 24, 26, 28, 30, 32, 14, 4; the
+    // engine's start-up stop of both channels at rest (straight to the hold: 16, 20 each);
+    // then the goals: position (16, 20), velocity (16, 36), and the stop: setpoint reset
+    // (16 Off, 16 Velocity PID, 28 ← 0, 36 measured), ramp (36), hold (28 restored, 16, 20).
+    assert_eq!(
+        &ids[..14],
+        &[1, 7, 9, 5, 12, 6, 8, 24, 26, 28, 30, 32, 14, 4]
+    );
+    assert_eq!(&ids[14..18], &[16, 20, 16, 20]);
+    assert_eq!(
+        &ids[18..],
+        &[16, 20, 16, 36, 16, 16, 28, 36, 36, 28, 16, 20]
+    );
     let sim = board.lock().unwrap();
     assert_eq!(sim.stats().bad_packets, 0);
     assert_eq!(sim.stats().rejected, 0);
@@ -498,7 +509,8 @@ fn a_board_that_does_not_answer_is_faulted() {
     assert!(status.timeouts > 0);
     assert_eq!(
         rejected(&mut rig, 0, CommandKind::Position, [1.0, 0.0, 0.0]),
-        Reason::AxisFaulted
+        Reason::DeviceOffline,
+        "a board that stopped answering is offline"
     );
     // It answers again: the axes come back.
     faults.set_drop_probability(Direction::ToHost, 0.0);
@@ -685,3 +697,10 @@ fn random_goals_and_noise_never_break_the_driver() {
     }
     assert_eq!(board.stats().bad_packets, 0, "MOSI stayed clean");
 }
+
+// Stops planned from the measured velocity, and homing that a stop interrupts.
+#[path = "engine_qq2drv/stops.rs"]
+mod stops;
+// The IN pins and Status bits as signals.
+#[path = "engine_qq2drv/io.rs"]
+mod io;

@@ -3,6 +3,11 @@
 
 mod support;
 
+#[path = "engine_qsb/io.rs"]
+mod io;
+#[path = "engine_qsb/machine.rs"]
+mod machine;
+
 use core::time::Duration;
 use std::sync::{Arc, Mutex};
 
@@ -26,14 +31,30 @@ struct Qsb {
     rig: Rig,
     sim: Arc<Mutex<QsbSim>>,
     faults: SimFaults,
+    /// Motor steps per axis unit.
+    steps_per_unit: f64,
 }
 
 fn rig(variant: Variant, motion: EncoderMotion, command_timeout: Duration) -> Qsb {
-    let (device, sim) = Shared::new(QsbSim::new(QsbSimConfig {
+    let sim = QsbSimConfig {
         variant,
         motion,
         ..QsbSimConfig::default()
-    }));
+    };
+    let driver = QsbDriverConfig {
+        variant,
+        counts_per_step: 10.0,
+        max_velocity: MAX_VELOCITY * COUNTS_PER_UNIT,
+        max_accel: MAX_ACCEL * COUNTS_PER_UNIT,
+        ..QsbDriverConfig::default()
+    };
+    rig_with(sim, driver, command_timeout)
+}
+
+/// The engine with one QSB axis (the constants above) on a simulated board `sim` driven by
+/// a driver of `driver`.
+fn rig_with(sim: QsbSimConfig, driver: QsbDriverConfig, command_timeout: Duration) -> Qsb {
+    let (device, sim) = Shared::new(QsbSim::new(sim));
     let link = SimLink::stream("usb0", 230_400, device);
     let faults = link.faults();
     let config = EngineConfig {
@@ -64,16 +85,16 @@ fn rig(variant: Variant, motion: EncoderMotion, command_timeout: Duration) -> Qs
         }],
         ..EngineConfig::default()
     };
-    let driver = QsbDriver::new(QsbDriverConfig {
-        variant,
-        counts_per_step: 10.0,
-        max_velocity: MAX_VELOCITY * COUNTS_PER_UNIT,
-        max_accel: MAX_ACCEL * COUNTS_PER_UNIT,
-        ..QsbDriverConfig::default()
-    });
+    let steps_per_unit = COUNTS_PER_UNIT / driver.counts_per_step.abs();
+    let driver = QsbDriver::new(driver);
     let mut rig = Rig::new(config, vec![Box::new(driver)], vec![Box::new(link)]);
     rig.log_wire = true;
-    Qsb { rig, sim, faults }
+    Qsb {
+        rig,
+        sim,
+        faults,
+        steps_per_unit,
+    }
 }
 
 fn still() -> EncoderMotion {
@@ -88,8 +109,11 @@ fn flags(axis: &AxisState) -> AxisFlags {
     axis.flags()
 }
 
+/// Fresh, not faulted, and on an online board (its start-up stop acknowledged).
 fn healthy(axis: &AxisState) -> bool {
-    !flags(axis).contains(AxisFlags::STALE) && !flags(axis).contains(AxisFlags::FAULT)
+    !flags(axis).contains(AxisFlags::STALE)
+        && !flags(axis).contains(AxisFlags::FAULT)
+        && axis.device_state() == Ok(motion_ipc::DeviceState::Online)
 }
 
 impl Qsb {
@@ -132,11 +156,11 @@ impl Qsb {
             // Rounding of the simulator's exact phase arithmetic aside.
             let margin = 1.0 + 1e-6;
             assert!(
-                velocity.abs() <= MAX_VELOCITY * 10.0 * margin,
+                velocity.abs() <= MAX_VELOCITY * self.steps_per_unit * margin,
                 "v {velocity} steps/s"
             );
             assert!(
-                acceleration.abs() <= MAX_ACCEL * 10.0 * margin,
+                acceleration.abs() <= MAX_ACCEL * self.steps_per_unit * margin,
                 "a {acceleration} steps/s²"
             );
             if done(&self.rig.axis(0)) {
@@ -371,7 +395,8 @@ fn a_board_that_stops_answering_is_not_responding_then_comes_back() {
     assert!(status.timeouts >= 3);
     assert_eq!(
         qsb.command(CommandKind::Position, [1.0, 0.0, 0.0]),
-        Reason::AxisFaulted
+        Reason::DeviceOffline,
+        "a board that stopped answering is offline"
     );
     qsb.faults.set_drop_probability(Direction::ToHost, 0.0);
     assert!(

@@ -340,7 +340,8 @@ fn bytes_on_the_wire_decode_with_the_protocol_crate() {
             starts.push((motor, target));
         }
     }
-    assert_eq!(starts, [(0, 300)]);
+    // The engine's start-up stop of both motors (a ramp to where each stands), then the move.
+    assert_eq!(starts, [(0, 0), (1, 0), (0, 300)]);
     assert_eq!(board.lock().unwrap().stats().invalid, 0);
 }
 

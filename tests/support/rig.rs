@@ -13,7 +13,8 @@ use std::sync::{Arc, Mutex, MutexGuard};
 use motion_drivers::{BusKind, Driver};
 use motion_engine::{CommandPort, Engine, EngineConfig};
 use motion_ipc::{
-    AxisFlags, AxisState, ClientId, CommandKind, CommandReply, CommandRequest, MotionFrame,
+    AxisFlags, AxisState, ClientId, CommandKind, CommandReply, CommandRequest, DeviceState,
+    MotionFrame,
 };
 use motion_link::sim::{SpiDevice, StreamDevice};
 use motion_link::{Link, LinkErrorKind};
@@ -280,14 +281,20 @@ pub fn flag(rig: &Rig, axis: usize, flag: AxisFlags) -> bool {
     rig.axis(axis).flags & flag.0 != 0
 }
 
-/// Whether axis `axis` of the last frame is neither stale nor faulted.
+/// Whether axis `axis` of the last frame is neither stale nor faulted and its board is
+/// online (configured, its start-up stop acknowledged): it takes goals.
 pub fn fresh(rig: &Rig, axis: usize) -> bool {
-    !flag(rig, axis, AxisFlags::STALE) && !flag(rig, axis, AxisFlags::FAULT)
+    !flag(rig, axis, AxisFlags::STALE)
+        && !flag(rig, axis, AxisFlags::FAULT)
+        && rig.axis(axis).device_state() == Ok(DeviceState::Online)
 }
 
-/// Whether the first `axes` axes of `frame` are neither stale nor faulted.
+/// Whether the first `axes` axes of `frame` are neither stale nor faulted, on online boards.
 pub fn all_fresh(frame: &MotionFrame, axes: usize) -> bool {
-    (0..axes).all(|i| frame.axes[i].flags & (AxisFlags::STALE.0 | AxisFlags::FAULT.0) == 0)
+    (0..axes).all(|i| {
+        frame.axes[i].flags & (AxisFlags::STALE.0 | AxisFlags::FAULT.0) == 0
+            && frame.axes[i].device_state() == Ok(DeviceState::Online)
+    })
 }
 
 /// Sends a command and asserts the engine accepted it.

@@ -255,8 +255,7 @@ impl Engine {
             }
         }
         for signal in &mut self.signals {
-            if !signal.claimed_by.is_none() && now.saturating_sub(signal.claim_renewed_at) > lease
-            {
+            if !signal.claimed_by.is_none() && now.saturating_sub(signal.claim_renewed_at) > lease {
                 signal.claimed_by = ClientId::NONE;
             }
         }
@@ -395,9 +394,8 @@ fn heads_into_limit(axis: &Axis, velocity: f64, accel: f64) -> bool {
 /// set-position within them). Nothing else is accepted until a reset.
 fn heads_back_inside(axis: &Axis, goal: &Goal, target: f64) -> bool {
     let position = axis.position();
-    let inward = |sign: f64| {
-        (position > axis.max && sign < 0.0) || (position < axis.min && sign > 0.0)
-    };
+    let inward =
+        |sign: f64| (position > axis.max && sign < 0.0) || (position < axis.min && sign > 0.0);
     match goal {
         Goal::Position { .. } | Goal::RampPosition { .. } | Goal::SetPosition { .. } => {
             (axis.min..=axis.max).contains(&target)

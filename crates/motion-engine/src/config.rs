@@ -345,9 +345,18 @@ pub(crate) fn validate(
             return Err(bad("position_tolerance must be finite and > 0"));
         }
         for (value, what) in [
-            (axis.following_error, "following_error must be finite and >= 0"),
-            (axis.overspeed_factor, "overspeed_factor must be finite and >= 0"),
-            (axis.home_max_travel, "home_max_travel must be finite and >= 0"),
+            (
+                axis.following_error,
+                "following_error must be finite and >= 0",
+            ),
+            (
+                axis.overspeed_factor,
+                "overspeed_factor must be finite and >= 0",
+            ),
+            (
+                axis.home_max_travel,
+                "home_max_travel must be finite and >= 0",
+            ),
         ] {
             if !(value.is_finite() && value >= 0.0) {
                 return Err(bad(what));

@@ -131,8 +131,7 @@ impl Engine {
                 });
             }
             let goals = driver.capabilities(axis.channel);
-            if axis.estop != EstopCategory::Hold && !goals.contains(motion_drivers::GoalKind::Off)
-            {
+            if axis.estop != EstopCategory::Hold && !goals.contains(motion_drivers::GoalKind::Off) {
                 return Err(EngineConfigError::BadAxisValue {
                     axis: axis.name.clone(),
                     what: "estop = \"stop-off\" or \"off\" needs a board that can de-energise the motor; this one cannot (use \"hold\")",
@@ -230,6 +229,12 @@ impl Engine {
         }
     }
 
+    /// The fault latched on axis `index` (config order): code, measured figure, tolerance.
+    pub fn axis_fault(&self, index: usize) -> Option<(motion_ipc::FaultCode, f64, f64)> {
+        let fault = self.axes.get(index)?.fault?;
+        Some((fault.code, fault.value, fault.limit))
+    }
+
     /// The readiness of device `index` (config order) as of the last step.
     pub fn device_state(&self, index: usize) -> Option<motion_ipc::DeviceState> {
         self.devices.get(index).map(|device| device.state)
@@ -287,19 +292,35 @@ impl Engine {
         self.buses.iter().filter_map(LinkBus::poll_timeout).min()
     }
 
-    /// The client node `client` is gone (it died, exited, or closed its command port): its
-    /// claims end and its goals are voided (the axes decelerate and hold).
-    pub fn client_gone(&mut self, client: ClientId) {
+    /// The client node `client` died (its process is gone without a word): its claims end
+    /// and its goals are voided (the axes decelerate and hold).
+    pub fn client_dead(&mut self, client: ClientId) {
         if client.is_none() {
             return;
         }
+        self.release_claims_of(client);
         for index in 0..self.axes.len() {
             let axis = &mut self.axes[index];
+            if axis.goal_owner != client {
+                continue;
+            }
+            if axis.has_active_goal() {
+                self.stop_axis(index, false);
+            } else {
+                axis.goal_owner = ClientId::NONE;
+            }
+        }
+    }
+
+    /// The claims of `client` end (it closed its command port or exited; its goals go on:
+    /// a move sent by a command that exited right away still completes).
+    pub fn release_claims_of(&mut self, client: ClientId) {
+        if client.is_none() {
+            return;
+        }
+        for axis in &mut self.axes {
             if axis.claimed_by == client {
                 axis.claimed_by = ClientId::NONE;
-            }
-            if axis.goal_owner == client && axis.has_active_goal() {
-                self.stop_axis(index, false);
             }
         }
         for signal in &mut self.signals {
@@ -316,8 +337,13 @@ impl Engine {
             .iter()
             .map(|axis| axis.claimed_by)
             .chain(self.signals.iter().map(|signal| signal.claimed_by))
-            .chain(self.axes.iter().map(|axis| axis.goal_owner))
             .filter(|client| !client.is_none())
+    }
+
+    /// Latches the e-stop (as an `EStop` request does): for the shell's other e-stop paths
+    /// (the `estop` event, SIGUSR1).
+    pub fn estop(&mut self) {
+        self.estop_all();
     }
 
     /// Whether every board has acknowledged its goals and no axis with a live link moves.

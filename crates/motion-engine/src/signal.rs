@@ -72,7 +72,9 @@ impl Engine {
             let Some(driver) = self.buses[signal.bus].drivers().get(signal.slot) else {
                 continue;
             };
-            let reading = driver.read_pin(signal.config.pin).unwrap_or(PinReading::UNKNOWN);
+            let reading = driver
+                .read_pin(signal.config.pin)
+                .unwrap_or(PinReading::UNKNOWN);
             if reading.value.is_finite() {
                 signal.raw = reading.value;
             }

@@ -9,7 +9,7 @@
 //! | position outside [start, target] widened by `following_error` | a position goal on its way | `FollowingError` |
 //! | \|velocity\| > `overspeed_factor` × `max_velocity` on 3 fresh samples in a row | always | `Overspeed` |
 //! | position beyond `min`/`max` by more than `following_error` | every mode but `Off` and a search; during a search of a referenced axis the tolerance is `home_max_travel` | `LimitExceeded` |
-//! | distance travelled by a search > `home_max_travel` | `Homing` | `HomeFailed` |
+//! | distance of a search from where it started > `home_max_travel` | `Homing` | `HomeFailed` |
 //!
 //! `following_error = 0` turns off the following-error and limit rules, `overspeed_factor
 //! = 0` the overspeed rule, `home_max_travel = 0` the travel rule.
@@ -67,22 +67,23 @@ fn overspeed(axis: &mut Axis) -> Option<Broken> {
     (axis.overspeed_samples >= OVERSPEED_SAMPLES).then_some((FaultCode::Overspeed, speed, limit))
 }
 
-/// Adds the plausible part of the last step to the search's travel; a jump faster than
-/// twice the axis's velocity limit (the board set its counter at the trigger) is not
-/// travel.
+/// How far the search has gone from where it started: the sum of the plausible steps
+/// (a jump faster than twice the axis's velocity limit is the board setting its counter at
+/// the trigger, not travel), signed, so that backing off a switch does not count twice.
 fn search_travel(axis: &mut Axis, elapsed: f64) -> Option<Broken> {
     if axis.mode != AxisMode::Homing {
         return None;
     }
     let position = axis.position();
-    let step = (position - axis.home_last).abs();
+    let step = position - axis.home_last;
     axis.home_last = position;
-    if step <= 2.0 * axis.max_velocity * elapsed + axis.tolerance {
+    if step.abs() <= 2.0 * axis.max_velocity * elapsed + axis.tolerance {
         axis.home_travel += step;
     }
-    (axis.home_max_travel > 0.0 && axis.home_travel > axis.home_max_travel).then_some((
+    let distance = axis.home_travel.abs();
+    (axis.home_max_travel > 0.0 && distance > axis.home_max_travel).then_some((
         FaultCode::HomeFailed,
-        axis.home_travel,
+        distance,
         axis.home_max_travel,
     ))
 }

@@ -122,7 +122,7 @@ fn claims_are_exclusive_and_die_with_their_client() {
     );
     h.ticks(50);
     // The owner dies: claim released, its jog stopped.
-    h.engine.client_gone(CLIENT_A);
+    h.engine.client_dead(CLIENT_A);
     h.ticks(200);
     let state = h.axis(1);
     assert!(!state.flags().contains(AxisFlags::CLAIMED));

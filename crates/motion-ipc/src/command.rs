@@ -374,7 +374,12 @@ impl CommandRequest {
     }
 
     /// A request of the current schema about signal `signal`.
-    pub const fn for_signal(client: ClientId, sequence: u64, signal: u32, kind: CommandKind) -> Self {
+    pub const fn for_signal(
+        client: ClientId,
+        sequence: u64,
+        signal: u32,
+        kind: CommandKind,
+    ) -> Self {
         let mut request = Self::new(client, sequence, signal, kind);
         request.target = Target::Signal as u32;
         request

@@ -170,14 +170,18 @@ impl FaultCode {
             Self::LinkDown => format!("axis `{axis}`: its link is down"),
             Self::BoardNotResponding => format!("axis `{axis}`: its board is not answering"),
             Self::BoardReset => {
-                format!("axis `{axis}`: its board rebooted; its goals were lost (reset, then command again)")
+                format!(
+                    "axis `{axis}`: its board rebooted; its goals were lost (reset, then command again)"
+                )
             }
             Self::BoardError => format!("axis `{axis}`: its board reported an error"),
             Self::Protocol => format!("axis `{axis}`: its board's replies could not be decoded"),
             Self::Overspeed if limit > 0.0 => format!(
                 "axis `{axis}`: overspeed: measured {value:.4} {unit}/s, limit {limit:.4} {unit}/s"
             ),
-            Self::Overspeed => format!("axis `{axis}`: its board reported overspeed or an encoder glitch"),
+            Self::Overspeed => {
+                format!("axis `{axis}`: its board reported overspeed or an encoder glitch")
+            }
             Self::LimitSwitch => format!("axis `{axis}`: a limit or reference switch stopped it"),
             Self::Overrun => format!("axis `{axis}`: stopped because the server overran its tick"),
             Self::FollowingError => format!(

@@ -365,7 +365,9 @@ impl ServerInfo {
 
     /// Index of the signal called `name`.
     pub fn signal_index(&self, name: &str) -> Option<usize> {
-        self.signals().iter().position(|signal| signal.name() == name)
+        self.signals()
+            .iter()
+            .position(|signal| signal.name() == name)
     }
 
     /// The instance name.

@@ -39,8 +39,8 @@ pub use command::{
 pub use frame::{AxisFlags, AxisMode, AxisState, DeviceState, FaultCode, FrameFlags, MotionFrame};
 pub use info::{AxisInfo, Capabilities, DeviceInfo, DeviceModel, EstopCategory, ServerInfo};
 pub use params::{MAX_PARAMS, MachineParam, MachineParams, PARAM_TEXT_LEN, ParamOwner};
-pub use signal::{SignalFlags, SignalInfo, SignalInfoFlags, SignalKind, SignalState};
 pub use service::ServiceNames;
+pub use signal::{SignalFlags, SignalInfo, SignalInfoFlags, SignalKind, SignalState};
 pub use stats::{LatencySummary, LinkStats, ServerStats};
 pub use text::{read_text, write_text};
 

@@ -3,9 +3,9 @@
 
 use iceoryx2::prelude::ZeroCopySend;
 
+use crate::SCHEMA_VERSION;
 use crate::command::UnknownValue;
 use crate::text::read_text;
-use crate::SCHEMA_VERSION;
 
 /// Capacity of [`MachineParams::entries`].
 pub const MAX_PARAMS: usize = 2048;

@@ -62,6 +62,11 @@ impl ServiceNames {
     /// The iceoryx2 node name the server runs under (`motiond-<name>`): how a client finds
     /// the server's process without opening any service.
     pub fn server_node(&self) -> String {
-        format!("motiond-{}", self.prefix.trim_start_matches("motiond/").trim_end_matches('/'))
+        format!(
+            "motiond-{}",
+            self.prefix
+                .trim_start_matches("motiond/")
+                .trim_end_matches('/')
+        )
     }
 }

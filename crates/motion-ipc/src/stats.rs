@@ -83,7 +83,7 @@ impl LinkStats {
     }
 }
 
-/// Server figures. 1424 bytes, alignment 8. Fields in memory order:
+/// Server figures. 1448 bytes, alignment 8. Fields in memory order:
 ///
 /// | offset | field | type | meaning |
 /// |---|---|---|---|
@@ -100,6 +100,10 @@ impl LinkStats {
 /// | 136 | `clients` | u32 | live client nodes seen at the last liveness check |
 /// | 140 | `rt_flags` | u32 | bit 0 SCHED_FIFO, 1 memory locked, 2 pinned, 3 cpu_dma_latency held |
 /// | 144 | `links` | [`LinkStats`]; [`MAX_LINKS`] | per link |
+/// | 1424 | `faults` | u64 | axis faults latched by the server's supervision, since start |
+/// | 1432 | `frames_lost` | u64 | ticks whose frame could not be loaned or sent, since start |
+/// | 1440 | `full_services` | u32 | bit set of services whose port slots are all taken now ([`ServerStats::FULL_FRAME`] …) |
+/// | 1444 | `full_events` | u32 | times a service was found with all its slots taken, since start |
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ZeroCopySend)]
 #[type_name("motiond::ServerStats")]
 #[repr(C)]
@@ -130,6 +134,15 @@ pub struct ServerStats {
     pub rt_flags: u32,
     /// Per-link counters.
     pub links: [LinkStats; MAX_LINKS],
+    /// Axis faults latched by the server's supervision since start.
+    pub faults: u64,
+    /// Ticks whose frame could not be loaned or sent, since start.
+    pub frames_lost: u64,
+    /// Services whose port slots are all taken now (bits `FULL_*`): new clients are
+    /// refused there until a slot frees.
+    pub full_services: u32,
+    /// Times a service was found with all its slots taken, since start.
+    pub full_events: u32,
 }
 
 impl ServerStats {
@@ -141,6 +154,20 @@ impl ServerStats {
     pub const RT_PINNED: u32 = 1 << 2;
     /// Bit of `rt_flags`: `/dev/cpu_dma_latency` is held at 0.
     pub const RT_DMA_LATENCY: u32 = 1 << 3;
+    /// Bit of `full_services`: the frame service's subscriber slots.
+    pub const FULL_FRAME: u32 = 1 << 0;
+    /// Bit of `full_services`: the tick event's listener slots.
+    pub const FULL_TICK: u32 = 1 << 1;
+    /// Bit of `full_services`: the command service's client slots.
+    pub const FULL_COMMAND: u32 = 1 << 2;
+    /// Bit of `full_services`: the info service's subscriber slots.
+    pub const FULL_INFO: u32 = 1 << 3;
+    /// Bit of `full_services`: the stats service's subscriber slots.
+    pub const FULL_STATS: u32 = 1 << 4;
+    /// Bit of `full_services`: the params service's subscriber slots.
+    pub const FULL_PARAMS: u32 = 1 << 5;
+    /// Bit of `full_services`: the e-stop event's notifier slots.
+    pub const FULL_ESTOP: u32 = 1 << 6;
 
     /// Empty figures of the current schema.
     pub const EMPTY: Self = Self {
@@ -169,6 +196,10 @@ impl ServerStats {
         clients: 0,
         rt_flags: 0,
         links: [LinkStats::EMPTY; MAX_LINKS],
+        faults: 0,
+        frames_lost: 0,
+        full_services: 0,
+        full_events: 0,
     };
 
     /// The valid link entries.

@@ -67,10 +67,11 @@ pin!(LinkStats, size 80, align 8, {
     name @ 0, bytes_in @ 32, bytes_out @ 40, frames @ 48, errors @ 56, reconnects @ 64,
     up @ 72, reserved @ 76,
 });
-pin!(ServerStats, size 1424, align 8, {
+pin!(ServerStats, size 1448, align 8, {
     schema_version @ 0, link_count @ 4, tick @ 8, time_ns @ 16, wakeup @ 24, work @ 64,
     overruns @ 104, max_consecutive_overruns @ 112, commands @ 120, rejected @ 128,
-    clients @ 136, rt_flags @ 140, links @ 144,
+    clients @ 136, rt_flags @ 140, links @ 144, faults @ 1424, frames_lost @ 1432,
+    full_services @ 1440, full_events @ 1444,
 });
 
 #[test]

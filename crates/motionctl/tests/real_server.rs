@@ -215,8 +215,9 @@ fn real_jog_stops_on_ctrl_c_and_when_the_client_is_killed() -> Result {
     Ok(())
 }
 
-/// A server with no devices: what motiond runs before its board drivers exist.
-const EMPTY_CONFIG: &str = "[server]\nname = \"demo\"\ntick_hz = 1000\ncommand_timeout_ms = 250\n";
+/// The smallest server motiond accepts (a config needs a board and an axis or a signal):
+/// one simulated SPI_motor stepper, axis `a`.
+const EMPTY_CONFIG: &str = "[server]\nname = \"demo\"\ntick_hz = 1000\ncommand_timeout_ms = 250\n\n[[link]]\nname = \"spi\"\ntype = \"sim\"\n\n[[device]]\nname = \"m\"\nlink = \"spi\"\nmodel = \"spimotor\"\n\n[[axis]]\nname = \"a\"\ndevice = \"m\"\nchannel = 0\nunit = \"step\"\ncounts_per_unit = 1.0\nmin = -100.0\nmax = 100.0\nmax_velocity = 100.0\nmax_accel = 1000.0\n";
 
 /// `Some(server)` when a motiond binary exists; `None` (with a note) when this run did not
 /// build one (`cargo test -p motionctl` alone; `cargo test --workspace` builds it).
@@ -238,7 +239,7 @@ fn real_server_without_devices_answers_list_status_and_commands() -> Result {
     let list: Value = serde_json::from_slice(&output.stdout)?;
     assert_eq!(list["server"], server.name.as_str());
     assert_eq!(list["tick_hz"], 1000);
-    assert_eq!(list["axes"].as_array().map(Vec::len), Some(0));
+    assert_eq!(list["axes"].as_array().map(Vec::len), Some(1));
     let status = status_json(&server.name)?;
     assert!(status["tick"].as_u64().ok_or("tick")? > 0, "{status}");
     assert!(run(&server.name, &["estop"])?.status.success());

@@ -9,7 +9,7 @@ use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use anyhow::{Context, bail};
 use motion_drivers::Driver;
 use motion_engine::Engine;
-use motion_ipc::{ClientId, read_text};
+use motion_ipc::{ClientId, DeviceState, read_text};
 use motion_link::{Link, LinkConfig};
 use rtrb::RingBuffer;
 
@@ -71,6 +71,14 @@ pub fn run(config: ServerConfig, options: RunOptions) -> anyhow::Result<()> {
         signal_hook::flag::register(signal, Arc::clone(&shutdown))
             .context("installing signal handlers")?;
     }
+    // The e-stop of last resort: a process that can signal us (same user, or root) latches
+    // the e-stop even when every service slot is taken.
+    let estop_signal = Arc::new(AtomicBool::new(false));
+    signal_hook::flag::register(signal_hook::consts::SIGUSR1, Arc::clone(&estop_signal))
+        .context("installing signal handlers")?;
+    for warning in &config.warnings {
+        tracing::warn!("{}", warning.warning_line(&config.path));
+    }
 
     let dead = services::clean_dead_nodes();
     if !dead.is_empty() {
@@ -80,6 +88,7 @@ pub fn run(config: ServerConfig, options: RunOptions) -> anyhow::Result<()> {
         );
     }
 
+    let params = crate::params::machine_params(&config);
     let drivers: Vec<Box<dyn Driver>> = crate::drivers::build(&config)?;
     let engine = Engine::new(config.engine_config(), drivers).context("building the engine")?;
     let links = open_links(&config)?;
@@ -111,6 +120,8 @@ pub fn run(config: ServerConfig, options: RunOptions) -> anyhow::Result<()> {
         clients_alive: Arc::clone(&clients_alive),
         reports: report_tx,
         require_rt: options.require_rt,
+        params,
+        estop_signal,
     };
     let tick_thread = std::thread::Builder::new()
         .name("tick".into())
@@ -153,24 +164,56 @@ fn housekeeping(
                 }
                 Report::Device {
                     index,
-                    online,
+                    state,
                     firmware: text,
                 } => {
                     let name = config.devices.get(index).map_or("?", |d| d.name.as_str());
                     let text = read_text(&text).to_owned();
-                    if online {
-                        tracing::info!("device `{name}` online, firmware {text:?}");
-                    } else {
-                        tracing::warn!("device `{name}` is not answering");
+                    match state {
+                        DeviceState::Online => {
+                            tracing::info!("device `{name}` online, firmware {text:?}");
+                        }
+                        DeviceState::Starting => {
+                            tracing::info!(
+                                "device `{name}` starting (probing, configuring, start-up stop)"
+                            );
+                        }
+                        DeviceState::Faulted => tracing::warn!("device `{name}` faulted"),
+                        DeviceState::Offline => tracing::warn!("device `{name}` is not answering"),
                     }
                     if let Some(slot) = firmware.get_mut(index) {
-                        *slot = if online {
-                            text
-                        } else {
-                            "(not answering)".into()
+                        *slot = match state {
+                            DeviceState::Offline => "(not answering)".into(),
+                            _ => text,
                         };
                     }
                 }
+                Report::Fault {
+                    axis,
+                    code,
+                    value,
+                    limit,
+                } => {
+                    let (name, unit) = config
+                        .axes
+                        .get(axis)
+                        .map_or(("?", ""), |a| (a.name.as_str(), a.unit.as_str()));
+                    tracing::warn!(
+                        "fault {}: {}",
+                        code.name(),
+                        code.explain(name, value, limit, unit)
+                    );
+                }
+                Report::SlotsFull(slots) => {
+                    tracing::warn!(
+                        "service motiond/{}/{}: all {} {} slots are taken; new clients are refused there until one leaves (raise [server] max_clients)",
+                        config.server.name,
+                        slots.service,
+                        slots.limit,
+                        slots.slot
+                    );
+                }
+                Report::EstopBy(by) => tracing::warn!("e-stop latched by {by}"),
                 Report::Stats(stats) => {
                     if !summary_printed
                         && monotonic_now().saturating_sub(started) >= Duration::from_secs(1)
@@ -247,7 +290,7 @@ fn status(stats: &StatusLine, config: &ServerConfig) -> String {
 fn print_summary(config: &ServerConfig, firmware: &[String]) {
     let server = &config.server;
     let mut lines = vec![format!(
-        "motiond `{}`: {} Hz tick, deadman {} ms, {} links, {} devices, {} axes; services motiond/{}/{{frame,tick,command,info,stats}}",
+        "motiond `{}`: {} Hz tick, deadman {} ms, {} links, {} devices, {} axes; services motiond/{}/{{frame,tick,command,info,stats,params,estop}}",
         server.name,
         server.tick_hz,
         server.command_timeout.as_millis(),

@@ -6,6 +6,7 @@ pub mod app;
 pub mod config;
 pub mod drivers;
 pub mod io;
+pub mod params;
 pub mod rt;
 pub mod services;
 pub mod sim_models;

@@ -1,17 +1,27 @@
-//! The iceoryx2 services of one instance (DESIGN.md "Shared-memory contract").
+//! The iceoryx2 services of one instance (shared-memory contract in `crates/motion-ipc`):
+//! creating them, taking them over after a crashed server, watching their port slots, and
+//! telling the tick which node sent a request.
 
 use iceoryx2::node::NodeView;
+use iceoryx2::port::listener::Listener;
 use iceoryx2::port::notifier::Notifier;
 use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::server::Server;
 use iceoryx2::prelude::*;
+use iceoryx2::service::port_factory::event::PortFactory as EventFactory;
+use iceoryx2::service::port_factory::publish_subscribe::PortFactory as PubSubFactory;
+use iceoryx2::service::port_factory::request_response::PortFactory as RequestResponseFactory;
 use motion_ipc::{
-    CommandReply, CommandRequest, MotionFrame, ServerInfo, ServerStats, ServiceNames,
+    ClientId, CommandReply, CommandRequest, MachineParams, MotionFrame, ServerInfo, ServerStats,
+    ServiceNames,
 };
 
 /// The service type motiond runs on: inter-process shared memory, single-threaded ports
 /// (every port lives on the tick thread).
 pub type Ipc = ipc::Service;
+
+/// The command service's port factory.
+pub type CommandFactory = RequestResponseFactory<Ipc, CommandRequest, (), CommandReply, ()>;
 
 /// Every port the tick thread uses.
 #[derive(Debug)]
@@ -28,6 +38,27 @@ pub struct Services {
     pub info: Publisher<Ipc, ServerInfo, ()>,
     /// `stats`, history 1.
     pub stats: Publisher<Ipc, ServerStats, ()>,
+    /// `params`, history 1.
+    pub params: Publisher<Ipc, MachineParams, ()>,
+    /// `estop` event: any notification latches the e-stop.
+    pub estop: Listener<Ipc>,
+    /// The services themselves, for their port counts.
+    pub factories: Factories,
+    /// `max_clients` the services were made with.
+    pub max_clients: usize,
+}
+
+/// The services' port factories (dynamic configs: which ports are connected).
+#[derive(Debug)]
+pub struct Factories {
+    frame: PubSubFactory<Ipc, MotionFrame, ()>,
+    info: PubSubFactory<Ipc, ServerInfo, ()>,
+    stats: PubSubFactory<Ipc, ServerStats, ()>,
+    params: PubSubFactory<Ipc, MachineParams, ()>,
+    tick: EventFactory<Ipc>,
+    estop: EventFactory<Ipc>,
+    /// The command service.
+    pub command: CommandFactory,
 }
 
 /// Frames a subscriber can fall behind before the oldest is dropped (safe overflow).
@@ -36,12 +67,107 @@ pub const FRAME_BUFFER: usize = 32;
 /// Requests a client may have outstanding at once.
 pub const MAX_REQUESTS_PER_CLIENT: usize = 8;
 
+/// Notifier slots of the e-stop event per `max_clients`: its own pool, separate from the
+/// command service's clients, so that exhausting one does not lock out the other.
+pub const ESTOP_NOTIFIERS_PER_CLIENT: usize = 2;
+
+/// One service whose port slots can run out, for the "all slots taken" report.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SlotUse {
+    /// Bit of `ServerStats::full_services`.
+    pub bit: u32,
+    /// Service leaf name (`frame`) and what its slots are (`subscriber`).
+    pub service: &'static str,
+    /// What the slots are.
+    pub slot: &'static str,
+    /// Ports connected now.
+    pub used: usize,
+    /// Ports the service admits.
+    pub limit: usize,
+}
+
+impl Factories {
+    /// Port use of every service that clients connect to.
+    pub fn slot_use(&self, max_clients: usize) -> [SlotUse; 7] {
+        let sub = |bit, service, used| SlotUse {
+            bit,
+            service,
+            slot: "subscriber",
+            used,
+            limit: max_clients,
+        };
+        [
+            sub(
+                ServerStats::FULL_FRAME,
+                "frame",
+                self.frame.dynamic_config().number_of_subscribers(),
+            ),
+            SlotUse {
+                bit: ServerStats::FULL_TICK,
+                service: "tick",
+                slot: "listener",
+                used: self.tick.dynamic_config().number_of_listeners(),
+                limit: max_clients,
+            },
+            SlotUse {
+                bit: ServerStats::FULL_COMMAND,
+                service: "command",
+                slot: "client",
+                used: self.command.dynamic_config().number_of_clients(),
+                limit: max_clients,
+            },
+            sub(
+                ServerStats::FULL_INFO,
+                "info",
+                self.info.dynamic_config().number_of_subscribers(),
+            ),
+            sub(
+                ServerStats::FULL_STATS,
+                "stats",
+                self.stats.dynamic_config().number_of_subscribers(),
+            ),
+            sub(
+                ServerStats::FULL_PARAMS,
+                "params",
+                self.params.dynamic_config().number_of_subscribers(),
+            ),
+            SlotUse {
+                bit: ServerStats::FULL_ESTOP,
+                service: "estop",
+                slot: "notifier",
+                used: self.estop.dynamic_config().number_of_notifiers(),
+                limit: max_clients * ESTOP_NOTIFIERS_PER_CLIENT,
+            },
+        ]
+    }
+}
+
+fn service_name(name: String) -> Result<ServiceName, String> {
+    name.as_str()
+        .try_into()
+        .map_err(|e| format!("service name {name:?}: {e:?}"))
+}
+
+/// Why a service could not be made, with what to do about it.
+fn explain(service: &str, error: impl core::fmt::Debug) -> String {
+    let text = format!("{error:?}");
+    let hint = if text.contains("Incompatible") || text.contains("incompatible") {
+        " — the service exists with other settings (clients of a previous server still hold it, and this config changed max_clients or a payload): stop those clients, or keep the previous settings"
+    } else if text.contains("ExceedsMax") {
+        " — its port slots are all taken (by clients of a previous server?)"
+    } else {
+        ""
+    };
+    format!("service {service}: {text}{hint}")
+}
+
 impl Services {
-    /// Creates the instance's services. Fails when another live motiond already serves
-    /// `name` (the frame service exists and is not stale).
+    /// Creates the instance's services, or takes them over from a server that crashed while
+    /// clients kept them open. Fails when another live motiond serves `name` (its node is
+    /// alive), naming its process.
     pub fn create(name: &str, max_clients: usize) -> Result<Self, String> {
         let names = ServiceNames::new(name);
-        let node_name = format!("motiond-{name}");
+        let node_name = names.server_node();
         let node = NodeBuilder::new()
             .name(
                 &node_name
@@ -51,24 +177,15 @@ impl Services {
             )
             .create::<Ipc>()
             .map_err(|e| format!("iceoryx2 node: {e:?}"))?;
-        let service_name = |n: String| -> Result<ServiceName, String> {
-            n.as_str()
-                .try_into()
-                .map_err(|e| format!("service name {n:?}: {e:?}"))
-        };
-        let max_nodes = max_clients + 2;
-        let frame_name = service_name(names.frame())?;
-        if node
-            .service_builder(&frame_name)
-            .publish_subscribe::<MotionFrame>()
-            .open()
-            .is_ok()
-        {
+        if let Some(pid) = live_server(&node_name, node.id().value()) {
             return Err(format!(
-                "service {} exists: another motiond is serving instance `{name}`; stop it or pick another [server] name",
-                names.frame()
+                "another motiond (process {pid}) is serving instance `{name}`; stop it or pick another [server] name"
             ));
         }
+        // A crashed server's leftovers (its ports in services that clients kept open) go
+        // first, so that its publisher and server slots are free for us.
+        clean_dead_nodes();
+        let max_nodes = max_clients + 2;
         let tick = node
             .service_builder(&service_name(names.tick())?)
             .event()
@@ -76,10 +193,23 @@ impl Services {
             .max_listeners(max_clients)
             .max_nodes(max_nodes)
             .open_or_create()
-            .map_err(|e| format!("service {}: {e:?}", names.tick()))?
+            .map_err(|e| explain(&names.tick(), e))?;
+        let tick_notifier = tick
             .notifier_builder()
             .create()
-            .map_err(|e| format!("tick notifier: {e:?}"))?;
+            .map_err(|e| explain(&names.tick(), e))?;
+        let estop = node
+            .service_builder(&service_name(names.estop())?)
+            .event()
+            .max_notifiers(max_clients * ESTOP_NOTIFIERS_PER_CLIENT)
+            .max_listeners(1)
+            .max_nodes(max_nodes * ESTOP_NOTIFIERS_PER_CLIENT)
+            .open_or_create()
+            .map_err(|e| explain(&names.estop(), e))?;
+        let estop_listener = estop
+            .listener_builder()
+            .create()
+            .map_err(|e| explain(&names.estop(), e))?;
         let command = node
             .service_builder(&service_name(names.command())?)
             .request_response::<CommandRequest, CommandReply>()
@@ -90,53 +220,67 @@ impl Services {
             .max_response_buffer_size(MAX_REQUESTS_PER_CLIENT)
             .enable_safe_overflow_for_responses(true)
             .open_or_create()
-            .map_err(|e| format!("service {}: {e:?}", names.command()))?
+            .map_err(|e| explain(&names.command(), e))?;
+        let command_server = command
             .server_builder()
             .create()
-            .map_err(|e| format!("command server: {e:?}"))?;
-        let info = state_publisher::<ServerInfo>(&node, &service_name(names.info())?, max_clients)?;
-        let stats =
+            .map_err(|e| explain(&names.command(), e))?;
+        let (info, info_factory) =
+            state_publisher::<ServerInfo>(&node, &service_name(names.info())?, max_clients)?;
+        let (stats, stats_factory) =
             state_publisher::<ServerStats>(&node, &service_name(names.stats())?, max_clients)?;
+        let (params, params_factory) =
+            state_publisher::<MachineParams>(&node, &service_name(names.params())?, max_clients)?;
         // The frame service comes last: a client that sees it can open every other one.
         let frame = node
-            .service_builder(&frame_name)
+            .service_builder(&service_name(names.frame())?)
             .publish_subscribe::<MotionFrame>()
             .history_size(1)
-            // A client that is late by up to FRAME_BUFFER ticks loses nothing (8 KiB each).
+            // A client that is late by up to FRAME_BUFFER ticks loses nothing.
             .subscriber_max_buffer_size(FRAME_BUFFER)
             .max_subscribers(max_clients)
             .max_publishers(1)
             .max_nodes(max_nodes)
             .enable_safe_overflow(true)
-            .create()
-            .map_err(|e| {
-                format!(
-                    "service {}: {e:?} — is another motiond serving instance `{name}`? Stop it or pick another [server] name",
-                    names.frame()
-                )
-            })?
+            .open_or_create()
+            .map_err(|e| explain(&names.frame(), e))?;
+        let frame_publisher = frame
             .publisher_builder()
             .create()
-            .map_err(|e| format!("frame publisher: {e:?}"))?;
+            .map_err(|e| explain(&names.frame(), e))?;
         Ok(Self {
             node,
-            frame,
-            tick,
-            command,
+            frame: frame_publisher,
+            tick: tick_notifier,
+            command: command_server,
             info,
             stats,
+            params,
+            estop: estop_listener,
+            factories: Factories {
+                frame,
+                info: info_factory,
+                stats: stats_factory,
+                params: params_factory,
+                tick,
+                estop,
+                command,
+            },
+            max_clients,
         })
     }
 }
 
-/// A publisher of a rarely changing state (info, stats): history 1, so a late subscriber
-/// gets the current value at once.
+/// A publisher of a rarely changing state (info, stats, params): history 1, so a late
+/// subscriber gets the current value at once.
+#[allow(clippy::type_complexity)]
 fn state_publisher<T: core::fmt::Debug + ZeroCopySend + 'static>(
     node: &Node<Ipc>,
     name: &ServiceName,
     max_clients: usize,
-) -> Result<Publisher<Ipc, T, ()>, String> {
-    node.service_builder(name)
+) -> Result<(Publisher<Ipc, T, ()>, PubSubFactory<Ipc, T, ()>), String> {
+    let service = node
+        .service_builder(name)
         .publish_subscribe::<T>()
         .history_size(1)
         .subscriber_max_buffer_size(1)
@@ -144,10 +288,31 @@ fn state_publisher<T: core::fmt::Debug + ZeroCopySend + 'static>(
         .max_publishers(1)
         .max_nodes(max_clients + 2)
         .open_or_create()
-        .map_err(|e| format!("service {name}: {e:?}"))?
+        .map_err(|e| explain(name.as_str(), e))?;
+    let publisher = service
         .publisher_builder()
         .create()
-        .map_err(|e| format!("{name} publisher: {e:?}"))
+        .map_err(|e| explain(name.as_str(), e))?;
+    Ok((publisher, service))
+}
+
+/// The process id of a live node called `node_name` other than `except`.
+fn live_server(node_name: &str, except: u128) -> Option<u32> {
+    let mut found = None;
+    let _ = Node::<Ipc>::list(Config::global_config(), |state| {
+        if let NodeState::Alive(view) = &state
+            && view.id().value() != except
+            && view
+                .details()
+                .as_ref()
+                .is_some_and(|details| details.name().as_str() == node_name)
+        {
+            found = Some(view.id().pid::<Ipc>().map_or(0, |pid| pid.value() as u32));
+            return CallbackProgression::Stop;
+        }
+        CallbackProgression::Continue
+    });
+    found
 }
 
 /// Removes the shared-memory leftovers of dead processes (a crashed motiond or client) and
@@ -176,4 +341,79 @@ pub fn count_live_nodes(except: u128) -> u32 {
         CallbackProgression::Continue
     });
     count
+}
+
+/// Which node each client port of the command service belongs to, as the service's
+/// dynamic config says (written by iceoryx2 when the port connected — not by the payload).
+/// Fixed capacity, filled on demand: no allocation after construction.
+#[derive(Debug)]
+pub struct ClientDirectory {
+    /// (client port id, node id).
+    entries: Vec<(u128, u128)>,
+    /// Nodes with a client port on the command service, at the last [`Self::refresh`].
+    connected: Vec<u128>,
+    capacity: usize,
+}
+
+impl ClientDirectory {
+    /// Room for `max_clients` ports.
+    pub fn new(max_clients: usize) -> Self {
+        let capacity = max_clients.max(1);
+        Self {
+            entries: Vec::with_capacity(capacity),
+            connected: Vec::with_capacity(capacity),
+            capacity,
+        }
+    }
+
+    /// The node of client port `port`; `ClientId::NONE` when the service does not know it.
+    pub fn node_of(&mut self, command: &CommandFactory, port: u128) -> ClientId {
+        if let Some((_, node)) = self.entries.iter().find(|(p, _)| *p == port) {
+            return ClientId::from_u128(*node);
+        }
+        let mut found = None;
+        command.dynamic_config().list_clients(|details| {
+            if details.client_id.value() == port {
+                found = Some(details.node_id.value());
+                return CallbackProgression::Stop;
+            }
+            CallbackProgression::Continue
+        });
+        let Some(node) = found else {
+            return ClientId::NONE;
+        };
+        if self.entries.len() == self.capacity {
+            self.entries.remove(0);
+        }
+        self.entries.push((port, node));
+        ClientId::from_u128(node)
+    }
+
+    /// Re-reads which client ports are connected; forgets the ports that left.
+    pub fn refresh(&mut self, command: &CommandFactory) {
+        self.connected.clear();
+        let mut ports_seen = 0usize;
+        let (connected, capacity) = (&mut self.connected, self.capacity);
+        let entries = &mut self.entries;
+        let mut live_ports = [0u128; 64];
+        command.dynamic_config().list_clients(|details| {
+            let node = details.node_id.value();
+            if !connected.contains(&node) && connected.len() < capacity {
+                connected.push(node);
+            }
+            if ports_seen < live_ports.len() {
+                live_ports[ports_seen] = details.client_id.value();
+            }
+            ports_seen += 1;
+            CallbackProgression::Continue
+        });
+        if ports_seen <= live_ports.len() {
+            entries.retain(|(port, _)| live_ports[..ports_seen].contains(port));
+        }
+    }
+
+    /// Whether `node` had a client port on the command service at the last refresh.
+    pub fn is_connected(&self, node: ClientId) -> bool {
+        self.connected.contains(&node.as_u128())
+    }
 }

@@ -10,15 +10,15 @@ use iceoryx2::port::server::Server;
 use iceoryx2::port::update_connections::UpdateConnections;
 use motion_engine::{CommandPort, Engine};
 use motion_ipc::{
-    ClientId, CommandReply, CommandRequest, FaultCode, MotionFrame, ServerInfo, ServerStats,
-    write_text,
+    ClientId, CommandReply, CommandRequest, DeviceState, FaultCode, MachineParams, MotionFrame,
+    ServerInfo, ServerStats, write_text,
 };
 use rtrb::{Consumer, Producer};
 
 use crate::config::ServerSettings;
 use crate::io::{LinkEvent, LinkPort, PACKET_LEN, Packet};
 use crate::rt::{self, RtStatus, monotonic_now, sleep_until};
-use crate::services::{Ipc, Services};
+use crate::services::{ClientDirectory, CommandFactory, Ipc, Services, SlotUse};
 use crate::stats::Latency;
 
 /// How long a shutdown waits for the boards to acknowledge their stop goals.
@@ -36,15 +36,30 @@ pub enum Report {
     },
     /// The thread could not start.
     Failed(String),
-    /// A device's status changed.
+    /// A device's state or firmware changed.
     Device {
         /// Device index (config order).
         index: usize,
-        /// Answers.
-        online: bool,
+        /// Its readiness.
+        state: DeviceState,
         /// Firmware string, zero padded.
         firmware: [u8; 32],
     },
+    /// An axis faulted.
+    Fault {
+        /// Axis index (config order).
+        axis: usize,
+        /// The fault.
+        code: FaultCode,
+        /// Its measured figure.
+        value: f64,
+        /// The tolerance it broke.
+        limit: f64,
+    },
+    /// A service's port slots are all taken (reported once until some free up).
+    SlotsFull(SlotUse),
+    /// The e-stop was latched by the e-stop event or SIGUSR1 (not by a command).
+    EstopBy(&'static str),
     /// Once a second.
     Stats(StatusLine),
     /// The loop ended (shutdown complete or timed out).
@@ -98,21 +113,36 @@ pub struct TickSetup {
     pub clients_alive: Arc<AtomicU32>,
     pub reports: Producer<Report>,
     pub require_rt: bool,
+    /// The machine parameters in effect (published once on `params`).
+    pub params: Box<MachineParams>,
+    /// Set by SIGUSR1: latch the e-stop.
+    pub estop_signal: Arc<AtomicBool>,
 }
 
 /// The command port over the iceoryx2 server: one active request at a time, answered
-/// exactly once.
+/// exactly once. The sender is the node of the client port the request came through, as
+/// iceoryx2 knows it — never the payload's `client` field.
 struct IpcCommands<'a> {
     server: &'a Server<Ipc, CommandRequest, (), CommandReply, ()>,
+    factory: &'a CommandFactory,
+    directory: &'a mut ClientDirectory,
     current: Option<ActiveRequest<Ipc, CommandRequest, (), CommandReply, ()>>,
+    sender: ClientId,
 }
 
 impl CommandPort for IpcCommands<'_> {
     fn next_request(&mut self) -> Option<CommandRequest> {
         let active = self.server.receive().ok().flatten()?;
         let request = *active.payload();
+        self.sender = self
+            .directory
+            .node_of(self.factory, active.origin().value());
         self.current = Some(active);
         Some(request)
+    }
+
+    fn sender(&self) -> Option<ClientId> {
+        Some(self.sender)
     }
 
     fn reply(&mut self, reply: CommandReply) {
@@ -212,7 +242,10 @@ struct Loop {
     work: Latency,
     stats: Box<ServerStats>,
     spare_frame: Box<MotionFrame>,
-    device_seen: Vec<(bool, [u8; 32])>,
+    device_seen: Vec<(DeviceState, [u8; 32])>,
+    /// Per axis: the fault code in the last frame (to report new faults once).
+    faults_seen: Vec<u16>,
+    directory: ClientDirectory,
     consecutive_overruns: u64,
     overrun_fault_latched: bool,
 }
@@ -226,6 +259,8 @@ impl Loop {
             write_text(&mut out.name, name);
         }
         let devices = setup.engine.config().devices.len();
+        let axes = setup.engine.config().axes.len();
+        let directory = ClientDirectory::new(services.max_clients);
         Self {
             setup,
             services,
@@ -233,7 +268,9 @@ impl Loop {
             work: Latency::new(),
             stats,
             spare_frame: Box::new(MotionFrame::EMPTY),
-            device_seen: vec![(false, [0; 32]); devices],
+            device_seen: vec![(DeviceState::Offline, [0; 32]); devices],
+            faults_seen: vec![0; axes],
+            directory,
             consecutive_overruns: 0,
             overrun_fault_latched: false,
         }
@@ -244,9 +281,11 @@ impl Loop {
         let epoch = self.setup.epoch;
         let mut deadline = monotonic_now() + period;
         let mut last_stats = Duration::ZERO;
+        let mut last_liveness = Duration::ZERO;
         let mut shutting_since: Option<Duration> = None;
         let mut buf = [0u8; PACKET_LEN];
         self.publish_info();
+        self.publish_params();
         loop {
             sleep_until(deadline);
             let wake = monotonic_now();
@@ -256,7 +295,12 @@ impl Loop {
 
             self.take_link_input(now);
             while let Ok(client) = self.setup.dead_clients.pop() {
-                self.setup.engine.client_gone(client);
+                self.setup.engine.client_dead(client);
+            }
+            self.take_estops();
+            if now.saturating_sub(last_liveness) >= self.setup.settings.liveness_check {
+                last_liveness = now;
+                self.end_claims_of_departed_clients();
             }
             if shutting_since.is_none() && self.setup.shutdown.load(Ordering::Relaxed) {
                 self.setup.engine.begin_shutdown();
@@ -265,11 +309,13 @@ impl Loop {
             self.step_and_publish(now, deadline);
             self.queue_link_output(now, &mut buf);
 
+            self.report_faults();
             if now.saturating_sub(last_stats) >= Duration::from_secs(1) {
                 last_stats = now;
+                self.check_slots();
                 self.publish_stats(deadline);
-                self.report_devices();
             }
+            self.report_devices();
             if let Some(since) = shutting_since {
                 let at_rest = self.setup.engine.all_at_rest();
                 if at_rest || now.saturating_sub(since) >= SHUTDOWN_TIMEOUT {
@@ -321,10 +367,79 @@ impl Loop {
         }
     }
 
+    /// E-stops that did not come as commands: the `estop` event, SIGUSR1.
+    fn take_estops(&mut self) {
+        let mut notified = false;
+        let _ = self.services.estop.try_wait(|_| notified = true);
+        let signalled = self.setup.estop_signal.swap(false, Ordering::Relaxed);
+        if notified || signalled {
+            self.setup.engine.estop();
+            let by = if notified {
+                "the estop event"
+            } else {
+                "SIGUSR1"
+            };
+            let _ = self.setup.reports.push(Report::EstopBy(by));
+        }
+    }
+
+    /// Claims end when their owner has no client port on the command service any more
+    /// (it exited, normally or not, or dropped its client).
+    fn end_claims_of_departed_clients(&mut self) {
+        self.directory.refresh(&self.services.factories.command);
+        loop {
+            let departed = self
+                .setup
+                .engine
+                .claim_holders()
+                .find(|holder| !self.directory.is_connected(*holder));
+            let Some(holder) = departed else { break };
+            self.setup.engine.release_claims_of(holder);
+        }
+    }
+
+    /// Logs (through the main thread) every service whose slots are all taken, once until
+    /// some free up, and counts it in the stats.
+    fn check_slots(&mut self) {
+        let mut full = 0;
+        for slots in self.services.factories.slot_use(self.services.max_clients) {
+            if slots.used >= slots.limit {
+                full |= slots.bit;
+                if self.stats.full_services & slots.bit == 0 {
+                    self.stats.full_events += 1;
+                    let _ = self.setup.reports.push(Report::SlotsFull(slots));
+                }
+            }
+        }
+        self.stats.full_services = full;
+    }
+
+    /// Reports axes that faulted since the last frame.
+    fn report_faults(&mut self) {
+        for (index, seen) in self.faults_seen.iter_mut().enumerate() {
+            let fault = self.setup.engine.axis_fault(index);
+            let code = fault.map_or(0, |(code, _, _)| code as u16);
+            if code != *seen {
+                *seen = code;
+                if let Some((code, value, limit)) = fault {
+                    let _ = self.setup.reports.push(Report::Fault {
+                        axis: index,
+                        code,
+                        value,
+                        limit,
+                    });
+                }
+            }
+        }
+    }
+
     fn step_and_publish(&mut self, now: Duration, deadline: Duration) {
         let mut commands = IpcCommands {
             server: &self.services.command,
+            factory: &self.services.factories.command,
+            directory: &mut self.directory,
             current: None,
+            sender: ClientId::NONE,
         };
         match self.services.frame.loan_uninit() {
             Ok(sample) => {
@@ -333,13 +448,16 @@ impl Loop {
                 self.setup.engine.step(now, &mut commands, frame);
                 frame.time_ns = duration_ns(deadline);
                 frame.publish_ns = duration_ns(monotonic_now());
-                let _ = sample.send();
+                if sample.send().is_err() {
+                    self.stats.frames_lost += 1;
+                }
             }
             Err(_) => {
                 // No sample to loan (every one held by slow subscribers): the tick goes on.
                 self.setup
                     .engine
                     .step(now, &mut commands, &mut self.spare_frame);
+                self.stats.frames_lost += 1;
             }
         }
         let _ = self.services.tick.notify();
@@ -348,6 +466,7 @@ impl Loop {
         // changed.
         let _ = self.services.info.update_connections();
         let _ = self.services.stats.update_connections();
+        let _ = self.services.params.update_connections();
     }
 
     fn queue_link_output(&mut self, now: Duration, buf: &mut [u8; PACKET_LEN]) {
@@ -376,6 +495,7 @@ impl Loop {
         let counters = engine.counters();
         stats.commands = counters.commands;
         stats.rejected = counters.rejected;
+        stats.faults = counters.faults;
         stats.clients = self.setup.clients_alive.load(Ordering::Relaxed);
         let config = engine.config();
         for (index, (port, out)) in self
@@ -417,20 +537,31 @@ impl Loop {
                 continue;
             };
             let status = driver.status();
+            let state = self
+                .setup
+                .engine
+                .device_state(index)
+                .unwrap_or(DeviceState::Offline);
             let mut firmware = [0u8; 32];
             write_text(&mut firmware, status.firmware());
-            if (status.online, firmware) != *seen {
-                *seen = (status.online, firmware);
+            if (state, firmware) != *seen {
+                *seen = (state, firmware);
                 changed = true;
                 let _ = self.setup.reports.push(Report::Device {
                     index,
-                    online: status.online,
+                    state,
                     firmware,
                 });
             }
         }
         if changed {
             self.publish_info();
+        }
+    }
+
+    fn publish_params(&mut self) {
+        if let Ok(sample) = self.services.params.loan_uninit() {
+            let _ = sample.write_payload(*self.setup.params).send();
         }
     }
 

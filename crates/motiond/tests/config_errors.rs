@@ -109,7 +109,7 @@ fn wrong_type() {
         "wrong_type.toml",
         &text,
         "\"fast\"",
-        "tick_hz",
+        "server.tick_hz",
         "invalid type",
     );
 }
@@ -309,6 +309,9 @@ fn home_inputs_are_for_qq2drv_axes_only_and_named() {
         "is not a key of tmcpack axes; it is valid on: qq2drv",
     );
     let qq2drv = r#"
+[server]
+name = "home"
+
 [[link]]
 name = "spi"
 type = "sim"
@@ -342,4 +345,95 @@ home = { input = "switch" }
         &qq2drv.replace("\"switch\"", "\"edge\", active_high = false"),
     );
     assert_eq!(code, Some(0), "{stderr}");
+}
+
+// Issue: configs accepted that should not be, and misleading messages.
+
+#[test]
+fn an_empty_config_is_refused() {
+    let (code, stderr) = check("empty.toml", "");
+    assert_eq!(code, Some(1), "{stderr}");
+    for (key, says) in [
+        ("server.name", "missing [server]"),
+        ("link", "no [[link]] table"),
+        ("device", "no [[device]] table"),
+        ("axis", "no [[axis]] or [[signal]] table"),
+    ] {
+        assert!(
+            stderr.contains(&format!("`{key}`: {says}")),
+            "{key}: {stderr}"
+        );
+    }
+}
+
+#[test]
+fn a_nameless_server_is_refused() {
+    let text = GOOD.replace("name = \"t\"\n", "");
+    assert_fails(
+        "nameless.toml",
+        &text,
+        "[server]",
+        "server.name",
+        "missing; the instance name",
+    );
+}
+
+#[test]
+fn integers_beyond_64_bits_are_range_errors_of_their_key() {
+    let text = GOOD.replace("tick_hz = 1000", "tick_hz = 18446744073709551615");
+    assert_fails(
+        "tick_overflow.toml",
+        &text,
+        "18446744073709551615",
+        "server.tick_hz",
+        "18446744073709551615 is out of range; allowed: 1..=20000",
+    );
+    let text = GOOD.replace(
+        "tick_hz = 1000",
+        "tick_hz = 1000\ncommand_timeout_ms = 99999999999999999999",
+    );
+    let (code, stderr) = check("timeout_overflow.toml", &text);
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(
+        stderr.contains(":5:22: `server.command_timeout_ms`: 99999999999999999999 is out of range; allowed: 0..=60000"),
+        "{stderr}"
+    );
+    assert!(!stderr.contains("i128"), "{stderr}");
+}
+
+#[test]
+fn a_dangling_reference_is_reported_first() {
+    // An unrelated problem earlier in the file, then a device on a link that does not exist.
+    let text = GOOD
+        .replace("baud = 19200", "baud = 0")
+        .replace("link = \"bus\"", "link = \"bux\"");
+    let (code, stderr) = check("dangling.toml", &text);
+    assert_eq!(code, Some(1), "{stderr}");
+    let first = stderr.lines().next().unwrap_or("");
+    assert!(
+        first.contains("`device[0].link`: no link called `bux`"),
+        "the dangling name comes first:\n{stderr}"
+    );
+    assert!(stderr.contains("link[0].baud"), "{stderr}");
+}
+
+#[test]
+fn a_non_utf8_byte_is_reported_where_it_is() {
+    let path = write("latin1.toml", "");
+    let mut bytes = GOOD.as_bytes().to_vec();
+    // Line 7 of GOOD is `path = "/dev/does-not-exist-motiond-test"`: put a Latin-1 é in it.
+    let line7 = GOOD.lines().take(6).map(|l| l.len() + 1).sum::<usize>();
+    bytes.insert(line7 + 8, 0xE9);
+    std::fs::write(&path, &bytes).expect("write");
+    let output = Command::new(env!("CARGO_BIN_EXE_motiond"))
+        .arg("--check-config")
+        .arg(&path)
+        .output()
+        .expect("run motiond");
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("latin1.toml:7:9: `(file)`: byte 0xE9 is not UTF-8"),
+        "{stderr}"
+    );
 }

@@ -10,17 +10,43 @@ use iceoryx2::prelude::*;
 use nix::sys::signal::Signal;
 use support::*;
 
-fn empty_config(name: &str) -> std::path::PathBuf {
+/// The smallest config a server accepts: one simulated SPI_motor stepper.
+fn small_config(name: &str) -> std::path::PathBuf {
     write_config(
         name,
-        &format!("[server]\nname = \"{name}\"\ntick_hz = 1000\n"),
+        &format!(
+            r#"[server]
+name = "{name}"
+tick_hz = 1000
+
+[[link]]
+name = "spi"
+type = "sim"
+
+[[device]]
+name = "m"
+link = "spi"
+model = "spimotor"
+
+[[axis]]
+name = "a"
+device = "m"
+channel = 0
+unit = "mm"
+counts_per_unit = 100.0
+min = -10.0
+max = 10.0
+max_velocity = 10.0
+max_accel = 100.0
+"#
+        ),
     )
 }
 
 #[test]
 fn frames_flow_at_the_tick_rate_and_sigterm_exits_cleanly_and_restarts() {
     let name = unique_name("life");
-    let path = empty_config(&name);
+    let path = small_config(&name);
     let node = NodeBuilder::new().create::<ipc::Service>().expect("node");
     for round in 0..2 {
         let mut server = Server::start(&path);
@@ -59,7 +85,7 @@ fn frames_flow_at_the_tick_rate_and_sigterm_exits_cleanly_and_restarts() {
 #[test]
 fn a_second_server_on_the_same_name_is_refused() {
     let name = unique_name("dup");
-    let path = empty_config(&name);
+    let path = small_config(&name);
     let node = NodeBuilder::new().create::<ipc::Service>().expect("node");
     let mut first = Server::start(&path);
     let _subscriber = open_frames(&node, &name, Duration::from_secs(10)).expect("first server up");

@@ -8,7 +8,7 @@ use core::time::Duration;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
-use motion_ipc::{AxisFlags, AxisMode, CommandKind, FaultCode};
+use motion_ipc::{AxisFlags, AxisMode, CommandKind, DeviceState, FaultCode, MotionFrame};
 use motion_sim::tmcpack::{TmcpackSim, TmcpackSimConfig};
 use nix::sys::signal::Signal;
 use support::pty_board::PtyBoard;
@@ -203,11 +203,7 @@ fn sigterm_mid_move_stops_every_board_then_exits_zero() {
     let body = format!("{}{}", spimotor_section(250), tmcpack_section(&link));
     let mut server = Server::start(&config(&name, &body));
     let mut client = RawClient::connect(&name, Duration::from_secs(10));
-    let (frame, online) = client.wait_frame(Duration::from_secs(10), |f| {
-        f.axes()
-            .iter()
-            .all(|a| !a.flags().contains(AxisFlags::STALE))
-    });
+    let (frame, online) = client.wait_frame(Duration::from_secs(10), |f| ready(f));
     assert!(online, "every board reports in: {:?}", frame.axes());
     // Long moves on both boards.
     assert_eq!(
@@ -262,11 +258,7 @@ fn an_unplugged_serial_adapter_recovers_without_a_restart() {
     let body = format!("{}{}", spimotor_section(250), tmcpack_section(&link));
     let mut server = Server::start(&config(&name, &body));
     let mut client = RawClient::connect(&name, Duration::from_secs(10));
-    let (frame, online) = client.wait_frame(Duration::from_secs(10), |f| {
-        f.axes()
-            .iter()
-            .all(|a| !a.flags().contains(AxisFlags::STALE))
-    });
+    let (frame, online) = client.wait_frame(Duration::from_secs(10), |f| ready(f));
     assert!(online, "{:?}", frame.axes());
     assert_eq!(
         client
@@ -307,7 +299,9 @@ fn an_unplugged_serial_adapter_recovers_without_a_restart() {
     let _board = PtyBoard::start(&link, Arc::clone(&pack), epoch, 19_200);
     let (frame, back) = client.wait_frame(Duration::from_secs(10), |f| {
         let axis = f.axes()[1];
-        !axis.flags().contains(AxisFlags::FAULT) && !axis.flags().contains(AxisFlags::STALE)
+        !axis.flags().contains(AxisFlags::FAULT)
+            && !axis.flags().contains(AxisFlags::STALE)
+            && axis.device_state() == Ok(DeviceState::Online)
     });
     assert!(back, "the link recovers: {:?}", frame.axes());
     assert_ne!(
@@ -325,4 +319,12 @@ fn an_unplugged_serial_adapter_recovers_without_a_restart() {
         server.signal_and_wait(Signal::SIGTERM, Duration::from_secs(10)),
         Some(0)
     );
+}
+
+/// Every axis fresh and every board online (probed, configured, its start-up stop
+/// acknowledged): goals are accepted from now on.
+fn ready(frame: &MotionFrame) -> bool {
+    frame.axes().iter().all(|a| {
+        !a.flags().contains(AxisFlags::STALE) && a.device_state() == Ok(DeviceState::Online)
+    })
 }

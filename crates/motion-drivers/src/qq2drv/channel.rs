@@ -3,11 +3,14 @@
 
 use core::time::Duration;
 
-use qq2drv::limits::{ACCELERATION_MAX, POWER_MAX, VELOCITY_LIMIT_MAX, VELOCITY_TARGET_MAX};
-use qq2drv::{ControlMode, EdgeAction, InputConfig, InputMode, Status};
+use qq2drv::limits::{
+    ACCELERATION_MAX, LOOP_RATE_HZ, POWER_MAX, VELOCITY_LIMIT_MAX, VELOCITY_TARGET_MAX,
+};
+use qq2drv::{ControlMode, InputMode, Status};
 
 use super::config::{ChannelConfig, HomeInput};
 use super::packet::{Packet, Packets};
+use super::step::Step;
 use crate::goal::{Goal, GoalError, GoalKind};
 use crate::state::{ChannelState, DeviceFault};
 
@@ -19,39 +22,10 @@ pub const STOP_SETTLE: Duration = Duration::from_millis(300);
 pub const STANDSTILL: i32 = 4;
 /// Within this many transitions of its target, a channel at standstill has arrived.
 pub const ARRIVED_WITHIN: i64 = 2;
-
-/// What the board is asked to do for one channel, one step of a goal at a time.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) enum Step {
-    /// Nothing commanded since start-up or a board reset.
-    Idle,
-    /// Control mode Off.
-    Off,
-    /// Power mode at ±8191.
-    Power(i16),
-    /// Position PID towards a target (configured velocity / acceleration limits).
-    Position(i32),
-    /// Position ramp (velocity and acceleration shl 12).
-    Ramp {
-        position: i32,
-        velocity: u32,
-        accel: u32,
-    },
-    /// Velocity PID, ramped (velocity plain, acceleration shl 12).
-    Velocity { velocity: i32, accel: u32 },
-    /// Velocity ramp to 0, then [`Step::Hold`].
-    Stop { accel: u32, ramp: Duration },
-    /// Position PID holding where the channel is when the step is sent.
-    Hold,
-    /// Counter ← value; holds there unless the motor is off.
-    SetCounter(i32),
-    /// Home with an edge input already active: move off the switch first.
-    HomeBackoff { velocity: i32, accel: u32 },
-    /// Home: run towards the switch with the input armed.
-    HomeSearch { velocity: i32, accel: u32 },
-    /// Home: trigger seen, input disarmed, ramp to 0, then [`Step::Hold`].
-    HomeStop { accel: u32, ramp: Duration },
-}
+/// The board's control loop period ("Loop rate of 500Hz"): a stop's ramp goes out at
+/// least this long after the board answered its first transaction, so that the loop has
+/// taken the reset velocity setpoint in between.
+pub const LOOP_PERIOD: Duration = Duration::from_nanos(1_000_000_000 / LOOP_RATE_HZ as u64);
 
 /// One channel of the board.
 #[derive(Debug, Clone, Copy)]
@@ -77,6 +51,15 @@ pub(super) struct Channel {
     pub(super) status: Status,
     pub(super) refreshed_at: Option<Duration>,
     pub(super) homed: bool,
+    /// Stream data arrived since start-up, the last restart or a board reset: position and
+    /// velocity are the board's current ones (a stop and a hold wait for this).
+    pub(super) data_valid: bool,
+    /// The home input may be armed on the board (an armed packet 14 went out and no
+    /// Disabled one was answered since).
+    pub(super) armed: bool,
+    /// The acceleration limit may be lifted on the board (a stop's 28 ← 0 went out and no
+    /// restore was answered since).
+    pub(super) lifted: bool,
 }
 
 impl Channel {
@@ -96,6 +79,9 @@ impl Channel {
             status: Status(0),
             refreshed_at: None,
             homed: false,
+            data_valid: false,
+            armed: false,
+            lifted: false,
         }
     }
 
@@ -127,7 +113,6 @@ impl Channel {
             },
             Goal::Stop { decel } => Step::Stop {
                 accel: self.stop_accel(decel),
-                ramp: self.ramp_time(decel),
             },
             Goal::SetPosition { counts } => Step::SetCounter(position(kind, counts)?),
             Goal::Home { velocity } => {
@@ -174,11 +159,24 @@ impl Channel {
             .clamp(1, ACCELERATION_MAX)
     }
 
-    /// How long a ramp from the current velocity to 0 at `decel` takes.
-    fn ramp_time(&self, decel: f64) -> Duration {
-        let decel = qq2drv::limits::from_fixed(self.stop_accel(decel));
-        let seconds = f64::from(self.velocity).abs() / decel;
-        Duration::try_from_secs_f64(seconds).unwrap_or(STOP_SETTLE)
+    /// Whether the step can go out now (a stop and a hold need current data).
+    pub(super) fn ready(&self) -> bool {
+        !self.step.needs_data() || self.data_valid
+    }
+
+    /// Plans a stop from the velocity measured now, just before it is sent: at standstill
+    /// it holds at once, else it resets the board's velocity setpoint first.
+    pub(super) fn resolve(&mut self) {
+        if let Step::Stop { accel } = self.step {
+            self.step = if self.velocity.abs() <= STANDSTILL {
+                Step::Hold
+            } else {
+                Step::StopLift {
+                    accel,
+                    velocity: self.velocity,
+                }
+            };
+        }
     }
 
     /// Makes `step` the channel's step; its packets go out next.
@@ -201,88 +199,20 @@ impl Channel {
         self.set_step(step);
     }
 
-    /// The packets of the current step, in order.
-    pub(super) fn packets(&self) -> Packets {
-        use Packet::{Mode, Target};
-        let position_mode = Mode(ControlMode::PositionPid);
-        let velocity_mode = Mode(ControlMode::VelocityPid);
-        match self.step {
-            Step::Idle => Packets::default(),
-            Step::Off => Packets::of(&[Mode(ControlMode::Off)]),
-            Step::Power(power) => Packets::of(&[Mode(ControlMode::Power), Packet::Power(power)]),
-            Step::Position(target) => Packets::of(&[position_mode, Target(target)]),
-            Step::Ramp {
-                position,
-                velocity,
-                accel,
-            } => Packets::of(&[
-                position_mode,
-                Packet::PositionRamp {
-                    position,
-                    velocity,
-                    accel,
-                },
-            ]),
-            Step::Velocity { velocity, accel } => {
-                Packets::of(&[velocity_mode, Packet::VelocityRamp { velocity, accel }])
-            }
-            Step::Stop { accel, .. } => {
-                Packets::of(&[velocity_mode, Packet::VelocityRamp { velocity: 0, accel }])
-            }
-            Step::Hold => Packets::of(&[position_mode, Target(self.position)]),
-            Step::SetCounter(value) if self.board_mode == ControlMode::Off => {
-                Packets::of(&[Packet::SetCounter(value)])
-            }
-            Step::SetCounter(value) => {
-                Packets::of(&[Packet::SetCounter(value), position_mode, Target(value)])
-            }
-            Step::HomeBackoff { velocity, accel } => Packets::of(&[
-                self.input(false),
-                velocity_mode,
-                Packet::VelocityRamp { velocity, accel },
-            ]),
-            Step::HomeSearch { velocity, accel } => Packets::of(&[
-                self.input(true),
-                velocity_mode,
-                Packet::VelocityRamp { velocity, accel },
-            ]),
-            Step::HomeStop { accel, .. } => Packets::of(&[
-                self.input(false),
-                velocity_mode,
-                Packet::VelocityRamp { velocity: 0, accel },
-            ]),
-        }
-    }
-
-    /// Packet 14 for the home input: armed (mode, polarity, set the counter on the
-    /// switch's end) or disarmed (Disabled, polarity kept so Input Active stays meaningful).
-    pub(super) fn input(&self, armed: bool) -> Packet {
-        let home = self.config.home.unwrap_or(HomeInput {
-            mode: InputMode::Disabled,
-            active_high: false,
-            positive_end: true,
-            position: 0,
-        });
-        let edge = if home.positive_end {
-            EdgeAction::SetOnPositive
-        } else {
-            EdgeAction::SetOnNegative
-        };
-        let mode = if armed {
-            home.mode
-        } else {
-            InputMode::Disabled
-        };
-        Packet::Input {
-            config: InputConfig::new(mode, home.active_high, edge),
-            position: home.position,
-        }
-    }
-
-    /// The step's packets went out (`count` of them).
-    pub(super) fn sent(&mut self, count: u8) {
+    /// The step's `packets` went out.
+    pub(super) fn sent(&mut self, packets: &Packets) {
         self.unsent = false;
-        self.unacked = count;
+        self.unacked = 0;
+        for packet in packets.iter() {
+            self.unacked += 1;
+            match packet {
+                Packet::AccelLimit(0) => self.lifted = true,
+                Packet::Input { config, .. } if config.mode() != InputMode::Disabled => {
+                    self.armed = true;
+                }
+                _ => {}
+            }
+        }
         if self.step == Step::Hold {
             self.target = Some(self.position);
         }
@@ -301,6 +231,10 @@ impl Channel {
             Packet::Mode(mode) => self.board_mode = mode,
             // "Set absolute position value": the channel now has a reference.
             Packet::SetCounter(_) => self.homed = true,
+            Packet::AccelLimit(limit) if limit != 0 => self.lifted = false,
+            Packet::Input { config, .. } if config.mode() == InputMode::Disabled => {
+                self.armed = false;
+            }
             _ => {}
         }
         if seq == self.seq && self.unacked > 0 {
@@ -311,11 +245,15 @@ impl Channel {
         }
     }
 
-    /// A packet of step generation `seq` got no answer: send the step again.
+    /// A packet of step generation `seq` got no answer: send the step again (a stop is
+    /// planned again from the velocity measured then).
     pub(super) fn lost(&mut self, seq: u32) {
         if seq == self.seq && self.step != Step::Idle && self.fault.is_none() {
             self.unsent = true;
             self.unacked = 0;
+            if let Step::StopLift { accel, .. } = self.step {
+                self.step = Step::Stop { accel };
+            }
         }
     }
 
@@ -325,6 +263,7 @@ impl Channel {
         self.velocity = velocity;
         self.status = status;
         self.refreshed_at = Some(now);
+        self.data_valid = true;
         if status.glitch() || status.overspeed() {
             self.fault = Some(DeviceFault::Overspeed);
         }
@@ -339,12 +278,9 @@ impl Channel {
                 });
             }
             Step::HomeSearch { accel, .. } if self.triggered(status) => {
+                // Found: the input is disarmed by the stop's first packet.
                 self.homed = true;
-                let decel = qq2drv::limits::from_fixed(accel);
-                self.set_step(Step::HomeStop {
-                    accel,
-                    ramp: self.ramp_time(decel),
-                });
+                self.set_step(Step::Stop { accel });
             }
             _ => {}
         }
@@ -364,26 +300,36 @@ impl Channel {
         status.trigger_accumulator() & wanted != 0
     }
 
-    /// Time-driven progress: a finished stop ramp turns into a hold.
+    /// Time-driven progress of a stop: one loop period after its setpoint reset was
+    /// answered, the ramp; once the ramp has run and the channel stands still, the hold.
     pub(super) fn progress(&mut self, now: Duration) {
-        let (Step::Stop { ramp, .. } | Step::HomeStop { ramp, .. }) = self.step else {
-            return;
-        };
         let Some(done_at) = self.done_at else {
             return;
         };
         let elapsed = now.saturating_sub(done_at);
-        let still = self.velocity.abs() <= STANDSTILL;
-        if (elapsed >= ramp && still) || elapsed >= ramp.saturating_add(STOP_SETTLE) {
-            self.set_step(Step::Hold);
+        match self.step {
+            Step::StopLift { accel, velocity } if elapsed >= LOOP_PERIOD => {
+                let decel = qq2drv::limits::from_fixed(accel);
+                let seconds = f64::from(velocity).abs() / decel;
+                let ramp = Duration::try_from_secs_f64(seconds).unwrap_or(STOP_SETTLE);
+                self.set_step(Step::StopRamp { accel, ramp });
+            }
+            Step::StopRamp { ramp, .. } if elapsed >= ramp.saturating_add(LOOP_PERIOD) => {
+                self.set_step(Step::Hold);
+            }
+            _ => {}
         }
     }
 
-    /// The board lost its state (reset): it is Off and forgot every goal.
+    /// The board lost its state (reset): it is Off and forgot every goal; its counter
+    /// restarted, so the data known is void until the next stream packet.
     pub(super) fn board_reset(&mut self) {
         self.set_step(Step::Idle);
         self.board_mode = ControlMode::Off;
         self.homed = false;
+        self.data_valid = false;
+        self.armed = false;
+        self.lifted = false;
     }
 
     /// Requests in flight were voided (restart): what was not answered goes again.
@@ -406,27 +352,23 @@ impl Channel {
             let decel = self.config.limits.max_accel;
             self.set_step(Step::Stop {
                 accel: self.stop_accel(decel),
-                ramp: self.ramp_time(decel),
             });
         }
     }
 
     /// Whether the motor moves (or a stop / home is still under way).
     pub(super) fn moving(&self) -> bool {
-        matches!(
-            self.step,
-            Step::Stop { .. }
-                | Step::HomeBackoff { .. }
-                | Step::HomeSearch { .. }
-                | Step::HomeStop { .. }
-        ) || self.velocity.abs() > STANDSTILL
+        self.step.stopping()
+            || matches!(
+                self.step,
+                Step::HomeBackoff { .. } | Step::HomeSearch { .. }
+            )
+            || self.velocity.abs() > STANDSTILL
     }
 
     /// Whether the goal is not yet acknowledged, or a stop still has its hold to send.
     pub(super) fn pending(&self) -> bool {
-        self.unsent
-            || self.unacked > 0
-            || matches!(self.step, Step::Stop { .. } | Step::HomeStop { .. })
+        self.unsent || self.unacked > 0 || (self.step.stopping() && self.fault.is_none())
     }
 
     /// The engine's view.

@@ -2,7 +2,7 @@
 
 use core::time::Duration;
 
-use qq2drv::limits::{POWER_LIMIT_MAX, STREAM_TICK_NS};
+use qq2drv::limits::{POSITION_PID_DEFAULT, POWER_LIMIT_MAX, STREAM_TICK_NS, VELOCITY_PID_DEFAULT};
 use qq2drv::{CHANNELS, HistoryDimensions, InputMode};
 
 /// One axis's limits in board counts (quadrature transitions), as configured for the axis
@@ -39,6 +39,51 @@ pub struct HomeInput {
     pub positive_end: bool,
     /// The value the board writes into the position counter on the trigger, transitions.
     pub position: i32,
+    /// Packet 14 Spacing, transitions: 0 = a single end-stop (the Edge field names its
+    /// end); any other value = two end-stops (or a rotary sensor) on the one input, with
+    /// this hysteresis between a positive-end and a negative-end trigger.
+    pub spacing: u16,
+}
+
+/// Position PID constants of one channel (packet 30). The datasheet documents their
+/// defaults but not their units.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PositionPid {
+    /// Proportional constant ("Default: 100").
+    pub p: u16,
+    /// Integration constant ("Default: 500").
+    pub i: u16,
+    /// Differential constant ("Default: 500").
+    pub d: u16,
+    /// Integration windup limit, 0..=8191 ("Default: 600").
+    pub windup: u16,
+}
+
+impl Default for PositionPid {
+    /// The datasheet's defaults (packet 30).
+    fn default() -> Self {
+        let (p, i, d, windup) = POSITION_PID_DEFAULT;
+        Self { p, i, d, windup }
+    }
+}
+
+/// Velocity PID constants of one channel (packet 32).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct VelocityPid {
+    /// Proportional constant ("Default: 100").
+    pub p: u16,
+    /// Integration constant ("Default: 200").
+    pub i: u16,
+    /// Differential constant ("Default: 500").
+    pub d: u16,
+}
+
+impl Default for VelocityPid {
+    /// The datasheet's defaults (packet 32).
+    fn default() -> Self {
+        let (p, i, d) = VELOCITY_PID_DEFAULT;
+        Self { p, i, d }
+    }
 }
 
 /// One of the board's four channels.
@@ -53,6 +98,15 @@ pub struct ChannelConfig {
     pub power_limit: u16,
     /// The channel's home input; `None`: `Goal::Home` is unsupported.
     pub home: Option<HomeInput>,
+    /// Position PID constants written at start-up (packet 30), always: a board left with
+    /// other gains by another program is put right.
+    pub position_pid: PositionPid,
+    /// Velocity PID constants written at start-up (packet 32), always.
+    pub velocity_pid: VelocityPid,
+    /// The I/O pins of this channel a signal reads (bit `k` = pin `k` of the channel's six,
+    /// see [`PINS`](super::PINS)). A channel without an axis but with a pin is streamed
+    /// with its Status byte only.
+    pub pins: u8,
 }
 
 impl Default for ChannelConfig {
@@ -62,6 +116,9 @@ impl Default for ChannelConfig {
             limits: AxisLimits::default(),
             power_limit: POWER_LIMIT_MAX,
             home: None,
+            position_pid: PositionPid::default(),
+            velocity_pid: VelocityPid::default(),
+            pins: 0,
         }
     }
 }

@@ -34,33 +34,44 @@
 //!    or stream period are no longer ours (power-up defaults: period 0), the board has
 //!    reset: [`DeviceFault::Reset`], every channel's goal is gone (the motors are Off).
 //! 3. Configure, in one transaction: history dimensions (12), data masks (6: 32-bit
-//!    absolute position, velocity and status for enabled channels, nothing for the
-//!    others), stream config (8: Stream Period Timing), power limit (24), velocity limit
-//!    (26) and acceleration limit (28) of each enabled channel from its axis limits
-//!    (transitions/s and /s² shl 12, clipped to the board's ranges), the home inputs'
-//!    polarity (14, Disabled), and last the stream period (4): the largest whole number of
-//!    40.96 µs units not above the poll period. Any non-zero return code is
-//!    [`DeviceFault::BoardError`] and the start-up is retried.
+//!    absolute position, velocity and status for channels with an axis, the Status byte
+//!    alone for a channel whose pins a signal reads, nothing for the others), stream
+//!    config (8: Stream Period Timing), and for each channel with an axis its power limit
+//!    (24, [`ChannelConfig::power_limit`]), velocity limit (26) and acceleration limit (28)
+//!    from its axis limits (transitions/s and /s² shl 12, clipped to the board's ranges),
+//!    position and velocity PID constants (30, 32: always written, the datasheet defaults
+//!    unless configured, so a board left with other gains is put right), the home inputs'
+//!    polarity and Spacing (14, Disabled), and last the stream period (4): the largest
+//!    whole number of 40.96 µs units not above the poll period. Any non-zero return code
+//!    is [`DeviceFault::BoardError`] and the start-up is retried. All of it is written
+//!    again after every probe, so after a board reset too.
 //! 4. Running: stream packets refresh the channels; the first one clears board faults.
 //!
 //! # Goals (counts = quadrature transitions)
 //!
-//! Each goal is one transaction of up to three one-entry packets for its channel:
+//! Each goal is one transaction of up to five one-entry packets for its channel. A step
+//! first puts back what an earlier one left: a home input still armed (14 Disabled) and an
+//! acceleration limit a stop lifted (28 ← the axis's).
 //!
 //! | goal | packets |
 //! |---|---|
-//! | `Off` | 16 Off |
+//! | `Off` | 16 Off: "Motor output will be set to zero / off"; the next goal sets its own mode again |
 //! | `Power` | 16 Power, 18 round(fraction × 8191) (I16) |
 //! | `Position` | 16 Position PID, 20 target (the start-up limits shape the move) |
 //! | `RampPosition` | 16 Position PID, 34 target, velocity shl 12, acceleration shl 12 |
 //! | `Velocity` | 16 Velocity PID, 36 velocity (plain transitions/s, ±100 000), acceleration shl 12 |
-//! | `Stop` | 16 Velocity PID, 36 velocity 0 at `decel` (clipped to the board's range); once the ramp time has passed and the reported velocity is at standstill (or [`STOP_SETTLE`] later), 16 Position PID and 20 target = the last reported position |
+//! | `Stop` | planned when it is sent, from the velocity the board measures then (never from a commanded one). At standstill (≤ [`STANDSTILL`]): 16 Position PID, 20 target = the reported position. Else three transactions: (1) 16 Off, 16 Velocity PID (the loop starts afresh), 28 ← 0 ("A value of zero disables acceleration limiting") and 36 velocity = the measured one with acceleration 0 ("Set to 0 to ignore this parameter"): the board's velocity setpoint is now where the motor really runs, not where the last goal asked it to run (a saturated motor would otherwise keep full power while the setpoint ramps down from the commanded speed); (2) one loop period ([`LOOP_PERIOD`]) after (1) was answered, 36 velocity 0 at `decel` (clipped to the board's range); (3) when that ramp has run (\|v\| / decel) plus a loop period, 28 ← the axis's limit, 16 Position PID, 20 target = the reported position. Always sent, also on a channel the driver believes idle; it waits for data measured after start-up, a restart or a reset |
 //! | `SetPosition` | 10 position counter ← counts (I32); unless the motor is Off, 16 Position PID and 20 target = counts (hold there) |
-//! | `Home` | with a [`HomeInput`] configured: 14 armed (mode, polarity, Spacing 0, set the counter to `position` on the switch's end), 16 Velocity PID, 36 ± velocity towards the switch; on the Input Trigger Accumulator bit of that end (positive for INDEX) in a stream status: 14 Disabled, ramp to 0, hold. An EDGE input already active first backs off the switch. Without a home input: `Unsupported` |
+//! | `Home` | with a [`HomeInput`] configured: 14 armed (mode, polarity, Spacing, set the counter to `position` on the switch's end), 16 Velocity PID, 36 ± velocity towards the switch; on the Input Trigger Accumulator bit of that end (positive for INDEX) in a stream status: a `Stop` at the axis's max acceleration, whose first packet disarms the input (14 Disabled). An EDGE input already active first backs off the switch. A stop or any other goal mid-search disarms the input first. Without a home input: `Unsupported` |
 //!
 //! Values the board cannot represent are `OutOfBoardRange`: positions beyond I32, velocity
 //! targets beyond ±100 000 transitions/s, shl-12 velocities and accelerations that round to
 //! 0 (which would mean "not limited") or exceed 100 000 / 1 000 000 shl 12.
+//!
+//! # I/O
+//!
+//! [`PINS`]: per channel the IN pin (Input Active) and the Status accumulators (see the
+//! `pins` module docs), read from the stream; no outputs.
 //!
 //! # Faults
 //!
@@ -81,7 +92,9 @@ mod channel;
 mod config;
 mod in_flight;
 mod packet;
+mod pins;
 mod startup;
+mod step;
 
 use core::time::Duration;
 
@@ -92,14 +105,20 @@ use qq2drv::{
 
 use crate::driver::{Driver, Model, Priority, Transmit};
 use crate::goal::{Goal, GoalError, GoalKind, GoalKinds};
+use crate::pin::{Pin, PinReading};
 use crate::state::{ChannelState, DeviceFault, DeviceStatus};
 
-pub use channel::{ARRIVED_WITHIN, STANDSTILL, STOP_SETTLE};
-pub use config::{AxisLimits, ChannelConfig, HomeInput, Qq2drvDriverConfig};
+pub use channel::{ARRIVED_WITHIN, LOOP_PERIOD, STANDSTILL, STOP_SETTLE};
+pub use config::{
+    AxisLimits, ChannelConfig, HomeInput, PositionPid, Qq2drvDriverConfig, VelocityPid,
+};
 pub use in_flight::IN_FLIGHT_CAPACITY;
+pub use pins::{PINS, PINS_PER_CHANNEL, pin_of};
 
 use channel::Channel;
 use in_flight::{InFlight, Sent, Tag};
+use packet::MAX_STEP_PACKETS;
+use pins::InputBits;
 use startup::ProbeReplies;
 
 /// Probe attempts before the board is declared not responding.
@@ -112,8 +131,12 @@ pub const POLL_SLACK: usize = 6;
 pub const FILLER: u8 = 0x00;
 /// Data mask of an enabled channel: 32-bit absolute position, velocity, status.
 pub const STREAM_MASK: DataMask = DataMask::new(PositionSize::I32, false, true, true);
+/// Data mask of a channel without an axis whose pins a signal reads: Status only.
+pub const STATUS_MASK: DataMask = DataMask::new(PositionSize::Omitted, false, false, true);
 /// Stream config: Stream Period Timing only.
 pub const STREAM_CONFIG: StreamConfig = StreamConfig::new(true, false);
+/// Configuration requests written at start-up, at most.
+const CONFIGURE_REQUESTS: usize = 10;
 
 /// Start-up and running phases.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -143,6 +166,8 @@ pub struct Qq2drvDriver {
     phase: Phase,
     link_up: bool,
     channels: [Channel; CHANNELS],
+    /// The Status bits of each channel, for the pins.
+    inputs: [InputBits; CHANNELS],
     decoder: StreamDecoder,
     in_flight: InFlight,
     /// The layout the board streams in, as acknowledged.
@@ -178,6 +203,7 @@ impl Qq2drvDriver {
             },
             link_up: true,
             channels,
+            inputs: [InputBits::default(); CHANNELS],
             decoder: StreamDecoder::new(),
             in_flight: InFlight::new(),
             layout: MotionLayout::default(),
@@ -216,11 +242,18 @@ impl Qq2drvDriver {
         self.link_up && self.phase == Phase::Running
     }
 
-    /// The data masks start-up writes.
+    /// The data masks start-up writes: position, velocity and status for a channel with
+    /// an axis, status alone for one whose pins a signal reads, nothing otherwise.
     pub fn stream_masks(&self) -> [DataMask; CHANNELS] {
-        self.config
-            .channels
-            .map(|c| if c.enabled { STREAM_MASK } else { DataMask(0) })
+        self.config.channels.map(|c| {
+            if c.enabled {
+                STREAM_MASK
+            } else if c.pins != 0 {
+                STATUS_MASK
+            } else {
+                DataMask(0)
+            }
+        })
     }
 
     /// Length of one poll transaction: a stream packet in our layout plus [`POLL_SLACK`].
@@ -274,6 +307,10 @@ impl Qq2drvDriver {
         for channel in &mut self.channels {
             channel.void_in_flight();
         }
+        for channel in &mut self.channels {
+            // The stop and the hold wait for data measured after the restart.
+            channel.data_valid = false;
+        }
         self.probe = ProbeReplies::default();
         self.probe_due = false;
         self.configure_due = false;
@@ -296,7 +333,7 @@ impl Qq2drvDriver {
         if self.probe_due && self.in_flight.has_room(4) {
             return Some((Next::Probe, Priority::Setup));
         }
-        if self.configure_due && self.in_flight.has_room(8) {
+        if self.configure_due && self.in_flight.has_room(CONFIGURE_REQUESTS) {
             return Some((Next::Configure, Priority::Setup));
         }
         // Goals wait while a whole poll period of earlier bytes is still on the wire (a
@@ -305,8 +342,11 @@ impl Qq2drvDriver {
         let backlog = self.line_free_at.saturating_sub(now);
         let goals = self.phase == Phase::Running
             && backlog <= self.config.poll_period
-            && self.in_flight.has_room(3)
-            && self.channels.iter().any(|c| c.config.enabled && c.unsent);
+            && self.in_flight.has_room(MAX_STEP_PACKETS)
+            && self
+                .channels
+                .iter()
+                .any(|c| c.config.enabled && c.unsent && c.ready());
         if goals {
             return Some((Next::Goals, Priority::Command));
         }
@@ -322,9 +362,10 @@ impl Qq2drvDriver {
     fn write_goals(&mut self, now: Duration, buf: &mut [u8]) -> usize {
         let mut len = 0;
         for (index, channel) in self.channels.iter_mut().enumerate() {
-            if !(channel.config.enabled && channel.unsent) {
+            if !(channel.config.enabled && channel.unsent && channel.ready()) {
                 continue;
             }
+            channel.resolve();
             let packets = channel.packets();
             let count = packets.iter().count();
             if !self.in_flight.has_room(count) {
@@ -359,7 +400,7 @@ impl Qq2drvDriver {
                     },
                 });
             }
-            channel.sent(count as u8);
+            channel.sent(&packets);
         }
         len
     }
@@ -401,7 +442,15 @@ impl Qq2drvDriver {
     fn on_stream(&mut self, now: Duration, data: &StreamData) {
         self.last_stream_at = now;
         self.stream_packets = self.stream_packets.saturating_add(1);
-        for (channel, sample) in self.channels.iter_mut().zip(data.data.channels) {
+        for ((channel, inputs), sample) in self
+            .channels
+            .iter_mut()
+            .zip(&mut self.inputs)
+            .zip(data.data.channels)
+        {
+            if let Some(status) = sample.status {
+                inputs.update(now, status);
+            }
             if let (true, Some(position), Some(velocity)) =
                 (channel.config.enabled, sample.position, sample.velocity)
             {
@@ -454,6 +503,17 @@ impl Qq2drvDriver {
                 match sent.id {
                     PacketId::SetDataMask => self.layout.data_masks = self.stream_masks(),
                     PacketId::SetStreamConfig => self.layout.stream_config = STREAM_CONFIG,
+                    // The configured limits and disarmed inputs are in force again.
+                    PacketId::SetAccelerationLimit => {
+                        for channel in &mut self.channels {
+                            channel.lifted = false;
+                        }
+                    }
+                    PacketId::SetInputMode => {
+                        for channel in &mut self.channels {
+                            channel.armed = false;
+                        }
+                    }
                     _ => {}
                 }
                 self.setup_unanswered = self.setup_unanswered.saturating_sub(1);
@@ -546,6 +606,9 @@ impl Driver for Qq2drvDriver {
             self.call_interval = now.saturating_sub(last).min(Duration::from_secs(1));
         }
         self.last_call_at = Some(now);
+        for inputs in &mut self.inputs {
+            inputs.tick();
+        }
         if !self.link_up {
             return;
         }
@@ -711,11 +774,13 @@ impl Driver for Qq2drvDriver {
         self.last_valid_at = None;
         self.restart(now);
     }
+
+    fn read_pin(&self, pin: Pin) -> Option<PinReading> {
+        let (channel, index) = pins::locate(pin)?;
+        let configured = self.config.channels.get(channel)?.pins & (1 << index) != 0;
+        configured.then(|| self.inputs.get(channel).map(|bits| bits.reading(index)))?
+    }
 }
 
 #[cfg(test)]
 mod tests;
-
-/// The board's I/O pins (the IN pin and status bits of each channel). Filled in with the
-/// board's I/O support; empty until then.
-pub const PINS: &[crate::PinInfo] = &[];

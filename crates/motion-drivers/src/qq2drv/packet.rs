@@ -1,10 +1,13 @@
 //! The single-channel packets a goal turns into, encoded through the `qq2drv` crate.
 
 use qq2drv::{
-    ChannelMask, ControlMode, ControlModeEntry, Entries, InputConfig, InputModeEntry,
-    MotorPowerEntry, PacketId, PositionRampEntry, PositionTargetEntry, PositionValue, Request,
-    SetPositionEntry, VelocityRampEntry,
+    AccelerationLimitEntry, ChannelMask, ControlMode, ControlModeEntry, Entries, InputConfig,
+    InputModeEntry, MotorPowerEntry, PacketId, PositionRampEntry, PositionTargetEntry,
+    PositionValue, Request, SetPositionEntry, VelocityRampEntry,
 };
+
+/// Most packets one goal step sends in its transaction.
+pub(super) const MAX_STEP_PACKETS: usize = 5;
 
 /// One packet for one channel (a one-entry payload).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -25,9 +28,15 @@ pub(super) enum Packet {
     VelocityRamp { velocity: i32, accel: u32 },
     /// 10 - Set Position (32-bit value).
     SetCounter(i32),
-    /// 14 - Set Input Mode, Spacing 0 (one end-stop); `position` is omitted when the mode
-    /// is Disabled.
-    Input { config: InputConfig, position: i32 },
+    /// 14 - Set Input Mode; `position` is omitted when the mode is Disabled.
+    Input {
+        config: InputConfig,
+        spacing: u16,
+        position: i32,
+    },
+    /// 28 - Set Acceleration Limit, shl 12 (0 disables limiting: a stop lifts it while it
+    /// resets the board's velocity target, then restores it).
+    AccelLimit(u32),
 }
 
 impl Packet {
@@ -41,6 +50,7 @@ impl Packet {
             Self::VelocityRamp { .. } => PacketId::VelocityRamp,
             Self::SetCounter(_) => PacketId::SetPosition,
             Self::Input { .. } => PacketId::SetInputMode,
+            Self::AccelLimit(_) => PacketId::SetAccelerationLimit,
         }
     }
 
@@ -87,7 +97,11 @@ impl Packet {
                 position: Some(PositionValue::I32(value)),
             }]))
             .encode(buf),
-            Self::Input { config, position } => {
+            Self::Input {
+                config,
+                spacing,
+                position,
+            } => {
                 let position = if config.mode() == qq2drv::InputMode::Disabled {
                     0
                 } else {
@@ -96,8 +110,15 @@ impl Packet {
                 Request::SetInputMode(Entries::new(&[InputModeEntry {
                     channels,
                     config,
-                    spacing: 0,
+                    spacing,
                     position,
+                }]))
+                .encode(buf)
+            }
+            Self::AccelLimit(limit) => {
+                Request::SetAccelerationLimit(Entries::new(&[AccelerationLimitEntry {
+                    channels,
+                    limit,
                 }]))
                 .encode(buf)
             }
@@ -105,20 +126,19 @@ impl Packet {
     }
 }
 
-/// Up to three packets of one goal step, sent back to back in one transaction.
+/// Up to [`MAX_STEP_PACKETS`] packets of one goal step, sent back to back in one
+/// transaction.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub(super) struct Packets {
-    items: [Option<Packet>; 3],
+    items: [Option<Packet>; MAX_STEP_PACKETS],
 }
 
 impl Packets {
-    /// The packets in order.
-    pub(super) fn of(list: &[Packet]) -> Self {
-        let mut items = [None; 3];
-        for (slot, packet) in items.iter_mut().zip(list) {
-            *slot = Some(*packet);
+    /// Appends `packet` (the step tables never exceed the capacity).
+    pub(super) fn push(&mut self, packet: Packet) {
+        if let Some(slot) = self.items.iter_mut().find(|slot| slot.is_none()) {
+            *slot = Some(packet);
         }
-        Self { items }
     }
 
     /// The packets in order.

@@ -3,15 +3,32 @@
 use core::fmt::{self, Write as _};
 use core::time::Duration;
 
-use qq2drv::limits::{ACCELERATION_MAX, POWER_LIMIT_MAX, VELOCITY_LIMIT_MAX, to_fixed};
+use qq2drv::limits::{ACCELERATION_MAX, POWER_LIMIT_MAX, VELOCITY_LIMIT_MAX, WINDUP_MAX, to_fixed};
 use qq2drv::{
     AccelerationLimitEntry, CHANNELS, ChannelMask, DataMask, DataMaskEntry, Entries,
-    InputModeEntry, MotionLayout, PowerLimitEntry, Request, StreamConfig, VelocityLimitEntry,
+    InputModeEntry, MotionLayout, PositionPidEntry, PowerLimitEntry, Request, StreamConfig,
+    VelocityLimitEntry, VelocityPidEntry,
 };
 
 use super::in_flight::{Sent, Tag};
 use super::packet::Packet;
-use super::{Phase, Qq2drvDriver, STREAM_CONFIG, STREAM_MASK};
+use super::{CONFIGURE_REQUESTS, Phase, Qq2drvDriver, STREAM_CONFIG};
+
+/// A channel's acceleration limit (packet 28) for an axis's `max_accel`: shl 12, clipped to
+/// the board's range, never 0 (which would disable limiting).
+pub(super) fn accel_limit(max_accel: f64) -> u32 {
+    to_fixed(max_accel)
+        .unwrap_or(ACCELERATION_MAX)
+        .clamp(1, ACCELERATION_MAX)
+}
+
+/// A channel's velocity limit (packet 26) for an axis's `max_velocity`: shl 12, clipped to
+/// the board's range, never 0.
+pub(super) fn velocity_limit(max_velocity: f64) -> u32 {
+    to_fixed(max_velocity)
+        .unwrap_or(VELOCITY_LIMIT_MAX)
+        .clamp(1, VELOCITY_LIMIT_MAX)
+}
 use crate::state::{DeviceFault, FIRMWARE_LEN};
 
 /// What the probe has learnt so far.
@@ -46,28 +63,29 @@ impl Qq2drvDriver {
 
     /// Writes the configuration (start-up step 3).
     pub(super) fn write_configure(&mut self, now: Duration, buf: &mut [u8]) -> Option<usize> {
-        let enabled = self
-            .config
-            .channels
-            .iter()
-            .enumerate()
-            .filter(|(_, c)| c.enabled)
-            .fold(0u8, |mask, (i, _)| mask | ChannelMask::single(i).0);
-        let masks = [
-            DataMaskEntry {
-                channels: ChannelMask(enabled),
-                mask: STREAM_MASK,
-            },
-            DataMaskEntry {
-                channels: ChannelMask(!enabled & 0x0F),
-                mask: DataMask(0),
-            },
-        ];
-        let masks = match (enabled, enabled == 0x0F) {
-            (0, _) => masks.get(1..),
-            (_, true) => masks.get(..1),
-            _ => masks.get(..),
-        }?;
+        // One Data Mask entry per distinct mask (at most three: stream, status, none).
+        let wanted = self.stream_masks();
+        let mut masks = [DataMaskEntry {
+            channels: ChannelMask(0),
+            mask: DataMask(0),
+        }; CHANNELS];
+        let mut masks_len = 0;
+        for (index, mask) in wanted.iter().enumerate() {
+            let bit = ChannelMask::single(index).0;
+            match masks.iter_mut().take(masks_len).find(|e| e.mask == *mask) {
+                Some(entry) => entry.channels.0 |= bit,
+                None => {
+                    if let Some(slot) = masks.get_mut(masks_len) {
+                        *slot = DataMaskEntry {
+                            channels: ChannelMask(bit),
+                            mask: *mask,
+                        };
+                        masks_len += 1;
+                    }
+                }
+            }
+        }
+        let masks = masks.get(..masks_len)?;
         let mut power = [PowerLimitEntry {
             channels: ChannelMask(0),
             limit: 0,
@@ -86,6 +104,19 @@ impl Qq2drvDriver {
             spacing: 0,
             position: 0,
         }; CHANNELS];
+        let mut position_pid = [PositionPidEntry {
+            channels: ChannelMask(0),
+            p: 0,
+            i: 0,
+            d: 0,
+            windup: 0,
+        }; CHANNELS];
+        let mut velocity_pid = [VelocityPidEntry {
+            channels: ChannelMask(0),
+            p: 0,
+            i: 0,
+            d: 0,
+        }; CHANNELS];
         let (mut limits_len, mut inputs_len) = (0, 0);
         for (index, channel) in self.channels.iter().enumerate() {
             if !channel.config.enabled {
@@ -93,10 +124,12 @@ impl Qq2drvDriver {
             }
             let channels = ChannelMask::single(index);
             let limits = channel.config.limits;
-            if let (Some(p), Some(v), Some(a)) = (
+            if let (Some(p), Some(v), Some(a), Some(pp), Some(vp)) = (
                 power.get_mut(limits_len),
                 velocity.get_mut(limits_len),
                 accel.get_mut(limits_len),
+                position_pid.get_mut(limits_len),
+                velocity_pid.get_mut(limits_len),
             ) {
                 *p = PowerLimitEntry {
                     channels,
@@ -104,41 +137,57 @@ impl Qq2drvDriver {
                 };
                 *v = VelocityLimitEntry {
                     channels,
-                    limit: to_fixed(limits.max_velocity)
-                        .unwrap_or(VELOCITY_LIMIT_MAX)
-                        .clamp(1, VELOCITY_LIMIT_MAX),
+                    limit: velocity_limit(limits.max_velocity),
                 };
                 *a = AccelerationLimitEntry {
                     channels,
-                    limit: to_fixed(limits.max_accel)
-                        .unwrap_or(ACCELERATION_MAX)
-                        .clamp(1, ACCELERATION_MAX),
+                    limit: accel_limit(limits.max_accel),
+                };
+                let pid = channel.config.position_pid;
+                *pp = PositionPidEntry {
+                    channels,
+                    p: pid.p,
+                    i: pid.i,
+                    d: pid.d,
+                    windup: pid.windup.min(WINDUP_MAX),
+                };
+                let pid = channel.config.velocity_pid;
+                *vp = VelocityPidEntry {
+                    channels,
+                    p: pid.p,
+                    i: pid.i,
+                    d: pid.d,
                 };
                 limits_len += 1;
             }
             if channel.home().is_some()
-                && let (Some(slot), Packet::Input { config, .. }) =
-                    (inputs.get_mut(inputs_len), channel.input(false))
+                && let (
+                    Some(slot),
+                    Packet::Input {
+                        config, spacing, ..
+                    },
+                ) = (inputs.get_mut(inputs_len), channel.input(false))
             {
                 *slot = InputModeEntry {
                     channels,
                     config,
-                    spacing: 0,
+                    spacing,
                     position: 0,
                 };
                 inputs_len += 1;
             }
         }
-        let mut requests = [None; 8];
+        let mut requests = [None; CONFIGURE_REQUESTS];
+        let some = limits_len > 0;
         let list = [
             Some(Request::SetHistoryDimensions(self.config.history)),
             Some(Request::SetDataMask(Entries::new(masks))),
             Some(Request::SetStreamConfig(STREAM_CONFIG)),
-            (limits_len > 0).then(|| Request::SetPowerLimit(Entries::new(&power[..limits_len]))),
-            (limits_len > 0)
-                .then(|| Request::SetVelocityLimit(Entries::new(&velocity[..limits_len]))),
-            (limits_len > 0)
-                .then(|| Request::SetAccelerationLimit(Entries::new(&accel[..limits_len]))),
+            some.then(|| Request::SetPowerLimit(Entries::new(&power[..limits_len]))),
+            some.then(|| Request::SetVelocityLimit(Entries::new(&velocity[..limits_len]))),
+            some.then(|| Request::SetAccelerationLimit(Entries::new(&accel[..limits_len]))),
+            some.then(|| Request::SetPositionPid(Entries::new(&position_pid[..limits_len]))),
+            some.then(|| Request::SetVelocityPid(Entries::new(&velocity_pid[..limits_len]))),
             (inputs_len > 0).then(|| Request::SetInputMode(Entries::new(&inputs[..inputs_len]))),
             Some(Request::SetStreamPeriod(self.config.stream_period_units())),
         ];
@@ -188,6 +237,9 @@ impl Qq2drvDriver {
             self.raise(DeviceFault::Reset);
             for channel in &mut self.channels {
                 channel.board_reset();
+            }
+            for inputs in &mut self.inputs {
+                inputs.forget();
             }
         }
         self.layout = MotionLayout {

@@ -4,16 +4,14 @@
 use core::time::Duration;
 
 use ::qsb::{
-    ACCEL_RANGE, Eor, IntervalRate, JOG_RATE_RANGE, MAX_COMMAND_LEN, MAX_RESPONSE_LEN,
+    ACCEL_RANGE, EncoderMode, Eor, IntervalRate, JOG_RATE_RANGE, MAX_COMMAND_LEN, MAX_RESPONSE_LEN,
     PROCESSING_DELAY, ProductType, RATE_INCREMENT, STEP_RATE_RANGE, TICK, effective_rate,
 };
 
+pub use super::io::{EnableOutput, QsbIo};
+
 /// Bits on the wire per byte (8N1).
 const BITS_PER_BYTE: u64 = 10;
-
-/// Stream lines that may be queued in the board's UART ahead of a reply: one READ
-/// ENCODER, one MD STATUS and one STR line per data output tick, and the tick after.
-const LINES_AHEAD_OF_A_REPLY: u64 = 6;
 
 /// Stream periods without a sample before the driver asks the board whether it is still
 /// there (and still streaming).
@@ -54,14 +52,36 @@ pub struct QsbDriverConfig {
     pub counts_per_step: f64,
     /// The axis's velocity limit, counts/s (> 0): MD STEP RATE of plain position goals.
     pub max_velocity: f64,
-    /// The axis's acceleration limit, counts/s² (> 0): MD ACCEL of plain position goals
-    /// and of the home search.
+    /// The axis's acceleration limit, counts/s² (> 0): MD ACCEL of plain position goals,
+    /// of the home search and of the start-up stop.
     pub max_accel: f64,
-    /// Home search direction: `false` (default) searches towards negative counts.
+    /// Home search direction in counts: `false` (default) searches towards negative
+    /// counts.
     pub home_positive: bool,
-    /// A home search that travels this far (counts) without an index pulse stops, not
-    /// homed. Default 5000: two and a half turns of a 2000-count encoder.
+    /// A home search that travels this far (counts) without an index pulse stops and
+    /// reports [`DeviceFault::HomeFailed`](crate::DeviceFault::HomeFailed). Default 5000:
+    /// two and a half turns of a 2000-count encoder.
     pub home_max_travel: f64,
+    /// The counter value at the index (the home offset, counts): 0 uses MDR0 "reset CNTR"
+    /// on the index (`W0363`); any other value is written to DTR and MDR0 "load CNTR"
+    /// (transfers DTR to CNTR) is used, so the board itself sets it at the index.
+    pub home_position: i32,
+    /// MDR1 B3 "Encoder Index Polarity": invert the index (default: not inverted).
+    pub invert_index: bool,
+    /// -M: activate the motor drive (COMMAND 2) at start-up, so that channel 0 drives the
+    /// stepper (default `true`; motiond sets it when an axis is configured on the -M in
+    /// quadrature mode). Without it, DIG I/O bits 1 and 2 are free for signals.
+    pub motor_drive: bool,
+    /// -M: the external stepper driver's enable line on a DIG I/O bit. `Goal::Off` quits
+    /// the motor and makes it inactive; the next motion goal (and `Stop`, which holds)
+    /// makes it active first. Without it `Off` is `Unsupported` (set `enable_output` to
+    /// the drive's enable line).
+    pub enable: Option<EnableOutput>,
+    /// MODE B1 B0: quadrature counting (default, channel 0 is an axis), or a PWM absolute
+    /// encoder or the analog input, read as the `encoder` pin (no axis).
+    pub input_mode: EncoderMode,
+    /// The I/O pins signals read or drive.
+    pub io: QsbIo,
 }
 
 impl Default for QsbDriverConfig {
@@ -76,6 +96,12 @@ impl Default for QsbDriverConfig {
             max_accel: 100_000.0,
             home_positive: false,
             home_max_travel: 5_000.0,
+            home_position: 0,
+            invert_index: false,
+            motor_drive: true,
+            enable: None,
+            input_mode: EncoderMode::Quadrature,
+            io: QsbIo::default(),
         }
     }
 }
@@ -87,8 +113,8 @@ pub(crate) fn wire_time(baud: u32, bytes: u64) -> Duration {
 }
 
 impl QsbDriverConfig {
-    /// INTERVAL RATE the driver writes.
-    pub(crate) fn interval(&self) -> IntervalRate {
+    /// INTERVAL RATE the driver writes: `stream_interval`, or the automatic choice.
+    pub fn interval(&self) -> IntervalRate {
         let ticks = self.stream_interval.unwrap_or_else(|| {
             let line = wire_time(self.baud, DRIVER_LINE_LEN);
             let half_line = line.as_nanos() * 2;
@@ -98,9 +124,33 @@ impl QsbDriverConfig {
         IntervalRate(ticks.clamp(1, 0xFFFE))
     }
 
-    /// The data output period.
-    pub(crate) fn stream_period(&self) -> Duration {
+    /// The data output period (INTERVAL RATE × 1/512 s).
+    pub fn stream_period(&self) -> Duration {
         TICK * u32::from(self.interval().0)
+    }
+
+    /// The fraction of the line one READ ENCODER line (sent at every data output tick)
+    /// takes at this interval: above 1 the board skips samples. 0.47 at 230400 baud and
+    /// 1 tick.
+    pub fn stream_load(&self) -> f64 {
+        let line = wire_time(self.baud, DRIVER_LINE_LEN).as_secs_f64();
+        line / self.stream_period().as_secs_f64().max(f64::MIN_POSITIVE)
+    }
+
+    /// Streams that may each send a line at one data output tick: READ ENCODER, and (as
+    /// configured) MD STATUS and STR (home search) on a driving -M, DIG I/O, CAPTURE.
+    fn streams(&self) -> u64 {
+        let drive = self.variant == ProductType::M
+            && self.motor_drive
+            && self.input_mode == EncoderMode::Quadrature;
+        let dio = self.io.digital_in | self.io.digital_out != 0;
+        1 + 2 * u64::from(drive) + u64::from(dio) + u64::from(self.io.capture.is_some())
+    }
+
+    /// Stream lines that may be queued in the board's UART ahead of a reply: every
+    /// stream's line of one data output tick, and of the tick after.
+    fn lines_ahead_of_a_reply(&self) -> u64 {
+        2 * self.streams()
     }
 
     /// How long a request may wait for its answer: the request and the answer on the
@@ -109,14 +159,14 @@ impl QsbDriverConfig {
     pub(crate) fn reply_timeout(&self) -> Duration {
         let bytes = MAX_COMMAND_LEN as u64
             + MAX_RESPONSE_LEN as u64
-            + LINES_AHEAD_OF_A_REPLY * DRIVER_LINE_LEN;
+            + self.lines_ahead_of_a_reply() * DRIVER_LINE_LEN;
         wire_time(self.baud, bytes) + PROCESSING_DELAY * 2 + self.latency
     }
 
     /// How old the encoder data may become in normal operation.
     pub(crate) fn refresh_budget(&self) -> Duration {
         self.stream_period() * SILENT_PERIODS
-            + wire_time(self.baud, LINES_AHEAD_OF_A_REPLY * DRIVER_LINE_LEN)
+            + wire_time(self.baud, self.lines_ahead_of_a_reply() * DRIVER_LINE_LEN)
             + self.latency
     }
 
@@ -150,12 +200,20 @@ impl QsbDriverConfig {
         ACCEL_RANGE.contains(&accel).then_some(accel)
     }
 
-    /// A deceleration for a stop: like [`accel`](Self::accel) but never refused (a stop
-    /// must always work): below the board's 64 steps/s² it stops at 64.
+    /// MD ACCEL for a stop at `counts_per_s2`: never refused (a stop must always work)
+    /// and never gentler than asked, so that the stop ends within |v| / decel: rounded
+    /// *up* to the 16-step increment, at least the board's 64 and at most its 360000
+    /// steps/s². A decel that converts to nothing (NaN) stops at the axis limit.
     pub(crate) fn stop_decel(&self, counts_per_s2: f64) -> u32 {
-        let steps = self.steps(counts_per_s2).map_or(0.0, f64::abs);
-        let capped = steps.min(f64::from(*ACCEL_RANGE.end()));
-        effective_rate(capped as u32).max(*ACCEL_RANGE.start())
+        let Some(steps) = self.steps(counts_per_s2).map(f64::abs) else {
+            return self.default_profile().1;
+        };
+        let max = *ACCEL_RANGE.end();
+        let capped = steps.min(f64::from(max)).ceil() as u32;
+        capped
+            .div_ceil(RATE_INCREMENT)
+            .saturating_mul(RATE_INCREMENT)
+            .clamp(*ACCEL_RANGE.start(), max)
     }
 
     /// A signed velocity (counts/s) as MD JOG RATE: the magnitude rounded down to the
@@ -222,6 +280,12 @@ mod tests {
         assert_eq!(config.accel(600.0), None);
         assert_eq!(config.accel(1e12), Some(360_000));
         assert_eq!(config.stop_decel(1.0), 64);
+        // A stop rounds up to the increment of 16: never gentler than asked.
+        assert_eq!(config.stop_decel(10_010.0), 1008);
+        assert_eq!(config.stop_decel(10_000.0), 1008);
+        assert_eq!(config.stop_decel(16_000.0), 1600);
+        assert_eq!(config.stop_decel(1e12), 360_000);
+        assert_eq!(config.stop_decel(f64::NAN), 10_000, "the axis limit");
         // "MD JOG RATE … Range -13000 to 13000".
         assert_eq!(config.jog_rate(-10_000.0), Some(-992));
         assert_eq!(config.jog_rate(0.0), Some(0));

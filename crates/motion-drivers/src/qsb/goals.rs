@@ -2,11 +2,11 @@
 
 use core::time::Duration;
 
-use ::qsb::{LoadTarget, ProductType, QsbCommand, Register, Request, Write};
+use ::qsb::{EncoderMode, LoadTarget, ProductType, QsbCommand, Register, Request, Write};
 
 use super::program::Step;
-use super::{HOMING_MDR0, NORMAL_MDR0, QsbDriver, kinds_for};
-use crate::goal::{Goal, GoalError, GoalKind};
+use super::{HOMING_LOAD_MDR0, HOMING_MDR0, NORMAL_MDR0, QsbDriver};
+use crate::goal::{Goal, GoalError, GoalKind, GoalKinds};
 use crate::state::DeviceFault;
 
 /// Moves one position goal may make: the move and two corrections (lost steps, a move
@@ -21,6 +21,13 @@ const fn command(command: QsbCommand) -> Step {
 /// may replace a home search.
 const NORMAL_COUNTER: [Step; 2] = [Step::Ensure(Write::Mdr0(NORMAL_MDR0)), Step::EndStrStream];
 
+/// A home search that has not found its index after this many times the time its travel
+/// limit takes at the search velocity has failed (the encoder may not count at all).
+const HOME_TIME_FACTOR: f64 = 2.0;
+
+/// Slack added to a home search's time limit (start-up of the jog, wire time).
+const HOME_TIME_SLACK: Duration = Duration::from_millis(100);
+
 /// A whole number of counts the 32-bit counter can hold.
 fn counter_value(counts: f64) -> Option<i32> {
     let value = counts.round();
@@ -29,6 +36,48 @@ fn counter_value(counts: f64) -> Option<i32> {
 }
 
 impl QsbDriver {
+    /// Whether channel 0 drives the -M's stepper: a -M (as reported), its motor drive
+    /// configured, counting quadrature.
+    pub(super) fn drive_active(&self) -> bool {
+        self.effective_product() == ProductType::M
+            && self.config.motor_drive
+            && self.config.input_mode == EncoderMode::Quadrature
+    }
+
+    /// `Ok` when goals and outputs can be taken: `Starting` during the start-up,
+    /// `Offline` when the link is down or the board stopped answering.
+    pub(super) fn check_online(&self) -> Result<(), GoalError> {
+        if self.link_up && self.status.online {
+            Ok(())
+        } else if self.link_up && self.restart_at.is_none() && !self.setup.is_empty() {
+            Err(GoalError::Starting)
+        } else {
+            Err(GoalError::Offline)
+        }
+    }
+
+    /// The goals channel 0 takes.
+    pub(super) fn kinds(&self) -> GoalKinds {
+        if self.config.input_mode != EncoderMode::Quadrature {
+            // PWM / analog: an absolute value read as the `encoder` pin, no axis.
+            return GoalKinds::NONE;
+        }
+        if !self.drive_active() {
+            return GoalKinds::of(&[GoalKind::Stop, GoalKind::SetPosition]);
+        }
+        let moves = [
+            GoalKind::Stop,
+            GoalKind::Position,
+            GoalKind::Velocity,
+            GoalKind::RampPosition,
+            GoalKind::Home,
+            GoalKind::SetPosition,
+            GoalKind::Off,
+        ];
+        let with_off = if self.config.enable.is_some() { 7 } else { 6 };
+        GoalKinds::of(moves.get(..with_off).unwrap_or(&moves))
+    }
+
     /// Checks `goal` and turns it into the plan of requests (replacing the previous one).
     pub(super) fn plan_goal(
         &mut self,
@@ -40,15 +89,13 @@ impl QsbDriver {
             return Err(GoalError::NoSuchChannel(channel));
         }
         let kind = goal.kind();
-        let product = self.effective_product();
-        if !kinds_for(product).contains(kind) {
+        if !self.kinds().contains(kind) {
             return Err(GoalError::Unsupported(kind));
         }
-        if !self.link_up || !self.status.online {
-            return Err(GoalError::Offline);
-        }
+        self.check_online()?;
         let out_of_range = GoalError::OutOfBoardRange(kind);
-        let driven = product == ProductType::M;
+        let driven = self.drive_active();
+        let energise = Step::Enable(true);
         match goal {
             Goal::SetPosition { counts } => {
                 let value = counter_value(counts).ok_or(out_of_range)?;
@@ -61,13 +108,24 @@ impl QsbDriver {
                     self.replace_goal(kind, &[Step::StopIfMoving]);
                 }
             }
-            // -S / -D: nothing is driven, so "not driving" already holds.
-            Goal::Off | Goal::Stop { .. } if !driven => {}
+            // -S / -D: nothing is driven, so "stopped" already holds.
+            Goal::Stop { .. } if !driven => {}
+            // (Only with an enable line: `kinds` refuses it otherwise.)
             Goal::Off => {
                 let [normal, end_str] = NORMAL_COUNTER;
-                self.replace_goal(kind, &[command(QsbCommand::MotorQuit), normal, end_str]);
+                self.replace_goal(
+                    kind,
+                    &[
+                        command(QsbCommand::MotorQuit),
+                        Step::Enable(false),
+                        normal,
+                        end_str,
+                    ],
+                );
             }
             Goal::Stop { decel } => {
+                // Always on the wire, whatever the driver believes the motor does (a motor
+                // left jogging by someone else must stop), at the decel asked for.
                 let decel = self.config.stop_decel(decel);
                 let [normal, end_str] = NORMAL_COUNTER;
                 self.replace_goal(
@@ -75,6 +133,7 @@ impl QsbDriver {
                     &[
                         Step::Ensure(Write::Accel(decel)),
                         command(QsbCommand::MotorStop),
+                        energise,
                         normal,
                         end_str,
                     ],
@@ -101,6 +160,7 @@ impl QsbDriver {
                     self.replace_goal(
                         kind,
                         &[
+                            energise,
                             normal,
                             end_str,
                             Step::Ensure(Write::Accel(accel)),
@@ -111,6 +171,7 @@ impl QsbDriver {
                     self.replace_goal(
                         kind,
                         &[
+                            energise,
                             normal,
                             end_str,
                             Step::Ensure(Write::Accel(accel)),
@@ -132,12 +193,23 @@ impl QsbDriver {
                 self.index_seen = false;
                 self.index_armed = false;
                 self.home_start = None;
+                self.home_deadline = None;
+                // The counter value at the index: 0 by "reset CNTR", anything else by
+                // "load CNTR" from DTR.
+                let offset = self.config.home_position;
+                let (dtr, mdr0) = if offset == 0 {
+                    (Step::Ensure(Write::Mdr0(HOMING_MDR0)), HOMING_MDR0)
+                } else {
+                    (Step::Ensure(Write::Dtr(offset as u32)), HOMING_LOAD_MDR0)
+                };
                 self.replace_goal(
                     kind,
                     &[
+                        energise,
                         Step::Ensure(Write::Accel(accel)),
                         Step::Ensure(Write::JogRate(rate)),
-                        Step::Ensure(Write::Mdr0(HOMING_MDR0)),
+                        dtr,
+                        Step::Ensure(Write::Mdr0(mdr0)),
                         Step::Send(Request::Write(Write::Clear(::qsb::ClearTarget::Str))),
                         Step::Send(Request::Stream(Register::Str)),
                         command(QsbCommand::MotorJog),
@@ -152,6 +224,9 @@ impl QsbDriver {
         }
         if self.status.fault == Some(DeviceFault::BoardError) {
             self.status.fault = None;
+        }
+        if kind != GoalKind::Stop {
+            self.home_failed = false;
         }
         Ok(())
     }
@@ -179,6 +254,7 @@ impl QsbDriver {
         self.replace_goal(
             kind,
             &[
+                Step::Enable(true),
                 normal,
                 end_str,
                 Step::Ensure(Write::Accel(accel)),
@@ -196,11 +272,19 @@ impl QsbDriver {
 
     /// Moves the goal plan on by one step if that needs no request; returns whether it
     /// did.
-    pub(super) fn settle_goal_step(&mut self) -> bool {
+    pub(super) fn settle_goal_step(&mut self, now: Duration) -> bool {
         let Some(step) = self.goal.front() else {
             return false;
         };
         match step {
+            Step::Enable(on) => {
+                self.io.energised = on;
+                let held = self.request_of(step).is_none();
+                if held {
+                    self.goal.pop();
+                }
+                held
+            }
             Step::WaitDone => {
                 let done = self.drive_done();
                 if done {
@@ -219,13 +303,19 @@ impl QsbDriver {
                     return false;
                 };
                 let start = *self.home_start.get_or_insert(latest.count);
+                let limit = self.home_time_limit();
+                let deadline = *self
+                    .home_deadline
+                    .get_or_insert_with(|| now.saturating_add(limit));
                 let travel = f64::from(latest.count.wrapping_sub(start)).abs();
-                if travel > self.config.home_max_travel {
-                    // No index within the travel allowed: stop, not homed.
+                if travel > self.config.home_max_travel || now >= deadline {
+                    // No index within the travel allowed (or the time that takes): stop,
+                    // not homed, and say so.
                     let [normal, end_str] = NORMAL_COUNTER;
                     self.goal
                         .replace(&[command(QsbCommand::MotorStop), normal, end_str]);
                     self.index_armed = false;
+                    self.home_failed = true;
                     return true;
                 }
                 false
@@ -240,17 +330,36 @@ impl QsbDriver {
         }
     }
 
+    /// How long a home search may run: [`HOME_TIME_FACTOR`] times its travel limit at the
+    /// search rate, plus the ramp to that rate and [`HOME_TIME_SLACK`].
+    fn home_time_limit(&self) -> Duration {
+        let rate = self
+            .board
+            .get(usize::from(Register::MdJogRate.number()))
+            .copied()
+            .flatten()
+            .map_or(0.0, |r| f64::from((r as i32).unsigned_abs()));
+        let accel = f64::from(self.config.default_profile().1);
+        let steps = self.config.steps(self.config.home_max_travel).map(f64::abs);
+        let seconds = match steps {
+            Some(steps) if rate > 0.0 => HOME_TIME_FACTOR * steps / rate + rate / accel,
+            _ => 0.0,
+        };
+        Duration::try_from_secs_f64(seconds)
+            .unwrap_or(Duration::MAX)
+            .saturating_add(HOME_TIME_SLACK)
+    }
+
     /// Replaces a `MoveTo` with the move that remains (or ends the plan).
     fn expand_move(&mut self, target: f64, attempt: u8) -> bool {
         let Some(latest) = self.encoder.latest() else {
             return false;
         };
-        let steps = self
-            .config
-            .steps(target - f64::from(latest.count))
-            .map(f64::round);
-        match steps {
-            Some(0.0) => {
+        let steps = self.config.steps(target - f64::from(latest.count));
+        match steps.map(f64::round) {
+            // Within half a step: as close as whole steps get (a target half-way between
+            // two steps must not make the motor hop between them).
+            _ if steps.is_some_and(|s| s.abs() <= 0.5) => {
                 self.goal.pop();
                 self.arrived = true;
             }

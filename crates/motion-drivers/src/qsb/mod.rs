@@ -25,38 +25,64 @@
 //!
 //! `W161` (COMMAND 1: stop any streams left running, so the line is quiet), `R14`
 //! (VERSION: serial number, product type, firmware), then the configuration for the
-//! product reported: EOR 0x5 (LF and the time stamp: `s0E00001234000ABCDE!\n`), MODE
-//! quadrature, MDR0 0x43 (x4, free-running, index disabled, synchronous index), MDR1 0
-//! (counting up, enabled, no triggers), THRESHOLD 0 (a value at every tick), INTERVAL
-//! RATE from the line rate (1 tick = 1.95 ms at 230400 baud); on the -M also COMMAND 4
-//! (stop whatever the motor was doing), MD STEP RATE and MD ACCEL from the axis limits,
-//! COMMAND 2 (enable the drive) and `S13` (stream MD STATUS); last `S0E` (stream the
-//! counter). The board is online when all of that was acknowledged. Nothing is saved
-//! (COMMAND 3 is never sent).
+//! product reported, each register written unless known to hold its value:
+//!
+//! 1. -M: MD ACCEL from the axis's acceleration, then COMMAND 4 (a motor left running by
+//!    a previous server stops, at that acceleration);
+//! 2. EOR 0x5 (LF and the time stamp: `s0E00001234000ABCDE!\n`), MODE (`input_mode`:
+//!    quadrature, PWM or analog), MDR0 0x43 (x4, free-running, index disabled,
+//!    synchronous index), MDR1 (counting up, no triggers; B3 = `invert_index`),
+//!    THRESHOLD 0 (a value at every tick), INTERVAL RATE (`stream_interval`, or from the
+//!    line rate: 1 tick = 1.95 ms at 230400 baud);
+//! 3. driving -M: MD STEP RATE from the axis's velocity;
+//! 4. when DIG I/O is used (enable line, signals, capture): `R02`, DIG I/O CONFIG if the
+//!    board does not hold it already (directions, capture interrupt), DIG I/O (the
+//!    outputs' levels, the enable line active);
+//! 5. driving -M: COMMAND 2 (motor drive mode) and `S13` (stream MD STATUS);
+//! 6. `S01` (digital signals, not in analog mode), `S05` (capture), last `S0E` (stream the
+//!    counter / the PWM or analog value).
+//!
+//! The board is online when all of that was acknowledged; goals and outputs before that
+//! are refused with [`GoalError::Starting`]. Nothing is saved (COMMAND 3 is never sent).
+//! After a reset the whole sequence runs again, outputs at their last levels.
 //!
 //! # Goals
 //!
-//! | goal | -M | -S / -D |
+//! A "driving -M" is a -M with [`QsbDriverConfig::motor_drive`] counting quadrature.
+//!
+//! | goal | driving -M | -S / -D / -M without drive |
 //! |---|---|---|
-//! | `Off` | COMMAND 5 (quit: step pulses stop at once; the QSB cannot de-energise the motor driver) | accepted, nothing to do: nothing is driven |
-//! | `Stop{decel}` | MD ACCEL = decel, COMMAND 4 | accepted, nothing to do |
-//! | `Position`, `RampPosition` | MD STEP RATE / MD ACCEL (axis limits, or the goal's), COMMAND 4 and wait if moving, then MD MOVE STEPS = the whole steps from the encoder reading to the target, COMMAND 8; after the drive reports done, up to two correcting moves | `Unsupported` |
-//! | `Velocity` | MD ACCEL, MD JOG RATE, COMMAND 9 (0 = COMMAND 4) | `Unsupported` |
-//! | `Home{velocity}` | MDR0 0x63 (index resets CNTR), clear STR, stream STR, jog; the first index latch (STR IDX) is the reference: MDR0 back to 0x43, COMMAND 4. Stops not homed after `home_max_travel` | `Unsupported` (no drive to search with) |
+//! | `Off` | COMMAND 5 (quit: no more step pulses), then the enable line inactive. `Unsupported` without [`QsbDriverConfig::enable`]: the QSB itself cannot de-energise the motor (set `enable_output` to the drive's enable line) | `Unsupported`: nothing to de-energise |
+//! | `Stop{decel}` | MD ACCEL = decel (rounded *up* to 16, written when it differs), COMMAND 4 — always sent, even if the motor is believed idle —, then the enable line active (a stop holds) | accepted, nothing to do |
+//! | `Position`, `RampPosition` | enable line active, MD STEP RATE / MD ACCEL (axis limits, or the goal's), COMMAND 4 and wait if moving, then MD MOVE STEPS = the whole steps from the encoder reading to the target, COMMAND 8; after the drive reports done, up to two correcting moves | `Unsupported` |
+//! | `Velocity` | enable line active, MD ACCEL, MD JOG RATE, COMMAND 9 (0 = COMMAND 4) | `Unsupported` |
+//! | `Home{velocity}` | enable line active; MDR0 0x63 (index resets CNTR) for a home position of 0, else DTR = the home position and MDR0 0x53 (index loads CNTR from DTR); clear STR, stream STR, jog in the configured direction; the first index latch (STR IDX) is the reference: MDR0 back to 0x43, COMMAND 4. A search that travels `home_max_travel` (or runs twice the time that takes) without an index stops and reports [`DeviceFault::HomeFailed`] until its stop is complete | `Unsupported` (no drive to search with) |
 //! | `SetPosition` | DTR = counts, LOAD REG 0 (DTR → CNTR); then COMMAND 4 if the motor moves (the engine holds after a set-position) | DTR, LOAD REG 0 |
 //! | `Power` | `Unsupported` (step and direction only) | `Unsupported` |
 //!
+//! In PWM and analog input modes the channel takes no goal: it is not an axis.
+//!
 //! Counts are encoder counts; the -M's registers are in motor steps
-//! ([`QsbDriverConfig::counts_per_step`]). Rates and accelerations are rounded down to
-//! the board's 16-step increments, so a profile never exceeds the limits it was given;
-//! a limit below the board's minimum is `OutOfBoardRange`, a stop below it stops at the
-//! minimum (a stop always works).
+//! ([`QsbDriverConfig::counts_per_step`], negative when the encoder counts down as the
+//! motor steps forward). Rates and accelerations of motions are rounded down to the
+//! board's 16-step increments, so a profile never exceeds the limits it was given; a limit
+//! below the board's minimum is `OutOfBoardRange`. A stop rounds up and never refuses, so
+//! it ends within |v| / decel once its two lines are on the wire.
+//!
+//! # I/O pins
+//!
+//! [`pins`]: `io0`..`io3` (-M), `io0` (-D): digital in or open-drain out (DIG I/O, set
+//! with [`Driver::set_output`], read back as the level measured at the pin from the `S01`
+//! stream, sent on change); `encoder` (-S, -M): the PWM or analog value of READ ENCODER;
+//! `capture` (-M, -D): CAPTURE, the count an edge of [`QsbIo::capture`]'s input loaded.
+//! While the -M drives its motor, io1 and io2 are its step and direction lines and are no
+//! signals; the enable line's bit is no signal either.
 //!
 //! # Wire, liveness and resets
 //!
 //! One request in flight; its answer is matched by type and register among the streamed
 //! lines. Position is the streamed counter, velocity the count difference over the last
-//! [`encoder::VELOCITY_WINDOW`] samples divided by their time-stamp difference. A board
+//! 8 samples (`VELOCITY_WINDOW`) divided by their time-stamp difference. A board
 //! reset shows as a line without the time stamp (EOR lost), a time stamp going backwards,
 //! a -M drive found disabled, or the stream gone silent while the board still answers
 //! `R14`; it is reported as [`DeviceFault::Reset`] and the start-up runs again. A board
@@ -70,12 +96,15 @@
 mod config;
 mod encoder;
 mod goals;
+mod io;
 mod program;
 mod rx;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_machine;
+mod version;
 
-use core::fmt::Write as _;
 use core::time::Duration;
 
 use ::qsb::{
@@ -84,12 +113,15 @@ use ::qsb::{
 };
 
 pub use config::QsbDriverConfig;
+pub use io::{CaptureInput, EnableOutput, MOTOR_DRIVE_BITS, PinRole, QsbIo, pins};
 
 use crate::driver::{Driver, Model, Priority, Transmit};
 use crate::goal::{Goal, GoalError, GoalKind, GoalKinds};
-use crate::state::{ChannelState, DeviceFault, DeviceStatus, FIRMWARE_LEN};
+use crate::pin::{Pin, PinReading};
+use crate::state::{ChannelState, DeviceFault, DeviceStatus};
 use config::DRIVER_EOR;
 use encoder::EncoderTrack;
+use io::IoState;
 use program::{Program, Step};
 
 /// Tries of one request before the board is declared not responding.
@@ -108,10 +140,17 @@ const NORMAL_MDR0: Mdr0 = Mdr0 {
     filter_div2: false,
 };
 
-/// MDR0 during a home search: the index resets CNTR (0x63, the command list's "Sync
-/// Index, Reset on Index, Free Running, X4 mode, W0363").
+/// MDR0 during a home search to counter value 0: the index resets CNTR (0x63, the
+/// command list's "Sync Index, Reset on Index, Free Running, X4 mode, W0363").
 const HOMING_MDR0: Mdr0 = Mdr0 {
     index: IndexMode::ResetCntr,
+    ..NORMAL_MDR0
+};
+
+/// MDR0 during a home search to any other counter value: the index loads CNTR from DTR
+/// ("configure index as the "load CNTR" input (transfers DTR to CNTR)", 0x53).
+const HOMING_LOAD_MDR0: Mdr0 = Mdr0 {
+    index: IndexMode::LoadCntr,
     ..NORMAL_MDR0
 };
 
@@ -124,6 +163,8 @@ enum Origin {
     Setup,
     Preset,
     Goal,
+    /// A DIG I/O write of the signal outputs.
+    Io,
     Probe,
 }
 
@@ -176,14 +217,22 @@ pub struct QsbDriver {
     index_armed: bool,
     index_seen: bool,
     home_start: Option<i32>,
+    /// A search that has not found the index by then has failed (the encoder may not
+    /// count at all).
+    home_deadline: Option<Duration>,
+    /// The last home search ended without an index; cleared once its stop is complete
+    /// or by the next goal other than `Stop`.
+    home_failed: bool,
     homed: bool,
     arrived: bool,
+    io: IoState,
 }
 
 impl QsbDriver {
     /// A driver for the board of `config`; its start-up begins with the first
     /// [`poll_transmit`](Driver::poll_transmit).
-    pub fn new(config: QsbDriverConfig) -> Self {
+    pub fn new(mut config: QsbDriverConfig) -> Self {
+        io::sanitise(&mut config);
         let mut driver = Self {
             config,
             decoder: ResponseDecoder::new(),
@@ -215,8 +264,11 @@ impl QsbDriver {
             index_armed: false,
             index_seen: false,
             home_start: None,
+            home_deadline: None,
+            home_failed: false,
             homed: false,
             arrived: false,
+            io: IoState::new(),
         };
         driver.begin_startup();
         driver
@@ -268,6 +320,12 @@ impl QsbDriver {
         match step {
             Step::Send(request) => Some(request),
             Step::Ensure(write) => (!self.holds(write)).then_some(Request::Write(write)),
+            Step::Outputs => self.outputs_due().map(Request::Write),
+            Step::Enable(on) => {
+                let write = Write::DigIo(::qsb::DigIo(self.latch_with(on)));
+                (self.config.enable.is_some() && !self.holds(write))
+                    .then_some(Request::Write(write))
+            }
             Step::EndStrStream => self.str_streaming.then_some(Request::Read(Register::Str)),
             // Unless the drive is known to be done (a motor command just sent may not show
             // in MD STATUS yet), stop it.
@@ -305,6 +363,9 @@ impl QsbDriver {
                 return Some((request, origin, Priority::Command));
             }
         }
+        if let Some(write) = self.outputs_due() {
+            return Some((Request::Write(write), Origin::Io, Priority::Command));
+        }
         self.probe_due.then_some((
             Request::Read(Register::Version),
             Origin::Probe,
@@ -335,20 +396,36 @@ impl QsbDriver {
         self.index_armed = false;
         self.index_seen = false;
         self.home_start = None;
+        self.home_deadline = None;
+        self.home_failed = false;
+        // Outputs keep the levels the signals asked for; the enable line comes up active
+        // (the engine's start-up stop holds the motor energised).
+        self.io.energised = true;
+        self.io.refused = None;
+        self.io.dio_streaming = false;
+        self.io.capture_streaming = false;
     }
 
-    /// The configuration of the product VERSION reported.
+    /// The configuration of the product VERSION reported (module docs, "Start-up").
     fn configure(&mut self, product: ProductType) {
         let (rate, accel) = self.config.default_profile();
+        let drive = self.drive_active();
+        let mdr1 = Mdr1 {
+            invert_index: self.config.invert_index,
+            ..Mdr1::default()
+        };
         let common = [
             Step::Ensure(Write::Eor(DRIVER_EOR)),
-            Step::Ensure(Write::Mode(Mode::default())),
+            Step::Ensure(Write::Mode(Mode {
+                encoder: self.config.input_mode,
+                pwm_12bit: false,
+            })),
             Step::Ensure(Write::Mdr0(NORMAL_MDR0)),
-            Step::Ensure(Write::Mdr1(Mdr1::default())),
+            Step::Ensure(Write::Mdr1(mdr1)),
             Step::Ensure(Write::Threshold(0)),
             Step::Ensure(Write::IntervalRate(self.config.interval())),
         ];
-        let mut steps = [Step::Online; 16];
+        let mut steps = [Step::Online; program::PROGRAM_CAPACITY];
         let mut len = 0;
         let mut push = |step: Step| {
             if let Some(slot) = steps.get_mut(len) {
@@ -356,19 +433,36 @@ impl QsbDriver {
                 len += 1;
             }
         };
+        let has_dio = product.digital_io_bits() > 0;
         if product == ProductType::M {
+            // Whatever the motor was doing, it stops, at the axis's acceleration.
+            push(Step::Ensure(Write::Accel(accel)));
             push(Step::Send(Request::Write(Write::Command(
                 QsbCommand::MotorStop,
             ))));
         }
         common.into_iter().for_each(&mut push);
-        if product == ProductType::M {
+        if drive {
             push(Step::Ensure(Write::StepRate(rate)));
-            push(Step::Ensure(Write::Accel(accel)));
+        }
+        if has_dio && self.dio_used() {
+            // Read first: a configuration the board already holds is not written again,
+            // because a write sets every pin high for a moment.
+            push(Step::Send(Request::Read(Register::DigIoConfig)));
+            push(Step::Ensure(Write::DigIoConfig(self.dio_config())));
+            push(Step::Outputs);
+        }
+        if drive {
             push(Step::Send(Request::Write(Write::Command(
                 QsbCommand::EnableMotorDrive,
             ))));
             push(Step::Send(Request::Stream(Register::MdStatus)));
+        }
+        if has_dio && self.dio_streamed() {
+            push(Step::Send(Request::Stream(Register::DigIo)));
+        }
+        if self.config.io.capture.is_some() {
+            push(Step::Send(Request::Stream(Register::Capture)));
         }
         push(Step::Send(Request::Stream(Register::ReadEncoder)));
         push(Step::Online);
@@ -392,27 +486,12 @@ impl QsbDriver {
         self.begin_startup();
     }
 
-    /// Records the VERSION answer as the firmware description.
-    fn record_version(&mut self, version: ::qsb::Version) {
-        let mut text = FirmwareText::default();
-        let product = match version.product {
-            ProductType::D => 'D',
-            ProductType::M => 'M',
-            ProductType::S => 'S',
-        };
-        // The buffer is larger than the longest description; a failure only cuts it.
-        let _ = write!(
-            text,
-            "QSB-{product} SN {:05X} fw {:02X}",
-            version.serial, version.firmware
-        );
-        self.status.set_firmware(text.as_str());
-        self.product = Some(version.product);
-        self.serial = Some(version.serial);
-    }
-
     /// Lets every plan move on as far as it can without the board.
     fn settle(&mut self, now: Duration) {
+        if self.home_failed && self.goal.is_empty() && (!self.drive_active() || self.drive_done()) {
+            // The failed search's stop is complete.
+            self.home_failed = false;
+        }
         for _ in 0..4 * program::PROGRAM_CAPACITY {
             if self.busy(Origin::Setup, self.setup.generation()) {
                 break;
@@ -445,7 +524,7 @@ impl QsbDriver {
             }
         }
         for _ in 0..4 * program::PROGRAM_CAPACITY {
-            if self.busy(Origin::Goal, self.goal.generation()) || !self.settle_goal_step() {
+            if self.busy(Origin::Goal, self.goal.generation()) || !self.settle_goal_step(now) {
                 break;
             }
         }
@@ -473,48 +552,10 @@ impl QsbDriver {
             homed: self.homed,
             at_limit: false,
             arrived: self.arrived,
-            fault: self.status.fault,
-        }
-    }
-}
-
-/// A fixed buffer the firmware description is formatted into.
-#[derive(Default)]
-struct FirmwareText {
-    buf: [u8; FIRMWARE_LEN],
-    len: usize,
-}
-
-impl FirmwareText {
-    fn as_str(&self) -> &str {
-        core::str::from_utf8(self.buf.get(..self.len).unwrap_or_default()).unwrap_or("")
-    }
-}
-
-impl core::fmt::Write for FirmwareText {
-    fn write_str(&mut self, s: &str) -> core::fmt::Result {
-        let end = self.len + s.len();
-        let slot = self.buf.get_mut(self.len..end).ok_or(core::fmt::Error)?;
-        slot.copy_from_slice(s.as_bytes());
-        self.len = end;
-        Ok(())
-    }
-}
-
-/// The goals a product takes.
-fn kinds_for(product: ProductType) -> GoalKinds {
-    match product {
-        ProductType::M => GoalKinds::of(&[
-            GoalKind::Off,
-            GoalKind::Stop,
-            GoalKind::Position,
-            GoalKind::Velocity,
-            GoalKind::RampPosition,
-            GoalKind::Home,
-            GoalKind::SetPosition,
-        ]),
-        ProductType::D | ProductType::S => {
-            GoalKinds::of(&[GoalKind::Off, GoalKind::Stop, GoalKind::SetPosition])
+            fault: self
+                .status
+                .fault
+                .or(self.home_failed.then_some(DeviceFault::HomeFailed)),
         }
     }
 }
@@ -530,7 +571,7 @@ impl Driver for QsbDriver {
 
     fn capabilities(&self, channel: usize) -> GoalKinds {
         if channel == 0 {
-            kinds_for(self.effective_product())
+            self.kinds()
         } else {
             GoalKinds::NONE
         }
@@ -614,6 +655,7 @@ impl Driver for QsbDriver {
             Origin::Setup => self.setup.generation(),
             Origin::Preset => self.preset.generation(),
             Origin::Goal => self.goal.generation(),
+            Origin::Io => 0,
             Origin::Probe => {
                 self.probe_due = false;
                 self.samples_since_probe = false;
@@ -639,8 +681,9 @@ impl Driver for QsbDriver {
     fn goals_pending(&self) -> bool {
         let in_flight = self
             .in_flight
-            .is_some_and(|f| matches!(f.origin, Origin::Preset | Origin::Goal));
-        in_flight || !self.preset.is_empty() || !self.goal.is_empty()
+            .is_some_and(|f| matches!(f.origin, Origin::Preset | Origin::Goal | Origin::Io));
+        let outputs = self.status.online && self.outputs_due().is_some();
+        in_flight || outputs || !self.preset.is_empty() || !self.goal.is_empty()
     }
 
     fn set_goal(&mut self, now: Duration, channel: usize, goal: Goal) -> Result<(), GoalError> {
@@ -674,11 +717,14 @@ impl Driver for QsbDriver {
         self.decoder.clear();
         self.begin_startup();
     }
-}
 
-/// The QSB's I/O pins for `product` (command list DIG I/O, MODE). Filled in with the
-/// board's I/O support; empty until then.
-pub fn pins(product: ::qsb::ProductType) -> &'static [crate::PinInfo] {
-    let _ = product;
-    &[]
+    fn read_pin(&self, pin: Pin) -> Option<PinReading> {
+        self.pin_reading(pin)
+    }
+
+    fn set_output(&mut self, now: Duration, pin: Pin, high: bool) -> Result<(), GoalError> {
+        let result = self.drive_output(pin, high);
+        self.settle(now);
+        result
+    }
 }

@@ -13,6 +13,11 @@ pub(crate) enum Step {
     Ensure(Write),
     /// Cancel the STR stream (a read of STR) if it runs.
     EndStrStream,
+    /// Write DIG I/O with the signal outputs and the enable line, unless the board holds
+    /// them already.
+    Outputs,
+    /// -M with an enable line: make it active (`true`) or inactive, unless it is already.
+    Enable(bool),
     /// Start-up: the configuration for the product VERSION reported.
     Configure,
     /// Start-up: done; the board is online.

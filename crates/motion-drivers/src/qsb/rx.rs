@@ -4,7 +4,7 @@
 use core::time::Duration;
 
 use ::qsb::{
-    IndexMode, LoadTarget, MdStatus, ProductType, QsbCommand, Register, Request, Response,
+    EncoderMode, IndexMode, LoadTarget, MdStatus, QsbCommand, Register, Request, Response,
     ResponseType, Str, Version, Write,
 };
 
@@ -85,13 +85,17 @@ impl QsbDriver {
                     // A line of a stream left running before start-up configured EOR.
                     return;
                 };
-                if self.rebase_pending {
-                    self.rebase_pending = false;
-                    self.encoder.clear();
+                if self.config.input_mode == EncoderMode::Quadrature {
+                    if self.rebase_pending {
+                        self.rebase_pending = false;
+                        self.encoder.clear();
+                    }
+                    let count = response.signed();
+                    self.encoder.push(Sample { count, time_stamp });
+                    self.position = count;
+                } else {
+                    self.io_line(now, Register::ReadEncoder, response.data);
                 }
-                let count = response.signed();
-                self.encoder.push(Sample { count, time_stamp });
-                self.position = count;
                 self.last_sample_at = Some(now);
                 self.samples_since_probe = true;
                 if self.status.online
@@ -110,7 +114,7 @@ impl QsbDriver {
             }
             Some(Register::MdStatus) => {
                 if let Ok(md) = MdStatus::from_data(response.data) {
-                    if self.status.online && self.product == Some(ProductType::M) && !md.enabled {
+                    if self.status.online && self.drive_active() && !md.enabled {
                         // The drive was enabled at start-up: a board that reports it
                         // disabled has been reset (or stopped with COMMAND 0).
                         self.board_reset();
@@ -130,6 +134,11 @@ impl QsbDriver {
                     self.index_armed = false;
                     self.rebase_pending = true;
                 }
+            }
+            Some(register @ (Register::DigIo | Register::Capture))
+                if response.time_stamp.is_some() =>
+            {
+                self.io_line(now, register, response.data);
             }
             _ => {}
         }
@@ -159,6 +168,17 @@ impl QsbDriver {
             }
             Request::Read(Register::Str) => self.str_streaming = false,
             Request::Stream(Register::Str) => self.str_streaming = true,
+            Request::Stream(Register::DigIo) => self.io.dio_streaming = true,
+            Request::Stream(Register::Capture) => self.io.capture_streaming = true,
+            Request::Read(Register::DigIoConfig) => {
+                // What the board holds: an equal configuration is not written again.
+                if let Some(slot) = self
+                    .board
+                    .get_mut(usize::from(Register::DigIoConfig.number()))
+                {
+                    *slot = Some(response.data);
+                }
+            }
             Request::Read(_) | Request::Stream(_) => {}
         }
         self.advance(flight);
@@ -170,7 +190,7 @@ impl QsbDriver {
             Origin::Setup => &mut self.setup,
             Origin::Preset => &mut self.preset,
             Origin::Goal => &mut self.goal,
-            Origin::Probe => return,
+            Origin::Io | Origin::Probe => return,
         };
         if program.generation() == flight.generation {
             program.pop();
@@ -191,14 +211,31 @@ impl QsbDriver {
                 | QsbCommand::MotorStop
                 | QsbCommand::MotorQuit,
             ) => self.motor_commanded(time_stamp),
-            Write::Command(QsbCommand::StopStreaming) => self.str_streaming = false,
+            Write::Command(QsbCommand::StopStreaming) => {
+                self.str_streaming = false;
+                self.io.dio_streaming = false;
+                self.io.capture_streaming = false;
+            }
+            // "All I/O port pins will be set "high" after a write to this configuration
+            // register".
+            Write::DigIoConfig(_) => {
+                if let Some(slot) = self.board.get_mut(usize::from(Register::DigIo.number())) {
+                    *slot = Some(0xF);
+                }
+            }
             Write::Load(LoadTarget::DtrToCntr) => {
                 self.rebase_pending = true;
                 self.homed = true;
             }
             Write::Clear(::qsb::ClearTarget::Str) => {
-                self.index_armed = self.board[usize::from(Register::Mdr0.number())]
-                    == Some(super::HOMING_MDR0.data());
+                // Armed when the index acts on the counter (a home search's MDR0).
+                self.index_armed = self
+                    .board
+                    .get(usize::from(Register::Mdr0.number()))
+                    .copied()
+                    .flatten()
+                    .and_then(|data| ::qsb::Mdr0::from_data(data).ok())
+                    .is_some_and(|mdr0| mdr0.index != IndexMode::Disabled);
                 self.index_seen = false;
             }
             Write::Mdr0(mdr0) if mdr0.index == IndexMode::Disabled => self.index_armed = false,
@@ -255,6 +292,11 @@ impl QsbDriver {
                 self.preset.clear();
             }
             Origin::Goal if self.goal.generation() == flight.generation => self.goal.clear(),
+            Origin::Io => {
+                if let Request::Write(write) = flight.request {
+                    self.io.refused = Some(write.data() as u8);
+                }
+            }
             Origin::Preset | Origin::Goal | Origin::Probe => {}
         }
     }

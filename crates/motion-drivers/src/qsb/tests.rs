@@ -12,25 +12,32 @@ use crate::goal::{Goal, GoalError, GoalKind};
 use crate::state::DeviceFault;
 
 /// A driver on a bench: the test plays the board.
-struct Bench {
-    driver: QsbDriver,
-    now: Duration,
+pub(super) struct Bench {
+    pub(super) driver: QsbDriver,
+    pub(super) now: Duration,
     /// Board time stamp, 1/512 s ticks.
-    ts: u32,
+    pub(super) ts: u32,
     /// Whether the board answers with the driver's EOR (else the factory format).
-    configured: bool,
-    counter: i32,
+    pub(super) configured: bool,
+    pub(super) counter: i32,
     /// VERSION data the board answers.
-    version: u32,
+    pub(super) version: u32,
+    /// What reads and streams of other registers answer (register, data); 0 otherwise.
+    pub(super) values: Vec<(u8, u32)>,
 }
 
 impl Bench {
-    fn new(variant: ProductType) -> Self {
+    pub(super) fn new(variant: ProductType) -> Self {
+        Self::with_config(QsbDriverConfig {
+            variant,
+            ..QsbDriverConfig::default()
+        })
+    }
+
+    pub(super) fn with_config(config: QsbDriverConfig) -> Self {
+        let variant = config.variant;
         Self {
-            driver: QsbDriver::new(QsbDriverConfig {
-                variant,
-                ..QsbDriverConfig::default()
-            }),
+            driver: QsbDriver::new(config),
             now: Duration::ZERO,
             ts: 1000,
             configured: false,
@@ -40,17 +47,18 @@ impl Bench {
                 ProductType::M => 0x0000_1113,
                 ProductType::S => 0x0000_1213,
             },
+            values: Vec::new(),
         }
     }
 
-    fn advance(&mut self, by: Duration) {
+    pub(super) fn advance(&mut self, by: Duration) {
         self.now += by;
         self.ts += (by.as_nanos() / TICK.as_nanos()) as u32;
         self.driver.handle_timeout(self.now);
     }
 
     /// What the driver sends now, if anything.
-    fn sent(&mut self) -> Option<Vec<u8>> {
+    pub(super) fn sent(&mut self) -> Option<Vec<u8>> {
         self.driver.handle_timeout(self.now);
         let mut buf = [0u8; 256];
         let transmit = self.driver.poll_transmit(self.now, &mut buf)?;
@@ -58,7 +66,7 @@ impl Bench {
         Some(buf[..transmit.len].to_vec())
     }
 
-    fn expect(&mut self, line: &[u8]) {
+    pub(super) fn expect(&mut self, line: &[u8]) {
         let sent = self.sent();
         assert_eq!(
             sent.as_deref().map(String::from_utf8_lossy),
@@ -66,7 +74,7 @@ impl Bench {
         );
     }
 
-    fn line(&self, ty: ResponseType, register: u8, data: u32) -> Vec<u8> {
+    pub(super) fn line(&self, ty: ResponseType, register: u8, data: u32) -> Vec<u8> {
         let mut response = Response::new(ty, register, data);
         let eor = if self.configured {
             response.time_stamp = Some(self.ts);
@@ -79,12 +87,12 @@ impl Bench {
         buf[..len].to_vec()
     }
 
-    fn rx(&mut self, bytes: &[u8]) {
+    pub(super) fn rx(&mut self, bytes: &[u8]) {
         self.driver.handle_rx(self.now, bytes);
     }
 
     /// Answers `sent` as a board would: writes echo, reads and streams return `value`.
-    fn answer(&mut self, sent: &[u8], value: u32) {
+    pub(super) fn answer(&mut self, sent: &[u8], value: u32) {
         let line = CommandLine::decode(sent.strip_suffix(b"\r\n").expect("EOC")).expect("line");
         let (ty, data) = match line.ty {
             CommandType::Write => (ResponseType::Write, line.data.expect("data")),
@@ -99,15 +107,23 @@ impl Bench {
     }
 
     /// Sends and answers everything the driver wants until it is quiet; returns the lines.
-    fn run(&mut self) -> Vec<String> {
+    pub(super) fn run(&mut self) -> Vec<String> {
         let mut lines = Vec::new();
         for _ in 0..64 {
             let Some(sent) = self.sent() else { break };
+            let register = CommandLine::decode(sent.strip_suffix(b"\r\n").expect("EOC"))
+                .expect("line")
+                .register;
+            let extra = self
+                .values
+                .iter()
+                .find(|(r, _)| *r == register)
+                .map(|(_, v)| *v);
             let value = match &sent[..3] {
                 b"R14" => self.version,
                 b"S13" => 0x11,
                 b"S0E" => self.counter as u32,
-                _ => 0,
+                _ => extra.unwrap_or(0),
             };
             self.advance(Duration::from_micros(500));
             self.answer(&sent, value);
@@ -117,7 +133,7 @@ impl Bench {
     }
 
     /// One stream tick: the encoder line, then MD STATUS (-M order of the board).
-    fn tick(&mut self, md: Option<u32>) {
+    pub(super) fn tick(&mut self, md: Option<u32>) {
         self.advance(TICK);
         let mut bytes = self.line(ResponseType::Stream, 0x0E, self.counter as u32);
         if let Some(md) = md {
@@ -126,17 +142,24 @@ impl Bench {
         self.rx(&bytes);
     }
 
-    fn started(variant: ProductType) -> Self {
-        let mut bench = Self::new(variant);
+    pub(super) fn started(variant: ProductType) -> Self {
+        Self::started_with(QsbDriverConfig {
+            variant,
+            ..QsbDriverConfig::default()
+        })
+    }
+
+    pub(super) fn started_with(config: QsbDriverConfig) -> Self {
+        let mut bench = Self::with_config(config);
         bench.run();
         assert!(bench.driver.status().online, "start-up completes");
         bench
     }
 }
 
-const MD_DONE: u32 = 0x11; // done, drive enabled
-const MD_MOVING: u32 = 0x12; // moving, drive enabled
-const MD_JOGGING: u32 = 0x1A; // moving, jogging, drive enabled
+pub(super) const MD_DONE: u32 = 0x11; // done, drive enabled
+pub(super) const MD_MOVING: u32 = 0x12; // moving, drive enabled
+pub(super) const MD_JOGGING: u32 = 0x1A; // moving, jogging, drive enabled
 
 #[test]
 fn start_up_of_a_qsb_m_golden_lines() {
@@ -146,16 +169,17 @@ fn start_up_of_a_qsb_m_golden_lines() {
         Some(Priority::Setup)
     );
     let lines = bench.run();
-    // COMMAND 1 "Deactivate … streaming", VERSION, COMMAND 4, EOR 5 (LF + time stamp),
+    // COMMAND 1 "Deactivate … streaming", VERSION, MD ACCEL 10000 then COMMAND 4 (a
+    // motor left running stops at the axis's acceleration), EOR 5 (LF + time stamp),
     // MODE quadrature, MDR0 "Sync Index, … Free Running, X4" without the index reset,
     // MDR1 "Count Up No Triggers", THRESHOLD 0, INTERVAL RATE 1 tick, MD STEP RATE 992
-    // (1000 rounded down to 16), MD ACCEL 10000, COMMAND 2, stream MD STATUS, stream
-    // READ ENCODER ("Stream Encoder Value, S0E").
+    // (1000 rounded down to 16), COMMAND 2, stream MD STATUS, stream READ ENCODER
+    // ("Stream Encoder Value, S0E").
     assert_eq!(
         lines,
         [
-            "W161", "R14", "W164", "W155", "W000", "W0343", "W040", "W0B0", "W0C1", "W0F3E0",
-            "W102710", "W162", "S13", "S0E"
+            "W161", "R14", "W102710", "W164", "W155", "W000", "W0343", "W040", "W0B0", "W0C1",
+            "W0F3E0", "W162", "S13", "S0E"
         ]
     );
     let status = bench.driver.status();
@@ -164,16 +188,17 @@ fn start_up_of_a_qsb_m_golden_lines() {
     assert_eq!(status.fault, None);
     assert_eq!(bench.driver.product(), Some(ProductType::M));
     for kind in GoalKind::ALL {
+        // Off needs the drive's enable line (`enable_output`).
         assert_eq!(
             bench.driver.capabilities(0).contains(kind),
-            kind != GoalKind::Power
+            !matches!(kind, GoalKind::Power | GoalKind::Off)
         );
     }
     assert!(!bench.driver.capabilities(1).contains(GoalKind::Stop));
 }
 
 #[test]
-fn start_up_of_a_qsb_s_has_no_drive_and_stop_is_a_no_op() {
+fn start_up_of_a_qsb_s_has_no_drive_stop_is_a_no_op_and_off_unsupported() {
     let mut bench = Bench::new(ProductType::M); // configured -M, the board says -S
     bench.version = 0x0004_2213;
     let lines = bench.run();
@@ -199,7 +224,11 @@ fn start_up_of_a_qsb_s_has_no_drive_and_stop_is_a_no_op() {
         bench.driver.set_goal(now, 0, Goal::Stop { decel: 1.0 }),
         Ok(())
     );
-    assert_eq!(bench.driver.set_goal(now, 0, Goal::Off), Ok(()));
+    // Nothing to de-energise: boards that cannot, refuse.
+    assert_eq!(
+        bench.driver.set_goal(now, 0, Goal::Off),
+        Err(GoalError::Unsupported(GoalKind::Off))
+    );
     assert!(!bench.driver.goals_pending());
     assert_eq!(bench.sent(), None, "nothing is driven, nothing to send");
     assert!(!bench.driver.capabilities(0).contains(GoalKind::Velocity));
@@ -316,11 +345,15 @@ fn ramp_position_velocity_and_stop_write_the_rates_in_steps() {
         .driver
         .set_goal(bench.now, 0, Goal::Stop { decel: 50_000.0 })
         .expect("stop");
-    // COMMAND 4 "Motor Stop - Stop the motor using the MD ACCEL rate".
-    assert_eq!(bench.run(), ["W101380", "W164"]);
+    // COMMAND 4 "Motor Stop - Stop the motor using the MD ACCEL rate": 5000 steps/s²
+    // rounded up to 5008 = 0x1390 (a stop is never gentler than asked).
+    assert_eq!(bench.run(), ["W101390", "W164"]);
     bench.tick(Some(MD_DONE));
-    bench.driver.set_goal(bench.now, 0, Goal::Off).expect("off");
-    assert_eq!(bench.run(), ["W165"], "COMMAND 5 Motor Quit");
+    assert_eq!(
+        bench.driver.set_goal(bench.now, 0, Goal::Off),
+        Err(GoalError::Unsupported(GoalKind::Off)),
+        "no enable line configured"
+    );
     assert_eq!(
         bench.driver.set_goal(
             bench.now,
@@ -543,7 +576,7 @@ fn a_line_in_the_factory_format_or_an_older_time_stamp_means_a_reset() {
     assert_eq!(status.fault, Some(DeviceFault::Reset));
     assert_eq!(status.resets, 1);
     assert!(!bench.driver.channel(0).homed);
-    assert_eq!(bench.run()[..3], ["W161", "R14", "W164"]);
+    assert_eq!(bench.run()[..4], ["W161", "R14", "W102710", "W164"]);
     // A time stamp that goes backwards: the counter restarted at power-up.
     bench.tick(Some(MD_DONE));
     bench.ts -= 100;
@@ -617,6 +650,7 @@ mod random {
         AnswerLast(u32),
         SetGoal(u8, f64, f64),
         Link(bool),
+        Output(u16, bool),
     }
 
     fn op() -> impl Strategy<Value = Op> {
@@ -633,6 +667,7 @@ mod random {
             any::<u32>().prop_map(Op::AnswerLast),
             (0u8..9, any::<f64>(), -1e6f64..1e6).prop_map(|(k, a, b)| Op::SetGoal(k, a, b)),
             any::<bool>().prop_map(Op::Link),
+            (0u16..8, any::<bool>()).prop_map(|(pin, high)| Op::Output(pin, high)),
         ]
     }
 
@@ -665,12 +700,29 @@ mod random {
         #[test]
         fn any_traffic_goals_and_times_keep_the_driver_sane(
             started in any::<bool>(),
+            machine in any::<bool>(),
             ops in proptest::collection::vec(op(), 0..120),
         ) {
-            let mut bench = if started {
-                Bench::started(ProductType::M)
+            // Plain, or with an enable line, digital signals and the capture input.
+            let config = if machine {
+                QsbDriverConfig {
+                    counts_per_step: -4.0,
+                    home_position: 77,
+                    enable: Some(super::super::EnableOutput { bit: 3, active_high: false }),
+                    io: super::super::QsbIo {
+                        digital_in: 1,
+                        capture: Some(super::super::CaptureInput { bit: 0, falling: true }),
+                        ..super::super::QsbIo::default()
+                    },
+                    ..QsbDriverConfig::default()
+                }
             } else {
-                Bench::new(ProductType::M)
+                QsbDriverConfig::default()
+            };
+            let mut bench = if started {
+                Bench::started_with(config)
+            } else {
+                Bench::with_config(config)
             };
             let mut last: Option<Vec<u8>> = None;
             for op in ops {
@@ -702,6 +754,14 @@ mod random {
                         if !online {
                             prop_assert!(result.is_err());
                         }
+                    }
+                    Op::Output(pin, high) => {
+                        let pin = crate::Pin(pin);
+                        let result = bench.driver.set_output(bench.now, pin, high);
+                        if !bench.driver.status().online {
+                            prop_assert!(result.is_err());
+                        }
+                        let _ = bench.driver.read_pin(pin);
                     }
                     Op::Link(up) => {
                         if up {

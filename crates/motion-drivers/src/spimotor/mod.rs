@@ -46,10 +46,21 @@
 //!    [`DeviceFault::NotResponding`] and retried every [`OFFLINE_RETRY_PERIOD`].
 //! 2. Read the serial number (0x02); the firmware text becomes `"<identification> sn
 //!    <serial, hex>"`.
-//! 3. Stop all motion and configure. Stepper: 0x42 ← 0 (target = current position: stop
-//!    where it is), 0x44 ← coils, 0x43 ← the step delay of the axis's `max_velocity`, 0x10
-//!    ← intensity. Brushed: 0x22 and 0x32 (stop A and B).
-//! 4. Poll. The first consistent poll after start-up clears the channel faults; goals from
+//! 3. Stepper: survey before writing anything — read position (0x40), target (0x41) and
+//!    step delay (0x43), twice; believed when two readings agree (same target and delay, a
+//!    position no farther on than the delay allows), else read again (after
+//!    [`SURVEY_ATTEMPTS`] disagreements:
+//!    [`DeviceFault::Protocol`] and start over). The board is then online.
+//! 4. Configure. A standing stepper: 0x42 ← 0 (target = current position: stop where it
+//!    is), 0x44 ← coils, 0x43 ← the step delay of the axis's `max_velocity`, 0x10 ←
+//!    intensity ([`SpimotorDriverConfig::stepper_intensity`], 0 after an `Off`). A stepper
+//!    that moves (left running by another program, or by this server before it
+//!    restarted): 0x44 and 0x10 only, and a stop that ramps its step rate down from the
+//!    rate it steps at (the delay it was read with) at the axis's max acceleration — never
+//!    a stop dead, which a stepper at speed would answer by losing steps. Brushed: 0x22
+//!    and 0x32 (stop A and B). All of it again after every restart, so after a board reset
+//!    (power cycle) too.
+//! 5. Poll. The first consistent poll after start-up clears the channel faults; goals from
 //!    before are gone (the engine needs a new command).
 //!
 //! # Stepper (channel 0), counts = full steps of the board's position counter
@@ -66,9 +77,9 @@
 //! | `Position` | target 0x41 ← counts, rate ramped with the axis's `max_velocity` / `max_accel` |
 //! | `RampPosition` | target 0x41 ← counts, rate ramped with the goal's velocity (≥ 39.2 steps/s, capped at 10 000) and acceleration |
 //! | `Velocity` | target 2³⁰ steps ahead in the direction of travel, rate ramped to \|v\| (39.2 ≤ \|v\| ≤ 10 000 steps/s, else `OutOfBoardRange`; 0 stops); the board runs at the fastest rate 10 000/n not above \|v\| |
-//! | `Stop` | rate ramped down at `decel`, then 0x42 ← 0 (stop where it is); should the next poll show the target elsewhere (a firmware that counts 0x42 from the old target), 0x41 ← the position read |
+//! | `Stop` | rate ramped down at `decel` from the rate the board steps at now (the step delay in force towards its target; 0 when it stands), not from the profile's; then 0x42 ← 0 (stop where it is), so it ends within (\|rate\| − 39.2) / decel plus one profile period. Always sent, also on a standing stepper (0x42 ← 0 at once). Should the next poll show the target elsewhere (a firmware that counts 0x42 from the old target), 0x41 ← the position read |
 //! | `SetPosition` | 0x43 ← 255 (so no step can slip in), 0x40 ← counts, 0x41 ← counts, 0x43 ← the resting delay (writing 0x40 alone would walk back to the old target); stops motion |
-//! | `Off` | 0x42 ← 0, then intensity 0x10 ← 0 (coils de-energised); the next motion goal re-energises |
+//! | `Off` | 0x42 ← 0, then intensity 0x10 ← 0 (coils de-energised: stop category 0, no ramp); the next goal that moves or holds writes the configured intensity first |
 //! | `Home` | unsupported: the board has no reference input |
 //!
 //! Reported state: position = the board's position counter (open loop, no encoder);
@@ -82,7 +93,9 @@
 //! `Power { fraction }` spins the motor in direction A (fraction > 0, ports 0x20/0x30) or
 //! B (< 0, 0x21/0x31) with intensity `round(|fraction| × 255)`; a fraction that rounds to
 //! 0, `Stop` and `Off` write the stop port (0x22/0x32) at once: the board has no speed
-//! ramp and no coasting mode, so a stop's deceleration cannot be chosen. Every other goal
+//! ramp and no coasting mode, so a stop's deceleration cannot be chosen. A brushed motor
+//! stopped with no power on its bridge *is* de-energised: `Off` and `Stop` are the same
+//! write. Every other goal
 //! is `Unsupported`. The board has no encoder: position and velocity are reported as 0
 //! (configure brushed axes with `min < 0 < max`), `moving` means "the bridge is driven",
 //! and a channel is fresh when its board answered the last identification read.
@@ -109,6 +122,7 @@ mod brushed;
 mod config;
 pub mod ramp;
 mod stepper;
+mod survey;
 mod wire;
 
 use core::fmt::{self, Write as _};
@@ -121,6 +135,7 @@ use crate::goal::{Goal, GoalError, GoalKind, GoalKinds};
 use crate::state::{ChannelState, DeviceFault, DeviceStatus, FIRMWARE_LEN};
 
 pub use config::{AxisLimits, SpimotorDrive, SpimotorDriverConfig};
+pub use survey::SURVEY_ATTEMPTS;
 
 use brushed::BrushedMotor;
 use stepper::Stepper;
@@ -148,6 +163,9 @@ enum Phase {
     Identify { attempts: u32, next_at: Duration },
     /// Reading the serial number.
     Serial,
+    /// Stepper: reading what the board does now (position, target, step delay) before
+    /// anything is written, so that a motor left running is ramped down from its rate.
+    Survey,
     /// Configured; polling.
     Running,
 }
@@ -215,6 +233,8 @@ pub struct SpimotorDriver {
     refreshed_at: Option<Duration>,
     stepper: Stepper,
     motors: [BrushedMotor; 2],
+    /// The start-up survey's readings so far.
+    survey: survey::Survey,
 }
 
 impl SpimotorDriver {
@@ -243,6 +263,7 @@ impl SpimotorDriver {
             refreshed_at: None,
             stepper,
             motors: [BrushedMotor::default(); 2],
+            survey: survey::Survey::default(),
         }
     }
 
@@ -350,33 +371,6 @@ impl SpimotorDriver {
         self.status.bad_replies = self.status.bad_replies.saturating_add(1);
     }
 
-    /// Queues the start-up writes: stop everything, configure.
-    fn configure(&mut self) {
-        if self.is_stepper() {
-            let intensity = if self.stepper.is_off() {
-                0
-            } else {
-                self.config.stepper_intensity
-            };
-            for write in [
-                Write::RelativePosition(0),
-                Write::Coils(self.config.coils),
-                Write::StepDelay(self.stepper.rest_delay),
-                Write::StepperIntensity(intensity),
-            ] {
-                self.push_command(Op::Write(write), Priority::Setup, 0);
-            }
-        } else {
-            for motor in spimotor::Motor::ALL {
-                self.push_command(
-                    Op::Write(Write::Stop(motor)),
-                    Priority::Setup,
-                    motor.channel(),
-                );
-            }
-        }
-    }
-
     /// Handles one completed transaction.
     fn complete(&mut self, now: Duration, sent: Sent, miso: &[u8]) {
         let Op::Read(port, _) = sent.op else {
@@ -417,12 +411,20 @@ impl SpimotorDriver {
                     _ => SerialNumber::default(),
                 };
                 self.set_firmware(serial);
-                self.status.online = true;
-                self.phase = Phase::Running;
-                self.next_poll_at = now;
-                self.polls_done = 0;
-                self.configure();
+                if self.is_stepper() {
+                    self.begin_survey();
+                } else {
+                    self.status.online = true;
+                    self.phase = Phase::Running;
+                    self.next_poll_at = now;
+                    self.polls_done = 0;
+                    self.configure(now, false);
+                }
             }
+            (Phase::Survey, _) => match reply {
+                Ok(reply) => self.survey_reading(now, reply, sent.at),
+                Err(_) => self.bad_reply(),
+            },
             (Phase::Running, ReadPort::Identification) => {
                 let matches = reply.ok().and_then(valid_identification).is_some_and(|id| {
                     self.identification
@@ -667,7 +669,7 @@ impl Driver for SpimotorDriver {
         let phase = match self.phase {
             _ if !self.link_up => None,
             Phase::Identify { next_at, .. } => Some(next_at),
-            Phase::Serial => None,
+            Phase::Serial | Phase::Survey => None,
             Phase::Running => Some(self.next_poll_at),
         };
         match (timeout, phase) {

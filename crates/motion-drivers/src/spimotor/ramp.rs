@@ -159,6 +159,13 @@ impl Ramp {
         self.at = Some(now);
     }
 
+    /// Continues from the signed `rate` the board steps at now (a stop ramps down from
+    /// where the motor really is, not from where a profile had got to).
+    pub fn start_from(&mut self, now: Duration, rate: f64) {
+        self.rate = if rate.is_finite() { rate } else { 0.0 };
+        self.at = Some(now);
+    }
+
     /// Integrates the profile up to `now` and says what the board must do. `motion` turns
     /// into [`Motion::Hold`] when a stop completes. `None`: nothing to drive.
     pub fn update(&mut self, now: Duration, motion: &mut Motion, board: Observed) -> Option<Step> {

@@ -17,7 +17,7 @@ const PLAUSIBILITY_SLACK: Duration = Duration::from_millis(5);
 const PLAUSIBILITY_STEPS: f64 = 2.0;
 
 /// What an absent board's MISO (all 0xFF) decodes to: position −1, target −1, delay 255.
-const ABSENT_READING: (i32, i32, u8) = (-1, -1, u8::MAX);
+pub(super) const ABSENT_READING: (i32, i32, u8) = (-1, -1, u8::MAX);
 
 /// One poll's readings, gathered as its reads complete.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -122,6 +122,49 @@ impl Stepper {
         self.bad_in_row = 0;
     }
 
+    /// The start-up survey read the board: this is what it does now (the baseline of the
+    /// polls that follow).
+    pub fn surveyed(
+        &mut self,
+        now: Duration,
+        (position, sampled_at): (i32, Duration),
+        target: i32,
+        delay: StepDelay,
+    ) {
+        self.position = position;
+        self.target = Some(target);
+        self.delay = delay;
+        self.refreshed_at = Some(now);
+        self.sampled_at = sampled_at;
+        self.baseline = Some((position, now));
+        self.cycle = Cycle::default();
+        self.suspect = None;
+        self.repeats = 0;
+        self.bad_in_row = 0;
+    }
+
+    /// What the driver is doing with the stepper.
+    pub fn motion(&self) -> Motion {
+        self.motion
+    }
+
+    /// The axis's acceleration limit, steps/s² (a stop the driver starts on its own).
+    pub fn max_accel(&self) -> f64 {
+        self.max_accel
+    }
+
+    /// Decelerates at `decel` from the signed step `rate` the board runs at now.
+    pub fn stop_from(&mut self, now: Duration, decel: f64, rate: f64) {
+        self.motion = Motion::Stopping {
+            decel: if positive(decel) {
+                decel
+            } else {
+                f64::INFINITY
+            },
+        };
+        self.ramp.start_from(now, rate);
+    }
+
     /// A write of the position counter (0x40) went out at `now`.
     pub fn position_written(&mut self, now: Duration, position: i32) {
         self.position = position;
@@ -192,13 +235,17 @@ impl SpimotorDriver {
                 }
                 return Ok(());
             }
-            Goal::Stop { decel } => Motion::Stopping {
-                decel: if positive(decel) {
-                    decel
-                } else {
-                    f64::INFINITY
-                },
-            },
+            Goal::Stop { decel } => {
+                // From the rate the board steps at now, not from the profile's.
+                let rate = self.board_rate(now);
+                self.stepper.stop_from(now, decel, rate);
+                if running {
+                    self.drop_goals(0);
+                    self.energise();
+                    self.drive_stepper(now, true);
+                }
+                return Ok(());
+            }
             _ if !running => return Err(GoalError::Offline),
             Goal::Position { counts } => Motion::Move {
                 target: board_position(counts)
@@ -229,7 +276,14 @@ impl SpimotorDriver {
                     return Err(GoalError::OutOfBoardRange(GoalKind::Velocity));
                 }
                 if speed == 0.0 {
-                    Motion::Stopping { decel: accel }
+                    let rate = self.board_rate(now);
+                    self.stepper.stop_from(now, accel, rate);
+                    if running {
+                        self.drop_goals(0);
+                        self.energise();
+                        self.drive_stepper(now, true);
+                    }
+                    return Ok(());
                 } else {
                     Motion::Run { velocity, accel }
                 }
@@ -293,6 +347,21 @@ impl SpimotorDriver {
         }
     }
 
+    /// The signed step rate the board runs at now: the step delay in force (as written,
+    /// the last read confirming it) towards the target it has, 0 when it stands.
+    pub(super) fn board_rate(&self, now: Duration) -> f64 {
+        let position = self.estimated_position(now);
+        let Some(target) = self.written.target.or(self.stepper.target) else {
+            return 0.0;
+        };
+        let rate = ramp::rate_of(self.written.delay);
+        match target.cmp(&position) {
+            core::cmp::Ordering::Greater => rate,
+            core::cmp::Ordering::Less => -rate,
+            core::cmp::Ordering::Equal => 0.0,
+        }
+    }
+
     /// Where the board is now at the latest: the last position read, plus what the
     /// step delay in force lets it walk towards the target it had since that read was
     /// sampled (never past that target). Braking on this errs on the early side.
@@ -342,9 +411,12 @@ impl SpimotorDriver {
         }
         let delay_ok = delay == delay_expect.delay;
         let target_ok = target_expect.target.is_none_or(|t| t == target);
+        // The board steps no faster than the step delay in force: the one read last, or the
+        // one in force when this read went out, whichever is faster.
+        let rate = ramp::rate_of(position_expect.delay).max(ramp::rate_of(self.stepper.delay));
         let plausible = self.stepper.baseline.is_none_or(|(before, at)| {
             let window = now.saturating_sub(at).saturating_add(PLAUSIBILITY_SLACK);
-            let reach = ramp::fastest_rate() * window.as_secs_f64() + PLAUSIBILITY_STEPS;
+            let reach = rate * window.as_secs_f64() + PLAUSIBILITY_STEPS;
             (i64::from(position) - i64::from(before)).unsigned_abs() as f64 <= reach
         });
         if delay_ok && target_ok && plausible {

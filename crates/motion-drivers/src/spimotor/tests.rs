@@ -170,6 +170,24 @@ fn start_up_reads_identification_as_the_datasheet_example_then_configures() {
     );
     let serial = bench.step();
     assert_eq!(serial, vec![vec![0x91, 0x02, 0, 0, 0, 0]]);
+    // Before writing anything, what the board does now: read twice, believed when both
+    // readings agree.
+    for _ in 0..2 {
+        assert!(!bench.driver.status().online);
+        let survey = bench.step();
+        assert_eq!(
+            survey,
+            vec![
+                vec![0x91, 0x40, 0, 0, 0, 0],
+                vec![0x91, 0x41, 0, 0, 0, 0],
+                vec![0x91, 0x43, 0],
+            ]
+        );
+    }
+    assert!(
+        bench.driver.status().online,
+        "online once the survey is answered"
+    );
     let configure = bench.step();
     let rest = ramp::delay_for(2_000.0).tenths_ms();
     assert_eq!(rest, 5, "2000 steps/s is a step every 0.5 ms");
@@ -197,8 +215,11 @@ fn start_up_reads_identification_as_the_datasheet_example_then_configures() {
     assert_eq!(status.firmware(), "spi_motor sn 00001234");
     let state = bench.driver.channel(0);
     assert_eq!(state.fault, None);
-    assert_eq!(state.refreshed_at, Some(3 * MS));
-    assert_eq!(status.replies, 3, "identification, serial number, one poll");
+    assert_eq!(state.refreshed_at, Some(5 * MS));
+    assert_eq!(
+        status.replies, 4,
+        "identification, serial number, the survey, one poll"
+    );
     assert_eq!(bench.board.delay, rest);
     assert_eq!(Coils::from_byte(0x01), Coils::Two);
 }
@@ -589,15 +610,161 @@ fn a_stop_is_pinned_when_the_relative_port_counts_from_the_target() {
         .set_goal(bench.now, 0, Goal::Position { counts: 5_000.0 })
         .unwrap();
     bench.steps(3);
-    // The board has walked a little (this scripted board jumps).
-    bench.board.position = 20;
+    // The board has walked a step or two (this scripted board jumps; more than its
+    // step delay allows would be discarded as implausible).
+    bench.board.position = 2;
     bench.steps(2);
     bench
         .driver
         .set_goal(bench.now, 0, Goal::Stop { decel: 1e9 })
         .unwrap();
-    bench.steps(4);
-    assert_eq!(bench.board.target, 20, "pinned where it was");
+    bench.steps(8);
+    assert_eq!(bench.board.target, 2, "pinned where it was");
     assert!(!bench.driver.channel(0).moving);
     assert_eq!(bench.driver.status().bad_replies, 0);
+}
+
+/// The step delays (port 0x43) written in `sent`, in tenths of a millisecond.
+fn delays_written(sent: &[Vec<u8>]) -> Vec<u8> {
+    sent.iter()
+        .filter(|mosi| mosi[..2] == [0x90, 0x43])
+        .map(|mosi| mosi[2])
+        .collect()
+}
+
+#[test]
+fn a_stepper_left_running_is_ramped_down_from_its_own_rate() {
+    let mut bench = Bench::new(stepper());
+    // Another program left it stepping at 0.2 ms (5000 steps/s) towards a far target.
+    bench.board.delay = 2;
+    bench.board.target = 1_000_000;
+    bench.board.position = 10;
+    bench.steps(4);
+    assert!(bench.driver.status().online);
+    assert!(bench.driver.channel(0).moving);
+    assert!(bench.driver.goals_pending(), "its own stop is under way");
+    for _ in 0..400 {
+        bench.step();
+        if !bench.driver.channel(0).moving {
+            break;
+        }
+    }
+    let sent = bench.sent.clone();
+    // Nothing stopped it dead: no 0x42 before the ramp, and the first delay written is
+    // within one ramp step of the 5000 steps/s it ran at.
+    let first_stop = sent
+        .iter()
+        .position(|mosi| mosi[..2] == [0x90, 0x42])
+        .expect("stopped at the end");
+    let delays = delays_written(&sent[..first_stop]);
+    assert!(!delays.is_empty());
+    let first = ramp::rate_of(StepDelay::from_tenths_ms(delays[0]));
+    // 20 000 steps/s² (the axis's max acceleration) over one 2 ms profile period.
+    assert!(first >= 5_000.0 - 40.0 - 1_700.0, "first rate {first}");
+    assert!(
+        delays.windows(2).all(|w| w[1] >= w[0]),
+        "monotonic slow-down"
+    );
+    // From 5000 steps/s at 20 000 steps/s²: 0.25 s (plus a profile period or two).
+    let stopped_at = bench.now;
+    assert!(
+        stopped_at <= Duration::from_millis(4 + 250 + 10),
+        "{stopped_at:?}"
+    );
+    assert!(
+        stopped_at >= Duration::from_millis(200),
+        "not abrupt: {stopped_at:?}"
+    );
+    // The coils and intensity were written at start-up all the same.
+    assert!(sent.contains(&vec![0x90, 0x44, 0x01]));
+    assert!(sent.contains(&vec![0x90, 0x10, 0x20]));
+    assert!(!bench.driver.goals_pending());
+}
+
+#[test]
+fn a_stop_ramps_from_the_rate_the_board_steps_at() {
+    let mut bench = Bench::started(stepper());
+    bench
+        .driver
+        .set_goal(
+            bench.now,
+            0,
+            Goal::Velocity {
+                velocity: 2_000.0,
+                accel: 20_000.0,
+            },
+        )
+        .unwrap();
+    bench.steps(200);
+    assert_eq!(bench.board.delay, 5, "running at 2000 steps/s");
+    let from = bench.sent.len();
+    bench
+        .driver
+        .set_goal(bench.now, 0, Goal::Stop { decel: 10_000.0 })
+        .unwrap();
+    let mut steps = 0;
+    while bench.driver.channel(0).moving {
+        bench.step();
+        steps += 1;
+        assert!(steps < 400);
+    }
+    let sent = bench.sent[from..].to_vec();
+    let delays = delays_written(&sent);
+    // 2000 → 39 steps/s at 10 000 steps/s²: about 196 ms, a new delay whenever the
+    // ramped rate crosses to the next one.
+    assert!(delays.len() > 20, "{delays:?}");
+    assert!(delays.windows(2).all(|w| w[1] >= w[0]));
+    let rates: Vec<f64> = delays
+        .iter()
+        .map(|d| ramp::rate_of(StepDelay::from_tenths_ms(*d)))
+        .collect();
+    assert!(rates[0] >= 2_000.0 - 20.0 - 700.0, "{}", rates[0]);
+    assert!((190..=215).contains(&steps), "{steps} ms");
+}
+
+#[test]
+fn off_de_energises_and_the_next_goal_energises_first() {
+    let mut config = stepper();
+    config.stepper_intensity = 0x60;
+    config.coils = Coils::One;
+    let mut bench = Bench::started(config);
+    assert_eq!(
+        bench.board.intensity, 0x60,
+        "configured intensity at start-up"
+    );
+    assert!(bench.sent.contains(&vec![0x90, 0x44, 0x00]), "one coil");
+    bench.driver.set_goal(bench.now, 0, Goal::Off).unwrap();
+    let sent = bench.step();
+    // Port 0x42 ← 0 (stop here), then 0x10 ← 0: the coils carry no current.
+    assert_eq!(sent[0], vec![0x90, 0x42, 0, 0, 0, 0]);
+    assert_eq!(sent[1], vec![0x90, 0x10, 0x00]);
+    assert_eq!(bench.board.intensity, 0);
+    bench.steps(3);
+    bench
+        .driver
+        .set_goal(bench.now, 0, Goal::Position { counts: 50.0 })
+        .unwrap();
+    let sent = bench.step();
+    assert_eq!(sent[0], vec![0x90, 0x10, 0x60], "intensity before the move");
+    assert!(sent.iter().any(|mosi| mosi[..2] == [0x90, 0x41]));
+}
+
+#[test]
+fn a_reset_board_gets_intensity_and_coils_again() {
+    let mut config = stepper();
+    config.stepper_intensity = 0x40;
+    let mut bench = Bench::started(config);
+    bench.steps(5);
+    // Power cycle: registers back to power-on values.
+    bench.board = Board::new();
+    bench.board.intensity = 0x20;
+    let from = bench.sent.len();
+    for _ in 0..40 {
+        bench.step();
+    }
+    assert!(bench.driver.status().resets >= 1);
+    let sent = &bench.sent[from..];
+    assert!(sent.contains(&vec![0x90, 0x10, 0x40]), "intensity again");
+    assert!(sent.contains(&vec![0x90, 0x44, 0x01]), "coils again");
+    assert_eq!(bench.board.intensity, 0x40);
 }

@@ -7,7 +7,7 @@ use std::sync::{Arc, Mutex, MutexGuard};
 
 use motion_drivers::{
     BusKind, ChannelState, DeviceFault, DeviceStatus, Driver, Goal, GoalError, GoalKind, GoalKinds,
-    Model, Priority, Transmit,
+    Model, Pin, PinReading, Priority, Transmit,
 };
 use motion_engine::{AxisConfig, CommandPort, DeviceConfig, Engine, EngineConfig, LinkConfig};
 use motion_ipc::{ClientId, CommandKind, CommandReply, CommandRequest, MotionFrame};
@@ -21,6 +21,15 @@ pub struct BoardControl {
     pub silent: bool,
     /// A channel fault the board reports.
     pub fault: Option<DeviceFault>,
+    /// Per channel: a velocity (counts/s) the board adds on its own, whatever its goal (a
+    /// motor that slips, a board that runs an old ramp).
+    pub drift: [f64; 4],
+    /// Pins 0..8: the electrical level or ADC value the board reads.
+    pub inputs: [f64; 8],
+    /// Pins 0..8: the last level the driver wrote to an output (`None`: never).
+    pub outputs: [Option<bool>; 8],
+    /// The board still has its start-up to do: `status().online` is false while set.
+    pub starting: bool,
 }
 
 /// A board whose channels follow their goals with ideal trapezoidal physics, refreshing
@@ -39,6 +48,8 @@ pub struct IdealBoard {
 struct Channel {
     position: f64,
     velocity: f64,
+    /// The board's own drift in the last step, counts/s (reported in the velocity).
+    drift: f64,
     goal: Goal,
     refreshed_at: Option<Duration>,
 }
@@ -51,6 +62,7 @@ impl IdealBoard {
                 Channel {
                     position: 0.0,
                     velocity: 0.0,
+                    drift: 0.0,
                     goal: Goal::Off,
                     refreshed_at: None,
                 };
@@ -99,11 +111,11 @@ impl Driver for IdealBoard {
     fn handle_timeout(&mut self, now: Duration) {
         let dt = self.last.map_or(0.0, |last| (now - last).as_secs_f64());
         self.last = Some(now);
-        let (silent, fault) = {
+        let (silent, fault, drift) = {
             let control = self.control();
-            (control.silent, control.fault)
+            (control.silent, control.fault, control.drift)
         };
-        for channel in &mut self.channels {
+        for (index, channel) in self.channels.iter_mut().enumerate() {
             let (target_velocity, accel) = match channel.goal {
                 Goal::Off
                 | Goal::Power { .. }
@@ -132,15 +144,23 @@ impl Driver for IdealBoard {
                 };
                 channel.velocity = approach(channel.velocity, target_velocity, step);
             }
-            channel.position += channel.velocity * dt;
+            let drift = drift.get(index).copied().unwrap_or(0.0);
+            channel.drift = drift;
+            let before = channel.position;
+            channel.position += (channel.velocity + drift) * dt;
+            // A ramp that reaches (or would step over) its target this step ends on it.
             if let Goal::RampPosition { counts, .. } = channel.goal
+                && drift == 0.0
                 && ((counts - channel.position).abs() < 1e-6
+                    || (counts - before).signum() != (counts - channel.position).signum()
                     || channel.velocity == 0.0 && (counts - channel.position).abs() < 1.0)
             {
                 channel.position = counts;
                 channel.velocity = 0.0;
             }
-            if let Goal::Position { counts } = channel.goal {
+            if let Goal::Position { counts } = channel.goal
+                && drift == 0.0
+            {
                 channel.position = counts;
             }
             if !silent && self.link_up && fault.is_none() {
@@ -199,10 +219,10 @@ impl Driver for IdealBoard {
         };
         ChannelState {
             position: slot.position,
-            velocity: slot.velocity,
+            velocity: slot.velocity + slot.drift,
             raw_counts: slot.position.round() as i64,
             refreshed_at: slot.refreshed_at,
-            moving: slot.velocity != 0.0,
+            moving: slot.velocity + slot.drift != 0.0,
             homed: false,
             at_limit: false,
             arrived: false,
@@ -215,9 +235,33 @@ impl Driver for IdealBoard {
     }
     fn status(&self) -> DeviceStatus {
         let mut status = DeviceStatus::UNKNOWN;
-        status.online = self.link_up;
+        status.online = self.link_up && !self.control().starting;
         status.set_firmware("ideal 1.0");
         status
+    }
+    fn read_pin(&self, pin: Pin) -> Option<PinReading> {
+        let control = self.control();
+        let index = usize::from(pin.0);
+        let value = match control.outputs.get(index)? {
+            Some(level) => f64::from(u8::from(*level)),
+            None => control.inputs[index],
+        };
+        Some(PinReading {
+            value,
+            refreshed_at: self.last,
+        })
+    }
+    fn set_output(&mut self, _: Duration, pin: Pin, high: bool) -> Result<(), GoalError> {
+        if !self.link_up {
+            return Err(GoalError::Offline);
+        }
+        let mut control = self.control();
+        let slot = control
+            .outputs
+            .get_mut(usize::from(pin.0))
+            .ok_or(GoalError::NoSuchPin(pin))?;
+        *slot = Some(high);
+        Ok(())
     }
     fn link_down(&mut self, _: Duration) {
         self.link_up = false;

@@ -40,7 +40,10 @@ mod wire;
 use core::time::Duration;
 
 use motion_link::sim::SpiDevice;
-use qq2drv::{CHANNELS, ControlMode, DataMask, HistoryDimensions, MotionLayout};
+use qq2drv::{
+    CHANNELS, ControlMode, DataMask, HistoryDimensions, InputConfig, MotionLayout,
+    PositionPidEntry, VelocityPidEntry,
+};
 
 pub use config::{InputPin, InputSource, MotorConfig, Qq2drvSimConfig};
 
@@ -185,6 +188,32 @@ impl Qq2drvSim {
         self.channels
             .get(channel)
             .map(|c| c.control.velocity_ramp.velocity)
+    }
+
+    /// The input configuration of packet 14 (mode, polarity, edge) and its Spacing.
+    pub fn input_config(&self, channel: usize) -> Option<(InputConfig, u16)> {
+        self.channels
+            .get(channel)
+            .map(|c| (c.input.config, c.input.spacing))
+    }
+
+    /// The power limit of packet 24, 0..=8191.
+    pub fn power_limit(&self, channel: usize) -> Option<u16> {
+        self.channels.get(channel).map(|c| c.control.power_limit)
+    }
+
+    /// The acceleration limit of packet 28, shl 12 (0 = not limited).
+    pub fn acceleration_limit(&self, channel: usize) -> Option<u32> {
+        self.channels
+            .get(channel)
+            .map(|c| c.control.acceleration_limit)
+    }
+
+    /// The position and velocity PID constants of packets 30 and 32.
+    pub fn pid(&self, channel: usize) -> Option<(PositionPidEntry, VelocityPidEntry)> {
+        self.channels
+            .get(channel)
+            .map(|c| (c.control.position_pid, c.control.velocity_pid))
     }
 
     /// Input Active (after polarity) as last evaluated.

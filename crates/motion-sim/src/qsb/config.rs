@@ -62,6 +62,17 @@ impl Default for AnalogInput {
     }
 }
 
+/// The enable input of the external stepper driver a -M's step and direction lines go to,
+/// wired to one of its DIG I/O bits: while the line is inactive the motor is de-energised
+/// and does not follow the step pulses (the encoder stays where it is).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct DriveEnable {
+    /// DIG I/O bit (0 or 3; 1 and 2 are step and direction).
+    pub bit: u8,
+    /// The drive is enabled while the line is high (else while it is low).
+    pub active_high: bool,
+}
+
 /// Parameters of a simulated QSB.
 #[derive(Debug, Clone, PartialEq)]
 pub struct QsbSimConfig {
@@ -81,7 +92,9 @@ pub struct QsbSimConfig {
     /// measurements take [`qsb::ANALOG_PROCESSING_DELAY`]).
     pub processing_delay: Duration,
     /// Quadrature cycles per stepper step on the -M (the encoder sits on the motor shaft):
-    /// 2.5 is a 500-cycle encoder on a 200-step motor.
+    /// 2.5 is a 500-cycle encoder on a 200-step motor, 10 counts per step in x4. Negative
+    /// when the encoder counts down as the motor steps forward. See
+    /// [`QsbSimConfig::with_counts_per_step`].
     pub cycles_per_step: f64,
     /// Encoder motion on the -S and -D.
     pub motion: EncoderMotion,
@@ -96,6 +109,9 @@ pub struct QsbSimConfig {
     pub digital_inputs: u8,
     /// The motor drive was enabled and saved (COMMAND 2 then 3) before power-up.
     pub motor_drive_enabled: bool,
+    /// -M: the external stepper driver's enable input, when it is wired to a DIG I/O bit;
+    /// `None`: always enabled.
+    pub drive_enable: Option<DriveEnable>,
     /// Largest number of bytes queued for transmission; lines beyond it are dropped.
     pub tx_capacity: usize,
 }
@@ -116,7 +132,18 @@ impl Default for QsbSimConfig {
             analog: AnalogInput::default(),
             digital_inputs: 0xF,
             motor_drive_enabled: false,
+            drive_enable: None,
             tx_capacity: 4096,
         }
+    }
+}
+
+impl QsbSimConfig {
+    /// Sets [`cycles_per_step`](Self::cycles_per_step) from encoder counts per step as a
+    /// host counting x4 quadrature (MDR0 B1 B0 = 11, "four counts per quadrature cycle")
+    /// sees them: `counts / 4` cycles. Negative reverses the encoder.
+    pub fn with_counts_per_step(mut self, counts: f64) -> Self {
+        self.cycles_per_step = counts / 4.0;
+        self
     }
 }

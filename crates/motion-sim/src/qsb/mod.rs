@@ -50,8 +50,10 @@
 //!
 //! # Signals
 //!
-//! - -M: the encoder is on the stepper shaft ([`QsbSimConfig::cycles_per_step`]); -S/-D:
-//!   it follows [`QsbSimConfig::motion`]. [`QsbSim::nudge_encoder`] moves it by hand.
+//! - -M: the encoder is on the stepper shaft ([`QsbSimConfig::cycles_per_step`], negative
+//!   reverses it); -S/-D: it follows [`QsbSimConfig::motion`]. [`QsbSim::nudge_encoder`]
+//!   moves it by hand. With [`QsbSimConfig::drive_enable`] the external stepper driver
+//!   follows the step pulses only while its enable line (a DIG I/O bit) is active.
 //! - Index: one pulse per [`QsbSimConfig::cycles_per_rev`], a quarter cycle wide, acting
 //!   on its leading edge in the direction of motion (trailing edge with MDR1 B3).
 //! - Digital I/O: open-drain outputs with pull-ups; [`QsbSim::set_digital_inputs`] pulls
@@ -78,7 +80,7 @@ use qsb::{
 
 use crate::rng::SimRng;
 
-pub use config::{AnalogInput, EncoderMotion, QsbSimConfig, Variant};
+pub use config::{AnalogInput, DriveEnable, EncoderMotion, QsbSimConfig, Variant};
 pub use dio::{DIRECTION_BIT, STEP_BIT};
 
 use counter::Counter;
@@ -346,6 +348,20 @@ impl QsbSim {
     /// Levels at the digital I/O pins.
     pub fn digital_pins(&self) -> u8 {
         self.dio.pins()
+    }
+
+    /// DIG I/O bits configured as outputs (DIG I/O CONFIG B11–B8) and the output states
+    /// written (DIG I/O), as `(outputs, latch)`.
+    pub fn digital_outputs(&self) -> (u8, u8) {
+        (self.dio.config.output & 0xF, self.dio.latch & 0xF)
+    }
+
+    /// Whether the external stepper driver is enabled (always without
+    /// [`QsbSimConfig::drive_enable`]).
+    pub fn drive_energised(&self) -> bool {
+        self.config
+            .drive_enable
+            .is_none_or(|line| (self.dio.pins() >> line.bit) & 1 == u8::from(line.active_high))
     }
 
     /// The line rate the board is listening at.

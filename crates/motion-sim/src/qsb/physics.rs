@@ -57,8 +57,14 @@ impl QsbSim {
             let p0 = self.encoder_at(self.t);
             if self.config.variant == super::Variant::M {
                 let (vmax, accel) = self.motor_limits_internal();
+                let steps_before = self.motor.position;
                 self.motor
                     .advance((next - self.t).as_secs_f64(), vmax, accel);
+                if !self.drive_energised() {
+                    // A disabled driver ignores the pulses: the shaft stays.
+                    self.encoder_offset -=
+                        (self.motor.position - steps_before) * self.config.cycles_per_step;
+                }
                 if self.motor.velocity != 0.0 && self.dio.drive.is_some() {
                     self.set_direction(self.motor.velocity > 0.0);
                 }

@@ -61,6 +61,25 @@ impl ConfigIssue {
 }
 
 impl ConfigError {
+    /// A file that is not UTF-8: the first bad byte, located.
+    pub fn not_utf8(path: &Path, bytes: &[u8], error: &core::str::Utf8Error) -> Self {
+        let good = &bytes[..error.valid_up_to()];
+        let text = core::str::from_utf8(good).unwrap_or_default();
+        let (line, column) = line_column(text, text.len());
+        let byte = bytes.get(error.valid_up_to()).copied().unwrap_or(0);
+        Self {
+            path: path.to_owned(),
+            issues: vec![ConfigIssue {
+                line,
+                column,
+                key: "(file)".into(),
+                message: format!(
+                    "byte 0x{byte:02X} is not UTF-8: a config file is UTF-8 text (save it as UTF-8)"
+                ),
+            }],
+        }
+    }
+
     /// A file that could not be read at all.
     pub fn unreadable(path: &Path, error: &std::io::Error) -> Self {
         Self {
@@ -79,6 +98,8 @@ impl ConfigError {
 pub(crate) struct Issues<'a> {
     source: &'a str,
     pub list: Vec<ConfigIssue>,
+    /// Indices into `list` of issues about dangling names (reported first).
+    pub references: Vec<usize>,
     /// Things that work but are probably not what the user wants.
     pub warnings: Vec<ConfigIssue>,
 }
@@ -88,6 +109,7 @@ impl<'a> Issues<'a> {
         Self {
             source,
             list: Vec::new(),
+            references: Vec::new(),
             warnings: Vec::new(),
         }
     }
@@ -96,6 +118,30 @@ impl<'a> Issues<'a> {
     pub fn push(&mut self, span: Range<usize>, key: impl Into<String>, message: impl Into<String>) {
         let issue = self.at(span, key, message);
         self.list.push(issue);
+    }
+
+    /// Records an issue about a name that refers to nothing (listed before other issues:
+    /// it often explains them).
+    pub fn push_reference(
+        &mut self,
+        span: Range<usize>,
+        key: impl Into<String>,
+        message: impl Into<String>,
+    ) {
+        self.references.push(self.list.len());
+        self.push(span, key, message);
+    }
+
+    /// The issues, dangling references first, then in file order.
+    pub fn sorted(mut self) -> Vec<ConfigIssue> {
+        let mut keyed: Vec<(bool, ConfigIssue)> = self
+            .list
+            .drain(..)
+            .enumerate()
+            .map(|(index, issue)| (!self.references.contains(&index), issue))
+            .collect();
+        keyed.sort_by_key(|(later, issue)| (*later, issue.line, issue.column));
+        keyed.into_iter().map(|(_, issue)| issue).collect()
     }
 
     /// Records a warning (the config is used anyway).
@@ -119,24 +165,54 @@ impl<'a> Issues<'a> {
         }
     }
 
-    /// The key written at the start of the line holding byte `offset` (`key = value`), for
-    /// errors serde reports with only a span.
+    /// The dotted key of the line holding byte `offset` (`server.tick_hz`, `axis[2].max`,
+    /// the table itself for a header line), for errors serde reports with only a span.
     pub fn key_at(&self, offset: usize) -> String {
-        let start = self.source[..offset.min(self.source.len())]
-            .rfind('\n')
-            .map_or(0, |newline| newline + 1);
-        let line = self.source[start..].lines().next().unwrap_or("");
-        let trimmed = line.trim();
-        if let Some(table) = trimmed.strip_prefix('[') {
-            return table
-                .trim_matches(|c| c == '[' || c == ']')
-                .trim()
-                .to_owned();
+        let offset = offset.min(self.source.len());
+        let mut table = String::new();
+        let mut counts: Vec<(String, usize)> = Vec::new();
+        let mut line_start = 0;
+        for line in self.source.split_inclusive('\n') {
+            let trimmed = line.trim();
+            let header = if let Some(name) = trimmed.strip_prefix("[[") {
+                let name = name.split("]]").next().unwrap_or("").trim().to_owned();
+                let index = match counts.iter_mut().find(|(n, _)| *n == name) {
+                    Some((_, count)) => {
+                        *count += 1;
+                        *count - 1
+                    }
+                    None => {
+                        counts.push((name.clone(), 1));
+                        0
+                    }
+                };
+                Some(format!("{name}[{index}]"))
+            } else {
+                trimmed
+                    .strip_prefix('[')
+                    .map(|name| name.split(']').next().unwrap_or("").trim().to_owned())
+            };
+            let is_header = header.is_some();
+            if let Some(header) = header {
+                table = header;
+            }
+            if offset < line_start + line.len() || line_start + line.len() == self.source.len() {
+                if is_header {
+                    return table;
+                }
+                let key = trimmed
+                    .split_once('=')
+                    .map(|(key, _)| key.trim().trim_matches('"').to_owned());
+                return match (key, table.is_empty()) {
+                    (Some(key), true) => key,
+                    (Some(key), false) => format!("{table}.{key}"),
+                    (None, false) => table,
+                    (None, true) => "(file)".to_owned(),
+                };
+            }
+            line_start += line.len();
         }
-        match trimmed.split_once('=') {
-            Some((key, _)) => key.trim().to_owned(),
-            None => "(file)".to_owned(),
-        }
+        "(file)".to_owned()
     }
 }
 
@@ -169,11 +245,28 @@ mod tests {
     }
 
     #[test]
-    fn key_at_finds_the_key_or_table_of_a_line() {
-        let source = "[server]\ntick_hz = \"fast\"\n[[axis]]\n";
+    fn key_at_finds_the_dotted_key_or_table_of_a_line() {
+        let source = "[server]\ntick_hz = \"fast\"\n[[axis]]\nname = \"a\"\n[[axis]]\nmax = \"x\"\nhome = { input = 5 }";
         let issues = Issues::new(source);
-        assert_eq!(issues.key_at(source.find("fast").unwrap()), "tick_hz");
+        assert_eq!(
+            issues.key_at(source.find("fast").unwrap()),
+            "server.tick_hz"
+        );
         assert_eq!(issues.key_at(2), "server");
-        assert_eq!(issues.key_at(source.rfind("axis").unwrap()), "axis");
+        assert_eq!(
+            issues.key_at(source.find("[[axis]]").unwrap() + 3),
+            "axis[0]"
+        );
+        assert_eq!(issues.key_at(source.find("\"x\"").unwrap()), "axis[1].max");
+        assert_eq!(issues.key_at(source.find("5 }").unwrap()), "axis[1].home");
+    }
+
+    #[test]
+    fn a_non_utf8_byte_is_located() {
+        let bytes = b"[server]\nname = \"d\xE9mo\"\n";
+        let error = core::str::from_utf8(bytes).unwrap_err();
+        let config = ConfigError::not_utf8(Path::new("x.toml"), bytes, &error);
+        assert_eq!((config.issues[0].line, config.issues[0].column), (2, 10));
+        assert!(config.issues[0].message.contains("0xE9"));
     }
 }

@@ -314,9 +314,10 @@ pub struct ServerConfig {
 impl ServerConfig {
     /// Reads and validates `path`.
     pub fn load(path: &Path) -> Result<Self, ConfigError> {
-        let source =
-            std::fs::read_to_string(path).map_err(|error| ConfigError::unreadable(path, &error))?;
-        Self::parse(path, &source)
+        let bytes = std::fs::read(path).map_err(|error| ConfigError::unreadable(path, &error))?;
+        let source = core::str::from_utf8(&bytes)
+            .map_err(|error| ConfigError::not_utf8(path, &bytes, &error))?;
+        Self::parse(path, source)
     }
 
     /// Validates `source` as if read from `path`.

@@ -5,6 +5,54 @@
 use serde::Deserialize;
 use toml::Spanned;
 
+/// An integer as written, whatever its size: a value beyond 64 bits is a range error
+/// reported by validation with its key and allowed range, not a parse error.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Int(pub i128);
+
+impl<'de> Deserialize<'de> for Int {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl serde::de::Visitor<'_> for Visitor {
+            type Value = Int;
+            fn expecting(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+                f.write_str("an integer")
+            }
+            fn visit_i64<E>(self, v: i64) -> Result<Int, E> {
+                Ok(Int(i128::from(v)))
+            }
+            fn visit_u64<E>(self, v: u64) -> Result<Int, E> {
+                Ok(Int(i128::from(v)))
+            }
+            fn visit_i128<E>(self, v: i128) -> Result<Int, E> {
+                Ok(Int(v))
+            }
+            fn visit_u128<E>(self, v: u128) -> Result<Int, E> {
+                Ok(Int(i128::try_from(v).unwrap_or(i128::MAX)))
+            }
+        }
+        deserializer.deserialize_any(Visitor)
+    }
+}
+
+/// A raw integer key of either representation.
+pub(crate) trait IntValue {
+    /// The value, widened.
+    fn wide(&self) -> i128;
+}
+
+impl IntValue for i64 {
+    fn wide(&self) -> i128 {
+        i128::from(*self)
+    }
+}
+
+impl IntValue for Int {
+    fn wide(&self) -> i128 {
+        self.0
+    }
+}
+
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawConfig {
@@ -23,15 +71,15 @@ pub(crate) struct RawConfig {
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawServer {
     pub name: Option<Spanned<String>>,
-    pub tick_hz: Option<Spanned<i64>>,
-    pub command_timeout_ms: Option<Spanned<i64>>,
-    pub rt_priority: Option<Spanned<i64>>,
-    pub cpu: Option<Spanned<i64>>,
+    pub tick_hz: Option<Spanned<Int>>,
+    pub command_timeout_ms: Option<Spanned<Int>>,
+    pub rt_priority: Option<Spanned<Int>>,
+    pub cpu: Option<Spanned<Int>>,
     pub lock_memory: Option<Spanned<bool>>,
-    pub max_clients: Option<Spanned<i64>>,
-    pub max_consecutive_overruns: Option<Spanned<i64>>,
-    pub liveness_check_ms: Option<Spanned<i64>>,
-    pub claim_lease_ms: Option<Spanned<i64>>,
+    pub max_clients: Option<Spanned<Int>>,
+    pub max_consecutive_overruns: Option<Spanned<Int>>,
+    pub liveness_check_ms: Option<Spanned<Int>>,
+    pub claim_lease_ms: Option<Spanned<Int>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -41,9 +89,9 @@ pub(crate) struct RawLink {
     #[serde(rename = "type")]
     pub kind: Option<Spanned<String>>,
     pub path: Option<Spanned<String>>,
-    pub baud: Option<Spanned<i64>>,
-    pub speed_hz: Option<Spanned<i64>>,
-    pub mode: Option<Spanned<i64>>,
+    pub baud: Option<Spanned<Int>>,
+    pub speed_hz: Option<Spanned<Int>>,
+    pub mode: Option<Spanned<Int>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -52,7 +100,7 @@ pub(crate) struct RawDevice {
     pub name: Option<Spanned<String>>,
     pub link: Option<Spanned<String>>,
     pub model: Option<Spanned<String>>,
-    pub address: Option<Spanned<i64>>,
+    pub address: Option<Spanned<Int>>,
     pub variant: Option<Spanned<String>>,
     pub drive: Option<Spanned<String>>,
     pub sim: Option<Spanned<RawSim>>,
@@ -66,6 +114,9 @@ pub(crate) struct RawDevice {
     pub host_latency_ms: Option<Spanned<f64>>,
     pub enable_output: Option<Spanned<i64>>,
     pub enable_active: Option<Spanned<String>>,
+    pub input_mode: Option<Spanned<String>>,
+    pub capture_input: Option<Spanned<i64>>,
+    pub capture_edge: Option<Spanned<String>>,
     // tmcpack machine keys (config/machine/tmcpack.rs)
     pub reply_address: Option<Spanned<i64>>,
     pub switchover_ms: Option<Spanned<i64>>,
@@ -88,7 +139,7 @@ pub(crate) struct RawReadyOutput {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawSim {
-    pub seed: Option<Spanned<i64>>,
+    pub seed: Option<Spanned<Int>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -96,7 +147,7 @@ pub(crate) struct RawSim {
 pub(crate) struct RawAxis {
     pub name: Option<Spanned<String>>,
     pub device: Option<Spanned<String>>,
-    pub channel: Option<Spanned<i64>>,
+    pub channel: Option<Spanned<Int>>,
     pub unit: Option<Spanned<String>>,
     pub counts_per_unit: Option<Spanned<f64>>,
     pub min: Option<Spanned<f64>>,

@@ -3,16 +3,18 @@
 use anyhow::bail;
 use motion_drivers::Driver;
 use motion_drivers::spimotor::{AxisLimits, SpimotorDrive, SpimotorDriver, SpimotorDriverConfig};
+use spimotor::Coils;
 
 use super::{ParamRow, channel_limits, line_rate};
-use crate::config::{DeviceSpec, ServerConfig, SpiDrive};
+use crate::config::{DeviceMachine, DeviceSpec, Owner, ServerConfig, SpiDrive};
 
-/// The driver of spimotor device `index`.
-pub(super) fn build(
+/// The driver configuration of spimotor device `index`: address, drive, its link's clock,
+/// the axis limits and (stepper) the drive intensity and coils.
+pub(crate) fn driver_config(
     config: &ServerConfig,
     index: usize,
     device: &DeviceSpec,
-) -> anyhow::Result<Box<dyn Driver>> {
+) -> anyhow::Result<SpimotorDriverConfig> {
     let Ok(address) = spimotor::Address::new(device.address as u8) else {
         bail!(
             "device `{}`: {} is not an SPI_motor address",
@@ -39,15 +41,58 @@ pub(super) fn build(
             };
         }
     }
-    Ok(Box::new(SpimotorDriver::new(driver)))
+    if let DeviceMachine::Spimotor(keys) = &device.machine {
+        if let Some(intensity) = keys.intensity {
+            driver.stepper_intensity = intensity;
+        }
+        match keys.coils {
+            Some(1) => driver.coils = Coils::One,
+            Some(_) => driver.coils = Coils::Two,
+            None => {}
+        }
+    }
+    Ok(driver)
 }
 
-/// The machine parameters of spimotor device `index` and its axes, as the driver uses them.
+/// The driver of spimotor device `index`.
+pub(super) fn build(
+    config: &ServerConfig,
+    index: usize,
+    device: &DeviceSpec,
+) -> anyhow::Result<Box<dyn Driver>> {
+    Ok(Box::new(SpimotorDriver::new(driver_config(
+        config, index, device,
+    )?)))
+}
+
+/// The machine parameters of spimotor device `index`, as the driver uses them: a stepper
+/// board's `intensity` (port 0x10) and `coils` (port 0x44). A brushed board has none.
 pub(super) fn describe(
     config: &ServerConfig,
     index: usize,
     device: &DeviceSpec,
     out: &mut Vec<ParamRow>,
 ) {
-    let _ = (config, index, device, out);
+    if device.drive != SpiDrive::Stepper {
+        return;
+    }
+    let Ok(driver) = driver_config(config, index, device) else {
+        return;
+    };
+    out.push(ParamRow {
+        owner: Owner::Device(index),
+        key: "intensity".to_owned(),
+        value: format!(
+            "{} (0x{:02x} of 0xff)",
+            driver.stepper_intensity, driver.stepper_intensity
+        ),
+    });
+    out.push(ParamRow {
+        owner: Owner::Device(index),
+        key: "coils".to_owned(),
+        value: match driver.coils {
+            Coils::One => "1 (port 0x44 ← 0x00)".to_owned(),
+            Coils::Two => "2 (port 0x44 ← 0x01)".to_owned(),
+        },
+    });
 }

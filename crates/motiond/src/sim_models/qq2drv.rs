@@ -5,7 +5,8 @@ use motion_sim::qq2drv::{InputPin, InputSource, Qq2drvSim, Qq2drvSimConfig};
 use crate::config::{DeviceSpec, Direction, HomeInputKind, ServerConfig};
 
 /// The IN pins of a simulated QuadQuad2Drv, wired as its axes' `home` tables say: an
-/// encoder index once per revolution, or a switch at the end of travel the search runs to.
+/// encoder index once per revolution, a switch at the end of travel the search runs to, or
+/// (with `home.spacing`: two end-stops on one input) a switch at each end of travel.
 fn inputs(config: &ServerConfig, device: usize) -> [InputPin; 4] {
     let mut inputs = [InputPin::default(); 4];
     for (axis, spec) in config.axes.iter().zip(&config.axis_specs) {
@@ -23,6 +24,16 @@ fn inputs(config: &ServerConfig, device: usize) -> [InputPin; 4] {
                 offset: 0.0,
                 width: 4.0,
             },
+            HomeInputKind::Home | HomeInputKind::Edge if input.spacing.is_some() => {
+                let (a, b) = (
+                    axis.min * axis.counts_per_unit,
+                    axis.max * axis.counts_per_unit,
+                );
+                InputSource::TwoEndStops {
+                    negative: a.min(b),
+                    positive: a.max(b),
+                }
+            }
             HomeInputKind::Home | HomeInputKind::Edge => InputSource::EndStop {
                 position: end * axis.counts_per_unit,
                 positive_end: positive == (axis.counts_per_unit > 0.0),

@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 pub mod pty_board;
+pub mod socket_board;
 
 use core::time::Duration;
 use std::io::{BufRead, BufReader};

@@ -20,6 +20,8 @@ pub struct PtyBoard {
     thread: Option<JoinHandle<()>>,
     /// The symlink the server's config names.
     pub link: PathBuf,
+    /// Every byte the server sent, with the model time it reached the board.
+    pub received: Arc<Mutex<Vec<(Duration, u8)>>>,
 }
 
 impl PtyBoard {
@@ -51,18 +53,21 @@ impl PtyBoard {
         let _ = std::fs::remove_file(link);
         std::os::unix::fs::symlink(&slave_path, link).expect("symlink to the pty");
         let stop = Arc::new(AtomicBool::new(false));
+        let received: Arc<Mutex<Vec<(Duration, u8)>>> = Arc::default();
         let thread = {
             let stop = Arc::clone(&stop);
+            let log = Arc::clone(&received);
             let master = pty.master;
             // Keep our own slave fd open so the master never reads EIO while the server is
             // between opens.
             let slave = pty.slave;
-            std::thread::spawn(move || serve(master, slave, device, stop, epoch, baud))
+            std::thread::spawn(move || serve(master, slave, device, stop, epoch, baud, log))
         };
         Self {
             stop,
             thread: Some(thread),
             link: link.to_owned(),
+            received,
         }
     }
 
@@ -91,6 +96,7 @@ fn serve<D: StreamDevice>(
     stop: Arc<AtomicBool>,
     epoch: Instant,
     baud: u32,
+    log: Arc<Mutex<Vec<(Duration, u8)>>>,
 ) {
     let byte_time = Duration::from_nanos(10_000_000_000 / u64::from(baud.max(1)));
     let mut buf = [0u8; 512];
@@ -133,6 +139,7 @@ fn serve<D: StreamDevice>(
             }
             incoming.pop_front();
             device.lock().unwrap().receive(at, &[byte]);
+            log.lock().unwrap().push((at, byte));
         }
         let len = device.lock().unwrap().transmit(now, &mut buf);
         for &byte in &buf[..len] {

@@ -163,6 +163,22 @@ impl IntervalRate {
     pub fn period(self) -> Option<Duration> {
         (self != Self::DISABLED).then(|| TICK * u32::from(self.0))
     }
+
+    /// The longest period that still outputs data: 0xFFFE ticks (127.99 s); 0xFFFF would
+    /// disable output.
+    pub const LONGEST: Self = Self(0xFFFE);
+
+    /// The INTERVAL RATE whose period is nearest to `period` ("sets the data output timer
+    /// in 1.95ms steps"): `period` rounded to whole [`TICK`]s, halves up. `None` when that
+    /// is beyond [`LONGEST`](Self::LONGEST) (the next value, 0xFFFF, disables output).
+    pub fn nearest(period: Duration) -> Option<Self> {
+        let tick = TICK.as_nanos();
+        let ticks = (period.as_nanos() + tick / 2) / tick;
+        u16::try_from(ticks)
+            .ok()
+            .filter(|t| *t <= Self::LONGEST.0)
+            .map(Self)
+    }
 }
 
 impl Default for IntervalRate {

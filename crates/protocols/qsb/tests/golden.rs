@@ -59,6 +59,30 @@ fn interval_rate_example_w0c5_is_9_8_ms() {
     assert_eq!(period, Duration::from_nanos(9_765_625));
     assert_eq!(IntervalRate::DISABLED.period(), None);
     assert_eq!(IntervalRate(0).period(), Some(Duration::ZERO));
+    // "Set 9.8ms Interval": 9.8 ms is nearest to 5 ticks; "0x0001 = 1.95ms delay,
+    // 0x0002 = 3.9ms delay".
+    assert_eq!(
+        IntervalRate::nearest(Duration::from_micros(9_800)),
+        Some(IntervalRate(5))
+    );
+    assert_eq!(
+        IntervalRate::nearest(Duration::from_micros(1_950)),
+        Some(IntervalRate(1))
+    );
+    assert_eq!(
+        IntervalRate::nearest(Duration::from_micros(3_900)),
+        Some(IntervalRate(2))
+    );
+    assert_eq!(
+        IntervalRate::nearest(Duration::from_micros(900)),
+        Some(IntervalRate(0))
+    );
+    // "A value of 0xFFFF will disable data output": never the nearest of a period.
+    assert_eq!(
+        IntervalRate::nearest(IntervalRate::LONGEST.period().unwrap()),
+        Some(IntervalRate::LONGEST)
+    );
+    assert_eq!(IntervalRate::nearest(Duration::from_secs(128)), None);
 }
 
 #[test]

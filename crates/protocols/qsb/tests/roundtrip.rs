@@ -73,6 +73,18 @@ fn any_eor() -> impl Strategy<Value = Eor> {
 }
 
 proptest! {
+    /// INTERVAL RATE: the period of a rate is nearest to that rate, and any period within
+    /// half a tick of it rounds back to it.
+    #[test]
+    fn interval_rate_nearest_inverts_period(ticks in 0u16..=0xFFFE, jitter in -0.49f64..0.49) {
+        let rate = IntervalRate(ticks);
+        let period = rate.period().unwrap();
+        prop_assert_eq!(IntervalRate::nearest(period), Some(rate));
+        let nanos = period.as_nanos() as f64 + jitter * TICK.as_nanos() as f64;
+        let near = core::time::Duration::from_nanos(nanos.max(0.0) as u64);
+        prop_assert_eq!(IntervalRate::nearest(near), Some(rate));
+    }
+
     #[test]
     fn request_roundtrip(request in any_request()) {
         let mut buf = [0u8; MAX_COMMAND_LEN];

@@ -132,7 +132,11 @@ impl Validator<'_, '_> {
         let max_travel = match max_travel.value {
             Some((t, _, _)) if t.is_finite() && t > 0.0 => Some(t),
             Some((t, span, k)) => {
-                self.issue(span, &k, format!("{t} is not allowed; a finite distance > 0 (units)"));
+                self.issue(
+                    span,
+                    &k,
+                    format!("{t} is not allowed; a finite distance > 0 (units)"),
+                );
                 None
             }
             None => match (min, max) {
@@ -142,8 +146,7 @@ impl Validator<'_, '_> {
         };
         let position = match position.value {
             Some((p, span, k)) => {
-                let fits = counts_per_unit
-                    .is_none_or(|cpu| (p * cpu).abs() <= f64::from(i32::MAX));
+                let fits = counts_per_unit.is_none_or(|cpu| (p * cpu).abs() <= f64::from(i32::MAX));
                 if !p.is_finite() {
                     self.issue(span, &k, "a finite number (units)");
                     None
@@ -158,7 +161,12 @@ impl Validator<'_, '_> {
         };
         let input = if device.model == Model::Qq2drv {
             match home {
-                Some(h) => self.home_input(index, h, a.home.as_ref().map_or(0..0, Spanned::span), counts_per_unit),
+                Some(h) => self.home_input(
+                    index,
+                    h,
+                    a.home.as_ref().map_or(0..0, Spanned::span),
+                    counts_per_unit,
+                ),
                 None => Some(None),
             }
         } else {

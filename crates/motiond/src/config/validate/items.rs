@@ -6,8 +6,8 @@ use motion_ipc::{NAME_LEN, UNIT_LEN};
 use toml::Spanned;
 
 use super::Validator;
-use crate::config::raw::{RawAxis, RawDevice};
 use super::machine::{AxisContext, DeviceContext};
+use crate::config::raw::{RawAxis, RawDevice};
 use crate::config::{AxisSpec, DeviceSpec, PackVariant, QsbVariant, SpiDrive};
 
 impl Validator<'_, '_> {
@@ -32,7 +32,7 @@ impl Validator<'_, '_> {
                 if found.is_none() {
                     let known: Vec<&str> =
                         link_names.iter().flatten().map(String::as_str).collect();
-                    self.issue(
+                    self.dangling(
                         link.span(),
                         &key("link"),
                         format!(
@@ -114,7 +114,7 @@ impl Validator<'_, '_> {
             }
             (Some(Model::Spimotor), None) => Some(0x90),
             (Some(Model::Spimotor), Some(a)) => {
-                let value = *a.get_ref();
+                let value = a.get_ref().0;
                 if (2..=254).contains(&value) && value % 2 == 0 {
                     Some(value as u32)
                 } else {
@@ -189,7 +189,7 @@ impl Validator<'_, '_> {
                 if named.is_none() {
                     let known: Vec<&str> =
                         devices.iter().flatten().map(|d| d.name.as_str()).collect();
-                    self.issue(
+                    self.dangling(
                         device.span(),
                         &key("device"),
                         format!(
@@ -211,8 +211,8 @@ impl Validator<'_, '_> {
             .and_then(|channel| {
                 let spec = device.and_then(|d| devices[d].as_ref())?;
                 let count = spec.channel_count();
-                let value = *channel.get_ref();
-                if (0..count as i64).contains(&value) {
+                let value = channel.get_ref().0;
+                if (0..count as i128).contains(&value) {
                     Some(value as usize)
                 } else {
                     self.issue(

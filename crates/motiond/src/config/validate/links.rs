@@ -6,7 +6,7 @@ use motion_drivers::{BusKind, Model};
 use toml::Spanned;
 
 use super::Validator;
-use crate::config::raw::{RawDevice, RawLink};
+use crate::config::raw::{Int, RawDevice, RawLink};
 use crate::config::{DeviceSpec, LinkSpec, Transport};
 
 impl Validator<'_, '_> {
@@ -100,7 +100,7 @@ impl Validator<'_, '_> {
                     (None, false) => None,
                 }
             };
-            let forbid = |me: &mut Self, value: &Option<Spanned<i64>>, k: &str, why: &str| {
+            let forbid = |me: &mut Self, value: &Option<Spanned<Int>>, k: &str, why: &str| {
                 if let Some(v) = value {
                     me.issue(v.span(), &key(k), why.to_owned());
                 }

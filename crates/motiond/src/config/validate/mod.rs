@@ -16,7 +16,7 @@ mod signals;
 mod supervision;
 
 use super::error::{ConfigIssue, Issues};
-use super::raw::{RawConfig, RawLink, RawServer};
+use super::raw::{IntValue, RawConfig, RawLink, RawServer};
 use super::{AxisSpec, DeviceSpec, GivenKeys, ServerConfig, ServerSettings};
 
 pub(crate) fn parse(source: &str) -> Result<ServerConfig, Vec<ConfigIssue>> {
@@ -33,7 +33,7 @@ pub(crate) fn parse(source: &str) -> Result<ServerConfig, Vec<ConfigIssue>> {
                 .replace("expected i64", "expected an integer")
                 .replace("expected f64", "expected a number");
             issues.push(span, key, message);
-            return Err(issues.list);
+            return Err(issues.sorted());
         }
     };
     let mut validator = Validator {
@@ -43,12 +43,13 @@ pub(crate) fn parse(source: &str) -> Result<ServerConfig, Vec<ConfigIssue>> {
     validator.machine_cross_checks(&config, &raw);
     config.given = GivenKeys::of(source);
     config.warnings = core::mem::take(&mut issues.warnings);
-    config.warnings.sort_by_key(|issue| (issue.line, issue.column));
+    config
+        .warnings
+        .sort_by_key(|issue| (issue.line, issue.column));
     if issues.list.is_empty() {
         Ok(config)
     } else {
-        issues.list.sort_by_key(|issue| (issue.line, issue.column));
-        Err(issues.list)
+        Err(issues.sorted())
     }
 }
 
@@ -62,6 +63,11 @@ pub(crate) type TableSpan = Range<usize>;
 impl Validator<'_, '_> {
     pub(crate) fn issue(&mut self, span: Range<usize>, key: &str, message: impl Into<String>) {
         self.issues.push(span, key, message);
+    }
+
+    /// An issue about a name that refers to nothing (reported before the others).
+    pub(crate) fn dangling(&mut self, span: Range<usize>, key: &str, message: impl Into<String>) {
+        self.issues.push_reference(span, key, message);
     }
 
     /// A warning: the config is used, and motiond (and `--check-config`) print it.
@@ -82,15 +88,15 @@ impl Validator<'_, '_> {
         value.as_ref()
     }
 
-    pub(crate) fn int_in(
+    pub(crate) fn int_in<T: IntValue>(
         &mut self,
-        value: &Spanned<i64>,
+        value: &Spanned<T>,
         key: &str,
         range: core::ops::RangeInclusive<i64>,
     ) -> Option<i64> {
-        let v = *value.get_ref();
-        if range.contains(&v) {
-            Some(v)
+        let v = value.get_ref().wide();
+        if (i128::from(*range.start())..=i128::from(*range.end())).contains(&v) {
+            i64::try_from(v).ok()
         } else {
             self.issue(
                 value.span(),
@@ -133,6 +139,23 @@ impl Validator<'_, '_> {
 
     fn run(&mut self, raw: &RawConfig) -> ServerConfig {
         let server = self.server(raw.server.as_ref());
+        if raw.link.is_empty() {
+            self.issue(0..0, "link", "no [[link]] table: a server needs at least one link to a board (a sim link runs a simulated one)");
+        }
+        if raw.device.is_empty() {
+            self.issue(
+                0..0,
+                "device",
+                "no [[device]] table: a server needs at least one board",
+            );
+        }
+        if raw.axis.is_empty() && raw.signal.is_empty() {
+            self.issue(
+                0..0,
+                "axis",
+                "no [[axis]] or [[signal]] table: the server would have nothing to serve",
+            );
+        }
         for (what, count, max, items) in [
             (
                 "link",
@@ -284,11 +307,19 @@ impl Validator<'_, '_> {
             liveness_check: Duration::from_millis(100),
             claim_lease: Duration::ZERO,
         };
+        const NAME: &str =
+            "the instance name: services are motiond/<name>/frame, …; e.g. name = \"demo\"";
         let Some(raw) = raw else {
+            self.issue(
+                0..0,
+                "server.name",
+                format!("missing [server] table with its name; {NAME}"),
+            );
             return settings;
         };
+        let table = raw.span();
         let raw = raw.get_ref();
-        if let Some(name) = &raw.name
+        if let Some(name) = self.required(&raw.name, &table, "server.name", NAME)
             && let Some(name) = self.name(name, "server.name", NAME_LEN)
         {
             settings.name = name;

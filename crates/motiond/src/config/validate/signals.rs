@@ -24,7 +24,10 @@ impl Validator<'_, '_> {
             self.issue(
                 raw[MAX_SIGNALS].span(),
                 "signal",
-                format!("{} [[signal]] tables; at most {MAX_SIGNALS} are supported", raw.len()),
+                format!(
+                    "{} [[signal]] tables; at most {MAX_SIGNALS} are supported",
+                    raw.len()
+                ),
             );
         }
         let mut specs: Vec<Option<SignalSpec>> = Vec::with_capacity(raw.len());
@@ -32,11 +35,18 @@ impl Validator<'_, '_> {
             let spec = self.signal(index, signal, devices, raw_devices);
             if let Some(spec) = &spec {
                 if let Some(first) = specs.iter().flatten().find(|s| s.name == spec.name) {
-                    let span = signal.get_ref().name.as_ref().map_or(signal.span(), Spanned::span);
+                    let span = signal
+                        .get_ref()
+                        .name
+                        .as_ref()
+                        .map_or(signal.span(), Spanned::span);
                     self.issue(
                         span,
                         &format!("signal[{index}].name"),
-                        format!("a signal called `{}` is already defined; names must be unique", first.name),
+                        format!(
+                            "a signal called `{}` is already defined; names must be unique",
+                            first.name
+                        ),
                     );
                 }
                 if let Some(first) = specs
@@ -44,7 +54,11 @@ impl Validator<'_, '_> {
                     .flatten()
                     .find(|s| s.device == spec.device && s.pin == spec.pin)
                 {
-                    let span = signal.get_ref().pin.as_ref().map_or(signal.span(), Spanned::span);
+                    let span = signal
+                        .get_ref()
+                        .pin
+                        .as_ref()
+                        .map_or(signal.span(), Spanned::span);
                     self.issue(
                         span,
                         &format!("signal[{index}].pin"),
@@ -74,7 +88,12 @@ impl Validator<'_, '_> {
             .required(&s.name, &table, &key("name"), "every signal needs a name")
             .and_then(|name| self.name(name, &key("name"), NAME_LEN));
         let device = self
-            .required(&s.device, &table, &key("device"), "the name of a [[device]]")
+            .required(
+                &s.device,
+                &table,
+                &key("device"),
+                "the name of a [[device]]",
+            )
             .and_then(|device| {
                 let named = raw_devices.iter().position(|raw| {
                     raw.get_ref()
@@ -83,31 +102,52 @@ impl Validator<'_, '_> {
                         .is_some_and(|n| n.get_ref() == device.get_ref())
                 });
                 if named.is_none() {
-                    let known: Vec<&str> = devices.iter().flatten().map(|d| d.name.as_str()).collect();
-                    self.issue(
+                    let known: Vec<&str> =
+                        devices.iter().flatten().map(|d| d.name.as_str()).collect();
+                    self.dangling(
                         device.span(),
                         &key("device"),
-                        format!("no device called `{}`; devices defined: {}", device.get_ref(), known.join(", ")),
+                        format!(
+                            "no device called `{}`; devices defined: {}",
+                            device.get_ref(),
+                            known.join(", ")
+                        ),
                     );
                 }
                 named.filter(|&index| devices[index].is_some())
             });
         let kind = self
-            .required(&s.kind, &table, &key("kind"), "one of \"digital-in\", \"digital-out\", \"analog-in\"")
+            .required(
+                &s.kind,
+                &table,
+                &key("kind"),
+                "one of \"digital-in\", \"digital-out\", \"analog-in\"",
+            )
             .and_then(|kind| {
-                let found = SignalKind::ALL.into_iter().find(|k| k.id() == kind.get_ref());
+                let found = SignalKind::ALL
+                    .into_iter()
+                    .find(|k| k.id() == kind.get_ref());
                 if found.is_none() {
                     self.issue(
                         kind.span(),
                         &key("kind"),
-                        format!("unknown kind {:?}; allowed: {}", kind.get_ref(), kind_list(SignalKind::ALL.into_iter())),
+                        format!(
+                            "unknown kind {:?}; allowed: {}",
+                            kind.get_ref(),
+                            kind_list(SignalKind::ALL.into_iter())
+                        ),
                     );
                 }
                 found
             });
         let spec = device.and_then(|d| devices[d].as_ref());
         let pin = self
-            .required(&s.pin, &table, &key("pin"), "the board's pin name (README \"I/O\" lists each board's pins)")
+            .required(
+                &s.pin,
+                &table,
+                &key("pin"),
+                "the board's pin name (README \"I/O\" lists each board's pins)",
+            )
             .and_then(|pin| {
                 let spec = spec?;
                 let pins = spec.pins();
@@ -141,7 +181,11 @@ impl Validator<'_, '_> {
                         format!(
                             "pin `{name}` cannot be {}; it can be: {}",
                             kind.id(),
-                            kind_list(SignalKind::ALL.into_iter().filter(|k| info.kinds.contains(*k)))
+                            kind_list(
+                                SignalKind::ALL
+                                    .into_iter()
+                                    .filter(|k| info.kinds.contains(*k))
+                            )
                         ),
                     );
                     return None;
@@ -154,7 +198,11 @@ impl Validator<'_, '_> {
                 (s.scale.as_ref().map(Spanned::span), "scale", "analog-in"),
                 (s.offset.as_ref().map(Spanned::span), "offset", "analog-in"),
                 (s.unit.as_ref().map(Spanned::span), "unit", "analog-in"),
-                (s.invert.as_ref().map(Spanned::span), "invert", "digital-in and digital-out"),
+                (
+                    s.invert.as_ref().map(Spanned::span),
+                    "invert",
+                    "digital-in and digital-out",
+                ),
                 (s.safe.as_ref().map(Spanned::span), "safe", "digital-out"),
             ] {
                 let applies = match k {
@@ -163,24 +211,33 @@ impl Validator<'_, '_> {
                     _ => !digital,
                 };
                 if let (Some(span), false) = (set, applies) {
-                    self.issue(span, &key(k), format!("`{k}` applies only to {only} signals"));
+                    self.issue(
+                        span,
+                        &key(k),
+                        format!("`{k}` applies only to {only} signals"),
+                    );
                 }
             }
         }
-        let finite = |me: &mut Self, value: &Option<Spanned<f64>>, k: &str, default: f64| match value {
-            Some(v) if v.get_ref().is_finite() => Some(*v.get_ref()),
-            Some(v) => {
-                me.issue(v.span(), &key(k), "a finite number");
-                None
-            }
-            None => Some(default),
-        };
+        let finite =
+            |me: &mut Self, value: &Option<Spanned<f64>>, k: &str, default: f64| match value {
+                Some(v) if v.get_ref().is_finite() => Some(*v.get_ref()),
+                Some(v) => {
+                    me.issue(v.span(), &key(k), "a finite number");
+                    None
+                }
+                None => Some(default),
+            };
         let scale = finite(self, &s.scale, "scale", 1.0);
         let offset = finite(self, &s.offset, "offset", 0.0);
         let unit = match &s.unit {
             Some(u) if u.get_ref().len() <= UNIT_LEN => Some(u.get_ref().clone()),
             Some(u) => {
-                self.issue(u.span(), &key("unit"), format!("{:?}: allowed: at most {UNIT_LEN} bytes", u.get_ref()));
+                self.issue(
+                    u.span(),
+                    &key("unit"),
+                    format!("{:?}: allowed: at most {UNIT_LEN} bytes", u.get_ref()),
+                );
                 None
             }
             None => Some(String::new()),

@@ -39,7 +39,9 @@ impl Validator<'_, '_> {
                 me.issue(
                     value.span(),
                     &key(k),
-                    format!("{v} is not allowed; a finite number >= 0 ({what}; 0 disables the check)"),
+                    format!(
+                        "{v} is not allowed; a finite number >= 0 ({what}; 0 disables the check)"
+                    ),
                 );
                 None
             }
@@ -82,6 +84,28 @@ impl Validator<'_, '_> {
             }
             None => Some(DEFAULT_OVERSPEED_FACTOR),
         };
+        for (value, k, what) in [
+            (
+                &a.following_error,
+                "following_error",
+                "the following-error and soft-limit supervision",
+            ),
+            (
+                &a.overspeed_factor,
+                "overspeed_factor",
+                "the overspeed supervision",
+            ),
+        ] {
+            if let Some(value) = value
+                && *value.get_ref() == 0.0
+            {
+                self.warn(
+                    value.span(),
+                    &key(k),
+                    format!("0 turns off {what} of this axis: a board that drives it away goes unnoticed"),
+                );
+            }
+        }
         let estop = match &a.estop {
             None => Some(EstopCategory::Hold),
             Some(value) => match value.get_ref().as_str() {

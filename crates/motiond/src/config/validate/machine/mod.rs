@@ -94,7 +94,11 @@ fn device_key_models(raw: &RawDevice) -> Vec<(&'static str, Option<TableSpan>, &
         value.as_ref().map(Spanned::span)
     }
     vec![
-        ("address", at(&raw.address), &[Model::Tmcpack, Model::Spimotor]),
+        (
+            "address",
+            at(&raw.address),
+            &[Model::Tmcpack, Model::Spimotor],
+        ),
         ("variant", at(&raw.variant), &[Model::Tmcpack, Model::Qsb]),
         ("drive", at(&raw.drive), SPI),
         ("counts_per_step", at(&raw.counts_per_step), QSB),
@@ -106,6 +110,9 @@ fn device_key_models(raw: &RawDevice) -> Vec<(&'static str, Option<TableSpan>, &
         ("host_latency_ms", at(&raw.host_latency_ms), QSB),
         ("enable_output", at(&raw.enable_output), QSB),
         ("enable_active", at(&raw.enable_active), QSB),
+        ("input_mode", at(&raw.input_mode), QSB),
+        ("capture_input", at(&raw.capture_input), QSB),
+        ("capture_edge", at(&raw.capture_edge), QSB),
         ("reply_address", at(&raw.reply_address), TMC),
         ("switchover_ms", at(&raw.switchover_ms), TMC),
         ("packet_timeout_ms", at(&raw.packet_timeout_ms), TMC),
@@ -125,11 +132,27 @@ fn axis_key_models(raw: &RawAxis) -> Vec<(&'static str, Option<TableSpan>, &'sta
     let home = raw.home.as_ref().map(Spanned::get_ref);
     let home_at = |value: Option<TableSpan>| value;
     vec![
-        ("home", at(&raw.home), &[Model::Qq2drv, Model::Tmcpack, Model::Qsb]),
+        (
+            "home",
+            at(&raw.home),
+            &[Model::Qq2drv, Model::Tmcpack, Model::Qsb],
+        ),
         ("home.input", home_at(home.and_then(|h| at(&h.input))), QQ),
-        ("home.active_high", home_at(home.and_then(|h| at(&h.active_high))), QQ),
-        ("home.positive_end", home_at(home.and_then(|h| at(&h.positive_end))), QQ),
-        ("home.spacing", home_at(home.and_then(|h| at(&h.spacing))), QQ),
+        (
+            "home.active_high",
+            home_at(home.and_then(|h| at(&h.active_high))),
+            QQ,
+        ),
+        (
+            "home.positive_end",
+            home_at(home.and_then(|h| at(&h.positive_end))),
+            QQ,
+        ),
+        (
+            "home.spacing",
+            home_at(home.and_then(|h| at(&h.spacing))),
+            QQ,
+        ),
         ("current", at(&raw.current), TMC),
         ("reference", at(&raw.reference), TMC),
         ("rotary", at(&raw.rotary), TMC),
@@ -142,11 +165,7 @@ fn axis_key_models(raw: &RawAxis) -> Vec<(&'static str, Option<TableSpan>, &'sta
 }
 
 fn model_list(models: &[Model]) -> String {
-    models
-        .iter()
-        .map(|m| m.id())
-        .collect::<Vec<_>>()
-        .join(", ")
+    models.iter().map(|m| m.id()).collect::<Vec<_>>().join(", ")
 }
 
 impl Validator<'_, '_> {

@@ -1,15 +1,54 @@
 //! qq2drv machine keys (README "Config"): validated here, turned into the driver's config in
 //! `crate::drivers::qq2drv`.
+//!
+//! Per `[[axis]]` (one QuadQuad2Drv channel):
+//! - `pid_position = { p, i, d, windup }`: packet 30, Set Position Control PID Constants
+//!   (U16 each; the Windup Limit's range is 0..=8191);
+//! - `pid_velocity = { p, i, d }`: packet 32, Set Velocity Control PID Constants (it has no
+//!   windup limit);
+//! - `power_limit`: fraction 0.0..=1.0 of full power, packet 24 Set Power Limit
+//!   (0..=8191).
+//!
+//! Across tables: a link clocked above the datasheet's recommended 500 kHz ("We recommend
+//! clocking SPI up to 500kHz") gets a warning on its `speed_hz`.
+
+use motion_drivers::Model;
+use toml::Spanned;
 
 use super::AxisContext;
 use crate::config::ServerConfig;
-use crate::config::raw::{RawAxis, RawConfig};
+use crate::config::raw::{RawAxis, RawConfig, RawPid};
 use crate::config::validate::Validator;
+
+/// The datasheet's recommended maximum SPI clock ("SPI Interface").
+pub const RECOMMENDED_MAX_SPEED_HZ: i64 = 500_000;
+/// Packet 30 Windup Limit range: "Range: 0 - 8,191".
+pub const WINDUP_MAX: i64 = 8_191;
+
+/// One PID table as given; `None` fields were not set (the datasheet default applies).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct PidKeys {
+    /// Proportional constant.
+    pub p: Option<u16>,
+    /// Integration constant.
+    pub i: Option<u16>,
+    /// Differential constant.
+    pub d: Option<u16>,
+    /// Integration windup limit (position PID only).
+    pub windup: Option<u16>,
+}
 
 /// The qq2drv keys of one `[[axis]]`; `None` fields were not set (the driver's default
 /// applies).
 #[derive(Debug, Clone, PartialEq, Default)]
-pub struct Qq2drvAxisKeys {}
+pub struct Qq2drvAxisKeys {
+    /// `pid_position` (packet 30).
+    pub pid_position: PidKeys,
+    /// `pid_velocity` (packet 32).
+    pub pid_velocity: PidKeys,
+    /// `power_limit`, fraction of full power 0.0..=1.0 (packet 24).
+    pub power_limit: Option<f64>,
+}
 
 /// Validates the qq2drv keys of an `[[axis]]` table.
 pub(in crate::config) fn axis_keys(
@@ -17,15 +56,129 @@ pub(in crate::config) fn axis_keys(
     ctx: &AxisContext<'_>,
     raw: &RawAxis,
 ) -> Option<Qq2drvAxisKeys> {
-    let _ = (v, ctx, raw);
-    Some(Qq2drvAxisKeys::default())
+    let mut ok = true;
+    let pid_position = match &raw.pid_position {
+        Some(table) => pid(v, ctx, "pid_position", table.get_ref(), true).unwrap_or_else(|| {
+            ok = false;
+            PidKeys::default()
+        }),
+        None => PidKeys::default(),
+    };
+    let pid_velocity = match &raw.pid_velocity {
+        Some(table) => pid(v, ctx, "pid_velocity", table.get_ref(), false).unwrap_or_else(|| {
+            ok = false;
+            PidKeys::default()
+        }),
+        None => PidKeys::default(),
+    };
+    let power_limit = match &raw.power_limit {
+        None => None,
+        Some(value) => {
+            let fraction = *value.get_ref();
+            let key = ctx.key("power_limit");
+            if !(fraction.is_finite() && (0.0..=1.0).contains(&fraction)) {
+                v.issue(
+                    value.span(),
+                    &key,
+                    format!(
+                        "{fraction} is out of range; allowed: 0.0..=1.0, the fraction of full \
+                         power the board limits the motor output to (packet 24, 0..=8191)"
+                    ),
+                );
+                ok = false;
+                None
+            } else {
+                if fraction == 0.0 {
+                    v.warn(
+                        value.span(),
+                        &key,
+                        "0.0 limits the motor output to nothing: this axis cannot move",
+                    );
+                }
+                Some(fraction)
+            }
+        }
+    };
+    ok.then_some(Qq2drvAxisKeys {
+        pid_position,
+        pid_velocity,
+        power_limit,
+    })
 }
 
-/// Checks across tables for qq2drv devices (after everything else was validated).
+/// One PID table: `p`, `i`, `d` are U16; `windup` only where `with_windup`.
+fn pid(
+    v: &mut Validator<'_, '_>,
+    ctx: &AxisContext<'_>,
+    table: &str,
+    raw: &RawPid,
+    with_windup: bool,
+) -> Option<PidKeys> {
+    let mut ok = true;
+    let mut constant = |v: &mut Validator<'_, '_>, value: &Option<Spanned<i64>>, name: &str| {
+        let key = ctx.key(&format!("{table}.{name}"));
+        let value = value.as_ref()?;
+        let checked = v
+            .int_in(value, &key, 0..=i64::from(u16::MAX))
+            .and_then(|c| u16::try_from(c).ok());
+        ok &= checked.is_some();
+        checked
+    };
+    let p = constant(v, &raw.p, "p");
+    let i = constant(v, &raw.i, "i");
+    let d = constant(v, &raw.d, "d");
+    let windup = match &raw.windup {
+        None => None,
+        Some(value) if !with_windup => {
+            v.issue(
+                value.span(),
+                &ctx.key(&format!("{table}.windup")),
+                "packet 32 (velocity PID constants) has no windup limit; `windup` is a key of \
+                 pid_position only",
+            );
+            ok = false;
+            None
+        }
+        Some(value) => {
+            let checked = v
+                .int_in(value, &ctx.key(&format!("{table}.windup")), 0..=WINDUP_MAX)
+                .and_then(|c| u16::try_from(c).ok());
+            ok &= checked.is_some();
+            checked
+        }
+    };
+    ok.then_some(PidKeys { p, i, d, windup })
+}
+
+/// Checks across tables for qq2drv devices (after everything else was validated): a link
+/// clocked above the recommended 500 kHz.
 pub(in crate::config) fn cross_check(
     v: &mut Validator<'_, '_>,
     config: &ServerConfig,
     raw: &RawConfig,
 ) {
-    let _ = (v, config, raw);
+    for (index, link) in raw.link.iter().enumerate() {
+        let link = link.get_ref();
+        let (Some(name), Some(speed)) = (&link.name, &link.speed_hz) else {
+            continue;
+        };
+        let carries_qq2drv = config.devices.iter().any(|device| {
+            device.model == Model::Qq2drv
+                && config
+                    .links
+                    .get(device.link)
+                    .is_some_and(|l| &l.name == name.get_ref())
+        });
+        let hz = speed.get_ref().0;
+        if carries_qq2drv && hz > i128::from(RECOMMENDED_MAX_SPEED_HZ) {
+            v.warn(
+                speed.span(),
+                &format!("link[{index}].speed_hz"),
+                format!(
+                    "{hz} Hz is above the QuadQuad2Drv datasheet's recommended 500000 Hz \
+                     (\"We recommend clocking SPI up to 500kHz\"); the board may miss bytes"
+                ),
+            );
+        }
+    }
 }

@@ -1,15 +1,88 @@
-//! qsb machine keys (README "Config"): validated here, turned into the driver's config in
-//! `crate::drivers::qsb`.
+//! qsb machine keys (README "Config", `docs/keys/qsb.md`): validated here, turned into the
+//! driver's config in `crate::drivers::qsb`.
+//!
+//! The home keys (`home_direction`, `home_max_travel`, `home_offset`) are resolved with the
+//! general `home` table into the axis's `HomeSpec` (`validate/home.rs`).
 
-use super::DeviceContext;
-use crate::config::ServerConfig;
+use core::time::Duration;
+
+use motion_drivers::SignalKind;
+use motion_drivers::qsb::{MOTOR_DRIVE_BITS, PinRole, QsbDriverConfig};
+use qsb::{EncoderMode, IntervalRate, ProductType, TICK};
+use toml::Spanned;
+
+use super::{DeviceContext, DeviceMachine};
 use crate::config::raw::{RawConfig, RawDevice};
 use crate::config::validate::Validator;
+use crate::config::{QsbVariant, ServerConfig, Transport};
 
 /// The qsb keys of one `[[device]]`; `None` fields were not set (the driver's default
 /// applies).
 #[derive(Debug, Clone, PartialEq, Default)]
-pub struct QsbDeviceKeys {}
+pub struct QsbDeviceKeys {
+    /// `counts_per_step`: encoder counts (x4) per motor step, finite, not 0.
+    pub counts_per_step: Option<f64>,
+    /// `index_polarity = "inverted"` (MDR1 B3).
+    pub index_inverted: Option<bool>,
+    /// `stream_interval_ms` rounded to whole 1/512 s ticks (1..=0xFFFE).
+    pub stream_interval_ticks: Option<u16>,
+    /// `host_latency_ms`.
+    pub host_latency: Option<Duration>,
+    /// `enable_output`: the DIG I/O bit (0 or 3) of the stepper driver's enable line.
+    pub enable_output: Option<u8>,
+    /// `enable_active = "high"`.
+    pub enable_active_high: Option<bool>,
+    /// `input_mode` (MODE B1 B0).
+    pub input_mode: Option<EncoderMode>,
+    /// `capture_input`: the DIG I/O bit whose edge loads CAPTURE.
+    pub capture_input: Option<u8>,
+    /// `capture_edge = "falling"`.
+    pub capture_falling: Option<bool>,
+}
+
+/// The product a raw `variant` names (the central validation reports a bad one).
+fn variant_of(raw: &RawDevice) -> ProductType {
+    match raw.variant.as_ref().map(|v| v.get_ref().as_str()) {
+        Some("qsb-s") => ProductType::S,
+        Some("qsb-d") => ProductType::D,
+        _ => ProductType::M,
+    }
+}
+
+/// The product of a validated variant.
+pub(crate) fn product(variant: QsbVariant) -> ProductType {
+    match variant {
+        QsbVariant::M => ProductType::M,
+        QsbVariant::S => ProductType::S,
+        QsbVariant::D => ProductType::D,
+    }
+}
+
+/// One of `allowed` (name, value) for a string key; an issue naming them otherwise.
+fn choice<T: Copy>(
+    v: &mut Validator<'_, '_>,
+    value: &Spanned<String>,
+    key: &str,
+    allowed: &[(&str, T)],
+) -> Option<T> {
+    let found = allowed
+        .iter()
+        .find(|(name, _)| *name == value.get_ref())
+        .map(|(_, value)| *value);
+    if found.is_none() {
+        let names: Vec<String> = allowed.iter().map(|(n, _)| format!("{n:?}")).collect();
+        v.issue(
+            value.span(),
+            key,
+            format!(
+                "unknown value {:?}; allowed: {}",
+                value.get_ref(),
+                names.join(", ")
+            ),
+        );
+    }
+    found
+}
 
 /// Validates the qsb keys of a `[[device]]` table.
 pub(in crate::config) fn device_keys(
@@ -17,15 +90,338 @@ pub(in crate::config) fn device_keys(
     ctx: &DeviceContext,
     raw: &RawDevice,
 ) -> Option<QsbDeviceKeys> {
-    let _ = (v, ctx, raw);
-    Some(QsbDeviceKeys::default())
+    let product = variant_of(raw);
+    let mut keys = QsbDeviceKeys::default();
+    if let Some(value) = &raw.counts_per_step {
+        let c = *value.get_ref();
+        if c.is_finite() && c != 0.0 {
+            keys.counts_per_step = Some(c);
+        } else {
+            v.issue(
+                value.span(),
+                &ctx.key("counts_per_step"),
+                format!("{c} is not allowed; encoder counts (x4 quadrature) per motor step: a finite number, not 0 (negative when the encoder counts down as the motor steps forward); default 10"),
+            );
+        }
+    }
+    if let Some(value) = &raw.index_polarity {
+        let allowed = [("normal", false), ("inverted", true)];
+        keys.index_inverted = choice(v, value, &ctx.key("index_polarity"), &allowed);
+    }
+    if let Some(value) = &raw.stream_interval_ms {
+        keys.stream_interval_ticks = stream_interval(v, value, &ctx.key("stream_interval_ms"));
+    }
+    if let Some(value) = &raw.host_latency_ms {
+        let ms = *value.get_ref();
+        if ms.is_finite() && (0.0..=1000.0).contains(&ms) {
+            keys.host_latency = Some(Duration::from_secs_f64(ms / 1000.0));
+        } else {
+            v.issue(
+                value.span(),
+                &ctx.key("host_latency_ms"),
+                format!("{ms} is out of range; allowed: 0..=1000 ms (the USB/serial latency the driver allows on top of the wire time; default 5)"),
+            );
+        }
+    }
+    if let Some(value) = &raw.enable_output {
+        keys.enable_output = enable_output(v, value, &ctx.key("enable_output"), product);
+    }
+    if let Some(value) = &raw.enable_active {
+        let allowed = [("low", false), ("high", true)];
+        keys.enable_active_high = choice(v, value, &ctx.key("enable_active"), &allowed);
+        if raw.enable_output.is_none() {
+            v.warn(
+                value.span(),
+                &ctx.key("enable_active"),
+                "has no effect without enable_output (the DIG I/O bit of the drive's enable line)",
+            );
+        }
+    }
+    if let Some(value) = &raw.input_mode {
+        let allowed = [
+            ("quadrature", EncoderMode::Quadrature),
+            ("pwm", EncoderMode::Pwm),
+            ("analog", EncoderMode::Analog),
+        ];
+        keys.input_mode = choice(v, value, &ctx.key("input_mode"), &allowed);
+        if product == ProductType::D
+            && keys
+                .input_mode
+                .is_some_and(|m| m != EncoderMode::Quadrature)
+        {
+            v.issue(
+                value.span(),
+                &ctx.key("input_mode"),
+                "a qsb-d reads one differential quadrature encoder; \"pwm\" and \"analog\" are valid on a qsb-s and a qsb-m (command list, \"QSB Variations\")",
+            );
+        }
+    }
+    if let Some(value) = &raw.capture_input {
+        keys.capture_input = capture_input(v, value, &ctx.key("capture_input"), product);
+        if keys.capture_input.is_some() && keys.capture_input == keys.enable_output {
+            v.issue(
+                value.span(),
+                &ctx.key("capture_input"),
+                "is the enable_output bit (an output); the capture interrupt needs an input",
+            );
+        }
+    }
+    if let Some(value) = &raw.capture_edge {
+        let allowed = [("rising", false), ("falling", true)];
+        keys.capture_falling = choice(v, value, &ctx.key("capture_edge"), &allowed);
+        if raw.capture_input.is_none() {
+            v.warn(
+                value.span(),
+                &ctx.key("capture_edge"),
+                "has no effect without capture_input",
+            );
+        }
+    }
+    // Keys in error stay unset here; the issues already refuse the file, and the other
+    // tables are still checked against the rest (every issue at once).
+    Some(keys)
 }
 
-/// Checks across tables for qsb devices (after everything else was validated).
+/// `stream_interval_ms`: whole ticks of 1/512 s, 1..=0xFFFE.
+fn stream_interval(v: &mut Validator<'_, '_>, value: &Spanned<f64>, key: &str) -> Option<u16> {
+    let ms = *value.get_ref();
+    let tick_ms = TICK.as_secs_f64() * 1000.0;
+    let longest = f64::from(IntervalRate::LONGEST.0) * tick_ms;
+    let rate = Duration::try_from_secs_f64(ms / 1000.0)
+        .ok()
+        .filter(|_| ms.is_finite())
+        .and_then(IntervalRate::nearest)
+        .filter(|rate| rate.0 >= 1);
+    let Some(rate) = rate else {
+        v.issue(
+            value.span(),
+            key,
+            format!("{ms} is out of range; allowed: {tick_ms}..={longest} ms (INTERVAL RATE 1..=0xFFFE ticks of 1/512 s; 0xFFFF would disable the stream)"),
+        );
+        return None;
+    };
+    let effective = f64::from(rate.0) * tick_ms;
+    if (effective - ms).abs() > 1e-6 {
+        v.warn(
+            value.span(),
+            key,
+            format!(
+                "{ms} ms is not a whole number of 1/512 s ticks; the board gets {} tick{} = {effective} ms",
+                rate.0,
+                if rate.0 == 1 { "" } else { "s" }
+            ),
+        );
+    }
+    Some(rate.0)
+}
+
+/// `enable_output`: bit 0 or 3 of a qsb-m.
+fn enable_output(
+    v: &mut Validator<'_, '_>,
+    value: &Spanned<i64>,
+    key: &str,
+    product: ProductType,
+) -> Option<u8> {
+    let bit = *value.get_ref();
+    let why = match (product, bit) {
+        (ProductType::M, 0 | 3) => return Some(bit as u8),
+        (ProductType::M, 1 | 2) => {
+            "io1 and io2 are the motor drive's step and direction lines (\"Be careful if the motor drive is enabled, it uses I/O bits 1 and 2\"); allowed: 0 or 3"
+        }
+        (ProductType::M, _) => {
+            "allowed: 0 or 3 (the DIG I/O bit of the stepper driver's enable line)"
+        }
+        _ => {
+            "the enable line of an external stepper driver exists only on a qsb-m (the -S has no digital I/O, the -D one bit and no motor drive)"
+        }
+    };
+    v.issue(value.span(), key, format!("{bit} is not allowed; {why}"));
+    None
+}
+
+/// `capture_input`: a DIG I/O bit of the product.
+fn capture_input(
+    v: &mut Validator<'_, '_>,
+    value: &Spanned<i64>,
+    key: &str,
+    product: ProductType,
+) -> Option<u8> {
+    let bit = *value.get_ref();
+    let bits = i64::from(product.digital_io_bits());
+    if (0..bits).contains(&bit) {
+        return Some(bit as u8);
+    }
+    let why = match product {
+        ProductType::S => "a qsb-s has no digital I/O to capture on".to_owned(),
+        _ => format!("allowed: 0..={} (a DIG I/O bit of this board)", bits - 1),
+    };
+    v.issue(value.span(), key, format!("{bit} is not allowed; {why}"));
+    None
+}
+
+/// Where a raw table of `items` named `name` is.
+fn named<'r, T>(
+    items: &'r [Spanned<T>],
+    name: &str,
+    name_of: impl Fn(&T) -> Option<&Spanned<String>>,
+) -> Option<(usize, &'r Spanned<T>)> {
+    items
+        .iter()
+        .enumerate()
+        .find(|(_, item)| name_of(item.get_ref()).is_some_and(|n| n.get_ref() == name))
+}
+
+/// Checks across tables for qsb devices (after everything else was validated): no axis on
+/// a device in PWM / analog mode, signals that clash with the motor drive, the enable line
+/// or the capture input, and a stream the line cannot carry.
 pub(in crate::config) fn cross_check(
     v: &mut Validator<'_, '_>,
     config: &ServerConfig,
     raw: &RawConfig,
 ) {
-    let _ = (v, config, raw);
+    for (index, device) in config.devices.iter().enumerate() {
+        let DeviceMachine::Qsb(keys) = &device.machine else {
+            continue;
+        };
+        let Some((raw_index, raw_device)) = named(&raw.device, &device.name, |d| d.name.as_ref())
+        else {
+            continue;
+        };
+        let raw_device = raw_device.get_ref();
+        let dkey = |k: &str| format!("device[{raw_index}].{k}");
+        let product = product(device.qsb_variant);
+        let mode = keys.input_mode.unwrap_or_default();
+        let axes: Vec<&str> = config
+            .axes
+            .iter()
+            .filter(|axis| axis.device == index)
+            .map(|axis| axis.name.as_str())
+            .collect();
+        if mode != EncoderMode::Quadrature {
+            for name in &axes {
+                let Some((i, axis)) = named(&raw.axis, name, |a| a.name.as_ref()) else {
+                    continue;
+                };
+                let span = axis
+                    .get_ref()
+                    .device
+                    .as_ref()
+                    .map_or(axis.span(), Spanned::span);
+                v.issue(
+                    span,
+                    &format!("axis[{i}].device"),
+                    format!("device `{}` has input_mode = \"{}\": it reads an absolute value as its `encoder` pin and carries no axis; use a [[signal]] with pin = \"encoder\" and kind = \"analog-in\"", device.name, if mode == EncoderMode::Pwm { "pwm" } else { "analog" }),
+                );
+            }
+        }
+        let drive =
+            product == ProductType::M && mode == EncoderMode::Quadrature && !axes.is_empty();
+        if let (Some(value), false) = (&raw_device.enable_output, drive) {
+            v.warn(
+                value.span(),
+                &dkey("enable_output"),
+                "has no effect: no axis drives this qsb-m's stepper (an axis in input_mode \"quadrature\")",
+            );
+        }
+        if let (Some(value), Some(bit), true) =
+            (&raw_device.capture_input, keys.capture_input, drive)
+            && MOTOR_DRIVE_BITS & (1 << bit) != 0
+        {
+            v.issue(
+                value.span(),
+                &dkey("capture_input"),
+                format!("io{bit} is the motor drive's {} line while an axis drives this qsb-m; use io0 or io3", if bit == 1 { "step" } else { "direction" }),
+            );
+        }
+        signal_checks(v, config, raw, index, keys, drive);
+        line_budget(v, config, raw_device, raw_index, device.link, keys);
+    }
+}
+
+/// The signals on qsb device `index`.
+fn signal_checks(
+    v: &mut Validator<'_, '_>,
+    config: &ServerConfig,
+    raw: &RawConfig,
+    index: usize,
+    keys: &QsbDeviceKeys,
+    drive: bool,
+) {
+    let device = &config.devices[index];
+    let product = product(device.qsb_variant);
+    let mode = keys.input_mode.unwrap_or_default();
+    for signal in config.signals.iter().filter(|s| s.device == index) {
+        let Some((i, raw_signal)) = named(&raw.signal, &signal.name, |s| s.name.as_ref()) else {
+            continue;
+        };
+        let span = raw_signal
+            .get_ref()
+            .pin
+            .as_ref()
+            .map_or(raw_signal.span(), Spanned::span);
+        let key = format!("signal[{i}].pin");
+        let why = match PinRole::of(product, signal.pin) {
+            Some(PinRole::Io(bit)) if drive && MOTOR_DRIVE_BITS & (1 << bit) != 0 => format!(
+                "io{bit} is the motor drive's {} line while an axis drives qsb-m `{}` (\"digital I/O bits 1 and 2 are reserved for motor drive\"); use io0 or io3",
+                if bit == 1 { "step" } else { "direction" },
+                device.name
+            ),
+            Some(PinRole::Io(bit)) if keys.enable_output == Some(bit) => format!(
+                "io{bit} is the enable_output of device `{}` (the stepper driver's enable line); it is not a signal",
+                device.name
+            ),
+            Some(PinRole::Io(bit))
+                if keys.capture_input == Some(bit) && signal.kind == SignalKind::DigitalOut =>
+            {
+                format!(
+                    "io{bit} is the capture_input of device `{}`; it must stay an input",
+                    device.name
+                )
+            }
+            Some(PinRole::Encoder) if mode == EncoderMode::Quadrature => format!(
+                "pin `encoder` carries a PWM or analog value: set input_mode = \"pwm\" or \"analog\" on device `{}`",
+                device.name
+            ),
+            Some(PinRole::Capture) if keys.capture_input.is_none() => format!(
+                "pin `capture` reads the count an edge on capture_input loads: set capture_input (and capture_edge) on device `{}`",
+                device.name
+            ),
+            _ => continue,
+        };
+        v.issue(span, &key, why);
+    }
+}
+
+/// Warns when the configured stream interval is shorter than an encoder line takes on the
+/// wire.
+fn line_budget(
+    v: &mut Validator<'_, '_>,
+    config: &ServerConfig,
+    raw_device: &RawDevice,
+    raw_index: usize,
+    link: usize,
+    keys: &QsbDeviceKeys,
+) {
+    let (Some(ticks), Some(value)) = (keys.stream_interval_ticks, &raw_device.stream_interval_ms)
+    else {
+        return;
+    };
+    let baud = match config.links.get(link).map(|l| &l.transport) {
+        Some(Transport::Serial { baud, .. }) => *baud,
+        Some(Transport::Sim { rate }) => *rate,
+        _ => return,
+    };
+    let driver = QsbDriverConfig {
+        baud,
+        stream_interval: Some(ticks),
+        ..QsbDriverConfig::default()
+    };
+    let load = driver.stream_load();
+    if load > 1.0 {
+        v.warn(
+            value.span(),
+            &format!("device[{raw_index}].stream_interval_ms"),
+            format!("at {baud} baud one encoder line takes {:.0} % of this interval: the board will skip samples; a longer interval (or a faster line) keeps every sample", load * 100.0),
+        );
+    }
 }

@@ -25,6 +25,7 @@ fn config() -> Qq2drvDriverConfig {
         active_high: false,
         positive_end: true,
         position: 500,
+        spacing: 0,
     });
     config.channels[3].enabled = false;
     config
@@ -116,6 +117,8 @@ fn running() -> (Qq2drvDriver, Duration) {
     now += MS;
     driver.handle_rx(now, &acks(configure, 0));
     assert!(driver.running());
+    // The configuration (about 200 bytes, 3.2 ms at 500 kHz) has left the wire.
+    now += 4 * MS;
     driver.handle_rx(now, &ours_stream([10, 20, 30], [0, 0, 0], [0; 3]));
     (driver, now)
 }
@@ -177,6 +180,27 @@ fn configuration_follows_the_axis_limits_in_shl_12() {
                 assert!(entries.iter().all(|e| e.limit == 30_000 << FIXED_SHIFT));
             }
             Request::SetPowerLimit(entries) => assert!(entries.iter().all(|e| e.limit == 8_191)),
+            // Packet 30: "P … Default: 100", "I … Default: 500", "D … Default: 500",
+            // "Windup Limit … Default: 600"; written for every channel with an axis.
+            Request::SetPositionPid(entries) => {
+                let e: Vec<_> = entries
+                    .iter()
+                    .map(|e| (e.channels.0, e.p, e.i, e.d, e.windup))
+                    .collect();
+                assert_eq!(
+                    e,
+                    [
+                        (1, 100, 500, 500, 600),
+                        (2, 100, 500, 500, 600),
+                        (4, 100, 500, 500, 600)
+                    ]
+                );
+            }
+            // Packet 32: P 100, I 200, D 500.
+            Request::SetVelocityPid(entries) => {
+                assert_eq!(entries.len(), 3);
+                assert!(entries.iter().all(|e| (e.p, e.i, e.d) == (100, 200, 500)));
+            }
             Request::SetInputMode(entries) => {
                 let e: Vec<_> = entries.iter().collect();
                 assert_eq!(e.len(), 1);
@@ -189,7 +213,7 @@ fn configuration_follows_the_axis_limits_in_shl_12() {
             other => panic!("unexpected {other:?}"),
         }
     }
-    assert_eq!(ids, [12, 6, 8, 24, 26, 28, 14, 4]);
+    assert_eq!(ids, [12, 6, 8, 24, 26, 28, 30, 32, 14, 4]);
     // Until every write is answered the driver is not running.
     let sent_bytes = sent[0].clone();
     let all = acks(&sent_bytes, 0);
@@ -421,37 +445,22 @@ fn values_the_board_cannot_represent_are_refused() {
     assert_eq!(POWER_MAX, 8_191);
 }
 
-#[test]
-fn stop_ramps_to_zero_then_holds_where_the_channel_is() {
-    let (mut driver, mut now) = running();
-    driver.handle_rx(now, &ours_stream([100, 0, 0], [2_000, 0, 0], [0; 3]));
-    let mosi = goal_packets(&mut driver, now, 0, Goal::Stop { decel: 20_000.0 });
-    match Request::parse(&packets(&mosi)[1]).unwrap() {
-        Request::VelocityRamp(e) => {
-            let e = e.iter().next().unwrap();
-            assert_eq!((e.velocity, e.acceleration), (0, 20_000 << 12));
-        }
-        other => panic!("{other:?}"),
+/// The parsed requests of one transaction.
+fn requests(mosi: &[u8]) -> Vec<Request<'_>> {
+    let mut out = Vec::new();
+    let mut rest = mosi;
+    while !rest.is_empty() {
+        let len = usize::from(rest[1]);
+        out.push(Request::parse(&rest[..len]).expect("a valid request"));
+        rest = &rest[len..];
     }
-    now += MS;
-    driver.handle_rx(now, &acks(&mosi, 0));
-    assert!(driver.channel(0).moving);
-    assert!(driver.goals_pending(), "the hold is still to come");
-    // 2000 / 20 000 = 100 ms of ramp; the channel reports standstill at 150.
-    now += 150 * MS;
-    driver.handle_rx(now, &ours_stream([150, 0, 0], [0, 0, 0], [0; 3]));
-    let sent = drain(&mut driver, now);
-    let p = packets(&sent[0]);
-    assert_eq!(p[0][4], ControlMode::PositionPid as u8);
-    match Request::parse(&p[1]).unwrap() {
-        Request::SetPositionTarget(e) => assert_eq!(e.iter().next().unwrap().position, 150),
-        other => panic!("{other:?}"),
-    }
-    driver.handle_rx(now + MS, &acks(&sent[0], 0));
-    let state = driver.channel(0);
-    assert!(!state.moving);
-    assert!(state.arrived);
-    assert!(!driver.goals_pending());
+    out
+}
+
+fn one<T: qq2drv::Entry + Copy>(entries: &Entries<'_, T>) -> T {
+    let all: Vec<T> = entries.iter().collect();
+    assert_eq!(all.len(), 1, "one entry");
+    all[0]
 }
 
 #[test]
@@ -486,17 +495,20 @@ fn home_arms_the_input_and_stops_on_its_trigger() {
     driver.handle_rx(now, &ours_stream([0, 505, 0], [0, 800, 0], [0, bits, 0]));
     assert!(driver.channel(1).homed);
     let sent = drain(&mut driver, now);
-    let p = packets(&sent[0]);
-    match Request::parse(&p[0]).unwrap() {
-        Request::SetInputMode(e) => {
-            assert_eq!(
-                e.iter().next().unwrap().config.mode(),
-                qq2drv::InputMode::Disabled
-            );
+    // The stop from the measured 800: input disarmed, then the setpoint reset.
+    match requests(&sent[0]).as_slice() {
+        [
+            Request::SetInputMode(input),
+            Request::SetControlMode(_),
+            Request::SetControlMode(_),
+            Request::SetAccelerationLimit(_),
+            Request::VelocityRamp(ramp),
+        ] => {
+            assert_eq!(one(input).config.mode(), qq2drv::InputMode::Disabled);
+            assert_eq!(one(ramp).velocity, 800);
         }
         other => panic!("{other:?}"),
     }
-    assert_eq!(p[2][2], PacketId::VelocityRamp.as_u8());
 }
 
 #[test]
@@ -555,7 +567,7 @@ fn a_stalled_stream_probes_and_finds_a_reset_board() {
     assert_eq!(driver.status().resets, 1);
     assert_eq!(driver.channel(0).fault, Some(DeviceFault::Reset));
     let sent = drain(&mut driver, now);
-    assert_eq!(packets(&sent[0]).len(), 8, "configured again");
+    assert_eq!(packets(&sent[0]).len(), 10, "configured again");
     driver.handle_rx(now + MS, &acks(&sent[0], 0));
     driver.handle_rx(now + MS, &ours_stream([1, 2, 3], [0; 3], [0; 3]));
     assert_eq!(driver.status().fault, None);
@@ -613,9 +625,12 @@ fn link_down_faults_and_stops_what_was_moving_once_back() {
     driver.handle_rx(t + 2 * MS, &acks(&sent[0], 0));
     driver.handle_rx(t + 2 * MS, &ours_stream([0; 3], [0, 0, 900], [0; 3]));
     assert_eq!(driver.channel(2).fault, None);
-    let sent = drain(&mut driver, t + 2 * MS);
-    match Request::parse(&packets(&sent[0])[1]).unwrap() {
-        Request::VelocityRamp(e) => assert_eq!(e.iter().next().unwrap().velocity, 0),
+    // Once the configuration has left the wire.
+    let sent = drain(&mut driver, t + 6 * MS);
+    match requests(&sent[0]).as_slice() {
+        [.., Request::VelocityRamp(ramp)] => {
+            assert_eq!(one(ramp).velocity, 900, "from the measured velocity");
+        }
         other => panic!("{other:?}"),
     }
 }
@@ -725,3 +740,6 @@ fn goals_every_tick_never_build_a_backlog_on_the_wire() {
     let wire = bytes as f64 * 8.0 / 500_000.0;
     assert!(wire <= elapsed + 0.002, "{wire} s of bytes in {elapsed} s");
 }
+
+mod io;
+mod stops;

@@ -1,0 +1,503 @@
+//! The qsb machine keys of a config: every malformed value refused with file:line:column
+//! and the key, the cross-table rules (axes, signals, the motor drive's lines), the
+//! effective values `describe` shows, and the bytes the built driver puts on the wire.
+
+use core::time::Duration;
+use std::path::Path;
+
+use motion_link::Link;
+use motiond::config::{Owner, ServerConfig};
+use qsb::{CommandDecoder, Request};
+
+const GOOD: &str = r#"
+[server]
+name = "t"
+
+[[link]]
+name = "usb"
+type = "serial"
+path = "/dev/does-not-exist-motiond-qsb-test"
+baud = 230400
+
+[[device]]
+name = "feeder_qsb"
+link = "usb"
+model = "qsb"
+variant = "qsb-m"
+
+[[axis]]
+name = "feeder"
+device = "feeder_qsb"
+channel = 0
+unit = "mm"
+counts_per_unit = 100.0
+min = -1000.0
+max = 1000.0
+max_velocity = 100.0
+max_accel = 1000.0
+"#;
+
+/// `GOOD` with `lines` added to the device table.
+fn with_device_keys(lines: &str) -> String {
+    GOOD.replace(
+        "variant = \"qsb-m\"",
+        &format!("variant = \"qsb-m\"\n{lines}"),
+    )
+}
+
+fn parse(text: &str) -> Result<ServerConfig, String> {
+    ServerConfig::parse(Path::new("qsb.toml"), text).map_err(|e| e.to_string())
+}
+
+/// The 1-based line of the first occurrence of `needle`.
+fn line_of(text: &str, needle: &str) -> usize {
+    let offset = text
+        .find(needle)
+        .unwrap_or_else(|| panic!("{needle:?} not in config"));
+    text[..offset].matches('\n').count() + 1
+}
+
+/// `text` is refused at the line of `needle`, naming `key`, saying `says`.
+fn refused(text: &str, needle: &str, key: &str, says: &str) {
+    let error = match parse(text) {
+        Ok(_) => panic!("accepted:\n{text}"),
+        Err(error) => error,
+    };
+    let location = format!("qsb.toml:{}:", line_of(text, needle));
+    let at = error
+        .lines()
+        .find(|l| l.contains(&format!("`{key}`")) || l.contains(&format!(".{key}`")))
+        .unwrap_or_else(|| panic!("no issue for `{key}` in:\n{error}"));
+    assert!(at.starts_with(&location), "expected {location} in: {at}");
+    assert!(at.contains(says), "expected {says:?} in: {at}");
+}
+
+#[test]
+fn the_good_config_and_every_key_set_well_pass() {
+    let config = parse(GOOD).expect("good");
+    assert!(config.warnings.is_empty());
+    let all = with_device_keys(
+        "counts_per_step = -4.0\nindex_polarity = \"inverted\"\nstream_interval_ms = 3.90625\nhost_latency_ms = 20.0\nenable_output = 3\nenable_active = \"high\"\ninput_mode = \"quadrature\"\ncapture_input = 0\ncapture_edge = \"falling\"\nhome_direction = \"positive\"\nhome_max_travel = 50.0\nhome_offset = 1.5",
+    );
+    let config = parse(&all).expect("every key");
+    assert!(config.warnings.is_empty(), "{:?}", config.warnings);
+}
+
+#[test]
+fn malformed_values_of_every_key_are_refused_where_they_are() {
+    let cases: [(&str, &str, &str, &str); 21] = [
+        (
+            "counts_per_step = 0.0",
+            "counts_per_step",
+            "device[0].counts_per_step",
+            "not 0",
+        ),
+        (
+            "counts_per_step = nan",
+            "counts_per_step",
+            "device[0].counts_per_step",
+            "finite",
+        ),
+        (
+            "counts_per_step = \"ten\"",
+            "counts_per_step",
+            "counts_per_step",
+            "invalid type",
+        ),
+        (
+            "index_polarity = \"upside-down\"",
+            "index_polarity",
+            "device[0].index_polarity",
+            "allowed: \"normal\", \"inverted\"",
+        ),
+        (
+            "stream_interval_ms = 0.5",
+            "stream_interval_ms",
+            "device[0].stream_interval_ms",
+            "1..=0xFFFE ticks",
+        ),
+        (
+            "stream_interval_ms = 200000.0",
+            "stream_interval_ms",
+            "device[0].stream_interval_ms",
+            "out of range",
+        ),
+        (
+            "stream_interval_ms = -2.0",
+            "stream_interval_ms",
+            "device[0].stream_interval_ms",
+            "out of range",
+        ),
+        (
+            "host_latency_ms = -1.0",
+            "host_latency_ms",
+            "device[0].host_latency_ms",
+            "0..=1000 ms",
+        ),
+        (
+            "host_latency_ms = 1000.5",
+            "host_latency_ms",
+            "device[0].host_latency_ms",
+            "0..=1000 ms",
+        ),
+        (
+            "enable_output = 1",
+            "enable_output",
+            "device[0].enable_output",
+            "step and direction",
+        ),
+        (
+            "enable_output = 4",
+            "enable_output",
+            "device[0].enable_output",
+            "allowed: 0 or 3",
+        ),
+        (
+            "enable_output = 0\nenable_active = \"sometimes\"",
+            "enable_active",
+            "device[0].enable_active",
+            "allowed: \"low\", \"high\"",
+        ),
+        (
+            "input_mode = \"sine\"",
+            "input_mode",
+            "device[0].input_mode",
+            "allowed: \"quadrature\", \"pwm\", \"analog\"",
+        ),
+        (
+            "capture_input = 4",
+            "capture_input",
+            "device[0].capture_input",
+            "allowed: 0..=3",
+        ),
+        (
+            "capture_input = 1",
+            "capture_input",
+            "device[0].capture_input",
+            "step line",
+        ),
+        (
+            "enable_output = 3\ncapture_input = 3",
+            "capture_input",
+            "device[0].capture_input",
+            "enable_output",
+        ),
+        (
+            "capture_input = 0\ncapture_edge = \"both\"",
+            "capture_edge",
+            "device[0].capture_edge",
+            "allowed: \"rising\", \"falling\"",
+        ),
+        (
+            "home_direction = \"up\"",
+            "home_direction",
+            "device[0].home_direction",
+            "allowed",
+        ),
+        (
+            "home_max_travel = -5.0",
+            "home_max_travel",
+            "device[0].home_max_travel",
+            "> 0",
+        ),
+        (
+            "home_offset = inf",
+            "home_offset",
+            "device[0].home_offset",
+            "finite",
+        ),
+        (
+            "home_offset = 3e7",
+            "home_offset",
+            "device[0].home_offset",
+            "32-bit",
+        ),
+    ];
+    for (lines, needle, key, says) in cases {
+        refused(&with_device_keys(lines), needle, key, says);
+    }
+}
+
+#[test]
+fn keys_a_variant_does_not_have_are_refused() {
+    let s = GOOD.replace(
+        "variant = \"qsb-m\"",
+        "variant = \"qsb-s\"\nenable_output = 0",
+    );
+    refused(
+        &s,
+        "enable_output",
+        "device[0].enable_output",
+        "only on a qsb-m",
+    );
+    let s = GOOD.replace(
+        "variant = \"qsb-m\"",
+        "variant = \"qsb-s\"\ncapture_input = 0",
+    );
+    refused(
+        &s,
+        "capture_input",
+        "device[0].capture_input",
+        "no digital I/O",
+    );
+    let d = GOOD.replace(
+        "variant = \"qsb-m\"",
+        "variant = \"qsb-d\"\ncapture_input = 1",
+    );
+    refused(
+        &d,
+        "capture_input",
+        "device[0].capture_input",
+        "allowed: 0..=0",
+    );
+    let d = GOOD.replace(
+        "variant = \"qsb-m\"",
+        "variant = \"qsb-d\"\ninput_mode = \"pwm\"",
+    );
+    refused(
+        &d,
+        "input_mode",
+        "device[0].input_mode",
+        "differential quadrature",
+    );
+}
+
+#[test]
+fn qsb_keys_on_another_model_name_qsb() {
+    let text = GOOD
+        .replace("model = \"qsb\"", "model = \"tmcpack\"")
+        .replace("variant = \"qsb-m\"", "counts_per_step = 4.0");
+    refused(
+        &text,
+        "counts_per_step",
+        "device[0].counts_per_step",
+        "valid on: qsb",
+    );
+}
+
+#[test]
+fn an_axis_on_a_device_in_pwm_or_analog_mode_is_refused() {
+    for mode in ["pwm", "analog"] {
+        let text = with_device_keys(&format!("input_mode = \"{mode}\""));
+        refused(
+            &text,
+            "device = \"feeder_qsb\"",
+            "axis[0].device",
+            "carries no axis",
+        );
+    }
+}
+
+const SIGNAL: &str = "\n[[signal]]\nname = \"s\"\ndevice = \"feeder_qsb\"\n";
+
+#[test]
+fn signals_that_clash_with_the_motor_drive_the_enable_line_or_the_mode_are_refused() {
+    let cases = [
+        ("", "digital-in", "io1", "step line"),
+        ("", "digital-out", "io2", "direction line"),
+        ("enable_output = 3", "digital-in", "io3", "enable_output"),
+        ("capture_input = 0", "digital-out", "io0", "capture_input"),
+        (
+            "",
+            "analog-in",
+            "encoder",
+            "input_mode = \"pwm\" or \"analog\"",
+        ),
+        ("", "analog-in", "capture", "set capture_input"),
+    ];
+    for (keys, kind, pin, says) in cases {
+        let mut text = with_device_keys(keys);
+        text.push_str(&format!("{SIGNAL}kind = \"{kind}\"\npin = \"{pin}\"\n"));
+        refused(&text, &format!("pin = \"{pin}\""), "signal[0].pin", says);
+    }
+    // Without an axis the -M's motor drive is off: io1 and io2 are I/O.
+    let text = format!(
+        "{}{SIGNAL}kind = \"digital-out\"\npin = \"io1\"\n",
+        &GOOD[..GOOD.find("[[axis]]").expect("axis")]
+    );
+    let config = parse(&text).expect("io1 without a motor drive");
+    assert_eq!(config.signals.len(), 1);
+    // In pwm mode, no axis: the encoder pin.
+    let text = format!(
+        "{}input_mode = \"pwm\"\n{SIGNAL}kind = \"analog-in\"\npin = \"encoder\"\n",
+        &GOOD[..GOOD.find("[[axis]]").expect("axis")]
+    );
+    parse(&text).expect("the encoder pin in pwm mode");
+}
+
+#[test]
+fn warnings_for_keys_without_effect_and_a_stream_the_line_cannot_carry() {
+    let warned = |text: &str, key: &str, says: &str| {
+        let config = parse(text).expect("accepted with a warning");
+        let warning = config
+            .warnings
+            .iter()
+            .find(|w| w.key == key)
+            .unwrap_or_else(|| panic!("no warning for {key}: {:?}", config.warnings));
+        assert!(warning.message.contains(says), "{}", warning.message);
+        assert_eq!(
+            warning.line,
+            line_of(text, key.rsplit('.').next().unwrap_or(key))
+        );
+    };
+    warned(
+        &with_device_keys("stream_interval_ms = 2.0"),
+        "device[0].stream_interval_ms",
+        "1 tick = 1.953125 ms",
+    );
+    warned(
+        &with_device_keys("enable_active = \"high\""),
+        "device[0].enable_active",
+        "without enable_output",
+    );
+    warned(
+        &with_device_keys("capture_edge = \"falling\""),
+        "device[0].capture_edge",
+        "without capture_input",
+    );
+    // No axis (a signal keeps the server from being empty).
+    let no_axis = format!(
+        "{}enable_output = 0\n{SIGNAL}kind = \"digital-in\"\npin = \"io1\"\n",
+        &GOOD[..GOOD.find("[[axis]]").expect("axis")]
+    );
+    warned(&no_axis, "device[0].enable_output", "no axis drives");
+    let slow = with_device_keys("stream_interval_ms = 1.953125").replace("230400", "9600");
+    warned(&slow, "device[0].stream_interval_ms", "skip samples");
+}
+
+/// The effective parameters of device 0.
+fn rows(config: &ServerConfig) -> Vec<(String, String)> {
+    motiond::drivers::describe(config)
+        .into_iter()
+        .filter(|row| row.owner == Owner::Device(0))
+        .map(|row| (row.key, row.value))
+        .collect()
+}
+
+fn owned(pairs: &[(&str, &str)]) -> Vec<(String, String)> {
+    pairs
+        .iter()
+        .map(|(k, v)| ((*k).to_owned(), (*v).to_owned()))
+        .collect()
+}
+
+#[test]
+fn describe_lists_every_key_with_its_effective_value() {
+    let defaults = parse(GOOD).expect("good");
+    assert_eq!(
+        rows(&defaults),
+        owned(&[
+            ("counts_per_step", "10"),
+            ("home_direction", "negative"),
+            ("home_max_travel", "2500 mm"),
+            ("home_offset", "0 mm"),
+            ("index_polarity", "normal"),
+            ("stream_interval_ms", "1.953125 ms (1 tick)"),
+            ("host_latency_ms", "5 ms"),
+            ("enable_output", "none"),
+            ("enable_active", "low"),
+            ("input_mode", "quadrature"),
+            ("capture_input", "none"),
+            ("capture_edge", "rising"),
+        ])
+    );
+    let set = parse(&with_device_keys(
+        "counts_per_step = -4.0\nindex_polarity = \"inverted\"\nstream_interval_ms = 10.0\nhost_latency_ms = 20.0\nenable_output = 3\ninput_mode = \"quadrature\"\ncapture_input = 0\ncapture_edge = \"falling\"\nhome_direction = \"positive\"\nhome_max_travel = 50.0\nhome_offset = 1.5",
+    ))
+    .expect("set");
+    assert_eq!(
+        rows(&set),
+        owned(&[
+            ("counts_per_step", "-4"),
+            ("home_direction", "positive"),
+            ("home_max_travel", "50 mm"),
+            ("home_offset", "1.5 mm"),
+            ("index_polarity", "inverted"),
+            // 10 ms is nearest to 5 ticks of 1/512 s.
+            ("stream_interval_ms", "9.765625 ms (5 ticks)"),
+            ("host_latency_ms", "20 ms"),
+            ("enable_output", "3"),
+            ("enable_active", "low"),
+            ("input_mode", "quadrature"),
+            ("capture_input", "0"),
+            ("capture_edge", "falling"),
+        ])
+    );
+}
+
+/// Runs the built driver against the simulated board of `config`'s sim link 0 for `ms`
+/// and returns the command lines it sent, decoded with the protocol crate.
+fn start_up(config: &ServerConfig, ms: u64) -> Vec<String> {
+    let mut drivers = motiond::drivers::build(config).expect("drivers");
+    let driver = &mut drivers[0];
+    let mut link = motiond::sim_models::sim_link(config, 0);
+    let mut lines = Vec::new();
+    let mut buf = [0u8; 512];
+    let mut commands = CommandDecoder::new();
+    for tick in 0..ms {
+        let now = Duration::from_millis(tick);
+        while let Ok(n @ 1..) = link.read(now, &mut buf) {
+            driver.handle_rx(now, &buf[..n]);
+        }
+        driver.handle_timeout(now);
+        while let Some(sent) = driver.poll_transmit(now, &mut buf) {
+            let bytes = &buf[..sent.len];
+            link.write(now, bytes).expect("sim link");
+            let (_, line) = commands.decode(bytes);
+            let line = line.expect("a whole line").expect("a command line");
+            Request::from_line(&line).expect("a command of the command list");
+            let text = String::from_utf8_lossy(bytes).trim_end().to_owned();
+            lines.push(text);
+        }
+    }
+    assert!(driver.status().online, "{lines:?}");
+    lines
+}
+
+#[test]
+fn the_built_driver_writes_the_configured_parameters_to_the_simulated_board() {
+    let text = with_device_keys(
+        "counts_per_step = 4.0\nindex_polarity = \"inverted\"\nstream_interval_ms = 10.0\nenable_output = 3\ncapture_input = 0\ncapture_edge = \"falling\"",
+    )
+    .replace(
+        "type = \"serial\"\npath = \"/dev/does-not-exist-motiond-qsb-test\"",
+        "type = \"sim\"",
+    );
+    let config = parse(&text).expect("sim config");
+    let lines = start_up(&config, 40);
+    // 100 mm/s × 100 counts/mm / 4 = 2500 steps/s → 2496; 1000 mm/s² → 25000 → 24992.
+    for expected in [
+        "W1061A0", "W164", "W048", "W0C5", "W0F9C0", "R02", "W02811", "W017", "W162", "S05", "S0E",
+    ] {
+        assert!(
+            lines.iter().any(|l| l == expected),
+            "{expected} in {lines:?}"
+        );
+    }
+    assert!(
+        !lines.iter().any(|l| l == "S01"),
+        "no digital signal to stream"
+    );
+}
+
+#[test]
+fn the_real_hardware_example_is_valid_and_means_what_its_comments_say() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../config/examples/qsb-real.toml");
+    let config = ServerConfig::load(&path).expect("the example is valid");
+    assert!(config.warnings.is_empty(), "{:?}", config.warnings);
+    let rows = rows(&config);
+    for (key, value) in [
+        ("counts_per_step", "4"),
+        ("home_direction", "positive"),
+        ("home_max_travel", "60 mm"),
+        ("home_offset", "0 mm"),
+        ("enable_output", "3"),
+        ("enable_active", "low"),
+    ] {
+        assert!(
+            rows.contains(&(key.to_owned(), value.to_owned())),
+            "{key} = {value} in {rows:?}"
+        );
+    }
+    assert_eq!(config.signals.len(), 2);
+}
