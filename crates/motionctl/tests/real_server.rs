@@ -347,24 +347,27 @@ fn real_list_shows_device_states_supervision_and_machine_parameters() -> Result 
             .collect::<Vec<_>>(),
         configured(&sim_config()?, "device")
     );
-    let mut from_config = 0;
+    let (mut from_config, mut defaults) = (0, 0);
+    let mut count = |params: &Vec<Value>| {
+        from_config += params.iter().filter(|p| p["from_config"] == true).count();
+        defaults += params.iter().filter(|p| p["from_config"] == false).count();
+    };
     for device in devices {
         assert_eq!(device["state"], "online", "{device}");
         assert_ne!(device["firmware"], "", "{device}");
-        let params = json_array(device, "params")?;
-        assert!(
-            !params.is_empty(),
-            "every device has machine parameters: {device}"
-        );
-        from_config += params.iter().filter(|p| p["from_config"] == true).count();
+        count(json_array(device, "params")?);
     }
-    assert!(from_config > 0, "sim.toml sets some device keys");
     for axis in json_array(&list, "axes")? {
         assert!(
             ["hold", "stop-off", "off"].contains(&axis["estop"].as_str().unwrap_or("")),
             "{axis}"
         );
-        assert!(axis["params"].is_array(), "{axis}");
+        let params = json_array(axis, "params")?;
+        assert!(
+            !params.is_empty(),
+            "every axis has machine parameters: {axis}"
+        );
+        count(params);
         for key in ["following_error", "overspeed_factor", "home_max_travel"] {
             assert!(
                 axis[key].is_null() || axis[key].as_f64().is_some_and(|v| v > 0.0),
@@ -372,6 +375,10 @@ fn real_list_shows_device_states_supervision_and_machine_parameters() -> Result 
             );
         }
     }
+    assert!(
+        from_config > 0 && defaults > 0,
+        "sim.toml sets some keys and leaves others at their default"
+    );
     let text = stdout(&run(&server.name, &["list"])?);
     assert!(text.contains("machine parameters (source:"), "{text}");
     Ok(())
@@ -400,6 +407,25 @@ fn real_off_de_energises_or_says_why_per_axis() -> Result {
     Ok(())
 }
 
+/// `config/sim.toml` with its QSB jam sensor (DIG I/O 0) turned into an output, the one
+/// pin of the simulated robot that can drive a `digital-out` signal (the QSB-M's io1/io2
+/// are its step/direction lines and io3 its drive enable; the QuadQuad2Drv and SPI_motor
+/// have no outputs).
+fn sim_config_with_an_output() -> Result<String> {
+    let config = sim_config()?;
+    let at = config
+        .find("name = \"feeder_jam\"")
+        .ok_or("config/sim.toml has no feeder_jam signal")?;
+    let (head, tail) = config.split_at(at);
+    if !tail.contains("kind = \"digital-in\"") {
+        return Err("feeder_jam is not a digital-in".into());
+    }
+    Ok(format!(
+        "{head}{}",
+        tail.replacen("kind = \"digital-in\"", "kind = \"digital-out\"", 1)
+    ))
+}
+
 #[test]
 fn real_io_lists_the_configured_signals_and_sets_an_output() -> Result {
     let config = sim_config()?;
@@ -408,16 +434,29 @@ fn real_io_lists_the_configured_signals_and_sets_an_output() -> Result {
     let signals = json_array(&list, "signals")?;
     let names: Vec<&str> = signals.iter().filter_map(|s| s["name"].as_str()).collect();
     assert_eq!(names, configured(&config, "signal"));
-    let output = signals
-        .iter()
-        .find(|s| s["kind"] == "digital-out")
-        .ok_or("config/sim.toml has no digital-out [[signal]] to set")?;
-    let name = output["name"].as_str().ok_or("name")?;
-    for (word, on) in [("on", true), ("off", false)] {
-        let set = run(&server.name, &["io", "set", name, word])?;
+    for signal in signals {
+        assert!(
+            !signal["flags"]
+                .as_array()
+                .is_some_and(|f| f.contains(&"stale".into())),
+            "{signal}"
+        );
+    }
+    let refused = run(&server.name, &["io", "set", names[0], "on"])?;
+    assert_fails(&refused, 4, Reason::NotAnOutput.message());
+    drop(server);
+
+    let server = RealServer::start_with(&sim_config_with_an_output()?)?;
+    let output = json_of(&run(&server.name, &["io", "get", "feeder_jam", "--json"])?)?;
+    assert_eq!(output["kind"], "digital-out");
+    for (word, on) in [("on", true), ("off", false), ("on", true)] {
+        let set = run(&server.name, &["io", "set", "feeder_jam", word])?;
         assert!(set.status.success(), "{set:?}");
-        poll_json(&server.name, &["io", "get", name, "--json"], |s| {
+        poll_json(&server.name, &["io", "get", "feeder_jam", "--json"], |s| {
             s["on"] == on
+                && !s["flags"]
+                    .as_array()
+                    .is_some_and(|f| f.contains(&"pending".into()))
         })?;
     }
     Ok(())
