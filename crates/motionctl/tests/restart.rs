@@ -33,18 +33,19 @@ fn a_jog_ends_when_the_server_restarts_and_is_never_renewed_on_the_new_one() -> 
     wait_for_request(&server, CommandKind::RampVelocity)?;
     std::thread::sleep(Duration::from_millis(300)); // renewed past the deadman
     server.restart()?;
-    let before = server.requests().len();
     let output = finish(child, DEADLINE)?;
     assert_fails(&output, 1, "restarted");
     assert!(
         stderr(&output).contains("jog x ended: nothing more is sent to the new server"),
         "{output:?}"
     );
-    let after: Vec<(Option<CommandKind>, u32)> = server.requests()[before..]
+    let after: Vec<(Option<CommandKind>, u32)> = server
+        .requests_since_restart()
         .iter()
         .map(|request| (request.kind().ok(), request.axis))
         .collect();
-    // Nothing, or one renewal that crossed the restart and was stopped at once.
+    // What the new server took from the jog: nothing, or one renewal that crossed the
+    // restart and was stopped at once.
     assert!(
         after.is_empty()
             || after
@@ -68,10 +69,10 @@ fn claims_end_when_the_server_restarts() -> Result {
         .spawn()?;
     wait_for_request(&server, CommandKind::Claim)?;
     server.restart()?;
-    let before = server.requests().len();
     let output = finish(child, DEADLINE)?;
     assert_fails(&output, 1, "restarted");
-    let after: Vec<Option<CommandKind>> = server.requests()[before..]
+    let after: Vec<Option<CommandKind>> = server
+        .requests_since_restart()
         .iter()
         .map(|request| request.kind().ok())
         .collect();

@@ -68,7 +68,10 @@ pub enum FakeControl {
 /// What the test and the serving thread share.
 #[derive(Debug, Default)]
 pub(crate) struct Shared {
-    pub(crate) requests: Mutex<Vec<CommandRequest>>,
+    /// Every request with the incarnation (0, then one more per restart) that took it.
+    pub(crate) requests: Mutex<Vec<(u64, CommandRequest)>>,
+    /// The current incarnation.
+    pub(crate) generation: AtomicU64,
     pub(crate) controls: Mutex<Vec<FakeControl>>,
     pub(crate) estops: Mutex<Vec<&'static str>>,
     pub(crate) estop_latched: AtomicBool,
@@ -140,7 +143,22 @@ impl FakeServer {
         self.shared
             .requests
             .lock()
-            .map(|log| log.clone())
+            .map(|log| log.iter().map(|(_, request)| *request).collect())
+            .unwrap_or_default()
+    }
+
+    /// The requests the current incarnation took (since the last [`FakeServer::restart`]).
+    pub fn requests_since_restart(&self) -> Vec<CommandRequest> {
+        let generation = self.shared.generation.load(Ordering::Relaxed);
+        self.shared
+            .requests
+            .lock()
+            .map(|log| {
+                log.iter()
+                    .filter(|(taken_by, _)| *taken_by == generation)
+                    .map(|(_, request)| *request)
+                    .collect()
+            })
             .unwrap_or_default()
     }
 
@@ -192,6 +210,7 @@ impl FakeServer {
         self.stop_thread()?;
         self.stop = Arc::new(AtomicBool::new(false));
         self.shared.estop_latched.store(false, Ordering::Relaxed);
+        self.shared.generation.fetch_add(1, Ordering::Relaxed);
         let thread = (self.start)(&self.config, &self.shared, &self.stop)?;
         self.thread = Some(thread);
         Ok(())

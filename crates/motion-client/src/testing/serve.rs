@@ -185,6 +185,7 @@ fn serve_inner<S: Service>(
         .send_copy(Model::params(config))
         .map_err(|e| fail("params send")(&e))?;
     let mut published_states = model.device_states();
+    let generation = shared.generation.load(Ordering::Relaxed);
     let _ = ready.send(Ok(()));
 
     let period = Duration::from_secs(1) / config.tick_hz.max(1);
@@ -212,7 +213,7 @@ fn serve_inner<S: Service>(
             let request = *active.payload();
             let sender = ClientId::from_u128(active.header().node_id().value());
             if let Ok(mut log) = shared.requests.lock() {
-                log.push(request);
+                log.push((generation, request));
             }
             let reason = model.apply(&request, sender);
             if reason == motion_ipc::Reason::Accepted
