@@ -90,6 +90,19 @@ pub fn params_lines(info: &ServerInfo, table: &ParamTable) -> Vec<String> {
         "machine parameters (source: config = set in the config file, default = not set):"
             .to_owned(),
     ];
+    let all = || {
+        (0..info.devices().len())
+            .flat_map(|index| table.rows(ParamOwner::Device, index))
+            .chain((0..info.axes().len()).flat_map(|index| table.rows(ParamOwner::Axis, index)))
+    };
+    let key_width = all()
+        .map(|row| row.key().chars().count())
+        .max()
+        .unwrap_or(0);
+    let value_width = all()
+        .map(|row| row.value().chars().count())
+        .max()
+        .unwrap_or(0);
     let mut section = |title: String, rows: Vec<&MachineParam>| {
         if rows.is_empty() {
             return;
@@ -101,7 +114,11 @@ pub fn params_lines(info: &ServerInfo, table: &ParamTable) -> Vec<String> {
             } else {
                 "default"
             };
-            lines.push(format!("  {:<30} {:<24} {source}", row.key(), row.value()));
+            lines.push(format!(
+                "  {:<key_width$}  {:<value_width$}  {source}",
+                row.key(),
+                row.value()
+            ));
         }
     };
     for (index, device) in info.devices().iter().enumerate() {
