@@ -704,3 +704,5 @@ mod stops;
 // The IN pins and Status bits as signals.
 #[path = "engine_qq2drv/io.rs"]
 mod io;
+#[path = "engine_qq2drv/off.rs"]
+mod off;

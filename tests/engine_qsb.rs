@@ -7,6 +7,8 @@ mod support;
 mod io;
 #[path = "engine_qsb/machine.rs"]
 mod machine;
+#[path = "engine_qsb/off.rs"]
+mod off;
 
 use core::time::Duration;
 use std::sync::{Arc, Mutex};

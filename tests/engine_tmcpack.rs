@@ -6,6 +6,11 @@
 
 mod support;
 
+#[path = "engine_tmcpack/io.rs"]
+mod io;
+#[path = "engine_tmcpack/stops.rs"]
+mod stops;
+
 use core::time::Duration;
 use std::sync::{Arc, Mutex};
 
@@ -540,7 +545,10 @@ fn the_driver_allocates_nothing_after_construction() {
     use motion_drivers::Goal;
     use motion_link::Link;
 
-    let mut driver = driver(1, Variant::SixPack, &[0, 1], 0);
+    let variant = Variant::SixPack;
+    let inputs = io::io_config(variant, &["ref0", "analog6", "analog7"], &["ttlout1"]);
+    let mut driver = io::driver_with_io(1, variant, &[0, 1], 0, inputs);
+    let (ref0, ttlout1) = (io::pin(variant, "ref0"), io::pin(variant, "ttlout1"));
     let mut link = SimLink::stream_with(
         "rs485",
         BAUD,
@@ -573,8 +581,12 @@ fn the_driver_allocates_nothing_after_construction() {
         if let Some(goal) = goal {
             let _ = driver.set_goal(now, 0, goal);
         }
+        if tick % 700 == 0 {
+            let _ = driver.set_output(now, ttlout1, tick % 1400 == 0);
+        }
         let transmit = driver.poll_transmit(now, &mut buf);
         let _ = driver.channel(0);
+        let _ = driver.read_pin(ref0);
         online |= driver.status().online;
         in_driver += allocations() - before;
         if let Some(transmit) = transmit {

@@ -145,7 +145,7 @@ fn the_deadman_stops_a_saturated_motor_from_its_real_velocity() {
 }
 
 /// Writes raw requests into the simulated board at `now`, as another program would.
-fn poke(board: &Board, now: Duration, requests: &[Request<'_>]) {
+pub(super) fn poke(board: &Board, now: Duration, requests: &[Request<'_>]) {
     use motion_link::sim::SpiDevice;
     let mut mosi = [0u8; 256];
     let mut len = 0;

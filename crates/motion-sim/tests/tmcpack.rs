@@ -3,6 +3,8 @@
 
 #[path = "tmcpack/host.rs"]
 mod host;
+#[path = "tmcpack/io.rs"]
+mod io;
 #[path = "tmcpack/motion.rs"]
 mod motion;
 #[path = "tmcpack/reference.rs"]

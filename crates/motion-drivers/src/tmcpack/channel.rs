@@ -5,11 +5,17 @@
 //! - **Stop** (decelerate, then hold): `$25` rotation with velocity 0 — "The change to
 //!   rotation happens immediately, even if the motor is still active" and "The maximum
 //!   acceleration is obeyed when the velocity is to be changed" — from any action (ramp,
-//!   rotation, reference search), after `$14` sets amax from the goal's deceleration. Once
-//!   the motor is at rest, `$23` ends the rotation ("If rotation has been active, the motor
-//!   is only stopped by this command"), leaving it inactive. `$2A` is not used: it sets the
-//!   target to the actual position, and "motors driving beyond vstart will overshoot and
-//!   return".
+//!   rotation, PI controller, reference search), after `$14` sets amax from the goal's
+//!   deceleration (rounded up: never gentler than asked) when the pack has another amax.
+//!   So the motor decelerates from whatever velocity it really has, at the requested rate.
+//!   The `$25` is sent even when the driver believes the motor idle (it may have been left
+//!   running by someone else), and a stop goes before every other queued command. Once the
+//!   motor is at rest, `$23` ends the rotation ("If rotation has been active, the motor is
+//!   only stopped by this command"), leaving it inactive; a motor that was switched off is
+//!   energised again with its configured `$11` (a stop holds). `$2A` is not used: it sets
+//!   the target to the actual position, and "motors driving beyond vstart will overshoot and
+//!   return driving another ramp back"; nor is the PI controller (`$24`), whose
+//!   deceleration the manual does not bound.
 //! - **Position** / **RampPosition**: `$14` (vmax/amax: the axis limits, or the goal's),
 //!   then `$26` target and `$23` with the same target, as 8.4 advises ("use command $26,
 //!   and follow it by command $23 with the same target position, to ensure that the motor
@@ -18,14 +24,18 @@
 //! - **Velocity**: `$14` (amax from the goal, vmax the axis limit), `$25` velocity.
 //! - **Home**: stop first if moving ($16 may only change at standstill), `$16` vrefmax,
 //!   `$22`. The start-up `$16` sets "stop after reference search", so the motor ends at the
-//!   new zero point, inactive.
-//! - **SetPosition**: `$27`.
+//!   new zero point, inactive; then `$27` sets the configured home position if it is not 0.
+//!   A search the pack repeats (its action code goes back to an earlier phase: "the whole
+//!   procedure repeats by first stopping again"), a stop condition during the search
+//!   (`$20` P6), or a search that ends anywhere but inactive at the zero point is
+//!   [`DeviceFault::HomeFailed`]; the driver then stops the motor.
+//! - **SetPosition**: `$27`; the axis counts as referenced from the first poll after it.
 //! - **Off**: stop as above, then `$11` with every current level at 0 %; the next motion
 //!   goal sends the configured `$11` first.
 
 use core::time::Duration;
 
-use tmcpack::{Action, CurrentLevel, MAX_VELOCITY, Request};
+use tmcpack::{Action, CurrentLevel, MAX_VELOCITY, MotorOptions, Request};
 
 use super::config::{Scale, TmcpackChannel};
 use crate::goal::{Goal, GoalError, GoalKind};
@@ -101,6 +111,14 @@ pub(crate) struct Channel {
     prev: Option<(i32, Duration)>,
     /// Stop an active motor at its first poll after a (re)start: goals were voided.
     pub stop_if_active: bool,
+    /// The script is a stop (Stop, Off): it goes before every other command.
+    urgent: bool,
+    /// The last reference search failed (reported until the next goal).
+    home_failed: bool,
+    /// The highest reference-search phase (action − 20) seen in the current search.
+    ref_phase: Option<u8>,
+    /// A `$27` was sent with this sequence number: referenced from the next poll on.
+    confirm_position: Option<u64>,
 }
 
 impl Channel {
@@ -126,6 +144,10 @@ impl Channel {
             polled_sent_at: Duration::ZERO,
             prev: None,
             stop_if_active: true,
+            urgent: false,
+            home_failed: false,
+            ref_phase: None,
+            confirm_position: None,
         }
     }
 
@@ -142,6 +164,10 @@ impl Channel {
         self.target = None;
         self.prev = None;
         self.stop_if_active = true;
+        self.urgent = false;
+        self.home_failed = false;
+        self.ref_phase = None;
+        self.confirm_position = None;
         self.state.fault = Some(fault);
         self.state.arrived = false;
         if fault == DeviceFault::Reset {
@@ -175,6 +201,11 @@ impl Channel {
         matches!(self.current(), Some(Step::Send(_)))
     }
 
+    /// Whether the next step is a request of a stop (goes before other commands).
+    pub fn urgent(&self) -> bool {
+        self.urgent && self.ready()
+    }
+
     /// Whether the `AwaitRest` step waits for a fresh poll (its time bound has passed).
     pub fn wants_rest_poll(&self, now: Duration) -> bool {
         self.current() == Some(Step::AwaitRest) && self.rest_at.is_some_and(|at| now >= at)
@@ -186,9 +217,10 @@ impl Channel {
         let mut script = Script::default();
         let kind = goal.kind();
         let range = GoalError::OutOfBoardRange(kind);
+        let axis_decel = self.cfg.max_accel;
         match goal {
             Goal::Off => {
-                self.plan_stop(&mut script, motor, self.scale.amax);
+                self.plan_stop(&mut script, motor, axis_decel);
                 let off = CurrentLevel::Off;
                 script.send(Request::CurrentControl {
                     motor,
@@ -200,8 +232,14 @@ impl Channel {
                 });
             }
             Goal::Stop { decel } => {
-                let amax = self.scale.amax(decel).unwrap_or(self.scale.amax);
-                self.plan_stop(&mut script, motor, amax);
+                let decel = if decel.is_finite() && decel > 0.0 {
+                    decel
+                } else {
+                    axis_decel
+                };
+                self.plan_stop(&mut script, motor, decel);
+                // "Hold": a motor that was switched off holds with its currents again.
+                self.power_on(&mut script, motor);
             }
             Goal::Power { .. } => return Err(GoalError::Unsupported(kind)),
             Goal::Position { counts } => {
@@ -248,7 +286,7 @@ impl Channel {
                 }
                 let vrefmax = v.min(self.board_vmax.max(self.scale.vmax));
                 if self.needs_stop() {
-                    self.plan_stop(&mut script, motor, self.scale.amax);
+                    self.plan_stop(&mut script, motor, axis_decel);
                 }
                 self.power_on(&mut script, motor);
                 if vrefmax != self.board_vrefmax {
@@ -279,9 +317,14 @@ impl Channel {
         self.steps = script.steps;
         self.next = 0;
         self.stop_if_active = false;
+        self.urgent = matches!(kind, GoalKind::Stop | GoalKind::Off);
         self.rest_at = None;
         self.state.arrived = false;
         self.state.at_limit = false;
+        // A new goal ends whatever search ran (a stop must not count as its end).
+        self.homing = Homing::Idle;
+        self.home_failed = false;
+        self.ref_phase = None;
         if kind == GoalKind::Home {
             self.state.homed = false;
         }
@@ -298,15 +341,28 @@ impl Channel {
         !matches!(self.motion, Motion::Ramp)
     }
 
-    fn plan_stop(&self, script: &mut Script, motor: u8, amax: u16) {
-        self.limits(script, motor, self.board_vmax, amax);
-        script.send(Request::Rotate { motor, velocity: 0 });
+    /// `$25` velocity 0 at `decel` (microsteps/s²), then wait for rest. The pack gets the
+    /// stop's amax rounded up; when the amax it has is no gentler than the one rounded
+    /// down (the usual case after a move at the same limit) the `$25` goes first and the
+    /// exact amax right after it, so the deceleration starts one word earlier.
+    fn plan_stop(&self, script: &mut Script, motor: u8, decel: f64) {
+        let up = self.scale.stop_amax(decel).unwrap_or(self.scale.amax);
+        let down = self.scale.amax(decel).unwrap_or(up).min(up);
+        let (_, planned_amax) = script.limits.unwrap_or((self.board_vmax, self.board_amax));
+        let vmax = script.limits.map_or(self.board_vmax, |(v, _)| v);
+        if planned_amax >= down {
+            script.send(Request::Rotate { motor, velocity: 0 });
+            self.limits(script, motor, vmax, up);
+        } else {
+            self.limits(script, motor, vmax, up);
+            script.send(Request::Rotate { motor, velocity: 0 });
+        }
         script.push(Step::AwaitRest);
     }
 
     fn plan_ramp(&self, script: &mut Script, motor: u8, target: i32, vmax: u16, amax: u16) {
         if self.needs_stop() {
-            self.plan_stop(script, motor, self.scale.amax);
+            self.plan_stop(script, motor, self.cfg.max_accel);
         }
         self.power_on(script, motor);
         self.limits(script, motor, vmax, amax);
@@ -344,6 +400,13 @@ impl Channel {
             Request::VelocityAcceleration { amax, vmax, .. } => {
                 self.board_amax = amax;
                 self.board_vmax = vmax;
+                if self.motion == Motion::Rotation(0)
+                    && let Some(at) = self.rest_at
+                {
+                    // The amax of a stop already under way: the rest bound from now on.
+                    let bound = Scale::stop_time(self.board_vmax, self.board_amax);
+                    self.rest_at = Some(at.max(wire_end + bound));
+                }
             }
             Request::ReferenceParameters { vrefmax, .. } => self.board_vrefmax = vrefmax,
             Request::CurrentControl { i3, .. } => {
@@ -370,7 +433,7 @@ impl Channel {
                 self.target = None;
             }
             Request::SetPosition { .. } => {
-                self.state.homed = true;
+                self.confirm_position = Some(seq);
                 self.target = None;
                 self.prev = None;
             }
@@ -379,7 +442,8 @@ impl Channel {
     }
 
     /// A `$20` answer for this channel, to a request sent with `seq` at `sent_at`.
-    /// Returns `true` when the channel should be stopped (active after a restart).
+    /// Returns `true` when the driver should stop the channel (active after a restart, or
+    /// a failed reference search).
     pub fn on_poll(
         &mut self,
         now: Duration,
@@ -389,9 +453,10 @@ impl Channel {
         action: Action,
         stopped: bool,
     ) -> bool {
-        let velocity = match self.prev {
-            Some((p, t)) if now > t && action.is_active() => {
-                f64::from(position.wrapping_sub(p)) / (now - t).as_secs_f64()
+        let delta = self.prev.map(|(p, _)| self.travel(p, position));
+        let velocity = match (self.prev, delta) {
+            (Some((_, t)), Some(d)) if now > t && action.is_active() => {
+                d as f64 / (now - t).as_secs_f64()
             }
             _ => 0.0,
         };
@@ -402,29 +467,19 @@ impl Channel {
         } else {
             velocity
         };
-        let still = self.prev.is_some_and(|(p, _)| p == position);
-        let mut refused = false;
+        let still = delta == Some(0);
         self.prev = Some((position, now));
         self.action = Some(action);
         self.polled_seq = seq;
         self.polled_sent_at = sent_at;
-        match self.homing {
-            Homing::Sent(sent) if seq > sent && action.is_referencing() => {
-                self.homing = Homing::Running;
-            }
-            Homing::Sent(sent) if seq > sent => {
-                // Not searching at the first poll after $22: finished already (it ends at
-                // the new zero point, inactive) or refused by the pack.
-                if position == 0 && action == Action::Inactive {
-                    self.finish_homing();
-                } else {
-                    self.homing = Homing::Idle;
-                    self.motion = Motion::Unknown;
-                    refused = true;
-                }
-            }
-            Homing::Running if !action.is_referencing() => self.finish_homing(),
-            _ => {}
+        let failed = self.track_homing(seq, position, action, stopped);
+        if stopped && !self.cfg.options.contains(MotorOptions::STOP_SOFT) {
+            // An abrupt stop: "the precise motor position may be lost" (8.5 $31).
+            self.state.homed = false;
+        }
+        if self.confirm_position.is_some_and(|sent| seq > sent) {
+            self.confirm_position = None;
+            self.state.homed = true;
         }
         if self.motion == Motion::Ramp && action == Action::Rotation {
             self.motion = Motion::Unknown;
@@ -459,19 +514,85 @@ impl Channel {
             homed: self.state.homed,
             at_limit: stopped,
             arrived,
-            fault: if refused {
-                Some(DeviceFault::BoardError)
+            fault: if self.home_failed {
+                Some(DeviceFault::HomeFailed)
             } else {
                 stopped.then_some(DeviceFault::LimitSwitch)
             },
         };
-        restarted && action.is_active()
+        (restarted || failed) && action.is_active()
+    }
+
+    /// Microsteps from `from` to `to`: on a rotary axis (the pack reports the position
+    /// modulo poslimit) the shorter way round.
+    fn travel(&self, from: i32, to: i32) -> i64 {
+        let d = i64::from(to.wrapping_sub(from));
+        if !self.cfg.cyclic() {
+            return d;
+        }
+        let l = i64::from(self.cfg.poslimit);
+        let w = d.rem_euclid(l);
+        if w > l / 2 { w - l } else { w }
+    }
+
+    /// Follows a reference search the driver started; `true` when it failed at this poll.
+    fn track_homing(&mut self, seq: u64, position: i32, action: Action, stopped: bool) -> bool {
+        let phase = match action {
+            Action::ReferenceSearch(p) => Some(p),
+            _ => None,
+        };
+        let ended_at_zero = position == 0 && action == Action::Inactive && !stopped;
+        match self.homing {
+            Homing::Sent(sent) if seq <= sent => false,
+            Homing::Idle => false,
+            Homing::Sent(_) | Homing::Running if action.is_referencing() => {
+                let repeated = matches!((self.ref_phase, phase), (Some(q), Some(p)) if p < q);
+                if stopped || repeated {
+                    self.fail_homing();
+                    return true;
+                }
+                self.homing = Homing::Running;
+                self.ref_phase = self.ref_phase.max(phase);
+                false
+            }
+            // Not searching (any more): finished at the new zero point (it stops there,
+            // inactive), or not.
+            Homing::Sent(_) | Homing::Running if ended_at_zero => {
+                self.finish_homing();
+                false
+            }
+            Homing::Sent(_) | Homing::Running => {
+                self.fail_homing();
+                true
+            }
+        }
+    }
+
+    fn fail_homing(&mut self) {
+        self.homing = Homing::Idle;
+        self.motion = Motion::Unknown;
+        self.home_failed = true;
+        self.state.homed = false;
+        self.ref_phase = None;
     }
 
     fn finish_homing(&mut self) {
         self.homing = Homing::Idle;
         self.motion = Motion::Ramp;
-        self.state.homed = true;
+        self.ref_phase = None;
+        if self.cfg.home_position == 0 {
+            self.state.homed = true;
+        } else if !self.pending() {
+            // The zero point takes the configured home position; referenced once a poll
+            // after the `$27` confirms it.
+            self.steps = [None; MAX_STEPS];
+            self.steps[0] = Some(Step::Send(Request::SetPosition {
+                motor: self.motor,
+                position: self.cfg.home_position,
+            }));
+            self.next = 0;
+            self.urgent = false;
+        }
     }
 
     /// Puts `step` before the current one (the `$23` that ends a rotation at rest).

@@ -3,11 +3,15 @@
 
 use core::time::Duration;
 
-use tmcpack::convert::{AMAX_DIVISOR, DEFAULT_BAUD, F_CLK_HZ, MAX_MICROSTEP_HZ, RAMP_HZ};
-use tmcpack::{
-    CurrentLevel, MAX_AMAX, MAX_CLKDIV, MAX_DIV, MAX_VELOCITY, MotorOptions, MotorType, StepClock,
-    Variant,
+use tmcpack::convert::{
+    AMAX_DIVISOR, DEFAULT_BAUD, F_CLK_HZ, MAX_MICROSTEP_HZ, RAMP_HZ, TICK, byte_time,
 };
+use tmcpack::{
+    CurrentLevel, FRAME_LEN, MAX_AMAX, MAX_ANALOG, MAX_CLKDIV, MAX_DIV, MAX_VELOCITY, MotorOptions,
+    MotorType, StepClock, Variant,
+};
+
+use super::io::TmcpackIo;
 
 /// The response address the driver puts in its queries unless configured otherwise. The
 /// pack executes any word whose first byte is its own address, replies included, so this
@@ -18,6 +22,22 @@ pub const DEFAULT_REPLY_ADDRESS: u8 = 0xFE;
 /// (factory: 3 units = 6 ms). A query then costs request 4.7 ms + 2 ms + reply 4.7 ms +
 /// 2 ms hold ≈ 13.4 ms at 19200 baud instead of ≈ 21.4 ms.
 pub const DEFAULT_SWITCHOVER_UNITS: u16 = 1;
+
+/// Slack of the default $41 packet timeout beyond one word's wire time: two byte times (a
+/// host or adapter may pause between the bytes of one write).
+pub const PACKET_TIMEOUT_SLACK_BYTES: u32 = 2;
+
+/// The $41 packet timeout the driver programs by default, 2 ms units: the word time plus
+/// [`PACKET_TIMEOUT_SLACK_BYTES`], rounded up to 2 ms, at least the 2 units $41 allows.
+/// At 19200 baud: 11 byte times = 5.7 ms → 3 units = 6 ms. A complete word always fits;
+/// a word whose tail was lost is aborted 6 ms after its first byte, and the driver starts no
+/// word sooner than that after the previous one (see `TmcpackDriver`), so the torn word is
+/// discarded before the next one begins instead of swallowing its first bytes.
+pub fn default_packet_timeout_units(baud: u32) -> u16 {
+    let wire = byte_time(baud).saturating_mul(FRAME_LEN as u32 + PACKET_TIMEOUT_SLACK_BYTES);
+    let units = wire.as_nanos().div_ceil(TICK.as_nanos());
+    units.clamp(2, u128::from(u16::MAX)) as u16
+}
 
 /// $11 current control of one motor (manual 8.3).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -74,6 +94,20 @@ pub struct TmcpackChannel {
     /// $10 peak current (0..=255 of the pack's full scale). The pack sets it per pair of
     /// motors (0+1, 2+3, 4+5) from the even motor's value; `None` leaves it as it is.
     pub peak_current: Option<u8>,
+    /// $31 analogue stop limits of the motor's A_In: (left minimum, right maximum) in ADC
+    /// counts; 0 and ≥ 1023 are "no function".
+    pub analog_stop: (u16, u16),
+    /// The position the axis takes at the zero point a reference search found, microsteps
+    /// (`$27` after the search when not 0).
+    pub home_position: i32,
+}
+
+impl TmcpackChannel {
+    /// Whether the $15 type says rotary with a usable poslimit (the pack then reports the
+    /// position modulo poslimit).
+    pub fn cyclic(&self) -> bool {
+        self.motor_type.contains(MotorType::ROTARY) && self.poslimit > 0
+    }
 }
 
 impl Default for TmcpackChannel {
@@ -92,6 +126,8 @@ impl Default for TmcpackChannel {
             testnullrange: 15 * 16,
             currents: Currents::default(),
             peak_current: None,
+            analog_stop: (0, MAX_ANALOG),
+            home_position: 0,
         }
     }
 }
@@ -111,11 +147,27 @@ pub struct TmcpackDriverConfig {
     /// $40 transmitter switch-over delay to program at start-up, 2 ms units (1..=1000);
     /// `None` leaves the pack's setting (factory 6 ms) and sends no $40.
     pub switchover_units: Option<u16>,
+    /// $41 packet timeout to program at start-up, 2 ms units (2..=65535); `None`: the
+    /// default for the baud rate ([`default_packet_timeout_units`]).
+    pub packet_timeout_units: Option<u16>,
+    /// The longest packet timeout of any pack on the bus, 2 ms units (0: this pack's own).
+    /// Every pack frames every word on the bus, so the driver spaces its words by this.
+    pub bus_packet_timeout_units: u16,
     /// Motors polled on the whole bus this pack shares (all packs); 0 = this pack's own.
     /// Only sizes [`refresh_budget`](crate::Driver::refresh_budget).
     pub bus_motors: u8,
     /// Per motor 0..=5: `Some` for a motor with an axis (configured, polled, driven).
     pub channels: [Option<TmcpackChannel>; 6],
+    /// Inputs to poll, outputs to drive, the ready output.
+    pub io: TmcpackIo,
+}
+
+impl TmcpackDriverConfig {
+    /// The $41 packet timeout the driver programs, 2 ms units.
+    pub fn packet_timeout(&self) -> u16 {
+        self.packet_timeout_units
+            .unwrap_or_else(|| default_packet_timeout_units(self.baud))
+    }
 }
 
 impl Default for TmcpackDriverConfig {
@@ -127,8 +179,11 @@ impl Default for TmcpackDriverConfig {
             baud: DEFAULT_BAUD,
             reply_address: DEFAULT_REPLY_ADDRESS,
             switchover_units: Some(DEFAULT_SWITCHOVER_UNITS),
+            packet_timeout_units: None,
+            bus_packet_timeout_units: 0,
             bus_motors: 0,
             channels: [None; 6],
+            io: TmcpackIo::default(),
         }
     }
 }
@@ -145,7 +200,8 @@ pub(crate) struct Scale {
     pub vmax: u16,
     /// amax from the axis acceleration limit.
     pub amax: u16,
-    /// vstart: the smallest value with amax <= vstart · 64 ($14).
+    /// vstart: the smallest value with amax <= vstart · 64 ($14), for the amax of a stop at
+    /// the axis limit too (rounded up, see [`Scale::stop_amax`]).
     pub vstart: u16,
     /// vrefmax programmed at start-up: a quarter of vmax, at least vstart.
     pub vrefmax: u16,
@@ -201,8 +257,9 @@ impl Scale {
         let hz = clock.hz_per_unit();
         let vmax = units(limit, hz).clamp(1, MAX_VELOCITY);
         let mut amax = amax_units(channel.max_accel, hz).clamp(1, MAX_AMAX);
+        let stop = amax_up(channel.max_accel, hz).clamp(1, MAX_AMAX);
         let per = AMAX_DIVISOR as u16;
-        let mut vstart = amax.div_ceil(per).max(1);
+        let mut vstart = stop.max(amax).div_ceil(per).max(1);
         if vstart > vmax {
             vstart = vmax;
             amax = amax.min(vmax.saturating_mul(per));
@@ -241,6 +298,20 @@ impl Scale {
         Some(amax_units(accel, self.hz).clamp(1, cap))
     }
 
+    /// The amax of a stop at `decel` microsteps/s², rounded UP (a stop is never gentler
+    /// than asked), at least 1 and at most vstart · 64 (the $14 relation); `None` when not
+    /// finite or not positive.
+    pub fn stop_amax(&self, decel: f64) -> Option<u16> {
+        if !decel.is_finite() || decel <= 0.0 {
+            return None;
+        }
+        let cap = self
+            .vstart
+            .saturating_mul(AMAX_DIVISOR as u16)
+            .min(MAX_AMAX);
+        Some(amax_up(decel, self.hz).clamp(1, cap))
+    }
+
     /// Upper bound of the time a motor at `v` needs to stop with `amax` (amax/64 per 2 ms
     /// tick), plus two ticks.
     pub fn stop_time(v: u16, amax: u16) -> Duration {
@@ -253,6 +324,15 @@ fn units(hz: f64, per_unit: f64) -> u16 {
     (hz / per_unit + EPS)
         .floor()
         .clamp(0.0, f64::from(u16::MAX)) as u16
+}
+
+/// amax for `accel`, rounded up.
+fn amax_up(accel: f64, per_unit: f64) -> u16 {
+    if !accel.is_finite() || accel <= 0.0 {
+        return 1;
+    }
+    let a = accel * f64::from(AMAX_DIVISOR) / f64::from(RAMP_HZ) / per_unit;
+    (a - EPS).ceil().clamp(0.0, f64::from(u16::MAX)) as u16
 }
 
 fn amax_units(accel: f64, per_unit: f64) -> u16 {
@@ -326,6 +406,32 @@ mod tests {
     #[test]
     fn no_channels_keep_the_factory_clock() {
         assert_eq!(clkdiv_for(&[None; 6]), 5);
+    }
+
+    #[test]
+    fn a_stop_decelerates_at_least_as_hard_as_asked() {
+        let scale = Scale::new(18, &channel(32_000.0, 160_000.0));
+        // 160000 · 64 / 500 / 64.25 = 318.8: a move uses 318, a stop 319.
+        assert_eq!(scale.amax(160_000.0), Some(318));
+        assert_eq!(scale.stop_amax(160_000.0), Some(319));
+        assert!(u32::from(scale.vstart) * 64 >= 319);
+        let a = |amax: u16| f64::from(amax) / 64.0 * 500.0 * scale.hz;
+        assert!(a(319) >= 160_000.0);
+        assert_eq!(scale.stop_amax(f64::NAN), None);
+        assert_eq!(scale.stop_amax(0.0), None);
+    }
+
+    #[test]
+    fn the_default_packet_timeout_holds_a_word_and_two_byte_times() {
+        // 19200 baud: 11 · 0.52 ms = 5.7 ms → 3 units.
+        assert_eq!(default_packet_timeout_units(19_200), 3);
+        // 9600 baud: 11.5 ms → 6 units; 115200: 0.95 ms → the $41 minimum of 2 units.
+        assert_eq!(default_packet_timeout_units(9_600), 6);
+        assert_eq!(default_packet_timeout_units(115_200), 2);
+        for baud in [1200, 9600, 19_200, 57_600] {
+            let t = tmcpack::convert::units(default_packet_timeout_units(baud));
+            assert!(t >= byte_time(baud) * 11);
+        }
     }
 
     #[test]

@@ -1,58 +1,80 @@
 //! Driver for the Trinamic SIXpack / QUADpack on RS-232 / RS-485 ([`TmcpackDriver`]).
 //!
 //! Start-up: `$43` unit information (firmware revision and serial for
-//! [`DeviceStatus::firmware`], the reset flag), then the configuration — `$40` with the
-//! link's own baud divisor and a 2 ms switch-over delay (the baud rate is never changed:
-//! the link would have to follow), `$12` clkdiv chosen for the fastest motor, and per
-//! configured motor `$11`, `$13`, `$14`, `$15`, `$16`, `$18` from its axis limits. Motors
-//! found active afterwards are stopped: whatever they were doing was not commanded by this
-//! run.
+//! [`DeviceStatus::firmware`], the reset flag); `$28` to see whether a configured motor is
+//! still running (left so by a previous server: it is stopped with `$14`/`$25` and polled
+//! with `$21` until it stands, because `$12`, `$13` and `$16` may only change at
+//! standstill); then the configuration — `$40` with the link's own baud divisor and the
+//! configured switch-over delay (the baud rate is never changed: the link would have to
+//! follow), `$41` packet timeout, `$12` clkdiv chosen for the fastest motor, `$10` peak
+//! currents per motor pair, and per configured motor `$11`, `$13`, `$14`, `$15`, `$16`,
+//! `$18`, `$31` from its axis limits and machine keys, then `$33` and `$32` when I/O is
+//! configured. Motors found active afterwards are stopped: whatever they were doing was not
+//! commanded by this run. The whole configuration goes out again whenever the pack is seen
+//! to have reset (`$43` reset flag, or after it stopped answering).
 //!
 //! The wire (manual 6.1, 7.1): one request in flight. A query waits for its answer until
 //! `request + switch-over (at least the factory 6 ms, in case the pack rebooted) + answer +`
 //! [`REPLY_MARGIN`]; after an answer the line stays reserved for the switch-over time, in
 //! which the pack still drives it; after a timeout it stays silent for the pack's packet
-//! timeout so that a partial word on its side is aborted. Requests without an answer
-//! reserve the line for their own wire time. Queries carry the response address of
+//! timeout so that a partial word on its side is aborted. A request without an answer
+//! reserves the line for its own wire time and at least the packet timeout of every pack on
+//! the bus ($41: "The command word always has to be completely transmitted during a
+//! parameterized timeout"), so that a word torn by noise is aborted before the next one
+//! starts instead of taking its first bytes. Queries carry the response address of
 //! [`TmcpackDriverConfig::reply_address`], which no pack on the bus may have.
 //!
-//! Polling plan: goals first ([`Priority::Command`]), then `$20` position/action polls
-//! round-robin over the configured motors ([`Priority::Poll`]), with a `$43` every
-//! [`RESET_CHECK_PERIOD`] to notice a pack that rebooted (reset flag). Three timeouts in a
-//! row take the pack offline ([`DeviceFault::NotResponding`]); it is then asked for `$43`
-//! every [`RETRY_PERIOD`] and configured again when it answers.
+//! Polling plan: goals first ([`Priority::Command`]: stops before output changes before
+//! other commands), then `$20` position/action polls round-robin over the configured motors
+//! with one `$30` input poll per round when inputs are configured ([`Priority::Poll`]),
+//! and a `$43` every [`RESET_CHECK_PERIOD`] to notice a pack that rebooted (reset flag).
+//! Three timeouts in a row take the pack offline ([`DeviceFault::NotResponding`]); it is
+//! then asked for `$43` every [`RETRY_PERIOD`] and configured again when it answers.
 //!
 //! Goals are mapped as described in the `channel` module: Stop with `$25` velocity 0, then
 //! `$23`; Position/RampPosition with `$14`, `$26`, `$23`; Velocity with `$25`; Home with
-//! `$16`, `$22`; SetPosition with `$27`; Off with `$11` at 0 %. Power is unsupported (a
-//! stepper has no open-loop power).
+//! `$16`, `$22`; SetPosition with `$27`; Off with a stop, then `$11` at 0 %. Power is
+//! unsupported (a stepper has no open-loop power). I/O is described in the `io` module.
 
 mod channel;
 mod config;
+mod io;
+mod reply;
 mod startup;
 mod wire;
 
 #[cfg(test)]
+mod bench;
+#[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_goals;
+#[cfg(test)]
+mod tests_io;
 
-use core::fmt::Write as _;
 use core::time::Duration;
 
 use tmcpack::convert::{DEFAULT_SWITCHOVER_UNITS as FACTORY_SWITCHOVER, byte_time, units};
-use tmcpack::{Command, DEFAULT_PACKET_TIMEOUT, FRAME_LEN, Reply, Request, RequestFrame, Variant};
+use tmcpack::{
+    Command, DEFAULT_PACKET_TIMEOUT, FRAME_LEN, MotorMask, Request, RequestFrame, Variant,
+};
 
 use crate::driver::{Driver, Model, Priority, Transmit};
 use crate::goal::{Goal, GoalError, GoalKind, GoalKinds};
-use crate::state::{ChannelState, DeviceFault, DeviceStatus, FIRMWARE_LEN};
+use crate::pin::{Pin, PinReading};
+use crate::state::{ChannelState, DeviceFault, DeviceStatus};
 
 use channel::{Channel, Step};
 use config::{Scale, clkdiv_for};
-use startup::StartupPlan;
+use io::IoState;
+use startup::{Quiesce, StartupPlan};
 use wire::{Expect, Purpose, ReplyHunter, Wire};
 
 pub use config::{
-    Currents, DEFAULT_REPLY_ADDRESS, DEFAULT_SWITCHOVER_UNITS, TmcpackChannel, TmcpackDriverConfig,
+    Currents, DEFAULT_REPLY_ADDRESS, DEFAULT_SWITCHOVER_UNITS, PACKET_TIMEOUT_SLACK_BYTES,
+    TmcpackChannel, TmcpackDriverConfig, default_packet_timeout_units,
 };
+pub use io::{MAX_PINS, PinSet, ReadyOutput, TmcpackIo, pins};
 
 /// Added to a query's wire and switch-over time before it counts as unanswered
 /// (processing in the pack, and the host's tick granularity).
@@ -75,6 +97,9 @@ const CAPABILITIES: GoalKinds = GoalKinds::of(&[
     GoalKind::SetPosition,
 ]);
 
+/// The poll slot of the `$30` input poll, after the six motors.
+const IO_SLOT: usize = 6;
+
 /// Where the driver is with its pack.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Phase {
@@ -82,10 +107,21 @@ enum Phase {
     Down,
     /// Asking `$43` (first contact, or after the pack stopped answering).
     Identify,
+    /// Asking `$28` which motors are active.
+    Survey,
+    /// Stopping configured motors found active, waiting until they stand.
+    Quiesce,
     /// Sending start-up request `n`.
     Configure(usize),
     /// Polling and driving.
     Online,
+}
+
+/// What `pick` chose to send.
+struct Pick {
+    request: Request,
+    expect: Option<Expect>,
+    channel: Option<usize>,
 }
 
 /// The sans-I/O driver of one SIXpack / QUADpack.
@@ -97,8 +133,14 @@ pub struct TmcpackDriver {
     word_time: Duration,
     /// The switch-over delay the pack has now, as far as the driver knows.
     switchover: Duration,
+    /// The packet timeout the pack has now, as far as the driver knows.
+    pack_timeout: Duration,
+    /// The longest packet timeout of the other packs on the bus.
+    bus_timeout: Duration,
     channels: [Option<Channel>; 6],
+    io: IoState,
     plan: StartupPlan,
+    quiesce: Option<Quiesce>,
     phase: Phase,
     wire: Wire,
     hunter: ReplyHunter,
@@ -128,13 +170,14 @@ impl TmcpackDriver {
                 *slot = Some(Channel::new(motor as u8, cfg, Scale::new(clkdiv, &cfg)));
             }
         }
-        let plan = StartupPlan::new(&config, clkdiv, &channels);
+        let io = IoState::new(config.variant, config.io);
+        let plan = StartupPlan::new(&config, clkdiv, &channels, &io);
         let byte = byte_time(config.baud);
         let word_time = byte.saturating_mul(FRAME_LEN as u32);
         let configured = config
             .switchover_units
             .map_or(units(FACTORY_SWITCHOVER), units);
-        let polled = channels.iter().flatten().count();
+        let polled = channels.iter().flatten().count() + usize::from(io.polls());
         let round = usize::from(config.bus_motors).max(polled).max(1) as u32;
         let query = 2 * word_time + 2 * configured + Duration::from_millis(2);
         let budget = query * round * 2 + query * 4 + Duration::from_millis(50);
@@ -153,8 +196,12 @@ impl TmcpackDriver {
             variant: config.variant,
             word_time,
             switchover: units(FACTORY_SWITCHOVER),
+            pack_timeout: DEFAULT_PACKET_TIMEOUT,
+            bus_timeout: units(config.bus_packet_timeout_units),
             channels,
+            io,
             plan,
+            quiesce: None,
             phase: Phase::Identify,
             wire: Wire::Idle,
             hunter: ReplyHunter::new(),
@@ -188,8 +235,31 @@ impl TmcpackDriver {
         out
     }
 
+    /// The requests the start-up writes after the survey, in order (with the outputs as
+    /// they are now).
+    pub fn startup_requests(&self) -> impl Iterator<Item = Request> + '_ {
+        (0..startup::MAX_STARTUP)
+            .map_while(|index| self.plan.get(index))
+            .map(|request| self.resolve(request))
+    }
+
+    /// A plan entry as it goes on the wire: the `$32` placeholder carries the current
+    /// output levels.
+    fn resolve(&self, request: Request) -> Request {
+        match request {
+            Request::Outputs { .. } => self.io.outputs_request(),
+            other => other,
+        }
+    }
+
+    /// The smallest spacing between the starts of two words: their wire time, and the
+    /// packet timeout of every pack on the bus.
+    fn spacing(&self) -> Duration {
+        self.word_time.max(self.pack_timeout).max(self.bus_timeout)
+    }
+
     fn any_ready(&self) -> bool {
-        self.channels.iter().flatten().any(Channel::ready)
+        self.io.outputs_pending || self.channels.iter().flatten().any(Channel::ready)
     }
 
     /// What the driver would send now.
@@ -200,83 +270,172 @@ impl TmcpackDriver {
         match self.phase {
             Phase::Down => None,
             Phase::Identify => (now >= self.retry_at).then_some(Priority::Setup),
-            Phase::Configure(_) => Some(Priority::Setup),
+            Phase::Survey | Phase::Quiesce | Phase::Configure(_) => Some(Priority::Setup),
             Phase::Online if self.any_ready() => Some(Priority::Command),
             Phase::Online => {
-                let polls = self.channels.iter().any(Option::is_some);
+                let polls = self.channels.iter().any(Option::is_some) || self.io.polls();
                 (polls || now >= self.reset_check_at).then_some(Priority::Poll)
             }
         }
     }
 
-    /// Picks the request to send now; the closure-free core of `poll_transmit`.
-    fn pick(&mut self, now: Duration) -> Option<(Request, Option<Expect>, Option<usize>)> {
-        let query = |command, motor, purpose| {
-            Some(Expect {
+    fn query(
+        &self,
+        request: Request,
+        command: Command,
+        motor: Option<u8>,
+        purpose: Purpose,
+    ) -> Pick {
+        Pick {
+            request,
+            expect: Some(Expect {
                 command,
                 motor,
                 purpose,
-            })
-        };
-        match (self.next_message(now)?, self.phase) {
-            (_, Phase::Identify) => Some((
-                Request::UnitInfo {
-                    reply_to: self.reply_address,
-                },
-                query(Command::UnitInfo, None, Purpose::Startup),
+            }),
+            channel: None,
+        }
+    }
+
+    /// Picks the request to send now; the core of `poll_transmit`.
+    fn pick(&mut self, now: Duration) -> Option<Pick> {
+        let priority = self.next_message(now)?;
+        let reply_to = self.reply_address;
+        match self.phase {
+            Phase::Down => None,
+            Phase::Identify => Some(self.query(
+                Request::UnitInfo { reply_to },
+                Command::UnitInfo,
                 None,
+                Purpose::Startup,
             )),
-            (_, Phase::Configure(index)) => {
-                let request = self.plan.get(index)?;
-                Some((request, None, None))
+            Phase::Survey => Some(self.query(
+                Request::QueryActions {
+                    reply_to,
+                    delay_mask: MotorMask::EMPTY,
+                },
+                Command::QueryActions,
+                None,
+                Purpose::Survey,
+            )),
+            Phase::Quiesce => self.pick_quiesce(now),
+            Phase::Configure(index) => {
+                let request = self.resolve(self.plan.get(index)?);
+                Some(Pick {
+                    request,
+                    expect: None,
+                    channel: None,
+                })
             }
-            (Priority::Command, _) => {
-                for offset in 0..6 {
-                    let index = (self.next_command + offset) % 6;
-                    if let Some(Some(channel)) = self.channels.get(index)
-                        && let Some(Step::Send(request)) = channel.current()
-                    {
-                        self.next_command = (index + 1) % 6;
-                        return Some((request, None, Some(index)));
-                    }
-                }
-                None
-            }
-            _ => {
-                if now >= self.reset_check_at {
-                    return Some((
-                        Request::UnitInfo {
-                            reply_to: self.reply_address,
-                        },
-                        query(Command::UnitInfo, None, Purpose::ResetCheck),
-                        None,
-                    ));
-                }
-                let urgent = self
-                    .channels
-                    .iter()
-                    .flatten()
-                    .find(|c| c.wants_rest_poll(now))
-                    .map(|c| usize::from(c.motor));
-                let index = urgent.or_else(|| {
-                    (0..6)
-                        .map(|offset| (self.next_poll + offset) % 6)
-                        .find(|&i| matches!(self.channels.get(i), Some(Some(_))))
-                })?;
-                if urgent.is_none() {
-                    self.next_poll = (index + 1) % 6;
-                }
-                let motor = index as u8;
-                Some((
-                    Request::QueryPosition {
-                        motor,
-                        reply_to: self.reply_address,
-                    },
-                    query(Command::QueryPosition, Some(motor), Purpose::Poll),
-                    None,
-                ))
+            Phase::Online if priority == Priority::Command => self.pick_command(),
+            Phase::Online => self.pick_poll(now),
+        }
+    }
+
+    fn pick_quiesce(&mut self, now: Duration) -> Option<Pick> {
+        let quiesce = self.quiesce.as_mut()?;
+        if let Some(request) = quiesce.command() {
+            return Some(Pick {
+                request,
+                expect: None,
+                channel: None,
+            });
+        }
+        if quiesce.done(now) {
+            self.quiesce = None;
+            self.phase = Phase::Configure(0);
+            return self.pick(now);
+        }
+        let motor = quiesce.poll_motor()?;
+        Some(self.query(
+            Request::QueryVelocity {
+                motor,
+                reply_to: self.reply_address,
+            },
+            Command::QueryVelocity,
+            Some(motor),
+            Purpose::Quiesce,
+        ))
+    }
+
+    /// Stops first, then output changes, then the other goals round-robin.
+    fn pick_command(&mut self) -> Option<Pick> {
+        let urgent = self.channels.iter().flatten().find(|c| c.urgent());
+        if let Some(channel) = urgent
+            && let Some(Step::Send(request)) = channel.current()
+        {
+            return Some(Pick {
+                request,
+                expect: None,
+                channel: Some(usize::from(channel.motor)),
+            });
+        }
+        if self.io.outputs_pending {
+            return Some(Pick {
+                request: self.io.outputs_request(),
+                expect: None,
+                channel: None,
+            });
+        }
+        for offset in 0..6 {
+            let index = (self.next_command + offset) % 6;
+            if let Some(Some(channel)) = self.channels.get(index)
+                && let Some(Step::Send(request)) = channel.current()
+            {
+                self.next_command = (index + 1) % 6;
+                return Some(Pick {
+                    request,
+                    expect: None,
+                    channel: Some(index),
+                });
             }
         }
+        None
+    }
+
+    fn pick_poll(&mut self, now: Duration) -> Option<Pick> {
+        let reply_to = self.reply_address;
+        if now >= self.reset_check_at {
+            return Some(self.query(
+                Request::UnitInfo { reply_to },
+                Command::UnitInfo,
+                None,
+                Purpose::ResetCheck,
+            ));
+        }
+        let urgent = self
+            .channels
+            .iter()
+            .flatten()
+            .find(|c| c.wants_rest_poll(now))
+            .map(|c| usize::from(c.motor));
+        let slot = urgent.or_else(|| {
+            (0..=IO_SLOT)
+                .map(|offset| (self.next_poll + offset) % (IO_SLOT + 1))
+                .find(|&i| match i {
+                    IO_SLOT => self.io.polls(),
+                    _ => matches!(self.channels.get(i), Some(Some(_))),
+                })
+        })?;
+        if urgent.is_none() {
+            self.next_poll = (slot + 1) % (IO_SLOT + 1);
+        }
+        if slot == IO_SLOT {
+            let channel = self.io.next_channel();
+            return Some(self.query(
+                Request::ReadInput { channel, reply_to },
+                Command::ReadInput,
+                Some(channel),
+                Purpose::Io,
+            ));
+        }
+        let motor = slot as u8;
+        Some(self.query(
+            Request::QueryPosition { motor, reply_to },
+            Command::QueryPosition,
+            Some(motor),
+            Purpose::Poll,
+        ))
     }
 
     /// The reply timeout of a query sent at `now`: request, switch-over (at least the
@@ -292,6 +451,8 @@ impl TmcpackDriver {
         self.status.fault = None;
         self.ever_online = true;
         self.reset_check_at = now + RESET_CHECK_PERIOD;
+        // The start-up wrote the outputs as they are now.
+        self.io.outputs_pending = false;
     }
 
     /// The pack lost what it was told (reboot, silence, link): channels keep their last
@@ -299,122 +460,16 @@ impl TmcpackDriver {
     fn restart(&mut self, fault: DeviceFault) {
         self.status.online = false;
         self.status.fault = Some(fault);
+        self.quiesce = None;
         for channel in self.channels.iter_mut().flatten() {
             channel.restart(fault);
         }
     }
 
-    fn on_timeout(&mut self, now: Duration) {
-        self.status.timeouts = self.status.timeouts.saturating_add(1);
-        self.timeouts_in_row = self.timeouts_in_row.saturating_add(1);
-        // Silence long enough for the pack to abort any partial word (6.1, $41).
-        self.wire = Wire::Quiet {
-            until: now + DEFAULT_PACKET_TIMEOUT + self.switchover,
-        };
-        if self.timeouts_in_row < MAX_TIMEOUTS {
-            return;
-        }
-        self.timeouts_in_row = 0;
-        self.restart(DeviceFault::NotResponding);
-        // Whatever the pack has now (it may have rebooted to the factory delay).
+    /// Whatever the pack has now (it may have rebooted to the factory settings).
+    fn assume_factory_line(&mut self) {
         self.switchover = units(FACTORY_SWITCHOVER);
-        self.phase = Phase::Identify;
-        self.retry_at = now + RETRY_PERIOD;
-    }
-
-    fn on_reply(&mut self, now: Duration, expect: Expect, sent_at: Duration, reply: Reply) {
-        self.status.replies = self.status.replies.saturating_add(1);
-        self.timeouts_in_row = 0;
-        match (reply, expect.purpose) {
-            (
-                Reply::UnitInfo {
-                    firmware,
-                    reset,
-                    serial,
-                    ..
-                },
-                purpose,
-            ) => {
-                self.set_firmware(firmware, serial);
-                let rebooted = reset && self.ever_online;
-                if rebooted {
-                    self.status.resets = self.status.resets.saturating_add(1);
-                    self.restart(DeviceFault::Reset);
-                    self.switchover = units(FACTORY_SWITCHOVER);
-                }
-                match purpose {
-                    Purpose::Startup => self.phase = Phase::Configure(0),
-                    _ if rebooted => self.phase = Phase::Configure(0),
-                    _ => self.reset_check_at = now + RESET_CHECK_PERIOD,
-                }
-            }
-            (
-                Reply::Position {
-                    motor,
-                    position,
-                    action,
-                    stopped,
-                },
-                Purpose::Poll,
-            ) => {
-                let seq = self.seq;
-                let Some(Some(channel)) = self.channels.get_mut(usize::from(motor)) else {
-                    return;
-                };
-                if channel.on_poll(now, seq, sent_at, position, action, stopped) {
-                    let decel = channel.cfg.max_accel;
-                    // A motor found moving after a (re)start: not ours to keep running.
-                    let _ = channel.plan(Goal::Stop { decel });
-                }
-            }
-            _ => {
-                self.status.bad_replies = self.status.bad_replies.saturating_add(1);
-            }
-        }
-    }
-
-    fn set_firmware(&mut self, revision: u8, serial: u16) {
-        let mut text = FixedText::default();
-        let name = match self.variant {
-            Variant::SixPack => "SIXpack",
-            Variant::QuadPack => "QUADpack",
-        };
-        // "firmware-revision (e.g. 148=V1.4.8)"
-        let _ = write!(
-            text,
-            "{name} V{}.{}.{} s/n {serial}",
-            revision / 100,
-            revision / 10 % 10,
-            revision % 10
-        );
-        self.status.set_firmware(text.as_str());
-    }
-}
-
-/// A stack buffer for the firmware text (no allocation).
-#[derive(Default)]
-struct FixedText {
-    buf: [u8; FIRMWARE_LEN],
-    len: usize,
-}
-
-impl FixedText {
-    fn as_str(&self) -> &str {
-        self.buf
-            .get(..self.len)
-            .and_then(|b| core::str::from_utf8(b).ok())
-            .unwrap_or("")
-    }
-}
-
-impl core::fmt::Write for FixedText {
-    fn write_str(&mut self, s: &str) -> core::fmt::Result {
-        for &byte in s.as_bytes() {
-            let slot = self.buf.get_mut(self.len).ok_or(core::fmt::Error)?;
-            *slot = byte;
-            self.len += 1;
-        }
-        Ok(())
+        self.pack_timeout = DEFAULT_PACKET_TIMEOUT;
     }
 }
 
@@ -477,7 +532,8 @@ impl Driver for TmcpackDriver {
         let phase = match self.phase {
             Phase::Identify => Some(self.retry_at),
             Phase::Online => Some(self.reset_check_at),
-            Phase::Down | Phase::Configure(_) => None,
+            Phase::Quiesce => self.quiesce.as_ref().map(|q| q.deadline),
+            Phase::Down | Phase::Survey | Phase::Configure(_) => None,
         };
         let rest = self
             .channels
@@ -497,11 +553,23 @@ impl Driver for TmcpackDriver {
     }
 
     fn poll_transmit(&mut self, now: Duration, buf: &mut [u8]) -> Option<Transmit> {
-        let (request, expect, channel) = self.pick(now)?;
+        let pick = self.pick(now)?;
+        let request = pick.request;
         let len = RequestFrame::new(self.address, request).encode(buf).ok()?;
         self.seq += 1;
         let wire_end = now + self.word_time;
-        match expect {
+        match request {
+            Request::SetBaud { switchover, .. } => self.switchover = units(switchover),
+            Request::PacketTimeout { timeout } => self.pack_timeout = units(timeout),
+            Request::Outputs { .. } => {
+                self.io.on_outputs_sent(now, request);
+                if self.phase == Phase::Online {
+                    self.io.outputs_pending = false;
+                }
+            }
+            _ => {}
+        }
+        match pick.expect {
             Some(expect) => {
                 self.hunter.reset();
                 self.wire = Wire::Awaiting {
@@ -510,23 +578,31 @@ impl Driver for TmcpackDriver {
                     deadline: self.reply_deadline(now),
                 };
             }
-            None => self.wire = Wire::Sending { until: wire_end },
-        }
-        if let Request::SetBaud { switchover, .. } = request {
-            self.switchover = units(switchover);
-        }
-        if let Phase::Configure(index) = self.phase {
-            let next = index + 1;
-            self.phase = if self.plan.get(next).is_some() {
-                Phase::Configure(next)
-            } else {
-                Phase::Online
-            };
-            if self.phase == Phase::Online {
-                self.go_online(now);
+            None => {
+                self.wire = Wire::Sending {
+                    until: now + self.spacing(),
+                };
             }
         }
-        if let Some(Some(channel)) = channel.and_then(|i| self.channels.get_mut(i)) {
+        match self.phase {
+            Phase::Quiesce => {
+                if let Some(quiesce) = self.quiesce.as_mut()
+                    && pick.expect.is_none()
+                {
+                    quiesce.sent();
+                }
+            }
+            Phase::Configure(index) => {
+                let next = index + 1;
+                if self.plan.get(next).is_some() {
+                    self.phase = Phase::Configure(next);
+                } else {
+                    self.go_online(now);
+                }
+            }
+            _ => {}
+        }
+        if let Some(Some(channel)) = pick.channel.and_then(|i| self.channels.get_mut(i)) {
             channel.on_sent(request, self.seq, wire_end);
             channel.advance();
         }
@@ -541,20 +617,22 @@ impl Driver for TmcpackDriver {
     }
 
     fn goals_pending(&self) -> bool {
-        self.channels.iter().flatten().any(Channel::pending)
+        self.io.outputs_pending || self.channels.iter().flatten().any(Channel::pending)
     }
 
     fn set_goal(&mut self, _now: Duration, channel: usize, goal: Goal) -> Result<(), GoalError> {
         if channel >= self.channel_count() {
             return Err(GoalError::NoSuchChannel(channel));
         }
+        let phase = self.phase;
         let Some(Some(slot)) = self.channels.get_mut(channel) else {
             return Err(GoalError::Unsupported(goal.kind()));
         };
-        if self.phase != Phase::Online {
-            return Err(GoalError::Offline);
+        match phase {
+            Phase::Online => slot.plan(goal),
+            Phase::Survey | Phase::Quiesce | Phase::Configure(_) => Err(GoalError::Starting),
+            Phase::Down | Phase::Identify => Err(GoalError::Offline),
         }
-        slot.plan(goal)
     }
 
     fn channel(&self, channel: usize) -> ChannelState {
@@ -580,13 +658,28 @@ impl Driver for TmcpackDriver {
         self.wire = Wire::Idle;
         self.retry_at = now;
         self.timeouts_in_row = 0;
-        self.switchover = units(FACTORY_SWITCHOVER);
+        self.assume_factory_line();
     }
-}
 
-/// The pack's I/O pins for `variant` (manual 8.5). Filled in with the board's I/O
-/// support; empty until then.
-pub fn pins(variant: ::tmcpack::Variant) -> &'static [crate::PinInfo] {
-    let _ = variant;
-    &[]
+    fn read_pin(&self, pin: Pin) -> Option<PinReading> {
+        self.io.read(pin)
+    }
+
+    fn set_output(&mut self, _now: Duration, pin: Pin, high: bool) -> Result<(), GoalError> {
+        if !self.io.config().outputs.contains(pin) {
+            return Err(GoalError::NoSuchPin(pin));
+        }
+        match self.phase {
+            Phase::Online => {}
+            Phase::Survey | Phase::Quiesce | Phase::Configure(_) => {
+                return Err(GoalError::Starting);
+            }
+            Phase::Down | Phase::Identify => return Err(GoalError::Offline),
+        }
+        if self.io.set(pin, high) {
+            Ok(())
+        } else {
+            Err(GoalError::NoSuchPin(pin))
+        }
+    }
 }

@@ -1,30 +1,64 @@
 //! The configuration a pack gets after it answered `$43` (manual 7.1 "Strategy for
-//! Parameter Setting"): switch-over delay, clkdiv, peak currents, and per motor current
-//! control, starting velocity/divider, vmax/amax, motor parameters, reference search
-//! parameters and null offset.
+//! Parameter Setting"): switch-over delay, packet timeout, clkdiv, peak currents, and per
+//! motor current control, starting velocity/divider, vmax/amax, motor parameters, reference
+//! search parameters, null offset and analogue stop limits; then the ready output and the
+//! outputs. The same plan is sent again whenever the pack is seen to have reset.
+//!
+//! Before it, the [`Quiesce`] step: `$12` ("change only with stopped motors!"), `$13` and
+//! `$16` ("change only with motors standing still") must not reach a motor that is still
+//! running (left so by a previous server). So the driver first asks `$28` for every
+//! motor's action; configured motors found active get `$14` (this axis's amax) and `$25`
+//! velocity 0, and are polled with `$21` until their velocity reads 0 (or an upper bound of
+//! their stop time has passed) before the configuration goes out.
+
+use core::time::Duration;
 
 use tmcpack::convert::baud_divisor;
-use tmcpack::{MotorType, ReferenceFlags, Request};
+use tmcpack::{Action, MAX_VELOCITY, MotorMask, MotorOptions, MotorType, ReferenceFlags, Request};
 
 use super::channel::Channel;
-use super::config::TmcpackDriverConfig;
+use super::config::{Scale, TmcpackDriverConfig};
+use super::io::IoState;
 
 /// $16 P5 the driver always sets: "1=Stop after reference search", so that a `Home` goal
 /// ends at the new zero point with the motor inactive (0 would resume the previous action,
 /// e.g. drive back to where the search started).
 pub(crate) const REFERENCE_FLAGS: ReferenceFlags = ReferenceFlags::STOP_AFTER_SEARCH;
 
-/// Most requests a start-up can need: $40, $12, three $10, six motors × six.
-pub(crate) const MAX_STARTUP: usize = 48;
+/// Most requests a start-up can need: $40, $41, $12, three $10, six motors × seven, $33,
+/// $32.
+pub(crate) const MAX_STARTUP: usize = 52;
 
-/// The configuration requests, in the order they are sent.
+/// The $15 motor type the driver writes: PiMode cleared (positions use the trapezoidal
+/// ramp), AutoNullCmd cleared (a search starts only with a `Home` goal).
+pub(crate) fn motor_type(configured: MotorType) -> MotorType {
+    configured
+        .with(MotorType::PI_MODE, false)
+        .with(MotorType::AUTO_NULL_CMD, false)
+}
+
+/// The $15 options the driver writes: StopNoRef set, so that a stop condition (the switch
+/// outside its tolerance with StopNull, an analogue limit) just stops the motor and reports
+/// it ($20 P6) instead of starting a reference search the host did not ask for; the engine
+/// stops the axis and reports the limit.
+pub(crate) fn motor_options(configured: MotorOptions) -> MotorOptions {
+    configured.with(MotorOptions::STOP_NO_REF, true)
+}
+
+/// The configuration requests, in the order they are sent. The `$32` in it is a
+/// placeholder: the driver sends its current output levels in its place.
 #[derive(Debug, Clone)]
 pub(crate) struct StartupPlan {
     requests: [Option<Request>; MAX_STARTUP],
 }
 
 impl StartupPlan {
-    pub fn new(config: &TmcpackDriverConfig, clkdiv: u8, channels: &[Option<Channel>]) -> Self {
+    pub fn new(
+        config: &TmcpackDriverConfig,
+        clkdiv: u8,
+        channels: &[Option<Channel>],
+        io: &IoState,
+    ) -> Self {
         let mut requests = [None; MAX_STARTUP];
         let mut len = 0;
         let mut push = |request: Request| {
@@ -44,6 +78,9 @@ impl StartupPlan {
                 switchover,
             });
         }
+        push(Request::PacketTimeout {
+            timeout: config.packet_timeout(),
+        });
         // "$12 … change only with stopped motors": sent before any motor is started.
         push(Request::VelocitySetting { clkdiv });
         for pair in 0..3u8 {
@@ -89,11 +126,8 @@ impl StartupPlan {
             push(Request::MotorParameters {
                 motor,
                 poslimit: cfg.poslimit,
-                motor_type: cfg
-                    .motor_type
-                    .with(MotorType::PI_MODE, false)
-                    .with(MotorType::AUTO_NULL_CMD, false),
-                options: cfg.options,
+                motor_type: motor_type(cfg.motor_type),
+                options: motor_options(cfg.options),
             });
             push(Request::ReferenceParameters {
                 motor,
@@ -106,6 +140,17 @@ impl StartupPlan {
                 nulloffset: cfg.nulloffset,
                 testnullrange: cfg.testnullrange,
             });
+            push(Request::StopLimits {
+                channel: motor,
+                left_min: cfg.analog_stop.0,
+                right_max: cfg.analog_stop.1,
+            });
+        }
+        if let Some(ready) = io.ready_request() {
+            push(ready);
+        }
+        if io.writes_outputs() {
+            push(io.outputs_request());
         }
         Self { requests }
     }
@@ -113,5 +158,106 @@ impl StartupPlan {
     /// Request `index` of the plan.
     pub fn get(&self, index: usize) -> Option<Request> {
         self.requests.get(index).copied().flatten()
+    }
+}
+
+/// Requests the quiesce step can send: `$14` and `$25` for six motors.
+const MAX_QUIESCE: usize = 12;
+
+/// Margin on top of the computed stop time before the driver configures anyway.
+const QUIESCE_MARGIN: Duration = Duration::from_millis(250);
+
+/// Stopping the configured motors that the `$28` survey found active.
+#[derive(Debug, Clone)]
+pub(crate) struct Quiesce {
+    requests: [Option<Request>; MAX_QUIESCE],
+    next: usize,
+    /// Motors not yet seen at rest.
+    pub moving: MotorMask,
+    next_motor: u8,
+    /// Configure anyway after this (a motor that never reads 0 must not keep the pack
+    /// unconfigured forever).
+    pub deadline: Duration,
+}
+
+impl Quiesce {
+    /// The step for the `$28` answer `actions` at `now`; `None` when no configured motor
+    /// is active.
+    pub fn new(now: Duration, actions: [Action; 6], channels: &[Option<Channel>]) -> Option<Self> {
+        let mut requests = [None; MAX_QUIESCE];
+        let mut moving = MotorMask::EMPTY;
+        let mut len = 0;
+        let mut longest = Duration::ZERO;
+        for channel in channels.iter().flatten() {
+            let motor = channel.motor;
+            if !actions
+                .get(usize::from(motor))
+                .is_some_and(|a| a.is_active())
+            {
+                continue;
+            }
+            let amax = channel
+                .scale
+                .stop_amax(channel.cfg.max_accel)
+                .unwrap_or(channel.scale.amax);
+            for request in [
+                Request::VelocityAcceleration {
+                    motor,
+                    amax,
+                    vmax: channel.scale.vmax,
+                },
+                Request::Rotate { motor, velocity: 0 },
+            ] {
+                if let Some(slot) = requests.get_mut(len) {
+                    *slot = Some(request);
+                    len += 1;
+                }
+            }
+            moving = moving | MotorMask::single(motor);
+            // From any velocity the pack allows (its divider may not be ours yet).
+            longest = longest.max(Scale::stop_time(MAX_VELOCITY, amax));
+        }
+        if moving.bits() == 0 {
+            return None;
+        }
+        let words = Duration::from_millis(10) * len as u32;
+        Some(Self {
+            requests,
+            next: 0,
+            moving,
+            next_motor: 0,
+            deadline: now + words + longest + QUIESCE_MARGIN,
+        })
+    }
+
+    /// The stop command to send next, if any.
+    pub fn command(&self) -> Option<Request> {
+        self.requests.get(self.next).copied().flatten()
+    }
+
+    /// The command returned by [`command`](Self::command) was sent.
+    pub fn sent(&mut self) {
+        self.next += 1;
+    }
+
+    /// The next motor to ask `$21`, round-robin over those still moving.
+    pub fn poll_motor(&mut self) -> Option<u8> {
+        let motor = (0..6u8)
+            .map(|offset| (self.next_motor + offset) % 6)
+            .find(|&m| self.moving.has(m))?;
+        self.next_motor = (motor + 1) % 6;
+        Some(motor)
+    }
+
+    /// A `$21` answer: `motor` runs at `velocity`.
+    pub fn on_velocity(&mut self, motor: u8, velocity: i16) {
+        if velocity == 0 {
+            self.moving = self.moving.with(MotorMask::single(motor), false);
+        }
+    }
+
+    /// Whether the configuration may go out at `now`.
+    pub fn done(&self, now: Duration) -> bool {
+        self.command().is_none() && (self.moving.bits() == 0 || now >= self.deadline)
     }
 }

@@ -3,139 +3,10 @@
 
 use core::time::Duration;
 
-use tmcpack::{Action, Reply, ReplyFrame, Request, RequestFrame};
+use tmcpack::{Action, Reply, Request, RequestFrame};
 
+use super::bench::*;
 use super::*;
-
-const MS: Duration = Duration::from_millis(1);
-
-struct Bench {
-    driver: TmcpackDriver,
-    now: Duration,
-}
-
-fn channel() -> TmcpackChannel {
-    TmcpackChannel {
-        max_velocity: 32_000.0,
-        max_accel: 160_000.0,
-        ..TmcpackChannel::default()
-    }
-}
-
-fn config() -> TmcpackDriverConfig {
-    let mut channels = [None; 6];
-    channels[0] = Some(channel());
-    channels[2] = Some(TmcpackChannel {
-        max_velocity: 1600.0,
-        max_accel: 6400.0,
-        ..TmcpackChannel::default()
-    });
-    TmcpackDriverConfig {
-        channels,
-        ..TmcpackDriverConfig::default()
-    }
-}
-
-fn word(reply: Reply) -> [u8; 9] {
-    ReplyFrame::new(0xFE, reply).to_word().expect("valid reply")
-}
-
-fn position(motor: u8, position: i32, action: Action) -> [u8; 9] {
-    word(Reply::Position {
-        motor,
-        position,
-        action,
-        stopped: false,
-    })
-}
-
-const UNIT_INFO: [u8; 9] = [0xFE, 0x43, 149, 1, 35, 0xE9, 0x03, 0, 0];
-
-impl Bench {
-    fn new(config: TmcpackDriverConfig) -> Self {
-        Self {
-            driver: TmcpackDriver::new(config),
-            now: Duration::ZERO,
-        }
-    }
-
-    /// One tick: timeouts, then at most one message.
-    fn tick(&mut self) -> Option<[u8; 9]> {
-        self.driver.handle_timeout(self.now);
-        let out = if self.driver.wants_transmit(self.now).is_some() {
-            let mut buf = [0u8; 256];
-            let t = self.driver.poll_transmit(self.now, &mut buf)?;
-            assert_eq!(t.len, 9);
-            assert!(t.expects_reply, "every request reserves the bus");
-            let mut w = [0u8; 9];
-            w.copy_from_slice(&buf[..9]);
-            Some(w)
-        } else {
-            None
-        };
-        self.now += MS;
-        out
-    }
-
-    /// Ticks until the driver sends something (at most `limit` ticks).
-    fn next(&mut self, limit: u32) -> Option<(Duration, [u8; 9])> {
-        for _ in 0..limit {
-            let at = self.now;
-            if let Some(w) = self.tick() {
-                return Some((at, w));
-            }
-        }
-        None
-    }
-
-    fn request(&mut self) -> Request {
-        let (_, w) = self.next(1000).expect("a request");
-        RequestFrame::decode(&w).expect("decodes").request
-    }
-
-    fn rx(&mut self, bytes: &[u8]) {
-        self.driver.handle_rx(self.now, bytes);
-    }
-
-    /// Answers `$43` and lets the start-up run; returns the configuration requests.
-    fn online(&mut self) -> Vec<Request> {
-        let (_, w) = self.next(10).expect("$43");
-        assert_eq!(w, [0x01, 0x43, 0xFE, 0, 0, 0, 0, 0, 0]);
-        self.now += 11 * MS;
-        self.rx(&UNIT_INFO);
-        let mut sent = Vec::new();
-        while !self.driver.status().online {
-            sent.push(self.request());
-        }
-        sent
-    }
-
-    /// Answers every `$20` poll with `answer(motor)` until `done`, at most `limit` ticks.
-    fn serve(&mut self, limit: u32, mut answer: impl FnMut(u8) -> [u8; 9]) -> Vec<Request> {
-        let mut sent = Vec::new();
-        for _ in 0..limit {
-            if let Some(w) = self.tick() {
-                let request = RequestFrame::decode(&w).expect("decodes").request;
-                match request {
-                    Request::QueryPosition { motor, .. } => {
-                        self.now += 10 * MS;
-                        let reply = answer(motor);
-                        self.rx(&reply);
-                    }
-                    Request::UnitInfo { .. } => {
-                        self.now += 10 * MS;
-                        let mut info = UNIT_INFO;
-                        info[3] = 0;
-                        self.rx(&info);
-                    }
-                    _ => {}
-                }
-                sent.push(request);
-            }
-        }
-        sent
-    }
-}
 
 #[test]
 fn startup_reads_unit_info_then_writes_the_manual_parameters() {
@@ -150,8 +21,10 @@ fn startup_reads_unit_info_then_writes_the_manual_parameters() {
             switchover: 1
         }
     );
+    // $41: 11 byte times at 19200 baud = 5.7 ms → 3 units of 2 ms.
+    assert_eq!(sent[1], Request::PacketTimeout { timeout: 3 });
     // $12 clkdiv for 32000 µsteps/s at v = 511, div = 0 (8.2).
-    assert_eq!(sent[1], Request::VelocitySetting { clkdiv: 18 });
+    assert_eq!(sent[2], Request::VelocitySetting { clkdiv: 18 });
     assert!(sent.contains(&Request::VelocityAcceleration {
         motor: 0,
         amax: 318,
@@ -207,15 +80,24 @@ fn the_line_stays_reserved_for_the_switchover_after_an_answer() {
 }
 
 #[test]
-fn a_request_without_answer_reserves_the_line_for_its_wire_time() {
+fn a_request_without_answer_reserves_the_line_for_the_packet_timeout() {
     let mut bench = Bench::new(config());
     bench.next(5).expect("$43");
     bench.now += 11 * MS;
     bench.rx(&UNIT_INFO);
-    let (t40, _) = bench.next(20).expect("$40");
-    let (t12, _) = bench.next(20).expect("$12");
-    // 9 bytes · 10 bits at 19200 baud = 4.69 ms: the next word starts on the next tick.
-    assert_eq!(t12 - t40, 5 * MS);
+    bench.survey([Action::Inactive; 6]);
+    let (t40, _) = bench.next(40).expect("$40");
+    let (t41, w41) = bench.next(40).expect("$41");
+    let (t12, _) = bench.next(40).expect("$12");
+    let (t10, _) = bench.next(40).expect("$11");
+    // Manual 8.6 $41: P0,P1 timeout in 2 ms units, LSB first.
+    assert_eq!(w41, [0x01, 0x41, 3, 0, 0, 0, 0, 0, 0]);
+    // Until $41 the pack may have its factory timeout (assumed 20 ms): a word torn by noise
+    // must be aborted before the next word starts, so the next one waits for it.
+    assert_eq!(t41 - t40, 20 * MS);
+    // Then 6 ms: longer than one word's 4.69 ms wire time, and the pack's new timeout.
+    assert_eq!(t12 - t41, 6 * MS);
+    assert_eq!(t10 - t12, 6 * MS);
 }
 
 #[test]
@@ -530,6 +412,12 @@ fn a_set_reset_flag_after_start_up_is_a_reset_fault_and_the_pack_is_reconfigured
                     assert_eq!(bench.driver.status().fault, Some(DeviceFault::Reset));
                     assert_eq!(bench.driver.status().resets, 1);
                     assert_eq!(bench.driver.channel(0).fault, Some(DeviceFault::Reset));
+                }
+                Request::QueryActions { .. } => {
+                    bench.now += 10 * MS;
+                    bench.rx(&word(Reply::Actions {
+                        actions: [Action::Inactive; 6],
+                    }));
                 }
                 Request::QueryPosition { motor, .. } => {
                     bench.now += 10 * MS;

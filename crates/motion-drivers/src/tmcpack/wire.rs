@@ -16,7 +16,7 @@ use tmcpack::{Command, FRAME_LEN, Reply, ReplyFrame};
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct Expect {
     pub command: Command,
-    /// The motor a $20 answer must name.
+    /// The motor a $20 or $21 answer must name, the channel a $30 answer must name.
     pub motor: Option<u8>,
     /// Which query this is.
     pub purpose: Purpose,
@@ -31,6 +31,12 @@ pub(crate) enum Purpose {
     ResetCheck,
     /// $20 of the polling plan.
     Poll,
+    /// $28 of the start-up survey: which motors are active.
+    Survey,
+    /// $21 while stopping motors found active at start-up.
+    Quiesce,
+    /// $30 of the polling plan (inputs).
+    Io,
 }
 
 /// Who may use the line.
@@ -146,7 +152,10 @@ impl ReplyHunter {
 
 fn matches(reply: &Reply, expect: Expect) -> bool {
     match (reply, expect.motor) {
-        (Reply::Position { motor, .. }, Some(want)) => *motor == want,
+        (Reply::Position { motor, .. } | Reply::Velocity { motor, .. }, Some(want)) => {
+            *motor == want
+        }
+        (Reply::Input { channel, .. }, Some(want)) => *channel == want,
         _ => true,
     }
 }

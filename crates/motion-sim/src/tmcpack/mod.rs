@@ -61,7 +61,7 @@ use core::time::Duration;
 
 use motion_link::sim::StreamDevice;
 use tmcpack::convert::{TICK, byte_time, nominal_baud, units};
-use tmcpack::{Action, FrameDecoder, RequestFrame, Variant, Word};
+use tmcpack::{Action, FrameDecoder, MotorMask, RequestFrame, Variant, Word};
 
 use crate::rng::SimRng;
 
@@ -234,6 +234,25 @@ impl TmcpackSim {
         } else {
             self.st.ttlout1
         }
+    }
+
+    /// Level the pack drives at TTLIO1: `Some` when $32 made it an output ("0=output"),
+    /// `None` while it is an input.
+    pub fn ttlio1_output(&self) -> Option<bool> {
+        (!self.st.ttlio1_is_input).then_some(self.st.ttlio1_out)
+    }
+
+    /// Whether TTLOUT1 works as the ready output ($32 P3), and the $33 masks.
+    pub fn ready_output(&self) -> Option<(MotorMask, MotorMask)> {
+        self.st
+            .ttlout1_ready
+            .then_some((self.st.ready_active, self.st.ready_ref))
+    }
+
+    /// A motor's $31 stop limits (left minimum, right maximum).
+    pub fn stop_limits(&self, motor: u8) -> Option<(u16, u16)> {
+        let m = self.motors.get(self.index(motor)?)?;
+        Some((m.p.stop_left_min, m.p.stop_right_max))
     }
 
     /// Motor positions saved in EEPROM by the power-down mode, if valid.

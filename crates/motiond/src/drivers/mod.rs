@@ -6,6 +6,8 @@ mod qsb;
 mod spimotor;
 mod tmcpack;
 
+pub use tmcpack::driver_config as tmcpack_driver_config;
+
 use motion_drivers::{Driver, Model};
 
 use crate::config::{DeviceSpec, Owner, ServerConfig, Transport};

@@ -197,6 +197,58 @@ pub const fn units(n: u16) -> Duration {
     Duration::from_millis(2 * n as u64)
 }
 
+/// Highest de-bounce delay of the reference switch, ms ($16: "$FFFF=30ms").
+pub const MAX_DEBOUNCE_MS: u16 = 30;
+
+/// The $16 de-bounce mask for a delay of `ms` (0..=30 in 2 ms steps): "$0001=0ms,
+/// $0003=2ms, $FFFF=30ms", one more mask bit per 2 ms cycle (the 7.1 default $0FFF is
+/// "Filter delay 12-1 cycles = 22 ms").
+pub const fn debounce_mask(ms: u16) -> Result<u16, Error> {
+    if ms > MAX_DEBOUNCE_MS || !ms.is_multiple_of(2) {
+        return Err(Error::OutOfRange {
+            field: "de-bounce delay",
+        });
+    }
+    let bits = ms / 2 + 1;
+    Ok(if bits >= 16 {
+        u16::MAX
+    } else {
+        (1 << bits) - 1
+    })
+}
+
+/// The de-bounce delay in ms a $16 mask gives: (mask bits − 1) · 2 ms.
+pub const fn debounce_ms(mask: u16) -> u16 {
+    let bits = mask.count_ones() as u16;
+    if bits == 0 { 0 } else { (bits - 1) * 2 }
+}
+
+/// The $10 value for a peak current of `percent` % of the pack's full scale
+/// ("Imax = 0,8A * value/256"): `round(percent / 100 · 256)`, at most 255.
+pub fn peak_value(percent: f64) -> Result<u8, Error> {
+    if !percent.is_finite() || !(0.0..=100.0).contains(&percent) {
+        return Err(Error::OutOfRange {
+            field: "peak current",
+        });
+    }
+    Ok((percent / 100.0 * 256.0).round().min(255.0) as u8)
+}
+
+/// The peak current in % of full scale a $10 value gives (`value / 256`).
+pub fn peak_percent(value: u8) -> f64 {
+    f64::from(value) / 256.0 * 100.0
+}
+
+/// A time in ms as a count of 2 ms units (T0, $40 delays, $41 timeouts): `None` unless it
+/// is an even number of ms.
+pub const fn units_of_ms(ms: u32) -> Option<u32> {
+    if ms.is_multiple_of(2) {
+        Some(ms / 2)
+    } else {
+        None
+    }
+}
+
 /// The board variant: SIXpack drives six motors of up to 0.8 A, QUADpack four of 1.5 A.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum Variant {

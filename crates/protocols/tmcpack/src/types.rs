@@ -124,6 +124,32 @@ impl CurrentLevel {
         })
     }
 
+    /// Every level, in wire order (index 0 = 100 % … index 8 = 0 %).
+    pub const ALL: [Self; 9] = [
+        Self::P100,
+        Self::P75,
+        Self::P50,
+        Self::P38,
+        Self::P25,
+        Self::P19,
+        Self::P13,
+        Self::P9,
+        Self::Off,
+    ];
+
+    /// The level of exactly `percent` % of the peak current ("0=100%, 75, 50, 38, 25, 19,
+    /// [13, 9,] 0%"); `None` for any other value.
+    pub const fn from_percent(percent: u8) -> Option<Self> {
+        let mut i = 0;
+        while i < Self::ALL.len() {
+            if Self::ALL[i].percent() == percent {
+                return Some(Self::ALL[i]);
+            }
+            i += 1;
+        }
+        None
+    }
+
     /// Percent of the peak current.
     pub const fn percent(self) -> u8 {
         match self {

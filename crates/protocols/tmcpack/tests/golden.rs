@@ -393,3 +393,55 @@ fn motor_numbers_above_5_are_rejected() {
         })
     );
 }
+
+/// Manual 8.3 $16: "mask for reference switch de-bouncing ($0001=0ms,$0003=2ms,$FFFF=30ms)";
+/// 7.1 "De-bounce mask=$0FFF … Filter delay 12-1 cycles = 22 ms".
+#[test]
+fn manual_8_3_debounce_mask_16() {
+    assert_eq!(convert::debounce_mask(0), Ok(0x0001));
+    assert_eq!(convert::debounce_mask(2), Ok(0x0003));
+    assert_eq!(convert::debounce_mask(22), Ok(0x0FFF));
+    assert_eq!(convert::debounce_mask(30), Ok(0xFFFF));
+    for ms in (0..=30).step_by(2) {
+        let mask = convert::debounce_mask(ms).expect("in range");
+        assert_eq!(convert::debounce_ms(mask), ms);
+    }
+    assert!(convert::debounce_mask(3).is_err(), "2 ms steps");
+    assert!(convert::debounce_mask(32).is_err(), "30 ms at most");
+    let w = word(Request::ReferenceParameters {
+        motor: 0,
+        vrefmax: 100,
+        debounce_mask: convert::debounce_mask(22).expect("22 ms"),
+        flags: tmcpack::ReferenceFlags::EMPTY,
+    });
+    assert_eq!(w, [PACK, 0x16, 0, 100, 0, 0xFF, 0x0F, 0, 0]);
+}
+
+/// Manual 8.3 $10 "value (0..255): Sixpack: Imax=0,8A * value/256"; 7.1 "Peak current=128
+/// … define 100% curr. control as 400 mA"; $11 levels "(0=100%, 75, 50, 38, 25, 19, [13,
+/// 9,] 0%)".
+#[test]
+fn manual_8_3_peak_current_10_and_levels_11() {
+    assert_eq!(convert::peak_value(50.0), Ok(128));
+    assert_eq!(Variant::SixPack.peak_current_amps(128, 100), 0.4);
+    assert_eq!(convert::peak_value(100.0), Ok(255), "256 does not fit: 255");
+    assert_eq!(convert::peak_value(0.0), Ok(0));
+    assert!(convert::peak_value(100.5).is_err());
+    assert!(convert::peak_value(f64::NAN).is_err());
+    assert_eq!(convert::peak_percent(128), 50.0);
+    let percents: Vec<u8> = CurrentLevel::ALL.iter().map(|l| l.percent()).collect();
+    assert_eq!(percents, [100, 75, 50, 38, 25, 19, 13, 9, 0]);
+    for (index, level) in CurrentLevel::ALL.iter().enumerate() {
+        assert_eq!(level.index() as usize, index);
+        assert_eq!(CurrentLevel::from_percent(level.percent()), Some(*level));
+    }
+    assert_eq!(CurrentLevel::from_percent(40), None);
+    // "Power consumption can be reduced drastically when power-down current (I0) is set to
+    // 0%, i.e. P1=8".
+    assert_eq!(
+        CurrentLevel::from_percent(0).map(CurrentLevel::index),
+        Some(8)
+    );
+    assert_eq!(convert::units_of_ms(1000), Some(500));
+    assert_eq!(convert::units_of_ms(3), None);
+}

@@ -1,15 +1,139 @@
-//! tmcpack machine keys (README "Config"): validated here, turned into the driver's config in
-//! `crate::drivers::tmcpack`.
+//! tmcpack machine keys (README "Config", docs/keys/tmcpack.md): validated here, turned into
+//! the driver's config in `crate::drivers::tmcpack`. Every value is checked against the range
+//! the Trinamic SIXpack/QUADpack manual (V2.43) gives for the instruction it becomes.
+
+use motion_drivers::{Model, SignalKind};
+use tmcpack::CurrentLevel;
+use tmcpack::convert::{MAX_DEBOUNCE_MS, byte_time};
+use toml::Spanned;
 
 use super::{AxisContext, DeviceContext};
-use crate::config::ServerConfig;
 use crate::config::raw::{RawAxis, RawConfig, RawDevice};
 use crate::config::validate::Validator;
+use crate::config::{ServerConfig, Transport};
+
+/// The reply address the driver uses unless `reply_address` is set.
+pub const DEFAULT_REPLY_ADDRESS: u8 = motion_drivers::tmcpack::DEFAULT_REPLY_ADDRESS;
+
+/// Highest `poslimit` ($15 P1..P4).
+pub const MAX_POSLIMIT: f64 = tmcpack::MAX_POSLIMIT as f64;
+
+/// The current levels of $11, in %, as the error messages list them.
+const LEVELS: &str = "100, 75, 50, 38, 25, 19, 13, 9, 0";
+
+/// `ready_output = { motors, reference }`: TTLOUT1 as the ready output ($32 P3, $33).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ReadyOutputKeys {
+    /// $33 P0: bit n = motor n's activity switches the output.
+    pub motors: u8,
+    /// $33 P1: bit n = motor n's reference search switches the output.
+    pub reference: u8,
+}
 
 /// The tmcpack keys of one `[[device]]`; `None` fields were not set (the driver's default
 /// applies).
 #[derive(Debug, Clone, PartialEq, Default)]
-pub struct TmcpackDeviceKeys {}
+pub struct TmcpackDeviceKeys {
+    /// Response address of the driver's queries.
+    pub reply_address: Option<u8>,
+    /// $40 transmitter switch-over delay, ms (even, 2..=2000).
+    pub switchover_ms: Option<u16>,
+    /// $41 packet timeout, ms (even, 4..=131070).
+    pub packet_timeout_ms: Option<u32>,
+    /// TTLOUT1 as the ready output.
+    pub ready_output: Option<ReadyOutputKeys>,
+}
+
+/// `current = { … }` ($10, $11).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct CurrentKeys {
+    /// Peak current, % of the pack's full scale.
+    pub peak: Option<f64>,
+    /// I0, I1, I2, I3.
+    pub standby: Option<CurrentLevel>,
+    /// I1: at standstill.
+    pub standstill: Option<CurrentLevel>,
+    /// I2: at constant velocity.
+    pub constant: Option<CurrentLevel>,
+    /// I3: accelerating.
+    pub accel: Option<CurrentLevel>,
+    /// T0, ms (even, 2..=131070).
+    pub standby_delay_ms: Option<u32>,
+}
+
+/// `reference = { … }` ($15, $16, $18); `side` is resolved into the axis's `HomeSpec`.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ReferenceKeys {
+    /// NullPositive: the switch is active at a high level.
+    pub active_high: Option<bool>,
+    /// NullCenter.
+    pub center: Option<bool>,
+    /// StopNull.
+    pub stop_at_switch: Option<bool>,
+    /// StopSoft.
+    pub soft_stop: Option<bool>,
+    /// $16 de-bounce, ms (even, 0..=30).
+    pub debounce_ms: Option<u16>,
+    /// $18 nulloffset, units.
+    pub null_offset: Option<f64>,
+    /// $18 testnullrange, units.
+    pub test_range: Option<f64>,
+    /// FastRef.
+    pub fast: Option<bool>,
+    /// MechRef.
+    pub mechanical: Option<bool>,
+}
+
+/// The tmcpack keys of one `[[axis]]`; `None` fields were not set (the driver's default
+/// applies).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct TmcpackAxisKeys {
+    /// `current`.
+    pub current: CurrentKeys,
+    /// `reference`.
+    pub reference: ReferenceKeys,
+    /// $15 motor type bit 1.
+    pub rotary: Option<bool>,
+    /// Units per revolution of a rotary axis (given, or 360 for unit "deg").
+    pub revolution: Option<f64>,
+    /// $31 left minimum, ADC counts.
+    pub analog_stop_left: Option<u16>,
+    /// $31 right maximum, ADC counts.
+    pub analog_stop_right: Option<u16>,
+}
+
+/// An even number of ms in `range`, for keys in the pack's 2 ms units.
+fn even_ms(
+    v: &mut Validator<'_, '_>,
+    value: &Spanned<i64>,
+    key: &str,
+    range: core::ops::RangeInclusive<i64>,
+    what: &str,
+) -> Option<i64> {
+    let ms = *value.get_ref();
+    if range.contains(&ms) && ms % 2 == 0 {
+        Some(ms)
+    } else {
+        v.issue(
+            value.span(),
+            key,
+            format!(
+                "{ms} is not allowed; an even number of ms {}..={} ({what} is set in 2 ms units)",
+                range.start(),
+                range.end()
+            ),
+        );
+        None
+    }
+}
+
+/// Motors of the variant a raw `variant` names (unknown names are reported elsewhere).
+fn motors_of(raw: &RawDevice) -> u8 {
+    match raw.variant.as_ref().map(|v| v.get_ref().as_str()) {
+        Some("quadpack") => 4,
+        _ => 6,
+    }
+}
 
 /// Validates the tmcpack keys of a `[[device]]` table.
 pub(in crate::config) fn device_keys(
@@ -17,14 +141,114 @@ pub(in crate::config) fn device_keys(
     ctx: &DeviceContext,
     raw: &RawDevice,
 ) -> Option<TmcpackDeviceKeys> {
-    let _ = (v, ctx, raw);
-    Some(TmcpackDeviceKeys::default())
+    let mut ok = true;
+    let mut keys = TmcpackDeviceKeys::default();
+    if let Some(value) = &raw.reply_address {
+        match v.int_in(value, &ctx.key("reply_address"), 0..=255) {
+            Some(a) => keys.reply_address = Some(a as u8),
+            None => ok = false,
+        }
+    }
+    if let Some(value) = &raw.switchover_ms {
+        match even_ms(
+            v,
+            value,
+            &ctx.key("switchover_ms"),
+            2..=2000,
+            "$40 switch-over delay",
+        ) {
+            Some(ms) => keys.switchover_ms = Some(ms as u16),
+            None => ok = false,
+        }
+    }
+    if let Some(value) = &raw.packet_timeout_ms {
+        match even_ms(
+            v,
+            value,
+            &ctx.key("packet_timeout_ms"),
+            4..=131_070,
+            "$41 packet timeout",
+        ) {
+            Some(ms) => keys.packet_timeout_ms = Some(ms as u32),
+            None => ok = false,
+        }
+    }
+    if let Some(ready) = &raw.ready_output {
+        let motors = motors_of(raw);
+        let all = (1u8 << motors) - 1;
+        let mut mask = |list: &Option<Spanned<Vec<Spanned<i64>>>>, k: &str| -> Option<u8> {
+            let Some(list) = list else {
+                // The manual's default masks ($3F): every motor.
+                return Some(all);
+            };
+            let key = ctx.key(&format!("ready_output.{k}"));
+            let mut bits = 0u8;
+            let mut fine = true;
+            for item in list.get_ref() {
+                let m = *item.get_ref();
+                if !(0..i64::from(motors)).contains(&m) {
+                    v.issue(
+                        item.span(),
+                        &key,
+                        format!(
+                            "{m} is not a motor of this pack; allowed: 0..={}",
+                            motors - 1
+                        ),
+                    );
+                    fine = false;
+                } else if bits & (1 << m) != 0 {
+                    v.issue(item.span(), &key, format!("motor {m} is listed twice"));
+                    fine = false;
+                } else {
+                    bits |= 1 << m;
+                }
+            }
+            fine.then_some(bits)
+        };
+        let r = ready.get_ref();
+        let motors_mask = mask(&r.motors, "motors");
+        let reference = mask(&r.reference, "reference");
+        match (motors_mask, reference) {
+            (Some(motors), Some(reference)) => {
+                keys.ready_output = Some(ReadyOutputKeys { motors, reference });
+            }
+            _ => ok = false,
+        }
+    }
+    ok.then_some(keys)
 }
 
-/// The tmcpack keys of one `[[axis]]`; `None` fields were not set (the driver's default
-/// applies).
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct TmcpackAxisKeys {}
+/// A current level of $11 from a percentage.
+fn level(v: &mut Validator<'_, '_>, value: &Spanned<f64>, key: &str) -> Option<CurrentLevel> {
+    let p = *value.get_ref();
+    let found = (p.is_finite() && p.fract() == 0.0 && (0.0..=100.0).contains(&p))
+        .then(|| CurrentLevel::from_percent(p as u8))
+        .flatten();
+    match found {
+        Some(level) => {
+            if matches!(level, CurrentLevel::P13 | CurrentLevel::P9) {
+                v.warn(
+                    value.span(),
+                    key,
+                    format!("{p} % is below 19 %, the lowest current that microsteps properly (manual 7.1 \"Setting of Motor Current\")"),
+                );
+            }
+            Some(level)
+        }
+        None => {
+            v.issue(
+                value.span(),
+                key,
+                format!("{p} is not a current level of the pack; allowed: {LEVELS} (% of the peak current, manual 8.3 $11)"),
+            );
+            None
+        }
+    }
+}
+
+fn flag(value: &Option<Spanned<bool>>) -> Option<bool> {
+    value.as_ref().map(|b| *b.get_ref())
+}
 
 /// Validates the tmcpack keys of an `[[axis]]` table.
 pub(in crate::config) fn axis_keys(
@@ -32,8 +256,237 @@ pub(in crate::config) fn axis_keys(
     ctx: &AxisContext<'_>,
     raw: &RawAxis,
 ) -> Option<TmcpackAxisKeys> {
-    let _ = (v, ctx, raw);
-    Some(TmcpackAxisKeys::default())
+    let mut ok = true;
+    let mut keys = TmcpackAxisKeys::default();
+    let cpu = ctx.counts_per_unit.map(f64::abs);
+    if let Some(current) = &raw.current {
+        let c = current.get_ref();
+        let key = |k: &str| ctx.key(&format!("current.{k}"));
+        if let Some(peak) = &c.peak {
+            let p = *peak.get_ref();
+            if p.is_finite() && (0.0..=100.0).contains(&p) {
+                keys.current.peak = Some(p);
+            } else {
+                ok = false;
+                v.issue(
+                    peak.span(),
+                    &key("peak"),
+                    format!("{p} is not allowed; 0..=100 (% of the pack's full scale: SIXpack 0.8 A, QUADpack 1.5 A × its DIP setting; manual 8.3 $10)"),
+                );
+            }
+        }
+        for (value, k, slot) in [
+            (&c.standby, "standby", &mut keys.current.standby),
+            (&c.standstill, "standstill", &mut keys.current.standstill),
+            (&c.constant, "constant", &mut keys.current.constant),
+            (&c.accel, "accel", &mut keys.current.accel),
+        ] {
+            if let Some(value) = value {
+                *slot = level(v, value, &key(k));
+                ok &= slot.is_some();
+            }
+        }
+        if let Some(value) = &c.standby_delay_ms {
+            let what = "T0, the standby delay ($11, also used by $15 DelayTestNull)";
+            match even_ms(v, value, &key("standby_delay_ms"), 2..=131_070, what) {
+                Some(ms) => keys.current.standby_delay_ms = Some(ms as u32),
+                None => ok = false,
+            }
+        }
+    }
+    if let Some(reference) = &raw.reference {
+        let r = reference.get_ref();
+        let key = |k: &str| ctx.key(&format!("reference.{k}"));
+        if let Some(active) = &r.active {
+            match active.get_ref().as_str() {
+                "low" => keys.reference.active_high = Some(false),
+                "high" => keys.reference.active_high = Some(true),
+                other => {
+                    ok = false;
+                    v.issue(
+                        active.span(),
+                        &key("active"),
+                        format!("unknown level {other:?}; allowed: \"low\" (a closer to ground; default), \"high\" (an opener, normally closed, as manual section 4 advises: $15 NullPositive)"),
+                    );
+                }
+            }
+        }
+        keys.reference.center = flag(&r.center);
+        keys.reference.stop_at_switch = flag(&r.stop_at_switch);
+        keys.reference.soft_stop = flag(&r.soft_stop);
+        keys.reference.fast = flag(&r.fast);
+        keys.reference.mechanical = flag(&r.mechanical);
+        if let Some(value) = &r.debounce_ms {
+            let ms = *value.get_ref();
+            if (0..=i64::from(MAX_DEBOUNCE_MS)).contains(&ms) && ms % 2 == 0 {
+                keys.reference.debounce_ms = Some(ms as u16);
+            } else {
+                ok = false;
+                v.issue(
+                    value.span(),
+                    &key("debounce_ms"),
+                    format!("{ms} is not allowed; an even number of ms 0..=30 (manual 8.3 $16: \"$0001=0ms, $0003=2ms, $FFFF=30ms\")"),
+                );
+            }
+        }
+        if let Some(value) = &r.null_offset {
+            let d = *value.get_ref();
+            let counts = cpu.map(|c| (d * c).round());
+            if !d.is_finite() || counts.is_some_and(|n| n.abs() > f64::from(i32::MAX)) {
+                ok = false;
+                v.issue(
+                    value.span(),
+                    &key("null_offset"),
+                    format!("{d} is not allowed; a finite distance (units) whose microsteps fit the signed 32-bit nulloffset of $18"),
+                );
+            } else {
+                keys.reference.null_offset = Some(d);
+            }
+        }
+        if let Some(value) = &r.test_range {
+            let d = *value.get_ref();
+            let counts = cpu.map(|c| (d * c).round());
+            if !(d.is_finite() && d >= 0.0) || counts.is_some_and(|n| n > f64::from(u16::MAX)) {
+                ok = false;
+                v.issue(
+                    value.span(),
+                    &key("test_range"),
+                    format!(
+                        "{d} is not allowed; a distance >= 0 (units) of at most 65535 microsteps ($18 testnullrange){}",
+                        cpu.map(|c| format!(" = {} units", f64::from(u16::MAX) / c))
+                            .unwrap_or_default()
+                    ),
+                );
+            } else {
+                keys.reference.test_range = Some(d);
+            }
+        }
+    }
+    keys.rotary = flag(&raw.rotary);
+    let rotary = keys.rotary == Some(true);
+    match (&raw.revolution, rotary) {
+        (Some(value), true) => {
+            let r = *value.get_ref();
+            if r.is_finite() && r > 0.0 {
+                keys.revolution = Some(r);
+            } else {
+                ok = false;
+                v.issue(
+                    value.span(),
+                    &ctx.key("revolution"),
+                    format!("{r} is not allowed; a finite distance > 0 (units per revolution)"),
+                );
+            }
+        }
+        (Some(value), false) => {
+            ok = false;
+            v.issue(
+                value.span(),
+                &ctx.key("revolution"),
+                "applies only to an axis with `rotary = true`; a linear axis's reference range is its travel (max − min)",
+            );
+        }
+        (None, true) if ctx.unit == Some("deg") => keys.revolution = Some(360.0),
+        (None, true) => {
+            ok = false;
+            v.issue(
+                ctx.table.clone(),
+                &ctx.key("revolution"),
+                "missing; a rotary axis needs its units per revolution (360 is assumed only for unit = \"deg\")",
+            );
+        }
+        (None, false) => {}
+    }
+    ok &= poslimit_fits(v, ctx, raw, keys.revolution);
+    if let Some(stop) = &raw.analog_stop {
+        let s = stop.get_ref();
+        let key = |k: &str| ctx.key(&format!("analog_stop.{k}"));
+        let left = s
+            .left
+            .as_ref()
+            .map(|value| v.int_in(value, &key("left"), 0..=1023).map(|x| x as u16));
+        let right = s
+            .right
+            .as_ref()
+            .map(|value| v.int_in(value, &key("right"), 0..=1023).map(|x| x as u16));
+        ok &= left.is_none_or(|x| x.is_some()) && right.is_none_or(|x| x.is_some());
+        keys.analog_stop_left = left.flatten();
+        keys.analog_stop_right = right.flatten();
+        if let (Some(l), Some(r), Some(value)) =
+            (keys.analog_stop_left, keys.analog_stop_right, &s.right)
+            && l > 0
+            && r < 1023
+            && l >= r
+        {
+            ok = false;
+            v.issue(
+                value.span(),
+                &key("right"),
+                format!("{r} must be above left ({l}): the value rises to the right (manual 8.5 $31); 0 and 1023 switch a side off"),
+            );
+        }
+    }
+    ok.then_some(keys)
+}
+
+/// $15 poslimit: one revolution of a rotary axis, the travel of a linear one, in
+/// microsteps; it must fit 0..=0x7FFFFFFF.
+fn poslimit_fits(
+    v: &mut Validator<'_, '_>,
+    ctx: &AxisContext<'_>,
+    raw: &RawAxis,
+    revolution: Option<f64>,
+) -> bool {
+    let Some(cpu) = ctx.counts_per_unit.map(f64::abs) else {
+        return true;
+    };
+    let (units, span, key, what) = match (revolution, ctx.min, ctx.max) {
+        (Some(r), _, _) => (
+            r,
+            raw.revolution
+                .as_ref()
+                .map_or(ctx.table.clone(), Spanned::span),
+            ctx.key("revolution"),
+            "one revolution",
+        ),
+        (None, Some(lo), Some(hi)) => (
+            hi - lo,
+            raw.max.as_ref().map_or(ctx.table.clone(), Spanned::span),
+            ctx.key("max"),
+            "the travel max − min",
+        ),
+        _ => return true,
+    };
+    let counts = (units * cpu).round();
+    if counts > MAX_POSLIMIT {
+        v.issue(
+            span,
+            &key,
+            format!("{what} is {counts} microsteps; the pack's $15 poslimit allows at most {} (0x7FFFFFFF)", tmcpack::MAX_POSLIMIT),
+        );
+        return false;
+    }
+    if let (Some(r), Some(lo), Some(hi)) = (revolution, ctx.min, ctx.max)
+        && hi - lo > r
+    {
+        v.warn(
+            raw.max.as_ref().map_or(ctx.table.clone(), Spanned::span),
+            &ctx.key("max"),
+            format!("a rotary axis's positions lie within one revolution ({r}) of the zero point (manual 8.4 $23: \"0 <= position < poslimit\" for a switch on the left); min..max spans {}", hi - lo),
+        );
+    }
+    true
+}
+
+/// Index of the raw table of the device called `name`.
+fn raw_device<'r>(raw: &'r RawConfig, name: &str) -> Option<(usize, &'r RawDevice)> {
+    raw.device.iter().enumerate().find_map(|(i, d)| {
+        let d = d.get_ref();
+        d.name
+            .as_ref()
+            .is_some_and(|n| n.get_ref() == name)
+            .then_some((i, d))
+    })
 }
 
 /// Checks across tables for tmcpack devices (after everything else was validated).
@@ -42,5 +495,160 @@ pub(in crate::config) fn cross_check(
     config: &ServerConfig,
     raw: &RawConfig,
 ) {
-    let _ = (v, config, raw);
+    reply_addresses(v, config, raw);
+    peak_pairs(v, config, raw);
+    ready_output_signals(v, config, raw);
+    packet_timeouts(v, config, raw);
+}
+
+/// The device keys of tmcpack device `d`.
+pub(crate) fn device_keys_of(config: &ServerConfig, d: usize) -> Option<&TmcpackDeviceKeys> {
+    match &config.devices.get(d)?.machine {
+        super::DeviceMachine::Tmcpack(keys) => Some(keys),
+        _ => None,
+    }
+}
+
+/// The pack executes every word that starts with its address, replies included: no reply
+/// address may be the address of a pack on the same link (manual 6.1, 7.2 `$20`
+/// "address of the receiver").
+fn reply_addresses(v: &mut Validator<'_, '_>, config: &ServerConfig, raw: &RawConfig) {
+    let packs: Vec<(usize, &crate::config::DeviceSpec)> = config
+        .devices
+        .iter()
+        .enumerate()
+        .filter(|(_, d)| d.model == Model::Tmcpack)
+        .collect();
+    for &(a, asking) in &packs {
+        let Some(keys) = device_keys_of(config, a) else {
+            continue;
+        };
+        let reply = keys.reply_address.unwrap_or(DEFAULT_REPLY_ADDRESS);
+        for &(_, other) in packs.iter().filter(|(_, d)| d.link == asking.link) {
+            if other.address != u32::from(reply) {
+                continue;
+            }
+            let link = config
+                .links
+                .get(asking.link)
+                .map_or("?", |l| l.name.as_str());
+            let asking_raw = raw_device(raw, &asking.name);
+            let explicit =
+                asking_raw.and_then(|(i, d)| d.reply_address.as_ref().map(|s| (i, s.span())));
+            match explicit {
+                Some((i, span)) => v.issue(
+                    span,
+                    &format!("device[{i}].reply_address"),
+                    format!("{reply} is the address of pack `{}` on link `{link}`: that pack would take the replies for requests; choose an address no pack on the link has", other.name),
+                ),
+                None => {
+                    let (i, span) = raw_device(raw, &other.name)
+                        .map(|(i, d)| (i, d.address.as_ref().map_or(0..0, Spanned::span)))
+                        .unwrap_or((0, 0..0));
+                    v.issue(
+                        span,
+                        &format!("device[{i}].address"),
+                        format!("{reply} is the reply address pack `{}` uses (reply_address, default {DEFAULT_REPLY_ADDRESS}) on link `{link}`: this pack would take its replies for requests; change this address or set `reply_address` on `{}`", asking.name, asking.name),
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// $10 "settings are done for pairs of motors, i.e. each two motors 0 + 1, 2 + 3
+/// respectively 4 + 5 have the same peak current".
+fn peak_pairs(v: &mut Validator<'_, '_>, config: &ServerConfig, raw: &RawConfig) {
+    for (i, (axis, spec)) in config.axes.iter().zip(&config.axis_specs).enumerate() {
+        let super::AxisMachine::Tmcpack(keys) = &spec.machine else {
+            continue;
+        };
+        let partner = axis.channel ^ 1;
+        let Some((j, other)) = config
+            .axes
+            .iter()
+            .enumerate()
+            .find(|(_, o)| o.device == axis.device && o.channel == partner)
+        else {
+            continue;
+        };
+        let other_peak = match &config.axis_specs.get(j).map(|s| &s.machine) {
+            Some(super::AxisMachine::Tmcpack(k)) => k.current.peak,
+            _ => None,
+        };
+        let span = raw
+            .axis
+            .get(i)
+            .and_then(|a| a.get_ref().current.as_ref())
+            .and_then(|c| c.get_ref().peak.as_ref())
+            .map(Spanned::span);
+        let (Some(mine), Some(span)) = (keys.current.peak, span) else {
+            continue;
+        };
+        let pair = format!("motors {} and {}", axis.channel & !1, axis.channel | 1);
+        match other_peak {
+            Some(theirs) if theirs != mine && j < i => v.issue(
+                span,
+                &format!("axis[{i}].current.peak"),
+                format!("{mine} differs from axis `{}` ({theirs}): {pair} share one peak current (manual 8.3 $10: \"settings are done for pairs of motors\"); give both the same value", other.name),
+            ),
+            None => v.warn(
+                span,
+                &format!("axis[{i}].current.peak"),
+                format!("{pair} share one peak current (manual 8.3 $10): {mine} % applies to axis `{}` too", other.name),
+            ),
+            _ => {}
+        }
+    }
+}
+
+/// TTLOUT1 is either the ready output or a plain output.
+fn ready_output_signals(v: &mut Validator<'_, '_>, config: &ServerConfig, raw: &RawConfig) {
+    for (s, signal) in config.signals.iter().enumerate() {
+        let ready = device_keys_of(config, signal.device).and_then(|k| k.ready_output);
+        if ready.is_none() || signal.pin_name != "ttlout1" || signal.kind != SignalKind::DigitalOut
+        {
+            continue;
+        }
+        let device = config
+            .devices
+            .get(signal.device)
+            .map_or("?", |d| d.name.as_str());
+        let span = raw
+            .signal
+            .get(s)
+            .and_then(|r| r.get_ref().pin.as_ref())
+            .map_or(0..0, Spanned::span);
+        v.issue(
+            span,
+            &format!("signal[{s}].pin"),
+            format!("TTLOUT1 of device `{device}` is its ready output (ready_output, manual 8.5 $32 P3); it cannot also be a digital-out signal — remove ready_output or use ttlio1"),
+        );
+    }
+}
+
+/// $41: "The command word always has to be completely transmitted during a parameterized
+/// timeout": a timeout shorter than one word at the link's rate would abort every request.
+fn packet_timeouts(v: &mut Validator<'_, '_>, config: &ServerConfig, raw: &RawConfig) {
+    for (d, device) in config.devices.iter().enumerate() {
+        let Some(ms) = device_keys_of(config, d).and_then(|k| k.packet_timeout_ms) else {
+            continue;
+        };
+        let baud = match config.links.get(device.link).map(|l| &l.transport) {
+            Some(Transport::Serial { baud, .. }) => *baud,
+            Some(Transport::Sim { rate }) => *rate,
+            _ => continue,
+        };
+        let word = byte_time(baud) * tmcpack::FRAME_LEN as u32;
+        if u128::from(ms) * 1000 < word.as_micros() {
+            let (i, span) = raw_device(raw, &device.name)
+                .map(|(i, r)| (i, r.packet_timeout_ms.as_ref().map_or(0..0, Spanned::span)))
+                .unwrap_or((d, 0..0));
+            v.issue(
+                span,
+                &format!("device[{i}].packet_timeout_ms"),
+                format!("{ms} ms is shorter than one 9-byte word at {baud} baud ({:.1} ms): the pack would abort every request", word.as_secs_f64() * 1000.0),
+            );
+        }
+    }
 }

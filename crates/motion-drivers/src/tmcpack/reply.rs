@@ -1,0 +1,154 @@
+//! What the driver does with an answer, or with its absence.
+
+use core::fmt::Write as _;
+use core::time::Duration;
+
+use tmcpack::{DEFAULT_PACKET_TIMEOUT, Reply, Variant};
+
+use super::startup::Quiesce;
+use super::wire::{Expect, Purpose, Wire};
+use super::{MAX_TIMEOUTS, Phase, RESET_CHECK_PERIOD, RETRY_PERIOD, TmcpackDriver};
+use crate::goal::Goal;
+use crate::state::{DeviceFault, FIRMWARE_LEN};
+
+impl TmcpackDriver {
+    pub(super) fn on_timeout(&mut self, now: Duration) {
+        self.status.timeouts = self.status.timeouts.saturating_add(1);
+        self.timeouts_in_row = self.timeouts_in_row.saturating_add(1);
+        // Silence long enough for the pack to abort any partial word (6.1, $41), whatever
+        // timeout it has (it may have rebooted to its factory one).
+        let abort = self.spacing().max(DEFAULT_PACKET_TIMEOUT);
+        self.wire = Wire::Quiet {
+            until: now + abort + self.switchover,
+        };
+        if self.timeouts_in_row < MAX_TIMEOUTS {
+            return;
+        }
+        self.timeouts_in_row = 0;
+        self.restart(DeviceFault::NotResponding);
+        self.assume_factory_line();
+        self.phase = Phase::Identify;
+        self.retry_at = now + RETRY_PERIOD;
+    }
+
+    pub(super) fn on_reply(
+        &mut self,
+        now: Duration,
+        expect: Expect,
+        sent_at: Duration,
+        reply: Reply,
+    ) {
+        self.status.replies = self.status.replies.saturating_add(1);
+        self.timeouts_in_row = 0;
+        match (reply, expect.purpose) {
+            (
+                Reply::UnitInfo {
+                    firmware,
+                    reset,
+                    serial,
+                    ..
+                },
+                purpose,
+            ) => {
+                self.set_firmware(firmware, serial);
+                let rebooted = reset && self.ever_online;
+                if rebooted {
+                    self.status.resets = self.status.resets.saturating_add(1);
+                    self.restart(DeviceFault::Reset);
+                    self.assume_factory_line();
+                }
+                match purpose {
+                    Purpose::Startup => self.phase = Phase::Survey,
+                    _ if rebooted => self.phase = Phase::Survey,
+                    _ => self.reset_check_at = now + RESET_CHECK_PERIOD,
+                }
+            }
+            (Reply::Actions { actions }, Purpose::Survey) => {
+                self.quiesce = Quiesce::new(now, actions, &self.channels);
+                self.phase = if self.quiesce.is_some() {
+                    Phase::Quiesce
+                } else {
+                    Phase::Configure(0)
+                };
+            }
+            (
+                Reply::Velocity {
+                    motor, velocity, ..
+                },
+                Purpose::Quiesce,
+            ) => {
+                if let Some(quiesce) = self.quiesce.as_mut() {
+                    quiesce.on_velocity(motor, velocity);
+                }
+            }
+            (reply @ Reply::Input { .. }, Purpose::Io) => self.io.on_input(now, reply),
+            (
+                Reply::Position {
+                    motor,
+                    position,
+                    action,
+                    stopped,
+                },
+                Purpose::Poll,
+            ) => {
+                let seq = self.seq;
+                let Some(Some(channel)) = self.channels.get_mut(usize::from(motor)) else {
+                    return;
+                };
+                if channel.on_poll(now, seq, sent_at, position, action, stopped) {
+                    let decel = channel.cfg.max_accel;
+                    // A motor found moving after a (re)start is not ours to keep running;
+                    // a failed search is stopped.
+                    let _ = channel.plan(Goal::Stop { decel });
+                }
+            }
+            _ => {
+                self.status.bad_replies = self.status.bad_replies.saturating_add(1);
+            }
+        }
+    }
+
+    pub(super) fn set_firmware(&mut self, revision: u8, serial: u16) {
+        let mut text = FixedText::default();
+        let name = match self.variant {
+            Variant::SixPack => "SIXpack",
+            Variant::QuadPack => "QUADpack",
+        };
+        // "firmware-revision (e.g. 148=V1.4.8)"
+        let _ = write!(
+            text,
+            "{name} V{}.{}.{} s/n {serial}",
+            revision / 100,
+            revision / 10 % 10,
+            revision % 10
+        );
+        self.status.set_firmware(text.as_str());
+    }
+}
+
+/// A stack buffer for the firmware text (no allocation).
+#[derive(Default)]
+struct FixedText {
+    buf: [u8; FIRMWARE_LEN],
+    len: usize,
+}
+
+impl FixedText {
+    fn as_str(&self) -> &str {
+        self.buf
+            .get(..self.len)
+            .and_then(|b| core::str::from_utf8(b).ok())
+            .unwrap_or("")
+    }
+}
+
+impl core::fmt::Write for FixedText {
+    fn write_str(&mut self, s: &str) -> core::fmt::Result {
+        for &byte in s.as_bytes() {
+            let slot = self.buf.get_mut(self.len).ok_or(core::fmt::Error)?;
+            *slot = byte;
+            self.len += 1;
+        }
+        Ok(())
+    }
+}
