@@ -1,5 +1,6 @@
-//! A complete client program: connect to a running motiond, describe it, move an axis to a
-//! position and wait for it, show a refusal, jog for a second under a guard, and stop.
+//! A complete client program: connect to a running motiond, describe it, wait for the axis's
+//! board to be ready, move the axis to a position and wait for it, show a refusal, jog for a
+//! second under a guard, and stop.
 //!
 //! Run the server first (`motiond --config config/sim.toml`), then
 //! `cargo run -p motion-client --example jog_and_move -- [SERVER] [AXIS]`
@@ -43,6 +44,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     drop(info);
 
     let axis = client.axis(&name)?;
+    // Its board answered, was configured and acknowledged its start-up stop.
+    axis.wait_ready(Duration::from_secs(30))?;
     let limits = axis.info();
     let start = axis.state()?.position;
     let goal = (start + (limits.max - limits.min) / 10.0).clamp(limits.min, limits.max);

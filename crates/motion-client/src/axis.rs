@@ -4,9 +4,11 @@ use core::time::Duration;
 use std::time::Instant;
 
 use iceoryx2::service::Service;
-use motion_ipc::{AxisFlags, AxisInfo, AxisMode, AxisState, CommandKind, FrameFlags};
+use motion_ipc::{
+    AxisFlags, AxisInfo, AxisMode, AxisState, CommandKind, FaultCode, FrameFlags, Target,
+};
 
-use crate::{Accepted, Client, ClientError, Frame, JogGuard};
+use crate::{Accepted, ClaimGuard, Client, ClientError, Frame, JogGuard};
 
 /// One axis of the server, found by name with [`Client::axis`]. Cheap to copy.
 ///
@@ -48,7 +50,7 @@ impl<'c, S: Service> Axis<'c, S> {
         self.info().name().to_owned()
     }
 
-    /// The axis's state in the newest frame (a 64-byte copy).
+    /// The axis's state in the newest frame (an 80-byte copy).
     pub fn state(&self) -> Result<AxisState, ClientError> {
         let frame = self.client.latest()?;
         Ok(state_in(&frame, self.index))
@@ -111,6 +113,31 @@ impl<'c, S: Service> Axis<'c, S> {
     /// Gives a claim back.
     pub fn release(&self) -> Result<Accepted, ClientError> {
         self.command(CommandKind::Release, [0.0; 3])
+    }
+
+    /// Takes a claim held by a guard: released when the guard is dropped, never released
+    /// (nor renewed) on a server that restarted meanwhile.
+    pub fn claim_guard(&self) -> Result<ClaimGuard<'c, S>, ClientError> {
+        ClaimGuard::take(self.client, Target::Axis, self.index)
+    }
+
+    /// De-energises the motor (`Off`): it coasts, without holding torque. A board that
+    /// cannot de-energise refuses with `Unsupported`.
+    pub fn off(&self) -> Result<Accepted, ClientError> {
+        self.command(CommandKind::Off, [0.0; 3])
+    }
+
+    /// Waits until the axis's device is online (answering, configured, its start-up stop
+    /// acknowledged), so that goals are taken. Fails at once when the device is faulted.
+    pub fn wait_ready(&self, timeout: Duration) -> Result<(), ClientError> {
+        let device = usize::from(self.info().device_index);
+        self.client.wait_devices_ready(&[device], timeout)
+    }
+
+    /// The fault sentence of the axis ([`FaultCode::explain`]) when it is faulted in the
+    /// newest frame.
+    pub fn fault_text(&self) -> Option<String> {
+        self.client.fault_text(self.index)
     }
 
     /// Starts a jog at `velocity` units/s reached with `accel` units/s² (`RampVelocity`),
@@ -179,17 +206,31 @@ impl<'c, S: Service> Axis<'c, S> {
         mut done: impl FnMut(&AxisState, &Frame<S>) -> Result<bool, String>,
     ) -> Result<Frame<S>, ClientError> {
         let deadline = Instant::now() + timeout;
-        let since = self
+        let (since, epoch) = self
             .client
             .goal_ticks
             .borrow()
             .get(self.index as usize)
             .copied()
-            .unwrap_or(0);
+            .unwrap_or((0, self.client.session.epoch()));
+        let timed_out = || ClientError::WaitTimeout {
+            axis: self.name(),
+            what,
+            waited: timeout,
+        };
         let mut frame = self.client.latest()?;
         loop {
+            if self.client.session.epoch() != epoch {
+                // The goal died with the old server.
+                if let Some(restart) = self.client.session.last_restart() {
+                    return Err(ClientError::ServerRestarted(restart));
+                }
+            }
             if frame.tick >= since {
                 let state = state_in(&frame, self.index);
+                if let Some(error) = self.faulted(&state) {
+                    return Err(error);
+                }
                 match done(&state, &frame) {
                     Ok(true) => return Ok(frame),
                     Ok(false) => {}
@@ -204,25 +245,43 @@ impl<'c, S: Service> Axis<'c, S> {
             }
             let now = Instant::now();
             if now >= deadline {
-                return Err(ClientError::WaitTimeout {
-                    axis: self.name(),
-                    what,
-                    waited: timeout,
-                });
+                return Err(timed_out());
             }
             drop(frame);
             frame = match self.client.next_frame(deadline - now) {
                 Ok(next) => next,
-                Err(ClientError::NoFrame(_)) => {
-                    return Err(ClientError::WaitTimeout {
-                        axis: self.name(),
-                        what,
-                        waited: timeout,
-                    });
-                }
+                Err(ClientError::NoFrame(_)) => return Err(timed_out()),
                 Err(error) => return Err(error),
             };
         }
+    }
+
+    /// [`ClientError::AxisFaulted`] with the fault sentence when `state` is faulted.
+    fn faulted(&self, state: &AxisState) -> Option<ClientError> {
+        if !state.flags().contains(AxisFlags::FAULT) {
+            return None;
+        }
+        let info = self.info();
+        let (fault, text) = match state.fault() {
+            Ok(code) => (
+                code,
+                code.explain(
+                    info.name(),
+                    state.fault_value,
+                    state.fault_limit,
+                    info.unit(),
+                ),
+            ),
+            Err(error) => (
+                FaultCode::None,
+                format!("axis `{}` is faulted ({error})", info.name()),
+            ),
+        };
+        Some(ClientError::AxisFaulted {
+            axis: info.name().to_owned(),
+            fault,
+            text,
+        })
     }
 }
 
@@ -234,15 +293,9 @@ fn state_in(frame: &Frame<impl Service>, index: u32) -> AxisState {
         .unwrap_or(AxisState::UNKNOWN)
 }
 
-/// Why an axis cannot reach any goal right now, if it cannot.
+/// Why an unfaulted axis cannot reach any goal right now, if it cannot.
 fn blocked(state: &AxisState, frame: &Frame<impl Service>) -> Option<String> {
     let flags = state.flags();
-    if flags.contains(AxisFlags::FAULT) {
-        return Some(match state.fault() {
-            Ok(code) => format!("it is faulted ({code:?})"),
-            Err(error) => format!("it is faulted ({error})"),
-        });
-    }
     if flags.contains(AxisFlags::ESTOPPED) || frame.flags().contains(FrameFlags::ESTOP_LATCHED) {
         return Some("the e-stop is latched".to_owned());
     }

@@ -1,23 +1,26 @@
 //! Connecting: [`ClientBuilder`], [`Client`], and the server's description.
 
 use core::fmt;
+use core::ops::Deref;
 use core::time::Duration;
 use std::cell::{Cell, RefCell};
+use std::rc::Rc;
 use std::time::Instant;
 
 use iceoryx2::node::{Node, NodeBuilder};
 use iceoryx2::port::listener::Listener;
-use iceoryx2::prelude::{NodeName, ServiceName, SignalHandlingMode};
+use iceoryx2::prelude::{NodeName, SignalHandlingMode};
 use iceoryx2::service::Service;
-use iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError;
 use motion_ipc::{
-    AxisInfo, ClientId, CommandReply, CommandRequest, MotionFrame, SCHEMA_VERSION, ServerInfo,
-    ServerStats, ServiceNames,
+    AxisInfo, ClientId, CommandRequest, MachineParams, MotionFrame, SCHEMA_VERSION, ServerInfo,
+    ServerStats, ServiceNames, SignalInfo, Target,
 };
 
 use crate::jog::JogTable;
+use crate::ports::{self, CommandPorts, FramePorts, Opening};
 use crate::received::{LatestCache, Received};
-use crate::{Axis, ClientError, ConnectError};
+use crate::session::{Seen, Session};
+use crate::{Axis, ClientError, ConnectError, Restart};
 
 /// A [`MotionFrame`] still in shared memory.
 pub type Frame<S> = Received<S, MotionFrame>;
@@ -25,9 +28,8 @@ pub type Frame<S> = Received<S, MotionFrame>;
 pub type Info<S> = Received<S, ServerInfo>;
 /// A [`ServerStats`] still in shared memory.
 pub type Stats<S> = Received<S, ServerStats>;
-
-pub(crate) type CommandPort<S> =
-    iceoryx2::port::client::Client<S, CommandRequest, (), CommandReply, ()>;
+/// The [`MachineParams`] still in shared memory.
+pub type Params<S> = Received<S, MachineParams>;
 
 /// How long [`Client::connect`] retries by default before saying no server runs.
 pub const DEFAULT_CONNECT_TIMEOUT: Duration = Duration::from_secs(2);
@@ -94,22 +96,30 @@ impl ClientBuilder {
 
 /// A connection to one motiond instance: frames, server description, commands.
 ///
+/// Connecting opens only the info service. The frame subscription (and the tick event) is
+/// opened by the first call that needs frames, the command port by the first command, the
+/// params and stats services by their first read: a client that only commands works while
+/// every frame subscriber slot of the server is taken.
+///
 /// All methods take `&self`; a client is meant to be used from one thread (iceoryx2 ports
 /// of the `ipc` service are not `Send`). See the crate docs for an example.
 pub struct Client<S: Service> {
     pub(crate) server: String,
     pub(crate) node: Node<S>,
     pub(crate) id: ClientId,
-    pub(crate) frames: LatestCache<S, MotionFrame>,
-    pub(crate) tick: Listener<S>,
-    pub(crate) commands: CommandPort<S>,
-    pub(crate) info: LatestCache<S, ServerInfo>,
-    pub(crate) stats: RefCell<Option<LatestCache<S, ServerStats>>>,
     pub(crate) names: ServiceNames,
-    pub(crate) sequence: Cell<u64>,
+    pub(crate) connect_timeout: Duration,
     pub(crate) reply_timeout: Duration,
-    /// Tick of the last accepted goal per axis, so that waits ignore older frames.
-    pub(crate) goal_ticks: RefCell<Vec<u64>>,
+    pub(crate) info: LatestCache<S, ServerInfo>,
+    pub(crate) frames: RefCell<Option<Rc<FramePorts<S>>>>,
+    pub(crate) commands: RefCell<Option<Rc<CommandPorts<S>>>>,
+    pub(crate) stats: RefCell<Option<LatestCache<S, ServerStats>>>,
+    pub(crate) params: RefCell<Option<Rc<LatestCache<S, MachineParams>>>>,
+    pub(crate) session: Session,
+    pub(crate) sequence: Cell<u64>,
+    /// Tick and restart count of the last accepted goal per axis, so that waits ignore
+    /// older frames and end when the server restarted.
+    pub(crate) goal_ticks: RefCell<Vec<(u64, u64)>>,
     pub(crate) jogs: RefCell<JogTable>,
 }
 
@@ -122,28 +132,26 @@ impl<S: Service> fmt::Debug for Client<S> {
     }
 }
 
-fn service_name(name: &str, server: &str) -> Result<ServiceName, ConnectError> {
-    ServiceName::new(name).map_err(|error| ConnectError::BadName {
-        name: server.to_owned(),
-        detail: format!("{error:?}"),
-    })
+/// The tick event listener of a client's frame subscription; see [`Client::tick_listener`].
+pub struct TickListener<S: Service>(Rc<FramePorts<S>>);
+
+impl<S: Service> fmt::Debug for TickListener<S> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("TickListener").finish_non_exhaustive()
+    }
 }
 
-/// Retries `open` until it succeeds or `deadline` passes.
-fn retry<T, E>(deadline: Instant, mut open: impl FnMut() -> Result<T, E>) -> Result<T, E> {
-    loop {
-        match open() {
-            Ok(value) => return Ok(value),
-            Err(error) if Instant::now() >= deadline => return Err(error),
-            Err(_) => std::thread::sleep(Duration::from_millis(10)),
-        }
+impl<S: Service> Deref for TickListener<S> {
+    type Target = Listener<S>;
+    fn deref(&self) -> &Listener<S> {
+        &self.0.tick
     }
 }
 
 impl<S: Service> Client<S> {
     /// Connects to the instance `server` with default options over `S`.
     ///
-    /// Waits up to [`DEFAULT_CONNECT_TIMEOUT`] for the server's services and its
+    /// Waits up to [`DEFAULT_CONNECT_TIMEOUT`] for the server's info service and its
     /// [`ServerInfo`]; fails with [`ConnectError::NoServer`] when none runs.
     pub fn connect(server: &str) -> Result<Self, ConnectError> {
         ClientBuilder::new(server).connect()
@@ -151,7 +159,6 @@ impl<S: Service> Client<S> {
 
     fn connect_with(options: ClientBuilder) -> Result<Self, ConnectError> {
         let started = Instant::now();
-        let deadline = started + options.connect_timeout;
         let server = options.server.clone();
         let names = ServiceNames::new(&server);
         let node_name =
@@ -171,65 +178,10 @@ impl<S: Service> Client<S> {
             let _ = node.wait(Duration::ZERO);
         }
 
-        let frame_name = service_name(&names.frame(), &server)?;
-        let frame_service = retry(deadline, || {
-            node.service_builder(&frame_name)
-                .publish_subscribe::<MotionFrame>()
-                .open()
-        })
-        .map_err(|error| match error {
-            PublishSubscribeOpenError::DoesNotExist
-            | PublishSubscribeOpenError::IsMarkedForDestruction
-            | PublishSubscribeOpenError::HangsInCreation => ConnectError::NoServer {
-                name: server.clone(),
-                service: names.frame(),
-                waited: options.connect_timeout,
-            },
-            PublishSubscribeOpenError::IncompatibleTypes => ConnectError::SchemaMismatch {
-                name: server.clone(),
-                server: 0,
-                client: SCHEMA_VERSION,
-            },
-            PublishSubscribeOpenError::ExceedsMaxNumberOfNodes => ConnectError::Ipc {
-                what: "join the frame service",
-                detail: "the server's client limit is reached ([server] max_clients)".to_owned(),
-            },
-            other => ConnectError::ipc("open the frame service", other),
-        })?;
-        let frames = frame_service
-            .subscriber_builder()
-            .create()
-            .map_err(|error| ConnectError::ipc("subscribe to the frame service", error))?;
-
-        let tick_name = service_name(&names.tick(), &server)?;
-        let tick = retry(deadline, || node.service_builder(&tick_name).event().open())
-            .map_err(|error| ConnectError::ipc("open the tick event service", error))?
-            .listener_builder()
-            .create()
-            .map_err(|error| ConnectError::ipc("listen to the tick event", error))?;
-
-        let command_name = service_name(&names.command(), &server)?;
-        let commands = retry(deadline, || {
-            node.service_builder(&command_name)
-                .request_response::<CommandRequest, CommandReply>()
-                .open()
-        })
-        .map_err(|error| ConnectError::ipc("open the command service", error))?
-        .client_builder()
-        .create()
-        .map_err(|error| ConnectError::ipc("create a command client", error))?;
-
-        let info_name = service_name(&names.info(), &server)?;
-        let info_subscriber = retry(deadline, || {
-            node.service_builder(&info_name)
-                .publish_subscribe::<ServerInfo>()
-                .open()
-        })
-        .map_err(|error| ConnectError::ipc("open the info service", error))?
-        .subscriber_builder()
-        .create()
-        .map_err(|error| ConnectError::ipc("subscribe to the info service", error))?;
-        let info = LatestCache::new(info_subscriber);
+        let opening = Opening::new(&server, options.connect_timeout);
+        let (subscriber, _) =
+            ports::open_subscriber::<S, ServerInfo>(&node, &opening, &names.info())?;
+        let info = LatestCache::new(subscriber);
         // The server delivers its history sample when it next updates its connections.
         let info_timeout = options.connect_timeout.max(Duration::from_millis(500));
         let info_deadline = started + info_timeout;
@@ -258,43 +210,109 @@ impl<S: Service> Client<S> {
             });
         }
         let axis_count = description.axes().len();
+        let session = Session::new(
+            &server,
+            description.origin_node(),
+            description.server_pid,
+            description.start_time_ns,
+        );
         drop(description);
 
         let id = ClientId::from_u128(node.id().value());
-        let client = Self {
+        Ok(Self {
             server,
             node,
             id,
-            frames: LatestCache::new(frames),
-            tick,
-            commands,
-            info,
-            stats: RefCell::new(None),
             names,
-            sequence: Cell::new(0),
+            connect_timeout: options.connect_timeout,
             reply_timeout: options.reply_timeout,
-            goal_ticks: RefCell::new(vec![0; axis_count]),
+            info,
+            frames: RefCell::new(None),
+            commands: RefCell::new(None),
+            stats: RefCell::new(None),
+            params: RefCell::new(None),
+            session,
+            sequence: Cell::new(0),
+            goal_ticks: RefCell::new(vec![(0, 0); axis_count]),
             jogs: RefCell::new(JogTable::default()),
+        })
+    }
+
+    /// The frame subscription, opened on first use.
+    pub(crate) fn frame_ports(&self) -> Result<Rc<FramePorts<S>>, ClientError> {
+        if let Some(ports) = self.frames.borrow().as_ref() {
+            return Ok(Rc::clone(ports));
+        }
+        let opening = Opening::new(&self.server, self.connect_timeout);
+        let ports = Rc::new(ports::open_frames(
+            &self.node,
+            &opening,
+            &self.names.frame(),
+            &self.names.tick(),
+        )?);
+        *self.frames.borrow_mut() = Some(Rc::clone(&ports));
+        Ok(ports)
+    }
+
+    /// The frame subscription if it is open (never opens it).
+    pub(crate) fn frame_ports_if_open(&self) -> Option<Rc<FramePorts<S>>> {
+        self.frames.borrow().as_ref().map(Rc::clone)
+    }
+
+    /// The command port, opened on first use.
+    pub(crate) fn command_ports(&self) -> Result<Rc<CommandPorts<S>>, ClientError> {
+        if let Some(ports) = self.commands.borrow().as_ref() {
+            return Ok(Rc::clone(ports));
+        }
+        let opening = Opening::new(&self.server, self.connect_timeout);
+        let ports = Rc::new(ports::open_commands(
+            &self.node,
+            &opening,
+            &self.names.command(),
+        )?);
+        *self.commands.borrow_mut() = Some(Rc::clone(&ports));
+        Ok(ports)
+    }
+
+    /// When the frame service was recreated (a server that could not reuse it), the frame
+    /// subscription is reopened on the new one; true when that happened.
+    pub(crate) fn reopen_frames_if_recreated(&self) -> Result<bool, ClientError> {
+        let Some(ports) = self.frame_ports_if_open() else {
+            return Ok(false);
         };
-        client.open_stats();
-        Ok(client)
+        let now = ports::pubsub_id_now::<S, MotionFrame>(&self.node, &self.names.frame());
+        if now.is_none_or(|id| id == ports.service_id) {
+            return Ok(false);
+        }
+        *self.frames.borrow_mut() = None;
+        drop(ports);
+        self.frame_ports()?;
+        Ok(true)
+    }
+
+    /// Like [`Client::reopen_frames_if_recreated`] for the command port.
+    pub(crate) fn reopen_commands_if_recreated(&self) -> Result<bool, ClientError> {
+        let Some(ports) = self.commands.borrow().as_ref().map(Rc::clone) else {
+            return Ok(false);
+        };
+        let now = ports::command_id_now::<S>(&self.node, &self.names.command());
+        if now.is_none_or(|id| id == ports.service_id) {
+            return Ok(false);
+        }
+        *self.commands.borrow_mut() = None;
+        drop(ports);
+        self.command_ports()?;
+        Ok(true)
     }
 
     fn open_stats(&self) {
         if self.stats.borrow().is_some() {
             return;
         }
-        let Ok(name) = ServiceName::new(&self.names.stats()) else {
-            return;
-        };
-        let subscriber = self
-            .node
-            .service_builder(&name)
-            .publish_subscribe::<ServerStats>()
-            .open()
-            .ok()
-            .and_then(|service| service.subscriber_builder().create().ok());
-        if let Some(subscriber) = subscriber {
+        let opening = Opening::once(&self.server);
+        if let Ok((subscriber, _)) =
+            ports::open_subscriber::<S, ServerStats>(&self.node, &opening, &self.names.stats())
+        {
             *self.stats.borrow_mut() = Some(LatestCache::new(subscriber));
         }
     }
@@ -304,7 +322,10 @@ impl<S: Service> Client<S> {
         &self.server
     }
 
-    /// This client's id as the server sees it (its iceoryx2 node id).
+    /// This client's id as the server sees it (its iceoryx2 node id). Every request carries
+    /// it in [`CommandRequest::client`]; the server takes identity from the transport and
+    /// refuses a request whose non-zero `client` is not the sending node, so zero would do
+    /// as well (a client in another language may send zero).
     pub fn id(&self) -> ClientId {
         self.id
     }
@@ -314,12 +335,32 @@ impl<S: Service> Client<S> {
         &self.node
     }
 
-    /// The server's description: axes (names, units, limits, capabilities), devices, tick
-    /// rate, deadman. Refreshed from the info service on every call (devices coming online
-    /// or reporting firmware change it; the axis list never changes while a server runs).
+    /// The service names of the server.
+    pub fn service_names(&self) -> &ServiceNames {
+        &self.names
+    }
+
+    /// Takes every waiting description and keeps the newest; notes a restart.
+    pub(crate) fn refresh_info(&self) -> Result<Option<Info<S>>, ClientError> {
+        while let Some(info) = self.info.take_next()? {
+            let seen =
+                self.session
+                    .observe_info(info.origin_node(), info.server_pid, info.start_time_ns);
+            match seen {
+                Seen::Retired => self.info.forget(),
+                Seen::Restarted => self.on_restart(),
+                Seen::Current => {}
+            }
+        }
+        Ok(self.info.current())
+    }
+
+    /// The server's description: axes (names, units, limits, capabilities, supervision),
+    /// devices, signals, tick rate, deadman. Refreshed from the info service on every call
+    /// (devices coming online or reporting firmware change it; the axis and signal lists
+    /// never change while a server runs).
     pub fn info(&self) -> Result<Info<S>, ClientError> {
-        self.info
-            .refresh()?
+        self.refresh_info()?
             .ok_or_else(|| ClientError::ipc("read the server description", "none received"))
     }
 
@@ -329,6 +370,53 @@ impl<S: Service> Client<S> {
         match self.stats.borrow().as_ref() {
             Some(cache) => cache.refresh(),
             None => Ok(None),
+        }
+    }
+
+    /// The machine parameters in effect (every device's and axis's key as the config spells
+    /// it, its effective value with unit, and whether the config set it or it is the
+    /// default). The params service is subscribed to on the first call only; waits up to the
+    /// reply timeout for the server's sample.
+    pub fn machine_params(&self) -> Result<Params<S>, ClientError> {
+        let cache = match self.params.borrow().as_ref() {
+            Some(cache) => Some(Rc::clone(cache)),
+            None => None,
+        };
+        let cache = match cache {
+            Some(cache) => cache,
+            None => {
+                let opening = Opening::once(&self.server);
+                let service = self.names.params();
+                let (subscriber, _) =
+                    ports::open_subscriber::<S, MachineParams>(&self.node, &opening, &service)
+                        .map_err(|error| match error {
+                            ConnectError::NoServer { .. } => ClientError::NotPublished {
+                                what: "machine parameters",
+                                service: service.clone(),
+                                why: "the service does not exist (a server older than \
+                                      motion-ipc schema 2?)"
+                                    .to_owned(),
+                            },
+                            other => other.into(),
+                        })?;
+                let cache = Rc::new(LatestCache::new(subscriber));
+                *self.params.borrow_mut() = Some(Rc::clone(&cache));
+                cache
+            }
+        };
+        let deadline = Instant::now() + self.reply_timeout;
+        loop {
+            if let Some(params) = cache.refresh()? {
+                return Ok(params);
+            }
+            if Instant::now() >= deadline {
+                return Err(ClientError::NotPublished {
+                    what: "machine parameters",
+                    service: self.names.params(),
+                    why: format!("nothing arrived within {:?}", self.reply_timeout),
+                });
+            }
+            std::thread::sleep(Duration::from_millis(5));
         }
     }
 
@@ -348,7 +436,7 @@ impl<S: Service> Client<S> {
         (0..count).map(|index| Axis::new(self, index)).collect()
     }
 
-    /// The static description of axis `index` (a copy: 128 bytes).
+    /// The static description of axis `index` (a copy).
     pub(crate) fn axis_info(&self, index: usize) -> AxisInfo {
         self.info
             .current()
@@ -356,15 +444,77 @@ impl<S: Service> Client<S> {
             .unwrap_or(AxisInfo::EMPTY)
     }
 
-    /// The name of axis `index`, for messages.
-    pub(crate) fn axis_label(&self, axis: u32) -> String {
-        if axis == CommandRequest::ALL_AXES {
+    /// The static description of signal `index` (a copy).
+    pub(crate) fn signal_info(&self, index: usize) -> SignalInfo {
+        self.info
+            .current()
+            .and_then(|info| info.signals().get(index).copied())
+            .unwrap_or(SignalInfo::EMPTY)
+    }
+
+    /// The name of device `index`.
+    pub(crate) fn device_name(&self, index: usize) -> String {
+        self.info
+            .current()
+            .and_then(|info| info.devices().get(index).map(|d| d.name().to_owned()))
+            .unwrap_or_else(|| format!("#{index}"))
+    }
+
+    /// What a request is about, for messages: "axis x", "signal lamp", "all axes".
+    pub(crate) fn target_label(&self, target: Target, index: u32) -> String {
+        if target == Target::Axis && index == CommandRequest::ALL_AXES {
             return "all axes".to_owned();
         }
-        let info = self.axis_info(axis as usize);
-        match info.name() {
-            "" => format!("axis #{axis}"),
-            name => format!("axis {name}"),
+        let name = match target {
+            Target::Axis => self.axis_info(index as usize).name().to_owned(),
+            Target::Signal => self.signal_info(index as usize).name().to_owned(),
+        };
+        let what = match target {
+            Target::Axis => "axis",
+            Target::Signal => "signal",
+        };
+        match name.as_str() {
+            "" => format!("{what} #{index}"),
+            name => format!("{what} {name}"),
+        }
+    }
+
+    /// The server restart this client saw and nobody acknowledged yet, if any.
+    pub fn restart(&self) -> Option<Restart> {
+        self.session.unacknowledged()
+    }
+
+    /// Looks for a server restart now (reads the newest description; cheap). `Err` with
+    /// [`ClientError::ServerRestarted`] while a restart is not acknowledged.
+    pub fn check_server(&self) -> Result<(), ClientError> {
+        self.refresh_info()?;
+        match self.session.unacknowledged() {
+            Some(restart) => Err(ClientError::ServerRestarted(restart)),
+            None => Ok(()),
+        }
+    }
+
+    /// Accepts that the server restarted: goals may be sent to the new server again (jog
+    /// and claim guards of the old server stay ended). Returns the restart, if one was
+    /// pending.
+    pub fn acknowledge_restart(&self) -> Option<Restart> {
+        self.session.acknowledge()
+    }
+
+    /// Forgets what belonged to the old server after a restart was noticed.
+    pub(crate) fn on_restart(&self) {
+        if let Some(ports) = self.frame_ports_if_open() {
+            ports.cache.forget();
+        }
+        // Read the new server's description (its pid) if it is already there.
+        while let Ok(Some(info)) = self.info.take_next() {
+            if self
+                .session
+                .observe_info(info.origin_node(), info.server_pid, info.start_time_ns)
+                == Seen::Retired
+            {
+                self.info.forget();
+            }
         }
     }
 
@@ -376,16 +526,17 @@ impl<S: Service> Client<S> {
         }
     }
 
-    /// The tick event listener, to attach to your own iceoryx2 `WaitSet`
-    /// (`waitset.attach_notification(client.tick_listener())`). After a wake-up, read with
-    /// [`Client::latest`] or [`Client::try_next_frame`].
-    pub fn tick_listener(&self) -> &Listener<S> {
-        &self.tick
+    /// The tick event listener (opens the frame subscription if needed), to attach to your
+    /// own iceoryx2 `WaitSet` (`waitset.attach_notification(&*client.tick_listener()?)`).
+    /// After a wake-up, read with [`Client::latest`] or [`Client::try_next_frame`].
+    pub fn tick_listener(&self) -> Result<TickListener<S>, ClientError> {
+        Ok(TickListener(self.frame_ports()?))
     }
 
     /// Blocks until the next tick notification or `timeout` (no busy waiting).
     pub(crate) fn wait_tick(&self, timeout: Duration) -> Result<(), ClientError> {
-        match self.tick.timed_wait(|_| {}, timeout) {
+        let ports = self.frame_ports()?;
+        match ports.tick.timed_wait(|_| {}, timeout) {
             Ok(_) => self.check_interrupted(),
             Err(iceoryx2::port::listener::ListenerWaitError::InterruptSignal) => {
                 self.check_interrupted()

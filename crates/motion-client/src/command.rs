@@ -3,14 +3,19 @@
 use core::time::Duration;
 use std::time::Instant;
 
+use iceoryx2::prelude::PayloadHeader as _;
 use iceoryx2::service::Service;
-use motion_ipc::{CommandKind, CommandReply, CommandRequest};
+use motion_ipc::{AxisFlags, CommandKind, CommandReply, CommandRequest, FaultCode, Reason, Target};
 
-use crate::{Client, ClientError};
+use crate::session::Seen;
+use crate::{Axis, Client, ClientError};
 
 /// Longest single sleep while waiting for a reply. The server answers in the tick and then
-/// notifies the tick event, which wakes us earlier; this only bounds a missed wake-up.
+/// notifies the tick event, which wakes a client with a frame subscription earlier; this
+/// only bounds a missed wake-up.
 const REPLY_POLL_CAP: Duration = Duration::from_millis(2);
+/// Polling step of a client without a frame subscription (no tick event to sleep on).
+const REPLY_POLL_NO_TICK: Duration = Duration::from_micros(200);
 
 /// A command the server accepted.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -21,36 +26,51 @@ pub struct Accepted {
     pub tick: u64,
 }
 
+/// Kinds that are sent whatever happened to the server: they only ever make a machine
+/// safer (and a restarted server starts every axis stopped anyway).
+pub(crate) const fn always_sent(kind: CommandKind) -> bool {
+    matches!(
+        kind,
+        CommandKind::Stop | CommandKind::EStop | CommandKind::Off
+    )
+}
+
+/// The outcome of one request on the wire.
+enum Exchange {
+    Reply(CommandReply, u128),
+    NoServer,
+}
+
 impl<S: Service> Client<S> {
-    /// Sends one request and returns the server's reply as it is (accepted or not).
-    /// `axis` is an axis index or [`CommandRequest::ALL_AXES`]; `values` as tabled on
-    /// [`CommandKind`].
-    pub fn send(
-        &self,
-        axis: u32,
-        kind: CommandKind,
-        values: [f64; 3],
-    ) -> Result<CommandReply, ClientError> {
+    fn next_sequence(&self) -> u64 {
         let sequence = self.sequence.get().wrapping_add(1);
         self.sequence.set(sequence);
-        let request = CommandRequest::new(self.id, sequence, axis, kind).with_values(values);
-        let pending = self
-            .commands
+        sequence
+    }
+
+    /// Sends `request` once and waits for its reply.
+    fn exchange(
+        &self,
+        request: CommandRequest,
+        kind: CommandKind,
+    ) -> Result<Exchange, ClientError> {
+        let ports = self.command_ports()?;
+        let pending = ports
+            .port
             .send_copy(request)
             .map_err(|error| ClientError::ipc("send a command", error))?;
         if pending.number_of_server_connections() == 0 {
-            return Err(ClientError::NoServer { kind: kind.name() });
+            return Ok(Exchange::NoServer);
         }
-        let started = Instant::now();
-        let deadline = started + self.reply_timeout;
+        let deadline = Instant::now() + self.reply_timeout;
         loop {
             let response = pending
                 .receive()
                 .map_err(|error| ClientError::ipc("receive a command reply", error))?;
             if let Some(response) = response {
                 let reply = *response.payload();
-                if reply.sequence == sequence {
-                    return Ok(reply);
+                if reply.sequence == request.sequence {
+                    return Ok(Exchange::Reply(reply, response.header().node_id().value()));
                 }
                 continue;
             }
@@ -62,26 +82,107 @@ impl<S: Service> Client<S> {
                 });
             }
             // Not interruptible: a stop sent after Ctrl-C must still get its answer.
-            let nap = (deadline - now).min(REPLY_POLL_CAP);
-            match self.tick.timed_wait(|_| {}, nap) {
-                Ok(_) | Err(iceoryx2::port::listener::ListenerWaitError::InterruptSignal) => {}
-                Err(error) => return Err(ClientError::ipc("wait for a command reply", error)),
+            let nap = deadline - now;
+            match self.frame_ports_if_open() {
+                Some(frames) => match frames.tick.timed_wait(|_| {}, nap.min(REPLY_POLL_CAP)) {
+                    Ok(_) | Err(iceoryx2::port::listener::ListenerWaitError::InterruptSignal) => {}
+                    Err(error) => return Err(ClientError::ipc("wait for a command reply", error)),
+                },
+                None => std::thread::sleep(nap.min(REPLY_POLL_NO_TICK)),
             }
         }
     }
 
-    /// Sends one request; `Ok` when accepted, [`ClientError::Refused`] with the server's
-    /// typed [`Reason`](motion_ipc::Reason) otherwise.
+    /// Sends `request` and returns the server's reply, reopening the command port once if
+    /// the command service was recreated under it.
+    pub(crate) fn send_request(
+        &self,
+        request: CommandRequest,
+    ) -> Result<CommandReply, ClientError> {
+        let kind = request.kind().unwrap_or(CommandKind::Stop);
+        let mut exchange = self.exchange(request, kind)?;
+        if matches!(exchange, Exchange::NoServer) && self.reopen_commands_if_recreated()? {
+            exchange = self.exchange(request, kind)?;
+        }
+        match exchange {
+            Exchange::NoServer => Err(ClientError::NoServer { kind: kind.name() }),
+            Exchange::Reply(reply, node) => {
+                if self.session.observe_reply(node) == Seen::Restarted {
+                    self.on_restart();
+                }
+                Ok(reply)
+            }
+        }
+    }
+
+    /// Sends one request about axis `axis` (or [`CommandRequest::ALL_AXES`]) and returns the
+    /// server's reply as it is (accepted or not); `values` as tabled on [`CommandKind`].
+    /// Unlike [`Client::command`], this sends even after an unacknowledged server restart.
+    pub fn send(
+        &self,
+        axis: u32,
+        kind: CommandKind,
+        values: [f64; 3],
+    ) -> Result<CommandReply, ClientError> {
+        let request =
+            CommandRequest::new(self.id, self.next_sequence(), axis, kind).with_values(values);
+        self.send_request(request)
+    }
+
+    /// Sends one request about axis `axis`; `Ok` when accepted, [`ClientError::Refused`]
+    /// with the server's typed [`Reason`] (and, where the client can say more, the words of
+    /// the case: the device that is starting, the fault sentence) otherwise.
+    ///
+    /// After a server restart that was not acknowledged
+    /// ([`Client::acknowledge_restart`]), only stop, e-stop and off are sent; anything else
+    /// fails with [`ClientError::ServerRestarted`]. A goal that reached a restarted server
+    /// before the client could know (its reply came from a new server) is stopped at once
+    /// and reported the same way.
     pub fn command(
         &self,
         axis: u32,
         kind: CommandKind,
         values: [f64; 3],
     ) -> Result<Accepted, ClientError> {
-        let reply = self.send(axis, kind, values)?;
+        self.command_to(Target::Axis, axis, kind, values)
+    }
+
+    pub(crate) fn command_to(
+        &self,
+        target: Target,
+        index: u32,
+        kind: CommandKind,
+        values: [f64; 3],
+    ) -> Result<Accepted, ClientError> {
+        // A new server's description usually arrives before it takes commands.
+        self.refresh_info()?;
+        if !always_sent(kind)
+            && let Some(restart) = self.session.unacknowledged()
+        {
+            return Err(ClientError::ServerRestarted(restart));
+        }
+        let epoch = self.session.epoch();
+        let mut request =
+            CommandRequest::new(self.id, self.next_sequence(), index, kind).with_values(values);
+        request.target = target as u32;
+        let reply = self.send_request(request)?;
+        if self.session.epoch() != epoch && !always_sent(kind) {
+            if reply.result().is_ok() && target == Target::Axis && index != CommandRequest::ALL_AXES
+            {
+                // Sent to a new server before we knew: take the goal back.
+                let stop =
+                    CommandRequest::new(self.id, self.next_sequence(), index, CommandKind::Stop);
+                let _ = self.send_request(stop);
+            }
+            if let Some(restart) = self.session.unacknowledged() {
+                return Err(ClientError::ServerRestarted(restart));
+            }
+        }
         match reply.result() {
             Ok(()) => {
-                self.note_goal(axis, reply.tick_applied);
+                if target == Target::Axis {
+                    self.note_goal(index, reply.tick_applied);
+                }
                 Ok(Accepted {
                     sequence: reply.sequence,
                     tick: reply.tick_applied,
@@ -89,23 +190,70 @@ impl<S: Service> Client<S> {
             }
             Err(reason) => Err(ClientError::refused(
                 reply.kind,
-                self.axis_label(axis),
+                self.target_label(target, index),
                 reason,
                 reply.tick_applied,
+                self.refusal_detail(target, index, reason),
             )),
         }
     }
 
     fn note_goal(&self, axis: u32, tick: u64) {
+        let epoch = self.session.epoch();
         let mut ticks = self.goal_ticks.borrow_mut();
         if axis == CommandRequest::ALL_AXES {
-            ticks.iter_mut().for_each(|slot| *slot = tick);
+            ticks.iter_mut().for_each(|slot| *slot = (tick, epoch));
         } else if let Some(slot) = ticks.get_mut(axis as usize) {
-            *slot = tick;
+            *slot = (tick, epoch);
         }
     }
 
-    /// Emergency stop: every axis stops and holds; latched until [`Client::reset`].
+    /// The refusal in the words of this case, where the reason code alone says too little.
+    fn refusal_detail(&self, target: Target, index: u32, reason: Reason) -> Option<String> {
+        let device = match target {
+            Target::Axis if index != CommandRequest::ALL_AXES => {
+                Some(self.axis_info(index as usize).device_index)
+            }
+            Target::Signal => Some(self.signal_info(index as usize).device_index),
+            Target::Axis => None,
+        };
+        let device = || device.map(|d| self.device_name(usize::from(d)));
+        match reason {
+            Reason::DeviceStarting => device().map(|name| {
+                format!(
+                    "device `{name}` is starting: waiting for the board's first answer (and its \
+                     start-up stop); `motionctl wait-ready` waits for it"
+                )
+            }),
+            Reason::DeviceOffline => device()
+                .map(|name| format!("device `{name}` is offline: its board is not answering")),
+            Reason::AxisFaulted if target == Target::Axis => self.fault_text(index),
+            _ => None,
+        }
+    }
+
+    /// The fault sentence of axis `index` from the newest frame, if it is faulted and a
+    /// frame can be had.
+    pub(crate) fn fault_text(&self, index: u32) -> Option<String> {
+        let frame = self.newest_frame().ok()?;
+        let state = frame.axes().get(index as usize)?;
+        if !state.flags().contains(AxisFlags::FAULT) {
+            return None;
+        }
+        let info = self.axis_info(index as usize);
+        let code = state.fault().ok().filter(|code| *code != FaultCode::None)?;
+        Some(code.explain(
+            info.name(),
+            state.fault_value,
+            state.fault_limit,
+            info.unit(),
+        ))
+    }
+
+    /// Emergency stop through this client's command port: every axis stops with its e-stop
+    /// category; latched until [`Client::reset`]. For an e-stop that gets through when the
+    /// command service's ports are exhausted, see the free function
+    /// [`estop`](crate::estop).
     pub fn estop(&self) -> Result<Accepted, ClientError> {
         self.command(CommandRequest::ALL_AXES, CommandKind::EStop, [0.0; 3])
     }
@@ -118,5 +266,17 @@ impl<S: Service> Client<S> {
     /// Stops every axis (decelerate and hold).
     pub fn stop_all(&self) -> Result<Accepted, ClientError> {
         self.command(CommandRequest::ALL_AXES, CommandKind::Stop, [0.0; 3])
+    }
+
+    /// De-energises every axis, one `Off` per axis so that each refusal (a board that
+    /// cannot de-energise, a claim of another client) is reported for its axis.
+    pub fn off_all(&self) -> Vec<(Axis<'_, S>, Result<Accepted, ClientError>)> {
+        self.axes()
+            .into_iter()
+            .map(|axis| {
+                let result = axis.off();
+                (axis, result)
+            })
+            .collect()
     }
 }

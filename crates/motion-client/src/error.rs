@@ -1,13 +1,15 @@
-//! Errors of the client: [`ConnectError`] when reaching a server, [`ClientError`] after.
+//! Errors of the client: [`ConnectError`] when reaching a server, [`ClientError`] after,
+//! [`EstopError`] when no path could deliver an e-stop.
 
+use core::fmt;
 use core::time::Duration;
 
-use motion_ipc::{CommandKind, Reason};
+use motion_ipc::{CommandKind, DeviceState, FaultCode, Reason};
 
 /// Why [`ClientBuilder::connect`](crate::ClientBuilder::connect) failed.
 #[derive(Debug, thiserror::Error)]
 pub enum ConnectError {
-    /// No server of that name runs (its frame service does not exist).
+    /// No server of that name runs (its services do not exist).
     #[error(
         "no motiond server named \"{name}\" is running (waited {waited:?} for service \
          {service}); start one with `motiond --config config/sim.toml`, or pick another \
@@ -56,6 +58,17 @@ pub enum ConnectError {
         /// What iceoryx2 said.
         detail: String,
     },
+    /// Every port of a kind that the server's service allows is taken by other clients.
+    #[error(
+        "the server's service {service} has no free {port} ([server] max_clients is reached): \
+         end another client or raise max_clients"
+    )]
+    PortsExhausted {
+        /// The service.
+        service: String,
+        /// The kind of port ("subscriber slot", "client slot").
+        port: &'static str,
+    },
     /// iceoryx2 failed to create a node, port or wait set.
     #[error("iceoryx2 could not {what}: {detail}")]
     Ipc {
@@ -66,23 +79,115 @@ pub enum ConnectError {
     },
 }
 
+/// The server that answered is not the one this client was talking to: it restarted (a new
+/// process on the same instance name). Its goals, claims and jogs ended with the old server;
+/// the new one starts every axis stopped. Carried by [`ClientError::ServerRestarted`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Restart {
+    /// The instance name.
+    pub server: String,
+    /// Process id of the server this client knew (0 when unknown).
+    pub old_pid: u32,
+    /// Process id of the new server, once its description was read.
+    pub new_pid: Option<u32>,
+    /// How many restarts this client has seen, this one included.
+    pub count: u64,
+    /// Where it was seen: "server description", "frame", "command reply", "tick".
+    pub seen_in: &'static str,
+}
+
+impl fmt::Display for Restart {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "motiond \"{}\" restarted (pid {}",
+            self.server, self.old_pid
+        )?;
+        match self.new_pid {
+            Some(pid) => write!(f, " → {pid}")?,
+            None => f.write_str(" → a new process")?,
+        }
+        write!(
+            f,
+            ", seen in a {}): this client's goals, claims and jogs ended with the old server and \
+             the new one starts every axis stopped; nothing is sent on their behalf",
+            self.seen_in
+        )
+    }
+}
+
+/// One device and where it is in its life.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct DeviceStatus {
+    /// Device index (config order).
+    pub index: usize,
+    /// Device name.
+    pub name: String,
+    /// Its state in the newest frame.
+    pub state: DeviceState,
+}
+
+impl fmt::Display for DeviceStatus {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "device `{}` is {}", self.name, self.state.name())?;
+        f.write_str(match self.state {
+            DeviceState::Starting => {
+                " (waiting for the board's first answer, its configuration and its start-up stop)"
+            }
+            DeviceState::Offline => " (its board is not answering or its link is down)",
+            DeviceState::Faulted => {
+                " (a board-level fault is latched: reset once its cause is gone)"
+            }
+            DeviceState::Online => "",
+        })
+    }
+}
+
+fn not_ready_text(devices: &[DeviceStatus], waited: &Duration) -> String {
+    let list = devices
+        .iter()
+        .map(ToString::to_string)
+        .collect::<Vec<_>>()
+        .join("; ");
+    if devices
+        .iter()
+        .any(|device| device.state == DeviceState::Faulted)
+    {
+        format!("not ready: {list}")
+    } else {
+        format!("not ready within {waited:?}: {list}")
+    }
+}
+
+fn refusal_text(reason: &Reason, detail: &Option<String>) -> String {
+    detail
+        .clone()
+        .unwrap_or_else(|| reason.message().to_owned())
+}
+
 /// Why a read, a command or a wait failed.
 #[derive(Debug, thiserror::Error)]
 pub enum ClientError {
     /// No axis of that name on the server.
     #[error("no axis named \"{0}\" on this server (see `motionctl list`)")]
     UnknownAxis(String),
+    /// No signal of that name on the server.
+    #[error("no signal named \"{0}\" on this server (see `motionctl io list`)")]
+    UnknownSignal(String),
     /// The server refused a command.
-    #[error("{kind} on {axis} refused: {reason}")]
+    #[error("{kind} on {target} refused: {}", refusal_text(.reason, .detail))]
     Refused {
         /// The command.
         kind: &'static str,
-        /// The axis name, or "all axes".
-        axis: String,
+        /// What it was about: "axis x", "signal lamp", "all axes".
+        target: String,
         /// The server's typed reason.
         reason: Reason,
         /// The tick in which the server refused it.
         tick: u64,
+        /// The reason in the words of this case ("device `six` is starting: …", the fault
+        /// sentence of a faulted axis), when the client could say more than the reason code.
+        detail: Option<String>,
     },
     /// No server listens on the command service any more.
     #[error("{kind} not sent: no motiond serves the command service any more (did it stop?)")]
@@ -101,6 +206,11 @@ pub enum ClientError {
     /// No frame arrived in time.
     #[error("no frame from the server within {0:?}; is motiond still running?")]
     NoFrame(Duration),
+    /// The server restarted under this client (see [`Restart`]). Goals are not sent to the
+    /// new server until [`Client::acknowledge_restart`](crate::Client::acknowledge_restart);
+    /// stops, e-stops and offs always are.
+    #[error("{0}")]
+    ServerRestarted(Restart),
     /// A wait for a condition on an axis ran out of time.
     #[error("axis {axis} did not {what} within {waited:?}")]
     WaitTimeout {
@@ -111,7 +221,7 @@ pub enum ClientError {
         /// The time allowed.
         waited: Duration,
     },
-    /// A wait ended because the axis can no longer get there (stopped, faulted, e-stop).
+    /// A wait ended because the axis can no longer get there (stopped, e-stop, shutdown).
     #[error("axis {axis} will not {what}: {why}")]
     WaitAborted {
         /// The axis name.
@@ -121,6 +231,49 @@ pub enum ClientError {
         /// Why, in words.
         why: String,
     },
+    /// The axis is faulted (a wait ended, or a goal was refused, because of it).
+    #[error("{text}")]
+    AxisFaulted {
+        /// The axis name.
+        axis: String,
+        /// The fault.
+        fault: FaultCode,
+        /// The sentence of [`FaultCode::explain`]: the axis, the figure and the tolerance.
+        text: String,
+    },
+    /// Devices were not online within the time allowed, or one is faulted.
+    #[error("{}", not_ready_text(.devices, .waited))]
+    NotReady {
+        /// The devices that are not online.
+        devices: Vec<DeviceStatus>,
+        /// The time allowed.
+        waited: Duration,
+    },
+    /// A wait for a signal value ran out of time.
+    #[error("signal {signal} did not become {wanted} within {waited:?} (last value {last})")]
+    SignalTimeout {
+        /// The signal name.
+        signal: String,
+        /// What was awaited ("on", "1.25 bar ± 0.01").
+        wanted: String,
+        /// The last value seen ("off", "0.98 bar", "stale").
+        last: String,
+        /// The time allowed.
+        waited: Duration,
+    },
+    /// The server does not publish something this client asked for.
+    #[error("motiond published no {what} on {service}: {why}")]
+    NotPublished {
+        /// What ("machine parameters").
+        what: &'static str,
+        /// The service.
+        service: String,
+        /// Why: the service does not exist, or nothing arrived in time.
+        why: String,
+    },
+    /// A service could not be opened (the server is gone, or its port slots are taken).
+    #[error(transparent)]
+    Connect(#[from] ConnectError),
     /// SIGINT or SIGTERM arrived while waiting (iceoryx2's signal handling is on).
     #[error("interrupted")]
     Interrupted,
@@ -143,6 +296,14 @@ impl ClientError {
         }
     }
 
+    /// The restart when this error reports one.
+    pub fn restart(&self) -> Option<&Restart> {
+        match self {
+            Self::ServerRestarted(restart) => Some(restart),
+            _ => None,
+        }
+    }
+
     pub(crate) fn ipc(what: &'static str, error: impl core::fmt::Debug) -> Self {
         Self::Ipc {
             what,
@@ -150,12 +311,19 @@ impl ClientError {
         }
     }
 
-    pub(crate) fn refused(kind: u32, axis: String, reason: Reason, tick: u64) -> Self {
+    pub(crate) fn refused(
+        kind: u32,
+        target: String,
+        reason: Reason,
+        tick: u64,
+        detail: Option<String>,
+    ) -> Self {
         Self::Refused {
             kind: CommandKind::try_from(kind).map_or("command", CommandKind::name),
-            axis,
+            target,
             reason,
             tick,
+            detail,
         }
     }
 }
@@ -167,4 +335,24 @@ impl ConnectError {
             detail: format!("{error:?}"),
         }
     }
+}
+
+/// No path delivered an e-stop (see [`estop`](crate::estop)): what each one hit.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "e-stop of motiond \"{server}\" NOT delivered: command service: {command}; estop event: \
+     {event}; SIGUSR1: {signal}"
+)]
+pub struct EstopError {
+    /// The instance name.
+    pub server: String,
+    /// Why the command path failed.
+    pub command: String,
+    /// Why the event path failed.
+    pub event: String,
+    /// Why the signal path failed.
+    pub signal: String,
+    /// Whether any trace of the server was found (a service or its node); `false` means no
+    /// server of that name runs.
+    pub server_found: bool,
 }

@@ -9,43 +9,88 @@ use iceoryx2::prelude::{CallbackProgression, SynchronousMultiplexing, WaitSetBui
 use iceoryx2::service::Service;
 use iceoryx2::waitset::WaitSetRunResult;
 
+use crate::session::Seen;
 use crate::{Client, ClientError, Frame};
 
 /// How long [`Client::latest`] waits when no frame has been received yet.
 pub const FIRST_FRAME_TIMEOUT: Duration = Duration::from_secs(1);
 
+/// How long frames may stay away before the client checks whether the frame service was
+/// recreated under it (and resubscribes).
+const SILENCE_CHECK: Duration = Duration::from_millis(250);
+
 impl<S: Service> Client<S> {
-    /// The newest frame, zero-copy. Takes every frame waiting and keeps the newest; if none
-    /// was ever received, waits up to [`FIRST_FRAME_TIMEOUT`] for one.
-    pub fn latest(&self) -> Result<Frame<S>, ClientError> {
-        self.service_jogs();
-        if let Some(frame) = self.frames.refresh()? {
+    /// The next waiting frame of the current server (frames a server known to be gone left
+    /// in the buffer are dropped); notes a restart.
+    fn take_frame(&self) -> Result<Option<Frame<S>>, ClientError> {
+        let ports = self.frame_ports()?;
+        loop {
+            let Some(frame) = ports.cache.take_next()? else {
+                return Ok(None);
+            };
+            match self.session.observe_frame(frame.origin_node(), frame.tick) {
+                Seen::Current => return Ok(Some(frame)),
+                Seen::Retired => ports.cache.forget(),
+                Seen::Restarted => {
+                    self.on_restart();
+                    return Ok(Some(frame));
+                }
+            }
+        }
+    }
+
+    /// The newest frame without renewing jog guards (see [`Client::latest`]).
+    pub(crate) fn newest_frame(&self) -> Result<Frame<S>, ClientError> {
+        while let Some(frame) = self.take_frame()? {
+            drop(frame);
+        }
+        if let Some(frame) = self.frame_ports()?.cache.current() {
             return Ok(frame);
         }
-        self.next_frame(FIRST_FRAME_TIMEOUT)
+        self.next_frame_inner(FIRST_FRAME_TIMEOUT)
+    }
+
+    /// The newest frame, zero-copy. Takes every frame waiting and keeps the newest; if none
+    /// was ever received, waits up to [`FIRST_FRAME_TIMEOUT`] for one. The first call
+    /// subscribes to the frame service.
+    pub fn latest(&self) -> Result<Frame<S>, ClientError> {
+        self.service_jogs();
+        self.newest_frame()
     }
 
     /// The next frame in publication order if one is waiting, without blocking.
     pub fn try_next_frame(&self) -> Result<Option<Frame<S>>, ClientError> {
         self.service_jogs();
-        self.frames.take_next()
+        self.take_frame()
     }
 
     /// The next frame in publication order, blocking on the tick event (no busy polling)
     /// for up to `timeout`. A frame already waiting is returned at once. Frames the client
     /// was too slow for are lost (the server never waits for a client): compare `tick`s.
     pub fn next_frame(&self, timeout: Duration) -> Result<Frame<S>, ClientError> {
+        self.next_frame_inner(timeout)
+    }
+
+    fn next_frame_inner(&self, timeout: Duration) -> Result<Frame<S>, ClientError> {
         let deadline = Instant::now() + timeout;
+        let mut silent_since = Instant::now();
         loop {
             self.service_jogs();
-            if let Some(frame) = self.frames.take_next()? {
+            if let Some(frame) = self.take_frame()? {
                 return Ok(frame);
             }
             let now = Instant::now();
             if now >= deadline {
                 return Err(ClientError::NoFrame(timeout));
             }
-            self.wait_tick(self.jog_wait_cap(deadline - now))?;
+            if now.duration_since(silent_since) >= SILENCE_CHECK {
+                // Frames stopped: a server that recreated the services publishes elsewhere.
+                self.reopen_frames_if_recreated()?;
+                self.refresh_info()?;
+                silent_since = now;
+            }
+            let nap = self.jog_wait_cap(deadline - now).min(SILENCE_CHECK);
+            self.wait_tick(nap)?;
         }
     }
 
@@ -55,7 +100,7 @@ impl<S: Service> Client<S> {
     pub fn next_frame_spinning(&self, timeout: Duration) -> Result<Frame<S>, ClientError> {
         let deadline = Instant::now() + timeout;
         loop {
-            if let Some(frame) = self.frames.take_next()? {
+            if let Some(frame) = self.take_frame()? {
                 return Ok(frame);
             }
             if Instant::now() >= deadline {
@@ -87,11 +132,12 @@ impl<S: Service> Client<S> {
     where
         Listener<S>: SynchronousMultiplexing,
     {
+        let ports = self.frame_ports()?;
         let waitset = WaitSetBuilder::new()
             .create::<S>()
             .map_err(|error| ClientError::ipc("create a wait set", error))?;
         let guard = waitset
-            .attach_deadline(&self.tick, timeout)
+            .attach_deadline(&ports.tick, timeout)
             .map_err(|error| ClientError::ipc("attach the tick event to a wait set", error))?;
         let refresh = self.jog_refresh_period();
         let _interval = match refresh {
@@ -120,7 +166,7 @@ impl<S: Service> Client<S> {
                     }
                     if id.has_event_from(&guard) {
                         // Consume the notifications; the frames themselves are read below.
-                        if let Err(error) = self.tick.try_wait(|_| {}) {
+                        if let Err(error) = ports.tick.try_wait(|_| {}) {
                             outcome = Err(ClientError::ipc("take tick notifications", error));
                             return CallbackProgression::Stop;
                         }

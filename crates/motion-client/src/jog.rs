@@ -6,6 +6,12 @@
 //! command: [`Client::next_frame`], [`Client::latest`], [`Client::for_each_frame`], waits)
 //! or calls [`Client::keep_alive`]. A program that stops calling into the client lets the
 //! deadman stop the axis; that is the point. Dropping the guard stops the axis at once.
+//!
+//! A guard fails safe when the server restarts: it never renews its goal on the new server
+//! (which started every axis stopped), reports [`ClientError::ServerRestarted`] from
+//! [`JogGuard::check`], [`JogGuard::set`] and [`JogGuard::stop`], and sends nothing when
+//! dropped. A renewal that reached a new server before the client could know is stopped at
+//! once (see [`Client::command`]).
 
 use core::fmt;
 use core::time::Duration;
@@ -27,6 +33,8 @@ struct JogEntry {
     values: [f64; 3],
     last_sent: Instant,
     refused: Option<Reason>,
+    /// The server restart count when the goal was started.
+    epoch: u64,
 }
 
 /// The live guards of one client.
@@ -34,6 +42,8 @@ struct JogEntry {
 pub(crate) struct JogTable {
     next_id: u64,
     entries: Vec<JogEntry>,
+    /// Renewing right now (a renewal's own reads must not renew again).
+    busy: bool,
 }
 
 impl<S: Service> Client<S> {
@@ -54,10 +64,11 @@ impl<S: Service> Client<S> {
             return remaining;
         };
         let now = Instant::now();
+        let epoch = self.session.epoch();
         table
             .entries
             .iter()
-            .filter(|entry| entry.refused.is_none())
+            .filter(|entry| entry.refused.is_none() && entry.epoch == epoch)
             .map(|entry| (entry.last_sent + period).saturating_duration_since(now))
             .fold(remaining, Duration::min)
     }
@@ -67,6 +78,15 @@ impl<S: Service> Client<S> {
         let Some(period) = self.jog_refresh_period() else {
             return;
         };
+        {
+            let mut table = self.jogs.borrow_mut();
+            if table.busy || table.entries.is_empty() {
+                return;
+            }
+            table.busy = true;
+        }
+        // A restart seen here ends every guard before anything is sent.
+        let _ = self.refresh_info();
         let now = Instant::now();
         let due: Vec<JogEntry> = self
             .jogs
@@ -77,12 +97,16 @@ impl<S: Service> Client<S> {
             .copied()
             .collect();
         for entry in due {
+            if entry.epoch != self.session.epoch() {
+                continue;
+            }
             let result = self.command(entry.axis, entry.kind, entry.values);
             self.note_renewal(
                 entry.id,
                 result.as_ref().err().and_then(ClientError::reason),
             );
         }
+        self.jogs.borrow_mut().busy = false;
     }
 
     fn note_renewal(&self, id: u64, refused: Option<Reason>) {
@@ -127,6 +151,7 @@ impl<'c, S: Service> JogGuard<'c, S> {
         values: [f64; 3],
     ) -> Result<Self, ClientError> {
         client.command(axis, kind, values)?;
+        let epoch = client.session.epoch();
         let mut table = client.jogs.borrow_mut();
         table.next_id += 1;
         let id = table.next_id;
@@ -137,6 +162,7 @@ impl<'c, S: Service> JogGuard<'c, S> {
             values,
             last_sent: Instant::now(),
             refused: None,
+            epoch,
         });
         Ok(Self {
             client,
@@ -151,8 +177,56 @@ impl<'c, S: Service> JogGuard<'c, S> {
         self.axis
     }
 
+    /// The restart that ended this guard's goal, if the server restarted since it started.
+    fn lost_to(&self) -> Option<ClientError> {
+        let epoch = self.entry()?.epoch;
+        if epoch == self.client.session.epoch() {
+            return None;
+        }
+        self.client
+            .session
+            .last_restart()
+            .map(ClientError::ServerRestarted)
+    }
+
+    fn entry(&self) -> Option<JogEntry> {
+        self.client
+            .jogs
+            .borrow()
+            .entries
+            .iter()
+            .find(|entry| entry.id == self.id)
+            .copied()
+    }
+
+    /// `Ok` while the goal runs: [`ClientError::ServerRestarted`] once the server
+    /// restarted (the goal died with it and is never renewed on the new server),
+    /// [`ClientError::Refused`] once the server refused a renewal.
+    pub fn check(&self) -> Result<(), ClientError> {
+        let _ = self.client.refresh_info();
+        if let Some(error) = self.lost_to() {
+            return Err(error);
+        }
+        match self.refused() {
+            Some(reason) => Err(ClientError::Refused {
+                kind: "renewal",
+                target: self
+                    .client
+                    .target_label(motion_ipc::Target::Axis, self.axis),
+                reason,
+                tick: 0,
+                detail: None,
+            }),
+            None => Ok(()),
+        }
+    }
+
     /// Changes the jog's velocity (or power) and sends it now.
     pub fn set(&self, value: f64) -> Result<Accepted, ClientError> {
+        let _ = self.client.refresh_info();
+        if let Some(error) = self.lost_to() {
+            return Err(error);
+        }
         let entry = {
             let mut table = self.client.jogs.borrow_mut();
             let entry = table.entries.iter_mut().find(|entry| entry.id == self.id);
@@ -185,13 +259,23 @@ impl<'c, S: Service> JogGuard<'c, S> {
             .and_then(|entry| entry.refused)
     }
 
-    /// Stops the axis and returns the server's answer to the stop.
+    /// Stops the axis and returns the server's answer to the stop. After a server restart
+    /// nothing is sent (the new server never ran this goal) and the restart is returned.
     pub fn stop(mut self) -> Result<Accepted, ClientError> {
         self.finish()
     }
 
     fn finish(&mut self) -> Result<Accepted, ClientError> {
         self.active = false;
+        let _ = self.client.refresh_info();
+        if let Some(error) = self.lost_to() {
+            self.client
+                .jogs
+                .borrow_mut()
+                .entries
+                .retain(|entry| entry.id != self.id);
+            return Err(error);
+        }
         self.client
             .jogs
             .borrow_mut()
@@ -205,6 +289,7 @@ impl<S: Service> Drop for JogGuard<'_, S> {
     fn drop(&mut self) {
         if self.active {
             // Nothing to report to from here; the deadman is the fallback if this is lost.
+            // After a restart, finish sends nothing.
             let _ = self.finish();
         }
     }

@@ -1,27 +1,48 @@
 //! Client library for motiond: connect to a running server, read its per-tick
 //! [`MotionFrame`](motion_ipc::MotionFrame)s straight from shared memory, command its axes
-//! and wait for them.
+//! and signals, and wait for them.
 //!
 //! Everything goes through the iceoryx2 services of docs/ARCHITECTURE.md's shared-memory contract
-//! (`motiond/<name>/{frame,tick,command,info,stats}`, types from [`motion_ipc`], re-exported
-//! here as [`ipc`]). The client is generic over the iceoryx2 service type: use
+//! (`motiond/<name>/{frame,tick,command,info,stats,params,estop}`, types from [`motion_ipc`],
+//! re-exported here as [`ipc`]). The client is generic over the iceoryx2 service type: use
 //! `iceoryx2::prelude::ipc::Service` to talk to a real server, `local::Service` in tests.
 //!
 //! - Connect: [`Client::connect`] (retries for a while, then says clearly that no server
-//!   runs), or [`ClientBuilder`] for timeouts and signal handling.
-//! - Describe: [`Client::info`] (axes, units, limits, capabilities, devices),
-//!   [`Client::axis`] for a handle by name, [`Client::stats`].
+//!   runs), or [`ClientBuilder`] for timeouts and signal handling. Connecting opens only the
+//!   info service; frames, commands, stats and machine parameters are opened by their first
+//!   use, so a client that only commands works while the frame service's subscriber slots
+//!   are all taken.
+//! - Describe: [`Client::info`] (axes, units, limits, capabilities, supervision, devices,
+//!   signals), [`Client::axis`] / [`Client::signal`] for handles by name, [`Client::stats`],
+//!   [`Client::machine_params`] (every device's and axis's effective machine parameter,
+//!   marked config or default).
 //! - Read: [`Client::latest`] (the newest frame, zero-copy), [`Client::next_frame`] and
 //!   [`Client::frames`] (every frame in order, sleeping on the tick event),
 //!   [`Client::for_each_frame`] (a callback driven by an iceoryx2 `WaitSet`), or attach
-//!   [`Client::tick_listener`] to your own `WaitSet`.
+//!   [`Client::tick_listener`] to your own `WaitSet`; [`Client::devices`] for device states.
 //! - Command: typed methods on [`Axis`] (`move_to`, `ramp_to`, `velocity`, `ramp_velocity`,
-//!   `power`, `stop`, `home`, `set_position`, `claim`, `release`) and on [`Client`]
-//!   (`estop`, `reset`, `stop_all`); each returns [`Accepted`] or
-//!   [`ClientError::Refused`] with the server's typed [`Reason`](motion_ipc::Reason).
-//! - Wait: [`Axis::wait_until_arrived`], [`Axis::wait_until_homed`].
+//!   `power`, `stop`, `off`, `home`, `set_position`, `claim`, `release`), on [`Signal`]
+//!   (`set`, `claim`, `release`) and on [`Client`] (`estop`, `reset`, `stop_all`,
+//!   `off_all`); each returns [`Accepted`] or [`ClientError::Refused`] with the server's
+//!   typed [`Reason`](motion_ipc::Reason) and, where it helps, the case in words ("device
+//!   `six` is starting: …", the fault sentence of a faulted axis). Requests carry this
+//!   client's iceoryx2 node id; the server takes identity from the transport (zero is
+//!   allowed, a borrowed id is refused).
+//! - Wait: [`Client::wait_ready`] / [`Axis::wait_ready`] (devices online),
+//!   [`Axis::wait_until_arrived`], [`Axis::wait_until_homed`] (a faulted axis ends them with
+//!   [`ClientError::AxisFaulted`] carrying [`FaultCode::explain`](motion_ipc::FaultCode::explain)'s
+//!   sentence), [`Signal::wait_for`] / [`Signal::wait_until`].
 //! - Jog: [`Axis::jog`] returns a [`JogGuard`] that renews the server's deadman while your
-//!   program keeps calling into the client, and stops the axis when dropped.
+//!   program keeps calling into the client, and stops the axis when dropped;
+//!   [`Axis::claim_guard`] a [`ClaimGuard`].
+//! - Emergency: [`estop`] latches the e-stop with no connected client and no frame
+//!   subscription (command service, else the estop event, else SIGUSR1 to the server
+//!   process) and says which path worked; [`stop_all`] needs only the command service.
+//! - Restarts: a server that restarts under the client (a new process on the same name) is
+//!   noticed from its description, its frames or its replies ([`Client::restart`],
+//!   [`ClientError::ServerRestarted`]). Guards fail safe: nothing is renewed or released on
+//!   the new server; other goals wait for [`Client::acknowledge_restart`]; stops, e-stops
+//!   and offs always go out.
 //!
 //! ```no_run
 //! use core::time::Duration;
@@ -30,6 +51,7 @@
 //!
 //! fn main() -> Result<(), Box<dyn std::error::Error>> {
 //!     let client = Client::<ipc::Service>::connect("demo")?;
+//!     client.wait_ready(Duration::from_secs(10))?; // every board answered
 //!     let x = client.axis("x")?;
 //!     println!("x is at {} {}", x.state()?.position, x.info().unit());
 //!
@@ -47,6 +69,10 @@
 //!         println!("tick {} x {:.3}", frame.tick, frame.axes()[0].position);
 //!     }
 //!     jog.stop()?;
+//!
+//!     if let Ok(lamp) = client.signal("lamp") {
+//!         lamp.set(true)?;
+//!     }
 //!     Ok(())
 //! }
 //! ```
@@ -56,22 +82,32 @@
 #![forbid(unsafe_code)]
 
 mod axis;
+mod claim;
 mod client;
 mod command;
+mod emergency;
 mod error;
 mod frames;
 mod jog;
+mod ports;
+mod ready;
 mod received;
+mod session;
+mod signal;
 #[cfg(feature = "testing")]
 pub mod testing;
 
 pub use axis::Axis;
+pub use claim::ClaimGuard;
 pub use client::{
-    Client, ClientBuilder, DEFAULT_CONNECT_TIMEOUT, DEFAULT_REPLY_TIMEOUT, Frame, Info, Stats,
+    Client, ClientBuilder, DEFAULT_CONNECT_TIMEOUT, DEFAULT_REPLY_TIMEOUT, Frame, Info, Params,
+    Stats, TickListener,
 };
 pub use command::Accepted;
-pub use error::{ClientError, ConnectError};
+pub use emergency::{EstopPath, estop, stop_all};
+pub use error::{ClientError, ConnectError, DeviceStatus, EstopError, Restart};
 pub use frames::{FIRST_FRAME_TIMEOUT, Frames};
 pub use jog::JogGuard;
 pub use motion_ipc as ipc;
 pub use received::Received;
+pub use signal::{Signal, signal_value_text};

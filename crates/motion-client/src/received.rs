@@ -7,7 +7,7 @@ use std::cell::RefCell;
 use std::rc::Rc;
 
 use iceoryx2::port::subscriber::Subscriber;
-use iceoryx2::prelude::ZeroCopySend;
+use iceoryx2::prelude::{PayloadHeader as _, ZeroCopySend};
 use iceoryx2::sample::Sample;
 use iceoryx2::service::Service;
 
@@ -27,6 +27,13 @@ impl<S: Service, T: fmt::Debug + ZeroCopySend + 'static> Clone for Received<S, T
         Self {
             sample: Rc::clone(&self.sample),
         }
+    }
+}
+
+impl<S: Service, T: fmt::Debug + ZeroCopySend + 'static> Received<S, T> {
+    /// The iceoryx2 node id of the process that published it (the server).
+    pub fn origin_node(&self) -> u128 {
+        self.sample.header().node_id().value()
     }
 }
 
@@ -72,6 +79,11 @@ impl<S: Service, T: fmt::Debug + ZeroCopySend + 'static> LatestCache<S, T> {
         self.newest.borrow().as_ref().map(|sample| Received {
             sample: Rc::clone(sample),
         })
+    }
+
+    /// Drops the newest sample kept (one from a server that is gone).
+    pub(crate) fn forget(&self) {
+        *self.newest.borrow_mut() = None;
     }
 
     /// Takes every waiting sample and keeps the newest; returns it (or the one kept before).

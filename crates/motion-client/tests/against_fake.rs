@@ -241,6 +241,7 @@ fn a_stopped_server_is_reported_not_waited_for_forever() -> Result {
     let (server, client) = start::<ipc::Service>("gone")?;
     let x = client.axis("x")?;
     x.stop()?;
+    client.latest()?; // subscribes to frames
     server.shutdown()?;
     let error = x.move_to(1.0).expect_err("no server");
     assert!(
@@ -285,6 +286,7 @@ fn a_refused_renewal_is_reported_by_the_guard() -> Result {
 #[test]
 fn for_each_frame_reports_a_silent_server() -> Result {
     let (server, client) = start::<ipc::Service>("silent")?;
+    client.latest()?; // subscribes to frames
     server.shutdown()?;
     let mut seen = 0;
     let result = client.for_each_frame(Duration::from_millis(200), |_| {

@@ -1,15 +1,40 @@
-//! Commands that act on axes: move, jog, power, stop, home, claim, release.
+//! Commands that act on axes: move, jog, power, stop, off, home, claim, release, and the
+//! readiness wait in front of every `--wait`.
 
 use core::time::Duration;
 use std::time::Instant;
 
 use anyhow::Context as _;
-use motion_client::{Axis, Client, ClientError, JogGuard};
+use motion_client::ipc::Reason;
+use motion_client::{Accepted, Axis, ClaimGuard, Client, ClientError, JogGuard};
 
 use crate::Service;
 
 /// How long a frame may take before we call the server silent while holding a jog.
 const FRAME_TIMEOUT: Duration = Duration::from_secs(2);
+/// How often `claim` renews its claims (a claim lease of the server ends claims that are
+/// not renewed).
+const CLAIM_RENEWAL: Duration = Duration::from_secs(1);
+
+/// Waits for the axis's device to be ready, then sends the goal; a goal refused because
+/// the device is (again) starting is sent again after the next readiness, until `deadline`.
+fn when_ready(
+    axis: &Axis<'_, Service>,
+    deadline: Instant,
+    mut send: impl FnMut() -> Result<Accepted, ClientError>,
+) -> Result<Accepted, ClientError> {
+    loop {
+        axis.wait_ready(deadline.saturating_duration_since(Instant::now()))?;
+        match send() {
+            Err(error)
+                if error.reason() == Some(Reason::DeviceStarting) && Instant::now() < deadline =>
+            {
+                std::thread::sleep(Duration::from_millis(5));
+            }
+            other => return other,
+        }
+    }
+}
 
 /// `motionctl move AXIS POS [--velocity V] [--accel A] [--wait]`.
 pub fn move_axis(
@@ -22,13 +47,17 @@ pub fn move_axis(
 ) -> anyhow::Result<()> {
     let axis = client.axis(name)?;
     let unit = axis.info().unit().to_owned();
-    axis.ramp_to(position, velocity.unwrap_or(0.0), accel.unwrap_or(0.0))
-        .with_context(|| format!("move {name} to {position} {unit}"))?;
+    let send = || axis.ramp_to(position, velocity.unwrap_or(0.0), accel.unwrap_or(0.0));
     let Some(timeout) = wait else {
+        send().with_context(|| format!("move {name} to {position} {unit}"))?;
         out!("{name}: moving to {position} {unit}");
         return Ok(());
     };
-    let frame = stop_if_interrupted(&axis, axis.wait_until_arrived(timeout))
+    let deadline = Instant::now() + timeout;
+    stop_if_interrupted(&axis, when_ready(&axis, deadline, send))
+        .with_context(|| format!("move {name} to {position} {unit}"))?;
+    let remaining = deadline.saturating_duration_since(Instant::now());
+    let frame = stop_if_interrupted(&axis, axis.wait_until_arrived(remaining))
         .with_context(|| format!("move {name} to {position} {unit}"))?;
     let reached = frame
         .axes()
@@ -56,6 +85,8 @@ fn stop_if_interrupted<T>(
 }
 
 /// Holds `guard` until Ctrl-C/SIGTERM, renewing it as frames come, then stops the axis.
+/// Ends with an error when a renewal is refused or the server restarts (the guard then
+/// sends nothing to the new server).
 fn hold_until_interrupted(
     client: &Client<Service>,
     name: &str,
@@ -69,16 +100,16 @@ fn hold_until_interrupted(
             Err(ClientError::Interrupted) => break Ok(()),
             Err(error) => break Err(error),
         }
-        if let Some(reason) = guard.refused() {
-            break Err(ClientError::Refused {
-                kind: "renewal",
-                axis: format!("axis {name}"),
-                reason,
-                tick: 0,
-            });
+        if let Err(error) = guard.check() {
+            break Err(error);
         }
     };
     let stopped = guard.stop();
+    if let Err(error @ ClientError::ServerRestarted(_)) = outcome {
+        return Err(anyhow::Error::new(error).context(format!(
+            "jog {name} ended: nothing more is sent to the new server"
+        )));
+    }
     let position = client
         .latest()
         .ok()
@@ -119,16 +150,70 @@ pub fn power(client: &Client<Service>, name: &str, power: f64) -> anyhow::Result
     hold_until_interrupted(client, name, &unit, guard)
 }
 
-/// `motionctl stop [AXIS…]`.
+/// `motionctl stop AXIS…` (the names need the server's description, nothing else).
 pub fn stop(client: &Client<Service>, names: &[String]) -> anyhow::Result<()> {
-    if names.is_empty() {
-        client.stop_all()?;
-        out!("all axes stopping");
-        return Ok(());
-    }
     for name in names {
         client.axis(name)?.stop()?;
         out!("{name}: stopping");
+    }
+    Ok(())
+}
+
+/// `motionctl off AXIS…|--all`: one `Off` per axis, each refusal reported for its axis.
+pub fn off(client: &Client<Service>, names: &[String], all: bool) -> anyhow::Result<()> {
+    let axes = if all {
+        client.axes()
+    } else {
+        names
+            .iter()
+            .map(|name| client.axis(name))
+            .collect::<Result<Vec<_>, _>>()?
+    };
+    let mut first_error = None;
+    let mut refused = Vec::new();
+    for axis in axes {
+        let name = axis.name();
+        match axis.off() {
+            Ok(_) => out!("{name}: off"),
+            Err(error) => {
+                refused.push(name);
+                first_error.get_or_insert(error);
+            }
+        }
+    }
+    match first_error {
+        // One line: which axes stayed energised, then the first refusal's reason.
+        Some(error) => Err(anyhow::Error::new(error)
+            .context(format!("off: not de-energised: {}", refused.join(", ")))),
+        None => Ok(()),
+    }
+}
+
+/// `motionctl wait-ready [--timeout T] [AXIS…]`.
+pub fn wait_ready(
+    client: &Client<Service>,
+    names: &[String],
+    timeout: Duration,
+) -> anyhow::Result<()> {
+    if names.is_empty() {
+        client.wait_ready(timeout).context("wait-ready")?;
+    } else {
+        let mut devices = Vec::new();
+        for name in names {
+            let device = usize::from(client.axis(name)?.info().device_index);
+            if !devices.contains(&device) {
+                devices.push(device);
+            }
+        }
+        client
+            .wait_devices_ready(&devices, timeout)
+            .context("wait-ready")?;
+    }
+    let devices: Vec<String> = client.devices()?.into_iter().map(|d| d.name).collect();
+    if names.is_empty() {
+        out!("ready: every device is online ({})", devices.join(", "));
+    } else {
+        out!("ready: the devices of {} are online", names.join(", "));
     }
     Ok(())
 }
@@ -141,16 +226,51 @@ pub fn home(
     wait: Option<Duration>,
 ) -> anyhow::Result<()> {
     let axis = client.axis(name)?;
-    axis.home(velocity.unwrap_or(0.0))
-        .with_context(|| format!("home {name}"))?;
+    let send = || axis.home(velocity.unwrap_or(0.0));
     let Some(timeout) = wait else {
+        send().with_context(|| format!("home {name}"))?;
         out!("{name}: homing");
         return Ok(());
     };
-    let frame = stop_if_interrupted(&axis, axis.wait_until_homed(timeout))
+    let deadline = Instant::now() + timeout;
+    stop_if_interrupted(&axis, when_ready(&axis, deadline, send))
+        .with_context(|| format!("home {name}"))?;
+    let remaining = deadline.saturating_duration_since(Instant::now());
+    let frame = stop_if_interrupted(&axis, axis.wait_until_homed(remaining))
         .with_context(|| format!("home {name}"))?;
     out!("{name}: homed (tick {})", frame.tick);
     Ok(())
+}
+
+/// Holds `guards` until Ctrl-C or `until`, renewing them; ends with the restart if the
+/// server restarted (the claims died with it).
+fn hold_claims(
+    client: &Client<Service>,
+    guards: &[ClaimGuard<'_, Service>],
+    until: Option<Instant>,
+) -> anyhow::Result<()> {
+    let mut renewed = Instant::now();
+    loop {
+        if until.is_some_and(|until| Instant::now() >= until) {
+            return Ok(());
+        }
+        match client.next_frame(FRAME_TIMEOUT) {
+            Ok(_) => {}
+            Err(ClientError::Interrupted) => return Ok(()),
+            Err(error) => return Err(error.into()),
+        }
+        for guard in guards {
+            guard.check()?;
+        }
+        if renewed.elapsed() >= CLAIM_RENEWAL {
+            for guard in guards {
+                guard
+                    .renew()
+                    .with_context(|| format!("renew the claim on {}", guard.label()))?;
+            }
+            renewed = Instant::now();
+        }
+    }
 }
 
 /// `motionctl claim AXIS… [--duration D]`: holds the claims, then releases them.
@@ -163,43 +283,34 @@ pub fn claim(
         .iter()
         .map(|name| client.axis(name))
         .collect::<Result<Vec<_>, _>>()?;
-    let mut claimed = Vec::new();
-    let mut outcome = Ok(());
+    let mut guards = Vec::new();
     for axis in &axes {
-        match axis.claim() {
-            Ok(_) => claimed.push(*axis),
+        let guard = axis
+            .claim_guard()
+            .with_context(|| format!("claim {}", axis.name()))?;
+        guards.push(guard);
+    }
+    let list = names.join(", ");
+    match duration {
+        Some(duration) => eprintln!("claimed {list} for {duration:?}; Ctrl-C releases"),
+        None => eprintln!("claimed {list}; Ctrl-C releases"),
+    }
+    let until = duration.map(|duration| Instant::now() + duration);
+    let outcome = hold_claims(client, &guards, until);
+    let mut released = Ok(());
+    for guard in guards {
+        let label = guard.label();
+        match guard.release() {
+            Ok(_) | Err(ClientError::ServerRestarted(_)) => {}
             Err(error) => {
-                outcome = Err(error).with_context(|| format!("claim {}", axis.name()));
-                break;
+                released = Err(anyhow::Error::new(error).context(format!("release {label}")));
             }
         }
     }
-    if outcome.is_ok() {
-        let list = names.join(", ");
-        match duration {
-            Some(duration) => eprintln!("claimed {list} for {duration:?}; Ctrl-C releases"),
-            None => eprintln!("claimed {list}; Ctrl-C releases"),
-        }
-        let until = duration.map(|duration| Instant::now() + duration);
-        outcome = loop {
-            if until.is_some_and(|until| Instant::now() >= until) {
-                break Ok(());
-            }
-            match client.next_frame(FRAME_TIMEOUT) {
-                Ok(_) => {}
-                Err(ClientError::Interrupted) => break Ok(()),
-                Err(error) => break Err(error.into()),
-            }
-        };
-    }
-    for axis in claimed {
-        axis.release()
-            .with_context(|| format!("release {}", axis.name()))?;
-    }
-    if outcome.is_ok() {
-        eprintln!("released {}", names.join(", "));
-    }
-    outcome
+    outcome?;
+    released?;
+    eprintln!("released {list}");
+    Ok(())
 }
 
 /// `motionctl release AXIS…`.

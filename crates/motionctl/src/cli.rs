@@ -1,4 +1,4 @@
-//! The command line (DESIGN.md "CLI contract").
+//! The command line (docs/ARCHITECTURE.md "Contracts").
 
 use core::time::Duration;
 use std::path::PathBuf;
@@ -13,11 +13,12 @@ pub mod exit {
     pub const FAILURE: u8 = 1;
     /// Bad command line (clap's own status).
     pub const USAGE: u8 = 2;
-    /// No server of that name runs, or it could not be reached.
+    /// No server of that name runs, or it could not be reached (its port slots are taken).
     pub const NO_SERVER: u8 = 3;
-    /// The server refused the command (the reason is printed), or no such axis.
+    /// The server refused the command (the reason is printed), or no such axis or signal.
     pub const REFUSED: u8 = 4;
-    /// A wait ran out of time, the axis could not get there, or the server went silent.
+    /// A wait ran out of time, the axis could not get there (stopped, faulted), a device
+    /// was not ready, or the server went silent.
     pub const TIMEOUT: u8 = 5;
     /// Interrupted by Ctrl-C / SIGTERM while waiting (not for jog, watch, scope, claim).
     pub const INTERRUPTED: u8 = 130;
@@ -26,19 +27,23 @@ pub mod exit {
 const AFTER_HELP: &str = "\
 Exit status:
   0    success
-  1    other failure (iceoryx2, terminal, file)
+  1    other failure (iceoryx2, terminal, file; the server restarted under the command)
   2    bad command line
-  3    no motiond server of that name is running
-  4    the server refused the command (its reason is printed), or no such axis
-  5    timed out, or the axis stopped before reaching its goal, or the server went silent
+  3    no motiond server of that name is running (or none of its ports is free)
+  4    the server refused the command (its reason is printed), or no such axis or signal
+  5    timed out, or the axis stopped or faulted before reaching its goal, or a device
+       was not ready, or the server went silent
   130  interrupted by Ctrl-C or SIGTERM while waiting
 
 Durations take a unit: 500ms, 10s, 2m (a bare number is seconds).
 Examples:
   motionctl list
   motionctl watch
+  motionctl wait-ready
   motionctl move x 10 --velocity 5 --wait
   motionctl jog y -2.5          (Ctrl-C stops the axis)
+  motionctl io set lamp on
+  motionctl estop               (gets through even when the server's ports are taken)
   motionctl record --duration 5s --out run.csv";
 
 /// Command-line client of motiond.
@@ -61,13 +66,15 @@ pub struct Cli {
 /// The subcommands.
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// List the server's axes (units, limits, capabilities) and devices.
+    /// List the server's axes (units, limits, supervision), devices (state, firmware),
+    /// signals, and every machine parameter in effect (from the config or the default).
     List {
         /// Print JSON.
         #[arg(long)]
         json: bool,
     },
-    /// Show the state of every axis (or the ones named) in the newest frame.
+    /// Show the devices, every axis (or the ones named) with its fault in words, and the
+    /// signals, from the newest frame.
     Status {
         /// Axes to show (default: all).
         axes: Vec<String>,
@@ -75,7 +82,8 @@ pub enum Command {
         #[arg(long)]
         json: bool,
     },
-    /// Live table of every axis and the server's tick statistics; q or Ctrl-C exits.
+    /// Live table of every axis and signal and the server's tick statistics; q or Ctrl-C
+    /// exits.
     Watch {
         /// Print one JSON object per frame sampled, every --interval, instead of a table.
         #[arg(long)]
@@ -97,10 +105,10 @@ pub enum Command {
         /// Ramp acceleration, units/s² (default: the axis's maximum).
         #[arg(long)]
         accel: Option<f64>,
-        /// Wait until the axis has arrived.
+        /// Wait until the axis's device is ready, then until the axis has arrived.
         #[arg(long)]
         wait: bool,
-        /// Longest wait with --wait.
+        /// Longest wait with --wait (readiness included).
         #[arg(long, default_value = "60s", value_parser = parse_duration)]
         timeout: Duration,
     },
@@ -123,13 +131,40 @@ pub enum Command {
         #[arg(allow_negative_numbers = true)]
         power: f64,
     },
-    /// Stop the named axes (all axes when none is named).
+    /// Stop the named axes (all axes when none is named: sent before anything else is
+    /// read).
     Stop {
         /// Axes to stop.
         axes: Vec<String>,
     },
-    /// Emergency stop: every axis stops; latched until `reset`.
+    /// De-energise the named axes, or every axis with --all (they coast, no holding
+    /// torque). Each refusal is reported for its axis.
+    Off {
+        /// Axes to de-energise.
+        #[arg(required_unless_present = "all", conflicts_with = "all")]
+        axes: Vec<String>,
+        /// Every axis.
+        #[arg(long)]
+        all: bool,
+    },
+    /// Emergency stop: every axis stops with its e-stop category; latched until `reset`.
+    /// Tries the command service, then the estop event, then SIGUSR1 to the server
+    /// process, and says which path delivered it.
     Estop,
+    /// Wait until every device (or the devices of the axes named) is online.
+    WaitReady {
+        /// Axes whose devices to wait for (default: every device).
+        axes: Vec<String>,
+        /// Longest wait.
+        #[arg(long, default_value = "10s", value_parser = parse_duration)]
+        timeout: Duration,
+    },
+    /// Board I/O signals: list, get, set, watch.
+    Io {
+        /// What to do.
+        #[command(subcommand)]
+        command: IoCommand,
+    },
     /// Clear a latched e-stop and faults.
     Reset,
     /// Reference search.
@@ -139,10 +174,10 @@ pub enum Command {
         /// Search velocity, units/s (default: the server's).
         #[arg(long)]
         velocity: Option<f64>,
-        /// Wait until the axis is homed.
+        /// Wait until the axis's device is ready, then until the axis is homed.
         #[arg(long)]
         wait: bool,
-        /// Longest wait with --wait.
+        /// Longest wait with --wait (readiness included).
         #[arg(long, default_value = "120s", value_parser = parse_duration)]
         timeout: Duration,
     },
@@ -181,7 +216,8 @@ pub enum Command {
         #[arg(long, default_value = "10s", value_parser = parse_duration)]
         window: Duration,
     },
-    /// Record every frame to CSV, one row per tick, for a duration.
+    /// Record every frame to CSV, one row per tick, for a duration: the axes (all when none
+    /// is named) and every signal.
     Record {
         /// How long to record (server time).
         #[arg(long, value_parser = parse_duration)]
@@ -192,6 +228,51 @@ pub enum Command {
         /// Axes to record (default: all).
         axes: Vec<String>,
     },
+}
+
+/// `motionctl io …`.
+#[derive(Debug, Subcommand)]
+pub enum IoCommand {
+    /// Every signal: name, device, pin, kind, unit, value, flags.
+    List {
+        /// Print JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// One signal's value and flags.
+    Get {
+        /// Signal name.
+        name: String,
+        /// Print JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Set a digital output on or off.
+    Set {
+        /// Signal name.
+        name: String,
+        /// `on` or `off` (also 1/0, true/false, high/low).
+        #[arg(value_parser = parse_on_off, action = clap::ArgAction::Set, value_name = "on|off")]
+        value: bool,
+    },
+    /// Live table of every signal; q or Ctrl-C exits.
+    Watch {
+        /// Print one JSON object per --interval instead of a table.
+        #[arg(long)]
+        json: bool,
+        /// Refresh interval.
+        #[arg(long, default_value = "100ms", value_parser = parse_duration)]
+        interval: Duration,
+    },
+}
+
+/// `on`/`off` and their usual spellings.
+pub fn parse_on_off(text: &str) -> Result<bool, String> {
+    match text.trim().to_ascii_lowercase().as_str() {
+        "on" | "1" | "true" | "high" => Ok(true),
+        "off" | "0" | "false" | "low" => Ok(false),
+        other => Err(format!("`{other}` is not on or off")),
+    }
 }
 
 /// `500ms`, `10s`, `2m`, `1h`, `250us`, or a bare number of seconds.
@@ -246,5 +327,24 @@ mod tests {
             matches!(cli, Ok(Cli { command: Command::Move { position, .. }, .. }) if position == -30.0),
             "{cli:?}"
         );
+        let cli = Cli::try_parse_from(["motionctl", "io", "set", "lamp", "off"]);
+        assert!(
+            matches!(
+                cli,
+                Ok(Cli {
+                    command: Command::Io {
+                        command: IoCommand::Set { value: false, .. }
+                    },
+                    ..
+                })
+            ),
+            "{cli:?}"
+        );
+        assert!(
+            Cli::try_parse_from(["motionctl", "off"]).is_err(),
+            "axes or --all"
+        );
+        assert!(Cli::try_parse_from(["motionctl", "off", "x", "--all"]).is_err());
+        assert!(Cli::try_parse_from(["motionctl", "io", "set", "lamp", "maybe"]).is_err());
     }
 }

@@ -1,14 +1,16 @@
-//! `list` and `status`, as text tables or JSON; the JSON and text views of an axis are
-//! shared with `watch`.
+//! `list` and `status`, as text tables or JSON; the JSON and text views of an axis, a device
+//! and a frame are shared with `watch`.
 
-use motion_client::Client;
 use motion_client::ipc::{
-    AxisFlags, AxisInfo, AxisMode, AxisState, CommandKind, DeviceModel, FrameFlags, MotionFrame,
-    ServerInfo, ServerStats, read_text,
+    AxisFlags, AxisInfo, AxisMode, AxisState, CommandKind, DeviceModel, DeviceState, FaultCode,
+    FrameFlags, MotionFrame, ServerInfo, ServerStats, read_text,
 };
+use motion_client::{Client, Params};
 use serde_json::{Value, json};
 
 use crate::Service;
+use crate::io::{signal_info_json, signal_state_json, signals_text};
+use crate::machine::{ParamTable, params_lines};
 
 /// Names of the set flags, in bit order.
 pub fn flag_names(flags: AxisFlags) -> Vec<&'static str> {
@@ -48,16 +50,51 @@ pub fn mode_name(state: &AxisState) -> String {
     }
 }
 
-/// The fault as the CLI spells it ("" when none).
-pub fn fault_name(state: &AxisState) -> String {
+/// The fault's name ("following-error"), `None` when the axis has none.
+pub fn fault_name(state: &AxisState) -> Option<String> {
     match state.fault() {
-        Ok(motion_client::ipc::FaultCode::None) => String::new(),
-        Ok(code) => format!("{code:?}"),
-        Err(error) => format!("fault {}", error.0),
+        Ok(FaultCode::None) => None,
+        Ok(code) => Some(code.name().to_owned()),
+        Err(error) => Some(format!("fault {}", error.0)),
     }
 }
 
-fn axis_info_json(index: usize, axis: &AxisInfo) -> Value {
+/// The fault in words ([`FaultCode::explain`]), `None` when the axis has none.
+pub fn fault_text(axis: &AxisInfo, state: &AxisState) -> Option<String> {
+    match state.fault() {
+        Ok(FaultCode::None) => None,
+        Ok(code) => Some(code.explain(
+            axis.name(),
+            state.fault_value,
+            state.fault_limit,
+            axis.unit(),
+        )),
+        Err(error) => Some(format!(
+            "axis `{}`: fault {} (unknown to this motionctl)",
+            axis.name(),
+            error.0
+        )),
+    }
+}
+
+/// The e-stop category as the config spells it.
+fn estop_name(axis: &AxisInfo) -> String {
+    axis.estop().map_or_else(
+        |error| format!("estop {}", error.0),
+        |category| category.name().to_owned(),
+    )
+}
+
+/// A supervision figure: `null` when 0 (not supervised).
+fn supervised(value: f64) -> Value {
+    if value == 0.0 {
+        Value::Null
+    } else {
+        json!(value)
+    }
+}
+
+fn axis_info_json(index: usize, axis: &AxisInfo, params: &ParamTable) -> Value {
     let capabilities: Vec<&str> = CommandKind::ALL
         .iter()
         .filter(|kind| axis.capabilities().supports(**kind))
@@ -68,6 +105,7 @@ fn axis_info_json(index: usize, axis: &AxisInfo) -> Value {
         "name": axis.name(),
         "unit": axis.unit(),
         "device": read_text(&axis.device),
+        "device_index": axis.device_index,
         "channel": axis.channel,
         "counts_per_unit": axis.counts_per_unit,
         "min": axis.min,
@@ -75,44 +113,61 @@ fn axis_info_json(index: usize, axis: &AxisInfo) -> Value {
         "max_velocity": axis.max_velocity,
         "max_accel": axis.max_accel,
         "capabilities": capabilities,
+        "following_error": supervised(axis.following_error),
+        "overspeed_factor": supervised(axis.overspeed_factor),
+        "home_max_travel": supervised(axis.home_max_travel),
+        "estop": estop_name(axis),
+        "params": params.axis_json(index),
     })
 }
 
-/// The server description as JSON.
-pub fn info_json(info: &ServerInfo) -> Value {
+/// The server description (and the machine parameters) as JSON.
+pub fn info_json(info: &ServerInfo, params: &ParamTable) -> Value {
     let devices: Vec<Value> = info
         .devices()
         .iter()
-        .map(|device| {
+        .enumerate()
+        .map(|(index, device)| {
             json!({
+                "index": index,
                 "name": device.name(),
                 "link": read_text(&device.link),
                 "model": device.model().map_or("unknown", DeviceModel::id),
                 "address": device.address,
-                "firmware": read_text(&device.firmware),
+                "firmware": device.firmware(),
                 "axis_count": device.axis_count,
-                "online": device.state() == motion_client::ipc::DeviceState::Online,
+                "online": device.state() == DeviceState::Online,
                 "state": device.state().name(),
+                "params": params.device_json(index),
             })
         })
         .collect();
-    json!({
+    let mut value = json!({
         "server": read_text(&info.name),
         "schema_version": info.schema_version,
         "tick_hz": info.tick_hz,
         "command_timeout_ms": info.command_timeout_ms,
         "max_clients": info.max_clients,
         "server_pid": info.server_pid,
-        "axes": info.axes().iter().enumerate().map(|(i, a)| axis_info_json(i, a)).collect::<Vec<_>>(),
+        "axes": info.axes().iter().enumerate().map(|(i, a)| axis_info_json(i, a, params)).collect::<Vec<_>>(),
         "devices": devices,
-    })
+        "signals": info.signals().iter().enumerate().map(|(i, s)| signal_info_json(i, s)).collect::<Vec<_>>(),
+        "params_truncated": params.truncated(),
+    });
+    if let Some(error) = params.error() {
+        value["params_error"] = json!(error);
+    }
+    value
 }
 
 /// One axis's state in a frame as JSON.
 pub fn axis_state_json(info: &AxisInfo, state: &AxisState, tick: u64) -> Value {
+    let faulted = fault_name(state).is_some();
     json!({
         "name": info.name(),
         "unit": info.unit(),
+        "device": info.device(),
+        "device_state": state.device_state().map_or("unknown", DeviceState::name),
         "position": state.position,
         "velocity": state.velocity,
         "target": state.target,
@@ -120,6 +175,9 @@ pub fn axis_state_json(info: &AxisInfo, state: &AxisState, tick: u64) -> Value {
         "mode": mode_name(state),
         "flags": flag_names(state.flags()),
         "fault": fault_name(state),
+        "fault_text": fault_text(info, state),
+        "fault_value": if faulted { json!(state.fault_value) } else { Value::Null },
+        "fault_limit": if faulted { json!(state.fault_limit) } else { Value::Null },
         "last_refresh_tick": state.last_refresh_tick,
         "age_ticks": tick.saturating_sub(state.last_refresh_tick),
         "claimed_by": if state.claimed_by.is_none() { Value::Null } else { json!(format!("{:032x}", state.claimed_by.as_u128())) },
@@ -166,7 +224,22 @@ pub fn stats_json(stats: &ServerStats) -> Value {
     })
 }
 
-/// A frame (the chosen axes) as JSON.
+/// The devices and their states in a frame as JSON.
+pub fn devices_json(info: &ServerInfo, frame: &MotionFrame) -> Vec<Value> {
+    info.devices()
+        .iter()
+        .enumerate()
+        .map(|(index, device)| {
+            json!({
+                "name": device.name(),
+                "state": frame.device_state(index).name(),
+                "firmware": device.firmware(),
+            })
+        })
+        .collect()
+}
+
+/// A frame (the chosen axes, every device and signal) as JSON.
 pub fn frame_json(info: &ServerInfo, frame: &MotionFrame, axes: &[usize]) -> Value {
     let states: Vec<Value> = axes
         .iter()
@@ -176,12 +249,21 @@ pub fn frame_json(info: &ServerInfo, frame: &MotionFrame, axes: &[usize]) -> Val
             Some(axis_state_json(axis, state, frame.tick))
         })
         .collect();
+    let signals: Vec<Value> = info
+        .signals()
+        .iter()
+        .zip(frame.signals())
+        .enumerate()
+        .map(|(index, (signal, state))| signal_state_json(index, signal, state, frame.tick))
+        .collect();
     json!({
         "tick": frame.tick,
         "time_ns": frame.time_ns,
         "estop": frame.flags().contains(FrameFlags::ESTOP_LATCHED),
         "shutting_down": frame.flags().contains(FrameFlags::SHUTTING_DOWN),
+        "devices": devices_json(info, frame),
         "axes": states,
+        "signals": signals,
     })
 }
 
@@ -199,20 +281,26 @@ pub fn select_axes(client: &Client<Service>, names: &[String]) -> anyhow::Result
 /// `motionctl list`.
 pub fn list(client: &Client<Service>, json: bool) -> anyhow::Result<()> {
     let info = client.info()?;
+    let params: Result<Params<Service>, _> = client.machine_params();
+    let params = ParamTable::new(params);
     if json {
-        out!("{}", serde_json::to_string_pretty(&info_json(&info))?);
+        out!(
+            "{}",
+            serde_json::to_string_pretty(&info_json(&info, &params))?
+        );
         return Ok(());
     }
     out!(
-        "motiond \"{}\": {} Hz tick, deadman {} ms, {} axes, {} devices",
+        "motiond \"{}\": {} Hz tick, deadman {} ms, {} axes, {} devices, {} signals",
         read_text(&info.name),
         info.tick_hz,
         info.command_timeout_ms,
         info.axes().len(),
-        info.devices().len()
+        info.devices().len(),
+        info.signals().len()
     );
     out!(
-        "{:<4} {:<14} {:<6} {:<12} {:>10} {:>10} {:>10} {:>11}",
+        "{:<4} {:<14} {:<6} {:<12} {:>10} {:>10} {:>10} {:>11} {:>9} {:>8} {:>10} {:<8}",
         "#",
         "axis",
         "unit",
@@ -220,11 +308,22 @@ pub fn list(client: &Client<Service>, json: bool) -> anyhow::Result<()> {
         "min",
         "max",
         "max vel",
-        "max accel"
+        "max accel",
+        "foll err",
+        "overspd",
+        "home trav",
+        "estop"
     );
+    let figure = |value: f64| {
+        if value == 0.0 {
+            "-".to_owned()
+        } else {
+            value.to_string()
+        }
+    };
     for (index, axis) in info.axes().iter().enumerate() {
         out!(
-            "{:<4} {:<14} {:<6} {:<12} {:>10} {:>10} {:>10} {:>11}",
+            "{:<4} {:<14} {:<6} {:<12} {:>10} {:>10} {:>10} {:>11} {:>9} {:>8} {:>10} {:<8}",
             index,
             axis.name(),
             axis.unit(),
@@ -232,25 +331,35 @@ pub fn list(client: &Client<Service>, json: bool) -> anyhow::Result<()> {
             axis.min,
             axis.max,
             axis.max_velocity,
-            axis.max_accel
+            axis.max_accel,
+            figure(axis.following_error),
+            figure(axis.overspeed_factor),
+            figure(axis.home_max_travel),
+            estop_name(axis)
         );
     }
     out!(
-        "{:<14} {:<10} {:<10} {:<8} firmware",
+        "{:<14} {:<10} {:<10} {:<9} firmware",
         "device",
         "model",
         "link",
-        "online"
+        "state"
     );
     for device in info.devices() {
         out!(
-            "{:<14} {:<10} {:<10} {:<8} {}",
+            "{:<14} {:<10} {:<10} {:<9} {}",
             device.name(),
             device.model().map_or("unknown", DeviceModel::id),
             read_text(&device.link),
             device.state().name(),
-            read_text(&device.firmware)
+            device.firmware()
         );
+    }
+    for line in signals_text(&info, None) {
+        out!("{line}");
+    }
+    for line in params_lines(&info, &params) {
+        out!("{line}");
     }
     Ok(())
 }
@@ -284,13 +393,37 @@ pub fn status(client: &Client<Service>, names: &[String], json: bool) -> anyhow:
         ""
     };
     out!("tick {}{estop}", frame.tick);
+    out!("devices: {}", devices_line(&info, &frame));
     out!("{}", table_header());
+    let mut faults = Vec::new();
     for index in axes {
         if let (Some(axis), Some(state)) = (info.axes().get(index), frame.axes().get(index)) {
             out!("{}", table_row(axis, state, frame.tick));
+            faults.extend(fault_text(axis, state));
         }
     }
+    for fault in faults {
+        out!("fault: {fault}");
+    }
+    for line in signals_text(&info, Some(&frame)) {
+        out!("{line}");
+    }
     Ok(())
+}
+
+/// "pack online, aux starting".
+pub fn devices_line(info: &ServerInfo, frame: &MotionFrame) -> String {
+    let list: Vec<String> = info
+        .devices()
+        .iter()
+        .enumerate()
+        .map(|(index, device)| format!("{} {}", device.name(), frame.device_state(index).name()))
+        .collect();
+    if list.is_empty() {
+        "none".to_owned()
+    } else {
+        list.join(", ")
+    }
 }
 
 /// Header of the axis table of `status` and `watch`.
@@ -301,13 +434,17 @@ pub fn table_header() -> String {
     )
 }
 
+/// The flags of an axis with its fault name appended.
+pub fn flags_with_fault(state: &AxisState) -> String {
+    let flags = flag_names(state.flags()).join(",");
+    match fault_name(state) {
+        Some(fault) => format!("{flags} [{fault}]"),
+        None => flags,
+    }
+}
+
 /// One row of the axis table.
 pub fn table_row(axis: &AxisInfo, state: &AxisState, tick: u64) -> String {
-    let mut flags = flag_names(state.flags()).join(",");
-    let fault = fault_name(state);
-    if !fault.is_empty() {
-        flags = format!("{flags} [{fault}]");
-    }
     format!(
         "{:<14} {:>12.4} {:>12.4} {:>12.4} {:<5} {:<14} {:>6}  {}",
         axis.name(),
@@ -317,6 +454,6 @@ pub fn table_row(axis: &AxisInfo, state: &AxisState, tick: u64) -> String {
         axis.unit(),
         mode_name(state),
         tick.saturating_sub(state.last_refresh_tick),
-        flags
+        flags_with_fault(state)
     )
 }

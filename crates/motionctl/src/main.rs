@@ -1,4 +1,4 @@
-//! `motionctl`: the command-line client of motiond (DESIGN.md "CLI contract").
+//! `motionctl`: the command-line client of motiond (docs/ARCHITECTURE.md "Contracts").
 //!
 //! Every subcommand connects to the instance given by `--server` (default `demo`) over
 //! iceoryx2 shared memory through `motion-client`. Errors are one line naming what failed
@@ -18,6 +18,8 @@ macro_rules! out {
 mod act;
 mod cli;
 mod describe;
+mod io;
+mod machine;
 mod record;
 mod scope;
 mod terminal;
@@ -28,7 +30,7 @@ use std::process::ExitCode;
 use anyhow::Context as _;
 use clap::Parser;
 use iceoryx2::prelude::{LogLevel, ipc, set_log_level};
-use motion_client::{Client, ClientBuilder, ClientError, ConnectError};
+use motion_client::{Client, ClientBuilder, ClientError, ConnectError, EstopError};
 
 use crate::cli::{Cli, Command, exit};
 
@@ -67,7 +69,36 @@ fn connect(cli: &Cli) -> anyhow::Result<Client<Service>> {
         .connect()?)
 }
 
+/// Commands that must not wait for anything: the e-stop (which needs no client port even)
+/// and the stop of every axis (the command service alone). `None` for the others.
+fn run_unconnected(cli: &Cli) -> Option<anyhow::Result<()>> {
+    match &cli.command {
+        Command::Estop => Some(estop(cli)),
+        Command::Stop { axes } if axes.is_empty() => Some(
+            motion_client::stop_all::<Service>(&cli.server, cli.connect_timeout)
+                .map_err(anyhow::Error::new)
+                .and_then(|accepted| {
+                    out!("all axes stopping (tick {})", accepted.tick);
+                    Ok(())
+                }),
+        ),
+        _ => None,
+    }
+}
+
+fn estop(cli: &Cli) -> anyhow::Result<()> {
+    let path = motion_client::estop::<Service>(&cli.server, cli.connect_timeout)?;
+    out!(
+        "e-stop latched via {path}: every axis stops with its e-stop category; \
+         `motionctl reset` clears it"
+    );
+    Ok(())
+}
+
 fn run(cli: &Cli) -> anyhow::Result<()> {
+    if let Some(result) = run_unconnected(cli) {
+        return result;
+    }
     let client = connect(cli)?;
     let client = &client;
     match &cli.command {
@@ -96,11 +127,10 @@ fn run(cli: &Cli) -> anyhow::Result<()> {
         } => act::jog(client, axis, *velocity, *accel),
         Command::Power { axis, power } => act::power(client, axis, *power),
         Command::Stop { axes } => act::stop(client, axes),
-        Command::Estop => {
-            client.estop()?;
-            out!("e-stop latched: every axis stopped; `motionctl reset` clears it");
-            Ok(())
-        }
+        Command::Off { axes, all } => act::off(client, axes, *all),
+        Command::Estop => estop(cli),
+        Command::WaitReady { axes, timeout } => act::wait_ready(client, axes, *timeout),
+        Command::Io { command } => io::run(client, command),
         Command::Reset => {
             client.reset()?;
             out!("reset: e-stop and faults cleared");
@@ -142,25 +172,46 @@ fn closed_pipe(error: &anyhow::Error) -> bool {
     })
 }
 
+fn connect_status(error: &ConnectError) -> u8 {
+    match error {
+        ConnectError::NoServer { .. }
+        | ConnectError::NoInfo { .. }
+        | ConnectError::PortsExhausted { .. } => exit::NO_SERVER,
+        _ => exit::FAILURE,
+    }
+}
+
 /// The documented exit status of an error.
 fn exit_status(error: &anyhow::Error) -> u8 {
     for cause in error.chain() {
         if let Some(connect) = cause.downcast_ref::<ConnectError>() {
-            return match connect {
-                ConnectError::NoServer { .. } | ConnectError::NoInfo { .. } => exit::NO_SERVER,
-                _ => exit::FAILURE,
+            return connect_status(connect);
+        }
+        if let Some(estop) = cause.downcast_ref::<EstopError>() {
+            return if estop.server_found {
+                exit::FAILURE
+            } else {
+                exit::NO_SERVER
             };
         }
         if let Some(client) = cause.downcast_ref::<ClientError>() {
             return match client {
-                ClientError::Refused { .. } | ClientError::UnknownAxis(_) => exit::REFUSED,
+                ClientError::Refused { .. }
+                | ClientError::UnknownAxis(_)
+                | ClientError::UnknownSignal(_) => exit::REFUSED,
                 ClientError::NoServer { .. } => exit::NO_SERVER,
+                ClientError::Connect(connect) => connect_status(connect),
                 ClientError::NoReply { .. }
                 | ClientError::NoFrame(_)
                 | ClientError::WaitTimeout { .. }
-                | ClientError::WaitAborted { .. } => exit::TIMEOUT,
+                | ClientError::WaitAborted { .. }
+                | ClientError::AxisFaulted { .. }
+                | ClientError::NotReady { .. }
+                | ClientError::SignalTimeout { .. } => exit::TIMEOUT,
                 ClientError::Interrupted => exit::INTERRUPTED,
-                ClientError::Ipc { .. } => exit::FAILURE,
+                ClientError::ServerRestarted(_)
+                | ClientError::NotPublished { .. }
+                | ClientError::Ipc { .. } => exit::FAILURE,
             };
         }
     }

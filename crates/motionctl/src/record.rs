@@ -1,4 +1,5 @@
-//! `motionctl record --duration D --out FILE.csv`: every frame, one CSV row per tick.
+//! `motionctl record --duration D --out FILE.csv`: every frame, one CSV row per tick: the
+//! axes chosen and every signal.
 
 use core::time::Duration;
 use std::fs::File;
@@ -6,16 +7,18 @@ use std::io::{BufWriter, Write as _};
 use std::path::Path;
 
 use anyhow::Context as _;
+use motion_client::ipc::SignalKind;
 use motion_client::{Client, ClientError};
 
 use crate::Service;
 use crate::describe::{flag_names, mode_name, select_axes};
+use crate::io::signal_flag_names;
 
 /// How long to wait for a frame before calling the server silent.
 const FRAME_TIMEOUT: Duration = Duration::from_secs(2);
 
 /// The CSV header: tick and time, then per axis position, velocity, target (with units),
-/// mode and flags.
+/// mode and flags, then per signal its value (with its unit; `0/1` for digital) and flags.
 fn header(client: &Client<Service>, axes: &[usize]) -> anyhow::Result<String> {
     let info = client.info()?;
     let mut line = String::from("tick,time_s");
@@ -25,6 +28,14 @@ fn header(client: &Client<Service>, axes: &[usize]) -> anyhow::Result<String> {
         line.push_str(&format!(
             ",{name}.position[{unit}],{name}.velocity[{unit}/s],{name}.target[{unit}],{name}.mode,{name}.flags"
         ));
+    }
+    for signal in info.signals() {
+        let name = signal.name();
+        let unit = match signal.kind() {
+            Ok(SignalKind::AnalogIn) => signal.unit(),
+            _ => "0/1",
+        };
+        line.push_str(&format!(",{name}.value[{unit}],{name}.flags"));
     }
     Ok(line)
 }
@@ -38,6 +49,7 @@ pub fn run(
 ) -> anyhow::Result<()> {
     let axes = select_axes(client, names)?;
     let tick_hz = client.info()?.tick_hz.max(1);
+    let signals = client.info()?.signals().len();
     let wanted = (duration.as_secs_f64() * f64::from(tick_hz))
         .round()
         .max(1.0) as u64;
@@ -73,6 +85,14 @@ pub fn run(
                 state.target,
                 mode_name(&state),
                 flag_names(state.flags()).join("|")
+            ));
+        }
+        for index in 0..signals {
+            let state = frame.signals().get(index).copied().unwrap_or_default();
+            line.push_str(&format!(
+                ",{},{}",
+                state.value,
+                signal_flag_names(state.flags()).join("|")
             ));
         }
         writeln!(file, "{line}")?;

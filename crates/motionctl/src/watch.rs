@@ -1,4 +1,5 @@
-//! `motionctl watch`: a live table of every axis plus the server's tick statistics.
+//! `motionctl watch`: a live table of every axis and signal plus the server's device states
+//! and tick statistics.
 
 use core::time::Duration;
 
@@ -11,7 +12,8 @@ use ratatui::text::Line;
 use ratatui::widgets::{Block, Borders, Cell, Paragraph, Row, Table};
 
 use crate::Service;
-use crate::describe::{fault_name, flag_names, frame_json, mode_name};
+use crate::describe::{devices_line, fault_name, flags_with_fault, frame_json, mode_name};
+use crate::io::signal_table;
 use crate::terminal::{Screen, quit_requested};
 
 /// Runs `watch` until q / Ctrl-C (table) or SIGINT/SIGTERM (`--json`).
@@ -24,9 +26,10 @@ pub fn run(client: &Client<Service>, json: bool, interval: Duration) -> anyhow::
         let frame = client.latest()?;
         let info = client.info()?;
         let stats = client.stats()?;
+        let restart = client.restart().map(|restart| restart.to_string());
         screen
             .terminal()
-            .draw(|ui| draw(ui, &info, &frame, stats.as_deref()))?;
+            .draw(|ui| draw(ui, &info, &frame, stats.as_deref(), restart.as_deref()))?;
         drop(frame);
         if quit_requested(interval)? {
             return Ok(());
@@ -55,10 +58,23 @@ fn micros(ns: u64) -> String {
     format!("{:.1}µs", ns as f64 / 1e3)
 }
 
-fn draw(ui: &mut Frame<'_>, info: &ServerInfo, frame: &MotionFrame, stats: Option<&ServerStats>) {
-    let [head, table, foot] = Layout::vertical([
-        Constraint::Length(3),
+fn draw(
+    ui: &mut Frame<'_>,
+    info: &ServerInfo,
+    frame: &MotionFrame,
+    stats: Option<&ServerStats>,
+    restart: Option<&str>,
+) {
+    let signal_rows = u16::try_from(info.signals().len()).unwrap_or(u16::MAX);
+    let signal_height = if signal_rows == 0 {
+        0
+    } else {
+        signal_rows.saturating_add(2)
+    };
+    let [head, table, signals, foot] = Layout::vertical([
+        Constraint::Length(5),
         Constraint::Min(3),
+        Constraint::Length(signal_height),
         Constraint::Length(1),
     ])
     .areas(ui.area());
@@ -92,19 +108,27 @@ fn draw(ui: &mut Frame<'_>, info: &ServerInfo, frame: &MotionFrame, stats: Optio
     } else {
         Style::default().add_modifier(Modifier::BOLD)
     };
+    let restart_line = match restart {
+        Some(restart) => Line::styled(
+            restart.to_owned(),
+            Style::default().fg(Color::Red).add_modifier(Modifier::BOLD),
+        ),
+        None => Line::raw(""),
+    };
     ui.render_widget(
-        Paragraph::new(vec![Line::styled(banner, estop_style), Line::raw(figures)])
-            .block(Block::default().borders(Borders::BOTTOM)),
+        Paragraph::new(vec![
+            Line::styled(banner, estop_style),
+            Line::raw(format!("devices: {}", devices_line(info, frame))),
+            Line::raw(figures),
+            restart_line,
+        ])
+        .block(Block::default().borders(Borders::BOTTOM)),
         head,
     );
 
     let rows = info.axes().iter().zip(frame.axes()).map(|(axis, state)| {
-        let mut flags = flag_names(state.flags()).join(",");
-        let fault = fault_name(state);
-        if !fault.is_empty() {
-            flags = format!("{flags} [{fault}]");
-        }
-        let style = if fault.is_empty() {
+        let flags = flags_with_fault(state);
+        let style = if fault_name(state).is_none() {
             Style::default()
         } else {
             Style::default().fg(Color::Red)
@@ -141,6 +165,12 @@ fn draw(ui: &mut Frame<'_>, info: &ServerInfo, frame: &MotionFrame, stats: Optio
     ])
     .style(Style::default().add_modifier(Modifier::BOLD));
     ui.render_widget(Table::new(rows, widths).header(header), table);
+    if signal_height > 0 {
+        ui.render_widget(
+            signal_table(info, frame).block(Block::default().borders(Borders::TOP)),
+            signals,
+        );
+    }
     ui.render_widget(
         Paragraph::new("age: ticks since fresh board data   q or Ctrl-C quits"),
         foot,

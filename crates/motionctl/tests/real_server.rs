@@ -1,178 +1,28 @@
 //! motionctl end to end against a real `motiond` running `config/sim.toml` under a unique
-//! instance name (issue 6's CLI tests). Ignored by default until the server runs the sim
-//! config; run them with
-//! `cargo build -p motiond && cargo test -p motionctl --test real_server -- --ignored`.
-//! The motiond binary is taken from `MOTIOND_BIN`, or from beside the motionctl binary
-//! (where `cargo test --workspace` puts it).
+//! instance name. They need a motiond binary: `MOTIOND_BIN`, or beside the motionctl binary
+//! (`cargo build -p motiond` puts it there; so does `cargo test --workspace`):
+//! `cargo build -p motiond && cargo test -p motionctl --test real_server`.
 //!
-//! The tests on a server without devices run by default whenever a motiond binary is found:
-//! they check the services, the info history, commands and one CSV row per tick against the
-//! real server today.
+//! The tests of the second wave (readiness, off, io, machine parameters, e-stop paths, a
+//! server crash and restart) need the server side of motion-ipc schema 2 (params and estop
+//! services, SIGUSR1, device states, takeover after a crash).
+//!
+//! The tests on a server without devices skip (with a note) when no motiond binary is
+//! found.
 
 mod common;
 
 use core::time::Duration;
-use std::path::PathBuf;
-use std::process::{Child, Command, Stdio};
+use std::process::Stdio;
 use std::time::Instant;
 
+use common::real::{RealServer, configured, configured_axes, motiond_binary, sim_config};
 use common::*;
 use motion_client::ipc::Reason;
 use motion_client::testing::unique_name;
 use nix::sys::signal::{Signal, kill};
 use nix::unistd::Pid;
 use serde_json::Value;
-
-const IGNORED: &str = "needs a motiond that runs config/sim.toml";
-
-/// A motiond child on a copy of `config/sim.toml` with a unique `[server] name`.
-struct RealServer {
-    name: String,
-    child: Option<Child>,
-    dir: PathBuf,
-    /// One server at a time in this binary: each runs the whole simulated robot (18 axes,
-    /// six boards, a tick thread and four I/O threads), and several at once on a 2-core
-    /// machine starve each other's ticks until the boards look stale.
-    _turn: std::sync::MutexGuard<'static, ()>,
-}
-
-static ONE_SERVER_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
-
-fn motiond_binary() -> Result<PathBuf> {
-    if let Some(path) = std::env::var_os("MOTIOND_BIN") {
-        return Ok(path.into());
-    }
-    let beside = PathBuf::from(env!("CARGO_BIN_EXE_motionctl")).with_file_name("motiond");
-    if beside.exists() {
-        Ok(beside)
-    } else {
-        Err(format!(
-            "no motiond at {}: run `cargo build -p motiond` or set MOTIOND_BIN",
-            beside.display()
-        )
-        .into())
-    }
-}
-
-fn sim_config() -> Result<String> {
-    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../../config/sim.toml");
-    Ok(std::fs::read_to_string(path)?)
-}
-
-/// Axis names in config order, read from the `[[axis]]` tables of the sim config.
-fn configured_axes(config: &str) -> Vec<String> {
-    let mut names = Vec::new();
-    let mut in_axis = false;
-    for line in config.lines().map(str::trim) {
-        if line.starts_with('[') {
-            in_axis = line == "[[axis]]";
-        } else if in_axis && let Some(value) = line.strip_prefix("name") {
-            let value = value.trim_start().trim_start_matches('=').trim();
-            if let Some(name) = value.split('"').nth(1) {
-                names.push(name.to_owned());
-                in_axis = false;
-            }
-        }
-    }
-    names
-}
-
-impl RealServer {
-    /// motiond on `config/sim.toml`.
-    fn start() -> Result<Self> {
-        Self::start_with(&sim_config()?)
-    }
-
-    /// motiond on `config` (its first `name = "demo"` line becomes a unique name).
-    fn start_with(config: &str) -> Result<Self> {
-        let turn = ONE_SERVER_AT_A_TIME
-            .lock()
-            .unwrap_or_else(std::sync::PoisonError::into_inner);
-        let binary = motiond_binary()?;
-        let name = unique_name("real");
-        let mut renamed = String::new();
-        let mut done = false;
-        for line in config.lines() {
-            if !done && line.trim_start().starts_with("name = \"demo\"") {
-                renamed.push_str(&format!("name = \"{name}\"\n"));
-                done = true;
-            } else {
-                renamed.push_str(line);
-                renamed.push('\n');
-            }
-        }
-        let dir = std::env::temp_dir().join(&name);
-        std::fs::create_dir_all(&dir)?;
-        let config_path = dir.join("sim.toml");
-        std::fs::write(&config_path, renamed)?;
-        let child = Command::new(binary)
-            .arg("--config")
-            .arg(&config_path)
-            .stdin(Stdio::null())
-            .stdout(std::fs::File::create(dir.join("motiond.out"))?)
-            .stderr(std::fs::File::create(dir.join("motiond.err"))?)
-            .spawn()?;
-        let mut server = Self {
-            name,
-            child: Some(child),
-            dir,
-            _turn: turn,
-        };
-        let until = Instant::now() + DEADLINE;
-        loop {
-            if let Some(status) = server
-                .child
-                .as_mut()
-                .map(Child::try_wait)
-                .transpose()?
-                .flatten()
-            {
-                return Err(format!("motiond exited ({status}):\n{}", server.log()).into());
-            }
-            // Ready = every board answered: no axis stale or faulted (the simulated packs
-            // take a second to boot, as real ones do).
-            let ready = run(
-                &server.name,
-                &["--connect-timeout", "500ms", "status", "--json"],
-            )?;
-            if ready.status.success() {
-                let status: Value = serde_json::from_slice(&ready.stdout)?;
-                let settled = status["axes"].as_array().is_some_and(|axes| {
-                    axes.iter().all(|axis| {
-                        axis["flags"].as_array().is_some_and(|flags| {
-                            !flags.iter().any(|f| f == "stale" || f == "fault")
-                        })
-                    })
-                });
-                if settled {
-                    return Ok(server);
-                }
-            }
-            if Instant::now() > until {
-                return Err(format!("motiond did not come up: {ready:?}\n{}", server.log()).into());
-            }
-        }
-    }
-
-    fn log(&self) -> String {
-        let read = |file: &str| std::fs::read_to_string(self.dir.join(file)).unwrap_or_default();
-        format!("{}{}", read("motiond.out"), read("motiond.err"))
-    }
-}
-
-impl Drop for RealServer {
-    fn drop(&mut self) {
-        if let Some(child) = self.child.take() {
-            if let Ok(pid) = i32::try_from(child.id()) {
-                let _ = kill(Pid::from_raw(pid), Signal::SIGTERM);
-            }
-            if finish(child, Duration::from_secs(10)).is_err() {
-                eprintln!("motiond did not stop on SIGTERM:\n{}", self.log());
-            }
-        }
-        let _ = std::fs::remove_dir_all(&self.dir);
-    }
-}
 
 fn axis_index(status: &Value, name: &str) -> Result<usize> {
     status["axes"]
@@ -201,7 +51,7 @@ fn real_list_json_shows_every_configured_axis() -> Result {
         .iter()
         .filter_map(|axis| axis["name"].as_str().map(str::to_owned))
         .collect();
-    assert_eq!(names, configured_axes(&sim_config()?), "{IGNORED}");
+    assert_eq!(names, configured_axes(&sim_config()?));
     Ok(())
 }
 
@@ -432,5 +282,279 @@ fn real_server_without_devices_records_one_row_per_tick() -> Result {
         missed == 0 || stderr(&output).contains(&format!("{missed} ticks were missed")),
         "{output:?}"
     );
+    Ok(())
+}
+
+// --- Second wave: readiness, off, io, machine parameters, e-stop paths, restarts ---------
+
+fn json_array<'a>(value: &'a Value, key: &str) -> Result<&'a Vec<Value>> {
+    value[key]
+        .as_array()
+        .ok_or_else(|| format!("no array {key} in {value}").into())
+}
+
+#[test]
+fn real_move_wait_right_after_start_succeeds() -> Result {
+    // No waiting for the boards: the command's own --wait waits for readiness.
+    let server = RealServer::spawn_sim()?;
+    let output = run(
+        &server.name,
+        &[
+            "--connect-timeout",
+            "10s",
+            "move",
+            "x",
+            "10",
+            "--wait",
+            "--timeout",
+            "30s",
+        ],
+    )?;
+    assert!(output.status.success(), "{output:?}\n{}", server.log());
+    assert!(stdout(&output).contains("x: arrived at"), "{output:?}");
+    Ok(())
+}
+
+#[test]
+fn real_wait_ready_then_every_device_is_online() -> Result {
+    let server = RealServer::spawn_sim()?;
+    let ready = run(
+        &server.name,
+        &["--connect-timeout", "10s", "wait-ready", "--timeout", "30s"],
+    )?;
+    assert!(ready.status.success(), "{ready:?}\n{}", server.log());
+    let status = status_json(&server.name)?;
+    for device in json_array(&status, "devices")? {
+        assert_eq!(device["state"], "online", "{device}");
+    }
+    for axis in json_array(&status, "axes")? {
+        assert_eq!(axis["device_state"], "online", "{axis}");
+        assert_eq!(axis["fault"], Value::Null, "{axis}");
+    }
+    Ok(())
+}
+
+#[test]
+fn real_list_shows_device_states_supervision_and_machine_parameters() -> Result {
+    let server = RealServer::start()?;
+    let list = json_of(&run(&server.name, &["list", "--json"])?)?;
+    assert_eq!(list.get("params_error"), None, "{list}");
+    let devices = json_array(&list, "devices")?;
+    assert_eq!(
+        devices
+            .iter()
+            .filter_map(|d| d["name"].as_str())
+            .collect::<Vec<_>>(),
+        configured(&sim_config()?, "device")
+    );
+    let (mut from_config, mut defaults) = (0, 0);
+    let mut count = |params: &Vec<Value>| {
+        from_config += params.iter().filter(|p| p["from_config"] == true).count();
+        defaults += params.iter().filter(|p| p["from_config"] == false).count();
+    };
+    for device in devices {
+        assert_eq!(device["state"], "online", "{device}");
+        assert_ne!(device["firmware"], "", "{device}");
+        count(json_array(device, "params")?);
+    }
+    for axis in json_array(&list, "axes")? {
+        assert!(
+            ["hold", "stop-off", "off"].contains(&axis["estop"].as_str().unwrap_or("")),
+            "{axis}"
+        );
+        let params = json_array(axis, "params")?;
+        assert!(
+            !params.is_empty(),
+            "every axis has machine parameters: {axis}"
+        );
+        count(params);
+        for key in ["following_error", "overspeed_factor", "home_max_travel"] {
+            assert!(
+                axis[key].is_null() || axis[key].as_f64().is_some_and(|v| v > 0.0),
+                "{axis}"
+            );
+        }
+    }
+    assert!(
+        from_config > 0 && defaults > 0,
+        "sim.toml sets some keys and leaves others at their default"
+    );
+    let text = stdout(&run(&server.name, &["list"])?);
+    assert!(text.contains("machine parameters (source:"), "{text}");
+    Ok(())
+}
+
+#[test]
+fn real_off_de_energises_or_says_why_per_axis() -> Result {
+    let server = RealServer::start()?;
+    let output = run(&server.name, &["off", "--all"])?;
+    assert!(matches!(output.status.code(), Some(0 | 4)), "{output:?}");
+    std::thread::sleep(Duration::from_millis(300));
+    let status = status_json(&server.name)?;
+    let said = stdout(&output);
+    let mut offs = 0;
+    for axis in json_array(&status, "axes")? {
+        let name = axis["name"].as_str().ok_or("name")?;
+        if said.lines().any(|line| line == format!("{name}: off")) {
+            assert_eq!(axis["mode"], "off", "{axis}");
+            offs += 1;
+        }
+    }
+    assert!(
+        offs > 0,
+        "no axis of the sim robot could be de-energised: {output:?}"
+    );
+    Ok(())
+}
+
+/// `config/sim.toml` with its QSB jam sensor (DIG I/O 0) turned into an output, for a sim
+/// config that has no `digital-out` signal of its own (the QSB-M's io1/io2 are its
+/// step/direction lines and io3 its drive enable).
+fn sim_config_with_an_output() -> Result<String> {
+    let config = sim_config()?;
+    let at = config
+        .find("name = \"feeder_jam\"")
+        .ok_or("config/sim.toml has no feeder_jam signal")?;
+    let (head, tail) = config.split_at(at);
+    if !tail.contains("kind = \"digital-in\"") {
+        return Err("feeder_jam is not a digital-in".into());
+    }
+    Ok(format!(
+        "{head}{}",
+        tail.replacen("kind = \"digital-in\"", "kind = \"digital-out\"", 1)
+    ))
+}
+
+/// The name of the first signal of `kind` in an `io list --json`.
+fn first_of_kind<'a>(list: &'a Value, kind: &str) -> Option<&'a str> {
+    list["signals"]
+        .as_array()?
+        .iter()
+        .find(|s| s["kind"] == kind)
+        .and_then(|s| s["name"].as_str())
+}
+
+#[test]
+fn real_io_lists_the_configured_signals_and_sets_an_output() -> Result {
+    let config = sim_config()?;
+    let mut server = RealServer::start()?;
+    let list = json_of(&run(&server.name, &["io", "list", "--json"])?)?;
+    let signals = json_array(&list, "signals")?;
+    let names: Vec<&str> = signals.iter().filter_map(|s| s["name"].as_str()).collect();
+    assert_eq!(names, configured(&config, "signal"));
+    // Inputs are read within their board's refresh budget once the boards answered (an
+    // output never set has nothing to acknowledge yet).
+    for signal in signals.iter().filter(|s| s["kind"] != "digital-out") {
+        assert!(
+            !signal["flags"]
+                .as_array()
+                .is_some_and(|f| f.contains(&"stale".into())),
+            "{signal}"
+        );
+    }
+    let input = first_of_kind(&list, "digital-in").ok_or("no digital-in in config/sim.toml")?;
+    let refused = run(&server.name, &["io", "set", input, "on"])?;
+    assert_fails(&refused, 4, Reason::NotAnOutput.message());
+    let output = match first_of_kind(&list, "digital-out") {
+        Some(name) => name.to_owned(),
+        None => {
+            drop(server);
+            server = RealServer::start_with(&sim_config_with_an_output()?)?;
+            "feeder_jam".to_owned()
+        }
+    };
+    for (word, on) in [("on", true), ("off", false), ("on", true)] {
+        let set = run(&server.name, &["io", "set", &output, word])?;
+        assert!(set.status.success(), "{set:?}");
+        poll_json(&server.name, &["io", "get", &output, "--json"], |s| {
+            s["on"] == on
+                && !s["flags"]
+                    .as_array()
+                    .is_some_and(|f| f.contains(&"pending".into()))
+        })?;
+    }
+    Ok(())
+}
+
+#[test]
+fn real_estop_gets_through_every_exhausted_path() -> Result {
+    use iceoryx2::node::NodeBuilder;
+    use iceoryx2::prelude::{ServiceName, ipc};
+    use motion_client::ipc::{CommandReply, CommandRequest, MotionFrame, ServiceNames};
+
+    let server = RealServer::start()?;
+    let names = ServiceNames::new(&server.name);
+    let hog = NodeBuilder::new().create::<ipc::Service>()?;
+    let frames = hog
+        .service_builder(&ServiceName::new(&names.frame())?)
+        .publish_subscribe::<MotionFrame>()
+        .open()?;
+    let mut held_frames = Vec::new();
+    while let Ok(subscriber) = frames.subscriber_builder().create() {
+        held_frames.push(subscriber);
+    }
+    let estop = run(&server.name, &["estop"])?;
+    assert!(estop.status.success(), "{estop:?}");
+    assert!(
+        stdout(&estop).contains("via the command service"),
+        "{estop:?}"
+    );
+    assert!(run(&server.name, &["reset"])?.status.success());
+
+    let commands = hog
+        .service_builder(&ServiceName::new(&names.command())?)
+        .request_response::<CommandRequest, CommandReply>()
+        .open()?;
+    let mut held_clients = Vec::new();
+    while let Ok(client) = commands.client_builder().create() {
+        held_clients.push(client);
+    }
+    let estop = run(&server.name, &["estop"])?;
+    assert!(estop.status.success(), "{estop:?}\n{}", server.log());
+    assert!(
+        stdout(&estop).contains("via the estop event service"),
+        "{estop:?}"
+    );
+    held_clients.pop();
+    assert!(run(&server.name, &["reset"])?.status.success());
+    held_clients.push(commands.client_builder().create()?);
+
+    let event = hog
+        .service_builder(&ServiceName::new(&names.estop())?)
+        .event()
+        .open()?;
+    let mut held_notifiers = Vec::new();
+    while let Ok(notifier) = event.notifier_builder().create() {
+        held_notifiers.push(notifier);
+    }
+    let estop = run(&server.name, &["estop"])?;
+    assert!(estop.status.success(), "{estop:?}");
+    let pid = server.pid()?;
+    assert!(
+        stdout(&estop).contains(&format!("via SIGUSR1 to the server process (pid {pid})")),
+        "{estop:?}"
+    );
+    drop(held_frames);
+    let status = poll_json(&server.name, &["status", "--json"], |s| s["estop"] == true)?;
+    assert_eq!(status["estop"], true);
+    Ok(())
+}
+
+#[test]
+fn real_jog_ends_cleanly_when_the_server_crashes_and_restarts() -> Result {
+    let mut server = RealServer::start()?;
+    let child = command(&server.name, &["jog", "conveyor", "50"])
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()?;
+    std::thread::sleep(Duration::from_millis(800));
+    server.crash_and_restart()?;
+    let output = finish(child, DEADLINE)?;
+    assert_fails(&output, 1, "restarted");
+    let status = status_json(&server.name)?;
+    let conveyor = axis_index(&status, "conveyor")?;
+    let mode = axis_field(&status, conveyor, "mode");
+    assert!(mode != "ramp-velocity" && mode != "velocity", "{status}");
     Ok(())
 }

@@ -2,6 +2,8 @@
 //! `status --json`, drive it in a pseudo-terminal.
 #![allow(dead_code)]
 
+pub mod real;
+
 use core::time::Duration;
 use std::io::{Read as _, Write as _};
 use std::process::{Child, Command, Output, Stdio};
@@ -20,6 +22,53 @@ pub fn fake(prefix: &str) -> Result<FakeServer> {
     Ok(FakeServer::start::<ipc::Service>(FakeConfig::demo(
         &unique_name(prefix),
     ))?)
+}
+
+/// The demo fake with `change` applied to its config.
+pub fn fake_with(prefix: &str, change: impl FnOnce(&mut FakeConfig)) -> Result<FakeServer> {
+    let mut config = FakeConfig::demo(&unique_name(prefix));
+    change(&mut config);
+    Ok(FakeServer::start::<ipc::Service>(config)?)
+}
+
+/// The stdout of a successful run, as JSON.
+pub fn json_of(output: &Output) -> Result<Value> {
+    if !output.status.success() {
+        return Err(format!("motionctl failed: {output:?}").into());
+    }
+    Ok(serde_json::from_slice(&output.stdout)?)
+}
+
+/// Runs `args` until `check` holds for its JSON output, up to DEADLINE.
+pub fn poll_json(
+    server: &str,
+    args: &[&str],
+    mut check: impl FnMut(&Value) -> bool,
+) -> Result<Value> {
+    let until = Instant::now() + DEADLINE;
+    loop {
+        let value = json_of(&run(server, args)?)?;
+        if check(&value) {
+            return Ok(value);
+        }
+        if Instant::now() > until {
+            return Err(format!("never held: {args:?} → {value}").into());
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// Asserts a one-line error (`motionctl: …` on stderr, beside any progress lines) with
+/// `status` that contains `text`.
+pub fn assert_fails(output: &Output, status: i32, text: &str) {
+    assert_eq!(output.status.code(), Some(status), "{output:?}");
+    let all = stderr(output);
+    let errors: Vec<&str> = all
+        .lines()
+        .filter(|line| line.starts_with("motionctl:"))
+        .collect();
+    assert_eq!(errors.len(), 1, "one error line: {all}");
+    assert!(errors[0].contains(text), "{text:?} not in {all}");
 }
 
 pub fn command(server: &str, args: &[&str]) -> Command {

@@ -12,8 +12,8 @@ use motion_drivers::Model;
 use toml::Spanned;
 
 use super::{TableSpan, Validator};
-use crate::config::raw::{RawAxis, RawConfig, RawDevice};
 use crate::config::ServerConfig;
+use crate::config::raw::{RawAxis, RawConfig, RawDevice};
 
 /// A device's model-specific keys, validated.
 #[derive(Debug, Clone, PartialEq)]

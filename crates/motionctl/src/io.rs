@@ -1,0 +1,297 @@
+//! `motionctl io list|get|set|watch`, and the signal views shared with `list`, `status`,
+//! `watch` and `record`.
+
+use core::time::Duration;
+
+use anyhow::Context as _;
+use motion_client::ipc::{
+    MotionFrame, ServerInfo, SignalFlags, SignalInfo, SignalInfoFlags, SignalKind, SignalState,
+};
+use motion_client::{Client, ClientError, signal_value_text};
+use ratatui::layout::{Constraint, Layout};
+use ratatui::style::{Modifier, Style};
+use ratatui::widgets::{Cell, Paragraph, Row, Table};
+use serde_json::{Value, json};
+
+use crate::Service;
+use crate::cli::IoCommand;
+use crate::terminal::{Screen, quit_requested};
+
+/// Names of the set flags, in bit order.
+pub fn signal_flag_names(flags: SignalFlags) -> Vec<&'static str> {
+    [
+        (SignalFlags::STALE, "stale"),
+        (SignalFlags::CLAIMED, "claimed"),
+        (SignalFlags::SAFE_STATE, "safe-state"),
+        (SignalFlags::PENDING, "pending"),
+    ]
+    .into_iter()
+    .filter(|(flag, _)| flags.contains(*flag))
+    .map(|(_, name)| name)
+    .collect()
+}
+
+fn kind_name(info: &SignalInfo) -> String {
+    info.kind().map_or_else(
+        |error| format!("kind {}", error.0),
+        |kind| kind.name().to_owned(),
+    )
+}
+
+fn is_digital(info: &SignalInfo) -> bool {
+    matches!(
+        info.kind(),
+        Ok(SignalKind::DigitalIn | SignalKind::DigitalOut)
+    )
+}
+
+/// The safe state of an output: "on", "off", or `None`.
+fn safe_name(info: &SignalInfo) -> Option<&'static str> {
+    let flags = info.flags();
+    flags.contains(SignalInfoFlags::HAS_SAFE_STATE).then(|| {
+        if flags.contains(SignalInfoFlags::SAFE_ON) {
+            "on"
+        } else {
+            "off"
+        }
+    })
+}
+
+/// A signal's static description as JSON.
+pub fn signal_info_json(index: usize, info: &SignalInfo) -> Value {
+    json!({
+        "index": index,
+        "name": info.name(),
+        "device": info.device(),
+        "device_index": info.device_index,
+        "pin": info.pin(),
+        "kind": kind_name(info),
+        "unit": info.unit(),
+        "invert": info.flags().contains(SignalInfoFlags::INVERT),
+        "safe": safe_name(info),
+        "scale": info.scale,
+        "offset": info.offset,
+        "full_scale": info.full_scale,
+    })
+}
+
+/// A signal's state in a frame as JSON (with the description's name, device, pin, kind and
+/// unit).
+pub fn signal_state_json(index: usize, info: &SignalInfo, state: &SignalState, tick: u64) -> Value {
+    json!({
+        "index": index,
+        "name": info.name(),
+        "device": info.device(),
+        "pin": info.pin(),
+        "kind": kind_name(info),
+        "unit": info.unit(),
+        "value": state.value,
+        "raw": state.raw,
+        "on": if is_digital(info) { json!(state.is_on()) } else { Value::Null },
+        "text": signal_value_text(info, state.value),
+        "flags": signal_flag_names(state.flags()),
+        "last_refresh_tick": state.last_refresh_tick,
+        "age_ticks": tick.saturating_sub(state.last_refresh_tick),
+        "claimed_by": if state.claimed_by.is_none() { Value::Null } else { json!(format!("{:032x}", state.claimed_by.as_u128())) },
+    })
+}
+
+/// The signal table: with a frame, values and flags; without, the configuration.
+pub fn signals_text(info: &ServerInfo, frame: Option<&MotionFrame>) -> Vec<String> {
+    if info.signals().is_empty() {
+        return Vec::new();
+    }
+    let mut lines = vec![format!(
+        "{:<16} {:<12} {:<10} {:<12} {:<6} {:>12}  {}",
+        "signal",
+        "device",
+        "pin",
+        "kind",
+        "unit",
+        if frame.is_some() { "value" } else { "safe" },
+        if frame.is_some() { "flags" } else { "invert" }
+    )];
+    for (index, signal) in info.signals().iter().enumerate() {
+        let (value, flags) = match frame {
+            Some(frame) => {
+                let state = frame.signals().get(index).copied().unwrap_or_default();
+                let value = if is_digital(signal) {
+                    signal_value_text(signal, state.value)
+                } else {
+                    format!("{:.4}", state.value)
+                };
+                (value, signal_flag_names(state.flags()).join(","))
+            }
+            None => (
+                safe_name(signal).unwrap_or("-").to_owned(),
+                if signal.flags().contains(SignalInfoFlags::INVERT) {
+                    "yes"
+                } else {
+                    "no"
+                }
+                .to_owned(),
+            ),
+        };
+        lines.push(format!(
+            "{:<16} {:<12} {:<10} {:<12} {:<6} {:>12}  {}",
+            signal.name(),
+            signal.device(),
+            signal.pin(),
+            kind_name(signal),
+            signal.unit(),
+            value,
+            flags
+        ));
+    }
+    lines
+}
+
+/// `motionctl io …`.
+pub fn run(client: &Client<Service>, command: &IoCommand) -> anyhow::Result<()> {
+    match command {
+        IoCommand::List { json } => list(client, *json),
+        IoCommand::Get { name, json } => get(client, name, *json),
+        IoCommand::Set { name, value } => {
+            let signal = client.signal(name)?;
+            let word = if *value { "on" } else { "off" };
+            signal
+                .set(*value)
+                .with_context(|| format!("set {name} {word}"))?;
+            out!("{name}: set {word}");
+            Ok(())
+        }
+        IoCommand::Watch { json, interval } => watch(client, *json, *interval),
+    }
+}
+
+fn all_json(info: &ServerInfo, frame: &MotionFrame) -> Vec<Value> {
+    info.signals()
+        .iter()
+        .enumerate()
+        .map(|(index, signal)| {
+            let state = frame.signals().get(index).copied().unwrap_or_default();
+            let mut value = signal_state_json(index, signal, &state, frame.tick);
+            value["invert"] = json!(signal.flags().contains(SignalInfoFlags::INVERT));
+            value["safe"] = json!(safe_name(signal));
+            value
+        })
+        .collect()
+}
+
+fn list(client: &Client<Service>, json: bool) -> anyhow::Result<()> {
+    let info = client.info()?;
+    let frame = client.latest()?;
+    if json {
+        let value = json!({ "tick": frame.tick, "signals": all_json(&info, &frame) });
+        out!("{}", serde_json::to_string_pretty(&value)?);
+        return Ok(());
+    }
+    if info.signals().is_empty() {
+        out!("no signals configured ([[signal]] tables in the server's config)");
+    }
+    for line in signals_text(&info, Some(&frame)) {
+        out!("{line}");
+    }
+    Ok(())
+}
+
+fn get(client: &Client<Service>, name: &str, json: bool) -> anyhow::Result<()> {
+    let signal = client.signal(name)?;
+    let info = signal.info();
+    let frame = client.latest()?;
+    let index = signal.index() as usize;
+    let state = frame.signals().get(index).copied().unwrap_or_default();
+    if json {
+        let value = signal_state_json(index, &info, &state, frame.tick);
+        out!("{}", serde_json::to_string_pretty(&value)?);
+        return Ok(());
+    }
+    let flags = signal_flag_names(state.flags());
+    let flags = if flags.is_empty() {
+        String::new()
+    } else {
+        format!(" [{}]", flags.join(","))
+    };
+    out!("{name}: {}{flags}", signal_value_text(&info, state.value));
+    Ok(())
+}
+
+fn watch(client: &Client<Service>, json: bool, interval: Duration) -> anyhow::Result<()> {
+    if json {
+        loop {
+            let frame = client.latest()?;
+            let info = client.info()?;
+            out!(
+                "{}",
+                json!({ "tick": frame.tick, "signals": all_json(&info, &frame) })
+            );
+            drop(frame);
+            if client.node().wait(interval).is_err() {
+                return Ok(());
+            }
+        }
+    }
+    let mut screen = Screen::enter("io watch")?;
+    loop {
+        let frame = client.latest()?;
+        let info = client.info()?;
+        screen.terminal().draw(|ui| {
+            let [head, table, foot] = Layout::vertical([
+                Constraint::Length(1),
+                Constraint::Min(3),
+                Constraint::Length(1),
+            ])
+            .areas(ui.area());
+            ui.render_widget(
+                Paragraph::new(format!(
+                    "signals of motiond \"{}\"  tick {}",
+                    info.name(),
+                    frame.tick
+                ))
+                .style(Style::default().add_modifier(Modifier::BOLD)),
+                head,
+            );
+            ui.render_widget(signal_table(&info, &frame), table);
+            ui.render_widget(Paragraph::new("q or Ctrl-C quits"), foot);
+        })?;
+        drop(frame);
+        if quit_requested(interval)? {
+            return Ok(());
+        }
+        match client.check_interrupted() {
+            Err(ClientError::Interrupted) => return Ok(()),
+            other => other?,
+        }
+    }
+}
+
+/// The live signal table of `io watch` and `watch`.
+pub fn signal_table<'a>(info: &'a ServerInfo, frame: &MotionFrame) -> Table<'a> {
+    let rows = info.signals().iter().enumerate().map(|(index, signal)| {
+        let state = frame.signals().get(index).copied().unwrap_or_default();
+        let value = if is_digital(signal) {
+            signal_value_text(signal, state.value)
+        } else {
+            format!("{:.4}", state.value)
+        };
+        Row::new(vec![
+            Cell::from(signal.name().to_owned()),
+            Cell::from(value),
+            Cell::from(signal.unit().to_owned()),
+            Cell::from(kind_name(signal)),
+            Cell::from(format!("{}/{}", signal.device(), signal.pin())),
+            Cell::from(signal_flag_names(state.flags()).join(",")),
+        ])
+    });
+    let widths = [
+        Constraint::Length(16),
+        Constraint::Length(12),
+        Constraint::Length(6),
+        Constraint::Length(12),
+        Constraint::Length(20),
+        Constraint::Min(10),
+    ];
+    let header = Row::new(["signal", "value", "unit", "kind", "device/pin", "flags"])
+        .style(Style::default().add_modifier(Modifier::BOLD));
+    Table::new(rows, widths).header(header)
+}
