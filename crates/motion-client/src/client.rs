@@ -7,7 +7,7 @@ use std::cell::{Cell, RefCell};
 use std::rc::Rc;
 use std::time::Instant;
 
-use iceoryx2::node::{Node, NodeBuilder};
+use iceoryx2::node::Node;
 use iceoryx2::port::listener::Listener;
 use iceoryx2::prelude::{NodeName, SignalHandlingMode};
 use iceoryx2::service::Service;
@@ -166,10 +166,7 @@ impl<S: Service> Client<S> {
                 name: options.node_name.clone(),
                 detail: format!("{error:?}"),
             })?;
-        let node = NodeBuilder::new()
-            .name(&node_name)
-            .signal_handling_mode(options.signal_handling)
-            .create::<S>()
+        let node = ports::create_node::<S>(&node_name, options.signal_handling)
             .map_err(|error| ConnectError::ipc("create a node", error))?;
         if options.signal_handling == SignalHandlingMode::HandleTerminationRequests {
             // iceoryx2 installs its SIGINT/SIGTERM capture on the first look at the

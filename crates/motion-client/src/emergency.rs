@@ -6,7 +6,7 @@ use core::fmt;
 use core::time::Duration;
 use std::time::Instant;
 
-use iceoryx2::node::{Node, NodeBuilder, NodeView as _};
+use iceoryx2::node::{Node, NodeView as _};
 use iceoryx2::port::notifier::NotifierCreateError;
 use iceoryx2::prelude::{CallbackProgression, Config, NodeName, NodeState, SignalHandlingMode};
 use iceoryx2::service::Service;
@@ -65,10 +65,7 @@ impl fmt::Display for EstopPath {
 
 fn node<S: Service>(name: &str) -> Result<Node<S>, String> {
     let name = NodeName::new(name).map_err(|error| format!("{error:?}"))?;
-    NodeBuilder::new()
-        .name(&name)
-        .signal_handling_mode(SignalHandlingMode::Disabled)
-        .create::<S>()
+    crate::ports::create_node::<S>(&name, SignalHandlingMode::Disabled)
         .map_err(|error| format!("cannot create an iceoryx2 node: {error:?}"))
 }
 

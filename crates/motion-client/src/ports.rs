@@ -254,3 +254,26 @@ pub(crate) fn command_id_now<S: Service>(node: &Node<S>, service: &str) -> Optio
         .ok()
         .map(|factory| factory.unique_service_id())
 }
+
+/// Creates a node, trying again a few times: iceoryx2 can refuse a node for a moment
+/// (`InternalError`) while another process removes a dead process's node records.
+pub(crate) fn create_node<S: Service>(
+    name: &iceoryx2::prelude::NodeName,
+    signals: iceoryx2::prelude::SignalHandlingMode,
+) -> Result<Node<S>, iceoryx2::node::NodeCreationFailure> {
+    let mut attempt = 0;
+    loop {
+        match iceoryx2::prelude::NodeBuilder::new()
+            .name(name)
+            .signal_handling_mode(signals)
+            .create::<S>()
+        {
+            Ok(node) => return Ok(node),
+            Err(error) if attempt >= 4 => return Err(error),
+            Err(_) => {
+                attempt += 1;
+                std::thread::sleep(Duration::from_millis(20));
+            }
+        }
+    }
+}

@@ -75,6 +75,9 @@ pub(crate) struct Axis {
     pub home_referenced: bool,
     /// Stop-off category in progress: de-energise once the stop has come to rest.
     pub off_after_stop: bool,
+    /// The axis was de-energised on purpose (`off`, a stop category): a board that comes
+    /// back online gets it switched off again, not a holding stop.
+    pub switched_off: bool,
     pub deadman_expired: bool,
     pub estopped: bool,
     pub stale: bool,
@@ -120,6 +123,7 @@ impl Axis {
             home_last: 0.0,
             home_referenced: false,
             off_after_stop: false,
+            switched_off: false,
             deadman_expired: false,
             estopped: false,
             stale: true,

@@ -177,6 +177,7 @@ impl Engine {
         axis.move_start = position;
         axis.arrived = false;
         axis.off_after_stop = false;
+        axis.switched_off = false;
         axis.home_travel = 0.0;
         axis.home_last = position;
         axis.home_referenced = axis.referenced();

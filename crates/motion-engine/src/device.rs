@@ -92,12 +92,17 @@ impl Engine {
         }
     }
 
-    /// A stop on every configured channel of `device`, whatever the axis's mode.
+    /// A stop on every configured channel of `device`, whatever the axis's mode; an axis
+    /// that was switched off on purpose is switched off again instead (the board forgot).
     fn startup_stop(&mut self, device: usize) {
         for index in 0..self.axes.len() {
-            if self.axes[index].device == device {
-                self.stop_axis(index, true);
+            if self.axes[index].device != device {
+                continue;
             }
+            if self.axes[index].switched_off && self.off_axis(index).is_ok() {
+                continue;
+            }
+            self.stop_axis(index, true);
         }
     }
 

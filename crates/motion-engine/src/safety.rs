@@ -151,6 +151,9 @@ impl Engine {
         axis.deadman_at = None;
         axis.goal_owner = ClientId::NONE;
         axis.off_after_stop = false;
+        if stopped {
+            axis.switched_off = false;
+        }
     }
 
     /// De-energises axis `index` (its motor coasts).
@@ -166,6 +169,7 @@ impl Engine {
         axis.deadman_at = None;
         axis.goal_owner = ClientId::NONE;
         axis.off_after_stop = false;
+        axis.switched_off = true;
         Ok(())
     }
 

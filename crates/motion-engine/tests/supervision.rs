@@ -634,3 +634,21 @@ fn signals_read_inputs_drive_outputs_take_claims_and_go_safe_on_e_stop() {
         "reset cleared the claim"
     );
 }
+
+#[test]
+fn a_board_back_online_switches_an_off_axis_off_again_and_stops_the_others() {
+    let (mut h, board) = rig(axis("x", 0, 0), axis("y", 0, 1), vec![]);
+    let off = h.command(CLIENT_A, 0, CommandKind::Off, [0.0; 3]);
+    assert_eq!(off.result(), Ok(()));
+    h.ticks(3);
+    wire(&board, 0);
+    wire(&board, 1);
+    // The board drops out and comes back (a reboot, a glitch): it forgot everything.
+    board.lock().unwrap().starting = true;
+    h.ticks(3);
+    board.lock().unwrap().starting = false;
+    h.ticks(3);
+    assert_eq!(wire(&board, 0), [OFF], "still meant to be off");
+    assert_eq!(h.axis(0).mode(), Ok(AxisMode::Off));
+    assert_eq!(wire(&board, 1), [STOP], "the start-up stop");
+}

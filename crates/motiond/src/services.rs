@@ -168,15 +168,23 @@ impl Services {
     pub fn create(name: &str, max_clients: usize) -> Result<Self, String> {
         let names = ServiceNames::new(name);
         let node_name = names.server_node();
-        let node = NodeBuilder::new()
-            .name(
-                &node_name
-                    .as_str()
-                    .try_into()
-                    .map_err(|e| format!("node name {node_name:?}: {e:?}"))?,
-            )
-            .create::<Ipc>()
-            .map_err(|e| format!("iceoryx2 node: {e:?}"))?;
+        let iceoryx_name: NodeName = node_name
+            .as_str()
+            .try_into()
+            .map_err(|e| format!("node name {node_name:?}: {e:?}"))?;
+        // iceoryx2 can refuse a node for a moment while another process removes a dead
+        // process's node records: a few tries.
+        let mut attempt = 0;
+        let node = loop {
+            match NodeBuilder::new().name(&iceoryx_name).create::<Ipc>() {
+                Ok(node) => break node,
+                Err(e) if attempt >= 4 => return Err(format!("iceoryx2 node: {e:?}")),
+                Err(_) => {
+                    attempt += 1;
+                    std::thread::sleep(core::time::Duration::from_millis(20));
+                }
+            }
+        };
         if let Some(pid) = live_server(&node_name, node.id().value()) {
             return Err(format!(
                 "another motiond (process {pid}) is serving instance `{name}`; stop it or pick another [server] name"
