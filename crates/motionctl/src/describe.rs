@@ -318,7 +318,7 @@ pub fn list(client: &Client<Service>, json: bool) -> anyhow::Result<()> {
         if value == 0.0 {
             "-".to_owned()
         } else {
-            value.to_string()
+            significant(value)
         }
     };
     for (index, axis) in info.axes().iter().enumerate() {
@@ -456,4 +456,19 @@ pub fn table_row(axis: &AxisInfo, state: &AxisState, tick: u64) -> String {
         tick.saturating_sub(state.last_refresh_tick),
         flags_with_fault(state)
     )
+}
+
+/// `value` with at most six significant digits (17.99998560001152 reads as 18).
+fn significant(value: f64) -> String {
+    if !value.is_finite() || value == 0.0 {
+        return format!("{value}");
+    }
+    let digits = 5 - value.abs().log10().floor() as i32;
+    let rounded = if digits > 0 {
+        let scale = 10f64.powi(digits);
+        (value * scale).round() / scale
+    } else {
+        value.round()
+    };
+    format!("{rounded}")
 }

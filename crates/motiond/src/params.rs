@@ -56,6 +56,21 @@ pub fn from_config(config: &ServerConfig, owner: Owner, key: &str) -> bool {
     })
 }
 
+/// `value` with at most six significant digits (17.99998560001152 → 18).
+fn short(value: f64) -> String {
+    if value == 0.0 || !value.is_finite() {
+        return format!("{value}");
+    }
+    let digits = 6 - 1 - value.abs().log10().floor() as i32;
+    let rounded = if digits > 0 {
+        let scale = 10f64.powi(digits);
+        (value * scale).round() / scale
+    } else {
+        value.round()
+    };
+    format!("{rounded}")
+}
+
 /// Every axis's supervision and homing values (all models).
 fn axis_rows(config: &ServerConfig, out: &mut Vec<ParamRow>) {
     for (index, (axis, spec)) in config.axes.iter().zip(&config.axis_specs).enumerate() {
@@ -143,6 +158,15 @@ max_accel = 50.0
 following_error = 0.5
 home = { input = "home", positive_end = true }
 "#;
+
+    #[test]
+    fn figures_are_shown_with_six_significant_digits() {
+        assert_eq!(short(17.99998560001152), "18");
+        assert_eq!(short(0.03599997120002304), "0.036");
+        assert_eq!(short(1.5625), "1.5625");
+        assert_eq!(short(2_500_000.0), "2500000");
+        assert_eq!(short(0.0), "0");
+    }
 
     #[test]
     fn supervision_rows_are_marked_config_or_default() {
