@@ -295,23 +295,38 @@ fn json_array<'a>(value: &'a Value, key: &str) -> Result<&'a Vec<Value>> {
 
 #[test]
 fn real_move_wait_right_after_start_succeeds() -> Result {
-    // No waiting for the boards: the command's own --wait waits for readiness.
-    let server = RealServer::spawn_sim()?;
-    let output = run(
-        &server.name,
-        &[
-            "--connect-timeout",
-            "10s",
-            "move",
-            "x",
-            "10",
-            "--wait",
-            "--timeout",
-            "30s",
-        ],
-    )?;
-    assert!(output.status.success(), "{output:?}\n{}", server.log());
-    assert!(stdout(&output).contains("x: arrived at"), "{output:?}");
+    // No waiting for the boards: the command's own --wait waits for readiness. One fresh
+    // server per board kind: Trinamic, QuadQuad2Drv, SPI_motor, QSB-M.
+    for (axis, target) in [
+        ("x", "10"),
+        ("wheel_left", "30"),
+        ("focus", "100"),
+        ("feeder", "5"),
+    ] {
+        let server = RealServer::spawn_sim()?;
+        let output = run(
+            &server.name,
+            &[
+                "--connect-timeout",
+                "10s",
+                "move",
+                axis,
+                target,
+                "--wait",
+                "--timeout",
+                "30s",
+            ],
+        )?;
+        assert!(
+            output.status.success(),
+            "{axis}: {output:?}\n{}",
+            server.log()
+        );
+        assert!(
+            stdout(&output).contains(&format!("{axis}: arrived at")),
+            "{output:?}"
+        );
+    }
     Ok(())
 }
 
