@@ -85,20 +85,23 @@ fn axis_rows(config: &ServerConfig, out: &mut Vec<ParamRow>) {
         };
         row(
             "position_tolerance",
-            format!("{} {unit}", axis.position_tolerance),
+            format!("{} {unit}", short(axis.position_tolerance)),
         );
         row(
             "following_error",
-            format!("{} {unit}", axis.following_error),
+            format!("{} {unit}", short(axis.following_error)),
         );
-        row("overspeed_factor", format!("{}", axis.overspeed_factor));
+        row("overspeed_factor", short(axis.overspeed_factor));
         row("estop", axis.estop.id().to_owned());
         row("home.direction", spec.home.direction.id().to_owned());
         row(
             "home.max_travel",
-            format!("{} {unit}", spec.home.max_travel),
+            format!("{} {unit}", short(spec.home.max_travel)),
         );
-        row("home.position", format!("{} {unit}", spec.home.position));
+        row(
+            "home.position",
+            format!("{} {unit}", short(spec.home.position)),
+        );
     }
 }
 
