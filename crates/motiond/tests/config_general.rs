@@ -343,7 +343,6 @@ fn signals_are_checked_against_the_board_s_pins() {
     );
     // One pin, two signals.
     let text = GOOD
-        .replace("pin = \"io0\"", "pin = \"io0\"")
         .replace(
             "name = \"lamp\"\ndevice = \"io_board\"\npin = \"io0\"",
             "name = \"lamp\"\ndevice = \"drive\"\npin = \"in2\"",

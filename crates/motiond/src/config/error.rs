@@ -264,7 +264,7 @@ mod tests {
     #[test]
     fn a_non_utf8_byte_is_located() {
         let mut bytes = b"[server]\nname = \"d_mo\"\n".to_vec();
-        bytes[17] = 0xE9; // a Latin-1 é in place of the `_`
+        bytes[18] = 0xE9; // a Latin-1 é in place of the `_`
         let error = core::str::from_utf8(&bytes).unwrap_err();
         let config = ConfigError::not_utf8(Path::new("x.toml"), &bytes, &error);
         assert_eq!((config.issues[0].line, config.issues[0].column), (2, 10));
