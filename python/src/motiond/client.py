@@ -205,6 +205,7 @@ class Client:
             raise IncompatibleServer(name, description.schema_version, SCHEMA_VERSION)
         self._id = ClientId.from_int(self._node.id.value)
         self._goal_ticks: List[int] = [0] * int(description.axis_count)
+        self._open_stats()
 
     # --- plumbing --------------------------------------------------------------------------
 
@@ -229,6 +230,10 @@ class Client:
             return create()
         except Exception as error:
             raise IpcError(what, error) from error
+
+    def _check_open(self) -> None:
+        if self._closed:
+            raise errors.MotiondError("the client is closed")
 
     def _wait_tick(self, timeout: float) -> None:
         """Sleeps until the next tick notification or ``timeout`` (capped, so that Ctrl-C
@@ -260,6 +265,7 @@ class Client:
     def info(self) -> ServerInfo:
         """The server's description (axes, devices, signals, tick rate, deadman): a
         read-only view of the newest info sample."""
+        self._check_open()
         received = self._info.refresh()
         if received is None:  # pragma: no cover - connect guarantees one
             raise IpcError("read the server description", RuntimeError("none received"))
@@ -313,20 +319,27 @@ class Client:
         """A copy of the newest :class:`~motiond.ipc.ServerStats` (published about once a
         second); ``None`` until the first."""
         self.service_jogs()
+        self._open_stats()
         if self._stats is None:
-            try:
-                factory = (
-                    self._node.service_builder(self._service("stats"))
-                    .publish_subscribe(ServerStats)
-                    .open()
-                )
-                self._stats = LatestCache(
-                    factory.subscriber_builder().create(), ServerStats, "the stats service"
-                )
-            except Exception as error:
-                raise IpcError("open the stats service", error) from error
+            return None
         received = self._stats.refresh()
         return None if received is None else received.copy()
+
+    def _open_stats(self) -> None:
+        """Subscribes to the stats service if it is not yet (a server publishes it from
+        its first second on; until then there is nothing to read)."""
+        if self._stats is not None:
+            return
+        try:
+            factory = (
+                self._node.service_builder(self._service("stats"))
+                .publish_subscribe(ServerStats)
+                .open()
+            )
+            subscriber = factory.subscriber_builder().create()
+        except Exception:
+            return
+        self._stats = LatestCache(subscriber, ServerStats, "the stats service")
 
     def params(self, timeout: float = 1.0) -> List[Param]:
         """The machine parameters in effect (devices' then axes', config order), each with
@@ -382,6 +395,7 @@ class Client:
 
     def latest(self) -> Frame:
         """The newest frame (zero-copy). Waits for the first one if none arrived yet."""
+        self._check_open()
         self.service_jogs()
         frame = self._frames.refresh()
         if frame is None:
@@ -390,6 +404,7 @@ class Client:
 
     def try_next_frame(self) -> Optional[Frame]:
         """The next frame in publication order if one is waiting, else ``None``."""
+        self._check_open()
         self.service_jogs()
         return self._frames.take_next()
 
@@ -397,6 +412,7 @@ class Client:
         """The next frame in publication order, sleeping on the tick event (no busy
         polling) for up to ``timeout`` s. Frames the client was too slow for (more than
         the service's 32-frame buffer) are lost: compare ``tick``s."""
+        self._check_open()
         deadline = time.monotonic() + timeout
         while True:
             self.service_jogs()
@@ -478,8 +494,7 @@ class Client:
         not. ``index`` is an axis index, a signal index (``target=Target.SIGNAL``) or
         :data:`~motiond.ipc.ALL_AXES`; ``values`` as documented on
         :class:`~motiond.ipc.CommandKind`."""
-        if self._closed:
-            raise errors.MotiondError("the client is closed")
+        self._check_open()
         kind = CommandKind(kind)
         self._sequence += 1
         sequence = self._sequence
@@ -659,6 +674,11 @@ class Client:
         self._info.close()
         if self._stats is not None:
             self._stats.close()
+        # Give the port slots back now rather than whenever the garbage collector runs.
+        for port in (self._tick, self._commands, self._estop_notifier):
+            if port is not None:
+                port.delete()
+        self._estop_notifier = None
 
     def __enter__(self) -> "Client":
         return self

@@ -266,6 +266,7 @@ class LatestCache(Generic[T]):
         return received
 
     def close(self) -> None:
-        """Drops the cached sample and the subscriber."""
+        """Drops the cached sample and the subscriber (samples still held elsewhere stay
+        valid until they are dropped)."""
         self._newest = None
         self._subscriber = None
