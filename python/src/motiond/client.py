@@ -486,16 +486,16 @@ class Client:
     def send(
         self,
         index: int,
-        kind: CommandKind,
+        kind: Union[CommandKind, int],
         values: Sequence[float] = (0.0, 0.0, 0.0),
-        target: Target = Target.AXIS,
+        target: Union[Target, int] = Target.AXIS,
     ) -> CommandReply:
         """Sends one request and returns the server's reply (a copy) as it is, accepted or
         not. ``index`` is an axis index, a signal index (``target=Target.SIGNAL``) or
         :data:`~motiond.ipc.ALL_AXES`; ``values`` as documented on
         :class:`~motiond.ipc.CommandKind`."""
         self._check_open()
-        kind = CommandKind(kind)
+        typed_kind = to_enum(CommandKind, int(kind))
         self._sequence += 1
         sequence = self._sequence
         request = CommandRequest(
@@ -515,7 +515,7 @@ class Client:
             raise IpcError("send a command", error) from error
         try:
             if pending.number_of_server_connections == 0:
-                raise ServerGone(kind)
+                raise ServerGone(typed_kind)
             deadline = time.monotonic() + self._reply_timeout
             while True:
                 try:
@@ -532,7 +532,7 @@ class Client:
                     continue
                 now = time.monotonic()
                 if now >= deadline:
-                    raise NoReply(kind, self._reply_timeout)
+                    raise NoReply(typed_kind, self._reply_timeout)
                 # The server answers within its tick and then notifies the tick event.
                 self._wait_tick(min(deadline - now, _REPLY_POLL_CAP))
         finally:
@@ -541,9 +541,9 @@ class Client:
     def command(
         self,
         index: int,
-        kind: CommandKind,
+        kind: Union[CommandKind, int],
         values: Sequence[float] = (0.0, 0.0, 0.0),
-        target: Target = Target.AXIS,
+        target: Union[Target, int] = Target.AXIS,
         label: Optional[str] = None,
     ) -> Accepted:
         """Sends one request; returns :class:`Accepted`, or raises the
@@ -631,7 +631,7 @@ class Client:
             return remaining
         now = time.monotonic()
         for jog in list(self._jogs.values()):
-            if jog.active and jog.refused is None:
+            if jog.active and jog.refused is None and not jog.expired:
                 remaining = min(remaining, max(0.0, jog.last_sent + period - now))
         return remaining
 
@@ -644,14 +644,28 @@ class Client:
         self._jogs.pop(key, None)
 
     def service_jogs(self) -> None:
-        """Renews every running jog whose renewal is due. Called by every read and wait."""
+        """Renews every running jog whose renewal is due. Called by every read and wait.
+
+        A jog not renewed for a whole deadman (the program did not call into the client)
+        has been stopped by the server; it is not renewed any more, so that a program that
+        hung does not set the axis moving again when it wakes up (``Jog.expired``)."""
         period = self._jog_refresh_period()
         if period is None or not self._jogs:
             return
+        deadman = self.command_timeout_cached()
         now = time.monotonic()
         for jog in list(self._jogs.values()):
-            if jog.active and jog.refused is None and now >= jog.last_sent + period:
+            if not jog.active or jog.refused is not None or jog.expired:
+                continue
+            if now - jog.last_sent >= deadman:
+                jog.expired = True
+            elif now >= jog.last_sent + period:
                 jog._renew()
+
+    def command_timeout_cached(self) -> float:
+        """The server's deadman, s, from the description already received."""
+        current = self._info.current
+        return 0.0 if current is None else current.payload.command_timeout_ms / 1000.0
 
     def keep_alive(self) -> None:
         """Renews running jogs without reading anything: call it from a loop that does not

@@ -196,12 +196,16 @@ def refused(reason: int, kind: int, target: str, tick: int) -> Refused:
     return cls(typed_reason, typed_kind, target, tick)
 
 
+def _kind_text(kind: Union[CommandKind, int]) -> str:
+    return kind.text if isinstance(kind, CommandKind) else f"command {kind}"
+
+
 class ServerGone(MotiondError):
     """No server listens on the command service any more."""
 
-    def __init__(self, kind: CommandKind) -> None:
+    def __init__(self, kind: Union[CommandKind, int]) -> None:
         super().__init__(
-            f"{kind.text} not sent: no motiond serves the command service any more "
+            f"{_kind_text(kind)} not sent: no motiond serves the command service any more "
             "(did it stop?)"
         )
         self.kind = kind
@@ -210,9 +214,9 @@ class ServerGone(MotiondError):
 class NoReply(MotiondError, TimeoutError):
     """The server did not answer a command in time."""
 
-    def __init__(self, kind: CommandKind, waited: float) -> None:
+    def __init__(self, kind: Union[CommandKind, int], waited: float) -> None:
         super().__init__(
-            f"no reply from the server to {kind.text} within {waited:.3f} s; "
+            f"no reply from the server to {_kind_text(kind)} within {waited:.3f} s; "
             "is motiond still running?"
         )
         self.kind = kind

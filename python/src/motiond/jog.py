@@ -5,7 +5,8 @@ The server stops velocity and power goals that are not renewed within its deadma
 jog renews its goal every third of that time whenever the program calls into the client:
 any read or wait (:meth:`Client.latest`, :meth:`Client.frames`, :meth:`Axis.state`, the
 waits) or :meth:`Client.keep_alive`. There is no background thread on purpose: a program
-that hangs, or stops calling into the client, lets the server's deadman stop the axis.
+that hangs, or stops calling into the client, lets the server's deadman stop the axis, and
+the jog then stays stopped (:attr:`Jog.expired`) until :meth:`Jog.set` starts it again.
 
 Leaving the ``with`` block (normally, by an exception or by Ctrl-C) stops the axis at
 once::
@@ -61,6 +62,9 @@ class Jog:
         self.last_sent = time.monotonic()
         #: Renewals sent so far (the first goal not counted).
         self.renewals = 0
+        #: ``True`` once the jog went a whole deadman without renewal: the server has
+        #: stopped the axis, and the jog does not restart it (:meth:`set` does).
+        self.expired = False
         client.command(axis, kind, self._values)
         self.last_sent = time.monotonic()
         self.active = True
@@ -97,7 +101,9 @@ class Jog:
         if not self.active:
             raise errors.MotiondError("the jog has ended")
         self._values = (float(value), self._values[1], self._values[2])
-        return self._send()
+        accepted = self._send()
+        self.expired = False
+        return accepted
 
     def stop(self) -> None:
         """Ends the jog: stops the axis (decelerate and hold) and stops renewing."""
