@@ -9,14 +9,16 @@ How a change on the Rust side makes these tests fail (tried once, on AxisState, 
 writing them): add a field ``pub spare: u32`` to ``AxisState`` in
 ``crates/motion-ipc/src/frame.rs``. Then
 
-1. ``crates/motion-ipc/examples/layout/describe.rs`` no longer compiles: it destructures
-   every payload without ``..``, so the new field must be listed there (and the pinned
-   offsets of ``tests/layout.rs`` fail until they are updated too);
+1. ``crates/motion-ipc/examples/layout/describe.rs`` no longer compiles ("pattern
+   requires `..`"): it destructures every payload without ``..``, so the new field must
+   be listed there (and the pinned sizes and offsets of ``tests/layout.rs`` fail to
+   compile until they are updated too);
 2. once listed, the example prints the new field, and ``test_payload_layouts`` fails:
-   "AxisState: fields differ" with the Rust field list beside the Python one (and the
-   size, and the offsets of ``MotionFrame.signals`` that moved);
-3. ``crates/motion-ipc/tests/c_header.rs`` fails the same way for ``include/motiond.h``
-   (the generated probe names ``spare``, which the header lacks).
+   "AxisState: size 80 != 88", "AxisState: field #12 differs: rust {'name': 'spare',
+   'offset': 80, 'size': 4, 'type': 'u32'}, python None", and the same for
+   ``MotionFrame``, whose size and ``signals`` offset moved;
+3. ``crates/motion-ipc/tests/c_header.rs`` fails for ``include/motiond.h``: the
+   generated probe names ``spare``, and the compiler says the struct has no such member.
 
 Nothing but adding the field to ``python/src/motiond/ipc.py`` (and to the header) makes them
 pass again. A renamed type name, a changed enum value or a changed refusal message fails
@@ -92,10 +94,14 @@ def test_payload_layouts(contract: Dict[str, Any]) -> None:
         if ctypes.alignment(cls) != layout["align"]:
             problems.append(f"{name}: alignment {ctypes.alignment(cls)} != {layout['align']}")
         mine = mirror_fields(cls)
-        if mine != layout["fields"]:
-            problems.append(
-                f"{name}: fields differ\n  rust:   {layout['fields']}\n  python: {mine}"
-            )
+        theirs = layout["fields"]
+        for index in range(max(len(mine), len(theirs))):
+            rust_field = theirs[index] if index < len(theirs) else None
+            python_field = mine[index] if index < len(mine) else None
+            if rust_field != python_field:
+                problems.append(
+                    f"{name}: field #{index} differs: rust {rust_field}, python {python_field}"
+                )
     assert not problems, "\n".join(problems)
 
 
