@@ -53,9 +53,11 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         start = axis.state().position
         # Head for the far half of the travel, so that the move lasts the whole reading.
         middle = (info.min + info.max) / 2.0
-        goal = info.max - (info.max - middle) * 0.2 if start < middle else info.min + (
-            middle - info.min
-        ) * 0.2
+        goal = (
+            info.max - (info.max - middle) * 0.2
+            if start < middle
+            else info.min + (middle - info.min) * 0.2
+        )
         before = wait_stats(client, 0, timeout=3.0)
 
         accepted = axis.ramp_to(goal)

@@ -99,7 +99,7 @@ def sim_config(repo: Path, name: str) -> str:
     """config/sim.toml with ``[server] name`` set to ``name``."""
     text = (repo / "config" / "sim.toml").read_text()
     text, count = re.subn(r'(?m)^name = "demo"', f'name = "{name}"', text, count=1)
-    assert count == 1, "config/sim.toml has no `name = \"demo\"` line in [server]"
+    assert count == 1, 'config/sim.toml has no `name = "demo"` line in [server]'
     return text
 
 

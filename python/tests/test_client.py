@@ -113,7 +113,11 @@ def test_a_replaced_goal_aborts_the_wait(client: motiond.Client) -> None:
     "send, refusal, reason",
     [
         (lambda c: c.axis("x").move_to(1e9), motiond.OutOfRange, Reason.OUT_OF_RANGE),
-        (lambda c: c.axis("x").ramp_to(10.0, 1e6, 0.0), motiond.VelocityLimit, Reason.VELOCITY_LIMIT),
+        (
+            lambda c: c.axis("x").ramp_to(10.0, 1e6, 0.0),
+            motiond.VelocityLimit,
+            Reason.VELOCITY_LIMIT,
+        ),
         (lambda c: c.axis("x").ramp_to(10.0, 10.0, 1e9), motiond.AccelLimit, Reason.ACCEL_LIMIT),
         (lambda c: c.axis("x").move_to(float("nan")), motiond.NotFinite, Reason.NOT_FINITE),
         (lambda c: c.axis("pump_a").move_to(1.0), motiond.Unsupported, Reason.UNSUPPORTED),
@@ -126,7 +130,11 @@ def test_a_replaced_goal_aborts_the_wait(client: motiond.Client) -> None:
             Reason.UNKNOWN_SIGNAL,
         ),
         (lambda c: c.command(4, 99), motiond.UnknownKind, Reason.UNKNOWN_KIND),
-        (lambda c: c.command(4, CommandKind.STOP, target=7), motiond.UnknownTarget, Reason.UNKNOWN_TARGET),
+        (
+            lambda c: c.command(4, CommandKind.STOP, target=7),
+            motiond.UnknownTarget,
+            Reason.UNKNOWN_TARGET,
+        ),
         (lambda c: c.signal("x_ref").set(True), motiond.NotAnOutput, Reason.NOT_AN_OUTPUT),
     ],
     ids=[

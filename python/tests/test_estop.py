@@ -15,13 +15,14 @@ def test_estop_stops_refuses_and_reset_clears(client: motiond.Client) -> None:
     lamp.wait_for(True, timeout=5.0)
     jog = conveyor.jog(30.0)
     try:
-        client.wait_frames("move", 5.0, lambda f: bool(f.axis(conveyor.index).flags & AxisFlags.MOVING))
+        client.wait_frames(
+            "move", 5.0, lambda f: bool(f.axis(conveyor.index).flags & AxisFlags.MOVING)
+        )
         accepted = client.estop()
         stopped = client.wait_frames(
             "stop every axis",
             10.0,
-            lambda f: f.estop_latched
-            and not any(a.flags & AxisFlags.MOVING for a in f.axes),
+            lambda f: f.estop_latched and not any(a.flags & AxisFlags.MOVING for a in f.axes),
             since=accepted.tick,
         )
         state = conveyor.state(stopped)
@@ -63,9 +64,7 @@ def test_estop_stops_refuses_and_reset_clears(client: motiond.Client) -> None:
 def test_estop_event_latches_like_the_command(client: motiond.Client) -> None:
     client.notify_estop()
     frame = client.wait_frames("latch the e-stop", 5.0, lambda f: f.estop_latched)
-    assert all(
-        axis.mode in (AxisMode.HOLD, AxisMode.STOPPING, AxisMode.OFF) for axis in frame.axes
-    )
+    assert all(axis.mode in (AxisMode.HOLD, AxisMode.STOPPING, AxisMode.OFF) for axis in frame.axes)
     del frame
     try:
         client.axis("focus").ramp_to(10.0)

@@ -120,7 +120,9 @@ def test_enumerations_values_names_and_texts(contract: Dict[str, Any]) -> None:
         if cls is None:
             problems.append(f"{item['rust']}: no Python enumeration")
             continue
-        want = {upper_snake(v["name"]) if not item["flags"] else v["name"]: v for v in item["variants"]}
+        want = {
+            upper_snake(v["name"]) if not item["flags"] else v["name"]: v for v in item["variants"]
+        }
         have = {member.name: member for member in cls}
         if sorted(want) != sorted(have):
             problems.append(f"{item['rust']}: members {sorted(have)} != {sorted(want)}")
@@ -154,7 +156,9 @@ def test_every_refusal_reason_has_its_exception(contract: Dict[str, Any]) -> Non
         cls = errors.REFUSALS[reason]
         assert cls.__name__ == variant["name"]
         assert getattr(motiond, variant["name"]) is cls
-        error = errors.refused(variant["value"], int(motiond.CommandKind.RAMP_POSITION), "axis x", 7)
+        error = errors.refused(
+            variant["value"], int(motiond.CommandKind.RAMP_POSITION), "axis x", 7
+        )
         assert type(error) is cls and isinstance(error, motiond.Refused)
         assert error.reason is reason and error.tick == 7
         # The text reads like the Rust client's: "<kind> on <target> refused: <message>".

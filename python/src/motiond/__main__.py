@@ -8,6 +8,7 @@ parameters in effect. ``--server NAME`` picks the instance (default ``demo``).
 from __future__ import annotations
 
 import argparse
+import enum
 import sys
 from typing import List, Optional, Sequence, TextIO
 
@@ -32,8 +33,8 @@ def _name(value: object) -> str:
     return str(text) if text is not None else str(value)
 
 
-def _flags(flags: object) -> str:
-    names = [member.name.lower() for member in type(flags) if member in flags]  # type: ignore[attr-defined]
+def _flags(flags: enum.IntFlag) -> str:
+    names = [str(member.name).lower() for member in type(flags) if member in flags]
     return ",".join(names) if names else "-"
 
 
@@ -131,14 +132,14 @@ def status(client: Client, out: TextIO) -> None:
     if frame.signal_count:
         rows = [["signal", "value", "raw", "unit", "flags"]]
         for signal in client.signals:
-            s = signal.state(frame)
+            status = signal.state(frame)
             rows.append(
                 [
                     signal.name,
-                    f"{s.value:g}",
-                    f"{s.raw:g}",
+                    f"{status.value:g}",
+                    f"{status.raw:g}",
                     signal.unit or "-",
-                    _flags(SignalFlags(s.flags)),
+                    _flags(SignalFlags(status.flags)),
                 ]
             )
         out.write("\n")
@@ -167,9 +168,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     )
     parser.add_argument("command", choices=["list", "status", "params"])
     parser.add_argument("--server", default="demo", help="instance name ([server] name)")
-    parser.add_argument(
-        "--timeout", type=float, default=2.0, help="seconds to wait for the server"
-    )
+    parser.add_argument("--timeout", type=float, default=2.0, help="seconds to wait for the server")
     args = parser.parse_args(argv)
     try:
         with Client(args.server, timeout=args.timeout) as client:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Optional, Union
+from typing import TYPE_CHECKING, Callable, Optional, Union
 
 from .errors import WaitAborted
 from .frames import Frame
@@ -251,11 +251,17 @@ class Axis:
             return "the server is shutting down"
         return None
 
-    def _wait(self, what: str, timeout: float, done: "object") -> Frame:
+    def _wait(
+        self,
+        what: str,
+        timeout: float,
+        done: Callable[[AxisState, Frame], Union[bool, str]],
+    ) -> Frame:
+        """Waits until ``done`` returns ``True``; a text it returns aborts the wait."""
         subject = f"axis {self.name}"
 
         def check(frame: Frame) -> bool:
-            outcome = done(frame.axis(self._index), frame)  # type: ignore[operator]
+            outcome = done(frame.axis(self._index), frame)
             if isinstance(outcome, str):
                 raise WaitAborted(subject, what, outcome)
             return bool(outcome)
@@ -271,7 +277,7 @@ class Axis:
         (fault, e-stop, another goal) and :class:`~motiond.errors.WaitTimeout` after
         ``timeout`` s."""
 
-        def done(state: AxisState, frame: Frame) -> "Union[bool, str]":
+        def done(state: AxisState, frame: Frame) -> Union[bool, str]:
             flags = AxisFlags(state.flags)
             if AxisFlags.ARRIVED in flags and AxisFlags.MOVING not in flags:
                 return True
@@ -290,7 +296,7 @@ class Axis:
         """Waits until the reference search started by :meth:`home` has finished with the
         axis homed."""
 
-        def done(state: AxisState, frame: Frame) -> "Union[bool, str]":
+        def done(state: AxisState, frame: Frame) -> Union[bool, str]:
             homing = state.mode == AxisMode.HOMING
             if AxisFlags.HOMED in AxisFlags(state.flags) and not homing:
                 return True
@@ -304,7 +310,7 @@ class Axis:
     def wait_until_stopped(self, timeout: float = 5.0) -> Frame:
         """Waits until the axis is at rest (its ``MOVING`` flag clear)."""
 
-        def done(state: AxisState, frame: Frame) -> bool:
+        def done(state: AxisState, frame: Frame) -> Union[bool, str]:
             return AxisFlags.MOVING not in AxisFlags(state.flags)
 
         return self._wait("come to rest", timeout, done)

@@ -474,9 +474,7 @@ class Client:
             handles = [self.axis(name) for name in axes]
 
             def ready(frame: Frame) -> bool:
-                return all(
-                    frame.axis(h.index).device_state == DeviceState.ONLINE for h in handles
-                )
+                return all(frame.axis(h.index).device_state == DeviceState.ONLINE for h in handles)
 
             subject = "the devices of " + ", ".join(axes)
         return self.wait_frames("come online", timeout, ready, subject=subject)
@@ -560,7 +558,7 @@ class Client:
             int(reply.tick_applied),
         )
 
-    def _label(self, index: int, target: Target) -> str:
+    def _label(self, index: int, target: Union[Target, int]) -> str:
         if index == ALL_AXES:
             return "all axes"
         info = self.info
@@ -702,4 +700,3 @@ class Client:
 
     def __repr__(self) -> str:
         return f"Client(name={self._name!r}, id={int(self._id):#x})"
-

@@ -30,6 +30,29 @@ __all__ = [
     "IpcError",
     "refused",
     "REFUSALS",
+    "SchemaMismatch",
+    "UnknownKind",
+    "UnknownAxis",
+    "Unsupported",
+    "NotFinite",
+    "OutOfRange",
+    "VelocityLimit",
+    "AccelLimit",
+    "PowerLimit",
+    "ClaimedByOther",
+    "NotClaimed",
+    "EstopLatched",
+    "AxisFaulted",
+    "LinkDown",
+    "Busy",
+    "ShuttingDown",
+    "NoClientId",
+    "IdentityMismatch",
+    "DeviceStarting",
+    "DeviceOffline",
+    "UnknownSignal",
+    "NotAnOutput",
+    "UnknownTarget",
 ]
 
 
@@ -94,9 +117,7 @@ class NoSuchSignal(MotiondError, LookupError):
     """No signal of that name on the server."""
 
     def __init__(self, name: str) -> None:
-        super().__init__(
-            f'no signal named "{name}" on this server (see `python -m motiond list`)'
-        )
+        super().__init__(f'no signal named "{name}" on this server (see `python -m motiond list`)')
         self.name = name
 
 
@@ -123,36 +144,152 @@ class Refused(MotiondError):
         self.tick = tick
 
 
-def _refusal(reason: Reason) -> Type[Refused]:
-    name = "".join(part.capitalize() for part in reason.name.split("_"))
-    doc = f"Refused: {reason.message} (``Reason.{reason.name}``)."
-    return type(name, (Refused,), {"__doc__": doc, "reason_code": reason, "__module__": __name__})
-
-
 # One class per refusal reason, named after it: ``except motiond.OutOfRange:``.
-SchemaMismatch = _refusal(Reason.SCHEMA_MISMATCH)
-UnknownKind = _refusal(Reason.UNKNOWN_KIND)
-UnknownAxis = _refusal(Reason.UNKNOWN_AXIS)
-Unsupported = _refusal(Reason.UNSUPPORTED)
-NotFinite = _refusal(Reason.NOT_FINITE)
-OutOfRange = _refusal(Reason.OUT_OF_RANGE)
-VelocityLimit = _refusal(Reason.VELOCITY_LIMIT)
-AccelLimit = _refusal(Reason.ACCEL_LIMIT)
-PowerLimit = _refusal(Reason.POWER_LIMIT)
-ClaimedByOther = _refusal(Reason.CLAIMED_BY_OTHER)
-NotClaimed = _refusal(Reason.NOT_CLAIMED)
-EstopLatched = _refusal(Reason.ESTOP_LATCHED)
-AxisFaulted = _refusal(Reason.AXIS_FAULTED)
-LinkDown = _refusal(Reason.LINK_DOWN)
-Busy = _refusal(Reason.BUSY)
-ShuttingDown = _refusal(Reason.SHUTTING_DOWN)
-NoClientId = _refusal(Reason.NO_CLIENT_ID)
-IdentityMismatch = _refusal(Reason.IDENTITY_MISMATCH)
-DeviceStarting = _refusal(Reason.DEVICE_STARTING)
-DeviceOffline = _refusal(Reason.DEVICE_OFFLINE)
-UnknownSignal = _refusal(Reason.UNKNOWN_SIGNAL)
-NotAnOutput = _refusal(Reason.NOT_AN_OUTPUT)
-UnknownTarget = _refusal(Reason.UNKNOWN_TARGET)
+
+
+class SchemaMismatch(Refused):
+    """Refused: client and server use different motion-ipc schema versions
+    (``Reason.SCHEMA_MISMATCH``).
+    """
+
+    reason_code = Reason.SCHEMA_MISMATCH
+
+
+class UnknownKind(Refused):
+    """Refused: unknown command kind (``Reason.UNKNOWN_KIND``)."""
+
+    reason_code = Reason.UNKNOWN_KIND
+
+
+class UnknownAxis(Refused):
+    """Refused: no such axis on this server (``Reason.UNKNOWN_AXIS``)."""
+
+    reason_code = Reason.UNKNOWN_AXIS
+
+
+class Unsupported(Refused):
+    """Refused: the axis's board cannot do this command (``Reason.UNSUPPORTED``)."""
+
+    reason_code = Reason.UNSUPPORTED
+
+
+class NotFinite(Refused):
+    """Refused: a value is NaN or infinite (``Reason.NOT_FINITE``)."""
+
+    reason_code = Reason.NOT_FINITE
+
+
+class OutOfRange(Refused):
+    """Refused: position outside the axis's min..max soft limits (``Reason.OUT_OF_RANGE``)."""
+
+    reason_code = Reason.OUT_OF_RANGE
+
+
+class VelocityLimit(Refused):
+    """Refused: velocity above the axis's max_velocity (``Reason.VELOCITY_LIMIT``)."""
+
+    reason_code = Reason.VELOCITY_LIMIT
+
+
+class AccelLimit(Refused):
+    """Refused: acceleration above the axis's max_accel or not positive (``Reason.ACCEL_LIMIT``)."""
+
+    reason_code = Reason.ACCEL_LIMIT
+
+
+class PowerLimit(Refused):
+    """Refused: power outside -1.0..1.0 (``Reason.POWER_LIMIT``)."""
+
+    reason_code = Reason.POWER_LIMIT
+
+
+class ClaimedByOther(Refused):
+    """Refused: the axis is claimed by another client (``Reason.CLAIMED_BY_OTHER``)."""
+
+    reason_code = Reason.CLAIMED_BY_OTHER
+
+
+class NotClaimed(Refused):
+    """Refused: this client holds no claim on the axis (``Reason.NOT_CLAIMED``)."""
+
+    reason_code = Reason.NOT_CLAIMED
+
+
+class EstopLatched(Refused):
+    """Refused: e-stop is latched: send reset first (``Reason.ESTOP_LATCHED``)."""
+
+    reason_code = Reason.ESTOP_LATCHED
+
+
+class AxisFaulted(Refused):
+    """Refused: the axis is faulted: clear the cause, then reset (``Reason.AXIS_FAULTED``)."""
+
+    reason_code = Reason.AXIS_FAULTED
+
+
+class LinkDown(Refused):
+    """Refused: the axis's link is down (``Reason.LINK_DOWN``)."""
+
+    reason_code = Reason.LINK_DOWN
+
+
+class Busy(Refused):
+    """Refused: the server's command queue is full: retry (``Reason.BUSY``)."""
+
+    reason_code = Reason.BUSY
+
+
+class ShuttingDown(Refused):
+    """Refused: the server is shutting down (``Reason.SHUTTING_DOWN``)."""
+
+    reason_code = Reason.SHUTTING_DOWN
+
+
+class NoClientId(Refused):
+    """Refused: claim and release need a client id (``Reason.NO_CLIENT_ID``)."""
+
+    reason_code = Reason.NO_CLIENT_ID
+
+
+class IdentityMismatch(Refused):
+    """Refused: the request's client id is not the sender's iceoryx2 node: ids cannot be borrowed
+    (``Reason.IDENTITY_MISMATCH``).
+    """
+
+    reason_code = Reason.IDENTITY_MISMATCH
+
+
+class DeviceStarting(Refused):
+    """Refused: the axis's board is starting: waiting for its first answer and its start-up stop
+    (``Reason.DEVICE_STARTING``).
+    """
+
+    reason_code = Reason.DEVICE_STARTING
+
+
+class DeviceOffline(Refused):
+    """Refused: the axis's board is not answering (``Reason.DEVICE_OFFLINE``)."""
+
+    reason_code = Reason.DEVICE_OFFLINE
+
+
+class UnknownSignal(Refused):
+    """Refused: no such signal on this server (``Reason.UNKNOWN_SIGNAL``)."""
+
+    reason_code = Reason.UNKNOWN_SIGNAL
+
+
+class NotAnOutput(Refused):
+    """Refused: the signal is not a digital output (``Reason.NOT_AN_OUTPUT``)."""
+
+    reason_code = Reason.NOT_AN_OUTPUT
+
+
+class UnknownTarget(Refused):
+    """Refused: unknown target: 0 = axis, 1 = signal (``Reason.UNKNOWN_TARGET``)."""
+
+    reason_code = Reason.UNKNOWN_TARGET
+
 
 #: The :class:`Refused` subclass of every reason but ``ACCEPTED``.
 REFUSALS: Dict[Reason, Type[Refused]] = {
@@ -184,8 +321,6 @@ REFUSALS: Dict[Reason, Type[Refused]] = {
     )
     if cls.reason_code is not None
 }
-
-__all__ += [cls.__name__ for cls in REFUSALS.values()]
 
 
 def refused(reason: int, kind: int, target: str, tick: int) -> Refused:

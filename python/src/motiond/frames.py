@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import ctypes
-from typing import TYPE_CHECKING, Any, Generic, List, Optional, Type, TypeVar
+from typing import TYPE_CHECKING, Any, Dict, Generic, List, Optional, Type, TypeVar
 
 import iceoryx2 as iox2
 
@@ -27,6 +27,7 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = ["Received", "Frame", "LatestCache"]
 
 T = TypeVar("T", bound=Payload)
+R = TypeVar("R", bound="Received[Any]")
 
 _AXES_OFFSET = MotionFrame.axes.offset
 _SIGNALS_OFFSET = MotionFrame.signals.offset
@@ -78,7 +79,7 @@ class Received(Generic[T]):
             self._payload = None
             self._sample.delete()
 
-    def __enter__(self) -> "Received[T]":
+    def __enter__(self: R) -> R:
         return self
 
     def __exit__(self, *exc: object) -> None:
@@ -186,22 +187,18 @@ class Frame(Received[MotionFrame]):
         """Targets of the valid axes, a NumPy view without copy."""
         return self.axis_array("target")
 
-    def _strided(
-        self, record: Type[Payload], base: int, count: int, field: str
-    ) -> "numpy.ndarray":
+    def _strided(self, record: Type[Payload], base: int, count: int, field: str) -> "numpy.ndarray":
         try:
             import numpy
         except ImportError as error:  # pragma: no cover - depends on the environment
-            raise ImportError(
-                "Frame arrays need NumPy: pip install 'motiond[numpy]'"
-            ) from error
+            raise ImportError("Frame arrays need NumPy: pip install 'motiond[numpy]'") from error
         descriptor = getattr(record, field, None)
-        kinds = dict(record._fields_)
+        kinds: Dict[str, Any] = {entry[0]: entry[1] for entry in record._fields_}
         kind = kinds.get(field)
         if descriptor is None or kind not in _NUMPY_TYPES:
+            numeric = [name for name, k in kinds.items() if k in _NUMPY_TYPES]
             raise ValueError(
-                f"{record.__name__} has no numeric field {field!r} "
-                f"(numeric fields: {[n for n, k in record._fields_ if k in _NUMPY_TYPES]})"
+                f"{record.__name__} has no numeric field {field!r} (numeric fields: {numeric})"
             )
         payload = self.payload
         buffer = (ctypes.c_uint8 * ctypes.sizeof(MotionFrame)).from_address(
@@ -211,7 +208,7 @@ class Frame(Received[MotionFrame]):
         array = numpy.ndarray(
             shape=(count,),
             dtype=numpy.dtype(_NUMPY_TYPES[kind]),
-            buffer=buffer,
+            buffer=memoryview(buffer),
             offset=base + descriptor.offset,
             strides=(ctypes.sizeof(record),),
         )

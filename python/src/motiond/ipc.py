@@ -164,13 +164,15 @@ class Payload(ctypes.Structure):
 
     def __repr__(self) -> str:
         parts = []
-        for name, kind in self._fields_:
+        for entry in self._fields_:
+            name, kind = entry[0], entry[1]
             value = getattr(self, name)
             if isinstance(value, ctypes.Array):
-                if getattr(kind, "_type_", None) is _u8:
+                element = getattr(kind, "_type_", None)
+                if element is _u8:
                     value = read_text(value)
                 else:
-                    value = f"[{len(value)} × {kind._type_.__name__}]"
+                    value = f"[{len(value)} × {getattr(element, '__name__', '?')}]"
             parts.append(f"{name}={value!r}")
         return f"{type(self).__name__}({', '.join(parts)})"
 
@@ -647,12 +649,10 @@ _TEXTS: Dict[type, Dict[enum.IntEnum, str]] = {
         Reason.SHUTTING_DOWN: "the server is shutting down",
         Reason.NO_CLIENT_ID: "claim and release need a client id",
         Reason.IDENTITY_MISMATCH: (
-            "the request's client id is not the sender's iceoryx2 node: "
-            "ids cannot be borrowed"
+            "the request's client id is not the sender's iceoryx2 node: " "ids cannot be borrowed"
         ),
         Reason.DEVICE_STARTING: (
-            "the axis's board is starting: waiting for its first answer and its "
-            "start-up stop"
+            "the axis's board is starting: waiting for its first answer and its " "start-up stop"
         ),
         Reason.DEVICE_OFFLINE: "the axis's board is not answering",
         Reason.UNKNOWN_SIGNAL: "no such signal on this server",
