@@ -256,3 +256,31 @@ def test_cli_list_and_status(server: Server) -> None:
     )
     assert missing.returncode == 1
     assert 'no motiond server named "nobody-here"' in missing.stderr
+
+
+def test_home_set_position_and_off(client: motiond.Client) -> None:
+    z = client.axis("z")  # a reference switch at the top (0): the search runs positive
+    accepted = z.home()
+    frame = z.wait_until_homed(timeout=30.0)
+    assert frame.tick >= accepted.tick
+    state = z.state(frame)
+    del frame
+    assert state.homed and state.mode is not ipc.AxisMode.HOMING
+
+    focus = client.axis("focus")
+    focus.set_position(123.0)
+    frame = client.wait_frames(
+        "take the new position", 5.0, lambda f: f.axis(focus.index).position == 123.0
+    )
+    assert focus.state(frame).homed  # a set position is a valid reference
+    del frame
+
+    conveyor = client.axis("conveyor")
+    conveyor.off()
+    frame = client.wait_frames(
+        "de-energise", 5.0, lambda f: f.axis(conveyor.index).mode == ipc.AxisMode.OFF
+    )
+    del frame
+    here = conveyor.state().position
+    conveyor.ramp_to(here + 5.0)  # the next goal drives again
+    conveyor.wait_until_arrived(timeout=10.0)
