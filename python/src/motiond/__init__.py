@@ -1,0 +1,85 @@
+"""Python client of motiond, the real-time shared-memory motion server.
+
+Connect to a running server, read its per-tick frames straight from shared memory, command
+its axes and signals, wait for them::
+
+    import motiond
+
+    with motiond.Client("demo") as client:
+        client.wait_ready()
+        x = client.axis("x")
+        x.ramp_to(10.0)                 # 0.0 velocity/accel: the axis's maxima
+        x.wait_until_arrived(timeout=10)
+        print(x.state().position, x.unit)
+
+        with x.jog(-2.0):               # renewed while we read; stops when the block ends
+            for frame in client.frames():
+                if frame.axis(x.index).position < 5.0:
+                    break
+
+Everything goes through iceoryx2 (the ``iceoryx2`` package from PyPI) and the payload
+mirrors of :mod:`motiond.ipc`. Refusals raise the :class:`Refused` subclass of the
+server's :class:`Reason` (:class:`OutOfRange`, :class:`EstopLatched`, …).
+"""
+
+from __future__ import annotations
+
+import iceoryx2 as _iox2
+
+# iceoryx2 warns on stdout when it runs without a config file (the normal case for a
+# client); keep a client quiet unless IOX2_LOG_LEVEL asks for more.
+_iox2.set_log_level_from_env_or(_iox2.LogLevel.Error)
+
+from . import ipc  # noqa: E402
+from .axis import Axis, AxisStatus  # noqa: E402
+from .client import (  # noqa: E402
+    DEFAULT_CONNECT_TIMEOUT,
+    DEFAULT_REPLY_TIMEOUT,
+    Accepted,
+    Client,
+    Param,
+)
+from .errors import *  # noqa: E402,F401,F403
+from .errors import __all__ as _error_names  # noqa: E402
+from .frames import Frame, Received  # noqa: E402
+from .ipc import (  # noqa: E402
+    AxisFlags,
+    AxisMode,
+    CommandKind,
+    DeviceState,
+    FaultCode,
+    FrameFlags,
+    Reason,
+    SignalFlags,
+    SignalKind,
+)
+from .jog import Jog  # noqa: E402
+from .signal import Signal, SignalStatus  # noqa: E402
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "ipc",
+    "Client",
+    "Accepted",
+    "Param",
+    "Axis",
+    "AxisStatus",
+    "Signal",
+    "SignalStatus",
+    "Jog",
+    "Frame",
+    "Received",
+    "AxisFlags",
+    "AxisMode",
+    "CommandKind",
+    "DeviceState",
+    "FaultCode",
+    "FrameFlags",
+    "Reason",
+    "SignalFlags",
+    "SignalKind",
+    "DEFAULT_CONNECT_TIMEOUT",
+    "DEFAULT_REPLY_TIMEOUT",
+    *_error_names,
+]

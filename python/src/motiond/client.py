@@ -1,0 +1,702 @@
+"""Connecting to a motiond instance: :class:`Client`."""
+
+from __future__ import annotations
+
+import ctypes
+import time
+import weakref
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Callable, Iterator, List, Optional, Sequence, Union
+
+import iceoryx2 as iox2
+
+from . import errors
+from .errors import (
+    IncompatibleServer,
+    IpcError,
+    NoFrame,
+    NoInfo,
+    NoReply,
+    NoServer,
+    NoSuchAxis,
+    NoSuchSignal,
+    ServerGone,
+    WaitTimeout,
+)
+from .frames import Frame, LatestCache
+from .ipc import (
+    ALL_AXES,
+    SCHEMA_VERSION,
+    ClientId,
+    CommandKind,
+    CommandReply,
+    CommandRequest,
+    DeviceState,
+    MachineParams,
+    MotionFrame,
+    ParamOwner,
+    Reason,
+    ServerInfo,
+    ServerStats,
+    Target,
+    service_name,
+    to_enum,
+)
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .axis import Axis
+    from .jog import Jog
+    from .signal import Signal
+
+__all__ = ["Client", "Accepted", "Param", "DEFAULT_CONNECT_TIMEOUT", "DEFAULT_REPLY_TIMEOUT"]
+
+#: How long :class:`Client` retries by default before saying no server runs, s.
+DEFAULT_CONNECT_TIMEOUT = 2.0
+#: How long a command waits for its reply by default, s.
+DEFAULT_REPLY_TIMEOUT = 1.0
+# Longest single sleep of any wait: bounds a missed wake-up and how late Ctrl-C is seen.
+_WAIT_CAP = 0.05
+# Longest single sleep while waiting for a command reply.
+_REPLY_POLL_CAP = 0.002
+# Shortest jog renewal period, whatever the deadman.
+_MIN_REFRESH = 0.005
+
+
+@dataclass(frozen=True)
+class Accepted:
+    """A command the server accepted."""
+
+    #: The sequence number the client gave the request.
+    sequence: int
+    #: The tick in which the command took effect.
+    tick: int
+
+
+@dataclass(frozen=True)
+class Param:
+    """One machine parameter in effect (``motiond/<name>/params``)."""
+
+    #: ``ParamOwner.DEVICE`` or ``ParamOwner.AXIS``.
+    owner: Union[ParamOwner, int]
+    #: Device or axis index, config order.
+    owner_index: int
+    #: Device or axis name.
+    owner_name: str
+    #: The config key, dotted for tables (``current.standstill``).
+    key: str
+    #: The value in effect, with its unit (``50 %``).
+    value: str
+    #: ``True`` when the config file set it, ``False`` for the default.
+    from_config: bool
+
+
+def _duration(seconds: float) -> Any:
+    return iox2.Duration.from_secs_f64(max(0.0, seconds))
+
+
+def _open_retrying(deadline: float, open_: Callable[[], Any]) -> Any:
+    """Calls ``open_`` until it succeeds or ``deadline`` passes (then raises its error)."""
+    while True:
+        try:
+            return open_()
+        except Exception:
+            if time.monotonic() >= deadline:
+                raise
+            time.sleep(0.01)
+
+
+class Client:
+    """A connection to one motiond instance: frames, server description, commands.
+
+    ``Client("demo")`` connects to the instance whose config says ``[server] name =
+    "demo"``, retrying for ``timeout`` seconds while its services do not exist yet.
+    A client is meant to be used from one thread. Close it with :meth:`close` (or use it
+    as a context manager); its jogs stop then.
+
+    Every read and wait (:meth:`latest`, :meth:`frames`, :meth:`Axis.state`,
+    the waits, :meth:`keep_alive`) also renews the client's running jogs: see
+    :class:`~motiond.jog.Jog`.
+    """
+
+    def __init__(
+        self,
+        name: str = "demo",
+        timeout: float = DEFAULT_CONNECT_TIMEOUT,
+        *,
+        reply_timeout: float = DEFAULT_REPLY_TIMEOUT,
+        node_name: str = "motiond-python",
+    ) -> None:
+        started = time.monotonic()
+        deadline = started + timeout
+        self._name = name
+        self._reply_timeout = reply_timeout
+        self._sequence = 0
+        self._closed = False
+        self._jogs: "weakref.WeakValueDictionary[int, Jog]" = weakref.WeakValueDictionary()
+        self._next_jog = 0
+        self._stats: Optional[LatestCache[ServerStats]] = None
+        self._estop_notifier: Any = None
+        try:
+            self._node = (
+                iox2.NodeBuilder.new()
+                .name(iox2.NodeName.new(node_name))
+                # Python handles SIGINT itself (KeyboardInterrupt); every wait here is
+                # short enough for it to be seen at once.
+                .signal_handling_mode(iox2.SignalHandlingMode.Disabled)
+                .create(iox2.ServiceType.Ipc)
+            )
+        except Exception as error:
+            raise IpcError("create a node", error) from error
+
+        frame_service = self._service("frame")
+        try:
+            frames = _open_retrying(
+                deadline,
+                lambda: self._node.service_builder(frame_service)
+                .publish_subscribe(MotionFrame)
+                .open(),
+            )
+        except iox2.PublishSubscribeOpenError as error:
+            detail = error.args[0] if error.args else ""
+            if detail == "IncompatibleTypes":
+                raise IncompatibleServer(name, 0, SCHEMA_VERSION) from None
+            if detail in ("DoesNotExist", "IsMarkedForDestruction", "HangsInCreation"):
+                raise NoServer(name, str(frame_service), timeout) from None
+            raise IpcError("open the frame service", error) from error
+        self._frame_service = frames
+        self._frames: LatestCache[MotionFrame] = LatestCache(
+            self._create(lambda: frames.subscriber_builder().create(), "subscribe to frames"),
+            MotionFrame,
+            "the frame service",
+            wrap=Frame,
+        )
+        tick = self._open(deadline, "tick", lambda s: self._node.service_builder(s).event().open())
+        self._tick = self._create(lambda: tick.listener_builder().create(), "listen to ticks")
+        command = self._open(
+            deadline,
+            "command",
+            lambda s: self._node.service_builder(s)
+            .request_response(CommandRequest, CommandReply)
+            .open(),
+        )
+        self._commands = self._create(
+            lambda: command.client_builder().create(), "create a command client"
+        )
+        info = self._open(
+            deadline,
+            "info",
+            lambda s: self._node.service_builder(s).publish_subscribe(ServerInfo).open(),
+        )
+        self._info: LatestCache[ServerInfo] = LatestCache(
+            self._create(lambda: info.subscriber_builder().create(), "subscribe to info"),
+            ServerInfo,
+            "the info service",
+        )
+        # The server hands a late subscriber its history sample when it next looks at its
+        # connections (every tick).
+        info_timeout = max(timeout, 0.5)
+        info_deadline = started + info_timeout
+        while self._info.refresh() is None:
+            if time.monotonic() >= info_deadline:
+                raise NoInfo(name, str(self._service("info")), info_timeout)
+            time.sleep(0.005)
+        description = self.info
+        if description.schema_version != SCHEMA_VERSION:
+            raise IncompatibleServer(name, description.schema_version, SCHEMA_VERSION)
+        self._id = ClientId.from_int(self._node.id.value)
+        self._goal_ticks: List[int] = [0] * int(description.axis_count)
+        self._open_stats()
+
+    # --- plumbing --------------------------------------------------------------------------
+
+    def _service(self, leaf: str) -> Any:
+        try:
+            return iox2.ServiceName.new(service_name(self._name, leaf))
+        except iox2.SemanticStringError as error:
+            raise errors.ConnectError(
+                f'"{self._name}" is not a valid server name: {error!r}'
+            ) from None
+
+    def _open(self, deadline: float, leaf: str, open_: Callable[[Any], Any]) -> Any:
+        name = self._service(leaf)
+        try:
+            return _open_retrying(deadline, lambda: open_(name))
+        except Exception as error:
+            raise IpcError(f"open the {leaf} service", error) from error
+
+    @staticmethod
+    def _create(create: Callable[[], Any], what: str) -> Any:
+        try:
+            return create()
+        except Exception as error:
+            raise IpcError(what, error) from error
+
+    def _check_open(self) -> None:
+        if self._closed:
+            raise errors.MotiondError("the client is closed")
+
+    def _wait_tick(self, timeout: float) -> None:
+        """Sleeps until the next tick notification or ``timeout`` (capped, so that Ctrl-C
+        is seen)."""
+        try:
+            self._tick.timed_wait(_duration(min(timeout, _WAIT_CAP)))
+        except iox2.ListenerWaitError as error:
+            if "Interrupt" not in repr(error):
+                raise IpcError("wait for the tick event", error) from error
+
+    # --- description -----------------------------------------------------------------------
+
+    @property
+    def name(self) -> str:
+        """The instance name this client talks to."""
+        return self._name
+
+    @property
+    def id(self) -> ClientId:
+        """This client's id as the server sees it (its iceoryx2 node id)."""
+        return self._id
+
+    @property
+    def node(self) -> Any:
+        """The iceoryx2 node of this client (to build your own ports)."""
+        return self._node
+
+    @property
+    def info(self) -> ServerInfo:
+        """The server's description (axes, devices, signals, tick rate, deadman): a
+        read-only view of the newest info sample."""
+        self._check_open()
+        received = self._info.refresh()
+        if received is None:  # pragma: no cover - connect guarantees one
+            raise IpcError("read the server description", RuntimeError("none received"))
+        return received.payload
+
+    @property
+    def tick_hz(self) -> int:
+        """The server's tick rate."""
+        return int(self.info.tick_hz)
+
+    @property
+    def command_timeout(self) -> float:
+        """The server's deadman for velocity and power goals, s (0: none)."""
+        return self.info.command_timeout_ms / 1000.0
+
+    @property
+    def axes(self) -> List["Axis"]:
+        """Handles of every axis, in config order."""
+        from .axis import Axis
+
+        return [Axis(self, index) for index in range(len(self._goal_ticks))]
+
+    def axis(self, name: str) -> "Axis":
+        """The handle of the axis called ``name``."""
+        from .axis import Axis
+
+        info = self.info
+        for index in range(min(int(info.axis_count), len(info.axes))):
+            if info.axes[index].text("name") == name:
+                return Axis(self, index)
+        raise NoSuchAxis(name)
+
+    @property
+    def signals(self) -> List["Signal"]:
+        """Handles of every signal, in config order."""
+        from .signal import Signal
+
+        return [Signal(self, index) for index in range(int(self.info.signal_count))]
+
+    def signal(self, name: str) -> "Signal":
+        """The handle of the signal called ``name``."""
+        from .signal import Signal
+
+        info = self.info
+        for index in range(min(int(info.signal_count), len(info.signals))):
+            if info.signals[index].text("name") == name:
+                return Signal(self, index)
+        raise NoSuchSignal(name)
+
+    def stats(self) -> Optional[ServerStats]:
+        """A copy of the newest :class:`~motiond.ipc.ServerStats` (published about once a
+        second); ``None`` until the first."""
+        self.service_jogs()
+        self._open_stats()
+        if self._stats is None:
+            return None
+        received = self._stats.refresh()
+        return None if received is None else received.copy()
+
+    def _open_stats(self) -> None:
+        """Subscribes to the stats service if it is not yet (a server publishes it from
+        its first second on; until then there is nothing to read)."""
+        if self._stats is not None:
+            return
+        try:
+            factory = (
+                self._node.service_builder(self._service("stats"))
+                .publish_subscribe(ServerStats)
+                .open()
+            )
+            subscriber = factory.subscriber_builder().create()
+        except Exception:
+            return
+        self._stats = LatestCache(subscriber, ServerStats, "the stats service")
+
+    def params(self, timeout: float = 1.0) -> List[Param]:
+        """The machine parameters in effect (devices' then axes', config order), each with
+        the config key, the effective value with its unit and whether the config set it."""
+        self.service_jogs()
+        try:
+            factory = (
+                self._node.service_builder(self._service("params"))
+                .publish_subscribe(MachineParams)
+                .open()
+            )
+            subscriber = factory.subscriber_builder().create()
+        except Exception as error:
+            raise IpcError("open the params service", error) from error
+        cache: LatestCache[MachineParams] = LatestCache(
+            subscriber, MachineParams, "the params service"
+        )
+        deadline = time.monotonic() + timeout
+        while True:
+            received = cache.refresh()
+            if received is not None:
+                break
+            if time.monotonic() >= deadline:
+                raise WaitTimeout("the params service", "publish its parameters", timeout)
+            time.sleep(0.005)
+        info = self.info
+        params = []
+        with received:
+            table = received.payload
+            for index in range(min(int(table.count), len(table.entries))):
+                entry = table.entries[index]
+                owner = to_enum(ParamOwner, entry.owner_kind)
+                if owner == ParamOwner.DEVICE and entry.owner_index < info.device_count:
+                    owner_name = info.devices[entry.owner_index].text("name")
+                elif owner == ParamOwner.AXIS and entry.owner_index < info.axis_count:
+                    owner_name = info.axes[entry.owner_index].text("name")
+                else:
+                    owner_name = ""
+                params.append(
+                    Param(
+                        owner=owner,
+                        owner_index=int(entry.owner_index),
+                        owner_name=owner_name,
+                        key=entry.text("key"),
+                        value=entry.text("value"),
+                        from_config=bool(entry.from_config),
+                    )
+                )
+        cache.close()
+        return params
+
+    # --- frames ----------------------------------------------------------------------------
+
+    def latest(self) -> Frame:
+        """The newest frame (zero-copy). Waits for the first one if none arrived yet."""
+        self._check_open()
+        self.service_jogs()
+        frame = self._frames.refresh()
+        if frame is None:
+            return self.next_frame(1.0)
+        return frame
+
+    def try_next_frame(self) -> Optional[Frame]:
+        """The next frame in publication order if one is waiting, else ``None``."""
+        self._check_open()
+        self.service_jogs()
+        return self._frames.take_next()
+
+    def next_frame(self, timeout: float = 1.0) -> Frame:
+        """The next frame in publication order, sleeping on the tick event (no busy
+        polling) for up to ``timeout`` s. Frames the client was too slow for (more than
+        the service's 32-frame buffer) are lost: compare ``tick``s."""
+        self._check_open()
+        deadline = time.monotonic() + timeout
+        while True:
+            self.service_jogs()
+            frame = self._frames.take_next()
+            if frame is not None:
+                return frame
+            now = time.monotonic()
+            if now >= deadline:
+                raise NoFrame(timeout)
+            self._wait_tick(self._jog_wait_cap(deadline - now))
+
+    def frames(self, timeout: float = 1.0) -> Iterator[Frame]:
+        """Every frame in order, each waited for up to ``timeout`` s; raises
+        :class:`~motiond.errors.NoFrame` when the server stays silent.
+
+        Hold at most one frame from the previous iteration: iceoryx2 lets a client
+        borrow two samples at once (use ``frame.copy()`` to keep more)."""
+        while True:
+            frame = self.next_frame(timeout)
+            yield frame
+            del frame
+
+    def wait_frames(
+        self,
+        what: str,
+        timeout: float,
+        done: Callable[[Frame], bool],
+        subject: str = "the server",
+        since: int = 0,
+    ) -> Frame:
+        """Waits until ``done(frame)`` is true for a frame at or after tick ``since``, and
+        returns that frame. ``done`` may raise to abort the wait."""
+        deadline = time.monotonic() + timeout
+        frame = self.latest()
+        while True:
+            if frame.tick >= since and done(frame):
+                return frame
+            now = time.monotonic()
+            if now >= deadline:
+                raise WaitTimeout(subject, what, timeout)
+            del frame
+            try:
+                frame = self.next_frame(deadline - now)
+            except NoFrame:
+                raise WaitTimeout(subject, what, timeout) from None
+
+    def wait_ready(self, timeout: float = 5.0, axes: Optional[Sequence[str]] = None) -> Frame:
+        """Waits until the boards of ``axes`` (every device when ``None``) are online: they
+        answered, were configured and acknowledged their start-up stop, so they take
+        goals."""
+        if axes is None:
+
+            def ready(frame: Frame) -> bool:
+                states = frame.device_states()
+                return bool(states) and all(s == DeviceState.ONLINE for s in states)
+
+            subject = "every device"
+        else:
+            handles = [self.axis(name) for name in axes]
+
+            def ready(frame: Frame) -> bool:
+                return all(frame.axis(h.index).device_state == DeviceState.ONLINE for h in handles)
+
+            subject = "the devices of " + ", ".join(axes)
+        return self.wait_frames("come online", timeout, ready, subject=subject)
+
+    # --- commands --------------------------------------------------------------------------
+
+    def send(
+        self,
+        index: int,
+        kind: Union[CommandKind, int],
+        values: Sequence[float] = (0.0, 0.0, 0.0),
+        target: Union[Target, int] = Target.AXIS,
+    ) -> CommandReply:
+        """Sends one request and returns the server's reply (a copy) as it is, accepted or
+        not. ``index`` is an axis index, a signal index (``target=Target.SIGNAL``) or
+        :data:`~motiond.ipc.ALL_AXES`; ``values`` as documented on
+        :class:`~motiond.ipc.CommandKind`."""
+        self._check_open()
+        typed_kind = to_enum(CommandKind, int(kind))
+        self._sequence += 1
+        sequence = self._sequence
+        request = CommandRequest(
+            schema_version=SCHEMA_VERSION,
+            kind=int(kind),
+            client=self._id,
+            sequence=sequence,
+            axis=index,
+            target=int(target),
+        )
+        padded = list(values)[:3] + [0.0] * (3 - min(3, len(values)))
+        for slot, value in enumerate(padded):
+            request.values[slot] = float(value)
+        try:
+            pending = self._commands.send_copy(request)
+        except Exception as error:
+            raise IpcError("send a command", error) from error
+        try:
+            if pending.number_of_server_connections == 0:
+                raise ServerGone(typed_kind)
+            deadline = time.monotonic() + self._reply_timeout
+            while True:
+                try:
+                    response = pending.receive()
+                except Exception as error:
+                    raise IpcError("receive a command reply", error) from error
+                if response is not None:
+                    reply = CommandReply.from_buffer_copy(
+                        ctypes.string_at(response.payload_ptr, ctypes.sizeof(CommandReply))
+                    )
+                    response.delete()
+                    if reply.sequence == sequence:
+                        return reply
+                    continue
+                now = time.monotonic()
+                if now >= deadline:
+                    raise NoReply(typed_kind, self._reply_timeout)
+                # The server answers within its tick and then notifies the tick event.
+                self._wait_tick(min(deadline - now, _REPLY_POLL_CAP))
+        finally:
+            pending.delete()
+
+    def command(
+        self,
+        index: int,
+        kind: Union[CommandKind, int],
+        values: Sequence[float] = (0.0, 0.0, 0.0),
+        target: Union[Target, int] = Target.AXIS,
+        label: Optional[str] = None,
+    ) -> Accepted:
+        """Sends one request; returns :class:`Accepted`, or raises the
+        :class:`~motiond.errors.Refused` subclass of the server's reason."""
+        reply = self.send(index, kind, values, target)
+        if reply.reason == Reason.ACCEPTED:
+            if target == Target.AXIS:
+                self._note_goal(index, int(reply.tick_applied))
+            return Accepted(sequence=int(reply.sequence), tick=int(reply.tick_applied))
+        raise errors.refused(
+            int(reply.reason),
+            int(reply.kind),
+            label if label is not None else self._label(index, target),
+            int(reply.tick_applied),
+        )
+
+    def _label(self, index: int, target: Union[Target, int]) -> str:
+        if index == ALL_AXES:
+            return "all axes"
+        info = self.info
+        if target == Target.SIGNAL:
+            if index < info.signal_count:
+                return f"signal {info.signals[index].text('name')}"
+            return f"signal #{index}"
+        if index < info.axis_count:
+            return f"axis {info.axes[index].text('name')}"
+        return f"axis #{index}"
+
+    def _note_goal(self, index: int, tick: int) -> None:
+        if index == ALL_AXES:
+            self._goal_ticks = [tick] * len(self._goal_ticks)
+        elif 0 <= index < len(self._goal_ticks):
+            self._goal_ticks[index] = tick
+
+    def goal_tick(self, index: int) -> int:
+        """The tick of the last goal accepted for axis ``index`` (0 when none)."""
+        if 0 <= index < len(self._goal_ticks):
+            return self._goal_ticks[index]
+        return 0
+
+    def estop(self) -> Accepted:
+        """Emergency stop: every axis stops (with its e-stop category); latched until
+        :meth:`reset`."""
+        return self.command(ALL_AXES, CommandKind.E_STOP)
+
+    def notify_estop(self) -> None:
+        """Latches the e-stop through the ``estop`` event service instead of the command
+        service: its own ports, so it gets through when the command service's client
+        slots are all taken. No reply."""
+        if self._estop_notifier is None:
+            try:
+                event = self._node.service_builder(self._service("estop")).event().open()
+                self._estop_notifier = event.notifier_builder().create()
+            except Exception as error:
+                raise IpcError("open the estop event", error) from error
+        try:
+            self._estop_notifier.notify()
+        except Exception as error:
+            raise IpcError("notify the estop event", error) from error
+
+    def reset(self) -> Accepted:
+        """Clears a latched e-stop and faults; targets become the current positions."""
+        return self.command(ALL_AXES, CommandKind.RESET)
+
+    def stop_all(self) -> Accepted:
+        """Stops every axis (decelerate and hold)."""
+        return self.command(ALL_AXES, CommandKind.STOP)
+
+    def off_all(self) -> Accepted:
+        """De-energises every axis."""
+        return self.command(ALL_AXES, CommandKind.OFF)
+
+    # --- jogs ------------------------------------------------------------------------------
+
+    def _jog_refresh_period(self) -> Optional[float]:
+        current = self._info.current
+        timeout_ms = 0 if current is None else int(current.payload.command_timeout_ms)
+        if timeout_ms <= 0:
+            return None
+        return max(timeout_ms / 3000.0, _MIN_REFRESH)
+
+    def _jog_wait_cap(self, remaining: float) -> float:
+        period = self._jog_refresh_period()
+        if period is None:
+            return remaining
+        now = time.monotonic()
+        for jog in list(self._jogs.values()):
+            if jog.active and jog.refused is None and not jog.expired:
+                remaining = min(remaining, max(0.0, jog.last_sent + period - now))
+        return remaining
+
+    def _register_jog(self, jog: "Jog") -> int:
+        self._next_jog += 1
+        self._jogs[self._next_jog] = jog
+        return self._next_jog
+
+    def _forget_jog(self, key: int) -> None:
+        self._jogs.pop(key, None)
+
+    def service_jogs(self) -> None:
+        """Renews every running jog whose renewal is due. Called by every read and wait.
+
+        A jog not renewed for a whole deadman (the program did not call into the client)
+        has been stopped by the server; it is not renewed any more, so that a program that
+        hung does not set the axis moving again when it wakes up (``Jog.expired``)."""
+        period = self._jog_refresh_period()
+        if period is None or not self._jogs:
+            return
+        deadman = self.command_timeout_cached()
+        now = time.monotonic()
+        for jog in list(self._jogs.values()):
+            if not jog.active or jog.refused is not None or jog.expired:
+                continue
+            if now - jog.last_sent >= deadman:
+                jog.expired = True
+            elif now >= jog.last_sent + period:
+                jog._renew()
+
+    def command_timeout_cached(self) -> float:
+        """The server's deadman, s, from the description already received."""
+        current = self._info.current
+        return 0.0 if current is None else current.payload.command_timeout_ms / 1000.0
+
+    def keep_alive(self) -> None:
+        """Renews running jogs without reading anything: call it from a loop that does not
+        otherwise call into the client."""
+        self.service_jogs()
+
+    # --- life ------------------------------------------------------------------------------
+
+    def close(self) -> None:
+        """Stops this client's running jogs and releases its ports."""
+        if self._closed:
+            return
+        for jog in list(self._jogs.values()):
+            try:
+                jog.stop()
+            except errors.MotiondError:
+                pass
+        self._closed = True
+        self._frames.close()
+        self._info.close()
+        if self._stats is not None:
+            self._stats.close()
+        # Give the port slots back now rather than whenever the garbage collector runs.
+        for port in (self._tick, self._commands, self._estop_notifier):
+            if port is not None:
+                port.delete()
+        self._estop_notifier = None
+
+    def __enter__(self) -> "Client":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def __repr__(self) -> str:
+        return f"Client(name={self._name!r}, id={int(self._id):#x})"

@@ -1,0 +1,410 @@
+"""Exceptions of the motiond client.
+
+Everything raised by this package derives from :class:`MotiondError`. A command the server
+refused raises a subclass of :class:`Refused` named after the server's reason
+(:class:`OutOfRange`, :class:`EstopLatched`, …); each carries the typed
+:class:`~motiond.ipc.Reason`, whose ``message`` is the server's own text.
+"""
+
+from __future__ import annotations
+
+from typing import Dict, Optional, Type, Union
+
+from .ipc import CommandKind, Reason, to_enum
+
+__all__ = [
+    "MotiondError",
+    "ConnectError",
+    "NoServer",
+    "NoInfo",
+    "IncompatibleServer",
+    "NoSuchAxis",
+    "NoSuchSignal",
+    "Refused",
+    "ServerGone",
+    "NoReply",
+    "NoFrame",
+    "WaitTimeout",
+    "WaitAborted",
+    "FramesHeld",
+    "IpcError",
+    "refused",
+    "REFUSALS",
+    "SchemaMismatch",
+    "UnknownKind",
+    "UnknownAxis",
+    "Unsupported",
+    "NotFinite",
+    "OutOfRange",
+    "VelocityLimit",
+    "AccelLimit",
+    "PowerLimit",
+    "ClaimedByOther",
+    "NotClaimed",
+    "EstopLatched",
+    "AxisFaulted",
+    "LinkDown",
+    "Busy",
+    "ShuttingDown",
+    "NoClientId",
+    "IdentityMismatch",
+    "DeviceStarting",
+    "DeviceOffline",
+    "UnknownSignal",
+    "NotAnOutput",
+    "UnknownTarget",
+]
+
+
+class MotiondError(Exception):
+    """Base of every error of this package."""
+
+
+class ConnectError(MotiondError):
+    """Connecting to a server failed."""
+
+
+class NoServer(ConnectError):
+    """No server of that name runs (its frame service does not exist)."""
+
+    def __init__(self, name: str, service: str, waited: float) -> None:
+        super().__init__(
+            f'no motiond server named "{name}" is running (waited {waited:.1f} s for service '
+            f"{service}); start one with `motiond --config config/sim.toml`, or pick another "
+            "name"
+        )
+        self.name = name
+        self.service = service
+        self.waited = waited
+
+
+class NoInfo(ConnectError):
+    """The server runs but published no server description in time."""
+
+    def __init__(self, name: str, service: str, waited: float) -> None:
+        super().__init__(
+            f'motiond "{name}" published no server description on {service} within '
+            f"{waited:.1f} s; is it still starting up?"
+        )
+        self.name = name
+        self.service = service
+        self.waited = waited
+
+
+class IncompatibleServer(ConnectError):
+    """The server speaks another version of the shared-memory contract."""
+
+    def __init__(self, name: str, server: int, client: int) -> None:
+        super().__init__(
+            f'motiond "{name}" speaks another motion-ipc schema (server {server}, this client '
+            f"{client}; 0 = payload types differ): use the motiond package of the same "
+            "release as the server"
+        )
+        self.name = name
+        self.server = server
+        self.client = client
+
+
+class NoSuchAxis(MotiondError, LookupError):
+    """No axis of that name on the server."""
+
+    def __init__(self, name: str) -> None:
+        super().__init__(f'no axis named "{name}" on this server (see `python -m motiond list`)')
+        self.name = name
+
+
+class NoSuchSignal(MotiondError, LookupError):
+    """No signal of that name on the server."""
+
+    def __init__(self, name: str) -> None:
+        super().__init__(f'no signal named "{name}" on this server (see `python -m motiond list`)')
+        self.name = name
+
+
+class Refused(MotiondError):
+    """The server refused a command. ``reason`` is the typed reason (an ``int`` if this
+    package does not know it), ``kind`` the command, ``target`` the axis or signal in words,
+    ``tick`` the tick in which the server refused it."""
+
+    reason_code: Optional[Reason] = None
+
+    def __init__(
+        self,
+        reason: Union[Reason, int],
+        kind: Union[CommandKind, int],
+        target: str,
+        tick: int,
+    ) -> None:
+        kind_text = kind.text if isinstance(kind, CommandKind) else "command"
+        message = reason.message if isinstance(reason, Reason) else f"unknown reason {reason}"
+        super().__init__(f"{kind_text} on {target} refused: {message}")
+        self.reason = reason
+        self.kind = kind
+        self.target = target
+        self.tick = tick
+
+
+# One class per refusal reason, named after it: ``except motiond.OutOfRange:``.
+
+
+class SchemaMismatch(Refused):
+    """Refused: client and server use different motion-ipc schema versions
+    (``Reason.SCHEMA_MISMATCH``).
+    """
+
+    reason_code = Reason.SCHEMA_MISMATCH
+
+
+class UnknownKind(Refused):
+    """Refused: unknown command kind (``Reason.UNKNOWN_KIND``)."""
+
+    reason_code = Reason.UNKNOWN_KIND
+
+
+class UnknownAxis(Refused):
+    """Refused: no such axis on this server (``Reason.UNKNOWN_AXIS``)."""
+
+    reason_code = Reason.UNKNOWN_AXIS
+
+
+class Unsupported(Refused):
+    """Refused: the axis's board cannot do this command (``Reason.UNSUPPORTED``)."""
+
+    reason_code = Reason.UNSUPPORTED
+
+
+class NotFinite(Refused):
+    """Refused: a value is NaN or infinite (``Reason.NOT_FINITE``)."""
+
+    reason_code = Reason.NOT_FINITE
+
+
+class OutOfRange(Refused):
+    """Refused: position outside the axis's min..max soft limits (``Reason.OUT_OF_RANGE``)."""
+
+    reason_code = Reason.OUT_OF_RANGE
+
+
+class VelocityLimit(Refused):
+    """Refused: velocity above the axis's max_velocity (``Reason.VELOCITY_LIMIT``)."""
+
+    reason_code = Reason.VELOCITY_LIMIT
+
+
+class AccelLimit(Refused):
+    """Refused: acceleration above the axis's max_accel or not positive (``Reason.ACCEL_LIMIT``)."""
+
+    reason_code = Reason.ACCEL_LIMIT
+
+
+class PowerLimit(Refused):
+    """Refused: power outside -1.0..1.0 (``Reason.POWER_LIMIT``)."""
+
+    reason_code = Reason.POWER_LIMIT
+
+
+class ClaimedByOther(Refused):
+    """Refused: the axis is claimed by another client (``Reason.CLAIMED_BY_OTHER``)."""
+
+    reason_code = Reason.CLAIMED_BY_OTHER
+
+
+class NotClaimed(Refused):
+    """Refused: this client holds no claim on the axis (``Reason.NOT_CLAIMED``)."""
+
+    reason_code = Reason.NOT_CLAIMED
+
+
+class EstopLatched(Refused):
+    """Refused: e-stop is latched: send reset first (``Reason.ESTOP_LATCHED``)."""
+
+    reason_code = Reason.ESTOP_LATCHED
+
+
+class AxisFaulted(Refused):
+    """Refused: the axis is faulted: clear the cause, then reset (``Reason.AXIS_FAULTED``)."""
+
+    reason_code = Reason.AXIS_FAULTED
+
+
+class LinkDown(Refused):
+    """Refused: the axis's link is down (``Reason.LINK_DOWN``)."""
+
+    reason_code = Reason.LINK_DOWN
+
+
+class Busy(Refused):
+    """Refused: the server's command queue is full: retry (``Reason.BUSY``)."""
+
+    reason_code = Reason.BUSY
+
+
+class ShuttingDown(Refused):
+    """Refused: the server is shutting down (``Reason.SHUTTING_DOWN``)."""
+
+    reason_code = Reason.SHUTTING_DOWN
+
+
+class NoClientId(Refused):
+    """Refused: claim and release need a client id (``Reason.NO_CLIENT_ID``)."""
+
+    reason_code = Reason.NO_CLIENT_ID
+
+
+class IdentityMismatch(Refused):
+    """Refused: the request's client id is not the sender's iceoryx2 node: ids cannot be borrowed
+    (``Reason.IDENTITY_MISMATCH``).
+    """
+
+    reason_code = Reason.IDENTITY_MISMATCH
+
+
+class DeviceStarting(Refused):
+    """Refused: the axis's board is starting: waiting for its first answer and its start-up stop
+    (``Reason.DEVICE_STARTING``).
+    """
+
+    reason_code = Reason.DEVICE_STARTING
+
+
+class DeviceOffline(Refused):
+    """Refused: the axis's board is not answering (``Reason.DEVICE_OFFLINE``)."""
+
+    reason_code = Reason.DEVICE_OFFLINE
+
+
+class UnknownSignal(Refused):
+    """Refused: no such signal on this server (``Reason.UNKNOWN_SIGNAL``)."""
+
+    reason_code = Reason.UNKNOWN_SIGNAL
+
+
+class NotAnOutput(Refused):
+    """Refused: the signal is not a digital output (``Reason.NOT_AN_OUTPUT``)."""
+
+    reason_code = Reason.NOT_AN_OUTPUT
+
+
+class UnknownTarget(Refused):
+    """Refused: unknown target: 0 = axis, 1 = signal (``Reason.UNKNOWN_TARGET``)."""
+
+    reason_code = Reason.UNKNOWN_TARGET
+
+
+#: The :class:`Refused` subclass of every reason but ``ACCEPTED``.
+REFUSALS: Dict[Reason, Type[Refused]] = {
+    cls.reason_code: cls
+    for cls in (
+        SchemaMismatch,
+        UnknownKind,
+        UnknownAxis,
+        Unsupported,
+        NotFinite,
+        OutOfRange,
+        VelocityLimit,
+        AccelLimit,
+        PowerLimit,
+        ClaimedByOther,
+        NotClaimed,
+        EstopLatched,
+        AxisFaulted,
+        LinkDown,
+        Busy,
+        ShuttingDown,
+        NoClientId,
+        IdentityMismatch,
+        DeviceStarting,
+        DeviceOffline,
+        UnknownSignal,
+        NotAnOutput,
+        UnknownTarget,
+    )
+    if cls.reason_code is not None
+}
+
+
+def refused(reason: int, kind: int, target: str, tick: int) -> Refused:
+    """The exception for a refusal with raw ``reason`` of a command of raw ``kind``."""
+    typed_reason = to_enum(Reason, reason)
+    typed_kind = to_enum(CommandKind, kind)
+    cls = REFUSALS.get(typed_reason, Refused) if isinstance(typed_reason, Reason) else Refused
+    return cls(typed_reason, typed_kind, target, tick)
+
+
+def _kind_text(kind: Union[CommandKind, int]) -> str:
+    return kind.text if isinstance(kind, CommandKind) else f"command {kind}"
+
+
+class ServerGone(MotiondError):
+    """No server listens on the command service any more."""
+
+    def __init__(self, kind: Union[CommandKind, int]) -> None:
+        super().__init__(
+            f"{_kind_text(kind)} not sent: no motiond serves the command service any more "
+            "(did it stop?)"
+        )
+        self.kind = kind
+
+
+class NoReply(MotiondError, TimeoutError):
+    """The server did not answer a command in time."""
+
+    def __init__(self, kind: Union[CommandKind, int], waited: float) -> None:
+        super().__init__(
+            f"no reply from the server to {_kind_text(kind)} within {waited:.3f} s; "
+            "is motiond still running?"
+        )
+        self.kind = kind
+        self.waited = waited
+
+
+class NoFrame(MotiondError, TimeoutError):
+    """No frame arrived in time."""
+
+    def __init__(self, waited: float) -> None:
+        super().__init__(
+            f"no frame from the server within {waited:.3f} s; is motiond still running?"
+        )
+        self.waited = waited
+
+
+class WaitTimeout(MotiondError, TimeoutError):
+    """A wait for a condition ran out of time."""
+
+    def __init__(self, subject: str, what: str, waited: float) -> None:
+        super().__init__(f"{subject} did not {what} within {waited:.3f} s")
+        self.subject = subject
+        self.what = what
+        self.waited = waited
+
+
+class WaitAborted(MotiondError):
+    """A wait ended because the condition can no longer come true (stopped, faulted,
+    e-stop)."""
+
+    def __init__(self, subject: str, what: str, why: str) -> None:
+        super().__init__(f"{subject} will not {what}: {why}")
+        self.subject = subject
+        self.what = what
+        self.why = why
+
+
+class FramesHeld(MotiondError):
+    """Receiving failed because this process holds too many samples of one service."""
+
+    def __init__(self, service: str, detail: str) -> None:
+        super().__init__(
+            f"cannot receive from {service}: this client holds as many of its samples as "
+            f"iceoryx2 allows ({detail}); drop older Frame objects or keep copies "
+            "(frame.copy()) instead"
+        )
+        self.service = service
+
+
+class IpcError(MotiondError):
+    """iceoryx2 failed to create, send, receive or wait."""
+
+    def __init__(self, what: str, error: BaseException) -> None:
+        super().__init__(f"iceoryx2 could not {what}: {error!r}")
+        self.what = what
+        self.error = error

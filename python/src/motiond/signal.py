@@ -1,0 +1,181 @@
+"""Board I/O as named signals: :class:`Signal` and :class:`SignalStatus`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Callable, Optional, Union
+
+from .frames import Frame
+from .ipc import (
+    CommandKind,
+    SignalFlags,
+    SignalInfo,
+    SignalInfoFlags,
+    SignalKind,
+    Target,
+    to_enum,
+)
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .client import Accepted, Client
+
+__all__ = ["Signal", "SignalStatus"]
+
+
+@dataclass(frozen=True)
+class SignalStatus:
+    """One signal's state in one frame (a copy; see :class:`~motiond.ipc.SignalState`)."""
+
+    #: Signal index, config order.
+    index: int
+    #: The frame's tick.
+    tick: int
+    #: Logical value: digital 0.0/1.0 after ``invert``; analogue raw × scale + offset.
+    value: float
+    #: As the board reports it: electrical level 0/1, or ADC counts.
+    raw: float
+    #: Tick at which the board last reported it (outputs: acknowledged it).
+    last_refresh_tick: int
+    #: State flags.
+    flags: SignalFlags
+    #: What the signal is.
+    kind: Union[SignalKind, int]
+    #: Node id of the client holding a claim on an output, 0 when unclaimed.
+    claimed_by: int
+
+    @property
+    def on(self) -> bool:
+        """A digital signal's logical value (``value >= 0.5``)."""
+        return self.value >= 0.5
+
+    @property
+    def stale(self) -> bool:
+        """Older than its board's refresh budget (or never read)."""
+        return SignalFlags.STALE in self.flags
+
+    @property
+    def pending(self) -> bool:
+        """An output value was commanded and the board has not acknowledged it yet."""
+        return SignalFlags.PENDING in self.flags
+
+    @property
+    def safe_state(self) -> bool:
+        """The e-stop put the output into its configured safe state."""
+        return SignalFlags.SAFE_STATE in self.flags
+
+
+class Signal:
+    """One named signal (board input or output), found with :meth:`Client.signal`."""
+
+    __slots__ = ("_client", "_index")
+
+    def __init__(self, client: "Client", index: int) -> None:
+        self._client = client
+        self._index = index
+
+    @property
+    def index(self) -> int:
+        """The signal index (config order), as used in frames and requests."""
+        return self._index
+
+    @property
+    def info(self) -> SignalInfo:
+        """The signal's static description (a copy)."""
+        return self._client.info.signals[self._index].copy()
+
+    @property
+    def name(self) -> str:
+        """The signal name."""
+        return self._client.info.signals[self._index].text("name")
+
+    @property
+    def kind(self) -> Union[SignalKind, int]:
+        """Digital input, digital output or analogue input."""
+        return to_enum(SignalKind, self._client.info.signals[self._index].kind)
+
+    @property
+    def unit(self) -> str:
+        """The unit of an analogue value ("" for digital)."""
+        return self._client.info.signals[self._index].text("unit")
+
+    @property
+    def inverted(self) -> bool:
+        """Digital: the logical value is the inverse of the electrical level."""
+        flags = SignalInfoFlags(self._client.info.signals[self._index].flags)
+        return SignalInfoFlags.INVERT in flags
+
+    def state(self, frame: Optional[Frame] = None) -> SignalStatus:
+        """The signal's state in ``frame`` (default: the newest frame), a copy."""
+        if frame is None:
+            frame = self._client.latest()
+        raw = frame.signal(self._index)
+        return SignalStatus(
+            index=self._index,
+            tick=frame.tick,
+            value=float(raw.value),
+            raw=float(raw.raw),
+            last_refresh_tick=int(raw.last_refresh_tick),
+            flags=SignalFlags(raw.flags),
+            kind=to_enum(SignalKind, raw.kind),
+            claimed_by=int(raw.claimed_by),
+        )
+
+    def value(self) -> float:
+        """The logical value in the newest frame."""
+        return self.state().value
+
+    def is_on(self) -> bool:
+        """A digital signal's logical value in the newest frame."""
+        return self.state().on
+
+    def _command(self, kind: CommandKind, value: float = 0.0) -> "Accepted":
+        return self._client.command(
+            self._index, kind, (value, 0.0, 0.0), Target.SIGNAL, label=f"signal {self.name}"
+        )
+
+    def set(self, on: bool) -> "Accepted":
+        """Sets a digital output to its logical value ``on`` (``SetOutput``)."""
+        return self._command(CommandKind.SET_OUTPUT, 1.0 if on else 0.0)
+
+    def claim(self) -> "Accepted":
+        """Takes an exclusive claim on the output."""
+        return self._command(CommandKind.CLAIM)
+
+    def release(self) -> "Accepted":
+        """Gives a claim back."""
+        return self._command(CommandKind.RELEASE)
+
+    def wait_for(
+        self,
+        expected: Union[bool, float, Callable[[SignalStatus], bool]],
+        timeout: float = 2.0,
+    ) -> SignalStatus:
+        """Waits until the signal has the logical value ``expected`` (a ``bool`` for a
+        digital signal; a number is compared exactly) or, given a function, until it
+        returns true for the signal's :class:`SignalStatus`. A value the server has not
+        yet confirmed (``pending``, or ``stale``) does not count. Returns the status that
+        matched."""
+        if callable(expected):
+            test = expected
+        elif isinstance(expected, bool):
+
+            def test(status: SignalStatus) -> bool:
+                return status.on == expected
+
+        else:
+            wanted = float(expected)
+
+            def test(status: SignalStatus) -> bool:
+                return status.value == wanted
+
+        def done(frame: Frame) -> bool:
+            status = self.state(frame)
+            return not status.pending and not status.stale and bool(test(status))
+
+        frame = self._client.wait_frames(
+            f"reach {expected!r}", timeout, done, subject=f"signal {self.name}"
+        )
+        return self.state(frame)
+
+    def __repr__(self) -> str:
+        return f"Signal({self.name!r}, index={self._index})"
