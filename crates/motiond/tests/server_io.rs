@@ -240,3 +240,122 @@ kind = "digital-in"
         Some(0)
     );
 }
+
+#[test]
+fn tmcpack_inputs_show_outputs_reach_the_pack_and_an_e_stop_makes_them_safe() {
+    use motion_sim::tmcpack::{TmcpackSim, TmcpackSimConfig};
+    let name = unique_name("tmcio");
+    let epoch = Instant::now();
+    let pack = Arc::new(Mutex::new(TmcpackSim::new(TmcpackSimConfig::default())));
+    let tty = std::env::temp_dir().join(format!("{name}.tty"));
+    let served = PtyBoard::start(&tty, Arc::clone(&pack), epoch, 19_200);
+    let config = write_config(
+        &name,
+        &format!(
+            r#"[server]
+name = "{name}"
+
+[[link]]
+name = "rs485"
+type = "serial"
+path = "{}"
+baud = 19200
+
+[[device]]
+name = "pack"
+link = "rs485"
+model = "tmcpack"
+address = 1
+
+[[signal]]
+name = "beacon"
+device = "pack"
+pin = "ttlout1"
+kind = "digital-out"
+safe = false
+
+[[signal]]
+name = "pressure"
+device = "pack"
+pin = "analog6"
+kind = "analog-in"
+scale = 0.01
+unit = "bar"
+"#,
+            tty.display()
+        ),
+    );
+    let mut server = Server::start(&config);
+    let mut client = RawClient::connect(&name, Duration::from_secs(10));
+    let (frame, ready) = client.wait_frame(Duration::from_secs(15), online);
+    assert!(ready, "{:?}", frame.signals());
+    // The analogue input: the external input moves to 500 counts = 5.00 bar.
+    let before = client.frame();
+    pack.lock().expect("pack").set_analog(6, 500);
+    let (frame, seen) = client.wait_frame(Duration::from_secs(3), |f| {
+        (f.signals[1].value - 5.0).abs() < 0.011
+    });
+    assert!(seen, "{:?}", frame.signals[1]);
+    let budget_ticks = 1000; // the pack's refresh budget, in 1 ms ticks, is well below a second
+    assert!(
+        frame.tick - before.tick < budget_ticks,
+        "{} ticks",
+        frame.tick - before.tick
+    );
+    // The output: on, decoded on the wire as `$32` with TTLOUT1 set, seen on the pack.
+    let since = epoch.elapsed();
+    let reply = signal_command(&mut client, 0, CommandKind::SetOutput, 1.0);
+    assert_eq!(reply.result(), Ok(()));
+    let (frame, on) = client.wait_frame(Duration::from_secs(3), |f| {
+        f.signals[0].value == 1.0 && !f.signals[0].flags().contains(SignalFlags::PENDING)
+    });
+    assert!(on, "{:?}", frame.signals[0]);
+    // The driver shows the level once the `$32` is on the wire; the pack applies it a few
+    // milliseconds later, when its nine bytes have arrived at 19200 baud.
+    let end = Instant::now() + Duration::from_secs(2);
+    while !pack.lock().expect("pack").ttlout1() && Instant::now() < end {
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    assert!(
+        pack.lock().expect("pack").ttlout1(),
+        "TTLOUT1 high on the pack"
+    );
+    let words: Vec<u8> = served
+        .received
+        .lock()
+        .expect("log")
+        .iter()
+        .filter(|(at, _)| *at >= since)
+        .map(|(_, byte)| *byte)
+        .collect();
+    // The log may begin inside a frame: try every offset (the checksum rejects false starts).
+    let outputs = words
+        .windows(9)
+        .filter_map(|word| tmcpack::RequestFrame::decode(word).ok())
+        .any(|frame| {
+            matches!(
+                frame.request,
+                tmcpack::Request::Outputs { ttlout1: true, .. }
+            )
+        });
+    assert!(outputs, "a $32 with TTLOUT1 set went out");
+    // E-stop: the beacon goes to its safe state (off).
+    let estop = client.command(CommandRequest::ALL_AXES, CommandKind::EStop, [0.0; 3]);
+    assert_eq!(estop.result(), Ok(()));
+    let (frame, safe) = client.wait_frame(Duration::from_secs(3), |f| {
+        f.signals[0].flags().contains(SignalFlags::SAFE_STATE) && f.signals[0].value == 0.0
+    });
+    assert!(safe, "{:?}", frame.signals[0]);
+    let end = Instant::now() + Duration::from_secs(2);
+    while pack.lock().expect("pack").ttlout1() && Instant::now() < end {
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    assert!(
+        !pack.lock().expect("pack").ttlout1(),
+        "TTLOUT1 low on the pack"
+    );
+    assert_eq!(
+        server.signal_and_wait(Signal::SIGTERM, Duration::from_secs(10)),
+        Some(0)
+    );
+}
