@@ -265,6 +265,15 @@ impl TmcpackSim {
         self.power_down_state
     }
 
+    /// Executes `request` at `now` as if another master on the pair had sent it, without
+    /// the wire (a request that answers queues its answer as a word would): what a second
+    /// program or a hand-held terminal does behind the server's back. The pack is advanced
+    /// to `now` first.
+    pub fn act_behind_the_back(&mut self, now: Duration, request: tmcpack::Request) {
+        self.advance(now);
+        self.execute(now, request);
+    }
+
     /// Moves (or removes) a motor's reference switch.
     pub fn set_ref_switch(&mut self, motor: u8, switch: Option<RefSwitch>) {
         if let Some(m) = self.index(motor).and_then(|i| self.motors.get_mut(i)) {
@@ -343,7 +352,10 @@ impl TmcpackSim {
     fn quiet(&self) -> bool {
         self.st.interp.is_none()
             && self.st.delayed.is_none()
-            && self.active_motors().all(Motor::idle)
+            && self
+                .active_motors()
+                .enumerate()
+                .all(|(i, m)| m.idle() && m.current_settled(&self.ctx(i)))
     }
 
     fn index(&self, motor: u8) -> Option<usize> {

@@ -392,6 +392,12 @@ impl Motor {
         } else {
             self.standstill_ticks = 0;
         }
+        self.current_amps = self.coil_current(ctx);
+    }
+
+    /// The coil current the $15 levels give now: I3 accelerating, I2 at constant speed, I1
+    /// for T0 after a stop, I0 at standstill (manual 8.2 $15).
+    fn coil_current(&self, ctx: &TickCtx) -> f64 {
         let level = if self.vq != 0 {
             if self.accelerating {
                 self.p.i3
@@ -403,7 +409,13 @@ impl Motor {
         } else {
             self.p.i0
         };
-        self.current_amps = ctx.peak_amps * f64::from(level.percent()) / 100.0;
+        ctx.peak_amps * f64::from(level.percent()) / 100.0
+    }
+
+    /// `true` when the coil current shown is the one the current levels and peak give
+    /// (a `$15` or `$11` changed nothing yet while the pack was quiet otherwise).
+    pub fn current_settled(&self, ctx: &TickCtx) -> bool {
+        self.current_amps == self.coil_current(ctx)
     }
 
     fn check_stop_conditions(&mut self) {
