@@ -187,7 +187,7 @@ fn qq2drv_a_pid_constant_of_the_wrong_type_or_an_unknown_pid_key() {
         "qq2drv_type.toml",
         &text,
         "d = 6.5",
-        "axis[0].pid_position",
+        "axis[0].pid_position.d",
         "expected an integer",
     );
     let text = QQ2DRV.replace("d = 650", "dd = 650");

@@ -173,7 +173,14 @@ fn current_values_outside_the_manual_are_refused() {
         );
     }
     let text = on_x("current = { peak = \"half\" }");
-    fails_at("type.toml", &text, "\"half\"", 0, "current", "invalid type");
+    fails_at(
+        "type.toml",
+        &text,
+        "\"half\"",
+        0,
+        "current.peak",
+        "invalid type",
+    );
 }
 
 #[test]
@@ -241,7 +248,7 @@ fn reference_values_outside_the_manual_are_refused() {
             "signed 32-bit",
         ),
         ("side = \"up\"", "axis[0].reference.side", "unknown side"),
-        ("fast = 1", "reference", "invalid type"),
+        ("fast = 1", "reference.fast", "invalid type"),
     ];
     for (value, key, says) in cases {
         let text = on_x(&format!("reference = {{ {value} }}"));

@@ -200,9 +200,15 @@ impl<'a> Issues<'a> {
                 if is_header {
                     return table;
                 }
-                let key = trimmed
-                    .split_once('=')
-                    .map(|(key, _)| key.trim().trim_matches('"').to_owned());
+                let key = line.split_once('=').map(|(key, value)| {
+                    let key = key.trim().trim_matches('"').to_owned();
+                    // Inside an inline table: down to the key the offset is in.
+                    let before = (offset - line_start).saturating_sub(key_len(line, value));
+                    let inner = inline_path(value.get(..before).unwrap_or(value));
+                    inner
+                        .into_iter()
+                        .fold(key, |path, part| format!("{path}.{part}"))
+                });
                 return match (key, table.is_empty()) {
                     (Some(key), true) => key,
                     (Some(key), false) => format!("{table}.{key}"),
@@ -214,6 +220,60 @@ impl<'a> Issues<'a> {
         }
         "(file)".to_owned()
     }
+}
+
+/// Bytes of `line` before its value (`value` is the part after the first `=`).
+fn key_len(line: &str, value: &str) -> usize {
+    line.len() - value.len()
+}
+
+/// The keys of the inline tables that are open at the end of `value` (a line's text after
+/// its first `=`, cut at an offset), outermost first, with the key being given there:
+/// `{ a = 1, b = { c = ` gives `[b, c]`. Strings are skipped.
+fn inline_path(value: &str) -> Vec<String> {
+    let mut open: Vec<Option<String>> = Vec::new();
+    let mut current: Option<String> = None;
+    let mut token = String::new();
+    let mut quote: Option<char> = None;
+    for c in value.chars() {
+        if let Some(q) = quote {
+            if c == q {
+                quote = None;
+            }
+            token.push(c);
+            continue;
+        }
+        match c {
+            '"' | '\'' => {
+                quote = Some(c);
+                token.push(c);
+            }
+            '{' => {
+                open.push(current.take());
+                token.clear();
+            }
+            '}' => {
+                current = open.pop().flatten();
+                token.clear();
+            }
+            '=' => {
+                current = Some(token.trim().trim_matches('"').to_owned());
+                token.clear();
+            }
+            ',' => {
+                if !open.is_empty() {
+                    current = None;
+                }
+                token.clear();
+            }
+            '#' => break,
+            _ => token.push(c),
+        }
+    }
+    if open.is_empty() {
+        return Vec::new();
+    }
+    open.into_iter().flatten().chain(current).collect()
 }
 
 /// 1-based line and column (characters) of byte `offset` in `source`.
@@ -258,7 +318,19 @@ mod tests {
             "axis[0]"
         );
         assert_eq!(issues.key_at(source.find("\"x\"").unwrap()), "axis[1].max");
-        assert_eq!(issues.key_at(source.find("5 }").unwrap()), "axis[1].home");
+        assert_eq!(
+            issues.key_at(source.find("5 }").unwrap()),
+            "axis[1].home.input"
+        );
+        let source =
+            "[[axis]]\ncurrent = { peak = \"a, b = {\", limit = { low = 1, high = 2.5 }, t = 3 }\n";
+        let issues = Issues::new(source);
+        let at = |needle: &str| issues.key_at(source.find(needle).unwrap());
+        assert_eq!(at("\"a,"), "axis[0].current.peak");
+        assert_eq!(at("1,"), "axis[0].current.limit.low");
+        assert_eq!(at("2.5"), "axis[0].current.limit.high");
+        assert_eq!(at("3 }"), "axis[0].current.t");
+        assert_eq!(at("{ peak"), "axis[0].current");
     }
 
     #[test]

@@ -35,6 +35,19 @@ impl<'de> Deserialize<'de> for Int {
     }
 }
 
+impl Int {
+    /// The value, saturated to `i64` (range checks see a saturated value out of range too).
+    pub fn get(&self) -> i64 {
+        i64::try_from(self.0).unwrap_or(if self.0 < 0 { i64::MIN } else { i64::MAX })
+    }
+}
+
+impl core::fmt::Display for Int {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        self.0.fmt(f)
+    }
+}
+
 /// A raw integer key of either representation.
 pub(crate) trait IntValue {
     /// The value, widened.
@@ -112,19 +125,19 @@ pub(crate) struct RawDevice {
     pub index_polarity: Option<Spanned<String>>,
     pub stream_interval_ms: Option<Spanned<f64>>,
     pub host_latency_ms: Option<Spanned<f64>>,
-    pub enable_output: Option<Spanned<i64>>,
+    pub enable_output: Option<Spanned<Int>>,
     pub enable_active: Option<Spanned<String>>,
     pub input_mode: Option<Spanned<String>>,
-    pub capture_input: Option<Spanned<i64>>,
+    pub capture_input: Option<Spanned<Int>>,
     pub capture_edge: Option<Spanned<String>>,
     // tmcpack machine keys (config/machine/tmcpack.rs)
-    pub reply_address: Option<Spanned<i64>>,
-    pub switchover_ms: Option<Spanned<i64>>,
-    pub packet_timeout_ms: Option<Spanned<i64>>,
+    pub reply_address: Option<Spanned<Int>>,
+    pub switchover_ms: Option<Spanned<Int>>,
+    pub packet_timeout_ms: Option<Spanned<Int>>,
     pub ready_output: Option<Spanned<RawReadyOutput>>,
     // spimotor machine keys (config/machine/spimotor.rs)
-    pub intensity: Option<Spanned<i64>>,
-    pub coils: Option<Spanned<i64>>,
+    pub intensity: Option<Spanned<Int>>,
+    pub coils: Option<Spanned<Int>>,
 }
 
 /// tmcpack `ready_output = { motors = [0, 1], reference = [0] }`: TTLOUT1 as the ready
@@ -132,8 +145,8 @@ pub(crate) struct RawDevice {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawReadyOutput {
-    pub motors: Option<Spanned<Vec<Spanned<i64>>>>,
-    pub reference: Option<Spanned<Vec<Spanned<i64>>>>,
+    pub motors: Option<Spanned<Vec<Spanned<Int>>>>,
+    pub reference: Option<Spanned<Vec<Spanned<Int>>>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -182,7 +195,7 @@ pub(crate) struct RawCurrent {
     pub standstill: Option<Spanned<f64>>,
     pub constant: Option<Spanned<f64>>,
     pub accel: Option<Spanned<f64>>,
-    pub standby_delay_ms: Option<Spanned<i64>>,
+    pub standby_delay_ms: Option<Spanned<Int>>,
 }
 
 /// tmcpack `reference = { side, active, center, stop_at_switch, soft_stop, debounce_ms,
@@ -195,7 +208,7 @@ pub(crate) struct RawReference {
     pub center: Option<Spanned<bool>>,
     pub stop_at_switch: Option<Spanned<bool>>,
     pub soft_stop: Option<Spanned<bool>>,
-    pub debounce_ms: Option<Spanned<i64>>,
+    pub debounce_ms: Option<Spanned<Int>>,
     pub null_offset: Option<Spanned<f64>>,
     pub test_range: Option<Spanned<f64>>,
     pub fast: Option<Spanned<bool>>,
@@ -206,8 +219,8 @@ pub(crate) struct RawReference {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawAnalogStop {
-    pub left: Option<Spanned<i64>>,
-    pub right: Option<Spanned<i64>>,
+    pub left: Option<Spanned<Int>>,
+    pub right: Option<Spanned<Int>>,
 }
 
 /// qq2drv `pid_position = { p, i, d, windup }` (packet 30) / `pid_velocity = { p, i, d }`
@@ -215,10 +228,10 @@ pub(crate) struct RawAnalogStop {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawPid {
-    pub p: Option<Spanned<i64>>,
-    pub i: Option<Spanned<i64>>,
-    pub d: Option<Spanned<i64>>,
-    pub windup: Option<Spanned<i64>>,
+    pub p: Option<Spanned<Int>>,
+    pub i: Option<Spanned<Int>>,
+    pub d: Option<Spanned<Int>>,
+    pub windup: Option<Spanned<Int>>,
 }
 
 /// `[[signal]]`: a named board I/O pin.

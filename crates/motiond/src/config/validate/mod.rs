@@ -26,13 +26,7 @@ pub(crate) fn parse(source: &str) -> Result<ServerConfig, Vec<ConfigIssue>> {
         Err(error) => {
             let span = error.span().unwrap_or(0..0);
             let key = issues.key_at(span.start);
-            let message = error
-                .message()
-                .trim()
-                .replace('\n', " ")
-                .replace("expected i64", "expected an integer")
-                .replace("expected f64", "expected a number");
-            issues.push(span, key, message);
+            issues.push(span, key, plain_serde_message(error.message()));
             return Err(issues.sorted());
         }
     };
@@ -51,6 +45,30 @@ pub(crate) fn parse(source: &str) -> Result<ServerConfig, Vec<ConfigIssue>> {
     } else {
         Err(issues.sorted())
     }
+}
+
+/// A serde/TOML message in the user's words: no Rust type names (`i64`, `i128 `…); an
+/// integer beyond 64 bits says so.
+fn plain_serde_message(message: &str) -> String {
+    let mut text = message
+        .trim()
+        .replace('\n', " ")
+        .replace("expected i64", "expected an integer")
+        .replace("expected f64", "expected a number");
+    let mut beyond = false;
+    for rust in [" as i128", " as u128"] {
+        if text.contains(rust) {
+            beyond = true;
+            text = text.replace(rust, "");
+        }
+    }
+    for rust in [" as i64", " as u64", " as f64"] {
+        text = text.replace(rust, "");
+    }
+    if beyond {
+        text.push_str(" (the integer is beyond the 64-bit range every key has)");
+    }
+    text
 }
 
 pub(crate) struct Validator<'i, 's> {

@@ -17,7 +17,7 @@ use toml::Spanned;
 
 use super::AxisContext;
 use crate::config::ServerConfig;
-use crate::config::raw::{RawAxis, RawConfig, RawPid};
+use crate::config::raw::{Int, RawAxis, RawConfig, RawPid};
 use crate::config::validate::Validator;
 
 /// The datasheet's recommended maximum SPI clock ("SPI Interface").
@@ -115,7 +115,7 @@ fn pid(
     with_windup: bool,
 ) -> Option<PidKeys> {
     let mut ok = true;
-    let mut constant = |v: &mut Validator<'_, '_>, value: &Option<Spanned<i64>>, name: &str| {
+    let mut constant = |v: &mut Validator<'_, '_>, value: &Option<Spanned<Int>>, name: &str| {
         let key = ctx.key(&format!("{table}.{name}"));
         let value = value.as_ref()?;
         let checked = v

@@ -12,7 +12,7 @@ use qsb::{EncoderMode, IntervalRate, ProductType, TICK};
 use toml::Spanned;
 
 use super::{DeviceContext, DeviceMachine};
-use crate::config::raw::{RawConfig, RawDevice};
+use crate::config::raw::{Int, RawConfig, RawDevice};
 use crate::config::validate::Validator;
 use crate::config::{QsbVariant, ServerConfig, Transport};
 
@@ -218,11 +218,11 @@ fn stream_interval(v: &mut Validator<'_, '_>, value: &Spanned<f64>, key: &str) -
 /// `enable_output`: bit 0 or 3 of a qsb-m.
 fn enable_output(
     v: &mut Validator<'_, '_>,
-    value: &Spanned<i64>,
+    value: &Spanned<Int>,
     key: &str,
     product: ProductType,
 ) -> Option<u8> {
-    let bit = *value.get_ref();
+    let bit = value.get_ref().get();
     let why = match (product, bit) {
         (ProductType::M, 0 | 3) => return Some(bit as u8),
         (ProductType::M, 1 | 2) => {
@@ -235,18 +235,22 @@ fn enable_output(
             "the enable line of an external stepper driver exists only on a qsb-m (the -S has no digital I/O, the -D one bit and no motor drive)"
         }
     };
-    v.issue(value.span(), key, format!("{bit} is not allowed; {why}"));
+    v.issue(
+        value.span(),
+        key,
+        format!("{} is not allowed; {why}", value.get_ref()),
+    );
     None
 }
 
 /// `capture_input`: a DIG I/O bit of the product.
 fn capture_input(
     v: &mut Validator<'_, '_>,
-    value: &Spanned<i64>,
+    value: &Spanned<Int>,
     key: &str,
     product: ProductType,
 ) -> Option<u8> {
-    let bit = *value.get_ref();
+    let bit = value.get_ref().get();
     let bits = i64::from(product.digital_io_bits());
     if (0..bits).contains(&bit) {
         return Some(bit as u8);
@@ -255,7 +259,11 @@ fn capture_input(
         ProductType::S => "a qsb-s has no digital I/O to capture on".to_owned(),
         _ => format!("allowed: 0..={} (a DIG I/O bit of this board)", bits - 1),
     };
-    v.issue(value.span(), key, format!("{bit} is not allowed; {why}"));
+    v.issue(
+        value.span(),
+        key,
+        format!("{} is not allowed; {why}", value.get_ref()),
+    );
     None
 }
 

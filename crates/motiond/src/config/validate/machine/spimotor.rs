@@ -14,7 +14,7 @@ use toml::Spanned;
 
 use super::DeviceContext;
 use crate::config::ServerConfig;
-use crate::config::raw::{RawConfig, RawDevice};
+use crate::config::raw::{Int, RawConfig, RawDevice};
 use crate::config::validate::Validator;
 
 /// The spimotor keys of one `[[device]]`; `None` fields were not set (the driver's default
@@ -60,16 +60,17 @@ pub(in crate::config) fn device_keys(
     };
     let coils = match coils {
         None => None,
-        Some(value) => match *value.get_ref() {
+        Some(value) => match value.get_ref().get() {
             1 => Some(1),
             2 => Some(2),
-            other => {
+            _ => {
                 v.issue(
                     value.span(),
                     &ctx.key("coils"),
                     format!(
-                        "{other} is not allowed; allowed: 1 (one coil at a time, port 0x44 ← \
-                         0x00) or 2 (two coils, port 0x44 ← 0x01)"
+                        "{} is not allowed; allowed: 1 (one coil at a time, port 0x44 ← \
+                         0x00) or 2 (two coils, port 0x44 ← 0x01)",
+                        value.get_ref()
                     ),
                 );
                 ok = false;
@@ -85,10 +86,10 @@ fn stepper_only<'a>(
     v: &mut Validator<'_, '_>,
     ctx: &DeviceContext,
     brushed: bool,
-    value: &'a Option<Spanned<i64>>,
+    value: &'a Option<Spanned<Int>>,
     key: &str,
     ok: &mut bool,
-) -> Option<&'a Spanned<i64>> {
+) -> Option<&'a Spanned<Int>> {
     let value = value.as_ref()?;
     if brushed {
         let port = if key == "intensity" { "0x10" } else { "0x44" };

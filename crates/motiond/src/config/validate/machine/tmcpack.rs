@@ -8,7 +8,7 @@ use tmcpack::convert::{MAX_DEBOUNCE_MS, byte_time};
 use toml::Spanned;
 
 use super::{AxisContext, DeviceContext};
-use crate::config::raw::{RawAxis, RawConfig, RawDevice};
+use crate::config::raw::{Int, RawAxis, RawConfig, RawDevice};
 use crate::config::validate::Validator;
 use crate::config::{ServerConfig, Transport};
 
@@ -105,12 +105,12 @@ pub struct TmcpackAxisKeys {
 /// An even number of ms in `range`, for keys in the pack's 2 ms units.
 fn even_ms(
     v: &mut Validator<'_, '_>,
-    value: &Spanned<i64>,
+    value: &Spanned<Int>,
     key: &str,
     range: core::ops::RangeInclusive<i64>,
     what: &str,
 ) -> Option<i64> {
-    let ms = *value.get_ref();
+    let ms = value.get_ref().get();
     if range.contains(&ms) && ms % 2 == 0 {
         Some(ms)
     } else {
@@ -118,7 +118,8 @@ fn even_ms(
             value.span(),
             key,
             format!(
-                "{ms} is not allowed; an even number of ms {}..={} ({what} is set in 2 ms units)",
+                "{} is not allowed; an even number of ms {}..={} ({what} is set in 2 ms units)",
+                value.get_ref(),
                 range.start(),
                 range.end()
             ),
@@ -176,7 +177,7 @@ pub(in crate::config) fn device_keys(
     if let Some(ready) = &raw.ready_output {
         let motors = motors_of(raw);
         let all = (1u8 << motors) - 1;
-        let mut mask = |list: &Option<Spanned<Vec<Spanned<i64>>>>, k: &str| -> Option<u8> {
+        let mut mask = |list: &Option<Spanned<Vec<Spanned<Int>>>>, k: &str| -> Option<u8> {
             let Some(list) = list else {
                 // The manual's default masks ($3F): every motor.
                 return Some(all);
@@ -185,13 +186,14 @@ pub(in crate::config) fn device_keys(
             let mut bits = 0u8;
             let mut fine = true;
             for item in list.get_ref() {
-                let m = *item.get_ref();
+                let m = item.get_ref().get();
                 if !(0..i64::from(motors)).contains(&m) {
                     v.issue(
                         item.span(),
                         &key,
                         format!(
-                            "{m} is not a motor of this pack; allowed: 0..={}",
+                            "{} is not a motor of this pack; allowed: 0..={}",
+                            item.get_ref(),
                             motors - 1
                         ),
                     );
@@ -317,7 +319,7 @@ pub(in crate::config) fn axis_keys(
         keys.reference.fast = flag(&r.fast);
         keys.reference.mechanical = flag(&r.mechanical);
         if let Some(value) = &r.debounce_ms {
-            let ms = *value.get_ref();
+            let ms = value.get_ref().get();
             if (0..=i64::from(MAX_DEBOUNCE_MS)).contains(&ms) && ms % 2 == 0 {
                 keys.reference.debounce_ms = Some(ms as u16);
             } else {
@@ -325,7 +327,7 @@ pub(in crate::config) fn axis_keys(
                 v.issue(
                     value.span(),
                     &key("debounce_ms"),
-                    format!("{ms} is not allowed; an even number of ms 0..=30 (manual 8.3 $16: \"$0001=0ms, $0003=2ms, $FFFF=30ms\")"),
+                    format!("{} is not allowed; an even number of ms 0..=30 (manual 8.3 $16: \"$0001=0ms, $0003=2ms, $FFFF=30ms\")", value.get_ref()),
                 );
             }
         }
