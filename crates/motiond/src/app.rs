@@ -173,13 +173,20 @@ impl Systemd<'_> {
         }
     }
 
+    /// Shutdown began (a signal, or the tick loop ended).
+    fn stopping(&mut self) {
+        if let Some(supervisor) = self.supervisor.as_deref_mut() {
+            supervisor.stopping();
+        }
+    }
+
     fn poll(&mut self) {
+        if self.shutdown.load(Ordering::Relaxed) {
+            self.stopping();
+        }
         let Some(supervisor) = self.supervisor.as_deref_mut() else {
             return;
         };
-        if self.shutdown.load(Ordering::Relaxed) {
-            supervisor.stopping();
-        }
         if let Some(stuck) = supervisor.poll(monotonic_now(), self.health) {
             tracing::error!(
                 "the tick thread has not completed a tick for {} ms: no longer feeding the systemd watchdog",
@@ -206,6 +213,7 @@ fn housekeeping(
     let mut device_states = vec![DeviceState::Offline; config.devices.len()];
     let started = monotonic_now();
     loop {
+        systemd.poll();
         while let Ok(report) = reports.pop() {
             match report {
                 Report::Failed(error) => bail!("{error}"),
@@ -287,6 +295,7 @@ fn housekeeping(
                     }
                 }
                 Report::Stopped { at_rest } => {
+                    systemd.stopping();
                     if status_line {
                         eprintln!();
                     }
@@ -302,7 +311,6 @@ fn housekeeping(
                 }
             }
         }
-        systemd.poll();
         let now = monotonic_now();
         if now >= next_liveness && server_node != 0 {
             next_liveness = now + config.server.liveness_check;
