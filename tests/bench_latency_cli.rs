@@ -119,7 +119,10 @@ fn help_lists_the_options_but_not_the_peer_flags() {
         );
     }
     assert!(!help.contains("--peer"), "internal flag shown:\n{help}");
-    assert!(!help.contains("--motion-bench-peer"), "internal flag shown:\n{help}");
+    assert!(
+        !help.contains("--motion-bench-peer"),
+        "internal flag shown:\n{help}"
+    );
     assert!(!help.contains("--bench "), "cargo's flag shown:\n{help}");
 }
 

@@ -6,7 +6,9 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 fn deploy(file: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("deploy").join(file)
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("deploy")
+        .join(file)
 }
 
 fn read(file: &str) -> String {
@@ -182,7 +184,12 @@ fn the_udev_rules_parse_and_give_the_devices_to_group_motion() {
         assert!(rules.contains(needed), "{needed} missing");
     }
     // The parser refuses what udev refuses.
-    for bad in ["GROUP=motion", "GROUPE=\"motion\"", "ATTR{x=\"1\"", "KERNEL\"x\""] {
+    for bad in [
+        "GROUP=motion",
+        "GROUPE=\"motion\"",
+        "ATTR{x=\"1\"",
+        "KERNEL\"x\"",
+    ] {
         assert!(udev_pair(bad).is_err(), "{bad} accepted");
     }
 }

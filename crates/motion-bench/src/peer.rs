@@ -11,8 +11,8 @@
 //! Any program that runs the bench calls [`run_if_requested`] before parsing its own
 //! arguments, so the cargo bench and motionctl both serve as their own peer.
 
-use std::io::{BufRead, BufReader, Read, Write};
 use std::ffi::OsString;
+use std::io::{BufRead, BufReader, Read, Write};
 use std::process::{Child, ChildStdin, ChildStdout, Command, ExitCode, Stdio};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -84,7 +84,8 @@ impl PeerArgs {
 
     /// Parses [`PeerArgs::to_words`].
     pub fn parse(words: &[String]) -> Result<Self, String> {
-        let usage = || format!("usage: {PEER_FLAG} ticking|busy-rr NAME HZ [--rt-priority N] [--cpu N]");
+        let usage =
+            || format!("usage: {PEER_FLAG} ticking|busy-rr NAME HZ [--rt-priority N] [--cpu N]");
         let [mode, name, hz, rest @ ..] = words else {
             return Err(usage());
         };

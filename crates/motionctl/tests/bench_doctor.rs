@@ -61,7 +61,11 @@ fn bench_without_a_server_exits_3() -> Result {
         "--duration",
         "200ms",
     ])?;
-    assert_fails(&output, 3, "Is motiond running with [server] name = \"no-such-server-here\"");
+    assert_fails(
+        &output,
+        3,
+        "Is motiond running with [server] name = \"no-such-server-here\"",
+    );
     Ok(())
 }
 
@@ -100,8 +104,9 @@ fn bench_smoke_run_prints_ratios_beside_their_baselines() -> Result {
     }
     // The command-to-wire phase found the motiond beside motionctl.
     assert!(
-        rows.iter()
-            .any(|row| row["figure"].as_str().is_some_and(|f| f.contains("first byte"))),
+        rows.iter().any(|row| row["figure"]
+            .as_str()
+            .is_some_and(|f| f.contains("first byte"))),
         "{report:#}"
     );
     Ok(())
@@ -137,11 +142,17 @@ fn doctor_on_this_machine_prints_every_check_with_a_value() -> Result {
     assert_eq!(lines.len(), IDS.len(), "{text}");
     for (line, id) in lines.iter().zip(IDS) {
         let rest = line.get(5..).unwrap_or_default().trim_start();
-        let value = rest.strip_prefix(id).ok_or(format!("{id} expected: {line}"))?;
+        let value = rest
+            .strip_prefix(id)
+            .ok_or(format!("{id} expected: {line}"))?;
         assert!(!value.trim().is_empty(), "no value: {line}");
     }
     let fails = lines.iter().filter(|l| l.starts_with("FAIL")).count();
-    assert_eq!(output.status.code(), Some(if fails > 0 { 1 } else { 0 }), "{output:?}");
+    assert_eq!(
+        output.status.code(),
+        Some(if fails > 0 { 1 } else { 0 }),
+        "{output:?}"
+    );
     assert!(text.contains(&format!("{fails} fail")), "{text}");
     Ok(())
 }
@@ -158,15 +169,30 @@ fn doctor_json_on_a_fake_root_gives_every_check_a_status_value_and_fix() -> Resu
     };
     file("/proc/version", "Linux version 6.1.0-rt #1 SMP PREEMPT_RT")?;
     file("/proc/sys/kernel/sched_rt_runtime_us", "950000")?;
-    file("/proc/swaps", "Filename Type Size Used Priority\n/dev/sda2 partition 100 0 -2\n")?;
-    file("/proc/self/status", "Uid:\t998\t998\t998\t998\nGid:\t998\t998\t998\t998\nGroups:\t998\nCapEff:\t0000000000000000\n")?;
-    file("/proc/self/limits", "Max locked memory 65536 65536 bytes\nMax realtime priority 0 0\n")?;
+    file(
+        "/proc/swaps",
+        "Filename Type Size Used Priority\n/dev/sda2 partition 100 0 -2\n",
+    )?;
+    file(
+        "/proc/self/status",
+        "Uid:\t998\t998\t998\t998\nGid:\t998\t998\t998\t998\nGroups:\t998\nCapEff:\t0000000000000000\n",
+    )?;
+    file(
+        "/proc/self/limits",
+        "Max locked memory 65536 65536 bytes\nMax realtime priority 0 0\n",
+    )?;
     file("/sys/devices/system/cpu/online", "0-3")?;
-    file("/sys/devices/system/clocksource/clocksource0/current_clocksource", "hpet")?;
+    file(
+        "/sys/devices/system/clocksource/clocksource0/current_clocksource",
+        "hpet",
+    )?;
     file("/dev/ttyUSB0", "")?;
     file("/sys/bus/usb-serial/devices/ttyUSB0/latency_timer", "16")?;
     std::fs::create_dir_all(root.join("dev/shm"))?;
-    std::fs::set_permissions(root.join("dev/shm"), std::fs::Permissions::from_mode(0o1777))?;
+    std::fs::set_permissions(
+        root.join("dev/shm"),
+        std::fs::Permissions::from_mode(0o1777),
+    )?;
     let config = root.join("motiond.toml");
     std::fs::write(
         &config,
@@ -197,9 +223,19 @@ fn doctor_json_on_a_fake_root_gives_every_check_a_status_value_and_fix() -> Resu
     };
     for check in checks {
         let passed = check["status"] == "pass";
-        assert!(["pass", "warn", "fail"].contains(&check["status"].as_str().unwrap_or("")), "{check}");
-        assert!(check["value"].as_str().is_some_and(|v| !v.is_empty()), "{check}");
-        assert_eq!(check["fix"].is_null(), passed, "a fix exactly when not passed: {check}");
+        assert!(
+            ["pass", "warn", "fail"].contains(&check["status"].as_str().unwrap_or("")),
+            "{check}"
+        );
+        assert!(
+            check["value"].as_str().is_some_and(|v| !v.is_empty()),
+            "{check}"
+        );
+        assert_eq!(
+            check["fix"].is_null(),
+            passed,
+            "a fix exactly when not passed: {check}"
+        );
     }
     // What the fake root says, read through the binary.
     assert_eq!(status("kernel-preemption"), "pass");
@@ -210,17 +246,31 @@ fn doctor_json_on_a_fake_root_gives_every_check_a_status_value_and_fix() -> Resu
     assert_eq!(status("swap"), "warn");
     assert_eq!(status("cpu-isolation"), "warn");
     assert_eq!(status("wakeup-latency"), "warn");
-    assert_eq!(report["summary"]["fail"].as_u64(), Some(checks.iter().filter(|c| c["status"] == "fail").count() as u64));
+    assert_eq!(
+        report["summary"]["fail"].as_u64(),
+        Some(checks.iter().filter(|c| c["status"] == "fail").count() as u64)
+    );
     assert_eq!(output.status.code(), Some(1), "failed checks: exit 1");
-    assert!(report["config"].as_str().is_some_and(|c| c.ends_with("motiond.toml")));
+    assert!(
+        report["config"]
+            .as_str()
+            .is_some_and(|c| c.ends_with("motiond.toml"))
+    );
     Ok(())
 }
 
 #[test]
 fn doctor_refuses_a_bad_config_with_its_path() -> Result {
-    let path = std::env::temp_dir().join(format!("motionctl-doctor-bad-{}.toml", std::process::id()));
+    let path =
+        std::env::temp_dir().join(format!("motionctl-doctor-bad-{}.toml", std::process::id()));
     std::fs::write(&path, "[server]\nrt_priority = 0\n")?;
-    let output = motionctl(&["doctor", "--config", &path.to_string_lossy(), "--wakeup", "0s"])?;
+    let output = motionctl(&[
+        "doctor",
+        "--config",
+        &path.to_string_lossy(),
+        "--wakeup",
+        "0s",
+    ])?;
     let _ = std::fs::remove_file(&path);
     assert_fails(&output, 1, "rt_priority");
     assert!(stdout(&output).is_empty(), "{output:?}");

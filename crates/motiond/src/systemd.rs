@@ -272,10 +272,8 @@ mod tests {
 
     impl FakeManager {
         fn new(tag: &str) -> Self {
-            let path = std::env::temp_dir().join(format!(
-                "motiond-notify-{}-{tag}.sock",
-                std::process::id()
-            ));
+            let path = std::env::temp_dir()
+                .join(format!("motiond-notify-{}-{tag}.sock", std::process::id()));
             let _ = std::fs::remove_file(&path);
             let socket = UnixDatagram::bind(&path).expect("bind the fake notify socket");
             socket.set_nonblocking(true).expect("nonblocking");
@@ -350,15 +348,26 @@ mod tests {
         // WatchdogSec=2s at 1 kHz: ping every 1 s, stale after 500 ms.
         let mut feeder = WatchdogFeeder::new(ms(2000), ms(1));
         assert_eq!(feeder.poll(ms(0), None), Feed::Stalled(Duration::MAX));
-        assert_eq!(feeder.poll(ms(5), None), Feed::Wait, "a stall is reported once");
+        assert_eq!(
+            feeder.poll(ms(5), None),
+            Feed::Wait,
+            "a stall is reported once"
+        );
         assert_eq!(feeder.poll(ms(10), Some(ms(9))), Feed::Ping);
         assert_eq!(feeder.poll(ms(500), Some(ms(499))), Feed::Wait);
         assert_eq!(feeder.poll(ms(1010), Some(ms(1009))), Feed::Ping);
         // The tick stops at 1200 ms: pings stop once its beat is 500 ms old.
         assert_eq!(feeder.poll(ms(1700), Some(ms(1200))), Feed::Wait);
-        assert_eq!(feeder.poll(ms(1701), Some(ms(1200))), Feed::Stalled(ms(501)));
+        assert_eq!(
+            feeder.poll(ms(1701), Some(ms(1200))),
+            Feed::Stalled(ms(501))
+        );
         for at in (1800..6000).step_by(100) {
-            assert_eq!(feeder.poll(ms(at), Some(ms(1200))), Feed::Wait, "at {at} ms");
+            assert_eq!(
+                feeder.poll(ms(at), Some(ms(1200))),
+                Feed::Wait,
+                "at {at} ms"
+            );
         }
         // It recovers: pings again at once.
         assert_eq!(feeder.poll(ms(6000), Some(ms(5999))), Feed::Ping);
@@ -389,7 +398,10 @@ mod tests {
         supervisor.devices(1, 2); // unchanged: not repeated
         let messages = manager.messages();
         assert_eq!(messages.len(), 2, "{messages:?}");
-        assert!(messages.iter().all(|m| !m.contains("READY=1")), "{messages:?}");
+        assert!(
+            messages.iter().all(|m| !m.contains("READY=1")),
+            "{messages:?}"
+        );
         assert!(messages[1].contains("1 of 2"), "{messages:?}");
         supervisor.devices(2, 2);
         assert_eq!(
@@ -400,13 +412,20 @@ mod tests {
         supervisor.devices(2, 2);
         let messages = manager.messages();
         assert_eq!(messages.len(), 2);
-        assert!(messages.iter().all(|m| !m.contains("READY=1")), "READY is sent once");
+        assert!(
+            messages.iter().all(|m| !m.contains("READY=1")),
+            "READY is sent once"
+        );
         // Ticks complete: WATCHDOG=1 every 200 ms.
         let mut pings = 0;
         for at in (10..1000).step_by(10) {
             health.beat(ms(at));
             assert_eq!(supervisor.poll(ms(at), &health), None);
-            pings += manager.messages().iter().filter(|m| *m == "WATCHDOG=1").count();
+            pings += manager
+                .messages()
+                .iter()
+                .filter(|m| *m == "WATCHDOG=1")
+                .count();
         }
         assert_eq!(pings, 5);
         // The tick sticks: its newest beat stays at 990 ms. Pings may go on while that beat
@@ -424,10 +443,16 @@ mod tests {
         let messages = manager.messages();
         assert!(messages.iter().all(|m| m != "WATCHDOG=1"), "{messages:?}");
         assert_eq!(messages.len(), 1, "{messages:?}");
-        assert!(messages[0].starts_with("STATUS=tick thread stuck"), "{messages:?}");
+        assert!(
+            messages[0].starts_with("STATUS=tick thread stuck"),
+            "{messages:?}"
+        );
         supervisor.stopping();
         supervisor.stopping();
         supervisor.devices(0, 2);
-        assert_eq!(manager.messages(), ["STOPPING=1\nSTATUS=stopping every axis"]);
+        assert_eq!(
+            manager.messages(),
+            ["STOPPING=1\nSTATUS=stopping every axis"]
+        );
     }
 }

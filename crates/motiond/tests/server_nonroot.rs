@@ -71,7 +71,8 @@ fn ids_of(name: &str) -> Option<(u32, u32)> {
     let passwd = std::fs::read_to_string("/etc/passwd").ok()?;
     passwd.lines().find_map(|line| {
         let fields: Vec<&str> = line.split(':').collect();
-        (fields.first() == Some(&name)).then(|| Some((fields.get(2)?.parse().ok()?, fields.get(3)?.parse().ok()?)))?
+        (fields.first() == Some(&name))
+            .then(|| Some((fields.get(2)?.parse().ok()?, fields.get(3)?.parse().ok()?)))?
     })
 }
 
@@ -126,7 +127,10 @@ fn as_user(stage: &Stage, user: &TestUser, limits: &[&str], caps: bool, extra: &
     command.arg("--clear-groups");
     if caps {
         // AmbientCapabilities=CAP_SYS_NICE CAP_IPC_LOCK, as deploy/motiond.service.
-        command.args(["--inh-caps=+sys_nice,+ipc_lock", "--ambient-caps=+sys_nice,+ipc_lock"]);
+        command.args([
+            "--inh-caps=+sys_nice,+ipc_lock",
+            "--ambient-caps=+sys_nice,+ipc_lock",
+        ]);
     }
     command
         .arg("--")
@@ -140,14 +144,25 @@ fn as_user(stage: &Stage, user: &TestUser, limits: &[&str], caps: bool, extra: &
 
 /// Runs to READY (every device online) under a fake notify socket, checks the process's
 /// identity, stops it with SIGTERM; returns its log.
-fn run_until_ready(stage: &Stage, mut command: Command, expect_uid: u32, expect_caps: Option<u64>) -> String {
+fn run_until_ready(
+    stage: &Stage,
+    mut command: Command,
+    expect_uid: u32,
+    expect_caps: Option<u64>,
+) -> String {
     let mut manager = FakeManager::new(stage.dir());
     command.env("NOTIFY_SOCKET", &manager.path);
     let mut server = Motiond::spawn(command);
     let ready = manager.wait_for(Duration::from_secs(30), |m| m.contains("READY=1"));
     let log = server.log_text();
-    assert!(ready.is_some(), "instance {}: no READY=1 ({:?}); log:\n{log}", stage.name, manager.messages);
-    let status = std::fs::read_to_string(format!("/proc/{}/status", server.child.id())).expect("status");
+    assert!(
+        ready.is_some(),
+        "instance {}: no READY=1 ({:?}); log:\n{log}",
+        stage.name,
+        manager.messages
+    );
+    let status =
+        std::fs::read_to_string(format!("/proc/{}/status", server.child.id())).expect("status");
     let field = |name: &str| {
         status
             .lines()
@@ -155,18 +170,30 @@ fn run_until_ready(stage: &Stage, mut command: Command, expect_uid: u32, expect_
             .map(|v| v.split_whitespace().map(str::to_owned).collect::<Vec<_>>())
             .unwrap_or_default()
     };
-    assert_eq!(field("Uid:").get(1), Some(&expect_uid.to_string()), "{status}");
+    assert_eq!(
+        field("Uid:").get(1),
+        Some(&expect_uid.to_string()),
+        "{status}"
+    );
     if let Some(caps) = expect_caps {
-        assert_eq!(field("CapEff:").first(), Some(&format!("{caps:016x}")), "{status}");
+        assert_eq!(
+            field("CapEff:").first(),
+            Some(&format!("{caps:016x}")),
+            "{status}"
+        );
     }
-    assert_eq!(server.signal_and_wait(Signal::SIGTERM, Duration::from_secs(10)), Some(0));
+    assert_eq!(
+        server.signal_and_wait(Signal::SIGTERM, Duration::from_secs(10)),
+        Some(0)
+    );
     server.log_text()
 }
 
 const CAPS: u64 = (1 << 23) | (1 << 14); // CAP_SYS_NICE, CAP_IPC_LOCK
 
 #[test]
-fn a_non_root_server_gets_real_time_with_the_unit_s_capabilities_or_limits_and_says_why_not_without() {
+fn a_non_root_server_gets_real_time_with_the_unit_s_capabilities_or_limits_and_says_why_not_without()
+ {
     if !nix::unistd::Uid::effective().is_root() {
         return as_this_user();
     }
@@ -182,7 +209,12 @@ fn a_non_root_server_gets_real_time_with_the_unit_s_capabilities_or_limits_and_s
     // No privileges: refused, and the log says which and why; the server still serves.
     let stage = Stage::new("bare", owner);
     let bare = ["--rtprio=0", "--memlock=65536"];
-    let log = run_until_ready(&stage, as_user(&stage, &user, &bare, false, &[]), user.uid, Some(0));
+    let log = run_until_ready(
+        &stage,
+        as_user(&stage, &user, &bare, false, &[]),
+        user.uid,
+        Some(0),
+    );
     for needed in [
         "real-time: SCHED_FIFO priority 50: Operation not permitted",
         "(needs CAP_SYS_NICE or `ulimit -r 50`); continuing without it",
@@ -200,13 +232,21 @@ fn a_non_root_server_gets_real_time_with_the_unit_s_capabilities_or_limits_and_s
     let mut server = Motiond::spawn(as_user(&stage, &user, &bare, false, &["--require-rt"]));
     assert_eq!(server.wait(Duration::from_secs(20)), Some(1));
     let log = server.log_text();
-    assert!(log.contains("--require-rt: real-time set-up incomplete"), "{log}");
+    assert!(
+        log.contains("--require-rt: real-time set-up incomplete"),
+        "{log}"
+    );
     assert!(log.contains("Operation not permitted"), "{log}");
     drop(stage);
 
     // The unit's ambient capabilities, limits still at nothing: SCHED_FIFO and locked memory.
     let stage = Stage::new("caps", owner);
-    let log = run_until_ready(&stage, as_user(&stage, &user, &bare, true, &[]), user.uid, Some(CAPS));
+    let log = run_until_ready(
+        &stage,
+        as_user(&stage, &user, &bare, true, &[]),
+        user.uid,
+        Some(CAPS),
+    );
     assert!(log.contains("real-time: SCHED_FIFO prio 50"), "{log}");
     assert!(log.contains("memory locked"), "{log}");
     assert!(!log.contains("SCHED_FIFO priority 50:"), "{log}");
@@ -216,13 +256,25 @@ fn a_non_root_server_gets_real_time_with_the_unit_s_capabilities_or_limits_and_s
     // The unit's limits (LimitRTPRIO=50, LimitMEMLOCK=infinity) without capabilities. Raising
     // a hard limit needs CAP_SYS_RESOURCE, which a container may withhold even from root.
     let limits = ["--rtprio=50", "--memlock=unlimited"];
-    if Command::new("prlimit").args(limits).arg("true").status().is_ok_and(|s| s.success()) {
+    if Command::new("prlimit")
+        .args(limits)
+        .arg("true")
+        .status()
+        .is_ok_and(|s| s.success())
+    {
         let stage = Stage::new("limits", owner);
-        let log = run_until_ready(&stage, as_user(&stage, &user, &limits, false, &[]), user.uid, Some(0));
+        let log = run_until_ready(
+            &stage,
+            as_user(&stage, &user, &limits, false, &[]),
+            user.uid,
+            Some(0),
+        );
         assert!(log.contains("real-time: SCHED_FIFO prio 50"), "{log}");
         assert!(log.contains("memory locked"), "{log}");
     } else {
-        eprintln!("limits case not run: this root may not raise RLIMIT_RTPRIO (no CAP_SYS_RESOURCE)");
+        eprintln!(
+            "limits case not run: this root may not raise RLIMIT_RTPRIO (no CAP_SYS_RESOURCE)"
+        );
     }
 }
 
@@ -230,7 +282,10 @@ fn a_non_root_server_gets_real_time_with_the_unit_s_capabilities_or_limits_and_s
 fn as_this_user() {
     let stage = Stage::new("self", None);
     let mut command = Command::new(&stage.motiond);
-    command.arg("--config").arg(&stage.config).current_dir(stage.dir());
+    command
+        .arg("--config")
+        .arg(&stage.config)
+        .current_dir(stage.dir());
     let uid = nix::unistd::Uid::effective().as_raw();
     let log = run_until_ready(&stage, command, uid, None);
     assert!(
@@ -239,5 +294,8 @@ fn as_this_user() {
                 && log.contains("(needs CAP_SYS_NICE")),
         "{log}"
     );
-    assert!(log.contains("memory locked") || log.contains("(raise RLIMIT_MEMLOCK"), "{log}");
+    assert!(
+        log.contains("memory locked") || log.contains("(raise RLIMIT_MEMLOCK"),
+        "{log}"
+    );
 }

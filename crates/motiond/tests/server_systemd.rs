@@ -41,25 +41,37 @@ fn ready_waits_for_every_device_then_the_watchdog_is_fed_until_stopping() {
         .take_while(|m| !m.contains("READY=1"))
         .collect();
     assert!(
-        before.iter().any(|m| m.contains("STATUS=starting") && m.contains("of 2")),
+        before
+            .iter()
+            .any(|m| m.contains("STATUS=starting") && m.contains("of 2")),
         "{:?}",
         manager.messages
     );
     assert!(
-        ready.as_deref().is_some_and(|m| m.contains("STATUS=ready: 2 device(s)")),
+        ready
+            .as_deref()
+            .is_some_and(|m| m.contains("STATUS=ready: 2 device(s)")),
         "{ready:?}"
     );
     // READY means what it says: the frames show every device online.
     let client = support::RawClient::connect(&name, Duration::from_secs(5));
     let frame = client.frame();
     for device in 0..2 {
-        assert_eq!(frame.device_state(device), DeviceState::Online, "device {device}");
+        assert_eq!(
+            frame.device_state(device),
+            DeviceState::Online,
+            "device {device}"
+        );
     }
     drop(client);
 
     // WATCHDOG_USEC = 400 ms: a ping every 200 ms while the tick runs.
     manager.collect(Duration::from_millis(1500));
-    let pings = manager.messages.iter().filter(|m| *m == "WATCHDOG=1").count();
+    let pings = manager
+        .messages
+        .iter()
+        .filter(|m| *m == "WATCHDOG=1")
+        .count();
     assert!(pings >= 2, "{:?}", manager.messages);
     assert!(
         manager.messages.iter().all(|m| !m.contains("stuck")),
@@ -79,7 +91,11 @@ fn ready_waits_for_every_device_then_the_watchdog_is_fed_until_stopping() {
         manager.messages
     );
     assert_eq!(
-        manager.messages.iter().filter(|m| m.contains("READY=1")).count(),
+        manager
+            .messages
+            .iter()
+            .filter(|m| m.contains("READY=1"))
+            .count(),
         1
     );
     let log = server.log_text();

@@ -80,7 +80,11 @@ impl DoctorConfig {
         if config.server.tick_hz == 0 {
             return Err("`server.tick_hz` must be at least 1".to_owned());
         }
-        if config.server.rt_priority.is_some_and(|p| !(1..=99).contains(&p)) {
+        if config
+            .server
+            .rt_priority
+            .is_some_and(|p| !(1..=99).contains(&p))
+        {
             return Err("`server.rt_priority` must be within 1..=99".to_owned());
         }
         Ok(config)
@@ -88,8 +92,7 @@ impl DoctorConfig {
 
     /// Reads and parses `path`.
     pub fn load(path: &Path) -> Result<Self, String> {
-        let text =
-            std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
         Self::parse(&text).map_err(|e| format!("{}: {e}", path.display()))
     }
 
@@ -144,7 +147,10 @@ mod tests {
         assert_eq!(config.server.rt_priority, Some(80));
         assert_eq!(config.server.cpu, Some(3));
         assert!(config.server.lock_memory);
-        let links: Vec<&str> = config.device_links().map(|(l, _)| l.name.as_str()).collect();
+        let links: Vec<&str> = config
+            .device_links()
+            .map(|(l, _)| l.name.as_str())
+            .collect();
         assert_eq!(links, ["rs485", "spi"]);
     }
 

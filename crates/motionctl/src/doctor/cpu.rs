@@ -43,7 +43,8 @@ pub fn governor(cx: &Context<'_>) -> Check {
                     .unwrap_or_else(|| "unknown driver".to_owned());
                 // intel_pstate and amd-pstate-epp in active mode run their own dynamic
                 // algorithm under the name `powersave`; elsewhere it pins the lowest speed.
-                let dynamic_powersave = matches!(driver.as_str(), "intel_pstate" | "amd-pstate-epp");
+                let dynamic_powersave =
+                    matches!(driver.as_str(), "intel_pstate" | "amd-pstate-epp");
                 let status = match governor.as_str() {
                     "performance" => Status::Pass,
                     "powersave" if !dynamic_powersave => Status::Fail,
@@ -59,7 +60,11 @@ pub fn governor(cx: &Context<'_>) -> Check {
         };
         by_setting.entry((status, text)).or_default().insert(cpu);
     }
-    let status = by_setting.keys().map(|(s, _)| *s).max().unwrap_or(Status::Pass);
+    let status = by_setting
+        .keys()
+        .map(|(s, _)| *s)
+        .max()
+        .unwrap_or(Status::Pass);
     let value: Vec<String> = by_setting
         .iter()
         .map(|((_, text), cpus)| format!("cpu {}: {text}", format_cpu_list(cpus)))
@@ -185,7 +190,11 @@ const IRQ_T: &str = "interrupts of the links' devices";
 /// Finds the interrupts of a tty or spidev: its class directory's `irq` (8250 UARTs), else
 /// the first device up its sysfs path with an `irq` or `msi_irqs` (a USB adapter's host
 /// controller), else a `/proc/interrupts` line naming one of those devices or their drivers.
-fn irqs_of(host: &Host<'_>, link_path: &Path, spidev: bool) -> Result<(String, BTreeSet<u32>), String> {
+fn irqs_of(
+    host: &Host<'_>,
+    link_path: &Path,
+    spidev: bool,
+) -> Result<(String, BTreeSet<u32>), String> {
     let resolved = host
         .resolve(link_path)
         .ok_or_else(|| format!("{}: missing", link_path.display()))?;
@@ -198,7 +207,9 @@ fn irqs_of(host: &Host<'_>, link_path: &Path, spidev: bool) -> Result<(String, B
         if spidev { "spidev" } else { "tty" }
     ));
     let mut irqs = BTreeSet::new();
-    if let Some(irq) = host.read_path(&class.join("irq")).and_then(|t| t.parse().ok())
+    if let Some(irq) = host
+        .read_path(&class.join("irq"))
+        .and_then(|t| t.parse().ok())
         && irq != 0
     {
         irqs.insert(irq);
@@ -206,7 +217,12 @@ fn irqs_of(host: &Host<'_>, link_path: &Path, spidev: bool) -> Result<(String, B
     }
     let device = host
         .resolve(&host.unroot(&class.join("device")))
-        .ok_or_else(|| format!("{name}: no device in /sys/class (not a {} device?)", if spidev { "spidev" } else { "tty" }))?;
+        .ok_or_else(|| {
+            format!(
+                "{name}: no device in /sys/class (not a {} device?)",
+                if spidev { "spidev" } else { "tty" }
+            )
+        })?;
     let sys_devices = host.path("/sys/devices");
     let mut names: Vec<String> = Vec::new();
     let mut dir: Option<PathBuf> = Some(device);
@@ -214,7 +230,9 @@ fn irqs_of(host: &Host<'_>, link_path: &Path, spidev: bool) -> Result<(String, B
         if !current.starts_with(&sys_devices) || current == sys_devices {
             break;
         }
-        if let Some(irq) = host.read_path(&current.join("irq")).and_then(|t| t.parse::<u32>().ok())
+        if let Some(irq) = host
+            .read_path(&current.join("irq"))
+            .and_then(|t| t.parse::<u32>().ok())
             && irq != 0
         {
             irqs.insert(irq);
@@ -251,7 +269,9 @@ fn irqs_of(host: &Host<'_>, link_path: &Path, spidev: bool) -> Result<(String, B
         }
     }
     if irqs.is_empty() {
-        Err(format!("{name}: its interrupt was not found in sysfs or /proc/interrupts"))
+        Err(format!(
+            "{name}: its interrupt was not found in sysfs or /proc/interrupts"
+        ))
     } else {
         Ok((name, irqs))
     }
@@ -315,10 +335,14 @@ pub fn irq_affinity(cx: &Context<'_>) -> Check {
     }
     let value = match tick {
         Some(cpu) => format!("{} (tick on cpu {cpu})", values.join("; ")),
-        None => format!("{} (no [server] cpu: nothing to keep them off)", values.join("; ")),
+        None => format!(
+            "{} (no [server] cpu: nothing to keep them off)",
+            values.join("; ")
+        ),
     };
     let fix = if fixes.is_empty() {
-        "check the link paths (a device the doctor cannot find has no interrupt to place)".to_owned()
+        "check the link paths (a device the doctor cannot find has no interrupt to place)"
+            .to_owned()
     } else {
         format!(
             "keep the links' interrupts off the tick's core: {}; at boot with `irqaffinity=` on the \
@@ -343,19 +367,34 @@ mod tests {
         assert_eq!(check.status, Status::Pass, "{check:?}");
         assert!(check.value.contains("cpu 0-1: not scaled"), "{check:?}");
         for cpu in 0..2 {
-            fake.file(&format!("/sys/devices/system/cpu/cpu{cpu}/cpufreq/scaling_driver"), "acpi-cpufreq");
-            fake.file(&format!("/sys/devices/system/cpu/cpu{cpu}/cpufreq/scaling_governor"), "performance");
+            fake.file(
+                &format!("/sys/devices/system/cpu/cpu{cpu}/cpufreq/scaling_driver"),
+                "acpi-cpufreq",
+            );
+            fake.file(
+                &format!("/sys/devices/system/cpu/cpu{cpu}/cpufreq/scaling_governor"),
+                "performance",
+            );
         }
         assert_eq!(fake.check(governor).status, Status::Pass);
-        fake.file("/sys/devices/system/cpu/cpu1/cpufreq/scaling_governor", "schedutil");
+        fake.file(
+            "/sys/devices/system/cpu/cpu1/cpufreq/scaling_governor",
+            "schedutil",
+        );
         let check = fake.check(governor);
         assert_eq!(check.status, Status::Warn);
         assert!(check.value.contains("cpu 1: schedutil"), "{check:?}");
         assert!(check.fix.contains("frequency-set -g performance"));
-        fake.file("/sys/devices/system/cpu/cpu1/cpufreq/scaling_governor", "powersave");
+        fake.file(
+            "/sys/devices/system/cpu/cpu1/cpufreq/scaling_governor",
+            "powersave",
+        );
         assert_eq!(fake.check(governor).status, Status::Fail);
         // intel_pstate's powersave is dynamic: a warning.
-        fake.file("/sys/devices/system/cpu/cpu1/cpufreq/scaling_driver", "intel_pstate");
+        fake.file(
+            "/sys/devices/system/cpu/cpu1/cpufreq/scaling_driver",
+            "intel_pstate",
+        );
         assert_eq!(fake.check(governor).status, Status::Warn);
         // Only the configured core counts.
         fake.set_config("[server]\ncpu = 0\n");
@@ -374,11 +413,22 @@ mod tests {
         let check = fake.check(isolation);
         assert_eq!(check.status, Status::Warn);
         assert!(check.value.contains("not isolated"), "{check:?}");
-        assert!(check.fix.contains("isolcpus=3 nohz_full=3 rcu_nocbs=3"), "{check:?}");
-        fake.file("/proc/cmdline", "root=/dev/sda1 isolcpus=domain,managed_irq,2-3 nohz_full=2-3");
+        assert!(
+            check.fix.contains("isolcpus=3 nohz_full=3 rcu_nocbs=3"),
+            "{check:?}"
+        );
+        fake.file(
+            "/proc/cmdline",
+            "root=/dev/sda1 isolcpus=domain,managed_irq,2-3 nohz_full=2-3",
+        );
         let check = fake.check(isolation);
         assert_eq!(check.status, Status::Warn);
-        assert!(check.value.contains("isolcpus, nohz_full (missing rcu_nocbs)"), "{check:?}");
+        assert!(
+            check
+                .value
+                .contains("isolcpus, nohz_full (missing rcu_nocbs)"),
+            "{check:?}"
+        );
         fake.file("/proc/cmdline", "isolcpus=2-3 nohz_full=2-3 rcu_nocbs=1,3");
         assert_eq!(fake.check(isolation).status, Status::Pass);
         fake.file("/proc/cmdline", "isolcpus=3 nohz_full=3 rcu_nocbs");
@@ -386,7 +436,10 @@ mod tests {
         fake.set_config("[server]\ncpu = 5\n");
         let check = fake.check(isolation);
         assert_eq!(check.status, Status::Fail);
-        assert!(check.value.contains("not online (online: 0-3)"), "{check:?}");
+        assert!(
+            check.value.contains("not online (online: 0-3)"),
+            "{check:?}"
+        );
     }
 
     /// A USB adapter on an xHCI controller with MSI interrupts 40 and 41, a native UART
@@ -403,7 +456,10 @@ mod tests {
             "../../../devices/pci0000:00/0000:00:14.0/usb1/1-1/1-1:1.0/ttyUSB0",
         );
         fake.file("/dev/ttyUSB0", "");
-        fake.symlink("/dev/serial/by-id/usb-FTDI_FT232R-if00-port0", "../../ttyUSB0");
+        fake.symlink(
+            "/dev/serial/by-id/usb-FTDI_FT232R-if00-port0",
+            "../../ttyUSB0",
+        );
         fake.file("/sys/class/tty/ttyS1/irq", "4");
         fake.file("/dev/ttyS1", "");
         let spi = "/sys/devices/platform/soc/fe204000.spi";
@@ -461,12 +517,22 @@ type = "sim"
         fake.set_config(&format!("[server]\ncpu = 3\n{LINKS}"));
         let check = fake.check(irq_affinity);
         assert_eq!(check.status, Status::Warn, "{check:?}");
-        assert!(check.fix.contains("echo 0-2 | sudo tee /proc/irq/4/smp_affinity_list"), "{check:?}");
+        assert!(
+            check
+                .fix
+                .contains("echo 0-2 | sudo tee /proc/irq/4/smp_affinity_list"),
+            "{check:?}"
+        );
         // The tick on cpu 2: irq 41 always lands there.
         fake.set_config(&format!("[server]\ncpu = 2\n{LINKS}"));
         let check = fake.check(irq_affinity);
         assert_eq!(check.status, Status::Fail, "{check:?}");
-        assert!(check.fix.contains("echo 0-1,3 | sudo tee /proc/irq/41/smp_affinity_list"), "{check:?}");
+        assert!(
+            check
+                .fix
+                .contains("echo 0-1,3 | sudo tee /proc/irq/41/smp_affinity_list"),
+            "{check:?}"
+        );
         // The effective affinity wins over the requested one.
         fake.file("/proc/irq/41/effective_affinity_list", "0");
         fake.file("/proc/irq/40/effective_affinity_list", "1");

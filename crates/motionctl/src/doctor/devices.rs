@@ -20,7 +20,12 @@ pub fn access(cx: &Context<'_>) -> Check {
     let identity = match &cx.identity {
         Ok(id) => id,
         Err(e) => {
-            return Check::warn(ACCESS, ACCESS_T, format!("unknown user: {e}"), "run the doctor on the machine itself, with /proc mounted");
+            return Check::warn(
+                ACCESS,
+                ACCESS_T,
+                format!("unknown user: {e}"),
+                "run the doctor on the machine itself, with /proc mounted",
+            );
         }
     };
     let user = cx.host.user_name(identity.uid);
@@ -42,7 +47,10 @@ pub fn access(cx: &Context<'_>) -> Check {
         let described = owner.describe(&cx.host);
         if !identity.can_read_write(owner.mode, owner.uid, owner.gid) {
             status = Status::Fail;
-            values.push(format!("{}: {shown} is {described}: {user} cannot read and write it", link.name));
+            values.push(format!(
+                "{}: {shown} is {described}: {user} cannot read and write it",
+                link.name
+            ));
             fixes.push(format!(
                 "install deploy/udev/60-motiond.rules (group `motion`, mode 0660) and `sudo udevadm \
                  trigger`, with {user} in group motion; or `sudo usermod -aG {} {user}` and log in again",
@@ -50,11 +58,17 @@ pub fn access(cx: &Context<'_>) -> Check {
             ));
         } else if owner.mode & 0o006 == 0o006 {
             status = status.max(Status::Warn);
-            values.push(format!("{}: {shown} is {described}: any local user can drive this link", link.name));
+            values.push(format!(
+                "{}: {shown} is {described}: any local user can drive this link",
+                link.name
+            ));
             fixes.push(format!("sudo chmod o-rw {shown}, and give the device group `motion`, mode 0660 in a udev rule (deploy/udev/60-motiond.rules)"));
         } else if identity.uid == 0 {
             status = status.max(Status::Warn);
-            values.push(format!("{}: {shown} is {described}: root may open anything", link.name));
+            values.push(format!(
+                "{}: {shown} is {described}: root may open anything",
+                link.name
+            ));
             fixes.push(
                 "run the doctor as the server's user to check its access: `sudo -u motion motionctl doctor`"
                     .to_owned(),
@@ -64,7 +78,13 @@ pub fn access(cx: &Context<'_>) -> Check {
         }
     }
     fixes.dedup();
-    Check::with(ACCESS, ACCESS_T, status, values.join("; "), fixes.join("; "))
+    Check::with(
+        ACCESS,
+        ACCESS_T,
+        status,
+        values.join("; "),
+        fixes.join("; "),
+    )
 }
 
 const TIMER: &str = "usb-latency-timer";
@@ -73,7 +93,11 @@ const TIMER_T: &str = "USB-serial latency timer";
 /// An FTDI adapter holds received bytes up to its latency timer (16 ms from the factory)
 /// before sending them to the host: every reply waits that long. 1 ms passes, up to 4 warns.
 pub fn latency_timer(cx: &Context<'_>) -> Check {
-    let serial: Vec<_> = cx.config.device_links().filter(|(l, _)| l.is_serial()).collect();
+    let serial: Vec<_> = cx
+        .config
+        .device_links()
+        .filter(|(l, _)| l.is_serial())
+        .collect();
     if serial.is_empty() {
         return Check::pass(TIMER, TIMER_T, "no serial links in the config");
     }
@@ -88,7 +112,9 @@ pub fn latency_timer(cx: &Context<'_>) -> Check {
         };
         let file = format!("/sys/bus/usb-serial/devices/{name}/latency_timer");
         match cx.host.read(&file).and_then(|t| t.parse::<u32>().ok()) {
-            None => values.push(format!("{name}: no latency timer (not an FTDI USB-serial adapter)")),
+            None => values.push(format!(
+                "{name}: no latency timer (not an FTDI USB-serial adapter)"
+            )),
             Some(ms) => {
                 let verdict = match ms {
                     0..=1 => Status::Pass,
@@ -98,7 +124,11 @@ pub fn latency_timer(cx: &Context<'_>) -> Check {
                 status = status.max(verdict);
                 values.push(format!(
                     "{name}: {ms} ms{}",
-                    if verdict == Status::Pass { String::new() } else { format!(", up to {ms} ms added to every reply") }
+                    if verdict == Status::Pass {
+                        String::new()
+                    } else {
+                        format!(", up to {ms} ms added to every reply")
+                    }
                 ));
                 if verdict != Status::Pass {
                     fixes.push(format!("echo 1 | sudo tee {file}"));
@@ -134,15 +164,27 @@ pub fn dma_latency(cx: &Context<'_>) -> Check {
     let path = Path::new("/dev/cpu_dma_latency");
     let fix = "install deploy/udev/60-motiond.rules (it gives /dev/cpu_dma_latency to group motion, \
                mode 0660) and `sudo udevadm trigger`; the server's user must be in group motion";
-    let wanted = if cx.config.server.rt_priority.is_some() { Status::Fail } else { Status::Warn };
+    let wanted = if cx.config.server.rt_priority.is_some() {
+        Status::Fail
+    } else {
+        Status::Warn
+    };
     let Some(owner) = cx.host.owner(path) else {
-        return Check::with(DMA, DMA_T, wanted, "missing: this kernel has no PM QoS device", "none on this kernel: motiond runs without it (slower wake-ups from idle states)");
+        return Check::with(
+            DMA,
+            DMA_T,
+            wanted,
+            "missing: this kernel has no PM QoS device",
+            "none on this kernel: motiond runs without it (slower wake-ups from idle states)",
+        );
     };
     let described = owner.describe(&cx.host);
     match &cx.identity {
-        Ok(id) if writable(id, owner.mode, owner.uid, owner.gid) => {
-            Check::pass(DMA, DMA_T, format!("{described}: writable by {}", cx.host.user_name(id.uid)))
-        }
+        Ok(id) if writable(id, owner.mode, owner.uid, owner.gid) => Check::pass(
+            DMA,
+            DMA_T,
+            format!("{described}: writable by {}", cx.host.user_name(id.uid)),
+        ),
         Ok(id) => Check::with(
             DMA,
             DMA_T,
@@ -150,7 +192,11 @@ pub fn dma_latency(cx: &Context<'_>) -> Check {
             format!(
                 "{described}: not writable by {}; motiond runs without it (wake-up from idle states is slower){}",
                 cx.host.user_name(id.uid),
-                if wanted == Status::Fail { ", though the config asks for real time" } else { "" }
+                if wanted == Status::Fail {
+                    ", though the config asks for real time"
+                } else {
+                    ""
+                }
             ),
             fix,
         ),
@@ -190,10 +236,16 @@ path = "/dev/spidev0.0"
 
     fn devices(fake: &FakeRoot) {
         fake.file("/dev/ttyUSB0", "");
-        fake.symlink("/dev/serial/by-id/usb-FTDI_FT232R-if00-port0", "../../ttyUSB0");
+        fake.symlink(
+            "/dev/serial/by-id/usb-FTDI_FT232R-if00-port0",
+            "../../ttyUSB0",
+        );
         fake.file("/dev/spidev0.0", "");
         fake.file("/etc/group", &format!("motion:x:{}:\n", fake.file_gid()));
-        fake.file("/etc/passwd", &format!("motion:x:{UID}:{UID}::/:/usr/sbin/nologin\n"));
+        fake.file(
+            "/etc/passwd",
+            &format!("motion:x:{UID}:{UID}::/:/usr/sbin/nologin\n"),
+        );
     }
 
     #[test]
@@ -207,7 +259,10 @@ path = "/dev/spidev0.0"
         // Not in the devices' group: fail, and the fix names the udev rules.
         let check = fake.check(access);
         assert_eq!(check.status, Status::Fail, "{check:?}");
-        assert!(check.value.contains("motion cannot read and write it"), "{check:?}");
+        assert!(
+            check.value.contains("motion cannot read and write it"),
+            "{check:?}"
+        );
         assert!(check.fix.contains("60-motiond.rules"), "{check:?}");
         // In the group: pass.
         fake.identity(UID, &[fake.file_gid()], 0);
@@ -241,13 +296,19 @@ path = "/dev/spidev0.0"
         // A CDC-ACM or CP210x adapter has no latency timer.
         let check = fake.check(latency_timer);
         assert_eq!(check.status, Status::Pass);
-        assert!(check.value.contains("ttyUSB0: no latency timer"), "{check:?}");
+        assert!(
+            check.value.contains("ttyUSB0: no latency timer"),
+            "{check:?}"
+        );
         let file = "/sys/bus/usb-serial/devices/ttyUSB0/latency_timer";
         fake.file(file, "16");
         let check = fake.check(latency_timer);
         assert_eq!(check.status, Status::Fail);
         assert!(check.value.contains("ttyUSB0: 16 ms"), "{check:?}");
-        assert!(check.fix.contains(&format!("echo 1 | sudo tee {file}")), "{check:?}");
+        assert!(
+            check.fix.contains(&format!("echo 1 | sudo tee {file}")),
+            "{check:?}"
+        );
         fake.file(file, "4");
         assert_eq!(fake.check(latency_timer).status, Status::Warn);
         fake.file(file, "1");

@@ -70,7 +70,8 @@ impl Probe for LiveProbe {
     }
 
     fn free_bytes(&self, path: &Path) -> Result<u64, String> {
-        let stat = nix::sys::statvfs::statvfs(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let stat =
+            nix::sys::statvfs::statvfs(path).map_err(|e| format!("{}: {e}", path.display()))?;
         Ok(u64::from(stat.blocks_available()).saturating_mul(u64::from(stat.fragment_size())))
     }
 }
@@ -441,7 +442,10 @@ mod tests {
         assert!(!id.has_cap(0));
         // Owner, group, other bits, and root.
         assert!(id.can_read_write(0o600, 998, 0));
-        assert!(!id.can_read_write(0o060, 998, 44), "the owner bits apply to the owner");
+        assert!(
+            !id.can_read_write(0o060, 998, 44),
+            "the owner bits apply to the owner"
+        );
         assert!(id.can_read_write(0o660, 0, 44));
         assert!(!id.can_read_write(0o660, 0, 45));
         assert!(id.can_read_write(0o666, 0, 45));
@@ -457,8 +461,14 @@ mod tests {
         let text = "Limit                     Soft Limit           Hard Limit           Units     \n\
                     Max locked memory         8388608              8388608              bytes     \n\
                     Max realtime priority     unlimited            unlimited                      \n";
-        assert_eq!(soft_limit(text, "Max locked memory"), Some(Limit::Value(8 << 20)));
-        assert_eq!(soft_limit(text, "Max realtime priority"), Some(Limit::Unlimited));
+        assert_eq!(
+            soft_limit(text, "Max locked memory"),
+            Some(Limit::Value(8 << 20))
+        );
+        assert_eq!(
+            soft_limit(text, "Max realtime priority"),
+            Some(Limit::Unlimited)
+        );
         assert_eq!(soft_limit(text, "Max open files"), None);
     }
 
@@ -474,11 +484,17 @@ mod tests {
         fake.symlink("/dev/serial/by-id/usb-x", "../../ttyUSB0");
         // An absolute target is the root's, not the machine's.
         fake.symlink("/dev/rs485", "/dev/serial/by-id/usb-x");
-        assert_eq!(host.resolve(Path::new("/dev/rs485")), Some(fake.at("/dev/ttyUSB0")));
+        assert_eq!(
+            host.resolve(Path::new("/dev/rs485")),
+            Some(fake.at("/dev/ttyUSB0"))
+        );
         fake.symlink("/dev/loop-a", "loop-b");
         fake.symlink("/dev/loop-b", "loop-a");
         assert_eq!(host.resolve(Path::new("/dev/loop-a")), None);
         assert_eq!(host.resolve(Path::new("/dev/nothing")), None);
-        assert_eq!(host.unroot(&fake.at("/dev/ttyUSB0")), Path::new("/dev/ttyUSB0"));
+        assert_eq!(
+            host.unroot(&fake.at("/dev/ttyUSB0")),
+            Path::new("/dev/ttyUSB0")
+        );
     }
 }

@@ -62,14 +62,18 @@ pub fn preemption(cx: &Context<'_>) -> Check {
             Some(other) => Check::fail(
                 PREEMPT,
                 PREEMPT_T,
-                format!("PREEMPT_DYNAMIC, {other} ({source}): kernel code runs to completion before the tick thread gets its core"),
+                format!(
+                    "PREEMPT_DYNAMIC, {other} ({source}): kernel code runs to completion before the tick thread gets its core"
+                ),
                 format!("boot with `preempt=full` on the kernel command line, or better {rt_fix}"),
             ),
             None => Check::warn(
                 PREEMPT,
                 PREEMPT_T,
                 "PREEMPT_DYNAMIC, mode unknown (/sys/kernel/debug/sched/preempt is root's, no preempt= on the command line: the build's default, often voluntary)",
-                format!("boot with `preempt=full`, or better {rt_fix}; `sudo cat /sys/kernel/debug/sched/preempt` shows the mode in force"),
+                format!(
+                    "boot with `preempt=full`, or better {rt_fix}; `sudo cat /sys/kernel/debug/sched/preempt` shows the mode in force"
+                ),
             ),
         };
     }
@@ -250,7 +254,12 @@ mod tests {
     #[test]
     fn preemption_pass_warn_fail() {
         let fake = FakeRoot::new();
-        let version = |v: &str| fake.file("/proc/version", &format!("Linux version 6.1.0 #1 SMP {v} Debian"));
+        let version = |v: &str| {
+            fake.file(
+                "/proc/version",
+                &format!("Linux version 6.1.0 #1 SMP {v} Debian"),
+            )
+        };
         version("PREEMPT_RT");
         assert_eq!(fake.check(preemption).status, Status::Pass);
         version("PREEMPT RT");
@@ -265,7 +274,10 @@ mod tests {
         assert!(check.fix.contains("preempt=full"));
         fake.file("/proc/cmdline", "root=/dev/sda1 preempt=voluntary quiet");
         assert_eq!(fake.check(preemption).status, Status::Fail);
-        fake.file("/sys/kernel/debug/sched/preempt", "none voluntary (full) lazy");
+        fake.file(
+            "/sys/kernel/debug/sched/preempt",
+            "none voluntary (full) lazy",
+        );
         let check = fake.check(preemption);
         assert_eq!(check.status, Status::Warn);
         assert!(check.value.contains("full"), "{check:?}");

@@ -96,7 +96,11 @@ pub fn run(args: &DoctorArgs) -> anyhow::Result<()> {
     }
     let checks: Vec<Check> = CHECKS.iter().map(|check| check(&cx)).collect();
     let count = |status: Status| checks.iter().filter(|c| c.status == status).count();
-    let (pass, warn, fail) = (count(Status::Pass), count(Status::Warn), count(Status::Fail));
+    let (pass, warn, fail) = (
+        count(Status::Pass),
+        count(Status::Warn),
+        count(Status::Fail),
+    );
     if args.json {
         out!(
             "{:#}",
@@ -139,7 +143,9 @@ fn heading(cx: &Context<'_>) -> String {
             path.display(),
             server.name,
             server.tick_hz,
-            server.rt_priority.map_or("none".to_owned(), |p| p.to_string()),
+            server
+                .rt_priority
+                .map_or("none".to_owned(), |p| p.to_string()),
             server.cpu.map_or("none".to_owned(), |c| c.to_string()),
             if server.lock_memory { "on" } else { "off" },
             cx.config.link.len()

@@ -19,8 +19,14 @@ const RTPRIO_T: &str = "real-time priority limit (RLIMIT_RTPRIO, CAP_SYS_NICE)";
 /// The user may set SCHED_FIFO at the configured `rt_priority`: CAP_SYS_NICE, or an rtprio
 /// limit at least that high.
 pub fn rtprio(cx: &Context<'_>) -> Check {
-    let limit = cx.host.limits().and_then(|t| soft_limit(&t, "Max realtime priority"));
-    let cap = cx.identity.as_ref().is_ok_and(|id| id.has_cap(CAP_SYS_NICE));
+    let limit = cx
+        .host
+        .limits()
+        .and_then(|t| soft_limit(&t, "Max realtime priority"));
+    let cap = cx
+        .identity
+        .as_ref()
+        .is_ok_and(|id| id.has_cap(CAP_SYS_NICE));
     let limit_text = limit.map_or("unknown".to_owned(), |l| l.to_string());
     let reach = if cap {
         format!("CAP_SYS_NICE (limit {limit_text})")
@@ -42,7 +48,11 @@ pub fn rtprio(cx: &Context<'_>) -> Check {
                     None => false,
                 };
             if enough {
-                Check::pass(RTPRIO, RTPRIO_T, format!("{reach} ≥ rt_priority {priority}"))
+                Check::pass(
+                    RTPRIO,
+                    RTPRIO_T,
+                    format!("{reach} ≥ rt_priority {priority}"),
+                )
             } else {
                 Check::fail(
                     RTPRIO,
@@ -62,8 +72,14 @@ const MEMLOCK_T: &str = "locked memory limit (RLIMIT_MEMLOCK, CAP_IPC_LOCK)";
 /// a finite limit every later mapping (a client's shared memory joining) can fail with
 /// EAGAIN, so only `unlimited` or CAP_IPC_LOCK pass.
 pub fn memlock(cx: &Context<'_>) -> Check {
-    let limit = cx.host.limits().and_then(|t| soft_limit(&t, "Max locked memory"));
-    let cap = cx.identity.as_ref().is_ok_and(|id| id.has_cap(CAP_IPC_LOCK));
+    let limit = cx
+        .host
+        .limits()
+        .and_then(|t| soft_limit(&t, "Max locked memory"));
+    let cap = cx
+        .identity
+        .as_ref()
+        .is_ok_and(|id| id.has_cap(CAP_IPC_LOCK));
     let limit_text = match limit {
         Some(Limit::Value(bytes)) => super::host::format_bytes(bytes),
         Some(Limit::Unlimited) => "unlimited".to_owned(),
@@ -88,7 +104,9 @@ pub fn memlock(cx: &Context<'_>) -> Check {
         Check::fail(
             MEMLOCK,
             MEMLOCK_T,
-            format!("{reach}: mlockall fails, or later mappings (clients joining) fail with EAGAIN"),
+            format!(
+                "{reach}: mlockall fails, or later mappings (clients joining) fail with EAGAIN"
+            ),
             UNIT_FIX,
         )
     }
@@ -158,11 +176,21 @@ pub fn wakeup(cx: &Context<'_>) -> Check {
     let (summary, thread) = match measured {
         Ok(done) => done,
         Err(e) => {
-            return Check::fail(WAKEUP, WAKEUP_T, format!("could not measure: {e}"), "run the doctor on the machine itself");
+            return Check::fail(
+                WAKEUP,
+                WAKEUP_T,
+                format!("could not measure: {e}"),
+                "run the doctor on the machine itself",
+            );
         }
     };
     if summary.is_empty() {
-        return Check::fail(WAKEUP, WAKEUP_T, "no samples", "run the doctor for longer (--wakeup 5s)");
+        return Check::fail(
+            WAKEUP,
+            WAKEUP_T,
+            "no samples",
+            "run the doctor for longer (--wakeup 5s)",
+        );
     }
     let period_ns = u64::try_from(period.as_nanos()).unwrap_or(u64::MAX);
     let status = if summary.p99 <= period_ns / 10 {
@@ -218,7 +246,10 @@ mod tests {
         limits(&fake, "0", "8388608");
         let check = fake.check(rtprio);
         assert_eq!(check.status, Status::Warn, "{check:?}");
-        assert!(check.value.contains("limit 0, no CAP_SYS_NICE"), "{check:?}");
+        assert!(
+            check.value.contains("limit 0, no CAP_SYS_NICE"),
+            "{check:?}"
+        );
         fake.set_config("[server]\nrt_priority = 80\n");
         let check = fake.check(rtprio);
         assert_eq!(check.status, Status::Fail, "{check:?}");

@@ -7,7 +7,7 @@ use super::check::{Check, Context, Status};
 use super::host::format_bytes;
 
 /// Below this much free space in `/dev/shm` the server's services may not fit (the
-/// simulated robot's take about 40 MiB with the default 32 clients).
+/// simulated robot's take about 35 MiB with the default 32 clients).
 pub const SHM_FAIL_BELOW: u64 = 64 << 20;
 /// Below this, a few clients more or `max_clients` raised may not fit.
 pub const SHM_WARN_BELOW: u64 = 256 << 20;
@@ -24,7 +24,12 @@ pub fn iceoryx2(cx: &Context<'_>) -> Check {
     let id = match &cx.identity {
         Ok(id) => id,
         Err(e) => {
-            return Check::warn(SHM, SHM_T, format!("unknown user: {e}"), "run the doctor on the machine itself, with /proc mounted");
+            return Check::warn(
+                SHM,
+                SHM_T,
+                format!("unknown user: {e}"),
+                "run the doctor on the machine itself, with /proc mounted",
+            );
         }
     };
     let user = host.user_name(id.uid);
@@ -42,7 +47,9 @@ pub fn iceoryx2(cx: &Context<'_>) -> Check {
             let described = owner.describe(host);
             if !id.can_create_in(owner.mode, owner.uid, owner.gid) {
                 status = Status::Fail;
-                values.push(format!("/dev/shm is {described}: {user} cannot create segments"));
+                values.push(format!(
+                    "/dev/shm is {described}: {user} cannot create segments"
+                ));
                 fixes.push("sudo chmod 1777 /dev/shm".to_owned());
             } else {
                 match free {
@@ -59,7 +66,10 @@ pub fn iceoryx2(cx: &Context<'_>) -> Check {
                             Status::Pass
                         };
                         status = status.max(verdict);
-                        values.push(format!("/dev/shm {described}, {} free", format_bytes(bytes)));
+                        values.push(format!(
+                            "/dev/shm {described}, {} free",
+                            format_bytes(bytes)
+                        ));
                         if verdict != Status::Pass {
                             fixes.push(format!(
                                 "give /dev/shm at least {} (`sudo mount -o remount,size=512M /dev/shm`, \
@@ -81,7 +91,9 @@ pub fn iceoryx2(cx: &Context<'_>) -> Check {
             }
             _ => {
                 status = Status::Fail;
-                values.push(format!("/tmp/iceoryx2 is missing and {user} cannot create it in /tmp"));
+                values.push(format!(
+                    "/tmp/iceoryx2 is missing and {user} cannot create it in /tmp"
+                ));
                 fixes.push("sudo chmod 1777 /tmp, or install deploy/tmpfiles.d/motiond.conf (`sudo systemd-tmpfiles --create`)".to_owned());
             }
         },
@@ -161,17 +173,31 @@ const LOGIND_T: &str = "systemd-logind RemoveIPC";
 /// (uid ≤ SYS_UID_MAX) and root are exempt.
 pub fn remove_ipc(cx: &Context<'_>) -> Check {
     let host = &cx.host;
-    let logind = ["/usr/lib/systemd/systemd-logind", "/lib/systemd/systemd-logind"]
-        .iter()
-        .any(|p| host.path(p).exists());
+    let logind = [
+        "/usr/lib/systemd/systemd-logind",
+        "/lib/systemd/systemd-logind",
+    ]
+    .iter()
+    .any(|p| host.path(p).exists());
     if !logind {
-        return Check::pass(LOGIND, LOGIND_T, "systemd-logind is not installed: nothing removes IPC at logout");
+        return Check::pass(
+            LOGIND,
+            LOGIND_T,
+            "systemd-logind is not installed: nothing removes IPC at logout",
+        );
     }
     let remove_ipc = remove_ipc_setting(cx);
     let setting = format!("RemoveIPC={}", if remove_ipc { "yes" } else { "no" });
     let id = match &cx.identity {
         Ok(id) => id,
-        Err(e) => return Check::warn(LOGIND, LOGIND_T, format!("{setting}; unknown user: {e}"), "run the doctor as the server's user"),
+        Err(e) => {
+            return Check::warn(
+                LOGIND,
+                LOGIND_T,
+                format!("{setting}; unknown user: {e}"),
+                "run the doctor as the server's user",
+            );
+        }
     };
     let sys_uid_max = host
         .read("/etc/login.defs")
@@ -183,11 +209,17 @@ pub fn remove_ipc(cx: &Context<'_>) -> Check {
         })
         .unwrap_or(999);
     let user = host.user_name(id.uid);
-    if id.uid == 0 || id.uid <= sys_uid_max {
+    if id.uid == 0 {
+        return Check::pass(LOGIND, LOGIND_T, format!("{setting}; root is exempt"));
+    }
+    if id.uid <= sys_uid_max {
         return Check::pass(
             LOGIND,
             LOGIND_T,
-            format!("{setting}; {user} (uid {}) is a system user (≤ SYS_UID_MAX {sys_uid_max}): exempt", id.uid),
+            format!(
+                "{setting}; {user} (uid {}) is a system user (≤ SYS_UID_MAX {sys_uid_max}): exempt",
+                id.uid
+            ),
         );
     }
     let fix = "run the server as a system user (`sudo useradd --system --no-create-home --shell \
@@ -207,7 +239,10 @@ pub fn remove_ipc(cx: &Context<'_>) -> Check {
         Check::warn(
             LOGIND,
             LOGIND_T,
-            format!("{setting}; {user} (uid {}) is a regular user: safe only while RemoveIPC stays off", id.uid),
+            format!(
+                "{setting}; {user} (uid {}) is a regular user: safe only while RemoveIPC stays off",
+                id.uid
+            ),
             fix,
         )
     }
@@ -219,7 +254,11 @@ fn remove_ipc_setting(cx: &Context<'_>) -> bool {
     let host = &cx.host;
     let mut files = vec![host.path("/etc/systemd/logind.conf")];
     let mut dropins: std::collections::BTreeMap<String, std::path::PathBuf> = Default::default();
-    for dir in ["/usr/lib/systemd/logind.conf.d", "/run/systemd/logind.conf.d", "/etc/systemd/logind.conf.d"] {
+    for dir in [
+        "/usr/lib/systemd/logind.conf.d",
+        "/run/systemd/logind.conf.d",
+        "/etc/systemd/logind.conf.d",
+    ] {
         if let Ok(entries) = std::fs::read_dir(host.path(dir)) {
             for entry in entries.flatten() {
                 let name = entry.file_name().to_string_lossy().into_owned();
@@ -261,7 +300,10 @@ mod tests {
         fake.chmod("/dev/shm", 0o1777);
         fake.dir("/tmp");
         fake.chmod("/tmp", 0o1777);
-        fake.file("/etc/passwd", &format!("motion:x:{UID}:{UID}::/:/usr/sbin/nologin\n"));
+        fake.file(
+            "/etc/passwd",
+            &format!("motion:x:{UID}:{UID}::/:/usr/sbin/nologin\n"),
+        );
     }
 
     #[test]
@@ -284,7 +326,12 @@ mod tests {
         fake.chmod("/tmp/iceoryx2", 0o750);
         let check = fake.check(iceoryx2);
         assert_eq!(check.status, Status::Fail, "{check:?}");
-        assert!(check.value.contains("cannot create its records in /tmp/iceoryx2"), "{check:?}");
+        assert!(
+            check
+                .value
+                .contains("cannot create its records in /tmp/iceoryx2"),
+            "{check:?}"
+        );
         assert!(check.fix.contains("rm -rf /tmp/iceoryx2"));
         // Writable, but with another user's records in it.
         fake.chmod("/tmp/iceoryx2", 0o777);
@@ -313,13 +360,22 @@ mod tests {
         assert_eq!(check.status, Status::Fail, "{check:?}");
         assert!(check.value.contains("RemoveIPC=yes"), "{check:?}");
         assert!(check.fix.contains("useradd --system"));
-        fake.file("/etc/systemd/logind.conf", "[Login]\n#RemoveIPC=yes\nRemoveIPC=no\n");
+        fake.file(
+            "/etc/systemd/logind.conf",
+            "[Login]\n#RemoveIPC=yes\nRemoveIPC=no\n",
+        );
         assert_eq!(fake.check(remove_ipc).status, Status::Warn);
         // A drop-in wins over the main file.
-        fake.file("/etc/systemd/logind.conf.d/10-ipc.conf", "[Login]\nRemoveIPC=yes\n");
+        fake.file(
+            "/etc/systemd/logind.conf.d/10-ipc.conf",
+            "[Login]\nRemoveIPC=yes\n",
+        );
         assert_eq!(fake.check(remove_ipc).status, Status::Fail);
         // A key outside [Login] does not count.
-        fake.file("/etc/systemd/logind.conf.d/10-ipc.conf", "[Other]\nRemoveIPC=yes\n");
+        fake.file(
+            "/etc/systemd/logind.conf.d/10-ipc.conf",
+            "[Other]\nRemoveIPC=yes\n",
+        );
         assert_eq!(fake.check(remove_ipc).status, Status::Warn);
         // A system user is exempt.
         fake.identity(998, &[], 0);

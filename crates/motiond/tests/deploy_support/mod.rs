@@ -194,7 +194,11 @@ impl Motiond {
     }
 
     /// Sends `signal`, waits up to `timeout` for the exit status, collects the log.
-    pub fn signal_and_wait(&mut self, signal: nix::sys::signal::Signal, timeout: Duration) -> Option<i32> {
+    pub fn signal_and_wait(
+        &mut self,
+        signal: nix::sys::signal::Signal,
+        timeout: Duration,
+    ) -> Option<i32> {
         let pid = nix::unistd::Pid::from_raw(self.child.id() as i32);
         let _ = nix::sys::signal::kill(pid, signal);
         self.wait(timeout)
