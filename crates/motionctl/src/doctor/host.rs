@@ -72,7 +72,13 @@ impl Probe for LiveProbe {
     fn free_bytes(&self, path: &Path) -> Result<u64, String> {
         let stat =
             nix::sys::statvfs::statvfs(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        Ok(u64::from(stat.blocks_available()).saturating_mul(u64::from(stat.fragment_size())))
+        // Both are u64 here, u32 on a 32-bit Raspberry Pi OS.
+        #[allow(clippy::useless_conversion)]
+        let (blocks, size) = (
+            u64::from(stat.blocks_available()),
+            u64::from(stat.fragment_size()),
+        );
+        Ok(blocks.saturating_mul(size))
     }
 }
 

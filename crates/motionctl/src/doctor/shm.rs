@@ -130,11 +130,12 @@ pub fn iceoryx2(cx: &Context<'_>) -> Check {
                          different users cannot open each other's services (mode 0600)",
                         foreign.join(", ")
                     ));
-                    fixes.push(format!(
+                    fixes.push(
                         "run motiond and every client as one user (`sudo -u motion motionctl …`); \
                          records of stopped programs of other users go with `sudo rm -rf \
                          /tmp/iceoryx2` while no iceoryx2 program runs"
-                    ));
+                            .to_owned(),
+                    );
                 }
             }
         }
