@@ -43,7 +43,7 @@ pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
     let node = ipc::node("main")?;
     let frames = ipc::open_frames(&node, &names, ipc::OPEN_TIMEOUT).map_err(|e| {
         BenchError::NoServer(format!(
-            "{e}\nIs motiond running with [server] name = \"{server}\"? Start it (`cargo run --release` \
+            "{e}: is motiond running with [server] name = \"{server}\"? Start it (`cargo run --release` \
              runs config/sim.toml, instance `demo`; a deployed server runs as the `motion` user: \
              `sudo -u motion motionctl bench`) or pass --server NAME."
         ))
