@@ -164,12 +164,21 @@ struct Systemd<'a> {
 }
 
 impl Systemd<'_> {
-    fn devices(&mut self, states: &[DeviceState], started: bool) {
-        let online = states.iter().filter(|s| **s == DeviceState::Online).count();
-        match self.supervisor.as_deref_mut() {
-            Some(supervisor) if started => supervisor.started(online, states.len()),
-            Some(supervisor) => supervisor.devices(online, states.len()),
-            None => {}
+    fn devices(&mut self, config: &ServerConfig, states: &[DeviceState], started: bool) {
+        let Some(supervisor) = self.supervisor.as_deref_mut() else {
+            return;
+        };
+        let waiting: Vec<&str> = config
+            .devices
+            .iter()
+            .zip(states)
+            .filter(|(_, state)| **state != DeviceState::Online)
+            .map(|(device, _)| device.name.as_str())
+            .collect();
+        if started {
+            supervisor.started(&waiting, states.len());
+        } else {
+            supervisor.devices(&waiting, states.len());
         }
     }
 
@@ -223,7 +232,7 @@ fn housekeeping(
                         tracing::warn!("real-time: {problem}; continuing without it");
                     }
                     tracing::info!("real-time: {}", rt.summary());
-                    systemd.devices(&device_states, true);
+                    systemd.devices(config, &device_states, true);
                 }
                 Report::Device {
                     index,
@@ -253,7 +262,7 @@ fn housekeeping(
                     if let Some(slot) = device_states.get_mut(index) {
                         *slot = state;
                     }
-                    systemd.devices(&device_states, false);
+                    systemd.devices(config, &device_states, false);
                 }
                 Report::Fault {
                     axis,

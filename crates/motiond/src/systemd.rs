@@ -163,7 +163,8 @@ pub struct Supervisor {
     started: bool,
     ready: bool,
     stopping: bool,
-    devices_online: Option<(usize, usize)>,
+    /// The devices not online and the count, as last reported.
+    devices_seen: Option<(String, usize)>,
 }
 
 impl Supervisor {
@@ -175,7 +176,7 @@ impl Supervisor {
             started: false,
             ready: false,
             stopping: false,
-            devices_online: None,
+            devices_seen: None,
         }
     }
 
@@ -198,32 +199,36 @@ impl Supervisor {
         }
     }
 
-    /// The services exist and the tick runs.
-    pub fn started(&mut self, online: usize, devices: usize) {
+    /// The services exist and the tick runs; `waiting` names the devices not online yet.
+    pub fn started(&mut self, waiting: &[&str], devices: usize) {
         self.started = true;
-        self.devices(online, devices);
+        self.devices(waiting, devices);
     }
 
-    /// `online` of `devices` are online: `READY=1` the first time all are (once started).
-    pub fn devices(&mut self, online: usize, devices: usize) {
-        if self.devices_online == Some((online, devices)) || !self.started || self.stopping {
+    /// The devices not online (of `devices`): `READY=1` the first time none is missing
+    /// (once started), a `STATUS=` line naming them otherwise.
+    pub fn devices(&mut self, waiting: &[&str], devices: usize) {
+        let key = (waiting.join(", "), devices);
+        if self.devices_seen.as_ref() == Some(&key) || !self.started || self.stopping {
             return;
         }
-        self.devices_online = Some((online, devices));
-        if online == devices && !self.ready {
+        let (names, devices) = key.clone();
+        self.devices_seen = Some(key);
+        let online = devices.saturating_sub(waiting.len());
+        if waiting.is_empty() && !self.ready {
             self.ready = true;
             self.send(&format!(
                 "READY=1\nSTATUS=ready: {devices} device(s) online, serving"
             ));
-        } else if online == devices {
+        } else if waiting.is_empty() {
             self.send(&format!("STATUS=serving: {devices} device(s) online"));
         } else if self.ready {
             self.send(&format!(
-                "STATUS=serving: {online} of {devices} device(s) online"
+                "STATUS=serving: {online} of {devices} device(s) online; not answering: {names}"
             ));
         } else {
             self.send(&format!(
-                "STATUS=starting: services up, waiting for devices ({online} of {devices} online)"
+                "STATUS=starting: services up, waiting for {names} ({online} of {devices} device(s) online)"
             ));
         }
     }
@@ -390,30 +395,32 @@ mod tests {
         let mut supervisor = Supervisor::new(manager.notifier(), Some(ms(400)), ms(1));
         let health = TickHealth::default();
         // Nothing before the services exist.
-        supervisor.devices(0, 2);
+        supervisor.devices(&["a", "b"], 2);
         assert_eq!(supervisor.poll(ms(1), &health), None);
         assert!(manager.messages().is_empty());
-        supervisor.started(0, 2);
-        supervisor.devices(1, 2);
-        supervisor.devices(1, 2); // unchanged: not repeated
-        let messages = manager.messages();
-        assert_eq!(messages.len(), 2, "{messages:?}");
-        assert!(
-            messages.iter().all(|m| !m.contains("READY=1")),
-            "{messages:?}"
+        supervisor.started(&["a", "b"], 2);
+        supervisor.devices(&["b"], 2);
+        supervisor.devices(&["b"], 2); // unchanged: not repeated
+        assert_eq!(
+            manager.messages(),
+            [
+                "STATUS=starting: services up, waiting for a, b (0 of 2 device(s) online)",
+                "STATUS=starting: services up, waiting for b (1 of 2 device(s) online)",
+            ]
         );
-        assert!(messages[1].contains("1 of 2"), "{messages:?}");
-        supervisor.devices(2, 2);
+        supervisor.devices(&[], 2);
         assert_eq!(
             manager.messages(),
             ["READY=1\nSTATUS=ready: 2 device(s) online, serving"]
         );
-        supervisor.devices(1, 2);
-        supervisor.devices(2, 2);
-        let messages = manager.messages();
-        assert_eq!(messages.len(), 2);
-        assert!(
-            messages.iter().all(|m| !m.contains("READY=1")),
+        supervisor.devices(&["a"], 2);
+        supervisor.devices(&[], 2);
+        assert_eq!(
+            manager.messages(),
+            [
+                "STATUS=serving: 1 of 2 device(s) online; not answering: a",
+                "STATUS=serving: 2 device(s) online",
+            ],
             "READY is sent once"
         );
         // Ticks complete: WATCHDOG=1 every 200 ms.
@@ -449,7 +456,7 @@ mod tests {
         );
         supervisor.stopping();
         supervisor.stopping();
-        supervisor.devices(0, 2);
+        supervisor.devices(&["a", "b"], 2);
         assert_eq!(
             manager.messages(),
             ["STOPPING=1\nSTATUS=stopping every axis"]

@@ -43,7 +43,8 @@ fn ready_waits_for_every_device_then_the_watchdog_is_fed_until_stopping() {
     assert!(
         before
             .iter()
-            .any(|m| m.contains("STATUS=starting") && m.contains("of 2")),
+            .any(|m| m.contains("STATUS=starting: services up, waiting for")
+                && m.contains("of 2 device(s) online")),
         "{:?}",
         manager.messages
     );
