@@ -170,8 +170,10 @@ const LOGIND: &str = "logind-removeipc";
 const LOGIND_T: &str = "systemd-logind RemoveIPC";
 
 /// `RemoveIPC=yes` (logind's default) deletes a user's shared memory when their last
-/// session ends — under a running server, if it runs as a regular (login) user. System users
-/// (uid ≤ SYS_UID_MAX) and root are exempt.
+/// session ends — under a running server, if it runs as a regular (login) user. Root and
+/// system users are exempt (logind.conf(5)); systemd fixes that boundary when it is built,
+/// from the build machine's /etc/login.defs, so this machine's `SYS_UID_MAX` (999 when
+/// absent) is the best guess at run time.
 pub fn remove_ipc(cx: &Context<'_>) -> Check {
     let host = &cx.host;
     let logind = [
