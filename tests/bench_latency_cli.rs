@@ -1,5 +1,6 @@
 //! Smoke test of the latency bench's command line (benches/latency/cli.rs), which
-//! `cargo test` does not otherwise build: the documented invocations parse, bad ones fail.
+//! `cargo test` does not otherwise build: the documented invocations parse, bad ones fail,
+//! and the baseline peer's hidden command line round-trips.
 
 #[allow(dead_code)] // the bench reads the fields; this test only parses
 #[path = "../benches/latency/cli.rs"]
@@ -9,7 +10,9 @@ use core::time::Duration;
 
 use clap::Parser;
 use clap::error::ErrorKind;
-use cli::{Cli, CommandProbe, parse_duration};
+use cli::Cli;
+use motion_bench::peer::{PEER_FLAG, PeerArgs};
+use motion_bench::{CommandProbe, PeerMode, parse_duration};
 
 #[test]
 fn documented_invocation_parses() {
@@ -31,16 +34,51 @@ fn documented_invocation_parses() {
     ])
     .expect("the README's command line parses");
     assert_eq!(cli.server, "demo");
-    assert_eq!(cli.duration, Duration::from_secs(10));
-    assert!(cli.json && cli.axes_sweep);
-    assert_eq!(cli.rt_priority, Some(80));
-    assert_eq!(cli.cpu, Some(1));
-    assert_eq!(cli.command, CommandProbe::UnknownAxis);
+    assert!(cli.cargo_bench);
+    let bench = &cli.bench;
+    assert_eq!(bench.duration, Duration::from_secs(10));
+    assert!(bench.json && bench.axes_sweep);
+    assert_eq!(bench.rt_priority, Some(80));
+    assert_eq!(bench.cpu, Some(1));
+    assert_eq!(bench.command, CommandProbe::UnknownAxis);
     assert!(
-        cli.command_to_wire,
+        bench.command_to_wire,
         "the command-to-wire phase runs by default"
     );
-    assert!(cli.peer.is_none());
+}
+
+#[test]
+fn the_peer_command_line_round_trips_and_refuses_garbage() {
+    let peer = PeerArgs {
+        mode: PeerMode::Ticking,
+        name: "bench-peer-1".to_owned(),
+        hz: 1000,
+        rt_priority: Some(80),
+        cpu: Some(1),
+    };
+    assert_eq!(PeerArgs::parse(&peer.to_words()), Ok(peer.clone()));
+    let plain = PeerArgs {
+        mode: PeerMode::BusyRr,
+        rt_priority: None,
+        cpu: None,
+        ..peer
+    };
+    assert_eq!(PeerArgs::parse(&plain.to_words()), Ok(plain));
+    let words = |w: &[&str]| w.iter().map(|s| (*s).to_owned()).collect::<Vec<_>>();
+    for bad in [
+        &[][..],
+        &["ticking", "x"],
+        &["spinning", "x", "1000"],
+        &["ticking", "x", "0"],
+        &["ticking", "", "1000"],
+        &["ticking", "x", "1000", "--cpu"],
+        &["ticking", "x", "1000", "--nice", "3"],
+    ] {
+        assert!(PeerArgs::parse(&words(bad)).is_err(), "{bad:?} accepted");
+    }
+    // The flag is not an option of the bench's own command line (the binary's main
+    // handles it before parsing).
+    assert!(Cli::try_parse_from(["latency", PEER_FLAG, "ticking", "x", "1000"]).is_err());
 }
 
 #[test]
@@ -48,6 +86,7 @@ fn command_to_wire_is_on_by_default_and_can_be_switched_off() {
     let parse = |args: &[&str]| {
         Cli::try_parse_from(args)
             .unwrap_or_else(|e| panic!("{args:?}: {e}"))
+            .bench
             .command_to_wire
     };
     assert!(parse(&["latency"]));
@@ -80,6 +119,11 @@ fn help_lists_the_options_but_not_the_peer_flags() {
         );
     }
     assert!(!help.contains("--peer"), "internal flag shown:\n{help}");
+    assert!(
+        !help.contains("--motion-bench-peer"),
+        "internal flag shown:\n{help}"
+    );
+    assert!(!help.contains("--bench "), "cargo's flag shown:\n{help}");
 }
 
 #[test]

@@ -1,9 +1,9 @@
-//! Command line of the latency bench (shared with the smoke test in `tests/`).
+//! Command line of the latency bench (shared with the smoke test in `tests/`): the server's
+//! name and the suite's options from the `motion-bench` crate, which `motionctl bench` uses
+//! as well.
 
-use core::time::Duration;
-use std::path::PathBuf;
-
-use clap::{Parser, ValueEnum};
+use clap::Parser;
+use motion_bench::BenchArgs;
 
 /// End-to-end latency of a live motiond, each figure beside a baseline measured in the
 /// same run (plain iceoryx2 or a bare `clock_nanosleep` loop), with the ratio.
@@ -19,96 +19,10 @@ pub struct Cli {
     /// Instance name of the running motiond (`[server] name`).
     #[arg(long, default_value = "demo")]
     pub server: String,
-    /// How long each phase runs: `10s`, `500ms`, `2m`.
-    #[arg(long, default_value = "10s", value_parser = parse_duration)]
-    pub duration: Duration,
-    /// Print the results as one JSON document instead of the table.
-    #[arg(long)]
-    pub json: bool,
-    /// Write every distribution measured here as `value_ns percentile total_count` lines,
-    /// one file per distribution, into DIR (created if missing).
-    #[arg(long, value_name = "DIR")]
-    pub out: Option<PathBuf>,
-    /// SCHED_FIFO priority for the baseline sleeper, the baseline peer's tick thread and the
-    /// WaitSet clients (never for busy-polling threads). Give the server's `rt_priority`.
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u8).range(1..=99))]
-    pub rt_priority: Option<u8>,
-    /// Pin the baseline sleeper and the baseline peer's tick thread to this core. Give the
-    /// server's `cpu`.
-    #[arg(long, value_name = "N")]
-    pub cpu: Option<usize>,
-    /// The harmless command timed in the round trip.
-    #[arg(long, value_enum, default_value_t = CommandProbe::UnknownAxis)]
-    pub command: CommandProbe,
-    /// Also measure tick work versus axis count: start motiond on generated configs with
-    /// 4, 16, 64 and 128 simulated axes (each for DURATION).
-    #[arg(long)]
-    pub axes_sweep: bool,
-    /// Measure "command to wire": start a motiond of the bench's own on a generated config
-    /// whose serial link is a pty served by a simulated QSB in this bench, and time request →
-    /// first byte of the board command at the pty (DURATION, plus a third of it for the
-    /// baseline). On by default; `--command-to-wire=false` skips it.
-    #[arg(long, value_name = "BOOL", default_value_t = true, num_args = 0..=1,
-          default_missing_value = "true", action = clap::ArgAction::Set)]
-    pub command_to_wire: bool,
-    /// The motiond binary the sweep and the command-to-wire phase start (default: `motiond` beside this bench in the
-    /// target directory, else on PATH).
-    #[arg(long, value_name = "PATH")]
-    pub motiond: Option<PathBuf>,
-    /// Internal: run as the baseline peer process (`ticking` or `busy-rr`).
-    #[arg(long, hide = true, value_enum)]
-    pub peer: Option<PeerMode>,
-    /// Internal: the peer's instance name.
-    #[arg(long, hide = true, default_value = "")]
-    pub peer_name: String,
-    /// Internal: the peer's tick rate.
-    #[arg(long, hide = true, default_value_t = 1000)]
-    pub peer_hz: u32,
+    /// The suite's options.
+    #[command(flatten)]
+    pub bench: BenchArgs,
     /// `cargo bench` passes `--bench` to every bench binary; accepted and ignored.
-    #[arg(long, hide = true)]
-    pub bench: bool,
-}
-
-/// The command whose round trip is timed.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum CommandProbe {
-    /// `Stop` on the first axis index past the last one: answered `UnknownAxis`, touches no
-    /// axis, works on a server without devices.
-    UnknownAxis,
-    /// `Claim` then `Release` of axis 0, alternating: no motion, but the axis is claimed
-    /// for a moment, so other clients may see `ClaimedByOther`. Needs an axis.
-    ClaimRelease,
-}
-
-/// What the re-executed peer process does.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum PeerMode {
-    /// motiond's skeleton without the engine: absolute-deadline tick, answer requests,
-    /// publish a frame-sized sample, notify the tick event.
-    Ticking,
-    /// Answer requests as fast as possible (busy-polling server).
-    BusyRr,
-}
-
-/// `10s`, `250ms`, `2m`, `1.5s`, `500us`; a bare number is seconds.
-pub fn parse_duration(text: &str) -> Result<Duration, String> {
-    let text = text.trim();
-    let split = text
-        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
-        .unwrap_or(text.len());
-    let (number, unit) = text.split_at(split);
-    let value: f64 = number
-        .parse()
-        .map_err(|_| format!("`{text}`: expected a number followed by s, ms, us or m"))?;
-    let seconds = match unit.trim() {
-        "" | "s" => value,
-        "ms" => value / 1e3,
-        "us" | "µs" => value / 1e6,
-        "m" | "min" => value * 60.0,
-        other => return Err(format!("`{text}`: unknown unit `{other}` (s, ms, us, m)")),
-    };
-    if !seconds.is_finite() || seconds <= 0.0 || seconds > 86_400.0 {
-        return Err(format!("`{text}`: must be more than 0 and at most a day"));
-    }
-    Ok(Duration::from_secs_f64(seconds))
+    #[arg(long = "bench", hide = true)]
+    pub cargo_bench: bool,
 }

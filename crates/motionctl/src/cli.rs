@@ -44,7 +44,9 @@ Examples:
   motionctl jog y -2.5          (Ctrl-C stops the axis)
   motionctl io set lamp on
   motionctl estop               (gets through even when the server's ports are taken)
-  motionctl record --duration 5s --out run.csv";
+  motionctl record --duration 5s --out run.csv
+  motionctl bench --duration 5s --json
+  motionctl doctor --config /etc/motiond/motiond.toml";
 
 /// Command-line client of motiond.
 #[derive(Debug, Parser)]
@@ -216,6 +218,15 @@ pub enum Command {
         #[arg(long, default_value = "10s", value_parser = parse_duration)]
         window: Duration,
     },
+    /// Measure end-to-end latency against the running server, each figure beside a baseline
+    /// measured in the same run (plain iceoryx2, a bare clock_nanosleep loop), with the
+    /// ratio: the `cargo bench --bench latency` suite (docs/PERFORMANCE.md). Takes about
+    /// 9 × DURATION.
+    Bench(motion_bench::BenchArgs),
+    /// Check this machine for real-time operation: kernel, cores, interrupts, limits,
+    /// devices, shared memory, and a wake-up measurement; each check passes, warns or fails
+    /// with the value found and the fix. Exits 1 when any check fails.
+    Doctor(crate::doctor::DoctorArgs),
     /// Record every frame to CSV, one row per tick, for a duration: the axes (all when none
     /// is named) and every signal.
     Record {

@@ -16,8 +16,10 @@ macro_rules! out {
 }
 
 mod act;
+mod bench;
 mod cli;
 mod describe;
+mod doctor;
 mod io;
 mod machine;
 mod record;
@@ -38,6 +40,10 @@ use crate::cli::{Cli, Command, exit};
 pub type Service = ipc::Service;
 
 fn main() -> ExitCode {
+    // `motionctl bench` re-executes motionctl as its baseline peer process.
+    if let Some(status) = motion_bench::peer::run_if_requested() {
+        return status;
+    }
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(error) => {
@@ -74,6 +80,8 @@ fn connect(cli: &Cli) -> anyhow::Result<Client<Service>> {
 fn run_unconnected(cli: &Cli) -> Option<anyhow::Result<()>> {
     match &cli.command {
         Command::Estop => Some(estop(cli)),
+        Command::Bench(args) => Some(bench::run(&cli.server, args)),
+        Command::Doctor(args) => Some(doctor::run(args)),
         Command::Stop { axes } if axes.is_empty() => Some(
             motion_client::stop_all::<Service>(&cli.server, cli.connect_timeout)
                 .map_err(anyhow::Error::new)
@@ -129,6 +137,8 @@ fn run(cli: &Cli) -> anyhow::Result<()> {
         Command::Stop { axes } => act::stop(client, axes),
         Command::Off { axes, all } => act::off(client, axes, *all),
         Command::Estop => estop(cli),
+        Command::Bench(args) => bench::run(&cli.server, args),
+        Command::Doctor(args) => doctor::run(args),
         Command::WaitReady { axes, timeout } => act::wait_ready(client, axes, *timeout),
         Command::Io { command } => io::run(client, command),
         Command::Reset => {
@@ -186,6 +196,9 @@ fn exit_status(error: &anyhow::Error) -> u8 {
     for cause in error.chain() {
         if let Some(connect) = cause.downcast_ref::<ConnectError>() {
             return connect_status(connect);
+        }
+        if let Some(motion_bench::BenchError::NoServer(_)) = cause.downcast_ref() {
+            return exit::NO_SERVER;
         }
         if let Some(estop) = cause.downcast_ref::<EstopError>() {
             return if estop.server_found {

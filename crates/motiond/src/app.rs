@@ -19,6 +19,7 @@ use crate::rt::monotonic_now;
 use crate::services;
 use crate::sim_models::sim_link;
 use crate::stats::format_ns;
+use crate::systemd::{Supervisor, TickHealth};
 use crate::tick::{self, Report, StatusLine, TickSetup};
 
 /// How the server was asked to run.
@@ -106,6 +107,17 @@ pub fn run(config: ServerConfig, options: RunOptions) -> anyhow::Result<()> {
         io_threads.push(thread);
     }
 
+    let health = Arc::new(TickHealth::default());
+    let mut supervisor = Supervisor::from_env(period);
+    if supervisor.is_some() {
+        tracing::info!(
+            "systemd: notifying readiness on $NOTIFY_SOCKET{}",
+            crate::systemd::watchdog_from_env().map_or(String::new(), |interval| format!(
+                ", feeding the watchdog ({} ms) while ticks complete",
+                interval.as_millis()
+            ))
+        );
+    }
     let (dead_tx, dead_rx) = RingBuffer::<ClientId>::new(256);
     let (report_tx, mut report_rx) = RingBuffer::<Report>::new(64);
     let clients_alive = Arc::new(AtomicU32::new(0));
@@ -122,13 +134,19 @@ pub fn run(config: ServerConfig, options: RunOptions) -> anyhow::Result<()> {
         require_rt: options.require_rt,
         params,
         estop_signal,
+        health: Arc::clone(&health),
     };
     let tick_thread = std::thread::Builder::new()
         .name("tick".into())
         .spawn(move || tick::run(setup))
         .context("starting the tick thread")?;
 
-    let result = housekeeping(&config, &mut report_rx, dead_tx, &clients_alive);
+    let systemd = Systemd {
+        supervisor: supervisor.as_mut(),
+        health: &health,
+        shutdown: &shutdown,
+    };
+    let result = housekeeping(&config, &mut report_rx, dead_tx, &clients_alive, systemd);
     io_stop.store(true, Ordering::Relaxed);
     let _ = tick_thread.join();
     for thread in io_threads {
@@ -137,21 +155,74 @@ pub fn run(config: ServerConfig, options: RunOptions) -> anyhow::Result<()> {
     result
 }
 
+/// The main thread's side of the systemd conversation (crate::systemd).
+struct Systemd<'a> {
+    /// `None` when not started by systemd with `Type=notify`.
+    supervisor: Option<&'a mut Supervisor>,
+    health: &'a TickHealth,
+    shutdown: &'a AtomicBool,
+}
+
+impl Systemd<'_> {
+    fn devices(&mut self, config: &ServerConfig, states: &[DeviceState], started: bool) {
+        let Some(supervisor) = self.supervisor.as_deref_mut() else {
+            return;
+        };
+        let waiting: Vec<&str> = config
+            .devices
+            .iter()
+            .zip(states)
+            .filter(|(_, state)| **state != DeviceState::Online)
+            .map(|(device, _)| device.name.as_str())
+            .collect();
+        if started {
+            supervisor.started(&waiting, states.len());
+        } else {
+            supervisor.devices(&waiting, states.len());
+        }
+    }
+
+    /// Shutdown began (a signal, or the tick loop ended).
+    fn stopping(&mut self) {
+        if let Some(supervisor) = self.supervisor.as_deref_mut() {
+            supervisor.stopping();
+        }
+    }
+
+    fn poll(&mut self) {
+        if self.shutdown.load(Ordering::Relaxed) {
+            self.stopping();
+        }
+        let Some(supervisor) = self.supervisor.as_deref_mut() else {
+            return;
+        };
+        if let Some(stuck) = supervisor.poll(monotonic_now(), self.health) {
+            tracing::error!(
+                "the tick thread has not completed a tick for {} ms: no longer feeding the systemd watchdog",
+                stuck.as_millis()
+            );
+        }
+    }
+}
+
 /// The main thread's work while the tick runs: reports, logs, the status line, client
-/// liveness. Returns when the tick thread stops.
+/// liveness, systemd's readiness and watchdog. Returns when the tick thread stops.
 fn housekeeping(
     config: &ServerConfig,
     reports: &mut rtrb::Consumer<Report>,
     mut dead_clients: rtrb::Producer<ClientId>,
     clients_alive: &AtomicU32,
+    mut systemd: Systemd<'_>,
 ) -> anyhow::Result<()> {
     let status_line = std::io::stderr().is_terminal();
     let mut server_node = 0u128;
     let mut next_liveness = monotonic_now();
     let mut firmware: Vec<String> = vec![String::new(); config.devices.len()];
     let mut summary_printed = false;
+    let mut device_states = vec![DeviceState::Offline; config.devices.len()];
     let started = monotonic_now();
     loop {
+        systemd.poll();
         while let Ok(report) = reports.pop() {
             match report {
                 Report::Failed(error) => bail!("{error}"),
@@ -161,6 +232,7 @@ fn housekeeping(
                         tracing::warn!("real-time: {problem}; continuing without it");
                     }
                     tracing::info!("real-time: {}", rt.summary());
+                    systemd.devices(config, &device_states, true);
                 }
                 Report::Device {
                     index,
@@ -187,6 +259,10 @@ fn housekeeping(
                             _ => text,
                         };
                     }
+                    if let Some(slot) = device_states.get_mut(index) {
+                        *slot = state;
+                    }
+                    systemd.devices(config, &device_states, false);
                 }
                 Report::Fault {
                     axis,
@@ -228,6 +304,7 @@ fn housekeeping(
                     }
                 }
                 Report::Stopped { at_rest } => {
+                    systemd.stopping();
                     if status_line {
                         eprintln!();
                     }

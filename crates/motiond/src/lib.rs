@@ -11,4 +11,5 @@ pub mod rt;
 pub mod services;
 pub mod sim_models;
 pub mod stats;
+pub mod systemd;
 pub mod tick;

@@ -117,6 +117,8 @@ pub struct TickSetup {
     pub params: Box<MachineParams>,
     /// Set by SIGUSR1: latch the e-stop.
     pub estop_signal: Arc<AtomicBool>,
+    /// Stamped at the end of every tick (the systemd watchdog is fed from it).
+    pub health: Arc<crate::systemd::TickHealth>,
 }
 
 /// The command port over the iceoryx2 server: one active request at a time, answered
@@ -228,6 +230,7 @@ pub fn run(mut setup: TickSetup) {
     };
     let rt_flags = rt_status.flags();
     let node_id = services.node.id().value();
+    setup.health.beat(monotonic_now());
     let _ = setup.reports.push(Report::Started {
         rt: rt_status,
         node_id,
@@ -325,6 +328,7 @@ impl Loop {
             }
             let done = monotonic_now();
             self.work.record(duration_ns(done.saturating_sub(wake)));
+            self.setup.health.beat(done);
             deadline += period;
             if done > deadline {
                 // Missed at least one deadline: skip the missed ticks (no burst of

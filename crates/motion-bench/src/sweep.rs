@@ -43,16 +43,17 @@ pub enum SweepPoint {
     },
 }
 
-/// The motiond binary: `explicit`, else beside this bench in the target directory
-/// (`target/<profile>/motiond`), else `motiond` on PATH.
+/// The motiond binary: `explicit`, else beside the running program (an installed or built
+/// `motionctl`: `~/.cargo/bin/motiond`, `target/release/motiond`), else one directory up (the
+/// cargo bench: `target/release/deps/latency-…` → `target/release/motiond`), else `motiond`
+/// on PATH.
 pub fn find_motiond(explicit: Option<&Path>) -> Result<PathBuf, String> {
     if let Some(path) = explicit {
         return Ok(path.to_path_buf());
     }
     let exe = std::env::current_exe().map_err(|e| format!("own executable: {e}"))?;
-    // target/release/deps/latency-… → target/release/motiond
-    if let Some(profile_dir) = exe.parent().and_then(Path::parent) {
-        let candidate = profile_dir.join("motiond");
+    for dir in exe.ancestors().skip(1).take(2) {
+        let candidate = dir.join("motiond");
         if candidate.is_file() {
             return Ok(candidate);
         }

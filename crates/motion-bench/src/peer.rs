@@ -1,4 +1,4 @@
-//! The baseline peer: this bench binary re-executed with `--peer`, a plain process that
+//! The baseline peer: the running program re-executed with [`PEER_FLAG`], a plain process that
 //! does with iceoryx2 what motiond does, minus everything motiond adds (engine, links,
 //! drivers): its own services with motiond's settings, an absolute-deadline tick at the
 //! same rate, requests answered at the start of each tick, a frame-sized sample published
@@ -6,19 +6,115 @@
 //!
 //! Protocol with the bench: the peer prints `ready` once its services exist, runs until
 //! its stdin closes, then prints `wakeup <summary>` and `work <summary>` and exits.
+//!
+//! Its command line: `PROGRAM --motion-bench-peer MODE NAME HZ [--rt-priority N] [--cpu N]`.
+//! Any program that runs the bench calls [`run_if_requested`] before parsing its own
+//! arguments, so the cargo bench and motionctl both serve as their own peer.
 
+use std::ffi::OsString;
 use std::io::{BufRead, BufReader, Read, Write};
-use std::process::{Child, ChildStdin, ChildStdout, Command, Stdio};
+use std::process::{Child, ChildStdin, ChildStdout, Command, ExitCode, Stdio};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use iceoryx2::prelude::*;
 use motion_ipc::{CommandReply, CommandRequest, MotionFrame, Reason, ServiceNames};
 
-use crate::cli::PeerMode;
+use crate::args::PeerMode;
 use crate::dist::{Dist, Summary};
 use crate::ipc::Ipc;
 use crate::rt::{self, now_ns, sleep_until_ns};
+
+/// The first argument that makes a program the baseline peer.
+pub const PEER_FLAG: &str = "--motion-bench-peer";
+
+/// When this process was started as a baseline peer (its first argument is [`PEER_FLAG`]),
+/// serves as one and returns its exit status; `None` otherwise. Call it first in `main`.
+pub fn run_if_requested() -> Option<ExitCode> {
+    let args: Vec<OsString> = std::env::args_os().skip(1).collect();
+    if args.first().and_then(|a| a.to_str()) != Some(PEER_FLAG) {
+        return None;
+    }
+    let words: Vec<String> = args
+        .iter()
+        .skip(1)
+        .map(|a| a.to_string_lossy().into_owned())
+        .collect();
+    set_log_level_from_env_or(LogLevel::Error);
+    Some(ExitCode::from(match PeerArgs::parse(&words) {
+        Ok(peer) => run(peer.mode, &peer.name, peer.hz, peer.rt_priority, peer.cpu),
+        Err(error) => {
+            eprintln!("latency bench peer: {error}");
+            2
+        }
+    }))
+}
+
+/// The peer's command line after [`PEER_FLAG`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct PeerArgs {
+    /// What it does.
+    pub mode: PeerMode,
+    /// Its instance name.
+    pub name: String,
+    /// Its tick rate.
+    pub hz: u32,
+    /// SCHED_FIFO priority of its tick thread.
+    pub rt_priority: Option<u8>,
+    /// Core of its tick thread.
+    pub cpu: Option<usize>,
+}
+
+impl PeerArgs {
+    /// The words after [`PEER_FLAG`].
+    pub fn to_words(&self) -> Vec<String> {
+        let mut words = vec![
+            self.mode.word().to_owned(),
+            self.name.clone(),
+            self.hz.to_string(),
+        ];
+        if let Some(priority) = self.rt_priority {
+            words.extend(["--rt-priority".to_owned(), priority.to_string()]);
+        }
+        if let Some(cpu) = self.cpu {
+            words.extend(["--cpu".to_owned(), cpu.to_string()]);
+        }
+        words
+    }
+
+    /// Parses [`PeerArgs::to_words`].
+    pub fn parse(words: &[String]) -> Result<Self, String> {
+        let usage =
+            || format!("usage: {PEER_FLAG} ticking|busy-rr NAME HZ [--rt-priority N] [--cpu N]");
+        let [mode, name, hz, rest @ ..] = words else {
+            return Err(usage());
+        };
+        let mode = PeerMode::from_word(mode).ok_or_else(usage)?;
+        let hz: u32 = hz.parse().map_err(|_| usage())?;
+        if name.is_empty() || hz == 0 {
+            return Err(usage());
+        }
+        let mut peer = Self {
+            mode,
+            name: name.clone(),
+            hz,
+            rt_priority: None,
+            cpu: None,
+        };
+        let mut rest = rest.iter();
+        while let Some(flag) = rest.next() {
+            let value = rest.next().ok_or_else(usage)?;
+            match flag.as_str() {
+                "--rt-priority" => {
+                    peer.rt_priority = Some(value.parse().map_err(|_| usage())?);
+                }
+                "--cpu" => peer.cpu = Some(value.parse().map_err(|_| usage())?),
+                _ => return Err(usage()),
+            }
+        }
+        Ok(peer)
+    }
+}
 
 /// Clients the peer's services admit (as motiond's default).
 const MAX_CLIENTS: usize = 32;
@@ -52,24 +148,17 @@ impl Peer {
     ) -> Result<Self, String> {
         let exe = std::env::current_exe().map_err(|e| format!("own executable: {e}"))?;
         let name = format!("bench-peer-{}-{}", std::process::id(), now_ns() % 1_000_000);
-        let mut command = Command::new(exe);
-        command
-            .arg("--peer")
-            .arg(match mode {
-                PeerMode::Ticking => "ticking",
-                PeerMode::BusyRr => "busy-rr",
-            })
-            .arg("--peer-name")
-            .arg(&name)
-            .arg("--peer-hz")
-            .arg(hz.to_string());
-        if let Some(priority) = rt_priority {
-            command.arg("--rt-priority").arg(priority.to_string());
+        let words = PeerArgs {
+            mode,
+            name: name.clone(),
+            hz,
+            rt_priority,
+            cpu,
         }
-        if let Some(cpu) = cpu {
-            command.arg("--cpu").arg(cpu.to_string());
-        }
-        let mut child = command
+        .to_words();
+        let mut child = Command::new(exe)
+            .arg(PEER_FLAG)
+            .args(words)
             .stdin(Stdio::piped())
             .stdout(Stdio::piped())
             .stderr(Stdio::inherit())
@@ -211,7 +300,7 @@ fn serve(
     cpu: Option<usize>,
 ) -> Result<(), String> {
     if name.is_empty() || hz == 0 {
-        return Err("--peer needs --peer-name and a --peer-hz above 0".to_owned());
+        return Err("the peer needs a name and a tick rate above 0".to_owned());
     }
     let services = create(name)?;
     let stop = Arc::new(AtomicBool::new(false));

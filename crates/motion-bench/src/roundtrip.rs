@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 
 use motion_ipc::{ClientId, CommandKind, CommandRequest, Reason, ServiceNames};
 
-use crate::cli::CommandProbe;
+use crate::args::CommandProbe;
 use crate::delivery::duration_ns;
 use crate::dist::Dist;
 use crate::ipc;

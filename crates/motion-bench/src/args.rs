@@ -1,0 +1,111 @@
+//! The bench's options, shared by `cargo bench --bench latency` and `motionctl bench`
+//! (each adds its own `--server`: motionctl's is global to every subcommand).
+
+use core::time::Duration;
+use std::path::PathBuf;
+
+use clap::{Args, ValueEnum};
+
+/// Every option of the latency suite except the server's name.
+#[derive(Debug, Clone, Args)]
+pub struct BenchArgs {
+    /// How long each phase runs: `10s`, `500ms`, `2m`.
+    #[arg(long, default_value = "10s", value_parser = parse_duration)]
+    pub duration: Duration,
+    /// Print the results as one JSON document instead of the table.
+    #[arg(long)]
+    pub json: bool,
+    /// Write every distribution measured here as `value_ns percentile total_count` lines,
+    /// one file per distribution, into DIR (created if missing).
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// SCHED_FIFO priority for the baseline sleeper, the baseline peer's tick thread and the
+    /// WaitSet clients (never for busy-polling threads). Give the server's `rt_priority`.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u8).range(1..=99))]
+    pub rt_priority: Option<u8>,
+    /// Pin the baseline sleeper and the baseline peer's tick thread to this core. Give the
+    /// server's `cpu`.
+    #[arg(long, value_name = "N")]
+    pub cpu: Option<usize>,
+    /// The harmless command timed in the round trip.
+    #[arg(long, value_enum, default_value_t = CommandProbe::UnknownAxis)]
+    pub command: CommandProbe,
+    /// Also measure tick work versus axis count: start motiond on generated configs with
+    /// 4, 16, 64 and 128 simulated axes (each for DURATION).
+    #[arg(long)]
+    pub axes_sweep: bool,
+    /// Measure "command to wire": start a motiond of the bench's own on a generated config
+    /// whose serial link is a pty served by a simulated QSB in this bench, and time request →
+    /// first byte of the board command at the pty (DURATION, plus a third of it for the
+    /// baseline). On by default; `--command-to-wire=false` skips it.
+    #[arg(long, value_name = "BOOL", default_value_t = true, num_args = 0..=1,
+          default_missing_value = "true", action = clap::ArgAction::Set)]
+    pub command_to_wire: bool,
+    /// The motiond binary the sweep and the command-to-wire phase start (default: `motiond`
+    /// beside this program or in the target directory above it, else on PATH).
+    #[arg(long, value_name = "PATH")]
+    pub motiond: Option<PathBuf>,
+}
+
+/// The command whose round trip is timed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum CommandProbe {
+    /// `Stop` on the first axis index past the last one: answered `UnknownAxis`, touches no
+    /// axis, works on a server without devices.
+    UnknownAxis,
+    /// `Claim` then `Release` of axis 0, alternating: no motion, but the axis is claimed
+    /// for a moment, so other clients may see `ClaimedByOther`. Needs an axis.
+    ClaimRelease,
+}
+
+/// What the re-executed peer process does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PeerMode {
+    /// motiond's skeleton without the engine: absolute-deadline tick, answer requests,
+    /// publish a frame-sized sample, notify the tick event.
+    Ticking,
+    /// Answer requests as fast as possible (busy-polling server).
+    BusyRr,
+}
+
+impl PeerMode {
+    /// The word on the peer's command line.
+    pub fn word(self) -> &'static str {
+        match self {
+            Self::Ticking => "ticking",
+            Self::BusyRr => "busy-rr",
+        }
+    }
+
+    /// Parses [`PeerMode::word`].
+    pub fn from_word(word: &str) -> Option<Self> {
+        match word {
+            "ticking" => Some(Self::Ticking),
+            "busy-rr" => Some(Self::BusyRr),
+            _ => None,
+        }
+    }
+}
+
+/// `10s`, `250ms`, `2m`, `1.5s`, `500us`; a bare number is seconds.
+pub fn parse_duration(text: &str) -> Result<Duration, String> {
+    let text = text.trim();
+    let split = text
+        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+        .unwrap_or(text.len());
+    let (number, unit) = text.split_at(split);
+    let value: f64 = number
+        .parse()
+        .map_err(|_| format!("`{text}`: expected a number followed by s, ms, us or m"))?;
+    let seconds = match unit.trim() {
+        "" | "s" => value,
+        "ms" => value / 1e3,
+        "us" | "µs" => value / 1e6,
+        "m" | "min" => value * 60.0,
+        other => return Err(format!("`{text}`: unknown unit `{other}` (s, ms, us, m)")),
+    };
+    if !seconds.is_finite() || seconds <= 0.0 || seconds > 86_400.0 {
+        return Err(format!("`{text}`: must be more than 0 and at most a day"));
+    }
+    Ok(Duration::from_secs_f64(seconds))
+}

@@ -1,0 +1,88 @@
+//! The end-to-end latency suite of a live motiond: every figure beside a baseline measured
+//! in the same run, with the ratio (docs/PERFORMANCE.md explains each figure). Two programs
+//! run it: `cargo bench --bench latency` (the workspace's bench, `benches/latency/`) and
+//! `motionctl bench` on a deployed machine.
+//!
+//! Everything goes through plain iceoryx2 and the motion-ipc types, opening the server's
+//! services as any client would. Baselines: a bare `clock_nanosleep` loop (wake-up), and a
+//! plain peer process that ticks, publishes a frame-sized sample and answers requests like
+//! motiond minus its engine. The peer is the running program re-executed with
+//! [`peer::PEER_FLAG`]: every program that calls [`run`] must call
+//! [`peer::run_if_requested`] first thing in its `main`. Command to wire is timed on a
+//! motiond the bench starts itself, its serial link a pty the bench serves with a simulated
+//! QSB ([`wire`], [`pty`]).
+//!
+//! ```no_run
+//! use clap::Parser;
+//!
+//! #[derive(Parser)]
+//! struct Cli {
+//!     #[arg(long, default_value = "demo")]
+//!     server: String,
+//!     #[command(flatten)]
+//!     bench: motion_bench::BenchArgs,
+//! }
+//!
+//! fn main() -> std::process::ExitCode {
+//!     if let Some(status) = motion_bench::peer::run_if_requested() {
+//!         return status; // this process is a baseline peer
+//!     }
+//!     let cli = Cli::parse();
+//!     match motion_bench::run(&cli.server, &cli.bench) {
+//!         Ok(report) => {
+//!             print!("{}", report.table());
+//!             std::process::ExitCode::SUCCESS
+//!         }
+//!         Err(error) => {
+//!             eprintln!("{error}");
+//!             std::process::ExitCode::FAILURE
+//!         }
+//!     }
+//! }
+//! ```
+#![deny(unsafe_code)] // one exception: rt.rs (sched_setscheduler), with a SAFETY note
+
+pub mod args;
+pub mod delivery;
+pub mod dist;
+pub mod ipc;
+pub mod peer;
+pub mod pty;
+pub mod report;
+pub mod roundtrip;
+pub mod rt;
+mod run;
+pub mod sweep;
+pub mod wakeup;
+pub mod wire;
+
+pub use args::{BenchArgs, CommandProbe, PeerMode, parse_duration};
+pub use dist::{Dist, Summary, format_ns};
+pub use report::Report;
+pub use run::run;
+
+/// Why the bench could not run.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum BenchError {
+    /// No server of that name answers (its frame service could not be opened, or it does
+    /// not tick).
+    NoServer(String),
+    /// Anything else (a peer, a thread, a file), in words.
+    Failed(String),
+}
+
+impl core::fmt::Display for BenchError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            Self::NoServer(text) | Self::Failed(text) => f.write_str(text),
+        }
+    }
+}
+
+impl std::error::Error for BenchError {}
+
+impl From<String> for BenchError {
+    fn from(text: String) -> Self {
+        Self::Failed(text)
+    }
+}
