@@ -48,6 +48,7 @@ pub mod dist;
 pub mod ipc;
 pub mod peer;
 pub mod pty;
+pub mod python;
 pub mod report;
 pub mod roundtrip;
 pub mod rt;
