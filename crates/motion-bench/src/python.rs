@@ -344,8 +344,8 @@ pub fn rows(
             baseline: Some(rust_waitset),
             baseline_label: "the Rust client of row 3 (WaitSet on the tick event), same motiond, same run".to_owned(),
             note: format!(
-                "publish_ns → time.monotonic_ns() when the iterator hands the frame over ({}, CLOCK_MONOTONIC \
-                 like publish_ns); {}, iceoryx2 {}; {}: {} frames, lost ticks {}, stamped after receipt {}",
+                "publish_ns → time.monotonic_ns() when the iterator hands the frame over (implemented as {}, \
+                 the clock of publish_ns); {}, iceoryx2 {}; {}: {} frames, lost ticks {}, stamped after receipt {}",
                 run.clock, run.python, run.iceoryx2, run.waiting, run.received, run.lost, run.negative
             ),
         },
