@@ -10,7 +10,8 @@
 //! [`peer::PEER_FLAG`]: every program that calls [`run`] must call
 //! [`peer::run_if_requested`] first thing in its `main`. Command to wire is timed on a
 //! motiond the bench starts itself, its serial link a pty the bench serves with a simulated
-//! QSB ([`wire`], [`pty`]).
+//! QSB ([`wire`], [`pty`]). The Python client's figures come from `python -m motiond.bench`
+//! (the pip package in `python/`) run as a child process ([`python`]).
 //!
 //! ```no_run
 //! use clap::Parser;
