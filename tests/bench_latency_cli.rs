@@ -31,6 +31,8 @@ fn documented_invocation_parses() {
         "--cpu",
         "1",
         "--axes-sweep",
+        "--python",
+        "target/py-venv/bin/python",
     ])
     .expect("the README's command line parses");
     assert_eq!(cli.server, "demo");
@@ -41,6 +43,10 @@ fn documented_invocation_parses() {
     assert_eq!(bench.rt_priority, Some(80));
     assert_eq!(bench.cpu, Some(1));
     assert_eq!(bench.command, CommandProbe::UnknownAxis);
+    assert_eq!(
+        bench.python.as_deref(),
+        Some(std::path::Path::new("target/py-venv/bin/python"))
+    );
     assert!(
         bench.command_to_wire,
         "the command-to-wire phase runs by default"
@@ -112,6 +118,7 @@ fn help_lists_the_options_but_not_the_peer_flags() {
         "--axes-sweep",
         "--command-to-wire",
         "--motiond",
+        "--python",
     ] {
         assert!(
             help.contains(option),

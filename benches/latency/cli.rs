@@ -9,9 +9,11 @@ use motion_bench::BenchArgs;
 /// same run (plain iceoryx2 or a bare `clock_nanosleep` loop), with the ratio.
 ///
 /// Phases (each runs for DURATION, one after the other): tick wake-up baseline, frames
-/// (WaitSet, busy-poll), command round trip against motiond; then the same three against a
-/// plain iceoryx2 peer process; then request-response against a busy-polling peer; then
-/// command to wire, on a motiond the bench starts with a pty-served simulated QSB.
+/// (WaitSet, busy-poll), command round trip against motiond; the Python client (`python
+/// -m motiond.bench`, frames then round trip, when an interpreter with the package is
+/// found); then the same three against a plain iceoryx2 peer process; then request-response
+/// against a busy-polling peer; then command to wire, on a motiond the bench starts with a
+/// pty-served simulated QSB.
 /// Absolute times drift on a shared machine: read the ratios.
 #[derive(Debug, Parser)]
 #[command(name = "latency", version, about, long_about)]

@@ -45,6 +45,12 @@ pub struct BenchArgs {
     /// beside this program or in the target directory above it, else on PATH).
     #[arg(long, value_name = "PATH")]
     pub motiond: Option<PathBuf>,
+    /// The Python interpreter that has the `motiond` package (`python/`): the "Python
+    /// client" phase runs `PATH -m motiond.bench` against the server (default:
+    /// `py-venv/bin/python` in the target directory of this program, which `./scripts/test`
+    /// creates; without one the phase is skipped with a note).
+    #[arg(long, value_name = "PATH")]
+    pub python: Option<PathBuf>,
 }
 
 /// The command whose round trip is timed.

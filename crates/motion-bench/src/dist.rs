@@ -28,6 +28,11 @@ impl Dist {
         let _ = self.histogram.record(ns.clamp(1, MAX_NS));
     }
 
+    /// Records `count` samples of `ns` (clamped like [`Dist::record`]).
+    pub fn record_n(&mut self, ns: u64, count: u64) {
+        let _ = self.histogram.record_n(ns.clamp(1, MAX_NS), count);
+    }
+
     /// p50/p99/p99.9/max and the count.
     pub fn summary(&self) -> Summary {
         let h = &self.histogram;

@@ -10,7 +10,8 @@
 //! [`peer::PEER_FLAG`]: every program that calls [`run`] must call
 //! [`peer::run_if_requested`] first thing in its `main`. Command to wire is timed on a
 //! motiond the bench starts itself, its serial link a pty the bench serves with a simulated
-//! QSB ([`wire`], [`pty`]).
+//! QSB ([`wire`], [`pty`]). The Python client's figures come from `python -m motiond.bench`
+//! (the pip package in `python/`) run as a child process ([`python`]).
 //!
 //! ```no_run
 //! use clap::Parser;
@@ -48,6 +49,7 @@ pub mod dist;
 pub mod ipc;
 pub mod peer;
 pub mod pty;
+pub mod python;
 pub mod report;
 pub mod roundtrip;
 pub mod rt;

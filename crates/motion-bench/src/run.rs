@@ -7,10 +7,19 @@ use crate::args::{BenchArgs, CommandProbe, PeerMode};
 use crate::delivery::{self, Waiting};
 use crate::dist::{self, Summary, format_ns};
 use crate::report::{Report, Row, Unit, write_dist};
-use crate::{BenchError, ipc, peer, roundtrip, rt, sweep, wakeup, wire};
+use crate::{BenchError, ipc, peer, python, roundtrip, rt, sweep, wakeup, wire};
 
-fn progress(step: &str, what: &str, cli: &BenchArgs) {
-    eprintln!("[{step}] {what} ({:?})", cli.duration);
+/// The numbered progress lines: `[n/total] what (duration)` on stderr.
+struct Progress {
+    done: usize,
+    total: usize,
+}
+
+impl Progress {
+    fn next(&mut self, what: &str, cli: &BenchArgs) {
+        self.done += 1;
+        eprintln!("[{}/{}] {what} ({:?})", self.done, self.total, cli.duration);
+    }
 }
 
 fn rt_flags(flags: u32) -> String {
@@ -64,6 +73,23 @@ pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
                 .to_owned(),
         );
     }
+    // The Python client phase: an explicit --python must work (said now, not after the
+    // run); without one, a missing or unusable target/py-venv skips the phase with a note.
+    let python = match python::find_python(cli.python.as_deref()) {
+        Ok(path) => Some(path),
+        Err(error) if cli.python.is_some() => return Err(BenchError::Failed(error.to_string())),
+        Err(error) => {
+            report.notes.push(format!(
+                "Python client rows: skipped: {error}. To enable: {}",
+                python::HOW_TO_ENABLE
+            ));
+            None
+        }
+    };
+    let mut progress = Progress {
+        done: 0,
+        total: 8 + usize::from(python.is_some()),
+    };
     let dma = rt::DmaLatency::hold();
     report.context = vec![
         (
@@ -93,8 +119,14 @@ pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
         ),
     ];
     eprintln!(
-        "latency bench: motiond/{server} at {hz} Hz, {axis_count} axes; 8 phases of {:?}{}",
+        "latency bench: motiond/{server} at {hz} Hz, {axis_count} axes; {} phases of {:?}{}{}",
+        progress.total,
         cli.duration,
+        if python.is_some() {
+            " (the Python client's: 2 × that)"
+        } else {
+            ""
+        },
         match (cli.command_to_wire, cli.axes_sweep) {
             (true, true) => ", the command-to-wire phase and the axes sweep",
             (true, false) => " and the command-to-wire phase",
@@ -103,7 +135,7 @@ pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
         }
     );
 
-    progress("1/8", "wake-up baseline: clock_nanosleep loop", cli);
+    progress.next("wake-up baseline: clock_nanosleep loop", cli);
     let sleeper = wakeup::measure(period_ns, cli.duration, cli.rt_priority, cli.cpu)?;
     // Wake-up: read before the bench's own busy-polling phases load the machine.
     let stats_quiet = ipc::wait_stats(
@@ -111,12 +143,30 @@ pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
         stats_start.map_or(0, |s| s.tick),
         core::time::Duration::from_millis(2500),
     )?;
-    progress("2/8", "motiond frames, WaitSet client", cli);
+    progress.next("motiond frames, WaitSet client", cli);
     let ours_ws = delivery::measure(&names, Waiting::WaitSet, cli.duration, cli.rt_priority)?;
-    progress("3/8", "motiond frames, busy-polling client", cli);
+    progress.next("motiond frames, busy-polling client", cli);
     let ours_busy = delivery::measure(&names, Waiting::BusyPoll, cli.duration, cli.rt_priority)?;
-    progress("4/8", "motiond command round trip", cli);
+    progress.next("motiond command round trip", cli);
     let ours_rtt = roundtrip::measure(&names, probe, axis_count, true, period_ns, cli.duration)?;
+    let python_run = python.as_deref().and_then(|interpreter| {
+        progress.next(
+            &format!(
+                "Python client: {} -m motiond.bench (frames, then command round trip)",
+                interpreter.display()
+            ),
+            cli,
+        );
+        python::measure(interpreter, server, cli.duration)
+            .map_err(|error| {
+                eprintln!("  Python client phase failed: {error}");
+                report.notes.push(format!(
+                    "Python client rows: not measured this run: {error}"
+                ));
+            })
+            .ok()
+            .map(|run| (interpreter.display().to_string(), run))
+    });
     // Work: read after the client phases, as the peer's own work covers its client phases.
     let stats_loaded = ipc::wait_stats(
         &stats,
@@ -125,24 +175,20 @@ pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
     )?;
 
     let peer = peer::Peer::start(PeerMode::Ticking, hz, cli.rt_priority, cli.cpu)?;
-    progress("5/8", "baseline peer frames, WaitSet client", cli);
+    progress.next("baseline peer frames, WaitSet client", cli);
     let base_ws = delivery::measure(&peer.names, Waiting::WaitSet, cli.duration, cli.rt_priority)?;
-    progress("6/8", "baseline peer frames, busy-polling client", cli);
+    progress.next("baseline peer frames, busy-polling client", cli);
     let base_busy = delivery::measure(
         &peer.names,
         Waiting::BusyPoll,
         cli.duration,
         cli.rt_priority,
     )?;
-    progress(
-        "7/8",
-        "baseline peer request-response (answered per tick)",
-        cli,
-    );
+    progress.next("baseline peer request-response (answered per tick)", cli);
     let base_rtt = roundtrip::measure(&peer.names, probe, 0, true, period_ns, cli.duration)?;
     let peer_figures = peer.stop()?;
     let busy_peer = peer::Peer::start(PeerMode::BusyRr, hz, None, None)?;
-    progress("8/8", "baseline request-response, busy-polling server", cli);
+    progress.next("baseline request-response, busy-polling server", cli);
     let floor_rtt = roundtrip::measure(&busy_peer.names, probe, 0, false, period_ns, cli.duration)?;
     busy_peer.stop()?;
 
@@ -345,6 +391,34 @@ pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
             baseline_label: "the ticking plain peer of row 7, same computation".to_owned(),
             note: "the µs figure above includes this wait for the tick plus the driver's turn on the line".to_owned(),
         });
+    }
+    if let Some((interpreter, run)) = &python_run {
+        report.rows.extend(python::rows(
+            run,
+            ours_ws.latency.summary(),
+            ours_rtt.rtt.summary(),
+            probe,
+        ));
+        report.context.push((
+            "python client".to_owned(),
+            format!("{interpreter}: {}, iceoryx2 {}", run.python, run.iceoryx2),
+        ));
+        for (slug, title, dist) in [
+            (
+                "frame-python-motiond",
+                "frame delivery, Python client (client.frames())",
+                &run.frames,
+            ),
+            (
+                "command-rtt-python-motiond",
+                "command round trip, Python client (Client.command)",
+                &run.rtt,
+            ),
+        ] {
+            if let Some(error) = write_dist(out, slug, title, dist) {
+                report.notes.push(format!("could not write {error}"));
+            }
+        }
     }
     report.notes.push(format!(
         "the server's wake-up and work figures (rows 1, 8) are motiond's own since it started \

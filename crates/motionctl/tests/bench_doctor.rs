@@ -1,11 +1,13 @@
 //! `motionctl bench` and `motionctl doctor` as a user runs them: the bench's command line,
 //! its refusal without a server, a short smoke run against a real motiond (its baseline
-//! peer is motionctl re-executed); the doctor on this machine and on a fake root.
+//! peer is motionctl re-executed; its Python client rows when `target/py-venv` exists);
+//! the doctor on this machine and on a fake root.
 
 mod common;
 
 use core::time::Duration;
 use std::os::unix::fs::PermissionsExt as _;
+use std::path::Path;
 use std::process::{Command, Stdio};
 
 use common::real::{RealServer, motiond_binary};
@@ -38,6 +40,7 @@ fn bench_help_lists_the_suite_s_options_and_hides_the_peer() -> Result {
         "--axes-sweep",
         "--command-to-wire",
         "--motiond",
+        "--python",
     ] {
         assert!(help.contains(option), "{option} missing:\n{help}");
     }
@@ -112,7 +115,63 @@ fn bench_smoke_run_prints_ratios_beside_their_baselines() -> Result {
             .is_some_and(|f| f.contains("first byte"))),
         "{report:#}"
     );
+    check_python_rows(&report, rows);
     Ok(())
+}
+
+/// The Python client phase: with `target/py-venv` (which `./scripts/test` creates before
+/// the Rust tests) motionctl finds it beside its target directory and adds two rows with
+/// ratios; without it the report says how to get them.
+fn check_python_rows(report: &Value, rows: &[Value]) {
+    let venv = Path::new(env!("CARGO_BIN_EXE_motionctl"))
+        .parent()
+        .and_then(Path::parent)
+        .map(|target| target.join("py-venv/bin/python"))
+        .unwrap_or_default();
+    let python: Vec<&Value> = rows
+        .iter()
+        .filter(|row| {
+            row["figure"]
+                .as_str()
+                .is_some_and(|f| f.contains("Python client"))
+        })
+        .collect();
+    let notes = report["notes"].to_string();
+    if !venv.is_file() {
+        eprintln!(
+            "Python rows not checked: no {} (./scripts/test creates it)",
+            venv.display()
+        );
+        assert!(python.is_empty(), "{report:#}");
+        assert!(
+            notes.contains("Python client rows: skipped") && notes.contains("--python PATH"),
+            "{notes}"
+        );
+        return;
+    }
+    assert_eq!(python.len(), 2, "{report:#}");
+    for row in &python {
+        assert!(row["ours"]["samples"].as_u64() > Some(0), "{row:#}");
+        assert!(row["baseline"]["samples"].as_u64() > Some(0), "{row:#}");
+        assert!(
+            row["ratio_p50"].is_f64() && row["ratio_p99"].is_f64(),
+            "{row:#}"
+        );
+    }
+    let frames = python[0]["figure"].as_str().unwrap_or_default();
+    assert!(frames.starts_with("frame delivery"), "{frames}");
+    let note = python[1]["note"].as_str().unwrap_or_default();
+    // The probe (Stop on axis 1 of a 1-axis server) is answered UnknownAxis, never else.
+    assert!(
+        note.contains("UNKNOWN_AXIS ×") && note.contains("other reasons 0"),
+        "{note}"
+    );
+    assert!(
+        report["context"]["python client"]
+            .as_str()
+            .is_some_and(|c| c.contains("iceoryx2 0.10")),
+        "{report:#}"
+    );
 }
 
 const IDS: [&str; 16] = [
