@@ -221,7 +221,8 @@ pub enum Command {
     /// Measure end-to-end latency against the running server, each figure beside a baseline
     /// measured in the same run (plain iceoryx2, a bare clock_nanosleep loop), with the
     /// ratio: the `cargo bench --bench latency` suite (docs/PERFORMANCE.md). Takes about
-    /// 9 × DURATION.
+    /// 9 × DURATION, 11 × with the Python client's rows (when a venv with the `motiond`
+    /// package is found or given with --python).
     Bench(motion_bench::BenchArgs),
     /// Check this machine for real-time operation: kernel, cores, interrupts, limits,
     /// devices, shared memory, and a wake-up measurement; each check passes, warns or fails
