@@ -44,7 +44,8 @@ Examples:
   motionctl jog y -2.5          (Ctrl-C stops the axis)
   motionctl io set lamp on
   motionctl estop               (gets through even when the server's ports are taken)
-  motionctl record --duration 5s --out run.csv";
+  motionctl record --duration 5s --out run.csv
+  motionctl --remote tcp/cell4:7447 --identity panel status   (through motion-bridge)";
 
 /// Command-line client of motiond.
 #[derive(Debug, Parser)]
@@ -57,6 +58,20 @@ pub struct Cli {
     /// How long to wait for the server to appear.
     #[arg(long, global = true, default_value = "2s", value_parser = parse_duration, value_name = "DURATION")]
     pub connect_timeout: Duration,
+
+    /// Talk to the server through the motion-bridge at this zenoh endpoint
+    /// (`tcp/HOST:7447`) instead of shared memory.
+    #[arg(long, global = true, value_name = "ENDPOINT")]
+    pub remote: Option<String>,
+
+    /// With --remote: the identity to send commands as (the bridge's allow-list is per
+    /// identity).
+    #[arg(long, global = true, value_name = "NAME", requires = "remote")]
+    pub identity: Option<String>,
+
+    /// With --remote: zenoh's own config file (JSON5): TLS certificates, user/password.
+    #[arg(long, global = true, value_name = "FILE", requires = "remote")]
+    pub zenoh_config: Option<PathBuf>,
 
     /// What to do.
     #[command(subcommand)]
