@@ -351,6 +351,7 @@ impl Policy {
             .collect();
         held.sort_unstable_by_key(|(target, index)| (*target as u32, *index));
         for (target, index) in held {
+            self.claims.remove(&(target, index));
             let mut release = CommandRequest::new(ClientId::NONE, 0, index, CommandKind::Release);
             release.target = target as u32;
             requests.push(release);

@@ -39,10 +39,10 @@ pub const DEFAULT_REPLY_TIMEOUT: Duration = Duration::from_secs(1);
 /// Options for connecting to a motiond instance.
 #[derive(Debug, Clone)]
 pub struct ClientBuilder {
-    server: String,
+    pub(crate) server: String,
     node_name: String,
-    connect_timeout: Duration,
-    reply_timeout: Duration,
+    pub(crate) connect_timeout: Duration,
+    pub(crate) reply_timeout: Duration,
     signal_handling: SignalHandlingMode,
     /// Connect through a bridge instead of shared memory.
     #[cfg(feature = "zenoh")]

@@ -1,0 +1,1 @@
+//! A real motiond (see the CLI tests).
