@@ -61,6 +61,7 @@ fn main() -> ExitCode {
     tracing_subscriber::fmt()
         .with_env_filter(filter)
         .with_writer(std::io::stderr)
+        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .init();
     iceoryx2::prelude::set_log_level(iceoryx2::prelude::LogLevel::Error);
     let overrides = Overrides {
