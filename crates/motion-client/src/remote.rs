@@ -375,7 +375,7 @@ impl Link {
                     what: "reach the bridge",
                     detail: format!(
                         "no motion-bridge answers on {key} at {} (is it running, for server \
-                         `{}`?)",
+                         `{}`? does zenoh's access control let this user send on that key?)",
                         self.options.endpoint, self.server
                     ),
                 });
