@@ -165,7 +165,10 @@ impl BridgeConfig {
 
     fn from_parts(raw: RawConfig, cli: Overrides, origin: &str) -> Result<Self, ConfigError> {
         let mut issues = Vec::new();
-        let server = cli.server.or(raw.server).unwrap_or_else(|| "demo".to_owned());
+        let server = cli
+            .server
+            .or(raw.server)
+            .unwrap_or_else(|| "demo".to_owned());
         if let Err(error) = check_chunk("server name", &server) {
             issues.push(format!("server: {error}"));
         }
@@ -336,7 +339,10 @@ mod tests {
         let defaults = BridgeConfig::load(None, Overrides::default())?;
         assert_eq!(defaults.server, "demo");
         assert_eq!(defaults.listen, [default_listen()]);
-        assert!(defaults.remotes.is_empty(), "no remote may command by default");
+        assert!(
+            defaults.remotes.is_empty(),
+            "no remote may command by default"
+        );
         assert_eq!(defaults.reply_timeout, DEFAULT_REPLY_TIMEOUT);
         Ok(())
     }
@@ -398,7 +404,10 @@ mod tests {
         let text = parse("server = \"demo\"\nlisten_on = []\n")
             .expect_err("unknown key")
             .to_string();
-        assert!(text.contains("listen_on") && text.contains("line 2"), "{text}");
+        assert!(
+            text.contains("listen_on") && text.contains("line 2"),
+            "{text}"
+        );
         let text = parse("[[remote]]\nidentity = \"x\"\n")
             .expect_err("allow missing")
             .to_string();

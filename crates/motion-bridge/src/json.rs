@@ -236,7 +236,11 @@ mod tests {
             identity: "panel".to_owned(),
             session: SessionId(1),
         };
-        policy.on_reply(&remote, &claim, &CommandReply::to(&claim, Reason::Accepted, 1));
+        policy.on_reply(
+            &remote,
+            &claim,
+            &CommandReply::to(&claim, Reason::Accepted, 1),
+        );
 
         let value = state(&info, &frame, &policy);
         assert_eq!(value["server"], "demo");

@@ -122,7 +122,9 @@ impl Keys {
 
     /// The (identity, session) a remote token's key names.
     pub fn remote_of(&self, token_key: &str) -> Option<(String, SessionId)> {
-        let rest = token_key.strip_prefix(&self.prefix)?.strip_prefix("/remote/")?;
+        let rest = token_key
+            .strip_prefix(&self.prefix)?
+            .strip_prefix("/remote/")?;
         let (identity, session) = rest.split_once('/')?;
         Some((identity.to_owned(), session.parse().ok()?))
     }
@@ -293,7 +295,10 @@ mod tests {
         assert_eq!(keys.frame(), "motiond/demo/frame");
         assert_eq!(keys.state_json(), "motiond/demo/state/json");
         assert_eq!(keys.command("panel"), "motiond/demo/command/panel");
-        assert_eq!(keys.identity_of("motiond/demo/command/panel"), Some("panel"));
+        assert_eq!(
+            keys.identity_of("motiond/demo/command/panel"),
+            Some("panel")
+        );
         assert_eq!(keys.identity_of("motiond/other/command/panel"), None);
         assert_eq!(keys.identity_of("motiond/demo/command/a/b"), None);
         let token = keys.remote_token("panel", SessionId(0xab));

@@ -76,7 +76,10 @@ impl KindSet {
 
     /// Every name [`KindSet::from_name`] takes, for messages.
     pub fn known_names() -> String {
-        let mut names: Vec<&str> = CommandKind::ALL.into_iter().map(CommandKind::name).collect();
+        let mut names: Vec<&str> = CommandKind::ALL
+            .into_iter()
+            .map(CommandKind::name)
+            .collect();
         names.extend(["estop", "move", "jog", "io", "all"]);
         names.join(", ")
     }

@@ -157,7 +157,11 @@ fn only_the_authenticated_user_commands_under_its_identity() -> Result {
         }
         other => return Err(format!("the impostor's move went through: {other:?}").into()),
     }
-    assert_eq!(moves(&server), 1, "the server never saw the impostor's move");
+    assert_eq!(
+        moves(&server),
+        1,
+        "the server never saw the impostor's move"
+    );
 
     // As itself, the visitor commands (the bridge's allow-list lets `visitor` move).
     let visitor = connect(server.name(), endpoint, "visitor", Some(&visitor_login))?;

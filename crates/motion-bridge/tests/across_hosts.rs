@@ -78,7 +78,10 @@ fn list_move_jog_kill_refuse(rig: &Rig) -> Result {
     assert!(names(&list, "axes").contains(&"conveyor".to_owned()));
 
     // move and arrive.
-    let moved = rig.remote("operator", &["move", "x", "10", "--wait", "--timeout", "30s"])?;
+    let moved = rig.remote(
+        "operator",
+        &["move", "x", "10", "--wait", "--timeout", "30s"],
+    )?;
     assert!(moved.status.success(), "{moved:?}\n{}", rig.logs());
     let x = Rig::axis(&rig.status()?, "x")?;
     let reached = x["position"].as_f64().ok_or("position")?;
@@ -89,7 +92,10 @@ fn list_move_jog_kill_refuse(rig: &Rig) -> Result {
     let jog = start_jog(rig, "conveyor", "50")?;
     std::thread::sleep(Duration::from_millis(800));
     let conveyor = Rig::axis(&rig.status()?, "conveyor")?;
-    assert!(jogging(&conveyor), "the jog lapsed while its client ran: {conveyor}");
+    assert!(
+        jogging(&conveyor),
+        "the jog lapsed while its client ran: {conveyor}"
+    );
     // ...then the remote client is killed: the axis stops.
     kill_now(jog)?;
     until_axis(rig, "conveyor", "stopped", |axis| !jogging(axis))?;
@@ -143,7 +149,10 @@ fn across_network_namespaces_and_when_the_network_drops() -> Result {
     };
     let rig = Rig::start(&motiond, &motionctl, Some(&netns))?;
     // The bridge is reachable only across the veth pair, not through the remote's loopback.
-    assert!(rig.endpoint.starts_with(&format!("tcp/{}:", netns.server_addr)));
+    assert!(
+        rig.endpoint
+            .starts_with(&format!("tcp/{}:", netns.server_addr))
+    );
     list_move_jog_kill_refuse(&rig)?;
 
     // The network drops under a running jog (nothing is closed: zenoh on the bridge's side

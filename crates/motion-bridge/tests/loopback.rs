@@ -86,13 +86,20 @@ fn a_command_not_on_the_allow_list_never_reaches_the_server() -> Result {
     match y.ramp_to(5.0, 0.0, 0.0) {
         Err(ClientError::BridgeRefused { code, message, .. }) => {
             assert_eq!(code, "not-allowed");
-            assert!(message.contains("ramp-position") && message.contains("viewer"), "{message}");
+            assert!(
+                message.contains("ramp-position") && message.contains("viewer"),
+                "{message}"
+            );
         }
         other => return Err(format!("expected a refusal by the bridge, got {other:?}").into()),
     }
     y.stop()?;
     let requests = server.requests();
-    assert_eq!(count(&requests, CommandKind::RampPosition, 1), 0, "{requests:?}");
+    assert_eq!(
+        count(&requests, CommandKind::RampPosition, 1),
+        0,
+        "{requests:?}"
+    );
     assert_eq!(count(&requests, CommandKind::Stop, 1), 1);
 
     // An identity without a [[remote]] entry (and no `*` entry) may not even stop.
@@ -123,7 +130,11 @@ fn the_bridge_never_renews_a_jog_on_its_own() -> Result {
         Ok(state.flags().contains(AxisFlags::DEADMAN_EXPIRED))
     })?;
     let requests = server.requests();
-    assert_eq!(count(&requests, CommandKind::Velocity, 0), 1, "{requests:?}");
+    assert_eq!(
+        count(&requests, CommandKind::Velocity, 0),
+        1,
+        "{requests:?}"
+    );
     assert_eq!(count(&requests, CommandKind::Stop, 0), 0);
     Ok(())
 }
@@ -203,7 +214,10 @@ fn without_a_server_behind_it_the_bridge_says_so() -> Result {
         .connect::<ipc::Service>()
         .expect_err("no server");
     let text = error.to_string();
-    assert!(text.contains("no motion-bridge") || text.contains("description"), "{text}");
+    assert!(
+        text.contains("no motion-bridge") || text.contains("description"),
+        "{text}"
+    );
     assert!(started.elapsed() < DEADLINE);
     // And with no bridge at all: the endpoint nobody listens on.
     let port = common::free_port()?;
@@ -212,6 +226,9 @@ fn without_a_server_behind_it_the_bridge_says_so() -> Result {
         .remote(&format!("tcp/127.0.0.1:{port}"))
         .connect::<ipc::Service>()
         .expect_err("no bridge");
-    assert!(matches!(error, motion_client::ConnectError::NoBridge { .. }), "{error}");
+    assert!(
+        matches!(error, motion_client::ConnectError::NoBridge { .. }),
+        "{error}"
+    );
     Ok(())
 }

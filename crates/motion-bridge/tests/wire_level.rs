@@ -43,7 +43,9 @@ impl<T> Z<T> for zenoh::Result<T> {
 fn session(endpoint: &str) -> Result<zenoh::Session> {
     let mut config = zenoh::Config::default();
     config.insert_json5("mode", "\"client\"").z()?;
-    config.insert_json5("scouting/multicast/enabled", "false").z()?;
+    config
+        .insert_json5("scouting/multicast/enabled", "false")
+        .z()?;
     config
         .insert_json5("connect/endpoints", &format!("[\"{endpoint}\"]"))
         .z()?;
@@ -68,7 +70,8 @@ fn command(
     }
     let replies = get.wait().z()?;
     let reply = replies
-        .recv_timeout(DEADLINE).z()?
+        .recv_timeout(DEADLINE)
+        .z()?
         .ok_or("no reply from the bridge")?;
     Ok(match reply.result() {
         Ok(sample) => {
@@ -95,13 +98,15 @@ fn frames_are_decimated_and_every_sample_says_which_server_wrote_it() -> Result 
     let info = session
         .get(keys.info())
         .timeout(DEADLINE)
-        .wait().z()?
-        .recv_timeout(DEADLINE).z()?
+        .wait()
+        .z()?
+        .recv_timeout(DEADLINE)
+        .z()?
         .ok_or("no description")?;
     let info = info.result().map_err(|e| format!("{e:?}"))?;
     let description = wire::decode::<ServerInfo>(&info.payload().to_bytes())?;
-    let server_node = Origin::decode(&info.attachment().ok_or("no origin")?.to_bytes())
-        .ok_or("bad origin")?;
+    let server_node =
+        Origin::decode(&info.attachment().ok_or("no origin")?.to_bytes()).ok_or("bad origin")?;
     assert_eq!(description.name(), server.name());
     assert_ne!(server_node, Origin(0));
 
@@ -148,12 +153,17 @@ fn malformed_late_and_too_frequent_requests_are_refused_by_the_bridge() -> Resul
 
     // No attachment, a short payload.
     let refused = command(&session, &keys, "tool", &stop, None)?.expect_err("refused");
-    assert_eq!(Refusal::parse(&refused).map(|r| r.0), Some(Refusal::BadRequest), "{refused}");
+    assert_eq!(
+        Refusal::parse(&refused).map(|r| r.0),
+        Some(Refusal::BadRequest),
+        "{refused}"
+    );
     let replies = session
         .get(keys.command("tool"))
         .payload(vec![1u8, 2, 3])
         .attachment(meta(1, clock()).encode())
-        .wait().z()?;
+        .wait()
+        .z()?;
     let reply = replies.recv_timeout(DEADLINE).z()?.ok_or("no reply")?;
     let text = reply
         .result()
@@ -162,7 +172,10 @@ fn malformed_late_and_too_frequent_requests_are_refused_by_the_bridge() -> Resul
         .payload()
         .try_to_string()?
         .into_owned();
-    assert!(text.starts_with("bad-request: ") && text.contains("3 bytes"), "{text}");
+    assert!(
+        text.starts_with("bad-request: ") && text.contains("3 bytes"),
+        "{text}"
+    );
 
     // A request on time is forwarded; the reply comes from the server, with its node.
     let (reply, origin) = command(&session, &keys, "tool", &stop, Some(meta(7, clock())))?
@@ -177,11 +190,23 @@ fn malformed_late_and_too_frequent_requests_are_refused_by_the_bridge() -> Resul
         .with_values([1.0, 0.0, 0.0]);
     let two_seconds_ago = clock() - Duration::from_secs(2);
     // (The session's clock must have been seen on time first: sent "now" above.)
-    let late = command(&session, &keys, "tool", &velocity, Some(meta(7, two_seconds_ago)))?
-        .expect_err("late");
+    let late = command(
+        &session,
+        &keys,
+        "tool",
+        &velocity,
+        Some(meta(7, two_seconds_ago)),
+    )?
+    .expect_err("late");
     assert!(late.starts_with("late: "), "{late}");
-    let (reply, _) = command(&session, &keys, "tool", &stop, Some(meta(7, two_seconds_ago)))?
-        .map_err(|text| format!("refused: {text}"))?;
+    let (reply, _) = command(
+        &session,
+        &keys,
+        "tool",
+        &stop,
+        Some(meta(7, two_seconds_ago)),
+    )?
+    .map_err(|text| format!("refused: {text}"))?;
     assert_eq!(reply.result(), Ok(()));
     let velocities = server
         .requests()
@@ -195,7 +220,13 @@ fn malformed_late_and_too_frequent_requests_are_refused_by_the_bridge() -> Resul
     for sequence in 10..14 {
         let request = CommandRequest::new(ClientId::NONE, sequence, 1, CommandKind::Position)
             .with_values([1.0, 0.0, 0.0]);
-        outcomes.push(command(&session, &keys, "slow", &request, Some(meta(8, clock())))?);
+        outcomes.push(command(
+            &session,
+            &keys,
+            "slow",
+            &request,
+            Some(meta(8, clock())),
+        )?);
     }
     assert!(outcomes[0].is_ok() && outcomes[1].is_ok(), "{outcomes:?}");
     let limited = outcomes[3].as_ref().expect_err("over the rate");

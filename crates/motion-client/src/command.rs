@@ -90,15 +90,12 @@ impl<S: Service> Client<S> {
             let nap = deadline - now;
             let frames = self.frame_ports_if_open();
             match frames.as_ref().and_then(|frames| frames.tick.as_ref()) {
-                Some(tick) => {
-                    match tick.timed_wait(|_| {}, nap.min(REPLY_POLL_CAP)) {
-                        Ok(_)
-                        | Err(iceoryx2::port::listener::ListenerWaitError::InterruptSignal) => {}
-                        Err(error) => {
-                            return Err(ClientError::ipc("wait for a command reply", error));
-                        }
+                Some(tick) => match tick.timed_wait(|_| {}, nap.min(REPLY_POLL_CAP)) {
+                    Ok(_) | Err(iceoryx2::port::listener::ListenerWaitError::InterruptSignal) => {}
+                    Err(error) => {
+                        return Err(ClientError::ipc("wait for a command reply", error));
                     }
-                }
+                },
                 _ => std::thread::sleep(nap.min(REPLY_POLL_NO_TICK)),
             }
         }

@@ -231,10 +231,12 @@ impl Link {
         let keys = Keys::new(server).map_err(|error| bad_name(error, server))?;
         motion_bridge::keys::check_chunk("remote identity", &options.identity)
             .map_err(|error| bad_name(error, &options.identity))?;
-        let config = zenoh_config(options.zenoh_config.as_deref(), &options.endpoint)
-            .map_err(|detail| ConnectError::Network {
-                what: "configure zenoh",
-                detail,
+        let config =
+            zenoh_config(options.zenoh_config.as_deref(), &options.endpoint).map_err(|detail| {
+                ConnectError::Network {
+                    what: "configure zenoh",
+                    detail,
+                }
             })?;
         let session = loop {
             match zenoh::open(config.clone()).wait() {
@@ -270,7 +272,11 @@ impl Link {
     }
 
     /// The newest `T` on `key`, asked of the bridge until it has one or `deadline` passes.
-    pub(crate) fn first<T: Payload>(&self, key: &str, deadline: Instant) -> Result<Owned<T>, String> {
+    pub(crate) fn first<T: Payload>(
+        &self,
+        key: &str,
+        deadline: Instant,
+    ) -> Result<Owned<T>, String> {
         loop {
             let remaining = deadline.saturating_duration_since(Instant::now());
             let attempt = remaining.clamp(Duration::from_millis(200), Duration::from_secs(1));
@@ -283,7 +289,11 @@ impl Link {
     }
 
     /// The newest `T` on `key`, asked of the bridge.
-    pub(crate) fn fetch<T: Payload>(&self, key: &str, timeout: Duration) -> Result<Owned<T>, String> {
+    pub(crate) fn fetch<T: Payload>(
+        &self,
+        key: &str,
+        timeout: Duration,
+    ) -> Result<Owned<T>, String> {
         let replies = self
             .session
             .get(key)
@@ -304,7 +314,11 @@ impl Link {
     }
 
     /// A feed of `key`: subscribed when `subscribe`, else filled only by [`Feed::push`].
-    pub(crate) fn feed<T: Payload>(&self, key: &str, subscribe: bool) -> Result<Feed<T>, ClientError> {
+    pub(crate) fn feed<T: Payload>(
+        &self,
+        key: &str,
+        subscribe: bool,
+    ) -> Result<Feed<T>, ClientError> {
         let subscriber = if subscribe {
             Some(
                 self.session
@@ -415,12 +429,12 @@ impl<S: Service> Client<S> {
         let link = Link::open(remote, &server, deadline)?;
         let info_key = link.keys.info();
         // Subscribe first, so that no description published meanwhile is missed.
-        let feed = link
-            .feed::<ServerInfo>(&info_key, true)
-            .map_err(|error| ConnectError::Network {
-                what: "subscribe to the server description",
-                detail: error.to_string(),
-            })?;
+        let feed =
+            link.feed::<ServerInfo>(&info_key, true)
+                .map_err(|error| ConnectError::Network {
+                    what: "subscribe to the server description",
+                    detail: error.to_string(),
+                })?;
         let first = link
             .first::<ServerInfo>(&info_key, deadline)
             .map_err(|why| ConnectError::NoBridge {

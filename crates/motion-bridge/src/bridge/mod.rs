@@ -22,8 +22,8 @@ use std::time::Instant;
 use iceoryx2::node::Node;
 use iceoryx2::prelude::SignalHandlingMode;
 use motion_ipc::{
-    ClientId, CommandReply, CommandRequest, MachineParams, MotionFrame, ServerInfo,
-    ServerStats, ServiceNames,
+    ClientId, CommandReply, CommandRequest, MachineParams, MotionFrame, ServerInfo, ServerStats,
+    ServiceNames,
 };
 use zenoh::Wait as _;
 use zenoh::query::Query;
@@ -371,7 +371,8 @@ impl Bridge {
             return Ok(());
         };
         let tick_hz = self.info.as_ref().map_or(1000, |info| info.value.tick_hz);
-        let decimation = ((f64::from(tick_hz.max(1)) / self.config.frame_rate).round() as u64).max(1);
+        let decimation =
+            ((f64::from(tick_hz.max(1)) / self.config.frame_rate).round() as u64).max(1);
         let mut newest: Option<(MotionFrame, u128)> = None;
         let mut next_tick = self.next_frame_tick;
         let publisher = &self.net.frame;
@@ -476,13 +477,21 @@ impl Bridge {
     fn on_command(&mut self, query: Query) {
         let key = query.key_expr().as_str().to_owned();
         let Some(identity) = self.keys.identity_of(&key).map(str::to_owned) else {
-            refuse(Some(&query), Refusal::BadRequest, "not a command key of this bridge");
+            refuse(
+                Some(&query),
+                Refusal::BadRequest,
+                "not a command key of this bridge",
+            );
             return;
         };
         let request = match query.payload().map(|bytes| bytes.to_bytes()) {
             Some(bytes) => wire::decode::<CommandRequest>(&bytes),
             None => {
-                refuse(Some(&query), Refusal::BadRequest, "a command needs a CommandRequest");
+                refuse(
+                    Some(&query),
+                    Refusal::BadRequest,
+                    "a command needs a CommandRequest",
+                );
                 return;
             }
         };
@@ -524,7 +533,11 @@ impl Bridge {
                         ),
                     );
                 } else if self.queue.len() >= MAX_QUEUED {
-                    refuse(Some(&query), Refusal::Busy, "too many commands wait for the server");
+                    refuse(
+                        Some(&query),
+                        Refusal::Busy,
+                        "too many commands wait for the server",
+                    );
                 } else {
                     self.counters.forwarded += 1;
                     self.queue.push_back(Job {
@@ -654,7 +667,10 @@ impl Bridge {
                     refuse(
                         flight.job.query.as_ref(),
                         Refusal::NoReply,
-                        &format!("motiond did not answer within {:?}", self.config.reply_timeout),
+                        &format!(
+                            "motiond did not answer within {:?}",
+                            self.config.reply_timeout
+                        ),
                     );
                     true
                 }

@@ -23,7 +23,11 @@ fn hand_over(events: &Sender<Event>, waiting: &AtomicUsize, event: Event) {
         waiting.fetch_sub(1, Ordering::AcqRel);
         match event {
             Event::Command(query) | Event::Read(_, query) => {
-                refuse(Some(&query), Refusal::Busy, "the bridge is overloaded: retry");
+                refuse(
+                    Some(&query),
+                    Refusal::Busy,
+                    "the bridge is overloaded: retry",
+                );
             }
             _ => {}
         }

@@ -18,8 +18,7 @@ use iceoryx2::prelude::{
     ipc,
 };
 use motion_ipc::{
-    CommandReply, CommandRequest, MachineParams, MotionFrame, ServerInfo, ServerStats,
-    ServiceNames,
+    CommandReply, CommandRequest, MachineParams, MotionFrame, ServerInfo, ServerStats, ServiceNames,
 };
 
 use super::Event;

@@ -90,7 +90,12 @@ fn only_allowed_kinds_of_known_identities_pass_and_the_client_id_is_cleared() {
     );
     let panel = remote("panel", 1);
     let stranger = remote("visitor", 2);
-    match admit(&mut policy, &panel, ms(0), &request(CommandKind::RampPosition, 0)) {
+    match admit(
+        &mut policy,
+        &panel,
+        ms(0),
+        &request(CommandKind::RampPosition, 0),
+    ) {
         Verdict::Forward(sent) => {
             assert!(sent.client.is_none(), "the server takes the bridge's node");
             assert_eq!(sent.kind, CommandKind::RampPosition as u32);
@@ -100,19 +105,37 @@ fn only_allowed_kinds_of_known_identities_pass_and_the_client_id_is_cleared() {
     match admit(&mut policy, &panel, ms(1), &request(CommandKind::Home, 0)) {
         Verdict::Refuse(Refusal::NotAllowed, text) => {
             assert!(text.contains("`home`") && text.contains("panel"), "{text}");
-            assert!(text.contains("stop, ramp-position") || text.contains("stop"), "{text}");
+            assert!(
+                text.contains("stop, ramp-position") || text.contains("stop"),
+                "{text}"
+            );
         }
         other => panic!("{other:?}"),
     }
     // An identity without its own rule gets the `*` rule.
-    assert!(forwarded(&admit(&mut policy, &stranger, ms(2), &request(CommandKind::Stop, 0))));
+    assert!(forwarded(&admit(
+        &mut policy,
+        &stranger,
+        ms(2),
+        &request(CommandKind::Stop, 0)
+    )));
     assert!(matches!(
-        admit(&mut policy, &stranger, ms(3), &request(CommandKind::EStop, 0)),
+        admit(
+            &mut policy,
+            &stranger,
+            ms(3),
+            &request(CommandKind::EStop, 0)
+        ),
         Verdict::Refuse(Refusal::NotAllowed, _)
     ));
     // Without a `*` rule, an unknown identity may do nothing.
     let mut strict = Policy::new(vec![rule("panel", &["all"], 100.0, 10.0)], None);
-    match admit(&mut strict, &stranger, ms(0), &request(CommandKind::Stop, 0)) {
+    match admit(
+        &mut strict,
+        &stranger,
+        ms(0),
+        &request(CommandKind::Stop, 0),
+    ) {
         Verdict::Refuse(Refusal::NotAllowed, text) => assert!(text.contains("visitor"), "{text}"),
         other => panic!("{other:?}"),
     }
@@ -148,8 +171,18 @@ fn the_rate_limit_refuses_above_the_burst_refills_and_never_holds_back_a_stop() 
         Verdict::Refuse(Refusal::RateLimited, text) => assert!(text.contains("10"), "{text}"),
         other => panic!("{other:?}"),
     }
-    assert!(forwarded(&admit(&mut policy, &panel, ms(0), &request(CommandKind::Stop, 0))));
-    assert!(forwarded(&admit(&mut policy, &panel, ms(0), &request(CommandKind::EStop, 0))));
+    assert!(forwarded(&admit(
+        &mut policy,
+        &panel,
+        ms(0),
+        &request(CommandKind::Stop, 0)
+    )));
+    assert!(forwarded(&admit(
+        &mut policy,
+        &panel,
+        ms(0),
+        &request(CommandKind::EStop, 0)
+    )));
     // 100 ms at 10/s is one token again.
     assert!(forwarded(&admit(&mut policy, &panel, ms(100), &jog)));
     assert!(!forwarded(&admit(&mut policy, &panel, ms(100), &jog)));
@@ -178,17 +211,53 @@ fn a_request_held_up_in_the_network_is_refused_but_a_stop_is_not() {
         other => panic!("{other:?}"),
     }
     let stop = request(CommandKind::Stop, 0);
-    assert!(forwarded(&policy.admit(at, &panel, meta(&panel, late_sent), &stop, DEADMAN)));
+    assert!(forwarded(&policy.admit(
+        at,
+        &panel,
+        meta(&panel, late_sent),
+        &stop,
+        DEADMAN
+    )));
     // Later than usual but within the deadman: passes.
     let slow = clock(at) - ms(150);
-    assert!(forwarded(&policy.admit(at, &panel, meta(&panel, slow), &jog, DEADMAN)));
+    assert!(forwarded(&policy.admit(
+        at,
+        &panel,
+        meta(&panel, slow),
+        &jog,
+        DEADMAN
+    )));
     // A configured max_delay wins over the deadman; zero deadman and no config: no bound.
     let mut strict = Policy::new(vec![rule("*", &["all"], 1000.0, 1000.0)], Some(ms(50)));
-    assert!(forwarded(&strict.admit(at, &panel, meta(&panel, clock(at)), &jog, DEADMAN)));
-    assert!(!forwarded(&strict.admit(at, &panel, meta(&panel, slow), &jog, DEADMAN)));
+    assert!(forwarded(&strict.admit(
+        at,
+        &panel,
+        meta(&panel, clock(at)),
+        &jog,
+        DEADMAN
+    )));
+    assert!(!forwarded(&strict.admit(
+        at,
+        &panel,
+        meta(&panel, slow),
+        &jog,
+        DEADMAN
+    )));
     let mut open = Policy::new(vec![rule("*", &["all"], 1000.0, 1000.0)], None);
-    assert!(forwarded(&open.admit(at, &panel, meta(&panel, clock(at)), &jog, Duration::ZERO)));
-    assert!(forwarded(&open.admit(at, &panel, meta(&panel, late_sent), &jog, Duration::ZERO)));
+    assert!(forwarded(&open.admit(
+        at,
+        &panel,
+        meta(&panel, clock(at)),
+        &jog,
+        Duration::ZERO
+    )));
+    assert!(forwarded(&open.admit(
+        at,
+        &panel,
+        meta(&panel, late_sent),
+        &jog,
+        Duration::ZERO
+    )));
 }
 
 #[test]
@@ -222,7 +291,12 @@ fn claims_belong_to_the_remote_session_that_took_them() {
             Verdict::Answer(Reason::ClaimedByOther)
         );
         assert_eq!(
-            admit(&mut policy, other, ms(1), &request(CommandKind::RampPosition, 0)),
+            admit(
+                &mut policy,
+                other,
+                ms(1),
+                &request(CommandKind::RampPosition, 0)
+            ),
             Verdict::Answer(Reason::ClaimedByOther)
         );
         assert_eq!(
@@ -244,12 +318,27 @@ fn claims_belong_to_the_remote_session_that_took_them() {
         );
         // Anyone may stop any axis, and e-stop and reset.
         for kind in [CommandKind::Stop, CommandKind::EStop, CommandKind::Reset] {
-            assert!(forwarded(&admit(&mut policy, other, ms(1), &request(kind, 0))));
+            assert!(forwarded(&admit(
+                &mut policy,
+                other,
+                ms(1),
+                &request(kind, 0)
+            )));
         }
         // Other axes are free.
-        assert!(forwarded(&admit(&mut policy, other, ms(1), &request(CommandKind::Position, 1))));
+        assert!(forwarded(&admit(
+            &mut policy,
+            other,
+            ms(1),
+            &request(CommandKind::Position, 1)
+        )));
     }
-    assert!(forwarded(&admit(&mut policy, &a, ms(2), &request(CommandKind::Position, 0))));
+    assert!(forwarded(&admit(
+        &mut policy,
+        &a,
+        ms(2),
+        &request(CommandKind::Position, 0)
+    )));
     let release = request(CommandKind::Release, 0);
     assert!(forwarded(&admit(&mut policy, &a, ms(3), &release)));
     accept(&mut policy, &a, &release);
@@ -273,7 +362,12 @@ fn signal_claims_are_separate_from_axis_claims() {
         Verdict::Answer(Reason::ClaimedByOther)
     );
     assert!(forwarded(&admit(&mut policy, &a, ms(0), &set)));
-    assert!(forwarded(&admit(&mut policy, &b, ms(0), &request(CommandKind::Position, 0))));
+    assert!(forwarded(&admit(
+        &mut policy,
+        &b,
+        ms(0),
+        &request(CommandKind::Position, 0)
+    )));
 }
 
 #[test]
@@ -289,10 +383,7 @@ fn a_vanished_session_has_its_jogs_stopped_and_claims_released() {
     accept(&mut policy, &b, &request(CommandKind::Velocity, 5));
 
     let sent = policy.session_gone(SessionId(1));
-    let summary: Vec<(u32, u32, u32)> = sent
-        .iter()
-        .map(|r| (r.kind, r.axis, r.target))
-        .collect();
+    let summary: Vec<(u32, u32, u32)> = sent.iter().map(|r| (r.kind, r.axis, r.target)).collect();
     assert_eq!(
         summary,
         [
@@ -304,7 +395,11 @@ fn a_vanished_session_has_its_jogs_stopped_and_claims_released() {
     assert!(sent.iter().all(|r| r.client.is_none()));
     assert!(policy.session_gone(SessionId(1)).is_empty(), "once");
     // An e-stop ends every jog: nothing left to stop for Bob.
-    accept(&mut policy, &b, &request(CommandKind::EStop, CommandRequest::ALL_AXES));
+    accept(
+        &mut policy,
+        &b,
+        &request(CommandKind::EStop, CommandRequest::ALL_AXES),
+    );
     assert!(policy.session_gone(SessionId(2)).is_empty());
 }
 

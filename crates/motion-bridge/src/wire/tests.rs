@@ -150,7 +150,10 @@ fn big_payloads_round_trip() {
     params.entries[0] = param;
     let bytes = encode(&params);
     assert_eq!(bytes.len(), 180_240);
-    assert_eq!(*decode_boxed::<MachineParams>(&bytes).expect("decodes"), params);
+    assert_eq!(
+        *decode_boxed::<MachineParams>(&bytes).expect("decodes"),
+        params
+    );
 
     let mut stats = ServerStats::EMPTY;
     stats.tick = 5;
@@ -165,7 +168,13 @@ fn big_payloads_round_trip() {
 fn axis_state() -> impl Strategy<Value = AxisState> {
     (
         (any::<f64>(), any::<f64>(), any::<f64>(), any::<i64>()),
-        (any::<u64>(), any::<u32>(), any::<u16>(), any::<u8>(), any::<u8>()),
+        (
+            any::<u64>(),
+            any::<u32>(),
+            any::<u16>(),
+            any::<u8>(),
+            any::<u8>(),
+        ),
         (any::<u128>(), any::<f64>(), any::<f64>()),
     )
         .prop_map(

@@ -121,9 +121,28 @@ impl Netns {
         ip(&["link", "set", &this.remote_link, "netns", &this.remote])?;
         let remote_addr = format!("10.250.{subnet}.2/30");
         let server_cidr = format!("{}/30", this.server_addr);
-        ip(&["-n", &this.server, "addr", "add", &server_cidr, "dev", &server_link])?;
-        ip(&["-n", &this.remote, "addr", "add", &remote_addr, "dev", &this.remote_link])?;
-        for (ns, link) in [(&this.server, &server_link), (&this.remote, &this.remote_link)] {
+        ip(&[
+            "-n",
+            &this.server,
+            "addr",
+            "add",
+            &server_cidr,
+            "dev",
+            &server_link,
+        ])?;
+        ip(&[
+            "-n",
+            &this.remote,
+            "addr",
+            "add",
+            &remote_addr,
+            "dev",
+            &this.remote_link,
+        ])?;
+        for (ns, link) in [
+            (&this.server, &server_link),
+            (&this.remote, &this.remote_link),
+        ] {
             ip(&["-n", ns, "link", "set", "lo", "up"])?;
             ip(&["-n", ns, "link", "set", link, "up"])?;
         }
@@ -252,11 +271,9 @@ impl Rig {
                 break;
             }
             if Instant::now() > until {
-                return Err(format!(
-                    "the bridge never answered: {output:?}\n{}",
-                    rig.logs()
-                )
-                .into());
+                return Err(
+                    format!("the bridge never answered: {output:?}\n{}", rig.logs()).into(),
+                );
             }
             std::thread::sleep(Duration::from_millis(100));
         }
