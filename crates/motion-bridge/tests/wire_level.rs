@@ -49,7 +49,7 @@ fn session(endpoint: &str) -> Result<zenoh::Session> {
     config
         .insert_json5("connect/endpoints", &format!("[\"{endpoint}\"]"))
         .z()?;
-    Ok(zenoh::open(config).wait().z()?)
+    zenoh::open(config).wait().z()
 }
 
 /// Sends `request` as `identity` with `meta` (none: no attachment); the reply's payload or

@@ -95,7 +95,7 @@ enum Source<S: Service, T: fmt::Debug + ZeroCopySend + 'static> {
     Shm(Subscriber<S, T, ()>),
     /// A feed from a bridge.
     #[cfg(feature = "zenoh")]
-    Net(crate::remote::Feed<T>),
+    Net(Box<crate::remote::Feed<T>>),
 }
 
 /// One subscriber and the newest sample taken from it.
@@ -184,7 +184,7 @@ impl<S: Service, T: fmt::Debug + ZeroCopySend + 'static> LatestCache<S, T> {
     /// A cache fed from a bridge.
     pub(crate) fn remote(feed: crate::remote::Feed<T>) -> Self {
         Self {
-            source: Source::Net(feed),
+            source: Source::Net(Box::new(feed)),
             newest: RefCell::new(None),
         }
     }
