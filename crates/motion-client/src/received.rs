@@ -141,6 +141,8 @@ impl<S: Service, T: fmt::Debug + ZeroCopySend + 'static> LatestCache<S, T> {
 
     /// Takes the oldest waiting sample (the next in publication order), keeps it as the
     /// newest and returns it; `None` when nothing is waiting.
+    // Without the `zenoh` feature the source has one variant only.
+    #[allow(clippy::infallible_destructuring_match)]
     pub(crate) fn take_next(&self) -> Result<Option<Received<S, T>>, ClientError> {
         let subscriber = match &self.source {
             Source::Shm(subscriber) => subscriber,
