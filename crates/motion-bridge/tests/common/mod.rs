@@ -63,6 +63,17 @@ impl BridgeThread {
         zenoh_config: Option<PathBuf>,
     ) -> Result<Self> {
         let endpoint = format!("tcp/127.0.0.1:{}", free_port()?);
+        Self::start_on(server, config_toml, zenoh_config, &endpoint)
+    }
+
+    /// [`BridgeThread::start_with`] listening on `endpoint`.
+    pub fn start_on(
+        server: &str,
+        config_toml: &str,
+        zenoh_config: Option<PathBuf>,
+        endpoint: &str,
+    ) -> Result<Self> {
+        let endpoint = endpoint.to_owned();
         let overrides = Overrides {
             server: Some(server.to_owned()),
             listen: vec![endpoint.clone()],
