@@ -100,7 +100,8 @@ pub const fn is_deadman(kind: CommandKind) -> bool {
     )
 }
 
-/// What one remote identity may do (`[[remote]]` of the config).
+/// What one remote identity may do (`[[remote]]` of the config). The rate limit is the
+/// identity's, shared by all its client sessions.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RemoteRule {
     /// The identity (the last chunk of the command key), or `*` for any identity without a
@@ -144,13 +145,26 @@ pub enum Verdict {
     Refuse(Refusal, String),
 }
 
+/// What the bridge learnt of one remote client session's clock.
 #[derive(Debug)]
 struct SessionState {
-    tokens: f64,
-    refilled: Duration,
-    /// Smallest (bridge time − send time) seen, rising by at most `FLOOR_CREEP`.
+    /// Smallest (bridge time − send time) seen, rising by at most `FLOOR_CREEP`, and when.
     floor: Option<(i128, Duration)>,
 }
+
+/// The token bucket of one remote identity.
+#[derive(Debug)]
+struct Bucket {
+    tokens: f64,
+    refilled: Duration,
+}
+
+/// Sessions remembered at most; past it, sessions silent for [`SESSION_IDLE`] are
+/// forgotten, and a new one is refused while none is (a flood of made-up session ids never
+/// grows the bridge's memory).
+pub const MAX_SESSIONS: usize = 1024;
+/// A session not heard from for this long may be forgotten to make room.
+const SESSION_IDLE: Duration = Duration::from_secs(60);
 
 /// The bridge's policy: rules, and what it learnt of every remote session.
 #[derive(Debug)]
@@ -158,6 +172,7 @@ pub struct Policy {
     rules: Vec<RemoteRule>,
     max_delay: Option<Duration>,
     sessions: HashMap<SessionId, SessionState>,
+    buckets: HashMap<String, Bucket>,
     claims: HashMap<(Target, u32), Remote>,
     /// Per axis: the remote whose deadman goal (jog, power) runs there.
     deadman: HashMap<u32, Remote>,
@@ -171,6 +186,7 @@ impl Policy {
             rules,
             max_delay,
             sessions: HashMap::new(),
+            buckets: HashMap::new(),
             claims: HashMap::new(),
             deadman: HashMap::new(),
         }
@@ -232,14 +248,16 @@ impl Policy {
         }
         let (rate, burst) = (rule.rate, rule.burst);
         let max_delay = self.max_delay.unwrap_or(deadman);
+        if !self.sessions.contains_key(&remote.session) && !self.make_room(now) {
+            return Verdict::Refuse(
+                Refusal::Busy,
+                format!("the bridge follows {MAX_SESSIONS} remote sessions already"),
+            );
+        }
         let session = self
             .sessions
             .entry(remote.session)
-            .or_insert_with(|| SessionState {
-                tokens: burst,
-                refilled: now,
-                floor: None,
-            });
+            .or_insert(SessionState { floor: None });
         let lateness = session.lateness(now, meta.sent_ns);
         if !is_safety(kind) && !max_delay.is_zero() && lateness > max_delay {
             return Verdict::Refuse(
@@ -252,7 +270,14 @@ impl Policy {
                 ),
             );
         }
-        if !session.take_token(now, rate, burst) && !is_safety(kind) {
+        let bucket = self
+            .buckets
+            .entry(remote.identity.clone())
+            .or_insert(Bucket {
+                tokens: burst,
+                refilled: now,
+            });
+        if !bucket.take(now, rate, burst) && !is_safety(kind) {
             return Verdict::Refuse(
                 Refusal::RateLimited,
                 format!(
@@ -267,6 +292,19 @@ impl Policy {
         let mut forwarded = *request;
         forwarded.client = ClientId::NONE;
         Verdict::Forward(forwarded)
+    }
+
+    /// Whether a new session fits, forgetting idle ones if needed.
+    fn make_room(&mut self, now: Duration) -> bool {
+        if self.sessions.len() < MAX_SESSIONS {
+            return true;
+        }
+        self.sessions.retain(|_, state| {
+            state
+                .floor
+                .is_some_and(|(_, seen)| now.saturating_sub(seen) < SESSION_IDLE)
+        });
+        self.sessions.len() < MAX_SESSIONS
     }
 
     /// The claim rule between remotes, as the engine applies it between local clients.
@@ -416,9 +454,11 @@ impl SessionState {
         self.floor = Some((floor, now));
         Duration::from_nanos(u64::try_from(offset - floor).unwrap_or(u64::MAX))
     }
+}
 
-    /// Takes one token of the bucket; false when it is empty.
-    fn take_token(&mut self, now: Duration, rate: f64, burst: f64) -> bool {
+impl Bucket {
+    /// Takes one token; false when the bucket is empty.
+    fn take(&mut self, now: Duration, rate: f64, burst: f64) -> bool {
         let elapsed = now.saturating_sub(self.refilled).as_secs_f64();
         self.tokens = (self.tokens + elapsed * rate).min(burst);
         self.refilled = now;

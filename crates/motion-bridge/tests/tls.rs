@@ -14,7 +14,10 @@ use iceoryx2::prelude::ipc;
 use motion_client::{ClientBuilder, ConnectError};
 
 fn openssl(dir: &Path, args: &[&str]) -> Result {
-    let output = Command::new("openssl").current_dir(dir).args(args).output()?;
+    let output = Command::new("openssl")
+        .current_dir(dir)
+        .args(args)
+        .output()?;
     if output.status.success() {
         Ok(())
     } else {
@@ -29,19 +32,60 @@ fn openssl(dir: &Path, args: &[&str]) -> Result {
 
 /// A CA and a certificate for `localhost` signed by it.
 fn certificates(dir: &Path) -> Result {
-    openssl(dir, &[
-        "req", "-x509", "-newkey", "rsa:2048", "-nodes", "-keyout", "ca.key", "-out", "ca.pem",
-        "-days", "2", "-subj", "/CN=motion-bridge test CA",
-    ])?;
-    openssl(dir, &[
-        "req", "-newkey", "rsa:2048", "-nodes", "-keyout", "bridge.key", "-out", "bridge.csr",
-        "-subj", "/CN=localhost",
-    ])?;
+    openssl(
+        dir,
+        &[
+            "req",
+            "-x509",
+            "-newkey",
+            "rsa:2048",
+            "-nodes",
+            "-keyout",
+            "ca.key",
+            "-out",
+            "ca.pem",
+            "-days",
+            "2",
+            "-subj",
+            "/CN=motion-bridge test CA",
+        ],
+    )?;
+    openssl(
+        dir,
+        &[
+            "req",
+            "-newkey",
+            "rsa:2048",
+            "-nodes",
+            "-keyout",
+            "bridge.key",
+            "-out",
+            "bridge.csr",
+            "-subj",
+            "/CN=localhost",
+        ],
+    )?;
     std::fs::write(dir.join("san.ext"), "subjectAltName=DNS:localhost\n")?;
-    openssl(dir, &[
-        "x509", "-req", "-in", "bridge.csr", "-CA", "ca.pem", "-CAkey", "ca.key",
-        "-CAcreateserial", "-out", "bridge.pem", "-days", "2", "-extfile", "san.ext",
-    ])
+    openssl(
+        dir,
+        &[
+            "x509",
+            "-req",
+            "-in",
+            "bridge.csr",
+            "-CA",
+            "ca.pem",
+            "-CAkey",
+            "ca.key",
+            "-CAcreateserial",
+            "-out",
+            "bridge.pem",
+            "-days",
+            "2",
+            "-extfile",
+            "san.ext",
+        ],
+    )
 }
 
 #[test]

@@ -44,9 +44,9 @@ pub struct ClientBuilder {
     pub(crate) connect_timeout: Duration,
     pub(crate) reply_timeout: Duration,
     signal_handling: SignalHandlingMode,
-    /// Connect through a bridge instead of shared memory.
+    /// Connect through a bridge instead of shared memory (when it has an endpoint).
     #[cfg(feature = "zenoh")]
-    pub(crate) remote: Option<crate::remote::RemoteOptions>,
+    pub(crate) remote: crate::remote::RemoteOptions,
 }
 
 impl ClientBuilder {
@@ -59,7 +59,7 @@ impl ClientBuilder {
             reply_timeout: DEFAULT_REPLY_TIMEOUT,
             signal_handling: SignalHandlingMode::HandleTerminationRequests,
             #[cfg(feature = "zenoh")]
-            remote: None,
+            remote: crate::remote::RemoteOptions::default(),
         }
     }
 
@@ -69,12 +69,7 @@ impl ClientBuilder {
     #[cfg(feature = "zenoh")]
     #[must_use]
     pub fn remote(mut self, endpoint: &str) -> Self {
-        let mut options = crate::remote::RemoteOptions::new(endpoint);
-        if let Some(old) = self.remote.take() {
-            options.identity = old.identity;
-            options.zenoh_config = old.zenoh_config;
-        }
-        self.remote = Some(options);
+        self.remote.endpoint = Some(endpoint.to_owned());
         self
     }
 
@@ -84,9 +79,7 @@ impl ClientBuilder {
     #[cfg(feature = "zenoh")]
     #[must_use]
     pub fn identity(mut self, identity: &str) -> Self {
-        if let Some(remote) = self.remote.as_mut() {
-            identity.clone_into(&mut remote.identity);
-        }
+        identity.clone_into(&mut self.remote.identity);
         self
     }
 
@@ -95,9 +88,7 @@ impl ClientBuilder {
     #[cfg(feature = "zenoh")]
     #[must_use]
     pub fn zenoh_config(mut self, path: impl Into<std::path::PathBuf>) -> Self {
-        if let Some(remote) = self.remote.as_mut() {
-            remote.zenoh_config = Some(path.into());
-        }
+        self.remote.zenoh_config = Some(path.into());
         self
     }
 
@@ -226,8 +217,8 @@ impl<S: Service> Client<S> {
 
     fn connect_with(options: ClientBuilder) -> Result<Self, ConnectError> {
         #[cfg(feature = "zenoh")]
-        if let Some(remote) = options.remote.clone() {
-            return Self::connect_remote(&options, &remote);
+        if let Some(endpoint) = options.remote.endpoint.clone() {
+            return Self::connect_remote(&options, &endpoint);
         }
         let started = Instant::now();
         let server = options.server.clone();

@@ -10,6 +10,10 @@
 //! handles, waits, jog and claim guards, restart detection (the bridge passes the server's
 //! node id along with every sample and reply) — behaves as over shared memory.
 //!
+//! Identity: the server sees the bridge's iceoryx2 node as the sender of every request, so
+//! [`Client::id`](crate::Client::id) (this process's own node) is not what appears in
+//! `claimed_by`; the bridge keeps claims apart between its remote clients.
+//!
 //! Differences: [`Client::tick_listener`](crate::Client::tick_listener) is not available
 //! (there is no event to attach to a `WaitSet`), frames arrive at the bridge's
 //! `frame_rate` (every 10th tick by default) rather than every tick, and the bridge may
@@ -49,18 +53,18 @@ const FEED_DEPTH: usize = 32;
 /// The identity a client uses when none is given.
 pub const DEFAULT_IDENTITY: &str = "anonymous";
 
-/// Where and as whom a remote client connects.
+/// Where and as whom a remote client connects (remote when `endpoint` is set).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub(crate) struct RemoteOptions {
-    pub(crate) endpoint: String,
+    pub(crate) endpoint: Option<String>,
     pub(crate) identity: String,
     pub(crate) zenoh_config: Option<PathBuf>,
 }
 
-impl RemoteOptions {
-    pub(crate) fn new(endpoint: &str) -> Self {
+impl Default for RemoteOptions {
+    fn default() -> Self {
         Self {
-            endpoint: endpoint.to_owned(),
+            endpoint: None,
             identity: DEFAULT_IDENTITY.to_owned(),
             zenoh_config: None,
         }
@@ -175,7 +179,8 @@ impl<T> Feed<T> {
 pub(crate) struct Link {
     session: zenoh::Session,
     keys: Keys,
-    options: RemoteOptions,
+    endpoint: String,
+    identity: String,
     server: String,
     id: SessionId,
     epoch: Instant,
@@ -185,8 +190,8 @@ pub(crate) struct Link {
 impl fmt::Debug for Link {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_struct("Link")
-            .field("endpoint", &self.options.endpoint)
-            .field("identity", &self.options.identity)
+            .field("endpoint", &self.endpoint)
+            .field("identity", &self.identity)
             .field("session", &self.id)
             .finish_non_exhaustive()
     }
@@ -221,30 +226,30 @@ pub(crate) fn zenoh_config(base: Option<&Path>, endpoint: &str) -> Result<zenoh:
 }
 
 impl Link {
-    /// Opens a zenoh session to the bridge at `options.endpoint` for the instance
-    /// `server`, retrying until `deadline`, and declares this client's liveliness.
+    /// Opens a zenoh session to the bridge at `endpoint` for the instance `server`,
+    /// retrying until `deadline`, and declares this client's liveliness.
     pub(crate) fn open(
         options: &RemoteOptions,
+        endpoint: &str,
         server: &str,
         deadline: Instant,
     ) -> Result<Self, ConnectError> {
         let keys = Keys::new(server).map_err(|error| bad_name(error, server))?;
         motion_bridge::keys::check_chunk("remote identity", &options.identity)
             .map_err(|error| bad_name(error, &options.identity))?;
-        let config =
-            zenoh_config(options.zenoh_config.as_deref(), &options.endpoint).map_err(|detail| {
-                ConnectError::Network {
-                    what: "configure zenoh",
-                    detail,
-                }
-            })?;
+        let config = zenoh_config(options.zenoh_config.as_deref(), endpoint).map_err(|detail| {
+            ConnectError::Network {
+                what: "configure zenoh",
+                detail,
+            }
+        })?;
         let session = loop {
             match zenoh::open(config.clone()).wait() {
                 Ok(session) => break session,
                 Err(error) if Instant::now() >= deadline => {
                     return Err(ConnectError::NoBridge {
                         name: server.to_owned(),
-                        endpoint: options.endpoint.clone(),
+                        endpoint: endpoint.to_owned(),
                         why: error.to_string(),
                     });
                 }
@@ -263,7 +268,8 @@ impl Link {
         Ok(Self {
             session,
             keys,
-            options: options.clone(),
+            endpoint: endpoint.to_owned(),
+            identity: options.identity.clone(),
             server: server.to_owned(),
             id,
             epoch: Instant::now(),
@@ -346,12 +352,12 @@ impl Link {
 
     /// The endpoint this client connected to.
     pub(crate) fn endpoint(&self) -> &str {
-        &self.options.endpoint
+        &self.endpoint
     }
 
     /// The identity this client sends commands as.
     pub(crate) fn identity(&self) -> &str {
-        &self.options.identity
+        &self.identity
     }
 
     /// Sends `request` through the bridge and waits up to `timeout` for the reply; the
@@ -366,7 +372,7 @@ impl Link {
             session: self.id,
             sent_ns: u64::try_from(self.epoch.elapsed().as_nanos()).unwrap_or(u64::MAX),
         };
-        let key = self.keys.command(&self.options.identity);
+        let key = self.keys.command(&self.identity);
         let replies = self
             .session
             .get(&key)
@@ -390,7 +396,7 @@ impl Link {
                     detail: format!(
                         "no motion-bridge answers on {key} at {} (is it running, for server \
                          `{}`? does zenoh's access control let this user send on that key?)",
-                        self.options.endpoint, self.server
+                        self.endpoint, self.server
                     ),
                 });
             }
@@ -420,13 +426,13 @@ impl<S: Service> Client<S> {
     /// Connects through the bridge of `remote` (see [`ClientBuilder::remote`]).
     pub(crate) fn connect_remote(
         options: &ClientBuilder,
-        remote: &RemoteOptions,
+        endpoint: &str,
     ) -> Result<Self, ConnectError> {
         let deadline = Instant::now() + options.connect_timeout;
         let server = options.server.clone();
         let names = ServiceNames::new(&server);
         let node = Self::make_node(options)?;
-        let link = Link::open(remote, &server, deadline)?;
+        let link = Link::open(&options.remote, endpoint, &server, deadline)?;
         let info_key = link.keys.info();
         // Subscribe first, so that no description published meanwhile is missed.
         let feed =
@@ -439,7 +445,7 @@ impl<S: Service> Client<S> {
             .first::<ServerInfo>(&info_key, deadline)
             .map_err(|why| ConnectError::NoBridge {
                 name: server.clone(),
-                endpoint: remote.endpoint.clone(),
+                endpoint: endpoint.to_owned(),
                 why,
             })?;
         if first.value.schema_version != SCHEMA_VERSION {

@@ -186,9 +186,58 @@ fn the_rate_limit_refuses_above_the_burst_refills_and_never_holds_back_a_stop() 
     // 100 ms at 10/s is one token again.
     assert!(forwarded(&admit(&mut policy, &panel, ms(100), &jog)));
     assert!(!forwarded(&admit(&mut policy, &panel, ms(100), &jog)));
-    // Sessions have buckets of their own.
-    let other = remote("panel", 2);
-    assert!(forwarded(&admit(&mut policy, &other, ms(100), &jog)));
+    // The bucket is the identity's: another session of it shares it, another identity
+    // has its own.
+    assert!(!forwarded(&admit(
+        &mut policy,
+        &remote("panel", 2),
+        ms(100),
+        &jog
+    )));
+    assert!(forwarded(&admit(
+        &mut policy,
+        &remote("desk", 3),
+        ms(100),
+        &jog
+    )));
+}
+
+#[test]
+fn made_up_sessions_never_grow_the_table_past_its_bound() {
+    let mut policy = Policy::new(vec![rule("*", &["all"], 1e9, 1e9)], None);
+    let stop = request(CommandKind::Stop, 0);
+    for session in 0..super::MAX_SESSIONS as u128 {
+        assert!(forwarded(&admit(
+            &mut policy,
+            &remote("x", session),
+            ms(0),
+            &stop
+        )));
+    }
+    // Full, and every session heard from recently: a new one is refused.
+    match admit(&mut policy, &remote("x", 1 << 100), ms(1000), &stop) {
+        Verdict::Refuse(Refusal::Busy, _) => {}
+        other => panic!("{other:?}"),
+    }
+    // A known session still passes; after a minute of silence the old ones make room.
+    assert!(forwarded(&admit(
+        &mut policy,
+        &remote("x", 5),
+        ms(30_000),
+        &stop
+    )));
+    let later = Duration::from_secs(61);
+    assert!(forwarded(&admit(
+        &mut policy,
+        &remote("x", 1 << 100),
+        later,
+        &stop
+    )));
+    assert_eq!(
+        policy.sessions.len(),
+        2,
+        "session 5, heard 31 s ago, and the new one"
+    );
 }
 
 #[test]
