@@ -36,6 +36,9 @@ use zenoh::Wait as _;
 
 type Result<T = ()> = core::result::Result<T, Box<dyn std::error::Error>>;
 
+/// Round trips run and thrown away before each measured series.
+const WARM_UP: usize = 200;
+
 /// zenoh's errors as this bench's errors.
 trait Z<T> {
     fn z(self) -> Result<T>;
@@ -181,14 +184,16 @@ fn zenoh_baselines(samples: usize) -> Result<Vec<(String, Summary)>> {
     for size in [64usize, 13392] {
         let payload = vec![7u8; size];
         let mut rtts = Vec::with_capacity(samples);
-        for _ in 0..samples {
+        for round in 0..samples + WARM_UP {
             let sent = Instant::now();
             ping.put(payload.clone()).wait().z()?;
             pongs
                 .recv_timeout(Duration::from_secs(2))
                 .z()?
                 .ok_or("no pong")?;
-            rtts.push(sent.elapsed().as_nanos() as u64);
+            if round >= WARM_UP {
+                rtts.push(sent.elapsed().as_nanos() as u64);
+            }
         }
         rows.push((
             format!("zenoh pub/sub round trip, {size} B"),
@@ -196,7 +201,7 @@ fn zenoh_baselines(samples: usize) -> Result<Vec<(String, Summary)>> {
         ));
     }
     let mut rtts = Vec::with_capacity(samples);
-    for _ in 0..samples {
+    for round in 0..samples + WARM_UP {
         let sent = Instant::now();
         let replies = client
             .get("bench/query")
@@ -208,7 +213,9 @@ fn zenoh_baselines(samples: usize) -> Result<Vec<(String, Summary)>> {
             .recv_timeout(Duration::from_secs(2))
             .z()?
             .ok_or("no reply")?;
-        rtts.push(sent.elapsed().as_nanos() as u64);
+        if round >= WARM_UP {
+            rtts.push(sent.elapsed().as_nanos() as u64);
+        }
     }
     rows.push((
         "zenoh query round trip, 64 B → 32 B".to_owned(),
@@ -218,12 +225,20 @@ fn zenoh_baselines(samples: usize) -> Result<Vec<(String, Summary)>> {
 }
 
 /// `stop` of axis 0, `samples` times: each round trip waits for the server's next tick.
-fn command_rtt(client: &Client<ipc::Service>, samples: usize) -> Result<Summary> {
+/// Back to back (`spread` false), a request goes out just after the tick that answered the
+/// previous one, so every round trip is about one tick; with `spread`, each first waits a
+/// different fraction of a millisecond, so requests meet the tick at every phase.
+fn command_rtt(client: &Client<ipc::Service>, samples: usize, spread: bool) -> Result<Summary> {
     let mut rtts = Vec::with_capacity(samples);
-    for _ in 0..samples {
+    for round in 0..samples + WARM_UP {
+        if spread {
+            std::thread::sleep(Duration::from_micros((round as u64 * 137) % 1000));
+        }
         let sent = Instant::now();
         let reply = client.send(0, CommandKind::Stop, [0.0; 3])?;
-        rtts.push(sent.elapsed().as_nanos() as u64);
+        if round >= WARM_UP {
+            rtts.push(sent.elapsed().as_nanos() as u64);
+        }
         if reply.result().is_err() {
             return Err(format!("stop refused: {reply:?}").into());
         }
@@ -287,8 +302,10 @@ fn main() -> Result {
         .connect::<ipc::Service>()?;
 
     println!("commands and frames, local then through the bridge…");
-    let local_cmd = command_rtt(&local, samples)?;
-    let remote_cmd = command_rtt(&remote, samples)?;
+    let local_cmd = command_rtt(&local, samples, false)?;
+    let remote_cmd = command_rtt(&remote, samples, false)?;
+    let local_spread = command_rtt(&local, samples, true)?;
+    let remote_spread = command_rtt(&remote, samples, true)?;
     let frames = (samples / 4).max(50);
     let local_frames = delivery(&local, frames)?;
     let remote_frames = delivery(&remote, frames)?;
@@ -299,6 +316,14 @@ fn main() -> Result {
     rows.push((
         "motiond command round trip, through the bridge".to_owned(),
         remote_cmd,
+    ));
+    rows.push((
+        "  same, sent at spread tick phases, shared memory".to_owned(),
+        local_spread,
+    ));
+    rows.push((
+        "  same, sent at spread tick phases, through bridge".to_owned(),
+        remote_spread,
     ));
     rows.push((
         "motiond frame delivery, shared memory".to_owned(),
@@ -347,8 +372,13 @@ fn main() -> Result {
         remote_frames.p50 / (pubsub_frame / 2.0 + local_frames.p50)
     );
     println!(
-        "  added by the bridge: command {} , frame {}",
+        "  bridge command round trip / local, at spread tick phases                      = {:.2}",
+        remote_spread.p50 / local_spread.p50
+    );
+    println!(
+        "  added by the bridge (medians): command {} back to back, {} at spread phases; frame {}",
         us(remote_cmd.p50 - local_cmd.p50),
+        us(remote_spread.p50 - local_spread.p50),
         us(remote_frames.p50 - local_frames.p50)
     );
     Ok(())

@@ -8,7 +8,7 @@
 //! | `motiond/<name>/stats` | put about 1 Hz; queryable | [`ServerStats`](motion_ipc::ServerStats) | [`Origin`] |
 //! | `motiond/<name>/params` | queryable only (176 KiB) | [`MachineParams`](motion_ipc::MachineParams) | [`Origin`] |
 //! | `motiond/<name>/state/json` | put at `json_rate` Hz | UTF-8 JSON (see the README) | – |
-//! | `motiond/<name>/command/<identity>` | queryable | [`CommandRequest`](motion_ipc::CommandRequest) → [`CommandReply`](motion_ipc::CommandReply), or an error reply `"<code>: <text>"` ([`Refusal`]) | request: [`RequestMeta`]; reply: [`Origin`] |
+//! | `motiond/<name>/command/<identity>` (or `…/command`: identity `anonymous`) | queryable | [`CommandRequest`](motion_ipc::CommandRequest) → [`CommandReply`](motion_ipc::CommandReply), or an error reply `"<code>: <text>"` ([`Refusal`]) | request: [`RequestMeta`]; reply: [`Origin`] |
 //! | `motiond/<name>/remote/<identity>/<session>` | liveliness token of a remote client | – | – |
 //! | `motiond/<name>/bridge` | liveliness token of the bridge | – | – |
 //!
@@ -18,6 +18,10 @@ use core::fmt;
 
 /// The port a bridge listens on by default (zenoh's own).
 pub const DEFAULT_PORT: u16 = 7447;
+
+/// The identity of a remote that names none (a command sent to `motiond/<name>/command`,
+/// or a client without `identity`).
+pub const ANONYMOUS: &str = "anonymous";
 
 /// Why a name cannot be one chunk of a key expression.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -98,14 +102,19 @@ impl Keys {
         self.join(&format!("command/{identity}"))
     }
 
-    /// What the bridge's command queryable answers: every identity.
+    /// What the bridge's command queryable answers: `motiond/<name>/command` and every
+    /// identity below it (keys deeper than one identity are refused as bad requests).
     pub fn command_any(&self) -> String {
-        self.join("command/*")
+        self.join("command/**")
     }
 
-    /// The identity a command key names, if it is one of this instance's.
+    /// The identity a command key names, if it is one of this instance's: the chunk after
+    /// `command/`, or [`ANONYMOUS`] for `motiond/<name>/command` itself.
     pub fn identity_of<'k>(&self, command_key: &'k str) -> Option<&'k str> {
         let rest = command_key.strip_prefix(&self.prefix)?;
+        if rest == "/command" {
+            return Some(ANONYMOUS);
+        }
         let identity = rest.strip_prefix("/command/")?;
         (!identity.is_empty() && !identity.contains('/')).then_some(identity)
     }
@@ -301,6 +310,8 @@ mod tests {
         );
         assert_eq!(keys.identity_of("motiond/other/command/panel"), None);
         assert_eq!(keys.identity_of("motiond/demo/command/a/b"), None);
+        assert_eq!(keys.identity_of("motiond/demo/command"), Some(ANONYMOUS));
+        assert_eq!(keys.identity_of("motiond/demo/commands"), None);
         let token = keys.remote_token("panel", SessionId(0xab));
         assert_eq!(
             token,

@@ -232,3 +232,40 @@ fn without_a_server_behind_it_the_bridge_says_so() -> Result {
     );
     Ok(())
 }
+
+#[test]
+fn a_bridge_that_stops_stops_the_remote_jogs_first() -> Result {
+    let server = fake("bridge-exit")?;
+    let bridge = BridgeThread::start(server.name(), RULES)?;
+    let client = remote(server.name(), &bridge.endpoint, "operator")?;
+    client.wait_ready(DEADLINE)?;
+    let reply = client.send(1, CommandKind::Velocity, [5.0, 0.0, 0.0])?;
+    assert_eq!(reply.result(), Ok(()));
+    drop(bridge);
+    let requests = server.requests();
+    assert_eq!(count(&requests, CommandKind::Stop, 1), 1, "{requests:?}");
+    Ok(())
+}
+
+#[test]
+fn a_server_restart_behind_the_bridge_is_noticed_by_the_remote_client() -> Result {
+    let mut server = fake("bridge-restart")?;
+    let bridge = BridgeThread::start(server.name(), RULES)?;
+    let client = remote(server.name(), &bridge.endpoint, "operator")?;
+    client.wait_ready(DEADLINE)?;
+    client.axis("x")?.ramp_to(1.0, 0.0, 0.0)?;
+    server.restart()?;
+    // The bridge passes the new server's node along with its description.
+    eventually("the remote client notices the restart", || {
+        Ok(client.check_server().is_err())
+    })?;
+    match client.axis("x")?.ramp_to(2.0, 0.0, 0.0) {
+        Err(ClientError::ServerRestarted(restart)) => assert_eq!(restart.count, 1),
+        other => return Err(format!("expected ServerRestarted, got {other:?}").into()),
+    }
+    assert!(client.acknowledge_restart().is_some());
+    eventually("the new server takes commands through the bridge", || {
+        Ok(client.axis("x")?.ramp_to(2.0, 0.0, 0.0).is_ok())
+    })?;
+    Ok(())
+}

@@ -177,6 +177,23 @@ fn malformed_late_and_too_frequent_requests_are_refused_by_the_bridge() -> Resul
         "{text}"
     );
 
+    // The bare command key is the identity `anonymous` (no rule here: not allowed).
+    let replies = session
+        .get(format!("motiond/{}/command", server.name()))
+        .payload(wire::encode(&stop))
+        .attachment(meta(1, clock()).encode())
+        .wait()
+        .z()?;
+    let reply = replies.recv_timeout(DEADLINE).z()?.ok_or("no reply")?;
+    let text = reply
+        .result()
+        .err()
+        .ok_or("anonymous was allowed")?
+        .payload()
+        .try_to_string()?
+        .into_owned();
+    assert!(text.starts_with("not-allowed: ") && text.contains("`anonymous`"), "{text}");
+
     // A request on time is forwarded; the reply comes from the server, with its node.
     let (reply, origin) = command(&session, &keys, "tool", &stop, Some(meta(7, clock())))?
         .map_err(|text| format!("refused: {text}"))?;

@@ -51,7 +51,7 @@ use crate::{Client, ClientBuilder, ClientError, ConnectError};
 /// over shared memory).
 const FEED_DEPTH: usize = 32;
 /// The identity a client uses when none is given.
-pub const DEFAULT_IDENTITY: &str = "anonymous";
+pub const DEFAULT_IDENTITY: &str = motion_bridge::keys::ANONYMOUS;
 
 /// Where and as whom a remote client connects (remote when `endpoint` is set).
 #[derive(Debug, Clone, PartialEq, Eq)]

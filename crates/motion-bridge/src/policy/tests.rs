@@ -479,3 +479,24 @@ fn claims_the_server_no_longer_holds_for_the_bridge_are_forgotten() {
     policy.server_restarted();
     assert_eq!(policy.holder(Target::Axis, 0), None);
 }
+
+#[test]
+fn on_its_exit_the_bridge_stops_every_remote_jog() {
+    let mut policy = Policy::new(vec![rule("*", &["all"], 1000.0, 1000.0)], None);
+    let (a, b) = (remote("alice", 1), remote("bob", 2));
+    accept(&mut policy, &a, &request(CommandKind::Velocity, 4));
+    accept(&mut policy, &b, &request(CommandKind::Power, 2));
+    accept(&mut policy, &b, &request(CommandKind::RampPosition, 3));
+    accept(&mut policy, &a, &request(CommandKind::Claim, 1));
+    let stops: Vec<(u32, u32)> = policy
+        .shutdown()
+        .iter()
+        .map(|r| (r.kind, r.axis))
+        .collect();
+    assert_eq!(
+        stops,
+        [(CommandKind::Stop as u32, 2), (CommandKind::Stop as u32, 4)]
+    );
+    assert_eq!(policy.holder(Target::Axis, 1), None);
+    assert!(policy.shutdown().is_empty());
+}
