@@ -192,7 +192,10 @@ fn malformed_late_and_too_frequent_requests_are_refused_by_the_bridge() -> Resul
         .payload()
         .try_to_string()?
         .into_owned();
-    assert!(text.starts_with("not-allowed: ") && text.contains("`anonymous`"), "{text}");
+    assert!(
+        text.starts_with("not-allowed: ") && text.contains("`anonymous`"),
+        "{text}"
+    );
 
     // A request on time is forwarded; the reply comes from the server, with its node.
     let (reply, origin) = command(&session, &keys, "tool", &stop, Some(meta(7, clock())))?

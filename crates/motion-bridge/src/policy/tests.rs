@@ -488,11 +488,7 @@ fn on_its_exit_the_bridge_stops_every_remote_jog() {
     accept(&mut policy, &b, &request(CommandKind::Power, 2));
     accept(&mut policy, &b, &request(CommandKind::RampPosition, 3));
     accept(&mut policy, &a, &request(CommandKind::Claim, 1));
-    let stops: Vec<(u32, u32)> = policy
-        .shutdown()
-        .iter()
-        .map(|r| (r.kind, r.axis))
-        .collect();
+    let stops: Vec<(u32, u32)> = policy.shutdown().iter().map(|r| (r.kind, r.axis)).collect();
     assert_eq!(
         stops,
         [(CommandKind::Stop as u32, 2), (CommandKind::Stop as u32, 4)]
