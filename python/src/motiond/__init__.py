@@ -54,6 +54,7 @@ from .ipc import (  # noqa: E402
     SignalKind,
 )
 from .jog import Jog  # noqa: E402
+from .remote import RemoteClient  # noqa: E402
 from .signal import Signal, SignalStatus  # noqa: E402
 
 __version__ = "0.1.0"
@@ -61,6 +62,7 @@ __version__ = "0.1.0"
 __all__ = [
     "ipc",
     "Client",
+    "RemoteClient",
     "Accepted",
     "Param",
     "Axis",

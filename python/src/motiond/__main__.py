@@ -2,7 +2,8 @@
 
 ``list`` prints what the server drives (axes with units, limits and commands; devices;
 signals), ``status`` the newest frame (every axis and signal), ``params`` the machine
-parameters in effect. ``--server NAME`` picks the instance (default ``demo``).
+parameters in effect. ``--server NAME`` picks the instance (default ``demo``);
+``--remote tcp/HOST:7447`` reaches it on another host through its ``motion-bridge``.
 """
 
 from __future__ import annotations
@@ -169,9 +170,25 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument("command", choices=["list", "status", "params"])
     parser.add_argument("--server", default="demo", help="instance name ([server] name)")
     parser.add_argument("--timeout", type=float, default=2.0, help="seconds to wait for the server")
+    parser.add_argument(
+        "--remote",
+        metavar="ENDPOINT",
+        help="reach the server through its motion-bridge (zenoh), e.g. tcp/host-a:7447",
+    )
+    parser.add_argument("--identity", help="the identity to use with --remote (default anonymous)")
+    parser.add_argument(
+        "--zenoh-config", metavar="FILE", help="zenoh's JSON5 config for --remote (TLS, credentials)"
+    )
     args = parser.parse_args(argv)
+    remote = {}
+    if args.remote is not None:
+        remote = {"remote": args.remote, "identity": args.identity or "anonymous"}
+        if args.zenoh_config is not None:
+            remote["zenoh_config"] = args.zenoh_config
+    elif args.identity is not None or args.zenoh_config is not None:
+        parser.error("--identity and --zenoh-config need --remote")
     try:
-        with Client(args.server, timeout=args.timeout) as client:
+        with Client(args.server, timeout=args.timeout, **remote) as client:
             {"list": list_server, "status": status, "params": params}[args.command](
                 client, sys.stdout
             )

@@ -110,6 +110,8 @@ class Client:
 
     ``Client("demo")`` connects to the instance whose config says ``[server] name =
     "demo"``, retrying for ``timeout`` seconds while its services do not exist yet.
+    ``Client("demo", remote="tcp/host-a:7447", identity="panel")`` reaches it on another
+    host through its ``motion-bridge`` instead (a :class:`~motiond.remote.RemoteClient`).
     A client is meant to be used from one thread. Close it with :meth:`close` (or use it
     as a context manager); its jogs stop then.
 
@@ -118,14 +120,30 @@ class Client:
     :class:`~motiond.jog.Jog`.
     """
 
+    def __new__(cls, *args: Any, remote: Optional[str] = None, **kwargs: Any) -> "Client":
+        # `Client(name, remote="tcp/host:7447")` is a RemoteClient (motion-bridge, zenoh).
+        if remote is not None and cls is Client:
+            from .remote import RemoteClient
+
+            return super().__new__(RemoteClient)
+        return super().__new__(cls)
+
     def __init__(
         self,
         name: str = "demo",
         timeout: float = DEFAULT_CONNECT_TIMEOUT,
         *,
+        remote: Optional[str] = None,
+        identity: Optional[str] = None,
+        zenoh_config: Optional[str] = None,
         reply_timeout: float = DEFAULT_REPLY_TIMEOUT,
         node_name: str = "motiond-python",
     ) -> None:
+        if remote is not None or identity is not None or zenoh_config is not None:
+            raise errors.ConnectError(
+                "identity and zenoh_config apply to a remote client only: pass remote= "
+                "(over shared memory the server knows a client by its iceoryx2 node)"
+            )
         started = time.monotonic()
         deadline = started + timeout
         self._name = name
@@ -365,6 +383,12 @@ class Client:
             if time.monotonic() >= deadline:
                 raise WaitTimeout("the params service", "publish its parameters", timeout)
             time.sleep(0.005)
+        params = self._params_of(received)
+        cache.close()
+        return params
+
+    def _params_of(self, received: Any) -> List[Param]:
+        """The entries of a received :class:`~motiond.ipc.MachineParams`, named."""
         info = self.info
         params = []
         with received:
@@ -388,7 +412,6 @@ class Client:
                         from_config=bool(entry.from_config),
                     )
                 )
-        cache.close()
         return params
 
     # --- frames ----------------------------------------------------------------------------

@@ -28,6 +28,9 @@ __all__ = [
     "WaitAborted",
     "FramesHeld",
     "IpcError",
+    "NoBridge",
+    "BridgeRefused",
+    "RemoteError",
     "refused",
     "REFUSALS",
     "SchemaMismatch",
@@ -406,5 +409,38 @@ class IpcError(MotiondError):
 
     def __init__(self, what: str, error: BaseException) -> None:
         super().__init__(f"iceoryx2 could not {what}: {error!r}")
+        self.what = what
+        self.error = error
+
+
+class NoBridge(ConnectError):
+    """No ``motion-bridge`` answers at the endpoint a remote client was given (nothing
+    listens there, the bridge serves another instance, or zenoh's access control keeps this
+    user out)."""
+
+    def __init__(self, name: str, endpoint: str, why: str) -> None:
+        super().__init__(f'no motion-bridge for server "{name}" at {endpoint}: {why}')
+        self.name = name
+        self.endpoint = endpoint
+        self.why = why
+
+
+class BridgeRefused(MotiondError):
+    """The bridge refused a command itself; the server never saw it. ``code`` is one of
+    ``not-allowed`` (not on this identity's allow-list), ``rate-limited``, ``late`` (held up
+    in the network for longer than the bridge accepts), ``bad-request``, ``busy``."""
+
+    def __init__(self, kind: Union[CommandKind, int], code: str, message: str) -> None:
+        super().__init__(f"{_kind_text(kind)} refused by the bridge ({code}): {message}")
+        self.kind = kind
+        self.code = code
+        self.message = message
+
+
+class RemoteError(MotiondError):
+    """zenoh failed to open, send, receive or decode for a remote client."""
+
+    def __init__(self, what: str, error: BaseException) -> None:
+        super().__init__(f"zenoh could not {what}: {error}")
         self.what = what
         self.error = error

@@ -1,0 +1,511 @@
+"""Reaching a motiond on another host through ``motion-bridge``: :class:`RemoteClient`.
+
+``motiond.Client("demo", remote="tcp/host-a:7447", identity="panel")`` (or
+``RemoteClient(...)``) connects to the zenoh side of a ``motion-bridge`` running beside the
+server instead of to shared memory. Needs the ``eclipse-zenoh`` package
+(``pip install 'motiond[remote]'``).
+
+Everything of :class:`~motiond.Client` works the same (handles, commands, waits, jogs with
+their deadman, parameters, statistics), with these differences:
+
+- payloads are private copies received over the network, not views of shared memory (a
+  :class:`~motiond.Frame` holds no sample of the server's; keep as many as you like);
+- frames arrive at the bridge's ``frame_rate`` (100 per second by default), not every tick;
+- the bridge may refuse a command itself: :class:`~motiond.errors.BridgeRefused` with its
+  ``code`` (``not-allowed``, ``rate-limited``, ``late``, ``bad-request``, ``busy``);
+- :meth:`~RemoteClient.notify_estop` sends the e-stop command (there is no event service
+  across the network; the bridge never holds an e-stop back);
+- :attr:`~RemoteClient.node` does not exist (there is no iceoryx2 node), and
+  :attr:`~RemoteClient.id` is the random id of this zenoh session.
+
+The identity is the last chunk of the key expression the commands go to
+(``motiond/<name>/command/<identity>``): the bridge applies that identity's allow-list. It
+is proven only when the bridge's zenoh config authenticates users and restricts each to its
+own key (see ``crates/motion-bridge/README.md``); give this client its credentials with
+``zenoh_config``.
+
+The wire contract (``crates/motion-bridge/README.md``, "The network contract"): payloads are
+the ``motion-ipc`` structs in their C layout, little-endian, ``sizeof`` bytes; published
+samples and replies carry a 16-byte attachment, the server's node id; a command query carries
+25 bytes: version 1, this client's session id (u128), its CLOCK_MONOTONIC at sending (u64 ns).
+"""
+
+from __future__ import annotations
+
+import collections
+import ctypes
+import json
+import secrets
+import struct
+import sys
+import threading
+import time
+import weakref
+from pathlib import Path
+from typing import Any, Callable, Deque, List, Optional, Sequence, Tuple, Type, Union
+
+from . import errors
+from .client import DEFAULT_CONNECT_TIMEOUT, DEFAULT_REPLY_TIMEOUT, Client, Param
+from .errors import (
+    BridgeRefused,
+    IncompatibleServer,
+    NoBridge,
+    NoInfo,
+    NoReply,
+    RemoteError,
+    WaitTimeout,
+)
+from .frames import Frame, Received
+from .ipc import (
+    SCHEMA_VERSION,
+    ClientId,
+    CommandKind,
+    CommandReply,
+    CommandRequest,
+    MachineParams,
+    MotionFrame,
+    Payload,
+    ServerInfo,
+    ServerStats,
+    Target,
+    to_enum,
+)
+
+__all__ = ["RemoteClient", "ANONYMOUS", "DEFAULT_PORT", "REFUSAL_CODES", "make_zenoh_config", "check_chunk"]
+
+#: The identity of a client that names none (the bridge's ``motiond/<name>/command``).
+ANONYMOUS = "anonymous"
+#: The port a bridge listens on by default (zenoh's own).
+DEFAULT_PORT = 7447
+#: The codes of the bridge's own refusals (the error reply ``"<code>: <text>"``).
+REFUSAL_CODES = ("not-allowed", "rate-limited", "late", "no-server", "no-reply", "bad-request", "busy")
+# Samples a feed keeps when the program does not read them (the oldest go first, as the
+# 32-frame buffer over shared memory).
+_FEED_DEPTH = 32
+_META_VERSION = 1
+_CHUNK_EXTRA = set("-_.@+=")
+
+
+def _zenoh() -> Any:
+    try:
+        import zenoh
+    except ImportError as error:
+        raise errors.ConnectError(
+            "a remote client needs the eclipse-zenoh package: pip install 'motiond[remote]'"
+        ) from error
+    return zenoh
+
+
+def check_chunk(what: str, name: str) -> None:
+    """Raises :class:`~motiond.errors.ConnectError` unless ``name`` is one plain chunk of a
+    key expression (letters, digits, ``-_.@+=``, not starting with ``@``) — the bridge's
+    rule for server names and identities."""
+    plain = (
+        bool(name)
+        and not name.startswith("@")
+        and all((c.isascii() and c.isalnum()) or c in _CHUNK_EXTRA for c in name)
+    )
+    if not plain:
+        raise errors.ConnectError(
+            f"`{name}` cannot be a {what}: use letters, digits, `-`, `_` or `.` (no `/`, `*`, "
+            "`$`, `?`, `#`, no leading `@`, not empty)"
+        )
+
+
+def make_zenoh_config(endpoint: str, base: Optional[Union[str, Path]] = None) -> Any:
+    """zenoh's config of a remote client: ``base`` (a JSON5 file: TLS, credentials) if
+    given, client mode, connecting to ``endpoint``, no multicast scouting."""
+    zenoh = _zenoh()
+    try:
+        config = zenoh.Config.from_file(str(base)) if base is not None else zenoh.Config()
+        config.insert_json5("mode", '"client"')
+        config.insert_json5("scouting/multicast/enabled", "false")
+        config.insert_json5("connect/endpoints", json.dumps([endpoint]))
+    except Exception as error:  # zenoh raises its own ZError
+        raise errors.ConnectError(f"zenoh config ({base or 'default'}): {error}") from None
+    return config
+
+
+def _origin(sample: Any) -> int:
+    attachment = sample.attachment
+    if attachment is None:
+        return 0
+    data = attachment.to_bytes()
+    return int.from_bytes(data, "little") if len(data) == 16 else 0
+
+
+class _Copied:
+    """A payload received over the network, in a private buffer: what an iceoryx2 sample is
+    to :class:`~motiond.frames.Received` (``payload_ptr``, ``delete``)."""
+
+    __slots__ = ("_buffer", "payload_ptr", "origin")
+
+    def __init__(self, data: bytes, origin: int) -> None:
+        self._buffer = ctypes.create_string_buffer(data, len(data))
+        self.payload_ptr = ctypes.addressof(self._buffer)
+        self.origin = origin
+
+    def delete(self) -> None:
+        """Nothing to give back: the buffer is this process's own."""
+
+
+class _Feed:
+    """The samples of one key expression, in order: those a zenoh subscription delivers
+    (its callback runs on a zenoh thread) and those fetched with a query, bounded to the
+    newest ``_FEED_DEPTH``. Duck-types :class:`~motiond.frames.LatestCache`."""
+
+    def __init__(
+        self, payload_type: Type[Payload], key: str, server: str, wrap: Optional[Callable[[Any], Any]]
+    ) -> None:
+        self._type = payload_type
+        self._key = key
+        self._server = server
+        self._wrap = wrap if wrap is not None else (lambda s: Received(s, payload_type))
+        self._queue: Deque[Tuple[bytes, int]] = collections.deque(maxlen=_FEED_DEPTH)
+        self._ready = threading.Condition()
+        self._newest: Optional[Any] = None
+        self._subscriber: Any = None
+
+    def subscribe(self, session: Any) -> None:
+        """Subscribes to the key (samples arrive on zenoh's thread)."""
+        self._subscriber = session.declare_subscriber(self._key, self._on_sample)
+
+    def _on_sample(self, sample: Any) -> None:
+        self.push(sample.payload.to_bytes(), _origin(sample))
+
+    def push(self, data: bytes, origin: int) -> None:
+        """Queues one payload's bytes."""
+        with self._ready:
+            self._queue.append((data, origin))
+            self._ready.notify_all()
+
+    @property
+    def current(self) -> Optional[Any]:
+        """The newest sample taken so far."""
+        return self._newest
+
+    def refresh(self) -> Optional[Any]:
+        """Takes every waiting sample and keeps the newest; returns it (or the one before)."""
+        while self.take_next() is not None:
+            pass
+        return self._newest
+
+    def take_next(self) -> Optional[Any]:
+        """The oldest waiting sample, kept as the newest; ``None`` when none waits."""
+        with self._ready:
+            if not self._queue:
+                return None
+            data, origin = self._queue.popleft()
+        if len(data) != ctypes.sizeof(self._type):
+            raise IncompatibleServer(
+                f"{self._server} ({self._key}: {len(data)} bytes, this client's "
+                f"{self._type.__name__} has {ctypes.sizeof(self._type)})",
+                0,
+                SCHEMA_VERSION,
+            )
+        received = self._wrap(_Copied(data, origin))
+        self._newest = received
+        return received
+
+    def wait(self, timeout: float) -> bool:
+        """Sleeps until a sample waits or ``timeout`` s pass; whether one waits."""
+        with self._ready:
+            return self._ready.wait_for(lambda: bool(self._queue), max(0.0, timeout))
+
+    def close(self) -> None:
+        """Ends the subscription and drops the kept sample."""
+        if self._subscriber is not None:
+            try:
+                self._subscriber.undeclare()
+            except Exception:  # the session may be closed already
+                pass
+            self._subscriber = None
+        self._newest = None
+
+
+class RemoteClient(Client):
+    """A :class:`~motiond.Client` that talks to a ``motion-bridge`` over zenoh (see the
+    module's documentation). ``endpoint`` is the bridge's zenoh endpoint
+    (``tcp/host-a:7447``; ``tls/…`` with a zenoh built with TLS and ``zenoh_config``)."""
+
+    def __init__(
+        self,
+        name: str = "demo",
+        timeout: float = DEFAULT_CONNECT_TIMEOUT,
+        *,
+        remote: Optional[str] = None,
+        identity: str = ANONYMOUS,
+        zenoh_config: Optional[Union[str, Path]] = None,
+        reply_timeout: float = DEFAULT_REPLY_TIMEOUT,
+        node_name: str = "motiond-python",
+    ) -> None:
+        del node_name  # no iceoryx2 node here
+        if remote is None:
+            raise errors.ConnectError("a remote client needs the bridge's endpoint (remote=)")
+        if sys.byteorder != "little":
+            raise errors.ConnectError(
+                "the bridge's payloads are little-endian C layouts; this client maps them "
+                "in place and needs a little-endian host"
+            )
+        zenoh = _zenoh()
+        check_chunk("server name", name)
+        check_chunk("remote identity", identity)
+        started = time.monotonic()
+        deadline = started + timeout
+        self._name = name
+        self._reply_timeout = reply_timeout
+        self._sequence = 0
+        self._closed = False
+        self._jogs: "weakref.WeakValueDictionary[int, Any]" = weakref.WeakValueDictionary()
+        self._next_jog = 0
+        self._estop_notifier = None
+        self._endpoint = remote
+        self._identity = identity
+        self._prefix = f"motiond/{name}"
+        config = make_zenoh_config(remote, zenoh_config)
+        while True:
+            try:
+                self._session = zenoh.open(config)
+                break
+            except Exception as error:
+                if time.monotonic() >= deadline:
+                    raise NoBridge(name, remote, str(error)) from None
+                time.sleep(0.1)
+        self._session_id = secrets.randbits(128)
+        self._id = ClientId.from_int(self._session_id)
+        self._feeds: List[_Feed] = []
+        try:
+            self._token = self._session.liveliness().declare_token(
+                f"{self._prefix}/remote/{identity}/{self._session_id:032x}"
+            )
+            # Subscribe first, so that no description published meanwhile is missed.
+            self._info = self._feed(ServerInfo, "info", subscribe=True)
+            self._frames = self._feed(MotionFrame, "frame", subscribe=True, wrap=Frame)
+            self._stats = self._feed(ServerStats, "stats", subscribe=True)
+        except Exception as error:
+            self._session.close()
+            raise RemoteError("subscribe to the bridge's keys", error) from None
+        why = self._first(self._info, max(timeout, 0.5) + started - time.monotonic())
+        if why is not None:
+            self.close()
+            if why.startswith("no motion-bridge"):
+                raise NoBridge(name, remote, why)
+            raise NoInfo(name, f"{self._prefix}/info at {remote} ({why})", timeout)
+        description = self.info
+        if description.schema_version != SCHEMA_VERSION:
+            self.close()
+            raise IncompatibleServer(name, description.schema_version, SCHEMA_VERSION)
+        self._goal_ticks = [0] * int(description.axis_count)
+        # The newest statistics, if the bridge has them yet (published about once a second).
+        self._fetch(self._stats, 0.3)
+
+    # --- plumbing --------------------------------------------------------------------------
+
+    def _feed(
+        self, payload_type: Type[Payload], leaf: str, subscribe: bool, wrap: Any = None
+    ) -> _Feed:
+        feed = _Feed(payload_type, f"{self._prefix}/{leaf}", self._name, wrap)
+        if subscribe:
+            feed.subscribe(self._session)
+        self._feeds.append(feed)
+        return feed
+
+    def _fetch(self, feed: _Feed, timeout: float) -> Optional[str]:
+        """Asks the bridge for the newest sample of ``feed``'s key and queues it; ``None``
+        when one arrived, else why not."""
+        try:
+            replies = self._session.get(feed._key, timeout=max(0.05, timeout))
+            for reply in replies:
+                if reply.ok is not None:
+                    feed.push(reply.ok.payload.to_bytes(), _origin(reply.ok))
+                    return None
+                return _error_text(reply.err)
+        except Exception as error:
+            return f"zenoh: {error}"
+        return f"no motion-bridge answers on {feed._key} at {self._endpoint}"
+
+    def _first(self, feed: _Feed, timeout: float) -> Optional[str]:
+        """Fetches until ``feed`` has a sample or ``timeout`` s pass; ``None`` or why not."""
+        deadline = time.monotonic() + max(0.0, timeout)
+        while True:
+            if feed.refresh() is not None:
+                return None
+            remaining = deadline - time.monotonic()
+            why = self._fetch(feed, min(1.0, max(0.2, remaining)))
+            if why is None and feed.refresh() is not None:
+                return None
+            if time.monotonic() >= deadline:
+                return why or "nothing arrived"
+            time.sleep(0.05)
+
+    def _wait_tick(self, timeout: float) -> None:
+        """Sleeps until the next frame arrives or ``timeout`` (capped so Ctrl-C is seen)."""
+        self._frames.wait(min(timeout, 0.05))
+
+    # --- description -----------------------------------------------------------------------
+
+    @property
+    def node(self) -> Any:
+        """Not available: a remote client has no iceoryx2 node."""
+        raise errors.MotiondError("a remote client has no iceoryx2 node (it talks zenoh)")
+
+    @property
+    def endpoint(self) -> str:
+        """The zenoh endpoint of the bridge."""
+        return self._endpoint
+
+    @property
+    def identity(self) -> str:
+        """The identity this client sends commands as."""
+        return self._identity
+
+    def stats(self) -> Optional[ServerStats]:
+        """A copy of the newest :class:`~motiond.ipc.ServerStats` the bridge passed on
+        (about once a second); ``None`` until the first."""
+        self.service_jogs()
+        received = self._stats.refresh()
+        return None if received is None else received.copy()
+
+    def _open_stats(self) -> None:
+        """Subscribed at connection already."""
+
+    def params(self, timeout: float = 1.0) -> List[Param]:
+        """The machine parameters in effect, asked of the bridge (they are not published
+        on the network)."""
+        self.service_jogs()
+        feed = _Feed(MachineParams, f"{self._prefix}/params", self._name, None)
+        why = self._fetch(feed, timeout)
+        received = feed.refresh()
+        if received is None:
+            raise WaitTimeout(
+                f"the bridge at {self._endpoint}", f"send the machine parameters ({why})", timeout
+            )
+        return self._params_of(received)
+
+    # --- commands --------------------------------------------------------------------------
+
+    def send(
+        self,
+        index: int,
+        kind: Union[CommandKind, int],
+        values: Sequence[float] = (0.0, 0.0, 0.0),
+        target: Union[Target, int] = Target.AXIS,
+    ) -> Any:
+        """Sends one request through the bridge and returns the server's reply (a copy);
+        raises :class:`~motiond.errors.BridgeRefused` when the bridge refused it itself."""
+        self._check_open()
+        typed_kind = to_enum(CommandKind, int(kind))
+        self._sequence += 1
+        sequence = self._sequence
+        request = CommandRequest(
+            schema_version=SCHEMA_VERSION,
+            kind=int(kind),
+            client=self._id,
+            sequence=sequence,
+            axis=index,
+            target=int(target),
+        )
+        padded = list(values)[:3] + [0.0] * (3 - min(3, len(values)))
+        for slot, value in enumerate(padded):
+            request.values[slot] = float(value)
+        meta = struct.pack(
+            "<BQQQ",
+            _META_VERSION,
+            self._session_id & 0xFFFF_FFFF_FFFF_FFFF,
+            self._session_id >> 64,
+            time.monotonic_ns(),
+        )
+        key = f"{self._prefix}/command/{self._identity}"
+        started = time.monotonic()
+        try:
+            replies = self._session.get(
+                key,
+                payload=bytes(request),
+                attachment=meta,
+                timeout=self._reply_timeout,
+                express=True,
+            )
+            answer = next(iter(replies), None)
+        except Exception as error:
+            raise RemoteError("send a command", error) from None
+        if answer is None:
+            if time.monotonic() - started >= 0.9 * self._reply_timeout:
+                raise NoReply(typed_kind, self._reply_timeout)
+            raise NoBridge(
+                self._name,
+                self._endpoint,
+                f"no motion-bridge answers on {key} (is it running, for server `{self._name}`? "
+                "does zenoh's access control let this user send on that key?)",
+            )
+        if answer.ok is None:
+            raise _refusal(typed_kind, _error_text(answer.err), self._reply_timeout)
+        data = answer.ok.payload.to_bytes()
+        if len(data) != ctypes.sizeof(CommandReply):
+            raise IncompatibleServer(
+                f"{self._name} (a {len(data)}-byte reply; CommandReply has "
+                f"{ctypes.sizeof(CommandReply)})",
+                0,
+                SCHEMA_VERSION,
+            )
+        reply = CommandReply.from_buffer_copy(data)
+        if reply.sequence != sequence:
+            raise RemoteError(
+                "match a reply",
+                ValueError(f"reply to request {reply.sequence}, expected {sequence}"),
+            )
+        return reply
+
+    def notify_estop(self) -> None:
+        """Latches the e-stop: across the network there is no event service, so this sends
+        the e-stop command (the bridge never holds it back); no reply is awaited beyond the
+        command's."""
+        self.estop()
+
+    # --- life ------------------------------------------------------------------------------
+
+    def close(self) -> None:
+        """Stops this client's running jogs, ends its liveliness and closes the session."""
+        if self._closed:
+            return
+        for jog in list(self._jogs.values()):
+            try:
+                jog.stop()
+            except errors.MotiondError:
+                pass
+        self._closed = True
+        for feed in self._feeds:
+            feed.close()
+        try:
+            self._token.undeclare()
+        except Exception:
+            pass
+        try:
+            self._session.close()
+        except Exception:
+            pass
+
+    def __repr__(self) -> str:
+        return (
+            f"RemoteClient(name={self._name!r}, remote={self._endpoint!r}, "
+            f"identity={self._identity!r})"
+        )
+
+
+def _error_text(error: Any) -> str:
+    try:
+        return str(error.payload.to_string())
+    except Exception:
+        return "an error reply"
+
+
+def _refusal(kind: Union[CommandKind, int], text: str, waited: float) -> errors.MotiondError:
+    """The exception of a bridge's error reply ``"<code>: <text>"``."""
+    code, _, message = text.partition(": ")
+    if code == "no-server":
+        return errors.ServerGone(kind)
+    if code == "no-reply":
+        return NoReply(kind, waited)
+    if code in REFUSAL_CODES:
+        return BridgeRefused(kind, code, message)
+    return BridgeRefused(kind, "error", text)
+
