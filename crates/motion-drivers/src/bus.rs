@@ -15,6 +15,8 @@
 
 use core::time::Duration;
 
+use motion_fixed::FixedQueue;
+
 use crate::driver::{Driver, Priority, Transmit};
 
 /// Transactions whose MISO bytes may be outstanding at once on an SPI bus.
@@ -50,9 +52,7 @@ pub struct LinkBus {
     /// Round-robin start for the next pick.
     next_turn: usize,
     /// SPI: ring of transactions whose MISO bytes have not come back yet.
-    pending: [PendingMiso; SPI_PENDING_CAPACITY],
-    pending_head: usize,
-    pending_len: usize,
+    pending: FixedQueue<PendingMiso, SPI_PENDING_CAPACITY>,
     /// Received bytes no driver could take (SPI bytes beyond every pending transaction).
     stray_bytes: u64,
 }
@@ -66,9 +66,7 @@ impl LinkBus {
             in_flight: None,
             last_sender: 0,
             next_turn: 0,
-            pending: [PendingMiso::default(); SPI_PENDING_CAPACITY],
-            pending_head: 0,
-            pending_len: 0,
+            pending: FixedQueue::new(),
             stray_bytes: 0,
         }
     }
@@ -107,11 +105,10 @@ impl LinkBus {
             }
             BusKind::Spi => {
                 while !bytes.is_empty() {
-                    if self.pending_len == 0 {
+                    let Some(head) = self.pending.front_mut() else {
                         self.stray_bytes += bytes.len() as u64;
                         return;
-                    }
-                    let head = &mut self.pending[self.pending_head];
+                    };
                     let take = head.remaining.min(bytes.len());
                     let (mine, rest) = bytes.split_at(take);
                     if let Some(driver) = self.drivers.get_mut(head.driver) {
@@ -119,8 +116,7 @@ impl LinkBus {
                     }
                     head.remaining -= take;
                     if head.remaining == 0 {
-                        self.pending_head = (self.pending_head + 1) % SPI_PENDING_CAPACITY;
-                        self.pending_len -= 1;
+                        self.pending.pop();
                     }
                     bytes = rest;
                 }
@@ -151,7 +147,7 @@ impl LinkBus {
         if self.kind == BusKind::Stream && self.in_flight.is_some() {
             return None;
         }
-        if self.kind == BusKind::Spi && self.pending_len == SPI_PENDING_CAPACITY {
+        if self.kind == BusKind::Spi && self.pending.is_full() {
             return None;
         }
         let count = self.drivers.len();
@@ -180,12 +176,11 @@ impl LinkBus {
             }
             BusKind::Spi => {
                 if transmit.len > 0 {
-                    let slot = (self.pending_head + self.pending_len) % SPI_PENDING_CAPACITY;
-                    self.pending[slot] = PendingMiso {
+                    // Room was checked above.
+                    self.pending.push(PendingMiso {
                         driver: index,
                         remaining: transmit.len,
-                    };
-                    self.pending_len += 1;
+                    });
                 }
             }
         }
@@ -195,7 +190,7 @@ impl LinkBus {
     /// The link went down: every driver is told, outstanding routing is dropped.
     pub fn link_down(&mut self, now: Duration) {
         self.in_flight = None;
-        self.pending_len = 0;
+        self.pending.clear();
         for driver in &mut self.drivers {
             driver.link_down(now);
         }
@@ -204,7 +199,7 @@ impl LinkBus {
     /// The link is open again: every driver restarts its board.
     pub fn link_up(&mut self, now: Duration) {
         self.in_flight = None;
-        self.pending_len = 0;
+        self.pending.clear();
         for driver in &mut self.drivers {
             driver.link_up(now);
         }

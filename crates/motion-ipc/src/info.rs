@@ -4,8 +4,8 @@ use iceoryx2::prelude::ZeroCopySend;
 
 use crate::command::{CommandKind, UnknownValue};
 use crate::frame::DeviceState;
+use crate::read_text;
 use crate::signal::SignalInfo;
-use crate::text::read_text;
 use crate::{MAX_AXES, MAX_DEVICES, MAX_SIGNALS, NAME_LEN, SCHEMA_VERSION, UNIT_LEN};
 
 /// What an e-stop (and a fault) does to an axis: IEC 60204-1 stop categories. Travels as

@@ -32,18 +32,18 @@ pub mod rules;
 mod service;
 mod signal;
 mod stats;
-mod text;
 
 pub use command::{
     ClientId, CommandKind, CommandReply, CommandRequest, Reason, Target, UnknownValue,
 };
 pub use frame::{AxisFlags, AxisMode, AxisState, DeviceState, FaultCode, FrameFlags, MotionFrame};
 pub use info::{AxisInfo, Capabilities, DeviceInfo, DeviceModel, EstopCategory, ServerInfo};
+/// Fixed-size, zero-padded UTF-8 text fields (from `motion-fixed`, shared with the drivers).
+pub use motion_fixed::{read_text, write_text};
 pub use params::{MAX_PARAMS, MachineParam, MachineParams, PARAM_TEXT_LEN, ParamOwner};
 pub use service::ServiceNames;
 pub use signal::{SignalFlags, SignalInfo, SignalInfoFlags, SignalKind, SignalState};
 pub use stats::{LatencySummary, LinkStats, ServerStats};
-pub use text::{read_text, write_text};
 
 /// Version of this contract. Bumped on every layout or meaning change; every payload
 /// carries it so that a client built against another version can refuse politely.

@@ -4,7 +4,7 @@
 use iceoryx2::prelude::ZeroCopySend;
 
 use crate::command::{ClientId, UnknownValue};
-use crate::text::read_text;
+use crate::read_text;
 use crate::{NAME_LEN, UNIT_LEN};
 
 /// What a signal is. Travels as `u8` in [`SignalState::kind`] and [`SignalInfo::kind`].

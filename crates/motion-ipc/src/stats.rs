@@ -2,7 +2,7 @@
 
 use iceoryx2::prelude::ZeroCopySend;
 
-use crate::text::read_text;
+use crate::read_text;
 use crate::{MAX_LINKS, NAME_LEN, SCHEMA_VERSION};
 
 /// Percentiles of one latency distribution, in nanoseconds. 40 bytes.

@@ -130,7 +130,9 @@ impl Channel {
         }
         match self.step {
             Step::Idle => {}
-            Step::Off => out.push(Mode(ControlMode::Off)),
+            Step::Off => {
+                out.push(Mode(ControlMode::Off));
+            }
             Step::Power(power) => {
                 out.push(Mode(ControlMode::Power));
                 out.push(Packet::Power(power));
@@ -165,7 +167,9 @@ impl Channel {
                 out.push(Packet::AccelLimit(0));
                 out.push(VelocityRamp { velocity, accel: 0 });
             }
-            Step::StopRamp { accel, .. } => out.push(VelocityRamp { velocity: 0, accel }),
+            Step::StopRamp { accel, .. } => {
+                out.push(VelocityRamp { velocity: 0, accel });
+            }
             Step::Hold => {
                 out.push(position_mode);
                 out.push(Target(self.position));

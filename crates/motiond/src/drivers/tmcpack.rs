@@ -7,6 +7,7 @@ use motion_drivers::tmcpack::{
 };
 use motion_drivers::{Driver, SignalKind};
 use motion_engine::AxisConfig;
+use motion_fixed::counts_to_i32_saturating;
 use tmcpack::convert::{debounce_mask, debounce_ms, peak_percent, peak_value};
 use tmcpack::{CurrentLevel, MAX_POSLIMIT, MotorMask, MotorOptions, MotorType};
 
@@ -123,9 +124,9 @@ fn channel_config(axis: &AxisConfig, spec: &AxisSpec) -> TmcpackChannel {
             .debounce_ms
             .and_then(|ms| debounce_mask(ms).ok())
             .unwrap_or(d.debounce_mask),
-        nulloffset: r.null_offset.map_or(d.nulloffset, |u| {
-            counts(u).clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32
-        }),
+        nulloffset: r
+            .null_offset
+            .map_or(d.nulloffset, |u| counts_to_i32_saturating(counts(u))),
         testnullrange: r
             .test_range
             .map_or(d.testnullrange, |u| counts(u).clamp(0.0, 65535.0) as u16),
@@ -143,9 +144,7 @@ fn channel_config(axis: &AxisConfig, spec: &AxisSpec) -> TmcpackChannel {
             keys.analog_stop_left.unwrap_or(d.analog_stop.0),
             keys.analog_stop_right.unwrap_or(d.analog_stop.1),
         ),
-        home_position: (spec.home.position * cpu)
-            .round()
-            .clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32,
+        home_position: counts_to_i32_saturating(spec.home.position * cpu),
     }
 }
 

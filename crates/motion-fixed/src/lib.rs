@@ -1,0 +1,36 @@
+//! Fixed-capacity helpers shared by every motiond crate, with no dependency of their own
+//! (drivers, protocol crates and simulators use them without pulling in iceoryx2;
+//! `motion-ipc` re-exports the text helpers).
+//!
+//! - [`FixedQueue`]: a bounded FIFO of `Copy` items that never allocates; a full queue
+//!   refuses.
+//! - [`write_text`] / [`read_text`] / [`FixedText`]: UTF-8 text in a fixed buffer, always
+//!   cut on a character boundary.
+//! - [`counts_to_i32`] / [`counts_to_i32_saturating`]: a position in counts as a board's
+//!   signed 32-bit register.
+//!
+//! ```
+//! use motion_fixed::{FixedQueue, FixedText, counts_to_i32};
+//! use core::fmt::Write;
+//!
+//! let mut queue = FixedQueue::<u8, 2>::new();
+//! assert!(queue.push(1) && queue.push(2) && !queue.push(3));
+//! assert_eq!(queue.pop(), Some(1));
+//!
+//! let mut text = FixedText::<4>::new();
+//! let _ = write!(text, "aéé");
+//! assert_eq!(text.as_str(), "aé");
+//!
+//! assert_eq!(counts_to_i32(12.6), Some(13));
+//! assert_eq!(counts_to_i32(f64::NAN), None);
+//! ```
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+mod counts;
+mod queue;
+mod text;
+
+pub use counts::{counts_to_i32, counts_to_i32_saturating};
+pub use queue::FixedQueue;
+pub use text::{FixedText, floor_char_boundary, read_text, write_text};
