@@ -15,7 +15,7 @@
 
 use core::time::Duration;
 
-use motion_fixed::FixedQueue;
+use motion_base::{FixedQueue, LinkKind};
 
 use crate::driver::{Driver, Priority, Transmit};
 
@@ -24,15 +24,6 @@ pub const SPI_PENDING_CAPACITY: usize = 64;
 
 /// Messages one bus may send in one step (bounds the work of a step).
 pub const MAX_SENDS_PER_STEP: usize = 16;
-
-/// Whether the link carries a byte stream or SPI transactions.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum BusKind {
-    /// A byte stream: one request in flight on the bus.
-    Stream,
-    /// SPI: MISO bytes routed to the transaction's owner.
-    Spi,
-}
 
 #[derive(Debug, Clone, Copy, Default)]
 struct PendingMiso {
@@ -43,7 +34,7 @@ struct PendingMiso {
 /// The drivers of one link and the arbitration between them.
 #[derive(Debug)]
 pub struct LinkBus {
-    kind: BusKind,
+    kind: LinkKind,
     drivers: Vec<Box<dyn Driver>>,
     /// Stream: the driver whose reply is awaited.
     in_flight: Option<usize>,
@@ -59,7 +50,7 @@ pub struct LinkBus {
 
 impl LinkBus {
     /// A bus of `kind` with `drivers` (in config order; at least one).
-    pub fn new(kind: BusKind, drivers: Vec<Box<dyn Driver>>) -> Self {
+    pub fn new(kind: LinkKind, drivers: Vec<Box<dyn Driver>>) -> Self {
         Self {
             kind,
             drivers,
@@ -72,7 +63,7 @@ impl LinkBus {
     }
 
     /// Stream or SPI.
-    pub fn kind(&self) -> BusKind {
+    pub fn kind(&self) -> LinkKind {
         self.kind
     }
 
@@ -94,7 +85,7 @@ impl LinkBus {
     /// Routes bytes received from the link to their drivers.
     pub fn handle_rx(&mut self, now: Duration, mut bytes: &[u8]) {
         match self.kind {
-            BusKind::Stream => {
+            LinkKind::Stream => {
                 let owner = self.in_flight.unwrap_or(self.last_sender);
                 if let Some(driver) = self.drivers.get_mut(owner) {
                     driver.handle_rx(now, bytes);
@@ -103,7 +94,7 @@ impl LinkBus {
                 }
                 self.release_if_answered();
             }
-            BusKind::Spi => {
+            LinkKind::Spi => {
                 while !bytes.is_empty() {
                     let Some(head) = self.pending.front_mut() else {
                         self.stray_bytes += bytes.len() as u64;
@@ -144,10 +135,10 @@ impl LinkBus {
     /// `None` when nobody may or wants to send now.
     pub fn poll_transmit(&mut self, now: Duration, buf: &mut [u8]) -> Option<(usize, Transmit)> {
         self.release_if_answered();
-        if self.kind == BusKind::Stream && self.in_flight.is_some() {
+        if self.kind == LinkKind::Stream && self.in_flight.is_some() {
             return None;
         }
-        if self.kind == BusKind::Spi && self.pending.is_full() {
+        if self.kind == LinkKind::Spi && self.pending.is_full() {
             return None;
         }
         let count = self.drivers.len();
@@ -169,12 +160,12 @@ impl LinkBus {
         self.next_turn = (index + 1) % count;
         self.last_sender = index;
         match self.kind {
-            BusKind::Stream => {
+            LinkKind::Stream => {
                 if transmit.expects_reply {
                     self.in_flight = Some(index);
                 }
             }
-            BusKind::Spi => {
+            LinkKind::Spi => {
                 if transmit.len > 0 {
                     // Room was checked above.
                     self.pending.push(PendingMiso {

@@ -18,8 +18,10 @@ mod state;
 pub mod spimotor;
 pub mod tmcpack;
 
-pub use bus::{BusKind, LinkBus, MAX_SENDS_PER_STEP, SPI_PENDING_CAPACITY};
+pub use bus::{LinkBus, MAX_SENDS_PER_STEP, SPI_PENDING_CAPACITY};
 pub use driver::{Driver, Model, Priority, Transmit};
 pub use goal::{Goal, GoalError, GoalKind, GoalKinds};
+/// Whether a link carries a byte stream or SPI transactions (one enum with `motion_link`).
+pub use motion_base::LinkKind;
 pub use pin::{Pin, PinInfo, PinReading, SignalKind, SignalKinds, find_pin};
 pub use state::{ChannelState, DeviceFault, DeviceStatus, FIRMWARE_LEN};

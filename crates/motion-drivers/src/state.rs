@@ -115,8 +115,8 @@ impl DeviceStatus {
     /// Records `text` as the firmware description (cut to [`FIRMWARE_LEN`] bytes on a
     /// character boundary).
     pub fn set_firmware(&mut self, text: &str) {
-        let end = motion_fixed::floor_char_boundary(text, FIRMWARE_LEN);
-        motion_fixed::write_text(&mut self.firmware, &text[..end]);
+        let end = motion_base::floor_char_boundary(text, FIRMWARE_LEN);
+        motion_base::write_text(&mut self.firmware, &text[..end]);
         self.firmware_len = end as u8;
     }
 }

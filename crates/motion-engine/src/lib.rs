@@ -53,13 +53,13 @@ mod supervision;
 
 use core::time::Duration;
 
-use motion_drivers::{BusKind, Driver, LinkBus, MAX_SENDS_PER_STEP};
+use motion_drivers::{Driver, LinkBus, LinkKind, MAX_SENDS_PER_STEP};
 use motion_ipc::{ClientId, MotionFrame};
 
 use crate::axis::Axis;
 pub use crate::command::{CommandPort, HOME_FRACTION_OF_MAX, MAX_COMMANDS_PER_STEP};
 pub use crate::config::{
-    AxisConfig, DeviceConfig, EngineConfig, EngineConfigError, EstopCategory, LinkConfig,
+    AxisConfig, BusConfig, DeviceConfig, EngineConfig, EngineConfigError, EstopCategory,
     SignalConfig,
 };
 use crate::device::Device;
@@ -201,7 +201,7 @@ impl Engine {
     }
 
     /// Stream or SPI, per link.
-    pub fn link_kind(&self, link: usize) -> Option<BusKind> {
+    pub fn link_kind(&self, link: usize) -> Option<LinkKind> {
         self.buses.get(link).map(LinkBus::kind)
     }
 

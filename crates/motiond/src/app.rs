@@ -148,7 +148,9 @@ pub fn run(config: ServerConfig, options: RunOptions) -> anyhow::Result<()> {
     };
     let result = housekeeping(&config, &mut report_rx, dead_tx, &clients_alive, systemd);
     io_stop.store(true, Ordering::Relaxed);
-    let _ = tick_thread.join();
+    if tick_thread.join().is_err() {
+        tracing::error!("the tick thread panicked");
+    }
     for thread in io_threads {
         thread.join();
     }

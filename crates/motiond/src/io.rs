@@ -91,7 +91,9 @@ pub struct IoThread {
 impl IoThread {
     /// Waits for the thread to finish (after `stop` was set).
     pub fn join(self) {
-        let _ = self.handle.join();
+        if self.handle.join().is_err() {
+            tracing::error!("an I/O thread panicked");
+        }
     }
 }
 
@@ -192,7 +194,9 @@ impl Worker {
             self.counters.up.store(false, Ordering::Relaxed);
             self.backoff = BACKOFF_MIN;
             self.next_reopen = now + self.backoff;
-            let _ = self.events.push(LinkEvent::Down);
+            if self.events.push(LinkEvent::Down).is_err() {
+                self.counters.dropped.fetch_add(1, Ordering::Relaxed);
+            }
         }
     }
 
@@ -202,7 +206,9 @@ impl Worker {
                 self.down = false;
                 self.counters.up.store(true, Ordering::Relaxed);
                 self.counters.reconnects.fetch_add(1, Ordering::Relaxed);
-                let _ = self.events.push(LinkEvent::Up);
+                if self.events.push(LinkEvent::Up).is_err() {
+                    self.counters.dropped.fetch_add(1, Ordering::Relaxed);
+                }
             }
             Err(_) => {
                 self.backoff = (self.backoff * 2).min(BACKOFF_MAX);

@@ -5,6 +5,7 @@
 pub mod app;
 pub mod config;
 pub mod drivers;
+pub mod error;
 pub mod io;
 pub mod params;
 pub mod rt;

@@ -3,7 +3,7 @@
 
 use core::time::Duration;
 
-use motion_fixed::counts_to_i32;
+use motion_base::counts_to_i32;
 
 use qq2drv::limits::{
     ACCELERATION_MAX, LOOP_RATE_HZ, POWER_MAX, VELOCITY_LIMIT_MAX, VELOCITY_TARGET_MAX,

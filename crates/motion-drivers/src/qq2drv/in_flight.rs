@@ -2,7 +2,7 @@
 
 use core::time::Duration;
 
-use motion_fixed::FixedQueue;
+use motion_base::FixedQueue;
 use qq2drv::PacketId;
 
 use super::packet::Packet;

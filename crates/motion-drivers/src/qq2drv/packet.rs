@@ -1,6 +1,6 @@
 //! The single-channel packets a goal turns into, encoded through the `qq2drv` crate.
 
-use motion_fixed::FixedQueue;
+use motion_base::FixedQueue;
 use qq2drv::{
     AccelerationLimitEntry, ChannelMask, ControlMode, ControlModeEntry, Entries, InputConfig,
     InputModeEntry, MotorPowerEntry, PacketId, PositionRampEntry, PositionTargetEntry,

@@ -226,7 +226,7 @@ impl Qq2drvDriver {
         if !matches!(self.phase, Phase::Probe { .. }) {
             return;
         }
-        let mut text = motion_fixed::FixedText::<FIRMWARE_LEN>::new();
+        let mut text = motion_base::FixedText::<FIRMWARE_LEN>::new();
         let _ = write!(text, "fw {major}.{minor} protocol {protocol}");
         self.status.set_firmware(text.as_str());
         let ours = masks == self.stream_masks()

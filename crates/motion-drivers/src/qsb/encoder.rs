@@ -2,7 +2,7 @@
 //! successive time-stamped samples.
 
 use ::qsb::TICK;
-use motion_fixed::FixedQueue;
+use motion_base::FixedQueue;
 
 /// Samples the velocity is measured over (8 × 1.95 ms ≈ 16 ms at the fastest stream):
 /// long enough that one count of quantisation is small, short enough to follow a ramp.

@@ -107,7 +107,7 @@ mod version;
 
 use core::time::Duration;
 
-use motion_fixed::FixedQueue;
+use motion_base::FixedQueue;
 
 use ::qsb::{
     CountMode, CycleMode, IndexMode, MdStatus, Mdr0, Mdr1, Mode, ProductType, QsbCommand, Register,

@@ -3,7 +3,7 @@
 //! encoder reading at that moment, not when the goal was set).
 
 use ::qsb::{Request, Write};
-use motion_fixed::FixedQueue;
+use motion_base::FixedQueue;
 
 /// One step of a plan.
 #[derive(Debug, Clone, Copy, PartialEq)]

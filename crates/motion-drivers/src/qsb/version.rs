@@ -11,7 +11,7 @@ use crate::state::FIRMWARE_LEN;
 impl QsbDriver {
     /// Records the VERSION answer as the firmware description.
     pub(super) fn record_version(&mut self, version: ::qsb::Version) {
-        let mut text = motion_fixed::FixedText::<FIRMWARE_LEN>::new();
+        let mut text = motion_base::FixedText::<FIRMWARE_LEN>::new();
         let product = match version.product {
             ProductType::D => 'D',
             ProductType::M => 'M',

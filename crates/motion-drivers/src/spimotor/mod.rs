@@ -454,7 +454,7 @@ impl SpimotorDriver {
     }
 
     fn set_firmware(&mut self, serial: SerialNumber) {
-        let mut text = motion_fixed::FixedText::<FIRMWARE_LEN>::new();
+        let mut text = motion_base::FixedText::<FIRMWARE_LEN>::new();
         let identification = self.identification;
         let id = identification
             .as_ref()

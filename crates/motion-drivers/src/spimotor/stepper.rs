@@ -2,7 +2,7 @@
 
 use core::time::Duration;
 
-use motion_fixed::counts_to_i32;
+use motion_base::counts_to_i32;
 
 use spimotor::{Reply, StepDelay, Write};
 

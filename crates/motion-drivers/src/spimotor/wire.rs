@@ -6,7 +6,7 @@ use core::time::Duration;
 
 use spimotor::{Address, Header, Read, ReadPort, StepDelay, Transaction, Write};
 
-use motion_fixed::FixedQueue;
+use motion_base::FixedQueue;
 
 use crate::driver::Priority;
 

@@ -35,7 +35,7 @@
 
 use core::time::Duration;
 
-use motion_fixed::{FixedQueue, counts_to_i32};
+use motion_base::{FixedQueue, counts_to_i32};
 
 use tmcpack::{Action, CurrentLevel, MAX_VELOCITY, MotorOptions, Request};
 

@@ -109,7 +109,7 @@ impl TmcpackDriver {
     }
 
     pub(super) fn set_firmware(&mut self, revision: u8, serial: u16) {
-        let mut text = motion_fixed::FixedText::<FIRMWARE_LEN>::new();
+        let mut text = motion_base::FixedText::<FIRMWARE_LEN>::new();
         let name = match self.variant {
             Variant::SixPack => "SIXpack",
             Variant::QuadPack => "QUADpack",

@@ -13,7 +13,7 @@
 
 use core::time::Duration;
 
-use motion_fixed::FixedQueue;
+use motion_base::FixedQueue;
 use tmcpack::convert::baud_divisor;
 use tmcpack::{Action, MAX_VELOCITY, MotorMask, MotorOptions, MotorType, ReferenceFlags, Request};
 

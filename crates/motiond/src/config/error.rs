@@ -278,7 +278,7 @@ fn inline_path(value: &str) -> Vec<String> {
 
 /// 1-based line and column (characters) of byte `offset` in `source`.
 pub(crate) fn line_column(source: &str, offset: usize) -> (usize, usize) {
-    let offset = motion_fixed::floor_char_boundary(source, offset);
+    let offset = motion_base::floor_char_boundary(source, offset);
     let before = &source[..offset];
     let line = before.matches('\n').count() + 1;
     let line_start = before.rfind('\n').map_or(0, |newline| newline + 1);

@@ -1,13 +1,13 @@
 //! The Trinamic pack driver of a `[[device]]`, configured from its axes, machine keys and
 //! signals (docs/keys/tmcpack.md).
 
+use motion_base::counts_to_i32_saturating;
 use motion_drivers::tmcpack::{
     Currents, DEFAULT_REPLY_ADDRESS, DEFAULT_SWITCHOVER_UNITS, PinSet, ReadyOutput, TmcpackChannel,
     TmcpackDriver, TmcpackDriverConfig, TmcpackIo, default_packet_timeout_units,
 };
 use motion_drivers::{Driver, SignalKind};
 use motion_engine::AxisConfig;
-use motion_fixed::counts_to_i32_saturating;
 use tmcpack::convert::{debounce_mask, debounce_ms, peak_percent, peak_value};
 use tmcpack::{CurrentLevel, MAX_POSLIMIT, MotorMask, MotorOptions, MotorType};
 

@@ -1,6 +1,7 @@
-//! Fixed-capacity helpers shared by every motiond crate, with no dependency of their own
-//! (drivers, protocol crates and simulators use them without pulling in iceoryx2;
-//! `motion-ipc` re-exports the text helpers).
+//! The dependency-free base every motiond crate shares: fixed-capacity helpers and the few
+//! plain facts that crates which must not depend on each other all speak (drivers,
+//! protocol crates and simulators use it without pulling in iceoryx2; `motion-ipc`,
+//! `motion-link` and `motion-drivers` re-export what their users need).
 //!
 //! - [`FixedQueue`]: a bounded FIFO of `Copy` items that never allocates; a full queue
 //!   refuses.
@@ -8,9 +9,12 @@
 //!   cut on a character boundary.
 //! - [`counts_to_i32`] / [`counts_to_i32_saturating`]: a position in counts as a board's
 //!   signed 32-bit register.
+//! - [`LinkKind`] (stream or SPI) and [`SignalKind`] (digital in/out, analogue in): one
+//!   enum each for what the links, the drivers, the engine and the shared-memory contract
+//!   all mean.
 //!
 //! ```
-//! use motion_fixed::{FixedQueue, FixedText, counts_to_i32};
+//! use motion_base::{FixedQueue, FixedText, counts_to_i32};
 //! use core::fmt::Write;
 //!
 //! let mut queue = FixedQueue::<u8, 2>::new();
@@ -28,9 +32,11 @@
 #![warn(missing_docs)]
 
 mod counts;
+mod kinds;
 mod queue;
 mod text;
 
 pub use counts::{counts_to_i32, counts_to_i32_saturating};
+pub use kinds::{LinkKind, SignalKind, UnknownKind};
 pub use queue::FixedQueue;
 pub use text::{FixedText, floor_char_boundary, read_text, write_text};
