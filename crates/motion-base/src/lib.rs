@@ -9,6 +9,7 @@
 //!   cut on a character boundary.
 //! - [`counts_to_i32`] / [`counts_to_i32_saturating`]: a position in counts as a board's
 //!   signed 32-bit register.
+//! - [`parse_duration`]: `500ms`, `10s`, `2m` as the command-line tools take them.
 //! - [`LinkKind`] (stream or SPI) and [`SignalKind`] (digital in/out, analogue in): one
 //!   enum each for what the links, the drivers, the engine and the shared-memory contract
 //!   all mean.
@@ -32,11 +33,13 @@
 #![warn(missing_docs)]
 
 mod counts;
+mod duration;
 mod kinds;
 mod queue;
 mod text;
 
 pub use counts::{counts_to_i32, counts_to_i32_saturating};
+pub use duration::parse_duration;
 pub use kinds::{LinkKind, SignalKind, UnknownKind};
 pub use queue::FixedQueue;
 pub use text::{FixedText, floor_char_boundary, read_text, write_text};

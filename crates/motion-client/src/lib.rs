@@ -91,6 +91,8 @@ mod client;
 mod command;
 mod emergency;
 mod error;
+#[cfg(feature = "zenoh")]
+mod feed;
 mod frames;
 mod jog;
 mod ports;

@@ -24,7 +24,6 @@
 use core::fmt;
 use core::time::Duration;
 use std::cell::RefCell;
-use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -32,9 +31,8 @@ use motion_bridge::keys::{Keys, Origin, Refusal, RequestMeta, SessionId};
 use motion_bridge::wire::{self, Payload, WireError};
 use motion_ipc::{CommandKind, CommandReply, CommandRequest, SCHEMA_VERSION};
 use zenoh::Wait as _;
-use zenoh::handlers::{RingChannel, RingChannelHandler};
+use zenoh::handlers::RingChannel;
 use zenoh::liveliness::LivelinessToken;
-use zenoh::pubsub::Subscriber;
 use zenoh::sample::Sample;
 
 use std::rc::Rc;
@@ -43,6 +41,7 @@ use iceoryx2::service::Service;
 use motion_ipc::{MachineParams, ServerInfo, ServerStats, ServiceNames};
 
 use crate::client::Params;
+use crate::feed::{Feed, Owned, network};
 use crate::received::LatestCache;
 use crate::session::Session;
 use crate::{Client, ClientBuilder, ClientError, ConnectError};
@@ -71,26 +70,6 @@ impl Default for RemoteOptions {
     }
 }
 
-/// A payload received over the network: a copy, with the node id of the server that wrote
-/// it.
-pub(crate) struct Owned<T> {
-    pub(crate) value: Box<T>,
-    pub(crate) origin: u128,
-}
-
-impl<T: fmt::Debug> fmt::Debug for Owned<T> {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        self.value.fmt(f)
-    }
-}
-
-fn network(what: &'static str, error: impl fmt::Display) -> ClientError {
-    ClientError::Network {
-        what,
-        detail: error.to_string(),
-    }
-}
-
 fn schema_error(server: &str, error: WireError) -> ClientError {
     ClientError::Connect(ConnectError::SchemaMismatch {
         name: format!("{server} ({error})"),
@@ -110,69 +89,6 @@ fn owned<T: Payload>(sample: &Sample, server: &str) -> Result<Owned<T>, ClientEr
         value,
         origin: origin.0,
     })
-}
-
-/// The samples of one key expression: a subscription (if the key is published), and
-/// values fetched with a query, delivered first.
-pub(crate) struct Feed<T> {
-    subscriber: Option<Subscriber<RingChannelHandler<Sample>>>,
-    peeked: RefCell<Option<Sample>>,
-    fetched: RefCell<VecDeque<Owned<T>>>,
-    server: String,
-    decode: fn(&Sample, &str) -> Result<Owned<T>, ClientError>,
-}
-
-impl<T> fmt::Debug for Feed<T> {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.debug_struct("Feed")
-            .field("subscribed", &self.subscriber.is_some())
-            .finish_non_exhaustive()
-    }
-}
-
-impl<T> Feed<T> {
-    /// Hands `value` out before anything subscribed.
-    pub(crate) fn push(&self, value: Owned<T>) {
-        self.fetched.borrow_mut().push_back(value);
-    }
-
-    /// The next sample, in order; `None` when nothing waits.
-    pub(crate) fn next(&self) -> Result<Option<Owned<T>>, ClientError> {
-        if let Some(value) = self.fetched.borrow_mut().pop_front() {
-            return Ok(Some(value));
-        }
-        let Some(subscriber) = &self.subscriber else {
-            return Ok(None);
-        };
-        let sample = match self.peeked.borrow_mut().take() {
-            Some(sample) => sample,
-            None => match subscriber.try_recv() {
-                Ok(Some(sample)) => sample,
-                Ok(None) => return Ok(None),
-                Err(error) => return Err(network("receive a sample", error)),
-            },
-        };
-        (self.decode)(&sample, &self.server).map(Some)
-    }
-
-    /// Waits up to `timeout` for a sample; whether one waits now.
-    pub(crate) fn wait(&self, timeout: Duration) -> Result<bool, ClientError> {
-        if !self.fetched.borrow().is_empty() || self.peeked.borrow().is_some() {
-            return Ok(true);
-        }
-        let Some(subscriber) = &self.subscriber else {
-            std::thread::sleep(timeout);
-            return Ok(false);
-        };
-        match subscriber.recv_timeout(timeout) {
-            Ok(Some(sample)) => {
-                *self.peeked.borrow_mut() = Some(sample);
-                Ok(true)
-            }
-            Ok(None) => Ok(false),
-            Err(error) => Err(network("wait for a sample", error)),
-        }
-    }
 }
 
 /// A connection to a bridge.
@@ -336,13 +252,7 @@ impl Link {
         } else {
             None
         };
-        Ok(Feed {
-            subscriber,
-            peeked: RefCell::new(None),
-            fetched: RefCell::new(VecDeque::new()),
-            server: self.server.clone(),
-            decode: owned::<T>,
-        })
+        Ok(Feed::new(subscriber, self.server.clone(), owned::<T>))
     }
 
     /// The key of `what` ("frame", "info", "stats", "params").

@@ -93,6 +93,7 @@ mod config;
 mod in_flight;
 mod packet;
 mod pins;
+mod plan;
 mod startup;
 mod step;
 

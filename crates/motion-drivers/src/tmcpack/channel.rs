@@ -293,7 +293,7 @@ impl Channel {
                         motor,
                         vrefmax,
                         debounce_mask: self.cfg.debounce_mask,
-                        flags: super::startup::REFERENCE_FLAGS,
+                        flags: super::config::REFERENCE_FLAGS,
                     });
                 }
                 script.send(Request::ReferenceSearch { motor });

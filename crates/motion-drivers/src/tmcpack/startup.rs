@@ -15,16 +15,11 @@ use core::time::Duration;
 
 use motion_base::FixedQueue;
 use tmcpack::convert::baud_divisor;
-use tmcpack::{Action, MAX_VELOCITY, MotorMask, MotorOptions, MotorType, ReferenceFlags, Request};
+use tmcpack::{Action, MAX_VELOCITY, MotorMask, MotorOptions, MotorType, Request};
 
 use super::channel::Channel;
-use super::config::{Scale, TmcpackDriverConfig};
+use super::config::{REFERENCE_FLAGS, Scale, TmcpackDriverConfig};
 use super::io::IoState;
-
-/// $16 P5 the driver always sets: "1=Stop after reference search", so that a `Home` goal
-/// ends at the new zero point with the motor inactive (0 would resume the previous action,
-/// e.g. drive back to where the search started).
-pub(crate) const REFERENCE_FLAGS: ReferenceFlags = ReferenceFlags::STOP_AFTER_SEARCH;
 
 /// Most requests a start-up can need: $40, $41, $12, three $10, six motors × seven, $33,
 /// $32.

@@ -69,3 +69,77 @@ pub(crate) fn split_word(bytes: &[u8]) -> Result<(u8, Command, [u8; PARAMS]), Er
     p.copy_from_slice(&w[2..]);
     Ok((w[0], command, p))
 }
+
+/// A value that sits at a byte offset of P0..P6, little-endian: one definition serves the
+/// encoder and the decoder of every instruction that carries it.
+pub(crate) trait Param: Sized {
+    /// Writes `self` at `at`.
+    fn put(self, p: &mut [u8; PARAMS], at: usize);
+    /// Reads a value at `at` (an index out of its table is an error, never a panic).
+    fn take(p: &[u8; PARAMS], at: usize) -> Result<Self, Error>;
+}
+
+impl Param for u8 {
+    fn put(self, p: &mut [u8; PARAMS], at: usize) {
+        put(p, at, &[self]);
+    }
+    fn take(p: &[u8; PARAMS], at: usize) -> Result<Self, Error> {
+        Ok(byte(p, at))
+    }
+}
+
+impl Param for u16 {
+    fn put(self, p: &mut [u8; PARAMS], at: usize) {
+        put(p, at, &self.to_le_bytes());
+    }
+    fn take(p: &[u8; PARAMS], at: usize) -> Result<Self, Error> {
+        Ok(u16_at(p, at))
+    }
+}
+
+impl Param for i16 {
+    fn put(self, p: &mut [u8; PARAMS], at: usize) {
+        put(p, at, &self.to_le_bytes());
+    }
+    fn take(p: &[u8; PARAMS], at: usize) -> Result<Self, Error> {
+        Ok(i16_at(p, at))
+    }
+}
+
+impl Param for u32 {
+    fn put(self, p: &mut [u8; PARAMS], at: usize) {
+        put(p, at, &self.to_le_bytes());
+    }
+    fn take(p: &[u8; PARAMS], at: usize) -> Result<Self, Error> {
+        Ok(u32_at(p, at))
+    }
+}
+
+impl Param for i32 {
+    fn put(self, p: &mut [u8; PARAMS], at: usize) {
+        put(p, at, &self.to_le_bytes());
+    }
+    fn take(p: &[u8; PARAMS], at: usize) -> Result<Self, Error> {
+        Ok(i32_at(p, at))
+    }
+}
+
+/// A flag byte: 1 or 0 on the wire, bit 0 read back.
+impl Param for bool {
+    fn put(self, p: &mut [u8; PARAMS], at: usize) {
+        put(p, at, &[u8::from(self)]);
+    }
+    fn take(p: &[u8; PARAMS], at: usize) -> Result<Self, Error> {
+        Ok(bit0(p, at))
+    }
+}
+
+/// Consecutive bytes (a microstep table slice, flash data).
+impl<const N: usize> Param for [u8; N] {
+    fn put(self, p: &mut [u8; PARAMS], at: usize) {
+        put(p, at, &self);
+    }
+    fn take(p: &[u8; PARAMS], at: usize) -> Result<Self, Error> {
+        Ok(core::array::from_fn(|k| byte(p, at + k)))
+    }
+}

@@ -98,6 +98,16 @@ pub enum CurrentLevel {
     Off,
 }
 
+/// A current level travels as its wire index; an index out of the table is an error.
+impl crate::params::Param for CurrentLevel {
+    fn put(self, p: &mut [u8; crate::params::PARAMS], at: usize) {
+        self.index().put(p, at);
+    }
+    fn take(p: &[u8; crate::params::PARAMS], at: usize) -> Result<Self, Error> {
+        Self::from_index(u8::take(p, at)?)
+    }
+}
+
 impl CurrentLevel {
     /// The wire index 0..=8.
     pub const fn index(self) -> u8 {
@@ -203,6 +213,15 @@ macro_rules! flags {
             type Output = Self;
             fn bitor(self, rhs: Self) -> Self {
                 Self(self.0 | rhs.0)
+            }
+        }
+
+        impl crate::params::Param for $name {
+            fn put(self, p: &mut [u8; crate::params::PARAMS], at: usize) {
+                self.0.put(p, at);
+            }
+            fn take(p: &[u8; crate::params::PARAMS], at: usize) -> Result<Self, Error> {
+                <$repr>::take(p, at).map(Self)
             }
         }
     };
