@@ -13,6 +13,7 @@
 //! - [`LinkKind`] (stream or SPI) and [`SignalKind`] (digital in/out, analogue in): one
 //!   enum each for what the links, the drivers, the engine and the shared-memory contract
 //!   all mean.
+//! - [`Model`]: the board models, with their config id, contract code and link kind.
 //!
 //! ```
 //! use motion_base::{FixedQueue, FixedText, counts_to_i32};
@@ -35,11 +36,13 @@
 mod counts;
 mod duration;
 mod kinds;
+mod model;
 mod queue;
 mod text;
 
 pub use counts::{counts_to_i32, counts_to_i32_saturating};
 pub use duration::parse_duration;
 pub use kinds::{LinkKind, SignalKind, UnknownKind};
+pub use model::{Model, UnknownModel};
 pub use queue::FixedQueue;
 pub use text::{FixedText, floor_char_boundary, read_text, write_text};

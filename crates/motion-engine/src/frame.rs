@@ -1,8 +1,8 @@
 //! Writing the frame and the server description.
 
 use motion_ipc::{
-    AxisFlags, AxisInfo, AxisMode, AxisState, DeviceInfo, DeviceModel, FrameFlags, MotionFrame,
-    SCHEMA_VERSION, ServerInfo, SignalFlags, SignalInfo, SignalInfoFlags, SignalState, write_text,
+    AxisFlags, AxisInfo, AxisMode, AxisState, DeviceInfo, FrameFlags, MotionFrame, SCHEMA_VERSION,
+    ServerInfo, SignalFlags, SignalInfo, SignalInfoFlags, SignalState, write_text,
 };
 
 use crate::Engine;
@@ -148,12 +148,7 @@ impl Engine {
                 let status = driver.status();
                 write_text(&mut out.firmware, status.firmware());
                 out.state = u32::from(self.devices[index].state as u8);
-                out.model = match driver.model() {
-                    motion_drivers::Model::Qq2drv => DeviceModel::Qq2drv,
-                    motion_drivers::Model::Tmcpack => DeviceModel::Tmcpack,
-                    motion_drivers::Model::Spimotor => DeviceModel::Spimotor,
-                    motion_drivers::Model::Qsb => DeviceModel::Qsb,
-                } as u32;
+                out.model = driver.model().code();
             }
         }
     }

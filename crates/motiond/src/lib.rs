@@ -3,6 +3,7 @@
 #![deny(unsafe_code)] // one exception: rt.rs (sched_setscheduler), with SAFETY notes
 
 pub mod app;
+pub mod boards;
 pub mod config;
 pub mod drivers;
 pub mod error;

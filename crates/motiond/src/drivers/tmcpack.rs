@@ -208,7 +208,7 @@ pub fn driver_config(
 }
 
 /// The driver of tmcpack device `index`.
-pub(super) fn build(config: &ServerConfig, index: usize, device: &DeviceSpec) -> Box<dyn Driver> {
+pub(crate) fn build(config: &ServerConfig, index: usize, device: &DeviceSpec) -> Box<dyn Driver> {
     Box::new(TmcpackDriver::new(driver_config(config, index, device)))
 }
 
@@ -240,7 +240,7 @@ fn mask_list(mask: MotorMask) -> String {
 }
 
 /// The machine parameters of tmcpack device `index` and its axes, as the driver uses them.
-pub(super) fn describe(
+pub(crate) fn describe(
     config: &ServerConfig,
     index: usize,
     device: &DeviceSpec,

@@ -1,14 +1,15 @@
 //! The simulated boards behind `type = "sim"` links, built from the config (one module per
 //! board model).
 
-mod qq2drv;
-mod qsb;
-mod spimotor;
-mod tmcpack;
+pub(crate) mod qq2drv;
+pub(crate) mod qsb;
+pub(crate) mod spimotor;
+pub(crate) mod tmcpack;
 
-use motion_drivers::Model;
+use motion_drivers::LinkKind;
 use motion_link::sim::{SimLink, SpiBus, StreamBus};
 
+use crate::boards::{SimBoard, board};
 use crate::config::{ServerConfig, Transport};
 
 /// The simulated link `link` of `config` (a `type = "sim"` link) with the models of its
@@ -28,26 +29,20 @@ pub fn sim_link(config: &ServerConfig, link: usize) -> SimLink {
         .collect();
     let spi = devices
         .first()
-        .is_some_and(|(_, d)| matches!(d.model, Model::Qq2drv | Model::Spimotor));
+        .is_some_and(|(_, d)| d.model.link_kind() == LinkKind::Spi);
+    let mut spi_bus = SpiBus::new();
+    let mut stream_bus = StreamBus::new();
+    for &(index, device) in &devices {
+        // Validation keeps SPI and stream models apart; a model of the other kind is left out.
+        match (board(device.model).simulate)(config, index, device) {
+            SimBoard::Spi(model) if spi => spi_bus.push(model),
+            SimBoard::Stream(model) if !spi => stream_bus.push(model),
+            SimBoard::Spi(_) | SimBoard::Stream(_) => {}
+        }
+    }
     if spi {
-        let mut bus = SpiBus::new();
-        for &(index, device) in &devices {
-            match device.model {
-                Model::Qq2drv => bus.push(Box::new(qq2drv::model(config, index, device))),
-                Model::Spimotor => bus.push(Box::new(spimotor::model(config, index, device))),
-                Model::Tmcpack | Model::Qsb => {}
-            }
-        }
-        SimLink::spi(name, rate, Box::new(bus))
+        SimLink::spi(name, rate, Box::new(spi_bus))
     } else {
-        let mut bus = StreamBus::new();
-        for &(index, device) in &devices {
-            match device.model {
-                Model::Tmcpack => bus.push(Box::new(tmcpack::model(config, index, device))),
-                Model::Qsb => bus.push(Box::new(qsb::model(config, index, device))),
-                Model::Qq2drv | Model::Spimotor => {}
-            }
-        }
-        SimLink::stream(name, rate, Box::new(bus))
+        SimLink::stream(name, rate, Box::new(stream_bus))
     }
 }
