@@ -83,6 +83,7 @@
 //! Across hosts (feature `zenoh`): the same API through a `motion-bridge` running beside
 //! the server, `ClientBuilder::new("demo").remote("tcp/HOST:7447").identity("panel")`;
 //! see the [`remote`] module (with the feature) and `crates/motion-bridge/README.md`.
+#![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
 mod axis;

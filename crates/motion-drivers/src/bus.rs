@@ -124,6 +124,7 @@ impl LinkBus {
     }
 
     /// The earliest instant any driver has timed work.
+    #[must_use]
     pub fn poll_timeout(&self) -> Option<Duration> {
         self.drivers
             .iter()
@@ -133,6 +134,7 @@ impl LinkBus {
 
     /// The next message to put on the link, with the index of the driver that wrote it.
     /// `None` when nobody may or wants to send now.
+    #[must_use]
     pub fn poll_transmit(&mut self, now: Duration, buf: &mut [u8]) -> Option<(usize, Transmit)> {
         self.release_if_answered();
         if self.kind == LinkKind::Stream && self.in_flight.is_some() {

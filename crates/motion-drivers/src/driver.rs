@@ -63,12 +63,14 @@ pub trait Driver: Send + fmt::Debug {
     fn handle_timeout(&mut self, now: Duration);
 
     /// The earliest instant at which [`handle_timeout`](Self::handle_timeout) has work.
+    #[must_use]
     fn poll_timeout(&self) -> Option<Duration>;
 
     /// The priority of the message the driver would send now, or `None`.
     fn wants_transmit(&self, now: Duration) -> Option<Priority>;
 
     /// Writes the next message into `buf` (which holds at least 256 bytes).
+    #[must_use]
     fn poll_transmit(&mut self, now: Duration, buf: &mut [u8]) -> Option<Transmit>;
 
     /// Whether the driver still waits for the reply to its last request.

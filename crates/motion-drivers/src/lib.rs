@@ -5,6 +5,7 @@
 //! and never touch a file descriptor. A [`LinkBus`] puts several drivers on one link and
 //! enforces what no single driver sees: one request in flight on a shared serial bus,
 //! commands before polls, MISO bytes back to the transaction's owner.
+#![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
 mod bus;

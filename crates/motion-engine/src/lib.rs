@@ -40,6 +40,7 @@
 //! engine.step(Duration::from_millis(1), &mut NoCommands, &mut frame);
 //! assert_eq!(frame.tick, 1);
 //! ```
+#![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
 mod axis;
@@ -271,6 +272,7 @@ impl Engine {
     /// The next message for `link`, written into `buf` (at least 256 bytes); `None` when
     /// the link has nothing to send this tick. On an SPI link each message is one
     /// transaction.
+    #[must_use]
     pub fn poll_link_transmit(
         &mut self,
         link: usize,
@@ -288,6 +290,7 @@ impl Engine {
     }
 
     /// The earliest instant a driver has timed work (a reply timeout, a poll period).
+    #[must_use]
     pub fn poll_timeout(&self) -> Option<Duration> {
         self.buses.iter().filter_map(LinkBus::poll_timeout).min()
     }

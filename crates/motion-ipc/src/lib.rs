@@ -22,6 +22,7 @@
 //!     .with_values([12.5, 40.0, 200.0]);
 //! assert_eq!(request.kind(), Ok(CommandKind::RampPosition));
 //! ```
+#![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
 mod command;

@@ -59,11 +59,17 @@ pub enum LinkEvent {
 /// Counters an I/O thread keeps, read by the tick for `ServerStats`.
 #[derive(Debug, Default)]
 pub struct IoCounters {
+    /// Bytes read from the link.
     pub bytes_in: AtomicU64,
+    /// Bytes written to the link.
     pub bytes_out: AtomicU64,
+    /// I/O errors.
     pub errors: AtomicU64,
+    /// Successful reopens.
     pub reconnects: AtomicU64,
+    /// Packets or events dropped because a ring between the threads was full.
     pub dropped: AtomicU64,
+    /// The link is open.
     pub up: AtomicBool,
 }
 

@@ -1,5 +1,6 @@
 //! motiond, the real-time motion server: config, links, the timed loop around
 //! `motion_engine::Engine::step`, iceoryx2 services.
+#![warn(missing_docs)]
 #![deny(unsafe_code)] // one exception: rt.rs (sched_setscheduler), with SAFETY notes
 
 pub mod app;

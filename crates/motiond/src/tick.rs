@@ -73,10 +73,15 @@ pub enum Report {
 /// The figures of the status line (small and `Copy`: no allocation to report them).
 #[derive(Debug, Clone, Copy)]
 pub struct StatusLine {
+    /// The tick.
     pub tick: u64,
+    /// Wake-up latency since start.
     pub wakeup: motion_ipc::LatencySummary,
+    /// Tick work time since start.
     pub work: motion_ipc::LatencySummary,
+    /// Ticks that missed their deadline.
     pub overruns: u64,
+    /// Live client nodes.
     pub clients: u32,
     /// Bit i: link i is up.
     pub links_up: u32,
@@ -104,15 +109,25 @@ impl StatusLine {
 /// Everything the tick thread owns.
 #[derive(Debug)]
 pub struct TickSetup {
+    /// The engine, with its drivers.
     pub engine: Engine,
+    /// The tick's end of every link's I/O thread, in link order.
     pub ports: Vec<LinkPort>,
+    /// Link names, in link order (for the stats).
     pub link_names: Vec<String>,
+    /// `[server]` settings.
     pub settings: ServerSettings,
+    /// CLOCK_MONOTONIC at start: the engine's time is measured from here.
     pub epoch: Duration,
+    /// Set by the main thread: begin the shutdown stop.
     pub shutdown: Arc<AtomicBool>,
+    /// Clients the main thread found dead.
     pub dead_clients: Consumer<ClientId>,
+    /// Live clients, as the main thread counts them.
     pub clients_alive: Arc<AtomicU32>,
+    /// What the tick thread tells the main thread.
     pub reports: Producer<Report>,
+    /// `--require-rt`: fail unless the real-time set-up is complete.
     pub require_rt: bool,
     /// The machine parameters in effect (published once on `params`).
     pub params: Box<MachineParams>,

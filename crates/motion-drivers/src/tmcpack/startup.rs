@@ -227,6 +227,7 @@ impl Quiesce {
     }
 
     /// The next motor to ask `$21`, round-robin over those still moving.
+    #[must_use]
     pub fn poll_motor(&mut self) -> Option<u8> {
         let motor = (0..6u8)
             .map(|offset| (self.next_motor + offset) % 6)

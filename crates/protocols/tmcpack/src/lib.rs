@@ -63,6 +63,7 @@
 //! ```text
 //! cd crates/protocols/tmcpack/fuzz && cargo +nightly fuzz run stream
 //! ```
+#![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
 mod can;
