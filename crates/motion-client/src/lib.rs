@@ -96,6 +96,8 @@ mod error;
 mod feed;
 mod frames;
 mod jog;
+#[cfg(feature = "zenoh")]
+mod link;
 mod ports;
 mod ready;
 mod received;

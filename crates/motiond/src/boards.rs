@@ -1,13 +1,15 @@
-//! The model registry: what motiond does with each board model, in one table. The model's
-//! own facts (config id, contract code, link kind) are `motion_base::Model`; its machine
-//! keys are validated in `config/validate/machine/<model>.rs` (the key table of
-//! `machine/mod.rs` says which model has which key). Everything else a model needs from
-//! the server is a [`Board`] entry here.
+//! The model registry: what motiond does with each board model, in one table, and the
+//! three things done through it: [`build`] the drivers, [`describe`] their machine
+//! parameters, serve a `type = "sim"` link with simulated boards ([`sim_link`]). The
+//! model's own facts (config id, contract code, link kind) are `motion_base::Model`; its
+//! machine keys are validated in `config/validate/machine/<model>.rs` (the key table of
+//! `machine/mod.rs` says which model has which key), its channel count and pin table are
+//! `config::channel_count` and `DeviceSpec::pins`.
 
-use motion_drivers::{Driver, Model, PinInfo};
-use motion_link::sim::{SpiDevice, StreamDevice};
+use motion_drivers::{Driver, LinkKind, Model};
+use motion_link::sim::{SimLink, SpiBus, SpiDevice, StreamBus, StreamDevice};
 
-use crate::config::{DeviceSpec, PackVariant, QsbVariant, ServerConfig};
+use crate::config::{DeviceSpec, ServerConfig, Transport};
 use crate::drivers::{self, ParamRow};
 use crate::sim_models;
 
@@ -39,8 +41,6 @@ pub struct Board {
     pub describe: fn(&ServerConfig, usize, &DeviceSpec, &mut Vec<ParamRow>),
     /// The simulated board of device `index`, configured like the machine.
     pub simulate: fn(&ServerConfig, usize, &DeviceSpec) -> SimBoard,
-    /// The device's I/O pins (the model's pin table for its variant).
-    pub pins: fn(&DeviceSpec) -> &'static [PinInfo],
 }
 
 const QQ2DRV: Board = Board {
@@ -50,7 +50,6 @@ const QQ2DRV: Board = Board {
     simulate: |config, index, device| {
         SimBoard::Spi(Box::new(sim_models::qq2drv::model(config, index, device)))
     },
-    pins: |_| motion_drivers::qq2drv::PINS,
 };
 
 const TMCPACK: Board = Board {
@@ -59,12 +58,6 @@ const TMCPACK: Board = Board {
     describe: drivers::tmcpack::describe,
     simulate: |config, index, device| {
         SimBoard::Stream(Box::new(sim_models::tmcpack::model(config, index, device)))
-    },
-    pins: |device| {
-        motion_drivers::tmcpack::pins(match device.variant {
-            PackVariant::Sixpack => tmcpack::Variant::SixPack,
-            PackVariant::Quadpack => tmcpack::Variant::QuadPack,
-        })
     },
 };
 
@@ -75,7 +68,6 @@ const SPIMOTOR: Board = Board {
     simulate: |config, index, device| {
         SimBoard::Spi(Box::new(sim_models::spimotor::model(config, index, device)))
     },
-    pins: |_| motion_drivers::spimotor::PINS,
 };
 
 const QSB: Board = Board {
@@ -84,13 +76,6 @@ const QSB: Board = Board {
     describe: drivers::qsb::describe,
     simulate: |config, index, device| {
         SimBoard::Stream(Box::new(sim_models::qsb::model(config, index, device)))
-    },
-    pins: |device| {
-        motion_drivers::qsb::pins(match device.qsb_variant {
-            QsbVariant::M => qsb::ProductType::M,
-            QsbVariant::S => qsb::ProductType::S,
-            QsbVariant::D => qsb::ProductType::D,
-        })
     },
 };
 
@@ -102,6 +87,59 @@ pub const fn board(model: Model) -> &'static Board {
         Model::Tmcpack => &TMCPACK,
         Model::Spimotor => &SPIMOTOR,
         Model::Qsb => &QSB,
+    }
+}
+
+/// Builds the drivers of `config`'s devices, in config order.
+pub fn build(config: &ServerConfig) -> anyhow::Result<Vec<Box<dyn Driver>>> {
+    let mut drivers: Vec<Box<dyn Driver>> = Vec::with_capacity(config.devices.len());
+    for (index, device) in config.devices.iter().enumerate() {
+        drivers.push((board(device.model).build)(config, index, device)?);
+    }
+    Ok(drivers)
+}
+
+/// Every machine parameter of every device and axis, with the value in effect.
+pub fn describe(config: &ServerConfig) -> Vec<ParamRow> {
+    let mut rows = Vec::new();
+    for (index, device) in config.devices.iter().enumerate() {
+        (board(device.model).describe)(config, index, device, &mut rows);
+    }
+    rows
+}
+
+/// The simulated link `link` of `config` (a `type = "sim"` link) with the models of its
+/// devices, at its rate (baud for serial boards, SPI clock for SPI boards).
+pub fn sim_link(config: &ServerConfig, link: usize) -> SimLink {
+    let spec = &config.links[link];
+    let name = spec.name.as_str();
+    let rate = match spec.transport {
+        Transport::Sim { rate } => rate,
+        _ => 1_000_000,
+    };
+    let devices: Vec<(usize, &DeviceSpec)> = config
+        .devices
+        .iter()
+        .enumerate()
+        .filter(|(_, d)| d.link == link)
+        .collect();
+    let spi = devices
+        .first()
+        .is_some_and(|(_, d)| d.model.link_kind() == LinkKind::Spi);
+    let mut spi_bus = SpiBus::new();
+    let mut stream_bus = StreamBus::new();
+    for &(index, device) in &devices {
+        // Validation keeps SPI and stream models apart; a model of the other kind is left out.
+        match (board(device.model).simulate)(config, index, device) {
+            SimBoard::Spi(model) if spi => spi_bus.push(model),
+            SimBoard::Stream(model) if !spi => stream_bus.push(model),
+            SimBoard::Spi(_) | SimBoard::Stream(_) => {}
+        }
+    }
+    if spi {
+        SimLink::spi(name, rate, Box::new(spi_bus))
+    } else {
+        SimLink::stream(name, rate, Box::new(stream_bus))
     }
 }
 

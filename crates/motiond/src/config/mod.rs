@@ -163,7 +163,19 @@ impl DeviceSpec {
 
     /// The device's I/O pins (the model's pin table for its variant).
     pub fn pins(&self) -> &'static [PinInfo] {
-        (crate::boards::board(self.model).pins)(self)
+        match self.model {
+            Model::Qq2drv => motion_drivers::qq2drv::PINS,
+            Model::Spimotor => motion_drivers::spimotor::PINS,
+            Model::Tmcpack => motion_drivers::tmcpack::pins(match self.variant {
+                PackVariant::Sixpack => tmcpack::Variant::SixPack,
+                PackVariant::Quadpack => tmcpack::Variant::QuadPack,
+            }),
+            Model::Qsb => motion_drivers::qsb::pins(match self.qsb_variant {
+                QsbVariant::M => qsb::ProductType::M,
+                QsbVariant::S => qsb::ProductType::S,
+                QsbVariant::D => qsb::ProductType::D,
+            }),
+        }
     }
 }
 

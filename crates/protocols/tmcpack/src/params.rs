@@ -88,41 +88,21 @@ impl Param for u8 {
     }
 }
 
-impl Param for u16 {
-    fn put(self, p: &mut [u8; PARAMS], at: usize) {
-        put(p, at, &self.to_le_bytes());
-    }
-    fn take(p: &[u8; PARAMS], at: usize) -> Result<Self, Error> {
-        Ok(u16_at(p, at))
-    }
+/// Multi-byte integers, least significant byte first (manual section 8).
+macro_rules! le_param {
+    ($($ty:ty => $at:ident),*) => {$(
+        impl Param for $ty {
+            fn put(self, p: &mut [u8; PARAMS], at: usize) {
+                put(p, at, &self.to_le_bytes());
+            }
+            fn take(p: &[u8; PARAMS], at: usize) -> Result<Self, Error> {
+                Ok($at(p, at))
+            }
+        }
+    )*};
 }
 
-impl Param for i16 {
-    fn put(self, p: &mut [u8; PARAMS], at: usize) {
-        put(p, at, &self.to_le_bytes());
-    }
-    fn take(p: &[u8; PARAMS], at: usize) -> Result<Self, Error> {
-        Ok(i16_at(p, at))
-    }
-}
-
-impl Param for u32 {
-    fn put(self, p: &mut [u8; PARAMS], at: usize) {
-        put(p, at, &self.to_le_bytes());
-    }
-    fn take(p: &[u8; PARAMS], at: usize) -> Result<Self, Error> {
-        Ok(u32_at(p, at))
-    }
-}
-
-impl Param for i32 {
-    fn put(self, p: &mut [u8; PARAMS], at: usize) {
-        put(p, at, &self.to_le_bytes());
-    }
-    fn take(p: &[u8; PARAMS], at: usize) -> Result<Self, Error> {
-        Ok(i32_at(p, at))
-    }
-}
+le_param!(u16 => u16_at, i16 => i16_at, u32 => u32_at, i32 => i32_at);
 
 /// A flag byte: 1 or 0 on the wire, bit 0 read back.
 impl Param for bool {
