@@ -71,6 +71,7 @@ mod command;
 pub mod convert;
 mod decoder;
 mod error;
+#[macro_use]
 mod params;
 mod reply;
 mod request;

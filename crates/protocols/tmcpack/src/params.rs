@@ -39,6 +39,59 @@ pub(crate) fn bit0(p: &[u8; PARAMS], i: usize) -> bool {
     byte(p, i) & 1 != 0
 }
 
+/// A whole 9-byte word type (manual 6.1): an address byte and a typed message (`$field`)
+/// whose `command()`, `encode_params` and `decode_params` give the rest. Requests and
+/// replies are framed alike.
+macro_rules! word_frame {
+    (
+        $(#[$meta:meta])*
+        $frame:ident {
+            $(#[$ameta:meta])*
+            address,
+            $(#[$fmeta:meta])*
+            $field:ident: $ty:ident,
+        }
+        $(#[$newmeta:meta])*
+        new
+    ) => {
+        $(#[$meta])*
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        pub struct $frame {
+            $(#[$ameta])*
+            pub address: u8,
+            $(#[$fmeta])*
+            pub $field: $ty,
+        }
+
+        impl $frame {
+            $(#[$newmeta])*
+            pub const fn new(address: u8, $field: $ty) -> Self {
+                Self { address, $field }
+            }
+
+            /// The 9-byte word.
+            pub fn to_word(&self) -> Result<$crate::Word, $crate::Error> {
+                let p = self.$field.encode_params()?;
+                Ok($crate::params::assemble(self.address, self.$field.command(), &p))
+            }
+
+            /// Encodes the 9-byte word into `buf`; returns 9.
+            pub fn encode(&self, buf: &mut [u8]) -> Result<usize, $crate::Error> {
+                $crate::params::write_word(&self.to_word()?, buf)
+            }
+
+            /// Decodes exactly one 9-byte word.
+            pub fn decode(bytes: &[u8]) -> Result<Self, $crate::Error> {
+                let (address, command, p) = $crate::params::split_word(bytes)?;
+                Ok(Self {
+                    address,
+                    $field: $ty::decode_params(command, &p)?,
+                })
+            }
+        }
+    };
+}
+
 /// The 9-byte word of `address`, `command` and the parameters `p` (manual 6.1): the
 /// framing requests and replies share.
 pub(crate) fn assemble(address: u8, command: Command, p: &[u8; PARAMS]) -> Word {

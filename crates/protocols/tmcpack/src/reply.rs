@@ -1,11 +1,9 @@
 //! Typed replies (pack → host): the responses tabled in manual section 8.
 
-use crate::params::{
-    PARAMS, assemble, bit0, byte, i16_at, i32_at, put, split_word, u16_at, write_word,
-};
+use crate::params::{PARAMS, bit0, byte, i16_at, i32_at, put, u16_at};
 use crate::request::MAX_CHANNEL;
 use crate::types::{Action, PowerDownStatus, RefInputs, check_motor};
-use crate::{Command, Error, Word};
+use crate::{Command, Error};
 
 /// Highest analogue value ($30: "unsigned 0..1023").
 pub const MAX_ANALOG: u16 = 1023;
@@ -274,38 +272,14 @@ impl Reply {
     }
 }
 
-/// A whole reply word: the response address given in the request, the command, P0..P6.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub struct ReplyFrame {
-    /// The response address the request carried.
-    pub address: u8,
-    /// The reply.
-    pub reply: Reply,
-}
-
-impl ReplyFrame {
+word_frame! {
+    /// A whole reply word: the response address given in the request, the command, P0..P6.
+    ReplyFrame {
+        /// The response address the request carried.
+        address,
+        /// The reply.
+        reply: Reply,
+    }
     /// A reply sent to `address`.
-    pub const fn new(address: u8, reply: Reply) -> Self {
-        Self { address, reply }
-    }
-
-    /// The 9-byte word.
-    pub fn to_word(&self) -> Result<Word, Error> {
-        let p = self.reply.encode_params()?;
-        Ok(assemble(self.address, self.reply.command(), &p))
-    }
-
-    /// Encodes the 9-byte word into `buf`; returns 9.
-    pub fn encode(&self, buf: &mut [u8]) -> Result<usize, Error> {
-        write_word(&self.to_word()?, buf)
-    }
-
-    /// Decodes exactly one 9-byte word.
-    pub fn decode(bytes: &[u8]) -> Result<Self, Error> {
-        let (address, command, p) = split_word(bytes)?;
-        Ok(Self {
-            address,
-            reply: Reply::decode_params(command, &p)?,
-        })
-    }
+    new
 }

@@ -1,6 +1,6 @@
 //! Typed requests (host → pack), one variant per instruction of the section 9 table.
 
-use crate::params::{PARAMS, Param, assemble, split_word, write_word};
+use crate::params::{PARAMS, Param};
 use crate::types::{
     CurrentLevel, MotorMask, MotorOptions, MotorType, PowerDownRequest, ReferenceFlags, check_motor,
 };
@@ -59,7 +59,7 @@ macro_rules! instructions {
         }
     };
 }
-use crate::{Command, Error, Word};
+use crate::{Command, Error};
 
 /// Highest velocity value (manual 8.2: "range: -511..+511").
 pub const MAX_VELOCITY: u16 = 511;
@@ -516,38 +516,14 @@ impl Request {
     }
 }
 
-/// A whole request word: the pack's address, the command and P0..P6 (manual 6.1).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub struct RequestFrame {
-    /// Address of the pack (rotary switches, or $42).
-    pub address: u8,
-    /// The request.
-    pub request: Request,
-}
-
-impl RequestFrame {
+word_frame! {
+    /// A whole request word: the pack's address, the command and P0..P6 (manual 6.1).
+    RequestFrame {
+        /// Address of the pack (rotary switches, or $42).
+        address,
+        /// The request.
+        request: Request,
+    }
     /// A request to the pack at `address`.
-    pub const fn new(address: u8, request: Request) -> Self {
-        Self { address, request }
-    }
-
-    /// The 9-byte word.
-    pub fn to_word(&self) -> Result<Word, Error> {
-        let p = self.request.encode_params()?;
-        Ok(assemble(self.address, self.request.command(), &p))
-    }
-
-    /// Encodes the 9-byte word into `buf`; returns 9.
-    pub fn encode(&self, buf: &mut [u8]) -> Result<usize, Error> {
-        write_word(&self.to_word()?, buf)
-    }
-
-    /// Decodes exactly one 9-byte word.
-    pub fn decode(bytes: &[u8]) -> Result<Self, Error> {
-        let (address, command, p) = split_word(bytes)?;
-        Ok(Self {
-            address,
-            request: Request::decode_params(command, &p)?,
-        })
-    }
+    new
 }
