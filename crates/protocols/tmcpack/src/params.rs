@@ -157,6 +157,51 @@ macro_rules! le_param {
 
 le_param!(u16 => u16_at, i16 => i16_at, u32 => u32_at, i32 => i32_at);
 
+impl Param for i8 {
+    fn put(self, p: &mut [u8; PARAMS], at: usize) {
+        put(p, at, &self.to_le_bytes());
+    }
+    fn take(p: &[u8; PARAMS], at: usize) -> Result<Self, Error> {
+        Ok(i8::from_le_bytes([byte(p, at)]))
+    }
+}
+
+/// A success byte read strictly: 1 is success, anything else is not ("P0 = 1 when … went
+/// well"); written as 1 or 0. Named in a table with `via exact_one`.
+pub(crate) mod exact_one {
+    use super::{PARAMS, Param, byte};
+    use crate::Error;
+
+    pub(crate) fn put(value: bool, p: &mut [u8; PARAMS], at: usize) {
+        value.put(p, at);
+    }
+
+    pub(crate) fn take(p: &[u8; PARAMS], at: usize) -> Result<bool, Error> {
+        Ok(byte(p, at) == 1)
+    }
+}
+
+/// Writes `$value` at `$at` with the field's codec: its type's [`Param`], or the module
+/// named after `via`.
+macro_rules! put_field {
+    ($value:expr, $p:expr, $at:expr) => {
+        $crate::params::Param::put($value, $p, $at)
+    };
+    ($value:expr, $p:expr, $at:expr, $codec:ident) => {
+        $crate::params::$codec::put($value, $p, $at)
+    };
+}
+
+/// Reads a field at `$at` with its codec (see [`put_field!`]).
+macro_rules! take_field {
+    ($p:expr, $at:expr) => {
+        $crate::params::Param::take($p, $at)
+    };
+    ($p:expr, $at:expr, $codec:ident) => {
+        $crate::params::$codec::take($p, $at)
+    };
+}
+
 /// A flag byte: 1 or 0 on the wire, bit 0 read back.
 impl Param for bool {
     fn put(self, p: &mut [u8; PARAMS], at: usize) {

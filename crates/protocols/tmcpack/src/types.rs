@@ -37,6 +37,29 @@ pub enum Action {
     Unknown(u8),
 }
 
+/// An action travels as its code ([`Action::to_u8`] / [`Action::from_u8`]).
+impl crate::params::Param for Action {
+    fn put(self, p: &mut [u8; crate::params::PARAMS], at: usize) {
+        self.to_u8().put(p, at);
+    }
+    fn take(p: &[u8; crate::params::PARAMS], at: usize) -> Result<Self, Error> {
+        u8::take(p, at).map(Self::from_u8)
+    }
+}
+
+/// Consecutive action bytes ($28: P0..P5 for motors 0..5).
+impl<const N: usize> crate::params::Param for [Action; N] {
+    fn put(self, p: &mut [u8; crate::params::PARAMS], at: usize) {
+        for (k, action) in self.into_iter().enumerate() {
+            action.put(p, at + k);
+        }
+    }
+    fn take(p: &[u8; crate::params::PARAMS], at: usize) -> Result<Self, Error> {
+        let bytes = <[u8; N]>::take(p, at)?;
+        Ok(bytes.map(Action::from_u8))
+    }
+}
+
 impl Action {
     /// The wire value.
     pub const fn to_u8(self) -> u8 {
