@@ -39,6 +39,82 @@ pub(crate) fn bit0(p: &[u8; PARAMS], i: usize) -> bool {
     byte(p, i) & 1 != 0
 }
 
+/// One table per message drives its type, its encoder and its decoder: each variant of the
+/// enum is written once, every field with the byte of P0..P6 it starts at (`field: Type =
+/// offset`, little-endian, [`Param`]; `via codec` where a field is not read as its type's
+/// `Param`), and with the [`Command`](crate::Command) it is (a request: the variant's own
+/// name) or answers (a reply: `Variant => Command`). The macro defines the enum,
+/// `command()`, and `put_params` / `take_params` (the two directions of the parameter
+/// bytes) from that one list, so they cannot drift apart. `unmatched` maps a command the
+/// table has no variant for to an error (replies: the instructions with no reply).
+macro_rules! message_table {
+    (
+        $(#[$meta:meta])*
+        pub enum $name:ident {
+            $(
+                $(#[$vmeta:meta])*
+                $variant:ident $(=> $command:ident)? $({
+                    $(
+                        $(#[$fmeta:meta])*
+                        $field:ident : $ty:ty = $at:literal $(via $codec:ident)?
+                    ),* $(,)?
+                })?
+            ),* $(,)?
+        }
+        $(unmatched: $unmatched:expr)?
+    ) => {
+        $(#[$meta])*
+        pub enum $name {
+            $(
+                $(#[$vmeta])*
+                $variant $({ $( $(#[$fmeta])* $field: $ty ),* })?
+            ),*
+        }
+
+        impl $name {
+            /// The instruction code (of the instruction a reply answers).
+            pub const fn command(&self) -> $crate::Command {
+                match self {
+                    $( Self::$variant { .. } => command_of!($variant $(, $command)?) ),*
+                }
+            }
+
+            /// Writes the fields at their offsets (no validation).
+            fn put_params(&self, p: &mut [u8; $crate::params::PARAMS]) {
+                match *self {
+                    $( Self::$variant $({ $($field),* })? => {
+                        $( $( put_field!($field, p, $at $(, $codec)?); )* )?
+                    } )*
+                }
+            }
+
+            /// Reads the fields of a message of `command` from their offsets (no
+            /// validation).
+            fn take_params(
+                command: $crate::Command,
+                p: &[u8; $crate::params::PARAMS],
+            ) -> Result<Self, $crate::Error> {
+                Ok(match command {
+                    $( command_of!($variant $(, $command)?) => Self::$variant $({
+                        $( $field: take_field!(p, $at $(, $codec)?)? ),*
+                    })?, )*
+                    $( other => return Err(($unmatched)(other)), )?
+                })
+            }
+        }
+    };
+}
+
+/// The command of a table row: the one named after `=>`, else the variant's own name.
+macro_rules! command_of {
+    ($variant:ident) => {
+        $crate::Command::$variant
+    };
+    ($variant:ident, $command:ident) => {
+        $crate::Command::$command
+    };
+}
+
 /// A whole 9-byte word type (manual 6.1): an address byte and a typed message (`$field`)
 /// whose `command()`, `encode_params` and `decode_params` give the rest. Requests and
 /// replies are framed alike.

@@ -4,68 +4,12 @@ use crate::params::PARAMS;
 use crate::request::MAX_CHANNEL;
 use crate::types::{Action, PowerDownStatus, RefInputs, check_motor};
 
-/// One table per reply drives the type, the encoder and the decoder, like the requests'
-/// table: each variant of [`Reply`] is written once as `Variant => Command { field: Type =
-/// offset }` (the instruction it answers, each field with the byte of P0..P6 it starts at,
-/// `via codec` where a field is not read as its type's `Param`).
-macro_rules! replies {
-    (
-        $(#[$meta:meta])*
-        pub enum Reply {
-            $(
-                $(#[$vmeta:meta])*
-                $variant:ident => $command:ident {
-                    $(
-                        $(#[$fmeta:meta])*
-                        $field:ident : $ty:ty = $at:literal $(via $codec:ident)?
-                    ),* $(,)?
-                }
-            ),* $(,)?
-        }
-    ) => {
-        $(#[$meta])*
-        pub enum Reply {
-            $(
-                $(#[$vmeta])*
-                $variant { $( $(#[$fmeta])* $field: $ty ),* }
-            ),*
-        }
-
-        impl Reply {
-            /// The instruction code this reply answers.
-            pub const fn command(&self) -> Command {
-                match self {
-                    $( Self::$variant { .. } => Command::$command ),*
-                }
-            }
-
-            /// Writes the fields at their offsets (no validation).
-            fn put_params(&self, p: &mut [u8; PARAMS]) {
-                match *self {
-                    $( Self::$variant { $($field),* } => {
-                        $( put_field!($field, p, $at $(, $codec)?); )*
-                    } )*
-                }
-            }
-
-            /// Reads the fields of a reply to `command` from their offsets (no validation).
-            fn take_params(command: Command, p: &[u8; PARAMS]) -> Result<Self, Error> {
-                Ok(match command {
-                    $( Command::$command => Self::$variant {
-                        $( $field: take_field!(p, $at $(, $codec)?)? ),*
-                    }, )*
-                    other => return Err(Error::NoReply(other.code())),
-                })
-            }
-        }
-    };
-}
 use crate::{Command, Error};
 
 /// Highest analogue value ($30: "unsigned 0..1023").
 pub const MAX_ANALOG: u16 = 1023;
 
-replies! {
+message_table! {
 /// A response, without its address byte. See [`ReplyFrame`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Reply {
@@ -156,6 +100,7 @@ pub enum Reply {
         ok: bool = 0 via exact_one,
     },
 }
+unmatched: |other: Command| Error::NoReply(other.code())
 }
 
 impl Reply {

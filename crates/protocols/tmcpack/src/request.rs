@@ -1,64 +1,10 @@
 //! Typed requests (host → pack), one variant per instruction of the section 9 table.
 
-use crate::params::{PARAMS, Param};
+use crate::params::PARAMS;
 use crate::types::{
     CurrentLevel, MotorMask, MotorOptions, MotorType, PowerDownRequest, ReferenceFlags, check_motor,
 };
 
-/// One table per instruction drives the type, the encoder and the decoder: each variant of
-/// [`Request`] is written once, every field with the byte of P0..P6 it starts at
-/// (`field: Type = offset`, little-endian, [`Param`]); the variant's name is its
-/// [`Command`]. The macro defines the enum, [`Request::command`], and the two directions of
-/// the parameter bytes from that one list, so they cannot drift apart.
-macro_rules! instructions {
-    (
-        $(#[$meta:meta])*
-        pub enum Request {
-            $(
-                $(#[$vmeta:meta])*
-                $variant:ident $({
-                    $(
-                        $(#[$fmeta:meta])*
-                        $field:ident : $ty:ty = $at:literal
-                    ),* $(,)?
-                })?
-            ),* $(,)?
-        }
-    ) => {
-        $(#[$meta])*
-        pub enum Request {
-            $(
-                $(#[$vmeta])*
-                $variant $({ $( $(#[$fmeta])* $field: $ty ),* })?
-            ),*
-        }
-
-        impl Request {
-            /// The instruction code.
-            pub const fn command(&self) -> Command {
-                match self {
-                    $( Self::$variant { .. } => Command::$variant ),*
-                }
-            }
-
-            /// Writes the fields at their offsets (no validation).
-            fn put_params(&self, p: &mut [u8; PARAMS]) {
-                match *self {
-                    $( Self::$variant $({ $($field),* })? => {
-                        $( $( Param::put($field, p, $at); )* )?
-                    } )*
-                }
-            }
-
-            /// Reads the fields of `command` from their offsets (no validation).
-            fn take_params(command: Command, p: &[u8; PARAMS]) -> Result<Self, Error> {
-                Ok(match command {
-                    $( Command::$variant => Self::$variant $({ $( $field: Param::take(p, $at)? ),* })? , )*
-                })
-            }
-        }
-    };
-}
 use crate::{Command, Error};
 
 /// Highest velocity value (manual 8.2: "range: -511..+511").
@@ -77,7 +23,7 @@ pub const MAX_SWITCHOVER: u16 = 1000;
 /// Highest analogue channel ($30: "0..7").
 pub const MAX_CHANNEL: u8 = 7;
 
-instructions! {
+message_table! {
 /// A request, without its address byte. See [`RequestFrame`] for the whole 9-byte word.
 ///
 /// Field names follow the manual; `reply_to` is the "response address" a query carries.
