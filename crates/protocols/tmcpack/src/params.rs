@@ -79,6 +79,24 @@ macro_rules! message_table {
                 }
             }
 
+            /// Writes P0..P6 (unused bytes zero). Validates first.
+            pub fn encode_params(&self) -> Result<[u8; $crate::params::PARAMS], $crate::Error> {
+                self.validate()?;
+                let mut p = [0u8; $crate::params::PARAMS];
+                self.put_params(&mut p);
+                Ok(p)
+            }
+
+            /// Parses P0..P6 of a message of `command` and validates the result.
+            pub fn decode_params(
+                command: $crate::Command,
+                p: &[u8; $crate::params::PARAMS],
+            ) -> Result<Self, $crate::Error> {
+                let message = Self::take_params(command, p)?;
+                message.validate()?;
+                Ok(message)
+            }
+
             /// Writes the fields at their offsets (no validation).
             fn put_params(&self, p: &mut [u8; $crate::params::PARAMS]) {
                 match *self {

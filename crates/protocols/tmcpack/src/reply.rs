@@ -1,6 +1,5 @@
 //! Typed replies (pack → host): the responses tabled in manual section 8.
 
-use crate::params::PARAMS;
 use crate::request::MAX_CHANNEL;
 use crate::types::{Action, PowerDownStatus, RefInputs, check_motor};
 
@@ -123,21 +122,6 @@ impl Reply {
             }
             _ => Ok(()),
         }
-    }
-
-    /// Writes P0..P6 (unused bytes zero). Validates first.
-    pub fn encode_params(&self) -> Result<[u8; PARAMS], Error> {
-        self.validate()?;
-        let mut p = [0u8; PARAMS];
-        self.put_params(&mut p);
-        Ok(p)
-    }
-
-    /// Parses P0..P6 of a reply to `command`.
-    pub fn decode_params(command: Command, p: &[u8; PARAMS]) -> Result<Self, Error> {
-        let reply = Self::take_params(command, p)?;
-        reply.validate()?;
-        Ok(reply)
     }
 }
 

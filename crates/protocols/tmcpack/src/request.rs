@@ -1,11 +1,10 @@
 //! Typed requests (host → pack), one variant per instruction of the section 9 table.
 
-use crate::params::PARAMS;
 use crate::types::{
     CurrentLevel, MotorMask, MotorOptions, MotorType, PowerDownRequest, ReferenceFlags, check_motor,
 };
 
-use crate::{Command, Error};
+use crate::Error;
 
 /// Highest velocity value (manual 8.2: "range: -511..+511").
 pub const MAX_VELOCITY: u16 = 511;
@@ -444,21 +443,6 @@ impl Request {
             Self::CanRs232 { forward_count, .. } => range(forward_count <= 8, "forward count"),
             _ => Ok(()),
         }
-    }
-
-    /// Writes P0..P6 (unused bytes zero). Validates first.
-    pub fn encode_params(&self) -> Result<[u8; PARAMS], Error> {
-        self.validate()?;
-        let mut p = [0u8; PARAMS];
-        self.put_params(&mut p);
-        Ok(p)
-    }
-
-    /// Parses P0..P6 for `command` and validates the result.
-    pub fn decode_params(command: Command, p: &[u8; PARAMS]) -> Result<Self, Error> {
-        let req = Self::take_params(command, p)?;
-        req.validate()?;
-        Ok(req)
     }
 }
 
