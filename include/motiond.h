@@ -45,7 +45,7 @@ extern "C" {
 /* --- constants ------------------------------------------------------------------------ */
 
 /** Version of the contract; every payload carries it. */
-#define MOTIOND_SCHEMA_VERSION 2u
+#define MOTIOND_SCHEMA_VERSION 3u
 /** Capacity of the axis arrays of the frame and the server info. */
 #define MOTIOND_MAX_AXES 128u
 /** Capacity of the device array of the server info. */
@@ -449,7 +449,7 @@ typedef struct motiond_link_stats {
     uint32_t reserved;              /**< zero */
 } motiond_link_stats_t;
 
-/** Server figures, published about once a second. 1448 bytes, alignment 8. */
+/** Server figures, published about once a second. 1472 bytes, alignment 8. */
 typedef struct motiond_server_stats {
     uint32_t schema_version;                    /**< MOTIOND_SCHEMA_VERSION */
     uint32_t link_count;                        /**< valid entries of links */
@@ -468,6 +468,9 @@ typedef struct motiond_server_stats {
     uint64_t frames_lost;                       /**< ticks whose frame could not be sent */
     uint32_t full_services;                     /**< MOTIOND_FULL_SERVICES_* bits, now */
     uint32_t full_events;                       /**< times a service was found full */
+    uint64_t publish_failures;                  /**< info/stats/params samples and tick notifications not sent */
+    uint64_t replies_lost;                      /**< command replies that could not be sent */
+    uint64_t events_dropped;                    /**< log reports and iceoryx2 housekeeping that failed */
 } motiond_server_stats_t;
 
 /* Sizes and alignments the Rust side pins (crates/motion-ipc/tests/layout.rs). */
@@ -485,7 +488,7 @@ MOTIOND_STATIC_ASSERT(sizeof(motiond_machine_param_t) == 88, "motiond_machine_pa
 MOTIOND_STATIC_ASSERT(sizeof(motiond_machine_params_t) == 180240, "motiond_machine_params_t size");
 MOTIOND_STATIC_ASSERT(sizeof(motiond_latency_summary_t) == 40, "motiond_latency_summary_t size");
 MOTIOND_STATIC_ASSERT(sizeof(motiond_link_stats_t) == 80, "motiond_link_stats_t size");
-MOTIOND_STATIC_ASSERT(sizeof(motiond_server_stats_t) == 1448, "motiond_server_stats_t size");
+MOTIOND_STATIC_ASSERT(sizeof(motiond_server_stats_t) == 1472, "motiond_server_stats_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_motion_frame_t) == 8, "motiond_motion_frame_t align");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_machine_params_t) == 4, "motiond_machine_params_t align");
 

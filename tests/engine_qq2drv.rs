@@ -13,8 +13,8 @@ use motion_drivers::qq2drv::{
     AxisLimits, ChannelConfig, FILLER, HomeInput, POLL_SLACK, Qq2drvDriver, Qq2drvDriverConfig,
     STATUS_MASK, STREAM_MASK,
 };
-use motion_drivers::{BusKind, Driver, Goal};
-use motion_engine::{AxisConfig, DeviceConfig, EngineConfig, LinkConfig};
+use motion_drivers::{Driver, Goal, LinkKind};
+use motion_engine::{AxisConfig, BusConfig, DeviceConfig, EngineConfig};
 use motion_ipc::{AxisFlags, AxisMode, CommandKind, FaultCode, Reason};
 use motion_link::sim::{Direction, SimFaults, SimLink};
 use motion_sim::qq2drv::{InputPin, InputSource, Qq2drvSim, Qq2drvSimConfig};
@@ -110,9 +110,9 @@ fn rig_with(driver: Qq2drvDriver, model: Qq2drvSim) -> (Rig, Board, SimFaults) {
         name: "qq2drv".into(),
         tick_hz: 1000,
         command_timeout: Duration::from_millis(250),
-        links: vec![LinkConfig {
+        links: vec![BusConfig {
             name: "spi0".into(),
-            kind: BusKind::Spi,
+            kind: LinkKind::Spi,
         }],
         devices: vec![DeviceConfig {
             name: "quad".into(),

@@ -14,7 +14,7 @@ use core::time::Duration;
 use std::sync::{Arc, Mutex};
 
 use motion_drivers::qsb::{QsbDriver, QsbDriverConfig};
-use motion_engine::{AxisConfig, DeviceConfig, EngineConfig, LinkConfig};
+use motion_engine::{AxisConfig, BusConfig, DeviceConfig, EngineConfig};
 use motion_ipc::{AxisFlags, AxisMode, AxisState, CommandKind, FaultCode, Reason};
 use motion_link::sim::{Direction, SimFaults, SimLink};
 use motion_sim::qsb::{EncoderMotion, QsbSim, QsbSimConfig, Variant};
@@ -63,9 +63,9 @@ fn rig_with(sim: QsbSimConfig, driver: QsbDriverConfig, command_timeout: Duratio
         name: "qsb".into(),
         tick_hz: 1000,
         command_timeout,
-        links: vec![LinkConfig {
+        links: vec![BusConfig {
             name: "usb0".into(),
-            kind: motion_drivers::BusKind::Stream,
+            kind: motion_drivers::LinkKind::Stream,
         }],
         devices: vec![DeviceConfig {
             name: "feeder_qsb".into(),

@@ -10,8 +10,8 @@ use core::time::Duration;
 use std::sync::{Arc, Mutex};
 
 use motion_drivers::spimotor::{AxisLimits, SpimotorDrive, SpimotorDriver, SpimotorDriverConfig};
-use motion_drivers::{BusKind, Driver};
-use motion_engine::{AxisConfig, DeviceConfig, EngineConfig, LinkConfig};
+use motion_drivers::{Driver, LinkKind};
+use motion_engine::{AxisConfig, BusConfig, DeviceConfig, EngineConfig};
 use motion_ipc::{AxisFlags, AxisMode, CommandKind, FaultCode, Reason};
 use motion_link::Link;
 use motion_link::sim::{SimFaults, SimLink, SpiBus};
@@ -93,9 +93,9 @@ fn engine_config(devices: Vec<DeviceConfig>, axes: Vec<AxisConfig>) -> EngineCon
         name: "spimotor".into(),
         tick_hz: 1000,
         command_timeout: Duration::from_millis(250),
-        links: vec![LinkConfig {
+        links: vec![BusConfig {
             name: "spi0".into(),
-            kind: BusKind::Spi,
+            kind: LinkKind::Spi,
         }],
         devices,
         axes,

@@ -17,8 +17,8 @@ use core::time::Duration;
 use std::sync::{Arc, Mutex};
 
 use motion_drivers::tmcpack::{TmcpackChannel, TmcpackDriver, TmcpackDriverConfig};
-use motion_drivers::{BusKind, DeviceFault, Driver};
-use motion_engine::{AxisConfig, DeviceConfig, EngineConfig, LinkConfig};
+use motion_drivers::{DeviceFault, Driver, LinkKind};
+use motion_engine::{AxisConfig, BusConfig, DeviceConfig, EngineConfig};
 use motion_ipc::{AxisFlags, AxisMode, CommandKind, FaultCode, Reason};
 use motion_link::sim::{Duplex, SimFaults, SimLink, StreamBus};
 use motion_sim::tmcpack::{TmcpackSim, TmcpackSimConfig};
@@ -86,9 +86,9 @@ fn engine_config(devices: Vec<DeviceConfig>, axes: Vec<AxisConfig>) -> EngineCon
         name: "tmcpack".into(),
         tick_hz: 1000,
         command_timeout: Duration::from_millis(250),
-        links: vec![LinkConfig {
+        links: vec![BusConfig {
             name: "rs485".into(),
-            kind: BusKind::Stream,
+            kind: LinkKind::Stream,
         }],
         devices,
         axes,

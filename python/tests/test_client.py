@@ -94,7 +94,7 @@ def test_ramp_to_and_arrive(client: motiond.Client) -> None:
 def test_move_to_and_arrive(client: motiond.Client) -> None:
     turret = client.axis("turret")
     goal = 20.0 if abs(turret.state().position - 20.0) > 5.0 else -20.0
-    turret.move_to(goal)
+    turret.position(goal)
     frame = turret.wait_until_arrived(timeout=15.0)
     assert turret.state(frame).position == pytest.approx(goal, abs=1.0)
     del frame
@@ -112,15 +112,15 @@ def test_a_replaced_goal_aborts_the_wait(client: motiond.Client) -> None:
 @pytest.mark.parametrize(
     "send, refusal, reason",
     [
-        (lambda c: c.axis("x").move_to(1e9), motiond.OutOfRange, Reason.OUT_OF_RANGE),
+        (lambda c: c.axis("x").position(1e9), motiond.OutOfRange, Reason.OUT_OF_RANGE),
         (
             lambda c: c.axis("x").ramp_to(10.0, 1e6, 0.0),
             motiond.VelocityLimit,
             Reason.VELOCITY_LIMIT,
         ),
         (lambda c: c.axis("x").ramp_to(10.0, 10.0, 1e9), motiond.AccelLimit, Reason.ACCEL_LIMIT),
-        (lambda c: c.axis("x").move_to(float("nan")), motiond.NotFinite, Reason.NOT_FINITE),
-        (lambda c: c.axis("pump_a").move_to(1.0), motiond.Unsupported, Reason.UNSUPPORTED),
+        (lambda c: c.axis("x").position(float("nan")), motiond.NotFinite, Reason.NOT_FINITE),
+        (lambda c: c.axis("pump_a").position(1.0), motiond.Unsupported, Reason.UNSUPPORTED),
         (lambda c: c.axis("pump_a").power(1.5), motiond.PowerLimit, Reason.POWER_LIMIT),
         (lambda c: c.axis("x").release(), motiond.NotClaimed, Reason.NOT_CLAIMED),
         (lambda c: c.command(999, CommandKind.STOP), motiond.UnknownAxis, Reason.UNKNOWN_AXIS),

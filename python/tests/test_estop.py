@@ -32,7 +32,7 @@ def test_estop_stops_refuses_and_reset_clears(client: motiond.Client) -> None:
 
         # Goals are refused with the server's reason while it is latched...
         try:
-            x.move_to(10.0)
+            x.position(10.0)
         except motiond.EstopLatched as refusal:
             assert refusal.reason is Reason.ESTOP_LATCHED
             assert str(refusal) == "position on axis x refused: e-stop is latched: send reset first"

@@ -10,7 +10,7 @@ use core::time::Duration;
 use std::collections::VecDeque;
 use std::sync::{Arc, Mutex, MutexGuard};
 
-use motion_drivers::{BusKind, Driver};
+use motion_drivers::{Driver, LinkKind};
 use motion_engine::{CommandPort, Engine, EngineConfig};
 use motion_ipc::{
     AxisFlags, AxisState, ClientId, CommandKind, CommandReply, CommandRequest, DeviceState,
@@ -211,7 +211,7 @@ impl Rig {
                             rig_link.down = true;
                             rig_link.next_reopen = now + REOPEN_EVERY;
                             self.engine.link_down(index, now);
-                        } else if self.engine.link_kind(index) == Some(BusKind::Spi) {
+                        } else if self.engine.link_kind(index) == Some(LinkKind::Spi) {
                             // As motiond's I/O thread: a failed transaction reads as a
                             // floating bus, so MISO routing stays aligned.
                             let floating = [0xFFu8; 4096];

@@ -93,25 +93,15 @@ impl PeerMode {
     }
 }
 
-/// `10s`, `250ms`, `2m`, `1.5s`, `500us`; a bare number is seconds.
+/// `10s`, `250ms`, `2m`, `1.5s`, `500us`; a bare number is seconds
+/// ([`motion_base::parse_duration`]); a bench run lasts more than 0 and at most a day.
 pub fn parse_duration(text: &str) -> Result<Duration, String> {
-    let text = text.trim();
-    let split = text
-        .find(|c: char| !(c.is_ascii_digit() || c == '.'))
-        .unwrap_or(text.len());
-    let (number, unit) = text.split_at(split);
-    let value: f64 = number
-        .parse()
-        .map_err(|_| format!("`{text}`: expected a number followed by s, ms, us or m"))?;
-    let seconds = match unit.trim() {
-        "" | "s" => value,
-        "ms" => value / 1e3,
-        "us" | "µs" => value / 1e6,
-        "m" | "min" => value * 60.0,
-        other => return Err(format!("`{text}`: unknown unit `{other}` (s, ms, us, m)")),
-    };
-    if !seconds.is_finite() || seconds <= 0.0 || seconds > 86_400.0 {
-        return Err(format!("`{text}`: must be more than 0 and at most a day"));
+    let duration = motion_base::parse_duration(text)?;
+    if duration.is_zero() || duration > Duration::from_secs(86_400) {
+        return Err(format!(
+            "`{}`: must be more than 0 and at most a day",
+            text.trim()
+        ));
     }
-    Ok(Duration::from_secs_f64(seconds))
+    Ok(duration)
 }

@@ -41,6 +41,7 @@
 //!     }
 //! }
 //! ```
+#![warn(missing_docs)]
 #![deny(unsafe_code)] // one exception: rt.rs (sched_setscheduler), with a SAFETY note
 
 pub mod args;

@@ -21,6 +21,7 @@
 //! assert_eq!(keys.frame(), "motiond/demo/frame");
 //! assert_eq!(keys.command("panel"), "motiond/demo/command/panel");
 //! ```
+#![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
 pub mod keys;

@@ -51,7 +51,7 @@ pub enum WireError {
 // every offset). A change of a payload must be followed here: add the new field below.
 const _: () = assert!(size_of::<MotionFrame>() == 13392);
 const _: () = assert!(size_of::<ServerInfo>() == 32328);
-const _: () = assert!(size_of::<ServerStats>() == 1448);
+const _: () = assert!(size_of::<ServerStats>() == 1472);
 const _: () = assert!(size_of::<MachineParams>() == 180_240);
 const _: () = assert!(size_of::<CommandRequest>() == 64);
 const _: () = assert!(size_of::<CommandReply>() == 32);
@@ -327,6 +327,9 @@ record!(ServerStats {
     frames_lost,
     full_services,
     full_events,
+    publish_failures,
+    replies_lost,
+    events_dropped,
 });
 
 mod sealed {

@@ -62,7 +62,7 @@ fn a_remote_client_describes_moves_and_reads_as_a_local_one_does() -> Result {
     assert!(state.flags().contains(AxisFlags::ARRIVED));
 
     // The server's own refusals pass through with their reason.
-    match x.move_to(1e6) {
+    match x.position(1e6) {
         Err(ClientError::Refused {
             reason: Reason::OutOfRange,
             ..

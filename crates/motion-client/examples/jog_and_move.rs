@@ -55,7 +55,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     println!("{name}: arrived at tick {}", frame.tick);
     drop(frame);
 
-    match axis.move_to(limits.max + 1.0) {
+    match axis.position(limits.max + 1.0) {
         Err(ClientError::Refused { reason, .. }) => {
             println!("{name}: beyond max refused: {reason}")
         }

@@ -60,9 +60,19 @@ impl<'c, S: Service> Axis<'c, S> {
         self.client.command(self.index, kind, values)
     }
 
-    /// Position target handed to the board's own controller (`Position`).
-    pub fn move_to(&self, position: f64) -> Result<Accepted, ClientError> {
+    /// Position target handed to the board's own controller (`Position`), without the
+    /// server's ramp; `motionctl move` (a limited ramp) is [`ramp_to`](Self::ramp_to).
+    pub fn position(&self, position: f64) -> Result<Accepted, ClientError> {
         self.command(CommandKind::Position, [position, 0.0, 0.0])
+    }
+
+    /// The old name of [`position`](Self::position).
+    #[deprecated(
+        since = "0.1.0",
+        note = "renamed `position` (a board-controlled target); `motionctl move` is `ramp_to`"
+    )]
+    pub fn move_to(&self, position: f64) -> Result<Accepted, ClientError> {
+        self.position(position)
     }
 
     /// Position along a velocity- and acceleration-limited profile (`RampPosition`).

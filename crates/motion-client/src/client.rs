@@ -46,7 +46,7 @@ pub struct ClientBuilder {
     signal_handling: SignalHandlingMode,
     /// Connect through a bridge instead of shared memory (when it has an endpoint).
     #[cfg(feature = "zenoh")]
-    pub(crate) remote: crate::remote::RemoteOptions,
+    pub(crate) remote: crate::link::RemoteOptions,
 }
 
 impl ClientBuilder {
@@ -59,7 +59,7 @@ impl ClientBuilder {
             reply_timeout: DEFAULT_REPLY_TIMEOUT,
             signal_handling: SignalHandlingMode::HandleTerminationRequests,
             #[cfg(feature = "zenoh")]
-            remote: crate::remote::RemoteOptions::default(),
+            remote: crate::link::RemoteOptions::default(),
         }
     }
 
@@ -157,7 +157,7 @@ pub struct Client<S: Service> {
     pub(crate) jogs: RefCell<JogTable>,
     /// The bridge this client talks through, when remote.
     #[cfg(feature = "zenoh")]
-    pub(crate) remote: Option<crate::remote::Link>,
+    pub(crate) remote: Option<crate::link::Link>,
 }
 
 impl<S: Service> fmt::Debug for Client<S> {

@@ -20,7 +20,7 @@
 //!   [`Client::frames`] (every frame in order, sleeping on the tick event),
 //!   [`Client::for_each_frame`] (a callback driven by an iceoryx2 `WaitSet`), or attach
 //!   [`Client::tick_listener`] to your own `WaitSet`; [`Client::devices`] for device states.
-//! - Command: typed methods on [`Axis`] (`move_to`, `ramp_to`, `velocity`, `ramp_velocity`,
+//! - Command: typed methods on [`Axis`] (`position`, `ramp_to`, `velocity`, `ramp_velocity`,
 //!   `power`, `stop`, `off`, `home`, `set_position`, `claim`, `release`), on [`Signal`]
 //!   (`set`, `claim`, `release`) and on [`Client`] (`estop`, `reset`, `stop_all`,
 //!   `off_all`); each returns [`Accepted`] or [`ClientError::Refused`] with the server's
@@ -58,7 +58,7 @@
 //!     x.ramp_to(10.0, 0.0, 0.0)?; // 0.0: the axis's max velocity and acceleration
 //!     x.wait_until_arrived(Duration::from_secs(10))?;
 //!
-//!     match x.move_to(1e9) {
+//!     match x.position(1e9) {
 //!         Err(ClientError::Refused { reason, .. }) => println!("refused: {reason}"),
 //!         other => println!("unexpected: {other:?}"),
 //!     }
@@ -83,6 +83,7 @@
 //! Across hosts (feature `zenoh`): the same API through a `motion-bridge` running beside
 //! the server, `ClientBuilder::new("demo").remote("tcp/HOST:7447").identity("panel")`;
 //! see the [`remote`] module (with the feature) and `crates/motion-bridge/README.md`.
+#![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
 mod axis;
@@ -91,8 +92,12 @@ mod client;
 mod command;
 mod emergency;
 mod error;
+#[cfg(feature = "zenoh")]
+mod feed;
 mod frames;
 mod jog;
+#[cfg(feature = "zenoh")]
+mod link;
 mod ports;
 mod ready;
 mod received;

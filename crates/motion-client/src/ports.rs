@@ -21,7 +21,7 @@ use motion_ipc::{CommandReply, CommandRequest, MotionFrame, SCHEMA_VERSION};
 use crate::ConnectError;
 use crate::received::LatestCache;
 
-pub(crate) type CommandPort<S> =
+pub(crate) type CommandClient<S> =
     iceoryx2::port::client::Client<S, CommandRequest, (), CommandReply, ()>;
 
 /// The frame subscription: the frames and the tick event that announces each.
@@ -41,7 +41,7 @@ impl<S: Service> fmt::Debug for FramePorts<S> {
 
 /// A client port on the command service.
 pub(crate) struct CommandPorts<S: Service> {
-    pub(crate) port: CommandPort<S>,
+    pub(crate) port: CommandClient<S>,
     pub(crate) service_id: UniqueServiceId,
 }
 

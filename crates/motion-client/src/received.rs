@@ -29,7 +29,7 @@ enum Held<S: Service, T: fmt::Debug + ZeroCopySend + 'static> {
     Shm(Rc<Sample<S, T, ()>>),
     /// A copy received over the network.
     #[cfg(feature = "zenoh")]
-    Net(Rc<crate::remote::Owned<T>>),
+    Net(Rc<crate::feed::Owned<T>>),
 }
 
 impl<S: Service, T: fmt::Debug + ZeroCopySend + 'static> Clone for Held<S, T> {
@@ -95,7 +95,7 @@ enum Source<S: Service, T: fmt::Debug + ZeroCopySend + 'static> {
     Shm(Subscriber<S, T, ()>),
     /// A feed from a bridge.
     #[cfg(feature = "zenoh")]
-    Net(Box<crate::remote::Feed<T>>),
+    Net(Box<crate::feed::Feed<T>>),
 }
 
 /// One subscriber and the newest sample taken from it.
@@ -184,7 +184,7 @@ impl<S: Service, T: fmt::Debug + ZeroCopySend + 'static> LatestCache<S, T> {
 #[cfg(feature = "zenoh")]
 impl<S: Service, T: fmt::Debug + ZeroCopySend + 'static> LatestCache<S, T> {
     /// A cache fed from a bridge.
-    pub(crate) fn remote(feed: crate::remote::Feed<T>) -> Self {
+    pub(crate) fn remote(feed: crate::feed::Feed<T>) -> Self {
         Self {
             source: Source::Net(Box::new(feed)),
             newest: RefCell::new(None),
@@ -192,7 +192,7 @@ impl<S: Service, T: fmt::Debug + ZeroCopySend + 'static> LatestCache<S, T> {
     }
 
     /// The bridge's feed, if this cache has one.
-    pub(crate) fn feed(&self) -> Option<&crate::remote::Feed<T>> {
+    pub(crate) fn feed(&self) -> Option<&crate::feed::Feed<T>> {
         match &self.source {
             Source::Net(feed) => Some(feed),
             Source::Shm(_) => None,

@@ -100,7 +100,7 @@ fn ramp_to_then_wait_until_arrived() -> Result {
     let state = frame.axes()[0];
     assert_eq!(state.position, 5.0);
     assert!(state.flags().contains(AxisFlags::ARRIVED));
-    x.move_to(-2.0)?;
+    x.position(-2.0)?;
     x.wait_until_arrived(WAIT)?;
     assert_eq!(x.state()?.position, -2.0);
     Ok(())
@@ -135,11 +135,11 @@ fn estop_refuses_motion_until_reset_and_aborts_waits() -> Result {
         matches!(aborted, ClientError::WaitAborted { .. }),
         "{aborted:?}"
     );
-    let refused = x.move_to(1.0).expect_err("latched");
+    let refused = x.position(1.0).expect_err("latched");
     assert_eq!(refused.reason(), Some(Reason::EstopLatched));
     x.stop()?; // anyone may always stop
     client.reset()?;
-    x.move_to(1.0)?;
+    x.position(1.0)?;
     x.wait_until_arrived(WAIT)?;
     Ok(())
 }
@@ -150,7 +150,7 @@ fn a_claim_refuses_the_other_client_until_released() -> Result {
     let second = Client::<ipc::Service>::connect(first.server_name())?;
     assert_ne!(first.id(), second.id());
     first.axis("y")?.claim()?;
-    let refused = second.axis("y")?.move_to(3.0).expect_err("claimed");
+    let refused = second.axis("y")?.position(3.0).expect_err("claimed");
     assert_eq!(refused.reason(), Some(Reason::ClaimedByOther));
     assert!(
         refused.to_string().contains("claimed by another client"),
@@ -161,7 +161,7 @@ fn a_claim_refuses_the_other_client_until_released() -> Result {
     let frame = second.latest()?;
     assert_eq!(frame.axes()[1].claimed_by, first.id());
     first.axis("y")?.release()?;
-    second.axis("y")?.move_to(3.0)?;
+    second.axis("y")?.position(3.0)?;
     Ok(())
 }
 
@@ -243,7 +243,7 @@ fn a_stopped_server_is_reported_not_waited_for_forever() -> Result {
     x.stop()?;
     client.latest()?; // subscribes to frames
     server.shutdown()?;
-    let error = x.move_to(1.0).expect_err("no server");
+    let error = x.position(1.0).expect_err("no server");
     assert!(
         matches!(
             error,

@@ -60,7 +60,7 @@ fn a_starting_device_refuses_goals_naming_itself_until_ready() -> Result {
     // 500 Hz: starting for 0.4 s.
     let (_server, client) = start(FakeConfig::demo(&unique_name("starting")).starting_for(200))?;
     let x = client.axis("x")?;
-    let refused = x.move_to(1.0).expect_err("device starting");
+    let refused = x.position(1.0).expect_err("device starting");
     assert_eq!(refused.reason(), Some(Reason::DeviceStarting));
     let message = refused.to_string();
     assert!(
@@ -76,7 +76,7 @@ fn a_starting_device_refuses_goals_naming_itself_until_ready() -> Result {
             .iter()
             .all(|d| d.state == DeviceState::Online)
     );
-    x.move_to(1.0)?;
+    x.position(1.0)?;
     x.wait_until_arrived(WAIT)?;
     Ok(())
 }
@@ -106,7 +106,7 @@ fn wait_ready_names_the_devices_still_not_online() -> Result {
     let message = error.to_string();
     assert!(message.contains("device `aux` is offline"), "{message}");
     assert!(!message.contains("`pack`"), "{message}");
-    let refused = client.axis("a")?.move_to(1.0).expect_err("offline");
+    let refused = client.axis("a")?.position(1.0).expect_err("offline");
     assert_eq!(refused.reason(), Some(Reason::DeviceOffline));
     assert!(
         refused.to_string().contains("device `aux` is offline"),
@@ -142,11 +142,11 @@ fn a_fault_ends_a_wait_with_the_fault_sentence() -> Result {
     assert_eq!(error.to_string(), expected);
     assert_eq!(x.fault_text(), Some(expected.clone()));
     // A goal for the faulted axis is refused with the same sentence.
-    let refused = x.move_to(1.0).expect_err("faulted");
+    let refused = x.position(1.0).expect_err("faulted");
     assert_eq!(refused.reason(), Some(Reason::AxisFaulted));
     assert!(refused.to_string().contains(&expected), "{refused}");
     client.reset()?;
-    x.move_to(1.0)?;
+    x.position(1.0)?;
     x.wait_until_arrived(WAIT)?;
     Ok(())
 }

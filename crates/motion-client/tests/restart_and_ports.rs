@@ -92,7 +92,7 @@ fn goals_wait_for_the_restart_to_be_acknowledged_but_stops_do_not() -> Result {
         "{aborted:?}"
     );
     let before = server.requests().len();
-    let refused = x.move_to(1.0).expect_err("not acknowledged");
+    let refused = x.position(1.0).expect_err("not acknowledged");
     assert!(
         matches!(refused, ClientError::ServerRestarted(_)),
         "{refused:?}"
@@ -103,7 +103,7 @@ fn goals_wait_for_the_restart_to_be_acknowledged_but_stops_do_not() -> Result {
     let acknowledged = client.acknowledge_restart().ok_or("nothing pending")?;
     assert_eq!(acknowledged.count, 1);
     client.check_server()?;
-    x.move_to(1.0)?;
+    x.position(1.0)?;
     x.wait_until_arrived(WAIT)?;
     Ok(())
 }
@@ -156,7 +156,7 @@ fn a_client_commands_while_every_frame_slot_is_taken() -> Result {
     let hog = NodeBuilder::new().create::<local::Service>()?;
     let _held = take_frame_slots(&hog, server.name(), server.config().max_clients)?;
     let client = Client::<local::Service>::connect(server.name())?;
-    client.axis("x")?.move_to(5.0)?;
+    client.axis("x")?.position(5.0)?;
     client.stop_all()?;
     let error = client.latest().expect_err("no frame slot left");
     assert!(

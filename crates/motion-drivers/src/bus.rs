@@ -15,6 +15,8 @@
 
 use core::time::Duration;
 
+use motion_base::{FixedQueue, LinkKind};
+
 use crate::driver::{Driver, Priority, Transmit};
 
 /// Transactions whose MISO bytes may be outstanding at once on an SPI bus.
@@ -22,15 +24,6 @@ pub const SPI_PENDING_CAPACITY: usize = 64;
 
 /// Messages one bus may send in one step (bounds the work of a step).
 pub const MAX_SENDS_PER_STEP: usize = 16;
-
-/// Whether the link carries a byte stream or SPI transactions.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum BusKind {
-    /// A byte stream: one request in flight on the bus.
-    Stream,
-    /// SPI: MISO bytes routed to the transaction's owner.
-    Spi,
-}
 
 #[derive(Debug, Clone, Copy, Default)]
 struct PendingMiso {
@@ -41,7 +34,7 @@ struct PendingMiso {
 /// The drivers of one link and the arbitration between them.
 #[derive(Debug)]
 pub struct LinkBus {
-    kind: BusKind,
+    kind: LinkKind,
     drivers: Vec<Box<dyn Driver>>,
     /// Stream: the driver whose reply is awaited.
     in_flight: Option<usize>,
@@ -50,31 +43,27 @@ pub struct LinkBus {
     /// Round-robin start for the next pick.
     next_turn: usize,
     /// SPI: ring of transactions whose MISO bytes have not come back yet.
-    pending: [PendingMiso; SPI_PENDING_CAPACITY],
-    pending_head: usize,
-    pending_len: usize,
+    pending: FixedQueue<PendingMiso, SPI_PENDING_CAPACITY>,
     /// Received bytes no driver could take (SPI bytes beyond every pending transaction).
     stray_bytes: u64,
 }
 
 impl LinkBus {
     /// A bus of `kind` with `drivers` (in config order; at least one).
-    pub fn new(kind: BusKind, drivers: Vec<Box<dyn Driver>>) -> Self {
+    pub fn new(kind: LinkKind, drivers: Vec<Box<dyn Driver>>) -> Self {
         Self {
             kind,
             drivers,
             in_flight: None,
             last_sender: 0,
             next_turn: 0,
-            pending: [PendingMiso::default(); SPI_PENDING_CAPACITY],
-            pending_head: 0,
-            pending_len: 0,
+            pending: FixedQueue::new(),
             stray_bytes: 0,
         }
     }
 
     /// Stream or SPI.
-    pub fn kind(&self) -> BusKind {
+    pub fn kind(&self) -> LinkKind {
         self.kind
     }
 
@@ -96,7 +85,7 @@ impl LinkBus {
     /// Routes bytes received from the link to their drivers.
     pub fn handle_rx(&mut self, now: Duration, mut bytes: &[u8]) {
         match self.kind {
-            BusKind::Stream => {
+            LinkKind::Stream => {
                 let owner = self.in_flight.unwrap_or(self.last_sender);
                 if let Some(driver) = self.drivers.get_mut(owner) {
                     driver.handle_rx(now, bytes);
@@ -105,13 +94,12 @@ impl LinkBus {
                 }
                 self.release_if_answered();
             }
-            BusKind::Spi => {
+            LinkKind::Spi => {
                 while !bytes.is_empty() {
-                    if self.pending_len == 0 {
+                    let Some(head) = self.pending.front_mut() else {
                         self.stray_bytes += bytes.len() as u64;
                         return;
-                    }
-                    let head = &mut self.pending[self.pending_head];
+                    };
                     let take = head.remaining.min(bytes.len());
                     let (mine, rest) = bytes.split_at(take);
                     if let Some(driver) = self.drivers.get_mut(head.driver) {
@@ -119,8 +107,7 @@ impl LinkBus {
                     }
                     head.remaining -= take;
                     if head.remaining == 0 {
-                        self.pending_head = (self.pending_head + 1) % SPI_PENDING_CAPACITY;
-                        self.pending_len -= 1;
+                        self.pending.pop();
                     }
                     bytes = rest;
                 }
@@ -137,6 +124,7 @@ impl LinkBus {
     }
 
     /// The earliest instant any driver has timed work.
+    #[must_use]
     pub fn poll_timeout(&self) -> Option<Duration> {
         self.drivers
             .iter()
@@ -146,12 +134,13 @@ impl LinkBus {
 
     /// The next message to put on the link, with the index of the driver that wrote it.
     /// `None` when nobody may or wants to send now.
+    #[must_use]
     pub fn poll_transmit(&mut self, now: Duration, buf: &mut [u8]) -> Option<(usize, Transmit)> {
         self.release_if_answered();
-        if self.kind == BusKind::Stream && self.in_flight.is_some() {
+        if self.kind == LinkKind::Stream && self.in_flight.is_some() {
             return None;
         }
-        if self.kind == BusKind::Spi && self.pending_len == SPI_PENDING_CAPACITY {
+        if self.kind == LinkKind::Spi && self.pending.is_full() {
             return None;
         }
         let count = self.drivers.len();
@@ -173,19 +162,18 @@ impl LinkBus {
         self.next_turn = (index + 1) % count;
         self.last_sender = index;
         match self.kind {
-            BusKind::Stream => {
+            LinkKind::Stream => {
                 if transmit.expects_reply {
                     self.in_flight = Some(index);
                 }
             }
-            BusKind::Spi => {
+            LinkKind::Spi => {
                 if transmit.len > 0 {
-                    let slot = (self.pending_head + self.pending_len) % SPI_PENDING_CAPACITY;
-                    self.pending[slot] = PendingMiso {
+                    // Room was checked above.
+                    self.pending.push(PendingMiso {
                         driver: index,
                         remaining: transmit.len,
-                    };
-                    self.pending_len += 1;
+                    });
                 }
             }
         }
@@ -195,7 +183,7 @@ impl LinkBus {
     /// The link went down: every driver is told, outstanding routing is dropped.
     pub fn link_down(&mut self, now: Duration) {
         self.in_flight = None;
-        self.pending_len = 0;
+        self.pending.clear();
         for driver in &mut self.drivers {
             driver.link_down(now);
         }
@@ -204,7 +192,7 @@ impl LinkBus {
     /// The link is open again: every driver restarts its board.
     pub fn link_up(&mut self, now: Duration) {
         self.in_flight = None;
-        self.pending_len = 0;
+        self.pending.clear();
         for driver in &mut self.drivers {
             driver.link_up(now);
         }

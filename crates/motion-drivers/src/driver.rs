@@ -7,36 +7,9 @@ use crate::goal::{Goal, GoalError, GoalKinds};
 use crate::pin::{Pin, PinReading};
 use crate::state::{ChannelState, DeviceStatus};
 
-/// Which board a driver speaks to.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Model {
-    /// QuadQuad2Drv (SPI).
-    Qq2drv,
-    /// Trinamic SIXpack / QUADpack (RS-232 / RS-485).
-    Tmcpack,
-    /// SPI_motor (SPI).
-    Spimotor,
-    /// US Digital QSB (USB serial).
-    Qsb,
-}
-
-impl Model {
-    /// The model id of the config (`model = "tmcpack"`).
-    pub const fn id(self) -> &'static str {
-        match self {
-            Self::Qq2drv => "qq2drv",
-            Self::Tmcpack => "tmcpack",
-            Self::Spimotor => "spimotor",
-            Self::Qsb => "qsb",
-        }
-    }
-}
-
-impl fmt::Display for Model {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.id())
-    }
-}
+/// Which board a driver speaks to (one enum with the config, the contract and the
+/// simulator: `motion_base::Model`).
+pub use motion_base::Model;
 
 /// How urgent a driver's next message is; a shared bus serves higher priorities first.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -90,12 +63,14 @@ pub trait Driver: Send + fmt::Debug {
     fn handle_timeout(&mut self, now: Duration);
 
     /// The earliest instant at which [`handle_timeout`](Self::handle_timeout) has work.
+    #[must_use]
     fn poll_timeout(&self) -> Option<Duration>;
 
     /// The priority of the message the driver would send now, or `None`.
     fn wants_transmit(&self, now: Duration) -> Option<Priority>;
 
     /// Writes the next message into `buf` (which holds at least 256 bytes).
+    #[must_use]
     fn poll_transmit(&mut self, now: Duration, buf: &mut [u8]) -> Option<Transmit>;
 
     /// Whether the driver still waits for the reply to its last request.

@@ -5,6 +5,7 @@
 //! and never touch a file descriptor. A [`LinkBus`] puts several drivers on one link and
 //! enforces what no single driver sees: one request in flight on a shared serial bus,
 //! commands before polls, MISO bytes back to the transaction's owner.
+#![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
 mod bus;
@@ -18,8 +19,10 @@ mod state;
 pub mod spimotor;
 pub mod tmcpack;
 
-pub use bus::{BusKind, LinkBus, MAX_SENDS_PER_STEP, SPI_PENDING_CAPACITY};
+pub use bus::{LinkBus, MAX_SENDS_PER_STEP, SPI_PENDING_CAPACITY};
 pub use driver::{Driver, Model, Priority, Transmit};
 pub use goal::{Goal, GoalError, GoalKind, GoalKinds};
+/// Whether a link carries a byte stream or SPI transactions (one enum with `motion_link`).
+pub use motion_base::LinkKind;
 pub use pin::{Pin, PinInfo, PinReading, SignalKind, SignalKinds, find_pin};
 pub use state::{ChannelState, DeviceFault, DeviceStatus, FIRMWARE_LEN};

@@ -14,37 +14,13 @@ use core::time::Duration;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct Pin(pub u16);
 
-/// What a pin can be used as. Also the kind of a configured signal.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum SignalKind {
-    /// A digital input (a switch, a jumper, a board status bit).
-    DigitalIn,
-    /// A digital output (open drain, TTL).
-    DigitalOut,
-    /// An analogue input (ADC counts).
-    AnalogIn,
-}
+/// What a pin can be used as; also the kind of a configured signal (one enum with the
+/// engine and the shared-memory contract: `motion_base::SignalKind`).
+pub use motion_base::SignalKind;
 
-impl SignalKind {
-    /// Every kind.
-    pub const ALL: [Self; 3] = [Self::DigitalIn, Self::DigitalOut, Self::AnalogIn];
-
-    /// The name the config uses (`kind = "digital-in"`).
-    pub const fn id(self) -> &'static str {
-        match self {
-            Self::DigitalIn => "digital-in",
-            Self::DigitalOut => "digital-out",
-            Self::AnalogIn => "analog-in",
-        }
-    }
-
-    const fn bit(self) -> u8 {
-        match self {
-            Self::DigitalIn => 1,
-            Self::DigitalOut => 2,
-            Self::AnalogIn => 4,
-        }
-    }
+/// The bit of `kind` in a [`SignalKinds`].
+const fn bit(kind: SignalKind) -> u8 {
+    1 << (kind as u8)
 }
 
 /// A set of [`SignalKind`]s: what one pin can do.
@@ -57,7 +33,7 @@ impl SignalKinds {
         let mut bits = 0;
         let mut index = 0;
         while index < kinds.len() {
-            bits |= kinds[index].bit();
+            bits |= bit(kinds[index]);
             index += 1;
         }
         Self(bits)
@@ -65,7 +41,7 @@ impl SignalKinds {
 
     /// Whether `kind` is in the set.
     pub const fn contains(self, kind: SignalKind) -> bool {
-        self.0 & kind.bit() != 0
+        self.0 & bit(kind) != 0
     }
 }
 

@@ -115,12 +115,8 @@ impl DeviceStatus {
     /// Records `text` as the firmware description (cut to [`FIRMWARE_LEN`] bytes on a
     /// character boundary).
     pub fn set_firmware(&mut self, text: &str) {
-        let mut end = text.len().min(FIRMWARE_LEN);
-        while !text.is_char_boundary(end) {
-            end -= 1;
-        }
-        self.firmware = [0; FIRMWARE_LEN];
-        self.firmware[..end].copy_from_slice(&text.as_bytes()[..end]);
+        let end = motion_base::floor_char_boundary(text, FIRMWARE_LEN);
+        motion_base::write_text(&mut self.firmware, &text[..end]);
         self.firmware_len = end as u8;
     }
 }

@@ -5,8 +5,8 @@
 use core::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
-use motion_drivers::{BusKind, Driver};
-use motion_engine::{DeviceConfig, Engine, EngineConfig, LinkConfig};
+use motion_drivers::{Driver, LinkKind};
+use motion_engine::{BusConfig, DeviceConfig, Engine, EngineConfig};
 use motion_ipc::{CommandKind, CommandRequest, MotionFrame};
 
 #[path = "../tests/support/mod.rs"]
@@ -24,9 +24,9 @@ fn engine_with(axes: usize) -> Engine {
         tick_hz: 1000,
         command_timeout: Duration::from_millis(250),
         links: (0..links)
-            .map(|l| LinkConfig {
+            .map(|l| BusConfig {
                 name: format!("l{l}"),
-                kind: BusKind::Stream,
+                kind: LinkKind::Stream,
             })
             .collect(),
         devices: (0..boards)

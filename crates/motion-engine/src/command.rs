@@ -65,7 +65,7 @@ impl Facts for Engine {
         let signal = self.signals.get(index)?;
         let device = signal.config.device;
         Some(SignalFacts {
-            kind: crate::frame::signal_kind(signal.config.kind),
+            kind: signal.config.kind,
             claimed_by: signal.claimed_by,
             device: self
                 .devices

@@ -6,16 +6,17 @@
 
 use core::time::Duration;
 
-use motion_drivers::{BusKind, Pin, SignalKind};
+use motion_drivers::{LinkKind, Pin, SignalKind};
 use motion_ipc::{MAX_AXES, MAX_DEVICES, MAX_LINKS, MAX_SIGNALS};
 
-/// One link: a serial line, a bus or an SPI bus.
+/// One link as the engine sees it: a named bus of drivers, stream or SPI (the transport
+/// that carries it is `motion_link::LinkConfig`, opened by motiond).
 #[derive(Debug, Clone, PartialEq)]
-pub struct LinkConfig {
+pub struct BusConfig {
     /// Link name (config `[[link]] name`).
     pub name: String,
     /// Stream or SPI.
-    pub kind: BusKind,
+    pub kind: LinkKind,
 }
 
 /// One board on a link.
@@ -152,7 +153,7 @@ pub struct EngineConfig {
     /// Deadman for velocity and power goals; zero disables it.
     pub command_timeout: Duration,
     /// Links in config order.
-    pub links: Vec<LinkConfig>,
+    pub links: Vec<BusConfig>,
     /// Devices in config order; the engine gets one driver per device, same order.
     pub devices: Vec<DeviceConfig>,
     /// Axes in config order; this is the order of axes in every frame.

@@ -1,22 +1,12 @@
 //! Writing the frame and the server description.
 
-use motion_drivers::SignalKind;
 use motion_ipc::{
-    AxisFlags, AxisInfo, AxisMode, AxisState, DeviceInfo, DeviceModel, FrameFlags, MotionFrame,
-    SCHEMA_VERSION, ServerInfo, SignalFlags, SignalInfo, SignalInfoFlags, SignalState, write_text,
+    AxisFlags, AxisInfo, AxisMode, AxisState, DeviceInfo, FrameFlags, MotionFrame, SCHEMA_VERSION,
+    ServerInfo, SignalFlags, SignalInfo, SignalInfoFlags, SignalState, write_text,
 };
 
 use crate::Engine;
 use crate::config::EstopCategory;
-
-/// The shared-memory code of a signal kind.
-pub(crate) fn signal_kind(kind: SignalKind) -> motion_ipc::SignalKind {
-    match kind {
-        SignalKind::DigitalIn => motion_ipc::SignalKind::DigitalIn,
-        SignalKind::DigitalOut => motion_ipc::SignalKind::DigitalOut,
-        SignalKind::AnalogIn => motion_ipc::SignalKind::AnalogIn,
-    }
-}
 
 impl Engine {
     /// Step 5: the frame of this tick. Entries past the axis count are left untouched.
@@ -49,7 +39,7 @@ impl Engine {
                 raw: signal.raw,
                 last_refresh_tick: signal.last_refresh_tick,
                 flags: flags.0,
-                kind: signal_kind(signal.config.kind) as u8,
+                kind: signal.config.kind as u8,
                 reserved: [0; 3],
                 claimed_by: signal.claimed_by,
             };
@@ -134,7 +124,7 @@ impl Engine {
             out.scale = config.scale;
             out.offset = config.offset;
             out.full_scale = config.full_scale;
-            out.kind = signal_kind(config.kind) as u8;
+            out.kind = config.kind as u8;
             let mut flags = 0;
             if config.invert {
                 flags |= SignalInfoFlags::INVERT.0;
@@ -158,12 +148,7 @@ impl Engine {
                 let status = driver.status();
                 write_text(&mut out.firmware, status.firmware());
                 out.state = u32::from(self.devices[index].state as u8);
-                out.model = match driver.model() {
-                    motion_drivers::Model::Qq2drv => DeviceModel::Qq2drv,
-                    motion_drivers::Model::Tmcpack => DeviceModel::Tmcpack,
-                    motion_drivers::Model::Spimotor => DeviceModel::Spimotor,
-                    motion_drivers::Model::Qsb => DeviceModel::Qsb,
-                } as u32;
+                out.model = driver.model().code();
             }
         }
     }

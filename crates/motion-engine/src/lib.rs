@@ -40,6 +40,7 @@
 //! engine.step(Duration::from_millis(1), &mut NoCommands, &mut frame);
 //! assert_eq!(frame.tick, 1);
 //! ```
+#![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
 mod axis;
@@ -53,13 +54,13 @@ mod supervision;
 
 use core::time::Duration;
 
-use motion_drivers::{BusKind, Driver, LinkBus, MAX_SENDS_PER_STEP};
+use motion_drivers::{Driver, LinkBus, LinkKind, MAX_SENDS_PER_STEP};
 use motion_ipc::{ClientId, MotionFrame};
 
 use crate::axis::Axis;
 pub use crate::command::{CommandPort, HOME_FRACTION_OF_MAX, MAX_COMMANDS_PER_STEP};
 pub use crate::config::{
-    AxisConfig, DeviceConfig, EngineConfig, EngineConfigError, EstopCategory, LinkConfig,
+    AxisConfig, BusConfig, DeviceConfig, EngineConfig, EngineConfigError, EstopCategory,
     SignalConfig,
 };
 use crate::device::Device;
@@ -201,7 +202,7 @@ impl Engine {
     }
 
     /// Stream or SPI, per link.
-    pub fn link_kind(&self, link: usize) -> Option<BusKind> {
+    pub fn link_kind(&self, link: usize) -> Option<LinkKind> {
         self.buses.get(link).map(LinkBus::kind)
     }
 
@@ -271,6 +272,7 @@ impl Engine {
     /// The next message for `link`, written into `buf` (at least 256 bytes); `None` when
     /// the link has nothing to send this tick. On an SPI link each message is one
     /// transaction.
+    #[must_use]
     pub fn poll_link_transmit(
         &mut self,
         link: usize,
@@ -288,6 +290,7 @@ impl Engine {
     }
 
     /// The earliest instant a driver has timed work (a reply timeout, a poll period).
+    #[must_use]
     pub fn poll_timeout(&self) -> Option<Duration> {
         self.buses.iter().filter_map(LinkBus::poll_timeout).min()
     }

@@ -18,9 +18,9 @@ use iceoryx2::prelude::*;
 use motion_client::testing::{
     FakeAxis, FakeConfig, FakeDevice, FakeServer, FakeSignal, unique_name,
 };
-use motion_drivers::{BusKind, DeviceFault, GoalKind, Pin, SignalKind as PinKind};
+use motion_drivers::{DeviceFault, GoalKind, LinkKind, Pin, SignalKind as PinKind};
 use motion_engine::{
-    AxisConfig, CommandPort, DeviceConfig, Engine, EngineConfig, LinkConfig, SignalConfig,
+    AxisConfig, BusConfig, CommandPort, DeviceConfig, Engine, EngineConfig, SignalConfig,
 };
 use motion_ipc::{
     ClientId, CommandKind, CommandReply, CommandRequest, DeviceModel, DeviceState, FaultCode,
@@ -159,9 +159,9 @@ fn signal(name: &str, pin: u16, kind: PinKind) -> SignalConfig {
 /// `x` on a board that does everything, `y` on one that can neither de-energise nor home;
 /// an output `lamp` and an input `door` on the first board.
 fn engine_side() -> EngineSide {
-    let link = |name: &str| LinkConfig {
+    let link = |name: &str| BusConfig {
         name: name.into(),
-        kind: BusKind::Stream,
+        kind: LinkKind::Stream,
     };
     let config = EngineConfig {
         name: "parity".into(),

@@ -225,16 +225,16 @@ fn bad_values_are_refused_and_nothing_reaches_the_wire() {
 
 #[test]
 fn unsupported_goals_are_refused_with_a_reason() {
-    use motion_drivers::{BusKind, GoalKind};
-    use motion_engine::{DeviceConfig, Engine, EngineConfig, LinkConfig};
+    use motion_drivers::{GoalKind, LinkKind};
+    use motion_engine::{BusConfig, DeviceConfig, Engine, EngineConfig};
     let (board, _) = IdealBoard::new(1, &[GoalKind::Off, GoalKind::Stop, GoalKind::Power]);
     let config = EngineConfig {
         name: "caps".into(),
         tick_hz: 1000,
         command_timeout: core::time::Duration::from_millis(250),
-        links: vec![LinkConfig {
+        links: vec![BusConfig {
             name: "spi".into(),
-            kind: BusKind::Spi,
+            kind: LinkKind::Spi,
         }],
         devices: vec![DeviceConfig {
             name: "brushed".into(),

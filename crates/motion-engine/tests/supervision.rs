@@ -8,9 +8,9 @@ use core::time::Duration;
 use std::collections::VecDeque;
 use std::sync::{Arc, Mutex};
 
-use motion_drivers::{BusKind, GoalKind, Pin, SignalKind};
+use motion_drivers::{GoalKind, LinkKind, Pin, SignalKind};
 use motion_engine::{
-    AxisConfig, CommandPort, DeviceConfig, Engine, EngineConfig, EstopCategory, LinkConfig,
+    AxisConfig, BusConfig, CommandPort, DeviceConfig, Engine, EngineConfig, EstopCategory,
     SignalConfig,
 };
 use motion_ipc::{
@@ -30,9 +30,9 @@ fn rig(
 ) -> (Harness, Arc<Mutex<BoardControl>>) {
     let config = EngineConfig {
         name: "supervision".into(),
-        links: vec![LinkConfig {
+        links: vec![BusConfig {
             name: "bus".into(),
-            kind: BusKind::Stream,
+            kind: LinkKind::Stream,
         }],
         devices: vec![DeviceConfig {
             name: "board".into(),
@@ -376,9 +376,9 @@ fn off_de_energises_claims_apply_and_shutdown_stops_every_axis() {
 #[test]
 fn goals_wait_for_a_starting_board_and_its_start_up_stop() {
     let config = EngineConfig {
-        links: vec![LinkConfig {
+        links: vec![BusConfig {
             name: "bus".into(),
-            kind: BusKind::Stream,
+            kind: LinkKind::Stream,
         }],
         devices: vec![DeviceConfig {
             name: "board".into(),
@@ -487,9 +487,9 @@ fn identity_comes_from_the_transport_and_claims_end_with_their_owner() {
 #[test]
 fn claims_lapse_after_their_lease_unless_renewed() {
     let config = EngineConfig {
-        links: vec![LinkConfig {
+        links: vec![BusConfig {
             name: "bus".into(),
-            kind: BusKind::Stream,
+            kind: LinkKind::Stream,
         }],
         devices: vec![DeviceConfig {
             name: "board".into(),

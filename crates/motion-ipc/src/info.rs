@@ -4,8 +4,8 @@ use iceoryx2::prelude::ZeroCopySend;
 
 use crate::command::{CommandKind, UnknownValue};
 use crate::frame::DeviceState;
+use crate::read_text;
 use crate::signal::SignalInfo;
-use crate::text::read_text;
 use crate::{MAX_AXES, MAX_DEVICES, MAX_SIGNALS, NAME_LEN, SCHEMA_VERSION, UNIT_LEN};
 
 /// What an e-stop (and a fault) does to an axis: IEC 60204-1 stop categories. Travels as
@@ -45,44 +45,9 @@ impl TryFrom<u32> for EstopCategory {
     }
 }
 
-/// The board model of a device. Travels as `u32` in [`DeviceInfo::model`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[repr(u32)]
-pub enum DeviceModel {
-    /// QuadQuad2Drv (SPI, 4 DC motors with PID).
-    Qq2drv = 1,
-    /// Trinamic SIXpack / QUADpack (RS-232/RS-485 steppers).
-    Tmcpack = 2,
-    /// SPI_motor (SPI, 2 brushed motors or 1 stepper).
-    Spimotor = 3,
-    /// US Digital QSB (USB serial encoder interface, stepper on -M).
-    Qsb = 4,
-}
-
-impl DeviceModel {
-    /// The model id used in the config (`model = "qq2drv"`).
-    pub const fn id(self) -> &'static str {
-        match self {
-            Self::Qq2drv => "qq2drv",
-            Self::Tmcpack => "tmcpack",
-            Self::Spimotor => "spimotor",
-            Self::Qsb => "qsb",
-        }
-    }
-}
-
-impl TryFrom<u32> for DeviceModel {
-    type Error = UnknownValue;
-    fn try_from(value: u32) -> Result<Self, Self::Error> {
-        Ok(match value {
-            1 => Self::Qq2drv,
-            2 => Self::Tmcpack,
-            3 => Self::Spimotor,
-            4 => Self::Qsb,
-            other => return Err(UnknownValue(other)),
-        })
-    }
-}
+/// The board model of a device (one enum with the drivers and the config:
+/// `motion_base::Model`). Travels as its `u32` code in [`DeviceInfo::model`].
+pub use motion_base::Model as DeviceModel;
 
 /// Bit set of the [`CommandKind`]s an axis accepts: bit `kind as u32` is set.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
@@ -259,7 +224,7 @@ impl DeviceInfo {
 
     /// The typed model.
     pub fn model(&self) -> Result<DeviceModel, UnknownValue> {
-        DeviceModel::try_from(self.model)
+        DeviceModel::try_from(self.model).map_err(|unknown| UnknownValue(unknown.0))
     }
 
     /// The firmware text ("" until known).

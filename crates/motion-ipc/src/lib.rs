@@ -22,6 +22,7 @@
 //!     .with_values([12.5, 40.0, 200.0]);
 //! assert_eq!(request.kind(), Ok(CommandKind::RampPosition));
 //! ```
+#![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
 mod command;
@@ -32,22 +33,22 @@ pub mod rules;
 mod service;
 mod signal;
 mod stats;
-mod text;
 
 pub use command::{
     ClientId, CommandKind, CommandReply, CommandRequest, Reason, Target, UnknownValue,
 };
 pub use frame::{AxisFlags, AxisMode, AxisState, DeviceState, FaultCode, FrameFlags, MotionFrame};
 pub use info::{AxisInfo, Capabilities, DeviceInfo, DeviceModel, EstopCategory, ServerInfo};
+/// Fixed-size, zero-padded UTF-8 text fields (from `motion-base`, shared with the drivers).
+pub use motion_base::{read_text, write_text};
 pub use params::{MAX_PARAMS, MachineParam, MachineParams, PARAM_TEXT_LEN, ParamOwner};
 pub use service::ServiceNames;
 pub use signal::{SignalFlags, SignalInfo, SignalInfoFlags, SignalKind, SignalState};
 pub use stats::{LatencySummary, LinkStats, ServerStats};
-pub use text::{read_text, write_text};
 
 /// Version of this contract. Bumped on every layout or meaning change; every payload
 /// carries it so that a client built against another version can refuse politely.
-pub const SCHEMA_VERSION: u32 = 2;
+pub const SCHEMA_VERSION: u32 = 3;
 
 /// Capacity of the axis arrays in [`MotionFrame`] and [`ServerInfo`].
 pub const MAX_AXES: usize = 128;

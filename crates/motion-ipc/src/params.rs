@@ -5,7 +5,7 @@ use iceoryx2::prelude::ZeroCopySend;
 
 use crate::SCHEMA_VERSION;
 use crate::command::UnknownValue;
-use crate::text::read_text;
+use crate::read_text;
 
 /// Capacity of [`MachineParams::entries`].
 pub const MAX_PARAMS: usize = 2048;

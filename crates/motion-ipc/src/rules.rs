@@ -124,23 +124,48 @@ pub trait Facts {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Motion {
     /// Open-loop drive, fraction of full power −1..=1.
-    Power { fraction: f64 },
+    Power {
+        /// Fraction of full power, −1..=1.
+        fraction: f64,
+    },
     /// Go to `target` at the axis's limits.
-    Position { target: f64 },
+    Position {
+        /// Target, units.
+        target: f64,
+    },
     /// Run at `velocity` (units/s), reached at the axis's `max_accel`.
-    Velocity { velocity: f64, accel: f64 },
+    Velocity {
+        /// Velocity, units/s.
+        velocity: f64,
+        /// The axis's `max_accel`, units/s².
+        accel: f64,
+    },
     /// Run at `velocity`, reached at `accel` (units/s²).
-    RampVelocity { velocity: f64, accel: f64 },
+    RampVelocity {
+        /// Velocity, units/s.
+        velocity: f64,
+        /// Acceleration, units/s².
+        accel: f64,
+    },
     /// Go to `target` with a trapezoidal profile.
     RampPosition {
+        /// Target, units.
         target: f64,
+        /// Profile velocity, units/s.
         velocity: f64,
+        /// Profile acceleration, units/s².
         accel: f64,
     },
     /// Reference search at `velocity` (units/s, > 0).
-    Home { velocity: f64 },
+    Home {
+        /// Search velocity, units/s.
+        velocity: f64,
+    },
     /// Declare the present position to be `target`.
-    SetPosition { target: f64 },
+    SetPosition {
+        /// The position the axis is now at, units.
+        target: f64,
+    },
 }
 
 impl Motion {
@@ -202,13 +227,23 @@ pub enum Verdict {
     /// De-energise axis `.0`.
     OffAxis(usize),
     /// Give axis `axis` the goal `motion`.
-    Move { axis: usize, motion: Motion },
+    Move {
+        /// Axis index.
+        axis: usize,
+        /// The goal.
+        motion: Motion,
+    },
     /// Claim signal `.0` for the client.
     ClaimSignal(usize),
     /// End the client's claim of signal `.0`.
     ReleaseSignal(usize),
     /// Set output `signal` to `on` (logical level).
-    SetOutput { signal: usize, on: bool },
+    SetOutput {
+        /// Signal index.
+        signal: usize,
+        /// Logical level.
+        on: bool,
+    },
 }
 
 /// Who sent `request`: the transport's identity `sender` when there is one (a payload

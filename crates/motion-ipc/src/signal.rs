@@ -4,44 +4,12 @@
 use iceoryx2::prelude::ZeroCopySend;
 
 use crate::command::{ClientId, UnknownValue};
-use crate::text::read_text;
+use crate::read_text;
 use crate::{NAME_LEN, UNIT_LEN};
 
-/// What a signal is. Travels as `u8` in [`SignalState::kind`] and [`SignalInfo::kind`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[repr(u8)]
-pub enum SignalKind {
-    /// A digital input: value 0.0 or 1.0 after `invert`.
-    DigitalIn = 1,
-    /// A digital output: value 0.0 or 1.0 as commanded (after `invert`), set with
-    /// `SetOutput`.
-    DigitalOut = 2,
-    /// An analogue input: value = raw × scale + offset, in the signal's unit.
-    AnalogIn = 3,
-}
-
-impl SignalKind {
-    /// The config and CLI name.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Self::DigitalIn => "digital-in",
-            Self::DigitalOut => "digital-out",
-            Self::AnalogIn => "analog-in",
-        }
-    }
-}
-
-impl TryFrom<u8> for SignalKind {
-    type Error = UnknownValue;
-    fn try_from(value: u8) -> Result<Self, Self::Error> {
-        Ok(match value {
-            1 => Self::DigitalIn,
-            2 => Self::DigitalOut,
-            3 => Self::AnalogIn,
-            other => return Err(UnknownValue(u32::from(other))),
-        })
-    }
-}
+/// What a signal is (one enum with the drivers and the engine: `motion_base::SignalKind`).
+/// Travels as `u8` in [`SignalState::kind`] and [`SignalInfo::kind`].
+pub use motion_base::SignalKind;
 
 /// Bit set of a signal's state flags ([`SignalState::flags`]).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
@@ -232,7 +200,7 @@ impl SignalInfo {
 
     /// The typed kind; `Err` for a value this build does not know.
     pub fn kind(&self) -> Result<SignalKind, UnknownValue> {
-        SignalKind::try_from(self.kind)
+        SignalKind::try_from(self.kind).map_err(|unknown| UnknownValue(u32::from(unknown.0)))
     }
 
     /// The typed flags.

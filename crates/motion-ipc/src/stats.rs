@@ -2,7 +2,7 @@
 
 use iceoryx2::prelude::ZeroCopySend;
 
-use crate::text::read_text;
+use crate::read_text;
 use crate::{MAX_LINKS, NAME_LEN, SCHEMA_VERSION};
 
 /// Percentiles of one latency distribution, in nanoseconds. 40 bytes.
@@ -83,7 +83,7 @@ impl LinkStats {
     }
 }
 
-/// Server figures. 1448 bytes, alignment 8. Fields in memory order:
+/// Server figures. 1472 bytes, alignment 8. Fields in memory order:
 ///
 /// | offset | field | type | meaning |
 /// |---|---|---|---|
@@ -104,6 +104,9 @@ impl LinkStats {
 /// | 1432 | `frames_lost` | u64 | ticks whose frame could not be loaned or sent, since start |
 /// | 1440 | `full_services` | u32 | bit set of services whose port slots are all taken now ([`ServerStats::FULL_FRAME`] …) |
 /// | 1444 | `full_events` | u32 | times a service was found with all its slots taken, since start |
+/// | 1448 | `publish_failures` | u64 | info, stats and params samples that could not be loaned or sent, and tick notifications that failed, since start (a lost frame counts in `frames_lost`) |
+/// | 1456 | `replies_lost` | u64 | command replies that could not be sent (the client vanished before its answer), since start |
+/// | 1464 | `events_dropped` | u64 | log reports the main thread's queue had no room for, and failed iceoryx2 housekeeping (connection updates, e-stop event reads), since start |
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ZeroCopySend)]
 #[type_name("motiond::ServerStats")]
 #[repr(C)]
@@ -143,6 +146,15 @@ pub struct ServerStats {
     pub full_services: u32,
     /// Times a service was found with all its slots taken, since start.
     pub full_events: u32,
+    /// Info, stats and params samples that could not be loaned or sent, and tick
+    /// notifications that failed, since start (a lost frame counts in `frames_lost`).
+    pub publish_failures: u64,
+    /// Command replies that could not be sent (the client vanished before its answer),
+    /// since start.
+    pub replies_lost: u64,
+    /// Log reports the main thread's queue had no room for, and failed iceoryx2
+    /// housekeeping (connection updates, e-stop event reads), since start.
+    pub events_dropped: u64,
 }
 
 impl ServerStats {
@@ -200,6 +212,9 @@ impl ServerStats {
         frames_lost: 0,
         full_services: 0,
         full_events: 0,
+        publish_failures: 0,
+        replies_lost: 0,
+        events_dropped: 0,
     };
 
     /// The valid link entries.

@@ -54,6 +54,7 @@
 //! assert_eq!(err.kind(), LinkErrorKind::Disconnected);
 //! # Ok::<(), motion_link::LinkError>(())
 //! ```
+#![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
 mod config;

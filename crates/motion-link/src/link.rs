@@ -5,25 +5,9 @@ use core::time::Duration;
 
 use crate::error::LinkError;
 
-/// Whether a link carries a byte stream or SPI transactions.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum LinkKind {
-    /// A byte stream (RS-232, RS-485, USB CDC). Writes queue bytes; reads return whatever
-    /// the device sent.
-    Stream,
-    /// SPI: every write is one chip-select assertion, and the same number of MISO bytes
-    /// becomes readable.
-    Spi,
-}
-
-impl fmt::Display for LinkKind {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(match self {
-            Self::Stream => "stream",
-            Self::Spi => "spi",
-        })
-    }
-}
+/// Whether a link carries a byte stream or SPI transactions (one enum with the drivers'
+/// buses: `motion_base::LinkKind`).
+pub use motion_base::LinkKind;
 
 /// Counters of one link since it was created (they survive [`Link::reopen`]).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]

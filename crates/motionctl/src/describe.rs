@@ -220,6 +220,11 @@ pub fn stats_json(stats: &ServerStats) -> Value {
         "rejected": stats.rejected,
         "clients": stats.clients,
         "rt_flags": stats.rt_flags,
+        "faults": stats.faults,
+        "frames_lost": stats.frames_lost,
+        "publish_failures": stats.publish_failures,
+        "replies_lost": stats.replies_lost,
+        "events_dropped": stats.events_dropped,
         "links": links,
     })
 }

@@ -91,7 +91,8 @@ fn draw(
     }
     let figures = match stats {
         Some(stats) => format!(
-            "wake-up p50 {} p99 {} p99.9 {} max {}   work p50 {} max {}   overruns {}   clients {}",
+            "wake-up p50 {} p99 {} p99.9 {} max {}   work p50 {} max {}   overruns {}   clients {}   \
+             lost: frames {} publishes {} replies {} events {}",
             micros(stats.wakeup.p50_ns),
             micros(stats.wakeup.p99_ns),
             micros(stats.wakeup.p999_ns),
@@ -99,7 +100,11 @@ fn draw(
             micros(stats.work.p50_ns),
             micros(stats.work.max_ns),
             stats.overruns,
-            stats.clients
+            stats.clients,
+            stats.frames_lost,
+            stats.publish_failures,
+            stats.replies_lost,
+            stats.events_dropped,
         ),
         None => "tick statistics: none yet (published about once a second)".to_owned(),
     };

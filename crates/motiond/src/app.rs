@@ -13,11 +13,11 @@ use motion_ipc::{ClientId, DeviceState, read_text};
 use motion_link::{Link, LinkConfig};
 use rtrb::RingBuffer;
 
+use crate::boards::sim_link;
 use crate::config::{ServerConfig, Transport};
 use crate::io::{self, IoThread, LinkPort};
 use crate::rt::monotonic_now;
 use crate::services;
-use crate::sim_models::sim_link;
 use crate::stats::format_ns;
 use crate::systemd::{Supervisor, TickHealth};
 use crate::tick::{self, Report, StatusLine, TickSetup};
@@ -90,7 +90,7 @@ pub fn run(config: ServerConfig, options: RunOptions) -> anyhow::Result<()> {
     }
 
     let params = crate::params::machine_params(&config);
-    let drivers: Vec<Box<dyn Driver>> = crate::drivers::build(&config)?;
+    let drivers: Vec<Box<dyn Driver>> = crate::boards::build(&config)?;
     let engine = Engine::new(config.engine_config(), drivers).context("building the engine")?;
     let links = open_links(&config)?;
 
@@ -148,7 +148,9 @@ pub fn run(config: ServerConfig, options: RunOptions) -> anyhow::Result<()> {
     };
     let result = housekeeping(&config, &mut report_rx, dead_tx, &clients_alive, systemd);
     io_stop.store(true, Ordering::Relaxed);
-    let _ = tick_thread.join();
+    if tick_thread.join().is_err() {
+        tracing::error!("the tick thread panicked");
+    }
     for thread in io_threads {
         thread.join();
     }

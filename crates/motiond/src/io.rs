@@ -59,11 +59,17 @@ pub enum LinkEvent {
 /// Counters an I/O thread keeps, read by the tick for `ServerStats`.
 #[derive(Debug, Default)]
 pub struct IoCounters {
+    /// Bytes read from the link.
     pub bytes_in: AtomicU64,
+    /// Bytes written to the link.
     pub bytes_out: AtomicU64,
+    /// I/O errors.
     pub errors: AtomicU64,
+    /// Successful reopens.
     pub reconnects: AtomicU64,
+    /// Packets or events dropped because a ring between the threads was full.
     pub dropped: AtomicU64,
+    /// The link is open.
     pub up: AtomicBool,
 }
 
@@ -91,7 +97,9 @@ pub struct IoThread {
 impl IoThread {
     /// Waits for the thread to finish (after `stop` was set).
     pub fn join(self) {
-        let _ = self.handle.join();
+        if self.handle.join().is_err() {
+            tracing::error!("an I/O thread panicked");
+        }
     }
 }
 
@@ -192,7 +200,9 @@ impl Worker {
             self.counters.up.store(false, Ordering::Relaxed);
             self.backoff = BACKOFF_MIN;
             self.next_reopen = now + self.backoff;
-            let _ = self.events.push(LinkEvent::Down);
+            if self.events.push(LinkEvent::Down).is_err() {
+                self.counters.dropped.fetch_add(1, Ordering::Relaxed);
+            }
         }
     }
 
@@ -202,7 +212,9 @@ impl Worker {
                 self.down = false;
                 self.counters.up.store(true, Ordering::Relaxed);
                 self.counters.reconnects.fetch_add(1, Ordering::Relaxed);
-                let _ = self.events.push(LinkEvent::Up);
+                if self.events.push(LinkEvent::Up).is_err() {
+                    self.counters.dropped.fetch_add(1, Ordering::Relaxed);
+                }
             }
             Err(_) => {
                 self.backoff = (self.backoff * 2).min(BACKOFF_MAX);

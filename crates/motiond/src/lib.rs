@@ -1,10 +1,13 @@
 //! motiond, the real-time motion server: config, links, the timed loop around
 //! `motion_engine::Engine::step`, iceoryx2 services.
+#![warn(missing_docs)]
 #![deny(unsafe_code)] // one exception: rt.rs (sched_setscheduler), with SAFETY notes
 
 pub mod app;
+pub mod boards;
 pub mod config;
 pub mod drivers;
+pub mod error;
 pub mod io;
 pub mod params;
 pub mod rt;

@@ -1,11 +1,11 @@
 //! The effective machine parameters published on `motiond/<name>/params`: every board
-//! key as its driver uses it (from `drivers::describe`), plus every axis's supervision and
+//! key as its driver uses it (from `boards::describe`), plus every axis's supervision and
 //! homing values, each marked as set by the config file or left at its default.
 
 use motion_ipc::{MAX_PARAMS, MachineParam, MachineParams, ParamOwner, write_text};
 
 use crate::config::{Owner, ServerConfig};
-use crate::drivers::{self, ParamRow};
+use crate::drivers::ParamRow;
 
 /// Keys that have another spelling in the config file (one fact, two names): a row under
 /// the first counts as configured when the second was set on the related table.
@@ -107,7 +107,7 @@ fn axis_rows(config: &ServerConfig, out: &mut Vec<ParamRow>) {
 
 /// The parameters of `config`, ready to publish.
 pub fn machine_params(config: &ServerConfig) -> Box<MachineParams> {
-    let mut rows = drivers::describe(config);
+    let mut rows = crate::boards::describe(config);
     axis_rows(config, &mut rows);
     rows.sort_by_key(|row| row.owner);
     let mut params = Box::new(MachineParams::EMPTY);

@@ -13,6 +13,8 @@ use std::io::Write;
 use nix::sys::time::TimeSpec;
 use nix::time::{ClockId, ClockNanosleepFlags, clock_gettime, clock_nanosleep};
 
+use crate::error::RtError;
+
 /// CLOCK_MONOTONIC now, as a duration since the clock's own origin.
 pub fn monotonic_now() -> Duration {
     clock_gettime(ClockId::CLOCK_MONOTONIC).map_or(Duration::ZERO, Duration::from)
@@ -30,7 +32,7 @@ pub fn sleep_until(deadline: Duration) {
 }
 
 /// What the real-time set-up achieved.
-#[derive(Debug, Clone, Default, PartialEq, Eq)]
+#[derive(Debug, Default)]
 pub struct RtStatus {
     /// SCHED_FIFO priority in force.
     pub fifo: Option<u8>,
@@ -42,8 +44,8 @@ pub struct RtStatus {
     pub dma_latency: bool,
     /// Timer slack is 1 ns.
     pub timer_slack: bool,
-    /// What could not be done, one line each.
-    pub problems: Vec<String>,
+    /// What could not be done.
+    pub problems: Vec<RtError>,
 }
 
 impl RtStatus {
@@ -91,23 +93,23 @@ pub struct DmaLatencyGuard {
 }
 
 /// Asks the kernel for 0 µs wake-up latency from deep C-states.
-pub fn hold_cpu_dma_latency() -> Result<DmaLatencyGuard, String> {
+pub fn hold_cpu_dma_latency() -> Result<DmaLatencyGuard, RtError> {
     let mut file = File::options()
         .write(true)
         .open("/dev/cpu_dma_latency")
-        .map_err(|e| format!("/dev/cpu_dma_latency: {e} (needs root or a udev rule)"))?;
+        .map_err(RtError::DmaLatencyOpen)?;
     file.write_all(&0i32.to_ne_bytes())
-        .map_err(|e| format!("/dev/cpu_dma_latency: write: {e}"))?;
+        .map_err(RtError::DmaLatencyWrite)?;
     Ok(DmaLatencyGuard { _file: file })
 }
 
 /// Sets the calling thread's timer slack to 1 ns.
-pub fn set_timer_slack() -> Result<(), String> {
-    nix::sys::prctl::set_timerslack(1).map_err(|e| format!("PR_SET_TIMERSLACK: {e}"))
+pub fn set_timer_slack() -> Result<(), RtError> {
+    nix::sys::prctl::set_timerslack(1).map_err(RtError::TimerSlack)
 }
 
 /// Switches the calling thread to SCHED_FIFO at `priority`.
-pub fn set_fifo(priority: u8) -> Result<(), String> {
+pub fn set_fifo(priority: u8) -> Result<(), RtError> {
     let param = libc::sched_param {
         sched_priority: i32::from(priority),
     };
@@ -117,32 +119,30 @@ pub fn set_fifo(priority: u8) -> Result<(), String> {
     if result == 0 {
         Ok(())
     } else {
-        let error = std::io::Error::last_os_error();
-        Err(format!(
-            "SCHED_FIFO priority {priority}: {error} (needs CAP_SYS_NICE or `ulimit -r {priority}`)"
-        ))
+        Err(RtError::Fifo {
+            priority,
+            source: std::io::Error::last_os_error(),
+        })
     }
 }
 
 /// Pins the calling thread to `cpu`.
-pub fn pin_to(cpu: usize) -> Result<(), String> {
+pub fn pin_to(cpu: usize) -> Result<(), RtError> {
     let cores = core_affinity::get_core_ids().unwrap_or_default();
     let Some(core) = cores.into_iter().find(|core| core.id == cpu) else {
-        return Err(format!("cpu {cpu}: no such core available to this process"));
+        return Err(RtError::NoSuchCpu(cpu));
     };
     if core_affinity::set_for_current(core) {
         Ok(())
     } else {
-        Err(format!("cpu {cpu}: sched_setaffinity failed"))
+        Err(RtError::Affinity(cpu))
     }
 }
 
 /// Locks current and future memory.
-pub fn lock_memory() -> Result<(), String> {
+pub fn lock_memory() -> Result<(), RtError> {
     use nix::sys::mman::{MlockAllFlags, mlockall};
-    mlockall(MlockAllFlags::MCL_CURRENT | MlockAllFlags::MCL_FUTURE).map_err(|e| {
-        format!("mlockall: {e} (raise RLIMIT_MEMLOCK, e.g. `ulimit -l unlimited`, or run as root)")
-    })
+    mlockall(MlockAllFlags::MCL_CURRENT | MlockAllFlags::MCL_FUTURE).map_err(RtError::LockMemory)
 }
 
 /// Touches `bytes` of stack so its pages are faulted in (and locked) before the loop.

@@ -2,6 +2,7 @@
 //! creating them, taking them over after a crashed server, watching their port slots, and
 //! telling the tick which node sent a request.
 
+use crate::error::ServiceError;
 use iceoryx2::node::NodeView;
 use iceoryx2::port::listener::Listener;
 use iceoryx2::port::notifier::Notifier;
@@ -142,43 +143,37 @@ impl Factories {
     }
 }
 
-fn service_name(name: String) -> Result<ServiceName, String> {
-    name.as_str()
-        .try_into()
-        .map_err(|e| format!("service name {name:?}: {e:?}"))
-}
-
-/// Why a service could not be made, with what to do about it.
-fn explain(service: &str, error: impl core::fmt::Debug) -> String {
-    let text = format!("{error:?}");
-    let hint = if text.contains("Incompatible") || text.contains("incompatible") {
-        " — the service exists with other settings (clients of a previous server still hold it, and this config changed max_clients or a payload): stop those clients, or keep the previous settings"
-    } else if text.contains("ExceedsMax") {
-        " — its port slots are all taken (by clients of a previous server?)"
-    } else {
-        ""
-    };
-    format!("service {service}: {text}{hint}")
+fn service_name(name: String) -> Result<ServiceName, ServiceError> {
+    name.as_str().try_into().map_err(|e| ServiceError::Name {
+        what: "service",
+        detail: format!("{e:?}"),
+        name,
+    })
 }
 
 impl Services {
     /// Creates the instance's services, or takes them over from a server that crashed while
     /// clients kept them open. Fails when another live motiond serves `name` (its node is
     /// alive), naming its process.
-    pub fn create(name: &str, max_clients: usize) -> Result<Self, String> {
+    pub fn create(name: &str, max_clients: usize) -> Result<Self, ServiceError> {
         let names = ServiceNames::new(name);
         let node_name = names.server_node();
-        let iceoryx_name: NodeName = node_name
-            .as_str()
-            .try_into()
-            .map_err(|e| format!("node name {node_name:?}: {e:?}"))?;
+        let iceoryx_name: NodeName =
+            node_name
+                .as_str()
+                .try_into()
+                .map_err(|e| ServiceError::Name {
+                    what: "node",
+                    name: node_name.clone(),
+                    detail: format!("{e:?}"),
+                })?;
         // iceoryx2 can refuse a node for a moment while another process removes a dead
         // process's node records: a few tries.
         let mut attempt = 0;
         let node = loop {
             match NodeBuilder::new().name(&iceoryx_name).create::<Ipc>() {
                 Ok(node) => break node,
-                Err(e) if attempt >= 4 => return Err(format!("iceoryx2 node: {e:?}")),
+                Err(e) if attempt >= 4 => return Err(ServiceError::Node(format!("{e:?}"))),
                 Err(_) => {
                     attempt += 1;
                     std::thread::sleep(core::time::Duration::from_millis(20));
@@ -186,9 +181,10 @@ impl Services {
             }
         };
         if let Some(pid) = live_server(&node_name, node.id().value()) {
-            return Err(format!(
-                "another motiond (process {pid}) is serving instance `{name}`; stop it or pick another [server] name"
-            ));
+            return Err(ServiceError::AnotherServer {
+                pid,
+                instance: name.to_owned(),
+            });
         }
         // A crashed server's leftovers (its ports in services that clients kept open) go
         // first, so that its publisher and server slots are free for us.
@@ -201,11 +197,11 @@ impl Services {
             .max_listeners(max_clients)
             .max_nodes(max_nodes)
             .open_or_create()
-            .map_err(|e| explain(&names.tick(), e))?;
+            .map_err(|e| ServiceError::service(&names.tick(), e))?;
         let tick_notifier = tick
             .notifier_builder()
             .create()
-            .map_err(|e| explain(&names.tick(), e))?;
+            .map_err(|e| ServiceError::service(&names.tick(), e))?;
         let estop = node
             .service_builder(&service_name(names.estop())?)
             .event()
@@ -213,11 +209,11 @@ impl Services {
             .max_listeners(1)
             .max_nodes(max_nodes * ESTOP_NOTIFIERS_PER_CLIENT)
             .open_or_create()
-            .map_err(|e| explain(&names.estop(), e))?;
+            .map_err(|e| ServiceError::service(&names.estop(), e))?;
         let estop_listener = estop
             .listener_builder()
             .create()
-            .map_err(|e| explain(&names.estop(), e))?;
+            .map_err(|e| ServiceError::service(&names.estop(), e))?;
         let command = node
             .service_builder(&service_name(names.command())?)
             .request_response::<CommandRequest, CommandReply>()
@@ -228,11 +224,11 @@ impl Services {
             .max_response_buffer_size(MAX_REQUESTS_PER_CLIENT)
             .enable_safe_overflow_for_responses(true)
             .open_or_create()
-            .map_err(|e| explain(&names.command(), e))?;
+            .map_err(|e| ServiceError::service(&names.command(), e))?;
         let command_server = command
             .server_builder()
             .create()
-            .map_err(|e| explain(&names.command(), e))?;
+            .map_err(|e| ServiceError::service(&names.command(), e))?;
         let (info, info_factory) =
             state_publisher::<ServerInfo>(&node, &service_name(names.info())?, max_clients)?;
         let (stats, stats_factory) =
@@ -251,11 +247,11 @@ impl Services {
             .max_nodes(max_nodes)
             .enable_safe_overflow(true)
             .open_or_create()
-            .map_err(|e| explain(&names.frame(), e))?;
+            .map_err(|e| ServiceError::service(&names.frame(), e))?;
         let frame_publisher = frame
             .publisher_builder()
             .create()
-            .map_err(|e| explain(&names.frame(), e))?;
+            .map_err(|e| ServiceError::service(&names.frame(), e))?;
         Ok(Self {
             node,
             frame: frame_publisher,
@@ -286,7 +282,7 @@ fn state_publisher<T: core::fmt::Debug + ZeroCopySend + 'static>(
     node: &Node<Ipc>,
     name: &ServiceName,
     max_clients: usize,
-) -> Result<(Publisher<Ipc, T, ()>, PubSubFactory<Ipc, T, ()>), String> {
+) -> Result<(Publisher<Ipc, T, ()>, PubSubFactory<Ipc, T, ()>), ServiceError> {
     let service = node
         .service_builder(name)
         .publish_subscribe::<T>()
@@ -296,11 +292,11 @@ fn state_publisher<T: core::fmt::Debug + ZeroCopySend + 'static>(
         .max_publishers(1)
         .max_nodes(max_clients + 2)
         .open_or_create()
-        .map_err(|e| explain(name.as_str(), e))?;
+        .map_err(|e| ServiceError::service(name.as_str(), e))?;
     let publisher = service
         .publisher_builder()
         .create()
-        .map_err(|e| explain(name.as_str(), e))?;
+        .map_err(|e| ServiceError::service(name.as_str(), e))?;
     Ok((publisher, service))
 }
 

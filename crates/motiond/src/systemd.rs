@@ -15,6 +15,8 @@ use std::os::linux::net::SocketAddrExt as _;
 use std::os::unix::net::{SocketAddr, UnixDatagram};
 use std::sync::atomic::{AtomicU64, Ordering};
 
+use crate::error::NotifyError;
+
 /// A connection to the service manager's notification socket.
 #[derive(Debug)]
 pub struct Notifier {
@@ -25,32 +27,30 @@ pub struct Notifier {
 impl Notifier {
     /// From `$NOTIFY_SOCKET`: `Ok(None)` when it is not set (not started by systemd, or not
     /// `Type=notify`), an error when it is set but unusable.
-    pub fn from_env() -> Result<Option<Self>, String> {
+    pub fn from_env() -> Result<Option<Self>, NotifyError> {
         match std::env::var_os("NOTIFY_SOCKET") {
             None => Ok(None),
             Some(value) => {
-                let text = value
-                    .to_str()
-                    .ok_or_else(|| "NOTIFY_SOCKET is not UTF-8".to_owned())?;
+                let text = value.to_str().ok_or(NotifyError::NotUtf8)?;
                 Self::connect(text).map(Some)
             }
         }
     }
 
     /// A socket path (`/run/systemd/notify`) or an abstract name (`@name`).
-    pub fn connect(target: &str) -> Result<Self, String> {
+    pub fn connect(target: &str) -> Result<Self, NotifyError> {
         let address = if let Some(name) = target.strip_prefix('@') {
             SocketAddr::from_abstract_name(name.as_bytes())
         } else if target.starts_with('/') {
             SocketAddr::from_pathname(target)
         } else {
-            return Err(format!(
-                "NOTIFY_SOCKET={target:?}: neither an absolute path nor an @abstract name"
-            ));
+            return Err(NotifyError::BadTarget(target.to_owned()));
         }
-        .map_err(|e| format!("NOTIFY_SOCKET={target:?}: {e}"))?;
-        let socket = UnixDatagram::unbound()
-            .map_err(|e| format!("NOTIFY_SOCKET: cannot create a socket: {e}"))?;
+        .map_err(|source| NotifyError::Address {
+            target: target.to_owned(),
+            source,
+        })?;
+        let socket = UnixDatagram::unbound().map_err(NotifyError::Socket)?;
         Ok(Self { socket, address })
     }
 

@@ -16,6 +16,7 @@ use motion_ipc::{
 use rtrb::{Consumer, Producer};
 
 use crate::config::ServerSettings;
+use crate::error::{RtError, StartError};
 use crate::io::{LinkEvent, LinkPort, PACKET_LEN, Packet};
 use crate::rt::{self, RtStatus, monotonic_now, sleep_until};
 use crate::services::{ClientDirectory, CommandFactory, Ipc, Services, SlotUse};
@@ -35,7 +36,7 @@ pub enum Report {
         node_id: u128,
     },
     /// The thread could not start.
-    Failed(String),
+    Failed(StartError),
     /// A device's state or firmware changed.
     Device {
         /// Device index (config order).
@@ -72,10 +73,15 @@ pub enum Report {
 /// The figures of the status line (small and `Copy`: no allocation to report them).
 #[derive(Debug, Clone, Copy)]
 pub struct StatusLine {
+    /// The tick.
     pub tick: u64,
+    /// Wake-up latency since start.
     pub wakeup: motion_ipc::LatencySummary,
+    /// Tick work time since start.
     pub work: motion_ipc::LatencySummary,
+    /// Ticks that missed their deadline.
     pub overruns: u64,
+    /// Live client nodes.
     pub clients: u32,
     /// Bit i: link i is up.
     pub links_up: u32,
@@ -103,15 +109,25 @@ impl StatusLine {
 /// Everything the tick thread owns.
 #[derive(Debug)]
 pub struct TickSetup {
+    /// The engine, with its drivers.
     pub engine: Engine,
+    /// The tick's end of every link's I/O thread, in link order.
     pub ports: Vec<LinkPort>,
+    /// Link names, in link order (for the stats).
     pub link_names: Vec<String>,
+    /// `[server]` settings.
     pub settings: ServerSettings,
+    /// CLOCK_MONOTONIC at start: the engine's time is measured from here.
     pub epoch: Duration,
+    /// Set by the main thread: begin the shutdown stop.
     pub shutdown: Arc<AtomicBool>,
+    /// Clients the main thread found dead.
     pub dead_clients: Consumer<ClientId>,
+    /// Live clients, as the main thread counts them.
     pub clients_alive: Arc<AtomicU32>,
+    /// What the tick thread tells the main thread.
     pub reports: Producer<Report>,
+    /// `--require-rt`: fail unless the real-time set-up is complete.
     pub require_rt: bool,
     /// The machine parameters in effect (published once on `params`).
     pub params: Box<MachineParams>,
@@ -130,6 +146,8 @@ struct IpcCommands<'a> {
     directory: &'a mut ClientDirectory,
     current: Option<ActiveRequest<Ipc, CommandRequest, (), CommandReply, ()>>,
     sender: ClientId,
+    /// Replies that could not be sent (counted into `ServerStats::replies_lost`).
+    replies_lost: u64,
 }
 
 impl CommandPort for IpcCommands<'_> {
@@ -148,9 +166,11 @@ impl CommandPort for IpcCommands<'_> {
     }
 
     fn reply(&mut self, reply: CommandReply) {
-        if let Some(active) = self.current.take() {
-            // A client that vanished meanwhile cannot be answered; nothing else to do.
-            let _ = active.send_copy(reply);
+        if let Some(active) = self.current.take()
+            && active.send_copy(reply).is_err()
+        {
+            // A client that vanished meanwhile cannot be answered: counted, nothing else.
+            self.replies_lost += 1;
         }
     }
 }
@@ -158,9 +178,9 @@ impl CommandPort for IpcCommands<'_> {
 fn set_up_rt(
     settings: &ServerSettings,
     require_rt: bool,
-) -> Result<(RtStatus, Option<rt::DmaLatencyGuard>), String> {
+) -> Result<(RtStatus, Option<rt::DmaLatencyGuard>), StartError> {
     let mut status = RtStatus::default();
-    let problem = |status: &mut RtStatus, text: String| status.problems.push(text);
+    let problem = |status: &mut RtStatus, error: RtError| status.problems.push(error);
     if let Some(priority) = settings.rt_priority {
         match rt::set_fifo(priority) {
             Ok(()) => status.fifo = Some(priority),
@@ -197,15 +217,16 @@ fn set_up_rt(
     let wanted_fifo = settings.rt_priority.is_some() && status.fifo.is_none();
     let wanted_lock = settings.lock_memory && !status.locked;
     if require_rt && (wanted_fifo || wanted_lock || settings.rt_priority.is_none()) {
-        return Err(format!(
-            "--require-rt: real-time set-up incomplete ({}); {}",
-            status.summary(),
-            if settings.rt_priority.is_none() {
-                "set [server] rt_priority".to_owned()
-            } else {
-                status.problems.join("; ")
-            }
-        ));
+        let missing = if settings.rt_priority.is_none() {
+            "set [server] rt_priority".to_owned()
+        } else {
+            let problems: Vec<String> = status.problems.iter().map(ToString::to_string).collect();
+            problems.join("; ")
+        };
+        return Err(StartError::RtIncomplete {
+            summary: status.summary(),
+            missing,
+        });
     }
     Ok((status, guard))
 }
@@ -217,25 +238,36 @@ pub fn run(mut setup: TickSetup) {
     {
         Ok(services) => services,
         Err(error) => {
-            let _ = setup.reports.push(Report::Failed(error));
+            report_at_start(&mut setup, Report::Failed(error.into()));
             return;
         }
     };
     let (rt_status, _dma_guard) = match set_up_rt(&setup.settings, setup.require_rt) {
         Ok(done) => done,
         Err(error) => {
-            let _ = setup.reports.push(Report::Failed(error));
+            report_at_start(&mut setup, Report::Failed(error));
             return;
         }
     };
     let rt_flags = rt_status.flags();
     let node_id = services.node.id().value();
     setup.health.beat(monotonic_now());
-    let _ = setup.reports.push(Report::Started {
-        rt: rt_status,
-        node_id,
-    });
+    report_at_start(
+        &mut setup,
+        Report::Started {
+            rt: rt_status,
+            node_id,
+        },
+    );
     Loop::new(setup, services, rt_flags).run();
+}
+
+/// Hands a start-up report to the main thread. Its queue is empty at start, so this never
+/// fails; if it did, the report goes to the log instead (the loop has no stats yet).
+fn report_at_start(setup: &mut TickSetup, report: Report) {
+    if let Err(rtrb::PushError::Full(report)) = setup.reports.push(report) {
+        tracing::error!("report queue full at start: {report:?}");
+    }
 }
 
 struct Loop {
@@ -254,6 +286,13 @@ struct Loop {
 }
 
 impl Loop {
+    /// Hands `report` to the main thread; a full queue drops it and counts it.
+    fn report(&mut self, report: Report) {
+        if self.setup.reports.push(report).is_err() {
+            self.stats.events_dropped += 1;
+        }
+    }
+
     fn new(setup: TickSetup, services: Services, rt_flags: u32) -> Self {
         let mut stats = Box::new(ServerStats::EMPTY);
         stats.rt_flags = rt_flags;
@@ -322,7 +361,7 @@ impl Loop {
             if let Some(since) = shutting_since {
                 let at_rest = self.setup.engine.all_at_rest();
                 if at_rest || now.saturating_sub(since) >= SHUTDOWN_TIMEOUT {
-                    let _ = self.setup.reports.push(Report::Stopped { at_rest });
+                    self.report(Report::Stopped { at_rest });
                     return;
                 }
             }
@@ -374,7 +413,9 @@ impl Loop {
     /// E-stops that did not come as commands: the `estop` event, SIGUSR1.
     fn take_estops(&mut self) {
         let mut notified = false;
-        let _ = self.services.estop.try_wait(|_| notified = true);
+        if self.services.estop.try_wait(|_| notified = true).is_err() {
+            self.stats.events_dropped += 1;
+        }
         let signalled = self.setup.estop_signal.swap(false, Ordering::Relaxed);
         if notified || signalled {
             self.setup.engine.estop();
@@ -383,7 +424,7 @@ impl Loop {
             } else {
                 "SIGUSR1"
             };
-            let _ = self.setup.reports.push(Report::EstopBy(by));
+            self.report(Report::EstopBy(by));
         }
     }
 
@@ -411,7 +452,7 @@ impl Loop {
                 full |= slots.bit;
                 if self.stats.full_services & slots.bit == 0 {
                     self.stats.full_events += 1;
-                    let _ = self.setup.reports.push(Report::SlotsFull(slots));
+                    self.report(Report::SlotsFull(slots));
                 }
             }
         }
@@ -420,13 +461,15 @@ impl Loop {
 
     /// Reports axes that faulted since the last frame.
     fn report_faults(&mut self) {
-        for (index, seen) in self.faults_seen.iter_mut().enumerate() {
+        for index in 0..self.faults_seen.len() {
             let fault = self.setup.engine.axis_fault(index);
             let code = fault.map_or(0, |(code, _, _)| code as u16);
-            if code != *seen {
-                *seen = code;
+            if self.faults_seen.get(index) != Some(&code) {
+                if let Some(seen) = self.faults_seen.get_mut(index) {
+                    *seen = code;
+                }
                 if let Some((code, value, limit)) = fault {
-                    let _ = self.setup.reports.push(Report::Fault {
+                    self.report(Report::Fault {
                         axis: index,
                         code,
                         value,
@@ -444,6 +487,7 @@ impl Loop {
             directory: &mut self.directory,
             current: None,
             sender: ClientId::NONE,
+            replies_lost: 0,
         };
         match self.services.frame.loan_uninit() {
             Ok(sample) => {
@@ -464,13 +508,22 @@ impl Loop {
                 self.stats.frames_lost += 1;
             }
         }
-        let _ = self.services.tick.notify();
+        self.stats.replies_lost += commands.replies_lost;
+        if self.services.tick.notify().is_err() {
+            self.stats.publish_failures += 1;
+        }
         // Late subscribers of the rarely published info and stats get their history sample
         // only when the publisher looks at its connections; this is cheap when nothing
         // changed.
-        let _ = self.services.info.update_connections();
-        let _ = self.services.stats.update_connections();
-        let _ = self.services.params.update_connections();
+        for updated in [
+            self.services.info.update_connections(),
+            self.services.stats.update_connections(),
+            self.services.params.update_connections(),
+        ] {
+            if updated.is_err() {
+                self.stats.events_dropped += 1;
+            }
+        }
     }
 
     fn queue_link_output(&mut self, now: Duration, buf: &mut [u8; PACKET_LEN]) {
@@ -480,7 +533,11 @@ impl Loop {
                 let Some(len) = self.setup.engine.poll_link_transmit(index, now, buf) else {
                     break;
                 };
-                let _ = port.tx.push(Packet::new(&buf[..len]));
+                // `slots() > 0` was checked: the push cannot fail, but a failure would
+                // still be counted rather than lost silently.
+                if port.tx.push(Packet::new(&buf[..len])).is_err() {
+                    port.counters.dropped.fetch_add(1, Ordering::Relaxed);
+                }
                 queued = true;
             }
             if queued {
@@ -525,18 +582,21 @@ impl Loop {
             out.up = u32::from(c.up.load(Ordering::Relaxed));
             out.frames = replies;
         }
-        if let Ok(sample) = self.services.stats.loan_uninit() {
-            let _ = sample.write_payload(**stats).send();
+        let sent = match self.services.stats.loan_uninit() {
+            Ok(sample) => sample.write_payload(**stats).send().is_ok(),
+            Err(_) => false,
+        };
+        if !sent {
+            // Shows in the next figures that do get through.
+            stats.publish_failures += 1;
         }
-        let _ = self
-            .setup
-            .reports
-            .push(Report::Stats(StatusLine::of(stats)));
+        let line = StatusLine::of(stats);
+        self.report(Report::Stats(line));
     }
 
     fn report_devices(&mut self) {
         let mut changed = false;
-        for (index, seen) in self.device_seen.iter_mut().enumerate() {
+        for index in 0..self.device_seen.len() {
             let Some(driver) = self.setup.engine.driver(index) else {
                 continue;
             };
@@ -548,10 +608,12 @@ impl Loop {
                 .unwrap_or(DeviceState::Offline);
             let mut firmware = [0u8; 32];
             write_text(&mut firmware, status.firmware());
-            if (state, firmware) != *seen {
-                *seen = (state, firmware);
+            if self.device_seen.get(index) != Some(&(state, firmware)) {
+                if let Some(seen) = self.device_seen.get_mut(index) {
+                    *seen = (state, firmware);
+                }
                 changed = true;
-                let _ = self.setup.reports.push(Report::Device {
+                self.report(Report::Device {
                     index,
                     state,
                     firmware,
@@ -564,20 +626,30 @@ impl Loop {
     }
 
     fn publish_params(&mut self) {
-        if let Ok(sample) = self.services.params.loan_uninit() {
-            let _ = sample.write_payload(*self.setup.params).send();
+        let sent = match self.services.params.loan_uninit() {
+            Ok(sample) => sample.write_payload(*self.setup.params).send().is_ok(),
+            Err(_) => false,
+        };
+        if !sent {
+            self.stats.publish_failures += 1;
         }
     }
 
     fn publish_info(&mut self) {
-        if let Ok(sample) = self.services.info.loan_uninit() {
-            let mut sample = sample.write_payload(ServerInfo::EMPTY);
-            let info = sample.payload_mut();
-            self.setup.engine.fill_info(info);
-            info.max_clients = self.setup.settings.max_clients;
-            info.server_pid = std::process::id();
-            info.start_time_ns = duration_ns(self.setup.epoch);
-            let _ = sample.send();
+        let sent = match self.services.info.loan_uninit() {
+            Ok(sample) => {
+                let mut sample = sample.write_payload(ServerInfo::EMPTY);
+                let info = sample.payload_mut();
+                self.setup.engine.fill_info(info);
+                info.max_clients = self.setup.settings.max_clients;
+                info.server_pid = std::process::id();
+                info.start_time_ns = duration_ns(self.setup.epoch);
+                sample.send().is_ok()
+            }
+            Err(_) => false,
+        };
+        if !sent {
+            self.stats.publish_failures += 1;
         }
     }
 }

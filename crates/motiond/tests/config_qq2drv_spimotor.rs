@@ -107,7 +107,7 @@ fn parse(text: &str) -> ServerConfig {
 
 /// The value `describe` gives for `key` of `owner`.
 fn described(config: &ServerConfig, owner: Owner, key: &str) -> String {
-    motiond::drivers::describe(config)
+    motiond::boards::describe(config)
         .into_iter()
         .find(|row| row.owner == owner && row.key == key)
         .unwrap_or_else(|| panic!("no row {key} for {owner:?}"))
@@ -335,7 +335,7 @@ fn assert_qq2drv_keys(requests: &[qq2drv::Request<'_>]) {
 #[test]
 fn qq2drv_keys_are_written_at_start_up_and_again_after_a_reset() {
     let config = parse(QQ2DRV);
-    let mut drivers = motiond::drivers::build(&config).expect("drivers");
+    let mut drivers = motiond::boards::build(&config).expect("drivers");
     let driver = drivers[0].as_mut();
     let mut board = motion_sim::qq2drv::Qq2drvSim::default();
     let packets = run_qq2drv(driver, &mut board, Duration::ZERO, 50);
@@ -357,7 +357,7 @@ fn qq2drv_keys_are_written_at_start_up_and_again_after_a_reset() {
 fn qq2drv_a_home_search_runs_the_configured_way_in_board_counts() {
     use motion_drivers::Goal;
     let config = parse(QQ2DRV);
-    let mut drivers = motiond::drivers::build(&config).expect("drivers");
+    let mut drivers = motiond::boards::build(&config).expect("drivers");
     let driver = drivers[0].as_mut();
     let mut board = motion_sim::qq2drv::Qq2drvSim::default();
     run_qq2drv(driver, &mut board, Duration::ZERO, 50);
@@ -579,7 +579,7 @@ fn run_spimotor(
 fn spimotor_keys_are_written_at_start_up_and_again_after_a_power_cycle() {
     use spimotor::{Coils, Write};
     let config = parse(SPIMOTOR);
-    let mut drivers = motiond::drivers::build(&config).expect("drivers");
+    let mut drivers = motiond::boards::build(&config).expect("drivers");
     let driver = drivers[0].as_mut();
     let mut board = motion_sim::spimotor::SpimotorSim::default();
     let writes = run_spimotor(driver, &mut board, Duration::ZERO, 30);
@@ -617,7 +617,7 @@ fn spimotor_describe_lists_the_stepper_keys() {
     );
     assert_eq!(described(&config, stepper, "coils"), "2 (port 0x44 ← 0x01)");
     assert!(
-        motiond::drivers::describe(&config)
+        motiond::boards::describe(&config)
             .iter()
             .all(|row| row.owner != Owner::Device(1)),
         "a brushed board has no machine keys"
@@ -653,8 +653,8 @@ fn the_real_machine_examples_are_valid_and_warning_free() {
         described(&spi, Owner::Device(0), "intensity"),
         "64 (0x40 of 0xff)"
     );
-    motiond::drivers::build(&qq).expect("qq2drv drivers");
-    motiond::drivers::build(&spi).expect("spimotor drivers");
+    motiond::boards::build(&qq).expect("qq2drv drivers");
+    motiond::boards::build(&spi).expect("spimotor drivers");
 }
 
 #[test]
@@ -674,7 +674,7 @@ fn a_signal_on_an_spi_motor_is_refused_and_on_a_qq2drv_streams_its_channel() {
         "{QQ2DRV}\n[[signal]]\nname = \"door\"\ndevice = \"quad\"\nkind = \"digital-in\"\npin = \"in2\"\ninvert = true\n"
     );
     let config = parse(&text);
-    let mut drivers = motiond::drivers::build(&config).expect("drivers");
+    let mut drivers = motiond::boards::build(&config).expect("drivers");
     let driver = drivers[0].as_mut();
     let mut board = motion_sim::qq2drv::Qq2drvSim::default();
     run_qq2drv(driver, &mut board, Duration::ZERO, 50);

@@ -367,7 +367,7 @@ fn warnings_for_keys_without_effect_and_a_stream_the_line_cannot_carry() {
 
 /// The effective parameters of device 0.
 fn rows(config: &ServerConfig) -> Vec<(String, String)> {
-    motiond::drivers::describe(config)
+    motiond::boards::describe(config)
         .into_iter()
         .filter(|row| row.owner == Owner::Device(0))
         .map(|row| (row.key, row.value))
@@ -428,9 +428,9 @@ fn describe_lists_every_key_with_its_effective_value() {
 /// Runs the built driver against the simulated board of `config`'s sim link 0 for `ms`
 /// and returns the command lines it sent, decoded with the protocol crate.
 fn start_up(config: &ServerConfig, ms: u64) -> Vec<String> {
-    let mut drivers = motiond::drivers::build(config).expect("drivers");
+    let mut drivers = motiond::boards::build(config).expect("drivers");
     let driver = &mut drivers[0];
-    let mut link = motiond::sim_models::sim_link(config, 0);
+    let mut link = motiond::boards::sim_link(config, 0);
     let mut lines = Vec::new();
     let mut buf = [0u8; 512];
     let mut commands = CommandDecoder::new();

@@ -86,7 +86,7 @@ impl Robot {
     fn new() -> Self {
         let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../config/sim.toml");
         let config = ServerConfig::load(&path).expect("config/sim.toml is valid");
-        let drivers = motiond::drivers::build(&config).expect("drivers");
+        let drivers = motiond::boards::build(&config).expect("drivers");
         let engine = Engine::new(config.engine_config(), drivers).expect("engine");
         let links: Vec<Box<dyn Link>> = config
             .links
@@ -97,7 +97,7 @@ impl Robot {
                     spec.transport,
                     motiond::config::Transport::Sim { .. }
                 ));
-                Box::new(motiond::sim_models::sim_link(&config, index)) as Box<dyn Link>
+                Box::new(motiond::boards::sim_link(&config, index)) as Box<dyn Link>
             })
             .collect();
         let period = engine.config().period();

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Callable, Optional, Union
 
@@ -178,9 +179,20 @@ class Axis:
     def _command(self, kind: CommandKind, *values: float) -> "Accepted":
         return self._client.command(self._index, kind, values)
 
-    def move_to(self, position: float) -> "Accepted":
-        """Position target handed to the board's own controller (``Position``)."""
+    def position(self, position: float) -> "Accepted":
+        """Position target handed to the board's own controller (``Position``), without
+        the server's ramp; ``motionctl move`` (a limited ramp) is :meth:`ramp_to`."""
         return self._command(CommandKind.POSITION, position)
+
+    def move_to(self, position: float) -> "Accepted":
+        """Deprecated: the old name of :meth:`position`."""
+        warnings.warn(
+            "Axis.move_to is renamed Axis.position (a board-controlled target); "
+            "`motionctl move` is Axis.ramp_to",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return self.position(position)
 
     def ramp_to(self, position: float, velocity: float = 0.0, accel: float = 0.0) -> "Accepted":
         """Position along a velocity- and acceleration-limited profile (``RampPosition``)."""

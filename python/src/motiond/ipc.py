@@ -76,7 +76,7 @@ __all__ = [
 # --- constants -----------------------------------------------------------------------------
 
 #: Version of the contract; every payload carries it.
-SCHEMA_VERSION = 2
+SCHEMA_VERSION = 3
 #: Capacity of the axis arrays in :class:`MotionFrame` and :class:`ServerInfo`.
 MAX_AXES = 128
 #: Capacity of the device array in :class:`ServerInfo`.
@@ -418,7 +418,7 @@ class LinkStats(Payload):
 
 
 class ServerStats(Payload):
-    """Server figures, published about once a second. 1448 bytes, alignment 8."""
+    """Server figures, published about once a second. 1472 bytes, alignment 8."""
 
     _type_name_ = "motiond::ServerStats"
     _fields_ = [
@@ -439,6 +439,9 @@ class ServerStats(Payload):
         ("frames_lost", _u64),
         ("full_services", _u32),
         ("full_events", _u32),
+        ("publish_failures", _u64),
+        ("replies_lost", _u64),
+        ("events_dropped", _u64),
     ]
 
 

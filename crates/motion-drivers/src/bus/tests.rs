@@ -100,7 +100,7 @@ fn stream_bus_holds_everyone_while_a_reply_is_awaited() {
         9,
     );
     let b = Scripted::new(2, &[(Priority::Poll, 9, true)], 9);
-    let mut bus = LinkBus::new(BusKind::Stream, vec![a, b]);
+    let mut bus = LinkBus::new(LinkKind::Stream, vec![a, b]);
     let mut buf = [0u8; 256];
 
     let (first, _) = bus.poll_transmit(T0, &mut buf).expect("a sends");
@@ -128,7 +128,7 @@ fn stream_bus_holds_everyone_while_a_reply_is_awaited() {
 fn commands_go_before_polls() {
     let a = Scripted::new(1, &[(Priority::Poll, 9, false)], 0);
     let b = Scripted::new(2, &[(Priority::Command, 9, false)], 0);
-    let mut bus = LinkBus::new(BusKind::Stream, vec![a, b]);
+    let mut bus = LinkBus::new(LinkKind::Stream, vec![a, b]);
     let mut buf = [0u8; 256];
     assert_eq!(bus.poll_transmit(T0, &mut buf).map(|(i, _)| i), Some(1));
     assert_eq!(bus.poll_transmit(T0, &mut buf).map(|(i, _)| i), Some(0));
@@ -139,7 +139,7 @@ fn commands_go_before_polls() {
 fn spi_miso_bytes_go_back_to_the_transaction_owner_in_order() {
     let a = Scripted::new(1, &[(Priority::Poll, 3, false)], 0);
     let b = Scripted::new(2, &[(Priority::Poll, 2, false)], 0);
-    let mut bus = LinkBus::new(BusKind::Spi, vec![a, b]);
+    let mut bus = LinkBus::new(LinkKind::Spi, vec![a, b]);
     let mut buf = [0u8; 256];
     assert!(bus.poll_transmit(T0, &mut buf).is_some());
     assert!(bus.poll_transmit(T0, &mut buf).is_some());
@@ -158,7 +158,7 @@ fn link_down_frees_the_bus() {
         &[(Priority::Poll, 9, true), (Priority::Poll, 9, true)],
         9,
     );
-    let mut bus = LinkBus::new(BusKind::Stream, vec![a]);
+    let mut bus = LinkBus::new(LinkKind::Stream, vec![a]);
     let mut buf = [0u8; 256];
     assert!(bus.poll_transmit(T0, &mut buf).is_some());
     assert_eq!(bus.poll_transmit(T0, &mut buf), None);

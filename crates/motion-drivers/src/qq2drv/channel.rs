@@ -3,6 +3,8 @@
 
 use core::time::Duration;
 
+use motion_base::counts_to_i32;
+
 use qq2drv::limits::{
     ACCELERATION_MAX, LOOP_RATE_HZ, POWER_MAX, VELOCITY_LIMIT_MAX, VELOCITY_TARGET_MAX,
 };
@@ -97,13 +99,15 @@ impl Channel {
                 // Packet 18: "Power … Range: -8,191 - 8,191".
                 Step::Power((fraction * f64::from(POWER_MAX)).round() as i16)
             }
-            Goal::Position { counts } => Step::Position(position(kind, counts)?),
+            Goal::Position { counts } => {
+                Step::Position(counts_to_i32(counts).ok_or(GoalError::OutOfBoardRange(kind))?)
+            }
             Goal::RampPosition {
                 counts,
                 velocity,
                 accel,
             } => Step::Ramp {
-                position: position(kind, counts)?,
+                position: counts_to_i32(counts).ok_or(GoalError::OutOfBoardRange(kind))?,
                 velocity: fixed(kind, velocity, VELOCITY_LIMIT_MAX)?,
                 accel: fixed(kind, accel, ACCELERATION_MAX)?,
             },
@@ -114,7 +118,9 @@ impl Channel {
             Goal::Stop { decel } => Step::Stop {
                 accel: self.stop_accel(decel),
             },
-            Goal::SetPosition { counts } => Step::SetCounter(position(kind, counts)?),
+            Goal::SetPosition { counts } => {
+                Step::SetCounter(counts_to_i32(counts).ok_or(GoalError::OutOfBoardRange(kind))?)
+            }
             Goal::Home { velocity } => {
                 let home = self.home().ok_or(GoalError::Unsupported(kind))?;
                 let speed = velocity_target(kind, velocity)?;
@@ -395,16 +401,6 @@ impl Channel {
             arrived,
             fault: self.fault,
         }
-    }
-}
-
-/// A position in counts as the board's I32.
-fn position(kind: GoalKind, counts: f64) -> Result<i32, GoalError> {
-    let rounded = counts.round();
-    if rounded.is_finite() && (f64::from(i32::MIN)..=f64::from(i32::MAX)).contains(&rounded) {
-        Ok(rounded as i32)
-    } else {
-        Err(GoalError::OutOfBoardRange(kind))
     }
 }
 

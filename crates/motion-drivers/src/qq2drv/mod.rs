@@ -93,6 +93,7 @@ mod config;
 mod in_flight;
 mod packet;
 mod pins;
+mod plan;
 mod startup;
 mod step;
 
@@ -423,7 +424,7 @@ impl Qq2drvDriver {
             self.on_stream(now, &data);
             return;
         }
-        let Some(index) = self.in_flight.find(reply.id()) else {
+        let Some(index) = self.in_flight.position(|sent| sent.id == reply.id()) else {
             self.status.bad_replies = self.status.bad_replies.saturating_add(1);
             return;
         };
@@ -613,7 +614,7 @@ impl Driver for Qq2drvDriver {
             return;
         }
         let timeout = self.reply_timeout();
-        while let Some(oldest) = self.in_flight.oldest()
+        while let Some(oldest) = self.in_flight.front()
             && now.saturating_sub(oldest.at) > timeout
         {
             self.in_flight.pop();
@@ -666,7 +667,7 @@ impl Driver for Qq2drvDriver {
         }
         let reply = self
             .in_flight
-            .oldest()
+            .front()
             .map(|sent| sent.at.saturating_add(self.reply_timeout()));
         let phase = match self.phase {
             Phase::Probe { next_at, .. } => Some(next_at),

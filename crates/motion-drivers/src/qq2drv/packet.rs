@@ -1,5 +1,6 @@
 //! The single-channel packets a goal turns into, encoded through the `qq2drv` crate.
 
+use motion_base::FixedQueue;
 use qq2drv::{
     AccelerationLimitEntry, ChannelMask, ControlMode, ControlModeEntry, Entries, InputConfig,
     InputModeEntry, MotorPowerEntry, PacketId, PositionRampEntry, PositionTargetEntry,
@@ -127,22 +128,5 @@ impl Packet {
 }
 
 /// Up to [`MAX_STEP_PACKETS`] packets of one goal step, sent back to back in one
-/// transaction.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub(super) struct Packets {
-    items: [Option<Packet>; MAX_STEP_PACKETS],
-}
-
-impl Packets {
-    /// Appends `packet` (the step tables never exceed the capacity).
-    pub(super) fn push(&mut self, packet: Packet) {
-        if let Some(slot) = self.items.iter_mut().find(|slot| slot.is_none()) {
-            *slot = Some(packet);
-        }
-    }
-
-    /// The packets in order.
-    pub(super) fn iter(&self) -> impl Iterator<Item = Packet> + '_ {
-        self.items.iter().flatten().copied()
-    }
-}
+/// transaction (the step tables never exceed the capacity).
+pub(super) type Packets = FixedQueue<Packet, MAX_STEP_PACKETS>;

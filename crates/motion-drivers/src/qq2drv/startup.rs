@@ -1,6 +1,6 @@
 //! Start-up: the probe (what the board is and streams now) and the configuration.
 
-use core::fmt::{self, Write as _};
+use core::fmt::Write as _;
 use core::time::Duration;
 
 use qq2drv::limits::{ACCELERATION_MAX, POWER_LIMIT_MAX, VELOCITY_LIMIT_MAX, WINDUP_MAX, to_fixed};
@@ -226,7 +226,7 @@ impl Qq2drvDriver {
         if !matches!(self.phase, Phase::Probe { .. }) {
             return;
         }
-        let mut text = Text::default();
+        let mut text = motion_base::FixedText::<FIRMWARE_LEN>::new();
         let _ = write!(text, "fw {major}.{minor} protocol {protocol}");
         self.status.set_firmware(text.as_str());
         let ours = masks == self.stream_masks()
@@ -249,33 +249,5 @@ impl Qq2drvDriver {
         self.phase = Phase::Configure;
         self.configure_due = true;
         self.next_poll_at = now;
-    }
-}
-
-/// A string in a fixed buffer (no allocation), cut at [`FIRMWARE_LEN`] bytes.
-#[derive(Debug, Clone, Copy, Default)]
-struct Text {
-    bytes: [u8; FIRMWARE_LEN],
-    len: usize,
-}
-
-impl Text {
-    fn as_str(&self) -> &str {
-        core::str::from_utf8(self.bytes.get(..self.len).unwrap_or(&[])).unwrap_or("")
-    }
-}
-
-impl fmt::Write for Text {
-    fn write_str(&mut self, text: &str) -> fmt::Result {
-        for byte in text.bytes() {
-            match self.bytes.get_mut(self.len) {
-                Some(slot) => {
-                    *slot = byte;
-                    self.len += 1;
-                }
-                None => break,
-            }
-        }
-        Ok(())
     }
 }

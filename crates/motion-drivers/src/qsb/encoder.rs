@@ -2,6 +2,7 @@
 //! successive time-stamped samples.
 
 use ::qsb::TICK;
+use motion_base::FixedQueue;
 
 /// Samples the velocity is measured over (8 × 1.95 ms ≈ 16 ms at the fastest stream):
 /// long enough that one count of quantisation is small, short enough to follow a ramp.
@@ -19,30 +20,21 @@ pub(crate) struct Sample {
 /// The latest samples.
 #[derive(Debug, Clone)]
 pub(crate) struct EncoderTrack {
-    ring: [Sample; VELOCITY_WINDOW],
-    /// Next slot to write.
-    next: usize,
-    /// Valid samples in the ring.
-    len: usize,
+    window: FixedQueue<Sample, VELOCITY_WINDOW>,
     velocity: f64,
 }
 
 impl EncoderTrack {
     pub(crate) const fn new() -> Self {
         Self {
-            ring: [Sample {
-                count: 0,
-                time_stamp: 0,
-            }; VELOCITY_WINDOW],
-            next: 0,
-            len: 0,
+            window: FixedQueue::new(),
             velocity: 0.0,
         }
     }
 
     /// The newest sample.
     pub(crate) fn latest(&self) -> Option<Sample> {
-        (self.len > 0).then(|| self.ring[(self.next + VELOCITY_WINDOW - 1) % VELOCITY_WINDOW])
+        self.window.back()
     }
 
     /// Counts per second over the window (0 until two samples with different time
@@ -59,19 +51,17 @@ impl EncoderTrack {
 
     /// Takes a sample. Samples with the same time stamp as the newest replace it.
     pub(crate) fn push(&mut self, sample: Sample) {
-        if let Some(latest) = self.latest()
-            && latest.time_stamp == sample.time_stamp
-        {
-            let slot = (self.next + VELOCITY_WINDOW - 1) % VELOCITY_WINDOW;
-            self.ring[slot] = sample;
-        } else {
-            self.ring[self.next] = sample;
-            self.next = (self.next + 1) % VELOCITY_WINDOW;
-            self.len = (self.len + 1).min(VELOCITY_WINDOW);
+        match self.window.back_mut() {
+            Some(latest) if latest.time_stamp == sample.time_stamp => *latest = sample,
+            _ => {
+                self.window.push_overwrite(sample);
+            }
         }
-        let oldest = self.ring[(self.next + VELOCITY_WINDOW - self.len) % VELOCITY_WINDOW];
+        let Some(oldest) = self.window.front() else {
+            return;
+        };
         let ticks = sample.time_stamp.wrapping_sub(oldest.time_stamp);
-        if self.len >= 2 && ticks > 0 && ticks < u32::MAX / 2 {
+        if self.window.len() >= 2 && ticks > 0 && ticks < u32::MAX / 2 {
             let counts = f64::from(sample.count.wrapping_sub(oldest.count));
             self.velocity = counts / (TICK.as_secs_f64() * f64::from(ticks));
         }

@@ -2,6 +2,8 @@
 
 use core::time::Duration;
 
+use motion_base::counts_to_i32;
+
 use ::qsb::{EncoderMode, LoadTarget, ProductType, QsbCommand, Register, Request, Write};
 
 use super::program::Step;
@@ -27,13 +29,6 @@ const HOME_TIME_FACTOR: f64 = 2.0;
 
 /// Slack added to a home search's time limit (start-up of the jog, wire time).
 const HOME_TIME_SLACK: Duration = Duration::from_millis(100);
-
-/// A whole number of counts the 32-bit counter can hold.
-fn counter_value(counts: f64) -> Option<i32> {
-    let value = counts.round();
-    (value.is_finite() && value >= f64::from(i32::MIN) && value <= f64::from(i32::MAX))
-        .then_some(value as i32)
-}
 
 impl QsbDriver {
     /// Whether channel 0 drives the -M's stepper: a -M (as reported), its motor drive
@@ -98,7 +93,7 @@ impl QsbDriver {
         let energise = Step::Enable(true);
         match goal {
             Goal::SetPosition { counts } => {
-                let value = counter_value(counts).ok_or(out_of_range)?;
+                let value = counts_to_i32(counts).ok_or(out_of_range)?;
                 self.preset.replace(&[
                     Step::Ensure(Write::Dtr(value as u32)),
                     Step::Send(Request::Write(Write::Load(LoadTarget::DtrToCntr))),
@@ -249,7 +244,7 @@ impl QsbDriver {
         rate: u32,
         accel: u32,
     ) -> Result<(), GoalError> {
-        let target = counter_value(counts).ok_or(GoalError::OutOfBoardRange(kind))?;
+        let target = counts_to_i32(counts).ok_or(GoalError::OutOfBoardRange(kind))?;
         let [normal, end_str] = NORMAL_COUNTER;
         self.replace_goal(
             kind,
@@ -364,7 +359,7 @@ impl QsbDriver {
                 self.arrived = true;
             }
             Some(steps) if attempt < MAX_MOVES && steps.abs() <= f64::from(i32::MAX) => {
-                self.goal.expand_front(&[
+                self.goal.expand_front([
                     Step::Ensure(Write::MoveSteps(steps as i32)),
                     command(QsbCommand::MotorMove),
                     Step::WaitDone,

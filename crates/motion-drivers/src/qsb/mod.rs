@@ -107,6 +107,8 @@ mod version;
 
 use core::time::Duration;
 
+use motion_base::FixedQueue;
+
 use ::qsb::{
     CountMode, CycleMode, IndexMode, MdStatus, Mdr0, Mdr1, Mode, ProductType, QsbCommand, Register,
     Request, ResponseDecoder, Write,
@@ -425,13 +427,9 @@ impl QsbDriver {
             Step::Ensure(Write::Threshold(0)),
             Step::Ensure(Write::IntervalRate(self.config.interval())),
         ];
-        let mut steps = [Step::Online; program::PROGRAM_CAPACITY];
-        let mut len = 0;
+        let mut steps = FixedQueue::<Step, { program::PROGRAM_CAPACITY }>::new();
         let mut push = |step: Step| {
-            if let Some(slot) = steps.get_mut(len) {
-                *slot = step;
-                len += 1;
-            }
+            steps.push(step);
         };
         let has_dio = product.digital_io_bits() > 0;
         if product == ProductType::M {
@@ -466,7 +464,7 @@ impl QsbDriver {
         }
         push(Step::Send(Request::Stream(Register::ReadEncoder)));
         push(Step::Online);
-        self.setup.expand_front(&steps[..len]);
+        self.setup.expand_front(steps.iter());
     }
 
     /// The board stopped answering: everything in progress is void; try again later.

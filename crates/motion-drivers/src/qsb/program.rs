@@ -3,6 +3,7 @@
 //! encoder reading at that moment, not when the goal was set).
 
 use ::qsb::{Request, Write};
+use motion_base::FixedQueue;
 
 /// One step of a plan.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -43,8 +44,7 @@ pub(crate) const PROGRAM_CAPACITY: usize = 24;
 /// A fixed-capacity queue of steps.
 #[derive(Debug, Clone)]
 pub(crate) struct Program {
-    steps: [Step; PROGRAM_CAPACITY],
-    len: usize,
+    steps: FixedQueue<Step, PROGRAM_CAPACITY>,
     /// Changes whenever the plan is replaced, so that the answer to a request of an old
     /// plan never advances a new one.
     generation: u32,
@@ -53,8 +53,7 @@ pub(crate) struct Program {
 impl Program {
     pub(crate) const fn new() -> Self {
         Self {
-            steps: [Step::Online; PROGRAM_CAPACITY],
-            len: 0,
+            steps: FixedQueue::new(),
             generation: 0,
         }
     }
@@ -64,24 +63,23 @@ impl Program {
     }
 
     pub(crate) fn front(&self) -> Option<Step> {
-        (self.len > 0).then(|| self.steps[0])
+        self.steps.front()
     }
 
     pub(crate) fn is_empty(&self) -> bool {
-        self.len == 0
+        self.steps.is_empty()
     }
 
     #[cfg(test)]
-    pub(crate) fn iter(&self) -> impl Iterator<Item = &Step> {
-        self.steps.iter().take(self.len)
+    pub(crate) fn iter(&self) -> impl Iterator<Item = Step> + '_ {
+        self.steps.iter()
     }
 
     /// Replaces the whole plan with `steps` (cut to the capacity).
     pub(crate) fn replace(&mut self, steps: &[Step]) {
         self.generation = self.generation.wrapping_add(1);
-        let len = steps.len().min(PROGRAM_CAPACITY);
-        self.steps[..len].copy_from_slice(&steps[..len]);
-        self.len = len;
+        self.steps.clear();
+        self.steps.extend_from_slice(steps);
     }
 
     /// Empties the plan.
@@ -91,24 +89,22 @@ impl Program {
 
     /// Removes the front step.
     pub(crate) fn pop(&mut self) {
-        if self.len > 0 {
-            self.steps.copy_within(1..self.len, 0);
-            self.len -= 1;
-        }
+        self.steps.pop();
     }
 
     /// Replaces the front step with `steps` (keeping the rest behind them, as far as the
     /// capacity allows). The generation stays: this is the same plan unfolding.
-    pub(crate) fn expand_front(&mut self, steps: &[Step]) {
-        if self.len == 0 {
+    pub(crate) fn expand_front(&mut self, steps: impl IntoIterator<Item = Step>) {
+        if self.steps.pop().is_none() {
             return;
         }
-        let rest = self.len - 1;
-        let add = steps.len().min(PROGRAM_CAPACITY);
-        let kept = rest.min(PROGRAM_CAPACITY - add);
-        self.steps.copy_within(1..1 + kept, add);
-        self.steps[..add].copy_from_slice(&steps[..add]);
-        self.len = add + kept;
+        let rest = self.steps;
+        self.steps.clear();
+        for step in steps.into_iter().chain(rest.iter()) {
+            if !self.steps.push(step) {
+                break;
+            }
+        }
     }
 }
 
@@ -123,8 +119,8 @@ mod tests {
         program.replace(&[Step::Configure, Step::Online]);
         let generation = program.generation();
         let read = Step::Send(Request::Read(Register::Version));
-        program.expand_front(&[read, Step::EndStrStream]);
-        let steps: Vec<Step> = program.iter().copied().collect();
+        program.expand_front([read, Step::EndStrStream]);
+        let steps: Vec<Step> = program.iter().collect();
         assert_eq!(steps, [read, Step::EndStrStream, Step::Online]);
         assert_eq!(program.generation(), generation);
         program.pop();
@@ -142,7 +138,7 @@ mod tests {
         let mut program = Program::new();
         program.replace(&[Step::WaitDone; PROGRAM_CAPACITY + 3]);
         assert_eq!(program.iter().count(), PROGRAM_CAPACITY);
-        program.expand_front(&[Step::Online; 4]);
+        program.expand_front([Step::Online; 4]);
         assert_eq!(program.iter().count(), PROGRAM_CAPACITY);
         assert_eq!(program.front(), Some(Step::Online));
     }

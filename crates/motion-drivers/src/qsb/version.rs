@@ -11,7 +11,7 @@ use crate::state::FIRMWARE_LEN;
 impl QsbDriver {
     /// Records the VERSION answer as the firmware description.
     pub(super) fn record_version(&mut self, version: ::qsb::Version) {
-        let mut text = FirmwareText::default();
+        let mut text = motion_base::FixedText::<FIRMWARE_LEN>::new();
         let product = match version.product {
             ProductType::D => 'D',
             ProductType::M => 'M',
@@ -26,28 +26,5 @@ impl QsbDriver {
         self.status.set_firmware(text.as_str());
         self.product = Some(version.product);
         self.serial = Some(version.serial);
-    }
-}
-
-/// A fixed buffer the firmware description is formatted into.
-#[derive(Default)]
-struct FirmwareText {
-    buf: [u8; FIRMWARE_LEN],
-    len: usize,
-}
-
-impl FirmwareText {
-    fn as_str(&self) -> &str {
-        core::str::from_utf8(self.buf.get(..self.len).unwrap_or_default()).unwrap_or("")
-    }
-}
-
-impl core::fmt::Write for FirmwareText {
-    fn write_str(&mut self, s: &str) -> core::fmt::Result {
-        let end = self.len + s.len();
-        let slot = self.buf.get_mut(self.len..end).ok_or(core::fmt::Error)?;
-        slot.copy_from_slice(s.as_bytes());
-        self.len = end;
-        Ok(())
     }
 }

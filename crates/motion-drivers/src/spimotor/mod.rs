@@ -125,7 +125,7 @@ mod stepper;
 mod survey;
 mod wire;
 
-use core::fmt::{self, Write as _};
+use core::fmt::Write as _;
 use core::time::Duration;
 
 use spimotor::{Identification, ReadPort, Reply, SerialNumber, Write};
@@ -300,7 +300,7 @@ impl SpimotorDriver {
 
     /// Drops the unsent goal ops of `channel` and recomputes the planned registers.
     fn drop_goals(&mut self, channel: u8) {
-        self.commands.drop_goals(channel);
+        self.commands.retain(|queued| !queued.is_goal_of(channel));
         self.planned = self.written;
         let mut planned = self.written;
         for queued in self.commands.iter() {
@@ -454,7 +454,7 @@ impl SpimotorDriver {
     }
 
     fn set_firmware(&mut self, serial: SerialNumber) {
-        let mut text = FixedText::default();
+        let mut text = motion_base::FixedText::<FIRMWARE_LEN>::new();
         let identification = self.identification;
         let id = identification
             .as_ref()
@@ -551,37 +551,6 @@ fn valid_identification(reply: Reply) -> Option<Identification> {
             Some(id)
         }
         _ => None,
-    }
-}
-
-/// A string in a fixed buffer (no allocation), cut at [`FIRMWARE_LEN`] bytes.
-#[derive(Debug, Clone, Copy, Default)]
-struct FixedText {
-    bytes: [u8; FIRMWARE_LEN],
-    len: usize,
-}
-
-impl FixedText {
-    fn as_str(&self) -> &str {
-        core::str::from_utf8(self.bytes.get(..self.len).unwrap_or(&[])).unwrap_or("")
-    }
-}
-
-impl fmt::Write for FixedText {
-    fn write_str(&mut self, text: &str) -> fmt::Result {
-        for ch in text.chars() {
-            let mut utf8 = [0u8; 4];
-            let encoded = ch.encode_utf8(&mut utf8).as_bytes();
-            let end = self.len + encoded.len();
-            match self.bytes.get_mut(self.len..end) {
-                Some(slot) => {
-                    slot.copy_from_slice(encoded);
-                    self.len = end;
-                }
-                None => break,
-            }
-        }
-        Ok(())
     }
 }
 
@@ -728,7 +697,10 @@ impl Driver for SpimotorDriver {
     }
 
     fn goals_pending(&self) -> bool {
-        self.commands.any(Priority::Command) || self.stepper.ramping()
+        self.commands
+            .iter()
+            .any(|queued| queued.priority == Priority::Command)
+            || self.stepper.ramping()
     }
 
     fn set_goal(&mut self, now: Duration, channel: usize, goal: Goal) -> Result<(), GoalError> {

@@ -2,6 +2,8 @@
 
 use core::time::Duration;
 
+use motion_base::counts_to_i32;
+
 use spimotor::{Reply, StepDelay, Write};
 
 use super::config::SpimotorDriverConfig;
@@ -54,13 +56,6 @@ pub(super) struct Stepper {
     repeats: u32,
     bad_in_row: u32,
     next_profile_at: Duration,
-}
-
-/// `counts` as a 32-bit board position, if it is one.
-fn board_position(counts: f64) -> Option<i32> {
-    let rounded = counts.round();
-    (rounded.is_finite() && rounded >= f64::from(i32::MIN) && rounded <= f64::from(i32::MAX))
-        .then_some(rounded as i32)
 }
 
 fn positive(value: f64) -> bool {
@@ -248,7 +243,7 @@ impl SpimotorDriver {
             }
             _ if !running => return Err(GoalError::Offline),
             Goal::Position { counts } => Motion::Move {
-                target: board_position(counts)
+                target: counts_to_i32(counts)
                     .ok_or(GoalError::OutOfBoardRange(GoalKind::Position))?,
                 velocity: self.stepper.max_velocity.min(ramp::fastest_rate()),
                 accel: self.stepper.max_accel,
@@ -263,7 +258,7 @@ impl SpimotorDriver {
                     return Err(range);
                 }
                 Motion::Move {
-                    target: board_position(counts).ok_or(range)?,
+                    target: counts_to_i32(counts).ok_or(range)?,
                     velocity: velocity.min(ramp::fastest_rate()),
                     accel,
                 }
@@ -289,7 +284,7 @@ impl SpimotorDriver {
                 }
             }
             Goal::SetPosition { counts } => {
-                let position = board_position(counts)
+                let position = counts_to_i32(counts)
                     .ok_or(GoalError::OutOfBoardRange(GoalKind::SetPosition))?;
                 self.drop_goals(0);
                 self.stepper.motion = Motion::Hold;
@@ -320,7 +315,13 @@ impl SpimotorDriver {
     /// One profile update: rewrites the step delay and target the ramp asks for. Runs
     /// every poll period (`force` runs it now, for a new goal).
     pub(super) fn drive_stepper(&mut self, now: Duration, force: bool) {
-        if !force && (now < self.stepper.next_profile_at || self.commands.any(Priority::Command)) {
+        if !force
+            && (now < self.stepper.next_profile_at
+                || self
+                    .commands
+                    .iter()
+                    .any(|queued| queued.priority == Priority::Command))
+        {
             return;
         }
         self.stepper.next_profile_at = now.saturating_add(self.config.poll_period);

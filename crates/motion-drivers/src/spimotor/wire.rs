@@ -6,6 +6,8 @@ use core::time::Duration;
 
 use spimotor::{Address, Header, Read, ReadPort, StepDelay, Transaction, Write};
 
+use motion_base::FixedQueue;
+
 use crate::driver::Priority;
 
 /// One transaction the driver wants on the wire.
@@ -54,93 +56,16 @@ pub struct Queued {
     pub channel: u8,
 }
 
+impl Queued {
+    /// Whether this is an unsent goal op ([`Priority::Command`]) of `channel` (a new goal
+    /// drops them; setup ops stay).
+    pub fn is_goal_of(&self, channel: u8) -> bool {
+        self.channel == channel && self.priority == Priority::Command
+    }
+}
+
 /// A bounded FIFO of ops (no allocation; a full queue refuses).
-#[derive(Debug, Clone, Copy)]
-pub struct OpQueue<const N: usize> {
-    items: [Option<Queued>; N],
-    len: usize,
-}
-
-impl<const N: usize> OpQueue<N> {
-    /// An empty queue.
-    pub const fn new() -> Self {
-        Self {
-            items: [None; N],
-            len: 0,
-        }
-    }
-
-    /// Appends; `false` when full.
-    pub fn push(&mut self, item: Queued) -> bool {
-        match self.items.get_mut(self.len) {
-            Some(slot) => {
-                *slot = Some(item);
-                self.len += 1;
-                true
-            }
-            None => false,
-        }
-    }
-
-    /// The op that goes out next.
-    pub fn front(&self) -> Option<Queued> {
-        self.items.first().copied().flatten()
-    }
-
-    /// Takes the op that goes out next.
-    pub fn pop(&mut self) -> Option<Queued> {
-        let first = self.front()?;
-        self.items.copy_within(1.., 0);
-        if let Some(last) = self.items.last_mut() {
-            *last = None;
-        }
-        self.len -= 1;
-        Some(first)
-    }
-
-    /// The queued ops, next first.
-    pub fn iter(&self) -> impl Iterator<Item = Queued> + '_ {
-        self.items.iter().take(self.len).flatten().copied()
-    }
-
-    /// Drops the unsent goal ops ([`Priority::Command`]) of `channel`; setup ops stay.
-    pub fn drop_goals(&mut self, channel: u8) {
-        let mut kept = 0;
-        for index in 0..self.len {
-            let item = self.items.get(index).copied().flatten();
-            if let Some(item) =
-                item.filter(|item| item.channel != channel || item.priority != Priority::Command)
-                && let Some(slot) = self.items.get_mut(kept)
-            {
-                *slot = Some(item);
-                kept += 1;
-            }
-        }
-        for slot in self.items.iter_mut().skip(kept) {
-            *slot = None;
-        }
-        self.len = kept;
-    }
-
-    /// Drops everything.
-    pub fn clear(&mut self) {
-        self.items = [None; N];
-        self.len = 0;
-    }
-
-    /// Whether any queued op has `priority`.
-    pub fn any(&self, priority: Priority) -> bool {
-        self.items
-            .iter()
-            .flatten()
-            .any(|item| item.priority == priority)
-    }
-
-    /// Whether nothing is queued.
-    pub const fn is_empty(&self) -> bool {
-        self.len == 0
-    }
-}
+pub type OpQueue<const N: usize> = FixedQueue<Queued, N>;
 
 /// What the board should answer to a read, as the driver's writes left it when the read
 /// was sent.
@@ -174,9 +99,7 @@ pub const MAX_TRANSACTION: usize = Header::LEN + spimotor::IDENTIFICATION_READ_L
 /// the oldest received so far.
 #[derive(Debug, Clone)]
 pub struct InFlight<const N: usize> {
-    ring: [Option<Sent>; N],
-    head: usize,
-    len: usize,
+    sent: FixedQueue<Sent, N>,
     miso: [u8; MAX_TRANSACTION],
     received: usize,
 }
@@ -185,9 +108,7 @@ impl<const N: usize> InFlight<N> {
     /// Nothing in flight.
     pub const fn new() -> Self {
         Self {
-            ring: [None; N],
-            head: 0,
-            len: 0,
+            sent: FixedQueue::new(),
             miso: [0; MAX_TRANSACTION],
             received: 0,
         }
@@ -195,56 +116,39 @@ impl<const N: usize> InFlight<N> {
 
     /// Records a transaction just written; `false` when full (the caller checks first).
     pub fn push(&mut self, sent: Sent) -> bool {
-        if self.len >= N {
-            return false;
-        }
-        if let Some(slot) = self.ring.get_mut((self.head + self.len) % N) {
-            *slot = Some(sent);
-            self.len += 1;
-            return true;
-        }
-        false
+        self.sent.push(sent)
     }
 
     /// Whether another transaction may be recorded.
     pub const fn has_room(&self) -> bool {
-        self.len < N
+        !self.sent.is_full()
     }
 
     /// Transactions in flight.
     pub const fn len(&self) -> usize {
-        self.len
+        self.sent.len()
     }
 
     /// Whether nothing is in flight.
     pub const fn is_empty(&self) -> bool {
-        self.len == 0
+        self.sent.is_empty()
     }
 
     /// The oldest transaction in flight.
     pub fn oldest(&self) -> Option<Sent> {
-        if self.len == 0 {
-            return None;
-        }
-        self.ring.get(self.head).copied().flatten()
+        self.sent.front()
     }
 
     /// Whether a read of `port` is in flight.
     pub fn reading(&self, port: ReadPort) -> bool {
-        (0..self.len).any(|k| {
-            self.ring
-                .get((self.head + k) % N)
-                .copied()
-                .flatten()
-                .is_some_and(|sent| matches!(sent.op, Op::Read(p, _) if p == port))
-        })
+        self.sent
+            .iter()
+            .any(|sent| matches!(sent.op, Op::Read(p, _) if p == port))
     }
 
     /// Forgets everything in flight (link down, reply timeout).
     pub fn clear(&mut self) {
-        self.ring = [None; N];
-        self.head = 0;
-        self.len = 0;
+        self.sent.clear();
         self.received = 0;
     }
 
@@ -269,11 +173,7 @@ impl<const N: usize> InFlight<N> {
             return (take, None);
         }
         self.received = 0;
-        if let Some(slot) = self.ring.get_mut(self.head) {
-            *slot = None;
-        }
-        self.head = (self.head + 1) % N;
-        self.len -= 1;
+        self.sent.pop();
         let miso = self.miso.get(..len.min(MAX_TRANSACTION)).unwrap_or(&[]);
         (take, Some((sent, miso)))
     }
@@ -336,7 +236,7 @@ mod tests {
         };
         assert!(queue.push(op(0)) && queue.push(op(1)) && queue.push(op(0)));
         assert!(!queue.push(op(1)));
-        queue.drop_goals(0);
+        queue.retain(|queued| !queued.is_goal_of(0));
         assert_eq!(queue.pop(), Some(op(1)));
         assert!(queue.is_empty() && queue.pop().is_none());
     }

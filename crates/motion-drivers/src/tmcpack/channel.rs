@@ -35,6 +35,8 @@
 
 use core::time::Duration;
 
+use motion_base::{FixedQueue, counts_to_i32};
+
 use tmcpack::{Action, CurrentLevel, MAX_VELOCITY, MotorOptions, Request};
 
 use super::config::{Scale, TmcpackChannel};
@@ -100,8 +102,7 @@ pub(crate) struct Channel {
     /// Target of the last `$23` and the sequence number it was sent with.
     pub target: Option<(i32, u64)>,
     /// The script of the current goal.
-    steps: [Option<Step>; MAX_STEPS],
-    next: usize,
+    steps: FixedQueue<Step, MAX_STEPS>,
     /// Earliest instant the `AwaitRest` step may finish.
     pub rest_at: Option<Duration>,
     /// Sequence number and send time of the request behind the last poll answer.
@@ -137,8 +138,7 @@ impl Channel {
             board_vrefmax: scale.vrefmax,
             powered: true,
             target: None,
-            steps: [None; MAX_STEPS],
-            next: MAX_STEPS,
+            steps: FixedQueue::new(),
             rest_at: None,
             polled_seq: 0,
             polled_sent_at: Duration::ZERO,
@@ -176,24 +176,23 @@ impl Channel {
     }
 
     pub fn clear_script(&mut self) {
-        self.steps = [None; MAX_STEPS];
-        self.next = MAX_STEPS;
+        self.steps.clear();
         self.rest_at = None;
     }
 
     /// Whether the script has steps left.
     pub fn pending(&self) -> bool {
-        self.steps.get(self.next).is_some_and(Option::is_some)
+        !self.steps.is_empty()
     }
 
     /// The step to do next.
     pub fn current(&self) -> Option<Step> {
-        self.steps.get(self.next).copied().flatten()
+        self.steps.front()
     }
 
     /// The current step is done.
     pub fn advance(&mut self) {
-        self.next = (self.next + 1).min(MAX_STEPS);
+        self.steps.pop();
     }
 
     /// Whether the next step is a request that may go now.
@@ -243,7 +242,7 @@ impl Channel {
             }
             Goal::Power { .. } => return Err(GoalError::Unsupported(kind)),
             Goal::Position { counts } => {
-                let target = position(counts).ok_or(range)?;
+                let target = counts_to_i32(counts).ok_or(range)?;
                 self.plan_ramp(&mut script, motor, target, self.scale.vmax, self.scale.amax);
             }
             Goal::RampPosition {
@@ -251,7 +250,7 @@ impl Channel {
                 velocity,
                 accel,
             } => {
-                let target = position(counts).ok_or(range)?;
+                let target = counts_to_i32(counts).ok_or(range)?;
                 let vmax = self.scale.velocity(velocity).filter(|&v| v >= 1);
                 let amax = self.scale.amax(accel);
                 let (Some(vmax), Some(amax)) = (vmax, amax) else {
@@ -294,20 +293,20 @@ impl Channel {
                         motor,
                         vrefmax,
                         debounce_mask: self.cfg.debounce_mask,
-                        flags: super::startup::REFERENCE_FLAGS,
+                        flags: super::config::REFERENCE_FLAGS,
                     });
                 }
                 script.send(Request::ReferenceSearch { motor });
             }
             Goal::SetPosition { counts } => {
-                let position = position(counts).ok_or(range)?;
+                let position = counts_to_i32(counts).ok_or(range)?;
                 script.send(Request::SetPosition { motor, position });
             }
         }
         if script.overflow {
             return Err(range);
         }
-        for step in script.steps.iter().flatten() {
+        for step in script.steps.iter() {
             if let Step::Send(request) = step
                 && request.validate().is_err()
             {
@@ -315,7 +314,6 @@ impl Channel {
             }
         }
         self.steps = script.steps;
-        self.next = 0;
         self.stop_if_active = false;
         self.urgent = matches!(kind, GoalKind::Stop | GoalKind::Off);
         self.rest_at = None;
@@ -585,39 +583,25 @@ impl Channel {
         } else if !self.pending() {
             // The zero point takes the configured home position; referenced once a poll
             // after the `$27` confirms it.
-            self.steps = [None; MAX_STEPS];
-            self.steps[0] = Some(Step::Send(Request::SetPosition {
+            self.steps.clear();
+            self.steps.push(Step::Send(Request::SetPosition {
                 motor: self.motor,
                 position: self.cfg.home_position,
             }));
-            self.next = 0;
             self.urgent = false;
         }
     }
 
     /// Puts `step` before the current one (the `$23` that ends a rotation at rest).
     fn insert_now(&mut self, step: Step) {
-        if self.next > 0 {
-            self.next -= 1;
-            if let Some(slot) = self.steps.get_mut(self.next) {
-                *slot = Some(step);
-            }
-        }
+        self.steps.push_front(step);
     }
-}
-
-/// A target in counts as the pack's signed 32-bit position.
-fn position(counts: f64) -> Option<i32> {
-    let rounded = counts.round();
-    (rounded.is_finite() && rounded >= f64::from(i32::MIN) && rounded <= f64::from(i32::MAX))
-        .then_some(rounded as i32)
 }
 
 /// A script being planned.
 #[derive(Debug, Default)]
 struct Script {
-    steps: [Option<Step>; MAX_STEPS],
-    len: usize,
+    steps: FixedQueue<Step, MAX_STEPS>,
     overflow: bool,
     /// `$14` values the script has written so far.
     limits: Option<(u16, u16)>,
@@ -625,12 +609,8 @@ struct Script {
 
 impl Script {
     fn push(&mut self, step: Step) {
-        match self.steps.get_mut(self.len) {
-            Some(slot) => {
-                *slot = Some(step);
-                self.len += 1;
-            }
-            None => self.overflow = true,
+        if !self.steps.push(step) {
+            self.overflow = true;
         }
     }
 

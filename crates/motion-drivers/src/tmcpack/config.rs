@@ -8,10 +8,15 @@ use tmcpack::convert::{
 };
 use tmcpack::{
     CurrentLevel, FRAME_LEN, MAX_AMAX, MAX_ANALOG, MAX_CLKDIV, MAX_DIV, MAX_VELOCITY, MotorOptions,
-    MotorType, StepClock, Variant,
+    MotorType, ReferenceFlags, StepClock, Variant,
 };
 
 use super::io::TmcpackIo;
+
+/// $16 P5 the driver always sets: "1=Stop after reference search", so that a `Home` goal
+/// ends at the new zero point with the motor inactive (0 would resume the previous action,
+/// e.g. drive back to where the search started).
+pub(crate) const REFERENCE_FLAGS: ReferenceFlags = ReferenceFlags::STOP_AFTER_SEARCH;
 
 /// The response address the driver puts in its queries unless configured otherwise. The
 /// pack executes any word whose first byte is its own address, replies included, so this

@@ -109,7 +109,7 @@ impl TmcpackDriver {
     }
 
     pub(super) fn set_firmware(&mut self, revision: u8, serial: u16) {
-        let mut text = FixedText::default();
+        let mut text = motion_base::FixedText::<FIRMWARE_LEN>::new();
         let name = match self.variant {
             Variant::SixPack => "SIXpack",
             Variant::QuadPack => "QUADpack",
@@ -123,32 +123,5 @@ impl TmcpackDriver {
             revision % 10
         );
         self.status.set_firmware(text.as_str());
-    }
-}
-
-/// A stack buffer for the firmware text (no allocation).
-#[derive(Default)]
-struct FixedText {
-    buf: [u8; FIRMWARE_LEN],
-    len: usize,
-}
-
-impl FixedText {
-    fn as_str(&self) -> &str {
-        self.buf
-            .get(..self.len)
-            .and_then(|b| core::str::from_utf8(b).ok())
-            .unwrap_or("")
-    }
-}
-
-impl core::fmt::Write for FixedText {
-    fn write_str(&mut self, s: &str) -> core::fmt::Result {
-        for &byte in s.as_bytes() {
-            let slot = self.buf.get_mut(self.len).ok_or(core::fmt::Error)?;
-            *slot = byte;
-            self.len += 1;
-        }
-        Ok(())
     }
 }

@@ -13,17 +13,13 @@
 
 use core::time::Duration;
 
+use motion_base::FixedQueue;
 use tmcpack::convert::baud_divisor;
-use tmcpack::{Action, MAX_VELOCITY, MotorMask, MotorOptions, MotorType, ReferenceFlags, Request};
+use tmcpack::{Action, MAX_VELOCITY, MotorMask, MotorOptions, MotorType, Request};
 
 use super::channel::Channel;
-use super::config::{Scale, TmcpackDriverConfig};
+use super::config::{REFERENCE_FLAGS, Scale, TmcpackDriverConfig};
 use super::io::IoState;
-
-/// $16 P5 the driver always sets: "1=Stop after reference search", so that a `Home` goal
-/// ends at the new zero point with the motor inactive (0 would resume the previous action,
-/// e.g. drive back to where the search started).
-pub(crate) const REFERENCE_FLAGS: ReferenceFlags = ReferenceFlags::STOP_AFTER_SEARCH;
 
 /// Most requests a start-up can need: $40, $41, $12, three $10, six motors × seven, $33,
 /// $32.
@@ -49,7 +45,7 @@ pub(crate) fn motor_options(configured: MotorOptions) -> MotorOptions {
 /// placeholder: the driver sends its current output levels in its place.
 #[derive(Debug, Clone)]
 pub(crate) struct StartupPlan {
-    requests: [Option<Request>; MAX_STARTUP],
+    requests: FixedQueue<Request, MAX_STARTUP>,
 }
 
 impl StartupPlan {
@@ -59,14 +55,10 @@ impl StartupPlan {
         channels: &[Option<Channel>],
         io: &IoState,
     ) -> Self {
-        let mut requests = [None; MAX_STARTUP];
-        let mut len = 0;
+        let mut requests = FixedQueue::new();
         let mut push = |request: Request| {
-            if let Some(slot) = requests.get_mut(len)
-                && request.validate().is_ok()
-            {
-                *slot = Some(request);
-                len += 1;
+            if request.validate().is_ok() {
+                requests.push(request);
             }
         };
         if let (Some(switchover), Ok(divisor)) =
@@ -157,7 +149,7 @@ impl StartupPlan {
 
     /// Request `index` of the plan.
     pub fn get(&self, index: usize) -> Option<Request> {
-        self.requests.get(index).copied().flatten()
+        self.requests.get(index)
     }
 }
 
@@ -170,8 +162,7 @@ const QUIESCE_MARGIN: Duration = Duration::from_millis(250);
 /// Stopping the configured motors that the `$28` survey found active.
 #[derive(Debug, Clone)]
 pub(crate) struct Quiesce {
-    requests: [Option<Request>; MAX_QUIESCE],
-    next: usize,
+    requests: FixedQueue<Request, MAX_QUIESCE>,
     /// Motors not yet seen at rest.
     pub moving: MotorMask,
     next_motor: u8,
@@ -184,9 +175,8 @@ impl Quiesce {
     /// The step for the `$28` answer `actions` at `now`; `None` when no configured motor
     /// is active.
     pub fn new(now: Duration, actions: [Action; 6], channels: &[Option<Channel>]) -> Option<Self> {
-        let mut requests = [None; MAX_QUIESCE];
+        let mut requests = FixedQueue::new();
         let mut moving = MotorMask::EMPTY;
-        let mut len = 0;
         let mut longest = Duration::ZERO;
         for channel in channels.iter().flatten() {
             let motor = channel.motor;
@@ -208,10 +198,7 @@ impl Quiesce {
                 },
                 Request::Rotate { motor, velocity: 0 },
             ] {
-                if let Some(slot) = requests.get_mut(len) {
-                    *slot = Some(request);
-                    len += 1;
-                }
+                requests.push(request);
             }
             moving = moving | MotorMask::single(motor);
             // From any velocity the pack allows (its divider may not be ours yet).
@@ -220,10 +207,9 @@ impl Quiesce {
         if moving.bits() == 0 {
             return None;
         }
-        let words = Duration::from_millis(10) * len as u32;
+        let words = Duration::from_millis(10) * requests.len() as u32;
         Some(Self {
             requests,
-            next: 0,
             moving,
             next_motor: 0,
             deadline: now + words + longest + QUIESCE_MARGIN,
@@ -232,15 +218,16 @@ impl Quiesce {
 
     /// The stop command to send next, if any.
     pub fn command(&self) -> Option<Request> {
-        self.requests.get(self.next).copied().flatten()
+        self.requests.front()
     }
 
     /// The command returned by [`command`](Self::command) was sent.
     pub fn sent(&mut self) {
-        self.next += 1;
+        self.requests.pop();
     }
 
     /// The next motor to ask `$21`, round-robin over those still moving.
+    #[must_use]
     pub fn poll_motor(&mut self) -> Option<u8> {
         let motor = (0..6u8)
             .map(|offset| (self.next_motor + offset) % 6)

@@ -6,10 +6,10 @@ use std::collections::VecDeque;
 use std::sync::{Arc, Mutex, MutexGuard};
 
 use motion_drivers::{
-    BusKind, ChannelState, DeviceFault, DeviceStatus, Driver, Goal, GoalError, GoalKind, GoalKinds,
-    Model, Pin, PinReading, Priority, Transmit,
+    ChannelState, DeviceFault, DeviceStatus, Driver, Goal, GoalError, GoalKind, GoalKinds,
+    LinkKind, Model, Pin, PinReading, Priority, Transmit,
 };
-use motion_engine::{AxisConfig, CommandPort, DeviceConfig, Engine, EngineConfig, LinkConfig};
+use motion_engine::{AxisConfig, BusConfig, CommandPort, DeviceConfig, Engine, EngineConfig};
 use motion_ipc::{ClientId, CommandKind, CommandReply, CommandRequest, MotionFrame};
 
 /// What a test can see and change of an [`IdealBoard`] while the engine owns it.
@@ -320,13 +320,13 @@ pub fn two_link_engine() -> (Engine, Vec<Arc<Mutex<BoardControl>>>) {
         tick_hz: 1000,
         command_timeout: Duration::from_millis(250),
         links: vec![
-            LinkConfig {
+            BusConfig {
                 name: "bus0".into(),
-                kind: BusKind::Stream,
+                kind: LinkKind::Stream,
             },
-            LinkConfig {
+            BusConfig {
                 name: "bus1".into(),
-                kind: BusKind::Stream,
+                kind: LinkKind::Stream,
             },
         ],
         devices: vec![

@@ -315,6 +315,9 @@ fn layouts() -> Vec<Layout> {
                 frames_lost,
                 full_services,
                 full_events,
+                publish_failures,
+                replies_lost,
+                events_dropped,
             ]
         ),
     ]

@@ -7,7 +7,7 @@ use tmcpack::{Action, MotorOptions, MotorType};
 use super::config::MotorConfig;
 use super::params::MotorParams;
 use super::ramp::{self, Limits, Q};
-use super::reference::{RefSearch, Resume};
+use super::reference::{self, Outcome, RefSearch, Resume, SearchDrive};
 
 /// What a motor does.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -43,6 +43,45 @@ pub(crate) struct TickCtx {
     pub clkdiv: u8,
     /// Peak coil current of this motor, A ($10 pair value, QUADpack DIP).
     pub peak_amps: f64,
+}
+
+/// A motor in its reference search, with the tick's context: what the search module drives.
+struct Searching<'a> {
+    motor: &'a mut Motor,
+    ctx: &'a TickCtx,
+}
+
+impl SearchDrive for Searching<'_> {
+    fn params(&self) -> &MotorParams {
+        &self.motor.p
+    }
+    fn clkdiv(&self) -> u8 {
+        self.ctx.clkdiv
+    }
+    fn position(&self) -> i64 {
+        self.motor.pos
+    }
+    fn switch_active(&self) -> bool {
+        self.motor.switch_active
+    }
+    fn at_rest(&self) -> bool {
+        self.motor.vq == 0
+    }
+    fn current_div(&self) -> u8 {
+        self.motor.vdiv
+    }
+    fn drive(&mut self, velocity: i64, div: u8) -> i64 {
+        self.motor.drive(velocity, div, self.ctx)
+    }
+    fn halt_now(&mut self) {
+        self.motor.halt_now();
+    }
+    fn ramp_step(&mut self, target: i64, vmax: u16) -> bool {
+        self.motor.ramp_step(target, vmax, self.ctx)
+    }
+    fn rezero(&mut self, zero: i64) {
+        self.motor.rezero(zero);
+    }
 }
 
 /// One motor channel.
@@ -361,7 +400,19 @@ impl Motor {
                     self.mode = Mode::Inactive;
                 }
             }
-            Mode::Reference(r) => super::reference::tick(self, r, ctx),
+            Mode::Reference(r) => {
+                let outcome = reference::tick(&mut Searching { motor: self, ctx }, r);
+                self.mode = match outcome {
+                    Outcome::Searching(r) => Mode::Reference(r),
+                    Outcome::Inactive => Mode::Inactive,
+                    Outcome::Resume(Resume::Ramp(target)) => Mode::Ramp { target },
+                    Outcome::Resume(Resume::Rotation(velocity)) => Mode::Rotation { velocity },
+                    Outcome::Resume(Resume::Pi(target)) => Mode::Pi {
+                        target,
+                        integral: 0,
+                    },
+                };
+            }
             Mode::Interp => {}
         }
         if was_active && self.mode == Mode::Inactive {

@@ -25,7 +25,44 @@
 use tmcpack::convert::StepClock;
 use tmcpack::{Action, MotorOptions, MotorType, ReferenceFlags};
 
-use super::motor::{Mode, Motor, TickCtx};
+use super::params::MotorParams;
+
+/// What a search needs of its motor (implemented by the motor module, so that this module
+/// does not depend on it): its parameters, the switch, and the motions a search makes. The
+/// tick's context (clock divider) is the implementor's.
+pub(crate) trait SearchDrive {
+    /// The motor's parameters.
+    fn params(&self) -> &MotorParams;
+    /// The pack's clock divider this tick.
+    fn clkdiv(&self) -> u8;
+    /// The position counter.
+    fn position(&self) -> i64;
+    /// The reference switch, de-bounced.
+    fn switch_active(&self) -> bool;
+    /// The motor stands still.
+    fn at_rest(&self) -> bool;
+    /// The velocity divider in use.
+    fn current_div(&self) -> u8;
+    /// One tick heading for `velocity` (units of `div`); the microsteps moved.
+    fn drive(&mut self, velocity: i64, div: u8) -> i64;
+    /// Stops at once.
+    fn halt_now(&mut self);
+    /// One ramp tick to `target` at most `vmax`; `true` on arrival.
+    fn ramp_step(&mut self, target: i64, vmax: u16) -> bool;
+    /// Counter value `zero` becomes 0.
+    fn rezero(&mut self, zero: i64);
+}
+
+/// What the motor does after one tick of its search.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Outcome {
+    /// Still searching, in this state.
+    Searching(RefSearch),
+    /// Stopped at the new zero point ("stop after reference search").
+    Inactive,
+    /// Found: the previous operation resumes.
+    Resume(Resume),
+}
 
 /// What the motor does after the search.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -88,9 +125,9 @@ impl RefSearch {
 }
 
 /// vmin, or the fastest vmin when 0 ($13: "vmin <= 250Hz / fminsteps").
-pub(crate) fn effective_vmin(m: &Motor, clkdiv: u8) -> i64 {
-    if m.p.vmin > 0 {
-        return i64::from(m.p.vmin);
+pub(crate) fn effective_vmin(p: &MotorParams, clkdiv: u8) -> i64 {
+    if p.vmin > 0 {
+        return i64::from(p.vmin);
     }
     let f1 = StepClock::new(clkdiv, 3)
         .map(StepClock::hz_per_unit)
@@ -99,25 +136,27 @@ pub(crate) fn effective_vmin(m: &Motor, clkdiv: u8) -> i64 {
 }
 
 /// 125 % of the drive range (0: no limit).
-fn range_limit(m: &Motor) -> i64 {
-    i64::from(m.p.poslimit) * 5 / 4
+fn range_limit(p: &MotorParams) -> i64 {
+    i64::from(p.poslimit) * 5 / 4
 }
 
 /// One tick of the search.
-pub(crate) fn tick(m: &mut Motor, mut r: RefSearch, ctx: &TickCtx) {
-    let toward = m.p.toward_zero();
-    let vmin = effective_vmin(m, ctx.clkdiv);
-    let limit = range_limit(m);
+pub(crate) fn tick(m: &mut impl SearchDrive, mut r: RefSearch) -> Outcome {
+    let p = *m.params();
+    let toward = p.toward_zero();
+    let vmin = effective_vmin(&p, m.clkdiv());
+    let limit = range_limit(&p);
     let over = |t: i64| limit > 0 && t > limit;
     match r.phase {
         Phase::Stop => {
-            m.drive(0, m.vdiv, ctx);
-            if m.vq == 0 {
-                if m.p.options.contains(MotorOptions::MECH_REF) {
+            let div = m.current_div();
+            m.drive(0, div);
+            if m.at_rest() {
+                if p.options.contains(MotorOptions::MECH_REF) {
                     r.enter(Phase::Mech {
-                        target: m.pos + toward * limit.max(1),
+                        target: m.position() + toward * limit.max(1),
                     });
-                } else if m.switch_active {
+                } else if m.switch_active() {
                     r.enter(Phase::Backoff);
                 } else {
                     r.enter(Phase::Seek);
@@ -125,13 +164,13 @@ pub(crate) fn tick(m: &mut Motor, mut r: RefSearch, ctx: &TickCtx) {
             }
         }
         Phase::Seek => {
-            let (v, div) = if m.p.options.contains(MotorOptions::FAST_REF) {
-                (i64::from(m.p.vrefmax), m.p.div)
+            let (v, div) = if p.options.contains(MotorOptions::FAST_REF) {
+                (i64::from(p.vrefmax), p.div)
             } else {
                 (vmin, 3)
             };
-            r.travelled += m.drive(toward * v, div, ctx).abs();
-            if m.switch_active {
+            r.travelled += m.drive(toward * v, div).abs();
+            if m.switch_active() {
                 m.halt_now();
                 r.enter(Phase::Backoff);
             } else if over(r.travelled) {
@@ -139,8 +178,8 @@ pub(crate) fn tick(m: &mut Motor, mut r: RefSearch, ctx: &TickCtx) {
             }
         }
         Phase::Backoff => {
-            r.travelled += m.drive(-toward * i64::from(m.p.vstart), m.p.div, ctx).abs();
-            if !m.switch_active {
+            r.travelled += m.drive(-toward * i64::from(p.vstart), p.div).abs();
+            if !m.switch_active() {
                 m.halt_now();
                 r.backoff = r.travelled;
                 r.enter(Phase::Approach);
@@ -149,64 +188,65 @@ pub(crate) fn tick(m: &mut Motor, mut r: RefSearch, ctx: &TickCtx) {
             }
         }
         Phase::Approach => {
-            r.travelled += m.drive(toward * vmin, 3, ctx).abs();
-            if m.switch_active {
+            r.travelled += m.drive(toward * vmin, 3).abs();
+            if m.switch_active() {
                 m.halt_now();
-                if m.p.motor_type.contains(MotorType::NULL_CENTER) {
-                    let edge = m.pos;
+                if p.motor_type.contains(MotorType::NULL_CENTER) {
+                    let edge = m.position();
                     r.enter(Phase::Through { edge });
                 } else {
-                    finish(m, &mut r, m.pos);
+                    let at = m.position();
+                    if let Some(done) = finish(m, &mut r, at) {
+                        return done;
+                    }
                 }
             } else if r.travelled > r.backoff + r.backoff / 4 + 64 {
                 r.enter(Phase::Stop);
             }
         }
         Phase::Through { edge } => {
-            r.travelled += m.drive(toward * vmin, 3, ctx).abs();
-            if !m.switch_active {
+            r.travelled += m.drive(toward * vmin, 3).abs();
+            if !m.switch_active() {
                 m.halt_now();
-                finish(m, &mut r, edge + (m.pos - edge) / 2);
+                let at = edge + (m.position() - edge) / 2;
+                if let Some(done) = finish(m, &mut r, at) {
+                    return done;
+                }
             } else if over(r.travelled) {
                 r.enter(Phase::Stop);
             }
         }
         Phase::Final => {
-            if m.ramp_step(0, m.p.vmax, ctx) {
-                m.mode = Mode::Inactive;
-                return;
+            if m.ramp_step(0, p.vmax) {
+                return Outcome::Inactive;
             }
         }
         Phase::Mech { target } => {
-            let vmax = if m.p.options.contains(MotorOptions::FAST_REF) {
-                m.p.vrefmax
+            let vmax = if p.options.contains(MotorOptions::FAST_REF) {
+                p.vrefmax
             } else {
-                m.p.vmax
+                p.vmax
             };
-            if m.ramp_step(target, vmax, ctx) {
-                finish(m, &mut r, m.pos);
+            if m.ramp_step(target, vmax) {
+                let at = m.position();
+                if let Some(done) = finish(m, &mut r, at) {
+                    return done;
+                }
             }
         }
     }
-    if matches!(m.mode, Mode::Reference(_)) {
-        m.mode = Mode::Reference(r);
-    }
+    Outcome::Searching(r)
 }
 
-/// The zero point is found at counter value `at`: set the coordinates, then stop or resume.
-fn finish(m: &mut Motor, r: &mut RefSearch, at: i64) {
-    let zero = at + m.p.toward_zero() * i64::from(m.p.nulloffset);
+/// The zero point is found at counter value `at`: set the coordinates, then stop (the
+/// search goes on to its final phase: `None`) or resume.
+fn finish(m: &mut impl SearchDrive, r: &mut RefSearch, at: i64) -> Option<Outcome> {
+    let p = *m.params();
+    let zero = at + p.toward_zero() * i64::from(p.nulloffset);
     m.rezero(zero);
-    if m.p.ref_flags.contains(ReferenceFlags::STOP_AFTER_SEARCH) {
+    if p.ref_flags.contains(ReferenceFlags::STOP_AFTER_SEARCH) {
         r.enter(Phase::Final);
-        return;
+        return None;
     }
-    m.mode = match r.resume {
-        Resume::Ramp(target) => Mode::Ramp { target },
-        Resume::Rotation(velocity) => Mode::Rotation { velocity },
-        Resume::Pi(target) => Mode::Pi {
-            target,
-            integral: 0,
-        },
-    };
+    Some(Outcome::Resume(r.resume))
 }

@@ -25,7 +25,7 @@ pub use check::{Check, Context, Status};
 pub use config::{DEPLOYED_CONFIG, DoctorConfig};
 use host::{Host, LiveProbe};
 
-use crate::cli::parse_duration;
+use motion_base::parse_duration;
 
 /// `motionctl doctor`'s options.
 #[derive(Debug, Clone, Args)]

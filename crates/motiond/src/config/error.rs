@@ -278,11 +278,7 @@ fn inline_path(value: &str) -> Vec<String> {
 
 /// 1-based line and column (characters) of byte `offset` in `source`.
 pub(crate) fn line_column(source: &str, offset: usize) -> (usize, usize) {
-    let offset = offset.min(source.len());
-    let mut offset = offset;
-    while !source.is_char_boundary(offset) {
-        offset -= 1;
-    }
+    let offset = motion_base::floor_char_boundary(source, offset);
     let before = &source[..offset];
     let line = before.matches('\n').count() + 1;
     let line_start = before.rfind('\n').map_or(0, |newline| newline + 1);

@@ -14,8 +14,8 @@ mod validate;
 use core::time::Duration;
 use std::path::{Path, PathBuf};
 
-use motion_drivers::{BusKind, Model, Pin, PinInfo, SignalKind};
-use motion_engine::{AxisConfig, DeviceConfig, EngineConfig, LinkConfig, SignalConfig};
+use motion_drivers::{LinkKind, Model, Pin, PinInfo, SignalKind};
+use motion_engine::{AxisConfig, BusConfig, DeviceConfig, EngineConfig, SignalConfig};
 
 pub use error::{ConfigError, ConfigIssue};
 pub use given::{GivenKeys, Owner};
@@ -88,7 +88,7 @@ pub struct LinkSpec {
     /// Transport.
     pub transport: Transport,
     /// Stream or SPI (from the transport and the models on it).
-    pub kind: BusKind,
+    pub kind: LinkKind,
 }
 
 /// Trinamic pack variant.
@@ -342,7 +342,7 @@ impl ServerConfig {
             links: self
                 .links
                 .iter()
-                .map(|link| LinkConfig {
+                .map(|link| BusConfig {
                     name: link.name.clone(),
                     kind: link.kind,
                 })

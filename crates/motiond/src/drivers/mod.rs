@@ -1,14 +1,12 @@
-//! One driver per configured device, configured from its axes and machine keys (one module
-//! per board model).
+//! One driver per configured device, configured from its axes and machine keys: one module
+//! per board model (`build`, `describe`), reached through the model registry (boards.rs).
 
-mod qq2drv;
-mod qsb;
-mod spimotor;
-mod tmcpack;
+pub(crate) mod qq2drv;
+pub(crate) mod qsb;
+pub(crate) mod spimotor;
+pub(crate) mod tmcpack;
 
 pub use tmcpack::driver_config as tmcpack_driver_config;
-
-use motion_drivers::{Driver, Model};
 
 use crate::config::{DeviceSpec, Owner, ServerConfig, Transport};
 
@@ -24,20 +22,6 @@ pub struct ParamRow {
     pub key: String,
     /// Effective value.
     pub value: String,
-}
-
-/// Every machine parameter of every device and axis, with the value in effect.
-pub fn describe(config: &ServerConfig) -> Vec<ParamRow> {
-    let mut rows = Vec::new();
-    for (index, device) in config.devices.iter().enumerate() {
-        match device.model {
-            Model::Tmcpack => tmcpack::describe(config, index, device, &mut rows),
-            Model::Spimotor => spimotor::describe(config, index, device, &mut rows),
-            Model::Qq2drv => qq2drv::describe(config, index, device, &mut rows),
-            Model::Qsb => qsb::describe(config, index, device, &mut rows),
-        }
-    }
-    rows
 }
 
 /// Velocity and acceleration limits of `device`'s channel `channel` in counts, from the axis
@@ -61,18 +45,4 @@ fn line_rate(config: &ServerConfig, device: &DeviceSpec) -> Option<u32> {
         Transport::Sim { rate } => Some(*rate),
         Transport::SpiSocket { .. } => None,
     }
-}
-
-/// Builds the drivers of `config`'s devices, in config order.
-pub fn build(config: &ServerConfig) -> anyhow::Result<Vec<Box<dyn Driver>>> {
-    let mut drivers: Vec<Box<dyn Driver>> = Vec::with_capacity(config.devices.len());
-    for (index, device) in config.devices.iter().enumerate() {
-        drivers.push(match device.model {
-            Model::Tmcpack => tmcpack::build(config, index, device),
-            Model::Spimotor => spimotor::build(config, index, device)?,
-            Model::Qq2drv => qq2drv::build(config, index, device),
-            Model::Qsb => qsb::build(config, index, device),
-        });
-    }
-    Ok(drivers)
 }

@@ -112,14 +112,14 @@ pub(crate) fn driver_config(
 }
 
 /// The driver of qq2drv device `index`.
-pub(super) fn build(config: &ServerConfig, index: usize, device: &DeviceSpec) -> Box<dyn Driver> {
+pub(crate) fn build(config: &ServerConfig, index: usize, device: &DeviceSpec) -> Box<dyn Driver> {
     Box::new(Qq2drvDriver::new(driver_config(config, index, device)))
 }
 
 /// The machine parameters of qq2drv device `index` and its axes, as the driver uses them:
 /// per axis the PID constants (packets 30, 32), the power limit (packet 24) and the home
 /// input (packet 14). The board has no device-level machine keys.
-pub(super) fn describe(
+pub(crate) fn describe(
     config: &ServerConfig,
     index: usize,
     device: &DeviceSpec,

@@ -94,7 +94,7 @@ pub(crate) fn driver_config(
 }
 
 /// The driver of qsb device `index`.
-pub(super) fn build(config: &ServerConfig, index: usize, device: &DeviceSpec) -> Box<dyn Driver> {
+pub(crate) fn build(config: &ServerConfig, index: usize, device: &DeviceSpec) -> Box<dyn Driver> {
     Box::new(QsbDriver::new(driver_config(config, index, device)))
 }
 
@@ -104,7 +104,7 @@ fn number(value: f64) -> String {
 }
 
 /// The machine parameters of qsb device `index`, as the driver uses them.
-pub(super) fn describe(
+pub(crate) fn describe(
     config: &ServerConfig,
     index: usize,
     device: &DeviceSpec,

@@ -55,7 +55,7 @@ pub(crate) fn driver_config(
 }
 
 /// The driver of spimotor device `index`.
-pub(super) fn build(
+pub(crate) fn build(
     config: &ServerConfig,
     index: usize,
     device: &DeviceSpec,
@@ -67,7 +67,7 @@ pub(super) fn build(
 
 /// The machine parameters of spimotor device `index`, as the driver uses them: a stepper
 /// board's `intensity` (port 0x10) and `coils` (port 0x44). A brushed board has none.
-pub(super) fn describe(
+pub(crate) fn describe(
     config: &ServerConfig,
     index: usize,
     device: &DeviceSpec,

@@ -1,6 +1,7 @@
 //! The Trinamic pack driver of a `[[device]]`, configured from its axes, machine keys and
 //! signals (docs/keys/tmcpack.md).
 
+use motion_base::counts_to_i32_saturating;
 use motion_drivers::tmcpack::{
     Currents, DEFAULT_REPLY_ADDRESS, DEFAULT_SWITCHOVER_UNITS, PinSet, ReadyOutput, TmcpackChannel,
     TmcpackDriver, TmcpackDriverConfig, TmcpackIo, default_packet_timeout_units,
@@ -123,9 +124,9 @@ fn channel_config(axis: &AxisConfig, spec: &AxisSpec) -> TmcpackChannel {
             .debounce_ms
             .and_then(|ms| debounce_mask(ms).ok())
             .unwrap_or(d.debounce_mask),
-        nulloffset: r.null_offset.map_or(d.nulloffset, |u| {
-            counts(u).clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32
-        }),
+        nulloffset: r
+            .null_offset
+            .map_or(d.nulloffset, |u| counts_to_i32_saturating(counts(u))),
         testnullrange: r
             .test_range
             .map_or(d.testnullrange, |u| counts(u).clamp(0.0, 65535.0) as u16),
@@ -143,9 +144,7 @@ fn channel_config(axis: &AxisConfig, spec: &AxisSpec) -> TmcpackChannel {
             keys.analog_stop_left.unwrap_or(d.analog_stop.0),
             keys.analog_stop_right.unwrap_or(d.analog_stop.1),
         ),
-        home_position: (spec.home.position * cpu)
-            .round()
-            .clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32,
+        home_position: counts_to_i32_saturating(spec.home.position * cpu),
     }
 }
 
@@ -209,7 +208,7 @@ pub fn driver_config(
 }
 
 /// The driver of tmcpack device `index`.
-pub(super) fn build(config: &ServerConfig, index: usize, device: &DeviceSpec) -> Box<dyn Driver> {
+pub(crate) fn build(config: &ServerConfig, index: usize, device: &DeviceSpec) -> Box<dyn Driver> {
     Box::new(TmcpackDriver::new(driver_config(config, index, device)))
 }
 
@@ -241,7 +240,7 @@ fn mask_list(mask: MotorMask) -> String {
 }
 
 /// The machine parameters of tmcpack device `index` and its axes, as the driver uses them.
-pub(super) fn describe(
+pub(crate) fn describe(
     config: &ServerConfig,
     index: usize,
     device: &DeviceSpec,

@@ -44,7 +44,7 @@ fn inputs(config: &ServerConfig, device: usize) -> [InputPin; 4] {
 }
 
 /// The model of qq2drv device `index`.
-pub(super) fn model(config: &ServerConfig, index: usize, device: &DeviceSpec) -> Qq2drvSim {
+pub(crate) fn model(config: &ServerConfig, index: usize, device: &DeviceSpec) -> Qq2drvSim {
     Qq2drvSim::new(Qq2drvSimConfig {
         seed: device.sim_seed,
         inputs: inputs(config, index),

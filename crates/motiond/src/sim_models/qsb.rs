@@ -9,7 +9,7 @@ use motion_sim::qsb::{DriveEnable, QsbSim, QsbSimConfig, Variant};
 use crate::config::{DeviceMachine, DeviceSpec, QsbVariant, ServerConfig};
 
 /// The model of qsb device `index`.
-pub(super) fn model(config: &ServerConfig, index: usize, device: &DeviceSpec) -> QsbSim {
+pub(crate) fn model(config: &ServerConfig, index: usize, device: &DeviceSpec) -> QsbSim {
     let _ = (config, index);
     let (counts_per_step, drive_enable) = match &device.machine {
         DeviceMachine::Qsb(keys) => (

@@ -5,7 +5,7 @@ use motion_sim::spimotor::{Drive, SpimotorSim, SpimotorSimConfig};
 use crate::config::{DeviceSpec, ServerConfig, SpiDrive};
 
 /// The model of spimotor device `index`.
-pub(super) fn model(config: &ServerConfig, index: usize, device: &DeviceSpec) -> SpimotorSim {
+pub(crate) fn model(config: &ServerConfig, index: usize, device: &DeviceSpec) -> SpimotorSim {
     let _ = (config, index);
     SpimotorSim::new(SpimotorSimConfig {
         address: device.address as u8,

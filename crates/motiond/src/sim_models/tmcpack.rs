@@ -15,7 +15,7 @@ fn switch_width(counts_per_unit: f64) -> i64 {
 }
 
 /// The model of tmcpack device `index`.
-pub(super) fn model(config: &ServerConfig, index: usize, device: &DeviceSpec) -> TmcpackSim {
+pub(crate) fn model(config: &ServerConfig, index: usize, device: &DeviceSpec) -> TmcpackSim {
     let driver = tmcpack_driver_config(config, index, device);
     let mut motors = [MotorConfig::default(); 6];
     for axis in config.axes.iter().filter(|a| a.device == index) {

@@ -11,8 +11,9 @@ use motion_drivers::{Driver, Goal};
 use motion_link::Link;
 use motion_link::sim::{Duplex, SimLink, StreamDevice};
 use motion_sim::tmcpack::{TmcpackSim, TmcpackSimConfig};
+use motiond::boards::describe;
 use motiond::config::{Owner, ServerConfig};
-use motiond::drivers::{ParamRow, describe, tmcpack_driver_config};
+use motiond::drivers::{ParamRow, tmcpack_driver_config};
 use tmcpack::{
     CurrentLevel, MotorMask, MotorOptions, MotorType, ReferenceFlags, Request, RequestFrame,
 };
@@ -225,7 +226,7 @@ fn has(sent: &[Request], want: &Request) -> bool {
 #[test]
 fn every_key_reaches_the_wire_at_start_up_and_again_after_a_power_cycle() {
     let config = parse(ALL_KEYS);
-    let mut drivers = motiond::drivers::build(&config).expect("drivers");
+    let mut drivers = motiond::boards::build(&config).expect("drivers");
     let driver = drivers.get_mut(0).expect("the pack's driver");
     let sim = Arc::new(Mutex::new(TmcpackSim::new(TmcpackSimConfig::default())));
     let mut link = SimLink::stream_with(
@@ -424,9 +425,9 @@ fn the_simulated_pack_has_the_switch_on_the_configured_side() {
             1,
         );
         let config = parse(&text);
-        let mut drivers = motiond::drivers::build(&config).expect("drivers");
+        let mut drivers = motiond::boards::build(&config).expect("drivers");
         let driver = drivers.get_mut(0).expect("driver");
-        let mut link = motiond::sim_models::sim_link(&config, 0);
+        let mut link = motiond::boards::sim_link(&config, 0);
         let mut homing = false;
         let mut done = None;
         run(

@@ -50,6 +50,7 @@
 //! `fuzz/` is a standalone cargo-fuzz project with one target per decoder:
 //! `cd crates/protocols/qq2drv/fuzz && cargo +nightly fuzz run request` (also `reply`,
 //! `stream`).
+#![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
 mod decoder;

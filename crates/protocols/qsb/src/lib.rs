@@ -82,6 +82,7 @@
 //! `fuzz/` is a standalone cargo-fuzz project with one target per decoder:
 //! `cd crates/protocols/qsb/fuzz && cargo +nightly fuzz run command_decoder` (or
 //! `response_decoder`, `typed`).
+#![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
 mod command;

@@ -114,6 +114,7 @@
 //! cargo +nightly fuzz run decode_transaction
 //! cargo +nightly fuzz run decode_reply
 //! ```
+#![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
 mod address;

@@ -63,6 +63,7 @@
 //! ```text
 //! cd crates/protocols/tmcpack/fuzz && cargo +nightly fuzz run stream
 //! ```
+#![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
 mod can;
@@ -70,6 +71,7 @@ mod command;
 pub mod convert;
 mod decoder;
 mod error;
+#[macro_use]
 mod params;
 mod reply;
 mod request;

@@ -37,6 +37,29 @@ pub enum Action {
     Unknown(u8),
 }
 
+/// An action travels as its code ([`Action::to_u8`] / [`Action::from_u8`]).
+impl crate::params::Param for Action {
+    fn put(self, p: &mut [u8; crate::params::PARAMS], at: usize) {
+        self.to_u8().put(p, at);
+    }
+    fn take(p: &[u8; crate::params::PARAMS], at: usize) -> Result<Self, Error> {
+        u8::take(p, at).map(Self::from_u8)
+    }
+}
+
+/// Consecutive action bytes ($28: P0..P5 for motors 0..5).
+impl<const N: usize> crate::params::Param for [Action; N] {
+    fn put(self, p: &mut [u8; crate::params::PARAMS], at: usize) {
+        for (k, action) in self.into_iter().enumerate() {
+            action.put(p, at + k);
+        }
+    }
+    fn take(p: &[u8; crate::params::PARAMS], at: usize) -> Result<Self, Error> {
+        let bytes = <[u8; N]>::take(p, at)?;
+        Ok(bytes.map(Action::from_u8))
+    }
+}
+
 impl Action {
     /// The wire value.
     pub const fn to_u8(self) -> u8 {
@@ -96,6 +119,16 @@ pub enum CurrentLevel {
     P9,
     /// Index 8: 0 %.
     Off,
+}
+
+/// A current level travels as its wire index; an index out of the table is an error.
+impl crate::params::Param for CurrentLevel {
+    fn put(self, p: &mut [u8; crate::params::PARAMS], at: usize) {
+        self.index().put(p, at);
+    }
+    fn take(p: &[u8; crate::params::PARAMS], at: usize) -> Result<Self, Error> {
+        Self::from_index(u8::take(p, at)?)
+    }
 }
 
 impl CurrentLevel {
@@ -203,6 +236,15 @@ macro_rules! flags {
             type Output = Self;
             fn bitor(self, rhs: Self) -> Self {
                 Self(self.0 | rhs.0)
+            }
+        }
+
+        impl crate::params::Param for $name {
+            fn put(self, p: &mut [u8; crate::params::PARAMS], at: usize) {
+                self.0.put(p, at);
+            }
+            fn take(p: &[u8; crate::params::PARAMS], at: usize) -> Result<Self, Error> {
+                <$repr>::take(p, at).map(Self)
             }
         }
     };

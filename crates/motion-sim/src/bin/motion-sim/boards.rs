@@ -8,7 +8,9 @@ use motion_sim::spimotor::{Drive, SpimotorSim, SpimotorSimConfig};
 use motion_sim::tmcpack::{TmcpackSim, TmcpackSimConfig};
 use tmcpack::Variant as PackVariant;
 
-use crate::cli::{BoardSpec, ModelId};
+use motion_base::Model;
+
+use crate::cli::BoardSpec;
 
 /// A built model, on the wire its board uses.
 pub enum Board {
@@ -20,7 +22,7 @@ pub enum Board {
 
 /// One line describing `spec`, for the log.
 pub fn describe(spec: &BoardSpec) -> String {
-    let mut text = spec.model.as_str().to_owned();
+    let mut text = spec.model.id().to_owned();
     if let Some(a) = spec.address {
         text.push_str(&format!(" address {a} (0x{a:02x})"));
     }
@@ -38,7 +40,7 @@ pub fn describe(spec: &BoardSpec) -> String {
 
 fn refuse_option(spec: &BoardSpec, option: &str, given: bool) -> Result<()> {
     if given {
-        bail!("--model {} has no --{option}", spec.model.as_str());
+        bail!("--model {} has no --{option}", spec.model.id());
     }
     Ok(())
 }
@@ -48,7 +50,7 @@ fn refuse_option(spec: &BoardSpec, option: &str, given: bool) -> Result<()> {
 /// factory 19200 baud, as after power-up.
 pub fn build(spec: &BoardSpec, baud: Option<u32>, spi_hz: u32) -> Result<Board> {
     match spec.model {
-        ModelId::Qsb => {
+        Model::Qsb => {
             refuse_option(spec, "address", spec.address.is_some())?;
             refuse_option(spec, "drive", spec.drive.is_some())?;
             let mut config = QsbSimConfig::default();
@@ -76,7 +78,7 @@ pub fn build(spec: &BoardSpec, baud: Option<u32>, spi_hz: u32) -> Result<Board> 
             }
             Ok(Board::Stream(Box::new(QsbSim::new(config))))
         }
-        ModelId::Tmcpack => {
+        Model::Tmcpack => {
             refuse_option(spec, "drive", spec.drive.is_some())?;
             let mut config = TmcpackSimConfig::default();
             if let Some(address) = spec.address {
@@ -92,7 +94,7 @@ pub fn build(spec: &BoardSpec, baud: Option<u32>, spi_hz: u32) -> Result<Board> 
             }
             Ok(Board::Stream(Box::new(TmcpackSim::new(config))))
         }
-        ModelId::Qq2drv => {
+        Model::Qq2drv => {
             refuse_option(spec, "address", spec.address.is_some())?;
             refuse_option(spec, "variant", spec.variant.is_some())?;
             refuse_option(spec, "drive", spec.drive.is_some())?;
@@ -105,7 +107,7 @@ pub fn build(spec: &BoardSpec, baud: Option<u32>, spi_hz: u32) -> Result<Board> 
             }
             Ok(Board::Spi(Box::new(Qq2drvSim::new(config))))
         }
-        ModelId::Spimotor => {
+        Model::Spimotor => {
             refuse_option(spec, "variant", spec.variant.is_some())?;
             let mut config = SpimotorSimConfig::default();
             if let Some(address) = spec.address {

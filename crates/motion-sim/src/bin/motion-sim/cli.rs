@@ -3,7 +3,8 @@
 use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
-use clap::{ArgMatches, CommandFactory, FromArgMatches, Parser, ValueEnum};
+use clap::{ArgMatches, CommandFactory, FromArgMatches, Parser};
+use motion_base::{LinkKind, Model};
 
 const AFTER_HELP: &str = "\
 Boards:
@@ -37,34 +38,10 @@ at the new rate while the pty stays at --baud: its bytes arrive garbled, as on a
 Runs until SIGINT or SIGTERM (exit status 0). Logs what it serves on stderr; --trace also
 logs every byte with its time.";
 
-/// The boards motion-sim knows.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum ModelId {
-    /// QuadQuad2Drv (SPI).
-    Qq2drv,
-    /// Trinamic SIXpack / QUADpack (serial, RS-232/RS-485).
-    Tmcpack,
-    /// SPI_motor (SPI).
-    Spimotor,
-    /// US Digital QSB (serial over USB).
-    Qsb,
-}
-
-impl ModelId {
-    /// The id as written on the command line.
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Self::Qq2drv => "qq2drv",
-            Self::Tmcpack => "tmcpack",
-            Self::Spimotor => "spimotor",
-            Self::Qsb => "qsb",
-        }
-    }
-
-    /// Whether the board talks SPI (else a byte stream).
-    pub fn is_spi(self) -> bool {
-        matches!(self, Self::Qq2drv | Self::Spimotor)
-    }
+/// A `--model` value: one of the model ids (`motion_base::Model`).
+fn parse_model(text: &str) -> Result<Model, String> {
+    Model::from_id(text)
+        .ok_or_else(|| format!("unknown model `{text}` (one of {})", Model::id_list()))
 }
 
 /// Serve simulated motor-controller boards on a pseudo-terminal or an SPI socket.
@@ -72,8 +49,8 @@ impl ModelId {
 #[command(name = "motion-sim", version, after_help = AFTER_HELP)]
 pub struct Cli {
     /// A board to simulate; repeat for several boards on one bus.
-    #[arg(long = "model", value_enum, required = true, action = clap::ArgAction::Append)]
-    pub models: Vec<ModelId>,
+    #[arg(long = "model", value_parser = parse_model, required = true, action = clap::ArgAction::Append)]
+    pub models: Vec<Model>,
     /// Bus address of the preceding --model (tmcpack: 0..=255, default 1; spimotor: even
     /// byte, default 0x90). Decimal or 0x-hex.
     #[arg(long, action = clap::ArgAction::Append, value_parser = parse_u8)]
@@ -123,7 +100,7 @@ pub struct Cli {
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct BoardSpec {
     /// Which board.
-    pub model: ModelId,
+    pub model: Model,
     /// `--address`, if given.
     pub address: Option<u8>,
     /// `--variant`, if given.
@@ -197,29 +174,31 @@ fn group(matches: &ArgMatches, cli: &Cli) -> Result<Vec<BoardSpec>> {
     for (at, value) in indices("address").into_iter().zip(&cli.address) {
         let board = boards.get_mut(owner("address", at)?).context("address")?;
         if board.address.replace(*value).is_some() {
-            bail!("two --address for one --model {}", board.model.as_str());
+            bail!("two --address for one --model {}", board.model.id());
         }
     }
     for (at, value) in indices("variant").into_iter().zip(&cli.variant) {
         let board = boards.get_mut(owner("variant", at)?).context("variant")?;
         if board.variant.replace(value.clone()).is_some() {
-            bail!("two --variant for one --model {}", board.model.as_str());
+            bail!("two --variant for one --model {}", board.model.id());
         }
     }
     for (at, value) in indices("drive").into_iter().zip(&cli.drive) {
         let board = boards.get_mut(owner("drive", at)?).context("drive")?;
         if board.drive.replace(value.clone()).is_some() {
-            bail!("two --drive for one --model {}", board.model.as_str());
+            bail!("two --drive for one --model {}", board.model.id());
         }
     }
     for (at, value) in indices("seed").into_iter().zip(&cli.seed) {
         let board = boards.get_mut(owner("seed", at)?).context("seed")?;
         if board.seed.replace(*value).is_some() {
-            bail!("two --seed for one --model {}", board.model.as_str());
+            bail!("two --seed for one --model {}", board.model.id());
         }
     }
-    let serial = boards.iter().any(|b| !b.model.is_spi());
-    let spi = boards.iter().any(|b| b.model.is_spi());
+    let serial = boards
+        .iter()
+        .any(|b| b.model.link_kind() == LinkKind::Stream);
+    let spi = boards.iter().any(|b| b.model.link_kind() == LinkKind::Spi);
     if serial && !cli.pty {
         bail!("serial boards (qsb, tmcpack) are served on a pseudo-terminal: add --pty");
     }

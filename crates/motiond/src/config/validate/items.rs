@@ -49,23 +49,18 @@ impl Validator<'_, '_> {
                 &d.model,
                 &table,
                 &key("model"),
-                "one of qq2drv, tmcpack, spimotor, qsb",
+                &format!("one of {}", Model::id_list()),
             )
             .and_then(|model| {
-                let parsed = match model.get_ref().as_str() {
-                    "qq2drv" => Some(Model::Qq2drv),
-                    "tmcpack" => Some(Model::Tmcpack),
-                    "spimotor" => Some(Model::Spimotor),
-                    "qsb" => Some(Model::Qsb),
-                    _ => None,
-                };
+                let parsed = Model::from_id(model.get_ref());
                 if parsed.is_none() {
                     self.issue(
                         model.span(),
                         &key("model"),
                         format!(
-                            "unknown model {:?}; allowed: qq2drv, tmcpack, spimotor, qsb",
-                            model.get_ref()
+                            "unknown model {:?}; allowed: {}",
+                            model.get_ref(),
+                            Model::id_list()
                         ),
                     );
                 }

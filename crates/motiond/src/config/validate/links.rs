@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use motion_drivers::{BusKind, Model};
+use motion_drivers::{LinkKind, Model};
 use toml::Spanned;
 
 use super::Validator;
@@ -250,9 +250,9 @@ impl Validator<'_, '_> {
                     name: name.clone(),
                     transport,
                     kind: if spi || matches!(kind_name, "spidev" | "spi-socket") {
-                        BusKind::Spi
+                        LinkKind::Spi
                     } else {
-                        BusKind::Stream
+                        LinkKind::Stream
                     },
                 });
             }

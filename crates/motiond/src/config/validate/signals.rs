@@ -9,7 +9,7 @@ use crate::config::raw::{RawDevice, RawSignal};
 use crate::config::{DeviceSpec, SignalSpec};
 
 fn kind_list(kinds: impl Iterator<Item = SignalKind>) -> String {
-    kinds.map(SignalKind::id).collect::<Vec<_>>().join(", ")
+    kinds.map(SignalKind::name).collect::<Vec<_>>().join(", ")
 }
 
 impl Validator<'_, '_> {
@@ -126,7 +126,7 @@ impl Validator<'_, '_> {
             .and_then(|kind| {
                 let found = SignalKind::ALL
                     .into_iter()
-                    .find(|k| k.id() == kind.get_ref());
+                    .find(|k| k.name() == kind.get_ref());
                 if found.is_none() {
                     self.issue(
                         kind.span(),
@@ -180,7 +180,7 @@ impl Validator<'_, '_> {
                         &key("pin"),
                         format!(
                             "pin `{name}` cannot be {}; it can be: {}",
-                            kind.id(),
+                            kind.name(),
                             kind_list(
                                 SignalKind::ALL
                                     .into_iter()

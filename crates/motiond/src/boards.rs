@@ -1,0 +1,157 @@
+//! The model registry: what motiond does with each board model, in one table, and the
+//! three things done through it: [`build`] the drivers, [`describe`] their machine
+//! parameters, serve a `type = "sim"` link with simulated boards ([`sim_link`]). The
+//! model's own facts (config id, contract code, link kind) are `motion_base::Model`; its
+//! machine keys are validated in `config/validate/machine/<model>.rs` (the key table of
+//! `machine/mod.rs` says which model has which key), its channel count and pin table are
+//! `config::channel_count` and `DeviceSpec::pins`.
+
+use motion_drivers::{Driver, LinkKind, Model};
+use motion_link::sim::{SimLink, SpiBus, SpiDevice, StreamBus, StreamDevice};
+
+use crate::config::{DeviceSpec, ServerConfig, Transport};
+use crate::drivers::{self, ParamRow};
+use crate::sim_models;
+
+/// A simulated board on a `type = "sim"` link.
+pub enum SimBoard {
+    /// A board on a byte stream.
+    Stream(Box<dyn StreamDevice>),
+    /// A board on an SPI bus.
+    Spi(Box<dyn SpiDevice>),
+}
+
+impl core::fmt::Debug for SimBoard {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            Self::Stream(_) => "SimBoard::Stream",
+            Self::Spi(_) => "SimBoard::Spi",
+        })
+    }
+}
+
+/// What the server does with one board model.
+#[derive(Debug, Clone, Copy)]
+pub struct Board {
+    /// The model.
+    pub model: Model,
+    /// The driver of device `index` (config → driver config → driver).
+    pub build: fn(&ServerConfig, usize, &DeviceSpec) -> anyhow::Result<Box<dyn Driver>>,
+    /// One [`ParamRow`] per machine parameter of device `index` and its axes.
+    pub describe: fn(&ServerConfig, usize, &DeviceSpec, &mut Vec<ParamRow>),
+    /// The simulated board of device `index`, configured like the machine.
+    pub simulate: fn(&ServerConfig, usize, &DeviceSpec) -> SimBoard,
+}
+
+const QQ2DRV: Board = Board {
+    model: Model::Qq2drv,
+    build: |config, index, device| Ok(drivers::qq2drv::build(config, index, device)),
+    describe: drivers::qq2drv::describe,
+    simulate: |config, index, device| {
+        SimBoard::Spi(Box::new(sim_models::qq2drv::model(config, index, device)))
+    },
+};
+
+const TMCPACK: Board = Board {
+    model: Model::Tmcpack,
+    build: |config, index, device| Ok(drivers::tmcpack::build(config, index, device)),
+    describe: drivers::tmcpack::describe,
+    simulate: |config, index, device| {
+        SimBoard::Stream(Box::new(sim_models::tmcpack::model(config, index, device)))
+    },
+};
+
+const SPIMOTOR: Board = Board {
+    model: Model::Spimotor,
+    build: drivers::spimotor::build,
+    describe: drivers::spimotor::describe,
+    simulate: |config, index, device| {
+        SimBoard::Spi(Box::new(sim_models::spimotor::model(config, index, device)))
+    },
+};
+
+const QSB: Board = Board {
+    model: Model::Qsb,
+    build: |config, index, device| Ok(drivers::qsb::build(config, index, device)),
+    describe: drivers::qsb::describe,
+    simulate: |config, index, device| {
+        SimBoard::Stream(Box::new(sim_models::qsb::model(config, index, device)))
+    },
+};
+
+/// The registry entry of `model`.
+#[must_use]
+pub const fn board(model: Model) -> &'static Board {
+    match model {
+        Model::Qq2drv => &QQ2DRV,
+        Model::Tmcpack => &TMCPACK,
+        Model::Spimotor => &SPIMOTOR,
+        Model::Qsb => &QSB,
+    }
+}
+
+/// Builds the drivers of `config`'s devices, in config order.
+pub fn build(config: &ServerConfig) -> anyhow::Result<Vec<Box<dyn Driver>>> {
+    let mut drivers: Vec<Box<dyn Driver>> = Vec::with_capacity(config.devices.len());
+    for (index, device) in config.devices.iter().enumerate() {
+        drivers.push((board(device.model).build)(config, index, device)?);
+    }
+    Ok(drivers)
+}
+
+/// Every machine parameter of every device and axis, with the value in effect.
+pub fn describe(config: &ServerConfig) -> Vec<ParamRow> {
+    let mut rows = Vec::new();
+    for (index, device) in config.devices.iter().enumerate() {
+        (board(device.model).describe)(config, index, device, &mut rows);
+    }
+    rows
+}
+
+/// The simulated link `link` of `config` (a `type = "sim"` link) with the models of its
+/// devices, at its rate (baud for serial boards, SPI clock for SPI boards).
+pub fn sim_link(config: &ServerConfig, link: usize) -> SimLink {
+    let spec = &config.links[link];
+    let name = spec.name.as_str();
+    let rate = match spec.transport {
+        Transport::Sim { rate } => rate,
+        _ => 1_000_000,
+    };
+    let devices: Vec<(usize, &DeviceSpec)> = config
+        .devices
+        .iter()
+        .enumerate()
+        .filter(|(_, d)| d.link == link)
+        .collect();
+    let spi = devices
+        .first()
+        .is_some_and(|(_, d)| d.model.link_kind() == LinkKind::Spi);
+    let mut spi_bus = SpiBus::new();
+    let mut stream_bus = StreamBus::new();
+    for &(index, device) in &devices {
+        // Validation keeps SPI and stream models apart; a model of the other kind is left out.
+        match (board(device.model).simulate)(config, index, device) {
+            SimBoard::Spi(model) if spi => spi_bus.push(model),
+            SimBoard::Stream(model) if !spi => stream_bus.push(model),
+            SimBoard::Spi(_) | SimBoard::Stream(_) => {}
+        }
+    }
+    if spi {
+        SimLink::spi(name, rate, Box::new(spi_bus))
+    } else {
+        SimLink::stream(name, rate, Box::new(stream_bus))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::board;
+    use motion_drivers::Model;
+
+    #[test]
+    fn every_model_has_its_own_entry() {
+        for model in Model::ALL {
+            assert_eq!(board(model).model, model);
+        }
+    }
+}
