@@ -160,7 +160,7 @@ def test_remote_move_arrives_and_refusals_carry_the_servers_reason(
     assert client.axis("x").state().position == pytest.approx(goal, abs=0.05)
     # A refusal of the server's comes back typed, as over shared memory.
     with pytest.raises(motiond.OutOfRange) as refusal:
-        x.move_to(1e9)
+        x.position(1e9)
     assert refusal.value.reason is motiond.Reason.OUT_OF_RANGE
 
 
