@@ -155,5 +155,6 @@ fn durations_take_units() {
     assert_eq!(parse_duration("500us"), Ok(Duration::from_micros(500)));
     assert!(parse_duration("").is_err());
     assert!(parse_duration("-1s").is_err());
-    assert!(parse_duration("2h").is_err());
+    assert_eq!(parse_duration("2h"), Ok(Duration::from_secs(7200)));
+    assert!(parse_duration("2d").is_err());
 }
