@@ -14,6 +14,7 @@ import pytest
 
 import motiond
 from motiond import ipc
+from motiond.frames import Frame, LatestCache
 
 from conftest import Server
 
@@ -119,3 +120,43 @@ def test_the_example_moves_an_axis_and_reads_1000_consecutive_frames(
     assert result.returncode == 0, result.stdout + result.stderr
     assert "read 1000 frames" in result.stdout
     assert "every published frame was read, in order" in result.stdout
+
+
+class _FakeSample:
+    """What a LatestCache needs of an iceoryx2 sample: its payload's address, delete()."""
+
+    def __init__(self, tick: int) -> None:
+        frame = motiond.ipc.MotionFrame()
+        frame.tick = tick
+        self._buffer = ctypes.create_string_buffer(bytes(frame), ctypes.sizeof(frame))
+        self.payload_ptr = ctypes.addressof(self._buffer)
+        self.deleted = False
+
+    def delete(self) -> None:
+        self.deleted = True
+
+
+class _FakeSubscriber:
+    def __init__(self, samples: list) -> None:
+        self.samples = samples
+
+    def has_samples(self) -> bool:
+        return bool(self.samples)
+
+    def receive(self) -> _FakeSample:
+        return self.samples.pop(0)
+
+
+def test_a_released_newest_frame_is_not_handed_out_again() -> None:
+    # Regression: `with client.latest() as f: ...` then `client.latest()` within the same
+    # tick returned the released frame (ValueError on its payload) instead of waiting.
+    sample = _FakeSample(7)
+    cache = LatestCache(_FakeSubscriber([sample]), motiond.ipc.MotionFrame, "test", wrap=Frame)
+    newest = cache.refresh()
+    assert newest is not None and newest.tick == 7
+    newest.release()
+    assert sample.deleted
+    assert cache.refresh() is None
+    later = _FakeSample(8)
+    cache._subscriber.samples.append(later)
+    assert cache.refresh().tick == 8

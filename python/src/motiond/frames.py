@@ -72,6 +72,11 @@ class Received(Generic[T]):
         """A private, writable copy of the payload."""
         return self.payload.copy()
 
+    @property
+    def released(self) -> bool:
+        """Whether :meth:`release` gave the sample back."""
+        return self._payload is None
+
     def release(self) -> None:
         """Gives the sample back to the server now. Views taken from it are invalid
         afterwards."""
@@ -238,6 +243,9 @@ class LatestCache(Generic[T]):
         before)."""
         while self.take_next() is not None:
             pass
+        if self._newest is not None and self._newest.released:
+            # The program gave it back: it is no newest sample any more.
+            self._newest = None
         return self._newest
 
     def take_next(self) -> Optional[Any]:

@@ -188,6 +188,8 @@ class _Feed:
         """Takes every waiting sample and keeps the newest; returns it (or the one before)."""
         while self.take_next() is not None:
             pass
+        if self._newest is not None and self._newest.released:
+            self._newest = None
         return self._newest
 
     def take_next(self) -> Optional[Any]:
