@@ -18,7 +18,7 @@ import signal
 import subprocess
 import time
 from pathlib import Path
-from typing import Any, Dict, Iterator
+from typing import Any, Dict, Iterator, List
 
 import pytest
 
@@ -62,23 +62,18 @@ def motiond_binary() -> Path:
     return path
 
 
-class Server:
-    """A motiond process on a copy of config/sim.toml named ``name``."""
+class Process:
+    """A child process whose output goes to a log file; stopped with SIGTERM."""
 
-    def __init__(self, name: str, config: Path, log: Path) -> None:
-        self.name = name
-        self.config = config
+    def __init__(self, argv: List[str], log: Path) -> None:
         self.log = log
         self._log_file = open(log, "wb")
         self.process = subprocess.Popen(
-            [str(motiond_binary()), "--config", str(config)],
-            stdin=subprocess.DEVNULL,
-            stdout=self._log_file,
-            stderr=subprocess.STDOUT,
+            argv, stdin=subprocess.DEVNULL, stdout=self._log_file, stderr=subprocess.STDOUT
         )
 
     def log_text(self) -> str:
-        """What the server logged so far."""
+        """What the process logged so far."""
         self._log_file.flush()
         return self.log.read_text(errors="replace")
 
@@ -93,6 +88,15 @@ class Server:
                 self.process.wait()
         self._log_file.close()
         return int(self.process.returncode)
+
+
+class Server(Process):
+    """A motiond process on a copy of config/sim.toml named ``name``."""
+
+    def __init__(self, name: str, config: Path, log: Path) -> None:
+        self.name = name
+        self.config = config
+        super().__init__([str(motiond_binary()), "--config", str(config)], log)
 
 
 def sim_config(repo: Path, name: str) -> str:

@@ -23,7 +23,7 @@ import motiond
 from motiond import AxisMode, CommandKind
 from motiond.remote import RemoteClient
 
-from conftest import REPO, Server
+from conftest import REPO, Process, Server
 
 pytest.importorskip("zenoh", reason="the remote client needs eclipse-zenoh (motiond[test])")
 
@@ -55,44 +55,15 @@ def free_port() -> int:
         return int(probe.getsockname()[1])
 
 
-class Bridge:
+class Bridge(Process):
     """A motion-bridge process in front of the session's server."""
 
     def __init__(self, server: Server, tmp: Path) -> None:
         self.endpoint = f"tcp/127.0.0.1:{free_port()}"
         config = tmp / "bridge.toml"
         config.write_text(BRIDGE_CONFIG)
-        self.log = tmp / "bridge.log"
-        self._log_file = open(self.log, "wb")
-        self.process = subprocess.Popen(
-            [
-                str(bridge_binary()),
-                "--server",
-                server.name,
-                "--listen",
-                self.endpoint,
-                "--config",
-                str(config),
-            ],
-            stdin=subprocess.DEVNULL,
-            stdout=self._log_file,
-            stderr=subprocess.STDOUT,
-        )
-
-    def log_text(self) -> str:
-        self._log_file.flush()
-        return self.log.read_text(errors="replace")
-
-    def stop(self) -> int:
-        if self.process.poll() is None:
-            self.process.send_signal(signal.SIGTERM)
-            try:
-                self.process.wait(timeout=15)
-            except subprocess.TimeoutExpired:
-                self.process.kill()
-                self.process.wait()
-        self._log_file.close()
-        return int(self.process.returncode)
+        argv = [str(bridge_binary()), "--server", server.name, "--listen", self.endpoint]
+        super().__init__(argv + ["--config", str(config)], tmp / "bridge.log")
 
 
 @pytest.fixture(scope="module")

@@ -517,19 +517,8 @@ class Client:
         :class:`~motiond.ipc.CommandKind`."""
         self._check_open()
         typed_kind = to_enum(CommandKind, int(kind))
-        self._sequence += 1
-        sequence = self._sequence
-        request = CommandRequest(
-            schema_version=SCHEMA_VERSION,
-            kind=int(kind),
-            client=self._id,
-            sequence=sequence,
-            axis=index,
-            target=int(target),
-        )
-        padded = list(values)[:3] + [0.0] * (3 - min(3, len(values)))
-        for slot, value in enumerate(padded):
-            request.values[slot] = float(value)
+        request = self._request(index, kind, values, target)
+        sequence = int(request.sequence)
         try:
             pending = self._commands.send_copy(request)
         except Exception as error:
@@ -558,6 +547,28 @@ class Client:
                 self._wait_tick(min(deadline - now, _REPLY_POLL_CAP))
         finally:
             pending.delete()
+
+    def _request(
+        self,
+        index: int,
+        kind: Union[CommandKind, int],
+        values: Sequence[float],
+        target: Union[Target, int],
+    ) -> CommandRequest:
+        """The next request of this client (a new sequence number), values padded to 3."""
+        self._sequence += 1
+        request = CommandRequest(
+            schema_version=SCHEMA_VERSION,
+            kind=int(kind),
+            client=self._id,
+            sequence=self._sequence,
+            axis=index,
+            target=int(target),
+        )
+        padded = list(values)[:3] + [0.0] * (3 - min(3, len(values)))
+        for slot, value in enumerate(padded):
+            request.values[slot] = float(value)
+        return request
 
     def command(
         self,

@@ -61,7 +61,6 @@ from .ipc import (
     ClientId,
     CommandKind,
     CommandReply,
-    CommandRequest,
     MachineParams,
     MotionFrame,
     Payload,
@@ -397,19 +396,8 @@ class RemoteClient(Client):
         raises :class:`~motiond.errors.BridgeRefused` when the bridge refused it itself."""
         self._check_open()
         typed_kind = to_enum(CommandKind, int(kind))
-        self._sequence += 1
-        sequence = self._sequence
-        request = CommandRequest(
-            schema_version=SCHEMA_VERSION,
-            kind=int(kind),
-            client=self._id,
-            sequence=sequence,
-            axis=index,
-            target=int(target),
-        )
-        padded = list(values)[:3] + [0.0] * (3 - min(3, len(values)))
-        for slot, value in enumerate(padded):
-            request.values[slot] = float(value)
+        request = self._request(index, kind, values, target)
+        sequence = int(request.sequence)
         meta = struct.pack(
             "<BQQQ",
             _META_VERSION,
