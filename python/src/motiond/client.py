@@ -146,14 +146,8 @@ class Client:
             )
         started = time.monotonic()
         deadline = started + timeout
-        self._name = name
-        self._reply_timeout = reply_timeout
-        self._sequence = 0
-        self._closed = False
-        self._jogs: "weakref.WeakValueDictionary[int, Jog]" = weakref.WeakValueDictionary()
-        self._next_jog = 0
+        self._init_state(name, reply_timeout)
         self._stats: Optional[LatestCache[ServerStats]] = None
-        self._estop_notifier: Any = None
         try:
             self._node = (
                 iox2.NodeBuilder.new()
@@ -226,6 +220,16 @@ class Client:
         self._open_stats()
 
     # --- plumbing --------------------------------------------------------------------------
+
+    def _init_state(self, name: str, reply_timeout: float) -> None:
+        """The state every client keeps, whatever its transport."""
+        self._name = name
+        self._reply_timeout = reply_timeout
+        self._sequence = 0
+        self._closed = False
+        self._jogs: "weakref.WeakValueDictionary[int, Jog]" = weakref.WeakValueDictionary()
+        self._next_jog = 0
+        self._estop_notifier: Any = None
 
     def _service(self, leaf: str) -> Any:
         try:
@@ -716,6 +720,10 @@ class Client:
             except errors.MotiondError:
                 pass
         self._closed = True
+        self._release()
+
+    def _release(self) -> None:
+        """Gives back what the connection holds (called once, by :meth:`close`)."""
         self._frames.close()
         self._info.close()
         if self._stats is not None:

@@ -40,7 +40,6 @@ import struct
 import sys
 import threading
 import time
-import weakref
 from pathlib import Path
 from typing import Any, Callable, Deque, List, Optional, Sequence, Tuple, Type, Union
 
@@ -253,13 +252,7 @@ class RemoteClient(Client):
         check_chunk("remote identity", identity)
         started = time.monotonic()
         deadline = started + timeout
-        self._name = name
-        self._reply_timeout = reply_timeout
-        self._sequence = 0
-        self._closed = False
-        self._jogs: "weakref.WeakValueDictionary[int, Any]" = weakref.WeakValueDictionary()
-        self._next_jog = 0
-        self._estop_notifier = None
+        self._init_state(name, reply_timeout)
         self._endpoint = remote
         self._identity = identity
         self._prefix = f"motiond/{name}"
@@ -453,16 +446,8 @@ class RemoteClient(Client):
 
     # --- life ------------------------------------------------------------------------------
 
-    def close(self) -> None:
-        """Stops this client's running jogs, ends its liveliness and closes the session."""
-        if self._closed:
-            return
-        for jog in list(self._jogs.values()):
-            try:
-                jog.stop()
-            except errors.MotiondError:
-                pass
-        self._closed = True
+    def _release(self) -> None:
+        """Ends the subscriptions and this client's liveliness, closes the session."""
         for feed in self._feeds:
             feed.close()
         try:
