@@ -4,61 +4,12 @@
 //! a remote holds through this bridge, that remote's identity.
 
 use motion_ipc::{
-    AxisFlags, AxisInfo, AxisMode, AxisState, DeviceState, FaultCode, FrameFlags, MotionFrame,
-    ServerInfo, SignalFlags, SignalInfo, SignalKind, SignalState, Target,
+    AxisInfo, AxisState, DeviceState, FaultCode, FrameFlags, MotionFrame, ServerInfo, SignalInfo,
+    SignalKind, SignalState, Target,
 };
 use serde_json::{Value, json};
 
 use crate::policy::Policy;
-
-fn axis_flag_names(flags: AxisFlags) -> Vec<&'static str> {
-    [
-        (AxisFlags::MOVING, "moving"),
-        (AxisFlags::HOMED, "homed"),
-        (AxisFlags::AT_LIMIT, "at-limit"),
-        (AxisFlags::STALE, "stale"),
-        (AxisFlags::FAULT, "fault"),
-        (AxisFlags::CLAIMED, "claimed"),
-        (AxisFlags::ARRIVED, "arrived"),
-        (AxisFlags::ESTOPPED, "estopped"),
-        (AxisFlags::DEADMAN_EXPIRED, "deadman-expired"),
-    ]
-    .into_iter()
-    .filter(|(flag, _)| flags.contains(*flag))
-    .map(|(_, name)| name)
-    .collect()
-}
-
-fn signal_flag_names(flags: SignalFlags) -> Vec<&'static str> {
-    [
-        (SignalFlags::STALE, "stale"),
-        (SignalFlags::CLAIMED, "claimed"),
-        (SignalFlags::SAFE_STATE, "safe-state"),
-        (SignalFlags::PENDING, "pending"),
-    ]
-    .into_iter()
-    .filter(|(flag, _)| flags.contains(*flag))
-    .map(|(_, name)| name)
-    .collect()
-}
-
-fn mode_name(state: &AxisState) -> String {
-    match state.mode() {
-        Ok(mode) => match mode {
-            AxisMode::Off => "off",
-            AxisMode::Hold => "hold",
-            AxisMode::Power => "power",
-            AxisMode::Position => "position",
-            AxisMode::Velocity => "velocity",
-            AxisMode::RampPosition => "ramp-position",
-            AxisMode::RampVelocity => "ramp-velocity",
-            AxisMode::Homing => "homing",
-            AxisMode::Stopping => "stopping",
-        }
-        .to_owned(),
-        Err(error) => format!("mode {}", error.0),
-    }
-}
 
 fn claimant(claimed_by: motion_ipc::ClientId) -> Value {
     if claimed_by.is_none() {
@@ -77,6 +28,7 @@ fn remote_holder(policy: &Policy, target: Target, index: usize) -> Value {
 
 fn axis_json(info: &AxisInfo, state: &AxisState, tick: u64, remote: Value) -> Value {
     let fault = state.fault().ok().filter(|code| *code != FaultCode::None);
+    let faulted = fault.is_some();
     json!({
         "name": info.name(),
         "unit": info.unit(),
@@ -86,11 +38,13 @@ fn axis_json(info: &AxisInfo, state: &AxisState, tick: u64, remote: Value) -> Va
         "velocity": state.velocity,
         "target": state.target,
         "raw_counts": state.raw_counts,
-        "mode": mode_name(state),
-        "flags": axis_flag_names(state.flags()),
-        "fault": fault.map(FaultCode::name),
+        "mode": state.mode_name(),
+        "flags": state.flags().names(),
+        "fault": state.fault_name(),
         "fault_text": fault.map(|code| code.explain(
             info.name(), state.fault_value, state.fault_limit, info.unit())),
+        "fault_value": if faulted { json!(state.fault_value) } else { Value::Null },
+        "fault_limit": if faulted { json!(state.fault_limit) } else { Value::Null },
         "last_refresh_tick": state.last_refresh_tick,
         "age_ticks": tick.saturating_sub(state.last_refresh_tick),
         "claimed_by": claimant(state.claimed_by),
@@ -119,7 +73,7 @@ fn signal_json(
         "value": state.value,
         "raw": state.raw,
         "on": if digital { json!(state.is_on()) } else { Value::Null },
-        "flags": signal_flag_names(state.flags()),
+        "flags": state.flags().names(),
         "last_refresh_tick": state.last_refresh_tick,
         "age_ticks": tick.saturating_sub(state.last_refresh_tick),
         "claimed_by": claimant(state.claimed_by),
@@ -185,8 +139,8 @@ pub fn state(info: &ServerInfo, frame: &MotionFrame, policy: &Policy) -> Value {
 #[cfg(test)]
 mod tests {
     use motion_ipc::{
-        AxisInfo, ClientId, CommandKind, CommandReply, CommandRequest, DeviceInfo, Reason,
-        write_text,
+        AxisFlags, AxisInfo, AxisMode, ClientId, CommandKind, CommandReply, CommandRequest,
+        DeviceInfo, Reason, write_text,
     };
 
     use super::*;

@@ -73,6 +73,23 @@ pub enum AxisMode {
     Stopping = 8,
 }
 
+impl AxisMode {
+    /// The name clients print (`ramp-position`).
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::Off => "off",
+            Self::Hold => "hold",
+            Self::Power => "power",
+            Self::Position => "position",
+            Self::Velocity => "velocity",
+            Self::RampPosition => "ramp-position",
+            Self::RampVelocity => "ramp-velocity",
+            Self::Homing => "homing",
+            Self::Stopping => "stopping",
+        }
+    }
+}
+
 impl TryFrom<u8> for AxisMode {
     type Error = UnknownValue;
     fn try_from(value: u8) -> Result<Self, Self::Error> {
@@ -245,6 +262,28 @@ impl AxisFlags {
     /// The last velocity/power goal expired (deadman) and the axis was stopped.
     pub const DEADMAN_EXPIRED: Self = Self(1 << 8);
 
+    /// Every flag with the name clients print, in bit order.
+    pub const NAMED: [(Self, &'static str); 9] = [
+        (Self::MOVING, "moving"),
+        (Self::HOMED, "homed"),
+        (Self::AT_LIMIT, "at-limit"),
+        (Self::STALE, "stale"),
+        (Self::FAULT, "fault"),
+        (Self::CLAIMED, "claimed"),
+        (Self::ARRIVED, "arrived"),
+        (Self::ESTOPPED, "estopped"),
+        (Self::DEADMAN_EXPIRED, "deadman-expired"),
+    ];
+
+    /// The names of the set flags, in bit order.
+    pub fn names(self) -> Vec<&'static str> {
+        Self::NAMED
+            .iter()
+            .filter(|(flag, _)| self.contains(*flag))
+            .map(|(_, name)| *name)
+            .collect()
+    }
+
     /// Whether every bit of `other` is set.
     pub const fn contains(self, other: Self) -> bool {
         self.0 & other.0 == other.0
@@ -332,6 +371,25 @@ impl AxisState {
     /// The typed mode; `Err` for a value this build does not know.
     pub fn mode(&self) -> Result<AxisMode, UnknownValue> {
         AxisMode::try_from(self.mode)
+    }
+
+    /// The mode as clients print it (`ramp-position`), `mode N` for a value this build
+    /// does not know.
+    pub fn mode_name(&self) -> String {
+        self.mode().map_or_else(
+            |error| format!("mode {}", error.0),
+            |mode| mode.name().to_owned(),
+        )
+    }
+
+    /// The fault's name (`following-error`), `None` when the axis has none, `fault N` for a
+    /// code this build does not know.
+    pub fn fault_name(&self) -> Option<String> {
+        match self.fault() {
+            Ok(FaultCode::None) => None,
+            Ok(code) => Some(code.name().to_owned()),
+            Err(error) => Some(format!("fault {}", error.0)),
+        }
     }
 
     /// The typed fault code; `Err` for a value this build does not know.

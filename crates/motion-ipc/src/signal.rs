@@ -25,6 +25,23 @@ impl SignalFlags {
     /// An output value was commanded and the board has not acknowledged it yet.
     pub const PENDING: Self = Self(1 << 3);
 
+    /// Every flag with the name clients print, in bit order.
+    pub const NAMED: [(Self, &'static str); 4] = [
+        (Self::STALE, "stale"),
+        (Self::CLAIMED, "claimed"),
+        (Self::SAFE_STATE, "safe-state"),
+        (Self::PENDING, "pending"),
+    ];
+
+    /// The names of the set flags, in bit order.
+    pub fn names(self) -> Vec<&'static str> {
+        Self::NAMED
+            .iter()
+            .filter(|(flag, _)| self.contains(*flag))
+            .map(|(_, name)| *name)
+            .collect()
+    }
+
     /// Whether every bit of `other` is set.
     pub const fn contains(self, other: Self) -> bool {
         self.0 & other.0 == other.0

@@ -2,8 +2,8 @@
 //! and a frame are shared with `watch`.
 
 use motion_client::ipc::{
-    AxisFlags, AxisInfo, AxisMode, AxisState, CommandKind, DeviceModel, DeviceState, FaultCode,
-    FrameFlags, MotionFrame, ServerInfo, ServerStats, read_text,
+    AxisFlags, AxisInfo, AxisState, CommandKind, DeviceModel, DeviceState, FaultCode, FrameFlags,
+    MotionFrame, ServerInfo, ServerStats, read_text,
 };
 use motion_client::{Client, Params};
 use serde_json::{Value, json};
@@ -14,49 +14,17 @@ use crate::machine::{ParamTable, params_lines};
 
 /// Names of the set flags, in bit order.
 pub fn flag_names(flags: AxisFlags) -> Vec<&'static str> {
-    [
-        (AxisFlags::MOVING, "moving"),
-        (AxisFlags::HOMED, "homed"),
-        (AxisFlags::AT_LIMIT, "at-limit"),
-        (AxisFlags::STALE, "stale"),
-        (AxisFlags::FAULT, "fault"),
-        (AxisFlags::CLAIMED, "claimed"),
-        (AxisFlags::ARRIVED, "arrived"),
-        (AxisFlags::ESTOPPED, "estopped"),
-        (AxisFlags::DEADMAN_EXPIRED, "deadman-expired"),
-    ]
-    .into_iter()
-    .filter(|(flag, _)| flags.contains(*flag))
-    .map(|(_, name)| name)
-    .collect()
+    flags.names()
 }
 
 /// The mode as the CLI spells it.
 pub fn mode_name(state: &AxisState) -> String {
-    match state.mode() {
-        Ok(mode) => match mode {
-            AxisMode::Off => "off",
-            AxisMode::Hold => "hold",
-            AxisMode::Power => "power",
-            AxisMode::Position => "position",
-            AxisMode::Velocity => "velocity",
-            AxisMode::RampPosition => "ramp-position",
-            AxisMode::RampVelocity => "ramp-velocity",
-            AxisMode::Homing => "homing",
-            AxisMode::Stopping => "stopping",
-        }
-        .to_owned(),
-        Err(error) => format!("mode {}", error.0),
-    }
+    state.mode_name()
 }
 
 /// The fault's name ("following-error"), `None` when the axis has none.
 pub fn fault_name(state: &AxisState) -> Option<String> {
-    match state.fault() {
-        Ok(FaultCode::None) => None,
-        Ok(code) => Some(code.name().to_owned()),
-        Err(error) => Some(format!("fault {}", error.0)),
-    }
+    state.fault_name()
 }
 
 /// The fault in words ([`FaultCode::explain`]), `None` when the axis has none.

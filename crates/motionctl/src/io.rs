@@ -19,16 +19,7 @@ use crate::terminal::{Screen, quit_requested};
 
 /// Names of the set flags, in bit order.
 pub fn signal_flag_names(flags: SignalFlags) -> Vec<&'static str> {
-    [
-        (SignalFlags::STALE, "stale"),
-        (SignalFlags::CLAIMED, "claimed"),
-        (SignalFlags::SAFE_STATE, "safe-state"),
-        (SignalFlags::PENDING, "pending"),
-    ]
-    .into_iter()
-    .filter(|(flag, _)| flags.contains(*flag))
-    .map(|(_, name)| name)
-    .collect()
+    flags.names()
 }
 
 fn kind_name(info: &SignalInfo) -> String {
