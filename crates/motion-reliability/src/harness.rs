@@ -120,6 +120,13 @@ impl Harness {
         self.iox_listing().len()
     }
 
+    /// Node records in the isolated root (one directory per node, live or dead).
+    pub fn iox_nodes(&self) -> usize {
+        std::fs::read_dir(self.iox_root.join("nodes"))
+            .map(|entries| entries.filter_map(Result::ok).filter(|e| e.path().is_dir()).count())
+            .unwrap_or(0)
+    }
+
     /// The files [`Harness::iox_files`] counts, listed (for a report of leftovers).
     pub fn iox_listing(&self) -> Vec<String> {
         let mut names = Vec::new();

@@ -10,6 +10,7 @@
 
 mod boards;
 mod c1_dead_clients;
+mod c2_crash;
 mod harness;
 mod jogger;
 mod report;
@@ -102,7 +103,10 @@ fn main() -> ExitCode {
 type Campaign = fn(&Harness) -> anyhow::Result<Row>;
 
 fn campaigns() -> Vec<(u32, &'static str, Campaign)> {
-    vec![(1, "1 dead clients", c1_dead_clients::run)]
+    vec![
+        (1, "1 dead clients", c1_dead_clients::run),
+        (2, "2 server crash", c2_crash::run),
+    ]
 }
 
 fn run(cli: &Cli) -> anyhow::Result<bool> {

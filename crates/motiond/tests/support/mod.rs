@@ -1,7 +1,7 @@
 //! Starting motiond as a child process and talking to it with plain iceoryx2: the harness
 //! lives in `crates/motion-testkit` (shared with the reliability campaigns); this names the
 //! binary under test so that `Server::start(config)` needs nothing else.
-#![allow(dead_code)]
+#![allow(dead_code, unused_imports)]
 
 pub mod pty_board {
     pub use motion_testkit::pty_board::*;
