@@ -11,6 +11,7 @@
 mod boards;
 mod c1_dead_clients;
 mod c2_crash;
+mod c3_links;
 mod harness;
 mod jogger;
 mod report;
@@ -106,6 +107,7 @@ fn campaigns() -> Vec<(u32, &'static str, Campaign)> {
     vec![
         (1, "1 dead clients", c1_dead_clients::run),
         (2, "2 server crash", c2_crash::run),
+        (3, "3a links: unplug/replug", c3_links::run),
     ]
 }
 

@@ -231,8 +231,12 @@ impl PtyBoard {
 
     /// Closes the master side and removes the link: the server's tty reports a hang-up and
     /// the path is gone, as with an unplugged USB adapter (and the pty number cannot be
-    /// reused under the old path by another test's pty).
+    /// reused under the old path by another test's pty). Only the first call does anything:
+    /// a board plugged in on the same path afterwards keeps its link.
     pub fn unplug(&mut self) {
+        if self.thread.is_none() {
+            return;
+        }
         let _ = std::fs::remove_file(&self.link);
         self.stop.store(true, Ordering::Relaxed);
         if let Some(thread) = self.thread.take() {
