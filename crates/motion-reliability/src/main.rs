@@ -12,6 +12,7 @@ mod boards;
 mod c1_dead_clients;
 mod c2_crash;
 mod c3_links;
+mod c3_noise;
 mod harness;
 mod jogger;
 mod report;
@@ -108,6 +109,7 @@ fn campaigns() -> Vec<(u32, &'static str, Campaign)> {
         (1, "1 dead clients", c1_dead_clients::run),
         (2, "2 server crash", c2_crash::run),
         (3, "3a links: unplug/replug", c3_links::run),
+        (3, "3b links: line noise", c3_noise::run),
     ]
 }
 
