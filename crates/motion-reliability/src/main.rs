@@ -13,6 +13,7 @@ mod c1_dead_clients;
 mod c2_crash;
 mod c3_links;
 mod c3_noise;
+mod c4_bad_input;
 mod harness;
 mod jogger;
 mod report;
@@ -110,6 +111,7 @@ fn campaigns() -> Vec<(u32, &'static str, Campaign)> {
         (2, "2 server crash", c2_crash::run),
         (3, "3a links: unplug/replug", c3_links::run),
         (3, "3b links: line noise", c3_noise::run),
+        (4, "4 bad input", c4_bad_input::run),
     ]
 }
 
