@@ -39,11 +39,14 @@ pub const DEFAULT_REPLY_TIMEOUT: Duration = Duration::from_secs(1);
 /// Options for connecting to a motiond instance.
 #[derive(Debug, Clone)]
 pub struct ClientBuilder {
-    server: String,
+    pub(crate) server: String,
     node_name: String,
-    connect_timeout: Duration,
-    reply_timeout: Duration,
+    pub(crate) connect_timeout: Duration,
+    pub(crate) reply_timeout: Duration,
     signal_handling: SignalHandlingMode,
+    /// Connect through a bridge instead of shared memory (when it has an endpoint).
+    #[cfg(feature = "zenoh")]
+    pub(crate) remote: crate::remote::RemoteOptions,
 }
 
 impl ClientBuilder {
@@ -55,7 +58,38 @@ impl ClientBuilder {
             connect_timeout: DEFAULT_CONNECT_TIMEOUT,
             reply_timeout: DEFAULT_REPLY_TIMEOUT,
             signal_handling: SignalHandlingMode::HandleTerminationRequests,
+            #[cfg(feature = "zenoh")]
+            remote: crate::remote::RemoteOptions::default(),
         }
+    }
+
+    /// Connects through the `motion-bridge` at the zenoh `endpoint` (`tcp/HOST:7447`,
+    /// `tls/HOST:7447`) instead of shared memory (feature `zenoh`; see the `remote`
+    /// module docs for what differs).
+    #[cfg(feature = "zenoh")]
+    #[must_use]
+    pub fn remote(mut self, endpoint: &str) -> Self {
+        self.remote.endpoint = Some(endpoint.to_owned());
+        self
+    }
+
+    /// The identity a remote client sends commands as (the bridge's allow-list is per
+    /// identity); default [`DEFAULT_IDENTITY`](crate::remote::DEFAULT_IDENTITY). Only with
+    /// [`ClientBuilder::remote`].
+    #[cfg(feature = "zenoh")]
+    #[must_use]
+    pub fn identity(mut self, identity: &str) -> Self {
+        identity.clone_into(&mut self.remote.identity);
+        self
+    }
+
+    /// zenoh's own config file (JSON5) for a remote client: TLS certificates, user and
+    /// password. Only with [`ClientBuilder::remote`].
+    #[cfg(feature = "zenoh")]
+    #[must_use]
+    pub fn zenoh_config(mut self, path: impl Into<std::path::PathBuf>) -> Self {
+        self.remote.zenoh_config = Some(path.into());
+        self
     }
 
     /// The iceoryx2 node name of this client (shown by iceoryx2 tools); "motion-client".
@@ -121,6 +155,9 @@ pub struct Client<S: Service> {
     /// older frames and end when the server restarted.
     pub(crate) goal_ticks: RefCell<Vec<(u64, u64)>>,
     pub(crate) jogs: RefCell<JogTable>,
+    /// The bridge this client talks through, when remote.
+    #[cfg(feature = "zenoh")]
+    pub(crate) remote: Option<crate::remote::Link>,
 }
 
 impl<S: Service> fmt::Debug for Client<S> {
@@ -133,7 +170,7 @@ impl<S: Service> fmt::Debug for Client<S> {
 }
 
 /// The tick event listener of a client's frame subscription; see [`Client::tick_listener`].
-pub struct TickListener<S: Service>(Rc<FramePorts<S>>);
+pub struct TickListener<S: Service>(Rc<Listener<S>>);
 
 impl<S: Service> fmt::Debug for TickListener<S> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -144,7 +181,7 @@ impl<S: Service> fmt::Debug for TickListener<S> {
 impl<S: Service> Deref for TickListener<S> {
     type Target = Listener<S>;
     fn deref(&self) -> &Listener<S> {
-        &self.0.tick
+        &self.0
     }
 }
 
@@ -157,10 +194,8 @@ impl<S: Service> Client<S> {
         ClientBuilder::new(server).connect()
     }
 
-    fn connect_with(options: ClientBuilder) -> Result<Self, ConnectError> {
-        let started = Instant::now();
-        let server = options.server.clone();
-        let names = ServiceNames::new(&server);
+    /// This client's iceoryx2 node (identity, signal handling).
+    pub(crate) fn make_node(options: &ClientBuilder) -> Result<Node<S>, ConnectError> {
         let node_name =
             NodeName::new(&options.node_name).map_err(|error| ConnectError::BadName {
                 name: options.node_name.clone(),
@@ -174,6 +209,18 @@ impl<S: Service> Client<S> {
             // caught (and the axis stopped) instead of killing the process mid-command.
             let _ = node.wait(Duration::ZERO);
         }
+        Ok(node)
+    }
+
+    fn connect_with(options: ClientBuilder) -> Result<Self, ConnectError> {
+        #[cfg(feature = "zenoh")]
+        if let Some(endpoint) = options.remote.endpoint.clone() {
+            return Self::connect_remote(&options, &endpoint);
+        }
+        let started = Instant::now();
+        let server = options.server.clone();
+        let names = ServiceNames::new(&server);
+        let node = Self::make_node(&options)?;
 
         let opening = Opening::new(&server, options.connect_timeout);
         let (subscriber, _) =
@@ -232,13 +279,35 @@ impl<S: Service> Client<S> {
             sequence: Cell::new(0),
             goal_ticks: RefCell::new(vec![(0, 0); axis_count]),
             jogs: RefCell::new(JogTable::default()),
+            #[cfg(feature = "zenoh")]
+            remote: None,
         })
+    }
+
+    /// Whether this client talks to its server through a bridge (feature `zenoh`).
+    pub fn is_remote(&self) -> bool {
+        #[cfg(feature = "zenoh")]
+        if self.remote.is_some() {
+            return true;
+        }
+        false
     }
 
     /// The frame subscription, opened on first use.
     pub(crate) fn frame_ports(&self) -> Result<Rc<FramePorts<S>>, ClientError> {
         if let Some(ports) = self.frames.borrow().as_ref() {
             return Ok(Rc::clone(ports));
+        }
+        #[cfg(feature = "zenoh")]
+        if let Some(link) = &self.remote {
+            let feed = link.feed::<MotionFrame>(&link.keys().frame(), true)?;
+            let ports = Rc::new(FramePorts {
+                cache: LatestCache::remote(feed),
+                tick: None,
+                service_id: None,
+            });
+            *self.frames.borrow_mut() = Some(Rc::clone(&ports));
+            return Ok(ports);
         }
         let opening = Opening::new(&self.server, self.connect_timeout);
         let ports = Rc::new(ports::open_frames(
@@ -274,11 +343,14 @@ impl<S: Service> Client<S> {
     /// When the frame service was recreated (a server that could not reuse it), the frame
     /// subscription is reopened on the new one; true when that happened.
     pub(crate) fn reopen_frames_if_recreated(&self) -> Result<bool, ClientError> {
+        if self.is_remote() {
+            return Ok(false);
+        }
         let Some(ports) = self.frame_ports_if_open() else {
             return Ok(false);
         };
         let now = ports::pubsub_id_now::<S, MotionFrame>(&self.node, &self.names.frame());
-        if now.is_none_or(|id| id == ports.service_id) {
+        if now.is_none_or(|id| Some(id) == ports.service_id) {
             return Ok(false);
         }
         *self.frames.borrow_mut() = None;
@@ -289,6 +361,9 @@ impl<S: Service> Client<S> {
 
     /// Like [`Client::reopen_frames_if_recreated`] for the command port.
     pub(crate) fn reopen_commands_if_recreated(&self) -> Result<bool, ClientError> {
+        if self.is_remote() {
+            return Ok(false);
+        }
         let Some(ports) = self.commands.borrow().as_ref().map(Rc::clone) else {
             return Ok(false);
         };
@@ -304,6 +379,11 @@ impl<S: Service> Client<S> {
 
     fn open_stats(&self) {
         if self.stats.borrow().is_some() {
+            return;
+        }
+        #[cfg(feature = "zenoh")]
+        if let Some(link) = &self.remote {
+            *self.stats.borrow_mut() = link.stats_cache(self.reply_timeout);
             return;
         }
         let opening = Opening::once(&self.server);
@@ -375,6 +455,10 @@ impl<S: Service> Client<S> {
     /// default). The params service is subscribed to on the first call only; waits up to the
     /// reply timeout for the server's sample.
     pub fn machine_params(&self) -> Result<Params<S>, ClientError> {
+        #[cfg(feature = "zenoh")]
+        if let Some(link) = &self.remote {
+            return link.machine_params(&self.params, self.reply_timeout);
+        }
         let cache = match self.params.borrow().as_ref() {
             Some(cache) => Some(Rc::clone(cache)),
             None => None,
@@ -526,14 +610,33 @@ impl<S: Service> Client<S> {
     /// The tick event listener (opens the frame subscription if needed), to attach to your
     /// own iceoryx2 `WaitSet` (`waitset.attach_notification(&*client.tick_listener()?)`).
     /// After a wake-up, read with [`Client::latest`] or [`Client::try_next_frame`].
+    ///
+    /// A remote client (feature `zenoh`) has no tick event: `Err(Network)`; use
+    /// [`Client::next_frame`] or [`Client::for_each_frame`].
     pub fn tick_listener(&self) -> Result<TickListener<S>, ClientError> {
-        Ok(TickListener(self.frame_ports()?))
+        match &self.frame_ports()?.tick {
+            Some(listener) => Ok(TickListener(Rc::clone(listener))),
+            None => Err(ClientError::Network {
+                what: "listen to the tick event",
+                detail: "a client connected through a bridge has no tick event to attach to \
+                         a WaitSet: use next_frame or for_each_frame"
+                    .to_owned(),
+            }),
+        }
     }
 
-    /// Blocks until the next tick notification or `timeout` (no busy waiting).
+    /// Blocks until the next tick notification or `timeout` (no busy waiting); over a
+    /// bridge, until the next frame arrives.
     pub(crate) fn wait_tick(&self, timeout: Duration) -> Result<(), ClientError> {
         let ports = self.frame_ports()?;
-        match ports.tick.timed_wait(|_| {}, timeout) {
+        let Some(tick) = ports.tick.as_ref() else {
+            #[cfg(feature = "zenoh")]
+            if let Some(feed) = ports.cache.feed() {
+                feed.wait(timeout)?;
+            }
+            return self.check_interrupted();
+        };
+        match tick.timed_wait(|_| {}, timeout) {
             Ok(_) => self.check_interrupted(),
             Err(iceoryx2::port::listener::ListenerWaitError::InterruptSignal) => {
                 self.check_interrupted()

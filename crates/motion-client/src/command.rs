@@ -54,6 +54,11 @@ impl<S: Service> Client<S> {
         request: CommandRequest,
         kind: CommandKind,
     ) -> Result<Exchange, ClientError> {
+        #[cfg(feature = "zenoh")]
+        if let Some(link) = &self.remote {
+            let (reply, node) = link.command(&request, self.reply_timeout)?;
+            return Ok(Exchange::Reply(reply, node));
+        }
         let ports = self.command_ports()?;
         let pending = ports
             .port
@@ -83,12 +88,15 @@ impl<S: Service> Client<S> {
             }
             // Not interruptible: a stop sent after Ctrl-C must still get its answer.
             let nap = deadline - now;
-            match self.frame_ports_if_open() {
-                Some(frames) => match frames.tick.timed_wait(|_| {}, nap.min(REPLY_POLL_CAP)) {
+            let frames = self.frame_ports_if_open();
+            match frames.as_ref().and_then(|frames| frames.tick.as_ref()) {
+                Some(tick) => match tick.timed_wait(|_| {}, nap.min(REPLY_POLL_CAP)) {
                     Ok(_) | Err(iceoryx2::port::listener::ListenerWaitError::InterruptSignal) => {}
-                    Err(error) => return Err(ClientError::ipc("wait for a command reply", error)),
+                    Err(error) => {
+                        return Err(ClientError::ipc("wait for a command reply", error));
+                    }
                 },
-                None => std::thread::sleep(nap.min(REPLY_POLL_NO_TICK)),
+                _ => std::thread::sleep(nap.min(REPLY_POLL_NO_TICK)),
             }
         }
     }

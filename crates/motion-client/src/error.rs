@@ -77,6 +77,28 @@ pub enum ConnectError {
         /// The iceoryx2 error.
         detail: String,
     },
+    /// No `motion-bridge` for the instance answered at the endpoint (remote clients,
+    /// feature `zenoh`).
+    #[error(
+        "no motion-bridge for motiond \"{name}\" answers at {endpoint}: {why} (is the bridge \
+         running with --server {name}, and the endpoint reachable?)"
+    )]
+    NoBridge {
+        /// The instance name.
+        name: String,
+        /// The zenoh endpoint tried.
+        endpoint: String,
+        /// What zenoh or the bridge said.
+        why: String,
+    },
+    /// zenoh failed (remote clients, feature `zenoh`).
+    #[error("zenoh could not {what}: {detail}")]
+    Network {
+        /// What was being done.
+        what: &'static str,
+        /// zenoh's error.
+        detail: String,
+    },
 }
 
 /// The server that answered is not the one this client was talking to: it restarted (a new
@@ -283,6 +305,27 @@ pub enum ClientError {
         /// What was being done.
         what: &'static str,
         /// The iceoryx2 error.
+        detail: String,
+    },
+    /// The bridge between this client and the server refused the command itself (remote
+    /// clients, feature `zenoh`); the server never saw it. `code` says why: `not-allowed`
+    /// (not on this identity's allow-list), `rate-limited`, `late` (held up in the network
+    /// longer than the bridge accepts), `bad-request`, `busy`.
+    #[error("{kind} refused by the bridge ({code}): {message}")]
+    BridgeRefused {
+        /// The command.
+        kind: &'static str,
+        /// The bridge's refusal code.
+        code: &'static str,
+        /// The bridge's words.
+        message: String,
+    },
+    /// The network transport failed (remote clients, feature `zenoh`).
+    #[error("zenoh could not {what}: {detail}")]
+    Network {
+        /// What was being done.
+        what: &'static str,
+        /// zenoh's error, or what is missing.
         detail: String,
     },
 }

@@ -133,11 +133,15 @@ impl<S: Service> Client<S> {
         Listener<S>: SynchronousMultiplexing,
     {
         let ports = self.frame_ports()?;
+        let Some(tick) = ports.tick.as_ref() else {
+            // Over a bridge there is no event to wait on: wait for the frames themselves.
+            return self.for_each_frame_polled(timeout, on_frame);
+        };
         let waitset = WaitSetBuilder::new()
             .create::<S>()
             .map_err(|error| ClientError::ipc("create a wait set", error))?;
         let guard = waitset
-            .attach_deadline(&ports.tick, timeout)
+            .attach_deadline(&**tick, timeout)
             .map_err(|error| ClientError::ipc("attach the tick event to a wait set", error))?;
         let refresh = self.jog_refresh_period();
         let _interval = match refresh {
@@ -166,7 +170,7 @@ impl<S: Service> Client<S> {
                     }
                     if id.has_event_from(&guard) {
                         // Consume the notifications; the frames themselves are read below.
-                        if let Err(error) = ports.tick.try_wait(|_| {}) {
+                        if let Err(error) = tick.try_wait(|_| {}) {
                             outcome = Err(ClientError::ipc("take tick notifications", error));
                             return CallbackProgression::Stop;
                         }
@@ -195,6 +199,27 @@ impl<S: Service> Client<S> {
             }
         }
         outcome
+    }
+}
+
+impl<S: Service> Client<S> {
+    /// [`Client::for_each_frame`] without a wait set: each frame waited for in turn.
+    fn for_each_frame_polled(
+        &self,
+        timeout: Duration,
+        mut on_frame: impl FnMut(&Frame<S>) -> ControlFlow<()>,
+    ) -> Result<(), ClientError> {
+        loop {
+            match self.next_frame(timeout) {
+                Ok(frame) => {
+                    if on_frame(&frame).is_break() {
+                        return Ok(());
+                    }
+                }
+                Err(ClientError::Interrupted) => return Ok(()),
+                Err(error) => return Err(error),
+            }
+        }
     }
 }
 

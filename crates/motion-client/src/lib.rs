@@ -79,6 +79,10 @@
 //!
 //! `examples/jog_and_move.rs` is a complete program doing the same against a running
 //! server.
+//!
+//! Across hosts (feature `zenoh`): the same API through a `motion-bridge` running beside
+//! the server, `ClientBuilder::new("demo").remote("tcp/HOST:7447").identity("panel")`;
+//! see the [`remote`] module (with the feature) and `crates/motion-bridge/README.md`.
 #![forbid(unsafe_code)]
 
 mod axis;
@@ -92,6 +96,8 @@ mod jog;
 mod ports;
 mod ready;
 mod received;
+#[cfg(feature = "zenoh")]
+pub mod remote;
 mod session;
 mod signal;
 #[cfg(feature = "testing")]

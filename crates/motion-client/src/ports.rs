@@ -27,8 +27,10 @@ pub(crate) type CommandPort<S> =
 /// The frame subscription: the frames and the tick event that announces each.
 pub(crate) struct FramePorts<S: Service> {
     pub(crate) cache: LatestCache<S, MotionFrame>,
-    pub(crate) tick: Listener<S>,
-    pub(crate) service_id: UniqueServiceId,
+    /// The tick event; `None` over a bridge (frames are waited for on the network).
+    pub(crate) tick: Option<std::rc::Rc<Listener<S>>>,
+    /// The frame service's id; `None` over a bridge.
+    pub(crate) service_id: Option<UniqueServiceId>,
 }
 
 impl<S: Service> fmt::Debug for FramePorts<S> {
@@ -187,8 +189,8 @@ pub(crate) fn open_frames<S: Service>(
     })?;
     Ok(FramePorts {
         cache: LatestCache::new(subscriber),
-        tick,
-        service_id,
+        tick: Some(std::rc::Rc::new(tick)),
+        service_id: Some(service_id),
     })
 }
 

@@ -157,11 +157,6 @@ impl Axis {
         self.state.velocity / self.counts_per_unit
     }
 
-    /// Whether a client other than `client` holds a claim.
-    pub fn claimed_by_other(&self, client: ClientId) -> bool {
-        !self.claimed_by.is_none() && self.claimed_by != client
-    }
-
     /// A goal the client set that must be voided when its owner dies or a fault occurs.
     pub fn has_active_goal(&self) -> bool {
         matches!(

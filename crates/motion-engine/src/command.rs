@@ -1,9 +1,9 @@
 //! Taking in client commands: identity, validation and goals.
 
 use motion_drivers::{Goal, GoalError, GoalKind};
+use motion_ipc::rules::{self, AxisFacts, Facts, Motion, SignalFacts, Verdict};
 use motion_ipc::{
-    AxisMode, ClientId, CommandKind, CommandReply, CommandRequest, DeviceState, FaultCode, Reason,
-    SCHEMA_VERSION, Target,
+    ClientId, CommandKind, CommandReply, CommandRequest, DeviceState, FaultCode, Reason,
 };
 
 use crate::Engine;
@@ -31,132 +31,125 @@ pub trait CommandPort {
 pub const MAX_COMMANDS_PER_STEP: usize = 64;
 
 /// Search velocity of a home command that gives none, as a fraction of max_velocity.
-pub const HOME_FRACTION_OF_MAX: f64 = 0.25;
+pub const HOME_FRACTION_OF_MAX: f64 = rules::HOME_FRACTION_OF_MAX;
+
+/// The engine's state as the rulebook sees it.
+impl Facts for Engine {
+    fn estop(&self) -> bool {
+        self.estop
+    }
+
+    fn shutting_down(&self) -> bool {
+        self.shutting_down
+    }
+
+    fn axis(&self, index: usize) -> Option<AxisFacts> {
+        let axis = self.axes.get(index)?;
+        Some(AxisFacts {
+            min: axis.min,
+            max: axis.max,
+            max_velocity: axis.max_velocity,
+            max_accel: axis.max_accel,
+            capabilities: axis.capabilities,
+            claimed_by: axis.claimed_by,
+            device: self.device_state_of(index),
+            link_up: self.device_link_up(axis.device),
+            fault: axis.fault_code().unwrap_or(FaultCode::None),
+            position: axis.position(),
+            position_fresh: !axis.stale,
+            tolerance: axis.tolerance,
+        })
+    }
+
+    fn signal(&self, index: usize) -> Option<SignalFacts> {
+        let signal = self.signals.get(index)?;
+        let device = signal.config.device;
+        Some(SignalFacts {
+            kind: crate::frame::signal_kind(signal.config.kind),
+            claimed_by: signal.claimed_by,
+            device: self
+                .devices
+                .get(device)
+                .map_or(DeviceState::Offline, |d| d.state),
+            link_up: self.device_link_up(device),
+        })
+    }
+}
 
 impl Engine {
-    /// Validates and applies one request from `sender` (see [`CommandPort::sender`]); the
-    /// answer says whether it was accepted.
+    /// Validates (the rulebook, [`motion_ipc::rules`]) and applies one request from `sender`
+    /// (see [`CommandPort::sender`]); the answer says whether it was accepted.
     pub(crate) fn apply_command(
         &mut self,
         request: &CommandRequest,
         sender: Option<ClientId>,
     ) -> Reason {
-        if request.schema_version != SCHEMA_VERSION {
-            return Reason::SchemaMismatch;
-        }
-        let Ok(kind) = request.kind() else {
-            return Reason::UnknownKind;
-        };
-        if request.values.iter().any(|value| !value.is_finite()) {
-            return Reason::NotFinite;
-        }
-        let client = match sender {
-            None => request.client,
-            Some(node) if request.client.is_none() || request.client == node => node,
-            Some(_) => return Reason::IdentityMismatch,
+        let client = match rules::identify(request, sender) {
+            Ok(client) => client,
+            Err(reason) => return reason,
         };
         self.renew_claims(client);
-        let Ok(target) = request.target() else {
-            return Reason::UnknownTarget;
-        };
-        if target == Target::Signal {
-            return self.signal_command(kind, request.axis as usize, client, request.values[0]);
-        }
-        match kind {
-            CommandKind::EStop => {
+        match rules::judge(request, client, &*self) {
+            Verdict::Refused(reason) => reason,
+            Verdict::EStop => {
                 self.estop_all();
-                return Reason::Accepted;
+                Reason::Accepted
             }
-            CommandKind::Reset => return self.reset(),
-            CommandKind::Stop if request.axis == CommandRequest::ALL_AXES => {
+            Verdict::Reset => self.reset(),
+            Verdict::StopAll => {
                 for index in 0..self.axes.len() {
                     self.stop_axis(index, false);
                 }
-                return Reason::Accepted;
+                Reason::Accepted
             }
-            CommandKind::Off if request.axis == CommandRequest::ALL_AXES => {
-                return self.off_all(client);
-            }
-            CommandKind::SetOutput => return Reason::UnknownTarget,
-            _ => {}
-        }
-        let index = request.axis as usize;
-        let Some(axis) = self.axes.get(index) else {
-            return Reason::UnknownAxis;
-        };
-        match kind {
-            CommandKind::Claim | CommandKind::Release if client.is_none() => {
-                return Reason::NoClientId;
-            }
-            CommandKind::Claim => {
-                if axis.claimed_by_other(client) {
-                    return Reason::ClaimedByOther;
-                }
+            Verdict::OffAll => self.off_all(client),
+            Verdict::ClaimAxis(index) => {
                 let now = self.now;
                 let axis = &mut self.axes[index];
                 axis.claimed_by = client;
                 axis.claim_renewed_at = now;
-                return Reason::Accepted;
+                Reason::Accepted
             }
-            CommandKind::Release => {
-                if axis.claimed_by != client {
-                    return Reason::NotClaimed;
-                }
+            Verdict::ReleaseAxis(index) => {
                 self.axes[index].claimed_by = ClientId::NONE;
-                return Reason::Accepted;
+                Reason::Accepted
             }
-            // Anyone may stop any axis, claimed or not, e-stop or not.
-            CommandKind::Stop => {
+            Verdict::StopAxis(index) => {
                 self.stop_axis(index, false);
-                return Reason::Accepted;
+                Reason::Accepted
             }
-            // Off is safe from the board's point of view but not always for the machine (a
-            // vertical axis falls): claims apply; e-stop and faults do not stop it.
-            CommandKind::Off => {
-                if axis.claimed_by_other(client) {
-                    return Reason::ClaimedByOther;
-                }
-                if !axis.capabilities.supports(CommandKind::Off) {
-                    return Reason::Unsupported;
-                }
-                return match self.off_axis(index) {
-                    Ok(()) => Reason::Accepted,
-                    Err(error) => self.goal_error_reason(index, error),
-                };
+            Verdict::OffAxis(index) => match self.off_axis(index) {
+                Ok(()) => Reason::Accepted,
+                Err(error) => self.goal_error_reason(index, error),
+            },
+            Verdict::Move { axis, motion } => self.start_motion(axis, client, motion, request),
+            Verdict::ClaimSignal(index) => {
+                let now = self.now;
+                let signal = &mut self.signals[index];
+                signal.claimed_by = client;
+                signal.claim_renewed_at = now;
+                Reason::Accepted
             }
-            _ => {}
+            Verdict::ReleaseSignal(index) => {
+                self.signals[index].claimed_by = ClientId::NONE;
+                Reason::Accepted
+            }
+            Verdict::SetOutput { signal, on } => self.set_output(signal, on),
         }
-        if self.shutting_down {
-            return Reason::ShuttingDown;
-        }
-        if self.estop {
-            return Reason::EstopLatched;
-        }
-        if axis.claimed_by_other(client) {
-            return Reason::ClaimedByOther;
-        }
-        if !axis.capabilities.supports(kind) {
-            return Reason::Unsupported;
-        }
-        match self.device_state_of(index) {
-            DeviceState::Starting => return Reason::DeviceStarting,
-            DeviceState::Offline if !self.device_link_up(axis.device) => return Reason::LinkDown,
-            DeviceState::Offline => return Reason::DeviceOffline,
-            DeviceState::Online | DeviceState::Faulted => {}
-        }
-        let beyond_limit = match axis.fault_code() {
-            None => false,
-            Some(FaultCode::LimitExceeded) => true,
-            Some(FaultCode::LinkDown) => return Reason::LinkDown,
-            Some(_) => return Reason::AxisFaulted,
-        };
-        let (goal, mode, target, deadman) = match goal_of(axis, kind, request.values) {
-            Ok(goal) => goal,
-            Err(reason) => return reason,
-        };
-        if beyond_limit && !heads_back_inside(axis, &goal, target) {
-            return Reason::AxisFaulted;
-        }
+    }
+
+    /// Hands the accepted `motion` of axis `index` to its driver; the axis takes the goal
+    /// once the driver accepted it.
+    fn start_motion(
+        &mut self,
+        index: usize,
+        client: ClientId,
+        motion: Motion,
+        request: &CommandRequest,
+    ) -> Reason {
+        let axis = &self.axes[index];
+        let goal = goal_of(axis, motion);
+        let target = motion.target().unwrap_or_else(|| axis.position());
         let (bus, slot, channel) = (axis.bus, axis.slot, axis.channel);
         let now = self.now;
         let result = match self.buses[bus].driver_mut(slot) {
@@ -169,11 +162,11 @@ impl Engine {
         let timeout = self.config.command_timeout;
         let axis = &mut self.axes[index];
         let position = axis.position();
-        axis.mode = mode;
+        axis.mode = motion.mode();
         axis.target = target;
         axis.goal_owner = client;
         axis.deadman_expired = false;
-        axis.deadman_at = (deadman && !timeout.is_zero()).then(|| now + timeout);
+        axis.deadman_at = (motion.needs_renewal() && !timeout.is_zero()).then(|| now + timeout);
         axis.move_start = position;
         axis.arrived = false;
         axis.off_after_stop = false;
@@ -181,7 +174,7 @@ impl Engine {
         axis.home_travel = 0.0;
         axis.home_last = position;
         axis.home_referenced = axis.referenced();
-        if kind == CommandKind::SetPosition {
+        if request.kind() == Ok(CommandKind::SetPosition) {
             axis.position_set = true;
         }
         Reason::Accepted
@@ -192,12 +185,14 @@ impl Engine {
     fn off_all(&mut self, client: ClientId) -> Reason {
         let mut skipped = false;
         for index in 0..self.axes.len() {
-            let axis = &self.axes[index];
-            if axis.claimed_by_other(client) {
+            let Some(facts) = Facts::axis(&*self, index) else {
+                continue;
+            };
+            if rules::off_all_skips(&facts, client) {
                 skipped = true;
                 continue;
             }
-            if axis.capabilities.supports(CommandKind::Off) {
+            if facts.capabilities.supports(CommandKind::Off) {
                 let _ = self.off_axis(index);
             }
         }
@@ -278,132 +273,33 @@ impl Engine {
     }
 }
 
-/// The goal, mode, target and deadman flag of a motion request, or why it is refused.
-fn goal_of(
-    axis: &Axis,
-    kind: CommandKind,
-    [v0, v1, v2]: [f64; 3],
-) -> Result<(Goal, AxisMode, f64, bool), Reason> {
-    let or_max = |value: f64, max: f64| if value == 0.0 { max } else { value };
-    Ok(match kind {
-        CommandKind::Power => {
-            if v0.abs() > 1.0 {
-                return Err(Reason::PowerLimit);
-            }
-            if heads_into_limit(axis, v0, axis.max_accel) {
-                return Err(Reason::OutOfRange);
-            }
-            (Goal::Power { fraction: v0 }, AxisMode::Power, v0, true)
-        }
-        CommandKind::Position => {
-            if v0 < axis.min || v0 > axis.max {
-                return Err(Reason::OutOfRange);
-            }
-            let goal = Goal::Position {
-                counts: axis.to_counts(v0),
-            };
-            (goal, AxisMode::Position, v0, false)
-        }
-        CommandKind::Velocity | CommandKind::RampVelocity => {
-            let accel = if kind == CommandKind::Velocity {
-                axis.max_accel
-            } else {
-                or_max(v1, axis.max_accel)
-            };
-            if v0.abs() > axis.max_velocity {
-                return Err(Reason::VelocityLimit);
-            }
-            if accel <= 0.0 || accel > axis.max_accel {
-                return Err(Reason::AccelLimit);
-            }
-            if heads_into_limit(axis, v0, accel) {
-                return Err(Reason::OutOfRange);
-            }
-            let goal = Goal::Velocity {
-                velocity: axis.rate_to_counts(v0),
+/// The driver goal, in device counts, of an accepted motion.
+fn goal_of(axis: &Axis, motion: Motion) -> Goal {
+    match motion {
+        Motion::Power { fraction } => Goal::Power { fraction },
+        Motion::Position { target } => Goal::Position {
+            counts: axis.to_counts(target),
+        },
+        Motion::Velocity { velocity, accel } | Motion::RampVelocity { velocity, accel } => {
+            Goal::Velocity {
+                velocity: axis.rate_to_counts(velocity),
                 accel: axis.magnitude_to_counts(accel),
-            };
-            let mode = if kind == CommandKind::Velocity {
-                AxisMode::Velocity
-            } else {
-                AxisMode::RampVelocity
-            };
-            (goal, mode, v0, true)
-        }
-        CommandKind::RampPosition => {
-            let velocity = or_max(v1, axis.max_velocity);
-            let accel = or_max(v2, axis.max_accel);
-            if v0 < axis.min || v0 > axis.max {
-                return Err(Reason::OutOfRange);
             }
-            if velocity <= 0.0 || velocity > axis.max_velocity {
-                return Err(Reason::VelocityLimit);
-            }
-            if accel <= 0.0 || accel > axis.max_accel {
-                return Err(Reason::AccelLimit);
-            }
-            let goal = Goal::RampPosition {
-                counts: axis.to_counts(v0),
-                velocity: axis.magnitude_to_counts(velocity),
-                accel: axis.magnitude_to_counts(accel),
-            };
-            (goal, AxisMode::RampPosition, v0, false)
         }
-        CommandKind::Home => {
-            let velocity = or_max(v0, axis.max_velocity * HOME_FRACTION_OF_MAX);
-            if velocity <= 0.0 || velocity > axis.max_velocity {
-                return Err(Reason::VelocityLimit);
-            }
-            let goal = Goal::Home {
-                velocity: axis.magnitude_to_counts(velocity),
-            };
-            (goal, AxisMode::Homing, axis.position(), false)
-        }
-        CommandKind::SetPosition => {
-            if v0 < axis.min || v0 > axis.max {
-                return Err(Reason::OutOfRange);
-            }
-            let goal = Goal::SetPosition {
-                counts: axis.to_counts(v0),
-            };
-            (goal, AxisMode::Hold, v0, false)
-        }
-        CommandKind::Stop
-        | CommandKind::Off
-        | CommandKind::Claim
-        | CommandKind::Release
-        | CommandKind::EStop
-        | CommandKind::Reset
-        | CommandKind::SetOutput => return Err(Reason::UnknownKind),
-    })
-}
-
-/// Whether a velocity (or power, by its sign) goal of `velocity` could not stop before the
-/// soft limit it heads for, from where the axis is now.
-fn heads_into_limit(axis: &Axis, velocity: f64, accel: f64) -> bool {
-    if axis.stale {
-        return false;
-    }
-    let reach = velocity * velocity / (2.0 * accel);
-    let position = axis.position();
-    (velocity > 0.0 && position + reach.max(axis.tolerance) >= axis.max)
-        || (velocity < 0.0 && position - reach.max(axis.tolerance) <= axis.min)
-}
-
-/// For an axis beyond a soft limit (`LimitExceeded` latched): whether `goal` brings it back
-/// inside (a position target within the limits, a velocity or power towards them, a
-/// set-position within them). Nothing else is accepted until a reset.
-fn heads_back_inside(axis: &Axis, goal: &Goal, target: f64) -> bool {
-    let position = axis.position();
-    let inward =
-        |sign: f64| (position > axis.max && sign < 0.0) || (position < axis.min && sign > 0.0);
-    match goal {
-        Goal::Position { .. } | Goal::RampPosition { .. } | Goal::SetPosition { .. } => {
-            (axis.min..=axis.max).contains(&target)
-        }
-        // `target` is the requested velocity (units/s) or power fraction, sign as the axis
-        // counts positions.
-        Goal::Velocity { .. } | Goal::Power { .. } => inward(target),
-        Goal::Off | Goal::Stop { .. } | Goal::Home { .. } => false,
+        Motion::RampPosition {
+            target,
+            velocity,
+            accel,
+        } => Goal::RampPosition {
+            counts: axis.to_counts(target),
+            velocity: axis.magnitude_to_counts(velocity),
+            accel: axis.magnitude_to_counts(accel),
+        },
+        Motion::Home { velocity } => Goal::Home {
+            velocity: axis.magnitude_to_counts(velocity),
+        },
+        Motion::SetPosition { target } => Goal::SetPosition {
+            counts: axis.to_counts(target),
+        },
     }
 }

@@ -10,7 +10,7 @@ use crate::Engine;
 use crate::config::EstopCategory;
 
 /// The shared-memory code of a signal kind.
-fn signal_kind(kind: SignalKind) -> motion_ipc::SignalKind {
+pub(crate) fn signal_kind(kind: SignalKind) -> motion_ipc::SignalKind {
     match kind {
         SignalKind::DigitalIn => motion_ipc::SignalKind::DigitalIn,
         SignalKind::DigitalOut => motion_ipc::SignalKind::DigitalOut,

@@ -4,7 +4,7 @@
 use core::time::Duration;
 
 use motion_drivers::{GoalError, PinReading, SignalKind};
-use motion_ipc::{ClientId, CommandKind, DeviceState, Reason};
+use motion_ipc::{ClientId, Reason};
 
 use crate::Engine;
 use crate::config::SignalConfig;
@@ -89,63 +89,8 @@ impl Engine {
         }
     }
 
-    /// A request about signal `index`: `SetOutput`, `Claim`, `Release`.
-    pub(crate) fn signal_command(
-        &mut self,
-        kind: CommandKind,
-        index: usize,
-        client: ClientId,
-        value: f64,
-    ) -> Reason {
-        let Some(signal) = self.signals.get(index) else {
-            return Reason::UnknownSignal;
-        };
-        match kind {
-            CommandKind::Claim | CommandKind::Release if client.is_none() => Reason::NoClientId,
-            CommandKind::Claim => {
-                if !signal.claimed_by.is_none() && signal.claimed_by != client {
-                    return Reason::ClaimedByOther;
-                }
-                let now = self.now;
-                let signal = &mut self.signals[index];
-                signal.claimed_by = client;
-                signal.claim_renewed_at = now;
-                Reason::Accepted
-            }
-            CommandKind::Release => {
-                if signal.claimed_by != client {
-                    return Reason::NotClaimed;
-                }
-                self.signals[index].claimed_by = ClientId::NONE;
-                Reason::Accepted
-            }
-            CommandKind::SetOutput => self.set_output(index, client, value >= 0.5),
-            _ => Reason::UnknownKind,
-        }
-    }
-
-    fn set_output(&mut self, index: usize, client: ClientId, on: bool) -> Reason {
-        let signal = &self.signals[index];
-        if signal.config.kind != SignalKind::DigitalOut {
-            return Reason::NotAnOutput;
-        }
-        if self.shutting_down {
-            return Reason::ShuttingDown;
-        }
-        if self.estop {
-            return Reason::EstopLatched;
-        }
-        if !signal.claimed_by.is_none() && signal.claimed_by != client {
-            return Reason::ClaimedByOther;
-        }
-        match self.devices[signal.config.device].state {
-            DeviceState::Starting => return Reason::DeviceStarting,
-            DeviceState::Offline if !self.device_link_up(signal.config.device) => {
-                return Reason::LinkDown;
-            }
-            DeviceState::Offline => return Reason::DeviceOffline,
-            DeviceState::Online | DeviceState::Faulted => {}
-        }
+    /// Sets output `index` (accepted by the rulebook) to the logical value `on`.
+    pub(crate) fn set_output(&mut self, index: usize, on: bool) -> Reason {
         match self.drive_output(index, on) {
             Ok(()) => {
                 self.signals[index].safe_applied = false;

@@ -28,6 +28,7 @@ mod command;
 mod frame;
 mod info;
 mod params;
+pub mod rules;
 mod service;
 mod signal;
 mod stats;

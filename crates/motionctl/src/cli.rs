@@ -46,7 +46,8 @@ Examples:
   motionctl estop               (gets through even when the server's ports are taken)
   motionctl record --duration 5s --out run.csv
   motionctl bench --duration 5s --json
-  motionctl doctor --config /etc/motiond/motiond.toml";
+  motionctl doctor --config /etc/motiond/motiond.toml
+  motionctl --remote tcp/cell4:7447 --identity panel status   (through motion-bridge)";
 
 /// Command-line client of motiond.
 #[derive(Debug, Parser)]
@@ -59,6 +60,20 @@ pub struct Cli {
     /// How long to wait for the server to appear.
     #[arg(long, global = true, default_value = "2s", value_parser = parse_duration, value_name = "DURATION")]
     pub connect_timeout: Duration,
+
+    /// Talk to the server through the motion-bridge at this zenoh endpoint
+    /// (`tcp/HOST:7447`) instead of shared memory.
+    #[arg(long, global = true, value_name = "ENDPOINT")]
+    pub remote: Option<String>,
+
+    /// With --remote: the identity to send commands as (the bridge's allow-list is per
+    /// identity).
+    #[arg(long, global = true, value_name = "NAME", requires = "remote")]
+    pub identity: Option<String>,
+
+    /// With --remote: zenoh's own config file (JSON5): TLS certificates, user/password.
+    #[arg(long, global = true, value_name = "FILE", requires = "remote")]
+    pub zenoh_config: Option<PathBuf>,
 
     /// What to do.
     #[command(subcommand)]

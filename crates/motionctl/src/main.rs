@@ -69,15 +69,28 @@ fn main() -> ExitCode {
 }
 
 fn connect(cli: &Cli) -> anyhow::Result<Client<Service>> {
-    Ok(ClientBuilder::new(&cli.server)
+    let mut builder = ClientBuilder::new(&cli.server)
         .node_name("motionctl")
-        .connect_timeout(cli.connect_timeout)
-        .connect()?)
+        .connect_timeout(cli.connect_timeout);
+    if let Some(endpoint) = &cli.remote {
+        builder = builder.remote(endpoint);
+        if let Some(identity) = &cli.identity {
+            builder = builder.identity(identity);
+        }
+        if let Some(path) = &cli.zenoh_config {
+            builder = builder.zenoh_config(path);
+        }
+    }
+    Ok(builder.connect()?)
 }
 
 /// Commands that must not wait for anything: the e-stop (which needs no client port even)
 /// and the stop of every axis (the command service alone). `None` for the others.
 fn run_unconnected(cli: &Cli) -> Option<anyhow::Result<()>> {
+    if cli.remote.is_some() {
+        // Through a bridge every command needs the connection (see `run`).
+        return None;
+    }
     match &cli.command {
         Command::Estop => Some(estop(cli)),
         Command::Bench(args) => Some(bench::run(&cli.server, args)),
@@ -134,8 +147,22 @@ fn run(cli: &Cli) -> anyhow::Result<()> {
             accel,
         } => act::jog(client, axis, *velocity, *accel),
         Command::Power { axis, power } => act::power(client, axis, *power),
+        Command::Stop { axes } if axes.is_empty() && client.is_remote() => {
+            let accepted = client.stop_all()?;
+            out!("all axes stopping (tick {})", accepted.tick);
+            Ok(())
+        }
         Command::Stop { axes } => act::stop(client, axes),
         Command::Off { axes, all } => act::off(client, axes, *all),
+        Command::Estop if client.is_remote() => {
+            let accepted = client.estop()?;
+            out!(
+                "e-stop latched in tick {} through the bridge: every axis stops with its \
+                 e-stop category; `motionctl reset` clears it",
+                accepted.tick
+            );
+            Ok(())
+        }
         Command::Estop => estop(cli),
         Command::Bench(args) => bench::run(&cli.server, args),
         Command::Doctor(args) => doctor::run(args),
@@ -186,6 +213,7 @@ fn connect_status(error: &ConnectError) -> u8 {
     match error {
         ConnectError::NoServer { .. }
         | ConnectError::NoInfo { .. }
+        | ConnectError::NoBridge { .. }
         | ConnectError::PortsExhausted { .. } => exit::NO_SERVER,
         _ => exit::FAILURE,
     }
@@ -210,6 +238,7 @@ fn exit_status(error: &anyhow::Error) -> u8 {
         if let Some(client) = cause.downcast_ref::<ClientError>() {
             return match client {
                 ClientError::Refused { .. }
+                | ClientError::BridgeRefused { .. }
                 | ClientError::UnknownAxis(_)
                 | ClientError::UnknownSignal(_) => exit::REFUSED,
                 ClientError::NoServer { .. } => exit::NO_SERVER,
@@ -224,6 +253,7 @@ fn exit_status(error: &anyhow::Error) -> u8 {
                 ClientError::Interrupted => exit::INTERRUPTED,
                 ClientError::ServerRestarted(_)
                 | ClientError::NotPublished { .. }
+                | ClientError::Network { .. }
                 | ClientError::Ipc { .. } => exit::FAILURE,
             };
         }

@@ -29,6 +29,9 @@ pub struct FakeAxis {
     pub home_max_travel: f64,
     /// What an e-stop or a fault does to it.
     pub estop: EstopCategory,
+    /// Distance from a target that counts as arrived, units (the least distance a velocity
+    /// goal must keep from a soft limit, as on the server).
+    pub position_tolerance: f64,
 }
 
 impl FakeAxis {
@@ -49,6 +52,7 @@ impl FakeAxis {
             overspeed_factor: 0.0,
             home_max_travel: 0.0,
             estop: EstopCategory::Hold,
+            position_tolerance: 0.01,
         }
     }
 

@@ -2,10 +2,11 @@
 //! (frame, tick, command, info, stats, params, estop), under the server's node name, a
 //! thread ticking at a fixed rate, and a small kinematic model of each axis.
 //!
-//! It validates commands in the real engine's order (schema, kind, finite values, identity
-//! from the transport, target, signal requests, e-stop and reset, stop and off of all
-//! axes, axis index, claims, anyone may stop, off, e-stop latch, claim by another,
-//! capabilities, device readiness, faults, limits), so that client and CLI behaviour can be
+//! It judges every request with the server's own rulebook ([`motion_ipc::rules`]: schema,
+//! kind, finite values, identity from the transport, targets, claims, e-stop, shutdown,
+//! capabilities, device readiness, faults, limits and rates), and
+//! `crates/motion-engine/tests/rulebook_parity.rs` runs one table of requests through the
+//! engine and this fake and demands the same answers; client and CLI behaviour can so be
 //! tested without the real server. Positions move at the commanded speed without
 //! acceleration; nothing here models a board. Every request it receives is logged for
 //! assertions; tests change device states, inputs and faults with [`FakeServer`]'s
@@ -52,6 +53,16 @@ pub enum FakeControl {
         /// The raw value.
         raw: f64,
     },
+    /// The board of axis `axis` no longer reports the fault it raised: as on the server, a
+    /// fault a board raised ends when its cause is gone (the axis stays stopped); a fault the
+    /// server raised (following error, overspeed, limits) waits for a reset either way.
+    FaultGone {
+        /// Axis index.
+        axis: usize,
+    },
+    /// Begins the server's shutdown (as SIGTERM does): every axis stops and new motion is
+    /// refused with `ShuttingDown`.
+    ShutDown,
     /// Faults axis `axis` with `code`, its figure `value` and tolerance `limit`.
     Fault {
         /// Axis index.

@@ -1,12 +1,13 @@
-//! The fake server's state: axes, devices, signals; validation in the engine's order.
+//! The fake server's state: axes, devices, signals; requests judged by the server's own
+//! rulebook ([`motion_ipc::rules`]).
 
 use core::time::Duration;
 
+use motion_ipc::rules::{self, AxisFacts, Facts, Motion, SignalFacts, Verdict};
 use motion_ipc::{
     AxisFlags, AxisInfo, AxisMode, AxisState, ClientId, CommandKind, CommandRequest, DeviceInfo,
     DeviceState, EstopCategory, FaultCode, FrameFlags, MachineParams, MotionFrame, Reason,
-    SCHEMA_VERSION, ServerInfo, SignalFlags, SignalInfo, SignalInfoFlags, SignalKind, SignalState,
-    Target, write_text,
+    ServerInfo, SignalFlags, SignalInfo, SignalInfoFlags, SignalKind, SignalState, write_text,
 };
 
 use super::FakeControl;
@@ -36,6 +37,8 @@ pub(super) struct Model {
     forced: Vec<Option<DeviceState>>,
     starting_ticks: u64,
     pub(super) estop: bool,
+    /// After [`FakeControl::ShutDown`]: motion is refused as during the server's shutdown.
+    shutting_down: bool,
     pub(super) tick: u64,
     pub(super) commands: u64,
     pub(super) rejected: u64,
@@ -67,6 +70,7 @@ impl Model {
             forced: vec![None; config.devices.len()],
             starting_ticks: config.starting_ticks,
             estop: false,
+            shutting_down: false,
             tick: 0,
             commands: 0,
             rejected: 0,
@@ -187,6 +191,31 @@ impl Model {
                     sim.raw = raw;
                 }
             }
+            FakeControl::FaultGone { axis } => {
+                if let Some((_, sim)) = self.axes.get_mut(axis) {
+                    let by_server = matches!(
+                        FaultCode::try_from(sim.state.fault),
+                        Ok(FaultCode::FollowingError
+                            | FaultCode::Overspeed
+                            | FaultCode::LimitExceeded
+                            | FaultCode::HomeFailed
+                            | FaultCode::Overrun)
+                    );
+                    if !by_server {
+                        sim.state.fault = 0;
+                        sim.state.fault_value = 0.0;
+                        sim.state.fault_limit = 0.0;
+                        sim.state.flags =
+                            AxisFlags(sim.state.flags).with(AxisFlags::FAULT, false).0;
+                    }
+                }
+            }
+            FakeControl::ShutDown => {
+                self.shutting_down = true;
+                for (axis, sim) in &mut self.axes {
+                    Self::stop(axis, sim);
+                }
+            }
             FakeControl::Fault {
                 axis,
                 code,
@@ -243,244 +272,124 @@ impl Model {
         }
     }
 
-    fn signal_command(
-        &mut self,
-        kind: CommandKind,
-        index: usize,
-        client: ClientId,
-        value: f64,
-    ) -> Reason {
-        let device_state = match self.signals.get(index) {
-            Some((signal, _)) => self.device_state(signal.device),
-            None => return Reason::UnknownSignal,
-        };
-        let estop = self.estop;
-        let Some((signal, sim)) = self.signals.get_mut(index) else {
-            return Reason::UnknownSignal;
-        };
-        let claimed_by_other = !sim.claimed_by.is_none() && sim.claimed_by != client;
-        match kind {
-            CommandKind::Claim | CommandKind::Release if client.is_none() => Reason::NoClientId,
-            CommandKind::Claim if claimed_by_other => Reason::ClaimedByOther,
-            CommandKind::Claim => {
-                sim.claimed_by = client;
-                Reason::Accepted
-            }
-            CommandKind::Release if sim.claimed_by != client => Reason::NotClaimed,
-            CommandKind::Release => {
-                sim.claimed_by = ClientId::NONE;
-                Reason::Accepted
-            }
-            CommandKind::SetOutput if signal.kind != SignalKind::DigitalOut => Reason::NotAnOutput,
-            CommandKind::SetOutput if estop => Reason::EstopLatched,
-            CommandKind::SetOutput if claimed_by_other => Reason::ClaimedByOther,
-            CommandKind::SetOutput => match device_state {
-                DeviceState::Starting => Reason::DeviceStarting,
-                DeviceState::Offline => Reason::DeviceOffline,
-                DeviceState::Online | DeviceState::Faulted => {
-                    sim.raw = if value >= 0.5 { 1.0 } else { 0.0 };
-                    sim.pending = true;
-                    sim.safe_applied = false;
-                    Reason::Accepted
-                }
-            },
-            _ => Reason::UnknownKind,
-        }
-    }
-
+    /// The server's rulebook ([`motion_ipc::rules`]) decides; the model only carries out.
     fn validate_and_apply(&mut self, request: &CommandRequest, sender: ClientId) -> Reason {
-        if request.schema_version != SCHEMA_VERSION {
-            return Reason::SchemaMismatch;
-        }
-        let Ok(kind) = request.kind() else {
-            return Reason::UnknownKind;
+        let client = match rules::identify(request, Some(sender)) {
+            Ok(client) => client,
+            Err(reason) => return reason,
         };
-        if request.values.iter().any(|value| !value.is_finite()) {
-            return Reason::NotFinite;
-        }
-        if !request.client.is_none() && request.client != sender {
-            return Reason::IdentityMismatch;
-        }
-        let client = sender;
-        let Ok(target) = request.target() else {
-            return Reason::UnknownTarget;
-        };
-        if target == Target::Signal {
-            return self.signal_command(kind, request.axis as usize, client, request.values[0]);
-        }
-        match kind {
-            CommandKind::EStop => {
-                self.latch_estop();
-                return Reason::Accepted;
-            }
-            CommandKind::Reset => {
-                self.estop = false;
-                for (_, sim) in &mut self.axes {
-                    sim.state.fault = 0;
-                    sim.state.fault_value = 0.0;
-                    sim.state.fault_limit = 0.0;
-                    sim.state.flags = AxisFlags(sim.state.flags).with(AxisFlags::FAULT, false).0;
-                }
-                return Reason::Accepted;
-            }
-            CommandKind::Stop if request.axis == CommandRequest::ALL_AXES => {
+        match rules::judge(request, client, &*self) {
+            Verdict::Refused(reason) => return reason,
+            Verdict::EStop => self.latch_estop(),
+            Verdict::Reset => self.reset(),
+            Verdict::StopAll => {
                 for (axis, sim) in &mut self.axes {
                     Self::stop(axis, sim);
                 }
-                return Reason::Accepted;
             }
-            CommandKind::Off if request.axis == CommandRequest::ALL_AXES => {
+            Verdict::OffAll => {
                 let mut skipped = false;
-                for (axis, sim) in &mut self.axes {
-                    if !sim.state.claimed_by.is_none() && sim.state.claimed_by != client {
+                for index in 0..self.axes.len() {
+                    let Some(facts) = Facts::axis(&*self, index) else {
+                        continue;
+                    };
+                    if rules::off_all_skips(&facts, client) {
                         skipped = true;
-                    } else if axis.capabilities.supports(CommandKind::Off) {
-                        Self::off(sim);
+                    } else if facts.capabilities.supports(CommandKind::Off) {
+                        Self::off(&mut self.axes[index].1);
                     }
                 }
-                return if skipped {
-                    Reason::ClaimedByOther
-                } else {
-                    Reason::Accepted
-                };
+                if skipped {
+                    return Reason::ClaimedByOther;
+                }
             }
-            CommandKind::SetOutput => return Reason::UnknownTarget,
-            _ => {}
-        }
-        let tick = self.tick;
-        let estop = self.estop;
-        let Some(device) = self.axes.get(request.axis as usize).map(|(a, _)| a.device) else {
-            return Reason::UnknownAxis;
-        };
-        let device_state = self.device_state(device);
-        let Some((axis, sim)) = self.axes.get_mut(request.axis as usize) else {
-            return Reason::UnknownAxis;
-        };
-        let claimed_by_other = !sim.state.claimed_by.is_none() && sim.state.claimed_by != client;
-        match kind {
-            CommandKind::Claim | CommandKind::Release if client.is_none() => {
-                return Reason::NoClientId;
-            }
-            CommandKind::Claim if claimed_by_other => return Reason::ClaimedByOther,
-            CommandKind::Claim => {
-                sim.state.claimed_by = client;
-                return Reason::Accepted;
-            }
-            CommandKind::Release if sim.state.claimed_by != client => return Reason::NotClaimed,
-            CommandKind::Release => {
-                sim.state.claimed_by = ClientId::NONE;
-                return Reason::Accepted;
-            }
-            CommandKind::Stop => {
+            Verdict::ClaimAxis(index) => self.axes[index].1.state.claimed_by = client,
+            Verdict::ReleaseAxis(index) => self.axes[index].1.state.claimed_by = ClientId::NONE,
+            Verdict::StopAxis(index) => {
+                let (axis, sim) = &mut self.axes[index];
                 Self::stop(axis, sim);
-                return Reason::Accepted;
             }
-            CommandKind::Off if claimed_by_other => return Reason::ClaimedByOther,
-            CommandKind::Off if !axis.capabilities.supports(kind) => return Reason::Unsupported,
-            CommandKind::Off => {
-                Self::off(sim);
-                return Reason::Accepted;
+            Verdict::OffAxis(index) => Self::off(&mut self.axes[index].1),
+            Verdict::Move { axis, motion } => {
+                let tick = self.tick;
+                let (config, sim) = &mut self.axes[axis];
+                Self::start(config, sim, motion, tick);
             }
-            _ => {}
+            Verdict::ClaimSignal(index) => self.signals[index].1.claimed_by = client,
+            Verdict::ReleaseSignal(index) => self.signals[index].1.claimed_by = ClientId::NONE,
+            Verdict::SetOutput { signal, on } => {
+                let sim = &mut self.signals[signal].1;
+                sim.raw = if on { 1.0 } else { 0.0 };
+                sim.pending = true;
+                sim.safe_applied = false;
+            }
         }
-        if estop {
-            return Reason::EstopLatched;
-        }
-        if claimed_by_other {
-            return Reason::ClaimedByOther;
-        }
-        if !axis.capabilities.supports(kind) {
-            return Reason::Unsupported;
-        }
-        match device_state {
-            DeviceState::Starting => return Reason::DeviceStarting,
-            DeviceState::Offline => return Reason::DeviceOffline,
-            DeviceState::Online | DeviceState::Faulted => {}
-        }
-        if sim.state.fault != FaultCode::None as u16 {
-            return Reason::AxisFaulted;
-        }
-        Self::goal(axis, sim, kind, request.values, tick)
+        Reason::Accepted
     }
 
-    fn goal(
-        axis: &FakeAxis,
-        sim: &mut SimAxis,
-        kind: CommandKind,
-        values: [f64; 3],
-        tick: u64,
-    ) -> Reason {
-        let [v0, v1, v2] = values;
-        let or_max = |value: f64, max: f64| if value == 0.0 { max } else { value };
-        let in_range = |position: f64| position >= axis.min && position <= axis.max;
+    /// Reset, as the server does it: the e-stop, every claim, and the faults (an injected
+    /// fault's cause is gone once reset).
+    fn reset(&mut self) {
+        self.estop = false;
+        for (_, sim) in &mut self.axes {
+            sim.state.fault = 0;
+            sim.state.fault_value = 0.0;
+            sim.state.fault_limit = 0.0;
+            sim.state.claimed_by = ClientId::NONE;
+            sim.state.flags = AxisFlags(sim.state.flags)
+                .with(AxisFlags::FAULT, false)
+                .with(AxisFlags::DEADMAN_EXPIRED, false)
+                .0;
+            if sim.state.mode != AxisMode::Off as u8 {
+                sim.state.mode = AxisMode::Hold as u8;
+                sim.state.target = sim.state.position;
+                sim.state.velocity = 0.0;
+            }
+        }
+        for (_, sim) in &mut self.signals {
+            sim.claimed_by = ClientId::NONE;
+            sim.safe_applied = false;
+        }
+    }
+
+    /// Starts an accepted motion on the simulated axis.
+    fn start(axis: &FakeAxis, sim: &mut SimAxis, motion: Motion, tick: u64) {
         let state = &mut sim.state;
-        match kind {
-            CommandKind::Position | CommandKind::RampPosition | CommandKind::SetPosition
-                if !in_range(v0) =>
-            {
-                Reason::OutOfRange
+        state.mode = motion.mode() as u8;
+        match motion {
+            Motion::Position { target } => {
+                state.target = target;
+                sim.speed = axis.max_velocity;
             }
-            CommandKind::Power if v0.abs() > 1.0 => Reason::PowerLimit,
-            CommandKind::Velocity | CommandKind::RampVelocity if v0.abs() > axis.max_velocity => {
-                Reason::VelocityLimit
+            Motion::RampPosition {
+                target, velocity, ..
+            } => {
+                state.target = target;
+                sim.speed = velocity;
             }
-            CommandKind::RampVelocity if or_max(v1, axis.max_accel) > axis.max_accel => {
-                Reason::AccelLimit
-            }
-            CommandKind::RampPosition
-                if or_max(v1, axis.max_velocity) > axis.max_velocity || v1 < 0.0 =>
-            {
-                Reason::VelocityLimit
-            }
-            CommandKind::RampPosition
-                if or_max(v2, axis.max_accel) > axis.max_accel || v2 < 0.0 =>
-            {
-                Reason::AccelLimit
-            }
-            CommandKind::Home if v0 < 0.0 || v0 > axis.max_velocity => Reason::VelocityLimit,
-            CommandKind::Position | CommandKind::RampPosition => {
-                state.target = v0;
-                state.mode = kind as u8;
-                sim.speed = if kind == CommandKind::Position {
-                    axis.max_velocity
-                } else {
-                    or_max(v1, axis.max_velocity)
-                };
-                Reason::Accepted
-            }
-            CommandKind::Velocity | CommandKind::RampVelocity | CommandKind::Power => {
-                let velocity = if kind == CommandKind::Power {
-                    v0 * axis.max_velocity
-                } else {
-                    v0
-                };
-                state.target = v0;
+            Motion::Velocity { velocity, .. } | Motion::RampVelocity { velocity, .. } => {
+                state.target = velocity;
                 state.velocity = velocity;
-                state.mode = match kind {
-                    CommandKind::Velocity => AxisMode::Velocity,
-                    CommandKind::RampVelocity => AxisMode::RampVelocity,
-                    _ => AxisMode::Power,
-                } as u8;
-                state.flags = AxisFlags(state.flags)
-                    .with(AxisFlags::DEADMAN_EXPIRED, false)
-                    .0;
-                sim.goal_tick = tick;
-                Reason::Accepted
             }
-            CommandKind::Home => {
-                state.mode = AxisMode::Homing as u8;
+            Motion::Power { fraction } => {
+                state.target = fraction;
+                state.velocity = fraction * axis.max_velocity;
+            }
+            Motion::Home { velocity } => {
                 state.target = 0.0;
-                sim.speed = or_max(v0, axis.max_velocity / 4.0);
-                Reason::Accepted
+                sim.speed = velocity;
             }
-            CommandKind::SetPosition => {
-                state.position = v0;
-                state.target = v0;
-                state.mode = AxisMode::Hold as u8;
+            Motion::SetPosition { target } => {
+                state.position = target;
+                state.target = target;
                 state.flags = AxisFlags(state.flags).with(AxisFlags::HOMED, true).0;
-                Reason::Accepted
             }
-            _ => Reason::UnknownKind,
+        }
+        if motion.needs_renewal() {
+            state.flags = AxisFlags(state.flags)
+                .with(AxisFlags::DEADMAN_EXPIRED, false)
+                .0;
+            sim.goal_tick = tick;
         }
     }
 
@@ -614,5 +523,44 @@ impl Model {
         for (_, sim) in &mut self.signals {
             sim.pending = false;
         }
+    }
+}
+
+/// The fake's state as the server's rulebook sees it.
+impl Facts for Model {
+    fn estop(&self) -> bool {
+        self.estop
+    }
+
+    fn shutting_down(&self) -> bool {
+        self.shutting_down
+    }
+
+    fn axis(&self, index: usize) -> Option<AxisFacts> {
+        let (axis, sim) = self.axes.get(index)?;
+        Some(AxisFacts {
+            min: axis.min,
+            max: axis.max,
+            max_velocity: axis.max_velocity,
+            max_accel: axis.max_accel,
+            capabilities: axis.capabilities,
+            claimed_by: sim.state.claimed_by,
+            device: self.device_state(axis.device),
+            link_up: true,
+            fault: FaultCode::try_from(sim.state.fault).unwrap_or(FaultCode::None),
+            position: sim.state.position,
+            position_fresh: true,
+            tolerance: axis.position_tolerance,
+        })
+    }
+
+    fn signal(&self, index: usize) -> Option<SignalFacts> {
+        let (signal, sim) = self.signals.get(index)?;
+        Some(SignalFacts {
+            kind: signal.kind,
+            claimed_by: sim.claimed_by,
+            device: self.device_state(signal.device),
+            link_up: true,
+        })
     }
 }

@@ -1,0 +1,744 @@
+//! The bridge process: one loop that takes the server's samples from shared memory and
+//! publishes them on zenoh, and takes remote commands from zenoh, judges them
+//! ([`Policy`]) and forwards them to the server's command service, passing each reply back.
+//!
+//! The bridge forwards only what arrives: it never renews a jog on a remote's behalf, so a
+//! remote whose network drops stops sending renewals and the server's deadman stops its
+//! axis within `command_timeout_ms`. When a remote's session ends (its zenoh liveliness
+//! token goes: the process ended, or zenoh gave up on its link), the bridge sends a stop
+//! for every axis still running that remote's jog and releases its claims; on its own exit
+//! it stops every remote jog.
+
+mod net;
+mod server;
+
+use core::time::Duration;
+use std::collections::VecDeque;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::mpsc::{Receiver, RecvTimeoutError};
+use std::time::Instant;
+
+use iceoryx2::node::Node;
+use iceoryx2::prelude::SignalHandlingMode;
+use motion_ipc::{
+    ClientId, CommandReply, CommandRequest, MachineParams, MotionFrame, ServerInfo, ServerStats,
+    ServiceNames,
+};
+use zenoh::Wait as _;
+use zenoh::query::Query;
+
+pub use net::zenoh_config;
+
+use self::net::Net;
+use self::server::{Ipc, Pending, ServerPorts};
+use crate::config::BridgeConfig;
+use crate::keys::{Keys, Origin, Refusal, RequestMeta};
+use crate::policy::{Policy, Remote, Verdict};
+use crate::wire::{self, Payload};
+
+/// How long the loop sleeps at most between looks at the server.
+const POLL: Duration = Duration::from_millis(5);
+/// Frames may stay away this long before the bridge takes the server for gone.
+const SILENCE: Duration = Duration::from_secs(1);
+/// How often a missing server is looked for.
+const REOPEN: Duration = Duration::from_millis(250);
+/// Commands waiting for a free request slot of the server; more are refused as busy.
+const MAX_QUEUED: usize = 256;
+/// Remote queries waiting in the loop's channel; more are answered `busy` on zenoh's
+/// thread (a flood never grows the bridge's memory).
+const MAX_WAITING_QUERIES: usize = 1024;
+/// How long the bridge's own stops wait for the server when it exits.
+const SHUTDOWN_WAIT: Duration = Duration::from_millis(500);
+
+/// A read of the newest state.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Read {
+    Info,
+    Stats,
+    Params,
+    Frame,
+}
+
+/// What wakes the loop.
+pub(crate) enum Event {
+    /// The server published a frame.
+    Tick,
+    /// A remote's command.
+    Command(Query),
+    /// A remote reads the newest description, statistics, parameters or frame.
+    Read(Read, Query),
+    /// A remote client's liveliness token appeared or went.
+    Remote { key: String, alive: bool },
+}
+
+/// Why the bridge could not start or run.
+#[derive(Debug, thiserror::Error)]
+pub enum BridgeError {
+    /// The key expressions cannot be made from the server name.
+    #[error(transparent)]
+    Name(#[from] crate::keys::BadName),
+    /// zenoh or iceoryx2 could not be set up.
+    #[error("{0}")]
+    Setup(String),
+}
+
+/// The newest sample of a service, as received and as bytes for the network.
+struct Cached<T> {
+    value: Box<T>,
+    origin: u128,
+    bytes: Vec<u8>,
+}
+
+impl<T: Payload + Copy> Cached<T> {
+    fn new(value: &T, origin: u128) -> Self {
+        Self {
+            value: Box::new(*value),
+            origin,
+            bytes: wire::encode(value),
+        }
+    }
+}
+
+/// A command waiting for a request slot, or in flight.
+struct Job {
+    /// The remote's query; `None` for the bridge's own stops and releases.
+    query: Option<Query>,
+    /// Who sent it (`None` for the bridge's own).
+    remote: Option<Remote>,
+    request: CommandRequest,
+}
+
+struct InFlight {
+    job: Job,
+    pending: Pending,
+    deadline: Instant,
+}
+
+/// Counters for the log.
+#[derive(Debug, Default, Clone, Copy)]
+struct Counters {
+    forwarded: u64,
+    refused: u64,
+    frames: u64,
+}
+
+/// A running bridge of one motiond instance; see the crate docs.
+pub struct Bridge {
+    config: BridgeConfig,
+    keys: Keys,
+    names: ServiceNames,
+    node: Node<Ipc>,
+    bridge_id: ClientId,
+    server: Option<ServerPorts>,
+    next_open: Instant,
+    last_frame_at: Instant,
+    net: Net,
+    events: Receiver<Event>,
+    queued_queries: Arc<AtomicUsize>,
+    tick_pending: Arc<AtomicBool>,
+    ticker_stop: Arc<AtomicBool>,
+    ticker: Option<std::thread::JoinHandle<()>>,
+    policy: Policy,
+    started: Instant,
+    info: Option<Cached<ServerInfo>>,
+    stats: Option<Cached<ServerStats>>,
+    params: Option<Cached<MachineParams>>,
+    frame: Option<(Box<MotionFrame>, u128)>,
+    next_frame_tick: u64,
+    next_json: Instant,
+    queue: VecDeque<Job>,
+    in_flight: Vec<InFlight>,
+    counters: Counters,
+}
+
+impl core::fmt::Debug for Bridge {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("Bridge")
+            .field("server", &self.config.server)
+            .field("connected", &self.server.is_some())
+            .field("counters", &self.counters)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Bridge {
+    /// Opens the zenoh session (listening as configured) and starts watching the server;
+    /// the server need not run yet.
+    pub fn start(config: BridgeConfig) -> Result<Self, BridgeError> {
+        let keys = Keys::new(&config.server)?;
+        let names = ServiceNames::new(&config.server);
+        let node = server::node(
+            "motion-bridge",
+            SignalHandlingMode::HandleTerminationRequests,
+        )
+        .map_err(BridgeError::Setup)?;
+        let (sender, events) = std::sync::mpsc::channel();
+        let queued_queries = Arc::new(AtomicUsize::new(0));
+        let zenoh = zenoh_config(
+            config.zenoh_config.as_deref(),
+            "peer",
+            &config.listen,
+            &config.connect,
+        )
+        .map_err(BridgeError::Setup)?;
+        let net = Net::open(zenoh, &keys, &sender, &queued_queries).map_err(BridgeError::Setup)?;
+        let tick_pending = Arc::new(AtomicBool::new(false));
+        let ticker_stop = Arc::new(AtomicBool::new(false));
+        let ticker = server::spawn_ticker(
+            &names,
+            sender,
+            Arc::clone(&tick_pending),
+            Arc::clone(&ticker_stop),
+        )
+        .map_err(|error| BridgeError::Setup(format!("cannot start a thread: {error}")))?;
+        let bridge_id = ClientId::from_u128(node.id().value());
+        let now = Instant::now();
+        let policy = Policy::new(config.remotes.clone(), config.max_delay);
+        tracing::info!(
+            server = %config.server,
+            listen = ?config.listen,
+            connect = ?config.connect,
+            zid = %net.session.zid(),
+            remotes = config.remotes.len(),
+            "bridge up"
+        );
+        Ok(Self {
+            config,
+            keys,
+            names,
+            node,
+            bridge_id,
+            server: None,
+            next_open: now,
+            last_frame_at: now,
+            net,
+            events,
+            queued_queries,
+            tick_pending,
+            ticker_stop,
+            ticker: Some(ticker),
+            policy,
+            started: now,
+            info: None,
+            stats: None,
+            params: None,
+            frame: None,
+            next_frame_tick: 0,
+            next_json: now,
+            queue: VecDeque::new(),
+            in_flight: Vec::new(),
+            counters: Counters::default(),
+        })
+    }
+
+    /// The zenoh id of the bridge's session.
+    pub fn zid(&self) -> String {
+        self.net.session.zid().to_string()
+    }
+
+    /// Runs until SIGINT or SIGTERM (or `stop` is set), then stops every remote jog.
+    pub fn run(&mut self, stop: &AtomicBool) {
+        while !stop.load(Ordering::Relaxed) && self.node.wait(Duration::ZERO).is_ok() {
+            match self.events.recv_timeout(POLL) {
+                Ok(event) => self.handle(event),
+                Err(RecvTimeoutError::Timeout) => {}
+                Err(RecvTimeoutError::Disconnected) => break,
+            }
+            while let Ok(event) = self.events.try_recv() {
+                self.handle(event);
+            }
+            self.service();
+        }
+        self.shutdown();
+    }
+
+    fn handle(&mut self, event: Event) {
+        match event {
+            Event::Tick => self.tick_pending.store(false, Ordering::Release),
+            Event::Command(query) => {
+                self.queued_queries.fetch_sub(1, Ordering::AcqRel);
+                self.on_command(query);
+            }
+            Event::Read(read, query) => {
+                self.queued_queries.fetch_sub(1, Ordering::AcqRel);
+                self.on_read(read, &query);
+            }
+            Event::Remote { key, alive } => self.on_remote(&key, alive),
+        }
+    }
+
+    /// Everything that does not wait for an event: the server's samples, publishing,
+    /// sending queued commands and passing replies back.
+    fn service(&mut self) {
+        let now = Instant::now();
+        if self.server.is_none() && now >= self.next_open {
+            self.next_open = now + REOPEN;
+            match ServerPorts::open(&self.node, &self.names) {
+                Ok(ports) => {
+                    tracing::info!(server = %self.config.server, "motiond found");
+                    self.server = Some(ports);
+                    self.last_frame_at = now;
+                }
+                Err(why) => tracing::debug!(%why, "motiond not there yet"),
+            }
+        }
+        self.take_samples(now);
+        self.publish_json(now);
+        self.pump();
+        self.collect_replies(now);
+    }
+
+    fn take_samples(&mut self, now: Instant) {
+        let Some(ports) = self.server.as_ref() else {
+            return;
+        };
+        let mut failure = None;
+        let mut infos = Vec::new();
+        let mut stats = None;
+        let mut params = None;
+        if let Err(error) = server::drain(&ports.info, |value, origin| {
+            infos.push(Cached::new(value, origin));
+        }) {
+            failure = Some(error);
+        }
+        if let Err(error) = server::drain(&ports.stats, |value, origin| {
+            stats = Some(Cached::new(value, origin));
+        }) {
+            failure = Some(error);
+        }
+        if let Some(subscriber) = ports.params.as_ref()
+            && let Err(error) = server::drain(subscriber, |value, origin| {
+                params = Some(Cached::new(value, origin));
+            })
+        {
+            failure = Some(error);
+        }
+        for info in infos {
+            self.on_info(info);
+        }
+        if let Some(stats) = stats {
+            if let Err(error) = self
+                .net
+                .stats
+                .put(stats.bytes.clone())
+                .attachment(Origin(stats.origin).encode())
+                .wait()
+            {
+                tracing::warn!(%error, "cannot publish stats");
+            }
+            self.stats = Some(stats);
+        }
+        if params.is_some() {
+            self.params = params;
+        }
+        if let Err(error) = self.take_frames(now) {
+            failure = Some(error);
+        }
+        if failure.is_some() || now.duration_since(self.last_frame_at) > SILENCE {
+            tracing::warn!(
+                server = %self.config.server,
+                why = failure.as_deref().unwrap_or("no frame for a second"),
+                "motiond gone; looking for it again"
+            );
+            self.drop_server();
+        }
+    }
+
+    fn on_info(&mut self, info: Cached<ServerInfo>) {
+        if let Some(old) = &self.info
+            && old.origin != info.origin
+        {
+            tracing::info!("motiond restarted: remote claims and jogs ended with it");
+            self.policy.server_restarted();
+            self.next_frame_tick = 0;
+        }
+        if let Err(error) = self
+            .net
+            .info
+            .put(info.bytes.clone())
+            .attachment(Origin(info.origin).encode())
+            .wait()
+        {
+            tracing::warn!(%error, "cannot publish the server description");
+        }
+        self.info = Some(info);
+    }
+
+    /// Frames since the last look: every `tick_hz / frame_rate`-th published.
+    fn take_frames(&mut self, now: Instant) -> Result<(), String> {
+        let Some(ports) = self.server.as_ref() else {
+            return Ok(());
+        };
+        let tick_hz = self.info.as_ref().map_or(1000, |info| info.value.tick_hz);
+        let decimation =
+            ((f64::from(tick_hz.max(1)) / self.config.frame_rate).round() as u64).max(1);
+        let mut newest: Option<(MotionFrame, u128)> = None;
+        let mut next_tick = self.next_frame_tick;
+        let publisher = &self.net.frame;
+        let mut published = 0;
+        let mut restarted = false;
+        server::drain(&ports.frame, |frame, origin| {
+            if let Some((last, _)) = &newest
+                && frame.tick < last.tick
+            {
+                restarted = true;
+                next_tick = 0;
+            }
+            if frame.tick >= next_tick {
+                next_tick = frame.tick + decimation;
+                published += 1;
+                if let Err(error) = publisher
+                    .put(wire::encode(frame))
+                    .attachment(Origin(origin).encode())
+                    .wait()
+                {
+                    tracing::warn!(%error, "cannot publish a frame");
+                }
+            }
+            newest = Some((*frame, origin));
+        })?;
+        if let Some((frame, origin)) = newest {
+            if self
+                .frame
+                .as_ref()
+                .is_some_and(|(last, _)| frame.tick < last.tick)
+            {
+                restarted = true;
+                // The first frames of the new server: publish from the next one due.
+                next_tick = frame.tick + 1;
+            }
+            self.last_frame_at = now;
+            self.policy.reconcile(&frame, self.bridge_id);
+            match self.frame.as_mut() {
+                Some((boxed, node)) => {
+                    **boxed = frame;
+                    *node = origin;
+                }
+                None => self.frame = Some((Box::new(frame), origin)),
+            }
+        }
+        if restarted {
+            self.policy.server_restarted();
+        }
+        self.next_frame_tick = next_tick;
+        self.counters.frames += published;
+        Ok(())
+    }
+
+    fn publish_json(&mut self, now: Instant) {
+        if now < self.next_json {
+            return;
+        }
+        let period = Duration::from_secs_f64(1.0 / self.config.json_rate);
+        self.next_json = (self.next_json + period).max(now);
+        let (Some(info), Some((frame, _))) = (&self.info, &self.frame) else {
+            return;
+        };
+        let state = crate::json::state(&info.value, frame, &self.policy);
+        match serde_json::to_vec(&state) {
+            Ok(bytes) => {
+                if let Err(error) = self.net.json.put(bytes).wait() {
+                    tracing::warn!(%error, "cannot publish the JSON state");
+                }
+            }
+            Err(error) => tracing::warn!(%error, "cannot write the JSON state"),
+        }
+    }
+
+    /// Forgets the server's ports; what waited for it is answered `no-server`.
+    fn drop_server(&mut self) {
+        for flight in std::mem::take(&mut self.in_flight) {
+            refuse(
+                flight.job.query.as_ref(),
+                Refusal::NoServer,
+                "motiond went away before it answered",
+            );
+        }
+        for job in std::mem::take(&mut self.queue) {
+            refuse(
+                job.query.as_ref(),
+                Refusal::NoServer,
+                "motiond went away before the request was sent",
+            );
+        }
+        self.server = None;
+        self.next_open = Instant::now() + REOPEN;
+    }
+
+    fn latest_tick(&self) -> u64 {
+        self.frame.as_ref().map_or(0, |(frame, _)| frame.tick)
+    }
+
+    fn server_node(&self) -> u128 {
+        self.info.as_ref().map_or(0, |info| info.origin)
+    }
+
+    fn on_command(&mut self, query: Query) {
+        let key = query.key_expr().as_str().to_owned();
+        let Some(identity) = self.keys.identity_of(&key).map(str::to_owned) else {
+            refuse(
+                Some(&query),
+                Refusal::BadRequest,
+                "not a command key of this bridge",
+            );
+            return;
+        };
+        let request = match query.payload().map(|bytes| bytes.to_bytes()) {
+            Some(bytes) => wire::decode::<CommandRequest>(&bytes),
+            None => {
+                refuse(
+                    Some(&query),
+                    Refusal::BadRequest,
+                    "a command needs a CommandRequest",
+                );
+                return;
+            }
+        };
+        let request = match request {
+            Ok(request) => request,
+            Err(error) => {
+                refuse(Some(&query), Refusal::BadRequest, &error.to_string());
+                return;
+            }
+        };
+        let Some(meta) = query
+            .attachment()
+            .and_then(|bytes| RequestMeta::decode(&bytes.to_bytes()))
+        else {
+            refuse(
+                Some(&query),
+                Refusal::BadRequest,
+                "a command needs its 25-byte attachment (session and send time)",
+            );
+            return;
+        };
+        let remote = Remote {
+            identity,
+            session: meta.session,
+        };
+        let deadman = self.info.as_ref().map_or(Duration::ZERO, |info| {
+            Duration::from_millis(u64::from(info.value.command_timeout_ms))
+        });
+        let now = self.started.elapsed();
+        match self.policy.admit(now, &remote, meta, &request, deadman) {
+            Verdict::Forward(forwarded) => {
+                if self.server.is_none() {
+                    refuse(
+                        Some(&query),
+                        Refusal::NoServer,
+                        &format!(
+                            "motiond `{}` is not running behind this bridge",
+                            self.config.server
+                        ),
+                    );
+                } else if self.queue.len() >= MAX_QUEUED {
+                    refuse(
+                        Some(&query),
+                        Refusal::Busy,
+                        "too many commands wait for the server",
+                    );
+                } else {
+                    self.counters.forwarded += 1;
+                    self.queue.push_back(Job {
+                        query: Some(query),
+                        remote: Some(remote),
+                        request: forwarded,
+                    });
+                }
+            }
+            Verdict::Answer(reason) => {
+                let reply = CommandReply::to(&request, reason, self.latest_tick());
+                answer(&query, &reply, self.server_node());
+            }
+            Verdict::Refuse(refusal, text) => {
+                self.counters.refused += 1;
+                tracing::info!(remote = %remote.identity, %refusal, %text, "refused");
+                refuse(Some(&query), refusal, &text);
+            }
+        }
+    }
+
+    fn on_read(&self, read: Read, query: &Query) {
+        let cached = match read {
+            Read::Info => self.info.as_ref().map(|c| (c.bytes.clone(), c.origin)),
+            Read::Stats => self.stats.as_ref().map(|c| (c.bytes.clone(), c.origin)),
+            Read::Params => self.params.as_ref().map(|c| (c.bytes.clone(), c.origin)),
+            Read::Frame => self
+                .frame
+                .as_ref()
+                .map(|(frame, origin)| (wire::encode(&**frame), *origin)),
+        };
+        match cached {
+            Some((bytes, origin)) => {
+                if let Err(error) = query
+                    .reply(query.key_expr().clone(), bytes)
+                    .attachment(Origin(origin).encode())
+                    .wait()
+                {
+                    tracing::debug!(%error, "cannot answer a read");
+                }
+            }
+            None => refuse(
+                Some(query),
+                Refusal::NoServer,
+                &format!(
+                    "motiond `{}` has published no {} to this bridge (not running?)",
+                    self.config.server,
+                    match read {
+                        Read::Info => "description",
+                        Read::Stats => "statistics",
+                        Read::Params => "machine parameters",
+                        Read::Frame => "frame",
+                    }
+                ),
+            ),
+        }
+    }
+
+    fn on_remote(&mut self, key: &str, alive: bool) {
+        let Some((identity, session)) = self.keys.remote_of(key) else {
+            return;
+        };
+        if alive {
+            tracing::info!(%identity, %session, "remote client connected");
+            return;
+        }
+        let requests = self.policy.session_gone(session);
+        tracing::info!(
+            %identity,
+            %session,
+            stops_and_releases = requests.len(),
+            "remote client gone"
+        );
+        for request in requests {
+            self.queue.push_back(Job {
+                query: None,
+                remote: None,
+                request,
+            });
+        }
+    }
+
+    /// Sends queued commands while the server has request slots for the bridge.
+    fn pump(&mut self) {
+        let Some(ports) = self.server.as_ref() else {
+            return;
+        };
+        let timeout = self.config.reply_timeout;
+        while self.in_flight.len() < ports.max_in_flight {
+            let Some(job) = self.queue.pop_front() else {
+                break;
+            };
+            match ports.send(job.request) {
+                Ok(Some(pending)) => self.in_flight.push(InFlight {
+                    job,
+                    pending,
+                    deadline: Instant::now() + timeout,
+                }),
+                Ok(None) => refuse(
+                    job.query.as_ref(),
+                    Refusal::NoServer,
+                    "no motiond serves the command service",
+                ),
+                Err(why) => refuse(job.query.as_ref(), Refusal::NoServer, &why),
+            }
+        }
+    }
+
+    fn collect_replies(&mut self, now: Instant) {
+        let mut index = 0;
+        while index < self.in_flight.len() {
+            let flight = &self.in_flight[index];
+            let outcome = server::take_reply(&flight.pending);
+            let done = match outcome {
+                Ok(Some((reply, node))) => {
+                    if let Some(remote) = &flight.job.remote {
+                        self.policy.on_reply(remote, &flight.job.request, &reply);
+                    }
+                    if let Some(query) = &flight.job.query {
+                        answer(query, &reply, node);
+                    } else if reply.result().is_err() {
+                        tracing::warn!(?reply, "the bridge's own request was refused");
+                    }
+                    true
+                }
+                Ok(None) if now >= flight.deadline => {
+                    refuse(
+                        flight.job.query.as_ref(),
+                        Refusal::NoReply,
+                        &format!(
+                            "motiond did not answer within {:?}",
+                            self.config.reply_timeout
+                        ),
+                    );
+                    true
+                }
+                Ok(None) => false,
+                Err(why) => {
+                    refuse(flight.job.query.as_ref(), Refusal::NoServer, &why);
+                    true
+                }
+            };
+            if done {
+                self.in_flight.swap_remove(index);
+            } else {
+                index += 1;
+            }
+        }
+    }
+
+    /// Stops every remote jog and waits a little for the server to take the stops.
+    fn shutdown(&mut self) {
+        let stops = self.policy.shutdown();
+        if !stops.is_empty() {
+            tracing::info!(axes = stops.len(), "stopping remote jogs before exiting");
+        }
+        for request in stops {
+            self.queue.push_back(Job {
+                query: None,
+                remote: None,
+                request,
+            });
+        }
+        let until = Instant::now() + SHUTDOWN_WAIT;
+        while (!self.queue.is_empty() || !self.in_flight.is_empty()) && Instant::now() < until {
+            self.pump();
+            self.collect_replies(Instant::now());
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        tracing::info!(
+            forwarded = self.counters.forwarded,
+            refused = self.counters.refused,
+            frames = self.counters.frames,
+            "bridge down"
+        );
+    }
+}
+
+impl Drop for Bridge {
+    fn drop(&mut self) {
+        self.ticker_stop.store(true, Ordering::Relaxed);
+        if let Some(ticker) = self.ticker.take() {
+            let _ = ticker.join();
+        }
+    }
+}
+
+fn answer(query: &Query, reply: &CommandReply, origin: u128) {
+    if let Err(error) = query
+        .reply(query.key_expr().clone(), wire::encode(reply))
+        .attachment(Origin(origin).encode())
+        .wait()
+    {
+        tracing::debug!(%error, "cannot pass a reply back");
+    }
+}
+
+pub(crate) fn refuse(query: Option<&Query>, refusal: Refusal, text: &str) {
+    if let Some(query) = query
+        && let Err(error) = query.reply_err(refusal.reply_text(text)).wait()
+    {
+        tracing::debug!(%error, "cannot send a refusal");
+    }
+}

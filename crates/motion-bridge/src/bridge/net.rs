@@ -1,0 +1,182 @@
+//! The bridge's side of the network: one zenoh session (peer mode, listening), its
+//! publishers, queryables and the liveliness of remote clients. Queries and liveliness
+//! changes arrive on zenoh's threads and are handed to the bridge's loop as [`Event`]s.
+
+use std::path::Path;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::mpsc::Sender;
+
+use zenoh::Wait as _;
+use zenoh::liveliness::LivelinessToken;
+use zenoh::pubsub::{Publisher, Subscriber};
+use zenoh::qos::CongestionControl;
+use zenoh::query::Queryable;
+use zenoh::sample::SampleKind;
+
+use super::{Event, MAX_WAITING_QUERIES, Read, refuse};
+use crate::keys::{Keys, Refusal};
+
+/// Hands `event` (a query) to the loop, unless too many queries wait already.
+fn hand_over(events: &Sender<Event>, waiting: &AtomicUsize, event: Event) {
+    if waiting.fetch_add(1, Ordering::AcqRel) >= MAX_WAITING_QUERIES {
+        waiting.fetch_sub(1, Ordering::AcqRel);
+        match event {
+            Event::Command(query) | Event::Read(_, query) => {
+                refuse(
+                    Some(&query),
+                    Refusal::Busy,
+                    "the bridge is overloaded: retry",
+                );
+            }
+            _ => {}
+        }
+        return;
+    }
+    if events.send(event).is_err() {
+        waiting.fetch_sub(1, Ordering::AcqRel);
+    }
+}
+
+/// zenoh's config for a bridge: the file `base` (TLS, authentication, access control…) if
+/// given, with `mode`, `listen` and `connect` set over it and multicast scouting off (peers
+/// are named, nothing is sent to multicast groups).
+pub fn zenoh_config(
+    base: Option<&Path>,
+    mode: &str,
+    listen: &[String],
+    connect: &[String],
+) -> Result<zenoh::Config, String> {
+    let mut config = match base {
+        Some(path) => zenoh::Config::from_file(path)
+            .map_err(|error| format!("zenoh config {}: {error}", path.display()))?,
+        None => zenoh::Config::default(),
+    };
+    let list = |items: &[String]| {
+        serde_json::to_string(items).map_err(|error| format!("endpoints: {error}"))
+    };
+    let mut set = |key: &str, value: String| {
+        config
+            .insert_json5(key, &value)
+            .map_err(|error| format!("zenoh config {key} = {value}: {error}"))
+    };
+    set("mode", format!("\"{mode}\""))?;
+    set("scouting/multicast/enabled", "false".to_owned())?;
+    if !listen.is_empty() {
+        set("listen/endpoints", list(listen)?)?;
+    }
+    if !connect.is_empty() {
+        set("connect/endpoints", list(connect)?)?;
+    }
+    Ok(config)
+}
+
+/// The bridge's zenoh session and everything declared on it.
+pub(crate) struct Net {
+    pub(crate) session: zenoh::Session,
+    pub(crate) frame: Publisher<'static>,
+    pub(crate) info: Publisher<'static>,
+    pub(crate) stats: Publisher<'static>,
+    pub(crate) json: Publisher<'static>,
+    _queryables: Vec<Queryable<()>>,
+    _remotes: Subscriber<()>,
+    _token: LivelinessToken,
+}
+
+impl core::fmt::Debug for Net {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("Net")
+            .field("zid", &self.session.zid())
+            .finish_non_exhaustive()
+    }
+}
+
+impl Net {
+    /// Opens the session with `config` and declares the bridge's keys; queries and remote
+    /// liveliness go to `events` (`waiting` counts the queries in it).
+    pub(crate) fn open(
+        config: zenoh::Config,
+        keys: &Keys,
+        events: &Sender<Event>,
+        waiting: &Arc<AtomicUsize>,
+    ) -> Result<Self, String> {
+        let session = zenoh::open(config)
+            .wait()
+            .map_err(|error| format!("cannot open the zenoh session: {error}"))?;
+        let publisher = |key: String, droppable: bool| {
+            session
+                .declare_publisher(key.clone())
+                .congestion_control(if droppable {
+                    CongestionControl::Drop
+                } else {
+                    CongestionControl::Block
+                })
+                .express(true)
+                .wait()
+                .map_err(|error| format!("cannot declare a publisher on {key}: {error}"))
+        };
+        let frame = publisher(keys.frame(), true)?;
+        let json = publisher(keys.state_json(), true)?;
+        let info = publisher(keys.info(), false)?;
+        let stats = publisher(keys.stats(), false)?;
+
+        let mut queryables = Vec::new();
+        let commands = events.clone();
+        let count = Arc::clone(waiting);
+        queryables.push(
+            session
+                .declare_queryable(keys.command_any())
+                .callback(move |query| {
+                    hand_over(&commands, &count, Event::Command(query));
+                })
+                .wait()
+                .map_err(|error| format!("cannot declare the command queryable: {error}"))?,
+        );
+        for (key, read) in [
+            (keys.info(), Read::Info),
+            (keys.stats(), Read::Stats),
+            (keys.params(), Read::Params),
+            (keys.frame(), Read::Frame),
+        ] {
+            let reads = events.clone();
+            let count = Arc::clone(waiting);
+            queryables.push(
+                session
+                    .declare_queryable(key.clone())
+                    .callback(move |query| {
+                        hand_over(&reads, &count, Event::Read(read, query));
+                    })
+                    .wait()
+                    .map_err(|error| format!("cannot declare a queryable on {key}: {error}"))?,
+            );
+        }
+        let remotes_events = events.clone();
+        let remotes = session
+            .liveliness()
+            .declare_subscriber(keys.remote_tokens())
+            .history(true)
+            .callback(move |sample| {
+                let _ = remotes_events.send(Event::Remote {
+                    key: sample.key_expr().as_str().to_owned(),
+                    alive: sample.kind() == SampleKind::Put,
+                });
+            })
+            .wait()
+            .map_err(|error| format!("cannot watch remote clients: {error}"))?;
+        let token = session
+            .liveliness()
+            .declare_token(keys.bridge_token())
+            .wait()
+            .map_err(|error| format!("cannot declare the bridge's liveliness: {error}"))?;
+        Ok(Self {
+            session,
+            frame,
+            info,
+            stats,
+            json,
+            _queryables: queryables,
+            _remotes: remotes,
+            _token: token,
+        })
+    }
+}

@@ -1,0 +1,475 @@
+//! What the bridge lets through, decided without I/O (time is an argument): the allow-list
+//! of each remote identity, its rate limit, the lateness check, and claims per remote.
+//!
+//! The server sees the bridge's iceoryx2 node as the sender of every forwarded request, so
+//! to the server every claim a remote takes is the bridge's. The bridge therefore keeps its
+//! own table of which remote session holds what, and answers for the server where remotes
+//! would otherwise share one identity: a claim or a goal on a target another remote holds is
+//! refused with `ClaimedByOther`, a release of a claim the remote does not hold with
+//! `NotClaimed` — the same reasons the server gives between local clients. Stop, e-stop and
+//! reset are never held back by claims (as in the engine).
+
+use core::time::Duration;
+use std::collections::HashMap;
+
+use motion_ipc::{
+    AxisFlags, ClientId, CommandKind, CommandReply, CommandRequest, MotionFrame, Reason,
+    SCHEMA_VERSION, SignalFlags, Target,
+};
+
+use crate::keys::{Refusal, RequestMeta, SessionId};
+
+/// A set of command kinds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct KindSet(u32);
+
+impl KindSet {
+    /// No kind.
+    pub const NONE: Self = Self(0);
+
+    /// Every kind.
+    pub fn all() -> Self {
+        CommandKind::ALL.into_iter().fold(Self::NONE, Self::with)
+    }
+
+    /// The set with `kind` added.
+    #[must_use]
+    pub const fn with(self, kind: CommandKind) -> Self {
+        Self(self.0 | (1 << kind as u32))
+    }
+
+    /// Every kind of either set.
+    #[must_use]
+    pub const fn union(self, other: Self) -> Self {
+        Self(self.0 | other.0)
+    }
+
+    /// Whether `kind` is in the set.
+    pub const fn contains(self, kind: CommandKind) -> bool {
+        self.0 & (1 << kind as u32) != 0
+    }
+
+    /// The kinds in the set, by name.
+    pub fn names(self) -> Vec<&'static str> {
+        CommandKind::ALL
+            .into_iter()
+            .filter(|kind| self.contains(*kind))
+            .map(CommandKind::name)
+            .collect()
+    }
+
+    /// The kinds a name of the config's `allow` list stands for: a kind's own name
+    /// (`ramp-position`, `e-stop`, …) or a group: `estop` (= `e-stop`), `move` (`position`,
+    /// `ramp-position`), `jog` (`velocity`, `ramp-velocity`), `io` (`set-output`), `all`.
+    pub fn from_name(name: &str) -> Option<Self> {
+        use CommandKind::*;
+        let set = |kinds: &[CommandKind]| kinds.iter().fold(Self::NONE, |set, k| set.with(*k));
+        Some(match name {
+            "all" | "*" => Self::all(),
+            "estop" => set(&[EStop]),
+            "move" => set(&[Position, RampPosition]),
+            "jog" => set(&[Velocity, RampVelocity]),
+            "io" => set(&[SetOutput]),
+            other => set(&[CommandKind::ALL.into_iter().find(|k| k.name() == other)?]),
+        })
+    }
+
+    /// Every name [`KindSet::from_name`] takes, for messages.
+    pub fn known_names() -> String {
+        let mut names: Vec<&str> = CommandKind::ALL
+            .into_iter()
+            .map(CommandKind::name)
+            .collect();
+        names.extend(["estop", "move", "jog", "io", "all"]);
+        names.join(", ")
+    }
+}
+
+/// Kinds that only ever make a machine safer (stop, e-stop): never refused as late or over
+/// the rate limit (they still need the allow-list), never held back by claims. `off` is not
+/// one of them: a de-energised vertical axis falls.
+pub const fn is_safety(kind: CommandKind) -> bool {
+    matches!(kind, CommandKind::Stop | CommandKind::EStop)
+}
+
+/// Kinds whose goal the server's deadman ends unless renewed.
+pub const fn is_deadman(kind: CommandKind) -> bool {
+    matches!(
+        kind,
+        CommandKind::Velocity | CommandKind::RampVelocity | CommandKind::Power
+    )
+}
+
+/// What one remote identity may do (`[[remote]]` of the config). The rate limit is the
+/// identity's, shared by all its client sessions.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RemoteRule {
+    /// The identity (the last chunk of the command key), or `*` for any identity without a
+    /// rule of its own.
+    pub identity: String,
+    /// The kinds it may send.
+    pub allow: KindSet,
+    /// Sustained requests per second.
+    pub rate: f64,
+    /// Requests it may send at once above the sustained rate.
+    pub burst: f64,
+}
+
+/// Default `rate`: requests per second a remote may sustain.
+pub const DEFAULT_RATE: f64 = 200.0;
+/// Default `burst`.
+pub const DEFAULT_BURST: f64 = 100.0;
+
+/// How fast the lateness floor of a session may rise, s per s: room for clock drift
+/// between the hosts (1000 ppm, far above what NTP lets a clock drift).
+const FLOOR_CREEP: f64 = 1e-3;
+
+/// Who sent a request: an identity and one client session of it.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub struct Remote {
+    /// The identity (the command key's last chunk).
+    pub identity: String,
+    /// The client's session.
+    pub session: SessionId,
+}
+
+/// What to do with a request.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Verdict {
+    /// Send this (the request with its `client` cleared: the server takes the bridge's
+    /// node) to the server and pass its reply back.
+    Forward(CommandRequest),
+    /// Answer for the server with this reason (claims between remotes, schema).
+    Answer(Reason),
+    /// Refuse as the bridge, with a message.
+    Refuse(Refusal, String),
+}
+
+/// What the bridge learnt of one remote client session's clock.
+#[derive(Debug)]
+struct SessionState {
+    /// Smallest (bridge time − send time) seen, rising by at most `FLOOR_CREEP`, and when.
+    floor: Option<(i128, Duration)>,
+}
+
+/// The token bucket of one remote identity.
+#[derive(Debug)]
+struct Bucket {
+    tokens: f64,
+    refilled: Duration,
+}
+
+/// Sessions remembered at most; past it, sessions silent for [`SESSION_IDLE`] are
+/// forgotten, and a new one is refused while none is (a flood of made-up session ids never
+/// grows the bridge's memory).
+pub const MAX_SESSIONS: usize = 1024;
+/// A session not heard from for this long may be forgotten to make room.
+const SESSION_IDLE: Duration = Duration::from_secs(60);
+
+/// The bridge's policy: rules, and what it learnt of every remote session.
+#[derive(Debug)]
+pub struct Policy {
+    rules: Vec<RemoteRule>,
+    max_delay: Option<Duration>,
+    sessions: HashMap<SessionId, SessionState>,
+    buckets: HashMap<String, Bucket>,
+    claims: HashMap<(Target, u32), Remote>,
+    /// Per axis: the remote whose deadman goal (jog, power) runs there.
+    deadman: HashMap<u32, Remote>,
+}
+
+impl Policy {
+    /// A policy of `rules`, refusing non-safety requests older than `max_delay` (`None`:
+    /// the server's deadman, given to [`Policy::admit`]).
+    pub fn new(rules: Vec<RemoteRule>, max_delay: Option<Duration>) -> Self {
+        Self {
+            rules,
+            max_delay,
+            sessions: HashMap::new(),
+            buckets: HashMap::new(),
+            claims: HashMap::new(),
+            deadman: HashMap::new(),
+        }
+    }
+
+    /// The rule of `identity`: its own, else the `*` rule.
+    pub fn rule(&self, identity: &str) -> Option<&RemoteRule> {
+        self.rules
+            .iter()
+            .find(|rule| rule.identity == identity)
+            .or_else(|| self.rules.iter().find(|rule| rule.identity == "*"))
+    }
+
+    /// Judges `request` from `remote`, received at `now` (the bridge's monotonic clock)
+    /// with `meta`. `deadman` is the server's `command_timeout_ms` (the lateness bound when
+    /// the config sets none; zero: no bound).
+    pub fn admit(
+        &mut self,
+        now: Duration,
+        remote: &Remote,
+        meta: RequestMeta,
+        request: &CommandRequest,
+        deadman: Duration,
+    ) -> Verdict {
+        if request.schema_version != SCHEMA_VERSION {
+            return Verdict::Answer(Reason::SchemaMismatch);
+        }
+        let Ok(kind) = request.kind() else {
+            return Verdict::Answer(Reason::UnknownKind);
+        };
+        let Ok(target) = request.target() else {
+            return Verdict::Answer(Reason::UnknownTarget);
+        };
+        let Some(rule) = self.rule(&remote.identity) else {
+            return Verdict::Refuse(
+                Refusal::NotAllowed,
+                format!(
+                    "the bridge has no [[remote]] entry for identity `{}` (nor one for `*`): \
+                     it may not command",
+                    remote.identity
+                ),
+            );
+        };
+        if !rule.allow.contains(kind) {
+            let allowed = rule.allow.names();
+            return Verdict::Refuse(
+                Refusal::NotAllowed,
+                format!(
+                    "`{}` is not allowed for remote `{}` by the bridge's config (allowed: {})",
+                    kind.name(),
+                    remote.identity,
+                    if allowed.is_empty() {
+                        "nothing".to_owned()
+                    } else {
+                        allowed.join(", ")
+                    }
+                ),
+            );
+        }
+        let (rate, burst) = (rule.rate, rule.burst);
+        let max_delay = self.max_delay.unwrap_or(deadman);
+        if !self.sessions.contains_key(&remote.session) && !self.make_room(now) {
+            return Verdict::Refuse(
+                Refusal::Busy,
+                format!("the bridge follows {MAX_SESSIONS} remote sessions already"),
+            );
+        }
+        let session = self
+            .sessions
+            .entry(remote.session)
+            .or_insert(SessionState { floor: None });
+        let lateness = session.lateness(now, meta.sent_ns);
+        if !is_safety(kind) && !max_delay.is_zero() && lateness > max_delay {
+            return Verdict::Refuse(
+                Refusal::Late,
+                format!(
+                    "{} arrived {:?} later than this session's requests usually take (limit \
+                     {max_delay:?}): held up in the network, not applied",
+                    kind.name(),
+                    lateness
+                ),
+            );
+        }
+        let bucket = self
+            .buckets
+            .entry(remote.identity.clone())
+            .or_insert(Bucket {
+                tokens: burst,
+                refilled: now,
+            });
+        if !bucket.take(now, rate, burst) && !is_safety(kind) {
+            return Verdict::Refuse(
+                Refusal::RateLimited,
+                format!(
+                    "remote `{}` sent more than {rate} requests/s (burst {burst})",
+                    remote.identity
+                ),
+            );
+        }
+        if let Some(reason) = self.claim_check(remote, kind, target, request.axis) {
+            return Verdict::Answer(reason);
+        }
+        let mut forwarded = *request;
+        forwarded.client = ClientId::NONE;
+        Verdict::Forward(forwarded)
+    }
+
+    /// Whether a new session fits, forgetting idle ones if needed.
+    fn make_room(&mut self, now: Duration) -> bool {
+        if self.sessions.len() < MAX_SESSIONS {
+            return true;
+        }
+        self.sessions.retain(|_, state| {
+            state
+                .floor
+                .is_some_and(|(_, seen)| now.saturating_sub(seen) < SESSION_IDLE)
+        });
+        self.sessions.len() < MAX_SESSIONS
+    }
+
+    /// The claim rule between remotes, as the engine applies it between local clients.
+    fn claim_check(
+        &self,
+        remote: &Remote,
+        kind: CommandKind,
+        target: Target,
+        index: u32,
+    ) -> Option<Reason> {
+        let held_by_other = |target: Target, index: u32| {
+            self.claims
+                .get(&(target, index))
+                .is_some_and(|holder| holder != remote)
+        };
+        match kind {
+            CommandKind::Stop | CommandKind::EStop | CommandKind::Reset => None,
+            CommandKind::Release => {
+                (self.claims.get(&(target, index)) != Some(remote)).then_some(Reason::NotClaimed)
+            }
+            CommandKind::Off if index == CommandRequest::ALL_AXES => self
+                .claims
+                .iter()
+                .any(|((t, _), holder)| *t == Target::Axis && holder != remote)
+                .then_some(Reason::ClaimedByOther),
+            _ => held_by_other(target, index).then_some(Reason::ClaimedByOther),
+        }
+    }
+
+    /// Notes the server's reply to a request `remote` had forwarded.
+    pub fn on_reply(&mut self, remote: &Remote, request: &CommandRequest, reply: &CommandReply) {
+        if reply.result().is_err() {
+            return;
+        }
+        let (Ok(kind), Ok(target)) = (request.kind(), request.target()) else {
+            return;
+        };
+        let key = (target, request.axis);
+        match kind {
+            CommandKind::Claim => {
+                self.claims.insert(key, remote.clone());
+            }
+            CommandKind::Release => {
+                self.claims.remove(&key);
+            }
+            CommandKind::EStop => self.deadman.clear(),
+            _ if target == Target::Signal => {}
+            _ if request.axis == CommandRequest::ALL_AXES => self.deadman.clear(),
+            kind if is_deadman(kind) => {
+                self.deadman.insert(request.axis, remote.clone());
+            }
+            _ => {
+                self.deadman.remove(&request.axis);
+            }
+        }
+    }
+
+    /// A remote session ended (its liveliness token went away): what the bridge sends for
+    /// it — a stop of every axis whose deadman goal it started and nobody replaced, and a
+    /// release of every claim it held. Returns them as requests (client zero).
+    pub fn session_gone(&mut self, session: SessionId) -> Vec<CommandRequest> {
+        self.sessions.remove(&session);
+        let mut requests = Vec::new();
+        let mut axes: Vec<u32> = self
+            .deadman
+            .iter()
+            .filter(|(_, holder)| holder.session == session)
+            .map(|(axis, _)| *axis)
+            .collect();
+        axes.sort_unstable();
+        for axis in axes {
+            self.deadman.remove(&axis);
+            requests.push(CommandRequest::new(
+                ClientId::NONE,
+                0,
+                axis,
+                CommandKind::Stop,
+            ));
+        }
+        let mut held: Vec<(Target, u32)> = self
+            .claims
+            .iter()
+            .filter(|(_, holder)| holder.session == session)
+            .map(|(key, _)| *key)
+            .collect();
+        held.sort_unstable_by_key(|(target, index)| (*target as u32, *index));
+        for (target, index) in held {
+            self.claims.remove(&(target, index));
+            let mut release = CommandRequest::new(ClientId::NONE, 0, index, CommandKind::Release);
+            release.target = target as u32;
+            requests.push(release);
+        }
+        requests
+    }
+
+    /// The bridge is stopping: a stop of every axis running a remote's deadman goal (the
+    /// claims die with the bridge's node on the server anyway).
+    pub fn shutdown(&mut self) -> Vec<CommandRequest> {
+        let mut axes: Vec<u32> = self.deadman.drain().map(|(axis, _)| axis).collect();
+        axes.sort_unstable();
+        self.sessions.clear();
+        self.claims.clear();
+        axes.into_iter()
+            .map(|axis| CommandRequest::new(ClientId::NONE, 0, axis, CommandKind::Stop))
+            .collect()
+    }
+
+    /// Forgets the claims the server no longer holds for the bridge (`bridge`: its node):
+    /// leases that ran out, claims voided by a restart.
+    pub fn reconcile(&mut self, frame: &MotionFrame, bridge: ClientId) {
+        self.claims.retain(|(target, index), _| {
+            let index = *index as usize;
+            match target {
+                Target::Axis => frame.axes().get(index).is_some_and(|axis| {
+                    axis.flags().contains(AxisFlags::CLAIMED) && axis.claimed_by == bridge
+                }),
+                Target::Signal => frame.signals().get(index).is_some_and(|signal| {
+                    signal.flags().contains(SignalFlags::CLAIMED) && signal.claimed_by == bridge
+                }),
+            }
+        });
+    }
+
+    /// The remote holding a claim on `target` `index` through this bridge.
+    pub fn holder(&self, target: Target, index: u32) -> Option<&Remote> {
+        self.claims.get(&(target, index))
+    }
+
+    /// Forgets every claim and deadman goal (the server restarted: they died with it).
+    pub fn server_restarted(&mut self) {
+        self.claims.clear();
+        self.deadman.clear();
+    }
+}
+
+impl SessionState {
+    /// How much later than its fastest request this one arrived.
+    fn lateness(&mut self, now: Duration, sent_ns: u64) -> Duration {
+        let offset = now.as_nanos() as i128 - i128::from(sent_ns);
+        let floor = match self.floor {
+            None => offset,
+            Some((floor, at)) => {
+                let creep = (now.saturating_sub(at).as_secs_f64() * FLOOR_CREEP * 1e9) as i128;
+                (floor + creep).min(offset)
+            }
+        };
+        self.floor = Some((floor, now));
+        Duration::from_nanos(u64::try_from(offset - floor).unwrap_or(u64::MAX))
+    }
+}
+
+impl Bucket {
+    /// Takes one token; false when the bucket is empty.
+    fn take(&mut self, now: Duration, rate: f64, burst: f64) -> bool {
+        let elapsed = now.saturating_sub(self.refilled).as_secs_f64();
+        self.tokens = (self.tokens + elapsed * rate).min(burst);
+        self.refilled = now;
+        if self.tokens >= 1.0 {
+            self.tokens -= 1.0;
+            true
+        } else {
+            false
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,267 @@
+//! The bridge's network contract as a peer in another language would see it: raw zenoh,
+//! bytes in the `motion-ipc` C layout, the attachments and the refusal texts of
+//! `motion_bridge::keys`.
+
+mod common;
+
+use core::time::Duration;
+use std::time::Instant;
+
+use common::{BridgeThread, DEADLINE, Result, fake};
+use motion_bridge::keys::{Keys, Origin, Refusal, RequestMeta, SessionId};
+use motion_bridge::wire;
+use motion_client::ipc::{
+    ClientId, CommandKind, CommandReply, CommandRequest, MotionFrame, Reason, ServerInfo,
+};
+use zenoh::Wait as _;
+
+const RULES: &str = r#"
+frame_rate = 50
+
+[[remote]]
+identity = "tool"
+allow = ["all"]
+
+[[remote]]
+identity = "slow"
+allow = ["all"]
+rate = 1
+burst = 2
+"#;
+
+/// zenoh's errors as the tests' errors.
+trait Z<T> {
+    fn z(self) -> Result<T>;
+}
+
+impl<T> Z<T> for zenoh::Result<T> {
+    fn z(self) -> Result<T> {
+        self.map_err(|error| error.to_string().into())
+    }
+}
+
+fn session(endpoint: &str) -> Result<zenoh::Session> {
+    let mut config = zenoh::Config::default();
+    config.insert_json5("mode", "\"client\"").z()?;
+    config
+        .insert_json5("scouting/multicast/enabled", "false")
+        .z()?;
+    config
+        .insert_json5("connect/endpoints", &format!("[\"{endpoint}\"]"))
+        .z()?;
+    zenoh::open(config).wait().z()
+}
+
+/// Sends `request` as `identity` with `meta` (none: no attachment); the reply's payload or
+/// the refusal's text.
+fn command(
+    session: &zenoh::Session,
+    keys: &Keys,
+    identity: &str,
+    request: &CommandRequest,
+    meta: Option<RequestMeta>,
+) -> Result<core::result::Result<(CommandReply, Origin), String>> {
+    let mut get = session
+        .get(keys.command(identity))
+        .payload(wire::encode(request))
+        .timeout(Duration::from_secs(5));
+    if let Some(meta) = meta {
+        get = get.attachment(meta.encode());
+    }
+    let replies = get.wait().z()?;
+    let reply = replies
+        .recv_timeout(DEADLINE)
+        .z()?
+        .ok_or("no reply from the bridge")?;
+    Ok(match reply.result() {
+        Ok(sample) => {
+            let origin = sample
+                .attachment()
+                .and_then(|bytes| Origin::decode(&bytes.to_bytes()))
+                .ok_or("a reply without its origin")?;
+            Ok((
+                wire::decode::<CommandReply>(&sample.payload().to_bytes())?,
+                origin,
+            ))
+        }
+        Err(error) => Err(error.payload().try_to_string()?.into_owned()),
+    })
+}
+
+#[test]
+fn frames_are_decimated_and_every_sample_says_which_server_wrote_it() -> Result {
+    let server = fake("wire-frames")?;
+    let bridge = BridgeThread::start(server.name(), RULES)?;
+    let keys = Keys::new(server.name())?;
+    let session = session(&bridge.endpoint)?;
+    let frames = session.declare_subscriber(keys.frame()).wait().z()?;
+    let info = session
+        .get(keys.info())
+        .timeout(DEADLINE)
+        .wait()
+        .z()?
+        .recv_timeout(DEADLINE)
+        .z()?
+        .ok_or("no description")?;
+    let info = info.result().map_err(|e| format!("{e:?}"))?;
+    let description = wire::decode::<ServerInfo>(&info.payload().to_bytes())?;
+    let server_node =
+        Origin::decode(&info.attachment().ok_or("no origin")?.to_bytes()).ok_or("bad origin")?;
+    assert_eq!(description.name(), server.name());
+    assert_ne!(server_node, Origin(0));
+
+    let mut ticks = Vec::new();
+    while ticks.len() < 12 {
+        let sample = frames.recv_timeout(DEADLINE).z()?.ok_or("no frame")?;
+        let bytes = sample.payload().to_bytes();
+        assert_eq!(bytes.len(), 13392, "the C layout of MotionFrame");
+        let frame = wire::decode::<MotionFrame>(&bytes)?;
+        assert_eq!(frame.axes().len(), 3);
+        let origin = Origin::decode(&sample.attachment().ok_or("no origin")?.to_bytes());
+        assert_eq!(origin, Some(server_node));
+        ticks.push(frame.tick);
+    }
+    // 500 Hz ticks at 50 frames/s: every 10th tick at most, never two from one window.
+    for pair in ticks.windows(2) {
+        assert!(pair[1] >= pair[0] + 10, "{ticks:?}");
+    }
+
+    let states = session.declare_subscriber(keys.state_json()).wait().z()?;
+    let sample = states.recv_timeout(DEADLINE).z()?.ok_or("no JSON state")?;
+    let state: serde_json::Value = serde_json::from_slice(&sample.payload().to_bytes())?;
+    assert_eq!(state["server"], server.name());
+    assert_eq!(state["axes"][2]["name"], "a");
+    assert_eq!(state["axes"][2]["unit"], "deg");
+    assert_eq!(state["devices"][1]["name"], "aux");
+    Ok(())
+}
+
+#[test]
+fn malformed_late_and_too_frequent_requests_are_refused_by_the_bridge() -> Result {
+    let server = fake("wire-refusals")?;
+    let bridge = BridgeThread::start(server.name(), RULES)?;
+    let keys = Keys::new(server.name())?;
+    let session = session(&bridge.endpoint)?;
+    // The remote's own clock, 10 s ahead of the test's start.
+    let start = Instant::now();
+    let clock = || start.elapsed() + Duration::from_secs(10);
+    let meta = |session_id: u128, sent: Duration| RequestMeta {
+        session: SessionId(session_id),
+        sent_ns: sent.as_nanos() as u64,
+    };
+    let stop = CommandRequest::new(ClientId::NONE, 1, 0, CommandKind::Stop);
+
+    // No attachment, a short payload.
+    let refused = command(&session, &keys, "tool", &stop, None)?.expect_err("refused");
+    assert_eq!(
+        Refusal::parse(&refused).map(|r| r.0),
+        Some(Refusal::BadRequest),
+        "{refused}"
+    );
+    let replies = session
+        .get(keys.command("tool"))
+        .payload(vec![1u8, 2, 3])
+        .attachment(meta(1, clock()).encode())
+        .wait()
+        .z()?;
+    let reply = replies.recv_timeout(DEADLINE).z()?.ok_or("no reply")?;
+    let text = reply
+        .result()
+        .err()
+        .ok_or("accepted garbage")?
+        .payload()
+        .try_to_string()?
+        .into_owned();
+    assert!(
+        text.starts_with("bad-request: ") && text.contains("3 bytes"),
+        "{text}"
+    );
+
+    // The bare command key is the identity `anonymous` (no rule here: not allowed).
+    let replies = session
+        .get(format!("motiond/{}/command", server.name()))
+        .payload(wire::encode(&stop))
+        .attachment(meta(1, clock()).encode())
+        .wait()
+        .z()?;
+    let reply = replies.recv_timeout(DEADLINE).z()?.ok_or("no reply")?;
+    let text = reply
+        .result()
+        .err()
+        .ok_or("anonymous was allowed")?
+        .payload()
+        .try_to_string()?
+        .into_owned();
+    assert!(
+        text.starts_with("not-allowed: ") && text.contains("`anonymous`"),
+        "{text}"
+    );
+
+    // A request on time is forwarded; the reply comes from the server, with its node.
+    let (reply, origin) = command(&session, &keys, "tool", &stop, Some(meta(7, clock())))?
+        .map_err(|text| format!("refused: {text}"))?;
+    assert_eq!(reply.result(), Ok(()));
+    assert_eq!((reply.sequence, reply.kind), (1, CommandKind::Stop as u32));
+    assert_ne!(origin, Origin(0));
+
+    // A renewal that says it was sent 2 s ago (the deadman is 250 ms) is not applied; a
+    // stop as late is.
+    let velocity = CommandRequest::new(ClientId::NONE, 2, 0, CommandKind::Velocity)
+        .with_values([1.0, 0.0, 0.0]);
+    let two_seconds_ago = clock() - Duration::from_secs(2);
+    // (The session's clock must have been seen on time first: sent "now" above.)
+    let late = command(
+        &session,
+        &keys,
+        "tool",
+        &velocity,
+        Some(meta(7, two_seconds_ago)),
+    )?
+    .expect_err("late");
+    assert!(late.starts_with("late: "), "{late}");
+    let (reply, _) = command(
+        &session,
+        &keys,
+        "tool",
+        &stop,
+        Some(meta(7, two_seconds_ago)),
+    )?
+    .map_err(|text| format!("refused: {text}"))?;
+    assert_eq!(reply.result(), Ok(()));
+    let velocities = server
+        .requests()
+        .iter()
+        .filter(|r| r.kind == CommandKind::Velocity as u32)
+        .count();
+    assert_eq!(velocities, 0);
+
+    // `slow` may send 2 at once, then 1 a second; stops always pass.
+    let mut outcomes = Vec::new();
+    for sequence in 10..14 {
+        let request = CommandRequest::new(ClientId::NONE, sequence, 1, CommandKind::Position)
+            .with_values([1.0, 0.0, 0.0]);
+        outcomes.push(command(
+            &session,
+            &keys,
+            "slow",
+            &request,
+            Some(meta(8, clock())),
+        )?);
+    }
+    assert!(outcomes[0].is_ok() && outcomes[1].is_ok(), "{outcomes:?}");
+    let limited = outcomes[3].as_ref().expect_err("over the rate");
+    assert!(limited.starts_with("rate-limited: "), "{limited}");
+    let (reply, _) = command(&session, &keys, "slow", &stop, Some(meta(8, clock())))?
+        .map_err(|text| format!("refused: {text}"))?;
+    assert_eq!(reply.result(), Ok(()));
+
+    // Claims between remotes are answered for the server, as a CommandReply.
+    let claim = CommandRequest::new(ClientId::NONE, 20, 2, CommandKind::Claim);
+    let (reply, _) = command(&session, &keys, "tool", &claim, Some(meta(7, clock())))?
+        .map_err(|text| format!("refused: {text}"))?;
+    assert_eq!(reply.result(), Ok(()));
+    let (reply, _) = command(&session, &keys, "tool", &claim, Some(meta(9, clock())))?
+        .map_err(|text| format!("refused: {text}"))?;
+    assert_eq!(reply.result(), Err(Reason::ClaimedByOther));
+    Ok(())
+}

@@ -1,0 +1,591 @@
+//! The zenoh transport (feature `zenoh`): the same [`Client`](crate::Client) API over a
+//! network to a `motion-bridge` in front of a motiond on another host.
+//!
+//! [`ClientBuilder::remote`](crate::ClientBuilder::remote) makes a client that reads the
+//! server's description, frames, statistics and machine parameters from the bridge's zenoh
+//! key expressions (the `motion-ipc` C layouts, little-endian: `motion_bridge::wire`) and
+//! sends commands through the bridge's command queryable under an identity
+//! ([`ClientBuilder::identity`](crate::ClientBuilder::identity)) whose allow-list the bridge
+//! applies. Payloads are copies (nothing is in shared memory here); everything else —
+//! handles, waits, jog and claim guards, restart detection (the bridge passes the server's
+//! node id along with every sample and reply) — behaves as over shared memory.
+//!
+//! Identity: the server sees the bridge's iceoryx2 node as the sender of every request, so
+//! [`Client::id`](crate::Client::id) (this process's own node) is not what appears in
+//! `claimed_by`; the bridge keeps claims apart between its remote clients.
+//!
+//! Differences: [`Client::tick_listener`](crate::Client::tick_listener) is not available
+//! (there is no event to attach to a `WaitSet`), frames arrive at the bridge's
+//! `frame_rate` (every 10th tick by default) rather than every tick, and the bridge may
+//! refuse a command itself ([`ClientError::BridgeRefused`]): not on this identity's
+//! allow-list, over its rate limit, or held up in the network for longer than the bridge
+//! accepts.
+
+use core::fmt;
+use core::time::Duration;
+use std::cell::RefCell;
+use std::collections::VecDeque;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use motion_bridge::keys::{Keys, Origin, Refusal, RequestMeta, SessionId};
+use motion_bridge::wire::{self, Payload, WireError};
+use motion_ipc::{CommandKind, CommandReply, CommandRequest, SCHEMA_VERSION};
+use zenoh::Wait as _;
+use zenoh::handlers::{RingChannel, RingChannelHandler};
+use zenoh::liveliness::LivelinessToken;
+use zenoh::pubsub::Subscriber;
+use zenoh::sample::Sample;
+
+use std::rc::Rc;
+
+use iceoryx2::service::Service;
+use motion_ipc::{MachineParams, ServerInfo, ServerStats, ServiceNames};
+
+use crate::client::Params;
+use crate::received::LatestCache;
+use crate::session::Session;
+use crate::{Client, ClientBuilder, ClientError, ConnectError};
+
+/// Samples a feed keeps when the program does not read them (the oldest go first, as
+/// over shared memory).
+const FEED_DEPTH: usize = 32;
+/// The identity a client uses when none is given.
+pub const DEFAULT_IDENTITY: &str = motion_bridge::keys::ANONYMOUS;
+
+/// Where and as whom a remote client connects (remote when `endpoint` is set).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct RemoteOptions {
+    pub(crate) endpoint: Option<String>,
+    pub(crate) identity: String,
+    pub(crate) zenoh_config: Option<PathBuf>,
+}
+
+impl Default for RemoteOptions {
+    fn default() -> Self {
+        Self {
+            endpoint: None,
+            identity: DEFAULT_IDENTITY.to_owned(),
+            zenoh_config: None,
+        }
+    }
+}
+
+/// A payload received over the network: a copy, with the node id of the server that wrote
+/// it.
+pub(crate) struct Owned<T> {
+    pub(crate) value: Box<T>,
+    pub(crate) origin: u128,
+}
+
+impl<T: fmt::Debug> fmt::Debug for Owned<T> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        self.value.fmt(f)
+    }
+}
+
+fn network(what: &'static str, error: impl fmt::Display) -> ClientError {
+    ClientError::Network {
+        what,
+        detail: error.to_string(),
+    }
+}
+
+fn schema_error(server: &str, error: WireError) -> ClientError {
+    ClientError::Connect(ConnectError::SchemaMismatch {
+        name: format!("{server} ({error})"),
+        server: 0,
+        client: SCHEMA_VERSION,
+    })
+}
+
+fn owned<T: Payload>(sample: &Sample, server: &str) -> Result<Owned<T>, ClientError> {
+    let value = wire::decode_boxed::<T>(&sample.payload().to_bytes())
+        .map_err(|error| schema_error(server, error))?;
+    let origin = sample
+        .attachment()
+        .and_then(|bytes| Origin::decode(&bytes.to_bytes()))
+        .unwrap_or_default();
+    Ok(Owned {
+        value,
+        origin: origin.0,
+    })
+}
+
+/// The samples of one key expression: a subscription (if the key is published), and
+/// values fetched with a query, delivered first.
+pub(crate) struct Feed<T> {
+    subscriber: Option<Subscriber<RingChannelHandler<Sample>>>,
+    peeked: RefCell<Option<Sample>>,
+    fetched: RefCell<VecDeque<Owned<T>>>,
+    server: String,
+    decode: fn(&Sample, &str) -> Result<Owned<T>, ClientError>,
+}
+
+impl<T> fmt::Debug for Feed<T> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Feed")
+            .field("subscribed", &self.subscriber.is_some())
+            .finish_non_exhaustive()
+    }
+}
+
+impl<T> Feed<T> {
+    /// Hands `value` out before anything subscribed.
+    pub(crate) fn push(&self, value: Owned<T>) {
+        self.fetched.borrow_mut().push_back(value);
+    }
+
+    /// The next sample, in order; `None` when nothing waits.
+    pub(crate) fn next(&self) -> Result<Option<Owned<T>>, ClientError> {
+        if let Some(value) = self.fetched.borrow_mut().pop_front() {
+            return Ok(Some(value));
+        }
+        let Some(subscriber) = &self.subscriber else {
+            return Ok(None);
+        };
+        let sample = match self.peeked.borrow_mut().take() {
+            Some(sample) => sample,
+            None => match subscriber.try_recv() {
+                Ok(Some(sample)) => sample,
+                Ok(None) => return Ok(None),
+                Err(error) => return Err(network("receive a sample", error)),
+            },
+        };
+        (self.decode)(&sample, &self.server).map(Some)
+    }
+
+    /// Waits up to `timeout` for a sample; whether one waits now.
+    pub(crate) fn wait(&self, timeout: Duration) -> Result<bool, ClientError> {
+        if !self.fetched.borrow().is_empty() || self.peeked.borrow().is_some() {
+            return Ok(true);
+        }
+        let Some(subscriber) = &self.subscriber else {
+            std::thread::sleep(timeout);
+            return Ok(false);
+        };
+        match subscriber.recv_timeout(timeout) {
+            Ok(Some(sample)) => {
+                *self.peeked.borrow_mut() = Some(sample);
+                Ok(true)
+            }
+            Ok(None) => Ok(false),
+            Err(error) => Err(network("wait for a sample", error)),
+        }
+    }
+}
+
+/// A connection to a bridge.
+pub(crate) struct Link {
+    session: zenoh::Session,
+    keys: Keys,
+    endpoint: String,
+    identity: String,
+    server: String,
+    id: SessionId,
+    epoch: Instant,
+    _token: LivelinessToken,
+}
+
+impl fmt::Debug for Link {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Link")
+            .field("endpoint", &self.endpoint)
+            .field("identity", &self.identity)
+            .field("session", &self.id)
+            .finish_non_exhaustive()
+    }
+}
+
+fn bad_name(error: impl fmt::Display, name: &str) -> ConnectError {
+    ConnectError::BadName {
+        name: name.to_owned(),
+        detail: error.to_string(),
+    }
+}
+
+/// zenoh's config of a remote client: `base` (TLS, credentials) if given, client mode,
+/// connecting to `endpoint`, no multicast scouting.
+pub(crate) fn zenoh_config(base: Option<&Path>, endpoint: &str) -> Result<zenoh::Config, String> {
+    let mut config = match base {
+        Some(path) => zenoh::Config::from_file(path)
+            .map_err(|error| format!("zenoh config {}: {error}", path.display()))?,
+        None => zenoh::Config::default(),
+    };
+    let endpoints = format!("[\"{}\"]", endpoint.replace(['"', '\\'], ""));
+    for (key, value) in [
+        ("mode", "\"client\""),
+        ("scouting/multicast/enabled", "false"),
+        ("connect/endpoints", endpoints.as_str()),
+    ] {
+        config
+            .insert_json5(key, value)
+            .map_err(|error| format!("zenoh config {key} = {value}: {error}"))?;
+    }
+    Ok(config)
+}
+
+impl Link {
+    /// Opens a zenoh session to the bridge at `endpoint` for the instance `server`,
+    /// retrying until `deadline`, and declares this client's liveliness.
+    pub(crate) fn open(
+        options: &RemoteOptions,
+        endpoint: &str,
+        server: &str,
+        deadline: Instant,
+    ) -> Result<Self, ConnectError> {
+        let keys = Keys::new(server).map_err(|error| bad_name(error, server))?;
+        motion_bridge::keys::check_chunk("remote identity", &options.identity)
+            .map_err(|error| bad_name(error, &options.identity))?;
+        let config = zenoh_config(options.zenoh_config.as_deref(), endpoint).map_err(|detail| {
+            ConnectError::Network {
+                what: "configure zenoh",
+                detail,
+            }
+        })?;
+        let session = loop {
+            match zenoh::open(config.clone()).wait() {
+                Ok(session) => break session,
+                Err(error) if Instant::now() >= deadline => {
+                    return Err(ConnectError::NoBridge {
+                        name: server.to_owned(),
+                        endpoint: endpoint.to_owned(),
+                        why: error.to_string(),
+                    });
+                }
+                Err(_) => std::thread::sleep(Duration::from_millis(100)),
+            }
+        };
+        let id = SessionId(random_id(&session));
+        let token = session
+            .liveliness()
+            .declare_token(keys.remote_token(&options.identity, id))
+            .wait()
+            .map_err(|error| ConnectError::Network {
+                what: "declare this client's liveliness",
+                detail: error.to_string(),
+            })?;
+        Ok(Self {
+            session,
+            keys,
+            endpoint: endpoint.to_owned(),
+            identity: options.identity.clone(),
+            server: server.to_owned(),
+            id,
+            epoch: Instant::now(),
+            _token: token,
+        })
+    }
+
+    /// The newest `T` on `key`, asked of the bridge until it has one or `deadline` passes.
+    pub(crate) fn first<T: Payload>(
+        &self,
+        key: &str,
+        deadline: Instant,
+    ) -> Result<Owned<T>, String> {
+        loop {
+            let remaining = deadline.saturating_duration_since(Instant::now());
+            let attempt = remaining.clamp(Duration::from_millis(200), Duration::from_secs(1));
+            match self.fetch::<T>(key, attempt) {
+                Ok(value) => return Ok(value),
+                Err(why) if Instant::now() >= deadline => return Err(why),
+                Err(_) => std::thread::sleep(Duration::from_millis(50)),
+            }
+        }
+    }
+
+    /// The newest `T` on `key`, asked of the bridge.
+    pub(crate) fn fetch<T: Payload>(
+        &self,
+        key: &str,
+        timeout: Duration,
+    ) -> Result<Owned<T>, String> {
+        let replies = self
+            .session
+            .get(key)
+            .timeout(timeout)
+            .wait()
+            .map_err(|error| error.to_string())?;
+        match replies.recv_timeout(timeout + Duration::from_millis(100)) {
+            Ok(Some(reply)) => match reply.result() {
+                Ok(sample) => owned::<T>(sample, &self.server).map_err(|error| error.to_string()),
+                Err(error) => Err(error
+                    .payload()
+                    .try_to_string()
+                    .map_or_else(|_| "an error".to_owned(), |text| text.into_owned())),
+            },
+            Ok(None) => Err(format!("no answer on {key} within {timeout:?}")),
+            Err(_) => Err(format!("no motion-bridge answers on {key}")),
+        }
+    }
+
+    /// A feed of `key`: subscribed when `subscribe`, else filled only by [`Feed::push`].
+    pub(crate) fn feed<T: Payload>(
+        &self,
+        key: &str,
+        subscribe: bool,
+    ) -> Result<Feed<T>, ClientError> {
+        let subscriber = if subscribe {
+            Some(
+                self.session
+                    .declare_subscriber(key)
+                    .with(RingChannel::new(FEED_DEPTH))
+                    .wait()
+                    .map_err(|error| network("subscribe", error))?,
+            )
+        } else {
+            None
+        };
+        Ok(Feed {
+            subscriber,
+            peeked: RefCell::new(None),
+            fetched: RefCell::new(VecDeque::new()),
+            server: self.server.clone(),
+            decode: owned::<T>,
+        })
+    }
+
+    /// The key of `what` ("frame", "info", "stats", "params").
+    pub(crate) fn keys(&self) -> &Keys {
+        &self.keys
+    }
+
+    /// The endpoint this client connected to.
+    pub(crate) fn endpoint(&self) -> &str {
+        &self.endpoint
+    }
+
+    /// The identity this client sends commands as.
+    pub(crate) fn identity(&self) -> &str {
+        &self.identity
+    }
+
+    /// Sends `request` through the bridge and waits up to `timeout` for the reply; the
+    /// reply and the node of the server that sent it.
+    pub(crate) fn command(
+        &self,
+        request: &CommandRequest,
+        timeout: Duration,
+    ) -> Result<(CommandReply, u128), ClientError> {
+        let kind = request.kind().map_or("command", CommandKind::name);
+        let meta = RequestMeta {
+            session: self.id,
+            sent_ns: u64::try_from(self.epoch.elapsed().as_nanos()).unwrap_or(u64::MAX),
+        };
+        let key = self.keys.command(&self.identity);
+        let replies = self
+            .session
+            .get(&key)
+            .payload(wire::encode(request))
+            .attachment(meta.encode())
+            .timeout(timeout)
+            .express(true)
+            .wait()
+            .map_err(|error| network("send a command", error))?;
+        let answer = match replies.recv_timeout(timeout) {
+            Ok(Some(answer)) => answer,
+            Ok(None) => {
+                return Err(ClientError::NoReply {
+                    kind,
+                    waited: timeout,
+                });
+            }
+            Err(_) => {
+                return Err(ClientError::Network {
+                    what: "reach the bridge",
+                    detail: format!(
+                        "no motion-bridge answers on {key} at {} (is it running, for server \
+                         `{}`? does zenoh's access control let this user send on that key?)",
+                        self.endpoint, self.server
+                    ),
+                });
+            }
+        };
+        match answer.result() {
+            Ok(sample) => {
+                let reply = wire::decode::<CommandReply>(&sample.payload().to_bytes())
+                    .map_err(|error| schema_error(&self.server, error))?;
+                let origin = sample
+                    .attachment()
+                    .and_then(|bytes| Origin::decode(&bytes.to_bytes()))
+                    .unwrap_or_default();
+                Ok((reply, origin.0))
+            }
+            Err(error) => {
+                let text = error
+                    .payload()
+                    .try_to_string()
+                    .map_or_else(|_| String::new(), |text| text.into_owned());
+                Err(refusal(kind, &text, timeout))
+            }
+        }
+    }
+}
+
+impl<S: Service> Client<S> {
+    /// Connects through the bridge of `remote` (see [`ClientBuilder::remote`]).
+    pub(crate) fn connect_remote(
+        options: &ClientBuilder,
+        endpoint: &str,
+    ) -> Result<Self, ConnectError> {
+        let deadline = Instant::now() + options.connect_timeout;
+        let server = options.server.clone();
+        let names = ServiceNames::new(&server);
+        let node = Self::make_node(options)?;
+        let link = Link::open(&options.remote, endpoint, &server, deadline)?;
+        let info_key = link.keys.info();
+        // Subscribe first, so that no description published meanwhile is missed.
+        let feed =
+            link.feed::<ServerInfo>(&info_key, true)
+                .map_err(|error| ConnectError::Network {
+                    what: "subscribe to the server description",
+                    detail: error.to_string(),
+                })?;
+        let first = link
+            .first::<ServerInfo>(&info_key, deadline)
+            .map_err(|why| ConnectError::NoBridge {
+                name: server.clone(),
+                endpoint: endpoint.to_owned(),
+                why,
+            })?;
+        if first.value.schema_version != SCHEMA_VERSION {
+            return Err(ConnectError::SchemaMismatch {
+                name: server,
+                server: first.value.schema_version,
+                client: SCHEMA_VERSION,
+            });
+        }
+        let axis_count = first.value.axes().len();
+        let session = Session::new(
+            &server,
+            first.origin,
+            first.value.server_pid,
+            first.value.start_time_ns,
+        );
+        feed.push(first);
+        let info = LatestCache::remote(feed);
+        info.refresh().map_err(|error| ConnectError::Network {
+            what: "read the server description",
+            detail: error.to_string(),
+        })?;
+        let id = motion_ipc::ClientId::from_u128(node.id().value());
+        Ok(Self {
+            server,
+            node,
+            id,
+            names,
+            connect_timeout: options.connect_timeout,
+            reply_timeout: options.reply_timeout,
+            info,
+            frames: RefCell::new(None),
+            commands: RefCell::new(None),
+            stats: RefCell::new(None),
+            params: RefCell::new(None),
+            session,
+            sequence: std::cell::Cell::new(0),
+            goal_ticks: RefCell::new(vec![(0, 0); axis_count]),
+            jogs: RefCell::new(crate::jog::JogTable::default()),
+            remote: Some(link),
+        })
+    }
+
+    /// The zenoh endpoint of the bridge this client talks through, when remote.
+    pub fn remote_endpoint(&self) -> Option<&str> {
+        self.remote.as_ref().map(Link::endpoint)
+    }
+
+    /// The identity this client sends commands as, when remote.
+    pub fn remote_identity(&self) -> Option<&str> {
+        self.remote.as_ref().map(Link::identity)
+    }
+}
+
+impl Link {
+    /// The statistics feed: subscribed, with the bridge's newest first.
+    pub(crate) fn stats_cache<S: Service>(
+        &self,
+        timeout: Duration,
+    ) -> Option<LatestCache<S, ServerStats>> {
+        let key = self.keys.stats();
+        let feed = self.feed::<ServerStats>(&key, true).ok()?;
+        if let Ok(newest) = self.fetch::<ServerStats>(&key, timeout.min(Duration::from_millis(300)))
+        {
+            feed.push(newest);
+        }
+        Some(LatestCache::remote(feed))
+    }
+
+    /// The machine parameters, asked of the bridge on every call (they are not published
+    /// on the network: 176 KiB); the last ones received if the bridge has none now.
+    pub(crate) fn machine_params<S: Service>(
+        &self,
+        slot: &RefCell<Option<Rc<LatestCache<S, MachineParams>>>>,
+        timeout: Duration,
+    ) -> Result<Params<S>, ClientError> {
+        let key = self.keys.params();
+        let cache = match slot.borrow().as_ref() {
+            Some(cache) => Some(Rc::clone(cache)),
+            None => None,
+        };
+        let cache = match cache {
+            Some(cache) => cache,
+            None => {
+                let cache = Rc::new(LatestCache::remote(
+                    self.feed::<MachineParams>(&key, false)?,
+                ));
+                *slot.borrow_mut() = Some(Rc::clone(&cache));
+                cache
+            }
+        };
+        match self.fetch::<MachineParams>(&key, timeout) {
+            Ok(params) => {
+                if let Some(feed) = cache.feed() {
+                    feed.push(params);
+                }
+            }
+            Err(why) if cache.current().is_none() => {
+                return Err(ClientError::NotPublished {
+                    what: "machine parameters",
+                    service: key,
+                    why,
+                });
+            }
+            Err(_) => {}
+        }
+        cache.refresh()?.ok_or_else(|| ClientError::NotPublished {
+            what: "machine parameters",
+            service: self.keys.params(),
+            why: "nothing arrived".to_owned(),
+        })
+    }
+}
+
+/// The error of a bridge's refusal text.
+fn refusal(kind: &'static str, text: &str, waited: Duration) -> ClientError {
+    match Refusal::parse(text) {
+        Some((Refusal::NoServer, _)) => ClientError::NoServer { kind },
+        Some((Refusal::NoReply, _)) => ClientError::NoReply { kind, waited },
+        Some((refusal, message)) => ClientError::BridgeRefused {
+            kind,
+            code: refusal.code(),
+            message: message.to_owned(),
+        },
+        None => ClientError::BridgeRefused {
+            kind,
+            code: "error",
+            message: text.to_owned(),
+        },
+    }
+}
+
+/// A session id no other client of the bridge has: the zenoh session id (random, 128 bits)
+/// mixed with the process id and the time.
+fn random_id(session: &zenoh::Session) -> u128 {
+    let zid = session.zid().to_le_bytes();
+    let mut bytes = [0u8; 16];
+    bytes[..zid.len().min(16)].copy_from_slice(&zid[..zid.len().min(16)]);
+    let nanos = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |since| since.as_nanos());
+    u128::from_le_bytes(bytes) ^ (nanos << 32) ^ u128::from(std::process::id())
+}

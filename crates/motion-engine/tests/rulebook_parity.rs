@@ -1,0 +1,446 @@
+//! One rulebook: the same table of requests, from the same two clients, goes to the engine
+//! (over a queue port that reports the sender as the transport would) and to the fake server
+//! of `motion_client::testing` (over iceoryx2, identity from the sending node), with the same
+//! machine and the same changes of state between requests (a device starting, a board fault,
+//! the e-stop, the shutdown). Every answer must be the same reason on both.
+//!
+//! Both judge through `motion_ipc::rules`; this test catches a side that stops doing so, or
+//! one that carries a verdict out differently (a reset that keeps claims, an off-all that
+//! skips differently), which the next request then shows.
+
+mod support;
+
+use core::time::Duration;
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+use iceoryx2::prelude::*;
+use motion_client::testing::{
+    FakeAxis, FakeConfig, FakeDevice, FakeServer, FakeSignal, unique_name,
+};
+use motion_drivers::{BusKind, DeviceFault, GoalKind, Pin, SignalKind as PinKind};
+use motion_engine::{
+    AxisConfig, CommandPort, DeviceConfig, Engine, EngineConfig, LinkConfig, SignalConfig,
+};
+use motion_ipc::{
+    ClientId, CommandKind, CommandReply, CommandRequest, DeviceModel, DeviceState, FaultCode,
+    MotionFrame, Reason, ServerInfo, ServiceNames, SignalKind,
+};
+use support::{BoardControl, IdealBoard};
+
+/// A queue port that reports a transport identity for each request.
+#[derive(Default)]
+struct Port {
+    pending: Option<(CommandRequest, ClientId)>,
+    sender: Option<ClientId>,
+    reply: Option<CommandReply>,
+}
+
+impl CommandPort for Port {
+    fn next_request(&mut self) -> Option<CommandRequest> {
+        let (request, sender) = self.pending.take()?;
+        self.sender = Some(sender);
+        Some(request)
+    }
+    fn reply(&mut self, reply: CommandReply) {
+        self.reply = Some(reply);
+    }
+    fn sender(&self) -> Option<ClientId> {
+        self.sender
+    }
+}
+
+struct EngineSide {
+    engine: Engine,
+    boards: Vec<Arc<Mutex<BoardControl>>>,
+    port: Port,
+    frame: Box<MotionFrame>,
+    now: Duration,
+}
+
+impl EngineSide {
+    fn tick(&mut self) {
+        self.engine.step(self.now, &mut self.port, &mut self.frame);
+        let mut buf = [0u8; 256];
+        for link in 0..self.engine.config().links.len() {
+            while self
+                .engine
+                .poll_link_transmit(link, self.now, &mut buf)
+                .is_some()
+            {}
+        }
+        self.now += Duration::from_millis(1);
+    }
+
+    fn send(&mut self, request: CommandRequest, sender: ClientId) -> Reason {
+        self.port.pending = Some((request, sender));
+        self.tick();
+        let reply = self.port.reply.take().expect("answered in the tick");
+        Reason::try_from(reply.reason).expect("a known reason")
+    }
+}
+
+/// A raw iceoryx2 client of the fake: its node id is its identity.
+struct Raw {
+    node: Node<local::Service>,
+    client: iceoryx2::port::client::Client<local::Service, CommandRequest, (), CommandReply, ()>,
+}
+
+impl Raw {
+    fn connect(name: &str) -> Self {
+        let node = NodeBuilder::new().create::<local::Service>().expect("node");
+        let service: ServiceName = ServiceNames::new(name)
+            .command()
+            .as_str()
+            .try_into()
+            .expect("service name");
+        let client = node
+            .service_builder(&service)
+            .request_response::<CommandRequest, CommandReply>()
+            .open()
+            .expect("the fake's command service")
+            .client_builder()
+            .create()
+            .expect("client port");
+        Self { node, client }
+    }
+
+    fn id(&self) -> ClientId {
+        ClientId::from_u128(self.node.id().value())
+    }
+
+    fn send(&self, request: CommandRequest) -> Reason {
+        let pending = self.client.send_copy(request).expect("send");
+        let end = Instant::now() + Duration::from_secs(5);
+        while Instant::now() < end {
+            if let Ok(Some(reply)) = pending.receive() {
+                return Reason::try_from(reply.reason).expect("a known reason");
+            }
+            std::thread::sleep(Duration::from_micros(200));
+        }
+        panic!("the fake did not answer {request:?}");
+    }
+}
+
+fn axis(name: &str, device: usize) -> AxisConfig {
+    AxisConfig {
+        name: name.into(),
+        unit: "mm".into(),
+        device,
+        channel: 0,
+        counts_per_unit: 100.0,
+        min: -100.0,
+        max: 100.0,
+        max_velocity: 50.0,
+        max_accel: 500.0,
+        position_tolerance: 0.01,
+        following_error: 0.0,
+        overspeed_factor: 0.0,
+        ..AxisConfig::default()
+    }
+}
+
+fn signal(name: &str, pin: u16, kind: PinKind) -> SignalConfig {
+    SignalConfig {
+        name: name.into(),
+        unit: String::new(),
+        device: 0,
+        pin: Pin(pin),
+        pin_name: format!("p{pin}"),
+        kind,
+        invert: false,
+        scale: 1.0,
+        offset: 0.0,
+        full_scale: 1.0,
+        safe: Some(false),
+    }
+}
+
+/// `x` on a board that does everything, `y` on one that can neither de-energise nor home;
+/// an output `lamp` and an input `door` on the first board.
+fn engine_side() -> EngineSide {
+    let link = |name: &str| LinkConfig {
+        name: name.into(),
+        kind: BusKind::Stream,
+    };
+    let config = EngineConfig {
+        name: "parity".into(),
+        tick_hz: 1000,
+        command_timeout: Duration::from_millis(250),
+        links: vec![link("bus0"), link("bus1")],
+        devices: vec![
+            DeviceConfig {
+                name: "full".into(),
+                link: 0,
+                address: 1,
+            },
+            DeviceConfig {
+                name: "plain".into(),
+                link: 1,
+                address: 2,
+            },
+        ],
+        axes: vec![axis("x", 0), axis("y", 1)],
+        signals: vec![
+            signal("lamp", 1, PinKind::DigitalOut),
+            signal("door", 0, PinKind::DigitalIn),
+        ],
+        ..EngineConfig::default()
+    };
+    let (full, full_control) = IdealBoard::new(1, &GoalKind::ALL);
+    let plain_goals: Vec<GoalKind> = GoalKind::ALL
+        .into_iter()
+        .filter(|kind| !matches!(kind, GoalKind::Off | GoalKind::Home))
+        .collect();
+    let (plain, plain_control) = IdealBoard::new(1, &plain_goals);
+    let engine = Engine::new(config, vec![full, plain]).expect("valid config");
+    let mut side = EngineSide {
+        engine,
+        boards: vec![full_control, plain_control],
+        port: Port::default(),
+        frame: Box::new(MotionFrame::EMPTY),
+        now: Duration::ZERO,
+    };
+    for _ in 0..50 {
+        side.tick();
+    }
+    assert_eq!(side.engine.device_state(0), Some(DeviceState::Online));
+    side
+}
+
+/// The same machine as the fake sees it: limits, rates, capabilities and tolerance taken from
+/// the engine's own description.
+fn fake_config(engine: &Engine) -> FakeConfig {
+    let mut info = Box::new(ServerInfo::EMPTY);
+    engine.fill_info(&mut info);
+    let mut config = FakeConfig::demo(&unique_name("parity"));
+    config.tick_hz = 1000;
+    config.starting_ticks = 0;
+    config.devices = vec![
+        FakeDevice::new("full", DeviceModel::Qq2drv, "fw"),
+        FakeDevice::new("plain", DeviceModel::Qq2drv, "fw"),
+    ];
+    config.axes = info.axes[..info.axis_count as usize]
+        .iter()
+        .map(|a| {
+            let mut fake = FakeAxis::new(a.name(), a.min, a.max, a.max_velocity);
+            fake.device = usize::from(a.device_index);
+            fake.max_accel = a.max_accel;
+            fake.capabilities = motion_ipc::Capabilities(a.capabilities);
+            fake.position_tolerance = 0.01;
+            fake
+        })
+        .collect();
+    let mut lamp = FakeSignal::digital("lamp", 0, "p1", SignalKind::DigitalOut);
+    lamp.safe = Some(false);
+    config.signals = vec![
+        lamp,
+        FakeSignal::digital("door", 0, "p0", SignalKind::DigitalIn),
+    ];
+    config.params = Vec::new();
+    config
+}
+
+/// One row of the table.
+enum Step {
+    /// Client `.0` (0 = A, 1 = B) sends a request.
+    Send(usize, CommandRequest),
+    /// Client `.0` sends a request whose payload names the other client.
+    Forge(usize, CommandRequest),
+    /// A device's readiness changes.
+    Device(usize, DeviceState),
+    /// Axis `.0`'s board reports a fault until [`Step::FaultGone`] (the fake: injected).
+    Fault(usize),
+    /// The board of axis `.0` no longer reports its fault.
+    FaultGone(usize),
+    /// The server begins its shutdown.
+    ShutDown,
+}
+
+fn axis_request(axis: u32, kind: CommandKind, values: [f64; 3]) -> CommandRequest {
+    CommandRequest::new(ClientId::NONE, 0, axis, kind).with_values(values)
+}
+
+fn signal_request(signal: u32, kind: CommandKind, value: f64) -> CommandRequest {
+    CommandRequest::for_signal(ClientId::NONE, 0, signal, kind).with_values([value, 0.0, 0.0])
+}
+
+fn table() -> Vec<Step> {
+    use CommandKind::*;
+    use Step::{Device, Fault, FaultGone, Forge, Send, ShutDown};
+    let all = CommandRequest::ALL_AXES;
+    let mut bad_schema = axis_request(0, Stop, [0.0; 3]);
+    bad_schema.schema_version = 1;
+    let mut bad_kind = axis_request(0, Stop, [0.0; 3]);
+    bad_kind.kind = 99;
+    let mut bad_target = axis_request(0, Stop, [0.0; 3]);
+    bad_target.target = 7;
+    vec![
+        // Form: schema, kind, finite values, target, index.
+        Send(0, bad_schema),
+        Send(0, bad_kind),
+        Send(0, axis_request(0, Position, [f64::NAN, 0.0, 0.0])),
+        Send(0, axis_request(0, RampVelocity, [f64::INFINITY, 0.0, 0.0])),
+        Send(0, bad_target),
+        Send(0, axis_request(5, Position, [1.0, 0.0, 0.0])),
+        Send(0, axis_request(0, SetOutput, [1.0, 0.0, 0.0])),
+        // Limits and rates, at rest at 0.
+        Send(0, axis_request(0, Position, [100.5, 0.0, 0.0])),
+        Send(0, axis_request(0, Position, [-100.0, 0.0, 0.0])),
+        Send(0, axis_request(0, Stop, [0.0; 3])),
+        Send(0, axis_request(0, RampVelocity, [10.0, -1.0, 0.0])),
+        Send(0, axis_request(0, RampVelocity, [10.0, 600.0, 0.0])),
+        Send(0, axis_request(0, Velocity, [51.0, 0.0, 0.0])),
+        Send(0, axis_request(0, RampPosition, [10.0, -5.0, 0.0])),
+        Send(0, axis_request(0, RampPosition, [10.0, 0.0, -5.0])),
+        Send(0, axis_request(0, RampPosition, [10.0, 60.0, 0.0])),
+        Send(0, axis_request(0, Power, [1.5, 0.0, 0.0])),
+        Send(0, axis_request(0, Home, [-1.0, 0.0, 0.0])),
+        Send(0, axis_request(0, Home, [80.0, 0.0, 0.0])),
+        Send(0, axis_request(0, SetPosition, [200.0, 0.0, 0.0])),
+        Send(0, axis_request(0, Stop, [0.0; 3])),
+        // Capabilities.
+        Send(0, axis_request(1, Off, [0.0; 3])),
+        Send(0, axis_request(1, Home, [0.0; 3])),
+        Send(0, axis_request(0, Off, [0.0; 3])),
+        Send(0, axis_request(0, Stop, [0.0; 3])),
+        // Claims and identity.
+        Forge(1, axis_request(0, Claim, [0.0; 3])),
+        Send(0, axis_request(0, Claim, [0.0; 3])),
+        Send(1, axis_request(0, Claim, [0.0; 3])),
+        Send(1, axis_request(0, Position, [1.0, 0.0, 0.0])),
+        Send(1, axis_request(0, Off, [0.0; 3])),
+        Send(1, axis_request(0, Release, [0.0; 3])),
+        Send(1, axis_request(0, Stop, [0.0; 3])),
+        Send(1, axis_request(all, Off, [0.0; 3])),
+        Send(0, axis_request(0, Stop, [0.0; 3])),
+        Send(0, axis_request(0, Release, [0.0; 3])),
+        Send(0, axis_request(0, Release, [0.0; 3])),
+        Send(1, axis_request(0, Claim, [0.0; 3])),
+        // Reset ends every claim: A may move x again afterwards.
+        Send(0, axis_request(all, Reset, [0.0; 3])),
+        Send(0, axis_request(0, Position, [0.0, 0.0, 0.0])),
+        // Signals.
+        Send(0, signal_request(0, SetOutput, 1.0)),
+        Send(0, signal_request(1, SetOutput, 1.0)),
+        Send(0, signal_request(9, SetOutput, 1.0)),
+        Send(0, signal_request(0, Claim, 0.0)),
+        Send(1, signal_request(0, SetOutput, 0.0)),
+        Send(1, signal_request(0, Release, 0.0)),
+        Send(0, signal_request(0, Release, 0.0)),
+        Send(0, signal_request(0, Position, 0.0)),
+        // Readiness.
+        Device(1, DeviceState::Starting),
+        Send(0, axis_request(1, Position, [1.0, 0.0, 0.0])),
+        Send(0, axis_request(1, Position, [1000.0, 0.0, 0.0])),
+        Send(0, axis_request(1, Stop, [0.0; 3])),
+        Device(1, DeviceState::Online),
+        Send(0, axis_request(1, Position, [0.0, 0.0, 0.0])),
+        // A fault refuses motion until reset; a stop is always taken.
+        Fault(0),
+        Send(0, axis_request(0, Position, [1.0, 0.0, 0.0])),
+        Send(0, axis_request(0, Stop, [0.0; 3])),
+        FaultGone(0),
+        Send(0, axis_request(0, Position, [1.0, 0.0, 0.0])),
+        Send(0, axis_request(all, Reset, [0.0; 3])),
+        Send(0, axis_request(0, Position, [0.0, 0.0, 0.0])),
+        // E-stop: motion and outputs refused, stops and off taken, reset clears.
+        Send(1, axis_request(all, EStop, [0.0; 3])),
+        Send(0, axis_request(0, Position, [1.0, 0.0, 0.0])),
+        Send(0, signal_request(0, SetOutput, 1.0)),
+        Send(0, axis_request(0, Stop, [0.0; 3])),
+        Send(0, axis_request(all, Stop, [0.0; 3])),
+        Send(0, axis_request(0, Claim, [0.0; 3])),
+        Send(0, axis_request(0, Release, [0.0; 3])),
+        Send(0, axis_request(all, Reset, [0.0; 3])),
+        Send(0, axis_request(0, Position, [0.0, 0.0, 0.0])),
+        // Shutdown: motion, outputs and reset refused; stops taken.
+        ShutDown,
+        Send(0, axis_request(0, Position, [1.0, 0.0, 0.0])),
+        Send(0, signal_request(0, SetOutput, 1.0)),
+        Send(0, axis_request(all, Reset, [0.0; 3])),
+        Send(0, axis_request(0, Stop, [0.0; 3])),
+        Send(0, axis_request(all, EStop, [0.0; 3])),
+    ]
+}
+
+#[test]
+fn the_engine_and_the_fake_server_give_the_same_answer_to_every_request() {
+    let mut engine = engine_side();
+    let fake = FakeServer::start::<local::Service>(fake_config(&engine.engine)).expect("fake");
+    let clients = [Raw::connect(fake.name()), Raw::connect(fake.name())];
+    let ids = [clients[0].id(), clients[1].id()];
+    let mut sequence = 0;
+    let mut differences = Vec::new();
+    let mut answered = 0;
+    for (row, step) in table().into_iter().enumerate() {
+        let (client, mut request, forged) = match step {
+            Step::Send(client, request) => (client, request, false),
+            Step::Forge(client, request) => (client, request, true),
+            Step::Device(device, state) => {
+                engine.boards[device].lock().unwrap().starting = state == DeviceState::Starting;
+                fake.set_device_state(device, state);
+                settle(&mut engine);
+                continue;
+            }
+            Step::Fault(axis) => {
+                engine.boards[axis].lock().unwrap().fault = Some(DeviceFault::BoardError);
+                fake.fault_axis(axis, FaultCode::BoardError, 0.0, 0.0);
+                settle(&mut engine);
+                assert!(
+                    engine.engine.axis_fault(axis).is_some(),
+                    "the engine latched it"
+                );
+                continue;
+            }
+            Step::FaultGone(axis) => {
+                engine.boards[axis].lock().unwrap().fault = None;
+                fake.control(motion_client::testing::FakeControl::FaultGone { axis });
+                settle(&mut engine);
+                continue;
+            }
+            Step::ShutDown => {
+                engine.engine.begin_shutdown();
+                fake.control(motion_client::testing::FakeControl::ShutDown);
+                settle(&mut engine);
+                continue;
+            }
+        };
+        sequence += 1;
+        request.sequence = sequence;
+        request.client = if forged { ids[1 - client] } else { ids[client] };
+        let by_engine = engine.send(request, ids[client]);
+        let by_fake = clients[client].send(request);
+        answered += 1;
+        if by_engine != by_fake {
+            differences.push(format!(
+                "row {row}: {:?} axis {} values {:?} from {}: engine {by_engine:?}, fake {by_fake:?}",
+                request.kind(),
+                request.axis,
+                request.values,
+                ["A", "B"][client],
+            ));
+        }
+        // Let both carry it out before the next row.
+        for _ in 0..3 {
+            engine.tick();
+        }
+    }
+    assert!(answered > 60, "{answered} requests");
+    assert!(
+        differences.is_empty(),
+        "{} of {answered} answers differ:\n{}",
+        differences.len(),
+        differences.join("\n")
+    );
+    fake.shutdown().expect("fake shutdown");
+}
+
+/// Lets the engine see a board change and the fake (ticking at 1 kHz on its own thread)
+/// apply a control, which it does at its next tick.
+fn settle(engine: &mut EngineSide) {
+    for _ in 0..20 {
+        engine.tick();
+    }
+    std::thread::sleep(Duration::from_millis(20));
+}
