@@ -7,9 +7,7 @@ use std::path::Path;
 
 /// `[server]` of a generated config.
 pub fn server_section(name: &str, extra: &str) -> String {
-    format!(
-        "[server]\nname = \"{name}\"\ntick_hz = 1000\ncommand_timeout_ms = 250\n{extra}\n"
-    )
+    format!("[server]\nname = \"{name}\"\ntick_hz = 1000\ncommand_timeout_ms = 250\n{extra}\n")
 }
 
 /// The QSB-M's axis: 100 counts/mm, 10 counts a step, so 10 steps/mm.
@@ -158,9 +156,7 @@ pub fn is_qsb_stop(line: &qsb::CommandLine) -> bool {
 
 /// Whether `line` starts motion: COMMAND 7, 8 or 9 (resume, move, jog).
 pub fn is_qsb_motion(line: &qsb::CommandLine) -> bool {
-    line.ty == qsb::CommandType::Write
-        && line.register == 0x16
-        && matches!(line.data, Some(7..=9))
+    line.ty == qsb::CommandType::Write && line.register == 0x16 && matches!(line.data, Some(7..=9))
 }
 
 /// A QSB write outside the axis's limits: a jog or step rate above max_velocity, an
@@ -174,12 +170,34 @@ pub fn qsb_out_of_limits(line: &qsb::CommandLine) -> Option<String> {
     let max_rate = velocity * QSB_STEPS_PER_MM + 1.0;
     let max_accel = accel * QSB_STEPS_PER_MM + 1.0;
     let (what, value, limit) = match line.register {
-        0x12 => ("jog rate", f64::from((data as i32).unsigned_abs()), max_rate),
+        0x12 => (
+            "jog rate",
+            f64::from((data as i32).unsigned_abs()),
+            max_rate,
+        ),
         0x0F => ("step rate", f64::from(data), max_rate),
         0x10 => ("acceleration", f64::from(data), max_accel),
         _ => return None,
     };
     (value > limit).then(|| format!("QSB {what} {value} steps/s > {limit}"))
+}
+
+/// Targets this far out are velocity runs, not positions (half the driver's run distance
+/// of 2^30 steps).
+pub const RUN_TARGET: u32 = 1 << 29;
+
+/// Steps past a limit the stepper may travel while the engine stops a velocity run at the
+/// limit: 20 ms at max_velocity (the position it judges by is one poll old).
+pub const FOCUS_SLACK: f64 = FOCUS_LIMITS.2 * 0.02;
+
+/// The stepper's true position (the board's step counter, which `SetPosition` writes) when
+/// it is outside the axis's limits by more than [`FOCUS_SLACK`].
+pub fn spimotor_position_outside(position: i32) -> Option<String> {
+    let (min, max, _, _) = FOCUS_LIMITS;
+    let position = f64::from(position);
+    (position < min - FOCUS_SLACK || position > max + FOCUS_SLACK).then(|| {
+        format!("SPI_motor stepper at {position} steps, outside {min}..{max} (± {FOCUS_SLACK})")
+    })
 }
 
 /// An SPI_motor write outside the stepper axis's limits: a target outside min..max, a step
@@ -191,6 +209,11 @@ pub fn spimotor_out_of_limits(mosi: &[u8]) -> Option<String> {
     };
     let (min, max, velocity, _) = FOCUS_LIMITS;
     match write {
+        // A target 2^29 steps or more away is how the driver runs at a velocity (it steps
+        // towards a target 2^30 from where the motor is, `RUN_DISTANCE`); the engine stops
+        // that run before the soft limit, which the motor's true position shows
+        // (`spimotor_position_outside`).
+        spimotor::Write::TargetPosition(target) if target.unsigned_abs() >= RUN_TARGET => None,
         spimotor::Write::TargetPosition(target) => {
             let target = f64::from(target);
             (target < min || target > max)
@@ -245,6 +268,13 @@ mod tests {
         assert!(spimotor_out_of_limits(&mosi[..n]).is_none());
         let n = encode(spimotor::Write::TargetPosition(-6000), &mut mosi);
         assert!(spimotor_out_of_limits(&mosi[..n]).is_some());
+        // A velocity run's far target is no position.
+        let n = encode(spimotor::Write::TargetPosition(-(1 << 30)), &mut mosi);
+        assert!(spimotor_out_of_limits(&mosi[..n]).is_none());
+        let n = encode(spimotor::Write::TargetPosition(1 << 28), &mut mosi);
+        assert!(spimotor_out_of_limits(&mosi[..n]).is_some());
+        assert!(spimotor_position_outside(5010).is_none());
+        assert!(spimotor_position_outside(-5011).is_some());
         let n = encode(
             spimotor::Write::StepDelay(spimotor::StepDelay::from_tenths_ms(20)),
             &mut mosi,

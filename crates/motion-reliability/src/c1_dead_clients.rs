@@ -54,7 +54,13 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
     let epoch = Instant::now();
     let board = Arc::new(Mutex::new(QsbSim::new(QsbSimConfig::default())));
     let tty = h.path(&format!("{name}.tty"));
-    let served = PtyBoard::try_start(&tty, Arc::clone(&board), epoch, 230_400, PtyOptions::default())?;
+    let served = PtyBoard::try_start(
+        &tty,
+        Arc::clone(&board),
+        epoch,
+        230_400,
+        PtyOptions::default(),
+    )?;
     let config = h.write(
         &format!("{name}.toml"),
         &format!(
@@ -99,7 +105,11 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
                 bail!("motiond died during the {signal:?} runs (#{i})");
             }
         }
-        let label = if signal == Signal::SIGKILL { "SIGKILL" } else { "SIGSTOP" };
+        let label = if signal == Signal::SIGKILL {
+            "SIGKILL"
+        } else {
+            "SIGSTOP"
+        };
         row.figure(
             &format!("{label} → stop on the wire"),
             latency.p50_p99_max(1.0, "ms"),
@@ -120,7 +130,12 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
         } else {
             DEADMAN_MS + 5.0
         };
-        row.target(&format!("{label} max ÷ {bound:.0} ms bound"), latency.max(), bound, 1.0);
+        row.target(
+            &format!("{label} max ÷ {bound:.0} ms bound"),
+            latency.max(),
+            bound,
+            1.0,
+        );
     }
     for failure in failures {
         row.note(failure);
@@ -135,7 +150,10 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
     row.check(
         "clean exit, 0 stale files",
         code == Some(0) && files == 0,
-        format!("exit {code:?}, {files} iceoryx2 files left: {:?}", h.iox_listing()),
+        format!(
+            "exit {code:?}, {files} iceoryx2 files left: {:?}",
+            h.iox_listing()
+        ),
     );
     row.note(format!(
         "bounds: SIGKILL ≤ liveness_check_ms {LIVENESS_MS} ms + 1 tick (the dead node's goals are voided), \
@@ -200,7 +218,11 @@ fn one_kill(
         let end = Instant::now() + Duration::from_secs(2);
         let mut left_moving = true;
         while Instant::now() < end {
-            if board.lock().map(|b| b.motor_velocity() == 0.0).unwrap_or(false) {
+            if board
+                .lock()
+                .map(|b| b.motor_velocity() == 0.0)
+                .unwrap_or(false)
+            {
                 left_moving = false;
                 break;
             }

@@ -34,7 +34,10 @@ struct Boards {
 impl Boards {
     fn moving(&self) -> (bool, bool) {
         (
-            self.qsb.lock().map(|b| b.motor_velocity() != 0.0).unwrap_or(true),
+            self.qsb
+                .lock()
+                .map(|b| b.motor_velocity() != 0.0)
+                .unwrap_or(true),
             self.stepper.lock().map(|b| b.is_moving()).unwrap_or(true),
         )
     }
@@ -53,7 +56,13 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
     };
     let tty = h.path(&format!("{name}.tty"));
     let socket = h.path(&format!("{name}.sock"));
-    let _qsb = PtyBoard::try_start(&tty, Arc::clone(&boards.qsb), epoch, 230_400, PtyOptions::default())?;
+    let _qsb = PtyBoard::try_start(
+        &tty,
+        Arc::clone(&boards.qsb),
+        epoch,
+        230_400,
+        PtyOptions::default(),
+    )?;
     let _stepper = SocketBoard::try_start(&socket, Arc::clone(&boards.stepper), epoch)?;
     let config = h.write(
         &format!("{name}.toml"),
@@ -176,7 +185,10 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
     row.check(
         "clean exit, 0 stale files",
         code == Some(0) && files == 0,
-        format!("exit {code:?}, {files} iceoryx2 files left: {:?}", h.iox_listing()),
+        format!(
+            "exit {code:?}, {files} iceoryx2 files left: {:?}",
+            h.iox_listing()
+        ),
     );
     for problem in problems {
         row.note(problem);
@@ -236,7 +248,10 @@ fn one_crash(
         std::thread::sleep(Duration::from_millis(5));
     }
     std::thread::sleep(Duration::from_millis(20 + u64::from(i % 7) * 10));
-    if server.signal_and_wait(Signal::SIGKILL, Duration::from_secs(5)).is_some() {
+    if server
+        .signal_and_wait(Signal::SIGKILL, Duration::from_secs(5))
+        .is_some()
+    {
         bail!("motiond exited by itself");
     }
     let killed = Instant::now();
@@ -261,13 +276,15 @@ fn one_crash(
         .count();
     let frame = raw.frame();
     let held = frame.axes().iter().all(|a| {
-        !matches!(a.mode(), Ok(AxisMode::Velocity | AxisMode::RampVelocity | AxisMode::RampPosition))
-            || !a.flags().contains(AxisFlags::MOVING)
+        !matches!(
+            a.mode(),
+            Ok(AxisMode::Velocity | AxisMode::RampVelocity | AxisMode::RampPosition)
+        ) || !a.flags().contains(AxisFlags::MOVING)
     });
     let clean = server.is_running() && errors == 0 && held;
     // The stale guard fails safe and says why; the client reports the restart, then works.
-    let reported = matches!(guard.check(), Err(ClientError::ServerRestarted(_)))
-        || client.restart().is_some();
+    let reported =
+        matches!(guard.check(), Err(ClientError::ServerRestarted(_))) || client.restart().is_some();
     drop(guard);
     let _ = client.check_server();
     client.acknowledge_restart();

@@ -62,7 +62,9 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
     let count = if h.quick { 3 } else { 100 };
     let quiet_time = Duration::from_secs(if h.quick { 3 } else { 30 });
     let mut row = Row::new("3a links: unplug/replug");
-    row.runs = format!("{count} × unplug/replug of the QSB's serial link, the SIXpack and the stepper moving");
+    row.runs = format!(
+        "{count} × unplug/replug of the QSB's serial link, the SIXpack and the stepper moving"
+    );
     let name = h.name("plug");
     let epoch = Instant::now();
     let tty = h.path(&format!("{name}-qsb.tty"));
@@ -71,10 +73,20 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
     let pack = Arc::new(Mutex::new(TmcpackSim::new(TmcpackSimConfig::default())));
     let stepper = Arc::new(Mutex::new(SpimotorSim::new(SpimotorSimConfig::default())));
     let mut qsb = Arc::new(Mutex::new(QsbSim::new(QsbSimConfig::default())));
-    let mut qsb_board =
-        PtyBoard::try_start(&tty, Arc::clone(&qsb), epoch, 230_400, PtyOptions::default())?;
-    let _pack_board =
-        PtyBoard::try_start(&pack_tty, Arc::clone(&pack), epoch, 19_200, PtyOptions::default())?;
+    let mut qsb_board = PtyBoard::try_start(
+        &tty,
+        Arc::clone(&qsb),
+        epoch,
+        230_400,
+        PtyOptions::default(),
+    )?;
+    let _pack_board = PtyBoard::try_start(
+        &pack_tty,
+        Arc::clone(&pack),
+        epoch,
+        19_200,
+        PtyOptions::default(),
+    )?;
     let _stepper_board = SocketBoard::try_start(&socket, Arc::clone(&stepper), epoch)?;
     let config = h.write(
         &format!("{name}.toml"),
@@ -90,7 +102,10 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
     let raw = RawClient::try_connect(&name, Duration::from_secs(10))?;
     match raw.try_wait_frame(Duration::from_secs(20), |f| (0..3).all(|a| online(f, a))) {
         Some((_, true)) => {}
-        other => bail!("not every board online: {:?}", other.map(|(f, _)| f.axes()[..3].to_vec())),
+        other => bail!(
+            "not every board online: {:?}",
+            other.map(|(f, _)| f.axes()[..3].to_vec())
+        ),
     }
     let client: Client<ipc::Service> = ClientBuilder::new(&name)
         .connect_timeout(Duration::from_secs(10))
@@ -129,8 +144,13 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
         // A fresh board on the same path, as after a power cycle of the adapter.
         qsb = Arc::new(Mutex::new(QsbSim::new(QsbSimConfig::default())));
         let replugged = Instant::now();
-        qsb_board =
-            PtyBoard::try_start(&tty, Arc::clone(&qsb), epoch, 230_400, PtyOptions::default())?;
+        qsb_board = PtyBoard::try_start(
+            &tty,
+            Arc::clone(&qsb),
+            epoch,
+            230_400,
+            PtyOptions::default(),
+        )?;
         let up = wait(&mut motion, &raw, Duration::from_secs(10), |f| {
             online(f, 0) && !f.axes()[0].flags().contains(AxisFlags::FAULT)
         });
@@ -139,15 +159,27 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
         } else {
             not_back += 1;
             if problems.len() < 5 {
-                problems.push(format!("replug #{i}: not back: {:?}", raw.frame().axes()[0]));
+                problems.push(format!(
+                    "replug #{i}: not back: {:?}",
+                    raw.frame().axes()[0]
+                ));
             }
         }
         motion.run_for(Duration::from_millis(300));
-        let lines = qsb_lines(&qsb_board.received.lock().map(|l| l.clone()).unwrap_or_default());
+        let lines = qsb_lines(
+            &qsb_board
+                .received
+                .lock()
+                .map(|l| l.clone())
+                .unwrap_or_default(),
+        );
         let probed = lines.iter().any(|l| l.line.ty == qsb::CommandType::Read);
         no_handshake += u32::from(!probed);
         let axis = raw.frame().axes()[0];
-        let moving = qsb.lock().map(|b| b.motor_velocity() != 0.0).unwrap_or(true);
+        let moving = qsb
+            .lock()
+            .map(|b| b.motor_velocity() != 0.0)
+            .unwrap_or(true);
         let stale_goal = moving
             || lines.iter().any(|l| is_qsb_motion(&l.line))
             || matches!(axis.mode(), Ok(AxisMode::RampPosition | AxisMode::Position));
@@ -159,11 +191,20 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
         }
     }
     let loaded = meter.take();
-    row.figure("unplug → LinkDown/offline in the frame", down.p50_p99_max(1.0, "ms"));
+    row.figure(
+        "unplug → LinkDown/offline in the frame",
+        down.p50_p99_max(1.0, "ms"),
+    );
     row.figure("replug → online", back.p50_p99_max(1.0, "ms"));
     for (axis, label) in [(1usize, "SIXpack x"), (2, "stepper focus")] {
-        let q = quiet.refresh_age.get(axis).map_or(f64::NAN, |s| s.quantile(0.999));
-        let l = loaded.refresh_age.get(axis).map_or(f64::NAN, |s| s.quantile(0.999));
+        let q = quiet
+            .refresh_age
+            .get(axis)
+            .map_or(f64::NAN, |s| s.quantile(0.999));
+        let l = loaded
+            .refresh_age
+            .get(axis)
+            .map_or(f64::NAN, |s| s.quantile(0.999));
         row.figure(
             &format!("{label} refresh age p99.9"),
             format!("quiet {q:.0} / unplugging {l:.0} ticks"),
@@ -187,7 +228,11 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
     );
     let alive = server.is_running();
     let code = server.signal_and_wait(Signal::SIGTERM, Duration::from_secs(10));
-    row.check("server alive", alive && code == Some(0), format!("alive {alive}, exit {code:?}"));
+    row.check(
+        "server alive",
+        alive && code == Some(0),
+        format!("alive {alive}, exit {code:?}"),
+    );
     for problem in problems {
         row.note(problem);
     }
@@ -204,7 +249,10 @@ fn wait(
     let end = Instant::now() + timeout;
     while Instant::now() < end {
         motion.tick();
-        if raw.try_frame(Duration::from_millis(100)).is_some_and(|f| done(&f)) {
+        if raw
+            .try_frame(Duration::from_millis(100))
+            .is_some_and(|f| done(&f))
+        {
             return true;
         }
         std::thread::sleep(Duration::from_millis(5));

@@ -52,7 +52,10 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
     )?;
     let mut server = h.server(&config)?;
     let raw = RawClient::try_connect(&name, Duration::from_secs(10))?;
-    if !matches!(raw.try_wait_frame(Duration::from_secs(10), |f| online(f, 0)), Some((_, true))) {
+    if !matches!(
+        raw.try_wait_frame(Duration::from_secs(10), |f| online(f, 0)),
+        Some((_, true))
+    ) {
         bail!("the QSB axis is not online");
     }
     let stats_node = NodeBuilder::new()
@@ -98,8 +101,13 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
         let after = server_stats(&stats_node, &name, Duration::from_secs(3))?;
         let sent = sent_counts(&served.take_sent());
         let false_accepts: Vec<i64> = seen.iter().copied().filter(|c| !sent.contains(c)).collect();
-        let link = |s: &motion_ipc::ServerStats| s.links().first().map_or((0, 0), |l| (l.errors, l.frames));
-        let (errors, decoded) = (link(&after).0 - link(&before).0, link(&after).1 - link(&before).1);
+        let link = |s: &motion_ipc::ServerStats| {
+            s.links().first().map_or((0, 0), |l| (l.errors, l.frames))
+        };
+        let (errors, decoded) = (
+            link(&after).0 - link(&before).0,
+            link(&after).1 - link(&before).1,
+        );
         row.figure(
             &format!("ber {ber:e}"),
             format!(
@@ -128,14 +136,21 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
         clean_false == 0 && quiet_faults == 0,
         format!("{clean_false} false accepts, {quiet_faults} faults at ber 0"),
     );
-    row.figure("false accepts with noise (all rates)", total_false.to_string());
+    row.figure(
+        "false accepts with noise (all rates)",
+        total_false.to_string(),
+    );
     row.note(
         "false accepts with noise are a property of the QSB's line format (no checksum), \
          reported, not judged: README \"Reliability\" documents the rates",
     );
     let alive = server.is_running();
     let code = server.signal_and_wait(Signal::SIGTERM, Duration::from_secs(10));
-    row.check("server alive", alive && code == Some(0), format!("alive {alive}, exit {code:?}"));
+    row.check(
+        "server alive",
+        alive && code == Some(0),
+        format!("alive {alive}, exit {code:?}"),
+    );
     Ok(row)
 }
 

@@ -25,7 +25,7 @@ use nix::sys::signal::Signal;
 
 use crate::boards::{
     FOCUS_LIMITS, QSB_LIMITS, qsb_lines, qsb_out_of_limits, qsb_section, server_section,
-    spimotor_out_of_limits, spimotor_section,
+    spimotor_out_of_limits, spimotor_position_outside, spimotor_section,
 };
 use crate::c1_dead_clients::online;
 use crate::harness::{Harness, TickMeter};
@@ -35,13 +35,8 @@ const AXES: u32 = 2;
 const SIGNALS: u32 = 1;
 const IN_FLIGHT: usize = 8;
 
-type Pending = iceoryx2::pending_response::PendingResponse<
-    ipc::Service,
-    CommandRequest,
-    (),
-    CommandReply,
-    (),
->;
+type Pending =
+    iceoryx2::pending_response::PendingResponse<ipc::Service, CommandRequest, (), CommandReply, ()>;
 
 /// Runs the campaign.
 pub fn run(h: &Harness) -> anyhow::Result<Row> {
@@ -55,7 +50,13 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
     let stepper = Arc::new(Mutex::new(SpimotorSim::new(SpimotorSimConfig::default())));
     let tty = h.path(&format!("{name}.tty"));
     let socket = h.path(&format!("{name}.sock"));
-    let qsb_board = PtyBoard::try_start(&tty, Arc::clone(&qsb), epoch, 230_400, PtyOptions::default())?;
+    let qsb_board = PtyBoard::try_start(
+        &tty,
+        Arc::clone(&qsb),
+        epoch,
+        230_400,
+        PtyOptions::default(),
+    )?;
     let stepper_board = SocketBoard::try_start(&socket, Arc::clone(&stepper), epoch)?;
     let signal = "\n[[signal]]\nname = \"lamp\"\ndevice = \"feeder_qsb\"\npin = \"io3\"\nkind = \"digital-out\"\nsafe = false\n";
     let config = h.write(
@@ -94,11 +95,17 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
     let mut next_claim = Instant::now();
     let mut claimed = false;
     let mut quota = 0f64;
+    let mut extreme = 0u32;
+    let mut positions_outside: Vec<String> = Vec::new();
     let mut last = Instant::now();
     while sent < total || in_flight.iter().any(|f| !f.is_empty()) {
         // The owner claims the stepper for a second, then leaves it for a second.
         if Instant::now() >= next_claim {
-            let kind = if claimed { CommandKind::Release } else { CommandKind::Claim };
+            let kind = if claimed {
+                CommandKind::Release
+            } else {
+                CommandKind::Claim
+            };
             let _ = owner.try_command(1, kind, [0.0; 3]);
             claimed = !claimed;
             next_claim = Instant::now() + Duration::from_secs(1);
@@ -114,40 +121,53 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
                 let request = adversarial(&mut rng, own, sequence);
                 let expected = oracle(&request, own);
                 match attacker.commands.send_copy(request) {
-                    Ok(pending) => in_flight[index].push((request, expected, pending, Instant::now())),
+                    Ok(pending) => {
+                        in_flight[index].push((request, expected, pending, Instant::now()))
+                    }
                     Err(_) => send_errors += 1,
                 }
                 sent += 1;
                 quota -= 1.0;
             }
-            in_flight[index].retain(|(request, expected, pending, at)| {
-                match pending.receive() {
-                    Ok(Some(reply)) => {
-                        replies += 1;
-                        let reply: CommandReply = *reply;
-                        match Reason::try_from(reply.reason) {
-                            Ok(reason) => {
-                                *reasons.entry(format!("{reason:?}")).or_default() += 1;
-                                let wrong = reply.sequence != request.sequence
-                                    || expected.is_some_and(|e| e != reason && reason != Reason::Busy);
-                                if wrong {
-                                    mismatched += 1;
-                                    if examples.len() < 5 {
-                                        examples.push(format!("{request:?} → {reason:?}, expected {expected:?}"));
-                                    }
+            in_flight[index].retain(|(request, expected, pending, at)| match pending.receive() {
+                Ok(Some(reply)) => {
+                    replies += 1;
+                    let reply: CommandReply = *reply;
+                    match Reason::try_from(reply.reason) {
+                        Ok(reason) => {
+                            *reasons.entry(format!("{reason:?}")).or_default() += 1;
+                            let wrong = reply.sequence != request.sequence
+                                || expected.is_some_and(|e| e != reason && reason != Reason::Busy);
+                            if wrong {
+                                mismatched += 1;
+                                if examples.len() < 5 {
+                                    examples.push(format!(
+                                        "{request:?} → {reason:?}, expected {expected:?}"
+                                    ));
                                 }
                             }
-                            Err(_) => unknown += 1,
                         }
-                        false
+                        Err(_) => unknown += 1,
                     }
-                    _ if at.elapsed() > Duration::from_secs(2) => {
-                        lost += 1;
-                        false
-                    }
-                    _ => true,
+                    false
                 }
+                _ if at.elapsed() > Duration::from_secs(2) => {
+                    lost += 1;
+                    false
+                }
+                _ => true,
             });
+        }
+        // Where the stepper really is (velocity runs are stopped at the limits by the
+        // engine, not by the bytes on the wire).
+        if let Ok(board) = stepper.lock() {
+            let position = board.current_position();
+            extreme = extreme.max(position.unsigned_abs());
+            if let Some(outside) = spimotor_position_outside(position)
+                && positions_outside.len() < 5
+            {
+                positions_outside.push(outside);
+            }
         }
         std::thread::sleep(Duration::from_micros(200));
         if !server.is_running() {
@@ -172,19 +192,34 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
             .filter_map(|(_, mosi)| spimotor_out_of_limits(mosi)),
     );
     let rate = sent as f64 / attack_time.as_secs_f64();
-    row.figure("sent", format!("{sent} in {:.1} s ({rate:.0}/s)", attack_time.as_secs_f64()));
+    row.figure(
+        "sent",
+        format!("{sent} in {:.1} s ({rate:.0}/s)", attack_time.as_secs_f64()),
+    );
     row.figure(
         "replies by reason",
-        reasons.iter().map(|(k, v)| format!("{k} {v}")).collect::<Vec<_>>().join(", "),
+        reasons
+            .iter()
+            .map(|(k, v)| format!("{k} {v}"))
+            .collect::<Vec<_>>()
+            .join(", "),
     );
     let quiet_p99 = quiet.latency.quantile(0.99);
     let loaded_p99 = loaded.latency.quantile(0.99);
     row.figure(
         "tick latency p99 (deadline → frame sent)",
-        format!("quiet {:.0} µs / under attack {:.0} µs", quiet_p99 / 1e3, loaded_p99 / 1e3),
+        format!(
+            "quiet {:.0} µs / under attack {:.0} µs",
+            quiet_p99 / 1e3,
+            loaded_p99 / 1e3
+        ),
     );
     row.target("tick latency p99", loaded_p99, quiet_p99, 1.1);
-    row.check("server alive", alive && answers, format!("running {alive}, answers {answers}"));
+    row.check(
+        "server alive",
+        alive && answers,
+        format!("running {alive}, answers {answers}"),
+    );
     row.check(
         "every request answered once, with a reason",
         lost == 0 && unknown == 0 && send_errors == 0 && replies == sent,
@@ -198,7 +233,24 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
     row.check(
         "0 bytes outside an axis's limits",
         violations.is_empty(),
-        format!("{} out-of-limit writes: {:?}", violations.len(), violations.iter().take(5).collect::<Vec<_>>()),
+        format!(
+            "{} out-of-limit writes: {:?}",
+            violations.len(),
+            violations.iter().take(5).collect::<Vec<_>>()
+        ),
+    );
+    row.figure(
+        "stepper's farthest position",
+        format!("{extreme} steps (limits ±{})", FOCUS_LIMITS.1),
+    );
+    row.check(
+        "the stepper stays within its limits",
+        positions_outside.is_empty(),
+        format!("{:?}", positions_outside),
+    );
+    row.note(
+        "velocity runs on the SPI_motor are targets 2^30 steps away (the driver's run distance): \
+         not counted as out-of-limit bytes; the stepper's true position is checked instead",
     );
     for example in examples {
         row.note(example);
@@ -275,7 +327,11 @@ fn adversarial(rng: &mut SimRng, own: ClientId, sequence: u64) -> CommandRequest
     };
     let values = [value(rng, axis), value(rng, axis), value(rng, axis)];
     CommandRequest {
-        schema_version: if pick(rng) < 0.97 { SCHEMA_VERSION } else { rng.next_u64() as u32 },
+        schema_version: if pick(rng) < 0.97 {
+            SCHEMA_VERSION
+        } else {
+            rng.next_u64() as u32
+        },
         kind,
         client,
         sequence,
@@ -325,8 +381,11 @@ mod tests {
     #[test]
     fn the_oracle_follows_the_engines_order() {
         let me = ClientId::from_u128(7);
-        let mut r = CommandRequest::new(ClientId::NONE, 1, 0, CommandKind::Velocity)
-            .with_values([f64::NAN, 0.0, 0.0]);
+        let mut r = CommandRequest::new(ClientId::NONE, 1, 0, CommandKind::Velocity).with_values([
+            f64::NAN,
+            0.0,
+            0.0,
+        ]);
         assert_eq!(oracle(&r, me), Some(Reason::NotFinite));
         r.kind = 99;
         assert_eq!(oracle(&r, me), Some(Reason::UnknownKind));

@@ -123,7 +123,12 @@ impl Harness {
     /// Node records in the isolated root (one directory per node, live or dead).
     pub fn iox_nodes(&self) -> usize {
         std::fs::read_dir(self.iox_root.join("nodes"))
-            .map(|entries| entries.filter_map(Result::ok).filter(|e| e.path().is_dir()).count())
+            .map(|entries| {
+                entries
+                    .filter_map(Result::ok)
+                    .filter(|e| e.path().is_dir())
+                    .count()
+            })
             .unwrap_or(0)
     }
 

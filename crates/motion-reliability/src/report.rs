@@ -214,7 +214,10 @@ mod tests {
         assert!(row.verdict().starts_with("FAIL: 0 left moving"));
         let text = table(&[row.clone()]);
         assert!(text.contains("| 9 test |"), "{text}");
-        assert!(text.contains("[FAIL] 0 left moving: 2 left moving"), "{text}");
+        assert!(
+            text.contains("[FAIL] 0 left moving: 2 left moving"),
+            "{text}"
+        );
         assert_eq!(row.json()["passed"], false);
         assert_eq!(row.json()["targets"][0]["flagged"], true);
         // A quiet figure of 0 gives no ratio.

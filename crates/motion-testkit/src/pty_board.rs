@@ -92,7 +92,9 @@ impl Channel {
             0
         } else {
             let u = self.rng.next_f64().max(f64::MIN_POSITIVE);
-            (u.ln() / (1.0 - self.ber).ln()).floor().min(u64::MAX as f64) as u64
+            (u.ln() / (1.0 - self.ber).ln())
+                .floor()
+                .min(u64::MAX as f64) as u64
         };
     }
 

@@ -58,9 +58,10 @@ impl<B> Server<B> {
             .stderr(Stdio::piped())
             .spawn()
             .map_err(KitError::io(format!("start {}", bin.display())))?;
-        let stderr = child.stderr.take().ok_or_else(|| {
-            KitError::Timeout("the child's stderr pipe is missing".to_owned())
-        })?;
+        let stderr = child
+            .stderr
+            .take()
+            .ok_or_else(|| KitError::Timeout("the child's stderr pipe is missing".to_owned()))?;
         let (tx, rx) = mpsc::channel();
         std::thread::spawn(move || {
             for line in BufReader::new(stderr).lines().map_while(Result::ok) {

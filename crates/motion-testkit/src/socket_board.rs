@@ -51,8 +51,10 @@ impl SocketBoard {
         epoch: Instant,
     ) -> Result<Self, KitError> {
         let _ = std::fs::remove_file(path);
-        let listener = UnixListener::bind(path)
-            .map_err(KitError::io(format!("bind the SPI socket {}", path.display())))?;
+        let listener = UnixListener::bind(path).map_err(KitError::io(format!(
+            "bind the SPI socket {}",
+            path.display()
+        )))?;
         listener
             .set_nonblocking(true)
             .map_err(KitError::io("non-blocking accept"))?;
