@@ -28,6 +28,10 @@ pub struct Harness {
     pub quick: bool,
     /// Seed of every random choice.
     pub seed: u64,
+    /// The source tree (scripts/fuzz).
+    pub source: PathBuf,
+    /// Campaign 8: seconds per fuzz target.
+    pub fuzz_seconds: u64,
     iox_root: PathBuf,
     shm_prefix: String,
     names: Cell<u32>,
@@ -68,6 +72,8 @@ impl Harness {
             sim_config,
             quick,
             seed,
+            source: PathBuf::from("."),
+            fuzz_seconds: 0,
             iox_root,
             shm_prefix,
             names: Cell::new(0),
@@ -173,11 +179,6 @@ impl Samples {
         self.0.push(value);
     }
 
-    /// Adds every value of `other`.
-    pub fn extend(&mut self, other: &Self) {
-        self.0.extend_from_slice(&other.0);
-    }
-
     /// How many values.
     pub fn len(&self) -> usize {
         self.0.len()
@@ -202,11 +203,6 @@ impl Samples {
     /// The largest value, NaN when empty.
     pub fn max(&self) -> f64 {
         self.0.iter().copied().fold(f64::NAN, f64::max)
-    }
-
-    /// The mean, NaN when empty.
-    pub fn mean(&self) -> f64 {
-        self.0.iter().sum::<f64>() / self.0.len() as f64
     }
 
     /// `p50 a / p99 b / max c` with `unit` after each value scaled by `scale`.
@@ -301,14 +297,6 @@ impl TickMeter {
                 taken
             })
             .unwrap_or_default()
-    }
-
-    /// The newest frame seen.
-    pub fn last(&self) -> Option<MotionFrame> {
-        self.shared
-            .lock()
-            .ok()
-            .and_then(|data| data.last.as_deref().copied())
     }
 }
 
@@ -443,7 +431,6 @@ mod tests {
         assert_eq!(s.quantile(0.9999), 1000.0);
         assert_eq!(s.quantile(0.0), 1.0);
         assert_eq!(s.max(), 1000.0);
-        assert_eq!(s.mean(), 500.5);
         assert_eq!(s.p50_p99_max(0.001, "k"), "p50 0.5 / p99 1.0 / max 1.0 k");
     }
 

@@ -14,6 +14,10 @@ mod c2_crash;
 mod c3_links;
 mod c3_noise;
 mod c4_bad_input;
+mod c5_consumers;
+mod c6_config;
+mod c7_soak;
+mod c8_decoders;
 mod harness;
 mod jogger;
 mod report;
@@ -112,6 +116,10 @@ fn campaigns() -> Vec<(u32, &'static str, Campaign)> {
         (3, "3a links: unplug/replug", c3_links::run),
         (3, "3b links: line noise", c3_noise::run),
         (4, "4 bad input", c4_bad_input::run),
+        (5, "5 slow and many consumers", c5_consumers::run),
+        (6, "6 malformed configs", c6_config::run),
+        (7, "7 soak", c7_soak::run),
+        (8, "8 decoders", c8_decoders::run),
     ]
 }
 
@@ -133,7 +141,9 @@ fn run(cli: &Cli) -> anyhow::Result<bool> {
             true,
         ),
     };
-    let harness = Harness::new(&dir, &motiond, &sim_config, cli.quick, cli.seed)?;
+    let mut harness = Harness::new(&dir, &motiond, &sim_config, cli.quick, cli.seed)?;
+    harness.source = std::fs::canonicalize(&source).unwrap_or(source);
+    harness.fuzz_seconds = cli.fuzz_seconds;
     let started = Instant::now();
     let mut rows = Vec::new();
     for (number, label, campaign) in campaigns() {
