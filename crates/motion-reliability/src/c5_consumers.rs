@@ -37,7 +37,6 @@ const MAX_CLIENTS: u32 = 32;
 struct Churn {
     connected: AtomicU64,
     refused: AtomicU64,
-    no_info: AtomicU64,
     other: AtomicU64,
     examples: Mutex<Vec<String>>,
 }
@@ -47,14 +46,6 @@ impl Churn {
         match result {
             Ok(()) => {
                 self.connected.fetch_add(1, Ordering::Relaxed);
-            }
-            Err(text) if text.contains("published no server description") => {
-                self.no_info.fetch_add(1, Ordering::Relaxed);
-                if let Ok(mut examples) = self.examples.lock()
-                    && !examples.iter().any(|e| e.starts_with("no description"))
-                {
-                    examples.push(format!("no description: {text}"));
-                }
             }
             Err(text) if text.contains("max_clients") => {
                 self.refused.fetch_add(1, Ordering::Relaxed);
@@ -209,6 +200,26 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
         let _ = thread.join();
     }
     let logged = server.wait_for_log("raise [server] max_clients", Duration::from_secs(2));
+    // Past max_clients on purpose: clients that stay connected (each reading frames) until
+    // one is refused.
+    let mut kept = Vec::new();
+    let probe = loop {
+        if kept.len() > 2 * MAX_CLIENTS as usize {
+            break None;
+        }
+        let client = ClientBuilder::new(&name)
+            .connect_timeout(Duration::from_millis(300))
+            .connect::<ipc::Service>();
+        match client {
+            Ok(client) => match client.next_frame(Duration::from_secs(1)) {
+                Ok(_) => kept.push(client),
+                Err(e) => break Some(e.to_string()),
+            },
+            Err(e) => break Some(e.to_string()),
+        }
+    };
+    let held = kept.len();
+    drop(kept);
     // Everyone left: a new client connects and commands.
     std::thread::sleep(Duration::from_millis(300));
     let after = one_client(&name, Duration::ZERO);
@@ -219,18 +230,16 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
     drop(meter);
     let alive = server.is_running();
 
-    let (connected, refused, no_info, other) = (
+    let (connected, refused, other) = (
         churn.connected.load(Ordering::Relaxed),
         churn.refused.load(Ordering::Relaxed),
-        churn.no_info.load(Ordering::Relaxed),
         churn.other.load(Ordering::Relaxed),
     );
-    let cycles = connected + refused + no_info + other;
+    let cycles = connected + refused + other;
     row.figure(
         "client cycles",
         format!(
             "{cycles} in {:.0} s ({:.0}/s): {connected} served, {refused} refused at max_clients, \
-             {no_info} without a server description within 1 s (known issue, see the note), \
              {other} other failures",
             loaded_time.as_secs_f64(),
             cycles as f64 / loaded_time.as_secs_f64()
@@ -283,9 +292,17 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
         format!("{subscriber_errors:?}"),
     );
     row.check(
-        "max_clients exceeded and every refusal names it",
-        refused > 0 && other == 0,
+        "every failure of the churning clients names max_clients",
+        other == 0,
         format!("{refused} refusals naming max_clients, {other} other failures"),
+    );
+    row.check(
+        "clients kept past max_clients: refused, naming it",
+        probe
+            .as_ref()
+            .is_some_and(|text| text.contains("max_clients"))
+            && held <= MAX_CLIENTS as usize,
+        format!("{held} clients connected, then: {probe:?}"),
     );
     // The server looks at its slots once a second: a service full for less is not seen.
     let counted = stats.is_some_and(|s| s.full_events > 0);
@@ -309,16 +326,6 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
         for example in examples.iter() {
             row.note(example.clone());
         }
-    }
-    if no_info > 0 {
-        row.note(
-            "known issue: under this churn some clients see no ServerInfo within 1 s \
-             (motion-client's NoInfo, which asks whether the server is still starting up): the \
-             server is alive and ticking (SCHED_FIFO, few overruns), and re-publishing the info \
-             every 100 ms did not help, so those subscribers are not connected to the info \
-             publisher: iceoryx2 0.10's Publisher::update_connections re-runs its connection \
-             cycle only when the subscriber list changes and motiond ignores its Err",
-        );
     }
     row.note(
         "tick latency from the frames (publish_ns − time_ns: wake-up and work; frames carry \

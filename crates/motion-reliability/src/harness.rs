@@ -138,6 +138,23 @@ impl Harness {
             .unwrap_or(0)
     }
 
+    /// Removes the run's iceoryx2 root: its shared-memory segments in /dev/shm (the global
+    /// management segment among them: the prefix is this run's alone) and its directory.
+    pub fn remove_iox_root(&self) {
+        if let Ok(entries) = std::fs::read_dir("/dev/shm") {
+            for entry in entries.filter_map(Result::ok) {
+                if entry
+                    .file_name()
+                    .to_string_lossy()
+                    .starts_with(&self.shm_prefix)
+                {
+                    let _ = std::fs::remove_file(entry.path());
+                }
+            }
+        }
+        let _ = std::fs::remove_dir_all(&self.iox_root);
+    }
+
     /// The files [`Harness::iox_files`] counts, listed (for a report of leftovers).
     pub fn iox_listing(&self) -> Vec<String> {
         let mut names = Vec::new();

@@ -180,6 +180,7 @@ fn run(cli: &Cli) -> anyhow::Result<bool> {
             if cli.quick { "--quick" } else { "full run" }
         );
     }
+    harness.remove_iox_root();
     if remove {
         let _ = std::env::set_current_dir(std::env::temp_dir());
         let _ = std::fs::remove_dir_all(&dir);
