@@ -234,7 +234,7 @@ fn one_crash(
     i: u32,
 ) -> anyhow::Result<CrashRun> {
     // Mid-move: long ramps on both axes, and a jog guard that must not outlive the server.
-    let sign = if i % 2 == 0 { 1.0 } else { -1.0 };
+    let sign = if i.is_multiple_of(2) { 1.0 } else { -1.0 };
     let feeder = client.axis("feeder")?;
     let focus = client.axis("focus")?;
     feeder.ramp_to(sign * 400.0, 50.0, 0.0)?;

@@ -42,7 +42,11 @@ impl Motion<'_> {
             return;
         }
         self.leg += 1;
-        let sign = if self.leg % 2 == 0 { 1.0 } else { -1.0 };
+        let sign = if self.leg.is_multiple_of(2) {
+            1.0
+        } else {
+            -1.0
+        };
         let _ = self.x.ramp_to(sign * 5.0, 10.0, 0.0);
         let _ = self.focus.ramp_to(sign * 500.0, 500.0, 0.0);
         self.next = Instant::now() + Duration::from_millis(1200);

@@ -38,6 +38,9 @@ const IN_FLIGHT: usize = 8;
 type Pending =
     iceoryx2::pending_response::PendingResponse<ipc::Service, CommandRequest, (), CommandReply, ()>;
 
+/// A request sent: itself, the oracle's reason, its pending reply, when it left.
+type InFlight = (CommandRequest, Option<Reason>, Pending, Instant);
+
 /// Runs the campaign.
 pub fn run(h: &Harness) -> anyhow::Result<Row> {
     let total: u64 = if h.quick { 20_000 } else { 1_000_000 };
@@ -84,8 +87,7 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
     std::thread::sleep(quiet_time);
     let quiet = meter.take();
     let mut rng = SimRng::new(h.seed ^ 0xBAD1);
-    let mut in_flight: [Vec<(CommandRequest, Option<Reason>, Pending, Instant)>; 2] =
-        [Vec::new(), Vec::new()];
+    let mut in_flight: [Vec<InFlight>; 2] = [Vec::new(), Vec::new()];
     let (mut sent, mut replies, mut lost, mut unknown, mut mismatched, mut send_errors) =
         (0u64, 0u64, 0u64, 0u64, 0u64, 0u64);
     let mut reasons: BTreeMap<String, u64> = BTreeMap::new();
