@@ -17,7 +17,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use anyhow::{Context, bail};
-use motion_ipc::{AxisFlags, AxisMode, DeviceState, MotionFrame};
+use motion_ipc::{AxisFlags, AxisMode, CommandKind, DeviceState, MotionFrame};
 use motion_sim::qsb::{QsbSim, QsbSimConfig};
 use motion_sim::rng::SimRng;
 use motion_testkit::RawClient;
@@ -70,17 +70,20 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
         ),
     )?;
     let mut server = h.server(&config)?;
-    let watcher = RawClient::try_connect(&name, Duration::from_secs(10))?;
+    let mut watcher = RawClient::try_connect(&name, Duration::from_secs(10))?;
     match watcher.try_wait_frame(Duration::from_secs(10), |f| online(f, 0)) {
         Some((_, true)) => {}
         _ => bail!("the QSB axis is not online after 10 s"),
     }
     let mut rng = SimRng::new(h.seed ^ 0xD1E5);
     let mut failures: Vec<String> = Vec::new();
+    let mut board_resets = 0u32;
+    let mut fault_codes: std::collections::BTreeMap<String, u32> = Default::default();
     for signal in [Signal::SIGKILL, Signal::SIGSTOP] {
         let mut latency = Samples::default();
         let mut left_moving = 0u32;
         let mut no_stop = 0u32;
+        let mut not_started = 0u32;
         for i in 0..count {
             let velocity = if i % 2 == 0 { JOG } else { -JOG };
             let outcome = one_kill(
@@ -94,12 +97,28 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
                     }
                     left_moving += u32::from(outcome.left_moving);
                 }
+                // The jog never ran (the signal was not sent): nothing to stop.
                 Err(e) => {
                     if failures.len() < 5 {
                         failures.push(format!("{signal:?} #{i}: {e:#}"));
                     }
-                    no_stop += 1;
+                    not_started += 1;
                 }
+            }
+            // A fault latched meanwhile (the board's or the axis's) would refuse every
+            // later jog: reset it, and count it.
+            let faulted = watcher.try_wait_frame(Duration::from_millis(200), |f| {
+                let a = f.axes()[0];
+                a.fault != 0 || a.device_state() == Ok(DeviceState::Faulted)
+            });
+            if let Some((frame, true)) = faulted {
+                board_resets += 1;
+                let a = frame.axes()[0];
+                *fault_codes
+                    .entry(format!("{:?}/{:?}", a.fault(), a.device_state()))
+                    .or_insert(0u32) += 1;
+                let _ = watcher.try_command(0, CommandKind::Reset, [0.0; 3]);
+                let _ = watcher.try_wait_frame(Duration::from_secs(3), |f| online(f, 0));
             }
             if !server.is_running() {
                 bail!("motiond died during the {signal:?} runs (#{i})");
@@ -122,7 +141,14 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
         row.check(
             &format!("{label}: a stop reached the wire every time"),
             no_stop == 0,
-            format!("{no_stop} of {count} runs without a stop command within 3 s"),
+            format!(
+                "{no_stop} of {} jogs signalled without a stop command within 3 s",
+                count - not_started
+            ),
+        );
+        row.figure(
+            &format!("{label}: jogs that never started (no signal sent)"),
+            format!("{not_started} of {count}"),
         );
         // The bound (see the module docs): timing, so a target, never a failure.
         let bound = if signal == Signal::SIGKILL {
@@ -137,6 +163,10 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
             1.0,
         );
     }
+    row.figure(
+        "faults latched between runs (reset)",
+        format!("{board_resets} (axis fault/device state: {fault_codes:?})"),
+    );
     for failure in failures {
         row.note(failure);
     }
