@@ -22,6 +22,9 @@ use crate::received::{LatestCache, Received};
 use crate::session::{Seen, Session};
 use crate::{Axis, ClientError, ConnectError, Restart};
 
+/// How long a connecting client waits for the server description once its info subscriber
+/// exists (at least; the connect timeout when longer).
+const INFO_WAIT: Duration = Duration::from_millis(500);
 /// A [`MotionFrame`] still in shared memory.
 pub type Frame<S> = Received<S, MotionFrame>;
 /// A [`ServerInfo`] still in shared memory.
@@ -226,9 +229,12 @@ impl<S: Service> Client<S> {
         let (subscriber, _) =
             ports::open_subscriber::<S, ServerInfo>(&node, &opening, &names.info())?;
         let info = LatestCache::new(subscriber);
-        // The server delivers its history sample when it next updates its connections.
-        let info_timeout = options.connect_timeout.max(Duration::from_millis(500));
-        let info_deadline = started + info_timeout;
+        // The server delivers its history sample when it next updates its connections: it
+        // gets half a second from the moment the subscriber exists, however much of the
+        // connect timeout waiting for a free slot took (a client that got the last slot
+        // late was told that the server was still starting up).
+        let info_timeout = options.connect_timeout.max(INFO_WAIT);
+        let info_deadline = (started + info_timeout).max(Instant::now() + INFO_WAIT);
         let description = loop {
             let received = info.refresh().map_err(|error| ConnectError::Ipc {
                 what: "receive the server description",
@@ -241,7 +247,7 @@ impl<S: Service> Client<S> {
                 return Err(ConnectError::NoInfo {
                     name: server,
                     service: names.info(),
-                    waited: info_timeout,
+                    waited: started.elapsed(),
                 });
             }
             std::thread::sleep(Duration::from_millis(5));

@@ -7,10 +7,10 @@ use std::time::Instant;
 use iceoryx2::node::NodeBuilder;
 use iceoryx2::prelude::{ServiceName, local};
 use motion_client::ipc::{
-    AxisMode, CommandKind, CommandReply, CommandRequest, MotionFrame, ServiceNames,
+    AxisMode, CommandKind, CommandReply, CommandRequest, MotionFrame, ServerInfo, ServiceNames,
 };
 use motion_client::testing::{FakeConfig, FakeServer, unique_name};
-use motion_client::{Client, ClientError, ConnectError, EstopPath, estop, stop_all};
+use motion_client::{Client, ClientBuilder, ClientError, ConnectError, EstopPath, estop, stop_all};
 
 type Result<T = ()> = core::result::Result<T, Box<dyn std::error::Error>>;
 
@@ -148,6 +148,60 @@ fn take_frame_slots(
         held.push(service.subscriber_builder().create()?);
     }
     Ok(held)
+}
+
+/// A client that can open the info service only at the end of its connect timeout (every
+/// node slot of the service taken until then: it retries) still gets the server
+/// description: it was told "published no server description …; is it still starting
+/// up?" (found by the reliability campaign 5, 64 clients churning past `max_clients`).
+#[test]
+fn a_client_that_waited_for_a_node_slot_still_gets_the_description() -> Result {
+    // A slow server (4 ticks/s: history delivered up to 250 ms after the subscriber came).
+    let mut config = FakeConfig::demo(&unique_name("late_slot"));
+    config.tick_hz = 4;
+    let server = FakeServer::start::<local::Service>(config)?;
+    let name = server.name().to_owned();
+    let (held_tx, held_rx) = std::sync::mpsc::channel();
+    // Every node slot of the info service, held by nodes of a thread of its own (ports stay
+    // on their thread) until shortly before the client's connect timeout ends.
+    let hog = std::thread::spawn(move || -> core::result::Result<usize, String> {
+        let service_name =
+            ServiceName::new(&ServiceNames::new(&name).info()).map_err(|e| format!("{e:?}"))?;
+        let mut held = Vec::new();
+        loop {
+            let node = NodeBuilder::new()
+                .create::<local::Service>()
+                .map_err(|e| format!("{e:?}"))?;
+            match node
+                .service_builder(&service_name)
+                .publish_subscribe::<ServerInfo>()
+                .open()
+            {
+                Ok(service) => held.push((service, node)),
+                Err(_) if !held.is_empty() => break,
+                Err(e) => return Err(format!("{e:?}")),
+            }
+        }
+        let count = held.len();
+        let _ = held_tx.send(());
+        std::thread::sleep(Duration::from_millis(940));
+        drop(held);
+        Ok(count)
+    });
+    held_rx.recv_timeout(WAIT)?;
+    let started = Instant::now();
+    let client = ClientBuilder::new(server.name())
+        .connect_timeout(Duration::from_secs(1))
+        .connect::<local::Service>();
+    let held = hog.join().map_err(|_| "the slot holder panicked")??;
+    let client = client?;
+    assert!(held > 0);
+    assert!(
+        started.elapsed() >= Duration::from_millis(900),
+        "the slots were held"
+    );
+    assert_eq!(client.axis("x")?.name(), "x");
+    Ok(())
 }
 
 #[test]

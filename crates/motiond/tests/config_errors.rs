@@ -132,16 +132,58 @@ fn duplicate_axis() {
     let text = format!("{GOOD}\n{}", axis.replace("channel = 0", "channel = 1"));
     let (code, stderr) = check("dup_axis.toml", &text);
     assert_eq!(code, Some(1));
-    let second = text.rfind("[[axis]]").unwrap();
+    // On the second axis's `name` value (line and column), with the table's index in the
+    // key, as every other issue (it was the table's first line and `axis.name`).
+    let second = text.rfind("name = \"x\"").unwrap();
     let line = text[..second].matches('\n').count() + 1;
     assert!(
-        stderr.contains(&format!("dup_axis.toml:{line}:")),
+        stderr.contains(&format!("dup_axis.toml:{line}:8: `axis[1].name`")),
         "{stderr}"
     );
+    assert!(stderr.contains("already defined"), "{stderr}");
+}
+
+#[test]
+fn duplicate_link_and_device_names_are_located_at_the_name() {
+    let link = &GOOD[GOOD.find("[[link]]").unwrap()..GOOD.find("[[device]]").unwrap()];
+    let text = GOOD.replacen("[[device]]", &format!("{link}[[device]]"), 1);
+    let (code, stderr) = check("dup_link.toml", &text);
+    assert_eq!(code, Some(1));
+    let second = text.rfind("name = \"bus\"").unwrap();
+    let line = text[..second].matches('\n').count() + 1;
     assert!(
-        stderr.contains("`axis.name`") && stderr.contains("already defined"),
+        stderr.contains(&format!("dup_link.toml:{line}:8: `link[1].name`")),
         "{stderr}"
     );
+    let device = &GOOD[GOOD.find("[[device]]").unwrap()..GOOD.find("[[axis]]").unwrap()];
+    let text = GOOD.replacen(
+        "[[axis]]",
+        &format!("{}[[axis]]", device.replace("address = 1", "address = 2")),
+        1,
+    );
+    let (code, stderr) = check("dup_device.toml", &text);
+    assert_eq!(code, Some(1));
+    let second = text.rfind("name = \"pack\"").unwrap();
+    let line = text[..second].matches('\n').count() + 1;
+    assert!(
+        stderr.contains(&format!("dup_device.toml:{line}:8: `device[1].name`")),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn a_table_of_the_wrong_type_is_called_a_table() {
+    // serde says "expected struct RawCurrent": the parser's own type name.
+    let text = GOOD.replace("max_accel = 100.0", "max_accel = 100.0\ncurrent = 7");
+    assert_fails(
+        "table_type.toml",
+        &text,
+        "current = 7",
+        "axis[0].current",
+        "expected a table",
+    );
+    let (_, stderr) = check("table_type.toml", &text);
+    assert!(!stderr.contains("Raw"), "{stderr}");
 }
 
 #[test]

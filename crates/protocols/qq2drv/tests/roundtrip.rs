@@ -81,7 +81,10 @@ fn entries<T: std::fmt::Debug>(s: impl Strategy<Value = T>) -> impl Strategy<Val
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(256))]
+    #![proptest_config(ProptestConfig::with_cases(
+        // scripts/fuzz without a nightly toolchain asks for more.
+        std::env::var("PROPTEST_CASES").ok().and_then(|c| c.parse().ok()).unwrap_or(256)
+    ))]
 
     #[test]
     fn simple_requests(period in any::<u16>(), cfg in any::<u8>(), len in any::<u8>(), bits in any::<u8>()) {

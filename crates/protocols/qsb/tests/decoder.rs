@@ -52,7 +52,10 @@ fn feed_responses(stream: &[u8], chunk: usize) -> (Vec<Response>, u64) {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(48))]
+    #![proptest_config(ProptestConfig::with_cases(
+        // scripts/fuzz without a nightly toolchain asks for more.
+        std::env::var("PROPTEST_CASES").ok().and_then(|c| c.parse().ok()).unwrap_or(48)
+    ))]
 
     #[test]
     fn response_stream_every_chunk_size_with_garbage(

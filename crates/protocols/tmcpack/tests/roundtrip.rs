@@ -6,7 +6,10 @@ use proptest::prelude::*;
 use tmcpack::{ReplyFrame, RequestFrame};
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(2000))]
+    #![proptest_config(ProptestConfig::with_cases(
+        // scripts/fuzz without a nightly toolchain asks for more.
+        std::env::var("PROPTEST_CASES").ok().and_then(|c| c.parse().ok()).unwrap_or(2000)
+    ))]
 
     #[test]
     fn request_round_trip(address in any::<u8>(), req in common::request()) {

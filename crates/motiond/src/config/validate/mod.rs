@@ -47,6 +47,13 @@ pub(crate) fn parse(source: &str) -> Result<ServerConfig, Vec<ConfigIssue>> {
     }
 }
 
+/// The span of a table's `name` value, else of the whole table.
+fn name_span<T>(table: &Spanned<T>, name: impl Fn(&T) -> &Option<Spanned<String>>) -> Range<usize> {
+    name(table.get_ref())
+        .as_ref()
+        .map_or(table.span(), Spanned::span)
+}
+
 /// A serde/TOML message in the user's words: no Rust type names (`i64`, `i128 `…); an
 /// integer beyond 64 bits says so.
 fn plain_serde_message(message: &str) -> String {
@@ -64,6 +71,13 @@ fn plain_serde_message(message: &str) -> String {
     }
     for rust in [" as i64", " as u64", " as f64"] {
         text = text.replace(rust, "");
+    }
+    // serde names the parser's own structs (`expected struct RawSim`): a table to the user.
+    while let Some(at) = text.find("struct Raw") {
+        let end = text[at + "struct ".len()..]
+            .find(|c: char| !c.is_ascii_alphanumeric())
+            .map_or(text.len(), |n| at + "struct ".len() + n);
+        text.replace_range(at..end, "a table");
     }
     if beyond {
         text.push_str(" (the integer is beyond the 64-bit range every key has)");
@@ -222,10 +236,10 @@ impl Validator<'_, '_> {
             .collect();
         self.duplicates(
             "link",
-            links
-                .iter()
-                .flatten()
-                .map(|(name, link)| (name.as_str(), link.span())),
+            links.iter().enumerate().filter_map(|(index, link)| {
+                link.as_ref()
+                    .map(|(name, link)| (index, name.as_str(), name_span(link, |l| &l.name)))
+            }),
         );
         let link_names: Vec<Option<String>> = links
             .iter()
@@ -240,9 +254,14 @@ impl Validator<'_, '_> {
             .collect();
         self.duplicates(
             "device",
-            devices.iter().zip(&raw.device).filter_map(|(spec, raw)| {
-                spec.as_ref().map(|spec| (spec.name.as_str(), raw.span()))
-            }),
+            devices
+                .iter()
+                .zip(&raw.device)
+                .enumerate()
+                .filter_map(|(index, (spec, raw))| {
+                    spec.as_ref()
+                        .map(|spec| (index, spec.name.as_str(), name_span(raw, |d| &d.name)))
+                }),
         );
         let links = self.links(&links, &devices, &raw.device);
         let axes: Vec<Option<(AxisConfig, AxisSpec)>> = raw
@@ -263,9 +282,13 @@ impl Validator<'_, '_> {
         let signals = self.signals(&raw.signal, &devices, &raw.device);
         self.duplicates(
             "axis",
-            axes.iter().zip(&raw.axis).filter_map(|(axis, raw)| {
-                axis.as_ref().map(|axis| (axis.name.as_str(), raw.span()))
-            }),
+            axes.iter()
+                .zip(&raw.axis)
+                .enumerate()
+                .filter_map(|(index, (axis, raw))| {
+                    axis.as_ref()
+                        .map(|axis| (index, axis.name.as_str(), name_span(raw, |a| &a.name)))
+                }),
         );
         for (index, axis) in axes.iter().enumerate() {
             let Some(axis) = axis else { continue };
@@ -299,13 +322,22 @@ impl Validator<'_, '_> {
         }
     }
 
-    fn duplicates<'a>(&mut self, what: &str, items: impl Iterator<Item = (&'a str, Range<usize>)>) {
+    /// Every table whose name an earlier table of its kind has: an issue on its `name`
+    /// (`items`: the table's index, its name, the span of its `name` value).
+    fn duplicates<'a>(
+        &mut self,
+        what: &str,
+        items: impl Iterator<Item = (usize, &'a str, Range<usize>)>,
+    ) {
         let items: Vec<_> = items.collect();
-        for (index, (name, span)) in items.iter().enumerate() {
-            if items[..index].iter().any(|(earlier, _)| earlier == name) {
+        for (position, (index, name, span)) in items.iter().enumerate() {
+            if items[..position]
+                .iter()
+                .any(|(_, earlier, _)| earlier == name)
+            {
                 self.issue(
                     span.clone(),
-                    &format!("{what}.name"),
+                    &format!("{what}[{index}].name"),
                     format!("a {what} called `{name}` is already defined; names must be unique"),
                 );
             }

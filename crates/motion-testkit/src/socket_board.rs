@@ -1,4 +1,4 @@
-//! A simulated SPI board served on a Unix socket by a thread of the test process (the SPI
+//! A simulated SPI board served on a Unix socket by a thread of the calling process (the SPI
 //! socket contract: a `u16` LE length and the MOSI bytes in, as many MISO bytes out), so that
 //! motiond (a child process) talks to it through a `spi-socket` link while the test watches
 //! and changes the model, and reads every transaction the server clocked out.
@@ -14,10 +14,13 @@ use std::time::Instant;
 
 use motion_link::sim::SpiDevice;
 
+use crate::KitError;
+
 /// Every MOSI transaction the server sent, with its time since the board's epoch.
 pub type Transactions = Arc<Mutex<Vec<(Duration, Vec<u8>)>>>;
 
 /// A board model listening on `path`.
+#[derive(Debug)]
 pub struct SocketBoard {
     stop: Arc<AtomicBool>,
     thread: Option<JoinHandle<()>>,
@@ -30,28 +33,47 @@ pub struct SocketBoard {
 }
 
 impl SocketBoard {
-    /// Serves `device` on a new socket at `path` (replacing a stale one).
-    pub fn start<D: SpiDevice + 'static>(
+    /// Serves `device` on a new socket at `path` (replacing a stale one); panics when the
+    /// socket cannot be made.
+    pub fn start<D: SpiDevice + Send + 'static>(
         path: &Path,
         device: Arc<Mutex<D>>,
         epoch: Instant,
     ) -> Self {
+        Self::try_start(path, device, epoch)
+            .unwrap_or_else(|e| panic!("serve a board on an SPI socket: {e}"))
+    }
+
+    /// [`SocketBoard::start`] with the reason when it fails.
+    pub fn try_start<D: SpiDevice + Send + 'static>(
+        path: &Path,
+        device: Arc<Mutex<D>>,
+        epoch: Instant,
+    ) -> Result<Self, KitError> {
         let _ = std::fs::remove_file(path);
-        let listener = UnixListener::bind(path).expect("bind the SPI socket");
-        listener.set_nonblocking(true).expect("non-blocking accept");
+        let listener = UnixListener::bind(path).map_err(KitError::io(format!(
+            "bind the SPI socket {}",
+            path.display()
+        )))?;
+        listener
+            .set_nonblocking(true)
+            .map_err(KitError::io("non-blocking accept"))?;
         let stop = Arc::new(AtomicBool::new(false));
         let transactions: Transactions = Arc::default();
         let thread = {
             let (stop, transactions) = (Arc::clone(&stop), Arc::clone(&transactions));
-            std::thread::spawn(move || serve(&listener, &device, &stop, &transactions, epoch))
+            std::thread::Builder::new()
+                .name("spi-board".to_owned())
+                .spawn(move || serve(&listener, &device, &stop, &transactions, epoch))
+                .map_err(KitError::io("spawn the SPI socket thread"))?
         };
-        Self {
+        Ok(Self {
             stop,
             thread: Some(thread),
             path: path.to_owned(),
             transactions,
             epoch,
-        }
+        })
     }
 
     /// Model time now.
@@ -63,11 +85,21 @@ impl SocketBoard {
     pub fn sent_since(&self, since: Duration) -> Vec<Vec<u8>> {
         self.transactions
             .lock()
-            .expect("log")
-            .iter()
-            .filter(|(at, _)| *at >= since)
-            .map(|(_, mosi)| mosi.clone())
-            .collect()
+            .map(|log| {
+                log.iter()
+                    .filter(|(at, _)| *at >= since)
+                    .map(|(_, mosi)| mosi.clone())
+                    .collect()
+            })
+            .unwrap_or_default()
+    }
+
+    /// Takes every transaction logged so far out of the log.
+    pub fn take_transactions(&self) -> Vec<(Duration, Vec<u8>)> {
+        self.transactions
+            .lock()
+            .map(|mut log| core::mem::take(&mut *log))
+            .unwrap_or_default()
     }
 }
 
@@ -92,7 +124,9 @@ fn serve<D: SpiDevice>(
         let mut conn = match listener.accept() {
             Ok((conn, _)) => conn,
             Err(e) if e.kind() == ErrorKind::WouldBlock => {
-                device.lock().expect("device").advance(epoch.elapsed());
+                if let Ok(mut device) = device.lock() {
+                    device.advance(epoch.elapsed());
+                }
                 std::thread::sleep(Duration::from_millis(1));
                 continue;
             }
@@ -106,7 +140,9 @@ fn serve<D: SpiDevice>(
                 Ok(0) => break,
                 Ok(n) => pending.extend_from_slice(&buf[..n]),
                 Err(e) if matches!(e.kind(), ErrorKind::WouldBlock | ErrorKind::TimedOut) => {
-                    device.lock().expect("device").advance(epoch.elapsed());
+                    if let Ok(mut device) = device.lock() {
+                        device.advance(epoch.elapsed());
+                    }
                     continue;
                 }
                 Err(_) => break,
@@ -120,11 +156,12 @@ fn serve<D: SpiDevice>(
                 pending.drain(..2 + len);
                 let mut miso = vec![0xFF; len];
                 let now = epoch.elapsed();
-                device
-                    .lock()
-                    .expect("device")
-                    .transfer(now, &mosi, &mut miso);
-                transactions.lock().expect("log").push((now, mosi));
+                if let Ok(mut device) = device.lock() {
+                    device.transfer(now, &mosi, &mut miso);
+                }
+                if let Ok(mut log) = transactions.lock() {
+                    log.push((now, mosi));
+                }
                 if conn.write_all(&miso).is_err() {
                     return;
                 }
