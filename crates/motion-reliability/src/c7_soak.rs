@@ -111,7 +111,7 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
         let result: Result<(), ClientError> = if choice < 0.45 {
             let span = info.max_velocity * rng.range_f64(-1.0, 1.0);
             let margin = (info.max - info.min) * 0.05;
-            axis.move_to((position + span).clamp(info.min + margin, info.max - margin))
+            axis.position((position + span).clamp(info.min + margin, info.max - margin))
                 .map(drop)
         } else if choice < 0.8 {
             let velocity = info.max_velocity * rng.range_f64(-0.5, 0.5);
