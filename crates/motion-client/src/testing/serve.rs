@@ -5,9 +5,11 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, mpsc};
 use std::time::Instant;
 
+use iceoryx2::node::Node;
+use iceoryx2::port::publisher::Publisher;
 use iceoryx2::port::update_connections::UpdateConnections;
 use iceoryx2::prelude::{
-    NodeBuilder, NodeName, PayloadHeader as _, ServiceName, SignalHandlingMode,
+    NodeBuilder, NodeName, PayloadHeader as _, ServiceName, SignalHandlingMode, ZeroCopySend,
 };
 use iceoryx2::service::Service;
 use motion_ipc::{
@@ -52,6 +54,29 @@ impl Drop for SignalRegistration {
             signal_hook::low_level::unregister(id);
         }
     }
+}
+
+/// A publisher of a rarely published payload whose newest sample a late subscriber gets
+/// (history 1), as the real server's info, stats and params services.
+fn latest_publisher<S: Service, T: core::fmt::Debug + ZeroCopySend + 'static>(
+    node: &Node<S>,
+    name: &ServiceName,
+    what: &str,
+    max: usize,
+    max_nodes: usize,
+) -> Result<Publisher<S, T, ()>, String> {
+    node.service_builder(name)
+        .publish_subscribe::<T>()
+        .history_size(1)
+        .subscriber_max_buffer_size(1)
+        .max_subscribers(max)
+        .max_publishers(2)
+        .max_nodes(max_nodes)
+        .open_or_create()
+        .map_err(|e| format!("fake server: {what} service: {e:?}"))?
+        .publisher_builder()
+        .create()
+        .map_err(|e| format!("fake server: {what} publisher: {e:?}"))
 }
 
 #[allow(clippy::too_many_lines)]
@@ -105,45 +130,22 @@ fn serve_inner<S: Service>(
         .listener_builder()
         .create()
         .map_err(|e| fail("estop listener")(&e))?;
-    let info_publisher = node
-        .service_builder(&service(names.info())?)
-        .publish_subscribe::<ServerInfo>()
-        .history_size(1)
-        .subscriber_max_buffer_size(1)
-        .max_subscribers(max)
-        .max_publishers(2)
-        .max_nodes(max_nodes)
-        .open_or_create()
-        .map_err(|e| fail("info service")(&e))?
-        .publisher_builder()
-        .create()
-        .map_err(|e| fail("info publisher")(&e))?;
-    let stats_publisher = node
-        .service_builder(&service(names.stats())?)
-        .publish_subscribe::<ServerStats>()
-        .history_size(1)
-        .subscriber_max_buffer_size(1)
-        .max_subscribers(max)
-        .max_publishers(2)
-        .max_nodes(max_nodes)
-        .open_or_create()
-        .map_err(|e| fail("stats service")(&e))?
-        .publisher_builder()
-        .create()
-        .map_err(|e| fail("stats publisher")(&e))?;
-    let params_publisher = node
-        .service_builder(&service(names.params())?)
-        .publish_subscribe::<MachineParams>()
-        .history_size(1)
-        .subscriber_max_buffer_size(1)
-        .max_subscribers(max)
-        .max_publishers(2)
-        .max_nodes(max_nodes)
-        .open_or_create()
-        .map_err(|e| fail("params service")(&e))?
-        .publisher_builder()
-        .create()
-        .map_err(|e| fail("params publisher")(&e))?;
+    let info_publisher =
+        latest_publisher::<S, ServerInfo>(&node, &service(names.info())?, "info", max, max_nodes)?;
+    let stats_publisher = latest_publisher::<S, ServerStats>(
+        &node,
+        &service(names.stats())?,
+        "stats",
+        max,
+        max_nodes,
+    )?;
+    let params_publisher = latest_publisher::<S, MachineParams>(
+        &node,
+        &service(names.params())?,
+        "params",
+        max,
+        max_nodes,
+    )?;
     // The frame service comes last, as in the real server.
     let frames = node
         .service_builder(&service(names.frame())?)
