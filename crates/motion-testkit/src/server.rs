@@ -48,16 +48,29 @@ impl Server<Explicit> {
     }
 }
 
+impl Server<Explicit> {
+    /// Starts `command` (motiond, or a wrapper that ends in motiond: `runuser`, a fake
+    /// service manager's environment) with stdin and stdout closed and stderr collected.
+    pub fn spawn_command(command: Command) -> Result<Self, KitError> {
+        Self::spawn_with(command)
+    }
+}
+
 impl<B> Server<B> {
     fn spawn_binary(bin: &Path, path: &Path) -> Result<Self, KitError> {
-        let mut child = Command::new(bin)
-            .arg("--config")
-            .arg(path)
+        let mut command = Command::new(bin);
+        command.arg("--config").arg(path);
+        Self::spawn_with(command)
+    }
+
+    fn spawn_with(mut command: Command) -> Result<Self, KitError> {
+        let program = command.get_program().to_string_lossy().into_owned();
+        let mut child = command
             .stdin(Stdio::null())
             .stdout(Stdio::null())
             .stderr(Stdio::piped())
             .spawn()
-            .map_err(KitError::io(format!("start {}", bin.display())))?;
+            .map_err(KitError::io(format!("start {program}")))?;
         let stderr = child
             .stderr
             .take()
@@ -113,15 +126,30 @@ impl<B> Server<B> {
     ) -> Option<i32> {
         let pid = nix::unistd::Pid::from_raw(self.child.id() as i32);
         let _ = nix::sys::signal::kill(pid, signal);
+        self.wait(timeout)
+    }
+
+    /// Waits up to `timeout` for the exit status (`None`: still running, or killed by a
+    /// signal), then collects the log up to the end of the stderr pipe.
+    pub fn wait(&mut self, timeout: Duration) -> Option<i32> {
         let end = Instant::now() + timeout;
         while Instant::now() < end {
             if let Ok(Some(status)) = self.child.try_wait() {
-                self.drain_log();
+                // The reader thread ends at EOF (the channel disconnects then).
+                while let Ok(line) = self.stderr.recv_timeout(Duration::from_millis(200)) {
+                    self.log.push(line);
+                }
                 return status.code();
             }
             std::thread::sleep(Duration::from_millis(10));
         }
         None
+    }
+
+    /// The log so far, one string.
+    pub fn log_text(&mut self) -> String {
+        self.drain_log();
+        self.log.join("\n")
     }
 
     /// Whether the process still runs.

@@ -152,7 +152,7 @@ fn run_until_ready(
 ) -> String {
     let mut manager = FakeManager::new(stage.dir());
     command.env("NOTIFY_SOCKET", &manager.path);
-    let mut server = Motiond::spawn(command);
+    let mut server = Motiond::spawn_command(command).expect("start motiond");
     let ready = manager.wait_for(Duration::from_secs(30), |m| m.contains("READY=1"));
     let log = server.log_text();
     assert!(
@@ -229,7 +229,9 @@ fn a_non_root_server_gets_real_time_with_the_unit_s_capabilities_or_limits_and_s
 
     // The same with --require-rt: it refuses to run, saying why.
     let stage = Stage::new("require", owner);
-    let mut server = Motiond::spawn(as_user(&stage, &user, &bare, false, &["--require-rt"]));
+    let mut server =
+        Motiond::spawn_command(as_user(&stage, &user, &bare, false, &["--require-rt"]))
+            .expect("start motiond");
     assert_eq!(server.wait(Duration::from_secs(20)), Some(1));
     let log = server.log_text();
     assert!(

@@ -25,7 +25,7 @@ fn ready_waits_for_every_device_then_the_watchdog_is_fed_until_stopping() {
         .env("NOTIFY_SOCKET", &manager.path)
         .env("WATCHDOG_USEC", "400000")
         .env_remove("WATCHDOG_PID");
-    let mut server = Motiond::spawn(command);
+    let mut server = Motiond::spawn_command(command).expect("start motiond");
 
     let ready = manager.wait_for(Duration::from_secs(20), |m| m.contains("READY=1"));
     assert!(
@@ -114,7 +114,7 @@ fn a_bad_notify_socket_is_only_a_warning() {
         .arg("--config")
         .arg(&config)
         .env("NOTIFY_SOCKET", "relative/socket");
-    let mut server = Motiond::spawn(command);
+    let mut server = Motiond::spawn_command(command).expect("start motiond");
     assert!(
         server.wait_for_log("device `pumps` online", Duration::from_secs(20)),
         "{}",

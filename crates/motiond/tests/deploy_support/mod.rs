@@ -3,12 +3,9 @@
 #![allow(dead_code)]
 
 use core::time::Duration;
-use std::io::{BufRead, BufReader};
 use std::os::unix::fs::PermissionsExt as _;
 use std::os::unix::net::UnixDatagram;
 use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
-use std::sync::mpsc;
 use std::time::Instant;
 
 /// A scratch directory every user can read, removed on drop.
@@ -140,100 +137,6 @@ max_accel = 500.0
     )
 }
 
-/// A running motiond (killed on drop) with its stderr lines.
-pub struct Motiond {
-    pub child: Child,
-    lines: mpsc::Receiver<String>,
-    pub log: Vec<String>,
-}
-
-impl Motiond {
-    /// Spawns `command` (motiond, or a wrapper that ends in motiond) with stderr captured.
-    pub fn spawn(mut command: Command) -> Self {
-        let mut child = command
-            .stdin(Stdio::null())
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .expect("start motiond");
-        let stderr = child.stderr.take().expect("stderr");
-        let (tx, lines) = mpsc::channel();
-        std::thread::spawn(move || {
-            for line in BufReader::new(stderr).lines().map_while(Result::ok) {
-                if tx.send(line).is_err() {
-                    break;
-                }
-            }
-        });
-        Self {
-            child,
-            lines,
-            log: Vec::new(),
-        }
-    }
-
-    /// Collects stderr until a line contains `needle` (or `timeout`).
-    pub fn wait_for_log(&mut self, needle: &str, timeout: Duration) -> bool {
-        if self.log.iter().any(|l| l.contains(needle)) {
-            return true;
-        }
-        let end = Instant::now() + timeout;
-        while let Some(left) = end.checked_duration_since(Instant::now()) {
-            match self.lines.recv_timeout(left) {
-                Ok(line) => {
-                    let hit = line.contains(needle);
-                    self.log.push(line);
-                    if hit {
-                        return true;
-                    }
-                }
-                Err(_) => return false,
-            }
-        }
-        false
-    }
-
-    /// Sends `signal`, waits up to `timeout` for the exit status, collects the log.
-    pub fn signal_and_wait(
-        &mut self,
-        signal: nix::sys::signal::Signal,
-        timeout: Duration,
-    ) -> Option<i32> {
-        let pid = nix::unistd::Pid::from_raw(self.child.id() as i32);
-        let _ = nix::sys::signal::kill(pid, signal);
-        self.wait(timeout)
-    }
-
-    /// Waits up to `timeout` for the exit status, collecting the log.
-    pub fn wait(&mut self, timeout: Duration) -> Option<i32> {
-        let end = Instant::now() + timeout;
-        while Instant::now() < end {
-            if let Ok(Some(status)) = self.child.try_wait() {
-                // The reader thread ends at EOF; take what it read.
-                while let Ok(line) = self.lines.recv_timeout(Duration::from_millis(200)) {
-                    self.log.push(line);
-                }
-                return status.code();
-            }
-            std::thread::sleep(Duration::from_millis(10));
-        }
-        None
-    }
-
-    /// The log so far, one string.
-    pub fn log_text(&mut self) -> String {
-        while let Ok(line) = self.lines.try_recv() {
-            self.log.push(line);
-        }
-        self.log.join("\n")
-    }
-}
-
-impl Drop for Motiond {
-    fn drop(&mut self) {
-        if let Ok(None) = self.child.try_wait() {
-            let _ = self.child.kill();
-            let _ = self.child.wait();
-        }
-    }
-}
+/// A running motiond (killed on drop) with its stderr lines: the testkit's server, started
+/// from a whole command line (`Motiond::spawn_command`).
+pub type Motiond = motion_testkit::Server;
