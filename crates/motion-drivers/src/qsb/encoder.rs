@@ -17,11 +17,20 @@ pub(crate) struct Sample {
     pub time_stamp: u32,
 }
 
+/// Counts a sample may sit off the predicted count while the encoder moves: the counter
+/// counts whole edges, so samples of a smooth motion sit up to one count either side.
+const MOVING_SLACK: f64 = 2.0;
+
+/// The same while it stands still: none (half a count for the floating point).
+const STILL_SLACK: f64 = 0.5;
+
 /// The latest samples.
 #[derive(Debug, Clone)]
 pub(crate) struct EncoderTrack {
     window: FixedQueue<Sample, VELOCITY_WINDOW>,
     velocity: f64,
+    /// A sample that contradicted the track, waiting for the next one.
+    held: Option<Sample>,
 }
 
 impl EncoderTrack {
@@ -29,7 +38,60 @@ impl EncoderTrack {
         Self {
             window: FixedQueue::new(),
             velocity: 0.0,
+            held: None,
         }
+    }
+
+    /// Offers a streamed sample through the line-noise guard (module `guard`). A sample
+    /// where the track predicts it (the last count plus velocity × time, within what the
+    /// acceleration limit `max_accel` (counts/s²) and the counter's quantisation allow;
+    /// exactly the last count while the encoder stands still) is taken at once. One that
+    /// is not is held until the next sample: if that one is where the old track predicts
+    /// it, the held one was corrupted on the line and is dropped; if it too leaves the old
+    /// track, the motion really changed and both are taken, one sample late. One corrupted
+    /// sample is therefore never shown; it takes two in a row, or one that coincides with
+    /// a change of motion beyond the acceleration limit. Returns whether the sample (and
+    /// with it the newest count) was taken.
+    pub(crate) fn offer(&mut self, sample: Sample, max_accel: f64) -> bool {
+        let Some(last) = self.latest() else {
+            self.push(sample);
+            return true;
+        };
+        if self.predicts(last, sample, max_accel) {
+            self.held = None;
+            self.push(sample);
+            return true;
+        }
+        match self.held.take() {
+            Some(held) => {
+                self.push(held);
+                self.push(sample);
+                true
+            }
+            None => {
+                self.held = Some(sample);
+                false
+            }
+        }
+    }
+
+    /// Whether `sample` is where the track's velocity predicts it from `from`: within what
+    /// `max_accel` allows over the gap (plus the velocity estimate's lag over the window
+    /// while the encoder moves) and the counter's quantisation (none while it stands
+    /// still).
+    fn predicts(&self, from: Sample, sample: Sample, max_accel: f64) -> bool {
+        let Some(dt) = seconds_between(from, sample) else {
+            return false;
+        };
+        let still = self.velocity == 0.0;
+        let lag = match (still, self.window.front(), self.window.back()) {
+            (false, Some(oldest), Some(newest)) => seconds_between(oldest, newest).unwrap_or(0.0),
+            _ => 0.0,
+        };
+        let quantisation = if still { STILL_SLACK } else { MOVING_SLACK };
+        let allowed = max_accel.abs() * dt * (dt + lag) / 2.0 + quantisation;
+        let moved = f64::from(sample.count.wrapping_sub(from.count));
+        (moved - self.velocity * dt).abs() <= allowed
     }
 
     /// The newest sample.
@@ -50,7 +112,7 @@ impl EncoderTrack {
     }
 
     /// Takes a sample. Samples with the same time stamp as the newest replace it.
-    pub(crate) fn push(&mut self, sample: Sample) {
+    fn push(&mut self, sample: Sample) {
         match self.window.back_mut() {
             Some(latest) if latest.time_stamp == sample.time_stamp => *latest = sample,
             _ => {
@@ -66,6 +128,12 @@ impl EncoderTrack {
             self.velocity = counts / (TICK.as_secs_f64() * f64::from(ticks));
         }
     }
+}
+
+/// Seconds from `a` to `b` by their time stamps; `None` when `b` is older.
+fn seconds_between(a: Sample, b: Sample) -> Option<f64> {
+    let ticks = b.time_stamp.wrapping_sub(a.time_stamp);
+    (ticks < u32::MAX / 2).then(|| TICK.as_secs_f64() * f64::from(ticks))
 }
 
 #[cfg(test)]

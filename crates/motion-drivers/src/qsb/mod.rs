@@ -96,6 +96,7 @@
 mod config;
 mod encoder;
 mod goals;
+mod guard;
 mod io;
 mod program;
 mod rx;
@@ -103,6 +104,8 @@ mod rx;
 mod tests;
 #[cfg(test)]
 mod tests_machine;
+#[cfg(test)]
+mod tests_noise;
 mod version;
 
 use core::time::Duration;
@@ -123,6 +126,7 @@ use crate::pin::{Pin, PinReading};
 use crate::state::{ChannelState, DeviceFault, DeviceStatus};
 use config::DRIVER_EOR;
 use encoder::EncoderTrack;
+use guard::StampGuard;
 use io::IoState;
 use program::{Program, Step};
 
@@ -204,7 +208,13 @@ pub struct QsbDriver {
     /// What the board holds, per register number, as far as the driver knows.
     board: [Option<u32>; REGISTERS],
     eor_configured: bool,
-    last_time_stamp: Option<u32>,
+    /// The board's timeline, guarded against corrupted stamps.
+    stamps: StampGuard,
+    /// The last MD STATUS line said the drive is disabled (a reset, if the next agrees).
+    md_disabled_once: bool,
+    /// A VERSION answer that named another board or no product: asked again before it
+    /// counts.
+    version_doubt: Option<u32>,
     encoder: EncoderTrack,
     /// The next encoder sample follows a load or an index reset of the counter.
     rebase_pending: bool,
@@ -254,7 +264,9 @@ impl QsbDriver {
             samples_since_probe: false,
             board: [None; REGISTERS],
             eor_configured: false,
-            last_time_stamp: None,
+            stamps: StampGuard::default(),
+            md_disabled_once: false,
+            version_doubt: None,
             encoder: EncoderTrack::new(),
             rebase_pending: false,
             position: 0,
@@ -394,6 +406,7 @@ impl QsbDriver {
         self.eor_configured = false;
         self.rebase_pending = true;
         self.md = None;
+        self.md_disabled_once = false;
         self.str_streaming = false;
         self.index_armed = false;
         self.index_seen = false;
@@ -480,7 +493,7 @@ impl QsbDriver {
         self.status.resets = self.status.resets.saturating_add(1);
         self.status.fault = Some(DeviceFault::Reset);
         self.homed = false;
-        self.last_time_stamp = None;
+        self.stamps.clear();
         self.begin_startup();
     }
 
