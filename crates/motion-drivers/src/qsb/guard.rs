@@ -32,6 +32,10 @@ const HALF: u32 = u32::MAX / 2;
 pub(crate) enum StampVerdict {
     /// The line continues the board's timeline.
     Accept,
+    /// The line continues the timeline from before the last accepted line, whose stamp
+    /// (within the slack) was the corrupted one: take it, and forget what that line
+    /// brought.
+    Rewound,
     /// The line continues a timeline that jumped forwards (confirmed by two lines): take
     /// it, but samples before the jump are no base for a velocity.
     NewTimeline,
@@ -114,7 +118,7 @@ impl StampGuard {
             // The line accepted last was the corrupted one (its stamp ran ahead).
             self.last = self.before;
             self.accept(now, stamp);
-            return StampVerdict::Accept;
+            return StampVerdict::Rewound;
         }
         if held.wrapping_sub(last.0) > HALF {
             self.clear();
@@ -221,7 +225,7 @@ mod tests {
         now += TICK;
         assert_eq!(
             guard.check(now, Some(112), true, LATENCY),
-            StampVerdict::Accept
+            StampVerdict::Rewound
         );
         assert_eq!(guard.last(), Some(112));
     }

@@ -52,6 +52,13 @@ impl QsbDriver {
         );
         match verdict {
             StampVerdict::Accept => {}
+            StampVerdict::Rewound => {
+                // The line accepted before the held one carried a corrupted stamp: what it
+                // brought is not on the timeline.
+                if let Some(stamp) = response.time_stamp {
+                    self.encoder.forget_after(stamp);
+                }
+            }
             StampVerdict::NewTimeline => {
                 // Samples before the jump are no base for a velocity.
                 self.encoder.clear();

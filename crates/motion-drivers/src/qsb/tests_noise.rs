@@ -26,7 +26,7 @@ fn noisy_tick(bench: &mut Bench, flip: Option<usize>) {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(256))]
+    #![proptest_config(ProptestConfig::with_cases(512))]
 
     /// The axis stands still at `count`; every third tick carries one flipped bit somewhere
     /// in its two lines.
