@@ -5,6 +5,22 @@
 //! and never touch a file descriptor. A [`LinkBus`] puts several drivers on one link and
 //! enforces what no single driver sees: one request in flight on a shared serial bus,
 //! commands before polls, MISO bytes back to the transaction's owner.
+//!
+//! Every board's module has the same skeleton:
+//!
+//! | file | holds |
+//! |---|---|
+//! | `mod.rs` | the module docs (wire, start-up, goals, faults), the driver struct and its `impl Driver`, whose methods hand over to the files below |
+//! | `config.rs` | the driver's config and what is derived from it (scales, budgets, wire times) |
+//! | `startup.rs` | the probe / version / configuration sequence, going online, restarts and resets |
+//! | `goals.rs` | the goals a channel accepts, a goal turned into a plan of wire traffic (`set_goal`, `set_output`) |
+//! | `rx.rs` | received bytes and answers decoded into channel and board state; unanswered requests |
+//! | `wire.rs` | requests and transactions in flight, which one goes next (commands before polls), the poll plan and the passing of time |
+//!
+//! Board-specific parts sit beside them: the pin tables (`pins.rs` / `io.rs`), per-channel
+//! state machines (`qq2drv/channel.rs`, `tmcpack/channel.rs`, `spimotor/stepper.rs`,
+//! `spimotor/brushed.rs`), the stepper's rate profile (`spimotor/ramp.rs`), the QSB's
+//! encoder track and request programs (`qsb/encoder.rs`, `qsb/program.rs`).
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 

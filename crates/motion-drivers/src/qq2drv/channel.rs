@@ -11,8 +11,8 @@ use qq2drv::limits::{
 use qq2drv::{ControlMode, InputMode, Status};
 
 use super::config::{ChannelConfig, HomeInput};
-use super::packet::{Packet, Packets};
-use super::step::Step;
+use super::goals::Step;
+use super::wire::{Packet, Packets};
 use crate::goal::{Goal, GoalError, GoalKind};
 use crate::state::{ChannelState, DeviceFault};
 

@@ -90,22 +90,18 @@
 
 mod channel;
 mod config;
-mod in_flight;
-mod packet;
+mod goals;
 mod pins;
-mod plan;
+mod rx;
 mod startup;
-mod step;
+mod wire;
 
 use core::time::Duration;
 
-use qq2drv::{
-    CHANNELS, DataMask, MotionLayout, PacketBuf, PacketId, PositionSize, Reply, ReplyLayout,
-    StreamConfig, StreamData, StreamDecoder,
-};
+use qq2drv::{CHANNELS, DataMask, MotionLayout, PositionSize, StreamConfig, StreamDecoder};
 
 use crate::driver::{Driver, Model, Priority, Transmit};
-use crate::goal::{Goal, GoalError, GoalKind, GoalKinds};
+use crate::goal::{Goal, GoalError, GoalKinds};
 use crate::pin::{Pin, PinReading};
 use crate::state::{ChannelState, DeviceFault, DeviceStatus};
 
@@ -113,14 +109,13 @@ pub use channel::{ARRIVED_WITHIN, LOOP_PERIOD, STANDSTILL, STOP_SETTLE};
 pub use config::{
     AxisLimits, ChannelConfig, HomeInput, PositionPid, Qq2drvDriverConfig, VelocityPid,
 };
-pub use in_flight::IN_FLIGHT_CAPACITY;
 pub use pins::{PINS, PINS_PER_CHANNEL, pin_of};
+pub use wire::IN_FLIGHT_CAPACITY;
 
 use channel::Channel;
-use in_flight::{InFlight, Sent, Tag};
-use packet::MAX_STEP_PACKETS;
 use pins::InputBits;
 use startup::ProbeReplies;
+use wire::InFlight;
 
 /// Probe attempts before the board is declared not responding.
 pub const START_ATTEMPTS: u32 = 3;
@@ -148,15 +143,6 @@ enum Phase {
     Configure,
     /// Streaming.
     Running,
-}
-
-/// What the next transaction would be.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Next {
-    Probe,
-    Configure,
-    Goals,
-    Poll,
 }
 
 /// Sans-I/O driver of one QuadQuad2Drv board. See the module docs.
@@ -243,314 +229,9 @@ impl Qq2drvDriver {
         self.link_up && self.phase == Phase::Running
     }
 
-    /// The data masks start-up writes: position, velocity and status for a channel with
-    /// an axis, status alone for one whose pins a signal reads, nothing otherwise.
-    pub fn stream_masks(&self) -> [DataMask; CHANNELS] {
-        self.config.channels.map(|c| {
-            if c.enabled {
-                STREAM_MASK
-            } else if c.pins != 0 {
-                STATUS_MASK
-            } else {
-                DataMask(0)
-            }
-        })
-    }
-
-    /// Length of one poll transaction: a stream packet in our layout plus [`POLL_SLACK`].
-    pub fn poll_len(&self) -> usize {
-        let layout = MotionLayout {
-            data_masks: self.stream_masks(),
-            stream_config: STREAM_CONFIG,
-        };
-        (qq2drv::MIN_PACKET_LEN + layout.stream_payload_len() + POLL_SLACK).clamp(16, 255)
-    }
-
-    /// How often the driver actually gets to read: the poll period, or the interval
-    /// between the last two `handle_timeout` calls when that is longer (a slow tick, or a
-    /// late one: the data is as old as the caller's lateness, not the board's fault).
-    pub fn cadence(&self) -> Duration {
-        self.config.poll_period.max(self.call_interval)
-    }
-
-    /// Reply timeout: polls to read it, the wire time of two long transactions, the
-    /// board's processing time and a margin.
-    pub fn reply_timeout(&self) -> Duration {
-        self.cadence()
-            .saturating_mul(4)
-            .saturating_add(self.config.wire_time(2 * qq2drv::MAX_PACKET_LEN))
-            .saturating_add(self.config.processing_time)
-            .saturating_add(Duration::from_millis(2))
-    }
-
-    /// Without a stream packet for this long the driver probes the board again.
-    pub fn stall_timeout(&self) -> Duration {
-        self.config
-            .stream_period()
-            .saturating_mul(4)
-            .saturating_add(self.cadence().saturating_mul(3))
-            .saturating_add(Duration::from_millis(2))
-    }
-
     fn raise(&mut self, fault: DeviceFault) {
         if self.link_up || fault == DeviceFault::LinkDown {
             self.status.fault = Some(fault);
-        }
-    }
-
-    /// Starts again from the probe; unanswered requests are void (goals go again).
-    fn restart(&mut self, now: Duration) {
-        self.phase = Phase::Probe {
-            attempts: 0,
-            next_at: now,
-        };
-        self.in_flight.clear();
-        for channel in &mut self.channels {
-            channel.void_in_flight();
-        }
-        for channel in &mut self.channels {
-            // The stop and the hold wait for data measured after the restart.
-            channel.data_valid = false;
-        }
-        self.probe = ProbeReplies::default();
-        self.probe_due = false;
-        self.configure_due = false;
-        self.setup_unanswered = 0;
-        self.decoder.clear();
-    }
-
-    fn not_responding(&mut self) {
-        if self.status.fault != Some(DeviceFault::NotResponding) {
-            self.status.timeouts = self.status.timeouts.saturating_add(1);
-        }
-        self.raise(DeviceFault::NotResponding);
-        self.status.online = false;
-    }
-
-    fn next(&self, now: Duration) -> Option<(Next, Priority)> {
-        if !self.link_up {
-            return None;
-        }
-        if self.probe_due && self.in_flight.has_room(4) {
-            return Some((Next::Probe, Priority::Setup));
-        }
-        if self.configure_due && self.in_flight.has_room(CONFIGURE_REQUESTS) {
-            return Some((Next::Configure, Priority::Setup));
-        }
-        // Goals wait while a whole poll period of earlier bytes is still on the wire (a
-        // newer goal of the same channel replaces an unsent one meanwhile), polls while
-        // half of one is.
-        let backlog = self.line_free_at.saturating_sub(now);
-        let goals = self.phase == Phase::Running
-            && backlog <= self.config.poll_period
-            && self.in_flight.has_room(MAX_STEP_PACKETS)
-            && self
-                .channels
-                .iter()
-                .any(|c| c.config.enabled && c.unsent && c.ready());
-        if goals {
-            return Some((Next::Goals, Priority::Command));
-        }
-        let reading = self.phase == Phase::Running || !self.in_flight.is_empty();
-        let bus_free = backlog <= self.config.poll_period / 2;
-        if reading && now >= self.next_poll_at && bus_free {
-            return Some((Next::Poll, Priority::Poll));
-        }
-        None
-    }
-
-    /// Writes the unsent goal packets of every channel that fit.
-    fn write_goals(&mut self, now: Duration, buf: &mut [u8]) -> usize {
-        let mut len = 0;
-        for (index, channel) in self.channels.iter_mut().enumerate() {
-            if !(channel.config.enabled && channel.unsent && channel.ready()) {
-                continue;
-            }
-            channel.resolve();
-            let packets = channel.packets();
-            let count = packets.iter().count();
-            if !self.in_flight.has_room(count) {
-                break;
-            }
-            let mut end = len;
-            let mut fits = true;
-            for packet in packets.iter() {
-                match buf
-                    .get_mut(end..)
-                    .and_then(|rest| packet.encode(index, rest).ok())
-                {
-                    Some(n) => end += n,
-                    None => {
-                        fits = false;
-                        break;
-                    }
-                }
-            }
-            if !fits {
-                break;
-            }
-            len = end;
-            for packet in packets.iter() {
-                self.in_flight.push(Sent {
-                    id: packet.id(),
-                    at: now,
-                    tag: Tag::Goal {
-                        channel: index as u8,
-                        seq: channel.seq,
-                        packet,
-                    },
-                });
-            }
-            channel.sent(&packets);
-        }
-        len
-    }
-
-    fn on_packet(&mut self, now: Duration, packet: &PacketBuf) {
-        self.last_valid_at = Some(now);
-        let frame = packet.frame();
-        if frame.id == PacketId::StreamData.as_u8() && self.phase != Phase::Running {
-            return; // Its layout is not known yet.
-        }
-        let layout = ReplyLayout {
-            motion: self.layout,
-            ..ReplyLayout::default()
-        };
-        let Ok(reply) = Reply::decode(frame, &layout) else {
-            self.status.bad_replies = self.status.bad_replies.saturating_add(1);
-            return;
-        };
-        if let Reply::StreamData(data) = reply {
-            self.on_stream(now, &data);
-            return;
-        }
-        let Some(index) = self.in_flight.position(|sent| sent.id == reply.id()) else {
-            self.status.bad_replies = self.status.bad_replies.saturating_add(1);
-            return;
-        };
-        for _ in 0..index {
-            if let Some(lost) = self.in_flight.pop() {
-                self.status.bad_replies = self.status.bad_replies.saturating_add(1);
-                self.on_lost(now, lost);
-            }
-        }
-        if let Some(sent) = self.in_flight.pop() {
-            self.status.replies = self.status.replies.saturating_add(1);
-            self.on_reply(now, sent, reply);
-        }
-    }
-
-    fn on_stream(&mut self, now: Duration, data: &StreamData) {
-        self.last_stream_at = now;
-        self.stream_packets = self.stream_packets.saturating_add(1);
-        for ((channel, inputs), sample) in self
-            .channels
-            .iter_mut()
-            .zip(&mut self.inputs)
-            .zip(data.data.channels)
-        {
-            if let Some(status) = sample.status {
-                inputs.update(now, status);
-            }
-            if let (true, Some(position), Some(velocity)) =
-                (channel.config.enabled, sample.position, sample.velocity)
-            {
-                let status = sample.status.unwrap_or_default();
-                channel.data(now, position.get(), velocity, status);
-            }
-        }
-        if self.link_up {
-            self.status.fault = None;
-            self.status.online = true;
-        }
-    }
-
-    fn on_reply(&mut self, now: Duration, sent: Sent, reply: Reply) {
-        let code = reply.code().map_or(0, |code| code.0);
-        match sent.tag {
-            Tag::Probe => {
-                match reply {
-                    Reply::Version {
-                        code,
-                        firmware_major,
-                        firmware_minor,
-                        protocol,
-                    } if code.is_success() => {
-                        self.probe.version = Some((firmware_major, firmware_minor, protocol));
-                    }
-                    Reply::DataMasks { code, masks } if code.is_success() => {
-                        self.probe.masks = Some(masks);
-                    }
-                    Reply::StreamConfig { code, config } if code.is_success() => {
-                        self.probe.config = Some(config);
-                    }
-                    Reply::StreamPeriod { code, period } if code.is_success() => {
-                        self.probe.period = Some(period);
-                    }
-                    _ => {}
-                }
-                self.evaluate_probe(now);
-            }
-            Tag::Setup => {
-                if code != 0 {
-                    self.raise(DeviceFault::BoardError);
-                    self.restart(now);
-                    self.phase = Phase::Probe {
-                        attempts: 0,
-                        next_at: now.saturating_add(OFFLINE_RETRY_PERIOD),
-                    };
-                    return;
-                }
-                match sent.id {
-                    PacketId::SetDataMask => self.layout.data_masks = self.stream_masks(),
-                    PacketId::SetStreamConfig => self.layout.stream_config = STREAM_CONFIG,
-                    // The configured limits and disarmed inputs are in force again.
-                    PacketId::SetAccelerationLimit => {
-                        for channel in &mut self.channels {
-                            channel.lifted = false;
-                        }
-                    }
-                    PacketId::SetInputMode => {
-                        for channel in &mut self.channels {
-                            channel.armed = false;
-                        }
-                    }
-                    _ => {}
-                }
-                self.setup_unanswered = self.setup_unanswered.saturating_sub(1);
-                if self.setup_unanswered == 0 && self.phase == Phase::Configure {
-                    self.phase = Phase::Running;
-                    self.configured_once = true;
-                    self.status.online = true;
-                    self.last_stream_at = now;
-                    self.next_poll_at = now;
-                }
-            }
-            Tag::Goal {
-                channel,
-                seq,
-                packet,
-            } => {
-                if let Some(channel) = self.channels.get_mut(usize::from(channel)) {
-                    channel.answered(now, seq, packet, code);
-                }
-            }
-        }
-    }
-
-    fn on_lost(&mut self, now: Duration, sent: Sent) {
-        match sent.tag {
-            Tag::Probe => {}
-            Tag::Setup => {
-                if self.phase == Phase::Configure {
-                    self.restart(now);
-                }
-            }
-            Tag::Goal { channel, seq, .. } => {
-                if let Some(channel) = self.channels.get_mut(usize::from(channel)) {
-                    channel.lost(seq);
-                }
-            }
         }
     }
 }
@@ -565,19 +246,7 @@ impl Driver for Qq2drvDriver {
     }
 
     fn capabilities(&self, channel: usize) -> GoalKinds {
-        match self.channels.get(channel) {
-            Some(c) if c.config.enabled && c.home().is_some() => GoalKinds::of(&GoalKind::ALL),
-            Some(c) if c.config.enabled => GoalKinds::of(&[
-                GoalKind::Off,
-                GoalKind::Stop,
-                GoalKind::Power,
-                GoalKind::Position,
-                GoalKind::Velocity,
-                GoalKind::RampPosition,
-                GoalKind::SetPosition,
-            ]),
-            _ => GoalKinds::NONE,
-        }
+        self.kinds(channel)
     }
 
     fn refresh_budget(&self) -> Duration {
@@ -586,79 +255,12 @@ impl Driver for Qq2drvDriver {
             .saturating_add(Duration::from_millis(4))
     }
 
-    fn handle_rx(&mut self, now: Duration, mut bytes: &[u8]) {
-        if !self.link_up {
-            return;
-        }
-        while !bytes.is_empty() {
-            let taken = self.decoder.push(bytes);
-            bytes = bytes.get(taken..).unwrap_or(&[]);
-            while let Some(packet) = self.decoder.next_packet() {
-                self.on_packet(now, &packet);
-            }
-            if taken == 0 {
-                break;
-            }
-        }
+    fn handle_rx(&mut self, now: Duration, bytes: &[u8]) {
+        self.receive(now, bytes);
     }
 
     fn handle_timeout(&mut self, now: Duration) {
-        if let Some(last) = self.last_call_at {
-            self.call_interval = now.saturating_sub(last).min(Duration::from_secs(1));
-        }
-        self.last_call_at = Some(now);
-        for inputs in &mut self.inputs {
-            inputs.tick();
-        }
-        if !self.link_up {
-            return;
-        }
-        let timeout = self.reply_timeout();
-        while let Some(oldest) = self.in_flight.front()
-            && now.saturating_sub(oldest.at) > timeout
-        {
-            self.in_flight.pop();
-            self.status.timeouts = self.status.timeouts.saturating_add(1);
-            self.on_lost(now, oldest);
-        }
-        let silent = self
-            .last_valid_at
-            .is_some_and(|at| now.saturating_sub(at) > self.refresh_budget());
-        if silent && self.status.fault != Some(DeviceFault::NotResponding) {
-            self.not_responding();
-            // Probe again; a probe already under way keeps its pace.
-            if self.phase == Phase::Running {
-                self.restart(now);
-            }
-        }
-        match self.phase {
-            Phase::Probe { attempts, next_at } if now >= next_at => {
-                if attempts >= START_ATTEMPTS {
-                    self.not_responding();
-                }
-                self.probe_due = true;
-                let attempts = attempts.saturating_add(1);
-                let wait = if attempts >= START_ATTEMPTS {
-                    OFFLINE_RETRY_PERIOD
-                } else {
-                    timeout
-                };
-                self.phase = Phase::Probe {
-                    attempts,
-                    next_at: now.saturating_add(wait),
-                };
-            }
-            Phase::Running => {
-                if now.saturating_sub(self.last_stream_at) > self.stall_timeout() {
-                    self.restart(now);
-                } else {
-                    for channel in &mut self.channels {
-                        channel.progress(now);
-                    }
-                }
-            }
-            Phase::Probe { .. } | Phase::Configure => {}
-        }
+        self.pass_time(now);
     }
 
     fn poll_timeout(&self) -> Option<Duration> {
@@ -686,31 +288,7 @@ impl Driver for Qq2drvDriver {
     }
 
     fn poll_transmit(&mut self, now: Duration, buf: &mut [u8]) -> Option<Transmit> {
-        let (next, _) = self.next(now)?;
-        let len = match next {
-            Next::Probe => self.write_probe(now, buf)?,
-            Next::Configure => self.write_configure(now, buf)?,
-            Next::Goals => self.write_goals(now, buf),
-            Next::Poll => {
-                let len = self.poll_len();
-                buf.get_mut(..len)?.fill(FILLER);
-                // Three quarters: a tick at exactly the poll period always polls.
-                let period = self.config.poll_period;
-                self.next_poll_at = now.saturating_add(period - period / 4);
-                len
-            }
-        };
-        if len == 0 {
-            return None;
-        }
-        self.line_free_at = self
-            .line_free_at
-            .max(now)
-            .saturating_add(self.config.wire_time(len));
-        Some(Transmit {
-            len,
-            expects_reply: next != Next::Poll,
-        })
+        self.transmit(now, buf)
     }
 
     fn awaiting_reply(&self) -> bool {
@@ -724,23 +302,7 @@ impl Driver for Qq2drvDriver {
     }
 
     fn set_goal(&mut self, _now: Duration, channel: usize, goal: Goal) -> Result<(), GoalError> {
-        let kind = goal.kind();
-        if channel >= CHANNELS {
-            return Err(GoalError::NoSuchChannel(channel));
-        }
-        if !self.capabilities(channel).contains(kind) {
-            return Err(GoalError::Unsupported(kind));
-        }
-        if !self.link_up {
-            return Err(GoalError::Offline);
-        }
-        let slot = self
-            .channels
-            .get_mut(channel)
-            .ok_or(GoalError::NoSuchChannel(channel))?;
-        let step = slot.plan(goal)?;
-        slot.set_goal(step);
-        Ok(())
+        self.plan_goal(channel, goal)
     }
 
     fn channel(&self, channel: usize) -> ChannelState {

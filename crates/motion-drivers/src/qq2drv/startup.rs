@@ -10,9 +10,8 @@ use qq2drv::{
     VelocityLimitEntry, VelocityPidEntry,
 };
 
-use super::in_flight::{Sent, Tag};
-use super::packet::Packet;
-use super::{CONFIGURE_REQUESTS, Phase, Qq2drvDriver, STREAM_CONFIG};
+use super::wire::{Packet, Sent, Tag};
+use super::{CONFIGURE_REQUESTS, Phase, Qq2drvDriver, STATUS_MASK, STREAM_CONFIG, STREAM_MASK};
 
 /// A channel's acceleration limit (packet 28) for an axis's `max_accel`: shl 12, clipped to
 /// the board's range, never 0 (which would disable limiting).
@@ -249,5 +248,48 @@ impl Qq2drvDriver {
         self.phase = Phase::Configure;
         self.configure_due = true;
         self.next_poll_at = now;
+    }
+
+    /// The data masks start-up writes: position, velocity and status for a channel with
+    /// an axis, status alone for one whose pins a signal reads, nothing otherwise.
+    pub fn stream_masks(&self) -> [DataMask; CHANNELS] {
+        self.config.channels.map(|c| {
+            if c.enabled {
+                STREAM_MASK
+            } else if c.pins != 0 {
+                STATUS_MASK
+            } else {
+                DataMask(0)
+            }
+        })
+    }
+
+    /// Starts again from the probe; unanswered requests are void (goals go again).
+    pub(super) fn restart(&mut self, now: Duration) {
+        self.phase = Phase::Probe {
+            attempts: 0,
+            next_at: now,
+        };
+        self.in_flight.clear();
+        for channel in &mut self.channels {
+            channel.void_in_flight();
+        }
+        for channel in &mut self.channels {
+            // The stop and the hold wait for data measured after the restart.
+            channel.data_valid = false;
+        }
+        self.probe = ProbeReplies::default();
+        self.probe_due = false;
+        self.configure_due = false;
+        self.setup_unanswered = 0;
+        self.decoder.clear();
+    }
+
+    pub(super) fn not_responding(&mut self) {
+        if self.status.fault != Some(DeviceFault::NotResponding) {
+            self.status.timeouts = self.status.timeouts.saturating_add(1);
+        }
+        self.raise(DeviceFault::NotResponding);
+        self.status.online = false;
     }
 }

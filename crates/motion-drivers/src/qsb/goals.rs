@@ -4,12 +4,29 @@ use core::time::Duration;
 
 use motion_base::counts_to_i32;
 
-use ::qsb::{EncoderMode, LoadTarget, ProductType, QsbCommand, Register, Request, Write};
+use ::qsb::{
+    EncoderMode, IndexMode, LoadTarget, Mdr0, ProductType, QsbCommand, Register, Request, Write,
+};
 
+use super::QsbDriver;
 use super::program::Step;
-use super::{HOMING_LOAD_MDR0, HOMING_MDR0, NORMAL_MDR0, QsbDriver};
+use super::startup::NORMAL_MDR0;
 use crate::goal::{Goal, GoalError, GoalKind, GoalKinds};
 use crate::state::DeviceFault;
+
+/// MDR0 during a home search to counter value 0: the index resets CNTR (0x63, the
+/// command list's "Sync Index, Reset on Index, Free Running, X4 mode, W0363").
+const HOMING_MDR0: Mdr0 = Mdr0 {
+    index: IndexMode::ResetCntr,
+    ..NORMAL_MDR0
+};
+
+/// MDR0 during a home search to any other counter value: the index loads CNTR from DTR
+/// ("configure index as the "load CNTR" input (transfers DTR to CNTR)", 0x53).
+const HOMING_LOAD_MDR0: Mdr0 = Mdr0 {
+    index: IndexMode::LoadCntr,
+    ..NORMAL_MDR0
+};
 
 /// Moves one position goal may make: the move and two corrections (lost steps, a move
 /// whose answer was lost).

@@ -100,22 +100,18 @@ mod guard;
 mod io;
 mod program;
 mod rx;
+mod startup;
 #[cfg(test)]
 mod tests;
 #[cfg(test)]
 mod tests_machine;
 #[cfg(test)]
 mod tests_noise;
-mod version;
+mod wire;
 
 use core::time::Duration;
 
-use motion_base::FixedQueue;
-
-use ::qsb::{
-    CountMode, CycleMode, IndexMode, MdStatus, Mdr0, Mdr1, Mode, ProductType, QsbCommand, Register,
-    Request, ResponseDecoder, Write,
-};
+use ::qsb::{MdStatus, ProductType, ResponseDecoder};
 
 pub use config::QsbDriverConfig;
 pub use io::{CaptureInput, EnableOutput, MOTOR_DRIVE_BITS, PinRole, QsbIo, pins};
@@ -124,11 +120,11 @@ use crate::driver::{Driver, Model, Priority, Transmit};
 use crate::goal::{Goal, GoalError, GoalKind, GoalKinds};
 use crate::pin::{Pin, PinReading};
 use crate::state::{ChannelState, DeviceFault, DeviceStatus};
-use config::DRIVER_EOR;
 use encoder::EncoderTrack;
 use guard::StampGuard;
 use io::IoState;
-use program::{Program, Step};
+use program::Program;
+use wire::{InFlight, Origin};
 
 /// Tries of one request before the board is declared not responding.
 pub const MAX_ATTEMPTS: u8 = 3;
@@ -136,52 +132,8 @@ pub const MAX_ATTEMPTS: u8 = 3;
 /// Pause before a start-up is tried again after the board stopped answering.
 pub const RESTART_DELAY: Duration = Duration::from_millis(100);
 
-/// MDR0 in normal operation: x4 quadrature, free-running, index disabled, synchronous
-/// index (0x43).
-const NORMAL_MDR0: Mdr0 = Mdr0 {
-    count: CountMode::X4,
-    cycle: CycleMode::FreeRunning,
-    index: IndexMode::Disabled,
-    synchronous_index: true,
-    filter_div2: false,
-};
-
-/// MDR0 during a home search to counter value 0: the index resets CNTR (0x63, the
-/// command list's "Sync Index, Reset on Index, Free Running, X4 mode, W0363").
-const HOMING_MDR0: Mdr0 = Mdr0 {
-    index: IndexMode::ResetCntr,
-    ..NORMAL_MDR0
-};
-
-/// MDR0 during a home search to any other counter value: the index loads CNTR from DTR
-/// ("configure index as the "load CNTR" input (transfers DTR to CNTR)", 0x53).
-const HOMING_LOAD_MDR0: Mdr0 = Mdr0 {
-    index: IndexMode::LoadCntr,
-    ..NORMAL_MDR0
-};
-
 /// Registers the driver remembers the board's value of (00–16).
 const REGISTERS: usize = 0x17;
-
-/// Who sent the request in flight.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Origin {
-    Setup,
-    Preset,
-    Goal,
-    /// A DIG I/O write of the signal outputs.
-    Io,
-    Probe,
-}
-
-/// The request awaiting its answer.
-#[derive(Debug, Clone, Copy)]
-struct InFlight {
-    request: Request,
-    origin: Origin,
-    generation: u32,
-    deadline: Duration,
-}
 
 /// A sans-I/O driver for one US Digital QSB (see the module docs).
 #[derive(Debug, Clone)]
@@ -319,256 +271,6 @@ impl QsbDriver {
                 .md
                 .is_some_and(|md| md.done && !md.moving && !md.jogging)
     }
-
-    /// Whether the board is known to hold `write`'s value already.
-    fn holds(&self, write: Write) -> bool {
-        self.board
-            .get(usize::from(write.register().number()))
-            .copied()
-            .flatten()
-            == Some(write.data())
-    }
-
-    /// The request a step sends now, `None` for a step with nothing to send.
-    fn request_of(&self, step: Step) -> Option<Request> {
-        match step {
-            Step::Send(request) => Some(request),
-            Step::Ensure(write) => (!self.holds(write)).then_some(Request::Write(write)),
-            Step::Outputs => self.outputs_due().map(Request::Write),
-            Step::Enable(on) => {
-                let write = Write::DigIo(::qsb::DigIo(self.latch_with(on)));
-                (self.config.enable.is_some() && !self.holds(write))
-                    .then_some(Request::Write(write))
-            }
-            Step::EndStrStream => self.str_streaming.then_some(Request::Read(Register::Str)),
-            // Unless the drive is known to be done (a motor command just sent may not show
-            // in MD STATUS yet), stop it.
-            Step::StopIfMoving => (!self.drive_done())
-                .then_some(Request::Write(Write::Command(QsbCommand::MotorStop))),
-            Step::Configure
-            | Step::Online
-            | Step::WaitDone
-            | Step::MoveTo { .. }
-            | Step::WaitIndex => None,
-        }
-    }
-
-    /// Whether `origin`'s plan has its front step in flight (it must not move on).
-    fn busy(&self, origin: Origin, generation: u32) -> bool {
-        self.in_flight
-            .is_some_and(|f| f.origin == origin && f.generation == generation)
-    }
-
-    /// The next request to send, who sends it and how urgent it is.
-    fn next_request(&self) -> Option<(Request, Origin, Priority)> {
-        if !self.link_up || self.in_flight.is_some() {
-            return None;
-        }
-        if let Some(step) = self.setup.front() {
-            return self
-                .request_of(step)
-                .map(|r| (r, Origin::Setup, Priority::Setup));
-        }
-        if !self.status.online {
-            return None;
-        }
-        for (program, origin) in [(&self.preset, Origin::Preset), (&self.goal, Origin::Goal)] {
-            if let Some(request) = program.front().and_then(|step| self.request_of(step)) {
-                return Some((request, origin, Priority::Command));
-            }
-        }
-        if let Some(write) = self.outputs_due() {
-            return Some((Request::Write(write), Origin::Io, Priority::Command));
-        }
-        self.probe_due.then_some((
-            Request::Read(Register::Version),
-            Origin::Probe,
-            Priority::Poll,
-        ))
-    }
-
-    /// (Re)starts the start-up sequence; the last known position stays.
-    fn begin_startup(&mut self) {
-        self.setup.replace(&[
-            Step::Send(Request::Write(Write::Command(QsbCommand::StopStreaming))),
-            Step::Send(Request::Read(Register::Version)),
-            Step::Configure,
-        ]);
-        self.preset.clear();
-        self.goal.clear();
-        self.goal_kind = None;
-        self.in_flight = None;
-        self.attempts = 0;
-        self.restart_at = None;
-        self.probe_due = false;
-        self.status.online = false;
-        self.board = [None; REGISTERS];
-        self.eor_configured = false;
-        self.rebase_pending = true;
-        self.md = None;
-        self.md_disabled_once = false;
-        self.str_streaming = false;
-        self.index_armed = false;
-        self.index_seen = false;
-        self.home_start = None;
-        self.home_deadline = None;
-        self.home_failed = false;
-        // Outputs keep the levels the signals asked for; the enable line comes up active
-        // (the engine's start-up stop holds the motor energised).
-        self.io.energised = true;
-        self.io.refused = None;
-        self.io.dio_streaming = false;
-        self.io.capture_streaming = false;
-    }
-
-    /// The configuration of the product VERSION reported (module docs, "Start-up").
-    fn configure(&mut self, product: ProductType) {
-        let (rate, accel) = self.config.default_profile();
-        let drive = self.drive_active();
-        let mdr1 = Mdr1 {
-            invert_index: self.config.invert_index,
-            ..Mdr1::default()
-        };
-        let common = [
-            Step::Ensure(Write::Eor(DRIVER_EOR)),
-            Step::Ensure(Write::Mode(Mode {
-                encoder: self.config.input_mode,
-                pwm_12bit: false,
-            })),
-            Step::Ensure(Write::Mdr0(NORMAL_MDR0)),
-            Step::Ensure(Write::Mdr1(mdr1)),
-            Step::Ensure(Write::Threshold(0)),
-            Step::Ensure(Write::IntervalRate(self.config.interval())),
-        ];
-        let mut steps = FixedQueue::<Step, { program::PROGRAM_CAPACITY }>::new();
-        let mut push = |step: Step| {
-            steps.push(step);
-        };
-        let has_dio = product.digital_io_bits() > 0;
-        if product == ProductType::M {
-            // Whatever the motor was doing, it stops, at the axis's acceleration.
-            push(Step::Ensure(Write::Accel(accel)));
-            push(Step::Send(Request::Write(Write::Command(
-                QsbCommand::MotorStop,
-            ))));
-        }
-        common.into_iter().for_each(&mut push);
-        if drive {
-            push(Step::Ensure(Write::StepRate(rate)));
-        }
-        if has_dio && self.dio_used() {
-            // Read first: a configuration the board already holds is not written again,
-            // because a write sets every pin high for a moment.
-            push(Step::Send(Request::Read(Register::DigIoConfig)));
-            push(Step::Ensure(Write::DigIoConfig(self.dio_config())));
-            push(Step::Outputs);
-        }
-        if drive {
-            push(Step::Send(Request::Write(Write::Command(
-                QsbCommand::EnableMotorDrive,
-            ))));
-            push(Step::Send(Request::Stream(Register::MdStatus)));
-        }
-        if has_dio && self.dio_streamed() {
-            push(Step::Send(Request::Stream(Register::DigIo)));
-        }
-        if self.config.io.capture.is_some() {
-            push(Step::Send(Request::Stream(Register::Capture)));
-        }
-        push(Step::Send(Request::Stream(Register::ReadEncoder)));
-        push(Step::Online);
-        self.setup.expand_front(steps.iter());
-    }
-
-    /// The board stopped answering: everything in progress is void; try again later.
-    fn declare_dead(&mut self, now: Duration) {
-        self.begin_startup();
-        self.setup.clear();
-        self.status.fault = Some(DeviceFault::NotResponding);
-        self.restart_at = Some(now.saturating_add(RESTART_DELAY));
-    }
-
-    /// The board rebooted (or another board answers): goals are lost, start again.
-    fn board_reset(&mut self) {
-        self.status.resets = self.status.resets.saturating_add(1);
-        self.status.fault = Some(DeviceFault::Reset);
-        self.homed = false;
-        self.stamps.clear();
-        self.begin_startup();
-    }
-
-    /// Lets every plan move on as far as it can without the board.
-    fn settle(&mut self, now: Duration) {
-        if self.home_failed && self.goal.is_empty() && (!self.drive_active() || self.drive_done()) {
-            // The failed search's stop is complete.
-            self.home_failed = false;
-        }
-        for _ in 0..4 * program::PROGRAM_CAPACITY {
-            if self.busy(Origin::Setup, self.setup.generation()) {
-                break;
-            }
-            match self.setup.front() {
-                Some(Step::Configure) => match self.product {
-                    Some(product) => self.configure(product),
-                    // (Cannot happen: VERSION is read first.) Never sit offline for good.
-                    None => self.declare_dead(now),
-                },
-                Some(Step::Online) => {
-                    self.setup.pop();
-                    self.status.online = true;
-                    self.online_at = now;
-                }
-                Some(step) if self.request_of(step).is_none() => self.setup.pop(),
-                _ => break,
-            }
-        }
-        if !self.status.online {
-            return;
-        }
-        for _ in 0..4 * program::PROGRAM_CAPACITY {
-            if self.busy(Origin::Preset, self.preset.generation()) {
-                break;
-            }
-            match self.preset.front() {
-                Some(step) if self.request_of(step).is_none() => self.preset.pop(),
-                _ => break,
-            }
-        }
-        for _ in 0..4 * program::PROGRAM_CAPACITY {
-            if self.busy(Origin::Goal, self.goal.generation()) || !self.settle_goal_step(now) {
-                break;
-            }
-        }
-    }
-
-    /// Channel state of channel 0.
-    fn channel_state(&self) -> ChannelState {
-        let motion_pending = !self.goal.is_empty()
-            && matches!(
-                self.goal_kind,
-                Some(
-                    GoalKind::Position
-                        | GoalKind::RampPosition
-                        | GoalKind::Velocity
-                        | GoalKind::Home
-                )
-            );
-        let velocity = self.encoder.velocity();
-        ChannelState {
-            position: f64::from(self.position),
-            velocity,
-            raw_counts: i64::from(self.position),
-            refreshed_at: self.last_sample_at,
-            moving: motion_pending || self.drive_moving() || velocity != 0.0,
-            homed: self.homed,
-            at_limit: false,
-            arrived: self.arrived,
-            fault: self
-                .status
-                .fault
-                .or(self.home_failed.then_some(DeviceFault::HomeFailed)),
-        }
-    }
 }
 
 impl Driver for QsbDriver {
@@ -592,51 +294,12 @@ impl Driver for QsbDriver {
         self.config.refresh_budget()
     }
 
-    fn handle_rx(&mut self, now: Duration, mut bytes: &[u8]) {
-        if !self.link_up {
-            return;
-        }
-        while !bytes.is_empty() {
-            let (used, response) = self.decoder.decode(bytes);
-            bytes = bytes.get(used..).unwrap_or_default();
-            if let Some(response) = response {
-                self.on_response(now, response);
-            }
-        }
-        let bad = self.decoder.bad_frames();
-        let new_bad = bad.saturating_sub(self.decoder_bad_seen);
-        self.decoder_bad_seen = bad;
-        self.status.bad_replies = self
-            .status
-            .bad_replies
-            .saturating_add(u32::try_from(new_bad).unwrap_or(u32::MAX));
-        self.settle(now);
+    fn handle_rx(&mut self, now: Duration, bytes: &[u8]) {
+        self.receive(now, bytes);
     }
 
     fn handle_timeout(&mut self, now: Duration) {
-        if !self.link_up {
-            return;
-        }
-        if self.restart_at.is_some_and(|at| now >= at) {
-            self.begin_startup();
-        }
-        if let Some(flight) = self.in_flight
-            && now >= flight.deadline
-        {
-            self.timed_out(now, flight);
-        }
-        let quiet_since = self
-            .last_sample_at
-            .map_or(self.online_at, |at| at.max(self.online_at));
-        if self.status.online
-            && self.in_flight.is_none()
-            && !self.probe_due
-            && now >= quiet_since.saturating_add(self.config.refresh_budget())
-        {
-            self.probe_due = true;
-            self.samples_since_probe = false;
-        }
-        self.settle(now);
+        self.pass_time(now);
     }
 
     fn poll_timeout(&self) -> Option<Duration> {
@@ -660,29 +323,7 @@ impl Driver for QsbDriver {
     }
 
     fn poll_transmit(&mut self, now: Duration, buf: &mut [u8]) -> Option<Transmit> {
-        let (request, origin, _) = self.next_request()?;
-        let len = request.encode(buf).ok()?;
-        let generation = match origin {
-            Origin::Setup => self.setup.generation(),
-            Origin::Preset => self.preset.generation(),
-            Origin::Goal => self.goal.generation(),
-            Origin::Io => 0,
-            Origin::Probe => {
-                self.probe_due = false;
-                self.samples_since_probe = false;
-                0
-            }
-        };
-        self.in_flight = Some(InFlight {
-            request,
-            origin,
-            generation,
-            deadline: now.saturating_add(self.config.reply_timeout()),
-        });
-        Some(Transmit {
-            len,
-            expects_reply: true,
-        })
+        self.transmit(now, buf)
     }
 
     fn awaiting_reply(&self) -> bool {

@@ -11,7 +11,8 @@ use ::qsb::{
 use super::encoder::Sample;
 use super::guard::StampVerdict;
 use super::{InFlight, MAX_ATTEMPTS, Origin, QsbDriver};
-use crate::state::DeviceFault;
+use crate::goal::GoalKind;
+use crate::state::{ChannelState, DeviceFault};
 
 /// Data output ticks after a motor command before MD STATUS is trusted: the first tick
 /// after the command may report the drive before it started, its MD STATUS line follows
@@ -361,6 +362,58 @@ impl QsbDriver {
             }
             (Origin::Probe, _) => self.probe_due = true,
             _ => {}
+        }
+    }
+
+    /// Everything received: each decoded line, the decoder's bad frames, then the plans
+    /// move on.
+    pub(super) fn receive(&mut self, now: Duration, mut bytes: &[u8]) {
+        if !self.link_up {
+            return;
+        }
+        while !bytes.is_empty() {
+            let (used, response) = self.decoder.decode(bytes);
+            bytes = bytes.get(used..).unwrap_or_default();
+            if let Some(response) = response {
+                self.on_response(now, response);
+            }
+        }
+        let bad = self.decoder.bad_frames();
+        let new_bad = bad.saturating_sub(self.decoder_bad_seen);
+        self.decoder_bad_seen = bad;
+        self.status.bad_replies = self
+            .status
+            .bad_replies
+            .saturating_add(u32::try_from(new_bad).unwrap_or(u32::MAX));
+        self.settle(now);
+    }
+
+    /// Channel state of channel 0.
+    pub(super) fn channel_state(&self) -> ChannelState {
+        let motion_pending = !self.goal.is_empty()
+            && matches!(
+                self.goal_kind,
+                Some(
+                    GoalKind::Position
+                        | GoalKind::RampPosition
+                        | GoalKind::Velocity
+                        | GoalKind::Home
+                )
+            );
+        let velocity = self.encoder.velocity();
+        ChannelState {
+            position: f64::from(self.position),
+            velocity,
+            raw_counts: i64::from(self.position),
+            refreshed_at: self.last_sample_at,
+            moving: motion_pending || self.drive_moving() || velocity != 0.0,
+            homed: self.homed,
+            at_limit: false,
+            arrived: self.arrived,
+            fault: self
+                .status
+                .fault
+                .or(self.home_failed.then_some(DeviceFault::HomeFailed)),
         }
     }
 }

@@ -120,26 +120,27 @@
 
 mod brushed;
 mod config;
+mod goals;
 pub mod ramp;
+mod rx;
+mod startup;
 mod stepper;
-mod survey;
 mod wire;
 
-use core::fmt::Write as _;
 use core::time::Duration;
 
-use spimotor::{Identification, ReadPort, Reply, SerialNumber, Write};
+use spimotor::Identification;
 
 use crate::driver::{Driver, Model, Priority, Transmit};
-use crate::goal::{Goal, GoalError, GoalKind, GoalKinds};
-use crate::state::{ChannelState, DeviceFault, DeviceStatus, FIRMWARE_LEN};
+use crate::goal::{Goal, GoalError, GoalKinds};
+use crate::state::{ChannelState, DeviceFault, DeviceStatus};
 
 pub use config::{AxisLimits, SpimotorDrive, SpimotorDriverConfig};
-pub use survey::SURVEY_ATTEMPTS;
+pub use startup::SURVEY_ATTEMPTS;
 
 use brushed::BrushedMotor;
 use stepper::Stepper;
-use wire::{Expect, InFlight, Op, OpQueue, Queued, Sent};
+use wire::{InFlight, OpQueue, Registers};
 
 /// Retry period of the identification read during start-up.
 pub const RETRY_PERIOD: Duration = Duration::from_millis(20);
@@ -170,43 +171,6 @@ enum Phase {
     Running,
 }
 
-/// Board registers as the driver's writes leave them.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-struct Registers {
-    delay: spimotor::StepDelay,
-    /// `None`: unknown (after 0x42 ← 0, until a poll reads it).
-    target: Option<i32>,
-    intensity: Option<u8>,
-    /// Bumped by every write that changes the target.
-    target_seq: u32,
-}
-
-impl Registers {
-    const UNKNOWN: Self = Self {
-        delay: spimotor::StepDelay::DEFAULT,
-        target: None,
-        intensity: None,
-        target_seq: 0,
-    };
-
-    /// The registers after `write`.
-    fn apply(&mut self, write: Write) {
-        match write {
-            Write::StepDelay(delay) => self.delay = delay,
-            Write::TargetPosition(target) => {
-                self.target = Some(target);
-                self.target_seq = self.target_seq.wrapping_add(1);
-            }
-            Write::RelativePosition(_) => {
-                self.target = None;
-                self.target_seq = self.target_seq.wrapping_add(1);
-            }
-            Write::StepperIntensity(value) => self.intensity = Some(value),
-            _ => {}
-        }
-    }
-}
-
 /// Sans-I/O driver of one SPI_motor board. See the module docs.
 #[derive(Debug, Clone)]
 pub struct SpimotorDriver {
@@ -234,7 +198,7 @@ pub struct SpimotorDriver {
     stepper: Stepper,
     motors: [BrushedMotor; 2],
     /// The start-up survey's readings so far.
-    survey: survey::Survey,
+    survey: startup::Survey,
 }
 
 impl SpimotorDriver {
@@ -263,7 +227,7 @@ impl SpimotorDriver {
             refreshed_at: None,
             stepper,
             motors: [BrushedMotor::default(); 2],
-            survey: survey::Survey::default(),
+            survey: startup::Survey::default(),
         }
     }
 
@@ -285,272 +249,11 @@ impl SpimotorDriver {
         self.link_up && self.phase == Phase::Running
     }
 
-    /// Queues a setup or goal transaction; `false` when the queue is full.
-    fn push_command(&mut self, op: Op, priority: Priority, channel: u8) -> bool {
-        let pushed = self.commands.push(Queued {
-            op,
-            priority,
-            channel,
-        });
-        if pushed && let Op::Write(write) = op {
-            self.planned.apply(write);
-        }
-        pushed
-    }
-
-    /// Drops the unsent goal ops of `channel` and recomputes the planned registers.
-    fn drop_goals(&mut self, channel: u8) {
-        self.commands.retain(|queued| !queued.is_goal_of(channel));
-        self.planned = self.written;
-        let mut planned = self.written;
-        for queued in self.commands.iter() {
-            if let Op::Write(write) = queued.op {
-                planned.apply(write);
-            }
-        }
-        self.planned = planned;
-    }
-
-    /// Reply timeout: the wire time of everything in flight plus [`REPLY_MARGIN`].
-    fn reply_timeout(&self) -> Duration {
-        self.config
-            .wire_time(self.in_flight.len() * wire::MAX_TRANSACTION)
-            .saturating_add(REPLY_MARGIN)
-    }
-
     /// Raises `fault` on the board (and so on every channel).
     fn raise(&mut self, fault: DeviceFault) {
         if self.link_up || fault == DeviceFault::LinkDown {
             self.status.fault = Some(fault);
         }
-    }
-
-    /// Fresh, consistent data arrived: faults other than a down link clear.
-    fn refreshed(&mut self, now: Duration) {
-        self.refreshed_at = Some(now);
-        self.presence_misses = 0;
-        if self.link_up {
-            self.status.fault = None;
-        }
-    }
-
-    /// Starts the board again from the identification read (goals are lost).
-    fn restart(&mut self, now: Duration, attempts: u32) {
-        self.phase = Phase::Identify {
-            attempts,
-            next_at: now,
-        };
-        self.status.online = false;
-        self.commands.clear();
-        self.polls.clear();
-        self.planned = self.written;
-        self.presence_misses = 0;
-        self.stepper.forget(now);
-    }
-
-    /// The board does not answer.
-    fn absent(&mut self, now: Duration) {
-        self.status.timeouts = self.status.timeouts.saturating_add(1);
-        self.raise(DeviceFault::NotResponding);
-        self.restart(now, START_ATTEMPTS);
-    }
-
-    /// The board lost its registers (power cycle).
-    fn board_reset(&mut self, now: Duration) {
-        self.status.resets = self.status.resets.saturating_add(1);
-        self.raise(DeviceFault::Reset);
-        self.stepper.homed = false;
-        self.restart(now, 0);
-    }
-
-    fn good_reply(&mut self) {
-        self.status.replies = self.status.replies.saturating_add(1);
-    }
-
-    fn bad_reply(&mut self) {
-        self.status.bad_replies = self.status.bad_replies.saturating_add(1);
-    }
-
-    /// Handles one completed transaction.
-    fn complete(&mut self, now: Duration, sent: Sent, miso: &[u8]) {
-        let Op::Read(port, _) = sent.op else {
-            return; // MISO of a write carries nothing.
-        };
-        let reply = Reply::decode(port, miso);
-        match (self.phase, port) {
-            (Phase::Identify { attempts, .. }, ReadPort::Identification) => {
-                match reply.ok().and_then(valid_identification) {
-                    Some(id) => {
-                        self.good_reply();
-                        self.identification = Some(id);
-                        self.phase = Phase::Serial;
-                    }
-                    None => {
-                        let attempts = attempts.saturating_add(1);
-                        let retry = if attempts >= START_ATTEMPTS {
-                            self.status.timeouts = self.status.timeouts.saturating_add(1);
-                            self.raise(DeviceFault::NotResponding);
-                            self.status.online = false;
-                            OFFLINE_RETRY_PERIOD
-                        } else {
-                            RETRY_PERIOD
-                        };
-                        self.phase = Phase::Identify {
-                            attempts,
-                            next_at: now.saturating_add(retry),
-                        };
-                    }
-                }
-            }
-            (Phase::Serial, ReadPort::Serial) => {
-                let serial = match reply {
-                    Ok(Reply::Serial(serial)) => {
-                        self.good_reply();
-                        serial
-                    }
-                    _ => SerialNumber::default(),
-                };
-                self.set_firmware(serial);
-                if self.is_stepper() {
-                    self.begin_survey();
-                } else {
-                    self.status.online = true;
-                    self.phase = Phase::Running;
-                    self.next_poll_at = now;
-                    self.polls_done = 0;
-                    self.configure(now, false);
-                }
-            }
-            (Phase::Survey, _) => match reply {
-                Ok(reply) => self.survey_reading(now, reply, sent.at),
-                Err(_) => self.bad_reply(),
-            },
-            (Phase::Running, ReadPort::Identification) => {
-                let matches = reply.ok().and_then(valid_identification).is_some_and(|id| {
-                    self.identification
-                        .is_some_and(|known| known.as_bytes() == id.as_bytes())
-                });
-                if matches {
-                    self.good_reply();
-                    self.presence_misses = 0;
-                    if !self.is_stepper() {
-                        self.refreshed(now);
-                    }
-                } else {
-                    self.bad_reply();
-                    self.presence_misses = self.presence_misses.saturating_add(1);
-                    if self.presence_misses >= CONFIRMATIONS {
-                        self.absent(now);
-                    }
-                }
-            }
-            (Phase::Running, _) if self.is_stepper() => match reply {
-                Ok(reply) => self.stepper_reading(now, reply, sent),
-                Err(_) => self.bad_reply(),
-            },
-            // An answer to a read of an earlier phase: nothing to learn from it.
-            _ => {}
-        }
-    }
-
-    fn set_firmware(&mut self, serial: SerialNumber) {
-        let mut text = motion_base::FixedText::<FIRMWARE_LEN>::new();
-        let identification = self.identification;
-        let id = identification
-            .as_ref()
-            .and_then(Identification::as_str)
-            .unwrap_or("?");
-        let _ = write!(text, "{id} sn {:08x}", serial.0);
-        self.status.set_firmware(text.as_str());
-    }
-
-    /// Queues the reads of one poll when due.
-    fn schedule_poll(&mut self, now: Duration) {
-        if !self.running() || now < self.next_poll_at || !self.polls.is_empty() {
-            return;
-        }
-        let poll_reads_in_flight = self.in_flight.reading(ReadPort::StepDelay)
-            || (!self.is_stepper() && self.in_flight.reading(ReadPort::Identification));
-        if poll_reads_in_flight {
-            return;
-        }
-        self.next_poll_at = now.saturating_add(self.config.poll_period);
-        let presence_len = self
-            .identification
-            .map_or(spimotor::IDENTIFICATION_READ_LEN, |id| {
-                u16::try_from(id.wire_len()).unwrap_or(spimotor::IDENTIFICATION_READ_LEN)
-            });
-        let presence = Op::Read(ReadPort::Identification, presence_len);
-        let poll = |op| Queued {
-            op,
-            priority: Priority::Poll,
-            channel: 0,
-        };
-        if self.is_stepper() {
-            if self.polls_done % PRESENCE_EVERY == PRESENCE_EVERY - 1 {
-                self.polls.push(poll(presence));
-            }
-            for port in [
-                ReadPort::CurrentPosition,
-                ReadPort::TargetPosition,
-                ReadPort::StepDelay,
-            ] {
-                self.polls.push(poll(Op::read(port)));
-            }
-        } else {
-            self.polls.push(poll(presence));
-        }
-        self.polls_done = self.polls_done.wrapping_add(1);
-    }
-
-    /// Queues the start-up read of the current phase when due.
-    fn schedule_startup(&mut self, now: Duration) {
-        if !self.link_up || !self.commands.is_empty() {
-            return;
-        }
-        let op = match self.phase {
-            Phase::Identify { next_at, .. }
-                if now >= next_at && !self.in_flight.reading(ReadPort::Identification) =>
-            {
-                Op::read(ReadPort::Identification)
-            }
-            Phase::Serial if !self.in_flight.reading(ReadPort::Serial) => {
-                Op::read(ReadPort::Serial)
-            }
-            _ => return,
-        };
-        if let Phase::Identify { attempts, .. } = self.phase {
-            // No second read before this one is answered or times out.
-            self.phase = Phase::Identify {
-                attempts,
-                next_at: now.saturating_add(self.reply_timeout()),
-            };
-        }
-        self.push_command(op, Priority::Setup, 0);
-    }
-
-    /// The queue the next transaction comes from (commands before polls).
-    fn next_queued(&self) -> Option<Queued> {
-        if !self.link_up || !self.in_flight.has_room() {
-            return None;
-        }
-        self.commands.front().or_else(|| self.polls.front())
-    }
-}
-
-/// An identification worth believing: non-empty printable ASCII.
-fn valid_identification(reply: Reply) -> Option<Identification> {
-    match reply {
-        Reply::Identification(id)
-            if !id.as_bytes().is_empty()
-                && id
-                    .as_bytes()
-                    .iter()
-                    .all(|b| b.is_ascii_graphic() || *b == b' ') =>
-        {
-            Some(id)
-        }
-        _ => None,
     }
 }
 
@@ -564,24 +267,7 @@ impl Driver for SpimotorDriver {
     }
 
     fn capabilities(&self, channel: usize) -> GoalKinds {
-        if channel >= self.channel_count() {
-            return GoalKinds::NONE;
-        }
-        if !self.is_stepper() {
-            return GoalKinds::of(&[GoalKind::Off, GoalKind::Stop, GoalKind::Power]);
-        }
-        if self.stepper.can_move() {
-            GoalKinds::of(&[
-                GoalKind::Off,
-                GoalKind::Stop,
-                GoalKind::Position,
-                GoalKind::Velocity,
-                GoalKind::RampPosition,
-                GoalKind::SetPosition,
-            ])
-        } else {
-            GoalKinds::of(&[GoalKind::Off, GoalKind::Stop, GoalKind::SetPosition])
-        }
+        self.kinds(channel)
     }
 
     fn refresh_budget(&self) -> Duration {
@@ -591,43 +277,12 @@ impl Driver for SpimotorDriver {
             .saturating_add(Duration::from_millis(25))
     }
 
-    fn handle_rx(&mut self, now: Duration, mut bytes: &[u8]) {
-        while !bytes.is_empty() {
-            let (taken, complete) = self.in_flight.take(bytes);
-            if taken == 0 {
-                // Bytes for nothing in flight (late MISO after a timeout): ignore them.
-                self.bad_reply();
-                return;
-            }
-            let rest = bytes.get(taken..).unwrap_or(&[]);
-            if let Some((sent, miso)) = complete {
-                let mut copy = [0u8; wire::MAX_TRANSACTION];
-                let len = miso.len().min(copy.len());
-                copy[..len].copy_from_slice(&miso[..len]);
-                self.complete(now, sent, &copy[..len]);
-            }
-            bytes = rest;
-        }
+    fn handle_rx(&mut self, now: Duration, bytes: &[u8]) {
+        self.receive(now, bytes);
     }
 
     fn handle_timeout(&mut self, now: Duration) {
-        if !self.link_up {
-            return;
-        }
-        if let Some(oldest) = self.in_flight.oldest()
-            && now.saturating_sub(oldest.at) > self.reply_timeout()
-        {
-            self.in_flight.clear();
-            self.absent(now);
-        }
-        if self.phase == Phase::Running {
-            if self.is_stepper() {
-                self.drive_stepper(now, false);
-            }
-            self.schedule_poll(now);
-        } else {
-            self.schedule_startup(now);
-        }
+        self.pass_time(now);
     }
 
     fn poll_timeout(&self) -> Option<Duration> {
@@ -652,44 +307,7 @@ impl Driver for SpimotorDriver {
     }
 
     fn poll_transmit(&mut self, now: Duration, buf: &mut [u8]) -> Option<Transmit> {
-        let queued = self.next_queued()?;
-        let len = queued
-            .op
-            .transaction(self.config.address)
-            .encode(buf)
-            .ok()?;
-        if self.commands.front() == Some(queued) {
-            self.commands.pop();
-        } else {
-            self.polls.pop();
-        }
-        if let Op::Write(write) = queued.op {
-            self.written.apply(write);
-            if let Write::CurrentPosition(position) = write {
-                self.epoch = self.epoch.wrapping_add(1);
-                self.stepper.position_written(now, position);
-            }
-            if let Write::Spin { motor, .. } | Write::Stop(motor) = write
-                && let Some(state) = self.motors.get_mut(usize::from(motor.channel()))
-            {
-                state.written(write);
-            }
-        }
-        let expect = Expect {
-            delay: self.written.delay,
-            target: self.written.target,
-            epoch: self.epoch,
-            target_seq: self.written.target_seq,
-        };
-        self.in_flight.push(Sent {
-            op: queued.op,
-            at: now,
-            expect,
-        });
-        Some(Transmit {
-            len,
-            expects_reply: matches!(queued.op, Op::Read(..)),
-        })
+        self.transmit(now, buf)
     }
 
     fn awaiting_reply(&self) -> bool {
@@ -704,21 +322,7 @@ impl Driver for SpimotorDriver {
     }
 
     fn set_goal(&mut self, now: Duration, channel: usize, goal: Goal) -> Result<(), GoalError> {
-        if channel >= self.channel_count() {
-            return Err(GoalError::NoSuchChannel(channel));
-        }
-        let kind = goal.kind();
-        if !self.capabilities(channel).contains(kind) {
-            return Err(GoalError::Unsupported(kind));
-        }
-        if !self.link_up {
-            return Err(GoalError::Offline);
-        }
-        if self.is_stepper() {
-            self.stepper_goal(now, goal)
-        } else {
-            self.brushed_goal(channel, goal)
-        }
+        self.plan_goal(now, channel, goal)
     }
 
     fn channel(&self, channel: usize) -> ChannelState {

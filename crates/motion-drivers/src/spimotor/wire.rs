@@ -8,7 +8,8 @@ use spimotor::{Address, Header, Read, ReadPort, StepDelay, Transaction, Write};
 
 use motion_base::FixedQueue;
 
-use crate::driver::Priority;
+use super::{PRESENCE_EVERY, Phase, REPLY_MARGIN, SpimotorDriver};
+use crate::driver::{Priority, Transmit};
 
 /// One transaction the driver wants on the wire.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -176,6 +177,177 @@ impl<const N: usize> InFlight<N> {
         self.sent.pop();
         let miso = self.miso.get(..len.min(MAX_TRANSACTION)).unwrap_or(&[]);
         (take, Some((sent, miso)))
+    }
+}
+
+/// Board registers as the driver's writes leave them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) struct Registers {
+    pub(super) delay: spimotor::StepDelay,
+    /// `None`: unknown (after 0x42 ← 0, until a poll reads it).
+    pub(super) target: Option<i32>,
+    pub(super) intensity: Option<u8>,
+    /// Bumped by every write that changes the target.
+    pub(super) target_seq: u32,
+}
+
+impl Registers {
+    pub(super) const UNKNOWN: Self = Self {
+        delay: spimotor::StepDelay::DEFAULT,
+        target: None,
+        intensity: None,
+        target_seq: 0,
+    };
+
+    /// The registers after `write`.
+    pub(super) fn apply(&mut self, write: Write) {
+        match write {
+            Write::StepDelay(delay) => self.delay = delay,
+            Write::TargetPosition(target) => {
+                self.target = Some(target);
+                self.target_seq = self.target_seq.wrapping_add(1);
+            }
+            Write::RelativePosition(_) => {
+                self.target = None;
+                self.target_seq = self.target_seq.wrapping_add(1);
+            }
+            Write::StepperIntensity(value) => self.intensity = Some(value),
+            _ => {}
+        }
+    }
+}
+
+impl SpimotorDriver {
+    /// Queues a setup or goal transaction; `false` when the queue is full.
+    pub(super) fn push_command(&mut self, op: Op, priority: Priority, channel: u8) -> bool {
+        let pushed = self.commands.push(Queued {
+            op,
+            priority,
+            channel,
+        });
+        if pushed && let Op::Write(write) = op {
+            self.planned.apply(write);
+        }
+        pushed
+    }
+
+    /// Reply timeout: the wire time of everything in flight plus [`REPLY_MARGIN`].
+    pub(super) fn reply_timeout(&self) -> Duration {
+        self.config
+            .wire_time(self.in_flight.len() * MAX_TRANSACTION)
+            .saturating_add(REPLY_MARGIN)
+    }
+
+    /// Queues the reads of one poll when due.
+    pub(super) fn schedule_poll(&mut self, now: Duration) {
+        if !self.running() || now < self.next_poll_at || !self.polls.is_empty() {
+            return;
+        }
+        let poll_reads_in_flight = self.in_flight.reading(ReadPort::StepDelay)
+            || (!self.is_stepper() && self.in_flight.reading(ReadPort::Identification));
+        if poll_reads_in_flight {
+            return;
+        }
+        self.next_poll_at = now.saturating_add(self.config.poll_period);
+        let presence_len = self
+            .identification
+            .map_or(spimotor::IDENTIFICATION_READ_LEN, |id| {
+                u16::try_from(id.wire_len()).unwrap_or(spimotor::IDENTIFICATION_READ_LEN)
+            });
+        let presence = Op::Read(ReadPort::Identification, presence_len);
+        let poll = |op| Queued {
+            op,
+            priority: Priority::Poll,
+            channel: 0,
+        };
+        if self.is_stepper() {
+            if self.polls_done % PRESENCE_EVERY == PRESENCE_EVERY - 1 {
+                self.polls.push(poll(presence));
+            }
+            for port in [
+                ReadPort::CurrentPosition,
+                ReadPort::TargetPosition,
+                ReadPort::StepDelay,
+            ] {
+                self.polls.push(poll(Op::read(port)));
+            }
+        } else {
+            self.polls.push(poll(presence));
+        }
+        self.polls_done = self.polls_done.wrapping_add(1);
+    }
+
+    /// The queue the next transaction comes from (commands before polls).
+    pub(super) fn next_queued(&self) -> Option<Queued> {
+        if !self.link_up || !self.in_flight.has_room() {
+            return None;
+        }
+        self.commands.front().or_else(|| self.polls.front())
+    }
+
+    /// Writes the next queued transaction into `buf` (commands before polls) and puts it in
+    /// flight with what its reads must agree with.
+    pub(super) fn transmit(&mut self, now: Duration, buf: &mut [u8]) -> Option<Transmit> {
+        let queued = self.next_queued()?;
+        let len = queued
+            .op
+            .transaction(self.config.address)
+            .encode(buf)
+            .ok()?;
+        if self.commands.front() == Some(queued) {
+            self.commands.pop();
+        } else {
+            self.polls.pop();
+        }
+        if let Op::Write(write) = queued.op {
+            self.written.apply(write);
+            if let Write::CurrentPosition(position) = write {
+                self.epoch = self.epoch.wrapping_add(1);
+                self.stepper.position_written(now, position);
+            }
+            if let Write::Spin { motor, .. } | Write::Stop(motor) = write
+                && let Some(state) = self.motors.get_mut(usize::from(motor.channel()))
+            {
+                state.written(write);
+            }
+        }
+        let expect = Expect {
+            delay: self.written.delay,
+            target: self.written.target,
+            epoch: self.epoch,
+            target_seq: self.written.target_seq,
+        };
+        self.in_flight.push(Sent {
+            op: queued.op,
+            at: now,
+            expect,
+        });
+        Some(Transmit {
+            len,
+            expects_reply: matches!(queued.op, Op::Read(..)),
+        })
+    }
+
+    /// Lets time pass: MISO that never came back, the stepper's profile, the next poll or
+    /// start-up read.
+    pub(super) fn pass_time(&mut self, now: Duration) {
+        if !self.link_up {
+            return;
+        }
+        if let Some(oldest) = self.in_flight.oldest()
+            && now.saturating_sub(oldest.at) > self.reply_timeout()
+        {
+            self.in_flight.clear();
+            self.absent(now);
+        }
+        if self.phase == Phase::Running {
+            if self.is_stepper() {
+                self.drive_stepper(now, false);
+            }
+            self.schedule_poll(now);
+        } else {
+            self.schedule_startup(now);
+        }
     }
 }
 

@@ -38,8 +38,9 @@
 
 mod channel;
 mod config;
+mod goals;
 mod io;
-mod reply;
+mod rx;
 mod startup;
 mod wire;
 
@@ -55,20 +56,19 @@ mod tests_io;
 use core::time::Duration;
 
 use tmcpack::convert::{DEFAULT_SWITCHOVER_UNITS as FACTORY_SWITCHOVER, byte_time, units};
-use tmcpack::{
-    Command, DEFAULT_PACKET_TIMEOUT, FRAME_LEN, MotorMask, Request, RequestFrame, Variant,
-};
+use tmcpack::{DEFAULT_PACKET_TIMEOUT, FRAME_LEN, Variant};
 
 use crate::driver::{Driver, Model, Priority, Transmit};
-use crate::goal::{Goal, GoalError, GoalKind, GoalKinds};
+use crate::goal::{Goal, GoalError, GoalKinds};
 use crate::pin::{Pin, PinReading};
 use crate::state::{ChannelState, DeviceFault, DeviceStatus};
 
 use channel::{Channel, Step};
 use config::{Scale, clkdiv_for};
+use goals::CAPABILITIES;
 use io::IoState;
 use startup::{Quiesce, StartupPlan};
-use wire::{Expect, Purpose, ReplyHunter, Wire};
+use wire::{ReplyHunter, Wire};
 
 pub use config::{
     Currents, DEFAULT_REPLY_ADDRESS, DEFAULT_SWITCHOVER_UNITS, PACKET_TIMEOUT_SLACK_BYTES,
@@ -86,20 +86,6 @@ pub const RETRY_PERIOD: Duration = Duration::from_millis(250);
 /// How often an online pack's reset flag is read ($43).
 pub const RESET_CHECK_PERIOD: Duration = Duration::from_secs(1);
 
-/// The goals a configured motor takes.
-const CAPABILITIES: GoalKinds = GoalKinds::of(&[
-    GoalKind::Off,
-    GoalKind::Stop,
-    GoalKind::Position,
-    GoalKind::Velocity,
-    GoalKind::RampPosition,
-    GoalKind::Home,
-    GoalKind::SetPosition,
-]);
-
-/// The poll slot of the `$30` input poll, after the six motors.
-const IO_SLOT: usize = 6;
-
 /// Where the driver is with its pack.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Phase {
@@ -115,13 +101,6 @@ enum Phase {
     Configure(usize),
     /// Polling and driving.
     Online,
-}
-
-/// What `pick` chose to send.
-struct Pick {
-    request: Request,
-    expect: Option<Expect>,
-    channel: Option<usize>,
 }
 
 /// The sans-I/O driver of one SIXpack / QUADpack.
@@ -154,15 +133,6 @@ pub struct TmcpackDriver {
     next_poll: usize,
     next_command: usize,
     budget: Duration,
-}
-
-/// What has waited too long for its poll.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Starved {
-    /// A motor's `$20`.
-    Motor(u8),
-    /// A `$30` of this channel.
-    Input(u8),
 }
 
 impl TmcpackDriver {
@@ -243,284 +213,6 @@ impl TmcpackDriver {
         }
         out
     }
-
-    /// The requests the start-up writes after the survey, in order (with the outputs as
-    /// they are now).
-    pub fn startup_requests(&self) -> impl Iterator<Item = Request> + '_ {
-        (0..startup::MAX_STARTUP)
-            .map_while(|index| self.plan.get(index))
-            .map(|request| self.resolve(request))
-    }
-
-    /// A plan entry as it goes on the wire: the `$32` placeholder carries the current
-    /// output levels.
-    fn resolve(&self, request: Request) -> Request {
-        match request {
-            Request::Outputs { .. } => self.io.outputs_request(),
-            other => other,
-        }
-    }
-
-    /// The smallest spacing between the starts of two words: their wire time, and the
-    /// packet timeout of every pack on the bus.
-    fn spacing(&self) -> Duration {
-        self.word_time.max(self.pack_timeout).max(self.bus_timeout)
-    }
-
-    fn any_ready(&self) -> bool {
-        self.io.outputs_pending || self.channels.iter().flatten().any(Channel::ready)
-    }
-
-    /// A configured motor (or input) whose data is older than half the refresh budget: its
-    /// poll goes before every command but a stop, so that goals for every motor of the bus
-    /// at once (the engine's start-up stops, a client's coordinated move) never make an
-    /// axis or a signal stale.
-    fn starved(&self, now: Duration) -> Option<Starved> {
-        let limit = self.budget / 2;
-        let motor = self
-            .channels
-            .iter()
-            .flatten()
-            .filter_map(|c| c.state.refreshed_at.map(|at| (at, Starved::Motor(c.motor))));
-        let input = self
-            .io
-            .stalest()
-            .map(|(at, channel)| (at, Starved::Input(channel)));
-        motor
-            .chain(input)
-            .filter(|(at, _)| now.saturating_sub(*at) > limit)
-            .min_by_key(|(at, _)| *at)
-            .map(|(_, starved)| starved)
-    }
-
-    /// What the driver would send now.
-    fn next_message(&self, now: Duration) -> Option<Priority> {
-        if self.wire != Wire::Idle {
-            return None;
-        }
-        match self.phase {
-            Phase::Down => None,
-            Phase::Identify => (now >= self.retry_at).then_some(Priority::Setup),
-            Phase::Survey | Phase::Quiesce | Phase::Configure(_) => Some(Priority::Setup),
-            Phase::Online if self.any_ready() || self.starved(now).is_some() => {
-                Some(Priority::Command)
-            }
-            Phase::Online => {
-                let polls = self.channels.iter().any(Option::is_some) || self.io.polls();
-                (polls || now >= self.reset_check_at).then_some(Priority::Poll)
-            }
-        }
-    }
-
-    fn query(
-        &self,
-        request: Request,
-        command: Command,
-        motor: Option<u8>,
-        purpose: Purpose,
-    ) -> Pick {
-        Pick {
-            request,
-            expect: Some(Expect {
-                command,
-                motor,
-                purpose,
-            }),
-            channel: None,
-        }
-    }
-
-    /// Picks the request to send now; the core of `poll_transmit`.
-    fn pick(&mut self, now: Duration) -> Option<Pick> {
-        let priority = self.next_message(now)?;
-        let reply_to = self.reply_address;
-        match self.phase {
-            Phase::Down => None,
-            Phase::Identify => Some(self.query(
-                Request::UnitInfo { reply_to },
-                Command::UnitInfo,
-                None,
-                Purpose::Startup,
-            )),
-            Phase::Survey => Some(self.query(
-                Request::QueryActions {
-                    reply_to,
-                    delay_mask: MotorMask::EMPTY,
-                },
-                Command::QueryActions,
-                None,
-                Purpose::Survey,
-            )),
-            Phase::Quiesce => self.pick_quiesce(now),
-            Phase::Configure(index) => {
-                let request = self.resolve(self.plan.get(index)?);
-                Some(Pick {
-                    request,
-                    expect: None,
-                    channel: None,
-                })
-            }
-            Phase::Online if priority == Priority::Command => {
-                let urgent = self.channels.iter().flatten().any(Channel::urgent);
-                match self.starved(now) {
-                    Some(Starved::Motor(motor)) if !urgent => Some(self.query(
-                        Request::QueryPosition { motor, reply_to },
-                        Command::QueryPosition,
-                        Some(motor),
-                        Purpose::Poll,
-                    )),
-                    Some(Starved::Input(channel)) if !urgent => Some(self.query(
-                        Request::ReadInput { channel, reply_to },
-                        Command::ReadInput,
-                        Some(channel),
-                        Purpose::Io,
-                    )),
-                    _ => self.pick_command(),
-                }
-            }
-            Phase::Online => self.pick_poll(now),
-        }
-    }
-
-    fn pick_quiesce(&mut self, now: Duration) -> Option<Pick> {
-        let quiesce = self.quiesce.as_mut()?;
-        if let Some(request) = quiesce.command() {
-            return Some(Pick {
-                request,
-                expect: None,
-                channel: None,
-            });
-        }
-        if quiesce.done(now) {
-            self.quiesce = None;
-            self.phase = Phase::Configure(0);
-            return self.pick(now);
-        }
-        let motor = quiesce.poll_motor()?;
-        Some(self.query(
-            Request::QueryVelocity {
-                motor,
-                reply_to: self.reply_address,
-            },
-            Command::QueryVelocity,
-            Some(motor),
-            Purpose::Quiesce,
-        ))
-    }
-
-    /// Stops first, then output changes, then the other goals round-robin.
-    fn pick_command(&mut self) -> Option<Pick> {
-        let urgent = self.channels.iter().flatten().find(|c| c.urgent());
-        if let Some(channel) = urgent
-            && let Some(Step::Send(request)) = channel.current()
-        {
-            return Some(Pick {
-                request,
-                expect: None,
-                channel: Some(usize::from(channel.motor)),
-            });
-        }
-        if self.io.outputs_pending {
-            return Some(Pick {
-                request: self.io.outputs_request(),
-                expect: None,
-                channel: None,
-            });
-        }
-        for offset in 0..6 {
-            let index = (self.next_command + offset) % 6;
-            if let Some(Some(channel)) = self.channels.get(index)
-                && let Some(Step::Send(request)) = channel.current()
-            {
-                self.next_command = (index + 1) % 6;
-                return Some(Pick {
-                    request,
-                    expect: None,
-                    channel: Some(index),
-                });
-            }
-        }
-        None
-    }
-
-    fn pick_poll(&mut self, now: Duration) -> Option<Pick> {
-        let reply_to = self.reply_address;
-        if now >= self.reset_check_at {
-            return Some(self.query(
-                Request::UnitInfo { reply_to },
-                Command::UnitInfo,
-                None,
-                Purpose::ResetCheck,
-            ));
-        }
-        let urgent = self
-            .channels
-            .iter()
-            .flatten()
-            .find(|c| c.wants_rest_poll(now))
-            .map(|c| usize::from(c.motor));
-        let slot = urgent.or_else(|| {
-            (0..=IO_SLOT)
-                .map(|offset| (self.next_poll + offset) % (IO_SLOT + 1))
-                .find(|&i| match i {
-                    IO_SLOT => self.io.polls(),
-                    _ => matches!(self.channels.get(i), Some(Some(_))),
-                })
-        })?;
-        if urgent.is_none() {
-            self.next_poll = (slot + 1) % (IO_SLOT + 1);
-        }
-        if slot == IO_SLOT {
-            let channel = self.io.next_channel();
-            return Some(self.query(
-                Request::ReadInput { channel, reply_to },
-                Command::ReadInput,
-                Some(channel),
-                Purpose::Io,
-            ));
-        }
-        let motor = slot as u8;
-        Some(self.query(
-            Request::QueryPosition { motor, reply_to },
-            Command::QueryPosition,
-            Some(motor),
-            Purpose::Poll,
-        ))
-    }
-
-    /// The reply timeout of a query sent at `now`: request, switch-over (at least the
-    /// factory delay), reply, margin.
-    fn reply_deadline(&self, now: Duration) -> Duration {
-        let switchover = self.switchover.max(units(FACTORY_SWITCHOVER));
-        now + self.word_time * 2 + switchover + REPLY_MARGIN
-    }
-
-    fn go_online(&mut self, now: Duration) {
-        self.phase = Phase::Online;
-        self.status.online = true;
-        self.status.fault = None;
-        self.ever_online = true;
-        self.reset_check_at = now + RESET_CHECK_PERIOD;
-        // The start-up wrote the outputs as they are now.
-        self.io.outputs_pending = false;
-    }
-
-    /// The pack lost what it was told (reboot, silence, link): channels keep their last
-    /// state but are faulted until fresh data, and their goals are void.
-    fn restart(&mut self, fault: DeviceFault) {
-        self.status.online = false;
-        self.status.fault = Some(fault);
-        self.quiesce = None;
-        for channel in self.channels.iter_mut().flatten() {
-            channel.restart(fault);
-        }
-    }
-
-    /// Whatever the pack has now (it may have rebooted to the factory settings).
-    fn assume_factory_line(&mut self) {
-        self.switchover = units(FACTORY_SWITCHOVER);
-        self.pack_timeout = DEFAULT_PACKET_TIMEOUT;
-    }
 }
 
 impl Driver for TmcpackDriver {
@@ -544,28 +236,7 @@ impl Driver for TmcpackDriver {
     }
 
     fn handle_rx(&mut self, now: Duration, bytes: &[u8]) {
-        if bytes.is_empty() {
-            return;
-        }
-        let Wire::Awaiting {
-            expect, sent_at, ..
-        } = self.wire
-        else {
-            // A late answer, an echo or noise: nobody asked.
-            self.status.bad_replies = self.status.bad_replies.saturating_add(1);
-            return;
-        };
-        let Some(reply) = self.hunter.push(self.reply_address, expect, bytes) else {
-            return;
-        };
-        if self.hunter.skipped > 0 {
-            self.status.bad_replies = self.status.bad_replies.saturating_add(1);
-        }
-        // The pack keeps driving the line for the switch-over time after its answer.
-        self.wire = Wire::Quiet {
-            until: now + self.switchover,
-        };
-        self.on_reply(now, expect, sent_at, reply);
+        self.receive(now, bytes);
     }
 
     fn handle_timeout(&mut self, now: Duration) {
@@ -603,63 +274,7 @@ impl Driver for TmcpackDriver {
     }
 
     fn poll_transmit(&mut self, now: Duration, buf: &mut [u8]) -> Option<Transmit> {
-        let pick = self.pick(now)?;
-        let request = pick.request;
-        let len = RequestFrame::new(self.address, request).encode(buf).ok()?;
-        self.seq += 1;
-        let wire_end = now + self.word_time;
-        match request {
-            Request::SetBaud { switchover, .. } => self.switchover = units(switchover),
-            Request::PacketTimeout { timeout } => self.pack_timeout = units(timeout),
-            Request::Outputs { .. } => {
-                self.io.on_outputs_sent(now, request);
-                if self.phase == Phase::Online {
-                    self.io.outputs_pending = false;
-                }
-            }
-            _ => {}
-        }
-        match pick.expect {
-            Some(expect) => {
-                self.hunter.reset();
-                self.wire = Wire::Awaiting {
-                    expect,
-                    sent_at: now,
-                    deadline: self.reply_deadline(now),
-                };
-            }
-            None => {
-                self.wire = Wire::Sending {
-                    until: now + self.spacing(),
-                };
-            }
-        }
-        match self.phase {
-            Phase::Quiesce => {
-                if let Some(quiesce) = self.quiesce.as_mut()
-                    && pick.expect.is_none()
-                {
-                    quiesce.sent();
-                }
-            }
-            Phase::Configure(index) => {
-                let next = index + 1;
-                if self.plan.get(next).is_some() {
-                    self.phase = Phase::Configure(next);
-                } else {
-                    self.go_online(now);
-                }
-            }
-            _ => {}
-        }
-        if let Some(Some(channel)) = pick.channel.and_then(|i| self.channels.get_mut(i)) {
-            channel.on_sent(request, self.seq, wire_end);
-            channel.advance();
-        }
-        Some(Transmit {
-            len,
-            expects_reply: true,
-        })
+        self.transmit(now, buf)
     }
 
     fn awaiting_reply(&self) -> bool {
@@ -671,18 +286,7 @@ impl Driver for TmcpackDriver {
     }
 
     fn set_goal(&mut self, _now: Duration, channel: usize, goal: Goal) -> Result<(), GoalError> {
-        if channel >= self.channel_count() {
-            return Err(GoalError::NoSuchChannel(channel));
-        }
-        let phase = self.phase;
-        let Some(Some(slot)) = self.channels.get_mut(channel) else {
-            return Err(GoalError::Unsupported(goal.kind()));
-        };
-        match phase {
-            Phase::Online => slot.plan(goal),
-            Phase::Survey | Phase::Quiesce | Phase::Configure(_) => Err(GoalError::Starting),
-            Phase::Down | Phase::Identify => Err(GoalError::Offline),
-        }
+        self.plan_goal(channel, goal)
     }
 
     fn channel(&self, channel: usize) -> ChannelState {
@@ -716,20 +320,6 @@ impl Driver for TmcpackDriver {
     }
 
     fn set_output(&mut self, _now: Duration, pin: Pin, high: bool) -> Result<(), GoalError> {
-        if !self.io.config().outputs.contains(pin) {
-            return Err(GoalError::NoSuchPin(pin));
-        }
-        match self.phase {
-            Phase::Online => {}
-            Phase::Survey | Phase::Quiesce | Phase::Configure(_) => {
-                return Err(GoalError::Starting);
-            }
-            Phase::Down | Phase::Identify => return Err(GoalError::Offline),
-        }
-        if self.io.set(pin, high) {
-            Ok(())
-        } else {
-            Err(GoalError::NoSuchPin(pin))
-        }
+        self.drive_output(pin, high)
     }
 }

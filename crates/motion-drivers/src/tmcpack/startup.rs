@@ -10,16 +10,25 @@
 //! motor's action; configured motors found active get `$14` (this axis's amax) and `$25`
 //! velocity 0, and are polled with `$21` until their velocity reads 0 (or an upper bound of
 //! their stop time has passed) before the configuration goes out.
+//!
+//! Also here: going online once the plan is sent, and what a restart (reset, silence,
+//! link) voids.
 
 use core::time::Duration;
 
 use motion_base::FixedQueue;
-use tmcpack::convert::baud_divisor;
-use tmcpack::{Action, MAX_VELOCITY, MotorMask, MotorOptions, MotorType, Request};
+use tmcpack::convert::{DEFAULT_SWITCHOVER_UNITS as FACTORY_SWITCHOVER, baud_divisor, units};
+use tmcpack::{
+    Action, Command, DEFAULT_PACKET_TIMEOUT, MAX_VELOCITY, MotorMask, MotorOptions, MotorType,
+    Request,
+};
 
 use super::channel::Channel;
 use super::config::{REFERENCE_FLAGS, Scale, TmcpackDriverConfig};
 use super::io::IoState;
+use super::wire::{Pick, Purpose};
+use super::{Phase, RESET_CHECK_PERIOD, TmcpackDriver};
+use crate::state::DeviceFault;
 
 /// Most requests a start-up can need: $40, $41, $12, three $10, six motors × seven, $33,
 /// $32.
@@ -246,5 +255,77 @@ impl Quiesce {
     /// Whether the configuration may go out at `now`.
     pub fn done(&self, now: Duration) -> bool {
         self.command().is_none() && (self.moving.bits() == 0 || now >= self.deadline)
+    }
+}
+
+impl TmcpackDriver {
+    /// The requests the start-up writes after the survey, in order (with the outputs as
+    /// they are now).
+    pub fn startup_requests(&self) -> impl Iterator<Item = Request> + '_ {
+        (0..MAX_STARTUP)
+            .map_while(|index| self.plan.get(index))
+            .map(|request| self.resolve(request))
+    }
+
+    /// A plan entry as it goes on the wire: the `$32` placeholder carries the current
+    /// output levels.
+    pub(super) fn resolve(&self, request: Request) -> Request {
+        match request {
+            Request::Outputs { .. } => self.io.outputs_request(),
+            other => other,
+        }
+    }
+
+    pub(super) fn pick_quiesce(&mut self, now: Duration) -> Option<Pick> {
+        let quiesce = self.quiesce.as_mut()?;
+        if let Some(request) = quiesce.command() {
+            return Some(Pick {
+                request,
+                expect: None,
+                channel: None,
+            });
+        }
+        if quiesce.done(now) {
+            self.quiesce = None;
+            self.phase = Phase::Configure(0);
+            return self.pick(now);
+        }
+        let motor = quiesce.poll_motor()?;
+        Some(self.query(
+            Request::QueryVelocity {
+                motor,
+                reply_to: self.reply_address,
+            },
+            Command::QueryVelocity,
+            Some(motor),
+            Purpose::Quiesce,
+        ))
+    }
+
+    pub(super) fn go_online(&mut self, now: Duration) {
+        self.phase = Phase::Online;
+        self.status.online = true;
+        self.status.fault = None;
+        self.ever_online = true;
+        self.reset_check_at = now + RESET_CHECK_PERIOD;
+        // The start-up wrote the outputs as they are now.
+        self.io.outputs_pending = false;
+    }
+
+    /// The pack lost what it was told (reboot, silence, link): channels keep their last
+    /// state but are faulted until fresh data, and their goals are void.
+    pub(super) fn restart(&mut self, fault: DeviceFault) {
+        self.status.online = false;
+        self.status.fault = Some(fault);
+        self.quiesce = None;
+        for channel in self.channels.iter_mut().flatten() {
+            channel.restart(fault);
+        }
+    }
+
+    /// Whatever the pack has now (it may have rebooted to the factory settings).
+    pub(super) fn assume_factory_line(&mut self) {
+        self.switchover = units(FACTORY_SWITCHOVER);
+        self.pack_timeout = DEFAULT_PACKET_TIMEOUT;
     }
 }

@@ -1,5 +1,6 @@
 //! The host side of the half-duplex line: one request in flight, the pack's switch-over
-//! time on both sides of its answer (manual 6.1), and finding the answer in the byte stream.
+//! time on both sides of its answer (manual 6.1), finding the answer in the byte stream,
+//! and the polling plan (which request goes next, module docs "Polling plan").
 //!
 //! Timing of one query at 19200 baud with a 2 ms switch-over: the request takes 4.7 ms on
 //! the wire; the pack answers after the switch-over delay; the answer takes 4.7 ms; the pack
@@ -10,7 +11,12 @@
 
 use core::time::Duration;
 
-use tmcpack::{Command, FRAME_LEN, Reply, ReplyFrame};
+use tmcpack::convert::{DEFAULT_SWITCHOVER_UNITS as FACTORY_SWITCHOVER, units};
+use tmcpack::{Command, FRAME_LEN, MotorMask, Reply, ReplyFrame, Request, RequestFrame};
+
+use super::channel::Channel;
+use super::{Phase, REPLY_MARGIN, TmcpackDriver};
+use crate::driver::{Priority, Transmit};
 
 /// What a query waits for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -157,6 +163,258 @@ fn matches(reply: &Reply, expect: Expect) -> bool {
         }
         (Reply::Input { channel, .. }, Some(want)) => *channel == want,
         _ => true,
+    }
+}
+
+/// The poll slot of the `$30` input poll, after the six motors.
+const IO_SLOT: usize = 6;
+
+/// What `pick` chose to send.
+pub(super) struct Pick {
+    pub(super) request: Request,
+    pub(super) expect: Option<Expect>,
+    pub(super) channel: Option<usize>,
+}
+
+/// What has waited too long for its poll.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Starved {
+    /// A motor's `$20`.
+    Motor(u8),
+    /// A `$30` of this channel.
+    Input(u8),
+}
+
+impl TmcpackDriver {
+    /// The smallest spacing between the starts of two words: their wire time, and the
+    /// packet timeout of every pack on the bus.
+    pub(super) fn spacing(&self) -> Duration {
+        self.word_time.max(self.pack_timeout).max(self.bus_timeout)
+    }
+
+    /// A configured motor (or input) whose data is older than half the refresh budget: its
+    /// poll goes before every command but a stop, so that goals for every motor of the bus
+    /// at once (the engine's start-up stops, a client's coordinated move) never make an
+    /// axis or a signal stale.
+    pub(super) fn starved(&self, now: Duration) -> Option<Starved> {
+        let limit = self.budget / 2;
+        let motor = self
+            .channels
+            .iter()
+            .flatten()
+            .filter_map(|c| c.state.refreshed_at.map(|at| (at, Starved::Motor(c.motor))));
+        let input = self
+            .io
+            .stalest()
+            .map(|(at, channel)| (at, Starved::Input(channel)));
+        motor
+            .chain(input)
+            .filter(|(at, _)| now.saturating_sub(*at) > limit)
+            .min_by_key(|(at, _)| *at)
+            .map(|(_, starved)| starved)
+    }
+
+    /// What the driver would send now.
+    pub(super) fn next_message(&self, now: Duration) -> Option<Priority> {
+        if self.wire != Wire::Idle {
+            return None;
+        }
+        match self.phase {
+            Phase::Down => None,
+            Phase::Identify => (now >= self.retry_at).then_some(Priority::Setup),
+            Phase::Survey | Phase::Quiesce | Phase::Configure(_) => Some(Priority::Setup),
+            Phase::Online if self.any_ready() || self.starved(now).is_some() => {
+                Some(Priority::Command)
+            }
+            Phase::Online => {
+                let polls = self.channels.iter().any(Option::is_some) || self.io.polls();
+                (polls || now >= self.reset_check_at).then_some(Priority::Poll)
+            }
+        }
+    }
+
+    pub(super) fn query(
+        &self,
+        request: Request,
+        command: Command,
+        motor: Option<u8>,
+        purpose: Purpose,
+    ) -> Pick {
+        Pick {
+            request,
+            expect: Some(Expect {
+                command,
+                motor,
+                purpose,
+            }),
+            channel: None,
+        }
+    }
+
+    /// Picks the request to send now; the core of `poll_transmit`.
+    pub(super) fn pick(&mut self, now: Duration) -> Option<Pick> {
+        let priority = self.next_message(now)?;
+        let reply_to = self.reply_address;
+        match self.phase {
+            Phase::Down => None,
+            Phase::Identify => Some(self.query(
+                Request::UnitInfo { reply_to },
+                Command::UnitInfo,
+                None,
+                Purpose::Startup,
+            )),
+            Phase::Survey => Some(self.query(
+                Request::QueryActions {
+                    reply_to,
+                    delay_mask: MotorMask::EMPTY,
+                },
+                Command::QueryActions,
+                None,
+                Purpose::Survey,
+            )),
+            Phase::Quiesce => self.pick_quiesce(now),
+            Phase::Configure(index) => {
+                let request = self.resolve(self.plan.get(index)?);
+                Some(Pick {
+                    request,
+                    expect: None,
+                    channel: None,
+                })
+            }
+            Phase::Online if priority == Priority::Command => {
+                let urgent = self.channels.iter().flatten().any(Channel::urgent);
+                match self.starved(now) {
+                    Some(Starved::Motor(motor)) if !urgent => Some(self.query(
+                        Request::QueryPosition { motor, reply_to },
+                        Command::QueryPosition,
+                        Some(motor),
+                        Purpose::Poll,
+                    )),
+                    Some(Starved::Input(channel)) if !urgent => Some(self.query(
+                        Request::ReadInput { channel, reply_to },
+                        Command::ReadInput,
+                        Some(channel),
+                        Purpose::Io,
+                    )),
+                    _ => self.pick_command(),
+                }
+            }
+            Phase::Online => self.pick_poll(now),
+        }
+    }
+
+    pub(super) fn pick_poll(&mut self, now: Duration) -> Option<Pick> {
+        let reply_to = self.reply_address;
+        if now >= self.reset_check_at {
+            return Some(self.query(
+                Request::UnitInfo { reply_to },
+                Command::UnitInfo,
+                None,
+                Purpose::ResetCheck,
+            ));
+        }
+        let urgent = self
+            .channels
+            .iter()
+            .flatten()
+            .find(|c| c.wants_rest_poll(now))
+            .map(|c| usize::from(c.motor));
+        let slot = urgent.or_else(|| {
+            (0..=IO_SLOT)
+                .map(|offset| (self.next_poll + offset) % (IO_SLOT + 1))
+                .find(|&i| match i {
+                    IO_SLOT => self.io.polls(),
+                    _ => matches!(self.channels.get(i), Some(Some(_))),
+                })
+        })?;
+        if urgent.is_none() {
+            self.next_poll = (slot + 1) % (IO_SLOT + 1);
+        }
+        if slot == IO_SLOT {
+            let channel = self.io.next_channel();
+            return Some(self.query(
+                Request::ReadInput { channel, reply_to },
+                Command::ReadInput,
+                Some(channel),
+                Purpose::Io,
+            ));
+        }
+        let motor = slot as u8;
+        Some(self.query(
+            Request::QueryPosition { motor, reply_to },
+            Command::QueryPosition,
+            Some(motor),
+            Purpose::Poll,
+        ))
+    }
+
+    /// The reply timeout of a query sent at `now`: request, switch-over (at least the
+    /// factory delay), reply, margin.
+    pub(super) fn reply_deadline(&self, now: Duration) -> Duration {
+        let switchover = self.switchover.max(units(FACTORY_SWITCHOVER));
+        now + self.word_time * 2 + switchover + REPLY_MARGIN
+    }
+
+    /// Writes the request `pick` chose into `buf`; the line, the start-up and the channel
+    /// move on.
+    pub(super) fn transmit(&mut self, now: Duration, buf: &mut [u8]) -> Option<Transmit> {
+        let pick = self.pick(now)?;
+        let request = pick.request;
+        let len = RequestFrame::new(self.address, request).encode(buf).ok()?;
+        self.seq += 1;
+        let wire_end = now + self.word_time;
+        match request {
+            Request::SetBaud { switchover, .. } => self.switchover = units(switchover),
+            Request::PacketTimeout { timeout } => self.pack_timeout = units(timeout),
+            Request::Outputs { .. } => {
+                self.io.on_outputs_sent(now, request);
+                if self.phase == Phase::Online {
+                    self.io.outputs_pending = false;
+                }
+            }
+            _ => {}
+        }
+        match pick.expect {
+            Some(expect) => {
+                self.hunter.reset();
+                self.wire = Wire::Awaiting {
+                    expect,
+                    sent_at: now,
+                    deadline: self.reply_deadline(now),
+                };
+            }
+            None => {
+                self.wire = Wire::Sending {
+                    until: now + self.spacing(),
+                };
+            }
+        }
+        match self.phase {
+            Phase::Quiesce => {
+                if let Some(quiesce) = self.quiesce.as_mut()
+                    && pick.expect.is_none()
+                {
+                    quiesce.sent();
+                }
+            }
+            Phase::Configure(index) => {
+                let next = index + 1;
+                if self.plan.get(next).is_some() {
+                    self.phase = Phase::Configure(next);
+                } else {
+                    self.go_online(now);
+                }
+            }
+            _ => {}
+        }
+        if let Some(Some(channel)) = pick.channel.and_then(|i| self.channels.get_mut(i)) {
+            channel.on_sent(request, self.seq, wire_end);
+            channel.advance();
+        }
+        Some(Transmit {
+            len,
+            expects_reply: true,
+        })
     }
 }
 

@@ -9,6 +9,7 @@ use qq2drv::{
 };
 
 use super::*;
+use crate::goal::GoalKind;
 
 const MS: Duration = Duration::from_millis(1);
 

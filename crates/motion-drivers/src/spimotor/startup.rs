@@ -1,15 +1,18 @@
-//! Start-up after the board identified itself: the stepper's survey (what the board does
-//! now), then the configuration.
+//! Start-up (module docs, "Start-up"): the identification and serial reads, the
+//! stepper's survey (what the board does now), then the configuration; and what a restart
+//! (silence, a board reset, the link) voids.
 
+use core::fmt::Write as _;
 use core::time::Duration;
 
-use spimotor::{ReadPort, Reply, StepDelay, Write};
+use spimotor::{Identification, ReadPort, Reply, SerialNumber, StepDelay, Write};
 
 use super::ramp::Motion;
 use super::stepper::ABSENT_READING;
 use super::wire::Op;
-use super::{Phase, SpimotorDriver};
+use super::{Phase, START_ATTEMPTS, SpimotorDriver};
 use crate::driver::Priority;
+use crate::state::{DeviceFault, FIRMWARE_LEN};
 
 /// Survey readings that disagree in a row before the board is started over.
 pub const SURVEY_ATTEMPTS: u32 = 8;
@@ -170,5 +173,71 @@ impl SpimotorDriver {
         ] {
             self.push_command(Op::Write(write), Priority::Setup, 0);
         }
+    }
+
+    /// Starts the board again from the identification read (goals are lost).
+    pub(super) fn restart(&mut self, now: Duration, attempts: u32) {
+        self.phase = Phase::Identify {
+            attempts,
+            next_at: now,
+        };
+        self.status.online = false;
+        self.commands.clear();
+        self.polls.clear();
+        self.planned = self.written;
+        self.presence_misses = 0;
+        self.stepper.forget(now);
+    }
+
+    /// The board does not answer.
+    pub(super) fn absent(&mut self, now: Duration) {
+        self.status.timeouts = self.status.timeouts.saturating_add(1);
+        self.raise(DeviceFault::NotResponding);
+        self.restart(now, START_ATTEMPTS);
+    }
+
+    /// The board lost its registers (power cycle).
+    pub(super) fn board_reset(&mut self, now: Duration) {
+        self.status.resets = self.status.resets.saturating_add(1);
+        self.raise(DeviceFault::Reset);
+        self.stepper.homed = false;
+        self.restart(now, 0);
+    }
+
+    pub(super) fn set_firmware(&mut self, serial: SerialNumber) {
+        let mut text = motion_base::FixedText::<FIRMWARE_LEN>::new();
+        let identification = self.identification;
+        let id = identification
+            .as_ref()
+            .and_then(Identification::as_str)
+            .unwrap_or("?");
+        let _ = write!(text, "{id} sn {:08x}", serial.0);
+        self.status.set_firmware(text.as_str());
+    }
+
+    /// Queues the start-up read of the current phase when due.
+    pub(super) fn schedule_startup(&mut self, now: Duration) {
+        if !self.link_up || !self.commands.is_empty() {
+            return;
+        }
+        let op = match self.phase {
+            Phase::Identify { next_at, .. }
+                if now >= next_at && !self.in_flight.reading(ReadPort::Identification) =>
+            {
+                Op::read(ReadPort::Identification)
+            }
+            Phase::Serial if !self.in_flight.reading(ReadPort::Serial) => {
+                Op::read(ReadPort::Serial)
+            }
+            _ => return,
+        };
+        if let Phase::Identify { attempts, .. } = self.phase {
+            // No second read before this one is answered or times out.
+            self.phase = Phase::Identify {
+                attempts,
+                next_at: now.saturating_add(self.reply_timeout()),
+            };
+        }
+        self.push_command(op, Priority::Setup, 0);
     }
 }

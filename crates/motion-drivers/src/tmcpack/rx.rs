@@ -124,4 +124,30 @@ impl TmcpackDriver {
         );
         self.status.set_firmware(text.as_str());
     }
+
+    /// Bytes from the line: the answer to the query in flight, found among them.
+    pub(super) fn receive(&mut self, now: Duration, bytes: &[u8]) {
+        if bytes.is_empty() {
+            return;
+        }
+        let Wire::Awaiting {
+            expect, sent_at, ..
+        } = self.wire
+        else {
+            // A late answer, an echo or noise: nobody asked.
+            self.status.bad_replies = self.status.bad_replies.saturating_add(1);
+            return;
+        };
+        let Some(reply) = self.hunter.push(self.reply_address, expect, bytes) else {
+            return;
+        };
+        if self.hunter.skipped > 0 {
+            self.status.bad_replies = self.status.bad_replies.saturating_add(1);
+        }
+        // The pack keeps driving the line for the switch-over time after its answer.
+        self.wire = Wire::Quiet {
+            until: now + self.switchover,
+        };
+        self.on_reply(now, expect, sent_at, reply);
+    }
 }

@@ -1,0 +1,290 @@
+//! Goals: what a channel accepts, a goal as the channel's next step ([`Step`]), the
+//! packets each step sends ([`Step`] → [`Packets`]) and the goal transaction that carries
+//! them (module docs, "Goals").
+
+use core::time::Duration;
+
+use qq2drv::{CHANNELS, ControlMode, EdgeAction, InputConfig, InputMode};
+
+use super::Qq2drvDriver;
+use super::channel::Channel;
+use super::config::HomeInput;
+use super::wire::{Packet, Packets, Sent, Tag};
+use crate::driver::Driver;
+use crate::goal::{Goal, GoalError, GoalKind, GoalKinds};
+
+/// One step of a goal on the board.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Step {
+    /// Nothing commanded since start-up or a board reset.
+    Idle,
+    /// Control mode Off.
+    Off,
+    /// Power mode at ±8191.
+    Power(i16),
+    /// Position PID towards a target (configured velocity / acceleration limits).
+    Position(i32),
+    /// Position ramp (velocity and acceleration shl 12).
+    Ramp {
+        position: i32,
+        velocity: u32,
+        accel: u32,
+    },
+    /// Velocity PID, ramped (velocity plain, acceleration shl 12).
+    Velocity { velocity: i32, accel: u32 },
+    /// A stop as the engine asked for it (deceleration shl 12). It is planned when it is
+    /// sent, from the velocity measured then: at standstill it is a [`Step::Hold`], else a
+    /// [`Step::StopLift`].
+    Stop { accel: u32 },
+    /// Stop, first transaction: control mode Off then Velocity PID (the loop starts
+    /// afresh), acceleration limit lifted (28 ← 0) and velocity target = the measured
+    /// `velocity` with no ramp (36, acceleration 0), so the board's velocity setpoint is
+    /// where the motor really runs, not where an earlier goal asked it to run.
+    StopLift { accel: u32, velocity: i32 },
+    /// Stop, second transaction, at least one board loop period after the first was
+    /// answered: ramp that setpoint to 0 at the stop's deceleration (36), which takes
+    /// `ramp`; then [`Step::Hold`].
+    StopRamp { accel: u32, ramp: Duration },
+    /// Position PID holding where the channel is when the step is sent; restores the
+    /// acceleration limit.
+    Hold,
+    /// Counter ← value; holds there unless the motor is off.
+    SetCounter(i32),
+    /// Home with an edge input already active: move off the switch first.
+    HomeBackoff { velocity: i32, accel: u32 },
+    /// Home: run towards the switch with the input armed.
+    HomeSearch { velocity: i32, accel: u32 },
+}
+
+impl Step {
+    /// A stop is in progress (planned, lifting or ramping).
+    pub(super) const fn stopping(self) -> bool {
+        matches!(
+            self,
+            Self::Stop { .. } | Self::StopLift { .. } | Self::StopRamp { .. }
+        )
+    }
+
+    /// The step needs the channel's measured data to be sent (velocity or position).
+    pub(super) const fn needs_data(self) -> bool {
+        matches!(self, Self::Stop { .. } | Self::StopLift { .. } | Self::Hold)
+    }
+
+    /// The step keeps the acceleration limit lifted (it is restored by every other step).
+    pub(super) const fn keeps_limit_lifted(self) -> bool {
+        matches!(self, Self::StopLift { .. } | Self::StopRamp { .. })
+    }
+}
+
+impl Channel {
+    /// Packet 14 for the home input: armed (mode, polarity, Spacing, set the counter on
+    /// the switch's end) or disarmed (Disabled, polarity kept so Input Active stays
+    /// meaningful).
+    pub(super) fn input(&self, armed: bool) -> Packet {
+        let home = self.config.home.unwrap_or(HomeInput {
+            mode: InputMode::Disabled,
+            active_high: false,
+            positive_end: true,
+            position: 0,
+            spacing: 0,
+        });
+        let edge = if home.positive_end {
+            EdgeAction::SetOnPositive
+        } else {
+            EdgeAction::SetOnNegative
+        };
+        let mode = if armed {
+            home.mode
+        } else {
+            InputMode::Disabled
+        };
+        Packet::Input {
+            config: InputConfig::new(mode, home.active_high, edge),
+            spacing: home.spacing,
+            position: home.position,
+        }
+    }
+
+    /// Packet 28 with the channel's own acceleration limit (as start-up writes it).
+    pub(super) fn accel_limit(&self) -> Packet {
+        Packet::AccelLimit(super::startup::accel_limit(self.config.limits.max_accel))
+    }
+
+    /// The packets of the current step, in order.
+    pub(super) fn packets(&self) -> Packets {
+        use Packet::{Mode, Target, VelocityRamp};
+        let position_mode = Mode(ControlMode::PositionPid);
+        let velocity_mode = Mode(ControlMode::VelocityPid);
+        let mut out = Packets::default();
+        if self.step == Step::Idle {
+            return out;
+        }
+        // Whatever was armed or lifted before is put back first (a home search's input,
+        // a stop's lifted acceleration limit), except by the steps that need it so.
+        if self.armed
+            && !matches!(
+                self.step,
+                Step::HomeSearch { .. } | Step::HomeBackoff { .. }
+            )
+        {
+            out.push(self.input(false));
+        }
+        if self.lifted && !self.step.keeps_limit_lifted() {
+            out.push(self.accel_limit());
+        }
+        match self.step {
+            Step::Idle => {}
+            Step::Off => {
+                out.push(Mode(ControlMode::Off));
+            }
+            Step::Power(power) => {
+                out.push(Mode(ControlMode::Power));
+                out.push(Packet::Power(power));
+            }
+            Step::Position(target) => {
+                out.push(position_mode);
+                out.push(Target(target));
+            }
+            Step::Ramp {
+                position,
+                velocity,
+                accel,
+            } => {
+                out.push(position_mode);
+                out.push(Packet::PositionRamp {
+                    position,
+                    velocity,
+                    accel,
+                });
+            }
+            Step::Velocity { velocity, accel } => {
+                out.push(velocity_mode);
+                out.push(VelocityRamp { velocity, accel });
+            }
+            Step::Stop { .. } | Step::StopLift { .. } => {
+                let velocity = match self.step {
+                    Step::StopLift { velocity, .. } => velocity,
+                    _ => self.velocity,
+                };
+                out.push(Mode(ControlMode::Off));
+                out.push(velocity_mode);
+                out.push(Packet::AccelLimit(0));
+                out.push(VelocityRamp { velocity, accel: 0 });
+            }
+            Step::StopRamp { accel, .. } => {
+                out.push(VelocityRamp { velocity: 0, accel });
+            }
+            Step::Hold => {
+                out.push(position_mode);
+                out.push(Target(self.position));
+            }
+            Step::SetCounter(value) => {
+                out.push(Packet::SetCounter(value));
+                if self.board_mode != ControlMode::Off {
+                    out.push(position_mode);
+                    out.push(Target(value));
+                }
+            }
+            Step::HomeBackoff { velocity, accel } => {
+                out.push(self.input(false));
+                out.push(velocity_mode);
+                out.push(VelocityRamp { velocity, accel });
+            }
+            Step::HomeSearch { velocity, accel } => {
+                out.push(self.input(true));
+                out.push(velocity_mode);
+                out.push(VelocityRamp { velocity, accel });
+            }
+        }
+        out
+    }
+}
+
+impl Qq2drvDriver {
+    /// The goals `channel` accepts: every goal with a home input, all but `Home` without
+    /// one, none on a channel without an axis.
+    pub(super) fn kinds(&self, channel: usize) -> GoalKinds {
+        match self.channels.get(channel) {
+            Some(c) if c.config.enabled && c.home().is_some() => GoalKinds::of(&GoalKind::ALL),
+            Some(c) if c.config.enabled => GoalKinds::of(&[
+                GoalKind::Off,
+                GoalKind::Stop,
+                GoalKind::Power,
+                GoalKind::Position,
+                GoalKind::Velocity,
+                GoalKind::RampPosition,
+                GoalKind::SetPosition,
+            ]),
+            _ => GoalKinds::NONE,
+        }
+    }
+
+    /// A goal becomes the channel's next step; its packets go out with the next goal
+    /// transaction.
+    pub(super) fn plan_goal(&mut self, channel: usize, goal: Goal) -> Result<(), GoalError> {
+        let kind = goal.kind();
+        if channel >= CHANNELS {
+            return Err(GoalError::NoSuchChannel(channel));
+        }
+        if !self.capabilities(channel).contains(kind) {
+            return Err(GoalError::Unsupported(kind));
+        }
+        if !self.link_up {
+            return Err(GoalError::Offline);
+        }
+        let slot = self
+            .channels
+            .get_mut(channel)
+            .ok_or(GoalError::NoSuchChannel(channel))?;
+        let step = slot.plan(goal)?;
+        slot.set_goal(step);
+        Ok(())
+    }
+
+    /// Writes the unsent goal packets of every channel that fit.
+    pub(super) fn write_goals(&mut self, now: Duration, buf: &mut [u8]) -> usize {
+        let mut len = 0;
+        for (index, channel) in self.channels.iter_mut().enumerate() {
+            if !(channel.config.enabled && channel.unsent && channel.ready()) {
+                continue;
+            }
+            channel.resolve();
+            let packets = channel.packets();
+            let count = packets.iter().count();
+            if !self.in_flight.has_room(count) {
+                break;
+            }
+            let mut end = len;
+            let mut fits = true;
+            for packet in packets.iter() {
+                match buf
+                    .get_mut(end..)
+                    .and_then(|rest| packet.encode(index, rest).ok())
+                {
+                    Some(n) => end += n,
+                    None => {
+                        fits = false;
+                        break;
+                    }
+                }
+            }
+            if !fits {
+                break;
+            }
+            len = end;
+            for packet in packets.iter() {
+                self.in_flight.push(Sent {
+                    id: packet.id(),
+                    at: now,
+                    tag: Tag::Goal {
+                        channel: index as u8,
+                        seq: channel.seq,
+                        packet,
+                    },
+                });
+            }
+            channel.sent(&packets);
+        }
+        len
+    }
+}
