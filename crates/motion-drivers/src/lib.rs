@@ -30,6 +30,7 @@ mod goal;
 mod pin;
 pub mod qq2drv;
 pub mod qsb;
+pub mod spec;
 mod state;
 
 pub mod spimotor;
