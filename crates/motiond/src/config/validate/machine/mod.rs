@@ -1,7 +1,7 @@
 //! Machine keys: what depends on the motor, the mechanics and the wiring of one board
-//! model. One module per model validates its own keys into a typed struct; this module
-//! dispatches, and refuses a key on a model that does not have it, naming the models where
-//! it is valid.
+//! model. One module per model validates its own keys into their typed struct (defined with
+//! the drivers' neutral spec, `motion_drivers::spec`); this module dispatches, and refuses a
+//! key on a model that does not have it, naming the models where it is valid.
 
 pub mod qq2drv;
 pub mod qsb;

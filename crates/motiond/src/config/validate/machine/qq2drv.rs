@@ -1,5 +1,6 @@
-//! qq2drv machine keys (README "Config"): validated here, turned into the driver's config in
-//! `crate::drivers::qq2drv`.
+//! qq2drv machine keys (README "Config"): validated here into
+//! `motion_drivers::spec::Qq2drvAxisKeys`, turned into the driver's config by
+//! `Qq2drvDriverConfig::from_spec`.
 //!
 //! Per `[[axis]]` (one QuadQuad2Drv channel):
 //! - `pid_position = { p, i, d, windup }`: packet 30, Set Position Control PID Constants

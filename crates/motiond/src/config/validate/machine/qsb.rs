@@ -1,5 +1,6 @@
-//! qsb machine keys (README "Config", `docs/keys/qsb.md`): validated here, turned into the
-//! driver's config in `crate::drivers::qsb`.
+//! qsb machine keys (README "Config", `docs/keys/qsb.md`): validated here into
+//! `motion_drivers::spec::QsbDeviceKeys`, turned into the driver's config by
+//! `QsbDriverConfig::from_spec`.
 //!
 //! The home keys (`home_direction`, `home_max_travel`, `home_offset`) are resolved with the
 //! general `home` table into the axis's `HomeSpec` (`validate/home.rs`).

@@ -1,5 +1,6 @@
-//! spimotor machine keys (README "Config"): validated here, turned into the driver's config in
-//! `crate::drivers::spimotor`.
+//! spimotor machine keys (README "Config"): validated here into
+//! `motion_drivers::spec::SpimotorDeviceKeys`, turned into the driver's config by
+//! `SpimotorDriverConfig::from_spec`.
 //!
 //! Per `[[device]]` (the SPI_motor "Motor protocol" page, write ports):
 //! - `intensity`: port 0x10 "Set drive intensity for stepper mode (default is 0x20)",

@@ -1,6 +1,7 @@
-//! tmcpack machine keys (README "Config", docs/keys/tmcpack.md): validated here, turned into
-//! the driver's config in `crate::drivers::tmcpack`. Every value is checked against the range
-//! the Trinamic SIXpack/QUADpack manual (V2.43) gives for the instruction it becomes.
+//! tmcpack machine keys (README "Config", docs/keys/tmcpack.md): validated here into
+//! `motion_drivers::spec::{TmcpackDeviceKeys, TmcpackAxisKeys}`, turned into the driver's
+//! config by `TmcpackDriverConfig::from_spec`. Every value is checked against the range the
+//! Trinamic SIXpack/QUADpack manual (V2.43) gives for the instruction it becomes.
 
 use motion_drivers::spec::{ReadyOutputKeys, TmcpackAxisKeys, TmcpackDeviceKeys};
 use motion_drivers::tmcpack::{MAX_DEBOUNCE_MS, is_current_level, is_weak_current, word_time};
