@@ -12,6 +12,8 @@
 //! such values first, with file, line and column.
 
 mod keys;
+#[cfg(test)]
+mod tests;
 
 use crate::driver::Model;
 use crate::pin::{Pin, PinInfo, SignalKind};
