@@ -88,6 +88,17 @@ impl Engine {
             Ok(client) => client,
             Err(reason) => return reason,
         };
+        if !client.is_none()
+            && self.departed.position(|gone| *gone == client).is_some()
+            && !matches!(
+                request.kind(),
+                Ok(CommandKind::Stop | CommandKind::EStop | CommandKind::Off)
+            )
+        {
+            // Sent by a client already found dead (its request was still queued): the
+            // identity is no longer a live client's. Stops still count.
+            return Reason::IdentityMismatch;
+        }
         self.renew_claims(client);
         match rules::judge(request, client, &*self) {
             Verdict::Refused(reason) => reason,

@@ -54,6 +54,7 @@ mod supervision;
 
 use core::time::Duration;
 
+use motion_base::FixedQueue;
 use motion_drivers::{Driver, LinkBus, LinkKind, MAX_SENDS_PER_STEP};
 use motion_ipc::{ClientId, MotionFrame};
 
@@ -102,7 +103,13 @@ pub struct Engine {
     estop: bool,
     shutting_down: bool,
     counters: EngineCounters,
+    /// Clients found dead lately: a request one of them sent just before it died may still
+    /// be queued, and must not start a goal nobody will renew or stop.
+    departed: FixedQueue<ClientId, DEPARTED_MEMORY>,
 }
+
+/// Dead clients remembered (the oldest is forgotten first; node ids are never reused).
+const DEPARTED_MEMORY: usize = 64;
 
 impl Engine {
     /// Builds the engine from a validated description and one driver per device (same
@@ -167,6 +174,7 @@ impl Engine {
             estop: false,
             shutting_down: false,
             counters: EngineCounters::default(),
+            departed: FixedQueue::new(),
             config,
         })
     }
@@ -302,6 +310,9 @@ impl Engine {
             return;
         }
         self.release_claims_of(client);
+        if self.departed.position(|gone| *gone == client).is_none() {
+            self.departed.push_overwrite(client);
+        }
         for index in 0..self.axes.len() {
             let axis = &mut self.axes[index];
             if axis.goal_owner != client {

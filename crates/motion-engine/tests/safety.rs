@@ -136,6 +136,42 @@ fn claims_are_exclusive_and_die_with_their_client() {
 }
 
 #[test]
+fn a_request_a_client_sent_just_before_it_died_starts_nothing() {
+    // Campaign 1 of README "Reliability": a client SIGKILLed right after it renewed its
+    // jog leaves that renewal queued; the server finds the client dead first, then reads
+    // the renewal. It must not restart the jog (nobody would renew or stop it but the
+    // deadman); a stop it sent still counts.
+    let (engine, _) = two_link_engine();
+    let mut h = Harness::new(engine);
+    h.ticks(1);
+    assert_eq!(
+        h.command(CLIENT_A, 1, CommandKind::Velocity, [5.0, 0.0, 0.0])
+            .result(),
+        Ok(())
+    );
+    h.ticks(50);
+    h.engine.client_dead(CLIENT_A);
+    let late = h.command(CLIENT_A, 1, CommandKind::Velocity, [5.0, 0.0, 0.0]);
+    assert_eq!(late.result(), Err(Reason::IdentityMismatch));
+    let late = h.command(CLIENT_A, 0, CommandKind::Position, [1.0, 0.0, 0.0]);
+    assert_eq!(late.result(), Err(Reason::IdentityMismatch));
+    h.ticks(200);
+    let state = h.axis(1);
+    assert_eq!(state.velocity, 0.0);
+    assert_eq!(state.mode().unwrap(), AxisMode::Hold);
+    assert_eq!(
+        h.command(CLIENT_A, 1, CommandKind::Stop, [0.0; 3]).result(),
+        Ok(())
+    );
+    // Another client is not affected.
+    assert_eq!(
+        h.command(CLIENT_B, 1, CommandKind::Velocity, [5.0, 0.0, 0.0])
+            .result(),
+        Ok(())
+    );
+}
+
+#[test]
 fn bad_values_are_refused_and_nothing_reaches_the_wire() {
     let (engine, controls) = two_link_engine();
     let mut h = Harness::new(engine);

@@ -204,7 +204,8 @@ pub enum Reason {
     ShuttingDown = 16,
     /// A claim or release without a client id.
     NoClientId = 17,
-    /// The request's `client` is not the node the server received it from.
+    /// The request's `client` is not the node the server received it from, or that node
+    /// was already found dead (a request it sent just before it died; stops still count).
     IdentityMismatch = 18,
     /// The axis's board is still starting (first answer, configuration, start-up stop).
     DeviceStarting = 19,

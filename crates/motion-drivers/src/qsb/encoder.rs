@@ -17,11 +17,27 @@ pub(crate) struct Sample {
     pub time_stamp: u32,
 }
 
+/// Samples in a row off the track after which the newest starts a new one: a real jump of
+/// the counter is shown after this many stream periods; corrupted lines do not come in
+/// such runs below a bit-error rate of about 1e-3.
+pub(crate) const MAX_HELD: u8 = 3;
+
+/// Counts a sample may sit off the predicted count while the encoder moves: the counter
+/// counts whole edges, so samples of a smooth motion sit up to one count either side.
+const MOVING_SLACK: f64 = 2.0;
+
+/// The same while it stands still: none (half a count for the floating point).
+const STILL_SLACK: f64 = 0.5;
+
 /// The latest samples.
 #[derive(Debug, Clone)]
 pub(crate) struct EncoderTrack {
     window: FixedQueue<Sample, VELOCITY_WINDOW>,
     velocity: f64,
+    /// A sample that contradicted the track, waiting for the next one.
+    held: Option<Sample>,
+    /// Samples in a row that contradicted the track.
+    held_in_row: u8,
 }
 
 impl EncoderTrack {
@@ -29,7 +45,70 @@ impl EncoderTrack {
         Self {
             window: FixedQueue::new(),
             velocity: 0.0,
+            held: None,
+            held_in_row: 0,
         }
+    }
+
+    /// Offers a streamed sample through the line-noise guard (module `guard`). A sample
+    /// where the track predicts it (the last count plus velocity × time, within what the
+    /// acceleration limit `max_accel` (counts/s²) and the counter's quantisation allow;
+    /// exactly the last count while the encoder stands still) is taken at once. One that
+    /// is not is held until the next sample: if that one is where the old track predicts
+    /// it, the held one was corrupted on the line and is dropped; if it goes on from the
+    /// held one at the velocity the held one implies (a change of motion) or stays there,
+    /// both are taken,
+    /// one sample late; else it is held instead, and after [`MAX_HELD`] samples in a row
+    /// off the track the newest starts a new track (the counter really jumped). A corrupted
+    /// sample is shown only when the next one is corrupted into the same line of motion,
+    /// or when it lies within the acceleration and quantisation allowance. Returns whether
+    /// the sample (and with it the newest count) was taken.
+    pub(crate) fn offer(&mut self, sample: Sample, max_accel: f64) -> bool {
+        let Some(last) = self.latest() else {
+            self.push(sample);
+            return true;
+        };
+        if self.predicts(last, sample, max_accel) {
+            self.held = None;
+            self.held_in_row = 0;
+            self.push(sample);
+            return true;
+        }
+        if let Some(held) = self.held.take()
+            && goes_on(last, held, sample, max_accel)
+        {
+            self.held_in_row = 0;
+            self.push(held);
+            self.push(sample);
+            return true;
+        }
+        self.held_in_row = self.held_in_row.saturating_add(1);
+        if self.held_in_row >= MAX_HELD {
+            self.clear();
+            self.push(sample);
+            return true;
+        }
+        self.held = Some(sample);
+        false
+    }
+
+    /// Whether `sample` is where the track's velocity predicts it from `from`: within what
+    /// `max_accel` allows over the gap (plus the velocity estimate's lag over the window
+    /// while the encoder moves) and the counter's quantisation (none while it stands
+    /// still).
+    fn predicts(&self, from: Sample, sample: Sample, max_accel: f64) -> bool {
+        let Some(dt) = seconds_between(from, sample) else {
+            return false;
+        };
+        let still = self.velocity == 0.0;
+        let lag = match (still, self.window.front(), self.window.back()) {
+            (false, Some(oldest), Some(newest)) => seconds_between(oldest, newest).unwrap_or(0.0),
+            _ => 0.0,
+        };
+        let quantisation = if still { STILL_SLACK } else { MOVING_SLACK };
+        let allowed = max_accel.abs() * dt * (dt + lag) / 2.0 + quantisation;
+        let moved = f64::from(sample.count.wrapping_sub(from.count));
+        (moved - self.velocity * dt).abs() <= allowed
     }
 
     /// The newest sample.
@@ -49,23 +128,64 @@ impl EncoderTrack {
         *self = Self::new();
     }
 
+    /// Forgets the samples stamped after `time_stamp` (their stamp was corrupted).
+    pub(crate) fn forget_after(&mut self, time_stamp: u32) {
+        self.window
+            .retain(|sample| time_stamp.wrapping_sub(sample.time_stamp) < u32::MAX / 2);
+        self.held = None;
+        self.held_in_row = 0;
+        self.velocity = 0.0;
+        if let (Some(oldest), Some(newest)) = (self.window.front(), self.window.back()) {
+            self.update_velocity(oldest, newest);
+        }
+    }
+
     /// Takes a sample. Samples with the same time stamp as the newest replace it.
-    pub(crate) fn push(&mut self, sample: Sample) {
+    fn push(&mut self, sample: Sample) {
         match self.window.back_mut() {
             Some(latest) if latest.time_stamp == sample.time_stamp => *latest = sample,
             _ => {
                 self.window.push_overwrite(sample);
             }
         }
-        let Some(oldest) = self.window.front() else {
-            return;
-        };
-        let ticks = sample.time_stamp.wrapping_sub(oldest.time_stamp);
+        if let Some(oldest) = self.window.front() {
+            self.update_velocity(oldest, sample);
+        }
+    }
+
+    /// The velocity from `oldest` to `newest` of the window (kept when they share a stamp).
+    fn update_velocity(&mut self, oldest: Sample, newest: Sample) {
+        let ticks = newest.time_stamp.wrapping_sub(oldest.time_stamp);
         if self.window.len() >= 2 && ticks > 0 && ticks < u32::MAX / 2 {
-            let counts = f64::from(sample.count.wrapping_sub(oldest.count));
+            let counts = f64::from(newest.count.wrapping_sub(oldest.count));
             self.velocity = counts / (TICK.as_secs_f64() * f64::from(ticks));
         }
     }
+}
+
+/// Seconds from `a` to `b` by their time stamps; `None` when `b` is older.
+fn seconds_between(a: Sample, b: Sample) -> Option<f64> {
+    let ticks = b.time_stamp.wrapping_sub(a.time_stamp);
+    (ticks < u32::MAX / 2).then(|| TICK.as_secs_f64() * f64::from(ticks))
+}
+
+/// Whether `sample` goes on from `held` at the velocity `last` → `held` implies, within
+/// `max_accel` over the gaps and a count of quantisation on each of the three samples, or
+/// stays at `held` within a count: two independent corruptions of a line do neither.
+fn goes_on(last: Sample, held: Sample, sample: Sample, max_accel: f64) -> bool {
+    let (Some(before), Some(dt)) = (seconds_between(last, held), seconds_between(held, sample))
+    else {
+        return false;
+    };
+    let moved = f64::from(sample.count.wrapping_sub(held.count));
+    if before <= 0.0 {
+        // The held sample replaced the last one's value at its own time stamp.
+        return moved.abs() <= 1.0;
+    }
+    let velocity = f64::from(held.count.wrapping_sub(last.count)) / before;
+    let allowed = max_accel.abs() * dt * (dt + before) / 2.0 + 1.0 + 2.0 * dt / before;
+    // Either the motion goes on, or it stopped at the held count (a step).
+    (moved - velocity * dt).abs() <= allowed || moved.abs() <= 1.0
 }
 
 #[cfg(test)]
@@ -112,5 +232,67 @@ mod tests {
         assert_eq!(track.velocity(), 0.0);
         track.push(sample(-3, 4));
         assert_eq!(track.velocity(), 2.0 / (2.0 * TICK.as_secs_f64()));
+    }
+
+    const ACCEL: f64 = 100_000.0;
+
+    fn still_track() -> EncoderTrack {
+        let mut track = EncoderTrack::new();
+        for k in 0..8 {
+            assert!(track.offer(sample(500, k), ACCEL));
+        }
+        track
+    }
+
+    #[test]
+    fn a_sample_off_a_still_track_is_held_and_dropped_when_the_next_is_on_it() {
+        let mut track = still_track();
+        assert!(!track.offer(sample(500 + 4096, 8), ACCEL), "held");
+        assert_eq!(track.latest(), Some(sample(500, 7)));
+        assert!(track.offer(sample(500, 9), ACCEL));
+        assert_eq!(track.latest(), Some(sample(500, 9)));
+        assert_eq!(track.velocity(), 0.0);
+    }
+
+    #[test]
+    fn a_step_shows_one_sample_late_and_a_new_motion_too() {
+        let mut track = still_track();
+        assert!(!track.offer(sample(900, 8), ACCEL));
+        assert!(track.offer(sample(900, 9), ACCEL), "it stayed: a step");
+        assert_eq!(track.latest(), Some(sample(900, 9)));
+        let mut track = still_track();
+        assert!(!track.offer(sample(520, 8), ACCEL));
+        assert!(track.offer(sample(540, 9), ACCEL), "it went on: a motion");
+        // Far beyond the acceleration limit (20 counts per tick at once): each sample is
+        // shown at most one sample late.
+        for k in 10..40 {
+            let count = 500 + 20 * (k as i32 - 7);
+            track.offer(sample(count, k), ACCEL);
+            let shown = track.latest().expect("a sample").count;
+            assert!(shown >= count - 20, "{shown} behind {count}");
+        }
+    }
+
+    #[test]
+    fn samples_that_never_agree_start_a_new_track_after_max_held() {
+        let mut track = still_track();
+        let wild = [5_000, -9_000, 70_000];
+        for (k, count) in wild.iter().enumerate() {
+            let taken = track.offer(sample(*count, 8 + k as u32), ACCEL);
+            assert_eq!(taken, k + 1 == usize::from(MAX_HELD), "sample {k}");
+        }
+        assert_eq!(track.latest(), Some(sample(70_000, 10)));
+    }
+
+    #[test]
+    fn forgetting_a_corrupted_stamp_keeps_the_samples_before_it() {
+        let mut track = still_track();
+        assert!(
+            track.offer(sample(500, 15), ACCEL),
+            "a stamp run ahead, count right"
+        );
+        track.forget_after(8);
+        assert_eq!(track.latest(), Some(sample(500, 7)));
+        assert!(track.offer(sample(500, 9), ACCEL));
     }
 }

@@ -96,6 +96,7 @@
 mod config;
 mod encoder;
 mod goals;
+mod guard;
 mod io;
 mod program;
 mod rx;
@@ -105,6 +106,8 @@ mod startup;
 mod tests;
 #[cfg(test)]
 mod tests_machine;
+#[cfg(test)]
+mod tests_noise;
 mod wire;
 
 use core::time::Duration;
@@ -120,6 +123,7 @@ use crate::goal::{Goal, GoalError, GoalKind, GoalKinds};
 use crate::pin::{Pin, PinReading};
 use crate::state::{ChannelState, DeviceFault, DeviceStatus};
 use encoder::EncoderTrack;
+use guard::StampGuard;
 use io::IoState;
 use program::Program;
 use wire::{InFlight, Origin};
@@ -158,7 +162,13 @@ pub struct QsbDriver {
     /// What the board holds, per register number, as far as the driver knows.
     board: [Option<u32>; REGISTERS],
     eor_configured: bool,
-    last_time_stamp: Option<u32>,
+    /// The board's timeline, guarded against corrupted stamps.
+    stamps: StampGuard,
+    /// The last MD STATUS line said the drive is disabled (a reset, if the next agrees).
+    md_disabled_once: bool,
+    /// A VERSION answer that named another board or no product: asked again before it
+    /// counts.
+    version_doubt: Option<u32>,
     encoder: EncoderTrack,
     /// The next encoder sample follows a load or an index reset of the counter.
     rebase_pending: bool,
@@ -208,7 +218,9 @@ impl QsbDriver {
             samples_since_probe: false,
             board: [None; REGISTERS],
             eor_configured: false,
-            last_time_stamp: None,
+            stamps: StampGuard::default(),
+            md_disabled_once: false,
+            version_doubt: None,
             encoder: EncoderTrack::new(),
             rebase_pending: false,
             position: 0,

@@ -9,6 +9,7 @@ use ::qsb::{
 };
 
 use super::encoder::Sample;
+use super::guard::StampVerdict;
 use super::{InFlight, MAX_ATTEMPTS, Origin, QsbDriver};
 use crate::goal::GoalKind;
 use crate::state::{ChannelState, DeviceFault};
@@ -44,23 +45,36 @@ fn is_setting(write: Write) -> bool {
 impl QsbDriver {
     /// One decoded line.
     pub(super) fn on_response(&mut self, now: Duration, response: Response) {
-        match response.time_stamp {
-            Some(stamp) => {
-                if let Some(last) = self.last_time_stamp
-                    && stamp.wrapping_sub(last) > u32::MAX / 2
-                {
-                    // The time stamp went backwards: it restarts at power-up.
-                    self.board_reset();
-                    return;
+        let verdict = self.stamps.check(
+            now,
+            response.time_stamp,
+            self.eor_configured,
+            self.config.latency,
+        );
+        match verdict {
+            StampVerdict::Accept => {}
+            StampVerdict::Rewound => {
+                // The line accepted before the held one carried a corrupted stamp: what it
+                // brought is not on the timeline.
+                if let Some(stamp) = response.time_stamp {
+                    self.encoder.forget_after(stamp);
                 }
-                self.last_time_stamp = Some(stamp);
             }
-            None if self.eor_configured => {
-                // The board answers in another EOR format: it lost its settings.
+            StampVerdict::NewTimeline => {
+                // Samples before the jump are no base for a velocity.
+                self.encoder.clear();
+            }
+            StampVerdict::Hold => {
+                // Corrupted on the line, or the first line of a change the next confirms.
+                self.status.bad_replies = self.status.bad_replies.saturating_add(1);
+                return;
+            }
+            StampVerdict::Reset => {
+                // The time stamp went backwards (it restarts at power-up), or the lines
+                // lost their time stamps (the board lost its EOR setting): two lines say so.
                 self.board_reset();
                 return;
             }
-            None => {}
         }
         let flight = self
             .in_flight
@@ -91,9 +105,16 @@ impl QsbDriver {
                         self.rebase_pending = false;
                         self.encoder.clear();
                     }
-                    let count = response.signed();
-                    self.encoder.push(Sample { count, time_stamp });
-                    self.position = count;
+                    let sample = Sample {
+                        count: response.signed(),
+                        time_stamp,
+                    };
+                    if !self.encoder.offer(sample, self.config.max_accel) {
+                        // Held by the line-noise guard until the next sample.
+                        self.status.bad_replies = self.status.bad_replies.saturating_add(1);
+                        return;
+                    }
+                    self.position = self.encoder.latest().map_or(sample.count, |s| s.count);
                 } else {
                     self.io_line(now, Register::ReadEncoder, response.data);
                 }
@@ -117,10 +138,17 @@ impl QsbDriver {
                 if let Ok(md) = MdStatus::from_data(response.data) {
                     if self.status.online && self.drive_active() && !md.enabled {
                         // The drive was enabled at start-up: a board that reports it
-                        // disabled has been reset (or stopped with COMMAND 0).
+                        // disabled has been reset (or stopped with COMMAND 0). Two lines
+                        // in a row must say so: one may be corrupted on the line.
+                        if !self.md_disabled_once {
+                            self.md_disabled_once = true;
+                            self.status.bad_replies = self.status.bad_replies.saturating_add(1);
+                            return;
+                        }
                         self.board_reset();
                         return;
                     }
+                    self.md_disabled_once = false;
                     self.md = Some(md);
                 }
             }
@@ -248,7 +276,7 @@ impl QsbDriver {
     /// A motor command was executed at `time_stamp`: MD STATUS counts from two ticks on.
     fn motor_commanded(&mut self, time_stamp: Option<u32>) {
         let base = time_stamp
-            .or(self.last_time_stamp)
+            .or(self.stamps.last())
             .or(self.encoder.latest().map(|s| s.time_stamp))
             .unwrap_or(0);
         self.done_after = base.wrapping_add(DONE_AFTER_TICKS);
@@ -257,6 +285,20 @@ impl QsbDriver {
     /// The VERSION answer (start-up or liveness probe). Returns whether the request's plan
     /// goes on.
     fn version_read(&mut self, now: Duration, origin: Origin, data: u32) -> bool {
+        let anomalous = Version::from_data(data).map_or(true, |version| {
+            self.serial.is_some_and(|s| s != version.serial)
+        });
+        if anomalous && self.version_doubt != Some(data) {
+            // No checksum on the line: an answer that names another board (or no product)
+            // may be a corrupted one. Ask again; the same answer twice counts.
+            self.version_doubt = Some(data);
+            self.status.bad_replies = self.status.bad_replies.saturating_add(1);
+            if origin == Origin::Probe {
+                self.probe_due = true;
+            }
+            return false;
+        }
+        self.version_doubt = None;
         let Ok(version) = Version::from_data(data) else {
             // Not a product type of the command list: not a QSB we know.
             self.declare_dead(now);

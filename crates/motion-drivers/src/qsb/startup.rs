@@ -47,6 +47,7 @@ impl QsbDriver {
         self.eor_configured = false;
         self.rebase_pending = true;
         self.md = None;
+        self.md_disabled_once = false;
         self.str_streaming = false;
         self.index_armed = false;
         self.index_seen = false;
@@ -133,7 +134,7 @@ impl QsbDriver {
         self.status.resets = self.status.resets.saturating_add(1);
         self.status.fault = Some(DeviceFault::Reset);
         self.homed = false;
-        self.last_time_stamp = None;
+        self.stamps.clear();
         self.begin_startup();
     }
 
