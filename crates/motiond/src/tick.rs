@@ -541,7 +541,7 @@ impl Loop {
                 queued = true;
             }
             if queued {
-                port.thread.unpark();
+                port.waker.wake();
             }
         }
     }
