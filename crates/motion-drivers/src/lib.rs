@@ -30,12 +30,13 @@ mod goal;
 mod pin;
 pub mod qq2drv;
 pub mod qsb;
+mod stamps;
 mod state;
 
 pub mod spimotor;
 pub mod tmcpack;
 
-pub use bus::{LinkBus, MAX_SENDS_PER_STEP, SPI_PENDING_CAPACITY};
+pub use bus::{LinkBus, MAX_SENDS_PER_STEP, SPI_PENDING_CAPACITY, UNWRITTEN_CAPACITY, Unwritten};
 pub use driver::{Driver, Model, Priority, Transmit};
 pub use goal::{Goal, GoalError, GoalKind, GoalKinds};
 /// Whether a link carries a byte stream or SPI transactions (one enum with `motion_link`).

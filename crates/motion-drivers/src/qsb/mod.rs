@@ -119,6 +119,7 @@ pub use io::{CaptureInput, EnableOutput, MOTOR_DRIVE_BITS, PinRole, QsbIo, pins}
 use crate::driver::{Driver, Model, Priority, Transmit};
 use crate::goal::{Goal, GoalError, GoalKind, GoalKinds};
 use crate::pin::{Pin, PinReading};
+use crate::stamps::IoStamps;
 use crate::state::{ChannelState, DeviceFault, DeviceStatus};
 use encoder::EncoderTrack;
 use guard::StampGuard;
@@ -190,6 +191,10 @@ pub struct QsbDriver {
     homed: bool,
     arrived: bool,
     io: IoState,
+    /// The link's write reports and horizon.
+    io_stamps: IoStamps,
+    /// No request of the goal set last has been sent yet.
+    goal_unsent: bool,
 }
 
 impl QsbDriver {
@@ -235,6 +240,8 @@ impl QsbDriver {
             homed: false,
             arrived: false,
             io: IoState::new(),
+            io_stamps: IoStamps::default(),
+            goal_unsent: false,
         };
         driver.begin_startup();
         driver
@@ -302,6 +309,14 @@ impl Driver for QsbDriver {
         self.pass_time(now);
     }
 
+    fn handle_written(&mut self, at: Duration) {
+        self.on_written(at);
+    }
+
+    fn handle_heard(&mut self, until: Duration) {
+        self.io_stamps.heard(until);
+    }
+
     fn poll_timeout(&self) -> Option<Duration> {
         if !self.link_up {
             return None;
@@ -340,6 +355,9 @@ impl Driver for QsbDriver {
 
     fn set_goal(&mut self, now: Duration, channel: usize, goal: Goal) -> Result<(), GoalError> {
         let result = self.plan_goal(now, channel, goal);
+        if result.is_ok() {
+            self.goal_unsent = true;
+        }
         self.settle(now);
         result
     }
@@ -357,6 +375,7 @@ impl Driver for QsbDriver {
     }
 
     fn link_down(&mut self, _now: Duration) {
+        self.io_stamps.link_reset();
         self.begin_startup();
         self.setup.clear();
         self.link_up = false;
@@ -365,6 +384,7 @@ impl Driver for QsbDriver {
     }
 
     fn link_up(&mut self, _now: Duration) {
+        self.io_stamps.link_reset();
         self.link_up = true;
         self.decoder.clear();
         self.begin_startup();
