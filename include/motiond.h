@@ -45,7 +45,7 @@ extern "C" {
 /* --- constants ------------------------------------------------------------------------ */
 
 /** Version of the contract; every payload carries it. */
-#define MOTIOND_SCHEMA_VERSION 3u
+#define MOTIOND_SCHEMA_VERSION 4u
 /** Capacity of the axis arrays of the frame and the server info. */
 #define MOTIOND_MAX_AXES 128u
 /** Capacity of the device array of the server info. */
@@ -80,6 +80,7 @@ extern "C" {
 #define MOTIOND_TYPE_NAME_CLIENT_ID "motiond::ClientId"
 #define MOTIOND_TYPE_NAME_AXIS_STATE "motiond::AxisState"
 #define MOTIOND_TYPE_NAME_SIGNAL_STATE "motiond::SignalState"
+#define MOTIOND_TYPE_NAME_AXIS_WIRE "motiond::AxisWire"
 #define MOTIOND_TYPE_NAME_MOTION_FRAME "motiond::MotionFrame"
 #define MOTIOND_TYPE_NAME_COMMAND_REQUEST "motiond::CommandRequest"
 #define MOTIOND_TYPE_NAME_COMMAND_REPLY "motiond::CommandReply"
@@ -91,6 +92,7 @@ extern "C" {
 #define MOTIOND_TYPE_NAME_MACHINE_PARAMS "motiond::MachineParams"
 #define MOTIOND_TYPE_NAME_LATENCY_SUMMARY "motiond::LatencySummary"
 #define MOTIOND_TYPE_NAME_LINK_STATS "motiond::LinkStats"
+#define MOTIOND_TYPE_NAME_LINK_IO "motiond::LinkIo"
 #define MOTIOND_TYPE_NAME_SERVER_STATS "motiond::ServerStats"
 
 /* --- enumerations (values of the integer fields) ----------------------------------------- */
@@ -309,7 +311,16 @@ typedef struct motiond_signal_state {
     motiond_client_id_t claimed_by; /**< claim holder of an output, zero when unclaimed */
 } motiond_signal_state_t;
 
-/** One consistent snapshot of every axis, board and signal, once per tick. 13392 bytes. */
+/** When an axis's current goal was set and its first request reached the wire. 24 bytes.
+ *  Command -> wire: wire_ns minus the client's CLOCK_MONOTONIC at sending, or in ticks
+ *  wire_tick - goal_tick (0: written in the tick that accepted it). */
+typedef struct motiond_axis_wire {
+    uint64_t goal_tick; /**< tick in which the current goal was set */
+    uint64_t wire_tick; /**< tick during which its first request was written, 0 until then */
+    uint64_t wire_ns;   /**< CLOCK_MONOTONIC ns of that write, 0 until then */
+} motiond_axis_wire_t;
+
+/** One consistent snapshot of every axis, board and signal, once per tick. 16464 bytes. */
 typedef struct motiond_motion_frame {
     uint32_t schema_version;                           /**< MOTIOND_SCHEMA_VERSION */
     uint32_t axis_count;                               /**< valid entries of axes */
@@ -323,6 +334,7 @@ typedef struct motiond_motion_frame {
     uint8_t devices[MOTIOND_MAX_DEVICES];              /**< MOTIOND_DEVICE_STATE_* per device */
     motiond_axis_state_t axes[MOTIOND_MAX_AXES];       /**< axes in config order */
     motiond_signal_state_t signals[MOTIOND_MAX_SIGNALS]; /**< signals in config order */
+    motiond_axis_wire_t wire[MOTIOND_MAX_AXES];        /**< per axis (index of axes): goal set / on the wire */
 } motiond_motion_frame_t;
 
 /** A command to the server. 64 bytes, alignment 8. */
@@ -449,7 +461,15 @@ typedef struct motiond_link_stats {
     uint32_t reserved;              /**< zero */
 } motiond_link_stats_t;
 
-/** Server figures, published about once a second. 1472 bytes, alignment 8. */
+/** The I/O side of one link (CLOCK_MONOTONIC ns stamps, 0: never). 32 bytes, alignment 8. */
+typedef struct motiond_link_io {
+    uint64_t last_write_ns; /**< the last write that moved bytes */
+    uint64_t last_read_ns;  /**< the last read that returned bytes */
+    uint64_t transactions;  /**< messages written whole (SPI: transactions) */
+    uint64_t reads;         /**< reads that returned bytes */
+} motiond_link_io_t;
+
+/** Server figures, published about once a second. 1984 bytes, alignment 8. */
 typedef struct motiond_server_stats {
     uint32_t schema_version;                    /**< MOTIOND_SCHEMA_VERSION */
     uint32_t link_count;                        /**< valid entries of links */
@@ -471,13 +491,15 @@ typedef struct motiond_server_stats {
     uint64_t publish_failures;                  /**< info/stats/params samples and tick notifications not sent */
     uint64_t replies_lost;                      /**< command replies that could not be sent */
     uint64_t events_dropped;                    /**< log reports and iceoryx2 housekeeping that failed */
+    motiond_link_io_t link_io[MOTIOND_MAX_LINKS]; /**< per link (index of links): I/O stamps */
 } motiond_server_stats_t;
 
 /* Sizes and alignments the Rust side pins (crates/motion-ipc/tests/layout.rs). */
 MOTIOND_STATIC_ASSERT(sizeof(motiond_client_id_t) == 16, "motiond_client_id_t size");
 MOTIOND_STATIC_ASSERT(sizeof(motiond_axis_state_t) == 80, "motiond_axis_state_t size");
 MOTIOND_STATIC_ASSERT(sizeof(motiond_signal_state_t) == 48, "motiond_signal_state_t size");
-MOTIOND_STATIC_ASSERT(sizeof(motiond_motion_frame_t) == 13392, "motiond_motion_frame_t size");
+MOTIOND_STATIC_ASSERT(sizeof(motiond_axis_wire_t) == 24, "motiond_axis_wire_t size");
+MOTIOND_STATIC_ASSERT(sizeof(motiond_motion_frame_t) == 16464, "motiond_motion_frame_t size");
 MOTIOND_STATIC_ASSERT(sizeof(motiond_command_request_t) == 64, "motiond_command_request_t size");
 MOTIOND_STATIC_ASSERT(sizeof(motiond_command_reply_t) == 32, "motiond_command_reply_t size");
 MOTIOND_STATIC_ASSERT(sizeof(motiond_axis_info_t) == 160, "motiond_axis_info_t size");
@@ -488,7 +510,8 @@ MOTIOND_STATIC_ASSERT(sizeof(motiond_machine_param_t) == 88, "motiond_machine_pa
 MOTIOND_STATIC_ASSERT(sizeof(motiond_machine_params_t) == 180240, "motiond_machine_params_t size");
 MOTIOND_STATIC_ASSERT(sizeof(motiond_latency_summary_t) == 40, "motiond_latency_summary_t size");
 MOTIOND_STATIC_ASSERT(sizeof(motiond_link_stats_t) == 80, "motiond_link_stats_t size");
-MOTIOND_STATIC_ASSERT(sizeof(motiond_server_stats_t) == 1472, "motiond_server_stats_t size");
+MOTIOND_STATIC_ASSERT(sizeof(motiond_link_io_t) == 32, "motiond_link_io_t size");
+MOTIOND_STATIC_ASSERT(sizeof(motiond_server_stats_t) == 1984, "motiond_server_stats_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_motion_frame_t) == 8, "motiond_motion_frame_t align");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_machine_params_t) == 4, "motiond_machine_params_t align");
 

@@ -704,5 +704,7 @@ mod stops;
 // The IN pins and Status bits as signals.
 #[path = "engine_qq2drv/io.rs"]
 mod io;
+#[path = "engine_qq2drv/lag.rs"]
+mod lag;
 #[path = "engine_qq2drv/off.rs"]
 mod off;

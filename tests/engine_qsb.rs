@@ -5,6 +5,8 @@ mod support;
 
 #[path = "engine_qsb/io.rs"]
 mod io;
+#[path = "engine_qsb/lag.rs"]
+mod lag;
 #[path = "engine_qsb/machine.rs"]
 mod machine;
 #[path = "engine_qsb/off.rs"]

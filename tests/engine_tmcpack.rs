@@ -8,6 +8,8 @@ mod support;
 
 #[path = "engine_tmcpack/io.rs"]
 mod io;
+#[path = "engine_tmcpack/lag.rs"]
+mod lag;
 #[path = "engine_tmcpack/off.rs"]
 mod off;
 #[path = "engine_tmcpack/stops.rs"]

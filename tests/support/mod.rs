@@ -2,4 +2,5 @@
 #![allow(dead_code)]
 
 pub mod counting_alloc;
+pub mod lag;
 pub mod rig;

@@ -5,6 +5,12 @@
 //! Link faults (a `SimFaults` unplug) surface as `Disconnected` errors; the rig reports
 //! them to the engine and tries to reopen the link every [`REOPEN_EVERY`], as motiond's
 //! I/O threads do.
+//!
+//! By default the rig's I/O side is perfect and reports nothing: messages are written in
+//! the tick that made them and every tick reads. [`Rig::stamp_io`] makes it report write
+//! stamps and horizons as motiond's I/O threads do, and lets it lag: messages reach the
+//! wire a fixed delay after they were queued, and the I/O side may run only now and then
+//! (a starved thread).
 
 use core::time::Duration;
 use std::collections::VecDeque;
@@ -93,6 +99,21 @@ struct RigLink {
     down: bool,
     next_reopen: Duration,
     log: WireLog,
+    /// Stamped I/O: messages queued and not written yet, with the time they were queued.
+    unwritten: VecDeque<(Duration, Vec<u8>)>,
+}
+
+/// How a stamped I/O side lags (see [`Rig::stamp_io`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct IoLag {
+    /// A message reaches the wire this long after it was queued.
+    pub write_delay: Duration,
+    /// The I/O side runs (writes what is due, reads what arrived) only this often; zero:
+    /// every tick.
+    pub runs_every: Duration,
+    /// Report write stamps and horizons to the engine (motiond does); `false` shows what
+    /// the same lag does to an engine that is not told.
+    pub report: bool,
 }
 
 /// The engine wired to simulated links.
@@ -111,6 +132,10 @@ pub struct Rig {
     /// (feeding received bytes, stepping, polling transmits), so that a test can count
     /// what the engine alone does (e.g. allocations) apart from the simulated links.
     pub engine_scope: Option<fn(bool)>,
+    /// Stamped I/O and its lag.
+    io: Option<IoLag>,
+    /// When the stamped I/O side last ran.
+    io_ran_at: Option<Duration>,
 }
 
 impl Rig {
@@ -137,6 +162,7 @@ impl Rig {
                     down: false,
                     next_reopen: Duration::ZERO,
                     log: Vec::new(),
+                    unwritten: VecDeque::new(),
                 })
                 .collect(),
             frame: Box::new(MotionFrame::EMPTY),
@@ -147,6 +173,79 @@ impl Rig {
             sequence: 0,
             log_wire: false,
             engine_scope: None,
+            io: None,
+            io_ran_at: None,
+        }
+    }
+
+    /// From now on the I/O side lags as `lag` says and (if `lag.report`) reports every
+    /// write and its horizon to the engine, as motiond's I/O threads do.
+    pub fn stamp_io(&mut self, lag: IoLag) {
+        if lag.report {
+            self.engine.stamp_links();
+        }
+        self.io = Some(lag);
+    }
+
+    /// Stamped I/O: whether the I/O side runs in this tick.
+    fn io_runs(&mut self, now: Duration) -> bool {
+        let Some(lag) = self.io else {
+            return true;
+        };
+        let runs = self
+            .io_ran_at
+            .is_none_or(|at| now.saturating_sub(at) >= lag.runs_every);
+        if runs {
+            self.io_ran_at = Some(now);
+        }
+        runs
+    }
+
+    /// Stamped I/O: writes the messages of link `index` that are due, reporting each.
+    fn write_due(&mut self, index: usize, now: Duration) {
+        let Some(lag) = self.io else {
+            return;
+        };
+        let Some(rig_link) = self.links.get_mut(index) else {
+            return;
+        };
+        while let Some((queued_at, _)) = rig_link.unwritten.front()
+            && now.saturating_sub(*queued_at) >= lag.write_delay
+        {
+            let Some((_, bytes)) = rig_link.unwritten.pop_front() else {
+                break;
+            };
+            if rig_link.down {
+                continue;
+            }
+            match rig_link.link.write(now, &bytes) {
+                Ok(written) => {
+                    assert_eq!(written, bytes.len(), "the sim link took a partial message");
+                    if self.log_wire {
+                        rig_link.log.push((now, bytes));
+                    }
+                    if lag.report {
+                        self.engine.link_written(index, now);
+                    }
+                }
+                Err(error) => {
+                    if error.kind() == LinkErrorKind::Disconnected {
+                        rig_link.down = true;
+                        rig_link.unwritten.clear();
+                        rig_link.next_reopen = now + REOPEN_EVERY;
+                        self.engine.link_down(index, now);
+                        return;
+                    }
+                    if self.engine.link_kind(index) == Some(LinkKind::Spi) {
+                        let floating = [0xFFu8; 4096];
+                        self.engine
+                            .handle_link_rx(index, now, &floating[..bytes.len()]);
+                    }
+                    if lag.report {
+                        self.engine.link_written(index, now);
+                    }
+                }
+            }
         }
     }
 
@@ -154,7 +253,16 @@ impl Rig {
     pub fn tick(&mut self) {
         let now = self.now;
         let mut buf = [0u8; 4096];
+        let io_runs = self.io_runs(now);
+        if io_runs {
+            for index in 0..self.links.len() {
+                self.write_due(index, now);
+            }
+        }
         for (index, rig_link) in self.links.iter_mut().enumerate() {
+            if !io_runs {
+                continue;
+            }
             if rig_link.down {
                 if now >= rig_link.next_reopen {
                     if rig_link.link.reopen(now).is_ok() {
@@ -177,12 +285,25 @@ impl Rig {
                     Err(error) => {
                         if error.kind() == LinkErrorKind::Disconnected {
                             rig_link.down = true;
+                            rig_link.unwritten.clear();
                             rig_link.next_reopen = now + REOPEN_EVERY;
                             self.engine.link_down(index, now);
                         }
                         break;
                     }
                 }
+            }
+            if let Some(lag) = self.io
+                && lag.report
+                && !rig_link.down
+            {
+                // Everything that arrived is read; nothing queued before the oldest
+                // unwritten message is still waiting.
+                let heard = rig_link
+                    .unwritten
+                    .front()
+                    .map_or(now, |(queued_at, _)| (*queued_at).min(now));
+                self.engine.link_heard(index, heard);
             }
         }
         scope(self.engine_scope, true);
@@ -197,6 +318,10 @@ impl Rig {
                     break;
                 };
                 if rig_link.down {
+                    continue;
+                }
+                if self.io.is_some() {
+                    rig_link.unwritten.push_back((now, buf[..len].to_vec()));
                     continue;
                 }
                 match rig_link.link.write(now, &buf[..len]) {
@@ -219,6 +344,12 @@ impl Rig {
                         }
                     }
                 }
+            }
+        }
+        if io_runs && self.io.is_some_and(|lag| lag.write_delay.is_zero()) {
+            // A prompt I/O side writes in the tick that queued.
+            for index in 0..self.links.len() {
+                self.write_due(index, now);
             }
         }
         self.now += self.period;

@@ -191,6 +191,16 @@ impl<T: Copy, const N: usize> FixedQueue<T, N> {
         *self = Self::new();
     }
 
+    /// Calls `change` on every item, oldest first.
+    pub fn for_each_mut(&mut self, mut change: impl FnMut(&mut T)) {
+        for index in 0..self.len {
+            let slot = self.slot(index);
+            if let Some(Some(item)) = self.items.get_mut(slot) {
+                change(item);
+            }
+        }
+    }
+
     /// The items, oldest first.
     pub fn iter(&self) -> impl DoubleEndedIterator<Item = T> + '_ {
         (0..self.len).filter_map(move |index| self.items.get(self.slot(index)).copied().flatten())
@@ -207,6 +217,16 @@ mod tests {
             *slot = Some(item);
         }
         out
+    }
+
+    #[test]
+    fn every_item_can_be_changed_in_place_across_the_wrap() {
+        let mut queue = FixedQueue::<u32, 3>::new();
+        assert!(queue.push(1) && queue.push(2) && queue.push(3));
+        assert_eq!(queue.pop(), Some(1));
+        assert!(queue.push(4));
+        queue.for_each_mut(|item| *item *= 10);
+        assert_eq!(items(&queue)[..4], [Some(20), Some(30), Some(40), None]);
     }
 
     #[test]

@@ -23,9 +23,9 @@
 use core::mem::{offset_of, size_of};
 
 use motion_ipc::{
-    AxisInfo, AxisState, ClientId, CommandReply, CommandRequest, DeviceInfo, LatencySummary,
-    LinkStats, MachineParam, MachineParams, MotionFrame, ServerInfo, ServerStats, SignalInfo,
-    SignalState,
+    AxisInfo, AxisState, AxisWire, ClientId, CommandReply, CommandRequest, DeviceInfo,
+    LatencySummary, LinkIo, LinkStats, MachineParam, MachineParams, MotionFrame, ServerInfo,
+    ServerStats, SignalInfo, SignalState,
 };
 
 /// Why bytes could not be decoded into a payload.
@@ -49,9 +49,9 @@ pub enum WireError {
 
 // The layout these encoders were written against (`motion-ipc`'s `tests/layout.rs` pins
 // every offset). A change of a payload must be followed here: add the new field below.
-const _: () = assert!(size_of::<MotionFrame>() == 13392);
+const _: () = assert!(size_of::<MotionFrame>() == 16464);
 const _: () = assert!(size_of::<ServerInfo>() == 32328);
-const _: () = assert!(size_of::<ServerStats>() == 1472);
+const _: () = assert!(size_of::<ServerStats>() == 1984);
 const _: () = assert!(size_of::<MachineParams>() == 180_240);
 const _: () = assert!(size_of::<CommandRequest>() == 64);
 const _: () = assert!(size_of::<CommandReply>() == 32);
@@ -148,7 +148,9 @@ array_of!(
     DeviceInfo,
     SignalInfo,
     LinkStats,
-    MachineParam
+    MachineParam,
+    AxisWire,
+    LinkIo
 );
 
 /// A `#[repr(C)]` struct: each listed field at its `offset_of!`. Decoding builds the struct
@@ -204,6 +206,18 @@ record!(MotionFrame {
     devices,
     axes,
     signals,
+    wire,
+});
+record!(AxisWire {
+    goal_tick,
+    wire_tick,
+    wire_ns,
+});
+record!(LinkIo {
+    last_write_ns,
+    last_read_ns,
+    transactions,
+    reads,
 });
 record!(CommandRequest {
     schema_version,
@@ -330,6 +344,7 @@ record!(ServerStats {
     publish_failures,
     replies_lost,
     events_dropped,
+    link_io,
 });
 
 mod sealed {

@@ -10,8 +10,14 @@
 //! - SPI links: every transaction is owned by the driver that wrote it, and the same
 //!   number of MISO bytes is routed back to it in order.
 //!
-//! No allocation after construction: the SPI ownership queue has a fixed capacity and a
-//! full queue holds senders back until MISO bytes drain it.
+//! It also routes the link's write reports ([`LinkBus::handle_written`]) to the driver
+//! whose message went out, in the order the messages were made, and the link's horizon
+//! ([`LinkBus::handle_heard`]) to every driver (see [`Driver`]: reply timeouts run from
+//! the write, silence is judged up to the horizon). A shell that does not stamp leaves
+//! the bus unstamped: each message then counts as written when it is made.
+//!
+//! No allocation after construction: the SPI ownership queue and the queue of messages
+//! not reported written have fixed capacities, and a full queue holds senders back.
 
 use core::time::Duration;
 
@@ -25,10 +31,26 @@ pub const SPI_PENDING_CAPACITY: usize = 64;
 /// Messages one bus may send in one step (bounds the work of a step).
 pub const MAX_SENDS_PER_STEP: usize = 16;
 
+/// Messages whose write report may be outstanding at once on a stamped bus.
+pub const UNWRITTEN_CAPACITY: usize = 64;
+
+/// A message made and not reported written yet.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Unwritten {
+    /// The driver that made it (index in config order).
+    pub driver: usize,
+    /// Its [`Transmit::goal_starts`].
+    pub goal_starts: u8,
+    /// The `now` it was made at.
+    pub queued_at: Duration,
+}
+
 #[derive(Debug, Clone, Copy, Default)]
 struct PendingMiso {
     driver: usize,
     remaining: usize,
+    /// Stamped: when the transaction was written (once reported).
+    written_at: Option<Duration>,
 }
 
 /// The drivers of one link and the arbitration between them.
@@ -46,6 +68,13 @@ pub struct LinkBus {
     pending: FixedQueue<PendingMiso, SPI_PENDING_CAPACITY>,
     /// Received bytes no driver could take (SPI bytes beyond every pending transaction).
     stray_bytes: u64,
+    /// The shell reports writes and the horizon.
+    stamped: bool,
+    /// Stamped: messages made and not reported written, oldest first.
+    unwritten: FixedQueue<Unwritten, UNWRITTEN_CAPACITY>,
+    /// Stamped SPI, per driver: the write stamp of its newest transaction whose MISO bytes
+    /// all came back — how far the board's output has been clocked out and seen.
+    clocked: Vec<Option<Duration>>,
 }
 
 impl LinkBus {
@@ -53,12 +82,79 @@ impl LinkBus {
     pub fn new(kind: LinkKind, drivers: Vec<Box<dyn Driver>>) -> Self {
         Self {
             kind,
-            drivers,
             in_flight: None,
             last_sender: 0,
             next_turn: 0,
             pending: FixedQueue::new(),
             stray_bytes: 0,
+            stamped: false,
+            unwritten: FixedQueue::new(),
+            clocked: vec![None; drivers.len()],
+            drivers,
+        }
+    }
+
+    /// Whether the shell reports writes ([`handle_written`](Self::handle_written)) and the
+    /// horizon ([`handle_heard`](Self::handle_heard)). Unstamped (the default), every
+    /// message counts as written at the `now` it was made.
+    pub fn set_stamped(&mut self, stamped: bool) {
+        self.stamped = stamped;
+        if !stamped {
+            // Reports owed then never come; those messages keep the deadlines they were
+            // made with.
+            self.unwritten.clear();
+        }
+    }
+
+    /// Whether the bus waits for write reports.
+    pub fn stamped(&self) -> bool {
+        self.stamped
+    }
+
+    /// The oldest message not reported written yet.
+    pub fn oldest_unwritten(&self) -> Option<Unwritten> {
+        self.unwritten.front()
+    }
+
+    /// The link wrote the oldest message not reported yet at `at`: its driver learns it.
+    /// Returns that message (`None`: no report was owed, e.g. after the link went down).
+    pub fn handle_written(&mut self, at: Duration) -> Option<Unwritten> {
+        let message = self.unwritten.pop()?;
+        if let Some(driver) = self.drivers.get_mut(message.driver) {
+            driver.handle_written(at);
+        }
+        if self.kind == LinkKind::Spi {
+            // The oldest transaction not stamped yet is this one (both queues are in the
+            // order the messages were made).
+            let mut stamped = false;
+            self.pending.for_each_mut(|pending| {
+                if !stamped && pending.written_at.is_none() {
+                    pending.written_at = Some(at);
+                    stamped = true;
+                }
+            });
+        }
+        Some(message)
+    }
+
+    /// The link's horizon `until`, for every driver, never below `floor` (see
+    /// [`Driver::handle_heard`]). On SPI a board's output comes out only in the driver's own
+    /// transactions: while some of them have not returned their MISO bytes, the driver's
+    /// horizon is no later than the write of its newest transaction that did — what was
+    /// clocked out after that has not been seen yet, whenever it arrives. (A driver with
+    /// nothing outstanding has seen all there is.)
+    pub fn handle_heard(&mut self, until: Duration, floor: Duration) {
+        for (index, driver) in self.drivers.iter_mut().enumerate() {
+            let outstanding = self.kind == LinkKind::Spi
+                && self.stamped
+                && self.pending.iter().any(|pending| pending.driver == index);
+            let heard = if outstanding {
+                let clocked = self.clocked.get(index).copied().flatten();
+                until.min(clocked.unwrap_or(Duration::ZERO))
+            } else {
+                until
+            };
+            driver.handle_heard(heard.max(floor));
         }
     }
 
@@ -107,6 +203,11 @@ impl LinkBus {
                     }
                     head.remaining -= take;
                     if head.remaining == 0 {
+                        if let Some(at) = head.written_at
+                            && let Some(clocked) = self.clocked.get_mut(head.driver)
+                        {
+                            *clocked = Some(clocked.map_or(at, |c| c.max(at)));
+                        }
                         self.pending.pop();
                     }
                     bytes = rest;
@@ -143,6 +244,9 @@ impl LinkBus {
         if self.kind == LinkKind::Spi && self.pending.is_full() {
             return None;
         }
+        if self.stamped && self.unwritten.is_full() {
+            return None;
+        }
         let count = self.drivers.len();
         let mut best: Option<(usize, Priority)> = None;
         for offset in 0..count {
@@ -161,6 +265,16 @@ impl LinkBus {
         }
         self.next_turn = (index + 1) % count;
         self.last_sender = index;
+        if self.stamped {
+            // Room was checked above.
+            self.unwritten.push(Unwritten {
+                driver: index,
+                goal_starts: transmit.goal_starts,
+                queued_at: now,
+            });
+        } else {
+            self.drivers[index].handle_written(now);
+        }
         match self.kind {
             LinkKind::Stream => {
                 if transmit.expects_reply {
@@ -173,6 +287,7 @@ impl LinkBus {
                     self.pending.push(PendingMiso {
                         driver: index,
                         remaining: transmit.len,
+                        written_at: None,
                     });
                 }
             }
@@ -184,6 +299,8 @@ impl LinkBus {
     pub fn link_down(&mut self, now: Duration) {
         self.in_flight = None;
         self.pending.clear();
+        self.unwritten.clear();
+        self.clocked.fill(None);
         for driver in &mut self.drivers {
             driver.link_down(now);
         }
@@ -193,6 +310,8 @@ impl LinkBus {
     pub fn link_up(&mut self, now: Duration) {
         self.in_flight = None;
         self.pending.clear();
+        self.unwritten.clear();
+        self.clocked.fill(None);
         for driver in &mut self.drivers {
             driver.link_up(now);
         }

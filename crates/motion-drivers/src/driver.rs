@@ -31,6 +31,10 @@ pub struct Transmit {
     /// The driver now waits for a reply: on a shared stream bus nobody else may send until
     /// [`Driver::awaiting_reply`] turns false (manual 7.1 "Interlacing of Requests").
     pub expects_reply: bool,
+    /// Bit `c`: this message carries the first request of channel `c`'s current goal (the
+    /// goal [`Driver::set_goal`] set last). The engine stamps the goal with the instant
+    /// this message is reported written ([`Driver::handle_written`]): command → wire.
+    pub goal_starts: u8,
 }
 
 /// A sans-I/O board driver: axis goals, received bytes and `now` in; bytes to send and
@@ -38,9 +42,18 @@ pub struct Transmit {
 /// engine (or a test) moves the bytes and passes the time. The shape follows quinn-proto:
 /// `handle_rx` / `handle_timeout` feed it, `poll_transmit` / `poll_timeout` drain it.
 ///
-/// Call order within one engine step: `handle_rx` with everything received for this
-/// driver, then `handle_timeout(now)`, then goals (`set_goal`), then `poll_transmit` until
-/// it returns `None` or the bus holds the driver back.
+/// Call order within one engine step: `handle_written` for this driver's messages the link
+/// wrote since the last step, `handle_rx` with everything received for this driver,
+/// `handle_heard`, then `handle_timeout(now)`, then goals (`set_goal`), then
+/// `poll_transmit` until it returns `None` or the bus holds the driver back.
+///
+/// Time on the link side: a message queued by `poll_transmit` reaches the wire when the
+/// I/O side gets to it, and received bytes reach the driver when the I/O side read them.
+/// A driver starts a reply timeout when its request was written (`handle_written`), and
+/// judges silence only up to the link's horizon (`handle_heard`), so an I/O thread that
+/// did not run (a starved process, a full transmit buffer) never makes a board look dead;
+/// a board that does not answer requests that went out is still found within the same
+/// bounds. Both are stamps passed in: the driver still reads no clock.
 pub trait Driver: Send + fmt::Debug {
     /// The board model.
     fn model(&self) -> Model;
@@ -61,6 +74,25 @@ pub trait Driver: Send + fmt::Debug {
 
     /// Lets time pass: reply timeouts, poll periods, start-up retries.
     fn handle_timeout(&mut self, now: Duration);
+
+    /// The oldest of this driver's messages not reported yet went out whole at `at` (the
+    /// link accepted its last byte). Every message is reported once, in the order of
+    /// `poll_transmit` (a [`LinkBus`](crate::LinkBus) routes the reports); a link that
+    /// went down voids the reports still owed. A reply timeout runs from here, not from
+    /// the `now` the message was queued at. A shell without write stamps has the bus
+    /// report each message at once, at the `now` it was made.
+    fn handle_written(&mut self, at: Duration) {
+        let _ = at;
+    }
+
+    /// The link's horizon: every byte that arrived before `until` has been handed to
+    /// `handle_rx`, and every message queued before it was written. Silence (a reply
+    /// timeout, a stream gone quiet) is judged up to `min(until, now)`, never beyond: a
+    /// link whose I/O side did not look cannot show that the board stayed silent. Given
+    /// before every `handle_timeout` by a shell that stamps; without it, up to `now`.
+    fn handle_heard(&mut self, until: Duration) {
+        let _ = until;
+    }
 
     /// The earliest instant at which [`handle_timeout`](Self::handle_timeout) has work.
     #[must_use]

@@ -32,12 +32,13 @@ mod pin;
 pub mod qq2drv;
 pub mod qsb;
 pub mod spec;
+mod stamps;
 mod state;
 
 pub mod spimotor;
 pub mod tmcpack;
 
-pub use bus::{LinkBus, MAX_SENDS_PER_STEP, SPI_PENDING_CAPACITY};
+pub use bus::{LinkBus, MAX_SENDS_PER_STEP, SPI_PENDING_CAPACITY, UNWRITTEN_CAPACITY, Unwritten};
 pub use driver::{Driver, Model, Priority, Transmit};
 pub use goal::{Goal, GoalError, GoalKind, GoalKinds};
 /// Whether a link carries a byte stream or SPI transactions (one enum with `motion_link`).

@@ -85,6 +85,10 @@ pub(crate) struct Axis {
     pub position_set: bool,
     /// Last state reported by the driver.
     pub state: ChannelState,
+    /// Tick in which the current goal was handed to the driver.
+    pub goal_tick: u64,
+    /// Tick and engine time at which its first request was written.
+    pub goal_wire: Option<(u64, Duration)>,
 }
 
 impl Axis {
@@ -129,6 +133,8 @@ impl Axis {
             stale: true,
             position_set: false,
             state: ChannelState::UNKNOWN,
+            goal_tick: 0,
+            goal_wire: None,
         }
     }
 

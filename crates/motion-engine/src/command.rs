@@ -170,6 +170,7 @@ impl Engine {
         if let Err(error) = result {
             return self.goal_error_reason(index, error);
         }
+        self.goal_set(index);
         let timeout = self.config.command_timeout;
         let axis = &mut self.axes[index];
         let position = axis.position();

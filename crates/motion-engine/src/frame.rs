@@ -1,8 +1,8 @@
 //! Writing the frame and the server description.
 
 use motion_ipc::{
-    AxisFlags, AxisInfo, AxisMode, AxisState, DeviceInfo, FrameFlags, MotionFrame, SCHEMA_VERSION,
-    ServerInfo, SignalFlags, SignalInfo, SignalInfoFlags, SignalState, write_text,
+    AxisFlags, AxisInfo, AxisMode, AxisState, AxisWire, DeviceInfo, FrameFlags, MotionFrame,
+    SCHEMA_VERSION, ServerInfo, SignalFlags, SignalInfo, SignalInfoFlags, SignalState, write_text,
 };
 
 use crate::Engine;
@@ -42,6 +42,16 @@ impl Engine {
                 kind: signal.config.kind as u8,
                 reserved: [0; 3],
                 claimed_by: signal.claimed_by,
+            };
+        }
+        for (axis, out) in self.axes.iter().zip(frame.wire.iter_mut()) {
+            let (wire_tick, wire_ns) = axis
+                .goal_wire
+                .map_or((0, 0), |(tick, at)| (tick, self.monotonic_ns(at)));
+            *out = AxisWire {
+                goal_tick: axis.goal_tick,
+                wire_tick,
+                wire_ns,
             };
         }
         for (axis, out) in self.axes.iter().zip(frame.axes.iter_mut()) {

@@ -48,6 +48,7 @@ mod command;
 mod config;
 mod device;
 mod frame;
+mod io;
 mod safety;
 mod signal;
 mod supervision;
@@ -65,6 +66,7 @@ pub use crate::config::{
     SignalConfig,
 };
 use crate::device::Device;
+pub use crate::io::IO_STALL_LIMIT;
 use crate::signal::Signal;
 pub use crate::supervision::OVERSPEED_SAMPLES;
 
@@ -106,6 +108,10 @@ pub struct Engine {
     /// Clients found dead lately: a request one of them sent just before it died may still
     /// be queued, and must not start a goal nobody will renew or stop.
     departed: FixedQueue<ClientId, DEPARTED_MEMORY>,
+    /// Per link: the horizon the shell reported last (stamped links).
+    heard: Vec<Option<Duration>>,
+    /// CLOCK_MONOTONIC at engine time zero.
+    clock_origin: Duration,
 }
 
 /// Dead clients remembered (the oldest is forgotten first; node ids are never reused).
@@ -163,6 +169,8 @@ impl Engine {
             .collect();
         Ok(Self {
             sends: vec![0; buses.len()],
+            heard: vec![None; buses.len()],
+            clock_origin: Duration::ZERO,
             link_up: vec![true; buses.len()],
             buses,
             devices,
@@ -258,6 +266,7 @@ impl Engine {
         self.started = true;
         self.now = now;
         self.sends.fill(0);
+        self.apply_io_stamps(now);
         for bus in &mut self.buses {
             bus.handle_timeout(now);
         }
@@ -292,8 +301,12 @@ impl Engine {
             return None;
         }
         let bus = self.buses.get_mut(link)?;
-        let (_, transmit) = bus.poll_transmit(now, buf)?;
+        let (slot, transmit) = bus.poll_transmit(now, buf)?;
         *sends += 1;
+        if !bus.stamped() {
+            // Written as it is made.
+            self.goal_on_wire(link, slot, transmit.goal_starts, now);
+        }
         Some(transmit.len)
     }
 

@@ -138,6 +138,9 @@ impl Engine {
             }
             _ => false,
         };
+        if stopped {
+            self.goal_set(index);
+        }
         let axis = &mut self.axes[index];
         axis.mode = if stopped {
             AxisMode::Stopping
@@ -163,6 +166,7 @@ impl Engine {
         let (bus, slot, channel) = (axis.bus, axis.slot, axis.channel);
         let driver = self.buses[bus].driver_mut(slot).ok_or(GoalError::Offline)?;
         driver.set_goal(now, channel, Goal::Off)?;
+        self.goal_set(index);
         let axis = &mut self.axes[index];
         axis.mode = AxisMode::Off;
         axis.target = axis.position();

@@ -427,8 +427,45 @@ impl FrameFlags {
     }
 }
 
+/// When the current goal of one axis was set and when its first request reached the wire
+/// ([`MotionFrame::wire`], same index as `axes`). 24 bytes, alignment 8.
+///
+/// | offset | field | type | meaning |
+/// |---|---|---|---|
+/// | 0 | `goal_tick` | u64 | tick in which the current goal was set (a client's command: the reply's `tick_applied`; or the server's own stop) |
+/// | 8 | `wire_tick` | u64 | tick during which the goal's first request was written to the link (its last byte accepted by the transport), 0 until then |
+/// | 16 | `wire_ns` | u64 | CLOCK_MONOTONIC ns of that write, 0 until then (and for a goal that needs no request) |
+///
+/// Command → wire: `wire_ns` minus the client's CLOCK_MONOTONIC when it sent the command,
+/// or in ticks `wire_tick − goal_tick` (0: written in the tick that accepted it).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ZeroCopySend)]
+#[type_name("motiond::AxisWire")]
+#[repr(C)]
+pub struct AxisWire {
+    /// Tick in which the current goal was set.
+    pub goal_tick: u64,
+    /// Tick during which its first request was written; 0 until then.
+    pub wire_tick: u64,
+    /// CLOCK_MONOTONIC ns of that write; 0 until then.
+    pub wire_ns: u64,
+}
+
+impl AxisWire {
+    /// No goal yet.
+    pub const NONE: Self = Self {
+        goal_tick: 0,
+        wire_tick: 0,
+        wire_ns: 0,
+    };
+
+    /// Whether the current goal's first request has been written.
+    pub const fn written(&self) -> bool {
+        self.wire_ns != 0
+    }
+}
+
 /// One consistent snapshot of every axis, board and signal, published once per tick on
-/// `motiond/<name>/frame`. 13392 bytes, alignment 8. Fields in memory order:
+/// `motiond/<name>/frame`. 16464 bytes, alignment 8. Fields in memory order:
 ///
 /// | offset | field | type | meaning |
 /// |---|---|---|---|
@@ -444,6 +481,7 @@ impl FrameFlags {
 /// | 48 | `devices` | u8; [`MAX_DEVICES`] | [`DeviceState`] per device, config order |
 /// | 80 | `axes` | [`AxisState`]; [`MAX_AXES`] | axes in config order |
 /// | 10320 | `signals` | [`SignalState`]; [`MAX_SIGNALS`] | signals in config order |
+/// | 13392 | `wire` | [`AxisWire`]; [`MAX_AXES`] | per axis (same index as `axes`): when its current goal was set and reached the wire |
 #[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
 #[type_name("motiond::MotionFrame")]
 #[repr(C)]
@@ -472,6 +510,9 @@ pub struct MotionFrame {
     pub axes: [AxisState; MAX_AXES],
     /// Signals in config order; entries past `signal_count` are [`SignalState::UNKNOWN`].
     pub signals: [SignalState; MAX_SIGNALS],
+    /// Per axis (same index as `axes`): when its current goal was set and when its first
+    /// request reached the wire.
+    pub wire: [AxisWire; MAX_AXES],
 }
 
 impl MotionFrame {
@@ -489,12 +530,19 @@ impl MotionFrame {
         devices: [0; MAX_DEVICES],
         axes: [AxisState::UNKNOWN; MAX_AXES],
         signals: [SignalState::UNKNOWN; MAX_SIGNALS],
+        wire: [AxisWire::NONE; MAX_AXES],
     };
 
     /// The valid axes.
     pub fn axes(&self) -> &[AxisState] {
         let count = (self.axis_count as usize).min(MAX_AXES);
         &self.axes[..count]
+    }
+
+    /// The goal stamps of the valid axes.
+    pub fn wire(&self) -> &[AxisWire] {
+        let count = (self.axis_count as usize).min(MAX_AXES);
+        &self.wire[..count]
     }
 
     /// The valid signals.

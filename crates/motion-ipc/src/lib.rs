@@ -37,18 +37,20 @@ mod stats;
 pub use command::{
     ClientId, CommandKind, CommandReply, CommandRequest, Reason, Target, UnknownValue,
 };
-pub use frame::{AxisFlags, AxisMode, AxisState, DeviceState, FaultCode, FrameFlags, MotionFrame};
+pub use frame::{
+    AxisFlags, AxisMode, AxisState, AxisWire, DeviceState, FaultCode, FrameFlags, MotionFrame,
+};
 pub use info::{AxisInfo, Capabilities, DeviceInfo, DeviceModel, EstopCategory, ServerInfo};
 /// Fixed-size, zero-padded UTF-8 text fields (from `motion-base`, shared with the drivers).
 pub use motion_base::{read_text, write_text};
 pub use params::{MAX_PARAMS, MachineParam, MachineParams, PARAM_TEXT_LEN, ParamOwner};
 pub use service::ServiceNames;
 pub use signal::{SignalFlags, SignalInfo, SignalInfoFlags, SignalKind, SignalState};
-pub use stats::{LatencySummary, LinkStats, ServerStats};
+pub use stats::{LatencySummary, LinkIo, LinkStats, ServerStats};
 
 /// Version of this contract. Bumped on every layout or meaning change; every payload
 /// carries it so that a client built against another version can refuse politely.
-pub const SCHEMA_VERSION: u32 = 3;
+pub const SCHEMA_VERSION: u32 = 4;
 
 /// Capacity of the axis arrays in [`MotionFrame`] and [`ServerInfo`].
 pub const MAX_AXES: usize = 128;

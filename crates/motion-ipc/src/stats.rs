@@ -83,7 +83,41 @@ impl LinkStats {
     }
 }
 
-/// Server figures. 1472 bytes, alignment 8. Fields in memory order:
+/// The I/O side of one link: when bytes last went out and came in, and how often. 32 bytes,
+/// alignment 8. Stamps are CLOCK_MONOTONIC ns taken by the link's I/O thread right after
+/// the transport accepted or returned the bytes; 0 when it never did.
+///
+/// | offset | field | type | meaning |
+/// |---|---|---|---|
+/// | 0 | `last_write_ns` | u64 | the last write that moved bytes |
+/// | 8 | `last_read_ns` | u64 | the last read that returned bytes |
+/// | 16 | `transactions` | u64 | messages written whole since start (SPI: transactions) |
+/// | 24 | `reads` | u64 | reads that returned bytes since start |
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ZeroCopySend)]
+#[type_name("motiond::LinkIo")]
+#[repr(C)]
+pub struct LinkIo {
+    /// CLOCK_MONOTONIC ns of the last write that moved bytes; 0: never.
+    pub last_write_ns: u64,
+    /// CLOCK_MONOTONIC ns of the last read that returned bytes; 0: never.
+    pub last_read_ns: u64,
+    /// Messages written whole (SPI: transactions).
+    pub transactions: u64,
+    /// Reads that returned bytes.
+    pub reads: u64,
+}
+
+impl LinkIo {
+    /// Nothing yet.
+    pub const EMPTY: Self = Self {
+        last_write_ns: 0,
+        last_read_ns: 0,
+        transactions: 0,
+        reads: 0,
+    };
+}
+
+/// Server figures. 1984 bytes, alignment 8. Fields in memory order:
 ///
 /// | offset | field | type | meaning |
 /// |---|---|---|---|
@@ -107,6 +141,7 @@ impl LinkStats {
 /// | 1448 | `publish_failures` | u64 | info, stats and params samples that could not be loaned or sent, and tick notifications that failed, since start (a lost frame counts in `frames_lost`) |
 /// | 1456 | `replies_lost` | u64 | command replies that could not be sent (the client vanished before its answer), since start |
 /// | 1464 | `events_dropped` | u64 | log reports the main thread's queue had no room for, and failed iceoryx2 housekeeping (connection updates, e-stop event reads), since start |
+/// | 1472 | `link_io` | [`LinkIo`]; [`MAX_LINKS`] | per link (same index as `links`): the I/O thread's stamps |
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ZeroCopySend)]
 #[type_name("motiond::ServerStats")]
 #[repr(C)]
@@ -155,6 +190,8 @@ pub struct ServerStats {
     /// Log reports the main thread's queue had no room for, and failed iceoryx2
     /// housekeeping (connection updates, e-stop event reads), since start.
     pub events_dropped: u64,
+    /// Per link (same index as `links`): the I/O thread's stamps.
+    pub link_io: [LinkIo; MAX_LINKS],
 }
 
 impl ServerStats {
@@ -215,11 +252,17 @@ impl ServerStats {
         publish_failures: 0,
         replies_lost: 0,
         events_dropped: 0,
+        link_io: [LinkIo::EMPTY; MAX_LINKS],
     };
 
     /// The valid link entries.
     pub fn links(&self) -> &[LinkStats] {
         &self.links[..(self.link_count as usize).min(MAX_LINKS)]
+    }
+
+    /// The I/O stamps of the valid links.
+    pub fn link_io(&self) -> &[LinkIo] {
+        &self.link_io[..(self.link_count as usize).min(MAX_LINKS)]
     }
 }
 

@@ -24,10 +24,11 @@ pin!(SignalState, size 48, align 8, {
     value @ 0, raw @ 8, last_refresh_tick @ 16, flags @ 24, kind @ 28, reserved @ 29,
     claimed_by @ 32,
 });
-pin!(MotionFrame, size 13392, align 8, {
+pin!(AxisWire, size 24, align 8, { goal_tick @ 0, wire_tick @ 8, wire_ns @ 16 });
+pin!(MotionFrame, size 16464, align 8, {
     schema_version @ 0, axis_count @ 4, tick @ 8, time_ns @ 16, publish_ns @ 24,
     flags @ 32, signal_count @ 36, device_count @ 40, reserved @ 44, devices @ 48,
-    axes @ 80, signals @ 10320,
+    axes @ 80, signals @ 10320, wire @ 13392,
 });
 pin!(CommandRequest, size 64, align 8, {
     schema_version @ 0, kind @ 4, client @ 8, sequence @ 24, axis @ 32, target @ 36,
@@ -67,12 +68,15 @@ pin!(LinkStats, size 80, align 8, {
     name @ 0, bytes_in @ 32, bytes_out @ 40, frames @ 48, errors @ 56, reconnects @ 64,
     up @ 72, reserved @ 76,
 });
-pin!(ServerStats, size 1472, align 8, {
+pin!(LinkIo, size 32, align 8, {
+    last_write_ns @ 0, last_read_ns @ 8, transactions @ 16, reads @ 24,
+});
+pin!(ServerStats, size 1984, align 8, {
     schema_version @ 0, link_count @ 4, tick @ 8, time_ns @ 16, wakeup @ 24, work @ 64,
     overruns @ 104, max_consecutive_overruns @ 112, commands @ 120, rejected @ 128,
     clients @ 136, rt_flags @ 140, links @ 144, faults @ 1424, frames_lost @ 1432,
     full_services @ 1440, full_events @ 1444, publish_failures @ 1448, replies_lost @ 1456,
-    events_dropped @ 1464,
+    events_dropped @ 1464, link_io @ 1472,
 });
 
 #[test]
@@ -83,7 +87,7 @@ fn layout_is_pinned() {
         (128, 32, 16, 64, 2048)
     );
     assert_eq!((NAME_LEN, UNIT_LEN, PARAM_TEXT_LEN), (32, 16, 40));
-    assert_eq!(SCHEMA_VERSION, 3);
+    assert_eq!(SCHEMA_VERSION, 4);
 }
 
 #[test]
@@ -126,5 +130,7 @@ fn empty_payloads_are_consistent() {
     assert!(frame.axes[0].flags().contains(AxisFlags::STALE));
     let info = ServerInfo::default();
     assert_eq!(info.axis_index("x"), None);
+    assert!(frame.wire().is_empty() && !frame.wire[0].written());
     assert!(ServerStats::default().links().is_empty());
+    assert!(ServerStats::default().link_io().is_empty());
 }

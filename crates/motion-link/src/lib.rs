@@ -55,7 +55,7 @@
 //! # Ok::<(), motion_link::LinkError>(())
 //! ```
 #![warn(missing_docs)]
-#![forbid(unsafe_code)]
+#![deny(unsafe_code)] // one exception: SerialLink::poll_fd (a BorrowedFd of the port's own descriptor), with a SAFETY note
 
 mod config;
 mod error;

@@ -2,6 +2,7 @@
 
 use core::fmt;
 use core::time::Duration;
+use std::os::fd::BorrowedFd;
 
 use crate::error::LinkError;
 
@@ -86,6 +87,24 @@ pub trait Link: Send + fmt::Debug {
         None
     }
 
+    /// The file descriptor an I/O thread waits on with poll(2) until the link has
+    /// something for it: readable when bytes (or a hang-up) arrived, writable when
+    /// [`write_pending`](Self::write_pending) and the transport takes bytes again. `None`
+    /// while closed, and for links without one worth polling: a simulated wire (its
+    /// [`next_event`](Self::next_event) says when to look) and spidev (a transaction's MISO
+    /// bytes are there as soon as [`write`](Self::write) returns).
+    fn poll_fd(&self) -> Option<BorrowedFd<'_>> {
+        None
+    }
+
+    /// Whether bytes accepted by [`write`](Self::write) still wait inside the link for the
+    /// transport to take them (an SPI socket's outgoing buffer): the I/O thread then also
+    /// waits for [`poll_fd`](Self::poll_fd) to become writable, and calls
+    /// [`read`](Self::read) (which pushes them on) when it is.
+    fn write_pending(&self) -> bool {
+        false
+    }
+
     /// Counters since creation.
     fn stats(&self) -> LinkStats;
 }
@@ -122,6 +141,12 @@ impl<L: Link + ?Sized> Link for Box<L> {
     }
     fn next_event(&self, now: Duration) -> Option<Duration> {
         (**self).next_event(now)
+    }
+    fn poll_fd(&self) -> Option<BorrowedFd<'_>> {
+        (**self).poll_fd()
+    }
+    fn write_pending(&self) -> bool {
+        (**self).write_pending()
     }
     fn stats(&self) -> LinkStats {
         (**self).stats()

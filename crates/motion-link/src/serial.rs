@@ -2,6 +2,7 @@
 
 use core::time::Duration;
 use std::io::{self, Read, Write};
+use std::os::fd::{AsRawFd, BorrowedFd};
 use std::sync::Arc;
 
 use serialport::{SerialPort, TTYPort};
@@ -253,6 +254,15 @@ impl Link for SerialLink {
             Err(e) if is_idle(&e) => Ok(()),
             Err(e) => Err(self.io_failure("flush", &e)),
         }
+    }
+
+    #[allow(unsafe_code)] // serialport's TTYPort implements AsRawFd but not AsFd
+    fn poll_fd(&self) -> Option<BorrowedFd<'_>> {
+        let port = self.port.as_ref()?;
+        // SAFETY: the descriptor is owned by `port`, which `self` owns and keeps open for
+        // at least as long as the returned borrow of `self` lives (closing it needs
+        // `&mut self`: `reopen` or a failed call), so it stays valid for `'_`.
+        Some(unsafe { BorrowedFd::borrow_raw(port.as_raw_fd()) })
     }
 
     fn reopen(&mut self, _now: Duration) -> Result<(), LinkError> {

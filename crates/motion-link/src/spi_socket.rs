@@ -6,7 +6,7 @@
 
 use core::time::Duration;
 use std::io::{self, Read, Write};
-use std::os::fd::AsFd;
+use std::os::fd::{AsFd, BorrowedFd};
 use std::os::unix::net::UnixStream;
 
 use nix::poll::{PollFd, PollFlags, ppoll};
@@ -265,6 +265,14 @@ impl Link for SpiSocketLink {
             Err(e) => Err(LinkError::from_io(&self.name, "receive", &e)),
         };
         result.map_err(|e| self.fail(e))
+    }
+
+    fn poll_fd(&self) -> Option<BorrowedFd<'_>> {
+        self.stream.as_ref().map(AsFd::as_fd)
+    }
+
+    fn write_pending(&self) -> bool {
+        !self.tx.is_empty()
     }
 
     /// Blocks until every queued transaction has been handed to the socket.

@@ -163,10 +163,12 @@ pub fn stats_json(stats: &ServerStats) -> Value {
             "max_ns": summary.max_ns,
         })
     };
+    let stamp = |ns: u64| if ns == 0 { Value::Null } else { json!(ns) };
     let links: Vec<Value> = stats
         .links()
         .iter()
-        .map(|link| {
+        .zip(stats.link_io())
+        .map(|(link, io)| {
             json!({
                 "name": link.name(),
                 "up": link.up != 0,
@@ -175,6 +177,10 @@ pub fn stats_json(stats: &ServerStats) -> Value {
                 "frames": link.frames,
                 "errors": link.errors,
                 "reconnects": link.reconnects,
+                "last_write_ns": stamp(io.last_write_ns),
+                "last_read_ns": stamp(io.last_read_ns),
+                "transactions": io.transactions,
+                "reads": io.reads,
             })
         })
         .collect();
@@ -219,7 +225,21 @@ pub fn frame_json(info: &ServerInfo, frame: &MotionFrame, axes: &[usize]) -> Val
         .filter_map(|&index| {
             let state = frame.axes().get(index)?;
             let axis = info.axes().get(index)?;
-            Some(axis_state_json(axis, state, frame.tick))
+            let mut value = axis_state_json(axis, state, frame.tick);
+            if let Some(wire) = frame.wire().get(index) {
+                value["goal_tick"] = json!(wire.goal_tick);
+                value["wire_tick"] = if wire.written() {
+                    json!(wire.wire_tick)
+                } else {
+                    Value::Null
+                };
+                value["wire_ns"] = if wire.written() {
+                    json!(wire.wire_ns)
+                } else {
+                    Value::Null
+                };
+            }
+            Some(value)
         })
         .collect();
     let signals: Vec<Value> = info

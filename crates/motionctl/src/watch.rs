@@ -3,7 +3,7 @@
 
 use core::time::Duration;
 
-use motion_client::ipc::{FrameFlags, MotionFrame, ServerInfo, ServerStats, read_text};
+use motion_client::ipc::{AxisWire, FrameFlags, MotionFrame, ServerInfo, ServerStats, read_text};
 use motion_client::{Client, ClientError};
 use ratatui::Frame;
 use ratatui::layout::{Constraint, Layout};
@@ -58,6 +58,48 @@ fn micros(ns: u64) -> String {
     format!("{:.1}µs", ns as f64 / 1e3)
 }
 
+/// Ticks from the current goal to its first request on the wire; `…` while it waits, `-`
+/// before any goal.
+fn wire_text(wire: &AxisWire) -> String {
+    if wire.written() {
+        wire.wire_tick.saturating_sub(wire.goal_tick).to_string()
+    } else if wire.goal_tick == 0 {
+        "-".to_owned()
+    } else {
+        "…".to_owned()
+    }
+}
+
+/// Per link: how long ago (at the stats' tick) bytes last went out and came in, and the
+/// messages written.
+fn links_line(stats: &ServerStats) -> String {
+    let ago = |ns: u64| {
+        if ns == 0 {
+            "never".to_owned()
+        } else {
+            format!(
+                "{:.1} ms ago",
+                stats.time_ns.saturating_sub(ns) as f64 / 1e6
+            )
+        }
+    };
+    let links: Vec<String> = stats
+        .links()
+        .iter()
+        .zip(stats.link_io())
+        .map(|(link, io)| {
+            format!(
+                "{}: out {} in {} ({} msgs)",
+                link.name(),
+                ago(io.last_write_ns),
+                ago(io.last_read_ns),
+                io.transactions
+            )
+        })
+        .collect();
+    format!("links: {}", links.join("   "))
+}
+
 fn draw(
     ui: &mut Frame<'_>,
     info: &ServerInfo,
@@ -72,7 +114,7 @@ fn draw(
         signal_rows.saturating_add(2)
     };
     let [head, table, signals, foot] = Layout::vertical([
-        Constraint::Length(5),
+        Constraint::Length(6),
         Constraint::Min(3),
         Constraint::Length(signal_height),
         Constraint::Length(1),
@@ -125,36 +167,43 @@ fn draw(
             Line::styled(banner, estop_style),
             Line::raw(format!("devices: {}", devices_line(info, frame))),
             Line::raw(figures),
+            Line::raw(stats.map_or_else(String::new, links_line)),
             restart_line,
         ])
         .block(Block::default().borders(Borders::BOTTOM)),
         head,
     );
 
-    let rows = info.axes().iter().zip(frame.axes()).map(|(axis, state)| {
-        let flags = flags_with_fault(state);
-        let style = if fault_name(state).is_none() {
-            Style::default()
-        } else {
-            Style::default().fg(Color::Red)
-        };
-        Row::new(vec![
-            Cell::from(axis.name().to_owned()),
-            Cell::from(format!("{:.4}", state.position)),
-            Cell::from(format!("{:.4}", state.velocity)),
-            Cell::from(format!("{:.4}", state.target)),
-            Cell::from(axis.unit().to_owned()),
-            Cell::from(mode_name(state)),
-            Cell::from(
-                frame
-                    .tick
-                    .saturating_sub(state.last_refresh_tick)
-                    .to_string(),
-            ),
-            Cell::from(flags),
-        ])
-        .style(style)
-    });
+    let rows =
+        info.axes()
+            .iter()
+            .zip(frame.axes())
+            .zip(frame.wire())
+            .map(|((axis, state), wire)| {
+                let flags = flags_with_fault(state);
+                let style = if fault_name(state).is_none() {
+                    Style::default()
+                } else {
+                    Style::default().fg(Color::Red)
+                };
+                Row::new(vec![
+                    Cell::from(axis.name().to_owned()),
+                    Cell::from(format!("{:.4}", state.position)),
+                    Cell::from(format!("{:.4}", state.velocity)),
+                    Cell::from(format!("{:.4}", state.target)),
+                    Cell::from(axis.unit().to_owned()),
+                    Cell::from(mode_name(state)),
+                    Cell::from(
+                        frame
+                            .tick
+                            .saturating_sub(state.last_refresh_tick)
+                            .to_string(),
+                    ),
+                    Cell::from(wire_text(wire)),
+                    Cell::from(flags),
+                ])
+                .style(style)
+            });
     let widths = [
         Constraint::Length(14),
         Constraint::Length(12),
@@ -163,10 +212,11 @@ fn draw(
         Constraint::Length(6),
         Constraint::Length(14),
         Constraint::Length(6),
+        Constraint::Length(6),
         Constraint::Min(10),
     ];
     let header = Row::new([
-        "axis", "position", "velocity", "target", "unit", "mode", "age", "flags",
+        "axis", "position", "velocity", "target", "unit", "mode", "age", "wire", "flags",
     ])
     .style(Style::default().add_modifier(Modifier::BOLD));
     ui.render_widget(Table::new(rows, widths).header(header), table);
@@ -177,7 +227,10 @@ fn draw(
         );
     }
     ui.render_widget(
-        Paragraph::new("age: ticks since fresh board data   q or Ctrl-C quits"),
+        Paragraph::new(
+            "age: ticks since fresh board data   wire: ticks from the goal to its first byte on \
+             the link (… not yet)   q or Ctrl-C quits",
+        ),
         foot,
     );
 }

@@ -96,13 +96,13 @@ pub fn run(config: ServerConfig, options: RunOptions) -> anyhow::Result<()> {
 
     let epoch = monotonic_now();
     let period = engine.config().period();
-    let io_poll = (period / 4).clamp(Duration::from_micros(100), Duration::from_micros(500));
     let io_stop = Arc::new(AtomicBool::new(false));
     let mut ports: Vec<LinkPort> = Vec::with_capacity(links.len());
     let mut io_threads: Vec<IoThread> = Vec::with_capacity(links.len());
     for (spec, link) in config.links.iter().zip(links) {
-        let (port, thread) = io::spawn(&spec.name, link, epoch, io_poll, Arc::clone(&io_stop))
-            .with_context(|| format!("starting the I/O thread of link `{}`", spec.name))?;
+        let (port, thread) =
+            io::spawn(&spec.name, link, epoch, io::IDLE_WAIT, Arc::clone(&io_stop))
+                .with_context(|| format!("starting the I/O thread of link `{}`", spec.name))?;
         ports.push(port);
         io_threads.push(thread);
     }

@@ -10,14 +10,14 @@ use iceoryx2::port::server::Server;
 use iceoryx2::port::update_connections::UpdateConnections;
 use motion_engine::{CommandPort, Engine};
 use motion_ipc::{
-    ClientId, CommandReply, CommandRequest, DeviceState, FaultCode, MachineParams, MotionFrame,
-    ServerInfo, ServerStats, write_text,
+    ClientId, CommandReply, CommandRequest, DeviceState, FaultCode, LinkIo, MachineParams,
+    MotionFrame, ServerInfo, ServerStats, write_text,
 };
 use rtrb::{Consumer, Producer};
 
 use crate::config::ServerSettings;
 use crate::error::{RtError, StartError};
-use crate::io::{LinkEvent, LinkPort, PACKET_LEN, Packet};
+use crate::io::{LinkEvent, LinkPort, NEVER, PACKET_LEN, Packet};
 use crate::rt::{self, RtStatus, monotonic_now, sleep_until};
 use crate::services::{ClientDirectory, CommandFactory, Ipc, Services, SlotUse};
 use crate::stats::Latency;
@@ -293,7 +293,11 @@ impl Loop {
         }
     }
 
-    fn new(setup: TickSetup, services: Services, rt_flags: u32) -> Self {
+    fn new(mut setup: TickSetup, services: Services, rt_flags: u32) -> Self {
+        // The I/O threads report writes and horizons (crate::io); frame stamps are
+        // CLOCK_MONOTONIC.
+        setup.engine.stamp_links();
+        setup.engine.set_clock_origin(setup.epoch);
         let mut stats = Box::new(ServerStats::EMPTY);
         stats.rt_flags = rt_flags;
         stats.link_count = setup.ports.len().min(stats.links.len()) as u32;
@@ -396,17 +400,30 @@ impl Loop {
         }
     }
 
+    /// Per link: down/up events, write reports (those from before a `Down` belong to no
+    /// message the engine still tracks), received bytes, and the horizon read before them.
     fn take_link_input(&mut self, now: Duration) {
+        let engine = &mut self.setup.engine;
         for (index, port) in self.setup.ports.iter_mut().enumerate() {
+            let heard = port.heard();
             while let Ok(event) = port.events.pop() {
                 match event {
-                    LinkEvent::Down => self.setup.engine.link_down(index, now),
-                    LinkEvent::Up => self.setup.engine.link_up(index, now),
+                    LinkEvent::Down => {
+                        port.generation = port.generation.wrapping_add(1);
+                        engine.link_down(index, now);
+                    }
+                    LinkEvent::Up => engine.link_up(index, now),
+                }
+            }
+            while let Ok(written) = port.written.pop() {
+                if written.generation == port.generation {
+                    engine.link_written(index, written.at);
                 }
             }
             while let Ok(packet) = port.rx.pop() {
-                self.setup.engine.handle_link_rx(index, now, packet.bytes());
+                engine.handle_link_rx(index, now, packet.bytes());
             }
+            engine.link_heard(index, heard);
         }
     }
 
@@ -526,6 +543,9 @@ impl Loop {
         }
     }
 
+    /// Per link: the drivers' messages into the transmit ring (stamped with `now`), the
+    /// I/O thread woken if anything was queued, and asked to look at the link again by the
+    /// drivers' next deadline.
     fn queue_link_output(&mut self, now: Duration, buf: &mut [u8; PACKET_LEN]) {
         for (index, port) in self.setup.ports.iter_mut().enumerate() {
             let mut queued = false;
@@ -535,14 +555,15 @@ impl Loop {
                 };
                 // `slots() > 0` was checked: the push cannot fail, but a failure would
                 // still be counted rather than lost silently.
-                if port.tx.push(Packet::new(&buf[..len])).is_err() {
+                if port.tx.push(Packet::stamped(&buf[..len], now)).is_err() {
                     port.counters.dropped.fetch_add(1, Ordering::Relaxed);
                 }
                 queued = true;
             }
             if queued {
-                port.thread.unpark();
+                port.waker.wake();
             }
+            port.look_by(self.setup.engine.link_poll_timeout(index));
         }
     }
 
@@ -581,6 +602,23 @@ impl Loop {
             out.reconnects = c.reconnects.load(Ordering::Relaxed);
             out.up = u32::from(c.up.load(Ordering::Relaxed));
             out.frames = replies;
+        }
+        let epoch = self.setup.epoch;
+        let absolute = |ns: u64| {
+            if ns == NEVER {
+                0
+            } else {
+                duration_ns(epoch + Duration::from_nanos(ns))
+            }
+        };
+        for (port, out) in self.setup.ports.iter().zip(stats.link_io.iter_mut()) {
+            let c = &port.counters;
+            *out = LinkIo {
+                last_write_ns: absolute(c.last_write_ns.load(Ordering::Relaxed)),
+                last_read_ns: absolute(c.last_read_ns.load(Ordering::Relaxed)),
+                transactions: c.transactions.load(Ordering::Relaxed),
+                reads: c.reads.load(Ordering::Relaxed),
+            };
         }
         let sent = match self.services.stats.loan_uninit() {
             Ok(sample) => sample.write_payload(**stats).send().is_ok(),

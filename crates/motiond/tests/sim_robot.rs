@@ -87,7 +87,9 @@ impl Robot {
         let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../config/sim.toml");
         let config = ServerConfig::load(&path).expect("config/sim.toml is valid");
         let drivers = motiond::boards::build(&config).expect("drivers");
-        let engine = Engine::new(config.engine_config(), drivers).expect("engine");
+        let mut engine = Engine::new(config.engine_config(), drivers).expect("engine");
+        // As motiond: every write and the links' horizons are reported.
+        engine.stamp_links();
         let links: Vec<Box<dyn Link>> = config
             .links
             .iter()
@@ -124,11 +126,13 @@ impl Robot {
                 }
                 engine(|| self.engine.handle_link_rx(index, now, &buf[..len]));
             }
+            engine(|| self.engine.link_heard(index, now));
         }
         engine(|| self.engine.step(now, &mut self.port, &mut self.frame));
         for (index, link) in self.links.iter_mut().enumerate() {
             while let Some(len) = engine(|| self.engine.poll_link_transmit(index, now, &mut buf)) {
                 link.write(now, &buf[..len]).expect("sim link write");
+                engine(|| self.engine.link_written(index, now));
             }
         }
         self.now += self.period;
@@ -243,6 +247,11 @@ fn same_commands_same_ticks_give_byte_identical_frames() {
                 frames.extend_from_slice(&axis.flags.to_le_bytes());
                 frames.extend_from_slice(&[axis.mode, axis.fault as u8]);
             }
+            for wire in frame.wire() {
+                for value in [wire.goal_tick, wire.wire_tick, wire.wire_ns] {
+                    frames.extend_from_slice(&value.to_le_bytes());
+                }
+            }
         });
         let replies: Vec<(u64, u32, u64)> = robot
             .port
@@ -262,6 +271,11 @@ fn same_commands_same_ticks_give_byte_identical_frames() {
     // And the robot really moved.
     let mut robot = Robot::new();
     run(&mut robot, 0, 1500, |_| {});
-    let wheel = robot.frame.axes()[robot.axis("wheel_left") as usize];
+    let index = robot.axis("wheel_left") as usize;
+    let wheel = robot.frame.axes()[index];
     assert!(wheel.position > 1.0, "{wheel:?}");
+    // Its goal reached the wire, stamped in the frame no earlier than it was set.
+    let wire = robot.frame.wire()[index];
+    assert!(wire.written(), "{wire:?}");
+    assert!(wire.wire_tick >= wire.goal_tick, "{wire:?}");
 }

@@ -41,6 +41,7 @@ __all__ = [
     "ClientId",
     "AxisState",
     "SignalState",
+    "AxisWire",
     "MotionFrame",
     "CommandRequest",
     "CommandReply",
@@ -52,6 +53,7 @@ __all__ = [
     "MachineParams",
     "LatencySummary",
     "LinkStats",
+    "LinkIo",
     "ServerStats",
     "PAYLOADS",
     "CommandKind",
@@ -76,7 +78,7 @@ __all__ = [
 # --- constants -----------------------------------------------------------------------------
 
 #: Version of the contract; every payload carries it.
-SCHEMA_VERSION = 3
+SCHEMA_VERSION = 4
 #: Capacity of the axis arrays in :class:`MotionFrame` and :class:`ServerInfo`.
 MAX_AXES = 128
 #: Capacity of the device array in :class:`ServerInfo`.
@@ -227,9 +229,23 @@ class SignalState(Payload):
     ]
 
 
+class AxisWire(Payload):
+    """When an axis's current goal was set and its first request reached the wire.
+    24 bytes, alignment 8. Command -> wire: ``wire_ns`` minus the client's
+    CLOCK_MONOTONIC at sending, or in ticks ``wire_tick - goal_tick``; ``wire_ns`` is 0
+    until the request was written."""
+
+    _type_name_ = "motiond::AxisWire"
+    _fields_ = [
+        ("goal_tick", _u64),
+        ("wire_tick", _u64),
+        ("wire_ns", _u64),
+    ]
+
+
 class MotionFrame(Payload):
     """One consistent snapshot of every axis, board and signal, once per tick.
-    13392 bytes, alignment 8."""
+    16464 bytes, alignment 8."""
 
     _type_name_ = "motiond::MotionFrame"
     _fields_ = [
@@ -245,6 +261,7 @@ class MotionFrame(Payload):
         ("devices", _u8 * MAX_DEVICES),
         ("axes", AxisState * MAX_AXES),
         ("signals", SignalState * MAX_SIGNALS),
+        ("wire", AxisWire * MAX_AXES),
     ]
 
 
@@ -417,8 +434,22 @@ class LinkStats(Payload):
     ]
 
 
+class LinkIo(Payload):
+    """The I/O side of one link: CLOCK_MONOTONIC ns of the last write and read that moved
+    bytes (0: never), messages written whole (SPI: transactions), reads that returned
+    bytes. 32 bytes, alignment 8."""
+
+    _type_name_ = "motiond::LinkIo"
+    _fields_ = [
+        ("last_write_ns", _u64),
+        ("last_read_ns", _u64),
+        ("transactions", _u64),
+        ("reads", _u64),
+    ]
+
+
 class ServerStats(Payload):
-    """Server figures, published about once a second. 1472 bytes, alignment 8."""
+    """Server figures, published about once a second. 1984 bytes, alignment 8."""
 
     _type_name_ = "motiond::ServerStats"
     _fields_ = [
@@ -442,6 +473,7 @@ class ServerStats(Payload):
         ("publish_failures", _u64),
         ("replies_lost", _u64),
         ("events_dropped", _u64),
+        ("link_io", LinkIo * MAX_LINKS),
     ]
 
 
@@ -452,6 +484,7 @@ PAYLOADS: Dict[str, Type[Payload]] = {
         ClientId,
         AxisState,
         SignalState,
+        AxisWire,
         MotionFrame,
         CommandRequest,
         CommandReply,
@@ -463,6 +496,7 @@ PAYLOADS: Dict[str, Type[Payload]] = {
         MachineParams,
         LatencySummary,
         LinkStats,
+        LinkIo,
         ServerStats,
     )
 }

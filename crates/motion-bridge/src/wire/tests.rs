@@ -2,7 +2,7 @@
 //! trips.
 
 use motion_ipc::{
-    AxisFlags, AxisInfo, AxisState, ClientId, CommandKind, CommandReply, CommandRequest,
+    AxisFlags, AxisInfo, AxisState, AxisWire, ClientId, CommandKind, CommandReply, CommandRequest,
     MachineParam, MachineParams, MotionFrame, Reason, SCHEMA_VERSION, ServerInfo, ServerStats,
     SignalState, Target, write_text,
 };
@@ -68,7 +68,8 @@ fn command_reply_golden_bytes() {
 }
 
 /// `MotionFrame`'s table: tick @ 8, devices @ 48, axes @ 80 (80 bytes each: position @ 0,
-/// flags @ 40, mode @ 46, claimed_by @ 48), signals @ 10320 (48 bytes each); 13392 bytes.
+/// flags @ 40, mode @ 46, claimed_by @ 48), signals @ 10320 (48 bytes each), wire @ 13392
+/// (24 bytes each: goal_tick @ 0, wire_tick @ 8, wire_ns @ 16); 16464 bytes.
 #[test]
 fn frame_fields_sit_at_their_documented_offsets_and_padding_is_zero() {
     let mut frame = MotionFrame::EMPTY;
@@ -83,8 +84,16 @@ fn frame_fields_sit_at_their_documented_offsets_and_padding_is_zero() {
     frame.signal_count = 1;
     frame.signals[0].value = 1.0;
     frame.signals[0].kind = 2;
+    frame.wire[1] = AxisWire {
+        goal_tick: 5,
+        wire_tick: 6,
+        wire_ns: 77,
+    };
     let bytes = encode(&frame);
-    assert_eq!(bytes.len(), 13392);
+    assert_eq!(bytes.len(), 16464);
+    assert_eq!(le_u64(&bytes, 13392 + 24), 5);
+    assert_eq!(le_u64(&bytes, 13392 + 24 + 8), 6);
+    assert_eq!(le_u64(&bytes, 13392 + 24 + 16), 77);
     assert_eq!(le_u64(&bytes, 8), 99);
     assert_eq!(bytes[48], 1);
     let axis1 = 80 + 80;
@@ -109,7 +118,7 @@ fn wrong_sizes_are_refused_with_both_sizes() {
         decode::<MotionFrame>(&bytes[..100]),
         Err(WireError::Size {
             what: "MotionFrame",
-            expected: 13392,
+            expected: 16464,
             got: 100
         })
     );

@@ -63,7 +63,11 @@ impl Driver for Scripted {
         if expects_reply {
             self.awaiting = self.reply_len;
         }
-        Some(Transmit { len, expects_reply })
+        Some(Transmit {
+            len,
+            expects_reply,
+            goal_starts: 0,
+        })
     }
     fn awaiting_reply(&self) -> bool {
         self.awaiting > 0

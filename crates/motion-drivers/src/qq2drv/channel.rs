@@ -98,6 +98,8 @@ pub(super) struct Channel {
     pub(super) step: Step,
     /// The step's packets have yet to be sent.
     pub(super) unsent: bool,
+    /// No packet of the goal set last has been sent yet.
+    pub(super) goal_unsent: bool,
     /// Packets of the step sent and not yet answered.
     pub(super) unacked: u8,
     /// Generation of the step: answers to packets of older steps do not advance it.
@@ -132,6 +134,7 @@ impl Channel {
             config,
             step: Step::Idle,
             unsent: false,
+            goal_unsent: false,
             unacked: 0,
             seq: 0,
             done_at: None,

@@ -175,11 +175,14 @@ impl Qq2drvDriver {
             .ok_or(GoalError::NoSuchChannel(channel))?;
         let step = slot.plan(goal)?;
         slot.set_goal(step);
+        slot.goal_unsent = true;
         Ok(())
     }
 
-    /// Writes the unsent goal packets of every channel that fit.
-    pub(super) fn write_goals(&mut self, now: Duration, buf: &mut [u8]) -> usize {
+    /// Writes the unsent goal packets of every channel that fit; `starts` gets the bits of
+    /// channels whose goal set last goes out for the first time.
+    pub(super) fn write_goals(&mut self, now: Duration, buf: &mut [u8], starts: &mut u8) -> usize {
+        let number = self.io_stamps.next_number();
         let mut len = 0;
         for (index, channel) in self.channels.iter_mut().enumerate() {
             if !(channel.config.enabled && channel.unsent && channel.ready()) {
@@ -213,6 +216,7 @@ impl Qq2drvDriver {
                 self.in_flight.push(Sent {
                     id: packet.id(),
                     at: now,
+                    number,
                     tag: Tag::Goal {
                         channel: index as u8,
                         seq: channel.seq,
@@ -221,6 +225,10 @@ impl Qq2drvDriver {
                 });
             }
             channel.sent(&packets);
+            if channel.goal_unsent {
+                channel.goal_unsent = false;
+                *starts |= 1 << index;
+            }
         }
         len
     }

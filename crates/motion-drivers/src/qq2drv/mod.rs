@@ -104,6 +104,7 @@ use qq2drv::{CHANNELS, DataMask, MotionLayout, PositionSize, StreamConfig, Strea
 use crate::driver::{Driver, Model, Priority, Transmit};
 use crate::goal::{Goal, GoalError, GoalKinds};
 use crate::pin::{Pin, PinReading};
+use crate::stamps::IoStamps;
 use crate::state::{ChannelState, DeviceFault, DeviceStatus};
 
 pub use channel::{ARRIVED_WITHIN, LOOP_PERIOD, STANDSTILL, STOP_SETTLE};
@@ -175,6 +176,10 @@ pub struct Qq2drvDriver {
     /// The previous `handle_timeout` call and the interval before this one.
     last_call_at: Option<Duration>,
     call_interval: Duration,
+    /// The link's write reports and horizon.
+    io_stamps: IoStamps,
+    /// The message the last probe went out in.
+    probe_number: u64,
 }
 
 impl Qq2drvDriver {
@@ -207,6 +212,8 @@ impl Qq2drvDriver {
             stream_packets: 0,
             last_call_at: None,
             call_interval: Duration::ZERO,
+            io_stamps: IoStamps::default(),
+            probe_number: 0,
         }
     }
 
@@ -262,6 +269,14 @@ impl Driver for Qq2drvDriver {
 
     fn handle_timeout(&mut self, now: Duration) {
         self.pass_time(now);
+    }
+
+    fn handle_written(&mut self, at: Duration) {
+        self.on_written(at);
+    }
+
+    fn handle_heard(&mut self, until: Duration) {
+        self.io_stamps.heard(until);
     }
 
     fn poll_timeout(&self) -> Option<Duration> {
@@ -322,6 +337,7 @@ impl Driver for Qq2drvDriver {
     }
 
     fn link_down(&mut self, now: Duration) {
+        self.io_stamps.link_reset();
         self.link_up = false;
         self.raise(DeviceFault::LinkDown);
         self.status.online = false;
@@ -332,6 +348,7 @@ impl Driver for Qq2drvDriver {
     }
 
     fn link_up(&mut self, now: Duration) {
+        self.io_stamps.link_reset();
         self.link_up = true;
         self.line_free_at = now;
         self.next_poll_at = now;

@@ -53,9 +53,11 @@ impl Qq2drvDriver {
             self.in_flight.push(Sent {
                 id: request.id(),
                 at: now,
+                number: self.io_stamps.next_number(),
                 tag: Tag::Probe,
             });
         }
+        self.probe_number = self.io_stamps.next_number();
         self.probe_due = false;
         Some(len)
     }
@@ -202,6 +204,7 @@ impl Qq2drvDriver {
             self.in_flight.push(Sent {
                 id: request.id(),
                 at: now,
+                number: self.io_stamps.next_number(),
                 tag: Tag::Setup,
             });
             count += 1;

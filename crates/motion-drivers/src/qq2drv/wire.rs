@@ -165,7 +165,10 @@ pub(super) enum Tag {
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) struct Sent {
     pub(super) id: PacketId,
+    /// Queued at, then (once reported) written at: its reply timeout runs from here.
     pub(super) at: Duration,
+    /// The message (transaction) it went out in (`IoStamps::sent`).
+    pub(super) number: u64,
     pub(super) tag: Tag,
 }
 
@@ -252,10 +255,11 @@ impl Qq2drvDriver {
     /// Writes the next transaction (probe, configuration, goals or a poll) into `buf`.
     pub(super) fn transmit(&mut self, now: Duration, buf: &mut [u8]) -> Option<Transmit> {
         let (next, _) = self.next(now)?;
+        let mut goal_starts = 0;
         let len = match next {
             Next::Probe => self.write_probe(now, buf)?,
             Next::Configure => self.write_configure(now, buf)?,
-            Next::Goals => self.write_goals(now, buf),
+            Next::Goals => self.write_goals(now, buf, &mut goal_starts),
             Next::Poll => {
                 let len = self.poll_len();
                 buf.get_mut(..len)?.fill(FILLER);
@@ -268,6 +272,7 @@ impl Qq2drvDriver {
         if len == 0 {
             return None;
         }
+        let _number = self.io_stamps.sent();
         self.line_free_at = self
             .line_free_at
             .max(now)
@@ -275,7 +280,30 @@ impl Qq2drvDriver {
         Some(Transmit {
             len,
             expects_reply: next != Next::Poll,
+            goal_starts,
         })
+    }
+
+    /// A transaction went out at `at`: the reply timeouts of its requests run from there,
+    /// and so does the wait for a probe's answers.
+    pub(super) fn on_written(&mut self, at: Duration) {
+        let number = self.io_stamps.written();
+        if number == 0 {
+            return;
+        }
+        self.in_flight.for_each_mut(|sent| {
+            if sent.number == number {
+                sent.at = sent.at.max(at);
+            }
+        });
+        if number == self.probe_number
+            && let Phase::Probe { attempts, next_at } = self.phase
+        {
+            self.phase = Phase::Probe {
+                attempts,
+                next_at: next_at.max(at.saturating_add(self.reply_timeout())),
+            };
+        }
     }
 
     /// Lets time pass: lost requests, a silent board, the probe schedule, a stalled
@@ -292,8 +320,10 @@ impl Qq2drvDriver {
             return;
         }
         let timeout = self.reply_timeout();
+        // Unanswered, silent, stalled: only as far as the link was looked at.
+        let judged = self.io_stamps.judged(now);
         while let Some(oldest) = self.in_flight.front()
-            && now.saturating_sub(oldest.at) > timeout
+            && judged.saturating_sub(oldest.at) > timeout
         {
             self.in_flight.pop();
             self.status.timeouts = self.status.timeouts.saturating_add(1);
@@ -301,7 +331,7 @@ impl Qq2drvDriver {
         }
         let silent = self
             .last_valid_at
-            .is_some_and(|at| now.saturating_sub(at) > self.refresh_budget());
+            .is_some_and(|at| judged.saturating_sub(at) > self.refresh_budget());
         if silent && self.status.fault != Some(DeviceFault::NotResponding) {
             self.not_responding();
             // Probe again; a probe already under way keeps its pace.
@@ -310,7 +340,7 @@ impl Qq2drvDriver {
             }
         }
         match self.phase {
-            Phase::Probe { attempts, next_at } if now >= next_at => {
+            Phase::Probe { attempts, next_at } if judged >= next_at => {
                 if attempts >= START_ATTEMPTS {
                     self.not_responding();
                 }
@@ -327,7 +357,7 @@ impl Qq2drvDriver {
                 };
             }
             Phase::Running => {
-                if now.saturating_sub(self.last_stream_at) > self.stall_timeout() {
+                if judged.saturating_sub(self.last_stream_at) > self.stall_timeout() {
                     self.restart(now);
                 } else {
                     for channel in &mut self.channels {

@@ -121,6 +121,7 @@ pub use spec::{LONGEST_INTERVAL_TICKS, TICK, interval_ticks};
 use crate::driver::{Driver, Model, Priority, Transmit};
 use crate::goal::{Goal, GoalError, GoalKind, GoalKinds};
 use crate::pin::{Pin, PinReading};
+use crate::stamps::IoStamps;
 use crate::state::{ChannelState, DeviceFault, DeviceStatus};
 use encoder::EncoderTrack;
 use guard::StampGuard;
@@ -192,6 +193,10 @@ pub struct QsbDriver {
     homed: bool,
     arrived: bool,
     io: IoState,
+    /// The link's write reports and horizon.
+    io_stamps: IoStamps,
+    /// No request of the goal set last has been sent yet.
+    goal_unsent: bool,
 }
 
 impl QsbDriver {
@@ -237,6 +242,8 @@ impl QsbDriver {
             homed: false,
             arrived: false,
             io: IoState::new(),
+            io_stamps: IoStamps::default(),
+            goal_unsent: false,
         };
         driver.begin_startup();
         driver
@@ -304,6 +311,14 @@ impl Driver for QsbDriver {
         self.pass_time(now);
     }
 
+    fn handle_written(&mut self, at: Duration) {
+        self.on_written(at);
+    }
+
+    fn handle_heard(&mut self, until: Duration) {
+        self.io_stamps.heard(until);
+    }
+
     fn poll_timeout(&self) -> Option<Duration> {
         if !self.link_up {
             return None;
@@ -342,6 +357,9 @@ impl Driver for QsbDriver {
 
     fn set_goal(&mut self, now: Duration, channel: usize, goal: Goal) -> Result<(), GoalError> {
         let result = self.plan_goal(now, channel, goal);
+        if result.is_ok() {
+            self.goal_unsent = true;
+        }
         self.settle(now);
         result
     }
@@ -359,6 +377,7 @@ impl Driver for QsbDriver {
     }
 
     fn link_down(&mut self, _now: Duration) {
+        self.io_stamps.link_reset();
         self.begin_startup();
         self.setup.clear();
         self.link_up = false;
@@ -367,6 +386,7 @@ impl Driver for QsbDriver {
     }
 
     fn link_up(&mut self, _now: Duration) {
+        self.io_stamps.link_reset();
         self.link_up = true;
         self.decoder.clear();
         self.begin_startup();

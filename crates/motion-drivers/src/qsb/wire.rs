@@ -28,6 +28,8 @@ pub(super) struct InFlight {
     pub(super) origin: Origin,
     pub(super) generation: u32,
     pub(super) deadline: Duration,
+    /// Its message number (`IoStamps::sent`).
+    pub(super) number: u64,
 }
 
 impl QsbDriver {
@@ -151,8 +153,9 @@ impl QsbDriver {
         if self.restart_at.is_some_and(|at| now >= at) {
             self.begin_startup();
         }
+        // Unanswered only if the link was looked at after the deadline.
         if let Some(flight) = self.in_flight
-            && now >= flight.deadline
+            && self.io_stamps.judged(now) >= flight.deadline
         {
             self.timed_out(now, flight);
         }
@@ -162,7 +165,8 @@ impl QsbDriver {
         if self.status.online
             && self.in_flight.is_none()
             && !self.probe_due
-            && now >= quiet_since.saturating_add(self.config.refresh_budget())
+            && self.io_stamps.judged(now)
+                >= quiet_since.saturating_add(self.config.refresh_budget())
         {
             self.probe_due = true;
             self.samples_since_probe = false;
@@ -190,10 +194,29 @@ impl QsbDriver {
             origin,
             generation,
             deadline: now.saturating_add(self.config.reply_timeout()),
+            number: self.io_stamps.sent(),
         });
+        let mut goal_starts = 0;
+        if matches!(origin, Origin::Goal | Origin::Preset) && self.goal_unsent {
+            self.goal_unsent = false;
+            goal_starts = 1;
+        }
         Some(Transmit {
             len,
             expects_reply: true,
+            goal_starts,
         })
+    }
+
+    /// A message went out at `at`: the reply timeout of the request in flight runs from
+    /// there if it is that message.
+    pub(super) fn on_written(&mut self, at: Duration) {
+        let number = self.io_stamps.written();
+        let timeout = self.config.reply_timeout();
+        if let Some(flight) = self.in_flight.as_mut()
+            && flight.number == number
+        {
+            flight.deadline = at.saturating_add(timeout);
+        }
     }
 }

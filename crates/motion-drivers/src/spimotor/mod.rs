@@ -134,6 +134,7 @@ use spimotor::Identification;
 
 use crate::driver::{Driver, Model, Priority, Transmit};
 use crate::goal::{Goal, GoalError, GoalKinds};
+use crate::stamps::IoStamps;
 use crate::state::{ChannelState, DeviceFault, DeviceStatus};
 
 pub use config::{AxisLimits, SpimotorDrive, SpimotorDriverConfig};
@@ -200,6 +201,10 @@ pub struct SpimotorDriver {
     motors: [BrushedMotor; 2],
     /// The start-up survey's readings so far.
     survey: startup::Survey,
+    /// The link's write reports and horizon.
+    io_stamps: IoStamps,
+    /// Bit `c`: no transaction of channel `c`'s goal set last has been sent yet.
+    goal_unsent: u8,
 }
 
 impl SpimotorDriver {
@@ -229,6 +234,8 @@ impl SpimotorDriver {
             stepper,
             motors: [BrushedMotor::default(); 2],
             survey: startup::Survey::default(),
+            io_stamps: IoStamps::default(),
+            goal_unsent: 0,
         }
     }
 
@@ -286,6 +293,15 @@ impl Driver for SpimotorDriver {
         self.pass_time(now);
     }
 
+    fn handle_written(&mut self, at: Duration) {
+        let number = self.io_stamps.written();
+        self.in_flight.written(number, at);
+    }
+
+    fn handle_heard(&mut self, until: Duration) {
+        self.io_stamps.heard(until);
+    }
+
     fn poll_timeout(&self) -> Option<Duration> {
         let timeout = self
             .in_flight
@@ -323,7 +339,11 @@ impl Driver for SpimotorDriver {
     }
 
     fn set_goal(&mut self, now: Duration, channel: usize, goal: Goal) -> Result<(), GoalError> {
-        self.plan_goal(now, channel, goal)
+        self.plan_goal(now, channel, goal)?;
+        if channel < 8 {
+            self.goal_unsent |= 1 << channel;
+        }
+        Ok(())
     }
 
     fn channel(&self, channel: usize) -> ChannelState {
@@ -347,6 +367,7 @@ impl Driver for SpimotorDriver {
     }
 
     fn link_down(&mut self, now: Duration) {
+        self.io_stamps.link_reset();
         self.link_up = false;
         self.in_flight.clear();
         self.raise(DeviceFault::LinkDown);
@@ -354,6 +375,7 @@ impl Driver for SpimotorDriver {
     }
 
     fn link_up(&mut self, now: Duration) {
+        self.io_stamps.link_reset();
         self.link_up = true;
         self.in_flight.clear();
         self.restart(now, 0);

@@ -87,8 +87,10 @@ pub struct Expect {
 pub struct Sent {
     /// What was sent.
     pub op: Op,
-    /// When.
+    /// Queued at, then (once reported) written at: its MISO is due from here.
     pub at: Duration,
+    /// Its message number (`IoStamps::sent`).
+    pub number: u64,
     /// The board state the answer should agree with.
     pub expect: Expect,
 }
@@ -138,6 +140,15 @@ impl<const N: usize> InFlight<N> {
     /// The oldest transaction in flight.
     pub fn oldest(&self) -> Option<Sent> {
         self.sent.front()
+    }
+
+    /// Transaction `number` went out at `at`.
+    pub fn written(&mut self, number: u64, at: Duration) {
+        self.sent.for_each_mut(|sent| {
+            if sent.number == number {
+                sent.at = sent.at.max(at);
+            }
+        });
     }
 
     /// Whether a read of `port` is in flight.
@@ -320,11 +331,19 @@ impl SpimotorDriver {
         self.in_flight.push(Sent {
             op: queued.op,
             at: now,
+            number: self.io_stamps.sent(),
             expect,
         });
+        let mut goal_starts = 0;
+        let bit = 1u8.checked_shl(u32::from(queued.channel)).unwrap_or(0);
+        if queued.is_goal_of(queued.channel) && self.goal_unsent & bit != 0 {
+            self.goal_unsent &= !bit;
+            goal_starts = bit;
+        }
         Some(Transmit {
             len,
             expects_reply: matches!(queued.op, Op::Read(..)),
+            goal_starts,
         })
     }
 
@@ -334,8 +353,9 @@ impl SpimotorDriver {
         if !self.link_up {
             return;
         }
+        // MISO that never came back: only as far as the link was looked at.
         if let Some(oldest) = self.in_flight.oldest()
-            && now.saturating_sub(oldest.at) > self.reply_timeout()
+            && self.io_stamps.judged(now).saturating_sub(oldest.at) > self.reply_timeout()
         {
             self.in_flight.clear();
             self.absent(now);
@@ -359,6 +379,7 @@ mod tests {
         Sent {
             op,
             at: Duration::ZERO,
+            number: 0,
             expect: Expect {
                 delay: StepDelay::DEFAULT,
                 target: None,

@@ -120,6 +120,8 @@ pub(crate) struct Channel {
     ref_phase: Option<u8>,
     /// A `$27` was sent with this sequence number: referenced from the next poll on.
     confirm_position: Option<u64>,
+    /// No request of the goal set last has been sent yet.
+    pub goal_unsent: bool,
 }
 
 impl Channel {
@@ -148,6 +150,7 @@ impl Channel {
             home_failed: false,
             ref_phase: None,
             confirm_position: None,
+            goal_unsent: false,
         }
     }
 
@@ -178,6 +181,7 @@ impl Channel {
     pub fn clear_script(&mut self) {
         self.steps.clear();
         self.rest_at = None;
+        self.goal_unsent = false;
     }
 
     /// Whether the script has steps left.

@@ -70,7 +70,11 @@ impl TmcpackDriver {
             return Err(GoalError::Unsupported(goal.kind()));
         };
         match phase {
-            Phase::Online => slot.plan(goal),
+            Phase::Online => {
+                slot.plan(goal)?;
+                slot.goal_unsent = true;
+                Ok(())
+            }
             Phase::Survey | Phase::Quiesce | Phase::Configure(_) => Err(GoalError::Starting),
             Phase::Down | Phase::Identify => Err(GoalError::Offline),
         }

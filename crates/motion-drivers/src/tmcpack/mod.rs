@@ -62,6 +62,7 @@ use tmcpack::{DEFAULT_PACKET_TIMEOUT, FRAME_LEN, Variant};
 use crate::driver::{Driver, Model, Priority, Transmit};
 use crate::goal::{Goal, GoalError, GoalKinds};
 use crate::pin::{Pin, PinReading};
+use crate::stamps::IoStamps;
 use crate::state::{ChannelState, DeviceFault, DeviceStatus};
 
 use channel::{Channel, Step};
@@ -135,6 +136,7 @@ pub struct TmcpackDriver {
     next_poll: usize,
     next_command: usize,
     budget: Duration,
+    stamps: IoStamps,
 }
 
 impl TmcpackDriver {
@@ -195,6 +197,7 @@ impl TmcpackDriver {
             next_poll: 0,
             next_command: 0,
             budget,
+            stamps: IoStamps::default(),
         }
     }
 
@@ -243,12 +246,23 @@ impl Driver for TmcpackDriver {
 
     fn handle_timeout(&mut self, now: Duration) {
         match self.wire {
-            Wire::Sending { until } | Wire::Quiet { until } if now >= until => {
+            Wire::Sending { until, .. } | Wire::Quiet { until } if now >= until => {
                 self.wire = Wire::Idle;
             }
-            Wire::Awaiting { deadline, .. } if now >= deadline => self.on_timeout(now),
+            // Unanswered only if the link was looked at after the deadline.
+            Wire::Awaiting { deadline, .. } if self.stamps.judged(now) >= deadline => {
+                self.on_timeout(now);
+            }
             _ => {}
         }
+    }
+
+    fn handle_written(&mut self, at: Duration) {
+        self.on_written(at);
+    }
+
+    fn handle_heard(&mut self, until: Duration) {
+        self.stamps.heard(until);
     }
 
     fn poll_timeout(&self) -> Option<Duration> {
@@ -303,6 +317,7 @@ impl Driver for TmcpackDriver {
     }
 
     fn link_down(&mut self, _now: Duration) {
+        self.stamps.link_reset();
         self.phase = Phase::Down;
         self.wire = Wire::Idle;
         self.timeouts_in_row = 0;
@@ -310,6 +325,7 @@ impl Driver for TmcpackDriver {
     }
 
     fn link_up(&mut self, now: Duration) {
+        self.stamps.link_reset();
         self.phase = Phase::Identify;
         self.wire = Wire::Idle;
         self.retry_at = now;

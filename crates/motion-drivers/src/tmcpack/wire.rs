@@ -50,13 +50,15 @@ pub(crate) enum Purpose {
 pub(crate) enum Wire {
     /// Free.
     Idle,
-    /// A request without an answer is still on the wire.
-    Sending { until: Duration },
+    /// A request without an answer is still on the wire (`number`: its message number,
+    /// `IoStamps::sent`).
+    Sending { until: Duration, number: u64 },
     /// Waiting for the answer to a query.
     Awaiting {
         expect: Expect,
         sent_at: Duration,
         deadline: Duration,
+        number: u64,
     },
     /// The pack still drives the line after its answer, or the line is kept silent after
     /// a timeout so that the pack's packet timeout ($41) resynchronises it.
@@ -68,7 +70,7 @@ impl Wire {
     pub fn deadline(&self) -> Option<Duration> {
         match *self {
             Self::Idle => None,
-            Self::Sending { until } | Self::Quiet { until } => Some(until),
+            Self::Sending { until, .. } | Self::Quiet { until } => Some(until),
             Self::Awaiting { deadline, .. } => Some(deadline),
         }
     }
@@ -362,6 +364,7 @@ impl TmcpackDriver {
         let request = pick.request;
         let len = RequestFrame::new(self.address, request).encode(buf).ok()?;
         self.seq += 1;
+        let number = self.stamps.sent();
         let wire_end = now + self.word_time;
         match request {
             Request::SetBaud { switchover, .. } => self.switchover = units(switchover),
@@ -381,11 +384,13 @@ impl TmcpackDriver {
                     expect,
                     sent_at: now,
                     deadline: self.reply_deadline(now),
+                    number,
                 };
             }
             None => {
                 self.wire = Wire::Sending {
                     until: now + self.spacing(),
+                    number,
                 };
             }
         }
@@ -407,14 +412,42 @@ impl TmcpackDriver {
             }
             _ => {}
         }
-        if let Some(Some(channel)) = pick.channel.and_then(|i| self.channels.get_mut(i)) {
+        let mut goal_starts = 0;
+        if let Some(index) = pick.channel
+            && let Some(Some(channel)) = self.channels.get_mut(index)
+        {
             channel.on_sent(request, self.seq, wire_end);
             channel.advance();
+            if channel.goal_unsent {
+                channel.goal_unsent = false;
+                goal_starts = 1 << index;
+            }
         }
         Some(Transmit {
             len,
             expects_reply: true,
+            goal_starts,
         })
+    }
+
+    /// Message `number` went out at `at`: the line's times run from there.
+    pub(super) fn on_written(&mut self, at: Duration) {
+        let number = self.stamps.written();
+        let spacing = self.spacing();
+        let deadline = self.reply_deadline(at);
+        match &mut self.wire {
+            Wire::Awaiting {
+                number: n,
+                sent_at,
+                deadline: d,
+                ..
+            } if *n == number => {
+                *sent_at = at;
+                *d = deadline;
+            }
+            Wire::Sending { until, number: n } if *n == number => *until = at + spacing,
+            _ => {}
+        }
     }
 }
 

@@ -184,6 +184,7 @@ impl Driver for IdealBoard {
         Some(Transmit {
             len: 3,
             expects_reply: false,
+            goal_starts: 1 << channel,
         })
     }
     fn awaiting_reply(&self) -> bool {

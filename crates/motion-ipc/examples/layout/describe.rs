@@ -106,7 +106,7 @@ ty!(
     ClientId => "ClientId", AxisState => "AxisState", SignalState => "SignalState",
     AxisInfo => "AxisInfo", DeviceInfo => "DeviceInfo", SignalInfo => "SignalInfo",
     MachineParam => "MachineParam", LatencySummary => "LatencySummary",
-    LinkStats => "LinkStats",
+    LinkStats => "LinkStats", AxisWire => "AxisWire", LinkIo => "LinkIo",
 );
 
 impl<T: Ty, const N: usize> Ty for [T; N] {
@@ -181,6 +181,7 @@ fn layouts() -> Vec<Layout> {
                 claimed_by
             ]
         ),
+        layout!(AxisWire, AxisWire::NONE, [goal_tick, wire_tick, wire_ns]),
         layout!(
             MotionFrame,
             MotionFrame::EMPTY,
@@ -197,6 +198,7 @@ fn layouts() -> Vec<Layout> {
                 devices,
                 axes,
                 signals,
+                wire,
             ]
         ),
         layout!(
@@ -295,6 +297,11 @@ fn layouts() -> Vec<Layout> {
             ]
         ),
         layout!(
+            LinkIo,
+            LinkIo::EMPTY,
+            [last_write_ns, last_read_ns, transactions, reads]
+        ),
+        layout!(
             ServerStats,
             ServerStats::EMPTY,
             [
@@ -318,6 +325,7 @@ fn layouts() -> Vec<Layout> {
                 publish_failures,
                 replies_lost,
                 events_dropped,
+                link_io,
             ]
         ),
     ]

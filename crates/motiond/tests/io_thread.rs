@@ -1,0 +1,164 @@
+//! The I/O thread sleeps on its link's descriptor and the tick's eventfd: bytes that arrive,
+//! output the tick queued, a hang-up and a simulated link's next event each wake it, with
+//! no poll period behind them. Every thread here is spawned with an idle limit of an hour,
+//! so anything that only a timer would have noticed never arrives within the test's
+//! patience (correctness, not timing: the patience is generous).
+
+use core::time::Duration;
+use std::os::fd::{AsFd, OwnedFd};
+use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
+use std::time::Instant;
+
+use motion_link::Link;
+use motion_link::serial::{SerialConfig, SerialLink};
+use motion_link::sim::{SimLink, StreamDevice};
+use motiond::io::{self, IoThread, LinkEvent, LinkPort, Packet};
+use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
+
+/// Far longer than any test waits: only a wake-up on readiness can deliver in time.
+const NEVER: Duration = Duration::from_secs(3600);
+/// How long a test waits for something that should come at once.
+const PATIENCE: Duration = Duration::from_secs(10);
+
+fn start(link: Box<dyn Link>) -> (LinkPort, IoThread, Arc<AtomicBool>) {
+    let stop = Arc::new(AtomicBool::new(false));
+    let epoch = motiond::rt::monotonic_now();
+    let (port, thread) = io::spawn("test", link, epoch, NEVER, Arc::clone(&stop)).expect("spawn");
+    (port, thread, stop)
+}
+
+/// Stops the thread and checks it finishes (woken, not after its idle limit).
+fn finish(thread: IoThread, stop: &AtomicBool) {
+    stop.store(true, std::sync::atomic::Ordering::Relaxed);
+    let (done_tx, done_rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        thread.join();
+        let _ = done_tx.send(());
+    });
+    done_rx
+        .recv_timeout(PATIENCE)
+        .expect("the I/O thread did not stop when told to");
+}
+
+/// Everything the thread received until `want` bytes arrived or patience ran out.
+fn receive(port: &mut LinkPort, want: usize) -> Vec<u8> {
+    let started = Instant::now();
+    let mut got = Vec::new();
+    while got.len() < want && started.elapsed() < PATIENCE {
+        match port.rx.pop() {
+            Ok(packet) => got.extend_from_slice(packet.bytes()),
+            Err(_) => std::thread::sleep(Duration::from_millis(1)),
+        }
+    }
+    got
+}
+
+fn pty_link() -> (OwnedFd, SerialLink) {
+    let pty = nix::pty::openpty(None, None).expect("openpty");
+    let path = nix::unistd::ttyname(pty.slave.as_fd()).expect("ttyname");
+    let mut config = SerialConfig::new(path.to_string_lossy(), 230_400);
+    config.exclusive = false;
+    let link = SerialLink::open(config).expect("open the pty's slave");
+    // The link opened its own descriptor of the slave; the master stays with the test.
+    drop(pty.slave);
+    (pty.master, link)
+}
+
+fn read_master(master: &OwnedFd, want: usize) -> Vec<u8> {
+    let started = Instant::now();
+    let mut got = Vec::new();
+    while got.len() < want && started.elapsed() < PATIENCE {
+        let mut fds = [PollFd::new(master.as_fd(), PollFlags::POLLIN)];
+        if poll(&mut fds, PollTimeout::from(100u16)).unwrap_or(0) == 0 {
+            continue;
+        }
+        let mut buf = [0u8; 64];
+        match nix::unistd::read(master, &mut buf) {
+            Ok(n) => got.extend_from_slice(&buf[..n]),
+            Err(_) => break,
+        }
+    }
+    got
+}
+
+#[test]
+fn a_reply_written_to_a_pty_is_delivered_on_the_descriptor_becoming_readable() {
+    let (master, link) = pty_link();
+    let (mut port, thread, stop) = start(Box::new(link));
+    // Let the thread fall asleep with nothing queued and nothing to read.
+    std::thread::sleep(Duration::from_millis(50));
+    nix::unistd::write(&master, b"r 14 00001113 !\r\n").expect("write on the master");
+    let got = receive(&mut port, 17);
+    assert_eq!(got, b"r 14 00001113 !\r\n");
+    finish(thread, &stop);
+}
+
+#[test]
+fn output_the_tick_queued_is_written_when_it_wakes_the_thread() {
+    let (master, link) = pty_link();
+    let (mut port, thread, stop) = start(Box::new(link));
+    std::thread::sleep(Duration::from_millis(50));
+    port.tx.push(Packet::new(b"R14\r\n")).expect("room");
+    port.waker.wake();
+    assert_eq!(read_master(&master, 5), b"R14\r\n");
+    // And again, after the thread slept once more: every wake-up counts.
+    std::thread::sleep(Duration::from_millis(20));
+    port.tx.push(Packet::new(b"R0E\r\n")).expect("room");
+    port.waker.wake();
+    assert_eq!(read_master(&master, 5), b"R0E\r\n");
+    finish(thread, &stop);
+}
+
+#[test]
+fn a_hang_up_wakes_the_thread_and_takes_the_link_down() {
+    let (master, link) = pty_link();
+    let (mut port, thread, stop) = start(Box::new(link));
+    std::thread::sleep(Duration::from_millis(50));
+    drop(master);
+    let started = Instant::now();
+    let mut event = None;
+    while event.is_none() && started.elapsed() < PATIENCE {
+        event = port.events.pop().ok();
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    assert_eq!(event, Some(LinkEvent::Down));
+    finish(thread, &stop);
+}
+
+/// Answers every byte after a fixed delay (a device's scheduled reply, which only the
+/// link's `next_event` announces).
+#[derive(Default)]
+struct LateEcho {
+    due: Vec<(Duration, u8)>,
+}
+
+impl StreamDevice for LateEcho {
+    fn receive(&mut self, now: Duration, bytes: &[u8]) {
+        for &byte in bytes {
+            self.due.push((now + Duration::from_millis(20), byte));
+        }
+    }
+    fn transmit(&mut self, now: Duration, out: &mut [u8]) -> usize {
+        let ready = self.due.iter().take_while(|(at, _)| *at <= now).count();
+        let n = ready.min(out.len());
+        for (slot, (_, byte)) in out.iter_mut().zip(self.due.drain(..n)) {
+            *slot = byte;
+        }
+        n
+    }
+    fn next_event(&self, _now: Duration) -> Option<Duration> {
+        self.due.first().map(|(at, _)| *at)
+    }
+}
+
+#[test]
+fn a_simulated_link_is_looked_at_again_at_its_next_event() {
+    let link = SimLink::stream("late echo", 230_400, Box::new(LateEcho::default()));
+    let (mut port, thread, stop) = start(Box::new(link));
+    port.tx.push(Packet::new(b"ping")).expect("room");
+    port.waker.wake();
+    // Nothing but the link's next event (the device's delayed answer) wakes the thread.
+    assert_eq!(receive(&mut port, 4), b"ping");
+    finish(thread, &stop);
+}

@@ -1,0 +1,58 @@
+//! An I/O side that lags (issue 18): a healthy board never looks dead, a silent one is still
+//! found within the bound an unstamped rig finds it in.
+
+use core::time::Duration;
+
+use crate::rig;
+use crate::support::lag::{
+    LATE_WRITES, PROMPT, STARVED, TICK, not_responding_after, silence_found_after, stays_healthy,
+    unreported,
+};
+
+const ONLINE: Duration = Duration::from_secs(10);
+
+#[test]
+fn late_writes_or_a_starved_io_side_make_no_healthy_board_look_dead() {
+    for lag in [LATE_WRITES, STARVED] {
+        let (mut rig, _, _) = rig();
+        rig.stamp_io(lag);
+        stays_healthy(&mut rig, 2, ONLINE, Duration::from_secs(3));
+    }
+}
+
+#[test]
+fn unreported_the_same_lag_made_the_board_look_dead() {
+    for lag in [LATE_WRITES, STARVED] {
+        let (mut rig, _, _) = rig();
+        rig.stamp_io(unreported(lag));
+        assert!(not_responding_after(&mut rig, Duration::from_secs(5)).is_some());
+    }
+}
+
+#[test]
+fn a_board_gone_silent_is_still_found_within_the_unstamped_bound() {
+    let found = |lag| {
+        let (mut rig, _, faults) = rig();
+        if let Some(lag) = lag {
+            rig.stamp_io(lag);
+        }
+        silence_found_after(&mut rig, &faults, ONLINE)
+    };
+    let today = found(None);
+    let prompt = found(Some(PROMPT));
+    let late = found(Some(LATE_WRITES));
+    let starved = found(Some(STARVED));
+    assert!(prompt <= today + 2 * TICK, "{prompt:?} vs {today:?}");
+    // Silence is judged from the last valid packet; the polls that would have carried the
+    // next ones go out 100 ms late.
+    assert!(
+        late <= today + Duration::from_millis(150),
+        "{late:?} vs {today:?}"
+    );
+    // Polls go out in bursts at each run of the I/O side and their MISO bytes are read at
+    // the next: the silence shows two to three runs later.
+    assert!(
+        starved <= today + Duration::from_millis(350),
+        "{starved:?} vs {today:?}"
+    );
+}
