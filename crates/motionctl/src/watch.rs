@@ -228,8 +228,8 @@ fn draw(
     }
     ui.render_widget(
         Paragraph::new(
-            "age: ticks since fresh board data   wire: ticks from the goal to its first byte on \
-             the link (… not yet)   q or Ctrl-C quits",
+            "q or Ctrl-C quits   age: ticks since fresh board data   wire: ticks from the goal \
+             to its first byte on the link (… not yet)",
         ),
         foot,
     );
