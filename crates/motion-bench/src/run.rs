@@ -7,7 +7,7 @@ use crate::args::{BenchArgs, CommandProbe, PeerMode};
 use crate::delivery::{self, Waiting};
 use crate::dist::{self, Summary, format_ns};
 use crate::report::{Report, Row, Unit, write_dist};
-use crate::{BenchError, ipc, peer, python, roundtrip, rt, sweep, wakeup, wire};
+use crate::{BenchError, io_phase, ipc, peer, python, roundtrip, rt, sweep, wakeup, wire};
 
 /// The numbered progress lines: `[n/total] what (duration)` on stderr.
 struct Progress {
@@ -224,6 +224,42 @@ pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
         None
     };
 
+    let io_run = if cli.io_phase {
+        eprintln!(
+            "[io] own motiond with four idle external links: CPU ({:?}{}), reply → read ({:?}), \
+             then the baselines",
+            cli.duration,
+            if cli.io_before.is_some() {
+                ", and again with --io-before"
+            } else {
+                ""
+            },
+            (cli.duration / 2).max(core::time::Duration::from_secs(1))
+        );
+        match sweep::find_motiond(cli.motiond.as_deref()).and_then(|motiond| {
+            io_phase::run(
+                &motiond,
+                cli.io_before.as_deref(),
+                hz,
+                cli.duration,
+                &scratch()?,
+            )
+        }) {
+            Ok(run) => Some(run),
+            Err(e) => {
+                report.notes.push(format!(
+                    "I/O phase (CPU, reply → read): not measured this run: {e}"
+                ));
+                None
+            }
+        }
+    } else {
+        report
+            .notes
+            .push("I/O phase (CPU, reply → read): skipped (--io-phase=false)".to_owned());
+        None
+    };
+
     if cli.axes_sweep {
         eprintln!(
             "[sweep] motiond at 4, 16, 64, 128 simulated axes ({:?} each)",
@@ -391,6 +427,10 @@ pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
             baseline_label: "the ticking plain peer of row 7, same computation".to_owned(),
             note: "the µs figure above includes this wait for the tick plus the driver's turn on the line".to_owned(),
         });
+    }
+    if let Some(run) = &io_run {
+        let rows = io_phase::rows(run, hz, out, &mut report.notes);
+        report.rows.extend(rows);
     }
     if let Some((interpreter, run)) = &python_run {
         report.rows.extend(python::rows(
