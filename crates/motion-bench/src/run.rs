@@ -420,6 +420,18 @@ pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
             ),
         });
         report.rows.push(Row {
+            figure: "motiond's own stamp of that write (frame AxisWire.wire_ns) → the line's first byte at the pty master".to_owned(),
+            unit: Unit::Ns,
+            ours: run.stamp_to_pty.summary(),
+            baseline: Some(run.baseline.summary()),
+            baseline_label: "the pty path alone, as above (write into the slave → first byte at the master)".to_owned(),
+            note: format!(
+                "cross-check of the link stamps: the I/O thread stamps right after write(2) returned, so ours \
+                 should sit at or under the pty path; {} requests without a stamp in 50 ms or with one after the byte",
+                run.stamp_missing
+            ),
+        });
+        report.rows.push(Row {
             figure: "command → applied in ticks, same Velocity requests (reply.tick_applied − newest frame tick at send)".to_owned(),
             unit: Unit::Ticks,
             ours: run.ticks.summary(),
