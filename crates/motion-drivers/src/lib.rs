@@ -16,6 +16,7 @@
 //! | `goals.rs` | the goals a channel accepts, a goal turned into a plan of wire traffic (`set_goal`, `set_output`) |
 //! | `rx.rs` | received bytes and answers decoded into channel and board state; unanswered requests |
 //! | `wire.rs` | requests and transactions in flight, which one goes next (commands before polls), the poll plan and the passing of time |
+//! | `spec.rs` | the driver config built from the neutral [`spec::DriverSpec`] (`from_spec`: unit conversions, protocol encodings), the board facts a config is validated against, and `params` (the effective machine parameters) |
 //!
 //! Board-specific parts sit beside them: the pin tables (`pins.rs` / `io.rs`), per-channel
 //! state machines (`qq2drv/channel.rs`, `tmcpack/channel.rs`, `spimotor/stepper.rs`,
@@ -30,6 +31,7 @@ mod goal;
 mod pin;
 pub mod qq2drv;
 pub mod qsb;
+pub mod spec;
 mod stamps;
 mod state;
 

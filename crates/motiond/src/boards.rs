@@ -3,9 +3,15 @@
 //! parameters, serve a `type = "sim"` link with simulated boards ([`sim_link`]). The
 //! model's own facts (config id, contract code, link kind) are `motion_base::Model`; its
 //! machine keys are validated in `config/validate/machine/<model>.rs` (the key table of
-//! `machine/mod.rs` says which model has which key), its channel count and pin table are
-//! `config::channel_count` and `DeviceSpec::pins`.
+//! `machine/mod.rs` says which model has which key) into `motion_drivers::spec`, whose
+//! `DriverSpec` (filled in `drivers.rs`) each board's driver config is built from; its
+//! channel count and pin table are `config::channel_count` and `DeviceSpec::pins`.
 
+use motion_drivers::qq2drv::{Qq2drvDriver, Qq2drvDriverConfig};
+use motion_drivers::qsb::{QsbDriver, QsbDriverConfig};
+use motion_drivers::spec::{DriverSpec, Param, SpecError};
+use motion_drivers::spimotor::{SpimotorDriver, SpimotorDriverConfig};
+use motion_drivers::tmcpack::{TmcpackDriver, TmcpackDriverConfig};
 use motion_drivers::{Driver, LinkKind, Model};
 use motion_link::sim::{SimLink, SpiBus, SpiDevice, StreamBus, StreamDevice};
 
@@ -35,18 +41,22 @@ impl core::fmt::Debug for SimBoard {
 pub struct Board {
     /// The model.
     pub model: Model,
-    /// The driver of device `index` (config → driver config → driver).
-    pub build: fn(&ServerConfig, usize, &DeviceSpec) -> anyhow::Result<Box<dyn Driver>>,
-    /// One [`ParamRow`] per machine parameter of device `index` and its axes.
-    pub describe: fn(&ServerConfig, usize, &DeviceSpec, &mut Vec<ParamRow>),
+    /// The driver of the device a spec describes (spec → driver config → driver).
+    pub build: fn(&DriverSpec) -> Result<Box<dyn Driver>, SpecError>,
+    /// One [`Param`] per machine parameter of the device a spec describes and its axes.
+    pub describe: fn(&DriverSpec) -> Result<Vec<Param>, SpecError>,
     /// The simulated board of device `index`, configured like the machine.
     pub simulate: fn(&ServerConfig, usize, &DeviceSpec) -> SimBoard,
 }
 
 const QQ2DRV: Board = Board {
     model: Model::Qq2drv,
-    build: |config, index, device| Ok(drivers::qq2drv::build(config, index, device)),
-    describe: drivers::qq2drv::describe,
+    build: |spec| {
+        Ok(Box::new(Qq2drvDriver::new(Qq2drvDriverConfig::from_spec(
+            spec,
+        )?)))
+    },
+    describe: |spec| Qq2drvDriverConfig::from_spec(spec).map(|config| config.params(spec)),
     simulate: |config, index, device| {
         SimBoard::Spi(Box::new(sim_models::qq2drv::model(config, index, device)))
     },
@@ -54,8 +64,12 @@ const QQ2DRV: Board = Board {
 
 const TMCPACK: Board = Board {
     model: Model::Tmcpack,
-    build: |config, index, device| Ok(drivers::tmcpack::build(config, index, device)),
-    describe: drivers::tmcpack::describe,
+    build: |spec| {
+        Ok(Box::new(TmcpackDriver::new(
+            TmcpackDriverConfig::from_spec(spec)?,
+        )))
+    },
+    describe: |spec| TmcpackDriverConfig::from_spec(spec).map(|config| config.params(spec)),
     simulate: |config, index, device| {
         SimBoard::Stream(Box::new(sim_models::tmcpack::model(config, index, device)))
     },
@@ -63,8 +77,12 @@ const TMCPACK: Board = Board {
 
 const SPIMOTOR: Board = Board {
     model: Model::Spimotor,
-    build: drivers::spimotor::build,
-    describe: drivers::spimotor::describe,
+    build: |spec| {
+        Ok(Box::new(SpimotorDriver::new(
+            SpimotorDriverConfig::from_spec(spec)?,
+        )))
+    },
+    describe: |spec| SpimotorDriverConfig::from_spec(spec).map(|config| config.params(spec)),
     simulate: |config, index, device| {
         SimBoard::Spi(Box::new(sim_models::spimotor::model(config, index, device)))
     },
@@ -72,8 +90,8 @@ const SPIMOTOR: Board = Board {
 
 const QSB: Board = Board {
     model: Model::Qsb,
-    build: |config, index, device| Ok(drivers::qsb::build(config, index, device)),
-    describe: drivers::qsb::describe,
+    build: |spec| Ok(Box::new(QsbDriver::new(QsbDriverConfig::from_spec(spec)?))),
+    describe: |spec| QsbDriverConfig::from_spec(spec).map(|config| config.params(spec)),
     simulate: |config, index, device| {
         SimBoard::Stream(Box::new(sim_models::qsb::model(config, index, device)))
     },
@@ -94,7 +112,10 @@ pub const fn board(model: Model) -> &'static Board {
 pub fn build(config: &ServerConfig) -> anyhow::Result<Vec<Box<dyn Driver>>> {
     let mut drivers: Vec<Box<dyn Driver>> = Vec::with_capacity(config.devices.len());
     for (index, device) in config.devices.iter().enumerate() {
-        drivers.push((board(device.model).build)(config, index, device)?);
+        let spec = drivers::driver_spec(config, index, device);
+        let driver = (board(device.model).build)(&spec)
+            .map_err(|error| drivers::spec_error(config, index, &error))?;
+        drivers.push(driver);
     }
     Ok(drivers)
 }
@@ -103,7 +124,11 @@ pub fn build(config: &ServerConfig) -> anyhow::Result<Vec<Box<dyn Driver>>> {
 pub fn describe(config: &ServerConfig) -> Vec<ParamRow> {
     let mut rows = Vec::new();
     for (index, device) in config.devices.iter().enumerate() {
-        (board(device.model).describe)(config, index, device, &mut rows);
+        let spec = drivers::driver_spec(config, index, device);
+        // A device whose spec the driver refuses has no driver and so no parameters.
+        if let Ok(params) = (board(device.model).describe)(&spec) {
+            rows.extend(drivers::param_rows(config, index, params));
+        }
     }
     rows
 }

@@ -93,6 +93,7 @@ mod config;
 mod goals;
 mod pins;
 mod rx;
+mod spec;
 mod startup;
 mod wire;
 

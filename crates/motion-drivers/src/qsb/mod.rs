@@ -100,6 +100,7 @@ mod guard;
 mod io;
 mod program;
 mod rx;
+mod spec;
 mod startup;
 #[cfg(test)]
 mod tests;
@@ -115,6 +116,7 @@ use ::qsb::{MdStatus, ProductType, ResponseDecoder};
 
 pub use config::QsbDriverConfig;
 pub use io::{CaptureInput, EnableOutput, MOTOR_DRIVE_BITS, PinRole, QsbIo, pins};
+pub use spec::{LONGEST_INTERVAL_TICKS, TICK, interval_ticks};
 
 use crate::driver::{Driver, Model, Priority, Transmit};
 use crate::goal::{Goal, GoalError, GoalKind, GoalKinds};

@@ -123,6 +123,7 @@ mod config;
 mod goals;
 pub mod ramp;
 mod rx;
+mod spec;
 mod startup;
 mod stepper;
 mod wire;

@@ -41,6 +41,7 @@ mod config;
 mod goals;
 mod io;
 mod rx;
+mod spec;
 mod startup;
 mod wire;
 
@@ -76,6 +77,7 @@ pub use config::{
     TmcpackChannel, TmcpackDriverConfig, default_packet_timeout_units,
 };
 pub use io::{MAX_PINS, PinSet, ReadyOutput, TmcpackIo, pins};
+pub use spec::{MAX_DEBOUNCE_MS, MAX_POSLIMIT, is_current_level, is_weak_current, word_time};
 
 /// Added to a query's wire and switch-over time before it counts as unanswered
 /// (processing in the pack, and the host's tick granularity).

@@ -19,9 +19,12 @@ use motion_engine::{AxisConfig, BusConfig, DeviceConfig, EngineConfig, SignalCon
 
 pub use error::{ConfigError, ConfigIssue};
 pub use given::{GivenKeys, Owner};
-pub use validate::machine::{
-    AxisMachine, DeviceMachine, qq2drv::Qq2drvAxisKeys, qsb::QsbDeviceKeys,
-    spimotor::SpimotorDeviceKeys, tmcpack::TmcpackAxisKeys, tmcpack::TmcpackDeviceKeys,
+/// The machine description in the drivers' neutral terms (`motion_drivers::spec`): the
+/// variants, the home table and every model's machine keys, as validated here.
+pub use motion_drivers::spec::{
+    AxisMachine, DeviceMachine, Direction, HomeInput, HomeInputKind, HomeSpec, PackVariant,
+    Qq2drvAxisKeys, QsbDeviceKeys, QsbVariant, SpiDrive, SpimotorDeviceKeys, TmcpackAxisKeys,
+    TmcpackDeviceKeys,
 };
 
 /// `[server]`.
@@ -91,47 +94,6 @@ pub struct LinkSpec {
     pub kind: LinkKind,
 }
 
-/// Trinamic pack variant.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum PackVariant {
-    /// SIXpack: 6 motors.
-    Sixpack,
-    /// QUADpack: 4 motors.
-    Quadpack,
-}
-
-/// QSB product variant (command list "QSB Variations").
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub enum QsbVariant {
-    /// QSB-M: single-ended encoder, 4-bit digital I/O, stepper step/direction outputs.
-    #[default]
-    M,
-    /// QSB-S: single-ended encoder only.
-    S,
-    /// QSB-D: differential encoder, 1-bit digital I/O.
-    D,
-}
-
-impl QsbVariant {
-    /// The config name.
-    pub const fn id(self) -> &'static str {
-        match self {
-            Self::M => "qsb-m",
-            Self::S => "qsb-s",
-            Self::D => "qsb-d",
-        }
-    }
-}
-
-/// SPI_motor drive.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum SpiDrive {
-    /// One stepper, channel 0.
-    Stepper,
-    /// Two brushed motors: channels 0 = A, 1 = B.
-    Brushed,
-}
-
 /// `[[device]]`, validated.
 #[derive(Debug, Clone, PartialEq)]
 pub struct DeviceSpec {
@@ -163,19 +125,7 @@ impl DeviceSpec {
 
     /// The device's I/O pins (the model's pin table for its variant).
     pub fn pins(&self) -> &'static [PinInfo] {
-        match self.model {
-            Model::Qq2drv => motion_drivers::qq2drv::PINS,
-            Model::Spimotor => motion_drivers::spimotor::PINS,
-            Model::Tmcpack => motion_drivers::tmcpack::pins(match self.variant {
-                PackVariant::Sixpack => tmcpack::Variant::SixPack,
-                PackVariant::Quadpack => tmcpack::Variant::QuadPack,
-            }),
-            Model::Qsb => motion_drivers::qsb::pins(match self.qsb_variant {
-                QsbVariant::M => qsb::ProductType::M,
-                QsbVariant::S => qsb::ProductType::S,
-                QsbVariant::D => qsb::ProductType::D,
-            }),
-        }
+        motion_drivers::spec::pin_table(self.model, self.variant, self.qsb_variant)
     }
 }
 
@@ -190,66 +140,6 @@ pub fn channel_count(model: Model, variant: PackVariant, drive: SpiDrive) -> usi
         (Model::Spimotor, _, SpiDrive::Brushed) => 2,
         (Model::Qsb, _, _) => 1,
     }
-}
-
-/// What a qq2drv channel's IN pin is wired to (datasheet packet 14 Input Mode).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum HomeInputKind {
-    /// A home switch: acts while active.
-    Home,
-    /// The encoder index: acts while active and A = B = 0.
-    Index,
-    /// An edge: acts on the inactive-to-active transition.
-    Edge,
-}
-
-/// Which way a reference search runs, in axis units (after `counts_per_unit`'s sign).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub enum Direction {
-    /// Towards decreasing positions (the default: the switch sits at `min`).
-    #[default]
-    Negative,
-    /// Towards increasing positions.
-    Positive,
-}
-
-impl Direction {
-    /// The config name.
-    pub const fn id(self) -> &'static str {
-        match self {
-            Self::Negative => "negative",
-            Self::Positive => "positive",
-        }
-    }
-}
-
-/// A qq2drv channel's IN pin as a home input (`home = { input = "index", ... }`).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct HomeInput {
-    /// What the pin is wired to.
-    pub kind: HomeInputKind,
-    /// The pin is active high (default true).
-    pub active_high: bool,
-    /// Packet 14 Spacing: the hysteresis between a positive-end and a negative-end trigger
-    /// when two end-stops (or a rotary sensor) share the input, units; `None`: a single
-    /// end-stop (Spacing 0).
-    pub spacing: Option<f64>,
-}
-
-/// How an axis homes: the general `home` table with every default resolved. Every axis has
-/// one; a board that cannot home ignores it.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct HomeSpec {
-    /// Search direction (qsb `home_direction`, tmcpack `reference.side`: left = negative).
-    pub direction: Direction,
-    /// A search that travels farther than this from where it started fails with
-    /// `HomeFailed`, units (> 0). Default: 1.25 × (max − min), the Trinamic manual's 5/4 of
-    /// the drive range.
-    pub max_travel: f64,
-    /// The position the axis takes at the switch or index, units (qsb `home_offset`).
-    pub position: f64,
-    /// qq2drv: what the channel's IN pin is wired to; `None`: the channel cannot home.
-    pub input: Option<HomeInput>,
 }
 
 /// Per axis (same order as [`ServerConfig::axes`]): what the engine's [`AxisConfig`] does not

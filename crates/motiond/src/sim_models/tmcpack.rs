@@ -4,9 +4,8 @@
 //! with a mechanical reference has end stops there.
 
 use motion_sim::tmcpack::{MotorConfig, RefSwitch, TmcpackSim, TmcpackSimConfig};
-use tmcpack::MotorOptions;
 
-use crate::config::{DeviceSpec, PackVariant, ServerConfig};
+use crate::config::{DeviceSpec, ServerConfig};
 use crate::drivers::tmcpack_driver_config;
 
 /// Width of a simulated reference switch: one unit, at least 64 microsteps (4 full steps).
@@ -33,7 +32,7 @@ pub(crate) fn model(config: &ServerConfig, index: usize, device: &DeviceSpec) ->
         let width = switch_width(cpu);
         // The rotor starts at physical 0 = position 0; the search runs towards decreasing
         // microsteps with NullLeft (manual 8.3 $15).
-        let toward_lower = channel.motor_type.contains(tmcpack::MotorType::NULL_LEFT);
+        let toward_lower = channel.searches_toward_lower();
         let (from, to) = if toward_lower {
             (lo - width, lo - 1)
         } else {
@@ -42,18 +41,15 @@ pub(crate) fn model(config: &ServerConfig, index: usize, device: &DeviceSpec) ->
         slot.ref_switch = Some(RefSwitch {
             from,
             to,
-            opener: channel.options.contains(MotorOptions::NULL_POSITIVE),
+            opener: channel.switch_active_high(),
         });
-        if channel.options.contains(MotorOptions::MECH_REF) {
+        if channel.mechanical_reference() {
             slot.travel = Some((lo - width, hi + width));
         }
     }
     TmcpackSim::new(TmcpackSimConfig {
         address: device.address as u8,
-        variant: match device.variant {
-            PackVariant::Sixpack => tmcpack::Variant::SixPack,
-            PackVariant::Quadpack => tmcpack::Variant::QuadPack,
-        },
+        variant: driver.variant,
         seed: device.sim_seed,
         motors,
         ..TmcpackSimConfig::default()

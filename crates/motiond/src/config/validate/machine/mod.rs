@@ -1,7 +1,7 @@
 //! Machine keys: what depends on the motor, the mechanics and the wiring of one board
-//! model. One module per model validates its own keys into a typed struct; this module
-//! dispatches, and refuses a key on a model that does not have it, naming the models where
-//! it is valid.
+//! model. One module per model validates its own keys into their typed struct (defined with
+//! the drivers' neutral spec, `motion_drivers::spec`); this module dispatches, and refuses a
+//! key on a model that does not have it, naming the models where it is valid.
 
 pub mod qq2drv;
 pub mod qsb;
@@ -9,37 +9,12 @@ pub mod spimotor;
 pub mod tmcpack;
 
 use motion_drivers::Model;
+pub use motion_drivers::spec::{AxisMachine, DeviceMachine};
 use toml::Spanned;
 
 use super::{TableSpan, Validator};
 use crate::config::ServerConfig;
 use crate::config::raw::{RawAxis, RawConfig, RawDevice};
-
-/// A device's model-specific keys, validated.
-#[derive(Debug, Clone, PartialEq)]
-pub enum DeviceMachine {
-    /// QuadQuad2Drv: no device-level machine keys (its keys are per axis).
-    Qq2drv,
-    /// Trinamic pack.
-    Tmcpack(tmcpack::TmcpackDeviceKeys),
-    /// SPI_motor.
-    Spimotor(spimotor::SpimotorDeviceKeys),
-    /// QSB.
-    Qsb(qsb::QsbDeviceKeys),
-}
-
-/// An axis's model-specific keys, validated.
-#[derive(Debug, Clone, PartialEq)]
-pub enum AxisMachine {
-    /// QuadQuad2Drv channel.
-    Qq2drv(qq2drv::Qq2drvAxisKeys),
-    /// Trinamic motor.
-    Tmcpack(tmcpack::TmcpackAxisKeys),
-    /// SPI_motor channel: no axis-level machine keys (intensity and coils are per device).
-    Spimotor,
-    /// QSB: no axis-level machine keys (they are on its `[[device]]`).
-    Qsb,
-}
 
 /// Where a device table is, for the board modules' issues.
 #[derive(Debug, Clone)]

@@ -1,5 +1,6 @@
-//! qq2drv machine keys (README "Config"): validated here, turned into the driver's config in
-//! `crate::drivers::qq2drv`.
+//! qq2drv machine keys (README "Config"): validated here into
+//! `motion_drivers::spec::Qq2drvAxisKeys`, turned into the driver's config by
+//! `Qq2drvDriverConfig::from_spec`.
 //!
 //! Per `[[axis]]` (one QuadQuad2Drv channel):
 //! - `pid_position = { p, i, d, windup }`: packet 30, Set Position Control PID Constants
@@ -13,6 +14,7 @@
 //! clocking SPI up to 500kHz") gets a warning on its `speed_hz`.
 
 use motion_drivers::Model;
+use motion_drivers::spec::{PidKeys, Qq2drvAxisKeys};
 use toml::Spanned;
 
 use super::AxisContext;
@@ -24,31 +26,6 @@ use crate::config::validate::Validator;
 pub const RECOMMENDED_MAX_SPEED_HZ: i64 = 500_000;
 /// Packet 30 Windup Limit range: "Range: 0 - 8,191".
 pub const WINDUP_MAX: i64 = 8_191;
-
-/// One PID table as given; `None` fields were not set (the datasheet default applies).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct PidKeys {
-    /// Proportional constant.
-    pub p: Option<u16>,
-    /// Integration constant.
-    pub i: Option<u16>,
-    /// Differential constant.
-    pub d: Option<u16>,
-    /// Integration windup limit (position PID only).
-    pub windup: Option<u16>,
-}
-
-/// The qq2drv keys of one `[[axis]]`; `None` fields were not set (the driver's default
-/// applies).
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct Qq2drvAxisKeys {
-    /// `pid_position` (packet 30).
-    pub pid_position: PidKeys,
-    /// `pid_velocity` (packet 32).
-    pub pid_velocity: PidKeys,
-    /// `power_limit`, fraction of full power 0.0..=1.0 (packet 24).
-    pub power_limit: Option<f64>,
-}
 
 /// Validates the qq2drv keys of an `[[axis]]` table.
 pub(in crate::config) fn axis_keys(

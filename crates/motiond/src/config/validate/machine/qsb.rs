@@ -1,5 +1,6 @@
-//! qsb machine keys (README "Config", `docs/keys/qsb.md`): validated here, turned into the
-//! driver's config in `crate::drivers::qsb`.
+//! qsb machine keys (README "Config", `docs/keys/qsb.md`): validated here into
+//! `motion_drivers::spec::QsbDeviceKeys`, turned into the driver's config by
+//! `QsbDriverConfig::from_spec`.
 //!
 //! The home keys (`home_direction`, `home_max_travel`, `home_offset`) are resolved with the
 //! general `home` table into the axis's `HomeSpec` (`validate/home.rs`).
@@ -7,8 +8,10 @@
 use core::time::Duration;
 
 use motion_drivers::SignalKind;
-use motion_drivers::qsb::{MOTOR_DRIVE_BITS, PinRole, QsbDriverConfig};
-use qsb::{EncoderMode, IntervalRate, ProductType, TICK};
+use motion_drivers::qsb::{
+    LONGEST_INTERVAL_TICKS, MOTOR_DRIVE_BITS, PinRole, QsbDriverConfig, TICK, interval_ticks,
+};
+use motion_drivers::spec::{QsbDeviceKeys, QsbInputMode};
 use toml::Spanned;
 
 use super::{DeviceContext, DeviceMachine};
@@ -16,45 +19,12 @@ use crate::config::raw::{Int, RawConfig, RawDevice};
 use crate::config::validate::Validator;
 use crate::config::{QsbVariant, ServerConfig, Transport};
 
-/// The qsb keys of one `[[device]]`; `None` fields were not set (the driver's default
-/// applies).
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct QsbDeviceKeys {
-    /// `counts_per_step`: encoder counts (x4) per motor step, finite, not 0.
-    pub counts_per_step: Option<f64>,
-    /// `index_polarity = "inverted"` (MDR1 B3).
-    pub index_inverted: Option<bool>,
-    /// `stream_interval_ms` rounded to whole 1/512 s ticks (1..=0xFFFE).
-    pub stream_interval_ticks: Option<u16>,
-    /// `host_latency_ms`.
-    pub host_latency: Option<Duration>,
-    /// `enable_output`: the DIG I/O bit (0 or 3) of the stepper driver's enable line.
-    pub enable_output: Option<u8>,
-    /// `enable_active = "high"`.
-    pub enable_active_high: Option<bool>,
-    /// `input_mode` (MODE B1 B0).
-    pub input_mode: Option<EncoderMode>,
-    /// `capture_input`: the DIG I/O bit whose edge loads CAPTURE.
-    pub capture_input: Option<u8>,
-    /// `capture_edge = "falling"`.
-    pub capture_falling: Option<bool>,
-}
-
 /// The product a raw `variant` names (the central validation reports a bad one).
-fn variant_of(raw: &RawDevice) -> ProductType {
+fn variant_of(raw: &RawDevice) -> QsbVariant {
     match raw.variant.as_ref().map(|v| v.get_ref().as_str()) {
-        Some("qsb-s") => ProductType::S,
-        Some("qsb-d") => ProductType::D,
-        _ => ProductType::M,
-    }
-}
-
-/// The product of a validated variant.
-pub(crate) fn product(variant: QsbVariant) -> ProductType {
-    match variant {
-        QsbVariant::M => ProductType::M,
-        QsbVariant::S => ProductType::S,
-        QsbVariant::D => ProductType::D,
+        Some("qsb-s") => QsbVariant::S,
+        Some("qsb-d") => QsbVariant::D,
+        _ => QsbVariant::M,
     }
 }
 
@@ -139,15 +109,15 @@ pub(in crate::config) fn device_keys(
     }
     if let Some(value) = &raw.input_mode {
         let allowed = [
-            ("quadrature", EncoderMode::Quadrature),
-            ("pwm", EncoderMode::Pwm),
-            ("analog", EncoderMode::Analog),
+            ("quadrature", QsbInputMode::Quadrature),
+            ("pwm", QsbInputMode::Pwm),
+            ("analog", QsbInputMode::Analog),
         ];
         keys.input_mode = choice(v, value, &ctx.key("input_mode"), &allowed);
-        if product == ProductType::D
+        if product == QsbVariant::D
             && keys
                 .input_mode
-                .is_some_and(|m| m != EncoderMode::Quadrature)
+                .is_some_and(|m| m != QsbInputMode::Quadrature)
         {
             v.issue(
                 value.span(),
@@ -186,12 +156,12 @@ pub(in crate::config) fn device_keys(
 fn stream_interval(v: &mut Validator<'_, '_>, value: &Spanned<f64>, key: &str) -> Option<u16> {
     let ms = *value.get_ref();
     let tick_ms = TICK.as_secs_f64() * 1000.0;
-    let longest = f64::from(IntervalRate::LONGEST.0) * tick_ms;
+    let longest = f64::from(LONGEST_INTERVAL_TICKS) * tick_ms;
     let rate = Duration::try_from_secs_f64(ms / 1000.0)
         .ok()
         .filter(|_| ms.is_finite())
-        .and_then(IntervalRate::nearest)
-        .filter(|rate| rate.0 >= 1);
+        .and_then(interval_ticks)
+        .filter(|ticks| *ticks >= 1);
     let Some(rate) = rate else {
         v.issue(
             value.span(),
@@ -200,19 +170,19 @@ fn stream_interval(v: &mut Validator<'_, '_>, value: &Spanned<f64>, key: &str) -
         );
         return None;
     };
-    let effective = f64::from(rate.0) * tick_ms;
+    let effective = f64::from(rate) * tick_ms;
     if (effective - ms).abs() > 1e-6 {
         v.warn(
             value.span(),
             key,
             format!(
                 "{ms} ms is not a whole number of 1/512 s ticks; the board gets {} tick{} = {effective} ms",
-                rate.0,
-                if rate.0 == 1 { "" } else { "s" }
+                rate,
+                if rate == 1 { "" } else { "s" }
             ),
         );
     }
-    Some(rate.0)
+    Some(rate)
 }
 
 /// `enable_output`: bit 0 or 3 of a qsb-m.
@@ -220,15 +190,15 @@ fn enable_output(
     v: &mut Validator<'_, '_>,
     value: &Spanned<Int>,
     key: &str,
-    product: ProductType,
+    product: QsbVariant,
 ) -> Option<u8> {
     let bit = value.get_ref().get();
     let why = match (product, bit) {
-        (ProductType::M, 0 | 3) => return Some(bit as u8),
-        (ProductType::M, 1 | 2) => {
+        (QsbVariant::M, 0 | 3) => return Some(bit as u8),
+        (QsbVariant::M, 1 | 2) => {
             "io1 and io2 are the motor drive's step and direction lines (\"Be careful if the motor drive is enabled, it uses I/O bits 1 and 2\"); allowed: 0 or 3"
         }
-        (ProductType::M, _) => {
+        (QsbVariant::M, _) => {
             "allowed: 0 or 3 (the DIG I/O bit of the stepper driver's enable line)"
         }
         _ => {
@@ -248,7 +218,7 @@ fn capture_input(
     v: &mut Validator<'_, '_>,
     value: &Spanned<Int>,
     key: &str,
-    product: ProductType,
+    product: QsbVariant,
 ) -> Option<u8> {
     let bit = value.get_ref().get();
     let bits = i64::from(product.digital_io_bits());
@@ -256,7 +226,7 @@ fn capture_input(
         return Some(bit as u8);
     }
     let why = match product {
-        ProductType::S => "a qsb-s has no digital I/O to capture on".to_owned(),
+        QsbVariant::S => "a qsb-s has no digital I/O to capture on".to_owned(),
         _ => format!("allowed: 0..={} (a DIG I/O bit of this board)", bits - 1),
     };
     v.issue(
@@ -297,7 +267,7 @@ pub(in crate::config) fn cross_check(
         };
         let raw_device = raw_device.get_ref();
         let dkey = |k: &str| format!("device[{raw_index}].{k}");
-        let product = product(device.qsb_variant);
+        let product = device.qsb_variant;
         let mode = keys.input_mode.unwrap_or_default();
         let axes: Vec<&str> = config
             .axes
@@ -305,7 +275,7 @@ pub(in crate::config) fn cross_check(
             .filter(|axis| axis.device == index)
             .map(|axis| axis.name.as_str())
             .collect();
-        if mode != EncoderMode::Quadrature {
+        if mode != QsbInputMode::Quadrature {
             for name in &axes {
                 let Some((i, axis)) = named(&raw.axis, name, |a| a.name.as_ref()) else {
                     continue;
@@ -318,12 +288,12 @@ pub(in crate::config) fn cross_check(
                 v.issue(
                     span,
                     &format!("axis[{i}].device"),
-                    format!("device `{}` has input_mode = \"{}\": it reads an absolute value as its `encoder` pin and carries no axis; use a [[signal]] with pin = \"encoder\" and kind = \"analog-in\"", device.name, if mode == EncoderMode::Pwm { "pwm" } else { "analog" }),
+                    format!("device `{}` has input_mode = \"{}\": it reads an absolute value as its `encoder` pin and carries no axis; use a [[signal]] with pin = \"encoder\" and kind = \"analog-in\"", device.name, if mode == QsbInputMode::Pwm { "pwm" } else { "analog" }),
                 );
             }
         }
         let drive =
-            product == ProductType::M && mode == EncoderMode::Quadrature && !axes.is_empty();
+            product == QsbVariant::M && mode == QsbInputMode::Quadrature && !axes.is_empty();
         if let (Some(value), false) = (&raw_device.enable_output, drive) {
             v.warn(
                 value.span(),
@@ -356,7 +326,7 @@ fn signal_checks(
     drive: bool,
 ) {
     let device = &config.devices[index];
-    let product = product(device.qsb_variant);
+    let product = device.qsb_variant;
     let mode = keys.input_mode.unwrap_or_default();
     for signal in config.signals.iter().filter(|s| s.device == index) {
         let Some((i, raw_signal)) = named(&raw.signal, &signal.name, |s| s.name.as_ref()) else {
@@ -368,7 +338,7 @@ fn signal_checks(
             .as_ref()
             .map_or(raw_signal.span(), Spanned::span);
         let key = format!("signal[{i}].pin");
-        let why = match PinRole::of(product, signal.pin) {
+        let why = match product.pin_role(signal.pin) {
             Some(PinRole::Io(bit)) if drive && MOTOR_DRIVE_BITS & (1 << bit) != 0 => format!(
                 "io{bit} is the motor drive's {} line while an axis drives qsb-m `{}` (\"digital I/O bits 1 and 2 are reserved for motor drive\"); use io0 or io3",
                 if bit == 1 { "step" } else { "direction" },
@@ -386,7 +356,7 @@ fn signal_checks(
                     device.name
                 )
             }
-            Some(PinRole::Encoder) if mode == EncoderMode::Quadrature => format!(
+            Some(PinRole::Encoder) if mode == QsbInputMode::Quadrature => format!(
                 "pin `encoder` carries a PWM or analog value: set input_mode = \"pwm\" or \"analog\" on device `{}`",
                 device.name
             ),

@@ -1,5 +1,6 @@
-//! spimotor machine keys (README "Config"): validated here, turned into the driver's config in
-//! `crate::drivers::spimotor`.
+//! spimotor machine keys (README "Config"): validated here into
+//! `motion_drivers::spec::SpimotorDeviceKeys`, turned into the driver's config by
+//! `SpimotorDriverConfig::from_spec`.
 //!
 //! Per `[[device]]` (the SPI_motor "Motor protocol" page, write ports):
 //! - `intensity`: port 0x10 "Set drive intensity for stepper mode (default is 0x20)",
@@ -10,22 +11,13 @@
 //! Both are stepper settings: on a `drive = "brushed"` board they would do nothing (the
 //! brushed section's intensity is each spin command's byte), so they are an error there.
 
+use motion_drivers::spec::SpimotorDeviceKeys;
 use toml::Spanned;
 
 use super::DeviceContext;
 use crate::config::ServerConfig;
 use crate::config::raw::{Int, RawConfig, RawDevice};
 use crate::config::validate::Validator;
-
-/// The spimotor keys of one `[[device]]`; `None` fields were not set (the driver's default
-/// applies).
-#[derive(Debug, Clone, PartialEq, Eq, Default)]
-pub struct SpimotorDeviceKeys {
-    /// `intensity`: stepper drive intensity, port 0x10 (0..=255).
-    pub intensity: Option<u8>,
-    /// `coils`: coils driven at a time, 1 or 2 (port 0x44).
-    pub coils: Option<u8>,
-}
 
 /// Validates the spimotor keys of a `[[device]]` table.
 pub(in crate::config) fn device_keys(

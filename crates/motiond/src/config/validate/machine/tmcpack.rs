@@ -1,10 +1,11 @@
-//! tmcpack machine keys (README "Config", docs/keys/tmcpack.md): validated here, turned into
-//! the driver's config in `crate::drivers::tmcpack`. Every value is checked against the range
-//! the Trinamic SIXpack/QUADpack manual (V2.43) gives for the instruction it becomes.
+//! tmcpack machine keys (README "Config", docs/keys/tmcpack.md): validated here into
+//! `motion_drivers::spec::{TmcpackDeviceKeys, TmcpackAxisKeys}`, turned into the driver's
+//! config by `TmcpackDriverConfig::from_spec`. Every value is checked against the range the
+//! Trinamic SIXpack/QUADpack manual (V2.43) gives for the instruction it becomes.
 
+use motion_drivers::spec::{ReadyOutputKeys, TmcpackAxisKeys, TmcpackDeviceKeys};
+use motion_drivers::tmcpack::{MAX_DEBOUNCE_MS, is_current_level, is_weak_current, word_time};
 use motion_drivers::{Model, SignalKind};
-use tmcpack::CurrentLevel;
-use tmcpack::convert::{MAX_DEBOUNCE_MS, byte_time};
 use toml::Spanned;
 
 use super::{AxisContext, DeviceContext};
@@ -16,91 +17,10 @@ use crate::config::{ServerConfig, Transport};
 pub const DEFAULT_REPLY_ADDRESS: u8 = motion_drivers::tmcpack::DEFAULT_REPLY_ADDRESS;
 
 /// Highest `poslimit` ($15 P1..P4).
-pub const MAX_POSLIMIT: f64 = tmcpack::MAX_POSLIMIT as f64;
+pub const MAX_POSLIMIT: f64 = motion_drivers::tmcpack::MAX_POSLIMIT as f64;
 
 /// The current levels of $11, in %, as the error messages list them.
 const LEVELS: &str = "100, 75, 50, 38, 25, 19, 13, 9, 0";
-
-/// `ready_output = { motors, reference }`: TTLOUT1 as the ready output ($32 P3, $33).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct ReadyOutputKeys {
-    /// $33 P0: bit n = motor n's activity switches the output.
-    pub motors: u8,
-    /// $33 P1: bit n = motor n's reference search switches the output.
-    pub reference: u8,
-}
-
-/// The tmcpack keys of one `[[device]]`; `None` fields were not set (the driver's default
-/// applies).
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct TmcpackDeviceKeys {
-    /// Response address of the driver's queries.
-    pub reply_address: Option<u8>,
-    /// $40 transmitter switch-over delay, ms (even, 2..=2000).
-    pub switchover_ms: Option<u16>,
-    /// $41 packet timeout, ms (even, 4..=131070).
-    pub packet_timeout_ms: Option<u32>,
-    /// TTLOUT1 as the ready output.
-    pub ready_output: Option<ReadyOutputKeys>,
-}
-
-/// `current = { … }` ($10, $11).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct CurrentKeys {
-    /// Peak current, % of the pack's full scale.
-    pub peak: Option<f64>,
-    /// I0, I1, I2, I3.
-    pub standby: Option<CurrentLevel>,
-    /// I1: at standstill.
-    pub standstill: Option<CurrentLevel>,
-    /// I2: at constant velocity.
-    pub constant: Option<CurrentLevel>,
-    /// I3: accelerating.
-    pub accel: Option<CurrentLevel>,
-    /// T0, ms (even, 2..=131070).
-    pub standby_delay_ms: Option<u32>,
-}
-
-/// `reference = { … }` ($15, $16, $18); `side` is resolved into the axis's `HomeSpec`.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct ReferenceKeys {
-    /// NullPositive: the switch is active at a high level.
-    pub active_high: Option<bool>,
-    /// NullCenter.
-    pub center: Option<bool>,
-    /// StopNull.
-    pub stop_at_switch: Option<bool>,
-    /// StopSoft.
-    pub soft_stop: Option<bool>,
-    /// $16 de-bounce, ms (even, 0..=30).
-    pub debounce_ms: Option<u16>,
-    /// $18 nulloffset, units.
-    pub null_offset: Option<f64>,
-    /// $18 testnullrange, units.
-    pub test_range: Option<f64>,
-    /// FastRef.
-    pub fast: Option<bool>,
-    /// MechRef.
-    pub mechanical: Option<bool>,
-}
-
-/// The tmcpack keys of one `[[axis]]`; `None` fields were not set (the driver's default
-/// applies).
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct TmcpackAxisKeys {
-    /// `current`.
-    pub current: CurrentKeys,
-    /// `reference`.
-    pub reference: ReferenceKeys,
-    /// $15 motor type bit 1.
-    pub rotary: Option<bool>,
-    /// Units per revolution of a rotary axis (given, or 360 for unit "deg").
-    pub revolution: Option<f64>,
-    /// $31 left minimum, ADC counts.
-    pub analog_stop_left: Option<u16>,
-    /// $31 right maximum, ADC counts.
-    pub analog_stop_right: Option<u16>,
-}
 
 /// An even number of ms in `range`, for keys in the pack's 2 ms units.
 fn even_ms(
@@ -221,14 +141,14 @@ pub(in crate::config) fn device_keys(
 }
 
 /// A current level of $11 from a percentage.
-fn level(v: &mut Validator<'_, '_>, value: &Spanned<f64>, key: &str) -> Option<CurrentLevel> {
+fn level(v: &mut Validator<'_, '_>, value: &Spanned<f64>, key: &str) -> Option<u8> {
     let p = *value.get_ref();
     let found = (p.is_finite() && p.fract() == 0.0 && (0.0..=100.0).contains(&p))
-        .then(|| CurrentLevel::from_percent(p as u8))
-        .flatten();
+        .then_some(p as u8)
+        .filter(|&level| is_current_level(level));
     match found {
         Some(level) => {
-            if matches!(level, CurrentLevel::P13 | CurrentLevel::P9) {
+            if is_weak_current(level) {
                 v.warn(
                     value.span(),
                     key,
@@ -464,7 +384,7 @@ fn poslimit_fits(
         v.issue(
             span,
             &key,
-            format!("{what} is {counts} microsteps; the pack's $15 poslimit allows at most {} (0x7FFFFFFF)", tmcpack::MAX_POSLIMIT),
+            format!("{what} is {counts} microsteps; the pack's $15 poslimit allows at most {} (0x7FFFFFFF)", motion_drivers::tmcpack::MAX_POSLIMIT),
         );
         return false;
     }
@@ -641,7 +561,7 @@ fn packet_timeouts(v: &mut Validator<'_, '_>, config: &ServerConfig, raw: &RawCo
             Some(Transport::Sim { rate }) => *rate,
             _ => continue,
         };
-        let word = byte_time(baud) * tmcpack::FRAME_LEN as u32;
+        let word = word_time(baud);
         if u128::from(ms) * 1000 < word.as_micros() {
             let (i, span) = raw_device(raw, &device.name)
                 .map(|(i, r)| (i, r.packet_timeout_ms.as_ref().map_or(0..0, Spanned::span)))

@@ -1,0 +1,304 @@
+//! The neutral description a driver is built from: [`DriverSpec`].
+//!
+//! The server validates its config file and fills one [`DriverSpec`] per `[[device]]`: plain
+//! numbers in axis units (or counts where the config gives counts), the enums of this
+//! module, and the model's machine keys ([`DeviceMachine`], [`AxisMachine`]) — no protocol
+//! type. Each board's `<Board>DriverConfig::from_spec` turns it into the driver's config
+//! (the unit conversions and protocol encodings live there, next to the driver), and its
+//! `params` says what the driver made of it, key by key, for `motionctl list`.
+//!
+//! A [`SpecError`] names the key (relative to its `[[device]]` or, with a channel, to the
+//! axis on that channel) whose value the board cannot take; the server's validation refuses
+//! such values first, with file, line and column.
+
+mod keys;
+#[cfg(test)]
+mod tests;
+
+use crate::driver::Model;
+use crate::pin::{Pin, PinInfo, SignalKind};
+
+pub use keys::{
+    AxisMachine, CurrentKeys, DeviceMachine, PidKeys, Qq2drvAxisKeys, QsbDeviceKeys,
+    ReadyOutputKeys, ReferenceKeys, SpimotorDeviceKeys, TmcpackAxisKeys, TmcpackDeviceKeys,
+};
+
+/// Trinamic pack variant.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum PackVariant {
+    /// SIXpack: 6 motors.
+    Sixpack,
+    /// QUADpack: 4 motors.
+    Quadpack,
+}
+
+/// QSB product variant (command list "QSB Variations").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum QsbVariant {
+    /// QSB-M: single-ended encoder, 4-bit digital I/O, stepper step/direction outputs.
+    #[default]
+    M,
+    /// QSB-S: single-ended encoder only.
+    S,
+    /// QSB-D: differential encoder, 1-bit digital I/O.
+    D,
+}
+
+impl QsbVariant {
+    /// The config name.
+    pub const fn id(self) -> &'static str {
+        match self {
+            Self::M => "qsb-m",
+            Self::S => "qsb-s",
+            Self::D => "qsb-d",
+        }
+    }
+}
+
+/// SPI_motor drive.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum SpiDrive {
+    /// One stepper, channel 0.
+    Stepper,
+    /// Two brushed motors: channels 0 = A, 1 = B.
+    Brushed,
+}
+
+/// What a QSB's encoder input reads (`input_mode`, MODE B1 B0).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum QsbInputMode {
+    /// Quadrature: a counter, the axis's position.
+    #[default]
+    Quadrature,
+    /// PWM: the duty cycle as an absolute value (the `encoder` pin).
+    Pwm,
+    /// Analog: the voltage as an absolute value (the `encoder` pin).
+    Analog,
+}
+
+impl QsbInputMode {
+    /// The config name.
+    pub const fn id(self) -> &'static str {
+        match self {
+            Self::Quadrature => "quadrature",
+            Self::Pwm => "pwm",
+            Self::Analog => "analog",
+        }
+    }
+}
+
+/// What a qq2drv channel's IN pin is wired to (datasheet packet 14 Input Mode).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum HomeInputKind {
+    /// A home switch: acts while active.
+    Home,
+    /// The encoder index: acts while active and A = B = 0.
+    Index,
+    /// An edge: acts on the inactive-to-active transition.
+    Edge,
+}
+
+/// Which way a reference search runs, in axis units (after `counts_per_unit`'s sign).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum Direction {
+    /// Towards decreasing positions (the default: the switch sits at `min`).
+    #[default]
+    Negative,
+    /// Towards increasing positions.
+    Positive,
+}
+
+impl Direction {
+    /// The config name.
+    pub const fn id(self) -> &'static str {
+        match self {
+            Self::Negative => "negative",
+            Self::Positive => "positive",
+        }
+    }
+}
+
+/// A qq2drv channel's IN pin as a home input (`home = { input = "index", ... }`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HomeInput {
+    /// What the pin is wired to.
+    pub kind: HomeInputKind,
+    /// The pin is active high (default true).
+    pub active_high: bool,
+    /// Packet 14 Spacing: the hysteresis between a positive-end and a negative-end trigger
+    /// when two end-stops (or a rotary sensor) share the input, units; `None`: a single
+    /// end-stop (Spacing 0).
+    pub spacing: Option<f64>,
+}
+
+/// How an axis homes: the general `home` table with every default resolved. Every axis has
+/// one; a board that cannot home ignores it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HomeSpec {
+    /// Search direction (qsb `home_direction`, tmcpack `reference.side`: left = negative).
+    pub direction: Direction,
+    /// A search that travels farther than this from where it started fails with
+    /// `HomeFailed`, units (> 0). Default: 1.25 × (max − min), the Trinamic manual's 5/4 of
+    /// the drive range.
+    pub max_travel: f64,
+    /// The position the axis takes at the switch or index, units (qsb `home_offset`).
+    pub position: f64,
+    /// qq2drv: what the channel's IN pin is wired to; `None`: the channel cannot home.
+    pub input: Option<HomeInput>,
+}
+
+/// One axis on the device: where it is and what it may do, in axis units.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DriverAxis {
+    /// The board channel it drives.
+    pub channel: usize,
+    /// Its unit (`"mm"`, `"deg"`).
+    pub unit: String,
+    /// Counts (the board's own position unit) per axis unit; negative when the board counts
+    /// down as the axis moves up.
+    pub counts_per_unit: f64,
+    /// Soft limit, units.
+    pub min: f64,
+    /// Soft limit, units.
+    pub max: f64,
+    /// Velocity limit, units/s.
+    pub max_velocity: f64,
+    /// Acceleration limit, units/s².
+    pub max_accel: f64,
+    /// How it homes.
+    pub home: HomeSpec,
+    /// The model's axis keys.
+    pub machine: AxisMachine,
+}
+
+/// One signal on one of the device's pins.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct DriverSignal {
+    /// The pin (index into the model's pin table for the device's variant).
+    pub pin: Pin,
+    /// What it is used as.
+    pub kind: SignalKind,
+}
+
+/// A device on the same link (a shared bus divides its wire time among its devices).
+#[derive(Debug, Clone, PartialEq)]
+pub struct BusPeer {
+    /// Its model.
+    pub model: Model,
+    /// Axes on it.
+    pub axes: usize,
+    /// Signals on its pins.
+    pub signals: Vec<DriverSignal>,
+    /// Its machine keys.
+    pub machine: DeviceMachine,
+}
+
+/// One `[[device]]` as a driver needs it (see the module docs).
+#[derive(Debug, Clone, PartialEq)]
+pub struct DriverSpec {
+    /// The device's name.
+    pub name: String,
+    /// Board model.
+    pub model: Model,
+    /// The line rate of its link: baud of a serial line, SPI clock; `None`: the link gives
+    /// none (the driver's default applies).
+    pub line_rate: Option<u32>,
+    /// Bus address (tmcpack 0..=255, spimotor even 2..=254; 0 for the others).
+    pub address: u32,
+    /// tmcpack variant.
+    pub pack_variant: PackVariant,
+    /// qsb product variant.
+    pub qsb_variant: QsbVariant,
+    /// spimotor drive.
+    pub drive: SpiDrive,
+    /// The model's device keys.
+    pub machine: DeviceMachine,
+    /// The axes on the device, in config order.
+    pub axes: Vec<DriverAxis>,
+    /// The signals on its pins, in config order.
+    pub signals: Vec<DriverSignal>,
+    /// Every device on its link, itself included, in config order.
+    pub bus: Vec<BusPeer>,
+}
+
+impl DriverSpec {
+    /// The (first) axis on `channel`, with its index in [`axes`](Self::axes).
+    pub fn axis_on(&self, channel: usize) -> Option<(usize, &DriverAxis)> {
+        self.axes
+            .iter()
+            .enumerate()
+            .find(|(_, axis)| axis.channel == channel)
+    }
+
+    /// Velocity and acceleration limits of `channel` in counts, from the axis that drives
+    /// it.
+    pub fn channel_limits(&self, channel: usize) -> Option<(f64, f64)> {
+        self.axis_on(channel).map(|(_, axis)| {
+            let scale = axis.counts_per_unit.abs();
+            (axis.max_velocity * scale, axis.max_accel * scale)
+        })
+    }
+
+    /// The device's pin table (the model's, for its variant).
+    pub fn pins(&self) -> &'static [PinInfo] {
+        pin_table(self.model, self.pack_variant, self.qsb_variant)
+    }
+}
+
+/// The pin table of `model` in `pack` / `qsb` variant (the variant of another model is
+/// ignored).
+pub fn pin_table(model: Model, pack: PackVariant, qsb: QsbVariant) -> &'static [PinInfo] {
+    match model {
+        Model::Qq2drv => crate::qq2drv::PINS,
+        Model::Spimotor => crate::spimotor::PINS,
+        Model::Tmcpack => crate::tmcpack::pins(pack.into()),
+        Model::Qsb => crate::qsb::pins(qsb.into()),
+    }
+}
+
+/// A value of the spec the board cannot take.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SpecError {
+    /// `None`: a key of the `[[device]]`; `Some(channel)`: a key of the axis on `channel`.
+    pub channel: Option<usize>,
+    /// The key, dotted into inline tables (`"current.standby"`).
+    pub key: &'static str,
+    /// What is wrong with its value.
+    pub message: String,
+}
+
+impl core::fmt::Display for SpecError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self.channel {
+            Some(channel) => write!(
+                f,
+                "the axis on channel {channel}: `{}`: {}",
+                self.key, self.message
+            ),
+            None => write!(f, "`{}`: {}", self.key, self.message),
+        }
+    }
+}
+
+impl std::error::Error for SpecError {}
+
+/// Whose parameter a [`Param`] is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ParamOwner {
+    /// The `[[device]]`.
+    Device,
+    /// The axis at this index of [`DriverSpec::axes`].
+    Axis(usize),
+}
+
+/// One effective machine parameter: the config key and the value the driver uses, with its
+/// unit and its encoding on the wire (`"50 %"`, `"2 ms ($40)"`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Param {
+    /// Device or axis.
+    pub owner: ParamOwner,
+    /// The config key, dotted into inline tables.
+    pub key: &'static str,
+    /// The effective value.
+    pub value: String,
+}
