@@ -41,6 +41,18 @@ pub struct BenchArgs {
     #[arg(long, value_name = "BOOL", default_value_t = true, num_args = 0..=1,
           default_missing_value = "true", action = clap::ArgAction::Set)]
     pub command_to_wire: bool,
+    /// Measure the I/O phase: a motiond of the bench's own with four idle external links (two
+    /// ptys, two SPI sockets served by simulated boards in this bench) for its CPU beside a
+    /// plain peer's (DURATION each), and how long a reply's bytes wait in the tty before
+    /// its I/O thread reads them beside a plain poll + read thread (half of DURATION each).
+    /// On by default; `--io-phase=false` skips it.
+    #[arg(long, value_name = "BOOL", default_value_t = true, num_args = 0..=1,
+          default_missing_value = "true", action = clap::ArgAction::Set)]
+    pub io_phase: bool,
+    /// Also run the I/O phase's CPU measurement with this motiond binary (an older build:
+    /// a before/after on the same machine in the same run).
+    #[arg(long, value_name = "PATH")]
+    pub io_before: Option<PathBuf>,
     /// The motiond binary the sweep and the command-to-wire phase start (default: `motiond`
     /// beside this program or in the target directory above it, else on PATH).
     #[arg(long, value_name = "PATH")]

@@ -47,6 +47,7 @@
 pub mod args;
 pub mod delivery;
 pub mod dist;
+pub mod io_phase;
 pub mod ipc;
 pub mod peer;
 pub mod pty;
@@ -55,6 +56,7 @@ pub mod report;
 pub mod roundtrip;
 pub mod rt;
 mod run;
+pub mod spi_board;
 pub mod sweep;
 pub mod wakeup;
 pub mod wire;

@@ -188,6 +188,11 @@ impl Peer {
         Ok(peer)
     }
 
+    /// The peer's process id.
+    pub fn pid(&self) -> u32 {
+        self.child.id()
+    }
+
     /// Stops the peer and collects its figures.
     pub fn stop(mut self) -> Result<PeerFigures, String> {
         drop(self.stdin.take());

@@ -1,6 +1,7 @@
-//! A simulated QSB served on a pseudo-terminal by a thread of the bench, so that a motiond
-//! child opens a real tty (its `[[link]] type = "serial"`) while the bench stamps, on
-//! CLOCK_MONOTONIC, the moment the first byte of each command line reaches the master side.
+//! A simulated board (a QSB unless told otherwise) served on a pseudo-terminal by a thread
+//! of the bench, so that a motiond child opens a real tty (its `[[link]] type = "serial"`)
+//! while the bench stamps, on CLOCK_MONOTONIC, the moment the first byte of each command
+//! line reaches the master side.
 //!
 //! The technique of `crates/motiond/tests/support/pty_board.rs`, written again here (a bench
 //! does not import test code): both fds close-on-exec so the server cannot inherit the master,
@@ -10,7 +11,7 @@
 
 use core::time::Duration;
 use std::collections::VecDeque;
-use std::os::fd::{AsFd, OwnedFd};
+use std::os::fd::{AsFd, AsRawFd, OwnedFd};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::Sender;
@@ -37,15 +38,20 @@ pub struct LineSeen {
     pub line: Vec<u8>,
 }
 
-/// A simulated QSB on a pty, reachable at `link` (a symlink to the slave side).
+/// A simulated board on a pty, reachable at `link` (a symlink to the slave side).
 #[derive(Debug)]
 pub struct PtyBoard {
     stop: Arc<AtomicBool>,
     thread: Option<JoinHandle<()>>,
     link: PathBuf,
+    /// A descriptor of the slave side of the bench's own (for [`queued`]).
+    watch: OwnedFd,
     /// What went wrong in the serving thread, if anything.
     pub failure: Arc<Mutex<Option<String>>>,
 }
+
+/// The model a [`PtyBoard`] serves.
+pub type Model = Box<dyn StreamDevice + Send>;
 
 impl PtyBoard {
     /// Serves a fresh QSB model on a new pty and points `link` at its slave (replacing an
@@ -53,6 +59,23 @@ impl PtyBoard {
     /// sent to `lines` with its first-byte stamp.
     pub fn start(
         link: &Path,
+        prefix: &'static [u8],
+        lines: Sender<LineSeen>,
+    ) -> Result<Self, String> {
+        Self::start_with(
+            link,
+            Box::new(QsbSim::new(QsbSimConfig::default())),
+            BAUD,
+            prefix,
+            lines,
+        )
+    }
+
+    /// [`start`](Self::start) with another model, at `baud`.
+    pub fn start_with(
+        link: &Path,
+        device: Model,
+        baud: u32,
         prefix: &'static [u8],
         lines: Sender<LineSeen>,
     ) -> Result<Self, String> {
@@ -76,6 +99,10 @@ impl PtyBoard {
             .map_err(|e| format!("symlink {} → {}: {e}", link.display(), slave_path.display()))?;
         let stop = Arc::new(AtomicBool::new(false));
         let failure = Arc::new(Mutex::new(None));
+        let watch = pty
+            .slave
+            .try_clone()
+            .map_err(|e| format!("dup the pty slave: {e}"))?;
         let thread = {
             let stop = Arc::clone(&stop);
             let failure = Arc::clone(&failure);
@@ -87,8 +114,7 @@ impl PtyBoard {
                 .name("pty-board".to_owned())
                 .spawn(move || {
                     let _ = crate::rt::set_up_thread(None, None);
-                    let device = QsbSim::new(QsbSimConfig::default());
-                    if let Err(e) = serve(&master, device, &stop, prefix, &lines)
+                    if let Err(e) = serve(&master, device, baud, &stop, prefix, &lines)
                         && let Ok(mut slot) = failure.lock()
                     {
                         *slot = Some(e);
@@ -101,8 +127,21 @@ impl PtyBoard {
             stop,
             thread: Some(thread),
             link: link.to_owned(),
+            watch,
             failure,
         })
+    }
+
+    /// Bytes the board sent that nobody has read from the slave side yet.
+    pub fn unread(&self) -> usize {
+        queued(&self.watch)
+    }
+
+    /// A descriptor of the slave side (to read it as a host would, or to watch [`queued`]).
+    pub fn slave(&self) -> Result<OwnedFd, String> {
+        self.watch
+            .try_clone()
+            .map_err(|e| format!("dup the pty slave: {e}"))
     }
 
     /// Stops the thread, closes the pty and removes the link.
@@ -151,15 +190,30 @@ impl LineWatch {
     }
 }
 
+/// Bytes waiting in a tty's input queue (FIONREAD): received, not yet read by anyone.
+#[allow(unsafe_code)] // an ioctl nix has no safe wrapper for, see the SAFETY note
+pub fn queued(tty: &OwnedFd) -> usize {
+    let mut count: libc::c_int = 0;
+    // SAFETY: FIONREAD writes one c_int through the pointer, which points at `count`, a
+    // live local of that type; the descriptor is borrowed from an open OwnedFd.
+    let result = unsafe { libc::ioctl(tty.as_raw_fd(), libc::FIONREAD, &mut count) };
+    if result < 0 {
+        0
+    } else {
+        usize::try_from(count).unwrap_or(0)
+    }
+}
+
 fn serve(
     master: &OwnedFd,
-    mut device: QsbSim,
+    mut device: Model,
+    baud: u32,
     stop: &AtomicBool,
     prefix: &[u8],
     lines: &Sender<LineSeen>,
 ) -> Result<(), String> {
     let epoch = Instant::now();
-    let byte_time = Duration::from_nanos(10_000_000_000 / u64::from(BAUD));
+    let byte_time = Duration::from_nanos(10_000_000_000 / u64::from(baud.max(1)));
     let mut buf = [0u8; 512];
     let mut watch = LineWatch {
         current: Vec::new(),

@@ -32,6 +32,8 @@ pub enum Unit {
     Ns,
     /// Ticks.
     Ticks,
+    /// Hundredths of a percent of one core (CPU use).
+    CentiPercent,
 }
 
 impl Row {
@@ -69,6 +71,7 @@ fn value(unit: Unit, v: u64) -> String {
     match unit {
         Unit::Ns => format_ns(v),
         Unit::Ticks => format!("{v}t"),
+        Unit::CentiPercent => format!("{:.2}%", v as f64 / 100.0),
     }
 }
 
@@ -181,7 +184,11 @@ impl Report {
                     .map_or((Value::Null, Value::Null), |(a, b)| (json!(a), json!(b)));
                 json!({
                     "figure": row.figure,
-                    "unit": match row.unit { Unit::Ns => "ns", Unit::Ticks => "ticks" },
+                    "unit": match row.unit {
+                        Unit::Ns => "ns",
+                        Unit::Ticks => "ticks",
+                        Unit::CentiPercent => "centi-percent of a core",
+                    },
                     "ours": summary(row.ours),
                     "baseline": row.baseline.map(summary),
                     "baseline_label": row.baseline_label,

@@ -7,7 +7,7 @@ use crate::args::{BenchArgs, CommandProbe, PeerMode};
 use crate::delivery::{self, Waiting};
 use crate::dist::{self, Summary, format_ns};
 use crate::report::{Report, Row, Unit, write_dist};
-use crate::{BenchError, ipc, peer, python, roundtrip, rt, sweep, wakeup, wire};
+use crate::{BenchError, io_phase, ipc, peer, python, roundtrip, rt, sweep, wakeup, wire};
 
 /// The numbered progress lines: `[n/total] what (duration)` on stderr.
 struct Progress {
@@ -224,6 +224,42 @@ pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
         None
     };
 
+    let io_run = if cli.io_phase {
+        eprintln!(
+            "[io] own motiond with four idle external links: CPU ({:?}{}), reply → read ({:?}), \
+             then the baselines",
+            cli.duration,
+            if cli.io_before.is_some() {
+                ", and again with --io-before"
+            } else {
+                ""
+            },
+            (cli.duration / 2).max(core::time::Duration::from_secs(1))
+        );
+        match sweep::find_motiond(cli.motiond.as_deref()).and_then(|motiond| {
+            io_phase::run(
+                &motiond,
+                cli.io_before.as_deref(),
+                hz,
+                cli.duration,
+                &scratch()?,
+            )
+        }) {
+            Ok(run) => Some(run),
+            Err(e) => {
+                report.notes.push(format!(
+                    "I/O phase (CPU, reply → read): not measured this run: {e}"
+                ));
+                None
+            }
+        }
+    } else {
+        report
+            .notes
+            .push("I/O phase (CPU, reply → read): skipped (--io-phase=false)".to_owned());
+        None
+    };
+
     if cli.axes_sweep {
         eprintln!(
             "[sweep] motiond at 4, 16, 64, 128 simulated axes ({:?} each)",
@@ -384,6 +420,18 @@ pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
             ),
         });
         report.rows.push(Row {
+            figure: "motiond's own stamp of that write (frame AxisWire.wire_ns) → the line's first byte at the pty master".to_owned(),
+            unit: Unit::Ns,
+            ours: run.stamp_to_pty.summary(),
+            baseline: Some(run.baseline.summary()),
+            baseline_label: "the pty path alone, as above (write into the slave → first byte at the master)".to_owned(),
+            note: format!(
+                "cross-check of the link stamps: the I/O thread stamps right after write(2) returned, so ours \
+                 should sit at or under the pty path; {} requests without a stamp in 50 ms or with one after the byte",
+                run.stamp_missing
+            ),
+        });
+        report.rows.push(Row {
             figure: "command → applied in ticks, same Velocity requests (reply.tick_applied − newest frame tick at send)".to_owned(),
             unit: Unit::Ticks,
             ours: run.ticks.summary(),
@@ -391,6 +439,10 @@ pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
             baseline_label: "the ticking plain peer of row 7, same computation".to_owned(),
             note: "the µs figure above includes this wait for the tick plus the driver's turn on the line".to_owned(),
         });
+    }
+    if let Some(run) = &io_run {
+        let rows = io_phase::rows(run, hz, out, &mut report.notes);
+        report.rows.extend(rows);
     }
     if let Some((interpreter, run)) = &python_run {
         report.rows.extend(python::rows(

@@ -1,7 +1,7 @@
 //! Command to wire: client request → first byte of the resulting board command at the link.
 //!
-//! motiond publishes no stamp for the moment it writes a board command, so the bench hosts
-//! the board itself: it starts its own motiond on a generated config whose one link is
+//! The bench hosts the board itself (so that it sees the bytes arrive, and can cross-check
+//! motiond's own stamp of the write, the frame's `AxisWire::wire_ns`): it starts its own motiond on a generated config whose one link is
 //! `type = "serial"` on a pty the bench serves with a simulated QSB-M ([`crate::pty`]), sends
 //! `Velocity` commands (alternately +v and −v, each a refresh of the deadman) stamped
 //! t0 = CLOCK_MONOTONIC just before `send_copy`, and the pty thread stamps t1 when the first
@@ -53,6 +53,11 @@ pub struct WireRun {
     pub ticks: Dist,
     /// The bench writing the line into the slave itself → first byte at the master, ns.
     pub baseline: Dist,
+    /// motiond's own stamp of the goal's first write (`AxisWire::wire_ns`) → the first byte
+    /// of that line at the master, ns (the cross-check of the stamps).
+    pub stamp_to_pty: Dist,
+    /// Requests whose frame stamp did not show within 50 ms, or came after the byte.
+    pub stamp_missing: u64,
     /// Requests answered with something other than `Accepted`, by reason.
     pub refused: BTreeMap<String, u64>,
     /// Requests without a reply, or without their line within 500 ms.
@@ -96,6 +101,8 @@ pub fn run(
         ours: Dist::new(),
         ticks: Dist::new(),
         baseline: Dist::new(),
+        stamp_to_pty: Dist::new(),
+        stamp_missing: 0,
         refused: BTreeMap::new(),
         lost: 0,
         baseline_lost: 0,
@@ -226,6 +233,10 @@ fn with_motiond(
         };
         result.ours.record(t1 - t0);
         result.lines[usize::from(positive)] = Some(line);
+        match wire_stamp(&frames, reply.tick_applied)? {
+            Some(wire_ns) if wire_ns <= t1 => result.stamp_to_pty.record(t1 - wire_ns),
+            _ => result.stamp_missing += 1,
+        }
         // The next request only once this plan is through (its MOTOR JOG line), so that
         // every request starts a plan of its own instead of rewriting one half sent.
         if !wait_jog_command(lines, t1) {
@@ -240,6 +251,23 @@ fn with_motiond(
         }
     }
     Ok(())
+}
+
+/// motiond's stamp of the first write of the goal set in `tick` (axis 0), from the frames,
+/// waiting up to 50 ms for it.
+fn wire_stamp(frames: &ipc::Frames, tick: u64) -> Result<Option<u64>, String> {
+    let deadline = now_ns() + 50_000_000;
+    while now_ns() < deadline {
+        if let Some(frame) = ipc::latest(frames)?
+            && let Some(wire) = frame.wire().first()
+            && wire.goal_tick == tick
+            && wire.written()
+        {
+            return Ok(Some(wire.wire_ns));
+        }
+        std::thread::sleep(Duration::from_micros(200));
+    }
+    Ok(None)
 }
 
 /// Waits for the first `W12` line whose first byte came at or after `t0` and whose value

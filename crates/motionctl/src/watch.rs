@@ -227,10 +227,7 @@ fn draw(
         );
     }
     ui.render_widget(
-        Paragraph::new(
-            "q or Ctrl-C quits   age: ticks since fresh board data   wire: ticks from the goal \
-             to its first byte on the link (… not yet)",
-        ),
+        Paragraph::new("age: ticks since fresh data   wire: ticks goal → link (…: waiting)   q or Ctrl-C quits"),
         foot,
     );
 }
