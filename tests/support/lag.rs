@@ -99,5 +99,56 @@ pub fn silence_found_after(
     not_responding_after(rig, Duration::from_secs(5)).expect("a silent board is found")
 }
 
+/// How long after going silent a board is found (see [`silence_found_after`]): without
+/// stamps (today's bound), with prompt stamps, with writes reported 100 ms late, and with
+/// an I/O side that runs only every 100 ms.
+#[derive(Debug, Clone, Copy)]
+pub struct SilenceFound {
+    pub today: Duration,
+    pub prompt: Duration,
+    pub late: Duration,
+    pub starved: Duration,
+}
+
+impl SilenceFound {
+    /// Measures each case on a fresh rig from `make` (the rig and its link's faults).
+    pub fn measure(
+        mut make: impl FnMut() -> (Rig, motion_link::sim::SimFaults),
+        online_within: Duration,
+    ) -> Self {
+        let mut found = |lag: Option<IoLag>| {
+            let (mut rig, faults) = make();
+            if let Some(lag) = lag {
+                rig.stamp_io(lag);
+            }
+            silence_found_after(&mut rig, &faults, online_within)
+        };
+        Self {
+            today: found(None),
+            prompt: found(Some(PROMPT)),
+            late: found(Some(LATE_WRITES)),
+            starved: found(Some(STARVED)),
+        }
+    }
+
+    /// Prompt stamps cost at most two ticks over today's bound; late writes at most `late`
+    /// more, a starved I/O side at most `starved` more (each board's reasons beside its
+    /// call).
+    pub fn assert_within(&self, late: Duration, starved: Duration) {
+        let today = self.today;
+        assert!(
+            self.prompt <= today + 2 * TICK,
+            "{:?} vs {today:?}",
+            self.prompt
+        );
+        assert!(self.late <= today + late, "{:?} vs {today:?}", self.late);
+        assert!(
+            self.starved <= today + starved,
+            "{:?} vs {today:?}",
+            self.starved
+        );
+    }
+}
+
 /// One tick of the rigs (1 kHz).
 pub const TICK: Duration = Duration::from_millis(1);
