@@ -413,9 +413,19 @@ pub fn run_with_timeout(mut command: Command, timeout: Duration) -> Result<Child
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .process_group(0);
-    let mut child = command
-        .spawn()
-        .map_err(|e| format!("could not start {program}: {e}"))?;
+    // ETXTBSY ("Text file busy"): an executable written a moment ago (a script a test or
+    // an installer just wrote) may still be open for writing in a child another thread
+    // forked and has not yet exec'd; that passes within milliseconds.
+    let mut attempts = 0;
+    let mut child = loop {
+        match command.spawn() {
+            Err(e) if e.kind() == std::io::ErrorKind::ExecutableFileBusy && attempts < 50 => {
+                attempts += 1;
+                std::thread::sleep(Duration::from_millis(10));
+            }
+            spawned => break spawned.map_err(|e| format!("could not start {program}: {e}"))?,
+        }
+    };
     let group = nix::unistd::Pid::from_raw(i32::try_from(child.id()).unwrap_or(i32::MAX));
     let kill_group = || {
         let _ = nix::sys::signal::killpg(group, nix::sys::signal::Signal::SIGKILL);
