@@ -175,16 +175,7 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
     let code = server.signal_and_wait(Signal::SIGTERM, Duration::from_secs(10));
     drop(watcher);
     drop(served);
-    std::thread::sleep(Duration::from_millis(200));
-    let files = h.iox_files();
-    row.check(
-        "clean exit, 0 stale files",
-        code == Some(0) && files == 0,
-        format!(
-            "exit {code:?}, {files} iceoryx2 files left: {:?}",
-            h.iox_listing()
-        ),
-    );
+    h.check_clean_exit(&mut row, code);
     row.note(format!(
         "bounds: SIGKILL ≤ liveness_check_ms {LIVENESS_MS} ms + 1 tick (the dead node's goals are voided), \
          SIGSTOP ≤ command_timeout_ms {DEADMAN_MS} ms after the last renewal (the deadman); \

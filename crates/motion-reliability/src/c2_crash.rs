@@ -180,16 +180,7 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
     let code = server.signal_and_wait(Signal::SIGTERM, Duration::from_secs(10));
     drop(client);
     drop(raw);
-    std::thread::sleep(Duration::from_millis(200));
-    let files = h.iox_files();
-    row.check(
-        "clean exit, 0 stale files",
-        code == Some(0) && files == 0,
-        format!(
-            "exit {code:?}, {files} iceoryx2 files left: {:?}",
-            h.iox_listing()
-        ),
-    );
+    h.check_clean_exit(&mut row, code);
     for problem in problems {
         row.note(problem);
     }

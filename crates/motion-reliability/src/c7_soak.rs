@@ -254,12 +254,6 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
     drop(client);
     drop(node);
     let code = server.signal_and_wait(Signal::SIGTERM, Duration::from_secs(15));
-    std::thread::sleep(Duration::from_millis(200));
-    let files = h.iox_files();
-    row.check(
-        "clean exit, 0 stale files",
-        code == Some(0) && files == 0,
-        format!("exit {code:?}, {files} files: {:?}", h.iox_listing()),
-    );
+    h.check_clean_exit(&mut row, code);
     Ok(row)
 }

@@ -170,6 +170,21 @@ impl Harness {
         names.sort();
         names
     }
+
+    /// After the server exited with `code` and every client was dropped: waits 200 ms for
+    /// the last files to go, then checks "clean exit, 0 stale files" in `row`.
+    pub fn check_clean_exit(&self, row: &mut crate::report::Row, code: Option<i32>) {
+        std::thread::sleep(Duration::from_millis(200));
+        let files = self.iox_files();
+        row.check(
+            "clean exit, 0 stale files",
+            code == Some(0) && files == 0,
+            format!(
+                "exit {code:?}, {files} iceoryx2 files left: {:?}",
+                self.iox_listing()
+            ),
+        );
+    }
 }
 
 fn list_files(dir: &Path, out: &mut Vec<String>) {
