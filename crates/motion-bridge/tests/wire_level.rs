@@ -95,15 +95,28 @@ fn frames_are_decimated_and_every_sample_says_which_server_wrote_it() -> Result 
     let keys = Keys::new(server.name())?;
     let session = session(&bridge.endpoint)?;
     let frames = session.declare_subscriber(keys.frame()).wait().z()?;
-    let info = session
-        .get(keys.info())
-        .timeout(DEADLINE)
-        .wait()
-        .z()?
-        .recv_timeout(DEADLINE)
-        .z()?
-        .ok_or("no description")?;
-    let info = info.result().map_err(|e| format!("{e:?}"))?;
+    // The bridge answers "no-server" until its subscriber has the server's description,
+    // which may come a moment after the bridge started: ask until it has.
+    let until = Instant::now() + DEADLINE;
+    let info = loop {
+        let reply = session
+            .get(keys.info())
+            .timeout(DEADLINE)
+            .wait()
+            .z()?
+            .recv_timeout(DEADLINE)
+            .z()?
+            .ok_or("no description")?;
+        match reply.into_result() {
+            Ok(sample) => break sample,
+            Err(error) if Instant::now() < until => {
+                let text = String::from_utf8_lossy(&error.payload().to_bytes()).into_owned();
+                assert!(text.starts_with("no-server"), "{text}");
+                std::thread::sleep(Duration::from_millis(20));
+            }
+            Err(error) => return Err(format!("{error:?}").into()),
+        }
+    };
     let description = wire::decode::<ServerInfo>(&info.payload().to_bytes())?;
     let server_node =
         Origin::decode(&info.attachment().ok_or("no origin")?.to_bytes()).ok_or("bad origin")?;

@@ -19,7 +19,8 @@ pub struct Target {
     pub name: String,
     /// Inputs tried.
     pub runs: u64,
-    /// Finished without a crashing input.
+    /// Ran and finished without a crashing input (`CRASH`: one found; `FAILED`: the
+    /// target never ran, e.g. its build failed).
     pub ok: bool,
 }
 
@@ -90,16 +91,16 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
                 .join(", ")
         ),
     );
-    let crashed: Vec<&str> = found
+    let not_ok: Vec<&str> = found
         .iter()
         .filter(|t| !t.ok)
         .map(|t| t.name.as_str())
         .collect();
     row.check(
         "every target ran, no crashing input",
-        !found.is_empty() && crashed.is_empty() && output.status.success(),
+        !found.is_empty() && not_ok.is_empty() && output.status.success(),
         format!(
-            "{} targets, crashed: {crashed:?}, exit {}",
+            "{} targets, crashed or never ran: {not_ok:?}, exit {}",
             found.len(),
             output.status
         ),
@@ -117,7 +118,8 @@ mod tests {
 
     #[test]
     fn the_script_lines_are_parsed() {
-        let out = "fuzz qsb/typed: 123456 runs in 60 s, corpus 80: ok\nnoise\nfuzz tmcpack/can: 7 runs in 60 s, corpus 1: CRASH\n";
+        let out = "fuzz qsb/typed: 123456 runs in 60 s, corpus 80: ok\nnoise\nfuzz tmcpack/can: 7 runs in 60 s, corpus 1: CRASH\n\
+                   fuzz: installing cargo-fuzz\nfuzz spimotor/reply: 0 runs in 60 s, corpus 0: FAILED\n";
         assert_eq!(
             targets(out),
             vec![
@@ -129,6 +131,11 @@ mod tests {
                 Target {
                     name: "tmcpack/can".into(),
                     runs: 7,
+                    ok: false
+                },
+                Target {
+                    name: "spimotor/reply".into(),
+                    runs: 0,
                     ok: false
                 },
             ]
