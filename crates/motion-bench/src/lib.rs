@@ -60,6 +60,7 @@ pub mod spi_board;
 pub mod sweep;
 pub mod wakeup;
 pub mod wire;
+pub mod wire_board;
 
 pub use args::{BenchArgs, CommandProbe, PeerMode, parse_duration};
 pub use dist::{Dist, Summary, format_ns};
