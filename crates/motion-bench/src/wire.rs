@@ -24,7 +24,7 @@ use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, channel};
 use std::time::Instant;
 
-use motion_ipc::{AxisFlags, ClientId, CommandKind, CommandRequest, ServiceNames};
+use motion_ipc::{AxisFlags, AxisWire, ClientId, CommandKind, CommandRequest, ServiceNames};
 
 use crate::delivery::duration_ns;
 use crate::dist::{Dist, Summary};
@@ -58,6 +58,9 @@ pub struct BoardWire {
     pub stamp_to_link: Dist,
     /// Requests whose frame stamp did not show within 50 ms, or came after the byte.
     pub stamp_missing: u64,
+    /// motiond's own count: `AxisWire.wire_tick − goal_tick`, the ticks from the tick that
+    /// set the goal to the tick during which its first request was written (0: the same).
+    pub wire_ticks: Dist,
     /// Requests answered with something other than `Accepted`, by reason.
     pub refused: BTreeMap<String, u64>,
     /// Requests without a reply, or without their message within 500 ms.
@@ -77,6 +80,7 @@ impl BoardWire {
             baseline: Dist::new(),
             stamp_to_link: Dist::new(),
             stamp_missing: 0,
+            wire_ticks: Dist::new(),
             refused: BTreeMap::new(),
             lost: 0,
             baseline_lost: 0,
@@ -284,8 +288,24 @@ fn with_motiond(
             };
             wire.ours.record(t1 - t0);
             wire.messages[usize::from(positive)] = Some(message);
-            match wire_stamp(&frames, reply.tick_applied, axis)? {
-                Some(wire_ns) if wire_ns <= t1 => wire.stamp_to_link.record(t1 - wire_ns),
+            let stamp = wire_stamp(&frames, reply.tick_applied, axis)?;
+            if trace() {
+                eprintln!(
+                    "wire {}: t1 +{} ns, tick at send {newest_tick:?}, applied {}, stamp {stamp:?} (+{} ns)",
+                    board.slug(),
+                    t1 - t0,
+                    reply.tick_applied,
+                    stamp.map_or(0, |s| s.wire_ns.wrapping_sub(t0))
+                );
+            }
+            if let Some(stamp) = stamp {
+                wire.wire_ticks
+                    .record(stamp.wire_tick.saturating_sub(stamp.goal_tick));
+            }
+            match stamp {
+                Some(stamp) if stamp.wire_ns <= t1 => {
+                    wire.stamp_to_link.record(t1 - stamp.wire_ns);
+                }
                 _ => wire.stamp_missing += 1,
             }
             // The next request only once this plan is through, so that every request
@@ -308,7 +328,7 @@ fn with_motiond(
 
 /// motiond's stamp of the first write of the goal set in `tick` on `axis`, from the
 /// frames, waiting up to 50 ms for it.
-fn wire_stamp(frames: &ipc::Frames, tick: u64, axis: u32) -> Result<Option<u64>, String> {
+fn wire_stamp(frames: &ipc::Frames, tick: u64, axis: u32) -> Result<Option<AxisWire>, String> {
     let deadline = now_ns() + 50_000_000;
     while now_ns() < deadline {
         if let Some(frame) = ipc::latest(frames)?
@@ -316,7 +336,7 @@ fn wire_stamp(frames: &ipc::Frames, tick: u64, axis: u32) -> Result<Option<u64>,
             && wire.goal_tick == tick
             && wire.written()
         {
-            return Ok(Some(wire.wire_ns));
+            return Ok(Some(*wire));
         }
         std::thread::sleep(Duration::from_micros(200));
     }
@@ -472,6 +492,17 @@ pub fn rows(run: &WireRun, ticks_baseline: Option<Summary>) -> Vec<Row> {
                  so ours should sit at or under the transport alone; {} requests without a stamp in 50 ms or with one after the byte",
                 wire.stamp_missing
             ),
+        });
+        rows.push(Row {
+            figure: format!(
+                "goal → its first request written, in ticks (frame AxisWire.wire_tick − goal_tick), {}",
+                board.name()
+            ),
+            unit: Unit::Ticks,
+            ours: wire.wire_ticks.summary(),
+            baseline: None,
+            baseline_label: "motiond's own count of the same requests; 0 = written in the tick that set the goal".to_owned(),
+            note: "the driver's turn on the link in ticks, free of the machine's scheduling noise (the tick that took the request is the goal tick)".to_owned(),
         });
     }
     rows.push(Row {

@@ -80,8 +80,15 @@
 //!
 //! # Wire, liveness and resets
 //!
-//! One request in flight; its answer is matched by type and register among the streamed
-//! lines. Position is the streamed counter, velocity the count difference over the last
+//! Each plan sends one request at a time and waits for its answer, matched by type and
+//! register (and a write's echoed data) among the streamed lines. A request of the plans
+//! in force may be written behind [`MAX_IN_FLIGHT`]` − 1` request in flight that is none
+//! of their steps (a replaced plan's, the liveness probe, an output write): the board
+//! answers commands in order, so answers are matched oldest first, and a new goal reaches
+//! the wire in the tick that set it instead of waiting for the old plan's answer, which
+//! queues behind up to two streamed lines (~1.8 ms at 230400 baud) and is seen a tick
+//! later. While a write awaits its answer the driver does not count on the register's
+//! value, and while a motor command does, on the drive being done. Position is the streamed counter, velocity the count difference over the last
 //! 8 samples (`VELOCITY_WINDOW`) divided by their time-stamp difference. A board
 //! reset shows as a line without the time stamp (EOR lost), a time stamp going backwards,
 //! a -M drive found disabled, or the stream gone silent while the board still answers
