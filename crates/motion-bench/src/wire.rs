@@ -61,6 +61,8 @@ pub struct BoardWire {
     /// motiond's own count: `AxisWire.wire_tick − goal_tick`, the ticks from the tick that
     /// set the goal to the tick during which its first request was written (0: the same).
     pub wire_ticks: Dist,
+    /// Requests whose first write was in the tick that set the goal.
+    pub same_tick: u64,
     /// Requests answered with something other than `Accepted`, by reason.
     pub refused: BTreeMap<String, u64>,
     /// Requests without a reply, or without their message within 500 ms.
@@ -81,6 +83,7 @@ impl BoardWire {
             stamp_to_link: Dist::new(),
             stamp_missing: 0,
             wire_ticks: Dist::new(),
+            same_tick: 0,
             refused: BTreeMap::new(),
             lost: 0,
             baseline_lost: 0,
@@ -299,8 +302,11 @@ fn with_motiond(
                 );
             }
             if let Some(stamp) = stamp {
-                wire.wire_ticks
-                    .record(stamp.wire_tick.saturating_sub(stamp.goal_tick));
+                let ticks = stamp.wire_tick.saturating_sub(stamp.goal_tick);
+                wire.wire_ticks.record_count(ticks);
+                if ticks == 0 {
+                    wire.same_tick += 1;
+                }
             }
             match stamp {
                 Some(stamp) if stamp.wire_ns <= t1 => {
@@ -502,7 +508,12 @@ pub fn rows(run: &WireRun, ticks_baseline: Option<Summary>) -> Vec<Row> {
             ours: wire.wire_ticks.summary(),
             baseline: None,
             baseline_label: "motiond's own count of the same requests; 0 = written in the tick that set the goal".to_owned(),
-            note: "the driver's turn on the link in ticks, free of the machine's scheduling noise (the tick that took the request is the goal tick)".to_owned(),
+            note: format!(
+                "{} of {} written in the goal's own tick; the tick that took the request is the goal tick, so this is the \
+                 driver's turn on the link plus the I/O thread's wake-up, in ticks",
+                wire.same_tick,
+                wire.wire_ticks.summary().samples
+            ),
         });
     }
     rows.push(Row {
