@@ -69,7 +69,7 @@ pub struct BoardWire {
     pub lost: u64,
     /// Baseline writes whose message did not come back within 500 ms.
     pub baseline_lost: u64,
-    /// The last goal message motiond sent for a negative ([0]) and a positive ([1]) jog:
+    /// The last goal message motiond sent for a negative (index 0) and a positive (index 1) jog:
     /// the baseline writes the same bytes.
     pub messages: [Option<Vec<u8>>; 2],
 }
