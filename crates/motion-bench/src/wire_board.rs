@@ -26,12 +26,9 @@ use crate::spi_board::{SpiBoard, Watch};
 pub const PACK_BAUD: u32 = 19_200;
 /// The pack's bus address in the generated config.
 const PACK_ADDRESS: u8 = 1;
-/// `$25`, rotation at a velocity.
-const ROTATE: u8 = 0x25;
-/// The host's messages the SIXpack's pty reports: `$25` to the pack.
-const PACK_ROTATE: &[u8] = &[PACK_ADDRESS, ROTATE];
-/// QuadQuad2Drv packet 36, velocity ramp.
-const VELOCITY_RAMP: u8 = 36;
+/// The host's messages the SIXpack's pty reports: `$25` (rotation) to the pack (the word
+/// starts with the address and the command byte, manual 6.1).
+const PACK_ROTATE: &[u8] = &[PACK_ADDRESS, tmcpack::Command::Rotate.code()];
 /// The SPI_motor's address (write transactions start with it; reads with it + 1).
 const SPIM_ADDRESS: u8 = 0x90;
 
@@ -174,11 +171,11 @@ impl WireBoard {
                 let value = u32::from_str_radix(digits, 16).ok()? as i32;
                 (value != 0).then_some(Some(value > 0))
             }
-            Self::Tmcpack => match message {
-                [PACK_ADDRESS, ROTATE, _motor, low, high, ..] if message.len() == 9 => {
-                    let velocity = i16::from_le_bytes([*low, *high]);
-                    (velocity != 0).then_some(Some(velocity > 0))
-                }
+            Self::Tmcpack => match tmcpack::RequestFrame::decode(message) {
+                Ok(tmcpack::RequestFrame {
+                    address: PACK_ADDRESS,
+                    request: tmcpack::Request::Rotate { velocity, .. },
+                }) if velocity != 0 => Some(Some(velocity > 0)),
                 _ => None,
             },
             Self::Qq2drv => velocity_ramp(message).map(|v| Some(v > 0)),
@@ -271,24 +268,25 @@ impl WireBoard {
             }
             Self::Tmcpack => {
                 let velocity: i16 = if positive { 100 } else { -100 };
-                let [low, high] = velocity.to_le_bytes();
-                vec![PACK_ADDRESS, ROTATE, 0, low, high, 0, 0, 0, 0]
+                let frame = tmcpack::RequestFrame::new(
+                    PACK_ADDRESS,
+                    tmcpack::Request::Rotate { motor: 0, velocity },
+                );
+                let mut word = [0u8; tmcpack::FRAME_LEN];
+                let len = frame.encode(&mut word).unwrap_or(0);
+                word.get(..len).unwrap_or_default().to_vec()
             }
             Self::Qq2drv => {
-                let velocity: i32 = if positive { 3183 } else { -3183 };
-                let mut packet = vec![2, 0, VELOCITY_RAMP, 1];
-                packet.extend_from_slice(&velocity.to_le_bytes());
-                packet.extend_from_slice(&0u32.to_le_bytes());
-                packet.push(0);
-                let len = packet.len() as u8;
-                if let Some(size) = packet.get_mut(1) {
-                    *size = len;
-                }
-                let sum = packet.iter().fold(0u8, |a, b| a.wrapping_add(*b));
-                if let Some(checksum) = packet.last_mut() {
-                    *checksum = 0u8.wrapping_sub(sum);
-                }
-                packet
+                let entry = qq2drv::VelocityRampEntry {
+                    channels: qq2drv::ChannelMask::single(0),
+                    velocity: if positive { 3183 } else { -3183 },
+                    acceleration: 0,
+                };
+                let entries = [entry];
+                let request = qq2drv::Request::VelocityRamp(qq2drv::Entries::new(&entries));
+                let mut packet = [0u8; qq2drv::MAX_PACKET_LEN];
+                let len = request.encode(&mut packet).unwrap_or(0);
+                packet.get(..len).unwrap_or_default().to_vec()
             }
             // 0x43 ← 100: 10 ms per step.
             Self::Spimotor => vec![SPIM_ADDRESS, 0x43, 100],
@@ -333,24 +331,19 @@ impl WireBoard {
     }
 }
 
-/// The velocity of the first packet 36 in an SPI transaction's MOSI bytes (any number of
-/// packets, filler between them), if it has one.
+/// The velocity of the first packet 36 (velocity ramp) in an SPI transaction's MOSI bytes
+/// (any number of packets, filler between them), if it has one.
 fn velocity_ramp(mosi: &[u8]) -> Option<i32> {
     let mut start = 0;
     while let Some(offset) = mosi.get(start..)?.iter().position(|&b| b == qq2drv::STX) {
         let at = start + offset;
         let size = usize::from(*mosi.get(at + 1)?);
-        if let Some(packet) = mosi.get(at..at + size)
-            && let Ok(frame) = qq2drv::Frame::parse(packet)
-        {
-            if frame.id == VELOCITY_RAMP
-                && let Some(&[_channels, a, b, c, d, ..]) = frame.payload.get(..5)
-            {
-                return Some(i32::from_le_bytes([a, b, c, d]));
+        match mosi.get(at..at + size).map(qq2drv::Request::parse) {
+            Some(Ok(qq2drv::Request::VelocityRamp(entries))) => {
+                return entries.iter().next().map(|entry| entry.velocity);
             }
-            start = at + size;
-        } else {
-            start = at + 1;
+            Some(Ok(_)) => start = at + size,
+            _ => start = at + 1,
         }
     }
     None
@@ -447,11 +440,15 @@ mod tests {
         );
         // Filler, then packet 16 alone (control mode), then a torn packet 36.
         let mut mosi = vec![0u8; 8];
-        mosi.extend_from_slice(&[2, 6, 16, 1, 2, 0]);
-        let sum = mosi.iter().fold(0u8, |a, b| a.wrapping_add(*b));
-        if let Some(last) = mosi.last_mut() {
-            *last = 0u8.wrapping_sub(sum);
-        }
+        let mode = [qq2drv::ControlModeEntry {
+            channels: qq2drv::ChannelMask::single(0),
+            mode: qq2drv::ControlMode::VelocityPid,
+        }];
+        let mut packet = [0u8; qq2drv::MAX_PACKET_LEN];
+        let len = qq2drv::Request::SetControlMode(qq2drv::Entries::new(&mode))
+            .encode(&mut packet)
+            .expect("fits");
+        mosi.extend_from_slice(&packet[..len]);
         assert_eq!(WireBoard::Qq2drv.goal_sign(&mosi), None);
         let ramp = WireBoard::Qq2drv.fallback_message(false);
         mosi.extend_from_slice(ramp.get(..ramp.len() - 1).unwrap_or_default());
