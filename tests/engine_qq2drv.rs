@@ -708,3 +708,5 @@ mod io;
 mod lag;
 #[path = "engine_qq2drv/off.rs"]
 mod off;
+#[path = "engine_qq2drv/wire.rs"]
+mod wire;

@@ -11,6 +11,8 @@ mod lag;
 mod machine;
 #[path = "engine_qsb/off.rs"]
 mod off;
+#[path = "engine_qsb/wire.rs"]
+mod wire;
 
 use core::time::Duration;
 use std::sync::{Arc, Mutex};

@@ -721,3 +721,5 @@ mod lag;
 mod off;
 #[path = "engine_spimotor/stops.rs"]
 mod stops;
+#[path = "engine_spimotor/wire.rs"]
+mod wire;

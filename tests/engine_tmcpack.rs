@@ -14,6 +14,8 @@ mod lag;
 mod off;
 #[path = "engine_tmcpack/stops.rs"]
 mod stops;
+#[path = "engine_tmcpack/wire.rs"]
+mod wire;
 
 use core::time::Duration;
 use std::sync::{Arc, Mutex};

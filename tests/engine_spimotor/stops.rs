@@ -34,7 +34,8 @@ fn watch_stop(rig: &mut Rig, board: &Board, rate: f64, decel: f64, limit: Durati
             break;
         }
         // The delay quantisation near `last`: the next slower delay's rate.
-        let delay = spimotor::StepDelay::from_tenths_ms((10_000.0 / last).ceil() as u8 + 1);
+        let delay =
+            spimotor::StepDelay::from_tenths_ms(((10_000.0 / last).ceil() as u8).saturating_add(1));
         let quantum = last - 1.0 / delay.duration().as_secs_f64();
         assert!(
             last - now_rate <= decel * 0.003 + quantum + 1e-6,
@@ -51,11 +52,21 @@ fn the_deadman_ramps_a_jog_down_from_its_step_rate() {
     let (mut rig, board, _) = stepper_rig(0x90);
     wait_online(&mut rig, 1);
     accepted(&mut rig, 0, CommandKind::Velocity, [20.0, 0.0, 0.0]);
+    // The fastest the board stepped before the deadman fired (its stop's first, slower
+    // step delay is on the wire in the tick that fires it).
+    let mut rate: f64 = 0.0;
     assert!(rig.run_until(Duration::from_secs(1), |frame| {
-        frame.axes[0].flags & AxisFlags::DEADMAN_EXPIRED.0 != 0
+        let expired = frame.axes[0].flags & AxisFlags::DEADMAN_EXPIRED.0 != 0;
+        if !expired {
+            rate = rate.max(board.lock().unwrap().velocity(0).unwrap());
+        }
+        expired
     }));
-    let rate = board.lock().unwrap().velocity(0).unwrap();
-    assert_eq!(rate, 2_000.0, "at its max velocity when the deadman fired");
+    assert_eq!(rate, 2_000.0, "at its max velocity until the deadman fired");
+    assert!(
+        board.lock().unwrap().velocity(0).unwrap() < rate,
+        "slowing down from the tick that fired it"
+    );
     let decel = MAX_ACCEL_MM * STEPS_PER_MM;
     // 2000 → 39 steps/s at 20 000 steps/s²: 98 ms, plus a profile period (2 ms) and the
     // tick that carries the last write.

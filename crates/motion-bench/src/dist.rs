@@ -28,6 +28,11 @@ impl Dist {
         let _ = self.histogram.record(ns.clamp(1, MAX_NS));
     }
 
+    /// Records one count (ticks), 0 included (clamped at 10 s worth of ns like the rest).
+    pub fn record_count(&mut self, count: u64) {
+        let _ = self.histogram.record(count.min(MAX_NS));
+    }
+
     /// Records `count` samples of `ns` (clamped like [`Dist::record`]).
     pub fn record_n(&mut self, ns: u64, count: u64) {
         let _ = self.histogram.record_n(ns.clamp(1, MAX_NS), count);

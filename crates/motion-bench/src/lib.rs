@@ -9,8 +9,9 @@
 //! motiond minus its engine. The peer is the running program re-executed with
 //! [`peer::PEER_FLAG`]: every program that calls [`run`] must call
 //! [`peer::run_if_requested`] first thing in its `main`. Command to wire is timed on a
-//! motiond the bench starts itself, its serial link a pty the bench serves with a simulated
-//! QSB ([`wire`], [`pty`]). The Python client's figures come from `python -m motiond.bench`
+//! motiond the bench starts itself, its four links to boards the bench simulates: a QSB and
+//! a SIXpack on ptys, a QuadQuad2Drv and an SPI_motor on SPI sockets ([`wire`],
+//! [`wire_board`], [`pty`], [`spi_board`]). The Python client's figures come from `python -m motiond.bench`
 //! (the pip package in `python/`) run as a child process ([`python`]).
 //!
 //! ```no_run
@@ -60,6 +61,7 @@ pub mod spi_board;
 pub mod sweep;
 pub mod wakeup;
 pub mod wire;
+pub mod wire_board;
 
 pub use args::{BenchArgs, CommandProbe, PeerMode, parse_duration};
 pub use dist::{Dist, Summary, format_ns};

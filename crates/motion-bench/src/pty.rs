@@ -38,6 +38,21 @@ pub struct LineSeen {
     pub line: Vec<u8>,
 }
 
+/// How the host's bytes are cut into the messages [`LineSeen`] reports.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Framing {
+    /// ASCII command lines ended by CR or LF (the QSB).
+    Lines,
+    /// Fixed-size binary words (the Trinamic pack's 9 bytes); a pause longer than `gap_ns`
+    /// between two bytes starts a new word (the pack's own packet timeout, `$41`).
+    Words {
+        /// Bytes per word.
+        len: usize,
+        /// Longest pause within one word, ns.
+        gap_ns: u64,
+    },
+}
+
 /// A simulated board on a pty, reachable at `link` (a symlink to the slave side).
 #[derive(Debug)]
 pub struct PtyBoard {
@@ -79,6 +94,19 @@ impl PtyBoard {
         prefix: &'static [u8],
         lines: Sender<LineSeen>,
     ) -> Result<Self, String> {
+        Self::start_framed(link, device, baud, Framing::Lines, prefix, lines)
+    }
+
+    /// [`start_with`](Self::start_with) for a board whose host messages are cut by
+    /// `framing`: every message that starts with `prefix` is sent to `lines`.
+    pub fn start_framed(
+        link: &Path,
+        device: Model,
+        baud: u32,
+        framing: Framing,
+        prefix: &'static [u8],
+        lines: Sender<LineSeen>,
+    ) -> Result<Self, String> {
         let pty = nix::pty::openpty(None, None).map_err(|e| format!("openpty: {e}"))?;
         for fd in [&pty.master, &pty.slave] {
             nix::fcntl::fcntl(
@@ -114,7 +142,8 @@ impl PtyBoard {
                 .name("pty-board".to_owned())
                 .spawn(move || {
                     let _ = crate::rt::set_up_thread(None, None);
-                    if let Err(e) = serve(&master, device, baud, &stop, prefix, &lines)
+                    let watch = LineWatch::new(framing, prefix, lines);
+                    if let Err(e) = serve(&master, device, baud, &stop, watch)
                         && let Ok(mut slot) = failure.lock()
                     {
                         *slot = Some(e);
@@ -160,32 +189,67 @@ impl Drop for PtyBoard {
     }
 }
 
-/// Splits the host's bytes into lines and reports the ones that start with a prefix.
+/// Cuts the host's bytes into messages and reports the ones that start with a prefix.
 struct LineWatch {
+    framing: Framing,
+    prefix: &'static [u8],
+    lines: Sender<LineSeen>,
     current: Vec<u8>,
     first_byte_ns: u64,
+    last_byte_ns: u64,
 }
 
 impl LineWatch {
-    fn push(&mut self, byte: u8, read_ns: u64, prefix: &[u8], lines: &Sender<LineSeen>) {
-        if byte == b'\r' || byte == b'\n' {
-            if !self.current.is_empty() {
-                let line = core::mem::take(&mut self.current);
-                if line.starts_with(prefix) {
-                    let _ = lines.send(LineSeen {
-                        first_byte_ns: self.first_byte_ns,
-                        line,
-                    });
+    fn new(framing: Framing, prefix: &'static [u8], lines: Sender<LineSeen>) -> Self {
+        Self {
+            framing,
+            prefix,
+            lines,
+            current: Vec::new(),
+            first_byte_ns: 0,
+            last_byte_ns: 0,
+        }
+    }
+
+    fn report(&mut self) {
+        let line = core::mem::take(&mut self.current);
+        if line.starts_with(self.prefix) {
+            let _ = self.lines.send(LineSeen {
+                first_byte_ns: self.first_byte_ns,
+                line,
+            });
+        }
+    }
+
+    fn push(&mut self, byte: u8, read_ns: u64) {
+        match self.framing {
+            Framing::Lines => {
+                if byte == b'\r' || byte == b'\n' {
+                    if !self.current.is_empty() {
+                        self.report();
+                    }
+                    return;
                 }
             }
-            return;
+            Framing::Words { gap_ns, .. } => {
+                if read_ns.saturating_sub(self.last_byte_ns) > gap_ns {
+                    // A pause: whatever came before was a torn word.
+                    self.current.clear();
+                }
+                self.last_byte_ns = read_ns;
+            }
         }
         if self.current.is_empty() {
             self.first_byte_ns = read_ns;
         }
-        // A QSB command line is at most a dozen bytes; garbage is not allowed to grow.
+        // A command line is at most a dozen bytes; garbage is not allowed to grow.
         if self.current.len() < 64 {
             self.current.push(byte);
+        }
+        if let Framing::Words { len, .. } = self.framing
+            && self.current.len() >= len
+        {
+            self.report();
         }
     }
 }
@@ -209,16 +273,11 @@ fn serve(
     mut device: Model,
     baud: u32,
     stop: &AtomicBool,
-    prefix: &[u8],
-    lines: &Sender<LineSeen>,
+    mut watch: LineWatch,
 ) -> Result<(), String> {
     let epoch = Instant::now();
     let byte_time = Duration::from_nanos(10_000_000_000 / u64::from(baud.max(1)));
     let mut buf = [0u8; 512];
-    let mut watch = LineWatch {
-        current: Vec::new(),
-        first_byte_ns: 0,
-    };
     let mut outgoing: VecDeque<(Duration, u8)> = VecDeque::new();
     let mut outgoing_free_at = Duration::ZERO;
     let mut incoming: VecDeque<(Duration, u8)> = VecDeque::new();
@@ -238,7 +297,7 @@ fn serve(
                     let read_ns = now_ns();
                     let now = epoch.elapsed();
                     for &byte in buf.get(..len).unwrap_or(&[]) {
-                        watch.push(byte, read_ns, prefix, lines);
+                        watch.push(byte, read_ns);
                         // Written at once by the host; on the wire one byte time apart,
                         // which is what the model's receiver times.
                         incoming_free_at = incoming_free_at.max(now) + byte_time;

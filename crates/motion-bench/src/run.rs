@@ -202,7 +202,7 @@ pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
     };
     let wire_run = if cli.command_to_wire {
         eprintln!(
-            "[wire] command to wire: own motiond on a pty-served QSB ({:?}), then the pty baseline ({:?})",
+            "[wire] command to wire: own motiond with four simulated boards ({:?} each), then each board's transport baseline ({:?} each)",
             cli.duration,
             (cli.duration / 3).max(core::time::Duration::from_secs(1))
         );
@@ -397,48 +397,7 @@ pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
         },
     ];
     if let Some(run) = &wire_run {
-        let refused: Vec<String> = run
-            .refused
-            .iter()
-            .map(|(k, v)| format!("{k} ×{v}"))
-            .collect();
-        report.rows.push(Row {
-            figure: "command → first byte of the board command at the link (Velocity → `W12…` line at the pty)".to_owned(),
-            unit: Unit::Ns,
-            ours: run.ours.summary(),
-            baseline: Some(run.baseline.summary()),
-            baseline_label: "the bench writing the same `W12…` line into the pty slave itself: pty + 230400-baud pacing thread, no motiond".to_owned(),
-            note: format!(
-                "a motiond started by the bench on a serial link to a pty served by a simulated QSB-M in the bench \
-                 (online after {:.1} s); t0 = CLOCK_MONOTONIC before send_copy, t1 = the pty thread's read of the \
-                 line's first byte; Velocity ±{} mm/s alternating; lost {}, refused [{}]; baseline lost {}",
-                run.online_after.as_secs_f64(),
-                wire::VELOCITY,
-                run.lost,
-                refused.join(", "),
-                run.baseline_lost
-            ),
-        });
-        report.rows.push(Row {
-            figure: "motiond's own stamp of that write (frame AxisWire.wire_ns) → the line's first byte at the pty master".to_owned(),
-            unit: Unit::Ns,
-            ours: run.stamp_to_pty.summary(),
-            baseline: Some(run.baseline.summary()),
-            baseline_label: "the pty path alone, as above (write into the slave → first byte at the master)".to_owned(),
-            note: format!(
-                "cross-check of the link stamps: the I/O thread stamps right after write(2) returned, so ours \
-                 should sit at or under the pty path; {} requests without a stamp in 50 ms or with one after the byte",
-                run.stamp_missing
-            ),
-        });
-        report.rows.push(Row {
-            figure: "command → applied in ticks, same Velocity requests (reply.tick_applied − newest frame tick at send)".to_owned(),
-            unit: Unit::Ticks,
-            ours: run.ticks.summary(),
-            baseline: ticks_of(&base_rtt),
-            baseline_label: "the ticking plain peer of row 7, same computation".to_owned(),
-            note: "the µs figure above includes this wait for the tick plus the driver's turn on the line".to_owned(),
-        });
+        report.rows.extend(wire::rows(run, ticks_of(&base_rtt)));
     }
     if let Some(run) = &io_run {
         let rows = io_phase::rows(run, hz, out, &mut report.notes);
@@ -544,24 +503,8 @@ pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
         }
     }
     if let Some(run) = &wire_run {
-        for (slug, title, dist) in [
-            (
-                "command-to-wire-motiond",
-                "command → first byte at the link, motiond",
-                &run.ours,
-            ),
-            (
-                "command-to-wire-baseline",
-                "line written into the pty by the bench → first byte at the master",
-                &run.baseline,
-            ),
-            (
-                "command-to-wire-ticks-motiond",
-                "Velocity → applied, ticks",
-                &run.ticks,
-            ),
-        ] {
-            if let Some(error) = write_dist(out, slug, title, dist) {
+        for (slug, title, dist) in wire::files(run) {
+            if let Some(error) = write_dist(out, &slug, &title, dist) {
                 report.notes.push(format!("could not write {error}"));
             }
         }

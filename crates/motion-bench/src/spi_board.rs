@@ -8,6 +8,7 @@ use std::os::fd::AsFd;
 use std::os::unix::net::{UnixListener, UnixStream};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::Sender;
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::Instant;
@@ -15,8 +16,22 @@ use std::time::Instant;
 use motion_link::sim::SpiDevice;
 use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
 
+use crate::pty::LineSeen;
+use crate::rt::now_ns;
+
 /// The model an [`SpiBoard`] serves.
 pub type Model = Box<dyn SpiDevice + Send>;
+
+/// Which transactions an [`SpiBoard`] reports, and to whom: every transaction whose MOSI
+/// bytes `select` accepts goes to `seen`, stamped with the CLOCK_MONOTONIC instant the
+/// read of its length header returned (its first bytes at the board).
+#[derive(Debug)]
+pub struct Watch {
+    /// Which transactions to report.
+    pub select: fn(&[u8]) -> bool,
+    /// Where to.
+    pub seen: Sender<LineSeen>,
+}
 
 /// A simulated SPI board listening at `path`.
 #[derive(Debug)]
@@ -32,6 +47,11 @@ impl SpiBoard {
     /// Listens at `path` (replacing an old socket file) and serves `device` to one client at
     /// a time.
     pub fn start(path: &Path, device: Model) -> Result<Self, String> {
+        Self::start_watched(path, device, None)
+    }
+
+    /// [`start`](Self::start), reporting the transactions `watch` selects.
+    pub fn start_watched(path: &Path, device: Model, watch: Option<Watch>) -> Result<Self, String> {
         let _ = std::fs::remove_file(path);
         let listener =
             UnixListener::bind(path).map_err(|e| format!("bind {}: {e}", path.display()))?;
@@ -47,7 +67,7 @@ impl SpiBoard {
                 .name("spi-board".to_owned())
                 .spawn(move || {
                     let _ = crate::rt::set_up_thread(None, None);
-                    if let Err(e) = serve(&listener, device, &stop)
+                    if let Err(e) = serve(&listener, device, &stop, watch.as_ref())
                         && let Ok(mut slot) = failure.lock()
                     {
                         *slot = Some(e);
@@ -85,7 +105,12 @@ fn readable(stream: &UnixStream) -> bool {
     poll(&mut fds, PollTimeout::from(50u16)).unwrap_or(0) > 0
 }
 
-fn serve(listener: &UnixListener, mut device: Model, stop: &AtomicBool) -> Result<(), String> {
+fn serve(
+    listener: &UnixListener,
+    mut device: Model,
+    stop: &AtomicBool,
+    watch: Option<&Watch>,
+) -> Result<(), String> {
     let epoch = Instant::now();
     let mut mosi = vec![0u8; usize::from(u16::MAX)];
     let mut miso = vec![0u8; usize::from(u16::MAX)];
@@ -110,12 +135,21 @@ fn serve(listener: &UnixListener, mut device: Model, stop: &AtomicBool) -> Resul
             if stream.read_exact(&mut header).is_err() {
                 break;
             }
+            let first_byte_ns = now_ns();
             let len = usize::from(u16::from_le_bytes(header));
             let (Some(mosi), Some(miso)) = (mosi.get_mut(..len), miso.get_mut(..len)) else {
                 break;
             };
             if stream.read_exact(mosi).is_err() {
                 break;
+            }
+            if let Some(watch) = watch
+                && (watch.select)(mosi)
+            {
+                let _ = watch.seen.send(LineSeen {
+                    first_byte_ns,
+                    line: mosi.to_vec(),
+                });
             }
             miso.fill(0xFF);
             let _driven = device.transfer(epoch.elapsed(), mosi, miso);

@@ -1,96 +1,142 @@
-//! Command to wire: client request → first byte of the resulting board command at the link.
+//! Command to wire: client request → first byte of the resulting board command at the link,
+//! on each of the four boards ([`WireBoard`]).
 //!
-//! The bench hosts the board itself (so that it sees the bytes arrive, and can cross-check
-//! motiond's own stamp of the write, the frame's `AxisWire::wire_ns`): it starts its own motiond on a generated config whose one link is
-//! `type = "serial"` on a pty the bench serves with a simulated QSB-M ([`crate::pty`]), sends
-//! `Velocity` commands (alternately +v and −v, each a refresh of the deadman) stamped
-//! t0 = CLOCK_MONOTONIC just before `send_copy`, and the pty thread stamps t1 when the first
-//! byte of the resulting `W12…` line (MD JOG RATE, the first request of the driver's jog
-//! plan; its sign tells which request caused it) comes back from a read of the master.
+//! The bench hosts the boards itself (so that it sees the bytes arrive, and can cross-check
+//! motiond's own stamp of the write, the frame's `AxisWire::wire_ns`): it starts its own
+//! motiond on a generated config with four links — a QSB-M on a pty at 230400 baud and a
+//! SIXpack on a pty at 19200 ([`crate::pty`]), a QuadQuad2Drv and an SPI_motor stepper on
+//! SPI sockets ([`crate::spi_board`]) — every board simulated by a thread of the bench. For
+//! each board in turn it sends `Velocity` commands to the board's axis (alternately +v and
+//! −v, each a refresh of the deadman) stamped t0 = CLOCK_MONOTONIC just before
+//! `send_copy`, and the board's thread stamps t1 when the first byte of the message that
+//! carries the goal's first request reaches it (a pty master's read, the SPI socket's
+//! length header): [`WireBoard::goal_sign`] says which message that is.
 //!
-//! Baseline, same phase: no motiond — the bench writes the same `W12…` line into the pty's
-//! slave side itself at t0 and the same thread stamps its first byte: the pty, the pacing
-//! thread and the wake-ups alone, so the ratio is what motiond adds (the wait for its next
-//! tick, the engine, the driver's turn on the line and the I/O thread).
+//! Baseline, same phase, per board: no motiond — the bench writes the same message through
+//! the same kind of transport itself (into a pty's slave side, or as a transaction on an
+//! SPI socket) at t0 and the board's thread stamps it the same way: the transport, the
+//! pacing thread and the wake-ups alone, so the ratio is what motiond adds (the wait for
+//! its next tick, the engine, the driver's turn on the line and the I/O thread).
 
 use core::time::Duration;
 use std::collections::BTreeMap;
-use std::fmt::Write as _;
-use std::os::unix::fs::OpenOptionsExt as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, channel};
 use std::time::Instant;
 
-use motion_ipc::{AxisFlags, ClientId, CommandKind, CommandRequest, ServiceNames};
+use motion_ipc::{AxisFlags, AxisWire, ClientId, CommandKind, CommandRequest, ServiceNames};
 
 use crate::delivery::duration_ns;
-use crate::dist::Dist;
+use crate::dist::{Dist, Summary};
 use crate::ipc;
-use crate::pty::{BAUD, LineSeen, PtyBoard};
+use crate::pty::LineSeen;
+use crate::report::{Row, Unit};
 use crate::rt::{XorShift, now_ns, sleep_until_ns};
 use crate::sweep::{Server, last_line};
+use crate::wire_board::{Served, WireBoard, config_text};
 
-/// Lines the pty thread reports: writes of MD JOG RATE (0x12) and COMMAND (0x16).
-const MOTOR_LINES: &[u8] = b"W1";
-/// The driver's jog plan starts with a write of MD JOG RATE (register 0x12)...
-const JOG_LINE: &[u8] = b"W12";
-/// ...and ends with COMMAND 9, MOTOR JOG.
+/// The QSB's jog plan ends with COMMAND 9, MOTOR JOG.
 const JOG_COMMAND: &[u8] = b"W169";
-/// Jog velocity, mm/s: 1000 counts/s at 100 counts/mm (the driver's MD JOG RATE ±96).
-pub const VELOCITY: f64 = 10.0;
-/// Pause before each request: uniformly 1 ms plus up to this, so requests land at every
-/// phase of the server's tick (and each one refreshes the 250 ms deadman).
-const PACE_NS: u64 = 5_000_000;
-/// A reply or a line later than this is counted as lost.
+/// A reply or a message later than this is counted as lost.
 const TIMEOUT_NS: u64 = 500_000_000;
+/// The SPI_motor's ramp is over when no write went to it for this long (its profile is
+/// rewritten every 2 ms poll period while it ramps).
+const QUIET_NS: u64 = 10_000_000;
+
+/// What the phase measured on one board.
+#[derive(Debug)]
+pub struct BoardWire {
+    /// The board.
+    pub board: WireBoard,
+    /// motiond: request sent → first byte of the goal's first message at the board, ns.
+    pub ours: Dist,
+    /// The bench writing the same message through the same transport itself → its first
+    /// byte at the board, ns.
+    pub baseline: Dist,
+    /// motiond's own stamp of the goal's first write (`AxisWire::wire_ns`) → the first byte
+    /// of that message at the board, ns (the cross-check of the stamps).
+    pub stamp_to_link: Dist,
+    /// Requests whose frame stamp did not show within 50 ms, or came after the byte.
+    pub stamp_missing: u64,
+    /// motiond's own count: `AxisWire.wire_tick − goal_tick`, the ticks from the tick that
+    /// set the goal to the tick during which its first request was written (0: the same).
+    pub wire_ticks: Dist,
+    /// Requests whose first write was in the tick that set the goal.
+    pub same_tick: u64,
+    /// Requests answered with something other than `Accepted`, by reason.
+    pub refused: BTreeMap<String, u64>,
+    /// Requests without a reply, or without their message within 500 ms.
+    pub lost: u64,
+    /// Baseline writes whose message did not come back within 500 ms.
+    pub baseline_lost: u64,
+    /// The last goal message motiond sent for a negative (index 0) and a positive (index 1) jog:
+    /// the baseline writes the same bytes.
+    pub messages: [Option<Vec<u8>>; 2],
+}
+
+impl BoardWire {
+    fn new(board: WireBoard) -> Self {
+        Self {
+            board,
+            ours: Dist::new(),
+            baseline: Dist::new(),
+            stamp_to_link: Dist::new(),
+            stamp_missing: 0,
+            wire_ticks: Dist::new(),
+            same_tick: 0,
+            refused: BTreeMap::new(),
+            lost: 0,
+            baseline_lost: 0,
+            messages: [None, None],
+        }
+    }
+}
 
 /// What the phase measured.
 #[derive(Debug)]
 pub struct WireRun {
-    /// motiond: request sent → first byte of its `W12` line at the pty master, ns.
-    pub ours: Dist,
-    /// motiond: `reply.tick_applied` − newest frame tick at send, same requests.
+    /// Per board, in [`WireBoard::ALL`] order.
+    pub boards: Vec<BoardWire>,
+    /// motiond: `reply.tick_applied` − newest frame tick at send, every board's requests.
     pub ticks: Dist,
-    /// The bench writing the line into the slave itself → first byte at the master, ns.
-    pub baseline: Dist,
-    /// motiond's own stamp of the goal's first write (`AxisWire::wire_ns`) → the first byte
-    /// of that line at the master, ns (the cross-check of the stamps).
-    pub stamp_to_pty: Dist,
-    /// Requests whose frame stamp did not show within 50 ms, or came after the byte.
-    pub stamp_missing: u64,
-    /// Requests answered with something other than `Accepted`, by reason.
-    pub refused: BTreeMap<String, u64>,
-    /// Requests without a reply, or without their line within 500 ms.
-    pub lost: u64,
-    /// Baseline writes whose line did not come back within 500 ms.
-    pub baseline_lost: u64,
-    /// How long until the axis was fresh after motiond started.
+    /// How long until every axis was fresh after motiond started.
     pub online_after: Duration,
-    /// The last `W12` line motiond sent for a negative ([0]) and a positive ([1]) jog: the
-    /// baseline writes the same bytes.
-    pub lines: [Option<Vec<u8>>; 2],
 }
 
-/// The generated config: one QSB-M on a serial link at `tty`, one axis like the
-/// `feeder` of config/examples/qsb-usb.toml.
-pub fn config_text(name: &str, tick_hz: u32, tty: &Path) -> String {
-    let mut text = String::new();
-    let _ = write!(
-        text,
-        "# generated by the latency bench's --command-to-wire\n\
-         [server]\nname = \"{name}\"\ntick_hz = {tick_hz}\ncommand_timeout_ms = 250\n\n\
-         [[link]]\nname = \"qsb\"\ntype = \"serial\"\npath = \"{}\"\nbaud = {BAUD}\n\n\
-         [[device]]\nname = \"feeder_qsb\"\nlink = \"qsb\"\nmodel = \"qsb\"\n\n\
-         [[axis]]\nname = \"feeder\"\ndevice = \"feeder_qsb\"\nchannel = 0\nunit = \"mm\"\n\
-         counts_per_unit = 100.0\nmin = -1000.0\nmax = 1000.0\nmax_velocity = 100.0\n\
-         max_accel = 1000.0\n",
-        tty.display()
-    );
-    text
+/// A served board and where its messages arrive.
+struct Fixture {
+    board: WireBoard,
+    served: Served,
+    seen: Receiver<LineSeen>,
+    link: PathBuf,
 }
 
-/// Runs the phase: motiond for `duration`, then the baseline for a third of it (at least
-/// a second). Files (config, log, pty links) go into `dir`.
+fn link_path(dir: &Path, board: WireBoard, what: &str) -> PathBuf {
+    let ext = match board {
+        WireBoard::Qsb | WireBoard::Tmcpack => "tty",
+        WireBoard::Qq2drv | WireBoard::Spimotor => "sock",
+    };
+    dir.join(format!(
+        "wire-{what}-{}-{}.{ext}",
+        board.slug(),
+        std::process::id()
+    ))
+}
+
+fn serve(board: WireBoard, link: PathBuf) -> Result<Fixture, String> {
+    let (sender, seen) = channel();
+    let served = board.serve(&link, sender)?;
+    Ok(Fixture {
+        board,
+        served,
+        seen,
+        link,
+    })
+}
+
+/// Runs the phase: motiond with every board, `duration` per board, then each board's
+/// baseline for a third of it (at least a second). Files (config, log, pty links,
+/// sockets) go into `dir`.
 pub fn run(
     motiond: &Path,
     tick_hz: u32,
@@ -98,55 +144,57 @@ pub fn run(
     dir: &Path,
 ) -> Result<WireRun, String> {
     let mut result = WireRun {
-        ours: Dist::new(),
+        boards: WireBoard::ALL.into_iter().map(BoardWire::new).collect(),
         ticks: Dist::new(),
-        baseline: Dist::new(),
-        stamp_to_pty: Dist::new(),
-        stamp_missing: 0,
-        refused: BTreeMap::new(),
-        lost: 0,
-        baseline_lost: 0,
         online_after: Duration::ZERO,
-        lines: [None, None],
     };
-    let pid = std::process::id();
     {
-        let (sender, lines) = channel();
-        let link = dir.join(format!("wire-qsb-{pid}.tty"));
-        let mut board = PtyBoard::start(&link, MOTOR_LINES, sender)?;
-        let name = format!("bench-wire-{pid}");
+        let mut fixtures = Vec::new();
+        for board in WireBoard::ALL {
+            fixtures.push(serve(board, link_path(dir, board, "motiond"))?);
+        }
+        let name = format!("bench-wire-{}", std::process::id());
         let config = dir.join("command-to-wire.toml");
         let log = dir.join("command-to-wire.log");
-        std::fs::write(&config, config_text(&name, tick_hz, &link))
+        let links = WireBoard::ALL.map(|board| {
+            let link = fixtures
+                .iter()
+                .find(|f| f.board == board)
+                .map_or(Path::new(""), |f| f.link.as_path());
+            (board, link)
+        });
+        std::fs::write(&config, config_text(&name, tick_hz, &links))
             .map_err(|e| format!("{}: {e}", config.display()))?;
         let mut server = Server::start(motiond, &config, &log)?;
-        let outcome = with_motiond(&mut server, &name, &lines, duration, &log, &mut result);
+        let outcome = with_motiond(&mut server, &name, &fixtures, duration, &log, &mut result);
         server.stop();
-        board.stop();
+        for fixture in &mut fixtures {
+            fixture.served.stop();
+        }
         outcome?;
-        if let Ok(Some(failure)) = board.failure.lock().map(|f| f.clone()) {
-            return Err(format!("the pty board failed: {failure}"));
+        for fixture in &fixtures {
+            if let Some(failure) = fixture.served.failure() {
+                return Err(format!(
+                    "the simulated {} failed: {failure}",
+                    fixture.board.name()
+                ));
+            }
         }
     }
-    let (sender, lines) = channel();
-    let link = dir.join(format!("wire-baseline-{pid}.tty"));
-    let mut board = PtyBoard::start(&link, MOTOR_LINES, sender)?;
-    let outcome = baseline(
-        &link,
-        &lines,
-        (duration / 3).max(Duration::from_secs(1)),
-        &mut result,
-    );
-    board.stop();
-    outcome
-        .map(|()| result)
-        .map_err(|e| format!("baseline: {e}"))
+    let base_duration = (duration / 3).max(Duration::from_secs(1));
+    for wire in &mut result.boards {
+        let mut fixture = serve(wire.board, link_path(dir, wire.board, "baseline"))?;
+        let outcome = baseline(&fixture, base_duration, wire);
+        fixture.served.stop();
+        outcome.map_err(|e| format!("{} baseline: {e}", wire.board.name()))?;
+    }
+    Ok(result)
 }
 
 fn with_motiond(
     server: &mut Server,
     name: &str,
-    lines: &Receiver<LineSeen>,
+    fixtures: &[Fixture],
     duration: Duration,
     log: &Path,
     result: &mut WireRun,
@@ -166,19 +214,20 @@ fn with_motiond(
         }
     };
     let client = ipc::open_commands(&node, &names)?;
-    // The axis must be online (link open, board answered) before a jog is accepted.
+    // Every axis must be online (link open, board answered) before a jog is accepted.
     loop {
         if let Some(frame) = ipc::latest(&frames)?
+            && frame.axes().len() == WireBoard::ALL.len()
             && frame
                 .axes()
-                .first()
-                .is_some_and(|axis| !axis.flags().contains(AxisFlags::STALE))
+                .iter()
+                .all(|axis| !axis.flags().contains(AxisFlags::STALE))
         {
             break;
         }
         if started.elapsed() > Duration::from_secs(15) {
             return Err(format!(
-                "the QSB axis not online after 15 s: {}",
+                "the four axes not all online after 15 s: {}",
                 last_line(log)
             ));
         }
@@ -188,189 +237,316 @@ fn with_motiond(
     let _ = crate::rt::set_up_thread(None, None);
     let id = ClientId::from_u128(node.id().value());
     let mut random = XorShift::new(u64::from(std::process::id()) ^ now_ns());
-    let end = now_ns() + duration_ns(duration);
     let mut sequence = 0u64;
-    while now_ns() < end {
-        sleep_until_ns(now_ns() + 1_000_000 + random.below(PACE_NS));
-        let newest_tick = ipc::latest(&frames)?.map(|frame| frame.tick);
-        while lines.try_recv().is_ok() {}
-        sequence += 1;
-        let positive = sequence % 2 == 1;
-        let velocity = if positive { VELOCITY } else { -VELOCITY };
-        let request = CommandRequest::new(id, sequence, 0, CommandKind::Velocity)
-            .with_values([velocity, 0.0, 0.0]);
-        let t0 = now_ns();
-        let Ok(pending) = client.send_copy(request) else {
-            result.lost += 1;
-            continue;
-        };
-        let reply = loop {
-            match pending.receive() {
-                Ok(Some(response)) => break Some(*response.payload()),
-                Ok(None) if now_ns() - t0 > TIMEOUT_NS => break None,
-                Ok(None) => std::hint::spin_loop(),
-                Err(e) => return Err(format!("receive a reply: {e:?}")),
+    for (fixture, wire) in fixtures.iter().zip(result.boards.iter_mut()) {
+        let board = fixture.board;
+        let axis = board.axis();
+        let end = now_ns() + duration_ns(duration);
+        let mut count = 0u64;
+        while now_ns() < end {
+            sleep_until_ns(now_ns() + 1_000_000 + random.below(board.pace_ns()));
+            let newest_tick = ipc::latest(&frames)?.map(|frame| frame.tick);
+            while fixture.seen.try_recv().is_ok() {}
+            sequence += 1;
+            count += 1;
+            let positive = count % 2 == 1;
+            let velocity = if positive {
+                board.velocity()
+            } else {
+                -board.velocity()
+            };
+            let request = CommandRequest::new(id, sequence, axis, CommandKind::Velocity)
+                .with_values([velocity, 0.0, 0.0]);
+            let t0 = now_ns();
+            let Ok(pending) = client.send_copy(request) else {
+                wire.lost += 1;
+                continue;
+            };
+            let reply = loop {
+                match pending.receive() {
+                    Ok(Some(response)) => break Some(*response.payload()),
+                    Ok(None) if now_ns() - t0 > TIMEOUT_NS => break None,
+                    Ok(None) => std::hint::spin_loop(),
+                    Err(e) => return Err(format!("receive a reply: {e:?}")),
+                }
+            };
+            let Some(reply) = reply.filter(|r| r.sequence == sequence) else {
+                wire.lost += 1;
+                continue;
+            };
+            if let Err(reason) = reply.result() {
+                *wire.refused.entry(format!("{reason:?}")).or_default() += 1;
+                // Let the motor reverse before the next try.
+                std::thread::sleep(Duration::from_millis(20));
+                continue;
             }
-        };
-        let Some(reply) = reply.filter(|r| r.sequence == sequence) else {
-            result.lost += 1;
-            continue;
-        };
-        if let Err(reason) = reply.result() {
-            *result.refused.entry(format!("{reason:?}")).or_default() += 1;
-            // Let the motor reverse before the next try.
-            std::thread::sleep(Duration::from_millis(20));
-            continue;
+            if let Some(at_send) = newest_tick {
+                result
+                    .ticks
+                    .record(reply.tick_applied.saturating_sub(at_send));
+            }
+            let Some((t1, message)) = wait_goal(fixture, t0, positive) else {
+                wire.lost += 1;
+                continue;
+            };
+            wire.ours.record(t1 - t0);
+            wire.messages[usize::from(positive)] = Some(message);
+            let stamp = wire_stamp(&frames, reply.tick_applied, axis)?;
+            if trace() {
+                eprintln!(
+                    "wire {}: t1 +{} ns, tick at send {newest_tick:?}, applied {}, stamp {stamp:?} (+{} ns)",
+                    board.slug(),
+                    t1 - t0,
+                    reply.tick_applied,
+                    stamp.map_or(0, |s| s.wire_ns.wrapping_sub(t0))
+                );
+            }
+            if let Some(stamp) = stamp {
+                let ticks = stamp.wire_tick.saturating_sub(stamp.goal_tick);
+                wire.wire_ticks.record_count(ticks);
+                if ticks == 0 {
+                    wire.same_tick += 1;
+                }
+            }
+            match stamp {
+                Some(stamp) if stamp.wire_ns <= t1 => {
+                    wire.stamp_to_link.record(t1 - stamp.wire_ns);
+                }
+                _ => wire.stamp_missing += 1,
+            }
+            // The next request only once this plan is through, so that every request
+            // starts a plan of its own instead of rewriting one half sent.
+            if !wait_end_of_plan(fixture, t1) {
+                wire.lost += 1;
+            }
         }
-        if let Some(at_send) = newest_tick {
-            result
-                .ticks
-                .record(reply.tick_applied.saturating_sub(at_send));
-        }
-        let Some((t1, line)) = wait_line(lines, t0, positive) else {
-            result.lost += 1;
-            continue;
-        };
-        result.ours.record(t1 - t0);
-        result.lines[usize::from(positive)] = Some(line);
-        match wire_stamp(&frames, reply.tick_applied)? {
-            Some(wire_ns) if wire_ns <= t1 => result.stamp_to_pty.record(t1 - wire_ns),
-            _ => result.stamp_missing += 1,
-        }
-        // The next request only once this plan is through (its MOTOR JOG line), so that
-        // every request starts a plan of its own instead of rewriting one half sent.
-        if !wait_jog_command(lines, t1) {
-            result.lost += 1;
-        }
-    }
-    let stop = CommandRequest::new(id, sequence + 1, 0, CommandKind::Stop);
-    if let Ok(pending) = client.send_copy(stop) {
-        let deadline = now_ns() + TIMEOUT_NS;
-        while now_ns() < deadline && matches!(pending.receive(), Ok(None)) {
-            std::thread::sleep(Duration::from_micros(200));
+        let stop = CommandRequest::new(id, sequence + 1, axis, CommandKind::Stop);
+        sequence += 1;
+        if let Ok(pending) = client.send_copy(stop) {
+            let deadline = now_ns() + TIMEOUT_NS;
+            while now_ns() < deadline && matches!(pending.receive(), Ok(None)) {
+                std::thread::sleep(Duration::from_micros(200));
+            }
         }
     }
     Ok(())
 }
 
-/// motiond's stamp of the first write of the goal set in `tick` (axis 0), from the frames,
-/// waiting up to 50 ms for it.
-fn wire_stamp(frames: &ipc::Frames, tick: u64) -> Result<Option<u64>, String> {
+/// motiond's stamp of the first write of the goal set in `tick` on `axis`, from the
+/// frames, waiting up to 50 ms for it.
+fn wire_stamp(frames: &ipc::Frames, tick: u64, axis: u32) -> Result<Option<AxisWire>, String> {
     let deadline = now_ns() + 50_000_000;
     while now_ns() < deadline {
         if let Some(frame) = ipc::latest(frames)?
-            && let Some(wire) = frame.wire().first()
+            && let Some(wire) = frame.wire().get(axis as usize)
             && wire.goal_tick == tick
             && wire.written()
         {
-            return Ok(Some(wire.wire_ns));
+            return Ok(Some(*wire));
         }
         std::thread::sleep(Duration::from_micros(200));
     }
     Ok(None)
 }
 
-/// Waits for the first `W12` line whose first byte came at or after `t0` and whose value
-/// has the requested sign; its first-byte stamp and the line.
-fn wait_line(lines: &Receiver<LineSeen>, t0: u64, positive: bool) -> Option<(u64, Vec<u8>)> {
+/// Waits for the first message of the goal whose first byte came at or after `t0` and whose
+/// velocity has the requested sign (any goal message, on a board whose messages carry no
+/// sign); its first-byte stamp and the message.
+fn wait_goal(fixture: &Fixture, t0: u64, positive: bool) -> Option<(u64, Vec<u8>)> {
     loop {
-        let seen = next_line(lines, t0)?;
+        let seen = next_message(&fixture.seen, t0, TIMEOUT_NS)?;
         if trace() {
             eprintln!(
-                "wire: +{} ns {}",
+                "wire {}: +{} ns {:02x?}",
+                fixture.board.slug(),
                 seen.first_byte_ns.wrapping_sub(t0),
-                String::from_utf8_lossy(&seen.line)
+                seen.line
             );
         }
-        if seen.first_byte_ns >= t0 && jog_sign(&seen.line) == Some(positive) {
+        let sign = fixture.board.goal_sign(&seen.line);
+        if seen.first_byte_ns >= t0 && sign.is_some_and(|s| s.is_none_or(|p| p == positive)) {
             return Some((seen.first_byte_ns, seen.line));
         }
     }
 }
 
-/// Waits for the `W169` line (MOTOR JOG) that ends a jog plan whose first line came at `t1`.
-fn wait_jog_command(lines: &Receiver<LineSeen>, t1: u64) -> bool {
-    while let Some(seen) = next_line(lines, t1) {
-        if trace() {
-            eprintln!(
-                "wire: +{} ns {} (end of plan)",
-                seen.first_byte_ns.wrapping_sub(t1),
-                String::from_utf8_lossy(&seen.line)
-            );
+/// Waits until the plan whose first message came at `t1` is through: the QSB's `W169`
+/// line (MOTOR JOG); the SPI_motor's ramp (no write for [`QUIET_NS`]). The other boards'
+/// goals are one message.
+fn wait_end_of_plan(fixture: &Fixture, t1: u64) -> bool {
+    match fixture.board {
+        WireBoard::Qsb => {
+            while let Some(seen) = next_message(&fixture.seen, t1, TIMEOUT_NS) {
+                if trace() {
+                    eprintln!(
+                        "wire qsb: +{} ns {} (end of plan)",
+                        seen.first_byte_ns.wrapping_sub(t1),
+                        String::from_utf8_lossy(&seen.line)
+                    );
+                }
+                if seen.first_byte_ns >= t1 && seen.line == JOG_COMMAND {
+                    return true;
+                }
+            }
+            false
         }
-        if seen.first_byte_ns >= t1 && seen.line == JOG_COMMAND {
-            return true;
+        WireBoard::Spimotor => {
+            while now_ns() < t1 + TIMEOUT_NS {
+                if next_message(&fixture.seen, now_ns(), QUIET_NS).is_none() {
+                    return true;
+                }
+            }
+            false
         }
+        WireBoard::Tmcpack | WireBoard::Qq2drv => true,
     }
-    false
 }
 
-/// The next reported line, waiting at most until `since` + 500 ms.
-fn next_line(lines: &Receiver<LineSeen>, since: u64) -> Option<LineSeen> {
-    let left = (since + TIMEOUT_NS).saturating_sub(now_ns());
-    lines.recv_timeout(Duration::from_nanos(left)).ok()
+/// The next reported message, waiting at most until `since` + `limit`.
+fn next_message(seen: &Receiver<LineSeen>, since: u64, limit: u64) -> Option<LineSeen> {
+    let left = (since + limit).saturating_sub(now_ns());
+    seen.recv_timeout(Duration::from_nanos(left)).ok()
 }
 
-/// `BENCH_WIRE_TRACE=1`: every line the phase looks at, on stderr.
+/// `BENCH_WIRE_TRACE=1`: every message the phase looks at, on stderr.
 fn trace() -> bool {
     std::env::var_os("BENCH_WIRE_TRACE").is_some()
 }
 
-/// The sign of the value of a `W12<hex>` line (the register holds a 32-bit two's
-/// complement rate): Some(true) for a positive rate.
-fn jog_sign(line: &[u8]) -> Option<bool> {
-    let digits = std::str::from_utf8(line.get(JOG_LINE.len()..)?).ok()?;
-    let value = u32::from_str_radix(digits, 16).ok()? as i32;
-    (value != 0).then_some(value > 0)
-}
-
-/// A ±96 steps/s jog line (the QSB's fewest-digits encoding), for a baseline whose
-/// motiond phase saw no line of that sign.
-fn jog_line(positive: bool) -> Vec<u8> {
-    let rate: i32 = if positive { 96 } else { -96 };
-    format!("W12{:X}\r\n", rate as u32).into_bytes()
-}
-
-fn baseline(
-    link: &Path,
-    lines: &Receiver<LineSeen>,
-    duration: Duration,
-    result: &mut WireRun,
-) -> Result<(), String> {
-    let tty = std::fs::OpenOptions::new()
-        .read(true)
-        .write(true)
-        .custom_flags(libc::O_NOCTTY | libc::O_NONBLOCK | libc::O_CLOEXEC)
-        .open(link)
-        .map_err(|e| format!("open {}: {e}", link.display()))?;
+fn baseline(fixture: &Fixture, duration: Duration, wire: &mut BoardWire) -> Result<(), String> {
+    let board = fixture.board;
+    let mut host = board.open_host(&fixture.link)?;
     let _ = crate::rt::set_up_thread(None, None);
     let mut random = XorShift::new(u64::from(std::process::id()) ^ now_ns());
     let end = now_ns() + duration_ns(duration);
     let mut sequence = 0u64;
-    let mut drain = [0u8; 256];
     while now_ns() < end {
-        sleep_until_ns(now_ns() + 1_000_000 + random.below(PACE_NS));
-        // The model's answers to earlier lines: read and dropped, as a host would.
-        while matches!(nix::unistd::read(&tty, &mut drain), Ok(n) if n > 0) {}
-        while lines.try_recv().is_ok() {}
+        sleep_until_ns(now_ns() + 1_000_000 + random.below(board.pace_ns()));
+        // The model's answers to earlier messages: read and dropped, as a host would.
+        WireBoard::drain(&mut host);
+        while fixture.seen.try_recv().is_ok() {}
         sequence += 1;
         let positive = sequence % 2 == 1;
-        let line = match result.lines.get(usize::from(positive)) {
-            Some(Some(seen)) => [seen.as_slice(), b"\r\n"].concat(),
-            _ => jog_line(positive),
+        let message = match wire.messages.get(usize::from(positive)) {
+            Some(Some(seen)) => seen.clone(),
+            _ => board.fallback_message(positive),
         };
         let t0 = now_ns();
-        match nix::unistd::write(&tty, &line) {
-            Ok(n) if n == line.len() => {}
-            Ok(_) | Err(_) => {
-                result.baseline_lost += 1;
-                continue;
-            }
+        if !board.write(&mut host, &message) {
+            wire.baseline_lost += 1;
+            continue;
         }
-        match wait_line(lines, t0, positive) {
-            Some((t1, _)) => result.baseline.record(t1 - t0),
-            None => result.baseline_lost += 1,
+        match wait_goal(fixture, t0, positive) {
+            Some((t1, _)) => wire.baseline.record(t1 - t0),
+            None => wire.baseline_lost += 1,
         }
     }
     Ok(())
+}
+
+/// The rows of the phase: per board, figure 9 and the stamp cross-check; then figure 10
+/// (command → applied in ticks, every board's requests) beside `ticks_baseline`.
+pub fn rows(run: &WireRun, ticks_baseline: Option<Summary>) -> Vec<Row> {
+    let mut rows = Vec::new();
+    for wire in &run.boards {
+        let board = wire.board;
+        let refused: Vec<String> = wire
+            .refused
+            .iter()
+            .map(|(k, v)| format!("{k} ×{v}"))
+            .collect();
+        rows.push(Row {
+            figure: format!(
+                "command → first byte at the link, {} ({}): Velocity → {}",
+                board.name(),
+                board.transport(),
+                board.message()
+            ),
+            unit: Unit::Ns,
+            ours: wire.ours.summary(),
+            baseline: Some(wire.baseline.summary()),
+            baseline_label: format!(
+                "the bench writing the same message through a {} itself, no motiond",
+                board.transport()
+            ),
+            note: format!(
+                "a motiond started by the bench with all four boards simulated in the bench (online after {:.1} s); \
+                 t0 = CLOCK_MONOTONIC before send_copy, t1 = the board thread's read of the message's first byte; \
+                 Velocity ±{} alternating, 1 ms + up to {} ms apart; lost {}, refused [{}]; baseline lost {}",
+                run.online_after.as_secs_f64(),
+                board.velocity(),
+                board.pace_ns() / 1_000_000,
+                wire.lost,
+                refused.join(", "),
+                wire.baseline_lost
+            ),
+        });
+        rows.push(Row {
+            figure: format!(
+                "motiond's own stamp of that write (frame AxisWire.wire_ns) → the message's first byte at the board, {}",
+                board.name()
+            ),
+            unit: Unit::Ns,
+            ours: wire.stamp_to_link.summary(),
+            baseline: Some(wire.baseline.summary()),
+            baseline_label: format!(
+                "the {} alone, as above (write → first byte at the board)",
+                board.transport()
+            ),
+            note: format!(
+                "cross-check of the link stamps: the I/O thread stamps right after the transport took the message, \
+                 so ours should sit at or under the transport alone; {} requests without a stamp in 50 ms or with one after the byte",
+                wire.stamp_missing
+            ),
+        });
+        rows.push(Row {
+            figure: format!(
+                "goal → its first request written, in ticks (frame AxisWire.wire_tick − goal_tick), {}",
+                board.name()
+            ),
+            unit: Unit::Ticks,
+            ours: wire.wire_ticks.summary(),
+            baseline: None,
+            baseline_label: "motiond's own count of the same requests; 0 = written in the tick that set the goal".to_owned(),
+            note: format!(
+                "{} of {} written in the goal's own tick; the tick that took the request is the goal tick, so this is the \
+                 driver's turn on the link plus the I/O thread's wake-up, in ticks",
+                wire.same_tick,
+                wire.wire_ticks.summary().samples
+            ),
+        });
+    }
+    rows.push(Row {
+        figure: "command → applied in ticks, same Velocity requests (reply.tick_applied − newest frame tick at send)".to_owned(),
+        unit: Unit::Ticks,
+        ours: run.ticks.summary(),
+        baseline: ticks_baseline,
+        baseline_label: "the ticking plain peer of row 7, same computation".to_owned(),
+        note: "the µs figures above include this wait for the tick plus the driver's turn on the link".to_owned(),
+    });
+    rows
+}
+
+/// The `--out` files of the phase: slug, title, distribution.
+pub fn files(run: &WireRun) -> Vec<(String, String, &Dist)> {
+    let mut files = Vec::new();
+    for wire in &run.boards {
+        let (slug, name) = (wire.board.slug(), wire.board.name());
+        files.push((
+            format!("command-to-wire-{slug}-motiond"),
+            format!("command → first byte at the link, motiond, {name}"),
+            &wire.ours,
+        ));
+        files.push((
+            format!("command-to-wire-{slug}-baseline"),
+            format!("message written by the bench → first byte at the board, {name}"),
+            &wire.baseline,
+        ));
+    }
+    files.push((
+        "command-to-wire-ticks-motiond".to_owned(),
+        "Velocity → applied, ticks".to_owned(),
+        &run.ticks,
+    ));
+    files
 }

@@ -21,7 +21,9 @@
 //! sending goals every tick cannot build an ever-growing backlog on the bus. Requests go
 //! out as their own transactions, before polls ([`Priority::Setup`] / [`Priority::Command`]); the board
 //! answers requests in order, each with its packet id, so answers are matched to the
-//! oldest unanswered request with that id (skipped ones are lost).
+//! oldest unanswered request with that id (skipped ones are lost). A goal's transaction
+//! therefore goes out in the tick that set it, behind at most the link's transaction in
+//! progress (`tests/engine_qq2drv/wire.rs`).
 //!
 //! # Start-up
 //!

@@ -247,7 +247,7 @@ impl QsbDriver {
         self.goal.replace(steps);
         self.goal_kind = Some(kind);
         self.arrived = false;
-        if self.in_flight.is_none() {
+        if self.in_flight.is_empty() {
             self.attempts = 0;
         }
     }

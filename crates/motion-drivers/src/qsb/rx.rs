@@ -76,9 +76,22 @@ impl QsbDriver {
                 return;
             }
         }
-        let flight = self
+        // The board answers in order: the oldest request this line answers is the one, and
+        // requests sent before it will not be answered any more (their answers were lost).
+        let flight = match self
             .in_flight
-            .filter(|flight| answers(flight.request, &response));
+            .position(|flight| answers(flight.request, &response))
+        {
+            Some(index) => {
+                for _ in 0..index {
+                    if let Some(lost) = self.in_flight.pop() {
+                        self.timed_out(now, lost);
+                    }
+                }
+                self.in_flight.pop()
+            }
+            None => None,
+        };
         if response.ty == ResponseType::Stream {
             self.status.replies = self.status.replies.saturating_add(1);
             self.on_stream(now, &response);
@@ -175,7 +188,6 @@ impl QsbDriver {
 
     /// The answer to the request in flight.
     fn on_answer(&mut self, now: Duration, flight: InFlight, response: &Response) {
-        self.in_flight = None;
         if matches!(response.ty, ResponseType::Error | ResponseType::Unsupported) {
             self.refused(now, flight);
             return;
@@ -344,9 +356,8 @@ impl QsbDriver {
         }
     }
 
-    /// No answer in time.
+    /// No answer in time (`flight` is no longer in flight).
     pub(super) fn timed_out(&mut self, now: Duration, flight: InFlight) {
-        self.in_flight = None;
         self.status.timeouts = self.status.timeouts.saturating_add(1);
         self.attempts = self.attempts.saturating_add(1);
         if self.attempts >= MAX_ATTEMPTS {

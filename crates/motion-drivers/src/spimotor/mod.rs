@@ -70,7 +70,12 @@
 //! that rate ([`ramp`]) so that moves respect the axis's velocity and acceleration: the
 //! step delay is rewritten every `poll_period`, always rounded to step no faster than the
 //! profile, and never faster than the goal's velocity. The board's slowest rate, 39.2
-//! steps/s, is its start/stop rate (reached and left within one step).
+//! steps/s, is its start/stop rate (reached and left within one step). A goal reaches the
+//! wire in the tick that set it when it slows the motor (a reverse jog, a stop: the delay
+//! written is that of the rate the profile will have at its next update, so the board is
+//! never faster than the profile); a speed-up shows in the first tick whose profile rate
+//! has another 0.1 ms delay, the profile being updated every tick until it does
+//! (`tests/engine_spimotor/wire.rs`).
 //!
 //! | goal | what the board gets |
 //! |---|---|

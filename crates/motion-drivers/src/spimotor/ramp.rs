@@ -142,6 +142,21 @@ fn approach(current: f64, desired: f64, step: f64) -> f64 {
     }
 }
 
+/// The rate (unsigned) whose step delay a profile at the signed `rate`, heading for
+/// `desired` at `accel`, writes now: while it slows down, the rate it will have reached at
+/// the next update (`lookahead` from now), so that a new goal's deceleration is on the wire
+/// at once rather than one update later, and the board never steps faster than the profile
+/// during the interval; while it speeds up or cruises, the rate now (never ahead of it).
+fn rate_in_force(rate: f64, desired: f64, accel: f64, lookahead: Duration) -> f64 {
+    let ahead = approach(rate, desired, accel * lookahead.as_secs_f64());
+    if sign(ahead) != sign(rate) {
+        // Through zero within the interval: the slowest rate the board has.
+        0.0
+    } else {
+        ahead.abs().min(rate.abs())
+    }
+}
+
 fn far_target(position: i32, direction: f64) -> i32 {
     let offset = if direction < 0.0 {
         -RUN_DISTANCE
@@ -189,8 +204,9 @@ impl Ramp {
                         target: TargetCommand::StopHere,
                     });
                 }
+                let written = rate_in_force(self.rate, 0.0, decel, board.lookahead);
                 Some(Step {
-                    delay: delay_for(self.rate.abs()),
+                    delay: delay_for(written.max(slowest)),
                     target: TargetCommand::Keep,
                 })
             }
@@ -218,8 +234,9 @@ impl Ramp {
                 } else {
                     TargetCommand::Set(far)
                 };
+                let written = rate_in_force(rate, desired, accel, board.lookahead);
                 Some(Step {
-                    delay: delay_for(rate.abs().max(slowest)),
+                    delay: delay_for(written.max(slowest)),
                     target,
                 })
             }
@@ -370,6 +387,41 @@ mod tests {
         assert_eq!(step.target, TargetCommand::StopHere);
         assert_eq!(motion, Motion::Hold);
         assert_eq!(ramp.update(30 * MS, &mut motion, board), None);
+    }
+
+    #[test]
+    fn a_new_deceleration_is_written_at_once_with_the_rate_of_the_next_update() {
+        // Running at 100 steps/s, profile integrated just now (a poll-period update in
+        // this very tick): a reverse goal slows down from this update on, not the next.
+        let board = Observed {
+            position: 0,
+            target: Some(1 << 30),
+            standing: false,
+            lookahead: 2 * MS,
+        };
+        let mut ramp = Ramp {
+            rate: 100.0,
+            at: Some(5 * MS),
+        };
+        let mut motion = Motion::Run {
+            velocity: -100.0,
+            accel: 5_000.0,
+        };
+        let step = ramp.update(5 * MS, &mut motion, board).unwrap();
+        assert_eq!(ramp.rate, 100.0, "the profile itself is where it was");
+        assert_eq!(step.delay, delay_for(90.0), "the rate 2 ms on");
+        assert_eq!(step.target, TargetCommand::Keep, "still running forwards");
+        // A stop the same.
+        let mut motion = Motion::Stopping { decel: 5_000.0 };
+        let step = ramp.update(5 * MS, &mut motion, board).unwrap();
+        assert_eq!(step.delay, delay_for(90.0));
+        // Speeding up never writes ahead of the profile.
+        let mut motion = Motion::Run {
+            velocity: 200.0,
+            accel: 5_000.0,
+        };
+        let step = ramp.update(5 * MS, &mut motion, board).unwrap();
+        assert_eq!(step.delay, delay_for(100.0));
     }
 
     #[test]

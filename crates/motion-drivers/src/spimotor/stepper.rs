@@ -334,9 +334,18 @@ impl SpimotorDriver {
             lookahead: self.config.poll_period,
         };
         let stepper = &mut self.stepper;
+        let rate_before = stepper.ramp.rate;
         let Some(step) = stepper.ramp.update(now, &mut stepper.motion, observed) else {
             return;
         };
+        let writes = step.target != TargetCommand::Keep || step.delay != self.planned.delay;
+        if !writes && (force || self.stepper.ramp.rate != rate_before) {
+            // A new goal, or a profile on the move, that the board's 0.1 ms step delay
+            // cannot show yet (a speed-up integrated over no time, or over less than one
+            // delay step): the next tick updates again, not a whole poll period later, so
+            // the first change is written in the first tick that has one.
+            self.stepper.next_profile_at = now;
+        }
         if step.target == TargetCommand::StopHere {
             self.push_goal_write(Write::RelativePosition(0));
         }

@@ -24,6 +24,13 @@
 //! starts instead of taking its first bytes. Queries carry the response address of
 //! [`TmcpackDriverConfig::reply_address`], which no pack on the bus may have.
 //!
+//! Command → wire: a goal's first request goes out in the tick that set it when the line is
+//! free; otherwise it waits for the one exchange in flight — at most a query, the
+//! switch-over, the answer and the switch-over again (13.4 ms at 19200 baud with `$40` =
+//! 2 ms) — and the tick that takes the answer in. The manual allows nothing shorter ("Each
+//! request should wait for the response of the PACK", 7.1); the engine test
+//! `tests/engine_tmcpack/wire.rs` checks the bound.
+//!
 //! Polling plan: goals first ([`Priority::Command`]: stops before output changes before
 //! other commands), then `$20` position/action polls round-robin over the configured motors
 //! with one `$30` input poll per round when inputs are configured ([`Priority::Poll`]),
