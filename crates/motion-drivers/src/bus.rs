@@ -2,11 +2,9 @@
 //!
 //! A [`LinkBus`] owns the drivers of one link and enforces the wire rules that no single
 //! driver can see:
-//! - stream links (RS-232/RS-485/USB serial): while a reply is awaited nobody else sends
-//!   (Trinamic manual 7.1: one request in flight on the whole bus); only a driver whose
-//!   board answers in order ([`Driver::writes_behind`], the QSB) may write behind its own
-//!   request in flight. The next sender is the driver with the most urgent message
-//!   ([`Priority`]), round-robin among equals, so commands go before polls;
+//! - stream links (RS-232/RS-485/USB serial): at most one request in flight on the whole
+//!   bus (Trinamic manual 7.1); the next sender is the driver with the most urgent
+//!   message ([`Priority`]), round-robin among equals, so commands go before polls;
 //!   received bytes belong to the driver whose reply is awaited (or, when none is, to the
 //!   last one that sent: a late reply) — with one driver, everything is its own;
 //! - SPI links: every transaction is owned by the driver that wrote it, and the same
@@ -240,21 +238,9 @@ impl LinkBus {
     #[must_use]
     pub fn poll_transmit(&mut self, now: Duration, buf: &mut [u8]) -> Option<(usize, Transmit)> {
         self.release_if_answered();
-        // Stream: while a reply is awaited only its driver may send, and only if it writes
-        // behind its own requests (its board answers in order).
-        let only = match (self.kind, self.in_flight) {
-            (LinkKind::Stream, Some(owner)) => {
-                if !self
-                    .drivers
-                    .get(owner)
-                    .is_some_and(|driver| driver.writes_behind())
-                {
-                    return None;
-                }
-                Some(owner)
-            }
-            _ => None,
-        };
+        if self.kind == LinkKind::Stream && self.in_flight.is_some() {
+            return None;
+        }
         if self.kind == LinkKind::Spi && self.pending.is_full() {
             return None;
         }
@@ -265,9 +251,6 @@ impl LinkBus {
         let mut best: Option<(usize, Priority)> = None;
         for offset in 0..count {
             let index = (self.next_turn + offset) % count;
-            if only.is_some_and(|owner| owner != index) {
-                continue;
-            }
             if let Some(priority) = self.drivers[index].wants_transmit(now)
                 && best.is_none_or(|(_, best_priority)| priority > best_priority)
             {

@@ -108,17 +108,6 @@ pub trait Driver: Send + fmt::Debug {
     /// Whether the driver still waits for the reply to its last request.
     fn awaiting_reply(&self) -> bool;
 
-    /// Whether the driver may send while it awaits a reply: its board answers requests in
-    /// the order it received them and the driver matches every answer to its request, so
-    /// a stream [`LinkBus`](crate::LinkBus) lets it write behind its own request in flight
-    /// (no other driver of the bus). The driver bounds what it writes behind itself
-    /// ([`wants_transmit`](Self::wants_transmit) says `None` when it may not). `false`
-    /// (the default): one request in flight, as manual 7.1 "Interlacing of Requests" asks
-    /// of a Trinamic pack.
-    fn writes_behind(&self) -> bool {
-        false
-    }
-
     /// Whether a goal set with [`set_goal`](Self::set_goal) has not yet been acknowledged
     /// by the board (sent and answered, or for boards without answers, sent). A shutdown
     /// waits for this to turn false on every driver.

@@ -3,9 +3,8 @@
 //! One driver per board model implements [`Driver`]: goals in counts ([`Goal`]), received
 //! bytes and `now` in; bytes to send and [`ChannelState`] out. Drivers never read a clock
 //! and never touch a file descriptor. A [`LinkBus`] puts several drivers on one link and
-//! enforces what no single driver sees: one request in flight on a shared serial bus
-//! (only a driver whose board answers in order, [`Driver::writes_behind`], may write
-//! behind its own), commands before polls, MISO bytes back to the transaction's owner.
+//! enforces what no single driver sees: one request in flight on a shared serial bus,
+//! commands before polls, MISO bytes back to the transaction's owner.
 //!
 //! Every board's module has the same skeleton:
 //!

@@ -247,7 +247,7 @@ impl QsbDriver {
         self.goal.replace(steps);
         self.goal_kind = Some(kind);
         self.arrived = false;
-        if self.in_flight.is_empty() {
+        if self.in_flight.is_none() {
             self.attempts = 0;
         }
     }

@@ -80,15 +80,15 @@
 //!
 //! # Wire, liveness and resets
 //!
-//! Each plan sends one request at a time and waits for its answer, matched by type and
-//! register (and a write's echoed data) among the streamed lines. A request of the plans
-//! in force may be written behind [`MAX_IN_FLIGHT`]` − 1` request in flight that is none
-//! of their steps (a replaced plan's, the liveness probe, an output write): the board
-//! answers commands in order, so answers are matched oldest first, and a new goal reaches
-//! the wire in the tick that set it instead of waiting for the old plan's answer, which
-//! queues behind up to two streamed lines (~1.8 ms at 230400 baud) and is seen a tick
-//! later. While a write awaits its answer the driver does not count on the register's
-//! value, and while a motor command does, on the drive being done. Position is the streamed counter, velocity the count difference over the last
+//! One request in flight; its answer is matched by type and register among the streamed
+//! lines. The board takes one command at a time ("At the conclusion of the command
+//! response, the QSB is ready to accept another command", QSB command list, Command
+//! Acknowledgement Format), so a new goal's first request waits for the answer in flight
+//! (one reply line, behind at most the streamed line being sent): command → wire is at
+//! most 1 tick + that line + the tick that takes it in. While a write awaits its answer
+//! the driver does not count on the register's value, and while a motor command does, on
+//! the drive being done: a step of a new plan is never skipped on what an unanswered
+//! request may still change. Position is the streamed counter, velocity the count difference over the last
 //! 8 samples (`VELOCITY_WINDOW`) divided by their time-stamp difference. A board
 //! reset shows as a line without the time stamp (EOR lost), a time stamp going backwards,
 //! a -M drive found disabled, or the stream gone silent while the board still answers
@@ -112,7 +112,7 @@ mod startup;
 #[cfg(test)]
 mod tests;
 #[cfg(test)]
-mod tests_behind;
+mod tests_in_flight;
 #[cfg(test)]
 mod tests_machine;
 #[cfg(test)]
@@ -122,7 +122,6 @@ mod wire;
 use core::time::Duration;
 
 use ::qsb::{MdStatus, ProductType, ResponseDecoder};
-use motion_base::FixedQueue;
 
 pub use config::QsbDriverConfig;
 pub use io::{CaptureInput, EnableOutput, MOTOR_DRIVE_BITS, PinRole, QsbIo, pins};
@@ -145,11 +144,6 @@ pub const MAX_ATTEMPTS: u8 = 3;
 /// Pause before a start-up is tried again after the board stopped answering.
 pub const RESTART_DELAY: Duration = Duration::from_millis(100);
 
-/// Requests that may await their answers at once: the one a plan step (or a probe, or an
-/// output write) is waiting for, and the first request of a newer plan written behind it
-/// (the board answers in order, and every answer names its register).
-pub const MAX_IN_FLIGHT: usize = 2;
-
 /// Registers the driver remembers the board's value of (00–16).
 const REGISTERS: usize = 0x17;
 
@@ -170,8 +164,7 @@ pub struct QsbDriver {
     preset: Program,
     goal: Program,
     goal_kind: Option<GoalKind>,
-    /// Requests awaiting their answers, oldest first (the board answers in order).
-    in_flight: FixedQueue<InFlight, MAX_IN_FLIGHT>,
+    in_flight: Option<InFlight>,
     attempts: u8,
     restart_at: Option<Duration>,
     probe_due: bool,
@@ -232,7 +225,7 @@ impl QsbDriver {
             preset: Program::new(),
             goal: Program::new(),
             goal_kind: None,
-            in_flight: FixedQueue::new(),
+            in_flight: None,
             attempts: 0,
             restart_at: None,
             probe_due: false,
@@ -344,13 +337,15 @@ impl Driver for QsbDriver {
             return None;
         }
         let probe =
-            (self.status.online && !self.probe_due && self.in_flight.is_empty()).then(|| {
+            (self.status.online && !self.probe_due && self.in_flight.is_none()).then(|| {
                 self.last_sample_at
                     .map_or(self.online_at, |at| at.max(self.online_at))
                     .saturating_add(self.config.refresh_budget())
             });
-        let reply = self.in_flight.iter().map(|f| f.deadline).min();
-        [reply, self.restart_at, probe].into_iter().flatten().min()
+        [self.in_flight.map(|f| f.deadline), self.restart_at, probe]
+            .into_iter()
+            .flatten()
+            .min()
     }
 
     fn wants_transmit(&self, _now: Duration) -> Option<Priority> {
@@ -362,18 +357,13 @@ impl Driver for QsbDriver {
     }
 
     fn awaiting_reply(&self) -> bool {
-        !self.in_flight.is_empty()
-    }
-
-    fn writes_behind(&self) -> bool {
-        true
+        self.in_flight.is_some()
     }
 
     fn goals_pending(&self) -> bool {
         let in_flight = self
             .in_flight
-            .iter()
-            .any(|f| matches!(f.origin, Origin::Preset | Origin::Goal | Origin::Io));
+            .is_some_and(|f| matches!(f.origin, Origin::Preset | Origin::Goal | Origin::Io));
         let outputs = self.status.online && self.outputs_due().is_some();
         in_flight || outputs || !self.preset.is_empty() || !self.goal.is_empty()
     }

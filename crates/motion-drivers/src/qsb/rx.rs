@@ -76,22 +76,9 @@ impl QsbDriver {
                 return;
             }
         }
-        // The board answers in order: the oldest request this line answers is the one, and
-        // requests sent before it will not be answered any more (their answers were lost).
-        let flight = match self
+        let flight = self
             .in_flight
-            .position(|flight| answers(flight.request, &response))
-        {
-            Some(index) => {
-                for _ in 0..index {
-                    if let Some(lost) = self.in_flight.pop() {
-                        self.timed_out(now, lost);
-                    }
-                }
-                self.in_flight.pop()
-            }
-            None => None,
-        };
+            .filter(|flight| answers(flight.request, &response));
         if response.ty == ResponseType::Stream {
             self.status.replies = self.status.replies.saturating_add(1);
             self.on_stream(now, &response);
@@ -188,6 +175,7 @@ impl QsbDriver {
 
     /// The answer to the request in flight.
     fn on_answer(&mut self, now: Duration, flight: InFlight, response: &Response) {
+        self.in_flight = None;
         if matches!(response.ty, ResponseType::Error | ResponseType::Unsupported) {
             self.refused(now, flight);
             return;
@@ -356,8 +344,9 @@ impl QsbDriver {
         }
     }
 
-    /// No answer in time (`flight` is no longer in flight).
+    /// No answer in time.
     pub(super) fn timed_out(&mut self, now: Duration, flight: InFlight) {
+        self.in_flight = None;
         self.status.timeouts = self.status.timeouts.saturating_add(1);
         self.attempts = self.attempts.saturating_add(1);
         if self.attempts >= MAX_ATTEMPTS {

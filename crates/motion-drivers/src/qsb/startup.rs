@@ -38,7 +38,7 @@ impl QsbDriver {
         self.preset.clear();
         self.goal.clear();
         self.goal_kind = None;
-        self.in_flight.clear();
+        self.in_flight = None;
         self.attempts = 0;
         self.restart_at = None;
         self.probe_due = false;

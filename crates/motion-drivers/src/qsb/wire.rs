@@ -1,18 +1,6 @@
-//! The wire side of the driver: the requests in flight and who sent them, which request
+//! The wire side of the driver: the one request in flight and who sent it, which request
 //! goes next (start-up, then set-positions, goals and outputs, then the liveness probe),
 //! and how every plan moves on as far as it can without the board.
-//!
-//! One request at a time is a plan's rule: each step waits for its own answer. A request
-//! of the plans in force (set-position, goal) is written *behind* a request in flight that
-//! is none of their steps — a replaced plan's, a liveness probe, an output write — instead
-//! of waiting for that answer: the QSB answers commands in the order it received them
-//! ("At the conclusion of the command response, the QSB is ready to accept another
-//! command"; a USB virtual COM port buffers what comes meanwhile), and every answer names
-//! its register and, for a write, echoes its data, so answers are matched oldest first.
-//! So a new goal goes on the wire in the tick that set it. While a write is in flight the
-//! board's value of its register is unknown ([`QsbDriver::holds`]), and a motor command in
-//! flight means the drive is not done: a step is never skipped on what an unanswered
-//! request may still change.
 
 use core::time::Duration;
 
@@ -56,13 +44,12 @@ impl QsbDriver {
             == Some(write.data())
             && !self
                 .in_flight
-                .iter()
-                .any(|f| matches!(f.request, Request::Write(w) if w.register() == register))
+                .is_some_and(|f| matches!(f.request, Request::Write(w) if w.register() == register))
     }
 
-    /// Whether a motor command (move, jog, stop, quit) awaits its answer.
+    /// Whether a motor command (move, jog, stop, quit, pause, resume) awaits its answer.
     pub(super) fn motor_command_in_flight(&self) -> bool {
-        self.in_flight.iter().any(|f| {
+        self.in_flight.is_some_and(|f| {
             matches!(
                 f.request,
                 Request::Write(Write::Command(
@@ -92,8 +79,7 @@ impl QsbDriver {
             Step::EndStrStream => (self.str_streaming
                 || self
                     .in_flight
-                    .iter()
-                    .any(|f| f.request == Request::Stream(Register::Str)))
+                    .is_some_and(|f| f.request == Request::Stream(Register::Str)))
             .then_some(Request::Read(Register::Str)),
             // Unless the drive is known to be done (a motor command just sent may not show
             // in MD STATUS yet), stop it.
@@ -110,38 +96,12 @@ impl QsbDriver {
     /// Whether `origin`'s plan has its front step in flight (it must not move on).
     pub(super) fn busy(&self, origin: Origin, generation: u32) -> bool {
         self.in_flight
-            .iter()
-            .any(|f| f.origin == origin && f.generation == generation)
-    }
-
-    /// Whether a request of the plans in force may be written behind the ones in flight:
-    /// online, room, and none of them is a step of the start-up or of a plan in force.
-    fn may_write_behind(&self) -> bool {
-        self.status.online
-            && self.setup.is_empty()
-            && !self.in_flight.is_full()
-            && !self.in_flight.iter().any(|f| f.origin == Origin::Setup)
-            && !self.busy(Origin::Preset, self.preset.generation())
-            && !self.busy(Origin::Goal, self.goal.generation())
+            .is_some_and(|f| f.origin == origin && f.generation == generation)
     }
 
     /// The next request to send, who sends it and how urgent it is.
     pub(super) fn next_request(&self) -> Option<(Request, Origin, Priority)> {
-        if !self.link_up {
-            return None;
-        }
-        if !self.in_flight.is_empty() {
-            // Only a plan in force, behind requests that are none of its steps.
-            if !self.may_write_behind() {
-                return None;
-            }
-            for (program, origin) in [(&self.preset, Origin::Preset), (&self.goal, Origin::Goal)] {
-                if let Some(step) = program.front() {
-                    return self
-                        .request_of(step)
-                        .map(|request| (request, origin, Priority::Command));
-                }
-            }
+        if !self.link_up || self.in_flight.is_some() {
             return None;
         }
         if let Some(step) = self.setup.front() {
@@ -221,17 +181,16 @@ impl QsbDriver {
             self.begin_startup();
         }
         // Unanswered only if the link was looked at after the deadline.
-        let judged = self.io_stamps.judged(now);
-        while let Some(index) = self.in_flight.position(|f| judged >= f.deadline) {
-            if let Some(flight) = self.in_flight.remove(index) {
-                self.timed_out(now, flight);
-            }
+        if let Some(flight) = self.in_flight
+            && self.io_stamps.judged(now) >= flight.deadline
+        {
+            self.timed_out(now, flight);
         }
         let quiet_since = self
             .last_sample_at
             .map_or(self.online_at, |at| at.max(self.online_at));
         if self.status.online
-            && self.in_flight.is_empty()
+            && self.in_flight.is_none()
             && !self.probe_due
             && self.io_stamps.judged(now)
                 >= quiet_since.saturating_add(self.config.refresh_budget())
@@ -257,17 +216,13 @@ impl QsbDriver {
                 0
             }
         };
-        if !self.in_flight.push(InFlight {
+        self.in_flight = Some(InFlight {
             request,
             origin,
             generation,
             deadline: now.saturating_add(self.config.reply_timeout()),
-            number: self.io_stamps.next_number(),
-        }) {
-            // (Cannot happen: `next_request` checked the room.) Never send unrecorded.
-            return None;
-        }
-        let _number = self.io_stamps.sent();
+            number: self.io_stamps.sent(),
+        });
         let mut goal_starts = 0;
         if matches!(origin, Origin::Goal | Origin::Preset) && self.goal_unsent {
             self.goal_unsent = false;
@@ -280,15 +235,15 @@ impl QsbDriver {
         })
     }
 
-    /// A message went out at `at`: the reply timeout of the request in flight that is
-    /// that message runs from there.
+    /// A message went out at `at`: the reply timeout of the request in flight runs from
+    /// there if it is that message.
     pub(super) fn on_written(&mut self, at: Duration) {
         let number = self.io_stamps.written();
         let timeout = self.config.reply_timeout();
-        self.in_flight.for_each_mut(|flight| {
-            if flight.number == number {
-                flight.deadline = at.saturating_add(timeout);
-            }
-        });
+        if let Some(flight) = self.in_flight.as_mut()
+            && flight.number == number
+        {
+            flight.deadline = at.saturating_add(timeout);
+        }
     }
 }
