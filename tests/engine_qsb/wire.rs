@@ -7,10 +7,10 @@
 
 use core::time::Duration;
 
-use motion_ipc::CommandKind;
 use motion_sim::qsb::Variant;
 
 use crate::support::lag::PROMPT;
+use crate::support::wire::{alternating, goal_to_wire_ticks};
 use crate::{rig, still};
 
 #[test]
@@ -24,27 +24,14 @@ fn reversed_jogs_reach_the_wire_within_the_answer_in_flight_at_every_phase_of_th
             )),
         "online"
     );
-    let mut extra_ticks = Vec::new();
-    for request in 0..60_u32 {
-        let velocity = if request % 2 == 0 { 10.0 } else { -10.0 };
-        let reply = qsb
-            .rig
-            .command(0, CommandKind::Velocity, [velocity, 0.0, 0.0]);
-        assert_eq!(reply.result(), Ok(()), "request {request}");
-        let goal_tick = reply.tick_applied;
-        assert!(
-            qsb.rig.run_until(Duration::from_millis(50), |frame| {
-                frame.wire[0].goal_tick == goal_tick && frame.wire[0].written()
-            }),
-            "request {request}: its first request is written"
-        );
-        let wire = qsb.rig.frame.wire[0];
-        assert!(wire.wire_tick >= goal_tick, "{wire:?}");
-        extra_ticks.push(wire.wire_tick - goal_tick);
-        // The next request lands 0–5 ticks after this one went out: while the plan's
-        // MD JOG RATE or COMMAND 9 awaits its answer, or after.
-        qsb.rig.run((request % 6) as usize);
-    }
+    // The next request lands 0–5 ticks after this one went out: while the plan's MD JOG
+    // RATE or COMMAND 9 awaits its answer, or after.
+    let extra_ticks = goal_to_wire_ticks(
+        &mut qsb.rig,
+        &alternating(60, 10.0, -10.0),
+        Duration::from_millis(50),
+        |request| request % 6,
+    );
     assert!(
         extra_ticks.iter().all(|&ticks| ticks <= 1),
         "at most the answer in flight (one tick) between the goal and its first write: \

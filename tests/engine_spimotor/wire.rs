@@ -6,27 +6,14 @@
 
 use super::*;
 use crate::support::lag::PROMPT;
+use crate::support::wire::{alternating, goal_to_wire_ticks};
 
-/// Ticks from each goal to its first write, for `requests` jogs of alternating sign
-/// `apart + 0..6` ticks apart (both phases of the 2 ms profile period).
+/// Ticks from each goal to its first write, for jogs at `speeds` `apart + 0..6` ticks
+/// apart (both phases of the 2 ms profile period).
 fn jogs(rig: &mut Rig, speeds: &[f64], apart: usize) -> Vec<u64> {
-    let mut ticks = Vec::new();
-    for (request, speed) in speeds.iter().enumerate() {
-        let reply = rig.command(0, CommandKind::Velocity, [*speed, 0.0, 0.0]);
-        assert_eq!(reply.result(), Ok(()), "request {request}");
-        let goal_tick = reply.tick_applied;
-        assert!(
-            rig.run_until(Duration::from_millis(50), |frame| {
-                frame.wire[0].goal_tick == goal_tick && frame.wire[0].written()
-            }),
-            "request {request}: its first request is written"
-        );
-        let wire = rig.frame.wire[0];
-        assert!(wire.wire_tick >= goal_tick, "{wire:?}");
-        ticks.push(wire.wire_tick - goal_tick);
-        rig.run(apart + request % 6);
-    }
-    ticks
+    goal_to_wire_ticks(rig, speeds, Duration::from_millis(50), |request| {
+        apart + request % 6
+    })
 }
 
 #[test]
@@ -35,9 +22,7 @@ fn reversed_jogs_and_stops_reach_the_wire_in_the_tick_that_took_them() {
     rig.stamp_io(PROMPT);
     wait_online(&mut rig, 1);
     // 500 steps/s at 20 000 steps/s²: 25 ms to stand, 25 more to cruise the other way.
-    let reversals: Vec<f64> = (0..24)
-        .map(|i| if i % 2 == 0 { 5.0 } else { -5.0 })
-        .collect();
+    let reversals = alternating(24, 5.0, -5.0);
     let ticks = jogs(&mut rig, &reversals, 60);
     assert_eq!(ticks, vec![0; ticks.len()], "reversals");
     assert!(board.lock().unwrap().is_moving(), "jogging");
@@ -52,9 +37,7 @@ fn a_speed_up_at_cruise_reaches_the_wire_in_the_first_tick_with_another_step_del
     let (mut rig, _board, _) = stepper_rig(0x90);
     rig.stamp_io(PROMPT);
     wait_online(&mut rig, 1);
-    let speeds: Vec<f64> = (0..12)
-        .map(|i| if i % 2 == 0 { 3.0 } else { 6.0 })
-        .collect();
+    let speeds = alternating(12, 3.0, 6.0);
     let ticks = jogs(&mut rig, &speeds, 60);
     // 300 → 600 steps/s at 20 000 steps/s²: +20 steps/s a tick. The step delay is whole
     // 0.1 ms (rounded up: never faster than the profile): 300 steps/s is 3.4 ms, 320 is

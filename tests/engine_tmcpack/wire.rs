@@ -5,6 +5,7 @@
 
 use super::*;
 use crate::support::lag::PROMPT;
+use crate::support::wire::{alternating, goal_to_wire_ticks};
 
 /// One query exchange at 19200 baud with the driver's `$40` of 2 ms: two 9-byte words
 /// (10 bits a byte) and the switch-over on both sides of the answer.
@@ -19,24 +20,13 @@ fn a_goal_waits_for_at_most_the_one_exchange_in_flight_and_the_tick_that_takes_i
     rig.stamp_io(PROMPT);
     wait_online(&mut rig, 2);
     let bound = 2 + exchange().as_millis() as u64 + 1;
-    let mut ticks = Vec::new();
-    for request in 0..40_u32 {
-        let velocity = if request % 2 == 0 { 10.0 } else { -10.0 };
-        let reply = rig.command(0, CommandKind::Velocity, [velocity, 0.0, 0.0]);
-        assert_eq!(reply.result(), Ok(()), "request {request}");
-        let goal_tick = reply.tick_applied;
-        assert!(
-            rig.run_until(Duration::from_millis(100), |frame| {
-                frame.wire[0].goal_tick == goal_tick && frame.wire[0].written()
-            }),
-            "request {request}: its `$25` is written"
-        );
-        let wire = rig.frame.wire[0];
-        assert!(wire.wire_tick >= goal_tick, "{wire:?}");
-        ticks.push(wire.wire_tick - goal_tick);
-        // Every phase of the polls' exchanges.
-        rig.run((request * 7 % 17) as usize);
-    }
+    // Every phase of the polls' exchanges.
+    let ticks = goal_to_wire_ticks(
+        &mut rig,
+        &alternating(40, 10.0, -10.0),
+        Duration::from_millis(100),
+        |request| request * 7 % 17,
+    );
     assert!(
         ticks.iter().all(|t| *t <= bound),
         "{ticks:?} beyond {bound}"

@@ -4,3 +4,4 @@
 pub mod counting_alloc;
 pub mod lag;
 pub mod rig;
+pub mod wire;
