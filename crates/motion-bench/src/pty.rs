@@ -141,7 +141,7 @@ impl PtyBoard {
             std::thread::Builder::new()
                 .name("pty-board".to_owned())
                 .spawn(move || {
-                    let _ = crate::rt::set_up_thread(None, None);
+                    let _ = crate::rt::set_up_thread(crate::rt::board_priority(), None);
                     let watch = LineWatch::new(framing, prefix, lines);
                     if let Err(e) = serve(&master, device, baud, &stop, watch)
                         && let Ok(mut slot) = failure.lock()

@@ -56,6 +56,22 @@ impl ThreadSetup {
     }
 }
 
+/// The SCHED_FIFO priority of the bench's simulated boards' threads (0: normal policy).
+static BOARD_PRIORITY: std::sync::atomic::AtomicU8 = std::sync::atomic::AtomicU8::new(0);
+
+/// Runs the threads that simulate boards (started after this call) at SCHED_FIFO
+/// `priority`: with `--rt-priority` they stand for external hardware, which has processors
+/// of its own and is never kept waiting by the server it talks to.
+pub fn set_board_priority(priority: Option<u8>) {
+    BOARD_PRIORITY.store(priority.unwrap_or(0), std::sync::atomic::Ordering::Relaxed);
+}
+
+/// The priority [`set_board_priority`] gave.
+pub fn board_priority() -> Option<u8> {
+    let priority = BOARD_PRIORITY.load(std::sync::atomic::Ordering::Relaxed);
+    (priority > 0).then_some(priority)
+}
+
 /// Applies timer slack 1 ns, then SCHED_FIFO `priority` and the pinning to `cpu` when given,
 /// to the calling thread.
 pub fn set_up_thread(priority: Option<u8>, cpu: Option<usize>) -> ThreadSetup {

@@ -200,6 +200,11 @@ pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
         std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
         Ok(dir)
     };
+    let server_rt = sweep::ServerRt {
+        priority: cli.rt_priority,
+        cpu: cli.cpu,
+    };
+    crate::rt::set_board_priority(cli.rt_priority);
     let wire_run = if cli.command_to_wire {
         eprintln!(
             "[wire] command to wire: own motiond with four simulated boards ({:?} each), then each board's transport baseline ({:?} each)",
@@ -207,7 +212,7 @@ pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
             (cli.duration / 3).max(core::time::Duration::from_secs(1))
         );
         match sweep::find_motiond(cli.motiond.as_deref())
-            .and_then(|motiond| wire::run(&motiond, hz, cli.duration, &scratch()?))
+            .and_then(|motiond| wire::run(&motiond, hz, server_rt, cli.duration, &scratch()?))
         {
             Ok(run) => Some(run),
             Err(e) => {
@@ -241,6 +246,7 @@ pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
                 &motiond,
                 cli.io_before.as_deref(),
                 hz,
+                server_rt,
                 cli.duration,
                 &scratch()?,
             )

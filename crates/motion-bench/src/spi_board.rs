@@ -66,7 +66,7 @@ impl SpiBoard {
             std::thread::Builder::new()
                 .name("spi-board".to_owned())
                 .spawn(move || {
-                    let _ = crate::rt::set_up_thread(None, None);
+                    let _ = crate::rt::set_up_thread(crate::rt::board_priority(), None);
                     if let Err(e) = serve(&listener, device, &stop, watch.as_ref())
                         && let Ok(mut slot) = failure.lock()
                     {

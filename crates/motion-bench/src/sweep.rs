@@ -43,6 +43,43 @@ pub enum SweepPoint {
     },
 }
 
+/// The real-time keys the bench's own motiond gets in figure 9 and the I/O phase: the
+/// bench's `--rt-priority` and `--cpu` (the server's I/O threads then take the priority
+/// below the tick's, `[server] io_rt_priority`'s default).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct ServerRt {
+    /// `[server] rt_priority`.
+    pub priority: Option<u8>,
+    /// `[server] cpu`.
+    pub cpu: Option<usize>,
+}
+
+impl ServerRt {
+    /// The `[server]` lines (empty without either).
+    pub fn keys(self) -> String {
+        let mut text = String::new();
+        if let Some(priority) = self.priority {
+            let _ = writeln!(text, "rt_priority = {priority}");
+        }
+        if let Some(cpu) = self.cpu {
+            let _ = writeln!(text, "cpu = {cpu}");
+        }
+        text
+    }
+
+    /// For the notes: what the bench's motiond ran with.
+    pub fn describe(self) -> String {
+        match (self.priority, self.cpu) {
+            (None, None) => "normal policy".to_owned(),
+            (priority, cpu) => format!(
+                "rt_priority {}, cpu {}",
+                priority.map_or("none".to_owned(), |p| p.to_string()),
+                cpu.map_or("any".to_owned(), |c| c.to_string())
+            ),
+        }
+    }
+}
+
 /// The motiond binary: `explicit`, else beside the running program (an installed or built
 /// `motionctl`: `~/.cargo/bin/motiond`, `target/release/motiond`), else one directory up (the
 /// cargo bench: `target/release/deps/latency-…` → `target/release/motiond`), else `motiond`

@@ -32,7 +32,7 @@ use crate::ipc;
 use crate::pty::LineSeen;
 use crate::report::{Row, Unit};
 use crate::rt::{XorShift, now_ns, sleep_until_ns};
-use crate::sweep::{Server, last_line};
+use crate::sweep::{Server, ServerRt, last_line};
 use crate::wire_board::{Served, WireBoard, config_text};
 
 /// The QSB's jog plan ends with COMMAND 9, MOTOR JOG.
@@ -101,6 +101,8 @@ pub struct WireRun {
     pub ticks: Dist,
     /// How long until every axis was fresh after motiond started.
     pub online_after: Duration,
+    /// The real-time keys the bench's motiond ran with.
+    pub rt: ServerRt,
 }
 
 /// A served board and where its messages arrive.
@@ -140,6 +142,7 @@ fn serve(board: WireBoard, link: PathBuf) -> Result<Fixture, String> {
 pub fn run(
     motiond: &Path,
     tick_hz: u32,
+    rt: ServerRt,
     duration: Duration,
     dir: &Path,
 ) -> Result<WireRun, String> {
@@ -147,6 +150,7 @@ pub fn run(
         boards: WireBoard::ALL.into_iter().map(BoardWire::new).collect(),
         ticks: Dist::new(),
         online_after: Duration::ZERO,
+        rt,
     };
     {
         let mut fixtures = Vec::new();
@@ -163,7 +167,7 @@ pub fn run(
                 .map_or(Path::new(""), |f| f.link.as_path());
             (board, link)
         });
-        std::fs::write(&config, config_text(&name, tick_hz, &links))
+        std::fs::write(&config, config_text(&name, tick_hz, rt, &links))
             .map_err(|e| format!("{}: {e}", config.display()))?;
         let mut server = Server::start(motiond, &config, &log)?;
         let outcome = with_motiond(&mut server, &name, &fixtures, duration, &log, &mut result);
@@ -470,9 +474,10 @@ pub fn rows(run: &WireRun, ticks_baseline: Option<Summary>) -> Vec<Row> {
                 board.transport()
             ),
             note: format!(
-                "a motiond started by the bench with all four boards simulated in the bench (online after {:.1} s); \
+                "a motiond started by the bench ({}) with all four boards simulated in the bench (online after {:.1} s); \
                  t0 = CLOCK_MONOTONIC before send_copy, t1 = the board thread's read of the message's first byte; \
                  Velocity ±{} alternating, 1 ms + up to {} ms apart; lost {}, refused [{}]; baseline lost {}",
+                run.rt.describe(),
                 run.online_after.as_secs_f64(),
                 board.velocity(),
                 board.pace_ns() / 1_000_000,

@@ -16,7 +16,7 @@ use rtrb::RingBuffer;
 use crate::boards::sim_link;
 use crate::config::{ServerConfig, Transport};
 use crate::io::{self, IoThread, LinkPort};
-use crate::rt::monotonic_now;
+use crate::rt::{IoRt, monotonic_now};
 use crate::services;
 use crate::stats::format_ns;
 use crate::systemd::{Supervisor, TickHealth};
@@ -99,12 +99,27 @@ pub fn run(config: ServerConfig, options: RunOptions) -> anyhow::Result<()> {
     let io_stop = Arc::new(AtomicBool::new(false));
     let mut ports: Vec<LinkPort> = Vec::with_capacity(links.len());
     let mut io_threads: Vec<IoThread> = Vec::with_capacity(links.len());
+    let io_options = io::IoThreadOptions {
+        epoch,
+        idle: io::IDLE_WAIT,
+        rt_priority: config.server.io_rt_priority,
+    };
+    let mut io_rt = IoRt::default();
     for (spec, link) in config.links.iter().zip(links) {
-        let (port, thread) =
-            io::spawn(&spec.name, link, epoch, io::IDLE_WAIT, Arc::clone(&io_stop))
-                .with_context(|| format!("starting the I/O thread of link `{}`", spec.name))?;
+        let (port, mut thread) = io::spawn(&spec.name, link, io_options, Arc::clone(&io_stop))
+            .with_context(|| format!("starting the I/O thread of link `{}`", spec.name))?;
+        match thread.take_fifo() {
+            Some(Ok(priority)) => io_rt.fifo = Some(priority),
+            Some(Err(error)) => io_rt.problems.push(error),
+            None => {}
+        }
         ports.push(port);
         io_threads.push(thread);
+    }
+    if !io_rt.problems.is_empty() {
+        // One thread's answer stands for all of them (same process, same limits).
+        io_rt.fifo = None;
+        io_rt.problems.truncate(1);
     }
 
     let health = Arc::new(TickHealth::default());
@@ -132,6 +147,7 @@ pub fn run(config: ServerConfig, options: RunOptions) -> anyhow::Result<()> {
         clients_alive: Arc::clone(&clients_alive),
         reports: report_tx,
         require_rt: options.require_rt,
+        io_rt,
         params,
         estop_signal,
         health: Arc::clone(&health),

@@ -36,6 +36,8 @@ pub fn sleep_until(deadline: Duration) {
 pub struct RtStatus {
     /// SCHED_FIFO priority in force.
     pub fifo: Option<u8>,
+    /// SCHED_FIFO priority of the links' I/O threads.
+    pub io_fifo: Option<u8>,
     /// Core the tick thread is pinned to.
     pub pinned: Option<usize>,
     /// mlockall succeeded.
@@ -71,8 +73,11 @@ impl RtStatus {
     /// One line for the start-up summary.
     pub fn summary(&self) -> String {
         format!(
-            "SCHED_FIFO {} | pinned {} | memory {} | cpu_dma_latency {} | timer slack {}",
+            "SCHED_FIFO {} | I/O threads {} | pinned {} | memory {} | cpu_dma_latency {} | \
+             timer slack {}",
             self.fifo.map_or("off".into(), |p| format!("prio {p}")),
+            self.io_fifo
+                .map_or("normal policy".into(), |p| format!("SCHED_FIFO prio {p}")),
             self.pinned.map_or("no".into(), |c| format!("cpu {c}")),
             if self.locked { "locked" } else { "not locked" },
             if self.dma_latency {
@@ -83,6 +88,16 @@ impl RtStatus {
             if self.timer_slack { "1 ns" } else { "default" },
         )
     }
+}
+
+/// What the I/O threads' real-time set-up achieved (each thread sets its own policy as it
+/// starts: [`crate::io::IoThreadOptions::rt_priority`]).
+#[derive(Debug, Default)]
+pub struct IoRt {
+    /// SCHED_FIFO priority every I/O thread runs at.
+    pub fifo: Option<u8>,
+    /// What could not be done (one entry: the threads share the process's limits).
+    pub problems: Vec<RtError>,
 }
 
 /// Keeps `/dev/cpu_dma_latency` at 0 while it lives (the kernel honours the request only as

@@ -18,7 +18,7 @@ use rtrb::{Consumer, Producer};
 use crate::config::ServerSettings;
 use crate::error::{RtError, StartError};
 use crate::io::{LinkEvent, LinkPort, NEVER, PACKET_LEN, Packet};
-use crate::rt::{self, RtStatus, monotonic_now, sleep_until};
+use crate::rt::{self, IoRt, RtStatus, monotonic_now, sleep_until};
 use crate::services::{ClientDirectory, CommandFactory, Ipc, Services, SlotUse};
 use crate::stats::Latency;
 
@@ -129,6 +129,8 @@ pub struct TickSetup {
     pub reports: Producer<Report>,
     /// `--require-rt`: fail unless the real-time set-up is complete.
     pub require_rt: bool,
+    /// What the I/O threads' real-time set-up achieved.
+    pub io_rt: IoRt,
     /// The machine parameters in effect (published once on `params`).
     pub params: Box<MachineParams>,
     /// Set by SIGUSR1: latch the e-stop.
@@ -178,8 +180,13 @@ impl CommandPort for IpcCommands<'_> {
 fn set_up_rt(
     settings: &ServerSettings,
     require_rt: bool,
+    io_rt: IoRt,
 ) -> Result<(RtStatus, Option<rt::DmaLatencyGuard>), StartError> {
-    let mut status = RtStatus::default();
+    let mut status = RtStatus {
+        io_fifo: io_rt.fifo,
+        problems: io_rt.problems,
+        ..RtStatus::default()
+    };
     let problem = |status: &mut RtStatus, error: RtError| status.problems.push(error);
     if let Some(priority) = settings.rt_priority {
         match rt::set_fifo(priority) {
@@ -214,7 +221,8 @@ fn set_up_rt(
         }
     }
     rt::prefault_stack();
-    let wanted_fifo = settings.rt_priority.is_some() && status.fifo.is_none();
+    let wanted_fifo = (settings.rt_priority.is_some() && status.fifo.is_none())
+        || (settings.io_rt_priority.is_some() && status.io_fifo.is_none());
     let wanted_lock = settings.lock_memory && !status.locked;
     if require_rt && (wanted_fifo || wanted_lock || settings.rt_priority.is_none()) {
         let missing = if settings.rt_priority.is_none() {
@@ -242,7 +250,11 @@ pub fn run(mut setup: TickSetup) {
             return;
         }
     };
-    let (rt_status, _dma_guard) = match set_up_rt(&setup.settings, setup.require_rt) {
+    let (rt_status, _dma_guard) = match set_up_rt(
+        &setup.settings,
+        setup.require_rt,
+        std::mem::take(&mut setup.io_rt),
+    ) {
         Ok(done) => done,
         Err(error) => {
             report_at_start(&mut setup, Report::Failed(error));

@@ -371,3 +371,45 @@ fn signals_are_checked_against_the_board_s_pins() {
         "a spimotor board has no I/O pins",
     );
 }
+
+/// `[server] io_rt_priority`: unless given, one below `rt_priority` (the tick preempts the
+/// I/O threads, they preempt ordinary work); 0 keeps them at the normal policy; without
+/// `rt_priority` they stay at the normal policy unless given.
+#[test]
+fn io_threads_take_the_priority_below_the_tick_s_unless_told_otherwise() {
+    let parse = |server_keys: &str| {
+        let text = GOOD.replace("claim_lease_ms = 500", server_keys);
+        motiond::config::ServerConfig::parse(std::path::Path::new("io.toml"), &text)
+            .unwrap_or_else(|e| panic!("{server_keys}: {e}"))
+            .server
+    };
+    let plain = parse("");
+    assert_eq!((plain.rt_priority, plain.io_rt_priority), (None, None));
+    let tick = parse("rt_priority = 80");
+    assert_eq!(
+        (tick.rt_priority, tick.io_rt_priority),
+        (Some(80), Some(79))
+    );
+    // The lowest tick priority leaves nothing below it: the I/O threads share it.
+    assert_eq!(parse("rt_priority = 1").io_rt_priority, Some(1));
+    let off = parse("rt_priority = 80\nio_rt_priority = 0");
+    assert_eq!((off.rt_priority, off.io_rt_priority), (Some(80), None));
+    let given = parse("io_rt_priority = 60");
+    assert_eq!((given.rt_priority, given.io_rt_priority), (None, Some(60)));
+    for (name, to, says) in [
+        ("io_rt_high.toml", "io_rt_priority = 100", "allowed: 0..=99"),
+        (
+            "io_rt_negative.toml",
+            "io_rt_priority = -1",
+            "allowed: 0..=99",
+        ),
+        (
+            "io_rt_type.toml",
+            "io_rt_priority = \"high\"",
+            "invalid type",
+        ),
+    ] {
+        let text = GOOD.replace("claim_lease_ms = 500", to);
+        fails(name, &text, to, "server.io_rt_priority", says);
+    }
+}

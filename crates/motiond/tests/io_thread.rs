@@ -24,7 +24,12 @@ const PATIENCE: Duration = Duration::from_secs(10);
 fn start(link: Box<dyn Link>) -> (LinkPort, IoThread, Arc<AtomicBool>) {
     let stop = Arc::new(AtomicBool::new(false));
     let epoch = motiond::rt::monotonic_now();
-    let (port, thread) = io::spawn("test", link, epoch, NEVER, Arc::clone(&stop)).expect("spawn");
+    let options = io::IoThreadOptions {
+        epoch,
+        idle: NEVER,
+        rt_priority: None,
+    };
+    let (port, thread) = io::spawn("test", link, options, Arc::clone(&stop)).expect("spawn");
     (port, thread, stop)
 }
 
@@ -160,5 +165,73 @@ fn a_simulated_link_is_looked_at_again_at_its_next_event() {
     port.waker.wake();
     // Nothing but the link's next event (the device's delayed answer) wakes the thread.
     assert_eq!(receive(&mut port, 4), b"ping");
+    finish(thread, &stop);
+}
+
+/// The scheduling policy (field 41 of `/proc/self/task/TID/stat`, 1 = SCHED_FIFO) and the
+/// real-time priority (field 40) of this process's thread named `comm`.
+fn policy_of_thread(comm: &str) -> Option<(u32, u32)> {
+    for task in std::fs::read_dir("/proc/self/task").ok()?.flatten() {
+        let path = task.path();
+        let name = std::fs::read_to_string(path.join("comm")).unwrap_or_default();
+        if name.trim_end() != comm {
+            continue;
+        }
+        let stat = std::fs::read_to_string(path.join("stat")).ok()?;
+        // Fields after the parenthesised name start at field 3.
+        let rest = &stat[stat.rfind(')')? + 2..];
+        let fields: Vec<&str> = rest.split_whitespace().collect();
+        let priority = fields.get(40 - 3)?.parse().ok()?;
+        let policy = fields.get(41 - 3)?.parse().ok()?;
+        return Some((policy, priority));
+    }
+    None
+}
+
+/// `[server] io_rt_priority`: the thread takes SCHED_FIFO at that priority before its first
+/// pass and says whether it got it; refused (no CAP_SYS_NICE, no RLIMIT_RTPRIO), it says
+/// why, naming the priority, and serves its link at the normal policy.
+#[test]
+fn an_io_thread_takes_the_real_time_priority_it_is_given_or_says_why_not() {
+    let (master, link) = pty_link();
+    let stop = Arc::new(AtomicBool::new(false));
+    let options = io::IoThreadOptions {
+        epoch: motiond::rt::monotonic_now(),
+        idle: NEVER,
+        rt_priority: Some(7),
+    };
+    let (mut port, mut thread) =
+        io::spawn("rtprio", Box::new(link), options, Arc::clone(&stop)).expect("spawn");
+    match thread.take_fifo() {
+        Some(Ok(priority)) => {
+            assert_eq!(priority, 7);
+            assert_eq!(policy_of_thread("io-rtprio"), Some((1, 7)));
+        }
+        Some(Err(error)) => {
+            let text = error.to_string();
+            assert!(text.contains("SCHED_FIFO priority 7"), "{text}");
+            assert_eq!(policy_of_thread("io-rtprio").map(|(p, _)| p), Some(0));
+        }
+        None => panic!("a priority was asked for: the thread must answer"),
+    }
+    assert!(thread.take_fifo().is_none(), "the answer is taken once");
+    nix::unistd::write(&master, b"r 14 00001113 !\r\n").expect("write on the master");
+    assert_eq!(receive(&mut port, 17), b"r 14 00001113 !\r\n");
+    finish(thread, &stop);
+}
+
+#[test]
+fn an_io_thread_without_a_priority_stays_at_the_normal_policy() {
+    let (_master, link) = pty_link();
+    let stop = Arc::new(AtomicBool::new(false));
+    let options = io::IoThreadOptions {
+        epoch: motiond::rt::monotonic_now(),
+        idle: NEVER,
+        rt_priority: None,
+    };
+    let (_port, mut thread) =
+        io::spawn("plain", Box::new(link), options, Arc::clone(&stop)).expect("spawn");
+    assert!(thread.take_fifo().is_none());
+    assert_eq!(policy_of_thread("io-plain").map(|(p, _)| p), Some(0));
     finish(thread, &stop);
 }

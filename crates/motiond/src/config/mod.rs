@@ -38,6 +38,11 @@ pub struct ServerSettings {
     pub command_timeout: Duration,
     /// SCHED_FIFO priority of the tick thread.
     pub rt_priority: Option<u8>,
+    /// SCHED_FIFO priority of the links' I/O threads (`None`: the normal policy). Unless
+    /// given, one below `rt_priority` when that is set: the tick preempts them, and they
+    /// preempt everything that is not real-time, so a queued command reaches the wire and
+    /// a reply reaches the ring without waiting for a core behind ordinary work.
+    pub io_rt_priority: Option<u8>,
     /// Core the tick thread is pinned to.
     pub cpu: Option<usize>,
     /// mlockall after the services exist.

@@ -87,6 +87,7 @@ pub(crate) struct RawServer {
     pub tick_hz: Option<Spanned<Int>>,
     pub command_timeout_ms: Option<Spanned<Int>>,
     pub rt_priority: Option<Spanned<Int>>,
+    pub io_rt_priority: Option<Spanned<Int>>,
     pub cpu: Option<Spanned<Int>>,
     pub lock_memory: Option<Spanned<bool>>,
     pub max_clients: Option<Spanned<Int>>,

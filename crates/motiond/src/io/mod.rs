@@ -34,6 +34,8 @@ use rtrb::{Consumer, Producer, RingBuffer};
 
 use worker::Worker;
 
+use crate::error::RtError;
+
 /// Bytes one packet carries (a driver message, or a chunk of received bytes).
 pub const PACKET_LEN: usize = 256;
 /// Packets each queue holds.
@@ -232,9 +234,16 @@ impl Waker {
 pub struct IoThread {
     handle: JoinHandle<()>,
     waker: Arc<Waker>,
+    fifo: Option<Result<u8, RtError>>,
 }
 
 impl IoThread {
+    /// What became of the SCHED_FIFO priority asked for at [`spawn`] (`None`: none asked
+    /// for); taken once.
+    pub fn take_fifo(&mut self) -> Option<Result<u8, RtError>> {
+        self.fifo.take()
+    }
+
     /// Wakes the thread so it sees `stop` (set before), and waits for it to finish.
     pub fn join(self) {
         self.waker.wake();
@@ -244,16 +253,27 @@ impl IoThread {
     }
 }
 
-/// Starts the I/O thread of `link` (named `io-<name>`); `epoch` is the monotonic instant
-/// all of the server's `now` values count from; `idle` is the longest the thread sleeps
-/// when neither the link's descriptor, its next event, the tick's wish nor a wake-up
-/// rouse it (only a simulated link's injected faults need it: a real transport's failure
-/// shows on its descriptor).
+/// How an I/O thread is started.
+#[derive(Debug, Clone, Copy)]
+pub struct IoThreadOptions {
+    /// The monotonic instant all of the server's `now` values count from.
+    pub epoch: Duration,
+    /// The longest the thread sleeps when neither the link's descriptor, its next event,
+    /// the tick's wish nor a wake-up rouse it (only a simulated link's injected faults need
+    /// it: a real transport's failure shows on its descriptor).
+    pub idle: Duration,
+    /// SCHED_FIFO priority the thread takes before its first pass (`None`: the normal
+    /// policy). Failing to get it is reported by [`IoThread::take_fifo`]; the thread
+    /// runs on at the normal policy.
+    pub rt_priority: Option<u8>,
+}
+
+/// Starts the I/O thread of `link` (named `io-<name>`) and waits until it has tried to
+/// take its real-time priority.
 pub fn spawn(
     name: &str,
     link: Box<dyn Link>,
-    epoch: Duration,
-    idle: Duration,
+    options: IoThreadOptions,
     stop: Arc<AtomicBool>,
 ) -> std::io::Result<(LinkPort, IoThread)> {
     let (tx_producer, tx_consumer) = RingBuffer::new(QUEUE_PACKETS);
@@ -274,11 +294,20 @@ pub fn spawn(
         Arc::clone(&counters),
         Arc::clone(&waker),
         stop,
-        idle,
+        options.idle,
     );
+    let (fifo_tx, fifo_rx) = std::sync::mpsc::sync_channel(1);
+    let priority = options.rt_priority;
+    let epoch = options.epoch;
     let handle = std::thread::Builder::new()
         .name(format!("io-{name}"))
-        .spawn(move || worker.run(epoch))?;
+        .spawn(move || {
+            let _ = fifo_tx.send(priority.map(|p| crate::rt::set_fifo(p).map(|()| p)));
+            drop(fifo_tx);
+            worker.run(epoch);
+        })?;
+    // The thread sends before anything else; a thread that died first reports nothing.
+    let fifo = fifo_rx.recv().ok().flatten();
     let port = LinkPort {
         tx: tx_producer,
         rx: rx_consumer,
@@ -288,7 +317,14 @@ pub fn spawn(
         counters,
         waker: Arc::clone(&waker),
     };
-    Ok((port, IoThread { handle, waker }))
+    Ok((
+        port,
+        IoThread {
+            handle,
+            waker,
+            fifo,
+        },
+    ))
 }
 
 /// Nanoseconds of `duration`, saturating.

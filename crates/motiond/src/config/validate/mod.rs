@@ -350,6 +350,7 @@ impl Validator<'_, '_> {
             tick_hz: 1000,
             command_timeout: Duration::from_millis(250),
             rt_priority: None,
+            io_rt_priority: None,
             cpu: None,
             lock_memory: false,
             max_clients: 32,
@@ -388,6 +389,13 @@ impl Validator<'_, '_> {
             settings.rt_priority = self
                 .int_in(v, "server.rt_priority", 1..=99)
                 .map(|v| v as u8);
+        }
+        settings.io_rt_priority = settings.rt_priority.map(|p| p.saturating_sub(1).max(1));
+        if let Some(v) = &raw.io_rt_priority
+            && let Some(v) = self.int_in(v, "server.io_rt_priority", 0..=99)
+        {
+            // 0: the normal policy, explicitly (I/O threads beside a real-time tick).
+            settings.io_rt_priority = (v > 0).then_some(v as u8);
         }
         if let Some(v) = &raw.cpu {
             settings.cpu = self.int_in(v, "server.cpu", 0..=1023).map(|v| v as usize);
