@@ -124,6 +124,34 @@ fn nine_bytes_at_19200_baud_take_4_6875_ms_each_way() {
     assert_eq!(link.next_event(done), None);
 }
 
+/// A board behind USB (the QSB: "a virtual COM port connection through the USB", QSB
+/// command list) is polled once per 1 ms frame: its bytes reach the host together at the
+/// end of the frame in which their last bit arrived, never before, and the link's next
+/// event is that frame's end, not each byte.
+#[test]
+fn a_board_behind_usb_hands_its_bytes_over_at_the_end_of_each_frame() {
+    let (device, _) = Responder::new(1);
+    let mut link = SimLink::stream("usb", 19_200, Box::new(device)).with_host_frames(ms(1.0));
+    link.write(T0, &REQUEST).unwrap();
+    let frame_time = ms(4.6875);
+    assert!(read_all(&mut link, T0 + frame_time).is_empty());
+    // The reply's bytes arrive from T0 + 5.208 ms to T0 + 9.375 ms; the first (arrived at
+    // 5.208 ms) is the host's at the end of that frame, 6 ms.
+    assert_eq!(link.next_event(T0 + frame_time), Some(T0 + ms(6.0)));
+    assert!(read_all(&mut link, T0 + ms(6.0) - NS).is_empty());
+    // Bytes 1 and 2 (5.208, 5.729 ms) at 6 ms; 3 and 4 (6.25, 6.77 ms) at 7 ms.
+    assert_eq!(read_all(&mut link, T0 + ms(6.0)), REPLY[..2]);
+    assert_eq!(link.next_event(T0 + ms(6.0)), Some(T0 + ms(7.0)));
+    assert!(read_all(&mut link, T0 + ms(6.5)).is_empty());
+    assert_eq!(read_all(&mut link, T0 + ms(7.0)), REPLY[2..4]);
+    // The last byte (9.375 ms) at 10 ms: the whole reply, in frame-sized pieces.
+    let mut rest = read_all(&mut link, T0 + ms(9.9));
+    assert_eq!(rest, REPLY[4..8]);
+    rest = read_all(&mut link, T0 + ms(10.0));
+    assert_eq!(rest, REPLY[8..]);
+    assert_eq!(link.next_event(T0 + ms(10.0)), None);
+}
+
 #[test]
 fn a_late_reader_sees_exactly_the_same_bytes_and_times() {
     let (device, heard_at) = Responder::new(1);
@@ -367,8 +395,8 @@ fn spi_wire_time_float_high_and_contention() {
         .with(board(0x92))
         .with(board(0x92));
     let mut link = SimLink::spi("motors", 500_000, Box::new(bus));
-    // 42 bytes at 500 kHz: 42 × 8 / 500000 s = 672 µs; each MISO byte is readable once
-    // its 8th clock has passed.
+    // 42 bytes at 500 kHz: 42 × 8 / 500000 s = 672 µs; the MISO bytes are readable together
+    // once the last clock has passed (a spidev transfer returns whole).
     let mut mosi = [0u8; 42];
     mosi[0] = 0x91;
     assert_eq!(link.write(T0, &mosi).unwrap(), 42);
@@ -380,14 +408,14 @@ fn spi_wire_time_float_high_and_contention() {
     assert_eq!(
         link.read(T0 + Duration::from_micros(672) - NS, &mut buf)
             .unwrap(),
-        41
+        0
     );
     assert_eq!(
         link.read(T0 + Duration::from_micros(672), &mut buf)
             .unwrap(),
-        1
+        42
     );
-    assert_eq!(buf[0], 42);
+    assert_eq!(buf[..42], (1..=42).collect::<Vec<u8>>()[..]);
     // A transaction nobody answers reads 0xFF; two drivers AND.
     mosi[0] = 0x94;
     link.write(T0 + ms(1.0), &mosi[..3]).unwrap();

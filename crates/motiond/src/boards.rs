@@ -47,7 +47,14 @@ pub struct Board {
     pub describe: fn(&DriverSpec) -> Result<Vec<Param>, SpecError>,
     /// The simulated board of device `index`, configured like the machine.
     pub simulate: fn(&ServerConfig, usize, &DeviceSpec) -> SimBoard,
+    /// How the board's bytes reach the host on a simulated link: `Some(frame)` for a
+    /// board behind USB (handed over at the end of each bus frame), `None` as each byte's
+    /// wire time passes.
+    pub host_frame: Option<core::time::Duration>,
 }
+
+/// A full-speed USB device is polled once per 1 ms frame.
+const USB_FRAME: core::time::Duration = core::time::Duration::from_millis(1);
 
 const QQ2DRV: Board = Board {
     model: Model::Qq2drv,
@@ -60,6 +67,7 @@ const QQ2DRV: Board = Board {
     simulate: |config, index, device| {
         SimBoard::Spi(Box::new(sim_models::qq2drv::model(config, index, device)))
     },
+    host_frame: None,
 };
 
 const TMCPACK: Board = Board {
@@ -73,6 +81,8 @@ const TMCPACK: Board = Board {
     simulate: |config, index, device| {
         SimBoard::Stream(Box::new(sim_models::tmcpack::model(config, index, device)))
     },
+    // RS-232 or RS-485 (manual 2): a UART, whatever adapter the host uses.
+    host_frame: None,
 };
 
 const SPIMOTOR: Board = Board {
@@ -86,6 +96,7 @@ const SPIMOTOR: Board = Board {
     simulate: |config, index, device| {
         SimBoard::Spi(Box::new(sim_models::spimotor::model(config, index, device)))
     },
+    host_frame: None,
 };
 
 const QSB: Board = Board {
@@ -95,6 +106,9 @@ const QSB: Board = Board {
     simulate: |config, index, device| {
         SimBoard::Stream(Box::new(sim_models::qsb::model(config, index, device)))
     },
+    // "The commands and responses are sent in RS-232 format over a virtual COM port
+    // connection through the USB" (QSB command list, Communications).
+    host_frame: Some(USB_FRAME),
 };
 
 /// The registry entry of `model`.
@@ -164,7 +178,16 @@ pub fn sim_link(config: &ServerConfig, link: usize) -> SimLink {
     if spi {
         SimLink::spi(name, rate, Box::new(spi_bus))
     } else {
-        SimLink::stream(name, rate, Box::new(stream_bus))
+        let link = SimLink::stream(name, rate, Box::new(stream_bus));
+        // Devices behind USB share its frames (a link mixes no others in practice).
+        let frame = devices
+            .iter()
+            .filter_map(|(_, d)| board(d.model).host_frame)
+            .max();
+        match frame {
+            Some(frame) => link.with_host_frames(frame),
+            None => link,
+        }
     }
 }
 

@@ -114,6 +114,8 @@ pub struct SimLink {
     scratch: Vec<u8>,
     overruns: u64,
     stats: LinkStats,
+    /// [`SimLink::with_host_frames`].
+    host_frame: Option<Duration>,
 }
 
 impl fmt::Debug for SimLink {
@@ -179,6 +181,7 @@ impl SimLink {
             scratch: vec![0; 256],
             overruns: 0,
             stats: LinkStats::default(),
+            host_frame: None,
         }
     }
 
@@ -187,6 +190,16 @@ impl SimLink {
     pub fn with_seed(mut self, seed: u64) -> Self {
         self.faults = SimFaults::new(seed);
         self.generation = Some(0);
+        self
+    }
+
+    /// Hands the device's bytes to the host at the end of each `frame` (a multiple of it
+    /// since the link's time origin) instead of as each byte's wire time passes: a board
+    /// behind USB (a virtual COM port) is polled once per bus frame, 1 ms at full speed,
+    /// and its bytes reach the host's tty together. A zero `frame` keeps per-byte delivery.
+    #[must_use]
+    pub fn with_host_frames(mut self, frame: Duration) -> Self {
+        self.host_frame = (!frame.is_zero()).then_some(frame);
         self
     }
 
@@ -262,7 +275,13 @@ impl SimLink {
     }
 
     /// Queues a byte for the host, or counts an overrun when the host is too far behind.
-    fn push_to_host(&mut self, received: Received) {
+    fn push_to_host(&mut self, mut received: Received) {
+        if let Some(frame) = self.host_frame {
+            let frame_ns = frame.as_nanos().max(1);
+            let at_ns = received.at.as_nanos();
+            let end_ns = at_ns.div_ceil(frame_ns).saturating_mul(frame_ns);
+            received.at = Duration::from_nanos(u64::try_from(end_ns).unwrap_or(u64::MAX));
+        }
         if self.to_host.len() >= self.limits.to_host {
             self.overruns += 1;
         } else {
@@ -522,14 +541,18 @@ impl SimLink {
         }
         miso.clear();
         miso.resize(len, 0xFF);
-        let (start, end) = line.send(now, 8 * len as u64);
+        let (_, end) = line.send(now, 8 * len as u64);
         self.device_time = self.device_time.max(end);
         // An undriven MISO floats high: the buffer already reads 0xFF.
         let _driven = device.transfer(self.device_time, mosi, miso);
-        let rate = line.rate();
+        // The MISO bytes reach the host together when the transaction's last clock has
+        // passed: a spidev transfer (SPI_IOC_MESSAGE) returns whole, and an SPI socket peer
+        // answers a transaction with all of its bytes. (Handing them over one by one at each
+        // byte's 8th clock woke the link's I/O thread once per byte for nothing: no driver
+        // can use half a transaction.)
         let mut faults = self.faults.lock();
         let mut arrivals = Vec::with_capacity(len);
-        for (i, byte) in miso.iter().copied().enumerate() {
+        for byte in miso.iter().copied() {
             let byte = if let Some(g) = faults.garbage.pop_front() {
                 g
             } else if faults.drops(Direction::ToHost) {
@@ -538,7 +561,7 @@ impl SimLink {
                 byte
             };
             arrivals.push(Received {
-                at: start.saturating_add(super::line::bits_time(8 * (i as u64 + 1), rate)),
+                at: end,
                 byte,
                 framing_error: false,
             });
