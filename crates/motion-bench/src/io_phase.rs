@@ -34,7 +34,7 @@ use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
 use crate::args::PeerMode;
 use crate::dist::Dist;
 use crate::peer::Peer;
-use crate::pty::{BAUD, PtyBoard, queued};
+use crate::pty::{BAUD, PtyBoard, Wire, queued};
 use crate::report::{Row, Unit, write_dist};
 use crate::rt::now_ns;
 use crate::spi_board::SpiBoard;
@@ -146,7 +146,7 @@ impl Boards {
             pack: PtyBoard::start_with(
                 &links.pack,
                 Box::new(TmcpackSim::new(TmcpackSimConfig::default())),
-                PACK_BAUD,
+                Wire::uart(PACK_BAUD),
                 b"\x00",
                 pack_lines,
             )?,
@@ -346,8 +346,13 @@ impl StreamDevice for Streamer {
 fn reply_baseline(dir: &Path, duration: Duration, rt: ServerRt) -> Result<Dist, String> {
     let link = dir.join(format!("io-baseline-{}.tty", std::process::id()));
     let (lines, _) = channel();
-    let mut board =
-        PtyBoard::start_with(&link, Box::new(Streamer::default()), BAUD, b"\x00", lines)?;
+    let mut board = PtyBoard::start_with(
+        &link,
+        Box::new(Streamer::default()),
+        Wire::QSB,
+        b"\x00",
+        lines,
+    )?;
     let reader_fd = board.slave()?;
     let watch_fd = board.slave()?;
     let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));

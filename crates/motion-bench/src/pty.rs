@@ -7,7 +7,8 @@
 //! does not import test code): both fds close-on-exec so the server cannot inherit the master,
 //! the tty raw from the start, and pacing both ways at the baud — bytes the host writes at
 //! once are handed to the model one byte time apart, and the model's bytes reach the tty one
-//! byte time apart, as on a real line.
+//! byte time apart, as on a real line — or, for a board behind USB (the QSB, [`Wire::QSB`]),
+//! together at the end of each 1 ms bus frame, as a USB serial device's do.
 
 use core::time::Duration;
 use std::collections::VecDeque;
@@ -36,6 +37,34 @@ pub struct LineSeen {
     pub first_byte_ns: u64,
     /// The line without its end-of-command bytes.
     pub line: Vec<u8>,
+}
+
+/// How a board's bytes travel to the host.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Wire {
+    /// Line rate, 8N1: both ways, bytes are one byte time apart on the line.
+    pub baud: u32,
+    /// `Some(frame)`: the board is behind USB and its bytes reach the host's tty together
+    /// at the end of each bus frame (a full-speed device is polled once per 1 ms frame);
+    /// `None`: each byte as its stop bit passes (a UART).
+    pub usb_frame: Option<Duration>,
+}
+
+impl Wire {
+    /// The QSB: 230400 baud "in RS-232 format over a virtual COM port connection through
+    /// the USB" (QSB command list), 1 ms frames.
+    pub const QSB: Self = Self {
+        baud: BAUD,
+        usb_frame: Some(Duration::from_millis(1)),
+    };
+
+    /// A UART at `baud` (the Trinamic pack's RS-232/RS-485).
+    pub const fn uart(baud: u32) -> Self {
+        Self {
+            baud,
+            usb_frame: None,
+        }
+    }
 }
 
 /// How the host's bytes are cut into the messages [`LineSeen`] reports.
@@ -80,21 +109,21 @@ impl PtyBoard {
         Self::start_with(
             link,
             Box::new(QsbSim::new(QsbSimConfig::default())),
-            BAUD,
+            Wire::QSB,
             prefix,
             lines,
         )
     }
 
-    /// [`start`](Self::start) with another model, at `baud`.
+    /// [`start`](Self::start) with another model, on `wire`.
     pub fn start_with(
         link: &Path,
         device: Model,
-        baud: u32,
+        wire: Wire,
         prefix: &'static [u8],
         lines: Sender<LineSeen>,
     ) -> Result<Self, String> {
-        Self::start_framed(link, device, baud, Framing::Lines, prefix, lines)
+        Self::start_framed(link, device, wire, Framing::Lines, prefix, lines)
     }
 
     /// [`start_with`](Self::start_with) for a board whose host messages are cut by
@@ -102,7 +131,7 @@ impl PtyBoard {
     pub fn start_framed(
         link: &Path,
         device: Model,
-        baud: u32,
+        wire: Wire,
         framing: Framing,
         prefix: &'static [u8],
         lines: Sender<LineSeen>,
@@ -143,7 +172,7 @@ impl PtyBoard {
                 .spawn(move || {
                     let _ = crate::rt::set_up_thread(crate::rt::board_priority(), None);
                     let watch = LineWatch::new(framing, prefix, lines);
-                    if let Err(e) = serve(&master, device, baud, &stop, watch)
+                    if let Err(e) = serve(&master, device, wire, &stop, watch)
                         && let Ok(mut slot) = failure.lock()
                     {
                         *slot = Some(e);
@@ -271,12 +300,12 @@ pub fn queued(tty: &OwnedFd) -> usize {
 fn serve(
     master: &OwnedFd,
     mut device: Model,
-    baud: u32,
+    wire: Wire,
     stop: &AtomicBool,
     mut watch: LineWatch,
 ) -> Result<(), String> {
     let epoch = Instant::now();
-    let byte_time = Duration::from_nanos(10_000_000_000 / u64::from(baud.max(1)));
+    let byte_time = Duration::from_nanos(10_000_000_000 / u64::from(wire.baud.max(1)));
     let mut buf = [0u8; 512];
     let mut outgoing: VecDeque<(Duration, u8)> = VecDeque::new();
     let mut outgoing_free_at = Duration::ZERO;
@@ -324,8 +353,15 @@ fn serve(
             outgoing.push_back((outgoing_free_at, byte));
         }
         due.clear();
+        // Behind USB, only what arrived by the end of the last whole frame has reached the
+        // host.
+        let delivered_by = wire.usb_frame.map_or(now, |frame| {
+            let frame_ns = frame.as_nanos().max(1);
+            let whole = now.as_nanos() / frame_ns * frame_ns;
+            Duration::from_nanos(u64::try_from(whole).unwrap_or(u64::MAX))
+        });
         while let Some(&(at, byte)) = outgoing.front() {
-            if at > now {
+            if at > delivered_by {
                 break;
             }
             outgoing.pop_front();

@@ -58,6 +58,10 @@ pub struct BoardWire {
     pub stamp_to_link: Dist,
     /// Requests whose frame stamp did not show within 50 ms, or came after the byte.
     pub stamp_missing: u64,
+    /// Requests whose stamp came after the board's read of the first byte (the board's
+    /// thread, on the other core, can read the byte before the I/O thread's `write(2)`
+    /// returns and it takes the stamp), and the most such a stamp was late, ns.
+    pub stamp_after: (u64, u64),
     /// motiond's own count: `AxisWire.wire_tick − goal_tick`, the ticks from the tick that
     /// set the goal to the tick during which its first request was written (0: the same).
     pub wire_ticks: Dist,
@@ -82,6 +86,7 @@ impl BoardWire {
             baseline: Dist::new(),
             stamp_to_link: Dist::new(),
             stamp_missing: 0,
+            stamp_after: (0, 0),
             wire_ticks: Dist::new(),
             same_tick: 0,
             refused: BTreeMap::new(),
@@ -316,7 +321,11 @@ fn with_motiond(
                 Some(stamp) if stamp.wire_ns <= t1 => {
                     wire.stamp_to_link.record(t1 - stamp.wire_ns);
                 }
-                _ => wire.stamp_missing += 1,
+                Some(stamp) => {
+                    let late = stamp.wire_ns - t1;
+                    wire.stamp_after = (wire.stamp_after.0 + 1, wire.stamp_after.1.max(late));
+                }
+                None => wire.stamp_missing += 1,
             }
             // The next request only once this plan is through, so that every request
             // starts a plan of its own instead of rewriting one half sent.
@@ -500,8 +509,12 @@ pub fn rows(run: &WireRun, ticks_baseline: Option<Summary>) -> Vec<Row> {
             ),
             note: format!(
                 "cross-check of the link stamps: the I/O thread stamps right after the transport took the message, \
-                 so ours should sit at or under the transport alone; {} requests without a stamp in 50 ms or with one after the byte",
-                wire.stamp_missing
+                 so ours should sit at or under the transport alone; {} requests without a stamp in 50 ms; \
+                 {} stamped after the board read the byte (write(2) returned after the board's thread on the other core had it; \
+                 at most {:.1} µs after)",
+                wire.stamp_missing,
+                wire.stamp_after.0,
+                wire.stamp_after.1 as f64 / 1000.0
             ),
         });
         rows.push(Row {

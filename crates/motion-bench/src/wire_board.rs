@@ -19,7 +19,7 @@ use motion_sim::qsb::{QsbSim, QsbSimConfig};
 use motion_sim::spimotor::{Drive, SpimotorSim, SpimotorSimConfig};
 use motion_sim::tmcpack::{TmcpackSim, TmcpackSimConfig};
 
-use crate::pty::{BAUD, Framing, LineSeen, PtyBoard};
+use crate::pty::{BAUD, Framing, LineSeen, PtyBoard, Wire};
 use crate::spi_board::{SpiBoard, Watch};
 use crate::sweep::ServerRt;
 
@@ -191,14 +191,14 @@ impl WireBoard {
             Self::Qsb => Served::Pty(PtyBoard::start_with(
                 link,
                 Box::new(QsbSim::new(QsbSimConfig::default())),
-                BAUD,
+                Wire::QSB,
                 b"W1",
                 seen,
             )?),
             Self::Tmcpack => Served::Pty(PtyBoard::start_framed(
                 link,
                 Box::new(TmcpackSim::new(TmcpackSimConfig::default())),
-                PACK_BAUD,
+                Wire::uart(PACK_BAUD),
                 Framing::Words {
                     len: 9,
                     gap_ns: 2_000_000,

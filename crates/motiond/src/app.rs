@@ -341,12 +341,13 @@ fn housekeeping(
         let now = monotonic_now();
         if now >= next_liveness && server_node != 0 {
             next_liveness = now + config.server.liveness_check;
-            for id in services::clean_dead_nodes() {
+            let (dead, live) = services::survey_nodes(server_node);
+            for id in dead {
                 if id != server_node && dead_clients.push(ClientId::from_u128(id)).is_err() {
                     tracing::warn!("dead-client queue full; retrying at the next check");
                 }
             }
-            clients_alive.store(services::count_live_nodes(server_node), Ordering::Relaxed);
+            clients_alive.store(live, Ordering::Relaxed);
         }
         std::thread::sleep(Duration::from_millis(10).min(config.server.liveness_check));
     }

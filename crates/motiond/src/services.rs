@@ -333,18 +333,24 @@ pub fn clean_dead_nodes() -> Vec<u128> {
     dead
 }
 
-/// Live nodes other than `except`.
-pub fn count_live_nodes(except: u128) -> u32 {
-    let mut count = 0;
+/// One look at every iceoryx2 node (a directory scan): the dead ones' leftovers removed
+/// (their ids returned) and the live ones other than `except` counted — what the main
+/// thread's liveness check needs, in one listing instead of two.
+pub fn survey_nodes(except: u128) -> (Vec<u128>, u32) {
+    let mut dead = Vec::new();
+    let mut live = 0;
     let _ = Node::<Ipc>::list(Config::global_config(), |state| {
-        if let NodeState::Alive(view) = &state
-            && view.id().value() != except
-        {
-            count += 1;
+        match state {
+            NodeState::Dead(view) => {
+                dead.push(view.id().value());
+                let _ = view.try_remove_stale_resources();
+            }
+            NodeState::Alive(view) if view.id().value() != except => live += 1,
+            _ => {}
         }
         CallbackProgression::Continue
     });
-    count
+    (dead, live)
 }
 
 /// Which node each client port of the command service belongs to, as the service's
