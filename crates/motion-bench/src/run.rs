@@ -204,7 +204,9 @@ pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
         priority: cli.rt_priority,
         cpu: cli.cpu,
     };
-    crate::rt::set_board_priority(cli.rt_priority);
+    // At the I/O threads' priority (one below the tick's): a board that outranked them
+    // would preempt the I/O thread between its write(2) and its stamp.
+    crate::rt::set_board_priority(cli.rt_priority.map(|p| p.saturating_sub(1).max(1)));
     let wire_run = if cli.command_to_wire {
         eprintln!(
             "[wire] command to wire: own motiond with four simulated boards ({:?} each), then each board's transport baseline ({:?} each)",

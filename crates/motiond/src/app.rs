@@ -308,6 +308,7 @@ fn housekeeping(
                     );
                 }
                 Report::EstopBy(by) => tracing::warn!("e-stop latched by {by}"),
+                Report::Phases(means) => tracing::info!("{}", means.line()),
                 Report::Stats(stats) => {
                     if !summary_printed
                         && monotonic_now().saturating_sub(started) >= Duration::from_secs(1)

@@ -10,6 +10,7 @@ pub mod drivers;
 pub mod error;
 pub mod io;
 pub mod params;
+pub mod phases;
 pub mod rt;
 pub mod services;
 pub mod sim_models;

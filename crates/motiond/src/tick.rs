@@ -18,6 +18,7 @@ use rtrb::{Consumer, Producer};
 use crate::config::ServerSettings;
 use crate::error::{RtError, StartError};
 use crate::io::{LinkEvent, LinkPort, NEVER, PACKET_LEN, Packet};
+use crate::phases::{Phase, PhaseClock, PhaseMeans};
 use crate::rt::{self, IoRt, RtStatus, monotonic_now, sleep_until};
 use crate::services::{ClientDirectory, CommandFactory, Ipc, Services, SlotUse};
 use crate::stats::Latency;
@@ -63,6 +64,8 @@ pub enum Report {
     EstopBy(&'static str),
     /// Once a second.
     Stats(StatusLine),
+    /// The tick's phases (`tick-profile` builds only, every `phases::REPORT_EVERY` ticks).
+    Phases(PhaseMeans),
     /// The loop ended (shutdown complete or timed out).
     Stopped {
         /// Whether every board acknowledged before the timeout.
@@ -342,6 +345,7 @@ impl Loop {
         let mut last_liveness = Duration::ZERO;
         let mut shutting_since: Option<Duration> = None;
         let mut buf = [0u8; PACKET_LEN];
+        let mut phases = PhaseClock::default();
         self.publish_info();
         self.publish_params();
         loop {
@@ -350,8 +354,10 @@ impl Loop {
             self.wakeup
                 .record(duration_ns(wake.saturating_sub(deadline)));
             let now = deadline.saturating_sub(epoch);
+            phases.begin(wake);
 
             self.take_link_input(now);
+            phases.lap(Phase::Input);
             while let Ok(client) = self.setup.dead_clients.pop() {
                 self.setup.engine.client_dead(client);
             }
@@ -364,8 +370,11 @@ impl Loop {
                 self.setup.engine.begin_shutdown();
                 shutting_since = Some(now);
             }
+            phases.lap(Phase::Clients);
             self.step_and_publish(now, deadline);
+            phases.lap(Phase::Step);
             self.queue_link_output(now, &mut buf);
+            phases.lap(Phase::Output);
 
             self.report_faults();
             if now.saturating_sub(last_stats) >= Duration::from_secs(1) {
@@ -380,6 +389,10 @@ impl Loop {
                     self.report(Report::Stopped { at_rest });
                     return;
                 }
+            }
+            phases.lap(Phase::Reports);
+            if let Some(means) = phases.end_tick() {
+                self.report(Report::Phases(means));
             }
             let done = monotonic_now();
             self.work.record(duration_ns(done.saturating_sub(wake)));
@@ -572,10 +585,7 @@ impl Loop {
                 }
                 queued = true;
             }
-            if queued {
-                port.waker.wake();
-            }
-            port.look_by(self.setup.engine.link_poll_timeout(index));
+            port.queued_and_look_by(queued, self.setup.engine.link_poll_timeout(index));
         }
     }
 

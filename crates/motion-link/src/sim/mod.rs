@@ -4,6 +4,11 @@
 //! [`SpiBus`] put several on one wire; [`SimLink`] connects a device or bus to the host
 //! side behind the [`Link`](crate::Link) trait, charging wire time and injecting faults
 //! through [`SimFaults`].
+//!
+//! What the host reads, and when, is what a real host would: an SPI transaction's MISO
+//! bytes together once its last clock has passed (a spidev transfer returns whole); a
+//! serial device's bytes as each stop bit passes (a UART), or, behind USB
+//! ([`SimLink::with_host_frames`]), together at the end of each bus frame.
 
 mod bus;
 mod device;

@@ -187,13 +187,20 @@ impl LinkPort {
     /// only a look after it can tell a silent board), and wakes it if its sleep would
     /// last longer. `None`: no wish.
     pub fn look_by(&self, at: Option<Duration>) {
+        self.queued_and_look_by(false, at);
+    }
+
+    /// The tick's end-of-tick call: stores the wish of [`look_by`](Self::look_by) first,
+    /// then wakes the thread once if output was `queued` or the new wish is earlier than
+    /// its sleep — one eventfd write per link and tick at most (each is a cross-core
+    /// wake-up, the dearest thing the tick does).
+    pub fn queued_and_look_by(&self, queued: bool, at: Option<Duration>) {
         let ns = at.map_or(NEVER, duration_ns);
         let counters = &self.counters;
-        if counters.look_by_ns.swap(ns, Ordering::SeqCst) == ns {
-            return;
-        }
-        // Either the thread reads the new wish before it sleeps, or this sees its sleep.
-        if ns < counters.sleep_until_ns.load(Ordering::SeqCst) {
+        let changed = counters.look_by_ns.swap(ns, Ordering::SeqCst) != ns;
+        // Either the thread reads the new wish before it sleeps, or this sees its sleep;
+        // woken for output, it reads the wish stored above before it sleeps again.
+        if queued || (changed && ns < counters.sleep_until_ns.load(Ordering::SeqCst)) {
             self.waker.wake();
         }
     }
