@@ -103,13 +103,20 @@ pub fn run(config: ServerConfig, options: RunOptions) -> anyhow::Result<()> {
         epoch,
         idle: io::IDLE_WAIT,
         rt_priority: config.server.io_rt_priority,
+        cpu: config.server.io_cpu,
     };
     let mut io_rt = IoRt::default();
     for (spec, link) in config.links.iter().zip(links) {
         let (port, mut thread) = io::spawn(&spec.name, link, io_options, Arc::clone(&io_stop))
             .with_context(|| format!("starting the I/O thread of link `{}`", spec.name))?;
-        match thread.take_fifo() {
+        let outcome = thread.take_rt().unwrap_or_default();
+        match outcome.fifo {
             Some(Ok(priority)) => io_rt.fifo = Some(priority),
+            Some(Err(error)) => io_rt.problems.push(error),
+            None => {}
+        }
+        match outcome.pinned {
+            Some(Ok(cpu)) => io_rt.pinned = Some(cpu),
             Some(Err(error)) => io_rt.problems.push(error),
             None => {}
         }
@@ -117,9 +124,11 @@ pub fn run(config: ServerConfig, options: RunOptions) -> anyhow::Result<()> {
         io_threads.push(thread);
     }
     if !io_rt.problems.is_empty() {
-        // One thread's answer stands for all of them (same process, same limits).
+        // One thread's answers stand for all of them (same process, same limits): the
+        // first thread's problems only.
         io_rt.fifo = None;
-        io_rt.problems.truncate(1);
+        io_rt.pinned = None;
+        io_rt.problems.truncate(2);
     }
 
     let health = Arc::new(TickHealth::default());

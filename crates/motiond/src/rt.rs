@@ -38,6 +38,8 @@ pub struct RtStatus {
     pub fifo: Option<u8>,
     /// SCHED_FIFO priority of the links' I/O threads.
     pub io_fifo: Option<u8>,
+    /// Core the links' I/O threads are pinned to.
+    pub io_pinned: Option<usize>,
     /// Core the tick thread is pinned to.
     pub pinned: Option<usize>,
     /// mlockall succeeded.
@@ -76,8 +78,14 @@ impl RtStatus {
             "SCHED_FIFO {} | I/O threads {} | pinned {} | memory {} | cpu_dma_latency {} | \
              timer slack {}",
             self.fifo.map_or("off".into(), |p| format!("prio {p}")),
-            self.io_fifo
-                .map_or("normal policy".into(), |p| format!("SCHED_FIFO prio {p}")),
+            match (self.io_fifo, self.io_pinned) {
+                (None, None) => "normal policy".to_owned(),
+                (fifo, cpu) => format!(
+                    "{}{}",
+                    fifo.map_or("normal policy".into(), |p| format!("SCHED_FIFO prio {p}")),
+                    cpu.map_or(String::new(), |c| format!(" on cpu {c}"))
+                ),
+            },
             self.pinned.map_or("no".into(), |c| format!("cpu {c}")),
             if self.locked { "locked" } else { "not locked" },
             if self.dma_latency {
@@ -96,7 +104,9 @@ impl RtStatus {
 pub struct IoRt {
     /// SCHED_FIFO priority every I/O thread runs at.
     pub fifo: Option<u8>,
-    /// What could not be done (one entry: the threads share the process's limits).
+    /// Core every I/O thread is pinned to.
+    pub pinned: Option<usize>,
+    /// What could not be done (the first thread's: they share the process's limits).
     pub problems: Vec<RtError>,
 }
 

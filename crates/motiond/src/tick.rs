@@ -187,6 +187,7 @@ fn set_up_rt(
 ) -> Result<(RtStatus, Option<rt::DmaLatencyGuard>), StartError> {
     let mut status = RtStatus {
         io_fifo: io_rt.fifo,
+        io_pinned: io_rt.pinned,
         problems: io_rt.problems,
         ..RtStatus::default()
     };
@@ -226,8 +227,10 @@ fn set_up_rt(
     rt::prefault_stack();
     let wanted_fifo = (settings.rt_priority.is_some() && status.fifo.is_none())
         || (settings.io_rt_priority.is_some() && status.io_fifo.is_none());
+    let wanted_pin = (settings.cpu.is_some() && status.pinned.is_none())
+        || (settings.io_cpu.is_some() && status.io_pinned.is_none());
     let wanted_lock = settings.lock_memory && !status.locked;
-    if require_rt && (wanted_fifo || wanted_lock || settings.rt_priority.is_none()) {
+    if require_rt && (wanted_fifo || wanted_pin || wanted_lock || settings.rt_priority.is_none()) {
         let missing = if settings.rt_priority.is_none() {
             "set [server] rt_priority".to_owned()
         } else {

@@ -413,3 +413,26 @@ fn io_threads_take_the_priority_below_the_tick_s_unless_told_otherwise() {
         fails(name, &text, to, "server.io_rt_priority", says);
     }
 }
+
+/// `[server] io_cpu`: the I/O threads' core, not pinned unless given (not even beside a
+/// pinned tick); out of range is refused with the key.
+#[test]
+fn io_threads_are_pinned_only_when_told() {
+    let parse = |server_keys: &str| {
+        let text = GOOD.replace("claim_lease_ms = 500", server_keys);
+        motiond::config::ServerConfig::parse(std::path::Path::new("io.toml"), &text)
+            .unwrap_or_else(|e| panic!("{server_keys}: {e}"))
+            .server
+    };
+    assert_eq!(parse("cpu = 1").io_cpu, None);
+    let both = parse("cpu = 1\nio_cpu = 1");
+    assert_eq!((both.cpu, both.io_cpu), (Some(1), Some(1)));
+    assert_eq!(parse("io_cpu = 0").io_cpu, Some(0));
+    for (name, to, says) in [
+        ("io_cpu_high.toml", "io_cpu = 1024", "allowed: 0..=1023"),
+        ("io_cpu_negative.toml", "io_cpu = -1", "allowed: 0..=1023"),
+    ] {
+        let text = GOOD.replace("claim_lease_ms = 500", to);
+        fails(name, &text, to, "server.io_cpu", says);
+    }
+}

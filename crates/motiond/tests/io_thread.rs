@@ -28,6 +28,7 @@ fn start(link: Box<dyn Link>) -> (LinkPort, IoThread, Arc<AtomicBool>) {
         epoch,
         idle: NEVER,
         rt_priority: None,
+        cpu: None,
     };
     let (port, thread) = io::spawn("test", link, options, Arc::clone(&stop)).expect("spawn");
     (port, thread, stop)
@@ -199,10 +200,13 @@ fn an_io_thread_takes_the_real_time_priority_it_is_given_or_says_why_not() {
         epoch: motiond::rt::monotonic_now(),
         idle: NEVER,
         rt_priority: Some(7),
+        cpu: None,
     };
     let (mut port, mut thread) =
         io::spawn("rtprio", Box::new(link), options, Arc::clone(&stop)).expect("spawn");
-    match thread.take_fifo() {
+    let outcome = thread.take_rt().expect("the set-up's outcome");
+    assert!(outcome.pinned.is_none(), "no core was asked for");
+    match outcome.fifo {
         Some(Ok(priority)) => {
             assert_eq!(priority, 7);
             assert_eq!(policy_of_thread("io-rtprio"), Some((1, 7)));
@@ -214,7 +218,7 @@ fn an_io_thread_takes_the_real_time_priority_it_is_given_or_says_why_not() {
         }
         None => panic!("a priority was asked for: the thread must answer"),
     }
-    assert!(thread.take_fifo().is_none(), "the answer is taken once");
+    assert!(thread.take_rt().is_none(), "the answer is taken once");
     nix::unistd::write(&master, b"r 14 00001113 !\r\n").expect("write on the master");
     assert_eq!(receive(&mut port, 17), b"r 14 00001113 !\r\n");
     finish(thread, &stop);
@@ -228,10 +232,69 @@ fn an_io_thread_without_a_priority_stays_at_the_normal_policy() {
         epoch: motiond::rt::monotonic_now(),
         idle: NEVER,
         rt_priority: None,
+        cpu: None,
     };
     let (_port, mut thread) =
         io::spawn("plain", Box::new(link), options, Arc::clone(&stop)).expect("spawn");
-    assert!(thread.take_fifo().is_none());
+    let outcome = thread.take_rt().expect("the set-up's outcome");
+    assert!(outcome.fifo.is_none() && outcome.pinned.is_none());
     assert_eq!(policy_of_thread("io-plain").map(|(p, _)| p), Some(0));
     finish(thread, &stop);
+}
+
+/// The cores this process's thread named `comm` may run on (`Cpus_allowed_list` of its
+/// status).
+fn cores_of_thread(comm: &str) -> Option<String> {
+    for task in std::fs::read_dir("/proc/self/task").ok()?.flatten() {
+        let path = task.path();
+        let name = std::fs::read_to_string(path.join("comm")).unwrap_or_default();
+        if name.trim_end() != comm {
+            continue;
+        }
+        let status = std::fs::read_to_string(path.join("status")).ok()?;
+        return status
+            .lines()
+            .find_map(|l| l.strip_prefix("Cpus_allowed_list:"))
+            .map(|l| l.trim().to_owned());
+    }
+    None
+}
+
+/// `[server] io_cpu`: the thread pins itself to that core before its first pass and says
+/// so; a core that does not exist is refused, said, and the link still served.
+#[test]
+fn an_io_thread_pins_itself_to_the_core_it_is_given_or_says_why_not() {
+    let last = core_affinity::get_core_ids()
+        .and_then(|cores| cores.iter().map(|c| c.id).max())
+        .expect("the process's cores");
+    for (comm, cpu, exists) in [("pinned", last, true), ("nopin", 4096, false)] {
+        let (master, link) = pty_link();
+        let stop = Arc::new(AtomicBool::new(false));
+        let options = io::IoThreadOptions {
+            epoch: motiond::rt::monotonic_now(),
+            idle: NEVER,
+            rt_priority: None,
+            cpu: Some(cpu),
+        };
+        let (mut port, mut thread) =
+            io::spawn(comm, Box::new(link), options, Arc::clone(&stop)).expect("spawn");
+        let outcome = thread.take_rt().expect("the set-up's outcome");
+        assert!(outcome.fifo.is_none());
+        let thread_comm = format!("io-{comm}");
+        match outcome.pinned {
+            Some(Ok(got)) => {
+                assert!(exists);
+                assert_eq!(got, cpu);
+                assert_eq!(cores_of_thread(&thread_comm), Some(cpu.to_string()));
+            }
+            Some(Err(error)) => {
+                assert!(!exists, "{error}");
+                assert!(error.to_string().contains("cpu 4096"), "{error}");
+            }
+            None => panic!("a core was asked for: the thread must answer"),
+        }
+        nix::unistd::write(&master, b"r 14 00001113 !\r\n").expect("write on the master");
+        assert_eq!(receive(&mut port, 17), b"r 14 00001113 !\r\n");
+        finish(thread, &stop);
+    }
 }

@@ -89,6 +89,7 @@ pub(crate) struct RawServer {
     pub rt_priority: Option<Spanned<Int>>,
     pub io_rt_priority: Option<Spanned<Int>>,
     pub cpu: Option<Spanned<Int>>,
+    pub io_cpu: Option<Spanned<Int>>,
     pub lock_memory: Option<Spanned<bool>>,
     pub max_clients: Option<Spanned<Int>>,
     pub max_consecutive_overruns: Option<Spanned<Int>>,

@@ -241,14 +241,24 @@ impl Waker {
 pub struct IoThread {
     handle: JoinHandle<()>,
     waker: Arc<Waker>,
-    fifo: Option<Result<u8, RtError>>,
+    rt: Option<IoRtOutcome>,
+}
+
+/// What an I/O thread's real-time set-up achieved ([`IoThreadOptions`]): `None` where
+/// nothing was asked for.
+#[derive(Debug, Default)]
+pub struct IoRtOutcome {
+    /// The SCHED_FIFO priority, or why not.
+    pub fifo: Option<Result<u8, RtError>>,
+    /// The core the thread is pinned to, or why not.
+    pub pinned: Option<Result<usize, RtError>>,
 }
 
 impl IoThread {
-    /// What became of the SCHED_FIFO priority asked for at [`spawn`] (`None`: none asked
-    /// for); taken once.
-    pub fn take_fifo(&mut self) -> Option<Result<u8, RtError>> {
-        self.fifo.take()
+    /// What became of the priority and the core asked for at [`spawn`]; taken once
+    /// (`None` the second time).
+    pub fn take_rt(&mut self) -> Option<IoRtOutcome> {
+        self.rt.take()
     }
 
     /// Wakes the thread so it sees `stop` (set before), and waits for it to finish.
@@ -270,9 +280,12 @@ pub struct IoThreadOptions {
     /// it: a real transport's failure shows on its descriptor).
     pub idle: Duration,
     /// SCHED_FIFO priority the thread takes before its first pass (`None`: the normal
-    /// policy). Failing to get it is reported by [`IoThread::take_fifo`]; the thread
-    /// runs on at the normal policy.
+    /// policy). Failing to get it is reported by [`IoThread::take_rt`]; the thread runs on
+    /// at the normal policy.
     pub rt_priority: Option<u8>,
+    /// Core the thread pins itself to before its first pass (`None`: any). Failing is
+    /// reported by [`IoThread::take_rt`]; the thread runs on unpinned.
+    pub cpu: Option<usize>,
 }
 
 /// Starts the I/O thread of `link` (named `io-<name>`) and waits until it has tried to
@@ -305,16 +318,19 @@ pub fn spawn(
     );
     let (fifo_tx, fifo_rx) = std::sync::mpsc::sync_channel(1);
     let priority = options.rt_priority;
+    let cpu = options.cpu;
     let epoch = options.epoch;
     let handle = std::thread::Builder::new()
         .name(format!("io-{name}"))
         .spawn(move || {
-            let _ = fifo_tx.send(priority.map(|p| crate::rt::set_fifo(p).map(|()| p)));
+            let pinned = cpu.map(|c| crate::rt::pin_to(c).map(|()| c));
+            let fifo = priority.map(|p| crate::rt::set_fifo(p).map(|()| p));
+            let _ = fifo_tx.send(IoRtOutcome { fifo, pinned });
             drop(fifo_tx);
             worker.run(epoch);
         })?;
     // The thread sends before anything else; a thread that died first reports nothing.
-    let fifo = fifo_rx.recv().ok().flatten();
+    let rt = fifo_rx.recv().unwrap_or_default();
     let port = LinkPort {
         tx: tx_producer,
         rx: rx_consumer,
@@ -329,7 +345,7 @@ pub fn spawn(
         IoThread {
             handle,
             waker,
-            fifo,
+            rt: Some(rt),
         },
     ))
 }

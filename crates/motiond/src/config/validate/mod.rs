@@ -352,6 +352,7 @@ impl Validator<'_, '_> {
             rt_priority: None,
             io_rt_priority: None,
             cpu: None,
+            io_cpu: None,
             lock_memory: false,
             max_clients: 32,
             max_consecutive_overruns: 50,
@@ -399,6 +400,11 @@ impl Validator<'_, '_> {
         }
         if let Some(v) = &raw.cpu {
             settings.cpu = self.int_in(v, "server.cpu", 0..=1023).map(|v| v as usize);
+        }
+        if let Some(v) = &raw.io_cpu {
+            settings.io_cpu = self
+                .int_in(v, "server.io_cpu", 0..=1023)
+                .map(|v| v as usize);
         }
         if let Some(v) = &raw.lock_memory {
             settings.lock_memory = *v.get_ref();
