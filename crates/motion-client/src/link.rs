@@ -349,7 +349,21 @@ impl Link {
                 cache
             }
         };
-        match self.fetch::<MachineParams>(&key, timeout) {
+        // A bridge whose own subscriber has not yet received the server's sample (it
+        // connected a moment ago) answers "no-server"; like the local client, wait up to the
+        // reply timeout for it before saying the server published nothing.
+        let started = std::time::Instant::now();
+        let mut fetched = self.fetch::<MachineParams>(&key, timeout);
+        while cache.current().is_none()
+            && fetched
+                .as_ref()
+                .is_err_and(|why| matches!(Refusal::parse(why), Some((Refusal::NoServer, _))))
+            && started.elapsed() < timeout
+        {
+            std::thread::sleep(Duration::from_millis(10));
+            fetched = self.fetch::<MachineParams>(&key, timeout.saturating_sub(started.elapsed()));
+        }
+        match fetched {
             Ok(params) => {
                 if let Some(feed) = cache.feed() {
                     feed.push(params);
