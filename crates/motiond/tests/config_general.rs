@@ -377,24 +377,18 @@ fn signals_are_checked_against_the_board_s_pins() {
 /// `rt_priority` they stay at the normal policy unless given.
 #[test]
 fn io_threads_take_the_priority_below_the_tick_s_unless_told_otherwise() {
-    let parse = |server_keys: &str| {
-        let text = GOOD.replace("claim_lease_ms = 500", server_keys);
-        motiond::config::ServerConfig::parse(std::path::Path::new("io.toml"), &text)
-            .unwrap_or_else(|e| panic!("{server_keys}: {e}"))
-            .server
-    };
-    let plain = parse("");
+    let plain = server_with("");
     assert_eq!((plain.rt_priority, plain.io_rt_priority), (None, None));
-    let tick = parse("rt_priority = 80");
+    let tick = server_with("rt_priority = 80");
     assert_eq!(
         (tick.rt_priority, tick.io_rt_priority),
         (Some(80), Some(79))
     );
     // The lowest tick priority leaves nothing below it: the I/O threads share it.
-    assert_eq!(parse("rt_priority = 1").io_rt_priority, Some(1));
-    let off = parse("rt_priority = 80\nio_rt_priority = 0");
+    assert_eq!(server_with("rt_priority = 1").io_rt_priority, Some(1));
+    let off = server_with("rt_priority = 80\nio_rt_priority = 0");
     assert_eq!((off.rt_priority, off.io_rt_priority), (Some(80), None));
-    let given = parse("io_rt_priority = 60");
+    let given = server_with("io_rt_priority = 60");
     assert_eq!((given.rt_priority, given.io_rt_priority), (None, Some(60)));
     for (name, to, says) in [
         ("io_rt_high.toml", "io_rt_priority = 100", "allowed: 0..=99"),
@@ -418,16 +412,10 @@ fn io_threads_take_the_priority_below_the_tick_s_unless_told_otherwise() {
 /// pinned tick); out of range is refused with the key.
 #[test]
 fn io_threads_are_pinned_only_when_told() {
-    let parse = |server_keys: &str| {
-        let text = GOOD.replace("claim_lease_ms = 500", server_keys);
-        motiond::config::ServerConfig::parse(std::path::Path::new("io.toml"), &text)
-            .unwrap_or_else(|e| panic!("{server_keys}: {e}"))
-            .server
-    };
-    assert_eq!(parse("cpu = 1").io_cpu, None);
-    let both = parse("cpu = 1\nio_cpu = 1");
+    assert_eq!(server_with("cpu = 1").io_cpu, None);
+    let both = server_with("cpu = 1\nio_cpu = 1");
     assert_eq!((both.cpu, both.io_cpu), (Some(1), Some(1)));
-    assert_eq!(parse("io_cpu = 0").io_cpu, Some(0));
+    assert_eq!(server_with("io_cpu = 0").io_cpu, Some(0));
     for (name, to, says) in [
         ("io_cpu_high.toml", "io_cpu = 1024", "allowed: 0..=1023"),
         ("io_cpu_negative.toml", "io_cpu = -1", "allowed: 0..=1023"),
@@ -435,4 +423,12 @@ fn io_threads_are_pinned_only_when_told() {
         let text = GOOD.replace("claim_lease_ms = 500", to);
         fails(name, &text, to, "server.io_cpu", says);
     }
+}
+
+/// The `[server]` settings of [`GOOD`] with `server_keys` in place of its claim lease.
+fn server_with(server_keys: &str) -> motiond::config::ServerSettings {
+    let text = GOOD.replace("claim_lease_ms = 500", server_keys);
+    motiond::config::ServerConfig::parse(std::path::Path::new("io.toml"), &text)
+        .unwrap_or_else(|e| panic!("{server_keys}: {e}"))
+        .server
 }

@@ -22,15 +22,24 @@ const NEVER: Duration = Duration::from_secs(3600);
 const PATIENCE: Duration = Duration::from_secs(10);
 
 fn start(link: Box<dyn Link>) -> (LinkPort, IoThread, Arc<AtomicBool>) {
+    start_named("test", link, None, None)
+}
+
+/// An I/O thread `io-<name>` asked for `rt_priority` and `cpu`.
+fn start_named(
+    name: &str,
+    link: Box<dyn Link>,
+    rt_priority: Option<u8>,
+    cpu: Option<usize>,
+) -> (LinkPort, IoThread, Arc<AtomicBool>) {
     let stop = Arc::new(AtomicBool::new(false));
-    let epoch = motiond::rt::monotonic_now();
     let options = io::IoThreadOptions {
-        epoch,
+        epoch: motiond::rt::monotonic_now(),
         idle: NEVER,
-        rt_priority: None,
-        cpu: None,
+        rt_priority,
+        cpu,
     };
-    let (port, thread) = io::spawn("test", link, options, Arc::clone(&stop)).expect("spawn");
+    let (port, thread) = io::spawn(name, link, options, Arc::clone(&stop)).expect("spawn");
     (port, thread, stop)
 }
 
@@ -172,21 +181,24 @@ fn a_simulated_link_is_looked_at_again_at_its_next_event() {
 /// The scheduling policy (field 41 of `/proc/self/task/TID/stat`, 1 = SCHED_FIFO) and the
 /// real-time priority (field 40) of this process's thread named `comm`.
 fn policy_of_thread(comm: &str) -> Option<(u32, u32)> {
-    for task in std::fs::read_dir("/proc/self/task").ok()?.flatten() {
-        let path = task.path();
-        let name = std::fs::read_to_string(path.join("comm")).unwrap_or_default();
-        if name.trim_end() != comm {
-            continue;
-        }
-        let stat = std::fs::read_to_string(path.join("stat")).ok()?;
-        // Fields after the parenthesised name start at field 3.
-        let rest = &stat[stat.rfind(')')? + 2..];
-        let fields: Vec<&str> = rest.split_whitespace().collect();
-        let priority = fields.get(40 - 3)?.parse().ok()?;
-        let policy = fields.get(41 - 3)?.parse().ok()?;
-        return Some((policy, priority));
-    }
-    None
+    let stat = std::fs::read_to_string(task_of_thread(comm)?.join("stat")).ok()?;
+    // Fields after the parenthesised name start at field 3.
+    let rest = &stat[stat.rfind(')')? + 2..];
+    let fields: Vec<&str> = rest.split_whitespace().collect();
+    let priority = fields.get(40 - 3)?.parse().ok()?;
+    let policy = fields.get(41 - 3)?.parse().ok()?;
+    Some((policy, priority))
+}
+
+/// `/proc/self/task/TID` of this process's thread named `comm`.
+fn task_of_thread(comm: &str) -> Option<std::path::PathBuf> {
+    std::fs::read_dir("/proc/self/task")
+        .ok()?
+        .flatten()
+        .map(|task| task.path())
+        .find(|path| {
+            std::fs::read_to_string(path.join("comm")).is_ok_and(|name| name.trim_end() == comm)
+        })
 }
 
 /// `[server] io_rt_priority`: the thread takes SCHED_FIFO at that priority before its first
@@ -195,15 +207,7 @@ fn policy_of_thread(comm: &str) -> Option<(u32, u32)> {
 #[test]
 fn an_io_thread_takes_the_real_time_priority_it_is_given_or_says_why_not() {
     let (master, link) = pty_link();
-    let stop = Arc::new(AtomicBool::new(false));
-    let options = io::IoThreadOptions {
-        epoch: motiond::rt::monotonic_now(),
-        idle: NEVER,
-        rt_priority: Some(7),
-        cpu: None,
-    };
-    let (mut port, mut thread) =
-        io::spawn("rtprio", Box::new(link), options, Arc::clone(&stop)).expect("spawn");
+    let (mut port, mut thread, stop) = start_named("rtprio", Box::new(link), Some(7), None);
     let outcome = thread.take_rt().expect("the set-up's outcome");
     assert!(outcome.pinned.is_none(), "no core was asked for");
     match outcome.fifo {
@@ -227,15 +231,7 @@ fn an_io_thread_takes_the_real_time_priority_it_is_given_or_says_why_not() {
 #[test]
 fn an_io_thread_without_a_priority_stays_at_the_normal_policy() {
     let (_master, link) = pty_link();
-    let stop = Arc::new(AtomicBool::new(false));
-    let options = io::IoThreadOptions {
-        epoch: motiond::rt::monotonic_now(),
-        idle: NEVER,
-        rt_priority: None,
-        cpu: None,
-    };
-    let (_port, mut thread) =
-        io::spawn("plain", Box::new(link), options, Arc::clone(&stop)).expect("spawn");
+    let (_port, mut thread, stop) = start_named("plain", Box::new(link), None, None);
     let outcome = thread.take_rt().expect("the set-up's outcome");
     assert!(outcome.fifo.is_none() && outcome.pinned.is_none());
     assert_eq!(policy_of_thread("io-plain").map(|(p, _)| p), Some(0));
@@ -245,19 +241,11 @@ fn an_io_thread_without_a_priority_stays_at_the_normal_policy() {
 /// The cores this process's thread named `comm` may run on (`Cpus_allowed_list` of its
 /// status).
 fn cores_of_thread(comm: &str) -> Option<String> {
-    for task in std::fs::read_dir("/proc/self/task").ok()?.flatten() {
-        let path = task.path();
-        let name = std::fs::read_to_string(path.join("comm")).unwrap_or_default();
-        if name.trim_end() != comm {
-            continue;
-        }
-        let status = std::fs::read_to_string(path.join("status")).ok()?;
-        return status
-            .lines()
-            .find_map(|l| l.strip_prefix("Cpus_allowed_list:"))
-            .map(|l| l.trim().to_owned());
-    }
-    None
+    let status = std::fs::read_to_string(task_of_thread(comm)?.join("status")).ok()?;
+    status
+        .lines()
+        .find_map(|l| l.strip_prefix("Cpus_allowed_list:"))
+        .map(|l| l.trim().to_owned())
 }
 
 /// `[server] io_cpu`: the thread pins itself to that core before its first pass and says
@@ -269,15 +257,7 @@ fn an_io_thread_pins_itself_to_the_core_it_is_given_or_says_why_not() {
         .expect("the process's cores");
     for (comm, cpu, exists) in [("pinned", last, true), ("nopin", 4096, false)] {
         let (master, link) = pty_link();
-        let stop = Arc::new(AtomicBool::new(false));
-        let options = io::IoThreadOptions {
-            epoch: motiond::rt::monotonic_now(),
-            idle: NEVER,
-            rt_priority: None,
-            cpu: Some(cpu),
-        };
-        let (mut port, mut thread) =
-            io::spawn(comm, Box::new(link), options, Arc::clone(&stop)).expect("spawn");
+        let (mut port, mut thread, stop) = start_named(comm, Box::new(link), None, Some(cpu));
         let outcome = thread.take_rt().expect("the set-up's outcome");
         assert!(outcome.fifo.is_none());
         let thread_comm = format!("io-{comm}");
