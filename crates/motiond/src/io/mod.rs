@@ -15,6 +15,9 @@
 //! ([`LinkPort::look_by`]: its drivers' next deadline); nothing else wakes the thread on a
 //! timer except the idle limit given to [`spawn`].
 //!
+//! Each thread takes the real-time set-up it is given before its first pass
+//! ([`IoThreadOptions`]: `[server] io_rt_priority`, `io_cpu`) and reports what it got.
+//!
 //! Stamps (time since the server's epoch, as the tick's `now`): each received chunk
 //! carries the instant it was read; each message written whole is reported back as
 //! [`Written`] with the instant its last byte was accepted; [`IoCounters::heard_ns`] is the
