@@ -291,8 +291,8 @@ pub struct IoThreadOptions {
     pub cpu: Option<usize>,
 }
 
-/// Starts the I/O thread of `link` (named `io-<name>`) and waits until it has tried to
-/// take its real-time priority.
+/// Starts the I/O thread of `link` (named `io-<name>`) and waits until it has tried its
+/// real-time set-up (priority, core).
 pub fn spawn(
     name: &str,
     link: Box<dyn Link>,
@@ -319,7 +319,7 @@ pub fn spawn(
         stop,
         options.idle,
     );
-    let (fifo_tx, fifo_rx) = std::sync::mpsc::sync_channel(1);
+    let (rt_tx, rt_rx) = std::sync::mpsc::sync_channel(1);
     let priority = options.rt_priority;
     let cpu = options.cpu;
     let epoch = options.epoch;
@@ -328,12 +328,12 @@ pub fn spawn(
         .spawn(move || {
             let pinned = cpu.map(|c| crate::rt::pin_to(c).map(|()| c));
             let fifo = priority.map(|p| crate::rt::set_fifo(p).map(|()| p));
-            let _ = fifo_tx.send(IoRtOutcome { fifo, pinned });
-            drop(fifo_tx);
+            let _ = rt_tx.send(IoRtOutcome { fifo, pinned });
+            drop(rt_tx);
             worker.run(epoch);
         })?;
     // The thread sends before anything else; a thread that died first reports nothing.
-    let rt = fifo_rx.recv().unwrap_or_default();
+    let rt = rt_rx.recv().unwrap_or_default();
     let port = LinkPort {
         tx: tx_producer,
         rx: rx_consumer,
