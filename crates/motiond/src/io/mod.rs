@@ -12,7 +12,7 @@
 //! write can go on) and an eventfd the tick writes to when it queued output ([`Waker`]).
 //! A link without a descriptor (a simulated wire) is looked at again at its
 //! [`Link::next_event`], and every link by the instant the tick asks for
-//! ([`LinkPort::look_by`]: its drivers' next deadline); nothing else wakes the thread on a
+//! ([`LinkPort::queued_and_look_by`]: its drivers' next deadline); nothing else wakes the thread on a
 //! timer except the idle limit given to [`spawn`].
 //!
 //! Each thread takes the real-time set-up it is given before its first pass
@@ -186,17 +186,11 @@ pub struct LinkPort {
 }
 
 impl LinkPort {
-    /// Asks the I/O thread to look at the link again by `at` (a driver's reply deadline:
-    /// only a look after it can tell a silent board), and wakes it if its sleep would
-    /// last longer. `None`: no wish.
-    pub fn look_by(&self, at: Option<Duration>) {
-        self.queued_and_look_by(false, at);
-    }
-
-    /// The tick's end-of-tick call: stores the wish of [`look_by`](Self::look_by) first,
-    /// then wakes the thread once if output was `queued` or the new wish is earlier than
-    /// its sleep — one eventfd write per link and tick at most (each is a cross-core
-    /// wake-up, the dearest thing the tick does).
+    /// The tick's end-of-tick call. Asks the I/O thread to look at the link again by `at`
+    /// (a driver's reply deadline: only a look after it can tell a silent board; `None`:
+    /// no wish), storing that wish first, then wakes the thread once if output was
+    /// `queued` or the wish is earlier than its sleep — one eventfd write per link and tick
+    /// at most (each is a cross-core wake-up, the dearest thing the tick does).
     pub fn queued_and_look_by(&self, queued: bool, at: Option<Duration>) {
         let ns = at.map_or(NEVER, duration_ns);
         let counters = &self.counters;

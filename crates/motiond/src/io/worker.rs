@@ -159,7 +159,7 @@ impl Worker {
     }
 
     /// Sleeps in poll(2) up to `timeout` after `now`, or until the tick's wish
-    /// ([`super::LinkPort::look_by`]) if that comes first and no look after it happened
+    /// ([`super::LinkPort::queued_and_look_by`]) if that comes first and no look after it happened
     /// yet: until the tick wakes the thread or, with `on_link`, the link's descriptor is
     /// ready (readable; writable too while bytes wait to go out).
     fn sleep(&mut self, now: Duration, timeout: Duration, on_link: bool) {
