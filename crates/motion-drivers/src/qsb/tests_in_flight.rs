@@ -31,6 +31,18 @@ fn online() -> Bench {
     bench
 }
 
+/// Sets axis 0's goal (accepted).
+fn set(bench: &mut Bench, goal: Goal) {
+    let now = bench.now;
+    bench.driver.set_goal(now, 0, goal).expect("goal accepted");
+}
+
+/// 500 µs later, the board's answer to `line`.
+fn answer_later(bench: &mut Bench, line: &[u8]) {
+    bench.advance(Duration::from_micros(500));
+    bench.answer(line, 0);
+}
+
 /// What `poll_transmit` writes now, with its `goal_starts`.
 fn transmit(bench: &mut Bench) -> Option<(Vec<u8>, u8)> {
     let mut buf = [0u8; 256];
@@ -42,23 +54,15 @@ fn transmit(bench: &mut Bench) -> Option<(Vec<u8>, u8)> {
 #[test]
 fn a_new_goal_waits_for_the_answer_in_flight_then_goes_out_first() {
     let mut bench = online();
-    bench
-        .driver
-        .set_goal(bench.now, 0, jog(5_000.0))
-        .expect("jog");
+    set(&mut bench, jog(5_000.0));
     assert_eq!(transmit(&mut bench), Some((JOG_PLUS.to_vec(), 1)));
-    bench.advance(Duration::from_micros(500));
-    bench.answer(JOG_PLUS, 0);
+    answer_later(&mut bench, JOG_PLUS);
     assert_eq!(transmit(&mut bench), Some((MOTOR_JOG.to_vec(), 0)));
     // The reverse jog while COMMAND 9 awaits its answer: nothing more on the line until
     // that answer (the board is not ready for another command before it).
-    bench
-        .driver
-        .set_goal(bench.now, 0, jog(-5_000.0))
-        .expect("reverse");
+    set(&mut bench, jog(-5_000.0));
     assert_eq!(transmit(&mut bench), None, "one command at a time");
-    bench.advance(Duration::from_micros(500));
-    bench.answer(MOTOR_JOG, 0);
+    answer_later(&mut bench, MOTOR_JOG);
     // The old plan's answer does not advance the new one; the new one goes out at once,
     // and it is the goal's first write (the frame's wire stamp).
     assert_eq!(transmit(&mut bench), Some((JOG_MINUS.to_vec(), 1)));
@@ -72,27 +76,17 @@ fn a_new_goal_waits_for_the_answer_in_flight_then_goes_out_first() {
 #[test]
 fn a_register_write_in_flight_is_not_taken_as_held() {
     let mut bench = online();
-    bench
-        .driver
-        .set_goal(bench.now, 0, jog(-5_000.0))
-        .expect("jog");
+    set(&mut bench, jog(-5_000.0));
     assert_eq!(bench.run(), ["W12FFFFFE10", "W169"]);
     // Forwards: its MD JOG RATE goes out and is not answered yet.
-    bench
-        .driver
-        .set_goal(bench.now, 0, jog(5_000.0))
-        .expect("forwards");
+    set(&mut bench, jog(5_000.0));
     assert_eq!(transmit(&mut bench), Some((JOG_PLUS.to_vec(), 1)));
     // Back again before that answer: the board held −496 but may yet take +496, so the
     // plan must not drop its MD JOG RATE step as already done (the jog would then run
     // forwards at the rate written last).
-    bench
-        .driver
-        .set_goal(bench.now, 0, jog(-5_000.0))
-        .expect("back");
+    set(&mut bench, jog(-5_000.0));
     assert_eq!(transmit(&mut bench), None, "one command at a time");
-    bench.advance(Duration::from_micros(500));
-    bench.answer(JOG_PLUS, 0);
+    answer_later(&mut bench, JOG_PLUS);
     assert_eq!(transmit(&mut bench), Some((JOG_MINUS.to_vec(), 1)));
     bench.answer(JOG_MINUS, 0);
     assert_eq!(bench.run(), ["W169"], "the jog runs backwards");
@@ -101,19 +95,13 @@ fn a_register_write_in_flight_is_not_taken_as_held() {
 #[test]
 fn a_stop_set_while_a_jog_command_is_unanswered_is_sent_after_its_answer() {
     let mut bench = online();
-    bench
-        .driver
-        .set_goal(bench.now, 0, jog(5_000.0))
-        .expect("jog");
+    set(&mut bench, jog(5_000.0));
     assert_eq!(transmit(&mut bench), Some((JOG_PLUS.to_vec(), 1)));
     bench.answer(JOG_PLUS, 0);
     assert_eq!(transmit(&mut bench), Some((MOTOR_JOG.to_vec(), 0)));
     // MD STATUS still says done (the jog has not shown yet): with COMMAND 9 unanswered the
     // drive is not taken as done, so the stop is not skipped.
-    bench
-        .driver
-        .set_goal(bench.now, 0, Goal::Stop { decel: 100_000.0 })
-        .expect("stop");
+    set(&mut bench, Goal::Stop { decel: 100_000.0 });
     bench.tick(Some(MD_DONE));
     assert_eq!(transmit(&mut bench), None, "one command at a time");
     bench.answer(MOTOR_JOG, 0);
