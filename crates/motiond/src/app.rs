@@ -106,29 +106,42 @@ pub fn run(config: ServerConfig, options: RunOptions) -> anyhow::Result<()> {
         cpu: config.server.io_cpu,
     };
     let mut io_rt = IoRt::default();
+    let (mut fifo_refused, mut pin_refused) = (false, false);
     for (spec, link) in config.links.iter().zip(links) {
         let (port, mut thread) = io::spawn(&spec.name, link, io_options, Arc::clone(&io_stop))
             .with_context(|| format!("starting the I/O thread of link `{}`", spec.name))?;
+        // Every thread asks the same of the same process's limits: a refusal is reported
+        // once (the first thread's), and what one thread was refused counts as not had.
         let outcome = thread.take_rt().unwrap_or_default();
+        let first = io_rt.problems.is_empty();
         match outcome.fifo {
             Some(Ok(priority)) => io_rt.fifo = Some(priority),
-            Some(Err(error)) => io_rt.problems.push(error),
+            Some(Err(error)) => {
+                fifo_refused = true;
+                if first {
+                    io_rt.problems.push(error);
+                }
+            }
             None => {}
         }
         match outcome.pinned {
             Some(Ok(cpu)) => io_rt.pinned = Some(cpu),
-            Some(Err(error)) => io_rt.problems.push(error),
+            Some(Err(error)) => {
+                pin_refused = true;
+                if first {
+                    io_rt.problems.push(error);
+                }
+            }
             None => {}
         }
         ports.push(port);
         io_threads.push(thread);
     }
-    if !io_rt.problems.is_empty() {
-        // One thread's answers stand for all of them (same process, same limits): the
-        // first thread's problems only.
+    if fifo_refused {
         io_rt.fifo = None;
+    }
+    if pin_refused {
         io_rt.pinned = None;
-        io_rt.problems.truncate(2);
     }
 
     let health = Arc::new(TickHealth::default());
