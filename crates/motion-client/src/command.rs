@@ -5,7 +5,9 @@ use std::time::Instant;
 
 use iceoryx2::prelude::PayloadHeader as _;
 use iceoryx2::service::Service;
-use motion_ipc::{AxisFlags, CommandKind, CommandReply, CommandRequest, FaultCode, Reason, Target};
+use motion_ipc::{
+    AxisFlags, CommandKind, CommandReply, CommandRequest, FaultCode, FrameFlags, Reason, Target,
+};
 
 use crate::session::Seen;
 use crate::{Axis, Client, ClientError};
@@ -259,11 +261,38 @@ impl<S: Service> Client<S> {
     }
 
     /// Emergency stop through this client's command port: every axis stops with its e-stop
-    /// category; latched until [`Client::reset`]. For an e-stop that gets through when the
-    /// command service's ports are exhausted, see the free function
-    /// [`estop`](crate::estop).
+    /// category; latched until [`Client::reset`]. Returns once a frame of the accepting tick
+    /// or later shows the e-stop latched; [`ClientError::EstopNotSeen`] when none does
+    /// within the reply timeout (the server accepted it, but this client cannot say it is
+    /// in force). For an e-stop that gets through when the command service's ports are
+    /// exhausted, see the free function [`estop`](crate::estop).
     pub fn estop(&self) -> Result<Accepted, ClientError> {
-        self.command(CommandRequest::ALL_AXES, CommandKind::EStop, [0.0; 3])
+        let accepted = self.command(CommandRequest::ALL_AXES, CommandKind::EStop, [0.0; 3])?;
+        let started = Instant::now();
+        let deadline = started + self.reply_timeout;
+        let mut newest = None;
+        loop {
+            let left = deadline.saturating_duration_since(Instant::now());
+            match self.next_frame(left) {
+                Ok(frame) => {
+                    newest = Some(frame.tick);
+                    if frame.tick >= accepted.tick
+                        && frame.flags().contains(FrameFlags::ESTOP_LATCHED)
+                    {
+                        return Ok(accepted);
+                    }
+                }
+                Err(ClientError::NoFrame(_)) => {}
+                Err(error) => return Err(error),
+            }
+            if Instant::now() >= deadline {
+                return Err(ClientError::EstopNotSeen {
+                    tick: accepted.tick,
+                    waited: started.elapsed(),
+                    newest,
+                });
+            }
+        }
     }
 
     /// Clears a latched e-stop and faults; targets become the current positions.

@@ -10,7 +10,10 @@ use iceoryx2::node::{Node, NodeView as _};
 use iceoryx2::port::notifier::NotifierCreateError;
 use iceoryx2::prelude::{CallbackProgression, Config, NodeName, NodeState, SignalHandlingMode};
 use iceoryx2::service::Service;
-use motion_ipc::{ClientId, CommandKind, CommandReply, CommandRequest, Reason, ServiceNames};
+use motion_ipc::{
+    ClientId, CommandKind, CommandReply, CommandRequest, FrameFlags, MotionFrame, PidFileError,
+    Reason, ServerPidFile, ServiceNames,
+};
 use nix::sys::signal::{Signal, kill};
 use nix::unistd::Pid;
 
@@ -31,7 +34,7 @@ pub enum EstopPath {
         /// How many listeners were notified.
         listeners: usize,
     },
-    /// SIGUSR1 to the server's process, found by its iceoryx2 node name.
+    /// SIGUSR1 to the server's process, as its pid file names it.
     Signal {
         /// The process signalled.
         pid: i32,
@@ -140,35 +143,81 @@ pub fn stop_all<S: Service>(server: &str, timeout: Duration) -> Result<Accepted,
     }
 }
 
+/// An e-stop [`estop`] delivered and saw latched.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Estop {
+    /// How it was delivered.
+    pub path: EstopPath,
+    /// The tick of the first frame seen with the e-stop latched; `None` when no frame
+    /// could be read (every frame subscriber slot taken) and the command service's reply,
+    /// from the one server port of the instance, is the only word of it.
+    pub seen_in_frame: Option<u64>,
+}
+
+impl fmt::Display for Estop {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.seen_in_frame {
+            Some(tick) => write!(f, "{} — latched in the frame of tick {tick}", self.path),
+            None => write!(
+                f,
+                "{} — no frame subscriber slot free to see it in a frame",
+                self.path
+            ),
+        }
+    }
+}
+
 /// Latches the e-stop of the instance `server` by the first path that works, needing no
-/// frame subscription and no connected [`Client`](crate::Client):
+/// frame subscription and no connected [`Client`](crate::Client), and reports success only
+/// when the server said so:
 ///
 /// 1. a request on the command service (a fresh client port), waiting for the reply up to
-///    half of `timeout`;
+///    half of `timeout`; the reply comes from the instance's one server port;
 /// 2. when the command service has no free client port, does not answer, or refuses: a
 ///    notification on the `estop` event service (own ports, so it works when the command
 ///    service's client slots are exhausted);
-/// 3. when that fails too: SIGUSR1 to the server process, found by its iceoryx2 node name
-///    ([`ServiceNames::server_node`]) without opening any service. Not sent to a process
-///    that does not catch SIGUSR1 (its `/proc/<pid>/status` says so): the signal's default
-///    action would end that server instead of latching its e-stop.
+/// 3. when that fails too: SIGUSR1 to the server's process as its pid file names it
+///    ([`ServerPidFile`]: a file only the server's user can have written, naming a live
+///    process of that user with the recorded start time, whose iceoryx2 node is the
+///    server's) — never a process found by its node name, which any process may choose.
+///    Not sent to a process that does not catch SIGUSR1 (its `/proc/<pid>/status` says
+///    so): the signal's default action would end that server instead of latching its
+///    e-stop.
 ///
-/// Returns the path that delivered it, or every path's failure.
-pub fn estop<S: Service>(server: &str, timeout: Duration) -> Result<EstopPath, EstopError> {
+/// After an event or a signal, a frame of the server (the frame service's one publisher)
+/// must show the e-stop latched before `timeout` ends; otherwise the call fails, saying
+/// what was sent. After an accepted command the frame is looked for too, and the reply
+/// alone is taken when no frame subscriber slot is free.
+pub fn estop<S: Service>(server: &str, timeout: Duration) -> Result<Estop, EstopError> {
     let started = Instant::now();
+    let deadline = started + timeout.max(Duration::from_millis(200));
     let names = ServiceNames::new(server);
     let mut server_found = false;
-    let (command, event) = match node::<S>("motion-estop") {
+    let node = node::<S>("motion-estop");
+    let (command, event) = match &node {
         Ok(node) => {
             // 1. The command service.
-            let deadline = started + (timeout / 2).max(Duration::from_millis(20));
+            let reply_by = started + (timeout / 2).max(Duration::from_millis(20));
             let opening = Opening::once(server);
-            let command = match command_all(&node, server, &opening, CommandKind::EStop, deadline) {
+            let command = match command_all(node, server, &opening, CommandKind::EStop, reply_by) {
                 Ok(reply) => match reply.result() {
                     Ok(()) => {
-                        return Ok(EstopPath::Command {
+                        let path = EstopPath::Command {
                             tick: reply.tick_applied,
-                        });
+                        };
+                        return match see_latched(node, server, reply.tick_applied, deadline) {
+                            Ok(tick) => Ok(Estop {
+                                path,
+                                seen_in_frame: Some(tick),
+                            }),
+                            Err(Unseen::NoSlot(_)) => Ok(Estop {
+                                path,
+                                seen_in_frame: None,
+                            }),
+                            Err(Unseen::NotLatched(why)) => {
+                                Err(EstopError::unconfirmed(server, path, why))
+                            }
+                        };
                     }
                     Err(reason) => {
                         server_found = true;
@@ -185,8 +234,10 @@ pub fn estop<S: Service>(server: &str, timeout: Duration) -> Result<EstopPath, E
                 }
             };
             // 2. The estop event service.
-            let event = match notify_estop(&node, &names) {
-                Ok(listeners) => return Ok(EstopPath::Event { listeners }),
+            let event = match notify_estop(node, &names) {
+                Ok(listeners) => {
+                    return confirm(node, server, EstopPath::Event { listeners }, deadline);
+                }
                 Err((found, why)) => {
                     server_found |= found;
                     why
@@ -194,18 +245,87 @@ pub fn estop<S: Service>(server: &str, timeout: Duration) -> Result<EstopPath, E
             };
             (command, event)
         }
-        Err(detail) => (detail.clone(), detail),
+        Err(detail) => (detail.clone(), detail.clone()),
     };
     // 3. SIGUSR1 to the server's process.
-    match signal_server::<S>(&names) {
-        Ok(pid) => Ok(EstopPath::Signal { pid }),
+    match signal_server::<S>(server, &names) {
+        Ok(pid) => match &node {
+            Ok(node) => confirm(node, server, EstopPath::Signal { pid }, deadline),
+            Err(detail) => Err(EstopError::unconfirmed(
+                server,
+                EstopPath::Signal { pid },
+                format!("no frame can be read: {detail}"),
+            )),
+        },
         Err((found, signal)) => Err(EstopError {
             server: server.to_owned(),
             command,
             event,
             signal,
             server_found: server_found || found,
+            unconfirmed: None,
         }),
+    }
+}
+
+/// After an event or a signal: only a frame showing the latch counts.
+fn confirm<S: Service>(
+    node: &Node<S>,
+    server: &str,
+    path: EstopPath,
+    deadline: Instant,
+) -> Result<Estop, EstopError> {
+    match see_latched(node, server, 0, deadline) {
+        Ok(tick) => Ok(Estop {
+            path,
+            seen_in_frame: Some(tick),
+        }),
+        Err(Unseen::NoSlot(why) | Unseen::NotLatched(why)) => {
+            Err(EstopError::unconfirmed(server, path, why))
+        }
+    }
+}
+
+/// Why no frame showed the latch.
+enum Unseen {
+    /// No frame could be read at all (no subscriber slot, no frame service).
+    NoSlot(String),
+    /// Frames came, none latched, until the deadline.
+    NotLatched(String),
+}
+
+/// Waits for a frame of tick `from_tick` or later with the e-stop latched; its tick.
+fn see_latched<S: Service>(
+    node: &Node<S>,
+    server: &str,
+    from_tick: u64,
+    deadline: Instant,
+) -> Result<u64, Unseen> {
+    let names = ServiceNames::new(server);
+    let opening = Opening::once(server);
+    let (subscriber, _) = ports::open_subscriber::<S, MotionFrame>(node, &opening, &names.frame())
+        .map_err(|error| Unseen::NoSlot(format!("no frame can be read: {error}")))?;
+    let mut newest = None;
+    loop {
+        while let Some(sample) = subscriber
+            .receive()
+            .map_err(|error| Unseen::NoSlot(format!("frames cannot be read: {error:?}")))?
+        {
+            let frame = sample.payload();
+            newest = Some(frame.tick);
+            if frame.tick >= from_tick && frame.flags().contains(FrameFlags::ESTOP_LATCHED) {
+                return Ok(frame.tick);
+            }
+        }
+        if Instant::now() >= deadline {
+            return Err(Unseen::NotLatched(match newest {
+                Some(tick) => format!(
+                    "the server's frames (the newest of tick {tick}) do not show the e-stop latched"
+                ),
+                None => "the server published no frame".to_owned(),
+            }));
+        }
+        std::thread::sleep(Duration::from_millis(1));
     }
 }
 
@@ -245,7 +365,7 @@ fn notify_estop<S: Service>(node: &Node<S>, names: &ServiceNames) -> Result<usiz
 
 /// Whether process `pid` catches SIGUSR1, from the `SigCgt` mask of `/proc/<pid>/status`;
 /// `None` when that cannot be read.
-fn catches_sigusr1(pid: i32) -> Option<bool> {
+fn catches_sigusr1(pid: u32) -> Option<bool> {
     let status = std::fs::read_to_string(format!("/proc/{pid}/status")).ok()?;
     let mask = status
         .lines()
@@ -254,42 +374,67 @@ fn catches_sigusr1(pid: i32) -> Option<bool> {
     Some(mask & (1 << (Signal::SIGUSR1 as u64 - 1)) != 0)
 }
 
-/// Sends SIGUSR1 to every live process whose iceoryx2 node is the server's; its pid, or
-/// (a server node was seen, why not).
-fn signal_server<S: Service>(names: &ServiceNames) -> Result<i32, (bool, String)> {
+/// Sends SIGUSR1 to the process the server's pid file names, once the file is trusted and
+/// the node it names is alive, is the server's and runs in that process; its pid, or (a
+/// server was seen, why not).
+fn signal_server<S: Service>(server: &str, names: &ServiceNames) -> Result<i32, (bool, String)> {
+    let file = ServerPidFile::of(server);
+    let process = file
+        .read_verified()
+        .map_err(|error| (!matches!(error, PidFileError::Missing { .. }), error.to_string()))?;
     let wanted = names.server_node();
-    let mut pids = Vec::new();
+    let mut node_found = None;
     let listed = Node::<S>::list(Config::global_config(), |state| {
         if let NodeState::Alive(view) = &state
-            && let Some(details) = view.details()
-            && details.name().as_str() == wanted
+            && view.id().value() == process.node
         {
-            pids.push(details.process_id().value());
+            node_found = Some(
+                view.details()
+                    .as_ref()
+                    .map(|details| (details.name().as_str() == wanted, details.process_id())),
+            );
+            return CallbackProgression::Stop;
         }
         CallbackProgression::Continue
     });
     if let Err(error) = listed {
-        return Err((false, format!("cannot list iceoryx2 nodes: {error:?}")));
+        return Err((true, format!("cannot list iceoryx2 nodes: {error:?}")));
     }
-    if pids.is_empty() {
-        return Err((false, format!("no live process has the node `{wanted}`")));
-    }
-    let mut last = Err((true, String::new()));
-    for pid in pids {
-        if catches_sigusr1(pid) == Some(false) {
-            // SIGUSR1's default action would end the server instead of latching its e-stop.
-            last = Err((
+    let pid = process.pid;
+    match node_found {
+        None => {
+            return Err((
                 true,
                 format!(
-                    "the server process (pid {pid}) does not handle SIGUSR1 (an older motiond?): not sent"
+                    "the node {} that {} names is not alive (the server is stopping?): not sent",
+                    process.node,
+                    file.path().display()
                 ),
             ));
-            continue;
         }
-        last = match kill(Pid::from_raw(pid), Signal::SIGUSR1) {
-            Ok(()) => return Ok(pid),
-            Err(error) => Err((true, format!("kill({pid}, SIGUSR1): {error}"))),
-        };
+        Some(Some((true, node_pid))) if node_pid.value() as u32 == pid => {}
+        Some(_) => {
+            return Err((
+                true,
+                format!(
+                    "the node {} that {} names is not the server's `{wanted}` in process {pid}: not sent",
+                    process.node,
+                    file.path().display()
+                ),
+            ));
+        }
     }
-    last
+    if catches_sigusr1(pid) == Some(false) {
+        // SIGUSR1's default action would end the server instead of latching its e-stop.
+        return Err((
+            true,
+            format!(
+                "the server process (pid {pid}) does not handle SIGUSR1 (an older motiond?): not sent"
+            ),
+        ));
+    }
+    let pid = i32::try_from(pid).map_err(|_| (true, format!("pid {pid} out of range")))?;
+    kill(Pid::from_raw(pid), Signal::SIGUSR1)
+        .map(|()| pid)
+        .map_err(|error| (true, format!("kill({pid}, SIGUSR1): {error}")))
 }

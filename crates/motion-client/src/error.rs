@@ -228,6 +228,21 @@ pub enum ClientError {
     /// No frame arrived in time.
     #[error("no frame from the server within {0:?}; is motiond still running?")]
     NoFrame(Duration),
+    /// The server accepted an e-stop, but no frame of that tick or later showed it latched
+    /// (another client's reset in between, or frames stopped).
+    #[error(
+        "the server accepted the e-stop in tick {tick}, but no frame showed it latched within \
+         {waited:?} ({}); check the machine",
+        match .newest { Some(tick) => format!("newest frame: tick {tick}"), None => "no frame came".to_owned() }
+    )]
+    EstopNotSeen {
+        /// The tick the server accepted it in.
+        tick: u64,
+        /// How long frames were watched.
+        waited: Duration,
+        /// The newest frame's tick, if any came.
+        newest: Option<u64>,
+    },
     /// The server restarted under this client (see [`Restart`]). Goals are not sent to the
     /// new server until [`Client::acknowledge_restart`](crate::Client::acknowledge_restart);
     /// stops, e-stops and offs always are.
@@ -382,10 +397,7 @@ impl ConnectError {
 
 /// No path delivered an e-stop (see [`estop`](crate::estop)): what each one hit.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error(
-    "e-stop of motiond \"{server}\" NOT delivered: command service: {command}; estop event: \
-     {event}; SIGUSR1: {signal}"
-)]
+#[error("{}", self.describe())]
 pub struct EstopError {
     /// The instance name.
     pub server: String,
@@ -398,4 +410,36 @@ pub struct EstopError {
     /// Whether any trace of the server was found (a service or its node); `false` means no
     /// server of that name runs.
     pub server_found: bool,
+    /// Set when the e-stop was sent by this path but no frame of the server showed it
+    /// latched, with why: it may or may not have latched, so it is not reported as done.
+    pub unconfirmed: Option<(crate::EstopPath, String)>,
+}
+
+impl EstopError {
+    /// Sent by `path`, never seen latched (`why`).
+    pub(crate) fn unconfirmed(server: &str, path: crate::EstopPath, why: String) -> Self {
+        Self {
+            server: server.to_owned(),
+            command: String::new(),
+            event: String::new(),
+            signal: String::new(),
+            server_found: true,
+            unconfirmed: Some((path, why)),
+        }
+    }
+
+    fn describe(&self) -> String {
+        match &self.unconfirmed {
+            Some((path, why)) => format!(
+                "e-stop of motiond \"{}\" sent via {path} but NOT confirmed: {why}; check the \
+                 machine and `motionctl status` before trusting it",
+                self.server
+            ),
+            None => format!(
+                "e-stop of motiond \"{}\" NOT delivered: command service: {}; estop event: {}; \
+                 SIGUSR1: {}",
+                self.server, self.command, self.event, self.signal
+            ),
+        }
+    }
 }

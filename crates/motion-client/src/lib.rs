@@ -35,9 +35,11 @@
 //! - Jog: [`Axis::jog`] returns a [`JogGuard`] that renews the server's deadman while your
 //!   program keeps calling into the client, and stops the axis when dropped;
 //!   [`Axis::claim_guard`] a [`ClaimGuard`].
-//! - Emergency: [`estop`] latches the e-stop with no connected client and no frame
-//!   subscription (command service, else the estop event, else SIGUSR1 to the server
-//!   process) and says which path worked; [`stop_all`] needs only the command service.
+//! - Emergency: [`estop`] latches the e-stop with no connected client (command service,
+//!   else the estop event, else SIGUSR1 to the process the server's pid file names), says
+//!   which path worked, and succeeds only when the server said so (a frame showing the
+//!   latch, or the command service's reply when no frame slot is free); [`stop_all`] needs
+//!   only the command service.
 //! - Restarts: a server that restarts under the client (a new process on the same name) is
 //!   noticed from its description, its frames or its replies ([`Client::restart`],
 //!   [`ClientError::ServerRestarted`]). Guards fail safe: nothing is renewed or released on
@@ -115,7 +117,7 @@ pub use client::{
     Stats, TickListener,
 };
 pub use command::Accepted;
-pub use emergency::{EstopPath, estop, stop_all};
+pub use emergency::{Estop, EstopPath, estop, stop_all};
 pub use error::{ClientError, ConnectError, DeviceStatus, EstopError, Restart};
 pub use frames::{FIRST_FRAME_TIMEOUT, Frames};
 pub use jog::JogGuard;

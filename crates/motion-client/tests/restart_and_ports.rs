@@ -227,8 +227,13 @@ fn a_client_commands_while_every_frame_slot_is_taken() -> Result {
 #[test]
 fn estop_takes_the_command_path_then_the_event_when_command_slots_are_taken() -> Result {
     let server = FakeServer::start::<local::Service>(FakeConfig::demo(&unique_name("paths")))?;
-    let path = estop::<local::Service>(server.name(), WAIT)?;
-    assert!(matches!(path, EstopPath::Command { .. }), "{path:?}");
+    let done = estop::<local::Service>(server.name(), WAIT)?;
+    assert!(matches!(done.path, EstopPath::Command { .. }), "{done:?}");
+    // Seen in a frame of the accepting tick or later.
+    let EstopPath::Command { tick } = done.path else {
+        unreachable!()
+    };
+    assert!(done.seen_in_frame.is_some_and(|seen| seen >= tick), "{done:?}");
     assert!(server.estop_latched());
     stop_all::<local::Service>(server.name(), WAIT)?;
     assert_eq!(count(&server, CommandKind::Stop), 1);
@@ -250,12 +255,14 @@ fn estop_takes_the_command_path_then_the_event_when_command_slots_are_taken() ->
     assert_eq!(held.len() + 1, server.config().max_clients);
     let error = stop_all::<local::Service>(server.name(), WAIT).expect_err("no client slot");
     assert!(error.to_string().contains("client slot"), "{error}");
-    let path = estop::<local::Service>(server.name(), WAIT)?;
-    assert_eq!(path, EstopPath::Event { listeners: 1 });
+    let done = estop::<local::Service>(server.name(), WAIT)?;
+    assert_eq!(done.path, EstopPath::Event { listeners: 1 });
     assert_eq!(
-        path.to_string(),
+        done.path.to_string(),
         "the estop event service (1 listener notified)"
     );
+    // An event has no reply: only a frame showing the latch made it a success.
+    assert!(done.seen_in_frame.is_some(), "{done:?}");
     let until = Instant::now() + WAIT;
     while !server.estop_latched() {
         assert!(Instant::now() < until, "the event never latched the e-stop");

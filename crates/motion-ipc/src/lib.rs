@@ -29,6 +29,7 @@ mod command;
 mod frame;
 mod info;
 mod params;
+mod pid_file;
 pub mod rules;
 mod service;
 mod signal;
@@ -44,6 +45,7 @@ pub use info::{AxisInfo, Capabilities, DeviceInfo, DeviceModel, EstopCategory, S
 /// Fixed-size, zero-padded UTF-8 text fields (from `motion-base`, shared with the drivers).
 pub use motion_base::{read_text, write_text};
 pub use params::{MAX_PARAMS, MachineParam, MachineParams, PARAM_TEXT_LEN, ParamOwner};
+pub use pid_file::{PidFileError, ServerPidFile, ServerProcess, process_start_ticks, process_uid};
 pub use service::ServiceNames;
 pub use signal::{SignalFlags, SignalInfo, SignalInfoFlags, SignalKind, SignalState};
 pub use stats::{LatencySummary, LinkIo, LinkStats, ServerStats};

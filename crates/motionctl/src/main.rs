@@ -108,9 +108,9 @@ fn run_unconnected(cli: &Cli) -> Option<anyhow::Result<()>> {
 }
 
 fn estop(cli: &Cli) -> anyhow::Result<()> {
-    let path = motion_client::estop::<Service>(&cli.server, cli.connect_timeout)?;
+    let estop = motion_client::estop::<Service>(&cli.server, cli.connect_timeout)?;
     out!(
-        "e-stop latched via {path}: every axis stops with its e-stop category; \
+        "e-stop latched via {estop}: every axis stops with its e-stop category; \
          `motionctl reset` clears it"
     );
     Ok(())
@@ -229,7 +229,10 @@ fn exit_status(error: &anyhow::Error) -> u8 {
             return exit::NO_SERVER;
         }
         if let Some(estop) = cause.downcast_ref::<EstopError>() {
-            return if estop.server_found {
+            return if estop.unconfirmed.is_some() {
+                // Sent, but the server never showed it latched: as a silent server.
+                exit::TIMEOUT
+            } else if estop.server_found {
                 exit::FAILURE
             } else {
                 exit::NO_SERVER
@@ -245,6 +248,7 @@ fn exit_status(error: &anyhow::Error) -> u8 {
                 ClientError::Connect(connect) => connect_status(connect),
                 ClientError::NoReply { .. }
                 | ClientError::NoFrame(_)
+                | ClientError::EstopNotSeen { .. }
                 | ClientError::WaitTimeout { .. }
                 | ClientError::WaitAborted { .. }
                 | ClientError::AxisFaulted { .. }

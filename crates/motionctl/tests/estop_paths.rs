@@ -1,8 +1,11 @@
 //! `motionctl estop` gets through whatever is exhausted: frame subscriber slots (command
 //! path), command client slots (estop event path), and event notifier slots too (SIGUSR1 to
-//! the process that runs the server's node: this test process, whose fake server latches
-//! on SIGUSR1 like motiond). One test in its own binary: the SIGUSR1 handler is
-//! process-wide, so no other fake server may run in this process meanwhile.
+//! the process the server's pid file names: this test process, whose fake server writes the
+//! pid file and latches on SIGUSR1 like motiond). It reports success only when the server
+//! said so: the command service's reply, or for an event or a signal a frame showing the
+//! latch — with every frame slot taken those exit 5, "NOT confirmed". One test in its own
+//! binary: the SIGUSR1 handler is process-wide, so no other fake server may run in this
+//! process meanwhile.
 
 mod common;
 
@@ -65,6 +68,11 @@ fn estop_gets_through_exhausted_frame_command_and_event_slots() -> Result {
         stdout(&estop).contains("via the command service"),
         "{estop:?}"
     );
+    // No frame to see it in: the reply of the instance's one server port is the word.
+    assert!(
+        stdout(&estop).contains("no frame subscriber slot free to see it in a frame"),
+        "{estop:?}"
+    );
     assert!(server.estop_latched());
     let stop = run(server.name(), &["stop"])?;
     assert!(stop.status.success(), "{stop:?}");
@@ -91,19 +99,27 @@ fn estop_gets_through_exhausted_frame_command_and_event_slots() -> Result {
     }
     assert_eq!(held_clients.len(), slots);
     assert_fails(&run(server.name(), &["stop"])?, 3, "no free client slot");
+    // An event has no reply: with every frame slot taken nothing can show the latch, so
+    // the e-stop is not reported as done (exit 5), though the server did latch.
+    let estop = run(server.name(), &["estop"])?;
+    assert_fails(&estop, 5, "sent via the estop event service");
+    assert_fails(&estop, 5, "NOT confirmed");
+    poll_latched(&server)?;
+    reset_through_one_free_slot(&server, &mut held_clients, &commands)?;
+    // One frame slot free: a frame shows the latch.
+    held_frames.pop();
     let estop = run(server.name(), &["estop"])?;
     assert!(estop.status.success(), "{estop:?}");
     assert!(
         stdout(&estop).contains("via the estop event service"),
         "{estop:?}"
     );
+    assert!(
+        stdout(&estop).contains("latched in the frame of tick"),
+        "{estop:?}"
+    );
     poll_latched(&server)?;
-
-    // Free one client slot to reset, then take it again.
-    held_clients.pop();
-    assert!(run(server.name(), &["reset"])?.status.success());
-    assert!(!server.estop_latched());
-    held_clients.push(commands.client_builder().create()?);
+    reset_through_one_free_slot(&server, &mut held_clients, &commands)?;
 
     // 3. Every estop notifier slot taken too: SIGUSR1 to the server's process.
     let event = hog
@@ -115,9 +131,24 @@ fn estop_gets_through_exhausted_frame_command_and_event_slots() -> Result {
         held_notifiers.push(notifier);
     }
     assert_eq!(held_notifiers.len(), slots);
+    // Every frame slot taken again: sent to the pid file's process, not confirmed.
+    held_frames.push(frames.subscriber_builder().create()?);
+    let estop = run(server.name(), &["estop"])?;
+    assert_fails(&estop, 5, "NOT confirmed");
+    assert!(
+        stderr(&estop).contains(&format!(
+            "sent via SIGUSR1 to the server process (pid {})",
+            std::process::id()
+        )),
+        "{estop:?}"
+    );
+    poll_latched(&server)?;
+    reset_through_one_free_slot(&server, &mut held_clients, &commands)?;
+    held_frames.pop();
     let estop = run(server.name(), &["estop"])?;
     assert!(estop.status.success(), "{estop:?}");
     let said = stdout(&estop);
+    assert!(said.contains("latched in the frame of tick"), "{said}");
     assert!(
         said.contains(&format!(
             "via SIGUSR1 to the server process (pid {})",
@@ -126,11 +157,34 @@ fn estop_gets_through_exhausted_frame_command_and_event_slots() -> Result {
         "{said}"
     );
     poll_latched(&server)?;
-    assert_eq!(server.estop_sources(), ["command", "event", "signal"]);
+    assert_eq!(
+        server.estop_sources(),
+        ["command", "event", "event", "signal", "signal"]
+    );
 
     // No server at all: exit 3, one line.
     let absent = run(&unique_name("absent"), &["estop"])?;
     assert_fails(&absent, 3, "NOT delivered");
+    Ok(())
+}
+
+/// Frees one command client slot of `held`, resets the e-stop through it, takes it again.
+fn reset_through_one_free_slot(
+    server: &motion_client::testing::FakeServer,
+    held: &mut Vec<iceoryx2::port::client::Client<ipc::Service, CommandRequest, (), CommandReply, ()>>,
+    commands: &iceoryx2::service::port_factory::request_response::PortFactory<
+        ipc::Service,
+        CommandRequest,
+        (),
+        CommandReply,
+        (),
+    >,
+) -> Result {
+    held.pop();
+    let reset = run(server.name(), &["reset"])?;
+    assert!(reset.status.success(), "{reset:?}");
+    assert!(!server.estop_latched());
+    held.push(commands.client_builder().create()?);
     Ok(())
 }
 

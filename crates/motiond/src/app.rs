@@ -9,7 +9,7 @@ use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use anyhow::{Context, bail};
 use motion_drivers::Driver;
 use motion_engine::Engine;
-use motion_ipc::{ClientId, DeviceState, read_text};
+use motion_ipc::{ClientId, DeviceState, ServerPidFile, read_text};
 use motion_link::{Link, LinkConfig};
 use rtrb::RingBuffer;
 
@@ -245,6 +245,15 @@ impl Systemd<'_> {
     }
 }
 
+/// Removes the server's pid file when dropped, if it still names this process.
+struct PidFileGuard(ServerPidFile);
+
+impl Drop for PidFileGuard {
+    fn drop(&mut self) {
+        self.0.remove_if_this_process();
+    }
+}
+
 /// The main thread's work while the tick runs: reports, logs, the status line, client
 /// liveness, systemd's readiness and watchdog. Returns when the tick thread stops.
 fn housekeeping(
@@ -261,6 +270,10 @@ fn housekeeping(
     let mut summary_printed = false;
     let mut device_states = vec![DeviceState::Offline; config.devices.len()];
     let started = monotonic_now();
+    // Where `motionctl estop` finds the one process to signal when every service slot is
+    // taken; removed again however this function returns.
+    let pid_file = PidFileGuard(ServerPidFile::of(&config.server.name));
+    let mut pid_file_error = None;
     loop {
         systemd.poll();
         while let Ok(report) = reports.pop() {
@@ -268,6 +281,16 @@ fn housekeeping(
                 Report::Failed(error) => bail!("{error}"),
                 Report::Started { rt, node_id } => {
                     server_node = node_id;
+                    match pid_file.0.write_for_this_process(node_id) {
+                        Ok(_) => tracing::debug!("pid file {}", pid_file.0.path().display()),
+                        Err(error) => {
+                            // A client's e-stop of last resort could not tell this process
+                            // from an impostor: do not run without it.
+                            tracing::error!("{error}; stopping every axis and exiting");
+                            pid_file_error = Some(error);
+                            systemd.shutdown.store(true, Ordering::Relaxed);
+                        }
+                    }
                     for problem in &rt.problems {
                         tracing::warn!("real-time: {problem}; continuing without it");
                     }
@@ -356,6 +379,9 @@ fn housekeeping(
                             "shutdown: not every board acknowledged its stop within {:?}",
                             tick::SHUTDOWN_TIMEOUT
                         );
+                    }
+                    if let Some(error) = pid_file_error {
+                        bail!("{error}");
                     }
                     return Ok(());
                 }

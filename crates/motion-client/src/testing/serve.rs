@@ -162,6 +162,13 @@ fn serve_inner<S: Service>(
         .create()
         .map_err(|e| fail("frame publisher")(&e))?;
 
+    // The pid file, as motiond writes it once its services exist.
+    let pid_file = PidFileGuard(motion_ipc::ServerPidFile::of(&config.name));
+    pid_file
+        .0
+        .write_for_this_process(node.id().value())
+        .map_err(|e| fail("pid file")(&e))?;
+
     let sigusr1 = Arc::new(AtomicBool::new(false));
     let _registration = SignalRegistration(if config.latch_on_sigusr1 {
         Some(
@@ -265,4 +272,13 @@ fn serve_inner<S: Service>(
         next += period;
     }
     Ok(())
+}
+
+/// Removes the fake's pid file when it stops.
+struct PidFileGuard(motion_ipc::ServerPidFile);
+
+impl Drop for PidFileGuard {
+    fn drop(&mut self) {
+        self.0.remove_if_this_process();
+    }
 }
