@@ -75,3 +75,28 @@ def test_estop_event_latches_like_the_command(client: motiond.Client) -> None:
     client.reset()
     client.wait_frames("clear the e-stop", 5.0, lambda f: not f.estop_latched)
     client.axis("focus").ramp_to(10.0)
+
+
+def test_estop_returns_once_a_frame_shows_the_latch(client: motiond.Client) -> None:
+    accepted = client.estop()
+    try:
+        # estop() returned only after a frame of the accepting tick or later showed the
+        # latch: the newest frame shows it too, with no wait.
+        frame = client.latest()
+        assert frame.estop_latched
+        assert frame.tick >= accepted.tick
+        del frame
+    finally:
+        client.reset()
+        client.wait_frames("clear the e-stop", 5.0, lambda f: not f.estop_latched)
+
+
+def test_an_estop_not_seen_is_a_timeout_that_says_what_was_accepted() -> None:
+    error = motiond.EstopNotSeen(12, 0.5, None)
+    assert isinstance(error, TimeoutError)
+    assert isinstance(error, motiond.MotiondError)
+    assert str(error) == (
+        "the server accepted the e-stop in tick 12, but no frame showed it latched within "
+        "0.500 s (no frame came); check the machine"
+    )
+    assert "newest frame: tick 40" in str(motiond.EstopNotSeen(12, 0.5, 40))

@@ -12,6 +12,7 @@ import iceoryx2 as iox2
 
 from . import errors
 from .errors import (
+    EstopNotSeen,
     IncompatibleServer,
     IpcError,
     NoFrame,
@@ -32,6 +33,7 @@ from .ipc import (
     CommandReply,
     CommandRequest,
     DeviceState,
+    FrameFlags,
     MachineParams,
     MotionFrame,
     ParamOwner,
@@ -622,8 +624,28 @@ class Client:
 
     def estop(self) -> Accepted:
         """Emergency stop: every axis stops (with its e-stop category); latched until
-        :meth:`reset`."""
-        return self.command(ALL_AXES, CommandKind.E_STOP)
+        :meth:`reset`. Returns once a frame of the accepting tick or later shows the e-stop
+        latched; raises :class:`~motiond.errors.EstopNotSeen` when none does within the
+        reply timeout (accepted, but not known to be in force)."""
+        accepted = self.command(ALL_AXES, CommandKind.E_STOP)
+        started = time.monotonic()
+        deadline = started + self._reply_timeout
+        newest: Optional[int] = None
+        while True:
+            try:
+                frame: Optional[Frame] = self.next_frame(max(0.0, deadline - time.monotonic()))
+            except NoFrame:
+                frame = None
+            if frame is not None:
+                newest = frame.tick
+                latched = frame.tick >= accepted.tick and bool(
+                    frame.flags & FrameFlags.ESTOP_LATCHED
+                )
+                del frame
+                if latched:
+                    return accepted
+            if time.monotonic() >= deadline:
+                raise EstopNotSeen(accepted.tick, time.monotonic() - started, newest)
 
     def notify_estop(self) -> None:
         """Latches the e-stop through the ``estop`` event service instead of the command

@@ -24,6 +24,7 @@ __all__ = [
     "ServerGone",
     "NoReply",
     "NoFrame",
+    "EstopNotSeen",
     "WaitTimeout",
     "WaitAborted",
     "FramesHeld",
@@ -369,6 +370,22 @@ class NoFrame(MotiondError, TimeoutError):
             f"no frame from the server within {waited:.3f} s; is motiond still running?"
         )
         self.waited = waited
+
+
+class EstopNotSeen(MotiondError, TimeoutError):
+    """The server accepted an e-stop, but no frame of that tick or later showed it latched
+    in time (another client's reset in between, or frames stopped): it is not reported as
+    in force."""
+
+    def __init__(self, tick: int, waited: float, newest: Optional[int]) -> None:
+        seen = "no frame came" if newest is None else f"newest frame: tick {newest}"
+        super().__init__(
+            f"the server accepted the e-stop in tick {tick}, but no frame showed it latched "
+            f"within {waited:.3f} s ({seen}); check the machine"
+        )
+        self.tick = tick
+        self.waited = waited
+        self.newest = newest
 
 
 class WaitTimeout(MotiondError, TimeoutError):
