@@ -45,7 +45,7 @@ extern "C" {
 /* --- constants ------------------------------------------------------------------------ */
 
 /** Version of the contract; every payload carries it. */
-#define MOTIOND_SCHEMA_VERSION 4u
+#define MOTIOND_SCHEMA_VERSION 5u
 /** Capacity of the axis arrays of the frame and the server info. */
 #define MOTIOND_MAX_AXES 128u
 /** Capacity of the device array of the server info. */
@@ -469,7 +469,7 @@ typedef struct motiond_link_io {
     uint64_t reads;         /**< reads that returned bytes */
 } motiond_link_io_t;
 
-/** Server figures, published about once a second. 1984 bytes, alignment 8. */
+/** Server figures, published about once a second. 1992 bytes, alignment 8. */
 typedef struct motiond_server_stats {
     uint32_t schema_version;                    /**< MOTIOND_SCHEMA_VERSION */
     uint32_t link_count;                        /**< valid entries of links */
@@ -492,6 +492,7 @@ typedef struct motiond_server_stats {
     uint64_t replies_lost;                      /**< command replies that could not be sent */
     uint64_t events_dropped;                    /**< log reports and iceoryx2 housekeeping that failed */
     motiond_link_io_t link_io[MOTIOND_MAX_LINKS]; /**< per link (index of links): I/O stamps */
+    uint64_t nodes_cleaned;                     /**< dead iceoryx2 nodes' records removed */
 } motiond_server_stats_t;
 
 /* Sizes and alignments the Rust side pins (crates/motion-ipc/tests/layout.rs). */
@@ -511,7 +512,7 @@ MOTIOND_STATIC_ASSERT(sizeof(motiond_machine_params_t) == 180240, "motiond_machi
 MOTIOND_STATIC_ASSERT(sizeof(motiond_latency_summary_t) == 40, "motiond_latency_summary_t size");
 MOTIOND_STATIC_ASSERT(sizeof(motiond_link_stats_t) == 80, "motiond_link_stats_t size");
 MOTIOND_STATIC_ASSERT(sizeof(motiond_link_io_t) == 32, "motiond_link_io_t size");
-MOTIOND_STATIC_ASSERT(sizeof(motiond_server_stats_t) == 1984, "motiond_server_stats_t size");
+MOTIOND_STATIC_ASSERT(sizeof(motiond_server_stats_t) == 1992, "motiond_server_stats_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_motion_frame_t) == 8, "motiond_motion_frame_t align");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_machine_params_t) == 4, "motiond_machine_params_t align");
 

@@ -51,7 +51,7 @@ pub enum WireError {
 // every offset). A change of a payload must be followed here: add the new field below.
 const _: () = assert!(size_of::<MotionFrame>() == 16464);
 const _: () = assert!(size_of::<ServerInfo>() == 32328);
-const _: () = assert!(size_of::<ServerStats>() == 1984);
+const _: () = assert!(size_of::<ServerStats>() == 1992);
 const _: () = assert!(size_of::<MachineParams>() == 180_240);
 const _: () = assert!(size_of::<CommandRequest>() == 64);
 const _: () = assert!(size_of::<CommandReply>() == 32);
@@ -345,6 +345,7 @@ record!(ServerStats {
     replies_lost,
     events_dropped,
     link_io,
+    nodes_cleaned,
 });
 
 mod sealed {

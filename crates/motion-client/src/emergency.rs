@@ -379,9 +379,12 @@ fn catches_sigusr1(pid: u32) -> Option<bool> {
 /// server was seen, why not).
 fn signal_server<S: Service>(server: &str, names: &ServiceNames) -> Result<i32, (bool, String)> {
     let file = ServerPidFile::of(server);
-    let process = file
-        .read_verified()
-        .map_err(|error| (!matches!(error, PidFileError::Missing { .. }), error.to_string()))?;
+    let process = file.read_verified().map_err(|error| {
+        (
+            !matches!(error, PidFileError::Missing { .. }),
+            error.to_string(),
+        )
+    })?;
     let wanted = names.server_node();
     let mut node_found = None;
     let listed = Node::<S>::list(Config::global_config(), |state| {

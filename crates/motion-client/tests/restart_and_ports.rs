@@ -233,7 +233,10 @@ fn estop_takes_the_command_path_then_the_event_when_command_slots_are_taken() ->
     let EstopPath::Command { tick } = done.path else {
         unreachable!()
     };
-    assert!(done.seen_in_frame.is_some_and(|seen| seen >= tick), "{done:?}");
+    assert!(
+        done.seen_in_frame.is_some_and(|seen| seen >= tick),
+        "{done:?}"
+    );
     assert!(server.estop_latched());
     stop_all::<local::Service>(server.name(), WAIT)?;
     assert_eq!(count(&server, CommandKind::Stop), 1);

@@ -102,7 +102,11 @@ impl ServerPidFile {
     /// The pid file of instance `name` under iceoryx2's root directory (the global config's
     /// `root-path`, `/tmp/iceoryx2/` by default).
     pub fn of(name: &str) -> Self {
-        let root = Config::global_config().global.root_path().as_str().to_owned();
+        let root = Config::global_config()
+            .global
+            .root_path()
+            .as_str()
+            .to_owned();
         Self::in_dir(Path::new(&root), name)
     }
 
@@ -154,7 +158,9 @@ impl ServerPidFile {
         // The umask may have taken bits off; it never adds any, but say so explicitly.
         file.set_permissions(fs::Permissions::from_mode(0o644))
             .map_err(self.io("cannot set the mode of"))?;
-        let written = file.write_all(text.as_bytes()).and_then(|()| file.sync_all());
+        let written = file
+            .write_all(text.as_bytes())
+            .and_then(|()| file.sync_all());
         drop(file);
         if let Err(error) = written.and_then(|()| fs::rename(&temporary, &self.path)) {
             let _ = fs::remove_file(&temporary);
@@ -355,10 +361,19 @@ mod tests {
         let error = file.read_verified().unwrap_err();
         assert!(matches!(error, PidFileError::Stale { .. }), "{error}");
 
-        for garbage in ["", "pid x\n", "pid 0\nstart 1\nnode 1\n", "who 1\n", "pid 1"] {
+        for garbage in [
+            "",
+            "pid x\n",
+            "pid 0\nstart 1\nnode 1\n",
+            "who 1\n",
+            "pid 1",
+        ] {
             fs::write(file.path(), garbage).unwrap();
             let error = file.read_verified().unwrap_err();
-            assert!(matches!(error, PidFileError::Malformed { .. }), "{garbage:?}: {error}");
+            assert!(
+                matches!(error, PidFileError::Malformed { .. }),
+                "{garbage:?}: {error}"
+            );
         }
 
         let target = dir.join("elsewhere");

@@ -117,7 +117,7 @@ impl LinkIo {
     };
 }
 
-/// Server figures. 1984 bytes, alignment 8. Fields in memory order:
+/// Server figures. 1992 bytes, alignment 8. Fields in memory order:
 ///
 /// | offset | field | type | meaning |
 /// |---|---|---|---|
@@ -142,6 +142,7 @@ impl LinkIo {
 /// | 1456 | `replies_lost` | u64 | command replies that could not be sent (the client vanished before its answer), since start |
 /// | 1464 | `events_dropped` | u64 | log reports the main thread's queue had no room for, and failed iceoryx2 housekeeping (connection updates, e-stop event reads), since start |
 /// | 1472 | `link_io` | [`LinkIo`]; [`MAX_LINKS`] | per link (same index as `links`): the I/O thread's stamps |
+/// | 1984 | `nodes_cleaned` | u64 | records of dead iceoryx2 nodes removed from the service root (crashed clients, clients killed while they started), since start |
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ZeroCopySend)]
 #[type_name("motiond::ServerStats")]
 #[repr(C)]
@@ -192,6 +193,9 @@ pub struct ServerStats {
     pub events_dropped: u64,
     /// Per link (same index as `links`): the I/O thread's stamps.
     pub link_io: [LinkIo; MAX_LINKS],
+    /// Records of dead iceoryx2 nodes removed from the service root (crashed clients,
+    /// clients killed while they started), since start.
+    pub nodes_cleaned: u64,
 }
 
 impl ServerStats {
@@ -253,6 +257,7 @@ impl ServerStats {
         replies_lost: 0,
         events_dropped: 0,
         link_io: [LinkIo::EMPTY; MAX_LINKS],
+        nodes_cleaned: 0,
     };
 
     /// The valid link entries.

@@ -199,6 +199,7 @@ pub fn stats_json(stats: &ServerStats) -> Value {
         "publish_failures": stats.publish_failures,
         "replies_lost": stats.replies_lost,
         "events_dropped": stats.events_dropped,
+        "nodes_cleaned": stats.nodes_cleaned,
         "links": links,
     })
 }

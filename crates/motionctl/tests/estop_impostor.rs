@@ -249,7 +249,10 @@ fn an_estop_no_frame_can_confirm_exits_non_zero_and_still_reaches_the_real_serve
     let estop = run(&name, &["estop"])?;
     assert_fails(&estop, 5, "NOT confirmed");
     assert!(
-        stderr(&estop).contains(&format!("SIGUSR1 to the server process (pid {})", server.pid()?)),
+        stderr(&estop).contains(&format!(
+            "SIGUSR1 to the server process (pid {})",
+            server.pid()?
+        )),
         "{estop:?}"
     );
     assert!(!mark.exists(), "the impostor received SIGUSR1");

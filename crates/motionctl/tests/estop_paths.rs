@@ -171,7 +171,9 @@ fn estop_gets_through_exhausted_frame_command_and_event_slots() -> Result {
 /// Frees one command client slot of `held`, resets the e-stop through it, takes it again.
 fn reset_through_one_free_slot(
     server: &motion_client::testing::FakeServer,
-    held: &mut Vec<iceoryx2::port::client::Client<ipc::Service, CommandRequest, (), CommandReply, ()>>,
+    held: &mut Vec<
+        iceoryx2::port::client::Client<ipc::Service, CommandRequest, (), CommandReply, ()>,
+    >,
     commands: &iceoryx2::service::port_factory::request_response::PortFactory<
         ipc::Service,
         CommandRequest,

@@ -4,7 +4,7 @@
 use core::time::Duration;
 use std::io::{IsTerminal, Write};
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
 
 use anyhow::{Context, bail};
 use motion_drivers::Driver;
@@ -17,10 +17,10 @@ use crate::boards::sim_link;
 use crate::config::{ServerConfig, Transport};
 use crate::io::{self, IoThread, LinkPort};
 use crate::rt::{IoRt, monotonic_now};
-use crate::services;
 use crate::stats::format_ns;
 use crate::systemd::{Supervisor, TickHealth};
 use crate::tick::{self, Report, StatusLine, TickSetup};
+use crate::{node_records, services};
 
 /// How the server was asked to run.
 #[derive(Debug, Clone, Copy, Default)]
@@ -158,6 +158,7 @@ pub fn run(config: ServerConfig, options: RunOptions) -> anyhow::Result<()> {
     let (dead_tx, dead_rx) = RingBuffer::<ClientId>::new(256);
     let (report_tx, mut report_rx) = RingBuffer::<Report>::new(64);
     let clients_alive = Arc::new(AtomicU32::new(0));
+    let nodes_cleaned = Arc::new(AtomicU64::new(dead.len() as u64));
     let setup = TickSetup {
         engine,
         ports,
@@ -167,6 +168,7 @@ pub fn run(config: ServerConfig, options: RunOptions) -> anyhow::Result<()> {
         shutdown: Arc::clone(&shutdown),
         dead_clients: dead_rx,
         clients_alive: Arc::clone(&clients_alive),
+        nodes_cleaned: Arc::clone(&nodes_cleaned),
         reports: report_tx,
         require_rt: options.require_rt,
         io_rt,
@@ -184,7 +186,11 @@ pub fn run(config: ServerConfig, options: RunOptions) -> anyhow::Result<()> {
         health: &health,
         shutdown: &shutdown,
     };
-    let result = housekeeping(&config, &mut report_rx, dead_tx, &clients_alive, systemd);
+    let liveness = Liveness {
+        clients_alive: &clients_alive,
+        nodes_cleaned: &nodes_cleaned,
+    };
+    let result = housekeeping(&config, &mut report_rx, dead_tx, liveness, systemd);
     io_stop.store(true, Ordering::Relaxed);
     if tick_thread.join().is_err() {
         tracing::error!("the tick thread panicked");
@@ -245,6 +251,14 @@ impl Systemd<'_> {
     }
 }
 
+/// What the main thread's liveness checks share with the tick (for the stats).
+struct Liveness<'a> {
+    /// Live client nodes at the last check.
+    clients_alive: &'a AtomicU32,
+    /// Dead nodes' records removed since start.
+    nodes_cleaned: &'a AtomicU64,
+}
+
 /// Removes the server's pid file when dropped, if it still names this process.
 struct PidFileGuard(ServerPidFile);
 
@@ -260,7 +274,7 @@ fn housekeeping(
     config: &ServerConfig,
     reports: &mut rtrb::Consumer<Report>,
     mut dead_clients: rtrb::Producer<ClientId>,
-    clients_alive: &AtomicU32,
+    liveness: Liveness<'_>,
     mut systemd: Systemd<'_>,
 ) -> anyhow::Result<()> {
     let status_line = std::io::stderr().is_terminal();
@@ -274,6 +288,7 @@ fn housekeeping(
     // taken; removed again however this function returns.
     let pid_file = PidFileGuard(ServerPidFile::of(&config.server.name));
     let mut pid_file_error = None;
+    let mut sweeper = node_records::Sweeper::default();
     loop {
         systemd.poll();
         while let Ok(report) = reports.pop() {
@@ -390,13 +405,23 @@ fn housekeeping(
         let now = monotonic_now();
         if now >= next_liveness && server_node != 0 {
             next_liveness = now + config.server.liveness_check;
-            let (dead, live) = services::survey_nodes(server_node);
+            // Dead nodes' records removed (off the tick thread, bounded per pass); live
+            // clients counted; dead ones' claims ended.
+            let sweep = sweeper.sweep(
+                server_node,
+                node_records::RESIDUE_AGE,
+                node_records::SWEEP_BUDGET,
+            );
+            let (dead, live) = (sweep.dead, sweep.live);
+            liveness
+                .nodes_cleaned
+                .fetch_add(u64::from(sweep.cleaned), Ordering::Relaxed);
             for id in dead {
                 if id != server_node && dead_clients.push(ClientId::from_u128(id)).is_err() {
                     tracing::warn!("dead-client queue full; retrying at the next check");
                 }
             }
-            clients_alive.store(live, Ordering::Relaxed);
+            liveness.clients_alive.store(live, Ordering::Relaxed);
         }
         std::thread::sleep(Duration::from_millis(10).min(config.server.liveness_check));
     }

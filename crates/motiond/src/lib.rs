@@ -9,6 +9,7 @@ pub mod config;
 pub mod drivers;
 pub mod error;
 pub mod io;
+pub mod node_records;
 pub mod params;
 pub mod phases;
 pub mod rt;

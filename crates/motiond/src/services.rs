@@ -333,26 +333,6 @@ pub fn clean_dead_nodes() -> Vec<u128> {
     dead
 }
 
-/// One look at every iceoryx2 node (a directory scan): the dead ones' leftovers removed
-/// (their ids returned) and the live ones other than `except` counted — what the main
-/// thread's liveness check needs, in one listing instead of two.
-pub fn survey_nodes(except: u128) -> (Vec<u128>, u32) {
-    let mut dead = Vec::new();
-    let mut live = 0;
-    let _ = Node::<Ipc>::list(Config::global_config(), |state| {
-        match state {
-            NodeState::Dead(view) => {
-                dead.push(view.id().value());
-                let _ = view.try_remove_stale_resources();
-            }
-            NodeState::Alive(view) if view.id().value() != except => live += 1,
-            _ => {}
-        }
-        CallbackProgression::Continue
-    });
-    (dead, live)
-}
-
 /// Which node each client port of the command service belongs to, as the service's
 /// dynamic config says (written by iceoryx2 when the port connected — not by the payload).
 /// Fixed capacity, filled on demand: no allocation after construction.

@@ -3,7 +3,7 @@
 
 use core::time::Duration;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
 
 use iceoryx2::active_request::ActiveRequest;
 use iceoryx2::port::server::Server;
@@ -128,6 +128,8 @@ pub struct TickSetup {
     pub dead_clients: Consumer<ClientId>,
     /// Live clients, as the main thread counts them.
     pub clients_alive: Arc<AtomicU32>,
+    /// Dead iceoryx2 nodes' records the main thread removed (for the stats).
+    pub nodes_cleaned: Arc<AtomicU64>,
     /// What the tick thread tells the main thread.
     pub reports: Producer<Report>,
     /// `--require-rt`: fail unless the real-time set-up is complete.
@@ -604,6 +606,7 @@ impl Loop {
         stats.rejected = counters.rejected;
         stats.faults = counters.faults;
         stats.clients = self.setup.clients_alive.load(Ordering::Relaxed);
+        stats.nodes_cleaned = self.setup.nodes_cleaned.load(Ordering::Relaxed);
         let config = engine.config();
         for (index, (port, out)) in self
             .setup

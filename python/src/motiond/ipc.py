@@ -78,7 +78,7 @@ __all__ = [
 # --- constants -----------------------------------------------------------------------------
 
 #: Version of the contract; every payload carries it.
-SCHEMA_VERSION = 4
+SCHEMA_VERSION = 5
 #: Capacity of the axis arrays in :class:`MotionFrame` and :class:`ServerInfo`.
 MAX_AXES = 128
 #: Capacity of the device array in :class:`ServerInfo`.
@@ -449,7 +449,7 @@ class LinkIo(Payload):
 
 
 class ServerStats(Payload):
-    """Server figures, published about once a second. 1984 bytes, alignment 8."""
+    """Server figures, published about once a second. 1992 bytes, alignment 8."""
 
     _type_name_ = "motiond::ServerStats"
     _fields_ = [
@@ -474,6 +474,7 @@ class ServerStats(Payload):
         ("replies_lost", _u64),
         ("events_dropped", _u64),
         ("link_io", LinkIo * MAX_LINKS),
+        ("nodes_cleaned", _u64),
     ]
 
 

@@ -326,6 +326,7 @@ fn layouts() -> Vec<Layout> {
                 replies_lost,
                 events_dropped,
                 link_io,
+                nodes_cleaned,
             ]
         ),
     ]
