@@ -540,10 +540,23 @@ fn real_estop_gets_through_every_exhausted_path() -> Result {
     while let Ok(client) = commands.client_builder().create() {
         held_clients.push(client);
     }
+    // Every frame slot taken: the event goes out, but nothing can show it latched.
+    let estop = run(&server.name, &["estop"])?;
+    assert_fails(&estop, 5, "sent via the estop event service");
+    assert_fails(&estop, 5, "NOT confirmed");
+    held_clients.pop();
+    assert!(run(&server.name, &["reset"])?.status.success());
+    held_clients.push(commands.client_builder().create()?);
+    // One frame slot free: confirmed by a frame.
+    drop(held_frames.pop());
     let estop = run(&server.name, &["estop"])?;
     assert!(estop.status.success(), "{estop:?}\n{}", server.log());
     assert!(
         stdout(&estop).contains("via the estop event service"),
+        "{estop:?}"
+    );
+    assert!(
+        stdout(&estop).contains("latched in the frame of tick"),
         "{estop:?}"
     );
     held_clients.pop();
@@ -558,11 +571,16 @@ fn real_estop_gets_through_every_exhausted_path() -> Result {
     while let Ok(notifier) = event.notifier_builder().create() {
         held_notifiers.push(notifier);
     }
+    // Everything taken but one frame slot: SIGUSR1 to the pid file's process, confirmed.
     let estop = run(&server.name, &["estop"])?;
     assert!(estop.status.success(), "{estop:?}");
     let pid = server.pid()?;
     assert!(
         stdout(&estop).contains(&format!("via SIGUSR1 to the server process (pid {pid})")),
+        "{estop:?}"
+    );
+    assert!(
+        stdout(&estop).contains("latched in the frame of tick"),
         "{estop:?}"
     );
     drop(held_frames);
