@@ -284,7 +284,7 @@ impl Driver for TmcpackDriver {
             .iter()
             .flatten()
             .filter(|c| c.current() == Some(Step::AwaitRest))
-            .filter_map(|c| c.rest_at)
+            .filter_map(|c| c.rest_poll_at.or(c.rest_at))
             .min();
         [self.wire.deadline(), phase, rest]
             .into_iter()

@@ -225,7 +225,14 @@ impl TmcpackDriver {
             Phase::Down => None,
             Phase::Identify => (now >= self.retry_at).then_some(Priority::Setup),
             Phase::Survey | Phase::Quiesce | Phase::Configure(_) => Some(Priority::Setup),
-            Phase::Online if self.any_ready() || self.starved(now).is_some() => {
+            Phase::Online if self.channels.iter().flatten().any(Channel::urgent) => {
+                Some(Priority::Stop)
+            }
+            Phase::Online
+                if self.any_ready()
+                    || self.starved(now).is_some()
+                    || self.channels.iter().flatten().any(|c| c.awaits_rest(now)) =>
+            {
                 Some(Priority::Command)
             }
             Phase::Online => {
@@ -283,7 +290,7 @@ impl TmcpackDriver {
                     channel: None,
                 })
             }
-            Phase::Online if priority == Priority::Command => {
+            Phase::Online if priority >= Priority::Command => {
                 let urgent = self.channels.iter().flatten().any(Channel::urgent);
                 match self.starved(now) {
                     Some(Starved::Motor(motor)) if !urgent => Some(self.query(
@@ -298,7 +305,8 @@ impl TmcpackDriver {
                         Some(channel),
                         Purpose::Io,
                     )),
-                    _ => self.pick_command(),
+                    // No command ready: the poll of a stopping motor.
+                    _ => self.pick_command().or_else(|| self.pick_poll(now)),
                 }
             }
             Phase::Online => self.pick_poll(now),
@@ -307,7 +315,15 @@ impl TmcpackDriver {
 
     pub(super) fn pick_poll(&mut self, now: Duration) -> Option<Pick> {
         let reply_to = self.reply_address;
-        if now >= self.reset_check_at {
+        let urgent = self
+            .channels
+            .iter()
+            .flatten()
+            .filter(|c| c.awaits_rest(now))
+            // Several motors stopping at once (an e-stop): the one polled longest ago.
+            .min_by_key(|c| c.state.refreshed_at)
+            .map(|c| usize::from(c.motor));
+        if urgent.is_none() && now >= self.reset_check_at {
             return Some(self.query(
                 Request::UnitInfo { reply_to },
                 Command::UnitInfo,
@@ -315,12 +331,6 @@ impl TmcpackDriver {
                 Purpose::ResetCheck,
             ));
         }
-        let urgent = self
-            .channels
-            .iter()
-            .flatten()
-            .find(|c| c.wants_rest_poll(now))
-            .map(|c| usize::from(c.motor));
         let slot = urgent.or_else(|| {
             (0..=IO_SLOT)
                 .map(|offset| (self.next_poll + offset) % (IO_SLOT + 1))
