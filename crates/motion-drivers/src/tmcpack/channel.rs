@@ -9,8 +9,11 @@
 //!   deceleration (rounded up: never gentler than asked) when the pack has another amax.
 //!   So the motor decelerates from whatever velocity it really has, at the requested rate.
 //!   The `$25` is sent even when the driver believes the motor idle (it may have been left
-//!   running by someone else), and a stop goes before every other queued command. Once the
-//!   motor is at rest, `$23` ends the rotation ("If rotation has been active, the motor is
+//!   running by someone else), and a stop goes before every other queued command. From the
+//!   end of the deceleration expected from the speed it was stopped from, the motor is polled
+//!   back to back until it is seen at rest (two polls at the same position, or inactive), so
+//!   that the frames show the rest within a few exchanges (docs/ARCHITECTURE.md "The
+//!   deadman's bound per board"). Once the motor is at rest, `$23` ends the rotation ("If rotation has been active, the motor is
 //!   only stopped by this command"), leaving it inactive; a motor that was switched off is
 //!   energised again with its configured `$11` (a stop holds). `$2A` is not used: it sets
 //!   the target to the actual position, and "motors driving beyond vstart will overshoot and

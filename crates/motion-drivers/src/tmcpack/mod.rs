@@ -31,8 +31,11 @@
 //! request should wait for the response of the PACK", 7.1); the engine test
 //! `tests/engine_tmcpack/wire.rs` checks the bound.
 //!
-//! Polling plan: goals first ([`Priority::Command`]: stops before output changes before
-//! other commands), then `$20` position/action polls round-robin over the configured motors
+//! Polling plan: stops first ([`Priority::Stop`]: on a shared bus before every other pack's
+//! message too), then output changes and other goals ([`Priority::Command`]), with the
+//! back-to-back `$20` polls of a motor whose stop should have ended (see the `channel`
+//! module) and the polls of motors whose data is older than half the refresh budget at the
+//! same priority; then `$20` position/action polls round-robin over the configured motors
 //! with one `$30` input poll per round when inputs are configured ([`Priority::Poll`]),
 //! and a `$43` every [`RESET_CHECK_PERIOD`] to notice a pack that rebooted (reset flag).
 //! Three timeouts in a row take the pack offline ([`DeviceFault::NotResponding`]); it is

@@ -80,6 +80,13 @@ impl Bound {
         let driver = driver_spec(config, spec.device, device);
         let (exchange, refresh) = match board {
             Board::Tmcpack => {
+                // "SIXpack / QUADpack manual" V2.43, 7.1 "Interlacing of Requests":
+                // "Requests must not be interlaced. Each request should wait for the
+                // response of the PACK before transmitting a new command." 6.1: "an
+                // instruction will be transmitted only after an adjustable transmitter
+                // switchover time (s. CMD $40 ...) has passed ... The PACK continues to drive
+                // the line for a pre-set time after transmitting a message." 8.3 $14: "1/64
+                // amax is accumulated with 500Hz during acceleration to vact".
                 let cfg = TmcpackDriverConfig::from_spec(&driver).expect("tmcpack spec");
                 let word = bytes_at(rate, 9);
                 let switchover = tmcpack::convert::units(
@@ -99,6 +106,10 @@ impl Bound {
                 (exchange, refresh)
             }
             Board::Qq2drv => {
+                // "QuadQuad2Drv PCB Datasheet", packet 12 Set History Dimensions: "Maximum
+                // Averaging Time in Microseconds = Maximum Averaging Time x 0.64" and "the
+                // slower average velocity will wind down when motion is significantly
+                // slowed down or stopped"; features: "Loop rate of 500Hz".
                 let cfg = Qq2drvDriverConfig::from_spec(&driver).expect("qq2drv spec");
                 let loop_period = motion_drivers::qq2drv::LOOP_PERIOD;
                 // The transaction in progress, the stop's first transaction (the setpoint
@@ -117,6 +128,8 @@ impl Bound {
                 (exchange, refresh)
             }
             Board::Spimotor => {
+                // SPI_motor "Motor protocol", port 0x43: "set stepdelay. (in tenths of a
+                // millisecond ...)": one byte, so the slowest step is 25.5 ms.
                 let cfg = SpimotorDriverConfig::from_spec(&driver).expect("spimotor spec");
                 // The transaction in progress and the stop's step delay, the tick.
                 let transaction = spi_bytes(rate, 8);
@@ -128,6 +141,8 @@ impl Bound {
                 (exchange, refresh)
             }
             Board::Qsb => {
+                // "QSB Command List" 1.28: "At the conclusion of the command response, the
+                // QSB is ready to accept another command."
                 let cfg = QsbDriverConfig::from_spec(&driver).expect("qsb spec");
                 let usb = Duration::from_millis(1);
                 // One command at a time: the line in flight (command, answer, the USB
