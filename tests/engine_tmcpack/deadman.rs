@@ -144,9 +144,10 @@ fn the_deadman_stop_is_the_first_word_after_its_tick_on_a_shared_bus() {
     }
 }
 
-/// Task: after the stop, the stopping motor is polled back to back, so the frame shows it
-/// at rest (Hold, velocity 0) within the deceleration from the measured speed and a few
-/// exchanges — not a round-robin period over ten motors (~134 ms) or two later. Both
+/// Task: once its deceleration from the measured speed has run, the stopping motor is
+/// polled back to back (taking turns with overdue polls), so the frame shows it at rest
+/// (Hold, velocity 0) within a few exchanges — not a round-robin period over ten motors
+/// (~134 ms) or two later. Both
 /// speeds: the deceleration short (a quarter of the limit) and long (four fifths).
 #[test]
 fn a_deadman_stop_shows_at_rest_within_a_few_exchanges_of_the_deceleration() {
@@ -183,9 +184,10 @@ fn a_deadman_stop_shows_at_rest_within_a_few_exchanges_of_the_deceleration() {
         let word = byte_time(BAUD) * 9;
         // The exchange in flight, the tick, the `$25`, two pack cycles; then the `$14`
         // and three polls (the one in flight at rest, the first after, the one showing the
-        // same position), each possibly behind one overdue poll of another motor.
+        // same position), each possibly behind one overdue poll of another motor of the
+        // SIXpack and one message of the QUADpack.
         let to_wire = exchange() + rig.period + word + Duration::from_millis(4);
-        let refresh = word + 6 * (exchange() + rig.period) + rig.period;
+        let refresh = word + 9 * (exchange() + rig.period) + rig.period;
         let bound = to_wire + decel + refresh;
         eprintln!(
             "{speed} mm/s (measured {measured:.2}): motor still {:?}, frame at rest {:?} after \

@@ -68,6 +68,12 @@ struct Stop {
     to_rest: Duration,
     /// The fastest speed the frames showed from the renewal to the rest (units/s).
     speed: f64,
+    /// The latest a frame of that span was published after its tick's deadline: how late
+    /// the server's tick ran (a loaded machine), for the failure message.
+    late: Duration,
+    /// The ticks (from the renewal's) at which the axis's data were refreshed after the stop
+    /// was set.
+    refreshed: Vec<u64>,
 }
 
 /// Jogs axis `index` at `fraction` of its velocity limit, renewing every `lease / 4`
@@ -118,6 +124,8 @@ fn deadman_stop(
     let mut rest = None;
     let waited = std::time::Instant::now();
     let mut last = None;
+    let mut late = Duration::ZERO;
+    let mut refreshed = Vec::new();
     while rest.is_none() {
         assert!(
             waited.elapsed() < Duration::from_secs(10),
@@ -132,8 +140,15 @@ fn deadman_stop(
             let state = frame.axes()[index];
             let renewed_ns = frame.time_ns - (frame.tick - renewal) * period_ns;
             speed = speed.max(state.velocity.abs());
+            late = late.max(Duration::from_nanos(
+                frame.publish_ns.saturating_sub(frame.time_ns),
+            ));
             if !state.flags().contains(AxisFlags::DEADMAN_EXPIRED) {
                 continue;
+            }
+            let at = state.last_refresh_tick.saturating_sub(renewal);
+            if refreshed.last() != Some(&at) {
+                refreshed.push(at);
             }
             let wire = frame.wire[index];
             if goal.is_none() {
@@ -156,6 +171,8 @@ fn deadman_stop(
         to_wire: wire_ns.expect("the stop was written"),
         to_rest: rest.expect("at rest"),
         speed,
+        late,
+        refreshed,
     }
 }
 
@@ -205,8 +222,12 @@ fn holds_its_bound(test: &str, axis: &str, fractions: &[f64]) {
         );
         assert!(
             stop.to_rest <= bound.total(),
-            "{axis}: at rest {:?} after the renewal; bound {bound}",
-            stop.to_rest
+            "{axis}: at rest {:?} after the renewal; bound {bound}; the server's tick ran up \
+             to {:?} late; the axis was refreshed at renewal + {:?} ticks (stop set at {:?})",
+            stop.to_rest,
+            stop.late,
+            stop.refreshed,
+            stop.to_goal
         );
     }
     assert_eq!(

@@ -35,7 +35,7 @@
 //! message too), then output changes and other goals ([`Priority::Command`]), with the
 //! back-to-back `$20` polls of a motor whose stop should have ended (see the `channel`
 //! module) and the polls of motors whose data is older than half the refresh budget at the
-//! same priority; then `$20` position/action polls round-robin over the configured motors
+//! same priority (the two take turns); then `$20` position/action polls round-robin over the configured motors
 //! with one `$30` input poll per round when inputs are configured ([`Priority::Poll`]),
 //! and a `$43` every [`RESET_CHECK_PERIOD`] to notice a pack that rebooted (reset flag).
 //! Three timeouts in a row take the pack offline ([`DeviceFault::NotResponding`]); it is
@@ -145,6 +145,9 @@ pub struct TmcpackDriver {
     reset_check_at: Duration,
     next_poll: usize,
     next_command: usize,
+    /// The last message was the poll of a motor awaiting rest: an overdue poll of another
+    /// motor may go next (the two alternate).
+    rest_polled: bool,
     budget: Duration,
     stamps: IoStamps,
 }
@@ -206,6 +209,7 @@ impl TmcpackDriver {
             reset_check_at: Duration::ZERO,
             next_poll: 0,
             next_command: 0,
+            rest_polled: false,
             budget,
             stamps: IoStamps::default(),
         }

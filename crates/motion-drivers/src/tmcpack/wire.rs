@@ -242,6 +242,16 @@ impl TmcpackDriver {
         }
     }
 
+    /// Whether the poll of a motor awaiting rest goes next: it goes before every other poll
+    /// of this pack, overdue ones included, but alternates with those, so that the
+    /// back-to-back polls of a stop never leave the other motors without data (on a shared
+    /// bus the other packs' commands and overdue polls take turns with it too: all are
+    /// [`Priority::Command`]).
+    fn rest_poll_due(&self, now: Duration) -> bool {
+        self.channels.iter().flatten().any(|c| c.awaits_rest(now))
+            && !(self.rest_polled && self.starved(now).is_some())
+    }
+
     pub(super) fn query(
         &self,
         request: Request,
@@ -292,7 +302,9 @@ impl TmcpackDriver {
             }
             Phase::Online if priority >= Priority::Command => {
                 let urgent = self.channels.iter().flatten().any(Channel::urgent);
+                let rest = self.rest_poll_due(now);
                 match self.starved(now) {
+                    _ if rest && !urgent => self.pick_command().or_else(|| self.pick_poll(now)),
                     Some(Starved::Motor(motor)) if !urgent => Some(self.query(
                         Request::QueryPosition { motor, reply_to },
                         Command::QueryPosition,
@@ -422,6 +434,18 @@ impl TmcpackDriver {
             }
             _ => {}
         }
+        self.rest_polled = match pick.expect {
+            Some(Expect {
+                purpose: Purpose::Poll,
+                motor: Some(motor),
+                ..
+            }) => self
+                .channels
+                .get(usize::from(motor))
+                .and_then(Option::as_ref)
+                .is_some_and(|c| c.awaits_rest(now)),
+            _ => false,
+        };
         let mut goal_starts = 0;
         if let Some(index) = pick.channel
             && let Some(Some(channel)) = self.channels.get_mut(index)

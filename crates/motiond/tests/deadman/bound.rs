@@ -101,8 +101,14 @@ impl Bound {
                 let exchange = query + tick + word + 2 * cycle;
                 // The `$14` after the `$25`, then three polls of the motor (the one in
                 // flight at rest, the first after it, the one showing the same position),
-                // each possibly after one overdue poll of another motor, and the tick.
-                let refresh = word + 6 * (query + tick) + tick;
+                // each possibly after one overdue poll of another motor of its pack and one
+                // message of every other pack on the bus, and the tick.
+                let packs = config
+                    .devices
+                    .iter()
+                    .filter(|d| d.link == device.link && d.model == Model::Tmcpack)
+                    .count() as u32;
+                let refresh = word + 3 * (packs + 1) * (query + tick) + tick;
                 (exchange, refresh)
             }
             Board::Qq2drv => {
