@@ -26,7 +26,7 @@ use motiond::config::ServerConfig;
 use nix::sys::signal::Signal;
 use support::*;
 
-use bound::{Board, Bound};
+use bound::{Board, Bound, MARGIN};
 
 static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
@@ -202,13 +202,29 @@ fn holds_its_bound(test: &str, axis: &str, fractions: &[f64]) {
     );
     let board = Board::of(&config, index);
     for &fraction in fractions {
-        let stop = deadman_stop(&mut client, &config, index, fraction);
-        let bound = Bound::new(&config, index, board, stop.speed);
-        eprintln!(
-            "{axis} ({board:?}) at {fraction} of its limit: measured {:.2} {}/s; stop set after \
-             {:?}, on the wire after {:?}, at rest after {:?}; bound {bound}",
-            stop.speed, config.axes[index].unit, stop.to_goal, stop.to_wire, stop.to_rest
-        );
+        let mut attempts = 0;
+        let (stop, bound) = loop {
+            attempts += 1;
+            let stop = deadman_stop(&mut client, &config, index, fraction);
+            let bound = Bound::new(&config, index, board, stop.speed);
+            eprintln!(
+                "{axis} ({board:?}) at {fraction} of its limit: measured {:.2} {}/s; stop set \
+                 after {:?}, on the wire after {:?}, at rest after {:?}; bound {bound}; the \
+                 server's tick ran up to {:?} late",
+                stop.speed,
+                config.axes[index].unit,
+                stop.to_goal,
+                stop.to_wire,
+                stop.to_rest,
+                stop.late
+            );
+            // The server itself says it was stalled longer than the margin (a host stall
+            // on a loaded machine): that stop measured the machine, not the code. Measured
+            // again, at most twice; a machine that stalls every time fails the test.
+            if stop.late <= MARGIN || attempts == 3 {
+                break (stop, bound);
+            }
+        };
         assert!(
             stop.to_goal <= bound.lease + bound.margin,
             "{axis}: the deadman fired {:?} after the renewal, lease {:?}",

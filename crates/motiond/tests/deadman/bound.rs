@@ -21,8 +21,10 @@ use motiond::drivers::driver_spec;
 /// simulated board each woken late by a few milliseconds (cyclictest on the 2-vCPU
 /// development guests without real-time priority: p99.9 wake-up ~0.55 ms, a few ms under
 /// a parallel build), each of the ~3 hand-overs of a stop (tick → I/O thread → board →
-/// I/O thread → tick) once, with room for a 10 ms stall. It does not cover a 100 ms host
-/// stall; such a stall fails the test honestly rather than being hidden in the bound.
+/// I/O thread → tick) once, with room for a 10 ms stall. It does not cover a host stall of
+/// tens of ms (seen with the load average near 10): a stop during which the server's own
+/// frames were published more than this late after their deadline is measured again (at
+/// most twice) rather than hidden in the bound; a machine that stalls every time fails.
 pub const MARGIN: Duration = Duration::from_millis(25);
 
 /// 8N1: ten bits a byte.
