@@ -6,6 +6,8 @@
 
 mod support;
 
+#[path = "engine_tmcpack/deadman.rs"]
+mod deadman;
 #[path = "engine_tmcpack/io.rs"]
 mod io;
 #[path = "engine_tmcpack/lag.rs"]

@@ -4,7 +4,8 @@
 //! driver can see:
 //! - stream links (RS-232/RS-485/USB serial): at most one request in flight on the whole
 //!   bus (Trinamic manual 7.1); the next sender is the driver with the most urgent
-//!   message ([`Priority`]), round-robin among equals, so commands go before polls;
+//!   message ([`Priority`]), round-robin among equals, so stops go before everything else
+//!   and commands before polls;
 //!   received bytes belong to the driver whose reply is awaited (or, when none is, to the
 //!   last one that sent: a late reply) — with one driver, everything is its own;
 //! - SPI links: every transaction is owned by the driver that wrote it, and the same

@@ -20,6 +20,11 @@ pub enum Priority {
     Setup = 1,
     /// A goal the engine set: goes before every poll (docs/ARCHITECTURE.md: commands before polls).
     Command = 2,
+    /// A request of a stop (a deadman, e-stop, fault or client stop): goes before every
+    /// other message on the bus — other drivers' commands and their overdue polls
+    /// included — so that it waits for nothing but the one exchange in flight
+    /// (docs/ARCHITECTURE.md "The deadman's bound per board").
+    Stop = 3,
 }
 
 /// One message a driver wrote in [`Driver::poll_transmit`].

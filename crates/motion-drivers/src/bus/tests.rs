@@ -139,6 +139,28 @@ fn commands_go_before_polls() {
     assert_eq!(bus.poll_transmit(T0, &mut buf), None);
 }
 
+/// A stop goes before another driver's command (and its overdue poll, also `Command`) even
+/// when round robin gives that driver the turn: it waits for nothing but the exchange in
+/// flight (docs/ARCHITECTURE.md "The deadman's bound per board").
+#[test]
+fn stops_go_before_commands_whoever_has_the_turn() {
+    let a = Scripted::new(
+        1,
+        &[(Priority::Command, 9, true), (Priority::Stop, 9, false)],
+        9,
+    );
+    let b = Scripted::new(2, &[(Priority::Command, 9, false)], 0);
+    let mut bus = LinkBus::new(LinkKind::Stream, vec![a, b]);
+    let mut buf = [0u8; 256];
+    assert_eq!(bus.poll_transmit(T0, &mut buf).map(|(i, _)| i), Some(0));
+    assert_eq!(bus.poll_transmit(T0, &mut buf), None, "a's query in flight");
+    bus.handle_rx(T0, &[0xAA; 9]);
+    // b has the turn now, but a's stop goes first.
+    assert_eq!(bus.poll_transmit(T0, &mut buf).map(|(i, _)| i), Some(0));
+    assert_eq!(buf[0], 1);
+    assert_eq!(bus.poll_transmit(T0, &mut buf).map(|(i, _)| i), Some(1));
+}
+
 #[test]
 fn spi_miso_bytes_go_back_to_the_transaction_owner_in_order() {
     let a = Scripted::new(1, &[(Priority::Poll, 3, false)], 0);

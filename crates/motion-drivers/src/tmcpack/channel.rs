@@ -9,8 +9,11 @@
 //!   deceleration (rounded up: never gentler than asked) when the pack has another amax.
 //!   So the motor decelerates from whatever velocity it really has, at the requested rate.
 //!   The `$25` is sent even when the driver believes the motor idle (it may have been left
-//!   running by someone else), and a stop goes before every other queued command. Once the
-//!   motor is at rest, `$23` ends the rotation ("If rotation has been active, the motor is
+//!   running by someone else), and a stop goes before every other queued command. From the
+//!   end of the deceleration expected from the speed it was stopped from, the motor is polled
+//!   back to back until it is seen at rest (two polls at the same position, or inactive), so
+//!   that the frames show the rest within a few exchanges (docs/ARCHITECTURE.md "The
+//!   deadman's bound per board"). Once the motor is at rest, `$23` ends the rotation ("If rotation has been active, the motor is
 //!   only stopped by this command"), leaving it inactive; a motor that was switched off is
 //!   energised again with its configured `$11` (a stop holds). `$2A` is not used: it sets
 //!   the target to the actual position, and "motors driving beyond vstart will overshoot and
@@ -105,6 +108,11 @@ pub(crate) struct Channel {
     steps: FixedQueue<Step, MAX_STEPS>,
     /// Earliest instant the `AwaitRest` step may finish.
     pub rest_at: Option<Duration>,
+    /// When the stopping motor may stand, from the speed it was stopped from (measured, or
+    /// the rotation commanded if faster): its back-to-back polls start here.
+    pub rest_poll_at: Option<Duration>,
+    /// The speed (velocity units) the current stop started from.
+    stop_speed: u16,
     /// Sequence number and send time of the request behind the last poll answer.
     pub polled_seq: u64,
     pub polled_sent_at: Duration,
@@ -142,6 +150,8 @@ impl Channel {
             target: None,
             steps: FixedQueue::new(),
             rest_at: None,
+            rest_poll_at: None,
+            stop_speed: 0,
             polled_seq: 0,
             polled_sent_at: Duration::ZERO,
             prev: None,
@@ -181,6 +191,7 @@ impl Channel {
     pub fn clear_script(&mut self) {
         self.steps.clear();
         self.rest_at = None;
+        self.rest_poll_at = None;
         self.goal_unsent = false;
     }
 
@@ -209,9 +220,32 @@ impl Channel {
         self.urgent && self.ready()
     }
 
-    /// Whether the `AwaitRest` step waits for a fresh poll (its time bound has passed).
-    pub fn wants_rest_poll(&self, now: Duration) -> bool {
-        self.current() == Some(Step::AwaitRest) && self.rest_at.is_some_and(|at| now >= at)
+    /// Whether a stop's `$25` is out, the motor may stand by now (its deceleration from
+    /// the speed it was stopped from has run) and it is not seen at rest yet: it is then
+    /// polled back to back (before the other motors' round-robin polls, and on a shared
+    /// bus before the other packs' polls), so that the frames show velocity 0 within a few
+    /// exchanges of the rest — two polls with the same position (or the pack's own
+    /// inactive action) — instead of a round-robin period or two later
+    /// (docs/ARCHITECTURE.md "The deadman's bound per board"). During the deceleration the
+    /// round-robin polls go on, so the other motors do not all fall due at once.
+    pub fn awaits_rest(&self, now: Duration) -> bool {
+        self.current() == Some(Step::AwaitRest) && self.rest_poll_at.is_some_and(|at| now >= at)
+    }
+
+    /// The speed (velocity units) a stop starts from: the measured one rounded up, or the
+    /// rotation commanded last if that is faster (a jog still accelerating).
+    fn speed_now(&self) -> u16 {
+        let measured = (self.state.velocity.abs() / self.scale.hz).ceil();
+        let measured = if measured.is_finite() {
+            measured.min(f64::from(MAX_VELOCITY)) as u16
+        } else {
+            MAX_VELOCITY
+        };
+        let commanded = match self.motion {
+            Motion::Rotation(v) => v.unsigned_abs(),
+            _ => 0,
+        };
+        measured.max(commanded)
     }
 
     /// Replaces the script with the one for `goal`.
@@ -408,6 +442,8 @@ impl Channel {
                     // The amax of a stop already under way: the rest bound from now on.
                     let bound = Scale::stop_time(self.board_vmax, self.board_amax);
                     self.rest_at = Some(at.max(wire_end + bound));
+                    let expected = Scale::stop_time(self.stop_speed, self.board_amax);
+                    self.rest_poll_at = self.rest_poll_at.map(|at| at.max(wire_end + expected));
                 }
             }
             Request::ReferenceParameters { vrefmax, .. } => self.board_vrefmax = vrefmax,
@@ -415,6 +451,11 @@ impl Channel {
                 self.powered = i3 != CurrentLevel::Off;
             }
             Request::Rotate { velocity, .. } => {
+                if velocity == 0 {
+                    self.stop_speed = self.speed_now();
+                    let expected = Scale::stop_time(self.stop_speed, self.board_amax);
+                    self.rest_poll_at = Some(wire_end + expected);
+                }
                 self.motion = Motion::Rotation(velocity);
                 self.motion_seq = seq;
                 self.target = None;

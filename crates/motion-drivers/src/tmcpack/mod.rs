@@ -31,8 +31,11 @@
 //! request should wait for the response of the PACK", 7.1); the engine test
 //! `tests/engine_tmcpack/wire.rs` checks the bound.
 //!
-//! Polling plan: goals first ([`Priority::Command`]: stops before output changes before
-//! other commands), then `$20` position/action polls round-robin over the configured motors
+//! Polling plan: stops first ([`Priority::Stop`]: on a shared bus before every other pack's
+//! message too), then output changes and other goals ([`Priority::Command`]), with the
+//! back-to-back `$20` polls of a motor whose stop should have ended (see the `channel`
+//! module) and the polls of motors whose data is older than half the refresh budget at the
+//! same priority (the two take turns); then `$20` position/action polls round-robin over the configured motors
 //! with one `$30` input poll per round when inputs are configured ([`Priority::Poll`]),
 //! and a `$43` every [`RESET_CHECK_PERIOD`] to notice a pack that rebooted (reset flag).
 //! Three timeouts in a row take the pack offline ([`DeviceFault::NotResponding`]); it is
@@ -142,6 +145,9 @@ pub struct TmcpackDriver {
     reset_check_at: Duration,
     next_poll: usize,
     next_command: usize,
+    /// The last message was the poll of a motor awaiting rest: an overdue poll of another
+    /// motor may go next (the two alternate).
+    rest_polled: bool,
     budget: Duration,
     stamps: IoStamps,
 }
@@ -203,6 +209,7 @@ impl TmcpackDriver {
             reset_check_at: Duration::ZERO,
             next_poll: 0,
             next_command: 0,
+            rest_polled: false,
             budget,
             stamps: IoStamps::default(),
         }
@@ -284,7 +291,7 @@ impl Driver for TmcpackDriver {
             .iter()
             .flatten()
             .filter(|c| c.current() == Some(Step::AwaitRest))
-            .filter_map(|c| c.rest_at)
+            .filter_map(|c| c.rest_poll_at.or(c.rest_at))
             .min();
         [self.wire.deadline(), phase, rest]
             .into_iter()

@@ -225,7 +225,14 @@ impl TmcpackDriver {
             Phase::Down => None,
             Phase::Identify => (now >= self.retry_at).then_some(Priority::Setup),
             Phase::Survey | Phase::Quiesce | Phase::Configure(_) => Some(Priority::Setup),
-            Phase::Online if self.any_ready() || self.starved(now).is_some() => {
+            Phase::Online if self.channels.iter().flatten().any(Channel::urgent) => {
+                Some(Priority::Stop)
+            }
+            Phase::Online
+                if self.any_ready()
+                    || self.starved(now).is_some()
+                    || self.channels.iter().flatten().any(|c| c.awaits_rest(now)) =>
+            {
                 Some(Priority::Command)
             }
             Phase::Online => {
@@ -233,6 +240,16 @@ impl TmcpackDriver {
                 (polls || now >= self.reset_check_at).then_some(Priority::Poll)
             }
         }
+    }
+
+    /// Whether the poll of a motor awaiting rest goes next: it goes before every other poll
+    /// of this pack, overdue ones included, but alternates with those, so that the
+    /// back-to-back polls of a stop never leave the other motors without data (on a shared
+    /// bus the other packs' commands and overdue polls take turns with it too: all are
+    /// [`Priority::Command`]).
+    fn rest_poll_due(&self, now: Duration) -> bool {
+        self.channels.iter().flatten().any(|c| c.awaits_rest(now))
+            && !(self.rest_polled && self.starved(now).is_some())
     }
 
     pub(super) fn query(
@@ -283,9 +300,11 @@ impl TmcpackDriver {
                     channel: None,
                 })
             }
-            Phase::Online if priority == Priority::Command => {
+            Phase::Online if priority >= Priority::Command => {
                 let urgent = self.channels.iter().flatten().any(Channel::urgent);
+                let rest = self.rest_poll_due(now);
                 match self.starved(now) {
+                    _ if rest && !urgent => self.pick_command().or_else(|| self.pick_poll(now)),
                     Some(Starved::Motor(motor)) if !urgent => Some(self.query(
                         Request::QueryPosition { motor, reply_to },
                         Command::QueryPosition,
@@ -298,7 +317,8 @@ impl TmcpackDriver {
                         Some(channel),
                         Purpose::Io,
                     )),
-                    _ => self.pick_command(),
+                    // No command ready: the poll of a stopping motor.
+                    _ => self.pick_command().or_else(|| self.pick_poll(now)),
                 }
             }
             Phase::Online => self.pick_poll(now),
@@ -307,7 +327,15 @@ impl TmcpackDriver {
 
     pub(super) fn pick_poll(&mut self, now: Duration) -> Option<Pick> {
         let reply_to = self.reply_address;
-        if now >= self.reset_check_at {
+        let urgent = self
+            .channels
+            .iter()
+            .flatten()
+            .filter(|c| c.awaits_rest(now))
+            // Several motors stopping at once (an e-stop): the one polled longest ago.
+            .min_by_key(|c| c.state.refreshed_at)
+            .map(|c| usize::from(c.motor));
+        if urgent.is_none() && now >= self.reset_check_at {
             return Some(self.query(
                 Request::UnitInfo { reply_to },
                 Command::UnitInfo,
@@ -315,12 +343,6 @@ impl TmcpackDriver {
                 Purpose::ResetCheck,
             ));
         }
-        let urgent = self
-            .channels
-            .iter()
-            .flatten()
-            .find(|c| c.wants_rest_poll(now))
-            .map(|c| usize::from(c.motor));
         let slot = urgent.or_else(|| {
             (0..=IO_SLOT)
                 .map(|offset| (self.next_poll + offset) % (IO_SLOT + 1))
@@ -412,6 +434,18 @@ impl TmcpackDriver {
             }
             _ => {}
         }
+        self.rest_polled = match pick.expect {
+            Some(Expect {
+                purpose: Purpose::Poll,
+                motor: Some(motor),
+                ..
+            }) => self
+                .channels
+                .get(usize::from(motor))
+                .and_then(Option::as_ref)
+                .is_some_and(|c| c.awaits_rest(now)),
+            _ => false,
+        };
         let mut goal_starts = 0;
         if let Some(index) = pick.channel
             && let Some(Some(channel)) = self.channels.get_mut(index)
