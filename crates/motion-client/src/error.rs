@@ -412,7 +412,7 @@ pub struct EstopError {
     pub server_found: bool,
     /// Set when the e-stop was sent by this path but no frame of the server showed it
     /// latched, with why: it may or may not have latched, so it is not reported as done.
-    pub unconfirmed: Option<(crate::EstopPath, String)>,
+    pub unconfirmed: Option<Box<(crate::EstopPath, String)>>,
 }
 
 impl EstopError {
@@ -424,12 +424,12 @@ impl EstopError {
             event: String::new(),
             signal: String::new(),
             server_found: true,
-            unconfirmed: Some((path, why)),
+            unconfirmed: Some(Box::new((path, why))),
         }
     }
 
     fn describe(&self) -> String {
-        match &self.unconfirmed {
+        match self.unconfirmed.as_deref() {
             Some((path, why)) => format!(
                 "e-stop of motiond \"{}\" sent via {path} but NOT confirmed: {why}; check the \
                  machine and `motionctl status` before trusting it",
