@@ -5,7 +5,7 @@
 //! the e-stop, the shutdown). Every answer must be the same reason on both.
 //!
 //! Both judge through `motion_ipc::rules`; this test catches a side that stops doing so, or
-//! one that carries a verdict out differently (a reset that keeps claims, an off-all that
+//! one that carries a verdict out differently (a reset that ends claims, an off-all that
 //! skips differently), which the next request then shows.
 
 mod support;
@@ -317,14 +317,25 @@ fn table() -> Vec<Step> {
         Send(0, axis_request(0, Release, [0.0; 3])),
         Send(0, axis_request(0, Release, [0.0; 3])),
         Send(1, axis_request(0, Claim, [0.0; 3])),
-        // Reset ends every claim: A may move x again afterwards.
+        // A reset never ends a claim: after A's reset B still holds x, A is refused and
+        // B's move is taken; only B's release frees x for A.
         Send(0, axis_request(all, Reset, [0.0; 3])),
+        Send(0, axis_request(0, Position, [0.0, 0.0, 0.0])),
+        Send(1, axis_request(0, Position, [0.0, 0.0, 0.0])),
+        Send(0, axis_request(all, Reset, [0.0; 3])),
+        Send(1, axis_request(0, Release, [0.0; 3])),
         Send(0, axis_request(0, Position, [0.0, 0.0, 0.0])),
         // Signals.
         Send(0, signal_request(0, SetOutput, 1.0)),
         Send(0, signal_request(1, SetOutput, 1.0)),
         Send(0, signal_request(9, SetOutput, 1.0)),
+        Send(0, signal_request(0, SetOutput, 0.5)),
+        Send(0, signal_request(0, SetOutput, 2.0)),
+        Send(0, signal_request(0, SetOutput, -1.0)),
+        Send(0, signal_request(0, SetOutput, 5e-324)),
+        Send(0, signal_request(1, SetOutput, 0.5)),
         Send(0, signal_request(0, Claim, 0.0)),
+        Send(1, axis_request(all, Reset, [0.0; 3])),
         Send(1, signal_request(0, SetOutput, 0.0)),
         Send(1, signal_request(0, Release, 0.0)),
         Send(0, signal_request(0, Release, 0.0)),

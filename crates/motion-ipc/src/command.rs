@@ -103,7 +103,8 @@ pub enum CommandKind {
     Release = 10,
     /// Emergency stop: every axis stops and holds, latched until `Reset`.
     EStop = 11,
-    /// Clear a latched e-stop and faults; targets become the current positions.
+    /// Clear a latched e-stop, deadman expiries and faults whose cause is gone; targets of
+    /// axes without a running goal become their current positions. Claims are kept.
     Reset = 12,
     /// De-energise the motor (it coasts; no holding torque). With
     /// [`CommandRequest::ALL_AXES`], every axis. A board that cannot de-energise refuses

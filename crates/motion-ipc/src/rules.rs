@@ -211,7 +211,8 @@ pub enum Verdict {
     Refused(Reason),
     /// Latch the e-stop.
     EStop,
-    /// Clear the e-stop, every claim and the faults whose cause is gone.
+    /// Clear the e-stop, deadman expiries and the faults whose cause is gone; claims and
+    /// running goals stay.
     Reset,
     /// Stop every axis.
     StopAll,
@@ -389,9 +390,11 @@ fn judge_signal(
         CommandKind::SetOutput if claimed_by_other => Refused(Reason::ClaimedByOther),
         CommandKind::SetOutput => match device_ready(signal.device, signal.link_up) {
             Err(reason) => Refused(reason),
+            // A digital output is 0 or 1; anything else (0.5, 2, −1, 5e-324) is no level.
+            Ok(()) if value != 0.0 && value != 1.0 => Refused(Reason::OutOfRange),
             Ok(()) => Verdict::SetOutput {
                 signal: index,
-                on: value >= 0.5,
+                on: value == 1.0,
             },
         },
         _ => Refused(Reason::UnknownKind),

@@ -379,3 +379,25 @@ fn signals() {
         Verdict::Refused(Reason::DeviceStarting)
     );
 }
+
+#[test]
+fn a_digital_output_takes_0_or_1_and_nothing_else() {
+    let w = world();
+    let set = |value: f64| {
+        CommandRequest::for_signal(ME, 1, 0, CommandKind::SetOutput).with_values([value, 0.0, 0.0])
+    };
+    for (value, on) in [(0.0, false), (-0.0, false), (1.0, true)] {
+        assert_eq!(
+            judge(&set(value), ME, &w),
+            Verdict::SetOutput { signal: 0, on },
+            "{value}"
+        );
+    }
+    for value in [0.5, 2.0, -1.0, 5e-324, 1.0 + f64::EPSILON, 0.999_999] {
+        assert_eq!(
+            judge(&set(value), ME, &w),
+            Verdict::Refused(Reason::OutOfRange),
+            "{value:e}"
+        );
+    }
+}
