@@ -227,7 +227,9 @@ impl Engine {
             GoalError::Starting => Reason::DeviceStarting,
             GoalError::Offline => {
                 let device = self.axes.get(index).map_or(usize::MAX, |axis| axis.device);
-                if self.device_link_up(device) {
+                if !self.device_link_opened(device) {
+                    Reason::DeviceStarting
+                } else if self.device_link_up(device) {
                     Reason::DeviceOffline
                 } else {
                     Reason::LinkDown

@@ -43,7 +43,10 @@ pub(super) struct Worker {
     idle: Duration,
     /// Part of a stream message the link did not take yet.
     pending: Option<(Packet, usize)>,
+    /// The link is not open: never opened yet, or failed and not reopened.
     down: bool,
+    /// The link opened at least once (its first opening is no reconnection).
+    opened: bool,
     /// `Down` events reported.
     generation: u32,
     backoff: Duration,
@@ -76,7 +79,9 @@ impl Worker {
             epoch: Duration::ZERO,
             idle,
             pending: None,
-            down: false,
+            // A link is handed over closed: the first pass opens it and reports `Up`.
+            down: true,
+            opened: false,
             generation: 0,
             backoff: BACKOFF_MIN,
             next_reopen: Duration::ZERO,
@@ -230,7 +235,10 @@ impl Worker {
             Ok(()) => {
                 self.down = false;
                 self.counters.up.store(true, Ordering::Relaxed);
-                self.counters.reconnects.fetch_add(1, Ordering::Relaxed);
+                if self.opened {
+                    self.counters.reconnects.fetch_add(1, Ordering::Relaxed);
+                }
+                self.opened = true;
                 if self.rings.events.push(LinkEvent::Up).is_err() {
                     self.counters.dropped.fetch_add(1, Ordering::Relaxed);
                 }
