@@ -50,6 +50,8 @@ impl Facts for Engine {
             max: axis.max,
             max_velocity: axis.max_velocity,
             max_accel: axis.max_accel,
+            min_velocity: axis.min_velocity,
+            min_accel: axis.min_accel,
             capabilities: axis.capabilities,
             claimed_by: axis.claimed_by,
             device: self.device_state_of(index),

@@ -155,7 +155,8 @@ impl Engine {
                     what: "estop = \"stop-off\" or \"off\" needs a board that can de-energise the motor; this one cannot (use \"hold\")",
                 });
             }
-            axes.push(Axis::new(axis, bus, slot, goals));
+            let floor = driver.rate_floor(axis.channel);
+            axes.push(Axis::new(axis, bus, slot, goals, floor));
         }
         let signals = config
             .signals

@@ -18,7 +18,7 @@ use iceoryx2::prelude::*;
 use motion_client::testing::{
     FakeAxis, FakeConfig, FakeDevice, FakeServer, FakeSignal, unique_name,
 };
-use motion_drivers::{DeviceFault, GoalKind, LinkKind, Pin, SignalKind as PinKind};
+use motion_drivers::{DeviceFault, GoalKind, LinkKind, Pin, RateFloor, SignalKind as PinKind};
 use motion_engine::{
     AxisConfig, BusConfig, CommandPort, DeviceConfig, Engine, EngineConfig, SignalConfig,
 };
@@ -188,6 +188,11 @@ fn engine_side() -> EngineSide {
         ..EngineConfig::default()
     };
     let (full, full_control) = IdealBoard::new(1, &GoalKind::ALL);
+    // Its smallest steps: 0.5 mm/s and 10 mm/s² at 100 counts/mm.
+    full_control.lock().unwrap().floor = RateFloor {
+        velocity: 50.0,
+        accel: 1000.0,
+    };
     let plain_goals: Vec<GoalKind> = GoalKind::ALL
         .into_iter()
         .filter(|kind| !matches!(kind, GoalKind::Off | GoalKind::Home))
@@ -233,6 +238,9 @@ fn fake_config(engine: &Engine) -> FakeConfig {
         .collect();
     let mut lamp = FakeSignal::digital("lamp", 0, "p1", SignalKind::DigitalOut);
     lamp.safe = Some(false);
+    // The fake learns x's smallest steps from the test (no payload carries them).
+    config.axes[0].min_velocity = 0.5;
+    config.axes[0].min_accel = 10.0;
     config.signals = vec![
         lamp,
         FakeSignal::digital("door", 0, "p0", SignalKind::DigitalIn),
@@ -299,6 +307,18 @@ fn table() -> Vec<Step> {
         Send(0, axis_request(0, Home, [80.0, 0.0, 0.0])),
         Send(0, axis_request(0, SetPosition, [200.0, 0.0, 0.0])),
         Send(0, axis_request(0, Stop, [0.0; 3])),
+        // Below the board's smallest steps (x: 0.5 mm/s, 10 mm/s²; y has none).
+        Send(0, axis_request(0, RampVelocity, [0.2, 0.0, 0.0])),
+        Send(0, axis_request(0, RampVelocity, [-0.2, 0.0, 0.0])),
+        Send(0, axis_request(0, RampVelocity, [5.0, 5e-324, 0.0])),
+        Send(0, axis_request(0, Velocity, [5e-324, 0.0, 0.0])),
+        Send(0, axis_request(0, RampPosition, [10.0, 0.4, 0.0])),
+        Send(0, axis_request(0, RampPosition, [10.0, 0.0, 9.0])),
+        Send(0, axis_request(0, RampPosition, [10.0, 0.5, 10.0])),
+        Send(0, axis_request(0, Stop, [0.0; 3])),
+        Send(0, axis_request(0, Home, [0.1, 0.0, 0.0])),
+        Send(0, axis_request(1, RampPosition, [10.0, 0.4, 5e-300])),
+        Send(0, axis_request(1, Stop, [0.0; 3])),
         // Capabilities.
         Send(0, axis_request(1, Off, [0.0; 3])),
         Send(0, axis_request(1, Home, [0.0; 3])),

@@ -181,11 +181,14 @@ pub enum Reason {
     Unsupported = 4,
     /// A value is NaN or infinite.
     NotFinite = 5,
-    /// The position is outside the axis's `min..=max`.
+    /// The position is outside the axis's `min..=max`, or a digital output's level is
+    /// neither 0 nor 1.
     OutOfRange = 6,
-    /// The velocity exceeds the axis's `max_velocity`.
+    /// The velocity exceeds the axis's `max_velocity`, or is below the smallest step its
+    /// board represents (a slower velocity would be rounded to nothing or up).
     VelocityLimit = 7,
-    /// The acceleration exceeds the axis's `max_accel`, or is not positive.
+    /// The acceleration exceeds the axis's `max_accel`, is not positive, or is below the
+    /// smallest step its board represents (it would be rounded up: harder than asked).
     AccelLimit = 8,
     /// The power is outside −1.0..=1.0.
     PowerLimit = 9,
@@ -258,9 +261,9 @@ impl Reason {
             Self::UnknownAxis => "no such axis on this server",
             Self::Unsupported => "the axis's board cannot do this command",
             Self::NotFinite => "a value is NaN or infinite",
-            Self::OutOfRange => "position outside the axis's min..max soft limits",
-            Self::VelocityLimit => "velocity above the axis's max_velocity",
-            Self::AccelLimit => "acceleration above the axis's max_accel or not positive",
+            Self::OutOfRange => "position outside the axis's min..max soft limits, or an output level other than 0 or 1",
+            Self::VelocityLimit => "velocity above the axis's max_velocity, or below the smallest step its board represents",
+            Self::AccelLimit => "acceleration above the axis's max_accel or not positive, or below the smallest step its board represents",
             Self::PowerLimit => "power outside -1.0..1.0",
             Self::ClaimedByOther => "the axis is claimed by another client",
             Self::NotClaimed => "this client holds no claim on the axis",

@@ -45,6 +45,11 @@ pub struct AxisFacts {
     pub max_velocity: f64,
     /// Units/s².
     pub max_accel: f64,
+    /// The smallest nonzero velocity its board represents, units/s (0: no floor): a
+    /// slower velocity would be rounded to nothing or up to the board's step.
+    pub min_velocity: f64,
+    /// The smallest acceleration its board represents, units/s² (0: no floor).
+    pub min_accel: f64,
     /// The command kinds its board accepts.
     pub capabilities: Capabilities,
     /// The client holding its claim ([`ClientId::NONE`]: none).
@@ -78,6 +83,8 @@ impl AxisFacts {
             max,
             max_velocity,
             max_accel,
+            min_velocity: 0.0,
+            min_accel: 0.0,
             capabilities,
             claimed_by: ClientId::NONE,
             device: DeviceState::Online,
@@ -428,10 +435,10 @@ fn motion_of(
             } else {
                 or_max(v1, axis.max_accel)
             };
-            if v0.abs() > axis.max_velocity {
+            if v0.abs() > axis.max_velocity || (v0 != 0.0 && v0.abs() < axis.min_velocity) {
                 return Err(Reason::VelocityLimit);
             }
-            if accel <= 0.0 || accel > axis.max_accel {
+            if !accel_within(axis, accel) {
                 return Err(Reason::AccelLimit);
             }
             if heads_into_limit(axis, v0, accel) {
@@ -455,10 +462,10 @@ fn motion_of(
             if !within(v0) {
                 return Err(Reason::OutOfRange);
             }
-            if velocity <= 0.0 || velocity > axis.max_velocity {
+            if !speed_within(axis, velocity) {
                 return Err(Reason::VelocityLimit);
             }
-            if accel <= 0.0 || accel > axis.max_accel {
+            if !accel_within(axis, accel) {
                 return Err(Reason::AccelLimit);
             }
             Motion::RampPosition {
@@ -469,7 +476,7 @@ fn motion_of(
         }
         CommandKind::Home => {
             let velocity = or_max(v0, axis.max_velocity * HOME_FRACTION_OF_MAX);
-            if velocity <= 0.0 || velocity > axis.max_velocity {
+            if !speed_within(axis, velocity) {
                 return Err(Reason::VelocityLimit);
             }
             Motion::Home { velocity }
@@ -484,6 +491,19 @@ fn motion_of(
         | CommandKind::Reset
         | CommandKind::SetOutput => return Err(Reason::UnknownKind),
     })
+}
+
+/// Whether a profile speed (> 0) is within the axis's: at most `max_velocity`, at least
+/// the smallest its board represents.
+fn speed_within(axis: &AxisFacts, speed: f64) -> bool {
+    speed > 0.0 && speed <= axis.max_velocity && speed >= axis.min_velocity
+}
+
+/// Whether an acceleration (> 0) is within the axis's: at most `max_accel`, at least the
+/// smallest its board represents (a smaller one would be rounded up to the board's step:
+/// harder than asked).
+fn accel_within(axis: &AxisFacts, accel: f64) -> bool {
+    accel > 0.0 && accel <= axis.max_accel && accel >= axis.min_accel
 }
 
 /// Whether a velocity (or power, by its sign) goal of `velocity` could not stop before the

@@ -550,6 +550,8 @@ impl Facts for Model {
             max: axis.max,
             max_velocity: axis.max_velocity,
             max_accel: axis.max_accel,
+            min_velocity: axis.min_velocity,
+            min_accel: axis.min_accel,
             capabilities: axis.capabilities,
             claimed_by: sim.state.claimed_by,
             device: self.device_state(axis.device),

@@ -182,6 +182,18 @@ impl QsbDriverConfig {
         steps.is_finite().then_some(steps)
     }
 
+    /// The smallest jog rate and acceleration of the drive, in counts: "Motor rate will
+    /// change in increments of 16 steps/second" (MD JOG RATE) and "64 – 360000
+    /// steps/second^2" (MD ACCEL). A ramp's MD STEP RATE starts at 32 steps/s; the driver
+    /// refuses slower ramps itself.
+    pub(crate) fn rate_floor(&self) -> crate::goal::RateFloor {
+        let per_step = self.step_scale().map_or(0.0, f64::abs);
+        crate::goal::RateFloor {
+            velocity: f64::from(RATE_INCREMENT) * per_step,
+            accel: f64::from(*ACCEL_RANGE.start()) * per_step,
+        }
+    }
+
     /// A rate limit (counts/s, > 0) as MD STEP RATE: steps/s rounded down to the 16-step
     /// increment, capped at the board's 13000. `None` when it is below the board's 32.
     pub(crate) fn step_rate(&self, counts_per_s: f64) -> Option<u32> {
