@@ -98,16 +98,15 @@ fn after_another_client_s_reset_the_claim_holds_and_the_other_s_move_is_refused(
             .result(),
         Ok(())
     );
-    assert_eq!(
-        b.command(CommandRequest::ALL_AXES, CommandKind::Reset, [0.0; 3])
-            .result(),
-        Ok(())
-    );
-    let (frame, arrived) = a.wait_frame(Duration::from_secs(10), |f| {
-        f.axes()[0].flags().contains(AxisFlags::ARRIVED) && f.axes()[0].position == 2000.0
-    });
-    assert!(arrived, "the move survived the reset: {:?}", frame.axes()[0]);
-    assert_eq!(frame.axes()[0].claimed_by, a.id());
+    let reset = b.command(CommandRequest::ALL_AXES, CommandKind::Reset, [0.0; 3]);
+    assert_eq!(reset.result(), Ok(()));
+    // The frame of the reset's tick or later: the move still runs to its target, A's.
+    let (frame, seen) = a.wait_frame(Duration::from_secs(2), |f| f.tick >= reset.tick_applied);
+    assert!(seen, "tick {} never published", reset.tick_applied);
+    let axis = frame.axes()[0];
+    assert_eq!(axis.mode(), Ok(motion_ipc::AxisMode::RampPosition), "{axis:?}");
+    assert_eq!(axis.target, 2000.0, "{axis:?}");
+    assert_eq!(axis.claimed_by, a.id());
     // A's release is what frees the axis.
     assert_eq!(a.command(0, CommandKind::Release, [0.0; 3]).result(), Ok(()));
     assert_eq!(
@@ -315,6 +314,78 @@ kind = "digital-out"
     std::thread::sleep(Duration::from_millis(50));
     assert_eq!(client.frame().signals()[0].value, 1.0);
     assert_eq!(set_output(&client, 0, 0.0), Ok(()));
+    assert_eq!(
+        server.signal_and_wait(Signal::SIGTERM, Duration::from_secs(10)),
+        Some(0)
+    );
+}
+
+/// A simulated SIXpack, axis `six0` at 640 µsteps/mm and 10 mm/s (6400 µsteps/s). The
+/// manual ("Instruction Set"): f = f_clk / (clkdiv + 1) · v / 2^(14 + div), "clkdiv is the
+/// same for all motors (range 0..31)", v up to 511; so the pack runs at clkdiv 31 and div 1
+/// (the largest div at which v = 511 still reaches 6400 µsteps/s): one velocity unit is
+/// 20 MHz / 32 / 2^15 = 19.07 µsteps/s (0.0298 mm/s), one amax unit 500/64 of that per
+/// second ("1/64 amax is accumulated with 500Hz"). Slower rates are refused, never rounded
+/// up to the pack's step.
+#[test]
+fn rates_below_the_pack_s_smallest_step_are_refused_and_at_it_taken() {
+    let name = unique_name("floor");
+    let config = write_config(
+        &name,
+        &format!(
+            r#"[server]
+name = "{name}"
+
+[[link]]
+name = "rs485"
+type = "sim"
+
+[[device]]
+name = "pack"
+link = "rs485"
+model = "tmcpack"
+address = 1
+
+[[axis]]
+name = "six0"
+device = "pack"
+channel = 0
+unit = "mm"
+counts_per_unit = 640.0
+min = -1000.0
+max = 1000.0
+max_velocity = 10.0
+max_accel = 50.0
+"#
+        ),
+    );
+    let mut server = Server::start(&config);
+    let mut client = RawClient::connect(&name, Duration::from_secs(10));
+    let (frame, up) = client.wait_frame(Duration::from_secs(10), online);
+    assert!(up, "{:?}", frame.axes());
+    let unit = 20e6 / 32.0 / 32768.0 / 640.0;
+    let amax = unit * 500.0 / 64.0;
+    for (kind, values, reason) in [
+        (CommandKind::RampPosition, [10.0, 0.0, 5e-324], Reason::AccelLimit),
+        (CommandKind::RampVelocity, [1.0, 0.9 * amax, 0.0], Reason::AccelLimit),
+        (CommandKind::RampVelocity, [0.9 * unit, 0.0, 0.0], Reason::VelocityLimit),
+        (CommandKind::RampPosition, [10.0, 0.9 * unit, 0.0], Reason::VelocityLimit),
+        (CommandKind::Velocity, [5e-324, 0.0, 0.0], Reason::VelocityLimit),
+    ] {
+        assert_eq!(
+            client.command(0, kind, values).result(),
+            Err(reason),
+            "{kind:?} {values:?}"
+        );
+        assert_eq!(client.frame().axes()[0].mode(), Ok(motion_ipc::AxisMode::Hold));
+    }
+    assert_eq!(
+        client
+            .command(0, CommandKind::RampPosition, [0.5, 1.001 * unit, 1.001 * amax])
+            .result(),
+        Ok(())
+    );
+    assert_eq!(client.command(0, CommandKind::Stop, [0.0; 3]).result(), Ok(()));
     assert_eq!(
         server.signal_and_wait(Signal::SIGTERM, Duration::from_secs(10)),
         Some(0)
