@@ -539,7 +539,7 @@ static inline const char *motiond_reason_text(uint32_t reason) {
     case MOTIOND_REASON_SHUTTING_DOWN: return "the server is shutting down";
     case MOTIOND_REASON_NO_CLIENT_ID: return "claim and release need a client id";
     case MOTIOND_REASON_IDENTITY_MISMATCH: return "the request's client id is not the sender's iceoryx2 node: ids cannot be borrowed";
-    case MOTIOND_REASON_DEVICE_STARTING: return "the axis's board is starting: waiting for its first answer and its start-up stop";
+    case MOTIOND_REASON_DEVICE_STARTING: return "the axis's board is starting: its link is not open yet, or it awaits its first answer and its start-up stop";
     case MOTIOND_REASON_DEVICE_OFFLINE: return "the axis's board is not answering";
     case MOTIOND_REASON_UNKNOWN_SIGNAL: return "no such signal on this server";
     case MOTIOND_REASON_NOT_AN_OUTPUT: return "the signal is not a digital output";

@@ -211,7 +211,8 @@ pub enum Reason {
     /// The request's `client` is not the node the server received it from, or that node
     /// was already found dead (a request it sent just before it died; stops still count).
     IdentityMismatch = 18,
-    /// The axis's board is still starting (first answer, configuration, start-up stop).
+    /// The axis's board is still starting (its link not open for the first time yet, or its
+    /// first answer, configuration, start-up stop).
     DeviceStarting = 19,
     /// The axis's board is not answering.
     DeviceOffline = 20,
@@ -277,7 +278,8 @@ impl Reason {
                 "the request's client id is not the sender's iceoryx2 node: ids cannot be borrowed"
             }
             Self::DeviceStarting => {
-                "the axis's board is starting: waiting for its first answer and its start-up stop"
+                "the axis's board is starting: its link is not open yet, or it awaits its first \
+                 answer and its start-up stop"
             }
             Self::DeviceOffline => "the axis's board is not answering",
             Self::UnknownSignal => "no such signal on this server",

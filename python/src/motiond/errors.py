@@ -266,8 +266,8 @@ class IdentityMismatch(Refused):
 
 
 class DeviceStarting(Refused):
-    """Refused: the axis's board is starting: waiting for its first answer and its start-up stop
-    (``Reason.DEVICE_STARTING``).
+    """Refused: the axis's board is starting: its link is not open yet, or it awaits its first
+    answer and its start-up stop (``Reason.DEVICE_STARTING``).
     """
 
     reason_code = Reason.DEVICE_STARTING

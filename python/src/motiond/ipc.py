@@ -698,7 +698,8 @@ _TEXTS: Dict[type, Dict[enum.IntEnum, str]] = {
             "the request's client id is not the sender's iceoryx2 node: " "ids cannot be borrowed"
         ),
         Reason.DEVICE_STARTING: (
-            "the axis's board is starting: waiting for its first answer and its " "start-up stop"
+            "the axis's board is starting: its link is not open yet, or it awaits its first "
+            "answer and its start-up stop"
         ),
         Reason.DEVICE_OFFLINE: "the axis's board is not answering",
         Reason.UNKNOWN_SIGNAL: "no such signal on this server",
