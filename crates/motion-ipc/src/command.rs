@@ -262,9 +262,15 @@ impl Reason {
             Self::UnknownAxis => "no such axis on this server",
             Self::Unsupported => "the axis's board cannot do this command",
             Self::NotFinite => "a value is NaN or infinite",
-            Self::OutOfRange => "position outside the axis's min..max soft limits, or an output level other than 0 or 1",
-            Self::VelocityLimit => "velocity above the axis's max_velocity, or below the smallest step its board represents",
-            Self::AccelLimit => "acceleration above the axis's max_accel or not positive, or below the smallest step its board represents",
+            Self::OutOfRange => {
+                "position outside the axis's min..max soft limits, or an output level other than 0 or 1"
+            }
+            Self::VelocityLimit => {
+                "velocity above the axis's max_velocity, or below the smallest step its board represents"
+            }
+            Self::AccelLimit => {
+                "acceleration above the axis's max_accel or not positive, or below the smallest step its board represents"
+            }
             Self::PowerLimit => "power outside -1.0..1.0",
             Self::ClaimedByOther => "the axis is claimed by another client",
             Self::NotClaimed => "this client holds no claim on the axis",

@@ -483,12 +483,42 @@ fn a_non_utf8_byte_is_reported_where_it_is() {
 #[test]
 fn server_and_device_names_are_identifiers() {
     for (file, from, to, key) in [
-        ("server_dot.toml", "name = \"t\"", "name = \".\"", "server.name"),
-        ("server_dots.toml", "name = \"t\"", "name = \"..\"", "server.name"),
-        ("server_path.toml", "name = \"t\"", "name = \"a.b\"", "server.name"),
-        ("device_dot.toml", "name = \"pack\"", "name = \".\"", "device[0].name"),
-        ("device_dots.toml", "name = \"pack\"", "name = \"..\"", "device[0].name"),
-        ("link_slash.toml", "name = \"bus\"", "name = \"b/us\"", "link[0].name"),
+        (
+            "server_dot.toml",
+            "name = \"t\"",
+            "name = \".\"",
+            "server.name",
+        ),
+        (
+            "server_dots.toml",
+            "name = \"t\"",
+            "name = \"..\"",
+            "server.name",
+        ),
+        (
+            "server_path.toml",
+            "name = \"t\"",
+            "name = \"a.b\"",
+            "server.name",
+        ),
+        (
+            "device_dot.toml",
+            "name = \"pack\"",
+            "name = \".\"",
+            "device[0].name",
+        ),
+        (
+            "device_dots.toml",
+            "name = \"pack\"",
+            "name = \"..\"",
+            "device[0].name",
+        ),
+        (
+            "link_slash.toml",
+            "name = \"bus\"",
+            "name = \"b/us\"",
+            "link[0].name",
+        ),
     ] {
         let text = GOOD.replacen(from, to, 1);
         assert_fails(file, &text, to, key, "is not a valid name");

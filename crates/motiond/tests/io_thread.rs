@@ -34,7 +34,11 @@ fn start_named(
     cpu: Option<usize>,
 ) -> (LinkPort, IoThread, Arc<AtomicBool>) {
     let (mut port, thread, stop) = spawn_closed(name, link, rt_priority, cpu);
-    assert_eq!(events(&mut port, 1), [LinkEvent::Up], "the thread opens its link");
+    assert_eq!(
+        events(&mut port, 1),
+        [LinkEvent::Up],
+        "the thread opens its link"
+    );
     (port, thread, stop)
 }
 
@@ -175,7 +179,11 @@ fn a_link_that_is_not_there_yet_is_opened_when_it_appears_and_never_reported_dow
     let (mut port, thread, stop) = spawn_closed("late", Box::new(link), None, None);
     // Several reopen attempts fail meanwhile (100, 200, 400 ms backoff).
     std::thread::sleep(Duration::from_millis(400));
-    assert_eq!(port.events.pop().ok(), None, "no event before the tty exists");
+    assert_eq!(
+        port.events.pop().ok(),
+        None,
+        "no event before the tty exists"
+    );
     assert!(!port.counters.up.load(std::sync::atomic::Ordering::Relaxed));
     let pty = nix::pty::openpty(None, None).expect("openpty");
     let slave = nix::unistd::ttyname(pty.slave.as_fd()).expect("ttyname");

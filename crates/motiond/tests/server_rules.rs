@@ -14,8 +14,7 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use motion_ipc::{
-    AxisFlags, ClientId, CommandKind, CommandRequest, DeviceState, MotionFrame, Reason,
-    SignalFlags,
+    AxisFlags, ClientId, CommandKind, CommandRequest, DeviceState, MotionFrame, Reason, SignalFlags,
 };
 use motion_sim::qsb::{QsbSim, QsbSimConfig};
 use motion_sim::tmcpack::{TmcpackSim, TmcpackSimConfig};
@@ -104,11 +103,18 @@ fn after_another_client_s_reset_the_claim_holds_and_the_other_s_move_is_refused(
     let (frame, seen) = a.wait_frame(Duration::from_secs(2), |f| f.tick >= reset.tick_applied);
     assert!(seen, "tick {} never published", reset.tick_applied);
     let axis = frame.axes()[0];
-    assert_eq!(axis.mode(), Ok(motion_ipc::AxisMode::RampPosition), "{axis:?}");
+    assert_eq!(
+        axis.mode(),
+        Ok(motion_ipc::AxisMode::RampPosition),
+        "{axis:?}"
+    );
     assert_eq!(axis.target, 2000.0, "{axis:?}");
     assert_eq!(axis.claimed_by, a.id());
     // A's release is what frees the axis.
-    assert_eq!(a.command(0, CommandKind::Release, [0.0; 3]).result(), Ok(()));
+    assert_eq!(
+        a.command(0, CommandKind::Release, [0.0; 3]).result(),
+        Ok(())
+    );
     assert_eq!(
         b.command(0, CommandKind::RampPosition, [0.0, 0.0, 0.0])
             .result(),
@@ -176,7 +182,12 @@ fn a_move_on_a_link_that_opens_late_is_refused_as_starting_never_link_down_then_
     let until = Instant::now() + Duration::from_millis(600);
     while Instant::now() < until {
         let frame = client.frame();
-        assert_eq!(frame.device_state(0), DeviceState::Starting, "tick {}", frame.tick);
+        assert_eq!(
+            frame.device_state(0),
+            DeviceState::Starting,
+            "tick {}",
+            frame.tick
+        );
         let axis = frame.axes()[0];
         assert!(!axis.flags().contains(AxisFlags::FAULT), "{axis:?}");
         let refused = client.command(0, CommandKind::Velocity, [1.0, 0.0, 0.0]);
@@ -366,26 +377,56 @@ max_accel = 50.0
     let unit = 20e6 / 32.0 / 32768.0 / 640.0;
     let amax = unit * 500.0 / 64.0;
     for (kind, values, reason) in [
-        (CommandKind::RampPosition, [10.0, 0.0, 5e-324], Reason::AccelLimit),
-        (CommandKind::RampVelocity, [1.0, 0.9 * amax, 0.0], Reason::AccelLimit),
-        (CommandKind::RampVelocity, [0.9 * unit, 0.0, 0.0], Reason::VelocityLimit),
-        (CommandKind::RampPosition, [10.0, 0.9 * unit, 0.0], Reason::VelocityLimit),
-        (CommandKind::Velocity, [5e-324, 0.0, 0.0], Reason::VelocityLimit),
+        (
+            CommandKind::RampPosition,
+            [10.0, 0.0, 5e-324],
+            Reason::AccelLimit,
+        ),
+        (
+            CommandKind::RampVelocity,
+            [1.0, 0.9 * amax, 0.0],
+            Reason::AccelLimit,
+        ),
+        (
+            CommandKind::RampVelocity,
+            [0.9 * unit, 0.0, 0.0],
+            Reason::VelocityLimit,
+        ),
+        (
+            CommandKind::RampPosition,
+            [10.0, 0.9 * unit, 0.0],
+            Reason::VelocityLimit,
+        ),
+        (
+            CommandKind::Velocity,
+            [5e-324, 0.0, 0.0],
+            Reason::VelocityLimit,
+        ),
     ] {
         assert_eq!(
             client.command(0, kind, values).result(),
             Err(reason),
             "{kind:?} {values:?}"
         );
-        assert_eq!(client.frame().axes()[0].mode(), Ok(motion_ipc::AxisMode::Hold));
+        assert_eq!(
+            client.frame().axes()[0].mode(),
+            Ok(motion_ipc::AxisMode::Hold)
+        );
     }
     assert_eq!(
         client
-            .command(0, CommandKind::RampPosition, [0.5, 1.001 * unit, 1.001 * amax])
+            .command(
+                0,
+                CommandKind::RampPosition,
+                [0.5, 1.001 * unit, 1.001 * amax]
+            )
             .result(),
         Ok(())
     );
-    assert_eq!(client.command(0, CommandKind::Stop, [0.0; 3]).result(), Ok(()));
+    assert_eq!(
+        client.command(0, CommandKind::Stop, [0.0; 3]).result(),
+        Ok(())
+    );
     assert_eq!(
         server.signal_and_wait(Signal::SIGTERM, Duration::from_secs(10)),
         Some(0)
