@@ -194,6 +194,11 @@ fn a_move_on_a_link_that_opens_late_is_refused_as_starting_never_link_down_then_
         assert_eq!(refused.result(), Err(Reason::DeviceStarting));
         std::thread::sleep(Duration::from_millis(50));
     }
+    assert!(
+        server.wait_for_log("not open yet", Duration::from_secs(5)),
+        "the operator is told why: {}",
+        server.log_text()
+    );
     // The board appears: the link opens, the pack starts, the move is taken.
     let epoch = Instant::now();
     let pack = Arc::new(Mutex::new(TmcpackSim::new(TmcpackSimConfig::default())));
