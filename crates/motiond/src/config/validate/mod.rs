@@ -86,8 +86,8 @@ fn plain_serde_message(message: &str) -> String {
 }
 
 /// Whether `text` is a name the server takes: 1..=`max` bytes of ASCII letters, digits, `_`
-/// and `-` (the server's name becomes part of its service and node names; `.` and `..`
-/// would be names of nothing there).
+/// and `-` (the server's name becomes part of its service and node names and of paths,
+/// where `.` and `..` mean something else).
 pub(crate) fn is_identifier(text: &str, max: usize) -> bool {
     !text.is_empty()
         && text.len() <= max
@@ -168,7 +168,7 @@ impl Validator<'_, '_> {
                 value.span(),
                 key,
                 format!(
-                    "{text:?} is not a valid name; a name is an identifier of 1..={max} characters of A-Z a-z 0-9 _ - (no `.`: names become parts of service and node names, where `.` and `..` are not names)"
+                    "{text:?} is not a valid name; a name is an identifier: 1..={max} characters of A-Z a-z 0-9 _ - (no `.`, so never `.` or `..`)"
                 ),
             );
             None
