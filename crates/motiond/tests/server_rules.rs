@@ -16,10 +16,12 @@ use std::time::Instant;
 use motion_ipc::{
     AxisFlags, ClientId, CommandKind, CommandRequest, DeviceState, MotionFrame, Reason, SignalFlags,
 };
+use motion_sim::qq2drv::{Qq2drvSim, Qq2drvSimConfig};
 use motion_sim::qsb::{QsbSim, QsbSimConfig};
 use motion_sim::tmcpack::{TmcpackSim, TmcpackSimConfig};
 use nix::sys::signal::Signal;
 use support::pty_board::PtyBoard;
+use support::socket_board::SocketBoard;
 use support::*;
 
 /// A simulated SPI_motor stepper, axis `a` (index 0).
@@ -165,13 +167,73 @@ max_accel = 50.0
 /// Until its link first opened, the pack is starting: never offline, never a link-down
 /// fault, and a move is refused as starting; once the tty appears the same move works.
 #[test]
-fn a_move_on_a_link_that_opens_late_is_refused_as_starting_never_link_down_then_works() {
+fn a_move_on_a_pty_link_that_opens_late_is_refused_as_starting_never_link_down_then_works() {
     let name = unique_name("latelink");
     let tty = std::env::temp_dir().join(format!("{name}.tty"));
     let _ = std::fs::remove_file(&tty);
-    let mut server = Server::start(&tmcpack_config(&name, &tty));
-    // The moment the server first answers.
-    let mut client = RawClient::connect(&name, Duration::from_secs(10));
+    let server = Server::start(&tmcpack_config(&name, &tty));
+    late_link(&name, server, "pack", || {
+        let pack = Arc::new(Mutex::new(TmcpackSim::new(TmcpackSimConfig::default())));
+        Box::new(PtyBoard::start(&tty, pack, Instant::now(), 19_200))
+    });
+    let _ = std::fs::remove_file(&tty);
+}
+
+/// The same on an SPI socket whose peer (a QuadQuad2Drv) starts listening late.
+#[test]
+fn a_move_on_an_spi_socket_that_opens_late_is_refused_as_starting_then_works() {
+    let name = unique_name("latesock");
+    let socket = std::env::temp_dir().join(format!("{name}.sock"));
+    let _ = std::fs::remove_file(&socket);
+    let config = write_config(
+        &name,
+        &format!(
+            r#"[server]
+name = "{name}"
+
+[[link]]
+name = "spi"
+type = "spi-socket"
+path = "{}"
+
+[[device]]
+name = "drive"
+link = "spi"
+model = "qq2drv"
+
+[[axis]]
+name = "wheel"
+device = "drive"
+channel = 0
+unit = "deg"
+counts_per_unit = 10.0
+min = -1000.0
+max = 1000.0
+max_velocity = 100.0
+max_accel = 1000.0
+"#,
+            socket.display()
+        ),
+    );
+    let server = Server::start(&config);
+    late_link(&name, server, "drive", || {
+        let board = Arc::new(Mutex::new(Qq2drvSim::new(Qq2drvSimConfig::default())));
+        Box::new(SocketBoard::start(&socket, board, Instant::now()))
+    });
+    let _ = std::fs::remove_file(&socket);
+}
+
+/// Axis 0's device (named `device`) is on a link that is not there yet: from the moment the
+/// server first answers it is starting, a move is refused as starting (never link down, never
+/// offline, no fault) and the operator is told why; once `plug_in` serves the board the same
+/// move is taken, having been refused only as starting.
+fn late_link(
+    name: &str,
+    mut server: Server,
+    device: &str,
+    plug_in: impl FnOnce() -> Box<dyn std::any::Any>,
+) {
+    let mut client = RawClient::connect(name, Duration::from_secs(10));
     let first = client.command(0, CommandKind::RampPosition, [1.0, 0.0, 0.0]);
     assert_eq!(
         first.result(),
@@ -199,10 +261,8 @@ fn a_move_on_a_link_that_opens_late_is_refused_as_starting_never_link_down_then_
         "the operator is told why: {}",
         server.log_text()
     );
-    // The board appears: the link opens, the pack starts, the move is taken.
-    let epoch = Instant::now();
-    let pack = Arc::new(Mutex::new(TmcpackSim::new(TmcpackSimConfig::default())));
-    let _board = PtyBoard::start(&tty, Arc::clone(&pack), epoch, 19_200);
+    // The board appears: the link opens, the board starts, the move is taken.
+    let _board = plug_in();
     let mut answers = Vec::new();
     let end = Instant::now() + Duration::from_secs(15);
     let mut accepted = false;
@@ -220,12 +280,14 @@ fn a_move_on_a_link_that_opens_late_is_refused_as_starting_never_link_down_then_
         "refused otherwise than as starting: {answers:?}"
     );
     let log = server.log_text();
-    assert!(!log.contains("`pack` is not answering"), "{log}");
+    assert!(
+        !log.contains(&format!("`{device}` is not answering")),
+        "{log}"
+    );
     assert_eq!(
         server.signal_and_wait(Signal::SIGTERM, Duration::from_secs(10)),
         Some(0)
     );
-    let _ = std::fs::remove_file(&tty);
 }
 
 /// A move sent the moment the server first answers, with the board's tty there from the
