@@ -116,8 +116,12 @@ impl GoalKind {
 /// no such floor (a continuous profile, or no velocity goal at all).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct RateFloor {
-    /// Counts/s.
+    /// Of a velocity goal and of a reference search, counts/s.
     pub velocity: f64,
+    /// Of a position profile's velocity (`RampPosition`), counts/s: finer on a board whose
+    /// profile takes another unit (the QuadQuad2Drv's shl 12), coarser on one whose
+    /// profile starts higher (the QSB's MD STEP RATE).
+    pub profile_velocity: f64,
     /// Counts/s².
     pub accel: f64,
 }
@@ -126,6 +130,7 @@ impl RateFloor {
     /// No floor.
     pub const NONE: Self = Self {
         velocity: 0.0,
+        profile_velocity: 0.0,
         accel: 0.0,
     };
 }

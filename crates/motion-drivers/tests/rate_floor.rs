@@ -11,15 +11,17 @@ use motion_drivers::{Driver, RateFloor};
 
 /// QuadQuad2Drv datasheet, packet 36 "Velocity Ramp": "Velocity target, specified as:
 /// Velocity = <transitions/s>" (plain) and "Acceleration = <transitions/s/s> shl 12";
-/// packet 28: "The extra bits can be used to specify a fractional acceleration".
+/// packet 34 "Position Ramp": "Velocity = <transitions/s> shl 12"; packet 28: "The extra
+/// bits can be used to specify a fractional acceleration".
 #[test]
-fn qq2drv_one_transition_per_second_and_one_4096th_per_second_squared() {
+fn qq2drv_one_transition_per_second_and_4096ths_in_profiles_and_accelerations() {
     let driver = Qq2drvDriver::new(Qq2drvDriverConfig::default());
     for channel in 0..driver.channel_count() {
         assert_eq!(
             driver.rate_floor(channel),
             RateFloor {
                 velocity: 1.0,
+                profile_velocity: 1.0 / 4096.0,
                 accel: 1.0 / 4096.0,
             }
         );
@@ -28,10 +30,11 @@ fn qq2drv_one_transition_per_second_and_one_4096th_per_second_squared() {
 }
 
 /// QSB Command List 1.28: MD JOG RATE "Motor rate will change in increments of 16
-/// steps/second"; MD ACCEL "Set motor step acceleration from 64 – 360000 steps/second^2".
-/// In counts: times `counts_per_step`, whatever its sign.
+/// steps/second"; MD STEP RATE "Set motor step rate from 32 – 13000 steps/second"; MD ACCEL
+/// "Set motor step acceleration from 64 – 360000 steps/second^2". In counts: times
+/// `counts_per_step`, whatever its sign.
 #[test]
-fn qsb_16_steps_per_second_and_64_steps_per_second_squared_in_counts() {
+fn qsb_16_and_32_steps_per_second_and_64_steps_per_second_squared_in_counts() {
     for counts_per_step in [10.0, -4.0, 0.5] {
         let driver = QsbDriver::new(QsbDriverConfig {
             counts_per_step,
@@ -42,6 +45,7 @@ fn qsb_16_steps_per_second_and_64_steps_per_second_squared_in_counts() {
             driver.rate_floor(0),
             RateFloor {
                 velocity: 16.0 * per_step,
+                profile_velocity: 32.0 * per_step,
                 accel: 64.0 * per_step,
             },
             "{counts_per_step} counts/step"
@@ -58,6 +62,7 @@ fn spimotor_one_step_per_25_5_ms_and_no_acceleration_step() {
     let stepper = SpimotorDriver::new(SpimotorDriverConfig::default());
     let floor = stepper.rate_floor(0);
     assert!((floor.velocity - 1.0 / 0.0255).abs() < 1e-9, "{floor:?}");
+    assert_eq!(floor.profile_velocity, floor.velocity);
     assert_eq!(floor.accel, 0.0);
     let brushed = SpimotorDriver::new(SpimotorDriverConfig {
         drive: SpimotorDrive::Brushed,
@@ -105,6 +110,7 @@ fn tmcpack_one_velocity_unit_and_one_amax_unit_of_the_motor_s_clock() {
             (floor.accel - floor.velocity * 500.0 / 64.0).abs() <= 1e-9 * floor.accel,
             "{floor:?}"
         );
+        assert_eq!(floor.profile_velocity, floor.velocity);
     }
     // The slower motor has the finer step (a larger divider).
     assert!(driver.rate_floor(1).velocity < driver.rate_floor(0).velocity);

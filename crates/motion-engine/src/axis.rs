@@ -34,9 +34,11 @@ pub(crate) struct Axis {
     pub max: f64,
     pub max_velocity: f64,
     pub max_accel: f64,
-    /// The smallest nonzero velocity (units/s) and acceleration (units/s²) the axis's
-    /// board represents ([`motion_drivers::Driver::rate_floor`]); 0: none.
+    /// The smallest nonzero velocity (units/s; of a velocity goal or search, and of a
+    /// position profile) and acceleration (units/s²) the axis's board represents
+    /// ([`motion_drivers::Driver::rate_floor`]); 0: none.
     pub min_velocity: f64,
+    pub min_profile_velocity: f64,
     pub min_accel: f64,
     pub tolerance: f64,
     pub following_error: f64,
@@ -122,6 +124,7 @@ impl Axis {
             max_velocity: config.max_velocity,
             max_accel: config.max_accel,
             min_velocity: in_units(floor.velocity),
+            min_profile_velocity: in_units(floor.profile_velocity),
             min_accel: in_units(floor.accel),
             tolerance: config.position_tolerance,
             following_error: config.following_error,

@@ -51,6 +51,7 @@ impl Facts for Engine {
             max_velocity: axis.max_velocity,
             max_accel: axis.max_accel,
             min_velocity: axis.min_velocity,
+            min_profile_velocity: axis.min_profile_velocity,
             min_accel: axis.min_accel,
             capabilities: axis.capabilities,
             claimed_by: axis.claimed_by,

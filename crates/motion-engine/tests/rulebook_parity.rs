@@ -188,9 +188,11 @@ fn engine_side() -> EngineSide {
         ..EngineConfig::default()
     };
     let (full, full_control) = IdealBoard::new(1, &GoalKind::ALL);
-    // Its smallest steps: 0.5 mm/s and 10 mm/s² at 100 counts/mm.
+    // Its smallest steps at 100 counts/mm: 0.5 mm/s (velocity goals, searches), 0.2 mm/s
+    // (position profiles), 10 mm/s².
     full_control.lock().unwrap().floor = RateFloor {
         velocity: 50.0,
+        profile_velocity: 20.0,
         accel: 1000.0,
     };
     let plain_goals: Vec<GoalKind> = GoalKind::ALL
@@ -240,6 +242,7 @@ fn fake_config(engine: &Engine) -> FakeConfig {
     lamp.safe = Some(false);
     // The fake learns x's smallest steps from the test (no payload carries them).
     config.axes[0].min_velocity = 0.5;
+    config.axes[0].min_profile_velocity = 0.2;
     config.axes[0].min_accel = 10.0;
     config.signals = vec![
         lamp,
@@ -307,12 +310,14 @@ fn table() -> Vec<Step> {
         Send(0, axis_request(0, Home, [80.0, 0.0, 0.0])),
         Send(0, axis_request(0, SetPosition, [200.0, 0.0, 0.0])),
         Send(0, axis_request(0, Stop, [0.0; 3])),
-        // Below the board's smallest steps (x: 0.5 mm/s, 10 mm/s²; y has none).
+        // Below the board's smallest steps (x: 0.5 mm/s, profiles 0.2 mm/s, 10 mm/s²; y has
+        // none).
         Send(0, axis_request(0, RampVelocity, [0.2, 0.0, 0.0])),
         Send(0, axis_request(0, RampVelocity, [-0.2, 0.0, 0.0])),
         Send(0, axis_request(0, RampVelocity, [5.0, 5e-324, 0.0])),
         Send(0, axis_request(0, Velocity, [5e-324, 0.0, 0.0])),
         Send(0, axis_request(0, RampPosition, [10.0, 0.4, 0.0])),
+        Send(0, axis_request(0, RampPosition, [10.0, 0.1, 0.0])),
         Send(0, axis_request(0, RampPosition, [10.0, 0.0, 9.0])),
         Send(0, axis_request(0, RampPosition, [10.0, 0.5, 10.0])),
         Send(0, axis_request(0, Stop, [0.0; 3])),

@@ -45,9 +45,13 @@ pub struct AxisFacts {
     pub max_velocity: f64,
     /// Units/s².
     pub max_accel: f64,
-    /// The smallest nonzero velocity its board represents, units/s (0: no floor): a
-    /// slower velocity would be rounded to nothing or up to the board's step.
+    /// The smallest nonzero velocity of a velocity goal or a search its board represents,
+    /// units/s (0: no floor): a slower velocity would be rounded to nothing or up to the
+    /// board's step.
     pub min_velocity: f64,
+    /// The smallest velocity of a position profile (`RampPosition`) its board represents,
+    /// units/s (0: no floor).
+    pub min_profile_velocity: f64,
     /// The smallest acceleration its board represents, units/s² (0: no floor).
     pub min_accel: f64,
     /// The command kinds its board accepts.
@@ -84,6 +88,7 @@ impl AxisFacts {
             max_velocity,
             max_accel,
             min_velocity: 0.0,
+            min_profile_velocity: 0.0,
             min_accel: 0.0,
             capabilities,
             claimed_by: ClientId::NONE,
@@ -462,7 +467,7 @@ fn motion_of(
             if !within(v0) {
                 return Err(Reason::OutOfRange);
             }
-            if !speed_within(axis, velocity) {
+            if !speed_within(axis, velocity, axis.min_profile_velocity) {
                 return Err(Reason::VelocityLimit);
             }
             if !accel_within(axis, accel) {
@@ -476,7 +481,7 @@ fn motion_of(
         }
         CommandKind::Home => {
             let velocity = or_max(v0, axis.max_velocity * HOME_FRACTION_OF_MAX);
-            if !speed_within(axis, velocity) {
+            if !speed_within(axis, velocity, axis.min_velocity) {
                 return Err(Reason::VelocityLimit);
             }
             Motion::Home { velocity }
@@ -493,10 +498,10 @@ fn motion_of(
     })
 }
 
-/// Whether a profile speed (> 0) is within the axis's: at most `max_velocity`, at least
-/// the smallest its board represents.
-fn speed_within(axis: &AxisFacts, speed: f64) -> bool {
-    speed > 0.0 && speed <= axis.max_velocity && speed >= axis.min_velocity
+/// Whether a speed (> 0) is within the axis's: at most `max_velocity`, at least `floor`
+/// (the smallest its board represents for this kind of goal).
+fn speed_within(axis: &AxisFacts, speed: f64, floor: f64) -> bool {
+    speed > 0.0 && speed <= axis.max_velocity && speed >= floor
 }
 
 /// Whether an acceleration (> 0) is within the axis's: at most `max_accel`, at least the

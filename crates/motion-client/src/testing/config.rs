@@ -19,9 +19,11 @@ pub struct FakeAxis {
     pub max_velocity: f64,
     /// Units/s².
     pub max_accel: f64,
-    /// The smallest nonzero velocity its "board" represents, units/s (0: no floor; slower
-    /// velocities are refused as by the server).
+    /// The smallest nonzero velocity of a velocity goal or search its "board" represents,
+    /// units/s (0: no floor; slower velocities are refused as by the server).
     pub min_velocity: f64,
+    /// The smallest velocity of a position profile its "board" represents, units/s.
+    pub min_profile_velocity: f64,
     /// The smallest acceleration its "board" represents, units/s² (0: no floor).
     pub min_accel: f64,
     /// Accepted command kinds.
@@ -51,6 +53,7 @@ impl FakeAxis {
             max_velocity,
             max_accel: max_velocity * 10.0,
             min_velocity: 0.0,
+            min_profile_velocity: 0.0,
             min_accel: 0.0,
             capabilities: CommandKind::ALL
                 .iter()

@@ -551,6 +551,7 @@ impl Facts for Model {
             max_velocity: axis.max_velocity,
             max_accel: axis.max_accel,
             min_velocity: axis.min_velocity,
+            min_profile_velocity: axis.min_profile_velocity,
             min_accel: axis.min_accel,
             capabilities: axis.capabilities,
             claimed_by: sim.state.claimed_by,

@@ -260,14 +260,17 @@ impl Driver for Qq2drvDriver {
     }
 
     /// Packet 36's velocity is plain transitions/s (the step of a velocity goal and of a
-    /// search); every acceleration is transitions/s² shl 12.
+    /// search); packet 34's profile velocity and every acceleration are transitions/s (/s²)
+    /// shl 12.
     fn rate_floor(&self, channel: usize) -> RateFloor {
         if self.kinds(channel) == GoalKinds::NONE {
             return RateFloor::NONE;
         }
+        let fixed = 1.0 / f64::from(1u32 << qq2drv::limits::FIXED_SHIFT);
         RateFloor {
             velocity: 1.0,
-            accel: 1.0 / f64::from(1u32 << qq2drv::limits::FIXED_SHIFT),
+            profile_velocity: fixed,
+            accel: fixed,
         }
     }
 

@@ -182,14 +182,14 @@ impl QsbDriverConfig {
         steps.is_finite().then_some(steps)
     }
 
-    /// The smallest jog rate and acceleration of the drive, in counts: "Motor rate will
-    /// change in increments of 16 steps/second" (MD JOG RATE) and "64 – 360000
-    /// steps/second^2" (MD ACCEL). A ramp's MD STEP RATE starts at 32 steps/s; the driver
-    /// refuses slower ramps itself.
+    /// The smallest rates and acceleration of the drive, in counts: MD JOG RATE "Motor
+    /// rate will change in increments of 16 steps/second", MD STEP RATE (a move's profile)
+    /// "from 32 – 13000 steps/second", MD ACCEL "from 64 – 360000 steps/second^2".
     pub(crate) fn rate_floor(&self) -> crate::goal::RateFloor {
         let per_step = self.step_scale().map_or(0.0, f64::abs);
         crate::goal::RateFloor {
             velocity: f64::from(RATE_INCREMENT) * per_step,
+            profile_velocity: f64::from(*STEP_RATE_RANGE.start()) * per_step,
             accel: f64::from(*ACCEL_RANGE.start()) * per_step,
         }
     }

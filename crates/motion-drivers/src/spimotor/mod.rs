@@ -290,6 +290,7 @@ impl Driver for SpimotorDriver {
         if self.is_stepper() && self.kinds(channel).contains(GoalKind::Velocity) {
             RateFloor {
                 velocity: ramp::slowest_rate(),
+                profile_velocity: ramp::slowest_rate(),
                 accel: 0.0,
             }
         } else {

@@ -286,6 +286,7 @@ impl Scale {
     pub fn floor(&self) -> crate::goal::RateFloor {
         crate::goal::RateFloor {
             velocity: self.hz,
+            profile_velocity: self.hz,
             accel: self.hz * f64::from(RAMP_HZ) / f64::from(AMAX_DIVISOR),
         }
     }

@@ -406,6 +406,7 @@ fn a_digital_output_takes_0_or_1_and_nothing_else() {
 fn rates_below_the_board_s_smallest_step_are_refused() {
     let mut w = world();
     w.axes[0].min_velocity = 0.5;
+    w.axes[0].min_profile_velocity = 0.2;
     w.axes[0].min_accel = 10.0;
     use CommandKind::{Home, RampPosition, RampVelocity, Velocity};
     for (kind, values, reason) in [
@@ -414,7 +415,7 @@ fn rates_below_the_board_s_smallest_step_are_refused() {
         (Velocity, [5e-324, 0.0, 0.0], Reason::VelocityLimit),
         (RampVelocity, [5.0, 5e-324, 0.0], Reason::AccelLimit),
         (RampVelocity, [5.0, 9.99, 0.0], Reason::AccelLimit),
-        (RampPosition, [10.0, 0.4, 0.0], Reason::VelocityLimit),
+        (RampPosition, [10.0, 0.19, 0.0], Reason::VelocityLimit),
         (RampPosition, [10.0, 0.0, 5e-324], Reason::AccelLimit),
         (Home, [0.1, 0.0, 0.0], Reason::VelocityLimit),
     ] {
@@ -425,7 +426,8 @@ fn rates_below_the_board_s_smallest_step_are_refused() {
         (RampVelocity, [0.5, 10.0, 0.0]),
         (RampVelocity, [-0.5, 0.0, 0.0]),
         (Velocity, [0.0, 0.0, 0.0]),
-        (RampPosition, [10.0, 0.5, 10.0]),
+        (RampPosition, [10.0, 0.2, 10.0]),
+        (RampPosition, [10.0, 0.4, 10.0]),
         (Home, [0.5, 0.0, 0.0]),
     ] {
         assert!(
