@@ -527,9 +527,9 @@ static inline const char *motiond_reason_text(uint32_t reason) {
     case MOTIOND_REASON_UNKNOWN_AXIS: return "no such axis on this server";
     case MOTIOND_REASON_UNSUPPORTED: return "the axis's board cannot do this command";
     case MOTIOND_REASON_NOT_FINITE: return "a value is NaN or infinite";
-    case MOTIOND_REASON_OUT_OF_RANGE: return "position outside the axis's min..max soft limits";
-    case MOTIOND_REASON_VELOCITY_LIMIT: return "velocity above the axis's max_velocity";
-    case MOTIOND_REASON_ACCEL_LIMIT: return "acceleration above the axis's max_accel or not positive";
+    case MOTIOND_REASON_OUT_OF_RANGE: return "position outside the axis's min..max soft limits, or an output level other than 0 or 1";
+    case MOTIOND_REASON_VELOCITY_LIMIT: return "velocity above the axis's max_velocity, or below the smallest step its board represents";
+    case MOTIOND_REASON_ACCEL_LIMIT: return "acceleration above the axis's max_accel or not positive, or below the smallest step its board represents";
     case MOTIOND_REASON_POWER_LIMIT: return "power outside -1.0..1.0";
     case MOTIOND_REASON_CLAIMED_BY_OTHER: return "the axis is claimed by another client";
     case MOTIOND_REASON_NOT_CLAIMED: return "this client holds no claim on the axis";
@@ -540,7 +540,7 @@ static inline const char *motiond_reason_text(uint32_t reason) {
     case MOTIOND_REASON_SHUTTING_DOWN: return "the server is shutting down";
     case MOTIOND_REASON_NO_CLIENT_ID: return "claim and release need a client id";
     case MOTIOND_REASON_IDENTITY_MISMATCH: return "the request's client id is not the sender's iceoryx2 node: ids cannot be borrowed";
-    case MOTIOND_REASON_DEVICE_STARTING: return "the axis's board is starting: waiting for its first answer and its start-up stop";
+    case MOTIOND_REASON_DEVICE_STARTING: return "the axis's board is starting: its link is not open yet, or it awaits its first answer and its start-up stop";
     case MOTIOND_REASON_DEVICE_OFFLINE: return "the axis's board is not answering";
     case MOTIOND_REASON_UNKNOWN_SIGNAL: return "no such signal on this server";
     case MOTIOND_REASON_NOT_AN_OUTPUT: return "the signal is not a digital output";

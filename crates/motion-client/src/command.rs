@@ -295,7 +295,8 @@ impl<S: Service> Client<S> {
         }
     }
 
-    /// Clears a latched e-stop and faults; targets become the current positions.
+    /// Clears a latched e-stop, deadman expiries and faults whose cause is gone; axes without
+    /// a running goal hold where they are. Claims (this client's and others') stay.
     pub fn reset(&self) -> Result<Accepted, ClientError> {
         self.command(CommandRequest::ALL_AXES, CommandKind::Reset, [0.0; 3])
     }

@@ -3,7 +3,7 @@
 use core::fmt;
 use core::time::Duration;
 
-use crate::goal::{Goal, GoalError, GoalKinds};
+use crate::goal::{Goal, GoalError, GoalKinds, RateFloor};
 use crate::pin::{Pin, PinReading};
 use crate::state::{ChannelState, DeviceStatus};
 
@@ -68,6 +68,16 @@ pub trait Driver: Send + fmt::Debug {
 
     /// The goals `channel` accepts; empty for a channel the board does not have.
     fn capabilities(&self, channel: usize) -> GoalKinds;
+
+    /// The smallest nonzero velocity and acceleration the board represents on `channel`
+    /// (its velocity and acceleration units: the Trinamic pack's velocity and amax units,
+    /// the QSB's step-rate and acceleration minimums, the QuadQuad2Drv's transitions/s and
+    /// shl-12 steps, the SPI_motor's slowest step delay), in counts. Fixed once the driver
+    /// is configured; [`RateFloor::NONE`] by default.
+    fn rate_floor(&self, channel: usize) -> RateFloor {
+        let _ = channel;
+        RateFloor::NONE
+    }
 
     /// How old a channel's data may become in normal operation before the engine marks
     /// the axis stale (the board's polling or streaming period plus wire time and margin).

@@ -110,6 +110,31 @@ impl GoalKind {
     ];
 }
 
+/// The smallest nonzero velocity and acceleration a board can represent on one channel, in
+/// device counts: a goal slower than that would be rounded to nothing or up to the board's
+/// step (running faster or accelerating harder than asked), so the engine refuses it. `0.0`:
+/// no such floor (a continuous profile, or no velocity goal at all).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct RateFloor {
+    /// Of a velocity goal and of a reference search, counts/s.
+    pub velocity: f64,
+    /// Of a position profile's velocity (`RampPosition`), counts/s: finer on a board whose
+    /// profile takes another unit (the QuadQuad2Drv's shl 12), coarser on one whose
+    /// profile starts higher (the QSB's MD STEP RATE).
+    pub profile_velocity: f64,
+    /// Counts/s².
+    pub accel: f64,
+}
+
+impl RateFloor {
+    /// No floor.
+    pub const NONE: Self = Self {
+        velocity: 0.0,
+        profile_velocity: 0.0,
+        accel: 0.0,
+    };
+}
+
 /// A set of [`GoalKind`]s: what a channel supports.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct GoalKinds(u16);

@@ -40,7 +40,7 @@ pub mod tmcpack;
 
 pub use bus::{LinkBus, MAX_SENDS_PER_STEP, SPI_PENDING_CAPACITY, UNWRITTEN_CAPACITY, Unwritten};
 pub use driver::{Driver, Model, Priority, Transmit};
-pub use goal::{Goal, GoalError, GoalKind, GoalKinds};
+pub use goal::{Goal, GoalError, GoalKind, GoalKinds, RateFloor};
 /// Whether a link carries a byte stream or SPI transactions (one enum with `motion_link`).
 pub use motion_base::LinkKind;
 pub use pin::{Pin, PinInfo, PinReading, SignalKind, SignalKinds, find_pin};

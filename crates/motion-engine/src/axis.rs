@@ -2,7 +2,7 @@
 
 use core::time::Duration;
 
-use motion_drivers::{ChannelState, DeviceFault, GoalKind, GoalKinds};
+use motion_drivers::{ChannelState, DeviceFault, GoalKind, GoalKinds, RateFloor};
 use motion_ipc::{AxisMode, Capabilities, ClientId, CommandKind, FaultCode};
 
 use crate::config::{AxisConfig, EstopCategory};
@@ -34,6 +34,12 @@ pub(crate) struct Axis {
     pub max: f64,
     pub max_velocity: f64,
     pub max_accel: f64,
+    /// The smallest nonzero velocity (units/s; of a velocity goal or search, and of a
+    /// position profile) and acceleration (units/s²) the axis's board represents
+    /// ([`motion_drivers::Driver::rate_floor`]); 0: none.
+    pub min_velocity: f64,
+    pub min_profile_velocity: f64,
+    pub min_accel: f64,
     pub tolerance: f64,
     pub following_error: f64,
     pub overspeed_factor: f64,
@@ -92,7 +98,22 @@ pub(crate) struct Axis {
 }
 
 impl Axis {
-    pub fn new(config: &AxisConfig, bus: usize, slot: usize, goals: GoalKinds) -> Self {
+    pub fn new(
+        config: &AxisConfig,
+        bus: usize,
+        slot: usize,
+        goals: GoalKinds,
+        floor: RateFloor,
+    ) -> Self {
+        let per_unit = config.counts_per_unit.abs();
+        let in_units = |counts: f64| {
+            let units = counts / per_unit;
+            if units.is_finite() && units > 0.0 {
+                units
+            } else {
+                0.0
+            }
+        };
         Self {
             bus,
             slot,
@@ -102,6 +123,9 @@ impl Axis {
             max: config.max,
             max_velocity: config.max_velocity,
             max_accel: config.max_accel,
+            min_velocity: in_units(floor.velocity),
+            min_profile_velocity: in_units(floor.profile_velocity),
+            min_accel: in_units(floor.accel),
             tolerance: config.position_tolerance,
             following_error: config.following_error,
             overspeed_factor: config.overspeed_factor,

@@ -50,6 +50,9 @@ impl Facts for Engine {
             max: axis.max,
             max_velocity: axis.max_velocity,
             max_accel: axis.max_accel,
+            min_velocity: axis.min_velocity,
+            min_profile_velocity: axis.min_profile_velocity,
+            min_accel: axis.min_accel,
             capabilities: axis.capabilities,
             claimed_by: axis.claimed_by,
             device: self.device_state_of(index),
@@ -227,7 +230,9 @@ impl Engine {
             GoalError::Starting => Reason::DeviceStarting,
             GoalError::Offline => {
                 let device = self.axes.get(index).map_or(usize::MAX, |axis| axis.device);
-                if self.device_link_up(device) {
+                if !self.device_link_opened(device) {
+                    Reason::DeviceStarting
+                } else if self.device_link_up(device) {
                     Reason::DeviceOffline
                 } else {
                     Reason::LinkDown

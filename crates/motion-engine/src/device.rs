@@ -4,7 +4,9 @@
 //! to reboot — first gets a stop on every configured channel, whatever the engine believed
 //! the axis was doing: a motor left running by a previous server (or by the board's own old
 //! ramp) must not keep running. Until the board has acknowledged those stops the device is
-//! `Starting` and its axes refuse goals with `DeviceStarting`.
+//! `Starting` and its axes refuse goals with `DeviceStarting`. So is a device whose link has
+//! not opened for the first time yet ([`Engine::link_opening`]): a link that never opened is
+//! not down; one that opened and then failed is.
 
 use motion_drivers::DeviceFault;
 use motion_ipc::DeviceState;
@@ -47,6 +49,7 @@ impl Engine {
         for index in 0..self.devices.len() {
             let (bus, slot) = (self.devices[index].bus, self.devices[index].slot);
             let link_up = self.link_up[bus];
+            let opened = self.link_opened[bus];
             let Some(driver) = self.buses[bus].drivers().get(slot) else {
                 continue;
             };
@@ -74,7 +77,9 @@ impl Engine {
             if !online {
                 device.startup_pending = false;
             }
-            device.state = if !link_up || status.fault == Some(DeviceFault::LinkDown) {
+            device.state = if !opened {
+                DeviceState::Starting
+            } else if !link_up || status.fault == Some(DeviceFault::LinkDown) {
                 DeviceState::Offline
             } else if !status.online {
                 if status.fault == Some(DeviceFault::NotResponding) {
@@ -112,6 +117,13 @@ impl Engine {
             .get(index)
             .and_then(|axis| self.devices.get(axis.device))
             .map_or(DeviceState::Offline, |device| device.state)
+    }
+
+    /// Whether the link of `device` has opened at least once.
+    pub(crate) fn device_link_opened(&self, device: usize) -> bool {
+        self.devices
+            .get(device)
+            .is_some_and(|device| self.link_opened[device.bus])
     }
 
     /// Whether the link of `device` is up.

@@ -56,6 +56,9 @@ impl Engine {
     /// seen to be silent.
     #[must_use]
     pub fn link_poll_timeout(&self, link: usize) -> Option<Duration> {
+        if !self.link_opened.get(link).copied().unwrap_or(false) {
+            return None;
+        }
         self.buses.get(link)?.poll_timeout()
     }
 
@@ -63,7 +66,7 @@ impl Engine {
     /// limit applied.
     pub(crate) fn apply_io_stamps(&mut self, now: Duration) {
         for link in 0..self.buses.len() {
-            if !self.buses[link].stamped() {
+            if !self.buses[link].stamped() || !self.link_opened[link] {
                 continue;
             }
             while let Some(oldest) = self.buses[link].oldest_unwritten()

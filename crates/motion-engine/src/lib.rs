@@ -97,6 +97,10 @@ pub struct Engine {
     signals: Vec<Signal>,
     /// Per link: up (the shell reports down/up events).
     link_up: Vec<bool>,
+    /// Per link: it has been open at least once ([`Engine::link_opening`] clears it until
+    /// the first [`Engine::link_up`]). A link that never opened is not down: its boards are
+    /// starting, and its drivers are not run.
+    link_opened: Vec<bool>,
     /// Messages sent on each bus in the current tick.
     sends: Vec<usize>,
     tick: u64,
@@ -151,7 +155,8 @@ impl Engine {
                     what: "estop = \"stop-off\" or \"off\" needs a board that can de-energise the motor; this one cannot (use \"hold\")",
                 });
             }
-            axes.push(Axis::new(axis, bus, slot, goals));
+            let floor = driver.rate_floor(axis.channel);
+            axes.push(Axis::new(axis, bus, slot, goals, floor));
         }
         let signals = config
             .signals
@@ -172,6 +177,7 @@ impl Engine {
             heard: vec![None; buses.len()],
             clock_origin: Duration::ZERO,
             link_up: vec![true; buses.len()],
+            link_opened: vec![true; buses.len()],
             buses,
             devices,
             axes,
@@ -229,20 +235,38 @@ impl Engine {
         }
     }
 
+    /// `link` is not open yet (call before the first [`step`](Self::step); the shell
+    /// opens links on their own threads): until its first [`link_up`](Self::link_up) its
+    /// devices are `Starting` — commands to them are refused with `DeviceStarting`, never
+    /// `LinkDown` — its drivers are not run and nothing is sent on it. Without this call a
+    /// link counts as open from the start (a rig that moves bytes itself).
+    pub fn link_opening(&mut self, link: usize) {
+        if link < self.buses.len() {
+            self.link_up[link] = false;
+            self.link_opened[link] = false;
+        }
+    }
+
     /// `link` failed (unplugged, closed, I/O error): its axes fault and stop being driven.
+    /// A link that never opened ([`link_opening`](Self::link_opening)) stays opening: its
+    /// boards are still starting, not down.
     pub fn link_down(&mut self, link: usize, now: Duration) {
+        if !self.link_opened.get(link).copied().unwrap_or(false) {
+            return;
+        }
         if let Some(bus) = self.buses.get_mut(link) {
             bus.link_down(now);
             self.link_up[link] = false;
         }
     }
 
-    /// `link` is open again: its boards restart; axes stay stale until fresh data and need
-    /// a new command.
+    /// `link` is open (the first time, or again after it failed): its boards (re)start;
+    /// axes stay stale until fresh data and need a new command.
     pub fn link_up(&mut self, link: usize, now: Duration) {
         if let Some(bus) = self.buses.get_mut(link) {
             bus.link_up(now);
             self.link_up[link] = true;
+            self.link_opened[link] = true;
         }
     }
 
@@ -267,8 +291,10 @@ impl Engine {
         self.now = now;
         self.sends.fill(0);
         self.apply_io_stamps(now);
-        for bus in &mut self.buses {
-            bus.handle_timeout(now);
+        for (bus, opened) in self.buses.iter_mut().zip(&self.link_opened) {
+            if *opened {
+                bus.handle_timeout(now);
+            }
         }
         self.update_devices();
         self.update_from_drivers();
@@ -296,6 +322,10 @@ impl Engine {
         now: Duration,
         buf: &mut [u8],
     ) -> Option<usize> {
+        if !self.link_opened.get(link).copied().unwrap_or(false) {
+            // Nothing goes to a link that never opened (the drivers have not started).
+            return None;
+        }
         let sends = self.sends.get_mut(link)?;
         if *sends >= MAX_SENDS_PER_STEP {
             return None;
@@ -313,7 +343,12 @@ impl Engine {
     /// The earliest instant a driver has timed work (a reply timeout, a poll period).
     #[must_use]
     pub fn poll_timeout(&self) -> Option<Duration> {
-        self.buses.iter().filter_map(LinkBus::poll_timeout).min()
+        self.buses
+            .iter()
+            .zip(&self.link_opened)
+            .filter(|(_, opened)| **opened)
+            .filter_map(|(bus, _)| bus.poll_timeout())
+            .min()
     }
 
     /// The client node `client` died (its process is gone without a word): its claims end

@@ -237,8 +237,11 @@ impl Engine {
         }
     }
 
-    /// Clears the e-stop latch, every claim, and the latched faults whose cause is gone;
-    /// targets become the current positions (nothing resumes).
+    /// Clears the e-stop latch, deadman expiries and the latched faults whose cause is
+    /// gone; the targets of axes without a running goal become their current positions
+    /// (nothing resumes). Claims are not touched: a claim ends only by release, by its
+    /// holder's death or departure, or by lease expiry — never by someone's reset. An axis
+    /// with a running goal (nothing was latched on it) keeps its goal and its owner.
     pub(crate) fn reset(&mut self) -> Reason {
         if self.shutting_down {
             return Reason::ShuttingDown;
@@ -247,7 +250,6 @@ impl Engine {
         for axis in &mut self.axes {
             axis.estopped = false;
             axis.deadman_expired = false;
-            axis.claimed_by = ClientId::NONE;
             let position = axis.position();
             let cause_gone = match axis.fault {
                 None => true,
@@ -264,15 +266,17 @@ impl Engine {
             if cause_gone {
                 axis.fault = None;
             }
+            axis.overspeed_samples = 0;
+            if axis.has_active_goal() {
+                continue;
+            }
             axis.target = position;
             axis.arrived = true;
-            axis.overspeed_samples = 0;
             if axis.mode != AxisMode::Off && axis.mode != AxisMode::Stopping {
                 axis.mode = AxisMode::Hold;
             }
         }
         for signal in &mut self.signals {
-            signal.claimed_by = ClientId::NONE;
             signal.safe_applied = false;
         }
         Reason::Accepted

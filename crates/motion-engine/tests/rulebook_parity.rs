@@ -5,7 +5,7 @@
 //! the e-stop, the shutdown). Every answer must be the same reason on both.
 //!
 //! Both judge through `motion_ipc::rules`; this test catches a side that stops doing so, or
-//! one that carries a verdict out differently (a reset that keeps claims, an off-all that
+//! one that carries a verdict out differently (a reset that ends claims, an off-all that
 //! skips differently), which the next request then shows.
 
 mod support;
@@ -18,7 +18,7 @@ use iceoryx2::prelude::*;
 use motion_client::testing::{
     FakeAxis, FakeConfig, FakeDevice, FakeServer, FakeSignal, unique_name,
 };
-use motion_drivers::{DeviceFault, GoalKind, LinkKind, Pin, SignalKind as PinKind};
+use motion_drivers::{DeviceFault, GoalKind, LinkKind, Pin, RateFloor, SignalKind as PinKind};
 use motion_engine::{
     AxisConfig, BusConfig, CommandPort, DeviceConfig, Engine, EngineConfig, SignalConfig,
 };
@@ -188,6 +188,13 @@ fn engine_side() -> EngineSide {
         ..EngineConfig::default()
     };
     let (full, full_control) = IdealBoard::new(1, &GoalKind::ALL);
+    // Its smallest steps at 100 counts/mm: 0.5 mm/s (velocity goals, searches), 0.2 mm/s
+    // (position profiles), 10 mm/s².
+    full_control.lock().unwrap().floor = RateFloor {
+        velocity: 50.0,
+        profile_velocity: 20.0,
+        accel: 1000.0,
+    };
     let plain_goals: Vec<GoalKind> = GoalKind::ALL
         .into_iter()
         .filter(|kind| !matches!(kind, GoalKind::Off | GoalKind::Home))
@@ -233,6 +240,10 @@ fn fake_config(engine: &Engine) -> FakeConfig {
         .collect();
     let mut lamp = FakeSignal::digital("lamp", 0, "p1", SignalKind::DigitalOut);
     lamp.safe = Some(false);
+    // The fake learns x's smallest steps from the test (no payload carries them).
+    config.axes[0].min_velocity = 0.5;
+    config.axes[0].min_profile_velocity = 0.2;
+    config.axes[0].min_accel = 10.0;
     config.signals = vec![
         lamp,
         FakeSignal::digital("door", 0, "p0", SignalKind::DigitalIn),
@@ -299,6 +310,20 @@ fn table() -> Vec<Step> {
         Send(0, axis_request(0, Home, [80.0, 0.0, 0.0])),
         Send(0, axis_request(0, SetPosition, [200.0, 0.0, 0.0])),
         Send(0, axis_request(0, Stop, [0.0; 3])),
+        // Below the board's smallest steps (x: 0.5 mm/s, profiles 0.2 mm/s, 10 mm/s²; y has
+        // none).
+        Send(0, axis_request(0, RampVelocity, [0.2, 0.0, 0.0])),
+        Send(0, axis_request(0, RampVelocity, [-0.2, 0.0, 0.0])),
+        Send(0, axis_request(0, RampVelocity, [5.0, 5e-324, 0.0])),
+        Send(0, axis_request(0, Velocity, [5e-324, 0.0, 0.0])),
+        Send(0, axis_request(0, RampPosition, [10.0, 0.4, 0.0])),
+        Send(0, axis_request(0, RampPosition, [10.0, 0.1, 0.0])),
+        Send(0, axis_request(0, RampPosition, [10.0, 0.0, 9.0])),
+        Send(0, axis_request(0, RampPosition, [10.0, 0.5, 10.0])),
+        Send(0, axis_request(0, Stop, [0.0; 3])),
+        Send(0, axis_request(0, Home, [0.1, 0.0, 0.0])),
+        Send(0, axis_request(1, RampPosition, [10.0, 0.4, 5e-300])),
+        Send(0, axis_request(1, Stop, [0.0; 3])),
         // Capabilities.
         Send(0, axis_request(1, Off, [0.0; 3])),
         Send(0, axis_request(1, Home, [0.0; 3])),
@@ -317,14 +342,25 @@ fn table() -> Vec<Step> {
         Send(0, axis_request(0, Release, [0.0; 3])),
         Send(0, axis_request(0, Release, [0.0; 3])),
         Send(1, axis_request(0, Claim, [0.0; 3])),
-        // Reset ends every claim: A may move x again afterwards.
+        // A reset never ends a claim: after A's reset B still holds x, A is refused and
+        // B's move is taken; only B's release frees x for A.
         Send(0, axis_request(all, Reset, [0.0; 3])),
+        Send(0, axis_request(0, Position, [0.0, 0.0, 0.0])),
+        Send(1, axis_request(0, Position, [0.0, 0.0, 0.0])),
+        Send(0, axis_request(all, Reset, [0.0; 3])),
+        Send(1, axis_request(0, Release, [0.0; 3])),
         Send(0, axis_request(0, Position, [0.0, 0.0, 0.0])),
         // Signals.
         Send(0, signal_request(0, SetOutput, 1.0)),
         Send(0, signal_request(1, SetOutput, 1.0)),
         Send(0, signal_request(9, SetOutput, 1.0)),
+        Send(0, signal_request(0, SetOutput, 0.5)),
+        Send(0, signal_request(0, SetOutput, 2.0)),
+        Send(0, signal_request(0, SetOutput, -1.0)),
+        Send(0, signal_request(0, SetOutput, 5e-324)),
+        Send(0, signal_request(1, SetOutput, 0.5)),
         Send(0, signal_request(0, Claim, 0.0)),
+        Send(1, axis_request(all, Reset, [0.0; 3])),
         Send(1, signal_request(0, SetOutput, 0.0)),
         Send(1, signal_request(0, Release, 0.0)),
         Send(0, signal_request(0, Release, 0.0)),

@@ -2,7 +2,7 @@
 
 mod support;
 
-use motion_ipc::{AxisFlags, AxisMode, CommandKind, FaultCode, FrameFlags, Reason};
+use motion_ipc::{AxisFlags, AxisMode, CommandKind, DeviceState, FaultCode, FrameFlags, Reason};
 use support::*;
 
 #[test]
@@ -342,6 +342,57 @@ fn a_dead_link_faults_only_its_axes_and_recovery_needs_a_new_command() {
             .result(),
         Ok(())
     );
+}
+
+#[test]
+fn a_link_not_open_yet_is_starting_not_down_until_it_opens_and_down_after() {
+    let (mut engine, _) = two_link_engine();
+    engine.link_opening(0);
+    let mut h = Harness::new(engine);
+    h.ticks(50);
+    // Its board is starting, nothing is sent to it, no axis faults; the other link runs.
+    assert_eq!(h.engine.device_state(0), Some(DeviceState::Starting));
+    assert_eq!(h.engine.device_state(1), Some(DeviceState::Online));
+    for index in [0, 1] {
+        let state = h.axis(index);
+        assert!(!state.flags().contains(AxisFlags::FAULT), "{state:?}");
+    }
+    let now = h.now;
+    // A failure before the first opening changes nothing: still starting, not down.
+    h.engine.link_down(0, now);
+    for kind in [CommandKind::Velocity, CommandKind::RampPosition] {
+        let refused = h.command(CLIENT_A, 0, kind, [1.0, 0.0, 0.0]);
+        assert_eq!(refused.result(), Err(Reason::DeviceStarting), "{kind:?}");
+    }
+    let mut buf = [0u8; 256];
+    assert_eq!(
+        h.engine.poll_link_transmit(0, h.now, &mut buf),
+        None,
+        "nothing goes to a link that never opened"
+    );
+    assert_eq!(
+        h.command(CLIENT_A, 2, CommandKind::Velocity, [1.0, 0.0, 0.0])
+            .result(),
+        Ok(())
+    );
+
+    // It opens: the board starts, then takes goals.
+    let now = h.now;
+    h.engine.link_up(0, now);
+    h.ticks(10);
+    assert_eq!(h.engine.device_state(0), Some(DeviceState::Online));
+    assert_eq!(
+        h.command(CLIENT_A, 0, CommandKind::Velocity, [1.0, 0.0, 0.0])
+            .result(),
+        Ok(())
+    );
+    // Opened once, a failure is a link down.
+    let now = h.now;
+    h.engine.link_down(0, now);
+    h.ticks(5);
+    assert_eq!(h.engine.device_state(0), Some(DeviceState::Offline));
+    let refused = h.command(CLIENT_A, 0, CommandKind::Velocity, [1.0, 0.0, 0.0]);
+    assert_eq!(refused.result(), Err(Reason::LinkDown));
 }
 
 #[test]

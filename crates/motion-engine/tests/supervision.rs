@@ -471,7 +471,8 @@ fn identity_comes_from_the_transport_and_claims_end_with_their_owner() {
     // A leaves (its command port is gone): its claim ends.
     h.engine.release_claims_of(CLIENT_A);
     assert_eq!(send(&mut h, CLIENT_B, anonymous), Ok(()));
-    // A reset clears every claim.
+    // Another client's reset ends no claim: B keeps y, A's move is still refused, B's
+    // running move goes on.
     let claim = CommandRequest::new(ClientId::NONE, 5, 1, CommandKind::Claim);
     assert_eq!(send(&mut h, CLIENT_B, claim), Ok(()));
     let reset = CommandRequest::new(
@@ -481,7 +482,26 @@ fn identity_comes_from_the_transport_and_claims_end_with_their_owner() {
         CommandKind::Reset,
     );
     assert_eq!(send(&mut h, CLIENT_A, reset), Ok(()));
-    assert!(h.frame.axes[1].claimed_by.is_none());
+    assert_eq!(h.frame.axes[1].claimed_by, CLIENT_B);
+    let a_moves = CommandRequest::new(ClientId::NONE, 7, 1, CommandKind::RampPosition)
+        .with_values([1.0, 0.0, 0.0]);
+    assert_eq!(send(&mut h, CLIENT_A, a_moves), Err(Reason::ClaimedByOther));
+    let b_moves = CommandRequest::new(ClientId::NONE, 8, 1, CommandKind::RampPosition)
+        .with_values([1.0, 0.0, 0.0]);
+    assert_eq!(send(&mut h, CLIENT_B, b_moves), Ok(()));
+    let reset = CommandRequest::new(
+        ClientId::NONE,
+        9,
+        CommandRequest::ALL_AXES,
+        CommandKind::Reset,
+    );
+    assert_eq!(send(&mut h, CLIENT_A, reset), Ok(()));
+    assert_eq!(h.frame.axes[1].claimed_by, CLIENT_B);
+    assert_eq!(
+        h.frame.axes[1].mode(),
+        Ok(motion_ipc::AxisMode::RampPosition),
+        "a reset with nothing latched leaves a running goal alone"
+    );
 }
 
 #[test]
@@ -630,9 +650,10 @@ fn signals_read_inputs_drive_outputs_take_claims_and_go_safe_on_e_stop() {
     assert_eq!(reset.result(), Ok(()));
     assert_eq!(
         set_output(&mut h, CLIENT_B, 1, true),
-        Ok(()),
-        "reset cleared the claim"
+        Err(Reason::ClaimedByOther),
+        "a reset ends no claim"
     );
+    assert_eq!(set_output(&mut h, CLIENT_A, 1, true), Ok(()));
 }
 
 #[test]

@@ -103,7 +103,8 @@ pub enum CommandKind {
     Release = 10,
     /// Emergency stop: every axis stops and holds, latched until `Reset`.
     EStop = 11,
-    /// Clear a latched e-stop and faults; targets become the current positions.
+    /// Clear a latched e-stop, deadman expiries and faults whose cause is gone; targets of
+    /// axes without a running goal become their current positions. Claims are kept.
     Reset = 12,
     /// De-energise the motor (it coasts; no holding torque). With
     /// [`CommandRequest::ALL_AXES`], every axis. A board that cannot de-energise refuses
@@ -180,11 +181,14 @@ pub enum Reason {
     Unsupported = 4,
     /// A value is NaN or infinite.
     NotFinite = 5,
-    /// The position is outside the axis's `min..=max`.
+    /// The position is outside the axis's `min..=max`, or a digital output's level is
+    /// neither 0 nor 1.
     OutOfRange = 6,
-    /// The velocity exceeds the axis's `max_velocity`.
+    /// The velocity exceeds the axis's `max_velocity`, or is below the smallest step its
+    /// board represents (a slower velocity would be rounded to nothing or up).
     VelocityLimit = 7,
-    /// The acceleration exceeds the axis's `max_accel`, or is not positive.
+    /// The acceleration exceeds the axis's `max_accel`, is not positive, or is below the
+    /// smallest step its board represents (it would be rounded up: harder than asked).
     AccelLimit = 8,
     /// The power is outside −1.0..=1.0.
     PowerLimit = 9,
@@ -207,7 +211,8 @@ pub enum Reason {
     /// The request's `client` is not the node the server received it from, or that node
     /// was already found dead (a request it sent just before it died; stops still count).
     IdentityMismatch = 18,
-    /// The axis's board is still starting (first answer, configuration, start-up stop).
+    /// The axis's board is still starting (its link not open for the first time yet, or its
+    /// first answer, configuration, start-up stop).
     DeviceStarting = 19,
     /// The axis's board is not answering.
     DeviceOffline = 20,
@@ -257,9 +262,15 @@ impl Reason {
             Self::UnknownAxis => "no such axis on this server",
             Self::Unsupported => "the axis's board cannot do this command",
             Self::NotFinite => "a value is NaN or infinite",
-            Self::OutOfRange => "position outside the axis's min..max soft limits",
-            Self::VelocityLimit => "velocity above the axis's max_velocity",
-            Self::AccelLimit => "acceleration above the axis's max_accel or not positive",
+            Self::OutOfRange => {
+                "position outside the axis's min..max soft limits, or an output level other than 0 or 1"
+            }
+            Self::VelocityLimit => {
+                "velocity above the axis's max_velocity, or below the smallest step its board represents"
+            }
+            Self::AccelLimit => {
+                "acceleration above the axis's max_accel or not positive, or below the smallest step its board represents"
+            }
             Self::PowerLimit => "power outside -1.0..1.0",
             Self::ClaimedByOther => "the axis is claimed by another client",
             Self::NotClaimed => "this client holds no claim on the axis",
@@ -273,7 +284,8 @@ impl Reason {
                 "the request's client id is not the sender's iceoryx2 node: ids cannot be borrowed"
             }
             Self::DeviceStarting => {
-                "the axis's board is starting: waiting for its first answer and its start-up stop"
+                "the axis's board is starting: its link is not open yet, or it awaits its first \
+                 answer and its start-up stop"
             }
             Self::DeviceOffline => "the axis's board is not answering",
             Self::UnknownSignal => "no such signal on this server",

@@ -45,6 +45,15 @@ pub struct AxisFacts {
     pub max_velocity: f64,
     /// Units/s².
     pub max_accel: f64,
+    /// The smallest nonzero velocity of a velocity goal or a search its board represents,
+    /// units/s (0: no floor): a slower velocity would be rounded to nothing or up to the
+    /// board's step.
+    pub min_velocity: f64,
+    /// The smallest velocity of a position profile (`RampPosition`) its board represents,
+    /// units/s (0: no floor).
+    pub min_profile_velocity: f64,
+    /// The smallest acceleration its board represents, units/s² (0: no floor).
+    pub min_accel: f64,
     /// The command kinds its board accepts.
     pub capabilities: Capabilities,
     /// The client holding its claim ([`ClientId::NONE`]: none).
@@ -78,6 +87,9 @@ impl AxisFacts {
             max,
             max_velocity,
             max_accel,
+            min_velocity: 0.0,
+            min_profile_velocity: 0.0,
+            min_accel: 0.0,
             capabilities,
             claimed_by: ClientId::NONE,
             device: DeviceState::Online,
@@ -211,7 +223,8 @@ pub enum Verdict {
     Refused(Reason),
     /// Latch the e-stop.
     EStop,
-    /// Clear the e-stop, every claim and the faults whose cause is gone.
+    /// Clear the e-stop, deadman expiries and the faults whose cause is gone; claims and
+    /// running goals stay.
     Reset,
     /// Stop every axis.
     StopAll,
@@ -389,9 +402,11 @@ fn judge_signal(
         CommandKind::SetOutput if claimed_by_other => Refused(Reason::ClaimedByOther),
         CommandKind::SetOutput => match device_ready(signal.device, signal.link_up) {
             Err(reason) => Refused(reason),
+            // A digital output is 0 or 1; anything else (0.5, 2, −1, 5e-324) is no level.
+            Ok(()) if value != 0.0 && value != 1.0 => Refused(Reason::OutOfRange),
             Ok(()) => Verdict::SetOutput {
                 signal: index,
-                on: value >= 0.5,
+                on: value == 1.0,
             },
         },
         _ => Refused(Reason::UnknownKind),
@@ -425,10 +440,10 @@ fn motion_of(
             } else {
                 or_max(v1, axis.max_accel)
             };
-            if v0.abs() > axis.max_velocity {
+            if v0.abs() > axis.max_velocity || (v0 != 0.0 && v0.abs() < axis.min_velocity) {
                 return Err(Reason::VelocityLimit);
             }
-            if accel <= 0.0 || accel > axis.max_accel {
+            if !accel_within(axis, accel) {
                 return Err(Reason::AccelLimit);
             }
             if heads_into_limit(axis, v0, accel) {
@@ -452,10 +467,10 @@ fn motion_of(
             if !within(v0) {
                 return Err(Reason::OutOfRange);
             }
-            if velocity <= 0.0 || velocity > axis.max_velocity {
+            if !speed_within(axis, velocity, axis.min_profile_velocity) {
                 return Err(Reason::VelocityLimit);
             }
-            if accel <= 0.0 || accel > axis.max_accel {
+            if !accel_within(axis, accel) {
                 return Err(Reason::AccelLimit);
             }
             Motion::RampPosition {
@@ -466,7 +481,7 @@ fn motion_of(
         }
         CommandKind::Home => {
             let velocity = or_max(v0, axis.max_velocity * HOME_FRACTION_OF_MAX);
-            if velocity <= 0.0 || velocity > axis.max_velocity {
+            if !speed_within(axis, velocity, axis.min_velocity) {
                 return Err(Reason::VelocityLimit);
             }
             Motion::Home { velocity }
@@ -481,6 +496,19 @@ fn motion_of(
         | CommandKind::Reset
         | CommandKind::SetOutput => return Err(Reason::UnknownKind),
     })
+}
+
+/// Whether a speed (> 0) is within the axis's: at most `max_velocity`, at least `floor`
+/// (the smallest its board represents for this kind of goal).
+fn speed_within(axis: &AxisFacts, speed: f64, floor: f64) -> bool {
+    speed > 0.0 && speed <= axis.max_velocity && speed >= floor
+}
+
+/// Whether an acceleration (> 0) is within the axis's: at most `max_accel`, at least the
+/// smallest its board represents (a smaller one would be rounded up to the board's step:
+/// harder than asked).
+fn accel_within(axis: &AxisFacts, accel: f64) -> bool {
+    accel > 0.0 && accel <= axis.max_accel && accel >= axis.min_accel
 }
 
 /// Whether a velocity (or power, by its sign) goal of `velocity` could not stop before the

@@ -318,6 +318,12 @@ impl Loop {
         // CLOCK_MONOTONIC.
         setup.engine.stamp_links();
         setup.engine.set_clock_origin(setup.epoch);
+        // Every link is handed to its I/O thread closed; the thread reports `Up` once it
+        // opened it (an `Up` already queued is taken at the first tick). Until then the
+        // link's boards are starting, not down.
+        for link in 0..setup.ports.len() {
+            setup.engine.link_opening(link);
+        }
         let mut stats = Box::new(ServerStats::EMPTY);
         stats.rt_flags = rt_flags;
         stats.link_count = setup.ports.len().min(stats.links.len()) as u32;

@@ -479,3 +479,55 @@ fn a_non_utf8_byte_is_reported_where_it_is() {
         "{stderr}"
     );
 }
+
+#[test]
+fn server_and_device_names_are_identifiers() {
+    for (file, from, to, key) in [
+        (
+            "server_dot.toml",
+            "name = \"t\"",
+            "name = \".\"",
+            "server.name",
+        ),
+        (
+            "server_dots.toml",
+            "name = \"t\"",
+            "name = \"..\"",
+            "server.name",
+        ),
+        (
+            "server_path.toml",
+            "name = \"t\"",
+            "name = \"a.b\"",
+            "server.name",
+        ),
+        (
+            "device_dot.toml",
+            "name = \"pack\"",
+            "name = \".\"",
+            "device[0].name",
+        ),
+        (
+            "device_dots.toml",
+            "name = \"pack\"",
+            "name = \"..\"",
+            "device[0].name",
+        ),
+        (
+            "link_slash.toml",
+            "name = \"bus\"",
+            "name = \"b/us\"",
+            "link[0].name",
+        ),
+    ] {
+        let text = GOOD.replacen(from, to, 1);
+        assert_fails(file, &text, to, key, "is not a valid name");
+    }
+    // Letters, digits, `_` and `-` are names.
+    let text = GOOD
+        .replacen("name = \"t\"", "name = \"Cell_2-a\"", 1)
+        .replace("name = \"pack\"", "name = \"pack_0-b\"")
+        .replace("device = \"pack\"", "device = \"pack_0-b\"");
+    let (code, stderr) = check("identifiers.toml", &text);
+    assert_eq!(code, Some(0), "{stderr}");
+}

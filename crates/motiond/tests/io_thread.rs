@@ -25,8 +25,25 @@ fn start(link: Box<dyn Link>) -> (LinkPort, IoThread, Arc<AtomicBool>) {
     start_named("test", link, None, None)
 }
 
-/// An I/O thread `io-<name>` asked for `rt_priority` and `cpu`.
+/// An I/O thread `io-<name>` asked for `rt_priority` and `cpu`, once it has opened its
+/// link (bytes written to a pty before that are the tty's to discard).
 fn start_named(
+    name: &str,
+    link: Box<dyn Link>,
+    rt_priority: Option<u8>,
+    cpu: Option<usize>,
+) -> (LinkPort, IoThread, Arc<AtomicBool>) {
+    let (mut port, thread, stop) = spawn_closed(name, link, rt_priority, cpu);
+    assert_eq!(
+        events(&mut port, 1),
+        [LinkEvent::Up],
+        "the thread opens its link"
+    );
+    (port, thread, stop)
+}
+
+/// An I/O thread, without waiting for anything.
+fn spawn_closed(
     name: &str,
     link: Box<dyn Link>,
     rt_priority: Option<u8>,
@@ -131,14 +148,58 @@ fn a_hang_up_wakes_the_thread_and_takes_the_link_down() {
     let (mut port, thread, stop) = start(Box::new(link));
     std::thread::sleep(Duration::from_millis(50));
     drop(master);
-    let started = Instant::now();
-    let mut event = None;
-    while event.is_none() && started.elapsed() < PATIENCE {
-        event = port.events.pop().ok();
-        std::thread::sleep(Duration::from_millis(1));
-    }
-    assert_eq!(event, Some(LinkEvent::Down));
+    assert_eq!(events(&mut port, 1), [LinkEvent::Down]);
     finish(thread, &stop);
+}
+
+/// The link events until `want` arrived or patience ran out.
+fn events(port: &mut LinkPort, want: usize) -> Vec<LinkEvent> {
+    let started = Instant::now();
+    let mut got = Vec::new();
+    while got.len() < want && started.elapsed() < PATIENCE {
+        match port.events.pop() {
+            Ok(event) => got.push(event),
+            Err(_) => std::thread::sleep(Duration::from_millis(1)),
+        }
+    }
+    got
+}
+
+/// A link is handed to its thread closed: the thread opens it and says `Up`; a tty that is
+/// not there yet is no `Down` (the link never opened), and is opened once it appears.
+#[test]
+fn a_link_that_is_not_there_yet_is_opened_when_it_appears_and_never_reported_down() {
+    let dir = std::env::temp_dir().join(format!("motiond-io-late-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("late.tty");
+    let _ = std::fs::remove_file(&path);
+    let mut config = SerialConfig::new(path.to_string_lossy(), 230_400);
+    config.exclusive = false;
+    let link = SerialLink::new(config).expect("a valid config, closed");
+    let (mut port, thread, stop) = spawn_closed("late", Box::new(link), None, None);
+    // Several reopen attempts fail meanwhile (100, 200, 400 ms backoff).
+    std::thread::sleep(Duration::from_millis(400));
+    assert_eq!(
+        port.events.pop().ok(),
+        None,
+        "no event before the tty exists"
+    );
+    assert!(!port.counters.up.load(std::sync::atomic::Ordering::Relaxed));
+    let pty = nix::pty::openpty(None, None).expect("openpty");
+    let slave = nix::unistd::ttyname(pty.slave.as_fd()).expect("ttyname");
+    std::os::unix::fs::symlink(&slave, &path).expect("symlink the pty");
+    assert_eq!(events(&mut port, 1), [LinkEvent::Up]);
+    assert_eq!(
+        port.counters
+            .reconnects
+            .load(std::sync::atomic::Ordering::Relaxed),
+        0,
+        "a first opening is no reconnection"
+    );
+    nix::unistd::write(&pty.master, b"r 14 00001113 !\r\n").expect("write on the master");
+    assert_eq!(receive(&mut port, 17), b"r 14 00001113 !\r\n");
+    finish(thread, &stop);
+    let _ = std::fs::remove_file(&path);
 }
 
 /// Answers every byte after a fixed delay (a device's scheduled reply, which only the

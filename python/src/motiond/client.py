@@ -663,7 +663,8 @@ class Client:
             raise IpcError("notify the estop event", error) from error
 
     def reset(self) -> Accepted:
-        """Clears a latched e-stop and faults; targets become the current positions."""
+        """Clears a latched e-stop, deadman expiries and faults whose cause is gone; axes
+        without a running goal hold where they are. Claims (anyone's) stay."""
         return self.command(ALL_AXES, CommandKind.RESET)
 
     def stop_all(self) -> Accepted:

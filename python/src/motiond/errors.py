@@ -184,19 +184,22 @@ class NotFinite(Refused):
 
 
 class OutOfRange(Refused):
-    """Refused: position outside the axis's min..max soft limits (``Reason.OUT_OF_RANGE``)."""
+    """Refused: position outside the axis's min..max soft limits, or an output level other
+    than 0 or 1 (``Reason.OUT_OF_RANGE``)."""
 
     reason_code = Reason.OUT_OF_RANGE
 
 
 class VelocityLimit(Refused):
-    """Refused: velocity above the axis's max_velocity (``Reason.VELOCITY_LIMIT``)."""
+    """Refused: velocity above the axis's max_velocity, or below the smallest step its board
+    represents (``Reason.VELOCITY_LIMIT``)."""
 
     reason_code = Reason.VELOCITY_LIMIT
 
 
 class AccelLimit(Refused):
-    """Refused: acceleration above the axis's max_accel or not positive (``Reason.ACCEL_LIMIT``)."""
+    """Refused: acceleration above the axis's max_accel or not positive, or below the smallest
+    step its board represents (``Reason.ACCEL_LIMIT``)."""
 
     reason_code = Reason.ACCEL_LIMIT
 
@@ -264,8 +267,8 @@ class IdentityMismatch(Refused):
 
 
 class DeviceStarting(Refused):
-    """Refused: the axis's board is starting: waiting for its first answer and its start-up stop
-    (``Reason.DEVICE_STARTING``).
+    """Refused: the axis's board is starting: its link is not open yet, or it awaits its first
+    answer and its start-up stop (``Reason.DEVICE_STARTING``).
     """
 
     reason_code = Reason.DEVICE_STARTING

@@ -674,9 +674,18 @@ _TEXTS: Dict[type, Dict[enum.IntEnum, str]] = {
         Reason.UNKNOWN_AXIS: "no such axis on this server",
         Reason.UNSUPPORTED: "the axis's board cannot do this command",
         Reason.NOT_FINITE: "a value is NaN or infinite",
-        Reason.OUT_OF_RANGE: "position outside the axis's min..max soft limits",
-        Reason.VELOCITY_LIMIT: "velocity above the axis's max_velocity",
-        Reason.ACCEL_LIMIT: "acceleration above the axis's max_accel or not positive",
+        Reason.OUT_OF_RANGE: (
+            "position outside the axis's min..max soft limits, or "
+            "an output level other than 0 or 1"
+        ),
+        Reason.VELOCITY_LIMIT: (
+            "velocity above the axis's max_velocity, or "
+            "below the smallest step its board represents"
+        ),
+        Reason.ACCEL_LIMIT: (
+            "acceleration above the axis's max_accel or not positive, or "
+            "below the smallest step its board represents"
+        ),
         Reason.POWER_LIMIT: "power outside -1.0..1.0",
         Reason.CLAIMED_BY_OTHER: "the axis is claimed by another client",
         Reason.NOT_CLAIMED: "this client holds no claim on the axis",
@@ -690,7 +699,8 @@ _TEXTS: Dict[type, Dict[enum.IntEnum, str]] = {
             "the request's client id is not the sender's iceoryx2 node: " "ids cannot be borrowed"
         ),
         Reason.DEVICE_STARTING: (
-            "the axis's board is starting: waiting for its first answer and its " "start-up stop"
+            "the axis's board is starting: its link is not open yet, or it awaits its first "
+            "answer and its start-up stop"
         ),
         Reason.DEVICE_OFFLINE: "the axis's board is not answering",
         Reason.UNKNOWN_SIGNAL: "no such signal on this server",

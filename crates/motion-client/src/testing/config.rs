@@ -19,6 +19,13 @@ pub struct FakeAxis {
     pub max_velocity: f64,
     /// Units/s².
     pub max_accel: f64,
+    /// The smallest nonzero velocity of a velocity goal or search its "board" represents,
+    /// units/s (0: no floor; slower velocities are refused as by the server).
+    pub min_velocity: f64,
+    /// The smallest velocity of a position profile its "board" represents, units/s.
+    pub min_profile_velocity: f64,
+    /// The smallest acceleration its "board" represents, units/s² (0: no floor).
+    pub min_accel: f64,
     /// Accepted command kinds.
     pub capabilities: Capabilities,
     /// Units; 0 = not supervised (only described: the fake never raises it by itself).
@@ -45,6 +52,9 @@ impl FakeAxis {
             max,
             max_velocity,
             max_accel: max_velocity * 10.0,
+            min_velocity: 0.0,
+            min_profile_velocity: 0.0,
+            min_accel: 0.0,
             capabilities: CommandKind::ALL
                 .iter()
                 .fold(Capabilities::NONE, |caps, kind| caps.with(*kind)),

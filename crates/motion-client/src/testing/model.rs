@@ -327,27 +327,34 @@ impl Model {
         Reason::Accepted
     }
 
-    /// Reset, as the server does it: the e-stop, every claim, and the faults (an injected
-    /// fault's cause is gone once reset).
+    /// Reset, as the server does it: the e-stop, deadman expiries and the faults (an
+    /// injected fault's cause is gone once reset); claims and running goals stay.
     fn reset(&mut self) {
         self.estop = false;
         for (_, sim) in &mut self.axes {
             sim.state.fault = 0;
             sim.state.fault_value = 0.0;
             sim.state.fault_limit = 0.0;
-            sim.state.claimed_by = ClientId::NONE;
             sim.state.flags = AxisFlags(sim.state.flags)
                 .with(AxisFlags::FAULT, false)
                 .with(AxisFlags::DEADMAN_EXPIRED, false)
                 .0;
-            if sim.state.mode != AxisMode::Off as u8 {
+            let running = matches!(
+                sim.state.mode(),
+                Ok(AxisMode::Power
+                    | AxisMode::Position
+                    | AxisMode::Velocity
+                    | AxisMode::RampPosition
+                    | AxisMode::RampVelocity
+                    | AxisMode::Homing)
+            );
+            if sim.state.mode != AxisMode::Off as u8 && !running {
                 sim.state.mode = AxisMode::Hold as u8;
                 sim.state.target = sim.state.position;
                 sim.state.velocity = 0.0;
             }
         }
         for (_, sim) in &mut self.signals {
-            sim.claimed_by = ClientId::NONE;
             sim.safe_applied = false;
         }
     }
@@ -543,6 +550,9 @@ impl Facts for Model {
             max: axis.max,
             max_velocity: axis.max_velocity,
             max_accel: axis.max_accel,
+            min_velocity: axis.min_velocity,
+            min_profile_velocity: axis.min_profile_velocity,
+            min_accel: axis.min_accel,
             capabilities: axis.capabilities,
             claimed_by: sim.state.claimed_by,
             device: self.device_state(axis.device),

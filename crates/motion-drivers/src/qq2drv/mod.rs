@@ -104,7 +104,7 @@ use core::time::Duration;
 use qq2drv::{CHANNELS, DataMask, MotionLayout, PositionSize, StreamConfig, StreamDecoder};
 
 use crate::driver::{Driver, Model, Priority, Transmit};
-use crate::goal::{Goal, GoalError, GoalKinds};
+use crate::goal::{Goal, GoalError, GoalKinds, RateFloor};
 use crate::pin::{Pin, PinReading};
 use crate::stamps::IoStamps;
 use crate::state::{ChannelState, DeviceFault, DeviceStatus};
@@ -257,6 +257,21 @@ impl Driver for Qq2drvDriver {
 
     fn capabilities(&self, channel: usize) -> GoalKinds {
         self.kinds(channel)
+    }
+
+    /// Packet 36's velocity is plain transitions/s (the step of a velocity goal and of a
+    /// search); packet 34's profile velocity and every acceleration are transitions/s (/s²)
+    /// shl 12.
+    fn rate_floor(&self, channel: usize) -> RateFloor {
+        if self.kinds(channel) == GoalKinds::NONE {
+            return RateFloor::NONE;
+        }
+        let fixed = 1.0 / f64::from(1u32 << qq2drv::limits::FIXED_SHIFT);
+        RateFloor {
+            velocity: 1.0,
+            profile_velocity: fixed,
+            accel: fixed,
+        }
     }
 
     fn refresh_budget(&self) -> Duration {

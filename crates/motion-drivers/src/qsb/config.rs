@@ -182,6 +182,18 @@ impl QsbDriverConfig {
         steps.is_finite().then_some(steps)
     }
 
+    /// The smallest rates and acceleration of the drive, in counts: MD JOG RATE "Motor
+    /// rate will change in increments of 16 steps/second", MD STEP RATE (a move's profile)
+    /// "from 32 – 13000 steps/second", MD ACCEL "from 64 – 360000 steps/second^2".
+    pub(crate) fn rate_floor(&self) -> crate::goal::RateFloor {
+        let per_step = self.step_scale().map_or(0.0, f64::abs);
+        crate::goal::RateFloor {
+            velocity: f64::from(RATE_INCREMENT) * per_step,
+            profile_velocity: f64::from(*STEP_RATE_RANGE.start()) * per_step,
+            accel: f64::from(*ACCEL_RANGE.start()) * per_step,
+        }
+    }
+
     /// A rate limit (counts/s, > 0) as MD STEP RATE: steps/s rounded down to the 16-step
     /// increment, capped at the board's 13000. `None` when it is below the board's 32.
     pub(crate) fn step_rate(&self, counts_per_s: f64) -> Option<u32> {

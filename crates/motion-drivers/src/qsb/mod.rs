@@ -128,7 +128,7 @@ pub use io::{CaptureInput, EnableOutput, MOTOR_DRIVE_BITS, PinRole, QsbIo, pins}
 pub use spec::{LONGEST_INTERVAL_TICKS, TICK, interval_ticks};
 
 use crate::driver::{Driver, Model, Priority, Transmit};
-use crate::goal::{Goal, GoalError, GoalKind, GoalKinds};
+use crate::goal::{Goal, GoalError, GoalKind, GoalKinds, RateFloor};
 use crate::pin::{Pin, PinReading};
 use crate::stamps::IoStamps;
 use crate::state::{ChannelState, DeviceFault, DeviceStatus};
@@ -309,6 +309,14 @@ impl Driver for QsbDriver {
             self.kinds()
         } else {
             GoalKinds::NONE
+        }
+    }
+
+    fn rate_floor(&self, channel: usize) -> RateFloor {
+        if channel == 0 && self.kinds().contains(GoalKind::Velocity) {
+            self.config.rate_floor()
+        } else {
+            RateFloor::NONE
         }
     }
 

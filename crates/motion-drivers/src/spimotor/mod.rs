@@ -138,7 +138,7 @@ use core::time::Duration;
 use spimotor::Identification;
 
 use crate::driver::{Driver, Model, Priority, Transmit};
-use crate::goal::{Goal, GoalError, GoalKinds};
+use crate::goal::{Goal, GoalError, GoalKind, GoalKinds, RateFloor};
 use crate::stamps::IoStamps;
 use crate::state::{ChannelState, DeviceFault, DeviceStatus};
 
@@ -281,6 +281,21 @@ impl Driver for SpimotorDriver {
 
     fn capabilities(&self, channel: usize) -> GoalKinds {
         self.kinds(channel)
+    }
+
+    /// A stepper's slowest rate is one step per longest step delay (255 × 0.1 ms: 39.2
+    /// steps/s); its acceleration is the driver's own profile, integrated continuously (no
+    /// floor). Brushed channels take power only.
+    fn rate_floor(&self, channel: usize) -> RateFloor {
+        if self.is_stepper() && self.kinds(channel).contains(GoalKind::Velocity) {
+            RateFloor {
+                velocity: ramp::slowest_rate(),
+                profile_velocity: ramp::slowest_rate(),
+                accel: 0.0,
+            }
+        } else {
+            RateFloor::NONE
+        }
     }
 
     fn refresh_budget(&self) -> Duration {

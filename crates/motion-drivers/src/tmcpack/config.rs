@@ -280,6 +280,17 @@ impl Scale {
         }
     }
 
+    /// The smallest velocity and acceleration this motor's clock represents: velocity 1
+    /// (microsteps/s, manual "Instruction Set": f = f_clk / (clkdiv + 1) · v / 2^(14 + div))
+    /// and amax 1 (amax / 64 is accumulated at 500 Hz: 500/64 velocity units/s²).
+    pub fn floor(&self) -> crate::goal::RateFloor {
+        crate::goal::RateFloor {
+            velocity: self.hz,
+            profile_velocity: self.hz,
+            accel: self.hz * f64::from(RAMP_HZ) / f64::from(AMAX_DIVISOR),
+        }
+    }
+
     /// The velocity value for a magnitude in microsteps/s, rounded down (never faster than
     /// asked); `None` when it is not finite or beyond the board (±511, 200 kHz).
     pub fn velocity(&self, hz: f64) -> Option<u16> {

@@ -70,7 +70,7 @@ use tmcpack::convert::{DEFAULT_SWITCHOVER_UNITS as FACTORY_SWITCHOVER, byte_time
 use tmcpack::{DEFAULT_PACKET_TIMEOUT, FRAME_LEN, Variant};
 
 use crate::driver::{Driver, Model, Priority, Transmit};
-use crate::goal::{Goal, GoalError, GoalKinds};
+use crate::goal::{Goal, GoalError, GoalKinds, RateFloor};
 use crate::pin::{Pin, PinReading};
 use crate::stamps::IoStamps;
 use crate::state::{ChannelState, DeviceFault, DeviceStatus};
@@ -247,6 +247,14 @@ impl Driver for TmcpackDriver {
         match self.channels.get(channel) {
             Some(Some(_)) if channel < self.channel_count() => CAPABILITIES,
             _ => GoalKinds::NONE,
+        }
+    }
+
+    /// One velocity unit and one amax unit of the motor's step clock.
+    fn rate_floor(&self, channel: usize) -> RateFloor {
+        match self.channels.get(channel) {
+            Some(Some(c)) if channel < self.channel_count() => c.scale.floor(),
+            _ => RateFloor::NONE,
         }
     }
 

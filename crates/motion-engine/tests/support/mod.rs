@@ -7,7 +7,7 @@ use std::sync::{Arc, Mutex, MutexGuard};
 
 use motion_drivers::{
     ChannelState, DeviceFault, DeviceStatus, Driver, Goal, GoalError, GoalKind, GoalKinds,
-    LinkKind, Model, Pin, PinReading, Priority, Transmit,
+    LinkKind, Model, Pin, PinReading, Priority, RateFloor, Transmit,
 };
 use motion_engine::{AxisConfig, BusConfig, CommandPort, DeviceConfig, Engine, EngineConfig};
 use motion_ipc::{ClientId, CommandKind, CommandReply, CommandRequest, MotionFrame};
@@ -30,6 +30,9 @@ pub struct BoardControl {
     pub outputs: [Option<bool>; 8],
     /// The board still has its start-up to do: `status().online` is false while set.
     pub starting: bool,
+    /// The smallest velocity and acceleration the board represents (read when the engine
+    /// is built).
+    pub floor: RateFloor,
 }
 
 /// A board whose channels follow their goals with ideal trapezoidal physics, refreshing
@@ -102,6 +105,13 @@ impl Driver for IdealBoard {
             self.supports
         } else {
             GoalKinds::NONE
+        }
+    }
+    fn rate_floor(&self, channel: usize) -> RateFloor {
+        if channel < self.channels.len() {
+            self.control().floor
+        } else {
+            RateFloor::NONE
         }
     }
     fn refresh_budget(&self) -> Duration {

@@ -379,3 +379,66 @@ fn signals() {
         Verdict::Refused(Reason::DeviceStarting)
     );
 }
+
+#[test]
+fn a_digital_output_takes_0_or_1_and_nothing_else() {
+    let w = world();
+    let set = |value: f64| {
+        CommandRequest::for_signal(ME, 1, 0, CommandKind::SetOutput).with_values([value, 0.0, 0.0])
+    };
+    for (value, on) in [(0.0, false), (-0.0, false), (1.0, true)] {
+        assert_eq!(
+            judge(&set(value), ME, &w),
+            Verdict::SetOutput { signal: 0, on },
+            "{value}"
+        );
+    }
+    for value in [0.5, 2.0, -1.0, 5e-324, 1.0 + f64::EPSILON, 0.999_999] {
+        assert_eq!(
+            judge(&set(value), ME, &w),
+            Verdict::Refused(Reason::OutOfRange),
+            "{value:e}"
+        );
+    }
+}
+
+#[test]
+fn rates_below_the_board_s_smallest_step_are_refused() {
+    let mut w = world();
+    w.axes[0].min_velocity = 0.5;
+    w.axes[0].min_profile_velocity = 0.2;
+    w.axes[0].min_accel = 10.0;
+    use CommandKind::{Home, RampPosition, RampVelocity, Velocity};
+    for (kind, values, reason) in [
+        (RampVelocity, [0.2, 0.0, 0.0], Reason::VelocityLimit),
+        (RampVelocity, [-0.49, 0.0, 0.0], Reason::VelocityLimit),
+        (Velocity, [5e-324, 0.0, 0.0], Reason::VelocityLimit),
+        (RampVelocity, [5.0, 5e-324, 0.0], Reason::AccelLimit),
+        (RampVelocity, [5.0, 9.99, 0.0], Reason::AccelLimit),
+        (RampPosition, [10.0, 0.19, 0.0], Reason::VelocityLimit),
+        (RampPosition, [10.0, 0.0, 5e-324], Reason::AccelLimit),
+        (Home, [0.1, 0.0, 0.0], Reason::VelocityLimit),
+    ] {
+        assert_eq!(refused(&w, kind, values), reason, "{kind:?} {values:?}");
+    }
+    // At the floor, and a velocity of 0 (stand in velocity mode), are taken.
+    for (kind, values) in [
+        (RampVelocity, [0.5, 10.0, 0.0]),
+        (RampVelocity, [-0.5, 0.0, 0.0]),
+        (Velocity, [0.0, 0.0, 0.0]),
+        (RampPosition, [10.0, 0.2, 10.0]),
+        (RampPosition, [10.0, 0.4, 10.0]),
+        (Home, [0.5, 0.0, 0.0]),
+    ] {
+        assert!(
+            matches!(verdict(&w, kind, values), Verdict::Move { .. }),
+            "{kind:?} {values:?}"
+        );
+    }
+    // Without a floor, only positive is asked of a rate.
+    let w = world();
+    assert!(matches!(
+        verdict(&w, RampPosition, [10.0, 1e-300, 5e-324]),
+        Verdict::Move { .. }
+    ));
+}

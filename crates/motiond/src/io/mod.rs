@@ -2,10 +2,14 @@
 //! queues (rtrb single-producer single-consumer rings: wait-free push and pop, no
 //! allocation after construction, no lock shared with the real-time thread).
 //!
-//! The thread owns the link: it writes what the tick queued, reads what arrived, and when
-//! the link fails it reports `Down`, reopens with exponential backoff (100 ms .. 2 s) and
-//! reports `Up` — the other links and the tick go on meanwhile. A blocking transport
-//! (spidev, a full serial buffer) only ever blocks its own thread.
+//! The thread owns the link: it opens it (a link is handed over closed, as
+//! `LinkConfig::create` makes it) and reports `Up` when it first opened — until then the
+//! link's boards are starting, not down; retried with the same backoff as a reopen, so a
+//! tty that appears late is opened once it is there. It writes what the tick queued, reads
+//! what arrived, and when the link fails it reports `Down`, reopens with exponential
+//! backoff (100 ms .. 2 s) and reports `Up` — the other links and the tick go on
+//! meanwhile. A blocking transport (spidev, a full serial buffer) only ever blocks its own
+//! thread.
 //!
 //! Between passes the thread sleeps in poll(2) on two descriptors: the link's own
 //! ([`Link::poll_fd`]: readable when bytes or a hang-up arrived, writable when a partial
@@ -96,9 +100,10 @@ impl Packet {
 /// What happened to a link.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LinkEvent {
-    /// The link failed; its devices are unreachable until `Up`.
+    /// The link failed; its devices are unreachable until `Up`. Never sent before the
+    /// first `Up` (a link that never opened is not down: its boards are starting).
     Down,
-    /// The link was (re)opened.
+    /// The link was opened (the first time, or again after `Down`).
     Up,
 }
 
@@ -123,11 +128,11 @@ pub struct IoCounters {
     pub bytes_out: AtomicU64,
     /// I/O errors.
     pub errors: AtomicU64,
-    /// Successful reopens.
+    /// Successful reopens (after a `Down`; the first opening is not counted).
     pub reconnects: AtomicU64,
     /// Packets or events dropped because a ring between the threads was full.
     pub dropped: AtomicU64,
-    /// The link is open.
+    /// The link is open (false until the I/O thread first opened it).
     pub up: AtomicBool,
     /// Messages written whole (on an SPI link: transactions).
     pub transactions: AtomicU64,
@@ -298,7 +303,6 @@ pub fn spawn(
     let (event_producer, event_consumer) = RingBuffer::new(16);
     let (written_producer, written_consumer) = RingBuffer::new(WRITTEN_REPORTS);
     let counters = Arc::new(IoCounters::default());
-    counters.up.store(true, Ordering::Relaxed);
     let waker = Arc::new(Waker::new()?);
     let mut worker = Worker::new(
         link,

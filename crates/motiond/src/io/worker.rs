@@ -43,7 +43,12 @@ pub(super) struct Worker {
     idle: Duration,
     /// Part of a stream message the link did not take yet.
     pending: Option<(Packet, usize)>,
+    /// The link is not open: never opened yet, or failed and not reopened.
     down: bool,
+    /// The link opened at least once (its first opening is no reconnection).
+    opened: bool,
+    /// A failure to open it the first time was logged.
+    said_not_open: bool,
     /// `Down` events reported.
     generation: u32,
     backoff: Duration,
@@ -76,7 +81,10 @@ impl Worker {
             epoch: Duration::ZERO,
             idle,
             pending: None,
-            down: false,
+            // A link is handed over closed: the first pass opens it and reports `Up`.
+            down: true,
+            opened: false,
+            said_not_open: false,
             generation: 0,
             backoff: BACKOFF_MIN,
             next_reopen: Duration::ZERO,
@@ -230,12 +238,28 @@ impl Worker {
             Ok(()) => {
                 self.down = false;
                 self.counters.up.store(true, Ordering::Relaxed);
-                self.counters.reconnects.fetch_add(1, Ordering::Relaxed);
+                if self.opened {
+                    self.counters.reconnects.fetch_add(1, Ordering::Relaxed);
+                }
+                self.opened = true;
                 if self.rings.events.push(LinkEvent::Up).is_err() {
                     self.counters.dropped.fetch_add(1, Ordering::Relaxed);
                 }
             }
-            Err(_) => {
+            Err(error) => {
+                self.counters.errors.fetch_add(1, Ordering::Relaxed);
+                if !self.opened && !self.said_not_open {
+                    // Once: an operator whose boards stay `starting` learns why. (This
+                    // thread is not the tick; a rare log line here costs the tick nothing.)
+                    self.said_not_open = true;
+                    tracing::warn!(
+                        "link {}: not open yet ({error}); its boards stay starting until it \
+                         opens, retried every {} ms .. {} s",
+                        self.link.name(),
+                        BACKOFF_MIN.as_millis(),
+                        BACKOFF_MAX.as_secs()
+                    );
+                }
                 self.backoff = (self.backoff * 2).min(BACKOFF_MAX);
                 self.next_reopen = now + self.backoff;
             }

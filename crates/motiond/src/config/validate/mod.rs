@@ -85,6 +85,17 @@ fn plain_serde_message(message: &str) -> String {
     text
 }
 
+/// Whether `text` is a name the server takes: 1..=`max` bytes of ASCII letters, digits, `_`
+/// and `-` (the server's name becomes part of its service and node names and of paths,
+/// where `.` and `..` mean something else).
+pub(crate) fn is_identifier(text: &str, max: usize) -> bool {
+    !text.is_empty()
+        && text.len() <= max
+        && text
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+}
+
 pub(crate) struct Validator<'i, 's> {
     issues: &'i mut Issues<'s>,
 }
@@ -150,19 +161,14 @@ impl Validator<'_, '_> {
         max: usize,
     ) -> Option<String> {
         let text = value.get_ref();
-        let ok = !text.is_empty()
-            && text.len() <= max
-            && text
-                .chars()
-                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-' || c == '.');
-        if ok {
+        if is_identifier(text, max) {
             Some(text.clone())
         } else {
             self.issue(
                 value.span(),
                 key,
                 format!(
-                    "{text:?} is not a valid name; allowed: 1..={max} characters of A-Z a-z 0-9 _ - ."
+                    "{text:?} is not a valid name; a name is an identifier: 1..={max} characters of A-Z a-z 0-9 _ - (no `.`, so never `.` or `..`)"
                 ),
             );
             None
