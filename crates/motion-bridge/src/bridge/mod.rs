@@ -11,6 +11,7 @@
 
 mod net;
 mod server;
+mod sessions;
 
 use core::time::Duration;
 use std::collections::VecDeque;
@@ -34,6 +35,7 @@ use self::net::Net;
 use self::server::{Ipc, Pending, ServerPorts};
 use crate::config::BridgeConfig;
 use crate::keys::{Keys, Origin, Refusal, RequestMeta};
+use crate::policy::RemoteRule;
 use crate::policy::{Policy, Remote, Verdict};
 use crate::wire::{self, Payload};
 
@@ -64,8 +66,10 @@ pub(crate) enum Read {
 pub(crate) enum Event {
     /// The server published a frame.
     Tick,
-    /// A remote's command.
-    Command(Query),
+    /// A remote's command, and when zenoh handed it over.
+    Command(Query, Instant),
+    /// A remote opens a session, and when zenoh handed the query over.
+    Open(Query, Instant),
     /// A remote reads the newest description, statistics, parameters or frame.
     Read(Read, Query),
     /// A remote client's liveliness token appeared or went.
@@ -81,6 +85,10 @@ pub enum BridgeError {
     /// zenoh or iceoryx2 could not be set up.
     #[error("{0}")]
     Setup(String),
+    /// The allow-list lets remotes do more than stop and e-stop, but zenoh authenticates
+    /// nobody, and `--insecure` was not given.
+    #[error("{0}")]
+    Insecure(String),
 }
 
 /// The newest sample of a service, as received and as bytes for the network.
@@ -182,6 +190,7 @@ impl Bridge {
             &config.connect,
         )
         .map_err(BridgeError::Setup)?;
+        check_exposure(&config, &zenoh)?;
         let net = Net::open(zenoh, &keys, &sender, &queued_queries).map_err(BridgeError::Setup)?;
         let tick_pending = Arc::new(AtomicBool::new(false));
         let ticker_stop = Arc::new(AtomicBool::new(false));
@@ -256,9 +265,13 @@ impl Bridge {
     fn handle(&mut self, event: Event) {
         match event {
             Event::Tick => self.tick_pending.store(false, Ordering::Release),
-            Event::Command(query) => {
+            Event::Command(query, received) => {
                 self.queued_queries.fetch_sub(1, Ordering::AcqRel);
-                self.on_command(query);
+                self.on_command(query, received);
+            }
+            Event::Open(query, received) => {
+                self.queued_queries.fetch_sub(1, Ordering::AcqRel);
+                self.on_open(&query, received);
             }
             Event::Read(read, query) => {
                 self.queued_queries.fetch_sub(1, Ordering::AcqRel);
@@ -474,7 +487,7 @@ impl Bridge {
         self.info.as_ref().map_or(0, |info| info.origin)
     }
 
-    fn on_command(&mut self, query: Query) {
+    fn on_command(&mut self, query: Query, received: Instant) {
         let key = query.key_expr().as_str().to_owned();
         let Some(identity) = self.keys.identity_of(&key).map(str::to_owned) else {
             refuse(
@@ -502,27 +515,17 @@ impl Bridge {
                 return;
             }
         };
-        let Some(meta) = query
+        // Stop and e-stop pass without a readable attachment; everything else is refused by
+        // the policy for want of a session.
+        let meta = query
             .attachment()
-            .and_then(|bytes| RequestMeta::decode(&bytes.to_bytes()))
-        else {
-            refuse(
-                Some(&query),
-                Refusal::BadRequest,
-                "a command needs its 25-byte attachment (session and send time)",
-            );
-            return;
-        };
-        let remote = Remote {
-            identity,
-            session: meta.session,
-        };
+            .and_then(|bytes| RequestMeta::decode(&bytes.to_bytes()));
         let deadman = self.info.as_ref().map_or(Duration::ZERO, |info| {
             Duration::from_millis(u64::from(info.value.command_timeout_ms))
         });
-        let now = self.started.elapsed();
-        match self.policy.admit(now, &remote, meta, &request, deadman) {
-            Verdict::Forward(forwarded) => {
+        let now = received.saturating_duration_since(self.started);
+        match self.policy.admit(now, &identity, meta, &request, deadman) {
+            Verdict::Forward(forwarded, remote) => {
                 if self.server.is_none() {
                     refuse(
                         Some(&query),
@@ -542,7 +545,7 @@ impl Bridge {
                     self.counters.forwarded += 1;
                     self.queue.push_back(Job {
                         query: Some(query),
-                        remote: Some(remote),
+                        remote,
                         request: forwarded,
                     });
                 }
@@ -553,7 +556,7 @@ impl Bridge {
             }
             Verdict::Refuse(refusal, text) => {
                 self.counters.refused += 1;
-                tracing::info!(remote = %remote.identity, %refusal, %text, "refused");
+                tracing::info!(remote = %identity, %refusal, %text, "refused");
                 refuse(Some(&query), refusal, &text);
             }
         }
@@ -602,9 +605,10 @@ impl Bridge {
         };
         if alive {
             tracing::info!(%identity, %session, "remote client connected");
+            self.policy.session_live(&identity, session);
             return;
         }
-        let requests = self.policy.session_gone(session);
+        let requests = self.policy.session_gone(&identity, session);
         tracing::info!(
             %identity,
             %session,
@@ -723,6 +727,52 @@ impl Drop for Bridge {
             let _ = ticker.join();
         }
     }
+}
+
+/// Refuses to start a bridge that lets remotes do more than stop and e-stop while zenoh
+/// authenticates nobody (anyone who reaches the endpoint could claim any identity), unless
+/// the config says `insecure` (`--insecure`); says so in the log when it does start so.
+fn check_exposure(config: &BridgeConfig, zenoh: &zenoh::Config) -> Result<(), BridgeError> {
+    let wide: Vec<&RemoteRule> = config
+        .remotes
+        .iter()
+        .filter(|rule| rule.allows_more_than_safety())
+        .collect();
+    if wide.is_empty() {
+        return Ok(());
+    }
+    if let Some(how) = net::authentication(zenoh) {
+        if !net::access_control(zenoh) {
+            tracing::warn!(
+                how,
+                "zenoh authenticates users but has no access control: any user may send \
+                 under any identity (README: \"Who is who\")"
+            );
+        }
+        return Ok(());
+    }
+    let names = wide
+        .iter()
+        .map(|rule| format!("`{}` ({})", rule.identity, rule.allow.names().join(", ")))
+        .collect::<Vec<_>>()
+        .join("; ");
+    if config.insecure {
+        tracing::warn!(
+            remotes = %names,
+            "--insecure: zenoh authenticates nobody, so anyone who reaches {:?} may command \
+             as these identities",
+            config.listen
+        );
+        return Ok(());
+    }
+    Err(BridgeError::Insecure(format!(
+        "the config lets remotes do more than stop and e-stop ({names}), but zenoh \
+         authenticates nobody (no transport/auth/usrpwd dictionary_file, no TLS client \
+         certificates in --zenoh-config): anyone who reaches {} could command as these \
+         identities. Configure zenoh authentication and access control (README, \"Who is \
+         who\"), or pass --insecure on a network you trust",
+        config.listen.join(", ")
+    )))
 }
 
 fn answer(query: &Query, reply: &CommandReply, origin: u128) {
