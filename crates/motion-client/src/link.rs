@@ -332,7 +332,13 @@ impl Link {
     ) -> Result<(CommandReply, u128), ClientError> {
         let safety = matches!(request.kind(), Ok(CommandKind::Stop | CommandKind::EStop));
         if !safety && self.granted.borrow().is_none() {
-            self.open_session(timeout)?;
+            match self.open_session(timeout) {
+                // An identity that may only stop gets no session: the command itself is
+                // refused with what this identity may do.
+                Err(ClientError::BridgeRefused { code, .. })
+                    if code == Refusal::NotAllowed.code() => {}
+                other => other?,
+            }
         }
         match self.send(request, timeout) {
             Err(ClientError::BridgeRefused { code, .. })
