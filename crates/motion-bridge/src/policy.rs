@@ -455,6 +455,24 @@ impl Policy {
         }
     }
 
+    /// Notes the server's reply to a stop or e-stop a remote sent without a session: the
+    /// jogs it ended are nobody's to stop any more.
+    pub fn on_sessionless_reply(&mut self, request: &CommandRequest, reply: &CommandReply) {
+        if reply.result().is_err() || request.target() != Ok(Target::Axis) {
+            return;
+        }
+        match request.kind() {
+            Ok(CommandKind::EStop) => self.deadman.clear(),
+            Ok(CommandKind::Stop) if request.axis == CommandRequest::ALL_AXES => {
+                self.deadman.clear();
+            }
+            Ok(CommandKind::Stop) => {
+                self.deadman.remove(&request.axis);
+            }
+            _ => {}
+        }
+    }
+
     /// A remote session ended (its liveliness token went away): what the bridge sends for
     /// it — a stop of every axis whose deadman goal it started and nobody replaced, and a
     /// release of every claim it held. Returns them as requests (client zero).

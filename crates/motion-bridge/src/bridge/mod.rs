@@ -35,7 +35,6 @@ use self::net::Net;
 use self::server::{Ipc, Pending, ServerPorts};
 use crate::config::BridgeConfig;
 use crate::keys::{Keys, Origin, Refusal, RequestMeta};
-use crate::policy::RemoteRule;
 use crate::policy::{Policy, Remote, Verdict};
 use crate::wire::{self, Payload};
 
@@ -190,7 +189,7 @@ impl Bridge {
             &config.connect,
         )
         .map_err(BridgeError::Setup)?;
-        check_exposure(&config, &zenoh)?;
+        net::check_exposure(&config, &zenoh)?;
         let net = Net::open(zenoh, &keys, &sender, &queued_queries).map_err(BridgeError::Setup)?;
         let tick_pending = Arc::new(AtomicBool::new(false));
         let ticker_stop = Arc::new(AtomicBool::new(false));
@@ -657,8 +656,15 @@ impl Bridge {
             let outcome = server::take_reply(&flight.pending);
             let done = match outcome {
                 Ok(Some((reply, node))) => {
-                    if let Some(remote) = &flight.job.remote {
-                        self.policy.on_reply(remote, &flight.job.request, &reply);
+                    match (&flight.job.remote, &flight.job.query) {
+                        (Some(remote), _) => {
+                            self.policy.on_reply(remote, &flight.job.request, &reply);
+                        }
+                        (None, Some(_)) => {
+                            self.policy
+                                .on_sessionless_reply(&flight.job.request, &reply);
+                        }
+                        (None, None) => {}
                     }
                     if let Some(query) = &flight.job.query {
                         answer(query, &reply, node);
@@ -727,52 +733,6 @@ impl Drop for Bridge {
             let _ = ticker.join();
         }
     }
-}
-
-/// Refuses to start a bridge that lets remotes do more than stop and e-stop while zenoh
-/// authenticates nobody (anyone who reaches the endpoint could claim any identity), unless
-/// the config says `insecure` (`--insecure`); says so in the log when it does start so.
-fn check_exposure(config: &BridgeConfig, zenoh: &zenoh::Config) -> Result<(), BridgeError> {
-    let wide: Vec<&RemoteRule> = config
-        .remotes
-        .iter()
-        .filter(|rule| rule.allows_more_than_safety())
-        .collect();
-    if wide.is_empty() {
-        return Ok(());
-    }
-    if let Some(how) = net::authentication(zenoh) {
-        if !net::access_control(zenoh) {
-            tracing::warn!(
-                how,
-                "zenoh authenticates users but has no access control: any user may send \
-                 under any identity (README: \"Who is who\")"
-            );
-        }
-        return Ok(());
-    }
-    let names = wide
-        .iter()
-        .map(|rule| format!("`{}` ({})", rule.identity, rule.allow.names().join(", ")))
-        .collect::<Vec<_>>()
-        .join("; ");
-    if config.insecure {
-        tracing::warn!(
-            remotes = %names,
-            "--insecure: zenoh authenticates nobody, so anyone who reaches {:?} may command \
-             as these identities",
-            config.listen
-        );
-        return Ok(());
-    }
-    Err(BridgeError::Insecure(format!(
-        "the config lets remotes do more than stop and e-stop ({names}), but zenoh \
-         authenticates nobody (no transport/auth/usrpwd dictionary_file, no TLS client \
-         certificates in --zenoh-config): anyone who reaches {} could command as these \
-         identities. Configure zenoh authentication and access control (README, \"Who is \
-         who\"), or pass --insecure on a network you trust",
-        config.listen.join(", ")
-    )))
 }
 
 fn answer(query: &Query, reply: &CommandReply, origin: u128) {

@@ -15,7 +15,9 @@ use zenoh::qos::CongestionControl;
 use zenoh::query::Queryable;
 use zenoh::sample::SampleKind;
 
-use super::{Event, MAX_WAITING_QUERIES, Read, refuse};
+use super::{BridgeError, Event, MAX_WAITING_QUERIES, Read, refuse};
+use crate::config::BridgeConfig;
+use crate::policy::RemoteRule;
 use crate::keys::{Keys, Refusal};
 
 /// Hands `event` (a query) to the loop, unless too many queries wait already.
@@ -94,6 +96,52 @@ pub(crate) fn access_control(config: &zenoh::Config) -> bool {
     config
         .get_json("access_control/enabled")
         .is_ok_and(|value| value.trim() == "true")
+}
+
+/// Refuses to start a bridge that lets remotes do more than stop and e-stop while zenoh
+/// authenticates nobody (anyone who reaches the endpoint could claim any identity), unless
+/// the config says `insecure` (`--insecure`); says so in the log when it does start so.
+pub(super) fn check_exposure(config: &BridgeConfig, zenoh: &zenoh::Config) -> Result<(), BridgeError> {
+    let wide: Vec<&RemoteRule> = config
+        .remotes
+        .iter()
+        .filter(|rule| rule.allows_more_than_safety())
+        .collect();
+    if wide.is_empty() {
+        return Ok(());
+    }
+    if let Some(how) = authentication(zenoh) {
+        if !access_control(zenoh) {
+            tracing::warn!(
+                how,
+                "zenoh authenticates users but has no access control: any user may send \
+                 under any identity (README: \"Who is who\")"
+            );
+        }
+        return Ok(());
+    }
+    let names = wide
+        .iter()
+        .map(|rule| format!("`{}` ({})", rule.identity, rule.allow.names().join(", ")))
+        .collect::<Vec<_>>()
+        .join("; ");
+    if config.insecure {
+        tracing::warn!(
+            remotes = %names,
+            "--insecure: zenoh authenticates nobody, so anyone who reaches {:?} may command \
+             as these identities",
+            config.listen
+        );
+        return Ok(());
+    }
+    Err(BridgeError::Insecure(format!(
+        "the config lets remotes do more than stop and e-stop ({names}), but zenoh \
+         authenticates nobody (no transport/auth/usrpwd dictionary_file, no TLS client \
+         certificates in --zenoh-config): anyone who reaches {} could command as these \
+         identities. Configure zenoh authentication and access control (README, \"Who is \
+         who\"), or pass --insecure on a network you trust",
+        config.listen.join(", ")
+    )))
 }
 
 /// The bridge's zenoh session and everything declared on it.

@@ -571,12 +571,10 @@ fn a_vanished_session_has_its_jogs_stopped_and_claims_released() {
     );
     assert!(sent.iter().all(|r| r.client.is_none()));
     assert!(policy.session_gone("alice", SessionId(1)).is_empty(), "once");
-    // An e-stop ends every jog: nothing left to stop for Bob.
-    accept(
-        &mut policy,
-        &b,
-        &request(CommandKind::EStop, CommandRequest::ALL_AXES),
-    );
+    // An e-stop ends every jog, even one sent without a session: nothing left to stop for
+    // Bob.
+    let estop = request(CommandKind::EStop, CommandRequest::ALL_AXES);
+    policy.on_sessionless_reply(&estop, &CommandReply::to(&estop, Reason::Accepted, 1));
     assert!(policy.session_gone("bob", SessionId(2)).is_empty());
 }
 
