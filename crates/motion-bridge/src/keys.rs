@@ -502,7 +502,11 @@ mod tests {
             ..grant
         };
         assert_eq!(SessionGrant::decode(&zero.encode()), None, "no zero token");
-        assert_eq!(format!("{:?}", grant.token), "SessionToken(…)", "never logged");
+        assert_eq!(
+            format!("{:?}", grant.token),
+            "SessionToken(…)",
+            "never logged"
+        );
     }
 
     #[test]

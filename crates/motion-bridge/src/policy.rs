@@ -228,9 +228,7 @@ impl Policy {
         if !rule.allows_more_than_safety() {
             return Err((
                 Refusal::NotAllowed,
-                format!(
-                    "remote `{identity}` may send only stop and e-stop, which need no session"
-                ),
+                format!("remote `{identity}` may send only stop and e-stop, which need no session"),
             ));
         }
         let (key, rate, burst) = (rule.identity.clone(), rule.rate, rule.burst);
@@ -248,10 +246,7 @@ impl Policy {
                 ),
             ))
         } else {
-            Err((
-                Refusal::Busy,
-                "the session id drawn is taken".to_owned(),
-            ))
+            Err((Refusal::Busy, "the session id drawn is taken".to_owned()))
         }
     }
 

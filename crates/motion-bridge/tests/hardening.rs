@@ -96,7 +96,11 @@ allow = ["all"]
         .collect();
     let answers = send_all(&flood, &keys, &stops)?;
     let refused: Vec<_> = answers.iter().filter_map(|a| a.as_ref().err()).collect();
-    assert!(refused.is_empty(), "stops refused: {:?}", &refused[..refused.len().min(3)]);
+    assert!(
+        refused.is_empty(),
+        "stops refused: {:?}",
+        &refused[..refused.len().min(3)]
+    );
 
     // Then 1100 sessions really opened: the table fills, the rest are told `busy`.
     let mut opened = 0;
@@ -299,7 +303,11 @@ allow = ["all"]
             .filter(|r| r.kind == CommandKind::Velocity as u32)
             .count()
     };
-    assert_eq!(velocities(&server), 0, "the server never saw the attacker's jogs");
+    assert_eq!(
+        velocities(&server),
+        0,
+        "the server never saw the attacker's jogs"
+    );
     // The victim's own session goes on commanding its axis.
     victim.axis("x")?.velocity(1.0)?;
     assert_eq!(velocities(&server), 1);
@@ -310,12 +318,21 @@ allow = ["all"]
 fn a_wide_allow_list_without_zenoh_authentication_needs_insecure() -> Result {
     let dir = scratch("hard-insecure")?;
     let wide = dir.join("wide.toml");
-    std::fs::write(&wide, "[[remote]]\nidentity = \"panel\"\nallow = [\"move\", \"stop\"]\n")?;
+    std::fs::write(
+        &wide,
+        "[[remote]]\nidentity = \"panel\"\nallow = [\"move\", \"stop\"]\n",
+    )?;
     let endpoint = format!("tcp/127.0.0.1:{}", free_port()?);
     let binary = env!("CARGO_BIN_EXE_motion-bridge");
     let run = |extra: &[&str]| {
         Command::new(binary)
-            .args(["--server", "hard-insecure-nobody", "--listen", &endpoint, "--config"])
+            .args([
+                "--server",
+                "hard-insecure-nobody",
+                "--listen",
+                &endpoint,
+                "--config",
+            ])
             .arg(&wide)
             .args(extra)
             .stdin(Stdio::null())

@@ -11,9 +11,7 @@ use common::raw::{Z as _, command, open_session, session};
 use common::{BridgeThread, DEADLINE, Result, fake};
 use motion_bridge::keys::{Keys, Origin, Refusal, RequestMeta, SessionGrant};
 use motion_bridge::wire;
-use motion_client::ipc::{
-    ClientId, CommandKind, CommandRequest, MotionFrame, Reason, ServerInfo,
-};
+use motion_client::ipc::{ClientId, CommandKind, CommandRequest, MotionFrame, Reason, ServerInfo};
 use zenoh::Wait as _;
 
 const RULES: &str = r#"
@@ -226,8 +224,14 @@ fn malformed_late_and_too_frequent_requests_are_refused_by_the_bridge() -> Resul
     let (reply, _) = command(&session, &keys, "tool", &claim, Some(meta(&tool, clock())))?
         .map_err(|text| format!("refused: {text}"))?;
     assert_eq!(reply.result(), Ok(()));
-    let (reply, _) = command(&session, &keys, "tool", &claim, Some(meta(&tool_again, clock())))?
-        .map_err(|text| format!("refused: {text}"))?;
+    let (reply, _) = command(
+        &session,
+        &keys,
+        "tool",
+        &claim,
+        Some(meta(&tool_again, clock())),
+    )?
+    .map_err(|text| format!("refused: {text}"))?;
     assert_eq!(reply.result(), Err(Reason::ClaimedByOther));
     Ok(())
 }

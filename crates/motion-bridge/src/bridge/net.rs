@@ -17,8 +17,8 @@ use zenoh::sample::SampleKind;
 
 use super::{BridgeError, Event, MAX_WAITING_QUERIES, Read, refuse};
 use crate::config::BridgeConfig;
-use crate::policy::RemoteRule;
 use crate::keys::{Keys, Refusal};
+use crate::policy::RemoteRule;
 
 /// Hands `event` (a query) to the loop, unless too many queries wait already.
 fn hand_over(events: &Sender<Event>, waiting: &AtomicUsize, event: Event) {
@@ -101,7 +101,10 @@ pub(crate) fn access_control(config: &zenoh::Config) -> bool {
 /// Refuses to start a bridge that lets remotes do more than stop and e-stop while zenoh
 /// authenticates nobody (anyone who reaches the endpoint could claim any identity), unless
 /// the config says `insecure` (`--insecure`); says so in the log when it does start so.
-pub(super) fn check_exposure(config: &BridgeConfig, zenoh: &zenoh::Config) -> Result<(), BridgeError> {
+pub(super) fn check_exposure(
+    config: &BridgeConfig,
+    zenoh: &zenoh::Config,
+) -> Result<(), BridgeError> {
     let wide: Vec<&RemoteRule> = config
         .remotes
         .iter()
@@ -287,12 +290,17 @@ mod tests {
         assert_eq!(authentication(&zenoh::Config::default()), None);
         assert!(!access_control(&zenoh::Config::default()));
         // A user and password of the bridge's own authenticate nobody else.
-        let own = config("transport/auth/usrpwd/user = \"bridge\"\ntransport/auth/usrpwd/password = \"x\"");
+        let own = config(
+            "transport/auth/usrpwd/user = \"bridge\"\ntransport/auth/usrpwd/password = \"x\"",
+        );
         assert_eq!(authentication(&own), None);
         let users = config("transport/auth/usrpwd/dictionary_file = \"/etc/users.txt\"");
         assert_eq!(authentication(&users), Some("user/password"));
         let certificates = config("transport/link/tls/enable_mtls = true");
-        assert_eq!(authentication(&certificates), Some("TLS client certificates"));
+        assert_eq!(
+            authentication(&certificates),
+            Some("TLS client certificates")
+        );
         assert!(access_control(&config("access_control/enabled = true")));
     }
 }

@@ -236,10 +236,16 @@ fn the_rate_limit_refuses_above_the_burst_refills_and_never_holds_back_a_stop() 
             passed += 1;
         }
     }
-    assert_eq!(passed, 1, "3 requests of the burst: one open and its jog, one more open");
+    assert_eq!(
+        passed, 1,
+        "3 requests of the burst: one open and its jog, one more open"
+    );
     match admit(&mut policy, &remote("made-up-0", 100), ms(100), &jog) {
         Verdict::Refuse(Refusal::RateLimited, text) => {
-            assert!(text.contains("under `*`") && text.contains("made-up-0"), "{text}");
+            assert!(
+                text.contains("under `*`") && text.contains("made-up-0"),
+                "{text}"
+            );
         }
         other => panic!("{other:?}"),
     }
@@ -337,7 +343,13 @@ fn a_session_is_good_for_its_own_identity_only_and_a_public_id_is_no_token() {
     ));
     // A stop under a copied token passes, as nobody's.
     assert!(matches!(
-        policy.admit(ms(2), "bob", meta(&alice, ms(2)), &request(CommandKind::Stop, 0), DEADMAN),
+        policy.admit(
+            ms(2),
+            "bob",
+            meta(&alice, ms(2)),
+            &request(CommandKind::Stop, 0),
+            DEADMAN
+        ),
         Verdict::Forward(_, None)
     ));
     // Alice herself goes on.
@@ -392,8 +404,16 @@ fn a_request_held_up_in_the_network_is_refused_but_a_stop_is_not() {
     )));
     // One that says it was sent later than it could have been (a clock from the future)
     // is not applied either.
-    match policy.admit(at, "panel", meta(&panel, clock(at) + ms(500)), &jog, DEADMAN) {
-        Verdict::Refuse(Refusal::Late, text) => assert!(text.contains("later than it could"), "{text}"),
+    match policy.admit(
+        at,
+        "panel",
+        meta(&panel, clock(at) + ms(500)),
+        &jog,
+        DEADMAN,
+    ) {
+        Verdict::Refuse(Refusal::Late, text) => {
+            assert!(text.contains("later than it could"), "{text}")
+        }
         other => panic!("{other:?}"),
     }
     // A configured max_delay wins over the deadman; zero deadman and no config: 1 s.
@@ -570,7 +590,10 @@ fn a_vanished_session_has_its_jogs_stopped_and_claims_released() {
         ]
     );
     assert!(sent.iter().all(|r| r.client.is_none()));
-    assert!(policy.session_gone("alice", SessionId(1)).is_empty(), "once");
+    assert!(
+        policy.session_gone("alice", SessionId(1)).is_empty(),
+        "once"
+    );
     // An e-stop ends every jog, even one sent without a session: nothing left to stop for
     // Bob.
     let estop = request(CommandKind::EStop, CommandRequest::ALL_AXES);

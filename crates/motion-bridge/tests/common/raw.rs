@@ -92,4 +92,3 @@ pub fn command(
         Err(error) => Err(error.payload().try_to_string()?.into_owned()),
     })
 }
-
