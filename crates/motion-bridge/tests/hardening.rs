@@ -112,6 +112,7 @@ allow = ["all"]
             Err(text) => return Err(format!("unexpected refusal: {text}").into()),
         }
     }
+    eprintln!("1100 stops under made-up sessions forwarded; {opened} sessions opened, {busy} busy");
     assert_eq!((opened, busy), (MAX_SESSIONS, 1100 - MAX_SESSIONS));
 
     // A new remote now gets no session, so a goal is refused as busy — but its e-stop is
@@ -155,11 +156,15 @@ burst = {burst}
 
     // 500 jogs, each under a new identity (which needs a session of its own first).
     let mut forwarded = 0;
+    let mut opened = 0;
     let mut rate_limited = 0;
     for n in 0..500 {
         let identity = format!("rotating-{n}");
         let grant = match open_session(&zenoh, &keys, &identity, clock_ns(start, Duration::ZERO))? {
-            Ok(grant) => grant,
+            Ok(grant) => {
+                opened += 1;
+                grant
+            }
             Err(text) if text.starts_with("rate-limited: ") => {
                 rate_limited += 1;
                 continue;
@@ -188,11 +193,17 @@ burst = {burst}
         .iter()
         .filter(|r| r.kind == CommandKind::Velocity as u32)
         .count();
+    eprintln!(
+        "{forwarded} of 500 jogs under rotating identities passed and {opened} sessions \
+         opened in {elapsed:.1} s (at most {most} together), {rate_limited} refused as over \
+         the rate"
+    );
     assert_eq!(velocities, forwarded, "what passed reached the server");
     assert!(
-        (1..=most).contains(&forwarded) && rate_limited >= 500 - most,
-        "{forwarded} jogs of 500 rotating identities passed in {elapsed:.1} s (at most \
-         {most}: burst {burst} + {rate}/s), {rate_limited} refused"
+        forwarded >= 1 && opened + forwarded <= most && rate_limited >= 500 - most,
+        "{forwarded} jogs of 500 rotating identities passed, {opened} sessions opened, in \
+         {elapsed:.1} s (at most {most} together: burst {burst} + {rate}/s), {rate_limited} \
+         refused"
     );
     // A named identity keeps its own bucket.
     let panel = open_session(&zenoh, &keys, "panel", clock_ns(start, Duration::ZERO))??;

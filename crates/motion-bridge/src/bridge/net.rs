@@ -125,7 +125,7 @@ pub(super) fn check_exposure(
     }
     let names = wide
         .iter()
-        .map(|rule| format!("`{}` ({})", rule.identity, rule.allow.names().join(", ")))
+        .map(|rule| format!("`{}`: {}", rule.identity, rule.allow.names().join(", ")))
         .collect::<Vec<_>>()
         .join("; ");
     if config.insecure {
