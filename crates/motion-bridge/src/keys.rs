@@ -318,9 +318,9 @@ impl SessionGrant {
 ///
 /// The send time is compared with the session's own clock as the bridge learnt it when the
 /// session opened: a request that arrives more than the bridge's `max_delay` later than the
-/// session's fastest, or that claims to be sent that much earlier than possible, is refused
-/// (a renewal held up in a network buffer must not restart a jog after the network came
-/// back).
+/// session's fastest (a renewal held up in a network buffer must not restart a jog after the
+/// network came back), or that says it was sent that much (at least 2 s) later than it could
+/// have been, is refused.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct RequestMeta {
     /// The session's secret ([`SessionToken::NONE`]: no session).

@@ -35,7 +35,7 @@ use self::net::Net;
 use self::server::{Ipc, Pending, ServerPorts};
 use crate::config::BridgeConfig;
 use crate::keys::{Keys, Origin, Refusal, RequestMeta};
-use crate::policy::{Policy, Remote, Verdict};
+use crate::policy::{Policy, Remote, Verdict, is_safety};
 use crate::wire::{self, Payload};
 
 /// How long the loop sleeps at most between looks at the server.
@@ -46,6 +46,9 @@ const SILENCE: Duration = Duration::from_secs(1);
 const REOPEN: Duration = Duration::from_millis(250);
 /// Commands waiting for a free request slot of the server; more are refused as busy.
 const MAX_QUEUED: usize = 256;
+/// Stop and e-stop still queue up to here (in order, behind what came before them: a stop
+/// never overtakes the goal it stops).
+const MAX_QUEUED_SAFETY: usize = 4 * MAX_QUEUED;
 /// Remote queries waiting in the loop's channel; more are answered `busy` on zenoh's
 /// thread (a flood never grows the bridge's memory).
 const MAX_WAITING_QUERIES: usize = 1024;
@@ -534,7 +537,13 @@ impl Bridge {
                             self.config.server
                         ),
                     );
-                } else if self.queue.len() >= MAX_QUEUED {
+                } else if self.queue.len()
+                    >= if request.kind().is_ok_and(is_safety) {
+                        MAX_QUEUED_SAFETY
+                    } else {
+                        MAX_QUEUED
+                    }
+                {
                     refuse(
                         Some(&query),
                         Refusal::Busy,

@@ -18,6 +18,11 @@ pub(super) const SESSION_IDLE: Duration = Duration::from_secs(60);
 /// How fast the floor of a session's clock offset may rise, s per s: room for clock drift
 /// between the hosts (1000 ppm, far above what NTP lets a clock drift).
 const FLOOR_CREEP: f64 = 1e-3;
+/// How much earlier than the session's floor a request may say it was sent, at least: the
+/// floor starts from the session's opening, which may itself have been slow (a loaded
+/// host, a new link), so a prompt request may look that much "ahead". A stamp further
+/// ahead than this and the window is a clock from the future.
+pub(super) const AHEAD_SLACK: Duration = Duration::from_secs(2);
 
 /// One open session.
 #[derive(Debug)]
@@ -49,7 +54,8 @@ pub(super) enum Timing {
 
 impl SessionState {
     /// Judges a request sent at `sent_ns` (the session's clock) and received at `now` (the
-    /// bridge's) within `window` either way; a request on time moves the floor.
+    /// bridge's): at most `window` later than the session's fastest, at most `window` (or
+    /// [`AHEAD_SLACK`], if more) earlier; a request on time moves the floor.
     pub(super) fn judge(&mut self, now: Duration, sent_ns: u64, window: Duration) -> Timing {
         let offset = now.as_nanos() as i128 - i128::from(sent_ns);
         let (floor, at) = self.floor;
@@ -60,7 +66,7 @@ impl SessionState {
         if offset.saturating_sub(floor) > window_ns {
             return Timing::Late(to_duration(offset.saturating_sub(floor)));
         }
-        if floor.saturating_sub(offset) > window_ns {
+        if floor.saturating_sub(offset) > window.max(AHEAD_SLACK).as_nanos() as i128 {
             return Timing::Ahead(to_duration(floor.saturating_sub(offset)));
         }
         self.floor = (floor.min(offset), now);
