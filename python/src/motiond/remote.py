@@ -428,9 +428,12 @@ class RemoteClient(Client):
         low, high = struct.unpack_from("<QQ", data, 1)
         session_id = low | (high << 64)
         token = bytes(data[17:33])
-        liveliness = self._session.liveliness().declare_token(
-            f"{self._prefix}/remote/{self._identity}/{session_id:032x}"
-        )
+        try:
+            liveliness = self._session.liveliness().declare_token(
+                f"{self._prefix}/remote/{self._identity}/{session_id:032x}"
+            )
+        except Exception as error:
+            raise RemoteError("declare this client's liveliness", error) from None
         self._drop_session()
         self._grant = (session_id, token)
         self._token = liveliness
