@@ -63,7 +63,8 @@ class Bridge(Process):
         config = tmp / "bridge.toml"
         config.write_text(BRIDGE_CONFIG)
         argv = [str(bridge_binary()), "--server", server.name, "--listen", self.endpoint]
-        super().__init__(argv + ["--config", str(config)], tmp / "bridge.log")
+        # The panel's rule is wide and zenoh authenticates nobody here: loopback only.
+        super().__init__(argv + ["--config", str(config), "--insecure"], tmp / "bridge.log")
 
 
 @pytest.fixture(scope="module")

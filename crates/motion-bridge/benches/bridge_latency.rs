@@ -285,6 +285,8 @@ fn main() -> Result {
             server: Some(args.server.clone()),
             listen: vec![endpoint.clone()],
             frame_rate: Some(args.frame_rate),
+            // Loopback only, the bench's own rules.
+            insecure: true,
             ..Overrides::default()
         },
     )?;

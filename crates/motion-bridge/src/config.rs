@@ -8,7 +8,7 @@
 //! frame_rate = 100                 # frames per second published (server ticks decimated)
 //! json_rate = 10                   # JSON states per second
 //! reply_timeout_ms = 1000          # how long a command waits for the server's reply
-//! # max_delay_ms = 250             # refuse requests held up longer (default: the deadman)
+//! # max_delay_ms = 250             # the window of every request's time stamp (default: the deadman)
 //! # zenoh_config = "zenoh.json5"   # zenoh's own config: TLS, user/password, access control
 //!
 //! [[remote]]
@@ -78,6 +78,9 @@ pub struct Overrides {
     pub json_rate: Option<f64>,
     /// `--zenoh-config`.
     pub zenoh_config: Option<PathBuf>,
+    /// `--insecure`: start with an allow-list wider than stop and e-stop although zenoh
+    /// authenticates nobody.
+    pub insecure: bool,
 }
 
 /// A checked configuration.
@@ -99,6 +102,9 @@ pub struct BridgeConfig {
     pub max_delay: Option<Duration>,
     /// zenoh's own config file, merged under the endpoints above.
     pub zenoh_config: Option<PathBuf>,
+    /// Whether the bridge may let remotes do more than stop and e-stop without zenoh
+    /// authentication (`--insecure` only: never from the file).
+    pub insecure: bool,
     /// What each remote identity may do.
     pub remotes: Vec<RemoteRule>,
 }
@@ -220,7 +226,17 @@ impl BridgeConfig {
             }
             Some(ms) => Duration::from_millis(ms),
         };
-        let max_delay = raw.max_delay_ms.map(Duration::from_millis);
+        let max_delay = match raw.max_delay_ms {
+            Some(0) => {
+                issues.push(
+                    "max_delay_ms: must be above 0 (the window every request's time stamp is \
+                     judged in)"
+                        .to_owned(),
+                );
+                None
+            }
+            ms => ms.map(Duration::from_millis),
+        };
         let remotes = remotes(raw.remote, &mut issues);
         if !issues.is_empty() {
             return Err(ConfigError::Invalid {
@@ -237,6 +253,7 @@ impl BridgeConfig {
             reply_timeout,
             max_delay,
             zenoh_config: cli.zenoh_config.or(raw.zenoh_config),
+            insecure: cli.insecure,
             remotes,
         })
     }
@@ -373,6 +390,7 @@ mod tests {
             server = "a/b"
             listen = ["7447"]
             frame_rate = -1
+            max_delay_ms = 0
             [[remote]]
             identity = "pa*nel"
             allow = ["stop", "teleport"]
@@ -389,6 +407,7 @@ mod tests {
             "server:",
             "listen[0]",
             "frame_rate",
+            "max_delay_ms: must be above 0",
             "remote[0].identity",
             "remote[0].allow[1]: `teleport`",
             "remote[0].rate",

@@ -8,11 +8,18 @@
 //! | `motiond/<name>/stats` | put about 1 Hz; queryable | [`ServerStats`](motion_ipc::ServerStats) | [`Origin`] |
 //! | `motiond/<name>/params` | queryable only (176 KiB) | [`MachineParams`](motion_ipc::MachineParams) | [`Origin`] |
 //! | `motiond/<name>/state/json` | put at `json_rate` Hz | UTF-8 JSON (see the README) | – |
+//! | `motiond/<name>/session/<identity>` (or `…/session`: identity `anonymous`) | queryable: opens a session | [`SessionOpen`] → [`SessionGrant`], or an error reply | – |
 //! | `motiond/<name>/command/<identity>` (or `…/command`: identity `anonymous`) | queryable | [`CommandRequest`](motion_ipc::CommandRequest) → [`CommandReply`](motion_ipc::CommandReply), or an error reply `"<code>: <text>"` ([`Refusal`]) | request: [`RequestMeta`]; reply: [`Origin`] |
-//! | `motiond/<name>/remote/<identity>/<session>` | liveliness token of a remote client | – | – |
+//! | `motiond/<name>/remote/<identity>/<session>` | liveliness token of a remote client (the public [`SessionId`] of its grant) | – | – |
 //! | `motiond/<name>/bridge` | liveliness token of the bridge | – | – |
 //!
 //! Binary payloads are the `motion-ipc` C layouts, little-endian ([`crate::wire`]).
+//!
+//! A remote's session is the bridge's to give: a client asks `session/<identity>` once and
+//! gets a public [`SessionId`] (for its liveliness token) and a secret [`SessionToken`] that
+//! only the querier receives; every command carries the token. The token is bound to the
+//! identity it was opened for, so a session id read from a liveliness key, or a token sent
+//! under another identity, names no session. Stop and e-stop need no session.
 
 use core::fmt;
 
@@ -111,11 +118,31 @@ impl Keys {
     /// The identity a command key names, if it is one of this instance's: the chunk after
     /// `command/`, or [`ANONYMOUS`] for `motiond/<name>/command` itself.
     pub fn identity_of<'k>(&self, command_key: &'k str) -> Option<&'k str> {
-        let rest = command_key.strip_prefix(&self.prefix)?;
-        if rest == "/command" {
+        self.identity_below("command", command_key)
+    }
+
+    /// Where the remote `identity` opens a session.
+    pub fn session(&self, identity: &str) -> String {
+        self.join(&format!("session/{identity}"))
+    }
+
+    /// What the bridge's session queryable answers (`session` and one identity below it).
+    pub fn session_any(&self) -> String {
+        self.join("session/**")
+    }
+
+    /// The identity a session key names (as [`Keys::identity_of`] for commands).
+    pub fn identity_of_session<'k>(&self, session_key: &'k str) -> Option<&'k str> {
+        self.identity_below("session", session_key)
+    }
+
+    fn identity_below<'k>(&self, leaf: &str, key: &'k str) -> Option<&'k str> {
+        let rest = key.strip_prefix(&self.prefix)?.strip_prefix('/')?;
+        let rest = rest.strip_prefix(leaf)?;
+        if rest.is_empty() {
             return Some(ANONYMOUS);
         }
-        let identity = rest.strip_prefix("/command/")?;
+        let identity = rest.strip_prefix('/')?;
         (!identity.is_empty() && !identity.contains('/')).then_some(identity)
     }
 
@@ -144,8 +171,9 @@ impl Keys {
     }
 }
 
-/// A remote client's session: random per connection, so that claims and jogs belong to one
-/// client process as they do over shared memory.
+/// A remote client's session as others may see it (its liveliness token names it): random,
+/// issued by the bridge with the session's [`SessionToken`]; claims and jogs belong to one
+/// session as they belong to one client process over shared memory. Never a credential.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Default)]
 pub struct SessionId(pub u128);
 
@@ -185,17 +213,118 @@ impl Origin {
     }
 }
 
-/// The attachment of a command query: version (u8, 1), the client's [`SessionId`] (u128
-/// LE), and the client's CLOCK_MONOTONIC when it sent the request (u64 LE, ns). 25 bytes.
+/// The secret of a session: 16 random bytes the bridge hands only to the querier that opened
+/// the session, checked on every command. All zero: no session (stop and e-stop only).
+#[derive(Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct SessionToken(pub [u8; 16]);
+
+impl SessionToken {
+    /// No session.
+    pub const NONE: Self = Self([0; 16]);
+
+    /// Whether this is [`SessionToken::NONE`].
+    pub fn is_none(self) -> bool {
+        self == Self::NONE
+    }
+}
+
+impl fmt::Debug for SessionToken {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        // A secret: never in a log.
+        f.write_str(if self.is_none() {
+            "SessionToken(none)"
+        } else {
+            "SessionToken(…)"
+        })
+    }
+}
+
+/// Version byte of [`SessionOpen`], [`SessionGrant`] and [`RequestMeta`].
+const CONTRACT_VERSION: u8 = 2;
+
+/// The payload of a session-opening query on `motiond/<name>/session/<identity>`: version
+/// (u8, 2) and the client's CLOCK_MONOTONIC when it sent the query (u64 LE, ns). 9 bytes.
+/// The bridge judges the session's later time stamps against its own clock from here on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SessionOpen {
+    /// The client's monotonic clock at sending, ns.
+    pub sent_ns: u64,
+}
+
+impl SessionOpen {
+    /// Bytes on the wire.
+    pub const SIZE: usize = 9;
+
+    /// The 9 bytes.
+    pub fn encode(self) -> [u8; 9] {
+        let mut out = [0; 9];
+        out[0] = CONTRACT_VERSION;
+        out[1..9].copy_from_slice(&self.sent_ns.to_le_bytes());
+        out
+    }
+
+    /// From the payload; `None` for another size or version.
+    pub fn decode(bytes: &[u8]) -> Option<Self> {
+        let bytes = <&[u8; 9]>::try_from(bytes).ok()?;
+        if bytes[0] != CONTRACT_VERSION {
+            return None;
+        }
+        Some(Self {
+            sent_ns: u64::from_le_bytes(bytes[1..9].try_into().ok()?),
+        })
+    }
+}
+
+/// The bridge's answer to [`SessionOpen`]: version (u8, 2), the public [`SessionId`] (u128
+/// LE) and the secret [`SessionToken`] (16 bytes). 33 bytes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SessionGrant {
+    /// The session's public id (the client's liveliness token names it).
+    pub session: SessionId,
+    /// The secret every command of the session carries.
+    pub token: SessionToken,
+}
+
+impl SessionGrant {
+    /// Bytes on the wire.
+    pub const SIZE: usize = 33;
+
+    /// The 33 bytes.
+    pub fn encode(self) -> [u8; 33] {
+        let mut out = [0; 33];
+        out[0] = CONTRACT_VERSION;
+        out[1..17].copy_from_slice(&self.session.0.to_le_bytes());
+        out[17..33].copy_from_slice(&self.token.0);
+        out
+    }
+
+    /// From the reply's payload; `None` for another size or version, or a zero token.
+    pub fn decode(bytes: &[u8]) -> Option<Self> {
+        let bytes = <&[u8; 33]>::try_from(bytes).ok()?;
+        if bytes[0] != CONTRACT_VERSION {
+            return None;
+        }
+        let grant = Self {
+            session: SessionId(u128::from_le_bytes(bytes[1..17].try_into().ok()?)),
+            token: SessionToken(bytes[17..33].try_into().ok()?),
+        };
+        (!grant.token.is_none()).then_some(grant)
+    }
+}
+
+/// The attachment of a command query: version (u8, 2), the session's [`SessionToken`] (16
+/// bytes; zero without a session) and the client's CLOCK_MONOTONIC when it sent the request
+/// (u64 LE, ns). 25 bytes.
 ///
-/// The send time is only ever compared with other send times of the same session: the
-/// bridge learns the smallest difference between its clock and the session's and refuses
-/// a request that arrives later than that by more than its `max_delay` (a renewal held up
-/// in a network buffer must not restart a jog after the network came back).
+/// The send time is compared with the session's own clock as the bridge learnt it when the
+/// session opened: a request that arrives more than the bridge's `max_delay` later than the
+/// session's fastest (a renewal held up in a network buffer must not restart a jog after the
+/// network came back), or that says it was sent that much (at least 2 s) later than it could
+/// have been, is refused.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct RequestMeta {
-    /// The client's session.
-    pub session: SessionId,
+    /// The session's secret ([`SessionToken::NONE`]: no session).
+    pub token: SessionToken,
     /// The client's monotonic clock at sending, ns.
     pub sent_ns: u64,
 }
@@ -203,13 +332,12 @@ pub struct RequestMeta {
 impl RequestMeta {
     /// Bytes on the wire.
     pub const SIZE: usize = 25;
-    const VERSION: u8 = 1;
 
     /// The 25 bytes.
     pub fn encode(self) -> [u8; 25] {
         let mut out = [0; 25];
-        out[0] = Self::VERSION;
-        out[1..17].copy_from_slice(&self.session.0.to_le_bytes());
+        out[0] = CONTRACT_VERSION;
+        out[1..17].copy_from_slice(&self.token.0);
         out[17..25].copy_from_slice(&self.sent_ns.to_le_bytes());
         out
     }
@@ -217,14 +345,12 @@ impl RequestMeta {
     /// From the attachment's bytes; `None` for another size or version.
     pub fn decode(bytes: &[u8]) -> Option<Self> {
         let bytes = <&[u8; 25]>::try_from(bytes).ok()?;
-        if bytes[0] != Self::VERSION {
+        if bytes[0] != CONTRACT_VERSION {
             return None;
         }
-        let session = u128::from_le_bytes(bytes[1..17].try_into().ok()?);
-        let sent_ns = u64::from_le_bytes(bytes[17..25].try_into().ok()?);
         Some(Self {
-            session: SessionId(session),
-            sent_ns,
+            token: SessionToken(bytes[1..17].try_into().ok()?),
+            sent_ns: u64::from_le_bytes(bytes[17..25].try_into().ok()?),
         })
     }
 }
@@ -245,13 +371,16 @@ pub enum Refusal {
     NoReply,
     /// The request is not a `CommandRequest` of this schema, or lacks its attachment.
     BadRequest,
-    /// Too many requests are waiting for the server; retry.
+    /// Too many requests are waiting for the server, or too many sessions are open; retry.
     Busy,
+    /// The request needs a session and its attachment names none this bridge opened for
+    /// the identity (open one on `motiond/<name>/session/<identity>`).
+    NoSession,
 }
 
 impl Refusal {
     /// Every refusal.
-    pub const ALL: [Self; 7] = [
+    pub const ALL: [Self; 8] = [
         Self::NotAllowed,
         Self::RateLimited,
         Self::Late,
@@ -259,6 +388,7 @@ impl Refusal {
         Self::NoReply,
         Self::BadRequest,
         Self::Busy,
+        Self::NoSession,
     ];
 
     /// The code that starts the error reply.
@@ -271,6 +401,7 @@ impl Refusal {
             Self::NoReply => "no-reply",
             Self::BadRequest => "bad-request",
             Self::Busy => "busy",
+            Self::NoSession => "no-session",
         }
     }
 
@@ -312,6 +443,17 @@ mod tests {
         assert_eq!(keys.identity_of("motiond/demo/command/a/b"), None);
         assert_eq!(keys.identity_of("motiond/demo/command"), Some(ANONYMOUS));
         assert_eq!(keys.identity_of("motiond/demo/commands"), None);
+        assert_eq!(keys.session("panel"), "motiond/demo/session/panel");
+        assert_eq!(
+            keys.identity_of_session("motiond/demo/session/panel"),
+            Some("panel")
+        );
+        assert_eq!(
+            keys.identity_of_session("motiond/demo/session"),
+            Some(ANONYMOUS)
+        );
+        assert_eq!(keys.identity_of_session("motiond/demo/command/panel"), None);
+        assert_eq!(keys.identity_of_session("motiond/demo/sessions"), None);
         let token = keys.remote_token("panel", SessionId(0xab));
         assert_eq!(
             token,
@@ -332,18 +474,39 @@ mod tests {
     #[test]
     fn attachments_round_trip_and_refuse_other_sizes() {
         let meta = RequestMeta {
-            session: SessionId(u128::MAX - 5),
+            token: SessionToken([7; 16]),
             sent_ns: 123_456_789,
         };
         let bytes = meta.encode();
-        assert_eq!(bytes[0], 1);
+        assert_eq!(bytes[0], 2);
         assert_eq!(RequestMeta::decode(&bytes), Some(meta));
         assert_eq!(RequestMeta::decode(&bytes[..24]), None);
         let mut other = bytes;
-        other[0] = 2;
-        assert_eq!(RequestMeta::decode(&other), None);
+        other[0] = 1;
+        assert_eq!(RequestMeta::decode(&other), None, "the old attachment");
         assert_eq!(Origin::decode(&Origin(77).encode()), Some(Origin(77)));
         assert_eq!(Origin::decode(&[1, 2, 3]), None);
+
+        let open = SessionOpen { sent_ns: 99 };
+        assert_eq!(SessionOpen::decode(&open.encode()), Some(open));
+        assert_eq!(SessionOpen::decode(&open.encode()[..8]), None);
+        let grant = SessionGrant {
+            session: SessionId(u128::MAX - 1),
+            token: SessionToken([0xa5; 16]),
+        };
+        let bytes = grant.encode();
+        assert_eq!(bytes.len(), SessionGrant::SIZE);
+        assert_eq!(SessionGrant::decode(&bytes), Some(grant));
+        let zero = SessionGrant {
+            token: SessionToken::NONE,
+            ..grant
+        };
+        assert_eq!(SessionGrant::decode(&zero.encode()), None, "no zero token");
+        assert_eq!(
+            format!("{:?}", grant.token),
+            "SessionToken(…)",
+            "never logged"
+        );
     }
 
     #[test]

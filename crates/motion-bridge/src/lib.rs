@@ -8,7 +8,8 @@
 //! - [`wire`]: the payloads as bytes (C layout, little-endian) — the network contract,
 //!   shared with `motion-client`'s `zenoh` transport.
 //! - [`keys`]: key expressions, attachments and the bridge's own refusals.
-//! - `policy` (feature `server`): allow-lists, rate limits, lateness, claims per remote.
+//! - `policy` (feature `server`): allow-lists, the sessions the bridge issues, rate limits
+//!   (one bucket per `[[remote]]` entry), lateness, claims per remote.
 //! - `Bridge` (feature `server`) and the `motion-bridge` binary.
 //!
 //! `crates/motion-bridge/README.md` has the two-terminal example, the config file, the

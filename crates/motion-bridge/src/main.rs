@@ -13,9 +13,11 @@ use motion_bridge::config::{BridgeConfig, Overrides};
 const AFTER_HELP: &str = "\
 Commands are refused unless the config file allows them ([[remote]] identity, allow, rate).
 Without --config the bridge publishes frames and state and refuses every command.
+An allow-list wider than stop and e-stop needs zenoh authentication (--zenoh-config with
+users and passwords or TLS client certificates), or --insecure on a network you trust.
 
 Example:
-  motion-bridge --server demo --listen tcp/0.0.0.0:7447 --config bridge.toml
+  motion-bridge --server demo --listen tcp/0.0.0.0:7447 --config bridge.toml --zenoh-config zenoh.json5
   motionctl --remote tcp/HOST:7447 --identity panel list
 
 Logging: RUST_LOG=debug (default info; zenoh's own at warn).
@@ -46,6 +48,10 @@ struct Cli {
     /// zenoh's own config file (JSON5): TLS, user/password authentication, access control.
     #[arg(long, value_name = "FILE")]
     zenoh_config: Option<PathBuf>,
+    /// Start although the config lets remotes do more than stop and e-stop and zenoh
+    /// authenticates nobody (a network you trust; anyone reaching it may claim any identity).
+    #[arg(long)]
+    insecure: bool,
 }
 
 fn main() -> ExitCode {
@@ -71,6 +77,7 @@ fn main() -> ExitCode {
         frame_rate: cli.frame_rate,
         json_rate: cli.json_rate,
         zenoh_config: cli.zenoh_config,
+        insecure: cli.insecure,
     };
     let config = match BridgeConfig::load(cli.config.as_deref(), overrides) {
         Ok(config) => config,

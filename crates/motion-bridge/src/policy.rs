@@ -1,5 +1,13 @@
 //! What the bridge lets through, decided without I/O (time is an argument): the allow-list
-//! of each remote identity, its rate limit, the lateness check, and claims per remote.
+//! of each remote identity, its rate limit, the sessions the bridge opened and the lateness
+//! of their requests, and claims per remote.
+//!
+//! Stop and e-stop need nothing but the allow-list: no session, no state of their own, no
+//! lateness or rate check — they are forwarded however many sessions are open. Every other
+//! command needs a session the bridge opened for the identity it is sent under (its secret
+//! token in the attachment), arrives within the window on that session's clock, and fits
+//! the rate of its `[[remote]]` entry: one bucket per entry, so every identity that falls
+//! under `*` shares the wildcard's bucket.
 //!
 //! The server sees the bridge's iceoryx2 node as the sender of every forwarded request, so
 //! to the server every claim a remote takes is the bridge's. The bridge therefore keeps its
@@ -17,7 +25,12 @@ use motion_ipc::{
     SCHEMA_VERSION, SignalFlags, Target,
 };
 
-use crate::keys::{Refusal, RequestMeta, SessionId};
+use crate::keys::{Refusal, RequestMeta, SessionId, SessionOpen, SessionToken};
+
+mod session;
+
+pub use session::MAX_SESSIONS;
+use session::{Lookup, Sessions, Timing};
 
 /// A set of command kinds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -101,7 +114,8 @@ pub const fn is_deadman(kind: CommandKind) -> bool {
 }
 
 /// What one remote identity may do (`[[remote]]` of the config). The rate limit is the
-/// identity's, shared by all its client sessions.
+/// entry's, shared by all its client sessions — for `*`, by every identity without an entry
+/// of its own.
 #[derive(Debug, Clone, PartialEq)]
 pub struct RemoteRule {
     /// The identity (the last chunk of the command key), or `*` for any identity without a
@@ -120,9 +134,18 @@ pub const DEFAULT_RATE: f64 = 200.0;
 /// Default `burst`.
 pub const DEFAULT_BURST: f64 = 100.0;
 
-/// How fast the lateness floor of a session may rise, s per s: room for clock drift
-/// between the hosts (1000 ppm, far above what NTP lets a clock drift).
-const FLOOR_CREEP: f64 = 1e-3;
+/// The lateness window when neither the config nor the server gives one (a server without
+/// a deadman).
+pub const FALLBACK_MAX_DELAY: Duration = Duration::from_secs(1);
+
+impl RemoteRule {
+    /// Whether the entry allows more than stop and e-stop (what needs a session).
+    pub fn allows_more_than_safety(&self) -> bool {
+        CommandKind::ALL
+            .into_iter()
+            .any(|kind| !is_safety(kind) && self.allow.contains(kind))
+    }
+}
 
 /// Who sent a request: an identity and one client session of it.
 #[derive(Debug, Clone, PartialEq, Eq, Hash)]
@@ -137,41 +160,29 @@ pub struct Remote {
 #[derive(Debug, Clone, PartialEq)]
 pub enum Verdict {
     /// Send this (the request with its `client` cleared: the server takes the bridge's
-    /// node) to the server and pass its reply back.
-    Forward(CommandRequest),
+    /// node) to the server and pass its reply back; from this remote session (`None`: a
+    /// stop or e-stop without one).
+    Forward(CommandRequest, Option<Remote>),
     /// Answer for the server with this reason (claims between remotes, schema).
     Answer(Reason),
     /// Refuse as the bridge, with a message.
     Refuse(Refusal, String),
 }
 
-/// What the bridge learnt of one remote client session's clock.
-#[derive(Debug)]
-struct SessionState {
-    /// Smallest (bridge time − send time) seen, rising by at most `FLOOR_CREEP`, and when.
-    floor: Option<(i128, Duration)>,
-}
-
-/// The token bucket of one remote identity.
+/// The token bucket of one `[[remote]]` entry.
 #[derive(Debug)]
 struct Bucket {
     tokens: f64,
     refilled: Duration,
 }
 
-/// Sessions remembered at most; past it, sessions silent for [`SESSION_IDLE`] are
-/// forgotten, and a new one is refused while none is (a flood of made-up session ids never
-/// grows the bridge's memory).
-pub const MAX_SESSIONS: usize = 1024;
-/// A session not heard from for this long may be forgotten to make room.
-const SESSION_IDLE: Duration = Duration::from_secs(60);
-
 /// The bridge's policy: rules, and what it learnt of every remote session.
 #[derive(Debug)]
 pub struct Policy {
     rules: Vec<RemoteRule>,
     max_delay: Option<Duration>,
-    sessions: HashMap<SessionId, SessionState>,
+    sessions: Sessions,
+    /// Per `[[remote]]` entry (its `identity`, `*` for the wildcard).
     buckets: HashMap<String, Bucket>,
     claims: HashMap<(Target, u32), Remote>,
     /// Per axis: the remote whose deadman goal (jog, power) runs there.
@@ -185,7 +196,7 @@ impl Policy {
         Self {
             rules,
             max_delay,
-            sessions: HashMap::new(),
+            sessions: Sessions::default(),
             buckets: HashMap::new(),
             claims: HashMap::new(),
             deadman: HashMap::new(),
@@ -200,14 +211,69 @@ impl Policy {
             .or_else(|| self.rules.iter().find(|rule| rule.identity == "*"))
     }
 
-    /// Judges `request` from `remote`, received at `now` (the bridge's monotonic clock)
-    /// with `meta`. `deadman` is the server's `command_timeout_ms` (the lateness bound when
-    /// the config sets none; zero: no bound).
+    /// Opens a session for `identity` as `open` asks, received at `now`, under the id and
+    /// token the caller drew at random; refused when the identity may send only stop and
+    /// e-stop (which need no session), over its rate, or when [`MAX_SESSIONS`] are open.
+    pub fn open_session(
+        &mut self,
+        now: Duration,
+        identity: &str,
+        open: SessionOpen,
+        id: SessionId,
+        token: SessionToken,
+    ) -> Result<(), (Refusal, String)> {
+        let Some(rule) = self.rule(identity) else {
+            return Err(no_rule(identity));
+        };
+        if !rule.allows_more_than_safety() {
+            return Err((
+                Refusal::NotAllowed,
+                format!("remote `{identity}` may send only stop and e-stop, which need no session"),
+            ));
+        }
+        let (key, rate, burst) = (rule.identity.clone(), rule.rate, rule.burst);
+        if !self.take_token(now, &key, rate, burst) {
+            return Err(rate_limited(identity, &key, rate, burst));
+        }
+        if self.sessions.open(now, identity, open.sent_ns, id, token) {
+            Ok(())
+        } else if self.sessions.len() >= MAX_SESSIONS {
+            Err((
+                Refusal::Busy,
+                format!(
+                    "the bridge has {MAX_SESSIONS} remote sessions open already (stop and \
+                     e-stop still pass without one)"
+                ),
+            ))
+        } else {
+            Err((Refusal::Busy, "the session id drawn is taken".to_owned()))
+        }
+    }
+
+    /// Whether `id` or `token` is taken (or the token is zero): draw again.
+    pub fn session_taken(&self, id: SessionId, token: SessionToken) -> bool {
+        self.sessions.taken(id, token)
+    }
+
+    /// The liveliness token of `identity`'s session `id` appeared: the session is not
+    /// forgotten to make room while it is there.
+    pub fn session_live(&mut self, identity: &str, id: SessionId) {
+        self.sessions.live(identity, id);
+    }
+
+    /// Sessions open now.
+    pub fn session_count(&self) -> usize {
+        self.sessions.len()
+    }
+
+    /// Judges `request` sent under `identity` with `meta` (`None`: no readable attachment),
+    /// received at `now` (the bridge's monotonic clock). `deadman` is the server's
+    /// `command_timeout_ms` (the lateness window when the config sets none).
     pub fn admit(
         &mut self,
         now: Duration,
-        remote: &Remote,
-        meta: RequestMeta,
+        identity: &str,
+        meta: Option<RequestMeta>,
         request: &CommandRequest,
         deadman: Duration,
     ) -> Verdict {
@@ -220,24 +286,18 @@ impl Policy {
         let Ok(target) = request.target() else {
             return Verdict::Answer(Reason::UnknownTarget);
         };
-        let Some(rule) = self.rule(&remote.identity) else {
-            return Verdict::Refuse(
-                Refusal::NotAllowed,
-                format!(
-                    "the bridge has no [[remote]] entry for identity `{}` (nor one for `*`): \
-                     it may not command",
-                    remote.identity
-                ),
-            );
+        let Some(rule) = self.rule(identity) else {
+            let (refusal, text) = no_rule(identity);
+            return Verdict::Refuse(refusal, text);
         };
         if !rule.allow.contains(kind) {
             let allowed = rule.allow.names();
             return Verdict::Refuse(
                 Refusal::NotAllowed,
                 format!(
-                    "`{}` is not allowed for remote `{}` by the bridge's config (allowed: {})",
+                    "`{}` is not allowed for remote `{identity}` by the bridge's config \
+                     (allowed: {})",
                     kind.name(),
-                    remote.identity,
                     if allowed.is_empty() {
                         "nothing".to_owned()
                     } else {
@@ -246,65 +306,93 @@ impl Policy {
                 ),
             );
         }
-        let (rate, burst) = (rule.rate, rule.burst);
-        let max_delay = self.max_delay.unwrap_or(deadman);
-        if !self.sessions.contains_key(&remote.session) && !self.make_room(now) {
-            return Verdict::Refuse(
-                Refusal::Busy,
-                format!("the bridge follows {MAX_SESSIONS} remote sessions already"),
-            );
+        let (key, rate, burst) = (rule.identity.clone(), rule.rate, rule.burst);
+        let window = match self.max_delay.unwrap_or(deadman) {
+            Duration::ZERO => FALLBACK_MAX_DELAY,
+            window => window,
+        };
+        let token = meta.map_or(SessionToken::NONE, |meta| meta.token);
+        let session = match self.sessions.find(identity, token) {
+            Lookup::Found(state) => state,
+            // Stop and e-stop: nothing more to judge and nothing to keep — never late,
+            // never over the rate, never held back by claims.
+            _ if is_safety(kind) => return Verdict::Forward(cleared(request), None),
+            Lookup::OtherIdentity => {
+                return Verdict::Refuse(
+                    Refusal::NoSession,
+                    format!(
+                        "the attachment names a session opened for another identity than \
+                         `{identity}`: a session is good only for its own identity"
+                    ),
+                );
+            }
+            Lookup::Unknown => {
+                return Verdict::Refuse(
+                    Refusal::NoSession,
+                    format!(
+                        "`{}` needs a session this bridge opened for `{identity}`; the \
+                         attachment names none (open one on the session key; a bridge that \
+                         restarted forgot its sessions)",
+                        kind.name()
+                    ),
+                );
+            }
+        };
+        let remote = Remote {
+            identity: identity.to_owned(),
+            session: session.id,
+        };
+        if is_safety(kind) {
+            return Verdict::Forward(cleared(request), Some(remote));
         }
-        let session = self
-            .sessions
-            .entry(remote.session)
-            .or_insert(SessionState { floor: None });
-        let lateness = session.lateness(now, meta.sent_ns);
-        if !is_safety(kind) && !max_delay.is_zero() && lateness > max_delay {
-            return Verdict::Refuse(
-                Refusal::Late,
-                format!(
-                    "{} arrived {:?} later than this session's requests usually take (limit \
-                     {max_delay:?}): held up in the network, not applied",
-                    kind.name(),
-                    lateness
-                ),
-            );
+        let sent_ns = meta.map_or(0, |meta| meta.sent_ns);
+        match session.judge(now, sent_ns, window) {
+            Timing::OnTime => {}
+            Timing::Late(by) => {
+                return Verdict::Refuse(
+                    Refusal::Late,
+                    format!(
+                        "{} arrived {by:?} later than this session's requests usually take \
+                         (limit {window:?}): held up in the network, not applied",
+                        kind.name()
+                    ),
+                );
+            }
+            Timing::Ahead(by) => {
+                return Verdict::Refuse(
+                    Refusal::Late,
+                    format!(
+                        "{} says it was sent {by:?} later than it could have been on this \
+                         session's clock (limit {window:?}): not applied",
+                        kind.name()
+                    ),
+                );
+            }
         }
-        let bucket = self
-            .buckets
-            .entry(remote.identity.clone())
-            .or_insert(Bucket {
-                tokens: burst,
-                refilled: now,
-            });
-        if !bucket.take(now, rate, burst) && !is_safety(kind) {
-            return Verdict::Refuse(
-                Refusal::RateLimited,
-                format!(
-                    "remote `{}` sent more than {rate} requests/s (burst {burst})",
-                    remote.identity
-                ),
-            );
+        if !self.take_token(now, &key, rate, burst) {
+            let (refusal, text) = rate_limited(identity, &key, rate, burst);
+            return Verdict::Refuse(refusal, text);
         }
-        if let Some(reason) = self.claim_check(remote, kind, target, request.axis) {
+        if let Some(reason) = self.claim_check(&remote, kind, target, request.axis) {
             return Verdict::Answer(reason);
         }
-        let mut forwarded = *request;
-        forwarded.client = ClientId::NONE;
-        Verdict::Forward(forwarded)
+        Verdict::Forward(cleared(request), Some(remote))
     }
 
-    /// Whether a new session fits, forgetting idle ones if needed.
-    fn make_room(&mut self, now: Duration) -> bool {
-        if self.sessions.len() < MAX_SESSIONS {
-            return true;
+    /// Takes one request from the bucket of the `[[remote]]` entry `key`.
+    fn take_token(&mut self, now: Duration, key: &str, rate: f64, burst: f64) -> bool {
+        if !self.buckets.contains_key(key) {
+            self.buckets.insert(
+                key.to_owned(),
+                Bucket {
+                    tokens: burst,
+                    refilled: now,
+                },
+            );
         }
-        self.sessions.retain(|_, state| {
-            state
-                .floor
-                .is_some_and(|(_, seen)| now.saturating_sub(seen) < SESSION_IDLE)
-        });
-        self.sessions.len() < MAX_SESSIONS
+        self.buckets
+            .get_mut(key)
+            .is_some_and(|bucket| bucket.take(now, rate, burst))
     }
 
     /// The claim rule between remotes, as the engine applies it between local clients.
@@ -362,11 +450,32 @@ impl Policy {
         }
     }
 
+    /// Notes the server's reply to a stop or e-stop a remote sent without a session: the
+    /// jogs it ended are nobody's to stop any more.
+    pub fn on_sessionless_reply(&mut self, request: &CommandRequest, reply: &CommandReply) {
+        if reply.result().is_err() || request.target() != Ok(Target::Axis) {
+            return;
+        }
+        match request.kind() {
+            Ok(CommandKind::EStop) => self.deadman.clear(),
+            Ok(CommandKind::Stop) if request.axis == CommandRequest::ALL_AXES => {
+                self.deadman.clear();
+            }
+            Ok(CommandKind::Stop) => {
+                self.deadman.remove(&request.axis);
+            }
+            _ => {}
+        }
+    }
+
     /// A remote session ended (its liveliness token went away): what the bridge sends for
     /// it — a stop of every axis whose deadman goal it started and nobody replaced, and a
     /// release of every claim it held. Returns them as requests (client zero).
-    pub fn session_gone(&mut self, session: SessionId) -> Vec<CommandRequest> {
-        self.sessions.remove(&session);
+    pub fn session_gone(&mut self, identity: &str, session: SessionId) -> Vec<CommandRequest> {
+        if !self.sessions.close(identity, session) {
+            // Not one of ours (a token declared under another's id, or long forgotten).
+            return Vec::new();
+        }
         let mut requests = Vec::new();
         let mut axes: Vec<u32> = self
             .deadman
@@ -440,20 +549,34 @@ impl Policy {
     }
 }
 
-impl SessionState {
-    /// How much later than its fastest request this one arrived.
-    fn lateness(&mut self, now: Duration, sent_ns: u64) -> Duration {
-        let offset = now.as_nanos() as i128 - i128::from(sent_ns);
-        let floor = match self.floor {
-            None => offset,
-            Some((floor, at)) => {
-                let creep = (now.saturating_sub(at).as_secs_f64() * FLOOR_CREEP * 1e9) as i128;
-                (floor + creep).min(offset)
-            }
-        };
-        self.floor = Some((floor, now));
-        Duration::from_nanos(u64::try_from(offset - floor).unwrap_or(u64::MAX))
-    }
+/// `request` as the bridge forwards it: its `client` cleared (the server takes the
+/// bridge's node).
+fn cleared(request: &CommandRequest) -> CommandRequest {
+    let mut forwarded = *request;
+    forwarded.client = ClientId::NONE;
+    forwarded
+}
+
+fn no_rule(identity: &str) -> (Refusal, String) {
+    (
+        Refusal::NotAllowed,
+        format!(
+            "the bridge has no [[remote]] entry for identity `{identity}` (nor one for `*`): \
+             it may not command"
+        ),
+    )
+}
+
+fn rate_limited(identity: &str, key: &str, rate: f64, burst: f64) -> (Refusal, String) {
+    let whose = if key == identity {
+        format!("remote `{identity}`")
+    } else {
+        format!("the identities under `{key}` (here `{identity}`) together")
+    };
+    (
+        Refusal::RateLimited,
+        format!("{whose} sent more than {rate} requests/s (burst {burst})"),
+    )
 }
 
 impl Bucket {

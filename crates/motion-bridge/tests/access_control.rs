@@ -55,14 +55,16 @@ fn bridge_zenoh_config(server: &str, dir: &Path) -> String {
         permission: "allow",
         flows: ["ingress", "egress"],
         messages: ["query", "reply", "liveliness_token"],
-        key_exprs: ["motiond/{server}/command/panel", "motiond/{server}/remote/panel/*"],
+        key_exprs: ["motiond/{server}/command/panel", "motiond/{server}/session/panel",
+                    "motiond/{server}/remote/panel/*"],
       }},
       {{
         id: "as-visitor",
         permission: "allow",
         flows: ["ingress", "egress"],
         messages: ["query", "reply", "liveliness_token"],
-        key_exprs: ["motiond/{server}/command/visitor", "motiond/{server}/remote/visitor/*"],
+        key_exprs: ["motiond/{server}/command/visitor", "motiond/{server}/session/visitor",
+                    "motiond/{server}/remote/visitor/*"],
       }},
     ],
     subjects: [

@@ -7,12 +7,11 @@ mod common;
 use core::time::Duration;
 use std::time::Instant;
 
+use common::raw::{Z as _, command, open_session, session};
 use common::{BridgeThread, DEADLINE, Result, fake};
-use motion_bridge::keys::{Keys, Origin, Refusal, RequestMeta, SessionId};
+use motion_bridge::keys::{Keys, Origin, Refusal, RequestMeta, SessionGrant};
 use motion_bridge::wire;
-use motion_client::ipc::{
-    ClientId, CommandKind, CommandReply, CommandRequest, MotionFrame, Reason, ServerInfo,
-};
+use motion_client::ipc::{ClientId, CommandKind, CommandRequest, MotionFrame, Reason, ServerInfo};
 use zenoh::Wait as _;
 
 const RULES: &str = r#"
@@ -28,65 +27,6 @@ allow = ["all"]
 rate = 1
 burst = 2
 "#;
-
-/// zenoh's errors as the tests' errors.
-trait Z<T> {
-    fn z(self) -> Result<T>;
-}
-
-impl<T> Z<T> for zenoh::Result<T> {
-    fn z(self) -> Result<T> {
-        self.map_err(|error| error.to_string().into())
-    }
-}
-
-fn session(endpoint: &str) -> Result<zenoh::Session> {
-    let mut config = zenoh::Config::default();
-    config.insert_json5("mode", "\"client\"").z()?;
-    config
-        .insert_json5("scouting/multicast/enabled", "false")
-        .z()?;
-    config
-        .insert_json5("connect/endpoints", &format!("[\"{endpoint}\"]"))
-        .z()?;
-    zenoh::open(config).wait().z()
-}
-
-/// Sends `request` as `identity` with `meta` (none: no attachment); the reply's payload or
-/// the refusal's text.
-fn command(
-    session: &zenoh::Session,
-    keys: &Keys,
-    identity: &str,
-    request: &CommandRequest,
-    meta: Option<RequestMeta>,
-) -> Result<core::result::Result<(CommandReply, Origin), String>> {
-    let mut get = session
-        .get(keys.command(identity))
-        .payload(wire::encode(request))
-        .timeout(Duration::from_secs(5));
-    if let Some(meta) = meta {
-        get = get.attachment(meta.encode());
-    }
-    let replies = get.wait().z()?;
-    let reply = replies
-        .recv_timeout(DEADLINE)
-        .z()?
-        .ok_or("no reply from the bridge")?;
-    Ok(match reply.result() {
-        Ok(sample) => {
-            let origin = sample
-                .attachment()
-                .and_then(|bytes| Origin::decode(&bytes.to_bytes()))
-                .ok_or("a reply without its origin")?;
-            Ok((
-                wire::decode::<CommandReply>(&sample.payload().to_bytes())?,
-                origin,
-            ))
-        }
-        Err(error) => Err(error.payload().try_to_string()?.into_owned()),
-    })
-}
 
 #[test]
 fn frames_are_decimated_and_every_sample_says_which_server_wrote_it() -> Result {
@@ -158,23 +98,34 @@ fn malformed_late_and_too_frequent_requests_are_refused_by_the_bridge() -> Resul
     // The remote's own clock, 10 s ahead of the test's start.
     let start = Instant::now();
     let clock = || start.elapsed() + Duration::from_secs(10);
-    let meta = |session_id: u128, sent: Duration| RequestMeta {
-        session: SessionId(session_id),
-        sent_ns: sent.as_nanos() as u64,
+    let ns = |sent: Duration| sent.as_nanos() as u64;
+    let tool = open_session(&session, &keys, "tool", ns(clock()))??;
+    let tool_again = open_session(&session, &keys, "tool", ns(clock()))??;
+    let slow = open_session(&session, &keys, "slow", ns(clock()))??;
+    assert_ne!(tool.token, tool_again.token, "every opening its own secret");
+    let meta = |grant: &SessionGrant, sent: Duration| RequestMeta {
+        token: grant.token,
+        sent_ns: ns(sent),
     };
     let stop = CommandRequest::new(ClientId::NONE, 1, 0, CommandKind::Stop);
+    let position = CommandRequest::new(ClientId::NONE, 1, 0, CommandKind::Position)
+        .with_values([1.0, 0.0, 0.0]);
 
-    // No attachment, a short payload.
-    let refused = command(&session, &keys, "tool", &stop, None)?.expect_err("refused");
+    // A stop needs no attachment; anything else needs a session.
+    let (reply, _) = command(&session, &keys, "tool", &stop, None)?
+        .map_err(|text| format!("refused: {text}"))?;
+    assert_eq!(reply.result(), Ok(()));
+    let refused = command(&session, &keys, "tool", &position, None)?.expect_err("refused");
     assert_eq!(
         Refusal::parse(&refused).map(|r| r.0),
-        Some(Refusal::BadRequest),
+        Some(Refusal::NoSession),
         "{refused}"
     );
+    // A short payload.
     let replies = session
         .get(keys.command("tool"))
         .payload(vec![1u8, 2, 3])
-        .attachment(meta(1, clock()).encode())
+        .attachment(meta(&tool, clock()).encode())
         .wait()
         .z()?;
     let reply = replies.recv_timeout(DEADLINE).z()?.ok_or("no reply")?;
@@ -194,7 +145,7 @@ fn malformed_late_and_too_frequent_requests_are_refused_by_the_bridge() -> Resul
     let replies = session
         .get(format!("motiond/{}/command", server.name()))
         .payload(wire::encode(&stop))
-        .attachment(meta(1, clock()).encode())
+        .attachment(meta(&tool, clock()).encode())
         .wait()
         .z()?;
     let reply = replies.recv_timeout(DEADLINE).z()?.ok_or("no reply")?;
@@ -211,7 +162,7 @@ fn malformed_late_and_too_frequent_requests_are_refused_by_the_bridge() -> Resul
     );
 
     // A request on time is forwarded; the reply comes from the server, with its node.
-    let (reply, origin) = command(&session, &keys, "tool", &stop, Some(meta(7, clock())))?
+    let (reply, origin) = command(&session, &keys, "tool", &stop, Some(meta(&tool, clock())))?
         .map_err(|text| format!("refused: {text}"))?;
     assert_eq!(reply.result(), Ok(()));
     assert_eq!((reply.sequence, reply.kind), (1, CommandKind::Stop as u32));
@@ -228,7 +179,7 @@ fn malformed_late_and_too_frequent_requests_are_refused_by_the_bridge() -> Resul
         &keys,
         "tool",
         &velocity,
-        Some(meta(7, two_seconds_ago)),
+        Some(meta(&tool, two_seconds_ago)),
     )?
     .expect_err("late");
     assert!(late.starts_with("late: "), "{late}");
@@ -237,7 +188,7 @@ fn malformed_late_and_too_frequent_requests_are_refused_by_the_bridge() -> Resul
         &keys,
         "tool",
         &stop,
-        Some(meta(7, two_seconds_ago)),
+        Some(meta(&tool, two_seconds_ago)),
     )?
     .map_err(|text| format!("refused: {text}"))?;
     assert_eq!(reply.result(), Ok(()));
@@ -248,7 +199,7 @@ fn malformed_late_and_too_frequent_requests_are_refused_by_the_bridge() -> Resul
         .count();
     assert_eq!(velocities, 0);
 
-    // `slow` may send 2 at once, then 1 a second; stops always pass.
+    // `slow` may send 2 at once, then 1 a second (its opening took one); stops always pass.
     let mut outcomes = Vec::new();
     for sequence in 10..14 {
         let request = CommandRequest::new(ClientId::NONE, sequence, 1, CommandKind::Position)
@@ -258,23 +209,29 @@ fn malformed_late_and_too_frequent_requests_are_refused_by_the_bridge() -> Resul
             &keys,
             "slow",
             &request,
-            Some(meta(8, clock())),
+            Some(meta(&slow, clock())),
         )?);
     }
-    assert!(outcomes[0].is_ok() && outcomes[1].is_ok(), "{outcomes:?}");
+    assert!(outcomes[0].is_ok(), "{outcomes:?}");
     let limited = outcomes[3].as_ref().expect_err("over the rate");
     assert!(limited.starts_with("rate-limited: "), "{limited}");
-    let (reply, _) = command(&session, &keys, "slow", &stop, Some(meta(8, clock())))?
+    let (reply, _) = command(&session, &keys, "slow", &stop, Some(meta(&slow, clock())))?
         .map_err(|text| format!("refused: {text}"))?;
     assert_eq!(reply.result(), Ok(()));
 
     // Claims between remotes are answered for the server, as a CommandReply.
     let claim = CommandRequest::new(ClientId::NONE, 20, 2, CommandKind::Claim);
-    let (reply, _) = command(&session, &keys, "tool", &claim, Some(meta(7, clock())))?
+    let (reply, _) = command(&session, &keys, "tool", &claim, Some(meta(&tool, clock())))?
         .map_err(|text| format!("refused: {text}"))?;
     assert_eq!(reply.result(), Ok(()));
-    let (reply, _) = command(&session, &keys, "tool", &claim, Some(meta(9, clock())))?
-        .map_err(|text| format!("refused: {text}"))?;
+    let (reply, _) = command(
+        &session,
+        &keys,
+        "tool",
+        &claim,
+        Some(meta(&tool_again, clock())),
+    )?
+    .map_err(|text| format!("refused: {text}"))?;
     assert_eq!(reply.result(), Err(Reason::ClaimedByOther));
     Ok(())
 }

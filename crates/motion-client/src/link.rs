@@ -8,7 +8,9 @@ use std::cell::RefCell;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use motion_bridge::keys::{Keys, Origin, Refusal, RequestMeta, SessionId};
+use motion_bridge::keys::{
+    Keys, Origin, Refusal, RequestMeta, SessionGrant, SessionOpen, SessionToken,
+};
 use motion_bridge::wire::{self, Payload, WireError};
 use motion_ipc::{CommandKind, CommandReply, CommandRequest, SCHEMA_VERSION};
 use zenoh::Wait as _;
@@ -71,6 +73,12 @@ fn owned<T: Payload>(sample: &Sample, server: &str) -> Result<Owned<T>, ClientEr
     })
 }
 
+/// The session the bridge opened for this client, and the liveliness token that names it.
+struct Granted {
+    grant: SessionGrant,
+    _token: LivelinessToken,
+}
+
 /// A connection to a bridge.
 pub(crate) struct Link {
     session: zenoh::Session,
@@ -78,9 +86,10 @@ pub(crate) struct Link {
     endpoint: String,
     identity: String,
     server: String,
-    id: SessionId,
     epoch: Instant,
-    _token: LivelinessToken,
+    /// `None` until the bridge opened a session (it may refuse: an identity allowed only
+    /// stop and e-stop, a full table); stop and e-stop go without one.
+    granted: RefCell<Option<Granted>>,
 }
 
 impl fmt::Debug for Link {
@@ -88,7 +97,10 @@ impl fmt::Debug for Link {
         f.debug_struct("Link")
             .field("endpoint", &self.endpoint)
             .field("identity", &self.identity)
-            .field("session", &self.id)
+            .field(
+                "session",
+                &self.granted.borrow().as_ref().map(|g| g.grant.session),
+            )
             .finish_non_exhaustive()
     }
 }
@@ -123,7 +135,9 @@ pub(crate) fn zenoh_config(base: Option<&Path>, endpoint: &str) -> Result<zenoh:
 
 impl Link {
     /// Opens a zenoh session to the bridge at `endpoint` for the instance `server`,
-    /// retrying until `deadline`, and declares this client's liveliness.
+    /// retrying until `deadline`, and asks the bridge for a session (declaring this
+    /// client's liveliness under it); without one (refused, or no bridge yet) stop and
+    /// e-stop still go, and other commands ask again.
     pub(crate) fn open(
         options: &RemoteOptions,
         endpoint: &str,
@@ -152,25 +166,82 @@ impl Link {
                 Err(_) => std::thread::sleep(Duration::from_millis(100)),
             }
         };
-        let id = SessionId(random_id(&session));
-        let token = session
-            .liveliness()
-            .declare_token(keys.remote_token(&options.identity, id))
-            .wait()
-            .map_err(|error| ConnectError::Network {
-                what: "declare this client's liveliness",
-                detail: error.to_string(),
-            })?;
-        Ok(Self {
+        let link = Self {
             session,
             keys,
             endpoint: endpoint.to_owned(),
             identity: options.identity.clone(),
             server: server.to_owned(),
-            id,
             epoch: Instant::now(),
+            granted: RefCell::new(None),
+        };
+        let wait = deadline
+            .saturating_duration_since(Instant::now())
+            .clamp(Duration::from_millis(200), Duration::from_secs(2));
+        // Not fatal: refused (an identity that may only stop, a full table) it goes on
+        // without a session; unanswered, the description's fetch says no bridge answers.
+        let _refused_or_unanswered = link.open_session(wait);
+        Ok(link)
+    }
+
+    /// Asks the bridge for a session (waiting up to `timeout`) and declares this client's
+    /// liveliness under its public id.
+    fn open_session(&self, timeout: Duration) -> Result<(), ClientError> {
+        let open = SessionOpen {
+            sent_ns: self.clock_ns(),
+        };
+        let key = self.keys.session(&self.identity);
+        let replies = self
+            .session
+            .get(&key)
+            .payload(open.encode().to_vec())
+            .timeout(timeout)
+            .express(true)
+            .wait()
+            .map_err(|error| network("open a session", error))?;
+        let answer = match replies.recv_timeout(timeout) {
+            Ok(Some(answer)) => answer,
+            Ok(None) | Err(_) => {
+                return Err(ClientError::Network {
+                    what: "open a session",
+                    detail: format!(
+                        "no motion-bridge answers on {key} at {} within {timeout:?}",
+                        self.endpoint
+                    ),
+                });
+            }
+        };
+        let grant = match answer.result() {
+            Ok(sample) => SessionGrant::decode(&sample.payload().to_bytes()).ok_or_else(|| {
+                ClientError::Network {
+                    what: "open a session",
+                    detail: format!("the bridge's answer on {key} is not a session grant"),
+                }
+            })?,
+            Err(error) => {
+                let text = error
+                    .payload()
+                    .try_to_string()
+                    .map_or_else(|_| String::new(), |text| text.into_owned());
+                return Err(refusal("session", &text, timeout));
+            }
+        };
+        let token = self
+            .session
+            .liveliness()
+            .declare_token(self.keys.remote_token(&self.identity, grant.session))
+            .wait()
+            .map_err(|error| network("declare this client's liveliness", error))?;
+        *self.granted.borrow_mut() = Some(Granted {
+            grant,
             _token: token,
-        })
+        });
+        Ok(())
+    }
+
+    /// This client's monotonic clock, ns since the link opened.
+    fn clock_ns(&self) -> u64 {
+        u64::try_from(self.epoch.elapsed().as_nanos()).unwrap_or(u64::MAX)
     }
 
     /// The newest `T` on `key`, asked of the bridge until it has one or `deadline` passes.
@@ -251,16 +322,50 @@ impl Link {
     }
 
     /// Sends `request` through the bridge and waits up to `timeout` for the reply; the
-    /// reply and the node of the server that sent it.
+    /// reply and the node of the server that sent it. A command other than stop and e-stop
+    /// first opens a session if there is none, and once more if the bridge no longer knows
+    /// this one (it restarted, or forgot it): the refused request never reached the server.
     pub(crate) fn command(
         &self,
         request: &CommandRequest,
         timeout: Duration,
     ) -> Result<(CommandReply, u128), ClientError> {
+        let safety = matches!(request.kind(), Ok(CommandKind::Stop | CommandKind::EStop));
+        if !safety && self.granted.borrow().is_none() {
+            match self.open_session(timeout) {
+                // An identity that may only stop gets no session: the command itself is
+                // refused with what this identity may do.
+                Err(ClientError::BridgeRefused { code, .. })
+                    if code == Refusal::NotAllowed.code() => {}
+                other => other?,
+            }
+        }
+        match self.send(request, timeout) {
+            Err(ClientError::BridgeRefused { code, .. })
+                if !safety && code == Refusal::NoSession.code() =>
+            {
+                *self.granted.borrow_mut() = None;
+                self.open_session(timeout)?;
+                self.send(request, timeout)
+            }
+            outcome => outcome,
+        }
+    }
+
+    fn send(
+        &self,
+        request: &CommandRequest,
+        timeout: Duration,
+    ) -> Result<(CommandReply, u128), ClientError> {
         let kind = request.kind().map_or("command", CommandKind::name);
+        let token = self
+            .granted
+            .borrow()
+            .as_ref()
+            .map_or(SessionToken::NONE, |granted| granted.grant.token);
         let meta = RequestMeta {
-            session: self.id,
-            sent_ns: u64::try_from(self.epoch.elapsed().as_nanos()).unwrap_or(u64::MAX),
+            token,
+            sent_ns: self.clock_ns(),
         };
         let key = self.keys.command(&self.identity);
         let replies = self
@@ -402,16 +507,4 @@ fn refusal(kind: &'static str, text: &str, waited: Duration) -> ClientError {
             message: text.to_owned(),
         },
     }
-}
-
-/// A session id no other client of the bridge has: the zenoh session id (random, 128 bits)
-/// mixed with the process id and the time.
-fn random_id(session: &zenoh::Session) -> u128 {
-    let zid = session.zid().to_le_bytes();
-    let mut bytes = [0u8; 16];
-    bytes[..zid.len().min(16)].copy_from_slice(&zid[..zid.len().min(16)]);
-    let nanos = std::time::SystemTime::now()
-        .duration_since(std::time::UNIX_EPOCH)
-        .map_or(0, |since| since.as_nanos());
-    u128::from_le_bytes(bytes) ^ (nanos << 32) ^ u128::from(std::process::id())
 }

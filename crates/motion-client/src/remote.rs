@@ -10,6 +10,13 @@
 //! handles, waits, jog and claim guards, restart detection (the bridge passes the server's
 //! node id along with every sample and reply) — behaves as over shared memory.
 //!
+//! Session: on connecting the client asks the bridge for a session (`motiond/<name>/session/
+//! <identity>`): a public id, named by this client's zenoh liveliness token, and a secret
+//! token only this client receives, sent with every command. Stop and e-stop go without
+//! one (an identity allowed only those gets none; a bridge with its session table full
+//! answers `busy` to other commands and still takes them); another command asks again when
+//! the client has none, or once more when the bridge answers `no-session` (it restarted).
+//!
 //! Identity: the server sees the bridge's iceoryx2 node as the sender of every request, so
 //! [`Client::id`](crate::Client::id) (this process's own node) is not what appears in
 //! `claimed_by`; the bridge keeps claims apart between its remote clients.

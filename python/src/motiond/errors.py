@@ -448,7 +448,8 @@ class NoBridge(ConnectError):
 class BridgeRefused(MotiondError):
     """The bridge refused a command itself; the server never saw it. ``code`` is one of
     ``not-allowed`` (not on this identity's allow-list), ``rate-limited``, ``late`` (held up
-    in the network for longer than the bridge accepts), ``bad-request``, ``busy``."""
+    in the network for longer than the bridge accepts), ``bad-request``, ``busy``,
+    ``no-session`` (the bridge opened no session for this client)."""
 
     def __init__(self, kind: Union[CommandKind, int], code: str, message: str) -> None:
         super().__init__(f"{_kind_text(kind)} refused by the bridge ({code}): {message}")

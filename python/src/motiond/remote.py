@@ -12,11 +12,19 @@ their deadman, parameters, statistics), with these differences:
   :class:`~motiond.Frame` holds no sample of the server's; keep as many as you like);
 - frames arrive at the bridge's ``frame_rate`` (100 per second by default), not every tick;
 - the bridge may refuse a command itself: :class:`~motiond.errors.BridgeRefused` with its
-  ``code`` (``not-allowed``, ``rate-limited``, ``late``, ``bad-request``, ``busy``);
+  ``code`` (``not-allowed``, ``rate-limited``, ``late``, ``bad-request``, ``busy``,
+  ``no-session``);
 - :meth:`~RemoteClient.notify_estop` sends the e-stop command (there is no event service
   across the network; the bridge never holds an e-stop back);
 - :attr:`~RemoteClient.node` does not exist (there is no iceoryx2 node), and
-  :attr:`~RemoteClient.id` is the random id of this zenoh session.
+  :attr:`~RemoteClient.id` is a random id of this client.
+
+A remote's session is the bridge's to give: on connecting the client asks
+``motiond/<name>/session/<identity>`` and gets a public session id (named by its liveliness
+token) and a secret token only it receives; every command carries the token. Stop and e-stop
+need none (an identity that may only stop gets none; a bridge with 1024 sessions open
+refuses new ones, and stop and e-stop still pass); other commands ask again when the client
+has none or the bridge forgot it (it restarted).
 
 The identity is the last chunk of the key expression the commands go to
 (``motiond/<name>/command/<identity>``): the bridge applies that identity's allow-list. It
@@ -26,8 +34,10 @@ own key (see ``crates/motion-bridge/README.md``); give this client its credentia
 
 The wire contract (``crates/motion-bridge/README.md``, "The network contract"): payloads are
 the ``motion-ipc`` structs in their C layout, little-endian, ``sizeof`` bytes; published
-samples and replies carry a 16-byte attachment, the server's node id; a command query carries
-25 bytes: version 1, this client's session id (u128), its CLOCK_MONOTONIC at sending (u64 ns).
+samples and replies carry a 16-byte attachment, the server's node id; a session opening sends
+9 bytes (version 2, CLOCK_MONOTONIC at sending, u64 ns) and gets 33 (version 2, the session id
+u128, the 16-byte token); a command query carries 25 bytes: version 2, the token (zero without
+a session), its CLOCK_MONOTONIC at sending (u64 ns).
 """
 
 from __future__ import annotations
@@ -76,11 +86,21 @@ ANONYMOUS = "anonymous"
 #: The port a bridge listens on by default (zenoh's own).
 DEFAULT_PORT = 7447
 #: The codes of the bridge's own refusals (the error reply ``"<code>: <text>"``).
-REFUSAL_CODES = ("not-allowed", "rate-limited", "late", "no-server", "no-reply", "bad-request", "busy")
+REFUSAL_CODES = (
+    "not-allowed",
+    "rate-limited",
+    "late",
+    "no-server",
+    "no-reply",
+    "bad-request",
+    "busy",
+    "no-session",
+)
 # Samples a feed keeps when the program does not read them (the oldest go first, as the
 # 32-frame buffer over shared memory).
 _FEED_DEPTH = 32
-_META_VERSION = 1
+_CONTRACT_VERSION = 2
+_NO_TOKEN = bytes(16)
 _CHUNK_EXTRA = set("-_.@+=")
 
 
@@ -265,13 +285,18 @@ class RemoteClient(Client):
                 if time.monotonic() >= deadline:
                     raise NoBridge(name, remote, str(error)) from None
                 time.sleep(0.1)
-        self._session_id = secrets.randbits(128)
-        self._id = ClientId.from_int(self._session_id)
+        self._id = ClientId.from_int(secrets.randbits(128))
         self._feeds: List[_Feed] = []
+        self._grant: Optional[Tuple[int, bytes]] = None
+        self._token: Any = None
         try:
-            self._token = self._session.liveliness().declare_token(
-                f"{self._prefix}/remote/{identity}/{self._session_id:032x}"
-            )
+            # Refused (an identity that may only stop, a full table) or unanswered, the
+            # client goes on without a session: stop and e-stop need none, and the
+            # description's fetch below says whether a bridge answers at all.
+            self._open_session(min(2.0, max(0.2, deadline - time.monotonic())), -1)
+        except errors.MotiondError:
+            pass
+        try:
             # Subscribe first, so that no description published meanwhile is missed.
             self._info = self._feed(ServerInfo, "info", subscribe=True)
             self._frames = self._feed(MotionFrame, "frame", subscribe=True, wrap=Frame)
@@ -378,6 +403,50 @@ class RemoteClient(Client):
 
     # --- commands --------------------------------------------------------------------------
 
+    def _open_session(self, timeout: float, kind: Union[CommandKind, int]) -> None:
+        """Asks the bridge for a session (for a command of ``kind``) and declares this
+        client's liveliness under its public id; raises
+        :class:`~motiond.errors.BridgeRefused` or :class:`~motiond.errors.RemoteError`."""
+        key = f"{self._prefix}/session/{self._identity}"
+        payload = struct.pack("<BQ", _CONTRACT_VERSION, time.monotonic_ns())
+        try:
+            replies = self._session.get(key, payload=payload, timeout=timeout, express=True)
+            answer = next(iter(replies), None)
+        except Exception as error:
+            raise RemoteError("open a session", error) from None
+        if answer is None:
+            raise RemoteError(
+                "open a session", TimeoutError(f"no motion-bridge answers on {key}")
+            )
+        if answer.ok is None:
+            raise _refusal(kind, _error_text(answer.err), timeout)
+        data = answer.ok.payload.to_bytes()
+        if len(data) != 33 or data[0] != _CONTRACT_VERSION or data[17:] == _NO_TOKEN:
+            raise RemoteError(
+                "open a session", ValueError(f"a {len(data)}-byte answer is not a session grant")
+            )
+        low, high = struct.unpack_from("<QQ", data, 1)
+        session_id = low | (high << 64)
+        token = bytes(data[17:33])
+        try:
+            liveliness = self._session.liveliness().declare_token(
+                f"{self._prefix}/remote/{self._identity}/{session_id:032x}"
+            )
+        except Exception as error:
+            raise RemoteError("declare this client's liveliness", error) from None
+        self._drop_session()
+        self._grant = (session_id, token)
+        self._token = liveliness
+
+    def _drop_session(self) -> None:
+        self._grant = None
+        if self._token is not None:
+            try:
+                self._token.undeclare()
+            except Exception:
+                pass
+            self._token = None
+
     def send(
         self,
         index: int,
@@ -386,18 +455,42 @@ class RemoteClient(Client):
         target: Union[Target, int] = Target.AXIS,
     ) -> Any:
         """Sends one request through the bridge and returns the server's reply (a copy);
-        raises :class:`~motiond.errors.BridgeRefused` when the bridge refused it itself."""
+        raises :class:`~motiond.errors.BridgeRefused` when the bridge refused it itself.
+        A command other than stop and e-stop first opens a session if there is none, and
+        once more if the bridge no longer knows this one (a refused request never reached
+        the server)."""
         self._check_open()
+        safety = int(kind) in (int(CommandKind.STOP), int(CommandKind.E_STOP))
+        typed_kind = to_enum(CommandKind, int(kind))
+        if not safety and self._grant is None:
+            try:
+                self._open_session(self._reply_timeout, typed_kind)
+            except BridgeRefused as refused:
+                # An identity that may only stop gets no session: the command itself is
+                # refused with what this identity may do.
+                if refused.code != "not-allowed":
+                    raise
+        try:
+            return self._send_once(index, kind, values, target)
+        except BridgeRefused as refused:
+            if safety or refused.code != "no-session":
+                raise
+        self._drop_session()
+        self._open_session(self._reply_timeout, typed_kind)
+        return self._send_once(index, kind, values, target)
+
+    def _send_once(
+        self,
+        index: int,
+        kind: Union[CommandKind, int],
+        values: Sequence[float],
+        target: Union[Target, int],
+    ) -> Any:
         typed_kind = to_enum(CommandKind, int(kind))
         request = self._request(index, kind, values, target)
         sequence = int(request.sequence)
-        meta = struct.pack(
-            "<BQQQ",
-            _META_VERSION,
-            self._session_id & 0xFFFF_FFFF_FFFF_FFFF,
-            self._session_id >> 64,
-            time.monotonic_ns(),
-        )
+        token = self._grant[1] if self._grant is not None else _NO_TOKEN
+        meta = struct.pack("<B16sQ", _CONTRACT_VERSION, token, time.monotonic_ns())
         key = f"{self._prefix}/command/{self._identity}"
         started = time.monotonic()
         try:
@@ -450,10 +543,7 @@ class RemoteClient(Client):
         """Ends the subscriptions and this client's liveliness, closes the session."""
         for feed in self._feeds:
             feed.close()
-        try:
-            self._token.undeclare()
-        except Exception:
-            pass
+        self._drop_session()
         try:
             self._session.close()
         except Exception:

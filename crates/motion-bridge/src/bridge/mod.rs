@@ -11,6 +11,7 @@
 
 mod net;
 mod server;
+mod sessions;
 
 use core::time::Duration;
 use std::collections::VecDeque;
@@ -34,7 +35,7 @@ use self::net::Net;
 use self::server::{Ipc, Pending, ServerPorts};
 use crate::config::BridgeConfig;
 use crate::keys::{Keys, Origin, Refusal, RequestMeta};
-use crate::policy::{Policy, Remote, Verdict};
+use crate::policy::{Policy, Remote, Verdict, is_safety};
 use crate::wire::{self, Payload};
 
 /// How long the loop sleeps at most between looks at the server.
@@ -45,6 +46,9 @@ const SILENCE: Duration = Duration::from_secs(1);
 const REOPEN: Duration = Duration::from_millis(250);
 /// Commands waiting for a free request slot of the server; more are refused as busy.
 const MAX_QUEUED: usize = 256;
+/// Stop and e-stop still queue up to here (in order, behind what came before them: a stop
+/// never overtakes the goal it stops).
+const MAX_QUEUED_SAFETY: usize = 4 * MAX_QUEUED;
 /// Remote queries waiting in the loop's channel; more are answered `busy` on zenoh's
 /// thread (a flood never grows the bridge's memory).
 const MAX_WAITING_QUERIES: usize = 1024;
@@ -64,8 +68,10 @@ pub(crate) enum Read {
 pub(crate) enum Event {
     /// The server published a frame.
     Tick,
-    /// A remote's command.
-    Command(Query),
+    /// A remote's command, and when zenoh handed it over.
+    Command(Query, Instant),
+    /// A remote opens a session, and when zenoh handed the query over.
+    Open(Query, Instant),
     /// A remote reads the newest description, statistics, parameters or frame.
     Read(Read, Query),
     /// A remote client's liveliness token appeared or went.
@@ -81,6 +87,10 @@ pub enum BridgeError {
     /// zenoh or iceoryx2 could not be set up.
     #[error("{0}")]
     Setup(String),
+    /// The allow-list lets remotes do more than stop and e-stop, but zenoh authenticates
+    /// nobody, and `--insecure` was not given.
+    #[error("{0}")]
+    Insecure(String),
 }
 
 /// The newest sample of a service, as received and as bytes for the network.
@@ -182,6 +192,7 @@ impl Bridge {
             &config.connect,
         )
         .map_err(BridgeError::Setup)?;
+        net::check_exposure(&config, &zenoh)?;
         let net = Net::open(zenoh, &keys, &sender, &queued_queries).map_err(BridgeError::Setup)?;
         let tick_pending = Arc::new(AtomicBool::new(false));
         let ticker_stop = Arc::new(AtomicBool::new(false));
@@ -256,9 +267,13 @@ impl Bridge {
     fn handle(&mut self, event: Event) {
         match event {
             Event::Tick => self.tick_pending.store(false, Ordering::Release),
-            Event::Command(query) => {
+            Event::Command(query, received) => {
                 self.queued_queries.fetch_sub(1, Ordering::AcqRel);
-                self.on_command(query);
+                self.on_command(query, received);
+            }
+            Event::Open(query, received) => {
+                self.queued_queries.fetch_sub(1, Ordering::AcqRel);
+                self.on_open(&query, received);
             }
             Event::Read(read, query) => {
                 self.queued_queries.fetch_sub(1, Ordering::AcqRel);
@@ -474,7 +489,7 @@ impl Bridge {
         self.info.as_ref().map_or(0, |info| info.origin)
     }
 
-    fn on_command(&mut self, query: Query) {
+    fn on_command(&mut self, query: Query, received: Instant) {
         let key = query.key_expr().as_str().to_owned();
         let Some(identity) = self.keys.identity_of(&key).map(str::to_owned) else {
             refuse(
@@ -502,27 +517,17 @@ impl Bridge {
                 return;
             }
         };
-        let Some(meta) = query
+        // Stop and e-stop pass without a readable attachment; everything else is refused by
+        // the policy for want of a session.
+        let meta = query
             .attachment()
-            .and_then(|bytes| RequestMeta::decode(&bytes.to_bytes()))
-        else {
-            refuse(
-                Some(&query),
-                Refusal::BadRequest,
-                "a command needs its 25-byte attachment (session and send time)",
-            );
-            return;
-        };
-        let remote = Remote {
-            identity,
-            session: meta.session,
-        };
+            .and_then(|bytes| RequestMeta::decode(&bytes.to_bytes()));
         let deadman = self.info.as_ref().map_or(Duration::ZERO, |info| {
             Duration::from_millis(u64::from(info.value.command_timeout_ms))
         });
-        let now = self.started.elapsed();
-        match self.policy.admit(now, &remote, meta, &request, deadman) {
-            Verdict::Forward(forwarded) => {
+        let now = received.saturating_duration_since(self.started);
+        match self.policy.admit(now, &identity, meta, &request, deadman) {
+            Verdict::Forward(forwarded, remote) => {
                 if self.server.is_none() {
                     refuse(
                         Some(&query),
@@ -532,7 +537,13 @@ impl Bridge {
                             self.config.server
                         ),
                     );
-                } else if self.queue.len() >= MAX_QUEUED {
+                } else if self.queue.len()
+                    >= if request.kind().is_ok_and(is_safety) {
+                        MAX_QUEUED_SAFETY
+                    } else {
+                        MAX_QUEUED
+                    }
+                {
                     refuse(
                         Some(&query),
                         Refusal::Busy,
@@ -542,7 +553,7 @@ impl Bridge {
                     self.counters.forwarded += 1;
                     self.queue.push_back(Job {
                         query: Some(query),
-                        remote: Some(remote),
+                        remote,
                         request: forwarded,
                     });
                 }
@@ -553,7 +564,7 @@ impl Bridge {
             }
             Verdict::Refuse(refusal, text) => {
                 self.counters.refused += 1;
-                tracing::info!(remote = %remote.identity, %refusal, %text, "refused");
+                tracing::info!(remote = %identity, %refusal, %text, "refused");
                 refuse(Some(&query), refusal, &text);
             }
         }
@@ -602,9 +613,10 @@ impl Bridge {
         };
         if alive {
             tracing::info!(%identity, %session, "remote client connected");
+            self.policy.session_live(&identity, session);
             return;
         }
-        let requests = self.policy.session_gone(session);
+        let requests = self.policy.session_gone(&identity, session);
         tracing::info!(
             %identity,
             %session,
@@ -653,8 +665,15 @@ impl Bridge {
             let outcome = server::take_reply(&flight.pending);
             let done = match outcome {
                 Ok(Some((reply, node))) => {
-                    if let Some(remote) = &flight.job.remote {
-                        self.policy.on_reply(remote, &flight.job.request, &reply);
+                    match (&flight.job.remote, &flight.job.query) {
+                        (Some(remote), _) => {
+                            self.policy.on_reply(remote, &flight.job.request, &reply);
+                        }
+                        (None, Some(_)) => {
+                            self.policy
+                                .on_sessionless_reply(&flight.job.request, &reply);
+                        }
+                        (None, None) => {}
                     }
                     if let Some(query) = &flight.job.query {
                         answer(query, &reply, node);

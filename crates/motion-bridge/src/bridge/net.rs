@@ -6,6 +6,7 @@ use std::path::Path;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::mpsc::Sender;
+use std::time::Instant;
 
 use zenoh::Wait as _;
 use zenoh::liveliness::LivelinessToken;
@@ -14,15 +15,17 @@ use zenoh::qos::CongestionControl;
 use zenoh::query::Queryable;
 use zenoh::sample::SampleKind;
 
-use super::{Event, MAX_WAITING_QUERIES, Read, refuse};
+use super::{BridgeError, Event, MAX_WAITING_QUERIES, Read, refuse};
+use crate::config::BridgeConfig;
 use crate::keys::{Keys, Refusal};
+use crate::policy::RemoteRule;
 
 /// Hands `event` (a query) to the loop, unless too many queries wait already.
 fn hand_over(events: &Sender<Event>, waiting: &AtomicUsize, event: Event) {
     if waiting.fetch_add(1, Ordering::AcqRel) >= MAX_WAITING_QUERIES {
         waiting.fetch_sub(1, Ordering::AcqRel);
         match event {
-            Event::Command(query) | Event::Read(_, query) => {
+            Event::Command(query, _) | Event::Open(query, _) | Event::Read(_, query) => {
                 refuse(
                     Some(&query),
                     Refusal::Busy,
@@ -69,6 +72,79 @@ pub fn zenoh_config(
         set("connect/endpoints", list(connect)?)?;
     }
     Ok(config)
+}
+
+/// How zenoh authenticates the remotes under `config`, if it does: users and passwords
+/// checked against a dictionary, or TLS client certificates.
+pub(crate) fn authentication(config: &zenoh::Config) -> Option<&'static str> {
+    let set = |key: &str| {
+        config
+            .get_json(key)
+            .is_ok_and(|value| !matches!(value.trim(), "null" | "false" | "\"\""))
+    };
+    if set("transport/auth/usrpwd/dictionary_file") {
+        Some("user/password")
+    } else if set("transport/link/tls/enable_mtls") {
+        Some("TLS client certificates")
+    } else {
+        None
+    }
+}
+
+/// Whether zenoh's access control is on under `config`.
+pub(crate) fn access_control(config: &zenoh::Config) -> bool {
+    config
+        .get_json("access_control/enabled")
+        .is_ok_and(|value| value.trim() == "true")
+}
+
+/// Refuses to start a bridge that lets remotes do more than stop and e-stop while zenoh
+/// authenticates nobody (anyone who reaches the endpoint could claim any identity), unless
+/// the config says `insecure` (`--insecure`); says so in the log when it does start so.
+pub(super) fn check_exposure(
+    config: &BridgeConfig,
+    zenoh: &zenoh::Config,
+) -> Result<(), BridgeError> {
+    let wide: Vec<&RemoteRule> = config
+        .remotes
+        .iter()
+        .filter(|rule| rule.allows_more_than_safety())
+        .collect();
+    if wide.is_empty() {
+        return Ok(());
+    }
+    if let Some(how) = authentication(zenoh) {
+        if !access_control(zenoh) {
+            tracing::warn!(
+                how,
+                "zenoh authenticates users but has no access control: any user may send \
+                 under any identity (README: \"Who is who\")"
+            );
+        }
+        return Ok(());
+    }
+    let names = wide
+        .iter()
+        .map(|rule| format!("`{}`: {}", rule.identity, rule.allow.names().join(", ")))
+        .collect::<Vec<_>>()
+        .join("; ");
+    if config.insecure {
+        tracing::warn!(
+            remotes = %names,
+            "--insecure: zenoh authenticates nobody, so anyone who reaches {:?} may command \
+             as these identities",
+            config.listen
+        );
+        return Ok(());
+    }
+    Err(BridgeError::Insecure(format!(
+        "the config lets remotes do more than stop and e-stop ({names}), but zenoh \
+         authenticates nobody (no transport/auth/usrpwd dictionary_file, no TLS client \
+         certificates in --zenoh-config): anyone who reaches {} could command as these \
+         identities. Configure zenoh authentication and access control (README, \"Who is \
+         who\"), or pass --insecure on a network you trust",
+        config.listen.join(", ")
+    )))
 }
 
 /// The bridge's zenoh session and everything declared on it.
@@ -127,10 +203,23 @@ impl Net {
             session
                 .declare_queryable(keys.command_any())
                 .callback(move |query| {
-                    hand_over(&commands, &count, Event::Command(query));
+                    let received = Instant::now();
+                    hand_over(&commands, &count, Event::Command(query, received));
                 })
                 .wait()
                 .map_err(|error| format!("cannot declare the command queryable: {error}"))?,
+        );
+        let opens = events.clone();
+        let count = Arc::clone(waiting);
+        queryables.push(
+            session
+                .declare_queryable(keys.session_any())
+                .callback(move |query| {
+                    let received = Instant::now();
+                    hand_over(&opens, &count, Event::Open(query, received));
+                })
+                .wait()
+                .map_err(|error| format!("cannot declare the session queryable: {error}"))?,
         );
         for (key, read) in [
             (keys.info(), Read::Info),
@@ -178,5 +267,40 @@ impl Net {
             _remotes: remotes,
             _token: token,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn config(json5: &str) -> zenoh::Config {
+        let mut config = zenoh::Config::default();
+        for line in json5.lines().filter(|line| !line.trim().is_empty()) {
+            let (key, value) = line.split_once('=').expect("key = value");
+            config
+                .insert_json5(key.trim(), value.trim())
+                .expect("a zenoh config key");
+        }
+        config
+    }
+
+    #[test]
+    fn authentication_is_a_dictionary_of_users_or_client_certificates() {
+        assert_eq!(authentication(&zenoh::Config::default()), None);
+        assert!(!access_control(&zenoh::Config::default()));
+        // A user and password of the bridge's own authenticate nobody else.
+        let own = config(
+            "transport/auth/usrpwd/user = \"bridge\"\ntransport/auth/usrpwd/password = \"x\"",
+        );
+        assert_eq!(authentication(&own), None);
+        let users = config("transport/auth/usrpwd/dictionary_file = \"/etc/users.txt\"");
+        assert_eq!(authentication(&users), Some("user/password"));
+        let certificates = config("transport/link/tls/enable_mtls = true");
+        assert_eq!(
+            authentication(&certificates),
+            Some("TLS client certificates")
+        );
+        assert!(access_control(&config("access_control/enabled = true")));
     }
 }

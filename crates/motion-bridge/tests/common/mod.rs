@@ -2,6 +2,7 @@
 //! remote clients, free ports.
 #![allow(dead_code)]
 
+pub mod raw;
 pub mod real;
 
 use core::time::Duration;
@@ -51,7 +52,8 @@ pub struct BridgeThread {
 
 impl BridgeThread {
     /// A bridge of `server` on a free loopback port with `config_toml` (the `[[remote]]`
-    /// tables and other keys; `server` and `listen` are set here).
+    /// tables and other keys; `server` and `listen` are set here), `--insecure` (the tests'
+    /// rules are wide, zenoh authenticates nobody, and only loopback reaches it).
     pub fn start(server: &str, config_toml: &str) -> Result<Self> {
         Self::start_with(server, config_toml, None)
     }
@@ -78,10 +80,16 @@ impl BridgeThread {
             server: Some(server.to_owned()),
             listen: vec![endpoint.clone()],
             zenoh_config,
+            insecure: true,
             ..Overrides::default()
         };
         let config =
             BridgeConfig::parse(config_toml, std::path::Path::new("test.toml"), overrides)?;
+        Self::start_config(config, endpoint)
+    }
+
+    /// A bridge of exactly `config` (listening on `endpoint`).
+    pub fn start_config(config: BridgeConfig, endpoint: String) -> Result<Self> {
         let stop = Arc::new(AtomicBool::new(false));
         let (ready_tx, ready_rx) = std::sync::mpsc::channel();
         let flag = Arc::clone(&stop);

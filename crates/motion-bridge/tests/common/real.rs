@@ -257,6 +257,8 @@ impl Rig {
                 &listen,
                 "--config",
                 &bridge_config,
+                // The test's rules let `operator` do anything, without zenoh users.
+                "--insecure",
             ],
         )
         .stdin(Stdio::null())

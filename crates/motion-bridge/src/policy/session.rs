@@ -1,0 +1,194 @@
+//! Remote sessions: opened by the bridge (a public [`SessionId`] and a secret
+//! [`SessionToken`] only the querier receives), bound to the identity they were opened for,
+//! their time stamps judged against the bridge's clock from the moment they opened. At most
+//! [`MAX_SESSIONS`]; stop and e-stop need none, so a full table never holds them back.
+
+use core::time::Duration;
+use std::collections::HashMap;
+
+use crate::keys::{SessionId, SessionToken};
+
+/// Sessions open at most; past it, sessions without a liveliness token and silent for
+/// [`SESSION_IDLE`] are forgotten, and a new one is refused while none is (a flood of
+/// session openings never grows the bridge's memory; stop and e-stop need no session).
+pub const MAX_SESSIONS: usize = 1024;
+/// A session without a liveliness token not heard from for this long may be forgotten to
+/// make room.
+pub(super) const SESSION_IDLE: Duration = Duration::from_secs(60);
+/// How fast the floor of a session's clock offset may rise, s per s: room for clock drift
+/// between the hosts (1000 ppm, far above what NTP lets a clock drift).
+const FLOOR_CREEP: f64 = 1e-3;
+/// How much earlier than the session's floor a request may say it was sent, at least: the
+/// floor starts from the session's opening, which may itself have been slow (a loaded
+/// host, a new link), so a prompt request may look that much "ahead". A stamp further
+/// ahead than this and the window is a clock from the future.
+pub(super) const AHEAD_SLACK: Duration = Duration::from_secs(2);
+
+/// One open session.
+#[derive(Debug)]
+pub(super) struct SessionState {
+    /// The identity it was opened for: its token is good for this identity only.
+    pub(super) identity: String,
+    /// Its public id.
+    pub(super) id: SessionId,
+    /// Smallest (bridge time − send time) seen, ns, rising by at most `FLOOR_CREEP`, and
+    /// when it was last set.
+    floor: (i128, Duration),
+    /// When it was last heard from (opened, a request).
+    seen: Duration,
+    /// Whether its liveliness token is there (such a session is never forgotten for room;
+    /// it ends when the token goes).
+    live: bool,
+}
+
+/// How a request's time stamp lies against its session's clock.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Timing {
+    /// Within the window.
+    OnTime,
+    /// Arrived this much later than the session's fastest request.
+    Late(Duration),
+    /// Says it was sent this much later than it could have been (a clock from the future).
+    Ahead(Duration),
+}
+
+impl SessionState {
+    /// Judges a request sent at `sent_ns` (the session's clock) and received at `now` (the
+    /// bridge's): at most `window` later than the session's fastest, at most `window` (or
+    /// [`AHEAD_SLACK`], if more) earlier; a request on time moves the floor.
+    pub(super) fn judge(&mut self, now: Duration, sent_ns: u64, window: Duration) -> Timing {
+        let offset = now.as_nanos() as i128 - i128::from(sent_ns);
+        let (floor, at) = self.floor;
+        let creep = (now.saturating_sub(at).as_secs_f64() * FLOOR_CREEP * 1e9) as i128;
+        let floor = floor.saturating_add(creep);
+        let window_ns = window.as_nanos() as i128;
+        let to_duration = |ns: i128| Duration::from_nanos(u64::try_from(ns).unwrap_or(u64::MAX));
+        if offset.saturating_sub(floor) > window_ns {
+            return Timing::Late(to_duration(offset.saturating_sub(floor)));
+        }
+        if floor.saturating_sub(offset) > window.max(AHEAD_SLACK).as_nanos() as i128 {
+            return Timing::Ahead(to_duration(floor.saturating_sub(offset)));
+        }
+        self.floor = (floor.min(offset), now);
+        self.seen = now;
+        Timing::OnTime
+    }
+}
+
+/// What a token names for an identity.
+#[derive(Debug)]
+pub(super) enum Lookup<'s> {
+    /// A session of this identity.
+    Found(&'s mut SessionState),
+    /// No token, or one this bridge did not give out (or forgot).
+    Unknown,
+    /// A session of another identity: the token was copied.
+    OtherIdentity,
+}
+
+/// Every open session.
+#[derive(Debug, Default)]
+pub(super) struct Sessions {
+    by_token: HashMap<SessionToken, SessionState>,
+    by_id: HashMap<SessionId, SessionToken>,
+}
+
+impl Sessions {
+    /// Opens session `id` with secret `token` for `identity`, whose opening query was sent
+    /// at `sent_ns` (its clock) and received at `now`. False when the table is full (or
+    /// the id or token is taken, or the token is zero: the caller draws them again).
+    pub(super) fn open(
+        &mut self,
+        now: Duration,
+        identity: &str,
+        sent_ns: u64,
+        id: SessionId,
+        token: SessionToken,
+    ) -> bool {
+        if self.taken(id, token) || !self.make_room(now) {
+            return false;
+        }
+        self.by_id.insert(id, token);
+        self.by_token.insert(
+            token,
+            SessionState {
+                identity: identity.to_owned(),
+                id,
+                floor: (now.as_nanos() as i128 - i128::from(sent_ns), now),
+                seen: now,
+                live: false,
+            },
+        );
+        true
+    }
+
+    /// Whether `id` or `token` is taken, or the token is zero.
+    pub(super) fn taken(&self, id: SessionId, token: SessionToken) -> bool {
+        token.is_none() || self.by_token.contains_key(&token) || self.by_id.contains_key(&id)
+    }
+
+    /// Whether a new session fits, forgetting idle ones without liveliness if needed.
+    fn make_room(&mut self, now: Duration) -> bool {
+        if self.by_token.len() < MAX_SESSIONS {
+            return true;
+        }
+        let by_id = &mut self.by_id;
+        self.by_token.retain(|_, state| {
+            let keep = state.live || now.saturating_sub(state.seen) < SESSION_IDLE;
+            if !keep {
+                by_id.remove(&state.id);
+            }
+            keep
+        });
+        self.by_token.len() < MAX_SESSIONS
+    }
+
+    /// The session `token` names for `identity`.
+    pub(super) fn find(&mut self, identity: &str, token: SessionToken) -> Lookup<'_> {
+        match self.by_token.get_mut(&token) {
+            Some(state) if state.identity == identity => Lookup::Found(state),
+            Some(_) => Lookup::OtherIdentity,
+            None => Lookup::Unknown,
+        }
+    }
+
+    /// The liveliness token of `identity`'s session `id` appeared.
+    pub(super) fn live(&mut self, identity: &str, id: SessionId) {
+        if let Some(state) = self
+            .by_id
+            .get(&id)
+            .and_then(|token| self.by_token.get_mut(token))
+            && state.identity == identity
+        {
+            state.live = true;
+        }
+    }
+
+    /// Ends `identity`'s session `id`; whether it was open.
+    pub(super) fn close(&mut self, identity: &str, id: SessionId) -> bool {
+        let Some(token) = self.by_id.get(&id).copied() else {
+            return false;
+        };
+        if self
+            .by_token
+            .get(&token)
+            .is_none_or(|state| state.identity != identity)
+        {
+            return false;
+        }
+        self.by_id.remove(&id);
+        self.by_token.remove(&token);
+        true
+    }
+
+    /// Ends every session.
+    pub(super) fn clear(&mut self) {
+        self.by_id.clear();
+        self.by_token.clear();
+    }
+
+    /// Sessions open.
+    pub(super) fn len(&self) -> usize {
+        self.by_token.len()
+    }
+}

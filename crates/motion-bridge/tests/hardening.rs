@@ -1,0 +1,404 @@
+//! The bridge under abuse, as a process sees it through zenoh: a flood of new sessions does
+//! not lock out an e-stop, identities made up under `*` share the wildcard's rate, a
+//! session is the bridge's to give (an id read from a liveliness key, or a token sent under
+//! another identity, commands nothing), time stamps are judged for every session, and a
+//! wide allow-list without zenoh authentication needs `--insecure`.
+
+mod common;
+
+use core::time::Duration;
+use std::process::{Command, Stdio};
+use std::time::Instant;
+
+use common::raw::{Z as _, command, open_session, session};
+use common::{BridgeThread, DEADLINE, Result, eventually, fake, free_port, remote, scratch};
+use motion_bridge::Bridge;
+use motion_bridge::config::{BridgeConfig, Overrides};
+use motion_bridge::keys::{Keys, Refusal, RequestMeta, SessionToken};
+use motion_bridge::policy::MAX_SESSIONS;
+use motion_bridge::wire;
+use motion_client::ClientError;
+use motion_client::ipc::{ClientId, CommandKind, CommandRequest};
+use zenoh::Wait as _;
+
+/// The bridge's clock is not the test's: every remote keeps its own, here the test's
+/// `Instant` since this start, shifted.
+fn clock_ns(start: Instant, shift: Duration) -> u64 {
+    (start.elapsed() + shift).as_nanos() as u64
+}
+
+/// Sends every `(identity, request, meta)` at once (in waves the bridge's queues hold) and
+/// returns each answer: `Ok(())` for a reply of the server, `Err(text)` for a refusal.
+fn send_all(
+    session: &zenoh::Session,
+    keys: &Keys,
+    requests: &[(String, CommandRequest, Option<RequestMeta>)],
+) -> Result<Vec<core::result::Result<(), String>>> {
+    let mut answers = Vec::with_capacity(requests.len());
+    for wave in requests.chunks(128) {
+        let mut pending = Vec::with_capacity(wave.len());
+        for (identity, request, meta) in wave {
+            let mut get = session
+                .get(keys.command(identity))
+                .payload(wire::encode(request))
+                .timeout(DEADLINE);
+            if let Some(meta) = meta {
+                get = get.attachment(meta.encode());
+            }
+            pending.push(get.wait().z()?);
+        }
+        for replies in pending {
+            let reply = replies.recv().z()?;
+            answers.push(match reply.result() {
+                Ok(_) => Ok(()),
+                Err(error) => Err(error.payload().try_to_string()?.into_owned()),
+            });
+        }
+    }
+    Ok(answers)
+}
+
+/// A token nobody was given.
+fn made_up(n: u128) -> SessionToken {
+    SessionToken((n.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1).to_le_bytes())
+}
+
+#[test]
+fn after_a_flood_of_new_sessions_a_new_sessions_estop_latches() -> Result {
+    let server = fake("hard-flood")?;
+    let rules = r#"
+[[remote]]
+identity = "flood"
+allow = ["all"]
+rate = 1000000
+burst = 1000000
+
+[[remote]]
+identity = "operator"
+allow = ["all"]
+"#;
+    let bridge = BridgeThread::start(server.name(), rules)?;
+    let keys = Keys::new(server.name())?;
+    let flood = session(&bridge.endpoint)?;
+    let start = Instant::now();
+
+    // 1100 stops, each under a session nobody opened (the issue's flood): every one is
+    // forwarded, and none of them is kept.
+    let stops: Vec<_> = (0..1100u128)
+        .map(|n| {
+            let stop = CommandRequest::new(ClientId::NONE, n as u64, 0, CommandKind::Stop);
+            let meta = RequestMeta {
+                token: made_up(n),
+                sent_ns: clock_ns(start, Duration::ZERO),
+            };
+            ("flood".to_owned(), stop, Some(meta))
+        })
+        .collect();
+    let answers = send_all(&flood, &keys, &stops)?;
+    let refused: Vec<_> = answers.iter().filter_map(|a| a.as_ref().err()).collect();
+    assert!(
+        refused.is_empty(),
+        "stops refused: {:?}",
+        &refused[..refused.len().min(3)]
+    );
+
+    // Then 1100 sessions really opened: the table fills, the rest are told `busy`.
+    let mut opened = 0;
+    let mut busy = 0;
+    for _ in 0..1100 {
+        match open_session(&flood, &keys, "flood", clock_ns(start, Duration::ZERO))? {
+            Ok(_) => opened += 1,
+            Err(text) if text.starts_with("busy: ") => busy += 1,
+            Err(text) => return Err(format!("unexpected refusal: {text}").into()),
+        }
+    }
+    eprintln!("1100 stops under made-up sessions forwarded; {opened} sessions opened, {busy} busy");
+    assert_eq!((opened, busy), (MAX_SESSIONS, 1100 - MAX_SESSIONS));
+
+    // A new remote now gets no session, so a goal is refused as busy — but its e-stop is
+    // accepted and latches.
+    let operator = remote(server.name(), &bridge.endpoint, "operator")?;
+    match operator.axis("x")?.velocity(1.0) {
+        Err(ClientError::BridgeRefused { code: "busy", .. }) => {}
+        other => return Err(format!("a jog without a session: {other:?}").into()),
+    }
+    assert!(!server.estop_latched());
+    operator.estop()?;
+    eventually("the e-stop latched", || Ok(server.estop_latched()))?;
+    Ok(())
+}
+
+#[test]
+fn identities_made_up_under_the_wildcard_share_its_rate_and_burst() -> Result {
+    let server = fake("hard-wildcard")?;
+    let (rate, burst) = (2.0, 5.0);
+    let rules = format!(
+        r#"
+[[remote]]
+identity = "panel"
+allow = ["all"]
+rate = {rate}
+burst = {burst}
+
+[[remote]]
+identity = "*"
+allow = ["all"]
+rate = {rate}
+burst = {burst}
+"#
+    );
+    let bridge = BridgeThread::start(server.name(), &rules)?;
+    let keys = Keys::new(server.name())?;
+    let zenoh = session(&bridge.endpoint)?;
+    let start = Instant::now();
+    let jog = CommandRequest::new(ClientId::NONE, 1, 0, CommandKind::Velocity)
+        .with_values([1.0, 0.0, 0.0]);
+
+    // 500 jogs, each under a new identity (which needs a session of its own first).
+    let mut forwarded = 0;
+    let mut opened = 0;
+    let mut rate_limited = 0;
+    for n in 0..500 {
+        let identity = format!("rotating-{n}");
+        let grant = match open_session(&zenoh, &keys, &identity, clock_ns(start, Duration::ZERO))? {
+            Ok(grant) => {
+                opened += 1;
+                grant
+            }
+            Err(text) if text.starts_with("rate-limited: ") => {
+                rate_limited += 1;
+                continue;
+            }
+            Err(text) => return Err(format!("unexpected refusal: {text}").into()),
+        };
+        let meta = RequestMeta {
+            token: grant.token,
+            sent_ns: clock_ns(start, Duration::ZERO),
+        };
+        match command(&zenoh, &keys, &identity, &jog, Some(meta))? {
+            Ok(_) => forwarded += 1,
+            Err(text) if text.starts_with("rate-limited: ") => {
+                assert!(text.contains("under `*`"), "{text}");
+                rate_limited += 1;
+            }
+            Err(text) => return Err(format!("unexpected refusal: {text}").into()),
+        }
+    }
+    let elapsed = start.elapsed().as_secs_f64();
+    // Every opening and every jog takes from the one bucket: burst plus what the rate
+    // refilled while the test ran (one more for rounding), never one per identity.
+    let most = (burst + rate * elapsed).floor() as usize + 1;
+    let velocities = server
+        .requests()
+        .iter()
+        .filter(|r| r.kind == CommandKind::Velocity as u32)
+        .count();
+    eprintln!(
+        "{forwarded} of 500 jogs under rotating identities passed and {opened} sessions \
+         opened in {elapsed:.1} s (at most {most} together), {rate_limited} refused as over \
+         the rate"
+    );
+    assert_eq!(velocities, forwarded, "what passed reached the server");
+    assert!(
+        forwarded >= 1 && opened + forwarded <= most && rate_limited >= 500 - most,
+        "{forwarded} jogs of 500 rotating identities passed, {opened} sessions opened, in \
+         {elapsed:.1} s (at most {most} together: burst {burst} + {rate}/s), {rate_limited} \
+         refused"
+    );
+    // A named identity keeps its own bucket.
+    let panel = open_session(&zenoh, &keys, "panel", clock_ns(start, Duration::ZERO))??;
+    let meta = RequestMeta {
+        token: panel.token,
+        sent_ns: clock_ns(start, Duration::ZERO),
+    };
+    command(&zenoh, &keys, "panel", &jog, Some(meta))?
+        .map_err(|text| format!("panel's own bucket: {text}"))?;
+    Ok(())
+}
+
+#[test]
+fn a_session_read_from_a_liveliness_key_or_copied_from_another_remote_is_refused() -> Result {
+    let server = fake("hard-session")?;
+    let rules = r#"
+[[remote]]
+identity = "operator"
+allow = ["all"]
+
+[[remote]]
+identity = "intruder"
+allow = ["all"]
+"#;
+    let bridge = BridgeThread::start(server.name(), rules)?;
+    let keys = Keys::new(server.name())?;
+    // The victim: a client that claims axis x.
+    let victim = remote(server.name(), &bridge.endpoint, "operator")?;
+    victim.wait_ready(DEADLINE)?;
+    let _claim = victim.axis("x")?.claim_guard()?;
+
+    // The attacker reads the victim's liveliness key, as anyone may.
+    let attacker = session(&bridge.endpoint)?;
+    let tokens = attacker
+        .liveliness()
+        .get(keys.remote_tokens())
+        .timeout(Duration::from_secs(5))
+        .wait()
+        .z()?;
+    let mut seen = Vec::new();
+    while let Ok(reply) = tokens.recv() {
+        if let Ok(sample) = reply.result()
+            && let Some((identity, id)) = keys.remote_of(sample.key_expr().as_str())
+        {
+            seen.push((identity, id));
+        }
+    }
+    let [(identity, public_id)] = &seen[..] else {
+        return Err(format!("one remote token expected: {seen:?}").into());
+    };
+    assert_eq!(identity, "operator");
+
+    let start = Instant::now();
+    // The attacker's clock: 100 s since it booted.
+    let now = || clock_ns(start, Duration::from_secs(100));
+    let jog = CommandRequest::new(ClientId::NONE, 7, 0, CommandKind::Velocity)
+        .with_values([5.0, 0.0, 0.0]);
+    let no_session = |answer: core::result::Result<_, String>, what: &str| -> Result {
+        match answer {
+            Err(text) if Refusal::parse(&text).map(|r| r.0) == Some(Refusal::NoSession) => Ok(()),
+            other => Err(format!("{what}: {other:?}").into()),
+        }
+    };
+    // The public id as the token, under the victim's identity: no session.
+    let from_key = RequestMeta {
+        token: SessionToken(public_id.0.to_le_bytes()),
+        sent_ns: now(),
+    };
+    no_session(
+        command(&attacker, &keys, "operator", &jog, Some(from_key))?,
+        "the id of a liveliness key",
+    )?;
+    // A session of the attacker's own identity, its attachment sent under the victim's
+    // identity — and a session of `operator` (opened by the attacker) sent under `intruder`.
+    let own = open_session(&attacker, &keys, "intruder", now())??;
+    let other = open_session(&attacker, &keys, "operator", now())??;
+    for (identity, token) in [("operator", own.token), ("intruder", other.token)] {
+        let meta = RequestMeta {
+            token,
+            sent_ns: now(),
+        };
+        match command(&attacker, &keys, identity, &jog, Some(meta))? {
+            Err(text) => assert!(
+                text.starts_with("no-session: ") && text.contains("another identity"),
+                "{text}"
+            ),
+            Ok(reply) => return Err(format!("a copied session commanded: {reply:?}").into()),
+        }
+    }
+    // A session's own first request, stamped 2 s before it opened, or 10 s ahead of its
+    // clock: judged against the bridge's clock, not taken as the session's new normal.
+    for (shift, what) in [(-2.0, "an old stamp"), (10.0, "a stamp from the future")] {
+        let opened = open_session(&attacker, &keys, "intruder", now())??;
+        let sent = (now() as f64 + shift * 1e9) as u64;
+        let meta = RequestMeta {
+            token: opened.token,
+            sent_ns: sent,
+        };
+        match command(&attacker, &keys, "intruder", &jog, Some(meta))? {
+            Err(text) if text.starts_with("late: ") => {}
+            other => return Err(format!("{what}: {other:?}").into()),
+        }
+    }
+    let velocities = |server: &motion_client::testing::FakeServer| {
+        server
+            .requests()
+            .iter()
+            .filter(|r| r.kind == CommandKind::Velocity as u32)
+            .count()
+    };
+    assert_eq!(
+        velocities(&server),
+        0,
+        "the server never saw the attacker's jogs"
+    );
+    // The victim's own session goes on commanding its axis.
+    victim.axis("x")?.velocity(1.0)?;
+    assert_eq!(velocities(&server), 1);
+    Ok(())
+}
+
+#[test]
+fn a_wide_allow_list_without_zenoh_authentication_needs_insecure() -> Result {
+    let dir = scratch("hard-insecure")?;
+    let wide = dir.join("wide.toml");
+    std::fs::write(
+        &wide,
+        "[[remote]]\nidentity = \"panel\"\nallow = [\"move\", \"stop\"]\n",
+    )?;
+    let endpoint = format!("tcp/127.0.0.1:{}", free_port()?);
+    let binary = env!("CARGO_BIN_EXE_motion-bridge");
+    let run = |extra: &[&str]| {
+        Command::new(binary)
+            .args([
+                "--server",
+                "hard-insecure-nobody",
+                "--listen",
+                &endpoint,
+                "--config",
+            ])
+            .arg(&wide)
+            .args(extra)
+            .stdin(Stdio::null())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+    };
+    // Refused at start, saying why and what to do.
+    let output = common::real::finish(run(&[])?, DEADLINE)?;
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(1), "{stderr}");
+    assert!(
+        stderr.contains("authenticates nobody")
+            && stderr.contains("`panel`")
+            && stderr.contains("--insecure"),
+        "{stderr}"
+    );
+    // With --insecure it starts (and says so); it runs until told to stop.
+    let mut child = run(&["--insecure"])?;
+    std::thread::sleep(Duration::from_millis(500));
+    let still_running = child.try_wait()?.is_none();
+    let _ = nix::sys::signal::kill(
+        nix::unistd::Pid::from_raw(child.id() as i32),
+        nix::sys::signal::Signal::SIGTERM,
+    );
+    let output = common::real::finish(child, DEADLINE)?;
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(still_running && stderr.contains("--insecure"), "{stderr}");
+
+    // Stop and e-stop only, or users checked by zenoh: no --insecure needed.
+    let start = |toml: &str, zenoh: Option<std::path::PathBuf>| -> Result<Bridge> {
+        let overrides = Overrides {
+            server: Some("hard-insecure-nobody".to_owned()),
+            listen: vec![format!("tcp/127.0.0.1:{}", free_port()?)],
+            zenoh_config: zenoh,
+            ..Overrides::default()
+        };
+        let config = BridgeConfig::parse(toml, &dir.join("b.toml"), overrides)?;
+        Ok(Bridge::start(config)?)
+    };
+    drop(start(
+        "[[remote]]\nidentity = \"*\"\nallow = [\"stop\", \"estop\"]\n",
+        None,
+    )?);
+    let zenoh = dir.join("users.json5");
+    std::fs::write(dir.join("users.txt"), "panel:secret\n")?;
+    std::fs::write(
+        &zenoh,
+        format!(
+            "{{ transport: {{ auth: {{ usrpwd: {{ dictionary_file: \"{}\" }} }} }} }}",
+            dir.join("users.txt").display()
+        ),
+    )?;
+    let wide_toml = std::fs::read_to_string(&wide)?;
+    drop(start(&wide_toml, Some(zenoh))?);
+    let _ = std::fs::remove_dir_all(&dir);
+    Ok(())
+}
