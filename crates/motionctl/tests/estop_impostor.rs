@@ -128,6 +128,35 @@ fn wait_frame(
     }
 }
 
+/// Command client ports and e-stop notifiers of the instance, every free one, held by
+/// `hog` until dropped.
+#[allow(clippy::type_complexity)]
+fn take_command_and_estop_slots(
+    hog: &iceoryx2::node::Node<ipc::Service>,
+    names: &ServiceNames,
+) -> Result<(
+    Vec<iceoryx2::port::client::Client<ipc::Service, CommandRequest, (), CommandReply, ()>>,
+    Vec<iceoryx2::port::notifier::Notifier<ipc::Service>>,
+)> {
+    let commands = hog
+        .service_builder(&ServiceName::new(&names.command())?)
+        .request_response::<CommandRequest, CommandReply>()
+        .open()?;
+    let mut clients = Vec::new();
+    while let Ok(port) = commands.client_builder().create() {
+        clients.push(port);
+    }
+    let event = hog
+        .service_builder(&ServiceName::new(&names.estop())?)
+        .event()
+        .open()?;
+    let mut notifiers = Vec::new();
+    while let Ok(notifier) = event.notifier_builder().create() {
+        notifiers.push(notifier);
+    }
+    Ok((clients, notifiers))
+}
+
 #[test]
 fn an_impostor_node_never_gets_the_estop_and_every_jog_stops() -> Result {
     // 4 jogs + this test's observer + 1 for motionctl estop's frame: 6 frame slots.
@@ -157,23 +186,8 @@ fn an_impostor_node_never_gets_the_estop_and_every_jog_stops() -> Result {
 
     // Every command client slot and every e-stop notifier slot taken.
     let hog = NodeBuilder::new().create::<ipc::Service>()?;
-    let commands = hog
-        .service_builder(&ServiceName::new(&names.command())?)
-        .request_response::<CommandRequest, CommandReply>()
-        .open()?;
-    let mut held_clients = Vec::new();
-    while let Ok(port) = commands.client_builder().create() {
-        held_clients.push(port);
-    }
-    let event = hog
-        .service_builder(&ServiceName::new(&names.estop())?)
-        .event()
-        .open()?;
-    let mut held_notifiers = Vec::new();
-    while let Ok(notifier) = event.notifier_builder().create() {
-        held_notifiers.push(notifier);
-    }
-    assert!(!held_notifiers.is_empty());
+    let held = take_command_and_estop_slots(&hog, &names)?;
+    assert!(!held.1.is_empty());
     assert_fails(&run(&name, &["stop"])?, 3, "no free client slot");
 
     let estop = run(&name, &["estop"])?;
@@ -219,22 +233,7 @@ fn an_estop_no_frame_can_confirm_exits_non_zero_and_still_reaches_the_real_serve
 
     // Every slot taken: command clients, notifiers and frame subscribers.
     let hog = NodeBuilder::new().create::<ipc::Service>()?;
-    let commands = hog
-        .service_builder(&ServiceName::new(&names.command())?)
-        .request_response::<CommandRequest, CommandReply>()
-        .open()?;
-    let mut held_clients = Vec::new();
-    while let Ok(port) = commands.client_builder().create() {
-        held_clients.push(port);
-    }
-    let event = hog
-        .service_builder(&ServiceName::new(&names.estop())?)
-        .event()
-        .open()?;
-    let mut held_notifiers = Vec::new();
-    while let Ok(notifier) = event.notifier_builder().create() {
-        held_notifiers.push(notifier);
-    }
+    let _held = take_command_and_estop_slots(&hog, &names)?;
     let frames = hog
         .service_builder(&ServiceName::new(&names.frame())?)
         .publish_subscribe::<MotionFrame>()
