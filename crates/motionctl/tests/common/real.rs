@@ -70,15 +70,22 @@ pub fn configured_axes(config: &str) -> Vec<String> {
     configured(config, "axis")
 }
 
-/// Whether every axis of a `status --json` is fresh and unfaulted.
+/// Whether every device of a `status --json` is online (it answered, was configured and
+/// stopped) and every axis is fresh and unfaulted. A board's axes can be fresh before its
+/// start-up is complete (seen on the simulated packs: `x` fresh at 0.75 s, `pack_xyz` online
+/// at 1.25 s).
 pub fn settled(status: &Value) -> bool {
-    status["axes"].as_array().is_some_and(|axes| {
-        axes.iter().all(|axis| {
-            axis["flags"]
-                .as_array()
-                .is_some_and(|flags| !flags.iter().any(|f| f == "stale" || f == "fault"))
+    let online = status["devices"]
+        .as_array()
+        .is_some_and(|devices| devices.iter().all(|device| device["state"] == "online"));
+    online
+        && status["axes"].as_array().is_some_and(|axes| {
+            axes.iter().all(|axis| {
+                axis["flags"]
+                    .as_array()
+                    .is_some_and(|flags| !flags.iter().any(|f| f == "stale" || f == "fault"))
+            })
         })
-    })
 }
 
 /// Whether the only faults of a `status --json` are tick overruns.
