@@ -404,6 +404,8 @@ impl Driver for SpimotorDriver {
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_late_replies;
 
 /// The SPI_motor protocol page defines no I/O port: no pins.
 pub const PINS: &[crate::PinInfo] = &[];

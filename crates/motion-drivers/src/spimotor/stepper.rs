@@ -49,7 +49,11 @@ pub(super) struct Stepper {
     max_accel: f64,
     motion: Motion,
     ramp: Ramp,
-    /// Position and time of the last consistent poll (`None` after start-up).
+    /// Position of the last consistent poll and when its read was on the wire (the
+    /// transaction's write stamp, else its queue time); `None` after start-up. Measured
+    /// from the wire, not from when the tick took the reply in: a reply taken in late
+    /// would otherwise shorten every later window by its lateness and make each following
+    /// poll of a moving motor look too far.
     baseline: Option<(i32, Duration)>,
     cycle: Cycle,
     suspect: Option<(i32, i32, u8)>,
@@ -131,7 +135,7 @@ impl Stepper {
         self.delay = delay;
         self.refreshed_at = Some(now);
         self.sampled_at = sampled_at;
-        self.baseline = Some((position, now));
+        self.baseline = Some((position, sampled_at));
         self.cycle = Cycle::default();
         self.suspect = None;
         self.repeats = 0;
@@ -425,7 +429,9 @@ impl SpimotorDriver {
         // one in force when this read went out, whichever is faster.
         let rate = ramp::rate_of(position_expect.delay).max(ramp::rate_of(self.stepper.delay));
         let plausible = self.stepper.baseline.is_none_or(|(before, at)| {
-            let window = now.saturating_sub(at).saturating_add(PLAUSIBILITY_SLACK);
+            let window = sampled_at
+                .saturating_sub(at)
+                .saturating_add(PLAUSIBILITY_SLACK);
             let reach = rate * window.as_secs_f64() + PLAUSIBILITY_STEPS;
             (i64::from(position) - i64::from(before)).unsigned_abs() as f64 <= reach
         });
@@ -436,7 +442,7 @@ impl SpimotorDriver {
             stepper.delay = delay;
             stepper.refreshed_at = Some(now);
             stepper.sampled_at = sampled_at;
-            stepper.baseline = Some((position, now));
+            stepper.baseline = Some((position, sampled_at));
             stepper.suspect = None;
             stepper.repeats = 0;
             stepper.bad_in_row = 0;

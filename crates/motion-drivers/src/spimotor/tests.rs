@@ -20,11 +20,11 @@ const MS: Duration = Duration::from_millis(1);
 
 /// A board that answers by port and takes writes at once (no stepping).
 #[derive(Debug, Clone)]
-struct Board {
+pub(super) struct Board {
     present: bool,
-    position: i32,
-    target: i32,
-    delay: u8,
+    pub(super) position: i32,
+    pub(super) target: i32,
+    pub(super) delay: u8,
     intensity: u8,
     spins: Vec<Write>,
     /// Port 0x42 counts from the old target instead of the current position.
@@ -44,7 +44,7 @@ impl Board {
         }
     }
 
-    fn transfer(&mut self, mosi: &[u8]) -> Vec<u8> {
+    pub(super) fn transfer(&mut self, mosi: &[u8]) -> Vec<u8> {
         let mut miso = vec![0xFF; mosi.len()];
         if !self.present {
             return miso;
@@ -83,10 +83,10 @@ impl Board {
 }
 
 /// The driver, a board, a clock and everything sent.
-struct Bench {
-    driver: SpimotorDriver,
-    board: Board,
-    now: Duration,
+pub(super) struct Bench {
+    pub(super) driver: SpimotorDriver,
+    pub(super) board: Board,
+    pub(super) now: Duration,
     sent: Vec<Vec<u8>>,
 }
 
@@ -131,7 +131,7 @@ impl Bench {
         }
     }
 
-    fn started(config: SpimotorDriverConfig) -> Self {
+    pub(super) fn started(config: SpimotorDriverConfig) -> Self {
         let mut bench = Self::new(config);
         bench.steps(5);
         assert!(bench.driver.status().online);
@@ -140,7 +140,7 @@ impl Bench {
     }
 }
 
-fn stepper() -> SpimotorDriverConfig {
+pub(super) fn stepper() -> SpimotorDriverConfig {
     SpimotorDriverConfig {
         limits: [AxisLimits {
             max_velocity: 2_000.0,
