@@ -10,7 +10,7 @@ use core::time::Duration;
 use std::process::{Command, Stdio};
 use std::time::Instant;
 
-use common::raw::{Z as _, command, open_session, session};
+use common::raw::{Z as _, command, open_session, session, wait_for_server};
 use common::{BridgeThread, DEADLINE, Result, eventually, fake, free_port, remote, scratch};
 use motion_bridge::Bridge;
 use motion_bridge::config::{BridgeConfig, Overrides};
@@ -80,6 +80,7 @@ allow = ["all"]
     let bridge = BridgeThread::start(server.name(), rules)?;
     let keys = Keys::new(server.name())?;
     let flood = session(&bridge.endpoint)?;
+    wait_for_server(&flood, &keys)?;
     let start = Instant::now();
 
     // 1100 stops, each under a session nobody opened (the flood): every one is
@@ -150,6 +151,7 @@ burst = {burst}
     let bridge = BridgeThread::start(server.name(), &rules)?;
     let keys = Keys::new(server.name())?;
     let zenoh = session(&bridge.endpoint)?;
+    wait_for_server(&zenoh, &keys)?;
     let start = Instant::now();
     let jog = CommandRequest::new(ClientId::NONE, 1, 0, CommandKind::Velocity)
         .with_values([1.0, 0.0, 0.0]);

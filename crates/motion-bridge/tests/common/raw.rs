@@ -92,3 +92,30 @@ pub fn command(
         Err(error) => Err(error.payload().try_to_string()?.into_owned()),
     })
 }
+
+/// Waits until the bridge has the server's description: until its subscriber gets the
+/// server's sample, a moment after the bridge started, it answers every request
+/// `no-server`.
+pub fn wait_for_server(session: &zenoh::Session, keys: &Keys) -> Result {
+    let until = std::time::Instant::now() + DEADLINE;
+    loop {
+        let reply = session
+            .get(keys.info())
+            .timeout(DEADLINE)
+            .wait()
+            .z()?
+            .recv_timeout(DEADLINE)
+            .z()?
+            .ok_or("no answer for the description")?;
+        match reply.into_result() {
+            Ok(_) => return Ok(()),
+            Err(error) => {
+                let text = String::from_utf8_lossy(&error.payload().to_bytes()).into_owned();
+                if !text.starts_with("no-server") || std::time::Instant::now() >= until {
+                    return Err(format!("the bridge never had the server: {text}").into());
+                }
+                std::thread::sleep(Duration::from_millis(20));
+            }
+        }
+    }
+}
