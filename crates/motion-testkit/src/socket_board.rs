@@ -135,7 +135,7 @@ fn serve<D: SpiDevice>(
         let _ = conn.set_read_timeout(Some(Duration::from_millis(1)));
         let mut pending: Vec<u8> = Vec::new();
         let mut buf = [0u8; 4096];
-        while !stop.load(Ordering::Relaxed) {
+        'connection: while !stop.load(Ordering::Relaxed) {
             match conn.read(&mut buf) {
                 Ok(0) => break,
                 Ok(n) => pending.extend_from_slice(&buf[..n]),
@@ -163,7 +163,9 @@ fn serve<D: SpiDevice>(
                     log.push((now, mosi));
                 }
                 if conn.write_all(&miso).is_err() {
-                    return;
+                    // The server went away mid-transaction (killed): this connection is
+                    // over, the board waits for the next one as a real bridge would.
+                    break 'connection;
                 }
             }
         }
