@@ -166,8 +166,10 @@ pub enum Command {
         all: bool,
     },
     /// Emergency stop: every axis stops with its e-stop category; latched until `reset`.
-    /// Tries the command service, then the estop event, then SIGUSR1 to the server
-    /// process, and says which path delivered it.
+    /// Tries the command service, then the estop event, then SIGUSR1 to the process the
+    /// server's pid file names, and says which path delivered it; exits 0 only when the
+    /// server showed the latch (a frame, or the command's reply), 5 when it was sent but
+    /// not seen.
     Estop,
     /// Wait until every device (or the devices of the axes named) is online.
     WaitReady {
