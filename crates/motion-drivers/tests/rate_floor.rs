@@ -1,5 +1,8 @@
 //! Every driver's smallest representable velocity and acceleration ([`Driver::rate_floor`]),
-//! from its board's datasheet (`../shared/seeds/`); the engine refuses slower goals
+//! from its board's datasheet (the documents docs/ARCHITECTURE.md "The boards" names by
+//! title and version: "QuadQuad2Drv PCB Datasheet", the SIXpack / QUADpack manual V2.43,
+//! the SPI_motor "Motor protocol" page, the "QSB Command List" v1.28); the engine refuses
+//! slower goals
 //! (`motion_ipc::rules`: `VelocityLimit`, `AccelLimit`) instead of letting a board round
 //! them to nothing or up to its step.
 
