@@ -23,38 +23,11 @@ use support::*;
 type CommandClient =
     iceoryx2::port::client::Client<ipc::Service, CommandRequest, (), CommandReply, ()>;
 
-/// A simulated SPI_motor stepper (axis `a`) and a brushed pair (`pa`, `pb`), `max_clients`
-/// ports per service.
+/// A simulated SPI_motor stepper (axis `a`), `max_clients` ports per service.
 fn config(name: &str, max_clients: u32) -> std::path::PathBuf {
-    write_config(
+    stepper_config(
         name,
-        &format!(
-            r#"[server]
-name = "{name}"
-max_clients = {max_clients}
-liveness_check_ms = 50
-
-[[link]]
-name = "spi"
-type = "sim"
-
-[[device]]
-name = "m"
-link = "spi"
-model = "spimotor"
-
-[[axis]]
-name = "a"
-device = "m"
-channel = 0
-unit = "step"
-counts_per_unit = 1.0
-min = -10000.0
-max = 10000.0
-max_velocity = 500.0
-max_accel = 5000.0
-"#
-        ),
+        &format!("max_clients = {max_clients}\nliveness_check_ms = 50"),
     )
 }
 

@@ -73,24 +73,10 @@ fn qsb_inputs_show_outputs_reach_the_board_and_an_e_stop_makes_them_safe() {
     let board = Arc::new(Mutex::new(QsbSim::new(QsbSimConfig::default())));
     let tty = std::env::temp_dir().join(format!("{name}.tty"));
     let served = PtyBoard::start(&tty, Arc::clone(&board), epoch, 230_400);
-    let config = write_config(
+    let config = qsb_io_config(
         &name,
-        &format!(
-            r#"[server]
-name = "{name}"
-
-[[link]]
-name = "usb"
-type = "serial"
-path = "{}"
-baud = 230400
-
-[[device]]
-name = "io_board"
-link = "usb"
-model = "qsb"
-
-[[signal]]
+        &tty,
+        r#"[[signal]]
 name = "lamp"
 device = "io_board"
 pin = "io0"
@@ -104,8 +90,6 @@ pin = "io3"
 kind = "digital-in"
 invert = true
 "#,
-            tty.display()
-        ),
     );
     let mut server = Server::start(&config);
     let mut client = RawClient::connect(&name, Duration::from_secs(10));

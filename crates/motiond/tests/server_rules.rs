@@ -26,35 +26,7 @@ use support::*;
 
 /// A simulated SPI_motor stepper, axis `a` (index 0).
 fn sim_config(name: &str) -> std::path::PathBuf {
-    write_config(
-        name,
-        &format!(
-            r#"[server]
-name = "{name}"
-liveness_check_ms = 50
-
-[[link]]
-name = "spi"
-type = "sim"
-
-[[device]]
-name = "m"
-link = "spi"
-model = "spimotor"
-
-[[axis]]
-name = "a"
-device = "m"
-channel = 0
-unit = "step"
-counts_per_unit = 1.0
-min = -10000.0
-max = 10000.0
-max_velocity = 500.0
-max_accel = 5000.0
-"#
-        ),
-    )
+    stepper_config(name, "liveness_check_ms = 50")
 }
 
 fn online(frame: &MotionFrame) -> bool {
@@ -130,6 +102,18 @@ fn after_another_client_s_reset_the_claim_holds_and_the_other_s_move_is_refused(
 
 /// A SIXpack on a serial link at `tty`: axis `six0` (channel 0).
 fn tmcpack_config(name: &str, tty: &std::path::Path) -> std::path::PathBuf {
+    tmcpack_config_on(
+        name,
+        &format!(
+            "type = \"serial\"\npath = \"{}\"\nbaud = 19200",
+            tty.display()
+        ),
+    )
+}
+
+/// A SIXpack at address 1 on the link `rs485` (its keys after the name: `link_keys`): axis
+/// `six0` (channel 0) at 640 µsteps/mm, 10 mm/s, 50 mm/s².
+fn tmcpack_config_on(name: &str, link_keys: &str) -> std::path::PathBuf {
     write_config(
         name,
         &format!(
@@ -138,9 +122,7 @@ name = "{name}"
 
 [[link]]
 name = "rs485"
-type = "serial"
-path = "{}"
-baud = 19200
+{link_keys}
 
 [[device]]
 name = "pack"
@@ -158,14 +140,11 @@ min = -1000.0
 max = 1000.0
 max_velocity = 10.0
 max_accel = 50.0
-"#,
-            tty.display()
+"#
         ),
     )
 }
 
-/// Until its link first opened, the pack is starting: never offline, never a link-down
-/// fault, and a move is refused as starting; once the tty appears the same move works.
 #[test]
 fn a_move_on_a_pty_link_that_opens_late_is_refused_as_starting_never_link_down_then_works() {
     let name = unique_name("latelink");
@@ -343,31 +322,15 @@ fn a_digital_output_takes_0_or_1_and_nothing_else() {
     let board = Arc::new(Mutex::new(QsbSim::new(QsbSimConfig::default())));
     let tty = std::env::temp_dir().join(format!("{name}.tty"));
     let _served = PtyBoard::start(&tty, Arc::clone(&board), epoch, 230_400);
-    let config = write_config(
+    let config = qsb_io_config(
         &name,
-        &format!(
-            r#"[server]
-name = "{name}"
-
-[[link]]
-name = "usb"
-type = "serial"
-path = "{}"
-baud = 230400
-
-[[device]]
-name = "io_board"
-link = "usb"
-model = "qsb"
-
-[[signal]]
+        &tty,
+        r#"[[signal]]
 name = "lamp"
 device = "io_board"
 pin = "io0"
 kind = "digital-out"
 "#,
-            tty.display()
-        ),
     );
     let mut server = Server::start(&config);
     let client = RawClient::connect(&name, Duration::from_secs(10));
@@ -408,35 +371,7 @@ kind = "digital-out"
 #[test]
 fn rates_below_the_pack_s_smallest_step_are_refused_and_at_it_taken() {
     let name = unique_name("floor");
-    let config = write_config(
-        &name,
-        &format!(
-            r#"[server]
-name = "{name}"
-
-[[link]]
-name = "rs485"
-type = "sim"
-
-[[device]]
-name = "pack"
-link = "rs485"
-model = "tmcpack"
-address = 1
-
-[[axis]]
-name = "six0"
-device = "pack"
-channel = 0
-unit = "mm"
-counts_per_unit = 640.0
-min = -1000.0
-max = 1000.0
-max_velocity = 10.0
-max_accel = 50.0
-"#
-        ),
-    );
+    let config = tmcpack_config_on(&name, r#"type = "sim""#);
     let mut server = Server::start(&config);
     let mut client = RawClient::connect(&name, Duration::from_secs(10));
     let (frame, up) = client.wait_frame(Duration::from_secs(10), online);

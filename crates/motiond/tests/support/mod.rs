@@ -24,3 +24,63 @@ impl motion_testkit::ServerBinary for ThisMotiond {
 
 /// A running motiond; killed on drop if still running.
 pub type Server = motion_testkit::Server<ThisMotiond>;
+
+/// A simulated SPI_motor stepper, axis `a` (index 0: 1 step a unit, ±10 000 steps,
+/// 500 steps/s, 5000 steps/s²), with `server_keys` added to `[server]`.
+pub fn stepper_config(name: &str, server_keys: &str) -> std::path::PathBuf {
+    write_config(
+        name,
+        &format!(
+            r#"[server]
+name = "{name}"
+{server_keys}
+
+[[link]]
+name = "spi"
+type = "sim"
+
+[[device]]
+name = "m"
+link = "spi"
+model = "spimotor"
+
+[[axis]]
+name = "a"
+device = "m"
+channel = 0
+unit = "step"
+counts_per_unit = 1.0
+min = -10000.0
+max = 10000.0
+max_velocity = 500.0
+max_accel = 5000.0
+"#
+        ),
+    )
+}
+
+/// A QSB as device `io_board` on the serial link `usb` at `tty` (230400 baud), with the
+/// `[[signal]]` tables `signals`.
+pub fn qsb_io_config(name: &str, tty: &std::path::Path, signals: &str) -> std::path::PathBuf {
+    write_config(
+        name,
+        &format!(
+            r#"[server]
+name = "{name}"
+
+[[link]]
+name = "usb"
+type = "serial"
+path = "{}"
+baud = 230400
+
+[[device]]
+name = "io_board"
+link = "usb"
+model = "qsb"
+
+{signals}"#,
+            tty.display()
+        ),
+    )
+}
