@@ -9,6 +9,8 @@ use super::QsbInputMode;
 /// A device's model-specific keys, validated.
 #[derive(Debug, Clone, PartialEq)]
 pub enum DeviceMachine {
+    /// A model without machine keys in this table (a board crate's own model).
+    Plain,
     /// QuadQuad2Drv: no device-level machine keys (its keys are per axis).
     Qq2drv,
     /// Trinamic pack.
@@ -22,6 +24,8 @@ pub enum DeviceMachine {
 /// An axis's model-specific keys, validated.
 #[derive(Debug, Clone, PartialEq)]
 pub enum AxisMachine {
+    /// A model without machine keys in this table (a board crate's own model).
+    Plain,
     /// QuadQuad2Drv channel.
     Qq2drv(Qq2drvAxisKeys),
     /// Trinamic motor.

@@ -16,7 +16,7 @@ mod keys;
 mod tests;
 
 use crate::driver::Model;
-use crate::pin::{Pin, PinInfo, SignalKind};
+use crate::pin::{Pin, SignalKind};
 
 pub use keys::{
     AxisMachine, CurrentKeys, DeviceMachine, PidKeys, Qq2drvAxisKeys, QsbDeviceKeys,
@@ -237,22 +237,6 @@ impl DriverSpec {
             let scale = axis.counts_per_unit.abs();
             (axis.max_velocity * scale, axis.max_accel * scale)
         })
-    }
-
-    /// The device's pin table (the model's, for its variant).
-    pub fn pins(&self) -> &'static [PinInfo] {
-        pin_table(self.model, self.pack_variant, self.qsb_variant)
-    }
-}
-
-/// The pin table of `model` in `pack` / `qsb` variant (the variant of another model is
-/// ignored).
-pub fn pin_table(model: Model, pack: PackVariant, qsb: QsbVariant) -> &'static [PinInfo] {
-    match model {
-        Model::Qq2drv => crate::qq2drv::PINS,
-        Model::Spimotor => crate::spimotor::PINS,
-        Model::Tmcpack => crate::tmcpack::pins(pack.into()),
-        Model::Qsb => crate::qsb::pins(qsb.into()),
     }
 }
 

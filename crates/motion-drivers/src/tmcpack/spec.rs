@@ -249,7 +249,7 @@ impl TmcpackDriverConfig {
             .bus
             .iter()
             .filter(|peer| {
-                peer.model == Model::Tmcpack
+                peer.model == Model::TMCPACK
                     && io(&peer.signals, &peer.machine).inputs != PinSet::EMPTY
             })
             .count();
@@ -257,7 +257,7 @@ impl TmcpackDriverConfig {
         driver.bus_packet_timeout_units = spec
             .bus
             .iter()
-            .filter(|peer| peer.model == Model::Tmcpack)
+            .filter(|peer| peer.model == Model::TMCPACK)
             .map(|peer| packet_timeout_units(&peer.machine, spec.line_rate))
             .max()
             .unwrap_or(0);

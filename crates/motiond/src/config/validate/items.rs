@@ -49,10 +49,10 @@ impl Validator<'_, '_> {
                 &d.model,
                 &table,
                 &key("model"),
-                &format!("one of {}", Model::id_list()),
+                &format!("one of {}", motion_boards::id_list()),
             )
             .and_then(|model| {
-                let parsed = Model::from_id(model.get_ref());
+                let parsed = motion_boards::by_id(model.get_ref()).map(|board| board.model());
                 if parsed.is_none() {
                     self.issue(
                         model.span(),
@@ -60,7 +60,7 @@ impl Validator<'_, '_> {
                         format!(
                             "unknown model {:?}; allowed: {}",
                             model.get_ref(),
-                            Model::id_list()
+                            motion_boards::id_list()
                         ),
                     );
                 }
@@ -71,17 +71,17 @@ impl Validator<'_, '_> {
         let mut qsb_variant = QsbVariant::M;
         if let Some(v) = &d.variant {
             match (model, v.get_ref().as_str()) {
-                (Some(Model::Tmcpack), "sixpack") => variant = PackVariant::Sixpack,
-                (Some(Model::Tmcpack), "quadpack") => variant = PackVariant::Quadpack,
-                (Some(Model::Tmcpack), other) => self.issue(
+                (Some(Model::TMCPACK), "sixpack") => variant = PackVariant::Sixpack,
+                (Some(Model::TMCPACK), "quadpack") => variant = PackVariant::Quadpack,
+                (Some(Model::TMCPACK), other) => self.issue(
                     v.span(),
                     &key("variant"),
                     format!("unknown variant {other:?}; allowed: \"sixpack\" (6 motors), \"quadpack\" (4)"),
                 ),
-                (Some(Model::Qsb), "qsb-m") => qsb_variant = QsbVariant::M,
-                (Some(Model::Qsb), "qsb-s") => qsb_variant = QsbVariant::S,
-                (Some(Model::Qsb), "qsb-d") => qsb_variant = QsbVariant::D,
-                (Some(Model::Qsb), other) => self.issue(
+                (Some(Model::QSB), "qsb-m") => qsb_variant = QsbVariant::M,
+                (Some(Model::QSB), "qsb-s") => qsb_variant = QsbVariant::S,
+                (Some(Model::QSB), "qsb-d") => qsb_variant = QsbVariant::D,
+                (Some(Model::QSB), other) => self.issue(
                     v.span(),
                     &key("variant"),
                     format!("unknown variant {other:?}; allowed: \"qsb-m\" (encoder, 4 digital I/O, stepper drive; default), \"qsb-s\" (encoder only), \"qsb-d\" (differential encoder, 1 digital I/O)"),
@@ -92,9 +92,9 @@ impl Validator<'_, '_> {
         let mut drive = SpiDrive::Stepper;
         if let Some(v) = &d.drive {
             match (model, v.get_ref().as_str()) {
-                (Some(Model::Spimotor), "stepper") => drive = SpiDrive::Stepper,
-                (Some(Model::Spimotor), "brushed") => drive = SpiDrive::Brushed,
-                (Some(Model::Spimotor), other) => self.issue(
+                (Some(Model::SPIMOTOR), "stepper") => drive = SpiDrive::Stepper,
+                (Some(Model::SPIMOTOR), "brushed") => drive = SpiDrive::Brushed,
+                (Some(Model::SPIMOTOR), other) => self.issue(
                     v.span(),
                     &key("drive"),
                     format!("unknown drive {other:?}; allowed: \"stepper\" (one axis, channel 0), \"brushed\" (channels 0 = A, 1 = B)"),
@@ -103,12 +103,12 @@ impl Validator<'_, '_> {
             }
         }
         let address = match (model, &d.address) {
-            (Some(Model::Tmcpack), None) => Some(1),
-            (Some(Model::Tmcpack), Some(a)) => {
+            (Some(Model::TMCPACK), None) => Some(1),
+            (Some(Model::TMCPACK), Some(a)) => {
                 self.int_in(a, &key("address"), 0..=255).map(|a| a as u32)
             }
-            (Some(Model::Spimotor), None) => Some(0x90),
-            (Some(Model::Spimotor), Some(a)) => {
+            (Some(Model::SPIMOTOR), None) => Some(0x90),
+            (Some(Model::SPIMOTOR), Some(a)) => {
                 let value = a.get_ref().0;
                 if (2..=254).contains(&value) && value % 2 == 0 {
                     Some(value as u32)

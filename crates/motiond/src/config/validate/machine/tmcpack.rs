@@ -439,7 +439,7 @@ fn reply_addresses(v: &mut Validator<'_, '_>, config: &ServerConfig, raw: &RawCo
         .devices
         .iter()
         .enumerate()
-        .filter(|(_, d)| d.model == Model::Tmcpack)
+        .filter(|(_, d)| d.model == Model::TMCPACK)
         .collect();
     for &(a, asking) in &packs {
         let Some(keys) = device_keys_of(config, a) else {
