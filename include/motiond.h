@@ -1,31 +1,34 @@
 /*
  * motiond.h - the shared-memory contract of motiond for C (C11) and C++ clients.
  *
+ * GENERATED from the Rust description of the contract (crate motion-ipc, src/schema) by
+ * `cargo run -p motion-ipc --example gen` (or scripts/gen): do not edit; change the Rust
+ * payload and run the generator. crates/motion-ipc/tests/generated.rs fails while this
+ * file differs from what the generator writes, and crates/motion-ipc/tests/c_header.rs
+ * compiles a probe against it and compares every size, alignment, offset, field type,
+ * constant, enum value, text and type name with the Rust definitions.
+ *
  * motiond publishes its state and takes commands over iceoryx2 services. Every payload
- * is a fixed-size #[repr(C)] Rust struct (crate motion-ipc); this header mirrors each one
- * field by field, in memory order, with the iceoryx2 type name a port must announce
- * (iceoryx2 only connects ports whose payload type name, size and alignment match the
- * server's). The Rust test crates/motion-ipc/tests/c_header.rs compiles a probe against
- * this header and compares every size, alignment, offset, field type, constant, enum
- * value, text and type name with the Rust definitions; it runs with ./scripts/test.
- *
- * Services of the instance NAME ([server] name in the server's config), with their
- * payloads (user header: none, i.e. iceoryx2's "()" of size 0, alignment 1):
- *
- *   motiond/NAME/frame    publish-subscribe, history 1    motiond_motion_frame_t, every tick
- *   motiond/NAME/tick     event                           notified after every frame
- *   motiond/NAME/command  request-response                motiond_command_request_t ->
- *                                                         motiond_command_reply_t
- *   motiond/NAME/info     publish-subscribe, history 1    motiond_server_info_t
- *   motiond/NAME/stats    publish-subscribe, history 1    motiond_server_stats_t, about 1 Hz
- *   motiond/NAME/params   publish-subscribe, history 1    motiond_machine_params_t
- *   motiond/NAME/estop    event                           any notification latches the e-stop
- *
- * Open the services, never create them. Enumerations travel as the plain integer fields
- * named in each struct; compare them with the MOTIOND_* constants below. Text fields are
- * UTF-8, zero padded (not necessarily zero terminated when full).
+ * is a fixed-size #[repr(C)] Rust struct; this header mirrors each one field by field, in
+ * memory order, with the iceoryx2 type name a port must announce (iceoryx2 only connects
+ * ports whose payload type name, size and alignment match the server's). Open the
+ * services, never create them; user header: none (iceoryx2's "()", size 0, alignment 1).
+ * Enumerations travel as the plain integer fields named in each struct; compare them with
+ * the MOTIOND_* constants below. Text fields are UTF-8, zero padded (not necessarily zero
+ * terminated when full).
  *
  * examples/c/ holds a complete program (frames in, a command out) on iceoryx2's C API.
+ *
+ * Services of the instance NAME ([server] name in the server's config):
+ *
+ *   MOTIOND_SERVICE_FRAME         publish-subscribe, history 1: motiond_motion_frame_t, every tick
+ *   MOTIOND_SERVICE_TICK          event: notified after every frame
+ *   MOTIOND_SERVICE_COMMAND       request-response: motiond_command_request_t -> motiond_command_reply_t
+ *   MOTIOND_SERVICE_INFO          publish-subscribe, history 1: motiond_server_info_t
+ *   MOTIOND_SERVICE_STATS         publish-subscribe, history 1: motiond_server_stats_t, about 1 Hz
+ *   MOTIOND_SERVICE_PARAMS        publish-subscribe, history 1: motiond_machine_params_t
+ *   MOTIOND_SERVICE_ESTOP         event: any notification latches the e-stop
+ *   MOTIOND_SERVICE_SERVER_NODE   the iceoryx2 node name of the instance's server
  */
 #ifndef MOTIOND_H
 #define MOTIOND_H
@@ -42,28 +45,28 @@ extern "C" {
 #define MOTIOND_ALIGNOF(type) _Alignof(type)
 #endif
 
-/* --- constants ------------------------------------------------------------------------ */
+/* --- constants ---------------------------------------------------------------------------- */
 
 /** Version of the contract; every payload carries it. */
 #define MOTIOND_SCHEMA_VERSION 5u
 /** Capacity of the axis arrays of the frame and the server info. */
 #define MOTIOND_MAX_AXES 128u
-/** Capacity of the device array of the server info. */
+/** Capacity of the device arrays of the frame and the server info. */
 #define MOTIOND_MAX_DEVICES 32u
-/** Capacity of the link array of the server stats. */
+/** Capacity of the link arrays of the server stats. */
 #define MOTIOND_MAX_LINKS 16u
 /** Capacity of the signal arrays of the frame and the server info. */
 #define MOTIOND_MAX_SIGNALS 64u
 /** Capacity of the machine parameter table. */
 #define MOTIOND_MAX_PARAMS 2048u
-/** Bytes of a name field. */
+/** Bytes of a name field (UTF-8, zero padded). */
 #define MOTIOND_NAME_LEN 32u
-/** Bytes of a unit field. */
+/** Bytes of a unit or pin field (UTF-8, zero padded). */
 #define MOTIOND_UNIT_LEN 16u
 /** Bytes of a parameter key or value text. */
 #define MOTIOND_PARAM_TEXT_LEN 40u
 /** motiond_command_request_t.axis addressing every axis (stop, e-stop, reset, off). */
-#define MOTIOND_ALL_AXES 0xFFFFFFFFu
+#define MOTIOND_ALL_AXES 4294967295u
 
 /* Service names: printf formats taking the instance name. */
 #define MOTIOND_SERVICE_FRAME "motiond/%s/frame"
@@ -73,7 +76,6 @@ extern "C" {
 #define MOTIOND_SERVICE_STATS "motiond/%s/stats"
 #define MOTIOND_SERVICE_PARAMS "motiond/%s/params"
 #define MOTIOND_SERVICE_ESTOP "motiond/%s/estop"
-/** The iceoryx2 node name of the server of an instance. */
 #define MOTIOND_SERVICE_SERVER_NODE "motiond-%s"
 
 /* iceoryx2 type names of the payloads. */
@@ -95,16 +97,15 @@ extern "C" {
 #define MOTIOND_TYPE_NAME_LINK_IO "motiond::LinkIo"
 #define MOTIOND_TYPE_NAME_SERVER_STATS "motiond::ServerStats"
 
-/* --- enumerations (values of the integer fields) ----------------------------------------- */
+/* --- enumerations (values of the integer fields) ------------------------------------------ */
 
 /**
- * What a request asks for (motiond_command_request_t.kind). values[] per kind; 0.0 in a
- * velocity or acceleration slot means the axis's configured maximum:
- *   STOP -; POWER [power -1..1]; POSITION [position]; VELOCITY [velocity];
- *   RAMP_POSITION [position, max velocity, acceleration]; RAMP_VELOCITY [velocity,
- *   acceleration]; HOME [search velocity]; SET_POSITION [position];
- *   SET_OUTPUT [0.0 or 1.0] (axis = signal index, target = MOTIOND_TARGET_SIGNAL);
- *   CLAIM, RELEASE, E_STOP, RESET, OFF -.
+ * What a request asks for (motiond_command_request_t.kind). `values` per kind; 0.0 in a
+ * velocity or acceleration slot means the axis's configured maximum: STOP -; POWER [power
+ * -1..1]; POSITION [position]; VELOCITY [velocity]; RAMP_POSITION [position, max velocity,
+ * acceleration]; RAMP_VELOCITY [velocity, acceleration]; HOME [search velocity]; SET_POSITION
+ * [position]; SET_OUTPUT [0.0 or 1.0] (`axis` = signal index, `target` = SIGNAL); CLAIM,
+ * RELEASE, E_STOP, RESET, OFF -.
  */
 enum motiond_command_kind {
     MOTIOND_COMMAND_KIND_STOP = 1,
@@ -123,7 +124,10 @@ enum motiond_command_kind {
     MOTIOND_COMMAND_KIND_SET_OUTPUT = 14
 };
 
-/** Why a request was refused (motiond_command_reply_t.reason); 0 = accepted. */
+/**
+ * Why a request was refused (motiond_command_reply_t.reason); 0 = accepted. The text is the
+ * server's one-line explanation.
+ */
 enum motiond_reason {
     MOTIOND_REASON_ACCEPTED = 0,
     MOTIOND_REASON_SCHEMA_MISMATCH = 1,
@@ -157,7 +161,10 @@ enum motiond_target {
     MOTIOND_TARGET_SIGNAL = 1
 };
 
-/** Where a board is in its life (frame.devices[], axis device_state, device info state). */
+/**
+ * Where a board is in its life (motiond_motion_frame_t.devices,
+ * motiond_axis_state_t.device_state, motiond_device_info_t.state).
+ */
 enum motiond_device_state {
     MOTIOND_DEVICE_STATE_OFFLINE = 0,
     MOTIOND_DEVICE_STATE_ONLINE = 1,
@@ -194,21 +201,27 @@ enum motiond_fault_code {
     MOTIOND_FAULT_CODE_HOME_FAILED = 11
 };
 
-/** What a signal is (signal state and signal info kind). */
+/**
+ * What a signal is (motiond_signal_state_t.kind, motiond_signal_info_t.kind); the text is its
+ * config name.
+ */
 enum motiond_signal_kind {
     MOTIOND_SIGNAL_KIND_DIGITAL_IN = 1,
     MOTIOND_SIGNAL_KIND_DIGITAL_OUT = 2,
     MOTIOND_SIGNAL_KIND_ANALOG_IN = 3
 };
 
-/** What an e-stop (and a fault) does to an axis (motiond_axis_info_t.estop). */
+/**
+ * What an e-stop (and a fault) does to an axis, IEC 60204-1 stop categories
+ * (motiond_axis_info_t.estop); the text is its config name.
+ */
 enum motiond_estop_category {
     MOTIOND_ESTOP_CATEGORY_HOLD = 0,
     MOTIOND_ESTOP_CATEGORY_STOP_OFF = 1,
     MOTIOND_ESTOP_CATEGORY_OFF = 2
 };
 
-/** The board model of a device (motiond_device_info_t.model). */
+/** The board model of a device (motiond_device_info_t.model); the text is its config id. */
 enum motiond_device_model {
     MOTIOND_DEVICE_MODEL_QQ2DRV = 1,
     MOTIOND_DEVICE_MODEL_TMCPACK = 2,
@@ -276,251 +289,817 @@ enum motiond_full_services {
     MOTIOND_FULL_SERVICES_ESTOP = 1 << 6
 };
 
-/* --- payloads ------------------------------------------------------------------------- */
+/* --- payloads ----------------------------------------------------------------------------- */
 
-/** The iceoryx2 node id of a client (a 128-bit value) in two halves; zero = no client. */
+/**
+ * The iceoryx2 node id of a client (`Node::id().value()`, a u128), split into two little halves
+ * so that the layout is the same for every C ABI. Zero means "no client".
+ *
+ * 16 bytes, alignment 8; iceoryx2 type name "motiond::ClientId".
+ */
 typedef struct motiond_client_id {
-    uint64_t lo; /**< low 64 bits */
-    uint64_t hi; /**< high 64 bits */
+    /** Low 64 bits of the node id. */
+    uint64_t lo; /* offset 0, 8 bytes */
+    /** High 64 bits of the node id. */
+    uint64_t hi; /* offset 8, 8 bytes */
 } motiond_client_id_t;
-
-/** One axis in a frame. 80 bytes, alignment 8. */
-typedef struct motiond_axis_state {
-    double position;                /**< measured position, axis units */
-    double velocity;                /**< measured velocity, units/s */
-    double target;                  /**< position target, or velocity target in velocity modes */
-    int64_t raw_counts;             /**< the board's own position counts */
-    uint64_t last_refresh_tick;     /**< tick at which fresh data last arrived */
-    uint32_t flags;                 /**< MOTIOND_AXIS_FLAGS_* bits */
-    uint16_t fault;                 /**< MOTIOND_FAULT_CODE_* */
-    uint8_t mode;                   /**< MOTIOND_AXIS_MODE_* */
-    uint8_t device_state;           /**< MOTIOND_DEVICE_STATE_* of the axis's board */
-    motiond_client_id_t claimed_by; /**< claim holder, zero when unclaimed */
-    double fault_value;             /**< measured figure of the fault, 0 when none */
-    double fault_limit;             /**< the tolerance it broke, 0 when none */
-} motiond_axis_state_t;
-
-/** One signal in a frame. 48 bytes, alignment 8. */
-typedef struct motiond_signal_state {
-    double value;                   /**< logical value (digital 0/1 after invert; analogue scaled) */
-    double raw;                     /**< as the board reports it (level 0/1, ADC counts) */
-    uint64_t last_refresh_tick;     /**< tick at which the board last reported (acknowledged) it */
-    uint32_t flags;                 /**< MOTIOND_SIGNAL_FLAGS_* bits */
-    uint8_t kind;                   /**< MOTIOND_SIGNAL_KIND_* */
-    uint8_t reserved[3];            /**< zero */
-    motiond_client_id_t claimed_by; /**< claim holder of an output, zero when unclaimed */
-} motiond_signal_state_t;
-
-/** When an axis's current goal was set and its first request reached the wire. 24 bytes.
- *  Command -> wire: wire_ns minus the client's CLOCK_MONOTONIC at sending, or in ticks
- *  wire_tick - goal_tick (0: written in the tick that accepted it). */
-typedef struct motiond_axis_wire {
-    uint64_t goal_tick; /**< tick in which the current goal was set */
-    uint64_t wire_tick; /**< tick during which its first request was written, 0 until then */
-    uint64_t wire_ns;   /**< CLOCK_MONOTONIC ns of that write, 0 until then */
-} motiond_axis_wire_t;
-
-/** One consistent snapshot of every axis, board and signal, once per tick. 16464 bytes. */
-typedef struct motiond_motion_frame {
-    uint32_t schema_version;                           /**< MOTIOND_SCHEMA_VERSION */
-    uint32_t axis_count;                               /**< valid entries of axes */
-    uint64_t tick;                                     /**< tick number, 0 at server start */
-    uint64_t time_ns;                                  /**< the tick's deadline, CLOCK_MONOTONIC ns */
-    uint64_t publish_ns;                               /**< CLOCK_MONOTONIC ns just before sending */
-    uint32_t flags;                                    /**< MOTIOND_FRAME_FLAGS_* bits */
-    uint32_t signal_count;                             /**< valid entries of signals */
-    uint32_t device_count;                             /**< valid entries of devices */
-    uint32_t reserved;                                 /**< zero */
-    uint8_t devices[MOTIOND_MAX_DEVICES];              /**< MOTIOND_DEVICE_STATE_* per device */
-    motiond_axis_state_t axes[MOTIOND_MAX_AXES];       /**< axes in config order */
-    motiond_signal_state_t signals[MOTIOND_MAX_SIGNALS]; /**< signals in config order */
-    motiond_axis_wire_t wire[MOTIOND_MAX_AXES];        /**< per axis (index of axes): goal set / on the wire */
-} motiond_motion_frame_t;
-
-/** A command to the server. 64 bytes, alignment 8. */
-typedef struct motiond_command_request {
-    uint32_t schema_version;    /**< MOTIOND_SCHEMA_VERSION */
-    uint32_t kind;              /**< MOTIOND_COMMAND_KIND_* */
-    motiond_client_id_t client; /**< the sender's iceoryx2 node id, or zero ("the sender") */
-    uint64_t sequence;          /**< the client's sequence number, echoed in the reply */
-    uint32_t axis;              /**< axis or signal index (config order), or MOTIOND_ALL_AXES */
-    uint32_t target;            /**< MOTIOND_TARGET_* */
-    double values[3];           /**< arguments, see enum motiond_command_kind */
-} motiond_command_request_t;
-
-/** The server's answer to one request. 32 bytes, alignment 8. */
-typedef struct motiond_command_reply {
-    uint32_t schema_version; /**< MOTIOND_SCHEMA_VERSION */
-    uint32_t reason;         /**< MOTIOND_REASON_*; 0 = accepted */
-    uint64_t sequence;       /**< the request's sequence */
-    uint64_t tick_applied;   /**< tick in which it took effect (or was refused) */
-    uint32_t axis;           /**< the request's axis */
-    uint32_t kind;           /**< the request's kind */
-} motiond_command_reply_t;
-
-/** One axis's static description. 160 bytes, alignment 8. */
-typedef struct motiond_axis_info {
-    uint8_t name[MOTIOND_NAME_LEN];   /**< axis name */
-    uint8_t unit[MOTIOND_UNIT_LEN];   /**< unit ("mm", "deg") */
-    uint8_t device[MOTIOND_NAME_LEN]; /**< device name */
-    double counts_per_unit;           /**< device counts per unit */
-    double min;                       /**< soft limit, units */
-    double max;                       /**< soft limit, units */
-    double max_velocity;              /**< units/s */
-    double max_accel;                 /**< units/s^2 */
-    uint32_t capabilities;            /**< bit (1 << kind) set for every command kind accepted */
-    uint16_t channel;                 /**< motor number on the device */
-    uint16_t device_index;            /**< index into the server info's devices */
-    double following_error;           /**< units; 0 = not supervised */
-    double overspeed_factor;          /**< x max_velocity; 0 = not supervised */
-    double home_max_travel;           /**< units; 0 = not supervised */
-    uint32_t estop;                   /**< MOTIOND_ESTOP_CATEGORY_* */
-    uint32_t reserved;                /**< zero */
-} motiond_axis_info_t;
-
-/** One device's description. 112 bytes, alignment 4. */
-typedef struct motiond_device_info {
-    uint8_t name[MOTIOND_NAME_LEN];     /**< device name */
-    uint8_t link[MOTIOND_NAME_LEN];     /**< link name */
-    uint8_t firmware[MOTIOND_NAME_LEN]; /**< firmware as the board reported it ("" until known) */
-    uint32_t model;                     /**< MOTIOND_DEVICE_MODEL_* */
-    uint32_t address;                   /**< bus address (0 when the model has none) */
-    uint32_t axis_count;                /**< axes configured on the device */
-    uint32_t state;                     /**< MOTIOND_DEVICE_STATE_* when published */
-} motiond_device_info_t;
-
-/** One signal's static description. 128 bytes, alignment 8. */
-typedef struct motiond_signal_info {
-    uint8_t name[MOTIOND_NAME_LEN];   /**< signal name */
-    uint8_t unit[MOTIOND_UNIT_LEN];   /**< unit of an analogue value ("" for digital) */
-    uint8_t device[MOTIOND_NAME_LEN]; /**< device name */
-    double scale;                     /**< analogue: value = raw * scale + offset */
-    double offset;                    /**< analogue: value = raw * scale + offset */
-    double full_scale;                /**< raw full scale (1023 for 10 bits; 1 for digital) */
-    uint8_t kind;                     /**< MOTIOND_SIGNAL_KIND_* */
-    uint8_t flags;                    /**< MOTIOND_SIGNAL_INFO_FLAGS_* bits */
-    uint16_t device_index;            /**< index into the server info's devices */
-    uint8_t pin[MOTIOND_UNIT_LEN];    /**< the board's pin name ("ttlio1") */
-    uint32_t reserved;                /**< zero */
-} motiond_signal_info_t;
-
-/** The server's static description. 32328 bytes, alignment 8. */
-typedef struct motiond_server_info {
-    uint32_t schema_version;                           /**< MOTIOND_SCHEMA_VERSION */
-    uint32_t axis_count;                               /**< valid entries of axes */
-    uint32_t device_count;                             /**< valid entries of devices */
-    uint32_t tick_hz;                                  /**< tick rate */
-    uint32_t command_timeout_ms;                       /**< deadman; 0 = disabled */
-    uint32_t max_clients;                              /**< configured client limit */
-    uint32_t server_pid;                               /**< process id of motiond */
-    uint32_t signal_count;                             /**< valid entries of signals */
-    uint8_t name[MOTIOND_NAME_LEN];                    /**< instance name */
-    uint64_t start_time_ns;                            /**< CLOCK_MONOTONIC ns of tick 0 */
-    motiond_axis_info_t axes[MOTIOND_MAX_AXES];        /**< axes in config order */
-    motiond_device_info_t devices[MOTIOND_MAX_DEVICES]; /**< devices in config order */
-    motiond_signal_info_t signals[MOTIOND_MAX_SIGNALS]; /**< signals in config order */
-} motiond_server_info_t;
-
-/** One effective machine parameter. 88 bytes, alignment 4. */
-typedef struct motiond_machine_param {
-    uint8_t key[MOTIOND_PARAM_TEXT_LEN];   /**< config key, dotted for tables */
-    uint8_t value[MOTIOND_PARAM_TEXT_LEN]; /**< value in effect, with its unit */
-    uint16_t owner_index;                  /**< device or axis index */
-    uint8_t owner_kind;                    /**< MOTIOND_PARAM_OWNER_* */
-    uint8_t from_config;                   /**< 1: set by the config file; 0: the default */
-    uint32_t reserved;                     /**< zero */
-} motiond_machine_param_t;
-
-/** Every machine parameter in effect. 180240 bytes, alignment 4. */
-typedef struct motiond_machine_params {
-    uint32_t schema_version;                            /**< MOTIOND_SCHEMA_VERSION */
-    uint32_t count;                                     /**< valid entries */
-    uint32_t truncated;                                 /**< 1 when parameters were left out */
-    uint32_t reserved;                                  /**< zero */
-    motiond_machine_param_t entries[MOTIOND_MAX_PARAMS]; /**< devices' then axes' */
-} motiond_machine_params_t;
-
-/** Percentiles of one latency distribution, ns. 40 bytes. */
-typedef struct motiond_latency_summary {
-    uint64_t samples;
-    uint64_t p50_ns;
-    uint64_t p99_ns;
-    uint64_t p999_ns;
-    uint64_t max_ns;
-} motiond_latency_summary_t;
-
-/** Counters of one link since start. 80 bytes, alignment 8. */
-typedef struct motiond_link_stats {
-    uint8_t name[MOTIOND_NAME_LEN]; /**< link name */
-    uint64_t bytes_in;              /**< bytes received */
-    uint64_t bytes_out;             /**< bytes sent */
-    uint64_t frames;                /**< replies decoded */
-    uint64_t errors;                /**< bad frames, I/O errors, timeouts */
-    uint64_t reconnects;            /**< successful reopens */
-    uint32_t up;                    /**< 1 when the link is open */
-    uint32_t reserved;              /**< zero */
-} motiond_link_stats_t;
-
-/** The I/O side of one link (CLOCK_MONOTONIC ns stamps, 0: never). 32 bytes, alignment 8. */
-typedef struct motiond_link_io {
-    uint64_t last_write_ns; /**< the last write that moved bytes */
-    uint64_t last_read_ns;  /**< the last read that returned bytes */
-    uint64_t transactions;  /**< messages written whole (SPI: transactions) */
-    uint64_t reads;         /**< reads that returned bytes */
-} motiond_link_io_t;
-
-/** Server figures, published about once a second. 1992 bytes, alignment 8. */
-typedef struct motiond_server_stats {
-    uint32_t schema_version;                    /**< MOTIOND_SCHEMA_VERSION */
-    uint32_t link_count;                        /**< valid entries of links */
-    uint64_t tick;                              /**< tick at which these were taken */
-    uint64_t time_ns;                           /**< CLOCK_MONOTONIC ns of that tick */
-    motiond_latency_summary_t wakeup;           /**< actual wake - deadline, since start */
-    motiond_latency_summary_t work;             /**< tick work time, since start */
-    uint64_t overruns;                          /**< ticks that missed their deadline */
-    uint64_t max_consecutive_overruns;          /**< longest run of overruns */
-    uint64_t commands;                          /**< requests answered */
-    uint64_t rejected;                          /**< requests refused */
-    uint32_t clients;                           /**< live client nodes at the last check */
-    uint32_t rt_flags;                          /**< MOTIOND_RT_FLAGS_* bits */
-    motiond_link_stats_t links[MOTIOND_MAX_LINKS]; /**< per link */
-    uint64_t faults;                            /**< axis faults latched since start */
-    uint64_t frames_lost;                       /**< ticks whose frame could not be sent */
-    uint32_t full_services;                     /**< MOTIOND_FULL_SERVICES_* bits, now */
-    uint32_t full_events;                       /**< times a service was found full */
-    uint64_t publish_failures;                  /**< info/stats/params samples and tick notifications not sent */
-    uint64_t replies_lost;                      /**< command replies that could not be sent */
-    uint64_t events_dropped;                    /**< log reports and iceoryx2 housekeeping that failed */
-    motiond_link_io_t link_io[MOTIOND_MAX_LINKS]; /**< per link (index of links): I/O stamps */
-    uint64_t nodes_cleaned;                     /**< dead iceoryx2 nodes' records removed */
-} motiond_server_stats_t;
-
-/* Sizes and alignments the Rust side pins (crates/motion-ipc/tests/layout.rs). */
 MOTIOND_STATIC_ASSERT(sizeof(motiond_client_id_t) == 16, "motiond_client_id_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_client_id_t) == 8, "motiond_client_id_t alignment");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_client_id_t, lo) == 0, "motiond_client_id_t.lo offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_client_id_t, hi) == 8, "motiond_client_id_t.hi offset");
+
+/**
+ * One axis in a frame. 80 bytes, alignment 8. Fields in memory order:
+ *
+ * | offset | field | type | meaning | |---|---|---|---| | 0 | `position` | f64 | measured
+ * position, axis units | | 8 | `velocity` | f64 | measured velocity, units/s | | 16 | `target`
+ * | f64 | position target (position modes) or velocity target (velocity modes) | | 24 |
+ * `raw_counts` | i64 | the board's own position counts | | 32 | `last_refresh_tick` | u64 |
+ * tick at which fresh data last arrived from the board | | 40 | `flags` | u32 |
+ * MOTIOND_AXIS_FLAGS_* bits | | 44 | `fault` | u16 | MOTIOND_FAULT_CODE_* | | 46 | `mode` | u8
+ * | MOTIOND_AXIS_MODE_* | | 47 | `device_state` | u8 | MOTIOND_DEVICE_STATE_* of the axis's
+ * board | | 48 | `claimed_by` | motiond_client_id_t | claim holder, zero when unclaimed | | 64
+ * | `fault_value` | f64 | the measured figure of the fault (units, units/s), 0 when none | | 72
+ * | `fault_limit` | f64 | the tolerance or limit it broke, 0 when none |
+ *
+ * 80 bytes, alignment 8; iceoryx2 type name "motiond::AxisState".
+ */
+typedef struct motiond_axis_state {
+    /** Measured position in axis units. */
+    double position; /* offset 0, 8 bytes */
+    /** Measured velocity in units/s. */
+    double velocity; /* offset 8, 8 bytes */
+    /** Position target (position modes) or velocity target (velocity modes), in units. */
+    double target; /* offset 16, 8 bytes */
+    /** Position in the board's own counts. */
+    int64_t raw_counts; /* offset 24, 8 bytes */
+    /** Tick at which fresh data last arrived from the board. */
+    uint64_t last_refresh_tick; /* offset 32, 8 bytes */
+    /** MOTIOND_AXIS_FLAGS_* bits. */
+    uint32_t flags; /* offset 40, 4 bytes */
+    /** MOTIOND_FAULT_CODE_* value. */
+    uint16_t fault; /* offset 44, 2 bytes */
+    /** MOTIOND_AXIS_MODE_* value. */
+    uint8_t mode; /* offset 46, 1 bytes */
+    /** MOTIOND_DEVICE_STATE_* value of the axis's board. */
+    uint8_t device_state; /* offset 47, 1 bytes */
+    /** The client holding a claim on the axis; zero when unclaimed. */
+    motiond_client_id_t claimed_by; /* offset 48, 16 bytes */
+    /** The measured figure of the latched fault (see MOTIOND_FAULT_CODE_*), 0 when none. */
+    double fault_value; /* offset 64, 8 bytes */
+    /** The tolerance or limit the fault broke, 0 when none. */
+    double fault_limit; /* offset 72, 8 bytes */
+} motiond_axis_state_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_axis_state_t) == 80, "motiond_axis_state_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_axis_state_t) == 8, "motiond_axis_state_t alignment");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, position) == 0, "motiond_axis_state_t.position offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, velocity) == 8, "motiond_axis_state_t.velocity offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, target) == 16, "motiond_axis_state_t.target offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, raw_counts) == 24, "motiond_axis_state_t.raw_counts offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, last_refresh_tick) == 32, "motiond_axis_state_t.last_refresh_tick offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, flags) == 40, "motiond_axis_state_t.flags offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, fault) == 44, "motiond_axis_state_t.fault offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, mode) == 46, "motiond_axis_state_t.mode offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, device_state) == 47, "motiond_axis_state_t.device_state offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, claimed_by) == 48, "motiond_axis_state_t.claimed_by offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, fault_value) == 64, "motiond_axis_state_t.fault_value offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, fault_limit) == 72, "motiond_axis_state_t.fault_limit offset");
+
+/**
+ * One signal in a frame. 48 bytes, alignment 8. Fields in memory order:
+ *
+ * | offset | field | type | meaning | |---|---|---|---| | 0 | `value` | f64 | logical value:
+ * digital 0.0/1.0 after `invert`; analogue raw × scale + offset | | 8 | `raw` | f64 | as the
+ * board reports it: electrical level 0/1, or ADC counts | | 16 | `last_refresh_tick` | u64 |
+ * tick at which the board last reported it (outputs: acknowledged it) | | 24 | `flags` | u32 |
+ * MOTIOND_SIGNAL_FLAGS_* bits | | 28 | `kind` | u8 | MOTIOND_SIGNAL_KIND_* | | 29 | `reserved`
+ * | u8; 3 | zero | | 32 | `claimed_by` | motiond_client_id_t | claim holder of an output, zero
+ * when unclaimed |
+ *
+ * 48 bytes, alignment 8; iceoryx2 type name "motiond::SignalState".
+ */
+typedef struct motiond_signal_state {
+    /** Logical value. */
+    double value; /* offset 0, 8 bytes */
+    /** Raw value as the board reports it. */
+    double raw; /* offset 8, 8 bytes */
+    /** Tick at which the board last reported (or acknowledged) it. */
+    uint64_t last_refresh_tick; /* offset 16, 8 bytes */
+    /** MOTIOND_SIGNAL_FLAGS_* bits. */
+    uint32_t flags; /* offset 24, 4 bytes */
+    /** MOTIOND_SIGNAL_KIND_* value. */
+    uint8_t kind; /* offset 28, 1 bytes */
+    /** Zero. */
+    uint8_t reserved[3]; /* offset 29, 3 bytes */
+    /** Claim holder of an output; zero when unclaimed. */
+    motiond_client_id_t claimed_by; /* offset 32, 16 bytes */
+} motiond_signal_state_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_signal_state_t) == 48, "motiond_signal_state_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_signal_state_t) == 8, "motiond_signal_state_t alignment");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_state_t, value) == 0, "motiond_signal_state_t.value offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_state_t, raw) == 8, "motiond_signal_state_t.raw offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_state_t, last_refresh_tick) == 16, "motiond_signal_state_t.last_refresh_tick offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_state_t, flags) == 24, "motiond_signal_state_t.flags offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_state_t, kind) == 28, "motiond_signal_state_t.kind offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_state_t, reserved) == 29, "motiond_signal_state_t.reserved offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_state_t, claimed_by) == 32, "motiond_signal_state_t.claimed_by offset");
+
+/**
+ * When the current goal of one axis was set and when its first request reached the wire
+ * (`MotionFrame::wire`, same index as `axes`). 24 bytes, alignment 8.
+ *
+ * | offset | field | type | meaning | |---|---|---|---| | 0 | `goal_tick` | u64 | tick in which
+ * the current goal was set (a client's command: the reply's `tick_applied`; or the server's own
+ * stop) | | 8 | `wire_tick` | u64 | tick during which the goal's first request was written to
+ * the link (its last byte accepted by the transport), 0 until then | | 16 | `wire_ns` | u64 |
+ * CLOCK_MONOTONIC ns of that write, 0 until then (and for a goal that needs no request) |
+ *
+ * Command → wire: `wire_ns` minus the client's CLOCK_MONOTONIC when it sent the command, or in
+ * ticks `wire_tick − goal_tick` (0: written in the tick that accepted it).
+ *
+ * 24 bytes, alignment 8; iceoryx2 type name "motiond::AxisWire".
+ */
+typedef struct motiond_axis_wire {
+    /** Tick in which the current goal was set. */
+    uint64_t goal_tick; /* offset 0, 8 bytes */
+    /** Tick during which its first request was written; 0 until then. */
+    uint64_t wire_tick; /* offset 8, 8 bytes */
+    /** CLOCK_MONOTONIC ns of that write; 0 until then. */
+    uint64_t wire_ns; /* offset 16, 8 bytes */
+} motiond_axis_wire_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_axis_wire_t) == 24, "motiond_axis_wire_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_axis_wire_t) == 8, "motiond_axis_wire_t alignment");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_wire_t, goal_tick) == 0, "motiond_axis_wire_t.goal_tick offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_wire_t, wire_tick) == 8, "motiond_axis_wire_t.wire_tick offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_wire_t, wire_ns) == 16, "motiond_axis_wire_t.wire_ns offset");
+
+/**
+ * One consistent snapshot of every axis, board and signal, published once per tick on
+ * `motiond/<name>/frame`. 16464 bytes, alignment 8. Fields in memory order:
+ *
+ * | offset | field | type | meaning | |---|---|---|---| | 0 | `schema_version` | u32 |
+ * MOTIOND_SCHEMA_VERSION | | 4 | `axis_count` | u32 | valid entries at the start of `axes` | |
+ * 8 | `tick` | u64 | tick number, 0 at server start | | 16 | `time_ns` | u64 | the tick's
+ * deadline, CLOCK_MONOTONIC ns | | 24 | `publish_ns` | u64 | CLOCK_MONOTONIC ns just before the
+ * frame was sent | | 32 | `flags` | u32 | MOTIOND_FRAME_FLAGS_* bits | | 36 | `signal_count` |
+ * u32 | valid entries at the start of `signals` | | 40 | `device_count` | u32 | valid entries
+ * at the start of `devices` | | 44 | `reserved` | u32 | zero | | 48 | `devices` | u8;
+ * MOTIOND_MAX_DEVICES | MOTIOND_DEVICE_STATE_* per device, config order | | 80 | `axes` |
+ * motiond_axis_state_t; MOTIOND_MAX_AXES | axes in config order | | 10320 | `signals` |
+ * motiond_signal_state_t; MOTIOND_MAX_SIGNALS | signals in config order | | 13392 | `wire` |
+ * motiond_axis_wire_t; MOTIOND_MAX_AXES | per axis (same index as `axes`): when its current
+ * goal was set and reached the wire |
+ *
+ * 16464 bytes, alignment 8; iceoryx2 type name "motiond::MotionFrame".
+ */
+typedef struct motiond_motion_frame {
+    /** MOTIOND_SCHEMA_VERSION of the writer. */
+    uint32_t schema_version; /* offset 0, 4 bytes */
+    /** Number of valid entries at the start of `axes`. */
+    uint32_t axis_count; /* offset 4, 4 bytes */
+    /** Tick number, 0 at server start. */
+    uint64_t tick; /* offset 8, 8 bytes */
+    /** The tick's deadline on CLOCK_MONOTONIC, ns. */
+    uint64_t time_ns; /* offset 16, 8 bytes */
+    /** CLOCK_MONOTONIC, ns, taken just before the frame was sent. */
+    uint64_t publish_ns; /* offset 24, 8 bytes */
+    /** MOTIOND_FRAME_FLAGS_* bits. */
+    uint32_t flags; /* offset 32, 4 bytes */
+    /** Number of valid entries at the start of `signals`. */
+    uint32_t signal_count; /* offset 36, 4 bytes */
+    /** Number of valid entries at the start of `devices`. */
+    uint32_t device_count; /* offset 40, 4 bytes */
+    /** Zero. */
+    uint32_t reserved; /* offset 44, 4 bytes */
+    /** MOTIOND_DEVICE_STATE_* per device, config order. */
+    uint8_t devices[MOTIOND_MAX_DEVICES]; /* offset 48, 32 bytes */
+    /** Axes in config order; entries past `axis_count` are `AxisState::UNKNOWN`. */
+    motiond_axis_state_t axes[MOTIOND_MAX_AXES]; /* offset 80, 10240 bytes */
+    /** Signals in config order; entries past `signal_count` are `SignalState::UNKNOWN`. */
+    motiond_signal_state_t signals[MOTIOND_MAX_SIGNALS]; /* offset 10320, 3072 bytes */
+    /**
+     * Per axis (same index as `axes`): when its current goal was set and when its first request
+     * reached the wire.
+     */
+    motiond_axis_wire_t wire[MOTIOND_MAX_AXES]; /* offset 13392, 3072 bytes */
+} motiond_motion_frame_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_motion_frame_t) == 16464, "motiond_motion_frame_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_motion_frame_t) == 8, "motiond_motion_frame_t alignment");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, schema_version) == 0, "motiond_motion_frame_t.schema_version offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, axis_count) == 4, "motiond_motion_frame_t.axis_count offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, tick) == 8, "motiond_motion_frame_t.tick offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, time_ns) == 16, "motiond_motion_frame_t.time_ns offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, publish_ns) == 24, "motiond_motion_frame_t.publish_ns offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, flags) == 32, "motiond_motion_frame_t.flags offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, signal_count) == 36, "motiond_motion_frame_t.signal_count offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, device_count) == 40, "motiond_motion_frame_t.device_count offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, reserved) == 44, "motiond_motion_frame_t.reserved offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, devices) == 48, "motiond_motion_frame_t.devices offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, axes) == 80, "motiond_motion_frame_t.axes offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, signals) == 10320, "motiond_motion_frame_t.signals offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, wire) == 13392, "motiond_motion_frame_t.wire offset");
+
+/**
+ * A command to the server. 64 bytes, alignment 8. Fields in memory order:
+ *
+ * | offset | field | type | meaning | |---|---|---|---| | 0 | `schema_version` | u32 |
+ * MOTIOND_SCHEMA_VERSION | | 4 | `kind` | u32 | MOTIOND_COMMAND_KIND_* | | 8 | `client` |
+ * motiond_client_id_t | the sender's iceoryx2 node id, or zero | | 24 | `sequence` | u64 | the
+ * client's own sequence number, echoed in the reply | | 32 | `axis` | u32 | axis (or signal)
+ * index, config order, or `CommandRequest::ALL_AXES` | | 36 | `target` | u32 |
+ * MOTIOND_TARGET_*: 0 = axis, 1 = signal | | 40 | `values` | f64; 3 | see
+ * MOTIOND_COMMAND_KIND_* |
+ *
+ * Identity comes from the transport: the server knows which iceoryx2 node sent a request and
+ * owns every claim by that node. `client` may be zero ("the sender"); a non-zero `client` that
+ * is not the sender's node is refused with `Reason::IdentityMismatch`.
+ *
+ * 64 bytes, alignment 8; iceoryx2 type name "motiond::CommandRequest".
+ */
+typedef struct motiond_command_request {
+    /** MOTIOND_SCHEMA_VERSION of the sender. */
+    uint32_t schema_version; /* offset 0, 4 bytes */
+    /** MOTIOND_COMMAND_KIND_* value. */
+    uint32_t kind; /* offset 4, 4 bytes */
+    /** The sender's iceoryx2 node id, or zero. */
+    motiond_client_id_t client; /* offset 8, 16 bytes */
+    /** The client's sequence number, echoed in the reply. */
+    uint64_t sequence; /* offset 24, 8 bytes */
+    /** Axis (or signal) index, or `CommandRequest::ALL_AXES`. */
+    uint32_t axis; /* offset 32, 4 bytes */
+    /** MOTIOND_TARGET_* value. */
+    uint32_t target; /* offset 36, 4 bytes */
+    /** Arguments; see MOTIOND_COMMAND_KIND_*. */
+    double values[3]; /* offset 40, 24 bytes */
+} motiond_command_request_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_command_request_t) == 64, "motiond_command_request_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_command_request_t) == 8, "motiond_command_request_t alignment");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_command_request_t, schema_version) == 0, "motiond_command_request_t.schema_version offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_command_request_t, kind) == 4, "motiond_command_request_t.kind offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_command_request_t, client) == 8, "motiond_command_request_t.client offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_command_request_t, sequence) == 24, "motiond_command_request_t.sequence offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_command_request_t, axis) == 32, "motiond_command_request_t.axis offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_command_request_t, target) == 36, "motiond_command_request_t.target offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_command_request_t, values) == 40, "motiond_command_request_t.values offset");
+
+/**
+ * The server's answer to one motiond_command_request_t; every request gets exactly one. 32
+ * bytes, alignment 8. Fields in memory order:
+ *
+ * | offset | field | type | meaning | |---|---|---|---| | 0 | `schema_version` | u32 |
+ * MOTIOND_SCHEMA_VERSION | | 4 | `reason` | u32 | MOTIOND_REASON_*; 0 = accepted | | 8 |
+ * `sequence` | u64 | the request's sequence | | 16 | `tick_applied` | u64 | tick in which the
+ * command took effect (or was refused) | | 24 | `axis` | u32 | the request's axis | | 28 |
+ * `kind` | u32 | the request's kind |
+ *
+ * 32 bytes, alignment 8; iceoryx2 type name "motiond::CommandReply".
+ */
+typedef struct motiond_command_reply {
+    /** MOTIOND_SCHEMA_VERSION of the server. */
+    uint32_t schema_version; /* offset 0, 4 bytes */
+    /** MOTIOND_REASON_* value; 0 = accepted. */
+    uint32_t reason; /* offset 4, 4 bytes */
+    /** The request's sequence. */
+    uint64_t sequence; /* offset 8, 8 bytes */
+    /** Tick in which the command took effect (or was refused). */
+    uint64_t tick_applied; /* offset 16, 8 bytes */
+    /** The request's axis. */
+    uint32_t axis; /* offset 24, 4 bytes */
+    /** The request's kind. */
+    uint32_t kind; /* offset 28, 4 bytes */
+} motiond_command_reply_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_command_reply_t) == 32, "motiond_command_reply_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_command_reply_t) == 8, "motiond_command_reply_t alignment");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_command_reply_t, schema_version) == 0, "motiond_command_reply_t.schema_version offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_command_reply_t, reason) == 4, "motiond_command_reply_t.reason offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_command_reply_t, sequence) == 8, "motiond_command_reply_t.sequence offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_command_reply_t, tick_applied) == 16, "motiond_command_reply_t.tick_applied offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_command_reply_t, axis) == 24, "motiond_command_reply_t.axis offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_command_reply_t, kind) == 28, "motiond_command_reply_t.kind offset");
+
+/**
+ * One axis's static description. 160 bytes, alignment 8. Fields in memory order:
+ *
+ * | offset | field | type | meaning | |---|---|---|---| | 0 | `name` | u8; 32 | axis name,
+ * UTF-8, zero padded | | 32 | `unit` | u8; 16 | unit, UTF-8, zero padded | | 48 | `device` |
+ * u8; 32 | device name | | 80 | `counts_per_unit` | f64 | device counts per unit | | 88 | `min`
+ * | f64 | soft limit, units | | 96 | `max` | f64 | soft limit, units | | 104 | `max_velocity` |
+ * f64 | units/s | | 112 | `max_accel` | f64 | units/s² | | 120 | `capabilities` | u32 |
+ * `Capabilities` bits | | 124 | `channel` | u16 | motor number on the device | | 126 |
+ * `device_index` | u16 | index into `ServerInfo::devices` | | 128 | `following_error` | f64 |
+ * units; 0 = not supervised | | 136 | `overspeed_factor` | f64 | × max_velocity; 0 = not
+ * supervised | | 144 | `home_max_travel` | f64 | units; 0 = not supervised | | 152 | `estop` |
+ * u32 | MOTIOND_ESTOP_CATEGORY_* | | 156 | `reserved` | u32 | zero |
+ *
+ * 160 bytes, alignment 8; iceoryx2 type name "motiond::AxisInfo".
+ */
+typedef struct motiond_axis_info {
+    /** Axis name. */
+    uint8_t name[MOTIOND_NAME_LEN]; /* offset 0, 32 bytes */
+    /** Unit of positions ("mm", "deg"). */
+    uint8_t unit[MOTIOND_UNIT_LEN]; /* offset 32, 16 bytes */
+    /** Name of the device that drives the axis. */
+    uint8_t device[MOTIOND_NAME_LEN]; /* offset 48, 32 bytes */
+    /** Device counts per unit. */
+    double counts_per_unit; /* offset 80, 8 bytes */
+    /** Lower soft limit, units. */
+    double min; /* offset 88, 8 bytes */
+    /** Upper soft limit, units. */
+    double max; /* offset 96, 8 bytes */
+    /** Velocity limit, units/s. */
+    double max_velocity; /* offset 104, 8 bytes */
+    /** Acceleration limit, units/s². */
+    double max_accel; /* offset 112, 8 bytes */
+    /** `Capabilities` bits. */
+    uint32_t capabilities; /* offset 120, 4 bytes */
+    /** Motor number on the device. */
+    uint16_t channel; /* offset 124, 2 bytes */
+    /** Index into `ServerInfo::devices`. */
+    uint16_t device_index; /* offset 126, 2 bytes */
+    /** Following error tolerance, units; 0 = not supervised. */
+    double following_error; /* offset 128, 8 bytes */
+    /** Overspeed factor; 0 = not supervised. */
+    double overspeed_factor; /* offset 136, 8 bytes */
+    /** Travel limit of a reference search, units; 0 = not supervised. */
+    double home_max_travel; /* offset 144, 8 bytes */
+    /** MOTIOND_ESTOP_CATEGORY_* value. */
+    uint32_t estop; /* offset 152, 4 bytes */
+    /** Zero. */
+    uint32_t reserved; /* offset 156, 4 bytes */
+} motiond_axis_info_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_axis_info_t) == 160, "motiond_axis_info_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_axis_info_t) == 8, "motiond_axis_info_t alignment");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, name) == 0, "motiond_axis_info_t.name offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, unit) == 32, "motiond_axis_info_t.unit offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, device) == 48, "motiond_axis_info_t.device offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, counts_per_unit) == 80, "motiond_axis_info_t.counts_per_unit offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, min) == 88, "motiond_axis_info_t.min offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, max) == 96, "motiond_axis_info_t.max offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, max_velocity) == 104, "motiond_axis_info_t.max_velocity offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, max_accel) == 112, "motiond_axis_info_t.max_accel offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, capabilities) == 120, "motiond_axis_info_t.capabilities offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, channel) == 124, "motiond_axis_info_t.channel offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, device_index) == 126, "motiond_axis_info_t.device_index offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, following_error) == 128, "motiond_axis_info_t.following_error offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, overspeed_factor) == 136, "motiond_axis_info_t.overspeed_factor offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, home_max_travel) == 144, "motiond_axis_info_t.home_max_travel offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, estop) == 152, "motiond_axis_info_t.estop offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, reserved) == 156, "motiond_axis_info_t.reserved offset");
+
+/**
+ * One device's description. 112 bytes, alignment 4. Fields in memory order:
+ *
+ * | offset | field | type | meaning | |---|---|---|---| | 0 | `name` | u8; 32 | device name | |
+ * 32 | `link` | u8; 32 | link name | | 64 | `firmware` | u8; 32 | firmware version as the board
+ * reported it ("" until known) | | 96 | `model` | u32 | MOTIOND_DEVICE_MODEL_* | | 100 |
+ * `address` | u32 | bus address (0 when the model has none) | | 104 | `axis_count` | u32 | axes
+ * configured on the device | | 108 | `state` | u32 | MOTIOND_DEVICE_STATE_* when the info was
+ * published (the frame has the current one) |
+ *
+ * 112 bytes, alignment 4; iceoryx2 type name "motiond::DeviceInfo".
+ */
+typedef struct motiond_device_info {
+    /** Device name. */
+    uint8_t name[MOTIOND_NAME_LEN]; /* offset 0, 32 bytes */
+    /** Link name. */
+    uint8_t link[MOTIOND_NAME_LEN]; /* offset 32, 32 bytes */
+    /** Firmware version as reported by the board. */
+    uint8_t firmware[MOTIOND_NAME_LEN]; /* offset 64, 32 bytes */
+    /** MOTIOND_DEVICE_MODEL_* value. */
+    uint32_t model; /* offset 96, 4 bytes */
+    /** Bus address, 0 when the model has none. */
+    uint32_t address; /* offset 100, 4 bytes */
+    /** Axes configured on the device. */
+    uint32_t axis_count; /* offset 104, 4 bytes */
+    /** MOTIOND_DEVICE_STATE_* value when the info was published. */
+    uint32_t state; /* offset 108, 4 bytes */
+} motiond_device_info_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_device_info_t) == 112, "motiond_device_info_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_device_info_t) == 4, "motiond_device_info_t alignment");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_device_info_t, name) == 0, "motiond_device_info_t.name offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_device_info_t, link) == 32, "motiond_device_info_t.link offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_device_info_t, firmware) == 64, "motiond_device_info_t.firmware offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_device_info_t, model) == 96, "motiond_device_info_t.model offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_device_info_t, address) == 100, "motiond_device_info_t.address offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_device_info_t, axis_count) == 104, "motiond_device_info_t.axis_count offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_device_info_t, state) == 108, "motiond_device_info_t.state offset");
+
+/**
+ * One signal's static description. 128 bytes, alignment 8. Fields in memory order:
+ *
+ * | offset | field | type | meaning | |---|---|---|---| | 0 | `name` | u8; 32 | signal name,
+ * UTF-8, zero padded | | 32 | `unit` | u8; 16 | unit of an analogue value ("" for digital) | |
+ * 48 | `device` | u8; 32 | device name | | 80 | `scale` | f64 | analogue: value = raw × scale +
+ * offset | | 88 | `offset` | f64 | analogue: value = raw × scale + offset | | 96 | `full_scale`
+ * | f64 | raw full scale (1023 for a 10-bit converter; 1 for digital) | | 104 | `kind` | u8 |
+ * MOTIOND_SIGNAL_KIND_* | | 105 | `flags` | u8 | MOTIOND_SIGNAL_INFO_FLAGS_* bits | | 106 |
+ * `device_index` | u16 | index into `ServerInfo::devices` | | 108 | `pin` | u8; 16 | the
+ * board's pin name ("ttlio1"), zero padded | | 124 | `reserved` | u32 | zero |
+ *
+ * 128 bytes, alignment 8; iceoryx2 type name "motiond::SignalInfo".
+ */
+typedef struct motiond_signal_info {
+    /** Signal name. */
+    uint8_t name[MOTIOND_NAME_LEN]; /* offset 0, 32 bytes */
+    /** Unit of an analogue value. */
+    uint8_t unit[MOTIOND_UNIT_LEN]; /* offset 32, 16 bytes */
+    /** Device name. */
+    uint8_t device[MOTIOND_NAME_LEN]; /* offset 48, 32 bytes */
+    /** Analogue scale. */
+    double scale; /* offset 80, 8 bytes */
+    /** Analogue offset. */
+    double offset; /* offset 88, 8 bytes */
+    /** Raw full scale. */
+    double full_scale; /* offset 96, 8 bytes */
+    /** MOTIOND_SIGNAL_KIND_* value. */
+    uint8_t kind; /* offset 104, 1 bytes */
+    /** MOTIOND_SIGNAL_INFO_FLAGS_* bits. */
+    uint8_t flags; /* offset 105, 1 bytes */
+    /** Index into the device array. */
+    uint16_t device_index; /* offset 106, 2 bytes */
+    /** The board's pin name. */
+    uint8_t pin[MOTIOND_UNIT_LEN]; /* offset 108, 16 bytes */
+    /** Zero. */
+    uint32_t reserved; /* offset 124, 4 bytes */
+} motiond_signal_info_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_signal_info_t) == 128, "motiond_signal_info_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_signal_info_t) == 8, "motiond_signal_info_t alignment");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, name) == 0, "motiond_signal_info_t.name offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, unit) == 32, "motiond_signal_info_t.unit offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, device) == 48, "motiond_signal_info_t.device offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, scale) == 80, "motiond_signal_info_t.scale offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, offset) == 88, "motiond_signal_info_t.offset offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, full_scale) == 96, "motiond_signal_info_t.full_scale offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, kind) == 104, "motiond_signal_info_t.kind offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, flags) == 105, "motiond_signal_info_t.flags offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, device_index) == 106, "motiond_signal_info_t.device_index offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, pin) == 108, "motiond_signal_info_t.pin offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, reserved) == 124, "motiond_signal_info_t.reserved offset");
+
+/**
+ * The server's static description. 32328 bytes, alignment 8. Fields in memory order:
+ *
+ * | offset | field | type | meaning | |---|---|---|---| | 0 | `schema_version` | u32 |
+ * MOTIOND_SCHEMA_VERSION | | 4 | `axis_count` | u32 | valid entries in `axes` | | 8 |
+ * `device_count` | u32 | valid entries in `devices` | | 12 | `tick_hz` | u32 | tick rate | | 16
+ * | `command_timeout_ms` | u32 | deadman; 0 = disabled | | 20 | `max_clients` | u32 |
+ * configured client limit | | 24 | `server_pid` | u32 | process id of motiond | | 28 |
+ * `signal_count` | u32 | valid entries in `signals` | | 32 | `name` | u8; 32 | instance name |
+ * | 64 | `start_time_ns` | u64 | CLOCK_MONOTONIC ns of tick 0 | | 72 | `axes` |
+ * motiond_axis_info_t; MOTIOND_MAX_AXES | axes in config order | | 20552 | `devices` |
+ * motiond_device_info_t; MOTIOND_MAX_DEVICES | devices in config order | | 24136 | `signals` |
+ * motiond_signal_info_t; MOTIOND_MAX_SIGNALS | signals in config order |
+ *
+ * 32328 bytes, alignment 8; iceoryx2 type name "motiond::ServerInfo".
+ */
+typedef struct motiond_server_info {
+    /** MOTIOND_SCHEMA_VERSION of the server. */
+    uint32_t schema_version; /* offset 0, 4 bytes */
+    /** Valid entries in `axes`. */
+    uint32_t axis_count; /* offset 4, 4 bytes */
+    /** Valid entries in `devices`. */
+    uint32_t device_count; /* offset 8, 4 bytes */
+    /** Tick rate, Hz. */
+    uint32_t tick_hz; /* offset 12, 4 bytes */
+    /** Deadman for velocity and power goals, ms; 0 = disabled. */
+    uint32_t command_timeout_ms; /* offset 16, 4 bytes */
+    /** Configured client limit. */
+    uint32_t max_clients; /* offset 20, 4 bytes */
+    /** Process id of motiond. */
+    uint32_t server_pid; /* offset 24, 4 bytes */
+    /** Valid entries in `signals`. */
+    uint32_t signal_count; /* offset 28, 4 bytes */
+    /** Instance name. */
+    uint8_t name[MOTIOND_NAME_LEN]; /* offset 32, 32 bytes */
+    /** CLOCK_MONOTONIC ns of tick 0. */
+    uint64_t start_time_ns; /* offset 64, 8 bytes */
+    /** Axes in config order. */
+    motiond_axis_info_t axes[MOTIOND_MAX_AXES]; /* offset 72, 20480 bytes */
+    /** Devices in config order. */
+    motiond_device_info_t devices[MOTIOND_MAX_DEVICES]; /* offset 20552, 3584 bytes */
+    /** Signals in config order. */
+    motiond_signal_info_t signals[MOTIOND_MAX_SIGNALS]; /* offset 24136, 8192 bytes */
+} motiond_server_info_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_server_info_t) == 32328, "motiond_server_info_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_server_info_t) == 8, "motiond_server_info_t alignment");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, schema_version) == 0, "motiond_server_info_t.schema_version offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, axis_count) == 4, "motiond_server_info_t.axis_count offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, device_count) == 8, "motiond_server_info_t.device_count offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, tick_hz) == 12, "motiond_server_info_t.tick_hz offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, command_timeout_ms) == 16, "motiond_server_info_t.command_timeout_ms offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, max_clients) == 20, "motiond_server_info_t.max_clients offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, server_pid) == 24, "motiond_server_info_t.server_pid offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, signal_count) == 28, "motiond_server_info_t.signal_count offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, name) == 32, "motiond_server_info_t.name offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, start_time_ns) == 64, "motiond_server_info_t.start_time_ns offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, axes) == 72, "motiond_server_info_t.axes offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, devices) == 20552, "motiond_server_info_t.devices offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, signals) == 24136, "motiond_server_info_t.signals offset");
+
+/**
+ * One effective machine parameter. 88 bytes, alignment 4. Fields in memory order:
+ *
+ * | offset | field | type | meaning | |---|---|---|---| | 0 | `key` | u8; 40 | the config key,
+ * dotted for tables (`current.standstill`) | | 40 | `value` | u8; 40 | the value in effect,
+ * with its unit (`50 %`) | | 80 | `owner_index` | u16 | device or axis index | | 82 |
+ * `owner_kind` | u8 | MOTIOND_PARAM_OWNER_* | | 83 | `from_config` | u8 | 1: the config file
+ * set it; 0: the default | | 84 | `reserved` | u32 | zero |
+ *
+ * 88 bytes, alignment 4; iceoryx2 type name "motiond::MachineParam".
+ */
+typedef struct motiond_machine_param {
+    /** Config key. */
+    uint8_t key[MOTIOND_PARAM_TEXT_LEN]; /* offset 0, 40 bytes */
+    /** Effective value. */
+    uint8_t value[MOTIOND_PARAM_TEXT_LEN]; /* offset 40, 40 bytes */
+    /** Device or axis index. */
+    uint16_t owner_index; /* offset 80, 2 bytes */
+    /** MOTIOND_PARAM_OWNER_* value. */
+    uint8_t owner_kind; /* offset 82, 1 bytes */
+    /** 1 when the config file set it. */
+    uint8_t from_config; /* offset 83, 1 bytes */
+    /** Zero. */
+    uint32_t reserved; /* offset 84, 4 bytes */
+} motiond_machine_param_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_machine_param_t) == 88, "motiond_machine_param_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_machine_param_t) == 4, "motiond_machine_param_t alignment");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_param_t, key) == 0, "motiond_machine_param_t.key offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_param_t, value) == 40, "motiond_machine_param_t.value offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_param_t, owner_index) == 80, "motiond_machine_param_t.owner_index offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_param_t, owner_kind) == 82, "motiond_machine_param_t.owner_kind offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_param_t, from_config) == 83, "motiond_machine_param_t.from_config offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_param_t, reserved) == 84, "motiond_machine_param_t.reserved offset");
+
+/**
+ * Every machine parameter in effect. 180240 bytes, alignment 4. Fields in memory order:
+ *
+ * | offset | field | type | meaning | |---|---|---|---| | 0 | `schema_version` | u32 |
+ * MOTIOND_SCHEMA_VERSION | | 4 | `count` | u32 | valid entries | | 8 | `truncated` | u32 | 1
+ * when more parameters existed than MOTIOND_MAX_PARAMS | | 12 | `reserved` | u32 | zero | | 16
+ * | `entries` | motiond_machine_param_t; MOTIOND_MAX_PARAMS | devices' then axes' parameters,
+ * config order |
+ *
+ * 180240 bytes, alignment 4; iceoryx2 type name "motiond::MachineParams".
+ */
+typedef struct motiond_machine_params {
+    /** MOTIOND_SCHEMA_VERSION of the server. */
+    uint32_t schema_version; /* offset 0, 4 bytes */
+    /** Valid entries. */
+    uint32_t count; /* offset 4, 4 bytes */
+    /** 1 when entries were left out for lack of room. */
+    uint32_t truncated; /* offset 8, 4 bytes */
+    /** Zero. */
+    uint32_t reserved; /* offset 12, 4 bytes */
+    /** The parameters. */
+    motiond_machine_param_t entries[MOTIOND_MAX_PARAMS]; /* offset 16, 180224 bytes */
+} motiond_machine_params_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_machine_params_t) == 180240, "motiond_machine_params_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_machine_params_t) == 4, "motiond_machine_params_t alignment");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_params_t, schema_version) == 0, "motiond_machine_params_t.schema_version offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_params_t, count) == 4, "motiond_machine_params_t.count offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_params_t, truncated) == 8, "motiond_machine_params_t.truncated offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_params_t, reserved) == 12, "motiond_machine_params_t.reserved offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_params_t, entries) == 16, "motiond_machine_params_t.entries offset");
+
+/**
+ * Percentiles of one latency distribution, in nanoseconds. 40 bytes.
+ *
+ * | offset | field | type | |---|---|---| | 0 | `samples` | u64 | | 8 | `p50_ns` | u64 | | 16 |
+ * `p99_ns` | u64 | | 24 | `p999_ns` | u64 | | 32 | `max_ns` | u64 |
+ *
+ * 40 bytes, alignment 8; iceoryx2 type name "motiond::LatencySummary".
+ */
+typedef struct motiond_latency_summary {
+    /** Number of samples. */
+    uint64_t samples; /* offset 0, 8 bytes */
+    /** Median. */
+    uint64_t p50_ns; /* offset 8, 8 bytes */
+    /** 99th percentile. */
+    uint64_t p99_ns; /* offset 16, 8 bytes */
+    /** 99.9th percentile. */
+    uint64_t p999_ns; /* offset 24, 8 bytes */
+    /** Maximum. */
+    uint64_t max_ns; /* offset 32, 8 bytes */
+} motiond_latency_summary_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_latency_summary_t) == 40, "motiond_latency_summary_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_latency_summary_t) == 8, "motiond_latency_summary_t alignment");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_latency_summary_t, samples) == 0, "motiond_latency_summary_t.samples offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_latency_summary_t, p50_ns) == 8, "motiond_latency_summary_t.p50_ns offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_latency_summary_t, p99_ns) == 16, "motiond_latency_summary_t.p99_ns offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_latency_summary_t, p999_ns) == 24, "motiond_latency_summary_t.p999_ns offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_latency_summary_t, max_ns) == 32, "motiond_latency_summary_t.max_ns offset");
+
+/**
+ * Counters of one link since start. 80 bytes, alignment 8.
+ *
+ * | offset | field | type | meaning | |---|---|---|---| | 0 | `name` | u8; 32 | link name | |
+ * 32 | `bytes_in` | u64 | bytes received | | 40 | `bytes_out` | u64 | bytes sent | | 48 |
+ * `frames` | u64 | replies decoded | | 56 | `errors` | u64 | bad frames, I/O errors, timeouts |
+ * | 64 | `reconnects` | u64 | successful reopens | | 72 | `up` | u32 | 1 when the link is open
+ * | | 76 | `reserved` | u32 | zero |
+ *
+ * 80 bytes, alignment 8; iceoryx2 type name "motiond::LinkStats".
+ */
+typedef struct motiond_link_stats {
+    /** Link name. */
+    uint8_t name[MOTIOND_NAME_LEN]; /* offset 0, 32 bytes */
+    /** Bytes received. */
+    uint64_t bytes_in; /* offset 32, 8 bytes */
+    /** Bytes sent. */
+    uint64_t bytes_out; /* offset 40, 8 bytes */
+    /** Replies decoded. */
+    uint64_t frames; /* offset 48, 8 bytes */
+    /** Bad frames, I/O errors, timeouts. */
+    uint64_t errors; /* offset 56, 8 bytes */
+    /** Successful reopens. */
+    uint64_t reconnects; /* offset 64, 8 bytes */
+    /** 1 when the link is open. */
+    uint32_t up; /* offset 72, 4 bytes */
+    /** Zero. */
+    uint32_t reserved; /* offset 76, 4 bytes */
+} motiond_link_stats_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_link_stats_t) == 80, "motiond_link_stats_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_link_stats_t) == 8, "motiond_link_stats_t alignment");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, name) == 0, "motiond_link_stats_t.name offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, bytes_in) == 32, "motiond_link_stats_t.bytes_in offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, bytes_out) == 40, "motiond_link_stats_t.bytes_out offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, frames) == 48, "motiond_link_stats_t.frames offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, errors) == 56, "motiond_link_stats_t.errors offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, reconnects) == 64, "motiond_link_stats_t.reconnects offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, up) == 72, "motiond_link_stats_t.up offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, reserved) == 76, "motiond_link_stats_t.reserved offset");
+
+/**
+ * The I/O side of one link: when bytes last went out and came in, and how often. 32 bytes,
+ * alignment 8. Stamps are CLOCK_MONOTONIC ns taken by the link's I/O thread right after the
+ * transport accepted or returned the bytes; 0 when it never did.
+ *
+ * | offset | field | type | meaning | |---|---|---|---| | 0 | `last_write_ns` | u64 | the last
+ * write that moved bytes | | 8 | `last_read_ns` | u64 | the last read that returned bytes | |
+ * 16 | `transactions` | u64 | messages written whole since start (SPI: transactions) | | 24 |
+ * `reads` | u64 | reads that returned bytes since start |
+ *
+ * 32 bytes, alignment 8; iceoryx2 type name "motiond::LinkIo".
+ */
+typedef struct motiond_link_io {
+    /** CLOCK_MONOTONIC ns of the last write that moved bytes; 0: never. */
+    uint64_t last_write_ns; /* offset 0, 8 bytes */
+    /** CLOCK_MONOTONIC ns of the last read that returned bytes; 0: never. */
+    uint64_t last_read_ns; /* offset 8, 8 bytes */
+    /** Messages written whole (SPI: transactions). */
+    uint64_t transactions; /* offset 16, 8 bytes */
+    /** Reads that returned bytes. */
+    uint64_t reads; /* offset 24, 8 bytes */
+} motiond_link_io_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_link_io_t) == 32, "motiond_link_io_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_link_io_t) == 8, "motiond_link_io_t alignment");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_link_io_t, last_write_ns) == 0, "motiond_link_io_t.last_write_ns offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_link_io_t, last_read_ns) == 8, "motiond_link_io_t.last_read_ns offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_link_io_t, transactions) == 16, "motiond_link_io_t.transactions offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_link_io_t, reads) == 24, "motiond_link_io_t.reads offset");
+
+/**
+ * Server figures. 1992 bytes, alignment 8. Fields in memory order:
+ *
+ * | offset | field | type | meaning | |---|---|---|---| | 0 | `schema_version` | u32 |
+ * MOTIOND_SCHEMA_VERSION | | 4 | `link_count` | u32 | valid entries in `links` | | 8 | `tick` |
+ * u64 | tick at which these figures were taken | | 16 | `time_ns` | u64 | CLOCK_MONOTONIC ns of
+ * that tick | | 24 | `wakeup` | motiond_latency_summary_t | actual wake − deadline, since start
+ * | | 64 | `work` | motiond_latency_summary_t | tick work time, since start | | 104 |
+ * `overruns` | u64 | ticks that missed their deadline, since start | | 112 |
+ * `max_consecutive_overruns` | u64 | longest run of overruns | | 120 | `commands` | u64 |
+ * requests answered | | 128 | `rejected` | u64 | requests refused | | 136 | `clients` | u32 |
+ * live client nodes seen at the last liveness check | | 140 | `rt_flags` | u32 | bit 0
+ * SCHED_FIFO, 1 memory locked, 2 pinned, 3 cpu_dma_latency held | | 144 | `links` |
+ * motiond_link_stats_t; MOTIOND_MAX_LINKS | per link | | 1424 | `faults` | u64 | axis faults
+ * latched by the server's supervision, since start | | 1432 | `frames_lost` | u64 | ticks whose
+ * frame could not be loaned or sent, since start | | 1440 | `full_services` | u32 | bit set of
+ * services whose port slots are all taken now (`ServerStats::FULL_FRAME` …) | | 1444 |
+ * `full_events` | u32 | times a service was found with all its slots taken, since start | |
+ * 1448 | `publish_failures` | u64 | info, stats and params samples that could not be loaned or
+ * sent, and tick notifications that failed, since start (a lost frame counts in `frames_lost`)
+ * | | 1456 | `replies_lost` | u64 | command replies that could not be sent (the client vanished
+ * before its answer), since start | | 1464 | `events_dropped` | u64 | log reports the main
+ * thread's queue had no room for, and failed iceoryx2 housekeeping (connection updates, e-stop
+ * event reads), since start | | 1472 | `link_io` | motiond_link_io_t; MOTIOND_MAX_LINKS | per
+ * link (same index as `links`): the I/O thread's stamps | | 1984 | `nodes_cleaned` | u64 |
+ * records of dead iceoryx2 nodes removed from the service root (crashed clients, clients killed
+ * while they started), since start |
+ *
+ * 1992 bytes, alignment 8; iceoryx2 type name "motiond::ServerStats".
+ */
+typedef struct motiond_server_stats {
+    /** MOTIOND_SCHEMA_VERSION of the server. */
+    uint32_t schema_version; /* offset 0, 4 bytes */
+    /** Valid entries in `links`. */
+    uint32_t link_count; /* offset 4, 4 bytes */
+    /** Tick at which these figures were taken. */
+    uint64_t tick; /* offset 8, 8 bytes */
+    /** CLOCK_MONOTONIC ns of that tick. */
+    uint64_t time_ns; /* offset 16, 8 bytes */
+    /** Wake-up latency (actual wake − deadline) since start. */
+    motiond_latency_summary_t wakeup; /* offset 24, 40 bytes */
+    /** Tick work time since start. */
+    motiond_latency_summary_t work; /* offset 64, 40 bytes */
+    /** Ticks that missed their deadline since start. */
+    uint64_t overruns; /* offset 104, 8 bytes */
+    /** Longest run of consecutive overruns. */
+    uint64_t max_consecutive_overruns; /* offset 112, 8 bytes */
+    /** Requests answered. */
+    uint64_t commands; /* offset 120, 8 bytes */
+    /** Requests refused. */
+    uint64_t rejected; /* offset 128, 8 bytes */
+    /** Live client nodes at the last liveness check. */
+    uint32_t clients; /* offset 136, 4 bytes */
+    /** Bit 0 SCHED_FIFO, bit 1 memory locked, bit 2 pinned, bit 3 cpu_dma_latency held. */
+    uint32_t rt_flags; /* offset 140, 4 bytes */
+    /** Per-link counters. */
+    motiond_link_stats_t links[MOTIOND_MAX_LINKS]; /* offset 144, 1280 bytes */
+    /** Axis faults latched by the server's supervision since start. */
+    uint64_t faults; /* offset 1424, 8 bytes */
+    /** Ticks whose frame could not be loaned or sent, since start. */
+    uint64_t frames_lost; /* offset 1432, 8 bytes */
+    /**
+     * Services whose port slots are all taken now (bits `FULL_*`): new clients are refused
+     * there until a slot frees.
+     */
+    uint32_t full_services; /* offset 1440, 4 bytes */
+    /** Times a service was found with all its slots taken, since start. */
+    uint32_t full_events; /* offset 1444, 4 bytes */
+    /**
+     * Info, stats and params samples that could not be loaned or sent, and tick notifications
+     * that failed, since start (a lost frame counts in `frames_lost`).
+     */
+    uint64_t publish_failures; /* offset 1448, 8 bytes */
+    /**
+     * Command replies that could not be sent (the client vanished before its answer), since
+     * start.
+     */
+    uint64_t replies_lost; /* offset 1456, 8 bytes */
+    /**
+     * Log reports the main thread's queue had no room for, and failed iceoryx2 housekeeping
+     * (connection updates, e-stop event reads), since start.
+     */
+    uint64_t events_dropped; /* offset 1464, 8 bytes */
+    /** Per link (same index as `links`): the I/O thread's stamps. */
+    motiond_link_io_t link_io[MOTIOND_MAX_LINKS]; /* offset 1472, 512 bytes */
+    /**
+     * Records of dead iceoryx2 nodes removed from the service root (crashed clients, clients
+     * killed while they started), since start.
+     */
+    uint64_t nodes_cleaned; /* offset 1984, 8 bytes */
+} motiond_server_stats_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_server_stats_t) == 1992, "motiond_server_stats_t size");
-MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_motion_frame_t) == 8, "motiond_motion_frame_t align");
-MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_machine_params_t) == 4, "motiond_machine_params_t align");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_server_stats_t) == 8, "motiond_server_stats_t alignment");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, schema_version) == 0, "motiond_server_stats_t.schema_version offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, link_count) == 4, "motiond_server_stats_t.link_count offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, tick) == 8, "motiond_server_stats_t.tick offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, time_ns) == 16, "motiond_server_stats_t.time_ns offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, wakeup) == 24, "motiond_server_stats_t.wakeup offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, work) == 64, "motiond_server_stats_t.work offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, overruns) == 104, "motiond_server_stats_t.overruns offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, max_consecutive_overruns) == 112, "motiond_server_stats_t.max_consecutive_overruns offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, commands) == 120, "motiond_server_stats_t.commands offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, rejected) == 128, "motiond_server_stats_t.rejected offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, clients) == 136, "motiond_server_stats_t.clients offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, rt_flags) == 140, "motiond_server_stats_t.rt_flags offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, links) == 144, "motiond_server_stats_t.links offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, faults) == 1424, "motiond_server_stats_t.faults offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, frames_lost) == 1432, "motiond_server_stats_t.frames_lost offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, full_services) == 1440, "motiond_server_stats_t.full_services offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, full_events) == 1444, "motiond_server_stats_t.full_events offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, publish_failures) == 1448, "motiond_server_stats_t.publish_failures offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, replies_lost) == 1456, "motiond_server_stats_t.replies_lost offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, events_dropped) == 1464, "motiond_server_stats_t.events_dropped offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, link_io) == 1472, "motiond_server_stats_t.link_io offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, nodes_cleaned) == 1984, "motiond_server_stats_t.nodes_cleaned offset");
 
-/* --- texts ---------------------------------------------------------------------------- */
+/* --- texts -------------------------------------------------------------------------------- */
 
-/** The server's one-line explanation of a refusal reason; NULL for a value unknown here. */
-static inline const char *motiond_reason_text(uint32_t reason) {
-    switch (reason) {
+/** The text of a MOTIOND_COMMAND_KIND_* value; NULL for a value unknown here. */
+static inline const char *motiond_command_kind_text(uint32_t value) {
+    switch (value) {
+    case MOTIOND_COMMAND_KIND_STOP: return "stop";
+    case MOTIOND_COMMAND_KIND_POWER: return "power";
+    case MOTIOND_COMMAND_KIND_POSITION: return "position";
+    case MOTIOND_COMMAND_KIND_VELOCITY: return "velocity";
+    case MOTIOND_COMMAND_KIND_RAMP_POSITION: return "ramp-position";
+    case MOTIOND_COMMAND_KIND_RAMP_VELOCITY: return "ramp-velocity";
+    case MOTIOND_COMMAND_KIND_HOME: return "home";
+    case MOTIOND_COMMAND_KIND_SET_POSITION: return "set-position";
+    case MOTIOND_COMMAND_KIND_CLAIM: return "claim";
+    case MOTIOND_COMMAND_KIND_RELEASE: return "release";
+    case MOTIOND_COMMAND_KIND_E_STOP: return "e-stop";
+    case MOTIOND_COMMAND_KIND_RESET: return "reset";
+    case MOTIOND_COMMAND_KIND_OFF: return "off";
+    case MOTIOND_COMMAND_KIND_SET_OUTPUT: return "set-output";
+    default: return NULL;
+    }
+}
+
+/** The text of a MOTIOND_REASON_* value; NULL for a value unknown here. */
+static inline const char *motiond_reason_text(uint32_t value) {
+    switch (value) {
     case MOTIOND_REASON_ACCEPTED: return "accepted";
     case MOTIOND_REASON_SCHEMA_MISMATCH: return "client and server use different motion-ipc schema versions";
     case MOTIOND_REASON_UNKNOWN_KIND: return "unknown command kind";
@@ -549,30 +1128,9 @@ static inline const char *motiond_reason_text(uint32_t reason) {
     }
 }
 
-/** The command's name as the CLI and logs spell it; NULL for a value unknown here. */
-static inline const char *motiond_command_kind_text(uint32_t kind) {
-    switch (kind) {
-    case MOTIOND_COMMAND_KIND_STOP: return "stop";
-    case MOTIOND_COMMAND_KIND_POWER: return "power";
-    case MOTIOND_COMMAND_KIND_POSITION: return "position";
-    case MOTIOND_COMMAND_KIND_VELOCITY: return "velocity";
-    case MOTIOND_COMMAND_KIND_RAMP_POSITION: return "ramp-position";
-    case MOTIOND_COMMAND_KIND_RAMP_VELOCITY: return "ramp-velocity";
-    case MOTIOND_COMMAND_KIND_HOME: return "home";
-    case MOTIOND_COMMAND_KIND_SET_POSITION: return "set-position";
-    case MOTIOND_COMMAND_KIND_CLAIM: return "claim";
-    case MOTIOND_COMMAND_KIND_RELEASE: return "release";
-    case MOTIOND_COMMAND_KIND_E_STOP: return "e-stop";
-    case MOTIOND_COMMAND_KIND_RESET: return "reset";
-    case MOTIOND_COMMAND_KIND_OFF: return "off";
-    case MOTIOND_COMMAND_KIND_SET_OUTPUT: return "set-output";
-    default: return NULL;
-    }
-}
-
-/** A device state's name; NULL for a value unknown here. */
-static inline const char *motiond_device_state_text(uint32_t state) {
-    switch (state) {
+/** The text of a MOTIOND_DEVICE_STATE_* value; NULL for a value unknown here. */
+static inline const char *motiond_device_state_text(uint32_t value) {
+    switch (value) {
     case MOTIOND_DEVICE_STATE_OFFLINE: return "offline";
     case MOTIOND_DEVICE_STATE_ONLINE: return "online";
     case MOTIOND_DEVICE_STATE_STARTING: return "starting";
@@ -581,9 +1139,9 @@ static inline const char *motiond_device_state_text(uint32_t state) {
     }
 }
 
-/** A fault code's name; NULL for a value unknown here. */
-static inline const char *motiond_fault_code_text(uint32_t fault) {
-    switch (fault) {
+/** The text of a MOTIOND_FAULT_CODE_* value; NULL for a value unknown here. */
+static inline const char *motiond_fault_code_text(uint32_t value) {
+    switch (value) {
     case MOTIOND_FAULT_CODE_NONE: return "none";
     case MOTIOND_FAULT_CODE_LINK_DOWN: return "link-down";
     case MOTIOND_FAULT_CODE_BOARD_NOT_RESPONDING: return "board-not-responding";
@@ -600,9 +1158,9 @@ static inline const char *motiond_fault_code_text(uint32_t fault) {
     }
 }
 
-/** A signal kind's config name; NULL for a value unknown here. */
-static inline const char *motiond_signal_kind_text(uint32_t kind) {
-    switch (kind) {
+/** The text of a MOTIOND_SIGNAL_KIND_* value; NULL for a value unknown here. */
+static inline const char *motiond_signal_kind_text(uint32_t value) {
+    switch (value) {
     case MOTIOND_SIGNAL_KIND_DIGITAL_IN: return "digital-in";
     case MOTIOND_SIGNAL_KIND_DIGITAL_OUT: return "digital-out";
     case MOTIOND_SIGNAL_KIND_ANALOG_IN: return "analog-in";
@@ -610,9 +1168,9 @@ static inline const char *motiond_signal_kind_text(uint32_t kind) {
     }
 }
 
-/** An e-stop category's config name; NULL for a value unknown here. */
-static inline const char *motiond_estop_category_text(uint32_t category) {
-    switch (category) {
+/** The text of a MOTIOND_ESTOP_CATEGORY_* value; NULL for a value unknown here. */
+static inline const char *motiond_estop_category_text(uint32_t value) {
+    switch (value) {
     case MOTIOND_ESTOP_CATEGORY_HOLD: return "hold";
     case MOTIOND_ESTOP_CATEGORY_STOP_OFF: return "stop-off";
     case MOTIOND_ESTOP_CATEGORY_OFF: return "off";
@@ -620,9 +1178,9 @@ static inline const char *motiond_estop_category_text(uint32_t category) {
     }
 }
 
-/** A device model's config id ("qq2drv"); NULL for a value unknown here. */
-static inline const char *motiond_device_model_text(uint32_t model) {
-    switch (model) {
+/** The text of a MOTIOND_DEVICE_MODEL_* value; NULL for a value unknown here. */
+static inline const char *motiond_device_model_text(uint32_t value) {
+    switch (value) {
     case MOTIOND_DEVICE_MODEL_QQ2DRV: return "qq2drv";
     case MOTIOND_DEVICE_MODEL_TMCPACK: return "tmcpack";
     case MOTIOND_DEVICE_MODEL_SPIMOTOR: return "spimotor";
@@ -630,6 +1188,8 @@ static inline const char *motiond_device_model_text(uint32_t model) {
     default: return NULL;
     }
 }
+
+/* --- helpers ------------------------------------------------------------------------------ */
 
 /** A client id from an iceoryx2 node id given as its two 64-bit halves. */
 static inline motiond_client_id_t motiond_client_id(uint64_t lo, uint64_t hi) {

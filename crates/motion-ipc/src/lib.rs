@@ -25,12 +25,17 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+// `payload!` first: the payload modules below use it.
+#[macro_use]
+mod payload;
+
 mod command;
 mod frame;
 mod info;
 mod params;
 mod pid_file;
 pub mod rules;
+pub mod schema;
 mod service;
 mod signal;
 mod stats;
