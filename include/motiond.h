@@ -21,14 +21,17 @@
  *
  * Services of the instance NAME ([server] name in the server's config):
  *
- *   MOTIOND_SERVICE_FRAME         publish-subscribe, history 1: motiond_motion_frame_t, every tick
- *   MOTIOND_SERVICE_TICK          event: notified after every frame
- *   MOTIOND_SERVICE_COMMAND       request-response: motiond_command_request_t -> motiond_command_reply_t
- *   MOTIOND_SERVICE_INFO          publish-subscribe, history 1: motiond_server_info_t
- *   MOTIOND_SERVICE_STATS         publish-subscribe, history 1: motiond_server_stats_t, about 1 Hz
- *   MOTIOND_SERVICE_PARAMS        publish-subscribe, history 1: motiond_machine_params_t
- *   MOTIOND_SERVICE_ESTOP         event: any notification latches the e-stop
- *   MOTIOND_SERVICE_SERVER_NODE   the iceoryx2 node name of the instance's server
+ *   MOTIOND_SERVICE_FRAME           publish-subscribe, history 1: motiond_motion_frame_t, every
+ *                                   tick
+ *   MOTIOND_SERVICE_TICK            event: notified after every frame
+ *   MOTIOND_SERVICE_COMMAND         request-response: motiond_command_request_t ->
+ *                                   motiond_command_reply_t
+ *   MOTIOND_SERVICE_INFO            publish-subscribe, history 1: motiond_server_info_t
+ *   MOTIOND_SERVICE_STATS           publish-subscribe, history 1: motiond_server_stats_t, about
+ *                                   1 Hz
+ *   MOTIOND_SERVICE_PARAMS          publish-subscribe, history 1: motiond_machine_params_t
+ *   MOTIOND_SERVICE_ESTOP           event: any notification latches the e-stop
+ *   MOTIOND_SERVICE_SERVER_NODE     the iceoryx2 node name of the instance's server
  */
 #ifndef MOTIOND_H
 #define MOTIOND_H
@@ -305,22 +308,11 @@ typedef struct motiond_client_id {
 } motiond_client_id_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_client_id_t) == 16, "motiond_client_id_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_client_id_t) == 8, "motiond_client_id_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_client_id_t, lo) == 0, "motiond_client_id_t.lo offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_client_id_t, hi) == 8, "motiond_client_id_t.hi offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_client_id_t, lo) == 0, "lo offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_client_id_t, hi) == 8, "hi offset");
 
 /**
- * One axis in a frame. 80 bytes, alignment 8. Fields in memory order:
- *
- * | offset | field | type | meaning | |---|---|---|---| | 0 | `position` | f64 | measured
- * position, axis units | | 8 | `velocity` | f64 | measured velocity, units/s | | 16 | `target`
- * | f64 | position target (position modes) or velocity target (velocity modes) | | 24 |
- * `raw_counts` | i64 | the board's own position counts | | 32 | `last_refresh_tick` | u64 |
- * tick at which fresh data last arrived from the board | | 40 | `flags` | u32 |
- * MOTIOND_AXIS_FLAGS_* bits | | 44 | `fault` | u16 | MOTIOND_FAULT_CODE_* | | 46 | `mode` | u8
- * | MOTIOND_AXIS_MODE_* | | 47 | `device_state` | u8 | MOTIOND_DEVICE_STATE_* of the axis's
- * board | | 48 | `claimed_by` | motiond_client_id_t | claim holder, zero when unclaimed | | 64
- * | `fault_value` | f64 | the measured figure of the fault (units, units/s), 0 when none | | 72
- * | `fault_limit` | f64 | the tolerance or limit it broke, 0 when none |
+ * One axis in a frame.
  *
  * 80 bytes, alignment 8; iceoryx2 type name "motiond::AxisState".
  */
@@ -337,58 +329,53 @@ typedef struct motiond_axis_state {
     uint64_t last_refresh_tick; /* offset 32, 8 bytes */
     /** MOTIOND_AXIS_FLAGS_* bits. */
     uint32_t flags; /* offset 40, 4 bytes */
-    /** MOTIOND_FAULT_CODE_* value. */
+    /** MOTIOND_FAULT_CODE_* value; 0 = no fault. */
     uint16_t fault; /* offset 44, 2 bytes */
     /** MOTIOND_AXIS_MODE_* value. */
-    uint8_t mode; /* offset 46, 1 bytes */
+    uint8_t mode; /* offset 46, 1 byte */
     /** MOTIOND_DEVICE_STATE_* value of the axis's board. */
-    uint8_t device_state; /* offset 47, 1 bytes */
+    uint8_t device_state; /* offset 47, 1 byte */
     /** The client holding a claim on the axis; zero when unclaimed. */
     motiond_client_id_t claimed_by; /* offset 48, 16 bytes */
-    /** The measured figure of the latched fault (see MOTIOND_FAULT_CODE_*), 0 when none. */
+    /**
+     * The measured figure of the latched fault (units, units/s; see MOTIOND_FAULT_CODE_*), 0
+     * when none.
+     */
     double fault_value; /* offset 64, 8 bytes */
     /** The tolerance or limit the fault broke, 0 when none. */
     double fault_limit; /* offset 72, 8 bytes */
 } motiond_axis_state_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_axis_state_t) == 80, "motiond_axis_state_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_axis_state_t) == 8, "motiond_axis_state_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, position) == 0, "motiond_axis_state_t.position offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, velocity) == 8, "motiond_axis_state_t.velocity offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, target) == 16, "motiond_axis_state_t.target offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, raw_counts) == 24, "motiond_axis_state_t.raw_counts offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, last_refresh_tick) == 32, "motiond_axis_state_t.last_refresh_tick offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, flags) == 40, "motiond_axis_state_t.flags offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, fault) == 44, "motiond_axis_state_t.fault offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, mode) == 46, "motiond_axis_state_t.mode offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, device_state) == 47, "motiond_axis_state_t.device_state offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, claimed_by) == 48, "motiond_axis_state_t.claimed_by offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, fault_value) == 64, "motiond_axis_state_t.fault_value offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, fault_limit) == 72, "motiond_axis_state_t.fault_limit offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, position) == 0, "position offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, velocity) == 8, "velocity offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, target) == 16, "target offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, raw_counts) == 24, "raw_counts offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, last_refresh_tick) == 32, "last_refresh_tick offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, flags) == 40, "flags offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, fault) == 44, "fault offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, mode) == 46, "mode offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, device_state) == 47, "device_state offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, claimed_by) == 48, "claimed_by offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, fault_value) == 64, "fault_value offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, fault_limit) == 72, "fault_limit offset");
 
 /**
- * One signal in a frame. 48 bytes, alignment 8. Fields in memory order:
- *
- * | offset | field | type | meaning | |---|---|---|---| | 0 | `value` | f64 | logical value:
- * digital 0.0/1.0 after `invert`; analogue raw × scale + offset | | 8 | `raw` | f64 | as the
- * board reports it: electrical level 0/1, or ADC counts | | 16 | `last_refresh_tick` | u64 |
- * tick at which the board last reported it (outputs: acknowledged it) | | 24 | `flags` | u32 |
- * MOTIOND_SIGNAL_FLAGS_* bits | | 28 | `kind` | u8 | MOTIOND_SIGNAL_KIND_* | | 29 | `reserved`
- * | u8; 3 | zero | | 32 | `claimed_by` | motiond_client_id_t | claim holder of an output, zero
- * when unclaimed |
+ * One signal in a frame.
  *
  * 48 bytes, alignment 8; iceoryx2 type name "motiond::SignalState".
  */
 typedef struct motiond_signal_state {
-    /** Logical value. */
+    /** Logical value: digital 0.0/1.0 after `invert`; analogue raw × scale + offset. */
     double value; /* offset 0, 8 bytes */
-    /** Raw value as the board reports it. */
+    /** Raw value as the board reports it: electrical level 0/1, or ADC counts. */
     double raw; /* offset 8, 8 bytes */
-    /** Tick at which the board last reported (or acknowledged) it. */
+    /** Tick at which the board last reported it (outputs: acknowledged it). */
     uint64_t last_refresh_tick; /* offset 16, 8 bytes */
     /** MOTIOND_SIGNAL_FLAGS_* bits. */
     uint32_t flags; /* offset 24, 4 bytes */
     /** MOTIOND_SIGNAL_KIND_* value. */
-    uint8_t kind; /* offset 28, 1 bytes */
+    uint8_t kind; /* offset 28, 1 byte */
     /** Zero. */
     uint8_t reserved[3]; /* offset 29, 3 bytes */
     /** Claim holder of an output; zero when unclaimed. */
@@ -396,23 +383,17 @@ typedef struct motiond_signal_state {
 } motiond_signal_state_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_signal_state_t) == 48, "motiond_signal_state_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_signal_state_t) == 8, "motiond_signal_state_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_state_t, value) == 0, "motiond_signal_state_t.value offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_state_t, raw) == 8, "motiond_signal_state_t.raw offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_state_t, last_refresh_tick) == 16, "motiond_signal_state_t.last_refresh_tick offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_state_t, flags) == 24, "motiond_signal_state_t.flags offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_state_t, kind) == 28, "motiond_signal_state_t.kind offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_state_t, reserved) == 29, "motiond_signal_state_t.reserved offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_state_t, claimed_by) == 32, "motiond_signal_state_t.claimed_by offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_state_t, value) == 0, "value offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_state_t, raw) == 8, "raw offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_state_t, last_refresh_tick) == 16, "last_refresh_tick offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_state_t, flags) == 24, "flags offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_state_t, kind) == 28, "kind offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_state_t, reserved) == 29, "reserved offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_state_t, claimed_by) == 32, "claimed_by offset");
 
 /**
  * When the current goal of one axis was set and when its first request reached the wire
- * (`MotionFrame::wire`, same index as `axes`). 24 bytes, alignment 8.
- *
- * | offset | field | type | meaning | |---|---|---|---| | 0 | `goal_tick` | u64 | tick in which
- * the current goal was set (a client's command: the reply's `tick_applied`; or the server's own
- * stop) | | 8 | `wire_tick` | u64 | tick during which the goal's first request was written to
- * the link (its last byte accepted by the transport), 0 until then | | 16 | `wire_ns` | u64 |
- * CLOCK_MONOTONIC ns of that write, 0 until then (and for a goal that needs no request) |
+ * (motiond_motion_frame_t.wire, same index as `axes`).
  *
  * Command → wire: `wire_ns` minus the client's CLOCK_MONOTONIC when it sent the command, or in
  * ticks `wire_tick − goal_tick` (0: written in the tick that accepted it).
@@ -420,35 +401,30 @@ MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_state_t, claimed_by) == 32, "motio
  * 24 bytes, alignment 8; iceoryx2 type name "motiond::AxisWire".
  */
 typedef struct motiond_axis_wire {
-    /** Tick in which the current goal was set. */
+    /**
+     * Tick in which the current goal was set (a client's command: the reply's `tick_applied`;
+     * or the server's own stop).
+     */
     uint64_t goal_tick; /* offset 0, 8 bytes */
-    /** Tick during which its first request was written; 0 until then. */
+    /**
+     * Tick during which the goal's first request was written to the link (its last byte
+     * accepted by the transport); 0 until then.
+     */
     uint64_t wire_tick; /* offset 8, 8 bytes */
-    /** CLOCK_MONOTONIC ns of that write; 0 until then. */
+    /**
+     * CLOCK_MONOTONIC ns of that write; 0 until then (and for a goal that needs no request).
+     */
     uint64_t wire_ns; /* offset 16, 8 bytes */
 } motiond_axis_wire_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_axis_wire_t) == 24, "motiond_axis_wire_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_axis_wire_t) == 8, "motiond_axis_wire_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_wire_t, goal_tick) == 0, "motiond_axis_wire_t.goal_tick offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_wire_t, wire_tick) == 8, "motiond_axis_wire_t.wire_tick offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_wire_t, wire_ns) == 16, "motiond_axis_wire_t.wire_ns offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_wire_t, goal_tick) == 0, "goal_tick offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_wire_t, wire_tick) == 8, "wire_tick offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_wire_t, wire_ns) == 16, "wire_ns offset");
 
 /**
  * One consistent snapshot of every axis, board and signal, published once per tick on
- * `motiond/<name>/frame`. 16464 bytes, alignment 8. Fields in memory order:
- *
- * | offset | field | type | meaning | |---|---|---|---| | 0 | `schema_version` | u32 |
- * MOTIOND_SCHEMA_VERSION | | 4 | `axis_count` | u32 | valid entries at the start of `axes` | |
- * 8 | `tick` | u64 | tick number, 0 at server start | | 16 | `time_ns` | u64 | the tick's
- * deadline, CLOCK_MONOTONIC ns | | 24 | `publish_ns` | u64 | CLOCK_MONOTONIC ns just before the
- * frame was sent | | 32 | `flags` | u32 | MOTIOND_FRAME_FLAGS_* bits | | 36 | `signal_count` |
- * u32 | valid entries at the start of `signals` | | 40 | `device_count` | u32 | valid entries
- * at the start of `devices` | | 44 | `reserved` | u32 | zero | | 48 | `devices` | u8;
- * MOTIOND_MAX_DEVICES | MOTIOND_DEVICE_STATE_* per device, config order | | 80 | `axes` |
- * motiond_axis_state_t; MOTIOND_MAX_AXES | axes in config order | | 10320 | `signals` |
- * motiond_signal_state_t; MOTIOND_MAX_SIGNALS | signals in config order | | 13392 | `wire` |
- * motiond_axis_wire_t; MOTIOND_MAX_AXES | per axis (same index as `axes`): when its current
- * goal was set and reached the wire |
+ * `motiond/<name>/frame`.
  *
  * 16464 bytes, alignment 8; iceoryx2 type name "motiond::MotionFrame".
  */
@@ -471,11 +447,15 @@ typedef struct motiond_motion_frame {
     uint32_t device_count; /* offset 40, 4 bytes */
     /** Zero. */
     uint32_t reserved; /* offset 44, 4 bytes */
-    /** MOTIOND_DEVICE_STATE_* per device, config order. */
+    /**
+     * MOTIOND_DEVICE_STATE_* per device, config order; entries past `device_count` are zero.
+     */
     uint8_t devices[MOTIOND_MAX_DEVICES]; /* offset 48, 32 bytes */
-    /** Axes in config order; entries past `axis_count` are `AxisState::UNKNOWN`. */
+    /** Axes in config order; entries past `axis_count` are motiond_axis_state_t.UNKNOWN. */
     motiond_axis_state_t axes[MOTIOND_MAX_AXES]; /* offset 80, 10240 bytes */
-    /** Signals in config order; entries past `signal_count` are `SignalState::UNKNOWN`. */
+    /**
+     * Signals in config order; entries past `signal_count` are motiond_signal_state_t.UNKNOWN.
+     */
     motiond_signal_state_t signals[MOTIOND_MAX_SIGNALS]; /* offset 10320, 3072 bytes */
     /**
      * Per axis (same index as `axes`): when its current goal was set and when its first request
@@ -485,30 +465,23 @@ typedef struct motiond_motion_frame {
 } motiond_motion_frame_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_motion_frame_t) == 16464, "motiond_motion_frame_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_motion_frame_t) == 8, "motiond_motion_frame_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, schema_version) == 0, "motiond_motion_frame_t.schema_version offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, axis_count) == 4, "motiond_motion_frame_t.axis_count offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, tick) == 8, "motiond_motion_frame_t.tick offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, time_ns) == 16, "motiond_motion_frame_t.time_ns offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, publish_ns) == 24, "motiond_motion_frame_t.publish_ns offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, flags) == 32, "motiond_motion_frame_t.flags offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, signal_count) == 36, "motiond_motion_frame_t.signal_count offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, device_count) == 40, "motiond_motion_frame_t.device_count offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, reserved) == 44, "motiond_motion_frame_t.reserved offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, devices) == 48, "motiond_motion_frame_t.devices offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, axes) == 80, "motiond_motion_frame_t.axes offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, signals) == 10320, "motiond_motion_frame_t.signals offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, wire) == 13392, "motiond_motion_frame_t.wire offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, schema_version) == 0, "schema_version offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, axis_count) == 4, "axis_count offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, tick) == 8, "tick offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, time_ns) == 16, "time_ns offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, publish_ns) == 24, "publish_ns offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, flags) == 32, "flags offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, signal_count) == 36, "signal_count offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, device_count) == 40, "device_count offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, reserved) == 44, "reserved offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, devices) == 48, "devices offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, axes) == 80, "axes offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, signals) == 10320, "signals offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, wire) == 13392, "wire offset");
 
 /**
- * A command to the server. 64 bytes, alignment 8. Fields in memory order:
- *
- * | offset | field | type | meaning | |---|---|---|---| | 0 | `schema_version` | u32 |
- * MOTIOND_SCHEMA_VERSION | | 4 | `kind` | u32 | MOTIOND_COMMAND_KIND_* | | 8 | `client` |
- * motiond_client_id_t | the sender's iceoryx2 node id, or zero | | 24 | `sequence` | u64 | the
- * client's own sequence number, echoed in the reply | | 32 | `axis` | u32 | axis (or signal)
- * index, config order, or `CommandRequest::ALL_AXES` | | 36 | `target` | u32 |
- * MOTIOND_TARGET_*: 0 = axis, 1 = signal | | 40 | `values` | f64; 3 | see
- * MOTIOND_COMMAND_KIND_* |
+ * A command to the server, on `motiond/<name>/command`; `values` per kind: see
+ * MOTIOND_COMMAND_KIND_*.
  *
  * Identity comes from the transport: the server knows which iceoryx2 node sent a request and
  * owns every claim by that node. `client` may be zero ("the sender"); a non-zero `client` that
@@ -525,32 +498,25 @@ typedef struct motiond_command_request {
     motiond_client_id_t client; /* offset 8, 16 bytes */
     /** The client's sequence number, echoed in the reply. */
     uint64_t sequence; /* offset 24, 8 bytes */
-    /** Axis (or signal) index, or `CommandRequest::ALL_AXES`. */
+    /** Axis (or signal) index, config order, or motiond_command_request_t.ALL_AXES. */
     uint32_t axis; /* offset 32, 4 bytes */
-    /** MOTIOND_TARGET_* value. */
+    /** MOTIOND_TARGET_* value: 0 = axis, 1 = signal. */
     uint32_t target; /* offset 36, 4 bytes */
     /** Arguments; see MOTIOND_COMMAND_KIND_*. */
     double values[3]; /* offset 40, 24 bytes */
 } motiond_command_request_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_command_request_t) == 64, "motiond_command_request_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_command_request_t) == 8, "motiond_command_request_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_command_request_t, schema_version) == 0, "motiond_command_request_t.schema_version offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_command_request_t, kind) == 4, "motiond_command_request_t.kind offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_command_request_t, client) == 8, "motiond_command_request_t.client offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_command_request_t, sequence) == 24, "motiond_command_request_t.sequence offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_command_request_t, axis) == 32, "motiond_command_request_t.axis offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_command_request_t, target) == 36, "motiond_command_request_t.target offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_command_request_t, values) == 40, "motiond_command_request_t.values offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_command_request_t, schema_version) == 0, "schema_version offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_command_request_t, kind) == 4, "kind offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_command_request_t, client) == 8, "client offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_command_request_t, sequence) == 24, "sequence offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_command_request_t, axis) == 32, "axis offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_command_request_t, target) == 36, "target offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_command_request_t, values) == 40, "values offset");
 
 /**
- * The server's answer to one motiond_command_request_t; every request gets exactly one. 32
- * bytes, alignment 8. Fields in memory order:
- *
- * | offset | field | type | meaning | |---|---|---|---| | 0 | `schema_version` | u32 |
- * MOTIOND_SCHEMA_VERSION | | 4 | `reason` | u32 | MOTIOND_REASON_*; 0 = accepted | | 8 |
- * `sequence` | u64 | the request's sequence | | 16 | `tick_applied` | u64 | tick in which the
- * command took effect (or was refused) | | 24 | `axis` | u32 | the request's axis | | 28 |
- * `kind` | u32 | the request's kind |
+ * The server's answer to one motiond_command_request_t; every request gets exactly one.
  *
  * 32 bytes, alignment 8; iceoryx2 type name "motiond::CommandReply".
  */
@@ -570,33 +536,22 @@ typedef struct motiond_command_reply {
 } motiond_command_reply_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_command_reply_t) == 32, "motiond_command_reply_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_command_reply_t) == 8, "motiond_command_reply_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_command_reply_t, schema_version) == 0, "motiond_command_reply_t.schema_version offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_command_reply_t, reason) == 4, "motiond_command_reply_t.reason offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_command_reply_t, sequence) == 8, "motiond_command_reply_t.sequence offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_command_reply_t, tick_applied) == 16, "motiond_command_reply_t.tick_applied offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_command_reply_t, axis) == 24, "motiond_command_reply_t.axis offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_command_reply_t, kind) == 28, "motiond_command_reply_t.kind offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_command_reply_t, schema_version) == 0, "schema_version offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_command_reply_t, reason) == 4, "reason offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_command_reply_t, sequence) == 8, "sequence offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_command_reply_t, tick_applied) == 16, "tick_applied offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_command_reply_t, axis) == 24, "axis offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_command_reply_t, kind) == 28, "kind offset");
 
 /**
- * One axis's static description. 160 bytes, alignment 8. Fields in memory order:
- *
- * | offset | field | type | meaning | |---|---|---|---| | 0 | `name` | u8; 32 | axis name,
- * UTF-8, zero padded | | 32 | `unit` | u8; 16 | unit, UTF-8, zero padded | | 48 | `device` |
- * u8; 32 | device name | | 80 | `counts_per_unit` | f64 | device counts per unit | | 88 | `min`
- * | f64 | soft limit, units | | 96 | `max` | f64 | soft limit, units | | 104 | `max_velocity` |
- * f64 | units/s | | 112 | `max_accel` | f64 | units/s² | | 120 | `capabilities` | u32 |
- * `Capabilities` bits | | 124 | `channel` | u16 | motor number on the device | | 126 |
- * `device_index` | u16 | index into `ServerInfo::devices` | | 128 | `following_error` | f64 |
- * units; 0 = not supervised | | 136 | `overspeed_factor` | f64 | × max_velocity; 0 = not
- * supervised | | 144 | `home_max_travel` | f64 | units; 0 = not supervised | | 152 | `estop` |
- * u32 | MOTIOND_ESTOP_CATEGORY_* | | 156 | `reserved` | u32 | zero |
+ * One axis's static description.
  *
  * 160 bytes, alignment 8; iceoryx2 type name "motiond::AxisInfo".
  */
 typedef struct motiond_axis_info {
-    /** Axis name. */
+    /** Axis name, UTF-8, zero padded. */
     uint8_t name[MOTIOND_NAME_LEN]; /* offset 0, 32 bytes */
-    /** Unit of positions ("mm", "deg"). */
+    /** Unit of positions ("mm", "deg"), UTF-8, zero padded. */
     uint8_t unit[MOTIOND_UNIT_LEN]; /* offset 32, 16 bytes */
     /** Name of the device that drives the axis. */
     uint8_t device[MOTIOND_NAME_LEN]; /* offset 48, 32 bytes */
@@ -614,11 +569,11 @@ typedef struct motiond_axis_info {
     uint32_t capabilities; /* offset 120, 4 bytes */
     /** Motor number on the device. */
     uint16_t channel; /* offset 124, 2 bytes */
-    /** Index into `ServerInfo::devices`. */
+    /** Index into motiond_server_info_t.devices. */
     uint16_t device_index; /* offset 126, 2 bytes */
     /** Following error tolerance, units; 0 = not supervised. */
     double following_error; /* offset 128, 8 bytes */
-    /** Overspeed factor; 0 = not supervised. */
+    /** Overspeed factor (× `max_velocity`); 0 = not supervised. */
     double overspeed_factor; /* offset 136, 8 bytes */
     /** Travel limit of a reference search, units; 0 = not supervised. */
     double home_max_travel; /* offset 144, 8 bytes */
@@ -629,32 +584,25 @@ typedef struct motiond_axis_info {
 } motiond_axis_info_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_axis_info_t) == 160, "motiond_axis_info_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_axis_info_t) == 8, "motiond_axis_info_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, name) == 0, "motiond_axis_info_t.name offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, unit) == 32, "motiond_axis_info_t.unit offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, device) == 48, "motiond_axis_info_t.device offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, counts_per_unit) == 80, "motiond_axis_info_t.counts_per_unit offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, min) == 88, "motiond_axis_info_t.min offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, max) == 96, "motiond_axis_info_t.max offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, max_velocity) == 104, "motiond_axis_info_t.max_velocity offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, max_accel) == 112, "motiond_axis_info_t.max_accel offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, capabilities) == 120, "motiond_axis_info_t.capabilities offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, channel) == 124, "motiond_axis_info_t.channel offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, device_index) == 126, "motiond_axis_info_t.device_index offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, following_error) == 128, "motiond_axis_info_t.following_error offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, overspeed_factor) == 136, "motiond_axis_info_t.overspeed_factor offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, home_max_travel) == 144, "motiond_axis_info_t.home_max_travel offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, estop) == 152, "motiond_axis_info_t.estop offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, reserved) == 156, "motiond_axis_info_t.reserved offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, name) == 0, "name offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, unit) == 32, "unit offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, device) == 48, "device offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, counts_per_unit) == 80, "counts_per_unit offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, min) == 88, "min offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, max) == 96, "max offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, max_velocity) == 104, "max_velocity offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, max_accel) == 112, "max_accel offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, capabilities) == 120, "capabilities offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, channel) == 124, "channel offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, device_index) == 126, "device_index offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, following_error) == 128, "following_error offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, overspeed_factor) == 136, "overspeed_factor offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, home_max_travel) == 144, "home_max_travel offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, estop) == 152, "estop offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, reserved) == 156, "reserved offset");
 
 /**
- * One device's description. 112 bytes, alignment 4. Fields in memory order:
- *
- * | offset | field | type | meaning | |---|---|---|---| | 0 | `name` | u8; 32 | device name | |
- * 32 | `link` | u8; 32 | link name | | 64 | `firmware` | u8; 32 | firmware version as the board
- * reported it ("" until known) | | 96 | `model` | u32 | MOTIOND_DEVICE_MODEL_* | | 100 |
- * `address` | u32 | bus address (0 when the model has none) | | 104 | `axis_count` | u32 | axes
- * configured on the device | | 108 | `state` | u32 | MOTIOND_DEVICE_STATE_* when the info was
- * published (the frame has the current one) |
+ * One device's description.
  *
  * 112 bytes, alignment 4; iceoryx2 type name "motiond::DeviceInfo".
  */
@@ -663,7 +611,7 @@ typedef struct motiond_device_info {
     uint8_t name[MOTIOND_NAME_LEN]; /* offset 0, 32 bytes */
     /** Link name. */
     uint8_t link[MOTIOND_NAME_LEN]; /* offset 32, 32 bytes */
-    /** Firmware version as reported by the board. */
+    /** Firmware version as the board reported it ("" until known). */
     uint8_t firmware[MOTIOND_NAME_LEN]; /* offset 64, 32 bytes */
     /** MOTIOND_DEVICE_MODEL_* value. */
     uint32_t model; /* offset 96, 4 bytes */
@@ -671,84 +619,66 @@ typedef struct motiond_device_info {
     uint32_t address; /* offset 100, 4 bytes */
     /** Axes configured on the device. */
     uint32_t axis_count; /* offset 104, 4 bytes */
-    /** MOTIOND_DEVICE_STATE_* value when the info was published. */
+    /**
+     * MOTIOND_DEVICE_STATE_* value when the info was published (the frame has the current one).
+     */
     uint32_t state; /* offset 108, 4 bytes */
 } motiond_device_info_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_device_info_t) == 112, "motiond_device_info_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_device_info_t) == 4, "motiond_device_info_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_device_info_t, name) == 0, "motiond_device_info_t.name offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_device_info_t, link) == 32, "motiond_device_info_t.link offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_device_info_t, firmware) == 64, "motiond_device_info_t.firmware offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_device_info_t, model) == 96, "motiond_device_info_t.model offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_device_info_t, address) == 100, "motiond_device_info_t.address offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_device_info_t, axis_count) == 104, "motiond_device_info_t.axis_count offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_device_info_t, state) == 108, "motiond_device_info_t.state offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_device_info_t, name) == 0, "name offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_device_info_t, link) == 32, "link offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_device_info_t, firmware) == 64, "firmware offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_device_info_t, model) == 96, "model offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_device_info_t, address) == 100, "address offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_device_info_t, axis_count) == 104, "axis_count offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_device_info_t, state) == 108, "state offset");
 
 /**
- * One signal's static description. 128 bytes, alignment 8. Fields in memory order:
- *
- * | offset | field | type | meaning | |---|---|---|---| | 0 | `name` | u8; 32 | signal name,
- * UTF-8, zero padded | | 32 | `unit` | u8; 16 | unit of an analogue value ("" for digital) | |
- * 48 | `device` | u8; 32 | device name | | 80 | `scale` | f64 | analogue: value = raw × scale +
- * offset | | 88 | `offset` | f64 | analogue: value = raw × scale + offset | | 96 | `full_scale`
- * | f64 | raw full scale (1023 for a 10-bit converter; 1 for digital) | | 104 | `kind` | u8 |
- * MOTIOND_SIGNAL_KIND_* | | 105 | `flags` | u8 | MOTIOND_SIGNAL_INFO_FLAGS_* bits | | 106 |
- * `device_index` | u16 | index into `ServerInfo::devices` | | 108 | `pin` | u8; 16 | the
- * board's pin name ("ttlio1"), zero padded | | 124 | `reserved` | u32 | zero |
+ * One signal's static description.
  *
  * 128 bytes, alignment 8; iceoryx2 type name "motiond::SignalInfo".
  */
 typedef struct motiond_signal_info {
     /** Signal name. */
     uint8_t name[MOTIOND_NAME_LEN]; /* offset 0, 32 bytes */
-    /** Unit of an analogue value. */
+    /** Unit of an analogue value ("" for digital). */
     uint8_t unit[MOTIOND_UNIT_LEN]; /* offset 32, 16 bytes */
     /** Device name. */
     uint8_t device[MOTIOND_NAME_LEN]; /* offset 48, 32 bytes */
-    /** Analogue scale. */
+    /** Analogue: value = raw × scale + offset. */
     double scale; /* offset 80, 8 bytes */
-    /** Analogue offset. */
+    /** Analogue: value = raw × scale + offset. */
     double offset; /* offset 88, 8 bytes */
-    /** Raw full scale. */
+    /** Raw full scale (1023 for a 10-bit converter; 1 for digital). */
     double full_scale; /* offset 96, 8 bytes */
     /** MOTIOND_SIGNAL_KIND_* value. */
-    uint8_t kind; /* offset 104, 1 bytes */
+    uint8_t kind; /* offset 104, 1 byte */
     /** MOTIOND_SIGNAL_INFO_FLAGS_* bits. */
-    uint8_t flags; /* offset 105, 1 bytes */
-    /** Index into the device array. */
+    uint8_t flags; /* offset 105, 1 byte */
+    /** Index into motiond_server_info_t.devices. */
     uint16_t device_index; /* offset 106, 2 bytes */
-    /** The board's pin name. */
+    /** The board's pin name ("ttlio1"), zero padded. */
     uint8_t pin[MOTIOND_UNIT_LEN]; /* offset 108, 16 bytes */
     /** Zero. */
     uint32_t reserved; /* offset 124, 4 bytes */
 } motiond_signal_info_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_signal_info_t) == 128, "motiond_signal_info_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_signal_info_t) == 8, "motiond_signal_info_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, name) == 0, "motiond_signal_info_t.name offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, unit) == 32, "motiond_signal_info_t.unit offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, device) == 48, "motiond_signal_info_t.device offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, scale) == 80, "motiond_signal_info_t.scale offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, offset) == 88, "motiond_signal_info_t.offset offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, full_scale) == 96, "motiond_signal_info_t.full_scale offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, kind) == 104, "motiond_signal_info_t.kind offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, flags) == 105, "motiond_signal_info_t.flags offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, device_index) == 106, "motiond_signal_info_t.device_index offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, pin) == 108, "motiond_signal_info_t.pin offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, reserved) == 124, "motiond_signal_info_t.reserved offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, name) == 0, "name offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, unit) == 32, "unit offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, device) == 48, "device offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, scale) == 80, "scale offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, offset) == 88, "offset offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, full_scale) == 96, "full_scale offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, kind) == 104, "kind offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, flags) == 105, "flags offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, device_index) == 106, "device_index offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, pin) == 108, "pin offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, reserved) == 124, "reserved offset");
 
 /**
- * The server's static description. 32328 bytes, alignment 8. Fields in memory order:
- *
- * | offset | field | type | meaning | |---|---|---|---| | 0 | `schema_version` | u32 |
- * MOTIOND_SCHEMA_VERSION | | 4 | `axis_count` | u32 | valid entries in `axes` | | 8 |
- * `device_count` | u32 | valid entries in `devices` | | 12 | `tick_hz` | u32 | tick rate | | 16
- * | `command_timeout_ms` | u32 | deadman; 0 = disabled | | 20 | `max_clients` | u32 |
- * configured client limit | | 24 | `server_pid` | u32 | process id of motiond | | 28 |
- * `signal_count` | u32 | valid entries in `signals` | | 32 | `name` | u8; 32 | instance name |
- * | 64 | `start_time_ns` | u64 | CLOCK_MONOTONIC ns of tick 0 | | 72 | `axes` |
- * motiond_axis_info_t; MOTIOND_MAX_AXES | axes in config order | | 20552 | `devices` |
- * motiond_device_info_t; MOTIOND_MAX_DEVICES | devices in config order | | 24136 | `signals` |
- * motiond_signal_info_t; MOTIOND_MAX_SIGNALS | signals in config order |
+ * The server's static description, published with history 1 on `motiond/<name>/info`.
  *
  * 32328 bytes, alignment 8; iceoryx2 type name "motiond::ServerInfo".
  */
@@ -782,62 +712,50 @@ typedef struct motiond_server_info {
 } motiond_server_info_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_server_info_t) == 32328, "motiond_server_info_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_server_info_t) == 8, "motiond_server_info_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, schema_version) == 0, "motiond_server_info_t.schema_version offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, axis_count) == 4, "motiond_server_info_t.axis_count offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, device_count) == 8, "motiond_server_info_t.device_count offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, tick_hz) == 12, "motiond_server_info_t.tick_hz offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, command_timeout_ms) == 16, "motiond_server_info_t.command_timeout_ms offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, max_clients) == 20, "motiond_server_info_t.max_clients offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, server_pid) == 24, "motiond_server_info_t.server_pid offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, signal_count) == 28, "motiond_server_info_t.signal_count offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, name) == 32, "motiond_server_info_t.name offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, start_time_ns) == 64, "motiond_server_info_t.start_time_ns offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, axes) == 72, "motiond_server_info_t.axes offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, devices) == 20552, "motiond_server_info_t.devices offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, signals) == 24136, "motiond_server_info_t.signals offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, schema_version) == 0, "schema_version offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, axis_count) == 4, "axis_count offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, device_count) == 8, "device_count offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, tick_hz) == 12, "tick_hz offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, command_timeout_ms) == 16, "command_timeout_ms offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, max_clients) == 20, "max_clients offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, server_pid) == 24, "server_pid offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, signal_count) == 28, "signal_count offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, name) == 32, "name offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, start_time_ns) == 64, "start_time_ns offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, axes) == 72, "axes offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, devices) == 20552, "devices offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, signals) == 24136, "signals offset");
 
 /**
- * One effective machine parameter. 88 bytes, alignment 4. Fields in memory order:
- *
- * | offset | field | type | meaning | |---|---|---|---| | 0 | `key` | u8; 40 | the config key,
- * dotted for tables (`current.standstill`) | | 40 | `value` | u8; 40 | the value in effect,
- * with its unit (`50 %`) | | 80 | `owner_index` | u16 | device or axis index | | 82 |
- * `owner_kind` | u8 | MOTIOND_PARAM_OWNER_* | | 83 | `from_config` | u8 | 1: the config file
- * set it; 0: the default | | 84 | `reserved` | u32 | zero |
+ * One effective machine parameter.
  *
  * 88 bytes, alignment 4; iceoryx2 type name "motiond::MachineParam".
  */
 typedef struct motiond_machine_param {
-    /** Config key. */
+    /** The config key, dotted for tables (`current.standstill`). */
     uint8_t key[MOTIOND_PARAM_TEXT_LEN]; /* offset 0, 40 bytes */
-    /** Effective value. */
+    /** The value in effect, with its unit (`50 %`). */
     uint8_t value[MOTIOND_PARAM_TEXT_LEN]; /* offset 40, 40 bytes */
     /** Device or axis index. */
     uint16_t owner_index; /* offset 80, 2 bytes */
     /** MOTIOND_PARAM_OWNER_* value. */
-    uint8_t owner_kind; /* offset 82, 1 bytes */
-    /** 1 when the config file set it. */
-    uint8_t from_config; /* offset 83, 1 bytes */
+    uint8_t owner_kind; /* offset 82, 1 byte */
+    /** 1: the config file set it; 0: the default. */
+    uint8_t from_config; /* offset 83, 1 byte */
     /** Zero. */
     uint32_t reserved; /* offset 84, 4 bytes */
 } motiond_machine_param_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_machine_param_t) == 88, "motiond_machine_param_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_machine_param_t) == 4, "motiond_machine_param_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_param_t, key) == 0, "motiond_machine_param_t.key offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_param_t, value) == 40, "motiond_machine_param_t.value offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_param_t, owner_index) == 80, "motiond_machine_param_t.owner_index offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_param_t, owner_kind) == 82, "motiond_machine_param_t.owner_kind offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_param_t, from_config) == 83, "motiond_machine_param_t.from_config offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_param_t, reserved) == 84, "motiond_machine_param_t.reserved offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_param_t, key) == 0, "key offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_param_t, value) == 40, "value offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_param_t, owner_index) == 80, "owner_index offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_param_t, owner_kind) == 82, "owner_kind offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_param_t, from_config) == 83, "from_config offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_param_t, reserved) == 84, "reserved offset");
 
 /**
- * Every machine parameter in effect. 180240 bytes, alignment 4. Fields in memory order:
- *
- * | offset | field | type | meaning | |---|---|---|---| | 0 | `schema_version` | u32 |
- * MOTIOND_SCHEMA_VERSION | | 4 | `count` | u32 | valid entries | | 8 | `truncated` | u32 | 1
- * when more parameters existed than MOTIOND_MAX_PARAMS | | 12 | `reserved` | u32 | zero | | 16
- * | `entries` | motiond_machine_param_t; MOTIOND_MAX_PARAMS | devices' then axes' parameters,
- * config order |
+ * Every machine parameter in effect, published with history 1 on `motiond/<name>/params`.
  *
  * 180240 bytes, alignment 4; iceoryx2 type name "motiond::MachineParams".
  */
@@ -846,26 +764,23 @@ typedef struct motiond_machine_params {
     uint32_t schema_version; /* offset 0, 4 bytes */
     /** Valid entries. */
     uint32_t count; /* offset 4, 4 bytes */
-    /** 1 when entries were left out for lack of room. */
+    /** 1 when more parameters existed than MOTIOND_MAX_PARAMS (entries were left out). */
     uint32_t truncated; /* offset 8, 4 bytes */
     /** Zero. */
     uint32_t reserved; /* offset 12, 4 bytes */
-    /** The parameters. */
+    /** Devices' then axes' parameters, config order. */
     motiond_machine_param_t entries[MOTIOND_MAX_PARAMS]; /* offset 16, 180224 bytes */
 } motiond_machine_params_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_machine_params_t) == 180240, "motiond_machine_params_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_machine_params_t) == 4, "motiond_machine_params_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_params_t, schema_version) == 0, "motiond_machine_params_t.schema_version offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_params_t, count) == 4, "motiond_machine_params_t.count offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_params_t, truncated) == 8, "motiond_machine_params_t.truncated offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_params_t, reserved) == 12, "motiond_machine_params_t.reserved offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_params_t, entries) == 16, "motiond_machine_params_t.entries offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_params_t, schema_version) == 0, "schema_version offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_params_t, count) == 4, "count offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_params_t, truncated) == 8, "truncated offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_params_t, reserved) == 12, "reserved offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_params_t, entries) == 16, "entries offset");
 
 /**
- * Percentiles of one latency distribution, in nanoseconds. 40 bytes.
- *
- * | offset | field | type | |---|---|---| | 0 | `samples` | u64 | | 8 | `p50_ns` | u64 | | 16 |
- * `p99_ns` | u64 | | 24 | `p999_ns` | u64 | | 32 | `max_ns` | u64 |
+ * Percentiles of one latency distribution, in nanoseconds.
  *
  * 40 bytes, alignment 8; iceoryx2 type name "motiond::LatencySummary".
  */
@@ -883,20 +798,14 @@ typedef struct motiond_latency_summary {
 } motiond_latency_summary_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_latency_summary_t) == 40, "motiond_latency_summary_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_latency_summary_t) == 8, "motiond_latency_summary_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_latency_summary_t, samples) == 0, "motiond_latency_summary_t.samples offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_latency_summary_t, p50_ns) == 8, "motiond_latency_summary_t.p50_ns offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_latency_summary_t, p99_ns) == 16, "motiond_latency_summary_t.p99_ns offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_latency_summary_t, p999_ns) == 24, "motiond_latency_summary_t.p999_ns offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_latency_summary_t, max_ns) == 32, "motiond_latency_summary_t.max_ns offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_latency_summary_t, samples) == 0, "samples offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_latency_summary_t, p50_ns) == 8, "p50_ns offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_latency_summary_t, p99_ns) == 16, "p99_ns offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_latency_summary_t, p999_ns) == 24, "p999_ns offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_latency_summary_t, max_ns) == 32, "max_ns offset");
 
 /**
- * Counters of one link since start. 80 bytes, alignment 8.
- *
- * | offset | field | type | meaning | |---|---|---|---| | 0 | `name` | u8; 32 | link name | |
- * 32 | `bytes_in` | u64 | bytes received | | 40 | `bytes_out` | u64 | bytes sent | | 48 |
- * `frames` | u64 | replies decoded | | 56 | `errors` | u64 | bad frames, I/O errors, timeouts |
- * | 64 | `reconnects` | u64 | successful reopens | | 72 | `up` | u32 | 1 when the link is open
- * | | 76 | `reserved` | u32 | zero |
+ * Counters of one link since start.
  *
  * 80 bytes, alignment 8; iceoryx2 type name "motiond::LinkStats".
  */
@@ -920,24 +829,19 @@ typedef struct motiond_link_stats {
 } motiond_link_stats_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_link_stats_t) == 80, "motiond_link_stats_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_link_stats_t) == 8, "motiond_link_stats_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, name) == 0, "motiond_link_stats_t.name offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, bytes_in) == 32, "motiond_link_stats_t.bytes_in offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, bytes_out) == 40, "motiond_link_stats_t.bytes_out offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, frames) == 48, "motiond_link_stats_t.frames offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, errors) == 56, "motiond_link_stats_t.errors offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, reconnects) == 64, "motiond_link_stats_t.reconnects offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, up) == 72, "motiond_link_stats_t.up offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, reserved) == 76, "motiond_link_stats_t.reserved offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, name) == 0, "name offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, bytes_in) == 32, "bytes_in offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, bytes_out) == 40, "bytes_out offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, frames) == 48, "frames offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, errors) == 56, "errors offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, reconnects) == 64, "reconnects offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, up) == 72, "up offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, reserved) == 76, "reserved offset");
 
 /**
- * The I/O side of one link: when bytes last went out and came in, and how often. 32 bytes,
- * alignment 8. Stamps are CLOCK_MONOTONIC ns taken by the link's I/O thread right after the
- * transport accepted or returned the bytes; 0 when it never did.
- *
- * | offset | field | type | meaning | |---|---|---|---| | 0 | `last_write_ns` | u64 | the last
- * write that moved bytes | | 8 | `last_read_ns` | u64 | the last read that returned bytes | |
- * 16 | `transactions` | u64 | messages written whole since start (SPI: transactions) | | 24 |
- * `reads` | u64 | reads that returned bytes since start |
+ * The I/O side of one link: when bytes last went out and came in, and how often. Stamps are
+ * CLOCK_MONOTONIC ns taken by the link's I/O thread right after the transport accepted or
+ * returned the bytes; 0 when it never did.
  *
  * 32 bytes, alignment 8; iceoryx2 type name "motiond::LinkIo".
  */
@@ -953,38 +857,13 @@ typedef struct motiond_link_io {
 } motiond_link_io_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_link_io_t) == 32, "motiond_link_io_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_link_io_t) == 8, "motiond_link_io_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_link_io_t, last_write_ns) == 0, "motiond_link_io_t.last_write_ns offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_link_io_t, last_read_ns) == 8, "motiond_link_io_t.last_read_ns offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_link_io_t, transactions) == 16, "motiond_link_io_t.transactions offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_link_io_t, reads) == 24, "motiond_link_io_t.reads offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_link_io_t, last_write_ns) == 0, "last_write_ns offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_link_io_t, last_read_ns) == 8, "last_read_ns offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_link_io_t, transactions) == 16, "transactions offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_link_io_t, reads) == 24, "reads offset");
 
 /**
- * Server figures. 1992 bytes, alignment 8. Fields in memory order:
- *
- * | offset | field | type | meaning | |---|---|---|---| | 0 | `schema_version` | u32 |
- * MOTIOND_SCHEMA_VERSION | | 4 | `link_count` | u32 | valid entries in `links` | | 8 | `tick` |
- * u64 | tick at which these figures were taken | | 16 | `time_ns` | u64 | CLOCK_MONOTONIC ns of
- * that tick | | 24 | `wakeup` | motiond_latency_summary_t | actual wake − deadline, since start
- * | | 64 | `work` | motiond_latency_summary_t | tick work time, since start | | 104 |
- * `overruns` | u64 | ticks that missed their deadline, since start | | 112 |
- * `max_consecutive_overruns` | u64 | longest run of overruns | | 120 | `commands` | u64 |
- * requests answered | | 128 | `rejected` | u64 | requests refused | | 136 | `clients` | u32 |
- * live client nodes seen at the last liveness check | | 140 | `rt_flags` | u32 | bit 0
- * SCHED_FIFO, 1 memory locked, 2 pinned, 3 cpu_dma_latency held | | 144 | `links` |
- * motiond_link_stats_t; MOTIOND_MAX_LINKS | per link | | 1424 | `faults` | u64 | axis faults
- * latched by the server's supervision, since start | | 1432 | `frames_lost` | u64 | ticks whose
- * frame could not be loaned or sent, since start | | 1440 | `full_services` | u32 | bit set of
- * services whose port slots are all taken now (`ServerStats::FULL_FRAME` …) | | 1444 |
- * `full_events` | u32 | times a service was found with all its slots taken, since start | |
- * 1448 | `publish_failures` | u64 | info, stats and params samples that could not be loaned or
- * sent, and tick notifications that failed, since start (a lost frame counts in `frames_lost`)
- * | | 1456 | `replies_lost` | u64 | command replies that could not be sent (the client vanished
- * before its answer), since start | | 1464 | `events_dropped` | u64 | log reports the main
- * thread's queue had no room for, and failed iceoryx2 housekeeping (connection updates, e-stop
- * event reads), since start | | 1472 | `link_io` | motiond_link_io_t; MOTIOND_MAX_LINKS | per
- * link (same index as `links`): the I/O thread's stamps | | 1984 | `nodes_cleaned` | u64 |
- * records of dead iceoryx2 nodes removed from the service root (crashed clients, clients killed
- * while they started), since start |
+ * Server figures, published about once a second on `motiond/<name>/stats`.
  *
  * 1992 bytes, alignment 8; iceoryx2 type name "motiond::ServerStats".
  */
@@ -1011,7 +890,10 @@ typedef struct motiond_server_stats {
     uint64_t rejected; /* offset 128, 8 bytes */
     /** Live client nodes at the last liveness check. */
     uint32_t clients; /* offset 136, 4 bytes */
-    /** Bit 0 SCHED_FIFO, bit 1 memory locked, bit 2 pinned, bit 3 cpu_dma_latency held. */
+    /**
+     * Real-time set-up bits (MOTIOND_RT_FLAGS_*): bit 0 SCHED_FIFO, bit 1 memory locked, bit 2
+     * pinned, bit 3 cpu_dma_latency held.
+     */
     uint32_t rt_flags; /* offset 140, 4 bytes */
     /** Per-link counters. */
     motiond_link_stats_t links[MOTIOND_MAX_LINKS]; /* offset 144, 1280 bytes */
@@ -1020,8 +902,8 @@ typedef struct motiond_server_stats {
     /** Ticks whose frame could not be loaned or sent, since start. */
     uint64_t frames_lost; /* offset 1432, 8 bytes */
     /**
-     * Services whose port slots are all taken now (bits `FULL_*`): new clients are refused
-     * there until a slot frees.
+     * Services whose port slots are all taken now (MOTIOND_FULL_SERVICES_* bits, the `FULL_*`
+     * constants): new clients are refused there until a slot frees.
      */
     uint32_t full_services; /* offset 1440, 4 bytes */
     /** Times a service was found with all its slots taken, since start. */
@@ -1051,28 +933,28 @@ typedef struct motiond_server_stats {
 } motiond_server_stats_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_server_stats_t) == 1992, "motiond_server_stats_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_server_stats_t) == 8, "motiond_server_stats_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, schema_version) == 0, "motiond_server_stats_t.schema_version offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, link_count) == 4, "motiond_server_stats_t.link_count offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, tick) == 8, "motiond_server_stats_t.tick offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, time_ns) == 16, "motiond_server_stats_t.time_ns offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, wakeup) == 24, "motiond_server_stats_t.wakeup offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, work) == 64, "motiond_server_stats_t.work offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, overruns) == 104, "motiond_server_stats_t.overruns offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, max_consecutive_overruns) == 112, "motiond_server_stats_t.max_consecutive_overruns offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, commands) == 120, "motiond_server_stats_t.commands offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, rejected) == 128, "motiond_server_stats_t.rejected offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, clients) == 136, "motiond_server_stats_t.clients offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, rt_flags) == 140, "motiond_server_stats_t.rt_flags offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, links) == 144, "motiond_server_stats_t.links offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, faults) == 1424, "motiond_server_stats_t.faults offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, frames_lost) == 1432, "motiond_server_stats_t.frames_lost offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, full_services) == 1440, "motiond_server_stats_t.full_services offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, full_events) == 1444, "motiond_server_stats_t.full_events offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, publish_failures) == 1448, "motiond_server_stats_t.publish_failures offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, replies_lost) == 1456, "motiond_server_stats_t.replies_lost offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, events_dropped) == 1464, "motiond_server_stats_t.events_dropped offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, link_io) == 1472, "motiond_server_stats_t.link_io offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, nodes_cleaned) == 1984, "motiond_server_stats_t.nodes_cleaned offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, schema_version) == 0, "schema_version offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, link_count) == 4, "link_count offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, tick) == 8, "tick offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, time_ns) == 16, "time_ns offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, wakeup) == 24, "wakeup offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, work) == 64, "work offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, overruns) == 104, "overruns offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, max_consecutive_overruns) == 112, "max_consecutive_overruns offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, commands) == 120, "commands offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, rejected) == 128, "rejected offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, clients) == 136, "clients offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, rt_flags) == 140, "rt_flags offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, links) == 144, "links offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, faults) == 1424, "faults offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, frames_lost) == 1432, "frames_lost offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, full_services) == 1440, "full_services offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, full_events) == 1444, "full_events offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, publish_failures) == 1448, "publish_failures offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, replies_lost) == 1456, "replies_lost offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, events_dropped) == 1464, "events_dropped offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, link_io) == 1472, "link_io offset");
+MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, nodes_cleaned) == 1984, "nodes_cleaned offset");
 
 /* --- texts -------------------------------------------------------------------------------- */
 

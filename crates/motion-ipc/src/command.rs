@@ -336,21 +336,12 @@ impl TryFrom<u32> for Target {
 }
 
 payload! {
-    /// A command to the server. 64 bytes, alignment 8. Fields in memory order:
+    /// A command to the server, on `motiond/<name>/command`; `values` per kind: see
+    /// [`CommandKind`].
     ///
-    /// | offset | field | type | meaning |
-    /// |---|---|---|---|
-    /// | 0 | `schema_version` | u32 | [`SCHEMA_VERSION`] |
-    /// | 4 | `kind` | u32 | [`CommandKind`] |
-    /// | 8 | `client` | [`ClientId`] | the sender's iceoryx2 node id, or zero |
-    /// | 24 | `sequence` | u64 | the client's own sequence number, echoed in the reply |
-    /// | 32 | `axis` | u32 | axis (or signal) index, config order, or [`CommandRequest::ALL_AXES`] |
-    /// | 36 | `target` | u32 | [`Target`]: 0 = axis, 1 = signal |
-    /// | 40 | `values` | f64; 3 | see [`CommandKind`] |
-    ///
-    /// Identity comes from the transport: the server knows which iceoryx2 node sent a request
-    /// and owns every claim by that node. `client` may be zero ("the sender"); a non-zero
-    /// `client` that is not the sender's node is refused with [`Reason::IdentityMismatch`].
+    /// Identity comes from the transport: the server knows which iceoryx2 node sent a request and
+    /// owns every claim by that node. `client` may be zero ("the sender"); a non-zero `client` that
+    /// is not the sender's node is refused with [`Reason::IdentityMismatch`].
     #[derive(Debug, Clone, Copy, PartialEq)]
     #[type_name("motiond::CommandRequest")]
     pub struct CommandRequest {
@@ -362,9 +353,9 @@ payload! {
         pub client: ClientId,
         /// The client's sequence number, echoed in the reply.
         pub sequence: u64,
-        /// Axis (or signal) index, or [`CommandRequest::ALL_AXES`].
+        /// Axis (or signal) index, config order, or [`CommandRequest::ALL_AXES`].
         pub axis: u32,
-        /// [`Target`] value.
+        /// [`Target`] value: 0 = axis, 1 = signal.
         pub target: u32,
         /// Arguments; see [`CommandKind`].
         pub values: [f64; 3],
@@ -420,16 +411,6 @@ impl CommandRequest {
 
 payload! {
     /// The server's answer to one [`CommandRequest`]; every request gets exactly one.
-    /// 32 bytes, alignment 8. Fields in memory order:
-    ///
-    /// | offset | field | type | meaning |
-    /// |---|---|---|---|
-    /// | 0 | `schema_version` | u32 | [`SCHEMA_VERSION`] |
-    /// | 4 | `reason` | u32 | [`Reason`]; 0 = accepted |
-    /// | 8 | `sequence` | u64 | the request's sequence |
-    /// | 16 | `tick_applied` | u64 | tick in which the command took effect (or was refused) |
-    /// | 24 | `axis` | u32 | the request's axis |
-    /// | 28 | `kind` | u32 | the request's kind |
     #[derive(Debug, Clone, Copy, PartialEq, Eq)]
     #[type_name("motiond::CommandReply")]
     pub struct CommandReply {

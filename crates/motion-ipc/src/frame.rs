@@ -301,22 +301,7 @@ impl AxisFlags {
 }
 
 payload! {
-    /// One axis in a frame. 80 bytes, alignment 8. Fields in memory order:
-    ///
-    /// | offset | field | type | meaning |
-    /// |---|---|---|---|
-    /// | 0 | `position` | f64 | measured position, axis units |
-    /// | 8 | `velocity` | f64 | measured velocity, units/s |
-    /// | 16 | `target` | f64 | position target (position modes) or velocity target (velocity modes) |
-    /// | 24 | `raw_counts` | i64 | the board's own position counts |
-    /// | 32 | `last_refresh_tick` | u64 | tick at which fresh data last arrived from the board |
-    /// | 40 | `flags` | u32 | [`AxisFlags`] bits |
-    /// | 44 | `fault` | u16 | [`FaultCode`] |
-    /// | 46 | `mode` | u8 | [`AxisMode`] |
-    /// | 47 | `device_state` | u8 | [`DeviceState`] of the axis's board |
-    /// | 48 | `claimed_by` | [`ClientId`] | claim holder, zero when unclaimed |
-    /// | 64 | `fault_value` | f64 | the measured figure of the fault (units, units/s), 0 when none |
-    /// | 72 | `fault_limit` | f64 | the tolerance or limit it broke, 0 when none |
+    /// One axis in a frame.
     #[derive(Debug, Clone, Copy, PartialEq)]
     #[type_name("motiond::AxisState")]
     pub struct AxisState {
@@ -332,7 +317,7 @@ payload! {
         pub last_refresh_tick: u64,
         /// [`AxisFlags`] bits.
         pub flags: u32,
-        /// [`FaultCode`] value.
+        /// [`FaultCode`] value; 0 = no fault.
         pub fault: u16,
         /// [`AxisMode`] value.
         pub mode: u8,
@@ -340,7 +325,8 @@ payload! {
         pub device_state: u8,
         /// The client holding a claim on the axis; zero when unclaimed.
         pub claimed_by: ClientId,
-        /// The measured figure of the latched fault (see [`FaultCode`]), 0 when none.
+        /// The measured figure of the latched fault (units, units/s; see [`FaultCode`]), 0 when
+        /// none.
         pub fault_value: f64,
         /// The tolerance or limit the fault broke, 0 when none.
         pub fault_limit: f64,
@@ -430,24 +416,20 @@ impl FrameFlags {
 
 payload! {
     /// When the current goal of one axis was set and when its first request reached the wire
-    /// ([`MotionFrame::wire`], same index as `axes`). 24 bytes, alignment 8.
+    /// ([`MotionFrame::wire`], same index as `axes`).
     ///
-    /// | offset | field | type | meaning |
-    /// |---|---|---|---|
-    /// | 0 | `goal_tick` | u64 | tick in which the current goal was set (a client's command: the reply's `tick_applied`; or the server's own stop) |
-    /// | 8 | `wire_tick` | u64 | tick during which the goal's first request was written to the link (its last byte accepted by the transport), 0 until then |
-    /// | 16 | `wire_ns` | u64 | CLOCK_MONOTONIC ns of that write, 0 until then (and for a goal that needs no request) |
-    ///
-    /// Command → wire: `wire_ns` minus the client's CLOCK_MONOTONIC when it sent the command,
-    /// or in ticks `wire_tick − goal_tick` (0: written in the tick that accepted it).
+    /// Command → wire: `wire_ns` minus the client's CLOCK_MONOTONIC when it sent the command, or in
+    /// ticks `wire_tick − goal_tick` (0: written in the tick that accepted it).
     #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
     #[type_name("motiond::AxisWire")]
     pub struct AxisWire {
-        /// Tick in which the current goal was set.
+        /// Tick in which the current goal was set (a client's command: the reply's `tick_applied`;
+        /// or the server's own stop).
         pub goal_tick: u64,
-        /// Tick during which its first request was written; 0 until then.
+        /// Tick during which the goal's first request was written to the link (its last byte
+        /// accepted by the transport); 0 until then.
         pub wire_tick: u64,
-        /// CLOCK_MONOTONIC ns of that write; 0 until then.
+        /// CLOCK_MONOTONIC ns of that write; 0 until then (and for a goal that needs no request).
         pub wire_ns: u64,
     }
 }
@@ -468,23 +450,7 @@ impl AxisWire {
 
 payload! {
     /// One consistent snapshot of every axis, board and signal, published once per tick on
-    /// `motiond/<name>/frame`. 16464 bytes, alignment 8. Fields in memory order:
-    ///
-    /// | offset | field | type | meaning |
-    /// |---|---|---|---|
-    /// | 0 | `schema_version` | u32 | [`SCHEMA_VERSION`] |
-    /// | 4 | `axis_count` | u32 | valid entries at the start of `axes` |
-    /// | 8 | `tick` | u64 | tick number, 0 at server start |
-    /// | 16 | `time_ns` | u64 | the tick's deadline, CLOCK_MONOTONIC ns |
-    /// | 24 | `publish_ns` | u64 | CLOCK_MONOTONIC ns just before the frame was sent |
-    /// | 32 | `flags` | u32 | [`FrameFlags`] bits |
-    /// | 36 | `signal_count` | u32 | valid entries at the start of `signals` |
-    /// | 40 | `device_count` | u32 | valid entries at the start of `devices` |
-    /// | 44 | `reserved` | u32 | zero |
-    /// | 48 | `devices` | u8; [`MAX_DEVICES`] | [`DeviceState`] per device, config order |
-    /// | 80 | `axes` | [`AxisState`]; [`MAX_AXES`] | axes in config order |
-    /// | 10320 | `signals` | [`SignalState`]; [`MAX_SIGNALS`] | signals in config order |
-    /// | 13392 | `wire` | [`AxisWire`]; [`MAX_AXES`] | per axis (same index as `axes`): when its current goal was set and reached the wire |
+    /// `motiond/<name>/frame`.
     #[derive(Debug, Clone, Copy, PartialEq)]
     #[type_name("motiond::MotionFrame")]
     pub struct MotionFrame {
@@ -506,7 +472,7 @@ payload! {
         pub device_count: u32,
         /// Zero.
         pub reserved: u32,
-        /// [`DeviceState`] per device, config order.
+        /// [`DeviceState`] per device, config order; entries past `device_count` are zero.
         pub devices: [u8; MAX_DEVICES],
         /// Axes in config order; entries past `axis_count` are [`AxisState::UNKNOWN`].
         pub axes: [AxisState; MAX_AXES],

@@ -70,32 +70,13 @@ impl Capabilities {
 }
 
 payload! {
-    /// One axis's static description. 160 bytes, alignment 8. Fields in memory order:
-    ///
-    /// | offset | field | type | meaning |
-    /// |---|---|---|---|
-    /// | 0 | `name` | u8; 32 | axis name, UTF-8, zero padded |
-    /// | 32 | `unit` | u8; 16 | unit, UTF-8, zero padded |
-    /// | 48 | `device` | u8; 32 | device name |
-    /// | 80 | `counts_per_unit` | f64 | device counts per unit |
-    /// | 88 | `min` | f64 | soft limit, units |
-    /// | 96 | `max` | f64 | soft limit, units |
-    /// | 104 | `max_velocity` | f64 | units/s |
-    /// | 112 | `max_accel` | f64 | units/s² |
-    /// | 120 | `capabilities` | u32 | [`Capabilities`] bits |
-    /// | 124 | `channel` | u16 | motor number on the device |
-    /// | 126 | `device_index` | u16 | index into [`ServerInfo::devices`] |
-    /// | 128 | `following_error` | f64 | units; 0 = not supervised |
-    /// | 136 | `overspeed_factor` | f64 | × max_velocity; 0 = not supervised |
-    /// | 144 | `home_max_travel` | f64 | units; 0 = not supervised |
-    /// | 152 | `estop` | u32 | [`EstopCategory`] |
-    /// | 156 | `reserved` | u32 | zero |
+    /// One axis's static description.
     #[derive(Debug, Clone, Copy, PartialEq)]
     #[type_name("motiond::AxisInfo")]
     pub struct AxisInfo {
-        /// Axis name.
+        /// Axis name, UTF-8, zero padded.
         pub name: [u8; NAME_LEN],
-        /// Unit of positions ("mm", "deg").
+        /// Unit of positions ("mm", "deg"), UTF-8, zero padded.
         pub unit: [u8; UNIT_LEN],
         /// Name of the device that drives the axis.
         pub device: [u8; NAME_LEN],
@@ -117,7 +98,7 @@ payload! {
         pub device_index: u16,
         /// Following error tolerance, units; 0 = not supervised.
         pub following_error: f64,
-        /// Overspeed factor; 0 = not supervised.
+        /// Overspeed factor (× `max_velocity`); 0 = not supervised.
         pub overspeed_factor: f64,
         /// Travel limit of a reference search, units; 0 = not supervised.
         pub home_max_travel: f64,
@@ -176,17 +157,7 @@ impl AxisInfo {
 }
 
 payload! {
-    /// One device's description. 112 bytes, alignment 4. Fields in memory order:
-    ///
-    /// | offset | field | type | meaning |
-    /// |---|---|---|---|
-    /// | 0 | `name` | u8; 32 | device name |
-    /// | 32 | `link` | u8; 32 | link name |
-    /// | 64 | `firmware` | u8; 32 | firmware version as the board reported it ("" until known) |
-    /// | 96 | `model` | u32 | [`DeviceModel`] |
-    /// | 100 | `address` | u32 | bus address (0 when the model has none) |
-    /// | 104 | `axis_count` | u32 | axes configured on the device |
-    /// | 108 | `state` | u32 | [`DeviceState`] when the info was published (the frame has the current one) |
+    /// One device's description.
     #[derive(Debug, Clone, Copy, PartialEq, Eq)]
     #[type_name("motiond::DeviceInfo")]
     pub struct DeviceInfo {
@@ -194,7 +165,7 @@ payload! {
         pub name: [u8; NAME_LEN],
         /// Link name.
         pub link: [u8; NAME_LEN],
-        /// Firmware version as reported by the board.
+        /// Firmware version as the board reported it ("" until known).
         pub firmware: [u8; NAME_LEN],
         /// [`DeviceModel`] value.
         pub model: u32,
@@ -202,7 +173,7 @@ payload! {
         pub address: u32,
         /// Axes configured on the device.
         pub axis_count: u32,
-        /// [`DeviceState`] value when the info was published.
+        /// [`DeviceState`] value when the info was published (the frame has the current one).
         pub state: u32,
     }
 }
@@ -244,23 +215,7 @@ impl DeviceInfo {
 }
 
 payload! {
-    /// The server's static description. 32328 bytes, alignment 8. Fields in memory order:
-    ///
-    /// | offset | field | type | meaning |
-    /// |---|---|---|---|
-    /// | 0 | `schema_version` | u32 | [`SCHEMA_VERSION`] |
-    /// | 4 | `axis_count` | u32 | valid entries in `axes` |
-    /// | 8 | `device_count` | u32 | valid entries in `devices` |
-    /// | 12 | `tick_hz` | u32 | tick rate |
-    /// | 16 | `command_timeout_ms` | u32 | deadman; 0 = disabled |
-    /// | 20 | `max_clients` | u32 | configured client limit |
-    /// | 24 | `server_pid` | u32 | process id of motiond |
-    /// | 28 | `signal_count` | u32 | valid entries in `signals` |
-    /// | 32 | `name` | u8; 32 | instance name |
-    /// | 64 | `start_time_ns` | u64 | CLOCK_MONOTONIC ns of tick 0 |
-    /// | 72 | `axes` | [`AxisInfo`]; [`MAX_AXES`] | axes in config order |
-    /// | 20552 | `devices` | [`DeviceInfo`]; [`MAX_DEVICES`] | devices in config order |
-    /// | 24136 | `signals` | [`SignalInfo`]; [`MAX_SIGNALS`] | signals in config order |
+    /// The server's static description, published with history 1 on `motiond/<name>/info`.
     #[derive(Debug, Clone, Copy, PartialEq)]
     #[type_name("motiond::ServerInfo")]
     pub struct ServerInfo {

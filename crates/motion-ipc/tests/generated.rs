@@ -14,8 +14,15 @@ fn generated_files_are_up_to_date() {
                 .lines()
                 .zip(file.contents.lines())
                 .position(|(have, want)| have != want)
-                .map_or_else(|| now.lines().count().min(file.contents.lines().count()), |i| i);
-            stale.push(format!("{} (first difference at line {})", file.path, line + 1));
+                .map_or_else(
+                    || now.lines().count().min(file.contents.lines().count()),
+                    |i| i,
+                );
+            stale.push(format!(
+                "{} (first difference at line {})",
+                file.path,
+                line + 1
+            ));
         }
     }
     assert!(

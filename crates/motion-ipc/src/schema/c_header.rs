@@ -100,7 +100,11 @@ pub(super) fn c_enum_value(item: &Enum, variant: &str) -> String {
     if item.flags {
         format!("MOTIOND_{}_{variant}", upper_snake(item.name))
     } else {
-        format!("MOTIOND_{}_{}", upper_snake(item.name), upper_snake(variant))
+        format!(
+            "MOTIOND_{}_{}",
+            upper_snake(item.name),
+            upper_snake(variant)
+        )
     }
 }
 
@@ -162,7 +166,10 @@ impl Contract {
         for service in &self.services {
             let macro_name = format!("MOTIOND_SERVICE_{}", service.leaf.to_ascii_uppercase());
             let doc = self.c_prose(service.doc);
-            let _ = writeln!(out, " *   {macro_name:<29} {doc}");
+            for (index, line) in wrap(&doc, WIDTH - 37).concat().iter().enumerate() {
+                let head = if index == 0 { macro_name.as_str() } else { "" };
+                let _ = writeln!(out, " *   {head:<29}   {line}");
+            }
         }
         out.push_str(" */\n");
         out.push_str(PROLOGUE);
@@ -186,7 +193,10 @@ impl Contract {
     /// The header's name for a code span of the docs: payloads, enumerations, constants
     /// and `Payload.field` by their C names; anything else stays a code span.
     fn c_name(&self, code: &str) -> String {
-        let (head, tail) = code.split_once('.').unwrap_or((code, ""));
+        let (head, tail) = code
+            .split_once("::")
+            .or_else(|| code.split_once('.'))
+            .unwrap_or((code, ""));
         let suffix = if tail.is_empty() {
             String::new()
         } else {
@@ -217,7 +227,11 @@ impl Contract {
         out.push_str("\n/* iceoryx2 type names of the payloads. */\n");
         for payload in &self.structs {
             let name = upper_snake(payload.name);
-            let _ = writeln!(out, "#define MOTIOND_TYPE_NAME_{name} \"{}\"", payload.type_name);
+            let _ = writeln!(
+                out,
+                "#define MOTIOND_TYPE_NAME_{name} \"{}\"",
+                payload.type_name
+            );
         }
     }
 
@@ -251,7 +265,11 @@ impl Contract {
             payload.size, payload.align, payload.type_name
         );
         out.push('\n');
-        comment(out, 0, &format!("{}\n\n{layout}", self.c_prose(&text(payload.docs))));
+        comment(
+            out,
+            0,
+            &format!("{}\n\n{layout}", self.c_prose(&text(payload.docs))),
+        );
         let _ = writeln!(out, "typedef struct motiond_{} {{", snake(payload.name));
         for field in payload.fields {
             self.c_field(out, field);
@@ -271,7 +289,7 @@ impl Contract {
             let name = field.name;
             let _ = writeln!(
                 out,
-                "MOTIOND_STATIC_ASSERT(offsetof({ty}, {name}) == {}, \"{ty}.{name} offset\");",
+                "MOTIOND_STATIC_ASSERT(offsetof({ty}, {name}) == {}, \"{name} offset\");",
                 field.offset
             );
         }
@@ -281,10 +299,11 @@ impl Contract {
         comment(out, 4, &self.c_prose(&text(field.docs)));
         let _ = writeln!(
             out,
-            "    {}; /* offset {}, {} bytes */",
+            "    {}; /* offset {}, {} byte{} */",
             c_declaration(&field.ty, field.name),
             field.offset,
-            field.size
+            field.size,
+            if field.size == 1 { "" } else { "s" }
         );
     }
 
@@ -331,7 +350,10 @@ mod tests {
             len: 32,
             len_name: Some("NAME_LEN"),
         };
-        assert_eq!(c_declaration(&text, "name"), "uint8_t name[MOTIOND_NAME_LEN]");
+        assert_eq!(
+            c_declaration(&text, "name"),
+            "uint8_t name[MOTIOND_NAME_LEN]"
+        );
         let values = Type::Array {
             element: &Type::Scalar(Scalar::F64),
             len: 3,
@@ -348,7 +370,10 @@ mod tests {
         let mut block = String::new();
         comment(&mut block, 0, &"word ".repeat(40));
         assert!(block.starts_with("/**\n * word"), "{block}");
-        assert!(block.lines().all(|line| line.chars().count() <= WIDTH), "{block}");
+        assert!(
+            block.lines().all(|line| line.chars().count() <= WIDTH),
+            "{block}"
+        );
     }
 
     #[test]

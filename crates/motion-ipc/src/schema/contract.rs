@@ -5,10 +5,10 @@ use super::{Constant, Contract, Enum, Scalar, Schema, Service, Struct, Variant};
 use crate::{
     AxisFlags, AxisInfo, AxisMode, AxisState, AxisWire, ClientId, CommandKind, CommandReply,
     CommandRequest, DeviceInfo, DeviceModel, DeviceState, EstopCategory, FaultCode, FrameFlags,
-    LatencySummary, LinkIo, LinkStats, MAX_AXES, MAX_DEVICES, MAX_LINKS, MAX_PARAMS,
-    MAX_SIGNALS, MachineParam, MachineParams, MotionFrame, NAME_LEN, PARAM_TEXT_LEN,
-    ParamOwner, Reason, SCHEMA_VERSION, ServerInfo, ServerStats, ServiceNames, SignalFlags,
-    SignalInfo, SignalInfoFlags, SignalKind, SignalState, Target, UNIT_LEN,
+    LatencySummary, LinkIo, LinkStats, MAX_AXES, MAX_DEVICES, MAX_LINKS, MAX_PARAMS, MAX_SIGNALS,
+    MachineParam, MachineParams, MotionFrame, NAME_LEN, PARAM_TEXT_LEN, ParamOwner, Reason,
+    SCHEMA_VERSION, ServerInfo, ServerStats, ServiceNames, SignalFlags, SignalInfo,
+    SignalInfoFlags, SignalKind, SignalState, Target, UNIT_LEN,
 };
 
 /// The contract of this build of `motion-ipc`.
@@ -397,7 +397,11 @@ mod tests {
         for payload in contract().structs {
             let name = payload.name;
             assert!(!payload.fields.is_empty(), "{name} has no fields");
-            assert_eq!(payload.size % payload.align, 0, "{name}: size not a multiple of align");
+            assert_eq!(
+                payload.size % payload.align,
+                0,
+                "{name}: size not a multiple of align"
+            );
             let mut end = 0;
             let mut align = 1;
             for field in payload.fields {
@@ -418,7 +422,10 @@ mod tests {
     #[test]
     fn known_layouts_come_out_of_the_description() {
         let frame = &MotionFrame::SCHEMA;
-        assert_eq!((frame.size, frame.align), (size_of_val(&MotionFrame::EMPTY), 8));
+        assert_eq!(
+            (frame.size, frame.align),
+            (size_of_val(&MotionFrame::EMPTY), 8)
+        );
         let axes = frame.field("axes").expect("MotionFrame.axes");
         assert_eq!(axes.offset, core::mem::offset_of!(MotionFrame, axes));
         assert_eq!(
@@ -459,7 +466,11 @@ mod tests {
         let structs = structs();
         for (index, payload) in structs.iter().enumerate() {
             let earlier = &structs[..index];
-            assert!(!earlier.iter().any(|s| s.name == payload.name), "{} twice", payload.name);
+            assert!(
+                !earlier.iter().any(|s| s.name == payload.name),
+                "{} twice",
+                payload.name
+            );
             for field in payload.fields {
                 let mut ty = &field.ty;
                 while let Type::Array { element, .. } = ty {
@@ -484,9 +495,15 @@ mod tests {
         assert_eq!(reason.variants.len(), Reason::ALL.len());
         assert_eq!(reason.variants[6].name, "OutOfRange");
         assert_eq!(reason.variants[6].text, Some(Reason::OutOfRange.message()));
-        let kinds = enums.iter().find(|e| e.name == "CommandKind").expect("kinds");
+        let kinds = enums
+            .iter()
+            .find(|e| e.name == "CommandKind")
+            .expect("kinds");
         assert_eq!(kinds.variants.len(), CommandKind::ALL.len());
-        let flags = enums.iter().find(|e| e.name == "AxisFlags").expect("AxisFlags");
+        let flags = enums
+            .iter()
+            .find(|e| e.name == "AxisFlags")
+            .expect("AxisFlags");
         assert_eq!(flags.variants.len(), AxisFlags::NAMED.len());
         for item in &enums {
             assert!(!item.variants.is_empty(), "{} has no values", item.name);

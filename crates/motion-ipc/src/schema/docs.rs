@@ -102,8 +102,14 @@ mod tests {
 
     #[test]
     fn links_become_code_spans() {
-        let lines = [" [`FaultCode`] value; see", " [`ServerInfo::devices`](crate::ServerInfo::devices)."];
-        assert_eq!(text(&lines), "`FaultCode` value; see\n`ServerInfo::devices`.");
+        let lines = [
+            " [`FaultCode`] value; see",
+            " [`ServerInfo::devices`](crate::ServerInfo::devices).",
+        ];
+        assert_eq!(
+            text(&lines),
+            "`FaultCode` value; see\n`ServerInfo::devices`."
+        );
         assert_eq!(unlink("a [b] c"), "a [b] c");
     }
 
@@ -116,7 +122,10 @@ mod tests {
     #[test]
     fn paragraphs_are_reflowed_and_wrapped() {
         let wrapped = wrap("one two\nthree four five\n\nsix", 9);
-        assert_eq!(wrapped, vec![vec!["one two", "three", "four five"], vec!["six"]]);
+        assert_eq!(
+            wrapped,
+            vec![vec!["one two", "three", "four five"], vec!["six"]]
+        );
     }
 
     #[test]

@@ -120,6 +120,8 @@ mod tests {
             assert!(json.contains(key), "{key} missing");
         }
         assert!(json.contains("\"rust\": \"MotionFrame\""));
-        assert!(json.contains("{\"name\": \"values\", \"offset\": 40, \"size\": 24, \"type\": \"f64[3]\"}"));
+        assert!(json.contains(
+            "{\"name\": \"values\", \"offset\": 40, \"size\": 24, \"type\": \"f64[3]\"}"
+        ));
     }
 }

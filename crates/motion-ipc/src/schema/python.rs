@@ -76,7 +76,7 @@ fn py_string(text: &str) -> String {
 
 /// Doc prose in reStructuredText: code spans doubled.
 fn rst(prose: &str) -> String {
-    rename_code(prose, |code| format!("``{code}``"))
+    rename_code(prose, |code| format!("``{}``", code.replace("::", ".")))
 }
 
 /// A docstring at `indent` spaces.
@@ -84,7 +84,10 @@ fn docstring(out: &mut String, indent: usize, prose: &str) {
     let pad = " ".repeat(indent);
     let prose = prose.replace('\\', "\\\\");
     let paragraphs = wrap(&prose, WIDTH - indent - 3);
-    let body: Vec<String> = paragraphs.iter().map(|lines| lines.join(&format!("\n{pad}"))).collect();
+    let body: Vec<String> = paragraphs
+        .iter()
+        .map(|lines| lines.join(&format!("\n{pad}")))
+        .collect();
     let _ = writeln!(out, "{pad}\"\"\"{}\"\"\"", body.join(&format!("\n\n{pad}")));
 }
 
@@ -118,7 +121,12 @@ impl Contract {
         out.push_str("\n#: Service name formats of one instance; ``%s`` is the instance name.\n");
         out.push_str("SERVICES: Dict[str, str] = {\n");
         for service in &self.services {
-            let _ = writeln!(out, "    {}: {},", py_string(service.leaf), py_string(&service.format));
+            let _ = writeln!(
+                out,
+                "    {}: {},",
+                py_string(service.leaf),
+                py_string(&service.format)
+            );
         }
         out.push_str("}\n");
         out.push_str("\n# --- payloads ----------------------------------------------------------------------------\n");
@@ -156,8 +164,15 @@ fn py_payload(out: &mut String, payload: &Struct) {
     let _ = writeln!(out, "\n    _type_name_ = {}", py_string(payload.type_name));
     out.push_str("    _fields_ = [\n");
     for field in payload.fields {
-        comment(out, 8, "#", &rst(&text(field.docs)));
-        let _ = writeln!(out, "        ({}, {}),", py_string(field.name), py_type(&field.ty));
+        let entry = format!("({}, {}),", py_string(field.name), py_type(&field.ty));
+        let doc = rst(&text(field.docs));
+        if !doc.contains("\n\n") && 8 + entry.len() + 4 + doc.chars().count() <= WIDTH {
+            let doc = doc.replace('\n', " ");
+            let _ = writeln!(out, "        {entry}  # {doc}");
+        } else {
+            comment(out, 8, "#", &doc);
+            let _ = writeln!(out, "        {entry}");
+        }
     }
     out.push_str("    ]\n");
 }
@@ -182,9 +197,15 @@ fn py_enum(out: &mut String, item: &Enum) {
         } else {
             variant.value.to_string()
         };
-        match variant.text {
+        match variant.text.map(py_string) {
+            Some(text) if name.len() + value.len() + text.len() + 9 <= WIDTH => {
+                let _ = writeln!(out, "    {name} = {value}, {text}");
+            }
             Some(text) => {
-                let _ = writeln!(out, "    {name} = {value}, {}", py_string(text));
+                let _ = writeln!(
+                    out,
+                    "    {name} = (\n        {value},\n        {text},\n    )"
+                );
             }
             None => {
                 let _ = writeln!(out, "    {name} = {value}");
