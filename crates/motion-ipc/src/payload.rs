@@ -16,7 +16,8 @@
 //!
 //! emits the struct, `#[repr(C)]` and `ZeroCopySend` with that iceoryx2 type name, and
 //! implements [`Schema`](crate::schema::Schema) (size, alignment, docs and every field's
-//! offset, size, type and docs, from the compiler's layout) and
+//! offset, size, type and docs, from the compiler's layout),
+//! [`Fields`](crate::schema::Fields) (the payload number by number, for codecs) and
 //! [`FieldType`](crate::schema::FieldType) (so another payload may nest it). A field type
 //! is one token: a number type, a payload, or an array `[T; N]` whose length is a literal
 //! or a contract constant (named as such in the C header). The declaring module imports
@@ -63,6 +64,28 @@ macro_rules! payload {
                     }
                 ),*],
             };
+        }
+
+        impl $crate::schema::Fields for $name {
+            fn put<S: $crate::schema::ScalarSink>(&self, sink: &mut S, at: usize) {
+                $(
+                    $crate::schema::Fields::put(
+                        &self.$field,
+                        sink,
+                        at + ::core::mem::offset_of!($name, $field),
+                    );
+                )*
+            }
+            fn get<S: $crate::schema::ScalarSource>(source: &mut S, at: usize) -> Self {
+                Self {
+                    $(
+                        $field: $crate::schema::Fields::get(
+                            source,
+                            at + ::core::mem::offset_of!($name, $field),
+                        ),
+                    )*
+                }
+            }
         }
 
         impl $crate::schema::FieldType for $name {

@@ -14,10 +14,7 @@ fn generated_files_are_up_to_date() {
                 .lines()
                 .zip(file.contents.lines())
                 .position(|(have, want)| have != want)
-                .map_or_else(
-                    || now.lines().count().min(file.contents.lines().count()),
-                    |i| i,
-                );
+                .unwrap_or_else(|| now.lines().count().min(file.contents.lines().count()));
             stale.push(format!(
                 "{} (first difference at line {})",
                 file.path,

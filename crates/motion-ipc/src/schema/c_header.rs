@@ -139,13 +139,12 @@ fn c_declaration(ty: &Type, name: &str) -> String {
 fn comment(out: &mut String, indent: usize, prose: &str) {
     let pad = " ".repeat(indent);
     let paragraphs = wrap(prose, WIDTH - indent - 3);
-    if let [only] = paragraphs.as_slice() {
-        if let [line] = only.as_slice() {
-            if indent + line.chars().count() + 7 <= WIDTH {
-                let _ = writeln!(out, "{pad}/** {line} */");
-                return;
-            }
-        }
+    if let [only] = paragraphs.as_slice()
+        && let [line] = only.as_slice()
+        && indent + line.chars().count() + 7 <= WIDTH
+    {
+        let _ = writeln!(out, "{pad}/** {line} */");
+        return;
     }
     let _ = writeln!(out, "{pad}/**");
     for (index, paragraph) in paragraphs.iter().enumerate() {

@@ -17,6 +17,10 @@
 //! `cargo run -p motion-ipc --example gen` (or `scripts/gen`) rewrites the checked-in
 //! files; `tests/generated.rs` fails while they differ from what the renderers give now.
 //!
+//! A codec moves a payload number by number through [`Fields`] (implemented by `payload!`
+//! as well): it writes a [`ScalarSink`] and a [`ScalarSource`] for the six number types and
+//! needs no field list of its own.
+//!
 //! ```
 //! use motion_ipc::schema::{Schema, Scalar, Type};
 //! use motion_ipc::AxisState;
@@ -30,10 +34,12 @@
 mod c_header;
 mod contract;
 mod docs;
+mod fields;
 mod json;
 mod python;
 
 pub use contract::contract;
+pub use fields::{Fields, ScalarSink, ScalarSource};
 
 /// A number type a payload field holds (the contract uses no others).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
