@@ -301,15 +301,11 @@ enum motiond_full_services {
  * 16 bytes, alignment 8; iceoryx2 type name "motiond::ClientId".
  */
 typedef struct motiond_client_id {
-    /** Low 64 bits of the node id. */
-    uint64_t lo; /* offset 0, 8 bytes */
-    /** High 64 bits of the node id. */
-    uint64_t hi; /* offset 8, 8 bytes */
+    uint64_t lo; /**< Low 64 bits of the node id. (offset 0) */
+    uint64_t hi; /**< High 64 bits of the node id. (offset 8) */
 } motiond_client_id_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_client_id_t) == 16, "motiond_client_id_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_client_id_t) == 8, "motiond_client_id_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_client_id_t, lo) == 0, "lo offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_client_id_t, hi) == 8, "hi offset");
 
 /**
  * One axis in a frame.
@@ -317,48 +313,28 @@ MOTIOND_STATIC_ASSERT(offsetof(motiond_client_id_t, hi) == 8, "hi offset");
  * 80 bytes, alignment 8; iceoryx2 type name "motiond::AxisState".
  */
 typedef struct motiond_axis_state {
-    /** Measured position in axis units. */
-    double position; /* offset 0, 8 bytes */
-    /** Measured velocity in units/s. */
-    double velocity; /* offset 8, 8 bytes */
+    double position; /**< Measured position in axis units. (offset 0) */
+    double velocity; /**< Measured velocity in units/s. (offset 8) */
     /** Position target (position modes) or velocity target (velocity modes), in units. */
-    double target; /* offset 16, 8 bytes */
-    /** Position in the board's own counts. */
-    int64_t raw_counts; /* offset 24, 8 bytes */
+    double target; /* offset 16 */
+    int64_t raw_counts; /**< Position in the board's own counts. (offset 24) */
     /** Tick at which fresh data last arrived from the board. */
-    uint64_t last_refresh_tick; /* offset 32, 8 bytes */
-    /** MOTIOND_AXIS_FLAGS_* bits. */
-    uint32_t flags; /* offset 40, 4 bytes */
-    /** MOTIOND_FAULT_CODE_* value; 0 = no fault. */
-    uint16_t fault; /* offset 44, 2 bytes */
-    /** MOTIOND_AXIS_MODE_* value. */
-    uint8_t mode; /* offset 46, 1 byte */
-    /** MOTIOND_DEVICE_STATE_* value of the axis's board. */
-    uint8_t device_state; /* offset 47, 1 byte */
+    uint64_t last_refresh_tick; /* offset 32 */
+    uint32_t flags; /**< MOTIOND_AXIS_FLAGS_* bits. (offset 40) */
+    uint16_t fault; /**< MOTIOND_FAULT_CODE_* value; 0 = no fault. (offset 44) */
+    uint8_t mode; /**< MOTIOND_AXIS_MODE_* value. (offset 46) */
+    uint8_t device_state; /**< MOTIOND_DEVICE_STATE_* value of the axis's board. (offset 47) */
     /** The client holding a claim on the axis; zero when unclaimed. */
-    motiond_client_id_t claimed_by; /* offset 48, 16 bytes */
+    motiond_client_id_t claimed_by; /* offset 48 */
     /**
      * The measured figure of the latched fault (units, units/s; see MOTIOND_FAULT_CODE_*), 0
      * when none.
      */
-    double fault_value; /* offset 64, 8 bytes */
-    /** The tolerance or limit the fault broke, 0 when none. */
-    double fault_limit; /* offset 72, 8 bytes */
+    double fault_value; /* offset 64 */
+    double fault_limit; /**< The tolerance or limit the fault broke, 0 when none. (offset 72) */
 } motiond_axis_state_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_axis_state_t) == 80, "motiond_axis_state_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_axis_state_t) == 8, "motiond_axis_state_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, position) == 0, "position offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, velocity) == 8, "velocity offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, target) == 16, "target offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, raw_counts) == 24, "raw_counts offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, last_refresh_tick) == 32, "last_refresh_tick offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, flags) == 40, "flags offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, fault) == 44, "fault offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, mode) == 46, "mode offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, device_state) == 47, "device_state offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, claimed_by) == 48, "claimed_by offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, fault_value) == 64, "fault_value offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, fault_limit) == 72, "fault_limit offset");
 
 /**
  * One signal in a frame.
@@ -367,29 +343,19 @@ MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_state_t, fault_limit) == 72, "fault_
  */
 typedef struct motiond_signal_state {
     /** Logical value: digital 0.0/1.0 after `invert`; analogue raw × scale + offset. */
-    double value; /* offset 0, 8 bytes */
+    double value; /* offset 0 */
     /** Raw value as the board reports it: electrical level 0/1, or ADC counts. */
-    double raw; /* offset 8, 8 bytes */
+    double raw; /* offset 8 */
     /** Tick at which the board last reported it (outputs: acknowledged it). */
-    uint64_t last_refresh_tick; /* offset 16, 8 bytes */
-    /** MOTIOND_SIGNAL_FLAGS_* bits. */
-    uint32_t flags; /* offset 24, 4 bytes */
-    /** MOTIOND_SIGNAL_KIND_* value. */
-    uint8_t kind; /* offset 28, 1 byte */
-    /** Zero. */
-    uint8_t reserved[3]; /* offset 29, 3 bytes */
+    uint64_t last_refresh_tick; /* offset 16 */
+    uint32_t flags; /**< MOTIOND_SIGNAL_FLAGS_* bits. (offset 24) */
+    uint8_t kind; /**< MOTIOND_SIGNAL_KIND_* value. (offset 28) */
+    uint8_t reserved[3]; /**< Zero. (offset 29) */
     /** Claim holder of an output; zero when unclaimed. */
-    motiond_client_id_t claimed_by; /* offset 32, 16 bytes */
+    motiond_client_id_t claimed_by; /* offset 32 */
 } motiond_signal_state_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_signal_state_t) == 48, "motiond_signal_state_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_signal_state_t) == 8, "motiond_signal_state_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_state_t, value) == 0, "value offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_state_t, raw) == 8, "raw offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_state_t, last_refresh_tick) == 16, "last_refresh_tick offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_state_t, flags) == 24, "flags offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_state_t, kind) == 28, "kind offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_state_t, reserved) == 29, "reserved offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_state_t, claimed_by) == 32, "claimed_by offset");
 
 /**
  * When the current goal of one axis was set and when its first request reached the wire
@@ -405,22 +371,19 @@ typedef struct motiond_axis_wire {
      * Tick in which the current goal was set (a client's command: the reply's `tick_applied`;
      * or the server's own stop).
      */
-    uint64_t goal_tick; /* offset 0, 8 bytes */
+    uint64_t goal_tick; /* offset 0 */
     /**
      * Tick during which the goal's first request was written to the link (its last byte
      * accepted by the transport); 0 until then.
      */
-    uint64_t wire_tick; /* offset 8, 8 bytes */
+    uint64_t wire_tick; /* offset 8 */
     /**
      * CLOCK_MONOTONIC ns of that write; 0 until then (and for a goal that needs no request).
      */
-    uint64_t wire_ns; /* offset 16, 8 bytes */
+    uint64_t wire_ns; /* offset 16 */
 } motiond_axis_wire_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_axis_wire_t) == 24, "motiond_axis_wire_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_axis_wire_t) == 8, "motiond_axis_wire_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_wire_t, goal_tick) == 0, "goal_tick offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_wire_t, wire_tick) == 8, "wire_tick offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_wire_t, wire_ns) == 16, "wire_ns offset");
 
 /**
  * One consistent snapshot of every axis, board and signal, published once per tick on
@@ -429,55 +392,34 @@ MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_wire_t, wire_ns) == 16, "wire_ns off
  * 16464 bytes, alignment 8; iceoryx2 type name "motiond::MotionFrame".
  */
 typedef struct motiond_motion_frame {
-    /** MOTIOND_SCHEMA_VERSION of the writer. */
-    uint32_t schema_version; /* offset 0, 4 bytes */
-    /** Number of valid entries at the start of `axes`. */
-    uint32_t axis_count; /* offset 4, 4 bytes */
-    /** Tick number, 0 at server start. */
-    uint64_t tick; /* offset 8, 8 bytes */
-    /** The tick's deadline on CLOCK_MONOTONIC, ns. */
-    uint64_t time_ns; /* offset 16, 8 bytes */
+    uint32_t schema_version; /**< MOTIOND_SCHEMA_VERSION of the writer. (offset 0) */
+    uint32_t axis_count; /**< Number of valid entries at the start of `axes`. (offset 4) */
+    uint64_t tick; /**< Tick number, 0 at server start. (offset 8) */
+    uint64_t time_ns; /**< The tick's deadline on CLOCK_MONOTONIC, ns. (offset 16) */
     /** CLOCK_MONOTONIC, ns, taken just before the frame was sent. */
-    uint64_t publish_ns; /* offset 24, 8 bytes */
-    /** MOTIOND_FRAME_FLAGS_* bits. */
-    uint32_t flags; /* offset 32, 4 bytes */
-    /** Number of valid entries at the start of `signals`. */
-    uint32_t signal_count; /* offset 36, 4 bytes */
-    /** Number of valid entries at the start of `devices`. */
-    uint32_t device_count; /* offset 40, 4 bytes */
-    /** Zero. */
-    uint32_t reserved; /* offset 44, 4 bytes */
+    uint64_t publish_ns; /* offset 24 */
+    uint32_t flags; /**< MOTIOND_FRAME_FLAGS_* bits. (offset 32) */
+    uint32_t signal_count; /**< Number of valid entries at the start of `signals`. (offset 36) */
+    uint32_t device_count; /**< Number of valid entries at the start of `devices`. (offset 40) */
+    uint32_t reserved; /**< Zero. (offset 44) */
     /**
      * MOTIOND_DEVICE_STATE_* per device, config order; entries past `device_count` are zero.
      */
-    uint8_t devices[MOTIOND_MAX_DEVICES]; /* offset 48, 32 bytes */
+    uint8_t devices[MOTIOND_MAX_DEVICES]; /* offset 48 */
     /** Axes in config order; entries past `axis_count` are motiond_axis_state_t.UNKNOWN. */
-    motiond_axis_state_t axes[MOTIOND_MAX_AXES]; /* offset 80, 10240 bytes */
+    motiond_axis_state_t axes[MOTIOND_MAX_AXES]; /* offset 80 */
     /**
      * Signals in config order; entries past `signal_count` are motiond_signal_state_t.UNKNOWN.
      */
-    motiond_signal_state_t signals[MOTIOND_MAX_SIGNALS]; /* offset 10320, 3072 bytes */
+    motiond_signal_state_t signals[MOTIOND_MAX_SIGNALS]; /* offset 10320 */
     /**
      * Per axis (same index as `axes`): when its current goal was set and when its first request
      * reached the wire.
      */
-    motiond_axis_wire_t wire[MOTIOND_MAX_AXES]; /* offset 13392, 3072 bytes */
+    motiond_axis_wire_t wire[MOTIOND_MAX_AXES]; /* offset 13392 */
 } motiond_motion_frame_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_motion_frame_t) == 16464, "motiond_motion_frame_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_motion_frame_t) == 8, "motiond_motion_frame_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, schema_version) == 0, "schema_version offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, axis_count) == 4, "axis_count offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, tick) == 8, "tick offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, time_ns) == 16, "time_ns offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, publish_ns) == 24, "publish_ns offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, flags) == 32, "flags offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, signal_count) == 36, "signal_count offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, device_count) == 40, "device_count offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, reserved) == 44, "reserved offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, devices) == 48, "devices offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, axes) == 80, "axes offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, signals) == 10320, "signals offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, wire) == 13392, "wire offset");
 
 /**
  * A command to the server, on `motiond/<name>/command`; `values` per kind: see
@@ -490,30 +432,17 @@ MOTIOND_STATIC_ASSERT(offsetof(motiond_motion_frame_t, wire) == 13392, "wire off
  * 64 bytes, alignment 8; iceoryx2 type name "motiond::CommandRequest".
  */
 typedef struct motiond_command_request {
-    /** MOTIOND_SCHEMA_VERSION of the sender. */
-    uint32_t schema_version; /* offset 0, 4 bytes */
-    /** MOTIOND_COMMAND_KIND_* value. */
-    uint32_t kind; /* offset 4, 4 bytes */
-    /** The sender's iceoryx2 node id, or zero. */
-    motiond_client_id_t client; /* offset 8, 16 bytes */
-    /** The client's sequence number, echoed in the reply. */
-    uint64_t sequence; /* offset 24, 8 bytes */
+    uint32_t schema_version; /**< MOTIOND_SCHEMA_VERSION of the sender. (offset 0) */
+    uint32_t kind; /**< MOTIOND_COMMAND_KIND_* value. (offset 4) */
+    motiond_client_id_t client; /**< The sender's iceoryx2 node id, or zero. (offset 8) */
+    uint64_t sequence; /**< The client's sequence number, echoed in the reply. (offset 24) */
     /** Axis (or signal) index, config order, or motiond_command_request_t.ALL_AXES. */
-    uint32_t axis; /* offset 32, 4 bytes */
-    /** MOTIOND_TARGET_* value: 0 = axis, 1 = signal. */
-    uint32_t target; /* offset 36, 4 bytes */
-    /** Arguments; see MOTIOND_COMMAND_KIND_*. */
-    double values[3]; /* offset 40, 24 bytes */
+    uint32_t axis; /* offset 32 */
+    uint32_t target; /**< MOTIOND_TARGET_* value: 0 = axis, 1 = signal. (offset 36) */
+    double values[3]; /**< Arguments; see MOTIOND_COMMAND_KIND_*. (offset 40) */
 } motiond_command_request_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_command_request_t) == 64, "motiond_command_request_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_command_request_t) == 8, "motiond_command_request_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_command_request_t, schema_version) == 0, "schema_version offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_command_request_t, kind) == 4, "kind offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_command_request_t, client) == 8, "client offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_command_request_t, sequence) == 24, "sequence offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_command_request_t, axis) == 32, "axis offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_command_request_t, target) == 36, "target offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_command_request_t, values) == 40, "values offset");
 
 /**
  * The server's answer to one motiond_command_request_t; every request gets exactly one.
@@ -521,27 +450,16 @@ MOTIOND_STATIC_ASSERT(offsetof(motiond_command_request_t, values) == 40, "values
  * 32 bytes, alignment 8; iceoryx2 type name "motiond::CommandReply".
  */
 typedef struct motiond_command_reply {
-    /** MOTIOND_SCHEMA_VERSION of the server. */
-    uint32_t schema_version; /* offset 0, 4 bytes */
-    /** MOTIOND_REASON_* value; 0 = accepted. */
-    uint32_t reason; /* offset 4, 4 bytes */
-    /** The request's sequence. */
-    uint64_t sequence; /* offset 8, 8 bytes */
+    uint32_t schema_version; /**< MOTIOND_SCHEMA_VERSION of the server. (offset 0) */
+    uint32_t reason; /**< MOTIOND_REASON_* value; 0 = accepted. (offset 4) */
+    uint64_t sequence; /**< The request's sequence. (offset 8) */
     /** Tick in which the command took effect (or was refused). */
-    uint64_t tick_applied; /* offset 16, 8 bytes */
-    /** The request's axis. */
-    uint32_t axis; /* offset 24, 4 bytes */
-    /** The request's kind. */
-    uint32_t kind; /* offset 28, 4 bytes */
+    uint64_t tick_applied; /* offset 16 */
+    uint32_t axis; /**< The request's axis. (offset 24) */
+    uint32_t kind; /**< The request's kind. (offset 28) */
 } motiond_command_reply_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_command_reply_t) == 32, "motiond_command_reply_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_command_reply_t) == 8, "motiond_command_reply_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_command_reply_t, schema_version) == 0, "schema_version offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_command_reply_t, reason) == 4, "reason offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_command_reply_t, sequence) == 8, "sequence offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_command_reply_t, tick_applied) == 16, "tick_applied offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_command_reply_t, axis) == 24, "axis offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_command_reply_t, kind) == 28, "kind offset");
 
 /**
  * One axis's static description.
@@ -549,57 +467,29 @@ MOTIOND_STATIC_ASSERT(offsetof(motiond_command_reply_t, kind) == 28, "kind offse
  * 160 bytes, alignment 8; iceoryx2 type name "motiond::AxisInfo".
  */
 typedef struct motiond_axis_info {
-    /** Axis name, UTF-8, zero padded. */
-    uint8_t name[MOTIOND_NAME_LEN]; /* offset 0, 32 bytes */
+    uint8_t name[MOTIOND_NAME_LEN]; /**< Axis name, UTF-8, zero padded. (offset 0) */
     /** Unit of positions ("mm", "deg"), UTF-8, zero padded. */
-    uint8_t unit[MOTIOND_UNIT_LEN]; /* offset 32, 16 bytes */
-    /** Name of the device that drives the axis. */
-    uint8_t device[MOTIOND_NAME_LEN]; /* offset 48, 32 bytes */
-    /** Device counts per unit. */
-    double counts_per_unit; /* offset 80, 8 bytes */
-    /** Lower soft limit, units. */
-    double min; /* offset 88, 8 bytes */
-    /** Upper soft limit, units. */
-    double max; /* offset 96, 8 bytes */
-    /** Velocity limit, units/s. */
-    double max_velocity; /* offset 104, 8 bytes */
-    /** Acceleration limit, units/s². */
-    double max_accel; /* offset 112, 8 bytes */
-    /** `Capabilities` bits. */
-    uint32_t capabilities; /* offset 120, 4 bytes */
-    /** Motor number on the device. */
-    uint16_t channel; /* offset 124, 2 bytes */
-    /** Index into motiond_server_info_t.devices. */
-    uint16_t device_index; /* offset 126, 2 bytes */
+    uint8_t unit[MOTIOND_UNIT_LEN]; /* offset 32 */
+    uint8_t device[MOTIOND_NAME_LEN]; /**< Name of the device that drives the axis. (offset 48) */
+    double counts_per_unit; /**< Device counts per unit. (offset 80) */
+    double min; /**< Lower soft limit, units. (offset 88) */
+    double max; /**< Upper soft limit, units. (offset 96) */
+    double max_velocity; /**< Velocity limit, units/s. (offset 104) */
+    double max_accel; /**< Acceleration limit, units/s². (offset 112) */
+    uint32_t capabilities; /**< `Capabilities` bits. (offset 120) */
+    uint16_t channel; /**< Motor number on the device. (offset 124) */
+    uint16_t device_index; /**< Index into motiond_server_info_t.devices. (offset 126) */
     /** Following error tolerance, units; 0 = not supervised. */
-    double following_error; /* offset 128, 8 bytes */
+    double following_error; /* offset 128 */
     /** Overspeed factor (× `max_velocity`); 0 = not supervised. */
-    double overspeed_factor; /* offset 136, 8 bytes */
+    double overspeed_factor; /* offset 136 */
     /** Travel limit of a reference search, units; 0 = not supervised. */
-    double home_max_travel; /* offset 144, 8 bytes */
-    /** MOTIOND_ESTOP_CATEGORY_* value. */
-    uint32_t estop; /* offset 152, 4 bytes */
-    /** Zero. */
-    uint32_t reserved; /* offset 156, 4 bytes */
+    double home_max_travel; /* offset 144 */
+    uint32_t estop; /**< MOTIOND_ESTOP_CATEGORY_* value. (offset 152) */
+    uint32_t reserved; /**< Zero. (offset 156) */
 } motiond_axis_info_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_axis_info_t) == 160, "motiond_axis_info_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_axis_info_t) == 8, "motiond_axis_info_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, name) == 0, "name offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, unit) == 32, "unit offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, device) == 48, "device offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, counts_per_unit) == 80, "counts_per_unit offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, min) == 88, "min offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, max) == 96, "max offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, max_velocity) == 104, "max_velocity offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, max_accel) == 112, "max_accel offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, capabilities) == 120, "capabilities offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, channel) == 124, "channel offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, device_index) == 126, "device_index offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, following_error) == 128, "following_error offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, overspeed_factor) == 136, "overspeed_factor offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, home_max_travel) == 144, "home_max_travel offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, estop) == 152, "estop offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, reserved) == 156, "reserved offset");
 
 /**
  * One device's description.
@@ -607,32 +497,20 @@ MOTIOND_STATIC_ASSERT(offsetof(motiond_axis_info_t, reserved) == 156, "reserved 
  * 112 bytes, alignment 4; iceoryx2 type name "motiond::DeviceInfo".
  */
 typedef struct motiond_device_info {
-    /** Device name. */
-    uint8_t name[MOTIOND_NAME_LEN]; /* offset 0, 32 bytes */
-    /** Link name. */
-    uint8_t link[MOTIOND_NAME_LEN]; /* offset 32, 32 bytes */
+    uint8_t name[MOTIOND_NAME_LEN]; /**< Device name. (offset 0) */
+    uint8_t link[MOTIOND_NAME_LEN]; /**< Link name. (offset 32) */
     /** Firmware version as the board reported it ("" until known). */
-    uint8_t firmware[MOTIOND_NAME_LEN]; /* offset 64, 32 bytes */
-    /** MOTIOND_DEVICE_MODEL_* value. */
-    uint32_t model; /* offset 96, 4 bytes */
-    /** Bus address, 0 when the model has none. */
-    uint32_t address; /* offset 100, 4 bytes */
-    /** Axes configured on the device. */
-    uint32_t axis_count; /* offset 104, 4 bytes */
+    uint8_t firmware[MOTIOND_NAME_LEN]; /* offset 64 */
+    uint32_t model; /**< MOTIOND_DEVICE_MODEL_* value. (offset 96) */
+    uint32_t address; /**< Bus address, 0 when the model has none. (offset 100) */
+    uint32_t axis_count; /**< Axes configured on the device. (offset 104) */
     /**
      * MOTIOND_DEVICE_STATE_* value when the info was published (the frame has the current one).
      */
-    uint32_t state; /* offset 108, 4 bytes */
+    uint32_t state; /* offset 108 */
 } motiond_device_info_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_device_info_t) == 112, "motiond_device_info_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_device_info_t) == 4, "motiond_device_info_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_device_info_t, name) == 0, "name offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_device_info_t, link) == 32, "link offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_device_info_t, firmware) == 64, "firmware offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_device_info_t, model) == 96, "model offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_device_info_t, address) == 100, "address offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_device_info_t, axis_count) == 104, "axis_count offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_device_info_t, state) == 108, "state offset");
 
 /**
  * One signal's static description.
@@ -640,42 +518,22 @@ MOTIOND_STATIC_ASSERT(offsetof(motiond_device_info_t, state) == 108, "state offs
  * 128 bytes, alignment 8; iceoryx2 type name "motiond::SignalInfo".
  */
 typedef struct motiond_signal_info {
-    /** Signal name. */
-    uint8_t name[MOTIOND_NAME_LEN]; /* offset 0, 32 bytes */
-    /** Unit of an analogue value ("" for digital). */
-    uint8_t unit[MOTIOND_UNIT_LEN]; /* offset 32, 16 bytes */
-    /** Device name. */
-    uint8_t device[MOTIOND_NAME_LEN]; /* offset 48, 32 bytes */
-    /** Analogue: value = raw × scale + offset. */
-    double scale; /* offset 80, 8 bytes */
-    /** Analogue: value = raw × scale + offset. */
-    double offset; /* offset 88, 8 bytes */
+    uint8_t name[MOTIOND_NAME_LEN]; /**< Signal name. (offset 0) */
+    uint8_t unit[MOTIOND_UNIT_LEN]; /**< Unit of an analogue value ("" for digital). (offset 32) */
+    uint8_t device[MOTIOND_NAME_LEN]; /**< Device name. (offset 48) */
+    double scale; /**< Analogue: value = raw × scale + offset. (offset 80) */
+    double offset; /**< Analogue: value = raw × scale + offset. (offset 88) */
     /** Raw full scale (1023 for a 10-bit converter; 1 for digital). */
-    double full_scale; /* offset 96, 8 bytes */
-    /** MOTIOND_SIGNAL_KIND_* value. */
-    uint8_t kind; /* offset 104, 1 byte */
-    /** MOTIOND_SIGNAL_INFO_FLAGS_* bits. */
-    uint8_t flags; /* offset 105, 1 byte */
-    /** Index into motiond_server_info_t.devices. */
-    uint16_t device_index; /* offset 106, 2 bytes */
+    double full_scale; /* offset 96 */
+    uint8_t kind; /**< MOTIOND_SIGNAL_KIND_* value. (offset 104) */
+    uint8_t flags; /**< MOTIOND_SIGNAL_INFO_FLAGS_* bits. (offset 105) */
+    uint16_t device_index; /**< Index into motiond_server_info_t.devices. (offset 106) */
     /** The board's pin name ("ttlio1"), zero padded. */
-    uint8_t pin[MOTIOND_UNIT_LEN]; /* offset 108, 16 bytes */
-    /** Zero. */
-    uint32_t reserved; /* offset 124, 4 bytes */
+    uint8_t pin[MOTIOND_UNIT_LEN]; /* offset 108 */
+    uint32_t reserved; /**< Zero. (offset 124) */
 } motiond_signal_info_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_signal_info_t) == 128, "motiond_signal_info_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_signal_info_t) == 8, "motiond_signal_info_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, name) == 0, "name offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, unit) == 32, "unit offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, device) == 48, "device offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, scale) == 80, "scale offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, offset) == 88, "offset offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, full_scale) == 96, "full_scale offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, kind) == 104, "kind offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, flags) == 105, "flags offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, device_index) == 106, "device_index offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, pin) == 108, "pin offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, reserved) == 124, "reserved offset");
 
 /**
  * The server's static description, published with history 1 on `motiond/<name>/info`.
@@ -683,48 +541,25 @@ MOTIOND_STATIC_ASSERT(offsetof(motiond_signal_info_t, reserved) == 124, "reserve
  * 32328 bytes, alignment 8; iceoryx2 type name "motiond::ServerInfo".
  */
 typedef struct motiond_server_info {
-    /** MOTIOND_SCHEMA_VERSION of the server. */
-    uint32_t schema_version; /* offset 0, 4 bytes */
-    /** Valid entries in `axes`. */
-    uint32_t axis_count; /* offset 4, 4 bytes */
-    /** Valid entries in `devices`. */
-    uint32_t device_count; /* offset 8, 4 bytes */
-    /** Tick rate, Hz. */
-    uint32_t tick_hz; /* offset 12, 4 bytes */
+    uint32_t schema_version; /**< MOTIOND_SCHEMA_VERSION of the server. (offset 0) */
+    uint32_t axis_count; /**< Valid entries in `axes`. (offset 4) */
+    uint32_t device_count; /**< Valid entries in `devices`. (offset 8) */
+    uint32_t tick_hz; /**< Tick rate, Hz. (offset 12) */
     /** Deadman for velocity and power goals, ms; 0 = disabled. */
-    uint32_t command_timeout_ms; /* offset 16, 4 bytes */
-    /** Configured client limit. */
-    uint32_t max_clients; /* offset 20, 4 bytes */
-    /** Process id of motiond. */
-    uint32_t server_pid; /* offset 24, 4 bytes */
-    /** Valid entries in `signals`. */
-    uint32_t signal_count; /* offset 28, 4 bytes */
-    /** Instance name. */
-    uint8_t name[MOTIOND_NAME_LEN]; /* offset 32, 32 bytes */
-    /** CLOCK_MONOTONIC ns of tick 0. */
-    uint64_t start_time_ns; /* offset 64, 8 bytes */
-    /** Axes in config order. */
-    motiond_axis_info_t axes[MOTIOND_MAX_AXES]; /* offset 72, 20480 bytes */
+    uint32_t command_timeout_ms; /* offset 16 */
+    uint32_t max_clients; /**< Configured client limit. (offset 20) */
+    uint32_t server_pid; /**< Process id of motiond. (offset 24) */
+    uint32_t signal_count; /**< Valid entries in `signals`. (offset 28) */
+    uint8_t name[MOTIOND_NAME_LEN]; /**< Instance name. (offset 32) */
+    uint64_t start_time_ns; /**< CLOCK_MONOTONIC ns of tick 0. (offset 64) */
+    motiond_axis_info_t axes[MOTIOND_MAX_AXES]; /**< Axes in config order. (offset 72) */
     /** Devices in config order. */
-    motiond_device_info_t devices[MOTIOND_MAX_DEVICES]; /* offset 20552, 3584 bytes */
+    motiond_device_info_t devices[MOTIOND_MAX_DEVICES]; /* offset 20552 */
     /** Signals in config order. */
-    motiond_signal_info_t signals[MOTIOND_MAX_SIGNALS]; /* offset 24136, 8192 bytes */
+    motiond_signal_info_t signals[MOTIOND_MAX_SIGNALS]; /* offset 24136 */
 } motiond_server_info_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_server_info_t) == 32328, "motiond_server_info_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_server_info_t) == 8, "motiond_server_info_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, schema_version) == 0, "schema_version offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, axis_count) == 4, "axis_count offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, device_count) == 8, "device_count offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, tick_hz) == 12, "tick_hz offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, command_timeout_ms) == 16, "command_timeout_ms offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, max_clients) == 20, "max_clients offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, server_pid) == 24, "server_pid offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, signal_count) == 28, "signal_count offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, name) == 32, "name offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, start_time_ns) == 64, "start_time_ns offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, axes) == 72, "axes offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, devices) == 20552, "devices offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, signals) == 24136, "signals offset");
 
 /**
  * One effective machine parameter.
@@ -733,26 +568,16 @@ MOTIOND_STATIC_ASSERT(offsetof(motiond_server_info_t, signals) == 24136, "signal
  */
 typedef struct motiond_machine_param {
     /** The config key, dotted for tables (`current.standstill`). */
-    uint8_t key[MOTIOND_PARAM_TEXT_LEN]; /* offset 0, 40 bytes */
+    uint8_t key[MOTIOND_PARAM_TEXT_LEN]; /* offset 0 */
     /** The value in effect, with its unit (`50 %`). */
-    uint8_t value[MOTIOND_PARAM_TEXT_LEN]; /* offset 40, 40 bytes */
-    /** Device or axis index. */
-    uint16_t owner_index; /* offset 80, 2 bytes */
-    /** MOTIOND_PARAM_OWNER_* value. */
-    uint8_t owner_kind; /* offset 82, 1 byte */
-    /** 1: the config file set it; 0: the default. */
-    uint8_t from_config; /* offset 83, 1 byte */
-    /** Zero. */
-    uint32_t reserved; /* offset 84, 4 bytes */
+    uint8_t value[MOTIOND_PARAM_TEXT_LEN]; /* offset 40 */
+    uint16_t owner_index; /**< Device or axis index. (offset 80) */
+    uint8_t owner_kind; /**< MOTIOND_PARAM_OWNER_* value. (offset 82) */
+    uint8_t from_config; /**< 1: the config file set it; 0: the default. (offset 83) */
+    uint32_t reserved; /**< Zero. (offset 84) */
 } motiond_machine_param_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_machine_param_t) == 88, "motiond_machine_param_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_machine_param_t) == 4, "motiond_machine_param_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_param_t, key) == 0, "key offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_param_t, value) == 40, "value offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_param_t, owner_index) == 80, "owner_index offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_param_t, owner_kind) == 82, "owner_kind offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_param_t, from_config) == 83, "from_config offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_param_t, reserved) == 84, "reserved offset");
 
 /**
  * Every machine parameter in effect, published with history 1 on `motiond/<name>/params`.
@@ -760,24 +585,16 @@ MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_param_t, reserved) == 84, "reserv
  * 180240 bytes, alignment 4; iceoryx2 type name "motiond::MachineParams".
  */
 typedef struct motiond_machine_params {
-    /** MOTIOND_SCHEMA_VERSION of the server. */
-    uint32_t schema_version; /* offset 0, 4 bytes */
-    /** Valid entries. */
-    uint32_t count; /* offset 4, 4 bytes */
+    uint32_t schema_version; /**< MOTIOND_SCHEMA_VERSION of the server. (offset 0) */
+    uint32_t count; /**< Valid entries. (offset 4) */
     /** 1 when more parameters existed than MOTIOND_MAX_PARAMS (entries were left out). */
-    uint32_t truncated; /* offset 8, 4 bytes */
-    /** Zero. */
-    uint32_t reserved; /* offset 12, 4 bytes */
+    uint32_t truncated; /* offset 8 */
+    uint32_t reserved; /**< Zero. (offset 12) */
     /** Devices' then axes' parameters, config order. */
-    motiond_machine_param_t entries[MOTIOND_MAX_PARAMS]; /* offset 16, 180224 bytes */
+    motiond_machine_param_t entries[MOTIOND_MAX_PARAMS]; /* offset 16 */
 } motiond_machine_params_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_machine_params_t) == 180240, "motiond_machine_params_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_machine_params_t) == 4, "motiond_machine_params_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_params_t, schema_version) == 0, "schema_version offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_params_t, count) == 4, "count offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_params_t, truncated) == 8, "truncated offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_params_t, reserved) == 12, "reserved offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_params_t, entries) == 16, "entries offset");
 
 /**
  * Percentiles of one latency distribution, in nanoseconds.
@@ -785,24 +602,14 @@ MOTIOND_STATIC_ASSERT(offsetof(motiond_machine_params_t, entries) == 16, "entrie
  * 40 bytes, alignment 8; iceoryx2 type name "motiond::LatencySummary".
  */
 typedef struct motiond_latency_summary {
-    /** Number of samples. */
-    uint64_t samples; /* offset 0, 8 bytes */
-    /** Median. */
-    uint64_t p50_ns; /* offset 8, 8 bytes */
-    /** 99th percentile. */
-    uint64_t p99_ns; /* offset 16, 8 bytes */
-    /** 99.9th percentile. */
-    uint64_t p999_ns; /* offset 24, 8 bytes */
-    /** Maximum. */
-    uint64_t max_ns; /* offset 32, 8 bytes */
+    uint64_t samples; /**< Number of samples. (offset 0) */
+    uint64_t p50_ns; /**< Median. (offset 8) */
+    uint64_t p99_ns; /**< 99th percentile. (offset 16) */
+    uint64_t p999_ns; /**< 99.9th percentile. (offset 24) */
+    uint64_t max_ns; /**< Maximum. (offset 32) */
 } motiond_latency_summary_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_latency_summary_t) == 40, "motiond_latency_summary_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_latency_summary_t) == 8, "motiond_latency_summary_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_latency_summary_t, samples) == 0, "samples offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_latency_summary_t, p50_ns) == 8, "p50_ns offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_latency_summary_t, p99_ns) == 16, "p99_ns offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_latency_summary_t, p999_ns) == 24, "p999_ns offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_latency_summary_t, max_ns) == 32, "max_ns offset");
 
 /**
  * Counters of one link since start.
@@ -810,33 +617,17 @@ MOTIOND_STATIC_ASSERT(offsetof(motiond_latency_summary_t, max_ns) == 32, "max_ns
  * 80 bytes, alignment 8; iceoryx2 type name "motiond::LinkStats".
  */
 typedef struct motiond_link_stats {
-    /** Link name. */
-    uint8_t name[MOTIOND_NAME_LEN]; /* offset 0, 32 bytes */
-    /** Bytes received. */
-    uint64_t bytes_in; /* offset 32, 8 bytes */
-    /** Bytes sent. */
-    uint64_t bytes_out; /* offset 40, 8 bytes */
-    /** Replies decoded. */
-    uint64_t frames; /* offset 48, 8 bytes */
-    /** Bad frames, I/O errors, timeouts. */
-    uint64_t errors; /* offset 56, 8 bytes */
-    /** Successful reopens. */
-    uint64_t reconnects; /* offset 64, 8 bytes */
-    /** 1 when the link is open. */
-    uint32_t up; /* offset 72, 4 bytes */
-    /** Zero. */
-    uint32_t reserved; /* offset 76, 4 bytes */
+    uint8_t name[MOTIOND_NAME_LEN]; /**< Link name. (offset 0) */
+    uint64_t bytes_in; /**< Bytes received. (offset 32) */
+    uint64_t bytes_out; /**< Bytes sent. (offset 40) */
+    uint64_t frames; /**< Replies decoded. (offset 48) */
+    uint64_t errors; /**< Bad frames, I/O errors, timeouts. (offset 56) */
+    uint64_t reconnects; /**< Successful reopens. (offset 64) */
+    uint32_t up; /**< 1 when the link is open. (offset 72) */
+    uint32_t reserved; /**< Zero. (offset 76) */
 } motiond_link_stats_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_link_stats_t) == 80, "motiond_link_stats_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_link_stats_t) == 8, "motiond_link_stats_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, name) == 0, "name offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, bytes_in) == 32, "bytes_in offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, bytes_out) == 40, "bytes_out offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, frames) == 48, "frames offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, errors) == 56, "errors offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, reconnects) == 64, "reconnects offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, up) == 72, "up offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, reserved) == 76, "reserved offset");
 
 /**
  * The I/O side of one link: when bytes last went out and came in, and how often. Stamps are
@@ -847,20 +638,14 @@ MOTIOND_STATIC_ASSERT(offsetof(motiond_link_stats_t, reserved) == 76, "reserved 
  */
 typedef struct motiond_link_io {
     /** CLOCK_MONOTONIC ns of the last write that moved bytes; 0: never. */
-    uint64_t last_write_ns; /* offset 0, 8 bytes */
+    uint64_t last_write_ns; /* offset 0 */
     /** CLOCK_MONOTONIC ns of the last read that returned bytes; 0: never. */
-    uint64_t last_read_ns; /* offset 8, 8 bytes */
-    /** Messages written whole (SPI: transactions). */
-    uint64_t transactions; /* offset 16, 8 bytes */
-    /** Reads that returned bytes. */
-    uint64_t reads; /* offset 24, 8 bytes */
+    uint64_t last_read_ns; /* offset 8 */
+    uint64_t transactions; /**< Messages written whole (SPI: transactions). (offset 16) */
+    uint64_t reads; /**< Reads that returned bytes. (offset 24) */
 } motiond_link_io_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_link_io_t) == 32, "motiond_link_io_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_link_io_t) == 8, "motiond_link_io_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_link_io_t, last_write_ns) == 0, "last_write_ns offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_link_io_t, last_read_ns) == 8, "last_read_ns offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_link_io_t, transactions) == 16, "transactions offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_link_io_t, reads) == 24, "reads offset");
 
 /**
  * Server figures, published about once a second on `motiond/<name>/stats`.
@@ -868,93 +653,60 @@ MOTIOND_STATIC_ASSERT(offsetof(motiond_link_io_t, reads) == 24, "reads offset");
  * 1992 bytes, alignment 8; iceoryx2 type name "motiond::ServerStats".
  */
 typedef struct motiond_server_stats {
-    /** MOTIOND_SCHEMA_VERSION of the server. */
-    uint32_t schema_version; /* offset 0, 4 bytes */
-    /** Valid entries in `links`. */
-    uint32_t link_count; /* offset 4, 4 bytes */
-    /** Tick at which these figures were taken. */
-    uint64_t tick; /* offset 8, 8 bytes */
-    /** CLOCK_MONOTONIC ns of that tick. */
-    uint64_t time_ns; /* offset 16, 8 bytes */
+    uint32_t schema_version; /**< MOTIOND_SCHEMA_VERSION of the server. (offset 0) */
+    uint32_t link_count; /**< Valid entries in `links`. (offset 4) */
+    uint64_t tick; /**< Tick at which these figures were taken. (offset 8) */
+    uint64_t time_ns; /**< CLOCK_MONOTONIC ns of that tick. (offset 16) */
     /** Wake-up latency (actual wake − deadline) since start. */
-    motiond_latency_summary_t wakeup; /* offset 24, 40 bytes */
-    /** Tick work time since start. */
-    motiond_latency_summary_t work; /* offset 64, 40 bytes */
-    /** Ticks that missed their deadline since start. */
-    uint64_t overruns; /* offset 104, 8 bytes */
-    /** Longest run of consecutive overruns. */
-    uint64_t max_consecutive_overruns; /* offset 112, 8 bytes */
-    /** Requests answered. */
-    uint64_t commands; /* offset 120, 8 bytes */
-    /** Requests refused. */
-    uint64_t rejected; /* offset 128, 8 bytes */
-    /** Live client nodes at the last liveness check. */
-    uint32_t clients; /* offset 136, 4 bytes */
+    motiond_latency_summary_t wakeup; /* offset 24 */
+    motiond_latency_summary_t work; /**< Tick work time since start. (offset 64) */
+    uint64_t overruns; /**< Ticks that missed their deadline since start. (offset 104) */
+    uint64_t max_consecutive_overruns; /**< Longest run of consecutive overruns. (offset 112) */
+    uint64_t commands; /**< Requests answered. (offset 120) */
+    uint64_t rejected; /**< Requests refused. (offset 128) */
+    uint32_t clients; /**< Live client nodes at the last liveness check. (offset 136) */
     /**
      * Real-time set-up bits (MOTIOND_RT_FLAGS_*): bit 0 SCHED_FIFO, bit 1 memory locked, bit 2
      * pinned, bit 3 cpu_dma_latency held.
      */
-    uint32_t rt_flags; /* offset 140, 4 bytes */
-    /** Per-link counters. */
-    motiond_link_stats_t links[MOTIOND_MAX_LINKS]; /* offset 144, 1280 bytes */
+    uint32_t rt_flags; /* offset 140 */
+    motiond_link_stats_t links[MOTIOND_MAX_LINKS]; /**< Per-link counters. (offset 144) */
     /** Axis faults latched by the server's supervision since start. */
-    uint64_t faults; /* offset 1424, 8 bytes */
+    uint64_t faults; /* offset 1424 */
     /** Ticks whose frame could not be loaned or sent, since start. */
-    uint64_t frames_lost; /* offset 1432, 8 bytes */
+    uint64_t frames_lost; /* offset 1432 */
     /**
      * Services whose port slots are all taken now (MOTIOND_FULL_SERVICES_* bits, the `FULL_*`
      * constants): new clients are refused there until a slot frees.
      */
-    uint32_t full_services; /* offset 1440, 4 bytes */
+    uint32_t full_services; /* offset 1440 */
     /** Times a service was found with all its slots taken, since start. */
-    uint32_t full_events; /* offset 1444, 4 bytes */
+    uint32_t full_events; /* offset 1444 */
     /**
      * Info, stats and params samples that could not be loaned or sent, and tick notifications
      * that failed, since start (a lost frame counts in `frames_lost`).
      */
-    uint64_t publish_failures; /* offset 1448, 8 bytes */
+    uint64_t publish_failures; /* offset 1448 */
     /**
      * Command replies that could not be sent (the client vanished before its answer), since
      * start.
      */
-    uint64_t replies_lost; /* offset 1456, 8 bytes */
+    uint64_t replies_lost; /* offset 1456 */
     /**
      * Log reports the main thread's queue had no room for, and failed iceoryx2 housekeeping
      * (connection updates, e-stop event reads), since start.
      */
-    uint64_t events_dropped; /* offset 1464, 8 bytes */
+    uint64_t events_dropped; /* offset 1464 */
     /** Per link (same index as `links`): the I/O thread's stamps. */
-    motiond_link_io_t link_io[MOTIOND_MAX_LINKS]; /* offset 1472, 512 bytes */
+    motiond_link_io_t link_io[MOTIOND_MAX_LINKS]; /* offset 1472 */
     /**
      * Records of dead iceoryx2 nodes removed from the service root (crashed clients, clients
      * killed while they started), since start.
      */
-    uint64_t nodes_cleaned; /* offset 1984, 8 bytes */
+    uint64_t nodes_cleaned; /* offset 1984 */
 } motiond_server_stats_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_server_stats_t) == 1992, "motiond_server_stats_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_server_stats_t) == 8, "motiond_server_stats_t alignment");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, schema_version) == 0, "schema_version offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, link_count) == 4, "link_count offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, tick) == 8, "tick offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, time_ns) == 16, "time_ns offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, wakeup) == 24, "wakeup offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, work) == 64, "work offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, overruns) == 104, "overruns offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, max_consecutive_overruns) == 112, "max_consecutive_overruns offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, commands) == 120, "commands offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, rejected) == 128, "rejected offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, clients) == 136, "clients offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, rt_flags) == 140, "rt_flags offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, links) == 144, "links offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, faults) == 1424, "faults offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, frames_lost) == 1432, "frames_lost offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, full_services) == 1440, "full_services offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, full_events) == 1444, "full_events offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, publish_failures) == 1448, "publish_failures offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, replies_lost) == 1456, "replies_lost offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, events_dropped) == 1464, "events_dropped offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, link_io) == 1472, "link_io offset");
-MOTIOND_STATIC_ASSERT(offsetof(motiond_server_stats_t, nodes_cleaned) == 1984, "nodes_cleaned offset");
 
 /* --- texts -------------------------------------------------------------------------------- */
 

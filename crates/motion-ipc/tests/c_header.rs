@@ -23,27 +23,11 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use motion_ipc::schema::{Contract, contract};
-
-/// `MotionFrame` → `motion_frame`.
-fn snake(name: &str) -> String {
-    let mut out = String::new();
-    for (index, c) in name.chars().enumerate() {
-        if c.is_ascii_uppercase() && index > 0 {
-            out.push('_');
-        }
-        out.push(c.to_ascii_lowercase());
-    }
-    out
-}
+use motion_ipc::schema::{Contract, c_enum_value, c_struct, contract, snake};
 
 /// `OutOfRange` → `OUT_OF_RANGE`.
 fn upper(name: &str) -> String {
     snake(name).to_ascii_uppercase()
-}
-
-fn c_type(rust: &str) -> String {
-    format!("motiond_{}_t", snake(rust))
 }
 
 /// Whether the Rust field type is an array (`u8[32]`).
@@ -99,7 +83,7 @@ fn probe_source(contract: &Contract) -> String {
     );
     c.push_str("    uint64_t: \"u64\", int64_t: \"i64\", double: \"f64\", \\\n");
     for layout in &contract.structs {
-        let _ = writeln!(c, "    {}: \"{}\", \\", c_type(layout.name), layout.name);
+        let _ = writeln!(c, "    {}: \"{}\", \\", c_struct(layout.name), layout.name);
     }
     c.push_str("    default: \"?\")\n\n");
     c.push_str(
@@ -108,7 +92,7 @@ fn probe_source(contract: &Contract) -> String {
     c.push_str("int main(void) {\n");
     for layout in &contract.structs {
         let name = layout.name;
-        let ty = c_type(name);
+        let ty = c_struct(name);
         let _ = writeln!(c, "    {{\n        const {ty} *v = NULL;\n        (void)v;");
         let _ = writeln!(
             c,
@@ -137,11 +121,7 @@ fn probe_source(contract: &Contract) -> String {
     }
     for item in &contract.enums {
         for variant in &item.variants {
-            let constant = if item.flags {
-                format!("MOTIOND_{}_{}", upper(item.name), variant.name)
-            } else {
-                format!("MOTIOND_{}_{}", upper(item.name), upper(&variant.name))
-            };
+            let constant = c_enum_value(item, &variant.name);
             let _ = writeln!(
                 c,
                 "    printf(\"enum {} {} %lld\\n\", (long long){constant});",

@@ -9,8 +9,10 @@ use std::fmt::Write as _;
 use super::docs::{rename_code, snake, text, upper_snake, wrap};
 use super::{Contract, Enum, Field, Scalar, Struct, Type};
 
-/// Columns of the generated header.
+/// Columns of the generated header's comments.
 const WIDTH: usize = 96;
+/// Columns a field with its doc on the same line may take.
+const FIELD_LINE: usize = 100;
 
 const PREAMBLE: &str = "\
 /*
@@ -89,14 +91,14 @@ static inline motiond_command_request_t motiond_command_request(
 #endif /* MOTIOND_H */
 ";
 
-/// `motiond_motion_frame_t` for `MotionFrame`.
-pub(super) fn c_struct(name: &str) -> String {
+/// The header's type of a payload: `motiond_motion_frame_t` for `MotionFrame`.
+pub fn c_struct(name: &str) -> String {
     format!("motiond_{}_t", snake(name))
 }
 
 /// The C name of an enumeration value or flag bit (`MOTIOND_REASON_OUT_OF_RANGE`,
 /// `MOTIOND_AXIS_FLAGS_MOVING`).
-pub(super) fn c_enum_value(item: &Enum, variant: &str) -> String {
+pub fn c_enum_value(item: &Enum, variant: &str) -> String {
     if item.flags {
         format!("MOTIOND_{}_{variant}", upper_snake(item.name))
     } else {
@@ -284,26 +286,24 @@ impl Contract {
             "MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF({ty}) == {}, \"{ty} alignment\");",
             payload.align
         );
-        for field in payload.fields {
-            let name = field.name;
-            let _ = writeln!(
-                out,
-                "MOTIOND_STATIC_ASSERT(offsetof({ty}, {name}) == {}, \"{name} offset\");",
-                field.offset
-            );
-        }
     }
 
+    /// A field: `type name; /**< doc (offset N) */` when that fits on a line, else the doc
+    /// above it.
     fn c_field(&self, out: &mut String, field: &Field) {
-        comment(out, 4, &self.c_prose(&text(field.docs)));
-        let _ = writeln!(
-            out,
-            "    {}; /* offset {}, {} byte{} */",
-            c_declaration(&field.ty, field.name),
-            field.offset,
-            field.size,
-            if field.size == 1 { "" } else { "s" }
+        let declaration = format!("{};", c_declaration(&field.ty, field.name));
+        let doc = self.c_prose(&text(field.docs));
+        let offset = format!("offset {}", field.offset);
+        let line = format!(
+            "    {declaration} /**< {} ({offset}) */",
+            doc.replace('\n', " ")
         );
+        if !doc.contains("\n\n") && line.chars().count() <= FIELD_LINE {
+            let _ = writeln!(out, "{line}");
+        } else {
+            comment(out, 4, &doc);
+            let _ = writeln!(out, "    {declaration} /* {offset} */");
+        }
     }
 
     fn c_texts(&self, out: &mut String) {

@@ -291,6 +291,13 @@ fn enums() -> Vec<Enum> {
     all
 }
 
+/// `(name, value)` of flag constants of a newtype bit set (`AxisFlags::MOVING`).
+macro_rules! bits {
+    ($set:ident: $($bit:ident),* $(,)?) => {
+        &[$((stringify!($bit), u64::from($set::$bit.0))),*]
+    };
+}
+
 /// The flag sets. Their bits are associated constants, listed here by name.
 fn flag_sets() -> Vec<Enum> {
     vec![
@@ -298,48 +305,25 @@ fn flag_sets() -> Vec<Enum> {
             "AxisFlags",
             Scalar::U32,
             "Bits of `AxisState.flags`.",
-            &[
-                ("MOVING", AxisFlags::MOVING.0.into()),
-                ("HOMED", AxisFlags::HOMED.0.into()),
-                ("AT_LIMIT", AxisFlags::AT_LIMIT.0.into()),
-                ("STALE", AxisFlags::STALE.0.into()),
-                ("FAULT", AxisFlags::FAULT.0.into()),
-                ("CLAIMED", AxisFlags::CLAIMED.0.into()),
-                ("ARRIVED", AxisFlags::ARRIVED.0.into()),
-                ("ESTOPPED", AxisFlags::ESTOPPED.0.into()),
-                ("DEADMAN_EXPIRED", AxisFlags::DEADMAN_EXPIRED.0.into()),
-            ],
+            bits!(AxisFlags: MOVING, HOMED, AT_LIMIT, STALE, FAULT, CLAIMED, ARRIVED, ESTOPPED, DEADMAN_EXPIRED),
         ),
         flags(
             "FrameFlags",
             Scalar::U32,
             "Bits of `MotionFrame.flags`.",
-            &[
-                ("ESTOP_LATCHED", FrameFlags::ESTOP_LATCHED.0.into()),
-                ("OVERRUN", FrameFlags::OVERRUN.0.into()),
-                ("SHUTTING_DOWN", FrameFlags::SHUTTING_DOWN.0.into()),
-            ],
+            bits!(FrameFlags: ESTOP_LATCHED, OVERRUN, SHUTTING_DOWN),
         ),
         flags(
             "SignalFlags",
             Scalar::U32,
             "Bits of `SignalState.flags`.",
-            &[
-                ("STALE", SignalFlags::STALE.0.into()),
-                ("CLAIMED", SignalFlags::CLAIMED.0.into()),
-                ("SAFE_STATE", SignalFlags::SAFE_STATE.0.into()),
-                ("PENDING", SignalFlags::PENDING.0.into()),
-            ],
+            bits!(SignalFlags: STALE, CLAIMED, SAFE_STATE, PENDING),
         ),
         flags(
             "SignalInfoFlags",
             Scalar::U8,
             "Bits of `SignalInfo.flags`.",
-            &[
-                ("INVERT", SignalInfoFlags::INVERT.0.into()),
-                ("HAS_SAFE_STATE", SignalInfoFlags::HAS_SAFE_STATE.0.into()),
-                ("SAFE_ON", SignalInfoFlags::SAFE_ON.0.into()),
-            ],
+            bits!(SignalInfoFlags: INVERT, HAS_SAFE_STATE, SAFE_ON),
         ),
         flags(
             "RtFlags",

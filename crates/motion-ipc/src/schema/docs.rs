@@ -79,8 +79,9 @@ pub(super) fn wrap(text: &str, width: usize) -> Vec<Vec<String>> {
         .collect()
 }
 
-/// `MotionFrame` → `motion_frame`, `OutOfRange` → `out_of_range`.
-pub(super) fn snake(name: &str) -> String {
+/// `MotionFrame` → `motion_frame`, `OutOfRange` → `out_of_range` (how the C header and
+/// its checks spell Rust names).
+pub fn snake(name: &str) -> String {
     let mut out = String::new();
     for (index, c) in name.chars().enumerate() {
         if c.is_ascii_uppercase() && index > 0 {

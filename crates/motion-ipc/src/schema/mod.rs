@@ -38,7 +38,9 @@ mod fields;
 mod json;
 mod python;
 
+pub use c_header::{c_enum_value, c_struct};
 pub use contract::contract;
+pub use docs::snake;
 pub use fields::{Fields, ScalarSink, ScalarSource};
 
 /// A number type a payload field holds (the contract uses no others).

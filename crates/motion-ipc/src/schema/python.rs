@@ -133,24 +133,38 @@ impl Contract {
         for payload in &self.structs {
             py_payload(&mut out, payload);
         }
-        out.push_str("\n\n#: Every payload mirror, by Rust type name.\n");
-        out.push_str("PAYLOADS: Dict[str, Type[Payload]] = {\n");
-        for payload in &self.structs {
-            let _ = writeln!(out, "    {}: {},", py_string(payload.name), payload.name);
-        }
-        out.push_str("}\n");
+        let payloads: Vec<&str> = self.structs.iter().map(|s| s.name).collect();
+        py_registry(
+            &mut out,
+            "PAYLOADS: Dict[str, Type[Payload]]",
+            "payload mirror",
+            &payloads,
+        );
         out.push_str("\n# --- enumerations ------------------------------------------------------------------------\n");
         for item in &self.enums {
             py_enum(&mut out, item);
         }
-        out.push_str("\n\n#: Every enumeration and flag set, by Rust type name.\n");
-        out.push_str("ENUMS: Dict[str, type] = {\n");
-        for item in &self.enums {
-            let _ = writeln!(out, "    {}: {},", py_string(item.name), item.name);
-        }
-        out.push_str("}\n");
+        let enums: Vec<&str> = self.enums.iter().map(|e| e.name).collect();
+        py_registry(
+            &mut out,
+            "ENUMS: Dict[str, type]",
+            "enumeration and flag set",
+            &enums,
+        );
         out
     }
+}
+
+/// `declaration = {"Name": Name, …}`: every class of a kind by its Rust type name.
+fn py_registry(out: &mut String, declaration: &str, what: &str, names: &[&str]) {
+    let _ = writeln!(
+        out,
+        "\n\n#: Every {what}, by Rust type name.\n{declaration} = {{"
+    );
+    for name in names {
+        let _ = writeln!(out, "    {}: {name},", py_string(name));
+    }
+    out.push_str("}\n");
 }
 
 fn py_payload(out: &mut String, payload: &Struct) {
