@@ -163,10 +163,23 @@ fn scan<T: core::fmt::Debug>(
     parse: impl Fn(u64) -> Option<T>,
     text: impl Fn(&T) -> Option<&'static str>,
 ) -> Enum {
+    scan_named(name, repr, doc, parse, |value| format!("{value:?}"), text)
+}
+
+/// [`scan`] with the variant names given by `variant_name` (`CamelCase`, as Rust names an
+/// enum variant) rather than by `Debug`.
+fn scan_named<T>(
+    name: &'static str,
+    repr: Scalar,
+    doc: &'static str,
+    parse: impl Fn(u64) -> Option<T>,
+    variant_name: impl Fn(&T) -> String,
+    text: impl Fn(&T) -> Option<&'static str>,
+) -> Enum {
     let variants = (0..SCAN)
         .filter_map(|raw| {
             parse(raw).map(|value| Variant {
-                name: format!("{value:?}"),
+                name: variant_name(&value),
                 value: raw,
                 text: text(&value),
             })
@@ -197,6 +210,14 @@ fn flags(name: &'static str, repr: Scalar, doc: &'static str, bits: &[(&str, u64
             })
             .collect(),
     }
+}
+
+/// `qq2drv` → `Qq2drv`: a config id as an enum variant name.
+fn capitalized(id: &str) -> String {
+    let mut chars = id.chars();
+    chars.next().map_or_else(String::new, |first| {
+        first.to_uppercase().chain(chars).collect()
+    })
 }
 
 fn raw<T: TryFrom<u64>>(raw: u64) -> Option<T> {
@@ -272,11 +293,12 @@ fn enums() -> Vec<Enum> {
             |value| raw::<u32>(value).and_then(|v| EstopCategory::try_from(v).ok()),
             |category| Some(category.name()),
         ),
-        scan(
+        scan_named(
             "DeviceModel",
             Scalar::U32,
             "The board model of a device (`DeviceInfo.model`); the text is its config id.",
             |value| raw::<u32>(value).and_then(|v| DeviceModel::try_from(v).ok()),
+            |model| capitalized(model.id()),
             |model| Some(model.id()),
         ),
         scan(
@@ -484,6 +506,13 @@ mod tests {
             .find(|e| e.name == "CommandKind")
             .expect("kinds");
         assert_eq!(kinds.variants.len(), CommandKind::ALL.len());
+        let models = enums
+            .iter()
+            .find(|e| e.name == "DeviceModel")
+            .expect("models");
+        let first = &models.variants[0];
+        assert_eq!((first.name.as_str(), first.value), ("Qq2drv", 1));
+        assert_eq!(first.text, Some(DeviceModel::QQ2DRV.id()));
         let flags = enums
             .iter()
             .find(|e| e.name == "AxisFlags")
