@@ -1,0 +1,5 @@
+//! The worked example of a motiond board.
+#![warn(missing_docs)]
+#![forbid(unsafe_code)]
+
+pub mod codec;
