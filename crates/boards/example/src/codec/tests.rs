@@ -268,7 +268,7 @@ proptest! {
         let line = encoded(request);
         prop_assert!(line.len() <= MAX_LINE);
         let mut lines = LineDecoder::new();
-        let parsed: Vec<_> = line.iter().filter_map(|b| lines.push(*b).map(|l| l.map(|l| Request::parse(l)))).collect();
+        let parsed: Vec<_> = line.iter().filter_map(|b| lines.push(*b).map(|l| l.map(Request::parse))).collect();
         prop_assert_eq!(parsed, vec![Ok(Ok(request))]);
     }
 
