@@ -14,6 +14,7 @@ pub static BOARDS: &[&dyn Board] = &[
     &board_tmcpack::BOARD,
     &board_spimotor::BOARD,
     &board_qsb::BOARD,
+    &board_example::BOARD,
 ];
 
 /// The board of `model`. Every [`Model`] the server sees comes from [`BOARDS`] (the
