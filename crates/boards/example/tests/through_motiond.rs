@@ -4,10 +4,8 @@
 //! (`motiond::boards`), and commands go through the engine as a client's would. A
 //! counting allocator checks that the engine and the AS-2 driver allocate nothing once
 //! running.
-#![allow(unsafe_code)] // the counting global allocator
 
 use core::time::Duration;
-use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 use std::path::Path;
 
@@ -43,48 +41,27 @@ max_accel = 500.0
 position_tolerance = 0.02
 "#;
 
-struct CountingAllocator;
+// The workspace's counting allocator (per thread), shared with the root's engine tests.
+#[path = "../../../../tests/support/counting_alloc.rs"]
+mod counting_alloc;
 
-thread_local! {
-    static COUNTING: Cell<bool> = const { Cell::new(false) };
-    static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
-}
-
-fn note_allocation() {
-    let _ = COUNTING.try_with(|counting| {
-        if counting.get() {
-            let _ = ALLOCATIONS.try_with(|count| count.set(count.get() + 1));
-        }
-    });
-}
-
-// SAFETY: every call is forwarded unchanged to the system allocator; the only addition is
-// a thread-local counter that does not allocate.
-unsafe impl GlobalAlloc for CountingAllocator {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        note_allocation();
-        // SAFETY: same contract as our caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as our caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        note_allocation();
-        // SAFETY: same contract as our caller's.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
+use counting_alloc::{CountingAllocator, allocations};
 
 #[global_allocator]
 static GLOBAL: CountingAllocator = CountingAllocator;
 
-/// Counts the allocations of `work` (the engine and its driver; not the simulated link).
+thread_local! {
+    /// Allocations inside [`counted`] so far.
+    static COUNTED: Cell<u64> = const { Cell::new(0) };
+}
+
+/// Runs `work` (the engine and its driver; not the simulated link), adding its
+/// allocations to [`COUNTED`].
 fn counted<T>(work: impl FnOnce() -> T) -> T {
-    COUNTING.with(|c| c.set(true));
+    let before = allocations();
     let result = work();
-    COUNTING.with(|c| c.set(false));
+    let made = allocations() - before;
+    COUNTED.with(|count| count.set(count.get() + made));
     result
 }
 
@@ -251,7 +228,7 @@ fn the_engine_and_the_example_driver_allocate_nothing_once_running() {
     let mut server = Server::start();
     server.port.replies.reserve(16);
     server.run_for(Duration::from_millis(100));
-    let before = ALLOCATIONS.with(Cell::get);
+    let before = COUNTED.with(Cell::get);
     // Polls, a move, a jog and a stop: the driver's every per-step path.
     let reply = server.command(CommandKind::RampPosition, [-5.0, 0.0, 0.0]);
     assert_eq!(reply.result(), Ok(()));
@@ -265,7 +242,7 @@ fn the_engine_and_the_example_driver_allocate_nothing_once_running() {
     server.run_for(Duration::from_millis(100));
     assert_eq!(server.command(CommandKind::Stop, [0.0; 3]).result(), Ok(()));
     server.run_for(Duration::from_millis(300));
-    let allocations = ALLOCATIONS.with(Cell::get) - before;
+    let allocations = COUNTED.with(Cell::get) - before;
     assert_eq!(
         allocations, 0,
         "the engine and the driver allocated {allocations} times"
