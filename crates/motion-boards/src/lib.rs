@@ -14,6 +14,7 @@ pub static BOARDS: &[&dyn Board] = &[
     &board_tmcpack::BOARD,
     &board_spimotor::BOARD,
     &board_qsb::BOARD,
+    &board_example::BOARD,
 ];
 
 /// The board of `model`. Every [`Model`] the server sees comes from [`BOARDS`] (the
@@ -78,7 +79,7 @@ pub fn ids(keep: impl Fn(&dyn Board) -> bool, word: &str) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::{BOARDS, board, by_code, by_id, id_list, ids};
+    use super::{BOARDS, Board, board, by_code, by_id, id_list, ids};
 
     #[test]
     fn ids_and_codes_are_unique_and_found() {
@@ -103,8 +104,18 @@ mod tests {
         }
         assert!(by_id("nonesuch").is_none());
         assert!(by_code(0).is_none());
-        assert_eq!(id_list(), "qq2drv, tmcpack, spimotor, qsb");
-        assert_eq!(ids(|b| b.link().shared, "or"), "tmcpack or spimotor");
+        // Properties, not the literal list: a board added to BOARDS needs no edit here.
+        let every: Vec<&str> = BOARDS.iter().map(|b| b.model().id()).collect();
+        assert_eq!(id_list().split(", ").collect::<Vec<_>>(), every);
+        assert!(id_list().starts_with("qq2drv, tmcpack, spimotor, qsb"));
+        let pair = |b: &dyn Board| ["tmcpack", "spimotor"].contains(&b.model().id());
+        assert_eq!(ids(pair, "or"), "tmcpack or spimotor");
+        let three = |b: &dyn Board| ["qq2drv", "tmcpack", "qsb"].contains(&b.model().id());
+        assert_eq!(ids(three, "and"), "qq2drv, tmcpack and qsb");
+        assert!(
+            ids(|b| b.link().shared, "or").contains("tmcpack"),
+            "the Trinamic packs share an RS-485 bus"
+        );
         assert_eq!(ids(|b| b.model().id() == "qsb", "or"), "qsb");
         assert_eq!(ids(|_| false, "or"), "");
     }
@@ -115,6 +126,14 @@ mod tests {
             let link = entry.link();
             assert!(link.default_rate > 0, "{}", entry.model());
             assert!(link.spi_mode <= 3, "{}", entry.model());
+        }
+    }
+
+    #[test]
+    fn codes_run_in_list_order() {
+        // BOARDS is in contract-code order (its docs): a new board goes at the end.
+        for pair in BOARDS.windows(2) {
+            assert!(pair[0].model().code() < pair[1].model().code());
         }
     }
 }
