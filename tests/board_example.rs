@@ -41,8 +41,8 @@ max_accel = 500.0
 position_tolerance = 0.02
 "#;
 
-// The workspace's counting allocator (per thread), shared with the root's engine tests.
-#[path = "../../../../tests/support/counting_alloc.rs"]
+// The workspace's counting allocator (per thread), shared with the engine tests.
+#[path = "support/counting_alloc.rs"]
 mod counting_alloc;
 
 use counting_alloc::{CountingAllocator, allocations};
