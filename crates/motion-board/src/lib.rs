@@ -17,7 +17,7 @@
 use core::fmt;
 use core::time::Duration;
 
-use motion_drivers::spec::{DriverSpec, PackVariant, Param, QsbVariant, SpecError, SpiDrive};
+use motion_drivers::spec::{DeviceMachine, DriverSpec, Param, SpecError};
 use motion_drivers::{Driver, Model, PinInfo};
 use motion_link::sim::{SpiDevice, StreamDevice};
 
@@ -35,31 +35,6 @@ impl fmt::Debug for SimBoard {
             Self::Stream(_) => "SimBoard::Stream",
             Self::Spi(_) => "SimBoard::Spi",
         })
-    }
-}
-
-/// The general variant keys of a `[[device]]` (`variant`, `drive`), as validated: what a
-/// board's channel count and pin table depend on. A model reads the one that is its own
-/// and ignores the others.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Variants {
-    /// Trinamic pack variant (SIXpack, QUADpack).
-    pub pack: PackVariant,
-    /// QSB product variant.
-    pub qsb: QsbVariant,
-    /// SPI_motor drive.
-    pub drive: SpiDrive,
-}
-
-impl Variants {
-    /// The variants a [`DriverSpec`] was filled with.
-    #[must_use]
-    pub fn of(spec: &DriverSpec) -> Self {
-        Self {
-            pack: spec.pack_variant,
-            qsb: spec.qsb_variant,
-            drive: spec.drive,
-        }
     }
 }
 
@@ -89,11 +64,19 @@ pub trait Board: Sync + fmt::Debug {
     /// How its link is laid out.
     fn link(&self) -> LinkFacts;
 
-    /// Channels (motors / encoders) a device of this model has, in `variants`.
-    fn channel_count(&self, variants: Variants) -> usize;
+    /// Channels (motors / encoders) a device of this model has, with its validated
+    /// machine keys (which say its variant, where the model comes in several).
+    fn channel_count(&self, machine: &DeviceMachine) -> usize;
 
-    /// The device's I/O pins in `variants` (index = `Pin`).
-    fn pins(&self, variants: Variants) -> &'static [PinInfo];
+    /// The device's I/O pins (index = `Pin`), with its validated machine keys.
+    fn pins(&self, machine: &DeviceMachine) -> &'static [PinInfo];
+
+    /// The name of the device's product in messages: its variant's where the model comes
+    /// in variants with different pins (`qsb-s`), else the model's id.
+    fn product_name(&self, machine: &DeviceMachine) -> &'static str {
+        let _ = machine;
+        self.model().id()
+    }
 
     /// The driver of the device `spec` describes (spec → driver config → driver).
     ///

@@ -6,7 +6,7 @@
 #![forbid(unsafe_code)]
 
 use motion_base::Model;
-pub use motion_board::{Board, LinkFacts, SimBoard, Variants};
+pub use motion_board::{Board, LinkFacts, SimBoard};
 
 /// Every board this build drives, in contract-code order.
 pub static BOARDS: &[&dyn Board] = &[

@@ -6,7 +6,7 @@
 //! validated in `config/validate/machine/<model>.rs` into `motion_drivers::spec`, whose
 //! `DriverSpec` (filled in `drivers.rs`) each board's driver is built from.
 
-use motion_boards::{Board, SimBoard, Variants};
+use motion_boards::{Board, SimBoard};
 use motion_drivers::Driver;
 use motion_link::sim::{SimLink, SpiBus, StreamBus};
 
@@ -29,16 +29,6 @@ pub struct BuildError {
 #[must_use]
 pub fn board_of(device: &DeviceSpec) -> &'static dyn Board {
     motion_boards::board(device.model)
-}
-
-/// The variant keys of `device`, as its board reads them.
-#[must_use]
-pub fn variants_of(device: &DeviceSpec) -> Variants {
-    Variants {
-        pack: device.variant,
-        qsb: device.qsb_variant,
-        drive: device.drive,
-    }
 }
 
 /// Builds the drivers of `config`'s devices, in config order.

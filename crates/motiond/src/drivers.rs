@@ -80,9 +80,6 @@ pub fn driver_spec(config: &ServerConfig, index: usize, device: &DeviceSpec) -> 
         model: device.model,
         line_rate: line_rate(config, device),
         address: device.address,
-        pack_variant: device.variant,
-        qsb_variant: device.qsb_variant,
-        drive: device.drive,
         machine: device.machine.clone(),
         axes: axes_on(config, index)
             .map(|i| driver_axis(&config.axes[i], &config.axis_specs[i]))

@@ -27,8 +27,8 @@ pub mod driver;
 pub mod sim;
 
 use motion_base::{LinkKind, Model, ModelFacts};
-use motion_board::{Board, LinkFacts, SimBoard, Variants};
-use motion_drivers::spec::{DriverSpec, Param, SpecError};
+use motion_board::{Board, LinkFacts, SimBoard};
+use motion_drivers::spec::{DeviceMachine, DriverSpec, Param, SpecError};
 use motion_drivers::{Driver, PinInfo};
 
 use driver::{DEFAULT_BAUD, ExampleDriver, ExampleDriverConfig};
@@ -67,12 +67,12 @@ impl Board for ExampleBoard {
         }
     }
 
-    fn channel_count(&self, _variants: Variants) -> usize {
+    fn channel_count(&self, _machine: &DeviceMachine) -> usize {
         codec::CHANNELS
     }
 
     /// The AS-2 has no I/O pins.
-    fn pins(&self, _variants: Variants) -> &'static [PinInfo] {
+    fn pins(&self, _machine: &DeviceMachine) -> &'static [PinInfo] {
         &[]
     }
 

@@ -8,9 +8,9 @@
 
 mod sim;
 
-use motion_board::{Board, LinkFacts, SimBoard, Variants};
+use motion_board::{Board, LinkFacts, SimBoard};
 use motion_drivers::qq2drv::{PINS, Qq2drvDriver, Qq2drvDriverConfig};
-use motion_drivers::spec::{DriverSpec, Param, SpecError};
+use motion_drivers::spec::{DeviceMachine, DriverSpec, Param, SpecError};
 use motion_drivers::{Driver, Model, PinInfo};
 
 /// The QuadQuad2Drv.
@@ -34,11 +34,11 @@ impl Board for Qq2drvBoard {
         }
     }
 
-    fn channel_count(&self, _variants: Variants) -> usize {
+    fn channel_count(&self, _machine: &DeviceMachine) -> usize {
         4
     }
 
-    fn pins(&self, _variants: Variants) -> &'static [PinInfo] {
+    fn pins(&self, _machine: &DeviceMachine) -> &'static [PinInfo] {
         PINS
     }
 

@@ -9,9 +9,11 @@
 
 use core::time::Duration;
 
-use motion_board::{Board, LinkFacts, SimBoard, Variants};
+use motion_board::{Board, LinkFacts, SimBoard};
 use motion_drivers::qsb::{QsbDriver, QsbDriverConfig, pins};
-use motion_drivers::spec::{DeviceMachine, DriverSpec, Param, QsbVariant, SpecError};
+use motion_drivers::spec::{
+    DeviceMachine, DriverSpec, Param, QsbDeviceKeys, QsbVariant, SpecError,
+};
 use motion_drivers::{Driver, Model, PinInfo};
 use motion_sim::qsb::{DriveEnable, QsbSim, QsbSimConfig, Variant};
 
@@ -39,12 +41,16 @@ impl Board for QsbBoard {
         }
     }
 
-    fn channel_count(&self, _variants: Variants) -> usize {
+    fn channel_count(&self, _machine: &DeviceMachine) -> usize {
         1
     }
 
-    fn pins(&self, variants: Variants) -> &'static [PinInfo] {
-        pins(variants.qsb.into())
+    fn pins(&self, machine: &DeviceMachine) -> &'static [PinInfo] {
+        pins(machine.get_or_default::<QsbDeviceKeys>().variant.into())
+    }
+
+    fn product_name(&self, machine: &DeviceMachine) -> &'static str {
+        machine.get_or_default::<QsbDeviceKeys>().variant.id()
     }
 
     fn build(&self, spec: &DriverSpec) -> Result<Box<dyn Driver>, SpecError> {
@@ -60,20 +66,16 @@ impl Board for QsbBoard {
     /// once per revolution of the model's 500-cycle encoder: a home search finds it within
     /// 2000 counts.)
     fn simulate(&self, spec: &DriverSpec, seed: u64) -> SimBoard {
-        let (counts_per_step, drive_enable) = match &spec.machine {
-            DeviceMachine::Qsb(keys) => (
-                keys.counts_per_step,
-                keys.enable_output.map(|bit| DriveEnable {
-                    bit,
-                    active_high: keys.enable_active_high.unwrap_or(false),
-                }),
-            ),
-            _ => (None, None),
-        };
+        let keys = spec.machine.get_or_default::<QsbDeviceKeys>();
+        let drive_enable = keys.enable_output.map(|bit| DriveEnable {
+            bit,
+            active_high: keys.enable_active_high.unwrap_or(false),
+        });
+        let counts_per_step = keys.counts_per_step;
         let counts_per_step =
             counts_per_step.unwrap_or_else(|| QsbDriverConfig::default().counts_per_step);
         SimBoard::Stream(Box::new(QsbSim::new(QsbSimConfig {
-            variant: match spec.qsb_variant {
+            variant: match keys.variant {
                 QsbVariant::M => Variant::M,
                 QsbVariant::S => Variant::S,
                 QsbVariant::D => Variant::D,

@@ -6,8 +6,10 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
-use motion_board::{Board, LinkFacts, SimBoard, Variants};
-use motion_drivers::spec::{DriverSpec, Param, SpecError, SpiDrive};
+use motion_board::{Board, LinkFacts, SimBoard};
+use motion_drivers::spec::{
+    DeviceMachine, DriverSpec, Param, SpecError, SpiDrive, SpimotorDeviceKeys,
+};
 use motion_drivers::spimotor::{PINS, SpimotorDriver, SpimotorDriverConfig};
 use motion_drivers::{Driver, Model, PinInfo};
 use motion_sim::spimotor::{Drive, SpimotorSim, SpimotorSimConfig};
@@ -33,14 +35,14 @@ impl Board for SpimotorBoard {
         }
     }
 
-    fn channel_count(&self, variants: Variants) -> usize {
-        match variants.drive {
+    fn channel_count(&self, machine: &DeviceMachine) -> usize {
+        match machine.get_or_default::<SpimotorDeviceKeys>().drive {
             SpiDrive::Stepper => 1,
             SpiDrive::Brushed => 2,
         }
     }
 
-    fn pins(&self, _variants: Variants) -> &'static [PinInfo] {
+    fn pins(&self, _machine: &DeviceMachine) -> &'static [PinInfo] {
         PINS
     }
 
@@ -57,7 +59,7 @@ impl Board for SpimotorBoard {
     fn simulate(&self, spec: &DriverSpec, seed: u64) -> SimBoard {
         SimBoard::Spi(Box::new(SpimotorSim::new(SpimotorSimConfig {
             address: spec.address as u8,
-            drive: match spec.drive {
+            drive: match spec.machine.get_or_default::<SpimotorDeviceKeys>().drive {
                 SpiDrive::Stepper => Drive::Stepper,
                 SpiDrive::Brushed => Drive::Brushed,
             },

@@ -8,8 +8,10 @@
 
 mod sim;
 
-use motion_board::{Board, LinkFacts, SimBoard, Variants};
-use motion_drivers::spec::{DriverSpec, PackVariant, Param, SpecError};
+use motion_board::{Board, LinkFacts, SimBoard};
+use motion_drivers::spec::{
+    DeviceMachine, DriverSpec, PackVariant, Param, SpecError, TmcpackDeviceKeys,
+};
 use motion_drivers::tmcpack::{TmcpackDriver, TmcpackDriverConfig, pins};
 use motion_drivers::{Driver, Model, PinInfo};
 
@@ -35,15 +37,15 @@ impl Board for TmcpackBoard {
         }
     }
 
-    fn channel_count(&self, variants: Variants) -> usize {
-        match variants.pack {
+    fn channel_count(&self, machine: &DeviceMachine) -> usize {
+        match machine.get_or_default::<TmcpackDeviceKeys>().variant {
             PackVariant::Sixpack => 6,
             PackVariant::Quadpack => 4,
         }
     }
 
-    fn pins(&self, variants: Variants) -> &'static [PinInfo] {
-        pins(variants.pack.into())
+    fn pins(&self, machine: &DeviceMachine) -> &'static [PinInfo] {
+        pins(machine.get_or_default::<TmcpackDeviceKeys>().variant.into())
     }
 
     fn build(&self, spec: &DriverSpec) -> Result<Box<dyn Driver>, SpecError> {

@@ -117,12 +117,6 @@ pub struct DeviceSpec {
     pub model: Model,
     /// Bus address (tmcpack 0..=255, spimotor even 2..=254; 0 for the others).
     pub address: u32,
-    /// tmcpack variant.
-    pub variant: PackVariant,
-    /// spimotor drive.
-    pub drive: SpiDrive,
-    /// qsb product variant (`variant = "qsb-m"`, default).
-    pub qsb_variant: QsbVariant,
     /// Seed of the simulated model (sim links).
     pub sim_seed: u64,
     /// The model's machine keys.
@@ -132,12 +126,12 @@ pub struct DeviceSpec {
 impl DeviceSpec {
     /// Channels the device has as configured (its board's count for its variant).
     pub fn channel_count(&self) -> usize {
-        crate::boards::board_of(self).channel_count(crate::boards::variants_of(self))
+        crate::boards::board_of(self).channel_count(&self.machine)
     }
 
     /// The device's I/O pins (its board's pin table for its variant).
     pub fn pins(&self) -> &'static [PinInfo] {
-        crate::boards::board_of(self).pins(crate::boards::variants_of(self))
+        crate::boards::board_of(self).pins(&self.machine)
     }
 }
 

@@ -8,7 +8,7 @@ use toml::Spanned;
 use super::Validator;
 use super::machine::{AxisContext, DeviceContext};
 use crate::config::raw::{RawAxis, RawDevice};
-use crate::config::{AxisSpec, DeviceSpec, PackVariant, QsbVariant, SpiDrive};
+use crate::config::{AxisSpec, DeviceSpec};
 
 impl Validator<'_, '_> {
     pub(super) fn device(
@@ -67,20 +67,15 @@ impl Validator<'_, '_> {
                 parsed
             });
         let fits = model.is_none_or(|model| self.device_keys_fit(index, d, model));
-        let mut variant = PackVariant::Sixpack;
-        let mut qsb_variant = QsbVariant::M;
         if let Some(v) = &d.variant {
             match (model, v.get_ref().as_str()) {
-                (Some(Model::TMCPACK), "sixpack") => variant = PackVariant::Sixpack,
-                (Some(Model::TMCPACK), "quadpack") => variant = PackVariant::Quadpack,
+                (Some(Model::TMCPACK), "sixpack" | "quadpack") => {}
                 (Some(Model::TMCPACK), other) => self.issue(
                     v.span(),
                     &key("variant"),
                     format!("unknown variant {other:?}; allowed: \"sixpack\" (6 motors), \"quadpack\" (4)"),
                 ),
-                (Some(Model::QSB), "qsb-m") => qsb_variant = QsbVariant::M,
-                (Some(Model::QSB), "qsb-s") => qsb_variant = QsbVariant::S,
-                (Some(Model::QSB), "qsb-d") => qsb_variant = QsbVariant::D,
+                (Some(Model::QSB), "qsb-m" | "qsb-s" | "qsb-d") => {}
                 (Some(Model::QSB), other) => self.issue(
                     v.span(),
                     &key("variant"),
@@ -89,11 +84,9 @@ impl Validator<'_, '_> {
                 _ => {}
             }
         }
-        let mut drive = SpiDrive::Stepper;
         if let Some(v) = &d.drive {
             match (model, v.get_ref().as_str()) {
-                (Some(Model::SPIMOTOR), "stepper") => drive = SpiDrive::Stepper,
-                (Some(Model::SPIMOTOR), "brushed") => drive = SpiDrive::Brushed,
+                (Some(Model::SPIMOTOR), "stepper" | "brushed") => {}
                 (Some(Model::SPIMOTOR), other) => self.issue(
                     v.span(),
                     &key("drive"),
@@ -142,9 +135,6 @@ impl Validator<'_, '_> {
             link: link?,
             model: model?,
             address: address?,
-            variant,
-            drive,
-            qsb_variant,
             sim_seed,
             machine: machine?,
         })

@@ -193,11 +193,10 @@ impl Validator<'_, '_> {
         raw: &RawDevice,
     ) -> Option<DeviceMachine> {
         Some(match model {
-            Model::QQ2DRV => DeviceMachine::Qq2drv,
-            Model::TMCPACK => DeviceMachine::Tmcpack(tmcpack::device_keys(self, ctx, raw)?),
-            Model::SPIMOTOR => DeviceMachine::Spimotor(spimotor::device_keys(self, ctx, raw)?),
-            Model::QSB => DeviceMachine::Qsb(qsb::device_keys(self, ctx, raw)?),
-            _ => DeviceMachine::Plain,
+            Model::TMCPACK => DeviceMachine::new(tmcpack::device_keys(self, ctx, raw)?),
+            Model::SPIMOTOR => DeviceMachine::new(spimotor::device_keys(self, ctx, raw)?),
+            Model::QSB => DeviceMachine::new(qsb::device_keys(self, ctx, raw)?),
+            _ => DeviceMachine::PLAIN,
         })
     }
 
@@ -209,11 +208,9 @@ impl Validator<'_, '_> {
         raw: &RawAxis,
     ) -> Option<AxisMachine> {
         Some(match model {
-            Model::QQ2DRV => AxisMachine::Qq2drv(qq2drv::axis_keys(self, ctx, raw)?),
-            Model::TMCPACK => AxisMachine::Tmcpack(tmcpack::axis_keys(self, ctx, raw)?),
-            Model::SPIMOTOR => AxisMachine::Spimotor,
-            Model::QSB => AxisMachine::Qsb,
-            _ => AxisMachine::Plain,
+            Model::QQ2DRV => AxisMachine::new(qq2drv::axis_keys(self, ctx, raw)?),
+            Model::TMCPACK => AxisMachine::new(tmcpack::axis_keys(self, ctx, raw)?),
+            _ => AxisMachine::PLAIN,
         })
     }
 
