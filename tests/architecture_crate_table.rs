@@ -75,10 +75,7 @@ fn crate_table(markdown: &str) -> Result<Vec<Row>, String> {
         if cells.len() < 5 {
             return Err(format!("line {}: not four cells: {line}", index + 1));
         }
-        let dirs: Vec<String> = backticked(cells[1])
-            .into_iter()
-            .flat_map(expand)
-            .collect();
+        let dirs: Vec<String> = backticked(cells[1]).into_iter().flat_map(expand).collect();
         if dirs.is_empty() {
             return Err(format!(
                 "line {}: the first cell names no crate directory in backticks",
@@ -171,7 +168,13 @@ fn root() -> PathBuf {
 fn manifests(root: &Path) -> BTreeMap<String, Manifest> {
     let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
     let output = Command::new(cargo)
-        .args(["metadata", "--no-deps", "--offline", "--format-version", "1"])
+        .args([
+            "metadata",
+            "--no-deps",
+            "--offline",
+            "--format-version",
+            "1",
+        ])
         .current_dir(root)
         .output()
         .expect("cargo metadata runs");
@@ -197,7 +200,11 @@ fn manifests(root: &Path) -> BTreeMap<String, Manifest> {
                 .and_then(|dir| dir.strip_prefix(root).ok())
                 .map(|dir| {
                     let text = dir.to_string_lossy().into_owned();
-                    if text.is_empty() { ".".to_owned() } else { text }
+                    if text.is_empty() {
+                        ".".to_owned()
+                    } else {
+                        text
+                    }
                 })
                 .expect("a manifest inside the workspace");
             let mut ours = BTreeSet::new();
