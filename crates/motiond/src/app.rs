@@ -97,12 +97,7 @@ pub fn run(config: ServerConfig, options: RunOptions) -> Result<(), ServerError>
     }
 
     let params = crate::params::machine_params(&config);
-    // `boards::build` answers with an anyhow error: kept whole (text and chain) as the
-    // source of a typed variant.
-    let drivers: Vec<Box<dyn Driver>> =
-        crate::boards::build(&config).map_err(|error| ServerError::Drivers {
-            source: error.into(),
-        })?;
+    let drivers: Vec<Box<dyn Driver>> = crate::boards::build(&config)?;
     let engine = Engine::new(config.engine_config(), drivers).map_err(ServerError::Engine)?;
     let links = open_links(&config)?;
 

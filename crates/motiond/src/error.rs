@@ -21,6 +21,8 @@ use motion_engine::EngineConfigError;
 use motion_ipc::PidFileError;
 use motion_link::LinkError;
 
+use crate::boards::BuildError;
+
 /// A real-time set-up step that could not be done (the server may go on without it).
 #[derive(Debug, thiserror::Error)]
 pub enum RtError {
@@ -274,13 +276,10 @@ pub enum ServerError {
     /// A signal handler could not be installed.
     #[error("installing signal handlers")]
     SignalHandlers(#[source] io::Error),
-    /// The config's boards could not be built into drivers (the error of
-    /// [`boards::build`](crate::boards::build), whose text says which device and key).
+    /// A device's board refused its config ([`boards::build`](crate::boards::build): which
+    /// device, which key, why).
     #[error(transparent)]
-    Drivers {
-        /// Why.
-        source: Box<dyn std::error::Error + Send + Sync>,
-    },
+    Drivers(#[from] BuildError),
     /// The engine refused the config.
     #[error("building the engine")]
     Engine(#[source] EngineConfigError),
@@ -323,7 +322,7 @@ mod tests {
         PublishSubscribeOpenError, PublishSubscribeOpenOrCreateError,
     };
 
-    use super::{Iceoryx2ServiceError, ServerError, ServiceError, ServiceHint};
+    use super::{BuildError, Iceoryx2ServiceError, ServerError, ServiceError, ServiceHint};
 
     fn hint_of(error: &ServiceError) -> ServiceHint {
         match error {
@@ -385,13 +384,16 @@ mod tests {
     }
 
     #[test]
-    fn a_drivers_error_keeps_the_text_and_chain_of_what_boards_returned() {
-        let built = anyhow::anyhow!("key `address` is 300, above 255").context("device `six`");
-        let expected = format!("{built:#}");
-        let error = ServerError::Drivers {
-            source: built.into(),
-        };
-        assert_eq!(error.to_string(), "device `six`");
-        assert_eq!(format!("{:#}", anyhow::Error::from(error)), expected);
+    fn a_board_that_refuses_its_config_is_named_with_the_key() {
+        let error = ServerError::from(BuildError {
+            device: "six".to_owned(),
+            key: "device[1].address".to_owned(),
+            message: "300 is above 255".to_owned(),
+        });
+        assert!(matches!(error, ServerError::Drivers(_)));
+        assert_eq!(
+            error.to_string(),
+            "device `six`: device[1].address: 300 is above 255"
+        );
     }
 }
