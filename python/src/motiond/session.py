@@ -16,9 +16,9 @@ from __future__ import annotations
 import time
 import weakref
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Callable, Iterator, Optional, Protocol, Sequence, Union
+from typing import TYPE_CHECKING, Callable, Iterator, Optional, Protocol, Union
 
-from .ipc import CommandKind, ParamOwner, Reason, Target
+from .ipc import ParamOwner, Reason
 
 if TYPE_CHECKING:  # pragma: no cover
     from .frames import Frame
@@ -144,34 +144,18 @@ class JogRegistry:
 
 
 class Session(Protocol):
-    """The calls a client's handles make on it (:class:`~motiond.Client` and
-    :class:`~motiond.RemoteClient` both answer them)."""
+    """The calls a client's handles make on it: :class:`~motiond.Client` and
+    :class:`~motiond.RemoteClient` both answer them, with the signatures of
+    :meth:`Client.command <motiond.Client.command>`, :meth:`~motiond.Client.wait_frames`,
+    :meth:`~motiond.Client.wait_ready`, :meth:`~motiond.Client.latest` and
+    :meth:`~motiond.Client.goal_tick`."""
 
     _jogs: JogRegistry
+    latest: Callable[[], "Frame"]
+    command: Callable[..., Accepted]
+    wait_frames: Callable[..., "Frame"]
+    wait_ready: Callable[..., "Frame"]
+    goal_tick: Callable[[int], int]
 
     @property
     def info(self) -> "ServerInfo": ...
-
-    def latest(self) -> "Frame": ...
-
-    def command(
-        self,
-        index: int,
-        kind: Union[CommandKind, int],
-        values: Sequence[float] = (0.0, 0.0, 0.0),
-        target: Union[Target, int] = Target.AXIS,
-        label: Optional[str] = None,
-    ) -> Accepted: ...
-
-    def wait_frames(
-        self,
-        what: str,
-        timeout: float,
-        done: Callable[["Frame"], bool],
-        subject: str = "the server",
-        since: int = 0,
-    ) -> "Frame": ...
-
-    def wait_ready(self, timeout: float = 5.0, axes: Optional[Sequence[str]] = None) -> "Frame": ...
-
-    def goal_tick(self, index: int) -> int: ...
