@@ -4,6 +4,10 @@
 //! (optional ones too; dev-dependencies are not the architecture). Third-party crates may be
 //! named there too, but only ones the crate depends on.
 //!
+//! A cell may group crates with braces (`crates/protocols/{qq2drv,qsb}`) or a `*`
+//! (`crates/boards/*`, `board-*`: every crate of ours that matches), so that adding a board
+//! crate under `crates/boards/` needs no new row.
+//!
 //! The manifests are read through `cargo metadata --no-deps` (workspace globs, inherited
 //! dependencies and renames are cargo's business).
 
@@ -55,7 +59,38 @@ fn names_crates(item: &str) -> bool {
     !item.is_empty()
         && item
             .chars()
-            .all(|c| c.is_ascii_alphanumeric() || "-_{},".contains(c))
+            .all(|c| c.is_ascii_alphanumeric() || "-_{},*".contains(c))
+}
+
+/// Whether `text` matches `pattern`, where one `*` stands for any run of characters but `/`.
+fn matches(pattern: &str, text: &str) -> bool {
+    match pattern.split_once('*') {
+        None => pattern == text,
+        Some((head, tail)) => {
+            text.len() >= head.len() + tail.len()
+                && text.starts_with(head)
+                && text.ends_with(tail)
+                && !text[head.len()..text.len() - tail.len()].contains('/')
+        }
+    }
+}
+
+/// The items of `stated` with each `*` pattern replaced by the `known` names it matches.
+fn resolve<'a>(stated: impl IntoIterator<Item = &'a String>, known: &[&str]) -> Vec<String> {
+    stated
+        .into_iter()
+        .flat_map(|item| {
+            if item.contains('*') {
+                known
+                    .iter()
+                    .filter(|name| matches(item, name))
+                    .map(|name| (*name).to_owned())
+                    .collect()
+            } else {
+                vec![item.clone()]
+            }
+        })
+        .collect()
 }
 
 /// The rows of the table whose header is `| crate | owns | depends on | …`.
@@ -102,10 +137,21 @@ fn disagreements(rows: &[Row], manifests: &BTreeMap<String, Manifest>) -> Vec<St
         .iter()
         .map(|(name, manifest)| (manifest.dir.as_str(), (name, manifest)))
         .collect();
+    let dirs: Vec<&str> = by_dir.keys().copied().collect();
+    let names: Vec<&str> = manifests.keys().map(String::as_str).collect();
     let mut problems = Vec::new();
     let mut seen = BTreeSet::new();
     for row in rows {
-        for dir in &row.dirs {
+        for pattern in row.dirs.iter().filter(|dir| dir.contains('*')) {
+            if !dirs.iter().any(|dir| matches(pattern, dir)) {
+                problems.push(format!(
+                    "line {}: `{pattern}` matches no workspace crate's directory",
+                    row.line
+                ));
+            }
+        }
+        let depends_on: BTreeSet<String> = resolve(&row.depends_on, &names).into_iter().collect();
+        for dir in &resolve(&row.dirs, &dirs) {
             let Some((name, manifest)) = by_dir.get(dir.as_str()) else {
                 problems.push(format!(
                     "line {}: `{dir}` is not a workspace crate's directory",
@@ -116,8 +162,7 @@ fn disagreements(rows: &[Row], manifests: &BTreeMap<String, Manifest>) -> Vec<St
             if !seen.insert(dir.clone()) {
                 problems.push(format!("line {}: `{dir}` has a row already", row.line));
             }
-            let stated_ours: BTreeSet<String> = row
-                .depends_on
+            let stated_ours: BTreeSet<String> = depends_on
                 .iter()
                 .filter(|dep| manifests.contains_key(*dep))
                 .cloned()
@@ -134,8 +179,7 @@ fn disagreements(rows: &[Row], manifests: &BTreeMap<String, Manifest>) -> Vec<St
                     row.line
                 ));
             }
-            for other in row
-                .depends_on
+            for other in depends_on
                 .iter()
                 .filter(|dep| !manifests.contains_key(*dep))
             {
@@ -281,6 +325,37 @@ fn a_true_table_with_groups_code_and_third_party_names_passes() {
          | `crates/drivers` | drivers | the codecs `{aa,bb}`, `thiserror`; see `drivers::spec` | x |\n",
     );
     assert_eq!(problems, Vec::<String>::new());
+}
+
+#[test]
+fn a_star_covers_every_crate_it_matches_and_nothing_else() {
+    let mut workspace = small_workspace();
+    workspace.insert("cc".to_owned(), manifest("crates/codecs/cc", &[], &[]));
+    let rows = crate_table(&format!(
+        "{TABLE_HEAD}| `crates/codecs/*` | codecs | nothing of ours | x |\n\
+         | `crates/drivers` | drivers | every codec `{{aa,bb}}` | x |\n\
+         | `crates/boards/*` | boards | nothing | x |\n"
+    ))
+    .expect("a table");
+    assert_eq!(
+        disagreements(&rows, &workspace),
+        vec!["line 5: `crates/boards/*` matches no workspace crate's directory".to_owned()]
+    );
+    let all = crate_table(&format!(
+        "{TABLE_HEAD}| `crates/codecs/*` | codecs | nothing of ours | x |\n\
+         | `crates/drivers` | drivers | every codec `*` | x |\n"
+    ))
+    .expect("a table");
+    // `*` names cc and drivers too, which drivers does not depend on.
+    assert_eq!(
+        disagreements(&all, &workspace),
+        vec![
+            "line 4: the row says drivers depends on `cc`; its [dependencies] do not".to_owned(),
+            "line 4: the row says drivers depends on `drivers`; its [dependencies] do not"
+                .to_owned(),
+        ]
+    );
+    assert!(matches("board-*", "board-qsb") && !matches("crates/*", "crates/boards/qsb"));
 }
 
 #[test]
