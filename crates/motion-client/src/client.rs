@@ -200,9 +200,10 @@ impl<S: Service> Client<S> {
     /// This client's iceoryx2 node (identity, signal handling).
     pub(crate) fn make_node(options: &ClientBuilder) -> Result<Node<S>, ConnectError> {
         let node_name =
-            NodeName::new(&options.node_name).map_err(|error| ConnectError::BadName {
+            NodeName::new(&options.node_name).map_err(|error| ConnectError::InvalidName {
                 name: options.node_name.clone(),
-                detail: format!("{error:?}"),
+                kind: "node",
+                source: error.into(),
             })?;
         let node = ports::create_node::<S>(&node_name, options.signal_handling)
             .map_err(|error| ConnectError::ipc("create a node", error))?;
@@ -236,10 +237,9 @@ impl<S: Service> Client<S> {
         let info_timeout = options.connect_timeout.max(INFO_WAIT);
         let info_deadline = (started + info_timeout).max(Instant::now() + INFO_WAIT);
         let description = loop {
-            let received = info.refresh().map_err(|error| ConnectError::Ipc {
-                what: "receive the server description",
-                detail: error.to_string(),
-            })?;
+            let received = info
+                .refresh()
+                .map_err(|error| ConnectError::Description(Box::new(error)))?;
             if let Some(description) = received {
                 break description;
             }
@@ -444,7 +444,11 @@ impl<S: Service> Client<S> {
     /// never change while a server runs).
     pub fn info(&self) -> Result<Info<S>, ClientError> {
         self.refresh_info()?
-            .ok_or_else(|| ClientError::ipc("read the server description", "none received"))
+            .ok_or_else(|| ClientError::NotPublished {
+                what: "server description",
+                service: self.names.info(),
+                why: "none received from the server that runs now".to_owned(),
+            })
     }
 
     /// The newest [`ServerStats`] (published about once a second); `None` until the first.

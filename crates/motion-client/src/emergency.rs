@@ -17,6 +17,7 @@ use motion_ipc::{
 use nix::sys::signal::{Signal, kill};
 use nix::unistd::Pid;
 
+use crate::error::with_causes;
 use crate::ports::{self, CommandPorts, Opening, service_name};
 use crate::{Accepted, ClientError, ConnectError, EstopError};
 
@@ -66,10 +67,14 @@ impl fmt::Display for EstopPath {
     }
 }
 
-fn node<S: Service>(name: &str) -> Result<Node<S>, String> {
-    let name = NodeName::new(name).map_err(|error| format!("{error:?}"))?;
-    crate::ports::create_node::<S>(&name, SignalHandlingMode::Disabled)
-        .map_err(|error| format!("cannot create an iceoryx2 node: {error:?}"))
+fn node<S: Service>(name: &str) -> Result<Node<S>, ConnectError> {
+    let node_name = NodeName::new(name).map_err(|error| ConnectError::InvalidName {
+        name: name.to_owned(),
+        kind: "node",
+        source: error.into(),
+    })?;
+    crate::ports::create_node::<S>(&node_name, SignalHandlingMode::Disabled)
+        .map_err(|error| ConnectError::ipc("create a node", error))
 }
 
 /// Sends `kind` for every axis on a fresh command port and waits for the reply until
@@ -122,10 +127,7 @@ fn command_all<S: Service>(
 /// it).
 pub fn stop_all<S: Service>(server: &str, timeout: Duration) -> Result<Accepted, ClientError> {
     let deadline = Instant::now() + timeout;
-    let node = node::<S>("motion-stop").map_err(|detail| ClientError::Ipc {
-        what: "create a node",
-        detail,
-    })?;
+    let node = node::<S>("motion-stop")?;
     let opening = Opening::new(server, timeout);
     let reply = command_all(&node, server, &opening, CommandKind::Stop, deadline)?;
     match reply.result() {
@@ -230,7 +232,7 @@ pub fn estop<S: Service>(server: &str, timeout: Duration) -> Result<Estop, Estop
                         ClientError::NoServer { .. }
                             | ClientError::Connect(ConnectError::NoServer { .. })
                     );
-                    error.to_string()
+                    with_causes(&error)
                 }
             };
             // 2. The estop event service.
@@ -245,16 +247,16 @@ pub fn estop<S: Service>(server: &str, timeout: Duration) -> Result<Estop, Estop
             };
             (command, event)
         }
-        Err(detail) => (detail.clone(), detail.clone()),
+        Err(error) => (with_causes(error), with_causes(error)),
     };
     // 3. SIGUSR1 to the server's process.
     match signal_server::<S>(server, &names) {
         Ok(pid) => match &node {
             Ok(node) => confirm(node, server, EstopPath::Signal { pid }, deadline),
-            Err(detail) => Err(EstopError::unconfirmed(
+            Err(error) => Err(EstopError::unconfirmed(
                 server,
                 EstopPath::Signal { pid },
-                format!("no frame can be read: {detail}"),
+                format!("no frame can be read: {}", with_causes(error)),
             )),
         },
         Err((found, signal)) => Err(EstopError {
@@ -304,13 +306,15 @@ fn see_latched<S: Service>(
     let names = ServiceNames::new(server);
     let opening = Opening::once(server);
     let (subscriber, _) = ports::open_subscriber::<S, MotionFrame>(node, &opening, &names.frame())
-        .map_err(|error| Unseen::NoSlot(format!("no frame can be read: {error}")))?;
+        .map_err(|error| {
+            Unseen::NoSlot(format!("no frame can be read: {}", with_causes(&error)))
+        })?;
     let mut newest = None;
     loop {
-        while let Some(sample) = subscriber
-            .receive()
-            .map_err(|error| Unseen::NoSlot(format!("frames cannot be read: {error:?}")))?
-        {
+        while let Some(sample) = subscriber.receive().map_err(|error| {
+            let error = ClientError::ipc("receive a frame", error);
+            Unseen::NoSlot(format!("frames cannot be read: {}", with_causes(&error)))
+        })? {
             let frame = sample.payload();
             newest = Some(frame.tick);
             if frame.tick >= from_tick && frame.flags().contains(FrameFlags::ESTOP_LATCHED) {
@@ -336,12 +340,18 @@ fn refused(reason: Reason) -> String {
 /// Notifies the estop event; the number of listeners notified, or (service seen, why not).
 fn notify_estop<S: Service>(node: &Node<S>, names: &ServiceNames) -> Result<usize, (bool, String)> {
     let service = names.estop();
-    let name = service_name(&service, "").map_err(|error| (false, error.to_string()))?;
+    let name = service_name(&service, "").map_err(|error| (false, with_causes(&error)))?;
     let factory = node
         .service_builder(&name)
         .event()
         .open()
-        .map_err(|error| (false, format!("cannot open {service}: {error:?}")))?;
+        .map_err(|error| {
+            let error = ConnectError::ipc("open an event service", error);
+            (
+                false,
+                format!("cannot open {service}: {}", with_causes(&error)),
+            )
+        })?;
     let notifier = factory
         .notifier_builder()
         .create()
@@ -354,12 +364,18 @@ fn notify_estop<S: Service>(node: &Node<S>, names: &ServiceNames) -> Result<usiz
                 }
                 .to_string(),
             ),
-            other => (true, format!("cannot create a notifier: {other:?}")),
+            other => (
+                true,
+                with_causes(&ConnectError::ipc("create a notifier", other)),
+            ),
         })?;
     match notifier.notify() {
         Ok(0) => Err((true, format!("nobody listens on {service}"))),
         Ok(listeners) => Ok(listeners),
-        Err(error) => Err((true, format!("notify failed: {error:?}"))),
+        Err(error) => Err((
+            true,
+            with_causes(&ClientError::ipc("notify the estop event", error)),
+        )),
     }
 }
 
@@ -401,7 +417,10 @@ fn signal_server<S: Service>(server: &str, names: &ServiceNames) -> Result<i32, 
         CallbackProgression::Continue
     });
     if let Err(error) = listed {
-        return Err((true, format!("cannot list iceoryx2 nodes: {error:?}")));
+        return Err((
+            true,
+            with_causes(&ClientError::ipc("list the nodes", error)),
+        ));
     }
     let pid = process.pid;
     match node_found {

@@ -6,6 +6,8 @@ use core::time::Duration;
 
 use motion_ipc::{CommandKind, DeviceState, FaultCode, Reason};
 
+use crate::Iceoryx2Error;
+
 /// Why [`ClientBuilder::connect`](crate::ClientBuilder::connect) failed.
 #[derive(Debug, thiserror::Error)]
 pub enum ConnectError {
@@ -50,13 +52,26 @@ pub enum ConnectError {
         /// This client's schema version.
         client: u32,
     },
-    /// The instance name does not make a valid iceoryx2 service or node name.
+    /// The instance name does not make a valid network key (remote clients, feature
+    /// `zenoh`).
     #[error("\"{name}\" is not a valid server name: {detail}")]
     BadName {
         /// The name given.
         name: String,
-        /// What iceoryx2 said.
+        /// Why not, in words.
         detail: String,
+    },
+    /// The instance name, or the node name, does not make a valid iceoryx2 service or node
+    /// name.
+    #[error("\"{name}\" is not a valid iceoryx2 {kind} name")]
+    InvalidName {
+        /// The name given.
+        name: String,
+        /// "service" or "node".
+        kind: &'static str,
+        /// iceoryx2's error.
+        #[source]
+        source: Iceoryx2Error,
     },
     /// Every port of a kind that the server's service allows is taken by other clients.
     #[error(
@@ -70,13 +85,17 @@ pub enum ConnectError {
         port: &'static str,
     },
     /// iceoryx2 failed to create a node, port or wait set.
-    #[error("iceoryx2 could not {what}: {detail}")]
+    #[error("iceoryx2 could not {what}")]
     Ipc {
-        /// What was being done.
+        /// What was being done ("create a node", "open an event service").
         what: &'static str,
-        /// The iceoryx2 error.
-        detail: String,
+        /// iceoryx2's error.
+        #[source]
+        source: Iceoryx2Error,
     },
+    /// The server's description could not be read while connecting.
+    #[error("could not read the server description")]
+    Description(#[source] Box<ClientError>),
     /// No `motion-bridge` for the instance answered at the endpoint (remote clients,
     /// feature `zenoh`).
     #[error(
@@ -315,12 +334,13 @@ pub enum ClientError {
     #[error("interrupted")]
     Interrupted,
     /// iceoryx2 failed to send, receive or wait.
-    #[error("iceoryx2 could not {what}: {detail}")]
+    #[error("iceoryx2 could not {what}")]
     Ipc {
-        /// What was being done.
+        /// What was being done ("send a command", "receive a sample").
         what: &'static str,
-        /// The iceoryx2 error.
-        detail: String,
+        /// iceoryx2's error.
+        #[source]
+        source: Iceoryx2Error,
     },
     /// The bridge between this client and the server refused the command itself (remote
     /// clients, feature `zenoh`); the server never saw it. `code` says why: `not-allowed`
@@ -362,10 +382,10 @@ impl ClientError {
         }
     }
 
-    pub(crate) fn ipc(what: &'static str, error: impl core::fmt::Debug) -> Self {
+    pub(crate) fn ipc(what: &'static str, error: impl Into<Iceoryx2Error>) -> Self {
         Self::Ipc {
             what,
-            detail: format!("{error:?}"),
+            source: error.into(),
         }
     }
 
@@ -387,12 +407,24 @@ impl ClientError {
 }
 
 impl ConnectError {
-    pub(crate) fn ipc(what: &'static str, error: impl core::fmt::Debug) -> Self {
+    pub(crate) fn ipc(what: &'static str, error: impl Into<Iceoryx2Error>) -> Self {
         Self::Ipc {
             what,
-            detail: format!("{error:?}"),
+            source: error.into(),
         }
     }
+}
+
+/// `error` and its sources, joined by ": " (the words of every layer, iceoryx2's last).
+pub(crate) fn with_causes(error: &dyn std::error::Error) -> String {
+    let mut text = error.to_string();
+    let mut cause = error.source();
+    while let Some(inner) = cause {
+        text.push_str(": ");
+        text.push_str(&inner.to_string());
+        cause = inner.source();
+    }
+    text
 }
 
 /// No path delivered an e-stop (see [`estop`](crate::estop)): what each one hit.

@@ -235,12 +235,9 @@ impl<'c, S: Service> JogGuard<'c, S> {
                 *entry
             })
         };
-        let Some(entry) = entry else {
-            return Err(ClientError::ipc(
-                "change a jog",
-                "the guard is no longer active",
-            ));
-        };
+        // The entry lives as long as the guard: only `finish` (stop or drop, both taking
+        // the guard) removes it.
+        let entry = entry.expect("a jog guard's entry lives as long as the guard");
         let result = self.client.command(entry.axis, entry.kind, entry.values);
         self.client
             .note_renewal(self.id, result.as_ref().err().and_then(ClientError::reason));

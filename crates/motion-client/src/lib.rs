@@ -97,6 +97,7 @@ mod error;
 #[cfg(feature = "zenoh")]
 mod feed;
 mod frames;
+mod iceoryx2_error;
 mod jog;
 #[cfg(feature = "zenoh")]
 mod link;
@@ -120,6 +121,7 @@ pub use command::Accepted;
 pub use emergency::{Estop, EstopPath, estop, stop_all};
 pub use error::{ClientError, ConnectError, DeviceStatus, EstopError, Restart};
 pub use frames::{FIRST_FRAME_TIMEOUT, Frames};
+pub use iceoryx2_error::Iceoryx2Error;
 pub use jog::JogGuard;
 pub use motion_ipc as ipc;
 pub use received::Received;

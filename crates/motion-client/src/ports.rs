@@ -87,9 +87,10 @@ impl<'a> Opening<'a> {
 }
 
 pub(crate) fn service_name(name: &str, server: &str) -> Result<ServiceName, ConnectError> {
-    ServiceName::new(name).map_err(|error| ConnectError::BadName {
+    ServiceName::new(name).map_err(|error| ConnectError::InvalidName {
         name: server.to_owned(),
-        detail: format!("{error:?}"),
+        kind: "service",
+        source: error.into(),
     })
 }
 

@@ -6,7 +6,6 @@ use std::io::{IsTerminal, Write};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
 
-use anyhow::{Context, bail};
 use motion_drivers::Driver;
 use motion_engine::Engine;
 use motion_ipc::{ClientId, DeviceState, ServerPidFile, read_text};
@@ -15,6 +14,7 @@ use rtrb::RingBuffer;
 
 use crate::boards::sim_link;
 use crate::config::{ServerConfig, Transport};
+use crate::error::ServerError;
 use crate::io::{self, IoThread, LinkPort};
 use crate::rt::{IoRt, monotonic_now};
 use crate::stats::format_ns;
@@ -30,7 +30,7 @@ pub struct RunOptions {
 }
 
 /// Opens every link of `config` (sim links with their models).
-fn open_links(config: &ServerConfig) -> anyhow::Result<Vec<Box<dyn Link>>> {
+fn open_links(config: &ServerConfig) -> Result<Vec<Box<dyn Link>>, ServerError> {
     let mut links: Vec<Box<dyn Link>> = Vec::with_capacity(config.links.len());
     for (index, spec) in config.links.iter().enumerate() {
         let link: Box<dyn Link> = match &spec.transport {
@@ -39,7 +39,7 @@ fn open_links(config: &ServerConfig) -> anyhow::Result<Vec<Box<dyn Link>>> {
                 motion_link::serial::SerialConfig::new(path.to_string_lossy(), *baud),
             )
             .create()
-            .with_context(|| format!("link `{}`", spec.name))?,
+            .map_err(|source| link_error(&spec.name, source))?,
             Transport::Spidev {
                 path,
                 speed_hz,
@@ -50,33 +50,40 @@ fn open_links(config: &ServerConfig) -> anyhow::Result<Vec<Box<dyn Link>>> {
                 *speed_hz,
             ))
             .create()
-            .with_context(|| format!("link `{}`", spec.name))?,
+            .map_err(|source| link_error(&spec.name, source))?,
             Transport::SpiSocket { path } => LinkConfig::SpiSocket(
                 motion_link::spi_socket::SpiSocketConfig::new(path.to_string_lossy()),
             )
             .create()
-            .with_context(|| format!("link `{}`", spec.name))?,
+            .map_err(|source| link_error(&spec.name, source))?,
         };
         links.push(link);
     }
     Ok(links)
 }
 
+fn link_error(link: &str, source: motion_link::LinkError) -> ServerError {
+    ServerError::Link {
+        link: link.to_owned(),
+        source,
+    }
+}
+
 /// Runs the server until SIGINT/SIGTERM. A second signal exits at once.
-pub fn run(config: ServerConfig, options: RunOptions) -> anyhow::Result<()> {
+pub fn run(config: ServerConfig, options: RunOptions) -> Result<(), ServerError> {
     let shutdown = Arc::new(AtomicBool::new(false));
     for signal in [signal_hook::consts::SIGINT, signal_hook::consts::SIGTERM] {
         // Order matters: the conditional exit sees the flag set by an earlier signal.
         signal_hook::flag::register_conditional_shutdown(signal, 130, Arc::clone(&shutdown))
-            .context("installing signal handlers")?;
+            .map_err(ServerError::SignalHandlers)?;
         signal_hook::flag::register(signal, Arc::clone(&shutdown))
-            .context("installing signal handlers")?;
+            .map_err(ServerError::SignalHandlers)?;
     }
     // The e-stop of last resort: a process that can signal us (same user, or root) latches
     // the e-stop even when every service slot is taken.
     let estop_signal = Arc::new(AtomicBool::new(false));
     signal_hook::flag::register(signal_hook::consts::SIGUSR1, Arc::clone(&estop_signal))
-        .context("installing signal handlers")?;
+        .map_err(ServerError::SignalHandlers)?;
     for warning in &config.warnings {
         tracing::warn!("{}", warning.warning_line(&config.path));
     }
@@ -91,7 +98,7 @@ pub fn run(config: ServerConfig, options: RunOptions) -> anyhow::Result<()> {
 
     let params = crate::params::machine_params(&config);
     let drivers: Vec<Box<dyn Driver>> = crate::boards::build(&config)?;
-    let engine = Engine::new(config.engine_config(), drivers).context("building the engine")?;
+    let engine = Engine::new(config.engine_config(), drivers).map_err(ServerError::Engine)?;
     let links = open_links(&config)?;
 
     let epoch = monotonic_now();
@@ -109,7 +116,10 @@ pub fn run(config: ServerConfig, options: RunOptions) -> anyhow::Result<()> {
     let (mut fifo_refused, mut pin_refused) = (false, false);
     for (spec, link) in config.links.iter().zip(links) {
         let (port, mut thread) = io::spawn(&spec.name, link, io_options, Arc::clone(&io_stop))
-            .with_context(|| format!("starting the I/O thread of link `{}`", spec.name))?;
+            .map_err(|source| ServerError::IoThread {
+                link: spec.name.clone(),
+                source,
+            })?;
         // Every thread asks the same of the same process's limits: a refusal is reported
         // once (the first thread's), and what one thread was refused counts as not had.
         let outcome = thread.take_rt().unwrap_or_default();
@@ -179,7 +189,7 @@ pub fn run(config: ServerConfig, options: RunOptions) -> anyhow::Result<()> {
     let tick_thread = std::thread::Builder::new()
         .name("tick".into())
         .spawn(move || tick::run(setup))
-        .context("starting the tick thread")?;
+        .map_err(ServerError::TickThread)?;
 
     let systemd = Systemd {
         supervisor: supervisor.as_mut(),
@@ -276,7 +286,7 @@ fn housekeeping(
     mut dead_clients: rtrb::Producer<ClientId>,
     liveness: Liveness<'_>,
     mut systemd: Systemd<'_>,
-) -> anyhow::Result<()> {
+) -> Result<(), ServerError> {
     let status_line = std::io::stderr().is_terminal();
     let mut server_node = 0u128;
     let mut next_liveness = monotonic_now();
@@ -293,7 +303,7 @@ fn housekeeping(
         systemd.poll();
         while let Ok(report) = reports.pop() {
             match report {
-                Report::Failed(error) => bail!("{error}"),
+                Report::Failed(error) => return Err(error.into()),
                 Report::Started { rt, node_id } => {
                     server_node = node_id;
                     match pid_file.0.write_for_this_process(node_id) {
@@ -396,7 +406,7 @@ fn housekeeping(
                         );
                     }
                     if let Some(error) = pid_file_error {
-                        bail!("{error}");
+                        return Err(error.into());
                     }
                     return Ok(());
                 }

@@ -58,7 +58,8 @@ fn main() -> ExitCode {
     ) {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {
-            eprintln!("motiond: {error:#}");
+            // Every layer's words, down to iceoryx2's or the system's.
+            eprintln!("motiond: {:#}", anyhow::Error::from(error));
             ExitCode::from(1)
         }
     }

@@ -144,9 +144,9 @@ impl Factories {
 }
 
 fn service_name(name: String) -> Result<ServiceName, ServiceError> {
-    name.as_str().try_into().map_err(|e| ServiceError::Name {
+    ServiceName::new(&name).map_err(|e| ServiceError::Name {
         what: "service",
-        detail: format!("{e:?}"),
+        source: e.into(),
         name,
     })
 }
@@ -158,22 +158,18 @@ impl Services {
     pub fn create(name: &str, max_clients: usize) -> Result<Self, ServiceError> {
         let names = ServiceNames::new(name);
         let node_name = names.server_node();
-        let iceoryx_name: NodeName =
-            node_name
-                .as_str()
-                .try_into()
-                .map_err(|e| ServiceError::Name {
-                    what: "node",
-                    name: node_name.clone(),
-                    detail: format!("{e:?}"),
-                })?;
+        let iceoryx_name = NodeName::new(&node_name).map_err(|e| ServiceError::Name {
+            what: "node",
+            name: node_name.clone(),
+            source: e.into(),
+        })?;
         // iceoryx2 can refuse a node for a moment while another process removes a dead
         // process's node records: a few tries.
         let mut attempt = 0;
         let node = loop {
             match NodeBuilder::new().name(&iceoryx_name).create::<Ipc>() {
                 Ok(node) => break node,
-                Err(e) if attempt >= 4 => return Err(ServiceError::Node(format!("{e:?}"))),
+                Err(e) if attempt >= 4 => return Err(ServiceError::Node(e)),
                 Err(_) => {
                     attempt += 1;
                     std::thread::sleep(core::time::Duration::from_millis(20));

@@ -32,13 +32,7 @@ _iox2.set_log_level_from_env_or(_iox2.LogLevel.Error)
 
 from . import ipc  # noqa: E402
 from .axis import Axis, AxisStatus  # noqa: E402
-from .client import (  # noqa: E402
-    DEFAULT_CONNECT_TIMEOUT,
-    DEFAULT_REPLY_TIMEOUT,
-    Accepted,
-    Client,
-    Param,
-)
+from .client import Client  # noqa: E402
 from .errors import *  # noqa: E402,F401,F403
 from .errors import __all__ as _error_names  # noqa: E402
 from .frames import Frame, Received  # noqa: E402
@@ -55,6 +49,12 @@ from .ipc import (  # noqa: E402
 )
 from .jog import Jog  # noqa: E402
 from .remote import RemoteClient  # noqa: E402
+from .session import (  # noqa: E402
+    DEFAULT_CONNECT_TIMEOUT,
+    DEFAULT_REPLY_TIMEOUT,
+    Accepted,
+    Param,
+)
 from .signal import Signal, SignalStatus  # noqa: E402
 
 __version__ = "0.1.0"

@@ -20,9 +20,10 @@ from .ipc import (
     to_enum,
 )
 
+from .jog import Jog
+
 if TYPE_CHECKING:  # pragma: no cover
-    from .client import Accepted, Client
-    from .jog import Jog
+    from .session import Accepted, Session
 
 __all__ = ["Axis", "AxisStatus"]
 
@@ -131,7 +132,7 @@ class Axis:
 
     __slots__ = ("_client", "_index")
 
-    def __init__(self, client: "Client", index: int) -> None:
+    def __init__(self, client: "Session", index: int) -> None:
         self._client = client
         self._index = index
 
@@ -239,14 +240,10 @@ class Axis:
         """Starts a jog at ``velocity`` units/s reached with ``accel`` (``RampVelocity``) and
         returns a :class:`~motiond.jog.Jog` that renews it while the program calls into
         the client, and stops the axis when it ends (``with axis.jog(5.0): ...``)."""
-        from .jog import Jog
-
         return Jog(self._client, self._index, CommandKind.RAMP_VELOCITY, (velocity, accel, 0.0))
 
     def jog_power(self, power: float) -> "Jog":
         """Open-loop power under a :class:`~motiond.jog.Jog`, like :meth:`jog`."""
-        from .jog import Jog
-
         return Jog(self._client, self._index, CommandKind.POWER, (power, 0.0, 0.0))
 
     # --- waits -----------------------------------------------------------------------------

@@ -4,13 +4,12 @@ from __future__ import annotations
 
 import ctypes
 import time
-import weakref
-from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Callable, Iterator, List, Optional, Sequence, Union
+from typing import Any, Callable, ClassVar, Iterator, List, Optional, Sequence, Type, Union
 
 import iceoryx2 as iox2
 
 from . import errors
+from .axis import Axis
 from .errors import (
     EstopNotSeen,
     IncompatibleServer,
@@ -44,52 +43,22 @@ from .ipc import (
     service_name,
     to_enum,
 )
-
-if TYPE_CHECKING:  # pragma: no cover
-    from .axis import Axis
-    from .jog import Jog
-    from .signal import Signal
+from .session import (
+    DEFAULT_CONNECT_TIMEOUT,
+    DEFAULT_REPLY_TIMEOUT,
+    Accepted,
+    JogRegistry,
+    Param,
+    refresh_period,
+)
+from .signal import Signal
 
 __all__ = ["Client", "Accepted", "Param", "DEFAULT_CONNECT_TIMEOUT", "DEFAULT_REPLY_TIMEOUT"]
 
-#: How long :class:`Client` retries by default before saying no server runs, s.
-DEFAULT_CONNECT_TIMEOUT = 2.0
-#: How long a command waits for its reply by default, s.
-DEFAULT_REPLY_TIMEOUT = 1.0
 # Longest single sleep of any wait: bounds a missed wake-up and how late Ctrl-C is seen.
 _WAIT_CAP = 0.05
 # Longest single sleep while waiting for a command reply.
 _REPLY_POLL_CAP = 0.002
-# Shortest jog renewal period, whatever the deadman.
-_MIN_REFRESH = 0.005
-
-
-@dataclass(frozen=True)
-class Accepted:
-    """A command the server accepted."""
-
-    #: The sequence number the client gave the request.
-    sequence: int
-    #: The tick in which the command took effect.
-    tick: int
-
-
-@dataclass(frozen=True)
-class Param:
-    """One machine parameter in effect (``motiond/<name>/params``)."""
-
-    #: ``ParamOwner.DEVICE`` or ``ParamOwner.AXIS``.
-    owner: Union[ParamOwner, int]
-    #: Device or axis index, config order.
-    owner_index: int
-    #: Device or axis name.
-    owner_name: str
-    #: The config key, dotted for tables (``current.standstill``).
-    key: str
-    #: The value in effect, with its unit (``50 %``).
-    value: str
-    #: ``True`` when the config file set it, ``False`` for the default.
-    from_config: bool
 
 
 def _duration(seconds: float) -> Any:
@@ -122,12 +91,22 @@ class Client:
     :class:`~motiond.jog.Jog`.
     """
 
+    #: The class ``Client(name, remote=...)`` makes: the subclass declared with
+    #: ``transport="remote"`` (:class:`~motiond.remote.RemoteClient`, which the package
+    #: imports), so that this module never imports the one above it.
+    _remote_class: ClassVar[Optional[Type["Client"]]] = None
+
+    def __init_subclass__(cls, transport: Optional[str] = None, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if transport == "remote":
+            Client._remote_class = cls
+
     def __new__(cls, *args: Any, remote: Optional[str] = None, **kwargs: Any) -> "Client":
         # `Client(name, remote="tcp/host:7447")` is a RemoteClient (motion-bridge, zenoh).
         if remote is not None and cls is Client:
-            from .remote import RemoteClient
-
-            return super().__new__(RemoteClient)
+            if Client._remote_class is None:  # pragma: no cover - motiond imports remote
+                raise errors.ConnectError("no remote client is loaded (import motiond.remote)")
+            return super().__new__(Client._remote_class)
         return super().__new__(cls)
 
     def __init__(
@@ -229,8 +208,7 @@ class Client:
         self._reply_timeout = reply_timeout
         self._sequence = 0
         self._closed = False
-        self._jogs: "weakref.WeakValueDictionary[int, Jog]" = weakref.WeakValueDictionary()
-        self._next_jog = 0
+        self._jogs = JogRegistry()
         self._estop_notifier: Any = None
 
     def _service(self, leaf: str) -> Any:
@@ -306,16 +284,12 @@ class Client:
         return self.info.command_timeout_ms / 1000.0
 
     @property
-    def axes(self) -> List["Axis"]:
+    def axes(self) -> List[Axis]:
         """Handles of every axis, in config order."""
-        from .axis import Axis
-
         return [Axis(self, index) for index in range(len(self._goal_ticks))]
 
-    def axis(self, name: str) -> "Axis":
+    def axis(self, name: str) -> Axis:
         """The handle of the axis called ``name``."""
-        from .axis import Axis
-
         info = self.info
         for index in range(min(int(info.axis_count), len(info.axes))):
             if info.axes[index].text("name") == name:
@@ -323,16 +297,12 @@ class Client:
         raise NoSuchAxis(name)
 
     @property
-    def signals(self) -> List["Signal"]:
+    def signals(self) -> List[Signal]:
         """Handles of every signal, in config order."""
-        from .signal import Signal
-
         return [Signal(self, index) for index in range(int(self.info.signal_count))]
 
-    def signal(self, name: str) -> "Signal":
+    def signal(self, name: str) -> Signal:
         """The handle of the signal called ``name``."""
-        from .signal import Signal
-
         info = self.info
         for index in range(min(int(info.signal_count), len(info.signals))):
             if info.signals[index].text("name") == name:
@@ -679,28 +649,10 @@ class Client:
 
     def _jog_refresh_period(self) -> Optional[float]:
         current = self._info.current
-        timeout_ms = 0 if current is None else int(current.payload.command_timeout_ms)
-        if timeout_ms <= 0:
-            return None
-        return max(timeout_ms / 3000.0, _MIN_REFRESH)
+        return refresh_period(0 if current is None else int(current.payload.command_timeout_ms))
 
     def _jog_wait_cap(self, remaining: float) -> float:
-        period = self._jog_refresh_period()
-        if period is None:
-            return remaining
-        now = time.monotonic()
-        for jog in list(self._jogs.values()):
-            if jog.active and jog.refused is None and not jog.expired:
-                remaining = min(remaining, max(0.0, jog.last_sent + period - now))
-        return remaining
-
-    def _register_jog(self, jog: "Jog") -> int:
-        self._next_jog += 1
-        self._jogs[self._next_jog] = jog
-        return self._next_jog
-
-    def _forget_jog(self, key: int) -> None:
-        self._jogs.pop(key, None)
+        return self._jogs.wait_cap(remaining, self._jog_refresh_period())
 
     def service_jogs(self) -> None:
         """Renews every running jog whose renewal is due. Called by every read and wait.
@@ -708,18 +660,8 @@ class Client:
         A jog not renewed for a whole deadman (the program did not call into the client)
         has been stopped by the server; it is not renewed any more, so that a program that
         hung does not set the axis moving again when it wakes up (``Jog.expired``)."""
-        period = self._jog_refresh_period()
-        if period is None or not self._jogs:
-            return
-        deadman = self.command_timeout_cached()
-        now = time.monotonic()
-        for jog in list(self._jogs.values()):
-            if not jog.active or jog.refused is not None or jog.expired:
-                continue
-            if now - jog.last_sent >= deadman:
-                jog.expired = True
-            elif now >= jog.last_sent + period:
-                jog._renew()
+        if self._jogs:
+            self._jogs.renew_due(self._jog_refresh_period(), self.command_timeout_cached())
 
     def command_timeout_cached(self) -> float:
         """The server's deadman, s, from the description already received."""
@@ -737,7 +679,7 @@ class Client:
         """Stops this client's running jogs and releases its ports."""
         if self._closed:
             return
-        for jog in list(self._jogs.values()):
+        for jog in self._jogs:
             try:
                 jog.stop()
             except errors.MotiondError:

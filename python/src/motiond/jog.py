@@ -26,7 +26,7 @@ from . import errors
 from .ipc import CommandKind, Reason
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .client import Accepted, Client
+    from .session import Accepted, Session
 
 __all__ = ["Jog"]
 
@@ -41,7 +41,7 @@ class Jog:
 
     def __init__(
         self,
-        client: "Client",
+        client: "Session",
         axis: int,
         kind: CommandKind,
         values: Sequence[float],
@@ -68,7 +68,7 @@ class Jog:
         client.command(axis, kind, self._values)
         self.last_sent = time.monotonic()
         self.active = True
-        self._key = client._register_jog(self)
+        self._key = client._jogs.register(self)
 
     @property
     def axis(self) -> int:
@@ -110,7 +110,7 @@ class Jog:
         if not self.active:
             return
         self.active = False
-        self._client._forget_jog(self._key)
+        self._client._jogs.forget(self._key)
         self._client.command(self._axis, CommandKind.STOP)
 
     def __enter__(self) -> "Jog":

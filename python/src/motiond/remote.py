@@ -54,7 +54,7 @@ from pathlib import Path
 from typing import Any, Callable, Deque, List, Optional, Sequence, Tuple, Type, Union
 
 from . import errors
-from .client import DEFAULT_CONNECT_TIMEOUT, DEFAULT_REPLY_TIMEOUT, Client, Param
+from .client import Client
 from .errors import (
     BridgeRefused,
     IncompatibleServer,
@@ -65,6 +65,7 @@ from .errors import (
     WaitTimeout,
 )
 from .frames import Frame, Received
+from .session import DEFAULT_CONNECT_TIMEOUT, DEFAULT_REPLY_TIMEOUT, Param
 from .ipc import (
     SCHEMA_VERSION,
     ClientId,
@@ -243,7 +244,7 @@ class _Feed:
         self._newest = None
 
 
-class RemoteClient(Client):
+class RemoteClient(Client, transport="remote"):
     """A :class:`~motiond.Client` that talks to a ``motion-bridge`` over zenoh (see the
     module's documentation). ``endpoint`` is the bridge's zenoh endpoint
     (``tcp/host-a:7447``; ``tls/…`` with a zenoh built with TLS and ``zenoh_config``)."""

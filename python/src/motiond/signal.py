@@ -17,7 +17,7 @@ from .ipc import (
 )
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .client import Accepted, Client
+    from .session import Accepted, Session
 
 __all__ = ["Signal", "SignalStatus"]
 
@@ -69,7 +69,7 @@ class Signal:
 
     __slots__ = ("_client", "_index")
 
-    def __init__(self, client: "Client", index: int) -> None:
+    def __init__(self, client: "Session", index: int) -> None:
         self._client = client
         self._index = index
 
