@@ -141,7 +141,17 @@ fn disagreements(rows: &[Row], manifests: &BTreeMap<String, Manifest>) -> Vec<St
     let names: Vec<&str> = manifests.keys().map(String::as_str).collect();
     let mut problems = Vec::new();
     let mut seen = BTreeSet::new();
-    for row in rows {
+    // Rows that name their crates come first; a row with a `*` then covers the crates no
+    // other row names, and states the dependencies such a crate may have (a new board
+    // needs no row of its own).
+    let (named, globbed): (Vec<&Row>, Vec<&Row>) = rows
+        .iter()
+        .partition(|row| !row.dirs.iter().any(|dir| dir.contains('*')));
+    for (row, glob) in named
+        .into_iter()
+        .map(|row| (row, false))
+        .chain(globbed.into_iter().map(|row| (row, true)))
+    {
         for pattern in row.dirs.iter().filter(|dir| dir.contains('*')) {
             if !dirs.iter().any(|dir| matches(pattern, dir)) {
                 problems.push(format!(
@@ -159,6 +169,9 @@ fn disagreements(rows: &[Row], manifests: &BTreeMap<String, Manifest>) -> Vec<St
                 ));
                 continue;
             };
+            if glob && seen.contains(dir) {
+                continue;
+            }
             if !seen.insert(dir.clone()) {
                 problems.push(format!("line {}: `{dir}` has a row already", row.line));
             }
@@ -172,6 +185,9 @@ fn disagreements(rows: &[Row], manifests: &BTreeMap<String, Manifest>) -> Vec<St
                     "line {}: {name} depends on `{missing}`, which its row does not name",
                     row.line
                 ));
+            }
+            if glob {
+                continue;
             }
             for extra in stated_ours.difference(&manifest.ours) {
                 problems.push(format!(
@@ -356,6 +372,37 @@ fn a_star_covers_every_crate_it_matches_and_nothing_else() {
         ]
     );
     assert!(matches("board-*", "board-qsb") && !matches("crates/*", "crates/boards/qsb"));
+}
+
+#[test]
+fn a_star_row_states_what_the_crates_no_other_row_names_may_depend_on() {
+    let mut workspace = small_workspace();
+    workspace.insert("cc".to_owned(), manifest("crates/codecs/cc", &["aa"], &[]));
+    // aa and bb depend on nothing, cc on aa: all within the star row's `aa`, `bb`.
+    let fits = crate_table(&format!(
+        "{TABLE_HEAD}| `crates/codecs/*` | codecs | at most `aa`, `bb` | x |\n\
+         | `crates/drivers` | drivers | `aa`, `bb` | x |\n"
+    ))
+    .expect("a table");
+    assert_eq!(disagreements(&fits, &workspace), Vec::<String>::new());
+    // A dependency outside the star row is still reported.
+    let narrow = crate_table(&format!(
+        "{TABLE_HEAD}| `crates/codecs/*` | codecs | at most `bb` | x |\n\
+         | `crates/drivers` | drivers | `aa`, `bb` | x |\n"
+    ))
+    .expect("a table");
+    assert_eq!(
+        disagreements(&narrow, &workspace),
+        vec!["line 3: cc depends on `aa`, which its row does not name".to_owned()]
+    );
+    // A crate with a row of its own is held to that row, not to the star's.
+    let own = crate_table(&format!(
+        "{TABLE_HEAD}| `crates/codecs/*` | codecs | at most `bb` | x |\n\
+         | `crates/codecs/cc` | the odd one | `aa` | x |\n\
+         | `crates/drivers` | drivers | `aa`, `bb` | x |\n"
+    ))
+    .expect("a table");
+    assert_eq!(disagreements(&own, &workspace), Vec::<String>::new());
 }
 
 #[test]

@@ -14,10 +14,18 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+pub mod keys;
+pub mod machine;
+
 use core::fmt;
 use core::time::Duration;
 
-use motion_drivers::spec::{DeviceMachine, DriverSpec, Param, SpecError};
+use motion_drivers::spec::{
+    AxisMachine, DeviceMachine, Direction, DriverSpec, HomeInput, MachineKeys, Param, SpecError,
+};
+
+use crate::keys::{AxisContext, DeviceContext, KeyIssues, KeyTable, Span};
+use crate::machine::MachineView;
 use motion_drivers::{Driver, Model, PinInfo};
 use motion_link::sim::{SpiDevice, StreamDevice};
 
@@ -53,6 +61,61 @@ pub struct LinkFacts {
     /// board behind USB (everything received within a bus frame at its end), `None` as
     /// each byte's wire time passes.
     pub host_frame: Option<Duration>,
+}
+
+/// A value a board's key gives for a general fact, with where it was written (a board key
+/// that says the same as a general key: both must agree).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Given<T> {
+    /// The value.
+    pub value: T,
+    /// Where it was written.
+    pub span: Span,
+    /// Its key (`axis[0].reference.side`).
+    pub key: String,
+}
+
+/// What a board's keys say about an axis's reference search, besides the general `home`
+/// table (`home.direction`, `home.max_travel`, `home.position`): the server merges both and
+/// refuses a disagreement.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct HomeHints {
+    /// The search direction (tmcpack `reference.side`, qq2drv `home.positive_end`, qsb
+    /// `home_direction`).
+    pub direction: Vec<Given<Direction>>,
+    /// The search's travel limit, units (qsb `home_max_travel`).
+    pub max_travel: Vec<Given<f64>>,
+    /// The position at the reference, units (qsb `home_offset`).
+    pub position: Vec<Given<f64>>,
+    /// The input the axis homes on (qq2drv `home.input`).
+    pub input: Option<HomeInput>,
+}
+
+/// A device's validated board keys.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct DeviceKeys {
+    /// The machine keys its driver is built from.
+    pub machine: DeviceMachine,
+    /// What they say about its axes' reference searches.
+    pub home: HomeHints,
+}
+
+/// An axis's validated board keys.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct AxisKeys {
+    /// The machine keys its driver is built from.
+    pub machine: AxisMachine,
+    /// What they say about its reference search.
+    pub home: HomeHints,
+}
+
+/// A model's `address` key: the default, and the check of a value written.
+#[derive(Debug, Clone, Copy)]
+pub struct AddressKey {
+    /// The address when none is written.
+    pub default: u32,
+    /// The address a written value gives, or what is wrong with it and what is allowed.
+    pub check: fn(i128) -> Result<u32, String>,
 }
 
 /// One board model, as the server knows it. Implemented once per board crate; the
@@ -95,4 +158,60 @@ pub trait Board: Sync + fmt::Debug {
     /// The simulated board of the device `spec` describes, configured like the machine
     /// (switches where its axes search, the variant, the address), seeded with `seed`.
     fn simulate(&self, spec: &DriverSpec, seed: u64) -> SimBoard;
+
+    /// The keys a `[[device]]` of this model may have besides the general ones (`name`,
+    /// `link`, `model`, `address`, `sim`). The server refuses any other with a message
+    /// naming the models that have it.
+    fn device_key_names(&self) -> &'static [&'static str] {
+        &[]
+    }
+
+    /// The keys an `[[axis]]` on this model may have besides the general ones; a key of the
+    /// axis's `home` table is named `home.<key>`.
+    fn axis_key_names(&self) -> &'static [&'static str] {
+        &[]
+    }
+
+    /// The model's `address` key; `None`: the model has none (it never shares a link).
+    fn address(&self) -> Option<AddressKey> {
+        None
+    }
+
+    /// Why an axis of this model cannot home (a `home` table is refused with it); `None`:
+    /// its axes home.
+    fn cannot_home(&self) -> Option<&'static str> {
+        None
+    }
+
+    /// Validates a `[[device]]`'s board keys (`keys` holds only names of
+    /// [`device_key_names`](Self::device_key_names)); `None` after an issue.
+    fn device_keys(
+        &self,
+        keys: &KeyTable<'_>,
+        ctx: &DeviceContext,
+        issues: &mut dyn KeyIssues,
+    ) -> Option<DeviceKeys> {
+        let _ = (keys, ctx, issues);
+        Some(DeviceKeys::default())
+    }
+
+    /// Validates an `[[axis]]`'s board keys, on a device with `device` keys; `None` after
+    /// an issue.
+    fn axis_keys(
+        &self,
+        keys: &KeyTable<'_>,
+        device: &MachineKeys,
+        ctx: &AxisContext<'_>,
+        issues: &mut dyn KeyIssues,
+    ) -> Option<AxisKeys> {
+        let _ = (keys, device, ctx, issues);
+        Some(AxisKeys::default())
+    }
+
+    /// Checks across tables (keys that must agree between axes of one device, addresses
+    /// against other devices, pins against the machine keys), after everything else was
+    /// validated. Called once per model present.
+    fn cross_check(&self, machine: &MachineView<'_>, issues: &mut dyn KeyIssues) {
+        let _ = (machine, issues);
+    }
 }

@@ -2,9 +2,9 @@
 //! (`motion_boards`): [`build`] the drivers, [`describe`] their machine parameters, serve a
 //! `type = "sim"` link with simulated boards ([`sim_link`]). motiond names no board here:
 //! each model's facts, driver, parameters and simulator are its board crate's
-//! (`crates/boards/<board>/`, trait `motion_board::Board`). The machine keys are
-//! validated in `config/validate/machine/<model>.rs` into `motion_drivers::spec`, whose
-//! `DriverSpec` (filled in `drivers.rs`) each board's driver is built from.
+//! (`crates/boards/<board>/`, trait `motion_board::Board`), its machine keys too (read
+//! and validated by the board through `config/validate/machine/`); each board's driver is
+//! built from the `DriverSpec` filled in `drivers.rs`.
 
 use motion_boards::{Board, SimBoard};
 use motion_drivers::Driver;

@@ -76,6 +76,10 @@ impl Board for ExampleBoard {
         &[]
     }
 
+    fn cannot_home(&self) -> Option<&'static str> {
+        Some("the AS-2 has no reference input (README: no home command), so its axes cannot home")
+    }
+
     fn build(&self, spec: &DriverSpec) -> Result<Box<dyn Driver>, SpecError> {
         Ok(Box::new(ExampleDriver::new(
             ExampleDriverConfig::from_spec(spec)?,

@@ -6,11 +6,14 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+mod keys;
 mod sim;
 
-use motion_board::{Board, LinkFacts, SimBoard};
+use motion_board::keys::{AxisContext, KeyIssues, KeyTable};
+use motion_board::machine::MachineView;
+use motion_board::{AxisKeys, Board, LinkFacts, SimBoard};
 use motion_drivers::qq2drv::{PINS, Qq2drvDriver, Qq2drvDriverConfig};
-use motion_drivers::spec::{DeviceMachine, DriverSpec, Param, SpecError};
+use motion_drivers::spec::{AxisMachine, DeviceMachine, DriverSpec, MachineKeys, Param, SpecError};
 use motion_drivers::{Driver, Model, PinInfo};
 
 /// The QuadQuad2Drv.
@@ -50,6 +53,27 @@ impl Board for Qq2drvBoard {
 
     fn params(&self, spec: &DriverSpec) -> Result<Vec<Param>, SpecError> {
         Qq2drvDriverConfig::from_spec(spec).map(|config| config.params(spec))
+    }
+
+    fn axis_key_names(&self) -> &'static [&'static str] {
+        keys::AXIS_KEYS
+    }
+
+    fn axis_keys(
+        &self,
+        keys: &KeyTable<'_>,
+        _device: &MachineKeys,
+        ctx: &AxisContext<'_>,
+        issues: &mut dyn KeyIssues,
+    ) -> Option<AxisKeys> {
+        keys::axis_keys(issues, ctx, keys).map(|(keys, home)| AxisKeys {
+            machine: AxisMachine::new(keys),
+            home,
+        })
+    }
+
+    fn cross_check(&self, machine: &MachineView<'_>, issues: &mut dyn KeyIssues) {
+        keys::cross_check(issues, machine);
     }
 
     fn simulate(&self, spec: &DriverSpec, seed: u64) -> SimBoard {

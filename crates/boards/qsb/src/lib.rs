@@ -9,7 +9,11 @@
 
 use core::time::Duration;
 
-use motion_board::{Board, LinkFacts, SimBoard};
+mod keys;
+
+use motion_board::keys::{DeviceContext, KeyIssues, KeyTable};
+use motion_board::machine::MachineView;
+use motion_board::{Board, DeviceKeys, LinkFacts, SimBoard};
 use motion_drivers::qsb::{QsbDriver, QsbDriverConfig, pins};
 use motion_drivers::spec::{
     DeviceMachine, DriverSpec, Param, QsbDeviceKeys, QsbVariant, SpecError,
@@ -51,6 +55,26 @@ impl Board for QsbBoard {
 
     fn product_name(&self, machine: &DeviceMachine) -> &'static str {
         machine.get_or_default::<QsbDeviceKeys>().variant.id()
+    }
+
+    fn device_key_names(&self) -> &'static [&'static str] {
+        keys::DEVICE_KEYS
+    }
+
+    fn device_keys(
+        &self,
+        keys: &KeyTable<'_>,
+        ctx: &DeviceContext,
+        issues: &mut dyn KeyIssues,
+    ) -> Option<DeviceKeys> {
+        keys::device_keys(issues, ctx, keys).map(|(keys, home)| DeviceKeys {
+            machine: DeviceMachine::new(keys),
+            home,
+        })
+    }
+
+    fn cross_check(&self, machine: &MachineView<'_>, issues: &mut dyn KeyIssues) {
+        keys::cross_check(issues, machine);
     }
 
     fn build(&self, spec: &DriverSpec) -> Result<Box<dyn Driver>, SpecError> {

@@ -6,7 +6,10 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
-use motion_board::{Board, LinkFacts, SimBoard};
+mod keys;
+
+use motion_board::keys::{DeviceContext, KeyIssues, KeyTable};
+use motion_board::{AddressKey, Board, DeviceKeys, LinkFacts, SimBoard};
 use motion_drivers::spec::{
     DeviceMachine, DriverSpec, Param, SpecError, SpiDrive, SpimotorDeviceKeys,
 };
@@ -54,6 +57,33 @@ impl Board for SpimotorBoard {
 
     fn params(&self, spec: &DriverSpec) -> Result<Vec<Param>, SpecError> {
         SpimotorDriverConfig::from_spec(spec).map(|config| config.params(spec))
+    }
+
+    fn device_key_names(&self) -> &'static [&'static str] {
+        keys::DEVICE_KEYS
+    }
+
+    fn address(&self) -> Option<AddressKey> {
+        Some(AddressKey {
+            default: 0x90,
+            check: keys::check_address,
+        })
+    }
+
+    fn cannot_home(&self) -> Option<&'static str> {
+        Some("an SPI_motor has no reference input, so its axes cannot home")
+    }
+
+    fn device_keys(
+        &self,
+        keys: &KeyTable<'_>,
+        ctx: &DeviceContext,
+        issues: &mut dyn KeyIssues,
+    ) -> Option<DeviceKeys> {
+        keys::device_keys(issues, ctx, keys).map(|keys| DeviceKeys {
+            machine: DeviceMachine::new(keys),
+            ..DeviceKeys::default()
+        })
     }
 
     fn simulate(&self, spec: &DriverSpec, seed: u64) -> SimBoard {

@@ -6,11 +6,15 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+mod keys;
 mod sim;
 
-use motion_board::{Board, LinkFacts, SimBoard};
+use motion_board::keys::{AxisContext, DeviceContext, KeyIssues, KeyTable};
+use motion_board::machine::MachineView;
+use motion_board::{AddressKey, AxisKeys, Board, DeviceKeys, LinkFacts, SimBoard};
 use motion_drivers::spec::{
-    DeviceMachine, DriverSpec, PackVariant, Param, SpecError, TmcpackDeviceKeys,
+    AxisMachine, DeviceMachine, DriverSpec, MachineKeys, PackVariant, Param, SpecError,
+    TmcpackDeviceKeys,
 };
 use motion_drivers::tmcpack::{TmcpackDriver, TmcpackDriverConfig, pins};
 use motion_drivers::{Driver, Model, PinInfo};
@@ -46,6 +50,50 @@ impl Board for TmcpackBoard {
 
     fn pins(&self, machine: &DeviceMachine) -> &'static [PinInfo] {
         pins(machine.get_or_default::<TmcpackDeviceKeys>().variant.into())
+    }
+
+    fn device_key_names(&self) -> &'static [&'static str] {
+        keys::DEVICE_KEYS
+    }
+
+    fn axis_key_names(&self) -> &'static [&'static str] {
+        keys::AXIS_KEYS
+    }
+
+    fn address(&self) -> Option<AddressKey> {
+        Some(AddressKey {
+            default: 1,
+            check: keys::check_address,
+        })
+    }
+
+    fn device_keys(
+        &self,
+        keys: &KeyTable<'_>,
+        ctx: &DeviceContext,
+        issues: &mut dyn KeyIssues,
+    ) -> Option<DeviceKeys> {
+        keys::device_keys(issues, ctx, keys).map(|keys| DeviceKeys {
+            machine: DeviceMachine::new(keys),
+            ..DeviceKeys::default()
+        })
+    }
+
+    fn axis_keys(
+        &self,
+        keys: &KeyTable<'_>,
+        _device: &MachineKeys,
+        ctx: &AxisContext<'_>,
+        issues: &mut dyn KeyIssues,
+    ) -> Option<AxisKeys> {
+        keys::axis_keys(issues, ctx, keys).map(|(keys, home)| AxisKeys {
+            machine: AxisMachine::new(keys),
+            home,
+        })
+    }
+
+    fn cross_check(&self, machine: &MachineView<'_>, issues: &mut dyn KeyIssues) {
+        keys::cross_check(issues, machine);
     }
 
     fn build(&self, spec: &DriverSpec) -> Result<Box<dyn Driver>, SpecError> {

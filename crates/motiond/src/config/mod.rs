@@ -121,6 +121,9 @@ pub struct DeviceSpec {
     pub sim_seed: u64,
     /// The model's machine keys.
     pub machine: DeviceMachine,
+    /// What its board keys say about its axes' reference searches (qsb `home_direction`,
+    /// `home_max_travel`, `home_offset`).
+    pub home_hints: motion_board::HomeHints,
 }
 
 impl DeviceSpec {

@@ -1,12 +1,12 @@
 //! `[[device]]` and `[[axis]]` tables.
 
-use motion_drivers::Model;
 use motion_engine::AxisConfig;
 use motion_ipc::{NAME_LEN, UNIT_LEN};
 use toml::Spanned;
 
 use super::Validator;
 use super::machine::{AxisContext, DeviceContext};
+
 use crate::config::raw::{RawAxis, RawDevice};
 use crate::config::{AxisSpec, DeviceSpec};
 
@@ -66,57 +66,26 @@ impl Validator<'_, '_> {
                 }
                 parsed
             });
-        let fits = model.is_none_or(|model| self.device_keys_fit(index, d, model));
-        if let Some(v) = &d.variant {
-            match (model, v.get_ref().as_str()) {
-                (Some(Model::TMCPACK), "sixpack" | "quadpack") => {}
-                (Some(Model::TMCPACK), other) => self.issue(
-                    v.span(),
-                    &key("variant"),
-                    format!("unknown variant {other:?}; allowed: \"sixpack\" (6 motors), \"quadpack\" (4)"),
-                ),
-                (Some(Model::QSB), "qsb-m" | "qsb-s" | "qsb-d") => {}
-                (Some(Model::QSB), other) => self.issue(
-                    v.span(),
-                    &key("variant"),
-                    format!("unknown variant {other:?}; allowed: \"qsb-m\" (encoder, 4 digital I/O, stepper drive; default), \"qsb-s\" (encoder only), \"qsb-d\" (differential encoder, 1 digital I/O)"),
-                ),
-                _ => {}
-            }
-        }
-        if let Some(v) = &d.drive {
-            match (model, v.get_ref().as_str()) {
-                (Some(Model::SPIMOTOR), "stepper" | "brushed") => {}
-                (Some(Model::SPIMOTOR), other) => self.issue(
-                    v.span(),
-                    &key("drive"),
-                    format!("unknown drive {other:?}; allowed: \"stepper\" (one axis, channel 0), \"brushed\" (channels 0 = A, 1 = B)"),
-                ),
-                _ => {}
-            }
-        }
-        let address = match (model, &d.address) {
-            (Some(Model::TMCPACK), None) => Some(1),
-            (Some(Model::TMCPACK), Some(a)) => {
-                self.int_in(a, &key("address"), 0..=255).map(|a| a as u32)
-            }
-            (Some(Model::SPIMOTOR), None) => Some(0x90),
-            (Some(Model::SPIMOTOR), Some(a)) => {
-                let value = a.get_ref().0;
-                if (2..=254).contains(&value) && value % 2 == 0 {
-                    Some(value as u32)
-                } else {
-                    self.issue(
-                        a.span(),
-                        &key("address"),
-                        format!("{value} is not an SPI_motor address; allowed: an even number 2..=254 (bit 0 is the read flag), default 0x90 = 144"),
-                    );
+        let keys = self.tables.devices.get(index).cloned();
+        let keys = keys.unwrap_or_else(|| motion_board::keys::KeyTable::empty(table.clone()));
+        let address_span = d.address.as_ref().map(Spanned::span);
+        let fits =
+            model.is_none_or(|model| self.device_keys_fit(index, &keys, address_span, model));
+        let address = match (
+            model.and_then(|m| motion_boards::board(m).address()),
+            &d.address,
+        ) {
+            (Some(rule), None) => Some(rule.default),
+            (Some(rule), Some(a)) => match (rule.check)(a.get_ref().0) {
+                Ok(address) => Some(address),
+                Err(message) => {
+                    self.issue(a.span(), &key("address"), message);
                     None
                 }
-            }
-            (Some(_), Some(_)) => None,
-            (_, None) => Some(0),
+            },
+            // An address on a model without one was refused with the keys above.
             (None, Some(_)) => None,
+            (None, None) => Some(0),
         };
         let mut sim_seed = index as u64 + 1;
         if let Some(sim) = &d.sim
@@ -125,9 +94,12 @@ impl Validator<'_, '_> {
         {
             sim_seed = seed as u64;
         }
-        let ctx = DeviceContext { index };
+        let ctx = DeviceContext {
+            index,
+            table: table.clone(),
+        };
         let machine = match model {
-            Some(model) if fits => self.device_machine(&ctx, model, d),
+            Some(model) if fits => self.device_machine(&ctx, model, &keys),
             _ => None,
         };
         Some(DeviceSpec {
@@ -136,7 +108,8 @@ impl Validator<'_, '_> {
             model: model?,
             address: address?,
             sim_seed,
-            machine: machine?,
+            machine: machine.as_ref()?.machine.clone(),
+            home_hints: machine?.home,
         })
     }
 
@@ -313,24 +286,29 @@ impl Validator<'_, '_> {
             None => cpu.map(|cpu| 2.0 / cpu.abs()),
         };
         let spec = device.and_then(|d| devices[d].as_ref());
-        let fits = spec.is_none_or(|spec| self.axis_keys_fit(index, a, spec.model));
+        let keys = self.tables.axes.get(index).cloned();
+        let keys = keys.unwrap_or_else(|| motion_board::keys::KeyTable::empty(table.clone()));
+        let home_span = a.home.as_ref().map(Spanned::span);
+        let fits = spec.is_none_or(|spec| self.axis_keys_fit(index, &keys, home_span, spec.model));
         let supervision = self.supervision(index, a, cpu, min, max, tolerance);
-        let home = device.zip(spec).and_then(|(d, spec)| {
-            let raw_device = Some(raw_devices[d].get_ref());
-            self.home(index, a, spec, d, raw_device, cpu, min, max)
-        });
         let ctx = AxisContext {
             index,
             table: table.clone(),
             counts_per_unit: cpu,
             min,
             max,
+            max_span: a.max.as_ref().map(Spanned::span),
             unit: unit.as_deref(),
+            channel,
         };
         let machine = match spec {
-            Some(spec) if fits => self.axis_machine(&ctx, spec.model, a),
+            Some(spec) if fits => self.axis_machine(&ctx, spec.model, &keys, &spec.machine),
             _ => None,
         };
+        let home = spec.and_then(|spec| {
+            let hints = machine.as_ref().map(|keys| &keys.home);
+            self.home(index, a, spec, hints, cpu, min, max)
+        });
         let (min, max) = (min?, max?);
         if min >= max {
             return None;
@@ -357,7 +335,7 @@ impl Validator<'_, '_> {
             axis,
             AxisSpec {
                 home,
-                machine: machine?,
+                machine: machine?.machine,
             },
         ))
     }

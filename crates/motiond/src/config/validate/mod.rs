@@ -6,6 +6,7 @@ use std::path::PathBuf;
 
 use motion_engine::AxisConfig;
 use motion_ipc::{MAX_AXES, MAX_DEVICES, MAX_LINKS, NAME_LEN};
+use serde::Deserialize;
 use toml::Spanned;
 
 mod home;
@@ -21,20 +22,33 @@ use super::{AxisSpec, DeviceSpec, GivenKeys, ServerConfig, ServerSettings};
 
 pub(crate) fn parse(source: &str) -> Result<ServerConfig, Vec<ConfigIssue>> {
     let mut issues = Issues::new(source);
-    let raw: RawConfig = match toml::from_str(source) {
+    let refused = |issues: &mut Issues<'_>, error: toml::de::Error| {
+        let span = error.span().unwrap_or(0..0);
+        let key = issues.key_at(span.start);
+        issues.push(span, key, plain_serde_message(error.message()));
+    };
+    // The boards' keys come off the tables first: serde reads the general ones.
+    let mut doc = match toml::de::DeTable::parse(source) {
+        Ok(doc) => doc,
+        Err(error) => {
+            refused(&mut issues, error);
+            return Err(issues.sorted());
+        }
+    };
+    let tables = machine::split::split(&mut doc);
+    let raw = match RawConfig::deserialize(toml::de::Deserializer::from(doc)) {
         Ok(raw) => raw,
         Err(error) => {
-            let span = error.span().unwrap_or(0..0);
-            let key = issues.key_at(span.start);
-            issues.push(span, key, plain_serde_message(error.message()));
+            refused(&mut issues, error);
             return Err(issues.sorted());
         }
     };
     let mut validator = Validator {
         issues: &mut issues,
+        tables: &tables,
     };
     let mut config = validator.run(&raw);
-    validator.machine_cross_checks(&config, &raw);
+    validator.machine_cross_checks(&config, &raw, &tables);
     config.given = GivenKeys::of(source);
     config.warnings = core::mem::take(&mut issues.warnings);
     config
@@ -98,6 +112,8 @@ pub(crate) fn is_identifier(text: &str, max: usize) -> bool {
 
 pub(crate) struct Validator<'i, 's> {
     issues: &'i mut Issues<'s>,
+    /// The boards' keys of each `[[device]]` and `[[axis]]` table.
+    tables: &'i machine::split::BoardTables<'s>,
 }
 
 /// The span of a whole table, for "missing key" issues.

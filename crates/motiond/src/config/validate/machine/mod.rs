@@ -1,185 +1,165 @@
 //! Machine keys: what depends on the motor, the mechanics and the wiring of one board
-//! model. One module per model validates its own keys into their typed struct (defined with
-//! the drivers' neutral spec, `motion_drivers::spec`); this module dispatches, and refuses a
-//! key on a model that does not have it, naming the models where it is valid.
+//! model. Each board's crate validates its own keys (`motion_board::Board::device_keys`,
+//! `axis_keys`, `cross_check`) into its typed struct, held opaquely in `MachineKeys`; this
+//! module splits them off the file's tables (`split.rs`), refuses a key the device's model
+//! does not have (naming the models where it is valid, from the registry), hands the rest
+//! to the board, and lets each board present check across tables.
 
-pub mod qq2drv;
-pub mod qsb;
-pub mod spimotor;
-pub mod tmcpack;
+pub(crate) mod split;
 
+pub use motion_board::keys::{AxisContext, DeviceContext};
+use motion_board::keys::{KeyIssues, KeyTable, Span};
+use motion_board::machine::{AxisView, DeviceView, LinkView, MachineView, SignalView};
+use motion_board::{AxisKeys, Board, DeviceKeys};
 use motion_drivers::Model;
-pub use motion_drivers::spec::{AxisMachine, DeviceMachine};
+pub use motion_drivers::spec::DeviceMachine;
 use toml::Spanned;
 
-use super::{TableSpan, Validator};
-use crate::config::ServerConfig;
-use crate::config::raw::{RawAxis, RawConfig, RawDevice};
+use super::{Validator, plain_serde_message};
+use crate::config::raw::RawConfig;
+use crate::config::{ServerConfig, Transport};
 
-/// Where a device table is, for the board modules' issues.
-#[derive(Debug, Clone)]
-pub(in crate::config) struct DeviceContext {
-    /// Index of the `[[device]]` table.
-    pub index: usize,
-}
+impl KeyIssues for Validator<'_, '_> {
+    fn report_issue(&mut self, span: Span, key: &str, message: String) {
+        self.issue(span, key, message);
+    }
 
-impl DeviceContext {
-    /// `device[i].key`.
-    pub fn key(&self, key: &str) -> String {
-        format!("device[{}].{key}", self.index)
+    fn report_warning(&mut self, span: Span, key: &str, message: String) {
+        self.warn(span, key, message);
+    }
+
+    fn report_refused(&mut self, span: Span, message: &str) {
+        let key = self.issues.key_at(span.start);
+        self.issue(span, &key, plain_serde_message(message));
     }
 }
 
-/// Where an axis table is and what the board modules need to convert units.
-#[derive(Debug, Clone)]
-pub(in crate::config) struct AxisContext<'a> {
-    /// Index of the `[[axis]]` table.
-    pub index: usize,
-    /// Span of the whole table.
-    pub table: TableSpan,
-    /// The axis's `counts_per_unit`, when valid.
-    pub counts_per_unit: Option<f64>,
-    /// The axis's soft limits, when valid.
-    pub min: Option<f64>,
-    /// The axis's soft limits, when valid.
-    pub max: Option<f64>,
-    /// The axis's unit, when valid.
-    pub unit: Option<&'a str>,
+/// The models whose boards have `has`, for messages (`qq2drv, tmcpack`).
+fn models_with(has: impl Fn(&dyn Board) -> bool) -> Vec<&'static str> {
+    motion_boards::BOARDS
+        .iter()
+        .filter(|board| has(**board))
+        .map(|board| board.model().id())
+        .collect()
 }
 
-impl AxisContext<'_> {
-    /// `axis[i].key`.
-    pub fn key(&self, key: &str) -> String {
-        format!("axis[{}].{key}", self.index)
-    }
-}
-
-/// Device keys that only some models have: (key, span if set, models).
-fn device_key_models(raw: &RawDevice) -> Vec<(&'static str, Option<TableSpan>, &'static [Model])> {
-    const QSB: &[Model] = &[Model::QSB];
-    const TMC: &[Model] = &[Model::TMCPACK];
-    const SPI: &[Model] = &[Model::SPIMOTOR];
-    fn at<T>(value: &Option<Spanned<T>>) -> Option<TableSpan> {
-        value.as_ref().map(Spanned::span)
-    }
-    vec![
-        (
-            "address",
-            at(&raw.address),
-            &[Model::TMCPACK, Model::SPIMOTOR],
-        ),
-        ("variant", at(&raw.variant), &[Model::TMCPACK, Model::QSB]),
-        ("drive", at(&raw.drive), SPI),
-        ("counts_per_step", at(&raw.counts_per_step), QSB),
-        ("home_direction", at(&raw.home_direction), QSB),
-        ("home_max_travel", at(&raw.home_max_travel), QSB),
-        ("home_offset", at(&raw.home_offset), QSB),
-        ("index_polarity", at(&raw.index_polarity), QSB),
-        ("stream_interval_ms", at(&raw.stream_interval_ms), QSB),
-        ("host_latency_ms", at(&raw.host_latency_ms), QSB),
-        ("enable_output", at(&raw.enable_output), QSB),
-        ("enable_active", at(&raw.enable_active), QSB),
-        ("input_mode", at(&raw.input_mode), QSB),
-        ("capture_input", at(&raw.capture_input), QSB),
-        ("capture_edge", at(&raw.capture_edge), QSB),
-        ("reply_address", at(&raw.reply_address), TMC),
-        ("switchover_ms", at(&raw.switchover_ms), TMC),
-        ("packet_timeout_ms", at(&raw.packet_timeout_ms), TMC),
-        ("ready_output", at(&raw.ready_output), TMC),
-        ("intensity", at(&raw.intensity), SPI),
-        ("coils", at(&raw.coils), SPI),
-    ]
-}
-
-/// Axis keys that only some models have.
-fn axis_key_models(raw: &RawAxis) -> Vec<(&'static str, Option<TableSpan>, &'static [Model])> {
-    const TMC: &[Model] = &[Model::TMCPACK];
-    const QQ: &[Model] = &[Model::QQ2DRV];
-    fn at<T>(value: &Option<Spanned<T>>) -> Option<TableSpan> {
-        value.as_ref().map(Spanned::span)
-    }
-    let home = raw.home.as_ref().map(Spanned::get_ref);
-    let home_at = |value: Option<TableSpan>| value;
-    vec![
-        (
-            "home",
-            at(&raw.home),
-            &[Model::QQ2DRV, Model::TMCPACK, Model::QSB],
-        ),
-        ("home.input", home_at(home.and_then(|h| at(&h.input))), QQ),
-        (
-            "home.active_high",
-            home_at(home.and_then(|h| at(&h.active_high))),
-            QQ,
-        ),
-        (
-            "home.positive_end",
-            home_at(home.and_then(|h| at(&h.positive_end))),
-            QQ,
-        ),
-        (
-            "home.spacing",
-            home_at(home.and_then(|h| at(&h.spacing))),
-            QQ,
-        ),
-        ("current", at(&raw.current), TMC),
-        ("reference", at(&raw.reference), TMC),
-        ("rotary", at(&raw.rotary), TMC),
-        ("revolution", at(&raw.revolution), TMC),
-        ("analog_stop", at(&raw.analog_stop), TMC),
-        ("pid_position", at(&raw.pid_position), QQ),
-        ("pid_velocity", at(&raw.pid_velocity), QQ),
-        ("power_limit", at(&raw.power_limit), QQ),
-    ]
-}
-
-fn model_list(models: &[Model]) -> String {
-    models.iter().map(|m| m.id()).collect::<Vec<_>>().join(", ")
+/// `unknown field `key`, expected one of …`: serde's words, with the general keys and the
+/// model's.
+fn unknown(key: &str, general: &[&str], model: &[&str]) -> String {
+    let expected: Vec<String> = general
+        .iter()
+        .chain(model)
+        .map(|k| format!("`{k}`"))
+        .collect();
+    format!(
+        "unknown field `{key}`, expected one of {}",
+        expected.join(", ")
+    )
 }
 
 impl Validator<'_, '_> {
-    /// Refuses every key of `raw` that `model` does not have; `false` when one was found.
-    pub(super) fn device_keys_fit(&mut self, index: usize, raw: &RawDevice, model: Model) -> bool {
+    /// Refuses every board key of device `index` that `model` does not have; `false` when
+    /// one was found.
+    pub(super) fn device_keys_fit(
+        &mut self,
+        index: usize,
+        keys: &KeyTable<'_>,
+        address: Option<Span>,
+        model: Model,
+    ) -> bool {
+        let board = motion_boards::board(model);
         let mut fit = true;
-        for (key, span, models) in device_key_models(raw) {
-            if let Some(span) = span
-                && !models.contains(&model)
-            {
-                fit = false;
-                self.issue(
-                    span,
-                    &format!("device[{index}].{key}"),
-                    format!(
-                        "`{key}` is not a key of {model} devices; it is valid on: {}",
-                        model_list(models)
-                    ),
-                );
+        if let (Some(span), None) = (address, board.address()) {
+            fit = false;
+            let valid = models_with(|b| b.address().is_some()).join(", ");
+            self.issue(
+                span,
+                &format!("device[{index}].address"),
+                format!("`address` is not a key of {model} devices; it is valid on: {valid}"),
+            );
+        }
+        for (key, span) in keys.keys() {
+            if board.device_key_names().contains(&key) {
+                continue;
             }
+            fit = false;
+            let valid = models_with(|b| b.device_key_names().contains(&key));
+            let message = if valid.is_empty() {
+                unknown(key, split::DEVICE_KEYS, board.device_key_names())
+            } else {
+                format!(
+                    "`{key}` is not a key of {model} devices; it is valid on: {}",
+                    valid.join(", ")
+                )
+            };
+            self.issue(span, &format!("device[{index}].{key}"), message);
         }
         fit
     }
 
-    /// Refuses every key of axis `raw` that its device's `model` does not have.
-    pub(super) fn axis_keys_fit(&mut self, index: usize, raw: &RawAxis, model: Model) -> bool {
+    /// Refuses every board key of axis `index` that its device's `model` does not have
+    /// (and a `home` table on a model that cannot home).
+    pub(super) fn axis_keys_fit(
+        &mut self,
+        index: usize,
+        keys: &KeyTable<'_>,
+        home: Option<Span>,
+        model: Model,
+    ) -> bool {
+        let board = motion_boards::board(model);
         let mut fit = true;
-        for (key, span, models) in axis_key_models(raw) {
-            if let Some(span) = span
-                && !models.contains(&model)
-            {
+        if let (Some(span), Some(why)) = (home.clone(), board.cannot_home()) {
+            fit = false;
+            let valid = models_with(|b| b.cannot_home().is_none()).join(", ");
+            self.issue(
+                span,
+                &format!("axis[{index}].home"),
+                format!("`home` is not a key of {model} axes; it is valid on: {valid}; {why}"),
+            );
+        }
+        let names = board.axis_key_names();
+        for (key, span) in keys.keys() {
+            if key == "home" {
+                continue;
+            }
+            if names.contains(&key) {
+                continue;
+            }
+            fit = false;
+            let valid = models_with(|b| b.axis_key_names().contains(&key));
+            let message = if valid.is_empty() {
+                unknown(key, split::AXIS_KEYS, names)
+            } else {
+                format!(
+                    "`{key}` is not a key of {model} axes; it is valid on: {}",
+                    valid.join(", ")
+                )
+            };
+            self.issue(span, &format!("axis[{index}].{key}"), message);
+        }
+        if home.is_some() && board.cannot_home().is_none() {
+            for (sub, span) in keys.keys_under("home") {
+                let dotted = format!("home.{sub}");
+                if names.contains(&dotted.as_str()) {
+                    continue;
+                }
                 fit = false;
-                let why = if key == "home" && model == Model::SPIMOTOR {
-                    "; an SPI_motor has no reference input, so its axes cannot home"
+                let valid = models_with(|b| b.axis_key_names().contains(&dotted.as_str()));
+                let message = if valid.is_empty() {
+                    let home: Vec<String> = names
+                        .iter()
+                        .filter_map(|k| k.strip_prefix("home."))
+                        .map(str::to_owned)
+                        .collect();
+                    let home: Vec<&str> = home.iter().map(String::as_str).collect();
+                    unknown(sub, split::HOME_KEYS, &home)
                 } else {
-                    ""
-                };
-                self.issue(
-                    span,
-                    &format!("axis[{index}].{key}"),
                     format!(
-                        "`{key}` is not a key of {model} axes; it is valid on: {}{why}",
-                        model_list(models)
-                    ),
-                );
+                        "`{dotted}` is not a key of {model} axes; it is valid on: {}",
+                        valid.join(", ")
+                    )
+                };
+                self.issue(span, &format!("axis[{index}].home.{sub}"), message);
             }
         }
         fit
@@ -190,36 +170,155 @@ impl Validator<'_, '_> {
         &mut self,
         ctx: &DeviceContext,
         model: Model,
-        raw: &RawDevice,
-    ) -> Option<DeviceMachine> {
-        Some(match model {
-            Model::TMCPACK => DeviceMachine::new(tmcpack::device_keys(self, ctx, raw)?),
-            Model::SPIMOTOR => DeviceMachine::new(spimotor::device_keys(self, ctx, raw)?),
-            Model::QSB => DeviceMachine::new(qsb::device_keys(self, ctx, raw)?),
-            _ => DeviceMachine::PLAIN,
-        })
+        keys: &KeyTable<'_>,
+    ) -> Option<DeviceKeys> {
+        motion_boards::board(model).device_keys(keys, ctx, self)
     }
 
-    /// The model's axis keys.
+    /// The model's axis keys, on a device with `device` keys. A board without keys of its
+    /// own in an axis's `home` table gets the table without it.
     pub(super) fn axis_machine(
         &mut self,
         ctx: &AxisContext<'_>,
         model: Model,
-        raw: &RawAxis,
-    ) -> Option<AxisMachine> {
-        Some(match model {
-            Model::QQ2DRV => AxisMachine::new(qq2drv::axis_keys(self, ctx, raw)?),
-            Model::TMCPACK => AxisMachine::new(tmcpack::axis_keys(self, ctx, raw)?),
-            _ => AxisMachine::PLAIN,
-        })
+        keys: &KeyTable<'_>,
+        device: &DeviceMachine,
+    ) -> Option<AxisKeys> {
+        let board = motion_boards::board(model);
+        let homes = board
+            .axis_key_names()
+            .iter()
+            .any(|key| key.starts_with("home."));
+        let keys = if homes {
+            keys.clone()
+        } else {
+            keys.without(|key| key == "home")
+        };
+        board.axis_keys(&keys, device, ctx, self)
     }
 
     /// Checks across tables (keys that must agree between axes of one device, addresses
-    /// against other devices), after everything else was validated.
-    pub(super) fn machine_cross_checks(&mut self, config: &ServerConfig, raw: &RawConfig) {
-        tmcpack::cross_check(self, config, raw);
-        qq2drv::cross_check(self, config, raw);
-        qsb::cross_check(self, config, raw);
-        spimotor::cross_check(self, config, raw);
+    /// against other devices), after everything else was validated: each model present
+    /// checks its own.
+    pub(super) fn machine_cross_checks(
+        &mut self,
+        config: &ServerConfig,
+        raw: &RawConfig,
+        tables: &split::BoardTables<'_>,
+    ) {
+        let view = view(config, raw, tables);
+        let mut models: Vec<Model> = Vec::new();
+        for device in &config.devices {
+            if !models.contains(&device.model) {
+                models.push(device.model);
+            }
+        }
+        for model in models {
+            motion_boards::board(model).cross_check(&view, self);
+        }
     }
+}
+
+/// Where the raw table of `items` named `name` is.
+fn named<'r, T>(
+    items: &'r [Spanned<T>],
+    name: &str,
+    name_of: impl Fn(&T) -> Option<&Spanned<String>>,
+) -> Option<(usize, &'r Spanned<T>)> {
+    items
+        .iter()
+        .enumerate()
+        .find(|(_, item)| name_of(item.get_ref()).is_some_and(|n| n.get_ref() == name))
+}
+
+/// The validated machine with where each part was written, for the boards' cross-checks.
+fn view<'a>(
+    config: &'a ServerConfig,
+    raw: &'a RawConfig,
+    tables: &'a split::BoardTables<'a>,
+) -> MachineView<'a> {
+    let mut view = MachineView::default();
+    for link in &config.links {
+        let Some((index, raw_link)) = named(&raw.link, &link.name, |l| l.name.as_ref()) else {
+            continue;
+        };
+        let raw_link = raw_link.get_ref();
+        view.links.push(LinkView {
+            index,
+            name: &link.name,
+            kind: link.kind,
+            line_rate: match link.transport {
+                Transport::Serial { baud, .. } => Some(baud),
+                Transport::Spidev { speed_hz, .. } => Some(speed_hz),
+                Transport::Sim { rate } => Some(rate),
+                Transport::SpiSocket { .. } => None,
+            },
+            rate_span: raw_link
+                .speed_hz
+                .as_ref()
+                .or(raw_link.baud.as_ref())
+                .map(Spanned::span),
+        });
+    }
+    for device in &config.devices {
+        let Some((index, raw_device)) = named(&raw.device, &device.name, |d| d.name.as_ref())
+        else {
+            continue;
+        };
+        let Some(keys) = tables.devices.get(index) else {
+            continue;
+        };
+        view.devices.push(DeviceView {
+            index,
+            name: &device.name,
+            link: device.link,
+            model: device.model,
+            address: device.address,
+            address_span: raw_device.get_ref().address.as_ref().map(Spanned::span),
+            table: raw_device.span(),
+            machine: &device.machine,
+            keys,
+        });
+    }
+    for (axis, spec) in config.axes.iter().zip(&config.axis_specs) {
+        let Some((index, raw_axis)) = named(&raw.axis, &axis.name, |a| a.name.as_ref()) else {
+            continue;
+        };
+        let Some(keys) = tables.axes.get(index) else {
+            continue;
+        };
+        view.axes.push(AxisView {
+            index,
+            name: &axis.name,
+            device: axis.device,
+            channel: axis.channel,
+            table: raw_axis.span(),
+            device_span: raw_axis
+                .get_ref()
+                .device
+                .as_ref()
+                .map_or(raw_axis.span(), Spanned::span),
+            machine: &spec.machine,
+            keys,
+        });
+    }
+    for signal in &config.signals {
+        let Some((index, raw_signal)) = named(&raw.signal, &signal.name, |s| s.name.as_ref())
+        else {
+            continue;
+        };
+        let r = raw_signal.get_ref();
+        view.signals.push(SignalView {
+            index,
+            name: &signal.name,
+            device: signal.device,
+            kind: signal.kind,
+            pin: signal.pin,
+            pin_name: &signal.pin_name,
+            pin_span: r.pin.as_ref().map_or(raw_signal.span(), Spanned::span),
+            kind_span: r.kind.as_ref().map_or(raw_signal.span(), Spanned::span),
+            table: raw_signal.span(),
+        });
+    }
+    view
 }

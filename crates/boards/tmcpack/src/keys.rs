@@ -3,15 +3,162 @@
 //! config by `TmcpackDriverConfig::from_spec`. Every value is checked against the range the
 //! Trinamic SIXpack/QUADpack manual (V2.43) gives for the instruction it becomes.
 
-use motion_drivers::spec::{PackVariant, ReadyOutputKeys, TmcpackAxisKeys, TmcpackDeviceKeys};
+use motion_board::keys::{AxisContext, DeviceContext, Int, KeyIssues, KeyTable, Spanned};
+use motion_board::machine::MachineView;
+use motion_board::{Given, HomeHints};
+use motion_drivers::spec::{
+    Direction, PackVariant, ReadyOutputKeys, TmcpackAxisKeys, TmcpackDeviceKeys,
+};
 use motion_drivers::tmcpack::{MAX_DEBOUNCE_MS, is_current_level, is_weak_current, word_time};
 use motion_drivers::{Model, SignalKind};
-use toml::Spanned;
+use serde::Deserialize;
 
-use super::{AxisContext, DeviceContext};
-use crate::config::raw::{Int, RawAxis, RawConfig, RawDevice};
-use crate::config::validate::Validator;
-use crate::config::{ServerConfig, Transport};
+/// The tmcpack keys of a `[[device]]` as written.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawDevice {
+    variant: Option<Spanned<String>>,
+    reply_address: Option<Spanned<Int>>,
+    switchover_ms: Option<Spanned<Int>>,
+    packet_timeout_ms: Option<Spanned<Int>>,
+    ready_output: Option<Spanned<RawReadyOutput>>,
+}
+
+/// `ready_output = { motors = [0, 1], reference = [0] }`: TTLOUT1 as the ready output
+/// ($32 P3) with the $33 masks.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawReadyOutput {
+    motors: Option<Spanned<Vec<Spanned<Int>>>>,
+    reference: Option<Spanned<Vec<Spanned<Int>>>>,
+}
+
+/// The tmcpack keys of an `[[axis]]` as written.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawAxis {
+    current: Option<Spanned<RawCurrent>>,
+    reference: Option<Spanned<RawReference>>,
+    rotary: Option<Spanned<bool>>,
+    revolution: Option<Spanned<f64>>,
+    analog_stop: Option<Spanned<RawAnalogStop>>,
+}
+
+/// `current = { peak, standby, standstill, constant, accel, standby_delay_ms }` ($10, $11).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawCurrent {
+    peak: Option<Spanned<f64>>,
+    standby: Option<Spanned<f64>>,
+    standstill: Option<Spanned<f64>>,
+    constant: Option<Spanned<f64>>,
+    accel: Option<Spanned<f64>>,
+    standby_delay_ms: Option<Spanned<Int>>,
+}
+
+/// `reference = { side, active, center, stop_at_switch, soft_stop, debounce_ms,
+/// null_offset, test_range, fast, mechanical }` ($15, $16, $18).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawReference {
+    side: Option<Spanned<String>>,
+    active: Option<Spanned<String>>,
+    center: Option<Spanned<bool>>,
+    stop_at_switch: Option<Spanned<bool>>,
+    soft_stop: Option<Spanned<bool>>,
+    debounce_ms: Option<Spanned<Int>>,
+    null_offset: Option<Spanned<f64>>,
+    test_range: Option<Spanned<f64>>,
+    fast: Option<Spanned<bool>>,
+    mechanical: Option<Spanned<bool>>,
+}
+
+/// `analog_stop = { left, right }` ($31), ADC counts 0..=1023.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawAnalogStop {
+    left: Option<Spanned<Int>>,
+    right: Option<Spanned<Int>>,
+}
+
+/// The device keys the board has (for the server's key check).
+pub(crate) const DEVICE_KEYS: &[&str] = &[
+    "variant",
+    "reply_address",
+    "switchover_ms",
+    "packet_timeout_ms",
+    "ready_output",
+];
+
+/// The axis keys the board has.
+pub(crate) const AXIS_KEYS: &[&str] = &[
+    "current",
+    "reference",
+    "rotary",
+    "revolution",
+    "analog_stop",
+];
+
+/// The pack variant a `variant` names; an issue for any other value.
+fn variant(v: &mut dyn KeyIssues, ctx: &DeviceContext, raw: &RawDevice) -> Option<PackVariant> {
+    let Some(value) = &raw.variant else {
+        return Some(PackVariant::Sixpack);
+    };
+    match value.get_ref().as_str() {
+        "sixpack" => Some(PackVariant::Sixpack),
+        "quadpack" => Some(PackVariant::Quadpack),
+        other => {
+            v.issue(
+                value.span(),
+                &ctx.key("variant"),
+                format!(
+                    "unknown variant {other:?}; allowed: \"sixpack\" (6 motors), \"quadpack\" (4)"
+                ),
+            );
+            None
+        }
+    }
+}
+
+/// `address`: the pack's RS-485 address, 0..=255 (manual 6.1); default 1.
+pub(crate) fn check_address(value: i128) -> Result<u32, String> {
+    if (0..=255).contains(&value) {
+        Ok(value as u32)
+    } else {
+        Err(format!("{value} is out of range; allowed: 0..=255"))
+    }
+}
+
+/// What `reference.side` says about the search direction.
+fn side_hint(v: &mut dyn KeyIssues, ctx: &AxisContext<'_>, raw: &RawAxis) -> Option<HomeHints> {
+    let mut hints = HomeHints::default();
+    let Some(side) = raw
+        .reference
+        .as_ref()
+        .and_then(|r| r.get_ref().side.as_ref())
+    else {
+        return Some(hints);
+    };
+    let key = ctx.key("reference.side");
+    let direction = match side.get_ref().as_str() {
+        "left" => Direction::Negative,
+        "right" => Direction::Positive,
+        other => {
+            v.issue(
+                side.span(),
+                &key,
+                format!("unknown side {other:?}; allowed: \"left\" (zero point left of the driving range: the search runs to decreasing positions; NullLeft, default), \"right\""),
+            );
+            return None;
+        }
+    };
+    hints.direction.push(Given {
+        value: direction,
+        span: side.span(),
+        key,
+    });
+    Some(hints)
+}
 
 /// The reply address the driver uses unless `reply_address` is set.
 pub const DEFAULT_REPLY_ADDRESS: u8 = motion_drivers::tmcpack::DEFAULT_REPLY_ADDRESS;
@@ -24,7 +171,7 @@ const LEVELS: &str = "100, 75, 50, 38, 25, 19, 13, 9, 0";
 
 /// An even number of ms in `range`, for keys in the pack's 2 ms units.
 fn even_ms(
-    v: &mut Validator<'_, '_>,
+    v: &mut dyn KeyIssues,
     value: &Spanned<Int>,
     key: &str,
     range: core::ops::RangeInclusive<i64>,
@@ -48,27 +195,18 @@ fn even_ms(
     }
 }
 
-/// Motors of the variant a raw `variant` names (unknown names are reported elsewhere).
-fn motors_of(raw: &RawDevice) -> u8 {
-    match raw.variant.as_ref().map(|v| v.get_ref().as_str()) {
-        Some("quadpack") => 4,
-        _ => 6,
-    }
-}
-
 /// Validates the tmcpack keys of a `[[device]]` table.
-pub(in crate::config) fn device_keys(
-    v: &mut Validator<'_, '_>,
+pub(crate) fn device_keys(
+    v: &mut dyn KeyIssues,
     ctx: &DeviceContext,
-    raw: &RawDevice,
+    keys: &KeyTable<'_>,
 ) -> Option<TmcpackDeviceKeys> {
+    let raw: RawDevice = keys.parse(v)?;
+    let raw = &raw;
     let mut ok = true;
+    let variant = variant(v, ctx, raw)?;
     let mut keys = TmcpackDeviceKeys {
-        variant: if motors_of(raw) == 4 {
-            PackVariant::Quadpack
-        } else {
-            PackVariant::Sixpack
-        },
+        variant,
         ..TmcpackDeviceKeys::default()
     };
     if let Some(value) = &raw.reply_address {
@@ -102,7 +240,10 @@ pub(in crate::config) fn device_keys(
         }
     }
     if let Some(ready) = &raw.ready_output {
-        let motors = motors_of(raw);
+        let motors: u8 = match variant {
+            PackVariant::Quadpack => 4,
+            PackVariant::Sixpack => 6,
+        };
         let all = (1u8 << motors) - 1;
         let mut mask = |list: &Option<Spanned<Vec<Spanned<Int>>>>, k: &str| -> Option<u8> {
             let Some(list) = list else {
@@ -148,7 +289,7 @@ pub(in crate::config) fn device_keys(
 }
 
 /// A current level of $11 from a percentage.
-fn level(v: &mut Validator<'_, '_>, value: &Spanned<f64>, key: &str) -> Option<u8> {
+fn level(v: &mut dyn KeyIssues, value: &Spanned<f64>, key: &str) -> Option<u8> {
     let p = *value.get_ref();
     let found = (p.is_finite() && p.fract() == 0.0 && (0.0..=100.0).contains(&p))
         .then_some(p as u8)
@@ -180,12 +321,15 @@ fn flag(value: &Option<Spanned<bool>>) -> Option<bool> {
 }
 
 /// Validates the tmcpack keys of an `[[axis]]` table.
-pub(in crate::config) fn axis_keys(
-    v: &mut Validator<'_, '_>,
+pub(crate) fn axis_keys(
+    v: &mut dyn KeyIssues,
     ctx: &AxisContext<'_>,
-    raw: &RawAxis,
-) -> Option<TmcpackAxisKeys> {
-    let mut ok = true;
+    keys: &KeyTable<'_>,
+) -> Option<(TmcpackAxisKeys, HomeHints)> {
+    let raw: RawAxis = keys.parse(v)?;
+    let raw = &raw;
+    let home = side_hint(v, ctx, raw);
+    let mut ok = home.is_some();
     let mut keys = TmcpackAxisKeys::default();
     let cpu = ctx.counts_per_unit.map(f64::abs);
     if let Some(current) = &raw.current {
@@ -355,13 +499,13 @@ pub(in crate::config) fn axis_keys(
             );
         }
     }
-    ok.then_some(keys)
+    ok.then_some((keys, home?))
 }
 
 /// $15 poslimit: one revolution of a rotary axis, the travel of a linear one, in
 /// microsteps; it must fit 0..=0x7FFFFFFF.
 fn poslimit_fits(
-    v: &mut Validator<'_, '_>,
+    v: &mut dyn KeyIssues,
     ctx: &AxisContext<'_>,
     raw: &RawAxis,
     revolution: Option<f64>,
@@ -380,7 +524,7 @@ fn poslimit_fits(
         ),
         (None, Some(lo), Some(hi)) => (
             hi - lo,
-            raw.max.as_ref().map_or(ctx.table.clone(), Spanned::span),
+            ctx.max_span.clone().unwrap_or_else(|| ctx.table.clone()),
             ctx.key("max"),
             "the travel max − min",
         ),
@@ -399,7 +543,7 @@ fn poslimit_fits(
         && hi - lo > r
     {
         v.warn(
-            raw.max.as_ref().map_or(ctx.table.clone(), Spanned::span),
+            ctx.max_span.clone().unwrap_or_else(|| ctx.table.clone()),
             &ctx.key("max"),
             format!("a rotary axis's positions lie within one revolution ({r}) of the zero point (manual 8.4 $23: \"0 <= position < poslimit\" for a switch on the left); min..max spans {}", hi - lo),
         );
@@ -407,46 +551,26 @@ fn poslimit_fits(
     true
 }
 
-/// Index of the raw table of the device called `name`.
-fn raw_device<'r>(raw: &'r RawConfig, name: &str) -> Option<(usize, &'r RawDevice)> {
-    raw.device.iter().enumerate().find_map(|(i, d)| {
-        let d = d.get_ref();
-        d.name
-            .as_ref()
-            .is_some_and(|n| n.get_ref() == name)
-            .then_some((i, d))
-    })
-}
-
 /// Checks across tables for tmcpack devices (after everything else was validated).
-pub(in crate::config) fn cross_check(
-    v: &mut Validator<'_, '_>,
-    config: &ServerConfig,
-    raw: &RawConfig,
-) {
-    reply_addresses(v, config, raw);
-    peak_pairs(v, config, raw);
-    ready_output_signals(v, config, raw);
-    packet_timeouts(v, config, raw);
+pub(crate) fn cross_check(v: &mut dyn KeyIssues, machine: &MachineView<'_>) {
+    reply_addresses(v, machine);
+    peak_pairs(v, machine);
+    ready_output_signals(v, machine);
+    packet_timeouts(v, machine);
 }
 
-/// The device keys of tmcpack device `d`.
-pub(crate) fn device_keys_of(config: &ServerConfig, d: usize) -> Option<&TmcpackDeviceKeys> {
-    config.devices.get(d)?.machine.get::<TmcpackDeviceKeys>()
+/// The device keys of pack `d` (an index into the view's devices).
+fn device_keys_of<'m>(machine: &'m MachineView<'_>, d: usize) -> Option<&'m TmcpackDeviceKeys> {
+    machine.devices.get(d)?.machine.get::<TmcpackDeviceKeys>()
 }
 
 /// The pack executes every word that starts with its address, replies included: no reply
 /// address may be the address of a pack on the same link (manual 6.1, 7.2 `$20`
 /// "address of the receiver").
-fn reply_addresses(v: &mut Validator<'_, '_>, config: &ServerConfig, raw: &RawConfig) {
-    let packs: Vec<(usize, &crate::config::DeviceSpec)> = config
-        .devices
-        .iter()
-        .enumerate()
-        .filter(|(_, d)| d.model == Model::TMCPACK)
-        .collect();
+fn reply_addresses(v: &mut dyn KeyIssues, machine: &MachineView<'_>) {
+    let packs: Vec<_> = machine.devices_of(Model::TMCPACK).collect();
     for &(a, asking) in &packs {
-        let Some(keys) = device_keys_of(config, a) else {
+        let Some(keys) = device_keys_of(machine, a) else {
             continue;
         };
         let reply = keys.reply_address.unwrap_or(DEFAULT_REPLY_ADDRESS);
@@ -454,29 +578,22 @@ fn reply_addresses(v: &mut Validator<'_, '_>, config: &ServerConfig, raw: &RawCo
             if other.address != u32::from(reply) {
                 continue;
             }
-            let link = config
-                .links
-                .get(asking.link)
-                .map_or("?", |l| l.name.as_str());
-            let asking_raw = raw_device(raw, &asking.name);
-            let explicit =
-                asking_raw.and_then(|(i, d)| d.reply_address.as_ref().map(|s| (i, s.span())));
+            let link = machine.links.get(asking.link).map_or("?", |l| l.name);
+            let explicit = asking
+                .keys
+                .parse_quiet::<RawDevice>()
+                .and_then(|raw| raw.reply_address.map(|s| s.span()));
             match explicit {
-                Some((i, span)) => v.issue(
+                Some(span) => v.issue(
                     span,
-                    &format!("device[{i}].reply_address"),
+                    &format!("device[{}].reply_address", asking.index),
                     format!("{reply} is the address of pack `{}` on link `{link}`: that pack would take the replies for requests; choose an address no pack on the link has", other.name),
                 ),
-                None => {
-                    let (i, span) = raw_device(raw, &other.name)
-                        .map(|(i, d)| (i, d.address.as_ref().map_or(0..0, Spanned::span)))
-                        .unwrap_or((0, 0..0));
-                    v.issue(
-                        span,
-                        &format!("device[{i}].address"),
-                        format!("{reply} is the reply address pack `{}` uses (reply_address, default {DEFAULT_REPLY_ADDRESS}) on link `{link}`: this pack would take its replies for requests; change this address or set `reply_address` on `{}`", asking.name, asking.name),
-                    );
-                }
+                None => v.issue(
+                    other.address_span.clone().unwrap_or(0..0),
+                    &format!("device[{}].address", other.index),
+                    format!("{reply} is the reply address pack `{}` uses (reply_address, default {DEFAULT_REPLY_ADDRESS}) on link `{link}`: this pack would take its replies for requests; change this address or set `reply_address` on `{}`", asking.name, asking.name),
+                ),
             }
         }
     }
@@ -484,13 +601,13 @@ fn reply_addresses(v: &mut Validator<'_, '_>, config: &ServerConfig, raw: &RawCo
 
 /// $10 "settings are done for pairs of motors, i.e. each two motors 0 + 1, 2 + 3
 /// respectively 4 + 5 have the same peak current".
-fn peak_pairs(v: &mut Validator<'_, '_>, config: &ServerConfig, raw: &RawConfig) {
-    for (i, (axis, spec)) in config.axes.iter().zip(&config.axis_specs).enumerate() {
-        let Some(keys) = spec.machine.get::<TmcpackAxisKeys>() else {
+fn peak_pairs(v: &mut dyn KeyIssues, machine: &MachineView<'_>) {
+    for (i, axis) in machine.axes.iter().enumerate() {
+        let Some(keys) = axis.machine.get::<TmcpackAxisKeys>() else {
             continue;
         };
         let partner = axis.channel ^ 1;
-        let Some((j, other)) = config
+        let Some((j, other)) = machine
             .axes
             .iter()
             .enumerate()
@@ -498,30 +615,30 @@ fn peak_pairs(v: &mut Validator<'_, '_>, config: &ServerConfig, raw: &RawConfig)
         else {
             continue;
         };
-        let other_peak = config
-            .axis_specs
-            .get(j)
-            .and_then(|s| s.machine.get::<TmcpackAxisKeys>())
+        let other_peak = other
+            .machine
+            .get::<TmcpackAxisKeys>()
             .and_then(|k| k.current.peak);
-        let span = raw
-            .axis
-            .get(i)
-            .and_then(|a| a.get_ref().current.as_ref())
-            .and_then(|c| c.get_ref().peak.as_ref())
-            .map(Spanned::span);
+        let span = axis
+            .keys
+            .parse_quiet::<RawAxis>()
+            .and_then(|raw| raw.current)
+            .and_then(|c| c.into_inner().peak)
+            .map(|peak| peak.span());
         let (Some(mine), Some(span)) = (keys.current.peak, span) else {
             continue;
         };
         let pair = format!("motors {} and {}", axis.channel & !1, axis.channel | 1);
+        let key = format!("axis[{}].current.peak", axis.index);
         match other_peak {
             Some(theirs) if theirs != mine && j < i => v.issue(
                 span,
-                &format!("axis[{i}].current.peak"),
+                &key,
                 format!("{mine} differs from axis `{}` ({theirs}): {pair} share one peak current (manual 8.3 $10: \"settings are done for pairs of motors\"); give both the same value", other.name),
             ),
             None => v.warn(
                 span,
-                &format!("axis[{i}].current.peak"),
+                &key,
                 format!("{pair} share one peak current (manual 8.3 $10): {mine} % applies to axis `{}` too", other.name),
             ),
             _ => {}
@@ -530,25 +647,17 @@ fn peak_pairs(v: &mut Validator<'_, '_>, config: &ServerConfig, raw: &RawConfig)
 }
 
 /// TTLOUT1 is either the ready output or a plain output.
-fn ready_output_signals(v: &mut Validator<'_, '_>, config: &ServerConfig, raw: &RawConfig) {
-    for (s, signal) in config.signals.iter().enumerate() {
-        let ready = device_keys_of(config, signal.device).and_then(|k| k.ready_output);
+fn ready_output_signals(v: &mut dyn KeyIssues, machine: &MachineView<'_>) {
+    for signal in &machine.signals {
+        let ready = device_keys_of(machine, signal.device).and_then(|k| k.ready_output);
         if ready.is_none() || signal.pin_name != "ttlout1" || signal.kind != SignalKind::DigitalOut
         {
             continue;
         }
-        let device = config
-            .devices
-            .get(signal.device)
-            .map_or("?", |d| d.name.as_str());
-        let span = raw
-            .signal
-            .get(s)
-            .and_then(|r| r.get_ref().pin.as_ref())
-            .map_or(0..0, Spanned::span);
+        let device = machine.devices.get(signal.device).map_or("?", |d| d.name);
         v.issue(
-            span,
-            &format!("signal[{s}].pin"),
+            signal.pin_span.clone(),
+            &format!("signal[{}].pin", signal.index),
             format!("TTLOUT1 of device `{device}` is its ready output (ready_output, manual 8.5 $32 P3); it cannot also be a digital-out signal — remove ready_output or use ttlio1"),
         );
     }
@@ -556,24 +665,24 @@ fn ready_output_signals(v: &mut Validator<'_, '_>, config: &ServerConfig, raw: &
 
 /// $41: "The command word always has to be completely transmitted during a parameterized
 /// timeout": a timeout shorter than one word at the link's rate would abort every request.
-fn packet_timeouts(v: &mut Validator<'_, '_>, config: &ServerConfig, raw: &RawConfig) {
-    for (d, device) in config.devices.iter().enumerate() {
-        let Some(ms) = device_keys_of(config, d).and_then(|k| k.packet_timeout_ms) else {
+fn packet_timeouts(v: &mut dyn KeyIssues, machine: &MachineView<'_>) {
+    for (d, device) in machine.devices.iter().enumerate() {
+        let Some(ms) = device_keys_of(machine, d).and_then(|k| k.packet_timeout_ms) else {
             continue;
         };
-        let baud = match config.links.get(device.link).map(|l| &l.transport) {
-            Some(Transport::Serial { baud, .. }) => *baud,
-            Some(Transport::Sim { rate }) => *rate,
-            _ => continue,
+        let Some(baud) = machine.links.get(device.link).and_then(|l| l.line_rate) else {
+            continue;
         };
         let word = word_time(baud);
         if u128::from(ms) * 1000 < word.as_micros() {
-            let (i, span) = raw_device(raw, &device.name)
-                .map(|(i, r)| (i, r.packet_timeout_ms.as_ref().map_or(0..0, Spanned::span)))
-                .unwrap_or((d, 0..0));
+            let span = device
+                .keys
+                .parse_quiet::<RawDevice>()
+                .and_then(|raw| raw.packet_timeout_ms.map(|s| s.span()))
+                .unwrap_or(0..0);
             v.issue(
                 span,
-                &format!("device[{i}].packet_timeout_ms"),
+                &format!("device[{}].packet_timeout_ms", device.index),
                 format!("{ms} ms is shorter than one 9-byte word at {baud} baud ({:.1} ms): the pack would abort every request", word.as_secs_f64() * 1000.0),
             );
         }

@@ -2,6 +2,10 @@
 //! `motion_drivers::spec::SpimotorDeviceKeys`, turned into the driver's config by
 //! `SpimotorDriverConfig::from_spec`.
 //!
+//! `drive`: "stepper" (one axis on channel 0; default) or "brushed" (channels 0 = A,
+//! 1 = B). `address` (the server's general key, checked here): an even number 2..=254,
+//! bit 0 being the read flag; default 0x90.
+//!
 //! Per `[[device]]` (the SPI_motor "Motor protocol" page, write ports):
 //! - `intensity`: port 0x10 "Set drive intensity for stepper mode (default is 0x20)",
 //!   0..=255;
@@ -11,25 +15,58 @@
 //! Both are stepper settings: on a `drive = "brushed"` board they would do nothing (the
 //! brushed section's intensity is each spin command's byte), so they are an error there.
 
+use motion_board::keys::{DeviceContext, Int, KeyIssues, KeyTable, Spanned};
 use motion_drivers::spec::{SpiDrive, SpimotorDeviceKeys};
-use toml::Spanned;
+use serde::Deserialize;
 
-use super::DeviceContext;
-use crate::config::ServerConfig;
-use crate::config::raw::{Int, RawConfig, RawDevice};
-use crate::config::validate::Validator;
+/// The spimotor keys of a `[[device]]` as written.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawDevice {
+    drive: Option<Spanned<String>>,
+    intensity: Option<Spanned<Int>>,
+    coils: Option<Spanned<Int>>,
+}
+
+/// The device keys the board has (for the server's key check).
+pub(crate) const DEVICE_KEYS: &[&str] = &["drive", "intensity", "coils"];
+
+/// `address`: "an even number 2..=254 (bit 0 is the read flag)".
+pub(crate) fn check_address(value: i128) -> Result<u32, String> {
+    if (2..=254).contains(&value) && value % 2 == 0 {
+        Ok(value as u32)
+    } else {
+        Err(format!(
+            "{value} is not an SPI_motor address; allowed: an even number 2..=254 (bit 0 is \
+             the read flag), default 0x90 = 144"
+        ))
+    }
+}
 
 /// Validates the spimotor keys of a `[[device]]` table.
-pub(in crate::config) fn device_keys(
-    v: &mut Validator<'_, '_>,
+pub(crate) fn device_keys(
+    v: &mut dyn KeyIssues,
     ctx: &DeviceContext,
-    raw: &RawDevice,
+    keys: &KeyTable<'_>,
 ) -> Option<SpimotorDeviceKeys> {
-    let brushed = raw
-        .drive
-        .as_ref()
-        .is_some_and(|drive| drive.get_ref() == "brushed");
+    let raw: RawDevice = keys.parse(v)?;
     let mut ok = true;
+    let brushed = match &raw.drive {
+        None => false,
+        Some(drive) => match drive.get_ref().as_str() {
+            "stepper" => false,
+            "brushed" => true,
+            other => {
+                v.issue(
+                    drive.span(),
+                    &ctx.key("drive"),
+                    format!("unknown drive {other:?}; allowed: \"stepper\" (one axis, channel 0), \"brushed\" (channels 0 = A, 1 = B)"),
+                );
+                ok = false;
+                false
+            }
+        },
+    };
     let intensity = stepper_only(v, ctx, brushed, &raw.intensity, "intensity", &mut ok);
     let coils = stepper_only(v, ctx, brushed, &raw.coils, "coils", &mut ok);
     let intensity = match intensity {
@@ -83,7 +120,7 @@ pub(in crate::config) fn device_keys(
 
 /// `value` of a stepper-only key: an issue (and `None`) on a brushed board.
 fn stepper_only<'a>(
-    v: &mut Validator<'_, '_>,
+    v: &mut dyn KeyIssues,
     ctx: &DeviceContext,
     brushed: bool,
     value: &'a Option<Spanned<Int>>,
@@ -105,14 +142,4 @@ fn stepper_only<'a>(
         return None;
     }
     Some(value)
-}
-
-/// Checks across tables for spimotor devices (after everything else was validated): none
-/// so far (addresses on a shared bus are checked with the devices).
-pub(in crate::config) fn cross_check(
-    v: &mut Validator<'_, '_>,
-    config: &ServerConfig,
-    raw: &RawConfig,
-) {
-    let _ = (v, config, raw);
 }

@@ -2,35 +2,120 @@
 //! `motion_drivers::spec::QsbDeviceKeys`, turned into the driver's config by
 //! `QsbDriverConfig::from_spec`.
 //!
-//! The home keys (`home_direction`, `home_max_travel`, `home_offset`) are resolved with the
-//! general `home` table into the axis's `HomeSpec` (`validate/home.rs`).
+//! The home keys (`home_direction`, `home_max_travel`, `home_offset`) are handed to the
+//! server as `HomeHints`: it resolves them with the general `home` table into the axis's
+//! `HomeSpec` and refuses a disagreement.
 
 use core::time::Duration;
 
-use motion_drivers::SignalKind;
+use motion_board::keys::{DeviceContext, Int, KeyIssues, KeyTable, Spanned};
+use motion_board::machine::MachineView;
+use motion_board::{Given, HomeHints};
 use motion_drivers::qsb::{
     LONGEST_INTERVAL_TICKS, MOTOR_DRIVE_BITS, PinRole, QsbDriverConfig, TICK, interval_ticks,
 };
-use motion_drivers::spec::{QsbDeviceKeys, QsbInputMode};
-use toml::Spanned;
+use motion_drivers::spec::{Direction, QsbDeviceKeys, QsbInputMode, QsbVariant};
+use motion_drivers::{Model, SignalKind};
+use serde::Deserialize;
 
-use super::DeviceContext;
-use crate::config::raw::{Int, RawConfig, RawDevice};
-use crate::config::validate::Validator;
-use crate::config::{QsbVariant, ServerConfig, Transport};
+/// The qsb keys of a `[[device]]` as written.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawDevice {
+    variant: Option<Spanned<String>>,
+    counts_per_step: Option<Spanned<f64>>,
+    home_direction: Option<Spanned<String>>,
+    home_max_travel: Option<Spanned<f64>>,
+    home_offset: Option<Spanned<f64>>,
+    index_polarity: Option<Spanned<String>>,
+    stream_interval_ms: Option<Spanned<f64>>,
+    host_latency_ms: Option<Spanned<f64>>,
+    enable_output: Option<Spanned<Int>>,
+    enable_active: Option<Spanned<String>>,
+    input_mode: Option<Spanned<String>>,
+    capture_input: Option<Spanned<Int>>,
+    capture_edge: Option<Spanned<String>>,
+}
 
-/// The product a raw `variant` names (the central validation reports a bad one).
-fn variant_of(raw: &RawDevice) -> QsbVariant {
-    match raw.variant.as_ref().map(|v| v.get_ref().as_str()) {
-        Some("qsb-s") => QsbVariant::S,
-        Some("qsb-d") => QsbVariant::D,
-        _ => QsbVariant::M,
+/// The device keys the board has (for the server's key check).
+pub(crate) const DEVICE_KEYS: &[&str] = &[
+    "variant",
+    "counts_per_step",
+    "home_direction",
+    "home_max_travel",
+    "home_offset",
+    "index_polarity",
+    "stream_interval_ms",
+    "host_latency_ms",
+    "enable_output",
+    "enable_active",
+    "input_mode",
+    "capture_input",
+    "capture_edge",
+];
+
+/// The product a `variant` names; an issue for any other value.
+fn variant(v: &mut dyn KeyIssues, ctx: &DeviceContext, raw: &RawDevice) -> Option<QsbVariant> {
+    let Some(value) = &raw.variant else {
+        return Some(QsbVariant::M);
+    };
+    match value.get_ref().as_str() {
+        "qsb-m" => Some(QsbVariant::M),
+        "qsb-s" => Some(QsbVariant::S),
+        "qsb-d" => Some(QsbVariant::D),
+        other => {
+            v.issue(
+                value.span(),
+                &ctx.key("variant"),
+                format!("unknown variant {other:?}; allowed: \"qsb-m\" (encoder, 4 digital I/O, stepper drive; default), \"qsb-s\" (encoder only), \"qsb-d\" (differential encoder, 1 digital I/O)"),
+            );
+            None
+        }
     }
+}
+
+/// What the device's home keys say about its axis's reference search.
+fn home_hints(v: &mut dyn KeyIssues, ctx: &DeviceContext, raw: &RawDevice) -> Option<HomeHints> {
+    let mut hints = HomeHints::default();
+    if let Some(value) = &raw.home_direction {
+        let direction = match value.get_ref().as_str() {
+            "negative" => Direction::Negative,
+            "positive" => Direction::Positive,
+            other => {
+                v.issue(
+                    value.span(),
+                    &ctx.key("home_direction"),
+                    format!("unknown direction {other:?}; allowed: \"negative\" (towards min; default), \"positive\" (towards max)"),
+                );
+                return None;
+            }
+        };
+        hints.direction.push(Given {
+            value: direction,
+            span: value.span(),
+            key: ctx.key("home_direction"),
+        });
+    }
+    if let Some(value) = &raw.home_max_travel {
+        hints.max_travel.push(Given {
+            value: *value.get_ref(),
+            span: value.span(),
+            key: ctx.key("home_max_travel"),
+        });
+    }
+    if let Some(value) = &raw.home_offset {
+        hints.position.push(Given {
+            value: *value.get_ref(),
+            span: value.span(),
+            key: ctx.key("home_offset"),
+        });
+    }
+    Some(hints)
 }
 
 /// One of `allowed` (name, value) for a string key; an issue naming them otherwise.
 fn choice<T: Copy>(
-    v: &mut Validator<'_, '_>,
+    v: &mut dyn KeyIssues,
     value: &Spanned<String>,
     key: &str,
     allowed: &[(&str, T)],
@@ -55,12 +140,14 @@ fn choice<T: Copy>(
 }
 
 /// Validates the qsb keys of a `[[device]]` table.
-pub(in crate::config) fn device_keys(
-    v: &mut Validator<'_, '_>,
+pub(crate) fn device_keys(
+    v: &mut dyn KeyIssues,
     ctx: &DeviceContext,
-    raw: &RawDevice,
-) -> Option<QsbDeviceKeys> {
-    let product = variant_of(raw);
+    keys: &KeyTable<'_>,
+) -> Option<(QsbDeviceKeys, HomeHints)> {
+    let raw: RawDevice = keys.parse(v)?;
+    let home = home_hints(v, ctx, &raw);
+    let product = variant(v, ctx, &raw)?;
     let mut keys = QsbDeviceKeys {
         variant: product,
         ..QsbDeviceKeys::default()
@@ -152,11 +239,11 @@ pub(in crate::config) fn device_keys(
     }
     // Keys in error stay unset here; the issues already refuse the file, and the other
     // tables are still checked against the rest (every issue at once).
-    Some(keys)
+    Some((keys, home?))
 }
 
 /// `stream_interval_ms`: whole ticks of 1/512 s, 1..=0xFFFE.
-fn stream_interval(v: &mut Validator<'_, '_>, value: &Spanned<f64>, key: &str) -> Option<u16> {
+fn stream_interval(v: &mut dyn KeyIssues, value: &Spanned<f64>, key: &str) -> Option<u16> {
     let ms = *value.get_ref();
     let tick_ms = TICK.as_secs_f64() * 1000.0;
     let longest = f64::from(LONGEST_INTERVAL_TICKS) * tick_ms;
@@ -190,7 +277,7 @@ fn stream_interval(v: &mut Validator<'_, '_>, value: &Spanned<f64>, key: &str) -
 
 /// `enable_output`: bit 0 or 3 of a qsb-m.
 fn enable_output(
-    v: &mut Validator<'_, '_>,
+    v: &mut dyn KeyIssues,
     value: &Spanned<Int>,
     key: &str,
     product: QsbVariant,
@@ -218,7 +305,7 @@ fn enable_output(
 
 /// `capture_input`: a DIG I/O bit of the product.
 fn capture_input(
-    v: &mut Validator<'_, '_>,
+    v: &mut dyn KeyIssues,
     value: &Spanned<Int>,
     key: &str,
     product: QsbVariant,
@@ -240,57 +327,26 @@ fn capture_input(
     None
 }
 
-/// Where a raw table of `items` named `name` is.
-fn named<'r, T>(
-    items: &'r [Spanned<T>],
-    name: &str,
-    name_of: impl Fn(&T) -> Option<&Spanned<String>>,
-) -> Option<(usize, &'r Spanned<T>)> {
-    items
-        .iter()
-        .enumerate()
-        .find(|(_, item)| name_of(item.get_ref()).is_some_and(|n| n.get_ref() == name))
-}
-
 /// Checks across tables for qsb devices (after everything else was validated): no axis on
 /// a device in PWM / analog mode, signals that clash with the motor drive, the enable line
 /// or the capture input, and a stream the line cannot carry.
-pub(in crate::config) fn cross_check(
-    v: &mut Validator<'_, '_>,
-    config: &ServerConfig,
-    raw: &RawConfig,
-) {
-    for (index, device) in config.devices.iter().enumerate() {
+pub(crate) fn cross_check(v: &mut dyn KeyIssues, machine: &MachineView<'_>) {
+    for (index, device) in machine.devices_of(Model::QSB) {
         let Some(keys) = device.machine.get::<QsbDeviceKeys>() else {
             continue;
         };
-        let Some((raw_index, raw_device)) = named(&raw.device, &device.name, |d| d.name.as_ref())
-        else {
+        let Some(raw_device) = device.keys.parse_quiet::<RawDevice>() else {
             continue;
         };
-        let raw_device = raw_device.get_ref();
-        let dkey = |k: &str| format!("device[{raw_index}].{k}");
+        let dkey = |k: &str| format!("device[{}].{k}", device.index);
         let product = keys.variant;
         let mode = keys.input_mode.unwrap_or_default();
-        let axes: Vec<&str> = config
-            .axes
-            .iter()
-            .filter(|axis| axis.device == index)
-            .map(|axis| axis.name.as_str())
-            .collect();
+        let axes: Vec<_> = machine.axes_on(index).collect();
         if mode != QsbInputMode::Quadrature {
-            for name in &axes {
-                let Some((i, axis)) = named(&raw.axis, name, |a| a.name.as_ref()) else {
-                    continue;
-                };
-                let span = axis
-                    .get_ref()
-                    .device
-                    .as_ref()
-                    .map_or(axis.span(), Spanned::span);
+            for axis in &axes {
                 v.issue(
-                    span,
-                    &format!("axis[{i}].device"),
+                    axis.device_span.clone(),
+                    &format!("axis[{}].device", axis.index),
                     format!("device `{}` has input_mode = \"{}\": it reads an absolute value as its `encoder` pin and carries no axis; use a [[signal]] with pin = \"encoder\" and kind = \"analog-in\"", device.name, if mode == QsbInputMode::Pwm { "pwm" } else { "analog" }),
                 );
             }
@@ -314,33 +370,24 @@ pub(in crate::config) fn cross_check(
                 format!("io{bit} is the motor drive's {} line while an axis drives this qsb-m; use io0 or io3", if bit == 1 { "step" } else { "direction" }),
             );
         }
-        signal_checks(v, config, raw, index, keys, drive);
-        line_budget(v, config, raw_device, raw_index, device.link, keys);
+        signal_checks(v, machine, index, keys, drive);
+        line_budget(v, machine, &raw_device, device.index, device.link, keys);
     }
 }
 
 /// The signals on qsb device `index`.
 fn signal_checks(
-    v: &mut Validator<'_, '_>,
-    config: &ServerConfig,
-    raw: &RawConfig,
+    v: &mut dyn KeyIssues,
+    machine: &MachineView<'_>,
     index: usize,
     keys: &QsbDeviceKeys,
     drive: bool,
 ) {
-    let device = &config.devices[index];
+    let device = &machine.devices[index];
     let product = keys.variant;
     let mode = keys.input_mode.unwrap_or_default();
-    for signal in config.signals.iter().filter(|s| s.device == index) {
-        let Some((i, raw_signal)) = named(&raw.signal, &signal.name, |s| s.name.as_ref()) else {
-            continue;
-        };
-        let span = raw_signal
-            .get_ref()
-            .pin
-            .as_ref()
-            .map_or(raw_signal.span(), Spanned::span);
-        let key = format!("signal[{i}].pin");
+    for signal in machine.signals_on(index) {
+        let key = format!("signal[{}].pin", signal.index);
         let why = match product.pin_role(signal.pin) {
             Some(PinRole::Io(bit)) if drive && MOTOR_DRIVE_BITS & (1 << bit) != 0 => format!(
                 "io{bit} is the motor drive's {} line while an axis drives qsb-m `{}` (\"digital I/O bits 1 and 2 are reserved for motor drive\"); use io0 or io3",
@@ -369,15 +416,15 @@ fn signal_checks(
             ),
             _ => continue,
         };
-        v.issue(span, &key, why);
+        v.issue(signal.pin_span.clone(), &key, why);
     }
 }
 
 /// Warns when the configured stream interval is shorter than an encoder line takes on the
 /// wire.
 fn line_budget(
-    v: &mut Validator<'_, '_>,
-    config: &ServerConfig,
+    v: &mut dyn KeyIssues,
+    machine: &MachineView<'_>,
     raw_device: &RawDevice,
     raw_index: usize,
     link: usize,
@@ -387,10 +434,8 @@ fn line_budget(
     else {
         return;
     };
-    let baud = match config.links.get(link).map(|l| &l.transport) {
-        Some(Transport::Serial { baud, .. }) => *baud,
-        Some(Transport::Sim { rate }) => *rate,
-        _ => return,
+    let Some(baud) = machine.links.get(link).and_then(|l| l.line_rate) else {
+        return;
     };
     let driver = QsbDriverConfig {
         baud,
