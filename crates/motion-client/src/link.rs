@@ -8,11 +8,11 @@ use std::cell::RefCell;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use motion_bridge::keys::{
+use motion_ipc::{CommandKind, CommandReply, CommandRequest, SCHEMA_VERSION};
+use motion_wire::keys::{
     Keys, Origin, Refusal, RequestMeta, SessionGrant, SessionOpen, SessionToken,
 };
-use motion_bridge::wire::{self, Payload, WireError};
-use motion_ipc::{CommandKind, CommandReply, CommandRequest, SCHEMA_VERSION};
+use motion_wire::wire::{self, Payload, WireError};
 use zenoh::Wait as _;
 use zenoh::handlers::RingChannel;
 use zenoh::liveliness::LivelinessToken;
@@ -32,7 +32,7 @@ use crate::{ClientError, ConnectError};
 /// over shared memory).
 const FEED_DEPTH: usize = 32;
 /// The identity a client uses when none is given.
-pub const DEFAULT_IDENTITY: &str = motion_bridge::keys::ANONYMOUS;
+pub const DEFAULT_IDENTITY: &str = motion_wire::keys::ANONYMOUS;
 
 /// Where and as whom a remote client connects (remote when `endpoint` is set).
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -145,7 +145,7 @@ impl Link {
         deadline: Instant,
     ) -> Result<Self, ConnectError> {
         let keys = Keys::new(server).map_err(|error| bad_name(error, server))?;
-        motion_bridge::keys::check_chunk("remote identity", &options.identity)
+        motion_wire::keys::check_chunk("remote identity", &options.identity)
             .map_err(|error| bad_name(error, &options.identity))?;
         let config = zenoh_config(options.zenoh_config.as_deref(), endpoint).map_err(|detail| {
             ConnectError::Network {

@@ -3,7 +3,7 @@
 //!
 //! [`ClientBuilder::remote`](crate::ClientBuilder::remote) makes a client that reads the
 //! server's description, frames, statistics and machine parameters from the bridge's zenoh
-//! key expressions (the `motion-ipc` C layouts, little-endian: `motion_bridge::wire`) and
+//! key expressions (the `motion-ipc` C layouts, little-endian: `motion_wire::wire`) and
 //! sends commands through the bridge's command queryable under an identity
 //! ([`ClientBuilder::identity`](crate::ClientBuilder::identity)) whose allow-list the bridge
 //! applies. Payloads are copies (nothing is in shared memory here); everything else —

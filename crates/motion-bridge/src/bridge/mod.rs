@@ -34,9 +34,9 @@ pub use net::zenoh_config;
 use self::net::Net;
 use self::server::{Ipc, Pending, ServerPorts};
 use crate::config::BridgeConfig;
-use crate::keys::{Keys, Origin, Refusal, RequestMeta};
 use crate::policy::{Policy, Remote, Verdict, is_safety};
-use crate::wire::{self, Payload};
+use motion_wire::keys::{Keys, Origin, Refusal, RequestMeta};
+use motion_wire::wire::{self, Payload};
 
 /// How long the loop sleeps at most between looks at the server.
 const POLL: Duration = Duration::from_millis(5);
@@ -83,7 +83,7 @@ pub(crate) enum Event {
 pub enum BridgeError {
     /// The key expressions cannot be made from the server name.
     #[error(transparent)]
-    Name(#[from] crate::keys::BadName),
+    Name(#[from] motion_wire::keys::BadName),
     /// zenoh or iceoryx2 could not be set up.
     #[error("{0}")]
     Setup(String),
@@ -450,7 +450,12 @@ impl Bridge {
         let (Some(info), Some((frame, _))) = (&self.info, &self.frame) else {
             return;
         };
-        let state = crate::json::state(&info.value, frame, &self.policy);
+        let policy = &self.policy;
+        let state = motion_wire::json::state(&info.value, frame, |target, index| {
+            policy
+                .holder(target, index)
+                .map(|remote| remote.identity.as_str())
+        });
         match serde_json::to_vec(&state) {
             Ok(bytes) => {
                 if let Err(error) = self.net.json.put(bytes).wait() {

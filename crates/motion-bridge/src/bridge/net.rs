@@ -17,8 +17,8 @@ use zenoh::sample::SampleKind;
 
 use super::{BridgeError, Event, MAX_WAITING_QUERIES, Read, refuse};
 use crate::config::BridgeConfig;
-use crate::keys::{Keys, Refusal};
 use crate::policy::RemoteRule;
+use motion_wire::keys::{Keys, Refusal};
 
 /// Hands `event` (a query) to the loop, unless too many queries wait already.
 fn hand_over(events: &Sender<Event>, waiting: &AtomicUsize, event: Event) {
