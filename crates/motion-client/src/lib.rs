@@ -105,6 +105,7 @@ mod ready;
 mod received;
 #[cfg(feature = "zenoh")]
 pub mod remote;
+mod remote_error;
 mod session;
 mod signal;
 #[cfg(feature = "testing")]
@@ -123,4 +124,5 @@ pub use frames::{FIRST_FRAME_TIMEOUT, Frames};
 pub use jog::JogGuard;
 pub use motion_ipc as ipc;
 pub use received::Received;
+pub use remote_error::{RemoteError, RemoteSource};
 pub use signal::{Signal, signal_value_text};
