@@ -154,34 +154,25 @@ pub fn state<'h>(
     frame_now: &MotionFrame,
     holder: impl Fn(Target, u32) -> Option<&'h str>,
 ) -> Value {
-    let remote = |target, index: usize| {
-        u32::try_from(index)
-            .ok()
-            .and_then(|index| holder(target, index))
-            .map_or(Value::Null, |identity| json!(identity))
+    let tick = frame_now.tick;
+    // Each axis's or signal's view, with the remote that holds its claim (by index).
+    let held = |target, views: Vec<Value>| -> Vec<Value> {
+        views
+            .into_iter()
+            .zip(0u32..)
+            .map(|(mut view, index)| {
+                view["claimed_by_remote"] =
+                    holder(target, index).map_or(Value::Null, |id| json!(id));
+                view
+            })
+            .collect()
     };
-    let axes = info
-        .axes()
-        .iter()
-        .zip(frame_now.axes())
-        .enumerate()
-        .map(|(index, (axis, state))| {
-            let mut value = axis_state(axis, state, frame_now.tick, "motion-bridge");
-            value["claimed_by_remote"] = remote(Target::Axis, index);
-            value
-        })
-        .collect();
-    let signals = info
-        .signals()
-        .iter()
-        .zip(frame_now.signals())
-        .enumerate()
-        .map(|(index, (signal, state))| {
-            let mut value = signal_state(index, signal, state, frame_now.tick);
-            value["claimed_by_remote"] = remote(Target::Signal, index);
-            value
-        })
-        .collect();
+    let axes = info.axes().iter().zip(frame_now.axes());
+    let axes = axes.map(|(axis, state)| axis_state(axis, state, tick, "motion-bridge"));
+    let signals = info.signals().iter().zip(frame_now.signals()).enumerate();
+    let signals = signals.map(|(index, (signal, state))| signal_state(index, signal, state, tick));
+    let axes = held(Target::Axis, axes.collect());
+    let signals = held(Target::Signal, signals.collect());
     let mut value = frame(info, frame_now, axes, signals);
     value["server"] = json!(info.name());
     value
