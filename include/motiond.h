@@ -1,31 +1,37 @@
 /*
  * motiond.h - the shared-memory contract of motiond for C (C11) and C++ clients.
  *
+ * GENERATED from the Rust description of the contract (crate motion-ipc, src/schema) by
+ * `cargo run -p motion-ipc --example gen` (or scripts/gen): do not edit; change the Rust
+ * payload and run the generator. crates/motion-ipc/tests/generated.rs fails while this
+ * file differs from what the generator writes, and crates/motion-ipc/tests/c_header.rs
+ * compiles a probe against it and compares every size, alignment, offset, field type,
+ * constant, enum value, text and type name with the Rust definitions.
+ *
  * motiond publishes its state and takes commands over iceoryx2 services. Every payload
- * is a fixed-size #[repr(C)] Rust struct (crate motion-ipc); this header mirrors each one
- * field by field, in memory order, with the iceoryx2 type name a port must announce
- * (iceoryx2 only connects ports whose payload type name, size and alignment match the
- * server's). The Rust test crates/motion-ipc/tests/c_header.rs compiles a probe against
- * this header and compares every size, alignment, offset, field type, constant, enum
- * value, text and type name with the Rust definitions; it runs with ./scripts/test.
- *
- * Services of the instance NAME ([server] name in the server's config), with their
- * payloads (user header: none, i.e. iceoryx2's "()" of size 0, alignment 1):
- *
- *   motiond/NAME/frame    publish-subscribe, history 1    motiond_motion_frame_t, every tick
- *   motiond/NAME/tick     event                           notified after every frame
- *   motiond/NAME/command  request-response                motiond_command_request_t ->
- *                                                         motiond_command_reply_t
- *   motiond/NAME/info     publish-subscribe, history 1    motiond_server_info_t
- *   motiond/NAME/stats    publish-subscribe, history 1    motiond_server_stats_t, about 1 Hz
- *   motiond/NAME/params   publish-subscribe, history 1    motiond_machine_params_t
- *   motiond/NAME/estop    event                           any notification latches the e-stop
- *
- * Open the services, never create them. Enumerations travel as the plain integer fields
- * named in each struct; compare them with the MOTIOND_* constants below. Text fields are
- * UTF-8, zero padded (not necessarily zero terminated when full).
+ * is a fixed-size #[repr(C)] Rust struct; this header mirrors each one field by field, in
+ * memory order, with the iceoryx2 type name a port must announce (iceoryx2 only connects
+ * ports whose payload type name, size and alignment match the server's). Open the
+ * services, never create them; user header: none (iceoryx2's "()", size 0, alignment 1).
+ * Enumerations travel as the plain integer fields named in each struct; compare them with
+ * the MOTIOND_* constants below. Text fields are UTF-8, zero padded (not necessarily zero
+ * terminated when full).
  *
  * examples/c/ holds a complete program (frames in, a command out) on iceoryx2's C API.
+ *
+ * Services of the instance NAME ([server] name in the server's config):
+ *
+ *   MOTIOND_SERVICE_FRAME           publish-subscribe, history 1: motiond_motion_frame_t, every
+ *                                   tick
+ *   MOTIOND_SERVICE_TICK            event: notified after every frame
+ *   MOTIOND_SERVICE_COMMAND         request-response: motiond_command_request_t ->
+ *                                   motiond_command_reply_t
+ *   MOTIOND_SERVICE_INFO            publish-subscribe, history 1: motiond_server_info_t
+ *   MOTIOND_SERVICE_STATS           publish-subscribe, history 1: motiond_server_stats_t, about
+ *                                   1 Hz
+ *   MOTIOND_SERVICE_PARAMS          publish-subscribe, history 1: motiond_machine_params_t
+ *   MOTIOND_SERVICE_ESTOP           event: any notification latches the e-stop
+ *   MOTIOND_SERVICE_SERVER_NODE     the iceoryx2 node name of the instance's server
  */
 #ifndef MOTIOND_H
 #define MOTIOND_H
@@ -42,28 +48,28 @@ extern "C" {
 #define MOTIOND_ALIGNOF(type) _Alignof(type)
 #endif
 
-/* --- constants ------------------------------------------------------------------------ */
+/* --- constants ---------------------------------------------------------------------------- */
 
 /** Version of the contract; every payload carries it. */
 #define MOTIOND_SCHEMA_VERSION 5u
 /** Capacity of the axis arrays of the frame and the server info. */
 #define MOTIOND_MAX_AXES 128u
-/** Capacity of the device array of the server info. */
+/** Capacity of the device arrays of the frame and the server info. */
 #define MOTIOND_MAX_DEVICES 32u
-/** Capacity of the link array of the server stats. */
+/** Capacity of the link arrays of the server stats. */
 #define MOTIOND_MAX_LINKS 16u
 /** Capacity of the signal arrays of the frame and the server info. */
 #define MOTIOND_MAX_SIGNALS 64u
 /** Capacity of the machine parameter table. */
 #define MOTIOND_MAX_PARAMS 2048u
-/** Bytes of a name field. */
+/** Bytes of a name field (UTF-8, zero padded). */
 #define MOTIOND_NAME_LEN 32u
-/** Bytes of a unit field. */
+/** Bytes of a unit or pin field (UTF-8, zero padded). */
 #define MOTIOND_UNIT_LEN 16u
 /** Bytes of a parameter key or value text. */
 #define MOTIOND_PARAM_TEXT_LEN 40u
 /** motiond_command_request_t.axis addressing every axis (stop, e-stop, reset, off). */
-#define MOTIOND_ALL_AXES 0xFFFFFFFFu
+#define MOTIOND_ALL_AXES 4294967295u
 
 /* Service names: printf formats taking the instance name. */
 #define MOTIOND_SERVICE_FRAME "motiond/%s/frame"
@@ -73,7 +79,6 @@ extern "C" {
 #define MOTIOND_SERVICE_STATS "motiond/%s/stats"
 #define MOTIOND_SERVICE_PARAMS "motiond/%s/params"
 #define MOTIOND_SERVICE_ESTOP "motiond/%s/estop"
-/** The iceoryx2 node name of the server of an instance. */
 #define MOTIOND_SERVICE_SERVER_NODE "motiond-%s"
 
 /* iceoryx2 type names of the payloads. */
@@ -95,16 +100,15 @@ extern "C" {
 #define MOTIOND_TYPE_NAME_LINK_IO "motiond::LinkIo"
 #define MOTIOND_TYPE_NAME_SERVER_STATS "motiond::ServerStats"
 
-/* --- enumerations (values of the integer fields) ----------------------------------------- */
+/* --- enumerations (values of the integer fields) ------------------------------------------ */
 
 /**
- * What a request asks for (motiond_command_request_t.kind). values[] per kind; 0.0 in a
- * velocity or acceleration slot means the axis's configured maximum:
- *   STOP -; POWER [power -1..1]; POSITION [position]; VELOCITY [velocity];
- *   RAMP_POSITION [position, max velocity, acceleration]; RAMP_VELOCITY [velocity,
- *   acceleration]; HOME [search velocity]; SET_POSITION [position];
- *   SET_OUTPUT [0.0 or 1.0] (axis = signal index, target = MOTIOND_TARGET_SIGNAL);
- *   CLAIM, RELEASE, E_STOP, RESET, OFF -.
+ * What a request asks for (motiond_command_request_t.kind). `values` per kind; 0.0 in a
+ * velocity or acceleration slot means the axis's configured maximum: STOP -; POWER [power
+ * -1..1]; POSITION [position]; VELOCITY [velocity]; RAMP_POSITION [position, max velocity,
+ * acceleration]; RAMP_VELOCITY [velocity, acceleration]; HOME [search velocity]; SET_POSITION
+ * [position]; SET_OUTPUT [0.0 or 1.0] (`axis` = signal index, `target` = SIGNAL); CLAIM,
+ * RELEASE, E_STOP, RESET, OFF -.
  */
 enum motiond_command_kind {
     MOTIOND_COMMAND_KIND_STOP = 1,
@@ -123,7 +127,10 @@ enum motiond_command_kind {
     MOTIOND_COMMAND_KIND_SET_OUTPUT = 14
 };
 
-/** Why a request was refused (motiond_command_reply_t.reason); 0 = accepted. */
+/**
+ * Why a request was refused (motiond_command_reply_t.reason); 0 = accepted. The text is the
+ * server's one-line explanation.
+ */
 enum motiond_reason {
     MOTIOND_REASON_ACCEPTED = 0,
     MOTIOND_REASON_SCHEMA_MISMATCH = 1,
@@ -157,7 +164,10 @@ enum motiond_target {
     MOTIOND_TARGET_SIGNAL = 1
 };
 
-/** Where a board is in its life (frame.devices[], axis device_state, device info state). */
+/**
+ * Where a board is in its life (motiond_motion_frame_t.devices,
+ * motiond_axis_state_t.device_state, motiond_device_info_t.state).
+ */
 enum motiond_device_state {
     MOTIOND_DEVICE_STATE_OFFLINE = 0,
     MOTIOND_DEVICE_STATE_ONLINE = 1,
@@ -194,21 +204,27 @@ enum motiond_fault_code {
     MOTIOND_FAULT_CODE_HOME_FAILED = 11
 };
 
-/** What a signal is (signal state and signal info kind). */
+/**
+ * What a signal is (motiond_signal_state_t.kind, motiond_signal_info_t.kind); the text is its
+ * config name.
+ */
 enum motiond_signal_kind {
     MOTIOND_SIGNAL_KIND_DIGITAL_IN = 1,
     MOTIOND_SIGNAL_KIND_DIGITAL_OUT = 2,
     MOTIOND_SIGNAL_KIND_ANALOG_IN = 3
 };
 
-/** What an e-stop (and a fault) does to an axis (motiond_axis_info_t.estop). */
+/**
+ * What an e-stop (and a fault) does to an axis, IEC 60204-1 stop categories
+ * (motiond_axis_info_t.estop); the text is its config name.
+ */
 enum motiond_estop_category {
     MOTIOND_ESTOP_CATEGORY_HOLD = 0,
     MOTIOND_ESTOP_CATEGORY_STOP_OFF = 1,
     MOTIOND_ESTOP_CATEGORY_OFF = 2
 };
 
-/** The board model of a device (motiond_device_info_t.model). */
+/** The board model of a device (motiond_device_info_t.model); the text is its config id. */
 enum motiond_device_model {
     MOTIOND_DEVICE_MODEL_QQ2DRV = 1,
     MOTIOND_DEVICE_MODEL_TMCPACK = 2,
@@ -276,251 +292,448 @@ enum motiond_full_services {
     MOTIOND_FULL_SERVICES_ESTOP = 1 << 6
 };
 
-/* --- payloads ------------------------------------------------------------------------- */
+/* --- payloads ----------------------------------------------------------------------------- */
 
-/** The iceoryx2 node id of a client (a 128-bit value) in two halves; zero = no client. */
+/**
+ * The iceoryx2 node id of a client (`Node::id().value()`, a u128), split into two little halves
+ * so that the layout is the same for every C ABI. Zero means "no client".
+ *
+ * 16 bytes, alignment 8; iceoryx2 type name "motiond::ClientId".
+ */
 typedef struct motiond_client_id {
-    uint64_t lo; /**< low 64 bits */
-    uint64_t hi; /**< high 64 bits */
+    uint64_t lo; /**< Low 64 bits of the node id. (offset 0) */
+    uint64_t hi; /**< High 64 bits of the node id. (offset 8) */
 } motiond_client_id_t;
-
-/** One axis in a frame. 80 bytes, alignment 8. */
-typedef struct motiond_axis_state {
-    double position;                /**< measured position, axis units */
-    double velocity;                /**< measured velocity, units/s */
-    double target;                  /**< position target, or velocity target in velocity modes */
-    int64_t raw_counts;             /**< the board's own position counts */
-    uint64_t last_refresh_tick;     /**< tick at which fresh data last arrived */
-    uint32_t flags;                 /**< MOTIOND_AXIS_FLAGS_* bits */
-    uint16_t fault;                 /**< MOTIOND_FAULT_CODE_* */
-    uint8_t mode;                   /**< MOTIOND_AXIS_MODE_* */
-    uint8_t device_state;           /**< MOTIOND_DEVICE_STATE_* of the axis's board */
-    motiond_client_id_t claimed_by; /**< claim holder, zero when unclaimed */
-    double fault_value;             /**< measured figure of the fault, 0 when none */
-    double fault_limit;             /**< the tolerance it broke, 0 when none */
-} motiond_axis_state_t;
-
-/** One signal in a frame. 48 bytes, alignment 8. */
-typedef struct motiond_signal_state {
-    double value;                   /**< logical value (digital 0/1 after invert; analogue scaled) */
-    double raw;                     /**< as the board reports it (level 0/1, ADC counts) */
-    uint64_t last_refresh_tick;     /**< tick at which the board last reported (acknowledged) it */
-    uint32_t flags;                 /**< MOTIOND_SIGNAL_FLAGS_* bits */
-    uint8_t kind;                   /**< MOTIOND_SIGNAL_KIND_* */
-    uint8_t reserved[3];            /**< zero */
-    motiond_client_id_t claimed_by; /**< claim holder of an output, zero when unclaimed */
-} motiond_signal_state_t;
-
-/** When an axis's current goal was set and its first request reached the wire. 24 bytes.
- *  Command -> wire: wire_ns minus the client's CLOCK_MONOTONIC at sending, or in ticks
- *  wire_tick - goal_tick (0: written in the tick that accepted it). */
-typedef struct motiond_axis_wire {
-    uint64_t goal_tick; /**< tick in which the current goal was set */
-    uint64_t wire_tick; /**< tick during which its first request was written, 0 until then */
-    uint64_t wire_ns;   /**< CLOCK_MONOTONIC ns of that write, 0 until then */
-} motiond_axis_wire_t;
-
-/** One consistent snapshot of every axis, board and signal, once per tick. 16464 bytes. */
-typedef struct motiond_motion_frame {
-    uint32_t schema_version;                           /**< MOTIOND_SCHEMA_VERSION */
-    uint32_t axis_count;                               /**< valid entries of axes */
-    uint64_t tick;                                     /**< tick number, 0 at server start */
-    uint64_t time_ns;                                  /**< the tick's deadline, CLOCK_MONOTONIC ns */
-    uint64_t publish_ns;                               /**< CLOCK_MONOTONIC ns just before sending */
-    uint32_t flags;                                    /**< MOTIOND_FRAME_FLAGS_* bits */
-    uint32_t signal_count;                             /**< valid entries of signals */
-    uint32_t device_count;                             /**< valid entries of devices */
-    uint32_t reserved;                                 /**< zero */
-    uint8_t devices[MOTIOND_MAX_DEVICES];              /**< MOTIOND_DEVICE_STATE_* per device */
-    motiond_axis_state_t axes[MOTIOND_MAX_AXES];       /**< axes in config order */
-    motiond_signal_state_t signals[MOTIOND_MAX_SIGNALS]; /**< signals in config order */
-    motiond_axis_wire_t wire[MOTIOND_MAX_AXES];        /**< per axis (index of axes): goal set / on the wire */
-} motiond_motion_frame_t;
-
-/** A command to the server. 64 bytes, alignment 8. */
-typedef struct motiond_command_request {
-    uint32_t schema_version;    /**< MOTIOND_SCHEMA_VERSION */
-    uint32_t kind;              /**< MOTIOND_COMMAND_KIND_* */
-    motiond_client_id_t client; /**< the sender's iceoryx2 node id, or zero ("the sender") */
-    uint64_t sequence;          /**< the client's sequence number, echoed in the reply */
-    uint32_t axis;              /**< axis or signal index (config order), or MOTIOND_ALL_AXES */
-    uint32_t target;            /**< MOTIOND_TARGET_* */
-    double values[3];           /**< arguments, see enum motiond_command_kind */
-} motiond_command_request_t;
-
-/** The server's answer to one request. 32 bytes, alignment 8. */
-typedef struct motiond_command_reply {
-    uint32_t schema_version; /**< MOTIOND_SCHEMA_VERSION */
-    uint32_t reason;         /**< MOTIOND_REASON_*; 0 = accepted */
-    uint64_t sequence;       /**< the request's sequence */
-    uint64_t tick_applied;   /**< tick in which it took effect (or was refused) */
-    uint32_t axis;           /**< the request's axis */
-    uint32_t kind;           /**< the request's kind */
-} motiond_command_reply_t;
-
-/** One axis's static description. 160 bytes, alignment 8. */
-typedef struct motiond_axis_info {
-    uint8_t name[MOTIOND_NAME_LEN];   /**< axis name */
-    uint8_t unit[MOTIOND_UNIT_LEN];   /**< unit ("mm", "deg") */
-    uint8_t device[MOTIOND_NAME_LEN]; /**< device name */
-    double counts_per_unit;           /**< device counts per unit */
-    double min;                       /**< soft limit, units */
-    double max;                       /**< soft limit, units */
-    double max_velocity;              /**< units/s */
-    double max_accel;                 /**< units/s^2 */
-    uint32_t capabilities;            /**< bit (1 << kind) set for every command kind accepted */
-    uint16_t channel;                 /**< motor number on the device */
-    uint16_t device_index;            /**< index into the server info's devices */
-    double following_error;           /**< units; 0 = not supervised */
-    double overspeed_factor;          /**< x max_velocity; 0 = not supervised */
-    double home_max_travel;           /**< units; 0 = not supervised */
-    uint32_t estop;                   /**< MOTIOND_ESTOP_CATEGORY_* */
-    uint32_t reserved;                /**< zero */
-} motiond_axis_info_t;
-
-/** One device's description. 112 bytes, alignment 4. */
-typedef struct motiond_device_info {
-    uint8_t name[MOTIOND_NAME_LEN];     /**< device name */
-    uint8_t link[MOTIOND_NAME_LEN];     /**< link name */
-    uint8_t firmware[MOTIOND_NAME_LEN]; /**< firmware as the board reported it ("" until known) */
-    uint32_t model;                     /**< MOTIOND_DEVICE_MODEL_* */
-    uint32_t address;                   /**< bus address (0 when the model has none) */
-    uint32_t axis_count;                /**< axes configured on the device */
-    uint32_t state;                     /**< MOTIOND_DEVICE_STATE_* when published */
-} motiond_device_info_t;
-
-/** One signal's static description. 128 bytes, alignment 8. */
-typedef struct motiond_signal_info {
-    uint8_t name[MOTIOND_NAME_LEN];   /**< signal name */
-    uint8_t unit[MOTIOND_UNIT_LEN];   /**< unit of an analogue value ("" for digital) */
-    uint8_t device[MOTIOND_NAME_LEN]; /**< device name */
-    double scale;                     /**< analogue: value = raw * scale + offset */
-    double offset;                    /**< analogue: value = raw * scale + offset */
-    double full_scale;                /**< raw full scale (1023 for 10 bits; 1 for digital) */
-    uint8_t kind;                     /**< MOTIOND_SIGNAL_KIND_* */
-    uint8_t flags;                    /**< MOTIOND_SIGNAL_INFO_FLAGS_* bits */
-    uint16_t device_index;            /**< index into the server info's devices */
-    uint8_t pin[MOTIOND_UNIT_LEN];    /**< the board's pin name ("ttlio1") */
-    uint32_t reserved;                /**< zero */
-} motiond_signal_info_t;
-
-/** The server's static description. 32328 bytes, alignment 8. */
-typedef struct motiond_server_info {
-    uint32_t schema_version;                           /**< MOTIOND_SCHEMA_VERSION */
-    uint32_t axis_count;                               /**< valid entries of axes */
-    uint32_t device_count;                             /**< valid entries of devices */
-    uint32_t tick_hz;                                  /**< tick rate */
-    uint32_t command_timeout_ms;                       /**< deadman; 0 = disabled */
-    uint32_t max_clients;                              /**< configured client limit */
-    uint32_t server_pid;                               /**< process id of motiond */
-    uint32_t signal_count;                             /**< valid entries of signals */
-    uint8_t name[MOTIOND_NAME_LEN];                    /**< instance name */
-    uint64_t start_time_ns;                            /**< CLOCK_MONOTONIC ns of tick 0 */
-    motiond_axis_info_t axes[MOTIOND_MAX_AXES];        /**< axes in config order */
-    motiond_device_info_t devices[MOTIOND_MAX_DEVICES]; /**< devices in config order */
-    motiond_signal_info_t signals[MOTIOND_MAX_SIGNALS]; /**< signals in config order */
-} motiond_server_info_t;
-
-/** One effective machine parameter. 88 bytes, alignment 4. */
-typedef struct motiond_machine_param {
-    uint8_t key[MOTIOND_PARAM_TEXT_LEN];   /**< config key, dotted for tables */
-    uint8_t value[MOTIOND_PARAM_TEXT_LEN]; /**< value in effect, with its unit */
-    uint16_t owner_index;                  /**< device or axis index */
-    uint8_t owner_kind;                    /**< MOTIOND_PARAM_OWNER_* */
-    uint8_t from_config;                   /**< 1: set by the config file; 0: the default */
-    uint32_t reserved;                     /**< zero */
-} motiond_machine_param_t;
-
-/** Every machine parameter in effect. 180240 bytes, alignment 4. */
-typedef struct motiond_machine_params {
-    uint32_t schema_version;                            /**< MOTIOND_SCHEMA_VERSION */
-    uint32_t count;                                     /**< valid entries */
-    uint32_t truncated;                                 /**< 1 when parameters were left out */
-    uint32_t reserved;                                  /**< zero */
-    motiond_machine_param_t entries[MOTIOND_MAX_PARAMS]; /**< devices' then axes' */
-} motiond_machine_params_t;
-
-/** Percentiles of one latency distribution, ns. 40 bytes. */
-typedef struct motiond_latency_summary {
-    uint64_t samples;
-    uint64_t p50_ns;
-    uint64_t p99_ns;
-    uint64_t p999_ns;
-    uint64_t max_ns;
-} motiond_latency_summary_t;
-
-/** Counters of one link since start. 80 bytes, alignment 8. */
-typedef struct motiond_link_stats {
-    uint8_t name[MOTIOND_NAME_LEN]; /**< link name */
-    uint64_t bytes_in;              /**< bytes received */
-    uint64_t bytes_out;             /**< bytes sent */
-    uint64_t frames;                /**< replies decoded */
-    uint64_t errors;                /**< bad frames, I/O errors, timeouts */
-    uint64_t reconnects;            /**< successful reopens */
-    uint32_t up;                    /**< 1 when the link is open */
-    uint32_t reserved;              /**< zero */
-} motiond_link_stats_t;
-
-/** The I/O side of one link (CLOCK_MONOTONIC ns stamps, 0: never). 32 bytes, alignment 8. */
-typedef struct motiond_link_io {
-    uint64_t last_write_ns; /**< the last write that moved bytes */
-    uint64_t last_read_ns;  /**< the last read that returned bytes */
-    uint64_t transactions;  /**< messages written whole (SPI: transactions) */
-    uint64_t reads;         /**< reads that returned bytes */
-} motiond_link_io_t;
-
-/** Server figures, published about once a second. 1992 bytes, alignment 8. */
-typedef struct motiond_server_stats {
-    uint32_t schema_version;                    /**< MOTIOND_SCHEMA_VERSION */
-    uint32_t link_count;                        /**< valid entries of links */
-    uint64_t tick;                              /**< tick at which these were taken */
-    uint64_t time_ns;                           /**< CLOCK_MONOTONIC ns of that tick */
-    motiond_latency_summary_t wakeup;           /**< actual wake - deadline, since start */
-    motiond_latency_summary_t work;             /**< tick work time, since start */
-    uint64_t overruns;                          /**< ticks that missed their deadline */
-    uint64_t max_consecutive_overruns;          /**< longest run of overruns */
-    uint64_t commands;                          /**< requests answered */
-    uint64_t rejected;                          /**< requests refused */
-    uint32_t clients;                           /**< live client nodes at the last check */
-    uint32_t rt_flags;                          /**< MOTIOND_RT_FLAGS_* bits */
-    motiond_link_stats_t links[MOTIOND_MAX_LINKS]; /**< per link */
-    uint64_t faults;                            /**< axis faults latched since start */
-    uint64_t frames_lost;                       /**< ticks whose frame could not be sent */
-    uint32_t full_services;                     /**< MOTIOND_FULL_SERVICES_* bits, now */
-    uint32_t full_events;                       /**< times a service was found full */
-    uint64_t publish_failures;                  /**< info/stats/params samples and tick notifications not sent */
-    uint64_t replies_lost;                      /**< command replies that could not be sent */
-    uint64_t events_dropped;                    /**< log reports and iceoryx2 housekeeping that failed */
-    motiond_link_io_t link_io[MOTIOND_MAX_LINKS]; /**< per link (index of links): I/O stamps */
-    uint64_t nodes_cleaned;                     /**< dead iceoryx2 nodes' records removed */
-} motiond_server_stats_t;
-
-/* Sizes and alignments the Rust side pins (crates/motion-ipc/tests/layout.rs). */
 MOTIOND_STATIC_ASSERT(sizeof(motiond_client_id_t) == 16, "motiond_client_id_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_client_id_t) == 8, "motiond_client_id_t alignment");
+
+/**
+ * One axis in a frame.
+ *
+ * 80 bytes, alignment 8; iceoryx2 type name "motiond::AxisState".
+ */
+typedef struct motiond_axis_state {
+    double position; /**< Measured position in axis units. (offset 0) */
+    double velocity; /**< Measured velocity in units/s. (offset 8) */
+    /** Position target (position modes) or velocity target (velocity modes), in units. */
+    double target; /* offset 16 */
+    int64_t raw_counts; /**< Position in the board's own counts. (offset 24) */
+    /** Tick at which fresh data last arrived from the board. */
+    uint64_t last_refresh_tick; /* offset 32 */
+    uint32_t flags; /**< MOTIOND_AXIS_FLAGS_* bits. (offset 40) */
+    uint16_t fault; /**< MOTIOND_FAULT_CODE_* value; 0 = no fault. (offset 44) */
+    uint8_t mode; /**< MOTIOND_AXIS_MODE_* value. (offset 46) */
+    uint8_t device_state; /**< MOTIOND_DEVICE_STATE_* value of the axis's board. (offset 47) */
+    /** The client holding a claim on the axis; zero when unclaimed. */
+    motiond_client_id_t claimed_by; /* offset 48 */
+    /**
+     * The measured figure of the latched fault (units, units/s; see MOTIOND_FAULT_CODE_*), 0
+     * when none.
+     */
+    double fault_value; /* offset 64 */
+    double fault_limit; /**< The tolerance or limit the fault broke, 0 when none. (offset 72) */
+} motiond_axis_state_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_axis_state_t) == 80, "motiond_axis_state_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_axis_state_t) == 8, "motiond_axis_state_t alignment");
+
+/**
+ * One signal in a frame.
+ *
+ * 48 bytes, alignment 8; iceoryx2 type name "motiond::SignalState".
+ */
+typedef struct motiond_signal_state {
+    /** Logical value: digital 0.0/1.0 after `invert`; analogue raw × scale + offset. */
+    double value; /* offset 0 */
+    /** Raw value as the board reports it: electrical level 0/1, or ADC counts. */
+    double raw; /* offset 8 */
+    /** Tick at which the board last reported it (outputs: acknowledged it). */
+    uint64_t last_refresh_tick; /* offset 16 */
+    uint32_t flags; /**< MOTIOND_SIGNAL_FLAGS_* bits. (offset 24) */
+    uint8_t kind; /**< MOTIOND_SIGNAL_KIND_* value. (offset 28) */
+    uint8_t reserved[3]; /**< Zero. (offset 29) */
+    /** Claim holder of an output; zero when unclaimed. */
+    motiond_client_id_t claimed_by; /* offset 32 */
+} motiond_signal_state_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_signal_state_t) == 48, "motiond_signal_state_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_signal_state_t) == 8, "motiond_signal_state_t alignment");
+
+/**
+ * When the current goal of one axis was set and when its first request reached the wire
+ * (motiond_motion_frame_t.wire, same index as `axes`).
+ *
+ * Command → wire: `wire_ns` minus the client's CLOCK_MONOTONIC when it sent the command, or in
+ * ticks `wire_tick − goal_tick` (0: written in the tick that accepted it).
+ *
+ * 24 bytes, alignment 8; iceoryx2 type name "motiond::AxisWire".
+ */
+typedef struct motiond_axis_wire {
+    /**
+     * Tick in which the current goal was set (a client's command: the reply's `tick_applied`;
+     * or the server's own stop).
+     */
+    uint64_t goal_tick; /* offset 0 */
+    /**
+     * Tick during which the goal's first request was written to the link (its last byte
+     * accepted by the transport); 0 until then.
+     */
+    uint64_t wire_tick; /* offset 8 */
+    /**
+     * CLOCK_MONOTONIC ns of that write; 0 until then (and for a goal that needs no request).
+     */
+    uint64_t wire_ns; /* offset 16 */
+} motiond_axis_wire_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_axis_wire_t) == 24, "motiond_axis_wire_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_axis_wire_t) == 8, "motiond_axis_wire_t alignment");
+
+/**
+ * One consistent snapshot of every axis, board and signal, published once per tick on
+ * `motiond/<name>/frame`.
+ *
+ * 16464 bytes, alignment 8; iceoryx2 type name "motiond::MotionFrame".
+ */
+typedef struct motiond_motion_frame {
+    uint32_t schema_version; /**< MOTIOND_SCHEMA_VERSION of the writer. (offset 0) */
+    uint32_t axis_count; /**< Number of valid entries at the start of `axes`. (offset 4) */
+    uint64_t tick; /**< Tick number, 0 at server start. (offset 8) */
+    uint64_t time_ns; /**< The tick's deadline on CLOCK_MONOTONIC, ns. (offset 16) */
+    /** CLOCK_MONOTONIC, ns, taken just before the frame was sent. */
+    uint64_t publish_ns; /* offset 24 */
+    uint32_t flags; /**< MOTIOND_FRAME_FLAGS_* bits. (offset 32) */
+    uint32_t signal_count; /**< Number of valid entries at the start of `signals`. (offset 36) */
+    uint32_t device_count; /**< Number of valid entries at the start of `devices`. (offset 40) */
+    uint32_t reserved; /**< Zero. (offset 44) */
+    /**
+     * MOTIOND_DEVICE_STATE_* per device, config order; entries past `device_count` are zero.
+     */
+    uint8_t devices[MOTIOND_MAX_DEVICES]; /* offset 48 */
+    /** Axes in config order; entries past `axis_count` are motiond_axis_state_t.UNKNOWN. */
+    motiond_axis_state_t axes[MOTIOND_MAX_AXES]; /* offset 80 */
+    /**
+     * Signals in config order; entries past `signal_count` are motiond_signal_state_t.UNKNOWN.
+     */
+    motiond_signal_state_t signals[MOTIOND_MAX_SIGNALS]; /* offset 10320 */
+    /**
+     * Per axis (same index as `axes`): when its current goal was set and when its first request
+     * reached the wire.
+     */
+    motiond_axis_wire_t wire[MOTIOND_MAX_AXES]; /* offset 13392 */
+} motiond_motion_frame_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_motion_frame_t) == 16464, "motiond_motion_frame_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_motion_frame_t) == 8, "motiond_motion_frame_t alignment");
+
+/**
+ * A command to the server, on `motiond/<name>/command`; `values` per kind: see
+ * MOTIOND_COMMAND_KIND_*.
+ *
+ * Identity comes from the transport: the server knows which iceoryx2 node sent a request and
+ * owns every claim by that node. `client` may be zero ("the sender"); a non-zero `client` that
+ * is not the sender's node is refused with `Reason::IdentityMismatch`.
+ *
+ * 64 bytes, alignment 8; iceoryx2 type name "motiond::CommandRequest".
+ */
+typedef struct motiond_command_request {
+    uint32_t schema_version; /**< MOTIOND_SCHEMA_VERSION of the sender. (offset 0) */
+    uint32_t kind; /**< MOTIOND_COMMAND_KIND_* value. (offset 4) */
+    motiond_client_id_t client; /**< The sender's iceoryx2 node id, or zero. (offset 8) */
+    uint64_t sequence; /**< The client's sequence number, echoed in the reply. (offset 24) */
+    /** Axis (or signal) index, config order, or motiond_command_request_t.ALL_AXES. */
+    uint32_t axis; /* offset 32 */
+    uint32_t target; /**< MOTIOND_TARGET_* value: 0 = axis, 1 = signal. (offset 36) */
+    double values[3]; /**< Arguments; see MOTIOND_COMMAND_KIND_*. (offset 40) */
+} motiond_command_request_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_command_request_t) == 64, "motiond_command_request_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_command_request_t) == 8, "motiond_command_request_t alignment");
+
+/**
+ * The server's answer to one motiond_command_request_t; every request gets exactly one.
+ *
+ * 32 bytes, alignment 8; iceoryx2 type name "motiond::CommandReply".
+ */
+typedef struct motiond_command_reply {
+    uint32_t schema_version; /**< MOTIOND_SCHEMA_VERSION of the server. (offset 0) */
+    uint32_t reason; /**< MOTIOND_REASON_* value; 0 = accepted. (offset 4) */
+    uint64_t sequence; /**< The request's sequence. (offset 8) */
+    /** Tick in which the command took effect (or was refused). */
+    uint64_t tick_applied; /* offset 16 */
+    uint32_t axis; /**< The request's axis. (offset 24) */
+    uint32_t kind; /**< The request's kind. (offset 28) */
+} motiond_command_reply_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_command_reply_t) == 32, "motiond_command_reply_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_command_reply_t) == 8, "motiond_command_reply_t alignment");
+
+/**
+ * One axis's static description.
+ *
+ * 160 bytes, alignment 8; iceoryx2 type name "motiond::AxisInfo".
+ */
+typedef struct motiond_axis_info {
+    uint8_t name[MOTIOND_NAME_LEN]; /**< Axis name, UTF-8, zero padded. (offset 0) */
+    /** Unit of positions ("mm", "deg"), UTF-8, zero padded. */
+    uint8_t unit[MOTIOND_UNIT_LEN]; /* offset 32 */
+    uint8_t device[MOTIOND_NAME_LEN]; /**< Name of the device that drives the axis. (offset 48) */
+    double counts_per_unit; /**< Device counts per unit. (offset 80) */
+    double min; /**< Lower soft limit, units. (offset 88) */
+    double max; /**< Upper soft limit, units. (offset 96) */
+    double max_velocity; /**< Velocity limit, units/s. (offset 104) */
+    double max_accel; /**< Acceleration limit, units/s². (offset 112) */
+    uint32_t capabilities; /**< `Capabilities` bits. (offset 120) */
+    uint16_t channel; /**< Motor number on the device. (offset 124) */
+    uint16_t device_index; /**< Index into motiond_server_info_t.devices. (offset 126) */
+    /** Following error tolerance, units; 0 = not supervised. */
+    double following_error; /* offset 128 */
+    /** Overspeed factor (× `max_velocity`); 0 = not supervised. */
+    double overspeed_factor; /* offset 136 */
+    /** Travel limit of a reference search, units; 0 = not supervised. */
+    double home_max_travel; /* offset 144 */
+    uint32_t estop; /**< MOTIOND_ESTOP_CATEGORY_* value. (offset 152) */
+    uint32_t reserved; /**< Zero. (offset 156) */
+} motiond_axis_info_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_axis_info_t) == 160, "motiond_axis_info_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_axis_info_t) == 8, "motiond_axis_info_t alignment");
+
+/**
+ * One device's description.
+ *
+ * 112 bytes, alignment 4; iceoryx2 type name "motiond::DeviceInfo".
+ */
+typedef struct motiond_device_info {
+    uint8_t name[MOTIOND_NAME_LEN]; /**< Device name. (offset 0) */
+    uint8_t link[MOTIOND_NAME_LEN]; /**< Link name. (offset 32) */
+    /** Firmware version as the board reported it ("" until known). */
+    uint8_t firmware[MOTIOND_NAME_LEN]; /* offset 64 */
+    uint32_t model; /**< MOTIOND_DEVICE_MODEL_* value. (offset 96) */
+    uint32_t address; /**< Bus address, 0 when the model has none. (offset 100) */
+    uint32_t axis_count; /**< Axes configured on the device. (offset 104) */
+    /**
+     * MOTIOND_DEVICE_STATE_* value when the info was published (the frame has the current one).
+     */
+    uint32_t state; /* offset 108 */
+} motiond_device_info_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_device_info_t) == 112, "motiond_device_info_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_device_info_t) == 4, "motiond_device_info_t alignment");
+
+/**
+ * One signal's static description.
+ *
+ * 128 bytes, alignment 8; iceoryx2 type name "motiond::SignalInfo".
+ */
+typedef struct motiond_signal_info {
+    uint8_t name[MOTIOND_NAME_LEN]; /**< Signal name. (offset 0) */
+    uint8_t unit[MOTIOND_UNIT_LEN]; /**< Unit of an analogue value ("" for digital). (offset 32) */
+    uint8_t device[MOTIOND_NAME_LEN]; /**< Device name. (offset 48) */
+    double scale; /**< Analogue: value = raw × scale + offset. (offset 80) */
+    double offset; /**< Analogue: value = raw × scale + offset. (offset 88) */
+    /** Raw full scale (1023 for a 10-bit converter; 1 for digital). */
+    double full_scale; /* offset 96 */
+    uint8_t kind; /**< MOTIOND_SIGNAL_KIND_* value. (offset 104) */
+    uint8_t flags; /**< MOTIOND_SIGNAL_INFO_FLAGS_* bits. (offset 105) */
+    uint16_t device_index; /**< Index into motiond_server_info_t.devices. (offset 106) */
+    /** The board's pin name ("ttlio1"), zero padded. */
+    uint8_t pin[MOTIOND_UNIT_LEN]; /* offset 108 */
+    uint32_t reserved; /**< Zero. (offset 124) */
+} motiond_signal_info_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_signal_info_t) == 128, "motiond_signal_info_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_signal_info_t) == 8, "motiond_signal_info_t alignment");
+
+/**
+ * The server's static description, published with history 1 on `motiond/<name>/info`.
+ *
+ * 32328 bytes, alignment 8; iceoryx2 type name "motiond::ServerInfo".
+ */
+typedef struct motiond_server_info {
+    uint32_t schema_version; /**< MOTIOND_SCHEMA_VERSION of the server. (offset 0) */
+    uint32_t axis_count; /**< Valid entries in `axes`. (offset 4) */
+    uint32_t device_count; /**< Valid entries in `devices`. (offset 8) */
+    uint32_t tick_hz; /**< Tick rate, Hz. (offset 12) */
+    /** Deadman for velocity and power goals, ms; 0 = disabled. */
+    uint32_t command_timeout_ms; /* offset 16 */
+    uint32_t max_clients; /**< Configured client limit. (offset 20) */
+    uint32_t server_pid; /**< Process id of motiond. (offset 24) */
+    uint32_t signal_count; /**< Valid entries in `signals`. (offset 28) */
+    uint8_t name[MOTIOND_NAME_LEN]; /**< Instance name. (offset 32) */
+    uint64_t start_time_ns; /**< CLOCK_MONOTONIC ns of tick 0. (offset 64) */
+    motiond_axis_info_t axes[MOTIOND_MAX_AXES]; /**< Axes in config order. (offset 72) */
+    /** Devices in config order. */
+    motiond_device_info_t devices[MOTIOND_MAX_DEVICES]; /* offset 20552 */
+    /** Signals in config order. */
+    motiond_signal_info_t signals[MOTIOND_MAX_SIGNALS]; /* offset 24136 */
+} motiond_server_info_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_server_info_t) == 32328, "motiond_server_info_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_server_info_t) == 8, "motiond_server_info_t alignment");
+
+/**
+ * One effective machine parameter.
+ *
+ * 88 bytes, alignment 4; iceoryx2 type name "motiond::MachineParam".
+ */
+typedef struct motiond_machine_param {
+    /** The config key, dotted for tables (`current.standstill`). */
+    uint8_t key[MOTIOND_PARAM_TEXT_LEN]; /* offset 0 */
+    /** The value in effect, with its unit (`50 %`). */
+    uint8_t value[MOTIOND_PARAM_TEXT_LEN]; /* offset 40 */
+    uint16_t owner_index; /**< Device or axis index. (offset 80) */
+    uint8_t owner_kind; /**< MOTIOND_PARAM_OWNER_* value. (offset 82) */
+    uint8_t from_config; /**< 1: the config file set it; 0: the default. (offset 83) */
+    uint32_t reserved; /**< Zero. (offset 84) */
+} motiond_machine_param_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_machine_param_t) == 88, "motiond_machine_param_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_machine_param_t) == 4, "motiond_machine_param_t alignment");
+
+/**
+ * Every machine parameter in effect, published with history 1 on `motiond/<name>/params`.
+ *
+ * 180240 bytes, alignment 4; iceoryx2 type name "motiond::MachineParams".
+ */
+typedef struct motiond_machine_params {
+    uint32_t schema_version; /**< MOTIOND_SCHEMA_VERSION of the server. (offset 0) */
+    uint32_t count; /**< Valid entries. (offset 4) */
+    /** 1 when more parameters existed than MOTIOND_MAX_PARAMS (entries were left out). */
+    uint32_t truncated; /* offset 8 */
+    uint32_t reserved; /**< Zero. (offset 12) */
+    /** Devices' then axes' parameters, config order. */
+    motiond_machine_param_t entries[MOTIOND_MAX_PARAMS]; /* offset 16 */
+} motiond_machine_params_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_machine_params_t) == 180240, "motiond_machine_params_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_machine_params_t) == 4, "motiond_machine_params_t alignment");
+
+/**
+ * Percentiles of one latency distribution, in nanoseconds.
+ *
+ * 40 bytes, alignment 8; iceoryx2 type name "motiond::LatencySummary".
+ */
+typedef struct motiond_latency_summary {
+    uint64_t samples; /**< Number of samples. (offset 0) */
+    uint64_t p50_ns; /**< Median. (offset 8) */
+    uint64_t p99_ns; /**< 99th percentile. (offset 16) */
+    uint64_t p999_ns; /**< 99.9th percentile. (offset 24) */
+    uint64_t max_ns; /**< Maximum. (offset 32) */
+} motiond_latency_summary_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_latency_summary_t) == 40, "motiond_latency_summary_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_latency_summary_t) == 8, "motiond_latency_summary_t alignment");
+
+/**
+ * Counters of one link since start.
+ *
+ * 80 bytes, alignment 8; iceoryx2 type name "motiond::LinkStats".
+ */
+typedef struct motiond_link_stats {
+    uint8_t name[MOTIOND_NAME_LEN]; /**< Link name. (offset 0) */
+    uint64_t bytes_in; /**< Bytes received. (offset 32) */
+    uint64_t bytes_out; /**< Bytes sent. (offset 40) */
+    uint64_t frames; /**< Replies decoded. (offset 48) */
+    uint64_t errors; /**< Bad frames, I/O errors, timeouts. (offset 56) */
+    uint64_t reconnects; /**< Successful reopens. (offset 64) */
+    uint32_t up; /**< 1 when the link is open. (offset 72) */
+    uint32_t reserved; /**< Zero. (offset 76) */
+} motiond_link_stats_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_link_stats_t) == 80, "motiond_link_stats_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_link_stats_t) == 8, "motiond_link_stats_t alignment");
+
+/**
+ * The I/O side of one link: when bytes last went out and came in, and how often. Stamps are
+ * CLOCK_MONOTONIC ns taken by the link's I/O thread right after the transport accepted or
+ * returned the bytes; 0 when it never did.
+ *
+ * 32 bytes, alignment 8; iceoryx2 type name "motiond::LinkIo".
+ */
+typedef struct motiond_link_io {
+    /** CLOCK_MONOTONIC ns of the last write that moved bytes; 0: never. */
+    uint64_t last_write_ns; /* offset 0 */
+    /** CLOCK_MONOTONIC ns of the last read that returned bytes; 0: never. */
+    uint64_t last_read_ns; /* offset 8 */
+    uint64_t transactions; /**< Messages written whole (SPI: transactions). (offset 16) */
+    uint64_t reads; /**< Reads that returned bytes. (offset 24) */
+} motiond_link_io_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_link_io_t) == 32, "motiond_link_io_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_link_io_t) == 8, "motiond_link_io_t alignment");
+
+/**
+ * Server figures, published about once a second on `motiond/<name>/stats`.
+ *
+ * 1992 bytes, alignment 8; iceoryx2 type name "motiond::ServerStats".
+ */
+typedef struct motiond_server_stats {
+    uint32_t schema_version; /**< MOTIOND_SCHEMA_VERSION of the server. (offset 0) */
+    uint32_t link_count; /**< Valid entries in `links`. (offset 4) */
+    uint64_t tick; /**< Tick at which these figures were taken. (offset 8) */
+    uint64_t time_ns; /**< CLOCK_MONOTONIC ns of that tick. (offset 16) */
+    /** Wake-up latency (actual wake − deadline) since start. */
+    motiond_latency_summary_t wakeup; /* offset 24 */
+    motiond_latency_summary_t work; /**< Tick work time since start. (offset 64) */
+    uint64_t overruns; /**< Ticks that missed their deadline since start. (offset 104) */
+    uint64_t max_consecutive_overruns; /**< Longest run of consecutive overruns. (offset 112) */
+    uint64_t commands; /**< Requests answered. (offset 120) */
+    uint64_t rejected; /**< Requests refused. (offset 128) */
+    uint32_t clients; /**< Live client nodes at the last liveness check. (offset 136) */
+    /**
+     * Real-time set-up bits (MOTIOND_RT_FLAGS_*): bit 0 SCHED_FIFO, bit 1 memory locked, bit 2
+     * pinned, bit 3 cpu_dma_latency held.
+     */
+    uint32_t rt_flags; /* offset 140 */
+    motiond_link_stats_t links[MOTIOND_MAX_LINKS]; /**< Per-link counters. (offset 144) */
+    /** Axis faults latched by the server's supervision since start. */
+    uint64_t faults; /* offset 1424 */
+    /** Ticks whose frame could not be loaned or sent, since start. */
+    uint64_t frames_lost; /* offset 1432 */
+    /**
+     * Services whose port slots are all taken now (MOTIOND_FULL_SERVICES_* bits, the `FULL_*`
+     * constants): new clients are refused there until a slot frees.
+     */
+    uint32_t full_services; /* offset 1440 */
+    /** Times a service was found with all its slots taken, since start. */
+    uint32_t full_events; /* offset 1444 */
+    /**
+     * Info, stats and params samples that could not be loaned or sent, and tick notifications
+     * that failed, since start (a lost frame counts in `frames_lost`).
+     */
+    uint64_t publish_failures; /* offset 1448 */
+    /**
+     * Command replies that could not be sent (the client vanished before its answer), since
+     * start.
+     */
+    uint64_t replies_lost; /* offset 1456 */
+    /**
+     * Log reports the main thread's queue had no room for, and failed iceoryx2 housekeeping
+     * (connection updates, e-stop event reads), since start.
+     */
+    uint64_t events_dropped; /* offset 1464 */
+    /** Per link (same index as `links`): the I/O thread's stamps. */
+    motiond_link_io_t link_io[MOTIOND_MAX_LINKS]; /* offset 1472 */
+    /**
+     * Records of dead iceoryx2 nodes removed from the service root (crashed clients, clients
+     * killed while they started), since start.
+     */
+    uint64_t nodes_cleaned; /* offset 1984 */
+} motiond_server_stats_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_server_stats_t) == 1992, "motiond_server_stats_t size");
-MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_motion_frame_t) == 8, "motiond_motion_frame_t align");
-MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_machine_params_t) == 4, "motiond_machine_params_t align");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_server_stats_t) == 8, "motiond_server_stats_t alignment");
 
-/* --- texts ---------------------------------------------------------------------------- */
+/* --- texts -------------------------------------------------------------------------------- */
 
-/** The server's one-line explanation of a refusal reason; NULL for a value unknown here. */
-static inline const char *motiond_reason_text(uint32_t reason) {
-    switch (reason) {
+/** The text of a MOTIOND_COMMAND_KIND_* value; NULL for a value unknown here. */
+static inline const char *motiond_command_kind_text(uint32_t value) {
+    switch (value) {
+    case MOTIOND_COMMAND_KIND_STOP: return "stop";
+    case MOTIOND_COMMAND_KIND_POWER: return "power";
+    case MOTIOND_COMMAND_KIND_POSITION: return "position";
+    case MOTIOND_COMMAND_KIND_VELOCITY: return "velocity";
+    case MOTIOND_COMMAND_KIND_RAMP_POSITION: return "ramp-position";
+    case MOTIOND_COMMAND_KIND_RAMP_VELOCITY: return "ramp-velocity";
+    case MOTIOND_COMMAND_KIND_HOME: return "home";
+    case MOTIOND_COMMAND_KIND_SET_POSITION: return "set-position";
+    case MOTIOND_COMMAND_KIND_CLAIM: return "claim";
+    case MOTIOND_COMMAND_KIND_RELEASE: return "release";
+    case MOTIOND_COMMAND_KIND_E_STOP: return "e-stop";
+    case MOTIOND_COMMAND_KIND_RESET: return "reset";
+    case MOTIOND_COMMAND_KIND_OFF: return "off";
+    case MOTIOND_COMMAND_KIND_SET_OUTPUT: return "set-output";
+    default: return NULL;
+    }
+}
+
+/** The text of a MOTIOND_REASON_* value; NULL for a value unknown here. */
+static inline const char *motiond_reason_text(uint32_t value) {
+    switch (value) {
     case MOTIOND_REASON_ACCEPTED: return "accepted";
     case MOTIOND_REASON_SCHEMA_MISMATCH: return "client and server use different motion-ipc schema versions";
     case MOTIOND_REASON_UNKNOWN_KIND: return "unknown command kind";
@@ -549,30 +762,9 @@ static inline const char *motiond_reason_text(uint32_t reason) {
     }
 }
 
-/** The command's name as the CLI and logs spell it; NULL for a value unknown here. */
-static inline const char *motiond_command_kind_text(uint32_t kind) {
-    switch (kind) {
-    case MOTIOND_COMMAND_KIND_STOP: return "stop";
-    case MOTIOND_COMMAND_KIND_POWER: return "power";
-    case MOTIOND_COMMAND_KIND_POSITION: return "position";
-    case MOTIOND_COMMAND_KIND_VELOCITY: return "velocity";
-    case MOTIOND_COMMAND_KIND_RAMP_POSITION: return "ramp-position";
-    case MOTIOND_COMMAND_KIND_RAMP_VELOCITY: return "ramp-velocity";
-    case MOTIOND_COMMAND_KIND_HOME: return "home";
-    case MOTIOND_COMMAND_KIND_SET_POSITION: return "set-position";
-    case MOTIOND_COMMAND_KIND_CLAIM: return "claim";
-    case MOTIOND_COMMAND_KIND_RELEASE: return "release";
-    case MOTIOND_COMMAND_KIND_E_STOP: return "e-stop";
-    case MOTIOND_COMMAND_KIND_RESET: return "reset";
-    case MOTIOND_COMMAND_KIND_OFF: return "off";
-    case MOTIOND_COMMAND_KIND_SET_OUTPUT: return "set-output";
-    default: return NULL;
-    }
-}
-
-/** A device state's name; NULL for a value unknown here. */
-static inline const char *motiond_device_state_text(uint32_t state) {
-    switch (state) {
+/** The text of a MOTIOND_DEVICE_STATE_* value; NULL for a value unknown here. */
+static inline const char *motiond_device_state_text(uint32_t value) {
+    switch (value) {
     case MOTIOND_DEVICE_STATE_OFFLINE: return "offline";
     case MOTIOND_DEVICE_STATE_ONLINE: return "online";
     case MOTIOND_DEVICE_STATE_STARTING: return "starting";
@@ -581,9 +773,9 @@ static inline const char *motiond_device_state_text(uint32_t state) {
     }
 }
 
-/** A fault code's name; NULL for a value unknown here. */
-static inline const char *motiond_fault_code_text(uint32_t fault) {
-    switch (fault) {
+/** The text of a MOTIOND_FAULT_CODE_* value; NULL for a value unknown here. */
+static inline const char *motiond_fault_code_text(uint32_t value) {
+    switch (value) {
     case MOTIOND_FAULT_CODE_NONE: return "none";
     case MOTIOND_FAULT_CODE_LINK_DOWN: return "link-down";
     case MOTIOND_FAULT_CODE_BOARD_NOT_RESPONDING: return "board-not-responding";
@@ -600,9 +792,9 @@ static inline const char *motiond_fault_code_text(uint32_t fault) {
     }
 }
 
-/** A signal kind's config name; NULL for a value unknown here. */
-static inline const char *motiond_signal_kind_text(uint32_t kind) {
-    switch (kind) {
+/** The text of a MOTIOND_SIGNAL_KIND_* value; NULL for a value unknown here. */
+static inline const char *motiond_signal_kind_text(uint32_t value) {
+    switch (value) {
     case MOTIOND_SIGNAL_KIND_DIGITAL_IN: return "digital-in";
     case MOTIOND_SIGNAL_KIND_DIGITAL_OUT: return "digital-out";
     case MOTIOND_SIGNAL_KIND_ANALOG_IN: return "analog-in";
@@ -610,9 +802,9 @@ static inline const char *motiond_signal_kind_text(uint32_t kind) {
     }
 }
 
-/** An e-stop category's config name; NULL for a value unknown here. */
-static inline const char *motiond_estop_category_text(uint32_t category) {
-    switch (category) {
+/** The text of a MOTIOND_ESTOP_CATEGORY_* value; NULL for a value unknown here. */
+static inline const char *motiond_estop_category_text(uint32_t value) {
+    switch (value) {
     case MOTIOND_ESTOP_CATEGORY_HOLD: return "hold";
     case MOTIOND_ESTOP_CATEGORY_STOP_OFF: return "stop-off";
     case MOTIOND_ESTOP_CATEGORY_OFF: return "off";
@@ -620,9 +812,9 @@ static inline const char *motiond_estop_category_text(uint32_t category) {
     }
 }
 
-/** A device model's config id ("qq2drv"); NULL for a value unknown here. */
-static inline const char *motiond_device_model_text(uint32_t model) {
-    switch (model) {
+/** The text of a MOTIOND_DEVICE_MODEL_* value; NULL for a value unknown here. */
+static inline const char *motiond_device_model_text(uint32_t value) {
+    switch (value) {
     case MOTIOND_DEVICE_MODEL_QQ2DRV: return "qq2drv";
     case MOTIOND_DEVICE_MODEL_TMCPACK: return "tmcpack";
     case MOTIOND_DEVICE_MODEL_SPIMOTOR: return "spimotor";
@@ -630,6 +822,8 @@ static inline const char *motiond_device_model_text(uint32_t model) {
     default: return NULL;
     }
 }
+
+/* --- helpers ------------------------------------------------------------------------------ */
 
 /** A client id from an iceoryx2 node id given as its two 64-bit halves. */
 static inline motiond_client_id_t motiond_client_id(uint64_t lo, uint64_t hi) {

@@ -5,24 +5,22 @@ layout``, fixture ``contract``): for every payload its size, alignment, iceoryx2
 and each field's name, offset, size and type; every enumeration's values, names and
 texts; the flag bits; the constants; the service names.
 
-How a change on the Rust side makes these tests fail (tried once, on AxisState, while
-writing them): add a field ``pub spare: u32`` to ``AxisState`` in
-``crates/motion-ipc/src/frame.rs``. Then
+How a change on the Rust side reaches these tests: the payloads are declared once, with
+``payload!`` in ``crates/motion-ipc/src``, and the mirrors in ``motiond/_layout.py`` are
+generated from that declaration (``scripts/gen``). Add a field ``pub spare: u32`` to
+``AxisState`` and
 
-1. ``crates/motion-ipc/examples/layout/describe.rs`` no longer compiles ("pattern
-   requires `..`"): it destructures every payload without ``..``, so the new field must
-   be listed there (and the pinned sizes and offsets of ``tests/layout.rs`` fail to
-   compile until they are updated too);
-2. once listed, the example prints the new field, and ``test_payload_layouts`` fails:
+1. ``crates/motion-ipc/tests/layout.rs`` fails to compile until its pinned sizes and
+   offsets are updated, and ``crates/motion-ipc/tests/generated.rs`` fails ("stale
+   generated files: include/motiond.h, python/src/motiond/_layout.py") until
+   ``scripts/gen`` has rewritten the header and the mirrors;
+2. before that, the example prints the new field, and ``test_payload_layouts`` fails:
    "AxisState: size 80 != 88", "AxisState: field #12 differs: rust {'name': 'spare',
    'offset': 80, 'size': 4, 'type': 'u32'}, python None", and the same for
-   ``MotionFrame``, whose size and ``signals`` offset moved;
-3. ``crates/motion-ipc/tests/c_header.rs`` fails for ``include/motiond.h``: the
-   generated probe names ``spare``, and the compiler says the struct has no such member.
+   ``MotionFrame``, whose size and ``signals`` offset moved.
 
-Nothing but adding the field to ``python/src/motiond/ipc.py`` (and to the header) makes them
-pass again. A renamed type name, a changed enum value or a changed refusal message fails
-the same way.
+These tests check what the generator wrote (and that nobody edited it by hand): every size,
+offset, type name, enum value and refusal message as ctypes computes it.
 """
 
 from __future__ import annotations

@@ -13,7 +13,8 @@
 //! - [`LinkKind`] (stream or SPI) and [`SignalKind`] (digital in/out, analogue in): one
 //!   enum each for what the links, the drivers, the engine and the shared-memory contract
 //!   all mean.
-//! - [`Model`]: the board models, with their config id, contract code and link kind.
+//! - [`Model`] / [`ModelFacts`]: a board model, with its config id, contract code and link
+//!   kind (an open set: board crates declare their own).
 //!
 //! ```
 //! use motion_base::{FixedQueue, FixedText, counts_to_i32};
@@ -43,6 +44,6 @@ mod text;
 pub use counts::{counts_to_i32, counts_to_i32_saturating};
 pub use duration::parse_duration;
 pub use kinds::{LinkKind, SignalKind, UnknownKind};
-pub use model::{Model, UnknownModel};
+pub use model::{Model, ModelFacts, UnknownModel};
 pub use queue::FixedQueue;
 pub use text::{FixedText, floor_char_boundary, read_text, write_text};

@@ -1,67 +1,108 @@
-//! The board models motiond drives: one enum, with every fact about a model that more than
-//! one crate needs (its config id, its code in the shared-memory contract, the kind of link
-//! it sits on). The per-model code is found from here: see "How to add a board" in
-//! docs/ARCHITECTURE.md.
+//! The board model of a device: [`Model`], a handle on the model's [`ModelFacts`] (config
+//! id, code in the shared-memory contract, the kind of link it sits on). The set of models
+//! is open: a board crate declares its own facts (`static FACTS: ModelFacts`) and the
+//! server learns every model from its registry (crate `motion-boards`, docs/ARCHITECTURE.md
+//! "How to add a board"). The four boards whose drivers still live in `motion-drivers` have
+//! their facts here ([`Model::QQ2DRV`], [`Model::TMCPACK`], [`Model::SPIMOTOR`],
+//! [`Model::QSB`]), below the drivers that name them.
 
 use core::fmt;
 
 use crate::LinkKind;
 
-/// A board model. Travels as its `u32` code in the shared-memory contract
-/// (`DeviceInfo::model`, where `motion_ipc` calls it `DeviceModel`).
+/// What every crate may know of a board model without depending on the board's crate.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[repr(u32)]
-pub enum Model {
-    /// QuadQuad2Drv (SPI, 4 DC motors with PID).
-    Qq2drv = 1,
-    /// Trinamic SIXpack / QUADpack (RS-232 / RS-485 steppers).
-    Tmcpack = 2,
-    /// SPI_motor (SPI, 2 brushed motors or 1 stepper).
-    Spimotor = 3,
-    /// US Digital QSB (USB serial encoder interface, stepper on the -M).
-    Qsb = 4,
+pub struct ModelFacts {
+    /// The model id of the config and the CLIs (`model = "tmcpack"`): lower case, unique.
+    pub id: &'static str,
+    /// Its code in the shared-memory contract (`DeviceInfo::model`): nonzero, unique.
+    pub code: u32,
+    /// The kind of link the board sits on.
+    pub link_kind: LinkKind,
+    /// The product's name as its documents spell it (`"Trinamic SIXpack / QUADpack"`).
+    pub title: &'static str,
 }
 
+/// A board model: a copyable handle on its [`ModelFacts`]. Two models are equal when their
+/// facts are (codes are unique across a registry: its tests check it).
+#[derive(Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Model(&'static ModelFacts);
+
 impl Model {
-    /// Every model, in code order.
-    pub const ALL: [Self; 4] = [Self::Qq2drv, Self::Tmcpack, Self::Spimotor, Self::Qsb];
+    /// QuadQuad2Drv (SPI, 4 DC motors with PID).
+    pub const QQ2DRV: Self = Self(&ModelFacts {
+        id: "qq2drv",
+        code: 1,
+        link_kind: LinkKind::Spi,
+        title: "QuadQuad2Drv",
+    });
+    /// Trinamic SIXpack / QUADpack (RS-232 / RS-485 steppers).
+    pub const TMCPACK: Self = Self(&ModelFacts {
+        id: "tmcpack",
+        code: 2,
+        link_kind: LinkKind::Stream,
+        title: "Trinamic SIXpack / QUADpack",
+    });
+    /// SPI_motor (SPI, 2 brushed motors or 1 stepper).
+    pub const SPIMOTOR: Self = Self(&ModelFacts {
+        id: "spimotor",
+        code: 3,
+        link_kind: LinkKind::Spi,
+        title: "SPI_motor",
+    });
+    /// US Digital QSB (USB serial encoder interface, stepper on the -M).
+    pub const QSB: Self = Self(&ModelFacts {
+        id: "qsb",
+        code: 4,
+        link_kind: LinkKind::Stream,
+        title: "US Digital QSB",
+    });
+
+    /// The models whose facts live here, for readers of the shared-memory contract that
+    /// name a device's model from its code without the board registry (the clients); a
+    /// code outside this list is an [`UnknownModel`] to them, shown by its number.
+    pub const BUILT_IN: [Self; 4] = [Self::QQ2DRV, Self::TMCPACK, Self::SPIMOTOR, Self::QSB];
+
+    /// The model `facts` describe.
+    #[must_use]
+    pub const fn new(facts: &'static ModelFacts) -> Self {
+        Self(facts)
+    }
+
+    /// Its facts.
+    #[must_use]
+    pub const fn facts(self) -> &'static ModelFacts {
+        self.0
+    }
 
     /// The model id of the config and the CLIs (`model = "tmcpack"`).
     #[must_use]
     pub const fn id(self) -> &'static str {
-        match self {
-            Self::Qq2drv => "qq2drv",
-            Self::Tmcpack => "tmcpack",
-            Self::Spimotor => "spimotor",
-            Self::Qsb => "qsb",
-        }
-    }
-
-    /// The model of a config id.
-    #[must_use]
-    pub fn from_id(id: &str) -> Option<Self> {
-        Self::ALL.into_iter().find(|model| model.id() == id)
-    }
-
-    /// The ids of every model, for messages (`qq2drv, tmcpack, spimotor, qsb`).
-    #[must_use]
-    pub const fn id_list() -> &'static str {
-        "qq2drv, tmcpack, spimotor, qsb"
+        self.0.id
     }
 
     /// Its code in the shared-memory contract.
     #[must_use]
     pub const fn code(self) -> u32 {
-        self as u32
+        self.0.code
     }
 
     /// The kind of link the board sits on.
     #[must_use]
     pub const fn link_kind(self) -> LinkKind {
-        match self {
-            Self::Qq2drv | Self::Spimotor => LinkKind::Spi,
-            Self::Tmcpack | Self::Qsb => LinkKind::Stream,
-        }
+        self.0.link_kind
+    }
+
+    /// The product's name.
+    #[must_use]
+    pub const fn title(self) -> &'static str {
+        self.0.title
+    }
+}
+
+impl fmt::Debug for Model {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "Model({})", self.id())
     }
 }
 
@@ -71,7 +112,7 @@ impl fmt::Display for Model {
     }
 }
 
-/// A `u32` that is no [`Model`] code (a value from a newer writer).
+/// A `u32` that is no known model's code (a model the reader was not built with).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct UnknownModel(pub u32);
 
@@ -85,27 +126,38 @@ impl std::error::Error for UnknownModel {}
 
 impl TryFrom<u32> for Model {
     type Error = UnknownModel;
-    fn try_from(value: u32) -> Result<Self, Self::Error> {
-        Self::ALL
+    /// One of the [`BUILT_IN`](Model::BUILT_IN) models by its code.
+    fn try_from(code: u32) -> Result<Self, Self::Error> {
+        Self::BUILT_IN
             .into_iter()
-            .find(|model| model.code() == value)
-            .ok_or(UnknownModel(value))
+            .find(|model| model.code() == code)
+            .ok_or(UnknownModel(code))
     }
 }
 
 #[cfg(test)]
 mod tests {
-    use super::{Model, UnknownModel};
+    use super::{LinkKind, Model, ModelFacts};
 
     #[test]
-    fn ids_and_codes_round_trip() {
-        for model in Model::ALL {
-            assert_eq!(Model::from_id(model.id()), Some(model));
+    fn a_model_is_its_facts() {
+        static OTHER: ModelFacts = ModelFacts {
+            id: "example",
+            code: 99,
+            link_kind: LinkKind::Stream,
+            title: "Example",
+        };
+        let other = Model::new(&OTHER);
+        assert_eq!(other.id(), "example");
+        assert_eq!(other.code(), 99);
+        assert_ne!(other, Model::TMCPACK);
+        assert_eq!(Model::TMCPACK, Model::TMCPACK);
+        assert_eq!(Model::TMCPACK.to_string(), "tmcpack");
+        assert_eq!(format!("{:?}", Model::QSB), "Model(qsb)");
+        assert_eq!(Model::QQ2DRV.link_kind(), LinkKind::Spi);
+        for model in Model::BUILT_IN {
             assert_eq!(Model::try_from(model.code()), Ok(model));
-            assert!(Model::id_list().contains(model.id()));
         }
-        assert_eq!(Model::from_id("x"), None);
-        assert_eq!(Model::try_from(0), Err(UnknownModel(0)));
-        assert_eq!(Model::Tmcpack.to_string(), "tmcpack");
+        assert_eq!(Model::try_from(99), Err(super::UnknownModel(99)));
     }
 }

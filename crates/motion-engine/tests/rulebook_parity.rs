@@ -224,8 +224,8 @@ fn fake_config(engine: &Engine) -> FakeConfig {
     config.tick_hz = 1000;
     config.starting_ticks = 0;
     config.devices = vec![
-        FakeDevice::new("full", DeviceModel::Qq2drv, "fw"),
-        FakeDevice::new("plain", DeviceModel::Qq2drv, "fw"),
+        FakeDevice::new("full", DeviceModel::QQ2DRV, "fw"),
+        FakeDevice::new("plain", DeviceModel::QQ2DRV, "fw"),
     ];
     config.axes = info.axes[..info.axis_count as usize]
         .iter()

@@ -22,16 +22,17 @@ impl fmt::Display for UnknownValue {
 
 impl std::error::Error for UnknownValue {}
 
-/// The iceoryx2 node id of a client (`Node::id().value()`, a u128), split into two
-/// little halves so that the layout is the same for every C ABI. Zero means "no client".
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, ZeroCopySend)]
-#[type_name("motiond::ClientId")]
-#[repr(C)]
-pub struct ClientId {
-    /// Low 64 bits of the node id.
-    pub lo: u64,
-    /// High 64 bits of the node id.
-    pub hi: u64,
+payload! {
+    /// The iceoryx2 node id of a client (`Node::id().value()`, a u128), split into two
+    /// little halves so that the layout is the same for every C ABI. Zero means "no client".
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+    #[type_name("motiond::ClientId")]
+    pub struct ClientId {
+        /// Low 64 bits of the node id.
+        pub lo: u64,
+        /// High 64 bits of the node id.
+        pub hi: u64,
+    }
 }
 
 impl ClientId {
@@ -334,39 +335,31 @@ impl TryFrom<u32> for Target {
     }
 }
 
-/// A command to the server. 64 bytes, alignment 8. Fields in memory order:
-///
-/// | offset | field | type | meaning |
-/// |---|---|---|---|
-/// | 0 | `schema_version` | u32 | [`SCHEMA_VERSION`] |
-/// | 4 | `kind` | u32 | [`CommandKind`] |
-/// | 8 | `client` | [`ClientId`] | the sender's iceoryx2 node id, or zero |
-/// | 24 | `sequence` | u64 | the client's own sequence number, echoed in the reply |
-/// | 32 | `axis` | u32 | axis (or signal) index, config order, or [`CommandRequest::ALL_AXES`] |
-/// | 36 | `target` | u32 | [`Target`]: 0 = axis, 1 = signal |
-/// | 40 | `values` | f64; 3 | see [`CommandKind`] |
-///
-/// Identity comes from the transport: the server knows which iceoryx2 node sent a request
-/// and owns every claim by that node. `client` may be zero ("the sender"); a non-zero
-/// `client` that is not the sender's node is refused with [`Reason::IdentityMismatch`].
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("motiond::CommandRequest")]
-#[repr(C)]
-pub struct CommandRequest {
-    /// [`SCHEMA_VERSION`] of the sender.
-    pub schema_version: u32,
-    /// [`CommandKind`] value.
-    pub kind: u32,
-    /// The sender's iceoryx2 node id, or zero.
-    pub client: ClientId,
-    /// The client's sequence number, echoed in the reply.
-    pub sequence: u64,
-    /// Axis (or signal) index, or [`CommandRequest::ALL_AXES`].
-    pub axis: u32,
-    /// [`Target`] value.
-    pub target: u32,
-    /// Arguments; see [`CommandKind`].
-    pub values: [f64; 3],
+payload! {
+    /// A command to the server, on `motiond/<name>/command`; `values` per kind: see
+    /// [`CommandKind`].
+    ///
+    /// Identity comes from the transport: the server knows which iceoryx2 node sent a request and
+    /// owns every claim by that node. `client` may be zero ("the sender"); a non-zero `client` that
+    /// is not the sender's node is refused with [`Reason::IdentityMismatch`].
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    #[type_name("motiond::CommandRequest")]
+    pub struct CommandRequest {
+        /// [`SCHEMA_VERSION`] of the sender.
+        pub schema_version: u32,
+        /// [`CommandKind`] value.
+        pub kind: u32,
+        /// The sender's iceoryx2 node id, or zero.
+        pub client: ClientId,
+        /// The client's sequence number, echoed in the reply.
+        pub sequence: u64,
+        /// Axis (or signal) index, config order, or [`CommandRequest::ALL_AXES`].
+        pub axis: u32,
+        /// [`Target`] value: 0 = axis, 1 = signal.
+        pub target: u32,
+        /// Arguments; see [`CommandKind`].
+        pub values: [f64; 3],
+    }
 }
 
 impl CommandRequest {
@@ -416,33 +409,24 @@ impl CommandRequest {
     }
 }
 
-/// The server's answer to one [`CommandRequest`]; every request gets exactly one.
-/// 32 bytes, alignment 8. Fields in memory order:
-///
-/// | offset | field | type | meaning |
-/// |---|---|---|---|
-/// | 0 | `schema_version` | u32 | [`SCHEMA_VERSION`] |
-/// | 4 | `reason` | u32 | [`Reason`]; 0 = accepted |
-/// | 8 | `sequence` | u64 | the request's sequence |
-/// | 16 | `tick_applied` | u64 | tick in which the command took effect (or was refused) |
-/// | 24 | `axis` | u32 | the request's axis |
-/// | 28 | `kind` | u32 | the request's kind |
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ZeroCopySend)]
-#[type_name("motiond::CommandReply")]
-#[repr(C)]
-pub struct CommandReply {
-    /// [`SCHEMA_VERSION`] of the server.
-    pub schema_version: u32,
-    /// [`Reason`] value; 0 = accepted.
-    pub reason: u32,
-    /// The request's sequence.
-    pub sequence: u64,
-    /// Tick in which the command took effect (or was refused).
-    pub tick_applied: u64,
-    /// The request's axis.
-    pub axis: u32,
-    /// The request's kind.
-    pub kind: u32,
+payload! {
+    /// The server's answer to one [`CommandRequest`]; every request gets exactly one.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+    #[type_name("motiond::CommandReply")]
+    pub struct CommandReply {
+        /// [`SCHEMA_VERSION`] of the server.
+        pub schema_version: u32,
+        /// [`Reason`] value; 0 = accepted.
+        pub reason: u32,
+        /// The request's sequence.
+        pub sequence: u64,
+        /// Tick in which the command took effect (or was refused).
+        pub tick_applied: u64,
+        /// The request's axis.
+        pub axis: u32,
+        /// The request's kind.
+        pub kind: u32,
+    }
 }
 
 impl CommandReply {

@@ -300,50 +300,37 @@ impl AxisFlags {
     }
 }
 
-/// One axis in a frame. 80 bytes, alignment 8. Fields in memory order:
-///
-/// | offset | field | type | meaning |
-/// |---|---|---|---|
-/// | 0 | `position` | f64 | measured position, axis units |
-/// | 8 | `velocity` | f64 | measured velocity, units/s |
-/// | 16 | `target` | f64 | position target (position modes) or velocity target (velocity modes) |
-/// | 24 | `raw_counts` | i64 | the board's own position counts |
-/// | 32 | `last_refresh_tick` | u64 | tick at which fresh data last arrived from the board |
-/// | 40 | `flags` | u32 | [`AxisFlags`] bits |
-/// | 44 | `fault` | u16 | [`FaultCode`] |
-/// | 46 | `mode` | u8 | [`AxisMode`] |
-/// | 47 | `device_state` | u8 | [`DeviceState`] of the axis's board |
-/// | 48 | `claimed_by` | [`ClientId`] | claim holder, zero when unclaimed |
-/// | 64 | `fault_value` | f64 | the measured figure of the fault (units, units/s), 0 when none |
-/// | 72 | `fault_limit` | f64 | the tolerance or limit it broke, 0 when none |
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("motiond::AxisState")]
-#[repr(C)]
-pub struct AxisState {
-    /// Measured position in axis units.
-    pub position: f64,
-    /// Measured velocity in units/s.
-    pub velocity: f64,
-    /// Position target (position modes) or velocity target (velocity modes), in units.
-    pub target: f64,
-    /// Position in the board's own counts.
-    pub raw_counts: i64,
-    /// Tick at which fresh data last arrived from the board.
-    pub last_refresh_tick: u64,
-    /// [`AxisFlags`] bits.
-    pub flags: u32,
-    /// [`FaultCode`] value.
-    pub fault: u16,
-    /// [`AxisMode`] value.
-    pub mode: u8,
-    /// [`DeviceState`] value of the axis's board.
-    pub device_state: u8,
-    /// The client holding a claim on the axis; zero when unclaimed.
-    pub claimed_by: ClientId,
-    /// The measured figure of the latched fault (see [`FaultCode`]), 0 when none.
-    pub fault_value: f64,
-    /// The tolerance or limit the fault broke, 0 when none.
-    pub fault_limit: f64,
+payload! {
+    /// One axis in a frame.
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    #[type_name("motiond::AxisState")]
+    pub struct AxisState {
+        /// Measured position in axis units.
+        pub position: f64,
+        /// Measured velocity in units/s.
+        pub velocity: f64,
+        /// Position target (position modes) or velocity target (velocity modes), in units.
+        pub target: f64,
+        /// Position in the board's own counts.
+        pub raw_counts: i64,
+        /// Tick at which fresh data last arrived from the board.
+        pub last_refresh_tick: u64,
+        /// [`AxisFlags`] bits.
+        pub flags: u32,
+        /// [`FaultCode`] value; 0 = no fault.
+        pub fault: u16,
+        /// [`AxisMode`] value.
+        pub mode: u8,
+        /// [`DeviceState`] value of the axis's board.
+        pub device_state: u8,
+        /// The client holding a claim on the axis; zero when unclaimed.
+        pub claimed_by: ClientId,
+        /// The measured figure of the latched fault (units, units/s; see [`FaultCode`]), 0 when
+        /// none.
+        pub fault_value: f64,
+        /// The tolerance or limit the fault broke, 0 when none.
+        pub fault_limit: f64,
+    }
 }
 
 impl AxisState {
@@ -427,27 +414,24 @@ impl FrameFlags {
     }
 }
 
-/// When the current goal of one axis was set and when its first request reached the wire
-/// ([`MotionFrame::wire`], same index as `axes`). 24 bytes, alignment 8.
-///
-/// | offset | field | type | meaning |
-/// |---|---|---|---|
-/// | 0 | `goal_tick` | u64 | tick in which the current goal was set (a client's command: the reply's `tick_applied`; or the server's own stop) |
-/// | 8 | `wire_tick` | u64 | tick during which the goal's first request was written to the link (its last byte accepted by the transport), 0 until then |
-/// | 16 | `wire_ns` | u64 | CLOCK_MONOTONIC ns of that write, 0 until then (and for a goal that needs no request) |
-///
-/// Command → wire: `wire_ns` minus the client's CLOCK_MONOTONIC when it sent the command,
-/// or in ticks `wire_tick − goal_tick` (0: written in the tick that accepted it).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ZeroCopySend)]
-#[type_name("motiond::AxisWire")]
-#[repr(C)]
-pub struct AxisWire {
-    /// Tick in which the current goal was set.
-    pub goal_tick: u64,
-    /// Tick during which its first request was written; 0 until then.
-    pub wire_tick: u64,
-    /// CLOCK_MONOTONIC ns of that write; 0 until then.
-    pub wire_ns: u64,
+payload! {
+    /// When the current goal of one axis was set and when its first request reached the wire
+    /// ([`MotionFrame::wire`], same index as `axes`).
+    ///
+    /// Command → wire: `wire_ns` minus the client's CLOCK_MONOTONIC when it sent the command, or in
+    /// ticks `wire_tick − goal_tick` (0: written in the tick that accepted it).
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+    #[type_name("motiond::AxisWire")]
+    pub struct AxisWire {
+        /// Tick in which the current goal was set (a client's command: the reply's `tick_applied`;
+        /// or the server's own stop).
+        pub goal_tick: u64,
+        /// Tick during which the goal's first request was written to the link (its last byte
+        /// accepted by the transport); 0 until then.
+        pub wire_tick: u64,
+        /// CLOCK_MONOTONIC ns of that write; 0 until then (and for a goal that needs no request).
+        pub wire_ns: u64,
+    }
 }
 
 impl AxisWire {
@@ -464,55 +448,40 @@ impl AxisWire {
     }
 }
 
-/// One consistent snapshot of every axis, board and signal, published once per tick on
-/// `motiond/<name>/frame`. 16464 bytes, alignment 8. Fields in memory order:
-///
-/// | offset | field | type | meaning |
-/// |---|---|---|---|
-/// | 0 | `schema_version` | u32 | [`SCHEMA_VERSION`] |
-/// | 4 | `axis_count` | u32 | valid entries at the start of `axes` |
-/// | 8 | `tick` | u64 | tick number, 0 at server start |
-/// | 16 | `time_ns` | u64 | the tick's deadline, CLOCK_MONOTONIC ns |
-/// | 24 | `publish_ns` | u64 | CLOCK_MONOTONIC ns just before the frame was sent |
-/// | 32 | `flags` | u32 | [`FrameFlags`] bits |
-/// | 36 | `signal_count` | u32 | valid entries at the start of `signals` |
-/// | 40 | `device_count` | u32 | valid entries at the start of `devices` |
-/// | 44 | `reserved` | u32 | zero |
-/// | 48 | `devices` | u8; [`MAX_DEVICES`] | [`DeviceState`] per device, config order |
-/// | 80 | `axes` | [`AxisState`]; [`MAX_AXES`] | axes in config order |
-/// | 10320 | `signals` | [`SignalState`]; [`MAX_SIGNALS`] | signals in config order |
-/// | 13392 | `wire` | [`AxisWire`]; [`MAX_AXES`] | per axis (same index as `axes`): when its current goal was set and reached the wire |
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("motiond::MotionFrame")]
-#[repr(C)]
-pub struct MotionFrame {
-    /// [`SCHEMA_VERSION`] of the writer.
-    pub schema_version: u32,
-    /// Number of valid entries at the start of `axes`.
-    pub axis_count: u32,
-    /// Tick number, 0 at server start.
-    pub tick: u64,
-    /// The tick's deadline on CLOCK_MONOTONIC, ns.
-    pub time_ns: u64,
-    /// CLOCK_MONOTONIC, ns, taken just before the frame was sent.
-    pub publish_ns: u64,
-    /// [`FrameFlags`] bits.
-    pub flags: u32,
-    /// Number of valid entries at the start of `signals`.
-    pub signal_count: u32,
-    /// Number of valid entries at the start of `devices`.
-    pub device_count: u32,
-    /// Zero.
-    pub reserved: u32,
-    /// [`DeviceState`] per device, config order.
-    pub devices: [u8; MAX_DEVICES],
-    /// Axes in config order; entries past `axis_count` are [`AxisState::UNKNOWN`].
-    pub axes: [AxisState; MAX_AXES],
-    /// Signals in config order; entries past `signal_count` are [`SignalState::UNKNOWN`].
-    pub signals: [SignalState; MAX_SIGNALS],
-    /// Per axis (same index as `axes`): when its current goal was set and when its first
-    /// request reached the wire.
-    pub wire: [AxisWire; MAX_AXES],
+payload! {
+    /// One consistent snapshot of every axis, board and signal, published once per tick on
+    /// `motiond/<name>/frame`.
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    #[type_name("motiond::MotionFrame")]
+    pub struct MotionFrame {
+        /// [`SCHEMA_VERSION`] of the writer.
+        pub schema_version: u32,
+        /// Number of valid entries at the start of `axes`.
+        pub axis_count: u32,
+        /// Tick number, 0 at server start.
+        pub tick: u64,
+        /// The tick's deadline on CLOCK_MONOTONIC, ns.
+        pub time_ns: u64,
+        /// CLOCK_MONOTONIC, ns, taken just before the frame was sent.
+        pub publish_ns: u64,
+        /// [`FrameFlags`] bits.
+        pub flags: u32,
+        /// Number of valid entries at the start of `signals`.
+        pub signal_count: u32,
+        /// Number of valid entries at the start of `devices`.
+        pub device_count: u32,
+        /// Zero.
+        pub reserved: u32,
+        /// [`DeviceState`] per device, config order; entries past `device_count` are zero.
+        pub devices: [u8; MAX_DEVICES],
+        /// Axes in config order; entries past `axis_count` are [`AxisState::UNKNOWN`].
+        pub axes: [AxisState; MAX_AXES],
+        /// Signals in config order; entries past `signal_count` are [`SignalState::UNKNOWN`].
+        pub signals: [SignalState; MAX_SIGNALS],
+        /// Per axis (same index as `axes`): when its current goal was set and when its first
+        /// request reached the wire.
+        pub wire: [AxisWire; MAX_AXES],
+    }
 }
 
 impl MotionFrame {

@@ -69,62 +69,44 @@ impl Capabilities {
     }
 }
 
-/// One axis's static description. 160 bytes, alignment 8. Fields in memory order:
-///
-/// | offset | field | type | meaning |
-/// |---|---|---|---|
-/// | 0 | `name` | u8; 32 | axis name, UTF-8, zero padded |
-/// | 32 | `unit` | u8; 16 | unit, UTF-8, zero padded |
-/// | 48 | `device` | u8; 32 | device name |
-/// | 80 | `counts_per_unit` | f64 | device counts per unit |
-/// | 88 | `min` | f64 | soft limit, units |
-/// | 96 | `max` | f64 | soft limit, units |
-/// | 104 | `max_velocity` | f64 | units/s |
-/// | 112 | `max_accel` | f64 | units/s² |
-/// | 120 | `capabilities` | u32 | [`Capabilities`] bits |
-/// | 124 | `channel` | u16 | motor number on the device |
-/// | 126 | `device_index` | u16 | index into [`ServerInfo::devices`] |
-/// | 128 | `following_error` | f64 | units; 0 = not supervised |
-/// | 136 | `overspeed_factor` | f64 | × max_velocity; 0 = not supervised |
-/// | 144 | `home_max_travel` | f64 | units; 0 = not supervised |
-/// | 152 | `estop` | u32 | [`EstopCategory`] |
-/// | 156 | `reserved` | u32 | zero |
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("motiond::AxisInfo")]
-#[repr(C)]
-pub struct AxisInfo {
-    /// Axis name.
-    pub name: [u8; NAME_LEN],
-    /// Unit of positions ("mm", "deg").
-    pub unit: [u8; UNIT_LEN],
-    /// Name of the device that drives the axis.
-    pub device: [u8; NAME_LEN],
-    /// Device counts per unit.
-    pub counts_per_unit: f64,
-    /// Lower soft limit, units.
-    pub min: f64,
-    /// Upper soft limit, units.
-    pub max: f64,
-    /// Velocity limit, units/s.
-    pub max_velocity: f64,
-    /// Acceleration limit, units/s².
-    pub max_accel: f64,
-    /// [`Capabilities`] bits.
-    pub capabilities: u32,
-    /// Motor number on the device.
-    pub channel: u16,
-    /// Index into [`ServerInfo::devices`].
-    pub device_index: u16,
-    /// Following error tolerance, units; 0 = not supervised.
-    pub following_error: f64,
-    /// Overspeed factor; 0 = not supervised.
-    pub overspeed_factor: f64,
-    /// Travel limit of a reference search, units; 0 = not supervised.
-    pub home_max_travel: f64,
-    /// [`EstopCategory`] value.
-    pub estop: u32,
-    /// Zero.
-    pub reserved: u32,
+payload! {
+    /// One axis's static description.
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    #[type_name("motiond::AxisInfo")]
+    pub struct AxisInfo {
+        /// Axis name, UTF-8, zero padded.
+        pub name: [u8; NAME_LEN],
+        /// Unit of positions ("mm", "deg"), UTF-8, zero padded.
+        pub unit: [u8; UNIT_LEN],
+        /// Name of the device that drives the axis.
+        pub device: [u8; NAME_LEN],
+        /// Device counts per unit.
+        pub counts_per_unit: f64,
+        /// Lower soft limit, units.
+        pub min: f64,
+        /// Upper soft limit, units.
+        pub max: f64,
+        /// Velocity limit, units/s.
+        pub max_velocity: f64,
+        /// Acceleration limit, units/s².
+        pub max_accel: f64,
+        /// [`Capabilities`] bits.
+        pub capabilities: u32,
+        /// Motor number on the device.
+        pub channel: u16,
+        /// Index into [`ServerInfo::devices`].
+        pub device_index: u16,
+        /// Following error tolerance, units; 0 = not supervised.
+        pub following_error: f64,
+        /// Overspeed factor (× `max_velocity`); 0 = not supervised.
+        pub overspeed_factor: f64,
+        /// Travel limit of a reference search, units; 0 = not supervised.
+        pub home_max_travel: f64,
+        /// [`EstopCategory`] value.
+        pub estop: u32,
+        /// Zero.
+        pub reserved: u32,
+    }
 }
 
 impl AxisInfo {
@@ -174,35 +156,26 @@ impl AxisInfo {
     }
 }
 
-/// One device's description. 112 bytes, alignment 4. Fields in memory order:
-///
-/// | offset | field | type | meaning |
-/// |---|---|---|---|
-/// | 0 | `name` | u8; 32 | device name |
-/// | 32 | `link` | u8; 32 | link name |
-/// | 64 | `firmware` | u8; 32 | firmware version as the board reported it ("" until known) |
-/// | 96 | `model` | u32 | [`DeviceModel`] |
-/// | 100 | `address` | u32 | bus address (0 when the model has none) |
-/// | 104 | `axis_count` | u32 | axes configured on the device |
-/// | 108 | `state` | u32 | [`DeviceState`] when the info was published (the frame has the current one) |
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ZeroCopySend)]
-#[type_name("motiond::DeviceInfo")]
-#[repr(C)]
-pub struct DeviceInfo {
-    /// Device name.
-    pub name: [u8; NAME_LEN],
-    /// Link name.
-    pub link: [u8; NAME_LEN],
-    /// Firmware version as reported by the board.
-    pub firmware: [u8; NAME_LEN],
-    /// [`DeviceModel`] value.
-    pub model: u32,
-    /// Bus address, 0 when the model has none.
-    pub address: u32,
-    /// Axes configured on the device.
-    pub axis_count: u32,
-    /// [`DeviceState`] value when the info was published.
-    pub state: u32,
+payload! {
+    /// One device's description.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+    #[type_name("motiond::DeviceInfo")]
+    pub struct DeviceInfo {
+        /// Device name.
+        pub name: [u8; NAME_LEN],
+        /// Link name.
+        pub link: [u8; NAME_LEN],
+        /// Firmware version as the board reported it ("" until known).
+        pub firmware: [u8; NAME_LEN],
+        /// [`DeviceModel`] value.
+        pub model: u32,
+        /// Bus address, 0 when the model has none.
+        pub address: u32,
+        /// Axes configured on the device.
+        pub axis_count: u32,
+        /// [`DeviceState`] value when the info was published (the frame has the current one).
+        pub state: u32,
+    }
 }
 
 impl DeviceInfo {
@@ -241,53 +214,38 @@ impl DeviceInfo {
     }
 }
 
-/// The server's static description. 32328 bytes, alignment 8. Fields in memory order:
-///
-/// | offset | field | type | meaning |
-/// |---|---|---|---|
-/// | 0 | `schema_version` | u32 | [`SCHEMA_VERSION`] |
-/// | 4 | `axis_count` | u32 | valid entries in `axes` |
-/// | 8 | `device_count` | u32 | valid entries in `devices` |
-/// | 12 | `tick_hz` | u32 | tick rate |
-/// | 16 | `command_timeout_ms` | u32 | deadman; 0 = disabled |
-/// | 20 | `max_clients` | u32 | configured client limit |
-/// | 24 | `server_pid` | u32 | process id of motiond |
-/// | 28 | `signal_count` | u32 | valid entries in `signals` |
-/// | 32 | `name` | u8; 32 | instance name |
-/// | 64 | `start_time_ns` | u64 | CLOCK_MONOTONIC ns of tick 0 |
-/// | 72 | `axes` | [`AxisInfo`]; [`MAX_AXES`] | axes in config order |
-/// | 20552 | `devices` | [`DeviceInfo`]; [`MAX_DEVICES`] | devices in config order |
-/// | 24136 | `signals` | [`SignalInfo`]; [`MAX_SIGNALS`] | signals in config order |
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("motiond::ServerInfo")]
-#[repr(C)]
-pub struct ServerInfo {
-    /// [`SCHEMA_VERSION`] of the server.
-    pub schema_version: u32,
-    /// Valid entries in `axes`.
-    pub axis_count: u32,
-    /// Valid entries in `devices`.
-    pub device_count: u32,
-    /// Tick rate, Hz.
-    pub tick_hz: u32,
-    /// Deadman for velocity and power goals, ms; 0 = disabled.
-    pub command_timeout_ms: u32,
-    /// Configured client limit.
-    pub max_clients: u32,
-    /// Process id of motiond.
-    pub server_pid: u32,
-    /// Valid entries in `signals`.
-    pub signal_count: u32,
-    /// Instance name.
-    pub name: [u8; NAME_LEN],
-    /// CLOCK_MONOTONIC ns of tick 0.
-    pub start_time_ns: u64,
-    /// Axes in config order.
-    pub axes: [AxisInfo; MAX_AXES],
-    /// Devices in config order.
-    pub devices: [DeviceInfo; MAX_DEVICES],
-    /// Signals in config order.
-    pub signals: [SignalInfo; MAX_SIGNALS],
+payload! {
+    /// The server's static description, published with history 1 on `motiond/<name>/info`.
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    #[type_name("motiond::ServerInfo")]
+    pub struct ServerInfo {
+        /// [`SCHEMA_VERSION`] of the server.
+        pub schema_version: u32,
+        /// Valid entries in `axes`.
+        pub axis_count: u32,
+        /// Valid entries in `devices`.
+        pub device_count: u32,
+        /// Tick rate, Hz.
+        pub tick_hz: u32,
+        /// Deadman for velocity and power goals, ms; 0 = disabled.
+        pub command_timeout_ms: u32,
+        /// Configured client limit.
+        pub max_clients: u32,
+        /// Process id of motiond.
+        pub server_pid: u32,
+        /// Valid entries in `signals`.
+        pub signal_count: u32,
+        /// Instance name.
+        pub name: [u8; NAME_LEN],
+        /// CLOCK_MONOTONIC ns of tick 0.
+        pub start_time_ns: u64,
+        /// Axes in config order.
+        pub axes: [AxisInfo; MAX_AXES],
+        /// Devices in config order.
+        pub devices: [DeviceInfo; MAX_DEVICES],
+        /// Signals in config order.
+        pub signals: [SignalInfo; MAX_SIGNALS],
+    }
 }
 
 impl ServerInfo {

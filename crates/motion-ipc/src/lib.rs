@@ -5,8 +5,10 @@
 //! names, the command kinds and the reason codes, and the schema version. Every payload is
 //! `#[repr(C)]`, fixed size, [`ZeroCopySend`](iceoryx2::prelude::ZeroCopySend) and carries
 //! an explicit iceoryx2 type name, so that C, C++ and Python iceoryx2 clients can mirror
-//! the layout field by field (each type documents its fields in order; sizes and offsets
-//! are pinned by `tests/layout.rs`).
+//! the layout field by field. Each payload is declared once, with its docs, and described
+//! by [`schema`]: `include/motiond.h` (every offset and size in its comments) and the
+//! Python package's ctypes mirrors are generated from that description
+//! (`cargo run -p motion-ipc --example gen`); `tests/layout.rs` pins sizes and offsets.
 //!
 //! Enumerations travel as plain integers (`u8`/`u16`/`u32` fields) so that a value unknown
 //! to an older client is never undefined behaviour; the typed view is obtained with
@@ -25,12 +27,17 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+// `payload!` first: the payload modules below use it.
+#[macro_use]
+mod payload;
+
 mod command;
 mod frame;
 mod info;
 mod params;
 mod pid_file;
 pub mod rules;
+pub mod schema;
 mod service;
 mod signal;
 mod stats;

@@ -33,32 +33,24 @@ impl TryFrom<u8> for ParamOwner {
     }
 }
 
-/// One effective machine parameter. 88 bytes, alignment 4. Fields in memory order:
-///
-/// | offset | field | type | meaning |
-/// |---|---|---|---|
-/// | 0 | `key` | u8; 40 | the config key, dotted for tables (`current.standstill`) |
-/// | 40 | `value` | u8; 40 | the value in effect, with its unit (`50 %`) |
-/// | 80 | `owner_index` | u16 | device or axis index |
-/// | 82 | `owner_kind` | u8 | [`ParamOwner`] |
-/// | 83 | `from_config` | u8 | 1: the config file set it; 0: the default |
-/// | 84 | `reserved` | u32 | zero |
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ZeroCopySend)]
-#[type_name("motiond::MachineParam")]
-#[repr(C)]
-pub struct MachineParam {
-    /// Config key.
-    pub key: [u8; PARAM_TEXT_LEN],
-    /// Effective value.
-    pub value: [u8; PARAM_TEXT_LEN],
-    /// Device or axis index.
-    pub owner_index: u16,
-    /// [`ParamOwner`] value.
-    pub owner_kind: u8,
-    /// 1 when the config file set it.
-    pub from_config: u8,
-    /// Zero.
-    pub reserved: u32,
+payload! {
+    /// One effective machine parameter.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+    #[type_name("motiond::MachineParam")]
+    pub struct MachineParam {
+        /// The config key, dotted for tables (`current.standstill`).
+        pub key: [u8; PARAM_TEXT_LEN],
+        /// The value in effect, with its unit (`50 %`).
+        pub value: [u8; PARAM_TEXT_LEN],
+        /// Device or axis index.
+        pub owner_index: u16,
+        /// [`ParamOwner`] value.
+        pub owner_kind: u8,
+        /// 1: the config file set it; 0: the default.
+        pub from_config: u8,
+        /// Zero.
+        pub reserved: u32,
+    }
 }
 
 impl MachineParam {
@@ -88,29 +80,22 @@ impl MachineParam {
     }
 }
 
-/// Every machine parameter in effect. 180240 bytes, alignment 4. Fields in memory order:
-///
-/// | offset | field | type | meaning |
-/// |---|---|---|---|
-/// | 0 | `schema_version` | u32 | [`SCHEMA_VERSION`] |
-/// | 4 | `count` | u32 | valid entries |
-/// | 8 | `truncated` | u32 | 1 when more parameters existed than [`MAX_PARAMS`] |
-/// | 12 | `reserved` | u32 | zero |
-/// | 16 | `entries` | [`MachineParam`]; [`MAX_PARAMS`] | devices' then axes' parameters, config order |
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ZeroCopySend)]
-#[type_name("motiond::MachineParams")]
-#[repr(C)]
-pub struct MachineParams {
-    /// [`SCHEMA_VERSION`] of the server.
-    pub schema_version: u32,
-    /// Valid entries.
-    pub count: u32,
-    /// 1 when entries were left out for lack of room.
-    pub truncated: u32,
-    /// Zero.
-    pub reserved: u32,
-    /// The parameters.
-    pub entries: [MachineParam; MAX_PARAMS],
+payload! {
+    /// Every machine parameter in effect, published with history 1 on `motiond/<name>/params`.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+    #[type_name("motiond::MachineParams")]
+    pub struct MachineParams {
+        /// [`SCHEMA_VERSION`] of the server.
+        pub schema_version: u32,
+        /// Valid entries.
+        pub count: u32,
+        /// 1 when more parameters existed than [`MAX_PARAMS`] (entries were left out).
+        pub truncated: u32,
+        /// Zero.
+        pub reserved: u32,
+        /// Devices' then axes' parameters, config order.
+        pub entries: [MachineParam; MAX_PARAMS],
+    }
 }
 
 impl MachineParams {

@@ -58,35 +58,26 @@ impl SignalFlags {
     }
 }
 
-/// One signal in a frame. 48 bytes, alignment 8. Fields in memory order:
-///
-/// | offset | field | type | meaning |
-/// |---|---|---|---|
-/// | 0 | `value` | f64 | logical value: digital 0.0/1.0 after `invert`; analogue raw × scale + offset |
-/// | 8 | `raw` | f64 | as the board reports it: electrical level 0/1, or ADC counts |
-/// | 16 | `last_refresh_tick` | u64 | tick at which the board last reported it (outputs: acknowledged it) |
-/// | 24 | `flags` | u32 | [`SignalFlags`] bits |
-/// | 28 | `kind` | u8 | [`SignalKind`] |
-/// | 29 | `reserved` | u8; 3 | zero |
-/// | 32 | `claimed_by` | [`ClientId`] | claim holder of an output, zero when unclaimed |
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("motiond::SignalState")]
-#[repr(C)]
-pub struct SignalState {
-    /// Logical value.
-    pub value: f64,
-    /// Raw value as the board reports it.
-    pub raw: f64,
-    /// Tick at which the board last reported (or acknowledged) it.
-    pub last_refresh_tick: u64,
-    /// [`SignalFlags`] bits.
-    pub flags: u32,
-    /// [`SignalKind`] value.
-    pub kind: u8,
-    /// Zero.
-    pub reserved: [u8; 3],
-    /// Claim holder of an output; zero when unclaimed.
-    pub claimed_by: ClientId,
+payload! {
+    /// One signal in a frame.
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    #[type_name("motiond::SignalState")]
+    pub struct SignalState {
+        /// Logical value: digital 0.0/1.0 after `invert`; analogue raw × scale + offset.
+        pub value: f64,
+        /// Raw value as the board reports it: electrical level 0/1, or ADC counts.
+        pub raw: f64,
+        /// Tick at which the board last reported it (outputs: acknowledged it).
+        pub last_refresh_tick: u64,
+        /// [`SignalFlags`] bits.
+        pub flags: u32,
+        /// [`SignalKind`] value.
+        pub kind: u8,
+        /// Zero.
+        pub reserved: [u8; 3],
+        /// Claim holder of an output; zero when unclaimed.
+        pub claimed_by: ClientId,
+    }
 }
 
 impl SignalState {
@@ -136,47 +127,34 @@ impl SignalInfoFlags {
     }
 }
 
-/// One signal's static description. 128 bytes, alignment 8. Fields in memory order:
-///
-/// | offset | field | type | meaning |
-/// |---|---|---|---|
-/// | 0 | `name` | u8; 32 | signal name, UTF-8, zero padded |
-/// | 32 | `unit` | u8; 16 | unit of an analogue value ("" for digital) |
-/// | 48 | `device` | u8; 32 | device name |
-/// | 80 | `scale` | f64 | analogue: value = raw × scale + offset |
-/// | 88 | `offset` | f64 | analogue: value = raw × scale + offset |
-/// | 96 | `full_scale` | f64 | raw full scale (1023 for a 10-bit converter; 1 for digital) |
-/// | 104 | `kind` | u8 | [`SignalKind`] |
-/// | 105 | `flags` | u8 | [`SignalInfoFlags`] bits |
-/// | 106 | `device_index` | u16 | index into [`ServerInfo::devices`](crate::ServerInfo::devices) |
-/// | 108 | `pin` | u8; 16 | the board's pin name ("ttlio1"), zero padded |
-/// | 124 | `reserved` | u32 | zero |
-#[derive(Debug, Clone, Copy, PartialEq, ZeroCopySend)]
-#[type_name("motiond::SignalInfo")]
-#[repr(C)]
-pub struct SignalInfo {
-    /// Signal name.
-    pub name: [u8; NAME_LEN],
-    /// Unit of an analogue value.
-    pub unit: [u8; UNIT_LEN],
-    /// Device name.
-    pub device: [u8; NAME_LEN],
-    /// Analogue scale.
-    pub scale: f64,
-    /// Analogue offset.
-    pub offset: f64,
-    /// Raw full scale.
-    pub full_scale: f64,
-    /// [`SignalKind`] value.
-    pub kind: u8,
-    /// [`SignalInfoFlags`] bits.
-    pub flags: u8,
-    /// Index into the device array.
-    pub device_index: u16,
-    /// The board's pin name.
-    pub pin: [u8; UNIT_LEN],
-    /// Zero.
-    pub reserved: u32,
+payload! {
+    /// One signal's static description.
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    #[type_name("motiond::SignalInfo")]
+    pub struct SignalInfo {
+        /// Signal name.
+        pub name: [u8; NAME_LEN],
+        /// Unit of an analogue value ("" for digital).
+        pub unit: [u8; UNIT_LEN],
+        /// Device name.
+        pub device: [u8; NAME_LEN],
+        /// Analogue: value = raw × scale + offset.
+        pub scale: f64,
+        /// Analogue: value = raw × scale + offset.
+        pub offset: f64,
+        /// Raw full scale (1023 for a 10-bit converter; 1 for digital).
+        pub full_scale: f64,
+        /// [`SignalKind`] value.
+        pub kind: u8,
+        /// [`SignalInfoFlags`] bits.
+        pub flags: u8,
+        /// Index into [`ServerInfo::devices`](crate::ServerInfo::devices).
+        pub device_index: u16,
+        /// The board's pin name ("ttlio1"), zero padded.
+        pub pin: [u8; UNIT_LEN],
+        /// Zero.
+        pub reserved: u32,
+    }
 }
 
 impl SignalInfo {

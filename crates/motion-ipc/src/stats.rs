@@ -5,63 +5,46 @@ use iceoryx2::prelude::ZeroCopySend;
 use crate::read_text;
 use crate::{MAX_LINKS, NAME_LEN, SCHEMA_VERSION};
 
-/// Percentiles of one latency distribution, in nanoseconds. 40 bytes.
-///
-/// | offset | field | type |
-/// |---|---|---|
-/// | 0 | `samples` | u64 |
-/// | 8 | `p50_ns` | u64 |
-/// | 16 | `p99_ns` | u64 |
-/// | 24 | `p999_ns` | u64 |
-/// | 32 | `max_ns` | u64 |
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ZeroCopySend)]
-#[type_name("motiond::LatencySummary")]
-#[repr(C)]
-pub struct LatencySummary {
-    /// Number of samples.
-    pub samples: u64,
-    /// Median.
-    pub p50_ns: u64,
-    /// 99th percentile.
-    pub p99_ns: u64,
-    /// 99.9th percentile.
-    pub p999_ns: u64,
-    /// Maximum.
-    pub max_ns: u64,
+payload! {
+    /// Percentiles of one latency distribution, in nanoseconds.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+    #[type_name("motiond::LatencySummary")]
+    pub struct LatencySummary {
+        /// Number of samples.
+        pub samples: u64,
+        /// Median.
+        pub p50_ns: u64,
+        /// 99th percentile.
+        pub p99_ns: u64,
+        /// 99.9th percentile.
+        pub p999_ns: u64,
+        /// Maximum.
+        pub max_ns: u64,
+    }
 }
 
-/// Counters of one link since start. 80 bytes, alignment 8.
-///
-/// | offset | field | type | meaning |
-/// |---|---|---|---|
-/// | 0 | `name` | u8; 32 | link name |
-/// | 32 | `bytes_in` | u64 | bytes received |
-/// | 40 | `bytes_out` | u64 | bytes sent |
-/// | 48 | `frames` | u64 | replies decoded |
-/// | 56 | `errors` | u64 | bad frames, I/O errors, timeouts |
-/// | 64 | `reconnects` | u64 | successful reopens |
-/// | 72 | `up` | u32 | 1 when the link is open |
-/// | 76 | `reserved` | u32 | zero |
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ZeroCopySend)]
-#[type_name("motiond::LinkStats")]
-#[repr(C)]
-pub struct LinkStats {
-    /// Link name.
-    pub name: [u8; NAME_LEN],
-    /// Bytes received.
-    pub bytes_in: u64,
-    /// Bytes sent.
-    pub bytes_out: u64,
-    /// Replies decoded.
-    pub frames: u64,
-    /// Bad frames, I/O errors, timeouts.
-    pub errors: u64,
-    /// Successful reopens.
-    pub reconnects: u64,
-    /// 1 when the link is open.
-    pub up: u32,
-    /// Zero.
-    pub reserved: u32,
+payload! {
+    /// Counters of one link since start.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+    #[type_name("motiond::LinkStats")]
+    pub struct LinkStats {
+        /// Link name.
+        pub name: [u8; NAME_LEN],
+        /// Bytes received.
+        pub bytes_in: u64,
+        /// Bytes sent.
+        pub bytes_out: u64,
+        /// Replies decoded.
+        pub frames: u64,
+        /// Bad frames, I/O errors, timeouts.
+        pub errors: u64,
+        /// Successful reopens.
+        pub reconnects: u64,
+        /// 1 when the link is open.
+        pub up: u32,
+        /// Zero.
+        pub reserved: u32,
+    }
 }
 
 impl LinkStats {
@@ -83,28 +66,22 @@ impl LinkStats {
     }
 }
 
-/// The I/O side of one link: when bytes last went out and came in, and how often. 32 bytes,
-/// alignment 8. Stamps are CLOCK_MONOTONIC ns taken by the link's I/O thread right after
-/// the transport accepted or returned the bytes; 0 when it never did.
-///
-/// | offset | field | type | meaning |
-/// |---|---|---|---|
-/// | 0 | `last_write_ns` | u64 | the last write that moved bytes |
-/// | 8 | `last_read_ns` | u64 | the last read that returned bytes |
-/// | 16 | `transactions` | u64 | messages written whole since start (SPI: transactions) |
-/// | 24 | `reads` | u64 | reads that returned bytes since start |
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, ZeroCopySend)]
-#[type_name("motiond::LinkIo")]
-#[repr(C)]
-pub struct LinkIo {
-    /// CLOCK_MONOTONIC ns of the last write that moved bytes; 0: never.
-    pub last_write_ns: u64,
-    /// CLOCK_MONOTONIC ns of the last read that returned bytes; 0: never.
-    pub last_read_ns: u64,
-    /// Messages written whole (SPI: transactions).
-    pub transactions: u64,
-    /// Reads that returned bytes.
-    pub reads: u64,
+payload! {
+    /// The I/O side of one link: when bytes last went out and came in, and how often. Stamps are
+    /// CLOCK_MONOTONIC ns taken by the link's I/O thread right after the transport accepted or
+    /// returned the bytes; 0 when it never did.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+    #[type_name("motiond::LinkIo")]
+    pub struct LinkIo {
+        /// CLOCK_MONOTONIC ns of the last write that moved bytes; 0: never.
+        pub last_write_ns: u64,
+        /// CLOCK_MONOTONIC ns of the last read that returned bytes; 0: never.
+        pub last_read_ns: u64,
+        /// Messages written whole (SPI: transactions).
+        pub transactions: u64,
+        /// Reads that returned bytes.
+        pub reads: u64,
+    }
 }
 
 impl LinkIo {
@@ -117,85 +94,62 @@ impl LinkIo {
     };
 }
 
-/// Server figures. 1992 bytes, alignment 8. Fields in memory order:
-///
-/// | offset | field | type | meaning |
-/// |---|---|---|---|
-/// | 0 | `schema_version` | u32 | [`SCHEMA_VERSION`] |
-/// | 4 | `link_count` | u32 | valid entries in `links` |
-/// | 8 | `tick` | u64 | tick at which these figures were taken |
-/// | 16 | `time_ns` | u64 | CLOCK_MONOTONIC ns of that tick |
-/// | 24 | `wakeup` | [`LatencySummary`] | actual wake − deadline, since start |
-/// | 64 | `work` | [`LatencySummary`] | tick work time, since start |
-/// | 104 | `overruns` | u64 | ticks that missed their deadline, since start |
-/// | 112 | `max_consecutive_overruns` | u64 | longest run of overruns |
-/// | 120 | `commands` | u64 | requests answered |
-/// | 128 | `rejected` | u64 | requests refused |
-/// | 136 | `clients` | u32 | live client nodes seen at the last liveness check |
-/// | 140 | `rt_flags` | u32 | bit 0 SCHED_FIFO, 1 memory locked, 2 pinned, 3 cpu_dma_latency held |
-/// | 144 | `links` | [`LinkStats`]; [`MAX_LINKS`] | per link |
-/// | 1424 | `faults` | u64 | axis faults latched by the server's supervision, since start |
-/// | 1432 | `frames_lost` | u64 | ticks whose frame could not be loaned or sent, since start |
-/// | 1440 | `full_services` | u32 | bit set of services whose port slots are all taken now ([`ServerStats::FULL_FRAME`] …) |
-/// | 1444 | `full_events` | u32 | times a service was found with all its slots taken, since start |
-/// | 1448 | `publish_failures` | u64 | info, stats and params samples that could not be loaned or sent, and tick notifications that failed, since start (a lost frame counts in `frames_lost`) |
-/// | 1456 | `replies_lost` | u64 | command replies that could not be sent (the client vanished before its answer), since start |
-/// | 1464 | `events_dropped` | u64 | log reports the main thread's queue had no room for, and failed iceoryx2 housekeeping (connection updates, e-stop event reads), since start |
-/// | 1472 | `link_io` | [`LinkIo`]; [`MAX_LINKS`] | per link (same index as `links`): the I/O thread's stamps |
-/// | 1984 | `nodes_cleaned` | u64 | records of dead iceoryx2 nodes removed from the service root (crashed clients, clients killed while they started), since start |
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ZeroCopySend)]
-#[type_name("motiond::ServerStats")]
-#[repr(C)]
-pub struct ServerStats {
-    /// [`SCHEMA_VERSION`] of the server.
-    pub schema_version: u32,
-    /// Valid entries in `links`.
-    pub link_count: u32,
-    /// Tick at which these figures were taken.
-    pub tick: u64,
-    /// CLOCK_MONOTONIC ns of that tick.
-    pub time_ns: u64,
-    /// Wake-up latency (actual wake − deadline) since start.
-    pub wakeup: LatencySummary,
-    /// Tick work time since start.
-    pub work: LatencySummary,
-    /// Ticks that missed their deadline since start.
-    pub overruns: u64,
-    /// Longest run of consecutive overruns.
-    pub max_consecutive_overruns: u64,
-    /// Requests answered.
-    pub commands: u64,
-    /// Requests refused.
-    pub rejected: u64,
-    /// Live client nodes at the last liveness check.
-    pub clients: u32,
-    /// Bit 0 SCHED_FIFO, bit 1 memory locked, bit 2 pinned, bit 3 cpu_dma_latency held.
-    pub rt_flags: u32,
-    /// Per-link counters.
-    pub links: [LinkStats; MAX_LINKS],
-    /// Axis faults latched by the server's supervision since start.
-    pub faults: u64,
-    /// Ticks whose frame could not be loaned or sent, since start.
-    pub frames_lost: u64,
-    /// Services whose port slots are all taken now (bits `FULL_*`): new clients are
-    /// refused there until a slot frees.
-    pub full_services: u32,
-    /// Times a service was found with all its slots taken, since start.
-    pub full_events: u32,
-    /// Info, stats and params samples that could not be loaned or sent, and tick
-    /// notifications that failed, since start (a lost frame counts in `frames_lost`).
-    pub publish_failures: u64,
-    /// Command replies that could not be sent (the client vanished before its answer),
-    /// since start.
-    pub replies_lost: u64,
-    /// Log reports the main thread's queue had no room for, and failed iceoryx2
-    /// housekeeping (connection updates, e-stop event reads), since start.
-    pub events_dropped: u64,
-    /// Per link (same index as `links`): the I/O thread's stamps.
-    pub link_io: [LinkIo; MAX_LINKS],
-    /// Records of dead iceoryx2 nodes removed from the service root (crashed clients,
-    /// clients killed while they started), since start.
-    pub nodes_cleaned: u64,
+payload! {
+    /// Server figures, published about once a second on `motiond/<name>/stats`.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+    #[type_name("motiond::ServerStats")]
+    pub struct ServerStats {
+        /// [`SCHEMA_VERSION`] of the server.
+        pub schema_version: u32,
+        /// Valid entries in `links`.
+        pub link_count: u32,
+        /// Tick at which these figures were taken.
+        pub tick: u64,
+        /// CLOCK_MONOTONIC ns of that tick.
+        pub time_ns: u64,
+        /// Wake-up latency (actual wake − deadline) since start.
+        pub wakeup: LatencySummary,
+        /// Tick work time since start.
+        pub work: LatencySummary,
+        /// Ticks that missed their deadline since start.
+        pub overruns: u64,
+        /// Longest run of consecutive overruns.
+        pub max_consecutive_overruns: u64,
+        /// Requests answered.
+        pub commands: u64,
+        /// Requests refused.
+        pub rejected: u64,
+        /// Live client nodes at the last liveness check.
+        pub clients: u32,
+        /// Real-time set-up bits (`RtFlags`): bit 0 SCHED_FIFO, bit 1 memory locked, bit 2 pinned,
+        /// bit 3 cpu_dma_latency held.
+        pub rt_flags: u32,
+        /// Per-link counters.
+        pub links: [LinkStats; MAX_LINKS],
+        /// Axis faults latched by the server's supervision since start.
+        pub faults: u64,
+        /// Ticks whose frame could not be loaned or sent, since start.
+        pub frames_lost: u64,
+        /// Services whose port slots are all taken now (`FullServices` bits, the `FULL_*`
+        /// constants): new clients are refused there until a slot frees.
+        pub full_services: u32,
+        /// Times a service was found with all its slots taken, since start.
+        pub full_events: u32,
+        /// Info, stats and params samples that could not be loaned or sent, and tick
+        /// notifications that failed, since start (a lost frame counts in `frames_lost`).
+        pub publish_failures: u64,
+        /// Command replies that could not be sent (the client vanished before its answer),
+        /// since start.
+        pub replies_lost: u64,
+        /// Log reports the main thread's queue had no room for, and failed iceoryx2
+        /// housekeeping (connection updates, e-stop event reads), since start.
+        pub events_dropped: u64,
+        /// Per link (same index as `links`): the I/O thread's stamps.
+        pub link_io: [LinkIo; MAX_LINKS],
+        /// Records of dead iceoryx2 nodes removed from the service root (crashed clients,
+        /// clients killed while they started), since start.
+        pub nodes_cleaned: u64,
+    }
 }
 
 impl ServerStats {

@@ -1,7 +1,9 @@
 //! Checks `include/motiond.h` against this crate: compiles a C11 probe against the header
 //! with the system C compiler and compares what it prints with the Rust definitions.
 //!
-//! The probe is generated from the contract description (`examples/layout/describe.rs`):
+//! The probe is generated from the contract's description (`motion_ipc::schema`), the same
+//! one the header itself is generated from: it checks what the C compiler makes of the
+//! generated text.
 //! for every payload it prints `sizeof`, `_Alignof` and the iceoryx2 type name macro, and
 //! for every Rust field the C field of the same name: `offsetof`, `sizeof` and its type
 //! (told by `_Generic`; arrays by element type and count); for every enumeration value,
@@ -16,35 +18,16 @@
 //! `MOTIOND_REASON_OUT_OF_RANGE`; flag `AxisFlags::MOVING` → `MOTIOND_AXIS_FLAGS_MOVING`;
 //! constant `MAX_AXES` → `MOTIOND_MAX_AXES`; service `frame` → `MOTIOND_SERVICE_FRAME`.
 
-#[path = "../examples/layout/describe.rs"]
-mod describe;
-
 use std::collections::BTreeSet;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use describe::{Contract, contract};
-
-/// `MotionFrame` → `motion_frame`.
-fn snake(name: &str) -> String {
-    let mut out = String::new();
-    for (index, c) in name.chars().enumerate() {
-        if c.is_ascii_uppercase() && index > 0 {
-            out.push('_');
-        }
-        out.push(c.to_ascii_lowercase());
-    }
-    out
-}
+use motion_ipc::schema::{Contract, c_enum_value, c_struct, contract, snake};
 
 /// `OutOfRange` → `OUT_OF_RANGE`.
 fn upper(name: &str) -> String {
     snake(name).to_ascii_uppercase()
-}
-
-fn c_type(rust: &str) -> String {
-    format!("motiond_{}_t", snake(rust))
 }
 
 /// Whether the Rust field type is an array (`u8[32]`).
@@ -55,15 +38,18 @@ fn is_array(ty: &str) -> bool {
 /// The lines the probe must print, from the Rust side.
 fn expected(contract: &Contract) -> BTreeSet<String> {
     let mut lines = BTreeSet::new();
-    for layout in &contract.layouts {
-        let name = layout.rust;
+    for layout in &contract.structs {
+        let name = layout.name;
         lines.insert(format!("layout {name} size {}", layout.size));
         lines.insert(format!("layout {name} align {}", layout.align));
         lines.insert(format!("layout {name} type_name {}", layout.type_name));
-        for field in &layout.fields {
+        for field in layout.fields {
             lines.insert(format!(
                 "field {name} {} {} {} {}",
-                field.name, field.offset, field.size, field.ty
+                field.name,
+                field.offset,
+                field.size,
+                field.ty.spelling()
             ));
         }
     }
@@ -71,18 +57,18 @@ fn expected(contract: &Contract) -> BTreeSet<String> {
         for variant in &item.variants {
             lines.insert(format!(
                 "enum {} {} {}",
-                item.rust, variant.name, variant.value
+                item.name, variant.name, variant.value
             ));
             if let Some(text) = variant.text {
-                lines.insert(format!("text {} {} {text}", item.rust, variant.name));
+                lines.insert(format!("text {} {} {text}", item.name, variant.name));
             }
         }
     }
-    for (name, value) in &contract.constants {
-        lines.insert(format!("const {name} {value}"));
+    for constant in &contract.constants {
+        lines.insert(format!("const {} {}", constant.name, constant.value));
     }
-    for (leaf, format) in &contract.services {
-        lines.insert(format!("service {leaf} {format}"));
+    for service in &contract.services {
+        lines.insert(format!("service {} {}", service.leaf, service.format));
     }
     lines
 }
@@ -96,17 +82,17 @@ fn probe_source(contract: &Contract) -> String {
         "#define TY(x) _Generic((x), uint8_t: \"u8\", uint16_t: \"u16\", uint32_t: \"u32\", \\\n",
     );
     c.push_str("    uint64_t: \"u64\", int64_t: \"i64\", double: \"f64\", \\\n");
-    for layout in &contract.layouts {
-        let _ = writeln!(c, "    {}: \"{}\", \\", c_type(layout.rust), layout.rust);
+    for layout in &contract.structs {
+        let _ = writeln!(c, "    {}: \"{}\", \\", c_struct(layout.name), layout.name);
     }
     c.push_str("    default: \"?\")\n\n");
     c.push_str(
         "static const char *or_null(const char *text) { return text ? text : \"(null)\"; }\n\n",
     );
     c.push_str("int main(void) {\n");
-    for layout in &contract.layouts {
-        let name = layout.rust;
-        let ty = c_type(name);
+    for layout in &contract.structs {
+        let name = layout.name;
+        let ty = c_struct(name);
         let _ = writeln!(c, "    {{\n        const {ty} *v = NULL;\n        (void)v;");
         let _ = writeln!(
             c,
@@ -115,9 +101,9 @@ fn probe_source(contract: &Contract) -> String {
              printf(\"layout {name} type_name %s\\n\", MOTIOND_TYPE_NAME_{});",
             upper(name)
         );
-        for field in &layout.fields {
+        for field in layout.fields {
             let f = field.name;
-            if is_array(&field.ty) {
+            if is_array(&field.ty.spelling()) {
                 let _ = writeln!(
                     c,
                     "        printf(\"field {name} {f} %zu %zu %s[%zu]\\n\", offsetof({ty}, {f}), \
@@ -135,38 +121,36 @@ fn probe_source(contract: &Contract) -> String {
     }
     for item in &contract.enums {
         for variant in &item.variants {
-            let constant = if item.flags {
-                format!("MOTIOND_{}_{}", upper(item.rust), variant.name)
-            } else {
-                format!("MOTIOND_{}_{}", upper(item.rust), upper(&variant.name))
-            };
+            let constant = c_enum_value(item, &variant.name);
             let _ = writeln!(
                 c,
                 "    printf(\"enum {} {} %lld\\n\", (long long){constant});",
-                item.rust, variant.name
+                item.name, variant.name
             );
             if variant.text.is_some() {
                 let _ = writeln!(
                     c,
                     "    printf(\"text {} {} %s\\n\", or_null(motiond_{}_text({constant})));",
-                    item.rust,
+                    item.name,
                     variant.name,
-                    snake(item.rust)
+                    snake(item.name)
                 );
             }
         }
     }
-    for (name, _) in &contract.constants {
+    for constant in &contract.constants {
+        let name = constant.name;
         let _ = writeln!(
             c,
             "    printf(\"const {name} %llu\\n\", (unsigned long long)MOTIOND_{name});"
         );
     }
-    for (leaf, _) in &contract.services {
+    for service in &contract.services {
         let _ = writeln!(
             c,
-            "    printf(\"service {leaf} %s\\n\", MOTIOND_SERVICE_{});",
-            leaf.to_ascii_uppercase()
+            "    printf(\"service {} %s\\n\", MOTIOND_SERVICE_{});",
+            service.leaf,
+            service.leaf.to_ascii_uppercase()
         );
     }
     c.push_str("    return 0;\n}\n");

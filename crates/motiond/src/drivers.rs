@@ -2,14 +2,15 @@
 //! its signals and the devices sharing its link, in the drivers' neutral terms
 //! (`motion_drivers::spec`), filled here from the validated config. Each board's
 //! `<Board>DriverConfig::from_spec` (in motion-drivers) does the unit conversions and
-//! protocol encodings; the model registry (boards.rs) says which one a model uses.
+//! protocol encodings; the board registry (`motion_boards`, through boards.rs) says which
+//! one a model uses.
 
 use motion_drivers::spec::{
     BusPeer, DriverAxis, DriverSignal, DriverSpec, Param, ParamOwner, SpecError,
 };
-use motion_drivers::tmcpack::TmcpackDriverConfig;
 use motion_engine::AxisConfig;
 
+use crate::boards::BuildError;
 use crate::config::{AxisSpec, DeviceSpec, Owner, ServerConfig, Transport};
 
 /// One effective machine parameter, as `motionctl list` shows it: the key as the config
@@ -79,9 +80,6 @@ pub fn driver_spec(config: &ServerConfig, index: usize, device: &DeviceSpec) -> 
         model: device.model,
         line_rate: line_rate(config, device),
         address: device.address,
-        pack_variant: device.variant,
-        qsb_variant: device.qsb_variant,
-        drive: device.drive,
         machine: device.machine.clone(),
         axes: axes_on(config, index)
             .map(|i| driver_axis(&config.axes[i], &config.axis_specs[i]))
@@ -103,7 +101,7 @@ pub fn driver_spec(config: &ServerConfig, index: usize, device: &DeviceSpec) -> 
 }
 
 /// `error` of device `index`'s spec, naming the config key it is about.
-pub fn spec_error(config: &ServerConfig, index: usize, error: &SpecError) -> anyhow::Error {
+pub fn spec_error(config: &ServerConfig, index: usize, error: &SpecError) -> BuildError {
     let device = config.devices.get(index).map_or("?", |d| d.name.as_str());
     let key = match error.channel {
         None => format!("device[{index}].{}", error.key),
@@ -114,7 +112,11 @@ pub fn spec_error(config: &ServerConfig, index: usize, error: &SpecError) -> any
                 |i| format!("axis[{i}].{}", error.key),
             ),
     };
-    anyhow::anyhow!("device `{device}`: {key}: {}", error.message)
+    BuildError {
+        device: device.to_owned(),
+        key,
+        message: error.message.clone(),
+    }
 }
 
 /// `params` of device `index` as [`ParamRow`]s.
@@ -134,17 +136,6 @@ pub fn param_rows(config: &ServerConfig, index: usize, params: Vec<Param>) -> Ve
             })
         })
         .collect()
-}
-
-/// The driver config of tmcpack device `index`: shared by the driver, `describe` and the
-/// simulated pack. (Validation refuses every value `from_spec` refuses; should one slip
-/// through, the pack gets the driver's defaults.)
-pub fn tmcpack_driver_config(
-    config: &ServerConfig,
-    index: usize,
-    device: &DeviceSpec,
-) -> TmcpackDriverConfig {
-    TmcpackDriverConfig::from_spec(&driver_spec(config, index, device)).unwrap_or_default()
 }
 
 #[cfg(test)]

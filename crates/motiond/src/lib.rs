@@ -14,7 +14,6 @@ pub mod params;
 pub mod phases;
 pub mod rt;
 pub mod services;
-pub mod sim_models;
 pub mod stats;
 pub mod systemd;
 pub mod tick;

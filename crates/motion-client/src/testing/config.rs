@@ -261,8 +261,8 @@ impl FakeConfig {
             info_delay_ticks: 0,
             latch_on_sigusr1: false,
             devices: vec![
-                FakeDevice::new("pack", DeviceModel::Tmcpack, "fake pack 1.0"),
-                FakeDevice::new("aux", DeviceModel::Qsb, "fake qsb 2.1"),
+                FakeDevice::new("pack", DeviceModel::TMCPACK, "fake pack 1.0"),
+                FakeDevice::new("aux", DeviceModel::QSB, "fake qsb 2.1"),
             ],
             axes: vec![x, y, a],
             signals: vec![

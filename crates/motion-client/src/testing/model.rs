@@ -135,7 +135,7 @@ impl Model {
             if state != DeviceState::Starting {
                 write_text(&mut out.firmware, &device.firmware);
             }
-            out.model = device.model as u32;
+            out.model = device.model.code();
             out.address = u32::try_from(index + 1).unwrap_or(0);
             out.axis_count = self.axes.iter().filter(|(a, _)| a.device == index).count() as u32;
             out.state = u32::from(state as u8);

@@ -32,7 +32,7 @@ impl Scripted {
 
 impl Driver for Scripted {
     fn model(&self) -> Model {
-        Model::Tmcpack
+        Model::TMCPACK
     }
     fn channel_count(&self) -> usize {
         1

@@ -248,7 +248,7 @@ impl Qq2drvDriver {
 
 impl Driver for Qq2drvDriver {
     fn model(&self) -> Model {
-        Model::Qq2drv
+        Model::QQ2DRV
     }
 
     fn channel_count(&self) -> usize {

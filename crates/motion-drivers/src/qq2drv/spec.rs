@@ -8,7 +8,7 @@ use qq2drv::limits::POWER_LIMIT_MAX;
 
 use super::{HomeInput, PINS_PER_CHANNEL, PositionPid, Qq2drvDriverConfig, VelocityPid};
 use crate::spec::{
-    AxisMachine, Direction, DriverSpec, HomeInputKind, Param, ParamOwner, Qq2drvAxisKeys, SpecError,
+    Direction, DriverSpec, HomeInputKind, Param, ParamOwner, Qq2drvAxisKeys, SpecError,
 };
 
 /// The machine keys of the axis on `channel`, if one drives it, with its index in
@@ -18,10 +18,7 @@ fn axis_of(spec: &DriverSpec, channel: usize) -> Option<(usize, &Qq2drvAxisKeys)
         .iter()
         .enumerate()
         .find(|(_, axis)| axis.channel == channel)
-        .and_then(|(index, axis)| match &axis.machine {
-            AxisMachine::Qq2drv(keys) => Some((index, keys)),
-            _ => None,
-        })
+        .and_then(|(index, axis)| Some((index, axis.machine.get::<Qq2drvAxisKeys>()?)))
 }
 
 /// Packet 24 Power Limit for a `power_limit` fraction (0.0..=1.0 of full power).

@@ -297,7 +297,7 @@ impl QsbDriver {
 
 impl Driver for QsbDriver {
     fn model(&self) -> Model {
-        Model::Qsb
+        Model::QSB
     }
 
     fn channel_count(&self) -> usize {

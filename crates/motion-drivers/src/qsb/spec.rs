@@ -10,8 +10,8 @@ use ::qsb::{EncoderMode, IntervalRate, ProductType};
 use super::{CaptureInput, EnableOutput, PinRole, QsbDriverConfig, QsbIo};
 use crate::pin::Pin;
 use crate::spec::{
-    DeviceMachine, Direction, DriverAxis, DriverSpec, Param, ParamOwner, QsbDeviceKeys,
-    QsbInputMode, QsbVariant, SpecError,
+    Direction, DriverAxis, DriverSpec, Param, ParamOwner, QsbDeviceKeys, QsbInputMode, QsbVariant,
+    SpecError,
 };
 
 /// One data output tick (INTERVAL RATE's unit): 1/512 s.
@@ -65,10 +65,7 @@ fn axis_of(spec: &DriverSpec) -> Option<(usize, &DriverAxis)> {
 
 /// The device's qsb keys (all `None` for a device without them).
 fn keys_of(spec: &DriverSpec) -> QsbDeviceKeys {
-    match &spec.machine {
-        DeviceMachine::Qsb(keys) => keys.clone(),
-        _ => QsbDeviceKeys::default(),
-    }
+    spec.machine.get_or_default()
 }
 
 /// A number as the config would write it (no trailing `.0` noise, full precision).
@@ -81,7 +78,7 @@ impl QsbDriverConfig {
     /// limits and home, the machine keys, the signals.
     pub fn from_spec(spec: &DriverSpec) -> Result<Self, SpecError> {
         let keys = keys_of(spec);
-        let variant = ProductType::from(spec.qsb_variant);
+        let variant = ProductType::from(keys.variant);
         let mut driver = Self {
             variant,
             ..Self::default()

@@ -2,34 +2,78 @@
 //! (the driver's default applies). Values are in the config's terms (units, ms, %); the
 //! drivers convert them.
 
+use core::any::Any;
+use core::fmt;
 use core::time::Duration;
+use std::sync::Arc;
 
-use super::QsbInputMode;
+use super::{PackVariant, QsbInputMode, QsbVariant, SpiDrive};
 
-/// A device's model-specific keys, validated.
-#[derive(Debug, Clone, PartialEq)]
-pub enum DeviceMachine {
-    /// QuadQuad2Drv: no device-level machine keys (its keys are per axis).
-    Qq2drv,
-    /// Trinamic pack.
-    Tmcpack(TmcpackDeviceKeys),
-    /// SPI_motor.
-    Spimotor(SpimotorDeviceKeys),
-    /// QSB.
-    Qsb(QsbDeviceKeys),
+/// A device's or an axis's model-specific keys, validated: whatever typed struct its
+/// board's crate defines (`TmcpackDeviceKeys`, `Qq2drvAxisKeys`, …), or none. The board
+/// that validated the keys reads them back with [`get`](Self::get); nobody else needs to
+/// know their type, so a board brings its keys without a variant here.
+#[derive(Clone, Default)]
+pub struct MachineKeys(Option<Arc<dyn AnyKeys>>);
+
+/// The device-level [`MachineKeys`] (a `[[device]]`'s model keys).
+pub type DeviceMachine = MachineKeys;
+/// The axis-level [`MachineKeys`] (an `[[axis]]`'s model keys).
+pub type AxisMachine = MachineKeys;
+
+/// What keys a [`MachineKeys`] can hold: any comparable, printable, shareable value.
+trait AnyKeys: Any + fmt::Debug + Send + Sync {
+    fn as_any(&self) -> &dyn Any;
+    fn same_as(&self, other: &dyn AnyKeys) -> bool;
 }
 
-/// An axis's model-specific keys, validated.
-#[derive(Debug, Clone, PartialEq)]
-pub enum AxisMachine {
-    /// QuadQuad2Drv channel.
-    Qq2drv(Qq2drvAxisKeys),
-    /// Trinamic motor.
-    Tmcpack(TmcpackAxisKeys),
-    /// SPI_motor channel: no axis-level machine keys (intensity and coils are per device).
-    Spimotor,
-    /// QSB: no axis-level machine keys (they are on its `[[device]]`).
-    Qsb,
+impl<T: Any + fmt::Debug + PartialEq + Send + Sync> AnyKeys for T {
+    fn as_any(&self) -> &dyn Any {
+        self
+    }
+    fn same_as(&self, other: &dyn AnyKeys) -> bool {
+        other.as_any().downcast_ref::<T>() == Some(self)
+    }
+}
+
+impl MachineKeys {
+    /// No model keys (a model that has none).
+    pub const PLAIN: Self = Self(None);
+
+    /// `keys`, as a board's crate validated them.
+    pub fn new<T: Any + fmt::Debug + PartialEq + Send + Sync>(keys: T) -> Self {
+        Self(Some(Arc::new(keys)))
+    }
+
+    /// The keys, when they are a `T`.
+    pub fn get<T: Any>(&self) -> Option<&T> {
+        self.0.as_deref()?.as_any().downcast_ref::<T>()
+    }
+
+    /// The keys as a `T`, or `T`'s default (every key unset) when they are none or another
+    /// type.
+    pub fn get_or_default<T: Any + Clone + Default>(&self) -> T {
+        self.get::<T>().cloned().unwrap_or_default()
+    }
+}
+
+impl PartialEq for MachineKeys {
+    fn eq(&self, other: &Self) -> bool {
+        match (&self.0, &other.0) {
+            (None, None) => true,
+            (Some(a), Some(b)) => a.same_as(b.as_ref()),
+            _ => false,
+        }
+    }
+}
+
+impl fmt::Debug for MachineKeys {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match &self.0 {
+            None => f.write_str("MachineKeys::PLAIN"),
+            Some(keys) => keys.fmt(f),
+        }
+    }
 }
 
 /// One PID table as given; `None` fields were not set (the datasheet default applies).
@@ -70,6 +114,8 @@ pub struct ReadyOutputKeys {
 /// applies).
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct TmcpackDeviceKeys {
+    /// `variant`: SIXpack (default) or QUADpack.
+    pub variant: PackVariant,
     /// Response address of the driver's queries.
     pub reply_address: Option<u8>,
     /// $40 transmitter switch-over delay, ms (even, 2..=2000).
@@ -143,6 +189,8 @@ pub struct TmcpackAxisKeys {
 /// applies).
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct QsbDeviceKeys {
+    /// `variant`: the product (QSB-M by default).
+    pub variant: QsbVariant,
     /// `counts_per_step`: encoder counts (x4) per motor step, finite, not 0.
     pub counts_per_step: Option<f64>,
     /// `index_polarity = "inverted"` (MDR1 B3).
@@ -167,6 +215,8 @@ pub struct QsbDeviceKeys {
 /// applies).
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
 pub struct SpimotorDeviceKeys {
+    /// `drive`: one stepper (default) or two brushed motors.
+    pub drive: SpiDrive,
     /// `intensity`: stepper drive intensity, port 0x10 (0..=255).
     pub intensity: Option<u8>,
     /// `coils`: coils driven at a time, 1 or 2 (port 0x44).

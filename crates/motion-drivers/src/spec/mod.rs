@@ -16,17 +16,18 @@ mod keys;
 mod tests;
 
 use crate::driver::Model;
-use crate::pin::{Pin, PinInfo, SignalKind};
+use crate::pin::{Pin, SignalKind};
 
 pub use keys::{
-    AxisMachine, CurrentKeys, DeviceMachine, PidKeys, Qq2drvAxisKeys, QsbDeviceKeys,
+    AxisMachine, CurrentKeys, DeviceMachine, MachineKeys, PidKeys, Qq2drvAxisKeys, QsbDeviceKeys,
     ReadyOutputKeys, ReferenceKeys, SpimotorDeviceKeys, TmcpackAxisKeys, TmcpackDeviceKeys,
 };
 
 /// Trinamic pack variant.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum PackVariant {
     /// SIXpack: 6 motors.
+    #[default]
     Sixpack,
     /// QUADpack: 4 motors.
     Quadpack,
@@ -56,9 +57,10 @@ impl QsbVariant {
 }
 
 /// SPI_motor drive.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum SpiDrive {
     /// One stepper, channel 0.
+    #[default]
     Stepper,
     /// Two brushed motors: channels 0 = A, 1 = B.
     Brushed,
@@ -205,12 +207,6 @@ pub struct DriverSpec {
     pub line_rate: Option<u32>,
     /// Bus address (tmcpack 0..=255, spimotor even 2..=254; 0 for the others).
     pub address: u32,
-    /// tmcpack variant.
-    pub pack_variant: PackVariant,
-    /// qsb product variant.
-    pub qsb_variant: QsbVariant,
-    /// spimotor drive.
-    pub drive: SpiDrive,
     /// The model's device keys.
     pub machine: DeviceMachine,
     /// The axes on the device, in config order.
@@ -237,22 +233,6 @@ impl DriverSpec {
             let scale = axis.counts_per_unit.abs();
             (axis.max_velocity * scale, axis.max_accel * scale)
         })
-    }
-
-    /// The device's pin table (the model's, for its variant).
-    pub fn pins(&self) -> &'static [PinInfo] {
-        pin_table(self.model, self.pack_variant, self.qsb_variant)
-    }
-}
-
-/// The pin table of `model` in `pack` / `qsb` variant (the variant of another model is
-/// ignored).
-pub fn pin_table(model: Model, pack: PackVariant, qsb: QsbVariant) -> &'static [PinInfo] {
-    match model {
-        Model::Qq2drv => crate::qq2drv::PINS,
-        Model::Spimotor => crate::spimotor::PINS,
-        Model::Tmcpack => crate::tmcpack::pins(pack.into()),
-        Model::Qsb => crate::qsb::pins(qsb.into()),
     }
 }
 

@@ -37,9 +37,6 @@ fn device(model: Model, machine: DeviceMachine, axes: Vec<DriverAxis>) -> Driver
         model,
         line_rate: Some(19_200),
         address: 1,
-        pack_variant: PackVariant::Sixpack,
-        qsb_variant: QsbVariant::M,
-        drive: SpiDrive::Stepper,
         machine,
         axes,
         signals: Vec::new(),
@@ -50,8 +47,8 @@ fn device(model: Model, machine: DeviceMachine, axes: Vec<DriverAxis>) -> Driver
 #[test]
 fn values_a_board_cannot_take_name_their_key() {
     let mut spimotor = device(
-        Model::Spimotor,
-        DeviceMachine::Spimotor(SpimotorDeviceKeys::default()),
+        Model::SPIMOTOR,
+        MachineKeys::new(SpimotorDeviceKeys::default()),
         Vec::new(),
     );
     spimotor.address = 0x91; // bit 0 is the read flag
@@ -63,9 +60,9 @@ fn values_a_board_cannot_take_name_their_key() {
     let mut keys = TmcpackAxisKeys::default();
     keys.current.standby = Some(42);
     let pack = device(
-        Model::Tmcpack,
-        DeviceMachine::Tmcpack(TmcpackDeviceKeys::default()),
-        vec![axis(3, AxisMachine::Tmcpack(keys))],
+        Model::TMCPACK,
+        MachineKeys::new(TmcpackDeviceKeys::default()),
+        vec![axis(3, MachineKeys::new(keys))],
     );
     let error = TmcpackDriverConfig::from_spec(&pack).expect_err("not a level");
     assert_eq!((error.channel, error.key), (Some(3), "current.standby"));
@@ -79,18 +76,18 @@ fn packs_on_one_link_share_its_polling_budget_and_word_spacing() {
         ..TmcpackDeviceKeys::default()
     };
     let mut pack = device(
-        Model::Tmcpack,
-        DeviceMachine::Tmcpack(TmcpackDeviceKeys::default()),
-        vec![axis(0, AxisMachine::Tmcpack(TmcpackAxisKeys::default()))],
+        Model::TMCPACK,
+        MachineKeys::new(TmcpackDeviceKeys::default()),
+        vec![axis(0, MachineKeys::new(TmcpackAxisKeys::default()))],
     );
     pack.bus.push(BusPeer {
-        model: Model::Tmcpack,
+        model: Model::TMCPACK,
         axes: 2,
         signals: vec![DriverSignal {
             pin: Pin(0),
             kind: SignalKind::AnalogIn,
         }],
-        machine: DeviceMachine::Tmcpack(slow),
+        machine: MachineKeys::new(slow),
     });
     let config = TmcpackDriverConfig::from_spec(&pack).expect("valid");
     // 1 + 2 axes, and one input poll of the other pack.
@@ -102,18 +99,33 @@ fn packs_on_one_link_share_its_polling_budget_and_word_spacing() {
 #[test]
 fn the_qsb_variant_and_input_mode_reach_the_driver() {
     let keys = QsbDeviceKeys {
+        variant: QsbVariant::S,
         input_mode: Some(QsbInputMode::Analog),
         ..QsbDeviceKeys::default()
     };
-    let mut qsb = device(Model::Qsb, DeviceMachine::Qsb(keys), Vec::new());
-    qsb.qsb_variant = QsbVariant::S;
+    let qsb = device(Model::QSB, MachineKeys::new(keys), Vec::new());
     let config = QsbDriverConfig::from_spec(&qsb).expect("valid");
     assert_eq!(config.variant, ::qsb::ProductType::S);
     assert_eq!(config.input_mode, ::qsb::EncoderMode::Analog);
     assert!(!config.motor_drive);
-    assert_eq!(
-        qsb.pins().len(),
-        crate::qsb::pins(::qsb::ProductType::S).len()
-    );
     assert_eq!(QsbVariant::D.digital_io_bits(), 1);
+}
+
+#[test]
+fn machine_keys_hold_any_board_s_struct_and_compare_by_value() {
+    let a = MachineKeys::new(SpimotorDeviceKeys {
+        coils: Some(2),
+        ..SpimotorDeviceKeys::default()
+    });
+    assert_eq!(a.get::<SpimotorDeviceKeys>().and_then(|k| k.coils), Some(2));
+    assert!(a.get::<QsbDeviceKeys>().is_none(), "another board's type");
+    assert_eq!(a, a.clone());
+    assert_ne!(a, MachineKeys::new(SpimotorDeviceKeys::default()));
+    assert_ne!(a, MachineKeys::new(QsbDeviceKeys::default()));
+    assert_ne!(a, MachineKeys::PLAIN);
+    assert_eq!(MachineKeys::PLAIN, MachineKeys::default());
+    assert_eq!(
+        MachineKeys::PLAIN.get_or_default::<SpimotorDeviceKeys>(),
+        SpimotorDeviceKeys::default()
+    );
 }

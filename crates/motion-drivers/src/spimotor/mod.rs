@@ -272,7 +272,7 @@ impl SpimotorDriver {
 
 impl Driver for SpimotorDriver {
     fn model(&self) -> Model {
-        Model::Spimotor
+        Model::SPIMOTOR
     }
 
     fn channel_count(&self) -> usize {

@@ -5,7 +5,7 @@
 use spimotor::{Address, Coils};
 
 use super::{AxisLimits, SpimotorDrive, SpimotorDriverConfig};
-use crate::spec::{DeviceMachine, DriverSpec, Param, ParamOwner, SpecError, SpiDrive};
+use crate::spec::{DriverSpec, Param, ParamOwner, SpecError, SpiDrive, SpimotorDeviceKeys};
 
 impl From<SpiDrive> for SpimotorDrive {
     fn from(drive: SpiDrive) -> Self {
@@ -27,7 +27,11 @@ impl SpimotorDriverConfig {
         })?;
         let mut driver = Self {
             address,
-            drive: spec.drive.into(),
+            drive: spec
+                .machine
+                .get_or_default::<SpimotorDeviceKeys>()
+                .drive
+                .into(),
             ..Self::default()
         };
         if let Some(speed) = spec.line_rate {
@@ -41,7 +45,7 @@ impl SpimotorDriverConfig {
                 };
             }
         }
-        if let DeviceMachine::Spimotor(keys) = &spec.machine {
+        if let Some(keys) = spec.machine.get::<SpimotorDeviceKeys>() {
             if let Some(intensity) = keys.intensity {
                 driver.stepper_intensity = intensity;
             }
@@ -57,7 +61,7 @@ impl SpimotorDriverConfig {
     /// The machine parameters of the device, as the driver uses them: a stepper board's
     /// `intensity` (port 0x10) and `coils` (port 0x44). A brushed board has none.
     pub fn params(&self, spec: &DriverSpec) -> Vec<Param> {
-        if spec.drive != SpiDrive::Stepper {
+        if spec.machine.get_or_default::<SpimotorDeviceKeys>().drive != SpiDrive::Stepper {
             return Vec::new();
         }
         vec![

@@ -236,7 +236,7 @@ impl TmcpackDriver {
 
 impl Driver for TmcpackDriver {
     fn model(&self) -> Model {
-        Model::Tmcpack
+        Model::TMCPACK
     }
 
     fn channel_count(&self) -> usize {

@@ -16,8 +16,8 @@ use super::{
 use crate::driver::Model;
 use crate::pin::SignalKind;
 use crate::spec::{
-    AxisMachine, DeviceMachine, Direction, DriverAxis, DriverSignal, DriverSpec, PackVariant,
-    Param, ParamOwner, SpecError, TmcpackAxisKeys, TmcpackDeviceKeys,
+    DeviceMachine, Direction, DriverAxis, DriverSignal, DriverSpec, PackVariant, Param, ParamOwner,
+    SpecError, TmcpackAxisKeys, TmcpackDeviceKeys,
 };
 
 /// Highest `$16` de-bounce time, ms.
@@ -55,17 +55,11 @@ impl From<PackVariant> for Variant {
 }
 
 fn device_keys(machine: &DeviceMachine) -> TmcpackDeviceKeys {
-    match machine {
-        DeviceMachine::Tmcpack(keys) => keys.clone(),
-        _ => TmcpackDeviceKeys::default(),
-    }
+    machine.get_or_default()
 }
 
 fn axis_keys(axis: &DriverAxis) -> TmcpackAxisKeys {
-    match &axis.machine {
-        AxisMachine::Tmcpack(keys) => keys.clone(),
-        _ => TmcpackAxisKeys::default(),
-    }
+    axis.machine.get_or_default()
 }
 
 /// The $41 timeout of a pack with `machine` keys on a line of `line_rate`, 2 ms units.
@@ -231,7 +225,7 @@ impl TmcpackDriverConfig {
         let keys = device_keys(&spec.machine);
         let mut driver = Self {
             address: spec.address as u8,
-            variant: spec.pack_variant.into(),
+            variant: device_keys(&spec.machine).variant.into(),
             reply_address: keys.reply_address.unwrap_or(DEFAULT_REPLY_ADDRESS),
             switchover_units: Some(
                 keys.switchover_ms
@@ -249,7 +243,7 @@ impl TmcpackDriverConfig {
             .bus
             .iter()
             .filter(|peer| {
-                peer.model == Model::Tmcpack
+                peer.model == Model::TMCPACK
                     && io(&peer.signals, &peer.machine).inputs != PinSet::EMPTY
             })
             .count();
@@ -257,7 +251,7 @@ impl TmcpackDriverConfig {
         driver.bus_packet_timeout_units = spec
             .bus
             .iter()
-            .filter(|peer| peer.model == Model::Tmcpack)
+            .filter(|peer| peer.model == Model::TMCPACK)
             .map(|peer| packet_timeout_units(&peer.machine, spec.line_rate))
             .max()
             .unwrap_or(0);
@@ -304,7 +298,7 @@ impl TmcpackDriverConfig {
                 None => "off".into(),
             },
         );
-        let pack = Variant::from(spec.pack_variant);
+        let pack = Variant::from(device_keys(&spec.machine).variant);
         for (a, axis) in spec.axes.iter().enumerate() {
             let Some(Some(ch)) = self.channels.get(axis.channel) else {
                 continue;

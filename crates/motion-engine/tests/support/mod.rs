@@ -95,7 +95,7 @@ fn approach(current: f64, target: f64, step: f64) -> f64 {
 
 impl Driver for IdealBoard {
     fn model(&self) -> Model {
-        Model::Tmcpack
+        Model::TMCPACK
     }
     fn channel_count(&self) -> usize {
         self.channels.len()

@@ -1,6 +1,6 @@
-//! Prints the shared-memory contract of this build as JSON: every payload's size, alignment,
-//! iceoryx2 type name and fields, every enumeration, the flag bits, the constants and the
-//! service name formats.
+//! Prints the shared-memory contract of this build as JSON (`motion_ipc::schema`): every
+//! payload's size, alignment, iceoryx2 type name and fields, every enumeration, the flag
+//! bits, the constants and the service name formats.
 //!
 //! ```text
 //! cargo run -p motion-ipc --example layout > layout.json
@@ -9,8 +9,6 @@
 //! The Python package's tests (`python/tests/test_layout.py`) compare its ctypes mirrors
 //! with this output; `tests/c_header.rs` checks `include/motiond.h` against the same data.
 
-mod describe;
-
 fn main() {
-    print!("{}", describe::contract().to_json());
+    print!("{}", motion_ipc::schema::contract().to_json());
 }

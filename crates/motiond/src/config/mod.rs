@@ -117,12 +117,6 @@ pub struct DeviceSpec {
     pub model: Model,
     /// Bus address (tmcpack 0..=255, spimotor even 2..=254; 0 for the others).
     pub address: u32,
-    /// tmcpack variant.
-    pub variant: PackVariant,
-    /// spimotor drive.
-    pub drive: SpiDrive,
-    /// qsb product variant (`variant = "qsb-m"`, default).
-    pub qsb_variant: QsbVariant,
     /// Seed of the simulated model (sim links).
     pub sim_seed: u64,
     /// The model's machine keys.
@@ -130,27 +124,14 @@ pub struct DeviceSpec {
 }
 
 impl DeviceSpec {
-    /// Channels the device has as configured.
+    /// Channels the device has as configured (its board's count for its variant).
     pub fn channel_count(&self) -> usize {
-        channel_count(self.model, self.variant, self.drive)
+        crate::boards::board_of(self).channel_count(&self.machine)
     }
 
-    /// The device's I/O pins (the model's pin table for its variant).
+    /// The device's I/O pins (its board's pin table for its variant).
     pub fn pins(&self) -> &'static [PinInfo] {
-        motion_drivers::spec::pin_table(self.model, self.variant, self.qsb_variant)
-    }
-}
-
-/// Channels of a model (seeds: QuadQuad2Drv 4 DC motors; SIXpack 6 / QUADpack 4 steppers;
-/// SPI_motor one stepper or two brushed motors; QSB one encoder (and the -M stepper on it)).
-pub fn channel_count(model: Model, variant: PackVariant, drive: SpiDrive) -> usize {
-    match (model, variant, drive) {
-        (Model::Qq2drv, _, _) => 4,
-        (Model::Tmcpack, PackVariant::Sixpack, _) => 6,
-        (Model::Tmcpack, PackVariant::Quadpack, _) => 4,
-        (Model::Spimotor, _, SpiDrive::Stepper) => 1,
-        (Model::Spimotor, _, SpiDrive::Brushed) => 2,
-        (Model::Qsb, _, _) => 1,
+        crate::boards::board_of(self).pins(&self.machine)
     }
 }
 

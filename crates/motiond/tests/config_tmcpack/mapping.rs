@@ -13,7 +13,7 @@ use motion_link::sim::{Duplex, SimLink, StreamDevice};
 use motion_sim::tmcpack::{TmcpackSim, TmcpackSimConfig};
 use motiond::boards::describe;
 use motiond::config::{Owner, ServerConfig};
-use motiond::drivers::{ParamRow, tmcpack_driver_config};
+use motiond::drivers::{ParamRow, driver_spec};
 use tmcpack::{
     CurrentLevel, MotorMask, MotorOptions, MotorType, ReferenceFlags, Request, RequestFrame,
 };
@@ -388,7 +388,12 @@ fn describe_lists_every_key_with_the_value_in_effect() {
 #[test]
 fn unset_keys_keep_the_driver_defaults() {
     let config = parse(super::GOOD);
-    let driver = tmcpack_driver_config(&config, 0, &config.devices[0]);
+    let driver = motion_drivers::tmcpack::TmcpackDriverConfig::from_spec(&driver_spec(
+        &config,
+        0,
+        &config.devices[0],
+    ))
+    .expect("a valid spec");
     let d = TmcpackChannel::default();
     assert_eq!(driver.reply_address, 0xFE);
     assert_eq!(driver.switchover_units, Some(1));

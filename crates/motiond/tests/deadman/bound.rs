@@ -49,10 +49,11 @@ pub enum Board {
 impl Board {
     pub fn of(config: &ServerConfig, axis: usize) -> Self {
         match config.devices[config.axes[axis].device].model {
-            Model::Qq2drv => Self::Qq2drv,
-            Model::Tmcpack => Self::Tmcpack,
-            Model::Spimotor => Self::Spimotor,
-            Model::Qsb => Self::Qsb,
+            Model::QQ2DRV => Self::Qq2drv,
+            Model::TMCPACK => Self::Tmcpack,
+            Model::SPIMOTOR => Self::Spimotor,
+            Model::QSB => Self::Qsb,
+            other => panic!("no deadman bound is written down for {other}"),
         }
     }
 }
@@ -108,7 +109,7 @@ impl Bound {
                 let packs = config
                     .devices
                     .iter()
-                    .filter(|d| d.link == device.link && d.model == Model::Tmcpack)
+                    .filter(|d| d.link == device.link && d.model == Model::TMCPACK)
                     .count() as u32;
                 let refresh = word + 3 * (packs + 1) * (query + tick) + tick;
                 (exchange, refresh)

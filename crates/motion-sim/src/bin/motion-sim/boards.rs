@@ -50,7 +50,7 @@ fn refuse_option(spec: &BoardSpec, option: &str, given: bool) -> Result<()> {
 /// factory 19200 baud, as after power-up.
 pub fn build(spec: &BoardSpec, baud: Option<u32>, spi_hz: u32) -> Result<Board> {
     match spec.model {
-        Model::Qsb => {
+        Model::QSB => {
             refuse_option(spec, "address", spec.address.is_some())?;
             refuse_option(spec, "drive", spec.drive.is_some())?;
             let mut config = QsbSimConfig::default();
@@ -78,7 +78,7 @@ pub fn build(spec: &BoardSpec, baud: Option<u32>, spi_hz: u32) -> Result<Board> 
             }
             Ok(Board::Stream(Box::new(QsbSim::new(config))))
         }
-        Model::Tmcpack => {
+        Model::TMCPACK => {
             refuse_option(spec, "drive", spec.drive.is_some())?;
             let mut config = TmcpackSimConfig::default();
             if let Some(address) = spec.address {
@@ -94,7 +94,7 @@ pub fn build(spec: &BoardSpec, baud: Option<u32>, spi_hz: u32) -> Result<Board> 
             }
             Ok(Board::Stream(Box::new(TmcpackSim::new(config))))
         }
-        Model::Qq2drv => {
+        Model::QQ2DRV => {
             refuse_option(spec, "address", spec.address.is_some())?;
             refuse_option(spec, "variant", spec.variant.is_some())?;
             refuse_option(spec, "drive", spec.drive.is_some())?;
@@ -107,7 +107,7 @@ pub fn build(spec: &BoardSpec, baud: Option<u32>, spi_hz: u32) -> Result<Board> 
             }
             Ok(Board::Spi(Box::new(Qq2drvSim::new(config))))
         }
-        Model::Spimotor => {
+        Model::SPIMOTOR => {
             refuse_option(spec, "variant", spec.variant.is_some())?;
             let mut config = SpimotorSimConfig::default();
             if let Some(address) = spec.address {
@@ -130,6 +130,7 @@ pub fn build(spec: &BoardSpec, baud: Option<u32>, spi_hz: u32) -> Result<Board> 
             }
             Ok(Board::Spi(Box::new(SpimotorSim::new(config))))
         }
+        other => bail!("motion-sim has no model of {other}"),
     }
 }
 

@@ -38,10 +38,15 @@ at the new rate while the pty stays at --baud: its bytes arrive garbled, as on a
 Runs until SIGINT or SIGTERM (exit status 0). Logs what it serves on stderr; --trace also
 logs every byte with its time.";
 
-/// A `--model` value: one of the model ids (`motion_base::Model`).
+/// A `--model` value: the id of one of the models this simulator has (`Model::BUILT_IN`).
 fn parse_model(text: &str) -> Result<Model, String> {
-    Model::from_id(text)
-        .ok_or_else(|| format!("unknown model `{text}` (one of {})", Model::id_list()))
+    Model::BUILT_IN
+        .into_iter()
+        .find(|model| model.id() == text)
+        .ok_or_else(|| {
+            let ids: Vec<&str> = Model::BUILT_IN.iter().map(|model| model.id()).collect();
+            format!("unknown model `{text}` (one of {})", ids.join(", "))
+        })
 }
 
 /// Serve simulated motor-controller boards on a pseudo-terminal or an SPI socket.

@@ -86,7 +86,7 @@ impl Validator<'_, '_> {
                 direction.set(self, dir, p.span(), key("positive_end"));
             }
         }
-        if device.model == Model::Tmcpack
+        if device.model == Model::TMCPACK
             && let Some(side) = a.reference.as_ref().and_then(|r| r.get_ref().side.as_ref())
         {
             let k = format!("axis[{index}].reference.side");
@@ -113,7 +113,7 @@ impl Validator<'_, '_> {
                 position.set(self, *p.get_ref(), p.span(), key("position"));
             }
         }
-        if device.model == Model::Qsb
+        if device.model == Model::QSB
             && let Some(d) = raw_device
         {
             if let Some(v) = &d.home_direction {
@@ -159,7 +159,7 @@ impl Validator<'_, '_> {
             }
             None => Some(0.0),
         };
-        let input = if device.model == Model::Qq2drv {
+        let input = if device.model == Model::QQ2DRV {
             match home {
                 Some(h) => self.home_input(
                     index,

@@ -8,7 +8,7 @@ use toml::Spanned;
 use super::Validator;
 use super::machine::{AxisContext, DeviceContext};
 use crate::config::raw::{RawAxis, RawDevice};
-use crate::config::{AxisSpec, DeviceSpec, PackVariant, QsbVariant, SpiDrive};
+use crate::config::{AxisSpec, DeviceSpec};
 
 impl Validator<'_, '_> {
     pub(super) fn device(
@@ -49,10 +49,10 @@ impl Validator<'_, '_> {
                 &d.model,
                 &table,
                 &key("model"),
-                &format!("one of {}", Model::id_list()),
+                &format!("one of {}", motion_boards::id_list()),
             )
             .and_then(|model| {
-                let parsed = Model::from_id(model.get_ref());
+                let parsed = motion_boards::by_id(model.get_ref()).map(|board| board.model());
                 if parsed.is_none() {
                     self.issue(
                         model.span(),
@@ -60,28 +60,23 @@ impl Validator<'_, '_> {
                         format!(
                             "unknown model {:?}; allowed: {}",
                             model.get_ref(),
-                            Model::id_list()
+                            motion_boards::id_list()
                         ),
                     );
                 }
                 parsed
             });
         let fits = model.is_none_or(|model| self.device_keys_fit(index, d, model));
-        let mut variant = PackVariant::Sixpack;
-        let mut qsb_variant = QsbVariant::M;
         if let Some(v) = &d.variant {
             match (model, v.get_ref().as_str()) {
-                (Some(Model::Tmcpack), "sixpack") => variant = PackVariant::Sixpack,
-                (Some(Model::Tmcpack), "quadpack") => variant = PackVariant::Quadpack,
-                (Some(Model::Tmcpack), other) => self.issue(
+                (Some(Model::TMCPACK), "sixpack" | "quadpack") => {}
+                (Some(Model::TMCPACK), other) => self.issue(
                     v.span(),
                     &key("variant"),
                     format!("unknown variant {other:?}; allowed: \"sixpack\" (6 motors), \"quadpack\" (4)"),
                 ),
-                (Some(Model::Qsb), "qsb-m") => qsb_variant = QsbVariant::M,
-                (Some(Model::Qsb), "qsb-s") => qsb_variant = QsbVariant::S,
-                (Some(Model::Qsb), "qsb-d") => qsb_variant = QsbVariant::D,
-                (Some(Model::Qsb), other) => self.issue(
+                (Some(Model::QSB), "qsb-m" | "qsb-s" | "qsb-d") => {}
+                (Some(Model::QSB), other) => self.issue(
                     v.span(),
                     &key("variant"),
                     format!("unknown variant {other:?}; allowed: \"qsb-m\" (encoder, 4 digital I/O, stepper drive; default), \"qsb-s\" (encoder only), \"qsb-d\" (differential encoder, 1 digital I/O)"),
@@ -89,12 +84,10 @@ impl Validator<'_, '_> {
                 _ => {}
             }
         }
-        let mut drive = SpiDrive::Stepper;
         if let Some(v) = &d.drive {
             match (model, v.get_ref().as_str()) {
-                (Some(Model::Spimotor), "stepper") => drive = SpiDrive::Stepper,
-                (Some(Model::Spimotor), "brushed") => drive = SpiDrive::Brushed,
-                (Some(Model::Spimotor), other) => self.issue(
+                (Some(Model::SPIMOTOR), "stepper" | "brushed") => {}
+                (Some(Model::SPIMOTOR), other) => self.issue(
                     v.span(),
                     &key("drive"),
                     format!("unknown drive {other:?}; allowed: \"stepper\" (one axis, channel 0), \"brushed\" (channels 0 = A, 1 = B)"),
@@ -103,12 +96,12 @@ impl Validator<'_, '_> {
             }
         }
         let address = match (model, &d.address) {
-            (Some(Model::Tmcpack), None) => Some(1),
-            (Some(Model::Tmcpack), Some(a)) => {
+            (Some(Model::TMCPACK), None) => Some(1),
+            (Some(Model::TMCPACK), Some(a)) => {
                 self.int_in(a, &key("address"), 0..=255).map(|a| a as u32)
             }
-            (Some(Model::Spimotor), None) => Some(0x90),
-            (Some(Model::Spimotor), Some(a)) => {
+            (Some(Model::SPIMOTOR), None) => Some(0x90),
+            (Some(Model::SPIMOTOR), Some(a)) => {
                 let value = a.get_ref().0;
                 if (2..=254).contains(&value) && value % 2 == 0 {
                     Some(value as u32)
@@ -142,9 +135,6 @@ impl Validator<'_, '_> {
             link: link?,
             model: model?,
             address: address?,
-            variant,
-            drive,
-            qsb_variant,
             sim_seed,
             machine: machine?,
         })

@@ -32,7 +32,7 @@ impl Validator<'_, '_> {
             let models: Vec<Model> = on_link.iter().map(|(_, d)| d.model).collect();
             let spi = models
                 .first()
-                .is_some_and(|m| matches!(m, Model::Qq2drv | Model::Spimotor));
+                .is_some_and(|m| m.link_kind() == LinkKind::Spi);
             if let Some((_, first)) = on_link.first() {
                 for (i, device) in &on_link[1..] {
                     if device.model != first.model {
@@ -44,7 +44,7 @@ impl Validator<'_, '_> {
                                 first.model
                             ),
                         );
-                    } else if matches!(device.model, Model::Qq2drv | Model::Qsb) {
+                    } else if !motion_boards::board(device.model).link().shared {
                         self.issue(
                             raw_devices[*i].span(),
                             &format!("device[{i}].link"),
@@ -105,16 +105,27 @@ impl Validator<'_, '_> {
                     me.issue(v.span(), &key(k), why.to_owned());
                 }
             };
-            let serial_models_ok = models
-                .iter()
-                .all(|m| matches!(m, Model::Tmcpack | Model::Qsb));
-            let spi_models_ok = models
-                .iter()
-                .all(|m| matches!(m, Model::Qq2drv | Model::Spimotor));
+            let serial_models_ok = models.iter().all(|m| m.link_kind() == LinkKind::Stream);
+            let spi_models_ok = models.iter().all(|m| m.link_kind() == LinkKind::Spi);
+            let serial = |b: &dyn motion_boards::Board| b.model().link_kind() == LinkKind::Stream;
+            let spi_board = |b: &dyn motion_boards::Board| b.model().link_kind() == LinkKind::Spi;
+            // The line rate a link of these boards starts at unless given (every board on
+            // one link shares it; the first board's, as the models on a link agree).
+            let default_rate = models
+                .first()
+                .map(|m| motion_boards::board(*m).link().default_rate);
             let transport = match kind_name {
                 "serial" => {
                     if !serial_models_ok {
-                        self.issue(kind.span(), &key("type"), "serial links carry tmcpack or qsb boards; qq2drv and spimotor need spidev, spi-socket or sim");
+                        self.issue(
+                            kind.span(),
+                            &key("type"),
+                            format!(
+                                "serial links carry {} boards; {} need spidev, spi-socket or sim",
+                                motion_boards::ids(serial, "or"),
+                                motion_boards::ids(spi_board, "and"),
+                            ),
+                        );
                     }
                     forbid(
                         self,
@@ -142,7 +153,15 @@ impl Validator<'_, '_> {
                 }
                 "spidev" | "spi-socket" => {
                     if !spi_models_ok {
-                        self.issue(kind.span(), &key("type"), "SPI links carry qq2drv or spimotor boards; tmcpack and qsb need serial or sim");
+                        self.issue(
+                            kind.span(),
+                            &key("type"),
+                            format!(
+                                "SPI links carry {} boards; {} need serial or sim",
+                                motion_boards::ids(spi_board, "or"),
+                                motion_boards::ids(serial, "and"),
+                            ),
+                        );
                     }
                     forbid(
                         self,
@@ -168,16 +187,14 @@ impl Validator<'_, '_> {
                     } else {
                         let speed = match &l.speed_hz {
                             Some(s) => self.int_in(s, &key("speed_hz"), 1_000..=50_000_000),
-                            None => Some(500_000),
+                            None => Some(i64::from(default_rate.unwrap_or(500_000))),
                         };
-                        let default_mode = if models.contains(&Model::Qq2drv) {
-                            1
-                        } else {
-                            0
-                        };
+                        let default_mode = models
+                            .first()
+                            .map_or(0, |m| motion_boards::board(*m).link().spi_mode);
                         let mode = match &l.mode {
                             Some(m) => self.int_in(m, &key("mode"), 0..=3),
-                            None => Some(default_mode),
+                            None => Some(i64::from(default_mode)),
                         };
                         match (path, speed, mode) {
                             (Some(path), Some(speed), Some(mode)) => Some(Transport::Spidev {
@@ -201,7 +218,7 @@ impl Validator<'_, '_> {
                         );
                         let speed = match &l.speed_hz {
                             Some(s) => self.int_in(s, &key("speed_hz"), 1_000..=50_000_000),
-                            None => Some(500_000),
+                            None => Some(i64::from(default_rate.unwrap_or(500_000))),
                         };
                         speed.map(|rate| Transport::Sim { rate: rate as u32 })
                     } else {
@@ -211,14 +228,9 @@ impl Validator<'_, '_> {
                             "speed_hz",
                             "this sim link carries serial boards: give baud, not speed_hz",
                         );
-                        let default = if models.contains(&Model::Qsb) {
-                            230_400
-                        } else {
-                            19_200
-                        };
                         let baud = match &l.baud {
                             Some(b) => self.int_in(b, &key("baud"), 300..=4_000_000),
-                            None => Some(default),
+                            None => Some(i64::from(default_rate.unwrap_or(19_200))),
                         };
                         baud.map(|rate| Transport::Sim { rate: rate as u32 })
                     }

@@ -154,11 +154,7 @@ impl Validator<'_, '_> {
                 let name = pin.get_ref().as_str();
                 let Some(found) = find_pin(pins, name) else {
                     let known: Vec<&str> = pins.iter().map(|p| p.name).collect();
-                    let model = if spec.model == motion_drivers::Model::Qsb {
-                        spec.qsb_variant.id()
-                    } else {
-                        spec.model.id()
-                    };
+                    let model = crate::boards::board_of(spec).product_name(&spec.machine);
                     let allowed = if known.is_empty() {
                         format!("a {model} board has no I/O pins")
                     } else {

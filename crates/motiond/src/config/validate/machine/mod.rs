@@ -56,9 +56,9 @@ impl AxisContext<'_> {
 
 /// Device keys that only some models have: (key, span if set, models).
 fn device_key_models(raw: &RawDevice) -> Vec<(&'static str, Option<TableSpan>, &'static [Model])> {
-    const QSB: &[Model] = &[Model::Qsb];
-    const TMC: &[Model] = &[Model::Tmcpack];
-    const SPI: &[Model] = &[Model::Spimotor];
+    const QSB: &[Model] = &[Model::QSB];
+    const TMC: &[Model] = &[Model::TMCPACK];
+    const SPI: &[Model] = &[Model::SPIMOTOR];
     fn at<T>(value: &Option<Spanned<T>>) -> Option<TableSpan> {
         value.as_ref().map(Spanned::span)
     }
@@ -66,9 +66,9 @@ fn device_key_models(raw: &RawDevice) -> Vec<(&'static str, Option<TableSpan>, &
         (
             "address",
             at(&raw.address),
-            &[Model::Tmcpack, Model::Spimotor],
+            &[Model::TMCPACK, Model::SPIMOTOR],
         ),
-        ("variant", at(&raw.variant), &[Model::Tmcpack, Model::Qsb]),
+        ("variant", at(&raw.variant), &[Model::TMCPACK, Model::QSB]),
         ("drive", at(&raw.drive), SPI),
         ("counts_per_step", at(&raw.counts_per_step), QSB),
         ("home_direction", at(&raw.home_direction), QSB),
@@ -93,8 +93,8 @@ fn device_key_models(raw: &RawDevice) -> Vec<(&'static str, Option<TableSpan>, &
 
 /// Axis keys that only some models have.
 fn axis_key_models(raw: &RawAxis) -> Vec<(&'static str, Option<TableSpan>, &'static [Model])> {
-    const TMC: &[Model] = &[Model::Tmcpack];
-    const QQ: &[Model] = &[Model::Qq2drv];
+    const TMC: &[Model] = &[Model::TMCPACK];
+    const QQ: &[Model] = &[Model::QQ2DRV];
     fn at<T>(value: &Option<Spanned<T>>) -> Option<TableSpan> {
         value.as_ref().map(Spanned::span)
     }
@@ -104,7 +104,7 @@ fn axis_key_models(raw: &RawAxis) -> Vec<(&'static str, Option<TableSpan>, &'sta
         (
             "home",
             at(&raw.home),
-            &[Model::Qq2drv, Model::Tmcpack, Model::Qsb],
+            &[Model::QQ2DRV, Model::TMCPACK, Model::QSB],
         ),
         ("home.input", home_at(home.and_then(|h| at(&h.input))), QQ),
         (
@@ -167,7 +167,7 @@ impl Validator<'_, '_> {
                 && !models.contains(&model)
             {
                 fit = false;
-                let why = if key == "home" && model == Model::Spimotor {
+                let why = if key == "home" && model == Model::SPIMOTOR {
                     "; an SPI_motor has no reference input, so its axes cannot home"
                 } else {
                     ""
@@ -193,10 +193,10 @@ impl Validator<'_, '_> {
         raw: &RawDevice,
     ) -> Option<DeviceMachine> {
         Some(match model {
-            Model::Qq2drv => DeviceMachine::Qq2drv,
-            Model::Tmcpack => DeviceMachine::Tmcpack(tmcpack::device_keys(self, ctx, raw)?),
-            Model::Spimotor => DeviceMachine::Spimotor(spimotor::device_keys(self, ctx, raw)?),
-            Model::Qsb => DeviceMachine::Qsb(qsb::device_keys(self, ctx, raw)?),
+            Model::TMCPACK => DeviceMachine::new(tmcpack::device_keys(self, ctx, raw)?),
+            Model::SPIMOTOR => DeviceMachine::new(spimotor::device_keys(self, ctx, raw)?),
+            Model::QSB => DeviceMachine::new(qsb::device_keys(self, ctx, raw)?),
+            _ => DeviceMachine::PLAIN,
         })
     }
 
@@ -208,10 +208,9 @@ impl Validator<'_, '_> {
         raw: &RawAxis,
     ) -> Option<AxisMachine> {
         Some(match model {
-            Model::Qq2drv => AxisMachine::Qq2drv(qq2drv::axis_keys(self, ctx, raw)?),
-            Model::Tmcpack => AxisMachine::Tmcpack(tmcpack::axis_keys(self, ctx, raw)?),
-            Model::Spimotor => AxisMachine::Spimotor,
-            Model::Qsb => AxisMachine::Qsb,
+            Model::QQ2DRV => AxisMachine::new(qq2drv::axis_keys(self, ctx, raw)?),
+            Model::TMCPACK => AxisMachine::new(tmcpack::axis_keys(self, ctx, raw)?),
+            _ => AxisMachine::PLAIN,
         })
     }
 

@@ -140,7 +140,7 @@ pub(in crate::config) fn cross_check(
             continue;
         };
         let carries_qq2drv = config.devices.iter().any(|device| {
-            device.model == Model::Qq2drv
+            device.model == Model::QQ2DRV
                 && config
                     .links
                     .get(device.link)

@@ -14,7 +14,7 @@ use motion_drivers::qsb::{
 use motion_drivers::spec::{QsbDeviceKeys, QsbInputMode};
 use toml::Spanned;
 
-use super::{DeviceContext, DeviceMachine};
+use super::DeviceContext;
 use crate::config::raw::{Int, RawConfig, RawDevice};
 use crate::config::validate::Validator;
 use crate::config::{QsbVariant, ServerConfig, Transport};
@@ -61,7 +61,10 @@ pub(in crate::config) fn device_keys(
     raw: &RawDevice,
 ) -> Option<QsbDeviceKeys> {
     let product = variant_of(raw);
-    let mut keys = QsbDeviceKeys::default();
+    let mut keys = QsbDeviceKeys {
+        variant: product,
+        ..QsbDeviceKeys::default()
+    };
     if let Some(value) = &raw.counts_per_step {
         let c = *value.get_ref();
         if c.is_finite() && c != 0.0 {
@@ -258,7 +261,7 @@ pub(in crate::config) fn cross_check(
     raw: &RawConfig,
 ) {
     for (index, device) in config.devices.iter().enumerate() {
-        let DeviceMachine::Qsb(keys) = &device.machine else {
+        let Some(keys) = device.machine.get::<QsbDeviceKeys>() else {
             continue;
         };
         let Some((raw_index, raw_device)) = named(&raw.device, &device.name, |d| d.name.as_ref())
@@ -267,7 +270,7 @@ pub(in crate::config) fn cross_check(
         };
         let raw_device = raw_device.get_ref();
         let dkey = |k: &str| format!("device[{raw_index}].{k}");
-        let product = device.qsb_variant;
+        let product = keys.variant;
         let mode = keys.input_mode.unwrap_or_default();
         let axes: Vec<&str> = config
             .axes
@@ -326,7 +329,7 @@ fn signal_checks(
     drive: bool,
 ) {
     let device = &config.devices[index];
-    let product = device.qsb_variant;
+    let product = keys.variant;
     let mode = keys.input_mode.unwrap_or_default();
     for signal in config.signals.iter().filter(|s| s.device == index) {
         let Some((i, raw_signal)) = named(&raw.signal, &signal.name, |s| s.name.as_ref()) else {

@@ -11,7 +11,7 @@
 //! Both are stepper settings: on a `drive = "brushed"` board they would do nothing (the
 //! brushed section's intensity is each spin command's byte), so they are an error there.
 
-use motion_drivers::spec::SpimotorDeviceKeys;
+use motion_drivers::spec::{SpiDrive, SpimotorDeviceKeys};
 use toml::Spanned;
 
 use super::DeviceContext;
@@ -70,7 +70,15 @@ pub(in crate::config) fn device_keys(
             }
         },
     };
-    ok.then_some(SpimotorDeviceKeys { intensity, coils })
+    ok.then_some(SpimotorDeviceKeys {
+        drive: if brushed {
+            SpiDrive::Brushed
+        } else {
+            SpiDrive::Stepper
+        },
+        intensity,
+        coils,
+    })
 }
 
 /// `value` of a stepper-only key: an issue (and `None`) on a brushed board.

@@ -3,7 +3,7 @@
 //! config by `TmcpackDriverConfig::from_spec`. Every value is checked against the range the
 //! Trinamic SIXpack/QUADpack manual (V2.43) gives for the instruction it becomes.
 
-use motion_drivers::spec::{ReadyOutputKeys, TmcpackAxisKeys, TmcpackDeviceKeys};
+use motion_drivers::spec::{PackVariant, ReadyOutputKeys, TmcpackAxisKeys, TmcpackDeviceKeys};
 use motion_drivers::tmcpack::{MAX_DEBOUNCE_MS, is_current_level, is_weak_current, word_time};
 use motion_drivers::{Model, SignalKind};
 use toml::Spanned;
@@ -63,7 +63,14 @@ pub(in crate::config) fn device_keys(
     raw: &RawDevice,
 ) -> Option<TmcpackDeviceKeys> {
     let mut ok = true;
-    let mut keys = TmcpackDeviceKeys::default();
+    let mut keys = TmcpackDeviceKeys {
+        variant: if motors_of(raw) == 4 {
+            PackVariant::Quadpack
+        } else {
+            PackVariant::Sixpack
+        },
+        ..TmcpackDeviceKeys::default()
+    };
     if let Some(value) = &raw.reply_address {
         match v.int_in(value, &ctx.key("reply_address"), 0..=255) {
             Some(a) => keys.reply_address = Some(a as u8),
@@ -425,10 +432,7 @@ pub(in crate::config) fn cross_check(
 
 /// The device keys of tmcpack device `d`.
 pub(crate) fn device_keys_of(config: &ServerConfig, d: usize) -> Option<&TmcpackDeviceKeys> {
-    match &config.devices.get(d)?.machine {
-        super::DeviceMachine::Tmcpack(keys) => Some(keys),
-        _ => None,
-    }
+    config.devices.get(d)?.machine.get::<TmcpackDeviceKeys>()
 }
 
 /// The pack executes every word that starts with its address, replies included: no reply
@@ -439,7 +443,7 @@ fn reply_addresses(v: &mut Validator<'_, '_>, config: &ServerConfig, raw: &RawCo
         .devices
         .iter()
         .enumerate()
-        .filter(|(_, d)| d.model == Model::Tmcpack)
+        .filter(|(_, d)| d.model == Model::TMCPACK)
         .collect();
     for &(a, asking) in &packs {
         let Some(keys) = device_keys_of(config, a) else {
@@ -482,7 +486,7 @@ fn reply_addresses(v: &mut Validator<'_, '_>, config: &ServerConfig, raw: &RawCo
 /// respectively 4 + 5 have the same peak current".
 fn peak_pairs(v: &mut Validator<'_, '_>, config: &ServerConfig, raw: &RawConfig) {
     for (i, (axis, spec)) in config.axes.iter().zip(&config.axis_specs).enumerate() {
-        let super::AxisMachine::Tmcpack(keys) = &spec.machine else {
+        let Some(keys) = spec.machine.get::<TmcpackAxisKeys>() else {
             continue;
         };
         let partner = axis.channel ^ 1;
@@ -494,10 +498,11 @@ fn peak_pairs(v: &mut Validator<'_, '_>, config: &ServerConfig, raw: &RawConfig)
         else {
             continue;
         };
-        let other_peak = match &config.axis_specs.get(j).map(|s| &s.machine) {
-            Some(super::AxisMachine::Tmcpack(k)) => k.current.peak,
-            _ => None,
-        };
+        let other_peak = config
+            .axis_specs
+            .get(j)
+            .and_then(|s| s.machine.get::<TmcpackAxisKeys>())
+            .and_then(|k| k.current.peak);
         let span = raw
             .axis
             .get(i)

@@ -1,22 +1,21 @@
 //! A simulated QuadQuad2Drv as its `[[device]]` and axes describe it.
 
+use motion_drivers::spec::{Direction, DriverSpec, HomeInputKind};
 use motion_sim::qq2drv::{InputPin, InputSource, Qq2drvSim, Qq2drvSimConfig};
-
-use crate::config::{DeviceSpec, Direction, HomeInputKind, ServerConfig};
 
 /// The IN pins of a simulated QuadQuad2Drv, wired as its axes' `home` tables say: an
 /// encoder index once per revolution, a switch at the end of travel the search runs to, or
 /// (with `home.spacing`: two end-stops on one input) a switch at each end of travel.
-fn inputs(config: &ServerConfig, device: usize) -> [InputPin; 4] {
+fn inputs(spec: &DriverSpec) -> [InputPin; 4] {
     let mut inputs = [InputPin::default(); 4];
-    for (axis, spec) in config.axes.iter().zip(&config.axis_specs) {
-        let (Some(input), true) = (spec.home.input, axis.device == device) else {
+    for axis in &spec.axes {
+        let Some(input) = axis.home.input else {
             continue;
         };
         let Some(pin) = inputs.get_mut(axis.channel) else {
             continue;
         };
-        let positive = spec.home.direction == Direction::Positive;
+        let positive = axis.home.direction == Direction::Positive;
         let end = if positive { axis.max } else { axis.min };
         pin.actuated_high = input.active_high;
         pin.source = match input.kind {
@@ -43,11 +42,11 @@ fn inputs(config: &ServerConfig, device: usize) -> [InputPin; 4] {
     inputs
 }
 
-/// The model of qq2drv device `index`.
-pub(crate) fn model(config: &ServerConfig, index: usize, device: &DeviceSpec) -> Qq2drvSim {
+/// The simulated board of the device `spec` describes.
+pub(crate) fn model(spec: &DriverSpec, seed: u64) -> Qq2drvSim {
     Qq2drvSim::new(Qq2drvSimConfig {
-        seed: device.sim_seed,
-        inputs: inputs(config, index),
+        seed,
+        inputs: inputs(spec),
         ..Qq2drvSimConfig::default()
     })
 }

@@ -3,21 +3,21 @@
 //! `home.direction`), wired as `reference.active` says (an opener for "high"), and an axis
 //! with a mechanical reference has end stops there.
 
+use motion_drivers::spec::DriverSpec;
+use motion_drivers::tmcpack::TmcpackDriverConfig;
 use motion_sim::tmcpack::{MotorConfig, RefSwitch, TmcpackSim, TmcpackSimConfig};
-
-use crate::config::{DeviceSpec, ServerConfig};
-use crate::drivers::tmcpack_driver_config;
 
 /// Width of a simulated reference switch: one unit, at least 64 microsteps (4 full steps).
 fn switch_width(counts_per_unit: f64) -> i64 {
     (counts_per_unit.abs().round() as i64).max(64)
 }
 
-/// The model of tmcpack device `index`.
-pub(crate) fn model(config: &ServerConfig, index: usize, device: &DeviceSpec) -> TmcpackSim {
-    let driver = tmcpack_driver_config(config, index, device);
+/// The simulated pack of the device `spec` describes. (Validation refuses every value
+/// `from_spec` refuses; should one slip through, the pack gets the driver's defaults.)
+pub(crate) fn model(spec: &DriverSpec, seed: u64) -> TmcpackSim {
+    let driver = TmcpackDriverConfig::from_spec(spec).unwrap_or_default();
     let mut motors = [MotorConfig::default(); 6];
-    for axis in config.axes.iter().filter(|a| a.device == index) {
+    for axis in &spec.axes {
         let (Some(slot), Some(Some(channel))) = (
             motors.get_mut(axis.channel),
             driver.channels.get(axis.channel),
@@ -48,9 +48,9 @@ pub(crate) fn model(config: &ServerConfig, index: usize, device: &DeviceSpec) ->
         }
     }
     TmcpackSim::new(TmcpackSimConfig {
-        address: device.address as u8,
+        address: spec.address as u8,
         variant: driver.variant,
-        seed: device.sim_seed,
+        seed,
         motors,
         ..TmcpackSimConfig::default()
     })

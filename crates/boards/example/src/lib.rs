@@ -1,0 +1,96 @@
+//! The worked example of a motiond board: the **AS-2**, an (invented) ASCII stepper
+//! controller with two channels on a serial link. Its README is its datasheet. This one
+//! crate is everything motiond knows of it:
+//!
+//! | module | holds |
+//! |---|---|
+//! | [`codec`] | the wire format, sans I/O: requests encoded into a caller's buffer, replies decoded incrementally |
+//! | [`driver`] | [`driver::ExampleDriver`], the `motion_drivers::Driver`: start-up, polling, goals, faults |
+//! | [`sim`] | [`sim::ExampleSim`], the simulated board on a `type = "sim"` link |
+//! | this file | the model's facts and [`ExampleBoard`], the `motion_board::Board` the registry lists |
+//!
+//! Adding it to the server was one line in `motion_boards::BOARDS` and one dependency line
+//! in that crate's `Cargo.toml` (docs/ARCHITECTURE.md "How to add a board").
+//!
+//! ```
+//! use motion_board::Board;
+//! use board_example::BOARD;
+//!
+//! assert_eq!(BOARD.model().id(), "example");
+//! assert_eq!(BOARD.link().default_rate, 115_200);
+//! ```
+#![warn(missing_docs)]
+#![forbid(unsafe_code)]
+
+pub mod codec;
+pub mod driver;
+pub mod sim;
+
+use motion_base::{LinkKind, Model, ModelFacts};
+use motion_board::{Board, LinkFacts, SimBoard};
+use motion_drivers::spec::{DeviceMachine, DriverSpec, Param, SpecError};
+use motion_drivers::{Driver, PinInfo};
+
+use driver::{DEFAULT_BAUD, ExampleDriver, ExampleDriverConfig};
+use sim::{ExampleSim, ExampleSimConfig};
+
+/// The AS-2's facts: config id `example`, contract code 5, a byte stream.
+pub static FACTS: ModelFacts = ModelFacts {
+    id: "example",
+    code: 5,
+    link_kind: LinkKind::Stream,
+    title: "AS-2 ASCII stepper (worked example)",
+};
+
+/// The AS-2 as a model.
+pub const MODEL: Model = Model::new(&FACTS);
+
+/// The AS-2.
+#[derive(Debug, Clone, Copy)]
+pub struct ExampleBoard;
+
+/// The registry's entry.
+pub static BOARD: ExampleBoard = ExampleBoard;
+
+impl Board for ExampleBoard {
+    fn model(&self) -> Model {
+        MODEL
+    }
+
+    /// One board on its own RS-232 line (no address, no bus), 115200 baud.
+    fn link(&self) -> LinkFacts {
+        LinkFacts {
+            shared: false,
+            default_rate: DEFAULT_BAUD,
+            spi_mode: 0,
+            host_frame: None,
+        }
+    }
+
+    fn channel_count(&self, _machine: &DeviceMachine) -> usize {
+        codec::CHANNELS
+    }
+
+    /// The AS-2 has no I/O pins.
+    fn pins(&self, _machine: &DeviceMachine) -> &'static [PinInfo] {
+        &[]
+    }
+
+    fn build(&self, spec: &DriverSpec) -> Result<Box<dyn Driver>, SpecError> {
+        Ok(Box::new(ExampleDriver::new(
+            ExampleDriverConfig::from_spec(spec)?,
+        )))
+    }
+
+    fn params(&self, spec: &DriverSpec) -> Result<Vec<Param>, SpecError> {
+        ExampleDriverConfig::from_spec(spec).map(|config| config.params(spec))
+    }
+
+    fn simulate(&self, _spec: &DriverSpec, seed: u64) -> SimBoard {
+        SimBoard::Stream(Box::new(ExampleSim::new(ExampleSimConfig {
+            jitter: core::time::Duration::from_micros(100),
+            seed,
+            ..ExampleSimConfig::default()
+        })))
+    }
+}

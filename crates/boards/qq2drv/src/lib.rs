@@ -1,0 +1,58 @@
+//! The QuadQuad2Drv as a motiond board ([`Qq2drvBoard`]): an SPI board with four DC motor
+//! channels under the board's own PID, alone on its link (its frames have no address),
+//! SPI mode 1 at the datasheet's recommended 500 kHz ("We recommend clocking SPI up to
+//! 500kHz", QuadQuad2Drv datasheet). The driver is `motion_drivers::qq2drv`, the simulator
+//! `motion_sim::qq2drv`.
+#![warn(missing_docs)]
+#![forbid(unsafe_code)]
+
+mod sim;
+
+use motion_board::{Board, LinkFacts, SimBoard};
+use motion_drivers::qq2drv::{PINS, Qq2drvDriver, Qq2drvDriverConfig};
+use motion_drivers::spec::{DeviceMachine, DriverSpec, Param, SpecError};
+use motion_drivers::{Driver, Model, PinInfo};
+
+/// The QuadQuad2Drv.
+#[derive(Debug, Clone, Copy)]
+pub struct Qq2drvBoard;
+
+/// The registry's entry.
+pub static BOARD: Qq2drvBoard = Qq2drvBoard;
+
+impl Board for Qq2drvBoard {
+    fn model(&self) -> Model {
+        Model::QQ2DRV
+    }
+
+    fn link(&self) -> LinkFacts {
+        LinkFacts {
+            shared: false,
+            default_rate: 500_000,
+            spi_mode: 1,
+            host_frame: None,
+        }
+    }
+
+    fn channel_count(&self, _machine: &DeviceMachine) -> usize {
+        4
+    }
+
+    fn pins(&self, _machine: &DeviceMachine) -> &'static [PinInfo] {
+        PINS
+    }
+
+    fn build(&self, spec: &DriverSpec) -> Result<Box<dyn Driver>, SpecError> {
+        Ok(Box::new(Qq2drvDriver::new(Qq2drvDriverConfig::from_spec(
+            spec,
+        )?)))
+    }
+
+    fn params(&self, spec: &DriverSpec) -> Result<Vec<Param>, SpecError> {
+        Qq2drvDriverConfig::from_spec(spec).map(|config| config.params(spec))
+    }
+
+    fn simulate(&self, spec: &DriverSpec, seed: u64) -> SimBoard {
+        SimBoard::Spi(Box::new(sim::model(spec, seed)))
+    }
+}

@@ -1,0 +1,88 @@
+//! The US Digital QSB as a motiond board ([`QsbBoard`]): a USB serial encoder interface
+//! (the -M also drives a stepper), alone on its virtual COM port, which starts at 230400
+//! baud; "The commands and responses are sent in RS-232 format over a virtual COM port
+//! connection through the USB" (QSB command list, Communications), so its bytes reach the
+//! host at the end of each 1 ms full-speed USB frame. The driver is `motion_drivers::qsb`,
+//! the simulator `motion_sim::qsb`.
+#![warn(missing_docs)]
+#![forbid(unsafe_code)]
+
+use core::time::Duration;
+
+use motion_board::{Board, LinkFacts, SimBoard};
+use motion_drivers::qsb::{QsbDriver, QsbDriverConfig, pins};
+use motion_drivers::spec::{
+    DeviceMachine, DriverSpec, Param, QsbDeviceKeys, QsbVariant, SpecError,
+};
+use motion_drivers::{Driver, Model, PinInfo};
+use motion_sim::qsb::{DriveEnable, QsbSim, QsbSimConfig, Variant};
+
+/// A full-speed USB device is polled once per 1 ms frame.
+const USB_FRAME: Duration = Duration::from_millis(1);
+
+/// The QSB.
+#[derive(Debug, Clone, Copy)]
+pub struct QsbBoard;
+
+/// The registry's entry.
+pub static BOARD: QsbBoard = QsbBoard;
+
+impl Board for QsbBoard {
+    fn model(&self) -> Model {
+        Model::QSB
+    }
+
+    fn link(&self) -> LinkFacts {
+        LinkFacts {
+            shared: false,
+            default_rate: 230_400,
+            spi_mode: 0,
+            host_frame: Some(USB_FRAME),
+        }
+    }
+
+    fn channel_count(&self, _machine: &DeviceMachine) -> usize {
+        1
+    }
+
+    fn pins(&self, machine: &DeviceMachine) -> &'static [PinInfo] {
+        pins(machine.get_or_default::<QsbDeviceKeys>().variant.into())
+    }
+
+    fn product_name(&self, machine: &DeviceMachine) -> &'static str {
+        machine.get_or_default::<QsbDeviceKeys>().variant.id()
+    }
+
+    fn build(&self, spec: &DriverSpec) -> Result<Box<dyn Driver>, SpecError> {
+        Ok(Box::new(QsbDriver::new(QsbDriverConfig::from_spec(spec)?)))
+    }
+
+    fn params(&self, spec: &DriverSpec) -> Result<Vec<Param>, SpecError> {
+        QsbDriverConfig::from_spec(spec).map(|config| config.params(spec))
+    }
+
+    /// The variant, the encoder's counts per motor step, and the external stepper driver's
+    /// enable line where `enable_output` says it is wired. (The index is the encoder's,
+    /// once per revolution of the model's 500-cycle encoder: a home search finds it within
+    /// 2000 counts.)
+    fn simulate(&self, spec: &DriverSpec, seed: u64) -> SimBoard {
+        let keys = spec.machine.get_or_default::<QsbDeviceKeys>();
+        let drive_enable = keys.enable_output.map(|bit| DriveEnable {
+            bit,
+            active_high: keys.enable_active_high.unwrap_or(false),
+        });
+        let counts_per_step = keys.counts_per_step;
+        let counts_per_step =
+            counts_per_step.unwrap_or_else(|| QsbDriverConfig::default().counts_per_step);
+        SimBoard::Stream(Box::new(QsbSim::new(QsbSimConfig {
+            variant: match keys.variant {
+                QsbVariant::M => Variant::M,
+                QsbVariant::S => Variant::S,
+                QsbVariant::D => Variant::D,
+            },
+            seed,
+            drive_enable,
+            ..QsbSimConfig::default().with_counts_per_step(counts_per_step)
+        })))
+    }
+}

@@ -1,0 +1,70 @@
+//! The SPI_motor as a motiond board ([`SpimotorBoard`]): an SPI board driving one stepper
+//! or two brushed motors; boards on one SPI bus share it, told apart by their address
+//! (SPI_motor "Motor protocol": even addresses 2..=254), SPI mode 0 at 500 kHz. The driver
+//! is `motion_drivers::spimotor`, the simulator `motion_sim::spimotor`. The board has no
+//! I/O pins of its own.
+#![warn(missing_docs)]
+#![forbid(unsafe_code)]
+
+use motion_board::{Board, LinkFacts, SimBoard};
+use motion_drivers::spec::{
+    DeviceMachine, DriverSpec, Param, SpecError, SpiDrive, SpimotorDeviceKeys,
+};
+use motion_drivers::spimotor::{PINS, SpimotorDriver, SpimotorDriverConfig};
+use motion_drivers::{Driver, Model, PinInfo};
+use motion_sim::spimotor::{Drive, SpimotorSim, SpimotorSimConfig};
+
+/// The SPI_motor.
+#[derive(Debug, Clone, Copy)]
+pub struct SpimotorBoard;
+
+/// The registry's entry.
+pub static BOARD: SpimotorBoard = SpimotorBoard;
+
+impl Board for SpimotorBoard {
+    fn model(&self) -> Model {
+        Model::SPIMOTOR
+    }
+
+    fn link(&self) -> LinkFacts {
+        LinkFacts {
+            shared: true,
+            default_rate: 500_000,
+            spi_mode: 0,
+            host_frame: None,
+        }
+    }
+
+    fn channel_count(&self, machine: &DeviceMachine) -> usize {
+        match machine.get_or_default::<SpimotorDeviceKeys>().drive {
+            SpiDrive::Stepper => 1,
+            SpiDrive::Brushed => 2,
+        }
+    }
+
+    fn pins(&self, _machine: &DeviceMachine) -> &'static [PinInfo] {
+        PINS
+    }
+
+    fn build(&self, spec: &DriverSpec) -> Result<Box<dyn Driver>, SpecError> {
+        Ok(Box::new(SpimotorDriver::new(
+            SpimotorDriverConfig::from_spec(spec)?,
+        )))
+    }
+
+    fn params(&self, spec: &DriverSpec) -> Result<Vec<Param>, SpecError> {
+        SpimotorDriverConfig::from_spec(spec).map(|config| config.params(spec))
+    }
+
+    fn simulate(&self, spec: &DriverSpec, seed: u64) -> SimBoard {
+        SimBoard::Spi(Box::new(SpimotorSim::new(SpimotorSimConfig {
+            address: spec.address as u8,
+            drive: match spec.machine.get_or_default::<SpimotorDeviceKeys>().drive {
+                SpiDrive::Stepper => Drive::Stepper,
+                SpiDrive::Brushed => Drive::Brushed,
+            },
+            seed,
+            ..SpimotorSimConfig::default()
+        })))
+    }
+}

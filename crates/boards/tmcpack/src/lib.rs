@@ -1,0 +1,64 @@
+//! The Trinamic SIXpack / QUADpack as a motiond board ([`TmcpackBoard`]): a serial board
+//! (RS-232 or RS-485, manual 2) with six or four stepper channels; packs on one RS-485 bus
+//! share the link, told apart by their address (manual 6.1); they start at the factory
+//! 19200 baud (manual 7.2 `$40`). The driver is `motion_drivers::tmcpack`, the simulator
+//! `motion_sim::tmcpack`.
+#![warn(missing_docs)]
+#![forbid(unsafe_code)]
+
+mod sim;
+
+use motion_board::{Board, LinkFacts, SimBoard};
+use motion_drivers::spec::{
+    DeviceMachine, DriverSpec, PackVariant, Param, SpecError, TmcpackDeviceKeys,
+};
+use motion_drivers::tmcpack::{TmcpackDriver, TmcpackDriverConfig, pins};
+use motion_drivers::{Driver, Model, PinInfo};
+
+/// The Trinamic pack.
+#[derive(Debug, Clone, Copy)]
+pub struct TmcpackBoard;
+
+/// The registry's entry.
+pub static BOARD: TmcpackBoard = TmcpackBoard;
+
+impl Board for TmcpackBoard {
+    fn model(&self) -> Model {
+        Model::TMCPACK
+    }
+
+    fn link(&self) -> LinkFacts {
+        LinkFacts {
+            shared: true,
+            default_rate: 19_200,
+            spi_mode: 0,
+            // RS-232 or RS-485 (manual 2): a UART, whatever adapter the host uses.
+            host_frame: None,
+        }
+    }
+
+    fn channel_count(&self, machine: &DeviceMachine) -> usize {
+        match machine.get_or_default::<TmcpackDeviceKeys>().variant {
+            PackVariant::Sixpack => 6,
+            PackVariant::Quadpack => 4,
+        }
+    }
+
+    fn pins(&self, machine: &DeviceMachine) -> &'static [PinInfo] {
+        pins(machine.get_or_default::<TmcpackDeviceKeys>().variant.into())
+    }
+
+    fn build(&self, spec: &DriverSpec) -> Result<Box<dyn Driver>, SpecError> {
+        Ok(Box::new(TmcpackDriver::new(
+            TmcpackDriverConfig::from_spec(spec)?,
+        )))
+    }
+
+    fn params(&self, spec: &DriverSpec) -> Result<Vec<Param>, SpecError> {
+        TmcpackDriverConfig::from_spec(spec).map(|config| config.params(spec))
+    }
+
+    fn simulate(&self, spec: &DriverSpec, seed: u64) -> SimBoard {
+        SimBoard::Stream(Box::new(sim::model(spec, seed)))
+    }
+}

@@ -1,0 +1,688 @@
+"""The shared-memory contract of motiond as ctypes mirrors, enumerations and constants.
+
+GENERATED from the Rust description of the contract (crate motion-ipc, src/schema) by
+``cargo run -p motion-ipc --example gen`` (or ``scripts/gen``): do not edit; change the Rust
+payload and run the generator. Import these names from :mod:`motiond.ipc`.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import enum
+from typing import Dict, Type
+
+from ._mirror_base import (
+    AxisInfoMethods,
+    ClientIdMethods,
+    Payload,
+    ReasonMethods,
+    TextedEnum,
+)
+
+# --- constants ---------------------------------------------------------------------------
+
+#: Version of the contract; every payload carries it.
+SCHEMA_VERSION = 5
+#: Capacity of the axis arrays of the frame and the server info.
+MAX_AXES = 128
+#: Capacity of the device arrays of the frame and the server info.
+MAX_DEVICES = 32
+#: Capacity of the link arrays of the server stats.
+MAX_LINKS = 16
+#: Capacity of the signal arrays of the frame and the server info.
+MAX_SIGNALS = 64
+#: Capacity of the machine parameter table.
+MAX_PARAMS = 2048
+#: Bytes of a name field (UTF-8, zero padded).
+NAME_LEN = 32
+#: Bytes of a unit or pin field (UTF-8, zero padded).
+UNIT_LEN = 16
+#: Bytes of a parameter key or value text.
+PARAM_TEXT_LEN = 40
+#: ``CommandRequest.axis`` addressing every axis (stop, e-stop, reset, off).
+ALL_AXES = 4294967295
+
+#: Service name formats of one instance; ``%s`` is the instance name.
+SERVICES: Dict[str, str] = {
+    "frame": "motiond/%s/frame",
+    "tick": "motiond/%s/tick",
+    "command": "motiond/%s/command",
+    "info": "motiond/%s/info",
+    "stats": "motiond/%s/stats",
+    "params": "motiond/%s/params",
+    "estop": "motiond/%s/estop",
+    "server_node": "motiond-%s",
+}
+
+# --- payloads ----------------------------------------------------------------------------
+
+
+class ClientId(ClientIdMethods, Payload):
+    """The iceoryx2 node id of a client (``Node.id().value()``, a u128), split into two little
+    halves so that the layout is the same for every C ABI. Zero means "no client".
+
+    16 bytes, alignment 8."""
+
+    _type_name_ = "motiond::ClientId"
+    _fields_ = [
+        ("lo", ctypes.c_uint64),  # Low 64 bits of the node id.
+        ("hi", ctypes.c_uint64),  # High 64 bits of the node id.
+    ]
+
+
+class AxisState(Payload):
+    """One axis in a frame.
+
+    80 bytes, alignment 8."""
+
+    _type_name_ = "motiond::AxisState"
+    _fields_ = [
+        ("position", ctypes.c_double),  # Measured position in axis units.
+        ("velocity", ctypes.c_double),  # Measured velocity in units/s.
+        # Position target (position modes) or velocity target (velocity modes), in units.
+        ("target", ctypes.c_double),
+        ("raw_counts", ctypes.c_int64),  # Position in the board's own counts.
+        # Tick at which fresh data last arrived from the board.
+        ("last_refresh_tick", ctypes.c_uint64),
+        ("flags", ctypes.c_uint32),  # ``AxisFlags`` bits.
+        ("fault", ctypes.c_uint16),  # ``FaultCode`` value; 0 = no fault.
+        ("mode", ctypes.c_uint8),  # ``AxisMode`` value.
+        ("device_state", ctypes.c_uint8),  # ``DeviceState`` value of the axis's board.
+        ("claimed_by", ClientId),  # The client holding a claim on the axis; zero when unclaimed.
+        # The measured figure of the latched fault (units, units/s; see ``FaultCode``), 0 when none.
+        ("fault_value", ctypes.c_double),
+        ("fault_limit", ctypes.c_double),  # The tolerance or limit the fault broke, 0 when none.
+    ]
+
+
+class SignalState(Payload):
+    """One signal in a frame.
+
+    48 bytes, alignment 8."""
+
+    _type_name_ = "motiond::SignalState"
+    _fields_ = [
+        # Logical value: digital 0.0/1.0 after ``invert``; analogue raw × scale + offset.
+        ("value", ctypes.c_double),
+        # Raw value as the board reports it: electrical level 0/1, or ADC counts.
+        ("raw", ctypes.c_double),
+        # Tick at which the board last reported it (outputs: acknowledged it).
+        ("last_refresh_tick", ctypes.c_uint64),
+        ("flags", ctypes.c_uint32),  # ``SignalFlags`` bits.
+        ("kind", ctypes.c_uint8),  # ``SignalKind`` value.
+        ("reserved", ctypes.c_uint8 * 3),  # Zero.
+        ("claimed_by", ClientId),  # Claim holder of an output; zero when unclaimed.
+    ]
+
+
+class AxisWire(Payload):
+    """When the current goal of one axis was set and when its first request reached the wire
+    (``MotionFrame.wire``, same index as ``axes``).
+
+    Command → wire: ``wire_ns`` minus the client's CLOCK_MONOTONIC when it sent the command, or
+    in ticks ``wire_tick − goal_tick`` (0: written in the tick that accepted it).
+
+    24 bytes, alignment 8."""
+
+    _type_name_ = "motiond::AxisWire"
+    _fields_ = [
+        # Tick in which the current goal was set (a client's command: the reply's ``tick_applied``;
+        # or the server's own stop).
+        ("goal_tick", ctypes.c_uint64),
+        # Tick during which the goal's first request was written to the link (its last byte accepted
+        # by the transport); 0 until then.
+        ("wire_tick", ctypes.c_uint64),
+        # CLOCK_MONOTONIC ns of that write; 0 until then (and for a goal that needs no request).
+        ("wire_ns", ctypes.c_uint64),
+    ]
+
+
+class MotionFrame(Payload):
+    """One consistent snapshot of every axis, board and signal, published once per tick on
+    ``motiond/<name>/frame``.
+
+    16464 bytes, alignment 8."""
+
+    _type_name_ = "motiond::MotionFrame"
+    _fields_ = [
+        ("schema_version", ctypes.c_uint32),  # ``SCHEMA_VERSION`` of the writer.
+        ("axis_count", ctypes.c_uint32),  # Number of valid entries at the start of ``axes``.
+        ("tick", ctypes.c_uint64),  # Tick number, 0 at server start.
+        ("time_ns", ctypes.c_uint64),  # The tick's deadline on CLOCK_MONOTONIC, ns.
+        # CLOCK_MONOTONIC, ns, taken just before the frame was sent.
+        ("publish_ns", ctypes.c_uint64),
+        ("flags", ctypes.c_uint32),  # ``FrameFlags`` bits.
+        ("signal_count", ctypes.c_uint32),  # Number of valid entries at the start of ``signals``.
+        ("device_count", ctypes.c_uint32),  # Number of valid entries at the start of ``devices``.
+        ("reserved", ctypes.c_uint32),  # Zero.
+        # ``DeviceState`` per device, config order; entries past ``device_count`` are zero.
+        ("devices", ctypes.c_uint8 * MAX_DEVICES),
+        # Axes in config order; entries past ``axis_count`` are ``AxisState.UNKNOWN``.
+        ("axes", AxisState * MAX_AXES),
+        # Signals in config order; entries past ``signal_count`` are ``SignalState.UNKNOWN``.
+        ("signals", SignalState * MAX_SIGNALS),
+        # Per axis (same index as ``axes``): when its current goal was set and when its first
+        # request reached the wire.
+        ("wire", AxisWire * MAX_AXES),
+    ]
+
+
+class CommandRequest(Payload):
+    """A command to the server, on ``motiond/<name>/command``; ``values`` per kind: see
+    ``CommandKind``.
+
+    Identity comes from the transport: the server knows which iceoryx2 node sent a request and
+    owns every claim by that node. ``client`` may be zero ("the sender"); a non-zero ``client``
+    that is not the sender's node is refused with ``Reason.IdentityMismatch``.
+
+    64 bytes, alignment 8."""
+
+    _type_name_ = "motiond::CommandRequest"
+    _fields_ = [
+        ("schema_version", ctypes.c_uint32),  # ``SCHEMA_VERSION`` of the sender.
+        ("kind", ctypes.c_uint32),  # ``CommandKind`` value.
+        ("client", ClientId),  # The sender's iceoryx2 node id, or zero.
+        ("sequence", ctypes.c_uint64),  # The client's sequence number, echoed in the reply.
+        # Axis (or signal) index, config order, or ``CommandRequest.ALL_AXES``.
+        ("axis", ctypes.c_uint32),
+        ("target", ctypes.c_uint32),  # ``Target`` value: 0 = axis, 1 = signal.
+        ("values", ctypes.c_double * 3),  # Arguments; see ``CommandKind``.
+    ]
+
+
+class CommandReply(Payload):
+    """The server's answer to one ``CommandRequest``; every request gets exactly one.
+
+    32 bytes, alignment 8."""
+
+    _type_name_ = "motiond::CommandReply"
+    _fields_ = [
+        ("schema_version", ctypes.c_uint32),  # ``SCHEMA_VERSION`` of the server.
+        ("reason", ctypes.c_uint32),  # ``Reason`` value; 0 = accepted.
+        ("sequence", ctypes.c_uint64),  # The request's sequence.
+        # Tick in which the command took effect (or was refused).
+        ("tick_applied", ctypes.c_uint64),
+        ("axis", ctypes.c_uint32),  # The request's axis.
+        ("kind", ctypes.c_uint32),  # The request's kind.
+    ]
+
+
+class AxisInfo(AxisInfoMethods, Payload):
+    """One axis's static description.
+
+    160 bytes, alignment 8."""
+
+    _type_name_ = "motiond::AxisInfo"
+    _fields_ = [
+        ("name", ctypes.c_uint8 * NAME_LEN),  # Axis name, UTF-8, zero padded.
+        ("unit", ctypes.c_uint8 * UNIT_LEN),  # Unit of positions ("mm", "deg"), UTF-8, zero padded.
+        ("device", ctypes.c_uint8 * NAME_LEN),  # Name of the device that drives the axis.
+        ("counts_per_unit", ctypes.c_double),  # Device counts per unit.
+        ("min", ctypes.c_double),  # Lower soft limit, units.
+        ("max", ctypes.c_double),  # Upper soft limit, units.
+        ("max_velocity", ctypes.c_double),  # Velocity limit, units/s.
+        ("max_accel", ctypes.c_double),  # Acceleration limit, units/s².
+        ("capabilities", ctypes.c_uint32),  # ``Capabilities`` bits.
+        ("channel", ctypes.c_uint16),  # Motor number on the device.
+        ("device_index", ctypes.c_uint16),  # Index into ``ServerInfo.devices``.
+        # Following error tolerance, units; 0 = not supervised.
+        ("following_error", ctypes.c_double),
+        # Overspeed factor (× ``max_velocity``); 0 = not supervised.
+        ("overspeed_factor", ctypes.c_double),
+        # Travel limit of a reference search, units; 0 = not supervised.
+        ("home_max_travel", ctypes.c_double),
+        ("estop", ctypes.c_uint32),  # ``EstopCategory`` value.
+        ("reserved", ctypes.c_uint32),  # Zero.
+    ]
+
+
+class DeviceInfo(Payload):
+    """One device's description.
+
+    112 bytes, alignment 4."""
+
+    _type_name_ = "motiond::DeviceInfo"
+    _fields_ = [
+        ("name", ctypes.c_uint8 * NAME_LEN),  # Device name.
+        ("link", ctypes.c_uint8 * NAME_LEN),  # Link name.
+        # Firmware version as the board reported it ("" until known).
+        ("firmware", ctypes.c_uint8 * NAME_LEN),
+        ("model", ctypes.c_uint32),  # ``DeviceModel`` value.
+        ("address", ctypes.c_uint32),  # Bus address, 0 when the model has none.
+        ("axis_count", ctypes.c_uint32),  # Axes configured on the device.
+        # ``DeviceState`` value when the info was published (the frame has the current one).
+        ("state", ctypes.c_uint32),
+    ]
+
+
+class SignalInfo(Payload):
+    """One signal's static description.
+
+    128 bytes, alignment 8."""
+
+    _type_name_ = "motiond::SignalInfo"
+    _fields_ = [
+        ("name", ctypes.c_uint8 * NAME_LEN),  # Signal name.
+        ("unit", ctypes.c_uint8 * UNIT_LEN),  # Unit of an analogue value ("" for digital).
+        ("device", ctypes.c_uint8 * NAME_LEN),  # Device name.
+        ("scale", ctypes.c_double),  # Analogue: value = raw × scale + offset.
+        ("offset", ctypes.c_double),  # Analogue: value = raw × scale + offset.
+        # Raw full scale (1023 for a 10-bit converter; 1 for digital).
+        ("full_scale", ctypes.c_double),
+        ("kind", ctypes.c_uint8),  # ``SignalKind`` value.
+        ("flags", ctypes.c_uint8),  # ``SignalInfoFlags`` bits.
+        ("device_index", ctypes.c_uint16),  # Index into ``ServerInfo.devices``.
+        ("pin", ctypes.c_uint8 * UNIT_LEN),  # The board's pin name ("ttlio1"), zero padded.
+        ("reserved", ctypes.c_uint32),  # Zero.
+    ]
+
+
+class ServerInfo(Payload):
+    """The server's static description, published with history 1 on ``motiond/<name>/info``.
+
+    32328 bytes, alignment 8."""
+
+    _type_name_ = "motiond::ServerInfo"
+    _fields_ = [
+        ("schema_version", ctypes.c_uint32),  # ``SCHEMA_VERSION`` of the server.
+        ("axis_count", ctypes.c_uint32),  # Valid entries in ``axes``.
+        ("device_count", ctypes.c_uint32),  # Valid entries in ``devices``.
+        ("tick_hz", ctypes.c_uint32),  # Tick rate, Hz.
+        # Deadman for velocity and power goals, ms; 0 = disabled.
+        ("command_timeout_ms", ctypes.c_uint32),
+        ("max_clients", ctypes.c_uint32),  # Configured client limit.
+        ("server_pid", ctypes.c_uint32),  # Process id of motiond.
+        ("signal_count", ctypes.c_uint32),  # Valid entries in ``signals``.
+        ("name", ctypes.c_uint8 * NAME_LEN),  # Instance name.
+        ("start_time_ns", ctypes.c_uint64),  # CLOCK_MONOTONIC ns of tick 0.
+        ("axes", AxisInfo * MAX_AXES),  # Axes in config order.
+        ("devices", DeviceInfo * MAX_DEVICES),  # Devices in config order.
+        ("signals", SignalInfo * MAX_SIGNALS),  # Signals in config order.
+    ]
+
+
+class MachineParam(Payload):
+    """One effective machine parameter.
+
+    88 bytes, alignment 4."""
+
+    _type_name_ = "motiond::MachineParam"
+    _fields_ = [
+        # The config key, dotted for tables (``current.standstill``).
+        ("key", ctypes.c_uint8 * PARAM_TEXT_LEN),
+        # The value in effect, with its unit (``50 %``).
+        ("value", ctypes.c_uint8 * PARAM_TEXT_LEN),
+        ("owner_index", ctypes.c_uint16),  # Device or axis index.
+        ("owner_kind", ctypes.c_uint8),  # ``ParamOwner`` value.
+        ("from_config", ctypes.c_uint8),  # 1: the config file set it; 0: the default.
+        ("reserved", ctypes.c_uint32),  # Zero.
+    ]
+
+
+class MachineParams(Payload):
+    """Every machine parameter in effect, published with history 1 on ``motiond/<name>/params``.
+
+    180240 bytes, alignment 4."""
+
+    _type_name_ = "motiond::MachineParams"
+    _fields_ = [
+        ("schema_version", ctypes.c_uint32),  # ``SCHEMA_VERSION`` of the server.
+        ("count", ctypes.c_uint32),  # Valid entries.
+        # 1 when more parameters existed than ``MAX_PARAMS`` (entries were left out).
+        ("truncated", ctypes.c_uint32),
+        ("reserved", ctypes.c_uint32),  # Zero.
+        ("entries", MachineParam * MAX_PARAMS),  # Devices' then axes' parameters, config order.
+    ]
+
+
+class LatencySummary(Payload):
+    """Percentiles of one latency distribution, in nanoseconds.
+
+    40 bytes, alignment 8."""
+
+    _type_name_ = "motiond::LatencySummary"
+    _fields_ = [
+        ("samples", ctypes.c_uint64),  # Number of samples.
+        ("p50_ns", ctypes.c_uint64),  # Median.
+        ("p99_ns", ctypes.c_uint64),  # 99th percentile.
+        ("p999_ns", ctypes.c_uint64),  # 99.9th percentile.
+        ("max_ns", ctypes.c_uint64),  # Maximum.
+    ]
+
+
+class LinkStats(Payload):
+    """Counters of one link since start.
+
+    80 bytes, alignment 8."""
+
+    _type_name_ = "motiond::LinkStats"
+    _fields_ = [
+        ("name", ctypes.c_uint8 * NAME_LEN),  # Link name.
+        ("bytes_in", ctypes.c_uint64),  # Bytes received.
+        ("bytes_out", ctypes.c_uint64),  # Bytes sent.
+        ("frames", ctypes.c_uint64),  # Replies decoded.
+        ("errors", ctypes.c_uint64),  # Bad frames, I/O errors, timeouts.
+        ("reconnects", ctypes.c_uint64),  # Successful reopens.
+        ("up", ctypes.c_uint32),  # 1 when the link is open.
+        ("reserved", ctypes.c_uint32),  # Zero.
+    ]
+
+
+class LinkIo(Payload):
+    """The I/O side of one link: when bytes last went out and came in, and how often. Stamps are
+    CLOCK_MONOTONIC ns taken by the link's I/O thread right after the transport accepted or
+    returned the bytes; 0 when it never did.
+
+    32 bytes, alignment 8."""
+
+    _type_name_ = "motiond::LinkIo"
+    _fields_ = [
+        # CLOCK_MONOTONIC ns of the last write that moved bytes; 0: never.
+        ("last_write_ns", ctypes.c_uint64),
+        # CLOCK_MONOTONIC ns of the last read that returned bytes; 0: never.
+        ("last_read_ns", ctypes.c_uint64),
+        ("transactions", ctypes.c_uint64),  # Messages written whole (SPI: transactions).
+        ("reads", ctypes.c_uint64),  # Reads that returned bytes.
+    ]
+
+
+class ServerStats(Payload):
+    """Server figures, published about once a second on ``motiond/<name>/stats``.
+
+    1992 bytes, alignment 8."""
+
+    _type_name_ = "motiond::ServerStats"
+    _fields_ = [
+        ("schema_version", ctypes.c_uint32),  # ``SCHEMA_VERSION`` of the server.
+        ("link_count", ctypes.c_uint32),  # Valid entries in ``links``.
+        ("tick", ctypes.c_uint64),  # Tick at which these figures were taken.
+        ("time_ns", ctypes.c_uint64),  # CLOCK_MONOTONIC ns of that tick.
+        ("wakeup", LatencySummary),  # Wake-up latency (actual wake − deadline) since start.
+        ("work", LatencySummary),  # Tick work time since start.
+        ("overruns", ctypes.c_uint64),  # Ticks that missed their deadline since start.
+        ("max_consecutive_overruns", ctypes.c_uint64),  # Longest run of consecutive overruns.
+        ("commands", ctypes.c_uint64),  # Requests answered.
+        ("rejected", ctypes.c_uint64),  # Requests refused.
+        ("clients", ctypes.c_uint32),  # Live client nodes at the last liveness check.
+        # Real-time set-up bits (``RtFlags``): bit 0 SCHED_FIFO, bit 1 memory locked, bit 2 pinned,
+        # bit 3 cpu_dma_latency held.
+        ("rt_flags", ctypes.c_uint32),
+        ("links", LinkStats * MAX_LINKS),  # Per-link counters.
+        ("faults", ctypes.c_uint64),  # Axis faults latched by the server's supervision since start.
+        # Ticks whose frame could not be loaned or sent, since start.
+        ("frames_lost", ctypes.c_uint64),
+        # Services whose port slots are all taken now (``FullServices`` bits, the ``FULL_*``
+        # constants): new clients are refused there until a slot frees.
+        ("full_services", ctypes.c_uint32),
+        # Times a service was found with all its slots taken, since start.
+        ("full_events", ctypes.c_uint32),
+        # Info, stats and params samples that could not be loaned or sent, and tick notifications
+        # that failed, since start (a lost frame counts in ``frames_lost``).
+        ("publish_failures", ctypes.c_uint64),
+        # Command replies that could not be sent (the client vanished before its answer), since
+        # start.
+        ("replies_lost", ctypes.c_uint64),
+        # Log reports the main thread's queue had no room for, and failed iceoryx2 housekeeping
+        # (connection updates, e-stop event reads), since start.
+        ("events_dropped", ctypes.c_uint64),
+        # Per link (same index as ``links``): the I/O thread's stamps.
+        ("link_io", LinkIo * MAX_LINKS),
+        # Records of dead iceoryx2 nodes removed from the service root (crashed clients, clients
+        # killed while they started), since start.
+        ("nodes_cleaned", ctypes.c_uint64),
+    ]
+
+
+#: Every payload mirror, by Rust type name.
+PAYLOADS: Dict[str, Type[Payload]] = {
+    "ClientId": ClientId,
+    "AxisState": AxisState,
+    "SignalState": SignalState,
+    "AxisWire": AxisWire,
+    "MotionFrame": MotionFrame,
+    "CommandRequest": CommandRequest,
+    "CommandReply": CommandReply,
+    "AxisInfo": AxisInfo,
+    "DeviceInfo": DeviceInfo,
+    "SignalInfo": SignalInfo,
+    "ServerInfo": ServerInfo,
+    "MachineParam": MachineParam,
+    "MachineParams": MachineParams,
+    "LatencySummary": LatencySummary,
+    "LinkStats": LinkStats,
+    "LinkIo": LinkIo,
+    "ServerStats": ServerStats,
+}
+
+# --- enumerations ------------------------------------------------------------------------
+
+
+class CommandKind(TextedEnum):
+    """What a request asks for (``CommandRequest.kind``). ``values`` per kind; 0.0 in a velocity or
+    acceleration slot means the axis's configured maximum: STOP -; POWER [power -1..1]; POSITION
+    [position]; VELOCITY [velocity]; RAMP_POSITION [position, max velocity, acceleration];
+    RAMP_VELOCITY [velocity, acceleration]; HOME [search velocity]; SET_POSITION [position];
+    SET_OUTPUT [0.0 or 1.0] (``axis`` = signal index, ``target`` = SIGNAL); CLAIM, RELEASE,
+    E_STOP, RESET, OFF -."""
+
+    STOP = 1, "stop"
+    POWER = 2, "power"
+    POSITION = 3, "position"
+    VELOCITY = 4, "velocity"
+    RAMP_POSITION = 5, "ramp-position"
+    RAMP_VELOCITY = 6, "ramp-velocity"
+    HOME = 7, "home"
+    SET_POSITION = 8, "set-position"
+    CLAIM = 9, "claim"
+    RELEASE = 10, "release"
+    E_STOP = 11, "e-stop"
+    RESET = 12, "reset"
+    OFF = 13, "off"
+    SET_OUTPUT = 14, "set-output"
+
+
+class Reason(ReasonMethods, TextedEnum):
+    """Why a request was refused (``CommandReply.reason``); 0 = accepted. The text is the server's
+    one-line explanation."""
+
+    ACCEPTED = 0, "accepted"
+    SCHEMA_MISMATCH = 1, "client and server use different motion-ipc schema versions"
+    UNKNOWN_KIND = 2, "unknown command kind"
+    UNKNOWN_AXIS = 3, "no such axis on this server"
+    UNSUPPORTED = 4, "the axis's board cannot do this command"
+    NOT_FINITE = 5, "a value is NaN or infinite"
+    OUT_OF_RANGE = (
+        6,
+        "position outside the axis's min..max soft limits, or an output level other than 0 or 1",
+    )
+    VELOCITY_LIMIT = (
+        7,
+        "velocity above the axis's max_velocity, or below the smallest step its board represents",
+    )
+    ACCEL_LIMIT = (
+        8,
+        "acceleration above the axis's max_accel or not positive, or below the smallest step its board represents",
+    )
+    POWER_LIMIT = 9, "power outside -1.0..1.0"
+    CLAIMED_BY_OTHER = 10, "the axis is claimed by another client"
+    NOT_CLAIMED = 11, "this client holds no claim on the axis"
+    ESTOP_LATCHED = 12, "e-stop is latched: send reset first"
+    AXIS_FAULTED = 13, "the axis is faulted: clear the cause, then reset"
+    LINK_DOWN = 14, "the axis's link is down"
+    BUSY = 15, "the server's command queue is full: retry"
+    SHUTTING_DOWN = 16, "the server is shutting down"
+    NO_CLIENT_ID = 17, "claim and release need a client id"
+    IDENTITY_MISMATCH = (
+        18,
+        "the request's client id is not the sender's iceoryx2 node: ids cannot be borrowed",
+    )
+    DEVICE_STARTING = (
+        19,
+        "the axis's board is starting: its link is not open yet, or it awaits its first answer and its start-up stop",
+    )
+    DEVICE_OFFLINE = 20, "the axis's board is not answering"
+    UNKNOWN_SIGNAL = 21, "no such signal on this server"
+    NOT_AN_OUTPUT = 22, "the signal is not a digital output"
+    UNKNOWN_TARGET = 23, "unknown target: 0 = axis, 1 = signal"
+
+
+class Target(TextedEnum):
+    """What ``CommandRequest.axis`` indexes (``CommandRequest.target``)."""
+
+    AXIS = 0
+    SIGNAL = 1
+
+
+class DeviceState(TextedEnum):
+    """Where a board is in its life (``MotionFrame.devices``, ``AxisState.device_state``,
+    ``DeviceInfo.state``)."""
+
+    OFFLINE = 0, "offline"
+    ONLINE = 1, "online"
+    STARTING = 2, "starting"
+    FAULTED = 3, "faulted"
+
+
+class AxisMode(TextedEnum):
+    """What an axis is doing (``AxisState.mode``)."""
+
+    OFF = 0
+    HOLD = 1
+    POWER = 2
+    POSITION = 3
+    VELOCITY = 4
+    RAMP_POSITION = 5
+    RAMP_VELOCITY = 6
+    HOMING = 7
+    STOPPING = 8
+
+
+class FaultCode(TextedEnum):
+    """Why an axis is faulted (``AxisState.fault``); 0 = no fault."""
+
+    NONE = 0, "none"
+    LINK_DOWN = 1, "link-down"
+    BOARD_NOT_RESPONDING = 2, "board-not-responding"
+    BOARD_RESET = 3, "board-reset"
+    BOARD_ERROR = 4, "board-error"
+    PROTOCOL = 5, "protocol"
+    OVERSPEED = 6, "overspeed"
+    LIMIT_SWITCH = 7, "limit-switch"
+    OVERRUN = 8, "overrun"
+    FOLLOWING_ERROR = 9, "following-error"
+    LIMIT_EXCEEDED = 10, "limit-exceeded"
+    HOME_FAILED = 11, "home-failed"
+
+
+class SignalKind(TextedEnum):
+    """What a signal is (``SignalState.kind``, ``SignalInfo.kind``); the text is its config name."""
+
+    DIGITAL_IN = 1, "digital-in"
+    DIGITAL_OUT = 2, "digital-out"
+    ANALOG_IN = 3, "analog-in"
+
+
+class EstopCategory(TextedEnum):
+    """What an e-stop (and a fault) does to an axis, IEC 60204-1 stop categories
+    (``AxisInfo.estop``); the text is its config name."""
+
+    HOLD = 0, "hold"
+    STOP_OFF = 1, "stop-off"
+    OFF = 2, "off"
+
+
+class DeviceModel(TextedEnum):
+    """The board model of a device (``DeviceInfo.model``); the text is its config id."""
+
+    QQ2DRV = 1, "qq2drv"
+    TMCPACK = 2, "tmcpack"
+    SPIMOTOR = 3, "spimotor"
+    QSB = 4, "qsb"
+
+
+class ParamOwner(TextedEnum):
+    """What a machine parameter belongs to (``MachineParam.owner_kind``)."""
+
+    DEVICE = 1
+    AXIS = 2
+
+
+class AxisFlags(enum.IntFlag):
+    """Bits of ``AxisState.flags``."""
+
+    MOVING = 1 << 0
+    HOMED = 1 << 1
+    AT_LIMIT = 1 << 2
+    STALE = 1 << 3
+    FAULT = 1 << 4
+    CLAIMED = 1 << 5
+    ARRIVED = 1 << 6
+    ESTOPPED = 1 << 7
+    DEADMAN_EXPIRED = 1 << 8
+
+
+class FrameFlags(enum.IntFlag):
+    """Bits of ``MotionFrame.flags``."""
+
+    ESTOP_LATCHED = 1 << 0
+    OVERRUN = 1 << 1
+    SHUTTING_DOWN = 1 << 2
+
+
+class SignalFlags(enum.IntFlag):
+    """Bits of ``SignalState.flags``."""
+
+    STALE = 1 << 0
+    CLAIMED = 1 << 1
+    SAFE_STATE = 1 << 2
+    PENDING = 1 << 3
+
+
+class SignalInfoFlags(enum.IntFlag):
+    """Bits of ``SignalInfo.flags``."""
+
+    INVERT = 1 << 0
+    HAS_SAFE_STATE = 1 << 1
+    SAFE_ON = 1 << 2
+
+
+class RtFlags(enum.IntFlag):
+    """Bits of ``ServerStats.rt_flags``."""
+
+    FIFO = 1 << 0
+    LOCKED = 1 << 1
+    PINNED = 1 << 2
+    DMA_LATENCY = 1 << 3
+
+
+class FullServices(enum.IntFlag):
+    """Bits of ``ServerStats.full_services``: services whose port slots are all taken."""
+
+    FRAME = 1 << 0
+    TICK = 1 << 1
+    COMMAND = 1 << 2
+    INFO = 1 << 3
+    STATS = 1 << 4
+    PARAMS = 1 << 5
+    ESTOP = 1 << 6
+
+
+#: Every enumeration and flag set, by Rust type name.
+ENUMS: Dict[str, type] = {
+    "CommandKind": CommandKind,
+    "Reason": Reason,
+    "Target": Target,
+    "DeviceState": DeviceState,
+    "AxisMode": AxisMode,
+    "FaultCode": FaultCode,
+    "SignalKind": SignalKind,
+    "EstopCategory": EstopCategory,
+    "DeviceModel": DeviceModel,
+    "ParamOwner": ParamOwner,
+    "AxisFlags": AxisFlags,
+    "FrameFlags": FrameFlags,
+    "SignalFlags": SignalFlags,
+    "SignalInfoFlags": SignalInfoFlags,
+    "RtFlags": RtFlags,
+    "FullServices": FullServices,
+}
