@@ -24,8 +24,8 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-use crate::keys::{DEFAULT_PORT, check_chunk};
 use crate::policy::{DEFAULT_BURST, DEFAULT_RATE, KindSet, RemoteRule};
+use motion_wire::keys::{DEFAULT_PORT, check_chunk};
 
 /// Default frames per second.
 pub const DEFAULT_FRAME_RATE: f64 = 100.0;

@@ -5,37 +5,34 @@
 //! command service. motiond itself stays free of network code: the bridge is its own
 //! process, an ordinary client of the server.
 //!
-//! - [`wire`]: the payloads as bytes (C layout, little-endian) — the network contract,
-//!   shared with `motion-client`'s `zenoh` transport.
-//! - [`keys`]: key expressions, attachments and the bridge's own refusals.
-//! - `policy` (feature `server`): allow-lists, the sessions the bridge issues, rate limits
-//!   (one bucket per `[[remote]]` entry), lateness, claims per remote.
-//! - `Bridge` (feature `server`) and the `motion-bridge` binary.
+//! The network contract (key expressions, attachments, refusals, the payloads as bytes and
+//! the JSON state) is the `motion-wire` crate, shared with `motion-client`'s `zenoh`
+//! transport. Here:
+//! - [`policy`]: allow-lists, the sessions the bridge issues, rate limits (one bucket per
+//!   `[[remote]]` entry), lateness, claims per remote.
+//! - [`config`]: the bridge's config file and command line.
+//! - [`Bridge`] and the `motion-bridge` binary.
 //!
 //! `crates/motion-bridge/README.md` has the two-terminal example, the config file, the
-//! security model (identities, zenoh access control and TLS) and measured latencies.
+//! security model (identities, zenoh access control and TLS) and measured latencies; the
+//! tests that drive a bridge through `motion-client` are in `crates/motion-bridge-tests`.
 //!
 //! ```
-//! use motion_bridge::keys::Keys;
+//! use std::path::Path;
 //!
-//! let keys = Keys::new("demo").expect("a plain name");
-//! assert_eq!(keys.frame(), "motiond/demo/frame");
-//! assert_eq!(keys.command("panel"), "motiond/demo/command/panel");
+//! use motion_bridge::config::{BridgeConfig, Overrides};
+//!
+//! let text = "server = \"demo\"\nlisten = [\"tcp/127.0.0.1:7447\"]\n";
+//! let config = BridgeConfig::parse(text, Path::new("bridge.toml"), Overrides::default())
+//!     .expect("a valid config");
+//! assert_eq!(config.server, "demo");
+//! assert_eq!(config.listen, ["tcp/127.0.0.1:7447"]);
 //! ```
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
-pub mod keys;
-pub mod wire;
-
-#[cfg(feature = "server")]
 mod bridge;
-#[cfg(feature = "server")]
 pub mod config;
-#[cfg(feature = "server")]
-mod json;
-#[cfg(feature = "server")]
 pub mod policy;
 
-#[cfg(feature = "server")]
 pub use bridge::{Bridge, BridgeError, zenoh_config};

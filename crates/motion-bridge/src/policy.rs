@@ -25,7 +25,7 @@ use motion_ipc::{
     SCHEMA_VERSION, SignalFlags, Target,
 };
 
-use crate::keys::{Refusal, RequestMeta, SessionId, SessionOpen, SessionToken};
+use motion_wire::keys::{Refusal, RequestMeta, SessionId, SessionOpen, SessionToken};
 
 mod session;
 

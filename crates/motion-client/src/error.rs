@@ -110,14 +110,17 @@ pub enum ConnectError {
         /// What zenoh or the bridge said.
         why: String,
     },
-    /// zenoh failed (remote clients, feature `zenoh`).
+    /// The zenoh transport could not be set up (remote clients, feature `zenoh`).
     #[error("zenoh could not {what}: {detail}")]
     Network {
         /// What was being done.
         what: &'static str,
-        /// zenoh's error.
+        /// What is missing.
         detail: String,
     },
+    /// zenoh or the wire codec failed (remote clients, feature `zenoh`): their error kept.
+    #[error(transparent)]
+    Remote(#[from] crate::RemoteError),
 }
 
 /// The server that answered is not the one this client was talking to: it restarted (a new
@@ -360,9 +363,12 @@ pub enum ClientError {
     Network {
         /// What was being done.
         what: &'static str,
-        /// zenoh's error, or what is missing.
+        /// What is missing.
         detail: String,
     },
+    /// zenoh or the wire codec failed (remote clients, feature `zenoh`): their error kept.
+    #[error(transparent)]
+    Remote(#[from] crate::RemoteError),
 }
 
 impl ClientError {

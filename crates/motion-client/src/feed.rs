@@ -11,7 +11,7 @@ use zenoh::handlers::RingChannelHandler;
 use zenoh::pubsub::Subscriber;
 use zenoh::sample::Sample;
 
-use crate::ClientError;
+use crate::{ClientError, RemoteError};
 
 /// A payload received over the network: a copy, with the node id of the server that wrote
 /// it.
@@ -23,13 +23,6 @@ pub(crate) struct Owned<T> {
 impl<T: fmt::Debug> fmt::Debug for Owned<T> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         self.value.fmt(f)
-    }
-}
-
-pub(crate) fn network(what: &'static str, error: impl fmt::Display) -> ClientError {
-    ClientError::Network {
-        what,
-        detail: error.to_string(),
     }
 }
 
@@ -86,7 +79,7 @@ impl<T> Feed<T> {
             None => match subscriber.try_recv() {
                 Ok(Some(sample)) => sample,
                 Ok(None) => return Ok(None),
-                Err(error) => return Err(network("receive a sample", error)),
+                Err(error) => return Err(RemoteError::zenoh("receive a sample", error).into()),
             },
         };
         (self.decode)(&sample, &self.server).map(Some)
@@ -107,7 +100,7 @@ impl<T> Feed<T> {
                 Ok(true)
             }
             Ok(None) => Ok(false),
-            Err(error) => Err(network("wait for a sample", error)),
+            Err(error) => Err(RemoteError::zenoh("wait for a sample", error).into()),
         }
     }
 }

@@ -106,6 +106,7 @@ mod ready;
 mod received;
 #[cfg(feature = "zenoh")]
 pub mod remote;
+mod remote_error;
 mod session;
 mod signal;
 #[cfg(feature = "testing")]
@@ -125,4 +126,5 @@ pub use iceoryx2_error::Iceoryx2Error;
 pub use jog::JogGuard;
 pub use motion_ipc as ipc;
 pub use received::Received;
+pub use remote_error::{RemoteError, RemoteSource};
 pub use signal::{Signal, signal_value_text};

@@ -8,11 +8,11 @@ use std::cell::RefCell;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use motion_bridge::keys::{
+use motion_ipc::{CommandKind, CommandReply, CommandRequest};
+use motion_wire::keys::{
     Keys, Origin, Refusal, RequestMeta, SessionGrant, SessionOpen, SessionToken,
 };
-use motion_bridge::wire::{self, Payload, WireError};
-use motion_ipc::{CommandKind, CommandReply, CommandRequest, SCHEMA_VERSION};
+use motion_wire::wire::{self, Payload};
 use zenoh::Wait as _;
 use zenoh::handlers::RingChannel;
 use zenoh::liveliness::LivelinessToken;
@@ -23,16 +23,16 @@ use std::rc::Rc;
 use iceoryx2::service::Service;
 use motion_ipc::{MachineParams, ServerStats};
 
-use crate::feed::{Feed, Owned, network};
+use crate::feed::{Feed, Owned};
 use crate::received::LatestCache;
 use crate::received::Received;
-use crate::{ClientError, ConnectError};
+use crate::{ClientError, ConnectError, RemoteError};
 
 /// Samples a feed keeps when the program does not read them (the oldest go first, as
 /// over shared memory).
 const FEED_DEPTH: usize = 32;
 /// The identity a client uses when none is given.
-pub const DEFAULT_IDENTITY: &str = motion_bridge::keys::ANONYMOUS;
+pub const DEFAULT_IDENTITY: &str = motion_wire::keys::ANONYMOUS;
 
 /// Where and as whom a remote client connects (remote when `endpoint` is set).
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -52,17 +52,9 @@ impl Default for RemoteOptions {
     }
 }
 
-fn schema_error(server: &str, error: WireError) -> ClientError {
-    ClientError::Connect(ConnectError::SchemaMismatch {
-        name: format!("{server} ({error})"),
-        server: 0,
-        client: SCHEMA_VERSION,
-    })
-}
-
 fn owned<T: Payload>(sample: &Sample, server: &str) -> Result<Owned<T>, ClientError> {
     let value = wire::decode_boxed::<T>(&sample.payload().to_bytes())
-        .map_err(|error| schema_error(server, error))?;
+        .map_err(|error| RemoteError::payload(server, error))?;
     let origin = sample
         .attachment()
         .and_then(|bytes| Origin::decode(&bytes.to_bytes()))
@@ -114,10 +106,14 @@ fn bad_name(error: impl fmt::Display, name: &str) -> ConnectError {
 
 /// zenoh's config of a remote client: `base` (TLS, credentials) if given, client mode,
 /// connecting to `endpoint`, no multicast scouting.
-pub(crate) fn zenoh_config(base: Option<&Path>, endpoint: &str) -> Result<zenoh::Config, String> {
+pub(crate) fn zenoh_config(
+    base: Option<&Path>,
+    endpoint: &str,
+) -> Result<zenoh::Config, RemoteError> {
     let mut config = match base {
-        Some(path) => zenoh::Config::from_file(path)
-            .map_err(|error| format!("zenoh config {}: {error}", path.display()))?,
+        Some(path) => zenoh::Config::from_file(path).map_err(|error| {
+            RemoteError::zenoh(format!("read its config {}", path.display()), error)
+        })?,
         None => zenoh::Config::default(),
     };
     let endpoints = format!("[\"{}\"]", endpoint.replace(['"', '\\'], ""));
@@ -126,9 +122,9 @@ pub(crate) fn zenoh_config(base: Option<&Path>, endpoint: &str) -> Result<zenoh:
         ("scouting/multicast/enabled", "false"),
         ("connect/endpoints", endpoints.as_str()),
     ] {
-        config
-            .insert_json5(key, value)
-            .map_err(|error| format!("zenoh config {key} = {value}: {error}"))?;
+        config.insert_json5(key, value).map_err(|error| {
+            RemoteError::zenoh(format!("set {key} = {value} in its config"), error)
+        })?;
     }
     Ok(config)
 }
@@ -145,14 +141,9 @@ impl Link {
         deadline: Instant,
     ) -> Result<Self, ConnectError> {
         let keys = Keys::new(server).map_err(|error| bad_name(error, server))?;
-        motion_bridge::keys::check_chunk("remote identity", &options.identity)
+        motion_wire::keys::check_chunk("remote identity", &options.identity)
             .map_err(|error| bad_name(error, &options.identity))?;
-        let config = zenoh_config(options.zenoh_config.as_deref(), endpoint).map_err(|detail| {
-            ConnectError::Network {
-                what: "configure zenoh",
-                detail,
-            }
-        })?;
+        let config = zenoh_config(options.zenoh_config.as_deref(), endpoint)?;
         let session = loop {
             match zenoh::open(config.clone()).wait() {
                 Ok(session) => break session,
@@ -198,7 +189,7 @@ impl Link {
             .timeout(timeout)
             .express(true)
             .wait()
-            .map_err(|error| network("open a session", error))?;
+            .map_err(|error| RemoteError::zenoh("ask the bridge for a session", error))?;
         let answer = match replies.recv_timeout(timeout) {
             Ok(Some(answer)) => answer,
             Ok(None) | Err(_) => {
@@ -231,7 +222,7 @@ impl Link {
             .liveliness()
             .declare_token(self.keys.remote_token(&self.identity, grant.session))
             .wait()
-            .map_err(|error| network("declare this client's liveliness", error))?;
+            .map_err(|error| RemoteError::zenoh("declare this client's liveliness", error))?;
         *self.granted.borrow_mut() = Some(Granted {
             grant,
             _token: token,
@@ -291,14 +282,14 @@ impl Link {
         &self,
         key: &str,
         subscribe: bool,
-    ) -> Result<Feed<T>, ClientError> {
+    ) -> Result<Feed<T>, RemoteError> {
         let subscriber = if subscribe {
             Some(
                 self.session
                     .declare_subscriber(key)
                     .with(RingChannel::new(FEED_DEPTH))
                     .wait()
-                    .map_err(|error| network("subscribe", error))?,
+                    .map_err(|error| RemoteError::zenoh(format!("subscribe to {key}"), error))?,
             )
         } else {
             None
@@ -376,7 +367,7 @@ impl Link {
             .timeout(timeout)
             .express(true)
             .wait()
-            .map_err(|error| network("send a command", error))?;
+            .map_err(|error| RemoteError::zenoh("send a command", error))?;
         let answer = match replies.recv_timeout(timeout) {
             Ok(Some(answer)) => answer,
             Ok(None) => {
@@ -399,7 +390,7 @@ impl Link {
         match answer.result() {
             Ok(sample) => {
                 let reply = wire::decode::<CommandReply>(&sample.payload().to_bytes())
-                    .map_err(|error| schema_error(&self.server, error))?;
+                    .map_err(|error| RemoteError::payload(&self.server, error))?;
                 let origin = sample
                     .attachment()
                     .and_then(|bytes| Origin::decode(&bytes.to_bytes()))

@@ -3,7 +3,7 @@
 //!
 //! [`ClientBuilder::remote`](crate::ClientBuilder::remote) makes a client that reads the
 //! server's description, frames, statistics and machine parameters from the bridge's zenoh
-//! key expressions (the `motion-ipc` C layouts, little-endian: `motion_bridge::wire`) and
+//! key expressions (the `motion-ipc` C layouts, little-endian: `motion_wire::wire`) and
 //! sends commands through the bridge's command queryable under an identity
 //! ([`ClientBuilder::identity`](crate::ClientBuilder::identity)) whose allow-list the bridge
 //! applies. Payloads are copies (nothing is in shared memory here); everything else —
@@ -38,7 +38,7 @@ pub use crate::link::DEFAULT_IDENTITY;
 use crate::link::Link;
 use crate::received::LatestCache;
 use crate::session::Session;
-use crate::{Client, ClientBuilder, ConnectError};
+use crate::{Client, ClientBuilder, ClientError, ConnectError};
 
 impl<S: Service> Client<S> {
     /// Connects through the bridge of `remote` (see [`ClientBuilder::remote`]).
@@ -53,12 +53,7 @@ impl<S: Service> Client<S> {
         let link = Link::open(&options.remote, endpoint, &server, deadline)?;
         let info_key = link.keys().info();
         // Subscribe first, so that no description published meanwhile is missed.
-        let feed =
-            link.feed::<ServerInfo>(&info_key, true)
-                .map_err(|error| ConnectError::Network {
-                    what: "subscribe to the server description",
-                    detail: error.to_string(),
-                })?;
+        let feed = link.feed::<ServerInfo>(&info_key, true)?;
         let first = link
             .first::<ServerInfo>(&info_key, deadline)
             .map_err(|why| ConnectError::NoBridge {
@@ -82,9 +77,13 @@ impl<S: Service> Client<S> {
         );
         feed.push(first);
         let info = LatestCache::remote(feed);
-        info.refresh().map_err(|error| ConnectError::Network {
-            what: "read the server description",
-            detail: error.to_string(),
+        info.refresh().map_err(|error| match error {
+            ClientError::Remote(error) => ConnectError::Remote(error),
+            ClientError::Connect(error) => error,
+            other => ConnectError::Network {
+                what: "read the server description",
+                detail: other.to_string(),
+            },
         })?;
         let id = motion_ipc::ClientId::from_u128(node.id().value());
         Ok(Self {

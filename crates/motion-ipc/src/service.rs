@@ -2,7 +2,9 @@
 
 /// The iceoryx2 service names of the instance called `name` (`[server] name` in the
 /// config): `motiond/<name>/frame`, `…/tick`, `…/command`, `…/info`, `…/stats`,
-/// `…/params`, `…/estop`.
+/// `…/params`, `…/estop`. The one place these names are spelt: the network contract
+/// (`motion-wire`'s key expressions) builds its keys on them, with [`ServiceNames::under`]
+/// for the keys it adds.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct ServiceNames {
     prefix: String,
@@ -16,47 +18,48 @@ impl ServiceNames {
         }
     }
 
-    fn join(&self, leaf: &str) -> String {
+    /// `motiond/<name>/<leaf>`: any name under this instance's prefix.
+    pub fn under(&self, leaf: &str) -> String {
         format!("{}{leaf}", self.prefix)
     }
 
     /// Publish-subscribe, history 1: one [`MotionFrame`](crate::MotionFrame) per tick.
     pub fn frame(&self) -> String {
-        self.join("frame")
+        self.under("frame")
     }
 
     /// Event: notified after every frame.
     pub fn tick(&self) -> String {
-        self.join("tick")
+        self.under("tick")
     }
 
     /// Request-response: [`CommandRequest`](crate::CommandRequest) →
     /// [`CommandReply`](crate::CommandReply).
     pub fn command(&self) -> String {
-        self.join("command")
+        self.under("command")
     }
 
     /// Publish-subscribe, history 1: [`ServerInfo`](crate::ServerInfo).
     pub fn info(&self) -> String {
-        self.join("info")
+        self.under("info")
     }
 
     /// Publish-subscribe, about 1 Hz: [`ServerStats`](crate::ServerStats).
     pub fn stats(&self) -> String {
-        self.join("stats")
+        self.under("stats")
     }
 
     /// Publish-subscribe, history 1: [`MachineParams`](crate::MachineParams), the machine
     /// parameters in effect.
     pub fn params(&self) -> String {
-        self.join("params")
+        self.under("params")
     }
 
     /// Event: any notification latches the e-stop. Its own ports, separate from the
     /// command service's, so that an e-stop gets through when the command service's client
     /// slots are exhausted.
     pub fn estop(&self) -> String {
-        self.join("estop")
+        self.under("estop")
     }
 
     /// The iceoryx2 node name the server runs under (`motiond-<name>`): how a client finds

@@ -1,11 +1,13 @@
 //! `list` and `status`, as text tables or JSON; the JSON and text views of an axis, a device
-//! and a frame are shared with `watch`.
+//! and a frame are shared with `watch`, and the JSON of an axis, the devices and a frame
+//! with the bridge's JSON state (`motion_wire::json`).
 
 use motion_client::ipc::{
-    AxisFlags, AxisInfo, AxisState, CommandKind, DeviceModel, DeviceState, FaultCode, FrameFlags,
-    MotionFrame, ServerInfo, ServerStats, read_text,
+    AxisFlags, AxisInfo, AxisState, CommandKind, DeviceModel, DeviceState, FrameFlags, MotionFrame,
+    ServerInfo, ServerStats, read_text,
 };
 use motion_client::{Client, Params};
+use motion_wire::json;
 use serde_json::{Value, json};
 
 use crate::Service;
@@ -27,22 +29,10 @@ pub fn fault_name(state: &AxisState) -> Option<String> {
     state.fault_name()
 }
 
-/// The fault in words ([`FaultCode::explain`]), `None` when the axis has none.
+/// The fault in words ([`FaultCode::explain`](motion_client::ipc::FaultCode::explain)),
+/// `None` when the axis has none.
 pub fn fault_text(axis: &AxisInfo, state: &AxisState) -> Option<String> {
-    match state.fault() {
-        Ok(FaultCode::None) => None,
-        Ok(code) => Some(code.explain(
-            axis.name(),
-            state.fault_value,
-            state.fault_limit,
-            axis.unit(),
-        )),
-        Err(error) => Some(format!(
-            "axis `{}`: fault {} (unknown to this motionctl)",
-            axis.name(),
-            error.0
-        )),
-    }
+    json::fault_text(axis, state, "motionctl")
 }
 
 /// The e-stop category as the config spells it.
@@ -128,30 +118,6 @@ pub fn info_json(info: &ServerInfo, params: &ParamTable) -> Value {
     value
 }
 
-/// One axis's state in a frame as JSON.
-pub fn axis_state_json(info: &AxisInfo, state: &AxisState, tick: u64) -> Value {
-    let faulted = fault_name(state).is_some();
-    json!({
-        "name": info.name(),
-        "unit": info.unit(),
-        "device": info.device(),
-        "device_state": state.device_state().map_or("unknown", DeviceState::name),
-        "position": state.position,
-        "velocity": state.velocity,
-        "target": state.target,
-        "raw_counts": state.raw_counts,
-        "mode": mode_name(state),
-        "flags": flag_names(state.flags()),
-        "fault": fault_name(state),
-        "fault_text": fault_text(info, state),
-        "fault_value": if faulted { json!(state.fault_value) } else { Value::Null },
-        "fault_limit": if faulted { json!(state.fault_limit) } else { Value::Null },
-        "last_refresh_tick": state.last_refresh_tick,
-        "age_ticks": tick.saturating_sub(state.last_refresh_tick),
-        "claimed_by": if state.claimed_by.is_none() { Value::Null } else { json!(format!("{:032x}", state.claimed_by.as_u128())) },
-    })
-}
-
 /// Server figures as JSON.
 pub fn stats_json(stats: &ServerStats) -> Value {
     let latency = |summary: &motion_client::ipc::LatencySummary| {
@@ -204,21 +170,6 @@ pub fn stats_json(stats: &ServerStats) -> Value {
     })
 }
 
-/// The devices and their states in a frame as JSON.
-pub fn devices_json(info: &ServerInfo, frame: &MotionFrame) -> Vec<Value> {
-    info.devices()
-        .iter()
-        .enumerate()
-        .map(|(index, device)| {
-            json!({
-                "name": device.name(),
-                "state": frame.device_state(index).name(),
-                "firmware": device.firmware(),
-            })
-        })
-        .collect()
-}
-
 /// A frame (the chosen axes, every device and signal) as JSON.
 pub fn frame_json(info: &ServerInfo, frame: &MotionFrame, axes: &[usize]) -> Value {
     let states: Vec<Value> = axes
@@ -226,7 +177,7 @@ pub fn frame_json(info: &ServerInfo, frame: &MotionFrame, axes: &[usize]) -> Val
         .filter_map(|&index| {
             let state = frame.axes().get(index)?;
             let axis = info.axes().get(index)?;
-            let mut value = axis_state_json(axis, state, frame.tick);
+            let mut value = json::axis_state(axis, state, frame.tick, "motionctl");
             if let Some(wire) = frame.wire().get(index) {
                 value["goal_tick"] = json!(wire.goal_tick);
                 value["wire_tick"] = if wire.written() {
@@ -250,15 +201,7 @@ pub fn frame_json(info: &ServerInfo, frame: &MotionFrame, axes: &[usize]) -> Val
         .enumerate()
         .map(|(index, (signal, state))| signal_state_json(index, signal, state, frame.tick))
         .collect();
-    json!({
-        "tick": frame.tick,
-        "time_ns": frame.time_ns,
-        "estop": frame.flags().contains(FrameFlags::ESTOP_LATCHED),
-        "shutting_down": frame.flags().contains(FrameFlags::SHUTTING_DOWN),
-        "devices": devices_json(info, frame),
-        "axes": states,
-        "signals": signals,
-    })
+    json::frame(info, frame, states, signals)
 }
 
 /// Axis indices for the names given (all axes when none).

@@ -8,6 +8,7 @@ use motion_client::ipc::{
     MotionFrame, ServerInfo, SignalFlags, SignalInfo, SignalInfoFlags, SignalKind, SignalState,
 };
 use motion_client::{Client, ClientError, signal_value_text};
+use motion_wire::json::{self, signal_kind_name};
 use ratatui::layout::{Constraint, Layout};
 use ratatui::style::{Modifier, Style};
 use ratatui::widgets::{Cell, Paragraph, Row, Table};
@@ -20,13 +21,6 @@ use crate::terminal::{Screen, quit_requested};
 /// Names of the set flags, in bit order.
 pub fn signal_flag_names(flags: SignalFlags) -> Vec<&'static str> {
     flags.names()
-}
-
-fn kind_name(info: &SignalInfo) -> String {
-    info.kind().map_or_else(
-        |error| format!("kind {}", error.0),
-        |kind| kind.name().to_owned(),
-    )
 }
 
 fn is_digital(info: &SignalInfo) -> bool {
@@ -56,7 +50,7 @@ pub fn signal_info_json(index: usize, info: &SignalInfo) -> Value {
         "device": info.device(),
         "device_index": info.device_index,
         "pin": info.pin(),
-        "kind": kind_name(info),
+        "kind": signal_kind_name(info),
         "unit": info.unit(),
         "invert": info.flags().contains(SignalInfoFlags::INVERT),
         "safe": safe_name(info),
@@ -67,24 +61,11 @@ pub fn signal_info_json(index: usize, info: &SignalInfo) -> Value {
 }
 
 /// A signal's state in a frame as JSON (with the description's name, device, pin, kind and
-/// unit).
+/// unit): the bridge's view of it (`motion_wire::json`) and its value as text.
 pub fn signal_state_json(index: usize, info: &SignalInfo, state: &SignalState, tick: u64) -> Value {
-    json!({
-        "index": index,
-        "name": info.name(),
-        "device": info.device(),
-        "pin": info.pin(),
-        "kind": kind_name(info),
-        "unit": info.unit(),
-        "value": state.value,
-        "raw": state.raw,
-        "on": if is_digital(info) { json!(state.is_on()) } else { Value::Null },
-        "text": signal_value_text(info, state.value),
-        "flags": signal_flag_names(state.flags()),
-        "last_refresh_tick": state.last_refresh_tick,
-        "age_ticks": tick.saturating_sub(state.last_refresh_tick),
-        "claimed_by": if state.claimed_by.is_none() { Value::Null } else { json!(format!("{:032x}", state.claimed_by.as_u128())) },
-    })
+    let mut value = json::signal_state(index, info, state, tick);
+    value["text"] = json!(signal_value_text(info, state.value));
+    value
 }
 
 /// The signal table: with a frame, values and flags; without, the configuration.
@@ -128,7 +109,7 @@ pub fn signals_text(info: &ServerInfo, frame: Option<&MotionFrame>) -> Vec<Strin
             signal.name(),
             signal.device(),
             signal.pin(),
-            kind_name(signal),
+            signal_kind_name(signal),
             signal.unit(),
             value,
             flags
@@ -269,7 +250,7 @@ pub fn signal_table<'a>(info: &'a ServerInfo, frame: &MotionFrame) -> Table<'a> 
             Cell::from(signal.name().to_owned()),
             Cell::from(value),
             Cell::from(signal.unit().to_owned()),
-            Cell::from(kind_name(signal)),
+            Cell::from(signal_kind_name(signal)),
             Cell::from(format!("{}/{}", signal.device(), signal.pin())),
             Cell::from(signal_flag_names(state.flags()).join(",")),
         ])

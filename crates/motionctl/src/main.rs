@@ -258,6 +258,7 @@ fn exit_status(error: &anyhow::Error) -> u8 {
                 ClientError::ServerRestarted(_)
                 | ClientError::NotPublished { .. }
                 | ClientError::Network { .. }
+                | ClientError::Remote(_)
                 | ClientError::Ipc { .. } => exit::FAILURE,
             };
         }

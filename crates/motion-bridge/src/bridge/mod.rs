@@ -9,6 +9,7 @@
 //! for every axis still running that remote's jog and releases its claims; on its own exit
 //! it stops every remote jog.
 
+mod error;
 mod net;
 mod server;
 mod sessions;
@@ -29,14 +30,15 @@ use motion_ipc::{
 use zenoh::Wait as _;
 use zenoh::query::Query;
 
+pub use error::BridgeError;
 pub use net::zenoh_config;
 
 use self::net::Net;
 use self::server::{Ipc, Pending, ServerPorts};
 use crate::config::BridgeConfig;
-use crate::keys::{Keys, Origin, Refusal, RequestMeta};
 use crate::policy::{Policy, Remote, Verdict, is_safety};
-use crate::wire::{self, Payload};
+use motion_wire::keys::{Keys, Origin, Refusal, RequestMeta};
+use motion_wire::wire::{self, Payload};
 
 /// How long the loop sleeps at most between looks at the server.
 const POLL: Duration = Duration::from_millis(5);
@@ -76,21 +78,6 @@ pub(crate) enum Event {
     Read(Read, Query),
     /// A remote client's liveliness token appeared or went.
     Remote { key: String, alive: bool },
-}
-
-/// Why the bridge could not start or run.
-#[derive(Debug, thiserror::Error)]
-pub enum BridgeError {
-    /// The key expressions cannot be made from the server name.
-    #[error(transparent)]
-    Name(#[from] crate::keys::BadName),
-    /// zenoh or iceoryx2 could not be set up.
-    #[error("{0}")]
-    Setup(String),
-    /// The allow-list lets remotes do more than stop and e-stop, but zenoh authenticates
-    /// nobody, and `--insecure` was not given.
-    #[error("{0}")]
-    Insecure(String),
 }
 
 /// The newest sample of a service, as received and as bytes for the network.
@@ -181,8 +168,7 @@ impl Bridge {
         let node = server::node(
             "motion-bridge",
             SignalHandlingMode::HandleTerminationRequests,
-        )
-        .map_err(BridgeError::Setup)?;
+        )?;
         let (sender, events) = std::sync::mpsc::channel();
         let queued_queries = Arc::new(AtomicUsize::new(0));
         let zenoh = zenoh_config(
@@ -190,10 +176,9 @@ impl Bridge {
             "peer",
             &config.listen,
             &config.connect,
-        )
-        .map_err(BridgeError::Setup)?;
+        )?;
         net::check_exposure(&config, &zenoh)?;
-        let net = Net::open(zenoh, &keys, &sender, &queued_queries).map_err(BridgeError::Setup)?;
+        let net = Net::open(zenoh, &keys, &sender, &queued_queries)?;
         let tick_pending = Arc::new(AtomicBool::new(false));
         let ticker_stop = Arc::new(AtomicBool::new(false));
         let ticker = server::spawn_ticker(
@@ -202,7 +187,7 @@ impl Bridge {
             Arc::clone(&tick_pending),
             Arc::clone(&ticker_stop),
         )
-        .map_err(|error| BridgeError::Setup(format!("cannot start a thread: {error}")))?;
+        .map_err(BridgeError::Thread)?;
         let bridge_id = ClientId::from_u128(node.id().value());
         let now = Instant::now();
         let policy = Policy::new(config.remotes.clone(), config.max_delay);
@@ -353,7 +338,7 @@ impl Bridge {
         if failure.is_some() || now.duration_since(self.last_frame_at) > SILENCE {
             tracing::warn!(
                 server = %self.config.server,
-                why = failure.as_deref().unwrap_or("no frame for a second"),
+                why = failure.map_or_else(|| "no frame for a second".to_owned(), |error| error.to_string()),
                 "motiond gone; looking for it again"
             );
             self.drop_server();
@@ -381,7 +366,7 @@ impl Bridge {
     }
 
     /// Frames since the last look: every `tick_hz / frame_rate`-th published.
-    fn take_frames(&mut self, now: Instant) -> Result<(), String> {
+    fn take_frames(&mut self, now: Instant) -> Result<(), BridgeError> {
         let Some(ports) = self.server.as_ref() else {
             return Ok(());
         };
@@ -450,7 +435,12 @@ impl Bridge {
         let (Some(info), Some((frame, _))) = (&self.info, &self.frame) else {
             return;
         };
-        let state = crate::json::state(&info.value, frame, &self.policy);
+        let policy = &self.policy;
+        let state = motion_wire::json::state(&info.value, frame, |target, index| {
+            policy
+                .holder(target, index)
+                .map(|remote| remote.identity.as_str())
+        });
         match serde_json::to_vec(&state) {
             Ok(bytes) => {
                 if let Err(error) = self.net.json.put(bytes).wait() {
@@ -653,7 +643,7 @@ impl Bridge {
                     Refusal::NoServer,
                     "no motiond serves the command service",
                 ),
-                Err(why) => refuse(job.query.as_ref(), Refusal::NoServer, &why),
+                Err(error) => refuse(job.query.as_ref(), Refusal::NoServer, &error.to_string()),
             }
         }
     }
@@ -694,8 +684,12 @@ impl Bridge {
                     true
                 }
                 Ok(None) => false,
-                Err(why) => {
-                    refuse(flight.job.query.as_ref(), Refusal::NoServer, &why);
+                Err(error) => {
+                    refuse(
+                        flight.job.query.as_ref(),
+                        Refusal::NoServer,
+                        &error.to_string(),
+                    );
                     true
                 }
             };

@@ -17,8 +17,8 @@ use zenoh::sample::SampleKind;
 
 use super::{BridgeError, Event, MAX_WAITING_QUERIES, Read, refuse};
 use crate::config::BridgeConfig;
-use crate::keys::{Keys, Refusal};
 use crate::policy::RemoteRule;
+use motion_wire::keys::{Keys, Refusal};
 
 /// Hands `event` (a query) to the loop, unless too many queries wait already.
 fn hand_over(events: &Sender<Event>, waiting: &AtomicUsize, event: Event) {
@@ -49,19 +49,21 @@ pub fn zenoh_config(
     mode: &str,
     listen: &[String],
     connect: &[String],
-) -> Result<zenoh::Config, String> {
+) -> Result<zenoh::Config, BridgeError> {
     let mut config = match base {
-        Some(path) => zenoh::Config::from_file(path)
-            .map_err(|error| format!("zenoh config {}: {error}", path.display()))?,
+        Some(path) => zenoh::Config::from_file(path).map_err(|error| {
+            BridgeError::zenoh(format!("read its config {}", path.display()), error)
+        })?,
         None => zenoh::Config::default(),
     };
     let list = |items: &[String]| {
-        serde_json::to_string(items).map_err(|error| format!("endpoints: {error}"))
+        serde_json::to_string(items)
+            .map_err(|error| BridgeError::zenoh("list the endpoints for its config", error))
     };
     let mut set = |key: &str, value: String| {
-        config
-            .insert_json5(key, &value)
-            .map_err(|error| format!("zenoh config {key} = {value}: {error}"))
+        config.insert_json5(key, &value).map_err(|error| {
+            BridgeError::zenoh(format!("set {key} = {value} in its config"), error)
+        })
     };
     set("mode", format!("\"{mode}\""))?;
     set("scouting/multicast/enabled", "false".to_owned())?;
@@ -175,10 +177,10 @@ impl Net {
         keys: &Keys,
         events: &Sender<Event>,
         waiting: &Arc<AtomicUsize>,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, BridgeError> {
         let session = zenoh::open(config)
             .wait()
-            .map_err(|error| format!("cannot open the zenoh session: {error}"))?;
+            .map_err(|error| BridgeError::zenoh("open the session", error))?;
         let publisher = |key: String, droppable: bool| {
             session
                 .declare_publisher(key.clone())
@@ -189,7 +191,7 @@ impl Net {
                 })
                 .express(true)
                 .wait()
-                .map_err(|error| format!("cannot declare a publisher on {key}: {error}"))
+                .map_err(|error| BridgeError::zenoh(format!("declare a publisher on {key}"), error))
         };
         let frame = publisher(keys.frame(), true)?;
         let json = publisher(keys.state_json(), true)?;
@@ -207,7 +209,7 @@ impl Net {
                     hand_over(&commands, &count, Event::Command(query, received));
                 })
                 .wait()
-                .map_err(|error| format!("cannot declare the command queryable: {error}"))?,
+                .map_err(|error| BridgeError::zenoh("declare the command queryable", error))?,
         );
         let opens = events.clone();
         let count = Arc::clone(waiting);
@@ -219,7 +221,7 @@ impl Net {
                     hand_over(&opens, &count, Event::Open(query, received));
                 })
                 .wait()
-                .map_err(|error| format!("cannot declare the session queryable: {error}"))?,
+                .map_err(|error| BridgeError::zenoh("declare the session queryable", error))?,
         );
         for (key, read) in [
             (keys.info(), Read::Info),
@@ -236,7 +238,9 @@ impl Net {
                         hand_over(&reads, &count, Event::Read(read, query));
                     })
                     .wait()
-                    .map_err(|error| format!("cannot declare a queryable on {key}: {error}"))?,
+                    .map_err(|error| {
+                        BridgeError::zenoh(format!("declare a queryable on {key}"), error)
+                    })?,
             );
         }
         let remotes_events = events.clone();
@@ -251,12 +255,12 @@ impl Net {
                 });
             })
             .wait()
-            .map_err(|error| format!("cannot watch remote clients: {error}"))?;
+            .map_err(|error| BridgeError::zenoh("watch remote clients' liveliness", error))?;
         let token = session
             .liveliness()
             .declare_token(keys.bridge_token())
             .wait()
-            .map_err(|error| format!("cannot declare the bridge's liveliness: {error}"))?;
+            .map_err(|error| BridgeError::zenoh("declare the bridge's liveliness", error))?;
         Ok(Self {
             session,
             frame,

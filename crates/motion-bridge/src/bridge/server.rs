@@ -21,7 +21,7 @@ use motion_ipc::{
     CommandReply, CommandRequest, MachineParams, MotionFrame, ServerInfo, ServerStats, ServiceNames,
 };
 
-use super::Event;
+use super::{BridgeError, Event};
 
 /// The service type of a real server.
 pub(crate) type Ipc = ipc::Service;
@@ -49,40 +49,40 @@ impl core::fmt::Debug for ServerPorts {
     }
 }
 
-fn service_name(name: &str) -> Result<ServiceName, String> {
-    ServiceName::new(name).map_err(|error| format!("`{name}`: {error:?}"))
+fn service_name(name: &str) -> Result<ServiceName, BridgeError> {
+    ServiceName::new(name)
+        .map_err(|error| BridgeError::ipc(format!("name a service `{name}`"), error))
 }
 
 fn subscriber<T: core::fmt::Debug + ZeroCopySend + 'static>(
     node: &Node<Ipc>,
     name: &str,
-) -> Result<Subscriber<Ipc, T, ()>, String> {
+) -> Result<Subscriber<Ipc, T, ()>, BridgeError> {
     node.service_builder(&service_name(name)?)
         .publish_subscribe::<T>()
         .open()
-        .map_err(|error| format!("cannot open {name}: {error:?}"))?
+        .map_err(|error| BridgeError::ipc(format!("open {name}"), error))?
         .subscriber_builder()
         .create()
-        .map_err(|error| format!("cannot subscribe to {name}: {error:?}"))
+        .map_err(|error| BridgeError::ipc(format!("subscribe to {name}"), error))
 }
 
 impl ServerPorts {
     /// Opens every service of the instance; the first failure says which.
-    pub(crate) fn open(node: &Node<Ipc>, names: &ServiceNames) -> Result<Self, String> {
+    pub(crate) fn open(node: &Node<Ipc>, names: &ServiceNames) -> Result<Self, BridgeError> {
         let command_name = names.command();
         let factory = node
             .service_builder(&service_name(&command_name)?)
             .request_response::<CommandRequest, CommandReply>()
             .open()
-            .map_err(|error| format!("cannot open {command_name}: {error:?}"))?;
+            .map_err(|error| BridgeError::ipc(format!("open {command_name}"), error))?;
         let max_in_flight = factory
             .static_config()
             .max_active_requests_per_client()
             .max(1);
-        let command = factory
-            .client_builder()
-            .create()
-            .map_err(|error| format!("cannot create a client of {command_name}: {error:?}"))?;
+        let command = factory.client_builder().create().map_err(|error| {
+            BridgeError::ipc(format!("create a client of {command_name}"), error)
+        })?;
         Ok(Self {
             frame: subscriber(node, &names.frame())?,
             info: subscriber(node, &names.info())?,
@@ -94,17 +94,17 @@ impl ServerPorts {
     }
 
     /// Sends `request`; `None` when no server takes requests on the service.
-    pub(crate) fn send(&self, request: CommandRequest) -> Result<Option<Pending>, String> {
+    pub(crate) fn send(&self, request: CommandRequest) -> Result<Option<Pending>, BridgeError> {
         let pending = self
             .command
             .send_copy(request)
-            .map_err(|error| format!("cannot send to the command service: {error:?}"))?;
+            .map_err(|error| BridgeError::ipc("send to the command service", error))?;
         Ok((pending.number_of_server_connections() > 0).then_some(pending))
     }
 }
 
 /// The reply to `pending` if it arrived, with the node that sent it.
-pub(crate) fn take_reply(pending: &Pending) -> Result<Option<(CommandReply, u128)>, String> {
+pub(crate) fn take_reply(pending: &Pending) -> Result<Option<(CommandReply, u128)>, BridgeError> {
     loop {
         match pending.receive() {
             Ok(Some(response)) => {
@@ -116,7 +116,7 @@ pub(crate) fn take_reply(pending: &Pending) -> Result<Option<(CommandReply, u128
                 }
             }
             Ok(None) => return Ok(None),
-            Err(error) => return Err(format!("cannot receive a reply: {error:?}")),
+            Err(error) => return Err(BridgeError::ipc("receive a reply", error)),
         }
     }
 }
@@ -125,7 +125,7 @@ pub(crate) fn take_reply(pending: &Pending) -> Result<Option<(CommandReply, u128
 pub(crate) fn drain<T: core::fmt::Debug + ZeroCopySend + Copy + 'static>(
     subscriber: &Subscriber<Ipc, T, ()>,
     mut each: impl FnMut(&T, u128),
-) -> Result<usize, String> {
+) -> Result<usize, BridgeError> {
     let mut count = 0;
     loop {
         match subscriber.receive() {
@@ -134,19 +134,20 @@ pub(crate) fn drain<T: core::fmt::Debug + ZeroCopySend + Copy + 'static>(
                 each(sample.payload(), sample.header().node_id().value());
             }
             Ok(None) => return Ok(count),
-            Err(error) => return Err(format!("cannot receive: {error:?}")),
+            Err(error) => return Err(BridgeError::ipc("receive a sample", error)),
         }
     }
 }
 
 /// The bridge's iceoryx2 node.
-pub(crate) fn node(name: &str, signals: SignalHandlingMode) -> Result<Node<Ipc>, String> {
-    let name = NodeName::new(name).map_err(|error| format!("node name: {error:?}"))?;
+pub(crate) fn node(name: &str, signals: SignalHandlingMode) -> Result<Node<Ipc>, BridgeError> {
+    let name = NodeName::new(name)
+        .map_err(|error| BridgeError::ipc(format!("name a node `{name}`"), error))?;
     NodeBuilder::new()
         .name(&name)
         .signal_handling_mode(signals)
         .create::<Ipc>()
-        .map_err(|error| format!("cannot create an iceoryx2 node: {error:?}"))
+        .map_err(|error| BridgeError::ipc("create a node", error))
 }
 
 /// Starts the thread that waits on the server's `tick` event and sends [`Event::Tick`] (one

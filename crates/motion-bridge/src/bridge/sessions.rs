@@ -10,7 +10,7 @@ use zenoh::Wait as _;
 use zenoh::query::Query;
 
 use super::{Bridge, refuse};
-use crate::keys::{Refusal, SessionGrant, SessionId, SessionOpen, SessionToken};
+use motion_wire::keys::{Refusal, SessionGrant, SessionId, SessionOpen, SessionToken};
 
 /// Attempts at drawing an id and token that are not taken (a clash of 128 random bits does
 /// not happen; the loop only bounds the work if the random source were broken).

@@ -6,7 +6,7 @@
 use core::time::Duration;
 use std::collections::HashMap;
 
-use crate::keys::{SessionId, SessionToken};
+use motion_wire::keys::{SessionId, SessionToken};
 
 /// Sessions open at most; past it, sessions without a liveliness token and silent for
 /// [`SESSION_IDLE`] are forgotten, and a new one is refused while none is (a flood of

@@ -8,7 +8,7 @@ use motion_ipc::{
 };
 
 use super::{KindSet, MAX_SESSIONS, Policy, Remote, RemoteRule, Verdict};
-use crate::keys::{Refusal, RequestMeta, SessionId, SessionOpen, SessionToken};
+use motion_wire::keys::{Refusal, RequestMeta, SessionId, SessionOpen, SessionToken};
 
 const DEADMAN: Duration = Duration::from_millis(200);
 

@@ -1,4 +1,4 @@
-//! The bridge's side of the network contract: zenoh key expressions, the small attachments
+//! The network contract's names and small messages: zenoh key expressions, the attachments
 //! that travel beside the payloads, and the bridge's own refusals.
 //!
 //! | key expression | what | payload | attachment |
@@ -22,6 +22,8 @@
 //! under another identity, names no session. Stop and e-stop need no session.
 
 use core::fmt;
+
+use motion_ipc::ServiceNames;
 
 /// The port a bridge listens on by default (zenoh's own).
 pub const DEFAULT_PORT: u16 = 7447;
@@ -60,10 +62,13 @@ pub fn check_chunk(what: &'static str, name: &str) -> Result<(), BadName> {
     }
 }
 
-/// The key expressions of the motiond instance `name`.
+/// The key expressions of the motiond instance `name`. Frames, description, statistics,
+/// parameters and commands travel under the names of their iceoryx2 services
+/// ([`ServiceNames`], which spells them); the keys only the network has (the JSON state,
+/// sessions, liveliness tokens) sit under the same prefix.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Keys {
-    prefix: String,
+    names: ServiceNames,
 }
 
 impl Keys {
@@ -71,104 +76,103 @@ impl Keys {
     pub fn new(name: &str) -> Result<Self, BadName> {
         check_chunk("server name", name)?;
         Ok(Self {
-            prefix: format!("motiond/{name}"),
+            names: ServiceNames::new(name),
         })
-    }
-
-    fn join(&self, leaf: &str) -> String {
-        format!("{}/{leaf}", self.prefix)
     }
 
     /// Frames, decimated.
     pub fn frame(&self) -> String {
-        self.join("frame")
+        self.names.frame()
     }
 
     /// The server description.
     pub fn info(&self) -> String {
-        self.join("info")
+        self.names.info()
     }
 
     /// The server's statistics.
     pub fn stats(&self) -> String {
-        self.join("stats")
+        self.names.stats()
     }
 
     /// The machine parameters (queryable only).
     pub fn params(&self) -> String {
-        self.join("params")
+        self.names.params()
     }
 
     /// The JSON state for tools.
     pub fn state_json(&self) -> String {
-        self.join("state/json")
+        self.names.under("state/json")
     }
 
     /// Where the remote `identity` sends commands.
     pub fn command(&self, identity: &str) -> String {
-        self.join(&format!("command/{identity}"))
+        format!("{}/{identity}", self.names.command())
     }
 
     /// What the bridge's command queryable answers: `motiond/<name>/command` and every
     /// identity below it (keys deeper than one identity are refused as bad requests).
     pub fn command_any(&self) -> String {
-        self.join("command/**")
+        format!("{}/**", self.names.command())
     }
 
     /// The identity a command key names, if it is one of this instance's: the chunk after
     /// `command/`, or [`ANONYMOUS`] for `motiond/<name>/command` itself.
     pub fn identity_of<'k>(&self, command_key: &'k str) -> Option<&'k str> {
-        self.identity_below("command", command_key)
+        identity_below(&self.names.command(), command_key)
+    }
+
+    fn session_root(&self) -> String {
+        self.names.under("session")
     }
 
     /// Where the remote `identity` opens a session.
     pub fn session(&self, identity: &str) -> String {
-        self.join(&format!("session/{identity}"))
+        format!("{}/{identity}", self.session_root())
     }
 
     /// What the bridge's session queryable answers (`session` and one identity below it).
     pub fn session_any(&self) -> String {
-        self.join("session/**")
+        format!("{}/**", self.session_root())
     }
 
     /// The identity a session key names (as [`Keys::identity_of`] for commands).
     pub fn identity_of_session<'k>(&self, session_key: &'k str) -> Option<&'k str> {
-        self.identity_below("session", session_key)
-    }
-
-    fn identity_below<'k>(&self, leaf: &str, key: &'k str) -> Option<&'k str> {
-        let rest = key.strip_prefix(&self.prefix)?.strip_prefix('/')?;
-        let rest = rest.strip_prefix(leaf)?;
-        if rest.is_empty() {
-            return Some(ANONYMOUS);
-        }
-        let identity = rest.strip_prefix('/')?;
-        (!identity.is_empty() && !identity.contains('/')).then_some(identity)
+        identity_below(&self.session_root(), session_key)
     }
 
     /// The liveliness token of remote `identity`'s client session `session`.
     pub fn remote_token(&self, identity: &str, session: SessionId) -> String {
-        self.join(&format!("remote/{identity}/{session}"))
+        self.names.under(&format!("remote/{identity}/{session}"))
     }
 
     /// Every remote client's liveliness token.
     pub fn remote_tokens(&self) -> String {
-        self.join("remote/*/*")
+        self.names.under("remote/*/*")
     }
 
     /// The (identity, session) a remote token's key names.
     pub fn remote_of(&self, token_key: &str) -> Option<(String, SessionId)> {
-        let rest = token_key
-            .strip_prefix(&self.prefix)?
-            .strip_prefix("/remote/")?;
+        let rest = token_key.strip_prefix(&self.names.under("remote/"))?;
         let (identity, session) = rest.split_once('/')?;
         Some((identity.to_owned(), session.parse().ok()?))
     }
 
     /// The bridge's liveliness token.
     pub fn bridge_token(&self) -> String {
-        self.join("bridge")
+        self.names.under("bridge")
     }
+}
+
+/// The identity `key` names below `root`: [`ANONYMOUS`] for `root` itself, the one chunk
+/// after `root/`, or `None` (another key, or deeper than one chunk).
+fn identity_below<'k>(root: &str, key: &'k str) -> Option<&'k str> {
+    let rest = key.strip_prefix(root)?;
+    if rest.is_empty() {
+        return Some(ANONYMOUS);
+    }
+    let identity = rest.strip_prefix('/')?;
+    (!identity.is_empty() && !identity.contains('/')).then_some(identity)
 }
 
 /// A remote client's session as others may see it (its liveliness token names it): random,

@@ -4,13 +4,11 @@
 //! kill the remote client, a command not on the allow-list, and — across the namespaces —
 //! the network dropping under a jog.
 
-mod common;
-
 use core::time::Duration;
 use std::time::Instant;
 
-use common::real::{Netns, Rig, binaries, finish};
-use common::{DEADLINE, Result};
+use motion_bridge_tests::real::{Netns, Rig, binaries, finish};
+use motion_bridge_tests::{DEADLINE, Result};
 use nix::sys::signal::{Signal, kill};
 use nix::unistd::{Pid, geteuid};
 use serde_json::Value;
@@ -118,10 +116,10 @@ fn list_move_jog_kill_refuse(rig: &Rig) -> Result {
 
 #[test]
 fn over_loopback_a_remote_motionctl_lists_moves_jogs_and_is_refused() -> Result {
-    let Some((motiond, motionctl)) = binaries() else {
+    let Some(binaries) = binaries() else {
         return Ok(());
     };
-    let rig = Rig::start(&motiond, &motionctl, None)?;
+    let rig = Rig::start(&binaries, None)?;
     list_move_jog_kill_refuse(&rig)
 }
 
@@ -134,7 +132,7 @@ fn across_network_namespaces_and_when_the_network_drops() -> Result {
         );
         return Ok(());
     }
-    let Some((motiond, motionctl)) = binaries() else {
+    let Some(binaries) = binaries() else {
         return Ok(());
     };
     let netns = match Netns::create() {
@@ -147,7 +145,7 @@ fn across_network_namespaces_and_when_the_network_drops() -> Result {
             return Ok(());
         }
     };
-    let rig = Rig::start(&motiond, &motionctl, Some(&netns))?;
+    let rig = Rig::start(&binaries, Some(&netns))?;
     // The bridge is reachable only across the veth pair, not through the remote's loopback.
     assert!(
         rig.endpoint

@@ -2,12 +2,12 @@
 
 use core::time::Duration;
 
-use motion_bridge::keys::{Keys, Origin, RequestMeta, SessionGrant, SessionOpen};
-use motion_bridge::wire;
 use motion_client::ipc::{CommandReply, CommandRequest};
+use motion_wire::keys::{Keys, Origin, RequestMeta, SessionGrant, SessionOpen};
+use motion_wire::wire;
 use zenoh::Wait as _;
 
-use super::{DEADLINE, Result};
+use crate::{DEADLINE, Result};
 
 /// zenoh's errors as the tests' errors.
 pub trait Z<T> {

@@ -4,7 +4,7 @@
 //!
 //! ```text
 //! cargo run --release -p motiond -- --config config/sim.toml &      # instance `demo`
-//! cargo bench -p motion-bridge --bench bridge_latency -- --server demo [--samples 2000]
+//! cargo bench -p motion-bridge-tests --bench bridge_latency -- --server demo [--samples 2000]
 //! ```
 //!
 //! It measures, in one process:

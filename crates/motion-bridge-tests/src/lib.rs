@@ -1,6 +1,13 @@
-//! Helpers of the bridge's tests: a bridge on a thread of the test, a fake or real motiond,
-//! remote clients, free ports.
-#![allow(dead_code)]
+//! The end-to-end tests of `motion-bridge` and its latency bench: the bridge driven through
+//! `motion-client` (a remote `Client`, `motionctl --remote`) or raw zenoh, against the fake
+//! motiond of `motion-client` or a real one. They live in their own crate because
+//! `motion-client` sits above the bridge: neither the bridge nor the client depends on the
+//! other, and this crate may depend on both (`publish = false`, nothing here ships).
+//!
+//! The tests are in `tests/` (`cargo test -p motion-bridge-tests`, `--features tls` for the
+//! TLS one), the bench in `benches/bridge_latency.rs`; this library is what they share: a
+//! bridge on a thread of the test, a fake or real motiond, remote clients, free ports
+//! ([`raw`]: a foreign peer's raw zenoh; [`real`]: real processes).
 
 pub mod raw;
 pub mod real;
@@ -44,6 +51,7 @@ pub fn fake(prefix: &str) -> Result<FakeServer> {
 }
 
 /// A bridge running on a thread of the test; stops (and joins) when dropped.
+#[derive(Debug)]
 pub struct BridgeThread {
     pub endpoint: String,
     stop: Arc<AtomicBool>,

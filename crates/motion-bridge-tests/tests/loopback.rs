@@ -2,12 +2,10 @@
 //! `motion-client` (in this process): what crosses the network, what the bridge lets
 //! through, and what it never does on its own.
 
-mod common;
-
 use core::time::Duration;
 
-use common::{BridgeThread, DEADLINE, Result, eventually, fake, remote};
 use iceoryx2::prelude::ipc;
+use motion_bridge_tests::{BridgeThread, DEADLINE, Result, eventually, fake, remote};
 use motion_client::ipc::{AxisFlags, AxisMode, CommandKind, CommandRequest, Reason};
 use motion_client::{Client, ClientError};
 
@@ -220,7 +218,7 @@ fn without_a_server_behind_it_the_bridge_says_so() -> Result {
     );
     assert!(started.elapsed() < DEADLINE);
     // And with no bridge at all: the endpoint nobody listens on.
-    let port = common::free_port()?;
+    let port = motion_bridge_tests::free_port()?;
     let error = motion_client::ClientBuilder::new("bridge-nobody")
         .connect_timeout(Duration::from_millis(300))
         .remote(&format!("tcp/127.0.0.1:{port}"))

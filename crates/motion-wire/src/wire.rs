@@ -6,10 +6,13 @@
 //!
 //! Encoding and decoding are plain safe code, field by field, at the offsets the compiler
 //! gives (`offset_of!`): no transmutes, and a payload whose layout changes fails to compile
-//! here (see the size pins below) rather than travelling wrong.
+//! here (see the size pins in `wire/field_table.rs`) rather than travelling wrong.
+//!
+//! The fields of every payload are listed once, in `wire/field_table.rs`; this file is the
+//! machinery that walks them.
 //!
 //! ```
-//! use motion_bridge::wire;
+//! use motion_wire::wire;
 //! use motion_ipc::{ClientId, CommandKind, CommandRequest};
 //!
 //! let request = CommandRequest::new(ClientId::NONE, 7, 2, CommandKind::RampPosition)
@@ -20,13 +23,7 @@
 //! assert_eq!(wire::decode::<CommandRequest>(&bytes), Ok(request));
 //! ```
 
-use core::mem::{offset_of, size_of};
-
-use motion_ipc::{
-    AxisInfo, AxisState, AxisWire, ClientId, CommandReply, CommandRequest, DeviceInfo,
-    LatencySummary, LinkIo, LinkStats, MachineParam, MachineParams, MotionFrame, ServerInfo,
-    ServerStats, SignalInfo, SignalState,
-};
+use core::mem::size_of;
 
 /// Why bytes could not be decoded into a payload.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
@@ -46,15 +43,6 @@ pub enum WireError {
         got: usize,
     },
 }
-
-// The layout these encoders were written against (`motion-ipc`'s `tests/layout.rs` pins
-// every offset). A change of a payload must be followed here: add the new field below.
-const _: () = assert!(size_of::<MotionFrame>() == 16464);
-const _: () = assert!(size_of::<ServerInfo>() == 32328);
-const _: () = assert!(size_of::<ServerStats>() == 1992);
-const _: () = assert!(size_of::<MachineParams>() == 180_240);
-const _: () = assert!(size_of::<CommandRequest>() == 64);
-const _: () = assert!(size_of::<CommandReply>() == 32);
 
 /// Writes into a zeroed buffer; out-of-range writes are dropped and remembered.
 struct Writer<'a> {
@@ -140,19 +128,6 @@ macro_rules! array_of {
     )*};
 }
 
-array_of!(
-    f64,
-    AxisState,
-    SignalState,
-    AxisInfo,
-    DeviceInfo,
-    SignalInfo,
-    LinkStats,
-    MachineParam,
-    AxisWire,
-    LinkIo
-);
-
 /// A `#[repr(C)]` struct: each listed field at its `offset_of!`. Decoding builds the struct
 /// with every field named, so a field added to the type and not listed here does not
 /// compile.
@@ -169,190 +144,11 @@ macro_rules! record {
     };
 }
 
-record!(ClientId { lo, hi });
-record!(AxisState {
-    position,
-    velocity,
-    target,
-    raw_counts,
-    last_refresh_tick,
-    flags,
-    fault,
-    mode,
-    device_state,
-    claimed_by,
-    fault_value,
-    fault_limit,
-});
-record!(SignalState {
-    value,
-    raw,
-    last_refresh_tick,
-    flags,
-    kind,
-    reserved,
-    claimed_by,
-});
-record!(MotionFrame {
-    schema_version,
-    axis_count,
-    tick,
-    time_ns,
-    publish_ns,
-    flags,
-    signal_count,
-    device_count,
-    reserved,
-    devices,
-    axes,
-    signals,
-    wire,
-});
-record!(AxisWire {
-    goal_tick,
-    wire_tick,
-    wire_ns,
-});
-record!(LinkIo {
-    last_write_ns,
-    last_read_ns,
-    transactions,
-    reads,
-});
-record!(CommandRequest {
-    schema_version,
-    kind,
-    client,
-    sequence,
-    axis,
-    target,
-    values,
-});
-record!(CommandReply {
-    schema_version,
-    reason,
-    sequence,
-    tick_applied,
-    axis,
-    kind,
-});
-record!(AxisInfo {
-    name,
-    unit,
-    device,
-    counts_per_unit,
-    min,
-    max,
-    max_velocity,
-    max_accel,
-    capabilities,
-    channel,
-    device_index,
-    following_error,
-    overspeed_factor,
-    home_max_travel,
-    estop,
-    reserved,
-});
-record!(DeviceInfo {
-    name,
-    link,
-    firmware,
-    model,
-    address,
-    axis_count,
-    state,
-});
-record!(SignalInfo {
-    name,
-    unit,
-    device,
-    scale,
-    offset,
-    full_scale,
-    kind,
-    flags,
-    device_index,
-    pin,
-    reserved,
-});
-record!(ServerInfo {
-    schema_version,
-    axis_count,
-    device_count,
-    tick_hz,
-    command_timeout_ms,
-    max_clients,
-    server_pid,
-    signal_count,
-    name,
-    start_time_ns,
-    axes,
-    devices,
-    signals,
-});
-record!(MachineParam {
-    key,
-    value,
-    owner_index,
-    owner_kind,
-    from_config,
-    reserved,
-});
-record!(MachineParams {
-    schema_version,
-    count,
-    truncated,
-    reserved,
-    entries,
-});
-record!(LatencySummary {
-    samples,
-    p50_ns,
-    p99_ns,
-    p999_ns,
-    max_ns,
-});
-record!(LinkStats {
-    name,
-    bytes_in,
-    bytes_out,
-    frames,
-    errors,
-    reconnects,
-    up,
-    reserved,
-});
-record!(ServerStats {
-    schema_version,
-    link_count,
-    tick,
-    time_ns,
-    wakeup,
-    work,
-    overruns,
-    max_consecutive_overruns,
-    commands,
-    rejected,
-    clients,
-    rt_flags,
-    links,
-    faults,
-    frames_lost,
-    full_services,
-    full_events,
-    publish_failures,
-    replies_lost,
-    events_dropped,
-    link_io,
-    nodes_cleaned,
-});
-
 mod sealed {
     pub trait Sealed {}
 }
 
-/// A payload that travels over the bridge: one of `motion-ipc`'s service payloads.
+/// A payload that travels over the network: one of `motion-ipc`'s service payloads.
 #[allow(private_bounds)]
 pub trait Payload: sealed::Sealed + Field {
     /// Its name in messages.
@@ -370,14 +166,8 @@ macro_rules! payload {
     )*};
 }
 
-payload!(
-    MotionFrame,
-    ServerInfo,
-    ServerStats,
-    MachineParams,
-    CommandRequest,
-    CommandReply
-);
+// After the macros: the table invokes them.
+mod field_table;
 
 /// `value` in its C layout, little-endian: `T::SIZE` bytes, padding zero.
 pub fn encode<T: Payload>(value: &T) -> Vec<u8> {
@@ -412,7 +202,8 @@ pub fn decode<T: Payload>(bytes: &[u8]) -> Result<T, WireError> {
     Ok(value)
 }
 
-/// [`decode`] into a box (for the large payloads: a [`MachineParams`] is 176 KiB).
+/// [`decode`] into a box (for the large payloads: a
+/// [`MachineParams`](motion_ipc::MachineParams) is 176 KiB).
 pub fn decode_boxed<T: Payload>(bytes: &[u8]) -> Result<Box<T>, WireError> {
     decode(bytes).map(Box::new)
 }

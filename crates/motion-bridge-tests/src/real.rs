@@ -12,7 +12,7 @@ use nix::sys::signal::{Signal, kill};
 use nix::unistd::Pid;
 use serde_json::Value;
 
-use super::{DEADLINE, Result, free_port, scratch};
+use crate::{DEADLINE, Result, free_port, scratch};
 
 /// The bridge's rules in these tests: `operator` may do anything, `viewer` only stop and
 /// e-stop.
@@ -26,29 +26,44 @@ identity = "viewer"
 allow = ["stop", "estop"]
 "#;
 
-/// A binary of the workspace: `$env` if set, else beside this package's `motion-bridge`
-/// (cargo builds every member's binaries for `cargo test --workspace`).
+/// The processes these tests run, from this build of the workspace.
+#[derive(Debug, Clone)]
+pub struct Binaries {
+    pub motiond: PathBuf,
+    pub motionctl: PathBuf,
+    pub bridge: PathBuf,
+}
+
+/// A binary of the workspace: `$env` if set, else in the directory cargo builds the
+/// workspace's binaries into (the parent of this test's `deps/`; `cargo test --workspace`
+/// builds every member's binaries).
 pub fn binary(name: &str, env: &str) -> Option<PathBuf> {
     if let Some(path) = std::env::var_os(env) {
         return Some(path.into());
     }
-    let path = PathBuf::from(env!("CARGO_BIN_EXE_motion-bridge")).with_file_name(name);
+    let exe = std::env::current_exe().ok()?;
+    let path = exe.parent()?.parent()?.join(name);
     path.exists().then_some(path)
 }
 
-/// motiond and motionctl, or `None` with a note on stderr when this run did not build them
-/// (`cargo test -p motion-bridge` alone; `./scripts/test` builds them).
-pub fn binaries() -> Option<(PathBuf, PathBuf)> {
+/// motiond, motionctl and motion-bridge, or `None` with a note on stderr when this run did
+/// not build them (`cargo test -p motion-bridge-tests` alone; `./scripts/test` builds them).
+pub fn binaries() -> Option<Binaries> {
     match (
         binary("motiond", "MOTIOND_BIN"),
         binary("motionctl", "MOTIONCTL_BIN"),
+        binary("motion-bridge", "MOTION_BRIDGE_BIN"),
     ) {
-        (Some(motiond), Some(motionctl)) => Some((motiond, motionctl)),
+        (Some(motiond), Some(motionctl), Some(bridge)) => Some(Binaries {
+            motiond,
+            motionctl,
+            bridge,
+        }),
         _ => {
             eprintln!(
-                "SKIPPED: no motiond or motionctl beside motion-bridge: run `cargo build -p \
-                 motiond -p motionctl` first (./scripts/test builds them), or set MOTIOND_BIN \
-                 and MOTIONCTL_BIN"
+                "SKIPPED: no motiond, motionctl or motion-bridge beside this test: run `cargo \
+                 build -p motiond -p motionctl -p motion-bridge` first (./scripts/test builds \
+                 them), or set MOTIOND_BIN, MOTIONCTL_BIN and MOTION_BRIDGE_BIN"
             );
             None
         }
@@ -191,6 +206,7 @@ fn in_ns(netns: Option<&str>, program: &Path, args: &[&str]) -> Command {
 static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
 /// motiond and a bridge in front of it, and how a remote reaches them.
+#[derive(Debug)]
 pub struct Rig {
     pub name: String,
     pub endpoint: String,
@@ -206,7 +222,7 @@ impl Rig {
     /// Starts motiond on the simulated robot and a bridge with [`RULES`]: both in
     /// `netns.server` when given (the remote then reaches the bridge across the veth pair),
     /// else on this host, listening on loopback.
-    pub fn start(motiond: &Path, motionctl: &Path, netns: Option<&Netns>) -> Result<Self> {
+    pub fn start(binaries: &Binaries, netns: Option<&Netns>) -> Result<Self> {
         let turn = ONE_AT_A_TIME
             .lock()
             .unwrap_or_else(std::sync::PoisonError::into_inner);
@@ -225,7 +241,7 @@ impl Rig {
             Ok(Stdio::from(std::fs::File::create(logs.join(file))?))
         };
         let sim_path = dir.join("sim.toml").display().to_string();
-        let motiond_child = in_ns(server_ns, motiond, &["--config", &sim_path])
+        let motiond_child = in_ns(server_ns, &binaries.motiond, &["--config", &sim_path])
             .stdin(Stdio::null())
             .stdout(log("motiond.out")?)
             .stderr(log("motiond.err")?)
@@ -236,7 +252,7 @@ impl Rig {
         let mut rig = Self {
             name,
             endpoint,
-            motionctl: motionctl.to_owned(),
+            motionctl: binaries.motionctl.clone(),
             dir,
             remote_ns: netns.map(|ns| ns.remote.clone()),
             motiond: Some(motiond_child),
@@ -244,12 +260,11 @@ impl Rig {
             _turn: turn,
         };
         rig.wait_settled()?;
-        let bridge_bin = PathBuf::from(env!("CARGO_BIN_EXE_motion-bridge"));
         let bridge_config = rig.dir.join("bridge.toml").display().to_string();
         let listen = rig.endpoint.clone();
         let bridge = in_ns(
             server_ns,
-            &bridge_bin,
+            &binaries.bridge,
             &[
                 "--server",
                 &rig.name,

@@ -3,14 +3,12 @@
 //! test's CA — and one that does not, which gets no session.
 #![cfg(feature = "tls")]
 
-mod common;
-
 use core::time::Duration;
 use std::path::Path;
 use std::process::Command;
 
-use common::{BridgeThread, DEADLINE, Result, fake, free_port, scratch};
 use iceoryx2::prelude::ipc;
+use motion_bridge_tests::{BridgeThread, DEADLINE, Result, fake, free_port, scratch};
 use motion_client::{ClientBuilder, ConnectError};
 
 fn openssl(dir: &Path, args: &[&str]) -> Result {

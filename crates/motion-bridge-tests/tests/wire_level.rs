@@ -1,17 +1,15 @@
 //! The bridge's network contract as a peer in another language would see it: raw zenoh,
 //! bytes in the `motion-ipc` C layout, the attachments and the refusal texts of
-//! `motion_bridge::keys`.
-
-mod common;
+//! `motion_wire::keys`.
 
 use core::time::Duration;
 use std::time::Instant;
 
-use common::raw::{Z as _, command, open_session, session};
-use common::{BridgeThread, DEADLINE, Result, fake};
-use motion_bridge::keys::{Keys, Origin, Refusal, RequestMeta, SessionGrant};
-use motion_bridge::wire;
+use motion_bridge_tests::raw::{Z as _, command, open_session, session};
+use motion_bridge_tests::{BridgeThread, DEADLINE, Result, fake};
 use motion_client::ipc::{ClientId, CommandKind, CommandRequest, MotionFrame, Reason, ServerInfo};
+use motion_wire::keys::{Keys, Origin, Refusal, RequestMeta, SessionGrant};
+use motion_wire::wire;
 use zenoh::Wait as _;
 
 const RULES: &str = r#"

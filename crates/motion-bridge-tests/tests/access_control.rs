@@ -4,13 +4,11 @@
 //! reads from the command key is proven, not claimed. (The config files are the ones the
 //! README shows.)
 
-mod common;
-
 use core::time::Duration;
 use std::path::Path;
 
-use common::{BridgeThread, DEADLINE, Result, fake, scratch};
 use iceoryx2::prelude::ipc;
+use motion_bridge_tests::{BridgeThread, DEADLINE, Result, fake, scratch};
 use motion_client::ipc::CommandKind;
 use motion_client::{Client, ClientBuilder, ClientError, ConnectError};
 
