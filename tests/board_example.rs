@@ -82,7 +82,7 @@ impl CommandPort for Queue {
 
 /// motiond's loop, minus the threads: links read, the engine stepped, links written.
 struct Server {
-    engine: Engine,
+    engine: Engine<motiond::boards::AnyDriver>,
     link: Box<dyn Link>,
     faults: SimFaults,
     frame: Box<MotionFrame>,

@@ -63,6 +63,21 @@ pub struct LinkFacts {
     pub host_frame: Option<Duration>,
 }
 
+/// A [`Board`] whose driver type is known statically: the registry builds its driver enum
+/// (`motion_boards::AnyDriver`, what the server's tick holds: static dispatch, no box)
+/// from it. Every board crate implements both traits; its `Board::build` boxes what
+/// [`driver`](Self::driver) builds.
+pub trait TypedBoard: Board {
+    /// The board's driver.
+    type Driver: Driver + 'static;
+
+    /// The driver of the device `spec` describes.
+    ///
+    /// # Errors
+    /// As [`Board::build`].
+    fn driver(&self, spec: &DriverSpec) -> Result<Self::Driver, SpecError>;
+}
+
 /// A value a board's key gives for a general fact, with where it was written (a board key
 /// that says the same as a general key: both must agree).
 #[derive(Debug, Clone, PartialEq)]

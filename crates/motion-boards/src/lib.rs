@@ -1,21 +1,29 @@
-//! The board registry: [`BOARDS`], the one list of the board crates this build of motiond
-//! drives, and the lookups every user of the list needs (by config id, by contract code,
-//! by model). Adding a board is its crate, one line in [`BOARDS`] and one dependency line
-//! in this crate's `Cargo.toml` (docs/ARCHITECTURE.md "How to add a board").
+//! The board registry: one list of the board crates this build of motiond drives (the
+//! `registry!` invocation below), and what is made from it: [`BOARDS`] (every board as a
+//! `dyn Board`, for start-up), [`AnyDriver`] (an enum of every board's driver: what the
+//! server's tick holds, static dispatch without a box), and the lookups every user of the
+//! list needs (by config id, by contract code, by model). Adding a board is its crate, one
+//! line in the list and one dependency line in this crate's `Cargo.toml`
+//! (docs/ARCHITECTURE.md "How to add a board").
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
-use motion_base::Model;
-pub use motion_board::{Board, LinkFacts, SimBoard};
+#[macro_use]
+mod any_driver;
 
-/// Every board this build drives, in contract-code order.
-pub static BOARDS: &[&dyn Board] = &[
-    &board_qq2drv::BOARD,
-    &board_tmcpack::BOARD,
-    &board_spimotor::BOARD,
-    &board_qsb::BOARD,
-    &board_example::BOARD,
-];
+use motion_base::Model;
+pub use motion_board::{Board, LinkFacts, SimBoard, TypedBoard};
+use motion_drivers::spec::{DriverSpec, SpecError};
+
+registry! {
+    /// Every board this build drives, in contract-code order (the board type: a unit
+    /// struct implementing `Board` and `TypedBoard`).
+    Qq2drv => board_qq2drv::Qq2drvBoard,
+    Tmcpack => board_tmcpack::TmcpackBoard,
+    Spimotor => board_spimotor::SpimotorBoard,
+    Qsb => board_qsb::QsbBoard,
+    Example => board_example::ExampleBoard,
+}
 
 /// The board of `model`. Every [`Model`] the server sees comes from [`BOARDS`] (the
 /// config names models by id: [`by_id`]), so this finds one.
@@ -75,6 +83,17 @@ pub fn ids(keep: impl Fn(&dyn Board) -> bool, word: &str) -> String {
         Some((last, [])) => (*last).to_owned(),
         Some((last, rest)) => format!("{} {word} {last}", rest.join(", ")),
     }
+}
+
+/// The driver of the device `spec` describes, as the enum the server's tick holds.
+///
+/// # Errors
+/// A value of the spec the board refuses.
+///
+/// # Panics
+/// As [`board`], for a model outside the registry.
+pub fn build(spec: &DriverSpec) -> Result<AnyDriver, SpecError> {
+    AnyDriver::build(spec)
 }
 
 #[cfg(test)]

@@ -54,11 +54,13 @@ struct PendingMiso {
     written_at: Option<Duration>,
 }
 
-/// The drivers of one link and the arbitration between them.
+/// The drivers of one link and the arbitration between them. `D` is the driver type: the
+/// server's is an enum of every registered board's driver (static dispatch on the tick
+/// path); tests and tools use `Box<dyn Driver>`, the default.
 #[derive(Debug)]
-pub struct LinkBus {
+pub struct LinkBus<D: Driver = Box<dyn Driver>> {
     kind: LinkKind,
-    drivers: Vec<Box<dyn Driver>>,
+    drivers: Vec<D>,
     /// Stream: the driver whose reply is awaited.
     in_flight: Option<usize>,
     /// Stream: the driver that sent last (receives unsolicited bytes).
@@ -78,9 +80,9 @@ pub struct LinkBus {
     clocked: Vec<Option<Duration>>,
 }
 
-impl LinkBus {
+impl<D: Driver> LinkBus<D> {
     /// A bus of `kind` with `drivers` (in config order; at least one).
-    pub fn new(kind: LinkKind, drivers: Vec<Box<dyn Driver>>) -> Self {
+    pub fn new(kind: LinkKind, drivers: Vec<D>) -> Self {
         Self {
             kind,
             in_flight: None,
@@ -165,13 +167,13 @@ impl LinkBus {
     }
 
     /// The drivers in config order.
-    pub fn drivers(&self) -> &[Box<dyn Driver>] {
+    pub fn drivers(&self) -> &[D] {
         &self.drivers
     }
 
     /// Mutable access to one driver (goals).
-    pub fn driver_mut(&mut self, index: usize) -> Option<&mut (dyn Driver + 'static)> {
-        self.drivers.get_mut(index).map(|driver| &mut **driver)
+    pub fn driver_mut(&mut self, index: usize) -> Option<&mut D> {
+        self.drivers.get_mut(index)
     }
 
     /// Received bytes that belonged to no driver.

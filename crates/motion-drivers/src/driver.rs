@@ -163,3 +163,71 @@ pub trait Driver: Send + fmt::Debug {
         Err(GoalError::NoSuchPin(pin))
     }
 }
+
+/// A boxed driver is a driver: tests and tools hold drivers of any board as
+/// `Box<dyn Driver>` (the server holds an enum of the registered boards' drivers instead).
+impl<T: Driver + ?Sized> Driver for Box<T> {
+    fn model(&self) -> Model {
+        (**self).model()
+    }
+    fn channel_count(&self) -> usize {
+        (**self).channel_count()
+    }
+    fn capabilities(&self, channel: usize) -> GoalKinds {
+        (**self).capabilities(channel)
+    }
+    fn rate_floor(&self, channel: usize) -> RateFloor {
+        (**self).rate_floor(channel)
+    }
+    fn refresh_budget(&self) -> Duration {
+        (**self).refresh_budget()
+    }
+    fn handle_rx(&mut self, now: Duration, bytes: &[u8]) {
+        (**self).handle_rx(now, bytes);
+    }
+    fn handle_timeout(&mut self, now: Duration) {
+        (**self).handle_timeout(now);
+    }
+    fn handle_written(&mut self, at: Duration) {
+        (**self).handle_written(at);
+    }
+    fn handle_heard(&mut self, until: Duration) {
+        (**self).handle_heard(until);
+    }
+    fn poll_timeout(&self) -> Option<Duration> {
+        (**self).poll_timeout()
+    }
+    fn wants_transmit(&self, now: Duration) -> Option<Priority> {
+        (**self).wants_transmit(now)
+    }
+    fn poll_transmit(&mut self, now: Duration, buf: &mut [u8]) -> Option<Transmit> {
+        (**self).poll_transmit(now, buf)
+    }
+    fn awaiting_reply(&self) -> bool {
+        (**self).awaiting_reply()
+    }
+    fn goals_pending(&self) -> bool {
+        (**self).goals_pending()
+    }
+    fn set_goal(&mut self, now: Duration, channel: usize, goal: Goal) -> Result<(), GoalError> {
+        (**self).set_goal(now, channel, goal)
+    }
+    fn channel(&self, channel: usize) -> ChannelState {
+        (**self).channel(channel)
+    }
+    fn status(&self) -> DeviceStatus {
+        (**self).status()
+    }
+    fn link_down(&mut self, now: Duration) {
+        (**self).link_down(now);
+    }
+    fn link_up(&mut self, now: Duration) {
+        (**self).link_up(now);
+    }
+    fn read_pin(&self, pin: Pin) -> Option<PinReading> {
+        (**self).read_pin(pin)
+    }
+    fn set_output(&mut self, now: Duration, pin: Pin, high: bool) -> Result<(), GoalError> {
+        (**self).set_output(now, pin, high)
+    }
+}

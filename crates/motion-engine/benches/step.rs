@@ -42,7 +42,7 @@ fn engine_with(axes: usize) -> Engine {
         ..EngineConfig::default()
     };
     let drivers: Vec<Box<dyn Driver>> = (0..boards)
-        .map(|_| IdealBoard::new(8, &ALL_GOALS).0 as Box<dyn Driver>)
+        .map(|_| IdealBoard::boxed(8, &ALL_GOALS).0)
         .collect();
     Engine::new(config, drivers).expect("valid bench config")
 }

@@ -1,5 +1,6 @@
 //! Taking in client commands: identity, validation and goals.
 
+use motion_drivers::Driver;
 use motion_drivers::{Goal, GoalError, GoalKind};
 use motion_ipc::rules::{self, AxisFacts, Facts, Motion, SignalFacts, Verdict};
 use motion_ipc::{
@@ -34,7 +35,7 @@ pub const MAX_COMMANDS_PER_STEP: usize = 64;
 pub const HOME_FRACTION_OF_MAX: f64 = rules::HOME_FRACTION_OF_MAX;
 
 /// The engine's state as the rulebook sees it.
-impl Facts for Engine {
+impl<D: Driver> Facts for Engine<D> {
     fn estop(&self) -> bool {
         self.estop
     }
@@ -79,7 +80,7 @@ impl Facts for Engine {
     }
 }
 
-impl Engine {
+impl<D: Driver> Engine<D> {
     /// Validates (the rulebook, [`motion_ipc::rules`]) and applies one request from `sender`
     /// (see [`CommandPort::sender`]); the answer says whether it was accepted.
     pub(crate) fn apply_command(

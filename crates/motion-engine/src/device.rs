@@ -9,6 +9,7 @@
 //! not down; one that opened and then failed is.
 
 use motion_drivers::DeviceFault;
+use motion_drivers::Driver;
 use motion_ipc::DeviceState;
 
 use crate::Engine;
@@ -42,7 +43,7 @@ impl Device {
     }
 }
 
-impl Engine {
+impl<D: Driver> Engine<D> {
     /// Step 1a: device states from the drivers and the links; start-up stops for boards
     /// that (re)appeared.
     pub(crate) fn update_devices(&mut self) {

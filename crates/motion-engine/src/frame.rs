@@ -1,5 +1,6 @@
 //! Writing the frame and the server description.
 
+use motion_drivers::Driver;
 use motion_ipc::{
     AxisFlags, AxisInfo, AxisMode, AxisState, AxisWire, DeviceInfo, FrameFlags, MotionFrame,
     SCHEMA_VERSION, ServerInfo, SignalFlags, SignalInfo, SignalInfoFlags, SignalState, write_text,
@@ -8,7 +9,7 @@ use motion_ipc::{
 use crate::Engine;
 use crate::config::EstopCategory;
 
-impl Engine {
+impl<D: Driver> Engine<D> {
     /// Step 5: the frame of this tick. Entries past the axis count are left untouched.
     pub(crate) fn write_frame(&self, frame: &mut MotionFrame) {
         frame.schema_version = SCHEMA_VERSION;

@@ -3,6 +3,7 @@
 //! goal reached the wire.
 
 use core::time::Duration;
+use motion_drivers::Driver;
 
 use crate::Engine;
 
@@ -12,7 +13,7 @@ use crate::Engine;
 /// before its boards can look dead; a hung one cannot hide a dead board for longer.
 pub const IO_STALL_LIMIT: Duration = Duration::from_secs(1);
 
-impl Engine {
+impl<D: Driver> Engine<D> {
     /// From now on the shell reports, for every link, each message written
     /// ([`link_written`](Self::link_written)) and the link's horizon
     /// ([`link_heard`](Self::link_heard)) before every step. Without it (a rig that moves

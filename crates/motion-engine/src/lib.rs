@@ -34,7 +34,7 @@
 //!     axes: vec![],
 //!     ..EngineConfig::default()
 //! };
-//! let mut engine = Engine::new(config, vec![]).expect("valid config");
+//! let mut engine: Engine = Engine::new(config, vec![]).expect("valid config");
 //! let mut frame = MotionFrame::EMPTY;
 //! engine.step(Duration::ZERO, &mut NoCommands, &mut frame);
 //! engine.step(Duration::from_millis(1), &mut NoCommands, &mut frame);
@@ -86,11 +86,13 @@ pub struct EngineCounters {
     pub faults: u64,
 }
 
-/// The deterministic motion engine.
+/// The deterministic motion engine, over drivers of type `D`: the server's enum of the
+/// registered boards' drivers (static dispatch, `motion_boards::AnyDriver`), or
+/// `Box<dyn Driver>` (the default) in tests and tools.
 #[derive(Debug)]
-pub struct Engine {
+pub struct Engine<D: Driver = Box<dyn Driver>> {
     config: EngineConfig,
-    buses: Vec<LinkBus>,
+    buses: Vec<LinkBus<D>>,
     /// Per device: where its driver is, and its readiness.
     devices: Vec<Device>,
     axes: Vec<Axis>,
@@ -121,16 +123,12 @@ pub struct Engine {
 /// Dead clients remembered (the oldest is forgotten first; node ids are never reused).
 const DEPARTED_MEMORY: usize = 64;
 
-impl Engine {
+impl<D: Driver> Engine<D> {
     /// Builds the engine from a validated description and one driver per device (same
     /// order as `config.devices`).
-    pub fn new(
-        config: EngineConfig,
-        drivers: Vec<Box<dyn Driver>>,
-    ) -> Result<Self, EngineConfigError> {
+    pub fn new(config: EngineConfig, drivers: Vec<D>) -> Result<Self, EngineConfigError> {
         config::validate(&config, drivers.len())?;
-        let mut per_link: Vec<Vec<Box<dyn Driver>>> =
-            config.links.iter().map(|_| Vec::new()).collect();
+        let mut per_link: Vec<Vec<D>> = config.links.iter().map(|_| Vec::new()).collect();
         let mut devices = Vec::with_capacity(drivers.len());
         for (device, driver) in config.devices.iter().zip(drivers) {
             devices.push(Device::new(device.link, per_link[device.link].len()));
@@ -166,7 +164,7 @@ impl Engine {
                 Signal::new(signal.clone(), device.bus, device.slot)
             })
             .collect();
-        let buses: Vec<LinkBus> = config
+        let buses: Vec<LinkBus<D>> = config
             .links
             .iter()
             .zip(per_link)
@@ -214,13 +212,9 @@ impl Engine {
     }
 
     /// The driver of device `index` (config order).
-    pub fn driver(&self, device: usize) -> Option<&dyn Driver> {
+    pub fn driver(&self, device: usize) -> Option<&D> {
         let (bus, slot) = self.devices.get(device).map(|d| (d.bus, d.slot))?;
-        self.buses
-            .get(bus)?
-            .drivers()
-            .get(slot)
-            .map(|driver| &**driver)
+        self.buses.get(bus)?.drivers().get(slot)
     }
 
     /// Stream or SPI, per link.

@@ -1,6 +1,7 @@
 //! Safety: faults from drivers, deadman, soft limits, e-stop and its stop categories,
 //! stops, reset and shutdown.
 
+use motion_drivers::Driver;
 use motion_drivers::{Goal, GoalError};
 use motion_ipc::{AxisMode, ClientId, FaultCode, Reason};
 
@@ -11,7 +12,7 @@ use crate::config::EstopCategory;
 /// Below this speed (units/s) a stopping axis whose board says it stands still holds.
 const STANDSTILL_FRACTION_OF_MAX: f64 = 1e-3;
 
-impl Engine {
+impl<D: Driver> Engine<D> {
     /// Step 1b: take every channel's state from its driver; refresh ticks, staleness and
     /// driver fault transitions.
     pub(crate) fn update_from_drivers(&mut self) {

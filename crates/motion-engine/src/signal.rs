@@ -3,6 +3,7 @@
 
 use core::time::Duration;
 
+use motion_drivers::Driver;
 use motion_drivers::{GoalError, PinReading, SignalKind};
 use motion_ipc::{ClientId, Reason};
 
@@ -64,7 +65,7 @@ impl Signal {
     }
 }
 
-impl Engine {
+impl<D: Driver> Engine<D> {
     /// Step 1c: every signal's reading from its driver.
     pub(crate) fn update_signals(&mut self) {
         let (now, tick) = (self.now, self.tick);

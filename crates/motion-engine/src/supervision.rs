@@ -14,6 +14,7 @@
 //! `following_error = 0` turns off the following-error and limit rules, `overspeed_factor
 //! = 0` the overspeed rule, `home_max_travel = 0` the travel rule.
 
+use motion_drivers::Driver;
 use motion_ipc::{AxisMode, DeviceState, FaultCode};
 
 use crate::Engine;
@@ -25,7 +26,7 @@ pub const OVERSPEED_SAMPLES: u8 = 3;
 /// A broken rule: code, measured figure, tolerance.
 type Broken = (FaultCode, f64, f64);
 
-impl Engine {
+impl<D: Driver> Engine<D> {
     /// Step 2: every rule on every axis with fresh data from an online board.
     pub(crate) fn supervise(&mut self) {
         let now = self.now;

@@ -187,7 +187,7 @@ fn engine_side() -> EngineSide {
         ],
         ..EngineConfig::default()
     };
-    let (full, full_control) = IdealBoard::new(1, &GoalKind::ALL);
+    let (full, full_control) = IdealBoard::boxed(1, &GoalKind::ALL);
     // Its smallest steps at 100 counts/mm: 0.5 mm/s (velocity goals, searches), 0.2 mm/s
     // (position profiles), 10 mm/s².
     full_control.lock().unwrap().floor = RateFloor {
@@ -199,7 +199,7 @@ fn engine_side() -> EngineSide {
         .into_iter()
         .filter(|kind| !matches!(kind, GoalKind::Off | GoalKind::Home))
         .collect();
-    let (plain, plain_control) = IdealBoard::new(1, &plain_goals);
+    let (plain, plain_control) = IdealBoard::boxed(1, &plain_goals);
     let engine = Engine::new(config, vec![full, plain]).expect("valid config");
     let mut side = EngineSide {
         engine,

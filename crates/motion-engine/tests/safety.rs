@@ -263,7 +263,7 @@ fn bad_values_are_refused_and_nothing_reaches_the_wire() {
 fn unsupported_goals_are_refused_with_a_reason() {
     use motion_drivers::{GoalKind, LinkKind};
     use motion_engine::{BusConfig, DeviceConfig, Engine, EngineConfig};
-    let (board, _) = IdealBoard::new(1, &[GoalKind::Off, GoalKind::Stop, GoalKind::Power]);
+    let (board, _) = IdealBoard::boxed(1, &[GoalKind::Off, GoalKind::Stop, GoalKind::Power]);
     let config = EngineConfig {
         name: "caps".into(),
         tick_hz: 1000,

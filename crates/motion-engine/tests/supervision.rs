@@ -43,7 +43,7 @@ fn rig(
         signals,
         ..EngineConfig::default()
     };
-    let (board, control) = IdealBoard::new(2, &ALL_GOALS);
+    let (board, control) = IdealBoard::boxed(2, &ALL_GOALS);
     let engine = Engine::new(config, vec![board]).expect("valid config");
     let mut harness = Harness::new(engine);
     harness.ticks(3);
@@ -388,7 +388,7 @@ fn goals_wait_for_a_starting_board_and_its_start_up_stop() {
         axes: vec![axis("x", 0, 0)],
         ..EngineConfig::default()
     };
-    let (board, control) = IdealBoard::new(1, &ALL_GOALS);
+    let (board, control) = IdealBoard::boxed(1, &ALL_GOALS);
     control.lock().unwrap().starting = true;
     let mut h = Harness::new(Engine::new(config, vec![board]).expect("valid"));
     h.ticks(5);
@@ -520,7 +520,7 @@ fn claims_lapse_after_their_lease_unless_renewed() {
         claim_lease: Duration::from_millis(100),
         ..EngineConfig::default()
     };
-    let (board, _) = IdealBoard::new(2, &ALL_GOALS);
+    let (board, _) = IdealBoard::boxed(2, &ALL_GOALS);
     let mut h = Harness::new(Engine::new(config, vec![board]).expect("valid"));
     h.ticks(3);
     for axis in [0, 1] {

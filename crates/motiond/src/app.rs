@@ -6,7 +6,6 @@ use std::io::{IsTerminal, Write};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
 
-use motion_drivers::Driver;
 use motion_engine::Engine;
 use motion_ipc::{ClientId, DeviceState, ServerPidFile, read_text};
 use motion_link::{Link, LinkConfig};
@@ -97,7 +96,7 @@ pub fn run(config: ServerConfig, options: RunOptions) -> Result<(), ServerError>
     }
 
     let params = crate::params::machine_params(&config);
-    let drivers: Vec<Box<dyn Driver>> = crate::boards::build(&config)?;
+    let drivers = crate::boards::build(&config)?;
     let engine = Engine::new(config.engine_config(), drivers).map_err(ServerError::Engine)?;
     let links = open_links(&config)?;
 

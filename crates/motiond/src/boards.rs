@@ -6,8 +6,8 @@
 //! and validated by the board through `config/validate/machine/`); each board's driver is
 //! built from the `DriverSpec` filled in `drivers.rs`.
 
+pub use motion_boards::AnyDriver;
 use motion_boards::{Board, SimBoard};
-use motion_drivers::Driver;
 use motion_link::sim::{SimLink, SpiBus, StreamBus};
 
 use crate::config::{DeviceSpec, ServerConfig, Transport};
@@ -31,16 +31,16 @@ pub fn board_of(device: &DeviceSpec) -> &'static dyn Board {
     motion_boards::board(device.model)
 }
 
-/// Builds the drivers of `config`'s devices, in config order.
+/// Builds the drivers of `config`'s devices, in config order, as the registry's enum the
+/// tick holds (`AnyDriver`: static dispatch, each driver inline in its link's bus).
 ///
 /// # Errors
 /// The first device whose board refuses its spec.
-pub fn build(config: &ServerConfig) -> Result<Vec<Box<dyn Driver>>, BuildError> {
-    let mut built: Vec<Box<dyn Driver>> = Vec::with_capacity(config.devices.len());
+pub fn build(config: &ServerConfig) -> Result<Vec<AnyDriver>, BuildError> {
+    let mut built = Vec::with_capacity(config.devices.len());
     for (index, device) in config.devices.iter().enumerate() {
         let spec = drivers::driver_spec(config, index, device);
-        let driver = board_of(device)
-            .build(&spec)
+        let driver = motion_boards::build(&spec)
             .map_err(|error| drivers::spec_error(config, index, &error))?;
         built.push(driver);
     }

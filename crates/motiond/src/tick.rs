@@ -8,6 +8,8 @@ use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
 use iceoryx2::active_request::ActiveRequest;
 use iceoryx2::port::server::Server;
 use iceoryx2::port::update_connections::UpdateConnections;
+use motion_boards::AnyDriver;
+use motion_drivers::Driver;
 use motion_engine::{CommandPort, Engine};
 use motion_ipc::{
     ClientId, CommandReply, CommandRequest, DeviceState, FaultCode, LinkIo, MachineParams,
@@ -112,8 +114,8 @@ impl StatusLine {
 /// Everything the tick thread owns.
 #[derive(Debug)]
 pub struct TickSetup {
-    /// The engine, with its drivers.
-    pub engine: Engine,
+    /// The engine, with its drivers (the registry's enum: static dispatch).
+    pub engine: Engine<AnyDriver>,
     /// The tick's end of every link's I/O thread, in link order.
     pub ports: Vec<LinkPort>,
     /// Link names, in link order (for the stats).

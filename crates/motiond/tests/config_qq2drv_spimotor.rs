@@ -336,7 +336,7 @@ fn assert_qq2drv_keys(requests: &[qq2drv::Request<'_>]) {
 fn qq2drv_keys_are_written_at_start_up_and_again_after_a_reset() {
     let config = parse(QQ2DRV);
     let mut drivers = motiond::boards::build(&config).expect("drivers");
-    let driver = drivers[0].as_mut();
+    let driver = &mut drivers[0];
     let mut board = motion_sim::qq2drv::Qq2drvSim::default();
     let packets = run_qq2drv(driver, &mut board, Duration::ZERO, 50);
     let (ids, requests) = qq2drv_start_up_requests(&packets);
@@ -358,7 +358,7 @@ fn qq2drv_a_home_search_runs_the_configured_way_in_board_counts() {
     use motion_drivers::Goal;
     let config = parse(QQ2DRV);
     let mut drivers = motiond::boards::build(&config).expect("drivers");
-    let driver = drivers[0].as_mut();
+    let driver = &mut drivers[0];
     let mut board = motion_sim::qq2drv::Qq2drvSim::default();
     run_qq2drv(driver, &mut board, Duration::ZERO, 50);
     // Axis y homes towards its max (positive in mm); 200 transitions/mm reversed.
@@ -580,7 +580,7 @@ fn spimotor_keys_are_written_at_start_up_and_again_after_a_power_cycle() {
     use spimotor::{Coils, Write};
     let config = parse(SPIMOTOR);
     let mut drivers = motiond::boards::build(&config).expect("drivers");
-    let driver = drivers[0].as_mut();
+    let driver = &mut drivers[0];
     let mut board = motion_sim::spimotor::SpimotorSim::default();
     let writes = run_spimotor(driver, &mut board, Duration::ZERO, 30);
     // Port 0x10 "Set drive intensity for stepper mode" ← 96; port 0x44 ← 0x00 (one coil).
@@ -675,7 +675,7 @@ fn a_signal_on_an_spi_motor_is_refused_and_on_a_qq2drv_streams_its_channel() {
     );
     let config = parse(&text);
     let mut drivers = motiond::boards::build(&config).expect("drivers");
-    let driver = drivers[0].as_mut();
+    let driver = &mut drivers[0];
     let mut board = motion_sim::qq2drv::Qq2drvSim::default();
     run_qq2drv(driver, &mut board, Duration::ZERO, 50);
     assert_eq!(

@@ -3,6 +3,7 @@
 //! effective values `describe` shows, and the bytes the built driver puts on the wire.
 
 use core::time::Duration;
+use motion_drivers::Driver;
 use std::path::Path;
 
 use motion_link::Link;

@@ -74,7 +74,7 @@ impl CommandPort for Queue {
 }
 
 struct Robot {
-    engine: Engine,
+    engine: Engine<motiond::boards::AnyDriver>,
     links: Vec<Box<dyn Link>>,
     frame: Box<MotionFrame>,
     port: Queue,

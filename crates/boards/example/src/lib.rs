@@ -27,7 +27,7 @@ pub mod driver;
 pub mod sim;
 
 use motion_base::{LinkKind, Model, ModelFacts};
-use motion_board::{Board, LinkFacts, SimBoard};
+use motion_board::{Board, LinkFacts, SimBoard, TypedBoard};
 use motion_drivers::spec::{DeviceMachine, DriverSpec, Param, SpecError};
 use motion_drivers::{Driver, PinInfo};
 
@@ -81,9 +81,7 @@ impl Board for ExampleBoard {
     }
 
     fn build(&self, spec: &DriverSpec) -> Result<Box<dyn Driver>, SpecError> {
-        Ok(Box::new(ExampleDriver::new(
-            ExampleDriverConfig::from_spec(spec)?,
-        )))
+        Ok(Box::new(self.driver(spec)?))
     }
 
     fn params(&self, spec: &DriverSpec) -> Result<Vec<Param>, SpecError> {
@@ -96,5 +94,13 @@ impl Board for ExampleBoard {
             seed,
             ..ExampleSimConfig::default()
         })))
+    }
+}
+
+impl TypedBoard for ExampleBoard {
+    type Driver = ExampleDriver;
+
+    fn driver(&self, spec: &DriverSpec) -> Result<ExampleDriver, SpecError> {
+        Ok(ExampleDriver::new(ExampleDriverConfig::from_spec(spec)?))
     }
 }

@@ -11,7 +11,7 @@ mod sim;
 
 use motion_board::keys::{AxisContext, KeyIssues, KeyTable};
 use motion_board::machine::MachineView;
-use motion_board::{AxisKeys, Board, LinkFacts, SimBoard};
+use motion_board::{AxisKeys, Board, LinkFacts, SimBoard, TypedBoard};
 use motion_drivers::qq2drv::{PINS, Qq2drvDriver, Qq2drvDriverConfig};
 use motion_drivers::spec::{AxisMachine, DeviceMachine, DriverSpec, MachineKeys, Param, SpecError};
 use motion_drivers::{Driver, Model, PinInfo};
@@ -46,9 +46,7 @@ impl Board for Qq2drvBoard {
     }
 
     fn build(&self, spec: &DriverSpec) -> Result<Box<dyn Driver>, SpecError> {
-        Ok(Box::new(Qq2drvDriver::new(Qq2drvDriverConfig::from_spec(
-            spec,
-        )?)))
+        Ok(Box::new(self.driver(spec)?))
     }
 
     fn params(&self, spec: &DriverSpec) -> Result<Vec<Param>, SpecError> {
@@ -78,5 +76,13 @@ impl Board for Qq2drvBoard {
 
     fn simulate(&self, spec: &DriverSpec, seed: u64) -> SimBoard {
         SimBoard::Spi(Box::new(sim::model(spec, seed)))
+    }
+}
+
+impl TypedBoard for Qq2drvBoard {
+    type Driver = Qq2drvDriver;
+
+    fn driver(&self, spec: &DriverSpec) -> Result<Qq2drvDriver, SpecError> {
+        Ok(Qq2drvDriver::new(Qq2drvDriverConfig::from_spec(spec)?))
     }
 }

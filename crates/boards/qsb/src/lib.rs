@@ -13,7 +13,7 @@ mod keys;
 
 use motion_board::keys::{DeviceContext, KeyIssues, KeyTable};
 use motion_board::machine::MachineView;
-use motion_board::{Board, DeviceKeys, LinkFacts, SimBoard};
+use motion_board::{Board, DeviceKeys, LinkFacts, SimBoard, TypedBoard};
 use motion_drivers::qsb::{QsbDriver, QsbDriverConfig, pins};
 use motion_drivers::spec::{
     DeviceMachine, DriverSpec, Param, QsbDeviceKeys, QsbVariant, SpecError,
@@ -78,7 +78,7 @@ impl Board for QsbBoard {
     }
 
     fn build(&self, spec: &DriverSpec) -> Result<Box<dyn Driver>, SpecError> {
-        Ok(Box::new(QsbDriver::new(QsbDriverConfig::from_spec(spec)?)))
+        Ok(Box::new(self.driver(spec)?))
     }
 
     fn params(&self, spec: &DriverSpec) -> Result<Vec<Param>, SpecError> {
@@ -108,5 +108,13 @@ impl Board for QsbBoard {
             drive_enable,
             ..QsbSimConfig::default().with_counts_per_step(counts_per_step)
         })))
+    }
+}
+
+impl TypedBoard for QsbBoard {
+    type Driver = QsbDriver;
+
+    fn driver(&self, spec: &DriverSpec) -> Result<QsbDriver, SpecError> {
+        Ok(QsbDriver::new(QsbDriverConfig::from_spec(spec)?))
     }
 }

@@ -9,7 +9,7 @@
 mod keys;
 
 use motion_board::keys::{DeviceContext, KeyIssues, KeyTable};
-use motion_board::{AddressKey, Board, DeviceKeys, LinkFacts, SimBoard};
+use motion_board::{AddressKey, Board, DeviceKeys, LinkFacts, SimBoard, TypedBoard};
 use motion_drivers::spec::{
     DeviceMachine, DriverSpec, Param, SpecError, SpiDrive, SpimotorDeviceKeys,
 };
@@ -50,9 +50,7 @@ impl Board for SpimotorBoard {
     }
 
     fn build(&self, spec: &DriverSpec) -> Result<Box<dyn Driver>, SpecError> {
-        Ok(Box::new(SpimotorDriver::new(
-            SpimotorDriverConfig::from_spec(spec)?,
-        )))
+        Ok(Box::new(self.driver(spec)?))
     }
 
     fn params(&self, spec: &DriverSpec) -> Result<Vec<Param>, SpecError> {
@@ -96,5 +94,13 @@ impl Board for SpimotorBoard {
             seed,
             ..SpimotorSimConfig::default()
         })))
+    }
+}
+
+impl TypedBoard for SpimotorBoard {
+    type Driver = SpimotorDriver;
+
+    fn driver(&self, spec: &DriverSpec) -> Result<SpimotorDriver, SpecError> {
+        Ok(SpimotorDriver::new(SpimotorDriverConfig::from_spec(spec)?))
     }
 }

@@ -11,7 +11,7 @@ mod sim;
 
 use motion_board::keys::{AxisContext, DeviceContext, KeyIssues, KeyTable};
 use motion_board::machine::MachineView;
-use motion_board::{AddressKey, AxisKeys, Board, DeviceKeys, LinkFacts, SimBoard};
+use motion_board::{AddressKey, AxisKeys, Board, DeviceKeys, LinkFacts, SimBoard, TypedBoard};
 use motion_drivers::spec::{
     AxisMachine, DeviceMachine, DriverSpec, MachineKeys, PackVariant, Param, SpecError,
     TmcpackDeviceKeys,
@@ -97,9 +97,7 @@ impl Board for TmcpackBoard {
     }
 
     fn build(&self, spec: &DriverSpec) -> Result<Box<dyn Driver>, SpecError> {
-        Ok(Box::new(TmcpackDriver::new(
-            TmcpackDriverConfig::from_spec(spec)?,
-        )))
+        Ok(Box::new(self.driver(spec)?))
     }
 
     fn params(&self, spec: &DriverSpec) -> Result<Vec<Param>, SpecError> {
@@ -108,5 +106,13 @@ impl Board for TmcpackBoard {
 
     fn simulate(&self, spec: &DriverSpec, seed: u64) -> SimBoard {
         SimBoard::Stream(Box::new(sim::model(spec, seed)))
+    }
+}
+
+impl TypedBoard for TmcpackBoard {
+    type Driver = TmcpackDriver;
+
+    fn driver(&self, spec: &DriverSpec) -> Result<TmcpackDriver, SpecError> {
+        Ok(TmcpackDriver::new(TmcpackDriverConfig::from_spec(spec)?))
     }
 }

@@ -92,7 +92,7 @@ impl Driver for Scripted {
 
 const T0: Duration = Duration::ZERO;
 
-fn received(bus: &LinkBus, index: usize) -> String {
+fn received<D: Driver>(bus: &LinkBus<D>, index: usize) -> String {
     format!("{:?}", bus.drivers()[index])
 }
 

@@ -58,7 +58,12 @@ struct Channel {
 }
 
 impl IdealBoard {
-    pub fn new(channels: usize, supports: &[GoalKind]) -> (Box<Self>, Arc<Mutex<BoardControl>>) {
+    /// A board with `channels` channels taking `supports`, boxed as the engine holds it in
+    /// tests, and its control.
+    pub fn boxed(
+        channels: usize,
+        supports: &[GoalKind],
+    ) -> (Box<dyn Driver>, Arc<Mutex<BoardControl>>) {
         let control = Arc::new(Mutex::new(BoardControl::default()));
         let board = Box::new(Self {
             channels: vec![
@@ -360,8 +365,8 @@ pub fn two_link_engine() -> (Engine, Vec<Arc<Mutex<BoardControl>>>) {
         ],
         ..EngineConfig::default()
     };
-    let (board0, control0) = IdealBoard::new(2, &ALL_GOALS);
-    let (board1, control1) = IdealBoard::new(2, &ALL_GOALS);
+    let (board0, control0) = IdealBoard::boxed(2, &ALL_GOALS);
+    let (board1, control1) = IdealBoard::boxed(2, &ALL_GOALS);
     let engine = Engine::new(config, vec![board0, board1]).expect("valid config");
     (engine, vec![control0, control1])
 }

@@ -235,7 +235,7 @@ fn every_key_reaches_the_wire_at_start_up_and_again_after_a_power_cycle() {
         Duplex::Half,
         Box::new(Shared(Arc::clone(&sim))),
     );
-    let sent = run(&mut **driver, &mut link, Duration::ZERO, 2000, |_, _| {});
+    let sent = run(&mut *driver, &mut link, Duration::ZERO, 2000, |_, _| {});
     assert!(driver.status().online);
     let requests: Vec<Request> = sent.iter().map(|(_, r)| *r).collect();
     for want in expected() {
@@ -273,7 +273,7 @@ fn every_key_reaches_the_wire_at_start_up_and_again_after_a_power_cycle() {
         Duration::from_millis(6),
         "factory default again"
     );
-    let again = run(&mut **driver, &mut link, cycled_at, 6000, |_, _| {});
+    let again = run(&mut *driver, &mut link, cycled_at, 6000, |_, _| {});
     let requests: Vec<Request> = again.iter().map(|(_, r)| *r).collect();
     for want in expected() {
         assert!(
@@ -435,29 +435,23 @@ fn the_simulated_pack_has_the_switch_on_the_configured_side() {
         let mut link = motiond::boards::sim_link(&config, 0);
         let mut homing = false;
         let mut done = None;
-        run(
-            &mut **driver,
-            &mut link,
-            Duration::ZERO,
-            15_000,
-            |now, d| {
-                if !homing && d.status().online && now > Duration::from_millis(1500) {
-                    d.set_goal(
-                        now,
-                        0,
-                        Goal::Home {
-                            velocity: 20.0 * 640.0,
-                        },
-                    )
-                    .expect("home");
-                    homing = true;
-                }
-                let state = d.channel(0);
-                if homing && done.is_none() && (state.homed || state.fault.is_some()) {
-                    done = Some((state.homed, state.fault));
-                }
-            },
-        );
+        run(&mut *driver, &mut link, Duration::ZERO, 15_000, |now, d| {
+            if !homing && d.status().online && now > Duration::from_millis(1500) {
+                d.set_goal(
+                    now,
+                    0,
+                    Goal::Home {
+                        velocity: 20.0 * 640.0,
+                    },
+                )
+                .expect("home");
+                homing = true;
+            }
+            let state = d.channel(0);
+            if homing && done.is_none() && (state.homed || state.fault.is_some()) {
+                done = Some((state.homed, state.fault));
+            }
+        });
         assert_eq!(done, Some((true, None)), "side {side}: homed, no fault");
     }
 }
