@@ -147,27 +147,16 @@ impl Validator<'_, '_> {
         value.as_ref()
     }
 
+    /// `value` when it lies in `range`; otherwise an issue naming the range (the same
+    /// check the boards' keys use).
     pub(crate) fn int_in<T: IntValue>(
         &mut self,
         value: &Spanned<T>,
         key: &str,
         range: core::ops::RangeInclusive<i64>,
     ) -> Option<i64> {
-        let v = value.get_ref().wide();
-        if (i128::from(*range.start())..=i128::from(*range.end())).contains(&v) {
-            i64::try_from(v).ok()
-        } else {
-            self.issue(
-                value.span(),
-                key,
-                format!(
-                    "{v} is out of range; allowed: {}..={}",
-                    range.start(),
-                    range.end()
-                ),
-            );
-            None
-        }
+        let issues: &mut dyn motion_board::keys::KeyIssues = self;
+        issues.int_in(value, key, range)
     }
 
     pub(super) fn name(
