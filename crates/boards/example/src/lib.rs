@@ -49,8 +49,6 @@ pub const MODEL: Model = Model::new(&FACTS);
 #[derive(Debug, Clone, Copy)]
 pub struct ExampleBoard;
 
-/// The registry's entry.
-pub static BOARD: ExampleBoard = ExampleBoard;
 
 impl Board for ExampleBoard {
     fn model(&self) -> Model {

@@ -20,8 +20,6 @@ use motion_drivers::{Driver, Model, PinInfo};
 #[derive(Debug, Clone, Copy)]
 pub struct Qq2drvBoard;
 
-/// The registry's entry.
-pub static BOARD: Qq2drvBoard = Qq2drvBoard;
 
 impl Board for Qq2drvBoard {
     fn model(&self) -> Model {

@@ -28,8 +28,6 @@ const USB_FRAME: Duration = Duration::from_millis(1);
 #[derive(Debug, Clone, Copy)]
 pub struct QsbBoard;
 
-/// The registry's entry.
-pub static BOARD: QsbBoard = QsbBoard;
 
 impl Board for QsbBoard {
     fn model(&self) -> Model {

@@ -21,8 +21,6 @@ use motion_sim::spimotor::{Drive, SpimotorSim, SpimotorSimConfig};
 #[derive(Debug, Clone, Copy)]
 pub struct SpimotorBoard;
 
-/// The registry's entry.
-pub static BOARD: SpimotorBoard = SpimotorBoard;
 
 impl Board for SpimotorBoard {
     fn model(&self) -> Model {

@@ -23,8 +23,6 @@ use motion_drivers::{Driver, Model, PinInfo};
 #[derive(Debug, Clone, Copy)]
 pub struct TmcpackBoard;
 
-/// The registry's entry.
-pub static BOARD: TmcpackBoard = TmcpackBoard;
 
 impl Board for TmcpackBoard {
     fn model(&self) -> Model {
