@@ -163,6 +163,19 @@ pub struct Client<S: Service> {
     pub(crate) remote: Option<crate::link::Link>,
 }
 
+/// Refuses a server whose contract is not this client's (`version` is the schema version
+/// its description carries).
+pub(crate) fn check_schema(server: &str, version: u32) -> Result<(), ConnectError> {
+    if version == SCHEMA_VERSION {
+        return Ok(());
+    }
+    Err(ConnectError::SchemaMismatch {
+        name: server.to_owned(),
+        server: version,
+        client: SCHEMA_VERSION,
+    })
+}
+
 impl<S: Service> fmt::Debug for Client<S> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_struct("Client")
@@ -252,13 +265,7 @@ impl<S: Service> Client<S> {
             }
             std::thread::sleep(Duration::from_millis(5));
         };
-        if description.schema_version != SCHEMA_VERSION {
-            return Err(ConnectError::SchemaMismatch {
-                name: server,
-                server: description.schema_version,
-                client: SCHEMA_VERSION,
-            });
-        }
+        check_schema(&server, description.schema_version)?;
         let axis_count = description.axes().len();
         let session = Session::new(
             &server,
@@ -267,9 +274,24 @@ impl<S: Service> Client<S> {
             description.start_time_ns,
         );
         drop(description);
+        Ok(Self::assemble(
+            &options, server, node, names, info, session, axis_count,
+        ))
+    }
 
+    /// The client made of what connecting found, over either transport (a remote client
+    /// then sets its `remote` link): no port is open yet beyond the description's.
+    pub(crate) fn assemble(
+        options: &ClientBuilder,
+        server: String,
+        node: Node<S>,
+        names: ServiceNames,
+        info: LatestCache<S, ServerInfo>,
+        session: Session,
+        axis_count: usize,
+    ) -> Self {
         let id = ClientId::from_u128(node.id().value());
-        Ok(Self {
+        Self {
             server,
             node,
             id,
@@ -287,7 +309,7 @@ impl<S: Service> Client<S> {
             jogs: RefCell::new(JogTable::default()),
             #[cfg(feature = "zenoh")]
             remote: None,
-        })
+        }
     }
 
     /// Whether this client talks to its server through a bridge (feature `zenoh`).

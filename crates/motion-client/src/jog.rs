@@ -247,13 +247,7 @@ impl<'c, S: Service> JogGuard<'c, S> {
     /// The reason the server gave when it last refused a renewal (e-stop, claim, limit);
     /// once refused, the guard stops renewing and the axis is stopped by the server.
     pub fn refused(&self) -> Option<Reason> {
-        self.client
-            .jogs
-            .borrow()
-            .entries
-            .iter()
-            .find(|entry| entry.id == self.id)
-            .and_then(|entry| entry.refused)
+        self.entry().and_then(|entry| entry.refused)
     }
 
     /// Stops the axis and returns the server's answer to the stop. After a server restart

@@ -28,12 +28,12 @@
 //! allow-list, over its rate limit, or held up in the network for longer than the bridge
 //! accepts.
 
-use std::cell::RefCell;
 use std::time::Instant;
 
 use iceoryx2::service::Service;
-use motion_ipc::{SCHEMA_VERSION, ServerInfo, ServiceNames};
+use motion_ipc::{ServerInfo, ServiceNames};
 
+use crate::client::check_schema;
 pub use crate::link::DEFAULT_IDENTITY;
 use crate::link::Link;
 use crate::received::LatestCache;
@@ -61,13 +61,7 @@ impl<S: Service> Client<S> {
                 endpoint: endpoint.to_owned(),
                 why,
             })?;
-        if first.value.schema_version != SCHEMA_VERSION {
-            return Err(ConnectError::SchemaMismatch {
-                name: server,
-                server: first.value.schema_version,
-                client: SCHEMA_VERSION,
-            });
-        }
+        check_schema(&server, first.value.schema_version)?;
         let axis_count = first.value.axes().len();
         let session = Session::new(
             &server,
@@ -85,25 +79,9 @@ impl<S: Service> Client<S> {
                 detail: other.to_string(),
             },
         })?;
-        let id = motion_ipc::ClientId::from_u128(node.id().value());
-        Ok(Self {
-            server,
-            node,
-            id,
-            names,
-            connect_timeout: options.connect_timeout,
-            reply_timeout: options.reply_timeout,
-            info,
-            frames: RefCell::new(None),
-            commands: RefCell::new(None),
-            stats: RefCell::new(None),
-            params: RefCell::new(None),
-            session,
-            sequence: std::cell::Cell::new(0),
-            goal_ticks: RefCell::new(vec![(0, 0); axis_count]),
-            jogs: RefCell::new(crate::jog::JogTable::default()),
-            remote: Some(link),
-        })
+        let mut client = Self::assemble(options, server, node, names, info, session, axis_count);
+        client.remote = Some(link);
+        Ok(client)
     }
 
     /// The zenoh endpoint of the bridge this client talks through, when remote.

@@ -3,7 +3,16 @@
 //! decoded with the protocol crates.
 
 use core::time::Duration;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+use motion_sim::qsb::{QsbSim, QsbSimConfig};
+use motion_sim::spimotor::{SpimotorSim, SpimotorSimConfig};
+use motion_testkit::pty_board::{PtyBoard, PtyOptions};
+use motion_testkit::socket_board::SocketBoard;
+
+use crate::harness::Harness;
 
 /// `[server]` of a generated config.
 pub fn server_section(name: &str, extra: &str) -> String {
@@ -15,6 +24,9 @@ pub const QSB_STEPS_PER_MM: f64 = 10.0;
 /// The QSB axis's limits (mm), max velocity (mm/s) and acceleration (mm/s²).
 pub const QSB_LIMITS: (f64, f64, f64, f64) = (-1000.0, 1000.0, 100.0, 1000.0);
 
+/// The QSB-M's baud rate (its link's `baud`).
+pub const QSB_BAUD: u32 = 230_400;
+
 /// A QSB-M (`feeder_qsb`, axis `feeder`) on the serial link `usb` at `tty`.
 pub fn qsb_section(tty: &Path) -> String {
     let (min, max, velocity, accel) = QSB_LIMITS;
@@ -24,7 +36,7 @@ pub fn qsb_section(tty: &Path) -> String {
 name = "usb"
 type = "serial"
 path = "{}"
-baud = 230400
+baud = {QSB_BAUD}
 
 [[device]]
 name = "feeder_qsb"
@@ -109,6 +121,78 @@ max_accel = 50.0
 "#,
         tty.display()
     )
+}
+
+/// A fresh simulated QSB-M, as its defaults make it.
+pub fn new_qsb() -> Arc<Mutex<QsbSim>> {
+    Arc::new(Mutex::new(QsbSim::new(QsbSimConfig::default())))
+}
+
+/// A fresh simulated SPI_motor stepper, as its defaults make it.
+pub fn new_stepper() -> Arc<Mutex<SpimotorSim>> {
+    Arc::new(Mutex::new(SpimotorSim::new(SpimotorSimConfig::default())))
+}
+
+/// Serves `qsb` on a pty at `tty` at the QSB's baud rate.
+pub fn serve_qsb(
+    tty: &Path,
+    qsb: &Arc<Mutex<QsbSim>>,
+    epoch: Instant,
+    options: PtyOptions,
+) -> anyhow::Result<PtyBoard> {
+    Ok(PtyBoard::try_start(
+        tty,
+        Arc::clone(qsb),
+        epoch,
+        QSB_BAUD,
+        options,
+    )?)
+}
+
+/// A QSB-M on a pty and an SPI_motor stepper on an SPI socket, served by this process for a
+/// campaign's server (`<name>.tty` and `<name>.sock` in the harness's directory).
+pub struct QsbAndStepper {
+    /// The simulated QSB-M.
+    pub qsb: Arc<Mutex<QsbSim>>,
+    /// The simulated stepper.
+    pub stepper: Arc<Mutex<SpimotorSim>>,
+    /// The pty serving the QSB-M (what the server sent it).
+    pub qsb_board: PtyBoard,
+    /// The socket serving the stepper (what the server sent it).
+    pub stepper_board: SocketBoard,
+    /// The QSB-M's pty.
+    pub tty: PathBuf,
+    /// The stepper's socket.
+    pub socket: PathBuf,
+}
+
+impl QsbAndStepper {
+    /// Fresh boards served for the campaign instance `name`, their model time from `epoch`.
+    pub fn serve(h: &Harness, name: &str, epoch: Instant) -> anyhow::Result<Self> {
+        let qsb = new_qsb();
+        let stepper = new_stepper();
+        let tty = h.path(&format!("{name}.tty"));
+        let socket = h.path(&format!("{name}.sock"));
+        let qsb_board = serve_qsb(&tty, &qsb, epoch, PtyOptions::default())?;
+        let stepper_board = SocketBoard::try_start(&socket, Arc::clone(&stepper), epoch)?;
+        Ok(Self {
+            qsb,
+            stepper,
+            qsb_board,
+            stepper_board,
+            tty,
+            socket,
+        })
+    }
+
+    /// The config of both boards: [`qsb_section`] then [`spimotor_section`].
+    pub fn sections(&self) -> String {
+        format!(
+            "{}{}",
+            qsb_section(&self.tty),
+            spimotor_section(&self.socket)
+        )
+    }
 }
 
 /// A QSB command line the server sent, with the model time of its first byte.

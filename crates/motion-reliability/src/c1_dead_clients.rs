@@ -13,19 +13,19 @@
 use core::time::Duration;
 use std::io::Read as _;
 use std::process::{Child, Command, Stdio};
-use std::sync::{Arc, Mutex};
+use std::sync::Mutex;
 use std::time::Instant;
 
 use anyhow::{Context, bail};
 use motion_ipc::{AxisFlags, AxisMode, CommandKind, DeviceState, MotionFrame};
-use motion_sim::qsb::{QsbSim, QsbSimConfig};
+use motion_sim::qsb::QsbSim;
 use motion_sim::rng::SimRng;
 use motion_testkit::RawClient;
 use motion_testkit::pty_board::{PtyBoard, PtyOptions};
 use nix::sys::signal::{Signal, kill};
 use nix::unistd::Pid;
 
-use crate::boards::{is_qsb_stop, qsb_lines, qsb_section, server_section};
+use crate::boards::{is_qsb_stop, new_qsb, qsb_lines, qsb_section, serve_qsb, server_section};
 use crate::harness::{Harness, Samples};
 use crate::report::Row;
 
@@ -52,15 +52,9 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
     row.runs = format!("{count} × SIGKILL, {count} × SIGSTOP of a jogging client");
     let name = h.name("dead");
     let epoch = Instant::now();
-    let board = Arc::new(Mutex::new(QsbSim::new(QsbSimConfig::default())));
+    let board = new_qsb();
     let tty = h.path(&format!("{name}.tty"));
-    let served = PtyBoard::try_start(
-        &tty,
-        Arc::clone(&board),
-        epoch,
-        230_400,
-        PtyOptions::default(),
-    )?;
+    let served = serve_qsb(&tty, &board, epoch, PtyOptions::default())?;
     let config = h.write(
         &format!("{name}.toml"),
         &format!(

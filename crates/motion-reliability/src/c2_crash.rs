@@ -14,14 +14,12 @@ use anyhow::{Context, bail};
 use iceoryx2::prelude::ipc;
 use motion_client::{Client, ClientBuilder, ClientError};
 use motion_ipc::{AxisFlags, AxisMode};
-use motion_sim::qsb::{QsbSim, QsbSimConfig};
-use motion_sim::spimotor::{SpimotorSim, SpimotorSimConfig};
-use motion_testkit::pty_board::{PtyBoard, PtyOptions};
-use motion_testkit::socket_board::SocketBoard;
+use motion_sim::qsb::QsbSim;
+use motion_sim::spimotor::SpimotorSim;
 use motion_testkit::{RawClient, Server};
 use nix::sys::signal::Signal;
 
-use crate::boards::{qsb_section, server_section, spimotor_section};
+use crate::boards::{QsbAndStepper, server_section};
 use crate::c1_dead_clients::online;
 use crate::harness::{Harness, Samples};
 use crate::report::Row;
@@ -50,27 +48,17 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
     row.runs = format!("{count} × SIGKILL mid-move, restart on the same name");
     let name = h.name("crash");
     let epoch = Instant::now();
+    let served = QsbAndStepper::serve(h, &name, epoch)?;
     let boards = Boards {
-        qsb: Arc::new(Mutex::new(QsbSim::new(QsbSimConfig::default()))),
-        stepper: Arc::new(Mutex::new(SpimotorSim::new(SpimotorSimConfig::default()))),
+        qsb: Arc::clone(&served.qsb),
+        stepper: Arc::clone(&served.stepper),
     };
-    let tty = h.path(&format!("{name}.tty"));
-    let socket = h.path(&format!("{name}.sock"));
-    let _qsb = PtyBoard::try_start(
-        &tty,
-        Arc::clone(&boards.qsb),
-        epoch,
-        230_400,
-        PtyOptions::default(),
-    )?;
-    let _stepper = SocketBoard::try_start(&socket, Arc::clone(&boards.stepper), epoch)?;
     let config = h.write(
         &format!("{name}.toml"),
         &format!(
-            "{}{}{}",
+            "{}{}",
             server_section(&name, "liveness_check_ms = 100"),
-            qsb_section(&tty),
-            spimotor_section(&socket)
+            served.sections()
         ),
     )?;
     let mut server = h.server(&config)?;

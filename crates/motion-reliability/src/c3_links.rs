@@ -13,16 +13,14 @@ use anyhow::bail;
 use iceoryx2::prelude::ipc;
 use motion_client::{Client, ClientBuilder};
 use motion_ipc::{AxisFlags, AxisMode, DeviceState, FaultCode};
-use motion_sim::qsb::{QsbSim, QsbSimConfig};
-use motion_sim::spimotor::{SpimotorSim, SpimotorSimConfig};
 use motion_sim::tmcpack::{TmcpackSim, TmcpackSimConfig};
 use motion_testkit::RawClient;
 use motion_testkit::pty_board::{PtyBoard, PtyOptions};
 use motion_testkit::socket_board::SocketBoard;
-use nix::sys::signal::Signal;
 
 use crate::boards::{
-    is_qsb_motion, qsb_lines, qsb_section, server_section, spimotor_section, tmcpack_section,
+    is_qsb_motion, new_qsb, new_stepper, qsb_lines, qsb_section, serve_qsb, server_section,
+    spimotor_section, tmcpack_section,
 };
 use crate::c1_dead_clients::online;
 use crate::harness::{Harness, Samples, TickMeter};
@@ -75,15 +73,9 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
     let pack_tty = h.path(&format!("{name}-pack.tty"));
     let socket = h.path(&format!("{name}.sock"));
     let pack = Arc::new(Mutex::new(TmcpackSim::new(TmcpackSimConfig::default())));
-    let stepper = Arc::new(Mutex::new(SpimotorSim::new(SpimotorSimConfig::default())));
-    let mut qsb = Arc::new(Mutex::new(QsbSim::new(QsbSimConfig::default())));
-    let mut qsb_board = PtyBoard::try_start(
-        &tty,
-        Arc::clone(&qsb),
-        epoch,
-        230_400,
-        PtyOptions::default(),
-    )?;
+    let stepper = new_stepper();
+    let mut qsb = new_qsb();
+    let mut qsb_board = serve_qsb(&tty, &qsb, epoch, PtyOptions::default())?;
     let _pack_board = PtyBoard::try_start(
         &pack_tty,
         Arc::clone(&pack),
@@ -146,15 +138,9 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
             not_down += 1;
         }
         // A fresh board on the same path, as after a power cycle of the adapter.
-        qsb = Arc::new(Mutex::new(QsbSim::new(QsbSimConfig::default())));
+        qsb = new_qsb();
         let replugged = Instant::now();
-        qsb_board = PtyBoard::try_start(
-            &tty,
-            Arc::clone(&qsb),
-            epoch,
-            230_400,
-            PtyOptions::default(),
-        )?;
+        qsb_board = serve_qsb(&tty, &qsb, epoch, PtyOptions::default())?;
         let up = wait(&mut motion, &raw, Duration::from_secs(10), |f| {
             online(f, 0) && !f.axes()[0].flags().contains(AxisFlags::FAULT)
         });
@@ -230,13 +216,7 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
         resumed == 0,
         format!("{resumed} of {count} fresh boards were set moving by the old goal"),
     );
-    let alive = server.is_running();
-    let code = server.signal_and_wait(Signal::SIGTERM, Duration::from_secs(10));
-    row.check(
-        "server alive",
-        alive && code == Some(0),
-        format!("alive {alive}, exit {code:?}"),
-    );
+    h.check_alive_and_stop(&mut row, &mut server);
     for problem in problems {
         row.note(problem);
     }

@@ -10,18 +10,16 @@
 
 use core::time::Duration;
 use std::collections::BTreeSet;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 use std::time::Instant;
 
 use anyhow::bail;
 use iceoryx2::prelude::*;
 use motion_ipc::{CommandKind, CommandRequest, FaultCode};
-use motion_sim::qsb::{QsbSim, QsbSimConfig};
 use motion_testkit::RawClient;
-use motion_testkit::pty_board::{LineNoise, PtyBoard, PtyOptions};
-use nix::sys::signal::Signal;
+use motion_testkit::pty_board::{LineNoise, PtyOptions};
 
-use crate::boards::{qsb_section, server_section};
+use crate::boards::{new_qsb, qsb_section, serve_qsb, server_section};
 use crate::c1_dead_clients::online;
 use crate::harness::{Harness, server_stats};
 use crate::report::Row;
@@ -39,14 +37,13 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
     row.runs = format!("{seconds} s at each bit-error rate 0, 1e-6 … 1e-2 (QSB → motiond)");
     let name = h.name("noise");
     let epoch = Instant::now();
-    let board = Arc::new(Mutex::new(QsbSim::new(QsbSimConfig::default())));
+    let board = new_qsb();
     let noise = LineNoise::new(h.seed ^ 0x0B17);
     let tty = h.path(&format!("{name}.tty"));
-    let served = PtyBoard::try_start(
+    let served = serve_qsb(
         &tty,
-        Arc::clone(&board),
+        &board,
         epoch,
-        230_400,
         PtyOptions {
             noise: Some(Arc::clone(&noise)),
             log_sent: true,
@@ -166,13 +163,7 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
         "above ber 1e-4 false accepts and faults are reported, not judged: the QSB's line \
          format has no checksum, and two corrupted lines in a row pass the driver's guard",
     );
-    let alive = server.is_running();
-    let code = server.signal_and_wait(Signal::SIGTERM, Duration::from_secs(10));
-    row.check(
-        "server alive",
-        alive && code == Some(0),
-        format!("alive {alive}, exit {code:?}"),
-    );
+    h.check_alive_and_stop(&mut row, &mut server);
     Ok(row)
 }
 

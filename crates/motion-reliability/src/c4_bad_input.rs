@@ -9,23 +9,18 @@
 
 use core::time::Duration;
 use std::collections::BTreeMap;
-use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use anyhow::bail;
 use iceoryx2::prelude::*;
 use motion_ipc::{ClientId, CommandKind, CommandReply, CommandRequest, Reason, SCHEMA_VERSION};
-use motion_sim::qsb::{QsbSim, QsbSimConfig};
 use motion_sim::rng::SimRng;
-use motion_sim::spimotor::{SpimotorSim, SpimotorSimConfig};
 use motion_testkit::RawClient;
-use motion_testkit::pty_board::{PtyBoard, PtyOptions};
-use motion_testkit::socket_board::SocketBoard;
 use nix::sys::signal::Signal;
 
 use crate::boards::{
-    FOCUS_LIMITS, QSB_LIMITS, qsb_lines, qsb_out_of_limits, qsb_section, server_section,
-    spimotor_out_of_limits, spimotor_position_outside, spimotor_section,
+    FOCUS_LIMITS, QSB_LIMITS, QsbAndStepper, qsb_lines, qsb_out_of_limits, server_section,
+    spimotor_out_of_limits, spimotor_position_outside,
 };
 use crate::c1_dead_clients::online;
 use crate::harness::{Harness, TickMeter};
@@ -49,26 +44,14 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
     row.runs = format!("{total} random and adversarial requests at 10 per tick, 2 clients");
     let name = h.name("input");
     let epoch = Instant::now();
-    let qsb = Arc::new(Mutex::new(QsbSim::new(QsbSimConfig::default())));
-    let stepper = Arc::new(Mutex::new(SpimotorSim::new(SpimotorSimConfig::default())));
-    let tty = h.path(&format!("{name}.tty"));
-    let socket = h.path(&format!("{name}.sock"));
-    let qsb_board = PtyBoard::try_start(
-        &tty,
-        Arc::clone(&qsb),
-        epoch,
-        230_400,
-        PtyOptions::default(),
-    )?;
-    let stepper_board = SocketBoard::try_start(&socket, Arc::clone(&stepper), epoch)?;
+    let boards = QsbAndStepper::serve(h, &name, epoch)?;
     let signal = "\n[[signal]]\nname = \"lamp\"\ndevice = \"feeder_qsb\"\npin = \"io3\"\nkind = \"digital-out\"\nsafe = false\n";
     let config = h.write(
         &format!("{name}.toml"),
         &format!(
-            "{}{}{}{signal}",
+            "{}{}{signal}",
             server_section(&name, "liveness_check_ms = 100"),
-            qsb_section(&tty),
-            spimotor_section(&socket)
+            boards.sections()
         ),
     )?;
     let mut server = h.server(&config)?;
@@ -162,7 +145,7 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
         }
         // Where the stepper really is (velocity runs are stopped at the limits by the
         // engine, not by the bytes on the wire).
-        if let Ok(board) = stepper.lock() {
+        if let Ok(board) = boards.stepper.lock() {
             let position = board.current_position();
             extreme = extreme.max(position.unsigned_abs());
             if let Some(outside) = spimotor_position_outside(position)
@@ -183,12 +166,13 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
     // Still answering after the attack?
     let answers = owner.try_command(0, CommandKind::Stop, [0.0; 3]).is_ok();
     std::thread::sleep(Duration::from_millis(300));
-    let mut violations: Vec<String> = qsb_lines(&qsb_board.take_received())
+    let mut violations: Vec<String> = qsb_lines(&boards.qsb_board.take_received())
         .iter()
         .filter_map(|l| qsb_out_of_limits(&l.line))
         .collect();
     violations.extend(
-        stepper_board
+        boards
+            .stepper_board
             .take_transactions()
             .iter()
             .filter_map(|(_, mosi)| spimotor_out_of_limits(mosi)),

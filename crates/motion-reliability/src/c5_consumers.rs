@@ -15,15 +15,11 @@ use std::time::Instant;
 use anyhow::bail;
 use iceoryx2::prelude::*;
 use motion_client::ClientBuilder;
-use motion_sim::qsb::{QsbSim, QsbSimConfig};
 use motion_sim::rng::SimRng;
-use motion_sim::spimotor::{SpimotorSim, SpimotorSimConfig};
 use motion_testkit::RawClient;
-use motion_testkit::pty_board::{PtyBoard, PtyOptions};
-use motion_testkit::socket_board::SocketBoard;
 use nix::sys::signal::Signal;
 
-use crate::boards::{qsb_section, server_section, spimotor_section};
+use crate::boards::{QsbAndStepper, server_section};
 use crate::c1_dead_clients::online;
 use crate::harness::{Harness, TickMeter, server_stats};
 use crate::report::Row;
@@ -102,22 +98,16 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
     );
     let name = h.name("consumers");
     let epoch = Instant::now();
-    let qsb = Arc::new(Mutex::new(QsbSim::new(QsbSimConfig::default())));
-    let stepper = Arc::new(Mutex::new(SpimotorSim::new(SpimotorSimConfig::default())));
-    let tty = h.path(&format!("{name}.tty"));
-    let socket = h.path(&format!("{name}.sock"));
-    let _qsb_board = PtyBoard::try_start(&tty, qsb, epoch, 230_400, PtyOptions::default())?;
-    let _stepper_board = SocketBoard::try_start(&socket, stepper, epoch)?;
+    let boards = QsbAndStepper::serve(h, &name, epoch)?;
     let config = h.write(
         &format!("{name}.toml"),
         &format!(
-            "{}{}{}",
+            "{}{}",
             server_section(
                 &name,
                 &format!("max_clients = {MAX_CLIENTS}\nrt_priority = 80")
             ),
-            qsb_section(&tty),
-            spimotor_section(&socket)
+            boards.sections()
         ),
     )?;
     let mut server = h.server(&config)?;

@@ -155,15 +155,15 @@ pub fn corpus(source: &str) -> Vec<Mutant> {
     let lines: Vec<&str> = source.lines().collect();
     let all = entries(&lines);
     let mut out = Vec::new();
-    let at = |e: &Entry| vec![(e.line + 1, e.key.clone())];
+    // The entry's key given `value` instead, found at its line.
+    let set_to = |kind: &'static str, e: &Entry, value: &str| Mutant {
+        kind,
+        what: format!("{}[{}].{} = {value}", e.table, e.index, e.key),
+        text: replace_line(&lines, e.line, &format!("{} = {value}", e.key)),
+        sites: vec![(e.line + 1, e.key.clone())],
+    };
     for e in &all {
-        let value = wrong_type(&e.value);
-        out.push(Mutant {
-            kind: "wrong type",
-            what: format!("{}[{}].{} = {value}", e.table, e.index, e.key),
-            text: replace_line(&lines, e.line, &format!("{} = {value}", e.key)),
-            sites: at(e),
-        });
+        out.push(set_to("wrong type", e, wrong_type(&e.value)));
     }
     for e in &all {
         if REQUIRED
@@ -200,7 +200,7 @@ pub fn corpus(source: &str) -> Vec<Mutant> {
                 kind: "duplicate",
                 what: format!("{table}[1] named as {table}[0]"),
                 text: replace_line(&lines, second.line, &format!("name = {}", first.value)),
-                sites: at(second),
+                sites: vec![(second.line + 1, second.key.clone())],
             });
         }
     }
@@ -224,12 +224,7 @@ pub fn corpus(source: &str) -> Vec<Mutant> {
             ("axis", "channel") => "99",
             _ => continue,
         };
-        out.push(Mutant {
-            kind: "dangling reference",
-            what: format!("{}[{}].{} = {bad}", e.table, e.index, e.key),
-            text: replace_line(&lines, e.line, &format!("{} = {bad}", e.key)),
-            sites: at(e),
-        });
+        out.push(set_to("dangling reference", e, bad));
     }
     for e in &all {
         let Some((_, _, values)) = OUT_OF_RANGE
@@ -244,12 +239,7 @@ pub fn corpus(source: &str) -> Vec<Mutant> {
             if value.starts_with("0x") && !e.value.starts_with("0x") {
                 continue;
             }
-            out.push(Mutant {
-                kind: "out of range",
-                what: format!("{}[{}].{} = {value}", e.table, e.index, e.key),
-                text: replace_line(&lines, e.line, &format!("{} = {value}", e.key)),
-                sites: at(e),
-            });
+            out.push(set_to("out of range", e, value));
         }
     }
     // Soft limits the wrong way round, on every axis.

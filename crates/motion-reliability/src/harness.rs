@@ -14,6 +14,7 @@ use anyhow::{Context, bail};
 use iceoryx2::prelude::*;
 use motion_ipc::{MotionFrame, ServerStats, ServiceNames};
 use motion_testkit::Server;
+use nix::sys::signal::Signal;
 
 /// The campaigns' environment.
 #[derive(Debug)]
@@ -169,6 +170,18 @@ impl Harness {
         list_files(&self.iox_root, &mut names);
         names.sort();
         names
+    }
+
+    /// Checks "server alive" in `row`: the server still runs, and exits with 0 on the
+    /// SIGTERM this sends it.
+    pub fn check_alive_and_stop(&self, row: &mut crate::report::Row, server: &mut Server) {
+        let alive = server.is_running();
+        let code = server.signal_and_wait(Signal::SIGTERM, Duration::from_secs(10));
+        row.check(
+            "server alive",
+            alive && code == Some(0),
+            format!("alive {alive}, exit {code:?}"),
+        );
     }
 
     /// After the server exited with `code` and every client was dropped: waits 200 ms for

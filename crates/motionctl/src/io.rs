@@ -7,7 +7,7 @@ use anyhow::Context as _;
 use motion_client::ipc::{
     MotionFrame, ServerInfo, SignalFlags, SignalInfo, SignalInfoFlags, SignalKind, SignalState,
 };
-use motion_client::{Client, ClientError, signal_value_text};
+use motion_client::{Client, signal_value_text};
 use motion_wire::json::{self, signal_kind_name};
 use ratatui::layout::{Constraint, Layout};
 use ratatui::style::{Modifier, Style};
@@ -16,7 +16,7 @@ use serde_json::{Value, json};
 
 use crate::Service;
 use crate::cli::IoCommand;
-use crate::terminal::{Screen, quit_requested};
+use crate::terminal::{print_until_terminated, redraw_until_quit};
 
 /// Names of the set flags, in bit order.
 pub fn signal_flag_names(flags: SignalFlags) -> Vec<&'static str> {
@@ -190,21 +190,11 @@ fn get(client: &Client<Service>, name: &str, json: bool) -> anyhow::Result<()> {
 
 fn watch(client: &Client<Service>, json: bool, interval: Duration) -> anyhow::Result<()> {
     if json {
-        loop {
-            let frame = client.latest()?;
-            let info = client.info()?;
-            out!(
-                "{}",
-                json!({ "tick": frame.tick, "signals": all_json(&info, &frame) })
-            );
-            drop(frame);
-            if client.node().wait(interval).is_err() {
-                return Ok(());
-            }
-        }
+        return print_until_terminated(client, interval, |info, frame| {
+            json!({ "tick": frame.tick, "signals": all_json(info, frame) }).to_string()
+        });
     }
-    let mut screen = Screen::enter("io watch")?;
-    loop {
+    redraw_until_quit(client, "io watch", interval, |screen| {
         let frame = client.latest()?;
         let info = client.info()?;
         screen.terminal().draw(|ui| {
@@ -226,15 +216,8 @@ fn watch(client: &Client<Service>, json: bool, interval: Duration) -> anyhow::Re
             ui.render_widget(signal_table(&info, &frame), table);
             ui.render_widget(Paragraph::new("q or Ctrl-C quits"), foot);
         })?;
-        drop(frame);
-        if quit_requested(interval)? {
-            return Ok(());
-        }
-        match client.check_interrupted() {
-            Err(ClientError::Interrupted) => return Ok(()),
-            other => other?,
-        }
-    }
+        Ok(())
+    })
 }
 
 /// The live signal table of `io watch` and `watch`.

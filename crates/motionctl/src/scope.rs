@@ -3,8 +3,8 @@
 use core::time::Duration;
 use std::collections::VecDeque;
 
+use motion_client::Client;
 use motion_client::ipc::AxisInfo;
-use motion_client::{Client, ClientError};
 use ratatui::Frame;
 use ratatui::layout::{Constraint, Layout, Rect};
 use ratatui::style::{Color, Style};
@@ -13,7 +13,7 @@ use ratatui::text::Span;
 use ratatui::widgets::{Axis, Block, Borders, Chart, Dataset, GraphType, Paragraph};
 
 use crate::Service;
-use crate::terminal::{Screen, quit_requested};
+use crate::terminal::redraw_until_quit;
 
 /// Redraw period.
 const REDRAW: Duration = Duration::from_millis(33);
@@ -42,9 +42,8 @@ pub fn run(client: &Client<Service>, names: &[String], window: Duration) -> anyh
         .collect::<anyhow::Result<Vec<_>>>()?;
     let window_s = window.as_secs_f64().max(0.1);
     let spacing = window_s / POINTS;
-    let mut screen = Screen::enter("scope")?;
     let mut now_s = 0.0;
-    loop {
+    redraw_until_quit(client, "scope", REDRAW, |screen| {
         // Every frame that arrived since the last redraw, thinned to the plot's resolution.
         while let Some(frame) = client.try_next_frame()? {
             now_s = frame.time_ns as f64 / 1e9;
@@ -73,14 +72,8 @@ pub fn run(client: &Client<Service>, names: &[String], window: Duration) -> anyh
         screen
             .terminal()
             .draw(|ui| draw(ui, &traces, now_s, window_s))?;
-        if quit_requested(REDRAW)? {
-            return Ok(());
-        }
-        match client.check_interrupted() {
-            Err(ClientError::Interrupted) => return Ok(()),
-            other => other?,
-        }
-    }
+        Ok(())
+    })
 }
 
 fn bounds(points: &[(f64, f64)], fallback: [f64; 2]) -> [f64; 2] {

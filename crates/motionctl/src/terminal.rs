@@ -1,10 +1,13 @@
-//! The full-screen terminal of `watch` and `scope`: raw mode and the alternate screen,
-//! restored however the command ends.
+//! The full-screen terminal of `watch`, `io watch` and `scope`: raw mode and the alternate
+//! screen, restored however the command ends; the redraw loop they share, and the line
+//! loop of their `--json` forms.
 
 use core::time::Duration;
 use std::io::{self, IsTerminal as _, Stdout};
 
 use anyhow::{Context as _, bail};
+use motion_client::ipc::{MotionFrame, ServerInfo};
+use motion_client::{Client, ClientError};
 use ratatui::Terminal;
 use ratatui::backend::CrosstermBackend;
 use ratatui::crossterm::event::{self, Event, KeyCode, KeyEventKind, KeyModifiers};
@@ -12,6 +15,8 @@ use ratatui::crossterm::execute;
 use ratatui::crossterm::terminal::{
     EnterAlternateScreen, LeaveAlternateScreen, disable_raw_mode, enable_raw_mode,
 };
+
+use crate::Service;
 
 /// A terminal in raw mode on the alternate screen; restored when dropped.
 pub struct Screen {
@@ -60,6 +65,45 @@ impl Drop for Screen {
         let _ = disable_raw_mode();
         let _ = execute!(self.terminal.backend_mut(), LeaveAlternateScreen);
         let _ = self.terminal.show_cursor();
+    }
+}
+
+/// Takes over the terminal for `what` and calls `redraw` every `interval` until the user
+/// quits (q, Esc, Ctrl-C) or the process is asked to terminate (SIGINT/SIGTERM).
+pub fn redraw_until_quit(
+    client: &Client<Service>,
+    what: &str,
+    interval: Duration,
+    mut redraw: impl FnMut(&mut Screen) -> anyhow::Result<()>,
+) -> anyhow::Result<()> {
+    let mut screen = Screen::enter(what)?;
+    loop {
+        redraw(&mut screen)?;
+        if quit_requested(interval)? {
+            return Ok(());
+        }
+        match client.check_interrupted() {
+            Err(ClientError::Interrupted) => return Ok(()),
+            other => other?,
+        }
+    }
+}
+
+/// Prints one line, `line` of the server's description and its newest frame, every
+/// `interval` until the process is asked to terminate (SIGINT/SIGTERM).
+pub fn print_until_terminated(
+    client: &Client<Service>,
+    interval: Duration,
+    mut line: impl FnMut(&ServerInfo, &MotionFrame) -> String,
+) -> anyhow::Result<()> {
+    loop {
+        let frame = client.latest()?;
+        let info = client.info()?;
+        out!("{}", line(&info, &frame));
+        drop(frame);
+        if client.node().wait(interval).is_err() {
+            return Ok(());
+        }
     }
 }
 

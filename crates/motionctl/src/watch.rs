@@ -3,8 +3,8 @@
 
 use core::time::Duration;
 
+use motion_client::Client;
 use motion_client::ipc::{AxisWire, FrameFlags, MotionFrame, ServerInfo, ServerStats, read_text};
-use motion_client::{Client, ClientError};
 use ratatui::Frame;
 use ratatui::layout::{Constraint, Layout};
 use ratatui::style::{Color, Modifier, Style};
@@ -14,15 +14,14 @@ use ratatui::widgets::{Block, Borders, Cell, Paragraph, Row, Table};
 use crate::Service;
 use crate::describe::{devices_line, fault_name, flags_with_fault, frame_json, mode_name};
 use crate::io::signal_table;
-use crate::terminal::{Screen, quit_requested};
+use crate::terminal::{print_until_terminated, redraw_until_quit};
 
 /// Runs `watch` until q / Ctrl-C (table) or SIGINT/SIGTERM (`--json`).
 pub fn run(client: &Client<Service>, json: bool, interval: Duration) -> anyhow::Result<()> {
     if json {
         return run_json(client, interval);
     }
-    let mut screen = Screen::enter("watch")?;
-    loop {
+    redraw_until_quit(client, "watch", interval, |screen| {
         let frame = client.latest()?;
         let info = client.info()?;
         let stats = client.stats()?;
@@ -30,28 +29,15 @@ pub fn run(client: &Client<Service>, json: bool, interval: Duration) -> anyhow::
         screen
             .terminal()
             .draw(|ui| draw(ui, &info, &frame, stats.as_deref(), restart.as_deref()))?;
-        drop(frame);
-        if quit_requested(interval)? {
-            return Ok(());
-        }
-        match client.check_interrupted() {
-            Err(ClientError::Interrupted) => return Ok(()),
-            other => other?,
-        }
-    }
+        Ok(())
+    })
 }
 
 fn run_json(client: &Client<Service>, interval: Duration) -> anyhow::Result<()> {
     let axes: Vec<usize> = (0..client.axes().len()).collect();
-    loop {
-        let frame = client.latest()?;
-        let info = client.info()?;
-        out!("{}", frame_json(&info, &frame, &axes));
-        drop(frame);
-        if client.node().wait(interval).is_err() {
-            return Ok(());
-        }
-    }
+    print_until_terminated(client, interval, |info, frame| {
+        frame_json(info, frame, &axes).to_string()
+    })
 }
 
 fn micros(ns: u64) -> String {

@@ -186,26 +186,24 @@ impl Services {
         // first, so that its publisher and server slots are free for us.
         clean_dead_nodes();
         let max_nodes = max_clients + 2;
-        let tick = node
-            .service_builder(&service_name(names.tick())?)
-            .event()
-            .max_notifiers(1)
-            .max_listeners(max_clients)
-            .max_nodes(max_nodes)
-            .open_or_create()
-            .map_err(|e| ServiceError::service(&names.tick(), e))?;
+        let tick = event_service(
+            &node,
+            &service_name(names.tick())?,
+            1,
+            max_clients,
+            max_nodes,
+        )?;
         let tick_notifier = tick
             .notifier_builder()
             .create()
             .map_err(|e| ServiceError::service(&names.tick(), e))?;
-        let estop = node
-            .service_builder(&service_name(names.estop())?)
-            .event()
-            .max_notifiers(max_clients * ESTOP_NOTIFIERS_PER_CLIENT)
-            .max_listeners(1)
-            .max_nodes(max_nodes * ESTOP_NOTIFIERS_PER_CLIENT)
-            .open_or_create()
-            .map_err(|e| ServiceError::service(&names.estop(), e))?;
+        let estop = event_service(
+            &node,
+            &service_name(names.estop())?,
+            max_clients * ESTOP_NOTIFIERS_PER_CLIENT,
+            1,
+            max_nodes * ESTOP_NOTIFIERS_PER_CLIENT,
+        )?;
         let estop_listener = estop
             .listener_builder()
             .create()
@@ -269,6 +267,23 @@ impl Services {
             max_clients,
         })
     }
+}
+
+/// The event service `name` with room for these many notifiers, listeners and nodes.
+fn event_service(
+    node: &Node<Ipc>,
+    name: &ServiceName,
+    max_notifiers: usize,
+    max_listeners: usize,
+    max_nodes: usize,
+) -> Result<EventFactory<Ipc>, ServiceError> {
+    node.service_builder(name)
+        .event()
+        .max_notifiers(max_notifiers)
+        .max_listeners(max_listeners)
+        .max_nodes(max_nodes)
+        .open_or_create()
+        .map_err(|e| ServiceError::service(name.as_str(), e))
 }
 
 /// A publisher of a rarely changing state (info, stats, params): history 1, so a late

@@ -21,9 +21,10 @@ from .ipc import (
 )
 
 from .jog import Jog
+from .session import EntryHandle
 
 if TYPE_CHECKING:  # pragma: no cover
-    from .session import Accepted, Session
+    from .session import Accepted
 
 __all__ = ["Axis", "AxisStatus"]
 
@@ -122,7 +123,7 @@ class AxisStatus:
         return AxisFlags.DEADMAN_EXPIRED in self.flags
 
 
-class Axis:
+class Axis(EntryHandle):
     """One axis of the server, found by name with :meth:`Client.axis`.
 
     Velocities and accelerations of ``0.0`` mean "the axis's configured maximum". Every
@@ -130,42 +131,29 @@ class Axis:
     :class:`~motiond.errors.Refused` subclass of the server's reason.
     """
 
-    __slots__ = ("_client", "_index")
+    __slots__ = ()
+    _table = "axes"
 
-    def __init__(self, client: "Session", index: int) -> None:
-        self._client = client
-        self._index = index
-
-    # --- description -----------------------------------------------------------------------
-
-    @property
-    def index(self) -> int:
-        """The axis index (config order), as used in frames and requests."""
-        return self._index
+    # --- description (index and name: EntryHandle) ------------------------------------------
 
     @property
     def info(self) -> AxisInfo:
         """The axis's static description (a copy): unit, limits, capabilities, device."""
-        return self._client.info.axes[self._index].copy()
-
-    @property
-    def name(self) -> str:
-        """The axis name."""
-        return self._client.info.axes[self._index].text("name")
+        return self._entry().copy()
 
     @property
     def unit(self) -> str:
         """The unit of positions ("mm", "deg")."""
-        return self._client.info.axes[self._index].text("unit")
+        return self._entry().text("unit")
 
     @property
     def device(self) -> str:
         """The name of the device that drives it."""
-        return self._client.info.axes[self._index].text("device")
+        return self._entry().text("device")
 
     def supports(self, kind: CommandKind) -> bool:
         """Whether the axis's board accepts ``kind``."""
-        return self._client.info.axes[self._index].supports(kind)
+        return bool(self._entry().supports(kind))
 
     # --- state -----------------------------------------------------------------------------
 
@@ -327,6 +315,3 @@ class Axis:
     def wait_ready(self, timeout: float = 5.0) -> Frame:
         """Waits until the axis's board is online (it takes goals)."""
         return self._client.wait_ready(timeout, axes=[self.name])
-
-    def __repr__(self) -> str:
-        return f"Axis({self.name!r}, index={self._index})"

@@ -4,7 +4,8 @@
 - the default timeouts;
 - :class:`JogRegistry`, the client's running jogs, renewed on every read and wait;
 - :class:`Session`, the calls :class:`~motiond.axis.Axis`, :class:`~motiond.signal.Signal`
-  and :class:`~motiond.jog.Jog` make on the client that made them.
+  and :class:`~motiond.jog.Jog` make on the client that made them;
+- :class:`EntryHandle`, what an axis and a signal handle have in common.
 
 None of them imports :mod:`motiond.client`: the package's imports run one way (``ipc`` ←
 ``errors`` ← ``frames`` ← ``session`` ← ``jog``, ``axis``, ``signal`` ← ``client`` ←
@@ -16,7 +17,7 @@ from __future__ import annotations
 import time
 import weakref
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Callable, Iterator, Optional, Protocol, Union
+from typing import TYPE_CHECKING, Any, Callable, Iterator, Optional, Protocol, Union
 
 from .ipc import ParamOwner, Reason
 
@@ -29,6 +30,7 @@ __all__ = [
     "Param",
     "JogRegistry",
     "Session",
+    "EntryHandle",
     "DEFAULT_CONNECT_TIMEOUT",
     "DEFAULT_REPLY_TIMEOUT",
 ]
@@ -159,3 +161,34 @@ class Session(Protocol):
 
     @property
     def info(self) -> "ServerInfo": ...
+
+
+class EntryHandle:
+    """A handle on one entry of the server's description, an axis or a signal: the client
+    that made it and the entry's index. A subclass names its table (``_table``: ``"axes"``
+    or ``"signals"`` of :class:`~motiond.ipc.ServerInfo`)."""
+
+    __slots__ = ("_client", "_index")
+    _table: str = ""
+
+    def __init__(self, client: Session, index: int) -> None:
+        self._client = client
+        self._index = index
+
+    def _entry(self) -> Any:
+        """The entry in the client's description (shared, not a copy): an
+        :class:`~motiond.ipc.AxisInfo` or a :class:`~motiond.ipc.SignalInfo`."""
+        return getattr(self._client.info, self._table)[self._index]
+
+    @property
+    def index(self) -> int:
+        """The index (config order), as used in frames and requests."""
+        return self._index
+
+    @property
+    def name(self) -> str:
+        """The name in the config."""
+        return self._entry().text("name")
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({self.name!r}, index={self._index})"

@@ -16,8 +16,10 @@ from .ipc import (
     to_enum,
 )
 
+from .session import EntryHandle
+
 if TYPE_CHECKING:  # pragma: no cover
-    from .session import Accepted, Session
+    from .session import Accepted
 
 __all__ = ["Signal", "SignalStatus"]
 
@@ -64,45 +66,31 @@ class SignalStatus:
         return SignalFlags.SAFE_STATE in self.flags
 
 
-class Signal:
+class Signal(EntryHandle):
     """One named signal (board input or output), found with :meth:`Client.signal`."""
 
-    __slots__ = ("_client", "_index")
-
-    def __init__(self, client: "Session", index: int) -> None:
-        self._client = client
-        self._index = index
-
-    @property
-    def index(self) -> int:
-        """The signal index (config order), as used in frames and requests."""
-        return self._index
+    __slots__ = ()
+    _table = "signals"
 
     @property
     def info(self) -> SignalInfo:
         """The signal's static description (a copy)."""
-        return self._client.info.signals[self._index].copy()
-
-    @property
-    def name(self) -> str:
-        """The signal name."""
-        return self._client.info.signals[self._index].text("name")
+        return self._entry().copy()
 
     @property
     def kind(self) -> Union[SignalKind, int]:
         """Digital input, digital output or analogue input."""
-        return to_enum(SignalKind, self._client.info.signals[self._index].kind)
+        return to_enum(SignalKind, self._entry().kind)
 
     @property
     def unit(self) -> str:
         """The unit of an analogue value ("" for digital)."""
-        return self._client.info.signals[self._index].text("unit")
+        return self._entry().text("unit")
 
     @property
     def inverted(self) -> bool:
         """Digital: the logical value is the inverse of the electrical level."""
-        flags = SignalInfoFlags(self._client.info.signals[self._index].flags)
-        return SignalInfoFlags.INVERT in flags
+        return SignalInfoFlags.INVERT in SignalInfoFlags(self._entry().flags)
 
     def state(self, frame: Optional[Frame] = None) -> SignalStatus:
         """The signal's state in ``frame`` (default: the newest frame), a copy."""
@@ -176,6 +164,3 @@ class Signal:
             f"reach {expected!r}", timeout, done, subject=f"signal {self.name}"
         )
         return self.state(frame)
-
-    def __repr__(self) -> str:
-        return f"Signal({self.name!r}, index={self._index})"
