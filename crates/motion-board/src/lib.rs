@@ -14,12 +14,16 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+pub mod standalone;
+
 use core::fmt;
 use core::time::Duration;
 
 use motion_drivers::spec::{DeviceMachine, DriverSpec, Param, SpecError};
 use motion_drivers::{Driver, Model, PinInfo};
 use motion_link::sim::{SpiDevice, StreamDevice};
+
+pub use standalone::{StandaloneError, StandaloneHelp, StandaloneSim};
 
 /// A simulated board, on the kind of wire its model uses.
 pub enum SimBoard {
@@ -95,4 +99,14 @@ pub trait Board: Sync + fmt::Debug {
     /// The simulated board of the device `spec` describes, configured like the machine
     /// (switches where its axes search, the variant, the address), seeded with `seed`.
     fn simulate(&self, spec: &DriverSpec, seed: u64) -> SimBoard;
+
+    /// The simulated board the `motion-sim` tool serves alone, from its command-line
+    /// `options` (no config file).
+    ///
+    /// # Errors
+    /// An option the board does not have, or a value of one it cannot take.
+    fn simulate_standalone(&self, options: &StandaloneSim) -> Result<SimBoard, StandaloneError>;
+
+    /// Its part of `motion-sim --help`.
+    fn standalone_help(&self) -> StandaloneHelp;
 }

@@ -25,9 +25,10 @@
 pub mod codec;
 pub mod driver;
 pub mod sim;
+mod standalone;
 
 use motion_base::{LinkKind, Model, ModelFacts};
-use motion_board::{Board, LinkFacts, SimBoard};
+use motion_board::{Board, LinkFacts, SimBoard, StandaloneError, StandaloneHelp, StandaloneSim};
 use motion_drivers::spec::{DeviceMachine, DriverSpec, Param, SpecError};
 use motion_drivers::{Driver, PinInfo};
 
@@ -92,5 +93,13 @@ impl Board for ExampleBoard {
             seed,
             ..ExampleSimConfig::default()
         })))
+    }
+
+    fn simulate_standalone(&self, options: &StandaloneSim) -> Result<SimBoard, StandaloneError> {
+        standalone::simulate(options)
+    }
+
+    fn standalone_help(&self) -> StandaloneHelp {
+        standalone::HELP
     }
 }

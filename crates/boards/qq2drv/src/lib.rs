@@ -6,9 +6,11 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+mod standalone;
+
 mod sim;
 
-use motion_board::{Board, LinkFacts, SimBoard};
+use motion_board::{Board, LinkFacts, SimBoard, StandaloneError, StandaloneHelp, StandaloneSim};
 use motion_drivers::qq2drv::{PINS, Qq2drvDriver, Qq2drvDriverConfig};
 use motion_drivers::spec::{DeviceMachine, DriverSpec, Param, SpecError};
 use motion_drivers::{Driver, Model, PinInfo};
@@ -54,5 +56,13 @@ impl Board for Qq2drvBoard {
 
     fn simulate(&self, spec: &DriverSpec, seed: u64) -> SimBoard {
         SimBoard::Spi(Box::new(sim::model(spec, seed)))
+    }
+
+    fn simulate_standalone(&self, options: &StandaloneSim) -> Result<SimBoard, StandaloneError> {
+        standalone::simulate(options)
+    }
+
+    fn standalone_help(&self) -> StandaloneHelp {
+        standalone::HELP
     }
 }

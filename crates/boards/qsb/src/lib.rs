@@ -7,9 +7,11 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+mod standalone;
+
 use core::time::Duration;
 
-use motion_board::{Board, LinkFacts, SimBoard};
+use motion_board::{Board, LinkFacts, SimBoard, StandaloneError, StandaloneHelp, StandaloneSim};
 use motion_drivers::qsb::{QsbDriver, QsbDriverConfig, pins};
 use motion_drivers::spec::{
     DeviceMachine, DriverSpec, Param, QsbDeviceKeys, QsbVariant, SpecError,
@@ -84,5 +86,13 @@ impl Board for QsbBoard {
             drive_enable,
             ..QsbSimConfig::default().with_counts_per_step(counts_per_step)
         })))
+    }
+
+    fn simulate_standalone(&self, options: &StandaloneSim) -> Result<SimBoard, StandaloneError> {
+        standalone::simulate(options)
+    }
+
+    fn standalone_help(&self) -> StandaloneHelp {
+        standalone::HELP
     }
 }

@@ -6,7 +6,9 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
-use motion_board::{Board, LinkFacts, SimBoard};
+mod standalone;
+
+use motion_board::{Board, LinkFacts, SimBoard, StandaloneError, StandaloneHelp, StandaloneSim};
 use motion_drivers::spec::{
     DeviceMachine, DriverSpec, Param, SpecError, SpiDrive, SpimotorDeviceKeys,
 };
@@ -66,5 +68,13 @@ impl Board for SpimotorBoard {
             seed,
             ..SpimotorSimConfig::default()
         })))
+    }
+
+    fn simulate_standalone(&self, options: &StandaloneSim) -> Result<SimBoard, StandaloneError> {
+        standalone::simulate(options)
+    }
+
+    fn standalone_help(&self) -> StandaloneHelp {
+        standalone::HELP
     }
 }

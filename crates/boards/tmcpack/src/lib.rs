@@ -6,9 +6,11 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+mod standalone;
+
 mod sim;
 
-use motion_board::{Board, LinkFacts, SimBoard};
+use motion_board::{Board, LinkFacts, SimBoard, StandaloneError, StandaloneHelp, StandaloneSim};
 use motion_drivers::spec::{
     DeviceMachine, DriverSpec, PackVariant, Param, SpecError, TmcpackDeviceKeys,
 };
@@ -60,5 +62,13 @@ impl Board for TmcpackBoard {
 
     fn simulate(&self, spec: &DriverSpec, seed: u64) -> SimBoard {
         SimBoard::Stream(Box::new(sim::model(spec, seed)))
+    }
+
+    fn simulate_standalone(&self, options: &StandaloneSim) -> Result<SimBoard, StandaloneError> {
+        standalone::simulate(options)
+    }
+
+    fn standalone_help(&self) -> StandaloneHelp {
+        standalone::HELP
     }
 }

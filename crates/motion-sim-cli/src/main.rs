@@ -18,9 +18,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use anyhow::{Context, Result, bail};
+use motion_board::SimBoard;
 use nix::sys::signal::{SigSet, Signal};
 
-use crate::boards::Board;
 use crate::trace::Trace;
 
 fn main() -> ExitCode {
@@ -58,13 +58,15 @@ fn run(options: &cli::Options) -> Result<()> {
     let mut spi = Vec::new();
     let mut serial_names = Vec::new();
     let mut spi_names = Vec::new();
+    let mut first_serial_rate = None;
     for spec in &options.boards {
         match boards::build(spec, cli.baud, cli.spi_hz)? {
-            Board::Stream(device) => {
+            SimBoard::Stream(device) => {
+                first_serial_rate.get_or_insert(spec.board.link().default_rate);
                 serial.push(device);
                 serial_names.push(boards::describe(spec));
             }
-            Board::Spi(device) => {
+            SimBoard::Spi(device) => {
                 spi.push(device);
                 spi_names.push(boards::describe(spec));
             }
@@ -75,11 +77,13 @@ fn run(options: &cli::Options) -> Result<()> {
     let pty_endpoint = if serial.is_empty() {
         None
     } else {
-        // The wire runs at --baud, else at the rate the boards listen at after power-up.
+        // The wire runs at --baud, else at the rate the boards listen at after power-up,
+        // else at the first serial board's line rate.
         let baud = cli
             .baud
             .or_else(|| serial.iter().find_map(|d| d.baud()))
-            .unwrap_or(230_400);
+            .or(first_serial_rate)
+            .context("a serial board without a line rate")?;
         for (device, name) in serial.iter().zip(&serial_names) {
             if let Some(own) = device.baud().filter(|&own| own != baud) {
                 eprintln!(

@@ -4,66 +4,93 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
 use clap::{ArgMatches, CommandFactory, FromArgMatches, Parser};
-use motion_base::{LinkKind, Model};
+use motion_base::LinkKind;
+use motion_board::Board;
 
 const AFTER_HELP: &str = "\
-Boards:
-  qsb       US Digital QSB-S/-D/-M, ASCII over USB serial, 230400 baud   (--variant s|d|m)
-  tmcpack   Trinamic SIXpack/QUADpack, 9-byte frames, 19200 baud          (--address, --variant sixpack|quadpack)
-  qq2drv    QuadQuad2Drv, SPI mode 1, 500 kHz                             (SPI socket)
-  spimotor  SPI_motor, SPI, default address 0x90                          (--address, --drive stepper|brushed)
-
 --address, --variant, --drive and --seed apply to the --model before them. All serial
 boards share one pseudo-terminal (an RS-485 bus: every board hears every byte); all SPI
 boards share one socket (one chip select: a board answers its own address, an undriven
-MISO reads 0xFF).
+MISO reads 0xFF).";
 
-Examples:
-  motion-sim --model qsb --pty --link /tmp/qsb
-      prints the pty path (first line of stdout) and links /tmp/qsb to it. Talk to it:
-        screen /tmp/qsb 230400          (type R14 then Enter; Ctrl-A k quits)
-        python3 -c \"import os,time; f=os.open('/tmp/qsb',os.O_RDWR); os.write(f,b'R14\\r\\n'); time.sleep(0.1); print(os.read(f,64))\"
-  motion-sim --model tmcpack --address 1 --model tmcpack --address 2 --variant quadpack --pty
-      two packs on one RS-485 bus. Unit info ($43) of pack 1, 9-byte request:
-        python3 -c \"import os,time,sys; f=os.open(sys.argv[1],os.O_RDWR); os.write(f,bytes([1,0x43,0xFE,0,0,0,0,0,0])); time.sleep(0.1); print(os.read(f,64).hex())\" /dev/pts/N
-  motion-sim --model qq2drv --spi-socket /tmp/qq2drv.sock
-      one transaction = u16 little-endian length + MOSI bytes; the answer is as many MISO
-      bytes. Version request (packet 1) then filler to clock the reply out:
-        python3 -c \"import socket; s=socket.socket(socket.AF_UNIX); s.connect('/tmp/qq2drv.sock'); s.send(bytes([4,0,2,4,1,249])); print(s.recv(4).hex()); s.send(bytes([16,0])+bytes(16)); print(s.recv(16).hex())\"
-  motion-sim --model spimotor --address 0x90 --model spimotor --address 0x92 --drive brushed --spi-socket /tmp/motors.sock
-
-A board told to change its rate (tmcpack $40, QSB COMMAND baud selection) then talks
-at the new rate while the pty stays at --baud: its bytes arrive garbled, as on a real line.
+const AFTER_EXAMPLES: &str = "\
+A board told to change its rate (a baud-rate command of its protocol) then talks at the
+new rate while the pty stays at --baud: its bytes arrive garbled, as on a real line.
 
 Runs until SIGINT or SIGTERM (exit status 0). Logs what it serves on stderr; --trace also
 logs every byte with its time.";
 
-/// A `--model` value: the id of one of the models this simulator has (`Model::BUILT_IN`).
-fn parse_model(text: &str) -> Result<Model, String> {
-    Model::BUILT_IN
-        .into_iter()
-        .find(|model| model.id() == text)
-        .ok_or_else(|| {
-            let ids: Vec<&str> = Model::BUILT_IN.iter().map(|model| model.id()).collect();
-            format!("unknown model `{text}` (one of {})", ids.join(", "))
-        })
+/// The text after the options in `--help`: every registered board with its options
+/// (`Board::standalone_help`), how boards share a wire, and the boards' examples.
+fn after_help() -> String {
+    let helps: Vec<(&str, motion_board::StandaloneHelp)> = motion_boards::BOARDS
+        .iter()
+        .map(|board| (board.model().id(), board.standalone_help()))
+        .collect();
+    let id_width = helps.iter().map(|(id, _)| id.len()).max().unwrap_or(0);
+    let summary_width = helps
+        .iter()
+        .map(|(_, help)| help.summary.len())
+        .max()
+        .unwrap_or(0);
+    let mut text = String::from("Boards:\n");
+    for (id, help) in &helps {
+        let line = if help.options.is_empty() {
+            format!("  {id:<id_width$}  {}", help.summary)
+        } else {
+            format!(
+                "  {id:<id_width$}  {:<summary_width$}  ({})",
+                help.summary, help.options
+            )
+        };
+        text.push_str(line.trim_end());
+        text.push('\n');
+    }
+    text.push('\n');
+    text.push_str(AFTER_HELP);
+    text.push_str("\n\nExamples:\n");
+    for (_, help) in &helps {
+        for line in help.examples.lines() {
+            text.push_str("  ");
+            text.push_str(line);
+            text.push('\n');
+        }
+    }
+    text.push('\n');
+    text.push_str(AFTER_EXAMPLES);
+    text
+}
+
+/// A `--model` value: the id of a registered board (`motion_boards::by_id`).
+fn parse_model(text: &str) -> Result<&'static dyn Board, String> {
+    motion_boards::by_id(text).ok_or_else(|| {
+        format!(
+            "unknown model `{text}` (one of {})",
+            motion_boards::id_list()
+        )
+    })
+}
+
+/// The command with its after-help (built from the registry).
+fn command() -> clap::Command {
+    Cli::command().after_help(after_help())
 }
 
 /// Serve simulated motor-controller boards on a pseudo-terminal or an SPI socket.
 #[derive(Debug, Parser)]
-#[command(name = "motion-sim", version, after_help = AFTER_HELP)]
+#[command(name = "motion-sim", version)]
 pub struct Cli {
     /// A board to simulate; repeat for several boards on one bus.
     #[arg(long = "model", value_parser = parse_model, required = true, action = clap::ArgAction::Append)]
-    pub models: Vec<Model>,
-    /// Bus address of the preceding --model (tmcpack: 0..=255, default 1; spimotor: even
-    /// byte, default 0x90). Decimal or 0x-hex.
+    pub models: Vec<&'static dyn Board>,
+    /// Bus address of the preceding --model (the boards that have one: see Boards below).
+    /// Decimal or 0x-hex.
     #[arg(long, action = clap::ArgAction::Append, value_parser = parse_u8)]
     pub address: Vec<u8>,
-    /// Variant of the preceding --model (tmcpack: sixpack|quadpack; qsb: s|d|m).
+    /// Variant of the preceding --model (the boards that have one: see Boards below).
     #[arg(long, action = clap::ArgAction::Append)]
     pub variant: Vec<String>,
-    /// Motors on the preceding spimotor: stepper|brushed.
+    /// Motors on the preceding --model (the boards that have a choice: see Boards below).
     #[arg(long, action = clap::ArgAction::Append)]
     pub drive: Vec<String>,
     /// Seed of the preceding --model's random effects (default: the model's own).
@@ -76,8 +103,8 @@ pub struct Cli {
     /// Also make PATH a symbolic link to the pseudo-terminal (removed on exit).
     #[arg(long, value_name = "PATH", requires = "pty")]
     pub link: Option<PathBuf>,
-    /// Pace the pseudo-terminal at this rate, 10 bits a byte (default: the board's own
-    /// rate, 230400 for qsb, 19200 for tmcpack).
+    /// Pace the pseudo-terminal at this rate, 10 bits a byte (default: the rate the first
+    /// serial board listens at, see Boards below).
     #[arg(long)]
     pub baud: Option<u32>,
     /// Serve the SPI boards on a Unix socket at PATH (docs/ARCHITECTURE.md SPI socket contract).
@@ -102,10 +129,10 @@ pub struct Cli {
 }
 
 /// One board and its options.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone)]
 pub struct BoardSpec {
     /// Which board.
-    pub model: Model,
+    pub board: &'static dyn Board,
     /// `--address`, if given.
     pub address: Option<u8>,
     /// `--variant`, if given.
@@ -139,11 +166,10 @@ where
     I: IntoIterator<Item = T>,
     T: Into<std::ffi::OsString> + Clone,
 {
-    let matches = Cli::command().try_get_matches_from(args)?;
+    let matches = command().try_get_matches_from(args)?;
     let cli = Cli::from_arg_matches(&matches)?;
-    let boards = group(&matches, &cli).map_err(|e| {
-        Cli::command().error(clap::error::ErrorKind::ArgumentConflict, format!("{e:#}"))
-    })?;
+    let boards = group(&matches, &cli)
+        .map_err(|e| command().error(clap::error::ErrorKind::ArgumentConflict, format!("{e:#}")))?;
     Ok(Options { cli, boards })
 }
 
@@ -156,8 +182,8 @@ fn group(matches: &ArgMatches, cli: &Cli) -> Result<Vec<BoardSpec>> {
     let mut boards: Vec<BoardSpec> = cli
         .models
         .iter()
-        .map(|&model| BoardSpec {
-            model,
+        .map(|&board| BoardSpec {
+            board,
             address: None,
             variant: None,
             drive: None,
@@ -179,42 +205,55 @@ fn group(matches: &ArgMatches, cli: &Cli) -> Result<Vec<BoardSpec>> {
     for (at, value) in indices("address").into_iter().zip(&cli.address) {
         let board = boards.get_mut(owner("address", at)?).context("address")?;
         if board.address.replace(*value).is_some() {
-            bail!("two --address for one --model {}", board.model.id());
+            bail!("two --address for one --model {}", board.board.model().id());
         }
     }
     for (at, value) in indices("variant").into_iter().zip(&cli.variant) {
         let board = boards.get_mut(owner("variant", at)?).context("variant")?;
         if board.variant.replace(value.clone()).is_some() {
-            bail!("two --variant for one --model {}", board.model.id());
+            bail!("two --variant for one --model {}", board.board.model().id());
         }
     }
     for (at, value) in indices("drive").into_iter().zip(&cli.drive) {
         let board = boards.get_mut(owner("drive", at)?).context("drive")?;
         if board.drive.replace(value.clone()).is_some() {
-            bail!("two --drive for one --model {}", board.model.id());
+            bail!("two --drive for one --model {}", board.board.model().id());
         }
     }
     for (at, value) in indices("seed").into_iter().zip(&cli.seed) {
         let board = boards.get_mut(owner("seed", at)?).context("seed")?;
         if board.seed.replace(*value).is_some() {
-            bail!("two --seed for one --model {}", board.model.id());
+            bail!("two --seed for one --model {}", board.board.model().id());
         }
     }
-    let serial = boards
-        .iter()
-        .any(|b| b.model.link_kind() == LinkKind::Stream);
-    let spi = boards.iter().any(|b| b.model.link_kind() == LinkKind::Spi);
+    let on = |kind: LinkKind| move |board: &dyn Board| board.model().link_kind() == kind;
+    let serial = boards.iter().any(|b| on(LinkKind::Stream)(b.board));
+    let spi = boards.iter().any(|b| on(LinkKind::Spi)(b.board));
+    let serial_ids = || motion_boards::ids(on(LinkKind::Stream), "or");
+    let spi_ids = || motion_boards::ids(on(LinkKind::Spi), "or");
     if serial && !cli.pty {
-        bail!("serial boards (qsb, tmcpack) are served on a pseudo-terminal: add --pty");
+        bail!(
+            "serial boards ({}) are served on a pseudo-terminal: add --pty",
+            serial_ids()
+        );
     }
     if spi && cli.spi_socket.is_none() {
-        bail!("SPI boards (qq2drv, spimotor) are served on a socket: add --spi-socket PATH");
+        bail!(
+            "SPI boards ({}) are served on a socket: add --spi-socket PATH",
+            spi_ids()
+        );
     }
     if cli.pty && !serial {
-        bail!("--pty given but no serial board (qsb, tmcpack) to serve on it");
+        bail!(
+            "--pty given but no serial board ({}) to serve on it",
+            serial_ids()
+        );
     }
     if cli.spi_socket.is_some() && !spi {
-        bail!("--spi-socket given but no SPI board (qq2drv, spimotor) to serve on it");
+        bail!(
+            "--spi-socket given but no SPI board ({}) to serve on it",
+            spi_ids()
+        );
     }
     if !(0.0..=1.0).contains(&cli.drop_rate) {
         bail!(
@@ -272,6 +311,20 @@ mod tests {
         ] {
             let err = boards(args).unwrap_err();
             assert!(err.contains(why), "{args}: {err}");
+        }
+    }
+
+    #[test]
+    fn help_names_every_registered_board_and_its_options() {
+        let help = command().render_long_help().to_string();
+        for board in motion_boards::BOARDS {
+            let entry = board.standalone_help();
+            let line = help
+                .lines()
+                .find(|line| line.starts_with(&format!("  {} ", board.model().id())))
+                .unwrap_or_else(|| panic!("no line for {}:\n{help}", board.model()));
+            assert!(line.contains(entry.summary), "{line}");
+            assert!(line.contains(entry.options), "{line}");
         }
     }
 }
