@@ -25,8 +25,8 @@ use std::path::{Path, PathBuf};
 use std::sync::mpsc::channel;
 use std::time::Instant;
 
+use board_qq2drv::sim::Qq2drvSim;
 use motion_link::sim::StreamDevice;
-use motion_sim::qq2drv::Qq2drvSim;
 use motion_sim::spimotor::{Drive, SpimotorSim, SpimotorSimConfig};
 use motion_sim::tmcpack::{TmcpackSim, TmcpackSimConfig};
 use nix::poll::{PollFd, PollFlags, PollTimeout, poll};

@@ -14,7 +14,7 @@ use std::os::unix::net::UnixStream;
 use std::path::Path;
 use std::sync::mpsc::Sender;
 
-use motion_sim::qq2drv::Qq2drvSim;
+use board_qq2drv::sim::Qq2drvSim;
 use motion_sim::qsb::{QsbSim, QsbSimConfig};
 use motion_sim::spimotor::{Drive, SpimotorSim, SpimotorSimConfig};
 use motion_sim::tmcpack::{TmcpackSim, TmcpackSimConfig};

@@ -29,7 +29,6 @@ mod bus;
 mod driver;
 mod goal;
 mod pin;
-pub mod qq2drv;
 pub mod qsb;
 pub mod spec;
 mod stamps;
@@ -44,4 +43,5 @@ pub use goal::{Goal, GoalError, GoalKind, GoalKinds, RateFloor};
 /// Whether a link carries a byte stream or SPI transactions (one enum with `motion_link`).
 pub use motion_base::LinkKind;
 pub use pin::{Pin, PinInfo, PinReading, SignalKind, SignalKinds, find_pin};
+pub use stamps::IoStamps;
 pub use state::{ChannelState, DeviceFault, DeviceStatus, FIRMWARE_LEN};

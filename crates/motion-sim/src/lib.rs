@@ -6,7 +6,6 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
-pub mod qq2drv;
 pub mod qsb;
 pub mod rng;
 pub mod spimotor;

@@ -11,11 +11,11 @@ use core::time::Duration;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
+use board_qq2drv::sim::{Qq2drvSim, Qq2drvSimConfig};
 use motion_ipc::{
     ClientId, CommandKind, CommandReply, CommandRequest, DeviceState, FrameFlags, MotionFrame,
     SignalFlags,
 };
-use motion_sim::qq2drv::{Qq2drvSim, Qq2drvSimConfig};
 use motion_sim::qsb::{QsbSim, QsbSimConfig};
 use nix::sys::signal::Signal;
 use support::pty_board::PtyBoard;

@@ -13,10 +13,10 @@ use core::time::Duration;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
+use board_qq2drv::sim::{Qq2drvSim, Qq2drvSimConfig};
 use motion_ipc::{
     AxisFlags, ClientId, CommandKind, CommandRequest, DeviceState, MotionFrame, Reason, SignalFlags,
 };
-use motion_sim::qq2drv::{Qq2drvSim, Qq2drvSimConfig};
 use motion_sim::qsb::{QsbSim, QsbSimConfig};
 use motion_sim::tmcpack::{TmcpackSim, TmcpackSimConfig};
 use nix::sys::signal::Signal;

@@ -1,19 +1,22 @@
 //! The QuadQuad2Drv as a motiond board ([`Qq2drvBoard`]): an SPI board with four DC motor
 //! channels under the board's own PID, alone on its link (its frames have no address),
 //! SPI mode 1 at the datasheet's recommended 500 kHz ("We recommend clocking SPI up to
-//! 500kHz", QuadQuad2Drv datasheet). The driver is `motion_drivers::qq2drv`, the simulator
-//! `motion_sim::qq2drv`.
+//! 500kHz", QuadQuad2Drv datasheet). Its driver is [`driver`], its simulator [`sim`],
+//! its machine keys [`machine_keys`].
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+pub mod driver;
+pub mod machine_keys;
+pub mod sim;
 mod standalone;
 
-mod sim;
-
 use motion_board::{Board, LinkFacts, SimBoard, StandaloneError, StandaloneHelp, StandaloneSim};
-use motion_drivers::qq2drv::{PINS, Qq2drvDriver, Qq2drvDriverConfig};
 use motion_drivers::spec::{DeviceMachine, DriverSpec, Param, SpecError};
 use motion_drivers::{Driver, Model, PinInfo};
+
+use driver::{PINS, Qq2drvDriver, Qq2drvDriverConfig};
+pub use machine_keys::{PidKeys, Qq2drvAxisKeys};
 
 /// The QuadQuad2Drv.
 #[derive(Debug, Clone, Copy)]
@@ -55,7 +58,7 @@ impl Board for Qq2drvBoard {
     }
 
     fn simulate(&self, spec: &DriverSpec, seed: u64) -> SimBoard {
-        SimBoard::Spi(Box::new(sim::model(spec, seed)))
+        SimBoard::Spi(Box::new(sim::machine::model(spec, seed)))
     }
 
     fn simulate_standalone(&self, options: &StandaloneSim) -> Result<SimBoard, StandaloneError> {

@@ -1,9 +1,9 @@
 //! A QuadQuad2Drv served alone by `motion-sim`: `--seed` only; it counts wire time at the
 //! socket's `--spi-hz`.
 
+use crate::sim::{Qq2drvSim, Qq2drvSimConfig};
 use motion_board::{SimBoard, StandaloneError, StandaloneHelp, StandaloneSim};
 use motion_drivers::Model;
-use motion_sim::qq2drv::{Qq2drvSim, Qq2drvSimConfig};
 
 /// `motion-sim --help` on the QuadQuad2Drv.
 pub(crate) const HELP: StandaloneHelp = StandaloneHelp {

@@ -19,8 +19,8 @@ use crate::driver::Model;
 use crate::pin::{Pin, SignalKind};
 
 pub use keys::{
-    AxisMachine, CurrentKeys, DeviceMachine, MachineKeys, PidKeys, Qq2drvAxisKeys, QsbDeviceKeys,
-    ReadyOutputKeys, ReferenceKeys, SpimotorDeviceKeys, TmcpackAxisKeys, TmcpackDeviceKeys,
+    AxisMachine, CurrentKeys, DeviceMachine, MachineKeys, QsbDeviceKeys, ReadyOutputKeys,
+    ReferenceKeys, SpimotorDeviceKeys, TmcpackAxisKeys, TmcpackDeviceKeys,
 };
 
 /// Trinamic pack variant.

@@ -1,5 +1,5 @@
 //! qq2drv machine keys (README "Config"): validated here into
-//! `motion_drivers::spec::Qq2drvAxisKeys`, turned into the driver's config by
+//! `board_qq2drv::Qq2drvAxisKeys`, turned into the driver's config by
 //! `Qq2drvDriverConfig::from_spec`.
 //!
 //! Per `[[axis]]` (one QuadQuad2Drv channel):
@@ -13,8 +13,8 @@
 //! Across tables: a link clocked above the datasheet's recommended 500 kHz ("We recommend
 //! clocking SPI up to 500kHz") gets a warning on its `speed_hz`.
 
+use board_qq2drv::{PidKeys, Qq2drvAxisKeys};
 use motion_drivers::Model;
-use motion_drivers::spec::{PidKeys, Qq2drvAxisKeys};
 use toml::Spanned;
 
 use super::AxisContext;

@@ -11,13 +11,13 @@ use motion_drivers::SignalKind;
 use motion_drivers::qsb::{
     LONGEST_INTERVAL_TICKS, MOTOR_DRIVE_BITS, PinRole, QsbDriverConfig, TICK, interval_ticks,
 };
-use motion_drivers::spec::{QsbDeviceKeys, QsbInputMode};
+use motion_drivers::spec::{QsbDeviceKeys, QsbInputMode, QsbVariant};
 use toml::Spanned;
 
 use super::DeviceContext;
 use crate::config::raw::{Int, RawConfig, RawDevice};
 use crate::config::validate::Validator;
-use crate::config::{QsbVariant, ServerConfig, Transport};
+use crate::config::{ServerConfig, Transport};
 
 /// The product a raw `variant` names (the central validation reports a bad one).
 fn variant_of(raw: &RawDevice) -> QsbVariant {

@@ -103,11 +103,10 @@ use core::time::Duration;
 
 use qq2drv::{CHANNELS, DataMask, MotionLayout, PositionSize, StreamConfig, StreamDecoder};
 
-use crate::driver::{Driver, Model, Priority, Transmit};
-use crate::goal::{Goal, GoalError, GoalKinds, RateFloor};
-use crate::pin::{Pin, PinReading};
-use crate::stamps::IoStamps;
-use crate::state::{ChannelState, DeviceFault, DeviceStatus};
+use motion_drivers::{
+    ChannelState, DeviceFault, DeviceStatus, Driver, Goal, GoalError, GoalKinds, IoStamps, Model,
+    Pin, PinReading, Priority, RateFloor, Transmit,
+};
 
 pub use channel::{ARRIVED_WITHIN, LOOP_PERIOD, STANDSTILL, STOP_SETTLE};
 pub use config::{

@@ -12,8 +12,7 @@ use qq2drv::{ControlMode, InputMode, Status};
 
 use super::config::{ChannelConfig, HomeInput};
 use super::wire::{Packet, Packets};
-use crate::goal::{Goal, GoalError, GoalKind};
-use crate::state::{ChannelState, DeviceFault};
+use motion_drivers::{ChannelState, DeviceFault, Goal, GoalError, GoalKind};
 
 /// After a stop's ramp time, how long to wait for the reported velocity to reach standstill
 /// before holding anyway.

@@ -3,7 +3,7 @@
 //! "Status"), all streamed in packet 3.
 //!
 //! The board has no general-purpose outputs (PWM and DIR are motor outputs), so every pin
-//! is a digital input and [`Driver::set_output`](crate::Driver::set_output) refuses.
+//! is a digital input and [`Driver::set_output`](motion_drivers::Driver::set_output) refuses.
 //!
 //! Values are what the stream gives: 1.0 when the bit is set. `inN` is *Input Active*,
 //! which the board evaluates "after polarity setting applied" (packet 14 Input Polarity):
@@ -18,7 +18,7 @@ use core::time::Duration;
 
 use qq2drv::{CHANNELS, Status};
 
-use crate::pin::{Pin, PinInfo, PinReading, SignalKind, SignalKinds};
+use motion_drivers::{Pin, PinInfo, PinReading, SignalKind, SignalKinds};
 
 /// Pins per channel: `in`, `_seen`, `_trig_pos`, `_trig_neg`, `glitch`, `overspeed`.
 pub const PINS_PER_CHANNEL: usize = 6;
@@ -200,7 +200,7 @@ impl InputBits {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pin::find_pin;
+    use motion_drivers::find_pin;
 
     #[test]
     fn the_table_names_every_channel_and_bit() {

@@ -7,9 +7,8 @@ use qq2drv::InputMode;
 use qq2drv::limits::POWER_LIMIT_MAX;
 
 use super::{HomeInput, PINS_PER_CHANNEL, PositionPid, Qq2drvDriverConfig, VelocityPid};
-use crate::spec::{
-    Direction, DriverSpec, HomeInputKind, Param, ParamOwner, Qq2drvAxisKeys, SpecError,
-};
+use crate::Qq2drvAxisKeys;
+use motion_drivers::spec::{Direction, DriverSpec, HomeInputKind, Param, ParamOwner, SpecError};
 
 /// The machine keys of the axis on `channel`, if one drives it, with its index in
 /// `spec.axes`.

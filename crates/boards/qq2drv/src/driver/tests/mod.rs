@@ -9,7 +9,7 @@ use qq2drv::{
 };
 
 use super::*;
-use crate::goal::GoalKind;
+use motion_drivers::GoalKind;
 
 const MS: Duration = Duration::from_millis(1);
 

@@ -224,7 +224,7 @@ fn random_glitches_are_deterministic_under_the_seed() {
 
 #[test]
 fn random_traffic_never_breaks_the_model_and_every_request_is_answered_once() {
-    use crate::rng::SimRng;
+    use motion_sim::rng::SimRng;
     use qq2drv::{ControlMode, ControlModeEntry, MotorPowerEntry, PacketId, StreamDecoder};
 
     let mut rng = SimRng::new(99);

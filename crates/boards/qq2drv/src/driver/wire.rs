@@ -16,8 +16,7 @@ use super::{
     CONFIGURE_REQUESTS, FILLER, OFFLINE_RETRY_PERIOD, POLL_SLACK, Phase, Qq2drvDriver,
     START_ATTEMPTS, STREAM_CONFIG,
 };
-use crate::driver::{Driver, Priority, Transmit};
-use crate::state::DeviceFault;
+use motion_drivers::{DeviceFault, Driver, Priority, Transmit};
 
 /// Most packets one goal step sends in its transaction.
 pub(super) const MAX_STEP_PACKETS: usize = 5;

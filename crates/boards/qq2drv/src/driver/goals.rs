@@ -10,8 +10,7 @@ use super::Qq2drvDriver;
 use super::channel::{Channel, Step};
 use super::config::HomeInput;
 use super::wire::{Packet, Packets, Sent, Tag};
-use crate::driver::Driver;
-use crate::goal::{Goal, GoalError, GoalKind, GoalKinds};
+use motion_drivers::{Driver, Goal, GoalError, GoalKind, GoalKinds};
 
 impl Channel {
     /// Packet 14 for the home input: armed (mode, polarity, Spacing, set the counter on

@@ -1,7 +1,7 @@
 //! A simulated QuadQuad2Drv as its `[[device]]` and axes describe it.
 
+use super::{InputPin, InputSource, Qq2drvSim, Qq2drvSimConfig};
 use motion_drivers::spec::{Direction, DriverSpec, HomeInputKind};
-use motion_sim::qq2drv::{InputPin, InputSource, Qq2drvSim, Qq2drvSimConfig};
 
 /// The IN pins of a simulated QuadQuad2Drv, wired as its axes' `home` tables say: an
 /// encoder index once per revolution, a switch at the end of travel the search runs to, or

@@ -28,7 +28,7 @@ pub(super) fn velocity_limit(max_velocity: f64) -> u32 {
         .unwrap_or(VELOCITY_LIMIT_MAX)
         .clamp(1, VELOCITY_LIMIT_MAX)
 }
-use crate::state::{DeviceFault, FIRMWARE_LEN};
+use motion_drivers::{DeviceFault, FIRMWARE_LEN};
 
 /// What the probe has learnt so far.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]

@@ -30,6 +30,7 @@ mod channel;
 mod config;
 mod control;
 mod inputs;
+pub(crate) mod machine;
 mod physics;
 mod ramp;
 mod registers;
@@ -47,8 +48,8 @@ use qq2drv::{
 
 pub use config::{InputPin, InputSource, MotorConfig, Qq2drvSimConfig};
 
-use crate::rng::SimRng;
 use channel::Channel;
+use motion_sim::rng::SimRng;
 use wire::{StreamClock, Wire};
 
 /// Return code of a request whose payload does not decode (a choice of this model).

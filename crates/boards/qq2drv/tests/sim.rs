@@ -2,10 +2,10 @@
 
 use core::time::Duration;
 
-use motion_link::sim::SpiDevice;
-use motion_sim::qq2drv::{
+use board_qq2drv::sim::{
     InputPin, InputSource, MotorConfig, Qq2drvSim, Qq2drvSimConfig, RC_MALFORMED, RC_OUT_OF_RANGE,
 };
+use motion_link::sim::SpiDevice;
 use qq2drv::{
     AccelerationLimitEntry, ChannelMask, ControlMode, ControlModeEntry, DataMask, DataMaskEntry,
     EdgeAction, Entries, HistoryDimensions, InputConfig, InputMode, InputModeEntry,

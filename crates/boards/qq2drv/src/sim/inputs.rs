@@ -162,7 +162,7 @@ impl Input {
 #[cfg(test)]
 mod tests {
     use super::{Input, InputAction, pin_level};
-    use crate::qq2drv::config::{InputPin, InputSource};
+    use crate::sim::config::{InputPin, InputSource};
     use qq2drv::{EdgeAction, InputConfig, InputMode, Status};
 
     #[test]

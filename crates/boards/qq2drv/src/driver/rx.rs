@@ -8,7 +8,7 @@ use qq2drv::{PacketBuf, PacketId, Reply, ReplyLayout, StreamData};
 
 use super::wire::{Sent, Tag};
 use super::{OFFLINE_RETRY_PERIOD, Phase, Qq2drvDriver, STREAM_CONFIG};
-use crate::state::DeviceFault;
+use motion_drivers::DeviceFault;
 
 impl Qq2drvDriver {
     /// Bytes clocked in on MISO: every packet the decoder finds in them.
