@@ -35,7 +35,6 @@ mod stamps;
 mod state;
 
 pub mod spimotor;
-pub mod tmcpack;
 
 pub use bus::{LinkBus, MAX_SENDS_PER_STEP, SPI_PENDING_CAPACITY, UNWRITTEN_CAPACITY, Unwritten};
 pub use driver::{Driver, Model, Priority, Transmit};

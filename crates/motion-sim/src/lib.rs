@@ -9,4 +9,3 @@
 pub mod qsb;
 pub mod rng;
 pub mod spimotor;
-pub mod tmcpack;

@@ -227,7 +227,7 @@ kind = "digital-in"
 
 #[test]
 fn tmcpack_inputs_show_outputs_reach_the_pack_and_an_e_stop_makes_them_safe() {
-    use motion_sim::tmcpack::{TmcpackSim, TmcpackSimConfig};
+    use board_tmcpack::sim::{TmcpackSim, TmcpackSimConfig};
     let name = unique_name("tmcio");
     let epoch = Instant::now();
     let pack = Arc::new(Mutex::new(TmcpackSim::new(TmcpackSimConfig::default())));

@@ -2,9 +2,9 @@
 //! `--seed`. A pack always starts at its factory 19200 baud, as after power-up, whatever
 //! `--baud` the pty runs at.
 
+use crate::sim::{TmcpackSim, TmcpackSimConfig};
 use motion_board::{SimBoard, StandaloneError, StandaloneHelp, StandaloneSim};
 use motion_drivers::Model;
-use motion_sim::tmcpack::{TmcpackSim, TmcpackSimConfig};
 use tmcpack::Variant;
 
 /// `motion-sim --help` on the pack.

@@ -3,7 +3,7 @@
 //! the engine refuses slower goals (`motion_ipc::rules`: `VelocityLimit`, `AccelLimit`)
 //! instead of letting the board round them to nothing or up to its step.
 
-use motion_drivers::tmcpack::{TmcpackChannel, TmcpackDriver, TmcpackDriverConfig};
+use board_tmcpack::driver::{TmcpackChannel, TmcpackDriver, TmcpackDriverConfig};
 use motion_drivers::{Driver, RateFloor};
 
 /// SIXpack/QUADpack manual, "Instruction Set": f_micro-step = f_clk / (clkdiv + 1) · v_i /

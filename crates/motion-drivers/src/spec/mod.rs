@@ -12,26 +12,11 @@
 //! such values first, with file, line and column.
 
 mod keys;
-#[cfg(test)]
-mod tests;
 
 use crate::driver::Model;
 use crate::pin::{Pin, SignalKind};
 
-pub use keys::{
-    AxisMachine, CurrentKeys, DeviceMachine, MachineKeys, QsbDeviceKeys, ReadyOutputKeys,
-    ReferenceKeys, SpimotorDeviceKeys, TmcpackAxisKeys, TmcpackDeviceKeys,
-};
-
-/// Trinamic pack variant.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub enum PackVariant {
-    /// SIXpack: 6 motors.
-    #[default]
-    Sixpack,
-    /// QUADpack: 4 motors.
-    Quadpack,
-}
+pub use keys::{AxisMachine, DeviceMachine, MachineKeys, QsbDeviceKeys, SpimotorDeviceKeys};
 
 /// QSB product variant (command list "QSB Variations").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]

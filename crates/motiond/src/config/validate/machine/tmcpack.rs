@@ -1,10 +1,10 @@
 //! tmcpack machine keys (README "Config", docs/keys/tmcpack.md): validated here into
-//! `motion_drivers::spec::{TmcpackDeviceKeys, TmcpackAxisKeys}`, turned into the driver's
+//! `board_tmcpack::{TmcpackDeviceKeys, TmcpackAxisKeys}`, turned into the driver's
 //! config by `TmcpackDriverConfig::from_spec`. Every value is checked against the range the
 //! Trinamic SIXpack/QUADpack manual (V2.43) gives for the instruction it becomes.
 
-use motion_drivers::spec::{PackVariant, ReadyOutputKeys, TmcpackAxisKeys, TmcpackDeviceKeys};
-use motion_drivers::tmcpack::{MAX_DEBOUNCE_MS, is_current_level, is_weak_current, word_time};
+use board_tmcpack::driver::{MAX_DEBOUNCE_MS, is_current_level, is_weak_current, word_time};
+use board_tmcpack::{PackVariant, ReadyOutputKeys, TmcpackAxisKeys, TmcpackDeviceKeys};
 use motion_drivers::{Model, SignalKind};
 use toml::Spanned;
 
@@ -14,10 +14,10 @@ use crate::config::validate::Validator;
 use crate::config::{ServerConfig, Transport};
 
 /// The reply address the driver uses unless `reply_address` is set.
-pub const DEFAULT_REPLY_ADDRESS: u8 = motion_drivers::tmcpack::DEFAULT_REPLY_ADDRESS;
+pub const DEFAULT_REPLY_ADDRESS: u8 = board_tmcpack::driver::DEFAULT_REPLY_ADDRESS;
 
 /// Highest `poslimit` ($15 P1..P4).
-pub const MAX_POSLIMIT: f64 = motion_drivers::tmcpack::MAX_POSLIMIT as f64;
+pub const MAX_POSLIMIT: f64 = board_tmcpack::driver::MAX_POSLIMIT as f64;
 
 /// The current levels of $11, in %, as the error messages list them.
 const LEVELS: &str = "100, 75, 50, 38, 25, 19, 13, 9, 0";
@@ -391,7 +391,7 @@ fn poslimit_fits(
         v.issue(
             span,
             &key,
-            format!("{what} is {counts} microsteps; the pack's $15 poslimit allows at most {} (0x7FFFFFFF)", motion_drivers::tmcpack::MAX_POSLIMIT),
+            format!("{what} is {counts} microsteps; the pack's $15 poslimit allows at most {} (0x7FFFFFFF)", board_tmcpack::driver::MAX_POSLIMIT),
         );
         return false;
     }

@@ -159,7 +159,7 @@ pub struct TmcpackDriverConfig {
     /// Every pack frames every word on the bus, so the driver spaces its words by this.
     pub bus_packet_timeout_units: u16,
     /// Motors polled on the whole bus this pack shares (all packs); 0 = this pack's own.
-    /// Only sizes [`refresh_budget`](crate::Driver::refresh_budget).
+    /// Only sizes [`refresh_budget`](motion_drivers::Driver::refresh_budget).
     pub bus_motors: u8,
     /// Per motor 0..=5: `Some` for a motor with an axis (configured, polled, driven).
     pub channels: [Option<TmcpackChannel>; 6],
@@ -283,8 +283,8 @@ impl Scale {
     /// The smallest velocity and acceleration this motor's clock represents: velocity 1
     /// (microsteps/s, manual "Instruction Set": f = f_clk / (clkdiv + 1) · v / 2^(14 + div))
     /// and amax 1 (amax / 64 is accumulated at 500 Hz: 500/64 velocity units/s²).
-    pub fn floor(&self) -> crate::goal::RateFloor {
-        crate::goal::RateFloor {
+    pub fn floor(&self) -> motion_drivers::RateFloor {
+        motion_drivers::RateFloor {
             velocity: self.hz,
             profile_velocity: self.hz,
             accel: self.hz * f64::from(RAMP_HZ) / f64::from(AMAX_DIVISOR),

@@ -3,9 +3,9 @@
 //! `home.direction`), wired as `reference.active` says (an opener for "high"), and an axis
 //! with a mechanical reference has end stops there.
 
+use super::{MotorConfig, RefSwitch, TmcpackSim, TmcpackSimConfig};
+use crate::driver::TmcpackDriverConfig;
 use motion_drivers::spec::DriverSpec;
-use motion_drivers::tmcpack::TmcpackDriverConfig;
-use motion_sim::tmcpack::{MotorConfig, RefSwitch, TmcpackSim, TmcpackSimConfig};
 
 /// Width of a simulated reference switch: one unit, at least 64 microsteps (4 full steps).
 fn switch_width(counts_per_unit: f64) -> i64 {

@@ -16,7 +16,7 @@ use core::time::Duration;
 
 use tmcpack::{MotorMask, RefInputs, Reply, Request, Variant};
 
-use crate::pin::{Pin, PinInfo, PinReading, SignalKind, SignalKinds};
+use motion_drivers::{Pin, PinInfo, PinReading, SignalKind, SignalKinds};
 
 /// Pins of the largest table (SIXpack).
 pub const MAX_PINS: usize = 18;
@@ -458,7 +458,7 @@ fn bit(level: bool) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::pin::find_pin;
+    use motion_drivers::find_pin;
 
     #[test]
     fn tables_name_every_pin_of_8_5_once_per_variant() {

@@ -43,8 +43,7 @@ use motion_base::{FixedQueue, counts_to_i32};
 use tmcpack::{Action, CurrentLevel, MAX_VELOCITY, MotorOptions, Request};
 
 use super::config::{Scale, TmcpackChannel};
-use crate::goal::{Goal, GoalError, GoalKind};
-use crate::state::{ChannelState, DeviceFault};
+use motion_drivers::{ChannelState, DeviceFault, Goal, GoalError, GoalKind};
 
 /// Longest script one goal needs.
 pub(crate) const MAX_STEPS: usize = 10;

@@ -6,7 +6,7 @@ use tmcpack::{Action, MotorMask, RefInputs, Reply, Request, RequestFrame};
 
 use super::bench::*;
 use super::*;
-use crate::pin::find_pin;
+use motion_drivers::find_pin;
 
 fn pin(name: &str) -> Pin {
     find_pin(pins(Variant::SixPack), name).expect("a SIXpack pin")

@@ -1,17 +1,17 @@
 //! The simulated SIXpack / QUADpack against the manual: golden exchanges, wire timing,
 //! ramp physics, every mode, and two packs on one RS-485 pair.
 
-#[path = "tmcpack/host.rs"]
+#[path = "sim/host.rs"]
 mod host;
-#[path = "tmcpack/io.rs"]
+#[path = "sim/io.rs"]
 mod io;
-#[path = "tmcpack/motion.rs"]
+#[path = "sim/motion.rs"]
 mod motion;
-#[path = "tmcpack/reference.rs"]
+#[path = "sim/reference.rs"]
 mod reference;
-#[path = "tmcpack/unit.rs"]
+#[path = "sim/unit.rs"]
 mod unit;
-#[path = "tmcpack/wire.rs"]
+#[path = "sim/wire.rs"]
 mod wire;
 
 use host::*;

@@ -2,8 +2,8 @@
 
 pub use std::time::Duration;
 
+pub use board_tmcpack::sim::{RefSwitch, TmcpackSim, TmcpackSimConfig};
 pub use motion_link::sim::{StreamBus, StreamDevice};
-pub use motion_sim::tmcpack::{RefSwitch, TmcpackSim, TmcpackSimConfig};
 pub use tmcpack::convert::byte_time;
 pub use tmcpack::{
     Action, MotorMask, MotorOptions, MotorType, PowerDownRequest, PowerDownStatus, Reply,

@@ -28,7 +28,7 @@ use super::config::{REFERENCE_FLAGS, Scale, TmcpackDriverConfig};
 use super::io::IoState;
 use super::wire::{Pick, Purpose};
 use super::{Phase, RESET_CHECK_PERIOD, TmcpackDriver};
-use crate::state::DeviceFault;
+use motion_drivers::DeviceFault;
 
 /// Most requests a start-up can need: $40, $41, $12, three $10, six motors × seven, $33,
 /// $32.

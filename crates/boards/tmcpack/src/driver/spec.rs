@@ -13,12 +13,11 @@ use super::{
     Currents, DEFAULT_REPLY_ADDRESS, DEFAULT_SWITCHOVER_UNITS, PinSet, ReadyOutput, TmcpackChannel,
     TmcpackDriverConfig, TmcpackIo, default_packet_timeout_units,
 };
-use crate::driver::Model;
-use crate::pin::SignalKind;
-use crate::spec::{
-    DeviceMachine, Direction, DriverAxis, DriverSignal, DriverSpec, PackVariant, Param, ParamOwner,
-    SpecError, TmcpackAxisKeys, TmcpackDeviceKeys,
+use crate::{PackVariant, TmcpackAxisKeys, TmcpackDeviceKeys};
+use motion_drivers::spec::{
+    DeviceMachine, Direction, DriverAxis, DriverSignal, DriverSpec, Param, ParamOwner, SpecError,
 };
+use motion_drivers::{Model, SignalKind};
 
 /// Highest `$16` de-bounce time, ms.
 pub const MAX_DEBOUNCE_MS: u16 = tmcpack::convert::MAX_DEBOUNCE_MS;

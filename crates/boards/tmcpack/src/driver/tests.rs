@@ -7,7 +7,7 @@ use tmcpack::{Action, Reply, Request, RequestFrame};
 
 use super::bench::*;
 use super::*;
-use crate::goal::GoalKind;
+use motion_drivers::GoalKind;
 
 #[test]
 fn startup_reads_unit_info_then_writes_the_manual_parameters() {

@@ -5,9 +5,7 @@
 use super::channel::{Channel, Step};
 use super::wire::Pick;
 use super::{Phase, TmcpackDriver};
-use crate::driver::Driver;
-use crate::goal::{Goal, GoalError, GoalKind, GoalKinds};
-use crate::pin::Pin;
+use motion_drivers::{Driver, Goal, GoalError, GoalKind, GoalKinds, Pin};
 
 /// The goals a configured motor takes.
 pub(super) const CAPABILITIES: GoalKinds = GoalKinds::of(&[

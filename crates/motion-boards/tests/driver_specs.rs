@@ -1,10 +1,15 @@
 //! Driver configs from hand-made specs: what the server's validation normally keeps out is
 //! refused with the key it is about, and a shared link's budget counts every pack on it.
 
-use super::*;
-use crate::qsb::QsbDriverConfig;
-use crate::spimotor::SpimotorDriverConfig;
-use crate::tmcpack::TmcpackDriverConfig;
+use board_tmcpack::driver::TmcpackDriverConfig;
+use board_tmcpack::{TmcpackAxisKeys, TmcpackDeviceKeys};
+use motion_drivers::qsb::QsbDriverConfig;
+use motion_drivers::spec::{
+    AxisMachine, BusPeer, DeviceMachine, Direction, DriverAxis, DriverSignal, DriverSpec, HomeSpec,
+    MachineKeys, QsbDeviceKeys, QsbInputMode, QsbVariant, SpimotorDeviceKeys,
+};
+use motion_drivers::spimotor::SpimotorDriverConfig;
+use motion_drivers::{Model, Pin, SignalKind};
 
 fn axis(channel: usize, machine: AxisMachine) -> DriverAxis {
     DriverAxis {
@@ -109,23 +114,4 @@ fn the_qsb_variant_and_input_mode_reach_the_driver() {
     assert_eq!(config.input_mode, ::qsb::EncoderMode::Analog);
     assert!(!config.motor_drive);
     assert_eq!(QsbVariant::D.digital_io_bits(), 1);
-}
-
-#[test]
-fn machine_keys_hold_any_board_s_struct_and_compare_by_value() {
-    let a = MachineKeys::new(SpimotorDeviceKeys {
-        coils: Some(2),
-        ..SpimotorDeviceKeys::default()
-    });
-    assert_eq!(a.get::<SpimotorDeviceKeys>().and_then(|k| k.coils), Some(2));
-    assert!(a.get::<QsbDeviceKeys>().is_none(), "another board's type");
-    assert_eq!(a, a.clone());
-    assert_ne!(a, MachineKeys::new(SpimotorDeviceKeys::default()));
-    assert_ne!(a, MachineKeys::new(QsbDeviceKeys::default()));
-    assert_ne!(a, MachineKeys::PLAIN);
-    assert_eq!(MachineKeys::PLAIN, MachineKeys::default());
-    assert_eq!(
-        MachineKeys::PLAIN.get_or_default::<SpimotorDeviceKeys>(),
-        SpimotorDeviceKeys::default()
-    );
 }

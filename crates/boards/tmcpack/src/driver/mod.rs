@@ -69,11 +69,10 @@ use core::time::Duration;
 use tmcpack::convert::{DEFAULT_SWITCHOVER_UNITS as FACTORY_SWITCHOVER, byte_time, units};
 use tmcpack::{DEFAULT_PACKET_TIMEOUT, FRAME_LEN, Variant};
 
-use crate::driver::{Driver, Model, Priority, Transmit};
-use crate::goal::{Goal, GoalError, GoalKinds, RateFloor};
-use crate::pin::{Pin, PinReading};
-use crate::stamps::IoStamps;
-use crate::state::{ChannelState, DeviceFault, DeviceStatus};
+use motion_drivers::{
+    ChannelState, DeviceFault, DeviceStatus, Driver, Goal, GoalError, GoalKinds, IoStamps, Model,
+    Pin, PinReading, Priority, RateFloor, Transmit,
+};
 
 use channel::{Channel, Step};
 use config::{Scale, clkdiv_for};

@@ -6,7 +6,7 @@
 //! the wire; the pack answers after the switch-over delay; the answer takes 4.7 ms; the pack
 //! then keeps driving the line for the switch-over time again, and bytes sent to it then
 //! are lost. So after an answer the whole bus stays quiet for the switch-over time (the
-//! driver reports [`awaiting_reply`](crate::Driver::awaiting_reply) until then, which holds
+//! driver reports [`awaiting_reply`](motion_drivers::Driver::awaiting_reply) until then, which holds
 //! every other driver on the bus too).
 
 use core::time::Duration;
@@ -16,7 +16,7 @@ use tmcpack::{Command, FRAME_LEN, MotorMask, Reply, ReplyFrame, Request, Request
 
 use super::channel::Channel;
 use super::{Phase, REPLY_MARGIN, TmcpackDriver};
-use crate::driver::{Priority, Transmit};
+use motion_drivers::{Priority, Transmit};
 
 /// What a query waits for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -8,8 +8,7 @@ use tmcpack::{DEFAULT_PACKET_TIMEOUT, Reply, Variant};
 use super::startup::Quiesce;
 use super::wire::{Expect, Purpose, Wire};
 use super::{MAX_TIMEOUTS, Phase, RESET_CHECK_PERIOD, RETRY_PERIOD, TmcpackDriver};
-use crate::goal::Goal;
-use crate::state::{DeviceFault, FIRMWARE_LEN};
+use motion_drivers::{DeviceFault, FIRMWARE_LEN, Goal};
 
 impl TmcpackDriver {
     pub(super) fn on_timeout(&mut self, now: Duration) {

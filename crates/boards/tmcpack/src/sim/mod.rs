@@ -50,6 +50,7 @@
 
 mod config;
 mod firmware;
+pub(crate) mod machine;
 mod motor;
 mod pack;
 mod params;
@@ -63,7 +64,7 @@ use motion_link::sim::StreamDevice;
 use tmcpack::convert::{TICK, byte_time, nominal_baud, units};
 use tmcpack::{Action, FrameDecoder, MotorMask, RequestFrame, Variant, Word};
 
-use crate::rng::SimRng;
+use motion_sim::rng::SimRng;
 
 pub use config::{MotorConfig, RefSwitch, TmcpackSimConfig};
 
