@@ -26,9 +26,9 @@ use std::sync::mpsc::channel;
 use std::time::Instant;
 
 use board_qq2drv::sim::Qq2drvSim;
+use board_spimotor::sim::{Drive, SpimotorSim, SpimotorSimConfig};
 use board_tmcpack::sim::{TmcpackSim, TmcpackSimConfig};
 use motion_link::sim::StreamDevice;
-use motion_sim::spimotor::{Drive, SpimotorSim, SpimotorSimConfig};
 use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
 
 use crate::args::PeerMode;

@@ -34,8 +34,6 @@ pub mod spec;
 mod stamps;
 mod state;
 
-pub mod spimotor;
-
 pub use bus::{LinkBus, MAX_SENDS_PER_STEP, SPI_PENDING_CAPACITY, UNWRITTEN_CAPACITY, Unwritten};
 pub use driver::{Driver, Model, Priority, Transmit};
 pub use goal::{Goal, GoalError, GoalKind, GoalKinds, RateFloor};

@@ -8,4 +8,3 @@
 
 pub mod qsb;
 pub mod rng;
-pub mod spimotor;

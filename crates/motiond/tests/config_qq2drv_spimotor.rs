@@ -548,7 +548,7 @@ fn spimotor_an_intensity_of_zero_is_a_warning() {
 /// write it made, decoded with the `spimotor` crate.
 fn run_spimotor(
     driver: &mut dyn Driver,
-    board: &mut motion_sim::spimotor::SpimotorSim,
+    board: &mut board_spimotor::sim::SpimotorSim,
     from: Duration,
     ticks: u32,
 ) -> Vec<spimotor::Write> {
@@ -581,7 +581,7 @@ fn spimotor_keys_are_written_at_start_up_and_again_after_a_power_cycle() {
     let config = parse(SPIMOTOR);
     let mut drivers = motiond::boards::build(&config).expect("drivers");
     let driver = drivers[0].as_mut();
-    let mut board = motion_sim::spimotor::SpimotorSim::default();
+    let mut board = board_spimotor::sim::SpimotorSim::default();
     let writes = run_spimotor(driver, &mut board, Duration::ZERO, 30);
     // Port 0x10 "Set drive intensity for stepper mode" ← 96; port 0x44 ← 0x00 (one coil).
     assert!(writes.contains(&Write::StepperIntensity(96)), "{writes:?}");

@@ -1,20 +1,23 @@
 //! The SPI_motor as a motiond board ([`SpimotorBoard`]): an SPI board driving one stepper
 //! or two brushed motors; boards on one SPI bus share it, told apart by their address
-//! (SPI_motor "Motor protocol": even addresses 2..=254), SPI mode 0 at 500 kHz. The driver
-//! is `motion_drivers::spimotor`, the simulator `motion_sim::spimotor`. The board has no
-//! I/O pins of its own.
+//! (SPI_motor "Motor protocol": even addresses 2..=254), SPI mode 0 at 500 kHz. Its driver
+//! is [`driver`], its simulator [`sim`], its machine keys [`machine_keys`]. The board has
+//! no I/O pins of its own.
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+pub mod driver;
+pub mod machine_keys;
+pub mod sim;
 mod standalone;
 
 use motion_board::{Board, LinkFacts, SimBoard, StandaloneError, StandaloneHelp, StandaloneSim};
-use motion_drivers::spec::{
-    DeviceMachine, DriverSpec, Param, SpecError, SpiDrive, SpimotorDeviceKeys,
-};
-use motion_drivers::spimotor::{PINS, SpimotorDriver, SpimotorDriverConfig};
+use motion_drivers::spec::{DeviceMachine, DriverSpec, Param, SpecError};
 use motion_drivers::{Driver, Model, PinInfo};
-use motion_sim::spimotor::{Drive, SpimotorSim, SpimotorSimConfig};
+
+use driver::{PINS, SpimotorDriver, SpimotorDriverConfig};
+pub use machine_keys::{SpiDrive, SpimotorDeviceKeys};
+use sim::{Drive, SpimotorSim, SpimotorSimConfig};
 
 /// The SPI_motor.
 #[derive(Debug, Clone, Copy)]

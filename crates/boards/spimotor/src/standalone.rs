@@ -1,9 +1,9 @@
 //! An SPI_motor served alone by `motion-sim`: `--address` (even), `--drive
 //! stepper|brushed`, `--seed`.
 
+use crate::sim::{Drive, SpimotorSim, SpimotorSimConfig};
 use motion_board::{SimBoard, StandaloneError, StandaloneHelp, StandaloneSim};
 use motion_drivers::Model;
-use motion_sim::spimotor::{Drive, SpimotorSim, SpimotorSimConfig};
 
 /// `motion-sim --help` on the SPI_motor.
 pub(crate) const HELP: StandaloneHelp = StandaloneHelp {

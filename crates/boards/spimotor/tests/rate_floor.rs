@@ -3,7 +3,7 @@
 //! the engine refuses slower goals (`motion_ipc::rules`: `VelocityLimit`, `AccelLimit`)
 //! instead of letting the board round them to nothing or up to its step.
 
-use motion_drivers::spimotor::{SpimotorDrive, SpimotorDriver, SpimotorDriverConfig};
+use board_spimotor::driver::{SpimotorDrive, SpimotorDriver, SpimotorDriverConfig};
 use motion_drivers::{Driver, RateFloor};
 
 /// SPI_motor "Motor protocol": "0x43 | set stepdelay. (in tenths of a millisecond …)", one

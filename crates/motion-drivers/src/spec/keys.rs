@@ -7,7 +7,7 @@ use core::fmt;
 use core::time::Duration;
 use std::sync::Arc;
 
-use super::{QsbInputMode, QsbVariant, SpiDrive};
+use super::{QsbInputMode, QsbVariant};
 
 /// A device's or an axis's model-specific keys, validated: whatever typed struct its
 /// board's crate defines (`TmcpackDeviceKeys`, `Qq2drvAxisKeys`, …), or none. The board
@@ -100,18 +100,6 @@ pub struct QsbDeviceKeys {
     pub capture_input: Option<u8>,
     /// `capture_edge = "falling"`.
     pub capture_falling: Option<bool>,
-}
-
-/// The spimotor keys of one `[[device]]`; `None` fields were not set (the driver's default
-/// applies).
-#[derive(Debug, Clone, PartialEq, Eq, Default)]
-pub struct SpimotorDeviceKeys {
-    /// `drive`: one stepper (default) or two brushed motors.
-    pub drive: SpiDrive,
-    /// `intensity`: stepper drive intensity, port 0x10 (0..=255).
-    pub intensity: Option<u8>,
-    /// `coils`: coils driven at a time, 1 or 2 (port 0x44).
-    pub coils: Option<u8>,
 }
 
 #[cfg(test)]

@@ -16,7 +16,7 @@ mod keys;
 use crate::driver::Model;
 use crate::pin::{Pin, SignalKind};
 
-pub use keys::{AxisMachine, DeviceMachine, MachineKeys, QsbDeviceKeys, SpimotorDeviceKeys};
+pub use keys::{AxisMachine, DeviceMachine, MachineKeys, QsbDeviceKeys};
 
 /// QSB product variant (command list "QSB Variations").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
@@ -39,16 +39,6 @@ impl QsbVariant {
             Self::D => "qsb-d",
         }
     }
-}
-
-/// SPI_motor drive.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub enum SpiDrive {
-    /// One stepper, channel 0.
-    #[default]
-    Stepper,
-    /// Two brushed motors: channels 0 = A, 1 = B.
-    Brushed,
 }
 
 /// What a QSB's encoder input reads (`input_mode`, MODE B1 B0).

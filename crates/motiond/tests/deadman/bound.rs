@@ -10,10 +10,10 @@ use core::fmt;
 use core::time::Duration;
 
 use board_qq2drv::driver::Qq2drvDriverConfig;
+use board_spimotor::driver::SpimotorDriverConfig;
 use board_tmcpack::driver::TmcpackDriverConfig;
 use motion_drivers::Model;
 use motion_drivers::qsb::QsbDriverConfig;
-use motion_drivers::spimotor::SpimotorDriverConfig;
 use motiond::config::{ServerConfig, Transport};
 use motiond::drivers::driver_spec;
 
@@ -145,7 +145,7 @@ impl Bound {
                 let exchange = 2 * transaction + tick;
                 // The last step at the board's slowest rate (the ramp's end), the next
                 // position read, the tick.
-                let slowest = motion_drivers::spimotor::ramp::SLOWEST_DELAY.duration();
+                let slowest = board_spimotor::driver::ramp::SLOWEST_DELAY.duration();
                 let refresh = slowest + cfg.poll_period + tick;
                 (exchange, refresh)
             }

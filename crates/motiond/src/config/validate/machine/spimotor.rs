@@ -1,5 +1,5 @@
 //! spimotor machine keys (README "Config"): validated here into
-//! `motion_drivers::spec::SpimotorDeviceKeys`, turned into the driver's config by
+//! `board_spimotor::SpimotorDeviceKeys`, turned into the driver's config by
 //! `SpimotorDriverConfig::from_spec`.
 //!
 //! Per `[[device]]` (the SPI_motor "Motor protocol" page, write ports):
@@ -11,7 +11,7 @@
 //! Both are stepper settings: on a `drive = "brushed"` board they would do nothing (the
 //! brushed section's intensity is each spin command's byte), so they are an error there.
 
-use motion_drivers::spec::{SpiDrive, SpimotorDeviceKeys};
+use board_spimotor::{SpiDrive, SpimotorDeviceKeys};
 use toml::Spanned;
 
 use super::DeviceContext;

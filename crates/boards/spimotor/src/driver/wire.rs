@@ -9,7 +9,7 @@ use spimotor::{Address, Header, Read, ReadPort, StepDelay, Transaction, Write};
 use motion_base::FixedQueue;
 
 use super::{PRESENCE_EVERY, Phase, REPLY_MARGIN, SpimotorDriver};
-use crate::driver::{Priority, Transmit};
+use motion_drivers::{Priority, Transmit};
 
 /// One transaction the driver wants on the wire.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -3,10 +3,10 @@
 
 use std::time::Duration;
 
-use motion_link::sim::{SpiBus, SpiDevice};
-use motion_sim::spimotor::{
+use board_spimotor::sim::{
     Bridge, Drive, MISO_IDLE, MISO_UNSELECTED, SpimotorSim, SpimotorSimConfig, UnlockStage,
 };
+use motion_link::sim::{SpiBus, SpiDevice};
 use spimotor::{
     Address, Coils, Direction, Motor, Read, ReadPort, Reply, Request, SerialNumber, StepDelay,
     Transaction, Write,

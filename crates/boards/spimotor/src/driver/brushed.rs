@@ -4,8 +4,7 @@ use spimotor::{Direction, Motor, Write};
 
 use super::SpimotorDriver;
 use super::wire::Op;
-use crate::driver::Priority;
-use crate::goal::{Goal, GoalError, GoalKind};
+use motion_drivers::{Goal, GoalError, GoalKind, Priority};
 
 /// What the driver last put on one motor's bridge.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]

@@ -11,8 +11,7 @@ use super::ramp::Motion;
 use super::stepper::ABSENT_READING;
 use super::wire::Op;
 use super::{Phase, START_ATTEMPTS, SpimotorDriver};
-use crate::driver::Priority;
-use crate::state::{DeviceFault, FIRMWARE_LEN};
+use motion_drivers::{DeviceFault, FIRMWARE_LEN, Priority};
 
 /// Survey readings that disagree in a row before the board is started over.
 pub const SURVEY_ATTEMPTS: u32 = 8;
@@ -83,7 +82,7 @@ impl SpimotorDriver {
                         if self.survey.attempts > SURVEY_ATTEMPTS {
                             // Nothing consistent comes back: a stuck or noisy MISO line.
                             self.bad_reply();
-                            self.raise(crate::state::DeviceFault::Protocol);
+                            self.raise(motion_drivers::DeviceFault::Protocol);
                             self.restart(now, 0);
                         } else {
                             self.queue_survey();

@@ -12,9 +12,7 @@ use spimotor::{
 };
 
 use super::*;
-use crate::driver::Driver;
-use crate::goal::{Goal, GoalError, GoalKind};
-use crate::state::DeviceFault;
+use motion_drivers::{DeviceFault, Driver, Goal, GoalError, GoalKind};
 
 const MS: Duration = Duration::from_millis(1);
 

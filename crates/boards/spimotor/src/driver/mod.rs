@@ -7,7 +7,7 @@
 //!
 //! ```
 //! use core::time::Duration;
-//! use motion_drivers::spimotor::{AxisLimits, SpimotorDriver, SpimotorDriverConfig};
+//! use board_spimotor::driver::{AxisLimits, SpimotorDriver, SpimotorDriverConfig};
 //! use motion_drivers::{Driver, Goal, GoalKind};
 //!
 //! let driver_config = SpimotorDriverConfig {
@@ -32,7 +32,7 @@
 //! # The wire
 //!
 //! Every exchange is one SPI transaction (address byte, port byte, data). A read's answer
-//! starts at MISO offset 2 ([`spimotor::REPLY_OFFSET`]); the [`LinkBus`](crate::LinkBus)
+//! starts at MISO offset 2 ([`spimotor::REPLY_OFFSET`]); the [`LinkBus`](motion_drivers::LinkBus)
 //! hands each transaction's MISO bytes back to the driver that wrote it, so several boards
 //! (distinct addresses) share one bus. Nothing on the wire tells a present board from an
 //! absent one — an undriven MISO reads 0xFF, so a position read of an absent board returns
@@ -137,10 +137,10 @@ use core::time::Duration;
 
 use spimotor::Identification;
 
-use crate::driver::{Driver, Model, Priority, Transmit};
-use crate::goal::{Goal, GoalError, GoalKind, GoalKinds, RateFloor};
-use crate::stamps::IoStamps;
-use crate::state::{ChannelState, DeviceFault, DeviceStatus};
+use motion_drivers::{
+    ChannelState, DeviceFault, DeviceStatus, Driver, Goal, GoalError, GoalKind, GoalKinds,
+    IoStamps, Model, Priority, RateFloor, Transmit,
+};
 
 pub use config::{AxisLimits, SpimotorDrive, SpimotorDriverConfig};
 pub use startup::SURVEY_ATTEMPTS;

@@ -5,8 +5,7 @@ use core::time::Duration;
 
 use super::SpimotorDriver;
 use super::wire::Op;
-use crate::driver::Driver;
-use crate::goal::{Goal, GoalError, GoalKind, GoalKinds};
+use motion_drivers::{Driver, Goal, GoalError, GoalKind, GoalKinds};
 
 impl SpimotorDriver {
     /// The goals `channel` accepts: power, stop and off for a brushed motor; for the

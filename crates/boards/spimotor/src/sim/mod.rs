@@ -13,7 +13,7 @@
 //! ```
 //! use std::time::Duration;
 //! use motion_link::sim::SpiDevice;
-//! use motion_sim::spimotor::{SpimotorSim, SpimotorSimConfig};
+//! use board_spimotor::sim::{SpimotorSim, SpimotorSimConfig};
 //! use spimotor::{Address, ReadPort, Reply, Transaction, Write};
 //!
 //! let mut board = SpimotorSim::new(SpimotorSimConfig::default()); // stepper at 0x90
@@ -175,7 +175,7 @@ use core::time::Duration;
 use motion_link::sim::SpiDevice;
 use spimotor::{Address, Coils, Identification, Motor, SerialNumber, StepDelay};
 
-use crate::rng::SimRng;
+use motion_sim::rng::SimRng;
 
 pub use brushed::Bridge;
 pub use config::{BrushedMotorConfig, Drive, SpimotorSimConfig};

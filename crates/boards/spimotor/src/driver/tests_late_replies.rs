@@ -10,8 +10,7 @@
 use core::time::Duration;
 
 use super::tests::{Bench, stepper};
-use crate::driver::Driver;
-use crate::goal::Goal;
+use motion_drivers::{Driver, Goal};
 
 const MS: Duration = Duration::from_millis(1);
 

@@ -10,7 +10,7 @@ use super::wire::{self, Op, Sent};
 use super::{
     CONFIRMATIONS, OFFLINE_RETRY_PERIOD, Phase, RETRY_PERIOD, START_ATTEMPTS, SpimotorDriver,
 };
-use crate::state::DeviceFault;
+use motion_drivers::DeviceFault;
 
 impl SpimotorDriver {
     /// MISO bytes: reassembled per transaction, each completed one handled.

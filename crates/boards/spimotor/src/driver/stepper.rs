@@ -10,9 +10,7 @@ use super::config::SpimotorDriverConfig;
 use super::ramp::{self, Motion, Observed, Ramp, TargetCommand};
 use super::wire::{Expect, Op, Sent};
 use super::{CONFIRMATIONS, PROTOCOL_LIMIT, SpimotorDriver};
-use crate::driver::Priority;
-use crate::goal::{Goal, GoalError, GoalKind};
-use crate::state::{ChannelState, DeviceFault};
+use motion_drivers::{ChannelState, DeviceFault, Goal, GoalError, GoalKind, Priority};
 
 /// Slack of the position plausibility check: time (for reads in flight) and steps.
 const PLAUSIBILITY_SLACK: Duration = Duration::from_millis(5);

@@ -5,7 +5,8 @@
 use spimotor::{Address, Coils};
 
 use super::{AxisLimits, SpimotorDrive, SpimotorDriverConfig};
-use crate::spec::{DriverSpec, Param, ParamOwner, SpecError, SpiDrive, SpimotorDeviceKeys};
+use crate::{SpiDrive, SpimotorDeviceKeys};
+use motion_drivers::spec::{DriverSpec, Param, ParamOwner, SpecError};
 
 impl From<SpiDrive> for SpimotorDrive {
     fn from(drive: SpiDrive) -> Self {
