@@ -20,8 +20,8 @@ use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::Instant;
 
+use board_qsb::sim::{QsbSim, QsbSimConfig};
 use motion_link::sim::StreamDevice;
-use motion_sim::qsb::{QsbSim, QsbSimConfig};
 use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
 
 use crate::rt::now_ns;

@@ -15,9 +15,9 @@ use std::path::Path;
 use std::sync::mpsc::Sender;
 
 use board_qq2drv::sim::Qq2drvSim;
+use board_qsb::sim::{QsbSim, QsbSimConfig};
 use board_spimotor::sim::{Drive, SpimotorSim, SpimotorSimConfig};
 use board_tmcpack::sim::{TmcpackSim, TmcpackSimConfig};
-use motion_sim::qsb::{QsbSim, QsbSimConfig};
 
 use crate::pty::{BAUD, Framing, LineSeen, PtyBoard, Wire};
 use crate::spi_board::{SpiBoard, Watch};

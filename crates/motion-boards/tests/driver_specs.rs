@@ -1,14 +1,15 @@
 //! Driver configs from hand-made specs: what the server's validation normally keeps out is
 //! refused with the key it is about, and a shared link's budget counts every pack on it.
 
+use board_qsb::driver::QsbDriverConfig;
+use board_qsb::{QsbDeviceKeys, QsbInputMode, QsbVariant};
 use board_spimotor::SpimotorDeviceKeys;
 use board_spimotor::driver::SpimotorDriverConfig;
 use board_tmcpack::driver::TmcpackDriverConfig;
 use board_tmcpack::{TmcpackAxisKeys, TmcpackDeviceKeys};
-use motion_drivers::qsb::QsbDriverConfig;
 use motion_drivers::spec::{
     AxisMachine, BusPeer, DeviceMachine, Direction, DriverAxis, DriverSignal, DriverSpec, HomeSpec,
-    MachineKeys, QsbDeviceKeys, QsbInputMode, QsbVariant,
+    MachineKeys,
 };
 use motion_drivers::{Model, Pin, SignalKind};
 

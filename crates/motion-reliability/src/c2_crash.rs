@@ -11,11 +11,11 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use anyhow::{Context, bail};
+use board_qsb::sim::{QsbSim, QsbSimConfig};
 use board_spimotor::sim::{SpimotorSim, SpimotorSimConfig};
 use iceoryx2::prelude::ipc;
 use motion_client::{Client, ClientBuilder, ClientError};
 use motion_ipc::{AxisFlags, AxisMode};
-use motion_sim::qsb::{QsbSim, QsbSimConfig};
 use motion_testkit::pty_board::{PtyBoard, PtyOptions};
 use motion_testkit::socket_board::SocketBoard;
 use motion_testkit::{RawClient, Server};

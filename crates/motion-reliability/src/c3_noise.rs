@@ -14,9 +14,9 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use anyhow::bail;
+use board_qsb::sim::{QsbSim, QsbSimConfig};
 use iceoryx2::prelude::*;
 use motion_ipc::{CommandKind, CommandRequest, FaultCode};
-use motion_sim::qsb::{QsbSim, QsbSimConfig};
 use motion_testkit::RawClient;
 use motion_testkit::pty_board::{LineNoise, PtyBoard, PtyOptions};
 use nix::sys::signal::Signal;

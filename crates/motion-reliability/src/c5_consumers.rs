@@ -13,10 +13,10 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use anyhow::bail;
+use board_qsb::sim::{QsbSim, QsbSimConfig};
 use board_spimotor::sim::{SpimotorSim, SpimotorSimConfig};
 use iceoryx2::prelude::*;
 use motion_client::ClientBuilder;
-use motion_sim::qsb::{QsbSim, QsbSimConfig};
 use motion_sim::rng::SimRng;
 use motion_testkit::RawClient;
 use motion_testkit::pty_board::{PtyBoard, PtyOptions};

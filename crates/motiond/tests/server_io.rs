@@ -12,11 +12,11 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use board_qq2drv::sim::{Qq2drvSim, Qq2drvSimConfig};
+use board_qsb::sim::{QsbSim, QsbSimConfig};
 use motion_ipc::{
     ClientId, CommandKind, CommandReply, CommandRequest, DeviceState, FrameFlags, MotionFrame,
     SignalFlags,
 };
-use motion_sim::qsb::{QsbSim, QsbSimConfig};
 use nix::sys::signal::Signal;
 use support::pty_board::PtyBoard;
 use support::socket_board::SocketBoard;

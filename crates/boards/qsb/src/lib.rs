@@ -2,22 +2,25 @@
 //! (the -M also drives a stepper), alone on its virtual COM port, which starts at 230400
 //! baud; "The commands and responses are sent in RS-232 format over a virtual COM port
 //! connection through the USB" (QSB command list, Communications), so its bytes reach the
-//! host at the end of each 1 ms full-speed USB frame. The driver is `motion_drivers::qsb`,
-//! the simulator `motion_sim::qsb`.
+//! host at the end of each 1 ms full-speed USB frame. Its driver is [`driver`], its
+//! simulator [`sim`], its machine keys [`machine_keys`].
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+pub mod driver;
+pub mod machine_keys;
+pub mod sim;
 mod standalone;
 
 use core::time::Duration;
 
 use motion_board::{Board, LinkFacts, SimBoard, StandaloneError, StandaloneHelp, StandaloneSim};
-use motion_drivers::qsb::{QsbDriver, QsbDriverConfig, pins};
-use motion_drivers::spec::{
-    DeviceMachine, DriverSpec, Param, QsbDeviceKeys, QsbVariant, SpecError,
-};
+use motion_drivers::spec::{DeviceMachine, DriverSpec, Param, SpecError};
 use motion_drivers::{Driver, Model, PinInfo};
-use motion_sim::qsb::{DriveEnable, QsbSim, QsbSimConfig, Variant};
+
+use driver::{QsbDriver, QsbDriverConfig, pins};
+pub use machine_keys::{QsbDeviceKeys, QsbInputMode, QsbVariant};
+use sim::{DriveEnable, QsbSim, QsbSimConfig, Variant};
 
 /// A full-speed USB device is polled once per 1 ms frame.
 const USB_FRAME: Duration = Duration::from_millis(1);

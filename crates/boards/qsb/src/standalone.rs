@@ -1,9 +1,9 @@
 //! A QSB served alone by `motion-sim`: `--variant s|d|m`, `--seed`; `--baud` sets the rate
 //! it starts at (its BAUD RATE command has the same rates).
 
+use crate::sim::{QsbSim, QsbSimConfig, Variant};
 use motion_board::{SimBoard, StandaloneError, StandaloneHelp, StandaloneSim};
 use motion_drivers::Model;
-use motion_sim::qsb::{QsbSim, QsbSimConfig, Variant};
 
 /// `motion-sim --help` on the QSB.
 pub(crate) const HELP: StandaloneHelp = StandaloneHelp {

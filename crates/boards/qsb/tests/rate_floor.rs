@@ -3,7 +3,7 @@
 //! the engine refuses slower goals (`motion_ipc::rules`: `VelocityLimit`, `AccelLimit`)
 //! instead of letting the board round them to nothing or up to its step.
 
-use motion_drivers::qsb::{QsbDriver, QsbDriverConfig};
+use board_qsb::driver::{QsbDriver, QsbDriverConfig};
 use motion_drivers::{Driver, RateFloor};
 
 /// QSB Command List 1.28: MD JOG RATE "Motor rate will change in increments of 16

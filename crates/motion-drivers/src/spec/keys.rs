@@ -1,13 +1,10 @@
-//! The machine keys of each model as the server validated them: `None` fields were not set
-//! (the driver's default applies). Values are in the config's terms (units, ms, %); the
-//! drivers convert them.
+//! A model's machine keys as the server validated them, held opaquely ([`MachineKeys`]):
+//! each board's crate defines its typed keys (`None` fields: not set, the driver's default
+//! applies; values in the config's terms, which its driver converts).
 
 use core::any::Any;
 use core::fmt;
-use core::time::Duration;
 use std::sync::Arc;
-
-use super::{QsbInputMode, QsbVariant};
 
 /// A device's or an axis's model-specific keys, validated: whatever typed struct its
 /// board's crate defines (`TmcpackDeviceKeys`, `Qq2drvAxisKeys`, …), or none. The board
@@ -74,32 +71,6 @@ impl fmt::Debug for MachineKeys {
             Some(keys) => keys.fmt(f),
         }
     }
-}
-
-/// The qsb keys of one `[[device]]`; `None` fields were not set (the driver's default
-/// applies).
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct QsbDeviceKeys {
-    /// `variant`: the product (QSB-M by default).
-    pub variant: QsbVariant,
-    /// `counts_per_step`: encoder counts (x4) per motor step, finite, not 0.
-    pub counts_per_step: Option<f64>,
-    /// `index_polarity = "inverted"` (MDR1 B3).
-    pub index_inverted: Option<bool>,
-    /// `stream_interval_ms` rounded to whole 1/512 s ticks (1..=0xFFFE).
-    pub stream_interval_ticks: Option<u16>,
-    /// `host_latency_ms`.
-    pub host_latency: Option<Duration>,
-    /// `enable_output`: the DIG I/O bit (0 or 3) of the stepper driver's enable line.
-    pub enable_output: Option<u8>,
-    /// `enable_active = "high"`.
-    pub enable_active_high: Option<bool>,
-    /// `input_mode` (MODE B1 B0).
-    pub input_mode: Option<QsbInputMode>,
-    /// `capture_input`: the DIG I/O bit whose edge loads CAPTURE.
-    pub capture_input: Option<u8>,
-    /// `capture_edge = "falling"`.
-    pub capture_falling: Option<bool>,
 }
 
 #[cfg(test)]

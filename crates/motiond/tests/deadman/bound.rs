@@ -10,10 +10,10 @@ use core::fmt;
 use core::time::Duration;
 
 use board_qq2drv::driver::Qq2drvDriverConfig;
+use board_qsb::driver::QsbDriverConfig;
 use board_spimotor::driver::SpimotorDriverConfig;
 use board_tmcpack::driver::TmcpackDriverConfig;
 use motion_drivers::Model;
-use motion_drivers::qsb::QsbDriverConfig;
 use motiond::config::{ServerConfig, Transport};
 use motiond::drivers::driver_spec;
 

@@ -408,4 +408,4 @@ mod tests;
 mod tests_late_replies;
 
 /// The SPI_motor protocol page defines no I/O port: no pins.
-pub const PINS: &[crate::PinInfo] = &[];
+pub const PINS: &[motion_drivers::PinInfo] = &[];

@@ -576,7 +576,7 @@ fn two_boards_have_their_own_addresses() {
     let mut bench = Bench::new(config);
     let sent = bench.step();
     assert_eq!(sent[0][0], 0x93);
-    assert_eq!(bench.driver.model(), crate::Model::SPIMOTOR);
+    assert_eq!(bench.driver.model(), motion_drivers::Model::SPIMOTOR);
 }
 
 #[test]

@@ -1,5 +1,5 @@
 //! qsb machine keys (README "Config", `docs/keys/qsb.md`): validated here into
-//! `motion_drivers::spec::QsbDeviceKeys`, turned into the driver's config by
+//! `board_qsb::QsbDeviceKeys`, turned into the driver's config by
 //! `QsbDriverConfig::from_spec`.
 //!
 //! The home keys (`home_direction`, `home_max_travel`, `home_offset`) are resolved with the
@@ -7,11 +7,11 @@
 
 use core::time::Duration;
 
-use motion_drivers::SignalKind;
-use motion_drivers::qsb::{
+use board_qsb::driver::{
     LONGEST_INTERVAL_TICKS, MOTOR_DRIVE_BITS, PinRole, QsbDriverConfig, TICK, interval_ticks,
 };
-use motion_drivers::spec::{QsbDeviceKeys, QsbInputMode, QsbVariant};
+use board_qsb::{QsbDeviceKeys, QsbInputMode, QsbVariant};
+use motion_drivers::SignalKind;
 use toml::Spanned;
 
 use super::DeviceContext;

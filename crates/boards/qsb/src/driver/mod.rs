@@ -6,7 +6,7 @@
 //! ```
 //! use core::time::Duration;
 //! use motion_drivers::Driver;
-//! use motion_drivers::qsb::{QsbDriver, QsbDriverConfig};
+//! use board_qsb::driver::{QsbDriver, QsbDriverConfig};
 //!
 //! let mut driver = QsbDriver::new(QsbDriverConfig::default()); // a QSB-M at 230400 baud
 //! let mut buf = [0u8; 256];
@@ -127,14 +127,13 @@ pub use config::QsbDriverConfig;
 pub use io::{CaptureInput, EnableOutput, MOTOR_DRIVE_BITS, PinRole, QsbIo, pins};
 pub use spec::{LONGEST_INTERVAL_TICKS, TICK, interval_ticks};
 
-use crate::driver::{Driver, Model, Priority, Transmit};
-use crate::goal::{Goal, GoalError, GoalKind, GoalKinds, RateFloor};
-use crate::pin::{Pin, PinReading};
-use crate::stamps::IoStamps;
-use crate::state::{ChannelState, DeviceFault, DeviceStatus};
 use encoder::EncoderTrack;
 use guard::StampGuard;
 use io::IoState;
+use motion_drivers::{
+    ChannelState, DeviceFault, DeviceStatus, Driver, Goal, GoalError, GoalKind, GoalKinds,
+    IoStamps, Model, Pin, PinReading, Priority, RateFloor, Transmit,
+};
 use program::Program;
 use wire::{InFlight, Origin};
 

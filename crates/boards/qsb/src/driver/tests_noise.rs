@@ -9,7 +9,7 @@ use proptest::prelude::*;
 use qsb::ResponseType;
 
 use super::tests::{Bench, MD_DONE};
-use crate::driver::Driver;
+use motion_drivers::Driver;
 use qsb::ProductType;
 
 /// One stream tick of a -M (encoder line, MD STATUS line) with bit `flip` of the tick's

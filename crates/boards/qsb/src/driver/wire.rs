@@ -8,7 +8,7 @@ use ::qsb::{QsbCommand, Register, Request, Write};
 
 use super::QsbDriver;
 use super::program::{self, Step};
-use crate::driver::{Priority, Transmit};
+use motion_drivers::{Priority, Transmit};
 
 /// Who sent the request in flight.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -14,8 +14,7 @@ use core::time::Duration;
 use ::qsb::{AnalogSample, DigIo, DigIoConfig, EncoderMode, ProductType, Register, Write};
 
 use super::QsbDriver;
-use crate::goal::GoalError;
-use crate::pin::{Pin, PinInfo, PinReading, SignalKind, SignalKinds};
+use motion_drivers::{GoalError, Pin, PinInfo, PinReading, SignalKind, SignalKinds};
 
 /// DIG I/O bits the -M motor drive uses (1 = step, 2 = direction).
 pub const MOTOR_DRIVE_BITS: u8 = 0b0110;
@@ -331,7 +330,7 @@ impl QsbDriver {
         at.max(alive.filter(|_| at.is_some()))
     }
 
-    /// [`Driver::read_pin`](crate::Driver::read_pin).
+    /// [`Driver::read_pin`](motion_drivers::Driver::read_pin).
     pub(super) fn pin_reading(&self, pin: Pin) -> Option<PinReading> {
         let io = self.config.io;
         let reading = |value: Option<f64>, at: Option<Duration>| match value {
@@ -362,7 +361,7 @@ impl QsbDriver {
         }
     }
 
-    /// [`Driver::set_output`](crate::Driver::set_output).
+    /// [`Driver::set_output`](motion_drivers::Driver::set_output).
     pub(super) fn drive_output(&mut self, pin: Pin, high: bool) -> Result<(), GoalError> {
         let bit = match PinRole::of(self.config.variant, pin) {
             Some(PinRole::Io(bit)) if self.config.io.digital_out & (1 << bit) != 0 => bit,

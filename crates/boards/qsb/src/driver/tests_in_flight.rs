@@ -9,8 +9,7 @@ use core::time::Duration;
 use ::qsb::ProductType;
 
 use super::tests::{Bench, MD_DONE};
-use crate::driver::Driver;
-use crate::goal::Goal;
+use motion_drivers::{Driver, Goal};
 
 /// MD JOG RATE ±496 steps/s (5000 counts/s at 10 counts per step, in 16-step increments).
 const JOG_PLUS: &[u8] = b"W121F0\r\n";

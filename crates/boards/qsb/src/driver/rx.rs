@@ -11,8 +11,7 @@ use ::qsb::{
 use super::encoder::Sample;
 use super::guard::StampVerdict;
 use super::{InFlight, MAX_ATTEMPTS, Origin, QsbDriver};
-use crate::goal::GoalKind;
-use crate::state::{ChannelState, DeviceFault};
+use motion_drivers::{ChannelState, DeviceFault, GoalKind};
 
 /// Data output ticks after a motor command before MD STATUS is trusted: the first tick
 /// after the command may report the drive before it started, its MD STATUS line follows

@@ -8,11 +8,9 @@ use core::time::Duration;
 use ::qsb::{EncoderMode, IntervalRate, ProductType};
 
 use super::{CaptureInput, EnableOutput, PinRole, QsbDriverConfig, QsbIo};
-use crate::pin::Pin;
-use crate::spec::{
-    Direction, DriverAxis, DriverSpec, Param, ParamOwner, QsbDeviceKeys, QsbInputMode, QsbVariant,
-    SpecError,
-};
+use crate::{QsbDeviceKeys, QsbInputMode, QsbVariant};
+use motion_drivers::Pin;
+use motion_drivers::spec::{Direction, DriverAxis, DriverSpec, Param, ParamOwner, SpecError};
 
 /// One data output tick (INTERVAL RATE's unit): 1/512 s.
 pub const TICK: Duration = ::qsb::TICK;

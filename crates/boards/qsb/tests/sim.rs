@@ -4,8 +4,8 @@
 
 use core::time::Duration;
 
+use board_qsb::sim::{EncoderMotion, QsbSim, QsbSimConfig, Variant};
 use motion_link::sim::StreamDevice;
-use motion_sim::qsb::{EncoderMotion, QsbSim, QsbSimConfig, Variant};
 use qsb::{
     AnalogSample, BaudRate, MdStatus, Register, Response, ResponseDecoder, ResponseType, Str, TICK,
     Value,

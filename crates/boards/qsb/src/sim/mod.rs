@@ -10,7 +10,7 @@
 //! ```
 //! use std::time::Duration;
 //! use motion_link::sim::StreamDevice;
-//! use motion_sim::qsb::{QsbSim, QsbSimConfig};
+//! use board_qsb::sim::{QsbSim, QsbSimConfig};
 //!
 //! let mut board = QsbSim::new(QsbSimConfig::default()); // a QSB-M, serial 00001
 //! board.receive(Duration::ZERO, b"R14\r\n");
@@ -78,7 +78,7 @@ use qsb::{
     defaults,
 };
 
-use crate::rng::SimRng;
+use motion_sim::rng::SimRng;
 
 pub use config::{AnalogInput, DriveEnable, EncoderMotion, QsbSimConfig, Variant};
 pub use dio::{DIRECTION_BIT, STEP_BIT};

@@ -15,7 +15,7 @@ use ::qsb::{
 use super::config::DRIVER_EOR;
 use super::program::{self, Step};
 use super::{QsbDriver, REGISTERS, RESTART_DELAY};
-use crate::state::{DeviceFault, FIRMWARE_LEN};
+use motion_drivers::{DeviceFault, FIRMWARE_LEN};
 
 /// MDR0 in normal operation: x4 quadrature, free-running, index disabled, synchronous
 /// index (0x43).

@@ -4,8 +4,8 @@
 
 use core::time::Duration;
 
+use board_qsb::sim::{DriveEnable, QsbSim, QsbSimConfig};
 use motion_link::sim::StreamDevice;
-use motion_sim::qsb::{DriveEnable, QsbSim, QsbSimConfig};
 use qsb::{Response, ResponseDecoder, ResponseType};
 
 const MS: Duration = Duration::from_millis(1);

@@ -59,7 +59,7 @@ pub struct QsbDriverConfig {
     /// counts.
     pub home_positive: bool,
     /// A home search that travels this far (counts) without an index pulse stops and
-    /// reports [`DeviceFault::HomeFailed`](crate::DeviceFault::HomeFailed). Default 5000:
+    /// reports [`DeviceFault::HomeFailed`](motion_drivers::DeviceFault::HomeFailed). Default 5000:
     /// two and a half turns of a 2000-count encoder.
     pub home_max_travel: f64,
     /// The counter value at the index (the home offset, counts): 0 uses MDR0 "reset CNTR"
@@ -185,9 +185,9 @@ impl QsbDriverConfig {
     /// The smallest rates and acceleration of the drive, in counts: MD JOG RATE "Motor
     /// rate will change in increments of 16 steps/second", MD STEP RATE (a move's profile)
     /// "from 32 – 13000 steps/second", MD ACCEL "from 64 – 360000 steps/second^2".
-    pub(crate) fn rate_floor(&self) -> crate::goal::RateFloor {
+    pub(crate) fn rate_floor(&self) -> motion_drivers::RateFloor {
         let per_step = self.step_scale().map_or(0.0, f64::abs);
-        crate::goal::RateFloor {
+        motion_drivers::RateFloor {
             velocity: f64::from(RATE_INCREMENT) * per_step,
             profile_velocity: f64::from(*STEP_RATE_RANGE.start()) * per_step,
             accel: f64::from(*ACCEL_RANGE.start()) * per_step,

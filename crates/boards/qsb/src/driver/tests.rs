@@ -7,9 +7,7 @@ use ::qsb::{CommandLine, CommandType, Eor, ProductType, Response, ResponseType, 
 
 use super::config::DRIVER_EOR;
 use super::{QsbDriver, QsbDriverConfig, RESTART_DELAY};
-use crate::driver::{Driver, Priority};
-use crate::goal::{Goal, GoalError, GoalKind};
-use crate::state::DeviceFault;
+use motion_drivers::{DeviceFault, Driver, Goal, GoalError, GoalKind, Priority};
 
 /// A driver on a bench: the test plays the board.
 pub(super) struct Bench {
@@ -253,7 +251,10 @@ fn position_and_velocity_come_from_time_stamped_samples() {
     let state = bench.driver.channel(0);
     assert_eq!(state.velocity, 0.0);
     assert!(!state.moving);
-    assert_eq!(bench.driver.channel(1), crate::state::ChannelState::UNKNOWN);
+    assert_eq!(
+        bench.driver.channel(1),
+        motion_drivers::ChannelState::UNKNOWN
+    );
 }
 
 #[test]
@@ -778,7 +779,7 @@ mod random {
                         }
                     }
                     Op::Output(pin, high) => {
-                        let pin = crate::Pin(pin);
+                        let pin = motion_drivers::Pin(pin);
                         let result = bench.driver.set_output(bench.now, pin, high);
                         if !bench.driver.status().online {
                             prop_assert!(result.is_err());

@@ -11,8 +11,7 @@ use ::qsb::{
 use super::QsbDriver;
 use super::program::Step;
 use super::startup::NORMAL_MDR0;
-use crate::goal::{Goal, GoalError, GoalKind, GoalKinds};
-use crate::state::DeviceFault;
+use motion_drivers::{DeviceFault, Goal, GoalError, GoalKind, GoalKinds};
 
 /// MDR0 during a home search to counter value 0: the index resets CNTR (0x63, the
 /// command list's "Sync Index, Reset on Index, Free Running, X4 mode, W0363").

@@ -8,10 +8,7 @@ use ::qsb::{AnalogSample, EncoderMode, ProductType, ResponseType, TICK};
 
 use super::tests::{Bench, MD_DONE, MD_JOGGING};
 use super::{CaptureInput, EnableOutput, QsbDriverConfig, QsbIo};
-use crate::driver::Driver;
-use crate::goal::{Goal, GoalError, GoalKind};
-use crate::pin::{Pin, PinReading, SignalKind};
-use crate::state::DeviceFault;
+use motion_drivers::{DeviceFault, Driver, Goal, GoalError, GoalKind, Pin, PinReading, SignalKind};
 
 /// -M pins: io0..io3, encoder, capture.
 const IO0: Pin = Pin(0);
@@ -381,7 +378,10 @@ fn analog_mode_reads_the_special_data_format_and_carries_no_axis() {
         ],
         "MODE 10 = ANALOG MODE"
     );
-    assert_eq!(bench.driver.capabilities(0), crate::GoalKinds::NONE);
+    assert_eq!(
+        bench.driver.capabilities(0),
+        motion_drivers::GoalKinds::NONE
+    );
     let sample = AnalogSample {
         time_stamp: 77,
         digital: 0xF,
