@@ -9,15 +9,15 @@ mod support;
 use core::time::Duration;
 use std::sync::{Arc, Mutex};
 
-use motion_drivers::qq2drv::{
+use board_qq2drv::driver::{
     AxisLimits, ChannelConfig, FILLER, HomeInput, POLL_SLACK, Qq2drvDriver, Qq2drvDriverConfig,
     STATUS_MASK, STREAM_MASK,
 };
+use board_qq2drv::sim::{InputPin, InputSource, Qq2drvSim, Qq2drvSimConfig};
 use motion_drivers::{Driver, Goal, LinkKind};
 use motion_engine::{AxisConfig, BusConfig, DeviceConfig, EngineConfig};
 use motion_ipc::{AxisFlags, AxisMode, CommandKind, FaultCode, Reason};
 use motion_link::sim::{Direction, SimFaults, SimLink};
-use motion_sim::qq2drv::{InputPin, InputSource, Qq2drvSim, Qq2drvSimConfig};
 use qq2drv::{ControlMode, InputMode, Request, StreamDecoder};
 use support::counting_alloc::{CountingAllocator, allocations};
 use support::rig::{Rig, Shared, accepted, all_fresh, flag};

@@ -17,11 +17,11 @@ mod wire;
 use core::time::Duration;
 use std::sync::{Arc, Mutex};
 
-use motion_drivers::qsb::{QsbDriver, QsbDriverConfig};
+use board_qsb::driver::{QsbDriver, QsbDriverConfig};
+use board_qsb::sim::{EncoderMotion, QsbSim, QsbSimConfig, Variant};
 use motion_engine::{AxisConfig, BusConfig, DeviceConfig, EngineConfig};
 use motion_ipc::{AxisFlags, AxisMode, AxisState, CommandKind, FaultCode, Reason};
 use motion_link::sim::{Direction, SimFaults, SimLink};
-use motion_sim::qsb::{EncoderMotion, QsbSim, QsbSimConfig, Variant};
 use qsb::{CommandType, Register, Request};
 use support::rig::{Rig, Shared};
 

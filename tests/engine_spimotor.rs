@@ -9,13 +9,13 @@ mod support;
 use core::time::Duration;
 use std::sync::{Arc, Mutex};
 
-use motion_drivers::spimotor::{AxisLimits, SpimotorDrive, SpimotorDriver, SpimotorDriverConfig};
+use board_spimotor::driver::{AxisLimits, SpimotorDrive, SpimotorDriver, SpimotorDriverConfig};
+use board_spimotor::sim::{Bridge, Drive, SpimotorSim, SpimotorSimConfig};
 use motion_drivers::{Driver, LinkKind};
 use motion_engine::{AxisConfig, BusConfig, DeviceConfig, EngineConfig};
 use motion_ipc::{AxisFlags, AxisMode, CommandKind, FaultCode, Reason};
 use motion_link::Link;
 use motion_link::sim::{SimFaults, SimLink, SpiBus};
-use motion_sim::spimotor::{Bridge, Drive, SpimotorSim, SpimotorSimConfig};
 use spimotor::{Address, Direction, Motor, Request, Transaction};
 use support::counting_alloc::{CountingAllocator, allocations};
 use support::rig::{Rig, Shared, accepted, all_fresh, flag, fresh};

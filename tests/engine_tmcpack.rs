@@ -22,12 +22,12 @@ mod wire;
 use core::time::Duration;
 use std::sync::{Arc, Mutex};
 
-use motion_drivers::tmcpack::{TmcpackChannel, TmcpackDriver, TmcpackDriverConfig};
+use board_tmcpack::driver::{TmcpackChannel, TmcpackDriver, TmcpackDriverConfig};
+use board_tmcpack::sim::{TmcpackSim, TmcpackSimConfig};
 use motion_drivers::{DeviceFault, Driver, LinkKind};
 use motion_engine::{AxisConfig, BusConfig, DeviceConfig, EngineConfig};
 use motion_ipc::{AxisFlags, AxisMode, CommandKind, FaultCode, Reason};
 use motion_link::sim::{Duplex, SimFaults, SimLink, StreamBus};
-use motion_sim::tmcpack::{TmcpackSim, TmcpackSimConfig};
 use support::counting_alloc::{CountingAllocator, allocations};
 use support::rig::{Rig, Shared, accepted, all_fresh, flag, fresh};
 use tmcpack::convert::byte_time;
@@ -132,7 +132,7 @@ fn wait_online(rig: &mut Rig, axes: usize) {
     );
 }
 
-fn motor(board: &Pack, motor: u8) -> motion_sim::tmcpack::MotorView {
+fn motor(board: &Pack, motor: u8) -> board_tmcpack::sim::MotorView {
     board.lock().unwrap().motor(motor).expect("motor exists")
 }
 

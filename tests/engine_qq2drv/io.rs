@@ -4,8 +4,8 @@ use super::*;
 
 #[test]
 fn a_switch_on_an_in_pin_is_read_within_the_refresh_budget() {
+    use board_qq2drv::driver::{PINS, pin_of};
     use motion_drivers::find_pin;
-    use motion_drivers::qq2drv::{PINS, pin_of};
     // Signals on QUAD2's IN pin (the axis y's home switch) and on QUAD4, which has no axis.
     let mut config = driver_config();
     let in2 = find_pin(PINS, "in2").unwrap();

@@ -6,11 +6,11 @@
 use core::time::Duration;
 use std::sync::{Arc, Mutex};
 
-use motion_drivers::qsb::{CaptureInput, EnableOutput, QsbDriver, QsbDriverConfig, QsbIo};
+use board_qsb::driver::{CaptureInput, EnableOutput, QsbDriver, QsbDriverConfig, QsbIo};
+use board_qsb::sim::{AnalogInput, DriveEnable, QsbSim, QsbSimConfig, Variant};
 use motion_drivers::{Driver, Goal, GoalError, GoalKind, Pin};
 use motion_link::Link;
 use motion_link::sim::SimLink;
-use motion_sim::qsb::{AnalogInput, DriveEnable, QsbSim, QsbSimConfig, Variant};
 use qsb::{CommandDecoder, DigIo, EncoderMode, Register, Request, Write};
 
 use super::support::rig::Shared;
@@ -245,7 +245,7 @@ fn analog_mode_streams_the_special_data_format_into_the_encoder_pin() {
 #[test]
 fn pwm_mode_reads_the_absolute_position() {
     let sim = QsbSimConfig {
-        motion: motion_sim::qsb::EncoderMotion {
+        motion: board_qsb::sim::EncoderMotion {
             velocity: 0.0,
             amplitude: 0.0,
             frequency_hz: 0.0,

@@ -3,8 +3,8 @@
 
 use core::time::Duration;
 
+use board_qsb::sim::Variant;
 use motion_ipc::CommandKind;
-use motion_sim::qsb::Variant;
 
 use crate::support::lag::{
     LATE_WRITES, PROMPT, STARVED, SilenceFound, not_responding_after, stays_healthy, unreported,

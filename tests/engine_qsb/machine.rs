@@ -4,10 +4,10 @@
 
 use core::time::Duration;
 
-use motion_drivers::qsb::QsbDriverConfig;
+use board_qsb::driver::QsbDriverConfig;
+use board_qsb::sim::QsbSimConfig;
 use motion_ipc::{AxisFlags, AxisMode, CommandKind, FaultCode, Reason};
 use motion_link::sim::StreamDevice;
-use motion_sim::qsb::QsbSimConfig;
 use qsb::{QsbCommand, Request, Write};
 
 use super::{COUNTS_PER_UNIT, MAX_ACCEL, MAX_VELOCITY, Qsb, TOLERANCE, flags, healthy, rig_with};
@@ -125,7 +125,7 @@ fn the_deadman_stop_ends_within_v_over_max_accel_and_the_wire_latency() {
 fn a_motor_jogging_before_start_up_or_behind_the_drivers_back_is_stopped() {
     // A motor left jogging by a previous server: the start-up stops it.
     let sim = QsbSimConfig::default();
-    let mut board = motion_sim::qsb::QsbSim::new(sim.clone());
+    let mut board = board_qsb::sim::QsbSim::new(sim.clone());
     board.receive(Duration::ZERO, b"W162\r\nW12320\r\nW169\r\n"); // 800 steps/s
     assert!(board.md_status().jogging);
     let mut qsb = super::rig_with(sim, driver(10.0), Duration::from_millis(250));

@@ -6,10 +6,10 @@
 
 use core::time::Duration;
 
-use motion_drivers::qsb::{EnableOutput, QsbDriverConfig};
+use board_qsb::driver::{EnableOutput, QsbDriverConfig};
+use board_qsb::sim::{DriveEnable, QsbSimConfig};
 use motion_ipc::{AxisMode, CommandKind, Reason};
 use motion_link::sim::StreamDevice;
-use motion_sim::qsb::{DriveEnable, QsbSimConfig};
 
 use super::{COUNTS_PER_UNIT, MAX_ACCEL, MAX_VELOCITY, Qsb, rig_with};
 

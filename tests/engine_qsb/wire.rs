@@ -7,7 +7,7 @@
 
 use core::time::Duration;
 
-use motion_sim::qsb::Variant;
+use board_qsb::sim::Variant;
 
 use crate::support::lag::PROMPT;
 use crate::support::wire::{alternating, goal_to_wire_ticks};

@@ -2,10 +2,10 @@
 //! within the refresh budget, outputs reach the pack, the polling of inputs keeps every
 //! axis fresh.
 
-use motion_drivers::tmcpack::{TmcpackIo, pins};
+use board_tmcpack::driver::{TmcpackIo, pins};
+use board_tmcpack::sim::RefSwitch;
 use motion_drivers::{Pin, find_pin};
 use motion_link::Link;
-use motion_sim::tmcpack::RefSwitch;
 
 use super::*;
 

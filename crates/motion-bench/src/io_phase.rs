@@ -25,10 +25,8 @@ use std::path::{Path, PathBuf};
 use std::sync::mpsc::channel;
 use std::time::Instant;
 
+use motion_base::Model;
 use motion_link::sim::StreamDevice;
-use motion_sim::qq2drv::Qq2drvSim;
-use motion_sim::spimotor::{Drive, SpimotorSim, SpimotorSimConfig};
-use motion_sim::tmcpack::{TmcpackSim, TmcpackSimConfig};
 use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
 
 use crate::args::PeerMode;
@@ -37,6 +35,7 @@ use crate::peer::Peer;
 use crate::pty::{BAUD, PtyBoard, Wire, queued};
 use crate::report::{Row, Unit, write_dist};
 use crate::rt::now_ns;
+use crate::sim_boards::{serial_board, spi_board};
 use crate::spi_board::SpiBoard;
 use crate::sweep::{Server, ServerRt, last_line};
 
@@ -145,19 +144,15 @@ impl Boards {
             qsb: PtyBoard::start(&links.qsb, b"\x00", qsb_lines)?,
             pack: PtyBoard::start_with(
                 &links.pack,
-                Box::new(TmcpackSim::new(TmcpackSimConfig::default())),
+                serial_board(Model::TMCPACK)?,
                 Wire::uart(PACK_BAUD),
                 b"\x00",
                 pack_lines,
             )?,
-            quad: SpiBoard::start(&links.quad, Box::new(Qq2drvSim::default()))?,
+            quad: SpiBoard::start(&links.quad, spi_board(Model::QQ2DRV, None, None)?)?,
             spim: SpiBoard::start(
                 &links.spim,
-                Box::new(SpimotorSim::new(SpimotorSimConfig {
-                    address: 0x90,
-                    drive: Drive::Stepper,
-                    ..SpimotorSimConfig::default()
-                })),
+                spi_board(Model::SPIMOTOR, Some(0x90), Some("stepper"))?,
             )?,
         })
     }

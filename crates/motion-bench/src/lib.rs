@@ -57,6 +57,7 @@ pub mod report;
 pub mod roundtrip;
 pub mod rt;
 mod run;
+pub mod sim_boards;
 pub mod spi_board;
 pub mod sweep;
 pub mod wakeup;

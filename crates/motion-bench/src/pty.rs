@@ -20,11 +20,12 @@ use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::Instant;
 
+use motion_base::Model as BoardModel;
 use motion_link::sim::StreamDevice;
-use motion_sim::qsb::{QsbSim, QsbSimConfig};
 use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
 
 use crate::rt::now_ns;
+use crate::sim_boards::serial_board;
 
 /// The QSB's line rate (factory setting), 8N1.
 pub const BAUD: u32 = 230_400;
@@ -108,7 +109,7 @@ impl PtyBoard {
     ) -> Result<Self, String> {
         Self::start_with(
             link,
-            Box::new(QsbSim::new(QsbSimConfig::default())),
+            serial_board(BoardModel::QSB)?,
             Wire::QSB,
             prefix,
             lines,

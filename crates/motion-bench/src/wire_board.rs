@@ -14,12 +14,10 @@ use std::os::unix::net::UnixStream;
 use std::path::Path;
 use std::sync::mpsc::Sender;
 
-use motion_sim::qq2drv::Qq2drvSim;
-use motion_sim::qsb::{QsbSim, QsbSimConfig};
-use motion_sim::spimotor::{Drive, SpimotorSim, SpimotorSimConfig};
-use motion_sim::tmcpack::{TmcpackSim, TmcpackSimConfig};
+use motion_base::Model;
 
 use crate::pty::{BAUD, Framing, LineSeen, PtyBoard, Wire};
+use crate::sim_boards::{serial_board, spi_board};
 use crate::spi_board::{SpiBoard, Watch};
 use crate::sweep::ServerRt;
 
@@ -190,14 +188,14 @@ impl WireBoard {
         Ok(match self {
             Self::Qsb => Served::Pty(PtyBoard::start_with(
                 link,
-                Box::new(QsbSim::new(QsbSimConfig::default())),
+                serial_board(Model::QSB)?,
                 Wire::QSB,
                 b"W1",
                 seen,
             )?),
             Self::Tmcpack => Served::Pty(PtyBoard::start_framed(
                 link,
-                Box::new(TmcpackSim::new(TmcpackSimConfig::default())),
+                serial_board(Model::TMCPACK)?,
                 Wire::uart(PACK_BAUD),
                 Framing::Words {
                     len: 9,
@@ -208,7 +206,7 @@ impl WireBoard {
             )?),
             Self::Qq2drv => Served::Spi(SpiBoard::start_watched(
                 link,
-                Box::new(Qq2drvSim::default()),
+                spi_board(Model::QQ2DRV, None, None)?,
                 Some(Watch {
                     select: |mosi| velocity_ramp(mosi).is_some(),
                     seen,
@@ -216,11 +214,7 @@ impl WireBoard {
             )?),
             Self::Spimotor => Served::Spi(SpiBoard::start_watched(
                 link,
-                Box::new(SpimotorSim::new(SpimotorSimConfig {
-                    address: SPIM_ADDRESS,
-                    drive: Drive::Stepper,
-                    ..SpimotorSimConfig::default()
-                })),
+                spi_board(Model::SPIMOTOR, Some(SPIM_ADDRESS), Some("stepper"))?,
                 Some(Watch {
                     select: spim_write,
                     seen,

@@ -16,6 +16,7 @@
 
 pub mod keys;
 pub mod machine;
+pub mod standalone;
 
 use core::fmt;
 use core::time::Duration;
@@ -28,6 +29,8 @@ use crate::keys::{AxisContext, DeviceContext, KeyIssues, KeyTable, Span};
 use crate::machine::MachineView;
 use motion_drivers::{Driver, Model, PinInfo};
 use motion_link::sim::{SpiDevice, StreamDevice};
+
+pub use standalone::{StandaloneError, StandaloneHelp, StandaloneSim};
 
 /// A simulated board, on the kind of wire its model uses.
 pub enum SimBoard {
@@ -229,4 +232,14 @@ pub trait Board: Sync + fmt::Debug {
     fn cross_check(&self, machine: &MachineView<'_>, issues: &mut dyn KeyIssues) {
         let _ = (machine, issues);
     }
+
+    /// The simulated board the `motion-sim` tool serves alone, from its command-line
+    /// `options` (no config file).
+    ///
+    /// # Errors
+    /// An option the board does not have, or a value of one it cannot take.
+    fn simulate_standalone(&self, options: &StandaloneSim) -> Result<SimBoard, StandaloneError>;
+
+    /// Its part of `motion-sim --help`.
+    fn standalone_help(&self) -> StandaloneHelp;
 }

@@ -1,12 +1,15 @@
-//! Sans-I/O drivers for the boards motiond drives.
+//! What every board's sans-I/O driver shares: the [`Driver`] trait, its goals, pins and
+//! state, the [`LinkBus`], and the neutral machine description a driver is built from
+//! ([`spec`]). The drivers themselves live in their board crates
+//! (`crates/boards/<board>/src/driver/`, docs/ARCHITECTURE.md "How to add a board").
 //!
-//! One driver per board model implements [`Driver`]: goals in counts ([`Goal`]), received
-//! bytes and `now` in; bytes to send and [`ChannelState`] out. Drivers never read a clock
-//! and never touch a file descriptor. A [`LinkBus`] puts several drivers on one link and
-//! enforces what no single driver sees: one request in flight on a shared serial bus,
-//! commands before polls, MISO bytes back to the transaction's owner.
+//! A driver implements [`Driver`]: goals in counts ([`Goal`]), received bytes and `now` in;
+//! bytes to send and [`ChannelState`] out. Drivers never read a clock and never touch a
+//! file descriptor. A [`LinkBus`] puts several drivers on one link and enforces what no
+//! single driver sees: one request in flight on a shared serial bus, commands before polls,
+//! MISO bytes back to the transaction's owner.
 //!
-//! Every board's module has the same skeleton:
+//! The four boards' driver modules share one skeleton:
 //!
 //! | file | holds |
 //! |---|---|
@@ -19,9 +22,9 @@
 //! | `spec.rs` | the driver config built from the neutral [`spec::DriverSpec`] (`from_spec`: unit conversions, protocol encodings), the board facts a config is validated against, and `params` (the effective machine parameters) |
 //!
 //! Board-specific parts sit beside them: the pin tables (`pins.rs` / `io.rs`), per-channel
-//! state machines (`qq2drv/channel.rs`, `tmcpack/channel.rs`, `spimotor/stepper.rs`,
-//! `spimotor/brushed.rs`), the stepper's rate profile (`spimotor/ramp.rs`), the QSB's
-//! encoder track and request programs (`qsb/encoder.rs`, `qsb/program.rs`).
+//! state machines (board-qq2drv's and board-tmcpack's `channel.rs`, board-spimotor's
+//! `stepper.rs` and `brushed.rs`), the stepper's rate profile (board-spimotor's `ramp.rs`),
+//! the QSB's encoder track and request programs (board-qsb's `encoder.rs`, `program.rs`).
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
@@ -29,14 +32,9 @@ mod bus;
 mod driver;
 mod goal;
 mod pin;
-pub mod qq2drv;
-pub mod qsb;
 pub mod spec;
 mod stamps;
 mod state;
-
-pub mod spimotor;
-pub mod tmcpack;
 
 pub use bus::{LinkBus, MAX_SENDS_PER_STEP, SPI_PENDING_CAPACITY, UNWRITTEN_CAPACITY, Unwritten};
 pub use driver::{Driver, Model, Priority, Transmit};
@@ -44,4 +42,5 @@ pub use goal::{Goal, GoalError, GoalKind, GoalKinds, RateFloor};
 /// Whether a link carries a byte stream or SPI transactions (one enum with `motion_link`).
 pub use motion_base::LinkKind;
 pub use pin::{Pin, PinInfo, PinReading, SignalKind, SignalKinds, find_pin};
+pub use stamps::IoStamps;
 pub use state::{ChannelState, DeviceFault, DeviceStatus, FIRMWARE_LEN};

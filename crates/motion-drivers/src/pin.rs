@@ -1,8 +1,9 @@
 //! Board I/O as the drivers see it: [`Pin`]s, what they can do ([`PinInfo`]) and what they
 //! read ([`PinReading`]).
 //!
-//! Every board module publishes a static table of its pins (`qq2drv::PINS`,
-//! `tmcpack::pins(variant)`, `qsb::pins(variant)`, `spimotor::PINS`) with the names the
+//! Every board's driver publishes a static table of its pins (`board_qq2drv::driver::PINS`,
+//! `board_tmcpack::driver::pins(variant)`, `board_qsb::driver::pins(variant)`, the board's
+//! `Board::pins`) with the names the
 //! config uses (`pin = "ttlio1"`). A [`Pin`] is the index into that table, so it means
 //! something only together with its board's model. Values are raw: 0.0 / 1.0 for a digital
 //! pin as the board reports its electrical level (no inversion), the ADC count for an

@@ -6,9 +6,13 @@
 
 use core::time::Duration;
 
-/// Messages made and reported written, and the link's horizon.
+/// Messages made and reported written, and the link's horizon: the bookkeeping a driver
+/// keeps to match [`Driver::handle_written`] reports to the messages it made, and to judge
+/// a reply missing only up to where the link has heard.
+///
+/// [`Driver::handle_written`]: crate::Driver::handle_written
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub(crate) struct IoStamps {
+pub struct IoStamps {
     /// Messages made (the number of the newest).
     sent: u64,
     /// Messages reported written.

@@ -7,8 +7,8 @@ use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
-use motion_sim::qsb::{QsbSim, QsbSimConfig};
-use motion_sim::spimotor::{SpimotorSim, SpimotorSimConfig};
+use board_qsb::sim::{QsbSim, QsbSimConfig};
+use board_spimotor::sim::{SpimotorSim, SpimotorSimConfig};
 use motion_testkit::pty_board::{PtyBoard, PtyOptions};
 use motion_testkit::socket_board::SocketBoard;
 

@@ -17,8 +17,8 @@ use std::sync::Mutex;
 use std::time::Instant;
 
 use anyhow::{Context, bail};
+use board_qsb::sim::QsbSim;
 use motion_ipc::{AxisFlags, AxisMode, CommandKind, DeviceState, MotionFrame};
-use motion_sim::qsb::QsbSim;
 use motion_sim::rng::SimRng;
 use motion_testkit::RawClient;
 use motion_testkit::pty_board::{PtyBoard, PtyOptions};

@@ -11,11 +11,11 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use anyhow::{Context, bail};
+use board_qsb::sim::QsbSim;
+use board_spimotor::sim::SpimotorSim;
 use iceoryx2::prelude::ipc;
 use motion_client::{Client, ClientBuilder, ClientError};
 use motion_ipc::{AxisFlags, AxisMode};
-use motion_sim::qsb::QsbSim;
-use motion_sim::spimotor::SpimotorSim;
 use motion_testkit::{RawClient, Server};
 use nix::sys::signal::Signal;
 

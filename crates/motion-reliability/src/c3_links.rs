@@ -10,10 +10,10 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use anyhow::bail;
+use board_tmcpack::sim::{TmcpackSim, TmcpackSimConfig};
 use iceoryx2::prelude::ipc;
 use motion_client::{Client, ClientBuilder};
 use motion_ipc::{AxisFlags, AxisMode, DeviceState, FaultCode};
-use motion_sim::tmcpack::{TmcpackSim, TmcpackSimConfig};
 use motion_testkit::RawClient;
 use motion_testkit::pty_board::{PtyBoard, PtyOptions};
 use motion_testkit::socket_board::SocketBoard;

@@ -142,8 +142,8 @@ pub fn param_rows(config: &ServerConfig, index: usize, params: Vec<Param>) -> Ve
 mod tests {
     use std::path::Path;
 
+    use board_qsb::driver::{CaptureInput, EnableOutput, QsbDriverConfig};
     use motion_drivers::Pin;
-    use motion_drivers::qsb::{CaptureInput, EnableOutput, QsbDriverConfig};
 
     use super::*;
 

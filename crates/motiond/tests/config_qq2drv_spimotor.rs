@@ -245,7 +245,7 @@ fn qq2drv_a_clock_above_500_khz_is_a_warning() {
 /// request written (parsed later) with its time.
 fn run_qq2drv(
     driver: &mut dyn Driver,
-    board: &mut motion_sim::qq2drv::Qq2drvSim,
+    board: &mut board_qq2drv::sim::Qq2drvSim,
     from: Duration,
     ticks: u32,
 ) -> Vec<Vec<u8>> {
@@ -337,7 +337,7 @@ fn qq2drv_keys_are_written_at_start_up_and_again_after_a_reset() {
     let config = parse(QQ2DRV);
     let mut drivers = motiond::boards::build(&config).expect("drivers");
     let driver = &mut drivers[0];
-    let mut board = motion_sim::qq2drv::Qq2drvSim::default();
+    let mut board = board_qq2drv::sim::Qq2drvSim::default();
     let packets = run_qq2drv(driver, &mut board, Duration::ZERO, 50);
     let (ids, requests) = qq2drv_start_up_requests(&packets);
     assert_eq!(&ids[..4], &[1, 7, 9, 5], "the probe");
@@ -359,7 +359,7 @@ fn qq2drv_a_home_search_runs_the_configured_way_in_board_counts() {
     let config = parse(QQ2DRV);
     let mut drivers = motiond::boards::build(&config).expect("drivers");
     let driver = &mut drivers[0];
-    let mut board = motion_sim::qq2drv::Qq2drvSim::default();
+    let mut board = board_qq2drv::sim::Qq2drvSim::default();
     run_qq2drv(driver, &mut board, Duration::ZERO, 50);
     // Axis y homes towards its max (positive in mm); 200 transitions/mm reversed.
     driver
@@ -548,7 +548,7 @@ fn spimotor_an_intensity_of_zero_is_a_warning() {
 /// write it made, decoded with the `spimotor` crate.
 fn run_spimotor(
     driver: &mut dyn Driver,
-    board: &mut motion_sim::spimotor::SpimotorSim,
+    board: &mut board_spimotor::sim::SpimotorSim,
     from: Duration,
     ticks: u32,
 ) -> Vec<spimotor::Write> {
@@ -581,7 +581,7 @@ fn spimotor_keys_are_written_at_start_up_and_again_after_a_power_cycle() {
     let config = parse(SPIMOTOR);
     let mut drivers = motiond::boards::build(&config).expect("drivers");
     let driver = &mut drivers[0];
-    let mut board = motion_sim::spimotor::SpimotorSim::default();
+    let mut board = board_spimotor::sim::SpimotorSim::default();
     let writes = run_spimotor(driver, &mut board, Duration::ZERO, 30);
     // Port 0x10 "Set drive intensity for stepper mode" ← 96; port 0x44 ← 0x00 (one coil).
     assert!(writes.contains(&Write::StepperIntensity(96)), "{writes:?}");
@@ -676,11 +676,11 @@ fn a_signal_on_an_spi_motor_is_refused_and_on_a_qq2drv_streams_its_channel() {
     let config = parse(&text);
     let mut drivers = motiond::boards::build(&config).expect("drivers");
     let driver = &mut drivers[0];
-    let mut board = motion_sim::qq2drv::Qq2drvSim::default();
+    let mut board = board_qq2drv::sim::Qq2drvSim::default();
     run_qq2drv(driver, &mut board, Duration::ZERO, 50);
     assert_eq!(
         board.data_masks()[1],
-        motion_drivers::qq2drv::STATUS_MASK,
+        board_qq2drv::driver::STATUS_MASK,
         "channel 2 streams its Status byte"
     );
     let pin = config.signals[0].pin;

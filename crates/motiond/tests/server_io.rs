@@ -11,12 +11,12 @@ use core::time::Duration;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
+use board_qq2drv::sim::{Qq2drvSim, Qq2drvSimConfig};
+use board_qsb::sim::{QsbSim, QsbSimConfig};
 use motion_ipc::{
     ClientId, CommandKind, CommandReply, CommandRequest, DeviceState, FrameFlags, MotionFrame,
     SignalFlags,
 };
-use motion_sim::qq2drv::{Qq2drvSim, Qq2drvSimConfig};
-use motion_sim::qsb::{QsbSim, QsbSimConfig};
 use nix::sys::signal::Signal;
 use support::pty_board::PtyBoard;
 use support::socket_board::SocketBoard;
@@ -227,7 +227,7 @@ kind = "digital-in"
 
 #[test]
 fn tmcpack_inputs_show_outputs_reach_the_pack_and_an_e_stop_makes_them_safe() {
-    use motion_sim::tmcpack::{TmcpackSim, TmcpackSimConfig};
+    use board_tmcpack::sim::{TmcpackSim, TmcpackSimConfig};
     let name = unique_name("tmcio");
     let epoch = Instant::now();
     let pack = Arc::new(Mutex::new(TmcpackSim::new(TmcpackSimConfig::default())));

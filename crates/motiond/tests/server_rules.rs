@@ -13,12 +13,12 @@ use core::time::Duration;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
+use board_qq2drv::sim::{Qq2drvSim, Qq2drvSimConfig};
+use board_qsb::sim::{QsbSim, QsbSimConfig};
+use board_tmcpack::sim::{TmcpackSim, TmcpackSimConfig};
 use motion_ipc::{
     AxisFlags, ClientId, CommandKind, CommandRequest, DeviceState, MotionFrame, Reason, SignalFlags,
 };
-use motion_sim::qq2drv::{Qq2drvSim, Qq2drvSimConfig};
-use motion_sim::qsb::{QsbSim, QsbSimConfig};
-use motion_sim::tmcpack::{TmcpackSim, TmcpackSimConfig};
 use nix::sys::signal::Signal;
 use support::pty_board::PtyBoard;
 use support::socket_board::SocketBoard;

@@ -8,8 +8,8 @@ use core::time::Duration;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
+use board_tmcpack::sim::{TmcpackSim, TmcpackSimConfig};
 use motion_ipc::{AxisFlags, AxisMode, CommandKind, DeviceState, FaultCode, MotionFrame};
-use motion_sim::tmcpack::{TmcpackSim, TmcpackSimConfig};
 use nix::sys::signal::Signal;
 use support::pty_board::PtyBoard;
 use support::*;

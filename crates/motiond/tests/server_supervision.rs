@@ -12,11 +12,11 @@ use core::time::Duration;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
+use board_qsb::sim::{QsbSim, QsbSimConfig};
+use board_spimotor::sim::{SpimotorSim, SpimotorSimConfig};
 use motion_ipc::{AxisFlags, DeviceState, FaultCode, MotionFrame};
 use motion_link::sim::SpiDevice;
 use motion_link::sim::StreamDevice;
-use motion_sim::qsb::{QsbSim, QsbSimConfig};
-use motion_sim::spimotor::{SpimotorSim, SpimotorSimConfig};
 use nix::sys::signal::Signal;
 use spimotor::{Address, StepDelay, Transaction, Write};
 use support::pty_board::PtyBoard;

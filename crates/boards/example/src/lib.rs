@@ -9,15 +9,16 @@
 //! | [`sim`] | [`sim::ExampleSim`], the simulated board on a `type = "sim"` link |
 //! | this file | the model's facts and [`ExampleBoard`], the `motion_board::Board` the registry lists |
 //!
-//! Adding it to the server was one line in `motion_boards::BOARDS` and one dependency line
-//! in that crate's `Cargo.toml` (docs/ARCHITECTURE.md "How to add a board").
+//! Adding it to the server was one line in the registry's list (`motion_boards`) and one
+//! dependency line in that crate's `Cargo.toml` (docs/ARCHITECTURE.md "How to add a
+//! board").
 //!
 //! ```
 //! use motion_board::Board;
-//! use board_example::BOARD;
+//! use board_example::ExampleBoard;
 //!
-//! assert_eq!(BOARD.model().id(), "example");
-//! assert_eq!(BOARD.link().default_rate, 115_200);
+//! assert_eq!(ExampleBoard.model().id(), "example");
+//! assert_eq!(ExampleBoard.link().default_rate, 115_200);
 //! ```
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
@@ -25,9 +26,12 @@
 pub mod codec;
 pub mod driver;
 pub mod sim;
+mod standalone;
 
 use motion_base::{LinkKind, Model, ModelFacts};
-use motion_board::{Board, LinkFacts, SimBoard, TypedBoard};
+use motion_board::{
+    Board, LinkFacts, SimBoard, StandaloneError, StandaloneHelp, StandaloneSim, TypedBoard,
+};
 use motion_drivers::spec::{DeviceMachine, DriverSpec, Param, SpecError};
 use motion_drivers::{Driver, PinInfo};
 
@@ -48,7 +52,6 @@ pub const MODEL: Model = Model::new(&FACTS);
 /// The AS-2.
 #[derive(Debug, Clone, Copy)]
 pub struct ExampleBoard;
-
 
 impl Board for ExampleBoard {
     fn model(&self) -> Model {
@@ -92,6 +95,14 @@ impl Board for ExampleBoard {
             seed,
             ..ExampleSimConfig::default()
         })))
+    }
+
+    fn simulate_standalone(&self, options: &StandaloneSim) -> Result<SimBoard, StandaloneError> {
+        standalone::simulate(options)
+    }
+
+    fn standalone_help(&self) -> StandaloneHelp {
+        standalone::HELP
     }
 }
 

@@ -1,5 +1,5 @@
 //! qq2drv machine keys (README "Config"): validated here into
-//! `motion_drivers::spec::Qq2drvAxisKeys`, turned into the driver's config by
+//! `Qq2drvAxisKeys` (machine_keys.rs), turned into the driver's config by
 //! `Qq2drvDriverConfig::from_spec`.
 //!
 //! Per `[[axis]]` (one QuadQuad2Drv channel):
@@ -17,8 +17,10 @@ use motion_board::keys::{AxisContext, Int, KeyIssues, KeyTable, Spanned};
 use motion_board::machine::MachineView;
 use motion_board::{Given, HomeHints};
 use motion_drivers::Model;
-use motion_drivers::spec::{Direction, HomeInput, HomeInputKind, PidKeys, Qq2drvAxisKeys};
+use motion_drivers::spec::{Direction, HomeInput, HomeInputKind};
 use serde::Deserialize;
+
+use crate::{PidKeys, Qq2drvAxisKeys};
 
 /// The qq2drv keys of an `[[axis]]` as written.
 #[derive(Debug, Deserialize)]

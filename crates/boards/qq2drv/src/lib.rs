@@ -1,25 +1,32 @@
 //! The QuadQuad2Drv as a motiond board ([`Qq2drvBoard`]): an SPI board with four DC motor
 //! channels under the board's own PID, alone on its link (its frames have no address),
 //! SPI mode 1 at the datasheet's recommended 500 kHz ("We recommend clocking SPI up to
-//! 500kHz", QuadQuad2Drv datasheet). The driver is `motion_drivers::qq2drv`, the simulator
-//! `motion_sim::qq2drv`.
+//! 500kHz", QuadQuad2Drv datasheet). Its driver is [`driver`], its simulator [`sim`],
+//! its machine keys [`machine_keys`].
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+pub mod driver;
 mod keys;
-mod sim;
+pub mod machine_keys;
+pub mod sim;
+mod standalone;
 
 use motion_board::keys::{AxisContext, KeyIssues, KeyTable};
 use motion_board::machine::MachineView;
-use motion_board::{AxisKeys, Board, LinkFacts, SimBoard, TypedBoard};
-use motion_drivers::qq2drv::{PINS, Qq2drvDriver, Qq2drvDriverConfig};
+use motion_board::{
+    AxisKeys, Board, LinkFacts, SimBoard, StandaloneError, StandaloneHelp, StandaloneSim,
+    TypedBoard,
+};
 use motion_drivers::spec::{AxisMachine, DeviceMachine, DriverSpec, MachineKeys, Param, SpecError};
 use motion_drivers::{Driver, Model, PinInfo};
+
+use driver::{PINS, Qq2drvDriver, Qq2drvDriverConfig};
+pub use machine_keys::{PidKeys, Qq2drvAxisKeys};
 
 /// The QuadQuad2Drv.
 #[derive(Debug, Clone, Copy)]
 pub struct Qq2drvBoard;
-
 
 impl Board for Qq2drvBoard {
     fn model(&self) -> Model {
@@ -73,7 +80,15 @@ impl Board for Qq2drvBoard {
     }
 
     fn simulate(&self, spec: &DriverSpec, seed: u64) -> SimBoard {
-        SimBoard::Spi(Box::new(sim::model(spec, seed)))
+        SimBoard::Spi(Box::new(sim::machine::model(spec, seed)))
+    }
+
+    fn simulate_standalone(&self, options: &StandaloneSim) -> Result<SimBoard, StandaloneError> {
+        standalone::simulate(options)
+    }
+
+    fn standalone_help(&self) -> StandaloneHelp {
+        standalone::HELP
     }
 }
 

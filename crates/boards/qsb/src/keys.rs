@@ -1,5 +1,5 @@
 //! qsb machine keys (README "Config", `docs/keys/qsb.md`): validated here into
-//! `motion_drivers::spec::QsbDeviceKeys`, turned into the driver's config by
+//! `crate::QsbDeviceKeys`, turned into the driver's config by
 //! `QsbDriverConfig::from_spec`.
 //!
 //! The home keys (`home_direction`, `home_max_travel`, `home_offset`) are handed to the
@@ -11,10 +11,12 @@ use core::time::Duration;
 use motion_board::keys::{DeviceContext, Int, KeyIssues, KeyTable, Spanned};
 use motion_board::machine::MachineView;
 use motion_board::{Given, HomeHints};
-use motion_drivers::qsb::{
+use motion_drivers::spec::Direction;
+
+use crate::driver::{
     LONGEST_INTERVAL_TICKS, MOTOR_DRIVE_BITS, PinRole, QsbDriverConfig, TICK, interval_ticks,
 };
-use motion_drivers::spec::{Direction, QsbDeviceKeys, QsbInputMode, QsbVariant};
+use crate::{QsbDeviceKeys, QsbInputMode, QsbVariant};
 use motion_drivers::{Model, SignalKind};
 use serde::Deserialize;
 

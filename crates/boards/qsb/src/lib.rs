@@ -2,10 +2,15 @@
 //! (the -M also drives a stepper), alone on its virtual COM port, which starts at 230400
 //! baud; "The commands and responses are sent in RS-232 format over a virtual COM port
 //! connection through the USB" (QSB command list, Communications), so its bytes reach the
-//! host at the end of each 1 ms full-speed USB frame. The driver is `motion_drivers::qsb`,
-//! the simulator `motion_sim::qsb`.
+//! host at the end of each 1 ms full-speed USB frame. Its driver is [`driver`], its
+//! simulator [`sim`], its machine keys [`machine_keys`].
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
+
+pub mod driver;
+pub mod machine_keys;
+pub mod sim;
+mod standalone;
 
 use core::time::Duration;
 
@@ -13,13 +18,16 @@ mod keys;
 
 use motion_board::keys::{DeviceContext, KeyIssues, KeyTable};
 use motion_board::machine::MachineView;
-use motion_board::{Board, DeviceKeys, LinkFacts, SimBoard, TypedBoard};
-use motion_drivers::qsb::{QsbDriver, QsbDriverConfig, pins};
-use motion_drivers::spec::{
-    DeviceMachine, DriverSpec, Param, QsbDeviceKeys, QsbVariant, SpecError,
+use motion_board::{
+    Board, DeviceKeys, LinkFacts, SimBoard, StandaloneError, StandaloneHelp, StandaloneSim,
+    TypedBoard,
 };
+use motion_drivers::spec::{DeviceMachine, DriverSpec, Param, SpecError};
 use motion_drivers::{Driver, Model, PinInfo};
-use motion_sim::qsb::{DriveEnable, QsbSim, QsbSimConfig, Variant};
+
+use driver::{QsbDriver, QsbDriverConfig, pins};
+pub use machine_keys::{QsbDeviceKeys, QsbInputMode, QsbVariant};
+use sim::{DriveEnable, QsbSim, QsbSimConfig, Variant};
 
 /// A full-speed USB device is polled once per 1 ms frame.
 const USB_FRAME: Duration = Duration::from_millis(1);
@@ -27,7 +35,6 @@ const USB_FRAME: Duration = Duration::from_millis(1);
 /// The QSB.
 #[derive(Debug, Clone, Copy)]
 pub struct QsbBoard;
-
 
 impl Board for QsbBoard {
     fn model(&self) -> Model {
@@ -106,6 +113,14 @@ impl Board for QsbBoard {
             drive_enable,
             ..QsbSimConfig::default().with_counts_per_step(counts_per_step)
         })))
+    }
+
+    fn simulate_standalone(&self, options: &StandaloneSim) -> Result<SimBoard, StandaloneError> {
+        standalone::simulate(options)
+    }
+
+    fn standalone_help(&self) -> StandaloneHelp {
+        standalone::HELP
     }
 }
 

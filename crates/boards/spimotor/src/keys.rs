@@ -1,5 +1,5 @@
 //! spimotor machine keys (README "Config"): validated here into
-//! `motion_drivers::spec::SpimotorDeviceKeys`, turned into the driver's config by
+//! `crate::SpimotorDeviceKeys`, turned into the driver's config by
 //! `SpimotorDriverConfig::from_spec`.
 //!
 //! `drive`: "stepper" (one axis on channel 0; default) or "brushed" (channels 0 = A,
@@ -16,8 +16,9 @@
 //! brushed section's intensity is each spin command's byte), so they are an error there.
 
 use motion_board::keys::{DeviceContext, Int, KeyIssues, KeyTable, Spanned};
-use motion_drivers::spec::{SpiDrive, SpimotorDeviceKeys};
 use serde::Deserialize;
+
+use crate::{SpiDrive, SpimotorDeviceKeys};
 
 /// The spimotor keys of a `[[device]]` as written.
 #[derive(Debug, Deserialize)]

@@ -1,26 +1,32 @@
 //! The SPI_motor as a motiond board ([`SpimotorBoard`]): an SPI board driving one stepper
 //! or two brushed motors; boards on one SPI bus share it, told apart by their address
-//! (SPI_motor "Motor protocol": even addresses 2..=254), SPI mode 0 at 500 kHz. The driver
-//! is `motion_drivers::spimotor`, the simulator `motion_sim::spimotor`. The board has no
-//! I/O pins of its own.
+//! (SPI_motor "Motor protocol": even addresses 2..=254), SPI mode 0 at 500 kHz. Its driver
+//! is [`driver`], its simulator [`sim`], its machine keys [`machine_keys`]. The board has
+//! no I/O pins of its own.
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+pub mod driver;
 mod keys;
+pub mod machine_keys;
+pub mod sim;
+mod standalone;
 
 use motion_board::keys::{DeviceContext, KeyIssues, KeyTable};
-use motion_board::{AddressKey, Board, DeviceKeys, LinkFacts, SimBoard, TypedBoard};
-use motion_drivers::spec::{
-    DeviceMachine, DriverSpec, Param, SpecError, SpiDrive, SpimotorDeviceKeys,
+use motion_board::{
+    AddressKey, Board, DeviceKeys, LinkFacts, SimBoard, StandaloneError, StandaloneHelp,
+    StandaloneSim, TypedBoard,
 };
-use motion_drivers::spimotor::{PINS, SpimotorDriver, SpimotorDriverConfig};
+use motion_drivers::spec::{DeviceMachine, DriverSpec, Param, SpecError};
 use motion_drivers::{Driver, Model, PinInfo};
-use motion_sim::spimotor::{Drive, SpimotorSim, SpimotorSimConfig};
+
+use driver::{PINS, SpimotorDriver, SpimotorDriverConfig};
+pub use machine_keys::{SpiDrive, SpimotorDeviceKeys};
+use sim::{Drive, SpimotorSim, SpimotorSimConfig};
 
 /// The SPI_motor.
 #[derive(Debug, Clone, Copy)]
 pub struct SpimotorBoard;
-
 
 impl Board for SpimotorBoard {
     fn model(&self) -> Model {
@@ -92,6 +98,14 @@ impl Board for SpimotorBoard {
             seed,
             ..SpimotorSimConfig::default()
         })))
+    }
+
+    fn simulate_standalone(&self, options: &StandaloneSim) -> Result<SimBoard, StandaloneError> {
+        standalone::simulate(options)
+    }
+
+    fn standalone_help(&self) -> StandaloneHelp {
+        standalone::HELP
     }
 }
 

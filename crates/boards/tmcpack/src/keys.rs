@@ -1,17 +1,18 @@
 //! tmcpack machine keys (README "Config", docs/keys/tmcpack.md): validated here into
-//! `motion_drivers::spec::{TmcpackDeviceKeys, TmcpackAxisKeys}`, turned into the driver's
+//! `board_tmcpack::{TmcpackDeviceKeys, TmcpackAxisKeys}`, turned into the driver's
 //! config by `TmcpackDriverConfig::from_spec`. Every value is checked against the range the
 //! Trinamic SIXpack/QUADpack manual (V2.43) gives for the instruction it becomes.
 
 use motion_board::keys::{AxisContext, DeviceContext, Int, KeyIssues, KeyTable, Spanned};
 use motion_board::machine::MachineView;
 use motion_board::{Given, HomeHints};
-use motion_drivers::spec::{
-    Direction, PackVariant, ReadyOutputKeys, TmcpackAxisKeys, TmcpackDeviceKeys,
-};
-use motion_drivers::tmcpack::{MAX_DEBOUNCE_MS, is_current_level, is_weak_current, word_time};
+use motion_drivers::spec::Direction;
+
 use motion_drivers::{Model, SignalKind};
 use serde::Deserialize;
+
+use crate::driver::{MAX_DEBOUNCE_MS, is_current_level, is_weak_current, word_time};
+use crate::{PackVariant, ReadyOutputKeys, TmcpackAxisKeys, TmcpackDeviceKeys};
 
 /// The tmcpack keys of a `[[device]]` as written.
 #[derive(Debug, Deserialize)]
@@ -161,10 +162,10 @@ fn side_hint(v: &mut dyn KeyIssues, ctx: &AxisContext<'_>, raw: &RawAxis) -> Opt
 }
 
 /// The reply address the driver uses unless `reply_address` is set.
-pub const DEFAULT_REPLY_ADDRESS: u8 = motion_drivers::tmcpack::DEFAULT_REPLY_ADDRESS;
+pub const DEFAULT_REPLY_ADDRESS: u8 = crate::driver::DEFAULT_REPLY_ADDRESS;
 
 /// Highest `poslimit` ($15 P1..P4).
-pub const MAX_POSLIMIT: f64 = motion_drivers::tmcpack::MAX_POSLIMIT as f64;
+pub const MAX_POSLIMIT: f64 = crate::driver::MAX_POSLIMIT as f64;
 
 /// The current levels of $11, in %, as the error messages list them.
 const LEVELS: &str = "100, 75, 50, 38, 25, 19, 13, 9, 0";
@@ -535,7 +536,7 @@ fn poslimit_fits(
         v.issue(
             span,
             &key,
-            format!("{what} is {counts} microsteps; the pack's $15 poslimit allows at most {} (0x7FFFFFFF)", motion_drivers::tmcpack::MAX_POSLIMIT),
+            format!("{what} is {counts} microsteps; the pack's $15 poslimit allows at most {} (0x7FFFFFFF)", crate::driver::MAX_POSLIMIT),
         );
         return false;
     }

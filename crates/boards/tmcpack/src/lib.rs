@@ -1,28 +1,34 @@
 //! The Trinamic SIXpack / QUADpack as a motiond board ([`TmcpackBoard`]): a serial board
 //! (RS-232 or RS-485, manual 2) with six or four stepper channels; packs on one RS-485 bus
 //! share the link, told apart by their address (manual 6.1); they start at the factory
-//! 19200 baud (manual 7.2 `$40`). The driver is `motion_drivers::tmcpack`, the simulator
-//! `motion_sim::tmcpack`.
+//! 19200 baud (manual 7.2 `$40`). Its driver is [`driver`], its simulator [`sim`], its
+//! machine keys [`machine_keys`].
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+pub mod driver;
 mod keys;
-mod sim;
+pub mod machine_keys;
+pub mod sim;
+mod standalone;
 
 use motion_board::keys::{AxisContext, DeviceContext, KeyIssues, KeyTable};
 use motion_board::machine::MachineView;
-use motion_board::{AddressKey, AxisKeys, Board, DeviceKeys, LinkFacts, SimBoard, TypedBoard};
-use motion_drivers::spec::{
-    AxisMachine, DeviceMachine, DriverSpec, MachineKeys, PackVariant, Param, SpecError,
-    TmcpackDeviceKeys,
+use motion_board::{
+    AddressKey, AxisKeys, Board, DeviceKeys, LinkFacts, SimBoard, StandaloneError, StandaloneHelp,
+    StandaloneSim, TypedBoard,
 };
-use motion_drivers::tmcpack::{TmcpackDriver, TmcpackDriverConfig, pins};
+use motion_drivers::spec::{AxisMachine, DeviceMachine, DriverSpec, MachineKeys, Param, SpecError};
 use motion_drivers::{Driver, Model, PinInfo};
+
+use driver::{TmcpackDriver, TmcpackDriverConfig, pins};
+pub use machine_keys::{
+    CurrentKeys, PackVariant, ReadyOutputKeys, ReferenceKeys, TmcpackAxisKeys, TmcpackDeviceKeys,
+};
 
 /// The Trinamic pack.
 #[derive(Debug, Clone, Copy)]
 pub struct TmcpackBoard;
-
 
 impl Board for TmcpackBoard {
     fn model(&self) -> Model {
@@ -103,7 +109,15 @@ impl Board for TmcpackBoard {
     }
 
     fn simulate(&self, spec: &DriverSpec, seed: u64) -> SimBoard {
-        SimBoard::Stream(Box::new(sim::model(spec, seed)))
+        SimBoard::Stream(Box::new(sim::machine::model(spec, seed)))
+    }
+
+    fn simulate_standalone(&self, options: &StandaloneSim) -> Result<SimBoard, StandaloneError> {
+        standalone::simulate(options)
+    }
+
+    fn standalone_help(&self) -> StandaloneHelp {
+        standalone::HELP
     }
 }
 

@@ -1,13 +1,10 @@
-//! The machine keys of each model as the server validated them: `None` fields were not set
-//! (the driver's default applies). Values are in the config's terms (units, ms, %); the
-//! drivers convert them.
+//! A model's machine keys as the server validated them, held opaquely ([`MachineKeys`]):
+//! each board's crate defines its typed keys (`None` fields: not set, the driver's default
+//! applies; values in the config's terms, which its driver converts).
 
 use core::any::Any;
 use core::fmt;
-use core::time::Duration;
 use std::sync::Arc;
-
-use super::{PackVariant, QsbInputMode, QsbVariant, SpiDrive};
 
 /// A device's or an axis's model-specific keys, validated: whatever typed struct its
 /// board's crate defines (`TmcpackDeviceKeys`, `Qq2drvAxisKeys`, …), or none. The board
@@ -76,149 +73,41 @@ impl fmt::Debug for MachineKeys {
     }
 }
 
-/// One PID table as given; `None` fields were not set (the datasheet default applies).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub struct PidKeys {
-    /// Proportional constant.
-    pub p: Option<u16>,
-    /// Integration constant.
-    pub i: Option<u16>,
-    /// Differential constant.
-    pub d: Option<u16>,
-    /// Integration windup limit (position PID only).
-    pub windup: Option<u16>,
-}
+#[cfg(test)]
+mod tests {
+    use super::MachineKeys;
 
-/// The qq2drv keys of one `[[axis]]`; `None` fields were not set (the driver's default
-/// applies).
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct Qq2drvAxisKeys {
-    /// `pid_position` (packet 30).
-    pub pid_position: PidKeys,
-    /// `pid_velocity` (packet 32).
-    pub pid_velocity: PidKeys,
-    /// `power_limit`, fraction of full power 0.0..=1.0 (packet 24).
-    pub power_limit: Option<f64>,
-}
+    /// One board's device keys (as a board crate defines them).
+    #[derive(Debug, Clone, PartialEq, Eq, Default)]
+    struct CoilKeys {
+        coils: Option<u8>,
+    }
 
-/// `ready_output = { motors, reference }`: TTLOUT1 as the ready output ($32 P3, $33).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct ReadyOutputKeys {
-    /// $33 P0: bit n = motor n's activity switches the output.
-    pub motors: u8,
-    /// $33 P1: bit n = motor n's reference search switches the output.
-    pub reference: u8,
-}
+    /// Another board's.
+    #[derive(Debug, Clone, PartialEq, Eq, Default)]
+    struct VariantKeys {
+        variant: u8,
+    }
 
-/// The tmcpack keys of one `[[device]]`; `None` fields were not set (the driver's default
-/// applies).
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct TmcpackDeviceKeys {
-    /// `variant`: SIXpack (default) or QUADpack.
-    pub variant: PackVariant,
-    /// Response address of the driver's queries.
-    pub reply_address: Option<u8>,
-    /// $40 transmitter switch-over delay, ms (even, 2..=2000).
-    pub switchover_ms: Option<u16>,
-    /// $41 packet timeout, ms (even, 4..=131070).
-    pub packet_timeout_ms: Option<u32>,
-    /// TTLOUT1 as the ready output.
-    pub ready_output: Option<ReadyOutputKeys>,
-}
-
-/// `current = { … }` ($10, $11).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct CurrentKeys {
-    /// Peak current, % of the pack's full scale.
-    pub peak: Option<f64>,
-    /// I0, % of the peak current: on standby (a level of $11: 100, 75, 50, 38, 25, 19, 13, 9
-    /// or 0).
-    pub standby: Option<u8>,
-    /// I1: at standstill.
-    pub standstill: Option<u8>,
-    /// I2: at constant velocity.
-    pub constant: Option<u8>,
-    /// I3: accelerating.
-    pub accel: Option<u8>,
-    /// T0, ms (even, 2..=131070).
-    pub standby_delay_ms: Option<u32>,
-}
-
-/// `reference = { … }` ($15, $16, $18); `side` is resolved into the axis's `HomeSpec`.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct ReferenceKeys {
-    /// NullPositive: the switch is active at a high level.
-    pub active_high: Option<bool>,
-    /// NullCenter.
-    pub center: Option<bool>,
-    /// StopNull.
-    pub stop_at_switch: Option<bool>,
-    /// StopSoft.
-    pub soft_stop: Option<bool>,
-    /// $16 de-bounce, ms (even, 0..=30).
-    pub debounce_ms: Option<u16>,
-    /// $18 nulloffset, units.
-    pub null_offset: Option<f64>,
-    /// $18 testnullrange, units.
-    pub test_range: Option<f64>,
-    /// FastRef.
-    pub fast: Option<bool>,
-    /// MechRef.
-    pub mechanical: Option<bool>,
-}
-
-/// The tmcpack keys of one `[[axis]]`; `None` fields were not set (the driver's default
-/// applies).
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct TmcpackAxisKeys {
-    /// `current`.
-    pub current: CurrentKeys,
-    /// `reference`.
-    pub reference: ReferenceKeys,
-    /// $15 motor type bit 1.
-    pub rotary: Option<bool>,
-    /// Units per revolution of a rotary axis (given, or 360 for unit "deg").
-    pub revolution: Option<f64>,
-    /// $31 left minimum, ADC counts.
-    pub analog_stop_left: Option<u16>,
-    /// $31 right maximum, ADC counts.
-    pub analog_stop_right: Option<u16>,
-}
-
-/// The qsb keys of one `[[device]]`; `None` fields were not set (the driver's default
-/// applies).
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct QsbDeviceKeys {
-    /// `variant`: the product (QSB-M by default).
-    pub variant: QsbVariant,
-    /// `counts_per_step`: encoder counts (x4) per motor step, finite, not 0.
-    pub counts_per_step: Option<f64>,
-    /// `index_polarity = "inverted"` (MDR1 B3).
-    pub index_inverted: Option<bool>,
-    /// `stream_interval_ms` rounded to whole 1/512 s ticks (1..=0xFFFE).
-    pub stream_interval_ticks: Option<u16>,
-    /// `host_latency_ms`.
-    pub host_latency: Option<Duration>,
-    /// `enable_output`: the DIG I/O bit (0 or 3) of the stepper driver's enable line.
-    pub enable_output: Option<u8>,
-    /// `enable_active = "high"`.
-    pub enable_active_high: Option<bool>,
-    /// `input_mode` (MODE B1 B0).
-    pub input_mode: Option<QsbInputMode>,
-    /// `capture_input`: the DIG I/O bit whose edge loads CAPTURE.
-    pub capture_input: Option<u8>,
-    /// `capture_edge = "falling"`.
-    pub capture_falling: Option<bool>,
-}
-
-/// The spimotor keys of one `[[device]]`; `None` fields were not set (the driver's default
-/// applies).
-#[derive(Debug, Clone, PartialEq, Eq, Default)]
-pub struct SpimotorDeviceKeys {
-    /// `drive`: one stepper (default) or two brushed motors.
-    pub drive: SpiDrive,
-    /// `intensity`: stepper drive intensity, port 0x10 (0..=255).
-    pub intensity: Option<u8>,
-    /// `coils`: coils driven at a time, 1 or 2 (port 0x44).
-    pub coils: Option<u8>,
+    #[test]
+    fn machine_keys_hold_any_board_s_struct_and_compare_by_value() {
+        let a = MachineKeys::new(CoilKeys { coils: Some(2) });
+        assert_eq!(a.get::<CoilKeys>().and_then(|k| k.coils), Some(2));
+        assert!(a.get::<VariantKeys>().is_none(), "another board's type");
+        assert_eq!(a, a.clone());
+        assert_ne!(a, MachineKeys::new(CoilKeys::default()));
+        assert_ne!(a, MachineKeys::new(VariantKeys::default()));
+        assert_ne!(a, MachineKeys::PLAIN);
+        assert_eq!(MachineKeys::PLAIN, MachineKeys::default());
+        assert_eq!(
+            MachineKeys::PLAIN.get_or_default::<CoilKeys>(),
+            CoilKeys::default()
+        );
+        assert_eq!(
+            MachineKeys::new(VariantKeys { variant: 1 })
+                .get::<VariantKeys>()
+                .map(|k| k.variant),
+            Some(1)
+        );
+    }
 }

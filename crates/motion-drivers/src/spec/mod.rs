@@ -12,82 +12,11 @@
 //! such values first, with file, line and column.
 
 mod keys;
-#[cfg(test)]
-mod tests;
 
 use crate::driver::Model;
 use crate::pin::{Pin, SignalKind};
 
-pub use keys::{
-    AxisMachine, CurrentKeys, DeviceMachine, MachineKeys, PidKeys, Qq2drvAxisKeys, QsbDeviceKeys,
-    ReadyOutputKeys, ReferenceKeys, SpimotorDeviceKeys, TmcpackAxisKeys, TmcpackDeviceKeys,
-};
-
-/// Trinamic pack variant.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub enum PackVariant {
-    /// SIXpack: 6 motors.
-    #[default]
-    Sixpack,
-    /// QUADpack: 4 motors.
-    Quadpack,
-}
-
-/// QSB product variant (command list "QSB Variations").
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub enum QsbVariant {
-    /// QSB-M: single-ended encoder, 4-bit digital I/O, stepper step/direction outputs.
-    #[default]
-    M,
-    /// QSB-S: single-ended encoder only.
-    S,
-    /// QSB-D: differential encoder, 1-bit digital I/O.
-    D,
-}
-
-impl QsbVariant {
-    /// The config name.
-    pub const fn id(self) -> &'static str {
-        match self {
-            Self::M => "qsb-m",
-            Self::S => "qsb-s",
-            Self::D => "qsb-d",
-        }
-    }
-}
-
-/// SPI_motor drive.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub enum SpiDrive {
-    /// One stepper, channel 0.
-    #[default]
-    Stepper,
-    /// Two brushed motors: channels 0 = A, 1 = B.
-    Brushed,
-}
-
-/// What a QSB's encoder input reads (`input_mode`, MODE B1 B0).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub enum QsbInputMode {
-    /// Quadrature: a counter, the axis's position.
-    #[default]
-    Quadrature,
-    /// PWM: the duty cycle as an absolute value (the `encoder` pin).
-    Pwm,
-    /// Analog: the voltage as an absolute value (the `encoder` pin).
-    Analog,
-}
-
-impl QsbInputMode {
-    /// The config name.
-    pub const fn id(self) -> &'static str {
-        match self {
-            Self::Quadrature => "quadrature",
-            Self::Pwm => "pwm",
-            Self::Analog => "analog",
-        }
-    }
-}
+pub use keys::{AxisMachine, DeviceMachine, MachineKeys};
 
 /// What a qq2drv channel's IN pin is wired to (datasheet packet 14 Input Mode).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

@@ -20,11 +20,10 @@ use motion_engine::{AxisConfig, BusConfig, DeviceConfig, EngineConfig, SignalCon
 pub use error::{ConfigError, ConfigIssue};
 pub use given::{GivenKeys, Owner};
 /// The machine description in the drivers' neutral terms (`motion_drivers::spec`): the
-/// variants, the home table and every model's machine keys, as validated here.
+/// home table and the machine keys (each model's own types are its board crate's), as
+/// validated here.
 pub use motion_drivers::spec::{
-    AxisMachine, DeviceMachine, Direction, HomeInput, HomeInputKind, HomeSpec, PackVariant,
-    Qq2drvAxisKeys, QsbDeviceKeys, QsbVariant, SpiDrive, SpimotorDeviceKeys, TmcpackAxisKeys,
-    TmcpackDeviceKeys,
+    AxisMachine, DeviceMachine, Direction, HomeInput, HomeInputKind, HomeSpec,
 };
 
 /// `[server]`.

@@ -6,11 +6,11 @@ use core::time::Duration;
 use std::path::Path;
 use std::sync::{Arc, Mutex};
 
-use motion_drivers::tmcpack::{Currents, TmcpackChannel};
+use board_tmcpack::driver::{Currents, TmcpackChannel};
+use board_tmcpack::sim::{TmcpackSim, TmcpackSimConfig};
 use motion_drivers::{Driver, Goal};
 use motion_link::Link;
 use motion_link::sim::{Duplex, SimLink, StreamDevice};
-use motion_sim::tmcpack::{TmcpackSim, TmcpackSimConfig};
 use motiond::boards::describe;
 use motiond::config::{Owner, ServerConfig};
 use motiond::drivers::{ParamRow, driver_spec};
@@ -388,7 +388,7 @@ fn describe_lists_every_key_with_the_value_in_effect() {
 #[test]
 fn unset_keys_keep_the_driver_defaults() {
     let config = parse(super::GOOD);
-    let driver = motion_drivers::tmcpack::TmcpackDriverConfig::from_spec(&driver_spec(
+    let driver = board_tmcpack::driver::TmcpackDriverConfig::from_spec(&driver_spec(
         &config,
         0,
         &config.devices[0],

@@ -9,11 +9,11 @@
 use core::fmt;
 use core::time::Duration;
 
+use board_qq2drv::driver::Qq2drvDriverConfig;
+use board_qsb::driver::QsbDriverConfig;
+use board_spimotor::driver::SpimotorDriverConfig;
+use board_tmcpack::driver::TmcpackDriverConfig;
 use motion_drivers::Model;
-use motion_drivers::qq2drv::Qq2drvDriverConfig;
-use motion_drivers::qsb::QsbDriverConfig;
-use motion_drivers::spimotor::SpimotorDriverConfig;
-use motion_drivers::tmcpack::TmcpackDriverConfig;
 use motiond::config::{ServerConfig, Transport};
 use motiond::drivers::driver_spec;
 
@@ -120,7 +120,7 @@ impl Bound {
                 // slower average velocity will wind down when motion is significantly
                 // slowed down or stopped"; features: "Loop rate of 500Hz".
                 let cfg = Qq2drvDriverConfig::from_spec(&driver).expect("qq2drv spec");
-                let loop_period = motion_drivers::qq2drv::LOOP_PERIOD;
+                let loop_period = board_qq2drv::driver::LOOP_PERIOD;
                 // The transaction in progress, the stop's first transaction (the setpoint
                 // reset to the measured speed), its answer in the next poll, one loop
                 // period before the ramp goes out, the tick.
@@ -132,7 +132,7 @@ impl Bound {
                 // down over its window after the last capture event (packet 12's
                 // averaging time); the next stream packet; the tick.
                 let averaging = Duration::from_nanos((1u64 << cfg.history.averaging_bits) * 640);
-                let settle = 3 * motion_sim::qq2drv::MotorConfig::default().time_constant;
+                let settle = 3 * board_qq2drv::sim::MotorConfig::default().time_constant;
                 let refresh = loop_period + settle + averaging + cfg.poll_period + tick;
                 (exchange, refresh)
             }
@@ -145,7 +145,7 @@ impl Bound {
                 let exchange = 2 * transaction + tick;
                 // The last step at the board's slowest rate (the ramp's end), the next
                 // position read, the tick.
-                let slowest = motion_drivers::spimotor::ramp::SLOWEST_DELAY.duration();
+                let slowest = board_spimotor::driver::ramp::SLOWEST_DELAY.duration();
                 let refresh = slowest + cfg.poll_period + tick;
                 (exchange, refresh)
             }

@@ -1,0 +1,370 @@
+//! The wire: the single-channel packets goals and start-up turn into (encoded through the
+//! `qq2drv` crate), the requests sent and not yet answered (oldest first: the board
+//! answers in order), which transaction goes next, and the timing that decides it (module
+//! docs, "The wire" and "Faults").
+
+use core::time::Duration;
+
+use motion_base::FixedQueue;
+use qq2drv::{
+    AccelerationLimitEntry, ChannelMask, ControlMode, ControlModeEntry, Entries, InputConfig,
+    InputModeEntry, MotionLayout, MotorPowerEntry, PacketId, PositionRampEntry,
+    PositionTargetEntry, PositionValue, Request, SetPositionEntry, VelocityRampEntry,
+};
+
+use super::{
+    CONFIGURE_REQUESTS, FILLER, OFFLINE_RETRY_PERIOD, POLL_SLACK, Phase, Qq2drvDriver,
+    START_ATTEMPTS, STREAM_CONFIG,
+};
+use motion_drivers::{DeviceFault, Driver, Priority, Transmit};
+
+/// Most packets one goal step sends in its transaction.
+pub(super) const MAX_STEP_PACKETS: usize = 5;
+
+/// One packet for one channel (a one-entry payload).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Packet {
+    /// 16 - Set Control Mode.
+    Mode(ControlMode),
+    /// 18 - Set Motor Power, ±8191.
+    Power(i16),
+    /// 20 - Set Position Control Target.
+    Target(i32),
+    /// 34 - Position Ramp: target, velocity and acceleration (both shl 12).
+    PositionRamp {
+        position: i32,
+        velocity: u32,
+        accel: u32,
+    },
+    /// 36 - Velocity Ramp: plain transitions/s, acceleration shl 12.
+    VelocityRamp { velocity: i32, accel: u32 },
+    /// 10 - Set Position (32-bit value).
+    SetCounter(i32),
+    /// 14 - Set Input Mode; `position` is omitted when the mode is Disabled.
+    Input {
+        config: InputConfig,
+        spacing: u16,
+        position: i32,
+    },
+    /// 28 - Set Acceleration Limit, shl 12 (0 disables limiting: a stop lifts it while it
+    /// resets the board's velocity target, then restores it).
+    AccelLimit(u32),
+}
+
+impl Packet {
+    /// The packet id (what its reply carries).
+    pub(super) fn id(self) -> PacketId {
+        match self {
+            Self::Mode(_) => PacketId::SetControlMode,
+            Self::Power(_) => PacketId::SetMotorPower,
+            Self::Target(_) => PacketId::SetPositionTarget,
+            Self::PositionRamp { .. } => PacketId::PositionRamp,
+            Self::VelocityRamp { .. } => PacketId::VelocityRamp,
+            Self::SetCounter(_) => PacketId::SetPosition,
+            Self::Input { .. } => PacketId::SetInputMode,
+            Self::AccelLimit(_) => PacketId::SetAccelerationLimit,
+        }
+    }
+
+    /// Encodes the packet for `channel` (0-based) into `buf`; returns its length.
+    pub(super) fn encode(self, channel: usize, buf: &mut [u8]) -> Result<usize, qq2drv::Error> {
+        let channels = ChannelMask::single(channel);
+        match self {
+            Self::Mode(mode) => {
+                Request::SetControlMode(Entries::new(&[ControlModeEntry { channels, mode }]))
+                    .encode(buf)
+            }
+            Self::Power(power) => {
+                Request::SetMotorPower(Entries::new(&[MotorPowerEntry { channels, power }]))
+                    .encode(buf)
+            }
+            Self::Target(position) => {
+                Request::SetPositionTarget(Entries::new(&[PositionTargetEntry {
+                    channels,
+                    position,
+                }]))
+                .encode(buf)
+            }
+            Self::PositionRamp {
+                position,
+                velocity,
+                accel,
+            } => Request::PositionRamp(Entries::new(&[PositionRampEntry {
+                channels,
+                position,
+                velocity,
+                acceleration: accel,
+            }]))
+            .encode(buf),
+            Self::VelocityRamp { velocity, accel } => {
+                Request::VelocityRamp(Entries::new(&[VelocityRampEntry {
+                    channels,
+                    velocity,
+                    acceleration: accel,
+                }]))
+                .encode(buf)
+            }
+            Self::SetCounter(value) => Request::SetPosition(Entries::new(&[SetPositionEntry {
+                channels,
+                position: Some(PositionValue::I32(value)),
+            }]))
+            .encode(buf),
+            Self::Input {
+                config,
+                spacing,
+                position,
+            } => {
+                let position = if config.mode() == qq2drv::InputMode::Disabled {
+                    0
+                } else {
+                    position
+                };
+                Request::SetInputMode(Entries::new(&[InputModeEntry {
+                    channels,
+                    config,
+                    spacing,
+                    position,
+                }]))
+                .encode(buf)
+            }
+            Self::AccelLimit(limit) => {
+                Request::SetAccelerationLimit(Entries::new(&[AccelerationLimitEntry {
+                    channels,
+                    limit,
+                }]))
+                .encode(buf)
+            }
+        }
+    }
+}
+
+/// Up to [`MAX_STEP_PACKETS`] packets of one goal step, sent back to back in one
+/// transaction (the step tables never exceed the capacity).
+pub(super) type Packets = FixedQueue<Packet, MAX_STEP_PACKETS>;
+
+/// Requests that may be unanswered at once.
+pub const IN_FLIGHT_CAPACITY: usize = 48;
+
+/// What an answer is for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Tag {
+    /// A start-up read (version, data masks, stream config, stream period).
+    Probe,
+    /// A start-up write.
+    Setup,
+    /// A goal packet of `channel`, step generation `seq`.
+    Goal {
+        channel: u8,
+        seq: u32,
+        packet: Packet,
+    },
+}
+
+/// One unanswered request.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) struct Sent {
+    pub(super) id: PacketId,
+    /// Queued at, then (once reported) written at: its reply timeout runs from here.
+    pub(super) at: Duration,
+    /// The message (transaction) it went out in (`IoStamps::sent`).
+    pub(super) number: u64,
+    pub(super) tag: Tag,
+}
+
+/// Requests in flight, oldest first.
+pub(super) type InFlight = FixedQueue<Sent, IN_FLIGHT_CAPACITY>;
+
+/// What the next transaction would be.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Next {
+    Probe,
+    Configure,
+    Goals,
+    Poll,
+}
+
+impl Qq2drvDriver {
+    /// Length of one poll transaction: a stream packet in our layout plus [`POLL_SLACK`].
+    pub fn poll_len(&self) -> usize {
+        let layout = MotionLayout {
+            data_masks: self.stream_masks(),
+            stream_config: STREAM_CONFIG,
+        };
+        (qq2drv::MIN_PACKET_LEN + layout.stream_payload_len() + POLL_SLACK).clamp(16, 255)
+    }
+
+    /// How often the driver actually gets to read: the poll period, or the interval
+    /// between the last two `handle_timeout` calls when that is longer (a slow tick, or a
+    /// late one: the data is as old as the caller's lateness, not the board's fault).
+    pub fn cadence(&self) -> Duration {
+        self.config.poll_period.max(self.call_interval)
+    }
+
+    /// Reply timeout: polls to read it, the wire time of two long transactions, the
+    /// board's processing time and a margin.
+    pub fn reply_timeout(&self) -> Duration {
+        self.cadence()
+            .saturating_mul(4)
+            .saturating_add(self.config.wire_time(2 * qq2drv::MAX_PACKET_LEN))
+            .saturating_add(self.config.processing_time)
+            .saturating_add(Duration::from_millis(2))
+    }
+
+    /// Without a stream packet for this long the driver probes the board again.
+    pub fn stall_timeout(&self) -> Duration {
+        self.config
+            .stream_period()
+            .saturating_mul(4)
+            .saturating_add(self.cadence().saturating_mul(3))
+            .saturating_add(Duration::from_millis(2))
+    }
+
+    pub(super) fn next(&self, now: Duration) -> Option<(Next, Priority)> {
+        if !self.link_up {
+            return None;
+        }
+        if self.probe_due && self.in_flight.has_room(4) {
+            return Some((Next::Probe, Priority::Setup));
+        }
+        if self.configure_due && self.in_flight.has_room(CONFIGURE_REQUESTS) {
+            return Some((Next::Configure, Priority::Setup));
+        }
+        // Goals wait while a whole poll period of earlier bytes is still on the wire (a
+        // newer goal of the same channel replaces an unsent one meanwhile), polls while
+        // half of one is.
+        let backlog = self.line_free_at.saturating_sub(now);
+        let goals = self.phase == Phase::Running
+            && backlog <= self.config.poll_period
+            && self.in_flight.has_room(MAX_STEP_PACKETS)
+            && self
+                .channels
+                .iter()
+                .any(|c| c.config.enabled && c.unsent && c.ready());
+        if goals {
+            return Some((Next::Goals, Priority::Command));
+        }
+        let reading = self.phase == Phase::Running || !self.in_flight.is_empty();
+        let bus_free = backlog <= self.config.poll_period / 2;
+        if reading && now >= self.next_poll_at && bus_free {
+            return Some((Next::Poll, Priority::Poll));
+        }
+        None
+    }
+
+    /// Writes the next transaction (probe, configuration, goals or a poll) into `buf`.
+    pub(super) fn transmit(&mut self, now: Duration, buf: &mut [u8]) -> Option<Transmit> {
+        let (next, _) = self.next(now)?;
+        let mut goal_starts = 0;
+        let len = match next {
+            Next::Probe => self.write_probe(now, buf)?,
+            Next::Configure => self.write_configure(now, buf)?,
+            Next::Goals => self.write_goals(now, buf, &mut goal_starts),
+            Next::Poll => {
+                let len = self.poll_len();
+                buf.get_mut(..len)?.fill(FILLER);
+                // Three quarters: a tick at exactly the poll period always polls.
+                let period = self.config.poll_period;
+                self.next_poll_at = now.saturating_add(period - period / 4);
+                len
+            }
+        };
+        if len == 0 {
+            return None;
+        }
+        let _number = self.io_stamps.sent();
+        self.line_free_at = self
+            .line_free_at
+            .max(now)
+            .saturating_add(self.config.wire_time(len));
+        Some(Transmit {
+            len,
+            expects_reply: next != Next::Poll,
+            goal_starts,
+        })
+    }
+
+    /// A transaction went out at `at`: the reply timeouts of its requests run from there,
+    /// and so does the wait for a probe's answers.
+    pub(super) fn on_written(&mut self, at: Duration) {
+        let number = self.io_stamps.written();
+        if number == 0 {
+            return;
+        }
+        self.in_flight.for_each_mut(|sent| {
+            if sent.number == number {
+                sent.at = sent.at.max(at);
+            }
+        });
+        if number == self.probe_number
+            && let Phase::Probe { attempts, next_at } = self.phase
+        {
+            self.phase = Phase::Probe {
+                attempts,
+                next_at: next_at.max(at.saturating_add(self.reply_timeout())),
+            };
+        }
+    }
+
+    /// Lets time pass: lost requests, a silent board, the probe schedule, a stalled
+    /// stream, and the channels' steps.
+    pub(super) fn pass_time(&mut self, now: Duration) {
+        if let Some(last) = self.last_call_at {
+            self.call_interval = now.saturating_sub(last).min(Duration::from_secs(1));
+        }
+        self.last_call_at = Some(now);
+        for inputs in &mut self.inputs {
+            inputs.tick();
+        }
+        if !self.link_up {
+            return;
+        }
+        let timeout = self.reply_timeout();
+        // Unanswered, silent, stalled: only as far as the link was looked at.
+        let judged = self.io_stamps.judged(now);
+        while let Some(oldest) = self.in_flight.front()
+            && judged.saturating_sub(oldest.at) > timeout
+        {
+            self.in_flight.pop();
+            self.status.timeouts = self.status.timeouts.saturating_add(1);
+            self.on_lost(now, oldest);
+        }
+        let silent = self
+            .last_valid_at
+            .is_some_and(|at| judged.saturating_sub(at) > self.refresh_budget());
+        if silent && self.status.fault != Some(DeviceFault::NotResponding) {
+            self.not_responding();
+            // Probe again; a probe already under way keeps its pace.
+            if self.phase == Phase::Running {
+                self.restart(now);
+            }
+        }
+        match self.phase {
+            Phase::Probe { attempts, next_at } if judged >= next_at => {
+                if attempts >= START_ATTEMPTS {
+                    self.not_responding();
+                }
+                self.probe_due = true;
+                let attempts = attempts.saturating_add(1);
+                let wait = if attempts >= START_ATTEMPTS {
+                    OFFLINE_RETRY_PERIOD
+                } else {
+                    timeout
+                };
+                self.phase = Phase::Probe {
+                    attempts,
+                    next_at: now.saturating_add(wait),
+                };
+            }
+            Phase::Running => {
+                if judged.saturating_sub(self.last_stream_at) > self.stall_timeout() {
+                    self.restart(now);
+                } else {
+                    for channel in &mut self.channels {
+                        channel.progress(now);
+                    }
+                }
+            }
+            Phase::Probe { .. } | Phase::Configure => {}
+        }
+    }
+}

@@ -1,0 +1,418 @@
+//! What the driver does with each response line: answers to its requests, streamed
+//! samples, and the signs of a reset.
+
+use core::time::Duration;
+
+use ::qsb::{
+    EncoderMode, IndexMode, LoadTarget, MdStatus, QsbCommand, Register, Request, Response,
+    ResponseType, Str, Version, Write,
+};
+
+use super::encoder::Sample;
+use super::guard::StampVerdict;
+use super::{InFlight, MAX_ATTEMPTS, Origin, QsbDriver};
+use motion_drivers::{ChannelState, DeviceFault, GoalKind};
+
+/// Data output ticks after a motor command before MD STATUS is trusted: the first tick
+/// after the command may report the drive before it started, its MD STATUS line follows
+/// the encoder line of that tick.
+const DONE_AFTER_TICKS: u32 = 2;
+
+/// Whether `response` answers `request`: same register, and the matching lower-case type
+/// (a write echoes its data), or an `e`/`x` refusal.
+fn answers(request: Request, response: &Response) -> bool {
+    if response.register != request.register().number() {
+        return false;
+    }
+    match (request, response.ty) {
+        (_, ResponseType::Error | ResponseType::Unsupported) => true,
+        (Request::Read(_), ResponseType::Read) | (Request::Stream(_), ResponseType::Stream) => true,
+        (Request::Write(write), ResponseType::Write) => response.data == write.data(),
+        _ => false,
+    }
+}
+
+/// Whether a write only changes a register (the driver may remember its value), rather
+/// than doing something.
+fn is_setting(write: Write) -> bool {
+    !matches!(
+        write,
+        Write::Clear(_) | Write::Load(_) | Write::TimeStamp(_) | Write::Command(_)
+    )
+}
+
+impl QsbDriver {
+    /// One decoded line.
+    pub(super) fn on_response(&mut self, now: Duration, response: Response) {
+        let verdict = self.stamps.check(
+            now,
+            response.time_stamp,
+            self.eor_configured,
+            self.config.latency,
+        );
+        match verdict {
+            StampVerdict::Accept => {}
+            StampVerdict::Rewound => {
+                // The line accepted before the held one carried a corrupted stamp: what it
+                // brought is not on the timeline.
+                if let Some(stamp) = response.time_stamp {
+                    self.encoder.forget_after(stamp);
+                }
+            }
+            StampVerdict::NewTimeline => {
+                // Samples before the jump are no base for a velocity.
+                self.encoder.clear();
+            }
+            StampVerdict::Hold => {
+                // Corrupted on the line, or the first line of a change the next confirms.
+                self.status.bad_replies = self.status.bad_replies.saturating_add(1);
+                return;
+            }
+            StampVerdict::Reset => {
+                // The time stamp went backwards (it restarts at power-up), or the lines
+                // lost their time stamps (the board lost its EOR setting): two lines say so.
+                self.board_reset();
+                return;
+            }
+        }
+        let flight = self
+            .in_flight
+            .filter(|flight| answers(flight.request, &response));
+        if response.ty == ResponseType::Stream {
+            self.status.replies = self.status.replies.saturating_add(1);
+            self.on_stream(now, &response);
+        }
+        match flight {
+            Some(flight) => self.on_answer(now, flight, &response),
+            None if response.ty != ResponseType::Stream => {
+                self.status.bad_replies = self.status.bad_replies.saturating_add(1);
+            }
+            None => {}
+        }
+    }
+
+    /// A streamed line (or the `s` answer that starts a stream).
+    fn on_stream(&mut self, now: Duration, response: &Response) {
+        match Register::from_u8(response.register) {
+            Some(Register::ReadEncoder) => {
+                let Some(time_stamp) = response.time_stamp else {
+                    // A line of a stream left running before start-up configured EOR.
+                    return;
+                };
+                if self.config.input_mode == EncoderMode::Quadrature {
+                    if self.rebase_pending {
+                        self.rebase_pending = false;
+                        self.encoder.clear();
+                    }
+                    let sample = Sample {
+                        count: response.signed(),
+                        time_stamp,
+                    };
+                    if !self.encoder.offer(sample, self.config.max_accel) {
+                        // Held by the line-noise guard until the next sample.
+                        self.status.bad_replies = self.status.bad_replies.saturating_add(1);
+                        return;
+                    }
+                    self.position = self.encoder.latest().map_or(sample.count, |s| s.count);
+                } else {
+                    self.io_line(now, Register::ReadEncoder, response.data);
+                }
+                self.last_sample_at = Some(now);
+                self.samples_since_probe = true;
+                if self.status.online
+                    && matches!(
+                        self.status.fault,
+                        Some(
+                            DeviceFault::LinkDown
+                                | DeviceFault::NotResponding
+                                | DeviceFault::Reset
+                                | DeviceFault::Protocol
+                        )
+                    )
+                {
+                    self.status.fault = None;
+                }
+            }
+            Some(Register::MdStatus) => {
+                if let Ok(md) = MdStatus::from_data(response.data) {
+                    if self.status.online && self.drive_active() && !md.enabled {
+                        // The drive was enabled at start-up: a board that reports it
+                        // disabled has been reset (or stopped with COMMAND 0). Two lines
+                        // in a row must say so: one may be corrupted on the line.
+                        if !self.md_disabled_once {
+                            self.md_disabled_once = true;
+                            self.status.bad_replies = self.status.bad_replies.saturating_add(1);
+                            return;
+                        }
+                        self.board_reset();
+                        return;
+                    }
+                    self.md_disabled_once = false;
+                    self.md = Some(md);
+                }
+            }
+            Some(Register::Str) => {
+                if let Ok(status) = Str::from_data(response.data)
+                    && status.index
+                    && self.index_armed
+                {
+                    // The index reset CNTR (MDR0 0x63); this tick's encoder line is the
+                    // first after the jump.
+                    self.index_seen = true;
+                    self.index_armed = false;
+                    self.rebase_pending = true;
+                }
+            }
+            Some(register @ (Register::DigIo | Register::Capture))
+                if response.time_stamp.is_some() =>
+            {
+                self.io_line(now, register, response.data);
+            }
+            _ => {}
+        }
+    }
+
+    /// The answer to the request in flight.
+    fn on_answer(&mut self, now: Duration, flight: InFlight, response: &Response) {
+        self.in_flight = None;
+        if matches!(response.ty, ResponseType::Error | ResponseType::Unsupported) {
+            self.refused(now, flight);
+            return;
+        }
+        self.attempts = 0;
+        if response.ty != ResponseType::Stream {
+            // (A stream's `s` answer was counted as a streamed line.)
+            self.status.replies = self.status.replies.saturating_add(1);
+        }
+        if self.status.fault == Some(DeviceFault::BoardError) {
+            self.status.fault = None;
+        }
+        match flight.request {
+            Request::Write(write) => self.written(write, response.time_stamp),
+            Request::Read(Register::Version) => {
+                if !self.version_read(now, flight.origin, response.data) {
+                    return;
+                }
+            }
+            Request::Read(Register::Str) => self.str_streaming = false,
+            Request::Stream(Register::Str) => self.str_streaming = true,
+            Request::Stream(Register::DigIo) => self.io.dio_streaming = true,
+            Request::Stream(Register::Capture) => self.io.capture_streaming = true,
+            Request::Read(Register::DigIoConfig) => {
+                // What the board holds: an equal configuration is not written again.
+                if let Some(slot) = self
+                    .board
+                    .get_mut(usize::from(Register::DigIoConfig.number()))
+                {
+                    *slot = Some(response.data);
+                }
+            }
+            Request::Read(_) | Request::Stream(_) => {}
+        }
+        self.advance(flight);
+    }
+
+    /// Pops the step whose request was answered, if its plan is still the same.
+    fn advance(&mut self, flight: InFlight) {
+        let program = match flight.origin {
+            Origin::Setup => &mut self.setup,
+            Origin::Preset => &mut self.preset,
+            Origin::Goal => &mut self.goal,
+            Origin::Io | Origin::Probe => return,
+        };
+        if program.generation() == flight.generation {
+            program.pop();
+        }
+    }
+
+    /// What an accepted write changed.
+    fn written(&mut self, write: Write, time_stamp: Option<u32>) {
+        if is_setting(write)
+            && let Some(slot) = self.board.get_mut(usize::from(write.register().number()))
+        {
+            *slot = Some(write.data());
+        }
+        match write {
+            Write::Command(
+                QsbCommand::MotorMove
+                | QsbCommand::MotorJog
+                | QsbCommand::MotorStop
+                | QsbCommand::MotorQuit,
+            ) => self.motor_commanded(time_stamp),
+            Write::Command(QsbCommand::StopStreaming) => {
+                self.str_streaming = false;
+                self.io.dio_streaming = false;
+                self.io.capture_streaming = false;
+            }
+            // "All I/O port pins will be set "high" after a write to this configuration
+            // register".
+            Write::DigIoConfig(_) => {
+                if let Some(slot) = self.board.get_mut(usize::from(Register::DigIo.number())) {
+                    *slot = Some(0xF);
+                }
+            }
+            Write::Load(LoadTarget::DtrToCntr) => {
+                self.rebase_pending = true;
+                self.homed = true;
+            }
+            Write::Clear(::qsb::ClearTarget::Str) => {
+                // Armed when the index acts on the counter (a home search's MDR0).
+                self.index_armed = self
+                    .board
+                    .get(usize::from(Register::Mdr0.number()))
+                    .copied()
+                    .flatten()
+                    .and_then(|data| ::qsb::Mdr0::from_data(data).ok())
+                    .is_some_and(|mdr0| mdr0.index != IndexMode::Disabled);
+                self.index_seen = false;
+            }
+            Write::Mdr0(mdr0) if mdr0.index == IndexMode::Disabled => self.index_armed = false,
+            Write::Eor(eor) => self.eor_configured = eor.time_stamp,
+            _ => {}
+        }
+    }
+
+    /// A motor command was executed at `time_stamp`: MD STATUS counts from two ticks on.
+    fn motor_commanded(&mut self, time_stamp: Option<u32>) {
+        let base = time_stamp
+            .or(self.stamps.last())
+            .or(self.encoder.latest().map(|s| s.time_stamp))
+            .unwrap_or(0);
+        self.done_after = base.wrapping_add(DONE_AFTER_TICKS);
+    }
+
+    /// The VERSION answer (start-up or liveness probe). Returns whether the request's plan
+    /// goes on.
+    fn version_read(&mut self, now: Duration, origin: Origin, data: u32) -> bool {
+        let anomalous = Version::from_data(data).map_or(true, |version| {
+            self.serial.is_some_and(|s| s != version.serial)
+        });
+        if anomalous && self.version_doubt != Some(data) {
+            // No checksum on the line: an answer that names another board (or no product)
+            // may be a corrupted one. Ask again; the same answer twice counts.
+            self.version_doubt = Some(data);
+            self.status.bad_replies = self.status.bad_replies.saturating_add(1);
+            if origin == Origin::Probe {
+                self.probe_due = true;
+            }
+            return false;
+        }
+        self.version_doubt = None;
+        let Ok(version) = Version::from_data(data) else {
+            // Not a product type of the command list: not a QSB we know.
+            self.declare_dead(now);
+            self.status.fault = Some(DeviceFault::Protocol);
+            return false;
+        };
+        if self.serial.is_some_and(|serial| serial != version.serial) {
+            // Another board on this port: whatever the old one was told is lost.
+            self.record_version(version);
+            self.board_reset();
+            return false;
+        }
+        self.record_version(version);
+        if origin == Origin::Probe && !self.samples_since_probe {
+            // The board answers but no longer streams: it lost its settings.
+            self.board_reset();
+            return false;
+        }
+        true
+    }
+
+    /// The board refused a request (`e`: data out of range; `x`: not supported).
+    fn refused(&mut self, now: Duration, flight: InFlight) {
+        self.status.bad_replies = self.status.bad_replies.saturating_add(1);
+        self.status.fault = Some(DeviceFault::BoardError);
+        match flight.origin {
+            Origin::Setup => {
+                // A board that refuses its configuration is not usable as configured;
+                // try again later rather than run half configured.
+                self.declare_dead(now);
+                self.status.fault = Some(DeviceFault::BoardError);
+            }
+            Origin::Preset if self.preset.generation() == flight.generation => {
+                self.preset.clear();
+            }
+            Origin::Goal if self.goal.generation() == flight.generation => self.goal.clear(),
+            Origin::Io => {
+                if let Request::Write(write) = flight.request {
+                    self.io.refused = Some(write.data() as u8);
+                }
+            }
+            Origin::Preset | Origin::Goal | Origin::Probe => {}
+        }
+    }
+
+    /// No answer in time.
+    pub(super) fn timed_out(&mut self, now: Duration, flight: InFlight) {
+        self.in_flight = None;
+        self.status.timeouts = self.status.timeouts.saturating_add(1);
+        self.attempts = self.attempts.saturating_add(1);
+        if self.attempts >= MAX_ATTEMPTS {
+            self.declare_dead(now);
+            return;
+        }
+        match (flight.origin, flight.request) {
+            (Origin::Goal, Request::Write(Write::Command(QsbCommand::MotorMove))) => {
+                // The answer may be what was lost, not the command: a move must never run
+                // twice. Carry on; the encoder tells what happened and the plan corrects.
+                self.motor_commanded(None);
+                self.advance(flight);
+            }
+            (Origin::Probe, _) => self.probe_due = true,
+            _ => {}
+        }
+    }
+
+    /// Everything received: each decoded line, the decoder's bad frames, then the plans
+    /// move on.
+    pub(super) fn receive(&mut self, now: Duration, mut bytes: &[u8]) {
+        if !self.link_up {
+            return;
+        }
+        while !bytes.is_empty() {
+            let (used, response) = self.decoder.decode(bytes);
+            bytes = bytes.get(used..).unwrap_or_default();
+            if let Some(response) = response {
+                self.on_response(now, response);
+            }
+        }
+        let bad = self.decoder.bad_frames();
+        let new_bad = bad.saturating_sub(self.decoder_bad_seen);
+        self.decoder_bad_seen = bad;
+        self.status.bad_replies = self
+            .status
+            .bad_replies
+            .saturating_add(u32::try_from(new_bad).unwrap_or(u32::MAX));
+        self.settle(now);
+    }
+
+    /// Channel state of channel 0.
+    pub(super) fn channel_state(&self) -> ChannelState {
+        let motion_pending = !self.goal.is_empty()
+            && matches!(
+                self.goal_kind,
+                Some(
+                    GoalKind::Position
+                        | GoalKind::RampPosition
+                        | GoalKind::Velocity
+                        | GoalKind::Home
+                )
+            );
+        let velocity = self.encoder.velocity();
+        ChannelState {
+            position: f64::from(self.position),
+            velocity,
+            raw_counts: i64::from(self.position),
+            refreshed_at: self.last_sample_at,
+            moving: motion_pending || self.drive_moving() || velocity != 0.0,
+            homed: self.homed,
+            at_limit: false,
+            arrived: self.arrived,
+            fault: self
+                .status
+                .fault
+                .or(self.home_failed.then_some(DeviceFault::HomeFailed)),
+        }
+    }
+}

@@ -1,0 +1,159 @@
+//! Start-up: the sequence of the module docs ("Start-up"), the VERSION register as the
+//! driver records it (the firmware description of the board's status, "QSB-M SN 00001 fw
+//! 13"), and what happens when the board stops answering or resets.
+
+use core::fmt::Write as _;
+use core::time::Duration;
+
+use motion_base::FixedQueue;
+
+use ::qsb::{
+    CountMode, CycleMode, IndexMode, Mdr0, Mdr1, Mode, ProductType, QsbCommand, Register, Request,
+    Write,
+};
+
+use super::config::DRIVER_EOR;
+use super::program::{self, Step};
+use super::{QsbDriver, REGISTERS, RESTART_DELAY};
+use motion_drivers::{DeviceFault, FIRMWARE_LEN};
+
+/// MDR0 in normal operation: x4 quadrature, free-running, index disabled, synchronous
+/// index (0x43).
+pub(super) const NORMAL_MDR0: Mdr0 = Mdr0 {
+    count: CountMode::X4,
+    cycle: CycleMode::FreeRunning,
+    index: IndexMode::Disabled,
+    synchronous_index: true,
+    filter_div2: false,
+};
+
+impl QsbDriver {
+    /// (Re)starts the start-up sequence; the last known position stays.
+    pub(super) fn begin_startup(&mut self) {
+        self.setup.replace(&[
+            Step::Send(Request::Write(Write::Command(QsbCommand::StopStreaming))),
+            Step::Send(Request::Read(Register::Version)),
+            Step::Configure,
+        ]);
+        self.preset.clear();
+        self.goal.clear();
+        self.goal_kind = None;
+        self.in_flight = None;
+        self.attempts = 0;
+        self.restart_at = None;
+        self.probe_due = false;
+        self.status.online = false;
+        self.board = [None; REGISTERS];
+        self.eor_configured = false;
+        self.rebase_pending = true;
+        self.md = None;
+        self.md_disabled_once = false;
+        self.str_streaming = false;
+        self.index_armed = false;
+        self.index_seen = false;
+        self.home_start = None;
+        self.home_deadline = None;
+        self.home_failed = false;
+        // Outputs keep the levels the signals asked for; the enable line comes up active
+        // (the engine's start-up stop holds the motor energised).
+        self.io.energised = true;
+        self.io.refused = None;
+        self.io.dio_streaming = false;
+        self.io.capture_streaming = false;
+    }
+
+    /// The configuration of the product VERSION reported (module docs, "Start-up").
+    pub(super) fn configure(&mut self, product: ProductType) {
+        let (rate, accel) = self.config.default_profile();
+        let drive = self.drive_active();
+        let mdr1 = Mdr1 {
+            invert_index: self.config.invert_index,
+            ..Mdr1::default()
+        };
+        let common = [
+            Step::Ensure(Write::Eor(DRIVER_EOR)),
+            Step::Ensure(Write::Mode(Mode {
+                encoder: self.config.input_mode,
+                pwm_12bit: false,
+            })),
+            Step::Ensure(Write::Mdr0(NORMAL_MDR0)),
+            Step::Ensure(Write::Mdr1(mdr1)),
+            Step::Ensure(Write::Threshold(0)),
+            Step::Ensure(Write::IntervalRate(self.config.interval())),
+        ];
+        let mut steps = FixedQueue::<Step, { program::PROGRAM_CAPACITY }>::new();
+        let mut push = |step: Step| {
+            steps.push(step);
+        };
+        let has_dio = product.digital_io_bits() > 0;
+        if product == ProductType::M {
+            // Whatever the motor was doing, it stops, at the axis's acceleration.
+            push(Step::Ensure(Write::Accel(accel)));
+            push(Step::Send(Request::Write(Write::Command(
+                QsbCommand::MotorStop,
+            ))));
+        }
+        common.into_iter().for_each(&mut push);
+        if drive {
+            push(Step::Ensure(Write::StepRate(rate)));
+        }
+        if has_dio && self.dio_used() {
+            // Read first: a configuration the board already holds is not written again,
+            // because a write sets every pin high for a moment.
+            push(Step::Send(Request::Read(Register::DigIoConfig)));
+            push(Step::Ensure(Write::DigIoConfig(self.dio_config())));
+            push(Step::Outputs);
+        }
+        if drive {
+            push(Step::Send(Request::Write(Write::Command(
+                QsbCommand::EnableMotorDrive,
+            ))));
+            push(Step::Send(Request::Stream(Register::MdStatus)));
+        }
+        if has_dio && self.dio_streamed() {
+            push(Step::Send(Request::Stream(Register::DigIo)));
+        }
+        if self.config.io.capture.is_some() {
+            push(Step::Send(Request::Stream(Register::Capture)));
+        }
+        push(Step::Send(Request::Stream(Register::ReadEncoder)));
+        push(Step::Online);
+        self.setup.expand_front(steps.iter());
+    }
+
+    /// The board stopped answering: everything in progress is void; try again later.
+    pub(super) fn declare_dead(&mut self, now: Duration) {
+        self.begin_startup();
+        self.setup.clear();
+        self.status.fault = Some(DeviceFault::NotResponding);
+        self.restart_at = Some(now.saturating_add(RESTART_DELAY));
+    }
+
+    /// The board rebooted (or another board answers): goals are lost, start again.
+    pub(super) fn board_reset(&mut self) {
+        self.status.resets = self.status.resets.saturating_add(1);
+        self.status.fault = Some(DeviceFault::Reset);
+        self.homed = false;
+        self.stamps.clear();
+        self.begin_startup();
+    }
+
+    /// Records the VERSION answer as the firmware description.
+    pub(super) fn record_version(&mut self, version: ::qsb::Version) {
+        let mut text = motion_base::FixedText::<FIRMWARE_LEN>::new();
+        let product = match version.product {
+            ProductType::D => 'D',
+            ProductType::M => 'M',
+            ProductType::S => 'S',
+        };
+        // The buffer is larger than the longest description; a failure only cuts it.
+        let _ = write!(
+            text,
+            "QSB-{product} SN {:05X} fw {:02X}",
+            version.serial, version.firmware
+        );
+        self.status.set_firmware(text.as_str());
+        self.product = Some(version.product);
+        self.serial = Some(version.serial);
+    }
+}

@@ -1,0 +1,364 @@
+//! Driver for the Trinamic SIXpack / QUADpack on RS-232 / RS-485 ([`TmcpackDriver`]).
+//!
+//! Start-up: `$43` unit information (firmware revision and serial for
+//! [`DeviceStatus::firmware`], the reset flag); `$28` to see whether a configured motor is
+//! still running (left so by a previous server: it is stopped with `$14`/`$25` and polled
+//! with `$21` until it stands, because `$12`, `$13` and `$16` may only change at
+//! standstill); then the configuration — `$40` with the link's own baud divisor and the
+//! configured switch-over delay (the baud rate is never changed: the link would have to
+//! follow), `$41` packet timeout, `$12` clkdiv chosen for the fastest motor, `$10` peak
+//! currents per motor pair, and per configured motor `$11`, `$13`, `$14`, `$15`, `$16`,
+//! `$18`, `$31` from its axis limits and machine keys, then `$33` and `$32` when I/O is
+//! configured. Motors found active afterwards are stopped: whatever they were doing was not
+//! commanded by this run. The whole configuration goes out again whenever the pack is seen
+//! to have reset (`$43` reset flag, or after it stopped answering).
+//!
+//! The wire (manual 6.1, 7.1): one request in flight. A query waits for its answer until
+//! `request + switch-over (at least the factory 6 ms, in case the pack rebooted) + answer +`
+//! [`REPLY_MARGIN`]; after an answer the line stays reserved for the switch-over time, in
+//! which the pack still drives it; after a timeout it stays silent for the pack's packet
+//! timeout so that a partial word on its side is aborted. A request without an answer
+//! reserves the line for its own wire time and at least the packet timeout of every pack on
+//! the bus ($41: "The command word always has to be completely transmitted during a
+//! parameterized timeout"), so that a word torn by noise is aborted before the next one
+//! starts instead of taking its first bytes. Queries carry the response address of
+//! [`TmcpackDriverConfig::reply_address`], which no pack on the bus may have.
+//!
+//! Command → wire: a goal's first request goes out in the tick that set it when the line is
+//! free; otherwise it waits for the one exchange in flight — at most a query, the
+//! switch-over, the answer and the switch-over again (13.4 ms at 19200 baud with `$40` =
+//! 2 ms) — and the tick that takes the answer in. The manual allows nothing shorter ("Each
+//! request should wait for the response of the PACK", 7.1); the engine test
+//! `tests/engine_tmcpack/wire.rs` checks the bound.
+//!
+//! Polling plan: stops first ([`Priority::Stop`]: on a shared bus before every other pack's
+//! message too), then output changes and other goals ([`Priority::Command`]), with the
+//! back-to-back `$20` polls of a motor whose stop should have ended (see the `channel`
+//! module) and the polls of motors whose data is older than half the refresh budget at the
+//! same priority (the two take turns); then `$20` position/action polls round-robin over the configured motors
+//! with one `$30` input poll per round when inputs are configured ([`Priority::Poll`]),
+//! and a `$43` every [`RESET_CHECK_PERIOD`] to notice a pack that rebooted (reset flag).
+//! Three timeouts in a row take the pack offline ([`DeviceFault::NotResponding`]); it is
+//! then asked for `$43` every [`RETRY_PERIOD`] and configured again when it answers.
+//!
+//! Goals are mapped as described in the `channel` module: Stop with `$25` velocity 0, then
+//! `$23`; Position/RampPosition with `$14`, `$26`, `$23`; Velocity with `$25`; Home with
+//! `$16`, `$22`; SetPosition with `$27`; Off with a stop, then `$11` at 0 %. Power is
+//! unsupported (a stepper has no open-loop power). I/O is described in the `io` module.
+
+mod channel;
+mod config;
+mod goals;
+mod io;
+mod rx;
+mod spec;
+mod startup;
+mod wire;
+
+#[cfg(test)]
+mod bench;
+#[cfg(test)]
+mod tests;
+#[cfg(test)]
+mod tests_goals;
+#[cfg(test)]
+mod tests_io;
+
+use core::time::Duration;
+
+use tmcpack::convert::{DEFAULT_SWITCHOVER_UNITS as FACTORY_SWITCHOVER, byte_time, units};
+use tmcpack::{DEFAULT_PACKET_TIMEOUT, FRAME_LEN, Variant};
+
+use motion_drivers::{
+    ChannelState, DeviceFault, DeviceStatus, Driver, Goal, GoalError, GoalKinds, IoStamps, Model,
+    Pin, PinReading, Priority, RateFloor, Transmit,
+};
+
+use channel::{Channel, Step};
+use config::{Scale, clkdiv_for};
+use goals::CAPABILITIES;
+use io::IoState;
+use startup::{Quiesce, StartupPlan};
+use wire::{ReplyHunter, Wire};
+
+pub use config::{
+    Currents, DEFAULT_REPLY_ADDRESS, DEFAULT_SWITCHOVER_UNITS, PACKET_TIMEOUT_SLACK_BYTES,
+    TmcpackChannel, TmcpackDriverConfig, default_packet_timeout_units,
+};
+pub use io::{MAX_PINS, PinSet, ReadyOutput, TmcpackIo, pins};
+pub use spec::{MAX_DEBOUNCE_MS, MAX_POSLIMIT, is_current_level, is_weak_current, word_time};
+
+/// Added to a query's wire and switch-over time before it counts as unanswered
+/// (processing in the pack, and the host's tick granularity).
+pub const REPLY_MARGIN: Duration = Duration::from_millis(6);
+/// Timeouts in a row after which the pack is declared not responding.
+pub const MAX_TIMEOUTS: u32 = 3;
+/// How often an offline pack is asked again.
+pub const RETRY_PERIOD: Duration = Duration::from_millis(250);
+/// How often an online pack's reset flag is read ($43).
+pub const RESET_CHECK_PERIOD: Duration = Duration::from_secs(1);
+
+/// Where the driver is with its pack.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Phase {
+    /// The link is down.
+    Down,
+    /// Asking `$43` (first contact, or after the pack stopped answering).
+    Identify,
+    /// Asking `$28` which motors are active.
+    Survey,
+    /// Stopping configured motors found active, waiting until they stand.
+    Quiesce,
+    /// Sending start-up request `n`.
+    Configure(usize),
+    /// Polling and driving.
+    Online,
+}
+
+/// The sans-I/O driver of one SIXpack / QUADpack.
+#[derive(Debug)]
+pub struct TmcpackDriver {
+    address: u8,
+    reply_address: u8,
+    variant: Variant,
+    word_time: Duration,
+    /// The switch-over delay the pack has now, as far as the driver knows.
+    switchover: Duration,
+    /// The packet timeout the pack has now, as far as the driver knows.
+    pack_timeout: Duration,
+    /// The longest packet timeout of the other packs on the bus.
+    bus_timeout: Duration,
+    channels: [Option<Channel>; 6],
+    io: IoState,
+    plan: StartupPlan,
+    quiesce: Option<Quiesce>,
+    phase: Phase,
+    wire: Wire,
+    hunter: ReplyHunter,
+    /// Sequence number of the last request sent.
+    seq: u64,
+    status: DeviceStatus,
+    timeouts_in_row: u32,
+    ever_online: bool,
+    retry_at: Duration,
+    reset_check_at: Duration,
+    next_poll: usize,
+    next_command: usize,
+    /// The last message was the poll of a motor awaiting rest: an overdue poll of another
+    /// motor may go next (the two alternate).
+    rest_polled: bool,
+    budget: Duration,
+    stamps: IoStamps,
+}
+
+impl TmcpackDriver {
+    /// A driver for the pack `config` describes; it starts talking at the first
+    /// `poll_transmit`.
+    pub fn new(config: TmcpackDriverConfig) -> Self {
+        let motors = usize::from(config.variant.motors());
+        let clkdiv = clkdiv_for(&config.channels[..motors.min(6)]);
+        let mut channels: [Option<Channel>; 6] = [const { None }; 6];
+        for (motor, (slot, cfg)) in channels.iter_mut().zip(config.channels).enumerate() {
+            if motor < motors
+                && let Some(cfg) = cfg
+            {
+                *slot = Some(Channel::new(motor as u8, cfg, Scale::new(clkdiv, &cfg)));
+            }
+        }
+        let io = IoState::new(config.variant, config.io);
+        let plan = StartupPlan::new(&config, clkdiv, &channels, &io);
+        let byte = byte_time(config.baud);
+        let word_time = byte.saturating_mul(FRAME_LEN as u32);
+        let configured = config
+            .switchover_units
+            .map_or(units(FACTORY_SWITCHOVER), units);
+        let polled = channels.iter().flatten().count() + usize::from(io.polls());
+        let round = usize::from(config.bus_motors).max(polled).max(1) as u32;
+        let query = 2 * word_time + 2 * configured + Duration::from_millis(2);
+        let budget = query * round * 2 + query * 4 + Duration::from_millis(50);
+        let reply_address = if config.reply_address == config.address {
+            if config.address == DEFAULT_REPLY_ADDRESS {
+                0xFF
+            } else {
+                DEFAULT_REPLY_ADDRESS
+            }
+        } else {
+            config.reply_address
+        };
+        Self {
+            address: config.address,
+            reply_address,
+            variant: config.variant,
+            word_time,
+            switchover: units(FACTORY_SWITCHOVER),
+            pack_timeout: DEFAULT_PACKET_TIMEOUT,
+            bus_timeout: units(config.bus_packet_timeout_units),
+            channels,
+            io,
+            plan,
+            quiesce: None,
+            phase: Phase::Identify,
+            wire: Wire::Idle,
+            hunter: ReplyHunter::new(),
+            seq: 0,
+            status: DeviceStatus::UNKNOWN,
+            timeouts_in_row: 0,
+            ever_online: false,
+            retry_at: Duration::ZERO,
+            reset_check_at: Duration::ZERO,
+            next_poll: 0,
+            next_command: 0,
+            rest_polled: false,
+            budget,
+            stamps: IoStamps::default(),
+        }
+    }
+
+    /// The response address the driver's queries carry.
+    pub fn reply_address(&self) -> u8 {
+        self.reply_address
+    }
+
+    /// The clkdiv and, per motor, the divider, vmax and amax the start-up writes
+    /// (`None` for unconfigured motors).
+    pub fn board_settings(&self) -> [Option<(u8, u8, u16, u16)>; 6] {
+        let mut out = [None; 6];
+        for (slot, channel) in out.iter_mut().zip(&self.channels) {
+            *slot = channel.as_ref().map(|c| {
+                let s = c.scale;
+                (s.clock.clkdiv(), s.clock.div(), s.vmax, s.amax)
+            });
+        }
+        out
+    }
+}
+
+impl Driver for TmcpackDriver {
+    fn model(&self) -> Model {
+        Model::TMCPACK
+    }
+
+    fn channel_count(&self) -> usize {
+        usize::from(self.variant.motors())
+    }
+
+    fn capabilities(&self, channel: usize) -> GoalKinds {
+        match self.channels.get(channel) {
+            Some(Some(_)) if channel < self.channel_count() => CAPABILITIES,
+            _ => GoalKinds::NONE,
+        }
+    }
+
+    /// One velocity unit and one amax unit of the motor's step clock.
+    fn rate_floor(&self, channel: usize) -> RateFloor {
+        match self.channels.get(channel) {
+            Some(Some(c)) if channel < self.channel_count() => c.scale.floor(),
+            _ => RateFloor::NONE,
+        }
+    }
+
+    fn refresh_budget(&self) -> Duration {
+        self.budget
+    }
+
+    fn handle_rx(&mut self, now: Duration, bytes: &[u8]) {
+        self.receive(now, bytes);
+    }
+
+    fn handle_timeout(&mut self, now: Duration) {
+        match self.wire {
+            Wire::Sending { until, .. } | Wire::Quiet { until } if now >= until => {
+                self.wire = Wire::Idle;
+            }
+            // Unanswered only if the link was looked at after the deadline.
+            Wire::Awaiting { deadline, .. } if self.stamps.judged(now) >= deadline => {
+                self.on_timeout(now);
+            }
+            _ => {}
+        }
+    }
+
+    fn handle_written(&mut self, at: Duration) {
+        self.on_written(at);
+    }
+
+    fn handle_heard(&mut self, until: Duration) {
+        self.stamps.heard(until);
+    }
+
+    fn poll_timeout(&self) -> Option<Duration> {
+        let phase = match self.phase {
+            Phase::Identify => Some(self.retry_at),
+            Phase::Online => Some(self.reset_check_at),
+            Phase::Quiesce => self.quiesce.as_ref().map(|q| q.deadline),
+            Phase::Down | Phase::Survey | Phase::Configure(_) => None,
+        };
+        let rest = self
+            .channels
+            .iter()
+            .flatten()
+            .filter(|c| c.current() == Some(Step::AwaitRest))
+            .filter_map(|c| c.rest_poll_at.or(c.rest_at))
+            .min();
+        [self.wire.deadline(), phase, rest]
+            .into_iter()
+            .flatten()
+            .min()
+    }
+
+    fn wants_transmit(&self, now: Duration) -> Option<Priority> {
+        self.next_message(now)
+    }
+
+    fn poll_transmit(&mut self, now: Duration, buf: &mut [u8]) -> Option<Transmit> {
+        self.transmit(now, buf)
+    }
+
+    fn awaiting_reply(&self) -> bool {
+        self.wire != Wire::Idle
+    }
+
+    fn goals_pending(&self) -> bool {
+        self.io.outputs_pending || self.channels.iter().flatten().any(Channel::pending)
+    }
+
+    fn set_goal(&mut self, _now: Duration, channel: usize, goal: Goal) -> Result<(), GoalError> {
+        self.plan_goal(channel, goal)
+    }
+
+    fn channel(&self, channel: usize) -> ChannelState {
+        match self.channels.get(channel) {
+            Some(Some(c)) if channel < self.channel_count() => c.state,
+            _ => ChannelState::UNKNOWN,
+        }
+    }
+
+    fn status(&self) -> DeviceStatus {
+        self.status
+    }
+
+    fn link_down(&mut self, _now: Duration) {
+        self.stamps.link_reset();
+        self.phase = Phase::Down;
+        self.wire = Wire::Idle;
+        self.timeouts_in_row = 0;
+        self.restart(DeviceFault::LinkDown);
+    }
+
+    fn link_up(&mut self, now: Duration) {
+        self.stamps.link_reset();
+        self.phase = Phase::Identify;
+        self.wire = Wire::Idle;
+        self.retry_at = now;
+        self.timeouts_in_row = 0;
+        self.assume_factory_line();
+    }
+
+    fn read_pin(&self, pin: Pin) -> Option<PinReading> {
+        self.io.read(pin)
+    }
+
+    fn set_output(&mut self, _now: Duration, pin: Pin, high: bool) -> Result<(), GoalError> {
+        self.drive_output(pin, high)
+    }
+}

@@ -1,0 +1,554 @@
+//! The host side of the half-duplex line: one request in flight, the pack's switch-over
+//! time on both sides of its answer (manual 6.1), finding the answer in the byte stream,
+//! and the polling plan (which request goes next, module docs "Polling plan").
+//!
+//! Timing of one query at 19200 baud with a 2 ms switch-over: the request takes 4.7 ms on
+//! the wire; the pack answers after the switch-over delay; the answer takes 4.7 ms; the pack
+//! then keeps driving the line for the switch-over time again, and bytes sent to it then
+//! are lost. So after an answer the whole bus stays quiet for the switch-over time (the
+//! driver reports [`awaiting_reply`](motion_drivers::Driver::awaiting_reply) until then, which holds
+//! every other driver on the bus too).
+
+use core::time::Duration;
+
+use tmcpack::convert::{DEFAULT_SWITCHOVER_UNITS as FACTORY_SWITCHOVER, units};
+use tmcpack::{Command, FRAME_LEN, MotorMask, Reply, ReplyFrame, Request, RequestFrame};
+
+use super::channel::Channel;
+use super::{Phase, REPLY_MARGIN, TmcpackDriver};
+use motion_drivers::{Priority, Transmit};
+
+/// What a query waits for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Expect {
+    pub command: Command,
+    /// The motor a $20 or $21 answer must name, the channel a $30 answer must name.
+    pub motor: Option<u8>,
+    /// Which query this is.
+    pub purpose: Purpose,
+}
+
+/// Why a query was sent.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Purpose {
+    /// $43 of the start-up sequence.
+    Startup,
+    /// $43 checking the reset flag while online.
+    ResetCheck,
+    /// $20 of the polling plan.
+    Poll,
+    /// $28 of the start-up survey: which motors are active.
+    Survey,
+    /// $21 while stopping motors found active at start-up.
+    Quiesce,
+    /// $30 of the polling plan (inputs).
+    Io,
+}
+
+/// Who may use the line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Wire {
+    /// Free.
+    Idle,
+    /// A request without an answer is still on the wire (`number`: its message number,
+    /// `IoStamps::sent`).
+    Sending { until: Duration, number: u64 },
+    /// Waiting for the answer to a query.
+    Awaiting {
+        expect: Expect,
+        sent_at: Duration,
+        deadline: Duration,
+        number: u64,
+    },
+    /// The pack still drives the line after its answer, or the line is kept silent after
+    /// a timeout so that the pack's packet timeout ($41) resynchronises it.
+    Quiet { until: Duration },
+}
+
+impl Wire {
+    /// When the line state changes by itself.
+    pub fn deadline(&self) -> Option<Duration> {
+        match *self {
+            Self::Idle => None,
+            Self::Sending { until, .. } | Self::Quiet { until } => Some(until),
+            Self::Awaiting { deadline, .. } => Some(deadline),
+        }
+    }
+}
+
+/// Capacity of the hunting window: a reply plus garbage before it.
+const WINDOW: usize = 4 * FRAME_LEN;
+
+/// Finds the expected answer in the received bytes. The line has no start byte and no
+/// checksum (6.1), but the host knows what it waits for: a word that starts with its
+/// response address and the query's command and decodes. Anything else before it is
+/// garbage and is skipped byte by byte, so a reply is found even right after a burst of
+/// noise (the pack's own resynchronisation, the packet timeout, needs a silent gap).
+#[derive(Debug, Clone)]
+pub(crate) struct ReplyHunter {
+    buf: [u8; WINDOW],
+    len: usize,
+    /// Bytes skipped since the last [`reset`](Self::reset).
+    pub skipped: u32,
+}
+
+impl ReplyHunter {
+    pub const fn new() -> Self {
+        Self {
+            buf: [0; WINDOW],
+            len: 0,
+            skipped: 0,
+        }
+    }
+
+    /// Forgets everything (a new request was sent).
+    pub fn reset(&mut self) {
+        self.len = 0;
+        self.skipped = 0;
+    }
+
+    /// Takes `bytes`; returns the expected answer once it is complete. Bytes after it are
+    /// left in the window (and dropped by the next reset).
+    pub fn push(&mut self, reply_address: u8, expect: Expect, bytes: &[u8]) -> Option<Reply> {
+        for &byte in bytes {
+            if self.len == WINDOW {
+                self.shift(1);
+            }
+            if let Some(slot) = self.buf.get_mut(self.len) {
+                *slot = byte;
+                self.len += 1;
+            }
+            if let Some(reply) = self.scan(reply_address, expect) {
+                return Some(reply);
+            }
+        }
+        None
+    }
+
+    fn scan(&mut self, reply_address: u8, expect: Expect) -> Option<Reply> {
+        loop {
+            let head = self.buf.get(..self.len)?;
+            match head {
+                [] => return None,
+                [first, ..] if *first != reply_address => {}
+                [_, command, ..] if *command != expect.command.code() => {}
+                _ if self.len < FRAME_LEN => return None,
+                _ => {
+                    if let Some(reply) = self
+                        .buf
+                        .get(..FRAME_LEN)
+                        .and_then(|word| ReplyFrame::decode(word).ok())
+                        .map(|frame| frame.reply)
+                        .filter(|reply| matches(reply, expect))
+                    {
+                        self.shift(FRAME_LEN);
+                        return Some(reply);
+                    }
+                }
+            }
+            self.shift(1);
+            self.skipped += 1;
+        }
+    }
+
+    fn shift(&mut self, n: usize) {
+        let n = n.min(self.len);
+        self.buf.copy_within(n..self.len, 0);
+        self.len -= n;
+    }
+}
+
+fn matches(reply: &Reply, expect: Expect) -> bool {
+    match (reply, expect.motor) {
+        (Reply::Position { motor, .. } | Reply::Velocity { motor, .. }, Some(want)) => {
+            *motor == want
+        }
+        (Reply::Input { channel, .. }, Some(want)) => *channel == want,
+        _ => true,
+    }
+}
+
+/// The poll slot of the `$30` input poll, after the six motors.
+const IO_SLOT: usize = 6;
+
+/// What `pick` chose to send.
+pub(super) struct Pick {
+    pub(super) request: Request,
+    pub(super) expect: Option<Expect>,
+    pub(super) channel: Option<usize>,
+}
+
+/// What has waited too long for its poll.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Starved {
+    /// A motor's `$20`.
+    Motor(u8),
+    /// A `$30` of this channel.
+    Input(u8),
+}
+
+impl TmcpackDriver {
+    /// The smallest spacing between the starts of two words: their wire time, and the
+    /// packet timeout of every pack on the bus.
+    pub(super) fn spacing(&self) -> Duration {
+        self.word_time.max(self.pack_timeout).max(self.bus_timeout)
+    }
+
+    /// A configured motor (or input) whose data is older than half the refresh budget: its
+    /// poll goes before every command but a stop, so that goals for every motor of the bus
+    /// at once (the engine's start-up stops, a client's coordinated move) never make an
+    /// axis or a signal stale.
+    pub(super) fn starved(&self, now: Duration) -> Option<Starved> {
+        let limit = self.budget / 2;
+        let motor = self
+            .channels
+            .iter()
+            .flatten()
+            .filter_map(|c| c.state.refreshed_at.map(|at| (at, Starved::Motor(c.motor))));
+        let input = self
+            .io
+            .stalest()
+            .map(|(at, channel)| (at, Starved::Input(channel)));
+        motor
+            .chain(input)
+            .filter(|(at, _)| now.saturating_sub(*at) > limit)
+            .min_by_key(|(at, _)| *at)
+            .map(|(_, starved)| starved)
+    }
+
+    /// What the driver would send now.
+    pub(super) fn next_message(&self, now: Duration) -> Option<Priority> {
+        if self.wire != Wire::Idle {
+            return None;
+        }
+        match self.phase {
+            Phase::Down => None,
+            Phase::Identify => (now >= self.retry_at).then_some(Priority::Setup),
+            Phase::Survey | Phase::Quiesce | Phase::Configure(_) => Some(Priority::Setup),
+            Phase::Online if self.channels.iter().flatten().any(Channel::urgent) => {
+                Some(Priority::Stop)
+            }
+            Phase::Online
+                if self.any_ready()
+                    || self.starved(now).is_some()
+                    || self.channels.iter().flatten().any(|c| c.awaits_rest(now)) =>
+            {
+                Some(Priority::Command)
+            }
+            Phase::Online => {
+                let polls = self.channels.iter().any(Option::is_some) || self.io.polls();
+                (polls || now >= self.reset_check_at).then_some(Priority::Poll)
+            }
+        }
+    }
+
+    /// Whether the poll of a motor awaiting rest goes next: it goes before every other poll
+    /// of this pack, overdue ones included, but alternates with those, so that the
+    /// back-to-back polls of a stop never leave the other motors without data (on a shared
+    /// bus the other packs' commands and overdue polls take turns with it too: all are
+    /// [`Priority::Command`]).
+    fn rest_poll_due(&self, now: Duration) -> bool {
+        self.channels.iter().flatten().any(|c| c.awaits_rest(now))
+            && !(self.rest_polled && self.starved(now).is_some())
+    }
+
+    pub(super) fn query(
+        &self,
+        request: Request,
+        command: Command,
+        motor: Option<u8>,
+        purpose: Purpose,
+    ) -> Pick {
+        Pick {
+            request,
+            expect: Some(Expect {
+                command,
+                motor,
+                purpose,
+            }),
+            channel: None,
+        }
+    }
+
+    /// Picks the request to send now; the core of `poll_transmit`.
+    pub(super) fn pick(&mut self, now: Duration) -> Option<Pick> {
+        let priority = self.next_message(now)?;
+        let reply_to = self.reply_address;
+        match self.phase {
+            Phase::Down => None,
+            Phase::Identify => Some(self.query(
+                Request::UnitInfo { reply_to },
+                Command::UnitInfo,
+                None,
+                Purpose::Startup,
+            )),
+            Phase::Survey => Some(self.query(
+                Request::QueryActions {
+                    reply_to,
+                    delay_mask: MotorMask::EMPTY,
+                },
+                Command::QueryActions,
+                None,
+                Purpose::Survey,
+            )),
+            Phase::Quiesce => self.pick_quiesce(now),
+            Phase::Configure(index) => {
+                let request = self.resolve(self.plan.get(index)?);
+                Some(Pick {
+                    request,
+                    expect: None,
+                    channel: None,
+                })
+            }
+            Phase::Online if priority >= Priority::Command => {
+                let urgent = self.channels.iter().flatten().any(Channel::urgent);
+                let rest = self.rest_poll_due(now);
+                match self.starved(now) {
+                    _ if rest && !urgent => self.pick_command().or_else(|| self.pick_poll(now)),
+                    Some(Starved::Motor(motor)) if !urgent => Some(self.query(
+                        Request::QueryPosition { motor, reply_to },
+                        Command::QueryPosition,
+                        Some(motor),
+                        Purpose::Poll,
+                    )),
+                    Some(Starved::Input(channel)) if !urgent => Some(self.query(
+                        Request::ReadInput { channel, reply_to },
+                        Command::ReadInput,
+                        Some(channel),
+                        Purpose::Io,
+                    )),
+                    // No command ready: the poll of a stopping motor.
+                    _ => self.pick_command().or_else(|| self.pick_poll(now)),
+                }
+            }
+            Phase::Online => self.pick_poll(now),
+        }
+    }
+
+    pub(super) fn pick_poll(&mut self, now: Duration) -> Option<Pick> {
+        let reply_to = self.reply_address;
+        let urgent = self
+            .channels
+            .iter()
+            .flatten()
+            .filter(|c| c.awaits_rest(now))
+            // Several motors stopping at once (an e-stop): the one polled longest ago.
+            .min_by_key(|c| c.state.refreshed_at)
+            .map(|c| usize::from(c.motor));
+        if urgent.is_none() && now >= self.reset_check_at {
+            return Some(self.query(
+                Request::UnitInfo { reply_to },
+                Command::UnitInfo,
+                None,
+                Purpose::ResetCheck,
+            ));
+        }
+        let slot = urgent.or_else(|| {
+            (0..=IO_SLOT)
+                .map(|offset| (self.next_poll + offset) % (IO_SLOT + 1))
+                .find(|&i| match i {
+                    IO_SLOT => self.io.polls(),
+                    _ => matches!(self.channels.get(i), Some(Some(_))),
+                })
+        })?;
+        if urgent.is_none() {
+            self.next_poll = (slot + 1) % (IO_SLOT + 1);
+        }
+        if slot == IO_SLOT {
+            let channel = self.io.next_channel();
+            return Some(self.query(
+                Request::ReadInput { channel, reply_to },
+                Command::ReadInput,
+                Some(channel),
+                Purpose::Io,
+            ));
+        }
+        let motor = slot as u8;
+        Some(self.query(
+            Request::QueryPosition { motor, reply_to },
+            Command::QueryPosition,
+            Some(motor),
+            Purpose::Poll,
+        ))
+    }
+
+    /// The reply timeout of a query sent at `now`: request, switch-over (at least the
+    /// factory delay), reply, margin.
+    pub(super) fn reply_deadline(&self, now: Duration) -> Duration {
+        let switchover = self.switchover.max(units(FACTORY_SWITCHOVER));
+        now + self.word_time * 2 + switchover + REPLY_MARGIN
+    }
+
+    /// Writes the request `pick` chose into `buf`; the line, the start-up and the channel
+    /// move on.
+    pub(super) fn transmit(&mut self, now: Duration, buf: &mut [u8]) -> Option<Transmit> {
+        let pick = self.pick(now)?;
+        let request = pick.request;
+        let len = RequestFrame::new(self.address, request).encode(buf).ok()?;
+        self.seq += 1;
+        let number = self.stamps.sent();
+        let wire_end = now + self.word_time;
+        match request {
+            Request::SetBaud { switchover, .. } => self.switchover = units(switchover),
+            Request::PacketTimeout { timeout } => self.pack_timeout = units(timeout),
+            Request::Outputs { .. } => {
+                self.io.on_outputs_sent(now, request);
+                if self.phase == Phase::Online {
+                    self.io.outputs_pending = false;
+                }
+            }
+            _ => {}
+        }
+        match pick.expect {
+            Some(expect) => {
+                self.hunter.reset();
+                self.wire = Wire::Awaiting {
+                    expect,
+                    sent_at: now,
+                    deadline: self.reply_deadline(now),
+                    number,
+                };
+            }
+            None => {
+                self.wire = Wire::Sending {
+                    until: now + self.spacing(),
+                    number,
+                };
+            }
+        }
+        match self.phase {
+            Phase::Quiesce => {
+                if let Some(quiesce) = self.quiesce.as_mut()
+                    && pick.expect.is_none()
+                {
+                    quiesce.sent();
+                }
+            }
+            Phase::Configure(index) => {
+                let next = index + 1;
+                if self.plan.get(next).is_some() {
+                    self.phase = Phase::Configure(next);
+                } else {
+                    self.go_online(now);
+                }
+            }
+            _ => {}
+        }
+        self.rest_polled = match pick.expect {
+            Some(Expect {
+                purpose: Purpose::Poll,
+                motor: Some(motor),
+                ..
+            }) => self
+                .channels
+                .get(usize::from(motor))
+                .and_then(Option::as_ref)
+                .is_some_and(|c| c.awaits_rest(now)),
+            _ => false,
+        };
+        let mut goal_starts = 0;
+        if let Some(index) = pick.channel
+            && let Some(Some(channel)) = self.channels.get_mut(index)
+        {
+            channel.on_sent(request, self.seq, wire_end);
+            channel.advance();
+            if channel.goal_unsent {
+                channel.goal_unsent = false;
+                goal_starts = 1 << index;
+            }
+        }
+        Some(Transmit {
+            len,
+            expects_reply: true,
+            goal_starts,
+        })
+    }
+
+    /// Message `number` went out at `at`: the line's times run from there.
+    pub(super) fn on_written(&mut self, at: Duration) {
+        let number = self.stamps.written();
+        let spacing = self.spacing();
+        let deadline = self.reply_deadline(at);
+        match &mut self.wire {
+            Wire::Awaiting {
+                number: n,
+                sent_at,
+                deadline: d,
+                ..
+            } if *n == number => {
+                *sent_at = at;
+                *d = deadline;
+            }
+            Wire::Sending { until, number: n } if *n == number => *until = at + spacing,
+            _ => {}
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const POLL: Expect = Expect {
+        command: Command::QueryPosition,
+        motor: Some(1),
+        purpose: Purpose::Poll,
+    };
+
+    // Manual 8.4 $20 response: CMD $20, P0 motnr, P1..4 posact LSB first, P5 action, P6 stop.
+    const ANSWER: [u8; 9] = [0xFE, 0x20, 0x01, 0xD0, 0x07, 0x00, 0x00, 0x05, 0x00];
+
+    #[test]
+    fn finds_the_answer_in_any_chunking() {
+        for chunk in 1..=FRAME_LEN {
+            let mut hunter = ReplyHunter::new();
+            let mut found = None;
+            for part in ANSWER.chunks(chunk) {
+                if let Some(reply) = hunter.push(0xFE, POLL, part) {
+                    found = Some(reply);
+                }
+            }
+            assert!(matches!(
+                found,
+                Some(Reply::Position {
+                    motor: 1,
+                    position: 2000,
+                    ..
+                })
+            ));
+        }
+    }
+
+    #[test]
+    fn skips_garbage_before_the_answer_even_if_it_looks_like_a_header() {
+        let mut hunter = ReplyHunter::new();
+        let mut bytes = vec![0x13, 0xFE, 0x20, 0x07, 0xFE, 0xFE];
+        bytes.extend_from_slice(&ANSWER);
+        let reply = hunter.push(0xFE, POLL, &bytes);
+        assert!(matches!(
+            reply,
+            Some(Reply::Position { position: 2000, .. })
+        ));
+        assert_eq!(hunter.skipped, 6);
+    }
+
+    #[test]
+    fn ignores_another_motor_and_another_address() {
+        let mut hunter = ReplyHunter::new();
+        let mut other_motor = ANSWER;
+        other_motor[2] = 2;
+        let mut other_address = ANSWER;
+        other_address[0] = 0x01;
+        assert_eq!(hunter.push(0xFE, POLL, &other_motor), None);
+        assert_eq!(hunter.push(0xFE, POLL, &other_address), None);
+        assert!(hunter.push(0xFE, POLL, &ANSWER).is_some());
+    }
+
+    #[test]
+    fn endless_noise_never_overflows() {
+        let mut hunter = ReplyHunter::new();
+        let noise: Vec<u8> = (0..1000u32).map(|i| (i * 37 % 251) as u8).collect();
+        assert_eq!(hunter.push(0xFE, POLL, &noise), None);
+        assert!(hunter.push(0xFE, POLL, &ANSWER).is_some());
+    }
+}

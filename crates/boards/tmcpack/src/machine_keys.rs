@@ -1,0 +1,98 @@
+//! The Trinamic pack's machine keys as the server validated them: `None` fields were not set (the
+//! driver's default applies). Values are in the config's terms (units, ms, %); the
+//! driver's `from_spec` converts them. The server holds them opaquely in
+//! `motion_drivers::spec::MachineKeys`.
+
+/// Trinamic pack variant.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum PackVariant {
+    /// SIXpack: 6 motors.
+    #[default]
+    Sixpack,
+    /// QUADpack: 4 motors.
+    Quadpack,
+}
+
+/// `ready_output = { motors, reference }`: TTLOUT1 as the ready output ($32 P3, $33).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ReadyOutputKeys {
+    /// $33 P0: bit n = motor n's activity switches the output.
+    pub motors: u8,
+    /// $33 P1: bit n = motor n's reference search switches the output.
+    pub reference: u8,
+}
+
+/// The tmcpack keys of one `[[device]]`; `None` fields were not set (the driver's default
+/// applies).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct TmcpackDeviceKeys {
+    /// `variant`: SIXpack (default) or QUADpack.
+    pub variant: PackVariant,
+    /// Response address of the driver's queries.
+    pub reply_address: Option<u8>,
+    /// $40 transmitter switch-over delay, ms (even, 2..=2000).
+    pub switchover_ms: Option<u16>,
+    /// $41 packet timeout, ms (even, 4..=131070).
+    pub packet_timeout_ms: Option<u32>,
+    /// TTLOUT1 as the ready output.
+    pub ready_output: Option<ReadyOutputKeys>,
+}
+
+/// `current = { … }` ($10, $11).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct CurrentKeys {
+    /// Peak current, % of the pack's full scale.
+    pub peak: Option<f64>,
+    /// I0, % of the peak current: on standby (a level of $11: 100, 75, 50, 38, 25, 19, 13, 9
+    /// or 0).
+    pub standby: Option<u8>,
+    /// I1: at standstill.
+    pub standstill: Option<u8>,
+    /// I2: at constant velocity.
+    pub constant: Option<u8>,
+    /// I3: accelerating.
+    pub accel: Option<u8>,
+    /// T0, ms (even, 2..=131070).
+    pub standby_delay_ms: Option<u32>,
+}
+
+/// `reference = { … }` ($15, $16, $18); `side` is resolved into the axis's `HomeSpec`.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ReferenceKeys {
+    /// NullPositive: the switch is active at a high level.
+    pub active_high: Option<bool>,
+    /// NullCenter.
+    pub center: Option<bool>,
+    /// StopNull.
+    pub stop_at_switch: Option<bool>,
+    /// StopSoft.
+    pub soft_stop: Option<bool>,
+    /// $16 de-bounce, ms (even, 0..=30).
+    pub debounce_ms: Option<u16>,
+    /// $18 nulloffset, units.
+    pub null_offset: Option<f64>,
+    /// $18 testnullrange, units.
+    pub test_range: Option<f64>,
+    /// FastRef.
+    pub fast: Option<bool>,
+    /// MechRef.
+    pub mechanical: Option<bool>,
+}
+
+/// The tmcpack keys of one `[[axis]]`; `None` fields were not set (the driver's default
+/// applies).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct TmcpackAxisKeys {
+    /// `current`.
+    pub current: CurrentKeys,
+    /// `reference`.
+    pub reference: ReferenceKeys,
+    /// $15 motor type bit 1.
+    pub rotary: Option<bool>,
+    /// Units per revolution of a rotary axis (given, or 360 for unit "deg").
+    pub revolution: Option<f64>,
+    /// $31 left minimum, ADC counts.
+    pub analog_stop_left: Option<u16>,
+    /// $31 right maximum, ADC counts.
+    pub analog_stop_right: Option<u16>,
+}
