@@ -286,5 +286,9 @@ fn the_server_info_names_the_example_model_by_its_id() {
     assert_eq!(stage.model_name(), "example");
     // A client built with only the built-in boards has no `DeviceModel` for its code.
     assert!(stage.model().is_err(), "code {}", stage.model);
-    assert!(DeviceModel::BUILT_IN.iter().all(|m| m.code() != stage.model));
+    assert!(
+        DeviceModel::BUILT_IN
+            .iter()
+            .all(|m| m.code() != stage.model)
+    );
 }
