@@ -3,8 +3,8 @@
 
 use motion_ipc::{
     AxisFlags, AxisInfo, AxisState, AxisWire, ClientId, CommandKind, CommandReply, CommandRequest,
-    DeviceInfo, MachineParam, MachineParams, MotionFrame, Reason, SCHEMA_VERSION, ServerInfo,
-    ServerStats, SignalState, Target, write_text,
+    MachineParam, MachineParams, MotionFrame, Reason, SCHEMA_VERSION, ServerInfo, ServerStats,
+    SignalState, Target, write_text,
 };
 use proptest::prelude::*;
 
@@ -144,11 +144,9 @@ fn big_payloads_round_trip() {
     axis.estop = 2;
     info.axes[0] = axis;
     info.device_count = 1;
-    let mut device = DeviceInfo::EMPTY;
-    write_text(&mut device.name, "pack");
-    write_text(&mut device.model_id, "widget");
-    device.model = 99;
-    info.devices[0] = device;
+    info.devices[0].model = 99;
+    write_text(&mut info.devices[0].name, "pack");
+    write_text(&mut info.devices[0].model_id, "widget");
     let bytes = encode(&info);
     assert_eq!(bytes.len(), ServerInfo::SIZE);
     assert_eq!(le_u32(&bytes, 12), 1000);
