@@ -51,7 +51,7 @@ extern "C" {
 /* --- constants ---------------------------------------------------------------------------- */
 
 /** Version of the contract; every payload carries it. */
-#define MOTIOND_SCHEMA_VERSION 5u
+#define MOTIOND_SCHEMA_VERSION 6u
 /** Capacity of the axis arrays of the frame and the server info. */
 #define MOTIOND_MAX_AXES 128u
 /** Capacity of the device arrays of the frame and the server info. */
@@ -66,6 +66,8 @@ extern "C" {
 #define MOTIOND_NAME_LEN 32u
 /** Bytes of a unit or pin field (UTF-8, zero padded). */
 #define MOTIOND_UNIT_LEN 16u
+/** Bytes of a model id field (UTF-8, zero padded). */
+#define MOTIOND_MODEL_ID_LEN 16u
 /** Bytes of a parameter key or value text. */
 #define MOTIOND_PARAM_TEXT_LEN 40u
 /** motiond_command_request_t.axis addressing every axis (stop, e-stop, reset, off). */
@@ -224,7 +226,10 @@ enum motiond_estop_category {
     MOTIOND_ESTOP_CATEGORY_OFF = 2
 };
 
-/** The board model of a device (motiond_device_info_t.model); the text is its config id. */
+/**
+ * The built-in board models (motiond_device_info_t.model); the text is its config id. Any
+ * board's id travels in motiond_device_info_t.model_id.
+ */
 enum motiond_device_model {
     MOTIOND_DEVICE_MODEL_QQ2DRV = 1,
     MOTIOND_DEVICE_MODEL_TMCPACK = 2,
@@ -494,7 +499,7 @@ MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_axis_info_t) == 8, "motiond_axis_i
 /**
  * One device's description.
  *
- * 112 bytes, alignment 4; iceoryx2 type name "motiond::DeviceInfo".
+ * 128 bytes, alignment 4; iceoryx2 type name "motiond::DeviceInfo".
  */
 typedef struct motiond_device_info {
     uint8_t name[MOTIOND_NAME_LEN]; /**< Device name. (offset 0) */
@@ -508,8 +513,13 @@ typedef struct motiond_device_info {
      * MOTIOND_DEVICE_STATE_* value when the info was published (the frame has the current one).
      */
     uint32_t state; /* offset 108 */
+    /**
+     * The model's config id (`tmcpack`, `example`), UTF-8, zero padded: names the model of any
+     * board, built in or not.
+     */
+    uint8_t model_id[MOTIOND_MODEL_ID_LEN]; /* offset 112 */
 } motiond_device_info_t;
-MOTIOND_STATIC_ASSERT(sizeof(motiond_device_info_t) == 112, "motiond_device_info_t size");
+MOTIOND_STATIC_ASSERT(sizeof(motiond_device_info_t) == 128, "motiond_device_info_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_device_info_t) == 4, "motiond_device_info_t alignment");
 
 /**
@@ -538,7 +548,7 @@ MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_signal_info_t) == 8, "motiond_sign
 /**
  * The server's static description, published with history 1 on `motiond/<name>/info`.
  *
- * 32328 bytes, alignment 8; iceoryx2 type name "motiond::ServerInfo".
+ * 32840 bytes, alignment 8; iceoryx2 type name "motiond::ServerInfo".
  */
 typedef struct motiond_server_info {
     uint32_t schema_version; /**< MOTIOND_SCHEMA_VERSION of the server. (offset 0) */
@@ -556,9 +566,9 @@ typedef struct motiond_server_info {
     /** Devices in config order. */
     motiond_device_info_t devices[MOTIOND_MAX_DEVICES]; /* offset 20552 */
     /** Signals in config order. */
-    motiond_signal_info_t signals[MOTIOND_MAX_SIGNALS]; /* offset 24136 */
+    motiond_signal_info_t signals[MOTIOND_MAX_SIGNALS]; /* offset 24648 */
 } motiond_server_info_t;
-MOTIOND_STATIC_ASSERT(sizeof(motiond_server_info_t) == 32328, "motiond_server_info_t size");
+MOTIOND_STATIC_ASSERT(sizeof(motiond_server_info_t) == 32840, "motiond_server_info_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_server_info_t) == 8, "motiond_server_info_t alignment");
 
 /**

@@ -10,7 +10,10 @@ use std::cell::Cell;
 use std::path::Path;
 
 use motion_engine::{CommandPort, Engine};
-use motion_ipc::{AxisFlags, ClientId, CommandKind, CommandReply, CommandRequest, MotionFrame};
+use motion_ipc::{
+    AxisFlags, ClientId, CommandKind, CommandReply, CommandRequest, DeviceModel, MotionFrame,
+    ServerInfo,
+};
 use motion_link::Link;
 use motion_link::sim::SimFaults;
 use motiond::config::ServerConfig;
@@ -270,4 +273,22 @@ fn motiond_describes_the_example_axis_with_its_limits_in_steps() {
     let config = ServerConfig::parse(Path::new("example.toml"), &fast).expect("valid");
     let error = motiond::boards::build(&config).expect_err("60 000 steps/s is too fast");
     assert!(error.key.contains("max_velocity"), "{error}");
+}
+
+#[test]
+fn the_server_info_names_the_example_model_by_its_id() {
+    let server = Server::start();
+    let mut info = Box::new(ServerInfo::EMPTY);
+    server.engine.fill_info(&mut info);
+    let stage = &info.devices()[0];
+    assert_eq!(stage.name(), "stage");
+    assert_eq!(stage.model_id(), "example");
+    assert_eq!(stage.model_name(), "example");
+    // A client built with only the built-in boards has no `DeviceModel` for its code.
+    assert!(stage.model().is_err(), "code {}", stage.model);
+    assert!(
+        DeviceModel::BUILT_IN
+            .iter()
+            .all(|m| m.code() != stage.model)
+    );
 }

@@ -60,6 +60,7 @@ def test_lists_axes_devices_and_signals(client: motiond.Client, server: Server) 
     devices = [info.devices[i].text("name") for i in range(info.device_count)]
     assert devices == ["drive", "pack_xyz", "pack_aux", "focus_drv", "pumps", "feeder_qsb"]
     assert ipc.DeviceModel(info.devices[1].model) is ipc.DeviceModel.TMCPACK
+    assert info.devices[1].model_name() == "tmcpack"
     lamp = client.signal("lamp")
     assert lamp.kind is ipc.SignalKind.DIGITAL_OUT
     assert client.signal("supply").unit == "V"

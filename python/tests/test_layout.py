@@ -179,6 +179,27 @@ def test_text_fields_read_like_rust() -> None:
     assert ipc.read_text(field) == "ok"  # invalid UTF-8 ends the text, never raises
 
 
+def test_a_device_model_is_named_by_its_id_or_else_its_code() -> None:
+    device = ipc.DeviceInfo()
+    device.model = 99  # no built-in board: DeviceModel does not know it
+    device.model_id[:6] = list(b"widget")
+    assert device.model_name() == "widget"
+    assert ipc.to_enum(ipc.DeviceModel, device.model) == 99
+    device.model_id[:] = [0] * ipc.MODEL_ID_LEN
+    assert device.model_name() == "model 99"
+    # Untrusted bytes, as the Rust side reads them: garbage falls back to the code; a full
+    # field with no terminating zero is the id.
+    for garbage, named in [
+        (b"wid\x1bget", False),
+        (b"two words", False),
+        (b"\xff\xfe", False),
+        (b"0123456789abcdef", True),
+    ]:
+        device.model_id[:] = list(garbage.ljust(ipc.MODEL_ID_LEN, b"\0"))
+        expected = garbage.decode() if named else "model 99"
+        assert device.model_name() == expected, garbage
+
+
 def test_client_id_round_trips() -> None:
     value = 0x0123_4567_89AB_CDEF_FEDC_BA98_7654_3210
     client_id = ipc.ClientId.from_int(value)

@@ -13,7 +13,9 @@ use crate::LinkKind;
 /// What every crate may know of a board model without depending on the board's crate.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct ModelFacts {
-    /// The model id of the config and the CLIs (`model = "tmcpack"`): lower case, unique.
+    /// The model id of the config and the CLIs (`model = "tmcpack"`): lower case, unique, at
+    /// most 16 bytes of printable ASCII (it travels in the shared-memory contract's
+    /// `DeviceInfo::model_id`, where clients read the model's name).
     pub id: &'static str,
     /// Its code in the shared-memory contract (`DeviceInfo::model`): nonzero, unique.
     pub code: u32,

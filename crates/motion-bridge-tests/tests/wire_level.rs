@@ -84,6 +84,10 @@ fn frames_are_decimated_and_every_sample_says_which_server_wrote_it() -> Result 
     assert_eq!(state["axes"][2]["name"], "a");
     assert_eq!(state["axes"][2]["unit"], "deg");
     assert_eq!(state["devices"][1]["name"], "aux");
+    assert_eq!(
+        state["devices"][1]["model"], "qsb",
+        "named by DeviceInfo::model_id"
+    );
     Ok(())
 }
 

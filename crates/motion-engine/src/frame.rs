@@ -160,6 +160,7 @@ impl<D: Driver> Engine<D> {
                 write_text(&mut out.firmware, status.firmware());
                 out.state = u32::from(self.devices[index].state as u8);
                 out.model = driver.model().code();
+                write_text(&mut out.model_id, driver.model().id());
             }
         }
     }

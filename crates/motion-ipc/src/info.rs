@@ -6,7 +6,7 @@ use crate::command::{CommandKind, UnknownValue};
 use crate::frame::DeviceState;
 use crate::read_text;
 use crate::signal::SignalInfo;
-use crate::{MAX_AXES, MAX_DEVICES, MAX_SIGNALS, NAME_LEN, SCHEMA_VERSION, UNIT_LEN};
+use crate::{MAX_AXES, MAX_DEVICES, MAX_SIGNALS, MODEL_ID_LEN, NAME_LEN, SCHEMA_VERSION, UNIT_LEN};
 
 /// What an e-stop (and a fault) does to an axis: IEC 60204-1 stop categories. Travels as
 /// `u32` in [`AxisInfo::estop`].
@@ -45,8 +45,10 @@ impl TryFrom<u32> for EstopCategory {
     }
 }
 
-/// The board model of a device (one enum with the drivers and the config:
-/// `motion_base::Model`). Travels as its `u32` code in [`DeviceInfo::model`].
+/// The board model of a device (one type with the drivers and the config:
+/// `motion_base::Model`). Travels as its `u32` code in [`DeviceInfo::model`] and as its
+/// config id in [`DeviceInfo::model_id`]; `TryFrom<u32>` knows only the built-in boards
+/// ([`DeviceModel::BUILT_IN`]), the id names any board ([`DeviceInfo::model_name`]).
 pub use motion_base::Model as DeviceModel;
 
 /// Bit set of the [`CommandKind`]s an axis accepts: bit `kind as u32` is set.
@@ -175,6 +177,9 @@ payload! {
         pub axis_count: u32,
         /// [`DeviceState`] value when the info was published (the frame has the current one).
         pub state: u32,
+        /// The model's config id (`tmcpack`, `example`), UTF-8, zero padded: names the
+        /// model of any board, built in or not.
+        pub model_id: [u8; MODEL_ID_LEN],
     }
 }
 
@@ -188,6 +193,7 @@ impl DeviceInfo {
         address: 0,
         axis_count: 0,
         state: 0,
+        model_id: [0; MODEL_ID_LEN],
     };
 
     /// The device name.
@@ -195,9 +201,27 @@ impl DeviceInfo {
         read_text(&self.name)
     }
 
-    /// The typed model.
+    /// The typed model: one of the built-in boards ([`DeviceModel::BUILT_IN`]), `Err` for
+    /// any other code (a board of the server's registry this build does not have; its
+    /// [`model_name`](Self::model_name) still names it).
     pub fn model(&self) -> Result<DeviceModel, UnknownValue> {
         DeviceModel::try_from(self.model).map_err(|unknown| UnknownValue(unknown.0))
+    }
+
+    /// The model's config id as the server wrote it ("" when it wrote none).
+    pub fn model_id(&self) -> &str {
+        read_text(&self.model_id)
+    }
+
+    /// The model's name for people: its config id, or `model <code>` when the id is empty
+    /// or not printable ASCII (the payload is untrusted: never garbage on a terminal).
+    pub fn model_name(&self) -> String {
+        let id = self.model_id();
+        if !id.is_empty() && id.bytes().all(|byte| byte.is_ascii_graphic()) {
+            id.to_owned()
+        } else {
+            format!("model {}", self.model)
+        }
     }
 
     /// The firmware text ("" until known).
@@ -302,5 +326,43 @@ impl ServerInfo {
 impl Default for ServerInfo {
     fn default() -> Self {
         Self::EMPTY
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::write_text;
+
+    #[test]
+    fn a_device_model_is_named_by_its_id_or_else_its_code() {
+        let mut device = DeviceInfo::EMPTY;
+        device.model = 99;
+        write_text(&mut device.model_id, "widget");
+        assert_eq!(
+            (device.model_id(), device.model_name().as_str()),
+            ("widget", "widget")
+        );
+        assert!(device.model().is_err(), "99 is no built-in board");
+        device.model_id = [0; MODEL_ID_LEN];
+        assert_eq!(device.model_name(), "model 99");
+        // Untrusted bytes: a control character, a space, text that is not UTF-8, a full
+        // field with no terminating zero.
+        for garbage in [
+            &b"wid\x1bget"[..],
+            b"two words",
+            b"\xff\xfe",
+            b"0123456789abcdef",
+        ] {
+            device.model_id = [0; MODEL_ID_LEN];
+            device.model_id[..garbage.len()].copy_from_slice(garbage);
+            let name = device.model_name();
+            let full = garbage.len() == MODEL_ID_LEN;
+            assert_eq!(name == "model 99", !full, "{garbage:?} gave {name}");
+        }
+        device.model = DeviceModel::TMCPACK.code();
+        write_text(&mut device.model_id, DeviceModel::TMCPACK.id());
+        assert_eq!(device.model(), Ok(DeviceModel::TMCPACK));
+        assert_eq!(device.model_name(), "tmcpack");
     }
 }

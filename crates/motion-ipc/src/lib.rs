@@ -59,7 +59,7 @@ pub use stats::{LatencySummary, LinkIo, LinkStats, ServerStats};
 
 /// Version of this contract. Bumped on every layout or meaning change; every payload
 /// carries it so that a client built against another version can refuse politely.
-pub const SCHEMA_VERSION: u32 = 5;
+pub const SCHEMA_VERSION: u32 = 6;
 
 /// Capacity of the axis arrays in [`MotionFrame`] and [`ServerInfo`].
 pub const MAX_AXES: usize = 128;
@@ -73,3 +73,5 @@ pub const MAX_SIGNALS: usize = 64;
 pub const NAME_LEN: usize = 32;
 /// Bytes of a unit field ("mm", "deg"): UTF-8, zero padded.
 pub const UNIT_LEN: usize = 16;
+/// Bytes of a model id field ([`DeviceInfo::model_id`]): UTF-8, zero padded.
+pub const MODEL_ID_LEN: usize = 16;

@@ -43,17 +43,18 @@ pin!(AxisInfo, size 160, align 8, {
     following_error @ 128, overspeed_factor @ 136, home_max_travel @ 144, estop @ 152,
     reserved @ 156,
 });
-pin!(DeviceInfo, size 112, align 4, {
+pin!(DeviceInfo, size 128, align 4, {
     name @ 0, link @ 32, firmware @ 64, model @ 96, address @ 100, axis_count @ 104, state @ 108,
+    model_id @ 112,
 });
 pin!(SignalInfo, size 128, align 8, {
     name @ 0, unit @ 32, device @ 48, scale @ 80, offset @ 88, full_scale @ 96, kind @ 104,
     flags @ 105, device_index @ 106, pin @ 108, reserved @ 124,
 });
-pin!(ServerInfo, size 32328, align 8, {
+pin!(ServerInfo, size 32840, align 8, {
     schema_version @ 0, axis_count @ 4, device_count @ 8, tick_hz @ 12,
     command_timeout_ms @ 16, max_clients @ 20, server_pid @ 24, signal_count @ 28, name @ 32,
-    start_time_ns @ 64, axes @ 72, devices @ 20552, signals @ 24136,
+    start_time_ns @ 64, axes @ 72, devices @ 20552, signals @ 24648,
 });
 pin!(MachineParam, size 88, align 4, {
     key @ 0, value @ 40, owner_index @ 80, owner_kind @ 82, from_config @ 83, reserved @ 84,
@@ -86,8 +87,11 @@ fn layout_is_pinned() {
         (MAX_AXES, MAX_DEVICES, MAX_LINKS, MAX_SIGNALS, MAX_PARAMS),
         (128, 32, 16, 64, 2048)
     );
-    assert_eq!((NAME_LEN, UNIT_LEN, PARAM_TEXT_LEN), (32, 16, 40));
-    assert_eq!(SCHEMA_VERSION, 5);
+    assert_eq!(
+        (NAME_LEN, UNIT_LEN, MODEL_ID_LEN, PARAM_TEXT_LEN),
+        (32, 16, 16, 40)
+    );
+    assert_eq!(SCHEMA_VERSION, 6);
 }
 
 #[test]

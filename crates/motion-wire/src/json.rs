@@ -112,7 +112,8 @@ pub fn signal_state(index: usize, info: &SignalInfo, state: &SignalState, tick: 
     })
 }
 
-/// Every device of `info` with its state in `frame`.
+/// Every device of `info`: its name, its model's name (`DeviceInfo::model_name`), its state in
+/// `frame` and its firmware.
 pub fn devices(info: &ServerInfo, frame: &MotionFrame) -> Vec<Value> {
     info.devices()
         .iter()
@@ -120,6 +121,7 @@ pub fn devices(info: &ServerInfo, frame: &MotionFrame) -> Vec<Value> {
         .map(|(index, device)| {
             json!({
                 "name": device.name(),
+                "model": device.model_name(),
                 "state": frame.device_state(index).name(),
                 "firmware": device.firmware(),
             })
@@ -196,6 +198,8 @@ mod tests {
         info.axes[0] = axis;
         let mut device = DeviceInfo::EMPTY;
         write_text(&mut device.name, "pack");
+        write_text(&mut device.model_id, "widget");
+        device.model = 99;
         info.devices[0] = device;
         let mut signal = SignalInfo::EMPTY;
         write_text(&mut signal.name, "door");
@@ -232,6 +236,10 @@ mod tests {
         assert_eq!(value["server"], "demo");
         assert_eq!(value["estop"], true);
         assert_eq!(value["devices"][0]["state"], "online");
+        assert_eq!(
+            value["devices"][0]["model"], "widget",
+            "a board no client knows"
+        );
         let x = &value["axes"][0];
         assert_eq!(x["name"], "x");
         assert_eq!(x["position"], 2.5);
@@ -259,6 +267,8 @@ mod tests {
         let (mut info, mut frame) = one_axis_one_signal();
         frame.axes[0].fault = 999;
         info.signals[0].kind = 250;
+        info.devices[0].model_id = [0; motion_ipc::MODEL_ID_LEN];
+        assert_eq!(devices(&info, &frame)[0]["model"], "model 99");
         let x = axis_state(&info.axes[0], &frame.axes[0], frame.tick, "motionctl");
         assert_eq!(x["fault"], "fault 999");
         assert_eq!(

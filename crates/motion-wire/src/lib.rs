@@ -3,8 +3,8 @@
 //!
 //! - [`keys`]: the zenoh key expressions of an instance (built on `motion-ipc`'s service
 //!   names), the attachments beside the payloads, the bridge's refusals.
-//! - [`wire`]: the `motion-ipc` payloads as bytes (C layout, little-endian); the fields of
-//!   every payload are tabled once, in `wire/field_table.rs`.
+//! - [`wire`]: the `motion-ipc` payloads as bytes (C layout, little-endian), walked through
+//!   `motion-ipc`'s schema: no field list here.
 //! - [`json`] (feature `json`): the JSON state published for tools, and the axis, signal
 //!   and device views `motionctl status --json` shares with it.
 //!

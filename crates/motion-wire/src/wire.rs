@@ -4,12 +4,12 @@
 //! with the same struct it maps out of shared memory (on a little-endian machine), or field
 //! by field from the offsets tabled in `motion-ipc`'s docs.
 //!
-//! Encoding and decoding are plain safe code, field by field, at the offsets the compiler
-//! gives (`offset_of!`): no transmutes, and a payload whose layout changes fails to compile
-//! here (see the size pins in `wire/field_table.rs`) rather than travelling wrong.
-//!
-//! The fields of every payload are listed once, in `wire/field_table.rs`; this file is the
-//! machinery that walks them.
+//! Encoding and decoding are plain safe code, number by number, at the offsets the compiler
+//! gives: the codec walks each payload through the schema of `motion-ipc`
+//! ([`Fields`](motion_ipc::schema::Fields), implemented by the `payload!` declaration of
+//! the type), so it has no field list of its own and a field added to a payload travels
+//! without a change here. No transmutes; the sizes below are pinned, so that a change of
+//! what crosses the network is made knowingly (a peer of another size is refused).
 //!
 //! ```
 //! use motion_wire::wire;
@@ -24,6 +24,11 @@
 //! ```
 
 use core::mem::size_of;
+
+use motion_ipc::schema::{Fields, ScalarSink, ScalarSource, Schema};
+use motion_ipc::{
+    CommandReply, CommandRequest, MachineParams, MotionFrame, ServerInfo, ServerStats,
+};
 
 /// Why bytes could not be decoded into a payload.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
@@ -44,7 +49,8 @@ pub enum WireError {
     },
 }
 
-/// Writes into a zeroed buffer; out-of-range writes are dropped and remembered.
+/// Writes little-endian numbers into a zeroed buffer; out-of-range writes are dropped and
+/// remembered.
 struct Writer<'a> {
     buf: &'a mut [u8],
     overflow: bool,
@@ -59,14 +65,15 @@ impl Writer<'_> {
     }
 }
 
-/// Reads from a buffer; out-of-range reads give zeros and are remembered.
+/// Reads little-endian numbers from a buffer; out-of-range reads give zeros and are
+/// remembered.
 struct Reader<'a> {
     buf: &'a [u8],
-    short: core::cell::Cell<bool>,
+    short: bool,
 }
 
 impl Reader<'_> {
-    fn array<const N: usize>(&self, at: usize) -> [u8; N] {
+    fn array<const N: usize>(&mut self, at: usize) -> [u8; N] {
         match self
             .buf
             .get(at..at + N)
@@ -74,100 +81,61 @@ impl Reader<'_> {
         {
             Some(bytes) => bytes,
             None => {
-                self.short.set(true);
+                self.short = true;
                 [0; N]
             }
         }
     }
 }
 
-/// A value at a fixed offset of a payload.
-trait Field: Sized {
-    fn put(&self, w: &mut Writer<'_>, at: usize);
-    fn get(r: &Reader<'_>, at: usize) -> Self;
-}
-
-macro_rules! number {
-    ($($ty:ty),*) => {$(
-        impl Field for $ty {
-            fn put(&self, w: &mut Writer<'_>, at: usize) {
-                w.bytes(at, &self.to_le_bytes());
-            }
-            fn get(r: &Reader<'_>, at: usize) -> Self {
-                <$ty>::from_le_bytes(r.array(at))
-            }
+/// The six number types as little-endian bytes, both ways.
+macro_rules! little_endian {
+    ($($ty:ident),*) => {
+        impl ScalarSink for Writer<'_> {
+            $(fn $ty(&mut self, at: usize, value: $ty) {
+                self.bytes(at, &value.to_le_bytes());
+            })*
         }
-    )*};
-}
-
-number!(u8, u16, u32, u64, i64, f64);
-
-/// Byte arrays (text fields, reserved bytes) travel as they are.
-impl<const N: usize> Field for [u8; N] {
-    fn put(&self, w: &mut Writer<'_>, at: usize) {
-        w.bytes(at, self);
-    }
-    fn get(r: &Reader<'_>, at: usize) -> Self {
-        r.array(at)
-    }
-}
-
-/// Arrays of structs and numbers: element `i` at `at + i · size_of::<T>()`.
-macro_rules! array_of {
-    ($($ty:ty),*) => {$(
-        impl<const N: usize> Field for [$ty; N] {
-            fn put(&self, w: &mut Writer<'_>, at: usize) {
-                for (index, item) in self.iter().enumerate() {
-                    item.put(w, at + index * size_of::<$ty>());
-                }
-            }
-            fn get(r: &Reader<'_>, at: usize) -> Self {
-                core::array::from_fn(|index| <$ty>::get(r, at + index * size_of::<$ty>()))
-            }
-        }
-    )*};
-}
-
-/// A `#[repr(C)]` struct: each listed field at its `offset_of!`. Decoding builds the struct
-/// with every field named, so a field added to the type and not listed here does not
-/// compile.
-macro_rules! record {
-    ($ty:ident { $($field:ident),* $(,)? }) => {
-        impl Field for $ty {
-            fn put(&self, w: &mut Writer<'_>, at: usize) {
-                $(self.$field.put(w, at + offset_of!($ty, $field));)*
-            }
-            fn get(r: &Reader<'_>, at: usize) -> Self {
-                Self { $($field: Field::get(r, at + offset_of!($ty, $field)),)* }
-            }
+        impl ScalarSource for Reader<'_> {
+            $(fn $ty(&mut self, at: usize) -> $ty {
+                $ty::from_le_bytes(self.array(at))
+            })*
         }
     };
 }
+
+little_endian!(u8, u16, u32, u64, i64, f64);
 
 mod sealed {
     pub trait Sealed {}
 }
 
 /// A payload that travels over the network: one of `motion-ipc`'s service payloads.
-#[allow(private_bounds)]
-pub trait Payload: sealed::Sealed + Field {
-    /// Its name in messages.
-    const NAME: &'static str;
+pub trait Payload: sealed::Sealed + Schema + Fields {
+    /// Its name in messages (the Rust type name).
+    const NAME: &'static str = Self::SCHEMA.name;
     /// Bytes on the wire: `size_of::<Self>()`.
     const SIZE: usize = size_of::<Self>();
 }
 
-macro_rules! payload {
-    ($($ty:ident),*) => {$(
+/// The payloads that cross the network, each with its size on the wire (`motion-ipc`'s
+/// `tests/layout.rs` pins every offset).
+macro_rules! payloads {
+    ($($ty:ident = $size:literal),* $(,)?) => {$(
+        const _: () = assert!(size_of::<$ty>() == $size);
         impl sealed::Sealed for $ty {}
-        impl Payload for $ty {
-            const NAME: &'static str = stringify!($ty);
-        }
+        impl Payload for $ty {}
     )*};
 }
 
-// After the macros: the table invokes them.
-mod field_table;
+payloads!(
+    MotionFrame = 16464,
+    ServerInfo = 32840,
+    ServerStats = 1992,
+    MachineParams = 180_240,
+    CommandRequest = 64,
+    CommandReply = 32,
+);
 
 /// `value` in its C layout, little-endian: `T::SIZE` bytes, padding zero.
 pub fn encode<T: Payload>(value: &T) -> Vec<u8> {
@@ -191,12 +159,12 @@ pub fn decode<T: Payload>(bytes: &[u8]) -> Result<T, WireError> {
     if bytes.len() != T::SIZE {
         return Err(size_error);
     }
-    let reader = Reader {
+    let mut reader = Reader {
         buf: bytes,
-        short: core::cell::Cell::new(false),
+        short: false,
     };
-    let value = T::get(&reader, 0);
-    if reader.short.get() {
+    let value = T::get(&mut reader, 0);
+    if reader.short {
         return Err(size_error);
     }
     Ok(value)

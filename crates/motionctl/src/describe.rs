@@ -3,8 +3,8 @@
 //! with the bridge's JSON state (`motion_wire::json`).
 
 use motion_client::ipc::{
-    AxisFlags, AxisInfo, AxisState, CommandKind, DeviceModel, DeviceState, FrameFlags, MotionFrame,
-    ServerInfo, ServerStats, read_text,
+    AxisFlags, AxisInfo, AxisState, CommandKind, DeviceState, FrameFlags, MotionFrame, ServerInfo,
+    ServerStats, read_text,
 };
 use motion_client::{Client, Params};
 use motion_wire::json;
@@ -90,7 +90,7 @@ pub fn info_json(info: &ServerInfo, params: &ParamTable) -> Value {
                 "index": index,
                 "name": device.name(),
                 "link": read_text(&device.link),
-                "model": device.model().map_or("unknown", DeviceModel::id),
+                "model": device.model_name(),
                 "address": device.address,
                 "firmware": device.firmware(),
                 "axis_count": device.axis_count,
@@ -286,7 +286,7 @@ pub fn list(client: &Client<Service>, json: bool) -> anyhow::Result<()> {
         out!(
             "{:<14} {:<10} {:<10} {:<9} {}",
             device.name(),
-            device.model().map_or("unknown", DeviceModel::id),
+            device.model_name(),
             read_text(&device.link),
             device.state().name(),
             device.firmware()

@@ -10,8 +10,9 @@ use std::process::Stdio;
 use std::time::Instant;
 
 use common::*;
-use motion_client::ipc::{CommandKind, Reason};
-use motion_client::testing::unique_name;
+use motion_base::{LinkKind, ModelFacts};
+use motion_client::ipc::{CommandKind, DeviceModel, Reason};
+use motion_client::testing::{FakeDevice, unique_name};
 use nix::sys::signal::{Signal, kill};
 use nix::unistd::Pid;
 use serde_json::Value;
@@ -64,6 +65,34 @@ fn list_json_shows_every_axis() -> Result {
     assert_eq!(list["tick_hz"], 500);
     let text = run(server.name(), &["list"])?;
     assert!(stdout(&text).contains("max vel"), "{text:?}");
+    Ok(())
+}
+
+/// A board outside `DeviceModel::BUILT_IN` (no client was built with it).
+static WIDGET: ModelFacts = ModelFacts {
+    id: "widget",
+    code: 99,
+    link_kind: LinkKind::Stream,
+    title: "Widget",
+};
+
+#[test]
+fn a_board_no_client_knows_is_named_by_its_model_id() -> Result {
+    let server = fake_with("widget", |config| {
+        let widget = FakeDevice::new("gizmo", DeviceModel::new(&WIDGET), "widget 0.1");
+        config.devices.push(widget);
+    })?;
+    let list = json_of(&run(server.name(), &["list", "--json"])?)?;
+    for (index, model) in ["tmcpack", "qsb", "widget"].into_iter().enumerate() {
+        assert_eq!(list["devices"][index]["model"], model, "{list}");
+    }
+    assert_eq!(list["devices"][3], Value::Null, "three devices");
+    let text = stdout(&run(server.name(), &["list"])?);
+    let gizmo = text.lines().find(|line| line.starts_with("gizmo"));
+    assert!(gizmo.is_some_and(|line| line.contains("widget")), "{text}");
+    let status = json_of(&run(server.name(), &["status", "--json"])?)?;
+    assert_eq!(status["devices"][2]["model"], "widget", "{status}");
+    assert_eq!(status["devices"][0]["model"], "tmcpack", "{status}");
     Ok(())
 }
 

@@ -103,3 +103,20 @@ pub fn sim_link(config: &ServerConfig, link: usize) -> SimLink {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use motion_ipc::{DeviceInfo, write_text};
+
+    /// The engine writes each model's id into `DeviceInfo::model_id`, where clients read
+    /// the model's name: every registered id fits whole and reads back as itself.
+    #[test]
+    fn every_model_id_travels_whole_in_the_device_info() {
+        for board in motion_boards::BOARDS {
+            let id = board.model().id();
+            let mut device = DeviceInfo::EMPTY;
+            assert!(write_text(&mut device.model_id, id), "{id} is cut");
+            assert_eq!(device.model_name(), id);
+        }
+    }
+}

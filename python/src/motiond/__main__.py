@@ -19,7 +19,6 @@ from .ipc import (
     AxisFlags,
     AxisMode,
     CommandKind,
-    DeviceModel,
     DeviceState,
     FaultCode,
     FrameFlags,
@@ -77,7 +76,7 @@ def list_server(client: Client, out: TextIO) -> None:
         rows.append(
             [
                 d.text("name"),
-                _name(to_enum(DeviceModel, d.model)),
+                d.model_name(),
                 d.text("link"),
                 f"{d.address:#x}" if d.address else "-",
                 str(d.axis_count),

@@ -14,6 +14,7 @@ from typing import Dict, Type
 from ._mirror_base import (
     AxisInfoMethods,
     ClientIdMethods,
+    DeviceInfoMethods,
     Payload,
     ReasonMethods,
     TextedEnum,
@@ -22,7 +23,7 @@ from ._mirror_base import (
 # --- constants ---------------------------------------------------------------------------
 
 #: Version of the contract; every payload carries it.
-SCHEMA_VERSION = 5
+SCHEMA_VERSION = 6
 #: Capacity of the axis arrays of the frame and the server info.
 MAX_AXES = 128
 #: Capacity of the device arrays of the frame and the server info.
@@ -37,6 +38,8 @@ MAX_PARAMS = 2048
 NAME_LEN = 32
 #: Bytes of a unit or pin field (UTF-8, zero padded).
 UNIT_LEN = 16
+#: Bytes of a model id field (UTF-8, zero padded).
+MODEL_ID_LEN = 16
 #: Bytes of a parameter key or value text.
 PARAM_TEXT_LEN = 40
 #: ``CommandRequest.axis`` addressing every axis (stop, e-stop, reset, off).
@@ -236,10 +239,10 @@ class AxisInfo(AxisInfoMethods, Payload):
     ]
 
 
-class DeviceInfo(Payload):
+class DeviceInfo(DeviceInfoMethods, Payload):
     """One device's description.
 
-    112 bytes, alignment 4."""
+    128 bytes, alignment 4."""
 
     _type_name_ = "motiond::DeviceInfo"
     _fields_ = [
@@ -252,6 +255,9 @@ class DeviceInfo(Payload):
         ("axis_count", ctypes.c_uint32),  # Axes configured on the device.
         # ``DeviceState`` value when the info was published (the frame has the current one).
         ("state", ctypes.c_uint32),
+        # The model's config id (``tmcpack``, ``example``), UTF-8, zero padded: names the model of
+        # any board, built in or not.
+        ("model_id", ctypes.c_uint8 * MODEL_ID_LEN),
     ]
 
 
@@ -280,7 +286,7 @@ class SignalInfo(Payload):
 class ServerInfo(Payload):
     """The server's static description, published with history 1 on ``motiond/<name>/info``.
 
-    32328 bytes, alignment 8."""
+    32840 bytes, alignment 8."""
 
     _type_name_ = "motiond::ServerInfo"
     _fields_ = [
@@ -592,7 +598,8 @@ class EstopCategory(TextedEnum):
 
 
 class DeviceModel(TextedEnum):
-    """The board model of a device (``DeviceInfo.model``); the text is its config id."""
+    """The built-in board models (``DeviceInfo.model``); the text is its config id. Any board's id
+    travels in ``DeviceInfo.model_id``."""
 
     QQ2DRV = 1, "qq2drv"
     TMCPACK = 2, "tmcpack"

@@ -3,8 +3,8 @@
 ``_layout.py`` is generated from the Rust description of the contract; the classes here are
 written by hand: the :class:`Payload` base of every ctypes mirror, the :class:`TextedEnum`
 base of every enumeration, :func:`read_text`, and the few methods some mirrors carry
-(``ClientIdMethods``, ``AxisInfoMethods``, ``ReasonMethods``: the generator names them in
-``crates/motion-ipc/src/schema/python.rs``).
+(``ClientIdMethods``, ``AxisInfoMethods``, ``DeviceInfoMethods``, ``ReasonMethods``: the
+generator names them in ``crates/motion-ipc/src/schema/python.rs``).
 """
 
 from __future__ import annotations
@@ -108,6 +108,22 @@ class AxisInfoMethods:
     def supports(self, kind: int) -> bool:
         """Whether the axis accepts commands of ``kind`` (a ``CommandKind``)."""
         return bool(self.capabilities & (1 << int(kind)))
+
+
+class DeviceInfoMethods:
+    """``DeviceInfo``: the model's name."""
+
+    model: int
+    model_id: "ctypes.Array[ctypes.c_uint8]"
+
+    def model_name(self) -> str:
+        """The model's config id as the server wrote it (any board, built in or not), or
+        ``model <code>`` when the id is empty or not printable ASCII (as the Rust
+        ``DeviceInfo::model_name``)."""
+        model_id = read_text(self.model_id)
+        if model_id and all(0x21 <= ord(char) <= 0x7E for char in model_id):
+            return model_id
+        return f"model {self.model}"
 
 
 class ReasonMethods:

@@ -136,6 +136,7 @@ impl Model {
                 write_text(&mut out.firmware, &device.firmware);
             }
             out.model = device.model.code();
+            write_text(&mut out.model_id, device.model.id());
             out.address = u32::try_from(index + 1).unwrap_or(0);
             out.axis_count = self.axes.iter().filter(|(a, _)| a.device == index).count() as u32;
             out.state = u32::from(state as u8);

@@ -6,8 +6,8 @@ use crate::{
     AxisFlags, AxisInfo, AxisMode, AxisState, AxisWire, ClientId, CommandKind, CommandReply,
     CommandRequest, DeviceInfo, DeviceModel, DeviceState, EstopCategory, FaultCode, FrameFlags,
     LatencySummary, LinkIo, LinkStats, MAX_AXES, MAX_DEVICES, MAX_LINKS, MAX_PARAMS, MAX_SIGNALS,
-    MachineParam, MachineParams, MotionFrame, NAME_LEN, PARAM_TEXT_LEN, ParamOwner, Reason,
-    SCHEMA_VERSION, ServerInfo, ServerStats, ServiceNames, SignalFlags, SignalInfo,
+    MODEL_ID_LEN, MachineParam, MachineParams, MotionFrame, NAME_LEN, PARAM_TEXT_LEN, ParamOwner,
+    Reason, SCHEMA_VERSION, ServerInfo, ServerStats, ServiceNames, SignalFlags, SignalInfo,
     SignalInfoFlags, SignalKind, SignalState, Target, UNIT_LEN,
 };
 
@@ -94,6 +94,11 @@ fn constants() -> Vec<Constant> {
             "UNIT_LEN",
             UNIT_LEN,
             "Bytes of a unit or pin field (UTF-8, zero padded).",
+        ),
+        constant(
+            "MODEL_ID_LEN",
+            MODEL_ID_LEN,
+            "Bytes of a model id field (UTF-8, zero padded).",
         ),
         constant(
             "PARAM_TEXT_LEN",
@@ -296,7 +301,8 @@ fn enums() -> Vec<Enum> {
         scan_named(
             "DeviceModel",
             Scalar::U32,
-            "The board model of a device (`DeviceInfo.model`); the text is its config id.",
+            "The built-in board models (`DeviceInfo.model`); the text is its config id. \
+             Any board's id travels in `DeviceInfo.model_id`.",
             |value| raw::<u32>(value).and_then(|v| DeviceModel::try_from(v).ok()),
             |model| capitalized(model.id()),
             |model| Some(model.id()),

@@ -16,6 +16,7 @@ const WIDTH: usize = 100;
 const METHODS: &[(&str, &str)] = &[
     ("ClientId", "ClientIdMethods"),
     ("AxisInfo", "AxisInfoMethods"),
+    ("DeviceInfo", "DeviceInfoMethods"),
     ("Reason", "ReasonMethods"),
 ];
 
@@ -36,6 +37,7 @@ from typing import Dict, Type
 from ._mirror_base import (
     AxisInfoMethods,
     ClientIdMethods,
+    DeviceInfoMethods,
     Payload,
     ReasonMethods,
     TextedEnum,

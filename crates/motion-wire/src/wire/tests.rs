@@ -143,11 +143,19 @@ fn big_payloads_round_trip() {
     axis.max = 100.0;
     axis.estop = 2;
     info.axes[0] = axis;
+    info.device_count = 1;
+    info.devices[0].model = 99;
+    write_text(&mut info.devices[0].name, "pack");
+    write_text(&mut info.devices[0].model_id, "widget");
     let bytes = encode(&info);
     assert_eq!(bytes.len(), ServerInfo::SIZE);
     assert_eq!(le_u32(&bytes, 12), 1000);
     assert_eq!(&bytes[32..36], b"demo");
     assert_eq!(&bytes[72..73], b"x"); // axes @ 72, name @ 0
+    // devices @ 20552: name @ 0, model @ 96, model_id @ 112.
+    assert_eq!(&bytes[20552..20556], b"pack");
+    assert_eq!(le_u32(&bytes, 20552 + 96), 99);
+    assert_eq!(&bytes[20552 + 112..20552 + 118], b"widget");
     assert_eq!(*decode_boxed::<ServerInfo>(&bytes).expect("decodes"), info);
 
     let mut params = MachineParams::EMPTY;
