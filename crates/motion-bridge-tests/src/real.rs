@@ -35,8 +35,9 @@ pub struct Binaries {
 }
 
 /// A binary of the workspace: `$env` if set, else in the directory cargo builds the
-/// workspace's binaries into (the parent of this test's `deps/`; `cargo test --workspace`
-/// builds every member's binaries).
+/// workspace's binaries into (the parent of this test's `deps/`). `cargo test --workspace`
+/// builds a member's binaries there because the member has integration tests of its own
+/// (motion-bridge's `tests/binary.rs` is there for that too).
 pub fn binary(name: &str, env: &str) -> Option<PathBuf> {
     if let Some(path) = std::env::var_os(env) {
         return Some(path.into());
