@@ -127,6 +127,32 @@ pub struct AxisKeys {
     pub home: HomeHints,
 }
 
+impl DeviceKeys {
+    /// A board's validated device keys `keys`, and what they say about its axes' searches.
+    pub fn new<T: core::any::Any + fmt::Debug + PartialEq + Send + Sync>(
+        keys: T,
+        home: HomeHints,
+    ) -> Self {
+        Self {
+            machine: MachineKeys::new(keys),
+            home,
+        }
+    }
+}
+
+impl AxisKeys {
+    /// A board's validated axis keys `keys`, and what they say about the axis's search.
+    pub fn new<T: core::any::Any + fmt::Debug + PartialEq + Send + Sync>(
+        keys: T,
+        home: HomeHints,
+    ) -> Self {
+        Self {
+            machine: MachineKeys::new(keys),
+            home,
+        }
+    }
+}
+
 /// A model's `address` key: the default, and the check of a value written.
 #[derive(Debug, Clone, Copy)]
 pub struct AddressKey {

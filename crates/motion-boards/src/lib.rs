@@ -85,17 +85,6 @@ pub fn ids(keep: impl Fn(&dyn Board) -> bool, word: &str) -> String {
     }
 }
 
-/// The driver of the device `spec` describes, as the enum the server's tick holds.
-///
-/// # Errors
-/// A value of the spec the board refuses.
-///
-/// # Panics
-/// As [`board`], for a model outside the registry.
-pub fn build(spec: &DriverSpec) -> Result<AnyDriver, SpecError> {
-    AnyDriver::build(spec)
-}
-
 #[cfg(test)]
 mod tests {
     use super::{BOARDS, Board, board, by_code, by_id, id_list, ids};

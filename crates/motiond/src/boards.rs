@@ -40,8 +40,8 @@ pub fn build(config: &ServerConfig) -> Result<Vec<AnyDriver>, BuildError> {
     let mut built = Vec::with_capacity(config.devices.len());
     for (index, device) in config.devices.iter().enumerate() {
         let spec = drivers::driver_spec(config, index, device);
-        let driver = motion_boards::build(&spec)
-            .map_err(|error| drivers::spec_error(config, index, &error))?;
+        let driver =
+            AnyDriver::build(&spec).map_err(|error| drivers::spec_error(config, index, &error))?;
         built.push(driver);
     }
     Ok(built)

@@ -15,7 +15,7 @@
 
 use motion_board::keys::{AxisContext, Int, KeyIssues, KeyTable, Spanned};
 use motion_board::machine::MachineView;
-use motion_board::{Given, HomeHints};
+use motion_board::{AxisKeys, Given, HomeHints};
 use motion_drivers::Model;
 use motion_drivers::spec::{Direction, HomeInput, HomeInputKind};
 use serde::Deserialize;
@@ -74,7 +74,7 @@ pub(crate) fn axis_keys(
     v: &mut dyn KeyIssues,
     ctx: &AxisContext<'_>,
     keys: &KeyTable<'_>,
-) -> Option<(Qq2drvAxisKeys, HomeHints)> {
+) -> Option<AxisKeys> {
     let raw: RawAxis = keys.parse(v)?;
     let mut ok = true;
     let home = match &raw.home {
@@ -124,7 +124,7 @@ pub(crate) fn axis_keys(
             }
         }
     };
-    ok.then_some((
+    ok.then_some(AxisKeys::new(
         Qq2drvAxisKeys {
             pid_position,
             pid_velocity,

@@ -18,7 +18,7 @@ use motion_board::{
     AxisKeys, Board, LinkFacts, SimBoard, StandaloneError, StandaloneHelp, StandaloneSim,
     TypedBoard,
 };
-use motion_drivers::spec::{AxisMachine, DeviceMachine, DriverSpec, MachineKeys, Param, SpecError};
+use motion_drivers::spec::{DeviceMachine, DriverSpec, MachineKeys, Param, SpecError};
 use motion_drivers::{Driver, Model, PinInfo};
 
 use driver::{PINS, Qq2drvDriver, Qq2drvDriverConfig};
@@ -69,10 +69,7 @@ impl Board for Qq2drvBoard {
         ctx: &AxisContext<'_>,
         issues: &mut dyn KeyIssues,
     ) -> Option<AxisKeys> {
-        keys::axis_keys(issues, ctx, keys).map(|(keys, home)| AxisKeys {
-            machine: AxisMachine::new(keys),
-            home,
-        })
+        keys::axis_keys(issues, ctx, keys)
     }
 
     fn cross_check(&self, machine: &MachineView<'_>, issues: &mut dyn KeyIssues) {

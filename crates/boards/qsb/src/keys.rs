@@ -10,7 +10,7 @@ use core::time::Duration;
 
 use motion_board::keys::{DeviceContext, Int, KeyIssues, KeyTable, Spanned};
 use motion_board::machine::MachineView;
-use motion_board::{Given, HomeHints};
+use motion_board::{DeviceKeys, Given, HomeHints};
 use motion_drivers::spec::Direction;
 
 use crate::driver::{
@@ -146,7 +146,7 @@ pub(crate) fn device_keys(
     v: &mut dyn KeyIssues,
     ctx: &DeviceContext,
     keys: &KeyTable<'_>,
-) -> Option<(QsbDeviceKeys, HomeHints)> {
+) -> Option<DeviceKeys> {
     let raw: RawDevice = keys.parse(v)?;
     let home = home_hints(v, ctx, &raw);
     let product = variant(v, ctx, &raw)?;
@@ -241,7 +241,7 @@ pub(crate) fn device_keys(
     }
     // Keys in error stay unset here; the issues already refuse the file, and the other
     // tables are still checked against the rest (every issue at once).
-    Some((keys, home?))
+    Some(DeviceKeys::new(keys, home?))
 }
 
 /// `stream_interval_ms`: whole ticks of 1/512 s, 1..=0xFFFE.

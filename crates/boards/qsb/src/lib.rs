@@ -72,10 +72,7 @@ impl Board for QsbBoard {
         ctx: &DeviceContext,
         issues: &mut dyn KeyIssues,
     ) -> Option<DeviceKeys> {
-        keys::device_keys(issues, ctx, keys).map(|(keys, home)| DeviceKeys {
-            machine: DeviceMachine::new(keys),
-            home,
-        })
+        keys::device_keys(issues, ctx, keys)
     }
 
     fn cross_check(&self, machine: &MachineView<'_>, issues: &mut dyn KeyIssues) {

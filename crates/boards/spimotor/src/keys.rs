@@ -16,6 +16,7 @@
 //! brushed section's intensity is each spin command's byte), so they are an error there.
 
 use motion_board::keys::{DeviceContext, Int, KeyIssues, KeyTable, Spanned};
+use motion_board::{DeviceKeys, HomeHints};
 use serde::Deserialize;
 
 use crate::{SpiDrive, SpimotorDeviceKeys};
@@ -49,7 +50,7 @@ pub(crate) fn device_keys(
     v: &mut dyn KeyIssues,
     ctx: &DeviceContext,
     keys: &KeyTable<'_>,
-) -> Option<SpimotorDeviceKeys> {
+) -> Option<DeviceKeys> {
     let raw: RawDevice = keys.parse(v)?;
     let mut ok = true;
     let brushed = match &raw.drive {
@@ -108,15 +109,18 @@ pub(crate) fn device_keys(
             }
         },
     };
-    ok.then_some(SpimotorDeviceKeys {
-        drive: if brushed {
-            SpiDrive::Brushed
-        } else {
-            SpiDrive::Stepper
+    ok.then_some(DeviceKeys::new(
+        SpimotorDeviceKeys {
+            drive: if brushed {
+                SpiDrive::Brushed
+            } else {
+                SpiDrive::Stepper
+            },
+            intensity,
+            coils,
         },
-        intensity,
-        coils,
-    })
+        HomeHints::default(),
+    ))
 }
 
 /// `value` of a stepper-only key: an issue (and `None`) on a brushed board.

@@ -82,10 +82,7 @@ impl Board for SpimotorBoard {
         ctx: &DeviceContext,
         issues: &mut dyn KeyIssues,
     ) -> Option<DeviceKeys> {
-        keys::device_keys(issues, ctx, keys).map(|keys| DeviceKeys {
-            machine: DeviceMachine::new(keys),
-            ..DeviceKeys::default()
-        })
+        keys::device_keys(issues, ctx, keys)
     }
 
     fn simulate(&self, spec: &DriverSpec, seed: u64) -> SimBoard {

@@ -5,7 +5,7 @@
 
 use motion_board::keys::{AxisContext, DeviceContext, Int, KeyIssues, KeyTable, Spanned};
 use motion_board::machine::MachineView;
-use motion_board::{Given, HomeHints};
+use motion_board::{AxisKeys, DeviceKeys, Given, HomeHints};
 use motion_drivers::spec::Direction;
 
 use motion_drivers::{Model, SignalKind};
@@ -201,7 +201,7 @@ pub(crate) fn device_keys(
     v: &mut dyn KeyIssues,
     ctx: &DeviceContext,
     keys: &KeyTable<'_>,
-) -> Option<TmcpackDeviceKeys> {
+) -> Option<DeviceKeys> {
     let raw: RawDevice = keys.parse(v)?;
     let raw = &raw;
     let mut ok = true;
@@ -286,7 +286,7 @@ pub(crate) fn device_keys(
             _ => ok = false,
         }
     }
-    ok.then_some(keys)
+    ok.then_some(DeviceKeys::new(keys, HomeHints::default()))
 }
 
 /// A current level of $11 from a percentage.
@@ -326,7 +326,7 @@ pub(crate) fn axis_keys(
     v: &mut dyn KeyIssues,
     ctx: &AxisContext<'_>,
     keys: &KeyTable<'_>,
-) -> Option<(TmcpackAxisKeys, HomeHints)> {
+) -> Option<AxisKeys> {
     let raw: RawAxis = keys.parse(v)?;
     let raw = &raw;
     let home = side_hint(v, ctx, raw);
@@ -500,7 +500,7 @@ pub(crate) fn axis_keys(
             );
         }
     }
-    ok.then_some((keys, home?))
+    ok.then_some(AxisKeys::new(keys, home?))
 }
 
 /// $15 poslimit: one revolution of a rotary axis, the travel of a linear one, in

@@ -18,7 +18,7 @@ use motion_board::{
     AddressKey, AxisKeys, Board, DeviceKeys, LinkFacts, SimBoard, StandaloneError, StandaloneHelp,
     StandaloneSim, TypedBoard,
 };
-use motion_drivers::spec::{AxisMachine, DeviceMachine, DriverSpec, MachineKeys, Param, SpecError};
+use motion_drivers::spec::{DeviceMachine, DriverSpec, MachineKeys, Param, SpecError};
 use motion_drivers::{Driver, Model, PinInfo};
 
 use driver::{TmcpackDriver, TmcpackDriverConfig, pins};
@@ -77,10 +77,7 @@ impl Board for TmcpackBoard {
         ctx: &DeviceContext,
         issues: &mut dyn KeyIssues,
     ) -> Option<DeviceKeys> {
-        keys::device_keys(issues, ctx, keys).map(|keys| DeviceKeys {
-            machine: DeviceMachine::new(keys),
-            ..DeviceKeys::default()
-        })
+        keys::device_keys(issues, ctx, keys)
     }
 
     fn axis_keys(
@@ -90,10 +87,7 @@ impl Board for TmcpackBoard {
         ctx: &AxisContext<'_>,
         issues: &mut dyn KeyIssues,
     ) -> Option<AxisKeys> {
-        keys::axis_keys(issues, ctx, keys).map(|(keys, home)| AxisKeys {
-            machine: AxisMachine::new(keys),
-            home,
-        })
+        keys::axis_keys(issues, ctx, keys)
     }
 
     fn cross_check(&self, machine: &MachineView<'_>, issues: &mut dyn KeyIssues) {
