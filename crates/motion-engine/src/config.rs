@@ -7,7 +7,7 @@
 use core::time::Duration;
 
 use motion_drivers::{LinkKind, Pin, SignalKind};
-use motion_ipc::{MAX_AXES, MAX_DEVICES, MAX_LINKS, MAX_SIGNALS};
+use motion_ipc::{MAX_AXES, MAX_DEVICES, MAX_GROUP_AXES, MAX_GROUPS, MAX_LINKS, MAX_SIGNALS};
 
 /// One link as the engine sees it: a named bus of drivers, stream or SPI (the transport
 /// that carries it is `motion_link::LinkConfig`, opened by motiond).
@@ -143,6 +143,70 @@ pub struct SignalConfig {
     pub safe: Option<bool>,
 }
 
+/// What a group does with a streamed setpoint beyond an axis's limits (`stream_limit`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum StreamLimit {
+    /// Clamp it to the limit, count it and flag it in the frame.
+    Clamp,
+    /// Stop the group and end the stream (the default: a safety function never quietly
+    /// changes what was asked).
+    #[default]
+    Abort,
+}
+
+impl StreamLimit {
+    /// The config name (`stream_limit = "clamp"`).
+    pub const fn id(self) -> &'static str {
+        match self {
+            Self::Clamp => "clamp",
+            Self::Abort => "abort",
+        }
+    }
+}
+
+/// One axis group (`[[group]]`): axes of any boards and links that move together.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GroupConfig {
+    /// Group name.
+    pub name: String,
+    /// Indices into [`EngineConfig::axes`], in the group's order (the order of every
+    /// position list a client sends for the group); no axis twice.
+    pub axes: Vec<usize>,
+    /// Per member axis (same order): the largest |desired − measured| while the group
+    /// moves before the group aborts, in the axis's unit; 0 disables the check.
+    pub path_tolerance: Vec<f64>,
+    /// Per member axis: how close to the end of its path the axis must come, in its unit
+    /// (> 0).
+    pub goal_tolerance: Vec<f64>,
+    /// How long after the path's end every axis may take to come within its
+    /// `goal_tolerance` before the group faults (`GoalTolerance`).
+    pub goal_time_tolerance: Duration,
+    /// What a streamed setpoint beyond a limit does.
+    pub stream_limit: StreamLimit,
+    /// Ticks without a new streamed setpoint after which the group stops (the deadman
+    /// rule of streaming); > 0.
+    pub stream_timeout: u32,
+    /// Ticks ahead a streamed setpoint may be addressed and wait; > 0.
+    pub stream_buffer: u32,
+}
+
+impl Default for GroupConfig {
+    /// An empty group with the documented defaults: path check off, goal tolerance 1 unit,
+    /// 1 s goal time, streams abort beyond a limit, time out after 20 ticks and buffer 3.
+    fn default() -> Self {
+        Self {
+            name: String::new(),
+            axes: Vec::new(),
+            path_tolerance: Vec::new(),
+            goal_tolerance: Vec::new(),
+            goal_time_tolerance: Duration::from_secs(1),
+            stream_limit: StreamLimit::Abort,
+            stream_timeout: 20,
+            stream_buffer: 3,
+        }
+    }
+}
+
 /// Everything the engine needs to know.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EngineConfig {
@@ -160,6 +224,8 @@ pub struct EngineConfig {
     pub axes: Vec<AxisConfig>,
     /// Signals in config order; this is the order of signals in every frame.
     pub signals: Vec<SignalConfig>,
+    /// Axis groups in config order; this is the order of groups in every frame.
+    pub groups: Vec<GroupConfig>,
     /// A claim not renewed by a command of its owner within this time ends; zero: claims
     /// last as long as their owner is connected.
     pub claim_lease: Duration,
@@ -176,6 +242,7 @@ impl Default for EngineConfig {
             devices: Vec::new(),
             axes: Vec::new(),
             signals: Vec::new(),
+            groups: Vec::new(),
             claim_lease: Duration::ZERO,
         }
     }
@@ -260,6 +327,14 @@ pub enum EngineConfigError {
         /// The name.
         name: String,
     },
+    /// A group is invalid.
+    #[error("group `{group}`: {what}")]
+    BadGroup {
+        /// Group name.
+        group: String,
+        /// What is wrong.
+        what: &'static str,
+    },
     /// A numeric axis parameter is invalid.
     #[error("axis `{axis}`: {what}")]
     BadAxisValue {
@@ -282,6 +357,7 @@ pub(crate) fn validate(
         ("devices", config.devices.len(), MAX_DEVICES),
         ("axes", config.axes.len(), MAX_AXES),
         ("signals", config.signals.len(), MAX_SIGNALS),
+        ("groups", config.groups.len(), MAX_GROUPS),
     ] {
         if count > max {
             return Err(EngineConfigError::TooMany { what, count, max });
@@ -297,6 +373,10 @@ pub(crate) fn validate(
     check_unique("devices", config.devices.iter().map(|d| d.name.as_str()))?;
     check_unique("axes", config.axes.iter().map(|a| a.name.as_str()))?;
     check_unique("signals", config.signals.iter().map(|s| s.name.as_str()))?;
+    check_unique("groups", config.groups.iter().map(|g| g.name.as_str()))?;
+    for group in &config.groups {
+        validate_group(group, config.axes.len())?;
+    }
     for signal in &config.signals {
         if signal.device >= config.devices.len() {
             return Err(EngineConfigError::UnknownDevice {
@@ -374,6 +454,50 @@ pub(crate) fn validate(
                 channel: axis.channel,
             });
         }
+    }
+    Ok(())
+}
+
+fn validate_group(group: &GroupConfig, axis_count: usize) -> Result<(), EngineConfigError> {
+    let bad = |what| EngineConfigError::BadGroup {
+        group: group.name.clone(),
+        what,
+    };
+    if group.axes.is_empty() {
+        return Err(bad("a group needs at least one axis"));
+    }
+    if group.axes.len() > MAX_GROUP_AXES {
+        return Err(bad("a group holds at most 16 axes"));
+    }
+    if group.axes.iter().any(|axis| *axis >= axis_count) {
+        return Err(bad("an axis index does not exist"));
+    }
+    for (index, axis) in group.axes.iter().enumerate() {
+        if group.axes[..index].contains(axis) {
+            return Err(bad("an axis appears twice"));
+        }
+    }
+    if group.path_tolerance.len() != group.axes.len()
+        || group.goal_tolerance.len() != group.axes.len()
+    {
+        return Err(bad("one path and one goal tolerance per axis"));
+    }
+    if !group
+        .path_tolerance
+        .iter()
+        .all(|value| value.is_finite() && *value >= 0.0)
+    {
+        return Err(bad("path_tolerance must be finite and >= 0"));
+    }
+    if !group
+        .goal_tolerance
+        .iter()
+        .all(|value| value.is_finite() && *value > 0.0)
+    {
+        return Err(bad("goal_tolerance must be finite and > 0"));
+    }
+    if group.stream_timeout == 0 || group.stream_buffer == 0 {
+        return Err(bad("stream_timeout and stream_buffer must be > 0 ticks"));
     }
     Ok(())
 }

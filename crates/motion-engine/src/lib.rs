@@ -63,7 +63,7 @@ use crate::axis::Axis;
 pub use crate::command::{CommandPort, HOME_FRACTION_OF_MAX, MAX_COMMANDS_PER_STEP};
 pub use crate::config::{
     AxisConfig, BusConfig, DeviceConfig, EngineConfig, EngineConfigError, EstopCategory,
-    SignalConfig,
+    GroupConfig, SignalConfig, StreamLimit,
 };
 use crate::device::Device;
 pub use crate::io::IO_STALL_LIMIT;

@@ -75,3 +75,9 @@ pub const NAME_LEN: usize = 32;
 pub const UNIT_LEN: usize = 16;
 /// Bytes of a model id field ([`DeviceInfo::model_id`]): UTF-8, zero padded.
 pub const MODEL_ID_LEN: usize = 16;
+/// Capacity of the group arrays in [`MotionFrame`] and [`ServerInfo`] (`[[group]]`).
+pub const MAX_GROUPS: usize = 16;
+/// Axes one group may hold.
+pub const MAX_GROUP_AXES: usize = 16;
+/// Points one trajectory may hold ([`GroupPath`]).
+pub const MAX_PATH_POINTS: usize = 1024;

@@ -15,7 +15,7 @@ use core::time::Duration;
 use std::path::{Path, PathBuf};
 
 use motion_drivers::{LinkKind, Model, Pin, PinInfo, SignalKind};
-use motion_engine::{AxisConfig, BusConfig, DeviceConfig, EngineConfig, SignalConfig};
+use motion_engine::{AxisConfig, BusConfig, DeviceConfig, EngineConfig, GroupConfig, SignalConfig};
 
 pub use error::{ConfigError, ConfigIssue};
 pub use given::{GivenKeys, Owner};
@@ -189,6 +189,8 @@ pub struct ServerConfig {
     pub axis_specs: Vec<AxisSpec>,
     /// `[[signal]]`s in file order.
     pub signals: Vec<SignalSpec>,
+    /// `[[group]]`s in file order, as the engine takes them.
+    pub groups: Vec<GroupConfig>,
     /// Every key the file set, for telling configured values from defaults.
     pub given: GivenKeys,
     /// What works but is probably not what the user wants (printed at start and by
@@ -262,6 +264,7 @@ impl ServerConfig {
                     safe: signal.safe,
                 })
                 .collect(),
+            groups: self.groups.clone(),
             claim_lease: self.server.claim_lease,
         }
     }

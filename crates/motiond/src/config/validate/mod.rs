@@ -328,6 +328,7 @@ impl Validator<'_, '_> {
             axes: axes.into_iter().flatten().collect(),
             axis_specs,
             signals,
+            groups: Vec::new(),
             given: GivenKeys::default(),
             warnings: Vec::new(),
         }
