@@ -30,6 +30,8 @@
  *   MOTIOND_SERVICE_STATS           publish-subscribe, history 1: motiond_server_stats_t, about
  *                                   1 Hz
  *   MOTIOND_SERVICE_PARAMS          publish-subscribe, history 1: motiond_machine_params_t
+ *   MOTIOND_SERVICE_PATHS           publish-subscribe: motiond_group_path_t, paths for groups,
+ *                                   run by a RUN command
  *   MOTIOND_SERVICE_ESTOP           event: any notification latches the e-stop
  *   MOTIOND_SERVICE_SERVER_NODE     the iceoryx2 node name of the instance's server
  */
@@ -51,7 +53,7 @@ extern "C" {
 /* --- constants ---------------------------------------------------------------------------- */
 
 /** Version of the contract; every payload carries it. */
-#define MOTIOND_SCHEMA_VERSION 6u
+#define MOTIOND_SCHEMA_VERSION 7u
 /** Capacity of the axis arrays of the frame and the server info. */
 #define MOTIOND_MAX_AXES 128u
 /** Capacity of the device arrays of the frame and the server info. */
@@ -68,6 +70,14 @@ extern "C" {
 #define MOTIOND_UNIT_LEN 16u
 /** Bytes of a model id field (UTF-8, zero padded). */
 #define MOTIOND_MODEL_ID_LEN 16u
+/** Capacity of the group arrays of the frame and the server info. */
+#define MOTIOND_MAX_GROUPS 16u
+/** Axes one group may hold. */
+#define MOTIOND_MAX_GROUP_AXES 16u
+/** Points one group path may hold. */
+#define MOTIOND_MAX_PATH_POINTS 1024u
+/** Values of one quantity of a group path: point i, axis j at i * MAX_GROUP_AXES + j. */
+#define MOTIOND_PATH_VALUES 16384u
 /** Bytes of a parameter key or value text. */
 #define MOTIOND_PARAM_TEXT_LEN 40u
 /** motiond_command_request_t.axis addressing every axis (stop, e-stop, reset, off). */
@@ -80,6 +90,7 @@ extern "C" {
 #define MOTIOND_SERVICE_INFO "motiond/%s/info"
 #define MOTIOND_SERVICE_STATS "motiond/%s/stats"
 #define MOTIOND_SERVICE_PARAMS "motiond/%s/params"
+#define MOTIOND_SERVICE_PATHS "motiond/%s/paths"
 #define MOTIOND_SERVICE_ESTOP "motiond/%s/estop"
 #define MOTIOND_SERVICE_SERVER_NODE "motiond-%s"
 
@@ -88,13 +99,16 @@ extern "C" {
 #define MOTIOND_TYPE_NAME_AXIS_STATE "motiond::AxisState"
 #define MOTIOND_TYPE_NAME_SIGNAL_STATE "motiond::SignalState"
 #define MOTIOND_TYPE_NAME_AXIS_WIRE "motiond::AxisWire"
+#define MOTIOND_TYPE_NAME_GROUP_STATE "motiond::GroupState"
 #define MOTIOND_TYPE_NAME_MOTION_FRAME "motiond::MotionFrame"
 #define MOTIOND_TYPE_NAME_COMMAND_REQUEST "motiond::CommandRequest"
 #define MOTIOND_TYPE_NAME_COMMAND_REPLY "motiond::CommandReply"
 #define MOTIOND_TYPE_NAME_AXIS_INFO "motiond::AxisInfo"
 #define MOTIOND_TYPE_NAME_DEVICE_INFO "motiond::DeviceInfo"
 #define MOTIOND_TYPE_NAME_SIGNAL_INFO "motiond::SignalInfo"
+#define MOTIOND_TYPE_NAME_GROUP_INFO "motiond::GroupInfo"
 #define MOTIOND_TYPE_NAME_SERVER_INFO "motiond::ServerInfo"
+#define MOTIOND_TYPE_NAME_GROUP_PATH "motiond::GroupPath"
 #define MOTIOND_TYPE_NAME_MACHINE_PARAM "motiond::MachineParam"
 #define MOTIOND_TYPE_NAME_MACHINE_PARAMS "motiond::MachineParams"
 #define MOTIOND_TYPE_NAME_LATENCY_SUMMARY "motiond::LatencySummary"
@@ -110,7 +124,8 @@ extern "C" {
  * -1..1]; POSITION [position]; VELOCITY [velocity]; RAMP_POSITION [position, max velocity,
  * acceleration]; RAMP_VELOCITY [velocity, acceleration]; HOME [search velocity]; SET_POSITION
  * [position]; SET_OUTPUT [0.0 or 1.0] (`axis` = signal index, `target` = SIGNAL); CLAIM,
- * RELEASE, E_STOP, RESET, OFF -.
+ * RELEASE, E_STOP, RESET, OFF -; with `target` = GROUP (`axis` = group index): CLAIM, RELEASE,
+ * STOP, RUN [path id], HOLD, RESUME, FEED [0.0..1.5], CANCEL.
  */
 enum motiond_command_kind {
     MOTIOND_COMMAND_KIND_STOP = 1,
@@ -126,7 +141,12 @@ enum motiond_command_kind {
     MOTIOND_COMMAND_KIND_E_STOP = 11,
     MOTIOND_COMMAND_KIND_RESET = 12,
     MOTIOND_COMMAND_KIND_OFF = 13,
-    MOTIOND_COMMAND_KIND_SET_OUTPUT = 14
+    MOTIOND_COMMAND_KIND_SET_OUTPUT = 14,
+    MOTIOND_COMMAND_KIND_RUN = 15,
+    MOTIOND_COMMAND_KIND_HOLD = 16,
+    MOTIOND_COMMAND_KIND_RESUME = 17,
+    MOTIOND_COMMAND_KIND_FEED = 18,
+    MOTIOND_COMMAND_KIND_CANCEL = 19
 };
 
 /**
@@ -157,13 +177,21 @@ enum motiond_reason {
     MOTIOND_REASON_DEVICE_OFFLINE = 20,
     MOTIOND_REASON_UNKNOWN_SIGNAL = 21,
     MOTIOND_REASON_NOT_AN_OUTPUT = 22,
-    MOTIOND_REASON_UNKNOWN_TARGET = 23
+    MOTIOND_REASON_UNKNOWN_TARGET = 23,
+    MOTIOND_REASON_UNKNOWN_GROUP = 24,
+    MOTIOND_REASON_NO_PATH = 25,
+    MOTIOND_REASON_PATH_TIMES = 26,
+    MOTIOND_REASON_PATH_START = 27,
+    MOTIOND_REASON_PATH_LAYOUT = 28,
+    MOTIOND_REASON_GROUP_BUSY = 29,
+    MOTIOND_REASON_NOT_MOVING = 30
 };
 
 /** What motiond_command_request_t.axis indexes (motiond_command_request_t.target). */
 enum motiond_target {
     MOTIOND_TARGET_AXIS = 0,
-    MOTIOND_TARGET_SIGNAL = 1
+    MOTIOND_TARGET_SIGNAL = 1,
+    MOTIOND_TARGET_GROUP = 2
 };
 
 /**
@@ -187,7 +215,8 @@ enum motiond_axis_mode {
     MOTIOND_AXIS_MODE_RAMP_POSITION = 5,
     MOTIOND_AXIS_MODE_RAMP_VELOCITY = 6,
     MOTIOND_AXIS_MODE_HOMING = 7,
-    MOTIOND_AXIS_MODE_STOPPING = 8
+    MOTIOND_AXIS_MODE_STOPPING = 8,
+    MOTIOND_AXIS_MODE_GROUP = 9
 };
 
 /** Why an axis is faulted (motiond_axis_state_t.fault); 0 = no fault. */
@@ -203,7 +232,8 @@ enum motiond_fault_code {
     MOTIOND_FAULT_CODE_OVERRUN = 8,
     MOTIOND_FAULT_CODE_FOLLOWING_ERROR = 9,
     MOTIOND_FAULT_CODE_LIMIT_EXCEEDED = 10,
-    MOTIOND_FAULT_CODE_HOME_FAILED = 11
+    MOTIOND_FAULT_CODE_HOME_FAILED = 11,
+    MOTIOND_FAULT_CODE_GOAL_TOLERANCE = 12
 };
 
 /**
@@ -235,6 +265,48 @@ enum motiond_device_model {
     MOTIOND_DEVICE_MODEL_TMCPACK = 2,
     MOTIOND_DEVICE_MODEL_SPIMOTOR = 3,
     MOTIOND_DEVICE_MODEL_QSB = 4
+};
+
+/** Where a group's motion is (motiond_group_state_t.motion). */
+enum motiond_group_motion {
+    MOTIOND_GROUP_MOTION_IDLE = 0,
+    MOTIOND_GROUP_MOTION_MOVING = 1,
+    MOTIOND_GROUP_MOTION_HOLDING = 2,
+    MOTIOND_GROUP_MOTION_HELD = 3,
+    MOTIOND_GROUP_MOTION_DONE = 4,
+    MOTIOND_GROUP_MOTION_ABORTED = 5
+};
+
+/** Why a group's motion ended early (motiond_group_state_t.abort); 0 = not aborted. */
+enum motiond_group_abort {
+    MOTIOND_GROUP_ABORT_NONE = 0,
+    MOTIOND_GROUP_ABORT_PATH_TOLERANCE = 1,
+    MOTIOND_GROUP_ABORT_GOAL_TOLERANCE = 2,
+    MOTIOND_GROUP_ABORT_AXIS_FAULT = 3,
+    MOTIOND_GROUP_ABORT_E_STOP = 4,
+    MOTIOND_GROUP_ABORT_CLAIM_LOST = 5,
+    MOTIOND_GROUP_ABORT_CLIENT_DEAD = 6,
+    MOTIOND_GROUP_ABORT_STOPPED = 7,
+    MOTIOND_GROUP_ABORT_CANCELLED = 8,
+    MOTIOND_GROUP_ABORT_STREAM_STALE = 9,
+    MOTIOND_GROUP_ABORT_STREAM_LIMIT = 10,
+    MOTIOND_GROUP_ABORT_SHUTTING_DOWN = 11
+};
+
+/** Where a group's setpoint stream is (motiond_group_state_t.stream). */
+enum motiond_stream_state {
+    MOTIOND_STREAM_STATE_IDLE = 0,
+    MOTIOND_STREAM_STATE_STREAMING = 1,
+    MOTIOND_STREAM_STATE_STALE = 2,
+    MOTIOND_STREAM_STATE_ABORTED = 3
+};
+
+/** What a group path is (motiond_group_path_t.kind, motiond_group_state_t.kind). */
+enum motiond_path_kind {
+    MOTIOND_PATH_KIND_NONE = 0,
+    MOTIOND_PATH_KIND_LINE = 1,
+    MOTIOND_PATH_KIND_TRAJECTORY = 2,
+    MOTIOND_PATH_KIND_STREAM = 3
 };
 
 /** What a machine parameter belongs to (motiond_machine_param_t.owner_kind). */
@@ -269,6 +341,12 @@ enum motiond_signal_flags {
     MOTIOND_SIGNAL_FLAGS_CLAIMED = 1 << 1,
     MOTIOND_SIGNAL_FLAGS_SAFE_STATE = 1 << 2,
     MOTIOND_SIGNAL_FLAGS_PENDING = 1 << 3
+};
+
+/** Bits of motiond_group_path_t.flags. */
+enum motiond_path_flags {
+    MOTIOND_PATH_FLAGS_VELOCITIES = 1 << 0,
+    MOTIOND_PATH_FLAGS_ACCELERATIONS = 1 << 1
 };
 
 /** Bits of motiond_signal_info_t.flags. */
@@ -315,7 +393,7 @@ MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_client_id_t) == 8, "motiond_client
 /**
  * One axis in a frame.
  *
- * 80 bytes, alignment 8; iceoryx2 type name "motiond::AxisState".
+ * 96 bytes, alignment 8; iceoryx2 type name "motiond::AxisState".
  */
 typedef struct motiond_axis_state {
     double position; /**< Measured position in axis units. (offset 0) */
@@ -337,8 +415,19 @@ typedef struct motiond_axis_state {
      */
     double fault_value; /* offset 64 */
     double fault_limit; /**< The tolerance or limit the fault broke, 0 when none. (offset 72) */
+    /**
+     * Where the server wants the axis now, in units: the group's path while the axis follows a
+     * group (mode `group`), the target while it holds or moves to a position, the measured
+     * position otherwise.
+     */
+    double desired_position; /* offset 80 */
+    /**
+     * The velocity the server wants now, units/s: the group path's while it follows a group,
+     * the velocity target of a velocity mode, 0 otherwise.
+     */
+    double desired_velocity; /* offset 88 */
 } motiond_axis_state_t;
-MOTIOND_STATIC_ASSERT(sizeof(motiond_axis_state_t) == 80, "motiond_axis_state_t size");
+MOTIOND_STATIC_ASSERT(sizeof(motiond_axis_state_t) == 96, "motiond_axis_state_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_axis_state_t) == 8, "motiond_axis_state_t alignment");
 
 /**
@@ -391,10 +480,54 @@ MOTIOND_STATIC_ASSERT(sizeof(motiond_axis_wire_t) == 24, "motiond_axis_wire_t si
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_axis_wire_t) == 8, "motiond_axis_wire_t alignment");
 
 /**
+ * One group in a frame (motiond_motion_frame_t.groups, config order).
+ *
+ * 144 bytes, alignment 8; iceoryx2 type name "motiond::GroupState".
+ */
+typedef struct motiond_group_state {
+    /** The client whose motion or stream the group runs; zero when none. */
+    motiond_client_id_t owner; /* offset 0 */
+    /** The id of the path running (or last run), as the client gave it. */
+    uint64_t path_id; /* offset 16 */
+    /** Seconds along the path (path time: it advances by the feed each second). */
+    double time; /* offset 24 */
+    double duration; /**< The path's length in seconds at feed 1. (offset 32) */
+    /** The feed in effect (0 while held; below the set feed while the path's limits cap it). */
+    double feed; /* offset 40 */
+    double feed_set; /**< The feed set by the client (1.0 = 100 %). (offset 48) */
+    /** The figure that aborted the motion (|desired − measured| in the axis's unit). */
+    double abort_value; /* offset 56 */
+    double abort_limit; /**< The tolerance it broke. (offset 64) */
+    uint32_t point; /**< Index of the point the path is heading to (0 for a line). (offset 72) */
+    /** Config index of the axis that aborted it; `u32::MAX` when none. */
+    uint32_t abort_axis; /* offset 76 */
+    uint8_t motion; /**< MOTIOND_GROUP_MOTION_* value. (offset 80) */
+    uint8_t abort; /**< MOTIOND_GROUP_ABORT_* value. (offset 81) */
+    uint8_t kind; /**< MOTIOND_PATH_KIND_* value of the path running or last run. (offset 82) */
+    uint8_t stream; /**< MOTIOND_STREAM_STATE_* value. (offset 83) */
+    uint32_t reserved; /**< Zero. (offset 84) */
+    uint64_t last_sequence; /**< Sequence of the last streamed setpoint applied. (offset 88) */
+    uint64_t last_applied_tick; /**< Tick in which it was applied. (offset 96) */
+    uint64_t applied; /**< Streamed setpoints applied. (offset 104) */
+    uint64_t late; /**< Streamed setpoints dropped because their tick had passed. (offset 112) */
+    /**
+     * Streamed setpoints dropped because they were addressed more than `stream_buffer` ticks
+     * ahead.
+     */
+    uint64_t early; /* offset 120 */
+    /** Streamed setpoints clamped to a limit (`stream_limit = "clamp"`). */
+    uint64_t clamped; /* offset 128 */
+    /** Streamed setpoints dropped because their sender does not hold the group. */
+    uint64_t refused; /* offset 136 */
+} motiond_group_state_t;
+MOTIOND_STATIC_ASSERT(sizeof(motiond_group_state_t) == 144, "motiond_group_state_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_group_state_t) == 8, "motiond_group_state_t alignment");
+
+/**
  * One consistent snapshot of every axis, board and signal, published once per tick on
  * `motiond/<name>/frame`.
  *
- * 16464 bytes, alignment 8; iceoryx2 type name "motiond::MotionFrame".
+ * 20816 bytes, alignment 8; iceoryx2 type name "motiond::MotionFrame".
  */
 typedef struct motiond_motion_frame {
     uint32_t schema_version; /**< MOTIOND_SCHEMA_VERSION of the writer. (offset 0) */
@@ -406,7 +539,7 @@ typedef struct motiond_motion_frame {
     uint32_t flags; /**< MOTIOND_FRAME_FLAGS_* bits. (offset 32) */
     uint32_t signal_count; /**< Number of valid entries at the start of `signals`. (offset 36) */
     uint32_t device_count; /**< Number of valid entries at the start of `devices`. (offset 40) */
-    uint32_t reserved; /**< Zero. (offset 44) */
+    uint32_t group_count; /**< Number of valid entries at the start of `groups`. (offset 44) */
     /**
      * MOTIOND_DEVICE_STATE_* per device, config order; entries past `device_count` are zero.
      */
@@ -416,14 +549,16 @@ typedef struct motiond_motion_frame {
     /**
      * Signals in config order; entries past `signal_count` are motiond_signal_state_t.UNKNOWN.
      */
-    motiond_signal_state_t signals[MOTIOND_MAX_SIGNALS]; /* offset 10320 */
+    motiond_signal_state_t signals[MOTIOND_MAX_SIGNALS]; /* offset 12368 */
     /**
      * Per axis (same index as `axes`): when its current goal was set and when its first request
      * reached the wire.
      */
-    motiond_axis_wire_t wire[MOTIOND_MAX_AXES]; /* offset 13392 */
+    motiond_axis_wire_t wire[MOTIOND_MAX_AXES]; /* offset 15440 */
+    /** Groups in config order; entries past `group_count` are motiond_group_state_t.IDLE. */
+    motiond_group_state_t groups[MOTIOND_MAX_GROUPS]; /* offset 18512 */
 } motiond_motion_frame_t;
-MOTIOND_STATIC_ASSERT(sizeof(motiond_motion_frame_t) == 16464, "motiond_motion_frame_t size");
+MOTIOND_STATIC_ASSERT(sizeof(motiond_motion_frame_t) == 20816, "motiond_motion_frame_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_motion_frame_t) == 8, "motiond_motion_frame_t alignment");
 
 /**
@@ -452,7 +587,7 @@ MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_command_request_t) == 8, "motiond_
 /**
  * The server's answer to one motiond_command_request_t; every request gets exactly one.
  *
- * 32 bytes, alignment 8; iceoryx2 type name "motiond::CommandReply".
+ * 72 bytes, alignment 8; iceoryx2 type name "motiond::CommandReply".
  */
 typedef struct motiond_command_reply {
     uint32_t schema_version; /**< MOTIOND_SCHEMA_VERSION of the server. (offset 0) */
@@ -462,8 +597,20 @@ typedef struct motiond_command_reply {
     uint64_t tick_applied; /* offset 16 */
     uint32_t axis; /**< The request's axis. (offset 24) */
     uint32_t kind; /**< The request's kind. (offset 28) */
+    /** A refused path: the index of the point at fault; `u32::MAX` when none. */
+    uint32_t at_point; /* offset 32 */
+    /**
+     * The config index of the axis at fault (a path's axis, the axis a claim found held, the
+     * axis a group motion owns); `u32::MAX` when none.
+     */
+    uint32_t at_axis; /* offset 36 */
+    /** `ClaimedByOther`: the client holding that axis; zero otherwise. */
+    motiond_client_id_t holder; /* offset 40 */
+    /** A refused path: the figure at fault (position, velocity, acceleration, distance). */
+    double value; /* offset 56 */
+    double limit; /**< The limit it broke. (offset 64) */
 } motiond_command_reply_t;
-MOTIOND_STATIC_ASSERT(sizeof(motiond_command_reply_t) == 32, "motiond_command_reply_t size");
+MOTIOND_STATIC_ASSERT(sizeof(motiond_command_reply_t) == 72, "motiond_command_reply_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_command_reply_t) == 8, "motiond_command_reply_t alignment");
 
 /**
@@ -546,9 +693,33 @@ MOTIOND_STATIC_ASSERT(sizeof(motiond_signal_info_t) == 128, "motiond_signal_info
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_signal_info_t) == 8, "motiond_signal_info_t alignment");
 
 /**
+ * One group as configured (motiond_server_info_t.groups).
+ *
+ * 376 bytes, alignment 8; iceoryx2 type name "motiond::GroupInfo".
+ */
+typedef struct motiond_group_info {
+    uint8_t name[MOTIOND_NAME_LEN]; /**< Group name, UTF-8, zero padded. (offset 0) */
+    uint32_t axis_count; /**< Valid entries in `axes` and the tolerance arrays. (offset 32) */
+    uint32_t stream_limit; /**< `stream_limit`: 0 = clamp, 1 = abort. (offset 36) */
+    /** Ticks without a streamed setpoint before the group stops. */
+    uint32_t stream_timeout; /* offset 40 */
+    uint32_t stream_buffer; /**< Ticks ahead a streamed setpoint may wait. (offset 44) */
+    /** Seconds after the path's end every axis has to come within its goal tolerance. */
+    double goal_time_tolerance; /* offset 48 */
+    /** Config indices of the member axes, in the group's order. */
+    uint32_t axes[MOTIOND_MAX_GROUP_AXES]; /* offset 56 */
+    /** Per member axis: the path tolerance, its unit (0 = not checked). */
+    double path_tolerance[MOTIOND_MAX_GROUP_AXES]; /* offset 120 */
+    /** Per member axis: the goal tolerance, its unit. */
+    double goal_tolerance[MOTIOND_MAX_GROUP_AXES]; /* offset 248 */
+} motiond_group_info_t;
+MOTIOND_STATIC_ASSERT(sizeof(motiond_group_info_t) == 376, "motiond_group_info_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_group_info_t) == 8, "motiond_group_info_t alignment");
+
+/**
  * The server's static description, published with history 1 on `motiond/<name>/info`.
  *
- * 32840 bytes, alignment 8; iceoryx2 type name "motiond::ServerInfo".
+ * 38864 bytes, alignment 8; iceoryx2 type name "motiond::ServerInfo".
  */
 typedef struct motiond_server_info {
     uint32_t schema_version; /**< MOTIOND_SCHEMA_VERSION of the server. (offset 0) */
@@ -567,9 +738,48 @@ typedef struct motiond_server_info {
     motiond_device_info_t devices[MOTIOND_MAX_DEVICES]; /* offset 20552 */
     /** Signals in config order. */
     motiond_signal_info_t signals[MOTIOND_MAX_SIGNALS]; /* offset 24648 */
+    uint32_t group_count; /**< Valid entries in `groups`. (offset 32840) */
+    uint32_t reserved; /**< Zero. (offset 32844) */
+    motiond_group_info_t groups[MOTIOND_MAX_GROUPS]; /**< Groups in config order. (offset 32848) */
 } motiond_server_info_t;
-MOTIOND_STATIC_ASSERT(sizeof(motiond_server_info_t) == 32840, "motiond_server_info_t size");
+MOTIOND_STATIC_ASSERT(sizeof(motiond_server_info_t) == 38864, "motiond_server_info_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_server_info_t) == 8, "motiond_server_info_t alignment");
+
+/**
+ * A path for a group, published on `motiond/<name>/paths` and run by a `Run` command
+ * (`values[0]` = `id`). Point `i`, axis `j` (the group's order) is at `i * MAX_GROUP_AXES + j`
+ * of `positions`, `velocities` and `accelerations`.
+ *
+ * 401456 bytes, alignment 8; iceoryx2 type name "motiond::GroupPath".
+ */
+typedef struct motiond_group_path {
+    uint32_t schema_version; /**< MOTIOND_SCHEMA_VERSION of the sender. (offset 0) */
+    uint32_t kind; /**< MOTIOND_PATH_KIND_* value: line or trajectory. (offset 4) */
+    /**
+     * The client's id for this path (echoed in motiond_group_state_t.path_id); the newest path
+     * with this id from the sender is the one run.
+     */
+    uint64_t id; /* offset 8 */
+    /** Group index (config order), as the `Run` command must name it too. */
+    uint32_t group; /* offset 16 */
+    uint32_t point_count; /**< Valid points (1 for a line). (offset 20) */
+    uint32_t axis_count; /**< Axes per point: the group's axis count. (offset 24) */
+    uint32_t flags; /**< MOTIOND_PATH_FLAGS_* bits. (offset 28) */
+    /** A line: fraction (0, 1] of every axis's `max_velocity`; 0 means 1. */
+    double velocity_scale; /* offset 32 */
+    /** A line: fraction (0, 1] of every axis's `max_accel`; 0 means 1. */
+    double accel_scale; /* offset 40 */
+    /** Per point: seconds from the start of the trajectory (ignored for a line). */
+    double times[MOTIOND_MAX_PATH_POINTS]; /* offset 48 */
+    /** Per point and axis: position, the axis's unit. */
+    double positions[MOTIOND_PATH_VALUES]; /* offset 8240 */
+    /** Per point and axis: velocity, unit/s (with `VELOCITIES`). */
+    double velocities[MOTIOND_PATH_VALUES]; /* offset 139312 */
+    /** Per point and axis: acceleration, unit/s² (with `ACCELERATIONS`). */
+    double accelerations[MOTIOND_PATH_VALUES]; /* offset 270384 */
+} motiond_group_path_t;
+MOTIOND_STATIC_ASSERT(sizeof(motiond_group_path_t) == 401456, "motiond_group_path_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_group_path_t) == 8, "motiond_group_path_t alignment");
 
 /**
  * One effective machine parameter.
@@ -737,6 +947,11 @@ static inline const char *motiond_command_kind_text(uint32_t value) {
     case MOTIOND_COMMAND_KIND_RESET: return "reset";
     case MOTIOND_COMMAND_KIND_OFF: return "off";
     case MOTIOND_COMMAND_KIND_SET_OUTPUT: return "set-output";
+    case MOTIOND_COMMAND_KIND_RUN: return "run";
+    case MOTIOND_COMMAND_KIND_HOLD: return "hold";
+    case MOTIOND_COMMAND_KIND_RESUME: return "resume";
+    case MOTIOND_COMMAND_KIND_FEED: return "feed";
+    case MOTIOND_COMMAND_KIND_CANCEL: return "cancel";
     default: return NULL;
     }
 }
@@ -767,7 +982,14 @@ static inline const char *motiond_reason_text(uint32_t value) {
     case MOTIOND_REASON_DEVICE_OFFLINE: return "the axis's board is not answering";
     case MOTIOND_REASON_UNKNOWN_SIGNAL: return "no such signal on this server";
     case MOTIOND_REASON_NOT_AN_OUTPUT: return "the signal is not a digital output";
-    case MOTIOND_REASON_UNKNOWN_TARGET: return "unknown target: 0 = axis, 1 = signal";
+    case MOTIOND_REASON_UNKNOWN_TARGET: return "unknown target: 0 = axis, 1 = signal, 2 = group";
+    case MOTIOND_REASON_UNKNOWN_GROUP: return "no such group on this server";
+    case MOTIOND_REASON_NO_PATH: return "no path with this id for this group was published by this client on `paths` (publish it first; a path runs once)";
+    case MOTIOND_REASON_PATH_TIMES: return "the path's point times must start at 0 or later and increase";
+    case MOTIOND_REASON_PATH_START: return "the path's first point has time 0 but is not where the group is";
+    case MOTIOND_REASON_PATH_LAYOUT: return "malformed path: no points, too many, an axis count other than the group's, an unknown kind, or a scale outside (0, 1]";
+    case MOTIOND_REASON_GROUP_BUSY: return "an axis of this request is moving with a group: cancel that motion or wait for it";
+    case MOTIOND_REASON_NOT_MOVING: return "the group has no motion running";
     default: return NULL;
     }
 }
@@ -798,6 +1020,7 @@ static inline const char *motiond_fault_code_text(uint32_t value) {
     case MOTIOND_FAULT_CODE_FOLLOWING_ERROR: return "following-error";
     case MOTIOND_FAULT_CODE_LIMIT_EXCEEDED: return "limit-exceeded";
     case MOTIOND_FAULT_CODE_HOME_FAILED: return "home-failed";
+    case MOTIOND_FAULT_CODE_GOAL_TOLERANCE: return "goal-tolerance";
     default: return NULL;
     }
 }
@@ -829,6 +1052,60 @@ static inline const char *motiond_device_model_text(uint32_t value) {
     case MOTIOND_DEVICE_MODEL_TMCPACK: return "tmcpack";
     case MOTIOND_DEVICE_MODEL_SPIMOTOR: return "spimotor";
     case MOTIOND_DEVICE_MODEL_QSB: return "qsb";
+    default: return NULL;
+    }
+}
+
+/** The text of a MOTIOND_GROUP_MOTION_* value; NULL for a value unknown here. */
+static inline const char *motiond_group_motion_text(uint32_t value) {
+    switch (value) {
+    case MOTIOND_GROUP_MOTION_IDLE: return "idle";
+    case MOTIOND_GROUP_MOTION_MOVING: return "moving";
+    case MOTIOND_GROUP_MOTION_HOLDING: return "holding";
+    case MOTIOND_GROUP_MOTION_HELD: return "held";
+    case MOTIOND_GROUP_MOTION_DONE: return "done";
+    case MOTIOND_GROUP_MOTION_ABORTED: return "aborted";
+    default: return NULL;
+    }
+}
+
+/** The text of a MOTIOND_GROUP_ABORT_* value; NULL for a value unknown here. */
+static inline const char *motiond_group_abort_text(uint32_t value) {
+    switch (value) {
+    case MOTIOND_GROUP_ABORT_NONE: return "none";
+    case MOTIOND_GROUP_ABORT_PATH_TOLERANCE: return "path-tolerance";
+    case MOTIOND_GROUP_ABORT_GOAL_TOLERANCE: return "goal-tolerance";
+    case MOTIOND_GROUP_ABORT_AXIS_FAULT: return "axis-fault";
+    case MOTIOND_GROUP_ABORT_E_STOP: return "e-stop";
+    case MOTIOND_GROUP_ABORT_CLAIM_LOST: return "claim-lost";
+    case MOTIOND_GROUP_ABORT_CLIENT_DEAD: return "client-dead";
+    case MOTIOND_GROUP_ABORT_STOPPED: return "stopped";
+    case MOTIOND_GROUP_ABORT_CANCELLED: return "cancelled";
+    case MOTIOND_GROUP_ABORT_STREAM_STALE: return "stream-stale";
+    case MOTIOND_GROUP_ABORT_STREAM_LIMIT: return "stream-limit";
+    case MOTIOND_GROUP_ABORT_SHUTTING_DOWN: return "shutting-down";
+    default: return NULL;
+    }
+}
+
+/** The text of a MOTIOND_STREAM_STATE_* value; NULL for a value unknown here. */
+static inline const char *motiond_stream_state_text(uint32_t value) {
+    switch (value) {
+    case MOTIOND_STREAM_STATE_IDLE: return "idle";
+    case MOTIOND_STREAM_STATE_STREAMING: return "streaming";
+    case MOTIOND_STREAM_STATE_STALE: return "stale";
+    case MOTIOND_STREAM_STATE_ABORTED: return "aborted";
+    default: return NULL;
+    }
+}
+
+/** The text of a MOTIOND_PATH_KIND_* value; NULL for a value unknown here. */
+static inline const char *motiond_path_kind_text(uint32_t value) {
+    switch (value) {
+    case MOTIOND_PATH_KIND_NONE: return "none";
+    case MOTIOND_PATH_KIND_LINE: return "line";
+    case MOTIOND_PATH_KIND_TRAJECTORY: return "trajectory";
+    case MOTIOND_PATH_KIND_STREAM: return "stream";
     default: return NULL;
     }
 }

@@ -533,6 +533,10 @@ impl Policy {
                 Target::Signal => frame.signals().get(index).is_some_and(|signal| {
                     signal.flags().contains(SignalFlags::CLAIMED) && signal.claimed_by == bridge
                 }),
+                Target::Group => frame
+                    .groups()
+                    .get(index)
+                    .is_some_and(|group| group.owner == bridge),
             }
         });
     }

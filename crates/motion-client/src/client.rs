@@ -581,10 +581,20 @@ impl<S: Service> Client<S> {
         let name = match target {
             Target::Axis => self.axis_info(index as usize).name().to_owned(),
             Target::Signal => self.signal_info(index as usize).name().to_owned(),
+            Target::Group => self
+                .info
+                .current()
+                .and_then(|info| {
+                    info.groups()
+                        .get(index as usize)
+                        .map(|g| g.name().to_owned())
+                })
+                .unwrap_or_default(),
         };
         let what = match target {
             Target::Axis => "axis",
             Target::Signal => "signal",
+            Target::Group => "group",
         };
         match name.as_str() {
             "" => format!("{what} #{index}"),

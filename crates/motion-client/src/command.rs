@@ -225,7 +225,7 @@ impl<S: Service> Client<S> {
                 Some(self.axis_info(index as usize).device_index)
             }
             Target::Signal => Some(self.signal_info(index as usize).device_index),
-            Target::Axis => None,
+            Target::Axis | Target::Group => None,
         };
         let device = || device.map(|d| self.device_name(usize::from(d)));
         match reason {

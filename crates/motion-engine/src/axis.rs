@@ -95,6 +95,11 @@ pub(crate) struct Axis {
     pub goal_tick: u64,
     /// Tick and engine time at which its first request was written.
     pub goal_wire: Option<(u64, Duration)>,
+    /// The group whose motion owns the axis (mode `Group`), if any.
+    pub group: Option<usize>,
+    /// While a group owns it: the path's position (units) and velocity (units/s) now.
+    pub path_position: f64,
+    pub path_velocity: f64,
 }
 
 impl Axis {
@@ -159,6 +164,9 @@ impl Axis {
             state: ChannelState::UNKNOWN,
             goal_tick: 0,
             goal_wire: None,
+            group: None,
+            path_position: 0.0,
+            path_velocity: 0.0,
         }
     }
 
@@ -185,6 +193,24 @@ impl Axis {
     /// Measured velocity in units/s.
     pub fn velocity(&self) -> f64 {
         self.state.velocity / self.counts_per_unit
+    }
+
+    /// Where the engine wants the axis now, units (the frame's `desired_position`).
+    pub fn desired_position(&self) -> f64 {
+        match self.mode {
+            AxisMode::Group => self.path_position,
+            AxisMode::Position | AxisMode::RampPosition | AxisMode::Hold => self.target,
+            _ => self.position(),
+        }
+    }
+
+    /// The velocity the engine wants now, units/s (the frame's `desired_velocity`).
+    pub fn desired_velocity(&self) -> f64 {
+        match self.mode {
+            AxisMode::Group => self.path_velocity,
+            AxisMode::Velocity | AxisMode::RampVelocity => self.target,
+            _ => 0.0,
+        }
     }
 
     /// A goal the client set that must be voided when its owner dies or a fault occurs.

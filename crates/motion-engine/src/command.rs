@@ -62,6 +62,7 @@ impl<D: Driver> Facts for Engine<D> {
             position: axis.position(),
             position_fresh: !axis.stale,
             tolerance: axis.tolerance,
+            group_motion: axis.group.is_some(),
         })
     }
 

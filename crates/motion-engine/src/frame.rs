@@ -87,6 +87,8 @@ impl<D: Driver> Engine<D> {
                 claimed_by: axis.claimed_by,
                 fault_value: axis.fault.map_or(0.0, |fault| fault.value),
                 fault_limit: axis.fault.map_or(0.0, |fault| fault.limit),
+                desired_position: axis.desired_position(),
+                desired_velocity: axis.desired_velocity(),
             };
         }
     }

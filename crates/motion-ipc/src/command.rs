@@ -113,11 +113,25 @@ pub enum CommandKind {
     Off = 13,
     /// Set a digital output signal (`axis` = signal index, `target` = [`Target::Signal`]).
     SetOutput = 14,
+    /// Run the group's path `values[0]` (the id of a [`GroupPath`](crate::GroupPath) the
+    /// same node published on `paths`): `axis` = group index, `target` = [`Target::Group`].
+    /// A path refused names its point and axis in [`CommandReply::at_point`] /
+    /// [`CommandReply::at_axis`].
+    Run = 15,
+    /// Feed hold: bring the group to rest along its path at its axes' acceleration limits.
+    Hold = 16,
+    /// Continue a held path at the set feed.
+    Resume = 17,
+    /// Set the group's feed override: `values[0]` = 0.0..=1.5 (1.0 = 100 %); time along the
+    /// path runs at this rate, changed within the axes' acceleration limits.
+    Feed = 18,
+    /// Bring the group to rest along its path, then end its motion (`aborted`, `cancelled`).
+    Cancel = 19,
 }
 
 impl CommandKind {
     /// Every kind, in value order.
-    pub const ALL: [Self; 14] = [
+    pub const ALL: [Self; 19] = [
         Self::Stop,
         Self::Power,
         Self::Position,
@@ -132,6 +146,11 @@ impl CommandKind {
         Self::Reset,
         Self::Off,
         Self::SetOutput,
+        Self::Run,
+        Self::Hold,
+        Self::Resume,
+        Self::Feed,
+        Self::Cancel,
     ];
 
     /// The command's name as the CLI and logs spell it.
@@ -151,6 +170,11 @@ impl CommandKind {
             Self::Reset => "reset",
             Self::Off => "off",
             Self::SetOutput => "set-output",
+            Self::Run => "run",
+            Self::Hold => "hold",
+            Self::Resume => "resume",
+            Self::Feed => "feed",
+            Self::Cancel => "cancel",
         }
     }
 }
@@ -223,11 +247,30 @@ pub enum Reason {
     NotAnOutput = 22,
     /// `target` is not a known [`Target`].
     UnknownTarget = 23,
+    /// `axis` is not a group of this server (for a group request).
+    UnknownGroup = 24,
+    /// No path with the request's id (`values[0]`) for this group was published by the
+    /// sender's node on `paths`, or it was already run.
+    NoPath = 25,
+    /// A path's point times do not start at ≥ 0 and increase
+    /// ([`CommandReply::at_point`]).
+    PathTimes = 26,
+    /// A path's first point has time 0 but is not where the group is
+    /// ([`CommandReply::at_axis`]).
+    PathStart = 27,
+    /// A path is malformed: no points, more than the contract holds, an axis count other
+    /// than the group's, an unknown kind, a scale outside (0, 1].
+    PathLayout = 28,
+    /// An axis of the request is moving with a group (or another group holds it): cancel
+    /// that motion or wait for it to end ([`CommandReply::at_axis`]).
+    GroupBusy = 29,
+    /// Hold, resume, feed or cancel of a group with no motion running.
+    NotMoving = 30,
 }
 
 impl Reason {
     /// Every reason, in value order.
-    pub const ALL: [Self; 24] = [
+    pub const ALL: [Self; 31] = [
         Self::Accepted,
         Self::SchemaMismatch,
         Self::UnknownKind,
@@ -252,6 +295,13 @@ impl Reason {
         Self::UnknownSignal,
         Self::NotAnOutput,
         Self::UnknownTarget,
+        Self::UnknownGroup,
+        Self::NoPath,
+        Self::PathTimes,
+        Self::PathStart,
+        Self::PathLayout,
+        Self::GroupBusy,
+        Self::NotMoving,
     ];
 
     /// One line saying what is wrong and what to do.
@@ -291,7 +341,22 @@ impl Reason {
             Self::DeviceOffline => "the axis's board is not answering",
             Self::UnknownSignal => "no such signal on this server",
             Self::NotAnOutput => "the signal is not a digital output",
-            Self::UnknownTarget => "unknown target: 0 = axis, 1 = signal",
+            Self::UnknownTarget => "unknown target: 0 = axis, 1 = signal, 2 = group",
+            Self::UnknownGroup => "no such group on this server",
+            Self::NoPath => {
+                "no path with this id for this group was published by this client on `paths` \
+                 (publish it first; a path runs once)"
+            }
+            Self::PathTimes => "the path's point times must start at 0 or later and increase",
+            Self::PathStart => "the path's first point has time 0 but is not where the group is",
+            Self::PathLayout => {
+                "malformed path: no points, too many, an axis count other than the group's, \
+                 an unknown kind, or a scale outside (0, 1]"
+            }
+            Self::GroupBusy => {
+                "an axis of this request is moving with a group: cancel that motion or wait for it"
+            }
+            Self::NotMoving => "the group has no motion running",
         }
     }
 }
@@ -322,6 +387,9 @@ pub enum Target {
     Axis = 0,
     /// A signal (config order): `SetOutput`, `Claim`, `Release`.
     Signal = 1,
+    /// A group (config order): `Claim`, `Release` (every axis of it, all or none), `Stop`,
+    /// `Run`, `Hold`, `Resume`, `Feed`, `Cancel`.
+    Group = 2,
 }
 
 impl TryFrom<u32> for Target {
@@ -330,6 +398,7 @@ impl TryFrom<u32> for Target {
         match value {
             0 => Ok(Self::Axis),
             1 => Ok(Self::Signal),
+            2 => Ok(Self::Group),
             other => Err(UnknownValue(other)),
         }
     }
@@ -411,7 +480,7 @@ impl CommandRequest {
 
 payload! {
     /// The server's answer to one [`CommandRequest`]; every request gets exactly one.
-    #[derive(Debug, Clone, Copy, PartialEq, Eq)]
+    #[derive(Debug, Clone, Copy, PartialEq)]
     #[type_name("motiond::CommandReply")]
     pub struct CommandReply {
         /// [`SCHEMA_VERSION`] of the server.
@@ -426,6 +495,17 @@ payload! {
         pub axis: u32,
         /// The request's kind.
         pub kind: u32,
+        /// A refused path: the index of the point at fault; `u32::MAX` when none.
+        pub at_point: u32,
+        /// The config index of the axis at fault (a path's axis, the axis a claim found held,
+        /// the axis a group motion owns); `u32::MAX` when none.
+        pub at_axis: u32,
+        /// `ClaimedByOther`: the client holding that axis; zero otherwise.
+        pub holder: ClientId,
+        /// A refused path: the figure at fault (position, velocity, acceleration, distance).
+        pub value: f64,
+        /// The limit it broke.
+        pub limit: f64,
     }
 }
 
@@ -439,7 +519,30 @@ impl CommandReply {
             tick_applied: tick,
             axis: request.axis,
             kind: request.kind,
+            at_point: u32::MAX,
+            at_axis: u32::MAX,
+            holder: ClientId::NONE,
+            value: 0.0,
+            limit: 0.0,
         }
+    }
+
+    /// The same reply naming the axis at fault (and the claim holder, if any).
+    #[must_use]
+    pub const fn at_axis(mut self, axis: u32, holder: ClientId) -> Self {
+        self.at_axis = axis;
+        self.holder = holder;
+        self
+    }
+
+    /// The same reply naming the point, the axis, the figure and the limit at fault.
+    #[must_use]
+    pub const fn at_point(mut self, point: u32, axis: u32, value: f64, limit: f64) -> Self {
+        self.at_point = point;
+        self.at_axis = axis;
+        self.value = value;
+        self.limit = limit;
+        self
     }
 
     /// `Ok(())` when accepted, the typed reason otherwise.
@@ -470,8 +573,9 @@ mod tests {
             assert_eq!(CommandKind::try_from(kind as u32), Ok(kind));
         }
         assert_eq!(CommandKind::try_from(0), Err(UnknownValue(0)));
-        assert_eq!(CommandKind::try_from(15), Err(UnknownValue(15)));
-        assert_eq!(Target::try_from(2), Err(UnknownValue(2)));
+        assert_eq!(CommandKind::try_from(20), Err(UnknownValue(20)));
+        assert_eq!(Target::try_from(2), Ok(Target::Group));
+        assert_eq!(Target::try_from(3), Err(UnknownValue(3)));
         for (index, reason) in Reason::ALL.iter().enumerate() {
             assert_eq!(*reason as usize, index);
             assert_eq!(Reason::try_from(*reason as u32), Ok(*reason));

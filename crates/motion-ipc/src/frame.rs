@@ -3,8 +3,9 @@
 use iceoryx2::prelude::ZeroCopySend;
 
 use crate::command::{ClientId, UnknownValue};
+use crate::group::GroupState;
 use crate::signal::SignalState;
-use crate::{MAX_AXES, MAX_DEVICES, MAX_SIGNALS, SCHEMA_VERSION};
+use crate::{MAX_AXES, MAX_DEVICES, MAX_GROUPS, MAX_SIGNALS, SCHEMA_VERSION};
 
 /// Where a board is in its life, as the server sees it. Travels as `u8` in
 /// [`MotionFrame::devices`] and [`AxisState::device_state`], and as `u32` in
@@ -71,6 +72,8 @@ pub enum AxisMode {
     Homing = 7,
     /// Decelerating to a stop (stop, deadman expiry, e-stop, fault).
     Stopping = 8,
+    /// Following its group's path or stream ([`AxisState::desired_position`]).
+    Group = 9,
 }
 
 impl AxisMode {
@@ -86,6 +89,7 @@ impl AxisMode {
             Self::RampVelocity => "ramp-velocity",
             Self::Homing => "homing",
             Self::Stopping => "stopping",
+            Self::Group => "group",
         }
     }
 }
@@ -103,6 +107,7 @@ impl TryFrom<u8> for AxisMode {
             6 => Self::RampVelocity,
             7 => Self::Homing,
             8 => Self::Stopping,
+            9 => Self::Group,
             other => return Err(UnknownValue(u32::from(other))),
         })
     }
@@ -128,6 +133,7 @@ impl TryFrom<u8> for AxisMode {
 /// | 9 | `FollowingError` | holding: \|position − target\| > `following_error`; moving: position left the segment [start, target] widened by `following_error` | distance / `following_error`, units | reset (the target becomes the position) |
 /// | 10 | `LimitExceeded` | position beyond a soft limit by more than `following_error` | position / the limit passed, units | reset once back within the limits (moves back inside are accepted meanwhile) |
 /// | 11 | `HomeFailed` | a reference search travelled `home_max_travel` without its switch or index, or the board reported a search error | travel / `home_max_travel`, units | reset |
+/// | 12 | `GoalTolerance` | a group's path ended and the axis was not within its `goal_tolerance` `goal_time_tolerance` later | distance / `goal_tolerance`, units | reset |
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[repr(u16)]
 pub enum FaultCode {
@@ -157,6 +163,9 @@ pub enum FaultCode {
     /// A reference search ended without finding its switch or index (travel limit
     /// reached, or the board reported a search error).
     HomeFailed = 11,
+    /// A group's path ended and the axis did not come within its `goal_tolerance` within the
+    /// group's `goal_time_tolerance`.
+    GoalTolerance = 12,
 }
 
 impl FaultCode {
@@ -175,6 +184,7 @@ impl FaultCode {
             Self::FollowingError => "following-error",
             Self::LimitExceeded => "limit-exceeded",
             Self::HomeFailed => "home-failed",
+            Self::GoalTolerance => "goal-tolerance",
         }
     }
 
@@ -213,6 +223,9 @@ impl FaultCode {
             Self::HomeFailed => {
                 format!("axis `{axis}`: home search failed: the board reported a search error")
             }
+            Self::GoalTolerance => format!(
+                "axis `{axis}`: its group's path ended and it stayed {value:.4} {unit} from its goal, tolerance {limit:.4} {unit}"
+            ),
         }
     }
 }
@@ -233,6 +246,7 @@ impl TryFrom<u16> for FaultCode {
             9 => Self::FollowingError,
             10 => Self::LimitExceeded,
             11 => Self::HomeFailed,
+            12 => Self::GoalTolerance,
             other => return Err(UnknownValue(u32::from(other))),
         })
     }
@@ -330,6 +344,13 @@ payload! {
         pub fault_value: f64,
         /// The tolerance or limit the fault broke, 0 when none.
         pub fault_limit: f64,
+        /// Where the server wants the axis now, in units: the group's path while the axis
+        /// follows a group (mode `group`), the target while it holds or moves to a position,
+        /// the measured position otherwise.
+        pub desired_position: f64,
+        /// The velocity the server wants now, units/s: the group path's while it follows a
+        /// group, the velocity target of a velocity mode, 0 otherwise.
+        pub desired_velocity: f64,
     }
 }
 
@@ -348,6 +369,8 @@ impl AxisState {
         claimed_by: ClientId::NONE,
         fault_value: 0.0,
         fault_limit: 0.0,
+        desired_position: 0.0,
+        desired_velocity: 0.0,
     };
 
     /// The typed flags.
@@ -470,8 +493,8 @@ payload! {
         pub signal_count: u32,
         /// Number of valid entries at the start of `devices`.
         pub device_count: u32,
-        /// Zero.
-        pub reserved: u32,
+        /// Number of valid entries at the start of `groups`.
+        pub group_count: u32,
         /// [`DeviceState`] per device, config order; entries past `device_count` are zero.
         pub devices: [u8; MAX_DEVICES],
         /// Axes in config order; entries past `axis_count` are [`AxisState::UNKNOWN`].
@@ -481,6 +504,8 @@ payload! {
         /// Per axis (same index as `axes`): when its current goal was set and when its first
         /// request reached the wire.
         pub wire: [AxisWire; MAX_AXES],
+        /// Groups in config order; entries past `group_count` are [`GroupState::IDLE`].
+        pub groups: [GroupState; MAX_GROUPS],
     }
 }
 
@@ -495,11 +520,12 @@ impl MotionFrame {
         flags: 0,
         signal_count: 0,
         device_count: 0,
-        reserved: 0,
+        group_count: 0,
         devices: [0; MAX_DEVICES],
         axes: [AxisState::UNKNOWN; MAX_AXES],
         signals: [SignalState::UNKNOWN; MAX_SIGNALS],
         wire: [AxisWire::NONE; MAX_AXES],
+        groups: [GroupState::IDLE; MAX_GROUPS],
     };
 
     /// The valid axes.
@@ -512,6 +538,12 @@ impl MotionFrame {
     pub fn wire(&self) -> &[AxisWire] {
         let count = (self.axis_count as usize).min(MAX_AXES);
         &self.wire[..count]
+    }
+
+    /// The valid groups.
+    pub fn groups(&self) -> &[GroupState] {
+        let count = (self.group_count as usize).min(MAX_GROUPS);
+        &self.groups[..count]
     }
 
     /// The valid signals.

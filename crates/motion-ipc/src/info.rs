@@ -4,9 +4,13 @@ use iceoryx2::prelude::ZeroCopySend;
 
 use crate::command::{CommandKind, UnknownValue};
 use crate::frame::DeviceState;
+use crate::group::GroupInfo;
 use crate::read_text;
 use crate::signal::SignalInfo;
-use crate::{MAX_AXES, MAX_DEVICES, MAX_SIGNALS, MODEL_ID_LEN, NAME_LEN, SCHEMA_VERSION, UNIT_LEN};
+use crate::{
+    MAX_AXES, MAX_DEVICES, MAX_GROUPS, MAX_SIGNALS, MODEL_ID_LEN, NAME_LEN, SCHEMA_VERSION,
+    UNIT_LEN,
+};
 
 /// What an e-stop (and a fault) does to an axis: IEC 60204-1 stop categories. Travels as
 /// `u32` in [`AxisInfo::estop`].
@@ -269,6 +273,12 @@ payload! {
         pub devices: [DeviceInfo; MAX_DEVICES],
         /// Signals in config order.
         pub signals: [SignalInfo; MAX_SIGNALS],
+        /// Valid entries in `groups`.
+        pub group_count: u32,
+        /// Zero.
+        pub reserved: u32,
+        /// Groups in config order.
+        pub groups: [GroupInfo; MAX_GROUPS],
     }
 }
 
@@ -288,6 +298,9 @@ impl ServerInfo {
         axes: [AxisInfo::EMPTY; MAX_AXES],
         devices: [DeviceInfo::EMPTY; MAX_DEVICES],
         signals: [SignalInfo::EMPTY; MAX_SIGNALS],
+        group_count: 0,
+        reserved: 0,
+        groups: [GroupInfo::EMPTY; MAX_GROUPS],
     };
 
     /// The valid axes.
@@ -303,6 +316,16 @@ impl ServerInfo {
     /// The valid signals.
     pub fn signals(&self) -> &[SignalInfo] {
         &self.signals[..(self.signal_count as usize).min(MAX_SIGNALS)]
+    }
+
+    /// The valid groups.
+    pub fn groups(&self) -> &[GroupInfo] {
+        &self.groups[..(self.group_count as usize).min(MAX_GROUPS)]
+    }
+
+    /// Index of the group called `name`.
+    pub fn group_index(&self, name: &str) -> Option<usize> {
+        self.groups().iter().position(|group| group.name() == name)
     }
 
     /// Index of the axis called `name`.

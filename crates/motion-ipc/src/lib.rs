@@ -33,6 +33,7 @@ mod payload;
 
 mod command;
 mod frame;
+mod group;
 mod info;
 mod params;
 mod pid_file;
@@ -48,6 +49,10 @@ pub use command::{
 pub use frame::{
     AxisFlags, AxisMode, AxisState, AxisWire, DeviceState, FaultCode, FrameFlags, MotionFrame,
 };
+pub use group::{
+    GroupAbort, GroupInfo, GroupMotion, GroupPath, GroupState, PATH_VALUES, PathFlags, PathKind,
+    StreamState,
+};
 pub use info::{AxisInfo, Capabilities, DeviceInfo, DeviceModel, EstopCategory, ServerInfo};
 /// Fixed-size, zero-padded UTF-8 text fields (from `motion-base`, shared with the drivers).
 pub use motion_base::{read_text, write_text};
@@ -59,7 +64,7 @@ pub use stats::{LatencySummary, LinkIo, LinkStats, ServerStats};
 
 /// Version of this contract. Bumped on every layout or meaning change; every payload
 /// carries it so that a client built against another version can refuse politely.
-pub const SCHEMA_VERSION: u32 = 6;
+pub const SCHEMA_VERSION: u32 = 7;
 
 /// Capacity of the axis arrays in [`MotionFrame`] and [`ServerInfo`].
 pub const MAX_AXES: usize = 128;

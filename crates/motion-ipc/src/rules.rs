@@ -72,6 +72,9 @@ pub struct AxisFacts {
     /// The position tolerance, units (the least distance a velocity goal must keep from a
     /// soft limit).
     pub tolerance: f64,
+    /// Whether a group's motion owns the axis (moving, holding or held): its own motion
+    /// commands are refused with [`Reason::GroupBusy`] (stops are not).
+    pub group_motion: bool,
 }
 
 impl AxisFacts {
@@ -98,6 +101,7 @@ impl AxisFacts {
             position: 0.0,
             position_fresh: true,
             tolerance: 0.01,
+            group_motion: false,
         }
     }
 
@@ -292,13 +296,24 @@ pub fn judge(request: &CommandRequest, client: ClientId, facts: &impl Facts) -> 
     if target == Target::Signal {
         return judge_signal(kind, index, client, request.values[0], facts);
     }
+    if target == Target::Group {
+        // A group's requests depend on its paths and its motion's state, which only the
+        // engine holds (`motion-engine`'s `group` module judges them); a server without
+        // groups has none to find.
+        return Refused(Reason::UnknownGroup);
+    }
     match kind {
         CommandKind::EStop => return Verdict::EStop,
         CommandKind::Reset if facts.shutting_down() => return Refused(Reason::ShuttingDown),
         CommandKind::Reset => return Verdict::Reset,
         CommandKind::Stop if request.axis == CommandRequest::ALL_AXES => return Verdict::StopAll,
         CommandKind::Off if request.axis == CommandRequest::ALL_AXES => return Verdict::OffAll,
-        CommandKind::SetOutput => return Refused(Reason::UnknownTarget),
+        CommandKind::SetOutput
+        | CommandKind::Run
+        | CommandKind::Hold
+        | CommandKind::Resume
+        | CommandKind::Feed
+        | CommandKind::Cancel => return Refused(Reason::UnknownTarget),
         _ => {}
     }
     let Some(axis) = facts.axis(index) else {
@@ -334,6 +349,9 @@ pub fn judge(request: &CommandRequest, client: ClientId, facts: &impl Facts) -> 
     }
     if axis.claimed_by_other(client) {
         return Refused(Reason::ClaimedByOther);
+    }
+    if axis.group_motion {
+        return Refused(Reason::GroupBusy);
     }
     if !axis.capabilities.supports(kind) {
         return Refused(Reason::Unsupported);
@@ -494,7 +512,12 @@ fn motion_of(
         | CommandKind::Release
         | CommandKind::EStop
         | CommandKind::Reset
-        | CommandKind::SetOutput => return Err(Reason::UnknownKind),
+        | CommandKind::SetOutput
+        | CommandKind::Run
+        | CommandKind::Hold
+        | CommandKind::Resume
+        | CommandKind::Feed
+        | CommandKind::Cancel => return Err(Reason::UnknownKind),
     })
 }
 

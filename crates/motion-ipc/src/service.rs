@@ -55,6 +55,12 @@ impl ServiceNames {
         self.under("params")
     }
 
+    /// Publish-subscribe: [`GroupPath`](crate::GroupPath), the paths clients send groups
+    /// (run by a `Run` command).
+    pub fn paths(&self) -> String {
+        self.under("paths")
+    }
+
     /// Event: any notification latches the e-stop. Its own ports, separate from the
     /// command service's, so that an e-stop gets through when the command service's client
     /// slots are exhausted.

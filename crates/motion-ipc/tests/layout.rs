@@ -15,27 +15,34 @@ macro_rules! pin {
 }
 
 pin!(ClientId, size 16, align 8, { lo @ 0, hi @ 8 });
-pin!(AxisState, size 80, align 8, {
+pin!(AxisState, size 96, align 8, {
     position @ 0, velocity @ 8, target @ 16, raw_counts @ 24, last_refresh_tick @ 32,
     flags @ 40, fault @ 44, mode @ 46, device_state @ 47, claimed_by @ 48,
-    fault_value @ 64, fault_limit @ 72,
+    fault_value @ 64, fault_limit @ 72, desired_position @ 80, desired_velocity @ 88,
 });
 pin!(SignalState, size 48, align 8, {
     value @ 0, raw @ 8, last_refresh_tick @ 16, flags @ 24, kind @ 28, reserved @ 29,
     claimed_by @ 32,
 });
 pin!(AxisWire, size 24, align 8, { goal_tick @ 0, wire_tick @ 8, wire_ns @ 16 });
-pin!(MotionFrame, size 16464, align 8, {
+pin!(GroupState, size 144, align 8, {
+    owner @ 0, path_id @ 16, time @ 24, duration @ 32, feed @ 40, feed_set @ 48,
+    abort_value @ 56, abort_limit @ 64, point @ 72, abort_axis @ 76, motion @ 80, abort @ 81,
+    kind @ 82, stream @ 83, reserved @ 84, last_sequence @ 88, last_applied_tick @ 96,
+    applied @ 104, late @ 112, early @ 120, clamped @ 128, refused @ 136,
+});
+pin!(MotionFrame, size 20816, align 8, {
     schema_version @ 0, axis_count @ 4, tick @ 8, time_ns @ 16, publish_ns @ 24,
-    flags @ 32, signal_count @ 36, device_count @ 40, reserved @ 44, devices @ 48,
-    axes @ 80, signals @ 10320, wire @ 13392,
+    flags @ 32, signal_count @ 36, device_count @ 40, group_count @ 44, devices @ 48,
+    axes @ 80, signals @ 12368, wire @ 15440, groups @ 18512,
 });
 pin!(CommandRequest, size 64, align 8, {
     schema_version @ 0, kind @ 4, client @ 8, sequence @ 24, axis @ 32, target @ 36,
     values @ 40,
 });
-pin!(CommandReply, size 32, align 8, {
+pin!(CommandReply, size 72, align 8, {
     schema_version @ 0, reason @ 4, sequence @ 8, tick_applied @ 16, axis @ 24, kind @ 28,
+    at_point @ 32, at_axis @ 36, holder @ 40, value @ 56, limit @ 64,
 });
 pin!(AxisInfo, size 160, align 8, {
     name @ 0, unit @ 32, device @ 48, counts_per_unit @ 80, min @ 88, max @ 96,
@@ -51,10 +58,20 @@ pin!(SignalInfo, size 128, align 8, {
     name @ 0, unit @ 32, device @ 48, scale @ 80, offset @ 88, full_scale @ 96, kind @ 104,
     flags @ 105, device_index @ 106, pin @ 108, reserved @ 124,
 });
-pin!(ServerInfo, size 32840, align 8, {
+pin!(GroupInfo, size 376, align 8, {
+    name @ 0, axis_count @ 32, stream_limit @ 36, stream_timeout @ 40, stream_buffer @ 44,
+    goal_time_tolerance @ 48, axes @ 56, path_tolerance @ 120, goal_tolerance @ 248,
+});
+pin!(ServerInfo, size 38864, align 8, {
     schema_version @ 0, axis_count @ 4, device_count @ 8, tick_hz @ 12,
     command_timeout_ms @ 16, max_clients @ 20, server_pid @ 24, signal_count @ 28, name @ 32,
-    start_time_ns @ 64, axes @ 72, devices @ 20552, signals @ 24648,
+    start_time_ns @ 64, axes @ 72, devices @ 20552, signals @ 24648, group_count @ 32840,
+    reserved @ 32844, groups @ 32848,
+});
+pin!(GroupPath, size 401456, align 8, {
+    schema_version @ 0, kind @ 4, id @ 8, group @ 16, point_count @ 20, axis_count @ 24,
+    flags @ 28, velocity_scale @ 32, accel_scale @ 40, times @ 48, positions @ 8240,
+    velocities @ 139312, accelerations @ 270384,
 });
 pin!(MachineParam, size 88, align 4, {
     key @ 0, value @ 40, owner_index @ 80, owner_kind @ 82, from_config @ 83, reserved @ 84,
@@ -91,7 +108,11 @@ fn layout_is_pinned() {
         (NAME_LEN, UNIT_LEN, MODEL_ID_LEN, PARAM_TEXT_LEN),
         (32, 16, 16, 40)
     );
-    assert_eq!(SCHEMA_VERSION, 6);
+    assert_eq!(SCHEMA_VERSION, 7);
+    assert_eq!(
+        (MAX_GROUPS, MAX_GROUP_AXES, MAX_PATH_POINTS, PATH_VALUES),
+        (16, 16, 1024, 16384)
+    );
 }
 
 #[test]
@@ -107,6 +128,7 @@ fn iceoryx2_type_names_are_explicit() {
         <MachineParams as ZeroCopySend>::type_name,
         <SignalState as ZeroCopySend>::type_name,
         <SignalInfo as ZeroCopySend>::type_name,
+        <GroupPath as ZeroCopySend>::type_name,
     ];
     let expected = [
         "motiond::MotionFrame",
@@ -117,6 +139,7 @@ fn iceoryx2_type_names_are_explicit() {
         "motiond::MachineParams",
         "motiond::SignalState",
         "motiond::SignalInfo",
+        "motiond::GroupPath",
     ];
     for (name, want) in names.iter().zip(expected) {
         // SAFETY: `type_name` has no preconditions; it is `unsafe` in iceoryx2 only so that

@@ -129,12 +129,12 @@ macro_rules! payloads {
 }
 
 payloads!(
-    MotionFrame = 16464,
-    ServerInfo = 32840,
+    MotionFrame = 20816,
+    ServerInfo = 38864,
     ServerStats = 1992,
     MachineParams = 180_240,
     CommandRequest = 64,
-    CommandReply = 32,
+    CommandReply = 72,
 );
 
 /// `value` in its C layout, little-endian: `T::SIZE` bytes, padding zero.

@@ -23,7 +23,7 @@ from ._mirror_base import (
 # --- constants ---------------------------------------------------------------------------
 
 #: Version of the contract; every payload carries it.
-SCHEMA_VERSION = 6
+SCHEMA_VERSION = 7
 #: Capacity of the axis arrays of the frame and the server info.
 MAX_AXES = 128
 #: Capacity of the device arrays of the frame and the server info.
@@ -40,6 +40,14 @@ NAME_LEN = 32
 UNIT_LEN = 16
 #: Bytes of a model id field (UTF-8, zero padded).
 MODEL_ID_LEN = 16
+#: Capacity of the group arrays of the frame and the server info.
+MAX_GROUPS = 16
+#: Axes one group may hold.
+MAX_GROUP_AXES = 16
+#: Points one group path may hold.
+MAX_PATH_POINTS = 1024
+#: Values of one quantity of a group path: point i, axis j at i * MAX_GROUP_AXES + j.
+PATH_VALUES = 16384
 #: Bytes of a parameter key or value text.
 PARAM_TEXT_LEN = 40
 #: ``CommandRequest.axis`` addressing every axis (stop, e-stop, reset, off).
@@ -53,6 +61,7 @@ SERVICES: Dict[str, str] = {
     "info": "motiond/%s/info",
     "stats": "motiond/%s/stats",
     "params": "motiond/%s/params",
+    "paths": "motiond/%s/paths",
     "estop": "motiond/%s/estop",
     "server_node": "motiond-%s",
 }
@@ -76,7 +85,7 @@ class ClientId(ClientIdMethods, Payload):
 class AxisState(Payload):
     """One axis in a frame.
 
-    80 bytes, alignment 8."""
+    96 bytes, alignment 8."""
 
     _type_name_ = "motiond::AxisState"
     _fields_ = [
@@ -95,6 +104,13 @@ class AxisState(Payload):
         # The measured figure of the latched fault (units, units/s; see ``FaultCode``), 0 when none.
         ("fault_value", ctypes.c_double),
         ("fault_limit", ctypes.c_double),  # The tolerance or limit the fault broke, 0 when none.
+        # Where the server wants the axis now, in units: the group's path while the axis follows a
+        # group (mode ``group``), the target while it holds or moves to a position, the measured
+        # position otherwise.
+        ("desired_position", ctypes.c_double),
+        # The velocity the server wants now, units/s: the group path's while it follows a group, the
+        # velocity target of a velocity mode, 0 otherwise.
+        ("desired_velocity", ctypes.c_double),
     ]
 
 
@@ -140,11 +156,52 @@ class AxisWire(Payload):
     ]
 
 
+class GroupState(Payload):
+    """One group in a frame (``MotionFrame.groups``, config order).
+
+    144 bytes, alignment 8."""
+
+    _type_name_ = "motiond::GroupState"
+    _fields_ = [
+        ("owner", ClientId),  # The client whose motion or stream the group runs; zero when none.
+        # The id of the path running (or last run), as the client gave it.
+        ("path_id", ctypes.c_uint64),
+        # Seconds along the path (path time: it advances by the feed each second).
+        ("time", ctypes.c_double),
+        ("duration", ctypes.c_double),  # The path's length in seconds at feed 1.
+        # The feed in effect (0 while held; below the set feed while the path's limits cap it).
+        ("feed", ctypes.c_double),
+        ("feed_set", ctypes.c_double),  # The feed set by the client (1.0 = 100 %).
+        # The figure that aborted the motion (|desired − measured| in the axis's unit).
+        ("abort_value", ctypes.c_double),
+        ("abort_limit", ctypes.c_double),  # The tolerance it broke.
+        ("point", ctypes.c_uint32),  # Index of the point the path is heading to (0 for a line).
+        # Config index of the axis that aborted it; ``u32.MAX`` when none.
+        ("abort_axis", ctypes.c_uint32),
+        ("motion", ctypes.c_uint8),  # ``GroupMotion`` value.
+        ("abort", ctypes.c_uint8),  # ``GroupAbort`` value.
+        ("kind", ctypes.c_uint8),  # ``PathKind`` value of the path running or last run.
+        ("stream", ctypes.c_uint8),  # ``StreamState`` value.
+        ("reserved", ctypes.c_uint32),  # Zero.
+        ("last_sequence", ctypes.c_uint64),  # Sequence of the last streamed setpoint applied.
+        ("last_applied_tick", ctypes.c_uint64),  # Tick in which it was applied.
+        ("applied", ctypes.c_uint64),  # Streamed setpoints applied.
+        ("late", ctypes.c_uint64),  # Streamed setpoints dropped because their tick had passed.
+        # Streamed setpoints dropped because they were addressed more than ``stream_buffer`` ticks
+        # ahead.
+        ("early", ctypes.c_uint64),
+        # Streamed setpoints clamped to a limit (``stream_limit = "clamp"``).
+        ("clamped", ctypes.c_uint64),
+        # Streamed setpoints dropped because their sender does not hold the group.
+        ("refused", ctypes.c_uint64),
+    ]
+
+
 class MotionFrame(Payload):
     """One consistent snapshot of every axis, board and signal, published once per tick on
     ``motiond/<name>/frame``.
 
-    16464 bytes, alignment 8."""
+    20816 bytes, alignment 8."""
 
     _type_name_ = "motiond::MotionFrame"
     _fields_ = [
@@ -157,7 +214,7 @@ class MotionFrame(Payload):
         ("flags", ctypes.c_uint32),  # ``FrameFlags`` bits.
         ("signal_count", ctypes.c_uint32),  # Number of valid entries at the start of ``signals``.
         ("device_count", ctypes.c_uint32),  # Number of valid entries at the start of ``devices``.
-        ("reserved", ctypes.c_uint32),  # Zero.
+        ("group_count", ctypes.c_uint32),  # Number of valid entries at the start of ``groups``.
         # ``DeviceState`` per device, config order; entries past ``device_count`` are zero.
         ("devices", ctypes.c_uint8 * MAX_DEVICES),
         # Axes in config order; entries past ``axis_count`` are ``AxisState.UNKNOWN``.
@@ -167,6 +224,8 @@ class MotionFrame(Payload):
         # Per axis (same index as ``axes``): when its current goal was set and when its first
         # request reached the wire.
         ("wire", AxisWire * MAX_AXES),
+        # Groups in config order; entries past ``group_count`` are ``GroupState.IDLE``.
+        ("groups", GroupState * MAX_GROUPS),
     ]
 
 
@@ -196,7 +255,7 @@ class CommandRequest(Payload):
 class CommandReply(Payload):
     """The server's answer to one ``CommandRequest``; every request gets exactly one.
 
-    32 bytes, alignment 8."""
+    72 bytes, alignment 8."""
 
     _type_name_ = "motiond::CommandReply"
     _fields_ = [
@@ -207,6 +266,15 @@ class CommandReply(Payload):
         ("tick_applied", ctypes.c_uint64),
         ("axis", ctypes.c_uint32),  # The request's axis.
         ("kind", ctypes.c_uint32),  # The request's kind.
+        # A refused path: the index of the point at fault; ``u32.MAX`` when none.
+        ("at_point", ctypes.c_uint32),
+        # The config index of the axis at fault (a path's axis, the axis a claim found held, the
+        # axis a group motion owns); ``u32.MAX`` when none.
+        ("at_axis", ctypes.c_uint32),
+        ("holder", ClientId),  # ``ClaimedByOther``: the client holding that axis; zero otherwise.
+        # A refused path: the figure at fault (position, velocity, acceleration, distance).
+        ("value", ctypes.c_double),
+        ("limit", ctypes.c_double),  # The limit it broke.
     ]
 
 
@@ -283,10 +351,34 @@ class SignalInfo(Payload):
     ]
 
 
+class GroupInfo(Payload):
+    """One group as configured (``ServerInfo.groups``).
+
+    376 bytes, alignment 8."""
+
+    _type_name_ = "motiond::GroupInfo"
+    _fields_ = [
+        ("name", ctypes.c_uint8 * NAME_LEN),  # Group name, UTF-8, zero padded.
+        ("axis_count", ctypes.c_uint32),  # Valid entries in ``axes`` and the tolerance arrays.
+        ("stream_limit", ctypes.c_uint32),  # ``stream_limit``: 0 = clamp, 1 = abort.
+        # Ticks without a streamed setpoint before the group stops.
+        ("stream_timeout", ctypes.c_uint32),
+        ("stream_buffer", ctypes.c_uint32),  # Ticks ahead a streamed setpoint may wait.
+        # Seconds after the path's end every axis has to come within its goal tolerance.
+        ("goal_time_tolerance", ctypes.c_double),
+        # Config indices of the member axes, in the group's order.
+        ("axes", ctypes.c_uint32 * MAX_GROUP_AXES),
+        # Per member axis: the path tolerance, its unit (0 = not checked).
+        ("path_tolerance", ctypes.c_double * MAX_GROUP_AXES),
+        # Per member axis: the goal tolerance, its unit.
+        ("goal_tolerance", ctypes.c_double * MAX_GROUP_AXES),
+    ]
+
+
 class ServerInfo(Payload):
     """The server's static description, published with history 1 on ``motiond/<name>/info``.
 
-    32840 bytes, alignment 8."""
+    38864 bytes, alignment 8."""
 
     _type_name_ = "motiond::ServerInfo"
     _fields_ = [
@@ -304,6 +396,43 @@ class ServerInfo(Payload):
         ("axes", AxisInfo * MAX_AXES),  # Axes in config order.
         ("devices", DeviceInfo * MAX_DEVICES),  # Devices in config order.
         ("signals", SignalInfo * MAX_SIGNALS),  # Signals in config order.
+        ("group_count", ctypes.c_uint32),  # Valid entries in ``groups``.
+        ("reserved", ctypes.c_uint32),  # Zero.
+        ("groups", GroupInfo * MAX_GROUPS),  # Groups in config order.
+    ]
+
+
+class GroupPath(Payload):
+    """A path for a group, published on ``motiond/<name>/paths`` and run by a ``Run`` command
+    (``values[0]`` = ``id``). Point ``i``, axis ``j`` (the group's order) is at ``i *
+    MAX_GROUP_AXES + j`` of ``positions``, ``velocities`` and ``accelerations``.
+
+    401456 bytes, alignment 8."""
+
+    _type_name_ = "motiond::GroupPath"
+    _fields_ = [
+        ("schema_version", ctypes.c_uint32),  # ``SCHEMA_VERSION`` of the sender.
+        ("kind", ctypes.c_uint32),  # ``PathKind`` value: line or trajectory.
+        # The client's id for this path (echoed in ``GroupState.path_id``); the newest path with
+        # this id from the sender is the one run.
+        ("id", ctypes.c_uint64),
+        # Group index (config order), as the ``Run`` command must name it too.
+        ("group", ctypes.c_uint32),
+        ("point_count", ctypes.c_uint32),  # Valid points (1 for a line).
+        ("axis_count", ctypes.c_uint32),  # Axes per point: the group's axis count.
+        ("flags", ctypes.c_uint32),  # ``PathFlags`` bits.
+        # A line: fraction (0, 1] of every axis's ``max_velocity``; 0 means 1.
+        ("velocity_scale", ctypes.c_double),
+        # A line: fraction (0, 1] of every axis's ``max_accel``; 0 means 1.
+        ("accel_scale", ctypes.c_double),
+        # Per point: seconds from the start of the trajectory (ignored for a line).
+        ("times", ctypes.c_double * MAX_PATH_POINTS),
+        # Per point and axis: position, the axis's unit.
+        ("positions", ctypes.c_double * PATH_VALUES),
+        # Per point and axis: velocity, unit/s (with ``VELOCITIES``).
+        ("velocities", ctypes.c_double * PATH_VALUES),
+        # Per point and axis: acceleration, unit/s² (with ``ACCELERATIONS``).
+        ("accelerations", ctypes.c_double * PATH_VALUES),
     ]
 
 
@@ -445,13 +574,16 @@ PAYLOADS: Dict[str, Type[Payload]] = {
     "AxisState": AxisState,
     "SignalState": SignalState,
     "AxisWire": AxisWire,
+    "GroupState": GroupState,
     "MotionFrame": MotionFrame,
     "CommandRequest": CommandRequest,
     "CommandReply": CommandReply,
     "AxisInfo": AxisInfo,
     "DeviceInfo": DeviceInfo,
     "SignalInfo": SignalInfo,
+    "GroupInfo": GroupInfo,
     "ServerInfo": ServerInfo,
+    "GroupPath": GroupPath,
     "MachineParam": MachineParam,
     "MachineParams": MachineParams,
     "LatencySummary": LatencySummary,
@@ -469,7 +601,8 @@ class CommandKind(TextedEnum):
     [position]; VELOCITY [velocity]; RAMP_POSITION [position, max velocity, acceleration];
     RAMP_VELOCITY [velocity, acceleration]; HOME [search velocity]; SET_POSITION [position];
     SET_OUTPUT [0.0 or 1.0] (``axis`` = signal index, ``target`` = SIGNAL); CLAIM, RELEASE,
-    E_STOP, RESET, OFF -."""
+    E_STOP, RESET, OFF -; with ``target`` = GROUP (``axis`` = group index): CLAIM, RELEASE, STOP,
+    RUN [path id], HOLD, RESUME, FEED [0.0..1.5], CANCEL."""
 
     STOP = 1, "stop"
     POWER = 2, "power"
@@ -485,6 +618,11 @@ class CommandKind(TextedEnum):
     RESET = 12, "reset"
     OFF = 13, "off"
     SET_OUTPUT = 14, "set-output"
+    RUN = 15, "run"
+    HOLD = 16, "hold"
+    RESUME = 17, "resume"
+    FEED = 18, "feed"
+    CANCEL = 19, "cancel"
 
 
 class Reason(ReasonMethods, TextedEnum):
@@ -529,7 +667,23 @@ class Reason(ReasonMethods, TextedEnum):
     DEVICE_OFFLINE = 20, "the axis's board is not answering"
     UNKNOWN_SIGNAL = 21, "no such signal on this server"
     NOT_AN_OUTPUT = 22, "the signal is not a digital output"
-    UNKNOWN_TARGET = 23, "unknown target: 0 = axis, 1 = signal"
+    UNKNOWN_TARGET = 23, "unknown target: 0 = axis, 1 = signal, 2 = group"
+    UNKNOWN_GROUP = 24, "no such group on this server"
+    NO_PATH = (
+        25,
+        "no path with this id for this group was published by this client on `paths` (publish it first; a path runs once)",
+    )
+    PATH_TIMES = 26, "the path's point times must start at 0 or later and increase"
+    PATH_START = 27, "the path's first point has time 0 but is not where the group is"
+    PATH_LAYOUT = (
+        28,
+        "malformed path: no points, too many, an axis count other than the group's, an unknown kind, or a scale outside (0, 1]",
+    )
+    GROUP_BUSY = (
+        29,
+        "an axis of this request is moving with a group: cancel that motion or wait for it",
+    )
+    NOT_MOVING = 30, "the group has no motion running"
 
 
 class Target(TextedEnum):
@@ -537,6 +691,7 @@ class Target(TextedEnum):
 
     AXIS = 0
     SIGNAL = 1
+    GROUP = 2
 
 
 class DeviceState(TextedEnum):
@@ -561,6 +716,7 @@ class AxisMode(TextedEnum):
     RAMP_VELOCITY = 6
     HOMING = 7
     STOPPING = 8
+    GROUP = 9
 
 
 class FaultCode(TextedEnum):
@@ -578,6 +734,7 @@ class FaultCode(TextedEnum):
     FOLLOWING_ERROR = 9, "following-error"
     LIMIT_EXCEEDED = 10, "limit-exceeded"
     HOME_FAILED = 11, "home-failed"
+    GOAL_TOLERANCE = 12, "goal-tolerance"
 
 
 class SignalKind(TextedEnum):
@@ -605,6 +762,52 @@ class DeviceModel(TextedEnum):
     TMCPACK = 2, "tmcpack"
     SPIMOTOR = 3, "spimotor"
     QSB = 4, "qsb"
+
+
+class GroupMotion(TextedEnum):
+    """Where a group's motion is (``GroupState.motion``)."""
+
+    IDLE = 0, "idle"
+    MOVING = 1, "moving"
+    HOLDING = 2, "holding"
+    HELD = 3, "held"
+    DONE = 4, "done"
+    ABORTED = 5, "aborted"
+
+
+class GroupAbort(TextedEnum):
+    """Why a group's motion ended early (``GroupState.abort``); 0 = not aborted."""
+
+    NONE = 0, "none"
+    PATH_TOLERANCE = 1, "path-tolerance"
+    GOAL_TOLERANCE = 2, "goal-tolerance"
+    AXIS_FAULT = 3, "axis-fault"
+    E_STOP = 4, "e-stop"
+    CLAIM_LOST = 5, "claim-lost"
+    CLIENT_DEAD = 6, "client-dead"
+    STOPPED = 7, "stopped"
+    CANCELLED = 8, "cancelled"
+    STREAM_STALE = 9, "stream-stale"
+    STREAM_LIMIT = 10, "stream-limit"
+    SHUTTING_DOWN = 11, "shutting-down"
+
+
+class StreamState(TextedEnum):
+    """Where a group's setpoint stream is (``GroupState.stream``)."""
+
+    IDLE = 0, "idle"
+    STREAMING = 1, "streaming"
+    STALE = 2, "stale"
+    ABORTED = 3, "aborted"
+
+
+class PathKind(TextedEnum):
+    """What a group path is (``GroupPath.kind``, ``GroupState.kind``)."""
+
+    NONE = 0, "none"
+    LINE = 1, "line"
+    TRAJECTORY = 2, "trajectory"
+    STREAM = 3, "stream"
 
 
 class ParamOwner(TextedEnum):
@@ -643,6 +846,13 @@ class SignalFlags(enum.IntFlag):
     CLAIMED = 1 << 1
     SAFE_STATE = 1 << 2
     PENDING = 1 << 3
+
+
+class PathFlags(enum.IntFlag):
+    """Bits of ``GroupPath.flags``."""
+
+    VELOCITIES = 1 << 0
+    ACCELERATIONS = 1 << 1
 
 
 class SignalInfoFlags(enum.IntFlag):
@@ -685,10 +895,15 @@ ENUMS: Dict[str, type] = {
     "SignalKind": SignalKind,
     "EstopCategory": EstopCategory,
     "DeviceModel": DeviceModel,
+    "GroupMotion": GroupMotion,
+    "GroupAbort": GroupAbort,
+    "StreamState": StreamState,
+    "PathKind": PathKind,
     "ParamOwner": ParamOwner,
     "AxisFlags": AxisFlags,
     "FrameFlags": FrameFlags,
     "SignalFlags": SignalFlags,
+    "PathFlags": PathFlags,
     "SignalInfoFlags": SignalInfoFlags,
     "RtFlags": RtFlags,
     "FullServices": FullServices,

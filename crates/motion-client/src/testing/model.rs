@@ -562,6 +562,7 @@ impl Facts for Model {
             position: sim.state.position,
             position_fresh: true,
             tolerance: axis.position_tolerance,
+            group_motion: false,
         })
     }
 

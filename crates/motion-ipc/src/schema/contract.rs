@@ -5,10 +5,12 @@ use super::{Constant, Contract, Enum, Scalar, Schema, Service, Struct, Variant};
 use crate::{
     AxisFlags, AxisInfo, AxisMode, AxisState, AxisWire, ClientId, CommandKind, CommandReply,
     CommandRequest, DeviceInfo, DeviceModel, DeviceState, EstopCategory, FaultCode, FrameFlags,
-    LatencySummary, LinkIo, LinkStats, MAX_AXES, MAX_DEVICES, MAX_LINKS, MAX_PARAMS, MAX_SIGNALS,
-    MODEL_ID_LEN, MachineParam, MachineParams, MotionFrame, NAME_LEN, PARAM_TEXT_LEN, ParamOwner,
-    Reason, SCHEMA_VERSION, ServerInfo, ServerStats, ServiceNames, SignalFlags, SignalInfo,
-    SignalInfoFlags, SignalKind, SignalState, Target, UNIT_LEN,
+    GroupAbort, GroupInfo, GroupMotion, GroupPath, GroupState, LatencySummary, LinkIo, LinkStats,
+    MAX_AXES, MAX_DEVICES, MAX_GROUP_AXES, MAX_GROUPS, MAX_LINKS, MAX_PARAMS, MAX_PATH_POINTS,
+    MAX_SIGNALS, MODEL_ID_LEN, MachineParam, MachineParams, MotionFrame, NAME_LEN, PARAM_TEXT_LEN,
+    PATH_VALUES, ParamOwner, PathFlags, PathKind, Reason, SCHEMA_VERSION, ServerInfo, ServerStats,
+    ServiceNames, SignalFlags, SignalInfo, SignalInfoFlags, SignalKind, SignalState, StreamState,
+    Target, UNIT_LEN,
 };
 
 /// The contract of this build of `motion-ipc`.
@@ -29,13 +31,16 @@ fn structs() -> Vec<&'static Struct> {
         &AxisState::SCHEMA,
         &SignalState::SCHEMA,
         &AxisWire::SCHEMA,
+        &GroupState::SCHEMA,
         &MotionFrame::SCHEMA,
         &CommandRequest::SCHEMA,
         &CommandReply::SCHEMA,
         &AxisInfo::SCHEMA,
         &DeviceInfo::SCHEMA,
         &SignalInfo::SCHEMA,
+        &GroupInfo::SCHEMA,
         &ServerInfo::SCHEMA,
+        &GroupPath::SCHEMA,
         &MachineParam::SCHEMA,
         &MachineParams::SCHEMA,
         &LatencySummary::SCHEMA,
@@ -101,6 +106,22 @@ fn constants() -> Vec<Constant> {
             "Bytes of a model id field (UTF-8, zero padded).",
         ),
         constant(
+            "MAX_GROUPS",
+            MAX_GROUPS,
+            "Capacity of the group arrays of the frame and the server info.",
+        ),
+        constant("MAX_GROUP_AXES", MAX_GROUP_AXES, "Axes one group may hold."),
+        constant(
+            "MAX_PATH_POINTS",
+            MAX_PATH_POINTS,
+            "Points one group path may hold.",
+        ),
+        constant(
+            "PATH_VALUES",
+            PATH_VALUES,
+            "Values of one quantity of a group path: point i, axis j at i * MAX_GROUP_AXES + j.",
+        ),
+        constant(
             "PARAM_TEXT_LEN",
             PARAM_TEXT_LEN,
             "Bytes of a parameter key or value text.",
@@ -142,6 +163,11 @@ fn services() -> Vec<Service> {
             "params",
             names.params(),
             "publish-subscribe, history 1: `MachineParams`",
+        ),
+        service(
+            "paths",
+            names.paths(),
+            "publish-subscribe: `GroupPath`, paths for groups, run by a RUN command",
         ),
         service(
             "estop",
@@ -241,7 +267,9 @@ fn enums() -> Vec<Enum> {
              RAMP_POSITION [position, max velocity, acceleration];\n\
              RAMP_VELOCITY [velocity, acceleration]; HOME [search velocity];\n\
              SET_POSITION [position]; SET_OUTPUT [0.0 or 1.0] (`axis` = signal index, \
-             `target` = SIGNAL); CLAIM, RELEASE, E_STOP, RESET, OFF -.",
+             `target` = SIGNAL); CLAIM, RELEASE, E_STOP, RESET, OFF -;\n\
+             with `target` = GROUP (`axis` = group index): CLAIM, RELEASE, STOP, RUN [path id], \
+             HOLD, RESUME, FEED [0.0..1.5], CANCEL.",
             |value| raw::<u32>(value).and_then(|v| CommandKind::try_from(v).ok()),
             |kind| Some(kind.name()),
         ),
@@ -308,6 +336,34 @@ fn enums() -> Vec<Enum> {
             |model| Some(model.id()),
         ),
         scan(
+            "GroupMotion",
+            Scalar::U8,
+            "Where a group's motion is (`GroupState.motion`).",
+            |value| raw::<u8>(value).and_then(|v| GroupMotion::try_from(v).ok()),
+            |motion| Some(motion.name()),
+        ),
+        scan(
+            "GroupAbort",
+            Scalar::U8,
+            "Why a group's motion ended early (`GroupState.abort`); 0 = not aborted.",
+            |value| raw::<u8>(value).and_then(|v| GroupAbort::try_from(v).ok()),
+            |abort| Some(abort.name()),
+        ),
+        scan(
+            "StreamState",
+            Scalar::U8,
+            "Where a group's setpoint stream is (`GroupState.stream`).",
+            |value| raw::<u8>(value).and_then(|v| StreamState::try_from(v).ok()),
+            |state| Some(state.name()),
+        ),
+        scan(
+            "PathKind",
+            Scalar::U32,
+            "What a group path is (`GroupPath.kind`, `GroupState.kind`).",
+            |value| raw::<u32>(value).and_then(|v| PathKind::try_from(v).ok()),
+            |kind| Some(kind.name()),
+        ),
+        scan(
             "ParamOwner",
             Scalar::U8,
             "What a machine parameter belongs to (`MachineParam.owner_kind`).",
@@ -346,6 +402,12 @@ fn flag_sets() -> Vec<Enum> {
             Scalar::U32,
             "Bits of `SignalState.flags`.",
             bits!(SignalFlags: STALE, CLAIMED, SAFE_STATE, PENDING),
+        ),
+        flags(
+            "PathFlags",
+            Scalar::U32,
+            "Bits of `GroupPath.flags`.",
+            bits!(PathFlags: VELOCITIES, ACCELERATIONS),
         ),
         flags(
             "SignalInfoFlags",

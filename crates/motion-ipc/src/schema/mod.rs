@@ -26,7 +26,7 @@
 //! use motion_ipc::AxisState;
 //!
 //! let axis = &AxisState::SCHEMA;
-//! assert_eq!((axis.name, axis.size, axis.align), ("AxisState", 80, 8));
+//! assert_eq!((axis.name, axis.size, axis.align), ("AxisState", 96, 8));
 //! let fault = axis.field("fault").expect("AxisState has a fault field");
 //! assert_eq!((fault.offset, fault.ty), (44, Type::Scalar(Scalar::U16)));
 //! ```

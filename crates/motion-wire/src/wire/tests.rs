@@ -192,13 +192,19 @@ fn axis_state() -> impl Strategy<Value = AxisState> {
             any::<u8>(),
             any::<u8>(),
         ),
-        (any::<u128>(), any::<f64>(), any::<f64>()),
+        (
+            any::<u128>(),
+            any::<f64>(),
+            any::<f64>(),
+            any::<f64>(),
+            any::<f64>(),
+        ),
     )
         .prop_map(
             |(
                 (position, velocity, target, raw_counts),
                 (last_refresh_tick, flags, fault, mode, device_state),
-                (claimed_by, fault_value, fault_limit),
+                (claimed_by, fault_value, fault_limit, desired_position, desired_velocity),
             )| AxisState {
                 position,
                 velocity,
@@ -212,6 +218,8 @@ fn axis_state() -> impl Strategy<Value = AxisState> {
                 claimed_by: ClientId::from_u128(claimed_by),
                 fault_value,
                 fault_limit,
+                desired_position,
+                desired_velocity,
             },
         )
 }
