@@ -63,6 +63,9 @@ macro_rules! registry {
             fn rate_floor(&self, channel: usize) -> motion_drivers::RateFloor {
                 each_driver!(self, d => d.rate_floor(channel))
             }
+            fn follow(&self, channel: usize) -> motion_drivers::Follow {
+                each_driver!(self, d => d.follow(channel))
+            }
             fn refresh_budget(&self) -> core::time::Duration {
                 each_driver!(self, d => d.refresh_budget())
             }

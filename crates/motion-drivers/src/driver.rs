@@ -27,6 +27,24 @@ pub enum Priority {
     Stop = 3,
 }
 
+/// How a board follows a moving target: what the engine sends it while an axis group's
+/// path moves one of its channels (docs/ARCHITECTURE.md "Coordinated motion").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum Follow {
+    /// A `Position` goal every tick, which the board's own controller tracks: for boards
+    /// on links fast enough to take one every tick (SPI).
+    Setpoints,
+    /// `RampPosition` segments: the path's position a segment ahead with the velocity that
+    /// arrives there in time, the next segment once the driver has acknowledged the last —
+    /// for boards that change a position target while they move.
+    #[default]
+    Segments,
+    /// `Velocity` goals — the path's velocity a segment ahead with the position error fed
+    /// back — the next once the last is acknowledged, and a final `RampPosition` to the
+    /// path's end: for boards that stop before starting a new position move.
+    Velocity,
+}
+
 /// One message a driver wrote in [`Driver::poll_transmit`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Transmit {
@@ -77,6 +95,12 @@ pub trait Driver: Send + fmt::Debug {
     fn rate_floor(&self, channel: usize) -> RateFloor {
         let _ = channel;
         RateFloor::NONE
+    }
+
+    /// How `channel` follows a group's path ([`Follow`]); [`Follow::Segments`] by default.
+    fn follow(&self, channel: usize) -> Follow {
+        let _ = channel;
+        Follow::Segments
     }
 
     /// How old a channel's data may become in normal operation before the engine marks
@@ -178,6 +202,9 @@ impl<T: Driver + ?Sized> Driver for Box<T> {
     }
     fn rate_floor(&self, channel: usize) -> RateFloor {
         (**self).rate_floor(channel)
+    }
+    fn follow(&self, channel: usize) -> Follow {
+        (**self).follow(channel)
     }
     fn refresh_budget(&self) -> Duration {
         (**self).refresh_budget()

@@ -311,6 +311,12 @@ impl Driver for QsbDriver {
         }
     }
 
+    /// A position move starts with COMMAND 4 and waits for the drive to stop, so position segments would stop at every segment; a jog rate changes on the fly.
+    fn follow(&self, channel: usize) -> motion_drivers::Follow {
+        let _ = channel;
+        motion_drivers::Follow::Velocity
+    }
+
     fn rate_floor(&self, channel: usize) -> RateFloor {
         if channel == 0 && self.kinds().contains(GoalKind::Velocity) {
             self.config.rate_floor()

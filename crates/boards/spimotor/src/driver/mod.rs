@@ -286,6 +286,12 @@ impl Driver for SpimotorDriver {
     /// A stepper's slowest rate is one step per longest step delay (255 × 0.1 ms: 39.2
     /// steps/s); its acceleration is the driver's own profile, integrated continuously (no
     /// floor). Brushed channels take power only.
+    /// A position move (the driver's own step-rate ramp) is retargeted every tick over SPI.
+    fn follow(&self, channel: usize) -> motion_drivers::Follow {
+        let _ = channel;
+        motion_drivers::Follow::Setpoints
+    }
+
     fn rate_floor(&self, channel: usize) -> RateFloor {
         if self.is_stepper() && self.kinds(channel).contains(GoalKind::Velocity) {
             RateFloor {
