@@ -16,6 +16,8 @@ pub enum Owner {
     Axis(usize),
     /// `[[signal]]` n.
     Signal(usize),
+    /// `[[group]]` n.
+    Group(usize),
 }
 
 /// The dotted key paths a file set, per owner (`home.direction` for `home = { direction =
@@ -42,6 +44,7 @@ impl GivenKeys {
                             "device" => Owner::Device(index),
                             "axis" => Owner::Axis(index),
                             "signal" => Owner::Signal(index),
+                            "group" => Owner::Group(index),
                             _ => continue,
                         };
                         if let toml::Value::Table(t) = item {
