@@ -205,7 +205,14 @@ impl<'de> Visitor<'de> for Loose {
     fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<RawTolerance, A::Error> {
         let mut entries = Vec::new();
         let mut date = false;
-        while let Some(key) = map.next_key::<Spanned<String>>()? {
+        loop {
+            // A date or time comes as a map of one private key that cannot be read with
+            // its span: the only map whose key is not a spanned string.
+            let Ok(key) = map.next_key::<Spanned<String>>() else {
+                date = true;
+                break;
+            };
+            let Some(key) = key else { break };
             if key.get_ref() == TOML_DATETIME {
                 date = true;
                 map.next_value::<IgnoredAny>()?;

@@ -294,13 +294,17 @@ impl Validator<'_, '_> {
                         None => {
                             ok = false;
                             let listed: Vec<&str> = members.iter().map(|m| m.name).collect();
+                            let listed = if listed.is_empty() {
+                                "it has none".to_owned()
+                            } else {
+                                format!("its axes: {}", listed.join(", "))
+                            };
                             self.issue(
                                 axis.span(),
                                 &k,
                                 format!(
-                                    "`{}` is not an axis of group `{group}`; its axes: {}",
-                                    axis.get_ref(),
-                                    listed.join(", ")
+                                    "`{}` is not an axis of group `{group}`; {listed}",
+                                    axis.get_ref()
                                 ),
                             );
                         }
