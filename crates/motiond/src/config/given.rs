@@ -100,4 +100,13 @@ mod tests {
         assert!(given.contains(Owner::Axis(1), "home.direction"));
         assert!(!given.contains(Owner::Axis(1), "home.max_travel"));
     }
+
+    #[test]
+    fn group_keys_belong_to_their_group() {
+        let given =
+            GivenKeys::of("[[group]]\nname = \"g\"\n[[group]]\npath_tolerance = { x = 1.0 }\n");
+        assert!(given.contains(Owner::Group(0), "name"));
+        assert!(given.contains(Owner::Group(1), "path_tolerance.x"));
+        assert!(!given.contains(Owner::Group(1), "goal_tolerance"));
+    }
 }
