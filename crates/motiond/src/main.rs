@@ -110,4 +110,12 @@ fn print_summary(config: &ServerConfig) {
             }
         }
     }
+    for group in &config.groups {
+        let axes: Vec<&str> = group
+            .axes
+            .iter()
+            .map(|&axis| config.axes[axis].name.as_str())
+            .collect();
+        println!("  group {:<10} {}", group.name, axes.join(" "));
+    }
 }

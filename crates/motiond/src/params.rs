@@ -115,7 +115,7 @@ pub fn machine_params(config: &ServerConfig) -> Box<MachineParams> {
         let (kind, index) = match row.owner {
             Owner::Device(index) => (ParamOwner::Device, index),
             Owner::Axis(index) => (ParamOwner::Axis, index),
-            Owner::Server | Owner::Link(_) | Owner::Signal(_) => continue,
+            Owner::Server | Owner::Link(_) | Owner::Signal(_) | Owner::Group(_) => continue,
         };
         *out = MachineParam::EMPTY;
         write_text(&mut out.key, &row.key);

@@ -16,6 +16,8 @@ pub enum Owner {
     Axis(usize),
     /// `[[signal]]` n.
     Signal(usize),
+    /// `[[group]]` n.
+    Group(usize),
 }
 
 /// The dotted key paths a file set, per owner (`home.direction` for `home = { direction =
@@ -42,6 +44,7 @@ impl GivenKeys {
                             "device" => Owner::Device(index),
                             "axis" => Owner::Axis(index),
                             "signal" => Owner::Signal(index),
+                            "group" => Owner::Group(index),
                             _ => continue,
                         };
                         if let toml::Value::Table(t) = item {
@@ -96,5 +99,14 @@ mod tests {
         assert!(given.contains(Owner::Axis(1), "home"));
         assert!(given.contains(Owner::Axis(1), "home.direction"));
         assert!(!given.contains(Owner::Axis(1), "home.max_travel"));
+    }
+
+    #[test]
+    fn group_keys_belong_to_their_group() {
+        let given =
+            GivenKeys::of("[[group]]\nname = \"g\"\n[[group]]\npath_tolerance = { x = 1.0 }\n");
+        assert!(given.contains(Owner::Group(0), "name"));
+        assert!(given.contains(Owner::Group(1), "path_tolerance.x"));
+        assert!(!given.contains(Owner::Group(1), "goal_tolerance"));
     }
 }

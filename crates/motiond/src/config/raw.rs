@@ -5,7 +5,10 @@
 //! read by the board's crate; a key that is neither general nor any board's is refused
 //! there.
 
+use core::fmt;
+
 use serde::Deserialize;
+use serde::de::{IgnoredAny, MapAccess, SeqAccess, Visitor};
 use toml::Spanned;
 
 /// Integers as written (a value beyond 64 bits is a range error, not a parse error): the
@@ -24,6 +27,8 @@ pub(crate) struct RawConfig {
     pub axis: Vec<Spanned<RawAxis>>,
     #[serde(default)]
     pub signal: Vec<Spanned<RawSignal>>,
+    #[serde(default)]
+    pub group: Vec<Spanned<RawGroup>>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -112,4 +117,130 @@ pub(crate) struct RawHome {
     pub direction: Option<Spanned<String>>,
     pub max_travel: Option<Spanned<f64>>,
     pub position: Option<Spanned<f64>>,
+}
+
+/// `[[group]]`: axes of any boards that move together.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawGroup {
+    pub name: Option<Spanned<String>>,
+    pub axes: Option<Spanned<Vec<Spanned<String>>>>,
+    pub path_tolerance: Option<Spanned<RawTolerance>>,
+    pub goal_tolerance: Option<Spanned<RawTolerance>>,
+    pub goal_time_tolerance_ms: Option<Spanned<Int>>,
+    pub stream_limit: Option<Spanned<String>>,
+    pub stream_timeout: Option<Spanned<Int>>,
+    pub stream_buffer: Option<Spanned<Int>>,
+}
+
+/// A group's tolerance as written: one number for every axis, or a table of numbers by
+/// axis name. Any value is taken, so that a wrong type is reported by validation with the
+/// group's other issues rather than ending the reading of the file.
+#[derive(Debug)]
+pub(crate) enum RawTolerance {
+    /// `path_tolerance = 0.5` (or a value that is neither a number nor a table).
+    One(RawNumber),
+    /// `path_tolerance = { x = 0.5, feeder = 2.0 }`, in file order.
+    PerAxis(Vec<(Spanned<String>, Spanned<RawNumber>)>),
+}
+
+/// A value that should be a number: the number, or what was written instead.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum RawNumber {
+    /// An integer or a float, as `f64`.
+    Number(f64),
+    /// Something else: "a string", "a boolean", "an array", "a table", "a date".
+    Not(&'static str),
+}
+
+/// The key under which the TOML deserializer hands over a date or time as a map.
+const TOML_DATETIME: &str = "$__toml_private_datetime";
+
+/// Reads any value as a [`RawTolerance`] (`table`: a map is a table of numbers) or a
+/// [`RawNumber`] (a map is "a table"). Integers beyond 64 bits become floats.
+struct Loose {
+    table: bool,
+}
+
+impl<'de> Visitor<'de> for Loose {
+    type Value = RawTolerance;
+
+    fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str("a number or a table of numbers")
+    }
+
+    fn visit_bool<E>(self, _: bool) -> Result<RawTolerance, E> {
+        Ok(RawTolerance::One(RawNumber::Not("a boolean")))
+    }
+
+    fn visit_i64<E>(self, v: i64) -> Result<RawTolerance, E> {
+        Ok(RawTolerance::One(RawNumber::Number(v as f64)))
+    }
+
+    fn visit_u64<E>(self, v: u64) -> Result<RawTolerance, E> {
+        Ok(RawTolerance::One(RawNumber::Number(v as f64)))
+    }
+
+    fn visit_i128<E>(self, v: i128) -> Result<RawTolerance, E> {
+        Ok(RawTolerance::One(RawNumber::Number(v as f64)))
+    }
+
+    fn visit_u128<E>(self, v: u128) -> Result<RawTolerance, E> {
+        Ok(RawTolerance::One(RawNumber::Number(v as f64)))
+    }
+
+    fn visit_f64<E>(self, v: f64) -> Result<RawTolerance, E> {
+        Ok(RawTolerance::One(RawNumber::Number(v)))
+    }
+
+    fn visit_str<E>(self, _: &str) -> Result<RawTolerance, E> {
+        Ok(RawTolerance::One(RawNumber::Not("a string")))
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<RawTolerance, A::Error> {
+        while seq.next_element::<IgnoredAny>()?.is_some() {}
+        Ok(RawTolerance::One(RawNumber::Not("an array")))
+    }
+
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<RawTolerance, A::Error> {
+        let mut entries = Vec::new();
+        let mut date = false;
+        loop {
+            // A date or time comes as a map of one private key that cannot be read with
+            // its span: the only map whose key is not a spanned string.
+            let Ok(key) = map.next_key::<Spanned<String>>() else {
+                date = true;
+                break;
+            };
+            let Some(key) = key else { break };
+            if key.get_ref() == TOML_DATETIME {
+                date = true;
+                map.next_value::<IgnoredAny>()?;
+            } else if self.table {
+                entries.push((key, map.next_value::<Spanned<RawNumber>>()?));
+            } else {
+                map.next_value::<IgnoredAny>()?;
+            }
+        }
+        Ok(match (date, self.table) {
+            (true, _) => RawTolerance::One(RawNumber::Not("a date")),
+            (false, true) => RawTolerance::PerAxis(entries),
+            (false, false) => RawTolerance::One(RawNumber::Not("a table")),
+        })
+    }
+}
+
+impl<'de> Deserialize<'de> for RawTolerance {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        deserializer.deserialize_any(Loose { table: true })
+    }
+}
+
+impl<'de> Deserialize<'de> for RawNumber {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        match deserializer.deserialize_any(Loose { table: false })? {
+            RawTolerance::One(number) => Ok(number),
+            RawTolerance::PerAxis(_) => Ok(Self::Not("a table")),
+        }
+    }
 }

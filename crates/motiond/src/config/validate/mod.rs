@@ -9,6 +9,7 @@ use motion_ipc::{MAX_AXES, MAX_DEVICES, MAX_LINKS, NAME_LEN};
 use serde::Deserialize;
 use toml::Spanned;
 
+mod groups;
 mod home;
 mod items;
 mod links;
@@ -320,6 +321,7 @@ impl Validator<'_, '_> {
                 self.issue(span, &format!("axis[{index}].channel"), message);
             }
         }
+        let groups = self.groups(&raw.group, &raw.axis, &axes);
         ServerConfig {
             path: PathBuf::new(),
             server,
@@ -328,7 +330,7 @@ impl Validator<'_, '_> {
             axes: axes.into_iter().flatten().collect(),
             axis_specs,
             signals,
-            groups: Vec::new(),
+            groups,
             given: GivenKeys::default(),
             warnings: Vec::new(),
         }
