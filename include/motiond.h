@@ -32,6 +32,8 @@
  *   MOTIOND_SERVICE_PARAMS          publish-subscribe, history 1: motiond_machine_params_t
  *   MOTIOND_SERVICE_PATHS           publish-subscribe: motiond_group_path_t, paths for groups,
  *                                   run by a RUN command
+ *   MOTIOND_SERVICE_SETPOINTS       publish-subscribe: motiond_setpoint_t, streamed setpoints
+ *                                   of the groups
  *   MOTIOND_SERVICE_ESTOP           event: any notification latches the e-stop
  *   MOTIOND_SERVICE_SERVER_NODE     the iceoryx2 node name of the instance's server
  */
@@ -91,6 +93,7 @@ extern "C" {
 #define MOTIOND_SERVICE_STATS "motiond/%s/stats"
 #define MOTIOND_SERVICE_PARAMS "motiond/%s/params"
 #define MOTIOND_SERVICE_PATHS "motiond/%s/paths"
+#define MOTIOND_SERVICE_SETPOINTS "motiond/%s/setpoints"
 #define MOTIOND_SERVICE_ESTOP "motiond/%s/estop"
 #define MOTIOND_SERVICE_SERVER_NODE "motiond-%s"
 
@@ -109,6 +112,7 @@ extern "C" {
 #define MOTIOND_TYPE_NAME_GROUP_INFO "motiond::GroupInfo"
 #define MOTIOND_TYPE_NAME_SERVER_INFO "motiond::ServerInfo"
 #define MOTIOND_TYPE_NAME_GROUP_PATH "motiond::GroupPath"
+#define MOTIOND_TYPE_NAME_SETPOINT "motiond::Setpoint"
 #define MOTIOND_TYPE_NAME_MACHINE_PARAM "motiond::MachineParam"
 #define MOTIOND_TYPE_NAME_MACHINE_PARAMS "motiond::MachineParams"
 #define MOTIOND_TYPE_NAME_LATENCY_SUMMARY "motiond::LatencySummary"
@@ -125,7 +129,7 @@ extern "C" {
  * acceleration]; RAMP_VELOCITY [velocity, acceleration]; HOME [search velocity]; SET_POSITION
  * [position]; SET_OUTPUT [0.0 or 1.0] (`axis` = signal index, `target` = SIGNAL); CLAIM,
  * RELEASE, E_STOP, RESET, OFF -; with `target` = GROUP (`axis` = group index): CLAIM, RELEASE,
- * STOP, RUN [path id], HOLD, RESUME, FEED [0.0..1.5], CANCEL.
+ * STOP, RUN [path id], HOLD, RESUME, FEED [0.0..1.5], CANCEL, STREAM [stream mode].
  */
 enum motiond_command_kind {
     MOTIOND_COMMAND_KIND_STOP = 1,
@@ -146,7 +150,8 @@ enum motiond_command_kind {
     MOTIOND_COMMAND_KIND_HOLD = 16,
     MOTIOND_COMMAND_KIND_RESUME = 17,
     MOTIOND_COMMAND_KIND_FEED = 18,
-    MOTIOND_COMMAND_KIND_CANCEL = 19
+    MOTIOND_COMMAND_KIND_CANCEL = 19,
+    MOTIOND_COMMAND_KIND_STREAM = 20
 };
 
 /**
@@ -301,6 +306,17 @@ enum motiond_stream_state {
     MOTIOND_STREAM_STATE_ABORTED = 3
 };
 
+/**
+ * What a group's streamed setpoints are (motiond_setpoint_t.mode,
+ * motiond_group_state_t.stream_mode, `values[0]` of a STREAM command).
+ */
+enum motiond_stream_mode {
+    MOTIOND_STREAM_MODE_NONE = 0,
+    MOTIOND_STREAM_MODE_POSITION = 1,
+    MOTIOND_STREAM_MODE_VELOCITY = 2,
+    MOTIOND_STREAM_MODE_POWER = 3
+};
+
 /** What a group path is (motiond_group_path_t.kind, motiond_group_state_t.kind). */
 enum motiond_path_kind {
     MOTIOND_PATH_KIND_NONE = 0,
@@ -349,6 +365,17 @@ enum motiond_path_flags {
     MOTIOND_PATH_FLAGS_ACCELERATIONS = 1 << 1
 };
 
+/** Bits of motiond_group_state_t.stream_flags. */
+enum motiond_stream_flags {
+    MOTIOND_STREAM_FLAGS_APPLIED = 1 << 0,
+    MOTIOND_STREAM_FLAGS_CLAMPED = 1 << 1
+};
+
+/** Bits of motiond_setpoint_t.flags. */
+enum motiond_setpoint_flags {
+    MOTIOND_SETPOINT_FLAGS_FEED_FORWARD = 1 << 0
+};
+
 /** Bits of motiond_signal_info_t.flags. */
 enum motiond_signal_info_flags {
     MOTIOND_SIGNAL_INFO_FLAGS_INVERT = 1 << 0,
@@ -372,7 +399,9 @@ enum motiond_full_services {
     MOTIOND_FULL_SERVICES_INFO = 1 << 3,
     MOTIOND_FULL_SERVICES_STATS = 1 << 4,
     MOTIOND_FULL_SERVICES_PARAMS = 1 << 5,
-    MOTIOND_FULL_SERVICES_ESTOP = 1 << 6
+    MOTIOND_FULL_SERVICES_ESTOP = 1 << 6,
+    MOTIOND_FULL_SERVICES_PATHS = 1 << 7,
+    MOTIOND_FULL_SERVICES_SETPOINTS = 1 << 8
 };
 
 /* --- payloads ----------------------------------------------------------------------------- */
@@ -505,7 +534,10 @@ typedef struct motiond_group_state {
     uint8_t abort; /**< MOTIOND_GROUP_ABORT_* value. (offset 81) */
     uint8_t kind; /**< MOTIOND_PATH_KIND_* value of the path running or last run. (offset 82) */
     uint8_t stream; /**< MOTIOND_STREAM_STATE_* value. (offset 83) */
-    uint32_t reserved; /**< Zero. (offset 84) */
+    /** MOTIOND_STREAM_MODE_* value of the stream running or last run. */
+    uint8_t stream_mode; /* offset 84 */
+    uint8_t stream_flags; /**< MOTIOND_STREAM_FLAGS_* bits of this tick. (offset 85) */
+    uint16_t reserved; /**< Zero. (offset 86) */
     uint64_t last_sequence; /**< Sequence of the last streamed setpoint applied. (offset 88) */
     uint64_t last_applied_tick; /**< Tick in which it was applied. (offset 96) */
     uint64_t applied; /**< Streamed setpoints applied. (offset 104) */
@@ -782,6 +814,36 @@ MOTIOND_STATIC_ASSERT(sizeof(motiond_group_path_t) == 401456, "motiond_group_pat
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_group_path_t) == 8, "motiond_group_path_t alignment");
 
 /**
+ * One setpoint of a group's stream, published on `motiond/<name>/setpoints` by the client that
+ * holds the group's claim and started the stream (`Stream` command); from any other node it is
+ * dropped and counted (motiond_group_state_t.refused). In tick `k` the server applies the
+ * newest setpoint with `for_tick ≤ k` not applied yet, at most once and in sequence order; one
+ * for a tick more than `stream_buffer` ahead is dropped (`early`), older ones not taken in time
+ * are dropped (`late`).
+ *
+ * 288 bytes, alignment 8; iceoryx2 type name "motiond::Setpoint".
+ */
+typedef struct motiond_setpoint {
+    uint32_t schema_version; /**< MOTIOND_SCHEMA_VERSION of the sender. (offset 0) */
+    uint32_t group; /**< Group index (config order). (offset 4) */
+    /**
+     * The client's sequence number: increasing; a setpoint not above the last applied one is
+     * late.
+     */
+    uint64_t sequence; /* offset 8 */
+    /** The tick this setpoint is for (a frame's `tick` + 1: the next tick). */
+    uint64_t for_tick; /* offset 16 */
+    uint32_t mode; /**< MOTIOND_STREAM_MODE_* value: must be the stream's. (offset 24) */
+    uint32_t flags; /**< MOTIOND_SETPOINT_FLAGS_* bits. (offset 28) */
+    /** Per axis, in the group's order: position (unit), velocity (unit/s) or power. */
+    double values[MOTIOND_MAX_GROUP_AXES]; /* offset 32 */
+    /** Per axis: velocity feed-forward, unit/s (with `FEED_FORWARD`). */
+    double velocities[MOTIOND_MAX_GROUP_AXES]; /* offset 160 */
+} motiond_setpoint_t;
+MOTIOND_STATIC_ASSERT(sizeof(motiond_setpoint_t) == 288, "motiond_setpoint_t size");
+MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_setpoint_t) == 8, "motiond_setpoint_t alignment");
+
+/**
  * One effective machine parameter.
  *
  * 88 bytes, alignment 4; iceoryx2 type name "motiond::MachineParam".
@@ -952,6 +1014,7 @@ static inline const char *motiond_command_kind_text(uint32_t value) {
     case MOTIOND_COMMAND_KIND_RESUME: return "resume";
     case MOTIOND_COMMAND_KIND_FEED: return "feed";
     case MOTIOND_COMMAND_KIND_CANCEL: return "cancel";
+    case MOTIOND_COMMAND_KIND_STREAM: return "stream";
     default: return NULL;
     }
 }
@@ -1095,6 +1158,17 @@ static inline const char *motiond_stream_state_text(uint32_t value) {
     case MOTIOND_STREAM_STATE_STREAMING: return "streaming";
     case MOTIOND_STREAM_STATE_STALE: return "stale";
     case MOTIOND_STREAM_STATE_ABORTED: return "aborted";
+    default: return NULL;
+    }
+}
+
+/** The text of a MOTIOND_STREAM_MODE_* value; NULL for a value unknown here. */
+static inline const char *motiond_stream_mode_text(uint32_t value) {
+    switch (value) {
+    case MOTIOND_STREAM_MODE_NONE: return "none";
+    case MOTIOND_STREAM_MODE_POSITION: return "position";
+    case MOTIOND_STREAM_MODE_VELOCITY: return "velocity";
+    case MOTIOND_STREAM_MODE_POWER: return "power";
     default: return NULL;
     }
 }

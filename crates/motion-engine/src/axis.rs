@@ -223,6 +223,7 @@ impl Axis {
                 | AxisMode::RampPosition
                 | AxisMode::RampVelocity
                 | AxisMode::Homing
+                | AxisMode::Group
         )
     }
 

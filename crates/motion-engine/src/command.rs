@@ -4,7 +4,8 @@ use motion_drivers::Driver;
 use motion_drivers::{Goal, GoalError, GoalKind};
 use motion_ipc::rules::{self, AxisFacts, Facts, Motion, SignalFacts, Verdict};
 use motion_ipc::{
-    ClientId, CommandKind, CommandReply, CommandRequest, DeviceState, FaultCode, Reason,
+    ClientId, CommandKind, CommandReply, CommandRequest, DeviceState, FaultCode, GroupPath, Reason,
+    Target,
 };
 
 use crate::Engine;
@@ -24,6 +25,13 @@ pub trait CommandPort {
     /// could not tell). `None` (the default) is for in-process ports without a transport
     /// identity: the request's own `client` field is then taken as is.
     fn sender(&self) -> Option<ClientId> {
+        None
+    }
+    /// The newest path with id `id` that `client` (the transport's identity of the request
+    /// being applied) published on `paths`, taken: a path runs once. `None` (the default)
+    /// when there is none.
+    fn take_path(&mut self, client: ClientId, id: u64) -> Option<&GroupPath> {
+        let _ = (client, id);
         None
     }
 }
@@ -87,9 +95,9 @@ impl<D: Driver> Engine<D> {
     pub(crate) fn apply_command(
         &mut self,
         request: &CommandRequest,
-        sender: Option<ClientId>,
+        port: &mut dyn CommandPort,
     ) -> Reason {
-        let client = match rules::identify(request, sender) {
+        let client = match rules::identify(request, port.sender()) {
             Ok(client) => client,
             Err(reason) => return reason,
         };
@@ -105,6 +113,9 @@ impl<D: Driver> Engine<D> {
             return Reason::IdentityMismatch;
         }
         self.renew_claims(client);
+        if request.target == Target::Group as u32 {
+            return self.apply_group_command(request, client, port);
+        }
         match rules::judge(request, client, &*self) {
             Verdict::Refused(reason) => reason,
             Verdict::EStop => {
@@ -282,12 +293,20 @@ impl<D: Driver> Engine<D> {
             let Some(request) = port.next_request() else {
                 break;
             };
-            let reason = self.apply_command(&request, port.sender());
+            self.reply_detail = crate::ReplyDetail::NONE;
+            let reason = self.apply_command(&request, port);
             self.counters.commands += 1;
             if reason != Reason::Accepted {
                 self.counters.rejected += 1;
             }
-            port.reply(CommandReply::to(&request, reason, self.tick));
+            let detail = self.reply_detail;
+            let index = |value: Option<usize>| value.map_or(u32::MAX, |v| v as u32);
+            let mut reply = CommandReply::to(&request, reason, self.tick)
+                .at_axis(index(detail.at_axis), detail.holder);
+            reply.at_point = index(detail.at_point);
+            reply.value = detail.value;
+            reply.limit = detail.limit;
+            port.reply(reply);
         }
     }
 }

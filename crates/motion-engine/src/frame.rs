@@ -2,8 +2,9 @@
 
 use motion_drivers::Driver;
 use motion_ipc::{
-    AxisFlags, AxisInfo, AxisMode, AxisState, AxisWire, DeviceInfo, FrameFlags, MotionFrame,
-    SCHEMA_VERSION, ServerInfo, SignalFlags, SignalInfo, SignalInfoFlags, SignalState, write_text,
+    AxisFlags, AxisInfo, AxisMode, AxisState, AxisWire, ClientId, DeviceInfo, FrameFlags,
+    GroupInfo, MAX_GROUP_AXES, MotionFrame, SCHEMA_VERSION, ServerInfo, SignalFlags, SignalInfo,
+    SignalInfoFlags, SignalState, write_text,
 };
 
 use crate::Engine;
@@ -44,6 +45,20 @@ impl<D: Driver> Engine<D> {
                 reserved: [0; 3],
                 claimed_by: signal.claimed_by,
             };
+        }
+        frame.group_count = self.groups.len() as u32;
+        for (group, out) in self.groups.iter().zip(frame.groups.iter_mut()) {
+            let mut holders = group
+                .members
+                .iter()
+                .map(|member| self.axes[member.axis].claimed_by);
+            let first = holders.next().unwrap_or(ClientId::NONE);
+            let common = if holders.all(|holder| holder == first) {
+                first
+            } else {
+                ClientId::NONE
+            };
+            *out = group.state(common);
         }
         for (axis, out) in self.axes.iter().zip(frame.wire.iter_mut()) {
             let (wire_tick, wire_ns) = axis
@@ -103,6 +118,25 @@ impl<D: Driver> Engine<D> {
         info.tick_hz = config.tick_hz;
         info.command_timeout_ms =
             u32::try_from(config.command_timeout.as_millis()).unwrap_or(u32::MAX);
+        info.group_count = self.groups.len() as u32;
+        for (group, out) in self.groups.iter().zip(&mut info.groups) {
+            let config = &group.config;
+            *out = GroupInfo::EMPTY;
+            write_text(&mut out.name, &config.name);
+            out.axis_count = config.axes.len().min(MAX_GROUP_AXES) as u32;
+            out.stream_limit = match config.stream_limit {
+                crate::config::StreamLimit::Clamp => 0,
+                crate::config::StreamLimit::Abort => 1,
+            };
+            out.stream_timeout = config.stream_timeout;
+            out.stream_buffer = config.stream_buffer;
+            out.goal_time_tolerance = config.goal_time_tolerance.as_secs_f64();
+            for (slot, axis) in config.axes.iter().take(MAX_GROUP_AXES).enumerate() {
+                out.axes[slot] = *axis as u32;
+                out.path_tolerance[slot] = config.path_tolerance[slot];
+                out.goal_tolerance[slot] = config.goal_tolerance[slot];
+            }
+        }
         write_text(&mut info.name, &config.name);
         for ((axis, axis_config), out) in self.axes.iter().zip(&config.axes).zip(&mut info.axes) {
             *out = AxisInfo::EMPTY;

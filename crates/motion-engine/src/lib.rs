@@ -48,6 +48,7 @@ mod command;
 mod config;
 mod device;
 mod frame;
+mod group;
 mod io;
 mod safety;
 mod signal;
@@ -66,6 +67,7 @@ pub use crate::config::{
     GroupConfig, SignalConfig, StreamLimit,
 };
 use crate::device::Device;
+use crate::group::Group;
 pub use crate::io::IO_STALL_LIMIT;
 use crate::signal::Signal;
 pub use crate::supervision::OVERSPEED_SAMPLES;
@@ -118,6 +120,31 @@ pub struct Engine<D: Driver = Box<dyn Driver>> {
     heard: Vec<Option<Duration>>,
     /// CLOCK_MONOTONIC at engine time zero.
     clock_origin: Duration,
+    /// Axis groups, config order.
+    groups: Vec<Group>,
+    /// What the answer to the request being applied names besides its reason.
+    reply_detail: ReplyDetail,
+}
+
+/// What an answer names besides its reason: the axis (config index) and the point at
+/// fault, the claim holder, the figure and the limit ([`motion_ipc::CommandReply`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct ReplyDetail {
+    pub at_point: Option<usize>,
+    pub at_axis: Option<usize>,
+    pub holder: ClientId,
+    pub value: f64,
+    pub limit: f64,
+}
+
+impl ReplyDetail {
+    pub const NONE: Self = Self {
+        at_point: None,
+        at_axis: None,
+        holder: ClientId::NONE,
+        value: 0.0,
+        limit: 0.0,
+    };
 }
 
 /// Dead clients remembered (the oldest is forgotten first; node ids are never reused).
@@ -164,6 +191,28 @@ impl<D: Driver> Engine<D> {
                 Signal::new(signal.clone(), device.bus, device.slot)
             })
             .collect();
+        let groups = config
+            .groups
+            .iter()
+            .map(|group| {
+                let members = group
+                    .axes
+                    .iter()
+                    .map(|&index| {
+                        let axis = &axes[index];
+                        let follow = per_link[axis.bus][axis.slot].follow(axis.channel);
+                        let limits = motion_trajectory::AxisLimits {
+                            min: axis.min,
+                            max: axis.max,
+                            max_velocity: axis.max_velocity,
+                            max_accel: axis.max_accel,
+                        };
+                        (index, follow, limits)
+                    })
+                    .collect();
+                Group::new(group.clone(), members)
+            })
+            .collect();
         let buses: Vec<LinkBus<D>> = config
             .links
             .iter()
@@ -187,6 +236,8 @@ impl<D: Driver> Engine<D> {
             shutting_down: false,
             counters: EngineCounters::default(),
             departed: FixedQueue::new(),
+            groups,
+            reply_detail: ReplyDetail::NONE,
             config,
         })
     }
@@ -297,6 +348,7 @@ impl<D: Driver> Engine<D> {
         self.expire_claims();
         self.take_commands(port);
         self.run_safety();
+        self.run_groups();
         self.write_frame(frame);
     }
 
@@ -351,6 +403,7 @@ impl<D: Driver> Engine<D> {
         if client.is_none() {
             return;
         }
+        self.abort_groups_of(client);
         self.release_claims_of(client);
         if self.departed.position(|gone| *gone == client).is_none() {
             self.departed.push_overwrite(client);

@@ -155,6 +155,7 @@ impl<D: Driver> Engine<D> {
         axis.deadman_at = None;
         axis.goal_owner = ClientId::NONE;
         axis.off_after_stop = false;
+        axis.group = None;
         if stopped {
             axis.switched_off = false;
         }
@@ -175,6 +176,7 @@ impl<D: Driver> Engine<D> {
         axis.goal_owner = ClientId::NONE;
         axis.off_after_stop = false;
         axis.switched_off = true;
+        axis.group = None;
         Ok(())
     }
 

@@ -125,13 +125,17 @@ pub enum CommandKind {
     /// Set the group's feed override: `values[0]` = 0.0..=1.5 (1.0 = 100 %); time along the
     /// path runs at this rate, changed within the axes' acceleration limits.
     Feed = 18,
-    /// Bring the group to rest along its path, then end its motion (`aborted`, `cancelled`).
+    /// Bring the group to rest along its path, then end its motion (`aborted`, `cancelled`);
+    /// for a stream: end it, every axis stops and holds.
     Cancel = 19,
+    /// Start streaming setpoints to the group (`values[0]` = [`StreamMode`](crate::StreamMode)
+    /// value) on `setpoints`; needs the group's claim (every member claimed by the sender).
+    Stream = 20,
 }
 
 impl CommandKind {
     /// Every kind, in value order.
-    pub const ALL: [Self; 19] = [
+    pub const ALL: [Self; 20] = [
         Self::Stop,
         Self::Power,
         Self::Position,
@@ -151,6 +155,7 @@ impl CommandKind {
         Self::Resume,
         Self::Feed,
         Self::Cancel,
+        Self::Stream,
     ];
 
     /// The command's name as the CLI and logs spell it.
@@ -175,6 +180,7 @@ impl CommandKind {
             Self::Resume => "resume",
             Self::Feed => "feed",
             Self::Cancel => "cancel",
+            Self::Stream => "stream",
         }
     }
 }
@@ -573,7 +579,7 @@ mod tests {
             assert_eq!(CommandKind::try_from(kind as u32), Ok(kind));
         }
         assert_eq!(CommandKind::try_from(0), Err(UnknownValue(0)));
-        assert_eq!(CommandKind::try_from(20), Err(UnknownValue(20)));
+        assert_eq!(CommandKind::try_from(21), Err(UnknownValue(21)));
         assert_eq!(Target::try_from(2), Ok(Target::Group));
         assert_eq!(Target::try_from(3), Err(UnknownValue(3)));
         for (index, reason) in Reason::ALL.iter().enumerate() {

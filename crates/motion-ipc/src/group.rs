@@ -184,6 +184,140 @@ impl TryFrom<u8> for StreamState {
     }
 }
 
+/// What a group's streamed setpoints are. Travels as `u32` in [`Setpoint::mode`], as
+/// `values[0]` of a `Stream` command, and as `u8` in [`GroupState::stream_mode`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[repr(u32)]
+pub enum StreamMode {
+    /// No stream.
+    #[default]
+    None = 0,
+    /// Positions, each axis's unit (cyclic synchronous position).
+    Position = 1,
+    /// Velocities, unit/s (cyclic synchronous velocity); the desired position integrates
+    /// them.
+    Velocity = 2,
+    /// Open-loop power, −1.0..=1.0 of full scale (boards that take power goals).
+    Power = 3,
+}
+
+impl StreamMode {
+    /// The name clients print.
+    pub const fn name(self) -> &'static str {
+        match self {
+            Self::None => "none",
+            Self::Position => "position",
+            Self::Velocity => "velocity",
+            Self::Power => "power",
+        }
+    }
+}
+
+impl TryFrom<u32> for StreamMode {
+    type Error = UnknownValue;
+    fn try_from(value: u32) -> Result<Self, Self::Error> {
+        Ok(match value {
+            0 => Self::None,
+            1 => Self::Position,
+            2 => Self::Velocity,
+            3 => Self::Power,
+            other => return Err(UnknownValue(other)),
+        })
+    }
+}
+
+/// Bits of [`GroupState::stream_flags`]: what happened to the stream in this tick.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct StreamFlags(pub u8);
+
+impl StreamFlags {
+    /// A setpoint was applied in this tick.
+    pub const APPLIED: Self = Self(1 << 0);
+    /// The setpoint applied in this tick was clamped to a limit.
+    pub const CLAMPED: Self = Self(1 << 1);
+
+    /// Whether every bit of `other` is set.
+    pub const fn contains(self, other: Self) -> bool {
+        self.0 & other.0 == other.0
+    }
+}
+
+/// Bits of [`Setpoint::flags`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct SetpointFlags(pub u32);
+
+impl SetpointFlags {
+    /// `velocities` holds a velocity feed-forward per axis (position streams): the boards
+    /// that follow by segments or velocities are given it instead of the difference of the
+    /// last two setpoints.
+    pub const FEED_FORWARD: Self = Self(1 << 0);
+
+    /// Whether every bit of `other` is set.
+    pub const fn contains(self, other: Self) -> bool {
+        self.0 & other.0 == other.0
+    }
+}
+
+payload! {
+    /// One setpoint of a group's stream, published on `motiond/<name>/setpoints` by the
+    /// client that holds the group's claim and started the stream (`Stream` command); from
+    /// any other node it is dropped and counted ([`GroupState::refused`]). In tick `k` the
+    /// server applies the newest setpoint with `for_tick ≤ k` not applied yet, at most once
+    /// and in sequence order; one for a tick more than `stream_buffer` ahead is dropped
+    /// (`early`), older ones not taken in time are dropped (`late`).
+    #[derive(Debug, Clone, Copy, PartialEq)]
+    #[type_name("motiond::Setpoint")]
+    pub struct Setpoint {
+        /// [`SCHEMA_VERSION`] of the sender.
+        pub schema_version: u32,
+        /// Group index (config order).
+        pub group: u32,
+        /// The client's sequence number: increasing; a setpoint not above the last applied
+        /// one is late.
+        pub sequence: u64,
+        /// The tick this setpoint is for (a frame's `tick` + 1: the next tick).
+        pub for_tick: u64,
+        /// [`StreamMode`] value: must be the stream's.
+        pub mode: u32,
+        /// [`SetpointFlags`] bits.
+        pub flags: u32,
+        /// Per axis, in the group's order: position (unit), velocity (unit/s) or power.
+        pub values: [f64; MAX_GROUP_AXES],
+        /// Per axis: velocity feed-forward, unit/s (with `FEED_FORWARD`).
+        pub velocities: [f64; MAX_GROUP_AXES],
+    }
+}
+
+impl Setpoint {
+    /// An empty setpoint of the current schema.
+    pub const EMPTY: Self = Self {
+        schema_version: SCHEMA_VERSION,
+        group: 0,
+        sequence: 0,
+        for_tick: 0,
+        mode: StreamMode::None as u32,
+        flags: 0,
+        values: [0.0; MAX_GROUP_AXES],
+        velocities: [0.0; MAX_GROUP_AXES],
+    };
+
+    /// The typed mode.
+    pub fn mode(&self) -> Result<StreamMode, UnknownValue> {
+        StreamMode::try_from(self.mode)
+    }
+
+    /// The typed flags.
+    pub const fn flags(&self) -> SetpointFlags {
+        SetpointFlags(self.flags)
+    }
+}
+
+impl Default for Setpoint {
+    fn default() -> Self {
+        Self::EMPTY
+    }
+}
+
 /// What a [`GroupPath`] holds. Travels as `u32` in [`GroupPath::kind`] and as `u8` in
 /// [`GroupState::kind`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
@@ -264,8 +398,12 @@ payload! {
         pub kind: u8,
         /// [`StreamState`] value.
         pub stream: u8,
+        /// [`StreamMode`] value of the stream running or last run.
+        pub stream_mode: u8,
+        /// [`StreamFlags`] bits of this tick.
+        pub stream_flags: u8,
         /// Zero.
-        pub reserved: u32,
+        pub reserved: u16,
         /// Sequence of the last streamed setpoint applied.
         pub last_sequence: u64,
         /// Tick in which it was applied.
@@ -301,6 +439,8 @@ impl GroupState {
         abort: 0,
         kind: 0,
         stream: 0,
+        stream_mode: 0,
+        stream_flags: 0,
         reserved: 0,
         last_sequence: 0,
         last_applied_tick: 0,
@@ -324,6 +464,16 @@ impl GroupState {
     /// The typed stream state.
     pub fn stream(&self) -> Result<StreamState, UnknownValue> {
         StreamState::try_from(self.stream)
+    }
+
+    /// The typed stream mode.
+    pub fn stream_mode(&self) -> Result<StreamMode, UnknownValue> {
+        StreamMode::try_from(u32::from(self.stream_mode))
+    }
+
+    /// The typed stream flags of this tick.
+    pub const fn stream_flags(&self) -> StreamFlags {
+        StreamFlags(self.stream_flags)
     }
 
     /// The config index of the axis that aborted the motion.

@@ -51,7 +51,7 @@ pub use frame::{
 };
 pub use group::{
     GroupAbort, GroupInfo, GroupMotion, GroupPath, GroupState, PATH_VALUES, PathFlags, PathKind,
-    StreamState,
+    Setpoint, SetpointFlags, StreamFlags, StreamMode, StreamState,
 };
 pub use info::{AxisInfo, Capabilities, DeviceInfo, DeviceModel, EstopCategory, ServerInfo};
 /// Fixed-size, zero-padded UTF-8 text fields (from `motion-base`, shared with the drivers).

@@ -313,7 +313,8 @@ pub fn judge(request: &CommandRequest, client: ClientId, facts: &impl Facts) -> 
         | CommandKind::Hold
         | CommandKind::Resume
         | CommandKind::Feed
-        | CommandKind::Cancel => return Refused(Reason::UnknownTarget),
+        | CommandKind::Cancel
+        | CommandKind::Stream => return Refused(Reason::UnknownTarget),
         _ => {}
     }
     let Some(axis) = facts.axis(index) else {
@@ -517,7 +518,8 @@ fn motion_of(
         | CommandKind::Hold
         | CommandKind::Resume
         | CommandKind::Feed
-        | CommandKind::Cancel => return Err(Reason::UnknownKind),
+        | CommandKind::Cancel
+        | CommandKind::Stream => return Err(Reason::UnknownKind),
     })
 }
 

@@ -61,6 +61,12 @@ impl ServiceNames {
         self.under("paths")
     }
 
+    /// Publish-subscribe: [`Setpoint`](crate::Setpoint), streamed setpoints of the groups
+    /// (a `Stream` command starts a stream).
+    pub fn setpoints(&self) -> String {
+        self.under("setpoints")
+    }
+
     /// Event: any notification latches the e-stop. Its own ports, separate from the
     /// command service's, so that an e-stop gets through when the command service's client
     /// slots are exhausted.

@@ -175,6 +175,10 @@ impl ServerStats {
     pub const FULL_PARAMS: u32 = 1 << 5;
     /// Bit of `full_services`: the e-stop event's notifier slots.
     pub const FULL_ESTOP: u32 = 1 << 6;
+    /// Bit of `full_services`: the paths service's publisher slots.
+    pub const FULL_PATHS: u32 = 1 << 7;
+    /// Bit of `full_services`: the setpoints service's publisher slots.
+    pub const FULL_SETPOINTS: u32 = 1 << 8;
 
     /// Empty figures of the current schema.
     pub const EMPTY: Self = Self {

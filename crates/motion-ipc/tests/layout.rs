@@ -28,7 +28,7 @@ pin!(AxisWire, size 24, align 8, { goal_tick @ 0, wire_tick @ 8, wire_ns @ 16 })
 pin!(GroupState, size 144, align 8, {
     owner @ 0, path_id @ 16, time @ 24, duration @ 32, feed @ 40, feed_set @ 48,
     abort_value @ 56, abort_limit @ 64, point @ 72, abort_axis @ 76, motion @ 80, abort @ 81,
-    kind @ 82, stream @ 83, reserved @ 84, last_sequence @ 88, last_applied_tick @ 96,
+    kind @ 82, stream @ 83, stream_mode @ 84, stream_flags @ 85, reserved @ 86, last_sequence @ 88, last_applied_tick @ 96,
     applied @ 104, late @ 112, early @ 120, clamped @ 128, refused @ 136,
 });
 pin!(MotionFrame, size 20816, align 8, {
@@ -67,6 +67,10 @@ pin!(ServerInfo, size 38864, align 8, {
     command_timeout_ms @ 16, max_clients @ 20, server_pid @ 24, signal_count @ 28, name @ 32,
     start_time_ns @ 64, axes @ 72, devices @ 20552, signals @ 24648, group_count @ 32840,
     reserved @ 32844, groups @ 32848,
+});
+pin!(Setpoint, size 288, align 8, {
+    schema_version @ 0, group @ 4, sequence @ 8, for_tick @ 16, mode @ 24, flags @ 28,
+    values @ 32, velocities @ 160,
 });
 pin!(GroupPath, size 401456, align 8, {
     schema_version @ 0, kind @ 4, id @ 8, group @ 16, point_count @ 20, axis_count @ 24,
@@ -129,6 +133,7 @@ fn iceoryx2_type_names_are_explicit() {
         <SignalState as ZeroCopySend>::type_name,
         <SignalInfo as ZeroCopySend>::type_name,
         <GroupPath as ZeroCopySend>::type_name,
+        <Setpoint as ZeroCopySend>::type_name,
     ];
     let expected = [
         "motiond::MotionFrame",
@@ -140,6 +145,7 @@ fn iceoryx2_type_names_are_explicit() {
         "motiond::SignalState",
         "motiond::SignalInfo",
         "motiond::GroupPath",
+        "motiond::Setpoint",
     ];
     for (name, want) in names.iter().zip(expected) {
         // SAFETY: `type_name` has no preconditions; it is `unsafe` in iceoryx2 only so that

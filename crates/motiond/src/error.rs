@@ -7,6 +7,7 @@ use iceoryx2::node::NodeCreationFailure;
 use iceoryx2::port::listener::ListenerCreateError;
 use iceoryx2::port::notifier::NotifierCreateError;
 use iceoryx2::port::publisher::PublisherCreateError;
+use iceoryx2::port::subscriber::SubscriberCreateError;
 use iceoryx2::prelude::SemanticStringError;
 use iceoryx2::service::builder::event::{EventOpenError, EventOpenOrCreateError};
 use iceoryx2::service::builder::publish_subscribe::{
@@ -136,6 +137,9 @@ pub enum Iceoryx2ServiceError {
     /// A request-response server port could not be created.
     #[error(transparent)]
     Server(#[from] ServerCreateError),
+    /// A subscriber could not be created.
+    #[error(transparent)]
+    Subscriber(#[from] SubscriberCreateError),
 }
 
 /// What an operator can do about a service that could not be made.
@@ -223,7 +227,8 @@ impl Iceoryx2ServiceError {
             Self::Notifier(NotifierCreateError::ExceedsMaxSupportedNotifiers)
             | Self::Listener(ListenerCreateError::ExceedsMaxSupportedListeners)
             | Self::Publisher(PublisherCreateError::ExceedsMaxSupportedPublishers)
-            | Self::Server(ServerCreateError::ExceedsMaxSupportedServers) => {
+            | Self::Server(ServerCreateError::ExceedsMaxSupportedServers)
+            | Self::Subscriber(SubscriberCreateError::ExceedsMaxSupportedSubscribers) => {
                 ServiceHint::SlotsTaken
             }
             _ => ServiceHint::None,

@@ -3,6 +3,8 @@
 //! telling the tick which node sent a request.
 
 use crate::error::ServiceError;
+use crate::paths::{PathInbox, PathsFactory};
+use crate::setpoints::{SetpointInbox, SetpointsFactory};
 use iceoryx2::node::NodeView;
 use iceoryx2::port::listener::Listener;
 use iceoryx2::port::notifier::Notifier;
@@ -43,6 +45,10 @@ pub struct Services {
     pub params: Publisher<Ipc, MachineParams, ()>,
     /// `estop` event: any notification latches the e-stop.
     pub estop: Listener<Ipc>,
+    /// `paths`: the groups' paths clients send, held for their `Run`.
+    pub paths: PathInbox,
+    /// `setpoints`: the groups' streamed setpoints.
+    pub setpoints: SetpointInbox,
     /// The services themselves, for their port counts.
     pub factories: Factories,
     /// `max_clients` the services were made with.
@@ -60,6 +66,10 @@ pub struct Factories {
     estop: EventFactory<Ipc>,
     /// The command service.
     pub command: CommandFactory,
+    /// The paths service (its publishers' nodes).
+    pub paths: PathsFactory,
+    /// The setpoints service (its publishers' nodes).
+    pub setpoints: SetpointsFactory,
 }
 
 /// Frames a subscriber can fall behind before the oldest is dropped (safe overflow).
@@ -89,7 +99,7 @@ pub struct SlotUse {
 
 impl Factories {
     /// Port use of every service that clients connect to.
-    pub fn slot_use(&self, max_clients: usize) -> [SlotUse; 7] {
+    pub fn slot_use(&self, max_clients: usize) -> [SlotUse; 9] {
         let sub = |bit, service, used| SlotUse {
             bit,
             service,
@@ -138,6 +148,20 @@ impl Factories {
                 slot: "notifier",
                 used: self.estop.dynamic_config().number_of_notifiers(),
                 limit: max_clients * ESTOP_NOTIFIERS_PER_CLIENT,
+            },
+            SlotUse {
+                bit: ServerStats::FULL_PATHS,
+                service: "paths",
+                slot: "publisher",
+                used: self.paths.dynamic_config().number_of_publishers(),
+                limit: max_clients,
+            },
+            SlotUse {
+                bit: ServerStats::FULL_SETPOINTS,
+                service: "setpoints",
+                slot: "publisher",
+                used: self.setpoints.dynamic_config().number_of_publishers(),
+                limit: max_clients,
             },
         ]
     }
@@ -229,6 +253,9 @@ impl Services {
             state_publisher::<ServerStats>(&node, &service_name(names.stats())?, max_clients)?;
         let (params, params_factory) =
             state_publisher::<MachineParams>(&node, &service_name(names.params())?, max_clients)?;
+        let (paths, paths_factory) = crate::paths::create(&node, &names.paths(), max_clients)?;
+        let (setpoints, setpoints_factory) =
+            crate::setpoints::create(&node, &names.setpoints(), max_clients)?;
         // The frame service comes last: a client that sees it can open every other one.
         let frame = node
             .service_builder(&service_name(names.frame())?)
@@ -255,6 +282,8 @@ impl Services {
             stats,
             params,
             estop: estop_listener,
+            paths,
+            setpoints,
             factories: Factories {
                 frame,
                 info: info_factory,
@@ -263,6 +292,8 @@ impl Services {
                 tick,
                 estop,
                 command,
+                paths: paths_factory,
+                setpoints: setpoints_factory,
             },
             max_clients,
         })

@@ -5,6 +5,7 @@ use core::time::Duration;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
 
+use crate::paths::PathInbox;
 use iceoryx2::active_request::ActiveRequest;
 use iceoryx2::port::server::Server;
 use iceoryx2::port::update_connections::UpdateConnections;
@@ -12,8 +13,8 @@ use motion_boards::AnyDriver;
 use motion_drivers::Driver;
 use motion_engine::{CommandPort, Engine};
 use motion_ipc::{
-    ClientId, CommandReply, CommandRequest, DeviceState, FaultCode, LinkIo, MachineParams,
-    MotionFrame, ServerInfo, ServerStats, write_text,
+    ClientId, CommandReply, CommandRequest, DeviceState, FaultCode, GroupPath, LinkIo,
+    MachineParams, MotionFrame, ServerInfo, ServerStats, write_text,
 };
 use rtrb::{Consumer, Producer};
 
@@ -157,6 +158,8 @@ struct IpcCommands<'a> {
     sender: ClientId,
     /// Replies that could not be sent (counted into `ServerStats::replies_lost`).
     replies_lost: u64,
+    /// The paths clients sent their groups.
+    paths: &'a mut PathInbox,
 }
 
 impl CommandPort for IpcCommands<'_> {
@@ -172,6 +175,10 @@ impl CommandPort for IpcCommands<'_> {
 
     fn sender(&self) -> Option<ClientId> {
         Some(self.sender)
+    }
+
+    fn take_path(&mut self, client: ClientId, id: u64) -> Option<&GroupPath> {
+        self.paths.take(client, id)
     }
 
     fn reply(&mut self, reply: CommandReply) {
@@ -536,6 +543,10 @@ impl Loop {
     }
 
     fn step_and_publish(&mut self, now: Duration, deadline: Duration) {
+        self.services.paths.receive(&self.services.factories.paths);
+        self.services
+            .setpoints
+            .deliver(&self.services.factories.setpoints, &mut self.setup.engine);
         let mut commands = IpcCommands {
             server: &self.services.command,
             factory: &self.services.factories.command,
@@ -543,6 +554,7 @@ impl Loop {
             current: None,
             sender: ClientId::NONE,
             replies_lost: 0,
+            paths: &mut self.services.paths,
         };
         match self.services.frame.loan_uninit() {
             Ok(sample) => {

@@ -9,7 +9,10 @@ use std::cell::Cell;
 use std::path::PathBuf;
 
 use motion_engine::{CommandPort, Engine};
-use motion_ipc::{AxisFlags, ClientId, CommandKind, CommandReply, CommandRequest, MotionFrame};
+use motion_ipc::{
+    AxisFlags, ClientId, CommandKind, CommandReply, CommandRequest, GroupMotion, GroupPath,
+    MAX_GROUP_AXES, MAX_PATH_POINTS, MotionFrame, PathKind, Target,
+};
 use motion_link::Link;
 use motiond::config::ServerConfig;
 
@@ -62,6 +65,8 @@ fn engine<T>(work: impl FnOnce() -> T) -> T {
 struct Queue {
     requests: std::collections::VecDeque<CommandRequest>,
     replies: Vec<CommandReply>,
+    /// A path "published" by the client (the engine takes it by reference).
+    path: Option<Box<GroupPath>>,
 }
 
 impl CommandPort for Queue {
@@ -70,6 +75,9 @@ impl CommandPort for Queue {
     }
     fn reply(&mut self, reply: CommandReply) {
         self.replies.push(reply);
+    }
+    fn take_path(&mut self, _: ClientId, id: u64) -> Option<&GroupPath> {
+        self.path.as_deref().filter(|path| path.id == id)
     }
 }
 
@@ -230,6 +238,81 @@ fn the_engine_and_all_four_drivers_allocate_nothing_in_steady_state() {
     );
 }
 
+/// A trajectory of the gantry (x on the SIXpack, feeder on the QSB-M, lift on the
+/// QuadQuad2Drv: the three ways a board follows) with 1024 points, 10 s long.
+fn gantry_trajectory(robot: &Robot, id: u64) -> Box<GroupPath> {
+    let group = robot
+        .engine
+        .config()
+        .groups
+        .iter()
+        .position(|g| g.name == "gantry")
+        .expect("sim.toml has the gantry");
+    let mut path = Box::new(GroupPath::EMPTY);
+    path.kind = PathKind::Trajectory as u32;
+    path.id = id;
+    path.group = group as u32;
+    path.axis_count = 3;
+    path.point_count = MAX_PATH_POINTS as u32;
+    let start: Vec<f64> = ["x", "feeder", "lift"]
+        .iter()
+        .map(|name| robot.frame.axes[robot.axis(name) as usize].position)
+        .collect();
+    for point in 0..MAX_PATH_POINTS {
+        let time = 0.5 + point as f64 * 0.01;
+        path.times[point] = time;
+        let phase = (point as f64 / (MAX_PATH_POINTS - 1) as f64) * core::f64::consts::PI;
+        for (axis, amplitude) in [10.0, 20.0, 5.0].into_iter().enumerate() {
+            path.positions[point * MAX_GROUP_AXES + axis] =
+                start[axis] + amplitude * (1.0 - phase.cos()) / 2.0 + 1.0;
+        }
+    }
+    path
+}
+
+#[test]
+fn a_group_following_a_1024_point_trajectory_allocates_nothing() {
+    let mut robot = Robot::new();
+    run(&mut robot, 0, 4000, |_| {});
+    // Let the script's moves end, then follow a trajectory on three boards.
+    for _ in 0..3000 {
+        robot.tick();
+    }
+    let path = gantry_trajectory(&robot, 7);
+    let group = path.group;
+    robot.port.path = Some(path);
+    let mut run_request = CommandRequest::new(ClientId::from_u128(42), 1, group, CommandKind::Run)
+        .with_values([7.0, 0.0, 0.0]);
+    run_request.target = Target::Group as u32;
+    robot.port.requests.push_back(run_request);
+    let before = ALLOCATIONS.with(Cell::get);
+    let mut done_at = None;
+    for tick in 0..13_000 {
+        robot.tick();
+        let state = robot.frame.groups[group as usize];
+        if tick == 0 {
+            let reply = robot.port.replies.last().expect("answered");
+            assert_eq!(reply.result(), Ok(()), "{reply:?}");
+            assert_eq!(state.motion(), Ok(GroupMotion::Moving));
+        }
+        if !state.motion().expect("known").active() {
+            done_at = Some((tick, state));
+            break;
+        }
+    }
+    let allocations = ALLOCATIONS.with(Cell::get) - before;
+    assert_eq!(
+        allocations, 0,
+        "the engine allocated {allocations} times accepting and following a trajectory"
+    );
+    let (tick, state) = done_at.expect("the trajectory ended");
+    assert_eq!(
+        state.motion(),
+        Ok(GroupMotion::Done),
+        "after {tick} ticks: {state:?}"
+    );
+}
+
 #[test]
 fn same_commands_same_ticks_give_byte_identical_frames() {
     let record = || {
@@ -278,4 +361,116 @@ fn same_commands_same_ticks_give_byte_identical_frames() {
     let wire = robot.frame.wire()[index];
     assert!(wire.written(), "{wire:?}");
     assert!(wire.wire_tick >= wire.goal_tick, "{wire:?}");
+}
+
+/// A client streaming velocity setpoints to the base (both wheels of the QuadQuad2Drv)
+/// every tick for 3 s: nothing allocated, every setpoint applied in its tick.
+#[test]
+fn streaming_setpoints_allocates_nothing_and_applies_each_in_its_tick() {
+    let mut robot = Robot::new();
+    run(&mut robot, 0, 4000, |_| {});
+    for _ in 0..3000 {
+        robot.tick();
+    }
+    let group = robot
+        .engine
+        .config()
+        .groups
+        .iter()
+        .position(|g| g.name == "base")
+        .expect("sim.toml has the base") as u32;
+    let client = ClientId::from_u128(42);
+    for (sequence, kind, value) in [(1, CommandKind::Claim, 0.0), (2, CommandKind::Stream, 2.0)] {
+        let mut request =
+            CommandRequest::new(client, sequence, group, kind).with_values([value, 0.0, 0.0]);
+        request.target = Target::Group as u32;
+        robot.port.requests.push_back(request);
+        robot.tick();
+        let reply = robot.port.replies.last().expect("answered");
+        assert_eq!(reply.result(), Ok(()), "{reply:?}");
+    }
+    let before = ALLOCATIONS.with(Cell::get);
+    let mut setpoint = motion_ipc::Setpoint {
+        group,
+        mode: motion_ipc::StreamMode::Velocity as u32,
+        ..motion_ipc::Setpoint::EMPTY
+    };
+    for tick in 0..3000_u64 {
+        // A sine of ±20 °/s, period 1.5 s, for the next tick.
+        let time = tick as f64 / 1000.0;
+        let speed = 20.0 * (time * core::f64::consts::TAU / 1.5).sin();
+        setpoint.sequence = tick + 1;
+        setpoint.for_tick = robot.frame.tick + 1;
+        setpoint.values[0] = speed;
+        setpoint.values[1] = -speed;
+        engine(|| robot.engine.handle_setpoint(client, &setpoint));
+        robot.tick();
+    }
+    let allocations = ALLOCATIONS.with(Cell::get) - before;
+    assert_eq!(
+        allocations, 0,
+        "the engine allocated {allocations} times streaming"
+    );
+    let state = robot.frame.groups[group as usize];
+    assert_eq!(
+        state.stream(),
+        Ok(motion_ipc::StreamState::Streaming),
+        "{state:?}"
+    );
+    assert_eq!(
+        (state.applied, state.late, state.early, state.refused),
+        (3000, 0, 0, 0)
+    );
+    assert_eq!(state.last_applied_tick, robot.frame.tick);
+}
+
+/// How closely each board of the gantry follows (printed: the figures of
+/// docs/ARCHITECTURE.md "Coordinated motion"): |desired − measured| on the frames with a
+/// fresh measurement, which includes the measurement's age.
+#[test]
+fn the_gantry_follows_a_trajectory_on_three_boards() {
+    let mut robot = Robot::new();
+    run(&mut robot, 0, 4000, |_| {});
+    for _ in 0..3000 {
+        robot.tick();
+    }
+    let path = gantry_trajectory(&robot, 9);
+    let group = path.group as usize;
+    robot.port.path = Some(path);
+    let mut request =
+        CommandRequest::new(ClientId::from_u128(42), 1, group as u32, CommandKind::Run)
+            .with_values([9.0, 0.0, 0.0]);
+    request.target = Target::Group as u32;
+    robot.port.requests.push_back(request);
+    let axes: Vec<usize> = ["x", "feeder", "lift"]
+        .iter()
+        .map(|name| robot.axis(name) as usize)
+        .collect();
+    let mut worst = [0.0_f64; 3];
+    let mut last_refresh = [0_u64; 3];
+    let mut state = robot.frame.groups[group];
+    for _ in 0..13_000 {
+        robot.tick();
+        state = robot.frame.groups[group];
+        for (slot, &axis) in axes.iter().enumerate() {
+            let a = robot.frame.axes[axis];
+            if a.last_refresh_tick != last_refresh[slot] {
+                last_refresh[slot] = a.last_refresh_tick;
+                worst[slot] = worst[slot].max((a.desired_position - a.position).abs());
+            }
+        }
+        if !state.motion().expect("known").active() {
+            break;
+        }
+    }
+    eprintln!(
+        "gantry, 10.7 s trajectory: max |desired - measured| x {:.3} mm, feeder {:.3} mm, lift {:.3} mm",
+        worst[0], worst[1], worst[2]
+    );
+    assert_eq!(state.motion(), Ok(GroupMotion::Done), "{state:?}");
+    for &axis in &axes {
+        let a = robot.frame.axes[axis];
+        assert_eq!(a.mode(), Ok(motion_ipc::AxisMode::Hold), "{a:?}");
+        assert_eq!(a.fault, 0, "{a:?}");
+    }
 }

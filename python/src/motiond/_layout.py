@@ -62,6 +62,7 @@ SERVICES: Dict[str, str] = {
     "stats": "motiond/%s/stats",
     "params": "motiond/%s/params",
     "paths": "motiond/%s/paths",
+    "setpoints": "motiond/%s/setpoints",
     "estop": "motiond/%s/estop",
     "server_node": "motiond-%s",
 }
@@ -182,7 +183,9 @@ class GroupState(Payload):
         ("abort", ctypes.c_uint8),  # ``GroupAbort`` value.
         ("kind", ctypes.c_uint8),  # ``PathKind`` value of the path running or last run.
         ("stream", ctypes.c_uint8),  # ``StreamState`` value.
-        ("reserved", ctypes.c_uint32),  # Zero.
+        ("stream_mode", ctypes.c_uint8),  # ``StreamMode`` value of the stream running or last run.
+        ("stream_flags", ctypes.c_uint8),  # ``StreamFlags`` bits of this tick.
+        ("reserved", ctypes.c_uint16),  # Zero.
         ("last_sequence", ctypes.c_uint64),  # Sequence of the last streamed setpoint applied.
         ("last_applied_tick", ctypes.c_uint64),  # Tick in which it was applied.
         ("applied", ctypes.c_uint64),  # Streamed setpoints applied.
@@ -436,6 +439,34 @@ class GroupPath(Payload):
     ]
 
 
+class Setpoint(Payload):
+    """One setpoint of a group's stream, published on ``motiond/<name>/setpoints`` by the client
+    that holds the group's claim and started the stream (``Stream`` command); from any other node
+    it is dropped and counted (``GroupState.refused``). In tick ``k`` the server applies the
+    newest setpoint with ``for_tick ≤ k`` not applied yet, at most once and in sequence order;
+    one for a tick more than ``stream_buffer`` ahead is dropped (``early``), older ones not taken
+    in time are dropped (``late``).
+
+    288 bytes, alignment 8."""
+
+    _type_name_ = "motiond::Setpoint"
+    _fields_ = [
+        ("schema_version", ctypes.c_uint32),  # ``SCHEMA_VERSION`` of the sender.
+        ("group", ctypes.c_uint32),  # Group index (config order).
+        # The client's sequence number: increasing; a setpoint not above the last applied one is
+        # late.
+        ("sequence", ctypes.c_uint64),
+        # The tick this setpoint is for (a frame's ``tick`` + 1: the next tick).
+        ("for_tick", ctypes.c_uint64),
+        ("mode", ctypes.c_uint32),  # ``StreamMode`` value: must be the stream's.
+        ("flags", ctypes.c_uint32),  # ``SetpointFlags`` bits.
+        # Per axis, in the group's order: position (unit), velocity (unit/s) or power.
+        ("values", ctypes.c_double * MAX_GROUP_AXES),
+        # Per axis: velocity feed-forward, unit/s (with ``FEED_FORWARD``).
+        ("velocities", ctypes.c_double * MAX_GROUP_AXES),
+    ]
+
+
 class MachineParam(Payload):
     """One effective machine parameter.
 
@@ -584,6 +615,7 @@ PAYLOADS: Dict[str, Type[Payload]] = {
     "GroupInfo": GroupInfo,
     "ServerInfo": ServerInfo,
     "GroupPath": GroupPath,
+    "Setpoint": Setpoint,
     "MachineParam": MachineParam,
     "MachineParams": MachineParams,
     "LatencySummary": LatencySummary,
@@ -602,7 +634,7 @@ class CommandKind(TextedEnum):
     RAMP_VELOCITY [velocity, acceleration]; HOME [search velocity]; SET_POSITION [position];
     SET_OUTPUT [0.0 or 1.0] (``axis`` = signal index, ``target`` = SIGNAL); CLAIM, RELEASE,
     E_STOP, RESET, OFF -; with ``target`` = GROUP (``axis`` = group index): CLAIM, RELEASE, STOP,
-    RUN [path id], HOLD, RESUME, FEED [0.0..1.5], CANCEL."""
+    RUN [path id], HOLD, RESUME, FEED [0.0..1.5], CANCEL, STREAM [stream mode]."""
 
     STOP = 1, "stop"
     POWER = 2, "power"
@@ -623,6 +655,7 @@ class CommandKind(TextedEnum):
     RESUME = 17, "resume"
     FEED = 18, "feed"
     CANCEL = 19, "cancel"
+    STREAM = 20, "stream"
 
 
 class Reason(ReasonMethods, TextedEnum):
@@ -801,6 +834,16 @@ class StreamState(TextedEnum):
     ABORTED = 3, "aborted"
 
 
+class StreamMode(TextedEnum):
+    """What a group's streamed setpoints are (``Setpoint.mode``, ``GroupState.stream_mode``,
+    ``values[0]`` of a STREAM command)."""
+
+    NONE = 0, "none"
+    POSITION = 1, "position"
+    VELOCITY = 2, "velocity"
+    POWER = 3, "power"
+
+
 class PathKind(TextedEnum):
     """What a group path is (``GroupPath.kind``, ``GroupState.kind``)."""
 
@@ -855,6 +898,19 @@ class PathFlags(enum.IntFlag):
     ACCELERATIONS = 1 << 1
 
 
+class StreamFlags(enum.IntFlag):
+    """Bits of ``GroupState.stream_flags``."""
+
+    APPLIED = 1 << 0
+    CLAMPED = 1 << 1
+
+
+class SetpointFlags(enum.IntFlag):
+    """Bits of ``Setpoint.flags``."""
+
+    FEED_FORWARD = 1 << 0
+
+
 class SignalInfoFlags(enum.IntFlag):
     """Bits of ``SignalInfo.flags``."""
 
@@ -882,6 +938,8 @@ class FullServices(enum.IntFlag):
     STATS = 1 << 4
     PARAMS = 1 << 5
     ESTOP = 1 << 6
+    PATHS = 1 << 7
+    SETPOINTS = 1 << 8
 
 
 #: Every enumeration and flag set, by Rust type name.
@@ -898,12 +956,15 @@ ENUMS: Dict[str, type] = {
     "GroupMotion": GroupMotion,
     "GroupAbort": GroupAbort,
     "StreamState": StreamState,
+    "StreamMode": StreamMode,
     "PathKind": PathKind,
     "ParamOwner": ParamOwner,
     "AxisFlags": AxisFlags,
     "FrameFlags": FrameFlags,
     "SignalFlags": SignalFlags,
     "PathFlags": PathFlags,
+    "StreamFlags": StreamFlags,
+    "SetpointFlags": SetpointFlags,
     "SignalInfoFlags": SignalInfoFlags,
     "RtFlags": RtFlags,
     "FullServices": FullServices,

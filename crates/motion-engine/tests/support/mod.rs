@@ -6,11 +6,11 @@ use std::collections::VecDeque;
 use std::sync::{Arc, Mutex, MutexGuard};
 
 use motion_drivers::{
-    ChannelState, DeviceFault, DeviceStatus, Driver, Goal, GoalError, GoalKind, GoalKinds,
+    ChannelState, DeviceFault, DeviceStatus, Driver, Follow, Goal, GoalError, GoalKind, GoalKinds,
     LinkKind, Model, Pin, PinReading, Priority, RateFloor, Transmit,
 };
 use motion_engine::{AxisConfig, BusConfig, CommandPort, DeviceConfig, Engine, EngineConfig};
-use motion_ipc::{ClientId, CommandKind, CommandReply, CommandRequest, MotionFrame};
+use motion_ipc::{ClientId, CommandKind, CommandReply, CommandRequest, GroupPath, MotionFrame};
 
 /// What a test can see and change of an [`IdealBoard`] while the engine owns it.
 #[derive(Debug, Default)]
@@ -33,6 +33,8 @@ pub struct BoardControl {
     /// The smallest velocity and acceleration the board represents (read when the engine
     /// is built).
     pub floor: RateFloor,
+    /// How the board follows a group's path (read when the engine is built).
+    pub follow: Follow,
 }
 
 /// A board whose channels follow their goals with ideal trapezoidal physics, refreshing
@@ -118,6 +120,9 @@ impl Driver for IdealBoard {
         } else {
             RateFloor::NONE
         }
+    }
+    fn follow(&self, _: usize) -> Follow {
+        self.control().follow
     }
     fn refresh_budget(&self) -> Duration {
         Duration::from_millis(20)
@@ -292,11 +297,14 @@ impl Driver for IdealBoard {
     }
 }
 
-/// A command port over a queue; replies are collected.
+/// A command port over a queue; replies are collected. Paths a test "published" wait in
+/// `paths` with their publisher's identity.
 #[derive(Debug, Default)]
 pub struct Queue {
     pub requests: VecDeque<CommandRequest>,
     pub replies: Vec<CommandReply>,
+    pub paths: Vec<(ClientId, Box<GroupPath>)>,
+    taken: Option<Box<GroupPath>>,
 }
 
 impl CommandPort for Queue {
@@ -305,6 +313,14 @@ impl CommandPort for Queue {
     }
     fn reply(&mut self, reply: CommandReply) {
         self.replies.push(reply);
+    }
+    fn take_path(&mut self, client: ClientId, id: u64) -> Option<&GroupPath> {
+        let index = self
+            .paths
+            .iter()
+            .rposition(|(from, path)| *from == client && path.id == id)?;
+        self.taken = Some(self.paths.remove(index).1);
+        self.taken.as_deref()
     }
 }
 

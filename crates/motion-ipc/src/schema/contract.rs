@@ -9,8 +9,8 @@ use crate::{
     MAX_AXES, MAX_DEVICES, MAX_GROUP_AXES, MAX_GROUPS, MAX_LINKS, MAX_PARAMS, MAX_PATH_POINTS,
     MAX_SIGNALS, MODEL_ID_LEN, MachineParam, MachineParams, MotionFrame, NAME_LEN, PARAM_TEXT_LEN,
     PATH_VALUES, ParamOwner, PathFlags, PathKind, Reason, SCHEMA_VERSION, ServerInfo, ServerStats,
-    ServiceNames, SignalFlags, SignalInfo, SignalInfoFlags, SignalKind, SignalState, StreamState,
-    Target, UNIT_LEN,
+    ServiceNames, Setpoint, SetpointFlags, SignalFlags, SignalInfo, SignalInfoFlags, SignalKind,
+    SignalState, StreamFlags, StreamMode, StreamState, Target, UNIT_LEN,
 };
 
 /// The contract of this build of `motion-ipc`.
@@ -41,6 +41,7 @@ fn structs() -> Vec<&'static Struct> {
         &GroupInfo::SCHEMA,
         &ServerInfo::SCHEMA,
         &GroupPath::SCHEMA,
+        &Setpoint::SCHEMA,
         &MachineParam::SCHEMA,
         &MachineParams::SCHEMA,
         &LatencySummary::SCHEMA,
@@ -170,6 +171,11 @@ fn services() -> Vec<Service> {
             "publish-subscribe: `GroupPath`, paths for groups, run by a RUN command",
         ),
         service(
+            "setpoints",
+            names.setpoints(),
+            "publish-subscribe: `Setpoint`, streamed setpoints of the groups",
+        ),
+        service(
             "estop",
             names.estop(),
             "event: any notification latches the e-stop",
@@ -269,7 +275,7 @@ fn enums() -> Vec<Enum> {
              SET_POSITION [position]; SET_OUTPUT [0.0 or 1.0] (`axis` = signal index, \
              `target` = SIGNAL); CLAIM, RELEASE, E_STOP, RESET, OFF -;\n\
              with `target` = GROUP (`axis` = group index): CLAIM, RELEASE, STOP, RUN [path id], \
-             HOLD, RESUME, FEED [0.0..1.5], CANCEL.",
+             HOLD, RESUME, FEED [0.0..1.5], CANCEL, STREAM [stream mode].",
             |value| raw::<u32>(value).and_then(|v| CommandKind::try_from(v).ok()),
             |kind| Some(kind.name()),
         ),
@@ -357,6 +363,14 @@ fn enums() -> Vec<Enum> {
             |state| Some(state.name()),
         ),
         scan(
+            "StreamMode",
+            Scalar::U32,
+            "What a group's streamed setpoints are (`Setpoint.mode`, `GroupState.stream_mode`, \
+             `values[0]` of a STREAM command).",
+            |value| raw::<u32>(value).and_then(|v| StreamMode::try_from(v).ok()),
+            |mode| Some(mode.name()),
+        ),
+        scan(
             "PathKind",
             Scalar::U32,
             "What a group path is (`GroupPath.kind`, `GroupState.kind`).",
@@ -410,6 +424,18 @@ fn flag_sets() -> Vec<Enum> {
             bits!(PathFlags: VELOCITIES, ACCELERATIONS),
         ),
         flags(
+            "StreamFlags",
+            Scalar::U8,
+            "Bits of `GroupState.stream_flags`.",
+            bits!(StreamFlags: APPLIED, CLAMPED),
+        ),
+        flags(
+            "SetpointFlags",
+            Scalar::U32,
+            "Bits of `Setpoint.flags`.",
+            bits!(SetpointFlags: FEED_FORWARD),
+        ),
+        flags(
             "SignalInfoFlags",
             Scalar::U8,
             "Bits of `SignalInfo.flags`.",
@@ -438,6 +464,8 @@ fn flag_sets() -> Vec<Enum> {
                 ("STATS", ServerStats::FULL_STATS.into()),
                 ("PARAMS", ServerStats::FULL_PARAMS.into()),
                 ("ESTOP", ServerStats::FULL_ESTOP.into()),
+                ("PATHS", ServerStats::FULL_PATHS.into()),
+                ("SETPOINTS", ServerStats::FULL_SETPOINTS.into()),
             ],
         ),
     ]

@@ -1,0 +1,667 @@
+//! A planned path: piecewise quintics per axis, planned from a line or from points, checked
+//! exactly against the axes' limits, and sampled at any path time.
+
+use crate::line::Profile;
+use crate::points::{Kind, Start};
+use crate::polynomial::{
+    Coeffs, Span, cubic_hermite, eval, extremes, hull_bounds, quintic_hermite,
+};
+use crate::spline::Spline;
+use crate::{AxisLimits, MAX_AXES, PathError, Points, at_most, check_limits};
+
+/// The relative slack of the limit checks: a segment whose largest |velocity| is at most
+/// `max_velocity · (1 + SLACK)` (and likewise the acceleration) is accepted.
+pub(crate) const SLACK: f64 = 1e-9;
+
+/// The segments of one planned path (or of one being planned).
+#[derive(Clone)]
+struct Segments {
+    axes: usize,
+    count: usize,
+    /// Segment s, axis j at `s * axes + j`.
+    coeffs: Vec<Coeffs>,
+    /// Path time at which each segment starts.
+    starts: Vec<f64>,
+    /// Each segment's duration.
+    lengths: Vec<f64>,
+    /// The point each segment heads to.
+    heads: Vec<usize>,
+    end: Vec<f64>,
+    duration: f64,
+    max_feed: f64,
+    last_point: usize,
+    planned: bool,
+}
+
+impl Segments {
+    fn new(axes: usize, capacity: usize) -> Self {
+        Self {
+            axes,
+            count: 0,
+            coeffs: vec![[0.0; 6]; capacity * axes],
+            starts: vec![0.0; capacity],
+            lengths: vec![0.0; capacity],
+            heads: vec![0; capacity],
+            end: vec![0.0; axes],
+            duration: 0.0,
+            max_feed: f64::INFINITY,
+            last_point: 0,
+            planned: false,
+        }
+    }
+
+    fn clear(&mut self) {
+        self.count = 0;
+        self.end.fill(0.0);
+        self.duration = 0.0;
+        self.max_feed = f64::INFINITY;
+        self.last_point = 0;
+        self.planned = false;
+    }
+
+    /// Appends a segment (its coefficients are written afterwards).
+    fn push(&mut self, start: f64, length: f64, heads: usize) {
+        let s = self.count;
+        self.starts[s] = start;
+        self.lengths[s] = length;
+        self.heads[s] = heads;
+        self.count += 1;
+    }
+
+    #[inline]
+    fn coeffs(&self, segment: usize, axis: usize) -> &Coeffs {
+        &self.coeffs[segment * self.axes + axis]
+    }
+
+    #[inline]
+    fn coeffs_mut(&mut self, segment: usize, axis: usize) -> &mut Coeffs {
+        &mut self.coeffs[segment * self.axes + axis]
+    }
+
+    /// The segment and local time at path time `t`; `None` at or past the end (and when
+    /// nothing is planned).
+    fn locate(&self, t: f64) -> Option<(usize, f64)> {
+        let t = if t > 0.0 { t } else { 0.0 };
+        let inside = self.planned && self.count > 0 && t < self.duration;
+        if !inside {
+            return None;
+        }
+        let segment = self.starts[..self.count]
+            .partition_point(|&s| s <= t)
+            .saturating_sub(1);
+        Some((segment, t - self.starts[segment]))
+    }
+}
+
+/// The largest feed at which velocity `v` and acceleration `a` (at feed 1) stay within `limit`.
+fn feed_limit(v: f64, a: f64, limit: &AxisLimits) -> f64 {
+    let by_velocity = if v != 0.0 {
+        limit.max_velocity / v.abs()
+    } else {
+        f64::INFINITY
+    };
+    let by_accel = if a != 0.0 {
+        (limit.max_accel / a.abs()).sqrt()
+    } else {
+        f64::INFINITY
+    };
+    by_velocity.min(by_accel)
+}
+
+/// The limit checks of a path being planned, segment by segment as they are built, and its
+/// `max_feed`.
+///
+/// A segment passes at once when the hulls of its Bernstein coefficients (`hull_bounds`)
+/// are within the limits; otherwise its exact extremes decide. Each segment and axis keeps
+/// its bounds on |velocity| and |acceleration| — from the hulls, or exact — and
+/// [`Checker::max_feed`] refines only those bounds that could exceed an axis's exact
+/// largest |velocity| or |acceleration| over the path, so `max_feed` is exact at the cost of
+/// a few exact extremes.
+struct Checker<'a> {
+    limits: &'a [AxisLimits],
+    /// Segment s, axis j at `s * axes + j`: bounds on |velocity| and |acceleration|.
+    bounds: &'a mut [[f64; 2]],
+    /// Per axis, the largest bound on |velocity| and on |acceleration| so far, and the
+    /// segment it belongs to.
+    largest: [[(f64, usize); 2]; MAX_AXES],
+}
+
+impl<'a> Checker<'a> {
+    fn new(limits: &'a [AxisLimits], bounds: &'a mut [[f64; 2]]) -> Self {
+        Self {
+            limits,
+            bounds,
+            largest: [[(0.0, 0); 2]; MAX_AXES],
+        }
+    }
+
+    /// Checks every axis of `segment`; refusals name the point it heads to and the axis.
+    fn check(&mut self, segments: &Segments, segment: usize) -> Result<(), PathError> {
+        let t = segments.lengths[segment];
+        let span = Span::new(t);
+        let point = segments.heads[segment];
+        let axes = segments.axes;
+        let coeffs = &segments.coeffs[segment * axes..][..axes];
+        let bounds = &mut self.bounds[segment * axes..][..axes];
+        let each = self
+            .limits
+            .iter()
+            .zip(coeffs)
+            .zip(bounds)
+            .zip(&mut self.largest);
+        for (axis, (((limit, c), bound), largest)) in each.enumerate() {
+            let (v_limit, a_limit) = (
+                limit.max_velocity * (1.0 + SLACK),
+                limit.max_accel * (1.0 + SLACK),
+            );
+            *bound = match hull_bounds(c, &span, limit.min, limit.max) {
+                Some((v, a)) if v <= v_limit && a <= a_limit => [v, a],
+                _ => {
+                    let e = extremes(c, t, limit.min, limit.max);
+                    if !at_most(e.velocity.abs(), v_limit) {
+                        return Err(PathError::VelocityLimit {
+                            point,
+                            axis,
+                            value: e.velocity,
+                            limit: limit.max_velocity,
+                        });
+                    }
+                    if !at_most(e.acceleration.abs(), a_limit) {
+                        return Err(PathError::AccelLimit {
+                            point,
+                            axis,
+                            value: e.acceleration,
+                            limit: limit.max_accel,
+                        });
+                    }
+                    if let Some(value) = e.outside {
+                        return Err(PathError::OutOfRange {
+                            point,
+                            axis,
+                            value,
+                            min: limit.min,
+                            max: limit.max,
+                        });
+                    }
+                    [e.velocity.abs(), e.acceleration.abs()]
+                }
+            };
+            for (largest, &bound) in largest.iter_mut().zip(bound.iter()) {
+                if bound > largest.0 {
+                    *largest = (bound, segment);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The exact largest feed of the checked `segments`: per axis, the exact largest
+    /// |velocity| and |acceleration| over the path give min(max_velocity/|v|, √(max_accel/|a|)).
+    fn max_feed(&self, segments: &Segments) -> f64 {
+        let axes = segments.axes;
+        let exact = |segment: usize, axis: usize| {
+            let e = extremes(
+                segments.coeffs(segment, axis),
+                segments.lengths[segment],
+                f64::NEG_INFINITY,
+                f64::INFINITY,
+            );
+            [e.velocity.abs(), e.acceleration.abs()]
+        };
+        // Start from the segment with the largest bound (most likely the largest exact
+        // figure), then refine every bound above the largest exact figure so far.
+        let mut largest = [[0.0; 2]; MAX_AXES];
+        for (axis, largest) in largest[..axes].iter_mut().enumerate() {
+            for (which, largest) in largest.iter_mut().enumerate() {
+                let (bound, segment) = self.largest[axis][which];
+                if bound > 0.0 {
+                    *largest = exact(segment, axis)[which];
+                }
+            }
+        }
+        let rows = self.bounds[..segments.count * axes].chunks_exact(axes);
+        for (segment, row) in rows.enumerate() {
+            for (axis, (bound, largest)) in row.iter().zip(&mut largest).enumerate() {
+                if bound[0] > largest[0] || bound[1] > largest[1] {
+                    let e = exact(segment, axis);
+                    *largest = [largest[0].max(e[0]), largest[1].max(e[1])];
+                }
+            }
+        }
+        self.limits
+            .iter()
+            .zip(&largest)
+            .map(|(limit, &[v, a])| feed_limit(v, a, limit))
+            .fold(f64::INFINITY, f64::min)
+    }
+}
+
+/// What the segments between points are made from.
+struct Build<'a> {
+    points: &'a Points<'a>,
+    kind: Kind,
+    /// The velocities at the points of a spline through positions (three points or more).
+    spline: &'a Spline,
+    start_velocity: &'a [f64],
+    lead_in: bool,
+}
+
+impl<'a> Build<'a> {
+    /// Writes the segment from point k−1 to point k (k ≥ 1) of every axis. For a spline's
+    /// last segment, the one before it must be written already.
+    fn segment(&self, segments: &mut Segments, k: usize) {
+        let points = self.points;
+        let (n, axes) = (points.len(), segments.axes);
+        let slot = usize::from(self.lead_in) + k - 1;
+        let span = Span::new(segments.lengths[slot]);
+        let stride = points.stride;
+        let row = |values: &'a [f64], i: usize| -> &'a [f64] { &values[i * stride..][..axes] };
+        let (p0, p1) = (row(points.positions, k - 1), row(points.positions, k));
+        let (before, out) = segments.coeffs.split_at_mut(slot * axes);
+        let out = &mut out[..axes];
+        match (self.kind, points.velocities, points.accelerations) {
+            (Kind::Accelerations, Some(v), Some(a)) => {
+                let (v0, v1, a0, a1) = (row(v, k - 1), row(v, k), row(a, k - 1), row(a, k));
+                for (j, c) in out.iter_mut().enumerate() {
+                    *c = quintic_hermite([p0[j], v0[j], a0[j]], [p1[j], v1[j], a1[j]], &span);
+                }
+            }
+            (Kind::Velocities, Some(v), _) => {
+                let (v0, v1) = (row(v, k - 1), row(v, k));
+                for (j, c) in out.iter_mut().enumerate() {
+                    *c = cubic_hermite(p0[j], v0[j], p1[j], v1[j], &span);
+                }
+            }
+            _ if n == 2 => {
+                for (j, c) in out.iter_mut().enumerate() {
+                    let v0 = if self.lead_in {
+                        0.0
+                    } else {
+                        self.start_velocity[j]
+                    };
+                    *c = quintic_hermite([p0[j], v0, 0.0], [p1[j], 0.0, 0.0], &span);
+                }
+            }
+            _ if k < n - 1 => {
+                let m = |i: usize, j: usize| self.spline.velocity(i, j);
+                for (j, c) in out.iter_mut().enumerate() {
+                    *c = cubic_hermite(p0[j], m(k - 1, j), p1[j], m(k, j), &span);
+                }
+            }
+            _ => {
+                // The last: a quintic from the last cubic's end to rest.
+                let cubics = &before[(slot - 1) * axes..];
+                let h = segments.lengths[slot - 1];
+                for (j, c) in out.iter_mut().enumerate() {
+                    let a = eval(&cubics[j], h)[2];
+                    let m = self.spline.velocity(k - 1, j);
+                    *c = quintic_hermite([p0[j], m, a], [p1[j], 0.0, 0.0], &span);
+                }
+            }
+        }
+    }
+}
+
+/// A planned path for `axes` axes: piecewise polynomials (every segment stored as a quintic
+/// per axis, c0..c5 in local time; lower-order segments have zero high coefficients), at most
+/// `max_points + 3` segments.
+///
+/// Every buffer is sized in [`Path::new`]; planning and sampling never allocate. A path is
+/// planned into a second set of buffers and swapped in only when it passed every check, so a
+/// refused plan leaves the previous path untouched.
+pub struct Path {
+    axes: usize,
+    max_points: usize,
+    active: Segments,
+    draft: Segments,
+    spline: Spline,
+    /// Bounds on each segment and axis's |velocity| and |acceleration| (`Checker`).
+    bounds: Vec<[f64; 2]>,
+}
+
+impl core::fmt::Debug for Path {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("Path")
+            .field("axes", &self.axes)
+            .field("max_points", &self.max_points)
+            .field("segments", &self.active.count)
+            .field("duration", &self.active.duration)
+            .field("max_feed", &self.active.max_feed)
+            .field("end", &self.active.end)
+            .finish()
+    }
+}
+
+impl Path {
+    /// An empty path for `axes` axes (1 ..= [`MAX_AXES`]) and trajectories of up to
+    /// `max_points` points: the only allocation.
+    ///
+    /// # Panics
+    /// When `axes` is 0 or more than [`MAX_AXES`].
+    pub fn new(axes: usize, max_points: usize) -> Self {
+        assert!(
+            (1..=MAX_AXES).contains(&axes),
+            "a path has 1 to {MAX_AXES} axes, not {axes}"
+        );
+        let capacity = max_points + 3;
+        Self {
+            axes,
+            max_points,
+            active: Segments::new(axes, capacity),
+            draft: Segments::new(axes, capacity),
+            spline: Spline::new(max_points, axes),
+            bounds: vec![[0.0; 2]; capacity * axes],
+        }
+    }
+
+    /// The number of axes.
+    pub fn axes(&self) -> usize {
+        self.axes
+    }
+
+    /// The most points [`Path::plan_points`] accepts.
+    pub fn max_points(&self) -> usize {
+        self.max_points
+    }
+
+    /// Whether no path is planned (after [`Path::new`] or [`Path::clear`]). A planned path of
+    /// duration 0 (a zero-length line) is not empty.
+    pub fn is_empty(&self) -> bool {
+        !self.active.planned
+    }
+
+    /// Forgets the path: empty, duration 0, `end()` all zeros.
+    pub fn clear(&mut self) {
+        self.active.clear();
+    }
+
+    /// Seconds at feed 1 (0 when empty).
+    pub fn duration(&self) -> f64 {
+        self.active.duration
+    }
+
+    /// The final positions (one per axis; zeros when empty).
+    pub fn end(&self) -> &[f64] {
+        &self.active.end
+    }
+
+    /// The largest feed (time-scale factor) at which the whole path keeps every axis within the
+    /// limits it was planned with: the minimum over segments and axes of
+    /// min(max_velocity / max|v|, √(max_accel / max|a|)), computed exactly when planned;
+    /// `f64::INFINITY` for a path that does not move (and an empty one).
+    pub fn max_feed(&self) -> f64 {
+        self.active.max_feed
+    }
+
+    /// Straight line in joint space from `start` (at rest) to `target` (at rest): every axis on
+    /// the same scalar profile s(t) in [0, 1] (trapezoidal, or triangular when short), so every
+    /// axis starts and arrives at the same instant; the slowest axis sets the time:
+    /// s' ≤ minᵢ(velocity_scale·vmaxᵢ/|Δᵢ|), s'' ≤ minᵢ(accel_scale·amaxᵢ/|Δᵢ|). Axes with Δ = 0
+    /// stay put. A zero-length move is a valid path of duration 0.
+    ///
+    /// Refused: a scale not in (0, 1] ([`PathError::BadScale`]), slices whose length is not
+    /// the number of axes ([`PathError::BadLayout`]), unusable limits, a start or target that
+    /// is not finite ([`PathError::NotFinite`], point 0), a target outside min..max
+    /// ([`PathError::OutOfRange`], point 0). The start may be outside the range (a line
+    /// that brings an axis back into it); the line stays between start and target.
+    pub fn plan_line(
+        &mut self,
+        start: &[f64],
+        target: &[f64],
+        limits: &[AxisLimits],
+        velocity_scale: f64,
+        accel_scale: f64,
+    ) -> Result<(), PathError> {
+        let in_unit = |x: f64| x > 0.0 && x <= 1.0;
+        if !in_unit(velocity_scale) || !in_unit(accel_scale) {
+            return Err(PathError::BadScale);
+        }
+        let axes = self.axes;
+        if start.len() != axes || target.len() != axes || limits.len() != axes {
+            return Err(PathError::BadLayout);
+        }
+        check_limits(limits)?;
+        for axis in 0..axes {
+            if !start[axis].is_finite() || !target[axis].is_finite() {
+                return Err(PathError::NotFinite { point: 0, axis });
+            }
+        }
+        for (axis, limit) in limits.iter().enumerate() {
+            let value = target[axis];
+            if !(value >= limit.min && value <= limit.max) {
+                return Err(PathError::OutOfRange {
+                    point: 0,
+                    axis,
+                    value,
+                    min: limit.min,
+                    max: limit.max,
+                });
+            }
+        }
+        let (mut rate, mut accel) = (f64::INFINITY, f64::INFINITY);
+        for (axis, limit) in limits.iter().enumerate() {
+            let distance = (target[axis] - start[axis]).abs();
+            if distance > 0.0 {
+                rate = rate.min(velocity_scale * limit.max_velocity / distance);
+                accel = accel.min(accel_scale * limit.max_accel / distance);
+            }
+        }
+        let draft = &mut self.draft;
+        draft.clear();
+        draft.end.copy_from_slice(target);
+        draft.planned = true;
+        // No axis moves (or only by amounts too small to time): a path of duration 0.
+        if rate.is_finite() && accel.is_finite() {
+            let profile = Profile::new(rate, accel);
+            let Profile {
+                peak,
+                ramp_time,
+                cruise_time,
+                ramp_distance,
+                ..
+            } = profile;
+            draft.push(0.0, ramp_time, 0);
+            if cruise_time > 0.0 {
+                draft.push(ramp_time, cruise_time, 0);
+            }
+            draft.push(ramp_time + cruise_time, ramp_time, 0);
+            let decel = draft.count - 1;
+            let mut max_feed = f64::INFINITY;
+            for (axis, limit) in limits.iter().enumerate() {
+                let (p0, delta) = (start[axis], target[axis] - start[axis]);
+                *draft.coeffs_mut(0, axis) = [p0, 0.0, 0.5 * accel * delta, 0.0, 0.0, 0.0];
+                if cruise_time > 0.0 {
+                    *draft.coeffs_mut(1, axis) =
+                        [p0 + ramp_distance * delta, peak * delta, 0.0, 0.0, 0.0, 0.0];
+                }
+                *draft.coeffs_mut(decel, axis) = [
+                    p0 + (1.0 - ramp_distance) * delta,
+                    peak * delta,
+                    -0.5 * accel * delta,
+                    0.0,
+                    0.0,
+                    0.0,
+                ];
+                max_feed = max_feed.min(feed_limit(peak * delta, accel * delta, limit));
+            }
+            draft.duration = profile.duration();
+            draft.max_feed = max_feed;
+        }
+        core::mem::swap(&mut self.active, &mut self.draft);
+        Ok(())
+    }
+
+    /// A trajectory from the current state (`start_position` / `start_velocity` /
+    /// `start_acceleration`, one value per axis) through `points`.
+    ///
+    /// - Lead-in: when `times[0] > 0`, a quintic from the start state to point 0 over
+    ///   `times[0]` seconds (matching position, velocity and acceleration at both ends; point
+    ///   0's velocity and acceleration are those the path has when it leaves point 0). When
+    ///   `times[0] == 0` there is no lead-in: point 0 must be within `start_tolerance[axis]`
+    ///   of `start_position` ([`PathError::StartMismatch`]) and the path starts at point 0's
+    ///   values.
+    /// - Between points: with velocities and accelerations, quintic Hermite (C2); with
+    ///   velocities only, cubic Hermite (C1: the acceleration jumps at the points, and to 0 at
+    ///   the end); positions only, a C2 spline through the points: cubics, except for a last
+    ///   quintic segment so that it ends at rest with velocity 0 and acceleration 0 (the
+    ///   conditions and the solve: `spline.rs`). Its velocity at point 0 is the start
+    ///   velocity without a lead-in, and its acceleration at point 0 is 0 with one.
+    /// - The last point ends at rest: with velocities its velocity must be 0 (else
+    ///   [`PathError::VelocityLimit`] at the last point, limit 0), with accelerations its
+    ///   acceleration too ([`PathError::AccelLimit`], limit 0).
+    ///
+    /// Checked before anything changes (a refused plan leaves the previous path untouched):
+    /// the layout, the limits, finite values, increasing times, every point within min..max,
+    /// and on every segment, exactly (analytic extrema, not sampling), the largest |velocity|
+    /// and |acceleration| against the limits (relative slack 10⁻⁹) and the position against
+    /// min..max. The start state must be finite, and the lead-in must stay within min..max
+    /// too. Refusals name the point and the axis.
+    pub fn plan_points(
+        &mut self,
+        start_position: &[f64],
+        start_velocity: &[f64],
+        start_acceleration: &[f64],
+        points: &Points<'_>,
+        limits: &[AxisLimits],
+        start_tolerance: &[f64],
+    ) -> Result<(), PathError> {
+        let axes = self.axes;
+        let start = Start {
+            position: start_position,
+            velocity: start_velocity,
+            acceleration: start_acceleration,
+            tolerance: start_tolerance,
+        };
+        points.check(axes, self.max_points, limits, &start)?;
+        let times = points.times;
+        let n = points.len();
+        let lead_in = times[0] > 0.0;
+        let kind = points.kind();
+        if kind == Kind::Positions && n >= 3 {
+            let clamp = (!lead_in).then_some(start_velocity);
+            self.spline
+                .solve(times, |i, axis| points.position(i, axis), clamp);
+        }
+
+        let draft = &mut self.draft;
+        draft.clear();
+        draft.planned = true;
+        draft.duration = times[n - 1];
+        draft.last_point = n - 1;
+        for (axis, end) in draft.end.iter_mut().enumerate() {
+            *end = points.position(n - 1, axis);
+        }
+        if lead_in {
+            draft.push(0.0, times[0], 0);
+        }
+        for k in 1..n {
+            draft.push(times[k - 1], times[k] - times[k - 1], k);
+        }
+        let build = Build {
+            points,
+            kind,
+            spline: &self.spline,
+            start_velocity,
+            lead_in,
+        };
+        let mut checker = Checker::new(limits, &mut self.bounds);
+        // The segment that leaves point 0 comes first: the lead-in meets its start.
+        let first = usize::from(lead_in);
+        if n > 1 {
+            build.segment(draft, 1);
+        }
+        if lead_in {
+            for axis in 0..axes {
+                let leave = if n > 1 {
+                    eval(draft.coeffs(first, axis), 0.0)
+                } else {
+                    let p = points.position(0, axis);
+                    [p, points.velocity(0, axis), points.acceleration(0, axis)]
+                };
+                let from = [
+                    start_position[axis],
+                    start_velocity[axis],
+                    start_acceleration[axis],
+                ];
+                *draft.coeffs_mut(0, axis) = quintic_hermite(from, leave, &Span::new(times[0]));
+            }
+            checker.check(draft, 0)?;
+        }
+        for k in 1..n {
+            if k > 1 {
+                build.segment(draft, k);
+            }
+            checker.check(draft, first + k - 1)?;
+        }
+        draft.max_feed = checker.max_feed(draft);
+        core::mem::swap(&mut self.active, &mut self.draft);
+        Ok(())
+    }
+
+    /// The state at path time `t` (clamped to 0 ..= duration) at feed 1: writes position,
+    /// velocity and acceleration (the first `axes` values of each) and returns the index of
+    /// the point the current segment heads to (0 during the lead-in; for a line: 0). At or
+    /// past the end: [`Path::end`], at rest, and the last point. An empty path gives `end()`
+    /// (zeros), at rest, and 0.
+    ///
+    /// # Panics
+    /// When a slice is shorter than the number of axes.
+    pub fn sample(
+        &self,
+        t: f64,
+        position: &mut [f64],
+        velocity: &mut [f64],
+        acceleration: &mut [f64],
+    ) -> usize {
+        let axes = self.axes;
+        let (position, velocity, acceleration) = (
+            &mut position[..axes],
+            &mut velocity[..axes],
+            &mut acceleration[..axes],
+        );
+        let s = &self.active;
+        match s.locate(t) {
+            None => {
+                position.copy_from_slice(&s.end);
+                velocity.fill(0.0);
+                acceleration.fill(0.0);
+                s.last_point
+            }
+            Some((segment, u)) => {
+                for axis in 0..axes {
+                    let [p, v, a] = eval(s.coeffs(segment, axis), u);
+                    position[axis] = p;
+                    velocity[axis] = v;
+                    acceleration[axis] = a;
+                }
+                s.heads[segment]
+            }
+        }
+    }
+
+    /// The segment and local time at path time `t` (`None` at or past the end).
+    pub(crate) fn locate(&self, t: f64) -> Option<(usize, f64)> {
+        self.active.locate(t)
+    }
+
+    /// Position, velocity and acceleration of `axis` on `segment` at local time `u`.
+    #[inline]
+    pub(crate) fn state(&self, segment: usize, axis: usize, u: f64) -> [f64; 3] {
+        eval(self.active.coeffs(segment, axis), u)
+    }
+
+    /// The number of segments.
+    pub(crate) fn segments(&self) -> usize {
+        self.active.count
+    }
+
+    /// Path time at which `segment` starts, and its duration.
+    pub(crate) fn segment_span(&self, segment: usize) -> (f64, f64) {
+        (self.active.starts[segment], self.active.lengths[segment])
+    }
+
+    /// The first segment that starts after path time `t` (`segments()` if none).
+    pub(crate) fn segment_after(&self, t: f64) -> usize {
+        self.active.starts[..self.active.count].partition_point(|&s| s <= t)
+    }
+}
