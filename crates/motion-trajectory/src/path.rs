@@ -1,0 +1,532 @@
+//! A planned path: piecewise quintics per axis, planned from a line or from points, checked
+//! exactly against the axes' limits, and sampled at any path time.
+
+use crate::line::Profile;
+use crate::points::{Kind, Start};
+use crate::polynomial::{Coeffs, cubic_hermite, eval, extremes, quintic_hermite};
+use crate::spline::Spline;
+use crate::{AxisLimits, MAX_AXES, PathError, Points, at_most, check_limits};
+
+/// The relative slack of the limit checks: a segment whose largest |velocity| is at most
+/// `max_velocity · (1 + SLACK)` (and likewise the acceleration) is accepted.
+pub(crate) const SLACK: f64 = 1e-9;
+
+/// The segments of one planned path (or of one being planned).
+#[derive(Clone)]
+struct Segments {
+    axes: usize,
+    count: usize,
+    /// Segment s, axis j at `s * axes + j`.
+    coeffs: Vec<Coeffs>,
+    /// Path time at which each segment starts.
+    starts: Vec<f64>,
+    /// Each segment's duration.
+    lengths: Vec<f64>,
+    /// The point each segment heads to.
+    heads: Vec<usize>,
+    end: Vec<f64>,
+    duration: f64,
+    max_feed: f64,
+    last_point: usize,
+    planned: bool,
+}
+
+impl Segments {
+    fn new(axes: usize, capacity: usize) -> Self {
+        Self {
+            axes,
+            count: 0,
+            coeffs: vec![[0.0; 6]; capacity * axes],
+            starts: vec![0.0; capacity],
+            lengths: vec![0.0; capacity],
+            heads: vec![0; capacity],
+            end: vec![0.0; axes],
+            duration: 0.0,
+            max_feed: f64::INFINITY,
+            last_point: 0,
+            planned: false,
+        }
+    }
+
+    fn clear(&mut self) {
+        self.count = 0;
+        self.end.fill(0.0);
+        self.duration = 0.0;
+        self.max_feed = f64::INFINITY;
+        self.last_point = 0;
+        self.planned = false;
+    }
+
+    /// Appends a segment (its coefficients are written afterwards).
+    fn push(&mut self, start: f64, length: f64, heads: usize) {
+        let s = self.count;
+        self.starts[s] = start;
+        self.lengths[s] = length;
+        self.heads[s] = heads;
+        self.count += 1;
+    }
+
+    #[inline]
+    fn coeffs(&self, segment: usize, axis: usize) -> &Coeffs {
+        &self.coeffs[segment * self.axes + axis]
+    }
+
+    #[inline]
+    fn coeffs_mut(&mut self, segment: usize, axis: usize) -> &mut Coeffs {
+        &mut self.coeffs[segment * self.axes + axis]
+    }
+
+    /// The segment and local time at path time `t`; `None` at or past the end (and when
+    /// nothing is planned).
+    fn locate(&self, t: f64) -> Option<(usize, f64)> {
+        let t = if t > 0.0 { t } else { 0.0 };
+        let inside = self.planned && self.count > 0 && t < self.duration;
+        if !inside {
+            return None;
+        }
+        let segment = self.starts[..self.count]
+            .partition_point(|&s| s <= t)
+            .saturating_sub(1);
+        Some((segment, t - self.starts[segment]))
+    }
+
+    /// Checks every segment of every axis against the limits, exactly, and stores the
+    /// largest feed the path allows.
+    fn check(&mut self, limits: &[AxisLimits]) -> Result<(), PathError> {
+        let mut max_feed = f64::INFINITY;
+        for segment in 0..self.count {
+            let length = self.lengths[segment];
+            let point = self.heads[segment];
+            for (axis, limit) in limits.iter().enumerate() {
+                let e = extremes(self.coeffs(segment, axis), length, limit.min, limit.max);
+                if !at_most(e.velocity.abs(), limit.max_velocity * (1.0 + SLACK)) {
+                    return Err(PathError::VelocityLimit {
+                        point,
+                        axis,
+                        value: e.velocity,
+                        limit: limit.max_velocity,
+                    });
+                }
+                if !at_most(e.acceleration.abs(), limit.max_accel * (1.0 + SLACK)) {
+                    return Err(PathError::AccelLimit {
+                        point,
+                        axis,
+                        value: e.acceleration,
+                        limit: limit.max_accel,
+                    });
+                }
+                if let Some(value) = e.outside {
+                    return Err(PathError::OutOfRange {
+                        point,
+                        axis,
+                        value,
+                        min: limit.min,
+                        max: limit.max,
+                    });
+                }
+                max_feed = max_feed.min(feed_limit(e.velocity, e.acceleration, limit));
+            }
+        }
+        self.max_feed = max_feed;
+        Ok(())
+    }
+}
+
+/// The largest feed at which velocity `v` and acceleration `a` (at feed 1) stay within `limit`.
+fn feed_limit(v: f64, a: f64, limit: &AxisLimits) -> f64 {
+    let by_velocity = if v != 0.0 {
+        limit.max_velocity / v.abs()
+    } else {
+        f64::INFINITY
+    };
+    let by_accel = if a != 0.0 {
+        (limit.max_accel / a.abs()).sqrt()
+    } else {
+        f64::INFINITY
+    };
+    by_velocity.min(by_accel)
+}
+
+/// A planned path for `axes` axes: piecewise polynomials (every segment stored as a quintic
+/// per axis, c0..c5 in local time; lower-order segments have zero high coefficients), at most
+/// `max_points + 3` segments.
+///
+/// Every buffer is sized in [`Path::new`]; planning and sampling never allocate. A path is
+/// planned into a second set of buffers and swapped in only when it passed every check, so a
+/// refused plan leaves the previous path untouched.
+pub struct Path {
+    axes: usize,
+    max_points: usize,
+    active: Segments,
+    draft: Segments,
+    spline: Spline,
+}
+
+impl core::fmt::Debug for Path {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.debug_struct("Path")
+            .field("axes", &self.axes)
+            .field("max_points", &self.max_points)
+            .field("segments", &self.active.count)
+            .field("duration", &self.active.duration)
+            .field("max_feed", &self.active.max_feed)
+            .field("end", &self.active.end)
+            .finish()
+    }
+}
+
+impl Path {
+    /// An empty path for `axes` axes (1 ..= [`MAX_AXES`]) and trajectories of up to
+    /// `max_points` points: the only allocation.
+    ///
+    /// # Panics
+    /// When `axes` is 0 or more than [`MAX_AXES`].
+    pub fn new(axes: usize, max_points: usize) -> Self {
+        assert!(
+            (1..=MAX_AXES).contains(&axes),
+            "a path has 1 to {MAX_AXES} axes, not {axes}"
+        );
+        let capacity = max_points + 3;
+        Self {
+            axes,
+            max_points,
+            active: Segments::new(axes, capacity),
+            draft: Segments::new(axes, capacity),
+            spline: Spline::new(max_points),
+        }
+    }
+
+    /// The number of axes.
+    pub fn axes(&self) -> usize {
+        self.axes
+    }
+
+    /// The most points [`Path::plan_points`] accepts.
+    pub fn max_points(&self) -> usize {
+        self.max_points
+    }
+
+    /// Whether no path is planned (after [`Path::new`] or [`Path::clear`]). A planned path of
+    /// duration 0 (a zero-length line) is not empty.
+    pub fn is_empty(&self) -> bool {
+        !self.active.planned
+    }
+
+    /// Forgets the path: empty, duration 0, `end()` all zeros.
+    pub fn clear(&mut self) {
+        self.active.clear();
+    }
+
+    /// Seconds at feed 1 (0 when empty).
+    pub fn duration(&self) -> f64 {
+        self.active.duration
+    }
+
+    /// The final positions (one per axis; zeros when empty).
+    pub fn end(&self) -> &[f64] {
+        &self.active.end
+    }
+
+    /// The largest feed (time-scale factor) at which the whole path keeps every axis within the
+    /// limits it was planned with: the minimum over segments and axes of
+    /// min(max_velocity / max|v|, √(max_accel / max|a|)), computed exactly when planned;
+    /// `f64::INFINITY` for a path that does not move (and an empty one).
+    pub fn max_feed(&self) -> f64 {
+        self.active.max_feed
+    }
+
+    /// Straight line in joint space from `start` (at rest) to `target` (at rest): every axis on
+    /// the same scalar profile s(t) in [0, 1] (trapezoidal, or triangular when short), so every
+    /// axis starts and arrives at the same instant; the slowest axis sets the time:
+    /// s' ≤ minᵢ(velocity_scale·vmaxᵢ/|Δᵢ|), s'' ≤ minᵢ(accel_scale·amaxᵢ/|Δᵢ|). Axes with Δ = 0
+    /// stay put. A zero-length move is a valid path of duration 0.
+    ///
+    /// Refused: a scale not in (0, 1] ([`PathError::BadScale`]), slices whose length is not
+    /// the number of axes ([`PathError::BadLayout`]), unusable limits, a start or target that
+    /// is not finite ([`PathError::NotFinite`], point 0), a target outside min..max
+    /// ([`PathError::OutOfRange`], point 0). The start may be outside the range (a line
+    /// that brings an axis back into it); the line stays between start and target.
+    pub fn plan_line(
+        &mut self,
+        start: &[f64],
+        target: &[f64],
+        limits: &[AxisLimits],
+        velocity_scale: f64,
+        accel_scale: f64,
+    ) -> Result<(), PathError> {
+        let in_unit = |x: f64| x > 0.0 && x <= 1.0;
+        if !in_unit(velocity_scale) || !in_unit(accel_scale) {
+            return Err(PathError::BadScale);
+        }
+        let axes = self.axes;
+        if start.len() != axes || target.len() != axes || limits.len() != axes {
+            return Err(PathError::BadLayout);
+        }
+        check_limits(limits)?;
+        for axis in 0..axes {
+            if !start[axis].is_finite() || !target[axis].is_finite() {
+                return Err(PathError::NotFinite { point: 0, axis });
+            }
+        }
+        for (axis, limit) in limits.iter().enumerate() {
+            let value = target[axis];
+            if !(value >= limit.min && value <= limit.max) {
+                return Err(PathError::OutOfRange {
+                    point: 0,
+                    axis,
+                    value,
+                    min: limit.min,
+                    max: limit.max,
+                });
+            }
+        }
+        let (mut rate, mut accel) = (f64::INFINITY, f64::INFINITY);
+        for (axis, limit) in limits.iter().enumerate() {
+            let distance = (target[axis] - start[axis]).abs();
+            if distance > 0.0 {
+                rate = rate.min(velocity_scale * limit.max_velocity / distance);
+                accel = accel.min(accel_scale * limit.max_accel / distance);
+            }
+        }
+        let draft = &mut self.draft;
+        draft.clear();
+        draft.end.copy_from_slice(target);
+        draft.planned = true;
+        // No axis moves (or only by amounts too small to time): a path of duration 0.
+        if rate.is_finite() && accel.is_finite() {
+            let profile = Profile::new(rate, accel);
+            let Profile {
+                peak,
+                ramp_time,
+                cruise_time,
+                ramp_distance,
+                ..
+            } = profile;
+            draft.push(0.0, ramp_time, 0);
+            if cruise_time > 0.0 {
+                draft.push(ramp_time, cruise_time, 0);
+            }
+            draft.push(ramp_time + cruise_time, ramp_time, 0);
+            let decel = draft.count - 1;
+            let mut max_feed = f64::INFINITY;
+            for (axis, limit) in limits.iter().enumerate() {
+                let (p0, delta) = (start[axis], target[axis] - start[axis]);
+                *draft.coeffs_mut(0, axis) = [p0, 0.0, 0.5 * accel * delta, 0.0, 0.0, 0.0];
+                if cruise_time > 0.0 {
+                    *draft.coeffs_mut(1, axis) =
+                        [p0 + ramp_distance * delta, peak * delta, 0.0, 0.0, 0.0, 0.0];
+                }
+                *draft.coeffs_mut(decel, axis) = [
+                    p0 + (1.0 - ramp_distance) * delta,
+                    peak * delta,
+                    -0.5 * accel * delta,
+                    0.0,
+                    0.0,
+                    0.0,
+                ];
+                max_feed = max_feed.min(feed_limit(peak * delta, accel * delta, limit));
+            }
+            draft.duration = profile.duration();
+            draft.max_feed = max_feed;
+        }
+        core::mem::swap(&mut self.active, &mut self.draft);
+        Ok(())
+    }
+
+    /// A trajectory from the current state (`start_position` / `start_velocity` /
+    /// `start_acceleration`, one value per axis) through `points`.
+    ///
+    /// - Lead-in: when `times[0] > 0`, a quintic from the start state to point 0 over
+    ///   `times[0]` seconds (matching position, velocity and acceleration at both ends; point
+    ///   0's velocity and acceleration are those the path has when it leaves point 0). When
+    ///   `times[0] == 0` there is no lead-in: point 0 must be within `start_tolerance[axis]`
+    ///   of `start_position` ([`PathError::StartMismatch`]) and the path starts at point 0's
+    ///   values.
+    /// - Between points: with velocities and accelerations, quintic Hermite (C2); with
+    ///   velocities only, cubic Hermite (C1: the acceleration jumps at the points, and to 0 at
+    ///   the end); positions only, a C2 spline through the points: cubics, except for a last
+    ///   quintic segment so that it ends at rest with velocity 0 and acceleration 0 (the
+    ///   conditions and the solve: `spline.rs`). Its velocity at point 0 is the start
+    ///   velocity without a lead-in, and its acceleration at point 0 is 0 with one.
+    /// - The last point ends at rest: with velocities its velocity must be 0 (else
+    ///   [`PathError::VelocityLimit`] at the last point, limit 0), with accelerations its
+    ///   acceleration too ([`PathError::AccelLimit`], limit 0).
+    ///
+    /// Checked before anything changes (a refused plan leaves the previous path untouched):
+    /// the layout, the limits, finite values, increasing times, every point within min..max,
+    /// and on every segment, exactly (analytic extrema, not sampling), the largest |velocity|
+    /// and |acceleration| against the limits (relative slack 10⁻⁹) and the position against
+    /// min..max. The start state must be finite, and the lead-in must stay within min..max
+    /// too. Refusals name the point and the axis.
+    pub fn plan_points(
+        &mut self,
+        start_position: &[f64],
+        start_velocity: &[f64],
+        start_acceleration: &[f64],
+        points: &Points<'_>,
+        limits: &[AxisLimits],
+        start_tolerance: &[f64],
+    ) -> Result<(), PathError> {
+        let axes = self.axes;
+        let start = Start {
+            position: start_position,
+            velocity: start_velocity,
+            acceleration: start_acceleration,
+            tolerance: start_tolerance,
+        };
+        points.check(axes, self.max_points, limits, &start)?;
+        let times = points.times;
+        let n = points.len();
+        let lead_in = times[0] > 0.0;
+        // The segment from point 0 to point 1 (if any).
+        let first = usize::from(lead_in);
+        let kind = points.kind();
+
+        let draft = &mut self.draft;
+        draft.clear();
+        draft.planned = true;
+        draft.duration = times[n - 1];
+        draft.last_point = n - 1;
+        for (axis, end) in draft.end.iter_mut().enumerate() {
+            *end = points.position(n - 1, axis);
+        }
+        if lead_in {
+            draft.push(0.0, times[0], 0);
+        }
+        for k in 1..n {
+            draft.push(times[k - 1], times[k] - times[k - 1], k);
+        }
+
+        for axis in 0..axes {
+            let p = |i: usize| points.position(i, axis);
+            match kind {
+                Kind::Accelerations => {
+                    for k in 1..n {
+                        let h = times[k] - times[k - 1];
+                        let at = |i: usize| {
+                            [p(i), points.velocity(i, axis), points.acceleration(i, axis)]
+                        };
+                        *draft.coeffs_mut(first + k - 1, axis) =
+                            quintic_hermite(at(k - 1), at(k), h);
+                    }
+                }
+                Kind::Velocities => {
+                    for k in 1..n {
+                        let h = times[k] - times[k - 1];
+                        let v = |i: usize| points.velocity(i, axis);
+                        *draft.coeffs_mut(first + k - 1, axis) =
+                            cubic_hermite(p(k - 1), v(k - 1), p(k), v(k), h);
+                    }
+                }
+                Kind::Positions if n == 2 => {
+                    let v0 = if lead_in { 0.0 } else { start_velocity[axis] };
+                    *draft.coeffs_mut(first, axis) =
+                        quintic_hermite([p(0), v0, 0.0], [p(1), 0.0, 0.0], times[1] - times[0]);
+                }
+                Kind::Positions if n >= 3 => {
+                    let clamp = (!lead_in).then_some(start_velocity[axis]);
+                    let m = self.spline.solve(times, p, clamp);
+                    let mut cubic = [0.0; 6];
+                    let mut h = 0.0;
+                    for k in 1..n - 1 {
+                        h = times[k] - times[k - 1];
+                        cubic = cubic_hermite(p(k - 1), m[k - 1], p(k), m[k], h);
+                        *draft.coeffs_mut(first + k - 1, axis) = cubic;
+                    }
+                    let a = eval(&cubic, h)[2];
+                    *draft.coeffs_mut(first + n - 2, axis) = quintic_hermite(
+                        [p(n - 2), m[n - 2], a],
+                        [p(n - 1), 0.0, 0.0],
+                        times[n - 1] - times[n - 2],
+                    );
+                }
+                Kind::Positions => {}
+            }
+            if lead_in {
+                // Point 0's state as the path leaves it (a single point: at rest, as checked).
+                let leave = if n > 1 {
+                    eval(draft.coeffs(first, axis), 0.0)
+                } else {
+                    [p(0), points.velocity(0, axis), points.acceleration(0, axis)]
+                };
+                let from = [
+                    start_position[axis],
+                    start_velocity[axis],
+                    start_acceleration[axis],
+                ];
+                *draft.coeffs_mut(0, axis) =
+                    quintic_hermite(from, [p(0), leave[1], leave[2]], times[0]);
+            }
+        }
+        draft.check(limits)?;
+        core::mem::swap(&mut self.active, &mut self.draft);
+        Ok(())
+    }
+
+    /// The state at path time `t` (clamped to 0 ..= duration) at feed 1: writes position,
+    /// velocity and acceleration (the first `axes` values of each) and returns the index of
+    /// the point the current segment heads to (0 during the lead-in; for a line: 0). At or
+    /// past the end: [`Path::end`], at rest, and the last point. An empty path gives `end()`
+    /// (zeros), at rest, and 0.
+    ///
+    /// # Panics
+    /// When a slice is shorter than the number of axes.
+    pub fn sample(
+        &self,
+        t: f64,
+        position: &mut [f64],
+        velocity: &mut [f64],
+        acceleration: &mut [f64],
+    ) -> usize {
+        let axes = self.axes;
+        let (position, velocity, acceleration) = (
+            &mut position[..axes],
+            &mut velocity[..axes],
+            &mut acceleration[..axes],
+        );
+        let s = &self.active;
+        match s.locate(t) {
+            None => {
+                position.copy_from_slice(&s.end);
+                velocity.fill(0.0);
+                acceleration.fill(0.0);
+                s.last_point
+            }
+            Some((segment, u)) => {
+                for axis in 0..axes {
+                    let [p, v, a] = eval(s.coeffs(segment, axis), u);
+                    position[axis] = p;
+                    velocity[axis] = v;
+                    acceleration[axis] = a;
+                }
+                s.heads[segment]
+            }
+        }
+    }
+
+    /// The segment and local time at path time `t` (`None` at or past the end).
+    pub(crate) fn locate(&self, t: f64) -> Option<(usize, f64)> {
+        self.active.locate(t)
+    }
+
+    /// Position, velocity and acceleration of `axis` on `segment` at local time `u`.
+    #[inline]
+    pub(crate) fn state(&self, segment: usize, axis: usize, u: f64) -> [f64; 3] {
+        eval(self.active.coeffs(segment, axis), u)
+    }
+
+    /// The number of segments.
+    pub(crate) fn segments(&self) -> usize {
+        self.active.count
+    }
+
+    /// Path time at which `segment` starts, and its duration.
+    pub(crate) fn segment_span(&self, segment: usize) -> (f64, f64) {
+        (self.active.starts[segment], self.active.lengths[segment])
+    }
+
+    /// The first segment that starts after path time `t` (`segments()` if none).
+    pub(crate) fn segment_after(&self, t: f64) -> usize {
+        self.active.starts[..self.active.count].partition_point(|&s| s <= t)
+    }
+}
