@@ -3,7 +3,9 @@
 
 use crate::line::Profile;
 use crate::points::{Kind, Start};
-use crate::polynomial::{Coeffs, cubic_hermite, eval, extremes, quintic_hermite};
+use crate::polynomial::{
+    Coeffs, Span, cubic_hermite, eval, extremes, hull_bounds, quintic_hermite,
+};
 use crate::spline::Spline;
 use crate::{AxisLimits, MAX_AXES, PathError, Points, at_most, check_limits};
 
@@ -89,47 +91,6 @@ impl Segments {
             .saturating_sub(1);
         Some((segment, t - self.starts[segment]))
     }
-
-    /// Checks every segment of every axis against the limits, exactly, and stores the
-    /// largest feed the path allows.
-    fn check(&mut self, limits: &[AxisLimits]) -> Result<(), PathError> {
-        let mut max_feed = f64::INFINITY;
-        for segment in 0..self.count {
-            let length = self.lengths[segment];
-            let point = self.heads[segment];
-            for (axis, limit) in limits.iter().enumerate() {
-                let e = extremes(self.coeffs(segment, axis), length, limit.min, limit.max);
-                if !at_most(e.velocity.abs(), limit.max_velocity * (1.0 + SLACK)) {
-                    return Err(PathError::VelocityLimit {
-                        point,
-                        axis,
-                        value: e.velocity,
-                        limit: limit.max_velocity,
-                    });
-                }
-                if !at_most(e.acceleration.abs(), limit.max_accel * (1.0 + SLACK)) {
-                    return Err(PathError::AccelLimit {
-                        point,
-                        axis,
-                        value: e.acceleration,
-                        limit: limit.max_accel,
-                    });
-                }
-                if let Some(value) = e.outside {
-                    return Err(PathError::OutOfRange {
-                        point,
-                        axis,
-                        value,
-                        min: limit.min,
-                        max: limit.max,
-                    });
-                }
-                max_feed = max_feed.min(feed_limit(e.velocity, e.acceleration, limit));
-            }
-        }
-        self.max_feed = max_feed;
-        Ok(())
-    }
 }
 
 /// The largest feed at which velocity `v` and acceleration `a` (at feed 1) stay within `limit`.
@@ -147,6 +108,175 @@ fn feed_limit(v: f64, a: f64, limit: &AxisLimits) -> f64 {
     by_velocity.min(by_accel)
 }
 
+/// The limit checks of a path being planned, segment by segment as they are built, and its
+/// `max_feed`.
+///
+/// A segment passes at once when the hulls of its Bernstein coefficients (`hull_bounds`)
+/// are within the limits; otherwise its exact extremes decide. Each segment and axis keeps
+/// its bounds on |velocity| and |acceleration| — from the hulls, or exact — and
+/// [`Checker::max_feed`] refines only those bounds that could exceed an axis's exact
+/// largest |velocity| or |acceleration| over the path, so `max_feed` is exact at the cost of
+/// a few exact extremes.
+struct Checker<'a> {
+    limits: &'a [AxisLimits],
+    /// Segment s, axis j at `s * axes + j`: bounds on |velocity| and |acceleration|.
+    bounds: &'a mut [[f64; 2]],
+}
+
+impl Checker<'_> {
+    /// Checks every axis of `segment`; refusals name the point it heads to and the axis.
+    fn check(&mut self, segments: &Segments, segment: usize) -> Result<(), PathError> {
+        let t = segments.lengths[segment];
+        let span = Span::new(t);
+        let point = segments.heads[segment];
+        let axes = segments.axes;
+        let coeffs = &segments.coeffs[segment * axes..][..axes];
+        let bounds = &mut self.bounds[segment * axes..][..axes];
+        for (axis, ((limit, c), bound)) in self.limits.iter().zip(coeffs).zip(bounds).enumerate() {
+            let (v_limit, a_limit) = (
+                limit.max_velocity * (1.0 + SLACK),
+                limit.max_accel * (1.0 + SLACK),
+            );
+            if let Some((v, a)) = hull_bounds(c, &span, limit.min, limit.max)
+                && v <= v_limit
+                && a <= a_limit
+            {
+                *bound = [v, a];
+                continue;
+            }
+            let e = extremes(c, t, limit.min, limit.max);
+            if !at_most(e.velocity.abs(), v_limit) {
+                return Err(PathError::VelocityLimit {
+                    point,
+                    axis,
+                    value: e.velocity,
+                    limit: limit.max_velocity,
+                });
+            }
+            if !at_most(e.acceleration.abs(), a_limit) {
+                return Err(PathError::AccelLimit {
+                    point,
+                    axis,
+                    value: e.acceleration,
+                    limit: limit.max_accel,
+                });
+            }
+            if let Some(value) = e.outside {
+                return Err(PathError::OutOfRange {
+                    point,
+                    axis,
+                    value,
+                    min: limit.min,
+                    max: limit.max,
+                });
+            }
+            *bound = [e.velocity.abs(), e.acceleration.abs()];
+        }
+        Ok(())
+    }
+
+    /// The exact largest feed of the checked `segments`: per axis, the exact largest
+    /// |velocity| and |acceleration| over the path give min(max_velocity/|v|, √(max_accel/|a|)).
+    fn max_feed(&self, segments: &Segments) -> f64 {
+        let (axes, count) = (segments.axes, segments.count);
+        let exact = |segment: usize, axis: usize| {
+            let e = extremes(
+                segments.coeffs(segment, axis),
+                segments.lengths[segment],
+                f64::NEG_INFINITY,
+                f64::INFINITY,
+            );
+            [e.velocity.abs(), e.acceleration.abs()]
+        };
+        let mut feed = f64::INFINITY;
+        for (axis, limit) in self.limits.iter().enumerate() {
+            let mut largest = [0.0; 2];
+            for (which, largest) in largest.iter_mut().enumerate() {
+                let bound = |segment: usize| self.bounds[segment * axes + axis][which];
+                // Start from the largest bound (most likely the largest exact figure), then
+                // refine every bound above the largest exact figure so far.
+                let Some(first) = (0..count).max_by(|&a, &b| bound(a).total_cmp(&bound(b))) else {
+                    break;
+                };
+                *largest = exact(first, axis)[which];
+                for segment in 0..count {
+                    if bound(segment) > *largest {
+                        *largest = largest.max(exact(segment, axis)[which]);
+                    }
+                }
+            }
+            feed = feed.min(feed_limit(largest[0], largest[1], limit));
+        }
+        feed
+    }
+}
+
+/// What the segments between points are made from.
+struct Build<'a> {
+    points: &'a Points<'a>,
+    kind: Kind,
+    /// The velocities at the points of a spline through positions (three points or more).
+    spline: &'a Spline,
+    start_velocity: &'a [f64],
+    lead_in: bool,
+}
+
+impl<'a> Build<'a> {
+    /// Writes the segment from point k−1 to point k (k ≥ 1) of every axis. For a spline's
+    /// last segment, the one before it must be written already.
+    fn segment(&self, segments: &mut Segments, k: usize) {
+        let points = self.points;
+        let (n, axes) = (points.len(), segments.axes);
+        let slot = usize::from(self.lead_in) + k - 1;
+        let span = Span::new(segments.lengths[slot]);
+        let stride = points.stride;
+        let row = |values: &'a [f64], i: usize| -> &'a [f64] { &values[i * stride..][..axes] };
+        let (p0, p1) = (row(points.positions, k - 1), row(points.positions, k));
+        let (before, out) = segments.coeffs.split_at_mut(slot * axes);
+        let out = &mut out[..axes];
+        match (self.kind, points.velocities, points.accelerations) {
+            (Kind::Accelerations, Some(v), Some(a)) => {
+                let (v0, v1, a0, a1) = (row(v, k - 1), row(v, k), row(a, k - 1), row(a, k));
+                for (j, c) in out.iter_mut().enumerate() {
+                    *c = quintic_hermite([p0[j], v0[j], a0[j]], [p1[j], v1[j], a1[j]], &span);
+                }
+            }
+            (Kind::Velocities, Some(v), _) => {
+                let (v0, v1) = (row(v, k - 1), row(v, k));
+                for (j, c) in out.iter_mut().enumerate() {
+                    *c = cubic_hermite(p0[j], v0[j], p1[j], v1[j], &span);
+                }
+            }
+            _ if n == 2 => {
+                for (j, c) in out.iter_mut().enumerate() {
+                    let v0 = if self.lead_in {
+                        0.0
+                    } else {
+                        self.start_velocity[j]
+                    };
+                    *c = quintic_hermite([p0[j], v0, 0.0], [p1[j], 0.0, 0.0], &span);
+                }
+            }
+            _ if k < n - 1 => {
+                let m = |i: usize, j: usize| self.spline.velocity(i, j);
+                for (j, c) in out.iter_mut().enumerate() {
+                    *c = cubic_hermite(p0[j], m(k - 1, j), p1[j], m(k, j), &span);
+                }
+            }
+            _ => {
+                // The last: a quintic from the last cubic's end to rest.
+                let cubics = &before[(slot - 1) * axes..];
+                let h = segments.lengths[slot - 1];
+                for (j, c) in out.iter_mut().enumerate() {
+                    let a = eval(&cubics[j], h)[2];
+                    let m = self.spline.velocity(k - 1, j);
+                    *c = quintic_hermite([p0[j], m, a], [p1[j], 0.0, 0.0], &span);
+                }
+            }
+        }
+    }
+}
+
 /// A planned path for `axes` axes: piecewise polynomials (every segment stored as a quintic
 /// per axis, c0..c5 in local time; lower-order segments have zero high coefficients), at most
 /// `max_points + 3` segments.
@@ -160,6 +290,8 @@ pub struct Path {
     active: Segments,
     draft: Segments,
     spline: Spline,
+    /// Bounds on each segment and axis's |velocity| and |acceleration| (`Checker`).
+    bounds: Vec<[f64; 2]>,
 }
 
 impl core::fmt::Debug for Path {
@@ -192,7 +324,8 @@ impl Path {
             max_points,
             active: Segments::new(axes, capacity),
             draft: Segments::new(axes, capacity),
-            spline: Spline::new(max_points),
+            spline: Spline::new(max_points, axes),
+            bounds: vec![[0.0; 2]; capacity * axes],
         }
     }
 
@@ -378,9 +511,12 @@ impl Path {
         let times = points.times;
         let n = points.len();
         let lead_in = times[0] > 0.0;
-        // The segment from point 0 to point 1 (if any).
-        let first = usize::from(lead_in);
         let kind = points.kind();
+        if kind == Kind::Positions && n >= 3 {
+            let clamp = (!lead_in).then_some(start_velocity);
+            self.spline
+                .solve(times, |i, axis| points.position(i, axis), clamp);
+        }
 
         let draft = &mut self.draft;
         draft.clear();
@@ -396,69 +532,46 @@ impl Path {
         for k in 1..n {
             draft.push(times[k - 1], times[k] - times[k - 1], k);
         }
-
-        for axis in 0..axes {
-            let p = |i: usize| points.position(i, axis);
-            match kind {
-                Kind::Accelerations => {
-                    for k in 1..n {
-                        let h = times[k] - times[k - 1];
-                        let at = |i: usize| {
-                            [p(i), points.velocity(i, axis), points.acceleration(i, axis)]
-                        };
-                        *draft.coeffs_mut(first + k - 1, axis) =
-                            quintic_hermite(at(k - 1), at(k), h);
-                    }
-                }
-                Kind::Velocities => {
-                    for k in 1..n {
-                        let h = times[k] - times[k - 1];
-                        let v = |i: usize| points.velocity(i, axis);
-                        *draft.coeffs_mut(first + k - 1, axis) =
-                            cubic_hermite(p(k - 1), v(k - 1), p(k), v(k), h);
-                    }
-                }
-                Kind::Positions if n == 2 => {
-                    let v0 = if lead_in { 0.0 } else { start_velocity[axis] };
-                    *draft.coeffs_mut(first, axis) =
-                        quintic_hermite([p(0), v0, 0.0], [p(1), 0.0, 0.0], times[1] - times[0]);
-                }
-                Kind::Positions if n >= 3 => {
-                    let clamp = (!lead_in).then_some(start_velocity[axis]);
-                    let m = self.spline.solve(times, p, clamp);
-                    let mut cubic = [0.0; 6];
-                    let mut h = 0.0;
-                    for k in 1..n - 1 {
-                        h = times[k] - times[k - 1];
-                        cubic = cubic_hermite(p(k - 1), m[k - 1], p(k), m[k], h);
-                        *draft.coeffs_mut(first + k - 1, axis) = cubic;
-                    }
-                    let a = eval(&cubic, h)[2];
-                    *draft.coeffs_mut(first + n - 2, axis) = quintic_hermite(
-                        [p(n - 2), m[n - 2], a],
-                        [p(n - 1), 0.0, 0.0],
-                        times[n - 1] - times[n - 2],
-                    );
-                }
-                Kind::Positions => {}
-            }
-            if lead_in {
-                // Point 0's state as the path leaves it (a single point: at rest, as checked).
+        let build = Build {
+            points,
+            kind,
+            spline: &self.spline,
+            start_velocity,
+            lead_in,
+        };
+        let mut checker = Checker {
+            limits,
+            bounds: &mut self.bounds,
+        };
+        // The segment that leaves point 0 comes first: the lead-in meets its start.
+        let first = usize::from(lead_in);
+        if n > 1 {
+            build.segment(draft, 1);
+        }
+        if lead_in {
+            for axis in 0..axes {
                 let leave = if n > 1 {
                     eval(draft.coeffs(first, axis), 0.0)
                 } else {
-                    [p(0), points.velocity(0, axis), points.acceleration(0, axis)]
+                    let p = points.position(0, axis);
+                    [p, points.velocity(0, axis), points.acceleration(0, axis)]
                 };
                 let from = [
                     start_position[axis],
                     start_velocity[axis],
                     start_acceleration[axis],
                 ];
-                *draft.coeffs_mut(0, axis) =
-                    quintic_hermite(from, [p(0), leave[1], leave[2]], times[0]);
+                *draft.coeffs_mut(0, axis) = quintic_hermite(from, leave, &Span::new(times[0]));
             }
+            checker.check(draft, 0)?;
         }
-        draft.check(limits)?;
+        for k in 1..n {
+            if k > 1 {
+                build.segment(draft, k);
+            }
+            checker.check(draft, first + k - 1)?;
+        }
+        draft.max_feed = checker.max_feed(draft);
         core::mem::swap(&mut self.active, &mut self.draft);
         Ok(())
     }

@@ -80,9 +80,9 @@ impl Points<'_> {
             .map_or(0.0, |a| a[point * self.stride + axis])
     }
 
-    /// Every check that needs no polynomial, in the order of [`PathError`]'s documentation:
-    /// count, layout, limits, finite values, times, ranges, rest at the last point, and the
-    /// start when point 0's time is 0.
+    /// Every check that needs no polynomial, in this order: count, layout, limits, the start
+    /// state finite, times, each point's values finite and within range (point by point),
+    /// rest at the last point, and the start when point 0's time is 0.
     pub(crate) fn check(
         &self,
         axes: usize,
@@ -139,20 +139,17 @@ impl Points<'_> {
             before = time;
         }
         for point in 0..count {
-            for axis in 0..axes {
-                let values = [
-                    self.position(point, axis),
-                    self.velocity(point, axis),
-                    self.acceleration(point, axis),
-                ];
-                if !values.iter().all(|x| x.is_finite()) {
+            let base = point * self.stride;
+            let positions = &self.positions[base..][..axes];
+            let velocities = self.velocities.map(|v| &v[base..][..axes]);
+            let accelerations = self.accelerations.map(|a| &a[base..][..axes]);
+            for (axis, (limit, &value)) in limits.iter().zip(positions).enumerate() {
+                let finite = value.is_finite()
+                    && velocities.is_none_or(|v| v[axis].is_finite())
+                    && accelerations.is_none_or(|a| a[axis].is_finite());
+                if !finite {
                     return Err(PathError::NotFinite { point, axis });
                 }
-            }
-        }
-        for point in 0..count {
-            for (axis, limit) in limits.iter().enumerate() {
-                let value = self.position(point, axis);
                 if !(value >= limit.min && value <= limit.max) {
                     return Err(PathError::OutOfRange {
                         point,

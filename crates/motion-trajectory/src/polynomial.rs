@@ -21,31 +21,55 @@ pub(crate) fn eval(c: &Coeffs, u: f64) -> [f64; 3] {
     [p, v, a]
 }
 
-/// The quintic on [0, t] from `start` to `end`, each (position, velocity, acceleration).
-pub(crate) fn quintic_hermite(start: [f64; 3], end: [f64; 3], t: f64) -> Coeffs {
+/// A segment's duration, its powers and those of its inverse, computed once for all axes.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Span {
+    /// The duration, seconds (> 0).
+    pub t: f64,
+    /// 1, t, t², t³, t⁴, t⁵.
+    powers: [f64; 6],
+    /// 1/t, 1/t², 1/t³, 1/t⁴, 1/t⁵.
+    inverse: [f64; 5],
+}
+
+impl Span {
+    pub(crate) fn new(t: f64) -> Self {
+        let i = 1.0 / t;
+        let (i2, t2) = (i * i, t * t);
+        Self {
+            t,
+            powers: [1.0, t, t2, t2 * t, t2 * t2, t2 * t2 * t],
+            inverse: [i, i2, i2 * i, i2 * i2, i2 * i2 * i],
+        }
+    }
+}
+
+/// The quintic over `span` from `start` to `end`, each (position, velocity, acceleration).
+pub(crate) fn quintic_hermite(start: [f64; 3], end: [f64; 3], span: &Span) -> Coeffs {
     let [p0, v0, a0] = start;
     let [p1, v1, a1] = end;
     let d = p1 - p0;
-    let t2 = t * t;
-    let t3 = t2 * t;
+    let (t, t2) = (span.t, span.t * span.t);
+    let [_, _, i3, i4, i5] = span.inverse;
     [
         p0,
         v0,
         0.5 * a0,
-        (20.0 * d - (8.0 * v1 + 12.0 * v0) * t - (3.0 * a0 - a1) * t2) / (2.0 * t3),
-        (-30.0 * d + (14.0 * v1 + 16.0 * v0) * t + (3.0 * a0 - 2.0 * a1) * t2) / (2.0 * t3 * t),
-        (12.0 * d - 6.0 * (v1 + v0) * t + (a1 - a0) * t2) / (2.0 * t3 * t2),
+        0.5 * (20.0 * d - (8.0 * v1 + 12.0 * v0) * t - (3.0 * a0 - a1) * t2) * i3,
+        0.5 * (-30.0 * d + (14.0 * v1 + 16.0 * v0) * t + (3.0 * a0 - 2.0 * a1) * t2) * i4,
+        0.5 * (12.0 * d - 6.0 * (v1 + v0) * t + (a1 - a0) * t2) * i5,
     ]
 }
 
-/// The cubic on [0, t] from (p0, v0) to (p1, v1).
-pub(crate) fn cubic_hermite(p0: f64, v0: f64, p1: f64, v1: f64, t: f64) -> Coeffs {
-    let slope = (p1 - p0) / t;
+/// The cubic over `span` from (p0, v0) to (p1, v1).
+pub(crate) fn cubic_hermite(p0: f64, v0: f64, p1: f64, v1: f64, span: &Span) -> Coeffs {
+    let [i1, i2, ..] = span.inverse;
+    let slope = (p1 - p0) * i1;
     [
         p0,
         v0,
-        (3.0 * slope - 2.0 * v0 - v1) / t,
-        (v0 + v1 - 2.0 * slope) / (t * t),
+        (3.0 * slope - 2.0 * v0 - v1) * i1,
+        (v0 + v1 - 2.0 * slope) * i2,
         0.0,
         0.0,
     ]
@@ -201,16 +225,71 @@ pub(crate) struct Extremes {
     pub outside: Option<f64>,
 }
 
-/// The exact extremes of the polynomial `c` on [0, t] (t > 0), and whether its position
-/// leaves `min..max`.
-pub(crate) fn extremes(c: &Coeffs, t: f64, min: f64, max: f64) -> Extremes {
-    // Normalised: P(x) = p(t·x), x in [0, 1]; p' = P'/t, p'' = P''/t².
+/// `c` on [0, t] normalised to x ∈ [0, 1]: P(x) = p(t·x), so p' = P'/t and p'' = P''/t².
+#[inline]
+fn normalise(c: &Coeffs, t: f64) -> [f64; 6] {
     let mut b = [0.0; 6];
     let mut tk = 1.0;
     for (bk, &ck) in b.iter_mut().zip(c) {
         *bk = ck * tk;
         tk *= t;
     }
+    b
+}
+
+/// Bounds on the polynomial `c` on [0, t] from the convex hulls of the Bernstein coefficients
+/// of its position, velocity and acceleration (each lies within its hull): the bounds on
+/// |velocity| and |acceleration| when the position's hull is within `min..max`; `None` when
+/// it is not (or the polynomial is not finite), and only [`extremes`] can tell.
+#[inline]
+pub(crate) fn hull_bounds(c: &Coeffs, span: &Span, min: f64, max: f64) -> Option<(f64, f64)> {
+    let mut b = [0.0; 6];
+    for ((b, c), tk) in b.iter_mut().zip(c).zip(span.powers) {
+        *b = c * tk;
+    }
+    let position = bernstein_position(&b);
+    if !position.iter().all(|&x| x >= min && x <= max) {
+        return None;
+    }
+    // P' = q0 + q1·x + … + q4·x⁴ and P'' = r0 + … + r3·x³, in Bernstein form.
+    let q = [b[1], 2.0 * b[2], 3.0 * b[3], 4.0 * b[4], 5.0 * b[5]];
+    let velocity = [
+        q[0],
+        q[0] + 0.25 * q[1],
+        q[0] + 0.5 * q[1] + q[2] / 6.0,
+        q[0] + 0.75 * q[1] + 0.5 * q[2] + 0.25 * q[3],
+        q[0] + q[1] + q[2] + q[3] + q[4],
+    ];
+    let r = [2.0 * b[2], 6.0 * b[3], 12.0 * b[4], 20.0 * b[5]];
+    let acceleration = [
+        r[0],
+        r[0] + r[1] / 3.0,
+        r[0] + (2.0 * r[1] + r[2]) / 3.0,
+        r[0] + r[1] + r[2] + r[3],
+    ];
+    let largest = |x: &[f64]| x.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+    let [i1, i2, ..] = span.inverse;
+    let bounds = (largest(&velocity) * i1, largest(&acceleration) * i2);
+    (bounds.0.is_finite() && bounds.1.is_finite()).then_some(bounds)
+}
+
+/// The Bernstein coefficients of the quintic `b` on [0, 1].
+#[inline]
+fn bernstein_position(b: &[f64; 6]) -> [f64; 6] {
+    [
+        b[0],
+        b[0] + b[1] / 5.0,
+        b[0] + 0.4 * b[1] + 0.1 * b[2],
+        b[0] + 0.6 * b[1] + 0.3 * b[2] + 0.1 * b[3],
+        b[0] + 0.8 * b[1] + 0.6 * b[2] + 0.4 * b[3] + 0.2 * b[4],
+        b[0] + b[1] + b[2] + b[3] + b[4] + b[5],
+    ]
+}
+
+/// The exact extremes of the polynomial `c` on [0, t] (t > 0), and whether its position
+/// leaves `min..max`.
+pub(crate) fn extremes(c: &Coeffs, t: f64, min: f64, max: f64) -> Extremes {
+    let b = normalise(c, t);
     if !b.iter().all(|x| x.is_finite()) {
         return Extremes {
             velocity: f64::INFINITY,
@@ -244,16 +323,8 @@ pub(crate) fn extremes(c: &Coeffs, t: f64, min: f64, max: f64) -> Extremes {
 /// The position of `b` (normalised) furthest outside `min..max`, if any. `d1` is its
 /// derivative, `r2` the roots of its second derivative.
 fn position_outside(b: &[f64; 6], d1: &[f64; 5], r2: &Roots, min: f64, max: f64) -> Option<f64> {
-    // The Bernstein coefficients: the segment lies within their hull.
-    let hull = [
-        b[0],
-        b[0] + b[1] / 5.0,
-        b[0] + 0.4 * b[1] + 0.1 * b[2],
-        b[0] + 0.6 * b[1] + 0.3 * b[2] + 0.1 * b[3],
-        b[0] + 0.8 * b[1] + 0.6 * b[2] + 0.4 * b[3] + 0.2 * b[4],
-        b[0] + b[1] + b[2] + b[3] + b[4] + b[5],
-    ];
-    if hull.iter().all(|&x| x >= min && x <= max) {
+    // The segment lies within the hull of its Bernstein coefficients.
+    if bernstein_position(b).iter().all(|&x| x >= min && x <= max) {
         return None;
     }
     let position = |x: f64| ((((b[5] * x + b[4]) * x + b[3]) * x + b[2]) * x + b[1]) * x + b[0];
@@ -286,7 +357,7 @@ mod tests {
 
     #[test]
     fn quintic_hermite_meets_both_ends() {
-        let c = quintic_hermite([1.0, -2.0, 3.0], [4.0, 0.5, -1.0], 0.7);
+        let c = quintic_hermite([1.0, -2.0, 3.0], [4.0, 0.5, -1.0], &Span::new(0.7));
         assert_eq!(eval(&c, 0.0), [1.0, -2.0, 3.0]);
         let [p, v, a] = eval(&c, 0.7);
         assert!(
@@ -297,7 +368,7 @@ mod tests {
 
     #[test]
     fn cubic_hermite_meets_both_ends() {
-        let c = cubic_hermite(1.0, -2.0, 4.0, 0.5, 0.7);
+        let c = cubic_hermite(1.0, -2.0, 4.0, 0.5, &Span::new(0.7));
         let [p, v, _] = eval(&c, 0.7);
         assert!(close(p, 4.0) && close(v, 0.5), "{p} {v}");
         assert_eq!(eval(&c, 0.0)[..2], [1.0, -2.0]);
@@ -319,7 +390,7 @@ mod tests {
     #[test]
     fn extremes_of_a_sine_like_quintic_match_dense_sampling() {
         let t = 2.0;
-        let c = quintic_hermite([0.0, 3.0, -1.0], [1.0, -2.0, 4.0], t);
+        let c = quintic_hermite([0.0, 3.0, -1.0], [1.0, -2.0, 4.0], &Span::new(t));
         let e = extremes(&c, t, -10.0, 10.0);
         let (mut v_max, mut a_max) = (0.0f64, 0.0f64);
         for k in 0..=200_000 {
@@ -336,13 +407,17 @@ mod tests {
             "{e:?} {a_max}"
         );
         assert_eq!(e.outside, None);
+        let span = Span::new(t);
+        let (v_bound, a_bound) = hull_bounds(&c, &span, -10.0, 10.0).expect("within the range");
+        assert!(v_bound >= v_max && a_bound >= a_max, "{v_bound} {a_bound}");
+        assert_eq!(hull_bounds(&c, &span, 0.1, 10.0), None, "starts below 0.1");
     }
 
     #[test]
     fn an_overshoot_between_the_ends_is_found() {
         // 0 → 0 with velocity 4 at the start: rises to about 0.59 in between.
         let t = 1.0;
-        let c = cubic_hermite(0.0, 4.0, 0.0, 0.0, t);
+        let c = cubic_hermite(0.0, 4.0, 0.0, 0.0, &Span::new(t));
         let peak = (0..=100_000)
             .map(|k| eval(&c, k as f64 / 100_000.0)[0])
             .fold(f64::MIN, f64::max);

@@ -17,105 +17,131 @@
 //! Two points: the single segment is that quintic, leaving point 0 with the start velocity
 //! (times[0] = 0) or at rest (after a lead-in) and zero acceleration.
 
-/// Preallocated scratch for the tridiagonal solve.
+/// Preallocated scratch for the tridiagonal solve. The matrix depends only on the times, so
+/// it is eliminated once for all axes; only the right-hand sides are per axis.
 #[derive(Debug, Clone)]
 pub(crate) struct Spline {
+    axes: usize,
     upper: Vec<f64>,
+    /// Point i, axis j at `i * axes + j`.
     velocity: Vec<f64>,
 }
 
 impl Spline {
-    /// Scratch for up to `max_points` points.
-    pub(crate) fn new(max_points: usize) -> Self {
+    /// Scratch for up to `max_points` points of `axes` axes.
+    pub(crate) fn new(max_points: usize, axes: usize) -> Self {
         Self {
+            axes,
             upper: vec![0.0; max_points],
-            velocity: vec![0.0; max_points],
+            velocity: vec![0.0; max_points * axes],
         }
     }
 
-    /// The velocities at points 0 ..= n−2 (the one at n−1 is 0) of one axis through the
-    /// positions `position(i)` at `times` (n = times.len() ≥ 3, times strictly increasing).
-    /// `clamp`: the velocity at point 0 (no lead-in), or `None` for the natural condition.
+    /// The velocity at `point` (≤ n−2) of `axis` from the last [`Spline::solve`].
+    #[inline]
+    pub(crate) fn velocity(&self, point: usize, axis: usize) -> f64 {
+        self.velocity[point * self.axes + axis]
+    }
+
+    /// Solves for the velocities at points 0 ..= n−2 (the one at n−1 is 0) of every axis
+    /// through the positions `position(point, axis)` at `times` (n = times.len() ≥ 3, times
+    /// strictly increasing). `clamp`: the velocity of each axis at point 0 (no lead-in), or
+    /// `None` for the natural condition.
     pub(crate) fn solve(
         &mut self,
         times: &[f64],
-        position: impl Fn(usize) -> f64,
-        clamp: Option<f64>,
-    ) -> &[f64] {
+        position: impl Fn(usize, usize) -> f64,
+        clamp: Option<&[f64]>,
+    ) {
         let n = times.len();
-        debug_assert!(n >= 3 && n <= self.velocity.len());
-        let unknowns = n - 1;
+        let axes = self.axes;
+        debug_assert!(n >= 3 && n <= self.upper.len());
+        let last = n - 2;
         let h = |i: usize| times[i + 1] - times[i];
-        let delta = |i: usize| position(i + 1) - position(i);
-        // (sub, diagonal, super, right-hand side) of row i.
-        let row = |i: usize| -> [f64; 4] {
-            if i == 0 {
-                match clamp {
-                    Some(v) => [0.0, 1.0, 0.0, v],
-                    None => {
-                        let h0 = h(0);
-                        [0.0, 2.0 / h0, 1.0 / h0, 3.0 * delta(0) / (h0 * h0)]
-                    }
+        let delta = |i: usize, axis: usize| position(i + 1, axis) - position(i, axis);
+        let upper = &mut self.upper[..=last];
+        let velocity = &mut self.velocity[..(last + 1) * axes];
+        // Row 0.
+        match clamp {
+            Some(v) => {
+                upper[0] = 0.0;
+                velocity[..axes].copy_from_slice(&v[..axes]);
+            }
+            None => {
+                // (2/h0)·m0 + (1/h0)·m1 = 3·δ0/h0², that is m0 + m1/2 = 1.5·δ0/h0.
+                let h0 = h(0);
+                upper[0] = 0.5;
+                for (axis, m) in velocity[..axes].iter_mut().enumerate() {
+                    *m = 1.5 * delta(0, axis) / h0;
                 }
-            } else if i < unknowns - 1 {
-                let (a, b) = (h(i - 1), h(i));
-                [
-                    1.0 / a,
-                    2.0 * (1.0 / a + 1.0 / b),
-                    1.0 / b,
-                    3.0 * (delta(i - 1) / (a * a) + delta(i) / (b * b)),
-                ]
+            }
+        }
+        // Rows 1 ..= n−2, eliminated as they come (Thomas's algorithm).
+        for i in 1..=last {
+            let (sub, diagonal, sup, rhs_before, rhs_after) = if i < last {
+                // C2 at point i.
+                let (a, b) = (1.0 / h(i - 1), 1.0 / h(i));
+                (a, 2.0 * (a + b), b, 3.0 * a * a, 3.0 * b * b)
             } else {
                 // C3 at point n−2 between the cubic of length h and the quintic of length t.
-                let (h, t) = (h(i - 1), h(i));
-                let (dc, dq) = (delta(i - 1), delta(i));
-                let (h2, t2) = (h * h, t * t);
-                [
-                    6.0 / h2 + 18.0 / (h * t),
-                    6.0 / h2 + 36.0 / t2 + 36.0 / (h * t),
+                let (ih, it) = (1.0 / h(i - 1), 1.0 / h(i));
+                (
+                    6.0 * ih * ih + 18.0 * ih * it,
+                    6.0 * ih * ih + 36.0 * it * it + 36.0 * ih * it,
                     0.0,
-                    60.0 * dq / (t2 * t) + 54.0 * dc / (t * h2) + 12.0 * dc / (h2 * h),
-                ]
+                    54.0 * it * ih * ih + 12.0 * ih * ih * ih,
+                    60.0 * it * it * it,
+                )
+            };
+            let w = 1.0 / (diagonal - sub * upper[i - 1]);
+            upper[i] = sup * w;
+            let (done, row) = velocity.split_at_mut(i * axes);
+            let before = &done[(i - 1) * axes..];
+            for (axis, m) in row[..axes].iter_mut().enumerate() {
+                let rhs = rhs_before * delta(i - 1, axis) + rhs_after * delta(i, axis);
+                *m = (rhs - sub * before[axis]) * w;
             }
-        };
-        let upper = &mut self.upper[..unknowns];
-        let velocity = &mut self.velocity[..unknowns];
-        let [_, diagonal, sup, rhs] = row(0);
-        upper[0] = sup / diagonal;
-        velocity[0] = rhs / diagonal;
-        for i in 1..unknowns {
-            let [sub, diagonal, sup, rhs] = row(i);
-            let w = diagonal - sub * upper[i - 1];
-            upper[i] = sup / w;
-            velocity[i] = (rhs - sub * velocity[i - 1]) / w;
         }
-        for i in (0..unknowns - 1).rev() {
-            velocity[i] -= upper[i] * velocity[i + 1];
+        for i in (0..last).rev() {
+            let (row, after) = velocity.split_at_mut((i + 1) * axes);
+            for (m, next) in row[i * axes..].iter_mut().zip(&after[..axes]) {
+                *m -= upper[i] * next;
+            }
         }
-        velocity
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::polynomial::{cubic_hermite, eval, quintic_hermite};
+    use crate::polynomial::{Span, cubic_hermite, eval, quintic_hermite};
 
     /// The segments of one axis through `p` at `times`, as the path builds them.
     fn segments(times: &[f64], p: &[f64], clamp: Option<f64>) -> Vec<([f64; 6], f64)> {
-        let mut spline = Spline::new(times.len());
-        let m = spline.solve(times, |i| p[i], clamp).to_vec();
+        let mut spline = Spline::new(times.len(), 1);
+        let clamp = clamp.map(|v| [v]);
+        spline.solve(times, |i, _| p[i], clamp.as_ref().map(|v| &v[..]));
         let n = times.len();
+        let m = |i: usize| {
+            if i < n - 1 {
+                spline.velocity(i, 0)
+            } else {
+                0.0
+            }
+        };
         let mut out = Vec::new();
         for i in 0..n - 2 {
             let h = times[i + 1] - times[i];
-            out.push((cubic_hermite(p[i], m[i], p[i + 1], m[i + 1], h), h));
+            out.push((
+                cubic_hermite(p[i], m(i), p[i + 1], m(i + 1), &Span::new(h)),
+                h,
+            ));
         }
         let (c, h) = out[n - 3];
         let a = eval(&c, h)[2];
         let t = times[n - 1] - times[n - 2];
         out.push((
-            quintic_hermite([p[n - 2], m[n - 2], a], [p[n - 1], 0.0, 0.0], t),
+            quintic_hermite([p[n - 2], m(n - 2), a], [p[n - 1], 0.0, 0.0], &Span::new(t)),
             t,
         ));
         out

@@ -1,0 +1,80 @@
+//! The engine plans inside its 1 ms tick: a trajectory of 1024 points × 16 axes must plan
+//! (and pass its exact checks). How long it takes is printed, not asserted
+//! (`cargo test --release -p motion-trajectory --test timing -- --nocapture`).
+
+use std::f64::consts::TAU;
+use std::time::{Duration, Instant};
+
+use motion_trajectory::{AxisLimits, Path, Points};
+
+const POINTS: usize = 1024;
+const AXES: usize = 16;
+const STRIDE: usize = 16;
+const STEP: f64 = 0.01;
+
+/// p(t) = A·(x − sin(2πkx)/(2πk)), x = t/T: at rest at both ends, k oscillations between.
+fn trajectory() -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<AxisLimits>) {
+    let duration = (POINTS - 1) as f64 * STEP;
+    let times: Vec<f64> = (0..POINTS).map(|i| i as f64 * STEP).collect();
+    let (mut p, mut v, mut a) = (
+        vec![0.0; POINTS * STRIDE],
+        vec![0.0; POINTS * STRIDE],
+        vec![0.0; POINTS * STRIDE],
+    );
+    let mut limits = Vec::new();
+    for j in 0..AXES {
+        let amplitude = 1.0 + j as f64;
+        let w = TAU * (1 + j % 5) as f64;
+        for (i, &t) in times.iter().enumerate() {
+            let x = t / duration;
+            p[i * STRIDE + j] = amplitude * (x - (w * x).sin() / w);
+            if i + 1 < POINTS {
+                v[i * STRIDE + j] = amplitude / duration * (1.0 - (w * x).cos());
+                a[i * STRIDE + j] = amplitude / (duration * duration) * w * (w * x).sin();
+            }
+        }
+        limits.push(AxisLimits {
+            min: -1.0,
+            max: amplitude + 1.0,
+            max_velocity: 3.0 * 2.0 * amplitude / duration,
+            max_accel: 3.0 * amplitude / (duration * duration) * w,
+        });
+    }
+    (times, p, v, a, limits)
+}
+
+#[test]
+fn a_trajectory_of_1024_points_by_16_axes_plans() {
+    let (times, positions, velocities, accelerations, limits) = trajectory();
+    let mut path = Path::new(AXES, POINTS);
+    let start = [0.0; AXES];
+    for (name, velocities, accelerations) in [
+        ("quintic", Some(&velocities[..]), Some(&accelerations[..])),
+        ("cubic", Some(&velocities[..]), None),
+        ("positions only", None, None),
+    ] {
+        let points = Points {
+            times: &times,
+            positions: &positions,
+            velocities,
+            accelerations,
+            stride: STRIDE,
+        };
+        let mut best = Duration::MAX;
+        for _ in 0..5 {
+            path.clear();
+            let began = Instant::now();
+            let planned = path.plan_points(&start, &start, &start, &points, &limits, &[1e-9; AXES]);
+            best = best.min(began.elapsed());
+            planned.unwrap_or_else(|e| panic!("{name}: {e}"));
+        }
+        assert_eq!(path.duration(), times[POINTS - 1]);
+        assert!(path.max_feed() > 1.0, "{name}: {}", path.max_feed());
+        eprintln!(
+            "plan_points, {POINTS} points × {AXES} axes, {name}: {:.3} ms (best of 5; {:.0} ns a \
+             segment and axis)",
+            best.as_secs_f64() * 1e3,
+            best.as_secs_f64() * 1e9 / (POINTS * AXES) as f64
+        );
+    }
+}
