@@ -12,8 +12,17 @@ const AXES: usize = 16;
 const STRIDE: usize = 16;
 const STEP: f64 = 0.01;
 
+/// Points (stride 16) and the limits of the group.
+struct Trajectory {
+    times: Vec<f64>,
+    positions: Vec<f64>,
+    velocities: Vec<f64>,
+    accelerations: Vec<f64>,
+    limits: Vec<AxisLimits>,
+}
+
 /// p(t) = A·(x − sin(2πkx)/(2πk)), x = t/T: at rest at both ends, k oscillations between.
-fn trajectory() -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<AxisLimits>) {
+fn trajectory() -> Trajectory {
     let duration = (POINTS - 1) as f64 * STEP;
     let times: Vec<f64> = (0..POINTS).map(|i| i as f64 * STEP).collect();
     let (mut p, mut v, mut a) = (
@@ -40,12 +49,24 @@ fn trajectory() -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, Vec<AxisLimits>) {
             max_accel: 3.0 * amplitude / (duration * duration) * w,
         });
     }
-    (times, p, v, a, limits)
+    Trajectory {
+        times,
+        positions: p,
+        velocities: v,
+        accelerations: a,
+        limits,
+    }
 }
 
 #[test]
 fn a_trajectory_of_1024_points_by_16_axes_plans() {
-    let (times, positions, velocities, accelerations, limits) = trajectory();
+    let Trajectory {
+        times,
+        positions,
+        velocities,
+        accelerations,
+        limits,
+    } = trajectory();
     let mut path = Path::new(AXES, POINTS);
     let start = [0.0; AXES];
     for (name, velocities, accelerations) in [
