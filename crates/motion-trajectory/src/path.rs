@@ -121,9 +121,20 @@ struct Checker<'a> {
     limits: &'a [AxisLimits],
     /// Segment s, axis j at `s * axes + j`: bounds on |velocity| and |acceleration|.
     bounds: &'a mut [[f64; 2]],
+    /// Per axis, the largest bound on |velocity| and on |acceleration| so far, and the
+    /// segment it belongs to.
+    largest: [[(f64, usize); 2]; MAX_AXES],
 }
 
-impl Checker<'_> {
+impl<'a> Checker<'a> {
+    fn new(limits: &'a [AxisLimits], bounds: &'a mut [[f64; 2]]) -> Self {
+        Self {
+            limits,
+            bounds,
+            largest: [[(0.0, 0); 2]; MAX_AXES],
+        }
+    }
+
     /// Checks every axis of `segment`; refusals name the point it heads to and the axis.
     fn check(&mut self, segments: &Segments, segment: usize) -> Result<(), PathError> {
         let t = segments.lengths[segment];
@@ -132,45 +143,54 @@ impl Checker<'_> {
         let axes = segments.axes;
         let coeffs = &segments.coeffs[segment * axes..][..axes];
         let bounds = &mut self.bounds[segment * axes..][..axes];
-        for (axis, ((limit, c), bound)) in self.limits.iter().zip(coeffs).zip(bounds).enumerate() {
+        let each = self
+            .limits
+            .iter()
+            .zip(coeffs)
+            .zip(bounds)
+            .zip(&mut self.largest);
+        for (axis, (((limit, c), bound), largest)) in each.enumerate() {
             let (v_limit, a_limit) = (
                 limit.max_velocity * (1.0 + SLACK),
                 limit.max_accel * (1.0 + SLACK),
             );
-            if let Some((v, a)) = hull_bounds(c, &span, limit.min, limit.max)
-                && v <= v_limit
-                && a <= a_limit
-            {
-                *bound = [v, a];
-                continue;
+            *bound = match hull_bounds(c, &span, limit.min, limit.max) {
+                Some((v, a)) if v <= v_limit && a <= a_limit => [v, a],
+                _ => {
+                    let e = extremes(c, t, limit.min, limit.max);
+                    if !at_most(e.velocity.abs(), v_limit) {
+                        return Err(PathError::VelocityLimit {
+                            point,
+                            axis,
+                            value: e.velocity,
+                            limit: limit.max_velocity,
+                        });
+                    }
+                    if !at_most(e.acceleration.abs(), a_limit) {
+                        return Err(PathError::AccelLimit {
+                            point,
+                            axis,
+                            value: e.acceleration,
+                            limit: limit.max_accel,
+                        });
+                    }
+                    if let Some(value) = e.outside {
+                        return Err(PathError::OutOfRange {
+                            point,
+                            axis,
+                            value,
+                            min: limit.min,
+                            max: limit.max,
+                        });
+                    }
+                    [e.velocity.abs(), e.acceleration.abs()]
+                }
+            };
+            for (largest, &bound) in largest.iter_mut().zip(bound.iter()) {
+                if bound > largest.0 {
+                    *largest = (bound, segment);
+                }
             }
-            let e = extremes(c, t, limit.min, limit.max);
-            if !at_most(e.velocity.abs(), v_limit) {
-                return Err(PathError::VelocityLimit {
-                    point,
-                    axis,
-                    value: e.velocity,
-                    limit: limit.max_velocity,
-                });
-            }
-            if !at_most(e.acceleration.abs(), a_limit) {
-                return Err(PathError::AccelLimit {
-                    point,
-                    axis,
-                    value: e.acceleration,
-                    limit: limit.max_accel,
-                });
-            }
-            if let Some(value) = e.outside {
-                return Err(PathError::OutOfRange {
-                    point,
-                    axis,
-                    value,
-                    min: limit.min,
-                    max: limit.max,
-                });
-            }
-            *bound = [e.velocity.abs(), e.acceleration.abs()];
         }
         Ok(())
     }
@@ -178,7 +198,7 @@ impl Checker<'_> {
     /// The exact largest feed of the checked `segments`: per axis, the exact largest
     /// |velocity| and |acceleration| over the path give min(max_velocity/|v|, √(max_accel/|a|)).
     fn max_feed(&self, segments: &Segments) -> f64 {
-        let (axes, count) = (segments.axes, segments.count);
+        let axes = segments.axes;
         let exact = |segment: usize, axis: usize| {
             let e = extremes(
                 segments.coeffs(segment, axis),
@@ -188,26 +208,31 @@ impl Checker<'_> {
             );
             [e.velocity.abs(), e.acceleration.abs()]
         };
-        let mut feed = f64::INFINITY;
-        for (axis, limit) in self.limits.iter().enumerate() {
-            let mut largest = [0.0; 2];
+        // Start from the segment with the largest bound (most likely the largest exact
+        // figure), then refine every bound above the largest exact figure so far.
+        let mut largest = [[0.0; 2]; MAX_AXES];
+        for (axis, largest) in largest[..axes].iter_mut().enumerate() {
             for (which, largest) in largest.iter_mut().enumerate() {
-                let bound = |segment: usize| self.bounds[segment * axes + axis][which];
-                // Start from the largest bound (most likely the largest exact figure), then
-                // refine every bound above the largest exact figure so far.
-                let Some(first) = (0..count).max_by(|&a, &b| bound(a).total_cmp(&bound(b))) else {
-                    break;
-                };
-                *largest = exact(first, axis)[which];
-                for segment in 0..count {
-                    if bound(segment) > *largest {
-                        *largest = largest.max(exact(segment, axis)[which]);
-                    }
+                let (bound, segment) = self.largest[axis][which];
+                if bound > 0.0 {
+                    *largest = exact(segment, axis)[which];
                 }
             }
-            feed = feed.min(feed_limit(largest[0], largest[1], limit));
         }
-        feed
+        let rows = self.bounds[..segments.count * axes].chunks_exact(axes);
+        for (segment, row) in rows.enumerate() {
+            for (axis, (bound, largest)) in row.iter().zip(&mut largest).enumerate() {
+                if bound[0] > largest[0] || bound[1] > largest[1] {
+                    let e = exact(segment, axis);
+                    *largest = [largest[0].max(e[0]), largest[1].max(e[1])];
+                }
+            }
+        }
+        self.limits
+            .iter()
+            .zip(&largest)
+            .map(|(limit, &[v, a])| feed_limit(v, a, limit))
+            .fold(f64::INFINITY, f64::min)
     }
 }
 
@@ -539,10 +564,7 @@ impl Path {
             start_velocity,
             lead_in,
         };
-        let mut checker = Checker {
-            limits,
-            bounds: &mut self.bounds,
-        };
+        let mut checker = Checker::new(limits, &mut self.bounds);
         // The segment that leaves point 0 comes first: the lead-in meets its start.
         let first = usize::from(lead_in);
         if n > 1 {

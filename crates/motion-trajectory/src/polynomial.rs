@@ -256,15 +256,15 @@ pub(crate) fn hull_bounds(c: &Coeffs, span: &Span, min: f64, max: f64) -> Option
     let velocity = [
         q[0],
         q[0] + 0.25 * q[1],
-        q[0] + 0.5 * q[1] + q[2] / 6.0,
+        q[0] + 0.5 * q[1] + q[2] * (1.0 / 6.0),
         q[0] + 0.75 * q[1] + 0.5 * q[2] + 0.25 * q[3],
         q[0] + q[1] + q[2] + q[3] + q[4],
     ];
     let r = [2.0 * b[2], 6.0 * b[3], 12.0 * b[4], 20.0 * b[5]];
     let acceleration = [
         r[0],
-        r[0] + r[1] / 3.0,
-        r[0] + (2.0 * r[1] + r[2]) / 3.0,
+        r[0] + r[1] * (1.0 / 3.0),
+        r[0] + (2.0 * r[1] + r[2]) * (1.0 / 3.0),
         r[0] + r[1] + r[2] + r[3],
     ];
     let largest = |x: &[f64]| x.iter().fold(0.0f64, |m, x| m.max(x.abs()));
@@ -278,7 +278,7 @@ pub(crate) fn hull_bounds(c: &Coeffs, span: &Span, min: f64, max: f64) -> Option
 fn bernstein_position(b: &[f64; 6]) -> [f64; 6] {
     [
         b[0],
-        b[0] + b[1] / 5.0,
+        b[0] + 0.2 * b[1],
         b[0] + 0.4 * b[1] + 0.1 * b[2],
         b[0] + 0.6 * b[1] + 0.3 * b[2] + 0.1 * b[3],
         b[0] + 0.8 * b[1] + 0.6 * b[2] + 0.4 * b[3] + 0.2 * b[4],

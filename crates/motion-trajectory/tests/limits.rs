@@ -224,6 +224,16 @@ proptest! {
                 *s = (s.0.min(p[j]), s.1.max(p[j]), s.2.max(v[j].abs()), s.3.max(a[j].abs()));
             }
         }
+        // max_feed is exact: at least what sampling shows, and not much more.
+        let sampled = seen.iter().zip(&loose).fold(f64::INFINITY, |feed, (s, l)| {
+            let by_velocity = if s.2 > 0.0 { l.max_velocity / s.2 } else { f64::INFINITY };
+            let by_accel = if s.3 > 0.0 { (l.max_accel / s.3).sqrt() } else { f64::INFINITY };
+            feed.min(by_velocity).min(by_accel)
+        });
+        prop_assert!(
+            path.max_feed() <= sampled * (1.0 + 1e-9) && path.max_feed() >= sampled * 0.9,
+            "max_feed {} from samples {}", path.max_feed(), sampled
+        );
 
         // Limits around what was seen: over it (by 0–30 %), except, in a third of the cases,
         // one limit of one axis a little under it, which must be refused.
