@@ -11,11 +11,13 @@
 //!
 //! Each step chooses the new feed F (ḟ = (F − f)/dt constant over the tick, τ advancing by
 //! (f + F)/2·dt) so that the acceleration is within the limits at both ends of the tick — at
-//! its start (τ, f; linear in F, solved in closed form) and at its end (τ + (f + F)/2·dt, F;
-//! checked, and F bisected back towards f when it fails) — and on both sides of every segment
-//! boundary the tick crosses (where the feed is √(f² + 2ḟ·Δτ)). Within a segment between those
-//! instants the polynomials are smooth, so what is left is a discretisation error of the order
-//! of the change over one tick.
+//! its start (τ, f; linear in F, solved in closed form) and at its end (τ + (f + F)/2·dt, F)
+//! — and on both sides of every segment boundary the tick crosses (where the feed is
+//! √(f² + 2ḟ·Δτ)). The start gives a candidate F; when the later instants refuse it, F is
+//! searched between f (always allowed) and the candidate by regula falsi (Illinois) on the
+//! largest relative excess over the limits, keeping the allowed end. Within a segment between
+//! those instants the polynomials are smooth, so what is left is a discretisation error of the
+//! order of the change over one tick.
 
 use crate::path::SLACK;
 use crate::{AxisLimits, Path};
@@ -23,8 +25,12 @@ use crate::{AxisLimits, Path};
 /// The largest feed override: 150 %.
 pub const MAX_FEED_OVERRIDE: f64 = 1.5;
 
-/// Bisection steps at most when the end-of-tick check fails.
-const BISECTIONS: usize = 48;
+/// Steps at most of the search for the new feed when the end of the tick refuses the
+/// candidate (it usually ends within a handful).
+const SEARCH_STEPS: usize = 60;
+
+/// The search stops when the allowed feed is within this much (relative) of a limit.
+const SEARCH_TOLERANCE: f64 = 1e-9;
 
 /// Feed override and hold: path time τ advances by feed·dt each tick.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -56,12 +62,19 @@ fn advance(tau: f64, f: f64, next: f64, dt: f64, duration: f64) -> f64 {
     (tau + 0.5 * (f + next) * dt).min(duration)
 }
 
-/// Whether velocity `v` and acceleration `a` at feed 1 keep the axis within `limit` at feed
-/// `feed` while the feed changes at `rate`.
+/// How far velocity `v` and acceleration `a` at feed 1 exceed `limit` at feed `feed` while
+/// the feed changes at `rate`, relative to the limits (≤ 0: within; NaN: not finite).
 #[inline]
-fn within(v: f64, a: f64, feed: f64, rate: f64, limit: &AxisLimits) -> bool {
-    (a * feed * feed + v * rate).abs() <= limit.max_accel * (1.0 + SLACK)
-        && (v * feed).abs() <= limit.max_velocity * (1.0 + SLACK)
+fn excess(v: f64, a: f64, feed: f64, rate: f64, limit: &AxisLimits) -> f64 {
+    let accel = (a * feed * feed + v * rate).abs() / limit.max_accel - (1.0 + SLACK);
+    let velocity = (v * feed).abs() / limit.max_velocity - (1.0 + SLACK);
+    larger(accel, velocity)
+}
+
+/// The larger of two excesses; NaN (not finite) wins.
+#[inline]
+fn larger(a: f64, b: f64) -> f64 {
+    if a.is_nan() || b > a { b } else { a }
 }
 
 impl TimeScale {
@@ -152,22 +165,16 @@ impl TimeScale {
             } else {
                 goal.max(low)
             };
-            if candidate == f || feasible(path, limits, tau, f, candidate, dt) {
+            let excess_at = |next: f64| end_excess(path, limits, tau, f, next, dt);
+            let over = if candidate == f {
+                0.0
+            } else {
+                excess_at(candidate)
+            };
+            if over <= 0.0 {
                 candidate
             } else {
-                let (mut good, mut bad) = (f, candidate);
-                for _ in 0..BISECTIONS {
-                    let middle = 0.5 * (good + bad);
-                    if middle == good || middle == bad {
-                        break;
-                    }
-                    if feasible(path, limits, tau, f, middle, dt) {
-                        good = middle;
-                    } else {
-                        bad = middle;
-                    }
-                }
-                good
+                search(f, candidate, over, excess_at)
             }
         };
         self.feed_rate = (next - f) / dt;
@@ -219,9 +226,52 @@ fn start_interval(path: &Path, limits: &[AxisLimits], tau: f64, f: f64, dt: f64)
     (low.min(f), high.max(f))
 }
 
-/// Whether a tick from feed `f` to feed `next` keeps every axis within its limits at the end
-/// of the tick and on both sides of every segment boundary it crosses.
-fn feasible(path: &Path, limits: &[AxisLimits], tau: f64, f: f64, next: f64, dt: f64) -> bool {
+/// The feed between `f` (allowed: its excess is taken as 0) and `bad` (excess `over` > 0 or
+/// NaN) closest to `bad` whose excess is ≤ 0, to within [`SEARCH_TOLERANCE`]: regula falsi
+/// with the Illinois modification, bisecting where the excess is not finite.
+fn search(f: f64, bad: f64, over: f64, excess_at: impl Fn(f64) -> f64) -> f64 {
+    let (mut good, mut bad) = (f, bad);
+    let (mut e_good, mut e_bad) = (0.0f64.min(excess_at(f)), over);
+    // Which end the last step moved (true: good), for the Illinois halving.
+    let mut last_good = None;
+    for _ in 0..SEARCH_STEPS {
+        let secant = good + e_good * (bad - good) / (e_good - e_bad);
+        let x = if secant.is_finite() && (secant - good) * (bad - secant) > 0.0 {
+            secant
+        } else {
+            0.5 * (good + bad)
+        };
+        if x == good || x == bad || (bad - good).abs() <= SEARCH_TOLERANCE * bad.abs().max(f) {
+            break;
+        }
+        let e = excess_at(x);
+        if e <= 0.0 {
+            good = x;
+            e_good = e;
+            if last_good == Some(true) {
+                e_bad *= 0.5;
+            }
+            last_good = Some(true);
+            if e >= -SEARCH_TOLERANCE {
+                break;
+            }
+        } else {
+            bad = x;
+            e_bad = if e.is_finite() { e } else { f64::MAX };
+            if last_good == Some(false) {
+                e_good *= 0.5;
+            }
+            last_good = Some(false);
+        }
+    }
+    good
+}
+
+/// The largest excess over the limits (relative; ≤ 0: within, NaN: not finite) of a tick
+/// from feed `f` to feed `next`, at the end of the tick and on both sides of every segment
+/// boundary it crosses.
+fn end_excess(path: &Path, limits: &[AxisLimits], tau: f64, f: f64, next: f64, dt: f64) -> f64 {
+    let mut worst = f64::NEG_INFINITY;
     let rate = (next - f) / dt;
     let duration = path.duration();
     let tau_end = advance(tau, f, next, dt, duration);
@@ -230,9 +280,7 @@ fn feasible(path: &Path, limits: &[AxisLimits], tau: f64, f: f64, next: f64, dt:
     if let Some((segment, u)) = path.locate(tau_end) {
         for (axis, limit) in limits.iter().enumerate() {
             let [_, v, a] = path.state(segment, axis, u);
-            if !within(v, a, next, rate, limit) {
-                return false;
-            }
+            worst = larger(worst, excess(v, a, next, rate, limit));
         }
     }
     let segments = path.segments();
@@ -251,17 +299,13 @@ fn feasible(path: &Path, limits: &[AxisLimits], tau: f64, f: f64, next: f64, dt:
         let (_, length) = path.segment_span(boundary - 1);
         for (axis, limit) in limits.iter().enumerate() {
             let [_, v, a] = path.state(boundary - 1, axis, length);
-            if !within(v, a, feed, rate, limit) {
-                return false;
-            }
+            worst = larger(worst, excess(v, a, feed, rate, limit));
             if let Some(next_segment) = after {
                 let [_, v, a] = path.state(next_segment, axis, 0.0);
-                if !within(v, a, feed, rate, limit) {
-                    return false;
-                }
+                worst = larger(worst, excess(v, a, feed, rate, limit));
             }
         }
         boundary += 1;
     }
-    true
+    worst
 }
