@@ -14,6 +14,16 @@
 //!
 //! A [`Path`] is sized once ([`Path::new`]) and planned and sampled in place.
 //!
+//! Choices worth knowing:
+//! - every path ends at rest. A spline through positions only is C2 cubics with a last
+//!   quintic segment, so that it arrives with velocity 0 and acceleration 0
+//!   ([`Path::plan_points`]);
+//! - the limit checks are exact per segment (analytic extrema), with a relative slack of
+//!   10⁻⁹; the Bernstein hull of a segment settles most segments without root finding;
+//! - [`TimeScale`] keeps the accelerations within the limits at both ends of every tick and at
+//!   the segment boundaries it crosses, not only at the tick's start, so the positions it
+//!   produces stay within the limits when finite-differenced too.
+//!
 //! ```
 //! use motion_trajectory::{AxisLimits, Path, TimeScale};
 //!
