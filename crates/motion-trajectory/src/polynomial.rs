@@ -413,6 +413,67 @@ mod tests {
         assert_eq!(hull_bounds(&c, &span, 0.1, 10.0), None, "starts below 0.1");
     }
 
+    /// A xorshift in (-1, 1), for reproducible random polynomials.
+    fn random(state: &mut u64) -> f64 {
+        *state ^= *state << 13;
+        *state ^= *state >> 7;
+        *state ^= *state << 17;
+        (*state >> 11) as f64 / (1u64 << 52) as f64 - 1.0
+    }
+
+    #[test]
+    fn exact_extremes_and_hull_bounds_agree_with_dense_sampling_on_random_segments() {
+        let mut state = 0x9e37_79b9_7f4a_7c15;
+        for case in 0..400 {
+            let t = 0.05 + 2.0 * random(&mut state).abs();
+            let mut end = |scale: f64| [random(&mut state), scale * random(&mut state), 0.0];
+            let (mut start, mut stop) = (end(3.0), end(3.0));
+            // Quintic, cubic, and (every fifth) a line's parabola or a straight segment.
+            let c = match case % 5 {
+                0 | 1 => {
+                    start[2] = 10.0 * random(&mut state);
+                    stop[2] = 10.0 * random(&mut state);
+                    quintic_hermite(start, stop, &Span::new(t))
+                }
+                2 | 3 => cubic_hermite(start[0], start[1], stop[0], stop[1], &Span::new(t)),
+                _ => [start[0], start[1], 2.0 * random(&mut state), 0.0, 0.0, 0.0],
+            };
+            let (mut v_max, mut a_max, mut low, mut high) = (0.0f64, 0.0f64, f64::MAX, f64::MIN);
+            for k in 0..=20_000 {
+                let [p, v, a] = eval(&c, t * k as f64 / 20_000.0);
+                (v_max, a_max) = (v_max.max(v.abs()), a_max.max(a.abs()));
+                (low, high) = (low.min(p), high.max(p));
+            }
+            // Sampling misses a position's extreme by up to |a|·(step/2)²/2 ≈ 10⁻⁸.
+            let e = extremes(&c, t, low - 1e-6, high + 1e-6);
+            let (v, a) = (e.velocity.abs(), e.acceleration.abs());
+            // Exact: never below what sampling finds (but for rounding), and barely above.
+            let near = |exact: f64, sampled: f64| {
+                exact >= sampled * (1.0 - 1e-12) && exact - sampled <= 1e-6 * (1.0 + exact)
+            };
+            assert!(near(v, v_max), "{case}: {v} {v_max}");
+            assert!(near(a, a_max), "{case}: {a} {a_max}");
+            assert_eq!(e.outside, None, "{case}");
+            // The range a hair inside what the segment reaches: found outside.
+            let middle = 0.5 * (low + high);
+            let inside = extremes(&c, t, low + 1e-6 * (middle - low), f64::INFINITY);
+            assert!(
+                inside.outside.is_some_and(|x| x <= low + 1e-12),
+                "{case}: {inside:?}"
+            );
+            let span = Span::new(t);
+            if let Some((v_bound, a_bound)) = hull_bounds(&c, &span, f64::MIN, f64::MAX) {
+                assert!(v_bound >= v * (1.0 - 1e-12), "{case}: {v_bound} < {v}");
+                assert!(a_bound >= a * (1.0 - 1e-12), "{case}: {a_bound} < {a}");
+            }
+            // Wherever the hull says "within", it is.
+            let narrow = (low + 1e-3 * (high - low), high);
+            if hull_bounds(&c, &span, narrow.0, narrow.1).is_some() {
+                panic!("{case}: the hull is within a range the segment leaves");
+            }
+        }
+    }
+
     #[test]
     fn an_overshoot_between_the_ends_is_found() {
         // 0 → 0 with velocity 4 at the start: rises to about 0.59 in between.
