@@ -295,7 +295,8 @@ enum motiond_group_abort {
     MOTIOND_GROUP_ABORT_CANCELLED = 8,
     MOTIOND_GROUP_ABORT_STREAM_STALE = 9,
     MOTIOND_GROUP_ABORT_STREAM_LIMIT = 10,
-    MOTIOND_GROUP_ABORT_SHUTTING_DOWN = 11
+    MOTIOND_GROUP_ABORT_SHUTTING_DOWN = 11,
+    MOTIOND_GROUP_ABORT_GOAL_REFUSED = 12
 };
 
 /** Where a group's setpoint stream is (motiond_group_state_t.stream). */
@@ -1147,6 +1148,7 @@ static inline const char *motiond_group_abort_text(uint32_t value) {
     case MOTIOND_GROUP_ABORT_STREAM_STALE: return "stream-stale";
     case MOTIOND_GROUP_ABORT_STREAM_LIMIT: return "stream-limit";
     case MOTIOND_GROUP_ABORT_SHUTTING_DOWN: return "shutting-down";
+    case MOTIOND_GROUP_ABORT_GOAL_REFUSED: return "goal-refused";
     default: return NULL;
     }
 }

@@ -101,6 +101,9 @@ pub enum GroupAbort {
     StreamLimit = 10,
     /// The server is shutting down.
     ShuttingDown = 11,
+    /// An axis's board refused the goal that would follow the path (beyond what the board
+    /// represents), or is not online ([`GroupState::abort_axis`]).
+    GoalRefused = 12,
 }
 
 impl GroupAbort {
@@ -119,6 +122,7 @@ impl GroupAbort {
             Self::StreamStale => "stream-stale",
             Self::StreamLimit => "stream-limit",
             Self::ShuttingDown => "shutting-down",
+            Self::GoalRefused => "goal-refused",
         }
     }
 }
@@ -139,6 +143,7 @@ impl TryFrom<u8> for GroupAbort {
             9 => Self::StreamStale,
             10 => Self::StreamLimit,
             11 => Self::ShuttingDown,
+            12 => Self::GoalRefused,
             other => return Err(UnknownValue(u32::from(other))),
         })
     }

@@ -82,8 +82,8 @@ unit = "mm"
 counts_per_unit = 400.0
 min = 0.0
 max = 300.0
-max_velocity = 40.0
-max_accel = 200.0
+max_velocity = 12.0
+max_accel = 100.0
 
 [[group]]
 name = "pair"
@@ -189,7 +189,9 @@ fn a_line_arrives_on_both_boards_body() {
     assert!((frame.axes[LIFT].position - targets[1]).abs() <= 0.05);
     // A path published by one node cannot be run by another.
     let mut other = RawClient::connect(&name, Duration::from_secs(5));
-    publish(&publisher, |path| path.set_line(0, 2, &start_positions(&start), (0.0, 0.0)));
+    publish(&publisher, |path| {
+        path.set_line(0, 2, &start_positions(&start), (0.0, 0.0))
+    });
     let reply = run(&mut other, 2);
     assert_eq!(reply.result(), Err(Reason::NoPath));
 }
@@ -227,10 +229,16 @@ fn a_slipping_motor_aborts_the_group_naming_its_axis_body() {
     let state = frame.groups()[0];
     assert_eq!(state.abort(), Ok(GroupAbort::PathTolerance), "{state:?}");
     assert_eq!(state.abort_axis(), Some(FEEDER as u32));
-    assert!(state.abort_value > 2.0 && state.abort_limit == 2.0, "{state:?}");
+    assert!(
+        state.abort_value > 2.0 && state.abort_limit == 2.0,
+        "{state:?}"
+    );
     for axis in [FEEDER, LIFT] {
         let mode = frame.axes[axis].mode().expect("mode");
-        assert!(matches!(mode, AxisMode::Stopping | AxisMode::Hold), "{axis}: {mode:?}");
+        assert!(
+            matches!(mode, AxisMode::Stopping | AxisMode::Hold),
+            "{axis}: {mode:?}"
+        );
     }
     // Both come to rest.
     wait_group(&client, Duration::from_secs(10), |frame| {
@@ -283,7 +291,13 @@ fn a_client_killed_mid_trajectory_stops_the_group() {
 fn a_client_killed_mid_trajectory_stops_the_group_body() {
     let (_board, _served, _server, client, name, _) = setup("group_dead_client");
     let mut child = Command::new(std::env::current_exe().expect("this test binary"))
-        .args(["--exact", "group_child_client", "--nocapture", "--test-threads", "1"])
+        .args([
+            "--exact",
+            "group_child_client",
+            "--nocapture",
+            "--test-threads",
+            "1",
+        ])
         .env("GROUP_CHILD", &name)
         .stdout(Stdio::null())
         .stderr(Stdio::null())
@@ -300,7 +314,12 @@ fn a_client_killed_mid_trajectory_stops_the_group_body() {
         !frame.groups()[0].motion().expect("known").active()
     });
     let state = frame.groups()[0];
-    assert_eq!(state.abort(), Ok(GroupAbort::ClientDead), "{state:?} {:?}", &frame.axes()[..2]);
+    assert_eq!(
+        state.abort(),
+        Ok(GroupAbort::ClientDead),
+        "{state:?} {:?}",
+        &frame.axes()[..2]
+    );
     wait_group(&client, Duration::from_secs(10), |frame| {
         [FEEDER, LIFT]
             .iter()

@@ -823,6 +823,7 @@ class GroupAbort(TextedEnum):
     STREAM_STALE = 9, "stream-stale"
     STREAM_LIMIT = 10, "stream-limit"
     SHUTTING_DOWN = 11, "shutting-down"
+    GOAL_REFUSED = 12, "goal-refused"
 
 
 class StreamState(TextedEnum):

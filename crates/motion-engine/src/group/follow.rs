@@ -14,7 +14,7 @@
 
 use core::time::Duration;
 
-use motion_drivers::{Driver, Follow, Goal};
+use motion_drivers::{Driver, Follow, Goal, GoalError};
 use motion_ipc::{GroupAbort, PathKind, StreamMode};
 
 use crate::Engine;
@@ -28,6 +28,10 @@ const FEEDBACK_TIME: Duration = Duration::from_millis(100);
 /// A segment's target lies at least this many braking distances ahead (from the path's
 /// speed at the axis's `max_accel`), so that a board's position ramp never brakes for it.
 const BRAKE_MARGIN: f64 = 1.5;
+
+/// A velocity within this many of the board's smallest steps that the board refuses is
+/// sent as a stop (the conversion to the board's steps rounds down).
+const SNAP_FLOORS: f64 = 4.0;
 
 /// The least speed of a segment, as a fraction of `max_velocity` (the last approach to the
 /// path's end, a held path): slow boards still get there.
@@ -61,12 +65,30 @@ impl<D: Driver> Engine<D> {
             let (bus, driver_slot, channel) = (axis.bus, axis.slot, axis.channel);
             let first = member.sent_at.is_none();
             let index = member.axis;
+            let floor = axis.rate_to_counts(axis.min_velocity).abs() * SNAP_FLOORS;
             let result = match self.buses[bus].driver_mut(driver_slot) {
-                Some(driver) => driver.set_goal(now, channel, goal),
-                None => Err(motion_drivers::GoalError::Offline),
+                Some(driver) => match (driver.set_goal(now, channel, goal), goal) {
+                    // A velocity a few floors slow may convert to less than the board's
+                    // smallest step: it stops instead.
+                    (Err(GoalError::OutOfBoardRange(_)), Goal::Velocity { velocity, accel })
+                        if velocity.abs() <= floor =>
+                    {
+                        member.last_velocity = 0.0;
+                        driver.set_goal(
+                            now,
+                            channel,
+                            Goal::Velocity {
+                                velocity: 0.0,
+                                accel,
+                            },
+                        )
+                    }
+                    (result, _) => result,
+                },
+                None => Err(GoalError::Offline),
             };
             if result.is_err() {
-                self.abort_group(group, GroupAbort::AxisFault, Some(index), 0.0, 0.0);
+                self.abort_group(group, GroupAbort::GoalRefused, Some(index), 0.0, 0.0);
                 return;
             }
             if first {
@@ -150,10 +172,12 @@ fn next_goal(
     // A position ramp brakes to stop at its target: a segment's target lies at least a
     // braking distance ahead, or the board crawls.
     let speed = g.velocity[slot].abs();
+    // A velocity acts from when it is acknowledged until the next one is: about two
+    // segments ahead.
     let reach = if member.follow == Follow::Segments {
         (speed / (2.0 * axis.max_accel) * BRAKE_MARGIN).max(lead)
     } else {
-        lead
+        2.0 * lead + period.as_secs_f64()
     };
     let (target, path_velocity) = if stream {
         let velocity = g.velocity[slot];

@@ -261,10 +261,12 @@ impl Driver for Qq2drvDriver {
     /// Packet 36's velocity is plain transitions/s (the step of a velocity goal and of a
     /// search); packet 34's profile velocity and every acceleration are transitions/s (/s²)
     /// shl 12.
-    /// The board runs its own position PID at 500 Hz and takes a new target (packet 34) in any SPI transaction.
+    /// The board's own trapezoid (packet 34 with velocity and acceleration) takes a new
+    /// target in any SPI transaction; a bare position target (its PID alone) saturates and
+    /// lags a moving path by whole millimetres.
     fn follow(&self, channel: usize) -> motion_drivers::Follow {
         let _ = channel;
-        motion_drivers::Follow::Setpoints
+        motion_drivers::Follow::Segments
     }
 
     fn rate_floor(&self, channel: usize) -> RateFloor {
