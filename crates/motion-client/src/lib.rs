@@ -97,6 +97,9 @@ mod error;
 #[cfg(feature = "zenoh")]
 mod feed;
 mod frames;
+mod group;
+mod group_error;
+mod group_state;
 mod iceoryx2_error;
 mod jog;
 #[cfg(feature = "zenoh")]
@@ -111,6 +114,7 @@ mod session;
 mod signal;
 #[cfg(feature = "testing")]
 pub mod testing;
+mod trajectory;
 
 pub use axis::Axis;
 pub use claim::ClaimGuard;
@@ -122,9 +126,13 @@ pub use command::Accepted;
 pub use emergency::{Estop, EstopPath, estop, stop_all};
 pub use error::{ClientError, ConnectError, DeviceStatus, EstopError, Restart};
 pub use frames::{FIRST_FRAME_TIMEOUT, Frames};
+pub use group::{Group, GroupRun};
+pub use group_error::{GroupAborted, GroupRefusal};
+pub use group_state::{GroupOutcome, GroupStatus};
 pub use iceoryx2_error::Iceoryx2Error;
 pub use jog::JogGuard;
 pub use motion_ipc as ipc;
 pub use received::Received;
 pub use remote_error::{RemoteError, RemoteSource};
 pub use signal::{Signal, signal_value_text};
+pub use trajectory::{PointKind, Trajectory, TrajectoryError};
