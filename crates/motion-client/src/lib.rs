@@ -32,6 +32,13 @@
 //!   [`Axis::wait_until_arrived`], [`Axis::wait_until_homed`] (a faulted axis ends them with
 //!   [`ClientError::AxisFaulted`] carrying [`FaultCode::explain`](motion_ipc::FaultCode::explain)'s
 //!   sentence), [`Signal::wait_for`] / [`Signal::wait_until`].
+//! - Coordinated motion: [`Client::group`] finds an axis group (`[[group]]`); [`Group`]
+//!   moves its axes together along a synchronized line ([`Group::move_to`]) or a
+//!   [`Trajectory`] ([`Group::follow`]), holds, resumes, sets the feed, cancels, claims every
+//!   member at once, and [`Group::wait_done`] ends with the motion (an abort is
+//!   [`ClientError::GroupAborted`] naming the reason, the axis and the figures; a refused
+//!   path [`ClientError::GroupRefused`] naming the point and the axis). Shared memory only
+//!   for now (not through a bridge).
 //! - Jog: [`Axis::jog`] returns a [`JogGuard`] that renews the server's deadman while your
 //!   program keeps calling into the client, and stops the axis when dropped;
 //!   [`Axis::claim_guard`] a [`ClaimGuard`].

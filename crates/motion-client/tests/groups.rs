@@ -254,7 +254,7 @@ fn an_abort_names_the_axis_and_its_figures() -> Result {
         (GroupMotion::Aborted, Some("y"))
     );
     // A stop of a member axis ends a new motion too.
-    all.move_to_scaled(&[0.0, 0.0, 0.0], 0.1, 1.0)?;
+    all.move_to_scaled(&[-50.0, -50.0, -50.0], 0.1, 1.0)?;
     client.axis("a")?.stop()?;
     let error = all.wait_done(WAIT).expect_err("stopped");
     assert!(
@@ -292,43 +292,4 @@ fn wait_motion(client: &Client<local::Service>, motion: GroupMotion) -> Result<u
             return Err(format!("group never {}", motion.name()).into());
         }
     }
-}
-
-/// Waits until group `xy` shows `motion`; returns the tick.
-fn wait_motion(client: &Client<local::Service>, motion: GroupMotion) -> Result<u64> {
-    let deadline = std::time::Instant::now() + WAIT;
-    loop {
-        let frame = client.next_frame(WAIT)?;
-        if frame.groups()[0].motion == motion as u8 {
-            return Ok(frame.tick);
-        }
-        if std::time::Instant::now() > deadline {
-            return Err(format!("group never {}", motion.name()).into());
-        }
-    }
-}
-
-#[test]
-fn stack_probe() -> Result {
-    let server =
-        FakeServer::start::<local::Service>(FakeConfig::demo(&unique_name("probe")).with_groups())?;
-    let name = server.name().to_owned();
-    let kb: usize = std::env::var("PROBE_KB").unwrap_or("2048".into()).parse()?;
-    let publish = std::env::var("PROBE_PUBLISH").is_ok();
-    {
-        let name = name.clone();
-        let ok = std::thread::Builder::new()
-            .stack_size(kb * 1024)
-            .spawn(move || {
-                let client = Client::<local::Service>::connect(&name).map_err(|e| e.to_string())?;
-                let xy = client.group("xy").map_err(|e| e.to_string())?;
-                if publish {
-                    xy.move_to(&[1.0, 1.0]).map_err(|e| e.to_string())?;
-                }
-                Ok::<(), String>(())
-            })?
-            .join();
-        eprintln!("{kb} KB: {:?}", ok.is_ok());
-    }
-    Ok(())
 }
