@@ -56,6 +56,13 @@ pub struct GroupStatus {
     pub raw: GroupState,
 }
 
+fn unknown_group(info: &ServerInfo, group: usize) -> ClientError {
+    ClientError::UnknownGroup {
+        name: format!("#{group}"),
+        known: info.groups().iter().map(|g| g.name().to_owned()).collect(),
+    }
+}
+
 fn unknown(what: &'static str) -> impl Fn(motion_ipc::UnknownValue) -> ClientError {
     move |error| ClientError::UnknownValue {
         what,
@@ -66,12 +73,22 @@ fn unknown(what: &'static str) -> impl Fn(motion_ipc::UnknownValue) -> ClientErr
 impl GroupStatus {
     /// The state of group `group` (config order) in `frame`, named with `info`.
     pub fn read(info: &ServerInfo, frame: &MotionFrame, group: usize) -> Result<Self, ClientError> {
-        let name = info.groups().get(group).map(|g| g.name().to_owned());
-        let (Some(name), Some(raw)) = (name, frame.groups().get(group).copied()) else {
-            return Err(ClientError::UnknownGroup {
-                name: format!("#{group}"),
-                known: info.groups().iter().map(|g| g.name().to_owned()).collect(),
-            });
+        match frame.groups().get(group) {
+            Some(raw) => Self::from_state(info, group, frame.tick, *raw),
+            None => Err(unknown_group(info, group)),
+        }
+    }
+
+    /// The state `raw` of group `group` (config order) seen in tick `tick`, named with
+    /// `info`.
+    pub fn from_state(
+        info: &ServerInfo,
+        group: usize,
+        tick: u64,
+        raw: GroupState,
+    ) -> Result<Self, ClientError> {
+        let Some(name) = info.groups().get(group).map(|g| g.name().to_owned()) else {
+            return Err(unknown_group(info, group));
         };
         let abort_axis = raw.abort_axis().map(|axis| {
             info.axes()
@@ -85,7 +102,7 @@ impl GroupStatus {
             .unwrap_or_default();
         Ok(Self {
             name,
-            tick: frame.tick,
+            tick,
             motion: raw.motion().map_err(unknown("group motion"))?,
             abort: raw.abort().map_err(unknown("group abort reason"))?,
             abort_axis,
