@@ -111,7 +111,7 @@ fn columns(header: &str, line: usize, axes: &[String]) -> Result<(Vec<Column>, u
         ));
     }
     let mut quantities = 1;
-    for quantity in 1..3 {
+    for (quantity, (_, plural)) in QUANTITIES.iter().enumerate().skip(1) {
         let absent = missing(quantity);
         if absent.len() == axes.len() {
             continue;
@@ -120,8 +120,7 @@ fn columns(header: &str, line: usize, axes: &[String]) -> Result<(Vec<Column>, u
             return Err(error(
                 line,
                 format!(
-                    "{} for every axis or none; missing: {}",
-                    QUANTITIES[quantity].1,
+                    "{plural} for every axis or none; missing: {}",
                     absent.join(", ")
                 ),
             ));
