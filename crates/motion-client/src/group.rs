@@ -42,6 +42,31 @@ pub struct GroupRun {
 /// Positions, velocities and accelerations are given per member axis in the group's order
 /// ([`Group::axes`]), in each axis's unit. Every motion command is judged by the server and
 /// answered; a refused path names its point and axis ([`ClientError::GroupRefused`]).
+///
+/// ```no_run
+/// use core::time::Duration;
+/// use iceoryx2::prelude::ipc;
+/// use motion_client::{Client, ClientError, Trajectory};
+///
+/// let client = Client::<ipc::Service>::connect("demo")?;
+/// let gantry = client.group("gantry")?; // targets in its order: x, feeder, lift
+/// gantry.move_to(&[200.0, 100.0, 150.0])?; // one synchronized line
+/// gantry.wait_done(Duration::from_secs(30))?;
+///
+/// let arm = client.group("arm")?; // x y z a b c
+/// let mut path = Trajectory::new(arm.axes().len());
+/// path.push(1.0, &[20.0, 15.0, -10.0, 30.0, 10.0, -30.0])?
+///     .push(2.0, &[40.0, 30.0, -20.0, 60.0, 20.0, -60.0])?;
+/// let _claim = arm.claim()?; // every axis of the arm; released on drop
+/// arm.follow(&path)?;
+/// arm.set_feed(0.5)?; // half speed along the path
+/// match arm.wait_done(Duration::from_secs(30)) {
+///     Ok(outcome) => println!("done in tick {}", outcome.tick),
+///     Err(ClientError::GroupAborted(abort)) => println!("{abort}"), // reason, axis, figures
+///     Err(other) => return Err(other.into()),
+/// }
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 #[derive(Debug)]
 pub struct Group<'c, S: Service> {
     client: &'c Client<S>,
