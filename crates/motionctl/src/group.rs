@@ -7,7 +7,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use anyhow::Context as _;
-use motion_client::ipc::{GroupInfo, ServerInfo};
+use motion_client::ipc::{GroupInfo, Reason, ServerInfo};
 use motion_client::{Client, ClientError, Group, GroupRun, GroupStatus, Trajectory};
 use serde_json::{Value, json};
 
@@ -168,10 +168,23 @@ fn execute(
     }
     let deadline = Instant::now() + timeout;
     let devices = member_devices(group);
-    client
-        .wait_devices_ready(&devices, timeout)
-        .with_context(|| what.to_owned())?;
-    let run = stop_if_interrupted(group, send()).with_context(|| what.to_owned())?;
+    // As `move --wait`: ready devices first; a path refused because a device is (again)
+    // starting is sent again (under a new id) after the next readiness.
+    let sent = loop {
+        let left = deadline.saturating_duration_since(Instant::now());
+        if let Err(error) = client.wait_devices_ready(&devices, left) {
+            break Err(error);
+        }
+        match send() {
+            Err(error)
+                if error.reason() == Some(Reason::DeviceStarting) && Instant::now() < deadline =>
+            {
+                std::thread::sleep(Duration::from_millis(5));
+            }
+            other => break other,
+        }
+    };
+    let run = stop_if_interrupted(group, sent).with_context(|| what.to_owned())?;
     let mut report = GroupReport::new(
         &name,
         group.index() as usize,

@@ -368,3 +368,17 @@ fn watch_shows_a_line_per_group() -> Result {
     assert_eq!(first["groups"][0]["motion"], "idle");
     Ok(())
 }
+
+#[test]
+fn group_move_wait_right_after_start_waits_for_readiness() -> Result {
+    let server = fake_with("gready", |config: &mut FakeConfig| {
+        *config = config.clone().with_groups().starting_for(300);
+    })?;
+    let output = run(
+        server.name(),
+        &["group", "move", "xy", "x=1", "y=2", "--wait", "--json"],
+    )?;
+    let report = json_of(&output)?;
+    assert_eq!(report["state"], "done", "{report}");
+    Ok(())
+}
