@@ -16,8 +16,9 @@ use motion_ipc::{
     ServerStats, ServiceNames, SignalInfo, Target,
 };
 
+use crate::group::RunMark;
 use crate::jog::JogTable;
-use crate::ports::{self, CommandPorts, FramePorts, Opening};
+use crate::ports::{self, CommandPorts, FramePorts, Opening, PathPorts};
 use crate::received::{LatestCache, Received};
 use crate::session::{Seen, Session};
 use crate::{Axis, ClientError, ConnectError, Restart};
@@ -158,6 +159,13 @@ pub struct Client<S: Service> {
     /// older frames and end when the server restarted.
     pub(crate) goal_ticks: RefCell<Vec<(u64, u64)>>,
     pub(crate) jogs: RefCell<JogTable>,
+    /// The publisher on the `paths` service, created by the first path sent.
+    pub(crate) paths: RefCell<Option<Rc<PathPorts<S>>>>,
+    /// The id of the last path this client sent (ids count up from 1).
+    pub(crate) path_ids: Cell<u64>,
+    /// Per group (config order): the last path this client ran on it, so that waits know
+    /// which motion is theirs.
+    pub(crate) group_runs: RefCell<Vec<Option<RunMark>>>,
     /// The bridge this client talks through, when remote.
     #[cfg(feature = "zenoh")]
     pub(crate) remote: Option<crate::link::Link>,
@@ -307,6 +315,9 @@ impl<S: Service> Client<S> {
             sequence: Cell::new(0),
             goal_ticks: RefCell::new(vec![(0, 0); axis_count]),
             jogs: RefCell::new(JogTable::default()),
+            paths: RefCell::new(None),
+            path_ids: Cell::new(0),
+            group_runs: RefCell::new(Vec::new()),
             #[cfg(feature = "zenoh")]
             remote: None,
         }

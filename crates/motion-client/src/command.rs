@@ -177,11 +177,13 @@ impl<S: Service> Client<S> {
         request.target = target as u32;
         let reply = self.send_request(request)?;
         if self.session.epoch() != epoch && !always_sent(kind) {
-            if reply.result().is_ok() && target == Target::Axis && index != CommandRequest::ALL_AXES
-            {
+            let one = (target == Target::Axis && index != CommandRequest::ALL_AXES)
+                || target == Target::Group;
+            if reply.result().is_ok() && one {
                 // Sent to a new server before we knew: take the goal back.
-                let stop =
+                let mut stop =
                     CommandRequest::new(self.id, self.next_sequence(), index, CommandKind::Stop);
+                stop.target = target as u32;
                 let _ = self.send_request(stop);
             }
             if let Some(restart) = self.session.unacknowledged() {
@@ -198,6 +200,7 @@ impl<S: Service> Client<S> {
                     tick: reply.tick_applied,
                 })
             }
+            Err(reason) if target == Target::Group => Err(self.group_refusal(&reply, reason)),
             Err(reason) => Err(ClientError::refused(
                 reply.kind,
                 self.target_label(target, index),

@@ -6,7 +6,7 @@ use core::time::Duration;
 
 use motion_ipc::{CommandKind, DeviceState, FaultCode, Reason};
 
-use crate::Iceoryx2Error;
+use crate::{GroupAborted, GroupRefusal, Iceoryx2Error, TrajectoryError};
 
 /// Why [`ClientBuilder::connect`](crate::ClientBuilder::connect) failed.
 #[derive(Debug, thiserror::Error)]
@@ -203,6 +203,14 @@ fn not_ready_text(devices: &[DeviceStatus], waited: &Duration) -> String {
     }
 }
 
+fn known_groups(known: &[String]) -> String {
+    if known.is_empty() {
+        "the server has no groups ([[group]] in its config)".to_owned()
+    } else {
+        format!("its groups: {}", known.join(", "))
+    }
+}
+
 fn refusal_text(reason: &Reason, detail: &Option<String>) -> String {
     detail
         .clone()
@@ -218,6 +226,71 @@ pub enum ClientError {
     /// No signal of that name on the server.
     #[error("no signal named \"{0}\" on this server (see `motionctl io list`)")]
     UnknownSignal(String),
+    /// No group of that name on the server.
+    #[error("no group named \"{name}\" on this server; {}", known_groups(.known))]
+    UnknownGroup {
+        /// The name asked for.
+        name: String,
+        /// The groups the server has, in config order.
+        known: Vec<String>,
+    },
+    /// The server refused a command to a group; the refusal names the point, the axis and
+    /// the figures of a path, the axis and its holder of a claim.
+    #[error("{0}")]
+    GroupRefused(Box<GroupRefusal>),
+    /// A group's motion ended before its end (a wait for it).
+    #[error("{0}")]
+    GroupAborted(Box<GroupAborted>),
+    /// A wait for a group's motion to end ran out of time.
+    #[error("group {group} did not finish within {waited:?} (it is {motion})")]
+    GroupTimeout {
+        /// The group's name.
+        group: String,
+        /// The time allowed.
+        waited: core::time::Duration,
+        /// Its motion when the time ran out ("moving", "held").
+        motion: &'static str,
+    },
+    /// A wait for a group's motion ended because another motion replaced it, or the group
+    /// went idle without ending it.
+    #[error("group {group}: {why}")]
+    GroupWaitAborted {
+        /// The group's name.
+        group: String,
+        /// Why, in words.
+        why: String,
+    },
+    /// A trajectory or a line's targets cannot be built or do not fit the group.
+    #[error(transparent)]
+    Trajectory(#[from] TrajectoryError),
+    /// A path could not be published on the server's `paths` service.
+    #[error("the path for group {group} was not sent: {why}")]
+    PathNotSent {
+        /// The group's name.
+        group: String,
+        /// Why, in words.
+        why: String,
+    },
+    /// The feature needs shared memory: not through a bridge (remote clients).
+    #[error(
+        "{what} works only on the server's host for now (shared memory): connect without \
+         --remote / ClientBuilder::remote"
+    )]
+    LocalOnly {
+        /// What ("groups").
+        what: &'static str,
+    },
+    /// The server sent an enumeration value this client does not know.
+    #[error(
+        "the server sent {what} {value}, which this client does not know (client and server \
+         schema differ?)"
+    )]
+    UnknownValue {
+        /// What it was ("group motion").
+        what: &'static str,
+        /// The raw value.
+        value: u32,
+    },
     /// The server refused a command.
     #[error("{kind} on {target} refused: {}", refusal_text(.reason, .detail))]
     Refused {
@@ -376,6 +449,7 @@ impl ClientError {
     pub fn reason(&self) -> Option<Reason> {
         match self {
             Self::Refused { reason, .. } => Some(*reason),
+            Self::GroupRefused(refusal) => Some(refusal.reason),
             _ => None,
         }
     }

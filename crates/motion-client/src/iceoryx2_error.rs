@@ -4,12 +4,13 @@
 //! of what the client was doing.
 
 use iceoryx2::node::{NodeCreationFailure, NodeListFailure};
-use iceoryx2::port::ReceiveError;
 use iceoryx2::port::client::RequestSendError;
 use iceoryx2::port::listener::{ListenerCreateError, ListenerWaitError};
 use iceoryx2::port::notifier::{NotifierCreateError, NotifierNotifyError};
+use iceoryx2::port::publisher::PublisherCreateError;
 use iceoryx2::port::subscriber::SubscriberCreateError;
 use iceoryx2::port::update_connections::ConnectionFailure;
+use iceoryx2::port::{LoanError, ReceiveError, SendError};
 use iceoryx2::prelude::SemanticStringError;
 use iceoryx2::service::builder::event::EventOpenError;
 use iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError;
@@ -45,6 +46,15 @@ pub enum Iceoryx2Error {
     /// An event service could not be opened.
     #[error(transparent)]
     EventOpen(#[from] EventOpenError),
+    /// A publisher could not be created.
+    #[error(transparent)]
+    PublisherCreate(#[from] PublisherCreateError),
+    /// A sample could not be loaned.
+    #[error(transparent)]
+    Loan(#[from] LoanError),
+    /// A sample could not be sent.
+    #[error(transparent)]
+    Send(#[from] SendError),
     /// A listener could not be created.
     #[error(transparent)]
     ListenerCreate(#[from] ListenerCreateError),

@@ -32,6 +32,13 @@
 //!   [`Axis::wait_until_arrived`], [`Axis::wait_until_homed`] (a faulted axis ends them with
 //!   [`ClientError::AxisFaulted`] carrying [`FaultCode::explain`](motion_ipc::FaultCode::explain)'s
 //!   sentence), [`Signal::wait_for`] / [`Signal::wait_until`].
+//! - Coordinated motion: [`Client::group`] finds an axis group (`[[group]]`); [`Group`]
+//!   moves its axes together along a synchronized line ([`Group::move_to`]) or a
+//!   [`Trajectory`] ([`Group::follow`]), holds, resumes, sets the feed, cancels, claims every
+//!   member at once, and [`Group::wait_done`] ends with the motion (an abort is
+//!   [`ClientError::GroupAborted`] naming the reason, the axis and the figures; a refused
+//!   path [`ClientError::GroupRefused`] naming the point and the axis). Shared memory only
+//!   for now (not through a bridge).
 //! - Jog: [`Axis::jog`] returns a [`JogGuard`] that renews the server's deadman while your
 //!   program keeps calling into the client, and stops the axis when dropped;
 //!   [`Axis::claim_guard`] a [`ClaimGuard`].
@@ -97,6 +104,9 @@ mod error;
 #[cfg(feature = "zenoh")]
 mod feed;
 mod frames;
+mod group;
+mod group_error;
+mod group_state;
 mod iceoryx2_error;
 mod jog;
 #[cfg(feature = "zenoh")]
@@ -111,6 +121,7 @@ mod session;
 mod signal;
 #[cfg(feature = "testing")]
 pub mod testing;
+mod trajectory;
 
 pub use axis::Axis;
 pub use claim::ClaimGuard;
@@ -122,9 +133,13 @@ pub use command::Accepted;
 pub use emergency::{Estop, EstopPath, estop, stop_all};
 pub use error::{ClientError, ConnectError, DeviceStatus, EstopError, Restart};
 pub use frames::{FIRST_FRAME_TIMEOUT, Frames};
+pub use group::{Group, GroupRun};
+pub use group_error::{GroupAborted, GroupRefusal};
+pub use group_state::{GroupOutcome, GroupStatus};
 pub use iceoryx2_error::Iceoryx2Error;
 pub use jog::JogGuard;
 pub use motion_ipc as ipc;
 pub use received::Received;
 pub use remote_error::{RemoteError, RemoteSource};
 pub use signal::{Signal, signal_value_text};
+pub use trajectory::{PointKind, Trajectory, TrajectoryError};

@@ -9,6 +9,7 @@ use iceoryx2::identifiers::UniqueServiceId;
 use iceoryx2::node::Node;
 use iceoryx2::port::listener::Listener;
 use iceoryx2::port::listener::ListenerCreateError;
+use iceoryx2::port::publisher::{Publisher, PublisherCreateError};
 use iceoryx2::port::subscriber::{Subscriber, SubscriberCreateError};
 use iceoryx2::prelude::{PortFactory as _, ServiceName, ZeroCopySend};
 use iceoryx2::service::Service;
@@ -16,7 +17,7 @@ use iceoryx2::service::builder::event::EventOpenError;
 use iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError;
 use iceoryx2::service::builder::request_response::RequestResponseOpenError;
 use iceoryx2::service::port_factory::client::ClientCreateError;
-use motion_ipc::{CommandReply, CommandRequest, MotionFrame, SCHEMA_VERSION};
+use motion_ipc::{CommandReply, CommandRequest, GroupPath, MotionFrame, SCHEMA_VERSION};
 
 use crate::ConnectError;
 use crate::received::LatestCache;
@@ -48,6 +49,19 @@ pub(crate) struct CommandPorts<S: Service> {
 impl<S: Service> fmt::Debug for CommandPorts<S> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_struct("CommandPorts").finish_non_exhaustive()
+    }
+}
+
+/// A publisher on the `paths` service (a group's paths; each sample is about 400 KB, so
+/// only a client that sends paths has one).
+pub(crate) struct PathPorts<S: Service> {
+    pub(crate) publisher: Publisher<S, GroupPath, ()>,
+    pub(crate) service_id: UniqueServiceId,
+}
+
+impl<S: Service> fmt::Debug for PathPorts<S> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("PathPorts").finish_non_exhaustive()
     }
 }
 
@@ -230,6 +244,36 @@ pub(crate) fn open_commands<S: Service>(
         })?;
     Ok(CommandPorts {
         port,
+        service_id: factory.unique_service_id(),
+    })
+}
+
+/// A publisher on the `paths` service `service` (created by the server), lending one
+/// sample at a time.
+pub(crate) fn open_paths<S: Service>(
+    node: &Node<S>,
+    opening: &Opening<'_>,
+    service: &str,
+) -> Result<PathPorts<S>, ConnectError> {
+    let name = service_name(service, opening.server)?;
+    let factory = retry(opening.deadline, || {
+        node.service_builder(&name)
+            .publish_subscribe::<GroupPath>()
+            .open()
+    })
+    .map_err(|error| pubsub_open_error(error, opening, service))?;
+    let publisher = factory
+        .publisher_builder()
+        .max_loaned_samples(1)
+        .create()
+        .map_err(|error| match error {
+            PublisherCreateError::ExceedsMaxSupportedPublishers => {
+                exhausted(service, "publisher slot")
+            }
+            other => ConnectError::ipc("create a path publisher", other),
+        })?;
+    Ok(PathPorts {
+        publisher,
         service_id: factory.unique_service_id(),
     })
 }

@@ -244,7 +244,7 @@ pub fn home(
 
 /// Holds `guards` until Ctrl-C or `until`, renewing them; ends with the restart if the
 /// server restarted (the claims died with it).
-fn hold_claims(
+pub fn hold_claims(
     client: &Client<Service>,
     guards: &[ClaimGuard<'_, Service>],
     until: Option<Instant>,

@@ -44,6 +44,9 @@ Examples:
   motionctl move x 10 --velocity 5 --wait
   motionctl jog y -2.5          (Ctrl-C stops the axis)
   motionctl io set lamp on
+  motionctl group move gantry x=200 feeder=100 lift=150 --wait
+  motionctl group follow arm arm.csv --wait --json
+  motionctl group feed arm 50%  (also hold, resume, cancel, stop, claim, list)
   motionctl estop               (gets through even when the server's ports are taken)
   motionctl record --duration 5s --out run.csv
   motionctl bench --duration 5s --json
@@ -100,7 +103,7 @@ pub enum Command {
         #[arg(long)]
         json: bool,
     },
-    /// Live table of every axis and signal and the server's tick statistics; q or Ctrl-C
+    /// Live table of every axis, group and signal and the server's tick statistics; q or Ctrl-C
     /// exits.
     Watch {
         /// Print one JSON object per frame sampled, every --interval, instead of a table.
@@ -178,6 +181,12 @@ pub enum Command {
         /// Longest wait.
         #[arg(long, default_value = "10s", value_parser = parse_duration)]
         timeout: Duration,
+    },
+    /// Axis groups: coordinated lines and trajectories, feed hold and override.
+    Group {
+        /// What to do.
+        #[command(subcommand)]
+        command: GroupCommand,
     },
     /// Board I/O signals: list, get, set, watch.
     Io {
@@ -296,6 +305,138 @@ pub enum IoCommand {
     },
 }
 
+/// `motionctl group …`.
+#[derive(Debug, Subcommand)]
+pub enum GroupCommand {
+    /// Every group: its axes in order, their path and goal tolerances, the goal time.
+    List {
+        /// Print JSON.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Move every axis of a group along one synchronized line (they start and arrive
+    /// together): `group move gantry x=200 feeder=100 lift=150`.
+    Move {
+        /// Group name.
+        group: String,
+        /// AXIS=POSITION for every axis of the group, each once.
+        #[arg(required = true, value_parser = parse_target, value_name = "AXIS=POS")]
+        targets: Vec<(String, f64)>,
+        /// Fraction (0, 1] of every axis's max velocity.
+        #[arg(long, value_name = "F")]
+        velocity_scale: Option<f64>,
+        /// Fraction (0, 1] of every axis's max acceleration.
+        #[arg(long, value_name = "F")]
+        accel_scale: Option<f64>,
+        /// Wait until the devices are ready, then until the motion ends (exit 5 when it is
+        /// aborted); prints per axis when it arrived and its largest path error.
+        #[arg(long)]
+        wait: bool,
+        /// Print JSON (with --wait: one object with the outcome).
+        #[arg(long)]
+        json: bool,
+        /// Longest wait with --wait (readiness included).
+        #[arg(long, default_value = "120s", value_parser = parse_duration)]
+        timeout: Duration,
+    },
+    /// Follow a trajectory from a CSV file: header `time,<axis>,…` (optional `<axis>:vel`,
+    /// `<axis>:acc` columns), one row per point, time in seconds from the start.
+    Follow {
+        /// Group name.
+        group: String,
+        /// The CSV file.
+        file: PathBuf,
+        /// Wait until the devices are ready, then until the motion ends (exit 5 when it is
+        /// aborted); prints per axis when it arrived and its largest path error.
+        #[arg(long)]
+        wait: bool,
+        /// Print JSON (with --wait: one object with the outcome).
+        #[arg(long)]
+        json: bool,
+        /// Longest wait with --wait (readiness included).
+        #[arg(long, default_value = "600s", value_parser = parse_duration)]
+        timeout: Duration,
+    },
+    /// Feed hold: bring the group to rest along its path (`resume` continues).
+    Hold {
+        /// Group name.
+        group: String,
+    },
+    /// Continue a held path.
+    Resume {
+        /// Group name.
+        group: String,
+    },
+    /// Bring the group to rest along its path and end its motion.
+    Cancel {
+        /// Group name.
+        group: String,
+    },
+    /// Stop every axis of the group (ends its motion).
+    Stop {
+        /// Group name.
+        group: String,
+    },
+    /// Set the feed override: `50%` or `0.5`, 0–150 %.
+    Feed {
+        /// Group name.
+        group: String,
+        /// The feed: a percentage (`80%`) or a fraction (`0.8`), 0–150 %.
+        #[arg(value_parser = parse_feed, value_name = "FEED")]
+        feed: f64,
+    },
+    /// Claim every axis of the group (all or none) until Ctrl-C (or --duration), then
+    /// release them.
+    Claim {
+        /// Group name.
+        group: String,
+        /// Release after this long instead of waiting for Ctrl-C.
+        #[arg(long, value_parser = parse_duration)]
+        duration: Option<Duration>,
+    },
+}
+
+/// `AXIS=POSITION`.
+pub fn parse_target(text: &str) -> Result<(String, f64), String> {
+    let (axis, position) = text
+        .split_once('=')
+        .ok_or_else(|| format!("`{text}` is not AXIS=POSITION"))?;
+    let axis = axis.trim();
+    if axis.is_empty() {
+        return Err(format!("`{text}` names no axis"));
+    }
+    let position: f64 = position
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{position}` is not a position (in `{text}`)"))?;
+    if !position.is_finite() {
+        return Err(format!("`{text}`: the position is not finite"));
+    }
+    Ok((axis.to_owned(), position))
+}
+
+/// A feed: `50%` (a percentage) or `0.5` (a fraction), 0–150 %.
+pub fn parse_feed(text: &str) -> Result<f64, String> {
+    let text = text.trim();
+    let (number, percent) = match text.strip_suffix('%') {
+        Some(number) => (number.trim(), true),
+        None => (text, false),
+    };
+    let value: f64 = number
+        .parse()
+        .map_err(|_| format!("`{text}` is not a feed (write 80% or 0.8)"))?;
+    let feed = if percent { value / 100.0 } else { value };
+    if !feed.is_finite() || !(0.0..=1.5).contains(&feed) {
+        let hint = if !percent && (1.5..=150.0).contains(&value) {
+            format!(" (a fraction; for a percentage write {value}%)")
+        } else {
+            String::new()
+        };
+        return Err(format!("`{text}` is outside 0–150 %{hint}"));
+    }
+    Ok(feed)
+}
+
 /// `on`/`off` and their usual spellings.
 pub fn parse_on_off(text: &str) -> Result<bool, String> {
     match text.trim().to_ascii_lowercase().as_str() {
@@ -351,5 +492,72 @@ mod tests {
         );
         assert!(Cli::try_parse_from(["motionctl", "off", "x", "--all"]).is_err());
         assert!(Cli::try_parse_from(["motionctl", "io", "set", "lamp", "maybe"]).is_err());
+        let cli = Cli::try_parse_from([
+            "motionctl",
+            "group",
+            "move",
+            "gantry",
+            "x=200",
+            "feeder=-100",
+            "lift=1.5e2",
+            "--wait",
+            "--velocity-scale",
+            "0.5",
+        ]);
+        assert!(
+            matches!(
+                &cli,
+                Ok(Cli {
+                    command: Command::Group {
+                        command: GroupCommand::Move { targets, wait: true, velocity_scale: Some(0.5), .. }
+                    },
+                    ..
+                }) if targets == &[("x".to_owned(), 200.0), ("feeder".to_owned(), -100.0), ("lift".to_owned(), 150.0)]
+            ),
+            "{cli:?}"
+        );
+        assert!(Cli::try_parse_from(["motionctl", "group", "move", "gantry"]).is_err());
+        assert!(Cli::try_parse_from(["motionctl", "group", "move", "gantry", "x:200"]).is_err());
+        let cli = Cli::try_parse_from(["motionctl", "group", "feed", "arm", "50%"]);
+        assert!(
+            matches!(cli, Ok(Cli { command: Command::Group { command: GroupCommand::Feed { feed, .. } }, .. }) if feed == 0.5),
+            "{cli:?}"
+        );
+        assert!(Cli::try_parse_from(["motionctl", "group", "feed", "arm", "151%"]).is_err());
+    }
+
+    #[test]
+    fn feeds_parse_as_percentages_or_fractions() {
+        assert_eq!(parse_feed("50%"), Ok(0.5));
+        assert_eq!(parse_feed(" 150 % "), Ok(1.5));
+        assert_eq!(parse_feed("0%"), Ok(0.0));
+        assert_eq!(parse_feed("0.5"), Ok(0.5));
+        assert_eq!(parse_feed("1.5"), Ok(1.5));
+        assert_eq!(parse_feed("12.5%"), Ok(0.125));
+        let error = parse_feed("50").unwrap_err();
+        assert!(
+            error.contains("outside 0–150 %") && error.contains("write 50%"),
+            "{error}"
+        );
+        assert!(parse_feed("151%").unwrap_err().contains("outside"));
+        assert!(parse_feed("-10%").is_err());
+        assert!(parse_feed("1.6").is_err());
+        assert!(parse_feed("NaN%").is_err());
+        assert!(parse_feed("fast").unwrap_err().contains("not a feed"));
+        assert!(parse_feed("%").is_err());
+    }
+
+    #[test]
+    fn targets_parse_as_axis_equals_position() {
+        assert_eq!(parse_target("x=200"), Ok(("x".to_owned(), 200.0)));
+        assert_eq!(parse_target("lift = -1.5"), Ok(("lift".to_owned(), -1.5)));
+        assert!(parse_target("x").unwrap_err().contains("AXIS=POSITION"));
+        assert!(parse_target("=3").unwrap_err().contains("names no axis"));
+        assert!(
+            parse_target("x=far")
+                .unwrap_err()
+                .contains("not a position")
+        );
+        assert!(parse_target("x=inf").is_err());
     }
 }

@@ -20,6 +20,9 @@ mod bench;
 mod cli;
 mod describe;
 mod doctor;
+mod group;
+mod group_csv;
+mod group_report;
 mod io;
 mod machine;
 mod record;
@@ -168,6 +171,7 @@ fn run(cli: &Cli) -> anyhow::Result<()> {
         Command::Doctor(args) => doctor::run(args),
         Command::WaitReady { axes, timeout } => act::wait_ready(client, axes, *timeout),
         Command::Io { command } => io::run(client, command),
+        Command::Group { command } => group::run(client, command),
         Command::Reset => {
             client.reset()?;
             out!("reset: e-stop and faults cleared");
@@ -238,12 +242,18 @@ fn exit_status(error: &anyhow::Error) -> u8 {
                 exit::NO_SERVER
             };
         }
+        if cause.downcast_ref::<group::BadArguments>().is_some() {
+            return exit::USAGE;
+        }
         if let Some(client) = cause.downcast_ref::<ClientError>() {
             return match client {
                 ClientError::Refused { .. }
+                | ClientError::GroupRefused(_)
                 | ClientError::BridgeRefused { .. }
                 | ClientError::UnknownAxis(_)
+                | ClientError::UnknownGroup { .. }
                 | ClientError::UnknownSignal(_) => exit::REFUSED,
+                ClientError::Trajectory(_) => exit::USAGE,
                 ClientError::NoServer { .. } => exit::NO_SERVER,
                 ClientError::Connect(connect) => connect_status(connect),
                 ClientError::NoReply { .. }
@@ -253,12 +263,18 @@ fn exit_status(error: &anyhow::Error) -> u8 {
                 | ClientError::WaitAborted { .. }
                 | ClientError::AxisFaulted { .. }
                 | ClientError::NotReady { .. }
-                | ClientError::SignalTimeout { .. } => exit::TIMEOUT,
+                | ClientError::SignalTimeout { .. }
+                | ClientError::GroupAborted(_)
+                | ClientError::GroupTimeout { .. }
+                | ClientError::GroupWaitAborted { .. } => exit::TIMEOUT,
                 ClientError::Interrupted => exit::INTERRUPTED,
                 ClientError::ServerRestarted(_)
                 | ClientError::NotPublished { .. }
                 | ClientError::Network { .. }
                 | ClientError::Remote(_)
+                | ClientError::PathNotSent { .. }
+                | ClientError::LocalOnly { .. }
+                | ClientError::UnknownValue { .. }
                 | ClientError::Ipc { .. } => exit::FAILURE,
             };
         }

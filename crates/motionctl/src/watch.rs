@@ -1,10 +1,12 @@
-//! `motionctl watch`: a live table of every axis and signal plus the server's device states
+//! `motionctl watch`: a live table of every axis, group and signal plus the server's device states
 //! and tick statistics.
 
 use core::time::Duration;
 
-use motion_client::Client;
-use motion_client::ipc::{AxisWire, FrameFlags, MotionFrame, ServerInfo, ServerStats, read_text};
+use motion_client::ipc::{
+    AxisWire, FrameFlags, GroupMotion, MotionFrame, ServerInfo, ServerStats, read_text,
+};
+use motion_client::{Client, GroupStatus};
 use ratatui::Frame;
 use ratatui::layout::{Constraint, Layout};
 use ratatui::style::{Color, Modifier, Style};
@@ -13,6 +15,7 @@ use ratatui::widgets::{Block, Borders, Cell, Paragraph, Row, Table};
 
 use crate::Service;
 use crate::describe::{devices_line, fault_name, flags_with_fault, frame_json, mode_name};
+use crate::group::{group_line, groups_json};
 use crate::io::signal_table;
 use crate::terminal::{print_until_terminated, redraw_until_quit};
 
@@ -36,7 +39,11 @@ pub fn run(client: &Client<Service>, json: bool, interval: Duration) -> anyhow::
 fn run_json(client: &Client<Service>, interval: Duration) -> anyhow::Result<()> {
     let axes: Vec<usize> = (0..client.axes().len()).collect();
     print_until_terminated(client, interval, |info, frame| {
-        frame_json(info, frame, &axes).to_string()
+        let mut value = frame_json(info, frame, &axes);
+        if !info.groups().is_empty() {
+            value["groups"] = groups_json(info, frame);
+        }
+        value.to_string()
     })
 }
 
@@ -99,8 +106,20 @@ fn draw(
     } else {
         signal_rows.saturating_add(2)
     };
-    let [head, table, signals, foot] = Layout::vertical([
+    let group_lines: Vec<Line<'_>> = (0..info.groups().len())
+        .map(|index| match GroupStatus::read(info, frame, index) {
+            Ok(status) if status.motion == GroupMotion::Aborted => Line::styled(
+                format!("group {}", group_line(&status)),
+                Style::default().fg(Color::Red),
+            ),
+            Ok(status) => Line::raw(format!("group {}", group_line(&status))),
+            Err(error) => Line::raw(format!("group #{index}: {error}")),
+        })
+        .collect();
+    let group_height = u16::try_from(group_lines.len()).unwrap_or(u16::MAX);
+    let [head, groups, table, signals, foot] = Layout::vertical([
         Constraint::Length(6),
+        Constraint::Length(group_height),
         Constraint::Min(3),
         Constraint::Length(signal_height),
         Constraint::Length(1),
@@ -159,6 +178,10 @@ fn draw(
         .block(Block::default().borders(Borders::BOTTOM)),
         head,
     );
+
+    if group_height > 0 {
+        ui.render_widget(Paragraph::new(group_lines), groups);
+    }
 
     let rows =
         info.axes()

@@ -193,6 +193,38 @@ impl FakeParam {
     }
 }
 
+/// One simulated axis group (`[[group]]`): axes that move together along lines and
+/// trajectories (interpolated linearly by the fake; no path or goal supervision unless a test
+/// aborts it with [`FakeControl::AbortGroup`](super::FakeControl::AbortGroup)).
+#[derive(Debug, Clone)]
+pub struct FakeGroup {
+    /// Name.
+    pub name: String,
+    /// Member axes (indices into [`FakeConfig::axes`]), in the group's order.
+    pub axes: Vec<usize>,
+    /// Per member: path tolerance, units (described only).
+    pub path_tolerance: Vec<f64>,
+    /// Per member: goal tolerance, units; a trajectory's point at time 0 farther than this
+    /// from where the axis is is refused with `PathStart`.
+    pub goal_tolerance: Vec<f64>,
+    /// Seconds (described only).
+    pub goal_time_tolerance: f64,
+}
+
+impl FakeGroup {
+    /// A group of `axes`, path tolerance 0.5 and goal tolerance 0.05 units each, goal time
+    /// 0.5 s.
+    pub fn new(name: &str, axes: &[usize]) -> Self {
+        Self {
+            name: name.to_owned(),
+            axes: axes.to_vec(),
+            path_tolerance: vec![0.5; axes.len()],
+            goal_tolerance: vec![0.05; axes.len()],
+            goal_time_tolerance: 0.5,
+        }
+    }
+}
+
 /// What the fake server serves.
 #[derive(Debug, Clone)]
 pub struct FakeConfig {
@@ -221,6 +253,8 @@ pub struct FakeConfig {
     pub signals: Vec<FakeSignal>,
     /// Machine parameters.
     pub params: Vec<FakeParam>,
+    /// Axis groups (none in [`FakeConfig::demo`]; see [`FakeConfig::with_groups`]).
+    pub groups: Vec<FakeGroup>,
 }
 
 impl FakeConfig {
@@ -279,7 +313,18 @@ impl FakeConfig {
                 FakeParam::new(ParamOwner::Axis, 0, "current.standstill", "50 %", false),
                 FakeParam::new(ParamOwner::Axis, 2, "microsteps", "64", false),
             ],
+            groups: Vec::new(),
         }
+    }
+
+    /// The demo machine with two groups: `xy` (`x`, `y`) and `all` (`x`, `y`, `a`).
+    #[must_use]
+    pub fn with_groups(mut self) -> Self {
+        self.groups = vec![
+            FakeGroup::new("xy", &[0, 1]),
+            FakeGroup::new("all", &[0, 1, 2]),
+        ];
+        self
     }
 
     /// The same with devices starting for `ticks` ticks after start.

@@ -22,9 +22,9 @@ use std::sync::{Arc, Mutex, mpsc};
 use std::thread::JoinHandle;
 
 use iceoryx2::service::Service;
-use motion_ipc::{CommandRequest, DeviceState, FaultCode};
+use motion_ipc::{CommandRequest, DeviceState, FaultCode, GroupAbort};
 
-pub use config::{FakeAxis, FakeConfig, FakeDevice, FakeParam, FakeSignal};
+pub use config::{FakeAxis, FakeConfig, FakeDevice, FakeGroup, FakeParam, FakeSignal};
 
 /// A name no other test of this process or of a concurrent run uses.
 pub fn unique_name(prefix: &str) -> String {
@@ -70,6 +70,21 @@ pub enum FakeControl {
         /// The fault.
         code: FaultCode,
         /// The measured figure.
+        value: f64,
+        /// The tolerance it broke.
+        limit: f64,
+    },
+    /// Aborts group `group`'s running motion with `abort`, naming axis `axis` (an index
+    /// into the config's axes) with its figure and tolerance, as the server's path or goal
+    /// supervision would.
+    AbortGroup {
+        /// Group index.
+        group: usize,
+        /// Why.
+        abort: GroupAbort,
+        /// The axis that aborted it.
+        axis: Option<usize>,
+        /// The figure.
         value: f64,
         /// The tolerance it broke.
         limit: f64,
@@ -202,6 +217,25 @@ impl FakeServer {
     /// Sets the raw value input `signal` reports.
     pub fn set_input(&self, signal: usize, raw: f64) {
         self.control(FakeControl::Input { signal, raw });
+    }
+
+    /// Aborts group `group`'s running motion with `abort`, naming axis `axis` with its
+    /// figure `value` and tolerance `limit`.
+    pub fn abort_group(
+        &self,
+        group: usize,
+        abort: GroupAbort,
+        axis: Option<usize>,
+        value: f64,
+        limit: f64,
+    ) {
+        self.control(FakeControl::AbortGroup {
+            group,
+            abort,
+            axis,
+            value,
+            limit,
+        });
     }
 
     /// Faults axis `axis`.

@@ -6,12 +6,18 @@ use core::time::Duration;
 use motion_ipc::rules::{self, AxisFacts, Facts, Motion, SignalFacts, Verdict};
 use motion_ipc::{
     AxisFlags, AxisInfo, AxisMode, AxisState, ClientId, CommandKind, CommandRequest, DeviceInfo,
-    DeviceState, EstopCategory, FaultCode, FrameFlags, MachineParams, MotionFrame, Reason,
-    ServerInfo, SignalFlags, SignalInfo, SignalInfoFlags, SignalKind, SignalState, write_text,
+    DeviceState, EstopCategory, FaultCode, FrameFlags, GroupAbort, MachineParams, MotionFrame,
+    Reason, ServerInfo, SignalFlags, SignalInfo, SignalInfoFlags, SignalKind, SignalState, Target,
+    write_text,
 };
 
 use super::FakeControl;
 use super::config::{FakeAxis, FakeConfig, FakeSignal};
+
+mod group;
+
+use group::SimGroup;
+pub(super) use group::{Judged, StoredPath};
 
 #[derive(Debug, Clone, Copy)]
 struct SimAxis {
@@ -43,6 +49,9 @@ pub(super) struct Model {
     pub(super) commands: u64,
     pub(super) rejected: u64,
     tick_hz: u32,
+    groups: Vec<SimGroup>,
+    /// Paths received on `paths`, not run yet.
+    paths: Vec<StoredPath>,
 }
 
 impl Model {
@@ -75,6 +84,8 @@ impl Model {
             commands: 0,
             rejected: 0,
             tick_hz: config.tick_hz.max(1),
+            groups: config.groups.iter().map(SimGroup::new).collect(),
+            paths: Vec::new(),
         }
     }
 
@@ -164,6 +175,7 @@ impl Model {
             }
             out.flags = flags;
         }
+        self.group_info(&mut info);
         info
     }
 
@@ -213,6 +225,7 @@ impl Model {
             }
             FakeControl::ShutDown => {
                 self.shutting_down = true;
+                self.abort_groups_of(None, GroupAbort::ShuttingDown);
                 for (axis, sim) in &mut self.axes {
                     Self::stop(axis, sim);
                 }
@@ -223,6 +236,7 @@ impl Model {
                 value,
                 limit,
             } => {
+                self.abort_groups_of(Some(axis), GroupAbort::AxisFault);
                 if let Some((config, sim)) = self.axes.get_mut(axis) {
                     Self::stop(config, sim);
                     sim.state.fault = code as u16;
@@ -231,16 +245,28 @@ impl Model {
                     sim.state.flags = AxisFlags(sim.state.flags).with(AxisFlags::FAULT, true).0;
                 }
             }
+            FakeControl::AbortGroup {
+                group,
+                abort,
+                axis,
+                value,
+                limit,
+            } => self.abort_group(group, abort, axis, (value, limit)),
         }
     }
 
-    pub(super) fn apply(&mut self, request: &CommandRequest, sender: ClientId) -> Reason {
-        let reason = self.validate_and_apply(request, sender);
+    pub(super) fn apply(&mut self, request: &CommandRequest, sender: ClientId) -> Judged {
+        let judged = match rules::identify(request, Some(sender)) {
+            Ok(client) if request.target() == Ok(Target::Group) => {
+                self.apply_group(request, client)
+            }
+            _ => self.validate_and_apply(request, sender).into(),
+        };
         self.commands += 1;
-        if reason != Reason::Accepted {
+        if judged.reason != Reason::Accepted {
             self.rejected += 1;
         }
-        reason
+        judged
     }
 
     fn stop(_axis: &FakeAxis, sim: &mut SimAxis) {
@@ -258,6 +284,7 @@ impl Model {
     /// Latches the e-stop: every axis stops with its category, outputs go to safe states.
     pub(super) fn latch_estop(&mut self) {
         self.estop = true;
+        self.abort_groups_of(None, GroupAbort::EStop);
         for (axis, sim) in &mut self.axes {
             match axis.estop {
                 EstopCategory::Hold => Self::stop(axis, sim),
@@ -284,6 +311,7 @@ impl Model {
             Verdict::EStop => self.latch_estop(),
             Verdict::Reset => self.reset(),
             Verdict::StopAll => {
+                self.abort_groups_of(None, GroupAbort::Stopped);
                 for (axis, sim) in &mut self.axes {
                     Self::stop(axis, sim);
                 }
@@ -307,10 +335,14 @@ impl Model {
             Verdict::ClaimAxis(index) => self.axes[index].1.state.claimed_by = client,
             Verdict::ReleaseAxis(index) => self.axes[index].1.state.claimed_by = ClientId::NONE,
             Verdict::StopAxis(index) => {
+                self.abort_groups_of(Some(index), GroupAbort::Stopped);
                 let (axis, sim) = &mut self.axes[index];
                 Self::stop(axis, sim);
             }
-            Verdict::OffAxis(index) => Self::off(&mut self.axes[index].1),
+            Verdict::OffAxis(index) => {
+                self.abort_groups_of(Some(index), GroupAbort::Stopped);
+                Self::off(&mut self.axes[index].1);
+            }
             Verdict::Move { axis, motion } => {
                 let tick = self.tick;
                 let (config, sim) = &mut self.axes[axis];
@@ -404,6 +436,7 @@ impl Model {
     pub(super) fn step(&mut self, dt: f64, command_timeout_ms: u32) {
         let deadman_ticks = u64::from(command_timeout_ms) * u64::from(self.tick_hz) / 1000;
         let tick = self.tick;
+        self.step_groups(dt);
         for (axis, sim) in &mut self.axes {
             let state = &mut sim.state;
             let mut flags = AxisFlags(state.flags);
@@ -438,7 +471,12 @@ impl Model {
                         }
                     }
                 }
+                AxisMode::Group => {}
                 _ => state.velocity = 0.0,
+            }
+            if mode != AxisMode::Group {
+                state.desired_position = state.position;
+                state.desired_velocity = state.velocity;
             }
             let mode = state.mode().unwrap_or(AxisMode::Off);
             let positional = matches!(mode, AxisMode::Position | AxisMode::RampPosition);
@@ -527,6 +565,10 @@ impl Model {
         for ((signal, sim), out) in self.signals.iter().zip(frame.signals.iter_mut()) {
             *out = self.signal_state(signal, sim);
         }
+        frame.group_count = self.groups.len().min(frame.groups.len()) as u32;
+        for (state, out) in self.group_states().zip(frame.groups.iter_mut()) {
+            *out = state;
+        }
         // An output commanded this tick is acknowledged by the next frame.
         for (_, sim) in &mut self.signals {
             sim.pending = false;
@@ -562,7 +604,7 @@ impl Facts for Model {
             position: sim.state.position,
             position_fresh: true,
             tolerance: axis.position_tolerance,
-            group_motion: false,
+            group_motion: self.in_group_motion(index),
         })
     }
 

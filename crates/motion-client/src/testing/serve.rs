@@ -13,13 +13,13 @@ use iceoryx2::prelude::{
 };
 use iceoryx2::service::Service;
 use motion_ipc::{
-    ClientId, CommandReply, CommandRequest, MachineParams, MotionFrame, ServerInfo, ServerStats,
-    ServiceNames,
+    ClientId, CommandReply, CommandRequest, GroupPath, MachineParams, MotionFrame, ServerInfo,
+    ServerStats, ServiceNames,
 };
 
 use super::Shared;
 use super::config::FakeConfig;
-use super::model::Model;
+use super::model::{Judged, Model, StoredPath};
 
 fn fail(what: &str) -> impl Fn(&dyn core::fmt::Debug) -> String + '_ {
     move |error| format!("fake server: {what}: {error:?}")
@@ -146,6 +146,20 @@ fn serve_inner<S: Service>(
         max,
         max_nodes,
     )?;
+    // Paths for groups: every client may publish (lazily: a sample is about 400 KB).
+    let paths = node
+        .service_builder(&service(names.paths())?)
+        .publish_subscribe::<GroupPath>()
+        .history_size(0)
+        .subscriber_max_buffer_size(4)
+        .max_subscribers(2)
+        .max_publishers(max)
+        .max_nodes(max_nodes)
+        .open_or_create()
+        .map_err(|e| fail("paths service")(&e))?
+        .subscriber_builder()
+        .create()
+        .map_err(|e| fail("paths subscriber")(&e))?;
     // The frame service comes last, as in the real server.
     let frames = node
         .service_builder(&service(names.frame())?)
@@ -224,14 +238,19 @@ fn serve_inner<S: Service>(
             if let Ok(mut log) = shared.requests.lock() {
                 log.push((generation, request));
             }
-            let reason = model.apply(&request, sender);
-            if reason == motion_ipc::Reason::Accepted
+            // A client publishes a path just before it sends the `Run` naming it.
+            while let Some(path) = paths.receive().map_err(|e| fail("receive a path")(&e))? {
+                let from = ClientId::from_u128(path.header().node_id().value());
+                model.store_path(StoredPath::new(from, &path));
+            }
+            let judged = model.apply(&request, sender);
+            if judged.reason == motion_ipc::Reason::Accepted
                 && request.kind() == Ok(motion_ipc::CommandKind::EStop)
             {
                 note_estop(shared, "command");
             }
             active
-                .send_copy(CommandReply::to(&request, reason, model.tick))
+                .send_copy(reply(&request, &judged, model.tick))
                 .map_err(|e| fail("reply")(&e))?;
         }
         shared.estop_latched.store(model.estop, Ordering::Relaxed);
@@ -272,6 +291,17 @@ fn serve_inner<S: Service>(
         next += period;
     }
     Ok(())
+}
+
+/// The reply to `request`, with the detail fields of `judged`.
+fn reply(request: &CommandRequest, judged: &Judged, tick: u64) -> CommandReply {
+    let mut reply = CommandReply::to(request, judged.reason, tick);
+    reply.at_point = judged.at_point;
+    reply.at_axis = judged.at_axis;
+    reply.holder = judged.holder;
+    reply.value = judged.value;
+    reply.limit = judged.limit;
+    reply
 }
 
 /// Removes the fake's pid file when it stops.
