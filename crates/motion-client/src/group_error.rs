@@ -146,6 +146,9 @@ impl GroupAborted {
             GroupAbort::StreamStale => "its setpoint stream stopped coming".to_owned(),
             GroupAbort::StreamLimit => "a streamed setpoint broke a limit".to_owned(),
             GroupAbort::ShuttingDown => "the server is shutting down".to_owned(),
+            GroupAbort::GoalRefused => {
+                format!("the board of axis `{axis}` refused the goal that would follow the path")
+            }
             GroupAbort::None => "no reason given".to_owned(),
         }
     }

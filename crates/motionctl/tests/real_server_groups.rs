@@ -1,11 +1,6 @@
 //! `motionctl group …` and the client's groups against a real `motiond` on `config/sim.toml`
 //! with its groups `arm` = x y z a b c, `gantry` = x feeder lift, `base` = wheel_left
-//! wheel_right (see `real_server.rs` for how the server is found and started:
-//! `cargo build -p motiond && cargo test -p motionctl --test real_server_groups -- --ignored`).
-//!
-//! Ignored until the group engine (motion-engine's `group` module, the paths service, the
-//! groups in `config/sim.toml`) is merged: they are written against the contract of
-//! motion-ipc schema 7; the merger un-ignores them.
+//! wheel_right (see `real_server.rs` for how the server is found and started).
 
 mod common;
 
@@ -78,7 +73,6 @@ fn assert_done(server: &str, group: &str, report: &Value, targets: &[(&str, f64)
 }
 
 #[test]
-#[ignore = "needs the group engine (merging)"]
 fn real_group_list_shows_the_sim_groups() -> Result {
     let server = RealServer::start()?;
     let names = |group: &str| -> Result<Vec<String>> {
@@ -94,7 +88,6 @@ fn real_group_list_shows_the_sim_groups() -> Result {
 }
 
 #[test]
-#[ignore = "needs the group engine (merging)"]
 fn real_group_move_gantry_arrives_together() -> Result {
     let server = RealServer::start()?;
     let output = run(
@@ -119,34 +112,48 @@ fn real_group_move_gantry_arrives_together() -> Result {
         &report,
         &[("x", 200.0), ("feeder", 100.0), ("lift", 150.0)],
     )?;
-    // A synchronized line: the axes arrive within a few ticks of each other (their
-    // boards' refresh apart), not each at its own speed.
+    // A synchronized line: the axes arrive within the group's goal_time_tolerance of
+    // one another (their boards' lag and refresh apart), not each at its own speed (x
+    // alone would take 4 s, the lift 15 s).
     let ticks: Vec<u64> = ["x", "feeder", "lift"]
         .iter()
         .filter_map(|axis| report["axes"][axis]["arrived_tick"].as_u64())
         .collect();
+    assert_eq!(ticks.len(), 3, "{report}");
+    let list = json_of(&run(&server.name, &["group", "list", "--json"])?)?;
+    let goal_time = list["groups"]
+        .as_array()
+        .and_then(|groups| groups.iter().find(|g| g["name"] == "gantry"))
+        .and_then(|g| g["goal_time_tolerance"].as_f64())
+        .ok_or("goal_time_tolerance")?;
     let spread = ticks.iter().max().unwrap_or(&0) - ticks.iter().min().unwrap_or(&0);
-    assert!(spread < 200, "arrivals {ticks:?}");
+    // 1 kHz: a tick is a millisecond.
+    assert!(
+        (spread as f64) <= goal_time * 1000.0,
+        "arrivals {ticks:?}, goal_time_tolerance {goal_time} s"
+    );
     Ok(())
 }
 
 #[test]
-#[ignore = "needs the group engine (merging)"]
 fn real_group_follow_arm_csv_ends_at_its_last_point() -> Result {
     let server = RealServer::start()?;
+    // From where the arm is at time 0 (a first point away from it would need a lead-in
+    // that reaches the second point's speed in time), out and along a line.
+    let start: Vec<f64> = ["x", "y", "z", "a", "b", "c"]
+        .iter()
+        .map(|axis| position(&server.name, axis))
+        .collect::<Result<_>>()?;
+    let offsets = [20.0, 15.0, -10.0, 30.0, 10.0, -30.0];
     let mut text = "time,x,y,z,a,b,c\n".to_owned();
-    for step in 1..=8 {
+    for step in 0..=8 {
         let share = f64::from(step) / 8.0;
-        text.push_str(&format!(
-            "{},{},{},{},{},{},{}\n",
-            0.5 + 0.25 * f64::from(step),
-            20.0 * share,
-            15.0 * share,
-            -10.0 * share,
-            30.0 * share,
-            10.0 * share,
-            -30.0 * share
-        ));
+        let row: Vec<String> = start
+            .iter()
+            .zip(offsets)
+            .map(|(s, o)| format!("{}", s + o * share))
+            .collect();
+        text.push_str(&format!("{},{}\n", 0.5 * f64::from(step), row.join(",")));
     }
     let path = std::env::temp_dir().join(format!(
         "{}.csv",
@@ -168,19 +175,16 @@ fn real_group_follow_arm_csv_ends_at_its_last_point() -> Result {
     )?;
     std::fs::remove_file(&path)?;
     let report = json_of(&output)?;
-    let targets = [
-        ("x", 20.0),
-        ("y", 15.0),
-        ("z", -10.0),
-        ("a", 30.0),
-        ("b", 10.0),
-        ("c", -30.0),
-    ];
+    let names = ["x", "y", "z", "a", "b", "c"];
+    let targets: Vec<(&str, f64)> = names
+        .iter()
+        .zip(start.iter().zip(offsets))
+        .map(|(name, (s, o))| (*name, s + o))
+        .collect();
     assert_done(&server.name, "arm", &report, &targets)
 }
 
 #[test]
-#[ignore = "needs the group engine (merging)"]
 fn real_refused_path_names_its_point_and_axis() -> Result {
     let server = RealServer::start()?;
     let path = std::env::temp_dir().join(format!(
@@ -206,7 +210,6 @@ fn real_refused_path_names_its_point_and_axis() -> Result {
 }
 
 #[test]
-#[ignore = "needs the group engine (merging)"]
 fn real_hold_resume_feed_and_cancel_through_the_client() -> Result {
     let server = RealServer::start()?;
     let client = Client::<ipc::Service>::connect(&server.name)?;
@@ -243,7 +246,6 @@ fn real_hold_resume_feed_and_cancel_through_the_client() -> Result {
 }
 
 #[test]
-#[ignore = "needs the group engine (merging)"]
 fn real_group_claim_names_the_holder_to_others() -> Result {
     let server = RealServer::start()?;
     let holder = command(
@@ -276,7 +278,6 @@ fn real_group_claim_names_the_holder_to_others() -> Result {
 }
 
 #[test]
-#[ignore = "needs the group engine (merging)"]
 fn real_ctrl_c_during_a_group_wait_stops_the_group() -> Result {
     let server = RealServer::start()?;
     let child = command(
@@ -305,19 +306,26 @@ fn real_ctrl_c_during_a_group_wait_stops_the_group() -> Result {
 }
 
 #[test]
-#[ignore = "needs the group engine (merging)"]
 fn real_trajectory_from_the_client_with_velocities() -> Result {
     let server = RealServer::start()?;
     let client = Client::<ipc::Service>::connect(&server.name)?;
     client.wait_ready(Duration::from_secs(10))?;
     let gantry = client.group("gantry")?;
     let mut path = Trajectory::new(3);
-    path.push_with_velocities(1.0, &[20.0, 10.0, 20.0], &[20.0, 10.0, 20.0])?
-        .push_with_velocities(2.0, &[40.0, 20.0, 40.0], &[0.0, 0.0, 0.0])?;
+    // Relative to where the gantry is (lift: 12 mm/s, 100 mm/s² in config/sim.toml).
+    let start: Vec<f64> = gantry
+        .axis_handles()
+        .iter()
+        .map(|axis| axis.state().map(|state| state.position))
+        .collect::<core::result::Result<_, _>>()?;
+    let at =
+        |offsets: [f64; 3]| -> Vec<f64> { start.iter().zip(offsets).map(|(s, o)| s + o).collect() };
+    path.push_with_velocities(3.0, &at([20.0, 10.0, 20.0]), &[10.0, 5.0, 8.0])?
+        .push_with_velocities(6.0, &at([40.0, 20.0, 40.0]), &[0.0, 0.0, 0.0])?;
     gantry.follow(&path)?;
-    let outcome = gantry.wait_done(Duration::from_secs(30))?;
+    let outcome = gantry.wait_done(Duration::from_secs(40))?;
     assert_eq!(outcome.motion, GroupMotion::Done);
-    assert!((outcome.duration - 2.0).abs() < 0.01, "{outcome:?}");
+    assert!((outcome.duration - 6.0).abs() < 0.01, "{outcome:?}");
     Ok(())
 }
 

@@ -474,3 +474,62 @@ fn the_gantry_follows_a_trajectory_on_three_boards() {
         assert_eq!(a.fault, 0, "{a:?}");
     }
 }
+
+/// The gantry's line of the README (x +200 mm, feeder +100 mm, lift +150 mm: the lift's
+/// 12 mm/s sets the pace, x cruises at 16 mm/s), printing how far each axis was from the
+/// path at its fresh measurements (docs/ARCHITECTURE.md "Coordinated motion").
+#[test]
+fn the_gantry_moves_a_line_on_three_boards() {
+    let mut robot = Robot::new();
+    run(&mut robot, 0, 4000, |_| {});
+    for _ in 0..3000 {
+        robot.tick();
+    }
+    let group = robot
+        .engine
+        .config()
+        .groups
+        .iter()
+        .position(|g| g.name == "gantry")
+        .expect("sim.toml has the gantry");
+    let axes: Vec<usize> = ["x", "feeder", "lift"]
+        .iter()
+        .map(|name| robot.axis(name) as usize)
+        .collect();
+    let start: Vec<f64> = axes.iter().map(|&a| robot.frame.axes[a].position).collect();
+    let mut path = Box::new(GroupPath::EMPTY);
+    let targets = [start[0] + 200.0, start[1] + 100.0, start[2] + 150.0];
+    path.set_line(group as u32, 3, &targets, (0.0, 0.0));
+    robot.port.path = Some(path);
+    let mut request =
+        CommandRequest::new(ClientId::from_u128(42), 1, group as u32, CommandKind::Run)
+            .with_values([3.0, 0.0, 0.0]);
+    request.target = Target::Group as u32;
+    robot.port.requests.push_back(request);
+    let mut last = [0_u64; 3];
+    let mut worst = [0.0_f64; 3];
+    let mut state = robot.frame.groups[group];
+    for _ in 0..20_000 {
+        robot.tick();
+        state = robot.frame.groups[group];
+        for (slot, &axis) in axes.iter().enumerate() {
+            let a = robot.frame.axes[axis];
+            if a.last_refresh_tick != last[slot] {
+                last[slot] = a.last_refresh_tick;
+                worst[slot] = worst[slot].max((a.desired_position - a.position).abs());
+            }
+        }
+        if !state.motion().expect("known").active() {
+            break;
+        }
+    }
+    eprintln!(
+        "gantry line: max |desired - measured| x {:.3} mm, feeder {:.3} mm, lift {:.3} mm",
+        worst[0], worst[1], worst[2]
+    );
+    assert_eq!(state.motion(), Ok(GroupMotion::Done), "{state:?}");
+    for (slot, &axis) in axes.iter().enumerate() {
+        let position = robot.frame.axes[axis].position;
+        assert!((position - targets[slot]).abs() < 0.1, "{slot}: {position}");
+    }
+}

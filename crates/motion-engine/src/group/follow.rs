@@ -172,12 +172,15 @@ fn next_goal(
     // A position ramp brakes to stop at its target: a segment's target lies at least a
     // braking distance ahead, or the board crawls.
     let speed = g.velocity[slot].abs();
-    // A velocity acts from when it is acknowledged until the next one is: about two
-    // segments ahead.
+    // A goal reaches the board about a segment after it is handed over (the
+    // acknowledgement's time) and acts until the next one, a segment later: the board is
+    // given where the path will be two segments ahead — for a position ramp at least a
+    // braking distance ahead, or it brakes for its target.
+    let ahead = 2.0 * lead + period.as_secs_f64();
     let reach = if member.follow == Follow::Segments {
-        (speed / (2.0 * axis.max_accel) * BRAKE_MARGIN).max(lead)
+        (speed / (2.0 * axis.max_accel) * BRAKE_MARGIN).max(ahead)
     } else {
-        2.0 * lead + period.as_secs_f64()
+        ahead
     };
     let (target, path_velocity) = if stream {
         let velocity = g.velocity[slot];

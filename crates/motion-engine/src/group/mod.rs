@@ -109,7 +109,7 @@ pub(crate) struct Group {
 }
 
 /// The segment length a board starts with before its acknowledgements are measured.
-pub(crate) const FIRST_LEAD: Duration = Duration::from_millis(20);
+pub(crate) const FIRST_LEAD: Duration = Duration::from_millis(60);
 /// The longest segment: a driver slower than this to acknowledge still gets targets this
 /// far ahead, no farther.
 pub(crate) const MAX_LEAD: Duration = Duration::from_millis(250);

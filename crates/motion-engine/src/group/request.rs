@@ -176,6 +176,8 @@ impl<D: Driver> Engine<D> {
                     Some(Reason::LinkDown)
                 }
                 _ if axis.fault.is_some() => Some(Reason::AxisFaulted),
+                // No measurement yet: still starting; one that stopped coming: offline.
+                _ if axis.stale && axis.refreshed_at.is_none() => Some(Reason::DeviceStarting),
                 _ if axis.stale => Some(Reason::DeviceOffline),
                 _ if busy => Some(Reason::GroupBusy),
                 _ if !supported => Some(Reason::Unsupported),
