@@ -51,25 +51,33 @@ fn command_request_golden_bytes() {
 }
 
 /// `CommandReply`'s table: schema_version @ 0, reason @ 4, sequence @ 8, tick_applied @ 16,
-/// axis @ 24, kind @ 28.
+/// axis @ 24, kind @ 28, at_point @ 32, at_axis @ 36, holder @ 40, value @ 56, limit @ 64;
+/// 72 bytes.
 #[test]
 fn command_reply_golden_bytes() {
     let request = CommandRequest::new(ClientId::NONE, 42, 3, CommandKind::Velocity);
-    let reply = CommandReply::to(&request, Reason::VelocityLimit, 0xABCD);
+    let reply =
+        CommandReply::to(&request, Reason::VelocityLimit, 0xABCD).at_point(7, 2, 60.5, 50.0);
     let bytes = encode(&reply);
-    assert_eq!(bytes.len(), 32);
+    assert_eq!(bytes.len(), 72);
     assert_eq!(le_u32(&bytes, 0), SCHEMA_VERSION);
     assert_eq!(le_u32(&bytes, 4), Reason::VelocityLimit as u32);
     assert_eq!(le_u64(&bytes, 8), 42);
     assert_eq!(le_u64(&bytes, 16), 0xABCD);
     assert_eq!(le_u32(&bytes, 24), 3);
     assert_eq!(le_u32(&bytes, 28), CommandKind::Velocity as u32);
+    assert_eq!(le_u32(&bytes, 32), 7);
+    assert_eq!(le_u32(&bytes, 36), 2);
+    assert_eq!(le_u64(&bytes, 40), 0);
+    assert_eq!(le_f64(&bytes, 56), 60.5);
+    assert_eq!(le_f64(&bytes, 64), 50.0);
     assert_eq!(decode::<CommandReply>(&bytes), Ok(reply));
 }
 
-/// `MotionFrame`'s table: tick @ 8, devices @ 48, axes @ 80 (80 bytes each: position @ 0,
-/// flags @ 40, mode @ 46, claimed_by @ 48), signals @ 10320 (48 bytes each), wire @ 13392
-/// (24 bytes each: goal_tick @ 0, wire_tick @ 8, wire_ns @ 16); 16464 bytes.
+/// `MotionFrame`'s table: tick @ 8, group_count @ 44, devices @ 48, axes @ 80 (96 bytes each:
+/// position @ 0, flags @ 40, mode @ 46, claimed_by @ 48, desired_position @ 80), signals @
+/// 12368 (48 bytes each), wire @ 15440 (24 bytes each: goal_tick @ 0, wire_tick @ 8,
+/// wire_ns @ 16), groups @ 18512 (144 bytes each: path_id @ 16, motion @ 80); 20816 bytes.
 #[test]
 fn frame_fields_sit_at_their_documented_offsets_and_padding_is_zero() {
     let mut frame = MotionFrame::EMPTY;
@@ -89,24 +97,32 @@ fn frame_fields_sit_at_their_documented_offsets_and_padding_is_zero() {
         wire_tick: 6,
         wire_ns: 77,
     };
+    frame.axes[1].desired_position = 3.25;
+    frame.group_count = 1;
+    frame.groups[0].path_id = 11;
+    frame.groups[0].motion = 1;
     let bytes = encode(&frame);
-    assert_eq!(bytes.len(), 16464);
-    assert_eq!(le_u64(&bytes, 13392 + 24), 5);
-    assert_eq!(le_u64(&bytes, 13392 + 24 + 8), 6);
-    assert_eq!(le_u64(&bytes, 13392 + 24 + 16), 77);
+    assert_eq!(bytes.len(), 20816);
+    assert_eq!(le_u64(&bytes, 15440 + 24), 5);
+    assert_eq!(le_u64(&bytes, 15440 + 24 + 8), 6);
+    assert_eq!(le_u64(&bytes, 15440 + 24 + 16), 77);
     assert_eq!(le_u64(&bytes, 8), 99);
+    assert_eq!(le_u32(&bytes, 44), 1);
     assert_eq!(bytes[48], 1);
-    let axis1 = 80 + 80;
+    let axis1 = 80 + 96;
     assert_eq!(le_f64(&bytes, axis1), -12.5);
     assert_eq!(le_u32(&bytes, axis1 + 40), 0b11);
     assert_eq!(bytes[axis1 + 46], 5);
     assert_eq!(le_u64(&bytes, axis1 + 48), 7);
-    assert_eq!(le_f64(&bytes, 10320), 1.0);
-    assert_eq!(bytes[10320 + 28], 2);
+    assert_eq!(le_f64(&bytes, axis1 + 80), 3.25);
+    assert_eq!(le_f64(&bytes, 12368), 1.0);
+    assert_eq!(bytes[12368 + 28], 2);
+    assert_eq!(le_u64(&bytes, 18512 + 16), 11);
+    assert_eq!(bytes[18512 + 80], 1);
     // `SignalState` has 3 reserved bytes at 29 and nothing after `kind`'s block but them:
     // they are zero, and so is everything of an unused axis but its STALE flag.
-    assert_eq!(&bytes[10320 + 29..10320 + 32], &[0, 0, 0]);
-    let unused_axis = 80 + 5 * 80;
+    assert_eq!(&bytes[12368 + 29..12368 + 32], &[0, 0, 0]);
+    let unused_axis = 80 + 5 * 96;
     assert_eq!(le_u32(&bytes, unused_axis + 40), AxisFlags::STALE.0);
     assert_eq!(decode::<MotionFrame>(&bytes), Ok(frame));
 }
@@ -118,7 +134,7 @@ fn wrong_sizes_are_refused_with_both_sizes() {
         decode::<MotionFrame>(&bytes[..100]),
         Err(WireError::Size {
             what: "MotionFrame",
-            expected: 16464,
+            expected: 20816,
             got: 100
         })
     );
@@ -127,7 +143,7 @@ fn wrong_sizes_are_refused_with_both_sizes() {
     assert!(decode::<MotionFrame>(&longer).is_err());
     assert!(decode::<CommandRequest>(&[]).is_err());
     let text = decode::<CommandReply>(&[0; 31]).unwrap_err().to_string();
-    assert!(text.contains("31 bytes") && text.contains("32"), "{text}");
+    assert!(text.contains("31 bytes") && text.contains("72"), "{text}");
 }
 
 #[test]
@@ -296,7 +312,7 @@ proptest! {
         let request = decode::<CommandRequest>(&bytes);
         prop_assert_eq!(request.is_ok(), bytes.len() == 64);
         let reply = decode::<CommandReply>(&bytes);
-        prop_assert_eq!(reply.is_ok(), bytes.len() == 32);
+        prop_assert_eq!(reply.is_ok(), bytes.len() == 72);
         prop_assert!(decode::<MotionFrame>(&bytes).is_err());
     }
 }
