@@ -609,7 +609,7 @@ class Client:
             unit += "/s"
         elif unit and reason == Reason.ACCEL_LIMIT:
             unit += "/s²"
-        figures = point is not None or reply.value != 0.0 or reply.limit != 0.0
+        figures = reply.value != 0.0 or reply.limit != 0.0
         holder = int(reply.holder)
         return errors.refused(
             reason,

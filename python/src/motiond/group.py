@@ -23,6 +23,7 @@ from .errors import BadPath, MotiondError, NotClaimed, WaitAborted
 from .frames import Frame
 from .groupstate import GroupStatus, aborted_error
 from .ipc import (
+    AxisFlags,
     MAX_GROUP_AXES,
     MAX_PATH_POINTS,
     SCHEMA_VERSION,
@@ -84,6 +85,8 @@ def pack_rows(rows: Rows, points: int, axes: int, what: str) -> Any:
         except (TypeError, ValueError) as error:
             raise BadPath(f"{what} are not numbers: {error}") from None
         return packed
+    if isinstance(rows, (str, bytes)):
+        raise BadPath(f"{what} must be a sequence of rows of numbers, not {rows!r}")
     try:
         listed = list(rows)
     except TypeError:
@@ -93,6 +96,8 @@ def pack_rows(rows: Rows, points: int, axes: int, what: str) -> Any:
     packed = array("d", bytes(_DOUBLE * points * MAX_GROUP_AXES))
     for point, row in enumerate(listed):
         try:
+            if isinstance(row, (str, bytes)):
+                raise TypeError(row)
             values = array("d", row)
         except TypeError:
             raise BadPath(
@@ -466,6 +471,19 @@ class Group(EntryHandle):
         """Waits until a hold brought the group to rest on its path (``held``)."""
         return self._wait_group(
             "come to rest on its path", timeout, lambda motion: motion == GroupMotion.HELD
+        )
+
+    def wait_stopped(self, timeout: float = 10.0) -> Frame:
+        """Waits until every axis of the group is at rest (no ``MOVING`` flag): after a
+        stop, a cancel or an abort the axes brake first, and a new motion or stream of
+        the group is refused (:class:`~motiond.errors.GroupBusy`) until then."""
+        indices = self.axis_indices
+
+        def still(frame: Frame) -> bool:
+            return not any(frame.axis(i).flags & AxisFlags.MOVING for i in indices)
+
+        return self._client.wait_frames(
+            "come to rest", timeout, still, subject=f"the axes of group {self.name}"
         )
 
     def wait_aborted(self, timeout: float = 10.0) -> Frame:
