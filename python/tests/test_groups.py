@@ -253,10 +253,11 @@ def test_claims_keep_a_second_client_out_of_the_group(
         theirs = other.group("base")
         with base.claim() as claim:
             assert claim.active
+            mine = int(client.id)
             client.wait_frames(
                 "show the claim",
                 5.0,
-                lambda f: all(int(f.axis(i).claimed_by) == int(client.id) for i in base.axis_indices),
+                lambda f: all(int(f.axis(i).claimed_by) == mine for i in base.axis_indices),
                 since=claim.accepted.tick,
             )
             with pytest.raises(motiond.ClaimedByOther) as refused:

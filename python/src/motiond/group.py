@@ -356,7 +356,9 @@ class Group(EntryHandle):
             raise BadPath("accelerations need velocities (give both, or velocities alone)")
         count = len(self.axis_indices)
         packed = pack_rows(positions, points, count, "positions")
-        packed_v = None if velocities is None else pack_rows(velocities, points, count, "velocities")
+        packed_v = (
+            None if velocities is None else pack_rows(velocities, points, count, "velocities")
+        )
         packed_a = (
             None
             if accelerations is None

@@ -34,7 +34,6 @@ from .errors import (
 from .frames import Frame
 from .groupstate import GroupStatus, aborted_error
 from .ipc import (
-    MAX_GROUP_AXES,
     SCHEMA_VERSION,
     CommandKind,
     GroupMotion,
@@ -54,7 +53,11 @@ _DOUBLE = ctypes.sizeof(ctypes.c_double)
 _SIZE = ctypes.sizeof(Setpoint)
 _VALUES = Setpoint.values.offset
 _VELOCITIES = Setpoint.velocities.offset
-_MODES = {"position": StreamMode.POSITION, "velocity": StreamMode.VELOCITY, "power": StreamMode.POWER}
+_MODES = {
+    "position": StreamMode.POSITION,
+    "velocity": StreamMode.VELOCITY,
+    "power": StreamMode.POWER,
+}
 
 
 def stream_mode(mode: Union[str, StreamMode, int]) -> StreamMode:
