@@ -249,3 +249,13 @@ def test_remote_sends_the_kind_it_was_given(panel: RemoteClient) -> None:
     reply = panel.send(motiond.ipc.ALL_AXES, CommandKind.STOP)
     assert reply.reason == motiond.Reason.ACCEPTED
     assert reply.tick_applied > 0
+
+
+def test_groups_say_they_need_shared_memory(panel: RemoteClient) -> None:
+    with pytest.raises(motiond.MotiondError, match="groups work over shared memory only"):
+        panel.group("base")
+    with pytest.raises(motiond.MotiondError, match="groups work over shared memory only"):
+        panel.groups
+    # The frames a remote client reads carry the groups' states all the same.
+    frame = panel.latest()
+    assert frame.group_count == len(panel.info.groups[: panel.info.group_count])

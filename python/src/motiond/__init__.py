@@ -17,6 +17,13 @@ its axes and signals, wait for them::
                 if frame.axis(x.index).position < 5.0:
                     break
 
+        gantry = client.group("gantry")   # [[group]]: axes that move together
+        gantry.move_to([100.0, 0.0, 20.0])
+        gantry.wait_done(timeout=30)    # GroupAborted names the reason, axis, figures
+
+        with client.group("base").stream("velocity") as stream:   # claims the group
+            stream.run_each_tick(lambda frame: [10.0, 10.0], duration=1.0)
+
 Everything goes through iceoryx2 (the ``iceoryx2`` package from PyPI) and the payload
 mirrors of :mod:`motiond.ipc`. Refusals raise the :class:`Refused` subclass of the
 server's :class:`Reason` (:class:`OutOfRange`, :class:`EstopLatched`, …).
@@ -36,6 +43,8 @@ from .client import Client  # noqa: E402
 from .errors import *  # noqa: E402,F401,F403
 from .errors import __all__ as _error_names  # noqa: E402
 from .frames import Frame, Received  # noqa: E402
+from .group import Group, GroupClaim, PathStarted  # noqa: E402
+from .groupstate import GroupStatus  # noqa: E402
 from .ipc import (  # noqa: E402
     AxisFlags,
     AxisMode,
@@ -43,9 +52,13 @@ from .ipc import (  # noqa: E402
     DeviceState,
     FaultCode,
     FrameFlags,
+    GroupAbort,
+    GroupMotion,
     Reason,
     SignalFlags,
     SignalKind,
+    StreamMode,
+    StreamState,
 )
 from .jog import Jog  # noqa: E402
 from .remote import RemoteClient  # noqa: E402
@@ -56,6 +69,7 @@ from .session import (  # noqa: E402
     Param,
 )
 from .signal import Signal, SignalStatus  # noqa: E402
+from .stream import SetpointStream  # noqa: E402
 
 __version__ = "0.1.0"
 
@@ -70,6 +84,11 @@ __all__ = [
     "Signal",
     "SignalStatus",
     "Jog",
+    "Group",
+    "GroupClaim",
+    "GroupStatus",
+    "PathStarted",
+    "SetpointStream",
     "Frame",
     "Received",
     "AxisFlags",
@@ -78,6 +97,10 @@ __all__ = [
     "DeviceState",
     "FaultCode",
     "FrameFlags",
+    "GroupAbort",
+    "GroupMotion",
+    "StreamMode",
+    "StreamState",
     "Reason",
     "SignalFlags",
     "SignalKind",

@@ -61,6 +61,12 @@ class AxisStatus:
     fault_value: float
     #: The tolerance or limit the fault broke, 0 when none.
     fault_limit: float
+    #: Where the server wants the axis now: the group's path while it follows a group
+    #: (mode ``GROUP``), the target while it holds or moves to a position, the measured
+    #: position otherwise.
+    desired_position: float = 0.0
+    #: The velocity the server wants now (the group path's, a velocity mode's target, 0).
+    desired_velocity: float = 0.0
 
     @classmethod
     def of(cls, index: int, tick: int, state: AxisState) -> "AxisStatus":
@@ -80,6 +86,8 @@ class AxisStatus:
             claimed_by=int(state.claimed_by),
             fault_value=float(state.fault_value),
             fault_limit=float(state.fault_limit),
+            desired_position=float(state.desired_position),
+            desired_velocity=float(state.desired_velocity),
         )
 
     @property

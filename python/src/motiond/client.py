@@ -19,11 +19,13 @@ from .errors import (
     NoReply,
     NoServer,
     NoSuchAxis,
+    NoSuchGroup,
     NoSuchSignal,
     ServerGone,
     WaitTimeout,
 )
 from .frames import Frame, LatestCache
+from .group import Group
 from .ipc import (
     ALL_AXES,
     SCHEMA_VERSION,
@@ -33,12 +35,14 @@ from .ipc import (
     CommandRequest,
     DeviceState,
     FrameFlags,
+    GroupPath,
     MachineParams,
     MotionFrame,
     ParamOwner,
     Reason,
     ServerInfo,
     ServerStats,
+    Setpoint,
     Target,
     service_name,
     to_enum,
@@ -55,6 +59,8 @@ from .signal import Signal
 
 __all__ = ["Client", "Accepted", "Param", "DEFAULT_CONNECT_TIMEOUT", "DEFAULT_REPLY_TIMEOUT"]
 
+# ``CommandReply.at_point`` / ``at_axis`` when the server named none.
+NO_INDEX = 0xFFFF_FFFF
 # Longest single sleep of any wait: bounds a missed wake-up and how late Ctrl-C is seen.
 _WAIT_CAP = 0.05
 # Longest single sleep while waiting for a command reply.
@@ -210,6 +216,10 @@ class Client:
         self._closed = False
         self._jogs = JogRegistry()
         self._estop_notifier: Any = None
+        # The groups' publishers, made by their first path or stream.
+        self._paths_publisher: Any = None
+        self._setpoints_publisher: Any = None
+        self._path_id = 0
 
     def _service(self, leaf: str) -> Any:
         try:
@@ -300,6 +310,24 @@ class Client:
     def signals(self) -> List[Signal]:
         """Handles of every signal, in config order."""
         return [Signal(self, index) for index in range(int(self.info.signal_count))]
+
+    @property
+    def groups(self) -> List[Group]:
+        """Handles of every group (``[[group]]`` of the server's config), in config order."""
+        return [Group(self, index) for index in range(self._group_count())]
+
+    def group(self, name: str) -> Group:
+        """The handle of the group called ``name``; :class:`~motiond.errors.NoSuchGroup`
+        (listing the server's groups) when there is none."""
+        info = self.info
+        names = [info.groups[i].text("name") for i in range(self._group_count())]
+        if name in names:
+            return Group(self, names.index(name))
+        raise NoSuchGroup(name, names)
+
+    def _group_count(self) -> int:
+        info = self.info
+        return min(int(info.group_count), len(info.groups))
 
     def signal(self, name: str) -> Signal:
         """The handle of the signal called ``name``."""
@@ -561,11 +589,39 @@ class Client:
             if target == Target.AXIS:
                 self._note_goal(index, int(reply.tick_applied))
             return Accepted(sequence=int(reply.sequence), tick=int(reply.tick_applied))
-        raise errors.refused(
-            int(reply.reason),
+        raise self._refusal(reply, label if label is not None else self._label(index, target))
+
+    def _refusal(self, reply: CommandReply, target: str) -> errors.Refused:
+        """The exception of a refused ``reply``, naming the point, the axis (by name), the
+        figures and the claim holder the server named."""
+        info = self.info
+        point = None if reply.at_point == NO_INDEX else int(reply.at_point)
+        axis: Optional[str] = None
+        unit = ""
+        if reply.at_axis != NO_INDEX:
+            if reply.at_axis < min(int(info.axis_count), len(info.axes)):
+                entry = info.axes[reply.at_axis]
+                axis, unit = entry.text("name"), entry.text("unit")
+            else:
+                axis = f"#{reply.at_axis}"
+        reason = int(reply.reason)
+        if unit and reason == Reason.VELOCITY_LIMIT:
+            unit += "/s"
+        elif unit and reason == Reason.ACCEL_LIMIT:
+            unit += "/s²"
+        figures = reply.value != 0.0 or reply.limit != 0.0
+        holder = int(reply.holder)
+        return errors.refused(
+            reason,
             int(reply.kind),
-            label if label is not None else self._label(index, target),
+            target,
             int(reply.tick_applied),
+            point=point,
+            axis=axis,
+            value=float(reply.value) if figures else None,
+            limit=float(reply.limit) if figures else None,
+            unit=unit,
+            holder=holder if holder else None,
         )
 
     def _label(self, index: int, target: Union[Target, int]) -> str:
@@ -576,6 +632,10 @@ class Client:
             if index < info.signal_count:
                 return f"signal {info.signals[index].text('name')}"
             return f"signal #{index}"
+        if target == Target.GROUP:
+            if index < self._group_count():
+                return f"group {info.groups[index].text('name')}"
+            return f"group #{index}"
         if index < info.axis_count:
             return f"axis {info.axes[index].text('name')}"
         return f"axis #{index}"
@@ -673,6 +733,39 @@ class Client:
         otherwise call into the client."""
         self.service_jogs()
 
+    # --- groups' ports ----------------------------------------------------------------------
+
+    def _publisher(self, leaf: str, payload: Any) -> Any:
+        """A publisher on this client's node to the server's ``leaf`` service."""
+        node = self.node  # a remote client has none: it raises
+        try:
+            service = (
+                node.service_builder(self._service(leaf)).publish_subscribe(payload).open()
+            )
+            return service.publisher_builder().create()
+        except Exception as error:
+            raise IpcError(f"publish on the {leaf} service", error) from error
+
+    def _paths_port(self) -> Any:
+        """The publisher of group paths (made on first use: a path is ≈400 KB of shared
+        memory per sample)."""
+        self._check_open()
+        if self._paths_publisher is None:
+            self._paths_publisher = self._publisher("paths", GroupPath)
+        return self._paths_publisher
+
+    def _setpoints_port(self) -> Any:
+        """The publisher of streamed setpoints (made on first use)."""
+        self._check_open()
+        if self._setpoints_publisher is None:
+            self._setpoints_publisher = self._publisher("setpoints", Setpoint)
+        return self._setpoints_publisher
+
+    def _next_path_id(self) -> int:
+        """A path id not used before by this client."""
+        self._path_id += 1
+        return self._path_id
+
     # --- life ------------------------------------------------------------------------------
 
     def close(self) -> None:
@@ -694,10 +787,18 @@ class Client:
         if self._stats is not None:
             self._stats.close()
         # Give the port slots back now rather than whenever the garbage collector runs.
-        for port in (self._tick, self._commands, self._estop_notifier):
+        for port in (
+            self._tick,
+            self._commands,
+            self._estop_notifier,
+            self._paths_publisher,
+            self._setpoints_publisher,
+        ):
             if port is not None:
                 port.delete()
         self._estop_notifier = None
+        self._paths_publisher = None
+        self._setpoints_publisher = None
 
     def __enter__(self) -> "Client":
         return self

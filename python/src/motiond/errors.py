@@ -8,9 +8,9 @@ refused raises a subclass of :class:`Refused` named after the server's reason
 
 from __future__ import annotations
 
-from typing import Dict, Optional, Type, Union
+from typing import Dict, Optional, Sequence, Type, Union
 
-from .ipc import CommandKind, Reason, to_enum
+from .ipc import CommandKind, GroupAbort, Reason, to_enum
 
 __all__ = [
     "MotiondError",
@@ -20,6 +20,10 @@ __all__ = [
     "IncompatibleServer",
     "NoSuchAxis",
     "NoSuchSignal",
+    "NoSuchGroup",
+    "BadPath",
+    "GroupAborted",
+    "StreamClosed",
     "Refused",
     "ServerGone",
     "NoReply",
@@ -57,6 +61,13 @@ __all__ = [
     "UnknownSignal",
     "NotAnOutput",
     "UnknownTarget",
+    "UnknownGroup",
+    "NoPath",
+    "PathTimes",
+    "PathStart",
+    "PathLayout",
+    "GroupBusy",
+    "NotMoving",
 ]
 
 
@@ -125,10 +136,31 @@ class NoSuchSignal(MotiondError, LookupError):
         self.name = name
 
 
+class NoSuchGroup(MotiondError, LookupError):
+    """No group of that name on the server; ``groups`` are the names it has."""
+
+    def __init__(self, name: str, groups: Sequence[str]) -> None:
+        have = ", ".join(groups) if groups else "none: its config has no [[group]]"
+        super().__init__(f'no group named "{name}" on this server (its groups: {have})')
+        self.name = name
+        self.groups = list(groups)
+
+
+class BadPath(MotiondError, ValueError):
+    """A path or a setpoint that cannot be sent as given (wrong shape, too many points,
+    not numbers): found by the client, before anything reached the server."""
+
+
 class Refused(MotiondError):
     """The server refused a command. ``reason`` is the typed reason (an ``int`` if this
-    package does not know it), ``kind`` the command, ``target`` the axis or signal in words,
-    ``tick`` the tick in which the server refused it."""
+    package does not know it), ``kind`` the command, ``target`` the axis, signal or group in
+    words, ``tick`` the tick in which the server refused it.
+
+    Where the server named what was at fault (a refused path, a claim held by another
+    client), ``point`` is the index of the path's point, ``axis`` the axis's name,
+    ``value`` the figure at fault and ``limit`` the limit it broke (in the axis's unit,
+    ``unit``), ``holder`` the node id of the client holding the claim; ``None`` otherwise.
+    """
 
     reason_code: Optional[Reason] = None
 
@@ -138,14 +170,38 @@ class Refused(MotiondError):
         kind: Union[CommandKind, int],
         target: str,
         tick: int,
+        *,
+        point: Optional[int] = None,
+        axis: Optional[str] = None,
+        value: Optional[float] = None,
+        limit: Optional[float] = None,
+        unit: str = "",
+        holder: Optional[int] = None,
     ) -> None:
         kind_text = kind.text if isinstance(kind, CommandKind) else "command"
         message = reason.message if isinstance(reason, Reason) else f"unknown reason {reason}"
-        super().__init__(f"{kind_text} on {target} refused: {message}")
+        parts = []
+        if point is not None:
+            parts.append(f"point {point}")
+        if axis is not None:
+            parts.append(f"axis {axis}")
+        if value is not None and limit is not None:
+            suffix = f" {unit}" if unit else ""
+            parts.append(f"{value:.6g}{suffix} against the limit {limit:.6g}{suffix}")
+        if holder is not None:
+            parts.append(f"held by client {holder:#x}")
+        detail = f" ({', '.join(parts)})" if parts else ""
+        super().__init__(f"{kind_text} on {target} refused: {message}{detail}")
         self.reason = reason
         self.kind = kind
         self.target = target
         self.tick = tick
+        self.point = point
+        self.axis = axis
+        self.value = value
+        self.limit = limit
+        self.unit = unit
+        self.holder = holder
 
 
 # One class per refusal reason, named after it: ``except motiond.OutOfRange:``.
@@ -298,6 +354,54 @@ class UnknownTarget(Refused):
     reason_code = Reason.UNKNOWN_TARGET
 
 
+class UnknownGroup(Refused):
+    """Refused: no such group on this server (``Reason.UNKNOWN_GROUP``)."""
+
+    reason_code = Reason.UNKNOWN_GROUP
+
+
+class NoPath(Refused):
+    """Refused: no path with this id for this group was published by this client on
+    ``paths`` (``Reason.NO_PATH``)."""
+
+    reason_code = Reason.NO_PATH
+
+
+class PathTimes(Refused):
+    """Refused: the path's point times must start at 0 or later and increase; ``point``
+    names the first one that does not (``Reason.PATH_TIMES``)."""
+
+    reason_code = Reason.PATH_TIMES
+
+
+class PathStart(Refused):
+    """Refused: the path's first point has time 0 but is not where the group is; ``axis``,
+    ``value`` (the distance) and ``limit`` (the tolerance) say by how much
+    (``Reason.PATH_START``)."""
+
+    reason_code = Reason.PATH_START
+
+
+class PathLayout(Refused):
+    """Refused: malformed path: no points, too many, an axis count other than the group's,
+    an unknown kind, or a scale outside (0, 1] (``Reason.PATH_LAYOUT``)."""
+
+    reason_code = Reason.PATH_LAYOUT
+
+
+class GroupBusy(Refused):
+    """Refused: an axis of this request is moving with a group (or the group streams):
+    cancel that motion or wait for it (``Reason.GROUP_BUSY``)."""
+
+    reason_code = Reason.GROUP_BUSY
+
+
+class NotMoving(Refused):
+    """Refused: the group has no motion running (``Reason.NOT_MOVING``)."""
+
+    reason_code = Reason.NOT_MOVING
+
+
 #: The :class:`Refused` subclass of every reason but ``ACCEPTED``.
 REFUSALS: Dict[Reason, Type[Refused]] = {
     cls.reason_code: cls
@@ -325,17 +429,48 @@ REFUSALS: Dict[Reason, Type[Refused]] = {
         UnknownSignal,
         NotAnOutput,
         UnknownTarget,
+        UnknownGroup,
+        NoPath,
+        PathTimes,
+        PathStart,
+        PathLayout,
+        GroupBusy,
+        NotMoving,
     )
     if cls.reason_code is not None
 }
 
 
-def refused(reason: int, kind: int, target: str, tick: int) -> Refused:
-    """The exception for a refusal with raw ``reason`` of a command of raw ``kind``."""
+def refused(
+    reason: int,
+    kind: int,
+    target: str,
+    tick: int,
+    *,
+    point: Optional[int] = None,
+    axis: Optional[str] = None,
+    value: Optional[float] = None,
+    limit: Optional[float] = None,
+    unit: str = "",
+    holder: Optional[int] = None,
+) -> Refused:
+    """The exception for a refusal with raw ``reason`` of a command of raw ``kind``, with
+    what the server named at fault (see :class:`Refused`)."""
     typed_reason = to_enum(Reason, reason)
     typed_kind = to_enum(CommandKind, kind)
     cls = REFUSALS.get(typed_reason, Refused) if isinstance(typed_reason, Reason) else Refused
-    return cls(typed_reason, typed_kind, target, tick)
+    return cls(
+        typed_reason,
+        typed_kind,
+        target,
+        tick,
+        point=point,
+        axis=axis,
+        value=value,
+        limit=limit,
+        unit=unit,
+        holder=holder,
+    )
 
 
 def _kind_text(kind: Union[CommandKind, int]) -> str:
@@ -410,6 +545,55 @@ class WaitAborted(MotiondError):
         self.subject = subject
         self.what = what
         self.why = why
+
+
+class GroupAborted(WaitAborted):
+    """A group's motion or stream ended before its end (``GroupMotion.ABORTED``).
+
+    ``abort`` is the server's :class:`~motiond.ipc.GroupAbort` (``path-tolerance``,
+    ``e-stop``, ``stream-stale`` …), ``axis`` the name of the axis at fault (``None`` when
+    none), ``value`` the figure that aborted it (for a tolerance: how far the axis was from
+    where the path had it) and ``limit`` the tolerance or limit it broke, in the axis's
+    ``unit``; ``path_id`` the path that ran, ``tick`` the frame that showed it."""
+
+    def __init__(
+        self,
+        group: str,
+        what: str,
+        abort: Union[GroupAbort, int],
+        axis: Optional[str],
+        value: float,
+        limit: float,
+        unit: str,
+        path_id: int,
+        tick: int,
+    ) -> None:
+        text = abort.text if isinstance(abort, GroupAbort) else f"abort reason {abort}"
+        why = f"aborted ({text})"
+        if axis is not None:
+            why += f" on axis {axis}"
+            if value or limit:
+                suffix = f" {unit}" if unit else ""
+                why += f": {value:.6g}{suffix} against the limit {limit:.6g}{suffix}"
+        why += f" in tick {tick}"
+        super().__init__(f"group {group}", what, why)
+        self.group = group
+        self.abort = abort
+        self.axis = axis
+        self.value = value
+        self.limit = limit
+        self.unit = unit
+        self.path_id = path_id
+        self.tick = tick
+
+
+class StreamClosed(MotiondError):
+    """A setpoint stream was used after it ended (its ``with`` block left, or
+    :meth:`~motiond.SetpointStream.close` called)."""
+
+    def __init__(self, group: str) -> None:
+        super().__init__(f"the setpoint stream of group {group} has ended")
+        self.group = group
 
 
 class FramesHeld(MotiondError):

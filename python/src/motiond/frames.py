@@ -12,11 +12,13 @@ from .ipc import (
     AxisState,
     DeviceState,
     FrameFlags,
+    GroupState,
     MotionFrame,
     Payload,
     SignalState,
     MAX_AXES,
     MAX_DEVICES,
+    MAX_GROUPS,
     MAX_SIGNALS,
     to_enum,
 )
@@ -139,6 +141,23 @@ class Frame(Received[MotionFrame]):
     def signal_count(self) -> int:
         """Valid entries of :attr:`signals`."""
         return min(int(self.payload.signal_count), MAX_SIGNALS)
+
+    @property
+    def group_count(self) -> int:
+        """Valid entries of :attr:`groups`."""
+        return min(int(self.payload.group_count), MAX_GROUPS)
+
+    @property
+    def groups(self) -> List[GroupState]:
+        """The valid groups, in config order: read-only views."""
+        raw = self.payload.groups
+        return [raw[i] for i in range(self.group_count)]
+
+    def group(self, index: int) -> GroupState:
+        """Group ``index`` (config order), a read-only view."""
+        if not 0 <= index < self.group_count:
+            raise IndexError(f"group index {index} out of range 0..{self.group_count}")
+        return self.payload.groups[index]
 
     @property
     def axes(self) -> List[AxisState]:

@@ -101,6 +101,10 @@ REFUSAL_CODES = (
 # 32-frame buffer over shared memory).
 _FEED_DEPTH = 32
 _CONTRACT_VERSION = 2
+_NO_GROUPS = (
+    "groups work over shared memory only for now: a remote client (motion-bridge) cannot "
+    "send paths or setpoints; connect with motiond.Client(name) on the server's host"
+)
 _NO_TOKEN = bytes(16)
 _CHUNK_EXTRA = set("-_.@+=")
 
@@ -378,6 +382,17 @@ class RemoteClient(Client, transport="remote"):
     def identity(self) -> str:
         """The identity this client sends commands as."""
         return self._identity
+
+    @property
+    def groups(self) -> List[Any]:
+        """Not available: see :meth:`group`."""
+        raise errors.MotiondError(_NO_GROUPS)
+
+    def group(self, name: str) -> Any:
+        """Not available: groups take their paths and setpoints over shared memory, from
+        the client's own iceoryx2 node; the bridge does not carry them (yet). The frames
+        a remote client reads do carry the groups' states (``frame.group(i)``)."""
+        raise errors.MotiondError(_NO_GROUPS)
 
     def stats(self) -> Optional[ServerStats]:
         """A copy of the newest :class:`~motiond.ipc.ServerStats` the bridge passed on

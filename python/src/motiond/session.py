@@ -3,13 +3,14 @@
 - :class:`Accepted` and :class:`Param`, what the server answers;
 - the default timeouts;
 - :class:`JogRegistry`, the client's running jogs, renewed on every read and wait;
-- :class:`Session`, the calls :class:`~motiond.axis.Axis`, :class:`~motiond.signal.Signal`
-  and :class:`~motiond.jog.Jog` make on the client that made them;
+- :class:`Session`, the calls :class:`~motiond.axis.Axis`, :class:`~motiond.signal.Signal`,
+  :class:`~motiond.jog.Jog`, :class:`~motiond.group.Group` and
+  :class:`~motiond.stream.SetpointStream` make on the client that made them;
 - :class:`EntryHandle`, what an axis and a signal handle have in common.
 
 None of them imports :mod:`motiond.client`: the package's imports run one way (``ipc`` ←
-``errors`` ← ``frames`` ← ``session`` ← ``jog``, ``axis``, ``signal`` ← ``client`` ←
-``remote``).
+``errors`` ← ``frames`` ← ``session`` ← ``jog``, ``axis``, ``signal``, ``groupstate`` ←
+``stream`` ← ``group`` ← ``client`` ← ``remote``).
 """
 
 from __future__ import annotations
@@ -158,9 +159,17 @@ class Session(Protocol):
     wait_frames: Callable[..., "Frame"]
     wait_ready: Callable[..., "Frame"]
     goal_tick: Callable[[int], int]
+    # What the groups use (:class:`~motiond.group.Group`, :class:`~motiond.stream.SetpointStream`).
+    _wait_tick: Callable[[float], None]
+    _paths_port: Callable[[], Any]
+    _setpoints_port: Callable[[], Any]
+    _next_path_id: Callable[[], int]
 
     @property
     def info(self) -> "ServerInfo": ...
+
+    @property
+    def id(self) -> Any: ...
 
 
 class EntryHandle:
