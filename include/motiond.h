@@ -1052,7 +1052,7 @@ static inline const char *motiond_reason_text(uint32_t value) {
     case MOTIOND_REASON_PATH_TIMES: return "the path's point times must start at 0 or later and increase";
     case MOTIOND_REASON_PATH_START: return "the path's first point has time 0 but is not where the group is";
     case MOTIOND_REASON_PATH_LAYOUT: return "malformed path: no points, too many, an axis count other than the group's, an unknown kind, or a scale outside (0, 1]";
-    case MOTIOND_REASON_GROUP_BUSY: return "an axis of this request is moving with a group: cancel that motion or wait for it";
+    case MOTIOND_REASON_GROUP_BUSY: return "an axis of this request is moving (with a group, or on its own, still stopping): cancel that motion or wait for the axis to rest";
     case MOTIOND_REASON_NOT_MOVING: return "the group has no motion running";
     default: return NULL;
     }

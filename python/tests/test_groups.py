@@ -81,7 +81,7 @@ def test_groups_and_their_description(client: motiond.Client) -> None:
     assert gantry.axes == GANTRY
     assert gantry.axis_indices == [client.axis(name).index for name in GANTRY]
     assert base.axes == ["wheel_left", "wheel_right"]
-    assert gantry.path_tolerance == {"x": 1.0, "feeder": 1.0, "lift": 1.0}
+    assert gantry.path_tolerance == {"x": 5.0, "feeder": 1.0, "lift": 2.0}
     assert gantry.goal_tolerance == {"x": 0.01, "feeder": 0.1, "lift": 0.02}
     assert arm.goal_time_tolerance == pytest.approx(1.0)
     assert (base.stream_limit, base.stream_timeout, base.stream_buffer) == ("clamp", 50, 3)

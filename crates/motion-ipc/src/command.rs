@@ -267,8 +267,9 @@ pub enum Reason {
     /// A path is malformed: no points, more than the contract holds, an axis count other
     /// than the group's, an unknown kind, a scale outside (0, 1].
     PathLayout = 28,
-    /// An axis of the request is moving with a group (or another group holds it): cancel
-    /// that motion or wait for it to end ([`CommandReply::at_axis`]).
+    /// An axis of the request is moving with a group, or (for a group's motion) moving on
+    /// its own, still stopping after one: cancel that motion or wait for the axis to rest
+    /// ([`CommandReply::at_axis`]).
     GroupBusy = 29,
     /// Hold, resume, feed or cancel of a group with no motion running.
     NotMoving = 30,
@@ -360,7 +361,8 @@ impl Reason {
                  an unknown kind, or a scale outside (0, 1]"
             }
             Self::GroupBusy => {
-                "an axis of this request is moving with a group: cancel that motion or wait for it"
+                "an axis of this request is moving (with a group, or on its own, still stopping): \
+                 cancel that motion or wait for the axis to rest"
             }
             Self::NotMoving => "the group has no motion running",
         }

@@ -714,7 +714,7 @@ class Reason(ReasonMethods, TextedEnum):
     )
     GROUP_BUSY = (
         29,
-        "an axis of this request is moving with a group: cancel that motion or wait for it",
+        "an axis of this request is moving (with a group, or on its own, still stopping): cancel that motion or wait for the axis to rest",
     )
     NOT_MOVING = 30, "the group has no motion running"
 
