@@ -146,8 +146,9 @@ fn real_group_follow_arm_csv_ends_at_its_last_point() -> Result {
         .collect::<Result<_>>()?;
     let offsets = [20.0, 15.0, -10.0, 30.0, 10.0, -30.0];
     let mut text = "time,x,y,z,a,b,c\n".to_owned();
-    for step in 0..=8 {
-        let share = f64::from(step) / 8.0;
+    // 21 rows, 10 s.
+    for step in 0..=20 {
+        let share = f64::from(step) / 20.0;
         let row: Vec<String> = start
             .iter()
             .zip(offsets)
