@@ -8,6 +8,7 @@ pub mod boards;
 pub mod config;
 pub mod drivers;
 pub mod error;
+pub mod inbox;
 pub mod io;
 pub mod node_records;
 pub mod params;

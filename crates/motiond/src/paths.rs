@@ -11,7 +11,6 @@
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use iceoryx2::sample::Sample;
-use iceoryx2::service::port_factory::PortFactory as _;
 use iceoryx2::service::port_factory::publish_subscribe::PortFactory;
 use motion_ipc::{ClientId, GroupPath};
 
@@ -47,37 +46,16 @@ pub fn create(
     name: &str,
     max_clients: usize,
 ) -> Result<(PathInbox, PathsFactory), ServiceError> {
-    let service_name = ServiceName::new(name).map_err(|e| ServiceError::Name {
-        what: "service",
-        source: e.into(),
-        name: name.to_owned(),
-    })?;
-    let factory = node
-        .service_builder(&service_name)
-        .publish_subscribe::<GroupPath>()
-        .history_size(0)
-        .subscriber_max_buffer_size(PATHS_BUFFER)
-        // The samples held, the one taken, and one being received.
-        .subscriber_max_borrowed_samples(PATHS_HELD + 2)
-        .max_subscribers(1)
-        .max_publishers(max_clients)
-        .max_nodes(max_clients + 2)
-        .enable_safe_overflow(true)
-        .open_or_create()
-        .map_err(|e| ServiceError::service(name, e))?;
-    let subscriber = factory
-        .subscriber_builder()
-        .create()
-        .map_err(|e| ServiceError::service(name, e))?;
-    Ok((
-        PathInbox {
-            subscriber,
-            held: Vec::with_capacity(PATHS_HELD),
-            taken: None,
-            dropped: 0,
-        },
-        factory,
-    ))
+    // The samples held, the one taken, and one being received.
+    let (subscriber, factory) =
+        crate::inbox::create(node, name, max_clients, PATHS_BUFFER, PATHS_HELD + 2)?;
+    let inbox = PathInbox {
+        subscriber,
+        held: Vec::with_capacity(PATHS_HELD),
+        taken: None,
+        dropped: 0,
+    };
+    Ok((inbox, factory))
 }
 
 impl PathInbox {
@@ -85,15 +63,7 @@ impl PathInbox {
     pub fn receive(&mut self, factory: &PathsFactory) {
         while let Ok(Some(sample)) = self.subscriber.receive() {
             let publisher = sample.header().publisher_id().value();
-            let mut node = None;
-            factory.dynamic_config().list_publishers(|details| {
-                if details.publisher_id.value() == publisher {
-                    node = Some(details.node_id.value());
-                    return CallbackProgression::Stop;
-                }
-                CallbackProgression::Continue
-            });
-            let Some(node) = node else {
+            let Some(node) = crate::inbox::publisher_node(factory, publisher) else {
                 // Its publisher left before we looked: nobody may run it.
                 self.dropped += 1;
                 continue;
@@ -102,7 +72,7 @@ impl PathInbox {
                 self.held.remove(0);
                 self.dropped += 1;
             }
-            self.held.push((ClientId::from_u128(node), sample));
+            self.held.push((node, sample));
         }
     }
 

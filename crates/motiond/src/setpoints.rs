@@ -5,10 +5,9 @@
 
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
-use iceoryx2::service::port_factory::PortFactory as _;
 use iceoryx2::service::port_factory::publish_subscribe::PortFactory;
 use motion_engine::Engine;
-use motion_ipc::{ClientId, Setpoint};
+use motion_ipc::Setpoint;
 
 use crate::boards::AnyDriver;
 use crate::error::ServiceError;
@@ -38,34 +37,12 @@ pub fn create(
     name: &str,
     max_clients: usize,
 ) -> Result<(SetpointInbox, SetpointsFactory), ServiceError> {
-    let service_name = ServiceName::new(name).map_err(|e| ServiceError::Name {
-        what: "service",
-        source: e.into(),
-        name: name.to_owned(),
-    })?;
-    let factory = node
-        .service_builder(&service_name)
-        .publish_subscribe::<Setpoint>()
-        .history_size(0)
-        .subscriber_max_buffer_size(SETPOINTS_BUFFER)
-        .subscriber_max_borrowed_samples(2)
-        .max_subscribers(1)
-        .max_publishers(max_clients)
-        .max_nodes(max_clients + 2)
-        .enable_safe_overflow(true)
-        .open_or_create()
-        .map_err(|e| ServiceError::service(name, e))?;
-    let subscriber = factory
-        .subscriber_builder()
-        .create()
-        .map_err(|e| ServiceError::service(name, e))?;
-    Ok((
-        SetpointInbox {
-            subscriber,
-            orphans: 0,
-        },
-        factory,
-    ))
+    let (subscriber, factory) = crate::inbox::create(node, name, max_clients, SETPOINTS_BUFFER, 2)?;
+    let inbox = SetpointInbox {
+        subscriber,
+        orphans: 0,
+    };
+    Ok((inbox, factory))
 }
 
 impl SetpointInbox {
@@ -77,16 +54,8 @@ impl SetpointInbox {
                 return;
             };
             let publisher = sample.header().publisher_id().value();
-            let mut node = None;
-            factory.dynamic_config().list_publishers(|details| {
-                if details.publisher_id.value() == publisher {
-                    node = Some(details.node_id.value());
-                    return CallbackProgression::Stop;
-                }
-                CallbackProgression::Continue
-            });
-            match node {
-                Some(node) => engine.handle_setpoint(ClientId::from_u128(node), sample.payload()),
+            match crate::inbox::publisher_node(factory, publisher) {
+                Some(node) => engine.handle_setpoint(node, sample.payload()),
                 None => self.orphans += 1,
             }
         }

@@ -58,8 +58,8 @@ impl<D: Driver> Engine<D> {
             CommandKind::Run => self.run_group(index, client, request.values[0], port),
             CommandKind::Stream => self.start_stream(index, client, request.values[0]),
             CommandKind::Cancel if self.streaming(index) => {
-                if let Some((axis, holder)) = self.claimed_member(index, client) {
-                    return self.refuse_at(Reason::ClaimedByOther, axis, holder);
+                if let Some(refused) = self.claimed_by_other(index, client) {
+                    return refused;
                 }
                 self.end_stream(index, StreamState::Idle, GroupAbort::None, None);
                 Reason::Accepted
@@ -95,6 +95,13 @@ impl<D: Driver> Engine<D> {
         })
     }
 
+    /// `ClaimedByOther`, naming the axis and its holder, when a member axis is claimed by
+    /// a client other than `client`.
+    pub(crate) fn claimed_by_other(&mut self, group: usize, client: ClientId) -> Option<Reason> {
+        let (axis, holder) = self.claimed_member(group, client)?;
+        Some(self.refuse_at(Reason::ClaimedByOther, axis, holder))
+    }
+
     pub(crate) fn refuse_at(&mut self, reason: Reason, axis: usize, holder: ClientId) -> Reason {
         self.reply_detail = ReplyDetail {
             at_axis: Some(axis),
@@ -109,8 +116,8 @@ impl<D: Driver> Engine<D> {
         if client.is_none() {
             return Reason::NoClientId;
         }
-        if let Some((axis, holder)) = self.claimed_member(group, client) {
-            return self.refuse_at(Reason::ClaimedByOther, axis, holder);
+        if let Some(refused) = self.claimed_by_other(group, client) {
+            return refused;
         }
         let now = self.now;
         for member in &self.groups[group].members {
@@ -149,8 +156,8 @@ impl<D: Driver> Engine<D> {
         if self.estop {
             return Some(Reason::EstopLatched);
         }
-        if let Some((axis, holder)) = self.claimed_member(group, client) {
-            return Some(self.refuse_at(Reason::ClaimedByOther, axis, holder));
+        if let Some(refused) = self.claimed_by_other(group, client) {
+            return Some(refused);
         }
         let members = self.groups[group].members.len();
         for slot in 0..members {
@@ -420,54 +427,22 @@ impl<D: Driver> Engine<D> {
     /// The planned path starts: every member follows it from this tick.
     fn start_motion_of(&mut self, group: usize, client: ClientId, id: u64, kind: PathKind) {
         let now = self.now;
-        let end_of = |g: &crate::group::Group, slot: usize| g.path.end()[slot];
-        let count = self.groups[group].members.len();
-        let mut claimed = true;
-        for slot in 0..count {
-            let member = self.groups[group].members[slot];
-            let end = end_of(&self.groups[group], slot);
-            let axis = &mut self.axes[member.axis];
-            claimed &= axis.claimed_by == client;
-            let position = axis.position();
-            axis.mode = motion_ipc::AxisMode::Group;
-            axis.group = Some(group);
-            axis.goal_owner = client;
-            axis.deadman_at = None;
-            axis.deadman_expired = false;
-            axis.arrived = false;
-            axis.off_after_stop = false;
-            axis.switched_off = false;
-            axis.move_start = position;
-            axis.target = end;
+        for slot in 0..self.groups[group].members.len() {
+            let end = self.groups[group].path.end()[slot];
+            self.groups[group].position[slot] = end;
         }
+        let claimed = self.take_members(group, client, kind);
         let g = &mut self.groups[group];
-        for member in &mut g.members {
-            member.sent_at = None;
-            member.acked_at = None;
-            member.end_sent = false;
-            member.next_at = now;
-            member.last_velocity = f64::NAN;
-        }
-        g.motion = GroupMotion::Moving;
-        g.abort = GroupAbort::None;
-        g.abort_axis = None;
-        g.abort_value = 0.0;
-        g.abort_limit = 0.0;
-        g.owner = client;
         g.claimed = claimed;
         g.path_id = id;
-        g.kind = kind;
-        g.point = 0;
-        g.cancelling = false;
-        g.ended_at = None;
         g.history.clear();
         g.history.push(now, 0.0);
     }
 
     /// Feed hold (`cancel`: then end the motion once at rest).
     fn hold_group(&mut self, group: usize, client: ClientId, cancel: bool) -> Reason {
-        if let Some((axis, holder)) = self.claimed_member(group, client) {
-            return self.refuse_at(Reason::ClaimedByOther, axis, holder);
+        if let Some(refused) = self.claimed_by_other(group, client) {
+            return refused;
         }
         let g = &mut self.groups[group];
         if !g.motion.active() {
@@ -483,8 +458,8 @@ impl<D: Driver> Engine<D> {
 
     /// Continues a held (or holding) path at the set feed.
     fn resume_group(&mut self, group: usize, client: ClientId) -> Reason {
-        if let Some((axis, holder)) = self.claimed_member(group, client) {
-            return self.refuse_at(Reason::ClaimedByOther, axis, holder);
+        if let Some(refused) = self.claimed_by_other(group, client) {
+            return refused;
         }
         if self.estop {
             return Reason::EstopLatched;
@@ -503,8 +478,8 @@ impl<D: Driver> Engine<D> {
         if !(0.0..=1.5).contains(&feed) {
             return Reason::OutOfRange;
         }
-        if let Some((axis, holder)) = self.claimed_member(group, client) {
-            return self.refuse_at(Reason::ClaimedByOther, axis, holder);
+        if let Some(refused) = self.claimed_by_other(group, client) {
+            return refused;
         }
         let g = &mut self.groups[group];
         g.feed_set = feed;

@@ -178,6 +178,52 @@ impl<D: Driver> Engine<D> {
         );
     }
 
+    /// A motion of kind `kind` owned by `client` starts: every member becomes the group's
+    /// (mode `group`, heading for the group's `position` of it: the path's end, or where
+    /// a stream starts), its following starts afresh. Returns whether `client` holds every
+    /// member's claim.
+    pub(crate) fn take_members(&mut self, group: usize, client: ClientId, kind: PathKind) -> bool {
+        let now = self.now;
+        let mut claimed = true;
+        for slot in 0..self.groups[group].members.len() {
+            let g = &mut self.groups[group];
+            let target = g.position[slot];
+            let member = &mut g.members[slot];
+            member.sent_at = None;
+            member.acked_at = None;
+            member.end_sent = false;
+            member.next_at = now;
+            member.last_velocity = f64::NAN;
+            let axis = &mut self.axes[member.axis];
+            claimed &= axis.claimed_by == client;
+            let position = axis.position();
+            axis.mode = AxisMode::Group;
+            axis.group = Some(group);
+            axis.goal_owner = client;
+            axis.deadman_at = None;
+            axis.deadman_expired = false;
+            axis.arrived = false;
+            axis.off_after_stop = false;
+            axis.switched_off = false;
+            axis.move_start = position;
+            axis.target = target;
+            axis.path_position = position;
+            axis.path_velocity = 0.0;
+        }
+        let g = &mut self.groups[group];
+        g.motion = GroupMotion::Moving;
+        g.abort = GroupAbort::None;
+        g.abort_axis = None;
+        g.abort_value = 0.0;
+        g.abort_limit = 0.0;
+        g.owner = client;
+        g.kind = kind;
+        g.point = 0;
+        g.cancelling = false;
+        g.ended_at = None;
+        claimed
+    }
+
     /// The motion ends in order (done, or a cancel at rest): every member holds where the
     /// path left it.
     fn finish_group(&mut self, group: usize, motion: GroupMotion, abort: GroupAbort) {

@@ -14,8 +14,8 @@
 
 use motion_drivers::Driver;
 use motion_ipc::{
-    AxisMode, ClientId, GroupAbort, GroupMotion, MAX_GROUP_AXES, PathKind, Reason, SCHEMA_VERSION,
-    Setpoint, SetpointFlags, StreamFlags, StreamMode, StreamState,
+    ClientId, GroupAbort, GroupMotion, MAX_GROUP_AXES, PathKind, Reason, SCHEMA_VERSION, Setpoint,
+    SetpointFlags, StreamFlags, StreamMode, StreamState,
 };
 
 use crate::Engine;
@@ -170,41 +170,17 @@ impl<D: Driver> Engine<D> {
             }
         }
         let tick = self.tick;
-        let g = &mut self.groups[group];
-        for (slot, member) in g.members.iter_mut().enumerate() {
-            let axis = &mut self.axes[member.axis];
-            g.position[slot] = axis.position();
+        for slot in 0..self.groups[group].members.len() {
+            let position = self.axes[self.groups[group].members[slot].axis].position();
+            let g = &mut self.groups[group];
+            g.position[slot] = position;
             g.velocity[slot] = 0.0;
             g.acceleration[slot] = 0.0;
             g.power[slot] = 0.0;
-            axis.mode = AxisMode::Group;
-            axis.group = Some(group);
-            axis.goal_owner = client;
-            axis.deadman_at = None;
-            axis.deadman_expired = false;
-            axis.arrived = false;
-            axis.off_after_stop = false;
-            axis.switched_off = false;
-            axis.target = axis.position();
-            axis.path_position = axis.position();
-            axis.path_velocity = 0.0;
-            member.sent_at = None;
-            member.acked_at = None;
-            member.end_sent = false;
-            member.next_at = self.now;
-            member.last_velocity = f64::NAN;
         }
-        g.motion = GroupMotion::Moving;
-        g.abort = GroupAbort::None;
-        g.abort_axis = None;
-        g.abort_value = 0.0;
-        g.abort_limit = 0.0;
-        g.owner = client;
+        self.take_members(group, client, PathKind::Stream);
+        let g = &mut self.groups[group];
         g.claimed = true;
-        g.kind = PathKind::Stream;
-        g.point = 0;
-        g.cancelling = false;
-        g.ended_at = None;
         g.stream = Stream {
             mode,
             state: StreamState::Streaming,
