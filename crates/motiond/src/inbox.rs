@@ -14,6 +14,9 @@ use motion_ipc::ClientId;
 use crate::error::ServiceError;
 use crate::services::Ipc;
 
+/// The server's end of an inbox service: its subscriber and the service's port factory.
+pub type Inbox<T> = (Subscriber<Ipc, T, ()>, PortFactory<Ipc, T, ()>);
+
 /// Creates (or opens) `name` for payload `T`: no history, `buffer` samples a publisher
 /// may have queued, `borrowed` samples the server may hold, `max_clients` publishers and
 /// the server's one subscriber.
@@ -23,7 +26,7 @@ pub fn create<T: Debug + ZeroCopySend + 'static>(
     max_clients: usize,
     buffer: usize,
     borrowed: usize,
-) -> Result<(Subscriber<Ipc, T, ()>, PortFactory<Ipc, T, ()>), ServiceError> {
+) -> Result<Inbox<T>, ServiceError> {
     let service_name = ServiceName::new(name).map_err(|e| ServiceError::Name {
         what: "service",
         source: e.into(),

@@ -31,7 +31,8 @@ const LIFT: usize = 1;
 
 /// The QSB-M on a pty, a simulated QuadQuad2Drv, the server and a client with both boards
 /// online.
-fn setup(test: &str) -> (Qsb, PtyBoard, Server, RawClient, String, Instant) {
+/// `path_tolerance`: the group's, mm.
+fn setup(test: &str, path_tolerance: f64) -> (Qsb, PtyBoard, Server, RawClient, String, Instant) {
     let name = unique_name(test);
     let epoch = Instant::now();
     let board: Qsb = Arc::new(Mutex::new(QsbSim::new(QsbSimConfig::default())));
@@ -88,7 +89,7 @@ max_accel = 100.0
 [[group]]
 name = "pair"
 axes = ["feeder", "lift"]
-path_tolerance = 2.0
+path_tolerance = {path_tolerance}
 goal_tolerance = {{ feeder = 0.1, lift = 0.05 }}
 goal_time_tolerance_ms = 2000
 "#,
@@ -170,7 +171,7 @@ fn a_line_arrives_on_both_boards() {
 }
 
 fn a_line_arrives_on_both_boards_body() {
-    let (_board, _served, _server, mut client, name, _) = setup("group_line");
+    let (_board, _served, _server, mut client, name, _) = setup("group_line", 10.0);
     let publisher = paths_publisher(&client.node, &name);
     let start = client.frame();
     let targets = [
@@ -206,7 +207,7 @@ fn a_slipping_motor_aborts_the_group_naming_its_axis() {
 }
 
 fn a_slipping_motor_aborts_the_group_naming_its_axis_body() {
-    let (board, _served, _server, mut client, name, epoch) = setup("group_slip");
+    let (board, _served, _server, mut client, name, epoch) = setup("group_slip", 2.0);
     let publisher = paths_publisher(&client.node, &name);
     let start = client.frame();
     let targets = [
@@ -289,7 +290,7 @@ fn a_client_killed_mid_trajectory_stops_the_group() {
 }
 
 fn a_client_killed_mid_trajectory_stops_the_group_body() {
-    let (_board, _served, _server, client, name, _) = setup("group_dead_client");
+    let (_board, _served, _server, client, name, _) = setup("group_dead_client", 10.0);
     let mut child = Command::new(std::env::current_exe().expect("this test binary"))
         .args([
             "--exact",
