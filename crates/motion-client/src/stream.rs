@@ -12,8 +12,8 @@ use std::time::Instant;
 
 use iceoryx2::service::Service;
 use motion_ipc::{
-    CommandKind, MAX_GROUP_AXES, MotionFrame, SCHEMA_VERSION, Setpoint, SetpointFlags,
-    StreamMode, StreamState, Target,
+    CommandKind, MAX_GROUP_AXES, MotionFrame, SCHEMA_VERSION, Setpoint, SetpointFlags, StreamMode,
+    StreamState, Target,
 };
 
 use crate::ports::{self, Opening, SetpointPorts};
@@ -74,13 +74,45 @@ impl<S: Service> Client<S> {
 }
 
 impl<'c, S: Service> Group<'c, S> {
+    /// Claims the members this client does not hold yet (per the newest frame): the whole
+    /// group at once when it holds none of them, else each missing axis (a claim it held
+    /// before is never released by the stream).
+    fn claim_for_stream(&self) -> Result<Vec<ClaimGuard<'c, S>>, ClientError> {
+        let client = self.client();
+        let members = self.info();
+        let mine: Vec<bool> = {
+            let frame = client.latest()?;
+            members
+                .axes()
+                .iter()
+                .map(|&axis| {
+                    frame
+                        .axes()
+                        .get(axis as usize)
+                        .is_some_and(|state| state.claimed_by == client.id())
+                })
+                .collect()
+        };
+        if mine.iter().all(|held| !held) {
+            return Ok(vec![self.claim()?]);
+        }
+        members
+            .axes()
+            .iter()
+            .zip(mine)
+            .filter(|(_, held)| !held)
+            .map(|(&axis, _)| ClaimGuard::take(client, Target::Axis, axis))
+            .collect()
+    }
+
     /// Starts streaming setpoints to the group in `mode`: claims every member axis (held by
     /// the stream, released when it ends), sends the `Stream` command and makes sure this
     /// client has its publisher on `setpoints`. The group must be at rest (no motion of its
     /// own running: `GroupBusy`); [`StreamMode::Power`] needs boards that take power goals.
     ///
     /// Dropping the returned stream (or [`SetpointStream::cancel`]) ends it: the axes stop
-    /// and hold, and the claim is released (also a claim this client held before).
+    /// and hold, and the claim the stream took is released (a claim this client already
+    /// held on every member before stays).
     ///
     /// ```no_run
     /// use core::ops::ControlFlow;
@@ -109,7 +141,7 @@ impl<'c, S: Service> Group<'c, S> {
         // The publisher first: it is connected to the server's subscriber by the time the
         // first setpoint goes out.
         client.setpoint_ports()?;
-        let claim = self.claim()?;
+        let claims = self.claim_for_stream()?;
         let started = client.command_to(
             Target::Group,
             self.index(),
@@ -118,7 +150,7 @@ impl<'c, S: Service> Group<'c, S> {
         )?;
         Ok(SetpointStream {
             group: *self,
-            claim: Some(claim),
+            claims,
             mode,
             axes: self.info().axes().len(),
             started,
@@ -133,7 +165,7 @@ impl<'c, S: Service> Group<'c, S> {
 
 /// A group's setpoint stream, started by [`Group::stream`]. Holds the group's claim; when
 /// dropped it sends `Cancel` (the stream ends idle, every member stops and holds) and
-/// releases the claim.
+/// releases the claim it took.
 ///
 /// Values are per member axis in the group's order ([`Group::axes`]): positions (each
 /// axis's unit), velocities (unit/s) or powers (−1.0..=1.0), as the stream's mode says.
@@ -141,7 +173,8 @@ impl<'c, S: Service> Group<'c, S> {
 #[must_use = "dropping the stream ends it at once"]
 pub struct SetpointStream<'c, S: Service> {
     group: Group<'c, S>,
-    claim: Option<ClaimGuard<'c, S>>,
+    /// The claims the stream took (none on members this client held before).
+    claims: Vec<ClaimGuard<'c, S>>,
     mode: StreamMode,
     axes: usize,
     started: Accepted,
@@ -416,16 +449,19 @@ impl<'c, S: Service> SetpointStream<'c, S> {
     }
 
     /// Ends the stream: sends `Cancel` (the stream ends idle, every member stops and holds)
-    /// and releases the claim. A stream the server had already ended (stale, aborted) is
+    /// and releases the claims the stream took. A stream the server had already ended (stale, aborted) is
     /// refused with `NotMoving`; the claim is released all the same.
     pub fn cancel(mut self) -> Result<Accepted, ClientError> {
         self.active = false;
         let cancelled = self.send_cancel();
-        let released = self.claim.take().map(ClaimGuard::release);
-        let accepted = cancelled?;
-        if let Some(released) = released {
-            released?;
+        let mut released = Ok(());
+        for claim in self.claims.drain(..) {
+            if let Err(error) = claim.release() {
+                released = released.and(Err(error));
+            }
         }
+        let accepted = cancelled?;
+        released?;
         Ok(accepted)
     }
 
@@ -451,6 +487,6 @@ impl<S: Service> Drop for SetpointStream<'_, S> {
             // A stream of a client that is gone is ended by the server anyway (stale).
             let _ = self.send_cancel();
         }
-        // The claim guard, dropped after this, releases the claim.
+        // The claim guards, dropped after this, release the claims the stream took.
     }
 }
