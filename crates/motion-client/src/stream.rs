@@ -337,22 +337,27 @@ impl<'c, S: Service> SetpointStream<'c, S> {
         StreamStatus::from_state(frame.tick, &raw)
     }
 
-    /// Waits until a frame of the tick the last setpoint was for, or a later one, shows
-    /// the stream (the server has taken every setpoint sent by then) and returns the
-    /// stream's state in it; up to `timeout`.
+    /// Waits until a frame shows the last setpoint sent applied (every earlier one was
+    /// applied or dropped by then, so the counters are final for what was sent), or the
+    /// stream no longer streaming, and returns the stream's state in it; when `timeout`
+    /// passes first, the state in the newest frame.
     pub fn wait_caught_up(&self, timeout: Duration) -> Result<StreamStatus, ClientError> {
         let client = self.group.client();
-        let until = self.last_for_tick.unwrap_or(self.started.tick);
         let deadline = Instant::now() + timeout;
         loop {
             let frame = client.latest()?;
-            if frame.tick >= until {
-                return Ok(self.status_in(&frame));
+            let status = self.status_in(&frame);
+            // A frame of the stream (not one from before it started) in which the last
+            // setpoint sent was applied (never before its tick), or the stream ended.
+            let current = frame.tick >= self.started.tick;
+            let taken = status.last_sequence >= self.sequence;
+            if current && (taken || status.state != StreamState::Streaming) {
+                return Ok(status);
             }
             drop(frame);
             let now = Instant::now();
             if now >= deadline {
-                return Err(ClientError::NoFrame(timeout));
+                return Ok(status);
             }
             client.wait_tick(deadline - now)?;
         }
@@ -427,7 +432,10 @@ impl<'c, S: Service> SetpointStream<'c, S> {
                     abort: status.abort,
                 });
             }
-            if self.last_for_tick == Some(frame.tick) && status.last_sequence < self.sequence {
+            // The setpoint sent last was due by this frame's tick but is not applied.
+            if self.last_for_tick.is_some_and(|last| last <= frame.tick)
+                && status.last_sequence < self.sequence
+            {
                 run.behind += 1;
             }
             if self.sequence == 0 && self.mode == StreamMode::Position {

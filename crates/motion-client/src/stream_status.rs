@@ -162,9 +162,11 @@ pub struct StreamRun {
     /// Ticks between the first and the last without a setpoint (frames the client did not
     /// read before the next one came).
     pub skipped: u64,
-    /// Setpoints the frame of their own tick did not show applied (published after the
-    /// server had taken that tick's setpoints): the server applies each in a later tick,
-    /// or drops it as late when a newer one is due with it.
+    /// Setpoints a frame of their own tick or a later one did not show applied when the
+    /// client read it (published after the server had taken that tick's setpoints, the
+    /// client descheduled between reading a frame and publishing): the server applies each
+    /// in a later tick, or drops it as late when a newer one is due with it. A setpoint
+    /// whose late application no frame read showed is not counted.
     pub behind: u64,
 }
 
