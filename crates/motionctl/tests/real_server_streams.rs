@@ -234,10 +234,16 @@ fn real_sigkill_of_a_streaming_client_stops_the_base() -> Result {
                 matches!(status.state, StreamState::Stale | StreamState::Aborted),
                 "{status:?}"
             );
+            // Stale after stream_timeout, or client-dead when the server noticed the dead
+            // node first; or claim-lost when it noticed first that the client's command
+            // port was gone: that check releases the claims without ending the client's
+            // motions, and the group then aborts because its claim went away (a plain stop
+            // for client-dead and stale, the stop category for claim-lost: the same for
+            // base's axes, `hold`).
             assert!(
                 matches!(
                     status.abort,
-                    GroupAbort::StreamStale | GroupAbort::ClientDead
+                    GroupAbort::StreamStale | GroupAbort::ClientDead | GroupAbort::ClaimLost
                 ),
                 "{status:?}"
             );
