@@ -397,7 +397,8 @@ impl<'c, S: Service> SetpointStream<'c, S> {
     /// Stops when `f` breaks or after `duration` (`None`: until `f` breaks).
     ///
     /// A frame the client was too slow for gets no setpoint (the next frame's does;
-    /// [`StreamRun::skipped`]). Nothing is allocated per tick by the stream. Ends with
+    /// [`StreamRun::skipped`]). The stream allocates nothing per tick (receiving a frame
+    /// costs the client one small handle on the shared-memory sample). Ends with
     /// [`StreamError::Ended`] when a frame shows the stream is no longer streaming (stale,
     /// aborted), [`ClientError::Interrupted`] after SIGINT or SIGTERM (the stream ends when
     /// dropped), [`ClientError::NoFrame`] when the server stays silent for
@@ -416,6 +417,10 @@ impl<'c, S: Service> SetpointStream<'c, S> {
         }
         let mut values = self.values;
         loop {
+            // Also when a newer frame is always waiting (a client slower than the tick).
+            if deadline.is_some_and(|deadline| Instant::now() >= deadline) {
+                break;
+            }
             let Some(frame) = self.frame_after(seen, deadline)? else {
                 break;
             };
