@@ -18,7 +18,7 @@ use motion_ipc::{
 
 use crate::group::RunMark;
 use crate::jog::JogTable;
-use crate::ports::{self, CommandPorts, FramePorts, Opening, PathPorts};
+use crate::ports::{self, CommandPorts, FramePorts, Opening, PathPorts, SetpointPorts};
 use crate::received::{LatestCache, Received};
 use crate::session::{Seen, Session};
 use crate::{Axis, ClientError, ConnectError, Restart};
@@ -161,6 +161,8 @@ pub struct Client<S: Service> {
     pub(crate) jogs: RefCell<JogTable>,
     /// The publisher on the `paths` service, created by the first path sent.
     pub(crate) paths: RefCell<Option<Rc<PathPorts<S>>>>,
+    /// The publisher on the `setpoints` service, created by the first stream.
+    pub(crate) setpoints: RefCell<Option<Rc<SetpointPorts<S>>>>,
     /// The id of the last path this client sent (ids count up from 1).
     pub(crate) path_ids: Cell<u64>,
     /// Per group (config order): the last path this client ran on it, so that waits know
@@ -316,6 +318,7 @@ impl<S: Service> Client<S> {
             goal_ticks: RefCell::new(vec![(0, 0); axis_count]),
             jogs: RefCell::new(JogTable::default()),
             paths: RefCell::new(None),
+            setpoints: RefCell::new(None),
             path_ids: Cell::new(0),
             group_runs: RefCell::new(Vec::new()),
             #[cfg(feature = "zenoh")]

@@ -39,6 +39,13 @@
 //!   [`ClientError::GroupAborted`] naming the reason, the axis and the figures; a refused
 //!   path [`ClientError::GroupRefused`] naming the point and the axis). Shared memory only
 //!   for now (not through a bridge).
+//! - Streaming: [`Group::stream`] claims a group and starts a [`SetpointStream`]: a
+//!   controller sends a setpoint (positions, velocities or powers) per tick
+//!   ([`SetpointStream::send`]) or closes its loop with
+//!   [`SetpointStream::run_each_tick`] (read the frame, write the next tick's values);
+//!   the frames count what the server applied ([`SetpointStream::state`]); dropping the
+//!   stream stops the axes and releases the claim. `examples/closed_loop.rs` streams a
+//!   sine to a real server.
 //! - Jog: [`Axis::jog`] returns a [`JogGuard`] that renews the server's deadman while your
 //!   program keeps calling into the client, and stops the axis when dropped;
 //!   [`Axis::claim_guard`] a [`ClaimGuard`].
@@ -119,6 +126,8 @@ pub mod remote;
 mod remote_error;
 mod session;
 mod signal;
+mod stream;
+mod stream_status;
 #[cfg(feature = "testing")]
 pub mod testing;
 mod trajectory;
@@ -142,4 +151,6 @@ pub use motion_ipc as ipc;
 pub use received::Received;
 pub use remote_error::{RemoteError, RemoteSource};
 pub use signal::{Signal, signal_value_text};
+pub use stream::{STREAM_FRAME_TIMEOUT, SetpointStream};
+pub use stream_status::{StreamError, StreamRun, StreamStatus};
 pub use trajectory::{PointKind, Trajectory, TrajectoryError};

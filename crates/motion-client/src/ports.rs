@@ -17,7 +17,7 @@ use iceoryx2::service::builder::event::EventOpenError;
 use iceoryx2::service::builder::publish_subscribe::PublishSubscribeOpenError;
 use iceoryx2::service::builder::request_response::RequestResponseOpenError;
 use iceoryx2::service::port_factory::client::ClientCreateError;
-use motion_ipc::{CommandReply, CommandRequest, GroupPath, MotionFrame, SCHEMA_VERSION};
+use motion_ipc::{CommandReply, CommandRequest, GroupPath, MotionFrame, SCHEMA_VERSION, Setpoint};
 
 use crate::ConnectError;
 use crate::received::LatestCache;
@@ -62,6 +62,19 @@ pub(crate) struct PathPorts<S: Service> {
 impl<S: Service> fmt::Debug for PathPorts<S> {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         f.debug_struct("PathPorts").finish_non_exhaustive()
+    }
+}
+
+/// A publisher on the `setpoints` service (a group's streamed setpoints, 288 bytes each;
+/// created by the first stream of a client).
+pub(crate) struct SetpointPorts<S: Service> {
+    pub(crate) publisher: Publisher<S, Setpoint, ()>,
+    pub(crate) service_id: UniqueServiceId,
+}
+
+impl<S: Service> fmt::Debug for SetpointPorts<S> {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("SetpointPorts").finish_non_exhaustive()
     }
 }
 
@@ -273,6 +286,34 @@ pub(crate) fn open_paths<S: Service>(
             other => ConnectError::ipc("create a path publisher", other),
         })?;
     Ok(PathPorts {
+        publisher,
+        service_id: factory.unique_service_id(),
+    })
+}
+
+/// A publisher on the `setpoints` service `service` (created by the server).
+pub(crate) fn open_setpoints<S: Service>(
+    node: &Node<S>,
+    opening: &Opening<'_>,
+    service: &str,
+) -> Result<SetpointPorts<S>, ConnectError> {
+    let name = service_name(service, opening.server)?;
+    let factory = retry(opening.deadline, || {
+        node.service_builder(&name)
+            .publish_subscribe::<Setpoint>()
+            .open()
+    })
+    .map_err(|error| pubsub_open_error(error, opening, service))?;
+    let publisher = factory
+        .publisher_builder()
+        .create()
+        .map_err(|error| match error {
+            PublisherCreateError::ExceedsMaxSupportedPublishers => {
+                exhausted(service, "publisher slot")
+            }
+            other => ConnectError::ipc("create a setpoint publisher", other),
+        })?;
+    Ok(SetpointPorts {
         publisher,
         service_id: factory.unique_service_id(),
     })

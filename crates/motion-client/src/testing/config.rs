@@ -209,11 +209,16 @@ pub struct FakeGroup {
     pub goal_tolerance: Vec<f64>,
     /// Seconds (described only).
     pub goal_time_tolerance: f64,
+    /// Ticks without a streamed setpoint before a stream goes stale and the group stops.
+    pub stream_timeout: u32,
+    /// Ticks ahead a streamed setpoint may be sent (further ahead: dropped as early).
+    pub stream_buffer: u32,
 }
 
 impl FakeGroup {
     /// A group of `axes`, path tolerance 0.5 and goal tolerance 0.05 units each, goal time
-    /// 0.5 s.
+    /// 0.5 s; a stream goes stale after 50 ticks without a setpoint and takes setpoints up
+    /// to 3 ticks ahead.
     pub fn new(name: &str, axes: &[usize]) -> Self {
         Self {
             name: name.to_owned(),
@@ -221,6 +226,8 @@ impl FakeGroup {
             path_tolerance: vec![0.5; axes.len()],
             goal_tolerance: vec![0.05; axes.len()],
             goal_time_tolerance: 0.5,
+            stream_timeout: 50,
+            stream_buffer: 3,
         }
     }
 }

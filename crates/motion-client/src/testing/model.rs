@@ -15,6 +15,7 @@ use super::FakeControl;
 use super::config::{FakeAxis, FakeConfig, FakeSignal};
 
 mod group;
+mod stream;
 
 use group::SimGroup;
 pub(super) use group::{Judged, StoredPath};

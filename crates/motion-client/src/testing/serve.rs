@@ -14,7 +14,7 @@ use iceoryx2::prelude::{
 use iceoryx2::service::Service;
 use motion_ipc::{
     ClientId, CommandReply, CommandRequest, GroupPath, MachineParams, MotionFrame, ServerInfo,
-    ServerStats, ServiceNames,
+    ServerStats, ServiceNames, Setpoint,
 };
 
 use super::Shared;
@@ -160,6 +160,21 @@ fn serve_inner<S: Service>(
         .subscriber_builder()
         .create()
         .map_err(|e| fail("paths subscriber")(&e))?;
+    // Setpoints streamed to groups: from any client, judged by the sender's node.
+    let setpoints = node
+        .service_builder(&service(names.setpoints())?)
+        .publish_subscribe::<Setpoint>()
+        .history_size(0)
+        .subscriber_max_buffer_size(16)
+        .max_subscribers(1)
+        .max_publishers(max)
+        .max_nodes(max_nodes)
+        .enable_safe_overflow(true)
+        .open_or_create()
+        .map_err(|e| fail("setpoints service")(&e))?
+        .subscriber_builder()
+        .create()
+        .map_err(|e| fail("setpoints subscriber")(&e))?;
     // The frame service comes last, as in the real server.
     let frames = node
         .service_builder(&service(names.frame())?)
@@ -231,6 +246,14 @@ fn serve_inner<S: Service>(
         if sigusr1.swap(false, Ordering::Relaxed) {
             model.latch_estop();
             note_estop(shared, "signal");
+        }
+        // Like the real server: the tick's setpoints before its commands.
+        while let Some(setpoint) = setpoints
+            .receive()
+            .map_err(|e| fail("receive a setpoint")(&e))?
+        {
+            let from = ClientId::from_u128(setpoint.header().node_id().value());
+            model.handle_setpoint(from, &setpoint);
         }
         while let Some(active) = commands.receive().map_err(|e| fail("receive")(&e))? {
             let request = *active.payload();

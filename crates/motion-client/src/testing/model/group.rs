@@ -9,6 +9,7 @@ use motion_ipc::{
 };
 
 use super::Model;
+use super::stream::SimStream;
 use crate::testing::config::FakeGroup;
 
 /// A request's answer with the reply's detail fields.
@@ -36,7 +37,13 @@ impl From<Reason> for Judged {
 }
 
 impl Judged {
-    fn at(reason: Reason, point: Option<usize>, axis: usize, value: f64, limit: f64) -> Self {
+    pub(super) fn at(
+        reason: Reason,
+        point: Option<usize>,
+        axis: usize,
+        value: f64,
+        limit: f64,
+    ) -> Self {
         Self {
             at_point: point.map_or(u32::MAX, |p| p as u32),
             at_axis: axis as u32,
@@ -130,9 +137,10 @@ impl Plan {
 /// One simulated group.
 #[derive(Debug, Clone)]
 pub(in crate::testing) struct SimGroup {
-    config: FakeGroup,
-    state: GroupState,
+    pub(super) config: FakeGroup,
+    pub(super) state: GroupState,
     plan: Plan,
+    pub(super) stream: SimStream,
 }
 
 impl SimGroup {
@@ -141,10 +149,11 @@ impl SimGroup {
             config: config.clone(),
             state: GroupState::IDLE,
             plan: Plan::default(),
+            stream: SimStream::default(),
         }
     }
 
-    fn motion(&self) -> GroupMotion {
+    pub(super) fn motion(&self) -> GroupMotion {
         self.state.motion().unwrap_or_default()
     }
 }
@@ -158,6 +167,8 @@ impl Model {
             write_text(&mut out.name, &sim.config.name);
             out.axis_count = sim.config.axes.len().min(MAX_GROUP_AXES) as u32;
             out.goal_time_tolerance = sim.config.goal_time_tolerance;
+            out.stream_timeout = sim.config.stream_timeout;
+            out.stream_buffer = sim.config.stream_buffer;
             for (slot, axis) in out.axes.iter_mut().zip(&sim.config.axes) {
                 *slot = *axis as u32;
             }
@@ -211,6 +222,9 @@ impl Model {
         }
         group.state.motion = GroupMotion::Aborted as u8;
         group.state.abort = abort as u8;
+        if group.state.stream == motion_ipc::StreamState::Streaming as u8 {
+            group.state.stream = motion_ipc::StreamState::Aborted as u8;
+        }
         group.state.abort_axis = axis.map_or(u32::MAX, |a| a as u32);
         (group.state.abort_value, group.state.abort_limit) = figures;
         group.state.owner = ClientId::NONE;
@@ -279,6 +293,18 @@ impl Model {
                 Reason::Accepted.into()
             }
             CommandKind::Run => self.run(index, request.values[0], client),
+            CommandKind::Stream => self.start_stream(index, request.values[0], client),
+            CommandKind::Cancel if self.streaming(index) => {
+                if let Some(&member) = members.iter().find(|&&m| {
+                    let owner = self.axes[m].1.state.claimed_by;
+                    !owner.is_none() && owner != client
+                }) {
+                    let mut judged = Judged::at(Reason::ClaimedByOther, None, member, 0.0, 0.0);
+                    judged.holder = self.axes[member].1.state.claimed_by;
+                    return judged;
+                }
+                self.cancel_stream(index)
+            }
             CommandKind::Hold | CommandKind::Resume | CommandKind::Feed | CommandKind::Cancel => {
                 self.steer(index, kind, request.values[0], client, &members, active)
             }
@@ -482,6 +508,10 @@ impl Model {
     /// Advances every active group by `dt` seconds of wall time.
     pub(super) fn step_groups(&mut self, dt: f64) {
         for index in 0..self.groups.len() {
+            if self.streaming(index) {
+                self.stream_tick(index, dt);
+                continue;
+            }
             let group = &mut self.groups[index];
             let motion = group.motion();
             if !motion.active() {

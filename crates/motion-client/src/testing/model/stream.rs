@@ -1,0 +1,216 @@
+//! The fake's setpoint streams, minimal: `Stream` on a group every member of which the
+//! sender claimed; setpoints from the streaming node queued for their tick (from any other
+//! node, of another mode, not finite: `refused`; too far ahead: `early`); in each tick the
+//! newest due one above the last applied sequence is applied (the other due ones are
+//! `late`); no setpoint for `stream_timeout` ticks: `stale`, the group stops; `Cancel`
+//! ends the stream idle. Velocities are integrated, positions taken as they are; no limits.
+
+use motion_ipc::{
+    AxisMode, ClientId, GroupAbort, GroupMotion, GroupState, MAX_GROUP_AXES, PathKind, Reason,
+    SCHEMA_VERSION, Setpoint, StreamFlags, StreamMode, StreamState,
+};
+
+use super::Model;
+use super::group::Judged;
+
+/// A setpoint waiting for its tick.
+#[derive(Debug, Clone, Copy)]
+struct Queued {
+    sequence: u64,
+    for_tick: u64,
+    values: [f64; MAX_GROUP_AXES],
+}
+
+/// One group's stream (its counters live in the group's [`GroupState`]).
+#[derive(Debug, Clone, Default)]
+pub(in crate::testing) struct SimStream {
+    mode: StreamMode,
+    queue: Vec<Queued>,
+    last_received: u64,
+    /// Per member: the velocity streamed last (velocity mode).
+    velocity: Vec<f64>,
+}
+
+impl Model {
+    /// Whether group `index` streams.
+    pub(super) fn streaming(&self, index: usize) -> bool {
+        self.groups.get(index).is_some_and(|group| {
+            group.state.kind == PathKind::Stream as u8
+                && group.state.stream == StreamState::Streaming as u8
+        })
+    }
+
+    /// `Stream` (`mode` = `values[0]`) on group `index` from `client`.
+    pub(super) fn start_stream(&mut self, index: usize, mode: f64, client: ClientId) -> Judged {
+        let mode = [
+            StreamMode::Position,
+            StreamMode::Velocity,
+            StreamMode::Power,
+        ]
+        .into_iter()
+        .find(|m| f64::from(*m as u32) == mode);
+        let Some(mode) = mode else {
+            return Reason::OutOfRange.into();
+        };
+        if client.is_none() {
+            return Reason::NoClientId.into();
+        }
+        if self.estop {
+            return Reason::EstopLatched.into();
+        }
+        let members = self.groups[index].config.axes.clone();
+        for &member in &members {
+            let holder = self.axes[member].1.state.claimed_by;
+            if holder.is_none() {
+                return Reason::NotClaimed.into();
+            }
+            if holder != client {
+                let mut judged = Judged::at(Reason::ClaimedByOther, None, member, 0.0, 0.0);
+                judged.holder = holder;
+                return judged;
+            }
+        }
+        if self.groups[index].motion().active() {
+            return Judged::at(Reason::GroupBusy, None, members[0], 0.0, 0.0);
+        }
+        if let Some(&busy) = members.iter().find(|&&m| self.in_group_motion(m)) {
+            return Judged::at(Reason::GroupBusy, None, busy, 0.0, 0.0);
+        }
+        let tick = self.tick;
+        let group = &mut self.groups[index];
+        group.state = GroupState {
+            owner: client,
+            feed: 1.0,
+            feed_set: group.state.feed_set,
+            motion: GroupMotion::Moving as u8,
+            kind: PathKind::Stream as u8,
+            stream: StreamState::Streaming as u8,
+            stream_mode: mode as u8,
+            ..GroupState::IDLE
+        };
+        group.stream = SimStream {
+            mode,
+            queue: Vec::new(),
+            last_received: tick,
+            velocity: vec![0.0; members.len()],
+        };
+        for member in members {
+            self.axes[member].1.state.mode = AxisMode::Group as u8;
+        }
+        Reason::Accepted.into()
+    }
+
+    /// A setpoint that arrived from node `sender`, before the tick `self.tick` runs.
+    pub(in crate::testing) fn handle_setpoint(&mut self, sender: ClientId, setpoint: &Setpoint) {
+        let tick = self.tick;
+        let streaming = self.streaming(setpoint.group as usize);
+        let Some(group) = self.groups.get_mut(setpoint.group as usize) else {
+            return;
+        };
+        let count = group.config.axes.len();
+        let valid = setpoint.schema_version == SCHEMA_VERSION
+            && setpoint.mode() == Ok(group.stream.mode)
+            && setpoint.values[..count].iter().all(|v| v.is_finite());
+        if !streaming || sender.is_none() || sender != group.state.owner || !valid {
+            group.state.refused += 1;
+            return;
+        }
+        if setpoint.for_tick > tick + u64::from(group.config.stream_buffer) {
+            group.state.early += 1;
+            return;
+        }
+        group.stream.last_received = tick;
+        group.stream.queue.push(Queued {
+            sequence: setpoint.sequence,
+            for_tick: setpoint.for_tick,
+            values: setpoint.values,
+        });
+    }
+
+    /// `Cancel` of a streaming group: the stream ends idle, the motion done, the axes hold.
+    pub(super) fn cancel_stream(&mut self, index: usize) -> Judged {
+        let group = &mut self.groups[index];
+        group.state.stream = StreamState::Idle as u8;
+        group.state.motion = GroupMotion::Done as u8;
+        group.state.owner = ClientId::NONE;
+        group.stream.queue.clear();
+        for member in group.config.axes.clone() {
+            let sim = &mut self.axes[member].1;
+            sim.state.mode = AxisMode::Hold as u8;
+            sim.state.velocity = 0.0;
+            sim.state.target = sim.state.position;
+        }
+        Reason::Accepted.into()
+    }
+
+    /// One tick of streaming group `index`: staleness, the setpoint due.
+    pub(super) fn stream_tick(&mut self, index: usize, dt: f64) {
+        let tick = self.tick;
+        let group = &mut self.groups[index];
+        group.state.stream_flags = 0;
+        if tick.saturating_sub(group.stream.last_received) >= u64::from(group.config.stream_timeout)
+        {
+            group.stream.queue.clear();
+            self.abort_group(index, GroupAbort::StreamStale, None, (0.0, 0.0));
+            self.groups[index].state.stream = StreamState::Stale as u8;
+            return;
+        }
+        let last = group.state.last_sequence;
+        let mut chosen: Option<Queued> = None;
+        let mut late = 0;
+        group.stream.queue.retain(|entry| {
+            if entry.for_tick > tick {
+                return true;
+            }
+            if entry.sequence > last
+                && chosen
+                    .is_none_or(|c| (entry.for_tick, entry.sequence) > (c.for_tick, c.sequence))
+            {
+                if chosen.is_some() {
+                    late += 1;
+                }
+                chosen = Some(*entry);
+            } else {
+                late += 1;
+            }
+            false
+        });
+        group.state.late += late;
+        let members = group.config.axes.clone();
+        if let Some(setpoint) = chosen {
+            group.state.last_sequence = setpoint.sequence;
+            group.state.last_applied_tick = tick;
+            group.state.applied += 1;
+            group.state.stream_flags = StreamFlags::APPLIED.0;
+        }
+        let mode = group.stream.mode;
+        for (slot, member) in members.into_iter().enumerate() {
+            let value = chosen.map(|setpoint| setpoint.values[slot]);
+            let sim = &mut self.axes[member].1;
+            let before = sim.state.position;
+            match mode {
+                StreamMode::Position => {
+                    if let Some(position) = value {
+                        sim.state.position = position;
+                    }
+                }
+                StreamMode::Velocity => {
+                    let velocity = &mut self.groups[index].stream.velocity[slot];
+                    if let Some(value) = value {
+                        *velocity = value;
+                    }
+                    sim.state.position += *velocity * dt;
+                }
+                StreamMode::Power | StreamMode::None => {}
+            }
+            sim.state.velocity = if dt > 0.0 {
+                (sim.state.position - before) / dt
+            } else {
+                0.0
+            };
+            sim.state.desired_position = sim.state.position;
+            sim.state.desired_velocity = sim.state.velocity;
+            sim.state.target = sim.state.position;
+        }
+    }
+}
