@@ -422,11 +422,13 @@ impl<D: Driver> Engine<D> {
     }
 
     /// The claims of `client` end (it closed its command port or exited; its goals go on:
-    /// a move sent by a command that exited right away still completes).
+    /// a move sent by a command that exited right away still completes — but a group's
+    /// motion or stream that it ran under its claim stops, as when it dies).
     pub fn release_claims_of(&mut self, client: ClientId) {
         if client.is_none() {
             return;
         }
+        self.abort_claimed_groups_of(client);
         for axis in &mut self.axes {
             if axis.claimed_by == client {
                 axis.claimed_by = ClientId::NONE;

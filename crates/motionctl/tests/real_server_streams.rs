@@ -234,16 +234,13 @@ fn real_sigkill_of_a_streaming_client_stops_the_base() -> Result {
                 matches!(status.state, StreamState::Stale | StreamState::Aborted),
                 "{status:?}"
             );
-            // Stale after stream_timeout, or client-dead when the server noticed the dead
-            // node first; or claim-lost when it noticed first that the client's command
-            // port was gone: that check releases the claims without ending the client's
-            // motions, and the group then aborts because its claim went away (a plain stop
-            // for client-dead and stale, the stop category for claim-lost: the same for
-            // base's axes, `hold`).
+            // Stale after stream_timeout, or client-dead when the server noticed first that
+            // the node died or that its command port was gone (which ends its claims and
+            // the motions it ran under them): a plain stop either way.
             assert!(
                 matches!(
                     status.abort,
-                    GroupAbort::StreamStale | GroupAbort::ClientDead | GroupAbort::ClaimLost
+                    GroupAbort::StreamStale | GroupAbort::ClientDead
                 ),
                 "{status:?}"
             );

@@ -309,4 +309,14 @@ impl<D: Driver> Engine<D> {
             }
         }
     }
+
+    /// The motions `client` ran under its claim end (it left; its claims end with it).
+    pub(crate) fn abort_claimed_groups_of(&mut self, client: ClientId) {
+        for group in 0..self.groups.len() {
+            let g = &self.groups[group];
+            if g.motion.active() && g.owner == client && g.claimed {
+                self.abort_group(group, GroupAbort::ClientDead, None, 0.0, 0.0);
+            }
+        }
+    }
 }
