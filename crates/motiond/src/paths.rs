@@ -76,6 +76,13 @@ impl PathInbox {
         }
     }
 
+    /// Whether a path `id` from `client` is held.
+    pub fn holds(&self, client: ClientId, id: u64) -> bool {
+        self.held
+            .iter()
+            .any(|(from, sample)| *from == client && sample.payload().id == id)
+    }
+
     /// The newest path `id` from `client`, taken (a path runs once).
     pub fn take(&mut self, client: ClientId, id: u64) -> Option<&GroupPath> {
         let index = self

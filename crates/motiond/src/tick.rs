@@ -5,7 +5,7 @@ use core::time::Duration;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
 
-use crate::paths::PathInbox;
+use crate::paths::{PathInbox, PathsFactory};
 use iceoryx2::active_request::ActiveRequest;
 use iceoryx2::port::server::Server;
 use iceoryx2::port::update_connections::UpdateConnections;
@@ -160,6 +160,8 @@ struct IpcCommands<'a> {
     replies_lost: u64,
     /// The paths clients sent their groups.
     paths: &'a mut PathInbox,
+    /// The paths service (the nodes of its publishers).
+    paths_factory: &'a PathsFactory,
 }
 
 impl CommandPort for IpcCommands<'_> {
@@ -178,6 +180,11 @@ impl CommandPort for IpcCommands<'_> {
     }
 
     fn take_path(&mut self, client: ClientId, id: u64) -> Option<&GroupPath> {
+        if !self.paths.holds(client, id) {
+            // Published after this tick took in the paths, and run at once: take in what
+            // arrived since.
+            self.paths.receive(self.paths_factory);
+        }
         self.paths.take(client, id)
     }
 
@@ -555,6 +562,7 @@ impl Loop {
             sender: ClientId::NONE,
             replies_lost: 0,
             paths: &mut self.services.paths,
+            paths_factory: &self.services.factories.paths,
         };
         match self.services.frame.loan_uninit() {
             Ok(sample) => {
