@@ -93,6 +93,9 @@ pub enum PeerMode {
     Ticking,
     /// Answer requests as fast as possible (busy-polling server).
     BusyRr,
+    /// `Ticking`, plus a `setpoints` service as motiond's, drained at the start of each
+    /// tick (the baseline of a client streaming setpoints).
+    Streaming,
 }
 
 impl PeerMode {
@@ -101,6 +104,7 @@ impl PeerMode {
         match self {
             Self::Ticking => "ticking",
             Self::BusyRr => "busy-rr",
+            Self::Streaming => "streaming",
         }
     }
 
@@ -109,6 +113,7 @@ impl PeerMode {
         match word {
             "ticking" => Some(Self::Ticking),
             "busy-rr" => Some(Self::BusyRr),
+            "streaming" => Some(Self::Streaming),
             _ => None,
         }
     }

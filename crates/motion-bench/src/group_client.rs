@@ -147,6 +147,11 @@ impl GroupClient {
         })
     }
 
+    /// The frame subscriber (for a client loop of its own).
+    pub fn frames(&self) -> &Frames {
+        &self.frames
+    }
+
     /// A publisher of setpoints on the server's `setpoints` service, on this client's node
     /// (the node the server takes a stream's claim from).
     pub fn setpoint_publisher(&self) -> Result<Publisher<Ipc, Setpoint, ()>, String> {
