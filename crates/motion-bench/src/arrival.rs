@@ -112,7 +112,7 @@ pub fn run(
         })?;
         let what = format!("gantry line {}", n + 1);
         let ids = [(0, id, gantry)];
-        client.wait_done(&watch, &mut frames, &ids, Duration::from_secs(30), &what)?;
+        client.wait_done(&watch, &mut frames, &ids, Duration::from_secs(15), &what)?;
         client.frames_for(&watch, &mut frames, SETTLE_TICKS)?;
         let from = frames.partition_point(|f| f.tick < tick);
         lines.push(arrived(
@@ -139,7 +139,7 @@ pub fn run(
             .pump(
                 &watch,
                 &mut frames,
-                Duration::from_secs(30),
+                Duration::from_secs(15),
                 &what,
                 |frame| {
                     if let Some(axis) = frame.axes.iter().find(|a| a.fault != 0) {

@@ -103,6 +103,8 @@ pub struct GroupClient {
     path_id: u64,
     /// Frames between two received ones that were never seen.
     pub lost_frames: u64,
+    /// `Run`s answered `NoPath` for a path published just before, sent again.
+    pub no_path_retries: u64,
     last_tick: Option<u64>,
 }
 
@@ -143,6 +145,7 @@ impl GroupClient {
             sequence: 0,
             path_id: 0,
             lost_frames: 0,
+            no_path_retries: 0,
             last_tick: None,
         })
     }
@@ -272,13 +275,26 @@ impl GroupClient {
             return Err(format!("no server subscribes to {}", self.names.paths()));
         }
         let index = u32::try_from(group).unwrap_or(u32::MAX);
-        let reply = self.accepted(
-            Target::Group,
-            index,
-            CommandKind::Run,
-            [id as f64, 0.0, 0.0],
-        )?;
-        Ok((id, reply.tick_applied))
+        let values = [id as f64, 0.0, 0.0];
+        let mut reply = self.command(Target::Group, index, CommandKind::Run, values)?;
+        if reply.result() == Err(Reason::NoPath) {
+            // The tick takes in the paths that arrived before it takes the commands: a Run
+            // sent right after its path can land between the two (motiond's race, counted
+            // in the report). The path is still held: the next tick finds it.
+            self.no_path_retries += 1;
+            std::thread::sleep(Duration::from_millis(2));
+            reply = self.command(Target::Group, index, CommandKind::Run, values)?;
+        }
+        match reply.result() {
+            Ok(()) => Ok((id, reply.tick_applied)),
+            Err(reason) => Err(refusal(
+                CommandKind::Run,
+                Target::Group,
+                index,
+                &reply,
+                reason,
+            )),
+        }
     }
 
     /// Drains the frames that arrived, keeping `watch`'s axes and groups of each.

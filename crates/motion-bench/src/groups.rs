@@ -85,6 +85,8 @@ pub struct GroupsRun {
     pub online_after: Duration,
     /// Frames the phase's client never saw.
     pub lost_frames: u64,
+    /// `Run`s the server answered `NoPath` for a path published just before (sent again).
+    pub no_path_retries: u64,
 }
 
 /// `config/sim.toml` as server `name` at `tick_hz`, with `rt`'s keys.
@@ -179,6 +181,7 @@ fn run_here(
         tracking(&mut client, gantry, base, duration).map_err(with_log)?;
     let skew = crate::arrival::run(&mut client, gantry, duration).map_err(with_log)?;
     let lost_frames = client.lost_frames;
+    let no_path_retries = client.no_path_retries;
     let stream = crate::stream::run(&mut client, base, tick_hz, client_priority, duration)
         .map_err(|e| format!("{e} (motiond: {})", last_line(&log)));
     drop(client);
@@ -191,6 +194,7 @@ fn run_here(
         rt,
         online_after,
         lost_frames,
+        no_path_retries,
     })
 }
 
@@ -286,7 +290,7 @@ fn clear_of_limits(
             &watch,
             &mut frames,
             &ids,
-            Duration::from_secs(60),
+            Duration::from_secs(20),
             "line clear of the limits",
         )?;
     }
@@ -340,7 +344,7 @@ fn tracking(
         ids.push((slot, id, group));
         first += count;
     }
-    let timeout = Duration::from_secs_f64(length + LEAD_IN + 15.0);
+    let timeout = Duration::from_secs_f64(length + LEAD_IN + 10.0);
     client.wait_done(&watch, &mut frames, &ids, timeout, "trajectory")?;
     client.frames_for(&watch, &mut frames, 20)?;
     let mut out = Vec::new();
@@ -490,6 +494,25 @@ pub fn rows(run: &GroupsRun) -> Vec<Row> {
     }
     rows.push(crate::arrival::row(&run.skew, &server));
     rows
+}
+
+/// What the reader must know about the phase beyond its rows.
+pub fn notes(run: &GroupsRun) -> Vec<String> {
+    let mut notes = vec![format!(
+        "coordinated motion: the phase's client missed {} frames between frames it received \
+         (a gap shortens the desired series the lag is computed on, nothing else)",
+        run.lost_frames
+    )];
+    if run.no_path_retries > 0 {
+        notes.push(format!(
+            "coordinated motion: {} Run command(s) were answered NoPath although their path was \
+             published just before; sent again, they ran (motiond takes in the paths at the \
+             start of a tick, before its commands: a Run that arrives between the two misses \
+             its path)",
+            run.no_path_retries
+        ));
+    }
+    notes
 }
 
 /// The distribution files of the phase: (slug, title, distribution).

@@ -448,6 +448,7 @@ pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
     }
     if let Some(run) = &groups_run {
         report.rows.extend(groups::rows(run));
+        report.notes.extend(groups::notes(run));
         match &run.stream {
             Ok(streamed) => report.rows.extend(stream::rows(streamed)),
             Err(e) => report.notes.push(format!(
