@@ -101,7 +101,7 @@ pub struct GroupClient {
     paths: Publisher<Ipc, GroupPath, ()>,
     sequence: u64,
     path_id: u64,
-    /// Frames between two received ones that were never seen.
+    /// Frames never seen between two received into the same record (a measured window).
     pub lost_frames: u64,
     /// `Run`s answered `NoPath` for a path published just before, sent again.
     pub no_path_retries: u64,
@@ -303,7 +303,9 @@ impl GroupClient {
             match self.frames.receive() {
                 Ok(Some(sample)) => {
                     let frame = sample.payload();
+                    // Gaps count within one record (a measured window), not between them.
                     if let Some(last) = self.last_tick
+                        && !into.is_empty()
                         && frame.tick > last + 1
                     {
                         self.lost_frames += frame.tick - last - 1;

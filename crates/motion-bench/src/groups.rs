@@ -499,8 +499,9 @@ pub fn rows(run: &GroupsRun) -> Vec<Row> {
 /// What the reader must know about the phase beyond its rows.
 pub fn notes(run: &GroupsRun) -> Vec<String> {
     let mut notes = vec![format!(
-        "coordinated motion: the phase's client missed {} frames between frames it received \
-         (a gap shortens the desired series the lag is computed on, nothing else)",
+        "coordinated motion: the phase's client missed {} frames inside its measured windows \
+         (between two frames it kept: an axis refreshed more than once in such a gap counts \
+         once, and the desired series the lag is aligned with holds the frame before the gap)",
         run.lost_frames
     )];
     if run.no_path_retries > 0 {
