@@ -49,6 +49,15 @@ pub struct BenchArgs {
     #[arg(long, value_name = "BOOL", default_value_t = true, num_args = 0..=1,
           default_missing_value = "true", action = clap::ArgAction::Set)]
     pub io_phase: bool,
+    /// Measure coordinated motion: start a motiond of the bench's own on `config/sim.toml`
+    /// (the simulated robot) and run trajectories on its groups `gantry` and `base`
+    /// (tracking error and lag per board beside its refresh), three gantry lines (arrival
+    /// skew beside single-axis ramps) and a velocity stream to `base` (setpoints in their
+    /// tick, frame → setpoint beside a plain peer pair); about 3 × DURATION (at least 10 s).
+    /// Never moves the server under test. On by default; `--groups=false` skips it.
+    #[arg(long, value_name = "BOOL", default_value_t = true, num_args = 0..=1,
+          default_missing_value = "true", action = clap::ArgAction::Set)]
+    pub groups: bool,
     /// Also run the I/O phase's CPU measurement with this motiond binary (an older build:
     /// a before/after on the same machine in the same run).
     #[arg(long, value_name = "PATH")]
@@ -84,6 +93,9 @@ pub enum PeerMode {
     Ticking,
     /// Answer requests as fast as possible (busy-polling server).
     BusyRr,
+    /// `Ticking`, plus a `setpoints` service as motiond's, drained at the start of each
+    /// tick (the baseline of a client streaming setpoints).
+    Streaming,
 }
 
 impl PeerMode {
@@ -92,6 +104,7 @@ impl PeerMode {
         match self {
             Self::Ticking => "ticking",
             Self::BusyRr => "busy-rr",
+            Self::Streaming => "streaming",
         }
     }
 
@@ -100,6 +113,7 @@ impl PeerMode {
         match word {
             "ticking" => Some(Self::Ticking),
             "busy-rr" => Some(Self::BusyRr),
+            "streaming" => Some(Self::Streaming),
             _ => None,
         }
     }

@@ -12,7 +12,9 @@
 //! motiond the bench starts itself, its four links to boards the bench simulates: a QSB and
 //! a SIXpack on ptys, a QuadQuad2Drv and an SPI_motor on SPI sockets ([`wire`],
 //! [`wire_board`], [`pty`], [`spi_board`]). The Python client's figures come from `python -m motiond.bench`
-//! (the pip package in `python/`) run as a child process ([`python`]).
+//! (the pip package in `python/`) run as a child process ([`python`]). Coordinated motion
+//! (trajectory tracking, arrival skew, streaming) is measured on a motiond the bench starts
+//! on `config/sim.toml` ([`groups`], [`stream`]).
 //!
 //! ```no_run
 //! use clap::Parser;
@@ -46,8 +48,11 @@
 #![deny(unsafe_code)] // one exception: rt.rs (sched_setscheduler), with a SAFETY note
 
 pub mod args;
+pub mod arrival;
 pub mod delivery;
 pub mod dist;
+pub mod group_client;
+pub mod groups;
 pub mod io_phase;
 pub mod ipc;
 pub mod peer;
@@ -59,6 +64,7 @@ pub mod rt;
 mod run;
 pub mod sim_boards;
 pub mod spi_board;
+pub mod stream;
 pub mod sweep;
 pub mod wakeup;
 pub mod wire;

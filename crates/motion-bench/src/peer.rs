@@ -2,10 +2,13 @@
 //! does with iceoryx2 what motiond does, minus everything motiond adds (engine, links,
 //! drivers): its own services with motiond's settings, an absolute-deadline tick at the
 //! same rate, requests answered at the start of each tick, a frame-sized sample published
-//! and the tick event notified. `busy-rr` mode answers requests as fast as it can instead.
+//! and the tick event notified. `busy-rr` mode answers requests as fast as it can instead;
+//! `streaming` also drains a `setpoints` service at the start of each tick and counts the
+//! setpoints that came in time for it.
 //!
 //! Protocol with the bench: the peer prints `ready` once its services exist, runs until
-//! its stdin closes, then prints `wakeup <summary>` and `work <summary>` and exits.
+//! its stdin closes, then prints `wakeup <summary>`, `work <summary>` and `setpoints
+//! <in time> <late>` and exits.
 //!
 //! Its command line: `PROGRAM --motion-bench-peer MODE NAME HZ [--rt-priority N] [--cpu N]`.
 //! Any program that runs the bench calls [`run_if_requested`] before parsing its own
@@ -18,7 +21,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use iceoryx2::prelude::*;
-use motion_ipc::{CommandReply, CommandRequest, MotionFrame, Reason, ServiceNames};
+use motion_ipc::{CommandReply, CommandRequest, MotionFrame, Reason, ServiceNames, Setpoint};
 
 use crate::args::PeerMode;
 use crate::dist::{Dist, Summary};
@@ -84,8 +87,11 @@ impl PeerArgs {
 
     /// Parses [`PeerArgs::to_words`].
     pub fn parse(words: &[String]) -> Result<Self, String> {
-        let usage =
-            || format!("usage: {PEER_FLAG} ticking|busy-rr NAME HZ [--rt-priority N] [--cpu N]");
+        let usage = || {
+            format!(
+                "usage: {PEER_FLAG} ticking|busy-rr|streaming NAME HZ [--rt-priority N] [--cpu N]"
+            )
+        };
         let [mode, name, hz, rest @ ..] = words else {
             return Err(usage());
         };
@@ -136,6 +142,10 @@ pub struct PeerFigures {
     pub wakeup: Summary,
     /// Its per-tick work (answer requests, loan, write 8 KiB, send, notify).
     pub work: Summary,
+    /// `streaming`: setpoints taken in the tick they were for (or earlier).
+    pub setpoints_in_time: u64,
+    /// `streaming`: setpoints taken after the tick they were for.
+    pub setpoints_late: u64,
 }
 
 impl Peer {
@@ -211,6 +221,10 @@ impl Peer {
                 figures.wakeup = Summary::from_line(rest).unwrap_or_default();
             } else if let Some(rest) = line.strip_prefix("work ") {
                 figures.work = Summary::from_line(rest).unwrap_or_default();
+            } else if let Some(rest) = line.strip_prefix("setpoints ") {
+                let mut counts = rest.split_whitespace().map(|w| w.parse().unwrap_or(0));
+                figures.setpoints_in_time = counts.next().unwrap_or(0);
+                figures.setpoints_late = counts.next().unwrap_or(0);
             }
         }
         Ok(figures)
@@ -242,10 +256,14 @@ struct PeerServices {
     frame: iceoryx2::port::publisher::Publisher<Ipc, MotionFrame, ()>,
     tick: iceoryx2::port::notifier::Notifier<Ipc>,
     command: iceoryx2::port::server::Server<Ipc, CommandRequest, (), CommandReply, ()>,
+    setpoints: Option<iceoryx2::port::subscriber::Subscriber<Ipc, Setpoint, ()>>,
 }
 
-/// motiond's service settings (crates/motiond/src/services.rs).
-fn create(name: &str) -> Result<PeerServices, String> {
+/// Setpoints waiting before a tick takes them (motiond's `SETPOINTS_BUFFER`).
+const SETPOINTS_BUFFER: usize = 16;
+
+/// motiond's service settings (crates/motiond/src/services.rs, setpoints.rs).
+fn create(name: &str, setpoints: bool) -> Result<PeerServices, String> {
     let names = ServiceNames::new(name);
     let node = crate::ipc::node("peer")?;
     let service = |n: String| ServiceName::new(&n).map_err(|e| format!("{n:?}: {e:?}"));
@@ -289,11 +307,32 @@ fn create(name: &str) -> Result<PeerServices, String> {
         .server_builder()
         .create()
         .map_err(|e| format!("command server: {e:?}"))?;
+    let setpoints = if setpoints {
+        Some(
+            node.service_builder(&service(names.setpoints())?)
+                .publish_subscribe::<Setpoint>()
+                .history_size(0)
+                .subscriber_max_buffer_size(SETPOINTS_BUFFER)
+                .subscriber_max_borrowed_samples(2)
+                .max_subscribers(1)
+                .max_publishers(MAX_CLIENTS)
+                .max_nodes(max_nodes)
+                .enable_safe_overflow(true)
+                .create()
+                .map_err(|e| format!("{}: {e:?}", names.setpoints()))?
+                .subscriber_builder()
+                .create()
+                .map_err(|e| format!("setpoints subscriber: {e:?}"))?,
+        )
+    } else {
+        None
+    };
     Ok(PeerServices {
         _node: node,
         frame,
         tick,
         command,
+        setpoints,
     })
 }
 
@@ -307,7 +346,7 @@ fn serve(
     if name.is_empty() || hz == 0 {
         return Err("the peer needs a name and a tick rate above 0".to_owned());
     }
-    let services = create(name)?;
+    let services = create(name, mode == PeerMode::Streaming)?;
     let stop = Arc::new(AtomicBool::new(false));
     let watcher = Arc::clone(&stop);
     std::thread::spawn(move || {
@@ -317,11 +356,17 @@ fn serve(
     });
     let mut wakeup = Dist::new();
     let mut work = Dist::new();
+    let mut setpoints = (0, 0);
     match mode {
-        PeerMode::Ticking => {
+        PeerMode::Ticking | PeerMode::Streaming => {
             let _ = rt::set_up_thread(rt_priority, cpu);
             say("ready")?;
-            tick_loop(&services, hz, &stop, &mut wakeup, &mut work)?;
+            let mut figures = TickFigures {
+                wakeup: &mut wakeup,
+                work: &mut work,
+                setpoints: &mut setpoints,
+            };
+            tick_loop(&services, hz, &stop, &mut figures)?;
         }
         PeerMode::BusyRr => {
             say("ready")?;
@@ -329,7 +374,15 @@ fn serve(
         }
     }
     say(&format!("wakeup {}", wakeup.summary().to_line()))?;
-    say(&format!("work {}", work.summary().to_line()))
+    say(&format!("work {}", work.summary().to_line()))?;
+    say(&format!("setpoints {} {}", setpoints.0, setpoints.1))
+}
+
+struct TickFigures<'a> {
+    wakeup: &'a mut Dist,
+    work: &'a mut Dist,
+    /// Setpoints taken in (or before) their tick, and after it.
+    setpoints: &'a mut (u64, u64),
 }
 
 fn say(line: &str) -> Result<(), String> {
@@ -350,8 +403,7 @@ fn tick_loop(
     services: &PeerServices,
     hz: u32,
     stop: &AtomicBool,
-    wakeup: &mut Dist,
-    work: &mut Dist,
+    figures: &mut TickFigures<'_>,
 ) -> Result<(), String> {
     let period = 1_000_000_000 / u64::from(hz);
     let mut deadline = now_ns() + period;
@@ -359,9 +411,18 @@ fn tick_loop(
     while !stop.load(Ordering::Relaxed) {
         sleep_until_ns(deadline);
         let wake = now_ns();
-        wakeup.record(wake.saturating_sub(deadline));
+        figures.wakeup.record(wake.saturating_sub(deadline));
         tick += 1;
         answer(services, tick);
+        if let Some(setpoints) = &services.setpoints {
+            while let Ok(Some(sample)) = setpoints.receive() {
+                if sample.payload().for_tick >= tick {
+                    figures.setpoints.0 += 1;
+                } else {
+                    figures.setpoints.1 += 1;
+                }
+            }
+        }
         if let Ok(sample) = services.frame.loan_uninit() {
             let mut sample = sample.write_payload(MotionFrame::EMPTY);
             let frame = sample.payload_mut();
@@ -372,7 +433,7 @@ fn tick_loop(
         }
         let _ = services.tick.notify();
         let done = now_ns();
-        work.record(done.saturating_sub(wake));
+        figures.work.record(done.saturating_sub(wake));
         deadline += period;
         while deadline <= done {
             deadline += period;

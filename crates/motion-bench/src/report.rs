@@ -32,8 +32,38 @@ pub enum Unit {
     Ns,
     /// Ticks.
     Ticks,
-    /// Hundredths of a percent of one core (CPU use).
+    /// Hundredths of a percent of one core (CPU use), or of anything counted.
     CentiPercent,
+    /// Millionths of an axis's unit (a position error), printed in that unit.
+    MicroUnit(UnitName),
+}
+
+/// The name of an axis's unit (`mm`, `deg`), kept in a `Copy` value (at most 15 bytes).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct UnitName {
+    bytes: [u8; 15],
+    len: u8,
+}
+
+impl UnitName {
+    /// `name`, cut at 15 bytes (on a character boundary).
+    pub fn new(name: &str) -> Self {
+        let mut end = name.len().min(15);
+        while !name.is_char_boundary(end) {
+            end -= 1;
+        }
+        let mut bytes = [0; 15];
+        bytes[..end].copy_from_slice(&name.as_bytes()[..end]);
+        Self {
+            bytes,
+            len: end as u8,
+        }
+    }
+
+    /// The name.
+    pub fn as_str(&self) -> &str {
+        core::str::from_utf8(&self.bytes[..usize::from(self.len)]).unwrap_or("")
+    }
 }
 
 impl Row {
@@ -72,6 +102,7 @@ fn value(unit: Unit, v: u64) -> String {
         Unit::Ns => format_ns(v),
         Unit::Ticks => format!("{v}t"),
         Unit::CentiPercent => format!("{:.2}%", v as f64 / 100.0),
+        Unit::MicroUnit(name) => format!("{:.4} {}", v as f64 / 1e6, name.as_str()),
     }
 }
 
@@ -185,9 +216,10 @@ impl Report {
                 json!({
                     "figure": row.figure,
                     "unit": match row.unit {
-                        Unit::Ns => "ns",
-                        Unit::Ticks => "ticks",
-                        Unit::CentiPercent => "centi-percent of a core",
+                        Unit::Ns => "ns".to_owned(),
+                        Unit::Ticks => "ticks".to_owned(),
+                        Unit::CentiPercent => "centi-percent".to_owned(),
+                        Unit::MicroUnit(name) => format!("millionths of {}", name.as_str()),
                     },
                     "ours": summary(row.ours),
                     "baseline": row.baseline.map(summary),

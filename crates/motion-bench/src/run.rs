@@ -7,7 +7,9 @@ use crate::args::{BenchArgs, CommandProbe, PeerMode};
 use crate::delivery::{self, Waiting};
 use crate::dist::{self, Summary, format_ns};
 use crate::report::{Report, Row, Unit, write_dist};
-use crate::{BenchError, io_phase, ipc, peer, python, roundtrip, rt, sweep, wakeup, wire};
+use crate::{
+    BenchError, groups, io_phase, ipc, peer, python, roundtrip, rt, stream, sweep, wakeup, wire,
+};
 
 /// The numbered progress lines: `[n/total] what (duration)` on stderr.
 struct Progress {
@@ -268,6 +270,39 @@ pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
         None
     };
 
+    let groups_run = if cli.groups {
+        eprintln!(
+            "[groups] own motiond on config/sim.toml: a trajectory on gantry and base, three \
+             gantry lines and their single-axis baseline, a velocity stream to base and its \
+             plain peer pair"
+        );
+        match sweep::find_motiond(cli.motiond.as_deref()).and_then(|motiond| {
+            groups::run(
+                &motiond,
+                hz,
+                server_rt,
+                cli.rt_priority,
+                cli.duration,
+                &scratch()?,
+            )
+        }) {
+            Ok(run) => Some(run),
+            Err(e) => {
+                report.notes.push(format!(
+                    "coordinated motion (tracking, arrival skew, streaming): not measured this \
+                     run, an error: {e}"
+                ));
+                None
+            }
+        }
+    } else {
+        report.notes.push(
+            "coordinated motion (tracking, arrival skew, streaming): skipped (--groups=false)"
+                .to_owned(),
+        );
+        None
+    };
+
     if cli.axes_sweep {
         eprintln!(
             "[sweep] motiond at 4, 16, 64, 128 simulated axes ({:?} each)",
@@ -411,6 +446,16 @@ pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
         let rows = io_phase::rows(run, hz, out, &mut report.notes);
         report.rows.extend(rows);
     }
+    if let Some(run) = &groups_run {
+        report.rows.extend(groups::rows(run));
+        report.notes.extend(groups::notes(run));
+        match &run.stream {
+            Ok(streamed) => report.rows.extend(stream::rows(streamed)),
+            Err(e) => report.notes.push(format!(
+                "streaming setpoints: not measured this run, an error: {e}"
+            )),
+        }
+    }
     if let Some((interpreter, run)) = &python_run {
         report.rows.extend(python::rows(
             run,
@@ -512,6 +557,17 @@ pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
     }
     if let Some(run) = &wire_run {
         for (slug, title, dist) in wire::files(run) {
+            if let Some(error) = write_dist(out, &slug, &title, dist) {
+                report.notes.push(format!("could not write {error}"));
+            }
+        }
+    }
+    if let Some(run) = &groups_run {
+        let mut files = groups::files(run);
+        if let Ok(streamed) = &run.stream {
+            files.extend(stream::files(streamed));
+        }
+        for (slug, title, dist) in files {
             if let Some(error) = write_dist(out, &slug, &title, dist) {
                 report.notes.push(format!("could not write {error}"));
             }
