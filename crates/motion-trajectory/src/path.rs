@@ -13,6 +13,18 @@ use crate::{AxisLimits, MAX_AXES, PathError, Points, at_most, check_limits};
 /// `max_velocity · (1 + SLACK)` (and likewise the acceleration) is accepted.
 pub(crate) const SLACK: f64 = 1e-9;
 
+/// The rounding a position may have beyond a soft limit: `SLACK` of the axis's range (at
+/// least of one unit), so that a path that starts or ends exactly at a limit is not refused
+/// for 10⁻²³ of floating-point noise.
+pub(crate) fn range_slack(limit: &AxisLimits) -> f64 {
+    let span = limit.max - limit.min;
+    if span.is_finite() {
+        SLACK * span.max(1.0)
+    } else {
+        0.0
+    }
+}
+
 /// The segments of one planned path (or of one being planned).
 #[derive(Clone)]
 struct Segments {
@@ -154,10 +166,12 @@ impl<'a> Checker<'a> {
                 limit.max_velocity * (1.0 + SLACK),
                 limit.max_accel * (1.0 + SLACK),
             );
-            *bound = match hull_bounds(c, &span, limit.min, limit.max) {
+            let slack = range_slack(limit);
+            let (min, max) = (limit.min - slack, limit.max + slack);
+            *bound = match hull_bounds(c, &span, min, max) {
                 Some((v, a)) if v <= v_limit && a <= a_limit => [v, a],
                 _ => {
-                    let e = extremes(c, t, limit.min, limit.max);
+                    let e = extremes(c, t, min, max);
                     if !at_most(e.velocity.abs(), v_limit) {
                         return Err(PathError::VelocityLimit {
                             point,

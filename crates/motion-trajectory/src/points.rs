@@ -150,7 +150,8 @@ impl Points<'_> {
                 if !finite {
                     return Err(PathError::NotFinite { point, axis });
                 }
-                if !(value >= limit.min && value <= limit.max) {
+                let slack = crate::path::range_slack(limit);
+                if !(value >= limit.min - slack && value <= limit.max + slack) {
                     return Err(PathError::OutOfRange {
                         point,
                         axis,
@@ -161,10 +162,11 @@ impl Points<'_> {
                 }
             }
         }
+        // At rest at the end: zero, but for rounding (10⁻⁹ of the axis's limits).
         let last = count - 1;
-        for axis in 0..axes {
+        for (axis, limit) in limits.iter().enumerate().take(axes) {
             let value = self.velocity(last, axis);
-            if value != 0.0 {
+            if value.abs() > crate::path::SLACK * limit.max_velocity {
                 return Err(PathError::VelocityLimit {
                     point: last,
                     axis,
@@ -173,7 +175,7 @@ impl Points<'_> {
                 });
             }
             let value = self.acceleration(last, axis);
-            if value != 0.0 {
+            if value.abs() > crate::path::SLACK * limit.max_accel {
                 return Err(PathError::AccelLimit {
                     point: last,
                     axis,

@@ -345,3 +345,59 @@ fn max_feed_is_the_headroom_of_the_tightest_axis() {
         "{error}"
     );
 }
+
+/// Floating-point noise is no reason to refuse: a last velocity of −2.9·10⁻¹⁵ is at rest,
+/// and a path that starts exactly at a soft limit may round a hair beyond it (both seen by
+/// the bench from computed trajectories); a real excess still is refused.
+#[test]
+fn rounding_at_rest_and_at_a_limit_is_not_refused() {
+    let limits = [
+        AxisLimits {
+            min: 0.0,
+            max: 100.0,
+            max_velocity: 50.0,
+            max_accel: 250.0,
+        };
+        2
+    ];
+    let times = [1.0, 2.0];
+    let positions = [10.0, 5.0, 20.0, 10.0];
+    let velocities = [10.0, 5.0, -2.9e-15, 0.0];
+    let points = Points {
+        times: &times,
+        positions: &positions,
+        velocities: Some(&velocities),
+        accelerations: None,
+        stride: 2,
+    };
+    let mut path = Path::new(2, 16);
+    plan(&mut path, &points, &limits, [0.0, 0.0]).expect("noise at rest is rest");
+    let moving = [10.0, 5.0, 1e-3, 0.0];
+    let points = Points {
+        velocities: Some(&moving),
+        ..points
+    };
+    assert!(matches!(
+        plan(&mut path, &points, &limits, [0.0, 0.0]),
+        Err(PathError::VelocityLimit { point: 1, axis: 0, .. })
+    ));
+    // A point a rounding beyond the limit is within it; one a micron beyond is not.
+    let positions = [-1e-13, 5.0, 20.0, 10.0];
+    let points = Points {
+        times: &times,
+        positions: &positions,
+        velocities: None,
+        accelerations: None,
+        stride: 2,
+    };
+    plan(&mut path, &points, &limits, [0.0, 0.0]).expect("a rounding at the limit");
+    let positions = [-1e-3, 5.0, 20.0, 10.0];
+    let points = Points {
+        positions: &positions,
+        ..points
+    };
+    assert!(matches!(
+        plan(&mut path, &points, &limits, [0.0, 0.0]),
+        Err(PathError::OutOfRange { axis: 0, .. })
+    ));
+}
