@@ -351,15 +351,12 @@ fn max_feed_is_the_headroom_of_the_tightest_axis() {
 /// the bench from computed trajectories); a real excess still is refused.
 #[test]
 fn rounding_at_rest_and_at_a_limit_is_not_refused() {
-    let limits = [
-        AxisLimits {
-            min: 0.0,
-            max: 100.0,
-            max_velocity: 50.0,
-            max_accel: 250.0,
-        };
-        2
-    ];
+    let limits = [AxisLimits {
+        min: 0.0,
+        max: 100.0,
+        max_velocity: 50.0,
+        max_accel: 250.0,
+    }; 2];
     let times = [1.0, 2.0];
     let positions = [10.0, 5.0, 20.0, 10.0];
     let velocities = [10.0, 5.0, -2.9e-15, 0.0];
@@ -379,7 +376,11 @@ fn rounding_at_rest_and_at_a_limit_is_not_refused() {
     };
     assert!(matches!(
         plan(&mut path, &points, &limits, [0.0, 0.0]),
-        Err(PathError::VelocityLimit { point: 1, axis: 0, .. })
+        Err(PathError::VelocityLimit {
+            point: 1,
+            axis: 0,
+            ..
+        })
     ));
     // A point a rounding beyond the limit is within it; one a micron beyond is not.
     let positions = [-1e-13, 5.0, 20.0, 10.0];
