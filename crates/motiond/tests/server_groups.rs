@@ -271,8 +271,10 @@ fn group_child_client_body() {
         path.group = 0;
         path.axis_count = 2;
         path.point_count = 2;
-        path.times[0] = 10.0;
-        path.times[1] = 20.0;
+        // Long enough that the server finds the dead node (its liveness check) before the
+        // path ends, on a loaded machine too.
+        path.times[0] = 30.0;
+        path.times[1] = 60.0;
         path.positions[0] = from[0] + 100.0;
         path.positions[1] = from[1] + 40.0;
         path.positions[MAX_GROUP_AXES] = from[0];
@@ -311,7 +313,7 @@ fn a_client_killed_mid_trajectory_stops_the_group_body() {
     assert!(!owner.is_none());
     kill(Pid::from_raw(child.id() as i32), Signal::SIGKILL).expect("kill the child");
     let _ = child.wait();
-    let frame = wait_group(&client, Duration::from_secs(10), |frame| {
+    let frame = wait_group(&client, Duration::from_secs(40), |frame| {
         !frame.groups()[0].motion().expect("known").active()
     });
     let state = frame.groups()[0];
