@@ -280,6 +280,14 @@ fn group_child_client_body() {
         path.positions[MAX_GROUP_AXES] = from[0];
         path.positions[MAX_GROUP_AXES + 1] = from[1];
     });
+    // Under its claim: the server finds the client gone both by its dead node and by its
+    // command port leaving (either ends the motion, as client-dead).
+    let mut claim = CommandRequest::new(client.id(), 4, 0, CommandKind::Claim);
+    claim.target = Target::Group as u32;
+    let reply = client
+        .request(claim, Duration::from_secs(2))
+        .expect("a reply");
+    assert_eq!(reply.result(), Ok(()), "{reply:?}");
     let reply = run(&mut client, 5);
     assert_eq!(reply.result(), Ok(()), "{reply:?}");
     println!("running");
