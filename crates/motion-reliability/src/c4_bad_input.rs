@@ -28,6 +28,8 @@ use crate::report::Row;
 
 const AXES: u32 = 2;
 const SIGNALS: u32 = 1;
+/// One group of both axes (requests with `target = Group` meet a real one).
+const GROUPS: u32 = 1;
 const IN_FLIGHT: usize = 8;
 
 type Pending =
@@ -45,7 +47,7 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
     let name = h.name("input");
     let epoch = Instant::now();
     let boards = QsbAndStepper::serve(h, &name, epoch)?;
-    let signal = "\n[[signal]]\nname = \"lamp\"\ndevice = \"feeder_qsb\"\npin = \"io3\"\nkind = \"digital-out\"\nsafe = false\n";
+    let signal = "\n[[signal]]\nname = \"lamp\"\ndevice = \"feeder_qsb\"\npin = \"io3\"\nkind = \"digital-out\"\nsafe = false\n\n[[group]]\nname = \"pair\"\naxes = [\"feeder\", \"focus\"]\n";
     let config = h.write(
         &format!("{name}.toml"),
         &format!(
@@ -350,10 +352,24 @@ fn oracle(request: &CommandRequest, sender: ClientId) -> Option<Reason> {
         return (request.axis >= SIGNALS && matches!(kind, CommandKind::SetOutput))
             .then_some(Reason::UnknownSignal);
     }
+    if target == motion_ipc::Target::Group {
+        return match kind {
+            CommandKind::EStop => Some(Reason::Accepted),
+            CommandKind::Reset => None,
+            _ if request.axis >= GROUPS => Some(Reason::UnknownGroup),
+            _ => None,
+        };
+    }
     match kind {
         CommandKind::EStop => Some(Reason::Accepted),
         CommandKind::Stop if request.axis == CommandRequest::ALL_AXES => Some(Reason::Accepted),
-        CommandKind::SetOutput => Some(Reason::UnknownTarget),
+        CommandKind::SetOutput
+        | CommandKind::Run
+        | CommandKind::Hold
+        | CommandKind::Resume
+        | CommandKind::Feed
+        | CommandKind::Cancel
+        | CommandKind::Stream => Some(Reason::UnknownTarget),
         CommandKind::Reset | CommandKind::Off if request.axis == CommandRequest::ALL_AXES => None,
         _ if request.axis >= AXES && kind != CommandKind::Reset => Some(Reason::UnknownAxis),
         _ => None,
@@ -385,5 +401,12 @@ mod tests {
         assert_eq!(oracle(&r, me), None, "depends on the state");
         let r = CommandRequest::new(me, 1, 0, CommandKind::EStop);
         assert_eq!(oracle(&r, me), Some(Reason::Accepted));
+        let r = CommandRequest::new(me, 1, 0, CommandKind::Hold);
+        assert_eq!(oracle(&r, me), Some(Reason::UnknownTarget), "a group kind to an axis");
+        let mut r = CommandRequest::new(me, 1, 1, CommandKind::Run);
+        r.target = motion_ipc::Target::Group as u32;
+        assert_eq!(oracle(&r, me), Some(Reason::UnknownGroup));
+        r.axis = 0;
+        assert_eq!(oracle(&r, me), None, "depends on the paths and the state");
     }
 }
