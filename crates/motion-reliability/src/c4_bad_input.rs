@@ -402,7 +402,11 @@ mod tests {
         let r = CommandRequest::new(me, 1, 0, CommandKind::EStop);
         assert_eq!(oracle(&r, me), Some(Reason::Accepted));
         let r = CommandRequest::new(me, 1, 0, CommandKind::Hold);
-        assert_eq!(oracle(&r, me), Some(Reason::UnknownTarget), "a group kind to an axis");
+        assert_eq!(
+            oracle(&r, me),
+            Some(Reason::UnknownTarget),
+            "a group kind to an axis"
+        );
         let mut r = CommandRequest::new(me, 1, 1, CommandKind::Run);
         r.target = motion_ipc::Target::Group as u32;
         assert_eq!(oracle(&r, me), Some(Reason::UnknownGroup));
