@@ -69,6 +69,27 @@ macro_rules! registry {
             fn refresh_budget(&self) -> core::time::Duration {
                 each_driver!(self, d => d.refresh_budget())
             }
+            fn lead_line(
+                &mut self,
+                now: core::time::Duration,
+                legs: &[motion_drivers::LineLeg],
+            ) -> Result<bool, motion_drivers::GoalError> {
+                each_driver!(self, d => d.lead_line(now, legs))
+            }
+            fn pause_line(
+                &mut self,
+                now: core::time::Duration,
+                channel: usize,
+            ) -> Result<bool, motion_drivers::GoalError> {
+                each_driver!(self, d => d.pause_line(now, channel))
+            }
+            fn resume_line(
+                &mut self,
+                now: core::time::Duration,
+                channel: usize,
+            ) -> Result<bool, motion_drivers::GoalError> {
+                each_driver!(self, d => d.resume_line(now, channel))
+            }
             fn handle_rx(&mut self, now: core::time::Duration, bytes: &[u8]) {
                 each_driver!(self, d => d.handle_rx(now, bytes))
             }

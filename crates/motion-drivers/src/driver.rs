@@ -45,6 +45,21 @@ pub enum Follow {
     Velocity,
 }
 
+/// One channel's part of a straight line in joint space ([`Driver::lead_line`]): the line
+/// ends at `counts`, reaching at most `velocity` counts/s at `accel` counts/s² — a
+/// trapezoid (or triangle) from rest to rest, the same in time for every leg of the line.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LineLeg {
+    /// The board's channel.
+    pub channel: usize,
+    /// Where the line ends, counts.
+    pub counts: f64,
+    /// The leg's peak velocity magnitude, counts/s (> 0).
+    pub velocity: f64,
+    /// The leg's acceleration magnitude, counts/s² (> 0).
+    pub accel: f64,
+}
+
 /// One message a driver wrote in [`Driver::poll_transmit`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Transmit {
@@ -101,6 +116,35 @@ pub trait Driver: Send + fmt::Debug {
     fn follow(&self, channel: usize) -> Follow {
         let _ = channel;
         Follow::Segments
+    }
+
+    /// Runs a group's straight line in joint space on several of this board's channels
+    /// with the board's own function, from rest (the Trinamic pack's `$26` + `$50`
+    /// linear interpolation; a single ramp on one channel). Returns `Ok(true)` when the
+    /// board took every leg: it now runs each to its end by itself, and the engine only
+    /// supervises it; `Ok(false)` when it has no such function or cannot now (a motor not
+    /// at rest): the engine then follows the line with goals ([`Driver::follow`]). By
+    /// default `Ok(false)`. A goal set on a leg's channel later ends the board's line.
+    fn lead_line(&mut self, now: Duration, legs: &[LineLeg]) -> Result<bool, GoalError> {
+        let _ = (now, legs);
+        Ok(false)
+    }
+
+    /// Holds a line this board leads on `channel` with the board's own pause, where the
+    /// board is running it now (the QSB-M's COMMAND 6, "Pause the motor using the MD
+    /// ACCEL rate"): `Ok(true)` when it will come to rest and wait for
+    /// [`resume_line`](Self::resume_line). By default `Ok(false)` (the engine then holds
+    /// the line with goals).
+    fn pause_line(&mut self, now: Duration, channel: usize) -> Result<bool, GoalError> {
+        let _ = (now, channel);
+        Ok(false)
+    }
+
+    /// Continues a line paused with [`pause_line`](Self::pause_line) (the QSB-M's
+    /// COMMAND 7): `Ok(true)` when the board resumes it; by default `Ok(false)`.
+    fn resume_line(&mut self, now: Duration, channel: usize) -> Result<bool, GoalError> {
+        let _ = (now, channel);
+        Ok(false)
     }
 
     /// How old a channel's data may become in normal operation before the engine marks
@@ -208,6 +252,15 @@ impl<T: Driver + ?Sized> Driver for Box<T> {
     }
     fn refresh_budget(&self) -> Duration {
         (**self).refresh_budget()
+    }
+    fn lead_line(&mut self, now: Duration, legs: &[LineLeg]) -> Result<bool, GoalError> {
+        (**self).lead_line(now, legs)
+    }
+    fn pause_line(&mut self, now: Duration, channel: usize) -> Result<bool, GoalError> {
+        (**self).pause_line(now, channel)
+    }
+    fn resume_line(&mut self, now: Duration, channel: usize) -> Result<bool, GoalError> {
+        (**self).resume_line(now, channel)
     }
     fn handle_rx(&mut self, now: Duration, bytes: &[u8]) {
         (**self).handle_rx(now, bytes);

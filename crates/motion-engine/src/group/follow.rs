@@ -19,6 +19,7 @@ use motion_ipc::{GroupAbort, PathKind, StreamMode};
 
 use crate::Engine;
 use crate::axis::Axis;
+use crate::group::lead::Lead;
 use crate::group::{Group, MAX_LEAD, Member};
 
 /// A position error is fed back to a board over at least this long (or four segments, if
@@ -57,6 +58,10 @@ impl<D: Driver> Engine<D> {
             let g = &mut self.groups[group];
             let mut member = g.members[slot];
             let axis = &self.axes[member.axis];
+            if member.led != Lead::No {
+                // Its board runs the line itself.
+                continue;
+            }
             let goal = next_goal(g, slot, &mut member, axis, now, period);
             let Some(goal) = goal else {
                 self.groups[group].members[slot] = member;

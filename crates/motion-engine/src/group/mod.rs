@@ -22,6 +22,7 @@
 
 mod follow;
 mod history;
+mod lead;
 mod request;
 mod run;
 mod stream;
@@ -34,6 +35,7 @@ use motion_trajectory::{AxisLimits, Path, TimeScale};
 
 use crate::config::GroupConfig;
 use history::PathHistory;
+use lead::Lead;
 use stream::Stream;
 
 /// One member axis's following state.
@@ -60,6 +62,8 @@ pub(crate) struct Member {
     pub next_at: Duration,
     /// The last velocity handed over (velocity following), units/s.
     pub last_velocity: f64,
+    /// Whether its board runs the group's line itself (`lead.rs`).
+    pub led: Lead,
 }
 
 /// One group and its motion.
@@ -90,6 +94,9 @@ pub(crate) struct Group {
     pub feed_set: f64,
     /// A cancel is bringing the group to rest.
     pub cancelling: bool,
+    /// The feed a line was handed to boards at (`lead.rs`): a resume at another feed
+    /// follows it with goals.
+    pub led_feed: f64,
     /// When the path's time reached its end.
     pub ended_at: Option<Duration>,
     /// Scratch: desired position, velocity, acceleration per member (time-scaled).
@@ -134,6 +141,7 @@ impl Group {
                     end_sent: false,
                     next_at: Duration::ZERO,
                     last_velocity: f64::NAN,
+                    led: Lead::No,
                 })
                 .collect(),
             config,
@@ -153,6 +161,7 @@ impl Group {
             point: 0,
             feed_set: 1.0,
             cancelling: false,
+            led_feed: 0.0,
             ended_at: None,
             position: vec![0.0; count],
             velocity: vec![0.0; count],

@@ -240,11 +240,17 @@ impl<D: Driver> Engine<D> {
             return Reason::PathLayout;
         }
         let kind = kind.unwrap_or(PathKind::Line);
+        let replacing = self.groups[group].motion.active();
         let planned = self.plan(group, kind, path);
         if let Err(error) = planned {
             return self.path_refused(group, error);
         }
         self.start_motion_of(group, client, id, kind);
+        if kind == PathKind::Line && !replacing {
+            let feed = self.groups[group].scale.feed();
+            self.groups[group].led_feed = feed;
+            self.lead_line(group, feed);
+        }
         Reason::Accepted
     }
 
@@ -453,6 +459,7 @@ impl<D: Driver> Engine<D> {
         if g.motion == GroupMotion::Moving {
             g.motion = GroupMotion::Holding;
         }
+        self.pause_led(group);
         Reason::Accepted
     }
 
@@ -470,6 +477,11 @@ impl<D: Driver> Engine<D> {
         }
         g.scale.set_target(g.feed_set);
         g.motion = GroupMotion::Moving;
+        if g.feed_set == g.led_feed {
+            self.resume_led(group);
+        } else {
+            self.follow_led(group);
+        }
         Reason::Accepted
     }
 
@@ -485,6 +497,10 @@ impl<D: Driver> Engine<D> {
         g.feed_set = feed;
         if g.motion == GroupMotion::Moving {
             g.scale.set_target(feed);
+        }
+        if feed != g.led_feed {
+            // A board's line has one pace.
+            self.follow_led(group);
         }
         Reason::Accepted
     }

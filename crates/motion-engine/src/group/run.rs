@@ -5,6 +5,7 @@ use motion_drivers::Driver;
 use motion_ipc::{AxisMode, ClientId, FaultCode, GroupAbort, GroupMotion, PathKind, StreamState};
 
 use crate::Engine;
+use crate::group::lead::Lead;
 
 impl<D: Driver> Engine<D> {
     /// Step 4b (after the commands and the safety rules): every group with a motion.
@@ -194,6 +195,7 @@ impl<D: Driver> Engine<D> {
             member.end_sent = false;
             member.next_at = now;
             member.last_velocity = f64::NAN;
+            member.led = Lead::No;
             let axis = &mut self.axes[member.axis];
             claimed &= axis.claimed_by == client;
             let position = axis.position();

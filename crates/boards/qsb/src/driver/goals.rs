@@ -11,6 +11,7 @@ use ::qsb::{
 use super::QsbDriver;
 use super::program::Step;
 use super::startup::NORMAL_MDR0;
+use super::wire::Origin;
 use motion_drivers::{DeviceFault, Goal, GoalError, GoalKind, GoalKinds};
 
 /// MDR0 during a home search to counter value 0: the index resets CNTR (0x63, the
@@ -304,6 +305,8 @@ impl QsbDriver {
                 done
             }
             Step::MoveTo { target, attempt } => self.expand_move(target, attempt),
+            // Until the engine resumes the move.
+            Step::Paused => false,
             Step::WaitIndex => {
                 if self.index_seen {
                     self.goal.pop();
@@ -359,6 +362,73 @@ impl QsbDriver {
         Duration::try_from_secs_f64(seconds)
             .unwrap_or(Duration::MAX)
             .saturating_add(HOME_TIME_SLACK)
+    }
+
+    /// A group's line on this motor ([`Driver::lead_line`](motion_drivers::Driver::lead_line)):
+    /// one leg, a position move with the leg's step rate and acceleration (MD STEP RATE, MD
+    /// ACCEL, MD MOVE STEPS, COMMAND 8), which the board runs as its own trapezoid.
+    pub(super) fn start_line(
+        &mut self,
+        now: Duration,
+        legs: &[motion_drivers::LineLeg],
+    ) -> Result<bool, GoalError> {
+        let [leg] = legs else {
+            return Ok(false);
+        };
+        if !self.drive_active() {
+            return Ok(false);
+        }
+        let goal = Goal::RampPosition {
+            counts: leg.counts,
+            velocity: leg.velocity,
+            accel: leg.accel,
+        };
+        self.plan_goal(now, leg.channel, goal).map(|()| true)
+    }
+
+    /// Whether the drive runs the move of the current position goal: its COMMAND 8 was
+    /// answered and the plan waits for it to be done.
+    fn running_move(&self) -> bool {
+        matches!(
+            self.goal_kind,
+            Some(GoalKind::Position | GoalKind::RampPosition)
+        ) && self.goal.front() == Some(Step::WaitDone)
+            && matches!(self.goal.second(), Some(Step::MoveTo { attempt, .. }) if attempt > 0)
+            && self.in_flight.is_none_or(|f| f.origin != Origin::Goal)
+    }
+
+    /// COMMAND 6 "Motor Pause - Pause the motor using the MD ACCEL rate" for a move the
+    /// drive runs now; the plan then waits at [`Step::Paused`].
+    pub(super) fn pause_move(&mut self, channel: usize) -> Result<bool, GoalError> {
+        if channel != 0 {
+            return Err(GoalError::NoSuchChannel(channel));
+        }
+        self.check_online()?;
+        if !self.drive_active() || !self.running_move() {
+            return Ok(false);
+        }
+        self.goal.expand_front([
+            command(QsbCommand::MotorPause),
+            Step::Paused,
+            Step::WaitDone,
+        ]);
+        Ok(true)
+    }
+
+    /// COMMAND 7 "Motor Resume - Resume motor operation if previously stopped using the
+    /// Motor Pause command. Use the programmed motor acceleration."
+    pub(super) fn resume_move(&mut self, channel: usize) -> Result<bool, GoalError> {
+        if channel != 0 {
+            return Err(GoalError::NoSuchChannel(channel));
+        }
+        self.check_online()?;
+        // A pause not answered yet is not resumed: the engine then follows the rest
+        // of the line with goals.
+        if self.goal.front() != Some(Step::Paused) {
+            return Ok(false);
+        }
+        self.goal.expand_front([command(QsbCommand::MotorResume)]);
+        Ok(true)
     }
 
     /// Replaces a `MoveTo` with the move that remains (or ends the plan).

@@ -381,6 +381,22 @@ impl Driver for QsbDriver {
         in_flight || outputs || !self.preset.is_empty() || !self.goal.is_empty()
     }
 
+    fn lead_line(
+        &mut self,
+        now: Duration,
+        legs: &[motion_drivers::LineLeg],
+    ) -> Result<bool, GoalError> {
+        self.start_line(now, legs)
+    }
+
+    fn pause_line(&mut self, _now: Duration, channel: usize) -> Result<bool, GoalError> {
+        self.pause_move(channel)
+    }
+
+    fn resume_line(&mut self, _now: Duration, channel: usize) -> Result<bool, GoalError> {
+        self.resume_move(channel)
+    }
+
     fn set_goal(&mut self, now: Duration, channel: usize, goal: Goal) -> Result<(), GoalError> {
         let result = self.plan_goal(now, channel, goal);
         if result.is_ok() {

@@ -36,6 +36,8 @@ pub(crate) enum Step {
     },
     /// -M home search: wait for the index latch (or give up after the travel limit).
     WaitIndex,
+    /// -M: a move paused with COMMAND 6 waits here until the engine resumes it.
+    Paused,
 }
 
 /// Steps a plan can hold.
@@ -64,6 +66,11 @@ impl Program {
 
     pub(crate) fn front(&self) -> Option<Step> {
         self.steps.front()
+    }
+
+    /// The step after the front one.
+    pub(crate) fn second(&self) -> Option<Step> {
+        self.steps.iter().nth(1)
     }
 
     pub(crate) fn is_empty(&self) -> bool {

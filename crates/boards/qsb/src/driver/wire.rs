@@ -89,7 +89,8 @@ impl QsbDriver {
             | Step::Online
             | Step::WaitDone
             | Step::MoveTo { .. }
-            | Step::WaitIndex => None,
+            | Step::WaitIndex
+            | Step::Paused => None,
         }
     }
 

@@ -340,17 +340,7 @@ impl Channel {
                 script.send(Request::SetPosition { motor, position });
             }
         }
-        if script.overflow {
-            return Err(range);
-        }
-        for step in script.steps.iter() {
-            if let Step::Send(request) = step
-                && request.validate().is_err()
-            {
-                return Err(range);
-            }
-        }
-        self.steps = script.steps;
+        self.steps = script.finish(range)?;
         self.stop_if_active = false;
         self.urgent = matches!(kind, GoalKind::Stop | GoalKind::Off);
         self.rest_at = None;
@@ -364,6 +354,44 @@ impl Channel {
             self.state.homed = false;
         }
         Ok(())
+    }
+
+    /// Whether the motor stands still, inactive, with nothing queued: `$50` may include it
+    /// ("The motors have to stand still before execution", manual 8.7).
+    pub fn at_rest(&self) -> bool {
+        self.action == Some(Action::Inactive)
+            && !self.state.moving
+            && !self.pending()
+            && !matches!(self.motion, Motion::Rotation(_) | Motion::Reference)
+    }
+
+    /// The script of one leg of a `$50` line: currents on, `$14` with the leg's vmax and
+    /// amax, `$26` with its target; the pack-wide `$50` follows once every leg's script is
+    /// out. Replaces the current script, as a goal does.
+    pub fn plan_leg(&mut self, target: i32, vmax: u16, amax: u16) -> Result<(), GoalError> {
+        let motor = self.motor;
+        let mut script = Script::default();
+        self.power_on(&mut script, motor);
+        self.limits(&mut script, motor, vmax, amax);
+        script.send(Request::SetTarget { motor, target });
+        self.steps = script.finish(GoalError::OutOfBoardRange(GoalKind::RampPosition))?;
+        self.stop_if_active = false;
+        self.urgent = false;
+        self.rest_at = None;
+        self.state.arrived = false;
+        self.state.at_limit = false;
+        self.homing = Homing::Idle;
+        self.home_failed = false;
+        self.ref_phase = None;
+        Ok(())
+    }
+
+    /// The `$50` that includes this motor went out with sequence number `seq`: it ramps
+    /// to `target` (arrived when a later poll finds it there, inactive).
+    pub fn on_line_started(&mut self, target: i32, seq: u64) {
+        self.motion = Motion::Ramp;
+        self.motion_seq = seq;
+        self.target = Some((target, seq));
     }
 
     /// Whether a ramp start would only stop the motor (rotation, reference search, PI):
@@ -660,5 +688,18 @@ impl Script {
 
     fn send(&mut self, request: Request) {
         self.push(Step::Send(request));
+    }
+
+    /// The steps, or `error` when the script overflowed or holds a request beyond the
+    /// pack's ranges.
+    fn finish(self, error: GoalError) -> Result<FixedQueue<Step, MAX_STEPS>, GoalError> {
+        let invalid = self
+            .steps
+            .iter()
+            .any(|step| matches!(step, Step::Send(request) if request.validate().is_err()));
+        if self.overflow || invalid {
+            return Err(error);
+        }
+        Ok(self.steps)
     }
 }

@@ -1,6 +1,6 @@
 //! Goals and outputs: what a configured motor accepts, a goal becoming the motor's script
 //! (the `channel` module), and which script's request goes next (stops first, then output
-//! changes, then the other goals round-robin).
+//! changes, then a `$50` line whose legs are out, then the other goals round-robin).
 
 use super::channel::{Channel, Step};
 use super::wire::Pick;
@@ -20,7 +20,9 @@ pub(super) const CAPABILITIES: GoalKinds = GoalKinds::of(&[
 
 impl TmcpackDriver {
     pub(super) fn any_ready(&self) -> bool {
-        self.io.outputs_pending || self.channels.iter().flatten().any(Channel::ready)
+        self.io.outputs_pending
+            || self.line_pick().is_some()
+            || self.channels.iter().flatten().any(Channel::ready)
     }
 
     /// Stops first, then output changes, then the other goals round-robin.
@@ -41,6 +43,9 @@ impl TmcpackDriver {
                 expect: None,
                 channel: None,
             });
+        }
+        if let Some(line) = self.line_pick() {
+            return Some(line);
         }
         for offset in 0..6 {
             let index = (self.next_command + offset) % 6;
@@ -71,6 +76,7 @@ impl TmcpackDriver {
             Phase::Online => {
                 slot.plan(goal)?;
                 slot.goal_unsent = true;
+                self.cancel_line_of(channel);
                 Ok(())
             }
             Phase::Survey | Phase::Quiesce | Phase::Configure(_) => Err(GoalError::Starting),

@@ -50,6 +50,7 @@ mod channel;
 mod config;
 mod goals;
 mod io;
+mod line;
 mod rx;
 mod spec;
 mod startup;
@@ -63,6 +64,8 @@ mod tests;
 mod tests_goals;
 #[cfg(test)]
 mod tests_io;
+#[cfg(test)]
+mod tests_line;
 
 use core::time::Duration;
 
@@ -78,6 +81,7 @@ use channel::{Channel, Step};
 use config::{Scale, clkdiv_for};
 use goals::CAPABILITIES;
 use io::IoState;
+use line::PackLine;
 use startup::{Quiesce, StartupPlan};
 use wire::{ReplyHunter, Wire};
 
@@ -129,6 +133,8 @@ pub struct TmcpackDriver {
     /// The longest packet timeout of the other packs on the bus.
     bus_timeout: Duration,
     channels: [Option<Channel>; 6],
+    /// A `$50` line waiting for its legs' scripts.
+    line: Option<PackLine>,
     io: IoState,
     plan: StartupPlan,
     quiesce: Option<Quiesce>,
@@ -194,6 +200,7 @@ impl TmcpackDriver {
             pack_timeout: DEFAULT_PACKET_TIMEOUT,
             bus_timeout: units(config.bus_packet_timeout_units),
             channels,
+            line: None,
             io,
             plan,
             quiesce: None,
@@ -319,7 +326,17 @@ impl Driver for TmcpackDriver {
     }
 
     fn goals_pending(&self) -> bool {
-        self.io.outputs_pending || self.channels.iter().flatten().any(Channel::pending)
+        self.io.outputs_pending
+            || self.line.is_some()
+            || self.channels.iter().flatten().any(Channel::pending)
+    }
+
+    fn lead_line(
+        &mut self,
+        _now: Duration,
+        legs: &[motion_drivers::LineLeg],
+    ) -> Result<bool, GoalError> {
+        self.start_line(legs)
     }
 
     fn set_goal(&mut self, _now: Duration, channel: usize, goal: Goal) -> Result<(), GoalError> {

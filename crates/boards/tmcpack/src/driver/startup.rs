@@ -318,6 +318,7 @@ impl TmcpackDriver {
         self.status.online = false;
         self.status.fault = Some(fault);
         self.quiesce = None;
+        self.line = None;
         for channel in self.channels.iter_mut().flatten() {
             channel.restart(fault);
         }

@@ -391,6 +391,7 @@ impl TmcpackDriver {
         match request {
             Request::SetBaud { switchover, .. } => self.switchover = units(switchover),
             Request::PacketTimeout { timeout } => self.pack_timeout = units(timeout),
+            Request::Interpolate { .. } => self.on_line_sent(self.seq),
             Request::Outputs { .. } => {
                 self.io.on_outputs_sent(now, request);
                 if self.phase == Phase::Online {

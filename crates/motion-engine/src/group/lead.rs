@@ -1,0 +1,187 @@
+//! Lines a board runs itself (`Driver::lead_line`): a synchronized straight line from rest
+//! is handed, board by board, to the boards that can run it with their own function — the
+//! Trinamic pack's `$26` + `$50` linear interpolation for its motors of the group, the
+//! QSB-M's own position move — instead of being followed with segments. Each leg is the
+//! line's time law on that axis (its peak velocity and acceleration at the set feed); the
+//! engine's path still runs every tick and supervises the board against it.
+//!
+//! | while a board leads | the engine |
+//! |---|---|
+//! | the line runs at its feed | sends that board nothing |
+//! | hold (or cancel) | asks the board to pause (`Driver::pause_line`, the QSB-M's COMMAND 6); a board that cannot follows the hold with goals from then on |
+//! | resume at the line's feed | asks the paused board to resume (COMMAND 7), else follows with goals |
+//! | a feed change, a replacing path | follows with goals from then on (a board's line has one pace) |
+
+use core::time::Duration;
+
+use motion_drivers::{Driver, LineLeg};
+use motion_ipc::MAX_GROUP_AXES;
+
+use crate::Engine;
+use crate::group::Member;
+
+/// Whether a member's board runs the group's line itself.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub(crate) enum Lead {
+    /// The engine follows the path with goals.
+    #[default]
+    No,
+    /// The board runs the line.
+    Running,
+    /// The board paused the line and waits to resume it.
+    Paused,
+}
+
+impl<D: Driver> Engine<D> {
+    /// A line that starts from rest at `feed` (> 0): every board that can runs its
+    /// members' legs itself. Members that do not move are not handed over.
+    pub(crate) fn lead_line(&mut self, group: usize, feed: f64) {
+        let now = self.now;
+        let g = &mut self.groups[group];
+        let count = g.members.len();
+        if !(feed > 0.0) || count == 0 || g.path.duration() <= 0.0 {
+            return;
+        }
+        if g.members
+            .iter()
+            .any(|m| self.axes[m.axis].state.moving || self.axes[m.axis].stale)
+        {
+            return;
+        }
+        // Each axis's acceleration where the line starts, and its velocity half-way (the
+        // peak of a trapezoid or a triangle), at the feed the path runs at.
+        let half = g.path.duration() / 2.0;
+        g.path.sample(
+            0.0,
+            &mut g.then,
+            &mut g.then_velocity,
+            &mut g.then_acceleration,
+        );
+        let mut accel = [0.0f64; MAX_GROUP_AXES];
+        for (slot, a) in accel.iter_mut().zip(&g.then_acceleration) {
+            *slot = a.abs() * feed * feed;
+        }
+        g.path.sample(
+            half,
+            &mut g.then,
+            &mut g.then_velocity,
+            &mut g.then_acceleration,
+        );
+        for first in 0..count {
+            let g = &self.groups[group];
+            let head = &self.axes[g.members[first].axis];
+            let board = (head.bus, head.slot);
+            // Each board once: at its first member.
+            if g.members[..first].iter().any(|m| {
+                let axis = &self.axes[m.axis];
+                (axis.bus, axis.slot) == board
+            }) {
+                continue;
+            }
+            let mut legs = [LineLeg {
+                channel: 0,
+                counts: 0.0,
+                velocity: 0.0,
+                accel: 0.0,
+            }; MAX_GROUP_AXES];
+            let mut slots = [0usize; MAX_GROUP_AXES];
+            let mut n = 0;
+            for (slot, member) in g.members.iter().enumerate().skip(first) {
+                let axis = &self.axes[member.axis];
+                let velocity = g.then_velocity.get(slot).map_or(0.0, |v| v.abs() * feed);
+                let a = accel.get(slot).copied().unwrap_or(0.0);
+                if (axis.bus, axis.slot) != board || velocity <= 0.0 || a <= 0.0 {
+                    continue;
+                }
+                if let (Some(leg), Some(s)) = (legs.get_mut(n), slots.get_mut(n)) {
+                    *leg = LineLeg {
+                        channel: axis.channel,
+                        counts: axis.to_counts(g.path.end()[slot]),
+                        velocity: axis.magnitude_to_counts(velocity),
+                        accel: axis.magnitude_to_counts(a),
+                    };
+                    *s = slot;
+                    n += 1;
+                }
+            }
+            if n == 0 {
+                continue;
+            }
+            let (bus, driver_slot) = board;
+            let taken = self.buses[bus]
+                .driver_mut(driver_slot)
+                .is_some_and(|driver| driver.lead_line(now, &legs[..n]).unwrap_or(false));
+            if !taken {
+                continue;
+            }
+            for &slot in &slots[..n] {
+                let member = &mut self.groups[group].members[slot];
+                member.led = Lead::Running;
+                member.sent_at = Some(now);
+                let index = member.axis;
+                self.goal_set(index);
+            }
+        }
+    }
+
+    /// Hold: every board that runs the line pauses it if it can; the others are followed
+    /// with goals from now on.
+    pub(crate) fn pause_led(&mut self, group: usize) {
+        self.each_led(group, |driver, now, channel, lead| match lead {
+            Lead::Running if driver.pause_line(now, channel).unwrap_or(false) => Lead::Paused,
+            Lead::Paused => Lead::Paused,
+            _ => Lead::No,
+        });
+    }
+
+    /// Resume (at the feed the line was handed over at): every paused board resumes it if
+    /// it can; the others are followed with goals.
+    pub(crate) fn resume_led(&mut self, group: usize) {
+        self.each_led(group, |driver, now, channel, lead| match lead {
+            Lead::Paused if driver.resume_line(now, channel).unwrap_or(false) => Lead::Running,
+            Lead::Running => Lead::Running,
+            _ => Lead::No,
+        });
+    }
+
+    /// The engine follows every member with goals from now on.
+    pub(crate) fn follow_led(&mut self, group: usize) {
+        self.each_led(group, |_, _, _, _| Lead::No);
+    }
+
+    /// `step` decides each led member's next state; a member no longer led is followed
+    /// with goals from this tick, as if its motion had just started.
+    fn each_led(
+        &mut self,
+        group: usize,
+        mut step: impl FnMut(&mut D, Duration, usize, Lead) -> Lead,
+    ) {
+        let now = self.now;
+        for slot in 0..self.groups[group].members.len() {
+            let member = self.groups[group].members[slot];
+            if member.led == Lead::No {
+                continue;
+            }
+            let axis = &self.axes[member.axis];
+            let (bus, driver_slot, channel) = (axis.bus, axis.slot, axis.channel);
+            let next = match self.buses[bus].driver_mut(driver_slot) {
+                Some(driver) => step(driver, now, channel, member.led),
+                None => Lead::No,
+            };
+            let m = &mut self.groups[group].members[slot];
+            m.led = next;
+            if next == Lead::No {
+                unlead(m, now);
+            }
+        }
+    }
+}
+
+/// A member that a board no longer leads: its following starts afresh.
+fn unlead(member: &mut Member, now: Duration) {
+    member.sent_at = None;
+    member.acked_at = None;
+    member.end_sent = false;
+    member.next_at = now;
+    member.last_velocity = f64::NAN;
+}
