@@ -114,6 +114,8 @@ mod tests;
 #[cfg(test)]
 mod tests_in_flight;
 #[cfg(test)]
+mod tests_line;
+#[cfg(test)]
 mod tests_machine;
 #[cfg(test)]
 mod tests_noise;

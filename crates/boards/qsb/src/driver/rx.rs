@@ -237,7 +237,9 @@ impl QsbDriver {
                 QsbCommand::MotorMove
                 | QsbCommand::MotorJog
                 | QsbCommand::MotorStop
-                | QsbCommand::MotorQuit,
+                | QsbCommand::MotorQuit
+                | QsbCommand::MotorPause
+                | QsbCommand::MotorResume,
             ) => self.motor_commanded(time_stamp),
             Write::Command(QsbCommand::StopStreaming) => {
                 self.str_streaming = false;
