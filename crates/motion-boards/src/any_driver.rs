@@ -76,6 +76,12 @@ macro_rules! registry {
             ) -> Result<bool, motion_drivers::GoalError> {
                 each_driver!(self, d => d.lead_line(now, legs))
             }
+            fn line_ready(&self) -> bool {
+                each_driver!(self, d => d.line_ready())
+            }
+            fn start_line(&mut self, now: core::time::Duration) {
+                each_driver!(self, d => d.start_line(now))
+            }
             fn pause_line(
                 &mut self,
                 now: core::time::Duration,

@@ -118,16 +118,32 @@ pub trait Driver: Send + fmt::Debug {
         Follow::Segments
     }
 
-    /// Runs a group's straight line in joint space on several of this board's channels
-    /// with the board's own function, from rest (the Trinamic pack's `$26` + `$50`
-    /// linear interpolation; a single ramp on one channel). Returns `Ok(true)` when the
-    /// board took every leg: it now runs each to its end by itself, and the engine only
-    /// supervises it; `Ok(false)` when it has no such function or cannot now (a motor not
-    /// at rest): the engine then follows the line with goals ([`Driver::follow`]). By
-    /// default `Ok(false)`. A goal set on a leg's channel later ends the board's line.
+    /// Prepares a group's straight line in joint space on several of this board's channels,
+    /// from rest, to be run with the board's own function (the Trinamic pack's `$26` +
+    /// `$50` linear interpolation; the QSB-M's own move): everything but the start goes
+    /// out now; [`start_line`](Self::start_line) starts it once
+    /// [`line_ready`](Self::line_ready) says the rest is out, so that the boards of a group
+    /// on several links start together. Returns `Ok(true)` when the board took every leg
+    /// (it then runs each to its end by itself and the engine only supervises it),
+    /// `Ok(false)` when it has no such function or cannot now (a motor not at rest, a line
+    /// already prepared): the engine then follows the line with goals
+    /// ([`Driver::follow`]). By default `Ok(false)`. A goal set on a leg's channel later
+    /// ends the board's line (or its preparation).
     fn lead_line(&mut self, now: Duration, legs: &[LineLeg]) -> Result<bool, GoalError> {
         let _ = (now, legs);
         Ok(false)
+    }
+
+    /// Whether the line prepared with [`lead_line`](Self::lead_line) waits only for
+    /// [`start_line`](Self::start_line). By default `true`.
+    fn line_ready(&self) -> bool {
+        true
+    }
+
+    /// Starts the line prepared with [`lead_line`](Self::lead_line) (its last request goes
+    /// out next). By default nothing.
+    fn start_line(&mut self, now: Duration) {
+        let _ = now;
     }
 
     /// Holds a line this board leads on `channel` with the board's own pause, where the
@@ -255,6 +271,12 @@ impl<T: Driver + ?Sized> Driver for Box<T> {
     }
     fn lead_line(&mut self, now: Duration, legs: &[LineLeg]) -> Result<bool, GoalError> {
         (**self).lead_line(now, legs)
+    }
+    fn line_ready(&self) -> bool {
+        (**self).line_ready()
+    }
+    fn start_line(&mut self, now: Duration) {
+        (**self).start_line(now);
     }
     fn pause_line(&mut self, now: Duration, channel: usize) -> Result<bool, GoalError> {
         (**self).pause_line(now, channel)

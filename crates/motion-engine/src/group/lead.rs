@@ -7,6 +7,7 @@
 //!
 //! | while a board leads | the engine |
 //! |---|---|
+//! | the board prepares the line (a pack's `$14` / `$26`, the QSB's rate and acceleration) | holds the path at its start; once every such board of the group is ready it starts them all in the same tick (`$50`, COMMAND 8), and the path with them; after [`ARM_TIMEOUT`] it follows instead |
 //! | the line runs at its feed | sends that board nothing |
 //! | hold (or cancel) | asks the board to pause (`Driver::pause_line`, the QSB-M's COMMAND 6); a board that cannot follows the hold with goals from then on |
 //! | resume at the line's feed | asks the paused board to resume (COMMAND 7), else follows with goals |
@@ -19,6 +20,10 @@ use motion_ipc::MAX_GROUP_AXES;
 
 use crate::Engine;
 use crate::group::Member;
+
+/// How long the boards of a line may take to prepare it before the engine follows it with
+/// goals instead (a pack's `$14` and `$26` per motor: a few words on its bus).
+pub(crate) const ARM_TIMEOUT: Duration = Duration::from_millis(500);
 
 /// Whether a member's board runs the group's line itself.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -121,7 +126,60 @@ impl<D: Driver> Engine<D> {
                 let index = member.axis;
                 self.goal_set(index);
             }
+            self.groups[group].arming_since = Some(now);
         }
+    }
+
+    /// Before the path's time moves on: a line handed to boards starts once every one of
+    /// them has it prepared — every board in the same tick, with the path — or, if one has
+    /// not after [`ARM_TIMEOUT`], is followed with goals from then on. Returns whether the
+    /// path may advance this tick.
+    pub(crate) fn line_started(&mut self, group: usize) -> bool {
+        let Some(since) = self.groups[group].arming_since else {
+            return true;
+        };
+        let now = self.now;
+        let mut led = false;
+        let mut ready = true;
+        for member in &self.groups[group].members {
+            if member.led == Lead::No {
+                continue;
+            }
+            led = true;
+            let axis = &self.axes[member.axis];
+            ready &= self.buses[axis.bus]
+                .drivers()
+                .get(axis.slot)
+                .is_some_and(|driver| driver.line_ready());
+        }
+        if led && !ready && now.saturating_sub(since) < ARM_TIMEOUT {
+            return false;
+        }
+        self.groups[group].arming_since = None;
+        if !led {
+            return true;
+        }
+        if !ready {
+            self.follow_led(group);
+            return true;
+        }
+        let count = self.groups[group].members.len();
+        for first in 0..count {
+            let g = &self.groups[group];
+            if g.members[first].led == Lead::No {
+                continue;
+            }
+            let head = &self.axes[g.members[first].axis];
+            let board = (head.bus, head.slot);
+            let seen = g.members[..first].iter().any(|m| {
+                let axis = &self.axes[m.axis];
+                m.led != Lead::No && (axis.bus, axis.slot) == board
+            });
+            if !seen && let Some(driver) = self.buses[board.0].driver_mut(board.1) {
+                driver.start_line(now);
+            }
+        }
+        true
     }
 
     /// Hold: every board that runs the line pauses it if it can; the others are followed

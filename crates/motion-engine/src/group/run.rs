@@ -25,7 +25,9 @@ impl<D: Driver> Engine<D> {
                 }
                 continue;
             }
-            self.advance_group(group);
+            if self.line_started(group) {
+                self.advance_group(group);
+            }
             self.follow_group(group);
             if self.groups[group].motion.active() {
                 self.supervise_group(group);
@@ -223,6 +225,7 @@ impl<D: Driver> Engine<D> {
         g.point = 0;
         g.cancelling = false;
         g.ended_at = None;
+        g.arming_since = None;
         claimed
     }
 

@@ -153,7 +153,7 @@ impl QsbDriver {
             }
             Goal::Position { counts } => {
                 let (rate, accel) = self.config.default_profile();
-                self.plan_move(kind, counts, rate, accel)?;
+                self.plan_move(kind, counts, rate, accel, false)?;
             }
             Goal::RampPosition {
                 counts,
@@ -162,7 +162,7 @@ impl QsbDriver {
             } => {
                 let rate = self.config.step_rate(velocity).ok_or(out_of_range)?;
                 let accel = self.config.accel(accel).ok_or(out_of_range)?;
-                self.plan_move(kind, counts, rate, accel)?;
+                self.plan_move(kind, counts, rate, accel, false)?;
             }
             Goal::Velocity { velocity, accel } => {
                 let rate = self.config.jog_rate(velocity).ok_or(out_of_range)?;
@@ -253,32 +253,42 @@ impl QsbDriver {
     }
 
     /// A move to `counts` at MD STEP RATE `rate` and MD ACCEL `accel`: stop first if the
-    /// motor runs (a move is relative to where it stands), then move by what remains.
+    /// motor runs (a move is relative to where it stands), then move by what remains;
+    /// `armed`: the move waits at [`Step::Armed`] for the engine's start.
     fn plan_move(
         &mut self,
         kind: GoalKind,
         counts: f64,
         rate: u32,
         accel: u32,
+        armed: bool,
     ) -> Result<(), GoalError> {
         let target = counts_to_i32(counts).ok_or(GoalError::OutOfBoardRange(kind))?;
         let [normal, end_str] = NORMAL_COUNTER;
-        self.replace_goal(
-            kind,
-            &[
-                Step::Enable(true),
-                normal,
-                end_str,
-                Step::Ensure(Write::Accel(accel)),
-                Step::Ensure(Write::StepRate(rate)),
-                Step::StopIfMoving,
-                Step::WaitDone,
-                Step::MoveTo {
-                    target: f64::from(target),
-                    attempt: 0,
-                },
-            ],
-        );
+        let steps = [
+            Step::Enable(true),
+            normal,
+            end_str,
+            Step::Ensure(Write::Accel(accel)),
+            Step::Ensure(Write::StepRate(rate)),
+            Step::StopIfMoving,
+            Step::WaitDone,
+            Step::Armed,
+            Step::MoveTo {
+                target: f64::from(target),
+                attempt: 0,
+            },
+        ];
+        let (head, tail) = steps.split_at(7);
+        let mut plan = [Step::Armed; 9];
+        let mut len = 0;
+        for step in head.iter().chain(tail.iter().skip(usize::from(!armed))) {
+            if let Some(slot) = plan.get_mut(len) {
+                *slot = *step;
+                len += 1;
+            }
+        }
+        self.replace_goal(kind, plan.get(..len).unwrap_or(&plan));
         Ok(())
     }
 
@@ -305,8 +315,8 @@ impl QsbDriver {
                 done
             }
             Step::MoveTo { target, attempt } => self.expand_move(target, attempt),
-            // Until the engine resumes the move.
-            Step::Paused => false,
+            // Until the engine starts or resumes the move.
+            Step::Armed | Step::Paused => false,
             Step::WaitIndex => {
                 if self.index_seen {
                     self.goal.pop();
@@ -366,24 +376,44 @@ impl QsbDriver {
 
     /// A group's line on this motor ([`Driver::lead_line`](motion_drivers::Driver::lead_line)):
     /// one leg, a position move with the leg's step rate and acceleration (MD STEP RATE, MD
-    /// ACCEL, MD MOVE STEPS, COMMAND 8), which the board runs as its own trapezoid.
-    pub(super) fn start_line(
+    /// ACCEL, then at the start MD MOVE STEPS and COMMAND 8), which the board runs as its
+    /// own trapezoid. Taken only from rest.
+    pub(super) fn prepare_line(
         &mut self,
-        now: Duration,
         legs: &[motion_drivers::LineLeg],
     ) -> Result<bool, GoalError> {
         let [leg] = legs else {
             return Ok(false);
         };
-        if !self.drive_active() {
+        if leg.channel != 0 {
+            return Err(GoalError::NoSuchChannel(leg.channel));
+        }
+        let kind = GoalKind::RampPosition;
+        if !self.drive_active() || !self.kinds().contains(kind) {
             return Ok(false);
         }
-        let goal = Goal::RampPosition {
-            counts: leg.counts,
-            velocity: leg.velocity,
-            accel: leg.accel,
-        };
-        self.plan_goal(now, leg.channel, goal).map(|()| true)
+        self.check_online()?;
+        if self.drive_moving() || !self.goal.is_empty() {
+            return Ok(false);
+        }
+        let out_of_range = GoalError::OutOfBoardRange(kind);
+        let rate = self.config.step_rate(leg.velocity).ok_or(out_of_range)?;
+        let accel = self.config.accel(leg.accel).ok_or(out_of_range)?;
+        self.plan_move(kind, leg.counts, rate, accel, true)?;
+        self.home_failed = false;
+        Ok(true)
+    }
+
+    /// Whether a prepared line waits only for its start.
+    pub(super) fn line_armed(&self) -> bool {
+        self.goal.front() == Some(Step::Armed)
+    }
+
+    /// Starts a prepared line: the move goes out next.
+    pub(super) fn fire_line(&mut self) {
+        if self.line_armed() {
+            self.goal.pop();
+        }
     }
 
     /// Whether the drive runs the move of the current position goal: its COMMAND 8 was

@@ -385,10 +385,18 @@ impl Driver for QsbDriver {
 
     fn lead_line(
         &mut self,
-        now: Duration,
+        _now: Duration,
         legs: &[motion_drivers::LineLeg],
     ) -> Result<bool, GoalError> {
-        self.start_line(now, legs)
+        self.prepare_line(legs)
+    }
+
+    fn line_ready(&self) -> bool {
+        self.line_armed()
+    }
+
+    fn start_line(&mut self, _now: Duration) {
+        self.fire_line();
     }
 
     fn pause_line(&mut self, _now: Duration, channel: usize) -> Result<bool, GoalError> {

@@ -36,6 +36,8 @@ pub(crate) enum Step {
     },
     /// -M home search: wait for the index latch (or give up after the travel limit).
     WaitIndex,
+    /// -M: a group's line waits here until the engine starts it.
+    Armed,
     /// -M: a move paused with COMMAND 6 waits here until the engine resumes it.
     Paused,
 }

@@ -26,12 +26,14 @@ fn a_line_is_the_boards_own_move_and_a_hold_pauses_and_resumes_it() {
     bench.tick(Some(MD_DONE));
     bench.tick(None);
     assert_eq!(bench.driver.lead_line(bench.now, &[leg(1000.0)]), Ok(true));
-    let sent = bench.run();
-    assert_eq!(
-        sent.last().map(String::as_str),
-        Some("W168"),
-        "COMMAND 8 Motor Move"
-    );
+    // MD ACCEL 2000 steps/s² = 0x7D0, MD STEP RATE 500 → 496 = 0x1F0; the move waits for
+    // the engine's start (with the group's boards on other links).
+    assert_eq!(bench.run(), ["W107D0", "W0F1F0"]);
+    assert!(bench.driver.line_ready());
+    bench.driver.start_line(bench.now);
+    // 100 steps (0x64), COMMAND 8 "Motor Move".
+    assert_eq!(bench.run(), ["W1164", "W168"]);
+    assert!(!bench.driver.line_ready());
     // Nothing to pause before the drive runs the move.
     bench.counter = 200;
     bench.tick(Some(MD_MOVING));
@@ -97,6 +99,13 @@ fn a_stop_while_paused_ends_the_move() {
     bench.tick(None);
     assert_eq!(bench.driver.lead_line(bench.now, &[leg(1000.0)]), Ok(true));
     bench.run();
+    assert_eq!(
+        bench.driver.pause_line(bench.now, 0),
+        Ok(false),
+        "not started"
+    );
+    bench.driver.start_line(bench.now);
+    bench.run();
     bench.tick(Some(MD_MOVING));
     assert_eq!(bench.driver.pause_line(bench.now, 0), Ok(true));
     bench.run();
@@ -109,4 +118,53 @@ fn a_stop_while_paused_ends_the_move() {
     assert!(sent.iter().any(|l| l == "W164"), "{sent:?}");
     assert!(!sent.iter().any(|l| l == "W167"));
     assert_eq!(bench.driver.resume_line(bench.now, 0), Ok(false));
+}
+
+/// A goal that energises the drive (an enable line, active low on io3) by sending the DIG
+/// I/O write itself keeps it energised: the signal outputs written next carry the enable
+/// line too (they used to write it inactive again, and the move after an Off never ran).
+#[test]
+fn the_outputs_written_after_a_goal_enables_the_drive_keep_it_enabled() {
+    let mut bench = Bench::started_with(super::QsbDriverConfig {
+        enable: Some(super::EnableOutput {
+            bit: 3,
+            active_high: false,
+        }),
+        io: super::QsbIo {
+            digital_out: 0b0001,
+            ..super::QsbIo::default()
+        },
+        ..super::QsbDriverConfig::default()
+    });
+    bench.tick(Some(MD_DONE));
+    bench.driver.set_goal(bench.now, 0, Goal::Off).expect("off");
+    bench.run();
+    bench.tick(Some(MD_DONE));
+    assert_eq!(bench.driver.lead_line(bench.now, &[leg(1000.0)]), Ok(true));
+    // As the engine does: the goal, then at once the transmit (no timeout handling
+    // between them to settle the plan).
+    let mut buf = [0u8; 256];
+    let transmit = bench
+        .driver
+        .poll_transmit(bench.now, &mut buf)
+        .expect("the enable write");
+    let first = buf[..transmit.len].to_vec();
+    bench.answer(&first, 0);
+    let mut sent = vec![String::from_utf8_lossy(&first).trim_end().to_owned()];
+    sent.extend(bench.run());
+    for _ in 0..5 {
+        bench.tick(Some(MD_DONE));
+        sent.extend(bench.run());
+    }
+    assert!(bench.driver.line_ready(), "{sent:?}");
+    bench.driver.start_line(bench.now);
+    sent.extend(bench.run());
+    let dig_io: Vec<u32> = sent
+        .iter()
+        .filter_map(|line| line.strip_prefix("W01"))
+        .map(|data| u32::from_str_radix(data, 16).expect("hex"))
+        .collect();
+    assert!(!dig_io.is_empty(), "{sent:?}");
+    assert!(dig_io.iter().all(|latch| latch & 0b1000 == 0), "{sent:?}");
+    assert_eq!(sent.last().map(String::as_str), Some("W168"), "{sent:?}");
 }

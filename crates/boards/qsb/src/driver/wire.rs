@@ -90,6 +90,7 @@ impl QsbDriver {
             | Step::WaitDone
             | Step::MoveTo { .. }
             | Step::WaitIndex
+            | Step::Armed
             | Step::Paused => None,
         }
     }
@@ -206,6 +207,13 @@ impl QsbDriver {
     pub(super) fn transmit(&mut self, now: Duration, buf: &mut [u8]) -> Option<Transmit> {
         let (request, origin, _) = self.next_request()?;
         let len = request.encode(buf).ok()?;
+        if origin == Origin::Goal
+            && let Some(Step::Enable(on)) = self.goal.front()
+        {
+            // The enable line goes with this write: the signal outputs written from now on
+            // carry it (settling the step sets it too, when nothing needs to be sent).
+            self.io.energised = on;
+        }
         let generation = match origin {
             Origin::Setup => self.setup.generation(),
             Origin::Preset => self.preset.generation(),

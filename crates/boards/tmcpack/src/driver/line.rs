@@ -8,49 +8,59 @@
 //! - every leg's motor must be at rest (inactive, nothing queued), or the line is not taken
 //!   and the engine follows it with segments;
 //! - each leg's script is `$14` (vmax, amax) and `$26` (its target); once every one of them
-//!   is out, one `$50` with the legs' mask starts them together;
+//!   is out and the engine starts the line (with the group's other boards), one `$50` with
+//!   the legs' mask starts them together;
 //! - the master sets the line's pace: the leg with the highest velocity gets its own
 //!   velocity (to the nearest unit, within the axis's limit) and acceleration; every other
 //!   leg gets a vmax at least one unit above its share, so that whichever reading of
 //!   "fastest" the firmware takes (the highest velocity, or the longest time at its vmax),
 //!   the master is that leg, and the line keeps the engine's time law;
-//! - a line of one leg is a plain ramp: `$14`, `$26`, `$23` (manual 8.4).
+//! - a line of one leg is a plain ramp: `$14`, `$26`, and `$23` for the start (manual 8.4).
 //!
-//! A goal set on a leg's motor before the `$50` went out (a stop, the group's following
-//! taking over) cancels the `$50`. After it, the motors ramp as the pack interpolates;
+//! A goal set on a leg's motor before the start went out (a stop, the group's following
+//! taking over) cancels the line. After it, the motors ramp as the pack interpolates;
 //! `$26` on the fly shortens or lengthens the master's ramp ("Modifies the target position
 //! without influencing the operation mode"), which is how the engine takes the line over
 //! for a hold or a feed change (docs/ARCHITECTURE.md "Coordinated motion").
 
 use motion_base::counts_to_i32;
-use motion_drivers::{Driver, Goal, GoalError, GoalKind, LineLeg};
+use motion_drivers::{Driver, GoalError, GoalKind, LineLeg};
 use tmcpack::{MAX_VELOCITY, MotorMask, Request};
 
 use super::wire::Pick;
 use super::{Phase, TmcpackDriver};
 
-/// A `$50` waiting for its legs' `$14` / `$26` to go out.
+/// A line prepared: its legs' `$14` / `$26` go out, then it waits for the start.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct PackLine {
     pub mask: MotorMask,
     pub targets: [i32; 6],
+    /// The engine started it: its `$50` (or one leg's `$23`) goes once the legs are out.
+    pub started: bool,
+}
+
+impl PackLine {
+    /// What starts it: `$50` for several motors, `$23` with the target for one.
+    pub fn request(&self) -> Request {
+        let single = (0..6u8)
+            .find(|&m| self.mask.has(m))
+            .filter(|&m| MotorMask::single(m) == self.mask);
+        match single {
+            Some(motor) => Request::StartRamp {
+                motor,
+                target: self.targets.get(usize::from(motor)).copied().unwrap_or(0),
+            },
+            None => Request::Interpolate { mask: self.mask },
+        }
+    }
 }
 
 impl TmcpackDriver {
     /// [`Driver::lead_line`](motion_drivers::Driver::lead_line) for this pack.
-    pub(super) fn start_line(&mut self, legs: &[LineLeg]) -> Result<bool, GoalError> {
+    pub(super) fn prepare_line(&mut self, legs: &[LineLeg]) -> Result<bool, GoalError> {
         let range = GoalError::OutOfBoardRange(GoalKind::RampPosition);
-        match legs {
-            [] => return Ok(false),
-            [leg] => {
-                let goal = Goal::RampPosition {
-                    counts: leg.counts,
-                    velocity: leg.velocity,
-                    accel: leg.accel,
-                };
-                return self.plan_goal(leg.channel, goal).map(|()| true);
-            }
-            _ => {}
+        if legs.is_empty() || self.line.is_some() {
+            return Ok(false);
         }
         match self.phase {
             Phase::Online => {}
@@ -119,26 +129,36 @@ impl TmcpackDriver {
         self.line = Some(PackLine {
             mask: MotorMask::from_bits_retain(mask),
             targets,
+            started: false,
         });
         Ok(true)
     }
 
-    /// The `$50` once every leg's script is out.
-    pub(super) fn line_pick(&self) -> Option<Pick> {
-        let line = self.line?;
-        let waiting = self
-            .channels
+    /// Whether the line prepared waits only for its start (every leg's script is out).
+    pub(super) fn line_prepared(&self) -> bool {
+        self.line
+            .is_some_and(|line| !line.started && !self.legs_pending(line))
+    }
+
+    fn legs_pending(&self, line: PackLine) -> bool {
+        self.channels
             .iter()
             .flatten()
-            .any(|c| line.mask.has(c.motor) && c.pending());
-        (!waiting).then_some(Pick {
-            request: Request::Interpolate { mask: line.mask },
+            .any(|c| line.mask.has(c.motor) && c.pending())
+    }
+
+    /// The line's start, once the engine started it and every leg's script is out.
+    pub(super) fn line_pick(&self) -> Option<Pick> {
+        let line = self.line.filter(|line| line.started)?;
+        (!self.legs_pending(line)).then_some(Pick {
+            request: line.request(),
             expect: None,
             channel: None,
         })
     }
 
-    /// The `$50` went out with sequence number `seq`: its motors ramp to their targets.
+    /// The line's start went out with sequence number `seq`: its motors ramp to their
+    /// targets.
     pub(super) fn on_line_sent(&mut self, seq: u64) {
         let Some(line) = self.line.take() else {
             return;

@@ -336,7 +336,17 @@ impl Driver for TmcpackDriver {
         _now: Duration,
         legs: &[motion_drivers::LineLeg],
     ) -> Result<bool, GoalError> {
-        self.start_line(legs)
+        self.prepare_line(legs)
+    }
+
+    fn line_ready(&self) -> bool {
+        self.line_prepared()
+    }
+
+    fn start_line(&mut self, _now: Duration) {
+        if let Some(line) = self.line.as_mut() {
+            line.started = true;
+        }
     }
 
     fn set_goal(&mut self, _now: Duration, channel: usize, goal: Goal) -> Result<(), GoalError> {

@@ -56,7 +56,19 @@ fn a_line_of_two_motors_at_rest_is_their_targets_then_one_interpolation() {
     assert!(6425.0 / hz_per_unit(&bench, 0) > 642.5 / slow);
     assert_eq!(bench.driver.lead_line(bench.now, &legs), Ok(true));
     assert!(bench.driver.goals_pending());
-    let sent = commands(&mut bench, 60);
+    assert!(!bench.driver.line_ready());
+    let mut sent = commands(&mut bench, 60);
+    // Prepared: the interpolation waits for the engine to start it (with the group's
+    // boards on other links).
+    assert!(bench.driver.line_ready());
+    assert!(
+        !sent
+            .iter()
+            .any(|r| matches!(r, Request::Interpolate { .. }))
+    );
+    bench.driver.start_line(bench.now);
+    assert!(!bench.driver.line_ready());
+    sent.extend(commands(&mut bench, 20));
     let slave_vmax = ((642.5 / slow).ceil() + 1.0) as u16;
     let position_of = |motor: u8| {
         sent.iter()
@@ -143,7 +155,7 @@ fn a_line_is_not_taken_while_a_motor_runs() {
     );
 }
 
-/// A stop of a leg before the `$50` went out cancels the `$50`.
+/// A stop of a leg before the `$50` went out cancels the line.
 #[test]
 fn a_stop_before_the_interpolation_went_out_cancels_it() {
     let mut bench = Bench::new(config());
@@ -158,6 +170,7 @@ fn a_stop_before_the_interpolation_went_out_cancels_it() {
         .driver
         .set_goal(bench.now, 2, Goal::Stop { decel: 6400.0 })
         .expect("stop");
+    bench.driver.start_line(bench.now);
     let sent = commands(&mut bench, 80);
     assert!(
         !sent
@@ -170,7 +183,8 @@ fn a_stop_before_the_interpolation_went_out_cancels_it() {
     }));
 }
 
-/// One leg is a plain ramp (manual 8.4: `$26`, then `$23` with the same target).
+/// One leg is a plain ramp (manual 8.4: `$26`, then, at the start, `$23` with the same
+/// target).
 #[test]
 fn a_line_of_one_motor_is_a_ramp() {
     let mut bench = Bench::new(config());
@@ -182,11 +196,14 @@ fn a_line_of_one_motor_is_a_ramp() {
             .lead_line(bench.now, &[leg(0, 10_000.0, 6425.0, 160_000.0)]),
         Ok(true)
     );
-    let sent = commands(&mut bench, 40);
+    let mut sent = commands(&mut bench, 40);
     assert!(sent.contains(&Request::SetTarget {
         motor: 0,
         target: 10_000
     }));
+    assert!(!sent.iter().any(|r| matches!(r, Request::StartRamp { .. })));
+    bench.driver.start_line(bench.now);
+    sent.extend(commands(&mut bench, 20));
     assert!(sent.contains(&Request::StartRamp {
         motor: 0,
         target: 10_000
@@ -225,4 +242,24 @@ fn unusable_legs_are_refused_whole() {
     ];
     assert!(bench.driver.lead_line(bench.now, &beyond).is_err());
     assert!(!bench.driver.goals_pending());
+}
+
+/// One line at a time: a second one while the first is prepared is followed by the engine.
+#[test]
+fn a_second_line_while_one_is_prepared_is_not_taken() {
+    let mut bench = Bench::new(config());
+    bench.online();
+    bench.serve(40, |motor| position(motor, 0, Action::Inactive));
+    assert_eq!(
+        bench
+            .driver
+            .lead_line(bench.now, &[leg(0, 10_000.0, 6425.0, 160_000.0)]),
+        Ok(true)
+    );
+    assert_eq!(
+        bench
+            .driver
+            .lead_line(bench.now, &[leg(2, 2_000.0, 642.5, 32_000.0)]),
+        Ok(false)
+    );
 }

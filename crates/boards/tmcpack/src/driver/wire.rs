@@ -388,10 +388,16 @@ impl TmcpackDriver {
         self.seq += 1;
         let number = self.stamps.sent();
         let wire_end = now + self.word_time;
+        if pick.channel.is_none()
+            && self
+                .line
+                .is_some_and(|line| line.started && line.request() == request)
+        {
+            self.on_line_sent(self.seq);
+        }
         match request {
             Request::SetBaud { switchover, .. } => self.switchover = units(switchover),
             Request::PacketTimeout { timeout } => self.pack_timeout = units(timeout),
-            Request::Interpolate { .. } => self.on_line_sent(self.seq),
             Request::Outputs { .. } => {
                 self.io.on_outputs_sent(now, request);
                 if self.phase == Phase::Online {
