@@ -12,6 +12,7 @@
 //! | hold (or cancel) | asks the board to pause (`Driver::pause_line`, the QSB-M's COMMAND 6); a board that cannot follows the hold with goals from then on |
 //! | resume at the line's feed | asks the paused board to resume (COMMAND 7), else follows with goals |
 //! | a feed change, a replacing path | follows with goals from then on (a board's line has one pace) |
+//! | the board is measured more than [`LEAD_DRIFT`] of the axis's `path_tolerance` off the path | follows with goals from then on |
 
 use core::time::Duration;
 
@@ -24,6 +25,12 @@ use crate::group::Member;
 /// How long the boards of a line may take to prepare it before the engine follows it with
 /// goals instead (a pack's `$14` and `$26` per motor: a few words on its bus).
 pub(crate) const ARM_TIMEOUT: Duration = Duration::from_millis(500);
+
+/// A board running a line by itself that is measured farther than this share of the
+/// axis's `path_tolerance` from the path is followed with goals from then on: its rates in
+/// its own units (the QSB's 16 steps/s) may not match the path's exactly, and goals feed
+/// the error back.
+pub(crate) const LEAD_DRIFT: f64 = 0.5;
 
 /// Whether a member's board runs the group's line itself.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -205,6 +212,21 @@ impl<D: Driver> Engine<D> {
     /// The engine follows every member with goals from now on.
     pub(crate) fn follow_led(&mut self, group: usize) {
         self.each_led(group, |_, _, _, _| Lead::No);
+    }
+
+    /// The engine follows the members on `axis`'s board with goals from now on (the others
+    /// go on leading: their lines are theirs).
+    pub(crate) fn follow_led_board(&mut self, group: usize, axis: usize) {
+        let board = (self.axes[axis].bus, self.axes[axis].slot);
+        for slot in 0..self.groups[group].members.len() {
+            let member = self.groups[group].members[slot];
+            let on = &self.axes[member.axis];
+            if member.led != Lead::No && (on.bus, on.slot) == board {
+                let m = &mut self.groups[group].members[slot];
+                m.led = Lead::No;
+                unlead(m, self.now);
+            }
+        }
     }
 
     /// `step` decides each led member's next state; a member no longer led is followed

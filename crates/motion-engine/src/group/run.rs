@@ -5,7 +5,7 @@ use motion_drivers::Driver;
 use motion_ipc::{AxisMode, ClientId, FaultCode, GroupAbort, GroupMotion, PathKind, StreamState};
 
 use crate::Engine;
-use crate::group::lead::Lead;
+use crate::group::lead::{LEAD_DRIFT, Lead};
 
 impl<D: Driver> Engine<D> {
     /// Step 4b (after the commands and the safety rules): every group with a motion.
@@ -120,6 +120,11 @@ impl<D: Driver> Engine<D> {
                 &mut g.then_acceleration,
             );
             let deviation = (g.then[slot] - axis.position()).abs();
+            if member.led == Lead::Running && deviation > tolerance * LEAD_DRIFT {
+                // A board running the line by itself drifts from the path (its rates in its
+                // own units): the engine follows it with goals from now on.
+                self.follow_led_board(group, member.axis);
+            }
             if deviation > tolerance {
                 let axis = member.axis;
                 self.abort_group(
