@@ -8,9 +8,10 @@ use core::time::Duration;
 use motion_drivers::{Follow, LinkKind};
 use motion_engine::{BusConfig, DeviceConfig, Engine, EngineConfig, GroupConfig, StreamLimit};
 use motion_ipc::{
-    AxisMode, ClientId, CommandKind, CommandReply, CommandRequest, GroupAbort, GroupMotion, Reason,
-    Setpoint, StreamFlags, StreamMode, StreamState, Target,
+    AxisMode, ClientId, CommandKind, GroupAbort, GroupMotion, Reason, Setpoint, StreamFlags,
+    StreamMode, StreamState,
 };
+use support::group_rig::group_command;
 use support::{ALL_GOALS, CLIENT_A, CLIENT_B, Harness, IdealBoard, axis};
 
 /// One SPI link, one ideal board with two axes (`left`, `right`: ±100 units, 50 units/s,
@@ -46,16 +47,6 @@ fn rig(limit: StreamLimit, follow: Follow) -> Harness {
     let mut h = Harness::new(Engine::new(config, vec![board]).expect("valid"));
     h.ticks(3);
     h
-}
-
-fn group_command(h: &mut Harness, client: ClientId, kind: CommandKind, value: f64) -> CommandReply {
-    h.sequence += 1;
-    let mut request =
-        CommandRequest::new(client, h.sequence, 0, kind).with_values([value, 0.0, 0.0]);
-    request.target = Target::Group as u32;
-    h.port.requests.push_back(request);
-    h.tick();
-    h.port.replies.pop().expect("answered")
 }
 
 /// Claims the group for `CLIENT_A` and starts a stream of `mode`.

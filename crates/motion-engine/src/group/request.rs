@@ -439,6 +439,13 @@ impl<D: Driver> Engine<D> {
         }
         let claimed = self.take_members(group, client, kind);
         let g = &mut self.groups[group];
+        // Until the path's time first moves, every member's desired state is its start.
+        g.scale.sample(
+            &g.path,
+            &mut g.position,
+            &mut g.velocity,
+            &mut g.acceleration,
+        );
         g.claimed = claimed;
         g.path_id = id;
         g.history.clear();

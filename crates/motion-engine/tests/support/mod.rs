@@ -1,13 +1,15 @@
 //! Test support: an ideal board driver and a queue command port.
 #![allow(dead_code)]
 
+pub mod group_rig;
+
 use core::time::Duration;
 use std::collections::VecDeque;
 use std::sync::{Arc, Mutex, MutexGuard};
 
 use motion_drivers::{
     ChannelState, DeviceFault, DeviceStatus, Driver, Follow, Goal, GoalError, GoalKind, GoalKinds,
-    LinkKind, Model, Pin, PinReading, Priority, RateFloor, Transmit,
+    LineLeg, LinkKind, Model, Pin, PinReading, Priority, RateFloor, Transmit,
 };
 use motion_engine::{AxisConfig, BusConfig, CommandPort, DeviceConfig, Engine, EngineConfig};
 use motion_ipc::{ClientId, CommandKind, CommandReply, CommandRequest, GroupPath, MotionFrame};
@@ -35,6 +37,19 @@ pub struct BoardControl {
     pub floor: RateFloor,
     /// How the board follows a group's path (read when the engine is built).
     pub follow: Follow,
+    /// The board runs a group's line itself (`Driver::lead_line`) when set...
+    pub leads: bool,
+    /// ...taking this many `handle_timeout`s to prepare it...
+    pub prepare_steps: u32,
+    /// ...and pauses and resumes it (`pause_line` / `resume_line`) when set.
+    pub pauses: bool,
+    /// Every line the board took: its legs.
+    pub lines: Vec<Vec<LineLeg>>,
+    /// The instants the engine started the prepared line.
+    pub starts: Vec<Duration>,
+    /// Pauses and resumes the board did.
+    pub paused: u32,
+    pub resumed: u32,
 }
 
 /// A board whose channels follow their goals with ideal trapezoidal physics, refreshing
@@ -47,6 +62,10 @@ pub struct IdealBoard {
     last: Option<Duration>,
     queue: VecDeque<(u8, u8)>,
     link_up: bool,
+    /// A line prepared, and the `handle_timeout`s it still needs.
+    line: Option<(Vec<LineLeg>, u32)>,
+    /// Per channel: the ramp a pause interrupted.
+    paused: Vec<Option<Goal>>,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -83,6 +102,8 @@ impl IdealBoard {
             last: None,
             queue: VecDeque::with_capacity(64),
             link_up: true,
+            line: None,
+            paused: vec![None; channels],
         });
         (board, control)
     }
@@ -128,7 +149,65 @@ impl Driver for IdealBoard {
         Duration::from_millis(20)
     }
     fn handle_rx(&mut self, _: Duration, _: &[u8]) {}
+    fn lead_line(&mut self, _: Duration, legs: &[LineLeg]) -> Result<bool, GoalError> {
+        let mut control = self.control.lock().expect("control lock");
+        let at_rest = legs.iter().all(|leg| {
+            self.channels
+                .get(leg.channel)
+                .is_some_and(|c| c.velocity == 0.0)
+        });
+        if !control.leads || self.line.is_some() || !at_rest {
+            return Ok(false);
+        }
+        control.lines.push(legs.to_vec());
+        self.line = Some((legs.to_vec(), control.prepare_steps));
+        Ok(true)
+    }
+    fn line_ready(&self) -> bool {
+        self.line.as_ref().is_some_and(|(_, steps)| *steps == 0)
+    }
+    fn start_line(&mut self, now: Duration) {
+        let Some((legs, _)) = self.line.take() else {
+            return;
+        };
+        self.control().starts.push(now);
+        for leg in legs {
+            if let Some(channel) = self.channels.get_mut(leg.channel) {
+                channel.goal = Goal::RampPosition {
+                    counts: leg.counts,
+                    velocity: leg.velocity,
+                    accel: leg.accel,
+                };
+            }
+        }
+    }
+    fn pause_line(&mut self, _: Duration, channel: usize) -> Result<bool, GoalError> {
+        let Some(slot) = self.channels.get_mut(channel) else {
+            return Err(GoalError::NoSuchChannel(channel));
+        };
+        let mut control = self.control.lock().expect("control lock");
+        match slot.goal {
+            Goal::RampPosition { accel, .. } if control.pauses => {
+                self.paused[channel] = Some(slot.goal);
+                slot.goal = Goal::Stop { decel: accel };
+                control.paused += 1;
+                Ok(true)
+            }
+            _ => Ok(false),
+        }
+    }
+    fn resume_line(&mut self, _: Duration, channel: usize) -> Result<bool, GoalError> {
+        let Some(goal) = self.paused.get_mut(channel).and_then(Option::take) else {
+            return Ok(false);
+        };
+        self.channels[channel].goal = goal;
+        self.control().resumed += 1;
+        Ok(true)
+    }
     fn handle_timeout(&mut self, now: Duration) {
+        if let Some((_, steps)) = self.line.as_mut() {
+            *steps = steps.saturating_sub(1);
+        }
         let dt = self.last.map_or(0.0, |last| (now - last).as_secs_f64());
         self.last = Some(now);
         let (silent, fault, drift) = {
@@ -228,6 +307,15 @@ impl Driver for IdealBoard {
             slot.position = counts;
         } else {
             slot.goal = goal;
+        }
+        // A goal ends a paused or prepared line on the channel.
+        self.paused[channel] = None;
+        if self
+            .line
+            .as_ref()
+            .is_some_and(|(legs, _)| legs.iter().any(|leg| leg.channel == channel))
+        {
+            self.line = None;
         }
         if self.queue.len() < 64 {
             self.queue.push_back((channel as u8, goal.kind() as u8));
