@@ -51,6 +51,7 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+mod blend;
 mod error;
 mod line;
 mod path;
@@ -61,7 +62,7 @@ mod time_scale;
 
 pub use error::PathError;
 pub use path::Path;
-pub use points::Points;
+pub use points::{Points, Tolerances};
 pub use time_scale::{MAX_FEED_OVERRIDE, TimeScale};
 
 /// The most axes in a group.

@@ -7,7 +7,7 @@ use crate::polynomial::{
     Coeffs, Span, cubic_hermite, eval, extremes, hull_bounds, quintic_hermite,
 };
 use crate::spline::Spline;
-use crate::{AxisLimits, MAX_AXES, PathError, Points, at_most, check_limits};
+use crate::{AxisLimits, MAX_AXES, PathError, Points, Tolerances, at_most, check_limits};
 
 /// The relative slack of the limit checks: a segment whose largest |velocity| is at most
 /// `max_velocity · (1 + SLACK)` (and likewise the acceleration) is accepted.
@@ -27,9 +27,9 @@ pub(crate) fn range_slack(limit: &AxisLimits) -> f64 {
 
 /// The segments of one planned path (or of one being planned).
 #[derive(Clone)]
-struct Segments {
-    axes: usize,
-    count: usize,
+pub(crate) struct Segments {
+    pub(crate) axes: usize,
+    pub(crate) count: usize,
     /// Segment s, axis j at `s * axes + j`.
     coeffs: Vec<Coeffs>,
     /// Path time at which each segment starts.
@@ -38,11 +38,11 @@ struct Segments {
     lengths: Vec<f64>,
     /// The point each segment heads to.
     heads: Vec<usize>,
-    end: Vec<f64>,
-    duration: f64,
-    max_feed: f64,
-    last_point: usize,
-    planned: bool,
+    pub(crate) end: Vec<f64>,
+    pub(crate) duration: f64,
+    pub(crate) max_feed: f64,
+    pub(crate) last_point: usize,
+    pub(crate) planned: bool,
 }
 
 impl Segments {
@@ -62,7 +62,7 @@ impl Segments {
         }
     }
 
-    fn clear(&mut self) {
+    pub(crate) fn clear(&mut self) {
         self.count = 0;
         self.end.fill(0.0);
         self.duration = 0.0;
@@ -72,7 +72,7 @@ impl Segments {
     }
 
     /// Appends a segment (its coefficients are written afterwards).
-    fn push(&mut self, start: f64, length: f64, heads: usize) {
+    pub(crate) fn push(&mut self, start: f64, length: f64, heads: usize) {
         let s = self.count;
         self.starts[s] = start;
         self.lengths[s] = length;
@@ -86,7 +86,7 @@ impl Segments {
     }
 
     #[inline]
-    fn coeffs_mut(&mut self, segment: usize, axis: usize) -> &mut Coeffs {
+    pub(crate) fn coeffs_mut(&mut self, segment: usize, axis: usize) -> &mut Coeffs {
         &mut self.coeffs[segment * self.axes + axis]
     }
 
@@ -129,7 +129,7 @@ fn feed_limit(v: f64, a: f64, limit: &AxisLimits) -> f64 {
 /// [`Checker::max_feed`] refines only those bounds that could exceed an axis's exact
 /// largest |velocity| or |acceleration| over the path, so `max_feed` is exact at the cost of
 /// a few exact extremes.
-struct Checker<'a> {
+pub(crate) struct Checker<'a> {
     limits: &'a [AxisLimits],
     /// Segment s, axis j at `s * axes + j`: bounds on |velocity| and |acceleration|.
     bounds: &'a mut [[f64; 2]],
@@ -139,7 +139,7 @@ struct Checker<'a> {
 }
 
 impl<'a> Checker<'a> {
-    fn new(limits: &'a [AxisLimits], bounds: &'a mut [[f64; 2]]) -> Self {
+    pub(crate) fn new(limits: &'a [AxisLimits], bounds: &'a mut [[f64; 2]]) -> Self {
         Self {
             limits,
             bounds,
@@ -148,7 +148,7 @@ impl<'a> Checker<'a> {
     }
 
     /// Checks every axis of `segment`; refusals name the point it heads to and the axis.
-    fn check(&mut self, segments: &Segments, segment: usize) -> Result<(), PathError> {
+    pub(crate) fn check(&mut self, segments: &Segments, segment: usize) -> Result<(), PathError> {
         let t = segments.lengths[segment];
         let span = Span::new(t);
         let point = segments.heads[segment];
@@ -211,7 +211,7 @@ impl<'a> Checker<'a> {
 
     /// The exact largest feed of the checked `segments`: per axis, the exact largest
     /// |velocity| and |acceleration| over the path give min(max_velocity/|v|, √(max_accel/|a|)).
-    fn max_feed(&self, segments: &Segments) -> f64 {
+    pub(crate) fn max_feed(&self, segments: &Segments) -> f64 {
         let axes = segments.axes;
         let exact = |segment: usize, axis: usize| {
             let e = extremes(
@@ -318,7 +318,7 @@ impl<'a> Build<'a> {
 
 /// A planned path for `axes` axes: piecewise polynomials (every segment stored as a quintic
 /// per axis, c0..c5 in local time; lower-order segments have zero high coefficients), at most
-/// `max_points + 3` segments.
+/// `2 · max_points + 3` segments.
 ///
 /// Every buffer is sized in [`Path::new`]; planning and sampling never allocate. A path is
 /// planned into a second set of buffers and swapped in only when it passed every check, so a
@@ -357,7 +357,9 @@ impl Path {
             (1..=MAX_AXES).contains(&axes),
             "a path has 1 to {MAX_AXES} axes, not {axes}"
         );
-        let capacity = max_points + 3;
+        // A blended path: a lead-in or a start blend, n − 1 straight segments, n − 2 blends
+        // and the end blend.
+        let capacity = 2 * max_points + 3;
         Self {
             axes,
             max_points,
@@ -537,16 +539,41 @@ impl Path {
         start_acceleration: &[f64],
         points: &Points<'_>,
         limits: &[AxisLimits],
-        start_tolerance: &[f64],
+        tolerances: &Tolerances<'_>,
     ) -> Result<(), PathError> {
-        let axes = self.axes;
         let start = Start {
             position: start_position,
             velocity: start_velocity,
             acceleration: start_acceleration,
-            tolerance: start_tolerance,
+            tolerance: tolerances.start,
+            path_tolerance: tolerances.path,
         };
-        points.check(axes, self.max_points, limits, &start)?;
+        points.check(self.axes, self.max_points, limits, &start)?;
+        match self.plan_exact(points, limits, &start) {
+            Err(
+                PathError::VelocityLimit { .. }
+                | PathError::AccelLimit { .. }
+                | PathError::OutOfRange { .. },
+            ) if points.kind() == Kind::Positions && points.len() >= 2 => {
+                crate::blend::plan(&mut self.draft, &mut self.bounds, points, limits, &start)?;
+            }
+            exact => exact?,
+        }
+        core::mem::swap(&mut self.active, &mut self.draft);
+        Ok(())
+    }
+
+    /// Plans the segments through the points exactly (Hermite segments, or the spline) into
+    /// the draft.
+    fn plan_exact(
+        &mut self,
+        points: &Points<'_>,
+        limits: &[AxisLimits],
+        start: &Start<'_>,
+    ) -> Result<(), PathError> {
+        let axes = self.axes;
+        let (start_position, start_velocity, start_acceleration) =
+            (start.position, start.velocity, start.acceleration);
         let times = points.times;
         let n = points.len();
         let lead_in = times[0] > 0.0;
@@ -608,7 +635,6 @@ impl Path {
             checker.check(draft, first + k - 1)?;
         }
         draft.max_feed = checker.max_feed(draft);
-        core::mem::swap(&mut self.active, &mut self.draft);
         Ok(())
     }
 

@@ -5,7 +5,7 @@
 use std::f64::consts::TAU;
 use std::time::{Duration, Instant};
 
-use motion_trajectory::{AxisLimits, Path, Points, TimeScale};
+use motion_trajectory::{AxisLimits, Path, Points, TimeScale, Tolerances};
 
 const POINTS: usize = 1024;
 const AXES: usize = 16;
@@ -85,7 +85,17 @@ fn a_trajectory_of_1024_points_by_16_axes_plans() {
         for _ in 0..5 {
             path.clear();
             let began = Instant::now();
-            let planned = path.plan_points(&start, &start, &start, &points, &limits, &[1e-9; AXES]);
+            let planned = path.plan_points(
+                &start,
+                &start,
+                &start,
+                &points,
+                &limits,
+                &Tolerances {
+                    start: &[1e-9; AXES],
+                    path: &[0.0; AXES],
+                },
+            );
             best = best.min(began.elapsed());
             planned.unwrap_or_else(|e| panic!("{name}: {e}"));
         }
@@ -118,8 +128,18 @@ fn following_it_with_a_hold_and_a_resume() {
         stride: STRIDE,
     };
     let start = [0.0; AXES];
-    path.plan_points(&start, &start, &start, &points, &limits, &[1e-9; AXES])
-        .unwrap();
+    path.plan_points(
+        &start,
+        &start,
+        &start,
+        &points,
+        &limits,
+        &Tolerances {
+            start: &[1e-9; AXES],
+            path: &[0.0; AXES],
+        },
+    )
+    .unwrap();
     let mut scale = TimeScale::new();
     let (mut p, mut v, mut a) = ([0.0; AXES], [0.0; AXES], [0.0; AXES]);
     let (mut ticks, mut total, mut longest) = (0u32, Duration::ZERO, Duration::ZERO);
