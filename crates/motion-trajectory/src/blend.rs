@@ -24,7 +24,7 @@
 //! lead-in: one duration at both ends, found by bisection). Every segment is then checked
 //! exactly like any other path (`Checker`): velocities, accelerations, positions.
 
-use crate::path::{Checker, Segments};
+use crate::path::{Checker, SLACK, Segments};
 use crate::points::{Points, Start};
 use crate::polynomial::{Span, quintic_hermite};
 use crate::{AxisLimits, PathError, at_most};
@@ -214,6 +214,21 @@ pub(crate) fn plan(
                 points.position(1, axis) - points.position(0, axis) - start.velocity[axis] * h
             };
             plan.first = end_blend(limits, h, d, 1)?;
+        }
+    }
+
+    // A straight segment over an axis's velocity limit: no blend helps.
+    for k in 1..n {
+        for (axis, limit) in limits.iter().enumerate() {
+            let value = plan.velocity(k, axis);
+            if !at_most(value.abs(), limit.max_velocity * (1.0 + SLACK)) {
+                return Err(PathError::VelocityLimit {
+                    point: k,
+                    axis,
+                    value,
+                    limit: limit.max_velocity,
+                });
+            }
         }
     }
 
