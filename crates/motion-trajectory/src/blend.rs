@@ -264,7 +264,7 @@ pub(crate) fn plan(
         let (t0, t1) = (plan.time(k - 1), plan.time(k));
         // The straight segment between the blends.
         let (from, to) = (t0 + 0.5 * before, t1 - 0.5 * after.0);
-        if !(0.5 * before + 0.5 * after.0 <= t1 - t0) {
+        if !at_most(0.5 * before + 0.5 * after.0, t1 - t0) {
             // The blends overlap: name the longer one, with the acceleration it would need to
             // fit within the segment.
             let (longer, axis) = if after.0 >= before {

@@ -125,8 +125,8 @@ fn check_blended(
     path.sample(path.duration(), &mut p, &mut v, &mut a);
     assert_eq!(p, path.end());
     assert!(v.iter().chain(&a).all(|&x| x == 0.0));
-    for j in 0..axes {
-        assert_eq!(p[j], points.position_of(n - 1, j));
+    for (j, &p) in p.iter().enumerate() {
+        assert_eq!(p, points.position_of(n - 1, j));
     }
     path.sample(path.duration() - 1e-6, &mut p, &mut v, &mut a);
     for (j, l) in limits.iter().enumerate() {
