@@ -318,7 +318,8 @@ impl<'a> Build<'a> {
 
 /// A planned path for `axes` axes: piecewise polynomials (every segment stored as a quintic
 /// per axis, c0..c5 in local time; lower-order segments have zero high coefficients), at most
-/// `2 · max_points + 3` segments.
+/// `2 · max_points + 3` segments (a blended trajectory: a straight segment and a blend per
+/// point).
 ///
 /// Every buffer is sized in [`Path::new`]; planning and sampling never allocate. A path is
 /// planned into a second set of buffers and swapped in only when it passed every check, so a
@@ -513,15 +514,29 @@ impl Path {
     /// - Lead-in: when `times[0] > 0`, a quintic from the start state to point 0 over
     ///   `times[0]` seconds (matching position, velocity and acceleration at both ends; point
     ///   0's velocity and acceleration are those the path has when it leaves point 0). When
-    ///   `times[0] == 0` there is no lead-in: point 0 must be within `start_tolerance[axis]`
-    ///   of `start_position` ([`PathError::StartMismatch`]) and the path starts at point 0's
-    ///   values.
+    ///   `times[0] == 0` there is no lead-in: point 0 must be within
+    ///   `tolerances.start[axis]` of `start_position` ([`PathError::StartMismatch`]) and the
+    ///   path starts at point 0's values.
     /// - Between points: with velocities and accelerations, quintic Hermite (C2); with
     ///   velocities only, cubic Hermite (C1: the acceleration jumps at the points, and to 0 at
     ///   the end); positions only, a C2 spline through the points: cubics, except for a last
     ///   quintic segment so that it ends at rest with velocity 0 and acceleration 0 (the
     ///   conditions and the solve: `spline.rs`). Its velocity at point 0 is the start
     ///   velocity without a lead-in, and its acceleration at point 0 is 0 with one.
+    /// - Positions only, when that spline exceeds a limit (velocity, acceleration or range,
+    ///   the lead-in's included): blended at the points instead (`blend.rs`). Straight
+    ///   segments between the points, each axis at its segment's Δp/Δt, with a parabolic
+    ///   blend centred on each interior point, as short as every axis's `max_accel` allows
+    ///   and the same for every axis, so that the points' times are kept; an axis whose
+    ///   velocity changes by Δv passes the point at |Δv|·blend/8, which must be within
+    ///   `tolerances.path[axis]` ([`PathError::BlendTolerance`], naming the point and the
+    ///   axis). The lead-in arrives at point 0 with the first segment's velocity; without
+    ///   one, a blend from the start velocity leaves point 0; a last blend arrives exactly at
+    ///   the last point, at rest. Blends that do not fit between their neighbours, or ends
+    ///   too short for `max_accel`, are [`PathError::AccelLimit`]; a straight segment over
+    ///   `max_velocity` is [`PathError::VelocityLimit`]. The blended path is C1 (the
+    ///   acceleration steps at the ends of the blends) and goes through the same exact
+    ///   checks; the spline, when it fits, is kept (it passes the points exactly).
     /// - The last point ends at rest: with velocities its velocity must be 0 (else
     ///   [`PathError::VelocityLimit`] at the last point, limit 0), with accelerations its
     ///   acceleration too ([`PathError::AccelLimit`], limit 0).
@@ -531,7 +546,8 @@ impl Path {
     /// and on every segment, exactly (analytic extrema, not sampling), the largest |velocity|
     /// and |acceleration| against the limits (relative slack 10⁻⁹) and the position against
     /// min..max. The start state must be finite, and the lead-in must stay within min..max
-    /// too. Refusals name the point and the axis.
+    /// too. Refusals name the point and the axis. `tolerances` holds one value per axis in
+    /// each slice ([`PathError::BadLayout`] otherwise).
     pub fn plan_points(
         &mut self,
         start_position: &[f64],
@@ -640,7 +656,8 @@ impl Path {
 
     /// The state at path time `t` (clamped to 0 ..= duration) at feed 1: writes position,
     /// velocity and acceleration (the first `axes` values of each) and returns the index of
-    /// the point the current segment heads to (0 during the lead-in; for a line: 0). At or
+    /// the point the current segment heads to (0 during the lead-in; for a line: 0; a blend
+    /// at a point: that point, until the blend ends). At or
     /// past the end: [`Path::end`], at rest, and the last point. An empty path gives `end()`
     /// (zeros), at rest, and 0.
     ///
