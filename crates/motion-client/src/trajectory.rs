@@ -8,7 +8,8 @@ use motion_ipc::{GroupPath, MAX_GROUP_AXES, MAX_PATH_POINTS, PathFlags, PathKind
 /// trajectory gives the same.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum PointKind {
-    /// Positions alone (the server runs a C2 spline through them).
+    /// Positions alone (the server runs a C2 spline through them, or, when that exceeds a
+    /// limit, straight segments blended at the points within the group's `path_tolerance`).
     Positions,
     /// Positions and velocities (cubic segments).
     Velocities,

@@ -166,6 +166,66 @@ fn a_refused_trajectory_names_its_point_and_axis_and_changes_nothing() {
 }
 
 #[test]
+fn positions_whose_spline_is_too_fast_are_blended_at_the_points_and_run_to_done() {
+    // w (20 units/s, 100 units/s²) at 16 units/s from rest: the exact spline through its
+    // points peaks above 20 units/s. Blended: straight segments with parabolic blends, the
+    // start from rest within 175 ms, w's turn at point 2 (16 → 8 units/s) in 80 ms, passed
+    // at 8·0.08/8 = 0.08 from it; x passes point 2 at 10·0.08/8 = 0.1.
+    let points = [
+        (0.0, [0.0, 0.0, 0.0, 0.0]),
+        (1.0, [10.0, 0.0, 0.0, 16.0]),
+        (2.0, [20.0, 0.0, 0.0, 32.0]),
+        (3.0, [20.0, 0.0, 0.0, 40.0]),
+        (4.0, [10.0, 0.0, 0.0, 40.0]),
+    ];
+    // With no path tolerance it cannot be blended: refused at point 1, where the blend
+    // would pass it (distance and tolerance in the reply).
+    let (mut h, _) = rig([Follow::Setpoints, Follow::Setpoints], 0.0);
+    let reply = run(&mut h, CLIENT_A, trajectory(1, &points, None));
+    assert_eq!(reply.result(), Err(Reason::AccelLimit), "{reply:?}");
+    assert_eq!((reply.at_point, reply.at_axis), (1, 0), "{reply:?}");
+    assert!(reply.value > reply.limit, "{reply:?}");
+    assert_eq!(motion(&h), GroupMotion::Idle);
+
+    let tolerance = 0.5;
+    let (mut h, _) = rig([Follow::Setpoints, Follow::Setpoints], tolerance);
+    let reply = run(&mut h, CLIENT_A, trajectory(2, &points, None));
+    assert_eq!(reply.result(), Ok(()), "{reply:?}");
+    let mut seen = vec![desired(&h)];
+    seen.extend(run_out(&mut h, 6000));
+    assert_eq!(motion(&h), GroupMotion::Done, "{:?}", h.frame.groups[0]);
+    assert_within_limits(&seen, LIMITS);
+    // Every point passed at its time within the tolerance (and a tick's travel); the turns
+    // not exactly: blended.
+    for (time, positions) in &points {
+        let tick = (time * 1000.0).round() as usize;
+        for axis in 0..4 {
+            let distance = (seen[tick][axis] - positions[axis]).abs();
+            assert!(
+                distance <= tolerance + 0.05,
+                "t {time} axis {axis}: {distance}"
+            );
+        }
+    }
+    assert!(
+        (seen[2000][3] - 32.0).abs() > 0.04,
+        "w at point 2: {}",
+        seen[2000][3]
+    );
+    assert!(
+        (seen[2000][0] - 20.0).abs() > 0.05,
+        "x at point 2: {}",
+        seen[2000][0]
+    );
+    // The end: exactly the last point.
+    let last = points[points.len() - 1].1;
+    assert_eq!(desired(&h), last);
+    for (axis, target) in h.frame.axes[..4].iter().zip(last) {
+        assert!((axis.position - target).abs() <= 0.05);
+    }
+}
+
+#[test]
 fn a_new_path_replaces_the_running_one_without_a_step() {
     let (mut h, _) = rig([Follow::Setpoints, Follow::Setpoints], 0.0);
     assert_eq!(

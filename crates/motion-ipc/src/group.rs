@@ -337,7 +337,8 @@ pub enum PathKind {
     Line = 1,
     /// A trajectory: `point_count` points at `times` (seconds from the start), positions,
     /// optional velocities and accelerations (cubic with velocities, quintic with
-    /// accelerations, a C2 spline through positions alone); it ends at rest.
+    /// accelerations, a C2 spline through positions alone, or straight segments blended at
+    /// the points within `path_tolerance` when that spline exceeds a limit); it ends at rest.
     Trajectory = 2,
     /// Setpoints streamed every tick (`motiond/<name>/setpoints`).
     Stream = 3,

@@ -109,6 +109,32 @@ pub enum PathError {
         /// The limit it exceeds.
         limit: f64,
     },
+    /// A trajectory through positions alone: its exact spline exceeds a limit, and the path
+    /// blended at the points instead would pass `point` farther from it than the axis's path
+    /// tolerance. The blend at a point is as short as every axis's `max_accel` allows (the
+    /// same for every axis, so that they pass the point together): `blend` seconds, set by
+    /// axis `by_axis`; an axis whose velocity changes by Δv passes at |Δv|·blend/8.
+    #[error(
+        "point {point}, axis {axis}: blended at the point, the path would pass it {distance} \
+         away, beyond the axis's path tolerance {tolerance} (the blend lasts {blend} s, as \
+         axis {by_axis}'s max_accel needs; the exact spline through the points exceeds a \
+         limit); give the points more time, add points where the path turns, or send \
+         velocities"
+    )]
+    BlendTolerance {
+        /// The point (an interior one: the first and the last are passed exactly).
+        point: usize,
+        /// The axis within the group that would pass too far.
+        axis: usize,
+        /// How far it would pass the point.
+        distance: f64,
+        /// The axis's path tolerance.
+        tolerance: f64,
+        /// The blend's duration, seconds.
+        blend: f64,
+        /// The axis whose acceleration limit sets the blend's duration.
+        by_axis: usize,
+    },
     /// Point 0's time is 0 (no lead-in), but it is not where the axis is.
     #[error(
         "axis {axis}: point 0 is {distance} away from the current position (tolerance \

@@ -6,9 +6,11 @@
 //!    trapezoidal (or triangular) profile, so they start and arrive together;
 //! 2. [`Path::plan_points`]: a time-parameterised trajectory through the [`Points`] a client
 //!    sent (positions, optionally velocities and accelerations), with a lead-in from the
-//!    group's current state: quintic Hermite, cubic Hermite, or a C2 spline through positions;
-//!    every segment checked exactly (analytic extrema, not sampling) against each axis's
-//!    [`AxisLimits`], a refusal ([`PathError`]) naming the point and the axis;
+//!    group's current state: quintic Hermite, cubic Hermite, or a C2 spline through positions
+//!    — blended at the points instead (straight segments, parabolic blends within every
+//!    axis's `max_accel` and its path tolerance, [`Tolerances`]) when that spline exceeds a
+//!    limit; every segment checked exactly (analytic extrema, not sampling) against each
+//!    axis's [`AxisLimits`], a refusal ([`PathError`]) naming the point and the axis;
 //! 3. [`TimeScale`]: feed override (0–150 %) and feed hold (to rest along the path, within the
 //!    axes' acceleration limits) and resume, as a path time advanced by feed·dt each tick.
 //!
@@ -17,7 +19,11 @@
 //! Choices worth knowing:
 //! - every path ends at rest. A spline through positions only is C2 cubics with a last
 //!   quintic segment, so that it arrives with velocity 0 and acceleration 0
-//!   ([`Path::plan_points`]);
+//!   ([`Path::plan_points`]); a blended one arrives on a last parabolic blend, exactly at
+//!   the last point;
+//! - a trajectory through positions alone passes its points exactly when its spline fits
+//!   the limits; otherwise the path passes each interior point at |Δv|·blend/8 per axis, the
+//!   blend as short as the group's acceleration limits allow, at the point's time;
 //! - the limit checks are exact per segment (analytic extrema), with a relative slack of
 //!   10⁻⁹; the Bernstein hull of a segment settles most segments without root finding;
 //! - [`TimeScale`] keeps the accelerations within the limits at both ends of every tick and at
@@ -51,6 +57,7 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+mod blend;
 mod error;
 mod line;
 mod path;
@@ -61,7 +68,7 @@ mod time_scale;
 
 pub use error::PathError;
 pub use path::Path;
-pub use points::Points;
+pub use points::{Points, Tolerances};
 pub use time_scale::{MAX_FEED_OVERRIDE, TimeScale};
 
 /// The most axes in a group.

@@ -7,7 +7,7 @@ use crate::polynomial::{
     Coeffs, Span, cubic_hermite, eval, extremes, hull_bounds, quintic_hermite,
 };
 use crate::spline::Spline;
-use crate::{AxisLimits, MAX_AXES, PathError, Points, at_most, check_limits};
+use crate::{AxisLimits, MAX_AXES, PathError, Points, Tolerances, at_most, check_limits};
 
 /// The relative slack of the limit checks: a segment whose largest |velocity| is at most
 /// `max_velocity · (1 + SLACK)` (and likewise the acceleration) is accepted.
@@ -27,9 +27,9 @@ pub(crate) fn range_slack(limit: &AxisLimits) -> f64 {
 
 /// The segments of one planned path (or of one being planned).
 #[derive(Clone)]
-struct Segments {
-    axes: usize,
-    count: usize,
+pub(crate) struct Segments {
+    pub(crate) axes: usize,
+    pub(crate) count: usize,
     /// Segment s, axis j at `s * axes + j`.
     coeffs: Vec<Coeffs>,
     /// Path time at which each segment starts.
@@ -38,11 +38,11 @@ struct Segments {
     lengths: Vec<f64>,
     /// The point each segment heads to.
     heads: Vec<usize>,
-    end: Vec<f64>,
-    duration: f64,
-    max_feed: f64,
-    last_point: usize,
-    planned: bool,
+    pub(crate) end: Vec<f64>,
+    pub(crate) duration: f64,
+    pub(crate) max_feed: f64,
+    pub(crate) last_point: usize,
+    pub(crate) planned: bool,
 }
 
 impl Segments {
@@ -62,7 +62,7 @@ impl Segments {
         }
     }
 
-    fn clear(&mut self) {
+    pub(crate) fn clear(&mut self) {
         self.count = 0;
         self.end.fill(0.0);
         self.duration = 0.0;
@@ -72,7 +72,7 @@ impl Segments {
     }
 
     /// Appends a segment (its coefficients are written afterwards).
-    fn push(&mut self, start: f64, length: f64, heads: usize) {
+    pub(crate) fn push(&mut self, start: f64, length: f64, heads: usize) {
         let s = self.count;
         self.starts[s] = start;
         self.lengths[s] = length;
@@ -86,7 +86,7 @@ impl Segments {
     }
 
     #[inline]
-    fn coeffs_mut(&mut self, segment: usize, axis: usize) -> &mut Coeffs {
+    pub(crate) fn coeffs_mut(&mut self, segment: usize, axis: usize) -> &mut Coeffs {
         &mut self.coeffs[segment * self.axes + axis]
     }
 
@@ -129,7 +129,7 @@ fn feed_limit(v: f64, a: f64, limit: &AxisLimits) -> f64 {
 /// [`Checker::max_feed`] refines only those bounds that could exceed an axis's exact
 /// largest |velocity| or |acceleration| over the path, so `max_feed` is exact at the cost of
 /// a few exact extremes.
-struct Checker<'a> {
+pub(crate) struct Checker<'a> {
     limits: &'a [AxisLimits],
     /// Segment s, axis j at `s * axes + j`: bounds on |velocity| and |acceleration|.
     bounds: &'a mut [[f64; 2]],
@@ -139,7 +139,7 @@ struct Checker<'a> {
 }
 
 impl<'a> Checker<'a> {
-    fn new(limits: &'a [AxisLimits], bounds: &'a mut [[f64; 2]]) -> Self {
+    pub(crate) fn new(limits: &'a [AxisLimits], bounds: &'a mut [[f64; 2]]) -> Self {
         Self {
             limits,
             bounds,
@@ -148,7 +148,7 @@ impl<'a> Checker<'a> {
     }
 
     /// Checks every axis of `segment`; refusals name the point it heads to and the axis.
-    fn check(&mut self, segments: &Segments, segment: usize) -> Result<(), PathError> {
+    pub(crate) fn check(&mut self, segments: &Segments, segment: usize) -> Result<(), PathError> {
         let t = segments.lengths[segment];
         let span = Span::new(t);
         let point = segments.heads[segment];
@@ -211,7 +211,7 @@ impl<'a> Checker<'a> {
 
     /// The exact largest feed of the checked `segments`: per axis, the exact largest
     /// |velocity| and |acceleration| over the path give min(max_velocity/|v|, √(max_accel/|a|)).
-    fn max_feed(&self, segments: &Segments) -> f64 {
+    pub(crate) fn max_feed(&self, segments: &Segments) -> f64 {
         let axes = segments.axes;
         let exact = |segment: usize, axis: usize| {
             let e = extremes(
@@ -318,7 +318,8 @@ impl<'a> Build<'a> {
 
 /// A planned path for `axes` axes: piecewise polynomials (every segment stored as a quintic
 /// per axis, c0..c5 in local time; lower-order segments have zero high coefficients), at most
-/// `max_points + 3` segments.
+/// `2 · max_points + 3` segments (a blended trajectory: a straight segment and a blend per
+/// point).
 ///
 /// Every buffer is sized in [`Path::new`]; planning and sampling never allocate. A path is
 /// planned into a second set of buffers and swapped in only when it passed every check, so a
@@ -357,7 +358,9 @@ impl Path {
             (1..=MAX_AXES).contains(&axes),
             "a path has 1 to {MAX_AXES} axes, not {axes}"
         );
-        let capacity = max_points + 3;
+        // A blended path: a lead-in or a start blend, n − 1 straight segments, n − 2 blends
+        // and the end blend.
+        let capacity = 2 * max_points + 3;
         Self {
             axes,
             max_points,
@@ -511,15 +514,29 @@ impl Path {
     /// - Lead-in: when `times[0] > 0`, a quintic from the start state to point 0 over
     ///   `times[0]` seconds (matching position, velocity and acceleration at both ends; point
     ///   0's velocity and acceleration are those the path has when it leaves point 0). When
-    ///   `times[0] == 0` there is no lead-in: point 0 must be within `start_tolerance[axis]`
-    ///   of `start_position` ([`PathError::StartMismatch`]) and the path starts at point 0's
-    ///   values.
+    ///   `times[0] == 0` there is no lead-in: point 0 must be within
+    ///   `tolerances.start[axis]` of `start_position` ([`PathError::StartMismatch`]) and the
+    ///   path starts at point 0's values.
     /// - Between points: with velocities and accelerations, quintic Hermite (C2); with
     ///   velocities only, cubic Hermite (C1: the acceleration jumps at the points, and to 0 at
     ///   the end); positions only, a C2 spline through the points: cubics, except for a last
     ///   quintic segment so that it ends at rest with velocity 0 and acceleration 0 (the
     ///   conditions and the solve: `spline.rs`). Its velocity at point 0 is the start
     ///   velocity without a lead-in, and its acceleration at point 0 is 0 with one.
+    /// - Positions only, when that spline exceeds a limit (velocity, acceleration or range,
+    ///   the lead-in's included): blended at the points instead (`blend.rs`). Straight
+    ///   segments between the points, each axis at its segment's Δp/Δt, with a parabolic
+    ///   blend centred on each interior point, as short as every axis's `max_accel` allows
+    ///   and the same for every axis, so that the points' times are kept; an axis whose
+    ///   velocity changes by Δv passes the point at |Δv|·blend/8, which must be within
+    ///   `tolerances.path[axis]` ([`PathError::BlendTolerance`], naming the point and the
+    ///   axis). The lead-in arrives at point 0 with the first segment's velocity; without
+    ///   one, a blend from the start velocity leaves point 0; a last blend arrives exactly at
+    ///   the last point, at rest. Blends that do not fit between their neighbours, or ends
+    ///   too short for `max_accel`, are [`PathError::AccelLimit`]; a straight segment over
+    ///   `max_velocity` is [`PathError::VelocityLimit`]. The blended path is C1 (the
+    ///   acceleration steps at the ends of the blends) and goes through the same exact
+    ///   checks; the spline, when it fits, is kept (it passes the points exactly).
     /// - The last point ends at rest: with velocities its velocity must be 0 (else
     ///   [`PathError::VelocityLimit`] at the last point, limit 0), with accelerations its
     ///   acceleration too ([`PathError::AccelLimit`], limit 0).
@@ -529,7 +546,8 @@ impl Path {
     /// and on every segment, exactly (analytic extrema, not sampling), the largest |velocity|
     /// and |acceleration| against the limits (relative slack 10⁻⁹) and the position against
     /// min..max. The start state must be finite, and the lead-in must stay within min..max
-    /// too. Refusals name the point and the axis.
+    /// too. Refusals name the point and the axis. `tolerances` holds one value per axis in
+    /// each slice ([`PathError::BadLayout`] otherwise).
     pub fn plan_points(
         &mut self,
         start_position: &[f64],
@@ -537,16 +555,41 @@ impl Path {
         start_acceleration: &[f64],
         points: &Points<'_>,
         limits: &[AxisLimits],
-        start_tolerance: &[f64],
+        tolerances: &Tolerances<'_>,
     ) -> Result<(), PathError> {
-        let axes = self.axes;
         let start = Start {
             position: start_position,
             velocity: start_velocity,
             acceleration: start_acceleration,
-            tolerance: start_tolerance,
+            tolerance: tolerances.start,
+            path_tolerance: tolerances.path,
         };
-        points.check(axes, self.max_points, limits, &start)?;
+        points.check(self.axes, self.max_points, limits, &start)?;
+        match self.plan_exact(points, limits, &start) {
+            Err(
+                PathError::VelocityLimit { .. }
+                | PathError::AccelLimit { .. }
+                | PathError::OutOfRange { .. },
+            ) if points.kind() == Kind::Positions && points.len() >= 2 => {
+                crate::blend::plan(&mut self.draft, &mut self.bounds, points, limits, &start)?;
+            }
+            exact => exact?,
+        }
+        core::mem::swap(&mut self.active, &mut self.draft);
+        Ok(())
+    }
+
+    /// Plans the segments through the points exactly (Hermite segments, or the spline) into
+    /// the draft.
+    fn plan_exact(
+        &mut self,
+        points: &Points<'_>,
+        limits: &[AxisLimits],
+        start: &Start<'_>,
+    ) -> Result<(), PathError> {
+        let axes = self.axes;
+        let (start_position, start_velocity, start_acceleration) =
+            (start.position, start.velocity, start.acceleration);
         let times = points.times;
         let n = points.len();
         let lead_in = times[0] > 0.0;
@@ -608,13 +651,13 @@ impl Path {
             checker.check(draft, first + k - 1)?;
         }
         draft.max_feed = checker.max_feed(draft);
-        core::mem::swap(&mut self.active, &mut self.draft);
         Ok(())
     }
 
     /// The state at path time `t` (clamped to 0 ..= duration) at feed 1: writes position,
     /// velocity and acceleration (the first `axes` values of each) and returns the index of
-    /// the point the current segment heads to (0 during the lead-in; for a line: 0). At or
+    /// the point the current segment heads to (0 during the lead-in; for a line: 0; a blend
+    /// at a point: that point, until the blend ends). At or
     /// past the end: [`Path::end`], at rest, and the last point. An empty path gives `end()`
     /// (zeros), at rest, and 0.
     ///

@@ -14,7 +14,8 @@ pub struct Points<'a> {
     pub times: &'a [f64],
     /// Positions, `stride` values per point.
     pub positions: &'a [f64],
-    /// Velocities, same layout; `None`: positions only (a C2 spline through them).
+    /// Velocities, same layout; `None`: positions only (a C2 spline through them, or blended
+    /// at them when the spline exceeds a limit).
     pub velocities: Option<&'a [f64]>,
     /// Accelerations, same layout; only with `velocities` (quintic Hermite segments).
     pub accelerations: Option<&'a [f64]>,
@@ -33,13 +34,28 @@ pub(crate) enum Kind {
     Accelerations,
 }
 
-/// The start state of the group and how far point 0 may be from it without a lead-in.
+/// How far a trajectory may be from its points, one value per axis of the group.
+#[derive(Debug, Clone, Copy)]
+pub struct Tolerances<'a> {
+    /// How far point 0 may be from the start position when its time is 0 (no lead-in):
+    /// [`PathError::StartMismatch`] beyond it.
+    pub start: &'a [f64],
+    /// How far a trajectory through positions alone may pass each point when its exact spline
+    /// would exceed a limit and it is blended at the points instead (the group's
+    /// `path_tolerance`): [`PathError::BlendTolerance`] beyond it. 0 (or NaN) allows no
+    /// blend at a point where the velocity changes.
+    pub path: &'a [f64],
+}
+
+/// The start state of the group, how far point 0 may be from it without a lead-in, and how
+/// far a blended path may pass the points.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Start<'a> {
     pub position: &'a [f64],
     pub velocity: &'a [f64],
     pub acceleration: &'a [f64],
     pub tolerance: &'a [f64],
+    pub path_tolerance: &'a [f64],
 }
 
 impl Points<'_> {
@@ -112,6 +128,7 @@ impl Points<'_> {
             || start.velocity.len() != axes
             || start.acceleration.len() != axes
             || start.tolerance.len() != axes
+            || start.path_tolerance.len() != axes
         {
             return Err(PathError::BadLayout);
         }

@@ -1,6 +1,6 @@
 //! Planning: lines, trajectories through points, and every refusal.
 
-use motion_trajectory::{AxisLimits, Path, PathError, Points};
+use motion_trajectory::{AxisLimits, Path, PathError, Points, Tolerances};
 
 const WIDE: AxisLimits = AxisLimits {
     min: -1000.0,
@@ -140,7 +140,17 @@ fn plan(
     limits: &[AxisLimits],
     start: [f64; 2],
 ) -> Result<(), PathError> {
-    path.plan_points(&start, &[0.0; 2], &[0.0; 2], points, limits, &[1e-6; 2])
+    path.plan_points(
+        &start,
+        &[0.0; 2],
+        &[0.0; 2],
+        points,
+        limits,
+        &Tolerances {
+            start: &[1e-6; 2],
+            path: &[0.0; 2],
+        },
+    )
 }
 
 /// Checks that `path` passes every point at its time (positions always; velocities and
@@ -231,7 +241,10 @@ fn a_spline_through_positions_passes_every_point_and_ends_at_rest() {
             &[0.0; 2],
             &points,
             &[WIDE; 2],
-            &[0.0; 2],
+            &Tolerances {
+                start: &[0.0; 2],
+                path: &[0.0; 2],
+            },
         )
         .unwrap();
         passes_points(&path, &points, 1e-10);

@@ -1,6 +1,6 @@
 //! Every refusal, naming the right point and axis; a refused plan leaves the path as it was.
 
-use motion_trajectory::{AxisLimits, Path, PathError, Points};
+use motion_trajectory::{AxisLimits, Path, PathError, Points, Tolerances};
 
 const LIMIT: AxisLimits = AxisLimits {
     min: -10.0,
@@ -26,7 +26,17 @@ fn plan_with(
         accelerations,
         stride: 2,
     };
-    path.plan_points(&start, &[0.0; 2], &[0.0; 2], &points, &LIMITS, &[0.01; 2])
+    path.plan_points(
+        &start,
+        &[0.0; 2],
+        &[0.0; 2],
+        &points,
+        &LIMITS,
+        &Tolerances {
+            start: &[0.01; 2],
+            path: &[0.0; 2],
+        },
+    )
 }
 
 fn refusal(
@@ -122,7 +132,10 @@ fn bad_layouts() {
             &[0.0; 2],
             &points,
             &vec![LIMIT; limits],
-            &vec![0.0; tolerance],
+            &Tolerances {
+                start: &vec![0.0; tolerance],
+                path: &[0.0; 2],
+            },
         );
         assert_eq!(error, Err(PathError::BadLayout), "case {i}");
     }
@@ -133,8 +146,18 @@ fn bad_layouts() {
         stride: 16,
         ..points
     };
-    path.plan_points(&[0.0; 2], &[0.0; 2], &[0.0; 2], &points, &LIMITS, &[0.0; 2])
-        .unwrap();
+    path.plan_points(
+        &[0.0; 2],
+        &[0.0; 2],
+        &[0.0; 2],
+        &points,
+        &LIMITS,
+        &Tolerances {
+            start: &[0.0; 2],
+            path: &[0.0; 2],
+        },
+    )
+    .unwrap();
     assert_eq!(
         path.plan_line(&[0.0], &[0.0, 1.0], &LIMITS, 1.0, 1.0),
         Err(PathError::BadLayout)
@@ -409,7 +432,17 @@ fn bad_scales_and_bad_limits() {
             stride: 2,
         };
         assert_eq!(
-            path.plan_points(&[0.0; 2], &[0.0; 2], &[0.0; 2], &points, &limits, &[0.0; 2]),
+            path.plan_points(
+                &[0.0; 2],
+                &[0.0; 2],
+                &[0.0; 2],
+                &points,
+                &limits,
+                &Tolerances {
+                    start: &[0.0; 2],
+                    path: &[0.0; 2]
+                }
+            ),
             Err(PathError::BadLimits { axis: 1 })
         );
     }

@@ -8,7 +8,7 @@ use motion_ipc::{
     GroupPath, MAX_GROUP_AXES, MAX_PATH_POINTS, PathFlags, PathKind, Reason, SCHEMA_VERSION,
     StreamState,
 };
-use motion_trajectory::{PathError, Points};
+use motion_trajectory::{PathError, Points, Tolerances};
 
 use crate::command::CommandPort;
 use crate::{Engine, ReplyDetail};
@@ -320,7 +320,10 @@ impl<D: Driver> Engine<D> {
                         &g.acceleration,
                         &points,
                         &g.limits,
-                        &g.then,
+                        &Tolerances {
+                            start: &g.then,
+                            path: &g.config.path_tolerance,
+                        },
                     );
                     if !matches!(
                         result,
@@ -351,7 +354,10 @@ impl<D: Driver> Engine<D> {
                     &g.acceleration,
                     &points,
                     &g.limits,
-                    &g.then,
+                    &Tolerances {
+                        start: &g.then,
+                        path: &g.config.path_tolerance,
+                    },
                 )?;
             }
         }
@@ -408,6 +414,22 @@ impl<D: Driver> Engine<D> {
                 value,
                 limit,
             } => (Reason::AccelLimit, Some(point), axis_of(axis), value, limit),
+            // No reason of the protocol names a path tolerance: blending is refused because
+            // the blends that the axes' accelerations allow pass the point too far; the
+            // reply carries the distance and the tolerance.
+            PathError::BlendTolerance {
+                point,
+                axis,
+                distance,
+                tolerance,
+                ..
+            } => (
+                Reason::AccelLimit,
+                Some(point),
+                axis_of(axis),
+                distance,
+                tolerance,
+            ),
             PathError::StartMismatch {
                 axis,
                 distance,
