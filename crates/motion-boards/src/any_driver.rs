@@ -82,6 +82,9 @@ macro_rules! registry {
             fn start_line(&mut self, now: core::time::Duration) {
                 each_driver!(self, d => d.start_line(now))
             }
+            fn line_starting(&self) -> bool {
+                each_driver!(self, d => d.line_starting())
+            }
             fn pause_line(
                 &mut self,
                 now: core::time::Duration,

@@ -146,6 +146,12 @@ pub trait Driver: Send + fmt::Debug {
         let _ = now;
     }
 
+    /// Whether the start of a line ([`start_line`](Self::start_line)) has not gone out to
+    /// the board yet (the path waits for it). By default `false`.
+    fn line_starting(&self) -> bool {
+        false
+    }
+
     /// Holds a line this board leads on `channel` with the board's own pause, where the
     /// board is running it now (the QSB-M's COMMAND 6, "Pause the motor using the MD
     /// ACCEL rate"): `Ok(true)` when it will come to rest and wait for
@@ -277,6 +283,9 @@ impl<T: Driver + ?Sized> Driver for Box<T> {
     }
     fn start_line(&mut self, now: Duration) {
         (**self).start_line(now);
+    }
+    fn line_starting(&self) -> bool {
+        (**self).line_starting()
     }
     fn pause_line(&mut self, now: Duration, channel: usize) -> Result<bool, GoalError> {
         (**self).pause_line(now, channel)

@@ -11,7 +11,7 @@ use std::path::PathBuf;
 use motion_engine::{CommandPort, Engine};
 use motion_ipc::{
     AxisFlags, ClientId, CommandKind, CommandReply, CommandRequest, GroupMotion, GroupPath,
-    MAX_GROUP_AXES, MAX_PATH_POINTS, MotionFrame, PathKind, Target,
+    GroupState, MAX_GROUP_AXES, MAX_PATH_POINTS, MotionFrame, PathKind, Target,
 };
 use motion_link::Link;
 use motiond::config::ServerConfig;
@@ -424,33 +424,72 @@ fn streaming_setpoints_allocates_nothing_and_applies_each_in_its_tick() {
     assert_eq!(state.last_applied_tick, robot.frame.tick);
 }
 
-/// How closely each board of the gantry follows (printed: the figures of
-/// docs/ARCHITECTURE.md "Coordinated motion"): |desired − measured| on the frames with a
-/// fresh measurement, which includes the measurement's age.
-#[test]
-fn the_gantry_follows_a_trajectory_on_three_boards() {
+/// The robot after the script's moves, the e-stop and the reset, with every axis at rest.
+fn robot_at_rest() -> Robot {
     let mut robot = Robot::new();
     run(&mut robot, 0, 4000, |_| {});
     for _ in 0..3000 {
         robot.tick();
     }
-    let path = gantry_trajectory(&robot, 9);
-    let group = path.group as usize;
+    robot
+}
+
+fn group_index(robot: &Robot, name: &str) -> usize {
+    robot
+        .engine
+        .config()
+        .groups
+        .iter()
+        .position(|g| g.name == name)
+        .expect("sim.toml has the group")
+}
+
+/// Publishes `path` and sends the Run for it.
+fn start_path(robot: &mut Robot, path: Box<GroupPath>) {
+    let (group, id) = (path.group, path.id);
     robot.port.path = Some(path);
-    let mut request =
-        CommandRequest::new(ClientId::from_u128(42), 1, group as u32, CommandKind::Run)
-            .with_values([9.0, 0.0, 0.0]);
+    let mut request = CommandRequest::new(ClientId::from_u128(42), id, group, CommandKind::Run)
+        .with_values([id as f64, 0.0, 0.0]);
     request.target = Target::Group as u32;
     robot.port.requests.push_back(request);
-    let axes: Vec<usize> = ["x", "feeder", "lift"]
+}
+
+/// A line of `group` from where its axes are, by `by` (one per axis of `names`).
+fn line_by(
+    robot: &Robot,
+    group: usize,
+    names: &[&str],
+    by: &[f64],
+    id: u64,
+) -> (Box<GroupPath>, Vec<f64>) {
+    let targets: Vec<f64> = names
         .iter()
-        .map(|name| robot.axis(name) as usize)
+        .zip(by)
+        .map(|(name, by)| robot.frame.axes[robot.axis(name) as usize].position + by)
         .collect();
-    let mut worst = [0.0_f64; 3];
-    let mut last_refresh = [0_u64; 3];
+    let mut path = Box::new(GroupPath::EMPTY);
+    path.set_line(group as u32, id, &targets, (0.0, 0.0));
+    (path, targets)
+}
+
+/// Ticks until `group`'s motion ends (at most `limit` ticks), calling `each` after every
+/// tick with the tick's index; returns the last state and, per axis of `names`, the
+/// largest |desired − measured| at its fresh measurements (which includes the
+/// measurement's age).
+fn watch_group(
+    robot: &mut Robot,
+    group: usize,
+    names: &[&str],
+    limit: u64,
+    mut each: impl FnMut(&mut Robot, u64),
+) -> (GroupState, Vec<f64>) {
+    let axes: Vec<usize> = names.iter().map(|name| robot.axis(name) as usize).collect();
+    let mut worst = vec![0.0_f64; axes.len()];
+    let mut last_refresh = vec![0_u64; axes.len()];
     let mut state = robot.frame.groups[group];
-    for _ in 0..13_000 {
+    for tick in 0..limit {
         robot.tick();
+        each(robot, tick);
         state = robot.frame.groups[group];
         for (slot, &axis) in axes.iter().enumerate() {
             let a = robot.frame.axes[axis];
@@ -459,77 +498,126 @@ fn the_gantry_follows_a_trajectory_on_three_boards() {
                 worst[slot] = worst[slot].max((a.desired_position - a.position).abs());
             }
         }
-        if !state.motion().expect("known").active() {
+        if tick > 0 && !state.motion().expect("known").active() {
             break;
         }
     }
+    (state, worst)
+}
+
+const GANTRY: [&str; 3] = ["x", "feeder", "lift"];
+const ARM: [&str; 6] = ["x", "y", "z", "a", "b", "c"];
+
+/// How closely each board of the gantry follows (printed: the figures of
+/// docs/ARCHITECTURE.md "Coordinated motion").
+#[test]
+fn the_gantry_follows_a_trajectory_on_three_boards() {
+    let mut robot = robot_at_rest();
+    let path = gantry_trajectory(&robot, 9);
+    let group = path.group as usize;
+    start_path(&mut robot, path);
+    let (state, worst) = watch_group(&mut robot, group, &GANTRY, 13_000, |_, _| {});
     eprintln!(
         "gantry, 10.7 s trajectory: max |desired - measured| x {:.3} mm, feeder {:.3} mm, lift {:.3} mm",
         worst[0], worst[1], worst[2]
     );
     assert_eq!(state.motion(), Ok(GroupMotion::Done), "{state:?}");
-    for &axis in &axes {
-        let a = robot.frame.axes[axis];
+    for name in GANTRY {
+        let a = robot.frame.axes[robot.axis(name) as usize];
         assert_eq!(a.mode(), Ok(motion_ipc::AxisMode::Hold), "{a:?}");
         assert_eq!(a.fault, 0, "{a:?}");
     }
 }
 
 /// The gantry's line of the README (x +200 mm, feeder +100 mm, lift +150 mm: the lift's
-/// 12 mm/s sets the pace, x cruises at 16 mm/s), printing how far each axis was from the
-/// path at its fresh measurements (docs/ARCHITECTURE.md "Coordinated motion").
+/// 10 mm/s sets the pace), printing how far each axis was from the path at its fresh
+/// measurements (docs/ARCHITECTURE.md "Coordinated motion"). x runs the line as the
+/// SIXpack's own ramp, the feeder as the QSB-M's own move until its step rate (in 16
+/// steps/s) drifts half its path tolerance off the path, the lift by setpoints; nothing
+/// of it allocates in the engine.
 #[test]
 fn the_gantry_moves_a_line_on_three_boards() {
-    let mut robot = Robot::new();
-    run(&mut robot, 0, 4000, |_| {});
-    for _ in 0..3000 {
-        robot.tick();
-    }
-    let group = robot
-        .engine
-        .config()
-        .groups
-        .iter()
-        .position(|g| g.name == "gantry")
-        .expect("sim.toml has the gantry");
-    let axes: Vec<usize> = ["x", "feeder", "lift"]
-        .iter()
-        .map(|name| robot.axis(name) as usize)
-        .collect();
-    let start: Vec<f64> = axes.iter().map(|&a| robot.frame.axes[a].position).collect();
-    let mut path = Box::new(GroupPath::EMPTY);
-    let targets = [start[0] + 200.0, start[1] + 100.0, start[2] + 150.0];
-    path.set_line(group as u32, 3, &targets, (0.0, 0.0));
-    robot.port.path = Some(path);
-    let mut request =
-        CommandRequest::new(ClientId::from_u128(42), 1, group as u32, CommandKind::Run)
-            .with_values([3.0, 0.0, 0.0]);
-    request.target = Target::Group as u32;
-    robot.port.requests.push_back(request);
-    let mut last = [0_u64; 3];
-    let mut worst = [0.0_f64; 3];
-    let mut state = robot.frame.groups[group];
-    for _ in 0..20_000 {
-        robot.tick();
-        state = robot.frame.groups[group];
-        for (slot, &axis) in axes.iter().enumerate() {
-            let a = robot.frame.axes[axis];
-            if a.last_refresh_tick != last[slot] {
-                last[slot] = a.last_refresh_tick;
-                worst[slot] = worst[slot].max((a.desired_position - a.position).abs());
-            }
-        }
-        if !state.motion().expect("known").active() {
-            break;
-        }
-    }
+    let mut robot = robot_at_rest();
+    let group = group_index(&robot, "gantry");
+    let (path, targets) = line_by(&robot, group, &GANTRY, &[200.0, 100.0, 150.0], 3);
+    start_path(&mut robot, path);
+    let before = ALLOCATIONS.with(Cell::get);
+    let (state, worst) = watch_group(&mut robot, group, &GANTRY, 20_000, |_, _| {});
+    let allocations = ALLOCATIONS.with(Cell::get) - before;
     eprintln!(
         "gantry line: max |desired - measured| x {:.3} mm, feeder {:.3} mm, lift {:.3} mm",
         worst[0], worst[1], worst[2]
     );
+    assert_eq!(allocations, 0, "the engine allocated running a line");
     assert_eq!(state.motion(), Ok(GroupMotion::Done), "{state:?}");
-    for (slot, &axis) in axes.iter().enumerate() {
-        let position = robot.frame.axes[axis].position;
-        assert!((position - targets[slot]).abs() < 0.1, "{slot}: {position}");
+    for (slot, name) in GANTRY.iter().enumerate() {
+        let position = robot.frame.axes[robot.axis(name) as usize].position;
+        assert!((position - targets[slot]).abs() < 0.1, "{name}: {position}");
+    }
+}
+
+/// A hold of the gantry's line one second in: the QSB-M pauses its own move (COMMAND 6)
+/// and resumes it (COMMAND 7), the others hold along the path; the line ends at its
+/// targets.
+#[test]
+fn the_gantry_holds_and_resumes_a_line() {
+    let mut robot = robot_at_rest();
+    let group = group_index(&robot, "gantry");
+    let (path, targets) = line_by(&robot, group, &GANTRY, &[60.0, 30.0, 45.0], 4);
+    start_path(&mut robot, path);
+    let command = |robot: &mut Robot, kind: CommandKind, sequence: u64| {
+        let mut request =
+            CommandRequest::new(ClientId::from_u128(42), sequence, group as u32, kind);
+        request.target = Target::Group as u32;
+        robot.port.requests.push_back(request);
+    };
+    let mut held_at = None;
+    let (state, worst) = watch_group(&mut robot, group, &GANTRY, 30_000, |robot, tick| {
+        let motion = robot.frame.groups[group].motion();
+        if tick == 1000 {
+            command(robot, CommandKind::Hold, 10);
+        }
+        if held_at.is_none() && motion == Ok(GroupMotion::Held) {
+            held_at = Some(tick);
+        }
+        if held_at.is_some_and(|at| tick == at + 500) {
+            command(robot, CommandKind::Resume, 11);
+        }
+    });
+    eprintln!(
+        "gantry line held and resumed: max |desired - measured| x {:.3} mm, feeder {:.3} mm, lift {:.3} mm",
+        worst[0], worst[1], worst[2]
+    );
+    assert!(held_at.is_some(), "{state:?}");
+    assert_eq!(state.motion(), Ok(GroupMotion::Done), "{state:?}");
+    for (slot, name) in GANTRY.iter().enumerate() {
+        let position = robot.frame.axes[robot.axis(name) as usize].position;
+        assert!((position - targets[slot]).abs() < 0.1, "{name}: {position}");
+    }
+}
+
+/// A line of the six axes of the SIXpack: the pack's own linear interpolation (`$26` per
+/// motor, then one `$50`), started with the path.
+#[test]
+fn the_arm_moves_a_line_with_the_packs_interpolation() {
+    let mut robot = robot_at_rest();
+    let group = group_index(&robot, "arm");
+    let (path, targets) = line_by(
+        &robot,
+        group,
+        &ARM,
+        &[30.0, 20.0, -10.0, 45.0, -30.0, 90.0],
+        5,
+    );
+    start_path(&mut robot, path);
+    let (state, worst) = watch_group(&mut robot, group, &ARM, 30_000, |_, _| {});
+    eprintln!(
+        "arm line: max |desired - measured| x {:.3} mm, y {:.3} mm, z {:.3} mm, a {:.3}°, b {:.3}°, c {:.3}°",
+        worst[0], worst[1], worst[2], worst[3], worst[4], worst[5]
+    );
+    assert_eq!(state.motion(), Ok(GroupMotion::Done), "{state:?}");
+    for (slot, name) in ARM.iter().enumerate() {
+        let position = robot.frame.axes[robot.axis(name) as usize].position;
+        assert!((position - targets[slot]).abs() < 0.3, "{name}: {position}");
     }
 }

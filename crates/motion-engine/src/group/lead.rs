@@ -7,7 +7,7 @@
 //!
 //! | while a board leads | the engine |
 //! |---|---|
-//! | the board prepares the line (a pack's `$14` / `$26`, the QSB's rate and acceleration) | holds the path at its start; once every such board of the group is ready it starts them all in the same tick (`$50`, COMMAND 8), and the path with them; after [`ARM_TIMEOUT`] it follows instead |
+//! | the board prepares the line (a pack's `$14` / `$26`, the QSB's rate and acceleration) | holds the path at its start; once every such board of the group is ready it starts them all in the same tick, and the path once every start (`$50`, MOVE STEPS + COMMAND 8) has gone out; a board not ready (or started) within [`ARM_TIMEOUT`] is followed with goals instead |
 //! | the line runs at its feed | sends that board nothing |
 //! | hold (or cancel) | asks the board to pause (`Driver::pause_line`, the QSB-M's COMMAND 6); a board that cannot follows the hold with goals from then on |
 //! | resume at the line's feed | asks the paused board to resume (COMMAND 7), else follows with goals |
@@ -31,6 +31,18 @@ pub(crate) const ARM_TIMEOUT: Duration = Duration::from_millis(500);
 /// its own units (the QSB's 16 steps/s) may not match the path's exactly, and goals feed
 /// the error back.
 pub(crate) const LEAD_DRIFT: f64 = 0.5;
+
+/// Where a line handed to boards is before its path's time moves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub(crate) enum Arming {
+    /// Not waiting: the path runs.
+    #[default]
+    No,
+    /// The boards prepare the line (since then).
+    Preparing(Duration),
+    /// The boards were started; their starts are on their way (since then).
+    Starting(Duration),
+}
 
 /// Whether a member's board runs the group's line itself.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -133,44 +145,56 @@ impl<D: Driver> Engine<D> {
                 let index = member.axis;
                 self.goal_set(index);
             }
-            self.groups[group].arming_since = Some(now);
+            self.groups[group].arming = Arming::Preparing(now);
         }
     }
 
     /// Before the path's time moves on: a line handed to boards starts once every one of
-    /// them has it prepared — every board in the same tick, with the path — or, if one has
-    /// not after [`ARM_TIMEOUT`], is followed with goals from then on. Returns whether the
-    /// path may advance this tick.
+    /// them has it prepared — every board in the same tick — and the path with it once
+    /// every board's start has gone out; if a board is not ready (or its start not out)
+    /// within [`ARM_TIMEOUT`], the engine follows the line with goals instead. Returns
+    /// whether the path may advance this tick.
     pub(crate) fn line_started(&mut self, group: usize) -> bool {
-        let Some(since) = self.groups[group].arming_since else {
-            return true;
-        };
         let now = self.now;
+        let (since, preparing) = match self.groups[group].arming {
+            Arming::No => return true,
+            Arming::Preparing(since) => (since, true),
+            Arming::Starting(since) => (since, false),
+        };
         let mut led = false;
-        let mut ready = true;
+        let mut waiting = false;
         for member in &self.groups[group].members {
             if member.led == Lead::No {
                 continue;
             }
             led = true;
             let axis = &self.axes[member.axis];
-            ready &= self.buses[axis.bus]
-                .drivers()
-                .get(axis.slot)
-                .is_some_and(|driver| driver.line_ready());
+            let driver = self.buses[axis.bus].drivers().get(axis.slot);
+            waiting |= driver.is_none_or(|driver| {
+                if preparing {
+                    !driver.line_ready()
+                } else {
+                    driver.line_starting()
+                }
+            });
         }
-        if led && !ready && now.saturating_sub(since) < ARM_TIMEOUT {
+        let timed_out = now.saturating_sub(since) >= ARM_TIMEOUT;
+        if led && waiting && !timed_out {
             return false;
         }
-        self.groups[group].arming_since = None;
+        self.groups[group].arming = Arming::No;
         if !led {
             return true;
         }
-        if !ready {
+        if waiting {
             self.follow_led(group);
             return true;
         }
+        if !preparing {
+            return true;
+        }
         let count = self.groups[group].members.len();
+        let mut starting = false;
         for first in 0..count {
             let g = &self.groups[group];
             if g.members[first].led == Lead::No {
@@ -184,9 +208,13 @@ impl<D: Driver> Engine<D> {
             });
             if !seen && let Some(driver) = self.buses[board.0].driver_mut(board.1) {
                 driver.start_line(now);
+                starting |= driver.line_starting();
             }
         }
-        true
+        if starting {
+            self.groups[group].arming = Arming::Starting(now);
+        }
+        !starting
     }
 
     /// Hold: every board that runs the line pauses it if it can; the others are followed

@@ -35,7 +35,7 @@ use motion_trajectory::{AxisLimits, Path, TimeScale};
 
 use crate::config::GroupConfig;
 use history::PathHistory;
-use lead::Lead;
+use lead::{Arming, Lead};
 use stream::Stream;
 
 /// One member axis's following state.
@@ -97,9 +97,9 @@ pub(crate) struct Group {
     /// The feed a line was handed to boards at (`lead.rs`): a resume at another feed
     /// follows it with goals.
     pub led_feed: f64,
-    /// Boards were handed the line at this instant and prepare it: the path waits
-    /// (`lead.rs`).
-    pub arming_since: Option<Duration>,
+    /// Boards were handed the line and prepare it, or were started and their starts are
+    /// on their way: the path waits (`lead.rs`).
+    pub arming: Arming,
     /// When the path's time reached its end.
     pub ended_at: Option<Duration>,
     /// Scratch: desired position, velocity, acceleration per member (time-scaled).
@@ -165,7 +165,7 @@ impl Group {
             feed_set: 1.0,
             cancelling: false,
             led_feed: 0.0,
-            arming_since: None,
+            arming: Arming::No,
             ended_at: None,
             position: vec![0.0; count],
             velocity: vec![0.0; count],

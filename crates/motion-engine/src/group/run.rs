@@ -5,7 +5,7 @@ use motion_drivers::Driver;
 use motion_ipc::{AxisMode, ClientId, FaultCode, GroupAbort, GroupMotion, PathKind, StreamState};
 
 use crate::Engine;
-use crate::group::lead::{LEAD_DRIFT, Lead};
+use crate::group::lead::{Arming, LEAD_DRIFT, Lead};
 
 impl<D: Driver> Engine<D> {
     /// Step 4b (after the commands and the safety rules): every group with a motion.
@@ -230,7 +230,7 @@ impl<D: Driver> Engine<D> {
         g.point = 0;
         g.cancelling = false;
         g.ended_at = None;
-        g.arming_since = None;
+        g.arming = Arming::No;
         claimed
     }
 

@@ -409,6 +409,20 @@ impl QsbDriver {
         self.goal.front() == Some(Step::Armed)
     }
 
+    /// Whether a started line's move has not been answered yet: its MD MOVE STEPS or
+    /// COMMAND 8 is still to go (or in flight).
+    pub(super) fn line_firing(&self) -> bool {
+        matches!(self.goal_kind, Some(GoalKind::RampPosition))
+            && match self.goal.front() {
+                Some(Step::MoveTo { attempt: 0, .. }) => true,
+                Some(Step::Ensure(Write::MoveSteps(_))) => true,
+                Some(Step::Send(request)) => {
+                    request == Request::Write(Write::Command(QsbCommand::MotorMove))
+                }
+                _ => false,
+            }
+    }
+
     /// Starts a prepared line: the move goes out next.
     pub(super) fn fire_line(&mut self) {
         if self.line_armed() {

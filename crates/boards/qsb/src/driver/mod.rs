@@ -399,6 +399,10 @@ impl Driver for QsbDriver {
         self.fire_line();
     }
 
+    fn line_starting(&self) -> bool {
+        self.line_firing()
+    }
+
     fn pause_line(&mut self, _now: Duration, channel: usize) -> Result<bool, GoalError> {
         self.pause_move(channel)
     }

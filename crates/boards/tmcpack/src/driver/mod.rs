@@ -349,6 +349,10 @@ impl Driver for TmcpackDriver {
         }
     }
 
+    fn line_starting(&self) -> bool {
+        self.line.is_some_and(|line| line.started)
+    }
+
     fn set_goal(&mut self, _now: Duration, channel: usize, goal: Goal) -> Result<(), GoalError> {
         self.plan_goal(channel, goal)
     }
