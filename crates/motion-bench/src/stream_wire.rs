@@ -2,7 +2,9 @@
 //! QuadQuad2Drv and SPI_motor stepper on SPI sockets the bench serves and watches), a
 //! position stream to a one-axis group per board ([`WireBoard::stream_group`]), one
 //! setpoint per tick, and for each setpoint the first goal transaction at the board that
-//! carries it.
+//! carries it. Timed are the setpoints that move the board's target by at least a count (a
+//! position that rounds to the count before changes nothing the board is told: near the
+//! swing's ends the SPI_motor's step count stays put for several ticks).
 //!
 //! The client polls the frames (every 50 µs) and after each new frame `k` publishes the
 //! setpoint for `k + 1` (a `(1 − cos)` swing from where the axis is, within its limits),
@@ -47,6 +49,9 @@ pub struct StreamWire {
     pub latency: Dist,
     /// Setpoints sent.
     pub sent: u64,
+    /// Of them, setpoints whose position rounded to the same count as the one before (the
+    /// board's target does not change: nothing new to carry, not timed).
+    pub same_count: u64,
     /// Goal transactions seen at the board while streaming.
     pub transactions: u64,
     /// Setpoints without a goal transaction of their tick or later before the stream ended.
@@ -91,6 +96,7 @@ pub fn run(
         board,
         latency: Dist::new(),
         sent: 0,
+        same_count: 0,
         transactions: 0,
         uncarried: 0,
         counters: [0; 5],
@@ -192,7 +198,10 @@ fn stream(
         mode: StreamMode::Position as u32,
         ..Setpoint::EMPTY
     };
-    // (for_tick, t0) of every setpoint; (tick, t1) of every goal transaction.
+    let counts_per_unit = board.counts_per_unit();
+    let mut last_counts = (start * counts_per_unit).round();
+    // (for_tick, t0) of every setpoint that moves the target by a count; (tick, t1) of
+    // every goal transaction.
     let mut sent: Vec<(u64, u64)> = Vec::with_capacity(8192);
     let mut carried: Vec<(u64, u64)> = Vec::with_capacity(8192);
     while seen.try_recv().is_ok() {}
@@ -216,13 +225,21 @@ fn stream(
         let t = (for_tick - first.tick) as f64 * period as f64 / 1e9;
         setpoint.sequence += 1;
         setpoint.for_tick = for_tick;
-        setpoint.values[0] = start + amplitude * (1.0 - (omega * t).cos());
+        let value = start + amplitude * (1.0 - (omega * t).cos());
+        setpoint.values[0] = value;
         let t0 = now_ns();
         ports
             .setpoints
             .send_copy(setpoint)
             .map_err(|e| format!("send a setpoint: {e:?}"))?;
-        sent.push((for_tick, t0));
+        result.sent += 1;
+        let counts = (value * counts_per_unit).round();
+        if counts == last_counts {
+            result.same_count += 1;
+        } else {
+            sent.push((for_tick, t0));
+        }
+        last_counts = counts;
         last = frame;
     }
     // The last setpoints' transactions.
@@ -244,7 +261,6 @@ fn stream(
         state.clamped,
         state.refused,
     ];
-    result.sent = sent.len() as u64;
     result.transactions = carried.len() as u64;
     for (for_tick, t0) in sent {
         // The first transaction of the setpoint's tick or later, after it was sent.
@@ -297,7 +313,8 @@ pub fn rows(runs: &[(&StreamWire, Summary)]) -> Vec<Row> {
             Row {
                 figure: format!(
                     "setpoint → first byte of a transaction carrying it, {} (SPI socket): a \
-                     position stream, one setpoint per tick",
+                     position stream, one setpoint per tick, the setpoints that move the \
+                     target by a count",
                     run.board.name()
                 ),
                 unit: Unit::Ns,
@@ -308,12 +325,14 @@ pub fn rows(runs: &[(&StreamWire, Summary)]) -> Vec<Row> {
                     .to_owned(),
                 note: format!(
                     "{}; t0 = CLOCK_MONOTONIC before send_copy of the setpoint for tick j, t1 = \
-                     the first goal transaction written during tick j or later; {} setpoints, \
-                     {} goal transactions, {} setpoints carried by none before the end; the \
-                     server's counters: applied {applied}, late {late}, early {early}, clamped \
-                     {clamped}, refused {refused}{}",
+                     the first goal transaction written during tick j or later; {} setpoints, of \
+                     which {} rounded to the count before (the board's target unchanged: not \
+                     timed), {} goal transactions, {} setpoints carried by none before the end; \
+                     the server's counters: applied {applied}, late {late}, early {early}, \
+                     clamped {clamped}, refused {refused}{}",
                     run.board.stream_follows(),
                     run.sent,
+                    run.same_count,
                     run.transactions,
                     run.uncarried,
                     run.error

@@ -179,6 +179,16 @@ impl WireBoard {
         }
     }
 
+    /// Counts per unit of the board's axis in [`config_text`].
+    pub fn counts_per_unit(self) -> f64 {
+        match self {
+            Self::Qsb => 100.0,
+            Self::Tmcpack => 640.0,
+            Self::Qq2drv => 31831.0,
+            Self::Spimotor => 1.0,
+        }
+    }
+
     /// How the board follows a stream, for the rows.
     pub fn stream_follows(self) -> &'static str {
         match self {
