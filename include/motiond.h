@@ -55,7 +55,7 @@ extern "C" {
 /* --- constants ---------------------------------------------------------------------------- */
 
 /** Version of the contract; every payload carries it. */
-#define MOTIOND_SCHEMA_VERSION 7u
+#define MOTIOND_SCHEMA_VERSION 8u
 /** Capacity of the axis arrays of the frame and the server info. */
 #define MOTIOND_MAX_AXES 128u
 /** Capacity of the device arrays of the frame and the server info. */
@@ -512,7 +512,7 @@ MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_axis_wire_t) == 8, "motiond_axis_w
 /**
  * One group in a frame (motiond_motion_frame_t.groups, config order).
  *
- * 144 bytes, alignment 8; iceoryx2 type name "motiond::GroupState".
+ * 152 bytes, alignment 8; iceoryx2 type name "motiond::GroupState".
  */
 typedef struct motiond_group_state {
     /** The client whose motion or stream the group runs; zero when none. */
@@ -552,15 +552,21 @@ typedef struct motiond_group_state {
     uint64_t clamped; /* offset 128 */
     /** Streamed setpoints dropped because their sender does not hold the group. */
     uint64_t refused; /* offset 136 */
+    /**
+     * When the server took the last applied setpoint from the `setpoints` service
+     * (CLOCK_MONOTONIC ns, the clock of motiond_motion_frame_t.publish_ns): a client subtracts
+     * its own send stamp, or a frame's `publish_ns`; 0 until one is applied.
+     */
+    uint64_t last_received_ns; /* offset 144 */
 } motiond_group_state_t;
-MOTIOND_STATIC_ASSERT(sizeof(motiond_group_state_t) == 144, "motiond_group_state_t size");
+MOTIOND_STATIC_ASSERT(sizeof(motiond_group_state_t) == 152, "motiond_group_state_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_group_state_t) == 8, "motiond_group_state_t alignment");
 
 /**
  * One consistent snapshot of every axis, board and signal, published once per tick on
  * `motiond/<name>/frame`.
  *
- * 20816 bytes, alignment 8; iceoryx2 type name "motiond::MotionFrame".
+ * 20944 bytes, alignment 8; iceoryx2 type name "motiond::MotionFrame".
  */
 typedef struct motiond_motion_frame {
     uint32_t schema_version; /**< MOTIOND_SCHEMA_VERSION of the writer. (offset 0) */
@@ -591,7 +597,7 @@ typedef struct motiond_motion_frame {
     /** Groups in config order; entries past `group_count` are motiond_group_state_t.IDLE. */
     motiond_group_state_t groups[MOTIOND_MAX_GROUPS]; /* offset 18512 */
 } motiond_motion_frame_t;
-MOTIOND_STATIC_ASSERT(sizeof(motiond_motion_frame_t) == 20816, "motiond_motion_frame_t size");
+MOTIOND_STATIC_ASSERT(sizeof(motiond_motion_frame_t) == 20944, "motiond_motion_frame_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_motion_frame_t) == 8, "motiond_motion_frame_t alignment");
 
 /**

@@ -114,3 +114,26 @@ def test_the_clock_is_checked_not_assumed(monkeypatch: pytest.MonkeyPatch) -> No
     monkeypatch.setattr(bench.time, "get_clock_info", lambda name: realtime)
     with pytest.raises(motiond.MotiondError, match="CLOCK_REALTIME"):
         bench.check_clock()
+
+
+def test_the_closed_loop_streams_to_base_and_prints_one_document(server: Server) -> None:
+    result = subprocess.run(
+        [sys.executable, "-m", "motiond.bench_stream", "--server", server.name]
+        + ["--group", "base", "--duration", "1"],
+        capture_output=True,
+        text=True,
+        timeout=60.0,
+        env={**os.environ, "PYTHONUNBUFFERED": "1"},
+        check=False,
+    )
+    assert result.returncode == 0, result.stderr
+    document = json.loads(result.stdout)
+    assert document["format"] == "motiond.bench_stream/1"
+    stream = document["stream"]
+    assert stream["sent"] > 0
+    assert 0 < stream["before_deadline"] <= stream["sent"] <= stream["ticks"]
+    assert stream["counters"]["refused"] == 0
+    # Frame published → setpoint received by the server: on one clock, after the send.
+    received = values(stream["received_ns"])
+    assert received and all(0 < v < _PLAUSIBLE_NS for v in received)
+    assert stream["applied_in_tick"] + stream["applied_later"] == len(received)

@@ -213,3 +213,18 @@ def test_copy_is_detached(cls: type) -> None:
     duplicate = original.copy()
     assert bytes(duplicate) == bytes(original)
     assert ctypes.addressof(duplicate) != ctypes.addressof(original)
+
+
+def test_a_group_status_carries_the_servers_receive_stamp() -> None:
+    # GroupState.last_received_ns (schema 8): when the server took the last applied
+    # setpoint from the setpoints service, on the clock of the frame's publish_ns.
+    state = ipc.GroupState(
+        last_sequence=7,
+        last_applied_tick=99,
+        last_received_ns=123_456_789,
+        abort_axis=0xFFFF_FFFF,
+    )
+    assert state.last_received_ns == 123_456_789
+    status = motiond.GroupStatus.of(ipc.ServerInfo(), 0, 100, state)
+    assert (status.last_sequence, status.last_applied_tick) == (7, 99)
+    assert status.last_received_ns == 123_456_789

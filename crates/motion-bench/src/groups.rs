@@ -112,7 +112,8 @@ pub fn config_text(name: &str, tick_hz: u32, rt: ServerRt) -> Result<String, Str
 }
 
 /// Runs the phase: motiond `motiond` on `config/sim.toml` at `tick_hz` with `rt`, files in
-/// `dir`; `client_priority` for the streaming client (as the WaitSet clients get it).
+/// `dir`; `client_priority` for the streaming client (as the WaitSet clients get it);
+/// `python`, the interpreter of the Python closed-loop client, if any.
 pub fn run(
     motiond: &Path,
     tick_hz: u32,
@@ -120,14 +121,26 @@ pub fn run(
     client_priority: Option<u8>,
     duration: Duration,
     dir: &Path,
+    python: Option<&Path>,
 ) -> Result<GroupsRun, String> {
     let motiond = motiond.to_path_buf();
     let dir = dir.to_path_buf();
+    let python = python.map(Path::to_path_buf);
     // A path is a ≈400 KB sample written in place: room for an unoptimised build too.
     std::thread::Builder::new()
         .name("bench-groups".to_owned())
         .stack_size(16 << 20)
-        .spawn(move || run_here(&motiond, tick_hz, rt, client_priority, duration, &dir))
+        .spawn(move || {
+            run_here(
+                &motiond,
+                tick_hz,
+                rt,
+                client_priority,
+                duration,
+                &dir,
+                python.as_deref(),
+            )
+        })
         .map_err(|e| format!("group phase thread: {e}"))?
         .join()
         .map_err(|_| "the group phase thread panicked".to_owned())?
@@ -140,6 +153,7 @@ fn run_here(
     client_priority: Option<u8>,
     duration: Duration,
     dir: &Path,
+    python: Option<&Path>,
 ) -> Result<GroupsRun, String> {
     let name = format!("bench-groups-{}", std::process::id());
     let config = dir.join("groups-sim.toml");
@@ -182,8 +196,15 @@ fn run_here(
     let skew = crate::arrival::run(&mut client, gantry, duration).map_err(with_log)?;
     let lost_frames = client.lost_frames;
     let no_path_retries = client.no_path_retries;
-    let stream = crate::stream::run(&mut client, base, tick_hz, client_priority, duration)
+    let mut stream = crate::stream::run(&mut client, base, tick_hz, client_priority, duration)
         .map_err(|e| format!("{e} (motiond: {})", last_line(&log)));
+    // The Python closed-loop client on the same group, once the Rust one let it go.
+    if let (Ok(streamed), Some(python)) = (&mut stream, python) {
+        streamed.python = Some(
+            crate::python_stream::measure(python, &name, "base", streamed.length)
+                .map_err(|e| format!("{e} (motiond: {})", last_line(&log))),
+        );
+    }
     drop(client);
     server.stop();
     Ok(GroupsRun {

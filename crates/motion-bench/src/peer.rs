@@ -146,6 +146,9 @@ pub struct PeerFigures {
     pub setpoints_in_time: u64,
     /// `streaming`: setpoints taken after the tick they were for.
     pub setpoints_late: u64,
+    /// `streaming`: frame `k` published → the setpoint for `k + 1` taken from the service
+    /// (the peer's own stamp, as motiond's `GroupState::last_received_ns`), ns.
+    pub received: Summary,
 }
 
 impl Peer {
@@ -221,6 +224,8 @@ impl Peer {
                 figures.wakeup = Summary::from_line(rest).unwrap_or_default();
             } else if let Some(rest) = line.strip_prefix("work ") {
                 figures.work = Summary::from_line(rest).unwrap_or_default();
+            } else if let Some(rest) = line.strip_prefix("received ") {
+                figures.received = Summary::from_line(rest).unwrap_or_default();
             } else if let Some(rest) = line.strip_prefix("setpoints ") {
                 let mut counts = rest.split_whitespace().map(|w| w.parse().unwrap_or(0));
                 figures.setpoints_in_time = counts.next().unwrap_or(0);
@@ -357,6 +362,7 @@ fn serve(
     let mut wakeup = Dist::new();
     let mut work = Dist::new();
     let mut setpoints = (0, 0);
+    let mut received = Dist::new();
     match mode {
         PeerMode::Ticking | PeerMode::Streaming => {
             let _ = rt::set_up_thread(rt_priority, cpu);
@@ -365,6 +371,7 @@ fn serve(
                 wakeup: &mut wakeup,
                 work: &mut work,
                 setpoints: &mut setpoints,
+                received: &mut received,
             };
             tick_loop(&services, hz, &stop, &mut figures)?;
         }
@@ -375,6 +382,7 @@ fn serve(
     }
     say(&format!("wakeup {}", wakeup.summary().to_line()))?;
     say(&format!("work {}", work.summary().to_line()))?;
+    say(&format!("received {}", received.summary().to_line()))?;
     say(&format!("setpoints {} {}", setpoints.0, setpoints.1))
 }
 
@@ -383,7 +391,12 @@ struct TickFigures<'a> {
     work: &'a mut Dist,
     /// Setpoints taken in (or before) their tick, and after it.
     setpoints: &'a mut (u64, u64),
+    /// Frame `k` published → the setpoint for `k + 1` taken.
+    received: &'a mut Dist,
 }
+
+/// Publish stamps of the peer's last frames, by tick modulo this.
+const PUBLISHED: usize = 64;
 
 fn say(line: &str) -> Result<(), String> {
     let mut out = std::io::stdout().lock();
@@ -408,6 +421,7 @@ fn tick_loop(
     let period = 1_000_000_000 / u64::from(hz);
     let mut deadline = now_ns() + period;
     let mut tick = 0u64;
+    let mut published = [(u64::MAX, 0u64); PUBLISHED];
     while !stop.load(Ordering::Relaxed) {
         sleep_until_ns(deadline);
         let wake = now_ns();
@@ -416,6 +430,12 @@ fn tick_loop(
         answer(services, tick);
         if let Some(setpoints) = &services.setpoints {
             while let Ok(Some(sample)) = setpoints.receive() {
+                let taken = now_ns();
+                let answered = sample.payload().for_tick.wrapping_sub(1);
+                let (at, publish_ns) = published[answered as usize % PUBLISHED];
+                if at == answered {
+                    figures.received.record(taken.saturating_sub(publish_ns));
+                }
                 if sample.payload().for_tick >= tick {
                     figures.setpoints.0 += 1;
                 } else {
@@ -429,6 +449,7 @@ fn tick_loop(
             frame.tick = tick;
             frame.time_ns = deadline;
             frame.publish_ns = now_ns();
+            published[tick as usize % PUBLISHED] = (tick, frame.publish_ns);
             let _ = sample.send();
         }
         let _ = services.tick.notify();

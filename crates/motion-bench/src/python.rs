@@ -250,17 +250,17 @@ fn bad(text: String) -> PythonError {
     PythonError::BadOutput(format!("an unexpected document: {text}"))
 }
 
-fn field<'a>(value: &'a Value, key: &str) -> Result<&'a Value, PythonError> {
+pub(crate) fn field<'a>(value: &'a Value, key: &str) -> Result<&'a Value, PythonError> {
     value.get(key).ok_or_else(|| bad(format!("no `{key}`")))
 }
 
-fn number(value: &Value, key: &str) -> Result<u64, PythonError> {
+pub(crate) fn number(value: &Value, key: &str) -> Result<u64, PythonError> {
     field(value, key)?
         .as_u64()
         .ok_or_else(|| bad(format!("`{key}` is not a non-negative integer")))
 }
 
-fn string<'a>(value: &'a Value, key: &str) -> Result<&'a str, PythonError> {
+pub(crate) fn string<'a>(value: &'a Value, key: &str) -> Result<&'a str, PythonError> {
     field(value, key)?
         .as_str()
         .ok_or_else(|| bad(format!("`{key}` is not a string")))
@@ -268,7 +268,7 @@ fn string<'a>(value: &'a Value, key: &str) -> Result<&'a str, PythonError> {
 
 /// One distribution: `samples` (raw ns) or `histogram` (`[value, count]` pairs), with its
 /// `count`; returns it and the count.
-fn dist(value: &Value, what: &str) -> Result<(Dist, u64), PythonError> {
+pub(crate) fn dist(value: &Value, what: &str) -> Result<(Dist, u64), PythonError> {
     let count = number(value, "count").map_err(|e| bad(format!("{what}: {e}")))?;
     let not_ns = |v: &Value| bad(format!("{what}: {v} is not a non-negative integer ns"));
     let mut dist = Dist::new();
@@ -308,7 +308,7 @@ fn excerpt(text: &str) -> String {
     format!("{cut:?}")
 }
 
-fn last_line(bytes: &[u8]) -> String {
+pub(crate) fn last_line(bytes: &[u8]) -> String {
     let text = String::from_utf8_lossy(bytes);
     text.lines()
         .rev()

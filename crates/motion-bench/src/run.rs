@@ -284,6 +284,7 @@ pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
                 cli.rt_priority,
                 cli.duration,
                 &scratch()?,
+                python.as_deref(),
             )
         }) {
             Ok(run) => Some(run),

@@ -39,6 +39,9 @@ const PERIOD_S: f64 = 1.5;
 pub struct Exchange {
     /// Frame `publish_ns` → setpoint sent, ns.
     pub latency: Dist,
+    /// Ours: frame `k`'s `publish_ns` → the server took the setpoint for `k + 1` from the
+    /// service (`GroupState::last_received_ns`, of the setpoints seen applied), ns.
+    pub received: Dist,
     /// Setpoints sent.
     pub sent: u64,
     /// Of them, sent before the deadline of the tick they were for.
@@ -64,6 +67,11 @@ pub struct StreamRun {
     pub baseline: Exchange,
     /// The peer's count of setpoints taken in time, and late.
     pub peer_counts: (u64, u64),
+    /// The peer's frame `k` published → setpoint for `k + 1` taken, its own stamps.
+    pub peer_received: Summary,
+    /// The Python closed-loop client on the same group, after ours
+    /// ([`crate::python_stream`]); `None` without an interpreter.
+    pub python: Option<Result<crate::python_stream::PythonStream, String>>,
     /// The client thread's set-up.
     pub thread: String,
     /// How long each side streamed.
@@ -117,6 +125,8 @@ pub fn run(
         ours,
         baseline,
         peer_counts: (figures.setpoints_in_time, figures.setpoints_late),
+        peer_received: figures.received,
+        python: None,
         thread,
         length,
     })
@@ -201,6 +211,7 @@ fn exchange(
         .map_err(|e| format!("attach the tick event: {e:?}"))?;
     let mut run = Exchange {
         latency: Dist::new(),
+        received: Dist::new(),
         sent: 0,
         before_deadline: 0,
         ticks: 0,
@@ -214,8 +225,9 @@ fn exchange(
         mode: StreamMode::Velocity as u32,
         ..Setpoint::EMPTY
     };
-    // for_tick of each sequence sent (index = sequence − 1).
-    let mut for_ticks: Vec<u64> = Vec::with_capacity(8192);
+    // for_tick of each sequence sent and the publish_ns of the frame it answered (index =
+    // sequence − 1).
+    let mut for_ticks: Vec<(u64, u64)> = Vec::with_capacity(8192);
     let mut last_tick: Option<u64> = None;
     let mut first_for: Option<u64> = None;
     let mut counted_sequence = 0;
@@ -255,8 +267,17 @@ fn exchange(
                 let sequence = state.last_sequence;
                 if state.last_applied_tick == frame.tick && sequence > counted_sequence {
                     counted_sequence = sequence;
-                    match for_ticks.get(usize::try_from(sequence).unwrap_or(usize::MAX) - 1) {
-                        Some(&tick) if tick == frame.tick => run.applied_in_tick += 1,
+                    let sent = usize::try_from(sequence)
+                        .ok()
+                        .and_then(|s| s.checked_sub(1))
+                        .and_then(|i| for_ticks.get(i));
+                    if let Some(&(_, answered)) = sent
+                        && state.last_received_ns >= answered
+                    {
+                        run.received.record(state.last_received_ns - answered);
+                    }
+                    match sent {
+                        Some(&(tick, _)) if tick == frame.tick => run.applied_in_tick += 1,
                         Some(_) => run.applied_later += 1,
                         None => {}
                     }
@@ -288,7 +309,7 @@ fn exchange(
             .send_copy(setpoint)
             .map_err(|e| format!("send a setpoint: {e:?}"))?;
         let sent = now_ns();
-        for_ticks.push(for_tick);
+        for_ticks.push((for_tick, publish_ns));
         run.sent += 1;
         run.latency.record(sent.saturating_sub(publish_ns));
         if sent < time_ns + period {
@@ -299,7 +320,7 @@ fn exchange(
     Ok(run)
 }
 
-fn percent(part: u64, whole: u64) -> Summary {
+pub(crate) fn percent(part: u64, whole: u64) -> Summary {
     let value = if whole == 0 {
         0
     } else {
@@ -324,7 +345,27 @@ pub fn rows(run: &StreamRun) -> Vec<Row> {
             s.applied, s.late, s.early, s.clamped, s.refused
         )
     });
-    vec![
+    let mut rows = vec![
+        Row {
+            figure: "streaming to base: frame k published → the client's setpoint for k + 1 \
+                     received by the server (GroupState.last_received_ns)"
+                .to_owned(),
+            unit: Unit::Ns,
+            ours: ours.received.summary(),
+            baseline: Some(run.peer_received),
+            baseline_label: "plain iceoryx2 peer pair: the peer's own stamps, its sample \
+                             published → the setpoint for the next tick taken from its \
+                             setpoints service (drained at the start of each tick, as motiond)"
+                .to_owned(),
+            note: format!(
+                "the Rust client in a WaitSet answering each frame; the server stamps a setpoint \
+                 when its tick takes it from the service (CLOCK_MONOTONIC, the clock of \
+                 publish_ns), so this includes the wait for the next tick; {} of {} setpoints \
+                 seen applied in a frame the client read",
+                ours.received.summary().samples,
+                ours.sent
+            ),
+        },
         Row {
             figure: "streaming to base: frame k published → the client's setpoint for k + 1 sent \
                      (client in a WaitSet, CLOCK_MONOTONIC)"
@@ -338,7 +379,7 @@ pub fn rows(run: &StreamRun) -> Vec<Row> {
                 .to_owned(),
             note: format!(
                 "{:.1} s each; client {}; a velocity sine of ±{SPEED} °/s on both wheels; the \
-                 server stamps no reception, so this is the client's side of the exchange",
+                 client's own stamp right after send_copy: its side of the exchange",
                 run.length.as_secs_f64(),
                 run.thread,
             ),
@@ -386,7 +427,15 @@ pub fn rows(run: &StreamRun) -> Vec<Row> {
                 base.ticks
             ),
         },
-    ]
+    ];
+    if let Some(python) = &run.python {
+        rows.extend(crate::python_stream::rows(
+            python,
+            percent(ours.before_deadline, ours.ticks),
+            ours.received.summary(),
+        ));
+    }
+    rows
 }
 
 /// The streaming distribution files.
@@ -396,6 +445,11 @@ pub fn files(run: &StreamRun) -> Vec<(String, String, &Dist)> {
             "stream-frame-to-setpoint-motiond".to_owned(),
             "frame publish → setpoint sent, motiond (base)".to_owned(),
             &run.ours.latency,
+        ),
+        (
+            "stream-frame-to-received-motiond".to_owned(),
+            "frame publish → setpoint received by motiond (base)".to_owned(),
+            &run.ours.received,
         ),
         (
             "stream-frame-to-setpoint-baseline".to_owned(),

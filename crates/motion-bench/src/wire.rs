@@ -32,6 +32,7 @@ use crate::ipc;
 use crate::pty::LineSeen;
 use crate::report::{Row, Unit};
 use crate::rt::{XorShift, now_ns, sleep_until_ns};
+use crate::stream_wire::StreamWire;
 use crate::sweep::{Server, ServerRt, last_line};
 use crate::wire_board::{Served, WireBoard, config_text};
 
@@ -108,6 +109,8 @@ pub struct WireRun {
     pub online_after: Duration,
     /// The real-time keys the bench's motiond ran with.
     pub rt: ServerRt,
+    /// Setpoint → wire on the SPI boards ([`crate::stream_wire`]), after the commands.
+    pub streams: Vec<StreamWire>,
 }
 
 /// A served board and where its messages arrive.
@@ -156,6 +159,7 @@ pub fn run(
         ticks: Dist::new(),
         online_after: Duration::ZERO,
         rt,
+        streams: Vec::new(),
     };
     {
         let mut fixtures = Vec::new();
@@ -342,7 +346,45 @@ fn with_motiond(
             }
         }
     }
+    // Setpoint → wire on the SPI boards, from the same node.
+    let setpoints = open_setpoints(&node, &names)?;
+    let ports = crate::stream_wire::Ports {
+        commands: &client,
+        id,
+        frames: &frames,
+        setpoints: &setpoints,
+    };
+    let length = (duration / 2).max(Duration::from_secs(1));
+    for fixture in fixtures {
+        if matches!(fixture.board, WireBoard::Qq2drv | WireBoard::Spimotor) {
+            // Let the axis come to rest from its last jog.
+            std::thread::sleep(Duration::from_millis(300));
+            let run = crate::stream_wire::run(
+                &ports,
+                fixture.board,
+                &fixture.seen,
+                length,
+                &mut sequence,
+            );
+            result.streams.push(run);
+        }
+    }
     Ok(())
+}
+
+fn open_setpoints(
+    node: &iceoryx2::node::Node<ipc::Ipc>,
+    names: &ServiceNames,
+) -> Result<iceoryx2::port::publisher::Publisher<ipc::Ipc, motion_ipc::Setpoint, ()>, String> {
+    let name = iceoryx2::prelude::ServiceName::new(&names.setpoints())
+        .map_err(|e| format!("{}: {e:?}", names.setpoints()))?;
+    node.service_builder(&name)
+        .publish_subscribe::<motion_ipc::Setpoint>()
+        .open()
+        .map_err(|e| format!("open {}: {e:?}", names.setpoints()))?
+        .publisher_builder()
+        .create()
+        .map_err(|e| format!("setpoint publisher: {e:?}"))
 }
 
 /// motiond's stamp of the first write of the goal set in `tick` on `axis`, from the
@@ -534,6 +576,20 @@ pub fn rows(run: &WireRun, ticks_baseline: Option<Summary>) -> Vec<Row> {
             ),
         });
     }
+    let streams: Vec<_> = run
+        .streams
+        .iter()
+        .map(|stream| {
+            let baseline = run
+                .boards
+                .iter()
+                .find(|b| b.board == stream.board)
+                .map(|b| b.baseline.summary())
+                .unwrap_or_default();
+            (stream, baseline)
+        })
+        .collect();
+    rows.extend(crate::stream_wire::rows(&streams));
     rows.push(Row {
         figure: "command → applied in ticks, same Velocity requests (reply.tick_applied − newest frame tick at send)".to_owned(),
         unit: Unit::Ticks,
@@ -559,6 +615,16 @@ pub fn files(run: &WireRun) -> Vec<(String, String, &Dist)> {
             format!("command-to-wire-{slug}-baseline"),
             format!("message written by the bench → first byte at the board, {name}"),
             &wire.baseline,
+        ));
+    }
+    for stream in &run.streams {
+        files.push((
+            format!("setpoint-to-wire-{}-motiond", stream.board.slug()),
+            format!(
+                "position setpoint → first byte of a transaction carrying it, {}",
+                stream.board.name()
+            ),
+            &stream.latency,
         ));
     }
     files.push((

@@ -159,6 +159,51 @@ impl WireBoard {
         }
     }
 
+    /// The one-axis group of this board's axis in [`config_text`] (the SPI boards': the
+    /// setpoint → wire stream, [`crate::stream_wire`]).
+    pub fn stream_group(self) -> u32 {
+        match self {
+            Self::Spimotor => 1,
+            Self::Qsb | Self::Tmcpack | Self::Qq2drv => 0,
+        }
+    }
+
+    /// The position stream's swing, `A (1 − cos 2π t / T)`: (A in the axis's unit, T in s),
+    /// within the axis's limits (peak velocity A · 2π / T, acceleration A (2π / T)²).
+    pub fn stream_swing(self) -> (f64, f64) {
+        match self {
+            // 126 steps/s, 790 steps/s² (max 500, 5000).
+            Self::Spimotor => (20.0, 1.0),
+            // 0.31 m/s, 2.0 m/s² (max 1.5, 3).
+            Self::Qsb | Self::Tmcpack | Self::Qq2drv => (0.05, 1.0),
+        }
+    }
+
+    /// Counts per unit of the board's axis in [`config_text`].
+    pub fn counts_per_unit(self) -> f64 {
+        match self {
+            Self::Qsb => 100.0,
+            Self::Tmcpack => 640.0,
+            Self::Qq2drv => 31831.0,
+            Self::Spimotor => 1.0,
+        }
+    }
+
+    /// How the board follows a stream, for the rows.
+    pub fn stream_follows(self) -> &'static str {
+        match self {
+            Self::Spimotor => {
+                "the SPI_motor follows by setpoints: a position goal in the tick each \
+                 setpoint applies (writes to 0x90)"
+            }
+            Self::Qsb | Self::Tmcpack | Self::Qq2drv => {
+                "the QuadQuad2Drv follows by segments: a packet 34 (position ramp) once the \
+                 last is acknowledged and as long again, so most setpoints wait for the next \
+                 segment"
+            }
+        }
+    }
+
     /// Whether `message` (a line, word or transaction the board side reported) carries
     /// the goal's first request: `Some(Some(positive))` with the sign of the velocity it
     /// sets, `Some(None)` when its bytes carry no sign (the SPI_motor's step delay), `None`
@@ -208,7 +253,8 @@ impl WireBoard {
                 link,
                 spi_board(Model::QQ2DRV, None, None)?,
                 Some(Watch {
-                    select: |mosi| velocity_ramp(mosi).is_some(),
+                    // Figure 9's velocity ramps, and the position stream's segments.
+                    select: |mosi| velocity_ramp(mosi).is_some() || position_ramp(mosi),
                     seen,
                 }),
             )?),
@@ -329,15 +375,32 @@ impl WireBoard {
 /// The velocity of the first packet 36 (velocity ramp) in an SPI transaction's MOSI bytes
 /// (any number of packets, filler between them), if it has one.
 fn velocity_ramp(mosi: &[u8]) -> Option<i32> {
+    first_packet(mosi, |request| match request {
+        qq2drv::Request::VelocityRamp(entries) => entries.iter().next().map(|e| e.velocity),
+        _ => None,
+    })
+}
+
+/// Whether an SPI transaction's MOSI bytes carry a packet 34 (position ramp: the segments
+/// a position stream or a path hands the QuadQuad2Drv).
+fn position_ramp(mosi: &[u8]) -> bool {
+    first_packet(mosi, |request| {
+        matches!(request, qq2drv::Request::PositionRamp(_)).then_some(())
+    })
+    .is_some()
+}
+
+/// The first packet in `mosi` for which `pick` says something.
+fn first_packet<T>(mosi: &[u8], pick: impl Fn(qq2drv::Request<'_>) -> Option<T>) -> Option<T> {
     let mut start = 0;
     while let Some(offset) = mosi.get(start..)?.iter().position(|&b| b == qq2drv::STX) {
         let at = start + offset;
         let size = usize::from(*mosi.get(at + 1)?);
         match mosi.get(at..at + size).map(qq2drv::Request::parse) {
-            Some(Ok(qq2drv::Request::VelocityRamp(entries))) => {
-                return entries.iter().next().map(|entry| entry.velocity);
-            }
-            Some(Ok(_)) => start = at + size,
+            Some(Ok(request)) => match pick(request) {
+                Some(found) => return Some(found),
+                None => start = at + size,
+            },
             _ => start = at + 1,
         }
     }
@@ -402,7 +465,11 @@ pub fn config_text(
          max_accel = 3.0\n\n\
          [[axis]]\nname = \"focus\"\ndevice = \"focus_drv\"\nchannel = 0\nunit = \"step\"\n\
          counts_per_unit = 1.0\nmin = -100000.0\nmax = 100000.0\nmax_velocity = 500.0\n\
-         max_accel = 5000.0\n",
+         max_accel = 5000.0\n\n\
+         [[group]]\nname = \"wheel\"\naxes = [\"wheel\"]\nstream_limit = \"clamp\"\n\
+         stream_timeout = 50\n\n\
+         [[group]]\nname = \"focus\"\naxes = [\"focus\"]\nstream_limit = \"clamp\"\n\
+         stream_timeout = 50\n",
     );
     text
 }
@@ -477,5 +544,6 @@ mod tests {
             assert_eq!(text.matches(path).count(), 1, "{path}");
         }
         assert_eq!(text.matches("[[axis]]").count(), 4);
+        assert_eq!(text.matches("[[group]]").count(), 2);
     }
 }

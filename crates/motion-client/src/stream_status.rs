@@ -112,6 +112,9 @@ pub struct StreamStatus {
     pub last_sequence: u64,
     /// The tick in which it was applied.
     pub last_applied_tick: u64,
+    /// When the server took it from the `setpoints` service (CLOCK_MONOTONIC ns, the clock
+    /// of the frame's `publish_ns`); 0 until one is applied.
+    pub last_received_ns: u64,
     /// Setpoints applied.
     pub applied: u64,
     /// Setpoints dropped because their tick had passed (a newer one was due as well).
@@ -138,6 +141,7 @@ impl StreamStatus {
             owner: (!raw.owner.is_none()).then_some(raw.owner),
             last_sequence: raw.last_sequence,
             last_applied_tick: raw.last_applied_tick,
+            last_received_ns: raw.last_received_ns,
             applied: raw.applied,
             late: raw.late,
             early: raw.early,
@@ -216,6 +220,7 @@ mod tests {
             refused: 2,
             last_sequence: 7,
             last_applied_tick: 99,
+            last_received_ns: 123_456_789,
             ..GroupState::IDLE
         };
         let status = StreamStatus::from_state(150, &raw);
@@ -224,6 +229,7 @@ mod tests {
         assert_eq!(status.abort, GroupAbort::StreamStale);
         assert_eq!((status.applied, status.refused), (7, 2));
         assert_eq!((status.last_sequence, status.last_applied_tick), (7, 99));
+        assert_eq!(status.last_received_ns, 123_456_789);
         assert_eq!(status.owner, None);
     }
 

@@ -89,13 +89,16 @@ fn setpoints_apply_in_their_tick_at_most_once_and_in_order() {
             base + ahead,
             [value, -value],
         );
-        h.engine.handle_setpoint(CLIENT_A, &sp);
+        // The shell's receive stamp: the frame carries the applied one's.
+        h.engine
+            .handle_setpoint_at(CLIENT_A, &sp, 1_000_000 + sequence);
     }
     for (ahead, value) in [(0, 0.0001), (1, 0.0002), (2, 0.0003)] {
         h.tick();
         let state = h.frame.groups[0];
         assert_eq!(h.frame.tick, base + ahead);
         assert_eq!(state.last_applied_tick, base + ahead, "{state:?}");
+        assert_eq!(state.last_received_ns, 1_000_001 + ahead, "{state:?}");
         assert!(state.stream_flags().contains(StreamFlags::APPLIED));
         assert!((h.frame.axes[0].desired_position - value).abs() < 1e-12);
         assert!((h.frame.axes[1].desired_position + value).abs() < 1e-12);

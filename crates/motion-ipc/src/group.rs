@@ -425,6 +425,11 @@ payload! {
         pub clamped: u64,
         /// Streamed setpoints dropped because their sender does not hold the group.
         pub refused: u64,
+        /// When the server took the last applied setpoint from the `setpoints` service
+        /// (CLOCK_MONOTONIC ns, the clock of [`MotionFrame::publish_ns`](crate::MotionFrame::publish_ns)):
+        /// a client subtracts its own send stamp, or a frame's `publish_ns`; 0 until one is
+        /// applied.
+        pub last_received_ns: u64,
     }
 }
 
@@ -455,6 +460,7 @@ impl GroupState {
         early: 0,
         clamped: 0,
         refused: 0,
+        last_received_ns: 0,
     };
 
     /// The typed motion state; `Err` for a value this build does not know.

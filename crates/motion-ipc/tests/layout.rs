@@ -25,13 +25,14 @@ pin!(SignalState, size 48, align 8, {
     claimed_by @ 32,
 });
 pin!(AxisWire, size 24, align 8, { goal_tick @ 0, wire_tick @ 8, wire_ns @ 16 });
-pin!(GroupState, size 144, align 8, {
+pin!(GroupState, size 152, align 8, {
     owner @ 0, path_id @ 16, time @ 24, duration @ 32, feed @ 40, feed_set @ 48,
     abort_value @ 56, abort_limit @ 64, point @ 72, abort_axis @ 76, motion @ 80, abort @ 81,
     kind @ 82, stream @ 83, stream_mode @ 84, stream_flags @ 85, reserved @ 86, last_sequence @ 88, last_applied_tick @ 96,
     applied @ 104, late @ 112, early @ 120, clamped @ 128, refused @ 136,
+    last_received_ns @ 144,
 });
-pin!(MotionFrame, size 20816, align 8, {
+pin!(MotionFrame, size 20944, align 8, {
     schema_version @ 0, axis_count @ 4, tick @ 8, time_ns @ 16, publish_ns @ 24,
     flags @ 32, signal_count @ 36, device_count @ 40, group_count @ 44, devices @ 48,
     axes @ 80, signals @ 12368, wire @ 15440, groups @ 18512,
@@ -112,7 +113,7 @@ fn layout_is_pinned() {
         (NAME_LEN, UNIT_LEN, MODEL_ID_LEN, PARAM_TEXT_LEN),
         (32, 16, 16, 40)
     );
-    assert_eq!(SCHEMA_VERSION, 7);
+    assert_eq!(SCHEMA_VERSION, 8);
     assert_eq!(
         (MAX_GROUPS, MAX_GROUP_AXES, MAX_PATH_POINTS, PATH_VALUES),
         (16, 16, 1024, 16384)

@@ -129,7 +129,7 @@ macro_rules! payloads {
 }
 
 payloads!(
-    MotionFrame = 20816,
+    MotionFrame = 20944,
     ServerInfo = 38864,
     ServerStats = 1992,
     MachineParams = 180_240,

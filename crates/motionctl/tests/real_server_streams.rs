@@ -196,6 +196,8 @@ fn real_closed_loop_every_setpoint_applied_once_never_early() -> Result {
             "{status:?}"
         );
         assert!(status.last_applied_tick >= last_tick, "{status:?} {text}");
+        // The server's receive stamp of that setpoint (schema 8), on the frames' clock.
+        assert!(status.last_received_ns > 0, "{status:?}");
         println!(
             "sent {sent}, applied {applied}, late {late}; last for tick {last_tick}, applied in \
              tick {}",

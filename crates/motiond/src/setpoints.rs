@@ -1,7 +1,9 @@
 //! The `setpoints` service: setpoints clients stream to their groups (`Setpoint`, 288
 //! bytes), handed to the engine each tick with the node that sent each — from the
 //! service's dynamic config, written by iceoryx2 when the port connected, never from the
-//! payload. Nothing is allocated after start-up.
+//! payload — and the instant the tick took each from the service (CLOCK_MONOTONIC, the
+//! clock of the frame's `publish_ns`: the frame's `GroupState::last_received_ns`). Nothing
+//! is allocated after start-up.
 
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
@@ -11,6 +13,7 @@ use motion_ipc::Setpoint;
 
 use crate::boards::AnyDriver;
 use crate::error::ServiceError;
+use crate::rt::monotonic_now;
 use crate::services::Ipc;
 
 /// Setpoints a publisher may have queued before the tick takes them: enough for a client
@@ -47,15 +50,16 @@ pub fn create(
 
 impl SetpointInbox {
     /// Hands every setpoint that arrived since the last tick to `engine`, each with its
-    /// sender's node.
+    /// sender's node and the instant it was taken from the service.
     pub fn deliver(&mut self, factory: &SetpointsFactory, engine: &mut Engine<AnyDriver>) {
         for _ in 0..SETPOINTS_PER_TICK {
             let Ok(Some(sample)) = self.subscriber.receive() else {
                 return;
             };
+            let received_ns = crate::io::duration_ns(monotonic_now());
             let publisher = sample.header().publisher_id().value();
             match crate::inbox::publisher_node(factory, publisher) {
-                Some(node) => engine.handle_setpoint(node, sample.payload()),
+                Some(node) => engine.handle_setpoint_at(node, sample.payload(), received_ns),
                 None => self.orphans += 1,
             }
         }

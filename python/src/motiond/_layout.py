@@ -23,7 +23,7 @@ from ._mirror_base import (
 # --- constants ---------------------------------------------------------------------------
 
 #: Version of the contract; every payload carries it.
-SCHEMA_VERSION = 7
+SCHEMA_VERSION = 8
 #: Capacity of the axis arrays of the frame and the server info.
 MAX_AXES = 128
 #: Capacity of the device arrays of the frame and the server info.
@@ -160,7 +160,7 @@ class AxisWire(Payload):
 class GroupState(Payload):
     """One group in a frame (``MotionFrame.groups``, config order).
 
-    144 bytes, alignment 8."""
+    152 bytes, alignment 8."""
 
     _type_name_ = "motiond::GroupState"
     _fields_ = [
@@ -197,6 +197,10 @@ class GroupState(Payload):
         ("clamped", ctypes.c_uint64),
         # Streamed setpoints dropped because their sender does not hold the group.
         ("refused", ctypes.c_uint64),
+        # When the server took the last applied setpoint from the ``setpoints`` service
+        # (CLOCK_MONOTONIC ns, the clock of ``MotionFrame.publish_ns``): a client subtracts its own
+        # send stamp, or a frame's ``publish_ns``; 0 until one is applied.
+        ("last_received_ns", ctypes.c_uint64),
     ]
 
 
@@ -204,7 +208,7 @@ class MotionFrame(Payload):
     """One consistent snapshot of every axis, board and signal, published once per tick on
     ``motiond/<name>/frame``.
 
-    20816 bytes, alignment 8."""
+    20944 bytes, alignment 8."""
 
     _type_name_ = "motiond::MotionFrame"
     _fields_ = [

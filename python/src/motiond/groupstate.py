@@ -85,6 +85,9 @@ class GroupStatus:
     last_sequence: int
     #: Tick in which it was applied.
     last_applied_tick: int
+    #: When the server took it from the setpoints service (CLOCK_MONOTONIC ns, the clock of
+    #: the frame's ``publish_ns`` and of ``time.monotonic_ns()``); 0 until one is applied.
+    last_received_ns: int
     #: Streamed setpoints applied.
     applied: int
     #: Streamed setpoints dropped because their tick had passed (a newer one was due).
@@ -122,6 +125,7 @@ class GroupStatus:
             stream_flags=StreamFlags(state.stream_flags),
             last_sequence=int(state.last_sequence),
             last_applied_tick=int(state.last_applied_tick),
+            last_received_ns=int(state.last_received_ns),
             applied=int(state.applied),
             late=int(state.late),
             early=int(state.early),

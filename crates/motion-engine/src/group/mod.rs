@@ -207,6 +207,7 @@ impl Group {
             reserved: 0,
             last_sequence: self.stream.last_sequence,
             last_applied_tick: self.stream.last_applied_tick,
+            last_received_ns: self.stream.last_received_ns,
             applied: self.stream.applied,
             late: self.stream.late,
             early: self.stream.early,

@@ -30,6 +30,8 @@ pub(crate) struct Queued {
     pub sequence: u64,
     pub for_tick: u64,
     pub feed_forward: bool,
+    /// When the shell took it from the service (CLOCK_MONOTONIC ns; 0: not stamped).
+    pub received_ns: u64,
     pub values: [f64; MAX_GROUP_AXES],
     pub velocities: [f64; MAX_GROUP_AXES],
 }
@@ -39,6 +41,7 @@ impl Queued {
         sequence: 0,
         for_tick: 0,
         feed_forward: false,
+        received_ns: 0,
         values: [0.0; MAX_GROUP_AXES],
         velocities: [0.0; MAX_GROUP_AXES],
     };
@@ -56,6 +59,8 @@ pub(crate) struct Stream {
     pub last_received: u64,
     pub last_sequence: u64,
     pub last_applied_tick: u64,
+    /// When the shell received the last setpoint applied (its `received_ns`).
+    pub last_received_ns: u64,
     /// The tick the last setpoint was applied in, or the stream started in.
     pub since_tick: u64,
     pub applied: u64,
@@ -75,6 +80,7 @@ impl Stream {
         last_received: 0,
         last_sequence: 0,
         last_applied_tick: 0,
+        last_received_ns: 0,
         since_tick: 0,
         applied: 0,
         late: 0,
@@ -97,8 +103,16 @@ impl Stream {
 impl<D: Driver> Engine<D> {
     /// A setpoint that arrived on `setpoints` from the node `sender` (the transport's
     /// identity): queued for its tick, or dropped and counted. Call before
-    /// [`step`](Self::step).
+    /// [`step`](Self::step). Not stamped: [`handle_setpoint_at`](Self::handle_setpoint_at)
+    /// with 0.
     pub fn handle_setpoint(&mut self, sender: ClientId, setpoint: &Setpoint) {
+        self.handle_setpoint_at(sender, setpoint, 0);
+    }
+
+    /// [`handle_setpoint`](Self::handle_setpoint) of a setpoint the shell took from the
+    /// service at `received_ns` (its clock, CLOCK_MONOTONIC ns in motiond: the engine reads
+    /// no clock). When applied, the frame's `GroupState::last_received_ns` carries it.
+    pub fn handle_setpoint_at(&mut self, sender: ClientId, setpoint: &Setpoint, received_ns: u64) {
         let next_tick = if self.started { self.tick + 1 } else { 0 };
         let Some(group) = self.groups.get_mut(setpoint.group as usize) else {
             return;
@@ -124,6 +138,7 @@ impl<D: Driver> Engine<D> {
             sequence: setpoint.sequence,
             for_tick: setpoint.for_tick,
             feed_forward: setpoint.flags().contains(SetpointFlags::FEED_FORWARD),
+            received_ns,
             values: setpoint.values,
             velocities: setpoint.velocities,
         });
@@ -230,6 +245,7 @@ impl<D: Driver> Engine<D> {
             let since = tick.saturating_sub(stream.since_tick).max(1) as f64 * dt;
             stream.last_sequence = setpoint.sequence;
             stream.last_applied_tick = tick;
+            stream.last_received_ns = setpoint.received_ns;
             stream.since_tick = tick;
             stream.applied += 1;
             stream.flags = StreamFlags(stream.flags.0 | StreamFlags::APPLIED.0);

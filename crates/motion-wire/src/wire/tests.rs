@@ -77,7 +77,7 @@ fn command_reply_golden_bytes() {
 /// `MotionFrame`'s table: tick @ 8, group_count @ 44, devices @ 48, axes @ 80 (96 bytes each:
 /// position @ 0, flags @ 40, mode @ 46, claimed_by @ 48, desired_position @ 80), signals @
 /// 12368 (48 bytes each), wire @ 15440 (24 bytes each: goal_tick @ 0, wire_tick @ 8,
-/// wire_ns @ 16), groups @ 18512 (144 bytes each: path_id @ 16, motion @ 80); 20816 bytes.
+/// wire_ns @ 16), groups @ 18512 (152 bytes each: path_id @ 16, motion @ 80); 20944 bytes.
 #[test]
 fn frame_fields_sit_at_their_documented_offsets_and_padding_is_zero() {
     let mut frame = MotionFrame::EMPTY;
@@ -102,7 +102,7 @@ fn frame_fields_sit_at_their_documented_offsets_and_padding_is_zero() {
     frame.groups[0].path_id = 11;
     frame.groups[0].motion = 1;
     let bytes = encode(&frame);
-    assert_eq!(bytes.len(), 20816);
+    assert_eq!(bytes.len(), 20944);
     assert_eq!(le_u64(&bytes, 15440 + 24), 5);
     assert_eq!(le_u64(&bytes, 15440 + 24 + 8), 6);
     assert_eq!(le_u64(&bytes, 15440 + 24 + 16), 77);
@@ -134,7 +134,7 @@ fn wrong_sizes_are_refused_with_both_sizes() {
         decode::<MotionFrame>(&bytes[..100]),
         Err(WireError::Size {
             what: "MotionFrame",
-            expected: 20816,
+            expected: 20944,
             got: 100
         })
     );
