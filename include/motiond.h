@@ -189,7 +189,8 @@ enum motiond_reason {
     MOTIOND_REASON_PATH_START = 27,
     MOTIOND_REASON_PATH_LAYOUT = 28,
     MOTIOND_REASON_GROUP_BUSY = 29,
-    MOTIOND_REASON_NOT_MOVING = 30
+    MOTIOND_REASON_NOT_MOVING = 30,
+    MOTIOND_REASON_BLEND_TOLERANCE = 31
 };
 
 /** What motiond_command_request_t.axis indexes (motiond_command_request_t.target). */
@@ -1060,6 +1061,7 @@ static inline const char *motiond_reason_text(uint32_t value) {
     case MOTIOND_REASON_PATH_LAYOUT: return "malformed path: no points, too many, an axis count other than the group's, an unknown kind, or a scale outside (0, 1]";
     case MOTIOND_REASON_GROUP_BUSY: return "an axis of this request is moving (with a group, or on its own, still stopping): cancel that motion or wait for the axis to rest";
     case MOTIOND_REASON_NOT_MOVING: return "the group has no motion running";
+    case MOTIOND_REASON_BLEND_TOLERANCE: return "positions alone cannot be blended at this point within the axis's path_tolerance at its max_accel: space the points further apart, or send velocities";
     default: return NULL;
     }
 }

@@ -182,7 +182,7 @@ fn positions_whose_spline_is_too_fast_are_blended_at_the_points_and_run_to_done(
     // would pass it (distance and tolerance in the reply).
     let (mut h, _) = rig([Follow::Setpoints, Follow::Setpoints], 0.0);
     let reply = run(&mut h, CLIENT_A, trajectory(1, &points, None));
-    assert_eq!(reply.result(), Err(Reason::AccelLimit), "{reply:?}");
+    assert_eq!(reply.result(), Err(Reason::BlendTolerance), "{reply:?}");
     assert_eq!((reply.at_point, reply.at_axis), (1, 0), "{reply:?}");
     assert!(reply.value > reply.limit, "{reply:?}");
     assert_eq!(motion(&h), GroupMotion::Idle);

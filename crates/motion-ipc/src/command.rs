@@ -273,11 +273,16 @@ pub enum Reason {
     GroupBusy = 29,
     /// Hold, resume, feed or cancel of a group with no motion running.
     NotMoving = 30,
+    /// A trajectory of positions alone cannot be blended at a point within an axis's
+    /// `path_tolerance` at its max_accel ([`CommandReply::at_point`],
+    /// [`CommandReply::at_axis`]; `value` the distance the blend would pass the point at,
+    /// `limit` the tolerance).
+    BlendTolerance = 31,
 }
 
 impl Reason {
     /// Every reason, in value order.
-    pub const ALL: [Self; 31] = [
+    pub const ALL: [Self; 32] = [
         Self::Accepted,
         Self::SchemaMismatch,
         Self::UnknownKind,
@@ -309,6 +314,7 @@ impl Reason {
         Self::PathLayout,
         Self::GroupBusy,
         Self::NotMoving,
+        Self::BlendTolerance,
     ];
 
     /// One line saying what is wrong and what to do.
@@ -365,6 +371,10 @@ impl Reason {
                  cancel that motion or wait for the axis to rest"
             }
             Self::NotMoving => "the group has no motion running",
+            Self::BlendTolerance => {
+                "positions alone cannot be blended at this point within the axis's path_tolerance \
+                 at its max_accel: space the points further apart, or send velocities"
+            }
         }
     }
 }

@@ -721,6 +721,10 @@ class Reason(ReasonMethods, TextedEnum):
         "an axis of this request is moving (with a group, or on its own, still stopping): cancel that motion or wait for the axis to rest",
     )
     NOT_MOVING = 30, "the group has no motion running"
+    BLEND_TOLERANCE = (
+        31,
+        "positions alone cannot be blended at this point within the axis's path_tolerance at its max_accel: space the points further apart, or send velocities",
+    )
 
 
 class Target(TextedEnum):

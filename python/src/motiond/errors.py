@@ -68,6 +68,7 @@ __all__ = [
     "PathLayout",
     "GroupBusy",
     "NotMoving",
+    "BlendTolerance",
 ]
 
 
@@ -402,6 +403,14 @@ class NotMoving(Refused):
     reason_code = Reason.NOT_MOVING
 
 
+class BlendTolerance(Refused):
+    """Refused: a trajectory of positions alone cannot be blended at a point within the
+    axis's ``path_tolerance`` at its max_accel; ``at_point`` / ``at_axis`` name it, ``value``
+    and ``limit`` give the distance and the tolerance (``Reason.BLEND_TOLERANCE``)."""
+
+    reason_code = Reason.BLEND_TOLERANCE
+
+
 #: The :class:`Refused` subclass of every reason but ``ACCEPTED``.
 REFUSALS: Dict[Reason, Type[Refused]] = {
     cls.reason_code: cls
@@ -436,6 +445,7 @@ REFUSALS: Dict[Reason, Type[Refused]] = {
         PathLayout,
         GroupBusy,
         NotMoving,
+        BlendTolerance,
     )
     if cls.reason_code is not None
 }

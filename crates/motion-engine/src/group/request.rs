@@ -414,9 +414,8 @@ impl<D: Driver> Engine<D> {
                 value,
                 limit,
             } => (Reason::AccelLimit, Some(point), axis_of(axis), value, limit),
-            // No reason of the protocol names a path tolerance: blending is refused because
-            // the blends that the axes' accelerations allow pass the point too far; the
-            // reply carries the distance and the tolerance.
+            // The blends the axes' accelerations allow pass the point too far; the reply
+            // carries the distance and the tolerance.
             PathError::BlendTolerance {
                 point,
                 axis,
@@ -424,7 +423,7 @@ impl<D: Driver> Engine<D> {
                 tolerance,
                 ..
             } => (
-                Reason::AccelLimit,
+                Reason::BlendTolerance,
                 Some(point),
                 axis_of(axis),
                 distance,
