@@ -340,7 +340,13 @@ impl Channel {
                 script.send(Request::SetPosition { motor, position });
             }
         }
-        self.steps = script.finish(range)?;
+        self.take_script(script.finish(range)?, kind);
+        Ok(())
+    }
+
+    /// `steps` carry out a new goal of `kind` from now on.
+    fn take_script(&mut self, steps: FixedQueue<Step, MAX_STEPS>, kind: GoalKind) {
+        self.steps = steps;
         self.stop_if_active = false;
         self.urgent = matches!(kind, GoalKind::Stop | GoalKind::Off);
         self.rest_at = None;
@@ -353,7 +359,6 @@ impl Channel {
         if kind == GoalKind::Home {
             self.state.homed = false;
         }
-        Ok(())
     }
 
     /// Whether the motor stands still, inactive, with nothing queued: `$50` may include it
@@ -374,15 +379,8 @@ impl Channel {
         self.power_on(&mut script, motor);
         self.limits(&mut script, motor, vmax, amax);
         script.send(Request::SetTarget { motor, target });
-        self.steps = script.finish(GoalError::OutOfBoardRange(GoalKind::RampPosition))?;
-        self.stop_if_active = false;
-        self.urgent = false;
-        self.rest_at = None;
-        self.state.arrived = false;
-        self.state.at_limit = false;
-        self.homing = Homing::Idle;
-        self.home_failed = false;
-        self.ref_phase = None;
+        let kind = GoalKind::RampPosition;
+        self.take_script(script.finish(GoalError::OutOfBoardRange(kind))?, kind);
         Ok(())
     }
 
