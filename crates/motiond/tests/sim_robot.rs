@@ -621,3 +621,59 @@ fn the_arm_moves_a_line_with_the_packs_interpolation() {
         assert!((position - targets[slot]).abs() < 0.3, "{name}: {position}");
     }
 }
+
+/// An e-stop while the SIXpack runs the arm's line by its own interpolation (`$50`):
+/// every motor of it stops (its `$25` 0 at the e-stop's rate, manual 8.4 "The change to
+/// rotation happens immediately, even if the motor is still active"), the group aborts.
+#[test]
+fn an_estop_stops_the_packs_interpolation() {
+    let mut robot = robot_at_rest();
+    let group = group_index(&robot, "arm");
+    let (path, _) = line_by(
+        &robot,
+        group,
+        &ARM,
+        &[60.0, 40.0, -20.0, 90.0, -60.0, 150.0],
+        6,
+    );
+    start_path(&mut robot, path);
+    let mut stopped_at = None;
+    let (state, _) = watch_group(&mut robot, group, &ARM, 10_000, |robot, tick| {
+        if tick == 400 {
+            let estop = CommandRequest::new(ClientId::from_u128(42), 20, 0, CommandKind::EStop);
+            robot.port.requests.push_back(estop);
+        }
+    });
+    assert_eq!(state.motion(), Ok(GroupMotion::Aborted), "{state:?}");
+    assert_eq!(
+        state.abort(),
+        Ok(motion_ipc::GroupAbort::EStop),
+        "{state:?}"
+    );
+    for tick in 0..3000 {
+        robot.tick();
+        let still = ARM.iter().all(|name| {
+            let a = robot.frame.axes[robot.axis(name) as usize];
+            a.velocity == 0.0 && a.flags & AxisFlags::MOVING.0 == 0
+        });
+        if still {
+            stopped_at = Some(tick);
+            break;
+        }
+    }
+    assert!(
+        stopped_at.is_some(),
+        "the arm's axes came to rest after the e-stop"
+    );
+    let after: Vec<f64> = ARM
+        .iter()
+        .map(|name| robot.frame.axes[robot.axis(name) as usize].position)
+        .collect();
+    for _ in 0..500 {
+        robot.tick();
+    }
+    for (slot, name) in ARM.iter().enumerate() {
+        let position = robot.frame.axes[robot.axis(name) as usize].position;
+        assert_eq!(position, after[slot], "{name} moved after it came to rest");
+    }
+}
