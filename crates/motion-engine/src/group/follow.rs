@@ -2,21 +2,19 @@
 //!
 //! | style | sent | when |
 //! |---|---|---|
-//! | `Setpoints` (SPI_motor) | `Position` = the desired position now | every tick it changed |
-//! | `Segments` (QuadQuad2Drv, Trinamic packs, the example board) | `RampPosition` to where the path will be a segment ahead (at least 1.5 braking distances), at the path's velocity plus the error over the feedback time | when the driver has acknowledged the last goal: on an SPI link in the next tick, on a serial link as long again after |
+//! | `Setpoints` (QuadQuad2Drv, SPI_motor) | `Position` = the desired position now | every tick it changed |
+//! | `Segments` (Trinamic packs, the example board) | `RampPosition` to where the path will be a segment ahead (at least 1.5 braking distances), at the path's velocity plus the error over the feedback time | when the driver has acknowledged the last goal, and as long again after |
 //! | `Velocity` (QSB) | `Velocity` = the path's velocity a segment ahead plus the position error over the feedback time; at the end a `RampPosition` to the path's end | likewise |
 //!
 //! A power stream hands every board its `Power` goal whatever its style. A segment is as
 //! long as the driver takes to get a goal acknowledged (an average, between one tick and
-//! [`MAX_LEAD`]); after each acknowledgement a serial link gets as long again for its own
+//! [`MAX_LEAD`]); after each acknowledgement the link gets as long again for its own
 //! traffic (polls, the encoder stream), so that following never starves the measurements
-//! it is supervised by. An SPI link exchanges with its board every tick whatever it
-//! carries: its board gets a goal every tick. A line a board runs itself (`lead.rs`) gets
-//! none while the board runs it.
+//! it is supervised by.
 
 use core::time::Duration;
 
-use motion_drivers::{Driver, Follow, Goal, GoalError, LinkKind};
+use motion_drivers::{Driver, Follow, Goal, GoalError};
 use motion_ipc::{GroupAbort, PathKind, StreamMode};
 
 use crate::Engine;
@@ -64,10 +62,7 @@ impl<D: Driver> Engine<D> {
                 // Its board runs the line itself.
                 continue;
             }
-            // An SPI link exchanges with its board every tick whatever is sent: its board
-            // gets a goal every tick, with no pause for its own traffic.
-            let every_tick = self.buses[axis.bus].kind() == LinkKind::Spi;
-            let goal = next_goal(g, slot, &mut member, axis, (now, period), every_tick);
+            let goal = next_goal(g, slot, &mut member, axis, now, period);
             let Some(goal) = goal else {
                 self.groups[group].members[slot] = member;
                 continue;
@@ -117,8 +112,8 @@ fn next_goal(
     slot: usize,
     member: &mut Member,
     axis: &Axis,
-    (now, period): (Duration, Duration),
-    every_tick: bool,
+    now: Duration,
+    period: Duration,
 ) -> Option<Goal> {
     let desired = g.position[slot];
     let stream = g.kind == PathKind::Stream;
@@ -142,12 +137,12 @@ fn next_goal(
     if let (Some(sent), None) = (member.sent_at, member.acked_at)
         && !g.pending[slot]
     {
-        // Acknowledged: that is a segment's length, and a serial link gets as long again
-        // for its own traffic before the next goal.
+        // Acknowledged: that is a segment's length, and the link gets as long again for
+        // its own traffic before the next goal.
         let took = now.saturating_sub(sent).clamp(period, MAX_LEAD);
         member.lead = (member.lead * 3 + took) / 4;
         member.acked_at = Some(now);
-        member.next_at = if every_tick { now } else { now + took };
+        member.next_at = now + took;
     }
     let waiting = member.sent_at.is_some() && member.acked_at.is_none();
     if waiting || now < member.next_at {
