@@ -2,15 +2,16 @@
 //!
 //! | style | sent | when |
 //! |---|---|---|
-//! | `Setpoints` (QuadQuad2Drv, SPI_motor) | `Position` = the desired position now | every tick it changed |
-//! | `Segments` (Trinamic packs, the example board) | `RampPosition` to where the path will be a segment ahead (at least 1.5 braking distances), at the path's velocity plus the error over the feedback time | when the driver has acknowledged the last goal, and as long again after |
+//! | `Setpoints` (SPI_motor) | `Position` = the desired position now | every tick it changed |
+//! | `Segments` (QuadQuad2Drv, Trinamic packs, the example board) | `RampPosition` to where the path will be a segment ahead (at least 1.5 braking distances), at the path's velocity plus the error over the feedback time | when the driver has acknowledged the last goal, and as long again after |
 //! | `Velocity` (QSB) | `Velocity` = the path's velocity a segment ahead plus the position error over the feedback time; at the end a `RampPosition` to the path's end | likewise |
 //!
 //! A power stream hands every board its `Power` goal whatever its style. A segment is as
 //! long as the driver takes to get a goal acknowledged (an average, between one tick and
 //! [`MAX_LEAD`]); after each acknowledgement the link gets as long again for its own
 //! traffic (polls, the encoder stream), so that following never starves the measurements
-//! it is supervised by.
+//! it is supervised by. A line a board runs itself (`lead.rs`) gets none while the board
+//! runs it.
 
 use core::time::Duration;
 
