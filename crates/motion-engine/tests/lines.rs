@@ -98,8 +98,8 @@ fn a_line_from_rest_is_handed_to_the_boards_and_starts_on_all_of_them_in_one_tic
             "board {board}"
         );
     }
-    for axis in 0..4 {
-        assert!((h.axis(axis).position - TARGETS[axis]).abs() <= 0.05);
+    for (axis, target) in TARGETS.iter().enumerate() {
+        assert!((h.axis(axis).position - target).abs() <= 0.05);
     }
 }
 
@@ -151,8 +151,8 @@ fn a_hold_pauses_the_boards_that_can_and_the_others_are_followed_with_goals() {
     run_out(&mut h, 5000);
     assert_eq!(motion(&h), GroupMotion::Done, "{:?}", h.frame.groups[0]);
     assert_eq!(controls[0].lock().expect("control").resumed, 2);
-    for axis in 0..4 {
-        assert!((h.axis(axis).position - TARGETS[axis]).abs() <= 0.05);
+    for (axis, target) in TARGETS.iter().enumerate() {
+        assert!((h.axis(axis).position - target).abs() <= 0.05);
     }
 }
 

@@ -63,7 +63,7 @@ impl<D: Driver> Engine<D> {
         let now = self.now;
         let g = &mut self.groups[group];
         let count = g.members.len();
-        if !(feed > 0.0) || count == 0 || g.path.duration() <= 0.0 {
+        if feed.is_nan() || feed <= 0.0 || count == 0 || g.path.duration() <= 0.0 {
             return;
         }
         if g.members

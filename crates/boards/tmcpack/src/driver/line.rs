@@ -81,9 +81,8 @@ impl TmcpackDriver {
                 return Err(GoalError::NoSuchChannel(leg.channel));
             }
             mask |= bit;
-            if !(leg.velocity.is_finite() && leg.velocity > 0.0)
-                || !(leg.accel.is_finite() && leg.accel > 0.0)
-            {
+            let usable = |rate: f64| rate.is_finite() && rate > 0.0;
+            if !usable(leg.velocity) || !usable(leg.accel) {
                 return Err(range);
             }
             if !channel.at_rest() {
