@@ -216,6 +216,16 @@ def _fail(error: BaseException) -> None:
     print(f"motiond.bench: {line}", file=sys.stderr)
 
 
+def exit_status(error: BaseException) -> int:
+    """Says on stderr why a bench stopped and returns its exit status: 3 when the server
+    could not be reached, 1 for another error of this package, 130 when interrupted."""
+    if isinstance(error, KeyboardInterrupt):
+        _fail(KeyboardInterrupt("interrupted"))
+        return 130
+    _fail(error)
+    return 3 if isinstance(error, ConnectError) else 1
+
+
 def main(argv: Optional[Sequence[str]] = None) -> int:
     """The command line; returns the exit status."""
     parser = argparse.ArgumentParser(
@@ -242,15 +252,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     try:
         with Client(args.server, timeout=args.connect_timeout, node_name="motiond-py-bench") as c:
             document = run(c, args.duration, seed)
-    except ConnectError as error:
-        _fail(error)
-        return 3
-    except MotiondError as error:
-        _fail(error)
-        return 1
-    except KeyboardInterrupt:
-        _fail(KeyboardInterrupt("interrupted"))
-        return 130
+    except (MotiondError, KeyboardInterrupt) as error:
+        return exit_status(error)
     json.dump(document, sys.stdout, separators=(",", ":"))
     sys.stdout.write("\n")
     return 0

@@ -32,9 +32,9 @@ import sys
 import time
 from typing import Any, Dict, List, Optional, Sequence, Tuple
 
-from .bench import _fail, _seconds, check_clock, distribution
+from .bench import _seconds, check_clock, distribution, exit_status
 from .client import Client
-from .errors import ConnectError, MotiondError
+from .errors import MotiondError
 from .frames import Frame
 
 __all__ = ["FORMAT", "measure_stream", "main"]
@@ -159,15 +159,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         ) as client:
             figures = measure_stream(client, args.group, args.duration)
             tick_hz = int(client.tick_hz)
-    except ConnectError as error:
-        _fail(error)
-        return 3
-    except MotiondError as error:
-        _fail(error)
-        return 1
-    except KeyboardInterrupt:
-        _fail(KeyboardInterrupt("interrupted"))
-        return 130
+    except (MotiondError, KeyboardInterrupt) as error:
+        return exit_status(error)
     document = {
         "format": FORMAT,
         "server": args.server,

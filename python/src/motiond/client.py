@@ -339,7 +339,7 @@ class Client:
 
     def stats(self) -> Optional[ServerStats]:
         """A copy of the newest :class:`~motiond.ipc.ServerStats` (published about once a
-        second); ``None`` until the first."""
+        second; a remote client has those the bridge passed on); ``None`` until the first."""
         self.service_jogs()
         self._open_stats()
         if self._stats is None:

@@ -8,7 +8,7 @@ refused raises a subclass of :class:`Refused` named after the server's reason
 
 from __future__ import annotations
 
-from typing import Dict, Optional, Sequence, Type, Union
+from typing import Any, Dict, Optional, Sequence, Type, Union
 
 from .ipc import CommandKind, GroupAbort, Reason, to_enum
 
@@ -152,6 +152,11 @@ class BadPath(MotiondError, ValueError):
     not numbers): found by the client, before anything reached the server."""
 
 
+#: The :class:`Refused` subclass of every reason but ``ACCEPTED`` (each registers itself
+#: by the ``reason`` of its class statement).
+REFUSALS: Dict[Reason, Type["Refused"]] = {}
+
+
 class Refused(MotiondError):
     """The server refused a command. ``reason`` is the typed reason (an ``int`` if this
     package does not know it), ``kind`` the command, ``target`` the axis, signal or group in
@@ -164,6 +169,16 @@ class Refused(MotiondError):
     """
 
     reason_code: Optional[Reason] = None
+
+    def __init_subclass__(cls, reason: Optional[Reason] = None, **kwargs: Any) -> None:
+        # `class OutOfRange(Refused, reason=Reason.OUT_OF_RANGE)` names its reason once:
+        # that is its `reason_code` and its entry in REFUSALS.
+        super().__init_subclass__(**kwargs)
+        if reason is not None:
+            if reason in REFUSALS:
+                raise TypeError(f"{reason!r} already raises {REFUSALS[reason].__name__}")
+            cls.reason_code = reason
+            REFUSALS[reason] = cls
 
     def __init__(
         self,
@@ -208,247 +223,145 @@ class Refused(MotiondError):
 # One class per refusal reason, named after it: ``except motiond.OutOfRange:``.
 
 
-class SchemaMismatch(Refused):
+class SchemaMismatch(Refused, reason=Reason.SCHEMA_MISMATCH):
     """Refused: client and server use different motion-ipc schema versions
     (``Reason.SCHEMA_MISMATCH``).
     """
 
-    reason_code = Reason.SCHEMA_MISMATCH
 
-
-class UnknownKind(Refused):
+class UnknownKind(Refused, reason=Reason.UNKNOWN_KIND):
     """Refused: unknown command kind (``Reason.UNKNOWN_KIND``)."""
 
-    reason_code = Reason.UNKNOWN_KIND
 
-
-class UnknownAxis(Refused):
+class UnknownAxis(Refused, reason=Reason.UNKNOWN_AXIS):
     """Refused: no such axis on this server (``Reason.UNKNOWN_AXIS``)."""
 
-    reason_code = Reason.UNKNOWN_AXIS
 
-
-class Unsupported(Refused):
+class Unsupported(Refused, reason=Reason.UNSUPPORTED):
     """Refused: the axis's board cannot do this command (``Reason.UNSUPPORTED``)."""
 
-    reason_code = Reason.UNSUPPORTED
 
-
-class NotFinite(Refused):
+class NotFinite(Refused, reason=Reason.NOT_FINITE):
     """Refused: a value is NaN or infinite (``Reason.NOT_FINITE``)."""
 
-    reason_code = Reason.NOT_FINITE
 
-
-class OutOfRange(Refused):
+class OutOfRange(Refused, reason=Reason.OUT_OF_RANGE):
     """Refused: position outside the axis's min..max soft limits, or an output level other
     than 0 or 1 (``Reason.OUT_OF_RANGE``)."""
 
-    reason_code = Reason.OUT_OF_RANGE
 
-
-class VelocityLimit(Refused):
+class VelocityLimit(Refused, reason=Reason.VELOCITY_LIMIT):
     """Refused: velocity above the axis's max_velocity, or below the smallest step its board
     represents (``Reason.VELOCITY_LIMIT``)."""
 
-    reason_code = Reason.VELOCITY_LIMIT
 
-
-class AccelLimit(Refused):
+class AccelLimit(Refused, reason=Reason.ACCEL_LIMIT):
     """Refused: acceleration above the axis's max_accel or not positive, or below the smallest
     step its board represents (``Reason.ACCEL_LIMIT``)."""
 
-    reason_code = Reason.ACCEL_LIMIT
 
-
-class PowerLimit(Refused):
+class PowerLimit(Refused, reason=Reason.POWER_LIMIT):
     """Refused: power outside -1.0..1.0 (``Reason.POWER_LIMIT``)."""
 
-    reason_code = Reason.POWER_LIMIT
 
-
-class ClaimedByOther(Refused):
+class ClaimedByOther(Refused, reason=Reason.CLAIMED_BY_OTHER):
     """Refused: the axis is claimed by another client (``Reason.CLAIMED_BY_OTHER``)."""
 
-    reason_code = Reason.CLAIMED_BY_OTHER
 
-
-class NotClaimed(Refused):
+class NotClaimed(Refused, reason=Reason.NOT_CLAIMED):
     """Refused: this client holds no claim on the axis (``Reason.NOT_CLAIMED``)."""
 
-    reason_code = Reason.NOT_CLAIMED
 
-
-class EstopLatched(Refused):
+class EstopLatched(Refused, reason=Reason.ESTOP_LATCHED):
     """Refused: e-stop is latched: send reset first (``Reason.ESTOP_LATCHED``)."""
 
-    reason_code = Reason.ESTOP_LATCHED
 
-
-class AxisFaulted(Refused):
+class AxisFaulted(Refused, reason=Reason.AXIS_FAULTED):
     """Refused: the axis is faulted: clear the cause, then reset (``Reason.AXIS_FAULTED``)."""
 
-    reason_code = Reason.AXIS_FAULTED
 
-
-class LinkDown(Refused):
+class LinkDown(Refused, reason=Reason.LINK_DOWN):
     """Refused: the axis's link is down (``Reason.LINK_DOWN``)."""
 
-    reason_code = Reason.LINK_DOWN
 
-
-class Busy(Refused):
+class Busy(Refused, reason=Reason.BUSY):
     """Refused: the server's command queue is full: retry (``Reason.BUSY``)."""
 
-    reason_code = Reason.BUSY
 
-
-class ShuttingDown(Refused):
+class ShuttingDown(Refused, reason=Reason.SHUTTING_DOWN):
     """Refused: the server is shutting down (``Reason.SHUTTING_DOWN``)."""
 
-    reason_code = Reason.SHUTTING_DOWN
 
-
-class NoClientId(Refused):
+class NoClientId(Refused, reason=Reason.NO_CLIENT_ID):
     """Refused: claim and release need a client id (``Reason.NO_CLIENT_ID``)."""
 
-    reason_code = Reason.NO_CLIENT_ID
 
-
-class IdentityMismatch(Refused):
+class IdentityMismatch(Refused, reason=Reason.IDENTITY_MISMATCH):
     """Refused: the request's client id is not the sender's iceoryx2 node: ids cannot be borrowed
     (``Reason.IDENTITY_MISMATCH``).
     """
 
-    reason_code = Reason.IDENTITY_MISMATCH
 
-
-class DeviceStarting(Refused):
+class DeviceStarting(Refused, reason=Reason.DEVICE_STARTING):
     """Refused: the axis's board is starting: its link is not open yet, or it awaits its first
     answer and its start-up stop (``Reason.DEVICE_STARTING``).
     """
 
-    reason_code = Reason.DEVICE_STARTING
 
-
-class DeviceOffline(Refused):
+class DeviceOffline(Refused, reason=Reason.DEVICE_OFFLINE):
     """Refused: the axis's board is not answering (``Reason.DEVICE_OFFLINE``)."""
 
-    reason_code = Reason.DEVICE_OFFLINE
 
-
-class UnknownSignal(Refused):
+class UnknownSignal(Refused, reason=Reason.UNKNOWN_SIGNAL):
     """Refused: no such signal on this server (``Reason.UNKNOWN_SIGNAL``)."""
 
-    reason_code = Reason.UNKNOWN_SIGNAL
 
-
-class NotAnOutput(Refused):
+class NotAnOutput(Refused, reason=Reason.NOT_AN_OUTPUT):
     """Refused: the signal is not a digital output (``Reason.NOT_AN_OUTPUT``)."""
 
-    reason_code = Reason.NOT_AN_OUTPUT
 
-
-class UnknownTarget(Refused):
+class UnknownTarget(Refused, reason=Reason.UNKNOWN_TARGET):
     """Refused: unknown target: 0 = axis, 1 = signal (``Reason.UNKNOWN_TARGET``)."""
 
-    reason_code = Reason.UNKNOWN_TARGET
 
-
-class UnknownGroup(Refused):
+class UnknownGroup(Refused, reason=Reason.UNKNOWN_GROUP):
     """Refused: no such group on this server (``Reason.UNKNOWN_GROUP``)."""
 
-    reason_code = Reason.UNKNOWN_GROUP
 
-
-class NoPath(Refused):
+class NoPath(Refused, reason=Reason.NO_PATH):
     """Refused: no path with this id for this group was published by this client on
     ``paths`` (``Reason.NO_PATH``)."""
 
-    reason_code = Reason.NO_PATH
 
-
-class PathTimes(Refused):
+class PathTimes(Refused, reason=Reason.PATH_TIMES):
     """Refused: the path's point times must start at 0 or later and increase; ``point``
     names the first one that does not (``Reason.PATH_TIMES``)."""
 
-    reason_code = Reason.PATH_TIMES
 
-
-class PathStart(Refused):
+class PathStart(Refused, reason=Reason.PATH_START):
     """Refused: the path's first point has time 0 but is not where the group is; ``axis``,
     ``value`` (the distance) and ``limit`` (the tolerance) say by how much
     (``Reason.PATH_START``)."""
 
-    reason_code = Reason.PATH_START
 
-
-class PathLayout(Refused):
+class PathLayout(Refused, reason=Reason.PATH_LAYOUT):
     """Refused: malformed path: no points, too many, an axis count other than the group's,
     an unknown kind, or a scale outside (0, 1] (``Reason.PATH_LAYOUT``)."""
 
-    reason_code = Reason.PATH_LAYOUT
 
-
-class GroupBusy(Refused):
+class GroupBusy(Refused, reason=Reason.GROUP_BUSY):
     """Refused: an axis of this request is moving with a group (or the group streams):
     cancel that motion or wait for it (``Reason.GROUP_BUSY``)."""
 
-    reason_code = Reason.GROUP_BUSY
 
-
-class NotMoving(Refused):
+class NotMoving(Refused, reason=Reason.NOT_MOVING):
     """Refused: the group has no motion running (``Reason.NOT_MOVING``)."""
 
-    reason_code = Reason.NOT_MOVING
 
-
-class BlendTolerance(Refused):
+class BlendTolerance(Refused, reason=Reason.BLEND_TOLERANCE):
     """Refused: a trajectory of positions alone cannot be blended at a point within the
     axis's ``path_tolerance`` at its max_accel; ``at_point`` / ``at_axis`` name it, ``value``
     and ``limit`` give the distance and the tolerance (``Reason.BLEND_TOLERANCE``)."""
-
-    reason_code = Reason.BLEND_TOLERANCE
-
-
-#: The :class:`Refused` subclass of every reason but ``ACCEPTED``.
-REFUSALS: Dict[Reason, Type[Refused]] = {
-    cls.reason_code: cls
-    for cls in (
-        SchemaMismatch,
-        UnknownKind,
-        UnknownAxis,
-        Unsupported,
-        NotFinite,
-        OutOfRange,
-        VelocityLimit,
-        AccelLimit,
-        PowerLimit,
-        ClaimedByOther,
-        NotClaimed,
-        EstopLatched,
-        AxisFaulted,
-        LinkDown,
-        Busy,
-        ShuttingDown,
-        NoClientId,
-        IdentityMismatch,
-        DeviceStarting,
-        DeviceOffline,
-        UnknownSignal,
-        NotAnOutput,
-        UnknownTarget,
-        UnknownGroup,
-        NoPath,
-        PathTimes,
-        PathStart,
-        PathLayout,
-        GroupBusy,
-        NotMoving,
-        BlendTolerance,
-    )
-    if cls.reason_code is not None
-}
 
 
 def refused(

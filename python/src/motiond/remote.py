@@ -394,15 +394,8 @@ class RemoteClient(Client, transport="remote"):
         a remote client reads do carry the groups' states (``frame.group(i)``)."""
         raise errors.MotiondError(_NO_GROUPS)
 
-    def stats(self) -> Optional[ServerStats]:
-        """A copy of the newest :class:`~motiond.ipc.ServerStats` the bridge passed on
-        (about once a second); ``None`` until the first."""
-        self.service_jogs()
-        received = self._stats.refresh()
-        return None if received is None else received.copy()
-
     def _open_stats(self) -> None:
-        """Subscribed at connection already."""
+        """Subscribed at connection already (so :meth:`stats` is the client's own)."""
 
     def params(self, timeout: float = 1.0) -> List[Param]:
         """The machine parameters in effect, asked of the bridge (they are not published

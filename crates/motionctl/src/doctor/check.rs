@@ -63,11 +63,7 @@ impl Check {
         value: impl Into<String>,
         fix: impl Into<String>,
     ) -> Self {
-        Self {
-            status: Status::Warn,
-            fix: fix.into(),
-            ..Self::pass(id, title, value)
-        }
+        Self::with(id, title, Status::Warn, value, fix)
     }
 
     /// A failure with its fix.
@@ -77,11 +73,7 @@ impl Check {
         value: impl Into<String>,
         fix: impl Into<String>,
     ) -> Self {
-        Self {
-            status: Status::Fail,
-            fix: fix.into(),
-            ..Self::pass(id, title, value)
-        }
+        Self::with(id, title, Status::Fail, value, fix)
     }
 
     /// `status` with the value and fix given (the fix is dropped for a pass).
