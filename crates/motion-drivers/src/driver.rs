@@ -45,6 +45,17 @@ pub enum Follow {
     Velocity,
 }
 
+/// How far a board's own velocity and acceleration for a line leg may be from the leg's
+/// (relative): a board runs a line itself only if its units represent both within this,
+/// so that the line keeps the path's time law within 2 % (a 10 s line arrives within
+/// 0.2 s, inside the default `goal_time_tolerance`); otherwise the engine follows it.
+pub const LINE_RATE_TOLERANCE: f64 = 0.02;
+
+/// Whether `represented` is within [`LINE_RATE_TOLERANCE`] of `wanted` (both > 0).
+pub fn line_rate_fits(represented: f64, wanted: f64) -> bool {
+    wanted > 0.0 && ((represented - wanted) / wanted).abs() <= LINE_RATE_TOLERANCE
+}
+
 /// One channel's part of a straight line in joint space ([`Driver::lead_line`]): the line
 /// ends at `counts`, reaching at most `velocity` counts/s at `accel` counts/s² — a
 /// trapezoid (or triangle) from rest to rest, the same in time for every leg of the line.

@@ -28,8 +28,8 @@ pub(crate) const ARM_TIMEOUT: Duration = Duration::from_millis(500);
 
 /// A board running a line by itself that is measured farther than this share of the
 /// axis's `path_tolerance` from the path is followed with goals from then on: its rates in
-/// its own units (the QSB's 16 steps/s) may not match the path's exactly, and goals feed
-/// the error back.
+/// its own units match the path's only to `LINE_RATE_TOLERANCE`, steps may be lost, and
+/// goals feed the error back.
 pub(crate) const LEAD_DRIFT: f64 = 0.5;
 
 /// Where a line handed to boards is before its path's time moves.

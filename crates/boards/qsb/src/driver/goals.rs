@@ -12,7 +12,7 @@ use super::QsbDriver;
 use super::program::Step;
 use super::startup::NORMAL_MDR0;
 use super::wire::Origin;
-use motion_drivers::{DeviceFault, Goal, GoalError, GoalKind, GoalKinds};
+use motion_drivers::{DeviceFault, Goal, GoalError, GoalKind, GoalKinds, line_rate_fits};
 
 /// MDR0 during a home search to counter value 0: the index resets CNTR (0x63, the
 /// command list's "Sync Index, Reset on Index, Free Running, X4 mode, W0363").
@@ -397,8 +397,21 @@ impl QsbDriver {
             return Ok(false);
         }
         let out_of_range = GoalError::OutOfBoardRange(kind);
-        let rate = self.config.step_rate(leg.velocity).ok_or(out_of_range)?;
-        let accel = self.config.accel(leg.accel).ok_or(out_of_range)?;
+        // Rounded down to the board's 16 steps/s (and steps/s²) increments; a rate a hair
+        // under an increment (the path's arithmetic) is that increment.
+        let nudge = 1.0 + 1e-9;
+        let rate = self
+            .config
+            .step_rate(leg.velocity * nudge)
+            .ok_or(out_of_range)?;
+        let accel = self.config.accel(leg.accel * nudge).ok_or(out_of_range)?;
+        let per_step = self.config.steps(1.0).map_or(0.0, |s| 1.0 / s.abs());
+        if !(line_rate_fits(f64::from(rate) * per_step, leg.velocity)
+            && line_rate_fits(f64::from(accel) * per_step, leg.accel))
+        {
+            // Too far from the line's pace in 16-step increments: the engine follows.
+            return Ok(false);
+        }
         self.plan_move(kind, leg.counts, rate, accel, true)?;
         self.home_failed = false;
         Ok(true)

@@ -168,3 +168,28 @@ fn the_outputs_written_after_a_goal_enables_the_drive_keep_it_enabled() {
     assert!(dig_io.iter().all(|latch| latch & 0b1000 == 0), "{sent:?}");
     assert_eq!(sent.last().map(String::as_str), Some("W168"), "{sent:?}");
 }
+
+/// MD STEP RATE changes "in increments of 16 steps/second": a line at 67 steps/s would run
+/// at 64 (4.5 % slow) and is left to the engine; one at 64 steps/s is taken.
+#[test]
+fn a_line_whose_rate_the_increments_miss_is_not_taken() {
+    let mut bench = Bench::started(ProductType::M);
+    bench.tick(Some(MD_DONE));
+    bench.tick(None);
+    // 10 counts per step (the default config).
+    let at = |velocity: f64| LineLeg {
+        channel: 0,
+        counts: 1000.0,
+        velocity,
+        accel: 6_400.0,
+    };
+    assert_eq!(bench.driver.lead_line(bench.now, &[at(670.0)]), Ok(false));
+    assert!(!bench.driver.goals_pending());
+    // 64 steps/s a hair under (the path's arithmetic) still counts as 64.
+    assert_eq!(
+        bench
+            .driver
+            .lead_line(bench.now, &[at(640.0 * (1.0 - 1e-12))]),
+        Ok(true)
+    );
+}

@@ -144,7 +144,7 @@ fn a_line_is_not_taken_while_a_motor_runs() {
     bench.serve(40, |motor| position(motor, 50, Action::Rotation));
     let legs = [
         leg(0, 10_000.0, 6425.0, 160_000.0),
-        leg(2, 2_000.0, 1285.0, 32_000.0),
+        leg(2, 2_000.0, 642.5, 6_400.0),
     ];
     assert_eq!(bench.driver.lead_line(bench.now, &legs), Ok(false));
     let sent = commands(&mut bench, 40);
@@ -163,7 +163,7 @@ fn a_stop_before_the_interpolation_went_out_cancels_it() {
     bench.serve(40, |motor| position(motor, 0, Action::Inactive));
     let legs = [
         leg(0, 10_000.0, 6425.0, 160_000.0),
-        leg(2, 2_000.0, 1285.0, 32_000.0),
+        leg(2, 2_000.0, 642.5, 6_400.0),
     ];
     assert_eq!(bench.driver.lead_line(bench.now, &legs), Ok(true));
     bench
@@ -238,7 +238,7 @@ fn unusable_legs_are_refused_whole() {
     assert!(bench.driver.lead_line(bench.now, &missing).is_err());
     let beyond = [
         leg(0, 1e12, 6425.0, 160_000.0),
-        leg(2, 2_000.0, 1285.0, 32_000.0),
+        leg(2, 2_000.0, 642.5, 6_400.0),
     ];
     assert!(bench.driver.lead_line(bench.now, &beyond).is_err());
     assert!(!bench.driver.goals_pending());
@@ -262,4 +262,21 @@ fn a_second_line_while_one_is_prepared_is_not_taken() {
             .lead_line(bench.now, &[leg(2, 2_000.0, 642.5, 32_000.0)]),
         Ok(false)
     );
+}
+
+/// A line whose pace the pack's units cannot represent within 2 % (here 1.4 velocity units,
+/// which would run as 1: 30 % slow) is left to the engine, which follows it by segments.
+#[test]
+fn a_line_too_slow_for_the_packs_units_is_not_taken() {
+    let mut bench = Bench::new(config());
+    bench.online();
+    bench.serve(40, |motor| position(motor, 0, Action::Inactive));
+    let slow = 1.4 * hz_per_unit(&bench, 0);
+    assert_eq!(
+        bench
+            .driver
+            .lead_line(bench.now, &[leg(0, 500.0, slow, 160_000.0)]),
+        Ok(false)
+    );
+    assert!(!bench.driver.goals_pending());
 }
