@@ -46,15 +46,10 @@ pub enum Follow {
 }
 
 /// How far a board's own velocity and acceleration for a line leg may be from the leg's
-/// (relative): a board runs a line itself only if its units represent both within this,
-/// so that the line keeps the path's time law within 2 % (a 10 s line arrives within
-/// 0.2 s, inside the default `goal_time_tolerance`); otherwise the engine follows it.
+/// (relative) at most: a board runs a line itself only if its units represent both within
+/// the leg's [`LineLeg::rate_tolerance`], which the engine makes no larger than this, and
+/// small enough that the line arrives within half the group's `goal_time_tolerance`.
 pub const LINE_RATE_TOLERANCE: f64 = 0.02;
-
-/// Whether `represented` is within [`LINE_RATE_TOLERANCE`] of `wanted` (both > 0).
-pub fn line_rate_fits(represented: f64, wanted: f64) -> bool {
-    wanted > 0.0 && ((represented - wanted) / wanted).abs() <= LINE_RATE_TOLERANCE
-}
 
 /// One channel's part of a straight line in joint space ([`Driver::lead_line`]): the line
 /// ends at `counts`, reaching at most `velocity` counts/s at `accel` counts/s² — a
@@ -69,6 +64,21 @@ pub struct LineLeg {
     pub velocity: f64,
     /// The leg's acceleration magnitude, counts/s² (> 0).
     pub accel: f64,
+    /// How far (relative) the board's own velocity and acceleration may be from the leg's
+    /// (at most [`LINE_RATE_TOLERANCE`]).
+    pub rate_tolerance: f64,
+}
+
+impl LineLeg {
+    /// Whether a board that represents the leg's velocity as `velocity` and its
+    /// acceleration as `accel` (counts/s, counts/s²) keeps its pace within
+    /// [`rate_tolerance`](Self::rate_tolerance).
+    pub fn represented_within(&self, velocity: f64, accel: f64) -> bool {
+        let within = |represented: f64, wanted: f64| {
+            wanted > 0.0 && ((represented - wanted) / wanted).abs() <= self.rate_tolerance
+        };
+        within(velocity, self.velocity) && within(accel, self.accel)
+    }
 }
 
 /// One message a driver wrote in [`Driver::poll_transmit`].

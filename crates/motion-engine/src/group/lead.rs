@@ -16,7 +16,7 @@
 
 use core::time::Duration;
 
-use motion_drivers::{Driver, LineLeg};
+use motion_drivers::{Driver, LINE_RATE_TOLERANCE, LineLeg};
 use motion_ipc::MAX_GROUP_AXES;
 
 use crate::Engine;
@@ -75,6 +75,11 @@ impl<D: Driver> Engine<D> {
         // Each axis's acceleration where the line starts, and its velocity half-way (the
         // peak of a trapezoid or a triangle), at the feed the path runs at.
         let half = g.path.duration() / 2.0;
+        // A board's pace off by r arrives r × the line's duration late: at most half the
+        // group's goal_time_tolerance, and never more than LINE_RATE_TOLERANCE.
+        let duration = g.path.duration() / feed;
+        let rate_tolerance =
+            (0.5 * g.config.goal_time_tolerance.as_secs_f64() / duration).min(LINE_RATE_TOLERANCE);
         g.path.sample(
             0.0,
             &mut g.then,
@@ -107,6 +112,7 @@ impl<D: Driver> Engine<D> {
                 counts: 0.0,
                 velocity: 0.0,
                 accel: 0.0,
+                rate_tolerance,
             }; MAX_GROUP_AXES];
             let mut slots = [0usize; MAX_GROUP_AXES];
             let mut n = 0;
@@ -123,6 +129,7 @@ impl<D: Driver> Engine<D> {
                         counts: axis.to_counts(g.path.end()[slot]),
                         velocity: axis.magnitude_to_counts(velocity),
                         accel: axis.magnitude_to_counts(a),
+                        rate_tolerance,
                     };
                     *s = slot;
                     n += 1;

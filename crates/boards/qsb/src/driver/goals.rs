@@ -12,7 +12,7 @@ use super::QsbDriver;
 use super::program::Step;
 use super::startup::NORMAL_MDR0;
 use super::wire::Origin;
-use motion_drivers::{DeviceFault, Goal, GoalError, GoalKind, GoalKinds, line_rate_fits};
+use motion_drivers::{DeviceFault, Goal, GoalError, GoalKind, GoalKinds};
 
 /// MDR0 during a home search to counter value 0: the index resets CNTR (0x63, the
 /// command list's "Sync Index, Reset on Index, Free Running, X4 mode, W0363").
@@ -406,9 +406,7 @@ impl QsbDriver {
             .ok_or(out_of_range)?;
         let accel = self.config.accel(leg.accel * nudge).ok_or(out_of_range)?;
         let per_step = self.config.steps(1.0).map_or(0.0, |s| 1.0 / s.abs());
-        if !(line_rate_fits(f64::from(rate) * per_step, leg.velocity)
-            && line_rate_fits(f64::from(accel) * per_step, leg.accel))
-        {
+        if !leg.represented_within(f64::from(rate) * per_step, f64::from(accel) * per_step) {
             // Too far from the line's pace in 16-step increments: the engine follows.
             return Ok(false);
         }

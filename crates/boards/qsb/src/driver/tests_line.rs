@@ -6,7 +6,7 @@
 use ::qsb::ProductType;
 
 use super::tests::{Bench, MD_DONE, MD_JOGGING, MD_MOVING};
-use motion_drivers::{Driver, Goal, LineLeg};
+use motion_drivers::{Driver, Goal, LINE_RATE_TOLERANCE, LineLeg};
 
 /// MD STATUS B2 "Paused", B4 "Motor Enabled".
 const MD_PAUSED: u32 = 0x14;
@@ -17,6 +17,7 @@ fn leg(counts: f64) -> LineLeg {
         counts,
         velocity: 5_000.0,
         accel: 20_000.0,
+        rate_tolerance: LINE_RATE_TOLERANCE,
     }
 }
 
@@ -182,6 +183,7 @@ fn a_line_whose_rate_the_increments_miss_is_not_taken() {
         counts: 1000.0,
         velocity,
         accel: 6_400.0,
+        rate_tolerance: LINE_RATE_TOLERANCE,
     };
     assert_eq!(bench.driver.lead_line(bench.now, &[at(670.0)]), Ok(false));
     assert!(!bench.driver.goals_pending());

@@ -24,7 +24,7 @@
 //! for a hold or a feed change (docs/ARCHITECTURE.md "Coordinated motion").
 
 use motion_base::counts_to_i32;
-use motion_drivers::{Driver, GoalError, GoalKind, LineLeg, line_rate_fits};
+use motion_drivers::{Driver, GoalError, GoalKind, LineLeg};
 use tmcpack::{MAX_VELOCITY, MotorMask, Request};
 
 use super::wire::Pick;
@@ -114,8 +114,7 @@ impl TmcpackDriver {
                 return Err(range);
             }
             if Some(index) == master
-                && !(line_rate_fits(vmax * scale.hz, leg.velocity)
-                    && line_rate_fits(f64::from(amax) * scale.floor().accel, leg.accel))
+                && !leg.represented_within(vmax * scale.hz, f64::from(amax) * scale.floor().accel)
             {
                 // The pack's units are too coarse for this line's pace: the engine follows.
                 return Ok(false);

@@ -5,7 +5,7 @@ use tmcpack::{Action, MotorMask, Request, StepClock};
 
 use super::bench::*;
 use super::*;
-use motion_drivers::LineLeg;
+use motion_drivers::{LINE_RATE_TOLERANCE, LineLeg};
 
 fn leg(channel: usize, counts: f64, velocity: f64, accel: f64) -> LineLeg {
     LineLeg {
@@ -13,6 +13,7 @@ fn leg(channel: usize, counts: f64, velocity: f64, accel: f64) -> LineLeg {
         counts,
         velocity,
         accel,
+        rate_tolerance: LINE_RATE_TOLERANCE,
     }
 }
 
