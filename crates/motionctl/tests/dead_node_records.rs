@@ -1,7 +1,7 @@
 //! Clients killed while they start leave no node record behind (issue 30, item 6): 200
-//! `motionctl list` SIGKILLed 0–60 ms after their start against a live motiond; 2 s later
-//! every record on the iceoryx2 service root belongs to a live node, and the server's stats
-//! count what it removed. One test in its own binary: nothing else here makes nodes.
+//! `motionctl list` SIGKILLed 0–60 ms after their start against a live motiond; soon after
+//! (about 2 s on a quiet machine; the test waits up to 20 s) every record on the iceoryx2
+//! service root belongs to a live node, and the server's stats count what it removed. One test in its own binary: nothing else here makes nodes.
 
 mod common;
 
@@ -76,9 +76,18 @@ fn clients_killed_while_they_start_leave_no_node_record() -> Result {
         child.kill()?;
         child.wait()?;
     }
+    // The server's sweep removes them within a couple of seconds on a quiet machine; a
+    // loaded one (a CI run building and testing on two cores) takes longer, so the test
+    // waits for the records to go, up to a bound, rather than asserting a time.
     let killed = Instant::now();
-    std::thread::sleep(Duration::from_secs(2));
-    let left = dead_records(Duration::from_millis(1500))?;
+    let mut left = Vec::new();
+    while killed.elapsed() < Duration::from_secs(20) {
+        std::thread::sleep(Duration::from_millis(250));
+        left = dead_records(Duration::from_millis(1500))?;
+        if left.is_empty() && killed.elapsed() >= Duration::from_secs(2) {
+            break;
+        }
+    }
     assert!(
         left.is_empty(),
         "{} records of dead nodes left {:?} after the kills: {left:#?}",
