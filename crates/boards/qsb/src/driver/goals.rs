@@ -265,7 +265,11 @@ impl QsbDriver {
     ) -> Result<(), GoalError> {
         let target = counts_to_i32(counts).ok_or(GoalError::OutOfBoardRange(kind))?;
         let [normal, end_str] = NORMAL_COUNTER;
-        let steps = [
+        let move_to = Step::MoveTo {
+            target: f64::from(target),
+            attempt: 0,
+        };
+        let mut steps = [
             Step::Enable(true),
             normal,
             end_str,
@@ -274,21 +278,18 @@ impl QsbDriver {
             Step::StopIfMoving,
             Step::WaitDone,
             Step::Armed,
-            Step::MoveTo {
-                target: f64::from(target),
-                attempt: 0,
-            },
+            move_to,
         ];
-        let (head, tail) = steps.split_at(7);
-        let mut plan = [Step::Armed; 9];
-        let mut len = 0;
-        for step in head.iter().chain(tail.iter().skip(usize::from(!armed))) {
-            if let Some(slot) = plan.get_mut(len) {
-                *slot = *step;
-                len += 1;
+        let len = if armed {
+            steps.len()
+        } else {
+            // The move in the `Armed` step's place.
+            if let Some(slot) = steps.get_mut(7) {
+                *slot = move_to;
             }
-        }
-        self.replace_goal(kind, plan.get(..len).unwrap_or(&plan));
+            steps.len() - 1
+        };
+        self.replace_goal(kind, steps.get(..len).unwrap_or(&steps));
         Ok(())
     }
 
