@@ -6,6 +6,7 @@ use std::process::ExitCode;
 
 use clap::Parser;
 use motiond::config::ServerConfig;
+use motiond::config::locate::{Places, locate};
 
 /// The motiond real-time motion server.
 ///
@@ -14,9 +15,10 @@ use motiond::config::ServerConfig;
 #[derive(Debug, Parser)]
 #[command(version, about, long_about = None)]
 struct Cli {
-    /// The config file to run.
-    #[arg(long, value_name = "FILE", default_value = "config/sim.toml")]
-    config: PathBuf,
+    /// The config file to run. Without it: $MOTIOND_CONFIG, then /etc/motiond/motiond.toml,
+    /// then config/sim.toml when run from the source tree's root.
+    #[arg(long, value_name = "FILE")]
+    config: Option<PathBuf>,
     /// Only validate FILE: print a summary or every error with file:line:column, and exit.
     #[arg(long, value_name = "FILE", conflicts_with = "config")]
     check_config: Option<PathBuf>,
@@ -29,7 +31,19 @@ struct Cli {
 fn main() -> ExitCode {
     iceoryx2::prelude::set_log_level_from_env_or(iceoryx2::prelude::LogLevel::Error);
     let cli = Cli::parse();
-    let path = cli.check_config.as_ref().unwrap_or(&cli.config);
+    let named = cli.check_config.clone().or(cli.config.clone());
+    let (path, source) = match locate(&Places::of_process(named)) {
+        Ok(found) => found,
+        Err(none) => {
+            eprintln!("{none}");
+            return ExitCode::from(2);
+        }
+    };
+    if cli.check_config.is_none() {
+        init_logging();
+        tracing::info!("config {} ({source})", path.display());
+    }
+    let path = &path;
     let config = match ServerConfig::load(path) {
         Ok(config) => config,
         Err(error) => {
@@ -49,7 +63,6 @@ fn main() -> ExitCode {
         println!("config ok");
         return ExitCode::SUCCESS;
     }
-    init_logging();
     match motiond::app::run(
         config,
         motiond::app::RunOptions {

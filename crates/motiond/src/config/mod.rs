@@ -8,6 +8,7 @@
 
 mod error;
 mod given;
+pub mod locate;
 mod raw;
 mod validate;
 
