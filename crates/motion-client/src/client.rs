@@ -21,7 +21,7 @@ use crate::jog::JogTable;
 use crate::ports::{self, CommandPorts, FramePorts, Opening, PathPorts, SetpointPorts};
 use crate::received::{LatestCache, Received};
 use crate::session::{Seen, Session};
-use crate::{Axis, ClientError, ConnectError, Restart};
+use crate::{Axis, ClientError, ConnectError, Restart, Unanswered};
 
 /// How long a connecting client waits for the server description once its info subscriber
 /// exists (at least; the connect timeout when longer).
@@ -483,7 +483,7 @@ impl<S: Service> Client<S> {
             .ok_or_else(|| ClientError::NotPublished {
                 what: "server description",
                 service: self.names.info(),
-                why: "none received from the server that runs now".to_owned(),
+                why: Unanswered::NotFromThisServer,
             })
     }
 
@@ -520,9 +520,7 @@ impl<S: Service> Client<S> {
                             ConnectError::NoServer { .. } => ClientError::NotPublished {
                                 what: "machine parameters",
                                 service: service.clone(),
-                                why: "the service does not exist (a server older than \
-                                      motion-ipc schema 2?)"
-                                    .to_owned(),
+                                why: Unanswered::NoService { schema: 2 },
                             },
                             other => other.into(),
                         })?;
@@ -540,7 +538,7 @@ impl<S: Service> Client<S> {
                 return Err(ClientError::NotPublished {
                     what: "machine parameters",
                     service: self.names.params(),
-                    why: format!("nothing arrived within {:?}", self.reply_timeout),
+                    why: Unanswered::Timeout(self.reply_timeout),
                 });
             }
             std::thread::sleep(Duration::from_millis(5));
@@ -674,9 +672,10 @@ impl<S: Service> Client<S> {
             Some(listener) => Ok(TickListener(Rc::clone(listener))),
             None => Err(ClientError::Network {
                 what: "listen to the tick event",
-                detail: "a client connected through a bridge has no tick event to attach to \
-                         a WaitSet: use next_frame or for_each_frame"
-                    .to_owned(),
+                why: Unanswered::NotOnThisConnection(
+                    "a client connected through a bridge has no tick event to attach to a \
+                     WaitSet: use next_frame or for_each_frame",
+                ),
             }),
         }
     }

@@ -6,7 +6,7 @@ use core::time::Duration;
 
 use motion_ipc::{CommandKind, DeviceState, FaultCode, Reason};
 
-use crate::{GroupAborted, GroupRefusal, Iceoryx2Error, TrajectoryError};
+use crate::{GroupAborted, GroupRefusal, Iceoryx2Error, TrajectoryError, Unanswered};
 
 /// Why [`ClientBuilder::connect`](crate::ClientBuilder::connect) failed.
 #[derive(Debug, thiserror::Error)]
@@ -107,16 +107,8 @@ pub enum ConnectError {
         name: String,
         /// The zenoh endpoint tried.
         endpoint: String,
-        /// What zenoh or the bridge said.
-        why: String,
-    },
-    /// The zenoh transport could not be set up (remote clients, feature `zenoh`).
-    #[error("zenoh could not {what}: {detail}")]
-    Network {
-        /// What was being done.
-        what: &'static str,
-        /// What is missing.
-        detail: String,
+        /// Why no answer came.
+        why: Unanswered,
     },
     /// zenoh or the wire codec failed (remote clients, feature `zenoh`): their error kept.
     #[error(transparent)]
@@ -401,7 +393,7 @@ pub enum ClientError {
         /// The service.
         service: String,
         /// Why: the service does not exist, or nothing arrived in time.
-        why: String,
+        why: Unanswered,
     },
     /// A service could not be opened (the server is gone, or its port slots are taken).
     #[error(transparent)]
@@ -432,12 +424,12 @@ pub enum ClientError {
         message: String,
     },
     /// The network transport failed (remote clients, feature `zenoh`).
-    #[error("zenoh could not {what}: {detail}")]
+    #[error("could not {what}: {why}")]
     Network {
         /// What was being done.
         what: &'static str,
-        /// What is missing.
-        detail: String,
+        /// Why no answer came.
+        why: Unanswered,
     },
     /// zenoh or the wire codec failed (remote clients, feature `zenoh`): their error kept.
     #[error(transparent)]

@@ -131,6 +131,7 @@ mod stream_status;
 #[cfg(feature = "testing")]
 pub mod testing;
 mod trajectory;
+mod unanswered;
 
 pub use axis::Axis;
 pub use claim::ClaimGuard;
@@ -154,3 +155,4 @@ pub use signal::{Signal, signal_value_text};
 pub use stream::{STREAM_FRAME_TIMEOUT, SetpointStream};
 pub use stream_status::{StreamError, StreamRun, StreamStatus};
 pub use trajectory::{PointKind, Trajectory, TrajectoryError};
+pub use unanswered::Unanswered;

@@ -26,7 +26,7 @@ use motion_ipc::{MachineParams, ServerStats};
 use crate::feed::{Feed, Owned};
 use crate::received::LatestCache;
 use crate::received::Received;
-use crate::{ClientError, ConnectError, RemoteError};
+use crate::{ClientError, ConnectError, RemoteError, Unanswered};
 
 /// Samples a feed keeps when the program does not read them (the oldest go first, as
 /// over shared memory).
@@ -53,6 +53,11 @@ impl Default for RemoteOptions {
 }
 
 fn owned<T: Payload>(sample: &Sample, server: &str) -> Result<Owned<T>, ClientError> {
+    Ok(owned_remote(sample, server)?)
+}
+
+/// [`owned`], with the codec's error as the transport's.
+fn owned_remote<T: Payload>(sample: &Sample, server: &str) -> Result<Owned<T>, RemoteError> {
     let value = wire::decode_boxed::<T>(&sample.payload().to_bytes())
         .map_err(|error| RemoteError::payload(server, error))?;
     let origin = sample
@@ -151,7 +156,7 @@ impl Link {
                     return Err(ConnectError::NoBridge {
                         name: server.to_owned(),
                         endpoint: endpoint.to_owned(),
-                        why: error.to_string(),
+                        why: RemoteError::zenoh("open a session", error).into(),
                     });
                 }
                 Err(_) => std::thread::sleep(Duration::from_millis(100)),
@@ -195,10 +200,11 @@ impl Link {
             Ok(None) | Err(_) => {
                 return Err(ClientError::Network {
                     what: "open a session",
-                    detail: format!(
-                        "no motion-bridge answers on {key} at {} within {timeout:?}",
-                        self.endpoint
-                    ),
+                    why: Unanswered::NoBridge {
+                        key,
+                        endpoint: self.endpoint.clone(),
+                        hint: "",
+                    },
                 });
             }
         };
@@ -206,7 +212,10 @@ impl Link {
             Ok(sample) => SessionGrant::decode(&sample.payload().to_bytes()).ok_or_else(|| {
                 ClientError::Network {
                     what: "open a session",
-                    detail: format!("the bridge's answer on {key} is not a session grant"),
+                    why: Unanswered::NotA {
+                        key: key.clone(),
+                        payload: "session grant",
+                    },
                 }
             })?,
             Err(error) => {
@@ -240,7 +249,7 @@ impl Link {
         &self,
         key: &str,
         deadline: Instant,
-    ) -> Result<Owned<T>, String> {
+    ) -> Result<Owned<T>, Unanswered> {
         loop {
             let remaining = deadline.saturating_duration_since(Instant::now());
             let attempt = remaining.clamp(Duration::from_millis(200), Duration::from_secs(1));
@@ -257,23 +266,32 @@ impl Link {
         &self,
         key: &str,
         timeout: Duration,
-    ) -> Result<Owned<T>, String> {
+    ) -> Result<Owned<T>, Unanswered> {
         let replies = self
             .session
             .get(key)
             .timeout(timeout)
             .wait()
-            .map_err(|error| error.to_string())?;
+            .map_err(|error| RemoteError::zenoh(format!("ask {key}"), error))?;
         match replies.recv_timeout(timeout + Duration::from_millis(100)) {
             Ok(Some(reply)) => match reply.result() {
-                Ok(sample) => owned::<T>(sample, &self.server).map_err(|error| error.to_string()),
-                Err(error) => Err(error
-                    .payload()
-                    .try_to_string()
-                    .map_or_else(|_| "an error".to_owned(), |text| text.into_owned())),
+                Ok(sample) => Ok(owned_remote::<T>(sample, &self.server)?),
+                Err(error) => Err(Unanswered::Refused(
+                    error
+                        .payload()
+                        .try_to_string()
+                        .map_or_else(|_| "(not text)".to_owned(), |text| text.into_owned()),
+                )),
             },
-            Ok(None) => Err(format!("no answer on {key} within {timeout:?}")),
-            Err(_) => Err(format!("no motion-bridge answers on {key}")),
+            Ok(None) => Err(Unanswered::NoAnswer {
+                key: key.to_owned(),
+                waited: timeout,
+            }),
+            Err(_) => Err(Unanswered::NoBridge {
+                key: key.to_owned(),
+                endpoint: self.endpoint.clone(),
+                hint: "",
+            }),
         }
     }
 
@@ -379,11 +397,12 @@ impl Link {
             Err(_) => {
                 return Err(ClientError::Network {
                     what: "reach the bridge",
-                    detail: format!(
-                        "no motion-bridge answers on {key} at {} (is it running, for server \
-                         `{}`? does zenoh's access control let this user send on that key?)",
-                        self.endpoint, self.server
-                    ),
+                    why: Unanswered::NoBridge {
+                        key,
+                        endpoint: self.endpoint.clone(),
+                        hint: " (is it running, for this server? does zenoh's access control \
+                               let this user send on that key?)",
+                    },
                 });
             }
         };
@@ -451,9 +470,10 @@ impl Link {
         let started = std::time::Instant::now();
         let mut fetched = self.fetch::<MachineParams>(&key, timeout);
         while cache.current().is_none()
-            && fetched
-                .as_ref()
-                .is_err_and(|why| matches!(Refusal::parse(why), Some((Refusal::NoServer, _))))
+            && fetched.as_ref().is_err_and(|why| {
+                matches!(why, Unanswered::Refused(text)
+                        if matches!(Refusal::parse(text), Some((Refusal::NoServer, _))))
+            })
             && started.elapsed() < timeout
         {
             std::thread::sleep(Duration::from_millis(10));
@@ -477,7 +497,7 @@ impl Link {
         cache.refresh()?.ok_or_else(|| ClientError::NotPublished {
             what: "machine parameters",
             service: self.keys.params(),
-            why: "nothing arrived".to_owned(),
+            why: Unanswered::Timeout(timeout),
         })
     }
 }

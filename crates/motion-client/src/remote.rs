@@ -74,10 +74,7 @@ impl<S: Service> Client<S> {
         info.refresh().map_err(|error| match error {
             ClientError::Remote(error) => ConnectError::Remote(error),
             ClientError::Connect(error) => error,
-            other => ConnectError::Network {
-                what: "read the server description",
-                detail: other.to_string(),
-            },
+            other => ConnectError::Description(Box::new(other)),
         })?;
         let mut client = Self::assemble(options, server, node, names, info, session, axis_count);
         client.remote = Some(link);

@@ -19,7 +19,7 @@ use motion_ipc::{
 use crate::ports::{self, Opening, SetpointPorts};
 use crate::{
     Accepted, ClaimGuard, Client, ClientError, ConnectError, Frame, Group, StreamError, StreamRun,
-    StreamStatus,
+    StreamStatus, Unanswered,
 };
 
 /// How long [`SetpointStream::run_each_tick`] waits for a frame before it gives up with
@@ -39,8 +39,7 @@ impl<S: Service> Client<S> {
                 ConnectError::NoServer { .. } => ClientError::NotPublished {
                     what: "setpoint service",
                     service: service.clone(),
-                    why: "the service does not exist (a server older than motion-ipc schema 7?)"
-                        .to_owned(),
+                    why: Unanswered::NoService { schema: 7 },
                 },
                 other => other.into(),
             })?;

@@ -21,7 +21,9 @@ fn empty_dir() -> std::path::PathBuf {
 
 fn motiond() -> Command {
     let mut command = Command::new(env!("CARGO_BIN_EXE_motiond"));
-    command.env_remove("MOTIOND_CONFIG").env("MOTIOND_LOG", "info");
+    command
+        .env_remove("MOTIOND_CONFIG")
+        .env("MOTIOND_LOG", "info");
     command
 }
 

@@ -81,7 +81,11 @@ pub fn locate(places: &Places) -> Result<(PathBuf, ConfigSource), NoConfig> {
     if let Some(path) = &places.flag {
         return Ok((path.clone(), ConfigSource::Flag));
     }
-    if let Some(path) = places.environment.as_ref().filter(|p| !p.as_os_str().is_empty()) {
+    if let Some(path) = places
+        .environment
+        .as_ref()
+        .filter(|p| !p.as_os_str().is_empty())
+    {
         return Ok((path.clone(), ConfigSource::Environment));
     }
     if places.installed_exists {
@@ -131,7 +135,12 @@ mod tests {
     #[test]
     fn the_no_config_line_names_every_way_to_pass_one() {
         let line = NoConfig.to_string();
-        for words in ["--config FILE", "MOTIOND_CONFIG", INSTALLED_CONFIG, "config/sim.toml"] {
+        for words in [
+            "--config FILE",
+            "MOTIOND_CONFIG",
+            INSTALLED_CONFIG,
+            "config/sim.toml",
+        ] {
             assert!(line.contains(words), "{line}");
         }
         assert!(!line.contains('\n'), "one line: {line}");
