@@ -11,6 +11,7 @@ use motion_ipc::{ClientId, DeviceState, ServerPidFile, read_text};
 use motion_link::{Link, LinkConfig};
 use rtrb::RingBuffer;
 
+use crate::blackbox::{BlackboxFile, Journal, RecorderSetup};
 use crate::boards::sim_link;
 use crate::config::{ServerConfig, Transport};
 use crate::error::ServerError;
@@ -82,6 +83,10 @@ pub fn run(config: ServerConfig, options: RunOptions) -> Result<(), ServerError>
     // the e-stop even when every service slot is taken.
     let estop_signal = Arc::new(AtomicBool::new(false));
     signal_hook::flag::register(signal_hook::consts::SIGUSR1, Arc::clone(&estop_signal))
+        .map_err(ServerError::SignalHandlers)?;
+    // SIGUSR2: save the black box now.
+    let save_blackbox = Arc::new(AtomicBool::new(false));
+    signal_hook::flag::register(signal_hook::consts::SIGUSR2, Arc::clone(&save_blackbox))
         .map_err(ServerError::SignalHandlers)?;
     for warning in &config.warnings {
         tracing::warn!("{}", warning.warning_line(&config.path));
@@ -168,6 +173,7 @@ pub fn run(config: ServerConfig, options: RunOptions) -> Result<(), ServerError>
     let (report_tx, mut report_rx) = RingBuffer::<Report>::new(64);
     let clients_alive = Arc::new(AtomicU32::new(0));
     let nodes_cleaned = Arc::new(AtomicU64::new(dead.len() as u64));
+    let (journal, recorder) = start_recorder(&config, save_blackbox)?;
     let setup = TickSetup {
         engine,
         ports,
@@ -184,6 +190,7 @@ pub fn run(config: ServerConfig, options: RunOptions) -> Result<(), ServerError>
         params,
         estop_signal,
         health: Arc::clone(&health),
+        journal,
     };
     let tick_thread = std::thread::Builder::new()
         .name("tick".into())
@@ -204,10 +211,57 @@ pub fn run(config: ServerConfig, options: RunOptions) -> Result<(), ServerError>
     if tick_thread.join().is_err() {
         tracing::error!("the tick thread panicked");
     }
+    if let Some((stop, thread)) = recorder {
+        stop.store(true, Ordering::Release);
+        if thread.join().is_err() {
+            tracing::error!("the black box recorder panicked");
+        }
+    }
     for thread in io_threads {
         thread.join();
     }
     result
+}
+
+/// Bytes of the queue from the tick's journal to the recorder thread (drained every
+/// 20 ms: a tick of four busy links journals about 1 KiB, a path at most 600 KiB).
+const JOURNAL_QUEUE_BYTES: usize = 8 << 20;
+
+/// The black box's recorder thread and the tick's journal into it; with
+/// `blackbox_seconds = 0`, a journal that records nothing and no thread.
+#[allow(clippy::type_complexity)]
+fn start_recorder(
+    config: &ServerConfig,
+    save_now: Arc<AtomicBool>,
+) -> Result<(Journal, Option<(Arc<AtomicBool>, std::thread::JoinHandle<()>)>), ServerError> {
+    let server = &config.server;
+    if server.blackbox_seconds == 0 {
+        return Ok((Journal::disabled(), None));
+    }
+    let (producer, consumer) = rtrb::RingBuffer::new(JOURNAL_QUEUE_BYTES);
+    let stop = Arc::new(AtomicBool::new(false));
+    let setup = RecorderSetup {
+        queue: consumer,
+        keep_ticks: server.blackbox_seconds as usize * server.tick_hz as usize,
+        file: BlackboxFile {
+            server_name: server.name.clone(),
+            tick_hz: server.tick_hz,
+            config_path: config.path.clone(),
+            // Read again for the file (a replay builds the same machine from it); a file
+            // gone meanwhile leaves it empty and the replay then needs --config.
+            config_text: std::fs::read_to_string(&config.path).unwrap_or_default(),
+            link_names: config.links.iter().map(|l| l.name.clone()).collect(),
+        },
+        dir: server.blackbox_dir.clone(),
+        on_exit: server.blackbox_on_exit,
+        save_now,
+        stop: Arc::clone(&stop),
+    };
+    let thread = std::thread::Builder::new()
+        .name("blackbox".into())
+        .spawn(move || crate::blackbox::recorder::run(setup))
+        .map_err(ServerError::RecorderThread)?;
+    Ok((Journal::new(producer), Some((stop, thread))))
 }
 
 /// The main thread's side of the systemd conversation (crate::systemd).

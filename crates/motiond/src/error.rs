@@ -309,6 +309,9 @@ pub enum ServerError {
     /// The tick thread could not be started.
     #[error("starting the tick thread")]
     TickThread(#[source] io::Error),
+    /// The black box's recorder thread could not be started.
+    #[error("starting the black box recorder thread")]
+    RecorderThread(#[source] io::Error),
     /// The tick thread could not set up its services or its real-time settings.
     #[error(transparent)]
     Start(#[from] StartError),

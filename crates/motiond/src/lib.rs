@@ -4,6 +4,7 @@
 #![deny(unsafe_code)] // one exception: rt.rs (sched_setscheduler), with SAFETY notes
 
 pub mod app;
+pub mod blackbox;
 pub mod boards;
 pub mod config;
 pub mod drivers;

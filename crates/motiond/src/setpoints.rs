@@ -51,7 +51,12 @@ pub fn create(
 impl SetpointInbox {
     /// Hands every setpoint that arrived since the last tick to `engine`, each with its
     /// sender's node and the instant it was taken from the service.
-    pub fn deliver(&mut self, factory: &SetpointsFactory, engine: &mut Engine<AnyDriver>) {
+    pub fn deliver(
+        &mut self,
+        factory: &SetpointsFactory,
+        engine: &mut Engine<AnyDriver>,
+        journal: &mut crate::blackbox::Journal,
+    ) {
         for _ in 0..SETPOINTS_PER_TICK {
             let Ok(Some(sample)) = self.subscriber.receive() else {
                 return;
@@ -59,7 +64,10 @@ impl SetpointInbox {
             let received_ns = crate::io::duration_ns(monotonic_now());
             let publisher = sample.header().publisher_id().value();
             match crate::inbox::publisher_node(factory, publisher) {
-                Some(node) => engine.handle_setpoint_at(node, sample.payload(), received_ns),
+                Some(node) => {
+                    journal.setpoint(node, received_ns, sample.payload());
+                    engine.handle_setpoint_at(node, sample.payload(), received_ns);
+                }
                 None => self.orphans += 1,
             }
         }

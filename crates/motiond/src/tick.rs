@@ -18,6 +18,8 @@ use motion_ipc::{
 };
 use rtrb::{Consumer, Producer};
 
+use crate::blackbox::Journal;
+use crate::blackbox::record::Trigger;
 use crate::config::ServerSettings;
 use crate::error::{RtError, StartError};
 use crate::io::{LinkEvent, LinkPort, NEVER, PACKET_LEN, Packet};
@@ -145,6 +147,8 @@ pub struct TickSetup {
     pub estop_signal: Arc<AtomicBool>,
     /// Stamped at the end of every tick (the systemd watchdog is fed from it).
     pub health: Arc<crate::systemd::TickHealth>,
+    /// The black box's journal (disabled with `blackbox_seconds = 0`).
+    pub journal: Journal,
 }
 
 /// The command port over the iceoryx2 server: one active request at a time, answered
@@ -162,6 +166,8 @@ struct IpcCommands<'a> {
     paths: &'a mut PathInbox,
     /// The paths service (the nodes of its publishers).
     paths_factory: &'a PathsFactory,
+    /// The black box: every request, path and reply.
+    journal: &'a mut Journal,
 }
 
 impl CommandPort for IpcCommands<'_> {
@@ -171,6 +177,7 @@ impl CommandPort for IpcCommands<'_> {
         self.sender = self
             .directory
             .node_of(self.factory, active.origin().value());
+        self.journal.request(self.sender, &request);
         self.current = Some(active);
         Some(request)
     }
@@ -185,10 +192,13 @@ impl CommandPort for IpcCommands<'_> {
             // arrived since.
             self.paths.receive(self.paths_factory);
         }
-        self.paths.take(client, id)
+        let path = self.paths.take(client, id);
+        self.journal.path(client, id, path);
+        path
     }
 
     fn reply(&mut self, reply: CommandReply) {
+        self.journal.reply(&reply);
         if let Some(active) = self.current.take()
             && active.send_copy(reply).is_err()
         {
@@ -319,6 +329,8 @@ struct Loop {
     directory: ClientDirectory,
     consecutive_overruns: u64,
     overrun_fault_latched: bool,
+    /// Whether the last frame had the e-stop latched (a new latch triggers the black box).
+    estop_seen: bool,
 }
 
 impl Loop {
@@ -340,6 +352,7 @@ impl Loop {
         for link in 0..setup.ports.len() {
             setup.engine.link_opening(link);
         }
+        setup.journal.start(setup.epoch, setup.ports.len());
         let mut stats = Box::new(ServerStats::EMPTY);
         stats.rt_flags = rt_flags;
         stats.link_count = setup.ports.len().min(stats.links.len()) as u32;
@@ -361,6 +374,7 @@ impl Loop {
             directory,
             consecutive_overruns: 0,
             overrun_fault_latched: false,
+            estop_seen: false,
         }
     }
 
@@ -382,10 +396,12 @@ impl Loop {
                 .record(duration_ns(wake.saturating_sub(deadline)));
             let now = deadline.saturating_sub(epoch);
             phases.begin(wake);
+            self.setup.journal.tick(now);
 
             self.take_link_input(now);
             phases.lap(Phase::Input);
             while let Ok(client) = self.setup.dead_clients.pop() {
+                self.setup.journal.client_dead(client);
                 self.setup.engine.client_dead(client);
             }
             self.take_estops();
@@ -394,6 +410,7 @@ impl Loop {
                 self.end_claims_of_departed_clients();
             }
             if shutting_since.is_none() && self.setup.shutdown.load(Ordering::Relaxed) {
+                self.setup.journal.shutdown();
                 self.setup.engine.begin_shutdown();
                 shutting_since = Some(now);
             }
@@ -433,6 +450,7 @@ impl Loop {
                     deadline += period;
                     skipped += 1;
                 }
+                self.setup.journal.skip(skipped);
                 self.setup.engine.skip_ticks(skipped);
                 self.stats.overruns += 1;
                 self.consecutive_overruns += 1;
@@ -442,6 +460,7 @@ impl Loop {
                     .max(self.consecutive_overruns);
                 let limit = u64::from(self.setup.settings.max_consecutive_overruns);
                 if limit > 0 && self.consecutive_overruns >= limit && !self.overrun_fault_latched {
+                    self.setup.journal.overrun_fault();
                     self.setup.engine.stop_all_with_fault(FaultCode::Overrun);
                     self.overrun_fault_latched = true;
                 }
@@ -456,25 +475,33 @@ impl Loop {
     /// message the engine still tracks), received bytes, and the horizon read before them.
     fn take_link_input(&mut self, now: Duration) {
         let engine = &mut self.setup.engine;
+        let journal = &mut self.setup.journal;
         for (index, port) in self.setup.ports.iter_mut().enumerate() {
             let heard = port.heard();
             while let Ok(event) = port.events.pop() {
                 match event {
                     LinkEvent::Down => {
                         port.generation = port.generation.wrapping_add(1);
+                        journal.link_down(index);
                         engine.link_down(index, now);
                     }
-                    LinkEvent::Up => engine.link_up(index, now),
+                    LinkEvent::Up => {
+                        journal.link_up(index);
+                        engine.link_up(index, now);
+                    }
                 }
             }
             while let Ok(written) = port.written.pop() {
                 if written.generation == port.generation {
+                    journal.link_written(index, written.at);
                     engine.link_written(index, written.at);
                 }
             }
             while let Ok(packet) = port.rx.pop() {
+                journal.link_rx(index, packet.at(), packet.bytes());
                 engine.handle_link_rx(index, now, packet.bytes());
             }
+            journal.link_heard(index, heard);
             engine.link_heard(index, heard);
         }
     }
@@ -487,6 +514,7 @@ impl Loop {
         }
         let signalled = self.setup.estop_signal.swap(false, Ordering::Relaxed);
         if notified || signalled {
+            self.setup.journal.estop(if notified { 1 } else { 2 });
             self.setup.engine.estop();
             let by = if notified {
                 "the estop event"
@@ -508,6 +536,7 @@ impl Loop {
                 .claim_holders()
                 .find(|holder| !self.directory.is_connected(*holder));
             let Some(holder) = departed else { break };
+            self.setup.journal.release_claims(holder);
             self.setup.engine.release_claims_of(holder);
         }
     }
@@ -538,6 +567,7 @@ impl Loop {
                     *seen = code;
                 }
                 if let Some((code, value, limit)) = fault {
+                    self.setup.journal.trigger(Trigger::Fault, index);
                     self.report(Report::Fault {
                         axis: index,
                         code,
@@ -551,9 +581,12 @@ impl Loop {
 
     fn step_and_publish(&mut self, now: Duration, deadline: Duration) {
         self.services.paths.receive(&self.services.factories.paths);
-        self.services
-            .setpoints
-            .deliver(&self.services.factories.setpoints, &mut self.setup.engine);
+        self.services.setpoints.deliver(
+            &self.services.factories.setpoints,
+            &mut self.setup.engine,
+            &mut self.setup.journal,
+        );
+        self.setup.journal.step();
         let mut commands = IpcCommands {
             server: &self.services.command,
             factory: &self.services.factories.command,
@@ -563,12 +596,14 @@ impl Loop {
             replies_lost: 0,
             paths: &mut self.services.paths,
             paths_factory: &self.services.factories.paths,
+            journal: &mut self.setup.journal,
         };
         match self.services.frame.loan_uninit() {
             Ok(sample) => {
                 let mut sample = sample.write_payload(MotionFrame::EMPTY);
                 let frame = sample.payload_mut();
                 self.setup.engine.step(now, &mut commands, frame);
+                Self::journal_frame(commands.journal, &mut self.estop_seen, frame);
                 frame.time_ns = duration_ns(deadline);
                 frame.publish_ns = duration_ns(monotonic_now());
                 if sample.send().is_err() {
@@ -580,6 +615,7 @@ impl Loop {
                 self.setup
                     .engine
                     .step(now, &mut commands, &mut self.spare_frame);
+                Self::journal_frame(commands.journal, &mut self.estop_seen, &self.spare_frame);
                 self.stats.frames_lost += 1;
             }
         }
@@ -609,8 +645,10 @@ impl Loop {
             let mut queued = false;
             while port.tx.slots() > 0 {
                 let Some(len) = self.setup.engine.poll_link_transmit(index, now, buf) else {
+                    self.setup.journal.link_tx_none(index);
                     break;
                 };
+                self.setup.journal.link_tx(index, &buf[..len]);
                 // `slots() > 0` was checked: the push cannot fail, but a failure would
                 // still be counted rather than lost silently.
                 if port.tx.push(Packet::stamped(&buf[..len], now)).is_err() {
@@ -620,6 +658,16 @@ impl Loop {
             }
             port.queued_and_look_by(queued, self.setup.engine.link_poll_timeout(index));
         }
+    }
+
+    /// The frame's digest into the journal, and a trigger when the e-stop latched.
+    fn journal_frame(journal: &mut Journal, estop_seen: &mut bool, frame: &MotionFrame) {
+        journal.frame(frame);
+        let estop = frame.flags & motion_ipc::FrameFlags::ESTOP_LATCHED.0 != 0;
+        if estop && !*estop_seen {
+            journal.trigger(Trigger::Estop, usize::MAX);
+        }
+        *estop_seen = estop;
     }
 
     fn publish_stats(&mut self, deadline: Duration) {

@@ -62,7 +62,16 @@ pub struct ServerSettings {
     pub liveness_check: Duration,
     /// A claim not renewed by a command of its owner within this time ends (zero: never).
     pub claim_lease: Duration,
+    /// Seconds of ticks the black box keeps (0: no black box).
+    pub blackbox_seconds: u32,
+    /// Save the black box on a clean exit too.
+    pub blackbox_on_exit: bool,
+    /// Where black box files are written.
+    pub blackbox_dir: PathBuf,
 }
+
+/// `[server] blackbox_dir`'s default.
+pub const DEFAULT_BLACKBOX_DIR: &str = "/tmp/motiond-blackbox";
 
 /// How a link reaches its devices.
 #[derive(Debug, Clone, PartialEq, Eq)]

@@ -46,6 +46,9 @@ pub(crate) struct RawServer {
     pub max_consecutive_overruns: Option<Spanned<Int>>,
     pub liveness_check_ms: Option<Spanned<Int>>,
     pub claim_lease_ms: Option<Spanned<Int>>,
+    pub blackbox_seconds: Option<Spanned<Int>>,
+    pub blackbox_on_exit: Option<Spanned<bool>>,
+    pub blackbox_dir: Option<Spanned<String>>,
 }
 
 #[derive(Debug, Deserialize)]

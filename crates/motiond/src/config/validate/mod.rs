@@ -372,6 +372,9 @@ impl Validator<'_, '_> {
             max_consecutive_overruns: 50,
             liveness_check: Duration::from_millis(100),
             claim_lease: Duration::ZERO,
+            blackbox_seconds: 10,
+            blackbox_on_exit: false,
+            blackbox_dir: crate::config::DEFAULT_BLACKBOX_DIR.into(),
         };
         const NAME: &str =
             "the instance name: services are motiond/<name>/frame, …; e.g. name = \"demo\"";
@@ -442,6 +445,27 @@ impl Validator<'_, '_> {
             && let Some(v) = self.int_in(v, "server.claim_lease_ms", 0..=3_600_000)
         {
             settings.claim_lease = Duration::from_millis(v as u64);
+        }
+        if let Some(v) = &raw.blackbox_seconds
+            && let Some(v) = self.int_in(v, "server.blackbox_seconds", 0..=600)
+        {
+            settings.blackbox_seconds = v as u32;
+        }
+        if let Some(v) = &raw.blackbox_on_exit {
+            settings.blackbox_on_exit = *v.get_ref();
+        }
+        if let Some(v) = &raw.blackbox_dir {
+            if v.get_ref().is_empty() {
+                self.issue(
+                    v.span(),
+                    "server.blackbox_dir",
+                    "an empty path; give the directory black box files go to, e.g. \
+                     blackbox_dir = \"/var/lib/motiond/blackbox\""
+                        .to_owned(),
+                );
+            } else {
+                settings.blackbox_dir = v.get_ref().into();
+            }
         }
         settings
     }
