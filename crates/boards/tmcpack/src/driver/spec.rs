@@ -102,6 +102,14 @@ fn level(
         .transpose()
 }
 
+/// `flags` with each flag of `given` set as its key says (`with`: the flags type's
+/// setter); a key not written leaves its flag as it is, the driver's default.
+fn given_flags<F: Copy>(flags: F, given: &[(F, Option<bool>)], with: fn(F, F, bool) -> F) -> F {
+    given.iter().fold(flags, |flags, &(flag, on)| {
+        on.map_or(flags, |on| with(flags, flag, on))
+    })
+}
+
 /// The driver's view of the motor behind `axis`: limits in microsteps, and the machine keys.
 fn channel_config(axis: &DriverAxis) -> Result<TmcpackChannel, SpecError> {
     let keys = axis_keys(axis);
@@ -113,41 +121,26 @@ fn channel_config(axis: &DriverAxis) -> Result<TmcpackChannel, SpecError> {
     // `reference.side` / `home.direction` are in axis units; NullLeft is in microsteps.
     let null_left = (axis.home.direction == Direction::Negative) == (cpu > 0.0);
     let rotary = keys.rotary == Some(true);
-    let motor_type = d
-        .motor_type
-        .with(MotorType::NULL_LEFT, null_left)
-        .with(
-            MotorType::NULL_CENTER,
-            r.center
-                .unwrap_or(d.motor_type.contains(MotorType::NULL_CENTER)),
-        )
-        .with(
-            MotorType::STOP_NULL,
-            r.stop_at_switch
-                .unwrap_or(d.motor_type.contains(MotorType::STOP_NULL)),
-        )
-        .with(MotorType::ROTARY, rotary);
-    let options = d
-        .options
-        .with(
-            MotorOptions::NULL_POSITIVE,
-            r.active_high
-                .unwrap_or(d.options.contains(MotorOptions::NULL_POSITIVE)),
-        )
-        .with(
-            MotorOptions::STOP_SOFT,
-            r.soft_stop
-                .unwrap_or(d.options.contains(MotorOptions::STOP_SOFT)),
-        )
-        .with(
-            MotorOptions::FAST_REF,
-            r.fast.unwrap_or(d.options.contains(MotorOptions::FAST_REF)),
-        )
-        .with(
-            MotorOptions::MECH_REF,
-            r.mechanical
-                .unwrap_or(d.options.contains(MotorOptions::MECH_REF)),
-        );
+    let motor_type = given_flags(
+        d.motor_type
+            .with(MotorType::NULL_LEFT, null_left)
+            .with(MotorType::ROTARY, rotary),
+        &[
+            (MotorType::NULL_CENTER, r.center),
+            (MotorType::STOP_NULL, r.stop_at_switch),
+        ],
+        MotorType::with,
+    );
+    let options = given_flags(
+        d.options,
+        &[
+            (MotorOptions::NULL_POSITIVE, r.active_high),
+            (MotorOptions::STOP_SOFT, r.soft_stop),
+            (MotorOptions::FAST_REF, r.fast),
+            (MotorOptions::MECH_REF, r.mechanical),
+        ],
+        MotorOptions::with,
+    );
     let range = match keys.revolution {
         Some(revolution) if rotary => revolution,
         _ => axis.max - axis.min,
