@@ -84,7 +84,7 @@ impl IntValue for Int {
 
 /// Where a board reports what is wrong with its keys (the server's validator). Boards
 /// call the inherent methods of `dyn KeyIssues` ([`issue`](#method.issue),
-/// [`warn`](#method.warn), [`int_in`](#method.int_in)).
+/// [`warn`](#method.warn), [`int_in`](#method.int_in), [`one_of`](#method.one_of)).
 pub trait KeyIssues {
     /// `message` about `key` (dotted: `axis[2].current.peak`) at `span`: the file is
     /// refused.
@@ -132,6 +132,31 @@ impl dyn KeyIssues + '_ {
             );
             None
         }
+    }
+
+    /// What `allowed` pairs with the name `value` gives; otherwise an issue
+    /// `unknown {what} "…"; allowed: {listed}` (`listed`: the names, and what each means).
+    pub fn one_of<T: Copy>(
+        &mut self,
+        value: &Spanned<String>,
+        key: &str,
+        allowed: &[(&str, T)],
+        what: &str,
+        listed: &str,
+    ) -> Option<T> {
+        let name = value.get_ref().as_str();
+        let found = allowed
+            .iter()
+            .find(|(allowed, _)| *allowed == name)
+            .map(|&(_, found)| found);
+        if found.is_none() {
+            self.issue(
+                value.span(),
+                key,
+                format!("unknown {what} {name:?}; allowed: {listed}"),
+            );
+        }
+        found
     }
 }
 
@@ -287,5 +312,59 @@ impl AxisContext<'_> {
     #[must_use]
     pub fn key(&self, key: &str) -> String {
         format!("axis[{}].{key}", self.index)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{KeyIssues, Span, Spanned};
+
+    /// Every issue told, as (span, key, message).
+    #[derive(Default)]
+    struct Told(Vec<(Span, String, String)>);
+
+    impl KeyIssues for Told {
+        fn report_issue(&mut self, span: Span, key: &str, message: String) {
+            self.0.push((span, key.to_owned(), message));
+        }
+        fn report_warning(&mut self, _: Span, _: &str, _: String) {}
+        fn report_refused(&mut self, _: Span, _: &str) {}
+    }
+
+    #[test]
+    fn one_of_gives_the_named_value_or_names_what_is_allowed() {
+        let allowed = [("low", false), ("high", true)];
+        let mut told = Told::default();
+        let issues: &mut dyn KeyIssues = &mut told;
+        let high = Spanned::new(3..9, "high".to_owned());
+        assert_eq!(
+            issues.one_of(
+                &high,
+                "device[0].level",
+                &allowed,
+                "level",
+                "\"low\", \"high\""
+            ),
+            Some(true)
+        );
+        let odd = Spanned::new(10..16, "middle".to_owned());
+        assert_eq!(
+            issues.one_of(
+                &odd,
+                "device[0].level",
+                &allowed,
+                "level",
+                "\"low\", \"high\""
+            ),
+            None
+        );
+        assert_eq!(
+            told.0,
+            [(
+                10..16,
+                "device[0].level".to_owned(),
+                "unknown level \"middle\"; allowed: \"low\", \"high\"".to_owned()
+            )]
+        );
     }
 }

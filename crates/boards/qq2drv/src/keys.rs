@@ -164,19 +164,17 @@ fn home_hints(
             );
             None
         }
-        Some(input) => match input.get_ref().as_str() {
-            "home" => Some(HomeInputKind::Home),
-            "index" => Some(HomeInputKind::Index),
-            "edge" => Some(HomeInputKind::Edge),
-            other => {
-                v.issue(
-                    input.span(),
-                    &key("input"),
-                    format!("unknown input {other:?}; allowed: \"home\" (switch, acts while active), \"index\" (encoder index), \"edge\" (inactive-to-active edge)"),
-                );
-                None
-            }
-        },
+        Some(input) => v.one_of(
+            input,
+            &key("input"),
+            &[
+                ("home", HomeInputKind::Home),
+                ("index", HomeInputKind::Index),
+                ("edge", HomeInputKind::Edge),
+            ],
+            "input",
+            "\"home\" (switch, acts while active), \"index\" (encoder index), \"edge\" (inactive-to-active edge)",
+        ),
     };
     let spacing = match &h.spacing {
         None => Some(None),

@@ -61,37 +61,33 @@ fn variant(v: &mut dyn KeyIssues, ctx: &DeviceContext, raw: &RawDevice) -> Optio
     let Some(value) = &raw.variant else {
         return Some(QsbVariant::M);
     };
-    match value.get_ref().as_str() {
-        "qsb-m" => Some(QsbVariant::M),
-        "qsb-s" => Some(QsbVariant::S),
-        "qsb-d" => Some(QsbVariant::D),
-        other => {
-            v.issue(
-                value.span(),
-                &ctx.key("variant"),
-                format!("unknown variant {other:?}; allowed: \"qsb-m\" (encoder, 4 digital I/O, stepper drive; default), \"qsb-s\" (encoder only), \"qsb-d\" (differential encoder, 1 digital I/O)"),
-            );
-            None
-        }
-    }
+    v.one_of(
+        value,
+        &ctx.key("variant"),
+        &[
+            ("qsb-m", QsbVariant::M),
+            ("qsb-s", QsbVariant::S),
+            ("qsb-d", QsbVariant::D),
+        ],
+        "variant",
+        "\"qsb-m\" (encoder, 4 digital I/O, stepper drive; default), \"qsb-s\" (encoder only), \"qsb-d\" (differential encoder, 1 digital I/O)",
+    )
 }
 
 /// What the device's home keys say about its axis's reference search.
 fn home_hints(v: &mut dyn KeyIssues, ctx: &DeviceContext, raw: &RawDevice) -> Option<HomeHints> {
     let mut hints = HomeHints::default();
     if let Some(value) = &raw.home_direction {
-        let direction = match value.get_ref().as_str() {
-            "negative" => Direction::Negative,
-            "positive" => Direction::Positive,
-            other => {
-                v.issue(
-                    value.span(),
-                    &ctx.key("home_direction"),
-                    format!("unknown direction {other:?}; allowed: \"negative\" (towards min; default), \"positive\" (towards max)"),
-                );
-                return None;
-            }
-        };
+        let direction = v.one_of(
+            value,
+            &ctx.key("home_direction"),
+            &[
+                ("negative", Direction::Negative),
+                ("positive", Direction::Positive),
+            ],
+            "direction",
+            "\"negative\" (towards min; default), \"positive\" (towards max)",
+        )?;
         hints.direction.push(Given {
             value: direction,
             span: value.span(),
@@ -122,23 +118,8 @@ fn choice<T: Copy>(
     key: &str,
     allowed: &[(&str, T)],
 ) -> Option<T> {
-    let found = allowed
-        .iter()
-        .find(|(name, _)| *name == value.get_ref())
-        .map(|(_, value)| *value);
-    if found.is_none() {
-        let names: Vec<String> = allowed.iter().map(|(n, _)| format!("{n:?}")).collect();
-        v.issue(
-            value.span(),
-            key,
-            format!(
-                "unknown value {:?}; allowed: {}",
-                value.get_ref(),
-                names.join(", ")
-            ),
-        );
-    }
-    found
+    let names: Vec<String> = allowed.iter().map(|(n, _)| format!("{n:?}")).collect();
+    v.one_of(value, key, allowed, "value", &names.join(", "))
 }
 
 /// Validates the qsb keys of a `[[device]]` table.

@@ -55,19 +55,18 @@ pub(crate) fn device_keys(
     let mut ok = true;
     let brushed = match &raw.drive {
         None => false,
-        Some(drive) => match drive.get_ref().as_str() {
-            "stepper" => false,
-            "brushed" => true,
-            other => {
-                v.issue(
-                    drive.span(),
-                    &ctx.key("drive"),
-                    format!("unknown drive {other:?}; allowed: \"stepper\" (one axis, channel 0), \"brushed\" (channels 0 = A, 1 = B)"),
-                );
+        Some(drive) => v
+            .one_of(
+                drive,
+                &ctx.key("drive"),
+                &[("stepper", false), ("brushed", true)],
+                "drive",
+                "\"stepper\" (one axis, channel 0), \"brushed\" (channels 0 = A, 1 = B)",
+            )
+            .unwrap_or_else(|| {
                 ok = false;
                 false
-            }
-        },
+            }),
     };
     let intensity = stepper_only(v, ctx, brushed, &raw.intensity, "intensity", &mut ok);
     let coils = stepper_only(v, ctx, brushed, &raw.coils, "coils", &mut ok);
