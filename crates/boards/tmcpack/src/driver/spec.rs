@@ -148,9 +148,10 @@ fn channel_config(axis: &DriverAxis) -> Result<TmcpackChannel, SpecError> {
     let poslimit = (range * scale).round().clamp(0.0, f64::from(MAX_POSLIMIT)) as u32;
     let counts = |units: f64| (units * scale).round();
     let channel = axis.channel;
+    let limits = axis.limits();
     Ok(TmcpackChannel {
-        max_velocity: axis.max_velocity * scale,
-        max_accel: axis.max_accel * scale,
+        max_velocity: limits.max_velocity,
+        max_accel: limits.max_accel,
         poslimit,
         motor_type,
         options,
