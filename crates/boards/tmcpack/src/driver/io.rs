@@ -57,6 +57,11 @@ const fn analog(channel: u8, name: &'static str, description: &'static str) -> R
     (info, Source::Analog(channel))
 }
 
+/// Motor `motor`'s reference input, a digital input of `$30` P4.
+const fn reference(motor: u8, name: &'static str, description: &'static str) -> Row {
+    digital(Source::Ref(motor), name, DIN, description)
+}
+
 const fn digital(
     source: Source,
     name: &'static str,
@@ -112,40 +117,34 @@ const A7: Row = analog(
     "analog7",
     "supply voltage, 22 counts per volt: scale = 0.04545 for V (manual 8.5 $30 channel 7, \"1V equals value 22\")",
 );
-const R0: Row = digital(
-    Source::Ref(0),
+const R0: Row = reference(
+    0,
     "ref0",
-    DIN,
     "motor 0's reference switch input Ref_In, electrical level 1 = high (manual 8.5 $30 P4 bit 0 reports it inverted; the driver undoes that)",
 );
-const R1: Row = digital(
-    Source::Ref(1),
+const R1: Row = reference(
+    1,
     "ref1",
-    DIN,
     "motor 1's reference switch input Ref_In, electrical level 1 = high (manual 8.5 $30 P4 bit 1, inverted on the wire)",
 );
-const R2: Row = digital(
-    Source::Ref(2),
+const R2: Row = reference(
+    2,
     "ref2",
-    DIN,
     "motor 2's reference switch input Ref_In, electrical level 1 = high (manual 8.5 $30 P4 bit 2, inverted on the wire)",
 );
-const R3: Row = digital(
-    Source::Ref(3),
+const R3: Row = reference(
+    3,
     "ref3",
-    DIN,
     "motor 3's reference switch input Ref_In, electrical level 1 = high (manual 8.5 $30 P4 bit 3, inverted on the wire)",
 );
-const R4: Row = digital(
-    Source::Ref(4),
+const R4: Row = reference(
+    4,
     "ref4",
-    DIN,
     "motor 4's reference switch input Ref_In, electrical level 1 = high (manual 8.5 $30 P4 bit 4, inverted on the wire)",
 );
-const R5: Row = digital(
-    Source::Ref(5),
+const R5: Row = reference(
+    5,
     "ref5",
-    DIN,
     "motor 5's reference switch input Ref_In, electrical level 1 = high (manual 8.5 $30 P4 bit 5, inverted on the wire)",
 );
 const J1: Row = digital(

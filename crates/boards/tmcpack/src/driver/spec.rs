@@ -377,23 +377,18 @@ impl TmcpackDriverConfig {
                     ch.debounce_mask
                 ),
             );
+            // A distance of the pack's, in units and microsteps.
+            let distance =
+                |steps: i64| format!("{} {unit} ({steps} µsteps)", num(steps as f64 / per_unit));
             row(
                 owner,
                 "reference.null_offset",
-                format!(
-                    "{} {unit} ({} µsteps)",
-                    num(f64::from(ch.nulloffset) / per_unit),
-                    ch.nulloffset
-                ),
+                distance(i64::from(ch.nulloffset)),
             );
             row(
                 owner,
                 "reference.test_range",
-                format!(
-                    "{} {unit} ({} µsteps)",
-                    num(f64::from(ch.testnullrange) / per_unit),
-                    ch.testnullrange
-                ),
+                distance(i64::from(ch.testnullrange)),
             );
             row(
                 owner,
