@@ -249,6 +249,56 @@ impl<'a> KeyTable<'a> {
     }
 }
 
+/// The keys of a table as the board's serde struct `T` declares them (its fields, in
+/// declaration order): what [`Board::device_key_names`](crate::Board::device_key_names)
+/// and [`axis_key_names`](crate::Board::axis_key_names) return, so that a board writes
+/// its key names once, in its struct. Empty for a `T` that is not a plain struct.
+#[must_use]
+pub fn key_names<'de, T: Deserialize<'de>>() -> &'static [&'static str] {
+    match T::deserialize(FieldNames) {
+        Err(Fields(fields)) => fields,
+        Ok(_) => &[],
+    }
+}
+
+/// A deserializer that answers nothing: it only asks the struct deserialized from it for
+/// its field names ([`key_names`]), which it hands back as its error.
+struct FieldNames;
+
+/// The field names a struct's `Deserialize` named (none for anything else).
+#[derive(Debug, thiserror::Error)]
+#[error("not a struct")]
+struct Fields(&'static [&'static str]);
+
+impl serde::de::Error for Fields {
+    fn custom<M: fmt::Display>(_: M) -> Self {
+        Self(&[])
+    }
+}
+
+impl<'de> serde::Deserializer<'de> for FieldNames {
+    type Error = Fields;
+
+    fn deserialize_any<V: serde::de::Visitor<'de>>(self, _: V) -> Result<V::Value, Fields> {
+        Err(Fields(&[]))
+    }
+
+    fn deserialize_struct<V: serde::de::Visitor<'de>>(
+        self,
+        _: &'static str,
+        fields: &'static [&'static str],
+        _: V,
+    ) -> Result<V::Value, Fields> {
+        Err(Fields(fields))
+    }
+
+    serde::forward_to_deserialize_any! {
+        bool i8 i16 i32 i64 i128 u8 u16 u32 u64 u128 f32 f64 char str string bytes byte_buf
+        option unit unit_struct newtype_struct seq tuple tuple_struct map enum identifier
+        ignored_any
+    }
+}
+
 /// A [`KeyIssues`] that drops what it is told: for reading a table again whose issues were
 /// reported already.
 #[derive(Debug, Clone, Copy, Default)]
@@ -317,7 +367,7 @@ impl AxisContext<'_> {
 
 #[cfg(test)]
 mod tests {
-    use super::{KeyIssues, Span, Spanned};
+    use super::{Int, KeyIssues, Span, Spanned, key_names};
 
     /// Every issue told, as (span, key, message).
     #[derive(Default)]
@@ -366,5 +416,19 @@ mod tests {
                 "unknown level \"middle\"; allowed: \"low\", \"high\"".to_owned()
             )]
         );
+    }
+
+    #[test]
+    fn key_names_are_the_fields_of_the_struct_in_order() {
+        #[derive(serde::Deserialize)]
+        #[serde(deny_unknown_fields)]
+        #[allow(dead_code)]
+        struct Raw {
+            variant: Option<Spanned<String>>,
+            switchover_ms: Option<Spanned<Int>>,
+            rotary: Option<Spanned<bool>>,
+        }
+        assert_eq!(key_names::<Raw>(), ["variant", "switchover_ms", "rotary"]);
+        assert!(key_names::<Int>().is_empty());
     }
 }

@@ -53,7 +53,9 @@ struct RawHome {
     spacing: Option<Spanned<f64>>,
 }
 
-/// The axis keys the board has (for the server's key check).
+/// The axis keys the board has (for the server's key check): `RawAxis`'s and, as
+/// `home.<key>`, `RawHome`'s (`Board::axis_key_names` returns static names, so the nested
+/// ones are written out here; a test checks them against the structs).
 pub(crate) const AXIS_KEYS: &[&str] = &[
     "pid_position",
     "pid_velocity",
@@ -265,5 +267,24 @@ pub(crate) fn cross_check(v: &mut dyn KeyIssues, machine: &MachineView<'_>) {
                 ),
             );
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use motion_board::keys::key_names;
+
+    use super::{AXIS_KEYS, RawAxis, RawHome};
+
+    #[test]
+    fn the_axis_keys_are_the_fields_of_the_raw_structs() {
+        let home = key_names::<RawHome>().iter().map(|k| format!("home.{k}"));
+        let names: Vec<String> = key_names::<RawAxis>()
+            .iter()
+            .filter(|k| **k != "home")
+            .map(|k| (*k).to_owned())
+            .chain(home)
+            .collect();
+        assert_eq!(names, AXIS_KEYS);
     }
 }

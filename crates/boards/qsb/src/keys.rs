@@ -20,7 +20,8 @@ use crate::{QsbDeviceKeys, QsbInputMode, QsbVariant};
 use motion_drivers::{Model, SignalKind};
 use serde::Deserialize;
 
-/// The qsb keys of a `[[device]]` as written.
+/// The qsb keys of a `[[device]]` as written; its fields name the keys the board has
+/// (`key_names`, for the server's key check).
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawDevice {
@@ -38,23 +39,6 @@ pub(crate) struct RawDevice {
     capture_input: Option<Spanned<Int>>,
     capture_edge: Option<Spanned<String>>,
 }
-
-/// The device keys the board has (for the server's key check).
-pub(crate) const DEVICE_KEYS: &[&str] = &[
-    "variant",
-    "counts_per_step",
-    "home_direction",
-    "home_max_travel",
-    "home_offset",
-    "index_polarity",
-    "stream_interval_ms",
-    "host_latency_ms",
-    "enable_output",
-    "enable_active",
-    "input_mode",
-    "capture_input",
-    "capture_edge",
-];
 
 /// The product a `variant` names; an issue for any other value.
 fn variant(v: &mut dyn KeyIssues, ctx: &DeviceContext, raw: &RawDevice) -> Option<QsbVariant> {

@@ -21,17 +21,15 @@ use serde::Deserialize;
 
 use crate::{SpiDrive, SpimotorDeviceKeys};
 
-/// The spimotor keys of a `[[device]]` as written.
+/// The spimotor keys of a `[[device]]` as written; its fields name the keys the board has
+/// (`key_names`, for the server's key check).
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct RawDevice {
+pub(crate) struct RawDevice {
     drive: Option<Spanned<String>>,
     intensity: Option<Spanned<Int>>,
     coils: Option<Spanned<Int>>,
 }
-
-/// The device keys the board has (for the server's key check).
-pub(crate) const DEVICE_KEYS: &[&str] = &["drive", "intensity", "coils"];
 
 /// `address`: "an even number 2..=254 (bit 0 is the read flag)".
 pub(crate) fn check_address(value: i128) -> Result<u32, String> {

@@ -14,7 +14,8 @@ use serde::Deserialize;
 use crate::driver::{MAX_DEBOUNCE_MS, is_current_level, is_weak_current, word_time};
 use crate::{PackVariant, ReadyOutputKeys, TmcpackAxisKeys, TmcpackDeviceKeys};
 
-/// The tmcpack keys of a `[[device]]` as written.
+/// The tmcpack keys of a `[[device]]` as written; its fields name the keys the board has
+/// (`key_names`, for the server's key check).
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawDevice {
@@ -34,7 +35,8 @@ struct RawReadyOutput {
     reference: Option<Spanned<Vec<Spanned<Int>>>>,
 }
 
-/// The tmcpack keys of an `[[axis]]` as written.
+/// The tmcpack keys of an `[[axis]]` as written; its fields name the keys the board has
+/// (`key_names`, for the server's key check).
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawAxis {
@@ -81,24 +83,6 @@ struct RawAnalogStop {
     left: Option<Spanned<Int>>,
     right: Option<Spanned<Int>>,
 }
-
-/// The device keys the board has (for the server's key check).
-pub(crate) const DEVICE_KEYS: &[&str] = &[
-    "variant",
-    "reply_address",
-    "switchover_ms",
-    "packet_timeout_ms",
-    "ready_output",
-];
-
-/// The axis keys the board has.
-pub(crate) const AXIS_KEYS: &[&str] = &[
-    "current",
-    "reference",
-    "rotary",
-    "revolution",
-    "analog_stop",
-];
 
 /// The pack variant a `variant` names; an issue for any other value.
 fn variant(v: &mut dyn KeyIssues, ctx: &DeviceContext, raw: &RawDevice) -> Option<PackVariant> {
