@@ -172,37 +172,29 @@ const OUT1: Row = digital(
     "TTLOUT1 digital output ($32 P0, manual 8.5); not available when the device has a ready_output",
 );
 
-/// The SIXpack's pins, in table order (`Pin` = index).
-const SIXPACK_ROWS: [Row; 18] = [
+/// The SIXpack's pins, in table order (`Pin` = index), and where each comes from.
+const SIXPACK_TABLES: ([PinInfo; 18], [Source; 18]) = split([
     A0, A1, A2, A3, A4, A5, A6, A7, R0, R1, R2, R3, R4, R5, J1, J2, IO1, OUT1,
-];
+]);
 /// The QUADpack's: no motor 4 and 5.
-const QUADPACK_ROWS: [Row; 14] = [A0, A1, A2, A3, A6, A7, R0, R1, R2, R3, J1, J2, IO1, OUT1];
-static SIXPACK: [PinInfo; 18] = infos(&SIXPACK_ROWS);
-static SIXPACK_SOURCES: [Source; 18] = sources_of(&SIXPACK_ROWS);
-static QUADPACK: [PinInfo; 14] = infos(&QUADPACK_ROWS);
-static QUADPACK_SOURCES: [Source; 14] = sources_of(&QUADPACK_ROWS);
+const QUADPACK_TABLES: ([PinInfo; 14], [Source; 14]) =
+    split([A0, A1, A2, A3, A6, A7, R0, R1, R2, R3, J1, J2, IO1, OUT1]);
+static SIXPACK: [PinInfo; 18] = SIXPACK_TABLES.0;
+static SIXPACK_SOURCES: [Source; 18] = SIXPACK_TABLES.1;
+static QUADPACK: [PinInfo; 14] = QUADPACK_TABLES.0;
+static QUADPACK_SOURCES: [Source; 14] = QUADPACK_TABLES.1;
 
-/// The pin table of `rows`.
-const fn infos<const N: usize>(rows: &[Row; N]) -> [PinInfo; N] {
-    let mut table = [rows[0].0; N];
+/// The pin table of `rows` and, in the same order, where each pin comes from.
+const fn split<const N: usize>(rows: [Row; N]) -> ([PinInfo; N], [Source; N]) {
+    let mut infos = [rows[0].0; N];
+    let mut sources = [rows[0].1; N];
     let mut i = 0;
     while i < N {
-        table[i] = rows[i].0;
+        infos[i] = rows[i].0;
+        sources[i] = rows[i].1;
         i += 1;
     }
-    table
-}
-
-/// Where each pin of `rows` comes from, in table order.
-const fn sources_of<const N: usize>(rows: &[Row; N]) -> [Source; N] {
-    let mut table = [rows[0].1; N];
-    let mut i = 0;
-    while i < N {
-        table[i] = rows[i].1;
-        i += 1;
-    }
-    table
+    (infos, sources)
 }
 
 /// The pack's I/O pins for `variant` (manual 8.5): `analog0..analog7` (a QUADpack has no
