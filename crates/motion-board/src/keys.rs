@@ -84,7 +84,7 @@ impl IntValue for Int {
 
 /// Where a board reports what is wrong with its keys (the server's validator). Boards
 /// call the inherent methods of `dyn KeyIssues` ([`issue`](#method.issue),
-/// [`warn`](#method.warn), [`int_in`](#method.int_in)).
+/// [`warn`](#method.warn), [`int_in`](#method.int_in), [`one_of`](#method.one_of)).
 pub trait KeyIssues {
     /// `message` about `key` (dotted: `axis[2].current.peak`) at `span`: the file is
     /// refused.
@@ -132,6 +132,31 @@ impl dyn KeyIssues + '_ {
             );
             None
         }
+    }
+
+    /// What `allowed` pairs with the name `value` gives; otherwise an issue
+    /// `unknown {what} "…"; allowed: {listed}` (`listed`: the names, and what each means).
+    pub fn one_of<T: Copy>(
+        &mut self,
+        value: &Spanned<String>,
+        key: &str,
+        allowed: &[(&str, T)],
+        what: &str,
+        listed: &str,
+    ) -> Option<T> {
+        let name = value.get_ref().as_str();
+        let found = allowed
+            .iter()
+            .find(|(allowed, _)| *allowed == name)
+            .map(|&(_, found)| found);
+        if found.is_none() {
+            self.issue(
+                value.span(),
+                key,
+                format!("unknown {what} {name:?}; allowed: {listed}"),
+            );
+        }
+        found
     }
 }
 
@@ -224,6 +249,56 @@ impl<'a> KeyTable<'a> {
     }
 }
 
+/// The keys of a table as the board's serde struct `T` declares them (its fields, in
+/// declaration order): what [`Board::device_key_names`](crate::Board::device_key_names)
+/// and [`axis_key_names`](crate::Board::axis_key_names) return, so that a board writes
+/// its key names once, in its struct. Empty for a `T` that is not a plain struct.
+#[must_use]
+pub fn key_names<'de, T: Deserialize<'de>>() -> &'static [&'static str] {
+    match T::deserialize(FieldNames) {
+        Err(Fields(fields)) => fields,
+        Ok(_) => &[],
+    }
+}
+
+/// A deserializer that answers nothing: it only asks the struct deserialized from it for
+/// its field names ([`key_names`]), which it hands back as its error.
+struct FieldNames;
+
+/// The field names a struct's `Deserialize` named (none for anything else).
+#[derive(Debug, thiserror::Error)]
+#[error("not a struct")]
+struct Fields(&'static [&'static str]);
+
+impl serde::de::Error for Fields {
+    fn custom<M: fmt::Display>(_: M) -> Self {
+        Self(&[])
+    }
+}
+
+impl<'de> serde::Deserializer<'de> for FieldNames {
+    type Error = Fields;
+
+    fn deserialize_any<V: serde::de::Visitor<'de>>(self, _: V) -> Result<V::Value, Fields> {
+        Err(Fields(&[]))
+    }
+
+    fn deserialize_struct<V: serde::de::Visitor<'de>>(
+        self,
+        _: &'static str,
+        fields: &'static [&'static str],
+        _: V,
+    ) -> Result<V::Value, Fields> {
+        Err(Fields(fields))
+    }
+
+    serde::forward_to_deserialize_any! {
+        bool i8 i16 i32 i64 i128 u8 u16 u32 u64 u128 f32 f64 char str string bytes byte_buf
+        option unit unit_struct newtype_struct seq tuple tuple_struct map enum identifier
+        ignored_any
+    }
+}
+
 /// A [`KeyIssues`] that drops what it is told: for reading a table again whose issues were
 /// reported already.
 #[derive(Debug, Clone, Copy, Default)]
@@ -287,5 +362,73 @@ impl AxisContext<'_> {
     #[must_use]
     pub fn key(&self, key: &str) -> String {
         format!("axis[{}].{key}", self.index)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{Int, KeyIssues, Span, Spanned, key_names};
+
+    /// Every issue told, as (span, key, message).
+    #[derive(Default)]
+    struct Told(Vec<(Span, String, String)>);
+
+    impl KeyIssues for Told {
+        fn report_issue(&mut self, span: Span, key: &str, message: String) {
+            self.0.push((span, key.to_owned(), message));
+        }
+        fn report_warning(&mut self, _: Span, _: &str, _: String) {}
+        fn report_refused(&mut self, _: Span, _: &str) {}
+    }
+
+    #[test]
+    fn one_of_gives_the_named_value_or_names_what_is_allowed() {
+        let allowed = [("low", false), ("high", true)];
+        let mut told = Told::default();
+        let issues: &mut dyn KeyIssues = &mut told;
+        let high = Spanned::new(3..9, "high".to_owned());
+        assert_eq!(
+            issues.one_of(
+                &high,
+                "device[0].level",
+                &allowed,
+                "level",
+                "\"low\", \"high\""
+            ),
+            Some(true)
+        );
+        let odd = Spanned::new(10..16, "middle".to_owned());
+        assert_eq!(
+            issues.one_of(
+                &odd,
+                "device[0].level",
+                &allowed,
+                "level",
+                "\"low\", \"high\""
+            ),
+            None
+        );
+        assert_eq!(
+            told.0,
+            [(
+                10..16,
+                "device[0].level".to_owned(),
+                "unknown level \"middle\"; allowed: \"low\", \"high\"".to_owned()
+            )]
+        );
+    }
+
+    #[test]
+    fn key_names_are_the_fields_of_the_struct_in_order() {
+        #[derive(serde::Deserialize)]
+        #[serde(deny_unknown_fields)]
+        #[allow(dead_code)]
+        struct Raw {
+            variant: Option<Spanned<String>>,
+            switchover_ms: Option<Spanned<Int>>,
+            rotary: Option<Spanned<bool>>,
+        }
+        assert_eq!(key_names::<Raw>(), ["variant", "switchover_ms", "rotary"]);
+        assert!(key_names::<Int>().is_empty());
     }
 }

@@ -22,7 +22,7 @@ use core::fmt;
 use core::time::Duration;
 
 use motion_drivers::spec::{
-    AxisMachine, DeviceMachine, Direction, DriverSpec, HomeInput, MachineKeys, Param, SpecError,
+    DeviceMachine, Direction, DriverSpec, HomeInput, MachineKeys, Param, SpecError,
 };
 
 use crate::keys::{AxisContext, DeviceContext, KeyIssues, KeyTable, Span};
@@ -109,39 +109,25 @@ pub struct HomeHints {
     pub input: Option<HomeInput>,
 }
 
-/// A device's validated board keys.
+/// A table's validated board keys: a device's ([`DeviceKeys`]) or an axis's
+/// ([`AxisKeys`]).
 #[derive(Debug, Clone, PartialEq, Default)]
-pub struct DeviceKeys {
+pub struct BoardKeys {
     /// The machine keys its driver is built from.
-    pub machine: DeviceMachine,
-    /// What they say about its axes' reference searches.
+    pub machine: MachineKeys,
+    /// What they say about reference searches: of the device's axes, or of the axis.
     pub home: HomeHints,
 }
+
+/// A device's validated board keys.
+pub type DeviceKeys = BoardKeys;
 
 /// An axis's validated board keys.
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct AxisKeys {
-    /// The machine keys its driver is built from.
-    pub machine: AxisMachine,
-    /// What they say about its reference search.
-    pub home: HomeHints,
-}
+pub type AxisKeys = BoardKeys;
 
-impl DeviceKeys {
-    /// A board's validated device keys `keys`, and what they say about its axes' searches.
-    pub fn new<T: core::any::Any + fmt::Debug + PartialEq + Send + Sync>(
-        keys: T,
-        home: HomeHints,
-    ) -> Self {
-        Self {
-            machine: MachineKeys::new(keys),
-            home,
-        }
-    }
-}
-
-impl AxisKeys {
-    /// A board's validated axis keys `keys`, and what they say about the axis's search.
+impl BoardKeys {
+    /// A board's validated keys `keys` of a device or an axis, and what they say about the
+    /// reference searches.
     pub fn new<T: core::any::Any + fmt::Debug + PartialEq + Send + Sync>(
         keys: T,
         home: HomeHints,

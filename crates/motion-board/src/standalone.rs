@@ -34,9 +34,7 @@ impl StandaloneSim {
         for &option in options {
             let given = match option {
                 "address" => self.address.is_some(),
-                "variant" => self.variant.is_some(),
-                "drive" => self.drive.is_some(),
-                _ => false,
+                _ => self.text(option).is_some(),
             };
             if given {
                 return Err(StandaloneError::NoSuchOption {
@@ -46,6 +44,41 @@ impl StandaloneSim {
             }
         }
         Ok(())
+    }
+
+    /// What `allowed` pairs with the text of `--{option}` (`"variant"`, `"drive"`);
+    /// `default` when it was not given.
+    ///
+    /// # Errors
+    /// [`StandaloneError::Invalid`] for any other text: `{model} --{option} {text}: {hint}`
+    /// (`hint`: what to use instead, `use sixpack or quadpack`).
+    pub fn choice<T: Copy>(
+        &self,
+        model: Model,
+        option: &'static str,
+        allowed: &[(&str, T)],
+        default: T,
+        hint: &str,
+    ) -> Result<T, StandaloneError> {
+        let Some(text) = self.text(option) else {
+            return Ok(default);
+        };
+        match allowed.iter().find(|(name, _)| *name == text) {
+            Some(&(_, value)) => Ok(value),
+            None => Err(StandaloneError::Invalid {
+                option,
+                message: format!("{} --{option} {text}: {hint}", model.id()),
+            }),
+        }
+    }
+
+    /// The text of option `option` (`"variant"`, `"drive"`), if given.
+    fn text(&self, option: &str) -> Option<&str> {
+        match option {
+            "variant" => self.variant.as_deref(),
+            "drive" => self.drive.as_deref(),
+            _ => None,
+        }
     }
 }
 
@@ -81,4 +114,32 @@ pub struct StandaloneHelp {
     /// Example command lines, each followed by indented lines saying what it serves and
     /// how to talk to it (the tool indents every line by two more); `""` for none.
     pub examples: &'static str,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{StandaloneError, StandaloneSim};
+    use motion_base::Model;
+
+    #[test]
+    fn choice_names_the_value_the_default_or_what_to_use() {
+        let allowed = [("stepper", 1), ("brushed", 2)];
+        let hint = "use stepper or brushed";
+        let choose = |drive: Option<&str>| {
+            let options = StandaloneSim {
+                drive: drive.map(str::to_owned),
+                ..StandaloneSim::default()
+            };
+            options.choice(Model::SPIMOTOR, "drive", &allowed, 1, hint)
+        };
+        assert_eq!(choose(None), Ok(1));
+        assert_eq!(choose(Some("brushed")), Ok(2));
+        assert_eq!(
+            choose(Some("servo")),
+            Err(StandaloneError::Invalid {
+                option: "drive",
+                message: "spimotor --drive servo: use stepper or brushed".to_owned(),
+            })
+        );
+    }
 }

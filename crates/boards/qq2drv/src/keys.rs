@@ -53,7 +53,9 @@ struct RawHome {
     spacing: Option<Spanned<f64>>,
 }
 
-/// The axis keys the board has (for the server's key check).
+/// The axis keys the board has (for the server's key check): `RawAxis`'s and, as
+/// `home.<key>`, `RawHome`'s (`Board::axis_key_names` returns static names, so the nested
+/// ones are written out here; a test checks them against the structs).
 pub(crate) const AXIS_KEYS: &[&str] = &[
     "pid_position",
     "pid_velocity",
@@ -164,19 +166,17 @@ fn home_hints(
             );
             None
         }
-        Some(input) => match input.get_ref().as_str() {
-            "home" => Some(HomeInputKind::Home),
-            "index" => Some(HomeInputKind::Index),
-            "edge" => Some(HomeInputKind::Edge),
-            other => {
-                v.issue(
-                    input.span(),
-                    &key("input"),
-                    format!("unknown input {other:?}; allowed: \"home\" (switch, acts while active), \"index\" (encoder index), \"edge\" (inactive-to-active edge)"),
-                );
-                None
-            }
-        },
+        Some(input) => v.one_of(
+            input,
+            &key("input"),
+            &[
+                ("home", HomeInputKind::Home),
+                ("index", HomeInputKind::Index),
+                ("edge", HomeInputKind::Edge),
+            ],
+            "input",
+            "\"home\" (switch, acts while active), \"index\" (encoder index), \"edge\" (inactive-to-active edge)",
+        ),
     };
     let spacing = match &h.spacing {
         None => Some(None),
@@ -267,5 +267,24 @@ pub(crate) fn cross_check(v: &mut dyn KeyIssues, machine: &MachineView<'_>) {
                 ),
             );
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use motion_board::keys::key_names;
+
+    use super::{AXIS_KEYS, RawAxis, RawHome};
+
+    #[test]
+    fn the_axis_keys_are_the_fields_of_the_raw_structs() {
+        let home = key_names::<RawHome>().iter().map(|k| format!("home.{k}"));
+        let names: Vec<String> = key_names::<RawAxis>()
+            .iter()
+            .filter(|k| **k != "home")
+            .map(|k| (*k).to_owned())
+            .chain(home)
+            .collect();
+        assert_eq!(names, AXIS_KEYS);
     }
 }

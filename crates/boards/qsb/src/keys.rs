@@ -20,7 +20,8 @@ use crate::{QsbDeviceKeys, QsbInputMode, QsbVariant};
 use motion_drivers::{Model, SignalKind};
 use serde::Deserialize;
 
-/// The qsb keys of a `[[device]]` as written.
+/// The qsb keys of a `[[device]]` as written; its fields name the keys the board has
+/// (`key_names`, for the server's key check).
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawDevice {
@@ -39,59 +40,38 @@ pub(crate) struct RawDevice {
     capture_edge: Option<Spanned<String>>,
 }
 
-/// The device keys the board has (for the server's key check).
-pub(crate) const DEVICE_KEYS: &[&str] = &[
-    "variant",
-    "counts_per_step",
-    "home_direction",
-    "home_max_travel",
-    "home_offset",
-    "index_polarity",
-    "stream_interval_ms",
-    "host_latency_ms",
-    "enable_output",
-    "enable_active",
-    "input_mode",
-    "capture_input",
-    "capture_edge",
-];
-
 /// The product a `variant` names; an issue for any other value.
 fn variant(v: &mut dyn KeyIssues, ctx: &DeviceContext, raw: &RawDevice) -> Option<QsbVariant> {
     let Some(value) = &raw.variant else {
         return Some(QsbVariant::M);
     };
-    match value.get_ref().as_str() {
-        "qsb-m" => Some(QsbVariant::M),
-        "qsb-s" => Some(QsbVariant::S),
-        "qsb-d" => Some(QsbVariant::D),
-        other => {
-            v.issue(
-                value.span(),
-                &ctx.key("variant"),
-                format!("unknown variant {other:?}; allowed: \"qsb-m\" (encoder, 4 digital I/O, stepper drive; default), \"qsb-s\" (encoder only), \"qsb-d\" (differential encoder, 1 digital I/O)"),
-            );
-            None
-        }
-    }
+    v.one_of(
+        value,
+        &ctx.key("variant"),
+        &[
+            ("qsb-m", QsbVariant::M),
+            ("qsb-s", QsbVariant::S),
+            ("qsb-d", QsbVariant::D),
+        ],
+        "variant",
+        "\"qsb-m\" (encoder, 4 digital I/O, stepper drive; default), \"qsb-s\" (encoder only), \"qsb-d\" (differential encoder, 1 digital I/O)",
+    )
 }
 
 /// What the device's home keys say about its axis's reference search.
 fn home_hints(v: &mut dyn KeyIssues, ctx: &DeviceContext, raw: &RawDevice) -> Option<HomeHints> {
     let mut hints = HomeHints::default();
     if let Some(value) = &raw.home_direction {
-        let direction = match value.get_ref().as_str() {
-            "negative" => Direction::Negative,
-            "positive" => Direction::Positive,
-            other => {
-                v.issue(
-                    value.span(),
-                    &ctx.key("home_direction"),
-                    format!("unknown direction {other:?}; allowed: \"negative\" (towards min; default), \"positive\" (towards max)"),
-                );
-                return None;
-            }
-        };
+        let direction = v.one_of(
+            value,
+            &ctx.key("home_direction"),
+            &[
+                ("negative", Direction::Negative),
+                ("positive", Direction::Positive),
+            ],
+            "direction",
+            "\"negative\" (towards min; default), \"positive\" (towards max)",
+        )?;
         hints.direction.push(Given {
             value: direction,
             span: value.span(),
@@ -122,23 +102,8 @@ fn choice<T: Copy>(
     key: &str,
     allowed: &[(&str, T)],
 ) -> Option<T> {
-    let found = allowed
-        .iter()
-        .find(|(name, _)| *name == value.get_ref())
-        .map(|(_, value)| *value);
-    if found.is_none() {
-        let names: Vec<String> = allowed.iter().map(|(n, _)| format!("{n:?}")).collect();
-        v.issue(
-            value.span(),
-            key,
-            format!(
-                "unknown value {:?}; allowed: {}",
-                value.get_ref(),
-                names.join(", ")
-            ),
-        );
-    }
-    found
+    let names: Vec<String> = allowed.iter().map(|(n, _)| format!("{n:?}")).collect();
+    v.one_of(value, key, allowed, "value", &names.join(", "))
 }
 
 /// Validates the qsb keys of a `[[device]]` table.

@@ -16,7 +16,7 @@ use core::time::Duration;
 
 mod keys;
 
-use motion_board::keys::{DeviceContext, KeyIssues, KeyTable};
+use motion_board::keys::{DeviceContext, KeyIssues, KeyTable, key_names};
 use motion_board::machine::MachineView;
 use motion_board::{
     Board, DeviceKeys, LinkFacts, SimBoard, StandaloneError, StandaloneHelp, StandaloneSim,
@@ -63,7 +63,7 @@ impl Board for QsbBoard {
     }
 
     fn device_key_names(&self) -> &'static [&'static str] {
-        keys::DEVICE_KEYS
+        key_names::<keys::RawDevice>()
     }
 
     fn device_keys(

@@ -20,18 +20,24 @@ motion-sim --model qsb --pty --link /tmp/qsb
 pub(crate) fn simulate(options: &StandaloneSim) -> Result<SimBoard, StandaloneError> {
     options.refuse(Model::QSB, &["address", "drive"])?;
     let mut config = QsbSimConfig::default();
-    config.variant = match options.variant.as_deref() {
-        None => config.variant,
-        Some("s" | "S" | "qsb-s") => Variant::S,
-        Some("d" | "D" | "qsb-d") => Variant::D,
-        Some("m" | "M" | "qsb-m") => Variant::M,
-        Some(other) => {
-            return Err(StandaloneError::Invalid {
-                option: "variant",
-                message: format!("qsb --variant {other}: use s, d or m"),
-            });
-        }
-    };
+    let variants = [
+        ("s", Variant::S),
+        ("S", Variant::S),
+        ("qsb-s", Variant::S),
+        ("d", Variant::D),
+        ("D", Variant::D),
+        ("qsb-d", Variant::D),
+        ("m", Variant::M),
+        ("M", Variant::M),
+        ("qsb-m", Variant::M),
+    ];
+    config.variant = options.choice(
+        Model::QSB,
+        "variant",
+        &variants,
+        config.variant,
+        "use s, d or m",
+    )?;
     if let Some(rate) = options.baud {
         let Some(selected) = qsb::BaudRate::ALL
             .iter()

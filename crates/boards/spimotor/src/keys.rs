@@ -21,17 +21,15 @@ use serde::Deserialize;
 
 use crate::{SpiDrive, SpimotorDeviceKeys};
 
-/// The spimotor keys of a `[[device]]` as written.
+/// The spimotor keys of a `[[device]]` as written; its fields name the keys the board has
+/// (`key_names`, for the server's key check).
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct RawDevice {
+pub(crate) struct RawDevice {
     drive: Option<Spanned<String>>,
     intensity: Option<Spanned<Int>>,
     coils: Option<Spanned<Int>>,
 }
-
-/// The device keys the board has (for the server's key check).
-pub(crate) const DEVICE_KEYS: &[&str] = &["drive", "intensity", "coils"];
 
 /// `address`: "an even number 2..=254 (bit 0 is the read flag)".
 pub(crate) fn check_address(value: i128) -> Result<u32, String> {
@@ -55,19 +53,18 @@ pub(crate) fn device_keys(
     let mut ok = true;
     let brushed = match &raw.drive {
         None => false,
-        Some(drive) => match drive.get_ref().as_str() {
-            "stepper" => false,
-            "brushed" => true,
-            other => {
-                v.issue(
-                    drive.span(),
-                    &ctx.key("drive"),
-                    format!("unknown drive {other:?}; allowed: \"stepper\" (one axis, channel 0), \"brushed\" (channels 0 = A, 1 = B)"),
-                );
+        Some(drive) => v
+            .one_of(
+                drive,
+                &ctx.key("drive"),
+                &[("stepper", false), ("brushed", true)],
+                "drive",
+                "\"stepper\" (one axis, channel 0), \"brushed\" (channels 0 = A, 1 = B)",
+            )
+            .unwrap_or_else(|| {
                 ok = false;
                 false
-            }
-        },
+            }),
     };
     let intensity = stepper_only(v, ctx, brushed, &raw.intensity, "intensity", &mut ok);
     let coils = stepper_only(v, ctx, brushed, &raw.coils, "coils", &mut ok);

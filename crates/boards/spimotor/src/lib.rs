@@ -12,7 +12,7 @@ pub mod machine_keys;
 pub mod sim;
 mod standalone;
 
-use motion_board::keys::{DeviceContext, KeyIssues, KeyTable};
+use motion_board::keys::{DeviceContext, KeyIssues, KeyTable, key_names};
 use motion_board::{
     AddressKey, Board, DeviceKeys, LinkFacts, SimBoard, StandaloneError, StandaloneHelp,
     StandaloneSim, TypedBoard,
@@ -62,7 +62,7 @@ impl Board for SpimotorBoard {
     }
 
     fn device_key_names(&self) -> &'static [&'static str] {
-        keys::DEVICE_KEYS
+        key_names::<keys::RawDevice>()
     }
 
     fn address(&self) -> Option<AddressKey> {

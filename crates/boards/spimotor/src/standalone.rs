@@ -30,16 +30,13 @@ pub(crate) fn simulate(options: &StandaloneSim) -> Result<SimBoard, StandaloneEr
         }
         config.address = address;
     }
-    config.drive = match options.drive.as_deref() {
-        None | Some("stepper") => Drive::Stepper,
-        Some("brushed") => Drive::Brushed,
-        Some(other) => {
-            return Err(StandaloneError::Invalid {
-                option: "drive",
-                message: format!("spimotor --drive {other}: use stepper or brushed"),
-            });
-        }
-    };
+    config.drive = options.choice(
+        Model::SPIMOTOR,
+        "drive",
+        &[("stepper", Drive::Stepper), ("brushed", Drive::Brushed)],
+        Drive::Stepper,
+        "use stepper or brushed",
+    )?;
     if let Some(seed) = options.seed {
         config.seed = seed;
     }

@@ -14,7 +14,8 @@ use serde::Deserialize;
 use crate::driver::{MAX_DEBOUNCE_MS, is_current_level, is_weak_current, word_time};
 use crate::{PackVariant, ReadyOutputKeys, TmcpackAxisKeys, TmcpackDeviceKeys};
 
-/// The tmcpack keys of a `[[device]]` as written.
+/// The tmcpack keys of a `[[device]]` as written; its fields name the keys the board has
+/// (`key_names`, for the server's key check).
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawDevice {
@@ -34,7 +35,8 @@ struct RawReadyOutput {
     reference: Option<Spanned<Vec<Spanned<Int>>>>,
 }
 
-/// The tmcpack keys of an `[[axis]]` as written.
+/// The tmcpack keys of an `[[axis]]` as written; its fields name the keys the board has
+/// (`key_names`, for the server's key check).
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawAxis {
@@ -82,43 +84,21 @@ struct RawAnalogStop {
     right: Option<Spanned<Int>>,
 }
 
-/// The device keys the board has (for the server's key check).
-pub(crate) const DEVICE_KEYS: &[&str] = &[
-    "variant",
-    "reply_address",
-    "switchover_ms",
-    "packet_timeout_ms",
-    "ready_output",
-];
-
-/// The axis keys the board has.
-pub(crate) const AXIS_KEYS: &[&str] = &[
-    "current",
-    "reference",
-    "rotary",
-    "revolution",
-    "analog_stop",
-];
-
 /// The pack variant a `variant` names; an issue for any other value.
 fn variant(v: &mut dyn KeyIssues, ctx: &DeviceContext, raw: &RawDevice) -> Option<PackVariant> {
     let Some(value) = &raw.variant else {
         return Some(PackVariant::Sixpack);
     };
-    match value.get_ref().as_str() {
-        "sixpack" => Some(PackVariant::Sixpack),
-        "quadpack" => Some(PackVariant::Quadpack),
-        other => {
-            v.issue(
-                value.span(),
-                &ctx.key("variant"),
-                format!(
-                    "unknown variant {other:?}; allowed: \"sixpack\" (6 motors), \"quadpack\" (4)"
-                ),
-            );
-            None
-        }
-    }
+    v.one_of(
+        value,
+        &ctx.key("variant"),
+        &[
+            ("sixpack", PackVariant::Sixpack),
+            ("quadpack", PackVariant::Quadpack),
+        ],
+        "variant",
+        "\"sixpack\" (6 motors), \"quadpack\" (4)",
+    )
 }
 
 /// `address`: the pack's RS-485 address, 0..=255 (manual 6.1); default 1.
@@ -141,18 +121,13 @@ fn side_hint(v: &mut dyn KeyIssues, ctx: &AxisContext<'_>, raw: &RawAxis) -> Opt
         return Some(hints);
     };
     let key = ctx.key("reference.side");
-    let direction = match side.get_ref().as_str() {
-        "left" => Direction::Negative,
-        "right" => Direction::Positive,
-        other => {
-            v.issue(
-                side.span(),
-                &key,
-                format!("unknown side {other:?}; allowed: \"left\" (zero point left of the driving range: the search runs to decreasing positions; NullLeft, default), \"right\""),
-            );
-            return None;
-        }
-    };
+    let direction = v.one_of(
+        side,
+        &key,
+        &[("left", Direction::Negative), ("right", Direction::Positive)],
+        "side",
+        "\"left\" (zero point left of the driving range: the search runs to decreasing positions; NullLeft, default), \"right\"",
+    )?;
     hints.direction.push(Given {
         value: direction,
         span: side.span(),
@@ -372,18 +347,14 @@ pub(crate) fn axis_keys(
         let r = reference.get_ref();
         let key = |k: &str| ctx.key(&format!("reference.{k}"));
         if let Some(active) = &r.active {
-            match active.get_ref().as_str() {
-                "low" => keys.reference.active_high = Some(false),
-                "high" => keys.reference.active_high = Some(true),
-                other => {
-                    ok = false;
-                    v.issue(
-                        active.span(),
-                        &key("active"),
-                        format!("unknown level {other:?}; allowed: \"low\" (a closer to ground; default), \"high\" (an opener, normally closed, as manual section 4 advises: $15 NullPositive)"),
-                    );
-                }
-            }
+            keys.reference.active_high = v.one_of(
+                active,
+                &key("active"),
+                &[("low", false), ("high", true)],
+                "level",
+                "\"low\" (a closer to ground; default), \"high\" (an opener, normally closed, as manual section 4 advises: $15 NullPositive)",
+            );
+            ok &= keys.reference.active_high.is_some();
         }
         keys.reference.center = flag(&r.center);
         keys.reference.stop_at_switch = flag(&r.stop_at_switch);

@@ -12,7 +12,7 @@ pub mod machine_keys;
 pub mod sim;
 mod standalone;
 
-use motion_board::keys::{AxisContext, DeviceContext, KeyIssues, KeyTable};
+use motion_board::keys::{AxisContext, DeviceContext, KeyIssues, KeyTable, key_names};
 use motion_board::machine::MachineView;
 use motion_board::{
     AddressKey, AxisKeys, Board, DeviceKeys, LinkFacts, SimBoard, StandaloneError, StandaloneHelp,
@@ -57,11 +57,11 @@ impl Board for TmcpackBoard {
     }
 
     fn device_key_names(&self) -> &'static [&'static str] {
-        keys::DEVICE_KEYS
+        key_names::<keys::RawDevice>()
     }
 
     fn axis_key_names(&self) -> &'static [&'static str] {
-        keys::AXIS_KEYS
+        key_names::<keys::RawAxis>()
     }
 
     fn address(&self) -> Option<AddressKey> {

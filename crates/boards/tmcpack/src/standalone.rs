@@ -24,16 +24,16 @@ pub(crate) fn simulate(options: &StandaloneSim) -> Result<SimBoard, StandaloneEr
     if let Some(address) = options.address {
         config.address = address;
     }
-    config.variant = match options.variant.as_deref() {
-        None | Some("sixpack") => Variant::SixPack,
-        Some("quadpack") => Variant::QuadPack,
-        Some(other) => {
-            return Err(StandaloneError::Invalid {
-                option: "variant",
-                message: format!("tmcpack --variant {other}: use sixpack or quadpack"),
-            });
-        }
-    };
+    config.variant = options.choice(
+        Model::TMCPACK,
+        "variant",
+        &[
+            ("sixpack", Variant::SixPack),
+            ("quadpack", Variant::QuadPack),
+        ],
+        Variant::SixPack,
+        "use sixpack or quadpack",
+    )?;
     if let Some(seed) = options.seed {
         config.seed = seed;
     }

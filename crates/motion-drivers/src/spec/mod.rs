@@ -102,6 +102,27 @@ pub struct DriverAxis {
     pub machine: AxisMachine,
 }
 
+impl DriverAxis {
+    /// Its velocity and acceleration limits in counts (times `|counts_per_unit|`).
+    pub fn limits(&self) -> AxisLimits {
+        let scale = self.counts_per_unit.abs();
+        AxisLimits {
+            max_velocity: self.max_velocity * scale,
+            max_accel: self.max_accel * scale,
+        }
+    }
+}
+
+/// An axis's limits in its board's counts (the board's own position unit: steps,
+/// quadrature transitions, microsteps), as a driver plans its moves with them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AxisLimits {
+    /// Velocity limit, counts/s.
+    pub max_velocity: f64,
+    /// Acceleration limit, counts/s².
+    pub max_accel: f64,
+}
+
 /// One signal on one of the device's pins.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct DriverSignal {
@@ -157,11 +178,8 @@ impl DriverSpec {
 
     /// Velocity and acceleration limits of `channel` in counts, from the axis that drives
     /// it.
-    pub fn channel_limits(&self, channel: usize) -> Option<(f64, f64)> {
-        self.axis_on(channel).map(|(_, axis)| {
-            let scale = axis.counts_per_unit.abs();
-            (axis.max_velocity * scale, axis.max_accel * scale)
-        })
+    pub fn channel_limits(&self, channel: usize) -> Option<AxisLimits> {
+        self.axis_on(channel).map(|(_, axis)| axis.limits())
     }
 }
 

@@ -5,6 +5,7 @@
 
 use core::time::Duration;
 
+pub use motion_drivers::spec::AxisLimits;
 use motion_drivers::spec::{DriverSpec, Param, ParamOwner, SpecError};
 
 use crate::codec::{CHANNELS, MAX_ACCEL, MAX_SPEED};
@@ -12,23 +13,11 @@ use crate::codec::{CHANNELS, MAX_ACCEL, MAX_SPEED};
 /// The AS-2's factory baud (8N1).
 pub const DEFAULT_BAUD: u32 = 115_200;
 
-/// One axis's limits in steps, as configured for the axis on that channel.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct AxisLimits {
-    /// Velocity limit, steps/s (1..=50 000): the speed of a `Position` goal's move.
-    pub max_velocity: f64,
-    /// Acceleration limit, steps/s² (1..=1 000 000): the ramp of a `Position` goal's move.
-    pub max_accel: f64,
-}
-
-impl Default for AxisLimits {
-    fn default() -> Self {
-        Self {
-            max_velocity: 1_000.0,
-            max_accel: 10_000.0,
-        }
-    }
-}
+/// A channel's limits when no axis is configured on it, steps/s and steps/s².
+const DEFAULT_LIMITS: AxisLimits = AxisLimits {
+    max_velocity: 1_000.0,
+    max_accel: 10_000.0,
+};
 
 /// Everything the driver needs to know about one AS-2.
 #[derive(Debug, Clone, PartialEq)]
@@ -39,7 +28,8 @@ pub struct ExampleDriverConfig {
     pub poll_period: Duration,
     /// Per channel: whether an axis is on it (only those are polled).
     pub polled: [bool; CHANNELS],
-    /// Per channel the axis limits in steps.
+    /// Per channel the axis limits in steps: the speed (1..=50 000 steps/s) and the ramp
+    /// (1..=1 000 000 steps/s²) of a `Position` goal's move.
     pub limits: [AxisLimits; CHANNELS],
 }
 
@@ -49,7 +39,7 @@ impl Default for ExampleDriverConfig {
             baud: DEFAULT_BAUD,
             poll_period: Duration::from_millis(10),
             polled: [true; CHANNELS],
-            limits: [AxisLimits::default(); CHANNELS],
+            limits: [DEFAULT_LIMITS; CHANNELS],
         }
     }
 }
@@ -96,17 +86,17 @@ impl ExampleDriverConfig {
                     message: format!("the AS-2 has channels 0 and 1, not {channel}"),
                 });
             }
-            let scale = axis.counts_per_unit.abs();
+            let limits = axis.limits();
             config.limits[channel] = AxisLimits {
                 max_velocity: board_rate(
-                    axis.max_velocity * scale,
+                    limits.max_velocity,
                     MAX_SPEED,
                     channel,
                     "max_velocity",
                     "steps/s",
                 )?,
                 max_accel: board_rate(
-                    axis.max_accel * scale,
+                    limits.max_accel,
                     MAX_ACCEL,
                     channel,
                     "max_accel",

@@ -5,25 +5,13 @@ use core::time::Duration;
 use qq2drv::limits::{POSITION_PID_DEFAULT, POWER_LIMIT_MAX, STREAM_TICK_NS, VELOCITY_PID_DEFAULT};
 use qq2drv::{CHANNELS, HistoryDimensions, InputMode};
 
-/// One axis's limits in board counts (quadrature transitions), as configured for the axis
-/// on that channel. Start-up writes them as the channel's velocity limit (packet 26) and
-/// acceleration limit (packet 28), clipped to the board's ranges.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct AxisLimits {
-    /// Velocity limit, transitions/s (> 0).
-    pub max_velocity: f64,
-    /// Acceleration limit, transitions/s² (> 0).
-    pub max_accel: f64,
-}
+pub use motion_drivers::spec::AxisLimits;
 
-impl Default for AxisLimits {
-    fn default() -> Self {
-        Self {
-            max_velocity: 5_000.0,
-            max_accel: 50_000.0,
-        }
-    }
-}
+/// A channel's limits when no axis is configured on it, transitions/s and /s².
+const DEFAULT_LIMITS: AxisLimits = AxisLimits {
+    max_velocity: 5_000.0,
+    max_accel: 50_000.0,
+};
 
 /// How a channel's IN pin finds home (packet 14), when something is wired to it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -92,7 +80,9 @@ pub struct ChannelConfig {
     /// An axis is connected: the channel is streamed and takes goals. A disabled channel
     /// has no capabilities and is left out of the stream (its data mask is 0).
     pub enabled: bool,
-    /// The axis limits in counts.
+    /// The axis limits in board counts (quadrature transitions), as configured for the
+    /// axis on the channel. Start-up writes them as the channel's velocity limit (packet
+    /// 26) and acceleration limit (packet 28), clipped to the board's ranges.
     pub limits: AxisLimits,
     /// Power limit written at start-up (packet 24), 0..=8191.
     pub power_limit: u16,
@@ -113,7 +103,7 @@ impl Default for ChannelConfig {
     fn default() -> Self {
         Self {
             enabled: true,
-            limits: AxisLimits::default(),
+            limits: DEFAULT_LIMITS,
             power_limit: POWER_LIMIT_MAX,
             home: None,
             position_pid: PositionPid::default(),

@@ -38,10 +38,9 @@ impl Qq2drvDriverConfig {
         }
         for (channel, slot) in driver.channels.iter_mut().enumerate() {
             match spec.channel_limits(channel) {
-                Some((max_velocity, max_accel)) => {
+                Some(limits) => {
                     slot.enabled = true;
-                    slot.limits.max_velocity = max_velocity;
-                    slot.limits.max_accel = max_accel;
+                    slot.limits = limits;
                 }
                 None => slot.enabled = false,
             }

@@ -168,30 +168,24 @@ impl QsbDriver {
                 let rate = self.config.jog_rate(velocity).ok_or(out_of_range)?;
                 let accel = self.config.accel(accel).ok_or(out_of_range)?;
                 let [normal, end_str] = NORMAL_COUNTER;
-                if rate == 0 {
-                    self.replace_goal(
-                        kind,
-                        &[
-                            energise,
-                            normal,
-                            end_str,
-                            Step::Ensure(Write::Accel(accel)),
-                            command(QsbCommand::MotorStop),
-                        ],
-                    );
+                let mut steps = [
+                    energise,
+                    normal,
+                    end_str,
+                    Step::Ensure(Write::Accel(accel)),
+                    Step::Ensure(Write::JogRate(rate)),
+                    command(QsbCommand::MotorJog),
+                ];
+                let len = if rate == 0 {
+                    // A stop at `accel`: MOTOR STOP in the jog rate's place.
+                    if let Some(slot) = steps.get_mut(4) {
+                        *slot = command(QsbCommand::MotorStop);
+                    }
+                    steps.len() - 1
                 } else {
-                    self.replace_goal(
-                        kind,
-                        &[
-                            energise,
-                            normal,
-                            end_str,
-                            Step::Ensure(Write::Accel(accel)),
-                            Step::Ensure(Write::JogRate(rate)),
-                            command(QsbCommand::MotorJog),
-                        ],
-                    );
-                }
+                    steps.len()
+                };
+                self.replace_goal(kind, steps.get(..len).unwrap_or(&steps));
             }
             Goal::Home { velocity } => {
                 let direction = if self.config.home_positive { 1.0 } else { -1.0 };

@@ -84,9 +84,9 @@ impl QsbDriverConfig {
         if let Some(baud) = spec.line_rate {
             driver.baud = baud;
         }
-        if let Some((max_velocity, max_accel)) = spec.channel_limits(0) {
-            driver.max_velocity = max_velocity;
-            driver.max_accel = max_accel;
+        if let Some(limits) = spec.channel_limits(0) {
+            driver.max_velocity = limits.max_velocity;
+            driver.max_accel = limits.max_accel;
         }
         let axis = axis_of(spec);
         if let Some((_, axis)) = axis {

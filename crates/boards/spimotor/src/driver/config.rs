@@ -25,24 +25,13 @@ impl SpimotorDrive {
     }
 }
 
-/// One axis's limits in board counts (full steps for the stepper), as configured for the
-/// axis on that channel.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct AxisLimits {
-    /// Velocity limit, counts/s (> 0). The stepper's moves never step faster.
-    pub max_velocity: f64,
-    /// Acceleration limit, counts/s² (> 0). `Goal::Position` ramps with it.
-    pub max_accel: f64,
-}
+pub use motion_drivers::spec::AxisLimits;
 
-impl Default for AxisLimits {
-    fn default() -> Self {
-        Self {
-            max_velocity: 1_000.0,
-            max_accel: 10_000.0,
-        }
-    }
-}
+/// A channel's limits when no axis is configured on it, counts/s and /s².
+const DEFAULT_LIMITS: AxisLimits = AxisLimits {
+    max_velocity: 1_000.0,
+    max_accel: 10_000.0,
+};
 
 /// Everything the driver needs to know about one SPI_motor board.
 #[derive(Debug, Clone, PartialEq)]
@@ -56,7 +45,9 @@ pub struct SpimotorDriverConfig {
     /// How often the driver reads the board (stepper: position, target and step delay;
     /// brushed: the identification string as a presence check).
     pub poll_period: Duration,
-    /// Per channel (index = channel) the axis limits in counts.
+    /// Per channel (index = channel) the axis limits in board counts (full steps for the
+    /// stepper), as configured for the axis on that channel: the stepper's moves never
+    /// step faster than `max_velocity`, and `Goal::Position` ramps with `max_accel`.
     pub limits: [AxisLimits; 2],
     /// Stepper drive intensity written at start-up and with every motion goal (port 0x10;
     /// the board's default is 0x20).
@@ -72,7 +63,7 @@ impl Default for SpimotorDriverConfig {
             drive: SpimotorDrive::Stepper,
             speed_hz: 1_000_000,
             poll_period: Duration::from_millis(2),
-            limits: [AxisLimits::default(); 2],
+            limits: [DEFAULT_LIMITS; 2],
             stepper_intensity: spimotor::port::DEFAULT_STEPPER_INTENSITY,
             coils: Coils::Two,
         }
@@ -82,7 +73,7 @@ impl Default for SpimotorDriverConfig {
 impl SpimotorDriverConfig {
     /// The limits of `channel` (the defaults for a channel beyond the table).
     pub(super) fn limits(&self, channel: usize) -> AxisLimits {
-        self.limits.get(channel).copied().unwrap_or_default()
+        self.limits.get(channel).copied().unwrap_or(DEFAULT_LIMITS)
     }
 
     /// Wire time of `bytes` at the configured SPI clock.

@@ -4,7 +4,7 @@
 
 use spimotor::{Address, Coils};
 
-use super::{AxisLimits, SpimotorDrive, SpimotorDriverConfig};
+use super::{SpimotorDrive, SpimotorDriverConfig};
 use crate::{SpiDrive, SpimotorDeviceKeys};
 use motion_drivers::spec::{DriverSpec, Param, ParamOwner, SpecError};
 
@@ -39,11 +39,8 @@ impl SpimotorDriverConfig {
             driver.speed_hz = speed;
         }
         for (channel, limits) in driver.limits.iter_mut().enumerate() {
-            if let Some((max_velocity, max_accel)) = spec.channel_limits(channel) {
-                *limits = AxisLimits {
-                    max_velocity,
-                    max_accel,
-                };
+            if let Some(configured) = spec.channel_limits(channel) {
+                *limits = configured;
             }
         }
         if let Some(keys) = spec.machine.get::<SpimotorDeviceKeys>() {

@@ -42,7 +42,7 @@ use motion_base::{FixedQueue, counts_to_i32};
 
 use tmcpack::{Action, CurrentLevel, MAX_VELOCITY, MotorOptions, Request};
 
-use super::config::{Scale, TmcpackChannel};
+use super::config::{Currents, Scale, TmcpackChannel};
 use motion_drivers::{ChannelState, DeviceFault, Goal, GoalError, GoalKind};
 
 /// Longest script one goal needs.
@@ -258,14 +258,14 @@ impl Channel {
             Goal::Off => {
                 self.plan_stop(&mut script, motor, axis_decel);
                 let off = CurrentLevel::Off;
-                script.send(Request::CurrentControl {
-                    motor,
+                let currents = Currents {
                     i0: off,
                     i1: off,
                     i2: off,
                     i3: off,
-                    t0: self.cfg.currents.t0.max(1),
-                });
+                    ..self.cfg.currents
+                };
+                script.send(currents.request(motor));
             }
             Goal::Stop { decel } => {
                 let decel = if decel.is_finite() && decel > 0.0 {
@@ -433,15 +433,7 @@ impl Channel {
 
     fn power_on(&self, script: &mut Script, motor: u8) {
         if !self.powered {
-            let c = self.cfg.currents;
-            script.send(Request::CurrentControl {
-                motor,
-                i0: c.i0,
-                i1: c.i1,
-                i2: c.i2,
-                i3: c.i3,
-                t0: c.t0.max(1),
-            });
+            script.send(self.cfg.currents.request(motor));
         }
     }
 

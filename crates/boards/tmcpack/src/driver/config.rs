@@ -8,7 +8,7 @@ use tmcpack::convert::{
 };
 use tmcpack::{
     CurrentLevel, FRAME_LEN, MAX_AMAX, MAX_ANALOG, MAX_CLKDIV, MAX_DIV, MAX_VELOCITY, MotorOptions,
-    MotorType, ReferenceFlags, StepClock, Variant,
+    MotorType, ReferenceFlags, Request, StepClock, Variant,
 };
 
 use super::io::TmcpackIo;
@@ -69,6 +69,21 @@ impl Default for Currents {
             i2: CurrentLevel::P75,
             i3: CurrentLevel::P100,
             t0: 500,
+        }
+    }
+}
+
+impl Currents {
+    /// `$11` setting these currents on `motor` (T0 at least 1: the manual's range starts
+    /// there).
+    pub(crate) fn request(self, motor: u8) -> Request {
+        Request::CurrentControl {
+            motor,
+            i0: self.i0,
+            i1: self.i1,
+            i2: self.i2,
+            i3: self.i3,
+            t0: self.t0.max(1),
         }
     }
 }

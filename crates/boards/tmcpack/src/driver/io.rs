@@ -43,147 +43,159 @@ const DIN: SignalKinds = SignalKinds::of(&[SignalKind::DigitalIn]);
 const DOUT: SignalKinds = SignalKinds::of(&[SignalKind::DigitalOut]);
 const DIO: SignalKinds = SignalKinds::of(&[SignalKind::DigitalIn, SignalKind::DigitalOut]);
 
-const fn analog(name: &'static str, description: &'static str) -> PinInfo {
-    PinInfo {
+/// One pin: its row of the pin table, and where its value comes from.
+type Row = (PinInfo, Source);
+
+/// Analogue channel `channel` of `$30`.
+const fn analog(channel: u8, name: &'static str, description: &'static str) -> Row {
+    let info = PinInfo {
         name,
         kinds: ANALOG,
         full_scale: 1023.0,
         description,
-    }
+    };
+    (info, Source::Analog(channel))
 }
 
-const fn digital(name: &'static str, kinds: SignalKinds, description: &'static str) -> PinInfo {
-    PinInfo {
+/// Motor `motor`'s reference input, a digital input of `$30` P4.
+const fn reference(motor: u8, name: &'static str, description: &'static str) -> Row {
+    digital(Source::Ref(motor), name, DIN, description)
+}
+
+const fn digital(
+    source: Source,
+    name: &'static str,
+    kinds: SignalKinds,
+    description: &'static str,
+) -> Row {
+    let info = PinInfo {
         name,
         kinds,
         full_scale: 1.0,
         description,
-    }
+    };
+    (info, source)
 }
 
-const A0: PinInfo = analog(
+const A0: Row = analog(
+    0,
     "analog0",
     "motor 0's analogue input A_In, ADC counts 0..1023 (manual 8.5 $30 channel 0)",
 );
-const A1: PinInfo = analog(
+const A1: Row = analog(
+    1,
     "analog1",
     "motor 1's analogue input A_In, ADC counts 0..1023 (manual 8.5 $30 channel 1)",
 );
-const A2: PinInfo = analog(
+const A2: Row = analog(
+    2,
     "analog2",
     "motor 2's analogue input A_In, ADC counts 0..1023 (manual 8.5 $30 channel 2)",
 );
-const A3: PinInfo = analog(
+const A3: Row = analog(
+    3,
     "analog3",
     "motor 3's analogue input A_In, ADC counts 0..1023 (manual 8.5 $30 channel 3)",
 );
-const A4: PinInfo = analog(
+const A4: Row = analog(
+    4,
     "analog4",
     "motor 4's analogue input A_In, ADC counts 0..1023 (manual 8.5 $30 channel 4)",
 );
-const A5: PinInfo = analog(
+const A5: Row = analog(
+    5,
     "analog5",
     "motor 5's analogue input A_In, ADC counts 0..1023 (manual 8.5 $30 channel 5)",
 );
-const A6: PinInfo = analog(
+const A6: Row = analog(
+    6,
     "analog6",
     "external analogue input, ADC counts 0..1023 (manual 8.5 $30 channel 6)",
 );
-const A7: PinInfo = analog(
+const A7: Row = analog(
+    7,
     "analog7",
     "supply voltage, 22 counts per volt: scale = 0.04545 for V (manual 8.5 $30 channel 7, \"1V equals value 22\")",
 );
-const R0: PinInfo = digital(
+const R0: Row = reference(
+    0,
     "ref0",
-    DIN,
     "motor 0's reference switch input Ref_In, electrical level 1 = high (manual 8.5 $30 P4 bit 0 reports it inverted; the driver undoes that)",
 );
-const R1: PinInfo = digital(
+const R1: Row = reference(
+    1,
     "ref1",
-    DIN,
     "motor 1's reference switch input Ref_In, electrical level 1 = high (manual 8.5 $30 P4 bit 1, inverted on the wire)",
 );
-const R2: PinInfo = digital(
+const R2: Row = reference(
+    2,
     "ref2",
-    DIN,
     "motor 2's reference switch input Ref_In, electrical level 1 = high (manual 8.5 $30 P4 bit 2, inverted on the wire)",
 );
-const R3: PinInfo = digital(
+const R3: Row = reference(
+    3,
     "ref3",
-    DIN,
     "motor 3's reference switch input Ref_In, electrical level 1 = high (manual 8.5 $30 P4 bit 3, inverted on the wire)",
 );
-const R4: PinInfo = digital(
+const R4: Row = reference(
+    4,
     "ref4",
-    DIN,
     "motor 4's reference switch input Ref_In, electrical level 1 = high (manual 8.5 $30 P4 bit 4, inverted on the wire)",
 );
-const R5: PinInfo = digital(
+const R5: Row = reference(
+    5,
     "ref5",
-    DIN,
     "motor 5's reference switch input Ref_In, electrical level 1 = high (manual 8.5 $30 P4 bit 5, inverted on the wire)",
 );
-const J1: PinInfo = digital(
+const J1: Row = digital(
+    Source::Jumper1,
     "jumper1",
     DIN,
     "jumper JP1, 1 = set (manual 8.5 $30 P4 bit 6; 6.2 CAN bit rate)",
 );
-const J2: PinInfo = digital(
+const J2: Row = digital(
+    Source::Jumper2,
     "jumper2",
     DIN,
     "jumper JP2, 1 = set (manual 8.5 $30 P4 bit 7; 6.2 CAN bit rate)",
 );
-const IO1: PinInfo = digital(
+const IO1: Row = digital(
+    Source::Ttlio1,
     "ttlio1",
     DIO,
     "TTLIO1, digital input ($30 P5) or output ($32 P1 direction, P2 level) (manual 8.5)",
 );
-const OUT1: PinInfo = digital(
+const OUT1: Row = digital(
+    Source::Ttlout1,
     "ttlout1",
     DOUT,
     "TTLOUT1 digital output ($32 P0, manual 8.5); not available when the device has a ready_output",
 );
 
-static SIXPACK: [PinInfo; 18] = [
+/// The SIXpack's pins, in table order (`Pin` = index), and where each comes from.
+const SIXPACK_TABLES: ([PinInfo; 18], [Source; 18]) = split([
     A0, A1, A2, A3, A4, A5, A6, A7, R0, R1, R2, R3, R4, R5, J1, J2, IO1, OUT1,
-];
-static SIXPACK_SOURCES: [Source; 18] = [
-    Source::Analog(0),
-    Source::Analog(1),
-    Source::Analog(2),
-    Source::Analog(3),
-    Source::Analog(4),
-    Source::Analog(5),
-    Source::Analog(6),
-    Source::Analog(7),
-    Source::Ref(0),
-    Source::Ref(1),
-    Source::Ref(2),
-    Source::Ref(3),
-    Source::Ref(4),
-    Source::Ref(5),
-    Source::Jumper1,
-    Source::Jumper2,
-    Source::Ttlio1,
-    Source::Ttlout1,
-];
-static QUADPACK: [PinInfo; 14] = [A0, A1, A2, A3, A6, A7, R0, R1, R2, R3, J1, J2, IO1, OUT1];
-static QUADPACK_SOURCES: [Source; 14] = [
-    Source::Analog(0),
-    Source::Analog(1),
-    Source::Analog(2),
-    Source::Analog(3),
-    Source::Analog(6),
-    Source::Analog(7),
-    Source::Ref(0),
-    Source::Ref(1),
-    Source::Ref(2),
-    Source::Ref(3),
-    Source::Jumper1,
-    Source::Jumper2,
-    Source::Ttlio1,
-    Source::Ttlout1,
-];
+]);
+/// The QUADpack's: no motor 4 and 5.
+const QUADPACK_TABLES: ([PinInfo; 14], [Source; 14]) =
+    split([A0, A1, A2, A3, A6, A7, R0, R1, R2, R3, J1, J2, IO1, OUT1]);
+static SIXPACK: [PinInfo; 18] = SIXPACK_TABLES.0;
+static SIXPACK_SOURCES: [Source; 18] = SIXPACK_TABLES.1;
+static QUADPACK: [PinInfo; 14] = QUADPACK_TABLES.0;
+static QUADPACK_SOURCES: [Source; 14] = QUADPACK_TABLES.1;
+
+/// The pin table of `rows` and, in the same order, where each pin comes from.
+const fn split<const N: usize>(rows: [Row; N]) -> ([PinInfo; N], [Source; N]) {
+    let mut infos = [rows[0].0; N];
+    let mut sources = [rows[0].1; N];
+    let mut i = 0;
+    while i < N {
+        infos[i] = rows[i].0;
+        sources[i] = rows[i].1;
+        i += 1;
+    }
+    (infos, sources)
+}
 
 /// The pack's I/O pins for `variant` (manual 8.5): `analog0..analog7` (a QUADpack has no
 /// motor 4 and 5, so no `analog4`, `analog5`), `ref0..ref5` (`ref0..ref3` on a QUADpack),

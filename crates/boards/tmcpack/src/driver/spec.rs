@@ -102,6 +102,14 @@ fn level(
         .transpose()
 }
 
+/// `flags` with each flag of `given` set as its key says (`with`: the flags type's
+/// setter); a key not written leaves its flag as it is, the driver's default.
+fn given_flags<F: Copy>(flags: F, given: &[(F, Option<bool>)], with: fn(F, F, bool) -> F) -> F {
+    given.iter().fold(flags, |flags, &(flag, on)| {
+        on.map_or(flags, |on| with(flags, flag, on))
+    })
+}
+
 /// The driver's view of the motor behind `axis`: limits in microsteps, and the machine keys.
 fn channel_config(axis: &DriverAxis) -> Result<TmcpackChannel, SpecError> {
     let keys = axis_keys(axis);
@@ -113,41 +121,26 @@ fn channel_config(axis: &DriverAxis) -> Result<TmcpackChannel, SpecError> {
     // `reference.side` / `home.direction` are in axis units; NullLeft is in microsteps.
     let null_left = (axis.home.direction == Direction::Negative) == (cpu > 0.0);
     let rotary = keys.rotary == Some(true);
-    let motor_type = d
-        .motor_type
-        .with(MotorType::NULL_LEFT, null_left)
-        .with(
-            MotorType::NULL_CENTER,
-            r.center
-                .unwrap_or(d.motor_type.contains(MotorType::NULL_CENTER)),
-        )
-        .with(
-            MotorType::STOP_NULL,
-            r.stop_at_switch
-                .unwrap_or(d.motor_type.contains(MotorType::STOP_NULL)),
-        )
-        .with(MotorType::ROTARY, rotary);
-    let options = d
-        .options
-        .with(
-            MotorOptions::NULL_POSITIVE,
-            r.active_high
-                .unwrap_or(d.options.contains(MotorOptions::NULL_POSITIVE)),
-        )
-        .with(
-            MotorOptions::STOP_SOFT,
-            r.soft_stop
-                .unwrap_or(d.options.contains(MotorOptions::STOP_SOFT)),
-        )
-        .with(
-            MotorOptions::FAST_REF,
-            r.fast.unwrap_or(d.options.contains(MotorOptions::FAST_REF)),
-        )
-        .with(
-            MotorOptions::MECH_REF,
-            r.mechanical
-                .unwrap_or(d.options.contains(MotorOptions::MECH_REF)),
-        );
+    let motor_type = given_flags(
+        d.motor_type
+            .with(MotorType::NULL_LEFT, null_left)
+            .with(MotorType::ROTARY, rotary),
+        &[
+            (MotorType::NULL_CENTER, r.center),
+            (MotorType::STOP_NULL, r.stop_at_switch),
+        ],
+        MotorType::with,
+    );
+    let options = given_flags(
+        d.options,
+        &[
+            (MotorOptions::NULL_POSITIVE, r.active_high),
+            (MotorOptions::STOP_SOFT, r.soft_stop),
+            (MotorOptions::FAST_REF, r.fast),
+            (MotorOptions::MECH_REF, r.mechanical),
+        ],
+        MotorOptions::with,
+    );
     let range = match keys.revolution {
         Some(revolution) if rotary => revolution,
         _ => axis.max - axis.min,
@@ -155,9 +148,10 @@ fn channel_config(axis: &DriverAxis) -> Result<TmcpackChannel, SpecError> {
     let poslimit = (range * scale).round().clamp(0.0, f64::from(MAX_POSLIMIT)) as u32;
     let counts = |units: f64| (units * scale).round();
     let channel = axis.channel;
+    let limits = axis.limits();
     Ok(TmcpackChannel {
-        max_velocity: axis.max_velocity * scale,
-        max_accel: axis.max_accel * scale,
+        max_velocity: limits.max_velocity,
+        max_accel: limits.max_accel,
         poslimit,
         motor_type,
         options,
@@ -383,23 +377,18 @@ impl TmcpackDriverConfig {
                     ch.debounce_mask
                 ),
             );
+            // A distance of the pack's, in units and microsteps.
+            let distance =
+                |steps: i64| format!("{} {unit} ({steps} µsteps)", num(steps as f64 / per_unit));
             row(
                 owner,
                 "reference.null_offset",
-                format!(
-                    "{} {unit} ({} µsteps)",
-                    num(f64::from(ch.nulloffset) / per_unit),
-                    ch.nulloffset
-                ),
+                distance(i64::from(ch.nulloffset)),
             );
             row(
                 owner,
                 "reference.test_range",
-                format!(
-                    "{} {unit} ({} µsteps)",
-                    num(f64::from(ch.testnullrange) / per_unit),
-                    ch.testnullrange
-                ),
+                distance(i64::from(ch.testnullrange)),
             );
             row(
                 owner,

@@ -102,15 +102,7 @@ impl StartupPlan {
         for channel in channels.iter().flatten() {
             let motor = channel.motor;
             let (cfg, scale) = (channel.cfg, channel.scale);
-            let c = cfg.currents;
-            push(Request::CurrentControl {
-                motor,
-                i0: c.i0,
-                i1: c.i1,
-                i2: c.i2,
-                i3: c.i3,
-                t0: c.t0.max(1),
-            });
+            push(cfg.currents.request(motor));
             push(Request::StartingVelocity {
                 motor,
                 // "The fastest possible vmin will be calculated automatically when its
