@@ -233,7 +233,13 @@ const JOURNAL_QUEUE_BYTES: usize = 8 << 20;
 fn start_recorder(
     config: &ServerConfig,
     save_now: Arc<AtomicBool>,
-) -> Result<(Journal, Option<(Arc<AtomicBool>, std::thread::JoinHandle<()>)>), ServerError> {
+) -> Result<
+    (
+        Journal,
+        Option<(Arc<AtomicBool>, std::thread::JoinHandle<()>)>,
+    ),
+    ServerError,
+> {
     let server = &config.server;
     if server.blackbox_seconds == 0 {
         return Ok((Journal::disabled(), None));
@@ -254,6 +260,7 @@ fn start_recorder(
         },
         dir: server.blackbox_dir.clone(),
         on_exit: server.blackbox_on_exit,
+        keep_files: server.blackbox_keep as usize,
         save_now,
         stop: Arc::clone(&stop),
     };

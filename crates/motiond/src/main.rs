@@ -22,6 +22,11 @@ struct Cli {
     /// Only validate FILE: print a summary or every error with file:line:column, and exit.
     #[arg(long, value_name = "FILE", conflicts_with = "config")]
     check_config: Option<PathBuf>,
+    /// Replay a black box FILE.mcap (saved on a fault, an e-stop, SIGUSR2 or exit) through
+    /// the drivers and the engine of its recorded config (or --config), compare every
+    /// frame, and exit: 0 when every frame is identical, 1 at the first difference.
+    #[arg(long, value_name = "FILE.mcap", conflicts_with = "check_config")]
+    replay: Option<PathBuf>,
     /// Refuse to run without real-time privileges (SCHED_FIFO, locked memory) instead of
     /// warning and continuing.
     #[arg(long)]
@@ -31,6 +36,9 @@ struct Cli {
 fn main() -> ExitCode {
     iceoryx2::prelude::set_log_level_from_env_or(iceoryx2::prelude::LogLevel::Error);
     let cli = Cli::parse();
+    if let Some(file) = &cli.replay {
+        return replay(file, cli.config.as_deref());
+    }
     let named = cli.check_config.clone().or(cli.config.clone());
     let (path, source) = match locate(&Places::of_process(named)) {
         Ok(found) => found,
@@ -73,6 +81,53 @@ fn main() -> ExitCode {
         Err(error) => {
             // Every layer's words, down to iceoryx2's or the system's.
             eprintln!("motiond: {:#}", anyhow::Error::from(error));
+            ExitCode::from(1)
+        }
+    }
+}
+
+/// `motiond --replay FILE.mcap [--config FILE]`.
+fn replay(file: &std::path::Path, config: Option<&std::path::Path>) -> ExitCode {
+    let recording = match motiond::blackbox::read(file) {
+        Ok(recording) => recording,
+        Err(error) => {
+            eprintln!("motiond: {error}");
+            return ExitCode::from(1);
+        }
+    };
+    let loaded = match config {
+        Some(path) => ServerConfig::load(path),
+        None if recording.config_text().is_empty() => {
+            eprintln!(
+                "motiond: {} holds no config text: pass the config it was recorded with \
+                 (--config FILE)",
+                file.display()
+            );
+            return ExitCode::from(1);
+        }
+        None => {
+            let recorded = recording
+                .metadata
+                .get("config_path")
+                .map_or_else(|| file.to_path_buf(), PathBuf::from);
+            ServerConfig::parse(&recorded, recording.config_text())
+        }
+    };
+    let config = match loaded {
+        Ok(config) => config,
+        Err(error) => {
+            eprintln!("{error}");
+            eprintln!("motiond: the replay's config is not usable");
+            return ExitCode::from(1);
+        }
+    };
+    match motiond::blackbox::replay(&config, &recording) {
+        Ok(done) => {
+            println!("replayed {} ticks: frames identical", done.ticks);
+            ExitCode::SUCCESS
+        }
+        Err(error) => {
+            println!("replay: {error}");
             ExitCode::from(1)
         }
     }

@@ -349,10 +349,11 @@ impl Loop {
         // Every link is handed to its I/O thread closed; the thread reports `Up` once it
         // opened it (an `Up` already queued is taken at the first tick). Until then the
         // link's boards are starting, not down.
+        setup.journal.start(setup.epoch, setup.ports.len());
         for link in 0..setup.ports.len() {
+            setup.journal.link_opening(link);
             setup.engine.link_opening(link);
         }
-        setup.journal.start(setup.epoch, setup.ports.len());
         let mut stats = Box::new(ServerStats::EMPTY);
         stats.rt_flags = rt_flags;
         stats.link_count = setup.ports.len().min(stats.links.len()) as u32;

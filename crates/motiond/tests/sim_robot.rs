@@ -14,6 +14,7 @@ use motion_ipc::{
     GroupState, MAX_GROUP_AXES, MAX_PATH_POINTS, MotionFrame, PathKind, Target,
 };
 use motion_link::Link;
+use motiond::blackbox::{Journal, Recording, ReplayError, Ring, replay};
 use motiond::config::ServerConfig;
 
 struct CountingAllocator;
@@ -61,23 +62,30 @@ fn engine<T>(work: impl FnOnce() -> T) -> T {
     result
 }
 
-#[derive(Default)]
 struct Queue {
     requests: std::collections::VecDeque<CommandRequest>,
     replies: Vec<CommandReply>,
     /// A path "published" by the client (the engine takes it by reference).
     path: Option<Box<GroupPath>>,
+    /// The black box's journal, as motiond's tick keeps it (every input and output).
+    journal: Journal,
 }
 
 impl CommandPort for Queue {
     fn next_request(&mut self) -> Option<CommandRequest> {
-        self.requests.pop_front()
+        let request = self.requests.pop_front()?;
+        // No transport identity here: the engine takes the request's own client.
+        self.journal.request(request.client, &request);
+        Some(request)
     }
     fn reply(&mut self, reply: CommandReply) {
+        self.journal.reply(&reply);
         self.replies.push(reply);
     }
-    fn take_path(&mut self, _: ClientId, id: u64) -> Option<&GroupPath> {
-        self.path.as_deref().filter(|path| path.id == id)
+    fn take_path(&mut self, client: ClientId, id: u64) -> Option<&GroupPath> {
+        let path = self.path.as_deref().filter(|path| path.id == id);
+        self.journal.path(client, id, path);
+        path
     }
 }
 
@@ -88,6 +96,10 @@ struct Robot {
     port: Queue,
     now: Duration,
     period: Duration,
+    /// The recorder's end of the journal, and its ring (every tick kept).
+    journal: rtrb::Consumer<u8>,
+    ring: Ring,
+    config: ServerConfig,
 }
 
 impl Robot {
@@ -111,9 +123,14 @@ impl Robot {
             })
             .collect();
         let period = engine.config().period();
-        let mut port = Queue::default();
-        port.replies.reserve(100_000);
-        port.requests.reserve(64);
+        let (producer, journal) = rtrb::RingBuffer::new(1 << 20);
+        let mut port = Queue {
+            requests: std::collections::VecDeque::with_capacity(64),
+            replies: Vec::with_capacity(100_000),
+            path: None,
+            journal: Journal::new(producer),
+        };
+        port.journal.start(Duration::ZERO, links.len());
         Self {
             engine,
             links,
@@ -121,27 +138,66 @@ impl Robot {
             port,
             now: Duration::ZERO,
             period,
+            journal,
+            ring: Ring::new(usize::MAX),
+            config,
         }
     }
 
+    /// One tick as motiond's runs it, every input and output journaled (the journal is
+    /// counted with the engine: it must not allocate either).
     fn tick(&mut self) {
         let now = self.now;
         let mut buf = [0u8; 512];
+        let journal = &mut self.port.journal;
+        engine(|| journal.tick(now));
         for (index, link) in self.links.iter_mut().enumerate() {
             while let Ok(len) = link.read(now, &mut buf) {
                 if len == 0 {
                     break;
                 }
-                engine(|| self.engine.handle_link_rx(index, now, &buf[..len]));
+                engine(|| {
+                    self.port.journal.link_rx(index, now, &buf[..len]);
+                    self.engine.handle_link_rx(index, now, &buf[..len]);
+                });
             }
-            engine(|| self.engine.link_heard(index, now));
+            engine(|| {
+                self.port.journal.link_heard(index, now);
+                self.engine.link_heard(index, now);
+            });
         }
-        engine(|| self.engine.step(now, &mut self.port, &mut self.frame));
+        engine(|| {
+            self.port.journal.step();
+            self.engine.step(now, &mut self.port, &mut self.frame);
+            self.port.journal.frame(&self.frame);
+        });
         for (index, link) in self.links.iter_mut().enumerate() {
-            while let Some(len) = engine(|| self.engine.poll_link_transmit(index, now, &mut buf)) {
+            loop {
+                let sent = engine(|| {
+                    let sent = self.engine.poll_link_transmit(index, now, &mut buf);
+                    match sent {
+                        Some(len) => self.port.journal.link_tx(index, &buf[..len]),
+                        None => self.port.journal.link_tx_none(index),
+                    }
+                    sent
+                });
+                let Some(len) = sent else { break };
                 link.write(now, &buf[..len]).expect("sim link write");
-                engine(|| self.engine.link_written(index, now));
+                engine(|| {
+                    self.port.journal.link_written(index, now);
+                    self.engine.link_written(index, now);
+                });
             }
+        }
+        // The recorder thread's work, outside the count.
+        while let Ok(chunk) = self.journal.read_chunk(self.journal.slots()) {
+            if chunk.is_empty() {
+                break;
+            }
+            let (first, second) = chunk.as_slices();
+            self.ring.push(first);
+            self.ring.push(second);
+            chunk.commit_all();
         }
         self.now += self.period;
     }
@@ -678,4 +734,57 @@ fn an_estop_stops_the_packs_interpolation() {
         let position = robot.frame.axes[robot.axis(name) as usize].position;
         assert_eq!(position, after[slot], "{name} moved after it came to rest");
     }
+}
+
+/// Offset of the first byte after the stamp of the first `LinkRx` record in `records`
+/// with at least `min` bytes of data, and its data length.
+fn first_rx(records: &[u8], min: usize) -> Option<(usize, usize)> {
+    let mut at = 0;
+    while at + 6 <= records.len() {
+        let len = u32::from_le_bytes(records[at + 2..at + 6].try_into().ok()?) as usize;
+        if records[at] == motiond::blackbox::record::Kind::LinkRx as u8 && len >= 8 + min {
+            return Some((at + 6 + 8, len - 8));
+        }
+        at += 6 + len;
+    }
+    None
+}
+
+/// The black box (docs/ARCHITECTURE.md "The black box"): the scripted robot's journal —
+/// four boards, moves, jogs, a home, an e-stop and a reset — replayed through drivers and
+/// an engine built anew from the same config gives every frame, every byte sent and every
+/// reply again; one byte changed in what a board said is found at the tick it was said.
+#[test]
+fn the_robots_journal_replays_frame_for_frame_and_one_changed_byte_is_found() {
+    let mut robot = Robot::new();
+    run(&mut robot, 0, 6000, |_| {});
+    let recording = Recording::of(&robot.ring.ticks());
+    assert_eq!(recording.ticks.len(), 6000);
+    let replayed = replay(&robot.config, &recording).expect("the same frames");
+    assert_eq!((replayed.first, replayed.ticks), (0, 6000));
+
+    // Journal tick k is the engine's tick k - 1 (the first two steps are both tick 0).
+    let changed_at = 3000;
+    let mut changed = recording.clone();
+    let (at, len) = first_rx(&changed.ticks[changed_at], 4).expect("a reply at tick 3000");
+    changed.ticks[changed_at][at + len / 2] ^= 0x5a;
+    match replay(&robot.config, &changed) {
+        Err(ReplayError::Diverged { tick, what }) => {
+            assert!(
+                (changed_at as u64 - 1..changed_at as u64 + 200).contains(&tick),
+                "diverged at tick {tick} ({what}), the byte was changed at {}",
+                changed_at - 1
+            );
+        }
+        other => panic!("a changed reply byte must diverge: {other:?}"),
+    }
+
+    // A recording that does not start at the server's start is refused, not misread.
+    let mut late = recording.clone();
+    late.ticks.remove(0);
+    late.metadata.insert("dropped_ticks".into(), "1".into());
+    assert!(matches!(
+        replay(&robot.config, &late),
+        Err(ReplayError::NotFromStart { .. })
+    ));
 }

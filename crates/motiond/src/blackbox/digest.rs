@@ -179,7 +179,11 @@ mod tests {
     }
 
     fn bytes(digest: &FrameDigest) -> Vec<u8> {
-        digest.values().iter().flat_map(|v| v.to_le_bytes()).collect()
+        digest
+            .values()
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect()
     }
 
     #[test]
@@ -195,7 +199,7 @@ mod tests {
             Some(Region::Axis(1))
         );
         let mut changed = frame();
-        changed.groups[0].tick += 1;
+        changed.groups[0].time += 0.5;
         assert_eq!(
             FrameDigest::of(&changed).first_difference(&bytes(&recorded)),
             Some(Region::Group(0))

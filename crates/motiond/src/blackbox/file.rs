@@ -88,6 +88,21 @@ pub struct Recording {
 }
 
 impl Recording {
+    /// The recording of a ring's ticks (what a saved file reads back as), without a file.
+    pub fn of(ticks: &Ticks<'_>) -> Self {
+        let mut metadata = BTreeMap::new();
+        metadata.insert("dropped_ticks".to_owned(), ticks.dropped.to_string());
+        Self {
+            metadata,
+            head: ticks.head.to_vec(),
+            ticks: ticks
+                .ticks
+                .iter()
+                .map(|(_, bytes)| bytes.to_vec())
+                .collect(),
+        }
+    }
+
     /// The config file's text as recorded.
     pub fn config_text(&self) -> &str {
         self.metadata.get("config").map_or("", String::as_str)
@@ -139,9 +154,10 @@ fn readable(record: &Record<'_>, links: &[String], tick: u64) -> Option<(usize, 
         ),
         Kind::Request => {
             let request = get_sparse::<CommandRequest>(record.rest(16))?;
-            let kind = request
-                .kind()
-                .map_or_else(|_| format!("{}", request.kind), |kind: CommandKind| format!("{kind:?}"));
+            let kind = request.kind().map_or_else(
+                |_| format!("{}", request.kind),
+                |kind: CommandKind| format!("{kind:?}"),
+            );
             (
                 2,
                 format!(
@@ -158,8 +174,10 @@ fn readable(record: &Record<'_>, links: &[String], tick: u64) -> Option<(usize, 
         }
         Kind::Reply => {
             let reply = get_sparse::<CommandReply>(record.payload)?;
-            let reason = Reason::try_from(reply.reason)
-                .map_or_else(|_| format!("{}", reply.reason), |reason| format!("{reason:?}"));
+            let reason = Reason::try_from(reply.reason).map_or_else(
+                |_| format!("{}", reply.reason),
+                |reason| format!("{reason:?}"),
+            );
             (
                 2,
                 format!(
@@ -184,11 +202,17 @@ fn readable(record: &Record<'_>, links: &[String], tick: u64) -> Option<(usize, 
         Kind::Trigger => (3, format!(r#"{{"tick":{tick},"event":"trigger"}}"#)),
         Kind::Lost => (
             3,
-            format!(r#"{{"tick":{tick},"event":"lost","records":{}}}"#, record.u64_at(0)),
+            format!(
+                r#"{{"tick":{tick},"event":"lost","records":{}}}"#,
+                record.u64_at(0)
+            ),
         ),
         Kind::Skip => (
             3,
-            format!(r#"{{"tick":{tick},"event":"overrun","skipped":{}}}"#, record.u64_at(0)),
+            format!(
+                r#"{{"tick":{tick},"event":"overrun","skipped":{}}}"#,
+                record.u64_at(0)
+            ),
         ),
         Kind::OverrunFault => (3, format!(r#"{{"tick":{tick},"event":"overrun fault"}}"#)),
         Kind::Shutdown => (3, format!(r#"{{"tick":{tick},"event":"shutdown"}}"#)),
@@ -248,21 +272,19 @@ impl BlackboxFile {
             .find(|record| record.kind == Kind::Start)
             .map_or(0, |record| record.u64_at(0));
         let mut sequence = 0u32;
-        let mut write = |writer: &mut mcap::Writer<BufWriter<File>>,
-                         channel: u16,
-                         time: u64,
-                         data: &[u8]| {
-            sequence = sequence.wrapping_add(1);
-            writer.write_to_known_channel(
-                &MessageHeader {
-                    channel_id: channel,
-                    sequence,
-                    log_time: time,
-                    publish_time: time,
-                },
-                data,
-            )
-        };
+        let mut write =
+            |writer: &mut mcap::Writer<BufWriter<File>>, channel: u16, time: u64, data: &[u8]| {
+                sequence = sequence.wrapping_add(1);
+                writer.write_to_known_channel(
+                    &MessageHeader {
+                        channel_id: channel,
+                        sequence,
+                        log_time: time,
+                        publish_time: time,
+                    },
+                    data,
+                )
+            };
         write(&mut writer, journal, epoch_ns, ticks.head).map_err(mcap)?;
         for &(tick, bytes) in &ticks.ticks {
             let now_ns = records(bytes)
@@ -273,8 +295,13 @@ impl BlackboxFile {
             write(&mut writer, journal, time, bytes).map_err(mcap)?;
             for record in records(bytes).filter_map(Result::ok) {
                 if let Some((channel, line)) = readable(&record, &self.link_names, tick) {
-                    write(&mut writer, readable_channels[channel], time, line.as_bytes())
-                        .map_err(mcap)?;
+                    write(
+                        &mut writer,
+                        readable_channels[channel],
+                        time,
+                        line.as_bytes(),
+                    )
+                    .map_err(mcap)?;
                 }
             }
         }

@@ -57,12 +57,18 @@ impl Journal {
     }
 
     /// Records dropped since start (the queue was full).
-    pub fn lost(&self) -> u64 {
+    pub fn lost_since_start(&self) -> u64 {
         self.lost_total
     }
 
     /// Writes one record of `len` payload bytes, filled by `fill`.
-    fn record(&mut self, kind: Kind, link: usize, len: usize, fill: impl FnOnce(&mut SplitWriter<'_>)) {
+    fn record(
+        &mut self,
+        kind: Kind,
+        link: usize,
+        len: usize,
+        fill: impl FnOnce(&mut SplitWriter<'_>),
+    ) {
         let Some(queue) = self.queue.as_mut() else {
             return;
         };
@@ -127,6 +133,11 @@ impl Journal {
         let number = self.ticks;
         self.ticks += 1;
         self.words(Kind::Tick, 0, &[ns(now), number]);
+    }
+
+    /// `link` is handed to its I/O thread closed.
+    pub fn link_opening(&mut self, link: usize) {
+        self.record(Kind::LinkOpening, link, 0, |_| {});
     }
 
     /// `link` went down.

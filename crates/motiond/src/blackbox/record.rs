@@ -70,13 +70,15 @@ pub enum Kind {
     Lost = 23,
     /// Something to save the black box for: `reason: u8` ([`Trigger`]), `axis: u32`.
     Trigger = 24,
+    /// The link is handed to its I/O thread closed (its boards start once it is up).
+    LinkOpening = 25,
 }
 
 impl Kind {
     /// The kind of byte `value`.
     pub fn from_u8(value: u8) -> Option<Self> {
         use Kind::*;
-        const ALL: [Kind; 24] = [
+        const ALL: [Kind; 25] = [
             Start,
             Tick,
             LinkDown,
@@ -101,6 +103,7 @@ impl Kind {
             OverrunFault,
             Lost,
             Trigger,
+            LinkOpening,
         ];
         ALL.into_iter().find(|kind| *kind as u8 == value)
     }
@@ -278,7 +281,7 @@ impl ScalarSource for SparseRead<'_> {
 /// A payload from its sparse bytes; `None` when they are not a sparse payload of `T`
 /// (a length that is no multiple of an entry, an entry out of order or past the end).
 pub fn get_sparse<T: Fields>(bytes: &[u8]) -> Option<T> {
-    if bytes.len() % 12 != 0 {
+    if !bytes.len().is_multiple_of(12) {
         return None;
     }
     let mut source = SparseRead {

@@ -35,6 +35,8 @@ pub struct RecorderSetup {
     pub dir: PathBuf,
     /// Save on a clean exit.
     pub on_exit: bool,
+    /// How many `.mcap` files `dir` keeps.
+    pub keep_files: usize,
     /// Set by SIGUSR2: save now.
     pub save_now: Arc<AtomicBool>,
     /// Set when the tick loop has ended: drain what is left, save if `on_exit`, end.
@@ -130,7 +132,11 @@ impl Ring {
     pub fn ticks(&self) -> Ticks<'_> {
         Ticks {
             head: &self.head,
-            ticks: self.ticks.iter().map(|t| (t.tick, t.bytes.as_slice())).collect(),
+            ticks: self
+                .ticks
+                .iter()
+                .map(|t| (t.tick, t.bytes.as_slice()))
+                .collect(),
             dropped: self.dropped,
         }
     }
@@ -246,7 +252,29 @@ fn save_to_dir(
         reason.word()
     ));
     setup.file.write(&path, &ring.ticks(), reason.word())?;
+    remove_oldest(&setup.dir, setup.keep_files);
     Ok(path)
+}
+
+/// Removes the oldest `.mcap` files of `dir` beyond the newest `keep` (a file another
+/// process removed meanwhile is no error).
+fn remove_oldest(dir: &std::path::Path, keep: usize) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    let mut files: Vec<(SystemTime, PathBuf)> = entries
+        .filter_map(Result::ok)
+        .map(|entry| entry.path())
+        .filter(|path| path.extension().is_some_and(|ext| ext == "mcap"))
+        .filter_map(|path| Some((path.metadata().ok()?.modified().ok()?, path)))
+        .collect();
+    files.sort();
+    let excess = files.len().saturating_sub(keep);
+    for (_, path) in files.into_iter().take(excess) {
+        if std::fs::remove_file(&path).is_ok() {
+            tracing::info!("black box {} removed (blackbox_keep)", path.display());
+        }
+    }
 }
 
 #[cfg(test)]

@@ -205,8 +205,25 @@ fn region_name(region: Region, config: &ServerConfig) -> String {
     }
 }
 
-/// Replays `recording` on drivers and an engine built from `config`.
+/// Stack of the replay's thread: a path (`GroupPath`, 392 KiB) is decoded by value, and an
+/// unoptimised build copies it several times on the way.
+const REPLAY_STACK: usize = 256 << 20;
+
+/// Replays `recording` on drivers and an engine built from `config` (on a thread of its
+/// own with a stack large enough for the payloads it decodes).
 pub fn replay(config: &ServerConfig, recording: &Recording) -> Result<Replayed, ReplayError> {
+    std::thread::scope(|scope| {
+        std::thread::Builder::new()
+            .name("replay".into())
+            .stack_size(REPLAY_STACK)
+            .spawn_scoped(scope, || replay_here(config, recording))
+            .map_err(|error| ReplayError::Build(format!("no replay thread: {error}")))?
+            .join()
+            .unwrap_or_else(|_| Err(ReplayError::Build("the replay thread panicked".into())))
+    })
+}
+
+fn replay_here(config: &ServerConfig, recording: &Recording) -> Result<Replayed, ReplayError> {
     let first = recording
         .ticks
         .first()
@@ -219,13 +236,14 @@ pub fn replay(config: &ServerConfig, recording: &Recording) -> Result<Replayed, 
     let drivers = crate::boards::build(config).map_err(|e| ReplayError::Build(e.to_string()))?;
     let mut engine: Engine<AnyDriver> = Engine::new(config.engine_config(), drivers)
         .map_err(|e| ReplayError::Build(e.to_string()))?;
-    let start = records(&recording.head)
-        .filter_map(Result::ok)
-        .find(|record| record.kind == Kind::Start);
     engine.stamp_links();
-    engine.set_clock_origin(at(start.map_or(0, |record| record.u64_at(0))));
-    for link in 0..config.links.len() {
-        engine.link_opening(link);
+    for record in records(&recording.head) {
+        let record = record.map_err(|source| ReplayError::Journal { tick: 0, source })?;
+        match record.kind {
+            Kind::Start => engine.set_clock_origin(at(record.u64_at(0))),
+            Kind::LinkOpening => engine.link_opening(usize::from(record.link)),
+            _ => {}
+        }
     }
     let mut frame = Box::new(MotionFrame::EMPTY);
     let mut buf = [0u8; crate::io::PACKET_LEN];
@@ -235,7 +253,10 @@ pub fn replay(config: &ServerConfig, recording: &Recording) -> Result<Replayed, 
         let mut iter = records(bytes).peekable();
         let diverged = |tick: u64, what: Divergence| ReplayError::Diverged { tick, what };
         while let Some(record) = iter.next() {
-            let record = record.map_err(|source| ReplayError::Journal { tick: engine.tick(), source })?;
+            let record = record.map_err(|source| ReplayError::Journal {
+                tick: engine.tick(),
+                source,
+            })?;
             let link = usize::from(record.link);
             match record.kind {
                 Kind::Tick => now = at(record.u64_at(0)),
@@ -268,15 +289,17 @@ pub fn replay(config: &ServerConfig, recording: &Recording) -> Result<Replayed, 
                     };
                     engine.step(now, &mut port, &mut frame);
                     if let Some(source) = port.damage {
-                        return Err(ReplayError::Journal { tick: engine.tick(), source });
+                        return Err(ReplayError::Journal {
+                            tick: engine.tick(),
+                            source,
+                        });
                     }
                     if let Some(what) = port.divergence {
                         return Err(diverged(engine.tick(), what));
                     }
                 }
                 Kind::Frame => {
-                    if let Some(region) = FrameDigest::of(&frame).first_difference(record.payload)
-                    {
+                    if let Some(region) = FrameDigest::of(&frame).first_difference(record.payload) {
                         return Err(diverged(
                             engine.tick(),
                             Divergence::Frame(region_name(region, config)),
@@ -329,7 +352,7 @@ pub fn replay(config: &ServerConfig, recording: &Recording) -> Result<Replayed, 
                         Divergence::Inputs("a command the engine did not ask for"),
                     ));
                 }
-                Kind::Start | Kind::Trigger => {}
+                Kind::Start | Kind::Trigger | Kind::LinkOpening => {}
             }
         }
         ticks += 1;

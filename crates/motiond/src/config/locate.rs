@@ -112,7 +112,7 @@ mod tests {
 
     #[test]
     fn the_flag_comes_first_then_the_environment_then_etc_then_the_tree() {
-        let found = |p: &Places| locate(p).map(|(path, source)| (path, source));
+        let found = |p: &Places| locate(p);
         assert_eq!(
             found(&places(true, "env.toml", true, true)),
             Ok((PathBuf::from("given.toml"), ConfigSource::Flag))

@@ -68,6 +68,9 @@ pub struct ServerSettings {
     pub blackbox_on_exit: bool,
     /// Where black box files are written.
     pub blackbox_dir: PathBuf,
+    /// How many black box files `blackbox_dir` keeps (the newest; older ones are removed
+    /// after each save).
+    pub blackbox_keep: u32,
 }
 
 /// `[server] blackbox_dir`'s default.

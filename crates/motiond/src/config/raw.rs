@@ -49,6 +49,7 @@ pub(crate) struct RawServer {
     pub blackbox_seconds: Option<Spanned<Int>>,
     pub blackbox_on_exit: Option<Spanned<bool>>,
     pub blackbox_dir: Option<Spanned<String>>,
+    pub blackbox_keep: Option<Spanned<Int>>,
 }
 
 #[derive(Debug, Deserialize)]

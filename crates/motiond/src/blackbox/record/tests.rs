@@ -11,7 +11,7 @@ fn sparse<T: Fields>(value: &T) -> Vec<u8> {
 
 #[test]
 fn a_request_comes_back_bit_for_bit_nan_and_negative_zero_included() {
-    let mut request = CommandRequest::new(ClientId { lo: 3, hi: 9 }, 41, 2, CommandKind::Move);
+    let mut request = CommandRequest::new(ClientId { lo: 3, hi: 9 }, 41, 2, CommandKind::Position);
     request.values = [f64::NAN, -0.0, 1.5];
     let bytes = sparse(&request);
     let back: CommandRequest = get_sparse(&bytes).expect("decodes");
@@ -21,8 +21,22 @@ fn a_request_comes_back_bit_for_bit_nan_and_negative_zero_included() {
     assert_eq!(back.client, request.client);
 }
 
+/// Runs `test` on a thread with a stack for 400 KiB payloads by value.
+fn with_big_stack(test: impl FnOnce() + Send + 'static) {
+    std::thread::Builder::new()
+        .stack_size(64 << 20)
+        .spawn(test)
+        .expect("a thread")
+        .join()
+        .expect("the test passed");
+}
+
 #[test]
 fn a_line_path_of_400_kib_takes_a_few_entries() {
+    with_big_stack(a_line_path);
+}
+
+fn a_line_path() {
     let mut path = Box::new(GroupPath::EMPTY);
     path.point_count = 1;
     path.axis_count = 3;
@@ -61,9 +75,14 @@ fn records_split_across_the_ring_end_read_back_in_order() {
     assert_eq!(writer.written(), 15);
     let mut joined = first.to_vec();
     joined.extend_from_slice(&second[..10]);
-    let read: Vec<_> = records(&joined).collect::<Result<_, _>>().expect("whole records");
+    let read: Vec<_> = records(&joined)
+        .collect::<Result<_, _>>()
+        .expect("whole records");
     assert_eq!(read.len(), 2);
-    assert_eq!((read[0].kind, read[0].link, read[0].payload), (Kind::LinkTx, 2, &[7, 8, 9][..]));
+    assert_eq!(
+        (read[0].kind, read[0].link, read[0].payload),
+        (Kind::LinkTx, 2, &[7, 8, 9][..])
+    );
     assert_eq!(read[1].kind, Kind::Step);
 }
 
@@ -75,7 +94,11 @@ fn garbage_is_an_error_not_a_panic() {
     ));
     assert!(matches!(
         records(&[Kind::LinkRx as u8, 0, 200, 0, 0, 0, 1, 2]).next(),
-        Some(Err(JournalError::Truncated { len: 200, left: 2, .. }))
+        Some(Err(JournalError::Truncated {
+            len: 200,
+            left: 2,
+            ..
+        }))
     ));
     // Every byte string ends the iterator without a panic.
     let mut state = 0x2545_f491_4f6c_dd1du64;

@@ -375,6 +375,7 @@ impl Validator<'_, '_> {
             blackbox_seconds: 10,
             blackbox_on_exit: false,
             blackbox_dir: crate::config::DEFAULT_BLACKBOX_DIR.into(),
+            blackbox_keep: 20,
         };
         const NAME: &str =
             "the instance name: services are motiond/<name>/frame, …; e.g. name = \"demo\"";
@@ -450,6 +451,11 @@ impl Validator<'_, '_> {
             && let Some(v) = self.int_in(v, "server.blackbox_seconds", 0..=600)
         {
             settings.blackbox_seconds = v as u32;
+        }
+        if let Some(v) = &raw.blackbox_keep
+            && let Some(v) = self.int_in(v, "server.blackbox_keep", 1..=10_000)
+        {
+            settings.blackbox_keep = v as u32;
         }
         if let Some(v) = &raw.blackbox_on_exit {
             settings.blackbox_on_exit = *v.get_ref();
