@@ -1,0 +1,221 @@
+//! The black box of a running motiond (docs/ARCHITECTURE.md "The black box"): a simulated
+//! QSB-M on a pty driven through a move, a jog, an e-stop and a following-error fault; the
+//! e-stop and the fault each save the ring, SIGUSR2 saves the whole run; `motiond --replay`
+//! gives every frame again, and one byte changed in what the board said is found at the
+//! tick it was said.
+
+mod support;
+
+use core::time::Duration;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+use board_qsb::sim::{QsbSim, QsbSimConfig};
+use motion_ipc::{AxisFlags, CommandKind, CommandRequest, DeviceState, FaultCode, MotionFrame};
+use motiond::blackbox::record::Kind;
+use motiond::blackbox::{BlackboxFile, Recording};
+use nix::sys::signal::Signal;
+use support::pty_board::PtyBoard;
+use support::*;
+
+fn online(frame: &MotionFrame) -> bool {
+    let axis = frame.axes()[0];
+    axis.device_state() == Ok(DeviceState::Online) && !axis.flags().contains(AxisFlags::STALE)
+}
+
+/// The path a "black box saved (why): PATH (N ticks)" log line names.
+fn saved_path(server: &mut Server, why: &str) -> PathBuf {
+    let needle = format!("black box saved ({why}): ");
+    assert!(
+        server.wait_for_log(&needle, Duration::from_secs(5)),
+        "no {why} save: {:#?}",
+        server.log
+    );
+    let line = server
+        .log
+        .iter()
+        .find(|line| line.contains(&needle))
+        .expect("the line");
+    let rest = &line[line.find(&needle).expect("needle") + needle.len()..];
+    PathBuf::from(rest.split(" (").next().expect("a path"))
+}
+
+fn replay(file: &Path) -> (Option<i32>, String) {
+    let output = Command::new(env!("CARGO_BIN_EXE_motiond"))
+        .arg("--replay")
+        .arg(file)
+        .output()
+        .expect("motiond --replay runs");
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&output.stdout),
+        String::from_utf8_lossy(&output.stderr)
+    );
+    (output.status.code(), text)
+}
+
+/// Offset and length of the data of the first `LinkRx` record of `records` with at least
+/// `min` data bytes.
+fn first_rx(records: &[u8], min: usize) -> Option<(usize, usize)> {
+    let mut at = 0;
+    while at + 6 <= records.len() {
+        let len = u32::from_le_bytes(records[at + 2..at + 6].try_into().ok()?) as usize;
+        if records[at] == Kind::LinkRx as u8 && len >= 8 + min {
+            return Some((at + 6 + 8, len - 8));
+        }
+        at += 6 + len;
+    }
+    None
+}
+
+#[test]
+fn a_run_with_a_move_a_jog_an_estop_and_a_fault_replays_frame_for_frame() {
+    let name = unique_name("blackbox");
+    let epoch = Instant::now();
+    let board = Arc::new(Mutex::new(QsbSim::new(QsbSimConfig::default())));
+    let tty = std::env::temp_dir().join(format!("{name}.tty"));
+    let _served = PtyBoard::start(&tty, Arc::clone(&board), epoch, 230_400);
+    let dir = std::env::temp_dir().join(format!("{name}-blackbox"));
+    let config = write_config(
+        &name,
+        &format!(
+            r#"[server]
+name = "{name}"
+blackbox_seconds = 120
+blackbox_dir = "{}"
+
+[[link]]
+name = "usb"
+type = "serial"
+path = "{}"
+baud = 230400
+
+[[device]]
+name = "feeder_qsb"
+link = "usb"
+model = "qsb"
+
+[[axis]]
+name = "feeder"
+device = "feeder_qsb"
+channel = 0
+unit = "mm"
+counts_per_unit = 100.0
+min = -1000.0
+max = 1000.0
+max_velocity = 100.0
+max_accel = 1000.0
+following_error = 1.0
+"#,
+            dir.display(),
+            tty.display()
+        ),
+    );
+    let mut server = Server::start(&config);
+    let mut client = RawClient::connect(&name, Duration::from_secs(10));
+    let (frame, ready) = client.wait_frame(Duration::from_secs(10), online);
+    assert!(ready, "{:?}", frame.axes()[0]);
+
+    // A move, and its arrival.
+    let reply = client.command(0, CommandKind::RampPosition, [5.0, 0.0, 0.0]);
+    assert!(reply.result().is_ok(), "{reply:?}");
+    let (frame, arrived) = client.wait_frame(Duration::from_secs(5), |f| {
+        (f.axes()[0].position - 5.0).abs() < 0.05
+    });
+    assert!(arrived, "{:?}", frame.axes()[0]);
+    // A jog, then a stop.
+    let reply = client.command(0, CommandKind::Velocity, [10.0, 0.0, 0.0]);
+    assert!(reply.result().is_ok(), "{reply:?}");
+    std::thread::sleep(Duration::from_millis(300));
+    let reply = client.command(0, CommandKind::Stop, [0.0; 3]);
+    assert!(reply.result().is_ok(), "{reply:?}");
+    std::thread::sleep(Duration::from_millis(300));
+    // An e-stop saves the ring; a reset ends it.
+    let reply = client.command(CommandRequest::ALL_AXES, CommandKind::EStop, [0.0; 3]);
+    assert!(reply.result().is_ok(), "{reply:?}");
+    let at_estop = saved_path(&mut server, "estop");
+    let reply = client.command(CommandRequest::ALL_AXES, CommandKind::Reset, [0.0; 3]);
+    assert!(reply.result().is_ok(), "{reply:?}");
+    std::thread::sleep(Duration::from_millis(300));
+    // The motor slips: a following-error fault saves the ring too.
+    board
+        .lock()
+        .expect("board")
+        .nudge_encoder(epoch.elapsed(), 50.0);
+    let (frame, faulted) = client.wait_frame(Duration::from_secs(2), |f| {
+        f.axes()[0].fault() == Ok(FaultCode::FollowingError)
+    });
+    assert!(faulted, "{:?}", frame.axes()[0]);
+    let at_fault = saved_path(&mut server, "fault");
+    // SIGUSR2 saves the whole run so far.
+    nix::sys::signal::kill(
+        nix::unistd::Pid::from_raw(server.pid() as i32),
+        Signal::SIGUSR2,
+    )
+    .expect("SIGUSR2");
+    let whole = saved_path(&mut server, "sigusr2");
+    assert_eq!(
+        server.signal_and_wait(Signal::SIGTERM, Duration::from_secs(10)),
+        Some(0)
+    );
+
+    for file in [&at_estop, &at_fault, &whole] {
+        let (status, text) = replay(file);
+        assert_eq!(status, Some(0), "{}: {text}", file.display());
+        assert!(text.contains("frames identical"), "{text}");
+    }
+    let recording = motiond::blackbox::read(&whole).expect("the file reads back");
+    assert!(recording.ticks.len() > 1000, "{} ticks", recording.ticks.len());
+    let (_, text) = replay(&whole);
+    assert!(
+        text.contains(&format!("replayed {} ticks", recording.ticks.len())),
+        "{text}"
+    );
+
+    // One byte of what the board said, changed, in a copy of the file.
+    let changed_at = recording.ticks.len() / 2;
+    let (index, (at, len)) = (changed_at..recording.ticks.len())
+        .find_map(|index| Some((index, first_rx(&recording.ticks[index], 2)?)))
+        .expect("a reply after the middle");
+    let mut changed = recording.clone();
+    changed.ticks[index][at + len / 2] ^= 0x01;
+    let copy = dir.join("changed.mcap");
+    write_recording(&changed, &copy);
+    let (status, text) = replay(&copy);
+    assert_eq!(status, Some(1), "{text}");
+    let tick: u64 = text
+        .split("tick ")
+        .nth(1)
+        .and_then(|rest| rest.split(':').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("a tick in {text:?}"));
+    assert!(
+        tick + 1 >= index as u64,
+        "diverged at tick {tick}, before the change (journal tick {index}): {text}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Writes `recording` as a black box file with the same config.
+fn write_recording(recording: &Recording, path: &Path) {
+    let file = BlackboxFile {
+        server_name: recording.metadata["server"].clone(),
+        tick_hz: 1000,
+        config_path: recording.metadata["config_path"].clone().into(),
+        config_text: recording.config_text().to_owned(),
+        link_names: vec!["usb".into()],
+    };
+    let ticks = motiond::blackbox::file::Ticks {
+        head: &recording.head,
+        ticks: recording
+            .ticks
+            .iter()
+            .enumerate()
+            .map(|(n, bytes)| (n as u64, bytes.as_slice()))
+            .collect(),
+        dropped: 0,
+    };
+    file.write(path, &ticks, "test").expect("written");
+}
