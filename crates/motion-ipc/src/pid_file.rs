@@ -110,6 +110,14 @@ impl ServerPidFile {
         Self::in_dir(Path::new(&root), name)
     }
 
+    /// The file naming instance `name`'s newest black box (`motiond`'s recorder rewrites
+    /// it after each save: the saved file's path and a newline), beside its pid file.
+    pub fn blackbox_pointer(name: &str) -> PathBuf {
+        Self::of(name)
+            .path
+            .with_file_name(format!("motiond-{name}.blackbox"))
+    }
+
     /// The pid file of instance `name` in `dir` (tests).
     pub fn in_dir(dir: &Path, name: &str) -> Self {
         Self {

@@ -255,6 +255,12 @@ pub enum Command {
     /// devices, shared memory, and a wake-up measurement; each check passes, warns or fails
     /// with the value found and the fix. Exits 1 when any check fails.
     Doctor(crate::doctor::DoctorArgs),
+    /// The server's black box (flight recorder): `save [FILE.mcap]`.
+    Blackbox {
+        /// What to do.
+        #[command(subcommand)]
+        command: BlackboxCommand,
+    },
     /// Record every frame to CSV, one row per tick, for a duration: the axes (all when none
     /// is named) and every signal.
     Record {
@@ -266,6 +272,18 @@ pub enum Command {
         out: PathBuf,
         /// Axes to record (default: all).
         axes: Vec<String>,
+    },
+}
+
+/// `motionctl blackbox …`.
+#[derive(Debug, Subcommand)]
+pub enum BlackboxCommand {
+    /// Save the server's black box now (the last [server] blackbox_seconds of its link
+    /// bytes, commands and frames) and say where the file is; with FILE, copy it there.
+    /// Replay it with `motiond --replay FILE`.
+    Save {
+        /// Where to copy the file (default: only the server's own copy, in its blackbox_dir).
+        out: Option<PathBuf>,
     },
 }
 

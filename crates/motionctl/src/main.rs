@@ -17,6 +17,7 @@ macro_rules! out {
 
 mod act;
 mod bench;
+mod blackbox;
 mod cli;
 mod describe;
 mod doctor;
@@ -195,6 +196,9 @@ fn run(cli: &Cli) -> anyhow::Result<()> {
         Command::Claim { axes, duration } => act::claim(client, axes, *duration),
         Command::Release { axes } => act::release(client, axes),
         Command::Scope { axes, window } => scope::run(client, axes, *window),
+        Command::Blackbox {
+            command: cli::BlackboxCommand::Save { out },
+        } => blackbox::save(client, out.as_deref()),
         Command::Record {
             duration,
             out,

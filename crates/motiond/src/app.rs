@@ -224,7 +224,7 @@ pub fn run(config: ServerConfig, options: RunOptions) -> Result<(), ServerError>
 }
 
 /// Bytes of the queue from the tick's journal to the recorder thread (drained every
-/// 20 ms: a tick of four busy links journals about 1 KiB, a path at most 600 KiB).
+/// 50 ms: a tick of `config/sim.toml` journals about 1.8 KiB, a path at most 600 KiB).
 const JOURNAL_QUEUE_BYTES: usize = 8 << 20;
 
 /// The black box's recorder thread and the tick's journal into it; with
@@ -261,6 +261,7 @@ fn start_recorder(
         dir: server.blackbox_dir.clone(),
         on_exit: server.blackbox_on_exit,
         keep_files: server.blackbox_keep as usize,
+        pointer: ServerPidFile::blackbox_pointer(&server.name),
         save_now,
         stop: Arc::clone(&stop),
     };

@@ -25,21 +25,27 @@ fn online(frame: &MotionFrame) -> bool {
     axis.device_state() == Ok(DeviceState::Online) && !axis.flags().contains(AxisFlags::STALE)
 }
 
-/// The path a "black box saved (why): PATH (N ticks)" log line names.
+/// The path of the first "black box saved (reasons): PATH (N ticks)" log line whose
+/// reasons include `why` (triggers within 300 ms make one save).
 fn saved_path(server: &mut Server, why: &str) -> PathBuf {
-    let needle = format!("black box saved ({why}): ");
-    assert!(
-        server.wait_for_log(&needle, Duration::from_secs(5)),
-        "no {why} save: {:#?}",
-        server.log
-    );
-    let line = server
-        .log
-        .iter()
-        .find(|line| line.contains(&needle))
-        .expect("the line");
-    let rest = &line[line.find(&needle).expect("needle") + needle.len()..];
-    PathBuf::from(rest.split(" (").next().expect("a path"))
+    const NEEDLE: &str = "black box saved (";
+    let found = |line: &String| {
+        let rest = &line[line.find(NEEDLE)? + NEEDLE.len()..];
+        let (reasons, rest) = rest.split_once("): ")?;
+        reasons
+            .split(", ")
+            .any(|reason| reason == why)
+            .then(|| PathBuf::from(rest.split(" (").next().unwrap_or(rest)))
+    };
+    let end = Instant::now() + Duration::from_secs(5);
+    loop {
+        if let Some(path) = server.log.iter().find_map(found) {
+            return path;
+        }
+        assert!(Instant::now() < end, "no {why} save: {:#?}", server.log);
+        std::thread::sleep(Duration::from_millis(50));
+        server.drain_log();
+    }
 }
 
 fn replay(file: &Path) -> (Option<i32>, String) {
@@ -167,7 +173,11 @@ following_error = 1.0
         assert!(text.contains("frames identical"), "{text}");
     }
     let recording = motiond::blackbox::read(&whole).expect("the file reads back");
-    assert!(recording.ticks.len() > 1000, "{} ticks", recording.ticks.len());
+    assert!(
+        recording.ticks.len() > 1000,
+        "{} ticks",
+        recording.ticks.len()
+    );
     let (_, text) = replay(&whole);
     assert!(
         text.contains(&format!("replayed {} ticks", recording.ticks.len())),

@@ -17,7 +17,7 @@ use super::file::{BlackboxFile, SaveError, Ticks};
 use super::record::{HEADER_LEN, Kind, Trigger, records};
 
 /// How often the recorder drains the journal.
-const DRAIN_EVERY: Duration = Duration::from_millis(20);
+const DRAIN_EVERY: Duration = Duration::from_millis(50);
 /// How long after a fault or an e-stop the ring is saved (so that the reaction to it is in
 /// the file too).
 const AFTER_TRIGGER: Duration = Duration::from_millis(300);
@@ -37,6 +37,8 @@ pub struct RecorderSetup {
     pub on_exit: bool,
     /// How many `.mcap` files `dir` keeps.
     pub keep_files: usize,
+    /// The file naming the newest save (`ServerPidFile::blackbox_pointer`).
+    pub pointer: PathBuf,
     /// Set by SIGUSR2: save now.
     pub save_now: Arc<AtomicBool>,
     /// Set when the tick loop has ended: drain what is left, save if `on_exit`, end.
@@ -170,7 +172,8 @@ impl SaveReason {
 /// Runs the recorder until `stop`.
 pub fn run(mut setup: RecorderSetup) {
     let mut ring = Ring::new(setup.keep_ticks);
-    let mut pending: Option<(SaveReason, Instant)> = None;
+    // Triggers within the 300 ms wait make one save, named by the first, logged by all.
+    let mut pending: Option<(Vec<SaveReason>, Instant)> = None;
     let mut buf = vec![0u8; 1 << 16];
     loop {
         let stopping = setup.stop.load(Ordering::Acquire);
@@ -180,22 +183,24 @@ pub fn run(mut setup: RecorderSetup) {
                 Trigger::Fault => SaveReason::Fault,
                 Trigger::Estop => SaveReason::Estop,
             };
-            if pending.is_none() {
-                pending = Some((reason, Instant::now() + AFTER_TRIGGER));
+            match &mut pending {
+                Some((reasons, _)) if !reasons.contains(&reason) => reasons.push(reason),
+                Some(_) => {}
+                None => pending = Some((vec![reason], Instant::now() + AFTER_TRIGGER)),
             }
         }
         if setup.save_now.swap(false, Ordering::AcqRel) {
-            save(&setup, &ring, SaveReason::Signal);
+            save(&setup, &ring, &[SaveReason::Signal]);
         }
-        if let Some((reason, at)) = pending
-            && (Instant::now() >= at || stopping)
+        if let Some((reasons, at)) = &pending
+            && (Instant::now() >= *at || stopping)
         {
-            save(&setup, &ring, reason);
+            save(&setup, &ring, reasons);
             pending = None;
         }
         if stopping {
             if setup.on_exit {
-                save(&setup, &ring, SaveReason::Exit);
+                save(&setup, &ring, &[SaveReason::Exit]);
             }
             return;
         }
@@ -221,16 +226,21 @@ fn drain(queue: &mut Consumer<u8>, ring: &mut Ring, buf: &mut [u8]) {
     }
 }
 
-/// Writes the ring; logs where (or why not).
-fn save(setup: &RecorderSetup, ring: &Ring, reason: SaveReason) {
-    match save_to_dir(setup, ring, reason) {
+/// Writes the ring (the file named by the first of `reasons`); logs where (or why not)
+/// with every reason.
+fn save(setup: &RecorderSetup, ring: &Ring, reasons: &[SaveReason]) {
+    let Some(&first) = reasons.first() else {
+        return;
+    };
+    let words: Vec<&str> = reasons.iter().map(|reason| reason.word()).collect();
+    let words = words.join(", ");
+    match save_to_dir(setup, ring, first) {
         Ok(path) => tracing::info!(
-            "black box saved ({}): {} ({} ticks)",
-            reason.word(),
+            "black box saved ({words}): {} ({} ticks)",
             path.display(),
             ring.ticks.len()
         ),
-        Err(error) => tracing::error!("black box not saved ({}): {error}", reason.word()),
+        Err(error) => tracing::error!("black box not saved ({words}): {error}"),
     }
 }
 
@@ -253,7 +263,23 @@ fn save_to_dir(
     ));
     setup.file.write(&path, &ring.ticks(), reason.word())?;
     remove_oldest(&setup.dir, setup.keep_files);
+    point_to(&setup.pointer, &path);
     Ok(path)
+}
+
+/// Rewrites the pointer file (`motionctl blackbox save` reads it) to name `saved`: a
+/// temporary file renamed over it, so a reader sees the old name or the new one.
+fn point_to(pointer: &std::path::Path, saved: &std::path::Path) {
+    let absolute = std::path::absolute(saved).unwrap_or_else(|_| saved.to_owned());
+    let temporary = pointer.with_extension("blackbox.new");
+    let written = std::fs::write(&temporary, format!("{}\n", absolute.display()))
+        .and_then(|()| std::fs::rename(&temporary, pointer));
+    if let Err(error) = written {
+        tracing::warn!(
+            "black box pointer {} not written: {error}",
+            pointer.display()
+        );
+    }
 }
 
 /// Removes the oldest `.mcap` files of `dir` beyond the newest `keep` (a file another
