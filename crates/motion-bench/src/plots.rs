@@ -12,7 +12,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use crate::dist::format_ns;
-use crate::report::Report;
+use crate::report::{Report, value};
 use crate::svg::{self, HistogramChart, HistogramSeries};
 
 /// Why the plots could not be written.
@@ -208,6 +208,10 @@ fn figure_of(slug: &str) -> (&str, bool) {
     if let Some(figure) = slug.strip_suffix("-motiond") {
         return (figure, false);
     }
+    // The I/O phase's CPU baseline is its plain peer's.
+    if let Some(figure) = slug.strip_suffix("-peer") {
+        return (figure, true);
+    }
     if let Some(at) = slug.find("-baseline")
         && (slug[at..] == *"-baseline" || slug[at..].starts_with("-baseline-"))
     {
@@ -360,29 +364,76 @@ pub fn write(
         names.push(name);
     }
     let path = plot_dir.join("index.html");
-    std::fs::write(
-        &path,
-        index_html(&report.table(), caption, &figures, &names),
-    )
-    .map_err(io_error(&path))?;
+    std::fs::write(&path, index_html(report, caption, &figures, &names))
+        .map_err(io_error(&path))?;
     Ok(names)
 }
 
-/// The page: the table, then each picture. Its script counts the pictures that loaded
-/// into `<body data-loaded="N" data-images="M">` (read by `scripts/check-plots`).
-pub fn index_html(table: &str, caption: &[String], figures: &[Figure], names: &[String]) -> String {
+/// The report's rows as an HTML table: p50 / p99 / p99.9 of ours and the baseline, and
+/// the ratios.
+fn rows_table(report: &Report) -> String {
+    let mut html = String::from(
+        "<table>\n<tr><th>#</th><th>figure</th><th>ours p50 / p99 / p99.9</th>\
+         <th>baseline p50 / p99 / p99.9</th><th>ratio p50</th><th>ratio p99</th></tr>\n",
+    );
+    let cell = |unit, summary: Option<crate::Summary>| match summary {
+        Some(s) if !s.is_empty() => format!(
+            "{} / {} / {}",
+            value(unit, s.p50),
+            value(unit, s.p99),
+            value(unit, s.p999)
+        ),
+        Some(_) => "no samples".to_owned(),
+        None => "none".to_owned(),
+    };
+    for (index, row) in report.rows.iter().enumerate() {
+        let (p50, p99) = row
+            .ratios()
+            .map_or((String::new(), String::new()), |(a, b)| {
+                (format!("×{a:.2}"), format!("×{b:.2}"))
+            });
+        let _ = writeln!(
+            html,
+            "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td>{p50}</td><td>{p99}</td></tr>",
+            index + 1,
+            svg::escape(&row.figure),
+            svg::escape(&cell(row.unit, Some(row.ours))),
+            svg::escape(&cell(row.unit, row.baseline)),
+        );
+    }
+    html.push_str("</table>\n");
+    html
+}
+
+/// The page: the report's rows as a table, each picture, then the full text report. Its
+/// script counts the pictures that loaded into `<body data-loaded="N" data-images="M">`
+/// (read by `scripts/check-plots`).
+pub fn index_html(
+    report: &Report,
+    caption: &[String],
+    figures: &[Figure],
+    names: &[String],
+) -> String {
     let mut html = String::new();
     html.push_str(
         "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n\
          <title>motiond latency bench</title>\n<style>\nbody { font-family: sans-serif; \
          margin: 2em; }\npre { background: #f6f6f6; padding: 1em; overflow-x: auto; }\n\
+         table { border-collapse: collapse; font-size: 13px; }\n\
+         td, th { border: 1px solid #ccc; padding: 2px 6px; text-align: left; }\n\
          figure { margin: 2em 0; }\nimg { max-width: 100%; border: 1px solid #ccc; }\n\
          </style>\n</head>\n<body data-loaded=\"0\">\n<h1>motiond latency bench</h1>\n",
     );
     for line in caption {
         let _ = writeln!(html, "<p>{}</p>", svg::escape(line));
     }
-    let _ = writeln!(html, "<h2>Report</h2>\n<pre>{}</pre>", svg::escape(table));
+    let _ = writeln!(
+        html,
+        "<h2>Figures</h2>\n<p>Ratio = ours ÷ baseline; the full report, with each \
+         baseline's description and the notes, is <a href=\"#report\">below the \
+         pictures</a>.</p>\n{}",
+        rows_table(report)
+    );
     let _ = writeln!(
         html,
         "<h2>Distributions</h2>\n<p>Each picture: the figure's histogram (counts on a log \
@@ -403,6 +454,11 @@ pub fn index_html(table: &str, caption: &[String], figures: &[Figure], names: &[
             files = files.join(", ")
         );
     }
+    let _ = writeln!(
+        html,
+        "<h2 id=\"report\">Report</h2>\n<pre>{}</pre>",
+        svg::escape(&report.table())
+    );
     html.push_str(
         "<script>\nfunction countLoaded() {\n  const images = Array.from(document.images);\n  \
          const loaded = images.filter((img) => img.complete && img.naturalWidth > 0).length;\n  \
@@ -517,9 +573,32 @@ mod tests {
             distribution("page-b-motiond", &[(1000, 3)]),
         ]);
         let names = vec!["a.svg".to_owned(), "b.svg".to_owned()];
-        let html = index_html("1. row <x>", &["machine: m".to_owned()], &figures, &names);
+        let mut report = Report::default();
+        report.rows.push(crate::report::Row {
+            figure: "row <x>".to_owned(),
+            unit: crate::report::Unit::Ns,
+            ours: crate::Summary {
+                samples: 3,
+                p50: 2000,
+                p99: 4000,
+                p999: 4000,
+                max: 4000,
+            },
+            baseline: Some(crate::Summary {
+                samples: 3,
+                p50: 1000,
+                p99: 1000,
+                p999: 1000,
+                max: 1000,
+            }),
+            baseline_label: "plain".to_owned(),
+            note: String::new(),
+        });
+        let html = index_html(&report, &["machine: m".to_owned()], &figures, &names);
         assert_eq!(html.matches("<img ").count(), 2);
-        assert!(html.contains("1. row &lt;x&gt;"));
+        assert!(html.contains("<td>row &lt;x&gt;</td>"), "{html}");
+        assert!(html.contains("<td>×2.00</td><td>×4.00</td>"), "{html}");
+        assert!(html.contains("1. row &lt;x&gt;"), "the text report too");
         assert!(html.contains("dataset.loaded"));
         let svg = figure_svg(&figures[0], &[]);
         assert!(svg.contains("p99.9"));

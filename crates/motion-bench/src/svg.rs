@@ -295,10 +295,15 @@ pub fn histogram(chart: &HistogramChart<'_>) -> String {
         for (slot, (name, value)) in series.markers.iter().enumerate() {
             let px = x.px(*value);
             let label_y = top + 12.0 + 12.0 * (index * series.markers.len() + slot) as f64;
+            // Labels right of their line, or left of it near the right edge.
+            let (label_x, anchor) = if px > MARGIN_LEFT + 0.75 * PLOT_WIDTH {
+                (px - 3.0, "end")
+            } else {
+                (px + 3.0, "start")
+            };
             let _ = writeln!(
                 out,
-                r#"<line x1="{px:.1}" y1="{top}" x2="{px:.1}" y2="{bottom}" stroke="{colour}" stroke-dasharray="4 3"/><text x="{:.1}" y="{label_y:.1}" fill="{colour}">{}</text>"#,
-                px + 3.0,
+                r#"<line x1="{px:.1}" y1="{top}" x2="{px:.1}" y2="{bottom}" stroke="{colour}" stroke-dasharray="4 3"/><text x="{label_x:.1}" y="{label_y:.1}" fill="{colour}" text-anchor="{anchor}">{}</text>"#,
                 escape(name)
             );
         }
