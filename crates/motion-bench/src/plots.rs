@@ -13,7 +13,7 @@ use std::path::{Path, PathBuf};
 
 use crate::dist::format_ns;
 use crate::report::{Report, value};
-use crate::svg::{self, HistogramChart, HistogramSeries};
+use crate::svg::{self, Bin, HistogramChart, HistogramSeries};
 
 /// Why the plots could not be written.
 #[derive(Debug, thiserror::Error)]
@@ -163,7 +163,7 @@ impl ValueUnit {
 
 /// Bins of `distributions` on a shared x range: log-spaced when the values span a decade
 /// or more above 0, linear otherwise. Returns whether the scale is logarithmic.
-fn bin(distributions: &[&Distribution], bins: usize) -> (bool, Vec<Vec<(f64, f64, u64)>>) {
+fn bin(distributions: &[&Distribution], bins: usize) -> (bool, Vec<Vec<Bin>>) {
     let values = || {
         distributions
             .iter()

@@ -51,7 +51,7 @@ impl Scale {
         } else {
             (low, high)
         };
-        if !(high > low) || !low.is_finite() || !high.is_finite() {
+        if high <= low || !low.is_finite() || !high.is_finite() {
             // One value, or nothing usable: a unit-wide range around it.
             let centre = if low.is_finite() { low } else { 0.0 };
             (low, high) = if log {
@@ -140,8 +140,7 @@ fn frame(
     out: &mut String,
     x: &Scale,
     y: &Scale,
-    top: f64,
-    bottom: f64,
+    (top, bottom): (f64, f64),
     x_label: &str,
     y_label: &str,
     x_format: &dyn Fn(f64) -> String,
@@ -186,13 +185,16 @@ fn frame(
     );
 }
 
+/// One bin of a histogram: `(low, high, count)`.
+pub type Bin = (f64, f64, u64);
+
 /// One series of a histogram: its bins and its percentile markers.
 #[derive(Debug, Clone, PartialEq)]
 pub struct HistogramSeries {
     /// The legend's text.
     pub label: String,
     /// `(low, high, count)` per bin, ascending, non-overlapping.
-    pub bins: Vec<(f64, f64, u64)>,
+    pub bins: Vec<Bin>,
     /// `(name, value)` lines to mark, e.g. `("p99", 1234.0)`.
     pub markers: Vec<(String, f64)>,
 }
@@ -252,8 +254,7 @@ pub fn histogram(chart: &HistogramChart<'_>) -> String {
         &mut out,
         &x,
         &y,
-        top,
-        bottom,
+        (top, bottom),
         chart.x_label,
         "count (log)",
         chart.x_format,
@@ -388,7 +389,12 @@ pub fn time_series(title: &str, caption_lines: &[String], panels: &[Panel]) -> S
             .flat_map(|l| l.points.iter().map(|p| p.1));
         let low = values.clone().fold(f64::INFINITY, f64::min);
         let high = values.fold(f64::NEG_INFINITY, f64::max);
-        let pad = ((high - low) * 0.05).max(1e-9);
+        // A constant line gets a range of ±1 (or ±5 %) around it, not ±1e-9.
+        let pad = if high - low > 1e-9 {
+            (high - low) * 0.05
+        } else {
+            (high.abs() * 0.05).max(1.0)
+        };
         let y = Scale::new(low - pad, high + pad, false, bottom, top);
         let _ = writeln!(
             out,
@@ -400,8 +406,7 @@ pub fn time_series(title: &str, caption_lines: &[String], panels: &[Panel]) -> S
             &mut out,
             &x,
             &y,
-            top,
-            bottom,
+            (top, bottom),
             "time (s)",
             &panel.y_label,
             &short_number,

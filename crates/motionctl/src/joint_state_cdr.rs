@@ -146,7 +146,7 @@ pub struct TooLong(pub usize);
 
 impl JointState<'_> {
     /// The message in little-endian CDR, encapsulation header first.
-    pub fn to_cdr(&self) -> Result<Vec<u8>, TooLong> {
+    pub fn to_cdr(self) -> Result<Vec<u8>, TooLong> {
         let names: usize = self.name.iter().map(|name| name.len() + 8).sum();
         let numbers = 8 * (self.position.len() + self.velocity.len() + self.effort.len());
         let mut cdr = CdrWriter::new(32 + self.frame_id.len() + names + numbers);

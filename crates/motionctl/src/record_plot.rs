@@ -66,7 +66,7 @@ fn thin<T: Copy>(samples: &[T]) -> Vec<T> {
     let step = samples.len().div_ceil(MAX_POINTS).max(1);
     let mut kept: Vec<T> = samples.iter().step_by(step).copied().collect();
     if let Some(&last) = samples.last()
-        && (samples.len() - 1) % step != 0
+        && !(samples.len() - 1).is_multiple_of(step)
     {
         kept.push(last);
     }
