@@ -6,6 +6,7 @@
 
 use core::time::Duration;
 use std::path::{Path, PathBuf};
+use std::sync::mpsc;
 
 use anyhow::{Context as _, bail};
 use clap::ValueEnum;
@@ -58,8 +59,9 @@ pub struct RecordRequest<'a> {
     pub axes: &'a [String],
 }
 
-/// One output of a recording: told every recorded frame, in tick order, then finished.
-pub trait Recording {
+/// One output of a recording: told every recorded frame, in tick order, then finished (on
+/// the recording's writer thread).
+pub trait Recording: Send {
     /// Writes one tick.
     fn frame(&mut self, frame: &MotionFrame) -> anyhow::Result<()>;
     /// Completes the file.
@@ -107,50 +109,85 @@ fn open_outputs(
     Ok(outputs)
 }
 
+/// Writes every frame received on `frames` to every output, then finishes them; the paths
+/// written, in order.
+fn write_all(
+    mut outputs: Vec<Box<dyn Recording>>,
+    frames: mpsc::Receiver<Box<MotionFrame>>,
+) -> anyhow::Result<Vec<PathBuf>> {
+    for frame in frames {
+        for output in &mut outputs {
+            output
+                .frame(&frame)
+                .with_context(|| format!("write {}", output.path().display()))?;
+        }
+    }
+    outputs
+        .into_iter()
+        .map(|output| {
+            let path = output.path().to_path_buf();
+            output
+                .finish()
+                .with_context(|| format!("finish {}", path.display()))?;
+            Ok(path)
+        })
+        .collect()
+}
+
 /// Records the ticks `first .. first + duration × tick_hz` (server time) to every output.
+///
+/// This thread only copies each frame out of the server's buffer (which holds a few ticks)
+/// and hands it to a writer thread, so encoding (JSON, CDR, MCAP chunks) slower than the
+/// tick rate delays the files' completion instead of losing ticks.
 pub fn run(client: &Client<Service>, request: &RecordRequest<'_>) -> anyhow::Result<()> {
     let axes = select_axes(client, request.axes)?;
     let tick_hz = client.info()?.tick_hz.max(1);
     let wanted = (request.duration.as_secs_f64() * f64::from(tick_hz))
         .round()
         .max(1.0) as u64;
-    let mut outputs = open_outputs(client, request, &axes)?;
+    let outputs = open_outputs(client, request, &axes)?;
+    let (sender, frames) = mpsc::channel::<Box<MotionFrame>>();
+    let writer = std::thread::Builder::new()
+        .name("record-writer".to_owned())
+        .spawn(move || write_all(outputs, frames))
+        .context("start the writer thread")?;
     let mut first = None;
     let mut last = None;
     let mut ticks = 0u64;
     let mut interrupted = false;
     // Start from fresh frames, not from whatever waited in the buffer.
     drop(client.latest()?);
-    loop {
+    let read: anyhow::Result<()> = loop {
         let frame = match client.next_frame(FRAME_TIMEOUT) {
             Ok(frame) => frame,
             Err(ClientError::Interrupted) => {
                 interrupted = true;
-                break;
+                break Ok(());
             }
-            Err(error) => return Err(error.into()),
+            Err(error) => break Err(error.into()),
         };
         let start = *first.get_or_insert(frame.tick);
         if frame.tick.saturating_sub(start) >= wanted {
-            break;
+            break Ok(());
         }
         last = Some(frame.tick);
-        for output in &mut outputs {
-            output
-                .frame(&frame)
-                .with_context(|| format!("write {}", output.path().display()))?;
+        if sender.send(Box::new(*frame)).is_err() {
+            // The writer stopped on an error, reported below.
+            break Ok(());
         }
         ticks += 1;
-    }
+    };
+    drop(sender);
+    let written = match writer.join() {
+        Ok(result) => result?,
+        Err(_) => bail!("the writer thread panicked"),
+    };
+    read?;
     let span = match (first, last) {
         (Some(from), Some(to)) => format!("ticks {from}..={to}"),
         _ => "no ticks".to_owned(),
     };
-    for output in outputs {
-        let path = output.path().to_path_buf();
-        output
-            .finish()
-            .with_context(|| format!("finish {}", path.display()))?;
+    for path in written {
         eprintln!("recorded {ticks} ticks ({span}) to {}", path.display());
     }
     if interrupted {
