@@ -10,6 +10,7 @@ mod common;
 use std::collections::BTreeMap;
 
 use common::*;
+use motion_client::ipc::FaultCode;
 use motion_client::testing::unique_name;
 
 #[test]
@@ -144,5 +145,47 @@ fn an_unknown_extension_is_refused_before_recording() -> Result {
     )?;
     assert_eq!(output.status.code(), Some(1), "{output:?}");
     assert!(stderr(&output).contains("--format csv|mcap"), "{output:?}");
+    Ok(())
+}
+
+#[test]
+fn a_fault_is_one_message_on_the_faults_channel() -> Result {
+    let server = fake("record-fault")?;
+    let dir = std::env::temp_dir().join(unique_name("motionctl-record-fault"));
+    std::fs::create_dir_all(&dir)?;
+    let path = dir.join("fault.mcap");
+    let path_arg = path.to_str().ok_or("path")?;
+    let child = command(
+        server.name(),
+        &["record", "--duration", "1s", "--out", path_arg, "x"],
+    )
+    .stdin(std::process::Stdio::null())
+    .stdout(std::process::Stdio::piped())
+    .stderr(std::process::Stdio::piped())
+    .spawn()?;
+    // During the recording or, on a slow machine, before its first tick: either way the
+    // fault is one change from none.
+    std::thread::sleep(core::time::Duration::from_millis(300));
+    server.fault_axis(0, FaultCode::BoardError, 0.0, 0.0);
+    let output = finish(child, core::time::Duration::from_secs(30))?;
+    assert!(output.status.success(), "{output:?}");
+    let bytes = std::fs::read(&path)?;
+    std::fs::remove_dir_all(&dir)?;
+    let topic = format!("/motiond/{}/faults", server.name());
+    let mut faults = Vec::new();
+    for message in mcap::MessageStream::new(&bytes)? {
+        let message = message?;
+        if message.channel.topic == topic {
+            faults.push(serde_json::from_slice::<serde_json::Value>(&message.data)?);
+        }
+    }
+    assert_eq!(faults.len(), 1, "{faults:?}");
+    let fault = &faults[0];
+    assert_eq!(fault["axis"], "x", "{fault}");
+    assert_eq!(fault["code"], FaultCode::BoardError as u16, "{fault}");
+    assert!(
+        fault["fault"].is_string() && fault["previous"].is_null(),
+        "{fault}"
+    );
     Ok(())
 }
