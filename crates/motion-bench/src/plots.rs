@@ -363,9 +363,20 @@ pub fn write(
         std::fs::write(&path, figure_svg(figure, caption)).map_err(io_error(&path))?;
         names.push(name);
     }
+    // The distribution files beside the page, or where --out put them.
+    let same_dir = std::fs::canonicalize(dist_dir).ok() == std::fs::canonicalize(plot_dir).ok();
+    let files_prefix = if same_dir {
+        String::new()
+    } else {
+        let absolute = std::fs::canonicalize(dist_dir).map_err(io_error(dist_dir))?;
+        format!("file://{}/", absolute.display())
+    };
     let path = plot_dir.join("index.html");
-    std::fs::write(&path, index_html(report, caption, &figures, &names))
-        .map_err(io_error(&path))?;
+    std::fs::write(
+        &path,
+        index_html(report, caption, &figures, &names, &files_prefix),
+    )
+    .map_err(io_error(&path))?;
     Ok(names)
 }
 
@@ -407,12 +418,14 @@ fn rows_table(report: &Report) -> String {
 
 /// The page: the report's rows as a table, each picture, then the full text report. Its
 /// script counts the pictures that loaded into `<body data-loaded="N" data-images="M">`
-/// (read by `scripts/check-plots`).
+/// (read by `scripts/check-plots`). The distribution files are linked as
+/// `files_prefix` + their name.
 pub fn index_html(
     report: &Report,
     caption: &[String],
     figures: &[Figure],
     names: &[String],
+    files_prefix: &str,
 ) -> String {
     let mut html = String::new();
     html.push_str(
@@ -443,7 +456,13 @@ pub fn index_html(
         let files: Vec<String> = figure
             .series
             .iter()
-            .map(|d| format!("<a href=\"{0}.txt\">{0}.txt</a>", svg::escape(&d.slug)))
+            .map(|d| {
+                let slug = svg::escape(&d.slug);
+                format!(
+                    "<a href=\"{}{slug}.txt\">{slug}.txt</a>",
+                    svg::escape(files_prefix)
+                )
+            })
             .collect();
         let _ = writeln!(
             html,
@@ -594,7 +613,7 @@ mod tests {
             baseline_label: "plain".to_owned(),
             note: String::new(),
         });
-        let html = index_html(&report, &["machine: m".to_owned()], &figures, &names);
+        let html = index_html(&report, &["machine: m".to_owned()], &figures, &names, "");
         assert_eq!(html.matches("<img ").count(), 2);
         assert!(html.contains("<td>row &lt;x&gt;</td>"), "{html}");
         assert!(html.contains("<td>×2.00</td><td>×4.00</td>"), "{html}");
