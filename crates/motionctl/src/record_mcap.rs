@@ -57,8 +57,14 @@ fn object_schema(title: &str, properties: Value) -> String {
     .to_string()
 }
 
-fn array_of_objects() -> Value {
-    json!({ "type": "array", "items": { "type": "object" } })
+/// An array of objects with these typed fields (the fields a plot or a table wants; the
+/// messages carry more). Plain types only: no `null` unions, which not every reader takes.
+fn array_of_objects(fields: &[(&str, &str)]) -> Value {
+    let properties: serde_json::Map<String, Value> = fields
+        .iter()
+        .map(|(name, kind)| ((*name).to_owned(), json!({ "type": kind })))
+        .collect();
+    json!({ "type": "array", "items": { "type": "object", "properties": properties } })
 }
 
 /// The server's start (tick 0's deadline) on the wall clock, ns since the epoch (see the
@@ -150,7 +156,16 @@ impl McapRecording {
         let axes_channel = json_channel(
             "axes",
             "motiond.Axes",
-            json!({ "axes": array_of_objects() }),
+            json!({ "axes": array_of_objects(&[
+                ("name", "string"),
+                ("unit", "string"),
+                ("mode", "string"),
+                ("position", "number"),
+                ("velocity", "number"),
+                ("target", "number"),
+                ("desired_position", "number"),
+                ("desired_velocity", "number"),
+            ]) }),
         )?;
         let signals = if info.signals().is_empty() {
             None
@@ -158,7 +173,12 @@ impl McapRecording {
             Some(json_channel(
                 "signals",
                 "motiond.Signals",
-                json!({ "signals": array_of_objects() }),
+                json!({ "signals": array_of_objects(&[
+                    ("name", "string"),
+                    ("kind", "string"),
+                    ("unit", "string"),
+                    ("value", "number"),
+                ]) }),
             )?)
         };
         let groups = if info.groups().is_empty() {
@@ -167,7 +187,14 @@ impl McapRecording {
             Some(json_channel(
                 "groups",
                 "motiond.Groups",
-                json!({ "groups": array_of_objects() }),
+                json!({ "groups": array_of_objects(&[
+                    ("name", "string"),
+                    ("motion", "string"),
+                    ("stream", "string"),
+                    ("time", "number"),
+                    ("duration", "number"),
+                    ("feed", "number"),
+                ]) }),
             )?)
         };
         let faults = json_channel(
@@ -175,10 +202,10 @@ impl McapRecording {
             "motiond.FaultChange",
             json!({
                 "axis": { "type": "string" },
-                "fault": { "type": ["string", "null"] },
-                "previous": { "type": ["string", "null"] },
+                "fault": { "type": "string" },
+                "previous": { "type": "string" },
                 "code": { "type": "integer" },
-                "text": { "type": ["string", "null"] },
+                "text": { "type": "string" },
                 "value": { "type": "number" },
                 "limit": { "type": "number" },
             }),
@@ -285,10 +312,10 @@ impl McapRecording {
             let value = json!({
                 "tick": frame.tick,
                 "axis": self.names[slot],
-                "fault": fault_name(&state),
-                "previous": fault_name(&before),
+                "fault": fault_name(&state).unwrap_or_else(|| "none".to_owned()),
+                "previous": fault_name(&before).unwrap_or_else(|| "none".to_owned()),
                 "code": state.fault,
-                "text": text,
+                "text": text.unwrap_or_default(),
                 "value": state.fault_value,
                 "limit": state.fault_limit,
             });

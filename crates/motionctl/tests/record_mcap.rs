@@ -183,8 +183,10 @@ fn a_fault_is_one_message_on_the_faults_channel() -> Result {
     let fault = &faults[0];
     assert_eq!(fault["axis"], "x", "{fault}");
     assert_eq!(fault["code"], FaultCode::BoardError as u16, "{fault}");
+    assert_eq!(fault["fault"], "board-error", "{fault}");
+    assert_eq!(fault["previous"], "none", "{fault}");
     assert!(
-        fault["fault"].is_string() && fault["previous"].is_null(),
+        fault["text"].as_str().is_some_and(|text| !text.is_empty()),
         "{fault}"
     );
     Ok(())
