@@ -88,7 +88,7 @@ def test_mcap_joint_states_equal_the_csv_of_the_same_run(
     decoded = []
     with open(mcap_path, "rb") as file:
         reader = mcap_reader.make_reader(
-            file, decoder_factories=[mcap_ros2_decoder.DecoderFactory()]
+            file, validate_crcs=True, decoder_factories=[mcap_ros2_decoder.DecoderFactory()]
         )
         summary = reader.get_summary()
         assert summary is not None and summary.chunk_indexes, "chunked, with a summary"
