@@ -26,6 +26,8 @@ fn documented_invocation_parses() {
         "--json",
         "--out",
         "/tmp/latency",
+        "--plot",
+        "/tmp/latency-plots",
         "--rt-priority",
         "80",
         "--cpu",
@@ -42,6 +44,10 @@ fn documented_invocation_parses() {
     assert!(bench.json && bench.axes_sweep);
     assert_eq!(bench.rt_priority, Some(80));
     assert_eq!(bench.cpu, Some(1));
+    assert_eq!(
+        bench.plot.as_deref(),
+        Some(std::path::Path::new("/tmp/latency-plots"))
+    );
     assert_eq!(bench.command, CommandProbe::UnknownAxis);
     assert_eq!(
         bench.python.as_deref(),

@@ -19,6 +19,11 @@ pub struct BenchArgs {
     /// one file per distribution, into DIR (created if missing).
     #[arg(long, value_name = "DIR")]
     pub out: Option<PathBuf>,
+    /// Draw one SVG histogram per figure, its same-run baselines overlaid (log counts,
+    /// p50/p99/p99.9 marked), and `DIR/index.html` with the table and the pictures
+    /// (created if missing). The distribution files go there too unless --out is given.
+    #[arg(long, value_name = "DIR")]
+    pub plot: Option<PathBuf>,
     /// SCHED_FIFO priority for the baseline sleeper, the baseline peer's tick thread and the
     /// WaitSet clients (never for busy-polling threads). Give the server's `rt_priority`.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u8).range(1..=99))]

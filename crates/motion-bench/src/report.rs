@@ -97,7 +97,8 @@ pub struct Report {
     pub notes: Vec<String>,
 }
 
-fn value(unit: Unit, v: u64) -> String {
+/// One value of a row in its unit, as the table prints it.
+pub(crate) fn value(unit: Unit, v: u64) -> String {
     match unit {
         Unit::Ns => format_ns(v),
         Unit::Ticks => format!("{v}t"),

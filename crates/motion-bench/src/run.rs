@@ -8,7 +8,8 @@ use crate::delivery::{self, Waiting};
 use crate::dist::{self, Summary, format_ns};
 use crate::report::{Report, Row, Unit, write_dist};
 use crate::{
-    BenchError, groups, io_phase, ipc, peer, python, roundtrip, rt, stream, sweep, wakeup, wire,
+    BenchError, groups, io_phase, ipc, peer, plots, python, roundtrip, rt, stream, sweep, wakeup,
+    wire,
 };
 
 /// The numbered progress lines: `[n/total] what (duration)` on stderr.
@@ -46,7 +47,8 @@ fn rt_flags(flags: u32) -> String {
 /// Runs the suite against the live motiond instance `server` (`[server] name`), progress on
 /// stderr. [`BenchError::NoServer`] when no such server ticks.
 pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
-    let out = cli.out.as_deref();
+    // --plot draws from the distribution files: without --out they go beside the pictures.
+    let out = cli.out.as_deref().or(cli.plot.as_deref());
     if let Some(dir) = out {
         std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
     }
@@ -491,14 +493,6 @@ pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
          row 2 is this run's window from the frames (wake-up p50 {} in the baseline peer's own histogram)",
         format_ns(peer_figures.wakeup.p50)
     ));
-    if out.is_some() {
-        report.notes.push(
-            "no PNG plot: plotters is not in the dependency tree and its bitmap backend would add \
-             minutes of compile time on this machine; plot the distribution files with gnuplot \
-             (docs/PERFORMANCE.md)"
-                .to_owned(),
-        );
-    }
     let files: [(&str, &str, &dist::Dist); 10] = [
         (
             "wakeup-baseline-sleeper",
@@ -593,6 +587,16 @@ pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
         "baseline summaries".to_owned(),
         summary_line(&peer_figures.wakeup),
     ));
+    if let (Some(plot_dir), Some(dist_dir)) = (cli.plot.as_deref(), out) {
+        match plots::write(dist_dir, plot_dir, &report, &plots::caption_lines()) {
+            Ok(names) => eprintln!(
+                "[plot] {} pictures and index.html in {}",
+                names.len(),
+                plot_dir.display()
+            ),
+            Err(error) => report.notes.push(format!("plots not written: {error}")),
+        }
+    }
     Ok(report)
 }
 

@@ -49,7 +49,9 @@ Examples:
   motionctl group feed arm 50%  (also hold, resume, cancel, stop, claim, list)
   motionctl estop               (gets through even when the server's ports are taken)
   motionctl record --duration 5s --out run.csv
+  motionctl record --duration 5s --out run.mcap --plot run.svg x y
   motionctl bench --duration 5s --json
+  motionctl bench --duration 2s --plot target/latency-plots
   motionctl doctor --config /etc/motiond/motiond.toml
   motionctl --remote tcp/cell4:7447 --identity panel status   (through motion-bridge)";
 
@@ -261,15 +263,24 @@ pub enum Command {
         #[command(subcommand)]
         command: BlackboxCommand,
     },
-    /// Record every frame to CSV, one row per tick, for a duration: the axes (all when none
-    /// is named) and every signal.
+    /// Record every frame, one row or message per tick, for a duration: to CSV (the axes,
+    /// all when none is named, and every signal), to MCAP (ROS 2 JointState and JSON
+    /// channels, for Foxglove and PlotJuggler), and/or to an SVG plot of desired and
+    /// measured position and velocity per axis. Every output holds the same ticks.
     Record {
         /// How long to record (server time).
         #[arg(long, value_parser = parse_duration)]
         duration: Duration,
-        /// The CSV file to write.
-        #[arg(long)]
-        out: PathBuf,
+        /// The file to write, its format from the extension (`.csv`, `.mcap`); repeat it
+        /// to write the same ticks to several files.
+        #[arg(long, value_name = "FILE")]
+        out: Vec<PathBuf>,
+        /// The format of every --out file, whatever its extension.
+        #[arg(long, value_enum)]
+        format: Option<crate::record::RecordFormat>,
+        /// Also plot desired and measured position and velocity per axis into this SVG.
+        #[arg(long, value_name = "FILE.svg")]
+        plot: Option<PathBuf>,
         /// Axes to record (default: all).
         axes: Vec<String>,
     },

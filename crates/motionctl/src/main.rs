@@ -25,15 +25,18 @@ mod group;
 mod group_csv;
 mod group_report;
 mod io;
+mod joint_state_cdr;
 mod machine;
 mod record;
+mod record_csv;
+mod record_mcap;
+mod record_plot;
 mod scope;
 mod terminal;
 mod watch;
 
 use std::process::ExitCode;
 
-use anyhow::Context as _;
 use clap::Parser;
 use iceoryx2::prelude::{LogLevel, ipc, set_log_level};
 use motion_client::{Client, ClientBuilder, ClientError, ConnectError, EstopError};
@@ -202,9 +205,19 @@ fn run(cli: &Cli) -> anyhow::Result<()> {
         Command::Record {
             duration,
             out,
+            format,
+            plot,
             axes,
-        } => record::run(client, *duration, out, axes)
-            .with_context(|| format!("record to {}", out.display())),
+        } => record::run(
+            client,
+            &record::RecordRequest {
+                duration: *duration,
+                outs: out,
+                format: *format,
+                plot: plot.as_deref(),
+                axes,
+            },
+        ),
     }
 }
 

@@ -34,6 +34,7 @@ fn bench_help_lists_the_suite_s_options_and_hides_the_peer() -> Result {
         "--duration",
         "--json",
         "--out",
+        "--plot",
         "--rt-priority",
         "--cpu",
         "--command",
@@ -85,6 +86,8 @@ fn bench_smoke_run_prints_ratios_beside_their_baselines() -> Result {
         return Ok(());
     }
     let server = RealServer::start_with(ONE_AXIS)?;
+    let plots = std::env::temp_dir().join(format!("motionctl-bench-plots-{}", std::process::id()));
+    let plots_arg = plots.to_str().ok_or("temp path")?;
     let output = motionctl(&[
         "--server",
         &server.name,
@@ -92,8 +95,11 @@ fn bench_smoke_run_prints_ratios_beside_their_baselines() -> Result {
         "--duration",
         "300ms",
         "--json",
+        "--plot",
+        plots_arg,
     ])?;
     assert!(output.status.success(), "{output:?}\n{}", server.log());
+    check_plots(&plots)?;
     let report: Value = serde_json::from_slice(&output.stdout)?;
     let rows = report["rows"].as_array().ok_or("no rows")?;
     assert!(rows.len() >= 8, "{report:#}");
@@ -116,6 +122,35 @@ fn bench_smoke_run_prints_ratios_beside_their_baselines() -> Result {
         "{report:#}"
     );
     check_python_rows(&report, rows);
+    Ok(())
+}
+
+/// `--plot DIR`: one SVG per figure (the distribution files beside them), index.html
+/// showing each; the same pictures as plots_in_browser.rs checks in Chromium.
+fn check_plots(dir: &Path) -> Result {
+    let index = std::fs::read_to_string(dir.join("index.html"))?;
+    let svgs: Vec<String> = std::fs::read_dir(dir)?
+        .filter_map(|entry| entry.ok())
+        .map(|entry| entry.file_name().to_string_lossy().into_owned())
+        .filter(|name| name.ends_with(".svg"))
+        .collect();
+    // At least the eight rows' figures that have histograms of the bench's own.
+    assert!(svgs.len() >= 8, "{svgs:?}");
+    assert_eq!(index.matches("<img ").count(), svgs.len(), "{index}");
+    for name in &svgs {
+        assert!(
+            index.contains(&format!("src=\"{name}\"")),
+            "{name} not shown"
+        );
+        let svg = std::fs::read_to_string(dir.join(name))?;
+        assert!(svg.starts_with("<svg ") && svg.contains("p99.9"), "{name}");
+    }
+    let rtt = std::fs::read_to_string(dir.join("command-rtt.svg"))?;
+    assert!(
+        rtt.contains("command-rtt-baseline-ticking"),
+        "baseline overlaid"
+    );
+    std::fs::remove_dir_all(dir)?;
     Ok(())
 }
 
