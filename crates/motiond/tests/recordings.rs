@@ -23,6 +23,11 @@ fn every_recording_in_tests_recordings_replays_frame_for_frame() {
         let replayed = motiond::blackbox::replay(&config, &recording)
             .unwrap_or_else(|error| panic!("{}: {error}", file.display()));
         assert_eq!(replayed.ticks as usize, recording.ticks.len());
-        assert!(replayed.ticks > 100, "{}: {} ticks", file.display(), replayed.ticks);
+        assert!(
+            replayed.ticks > 100,
+            "{}: {} ticks",
+            file.display(),
+            replayed.ticks
+        );
     }
 }
