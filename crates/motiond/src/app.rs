@@ -227,6 +227,10 @@ pub fn run(config: ServerConfig, options: RunOptions) -> Result<(), ServerError>
 /// 50 ms: a tick of `config/sim.toml` journals about 1.8 KiB, a path at most 600 KiB).
 const JOURNAL_QUEUE_BYTES: usize = 8 << 20;
 
+/// The ring's bytes per tick of `blackbox_seconds`: a tick of `config/sim.toml` journals
+/// about 1 KiB; a run whose ticks average more keeps fewer seconds.
+const RING_BYTES_PER_TICK: usize = 2048;
+
 /// The black box's recorder thread and the tick's journal into it; with
 /// `blackbox_seconds = 0`, a journal that records nothing and no thread.
 #[allow(clippy::type_complexity)]
@@ -249,6 +253,9 @@ fn start_recorder(
     let setup = RecorderSetup {
         queue: consumer,
         keep_ticks: server.blackbox_seconds as usize * server.tick_hz as usize,
+        ring_bytes: server.blackbox_seconds as usize
+            * server.tick_hz as usize
+            * RING_BYTES_PER_TICK,
         file: BlackboxFile {
             server_name: server.name.clone(),
             tick_hz: server.tick_hz,

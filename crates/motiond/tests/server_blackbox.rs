@@ -223,7 +223,7 @@ fn write_recording(recording: &Recording, path: &Path) {
             .ticks
             .iter()
             .enumerate()
-            .map(|(n, bytes)| (n as u64, bytes.as_slice()))
+            .map(|(n, bytes)| (n as u64, std::borrow::Cow::Borrowed(bytes.as_slice())))
             .collect(),
         dropped: 0,
     };

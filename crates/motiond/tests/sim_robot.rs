@@ -139,7 +139,7 @@ impl Robot {
             now: Duration::ZERO,
             period,
             journal,
-            ring: Ring::new(usize::MAX),
+            ring: Ring::new(usize::MAX, 64 << 20),
             config,
         }
     }

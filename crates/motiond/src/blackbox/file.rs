@@ -5,6 +5,7 @@
 //! `motiond.blackbox` with the config file's text, the server's name and rate, the versions
 //! and the ticks held. [`read`] gives the journal back for a replay.
 
+use std::borrow::Cow;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::fs::File;
@@ -42,7 +43,7 @@ pub struct Ticks<'a> {
     /// The records before the first tick.
     pub head: &'a [u8],
     /// Per tick: its number and its records.
-    pub ticks: Vec<(u64, &'a [u8])>,
+    pub ticks: Vec<(u64, Cow<'a, [u8]>)>,
     /// Ticks the ring dropped before the first one held.
     pub dropped: u64,
 }
@@ -286,7 +287,8 @@ impl BlackboxFile {
                 )
             };
         write(&mut writer, journal, epoch_ns, ticks.head).map_err(mcap)?;
-        for &(tick, bytes) in &ticks.ticks {
+        for (tick, bytes) in &ticks.ticks {
+            let (tick, bytes) = (*tick, bytes.as_ref());
             let now_ns = records(bytes)
                 .next()
                 .and_then(Result::ok)

@@ -11,8 +11,10 @@ pub mod journal;
 pub mod record;
 pub mod recorder;
 pub mod replay;
+pub mod ring;
 
 pub use file::{BlackboxFile, Recording, SaveError, read};
 pub use journal::Journal;
-pub use recorder::{RecorderSetup, Ring, SaveReason};
+pub use recorder::{RecorderSetup, SaveReason};
 pub use replay::{Divergence, ReplayError, Replayed, replay};
+pub use ring::Ring;

@@ -5,7 +5,6 @@
 //! never waits for it.
 
 use core::time::Duration;
-use std::collections::VecDeque;
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -13,8 +12,9 @@ use std::time::{Instant, SystemTime, UNIX_EPOCH};
 
 use rtrb::Consumer;
 
-use super::file::{BlackboxFile, SaveError, Ticks};
-use super::record::{HEADER_LEN, Kind, Trigger, records};
+use super::file::{BlackboxFile, SaveError};
+use super::record::Trigger;
+use super::ring::Ring;
 
 /// How often the recorder drains the journal.
 const DRAIN_EVERY: Duration = Duration::from_millis(50);
@@ -29,6 +29,8 @@ pub struct RecorderSetup {
     pub queue: Consumer<u8>,
     /// How many ticks the ring keeps.
     pub keep_ticks: usize,
+    /// Bytes the ring holds (allocated and touched at start).
+    pub ring_bytes: usize,
     /// What a saved file says about the server (name, config, versions).
     pub file: BlackboxFile,
     /// Where files go.
@@ -43,105 +45,6 @@ pub struct RecorderSetup {
     pub save_now: Arc<AtomicBool>,
     /// Set when the tick loop has ended: drain what is left, save if `on_exit`, end.
     pub stop: Arc<AtomicBool>,
-}
-
-/// One tick's records.
-#[derive(Debug, Default)]
-struct TickRecords {
-    tick: u64,
-    bytes: Vec<u8>,
-}
-
-/// The ring and the bytes not yet split into records.
-#[derive(Debug, Default)]
-pub struct Ring {
-    /// Records before the first tick (the start).
-    head: Vec<u8>,
-    ticks: VecDeque<TickRecords>,
-    keep: usize,
-    /// Drained bytes that do not make a whole record yet.
-    partial: Vec<u8>,
-    /// Emptied buffers, reused.
-    spare: Vec<Vec<u8>>,
-    /// Triggers seen since the last take.
-    triggers: Vec<(Trigger, u32)>,
-    /// Ticks dropped from the front (the ring wrapped).
-    pub dropped: u64,
-}
-
-impl Ring {
-    /// A ring keeping `keep` ticks.
-    pub fn new(keep: usize) -> Self {
-        Self {
-            keep: keep.max(1),
-            ..Self::default()
-        }
-    }
-
-    /// Takes in drained journal bytes.
-    pub fn push(&mut self, bytes: &[u8]) {
-        self.partial.extend_from_slice(bytes);
-        let mut used = 0;
-        while let Some(header) = self.partial.get(used..used + HEADER_LEN) {
-            let len = u32::from_le_bytes([header[2], header[3], header[4], header[5]]) as usize;
-            let end = used + HEADER_LEN + len;
-            if end > self.partial.len() {
-                break;
-            }
-            let kind = Kind::from_u8(header[0]);
-            if kind == Some(Kind::Tick) {
-                let tick = records(&self.partial[used..end])
-                    .next()
-                    .and_then(Result::ok)
-                    .map_or(0, |record| record.u64_at(8));
-                let mut bytes = self.spare.pop().unwrap_or_default();
-                bytes.clear();
-                self.ticks.push_back(TickRecords { tick, bytes });
-                while self.ticks.len() > self.keep {
-                    if let Some(old) = self.ticks.pop_front() {
-                        self.spare.push(old.bytes);
-                        self.dropped += 1;
-                    }
-                }
-            }
-            if kind == Some(Kind::Trigger) {
-                let payload = &self.partial[used + HEADER_LEN..end];
-                let why = match payload.first() {
-                    Some(2) => Trigger::Estop,
-                    _ => Trigger::Fault,
-                };
-                let axis = payload
-                    .get(1..5)
-                    .map_or(u32::MAX, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
-                self.triggers.push((why, axis));
-            }
-            let record = &self.partial[used..end];
-            match self.ticks.back_mut() {
-                Some(current) => current.bytes.extend_from_slice(record),
-                None => self.head.extend_from_slice(record),
-            }
-            used = end;
-        }
-        self.partial.drain(..used);
-    }
-
-    /// The triggers seen since the last call.
-    pub fn take_triggers(&mut self) -> Vec<(Trigger, u32)> {
-        std::mem::take(&mut self.triggers)
-    }
-
-    /// The ring as the file writes it.
-    pub fn ticks(&self) -> Ticks<'_> {
-        Ticks {
-            head: &self.head,
-            ticks: self
-                .ticks
-                .iter()
-                .map(|t| (t.tick, t.bytes.as_slice()))
-                .collect(),
-            dropped: self.dropped,
-        }
-    }
 }
 
 /// Why the ring is saved.
@@ -171,7 +74,7 @@ impl SaveReason {
 
 /// Runs the recorder until `stop`.
 pub fn run(mut setup: RecorderSetup) {
-    let mut ring = Ring::new(setup.keep_ticks);
+    let mut ring = Ring::new(setup.keep_ticks, setup.ring_bytes);
     // Triggers within the 300 ms wait make one save, named by the first, logged by all.
     let mut pending: Option<(Vec<SaveReason>, Instant)> = None;
     let mut buf = vec![0u8; 1 << 16];
@@ -202,6 +105,9 @@ pub fn run(mut setup: RecorderSetup) {
             if setup.on_exit {
                 save(&setup, &ring, &[SaveReason::Exit]);
             }
+            // A clean exit leaves nothing in iceoryx2's directory (the pid file goes too);
+            // the log named every file saved.
+            let _ = std::fs::remove_file(&setup.pointer);
             return;
         }
         std::thread::sleep(DRAIN_EVERY);
@@ -238,7 +144,7 @@ fn save(setup: &RecorderSetup, ring: &Ring, reasons: &[SaveReason]) {
         Ok(path) => tracing::info!(
             "black box saved ({words}): {} ({} ticks)",
             path.display(),
-            ring.ticks.len()
+            ring.len()
         ),
         Err(error) => tracing::error!("black box not saved ({words}): {error}"),
     }
@@ -300,49 +206,5 @@ fn remove_oldest(dir: &std::path::Path, keep: usize) {
         if std::fs::remove_file(&path).is_ok() {
             tracing::info!("black box {} removed (blackbox_keep)", path.display());
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn record(kind: Kind, payload: &[u8]) -> Vec<u8> {
-        let mut bytes = vec![kind as u8, 0];
-        bytes.extend_from_slice(&(payload.len() as u32).to_le_bytes());
-        bytes.extend_from_slice(payload);
-        bytes
-    }
-
-    fn tick(n: u64) -> Vec<u8> {
-        let mut payload = (n * 1_000_000).to_le_bytes().to_vec();
-        payload.extend_from_slice(&n.to_le_bytes());
-        record(Kind::Tick, &payload)
-    }
-
-    #[test]
-    fn the_ring_keeps_the_start_and_the_last_ticks_from_bytes_split_anywhere() {
-        let mut journal = record(Kind::Start, &[0; 16]);
-        for n in 0..10 {
-            journal.extend(tick(n));
-            journal.extend(record(Kind::LinkRx, &[1, 2, 3]));
-        }
-        journal.extend(record(Kind::Trigger, &[2, 4, 0, 0, 0]));
-        let mut ring = Ring::new(4);
-        // Fed in pieces of 7 bytes: records cut in the middle wait for their rest.
-        for piece in journal.chunks(7) {
-            ring.push(piece);
-        }
-        let ticks = ring.ticks();
-        assert_eq!(ticks.head, record(Kind::Start, &[0; 16]).as_slice());
-        let kept: Vec<u64> = ticks.ticks.iter().map(|(tick, _)| *tick).collect();
-        assert_eq!(kept, [6, 7, 8, 9]);
-        assert_eq!(ticks.dropped, 6);
-        let mut last = tick(9);
-        last.extend(record(Kind::LinkRx, &[1, 2, 3]));
-        last.extend(record(Kind::Trigger, &[2, 4, 0, 0, 0]));
-        assert_eq!(ticks.ticks[3].1, last.as_slice());
-        assert_eq!(ring.take_triggers(), [(Trigger::Estop, 4)]);
-        assert!(ring.take_triggers().is_empty());
     }
 }
