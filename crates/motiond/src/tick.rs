@@ -604,7 +604,9 @@ impl Loop {
                 let mut sample = sample.write_payload(MotionFrame::EMPTY);
                 let frame = sample.payload_mut();
                 self.setup.engine.step(now, &mut commands, frame);
-                Self::journal_frame(commands.journal, &mut self.estop_seen, frame);
+                commands
+                    .journal
+                    .frame_and_estop(frame, &mut self.estop_seen);
                 frame.time_ns = duration_ns(deadline);
                 frame.publish_ns = duration_ns(monotonic_now());
                 if sample.send().is_err() {
@@ -616,7 +618,9 @@ impl Loop {
                 self.setup
                     .engine
                     .step(now, &mut commands, &mut self.spare_frame);
-                Self::journal_frame(commands.journal, &mut self.estop_seen, &self.spare_frame);
+                commands
+                    .journal
+                    .frame_and_estop(&self.spare_frame, &mut self.estop_seen);
                 self.stats.frames_lost += 1;
             }
         }
@@ -659,16 +663,6 @@ impl Loop {
             }
             port.queued_and_look_by(queued, self.setup.engine.link_poll_timeout(index));
         }
-    }
-
-    /// The frame's digest into the journal, and a trigger when the e-stop latched.
-    fn journal_frame(journal: &mut Journal, estop_seen: &mut bool, frame: &MotionFrame) {
-        journal.frame(frame);
-        let estop = frame.flags & motion_ipc::FrameFlags::ESTOP_LATCHED.0 != 0;
-        if estop && !*estop_seen {
-            journal.trigger(Trigger::Estop, usize::MAX);
-        }
-        *estop_seen = estop;
     }
 
     fn publish_stats(&mut self, deadline: Duration) {

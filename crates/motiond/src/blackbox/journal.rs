@@ -230,6 +230,17 @@ impl Journal {
         self.words(Kind::Frame, 0, digest.values());
     }
 
+    /// The frame's digest, and a trigger when the e-stop latched since the frame before
+    /// (`estop_seen` holds the last frame's latch).
+    pub fn frame_and_estop(&mut self, frame: &MotionFrame, estop_seen: &mut bool) {
+        self.frame(frame);
+        let estop = frame.flags & motion_ipc::FrameFlags::ESTOP_LATCHED.0 != 0;
+        if estop && !*estop_seen {
+            self.trigger(Trigger::Estop, usize::MAX);
+        }
+        *estop_seen = estop;
+    }
+
     /// The engine queued `bytes` for `link`.
     pub fn link_tx(&mut self, link: usize, bytes: &[u8]) {
         self.record(Kind::LinkTx, link, bytes.len(), |writer| writer.put(bytes));
