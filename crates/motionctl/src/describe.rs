@@ -11,7 +11,7 @@ use motion_wire::json;
 use serde_json::{Value, json};
 
 use crate::Service;
-use crate::io::{signal_info_json, signal_state_json, signals_text};
+use crate::io::{signal_info_json, signal_states_json, signals_text};
 use crate::machine::{ParamTable, params_lines};
 
 /// Names of the set flags, in bit order.
@@ -194,13 +194,7 @@ pub fn frame_json(info: &ServerInfo, frame: &MotionFrame, axes: &[usize]) -> Val
             Some(value)
         })
         .collect();
-    let signals: Vec<Value> = info
-        .signals()
-        .iter()
-        .zip(frame.signals())
-        .enumerate()
-        .map(|(index, (signal, state))| signal_state_json(index, signal, state, frame.tick))
-        .collect();
+    let signals = signal_states_json(info, frame);
     json::frame(info, frame, states, signals)
 }
 

@@ -60,6 +60,16 @@ pub fn signal_info_json(index: usize, info: &SignalInfo) -> Value {
     })
 }
 
+/// Every signal's state in `frame` as JSON, in config order ([`signal_state_json`]).
+pub fn signal_states_json(info: &ServerInfo, frame: &MotionFrame) -> Vec<Value> {
+    info.signals()
+        .iter()
+        .zip(frame.signals())
+        .enumerate()
+        .map(|(index, (signal, state))| signal_state_json(index, signal, state, frame.tick))
+        .collect()
+}
+
 /// A signal's state in a frame as JSON (with the description's name, device, pin, kind and
 /// unit): the bridge's view of it (`motion_wire::json`) and its value as text.
 pub fn signal_state_json(index: usize, info: &SignalInfo, state: &SignalState, tick: u64) -> Value {

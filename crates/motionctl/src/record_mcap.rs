@@ -37,7 +37,7 @@ use serde_json::{Value, json};
 use crate::Service;
 use crate::describe::{fault_name, fault_text, info_json};
 use crate::group::groups_json;
-use crate::io::signal_state_json;
+use crate::io::signal_states_json;
 use crate::joint_state_cdr::{JOINT_STATE_DEFINITION, JOINT_STATE_SCHEMA_NAME, JointState, Stamp};
 use crate::machine::{ParamTable, params_lines};
 use crate::record::Recording;
@@ -380,14 +380,7 @@ impl Recording for McapRecording {
         let value = json!({ "tick": frame.tick, "axes": axes });
         self.write_json(self.channels.axes, frame, stamp, &value)?;
         if let Some(channel) = self.channels.signals {
-            let signals: Vec<Value> = self
-                .info
-                .signals()
-                .iter()
-                .zip(frame.signals())
-                .enumerate()
-                .map(|(index, (signal, state))| signal_state_json(index, signal, state, frame.tick))
-                .collect();
+            let signals = signal_states_json(&self.info, frame);
             let value = json!({ "tick": frame.tick, "signals": signals });
             self.write_json(channel, frame, stamp, &value)?;
         }
