@@ -355,6 +355,9 @@ pub struct AxisContext<'a> {
     pub unit: Option<&'a str>,
     /// The channel it drives.
     pub channel: Option<usize>,
+    /// The axis's `home.position` (the position it takes at the switch), and where it was
+    /// written.
+    pub home_position: Option<(f64, Span)>,
 }
 
 impl AxisContext<'_> {

@@ -256,6 +256,47 @@ fn reference_values_outside_the_manual_are_refused() {
     }
 }
 
+/// Manual, instruction set, `$27` "Set actual Position": "Can lead to unintended reference
+/// searches at detection of zero switches"; `$15` P5 bit 6 StopNull stops the motor and
+/// searches again "if zero switch is active outside the tolerance area around zero point".
+/// After a search the driver sets `home.position` with `$27`: with StopNull on, a position
+/// outside ±testnullrange puts the switch outside that area.
+#[test]
+fn a_home_position_outside_the_test_range_with_stop_null_is_refused() {
+    // x: 640 microsteps a mm; the default testnullrange is 240 microsteps (0.375 mm).
+    let text = on_x("reference = { stop_at_switch = true }\nhome = { position = 10.0 }");
+    fails_at(
+        "stopnull.toml",
+        &text,
+        "home =",
+        0,
+        "axis[0].home.position",
+        "unintended reference searches",
+    );
+    let text = on_x(
+        "reference = { stop_at_switch = true, test_range = 50.0 }\nhome = { position = 60.0 }",
+    );
+    fails_at(
+        "stopnull_range.toml",
+        &text,
+        "home =",
+        0,
+        "axis[0].home.position",
+        "within ±50 mm",
+    );
+    // Within the range, without StopNull, or at zero: accepted.
+    for extra in [
+        "reference = { stop_at_switch = true }\nhome = { position = 0.25 }",
+        "reference = { stop_at_switch = true, test_range = 50.0 }\nhome = { position = 40.0 }",
+        "reference = { stop_at_switch = false }\nhome = { position = 10.0 }",
+        "home = { position = 10.0 }",
+        "reference = { stop_at_switch = true }",
+    ] {
+        let (code, stderr) = check("stopnull_ok.toml", &on_x(extra));
+        assert_eq!(code, Some(0), "{extra}: {stderr}");
+    }
+}
+
 #[test]
 fn rotary_revolution_and_poslimit_are_checked() {
     let text = on_x("rotary = true");

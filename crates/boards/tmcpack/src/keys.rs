@@ -297,6 +297,52 @@ fn flag(value: &Option<Spanned<bool>>) -> Option<bool> {
 }
 
 /// Validates the tmcpack keys of an `[[axis]]` table.
+/// `home.position` with `reference.stop_at_switch`: after the reference search the driver
+/// sets the position to `home.position` with `$27`, so the zero switch, still active where
+/// the search ended, is then that far from zero. With StopNull the pack stops the motor
+/// (and, without StopNoRef, which the driver sets, searches again) when the switch is
+/// active outside ±testnullrange around zero (manual, instruction
+/// set, `$27` "Set actual Position": "Can lead to unintended reference searches at detection
+/// of zero switches"; `$15` P5 bit 6 StopNull: "if zero switch is active outside the
+/// tolerance area around zero point"). Refused unless the position lies within that range.
+fn home_position_fits_stop_null(
+    v: &mut dyn KeyIssues,
+    ctx: &AxisContext<'_>,
+    reference: &crate::machine_keys::ReferenceKeys,
+) -> bool {
+    let (Some(true), Some((position, span)), Some(cpu)) = (
+        reference.stop_at_switch,
+        ctx.home_position.clone(),
+        ctx.counts_per_unit.map(f64::abs),
+    ) else {
+        return true;
+    };
+    let range = reference.test_range.map_or(
+        f64::from(crate::driver::TmcpackChannel::default().testnullrange),
+        |units| (units * cpu).round(),
+    );
+    if !(position * cpu).is_finite() || (position * cpu).abs() <= range {
+        return true;
+    }
+    v.issue(
+        span,
+        &ctx.key("home.position"),
+        format!(
+            "{position} with reference.stop_at_switch = true: after the reference search `$27` \
+             sets the position to {position}, so the zero switch is active {} microsteps from \
+             zero, outside testnullrange ±{range}: StopNull would stop the motor there as at a \
+             limit switch (the driver sets StopNoRef; without it the pack would search again: \
+             manual, instruction set, $27: \"Can lead to unintended reference searches at \
+             detection of zero switches\"). Keep home.position within ±{} {}, raise \
+             reference.test_range, or leave stop_at_switch off",
+            (position * cpu).round(),
+            range / cpu,
+            ctx.unit.unwrap_or("units"),
+        ),
+    );
+    false
+}
+
 pub(crate) fn axis_keys(
     v: &mut dyn KeyIssues,
     ctx: &AxisContext<'_>,
@@ -407,6 +453,7 @@ pub(crate) fn axis_keys(
             }
         }
     }
+    ok &= home_position_fits_stop_null(v, ctx, &keys.reference);
     keys.rotary = flag(&raw.rotary);
     let rotary = keys.rotary == Some(true);
     match (&raw.revolution, rotary) {

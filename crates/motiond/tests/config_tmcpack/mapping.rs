@@ -48,7 +48,7 @@ min = 0.0
 max = 100.0
 max_velocity = 20.0
 max_accel = 100.0
-home = { position = 2.0 }
+home = { position = 0.75 }  # within test_range: StopNull checks the switch there ($27)
 current = { peak = 60.0, standby = 0.0, standstill = 38.0, constant = 75.0, accel = 100.0, standby_delay_ms = 500 }
 reference = { side = "right", active = "high", center = true, stop_at_switch = true, soft_stop = true, debounce_ms = 10, null_offset = 0.5, test_range = 1.0, fast = false, mechanical = false }
 analog_stop = { left = 100, right = 900 }

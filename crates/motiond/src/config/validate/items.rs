@@ -300,6 +300,11 @@ impl Validator<'_, '_> {
             max_span: a.max.as_ref().map(Spanned::span),
             unit: unit.as_deref(),
             channel,
+            home_position: a
+                .home
+                .as_ref()
+                .and_then(|home| home.get_ref().position.as_ref())
+                .map(|position| (*position.get_ref(), position.span())),
         };
         let machine = match spec {
             Some(spec) if fits => self.axis_machine(&ctx, spec.model, &keys, &spec.machine),
