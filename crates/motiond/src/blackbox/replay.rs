@@ -104,7 +104,8 @@ struct ReplayPort<'r, 'a> {
     records: &'r mut Peekable<Records<'a>>,
     sender: ClientId,
     sequence: u64,
-    path: Box<GroupPath>,
+    /// The buffer a recorded path is decoded into (one for the whole replay).
+    path: &'r mut GroupPath,
     divergence: Option<Divergence>,
     damage: Option<JournalError>,
 }
@@ -163,7 +164,7 @@ impl CommandPort for ReplayPort<'_, '_> {
         match get_sparse::<GroupPath>(record.rest(24)) {
             Some(path) => {
                 *self.path = path;
-                Some(&self.path)
+                Some(&*self.path)
             }
             None => {
                 self.diverged(Divergence::Inputs("a path that does not decode"));
@@ -246,6 +247,7 @@ fn replay_here(config: &ServerConfig, recording: &Recording) -> Result<Replayed,
         }
     }
     let mut frame = Box::new(MotionFrame::EMPTY);
+    let mut path = Box::new(GroupPath::EMPTY);
     let mut buf = [0u8; crate::io::PACKET_LEN];
     let mut ticks = 0;
     for bytes in &recording.ticks {
@@ -283,7 +285,7 @@ fn replay_here(config: &ServerConfig, recording: &Recording) -> Result<Replayed,
                         records: &mut iter,
                         sender: ClientId::NONE,
                         sequence: 0,
-                        path: Box::new(GroupPath::EMPTY),
+                        path: &mut path,
                         divergence: None,
                         damage: None,
                     };
