@@ -62,18 +62,44 @@ fn replay(file: &Path) -> (Option<i32>, String) {
     (output.status.code(), text)
 }
 
-/// Offset and length of the data of the first `LinkRx` record of `records` with at least
-/// `min` data bytes.
-fn first_rx(records: &[u8], min: usize) -> Option<(usize, usize)> {
-    let mut at = 0;
-    while at + 6 <= records.len() {
-        let len = u32::from_le_bytes(records[at + 2..at + 6].try_into().ok()?) as usize;
-        if records[at] == Kind::LinkRx as u8 && len >= 8 + min {
-            return Some((at + 6 + 8, len - 8));
+/// Where the first data digit of the last `w` line of the run is: the tick and the offset
+/// in that tick's records. "QSB Command List" 1.28, command response: "For write commands,
+/// the returned Data value will be a copy of the data that was written."
+///
+/// The bytes of a line come in several `LinkRx` records (a pty hands over a few bytes at a
+/// time), often across ticks, so the search runs over the received bytes put back together.
+/// The driver takes a write as done only when the echo carries the data it wrote, so a
+/// digit changed there leaves the write unanswered and the driver's next bytes differ; a
+/// digit changed in a streamed encoder line may be held by the line-noise guard and leave
+/// no trace in any frame.
+fn last_write_echo_digit(ticks: &[Vec<u8>]) -> Option<(usize, usize)> {
+    let mut stream = Vec::new();
+    let mut origin = Vec::new();
+    for (tick, records) in ticks.iter().enumerate() {
+        let mut at = 0;
+        while at + 6 <= records.len() {
+            let len = u32::from_le_bytes(records[at + 2..at + 6].try_into().ok()?) as usize;
+            if records[at] == Kind::LinkRx as u8 && len > 8 {
+                for offset in at + 6 + 8..at + 6 + len {
+                    stream.push(records[offset]);
+                    origin.push((tick, offset));
+                }
+            }
+            at += 6 + len;
         }
-        at += 6 + len;
     }
-    None
+    (0..stream.len()).rev().find_map(|start| {
+        let line_start = start == 0 || matches!(stream[start - 1], b'!' | b'\r' | b'\n');
+        if !(line_start && stream[start] == b'w') {
+            return None;
+        }
+        // `w`, separator, two register digits, separator, eight data digits.
+        let digits: Vec<usize> = (start + 1..stream.len())
+            .take_while(|&i| stream[i] != b'!')
+            .filter(|&i| stream[i].is_ascii_hexdigit())
+            .collect();
+        (digits.len() >= 10).then(|| origin[digits[2]])
+    })
 }
 
 #[test]
@@ -184,13 +210,12 @@ following_error = 1.0
         "{text}"
     );
 
-    // One byte of what the board said, changed, in a copy of the file.
-    let changed_at = recording.ticks.len() / 2;
-    let (index, (at, len)) = (changed_at..recording.ticks.len())
-        .find_map(|index| Some((index, first_rx(&recording.ticks[index], 2)?)))
-        .expect("a reply after the middle");
+    // One digit of what the board said, changed, in a copy of the file: the echo of the
+    // run's last write.
+    let (index, at) = last_write_echo_digit(&recording.ticks).expect("a write's echo");
     let mut changed = recording.clone();
-    changed.ticks[index][at + len / 2] ^= 0x01;
+    // '0'..'9' and 'A'..'F' with the low bit flipped: still a digit, or not hex at all.
+    changed.ticks[index][at] ^= 0x01;
     let copy = dir.join("changed.mcap");
     write_recording(&changed, &copy);
     let (status, text) = replay(&copy);
