@@ -13,7 +13,7 @@ use rtrb::RingBuffer;
 
 use crate::blackbox::{BlackboxFile, Journal, RecorderSetup};
 use crate::boards::sim_link;
-use crate::config::{ServerConfig, Transport};
+use crate::config::{IoMode, ServerConfig, Transport};
 use crate::error::ServerError;
 use crate::io::{self, IoThread, LinkPort};
 use crate::rt::{IoRt, monotonic_now};
@@ -119,6 +119,18 @@ pub fn run(config: ServerConfig, options: RunOptions) -> Result<(), ServerError>
     let mut io_rt = IoRt::default();
     let (mut fifo_refused, mut pin_refused) = (false, false);
     for (spec, link) in config.links.iter().zip(links) {
+        if let IoMode::Tick { budget } = spec.io {
+            // The tick runs this link itself (crate::io::inline): no thread.
+            let port =
+                io::inline::start(link, epoch, budget, spec.spi_bit_rate()).map_err(|source| {
+                    ServerError::IoThread {
+                        link: spec.name.clone(),
+                        source,
+                    }
+                })?;
+            ports.push(port);
+            continue;
+        }
         let (port, mut thread) = io::spawn(&spec.name, link, io_options, Arc::clone(&io_stop))
             .map_err(|source| ServerError::IoThread {
                 link: spec.name.clone(),

@@ -478,6 +478,11 @@ impl Loop {
         let engine = &mut self.setup.engine;
         let journal = &mut self.setup.journal;
         for (index, port) in self.setup.ports.iter_mut().enumerate() {
+            if let Some(inline) = port.inline.as_mut() {
+                // A link the tick runs itself: what came back since the last tick's
+                // transfers (crate::io::inline).
+                inline.look();
+            }
             let heard = port.heard();
             while let Ok(event) = port.events.pop() {
                 match event {
@@ -644,7 +649,8 @@ impl Loop {
 
     /// Per link: the drivers' messages into the transmit ring (stamped with `now`), the
     /// I/O thread woken if anything was queued, and asked to look at the link again by the
-    /// drivers' next deadline.
+    /// drivers' next deadline; a link the tick runs itself (`io = "tick"`) gets them
+    /// written now instead.
     fn queue_link_output(&mut self, now: Duration, buf: &mut [u8; PACKET_LEN]) {
         for (index, port) in self.setup.ports.iter_mut().enumerate() {
             let mut queued = false;
@@ -661,7 +667,13 @@ impl Loop {
                 }
                 queued = true;
             }
-            port.queued_and_look_by(queued, self.setup.engine.link_poll_timeout(index));
+            match port.inline.as_mut() {
+                // No thread to wake: the tick writes them now, within its budget.
+                Some(inline) => inline.transfer(),
+                None => {
+                    port.queued_and_look_by(queued, self.setup.engine.link_poll_timeout(index));
+                }
+            }
         }
     }
 

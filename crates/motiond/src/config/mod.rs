@@ -107,6 +107,30 @@ pub enum Transport {
     },
 }
 
+/// Who runs a link's transfers (`[[link]] io`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum IoMode {
+    /// An I/O thread of its own (`io = "thread"`): serial links, spidev by default.
+    Thread,
+    /// The tick thread itself (`io = "tick"`), after publishing the frame: at most `budget`
+    /// of wire time a tick (the first message of a tick always goes); the MISO bytes are
+    /// taken at the start of the next tick. SPI socket and SPI sim links by default.
+    Tick {
+        /// Wire time a tick may spend (`io_budget_us`; default a quarter of the period).
+        budget: Duration,
+    },
+}
+
+impl IoMode {
+    /// The `io` keyword.
+    pub const fn keyword(self) -> &'static str {
+        match self {
+            Self::Thread => "thread",
+            Self::Tick { .. } => "tick",
+        }
+    }
+}
+
 /// `[[link]]`, validated.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct LinkSpec {
@@ -116,6 +140,21 @@ pub struct LinkSpec {
     pub transport: Transport,
     /// Stream or SPI (from the transport and the models on it).
     pub kind: LinkKind,
+    /// Who runs its transfers.
+    pub io: IoMode,
+}
+
+impl LinkSpec {
+    /// The SPI clock a transfer of this link holds its caller for, bits per second:
+    /// spidev's `speed_hz`, an SPI sim link's rate; `None` where a write only queues (an
+    /// SPI socket: its peer clocks the bus) or on a stream link.
+    pub fn spi_bit_rate(&self) -> Option<u32> {
+        match (self.kind, &self.transport) {
+            (LinkKind::Spi, Transport::Spidev { speed_hz, .. }) => Some(*speed_hz),
+            (LinkKind::Spi, Transport::Sim { rate }) => Some(*rate),
+            _ => None,
+        }
+    }
 }
 
 /// `[[device]]`, validated.

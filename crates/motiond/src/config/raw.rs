@@ -62,6 +62,8 @@ pub(crate) struct RawLink {
     pub baud: Option<Spanned<Int>>,
     pub speed_hz: Option<Spanned<Int>>,
     pub mode: Option<Spanned<Int>>,
+    pub io: Option<Spanned<String>>,
+    pub io_budget_us: Option<Spanned<Int>>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -28,6 +28,7 @@
 //! thread's horizon — every byte that arrived before it has been handed over and every
 //! message queued before it has been written — against which drivers judge silence.
 
+pub mod inline;
 mod worker;
 
 use core::time::Duration;
@@ -149,6 +150,9 @@ pub struct IoCounters {
     pub look_by_ns: AtomicU64,
     /// When the thread's current sleep ends (0 while it is awake).
     pub sleep_until_ns: AtomicU64,
+    /// Messages a link the tick runs itself (`io = "tick"`) put off to a later tick because
+    /// the tick's wire-time budget was spent: each tick adds the messages left waiting.
+    pub deferred: AtomicU64,
 }
 
 impl Default for IoCounters {
@@ -167,6 +171,7 @@ impl Default for IoCounters {
             heard_ns: AtomicU64::new(0),
             look_by_ns: AtomicU64::new(NEVER),
             sleep_until_ns: AtomicU64::new(0),
+            deferred: AtomicU64::new(0),
         }
     }
 }
@@ -188,6 +193,8 @@ pub struct LinkPort {
     pub counters: Arc<IoCounters>,
     /// Wakes the I/O thread when something was queued.
     pub waker: Arc<Waker>,
+    /// The tick's own I/O, for a link without an I/O thread (`io = "tick"`).
+    pub inline: Option<Box<inline::InlineIo>>,
 }
 
 impl LinkPort {
@@ -340,6 +347,7 @@ pub fn spawn(
         generation: 0,
         counters,
         waker: Arc::clone(&waker),
+        inline: None,
     };
     Ok((
         port,

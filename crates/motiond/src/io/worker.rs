@@ -95,8 +95,41 @@ impl Worker {
         }
     }
 
-    fn now(&self) -> Duration {
+    pub(super) fn now(&self) -> Duration {
         monotonic_now().saturating_sub(self.epoch)
+    }
+
+    /// The instant `now` counts from (the thread's [`Worker::run`] sets it too).
+    pub(super) fn set_epoch(&mut self, epoch: Duration) {
+        self.epoch = epoch;
+    }
+
+    /// Whether the link is open.
+    pub(super) fn is_up(&self) -> bool {
+        !self.down
+    }
+
+    /// The tick's look at a link it runs itself ([`super::inline`]): reopens a failed link
+    /// when its backoff is over (dropping what was queued while it was down), otherwise
+    /// hands over what arrived and publishes the horizon. Never waits.
+    pub(super) fn look(&mut self, buf: &mut [u8; PACKET_LEN]) {
+        let now = self.now();
+        if self.down {
+            if now >= self.next_reopen {
+                self.try_reopen(now);
+            }
+            if self.down {
+                while self.rings.tx.pop().is_ok() {}
+                self.pending = None;
+                return;
+            }
+        }
+        self.failed = false;
+        self.looked_at = now;
+        self.read_available(now, buf);
+        if !self.down {
+            self.publish_horizon();
+        }
     }
 
     pub(super) fn run(&mut self, epoch: Duration) {
@@ -118,7 +151,7 @@ impl Worker {
             }
             self.failed = false;
             let moved = self.bytes_moved();
-            self.write_queued(now);
+            self.write_queued(now, |_| true);
             self.looked_at = self.now();
             self.read_available(now, &mut buf);
             if self.down {
@@ -282,12 +315,22 @@ impl Worker {
         }
     }
 
-    fn write_queued(&mut self, now: Duration) {
+    /// Writes what the tick queued, in order. A message not begun yet is written only when
+    /// `admit(its length)` says so; otherwise it stays queued (and is counted as deferred).
+    pub(super) fn write_queued(&mut self, now: Duration, mut admit: impl FnMut(usize) -> bool) {
         loop {
             let (packet, offset) = match self.pending.take() {
                 Some(pending) => pending,
-                None => match self.rings.tx.pop() {
-                    Ok(packet) => (packet, 0),
+                None => match self.rings.tx.peek() {
+                    Ok(next) if !admit(next.bytes().len()) => {
+                        let waiting = self.rings.tx.slots() as u64;
+                        self.counters.deferred.fetch_add(waiting, Ordering::Relaxed);
+                        return;
+                    }
+                    Ok(_) => match self.rings.tx.pop() {
+                        Ok(packet) => (packet, 0),
+                        Err(_) => return,
+                    },
                     Err(_) => return,
                 },
             };
@@ -333,7 +376,7 @@ impl Worker {
         }
     }
 
-    fn read_available(&mut self, now: Duration, buf: &mut [u8; PACKET_LEN]) {
+    pub(super) fn read_available(&mut self, now: Duration, buf: &mut [u8; PACKET_LEN]) {
         loop {
             match self.link.read(now, buf) {
                 Ok(0) => return,

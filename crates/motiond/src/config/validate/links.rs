@@ -1,5 +1,6 @@
 //! `[[link]]` tables, checked against the devices on them.
 
+use core::time::Duration;
 use std::path::PathBuf;
 
 use motion_drivers::{LinkKind, Model};
@@ -7,7 +8,7 @@ use toml::Spanned;
 
 use super::Validator;
 use crate::config::raw::{Int, RawDevice, RawLink};
-use crate::config::{DeviceSpec, LinkSpec, Transport};
+use crate::config::{DeviceSpec, IoMode, LinkSpec, Transport};
 
 impl Validator<'_, '_> {
     /// Links, checked against the devices on them (transport fits the model, sharing rules,
@@ -17,6 +18,7 @@ impl Validator<'_, '_> {
         links: &[Option<(String, &Spanned<RawLink>)>],
         devices: &[Option<DeviceSpec>],
         raw_devices: &[Spanned<RawDevice>],
+        tick_hz: u32,
     ) -> Vec<LinkSpec> {
         let mut specs = Vec::new();
         for (index, entry) in links.iter().enumerate() {
@@ -257,18 +259,82 @@ impl Validator<'_, '_> {
                     }
                 }
             }
-            if let Some(transport) = transport {
+            let link_kind = if spi || matches!(kind_name, "spidev" | "spi-socket") {
+                LinkKind::Spi
+            } else {
+                LinkKind::Stream
+            };
+            let io = self.io_mode(index, l, kind_name, link_kind, tick_hz);
+            if let (Some(transport), Some(io)) = (transport, io) {
                 specs.push(LinkSpec {
                     name: name.clone(),
                     transport,
-                    kind: if spi || matches!(kind_name, "spidev" | "spi-socket") {
-                        LinkKind::Spi
-                    } else {
-                        LinkKind::Stream
-                    },
+                    kind: link_kind,
+                    io,
                 });
             }
         }
         specs
+    }
+
+    /// `io` and `io_budget_us` of link `index`: "tick" by default on SPI socket and SPI
+    /// sim links (a write there never waits for the wire), "thread" on spidev (a transfer
+    /// holds its caller until clocked out, and a stuck controller until the kernel's
+    /// timeout) and on every stream link (which must keep its thread).
+    fn io_mode(
+        &mut self,
+        index: usize,
+        l: &RawLink,
+        kind_name: &str,
+        link_kind: LinkKind,
+        tick_hz: u32,
+    ) -> Option<IoMode> {
+        let key = |k: &str| format!("link[{index}].{k}");
+        let default_tick = link_kind == LinkKind::Spi && matches!(kind_name, "spi-socket" | "sim");
+        let tick = match &l.io {
+            None => default_tick,
+            Some(value) => match value.get_ref().as_str() {
+                "thread" => false,
+                "tick" if link_kind == LinkKind::Spi => true,
+                "tick" => {
+                    self.issue(
+                        value.span(),
+                        &key("io"),
+                        "io = \"tick\" is for SPI links, whose transfers end when their bytes \
+                         are clocked; a serial link keeps its I/O thread (a board answers when \
+                         it answers)",
+                    );
+                    return None;
+                }
+                other => {
+                    self.issue(
+                        value.span(),
+                        &key("io"),
+                        format!("unknown io {other:?}; allowed: tick, thread"),
+                    );
+                    return None;
+                }
+            },
+        };
+        let period_us = 1_000_000 / i64::from(tick_hz.max(1));
+        if !tick {
+            if let Some(budget) = &l.io_budget_us {
+                self.issue(
+                    budget.span(),
+                    &key("io_budget_us"),
+                    "io_budget_us is the wire time an io = \"tick\" link may take of a tick; \
+                     this link has its own I/O thread",
+                );
+                return None;
+            }
+            return Some(IoMode::Thread);
+        }
+        let budget_us = match &l.io_budget_us {
+            None => (period_us / 4).max(1),
+            Some(value) => self.int_in(value, &key("io_budget_us"), 1..=period_us.max(1))?,
+        };
+        Some(IoMode::Tick {
+            budget: Duration::from_micros(budget_us as u64),
+        })
     }
 }

@@ -275,7 +275,7 @@ impl Validator<'_, '_> {
                         .map(|spec| (index, spec.name.as_str(), name_span(raw, |d| &d.name)))
                 }),
         );
-        let links = self.links(&links, &devices, &raw.device);
+        let links = self.links(&links, &devices, &raw.device, server.tick_hz);
         let axes: Vec<Option<(AxisConfig, AxisSpec)>> = raw
             .axis
             .iter()
