@@ -914,7 +914,11 @@ typedef struct motiond_link_stats {
     uint64_t errors; /**< Bad frames, I/O errors, timeouts. (offset 56) */
     uint64_t reconnects; /**< Successful reopens. (offset 64) */
     uint32_t up; /**< 1 when the link is open. (offset 72) */
-    uint32_t reserved; /**< Zero. (offset 76) */
+    /**
+     * Messages a link the tick runs itself (`io = "tick"`) put off to a later tick because the
+     * tick's wire-time budget was spent (saturating; 0 on other links).
+     */
+    uint32_t deferred; /* offset 76 */
 } motiond_link_stats_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_link_stats_t) == 80, "motiond_link_stats_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_link_stats_t) == 8, "motiond_link_stats_t alignment");

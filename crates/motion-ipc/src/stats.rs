@@ -42,8 +42,9 @@ payload! {
         pub reconnects: u64,
         /// 1 when the link is open.
         pub up: u32,
-        /// Zero.
-        pub reserved: u32,
+        /// Messages a link the tick runs itself (`io = "tick"`) put off to a later tick
+        /// because the tick's wire-time budget was spent (saturating; 0 on other links).
+        pub deferred: u32,
     }
 }
 
@@ -57,7 +58,7 @@ impl LinkStats {
         errors: 0,
         reconnects: 0,
         up: 0,
-        reserved: 0,
+        deferred: 0,
     };
 
     /// The link name.

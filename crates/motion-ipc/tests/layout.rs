@@ -89,7 +89,7 @@ pin!(LatencySummary, size 40, align 8, {
 });
 pin!(LinkStats, size 80, align 8, {
     name @ 0, bytes_in @ 32, bytes_out @ 40, frames @ 48, errors @ 56, reconnects @ 64,
-    up @ 72, reserved @ 76,
+    up @ 72, deferred @ 76,
 });
 pin!(LinkIo, size 32, align 8, {
     last_write_ns @ 0, last_read_ns @ 8, transactions @ 16, reads @ 24,

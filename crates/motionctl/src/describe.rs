@@ -143,6 +143,7 @@ pub fn stats_json(stats: &ServerStats) -> Value {
                 "frames": link.frames,
                 "errors": link.errors,
                 "reconnects": link.reconnects,
+                "deferred": link.deferred,
                 "last_write_ns": stamp(io.last_write_ns),
                 "last_read_ns": stamp(io.last_read_ns),
                 "transactions": io.transactions,

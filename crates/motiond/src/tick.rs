@@ -712,6 +712,7 @@ impl Loop {
             out.errors = c.errors.load(Ordering::Relaxed) + c.dropped.load(Ordering::Relaxed) + bad;
             out.reconnects = c.reconnects.load(Ordering::Relaxed);
             out.up = u32::from(c.up.load(Ordering::Relaxed));
+            out.deferred = u32::try_from(c.deferred.load(Ordering::Relaxed)).unwrap_or(u32::MAX);
             out.frames = replies;
         }
         let epoch = self.setup.epoch;

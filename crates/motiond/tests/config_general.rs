@@ -432,3 +432,85 @@ fn server_with(server_keys: &str) -> motiond::config::ServerSettings {
         .unwrap_or_else(|e| panic!("{server_keys}: {e}"))
         .server
 }
+
+/// The links of [`GOOD`] with `spi_keys` added to its SPI sim link and `usb_keys` to its
+/// serial sim link.
+fn links_with(spi_keys: &str, usb_keys: &str) -> Vec<motiond::config::LinkSpec> {
+    let text = GOOD
+        .replace(
+            "name = \"spi\"\ntype = \"sim\"",
+            &format!("name = \"spi\"\ntype = \"sim\"\n{spi_keys}"),
+        )
+        .replace(
+            "name = \"usb\"\ntype = \"sim\"",
+            &format!("name = \"usb\"\ntype = \"sim\"\n{usb_keys}"),
+        );
+    motiond::config::ServerConfig::parse(std::path::Path::new("io.toml"), &text)
+        .unwrap_or_else(|e| panic!("{spi_keys} / {usb_keys}: {e}"))
+        .links
+}
+
+/// `[[link]] io`: the tick runs an SPI sim link itself by default, with a quarter of the
+/// period of wire time; a serial link keeps its I/O thread and refuses "tick"; the budget
+/// is checked against the period and belongs to io = "tick" links only.
+#[test]
+fn spi_links_are_run_by_the_tick_unless_told_and_serial_links_keep_their_threads() {
+    use core::time::Duration;
+    use motiond::config::IoMode;
+    let links = links_with("", "");
+    let quarter = IoMode::Tick {
+        budget: Duration::from_micros(250),
+    };
+    assert_eq!((links[0].io, links[1].io), (quarter, IoMode::Thread));
+    assert_eq!(links_with("io = \"thread\"", "")[0].io, IoMode::Thread);
+    assert_eq!(
+        links_with("io_budget_us = 600", "")[0].io,
+        IoMode::Tick {
+            budget: Duration::from_micros(600)
+        }
+    );
+    assert_eq!(
+        links_with("", "io = \"thread\"")[1].io,
+        IoMode::Thread,
+        "saying the default is fine"
+    );
+    let spi = "name = \"spi\"\ntype = \"sim\"";
+    let usb = "name = \"usb\"\ntype = \"sim\"";
+    for (name, link, key, says) in [
+        (
+            "io_tick_serial.toml",
+            (usb, "io = \"tick\""),
+            "link[1].io",
+            "a serial link keeps its I/O thread",
+        ),
+        (
+            "io_unknown.toml",
+            (spi, "io = \"inline\""),
+            "link[0].io",
+            "allowed: tick, thread",
+        ),
+        (
+            "io_budget_thread.toml",
+            (spi, "io = \"thread\"\nio_budget_us = 100"),
+            "link[0].io_budget_us",
+            "this link has its own I/O thread",
+        ),
+        (
+            "io_budget_long.toml",
+            (spi, "io_budget_us = 1001"),
+            "link[0].io_budget_us",
+            "allowed: 1..=1000",
+        ),
+        (
+            "io_budget_zero.toml",
+            (spi, "io_budget_us = 0"),
+            "link[0].io_budget_us",
+            "allowed: 1..=1000",
+        ),
+    ] {
+        let (table, keys) = link;
+        let text = GOOD.replace(table, &format!("{table}\n{keys}"));
+        let needle = keys.lines().last().expect("a key");
+        fails(name, &text, needle, key, says);
+    }
+}

@@ -534,7 +534,9 @@ class LinkStats(Payload):
         ("errors", ctypes.c_uint64),  # Bad frames, I/O errors, timeouts.
         ("reconnects", ctypes.c_uint64),  # Successful reopens.
         ("up", ctypes.c_uint32),  # 1 when the link is open.
-        ("reserved", ctypes.c_uint32),  # Zero.
+        # Messages a link the tick runs itself (``io = "tick"``) put off to a later tick because the
+        # tick's wire-time budget was spent (saturating; 0 on other links).
+        ("deferred", ctypes.c_uint32),
     ]
 
 
