@@ -9,6 +9,7 @@ pub mod boards;
 pub mod config;
 pub mod drivers;
 pub mod error;
+pub mod estop_watch;
 pub mod inbox;
 pub mod io;
 pub mod node_records;

@@ -22,6 +22,7 @@ use crate::blackbox::Journal;
 use crate::blackbox::record::Trigger;
 use crate::config::ServerSettings;
 use crate::error::{RtError, StartError};
+use crate::estop_watch::EstopWatch;
 use crate::io::{LinkEvent, LinkPort, NEVER, PACKET_LEN, Packet};
 use crate::phases::{Phase, PhaseClock, PhaseMeans};
 use crate::rt::{self, IoRt, RtStatus, monotonic_now, sleep_until};
@@ -331,6 +332,8 @@ struct Loop {
     overrun_fault_latched: bool,
     /// Whether the last frame had the e-stop latched (a new latch triggers the black box).
     estop_seen: bool,
+    /// Says when the `estop` listener has something (`None`: ask it every tick).
+    estop_watch: Option<EstopWatch>,
 }
 
 impl Loop {
@@ -363,6 +366,14 @@ impl Loop {
         let devices = setup.engine.config().devices.len();
         let axes = setup.engine.config().axes.len();
         let directory = ClientDirectory::new(services.max_clients);
+        let estop_watch = EstopWatch::start(&services.estop)
+            .inspect_err(|error| {
+                tracing::warn!(
+                    "the estop event is looked for every tick: its watch thread did not start \
+                     ({error})"
+                );
+            })
+            .ok();
         Self {
             setup,
             services,
@@ -376,6 +387,7 @@ impl Loop {
             consecutive_overruns: 0,
             overrun_fault_latched: false,
             estop_seen: false,
+            estop_watch,
         }
     }
 
@@ -515,8 +527,19 @@ impl Loop {
     /// E-stops that did not come as commands: the `estop` event, SIGUSR1.
     fn take_estops(&mut self) {
         let mut notified = false;
-        if self.services.estop.try_wait(|_| notified = true).is_err() {
-            self.stats.events_dropped += 1;
+        // The listener is asked only when its watch saw a notification (crate::estop_watch),
+        // or every tick when the watch could not be started.
+        let look = self.estop_watch.as_ref().is_none_or(EstopWatch::pending);
+        if look {
+            if let Some(watch) = &self.estop_watch {
+                watch.clear();
+            }
+            if self.services.estop.try_wait(|_| notified = true).is_err() {
+                self.stats.events_dropped += 1;
+            }
+            if let Some(watch) = &self.estop_watch {
+                watch.resume();
+            }
         }
         let signalled = self.setup.estop_signal.swap(false, Ordering::Relaxed);
         if notified || signalled {
