@@ -105,6 +105,15 @@ pub trait Link: Send + fmt::Debug {
         false
     }
 
+    /// While `on`, [`write`](Self::write) may only queue what it accepts; turning it off
+    /// hands everything queued to the transport at once, without waiting (an SPI socket
+    /// then sends the transactions of one pass in one system call, and wakes its peer
+    /// once). Links that send in `write` ignore it (the default).
+    fn batch(&mut self, now: Duration, on: bool) -> Result<(), LinkError> {
+        let _ = (now, on);
+        Ok(())
+    }
+
     /// Counters since creation.
     fn stats(&self) -> LinkStats;
 }
@@ -147,6 +156,9 @@ impl<L: Link + ?Sized> Link for Box<L> {
     }
     fn write_pending(&self) -> bool {
         (**self).write_pending()
+    }
+    fn batch(&mut self, now: Duration, on: bool) -> Result<(), LinkError> {
+        (**self).batch(now, on)
     }
     fn stats(&self) -> LinkStats {
         (**self).stats()

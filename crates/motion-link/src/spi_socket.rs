@@ -49,6 +49,8 @@ pub struct SpiSocketLink {
     tx: Vec<u8>,
     /// MISO bytes asked for and not yet read.
     expected: usize,
+    /// Writes only queue ([`Link::batch`]).
+    batching: bool,
     stats: LinkStats,
 }
 
@@ -77,6 +79,7 @@ impl SpiSocketLink {
             name,
             stream: None,
             expected: 0,
+            batching: false,
             stats: LinkStats::default(),
         })
     }
@@ -182,7 +185,9 @@ impl SpiSocketLink {
         self.expected += len;
         self.stats.bytes_out += len as u64;
         self.stats.transactions += 1;
-        self.push_tx()?;
+        if !self.batching {
+            self.push_tx()?;
+        }
         Ok(len)
     }
 }
@@ -301,6 +306,14 @@ impl Link for SpiSocketLink {
         }
     }
 
+    fn batch(&mut self, _now: Duration, on: bool) -> Result<(), LinkError> {
+        self.batching = on;
+        if on || self.tx.is_empty() {
+            return Ok(());
+        }
+        self.push_tx()
+    }
+
     fn stats(&self) -> LinkStats {
         self.stats
     }
@@ -310,6 +323,41 @@ impl Link for SpiSocketLink {
 mod tests {
     use super::*;
     use crate::LinkErrorKind;
+
+    #[test]
+    fn a_batch_only_queues_and_its_end_sends_every_transaction_at_once() {
+        let path =
+            std::env::temp_dir().join(format!("motion-link-batch-{}.sock", std::process::id()));
+        let _ = std::fs::remove_file(&path);
+        let listener = std::os::unix::net::UnixListener::bind(&path).expect("bind");
+        let mut link =
+            SpiSocketLink::connect(SpiSocketConfig::new(path.to_string_lossy())).expect("connect");
+        let (mut peer, _) = listener.accept().expect("accept");
+        peer.set_nonblocking(true).expect("non-blocking");
+        let now = Duration::ZERO;
+        link.batch(now, true).expect("batch");
+        assert_eq!(link.write(now, &[1, 2]).expect("write"), 2);
+        assert_eq!(link.write_parts(now, &[&[3], &[4, 5]]).expect("write"), 3);
+        let mut got = [0u8; 64];
+        let nothing = peer.read(&mut got).map_err(|e| e.kind());
+        assert_eq!(nothing, Err(io::ErrorKind::WouldBlock), "queued, not sent");
+        assert!(link.write_pending());
+        link.batch(now, false).expect("sent");
+        assert!(!link.write_pending());
+        peer.set_nonblocking(false).expect("blocking");
+        let mut stream = Vec::new();
+        while stream.len() < 9 {
+            let n = peer.read(&mut got).expect("read");
+            assert!(n > 0, "the link hung up");
+            stream.extend_from_slice(&got[..n]);
+        }
+        // Each transaction framed as the contract says, in order.
+        assert_eq!(stream, [2, 0, 1, 2, 3, 0, 3, 4, 5]);
+        // Outside a batch a write sends at once.
+        assert_eq!(link.write(now, &[6]).expect("write"), 1);
+        assert!(!link.write_pending());
+        let _ = std::fs::remove_file(&path);
+    }
 
     #[test]
     fn config_is_validated_and_absent_listener_is_disconnected() {

@@ -450,21 +450,22 @@ fn links_with(spi_keys: &str, usb_keys: &str) -> Vec<motiond::config::LinkSpec> 
         .links
 }
 
-/// `[[link]] io`: the tick runs an SPI sim link itself by default, with a quarter of the
-/// period of wire time; a serial link keeps its I/O thread and refuses "tick"; the budget
-/// is checked against the period and belongs to io = "tick" links only.
+/// `[[link]] io`: a sim link keeps its thread unless told (an `spi-socket` link's default
+/// "tick" is in `server_inline_io.rs`); an SPI sim link told "tick" gets a quarter of the
+/// period of wire time; a serial link refuses "tick"; the budget is checked against the
+/// period and belongs to io = "tick" links only.
 #[test]
-fn spi_links_are_run_by_the_tick_unless_told_and_serial_links_keep_their_threads() {
+fn spi_links_may_be_run_by_the_tick_and_serial_links_keep_their_threads() {
     use core::time::Duration;
     use motiond::config::IoMode;
     let links = links_with("", "");
+    assert_eq!((links[0].io, links[1].io), (IoMode::Thread, IoMode::Thread));
     let quarter = IoMode::Tick {
         budget: Duration::from_micros(250),
     };
-    assert_eq!((links[0].io, links[1].io), (quarter, IoMode::Thread));
-    assert_eq!(links_with("io = \"thread\"", "")[0].io, IoMode::Thread);
+    assert_eq!(links_with("io = \"tick\"", "")[0].io, quarter);
     assert_eq!(
-        links_with("io_budget_us = 600", "")[0].io,
+        links_with("io = \"tick\"\nio_budget_us = 600", "")[0].io,
         IoMode::Tick {
             budget: Duration::from_micros(600)
         }
@@ -497,13 +498,13 @@ fn spi_links_are_run_by_the_tick_unless_told_and_serial_links_keep_their_threads
         ),
         (
             "io_budget_long.toml",
-            (spi, "io_budget_us = 1001"),
+            (spi, "io = \"tick\"\nio_budget_us = 1001"),
             "link[0].io_budget_us",
             "allowed: 1..=1000",
         ),
         (
             "io_budget_zero.toml",
-            (spi, "io_budget_us = 0"),
+            (spi, "io = \"tick\"\nio_budget_us = 0"),
             "link[0].io_budget_us",
             "allowed: 1..=1000",
         ),

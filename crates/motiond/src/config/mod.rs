@@ -110,11 +110,12 @@ pub enum Transport {
 /// Who runs a link's transfers (`[[link]] io`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum IoMode {
-    /// An I/O thread of its own (`io = "thread"`): serial links, spidev by default.
+    /// An I/O thread of its own (`io = "thread"`): serial links; spidev and sim links by
+    /// default.
     Thread,
     /// The tick thread itself (`io = "tick"`), after publishing the frame: at most `budget`
     /// of wire time a tick (the first message of a tick always goes); the MISO bytes are
-    /// taken at the start of the next tick. SPI socket and SPI sim links by default.
+    /// taken at the start of the next tick. SPI socket links by default.
     Tick {
         /// Wire time a tick may spend (`io_budget_us`; default a quarter of the period).
         budget: Duration,

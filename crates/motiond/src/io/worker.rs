@@ -315,9 +315,27 @@ impl Worker {
         }
     }
 
-    /// Writes what the tick queued, in order. A message not begun yet is written only when
+    /// Writes what the tick queued, in order, as one batch ([`Link::batch`]: an SPI
+    /// socket sends them in one system call). A message not begun yet is written only when
     /// `admit(its length)` says so; otherwise it stays queued (and is counted as deferred).
-    pub(super) fn write_queued(&mut self, now: Duration, mut admit: impl FnMut(usize) -> bool) {
+    pub(super) fn write_queued(&mut self, now: Duration, admit: impl FnMut(usize) -> bool) {
+        if self.rings.tx.is_empty() && self.pending.is_none() {
+            return;
+        }
+        if let Err(error) = self.link.batch(now, true) {
+            self.fail(now, error.kind());
+            return;
+        }
+        self.write_each(now, admit);
+        if self.down {
+            return;
+        }
+        if let Err(error) = self.link.batch(now, false) {
+            self.fail(now, error.kind());
+        }
+    }
+
+    fn write_each(&mut self, now: Duration, mut admit: impl FnMut(usize) -> bool) {
         loop {
             let (packet, offset) = match self.pending.take() {
                 Some(pending) => pending,
@@ -381,6 +399,9 @@ impl Worker {
             match self.link.read(now, buf) {
                 Ok(0) => return,
                 Ok(len) => {
+                    // A short read took everything there was: another would only say so
+                    // (one system call fewer a pass).
+                    let all = len < buf.len();
                     let at = self.now();
                     self.counters
                         .bytes_in
@@ -399,6 +420,9 @@ impl Worker {
                         self.counters
                             .dropped
                             .fetch_add(len as u64, Ordering::Relaxed);
+                    }
+                    if all {
+                        return;
                     }
                 }
                 Err(error) => {

@@ -277,10 +277,12 @@ impl Validator<'_, '_> {
         specs
     }
 
-    /// `io` and `io_budget_us` of link `index`: "tick" by default on SPI socket and SPI
-    /// sim links (a write there never waits for the wire), "thread" on spidev (a transfer
-    /// holds its caller until clocked out, and a stuck controller until the kernel's
-    /// timeout) and on every stream link (which must keep its thread).
+    /// `io` and `io_budget_us` of link `index`: "tick" by default on SPI socket links (a
+    /// write there only queues: nothing waits), "thread" on spidev (a transfer holds its
+    /// caller until clocked out, and a stuck controller until the kernel's timeout), on
+    /// sim links (the simulated board runs where its wire is served: in the tick it would
+    /// be counted as the server's work) and on every stream link (which must keep its
+    /// thread).
     fn io_mode(
         &mut self,
         index: usize,
@@ -290,7 +292,7 @@ impl Validator<'_, '_> {
         tick_hz: u32,
     ) -> Option<IoMode> {
         let key = |k: &str| format!("link[{index}].{k}");
-        let default_tick = link_kind == LinkKind::Spi && matches!(kind_name, "spi-socket" | "sim");
+        let default_tick = link_kind == LinkKind::Spi && kind_name == "spi-socket";
         let tick = match &l.io {
             None => default_tick,
             Some(value) => match value.get_ref().as_str() {
