@@ -339,3 +339,57 @@ fn an_io_thread_pins_itself_to_the_core_it_is_given_or_says_why_not() {
         finish(thread, &stop);
     }
 }
+
+/// Waits until the thread's horizon passes `at` (port time); the instant it saw it, in the
+/// test's time, or `None` after `patience`.
+fn heard_past(port: &LinkPort, at: Duration, patience: Duration) -> Option<Instant> {
+    let started = Instant::now();
+    while started.elapsed() < patience {
+        if port.heard() > at {
+            return Some(Instant::now());
+        }
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    None
+}
+
+#[test]
+fn the_tick_s_wish_to_look_by_an_instant_is_kept_with_no_bytes_and_no_timer() {
+    // Port time counts from about here (the thread's epoch is taken a little later, so
+    // these instants are, if anything, later in its time).
+    let epoch = motiond::rt::monotonic_now();
+    let now = || motiond::rt::monotonic_now().saturating_sub(epoch);
+    let (_master, link) = pty_link();
+    let (port, thread, stop) = start(Box::new(link));
+    // A silent link and an idle limit of an hour: only the wish makes the thread look.
+    let a = now() + Duration::from_millis(150);
+    port.queued_and_look_by(false, Some(a));
+    assert!(
+        heard_past(&port, a, PATIENCE).is_some(),
+        "never looked after a"
+    );
+    // A wish, then a later one while the thread sleeps towards the first (the deadline
+    // moved on): the thread needs no wake-up for it, but still looks after it.
+    let b = now() + Duration::from_millis(100);
+    port.queued_and_look_by(false, Some(b));
+    std::thread::sleep(Duration::from_millis(20));
+    let c = now() + Duration::from_millis(300);
+    port.queued_and_look_by(false, Some(c));
+    assert!(
+        heard_past(&port, c, PATIENCE).is_some(),
+        "never looked after c"
+    );
+    // A far wish, then an earlier one: the thread is woken to sleep less.
+    let far = now() + Duration::from_secs(30);
+    port.queued_and_look_by(false, Some(far));
+    std::thread::sleep(Duration::from_millis(20));
+    let asked = Instant::now();
+    let near = now() + Duration::from_millis(100);
+    port.queued_and_look_by(false, Some(near));
+    let seen = heard_past(&port, near, PATIENCE).expect("never looked after the near wish");
+    assert!(
+        seen.duration_since(asked) < Duration::from_secs(20),
+        "the thread slept towards the far wish"
+    );
+    finish(thread, &stop);
+}

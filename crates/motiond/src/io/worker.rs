@@ -214,6 +214,13 @@ impl Worker {
             if wish != NEVER && wish > duration_ns(self.looked_at) {
                 let wish = Duration::from_nanos(wish);
                 timeout = timeout.min(wish.saturating_sub(self.now()));
+                // The sleep ends at the wish: say so, so that a later wish (the deadline
+                // moved on with a reply) needs no wake-up. The tick that saw the first,
+                // later end in between only wakes the thread once too often.
+                let until = duration_ns(now.saturating_add(timeout)).min(duration_ns(wish));
+                self.counters
+                    .sleep_until_ns
+                    .store(until.max(1), Ordering::SeqCst);
             }
         }
         if !timeout.is_zero() {
