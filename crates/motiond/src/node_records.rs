@@ -142,6 +142,43 @@ pub struct Sweeper {
     layout: Layout,
     /// Dead nodes whose clean-up failed, with the passes that saw it fail.
     failed: HashMap<u128, u32>,
+    /// What the last full sweep found when every node it listed was alive and nothing
+    /// was left to clean: while nothing changes, a sweep only checks that it still holds.
+    quiet: Option<Quiet>,
+}
+
+/// How often a sweep lists every node even though nothing seemed to change (a node's state
+/// can change inside its own details directory, which the quick check does not watch).
+pub const FULL_SWEEP_EVERY: Duration = Duration::from_secs(1);
+
+/// A node directory in which only live nodes were found.
+#[derive(Debug, Clone)]
+struct Quiet {
+    /// The node directory's modification time before that listing.
+    modified: SystemTime,
+    /// The live nodes' monitors (the server's own excluded: checking a lock this process
+    /// holds would release it).
+    monitors: Vec<PathBuf>,
+    /// The live nodes counted.
+    live: u32,
+    /// When that listing was made.
+    at: std::time::Instant,
+}
+
+/// The modification time of `dir` (changed by every node record made or removed in it).
+fn modified(dir: &Path) -> Option<SystemTime> {
+    fs::metadata(dir).and_then(|meta| meta.modified()).ok()
+}
+
+impl Quiet {
+    /// Nothing changed since: no record made or removed, every live node still holds its
+    /// monitor's lock (a node that dies releases it). A few system calls a node, against
+    /// iceoryx2's listing, which reads and parses every node's details.
+    fn holds(&self, dir: &Path) -> bool {
+        self.at.elapsed() < FULL_SWEEP_EVERY
+            && modified(dir) == Some(self.modified)
+            && self.monitors.iter().all(|monitor| locked(monitor))
+    }
 }
 
 impl Default for Sweeper {
@@ -158,7 +195,42 @@ impl Sweeper {
             config,
             layout,
             failed: HashMap::new(),
+            quiet: None,
         }
+    }
+
+    /// Dead nodes and live ones (see [`Sweeper::full_sweep`]), listed only when something
+    /// may have changed since the last listing found nothing but live nodes, and at least
+    /// every [`FULL_SWEEP_EVERY`].
+    pub fn sweep(&mut self, except: u128, residue_age: Duration, budget: usize) -> Sweep {
+        if let Some(quiet) = &self.quiet
+            && quiet.holds(&self.layout.dir)
+        {
+            return Sweep {
+                dead: Vec::new(),
+                live: quiet.live,
+                cleaned: 0,
+            };
+        }
+        // Taken before the listing: a change during it makes the next check fail.
+        let before = modified(&self.layout.dir);
+        let (sweep, alive) = self.full_sweep(except, residue_age, budget);
+        self.quiet = match (before, alive) {
+            (Some(modified), Some(alive)) if sweep.dead.is_empty() && sweep.cleaned == 0 => {
+                Some(Quiet {
+                    modified,
+                    monitors: alive
+                        .into_iter()
+                        .filter(|&id| id != except)
+                        .map(|id| self.layout.monitor_files(id).swap_remove(0))
+                        .collect(),
+                    live: sweep.live,
+                    at: std::time::Instant::now(),
+                })
+            }
+            _ => None,
+        };
+        sweep
     }
 
     /// One pass: dead nodes' resources removed by iceoryx2; what it cannot remove removed
@@ -171,13 +243,28 @@ impl Sweeper {
     /// iceoryx2's own clean-up — which also takes the node out of every service it had
     /// joined — runs at the next pass; a node that still fails then, or that no listing
     /// shows at all (it died before its monitor was complete), has its files removed.
-    pub fn sweep(&mut self, except: u128, residue_age: Duration, budget: usize) -> Sweep {
+    /// Lists every node: the dead ones' resources removed, the live ones counted, residue
+    /// removed within `budget`; with the ids of the live nodes when the listing was
+    /// complete, every node in it alive and no residue seen (`None` otherwise).
+    fn full_sweep(
+        &mut self,
+        except: u128,
+        residue_age: Duration,
+        budget: usize,
+    ) -> (Sweep, Option<Vec<u128>>) {
         let layout = &self.layout;
         let mut sweep = Sweep::default();
         let mut listed = HashSet::new();
         let mut stuck = Vec::new();
+        let mut alive = Vec::new();
+        let mut only_alive = true;
         let complete = Node::<Ipc>::list(&self.config, |state| {
             listed.insert(state.node_id().value());
+            if let NodeState::Alive(view) = &state {
+                alive.push(view.id().value());
+            } else {
+                only_alive = false;
+            }
             match state {
                 NodeState::Dead(view) => {
                     let id = view.id().value();
@@ -205,7 +292,7 @@ impl Sweeper {
         };
         for id in stuck {
             if budget == 0 {
-                return sweep;
+                return (sweep, None);
             }
             if !old_and_unlocked(id) {
                 continue;
@@ -228,10 +315,10 @@ impl Sweeper {
         // a monitor, monitor files without the monitor. Only after a complete listing:
         // a record missing from a failed one may be a live node's.
         if !complete {
-            return sweep;
+            return (sweep, None);
         }
         let Ok(entries) = fs::read_dir(&layout.dir) else {
-            return sweep;
+            return (sweep, None);
         };
         let mut orphans = HashSet::new();
         for entry in entries.flatten() {
@@ -242,6 +329,9 @@ impl Sweeper {
             {
                 orphans.insert(id);
             }
+        }
+        if !orphans.is_empty() {
+            only_alive = false;
         }
         for id in orphans {
             if budget == 0 {
@@ -254,7 +344,7 @@ impl Sweeper {
                 budget -= 1;
             }
         }
-        sweep
+        (sweep, only_alive.then_some(alive))
     }
 }
 
@@ -352,6 +442,52 @@ mod tests {
         let swept = sweeper.sweep(0, Duration::ZERO, SWEEP_BUDGET);
         assert_eq!(swept.cleaned, 1);
         assert!(!monitor.exists());
+        fs::remove_dir_all(root).unwrap();
+    }
+
+    #[test]
+    fn a_quiet_directory_holds_until_a_record_changes_or_a_live_node_lets_go() {
+        let (_config, root) = scratch_config("quiet");
+        let nodes = root.join("nodes");
+        let monitor = nodes.join("iox2_31.node_monitor");
+        fs::write(&monitor, b"").unwrap();
+        let mut holder = std::process::Command::new("python3")
+            .args([
+                "-c",
+                "import fcntl,sys,time\nf=open(sys.argv[1],'r+')\nfcntl.lockf(f,fcntl.LOCK_EX)\nprint('held',flush=True)\ntime.sleep(60)",
+            ])
+            .arg(&monitor)
+            .stdout(std::process::Stdio::piped())
+            .spawn()
+            .expect("python3 (scripts/test installs it)");
+        let mut line = String::new();
+        std::io::BufRead::read_line(
+            &mut std::io::BufReader::new(holder.stdout.take().unwrap()),
+            &mut line,
+        )
+        .unwrap();
+        assert_eq!(line.trim(), "held");
+        let quiet = |at| Quiet {
+            modified: modified(&nodes).expect("a directory"),
+            monitors: vec![monitor.clone()],
+            live: 1,
+            at,
+        };
+        assert!(quiet(std::time::Instant::now()).holds(&nodes));
+        // Too old: list again.
+        let long_ago = std::time::Instant::now() - FULL_SWEEP_EVERY;
+        assert!(!quiet(long_ago).holds(&nodes));
+        // A record made in the directory.
+        let before = quiet(std::time::Instant::now());
+        std::thread::sleep(Duration::from_millis(10));
+        fs::write(nodes.join("iox2_32.node_monitor"), b"").unwrap();
+        assert!(!before.holds(&nodes));
+        // The live node dies: its lock goes.
+        let after = quiet(std::time::Instant::now());
+        assert!(after.holds(&nodes));
+        holder.kill().unwrap();
+        holder.wait().unwrap();
+        assert!(!after.holds(&nodes));
         fs::remove_dir_all(root).unwrap();
     }
 }

@@ -80,10 +80,9 @@ fn last_write_echo_digit(ticks: &[Vec<u8>]) -> Option<(usize, usize)> {
         while at + 6 <= records.len() {
             let len = u32::from_le_bytes(records[at + 2..at + 6].try_into().ok()?) as usize;
             if records[at] == Kind::LinkRx as u8 && len > 8 {
-                for offset in at + 6 + 8..at + 6 + len {
-                    stream.push(records[offset]);
-                    origin.push((tick, offset));
-                }
+                let data = at + 6 + 8..at + 6 + len;
+                stream.extend_from_slice(records.get(data.clone())?);
+                origin.extend(data.map(|offset| (tick, offset)));
             }
             at += 6 + len;
         }
