@@ -115,6 +115,9 @@ pub struct Qq2drvSimConfig {
     pub glitch_velocity: f64,
     /// Upper bound on queued replies; requests beyond it are dropped unanswered.
     pub max_queued_replies: usize,
+    /// Packet 3 starts with a Return Code (0), as its text says ("except for Return
+    /// Code"); `false` (default): none, as its table shows.
+    pub stream_return_code: bool,
 }
 
 impl Default for Qq2drvSimConfig {
@@ -132,6 +135,7 @@ impl Default for Qq2drvSimConfig {
             glitch_rate: 0.0,
             glitch_velocity: 80_000.0,
             max_queued_replies: 16,
+            stream_return_code: false,
         }
     }
 }

@@ -305,6 +305,7 @@ impl Qq2drvSim {
         let config = self.regs.layout.stream_config;
         let data = self.sample_motion();
         encode(&Reply::StreamData(StreamData {
+            code: self.config.stream_return_code.then_some(ReturnCode(0)),
             timing: config.timing().then_some(timing),
             periods_elapsed: config.periods_elapsed().then_some(elapsed),
             data,
