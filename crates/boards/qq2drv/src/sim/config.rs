@@ -118,6 +118,9 @@ pub struct Qq2drvSimConfig {
     /// Packet 3 starts with a Return Code (0), as its text says ("except for Return
     /// Code"); `false` (default): none, as its table shows.
     pub stream_return_code: bool,
+    /// How the firmware reads packet 36's Velocity: signed (default), or forward only
+    /// ("Range: 0 - 100,000"), answering a negative one with an out-of-range Return Code.
+    pub velocity_ramp: qq2drv::limits::VelocityRampSign,
 }
 
 impl Default for Qq2drvSimConfig {
@@ -136,6 +139,7 @@ impl Default for Qq2drvSimConfig {
             glitch_velocity: 80_000.0,
             max_queued_replies: 16,
             stream_return_code: false,
+            velocity_ramp: qq2drv::limits::VelocityRampSign::Signed,
         }
     }
 }

@@ -73,3 +73,105 @@ fn a_stream_packet_with_a_non_zero_return_code_is_a_board_error() {
     assert_eq!(driver.status().fault, None);
     assert_eq!(driver.channel(1).position, 200.0);
 }
+
+/// `running()` with every channel reading packet 36 as `velocity_ramp` says.
+fn running_with(velocity_ramp: qq2drv::limits::VelocityRampSign) -> (Qq2drvDriver, Duration) {
+    let mut config = config();
+    for channel in &mut config.channels {
+        channel.velocity_ramp = velocity_ramp;
+    }
+    let mut driver = Qq2drvDriver::new(config);
+    let mut now = Duration::ZERO;
+    drain(&mut driver, now);
+    now += MS;
+    driver.handle_rx(
+        now,
+        &probe_answers([DataMask::DEFAULT; 4], StreamConfig(0), 0),
+    );
+    let sent = drain(&mut driver, now);
+    now += MS;
+    driver.handle_rx(now, &acks(&sent[0], 0));
+    assert!(driver.running());
+    now += 4 * MS;
+    driver.handle_rx(now, &ours_stream([10, 20, 30], [0, 0, 0], [0; 3]));
+    (driver, now)
+}
+
+/// Packet 36: "Velocity: Velocity target, specified as: Velocity = <transitions/s>. Range:
+/// 0 - 100,000", in an I32 field. Read as unsigned, a reverse velocity goes out as packet
+/// 28 (the ramp's acceleration as the limit: "The acceleration limit set using packet 28 …
+/// still applies") and packet 22, the channel's own limit written back by the next step;
+/// forward still uses packet 36. Read as signed (the default), packet 36 carries it.
+#[test]
+fn a_reverse_velocity_on_a_forward_only_packet_36_goes_out_as_packets_28_and_22() {
+    use qq2drv::limits::VelocityRampSign;
+    let (mut driver, mut now) = running_with(VelocityRampSign::Unsigned);
+    let reverse = Goal::Velocity {
+        velocity: -1_500.0,
+        accel: 20_000.0,
+    };
+    now += 2 * MS;
+    let mosi = acked(&mut driver, now, 2, reverse);
+    match requests(&mosi).as_slice() {
+        [
+            Request::SetControlMode(mode),
+            Request::SetAccelerationLimit(limit),
+            Request::SetVelocityTarget(target),
+        ] => {
+            assert_eq!(one(mode).mode, ControlMode::VelocityPid);
+            assert_eq!(one(limit).limit, 20_000 << FIXED_SHIFT);
+            assert_eq!(one(target).velocity, -1_500);
+        }
+        other => panic!("{other:?}"),
+    }
+    // Forward: the channel's own limit (30 000 shl 12) back first, then packet 36.
+    now += 2 * MS;
+    let forward = Goal::Velocity {
+        velocity: 1_500.0,
+        accel: 20_000.0,
+    };
+    let mosi = acked(&mut driver, now, 2, forward);
+    match requests(&mosi).as_slice() {
+        [
+            Request::SetAccelerationLimit(limit),
+            Request::SetControlMode(_),
+            Request::VelocityRamp(ramp),
+        ] => {
+            assert_eq!(one(limit).limit, 30_000 << FIXED_SHIFT);
+            assert_eq!(
+                (one(ramp).velocity, one(ramp).acceleration),
+                (1_500, 20_000 << FIXED_SHIFT)
+            );
+        }
+        other => panic!("{other:?}"),
+    }
+    // A stop from a measured reverse velocity: the limit lifted (28 ← 0, which replaces
+    // the reverse ramp's) and the setpoint reset to it by packet 22 instead of 36.
+    now += 2 * MS;
+    acked(&mut driver, now, 0, reverse);
+    now += 4 * MS;
+    driver.handle_rx(now, &ours_stream([100, 0, 0], [-900, 0, 0], [0; 3]));
+    let mosi = goal_packets(&mut driver, now, 0, Goal::Stop { decel: 20_000.0 });
+    match requests(&mosi).as_slice() {
+        [
+            Request::SetControlMode(off),
+            Request::SetControlMode(_),
+            Request::SetAccelerationLimit(lifted),
+            Request::SetVelocityTarget(target),
+        ] => {
+            assert_eq!(one(off).mode, ControlMode::Off);
+            assert_eq!(one(lifted).limit, 0);
+            assert_eq!(one(target).velocity, -900);
+        }
+        other => panic!("{other:?}"),
+    }
+    // Signed (the default): packet 36 carries the negative velocity.
+    let (mut driver, now) = running_with(VelocityRampSign::Signed);
+    let mosi = acked(&mut driver, now + 2 * MS, 2, reverse);
+    match requests(&mosi).as_slice() {
+        [Request::SetControlMode(_), Request::VelocityRamp(ramp)] => {
+            assert_eq!(one(ramp).velocity, -1_500);
+        }
+        other => panic!("{other:?}"),
+    }
+}
