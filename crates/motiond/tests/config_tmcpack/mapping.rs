@@ -465,3 +465,61 @@ fn the_simulated_pack_has_the_switch_on_the_configured_side() {
         assert_eq!(done, Some((true, None)), "side {side}: homed, no fault");
     }
 }
+
+/// The simulated pack of a device with `amax_divisor = 16` and `stop_no_ref_bit = 6` has
+/// that firmware (`sim::machine`): with a closer (`active = "low"`) the driver's `$15` P6
+/// has StopNoRef alone, in bit 6, which the table's reading would take for NullPositive
+/// and search with the switch's polarity inverted. The search finds the switch.
+#[test]
+fn the_simulated_pack_has_the_firmware_readings_of_its_device() {
+    let text = super::GOOD.replacen(
+        "type = \"serial\"\npath = \"/dev/does-not-exist-motiond-test\"",
+        "type = \"sim\"",
+        1,
+    );
+    let text = text.replacen(
+        "address = 1",
+        "address = 1\namax_divisor = 16\nstop_no_ref_bit = 6",
+        1,
+    );
+    let text = text.replacen(
+        "max_accel = 100.0",
+        "max_accel = 100.0\nreference = { side = \"left\", active = \"low\" }",
+        1,
+    );
+    let config = parse(&text);
+    let mut drivers = motiond::boards::build(&config).expect("drivers");
+    let driver = drivers.get_mut(0).expect("driver");
+    let mut link = motiond::boards::sim_link(&config, 0);
+    let mut homing = false;
+    let mut done = None;
+    let sent = run(&mut *driver, &mut link, Duration::ZERO, 15_000, |now, d| {
+        if !homing && d.status().online && now > Duration::from_millis(1500) {
+            d.set_goal(
+                now,
+                0,
+                Goal::Home {
+                    velocity: 20.0 * 640.0,
+                },
+            )
+            .expect("home");
+            homing = true;
+        }
+        let state = d.channel(0);
+        if homing && done.is_none() && (state.homed || state.fault.is_some()) {
+            done = Some((state.homed, state.fault));
+        }
+    });
+    assert_eq!(done, Some((true, None)), "homed, no fault");
+    let p6 = sent.iter().find_map(|(_, r)| match r {
+        Request::MotorParameters {
+            motor: 0, options, ..
+        } => Some(options.bits() & 0x60),
+        _ => None,
+    });
+    assert_eq!(
+        p6,
+        Some(0x40),
+        "StopNoRef in bit 6, NullPositive (bit 5) clear"
+    );
+}
