@@ -534,7 +534,12 @@ fn qq2drv_velocity_ramp_names_a_reading_of_packet_36() {
         )
     };
     let unsigned = parse(&with("\"unsigned\""));
-    assert!(described(&unsigned, device, "velocity_ramp").starts_with("unsigned"));
+    let text = described(&unsigned, device, "velocity_ramp");
+    assert!(text.starts_with("unsigned"), "{text}");
+    assert!(
+        text.len() <= motion_ipc::PARAM_TEXT_LEN,
+        "whole in a MachineParam: {text}"
+    );
     let drivers = motiond::boards::build(&unsigned).expect("drivers");
     assert_eq!(drivers.len(), 1);
     for bad in ["\"reverse\"", "\"Signed\""] {

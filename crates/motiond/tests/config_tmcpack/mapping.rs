@@ -350,6 +350,13 @@ fn describe_lists_every_key_with_the_value_in_effect() {
     assert!(value(&rows, dev, "ready_output").starts_with("motors [0, 1], reference [0]"));
     assert!(value(&rows, dev, "amax_divisor").starts_with("16 (7.1 defaults"));
     assert!(value(&rows, dev, "stop_no_ref_bit").starts_with("6 ($15 prose"));
+    // Whole in `MachineParam`'s 40 bytes, as `motionctl list` shows them.
+    for key in ["amax_divisor", "stop_no_ref_bit"] {
+        assert!(
+            value(&rows, dev, key).len() <= motion_ipc::PARAM_TEXT_LEN,
+            "{key}"
+        );
+    }
     assert_eq!(
         value(&rows, x, "current.peak"),
         "60.2 % ($10 = 154, 0.48 A)"
@@ -387,7 +394,7 @@ fn describe_lists_every_key_with_the_value_in_effect() {
     assert_eq!(value(&rows, dev, "packet_timeout_ms"), "6 ms ($41)");
     assert_eq!(value(&rows, dev, "ready_output"), "off");
     assert!(value(&rows, dev, "amax_divisor").starts_with("64 ($14 text"));
-    assert!(value(&rows, dev, "stop_no_ref_bit").starts_with("5 ($15 P6 table"));
+    assert!(value(&rows, dev, "stop_no_ref_bit").starts_with("5 ($15 table"));
     assert!(value(&rows, x, "current.peak").starts_with("not written"));
     assert_eq!(value(&rows, x, "reference.side"), "left ($15 NullLeft set)");
     assert_eq!(value(&rows, x, "analog_stop.right"), "1023 (no function)");

@@ -114,12 +114,9 @@ impl Qq2drvDriverConfig {
             owner: ParamOwner::Device,
             key: "velocity_ramp",
             value: match reading {
-                VelocityRampSign::Signed => {
-                    "signed (packet 36 Velocity an I32, negative for reverse)"
-                }
-                VelocityRampSign::Unsigned => {
-                    "unsigned (packet 36 \"Range: 0 - 100,000\": reverse by packets 28 and 22)"
-                }
+                // At most 40 bytes: `MachineParam`'s text.
+                VelocityRampSign::Signed => "signed (36 velocity an I32)",
+                VelocityRampSign::Unsigned => "unsigned (reverse by packets 28, 22)",
             }
             .to_owned(),
         });

@@ -314,8 +314,8 @@ impl TmcpackDriverConfig {
             dev,
             "amax_divisor",
             match self.amax_divisor {
-                AmaxDivisor::By64 => "64 ($14 text: \"1/64 amax is accumulated with 500Hz\")",
-                AmaxDivisor::By16 => "16 (7.1 defaults: \"increments v by 128/16=8 each 2 ms\")",
+                AmaxDivisor::By64 => "64 ($14 text: amax/64 per 2 ms)",
+                AmaxDivisor::By16 => "16 (7.1 defaults: amax/16 per 2 ms)",
             }
             .into(),
         );
@@ -323,8 +323,8 @@ impl TmcpackDriverConfig {
             dev,
             "stop_no_ref_bit",
             match self.options_layout {
-                OptionsLayout::Table => "5 ($15 P6 table: StopNoRef bit 5, NullPositive bit 6)",
-                OptionsLayout::Prose => "6 ($15 prose: StopNoRef bit 6, NullPositive bit 5)",
+                OptionsLayout::Table => "5 ($15 table: StopNoRef bit 5)",
+                OptionsLayout::Prose => "6 ($15 prose: StopNoRef bit 6)",
             }
             .into(),
         );
