@@ -708,5 +708,7 @@ mod io;
 mod lag;
 #[path = "engine_qq2drv/off.rs"]
 mod off;
+#[path = "engine_qq2drv/readings.rs"]
+mod readings;
 #[path = "engine_qq2drv/wire.rs"]
 mod wire;

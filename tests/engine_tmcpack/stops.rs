@@ -164,9 +164,13 @@ fn a_stop_of_a_motor_the_driver_believes_idle_goes_on_the_wire() {
     let clock = tmcpack::StepClock::new(clkdiv, div).expect("valid clock");
     let requested = MAX_ACCEL_MM * COUNTS;
     if let Some(amax) = amax {
-        let rate = clock.accel_hz_per_s(amax).expect("valid amax");
+        let rate = clock
+            .accel_hz_per_s(amax, tmcpack::AmaxDivisor::By64)
+            .expect("valid amax");
         assert!(rate >= requested, "{rate} < {requested}");
-        let below = clock.accel_hz_per_s(amax - 1).expect("valid amax");
+        let below = clock
+            .accel_hz_per_s(amax - 1, tmcpack::AmaxDivisor::By64)
+            .expect("valid amax");
         assert!(below < requested, "the closest amax at or above");
     }
     assert_eq!(motor(&board, 0).action, Action::Inactive);

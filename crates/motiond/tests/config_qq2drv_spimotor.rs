@@ -519,6 +519,55 @@ fn spimotor_stepper_keys_on_a_brushed_board_are_errors() {
     );
 }
 
+/// Packet 36: an I32 "Velocity" with "Range: 0 - 100,000". `velocity_ramp` names the
+/// board's reading ("signed" by default); anything else is refused at its line with both
+/// readings listed, and the key is a qq2drv key only.
+#[test]
+fn qq2drv_velocity_ramp_names_a_reading_of_packet_36() {
+    let device = Owner::Device(0);
+    assert!(described(&parse(QQ2DRV), device, "velocity_ramp").starts_with("signed"));
+    let with = |value: &str| {
+        QQ2DRV.replacen(
+            "model = \"qq2drv\"",
+            &format!("model = \"qq2drv\"\nvelocity_ramp = {value}"),
+            1,
+        )
+    };
+    let unsigned = parse(&with("\"unsigned\""));
+    let text = described(&unsigned, device, "velocity_ramp");
+    assert!(text.starts_with("unsigned"), "{text}");
+    assert!(
+        text.len() <= motion_ipc::PARAM_TEXT_LEN,
+        "whole in a MachineParam: {text}"
+    );
+    let drivers = motiond::boards::build(&unsigned).expect("drivers");
+    assert_eq!(drivers.len(), 1);
+    for bad in ["\"reverse\"", "\"Signed\""] {
+        assert_fails(
+            "ramp.toml",
+            &with(bad),
+            "velocity_ramp",
+            "device[0].velocity_ramp",
+            "allowed: \"signed\"",
+        );
+    }
+    let (code, stderr) = check("ramp.toml", &with("1"));
+    assert_eq!(code, Some(1), "not a string: {stderr}");
+    assert!(stderr.contains("velocity_ramp"), "{stderr}");
+    let spimotor = SPIMOTOR.replacen(
+        "intensity = 96",
+        "intensity = 96\nvelocity_ramp = \"signed\"",
+        1,
+    );
+    assert_fails(
+        "ramp_on_spimotor.toml",
+        &spimotor,
+        "velocity_ramp",
+        "device[0].velocity_ramp",
+        "it is valid on: qq2drv",
+    );
+}
+
 #[test]
 fn spimotor_keys_on_a_qq2drv_name_spimotor() {
     let text = QQ2DRV.replace("model = \"qq2drv\"", "model = \"qq2drv\"\nintensity = 32");

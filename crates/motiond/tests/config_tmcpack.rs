@@ -455,6 +455,59 @@ fn line_timing_keys_are_in_2_ms_units_and_fit_a_word() {
     }
 }
 
+/// The two readings of `$14` ("1/64 amax is accumulated with 500Hz" against 7.1's
+/// "increments v by 128/16=8 each 2 ms") and of `$15` P6 ("Bit 5: StopNoRef" against
+/// "StopNoRef(P6, Bit 6)") are the only values; anything else is refused at its line.
+#[test]
+fn firmware_readings_take_only_the_manuals_two_values() {
+    for good in [
+        "amax_divisor = 64",
+        "amax_divisor = 16",
+        "stop_no_ref_bit = 5",
+        "stop_no_ref_bit = 6",
+    ] {
+        let (code, stderr) = check("reading.toml", &on_device(good));
+        assert_eq!(code, Some(0), "{good}: {stderr}");
+    }
+    let cases = [
+        ("amax_divisor = 32", "device[0].amax_divisor", "allowed: 64"),
+        (
+            "amax_divisor = 0",
+            "device[0].amax_divisor",
+            "or 16 (manual 7.1",
+        ),
+        (
+            "amax_divisor = -64",
+            "device[0].amax_divisor",
+            "not a reading of $14",
+        ),
+        (
+            "stop_no_ref_bit = 7",
+            "device[0].stop_no_ref_bit",
+            "allowed: 5",
+        ),
+        (
+            "stop_no_ref_bit = 0",
+            "device[0].stop_no_ref_bit",
+            "or 6 (its prose",
+        ),
+        (
+            "stop_no_ref_bit = 261",
+            "device[0].stop_no_ref_bit",
+            "not a reading of $15 P6",
+        ),
+    ];
+    for (value, key, says) in cases {
+        let text = on_device(value);
+        let needle = value.split(' ').next().unwrap_or(value);
+        fails_at("reading.toml", &text, needle, 0, key, says);
+    }
+    // Not an integer: the TOML type is refused at the key.
+    let (code, stderr) = check("reading.toml", &on_device("amax_divisor = \"64\""));
+    assert_eq!(code, Some(1), "{stderr}");
+    assert!(stderr.contains("amax_divisor"), "{stderr}");
+}
+
 #[test]
 fn the_ready_output_names_motors_of_the_variant_and_owns_ttlout1() {
     let text = on_device("ready_output = { motors = [0, 7] }");
@@ -543,13 +596,15 @@ analog_stop = { left = 10 }
     }
     let device = qq2drv.replace(
         "model = \"qq2drv\"",
-        "model = \"qq2drv\"\nreply_address = 3\nswitchover_ms = 4\npacket_timeout_ms = 10\nready_output = {}",
+        "model = \"qq2drv\"\nreply_address = 3\nswitchover_ms = 4\npacket_timeout_ms = 10\nready_output = {}\namax_divisor = 16\nstop_no_ref_bit = 6",
     );
     for key in [
         "reply_address",
         "switchover_ms",
         "packet_timeout_ms",
         "ready_output",
+        "amax_divisor",
+        "stop_no_ref_bit",
     ] {
         fails_at(
             "device_model.toml",

@@ -10,17 +10,55 @@
 //! - `power_limit`: fraction 0.0..=1.0 of full power, packet 24 Set Power Limit
 //!   (0..=8191).
 //!
+//! Per `[[device]]`:
+//! - `velocity_ramp = "signed" | "unsigned"`: how the board reads packet 36's Velocity
+//!   (an I32 with "Range: 0 - 100,000"; docs/ARCHITECTURE.md), default `"signed"`.
+//!
 //! Across tables: a link clocked above the datasheet's recommended 500 kHz ("We recommend
 //! clocking SPI up to 500kHz") gets a warning on its `speed_hz`.
 
-use motion_board::keys::{AxisContext, Int, KeyIssues, KeyTable, Spanned};
+use motion_board::keys::{AxisContext, DeviceContext, Int, KeyIssues, KeyTable, Spanned};
 use motion_board::machine::MachineView;
-use motion_board::{AxisKeys, Given, HomeHints};
+use motion_board::{AxisKeys, DeviceKeys, Given, HomeHints};
 use motion_drivers::Model;
 use motion_drivers::spec::{Direction, HomeInput, HomeInputKind};
+use qq2drv::limits::VelocityRampSign;
 use serde::Deserialize;
 
-use crate::{PidKeys, Qq2drvAxisKeys};
+use crate::{PidKeys, Qq2drvAxisKeys, Qq2drvDeviceKeys};
+
+/// The qq2drv keys of a `[[device]]` as written; its fields name the keys the board has
+/// (`key_names`, for the server's key check).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct RawDevice {
+    velocity_ramp: Option<Spanned<String>>,
+}
+
+/// Validates the qq2drv keys of a `[[device]]` table.
+pub(crate) fn device_keys(
+    v: &mut dyn KeyIssues,
+    ctx: &DeviceContext,
+    keys: &KeyTable<'_>,
+) -> Option<DeviceKeys> {
+    let raw: RawDevice = keys.parse(v)?;
+    let mut out = Qq2drvDeviceKeys::default();
+    if let Some(value) = &raw.velocity_ramp {
+        out.velocity_ramp = Some(v.one_of(
+            value,
+            &ctx.key("velocity_ramp"),
+            &[
+                ("signed", VelocityRampSign::Signed),
+                ("unsigned", VelocityRampSign::Unsigned),
+            ],
+            "reading of packet 36",
+            "\"signed\" (packet 36 Velocity is an I32, as packet 22's \"-100,000 shl 12 - \
+             100,000 shl 12\": reverse is negative; the default), \"unsigned\" (its \
+             \"Range: 0 - 100,000\": reverse goes out as packets 28 and 22)",
+        )?);
+    }
+    Some(DeviceKeys::new(out, HomeHints::default()))
+}
 
 /// The qq2drv keys of an `[[axis]]` as written.
 #[derive(Debug, Deserialize)]

@@ -12,17 +12,17 @@ pub mod machine_keys;
 pub mod sim;
 mod standalone;
 
-use motion_board::keys::{AxisContext, KeyIssues, KeyTable};
+use motion_board::keys::{AxisContext, DeviceContext, KeyIssues, KeyTable, key_names};
 use motion_board::machine::MachineView;
 use motion_board::{
-    AxisKeys, Board, LinkFacts, SimBoard, StandaloneError, StandaloneHelp, StandaloneSim,
-    TypedBoard,
+    AxisKeys, Board, DeviceKeys, LinkFacts, SimBoard, StandaloneError, StandaloneHelp,
+    StandaloneSim, TypedBoard,
 };
 use motion_drivers::spec::{DeviceMachine, DriverSpec, MachineKeys, Param, SpecError};
 use motion_drivers::{Driver, Model, PinInfo};
 
 use driver::{PINS, Qq2drvDriver, Qq2drvDriverConfig};
-pub use machine_keys::{PidKeys, Qq2drvAxisKeys};
+pub use machine_keys::{PidKeys, Qq2drvAxisKeys, Qq2drvDeviceKeys};
 
 /// The QuadQuad2Drv.
 #[derive(Debug, Clone, Copy)]
@@ -56,6 +56,19 @@ impl Board for Qq2drvBoard {
 
     fn params(&self, spec: &DriverSpec) -> Result<Vec<Param>, SpecError> {
         Qq2drvDriverConfig::from_spec(spec).map(|config| config.params(spec))
+    }
+
+    fn device_key_names(&self) -> &'static [&'static str] {
+        key_names::<keys::RawDevice>()
+    }
+
+    fn device_keys(
+        &self,
+        keys: &KeyTable<'_>,
+        ctx: &DeviceContext,
+        issues: &mut dyn KeyIssues,
+    ) -> Option<DeviceKeys> {
+        keys::device_keys(issues, ctx, keys)
     }
 
     fn axis_key_names(&self) -> &'static [&'static str] {

@@ -3,6 +3,17 @@
 //! `Qq2drvDriverConfig::from_spec` converts them. The server holds them opaquely in
 //! `motion_drivers::spec::MachineKeys`.
 
+use qq2drv::limits::VelocityRampSign;
+
+/// The qq2drv keys of one `[[device]]`; `None` fields were not set (the driver's default
+/// applies).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Qq2drvDeviceKeys {
+    /// `velocity_ramp`: how the board reads packet 36's Velocity, `"signed"` (default) or
+    /// `"unsigned"` ("Range: 0 - 100,000").
+    pub velocity_ramp: Option<VelocityRampSign>,
+}
+
 /// One PID table as given; `None` fields were not set (the datasheet default applies).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct PidKeys {

@@ -24,6 +24,8 @@ pub(crate) struct RawDevice {
     switchover_ms: Option<Spanned<Int>>,
     packet_timeout_ms: Option<Spanned<Int>>,
     ready_output: Option<Spanned<RawReadyOutput>>,
+    amax_divisor: Option<Spanned<Int>>,
+    stop_no_ref_bit: Option<Spanned<Int>>,
 }
 
 /// `ready_output = { motors = [0, 1], reference = [0] }`: TTLOUT1 as the ready output
@@ -214,6 +216,14 @@ pub(crate) fn device_keys(
             Some(ms) => keys.packet_timeout_ms = Some(ms as u32),
             None => ok = false,
         }
+    }
+    if let Some(value) = &raw.amax_divisor {
+        keys.amax_divisor = crate::readings::amax_divisor(v, ctx, value);
+        ok &= keys.amax_divisor.is_some();
+    }
+    if let Some(value) = &raw.stop_no_ref_bit {
+        keys.stop_no_ref_bit = crate::readings::stop_no_ref_bit(v, ctx, value);
+        ok &= keys.stop_no_ref_bit.is_some();
     }
     if let Some(ready) = &raw.ready_output {
         let motors: u8 = match variant {

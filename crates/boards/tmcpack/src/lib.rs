@@ -9,6 +9,7 @@
 pub mod driver;
 mod keys;
 pub mod machine_keys;
+mod readings;
 pub mod sim;
 mod standalone;
 

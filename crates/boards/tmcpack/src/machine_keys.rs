@@ -36,6 +36,10 @@ pub struct TmcpackDeviceKeys {
     pub packet_timeout_ms: Option<u32>,
     /// TTLOUT1 as the ready output.
     pub ready_output: Option<ReadyOutputKeys>,
+    /// `$14` divisor of the pack's firmware: 64 (the `$14` text) or 16 (7.1's defaults).
+    pub amax_divisor: Option<u8>,
+    /// `$15` P6 bit of StopNoRef in the pack's firmware: 5 (the table) or 6 (the prose).
+    pub stop_no_ref_bit: Option<u8>,
 }
 
 /// `current = { … }` ($10, $11).

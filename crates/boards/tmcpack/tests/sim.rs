@@ -7,6 +7,8 @@ mod host;
 mod io;
 #[path = "sim/motion.rs"]
 mod motion;
+#[path = "sim/readings.rs"]
+mod readings;
 #[path = "sim/reference.rs"]
 mod reference;
 #[path = "sim/unit.rs"]

@@ -37,6 +37,8 @@ reply_address = 200
 switchover_ms = 4
 packet_timeout_ms = 10
 ready_output = { motors = [0, 1], reference = [0] }
+amax_divisor = 16
+stop_no_ref_bit = 6
 
 [[axis]]
 name = "x"
@@ -183,11 +185,13 @@ fn expected() -> Vec<Request> {
             right_max: 900,
         },
         // rotary, "deg": one revolution = 360 · 8.8889 = 3200 µsteps; side left (default).
+        // stop_no_ref_bit = 6: StopNoRef in bit 6, where the table has NullPositive (the
+        // manual's prose, "StopNoRef(P6, Bit 6)"); motor 0 above has both bits either way.
         Request::MotorParameters {
             motor: 1,
             poslimit: 3200,
             motor_type: MotorType::FILTER_SWITCH | MotorType::NULL_LEFT | MotorType::ROTARY,
-            options: MotorOptions::FAST_REF | MotorOptions::STOP_NO_REF,
+            options: MotorOptions::FAST_REF | MotorOptions::NULL_POSITIVE,
         },
         Request::ReadyOutput {
             active_mask: MotorMask::M0 | MotorMask::M1,
@@ -293,11 +297,13 @@ fn value<'r>(rows: &'r [ParamRow], owner: Owner, key: &str) -> &'r str {
         .unwrap_or_else(|| panic!("no row {owner:?} {key}"))
 }
 
-const DEVICE_KEYS: [&str; 4] = [
+const DEVICE_KEYS: [&str; 6] = [
     "reply_address",
     "switchover_ms",
     "packet_timeout_ms",
     "ready_output",
+    "amax_divisor",
+    "stop_no_ref_bit",
 ];
 const AXIS_KEYS: [&str; 20] = [
     "current.peak",
@@ -342,6 +348,15 @@ fn describe_lists_every_key_with_the_value_in_effect() {
     assert_eq!(value(&rows, dev, "switchover_ms"), "4 ms ($40)");
     assert_eq!(value(&rows, dev, "packet_timeout_ms"), "10 ms ($41)");
     assert!(value(&rows, dev, "ready_output").starts_with("motors [0, 1], reference [0]"));
+    assert!(value(&rows, dev, "amax_divisor").starts_with("16 (7.1 defaults"));
+    assert!(value(&rows, dev, "stop_no_ref_bit").starts_with("6 ($15 prose"));
+    // Whole in `MachineParam`'s 40 bytes, as `motionctl list` shows them.
+    for key in ["amax_divisor", "stop_no_ref_bit"] {
+        assert!(
+            value(&rows, dev, key).len() <= motion_ipc::PARAM_TEXT_LEN,
+            "{key}"
+        );
+    }
     assert_eq!(
         value(&rows, x, "current.peak"),
         "60.2 % ($10 = 154, 0.48 A)"
@@ -378,6 +393,8 @@ fn describe_lists_every_key_with_the_value_in_effect() {
     assert_eq!(value(&rows, dev, "switchover_ms"), "2 ms ($40)");
     assert_eq!(value(&rows, dev, "packet_timeout_ms"), "6 ms ($41)");
     assert_eq!(value(&rows, dev, "ready_output"), "off");
+    assert!(value(&rows, dev, "amax_divisor").starts_with("64 ($14 text"));
+    assert!(value(&rows, dev, "stop_no_ref_bit").starts_with("5 ($15 table"));
     assert!(value(&rows, x, "current.peak").starts_with("not written"));
     assert_eq!(value(&rows, x, "reference.side"), "left ($15 NullLeft set)");
     assert_eq!(value(&rows, x, "analog_stop.right"), "1023 (no function)");
@@ -454,4 +471,62 @@ fn the_simulated_pack_has_the_switch_on_the_configured_side() {
         });
         assert_eq!(done, Some((true, None)), "side {side}: homed, no fault");
     }
+}
+
+/// The simulated pack of a device with `amax_divisor = 16` and `stop_no_ref_bit = 6` has
+/// that firmware (`sim::machine`): with a closer (`active = "low"`) the driver's `$15` P6
+/// has StopNoRef alone, in bit 6, which the table's reading would take for NullPositive
+/// and search with the switch's polarity inverted. The search finds the switch.
+#[test]
+fn the_simulated_pack_has_the_firmware_readings_of_its_device() {
+    let text = super::GOOD.replacen(
+        "type = \"serial\"\npath = \"/dev/does-not-exist-motiond-test\"",
+        "type = \"sim\"",
+        1,
+    );
+    let text = text.replacen(
+        "address = 1",
+        "address = 1\namax_divisor = 16\nstop_no_ref_bit = 6",
+        1,
+    );
+    let text = text.replacen(
+        "max_accel = 100.0",
+        "max_accel = 100.0\nreference = { side = \"left\", active = \"low\" }",
+        1,
+    );
+    let config = parse(&text);
+    let mut drivers = motiond::boards::build(&config).expect("drivers");
+    let driver = drivers.get_mut(0).expect("driver");
+    let mut link = motiond::boards::sim_link(&config, 0);
+    let mut homing = false;
+    let mut done = None;
+    let sent = run(&mut *driver, &mut link, Duration::ZERO, 15_000, |now, d| {
+        if !homing && d.status().online && now > Duration::from_millis(1500) {
+            d.set_goal(
+                now,
+                0,
+                Goal::Home {
+                    velocity: 20.0 * 640.0,
+                },
+            )
+            .expect("home");
+            homing = true;
+        }
+        let state = d.channel(0);
+        if homing && done.is_none() && (state.homed || state.fault.is_some()) {
+            done = Some((state.homed, state.fault));
+        }
+    });
+    assert_eq!(done, Some((true, None)), "homed, no fault");
+    let p6 = sent.iter().find_map(|(_, r)| match r {
+        Request::MotorParameters {
+            motor: 0, options, ..
+        } => Some(options.bits() & 0x60),
+        _ => None,
+    });
+    assert_eq!(
+        p6,
+        Some(0x40),
+        "StopNoRef in bit 6, NullPositive (bit 5) clear"
+    );
 }

@@ -19,6 +19,7 @@ fn bench(c: &mut Criterion) {
     };
     let data = MotionData::sample(&masks, [1, -2, 3, -4], [10, 20, 30, 40], [Status(8); 4]);
     let stream = Reply::StreamData(StreamData {
+        code: None,
         timing: Some(108),
         periods_elapsed: Some(1),
         data,

@@ -132,13 +132,14 @@ impl PacketId {
 impl PacketId {
     /// The longest packet this id can have in either direction: the largest layout of the
     /// get replies and of packet 3 (all four channels with 32-bit position, velocity and
-    /// status, plus the stream timing fields), 255 for the multi-entry packets.
+    /// status, plus the stream timing fields and a Return Code, which the text has and the
+    /// table does not), 255 for the multi-entry packets.
     pub const fn max_packet_len(self) -> usize {
         const CHANNEL: usize = 4 + 4 + 1;
         match self {
             Self::GetVersion => MIN_PACKET_LEN + 4,
             Self::GetMotionData => MIN_PACKET_LEN + 1 + 4 * CHANNEL,
-            Self::StreamData => MIN_PACKET_LEN + 3 + 4 * CHANNEL,
+            Self::StreamData => MIN_PACKET_LEN + 1 + 3 + 4 * CHANNEL,
             Self::SetStreamPeriod | Self::GetStreamPeriod => MIN_PACKET_LEN + 3,
             Self::GetDataMask => MIN_PACKET_LEN + 5,
             Self::SetStreamConfig | Self::GetStreamConfig => MIN_PACKET_LEN + 2,

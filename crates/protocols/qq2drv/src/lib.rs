@@ -39,9 +39,12 @@
 //! # Interpretations
 //! Where the datasheet is silent or contradicts itself this crate follows
 //! `docs/ARCHITECTURE.md`, "How we read the datasheets": the checksum makes the byte sum zero,
-//! fields are little-endian, return code 0 is success, packet 3 has no return code, packet 18
+//! fields are little-endian, return code 0 is success, packet 3 is read with or without a
+//! Return Code (its text and its table disagree; Packet Size tells), packet 18
 //! Power is I16, packets 22/36 velocities are plain transitions/s while 26/34 velocities and
 //! all accelerations are shl 12, and the packet-14 Position is omitted in Disabled mode.
+//! Packet 36's I32 Velocity with "Range: 0 - 100,000" is read either way, as the caller
+//! says ([`limits::VelocityRampSign`]).
 //! Two more of our own: the reply to packet 11 in its one-byte (channel mask) form carries
 //! 32-bit positions (the datasheet gives no size), and a get request that fails is answered
 //! by its Return Code alone ([`Reply::Ack`] with a non-zero code).

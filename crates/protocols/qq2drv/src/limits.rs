@@ -66,6 +66,33 @@ pub fn duration_to_stream_units(d: core::time::Duration) -> u16 {
     u16::try_from(units).unwrap_or(u16::MAX)
 }
 
+/// How the board's firmware reads packet 36's Velocity. The datasheet gives two readings
+/// (docs/ARCHITECTURE.md): the field is an I32, where packet 34's Velocity is a U32, and
+/// packet 22's I32 Velocity Target ranges "-100,000 shl 12 - 100,000 shl 12"; yet packet
+/// 36's text says "Range: 0 - 100,000". A board that reads it as unsigned may answer a
+/// negative value with an error, clamp it, or run forward at full speed: nothing on the
+/// wire tells the readings apart safely, so it is a per-device setting (`velocity_ramp`,
+/// docs/keys/qq2drv.md).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum VelocityRampSign {
+    /// A signed velocity, negative for reverse (the field's I32, packet 22's range). The
+    /// default.
+    #[default]
+    Signed,
+    /// Forward only, "Range: 0 - 100,000": a reverse velocity target goes out as packet 22.
+    Unsigned,
+}
+
+impl VelocityRampSign {
+    /// Whether packet 36 can carry `velocity` (transitions/s) under this reading.
+    pub const fn carries(self, velocity: i32) -> bool {
+        match self {
+            Self::Signed => velocity.unsigned_abs() <= VELOCITY_TARGET_MAX.unsigned_abs(),
+            Self::Unsigned => 0 <= velocity && velocity <= VELOCITY_TARGET_MAX,
+        }
+    }
+}
+
 /// Maximum Averaging Time for a "Maximum Averaging Time in Bits" value (2^bits × 0.64 µs).
 pub fn averaging_time(bits: u8) -> core::time::Duration {
     let ticks = 1u128 << bits.min(64);
@@ -94,5 +121,23 @@ mod tests {
         // Packet 12 table: 20 bits → 671.1 ms, 14 bits → 10.5 ms.
         assert_eq!(averaging_time(20).as_micros(), 671_088);
         assert_eq!(averaging_time(14).as_micros(), 10_485);
+    }
+
+    /// Packet 36: an I32 "Velocity" with "Range: 0 - 100,000".
+    #[test]
+    fn packet_36_velocity_readings() {
+        assert_eq!(VelocityRampSign::default(), VelocityRampSign::Signed);
+        for v in [0, 1, 100_000] {
+            assert!(VelocityRampSign::Signed.carries(v));
+            assert!(VelocityRampSign::Unsigned.carries(v));
+        }
+        for v in [-1, -100_000] {
+            assert!(VelocityRampSign::Signed.carries(v));
+            assert!(!VelocityRampSign::Unsigned.carries(v));
+        }
+        for v in [100_001, -100_001, i32::MIN, i32::MAX] {
+            assert!(!VelocityRampSign::Signed.carries(v));
+            assert!(!VelocityRampSign::Unsigned.carries(v));
+        }
     }
 }

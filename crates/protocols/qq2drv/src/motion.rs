@@ -6,7 +6,8 @@
 
 use crate::error::Error;
 use crate::fields::{
-    CHANNELS, DataMask, PositionSize, PositionValue, Status, StreamConfig, position_size_of,
+    CHANNELS, DataMask, PositionSize, PositionValue, ReturnCode, Status, StreamConfig,
+    position_size_of,
 };
 use crate::wire::{Reader, Writer};
 
@@ -53,7 +54,9 @@ impl MotionLayout {
         1 + self.channels_len()
     }
 
-    /// Payload length of a packet-3 stream packet (optional timing fields plus channel data).
+    /// Payload length of a packet-3 stream packet (optional timing fields plus channel
+    /// data), without a Return Code; a board that sends one makes it one byte longer
+    /// ([`StreamData::code`]).
     pub fn stream_payload_len(&self) -> usize {
         usize::from(self.stream_config.timing()) * 2
             + usize::from(self.stream_config.periods_elapsed())
@@ -180,9 +183,18 @@ impl MotionData {
     }
 }
 
-/// Packet 3 - Binary Stream Data (no Return Code, docs/ARCHITECTURE.md).
+/// Packet 3 - Binary Stream Data.
+///
+/// Its text says every field is optional "except for *Return Code*", its table shows no
+/// Return Code ("QuadQuad2Drv PCB Datasheet", interface protocol v1, packet 3). Both forms
+/// are read: the layout gives the payload's length without one, and Packet Size says whether
+/// the board sent one more byte in front (docs/ARCHITECTURE.md). Any other length is an
+/// error.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct StreamData {
+    /// Return Code, when the board sends one (the text's reading); `None` as the table
+    /// shows the packet.
+    pub code: Option<ReturnCode>,
     /// Stream Period Timing in 40.96 µs units, clipped at 0xFFFF.
     pub timing: Option<u16>,
     /// Stream Periods Elapsed since the last transmitted packet, clipped at 0xFF.
@@ -193,6 +205,9 @@ pub struct StreamData {
 
 impl StreamData {
     pub(crate) fn write(&self, w: &mut Writer<'_>) -> Result<(), Error> {
+        if let Some(code) = self.code {
+            w.u8(code.0)?;
+        }
         if let Some(t) = self.timing {
             w.u16(t)?;
         }
@@ -202,7 +217,18 @@ impl StreamData {
         self.data.write(w)
     }
 
-    pub(crate) fn read(r: &mut Reader<'_>, layout: &MotionLayout) -> Result<Self, Error> {
+    /// Reads a payload of `len` bytes: with a Return Code in front when it is one byte
+    /// longer than the layout's.
+    pub(crate) fn read(
+        r: &mut Reader<'_>,
+        layout: &MotionLayout,
+        len: usize,
+    ) -> Result<Self, Error> {
+        let code = if len == layout.stream_payload_len() + 1 {
+            Some(ReturnCode(r.u8()?))
+        } else {
+            None
+        };
         let timing = if layout.stream_config.timing() {
             Some(r.u16()?)
         } else {
@@ -215,6 +241,7 @@ impl StreamData {
         };
         let data = MotionData::read(r, &layout.data_masks)?;
         Ok(Self {
+            code,
             timing,
             periods_elapsed,
             data,
@@ -223,7 +250,8 @@ impl StreamData {
 
     /// Bytes of payload.
     pub fn encoded_len(&self) -> usize {
-        usize::from(self.timing.is_some()) * 2
+        usize::from(self.code.is_some())
+            + usize::from(self.timing.is_some()) * 2
             + usize::from(self.periods_elapsed.is_some())
             + self.data.encoded_len()
     }

@@ -39,7 +39,8 @@ pub enum Reply {
         /// Channel data, as the data masks select.
         data: MotionData,
     },
-    /// 3 - Binary Stream Data (no Return Code).
+    /// 3 - Binary Stream Data (a Return Code only when the board sends one:
+    /// [`StreamData::code`]).
     StreamData(StreamData),
     /// 5 - Get Stream Period.
     StreamPeriod {
@@ -102,7 +103,7 @@ impl Reply {
         }
     }
 
-    /// The Return Code; `None` for stream data, which has none.
+    /// The Return Code; for stream data the one the board sent, if any.
     pub const fn code(&self) -> Option<ReturnCode> {
         match self {
             Self::Version { code, .. }
@@ -113,7 +114,7 @@ impl Reply {
             | Self::Positions { code, .. }
             | Self::HistoryDimensions { code, .. }
             | Self::Ack { code, .. } => Some(*code),
-            Self::StreamData(_) => None,
+            Self::StreamData(s) => s.code,
         }
     }
 
@@ -132,7 +133,8 @@ impl Reply {
     }
 
     fn write_payload(&self, w: &mut Writer<'_>) -> Result<(), Error> {
-        if let Some(code) = self.code() {
+        // Stream data writes its own (optional) Return Code.
+        if let (false, Some(code)) = (matches!(self, Self::StreamData(_)), self.code()) {
             w.u8(code.0)?;
         }
         match self {
@@ -168,7 +170,7 @@ impl Reply {
         let id = PacketId::try_from(frame.id)?;
         let mut r = Reader::new(frame.payload);
         if id == PacketId::StreamData {
-            let s = StreamData::read(&mut r, &layout.motion)?;
+            let s = StreamData::read(&mut r, &layout.motion, frame.payload.len())?;
             r.finish()?;
             return Ok(Self::StreamData(s));
         }

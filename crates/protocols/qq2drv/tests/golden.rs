@@ -151,6 +151,7 @@ fn packet_3_stream_has_no_return_code_and_optional_timing_fields() {
     layout.motion.data_masks = [DataMask::new(PositionSize::I16, false, false, false); 4];
     layout.motion.stream_config = StreamConfig::new(true, true);
     let stream = StreamData {
+        code: None,
         timing: Some(108),
         periods_elapsed: Some(1),
         data: MotionData::sample(
@@ -168,6 +169,73 @@ fn packet_3_stream_has_no_return_code_and_optional_timing_fields() {
     // Without the timing fields the same channel data is three bytes shorter.
     layout.motion.stream_config = StreamConfig(0);
     assert_eq!(layout.motion.stream_payload_len(), 8);
+}
+
+/// Packet 3 - Binary Stream Data: its text, "Each quadrature channel and field in the reply
+/// payload, except for *Return Code*, is optional", names a Return Code its table
+/// ("[Stream Period Timing] [Stream Periods Elapsed] [Channel 1 Data] …") does not show.
+/// Both forms decode, told apart by Packet Size; any other size is an error, never a
+/// shifted read.
+#[test]
+fn packet_3_with_and_without_a_return_code() {
+    let mut layout = ReplyLayout::default();
+    layout.motion.data_masks = [DataMask::new(PositionSize::I16, false, false, false); 4];
+    layout.motion.stream_config = StreamConfig::new(true, false);
+    let data = MotionData::sample(
+        &layout.motion.data_masks,
+        [1, -2, 3, -4],
+        [0; 4],
+        [Status(0); 4],
+    );
+    // The table's form: timing 108 (0x6C), then four I16 positions.
+    let table = [2, 14, 3, 108, 0, 1, 0, 0xFE, 0xFF, 3, 0, 0xFC, 0xFF, 0];
+    let mut table = table;
+    fix_checksum(&mut table);
+    let without = StreamData {
+        code: None,
+        timing: Some(108),
+        periods_elapsed: None,
+        data,
+    };
+    assert_eq!(
+        Reply::parse(&table, &layout),
+        Ok(Reply::StreamData(without))
+    );
+    assert_eq!(encode_rep(&Reply::StreamData(without)), table);
+    // The text's form: Return Code 0 in front, one byte longer; the same fields.
+    let mut text = [2, 15, 3, 0, 108, 0, 1, 0, 0xFE, 0xFF, 3, 0, 0xFC, 0xFF, 0];
+    fix_checksum(&mut text);
+    let with = StreamData {
+        code: Some(ReturnCode(0)),
+        ..without
+    };
+    assert_eq!(Reply::parse(&text, &layout), Ok(Reply::StreamData(with)));
+    assert_eq!(encode_rep(&Reply::StreamData(with)), text);
+    // A non-zero code is kept for the caller to report (docs/ARCHITECTURE.md).
+    text[3] = 5;
+    fix_checksum(&mut text);
+    let Ok(reply) = Reply::parse(&text, &layout) else {
+        panic!("a stream packet with code 5 decodes");
+    };
+    assert_eq!(reply.code(), Some(ReturnCode(5)));
+    // One byte short, or two long: neither reading; an error, not a shifted packet.
+    for size in [13u8, 16, 17] {
+        let mut odd = vec![0u8; usize::from(size)];
+        odd[..3].copy_from_slice(&[2, size, 3]);
+        fix_checksum(&mut odd);
+        assert!(Reply::parse(&odd, &layout).is_err(), "size {size}");
+    }
+}
+
+/// Sets the last byte so that the 8-bit sum of the packet is 0.
+fn fix_checksum(packet: &mut [u8]) {
+    let Some((last, rest)) = packet.split_last_mut() else {
+        return;
+    };
+    *last = rest
+        .iter()
+        .fold(0u8, |sum, b| sum.wrapping_add(*b))
+        .wrapping_neg();
 }
 
 #[test]

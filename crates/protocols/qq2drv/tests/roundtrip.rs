@@ -180,18 +180,24 @@ proptest! {
         prop_assert!(data.matches(&data_masks));
         // A non-zero code with no data at all is an error reply (Ack); keep the typed one.
         let code = if motion.channels_len() == 0 { ReturnCode(0) } else { ReturnCode(code) };
+        let stream = StreamData {
+            code: None,
+            timing: motion.stream_config.timing().then_some(timing),
+            periods_elapsed: motion.stream_config.periods_elapsed().then_some(elapsed),
+            data,
+        };
         let replies = [
-            Reply::MotionData { code, data },
-            Reply::StreamData(StreamData {
-                timing: motion.stream_config.timing().then_some(timing),
-                periods_elapsed: motion.stream_config.periods_elapsed().then_some(elapsed),
-                data,
-            }),
+            (Reply::MotionData { code, data }, motion.motion_payload_len()),
+            // Packet 3 as its table shows it, and with the Return Code its text names.
+            (Reply::StreamData(stream), motion.stream_payload_len()),
+            (
+                Reply::StreamData(StreamData { code: Some(code), ..stream }),
+                motion.stream_payload_len() + 1,
+            ),
         ];
-        for reply in replies {
+        for (reply, expect_len) in replies {
             let mut buf = [0u8; 255];
             let n = reply.encode(&mut buf).map_err(|e| TestCaseError::fail(e.to_string()))?;
-            let expect_len = if reply.id() == PacketId::StreamData { motion.stream_payload_len() } else { motion.motion_payload_len() };
             prop_assert_eq!(n, expect_len + 4);
             prop_assert_eq!(Reply::parse(&buf[..n], &layout), Ok(reply));
         }

@@ -58,6 +58,14 @@ fn packets() -> Vec<Vec<u8>> {
             data,
         },
         Reply::StreamData(StreamData {
+            code: None,
+            timing: Some(0x0202),
+            periods_elapsed: Some(2),
+            data,
+        }),
+        // Packet 3 with the Return Code its text names ("except for Return Code").
+        Reply::StreamData(StreamData {
+            code: Some(ReturnCode(0)),
             timing: Some(0x0202),
             periods_elapsed: Some(2),
             data,

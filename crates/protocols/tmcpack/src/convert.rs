@@ -2,8 +2,9 @@
 //! 8.5 (supply voltage) and 8.6 ($40 baud rate, 2 ms time units).
 //!
 //! Microstep frequency: `f = 20 MHz / (clkdiv + 1) · v / 2^(14 + div)`, with clkdiv 0..=31,
-//! div 0..=3, v −511..=511, and f at most 200 kHz. Acceleration: `amax / 64` is added to the
-//! velocity 500 times a second.
+//! div 0..=3, v −511..=511, and f at most 200 kHz. Acceleration: `amax / d` is added to the
+//! velocity 500 times a second, where the manual gives two readings of `d` ([`AmaxDivisor`]):
+//! 64 in the `$14` text, 16 in section 7.1's defaults.
 
 use core::time::Duration;
 
@@ -18,8 +19,44 @@ pub const MAX_MICROSTEP_HZ: f64 = 200_000.0;
 pub const RAMP_HZ: u32 = 500;
 /// One ramp tick, 2 ms; also the unit of T0, $40 delays and $41 timeouts.
 pub const TICK: Duration = Duration::from_millis(2);
-/// `amax / AMAX_DIVISOR` is accumulated per tick.
+/// The largest `$14` divisor: `amax / AMAX_DIVISOR` is accumulated per tick under the
+/// default reading ([`AmaxDivisor::By64`]); a velocity in 1/`AMAX_DIVISOR` units represents
+/// either reading exactly.
 pub const AMAX_DIVISOR: u32 = 64;
+
+/// How much of `$14` amax the pack adds to the velocity every 2 ms tick. The manual gives
+/// two readings ("SIXpack / QUADpack manual" V2.43, docs/ARCHITECTURE.md); nothing on the
+/// wire tells them apart before a ramp runs, so it is a per-device setting
+/// (`amax_divisor`, docs/keys/tmcpack.md).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum AmaxDivisor {
+    /// amax / 64 per tick: 8.3 `$14`, "1/64 amax is accumulated with 500Hz during
+    /// acceleration to vact", with "0 < amax <= vstart * 64". The default.
+    #[default]
+    By64,
+    /// amax / 16 per tick: 7.1 "Default Values", "amax=128; // increments v by 128/16=8
+    /// each 2 ms". Every ramp is 4× harsher than under [`AmaxDivisor::By64`].
+    By16,
+}
+
+impl AmaxDivisor {
+    /// The divisor, 64 or 16.
+    pub const fn get(self) -> u32 {
+        match self {
+            Self::By64 => 64,
+            Self::By16 => 16,
+        }
+    }
+
+    /// The reading of divisor `d`; `None` for anything but 64 and 16.
+    pub const fn from_divisor(d: u32) -> Option<Self> {
+        match d {
+            64 => Some(Self::By64),
+            16 => Some(Self::By16),
+            _ => None,
+        }
+    }
+}
 /// Microsteps per full step (resolution 1/16).
 pub const MICROSTEPS_PER_FULLSTEP: u32 = 16;
 /// Clock cycles per ramp tick: 20 MHz / 500 Hz. A motor at velocity v advances
@@ -102,23 +139,24 @@ impl StepClock {
         Ok(v as i16)
     }
 
-    /// The microstep acceleration (Hz/s) of `amax`: amax/64 velocity units per 2 ms.
-    pub fn accel_hz_per_s(self, amax: u16) -> Result<f64, Error> {
+    /// The microstep acceleration (Hz/s) of `amax`: amax/d velocity units per 2 ms, `d`
+    /// the divisor of the pack's reading.
+    pub fn accel_hz_per_s(self, amax: u16, divisor: AmaxDivisor) -> Result<f64, Error> {
         if amax == 0 || amax > MAX_AMAX {
             return Err(Error::OutOfRange { field: "amax" });
         }
-        Ok(f64::from(amax) / f64::from(AMAX_DIVISOR) * f64::from(RAMP_HZ) * self.hz_per_unit())
+        Ok(f64::from(amax) / f64::from(divisor.get()) * f64::from(RAMP_HZ) * self.hz_per_unit())
     }
 
-    /// The `amax` closest to a microstep acceleration in Hz/s.
-    pub fn amax_for_accel(self, hz_per_s: f64) -> Result<u16, Error> {
+    /// The `amax` closest to a microstep acceleration in Hz/s under the pack's reading.
+    pub fn amax_for_accel(self, hz_per_s: f64, divisor: AmaxDivisor) -> Result<u16, Error> {
         if !hz_per_s.is_finite() || hz_per_s <= 0.0 {
             return Err(Error::OutOfRange {
                 field: "acceleration",
             });
         }
         let amax =
-            (hz_per_s * f64::from(AMAX_DIVISOR) / f64::from(RAMP_HZ) / self.hz_per_unit()).round();
+            (hz_per_s * f64::from(divisor.get()) / f64::from(RAMP_HZ) / self.hz_per_unit()).round();
         if amax < 1.0 || amax > f64::from(MAX_AMAX) {
             return Err(Error::OutOfRange { field: "amax" });
         }
@@ -127,13 +165,16 @@ impl StepClock {
 }
 
 /// Checks the relations between ramp parameters that manual 8.3 states:
-/// `0 < amax <= vstart · 64`, `vmin <= vstart`, `vstart <= vrefmax <= vmax <= 511`.
+/// `0 < amax <= vstart · d` (the `$14` text's "vstart * 64" under its own reading: one
+/// tick's change at most vstart; under the 7.1 reading, d = 16, the same bound is
+/// `vstart · 16`), `vmin <= vstart`, `vstart <= vrefmax <= vmax <= 511`.
 pub fn check_ramp_relations(
     vmin: u16,
     vstart: u16,
     vmax: u16,
     vrefmax: u16,
     amax: u16,
+    divisor: AmaxDivisor,
 ) -> Result<(), Error> {
     let ok = |c: bool, field| {
         if c {
@@ -143,7 +184,7 @@ pub fn check_ramp_relations(
         }
     };
     ok(
-        amax > 0 && u32::from(amax) <= u32::from(vstart) * AMAX_DIVISOR,
+        amax > 0 && u32::from(amax) <= u32::from(vstart) * divisor.get(),
         "amax",
     )?;
     ok(vmin <= vstart, "vmin")?;

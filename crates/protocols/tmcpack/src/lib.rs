@@ -48,8 +48,11 @@
 //! - Requests are validated against the tabled ranges on encode and on decode (a word out of
 //!   range is an error, not clamped); unused bytes are ignored when decoding.
 //! - $15 `poslimit` is tabled as "0..0x7FFFFFF"; we accept the full positive 32-bit range.
-//! - $14 says amax/64 is accumulated at 500 Hz; the 7.1 defaults comment "128/16=8" disagrees
-//!   and we follow the $14 table.
+//! - $14 says amax/64 is accumulated at 500 Hz; the 7.1 defaults comment "128/16=8" disagrees.
+//!   Both readings are [`AmaxDivisor`] (the $14 text's 64 by default); the caller says
+//!   which its pack follows.
+//! - $15 P6 StopNoRef is bit 5 in the table and bit 6 in the prose: both readings are
+//!   [`OptionsLayout`] (the table's by default), which maps [`MotorOptions`] onto the byte.
 //! - The $41 timeout has no documented default: [`DEFAULT_PACKET_TIMEOUT`] is 20 ms.
 //! - $F7 (read EEPROM) is tabled with the same parameters and response as $F6; we encode it
 //!   as tabled.
@@ -79,7 +82,7 @@ mod types;
 
 pub use can::{CAN_LEN, CanChannel, CanFrame, can_id, split_can_id};
 pub use command::Command;
-pub use convert::{StepClock, Variant};
+pub use convert::{AmaxDivisor, StepClock, Variant};
 pub use decoder::{DEFAULT_PACKET_TIMEOUT, DecoderStats, FrameDecoder, Words};
 pub use error::Error;
 pub use reply::{MAX_ANALOG, Reply, ReplyFrame};
@@ -88,7 +91,7 @@ pub use request::{
     Request, RequestFrame,
 };
 pub use types::{
-    Action, CanBitrate, CurrentLevel, MAX_MOTOR, MotorMask, MotorOptions, MotorType,
+    Action, CanBitrate, CurrentLevel, MAX_MOTOR, MotorMask, MotorOptions, MotorType, OptionsLayout,
     PowerDownRequest, PowerDownStatus, RefInputs, ReferenceFlags, check_motor,
 };
 

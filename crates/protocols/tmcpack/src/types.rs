@@ -297,6 +297,56 @@ flags! {
     }
 }
 
+/// Where the pack's firmware keeps StopNoRef and NullPositive in `$15` P6. The manual
+/// ("SIXpack / QUADpack manual" V2.43, 8.3 `$15`) gives two readings: its table has
+/// "Bit 5: StopNoRef" and "Bit 6: NullPositive"; its prose says "StopNoRef(P6, Bit 6)"
+/// twice (under P5 bit 3 TestNull and bit 6 StopNull). If the prose is right the table
+/// swapped the two rows, so NullPositive is then bit 5. Nothing on the wire tells them
+/// apart (`$15` cannot be read back), so it is a per-device setting (`stop_no_ref_bit`,
+/// docs/keys/tmcpack.md). [`MotorOptions`] always names the flags as the table does; this
+/// maps them to and from the byte on the wire.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum OptionsLayout {
+    /// The table: StopNoRef bit 5, NullPositive bit 6. The default.
+    #[default]
+    Table,
+    /// The prose: StopNoRef bit 6, NullPositive bit 5.
+    Prose,
+}
+
+impl OptionsLayout {
+    /// The bit of StopNoRef: 5 (table) or 6 (prose).
+    pub const fn stop_no_ref_bit(self) -> u8 {
+        match self {
+            Self::Table => 5,
+            Self::Prose => 6,
+        }
+    }
+
+    /// The reading whose StopNoRef is `bit`; `None` for anything but 5 and 6.
+    pub const fn from_stop_no_ref_bit(bit: u8) -> Option<Self> {
+        match bit {
+            5 => Some(Self::Table),
+            6 => Some(Self::Prose),
+            _ => None,
+        }
+    }
+
+    /// The P6 byte carrying `options` under this reading; applied to a byte off the wire it
+    /// gives the options back (swapping bits 5 and 6 is its own inverse).
+    pub const fn wire(self, options: MotorOptions) -> MotorOptions {
+        match self {
+            Self::Table => options,
+            Self::Prose => {
+                let bits = options.bits();
+                let five = (bits >> 5) & 1;
+                let six = (bits >> 6) & 1;
+                MotorOptions::from_bits_retain((bits & !0x60) | (five << 6) | (six << 5))
+            }
+        }
+    }
+}
+
 flags! {
     /// $16 P5 (manual 8.3 "Reference Search Parameters").
     ReferenceFlags: u8 {

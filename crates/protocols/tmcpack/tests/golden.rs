@@ -1,9 +1,9 @@
 //! Golden vectors from the SIXpack/QUADpack manual (V2.43), quoting the sections.
 
-use tmcpack::convert::{self, StepClock, Variant};
+use tmcpack::convert::{self, AmaxDivisor, StepClock, Variant};
 use tmcpack::{
-    Action, CanFrame, Command, CurrentLevel, Error, MotorMask, MotorOptions, MotorType, Reply,
-    ReplyFrame, Request, RequestFrame,
+    Action, CanFrame, Command, CurrentLevel, Error, MotorMask, MotorOptions, MotorType,
+    OptionsLayout, Reply, ReplyFrame, Request, RequestFrame,
 };
 
 const PACK: u8 = 1;
@@ -206,11 +206,91 @@ fn manual_8_2_microstep_frequency_matches_7_1_comments() {
         Err(Error::OutOfRange { field: "div" })
     );
     // $14: "1/64 amax is accumulated with 500Hz": amax 128 adds 2 per 2 ms = 1000 units/s.
-    let a = c.accel_hz_per_s(128).expect("ok");
+    let a = c.accel_hz_per_s(128, AmaxDivisor::By64).expect("ok");
     assert!((a - 1000.0 * c.hz_per_unit()).abs() < 1e-6);
-    assert_eq!(c.amax_for_accel(a), Ok(128));
-    assert!(convert::check_ramp_relations(4, 5, 511, 100, 128).is_ok());
-    assert!(convert::check_ramp_relations(4, 5, 511, 100, 321).is_err());
+    assert_eq!(c.amax_for_accel(a, AmaxDivisor::By64), Ok(128));
+    assert!(convert::check_ramp_relations(4, 5, 511, 100, 128, AmaxDivisor::By64).is_ok());
+    assert!(convert::check_ramp_relations(4, 5, 511, 100, 321, AmaxDivisor::By64).is_err());
+}
+
+/// The two readings of the `$14` divisor. 8.3 `$14`: "1/64 amax is accumulated with 500Hz
+/// during acceleration to vact", "0 < amax <= vstart * 64 (default: amax =128)"; 7.1
+/// "Default Values": "amax=128; // increments v by 128/16=8 each 2 ms".
+#[test]
+fn manual_8_3_and_7_1_amax_divisor_readings() {
+    let c = StepClock::DEFAULT;
+    assert_eq!(AmaxDivisor::default(), AmaxDivisor::By64);
+    assert_eq!(AmaxDivisor::from_divisor(64), Some(AmaxDivisor::By64));
+    assert_eq!(AmaxDivisor::from_divisor(16), Some(AmaxDivisor::By16));
+    for d in [0, 1, 15, 17, 32, 63, 65, 128] {
+        assert_eq!(AmaxDivisor::from_divisor(d), None, "{d}");
+    }
+    // 7.1: amax 128 increments v by 8 each 2 ms = 4000 units/s, 4× the $14 reading.
+    let by16 = c.accel_hz_per_s(128, AmaxDivisor::By16).expect("ok");
+    let by64 = c.accel_hz_per_s(128, AmaxDivisor::By64).expect("ok");
+    assert!((by16 - 4000.0 * c.hz_per_unit()).abs() < 1e-6);
+    assert!((by16 - 4.0 * by64).abs() < 1e-6);
+    // The same acceleration asks for a quarter of the amax under the 7.1 reading.
+    assert_eq!(c.amax_for_accel(by64, AmaxDivisor::By16), Ok(32));
+    assert_eq!(c.amax_for_accel(by16, AmaxDivisor::By16), Ok(128));
+    // One tick's change stays within vstart: vstart 5 allows amax 320 at /64, 80 at /16.
+    assert!(convert::check_ramp_relations(4, 5, 511, 100, 320, AmaxDivisor::By64).is_ok());
+    assert!(convert::check_ramp_relations(4, 5, 511, 100, 80, AmaxDivisor::By16).is_ok());
+    assert_eq!(
+        convert::check_ramp_relations(4, 5, 511, 100, 81, AmaxDivisor::By16),
+        Err(Error::OutOfRange { field: "amax" })
+    );
+    // The 7.1 defaults themselves (vstart 5, amax 128) satisfy the relation only under /64.
+    assert!(convert::check_ramp_relations(4, 5, 511, 100, 128, AmaxDivisor::By16).is_err());
+}
+
+/// The two readings of `$15` P6. 8.3 `$15`, the table: "Bit 5: StopNoRef", "Bit 6:
+/// NullPositive"; the prose under P5 bits 3 and 6: "if StopNoRef(P6, Bit 6)=0".
+#[test]
+fn manual_8_3_stop_no_ref_bit_readings() {
+    assert_eq!(OptionsLayout::default(), OptionsLayout::Table);
+    assert_eq!(
+        OptionsLayout::from_stop_no_ref_bit(5),
+        Some(OptionsLayout::Table)
+    );
+    assert_eq!(
+        OptionsLayout::from_stop_no_ref_bit(6),
+        Some(OptionsLayout::Prose)
+    );
+    for bit in [0, 1, 2, 3, 4, 7, 8, 255] {
+        assert_eq!(OptionsLayout::from_stop_no_ref_bit(bit), None, "{bit}");
+    }
+    let options = MotorOptions::STOP_NO_REF | MotorOptions::FAST_REF | MotorOptions::STOP_SOFT;
+    // FastRef bit 1, StopSoft bit 4, StopNoRef bit 5 (table) or 6 (prose).
+    assert_eq!(OptionsLayout::Table.wire(options).bits(), 0b0011_0010);
+    assert_eq!(OptionsLayout::Prose.wire(options).bits(), 0b0101_0010);
+    // NullPositive moves the other way; both set, or neither, the byte is the same.
+    assert_eq!(
+        OptionsLayout::Prose
+            .wire(MotorOptions::NULL_POSITIVE)
+            .bits(),
+        0b0010_0000
+    );
+    let both = MotorOptions::STOP_NO_REF | MotorOptions::NULL_POSITIVE;
+    assert_eq!(OptionsLayout::Prose.wire(both), both);
+    // On the wire: $15 motor 0, poslimit 6400, type 0, P6 as the prose reads it.
+    let request = Request::MotorParameters {
+        motor: 0,
+        poslimit: 6400,
+        motor_type: MotorType::EMPTY,
+        options: OptionsLayout::Prose.wire(MotorOptions::STOP_NO_REF),
+    };
+    assert_eq!(
+        word(request),
+        [0x01, 0x15, 0x00, 0x00, 0x19, 0x00, 0x00, 0x00, 0x40]
+    );
+    // Every byte maps back to itself through the same reading.
+    for bits in 0..=u8::MAX {
+        let o = MotorOptions::from_bits_retain(bits);
+        for layout in [OptionsLayout::Table, OptionsLayout::Prose] {
+            assert_eq!(layout.wire(layout.wire(o)), o);
+        }
+    }
 }
 
 /// Manual 8.6 $40: "baud rate divisor=20MHz/(16*baud rate)"; 6.1: "pre-set to 6ms".

@@ -276,7 +276,11 @@ impl Channel {
         for packet in packets.iter() {
             self.unacked += 1;
             match packet {
-                Packet::AccelLimit(0) => self.lifted = true,
+                // Not the channel's own limit: a stop's 0, or a reverse ramp's acceleration
+                // (`velocity_ramp = "unsigned"`); the next step writes it back.
+                Packet::AccelLimit(limit) if limit != self.own_accel_limit() => {
+                    self.lifted = true;
+                }
                 Packet::Input { config, .. } if config.mode() != InputMode::Disabled => {
                     self.armed = true;
                 }
@@ -301,7 +305,7 @@ impl Channel {
             Packet::Mode(mode) => self.board_mode = mode,
             // "Set absolute position value": the channel now has a reference.
             Packet::SetCounter(_) => self.homed = true,
-            Packet::AccelLimit(limit) if limit != 0 => self.lifted = false,
+            Packet::AccelLimit(limit) if limit == self.own_accel_limit() => self.lifted = false,
             Packet::Input { config, .. } if config.mode() == InputMode::Disabled => {
                 self.armed = false;
             }

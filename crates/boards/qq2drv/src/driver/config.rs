@@ -2,7 +2,9 @@
 
 use core::time::Duration;
 
-use qq2drv::limits::{POSITION_PID_DEFAULT, POWER_LIMIT_MAX, STREAM_TICK_NS, VELOCITY_PID_DEFAULT};
+use qq2drv::limits::{
+    POSITION_PID_DEFAULT, POWER_LIMIT_MAX, STREAM_TICK_NS, VELOCITY_PID_DEFAULT, VelocityRampSign,
+};
 use qq2drv::{CHANNELS, HistoryDimensions, InputMode};
 
 pub use motion_drivers::spec::AxisLimits;
@@ -97,6 +99,11 @@ pub struct ChannelConfig {
     /// see [`PINS`](super::PINS)). A channel without an axis but with a pin is streamed
     /// with its Status byte only.
     pub pins: u8,
+    /// How the board reads packet 36's Velocity (the device's `velocity_ramp` key):
+    /// signed (default), or forward only, when a reverse velocity goes out as packet 28
+    /// (the ramp's acceleration as the limit) and packet 22, the channel's own limit
+    /// written back by the next step.
+    pub velocity_ramp: VelocityRampSign,
 }
 
 impl Default for ChannelConfig {
@@ -109,6 +116,7 @@ impl Default for ChannelConfig {
             position_pid: PositionPid::default(),
             velocity_pid: VelocityPid::default(),
             pins: 0,
+            velocity_ramp: VelocityRampSign::Signed,
         }
     }
 }

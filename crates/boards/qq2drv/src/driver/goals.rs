@@ -4,6 +4,7 @@
 
 use core::time::Duration;
 
+use qq2drv::limits::VelocityRampSign;
 use qq2drv::{CHANNELS, ControlMode, EdgeAction, InputConfig, InputMode};
 
 use super::Qq2drvDriver;
@@ -43,7 +44,28 @@ impl Channel {
 
     /// Packet 28 with the channel's own acceleration limit (as start-up writes it).
     pub(super) fn accel_limit(&self) -> Packet {
-        Packet::AccelLimit(super::startup::accel_limit(self.config.limits.max_accel))
+        Packet::AccelLimit(self.own_accel_limit())
+    }
+
+    /// The channel's own acceleration limit, shl 12.
+    pub(super) fn own_accel_limit(&self) -> u32 {
+        super::startup::accel_limit(self.config.limits.max_accel)
+    }
+
+    /// A velocity target ramped at `accel` (0: no ramp of its own, the limit applies):
+    /// packet 36, or where the board reads packet 36 as forward only ("Range: 0 -
+    /// 100,000") and `velocity` is negative, packet 28 with `accel` as the limit (none for
+    /// 0; never above the channel's own, which "still applies" to packet 36 too) and packet
+    /// 22, whose target the acceleration limit ramps the same way.
+    fn velocity_ramp(&self, out: &mut Packets, velocity: i32, accel: u32) {
+        if self.config.velocity_ramp == VelocityRampSign::Signed || velocity >= 0 {
+            out.push(Packet::VelocityRamp { velocity, accel });
+            return;
+        }
+        if accel != 0 {
+            out.push(Packet::AccelLimit(accel.min(self.own_accel_limit())));
+        }
+        out.push(Packet::VelocityTarget(velocity));
     }
 
     /// The packets of the current step, in order.
@@ -95,7 +117,7 @@ impl Channel {
             }
             Step::Velocity { velocity, accel } => {
                 out.push(velocity_mode);
-                out.push(VelocityRamp { velocity, accel });
+                self.velocity_ramp(&mut out, velocity, accel);
             }
             Step::Stop { .. } | Step::StopLift { .. } => {
                 let velocity = match self.step {
@@ -105,7 +127,7 @@ impl Channel {
                 out.push(Mode(ControlMode::Off));
                 out.push(velocity_mode);
                 out.push(Packet::AccelLimit(0));
-                out.push(VelocityRamp { velocity, accel: 0 });
+                self.velocity_ramp(&mut out, velocity, 0);
             }
             Step::StopRamp { accel, .. } => {
                 out.push(VelocityRamp { velocity: 0, accel });
@@ -124,12 +146,12 @@ impl Channel {
             Step::HomeBackoff { velocity, accel } => {
                 out.push(self.input(false));
                 out.push(velocity_mode);
-                out.push(VelocityRamp { velocity, accel });
+                self.velocity_ramp(&mut out, velocity, accel);
             }
             Step::HomeSearch { velocity, accel } => {
                 out.push(self.input(true));
                 out.push(velocity_mode);
-                out.push(VelocityRamp { velocity, accel });
+                self.velocity_ramp(&mut out, velocity, accel);
             }
         }
         out

@@ -43,6 +43,13 @@ impl Qq2drvDriver {
             return;
         };
         if let Reply::StreamData(data) = reply {
+            // Packet 3 with a Return Code (its text's reading: docs/ARCHITECTURE.md): a
+            // non-zero one is the board's error to report, and its data is not used.
+            if data.code.is_some_and(|code| !code.is_success()) {
+                self.status.bad_replies = self.status.bad_replies.saturating_add(1);
+                self.raise(DeviceFault::BoardError);
+                return;
+            }
             self.on_stream(now, &data);
             return;
         }

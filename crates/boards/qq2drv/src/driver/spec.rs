@@ -7,8 +7,9 @@ use qq2drv::InputMode;
 use qq2drv::limits::POWER_LIMIT_MAX;
 
 use super::{HomeInput, PINS_PER_CHANNEL, PositionPid, Qq2drvDriverConfig, VelocityPid};
-use crate::Qq2drvAxisKeys;
+use crate::{Qq2drvAxisKeys, Qq2drvDeviceKeys};
 use motion_drivers::spec::{Direction, DriverSpec, HomeInputKind, Param, ParamOwner, SpecError};
+use qq2drv::limits::VelocityRampSign;
 
 /// The machine keys of the axis on `channel`, if one drives it, with its index in
 /// `spec.axes`.
@@ -36,6 +37,11 @@ impl Qq2drvDriverConfig {
         if let Some(speed) = spec.line_rate {
             driver.speed_hz = speed;
         }
+        let velocity_ramp = spec
+            .machine
+            .get_or_default::<Qq2drvDeviceKeys>()
+            .velocity_ramp
+            .unwrap_or_default();
         for (channel, slot) in driver.channels.iter_mut().enumerate() {
             match spec.channel_limits(channel) {
                 Some(limits) => {
@@ -44,6 +50,7 @@ impl Qq2drvDriverConfig {
                 }
                 None => slot.enabled = false,
             }
+            slot.velocity_ramp = velocity_ramp;
             if let Some((_, keys)) = axis_of(spec, channel) {
                 let defaults = PositionPid::default();
                 let given = keys.pid_position;
@@ -96,9 +103,23 @@ impl Qq2drvDriverConfig {
 
     /// The machine parameters of the device's axes, as the driver uses them: per axis the
     /// PID constants (packets 30, 32), the power limit (packet 24) and the home input
-    /// (packet 14). The board has no device-level machine keys.
+    /// (packet 14); for the device, how it reads packet 36 (`velocity_ramp`).
     pub fn params(&self, spec: &DriverSpec) -> Vec<Param> {
         let mut out = Vec::new();
+        let reading = self
+            .channels
+            .first()
+            .map_or(VelocityRampSign::Signed, |c| c.velocity_ramp);
+        out.push(Param {
+            owner: ParamOwner::Device,
+            key: "velocity_ramp",
+            value: match reading {
+                // At most 40 bytes: `MachineParam`'s text.
+                VelocityRampSign::Signed => "signed (36 velocity an I32)",
+                VelocityRampSign::Unsigned => "unsigned (reverse by packets 28, 22)",
+            }
+            .to_owned(),
+        });
         for (channel, slot) in self.channels.iter().enumerate() {
             let Some((axis, _)) = axis_of(spec, channel) else {
                 continue;

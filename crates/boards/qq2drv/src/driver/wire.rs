@@ -10,6 +10,7 @@ use qq2drv::{
     AccelerationLimitEntry, ChannelMask, ControlMode, ControlModeEntry, Entries, InputConfig,
     InputModeEntry, MotionLayout, MotorPowerEntry, PacketId, PositionRampEntry,
     PositionTargetEntry, PositionValue, Request, SetPositionEntry, VelocityRampEntry,
+    VelocityTargetEntry,
 };
 
 use super::{
@@ -38,6 +39,9 @@ pub(super) enum Packet {
     },
     /// 36 - Velocity Ramp: plain transitions/s, acceleration shl 12.
     VelocityRamp { velocity: i32, accel: u32 },
+    /// 22 - Set Velocity Control Target, plain transitions/s: a reverse velocity on a board
+    /// whose packet 36 is forward only (`velocity_ramp = "unsigned"`).
+    VelocityTarget(i32),
     /// 10 - Set Position (32-bit value).
     SetCounter(i32),
     /// 14 - Set Input Mode; `position` is omitted when the mode is Disabled.
@@ -60,6 +64,7 @@ impl Packet {
             Self::Target(_) => PacketId::SetPositionTarget,
             Self::PositionRamp { .. } => PacketId::PositionRamp,
             Self::VelocityRamp { .. } => PacketId::VelocityRamp,
+            Self::VelocityTarget(_) => PacketId::SetVelocityTarget,
             Self::SetCounter(_) => PacketId::SetPosition,
             Self::Input { .. } => PacketId::SetInputMode,
             Self::AccelLimit(_) => PacketId::SetAccelerationLimit,
@@ -101,6 +106,13 @@ impl Packet {
                     channels,
                     velocity,
                     acceleration: accel,
+                }]))
+                .encode(buf)
+            }
+            Self::VelocityTarget(velocity) => {
+                Request::SetVelocityTarget(Entries::new(&[VelocityTargetEntry {
+                    channels,
+                    velocity,
                 }]))
                 .encode(buf)
             }

@@ -115,6 +115,12 @@ pub struct Qq2drvSimConfig {
     pub glitch_velocity: f64,
     /// Upper bound on queued replies; requests beyond it are dropped unanswered.
     pub max_queued_replies: usize,
+    /// Packet 3 starts with a Return Code (0), as its text says ("except for Return
+    /// Code"); `false` (default): none, as its table shows.
+    pub stream_return_code: bool,
+    /// How the firmware reads packet 36's Velocity: signed (default), or forward only
+    /// ("Range: 0 - 100,000"), answering a negative one with an out-of-range Return Code.
+    pub velocity_ramp: qq2drv::limits::VelocityRampSign,
 }
 
 impl Default for Qq2drvSimConfig {
@@ -132,6 +138,8 @@ impl Default for Qq2drvSimConfig {
             glitch_rate: 0.0,
             glitch_velocity: 80_000.0,
             max_queued_replies: 16,
+            stream_return_code: false,
+            velocity_ramp: qq2drv::limits::VelocityRampSign::Signed,
         }
     }
 }

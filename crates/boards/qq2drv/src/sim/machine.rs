@@ -47,6 +47,12 @@ pub(crate) fn model(spec: &DriverSpec, seed: u64) -> Qq2drvSim {
     Qq2drvSim::new(Qq2drvSimConfig {
         seed,
         inputs: inputs(spec),
+        // The firmware the device's `velocity_ramp` says it has.
+        velocity_ramp: spec
+            .machine
+            .get_or_default::<crate::Qq2drvDeviceKeys>()
+            .velocity_ramp
+            .unwrap_or_default(),
         ..Qq2drvSimConfig::default()
     })
 }

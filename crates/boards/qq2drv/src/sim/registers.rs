@@ -5,7 +5,7 @@ use core::time::Duration;
 
 use qq2drv::limits::{
     ACCELERATION_MAX, AVERAGING_BITS_RANGE, HISTORY_LENGTH_RANGE, POWER_LIMIT_MAX, POWER_MAX,
-    VELOCITY_LIMIT_MAX, VELOCITY_TARGET_MAX, WINDUP_MAX,
+    VELOCITY_LIMIT_MAX, VELOCITY_TARGET_MAX, VelocityRampSign, WINDUP_MAX,
 };
 use qq2drv::{
     CHANNELS, ChannelData, ChannelMask, MotionData, PacketBuf, PacketId, PositionValue, Reply,
@@ -14,8 +14,9 @@ use qq2drv::{
 
 use super::{Qq2drvSim, RC_MALFORMED, RC_OUT_OF_RANGE};
 
-/// Whether every value of the request is inside its documented range.
-fn in_range(req: &Request<'_>) -> bool {
+/// Whether every value of the request is inside its documented range; packet 36's
+/// Velocity as the board's firmware reads it (`reading`: signed, or "Range: 0 - 100,000").
+fn in_range(req: &Request<'_>, reading: VelocityRampSign) -> bool {
     match req {
         Request::SetMotorPower(e) => e
             .iter()
@@ -30,10 +31,9 @@ fn in_range(req: &Request<'_>) -> bool {
         Request::PositionRamp(e) => e
             .iter()
             .all(|x| x.velocity <= VELOCITY_LIMIT_MAX && x.acceleration <= ACCELERATION_MAX),
-        Request::VelocityRamp(e) => e.iter().all(|x| {
-            x.velocity.unsigned_abs() <= VELOCITY_TARGET_MAX.unsigned_abs()
-                && x.acceleration <= ACCELERATION_MAX
-        }),
+        Request::VelocityRamp(e) => e
+            .iter()
+            .all(|x| reading.carries(x.velocity) && x.acceleration <= ACCELERATION_MAX),
         Request::SetHistoryDimensions(d) => {
             HISTORY_LENGTH_RANGE.contains(&d.history_length)
                 && AVERAGING_BITS_RANGE.contains(&d.averaging_bits)
@@ -83,7 +83,7 @@ impl Qq2drvSim {
     pub(super) fn handle(&mut self, at: Duration, req: &Request<'_>) -> Reply {
         let id = req.id();
         let code = ReturnCode::SUCCESS;
-        if !in_range(req) {
+        if !in_range(req, self.config.velocity_ramp) {
             return Reply::Ack {
                 id,
                 code: ReturnCode(RC_OUT_OF_RANGE),
@@ -305,6 +305,7 @@ impl Qq2drvSim {
         let config = self.regs.layout.stream_config;
         let data = self.sample_motion();
         encode(&Reply::StreamData(StreamData {
+            code: self.config.stream_return_code.then_some(ReturnCode(0)),
             timing: config.timing().then_some(timing),
             periods_elapsed: config.periods_elapsed().then_some(elapsed),
             data,

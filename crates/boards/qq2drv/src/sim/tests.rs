@@ -294,3 +294,27 @@ fn random_traffic_never_breaks_the_model_and_every_request_is_answered_once() {
     }
     assert_eq!(decoder.stats().bad_packets(), 0);
 }
+
+/// Packet 3: its table shows no Return Code (the default), its text has one ("except for
+/// Return Code"); the simulator sends either, one byte longer with the code.
+#[test]
+fn stream_packets_carry_a_return_code_only_when_configured() {
+    for (with_code, extra) in [(false, 0), (true, 1)] {
+        let mut sim = Qq2drvSim::new(Qq2drvSimConfig {
+            stream_return_code: with_code,
+            ..Qq2drvSimConfig::default()
+        });
+        let layout = qq2drv::ReplyLayout {
+            motion: sim.regs.layout,
+            ..qq2drv::ReplyLayout::default()
+        };
+        let packet = sim.stream_packet(25, 1).expect("a stream packet");
+        let frame = packet.frame();
+        assert_eq!(
+            frame.payload.len(),
+            layout.motion.stream_payload_len() + extra
+        );
+        let reply = Reply::decode(frame, &layout).expect("decodes");
+        assert_eq!(reply.code(), with_code.then_some(OK));
+    }
+}

@@ -457,9 +457,9 @@ impl Channel {
                     && let Some(at) = self.rest_at
                 {
                     // The amax of a stop already under way: the rest bound from now on.
-                    let bound = Scale::stop_time(self.board_vmax, self.board_amax);
+                    let bound = self.scale.stop_time(self.board_vmax, self.board_amax);
                     self.rest_at = Some(at.max(wire_end + bound));
-                    let expected = Scale::stop_time(self.stop_speed, self.board_amax);
+                    let expected = self.scale.stop_time(self.stop_speed, self.board_amax);
                     self.rest_poll_at = self.rest_poll_at.map(|at| at.max(wire_end + expected));
                 }
             }
@@ -470,14 +470,14 @@ impl Channel {
             Request::Rotate { velocity, .. } => {
                 if velocity == 0 {
                     self.stop_speed = self.speed_now();
-                    let expected = Scale::stop_time(self.stop_speed, self.board_amax);
+                    let expected = self.scale.stop_time(self.stop_speed, self.board_amax);
                     self.rest_poll_at = Some(wire_end + expected);
                 }
                 self.motion = Motion::Rotation(velocity);
                 self.motion_seq = seq;
                 self.target = None;
                 if velocity == 0 {
-                    let bound = Scale::stop_time(self.board_vmax, self.board_amax);
+                    let bound = self.scale.stop_time(self.board_vmax, self.board_amax);
                     self.rest_at = Some(wire_end + bound);
                 }
             }

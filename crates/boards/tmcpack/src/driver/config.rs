@@ -3,12 +3,10 @@
 
 use core::time::Duration;
 
-use tmcpack::convert::{
-    AMAX_DIVISOR, DEFAULT_BAUD, F_CLK_HZ, MAX_MICROSTEP_HZ, RAMP_HZ, TICK, byte_time,
-};
+use tmcpack::convert::{DEFAULT_BAUD, F_CLK_HZ, MAX_MICROSTEP_HZ, RAMP_HZ, TICK, byte_time};
 use tmcpack::{
-    CurrentLevel, FRAME_LEN, MAX_AMAX, MAX_ANALOG, MAX_CLKDIV, MAX_DIV, MAX_VELOCITY, MotorOptions,
-    MotorType, ReferenceFlags, Request, StepClock, Variant,
+    AmaxDivisor, CurrentLevel, FRAME_LEN, MAX_AMAX, MAX_ANALOG, MAX_CLKDIV, MAX_DIV, MAX_VELOCITY,
+    MotorOptions, MotorType, OptionsLayout, ReferenceFlags, Request, StepClock, Variant,
 };
 
 use super::io::TmcpackIo;
@@ -180,6 +178,12 @@ pub struct TmcpackDriverConfig {
     pub channels: [Option<TmcpackChannel>; 6],
     /// Inputs to poll, outputs to drive, the ready output.
     pub io: TmcpackIo,
+    /// How much of `$14` amax the pack's firmware adds per 2 ms tick: amax/64 (the `$14`
+    /// text, default) or amax/16 (7.1's defaults); key `amax_divisor`.
+    pub amax_divisor: AmaxDivisor,
+    /// Where the pack's firmware keeps StopNoRef in `$15` P6: bit 5 (the table, default)
+    /// or bit 6 (the prose; NullPositive then bit 5); key `stop_no_ref_bit`.
+    pub options_layout: OptionsLayout,
 }
 
 impl TmcpackDriverConfig {
@@ -204,6 +208,8 @@ impl Default for TmcpackDriverConfig {
             bus_motors: 0,
             channels: [None; 6],
             io: TmcpackIo::default(),
+            amax_divisor: AmaxDivisor::By64,
+            options_layout: OptionsLayout::Table,
         }
     }
 }
@@ -220,8 +226,11 @@ pub(crate) struct Scale {
     pub vmax: u16,
     /// amax from the axis acceleration limit.
     pub amax: u16,
-    /// vstart: the smallest value with amax <= vstart · 64 ($14), for the amax of a stop at
-    /// the axis limit too (rounded up, see [`Scale::stop_amax`]).
+    /// The pack's `$14` reading: amax / divisor per 2 ms tick.
+    pub divisor: AmaxDivisor,
+    /// vstart: the smallest value with amax <= vstart · divisor ($14: "vstart * 64" under
+    /// its own reading), for the amax of a stop at the axis limit too (rounded up, see
+    /// [`Scale::stop_amax`]).
     pub vstart: u16,
     /// vrefmax programmed at start-up: a quarter of vmax, at least vstart.
     pub vrefmax: u16,
@@ -263,8 +272,8 @@ pub(crate) fn clkdiv_for(channels: &[Option<TmcpackChannel>]) -> u8 {
 }
 
 impl Scale {
-    /// The scales of `channel` under the global `clkdiv`.
-    pub fn new(clkdiv: u8, channel: &TmcpackChannel) -> Self {
+    /// The scales of `channel` under the global `clkdiv` and the pack's `$14` reading.
+    pub fn new(clkdiv: u8, channel: &TmcpackChannel, divisor: AmaxDivisor) -> Self {
         let limit = reachable(channel.max_velocity);
         let mut div = 0;
         for d in (0..=MAX_DIV).rev() {
@@ -276,9 +285,9 @@ impl Scale {
         let clock = StepClock::new(clkdiv, div).unwrap_or(StepClock::DEFAULT);
         let hz = clock.hz_per_unit();
         let vmax = units(limit, hz).clamp(1, MAX_VELOCITY);
-        let mut amax = amax_units(channel.max_accel, hz).clamp(1, MAX_AMAX);
-        let stop = amax_up(channel.max_accel, hz).clamp(1, MAX_AMAX);
-        let per = AMAX_DIVISOR as u16;
+        let mut amax = amax_units(channel.max_accel, hz, divisor).clamp(1, MAX_AMAX);
+        let stop = amax_up(channel.max_accel, hz, divisor).clamp(1, MAX_AMAX);
+        let per = divisor.get() as u16;
         let mut vstart = stop.max(amax).div_ceil(per).max(1);
         if vstart > vmax {
             vstart = vmax;
@@ -290,6 +299,7 @@ impl Scale {
             hz,
             vmax,
             amax,
+            divisor,
             vstart,
             vrefmax,
         }
@@ -297,12 +307,13 @@ impl Scale {
 
     /// The smallest velocity and acceleration this motor's clock represents: velocity 1
     /// (microsteps/s, manual "Instruction Set": f = f_clk / (clkdiv + 1) · v / 2^(14 + div))
-    /// and amax 1 (amax / 64 is accumulated at 500 Hz: 500/64 velocity units/s²).
+    /// and amax 1 (amax / divisor is accumulated at 500 Hz: 500/64 or 500/16 velocity
+    /// units/s²).
     pub fn floor(&self) -> motion_drivers::RateFloor {
         motion_drivers::RateFloor {
             velocity: self.hz,
             profile_velocity: self.hz,
-            accel: self.hz * f64::from(RAMP_HZ) / f64::from(AMAX_DIVISOR),
+            accel: self.hz * f64::from(RAMP_HZ) / f64::from(self.divisor.get()),
         }
     }
 
@@ -317,36 +328,35 @@ impl Scale {
     }
 
     /// The amax for an acceleration in microsteps/s², rounded down, at least 1 and at most
-    /// vstart · 64 (the $14 relation); `None` when not finite or not positive.
+    /// vstart · divisor (the $14 relation); `None` when not finite or not positive.
     pub fn amax(&self, accel: f64) -> Option<u16> {
         if !accel.is_finite() || accel <= 0.0 {
             return None;
         }
-        let cap = self
-            .vstart
-            .saturating_mul(AMAX_DIVISOR as u16)
-            .min(MAX_AMAX);
-        Some(amax_units(accel, self.hz).clamp(1, cap))
+        Some(amax_units(accel, self.hz, self.divisor).clamp(1, self.amax_cap()))
+    }
+
+    /// The largest amax the $14 relation allows with this vstart.
+    fn amax_cap(&self) -> u16 {
+        self.vstart
+            .saturating_mul(self.divisor.get() as u16)
+            .min(MAX_AMAX)
     }
 
     /// The amax of a stop at `decel` microsteps/s², rounded UP (a stop is never gentler
-    /// than asked), at least 1 and at most vstart · 64 (the $14 relation); `None` when not
-    /// finite or not positive.
+    /// than asked), at least 1 and at most vstart · divisor (the $14 relation); `None` when
+    /// not finite or not positive.
     pub fn stop_amax(&self, decel: f64) -> Option<u16> {
         if !decel.is_finite() || decel <= 0.0 {
             return None;
         }
-        let cap = self
-            .vstart
-            .saturating_mul(AMAX_DIVISOR as u16)
-            .min(MAX_AMAX);
-        Some(amax_up(decel, self.hz).clamp(1, cap))
+        Some(amax_up(decel, self.hz, self.divisor).clamp(1, self.amax_cap()))
     }
 
-    /// Upper bound of the time a motor at `v` needs to stop with `amax` (amax/64 per 2 ms
-    /// tick), plus two ticks.
-    pub fn stop_time(v: u16, amax: u16) -> Duration {
-        let ticks = (u32::from(v) * AMAX_DIVISOR).div_ceil(u32::from(amax.max(1))) + 2;
+    /// Upper bound of the time a motor at `v` needs to stop with `amax` (amax / divisor
+    /// per 2 ms tick), plus two ticks.
+    pub fn stop_time(&self, v: u16, amax: u16) -> Duration {
+        let ticks = (u32::from(v) * self.divisor.get()).div_ceil(u32::from(amax.max(1))) + 2;
         Duration::from_millis(2 * u64::from(ticks))
     }
 }
@@ -358,19 +368,19 @@ fn units(hz: f64, per_unit: f64) -> u16 {
 }
 
 /// amax for `accel`, rounded up.
-fn amax_up(accel: f64, per_unit: f64) -> u16 {
+fn amax_up(accel: f64, per_unit: f64, divisor: AmaxDivisor) -> u16 {
     if !accel.is_finite() || accel <= 0.0 {
         return 1;
     }
-    let a = accel * f64::from(AMAX_DIVISOR) / f64::from(RAMP_HZ) / per_unit;
+    let a = accel * f64::from(divisor.get()) / f64::from(RAMP_HZ) / per_unit;
     (a - EPS).ceil().clamp(0.0, f64::from(u16::MAX)) as u16
 }
 
-fn amax_units(accel: f64, per_unit: f64) -> u16 {
+fn amax_units(accel: f64, per_unit: f64, divisor: AmaxDivisor) -> u16 {
     if !accel.is_finite() || accel <= 0.0 {
         return 1;
     }
-    let a = accel * f64::from(AMAX_DIVISOR) / f64::from(RAMP_HZ) / per_unit;
+    let a = accel * f64::from(divisor.get()) / f64::from(RAMP_HZ) / per_unit;
     (a + EPS).floor().clamp(0.0, f64::from(u16::MAX)) as u16
 }
 
@@ -400,7 +410,7 @@ mod tests {
         ];
         let clkdiv = clkdiv_for(&chans);
         assert_eq!(clkdiv, 18);
-        let scale = Scale::new(clkdiv, &channel(32_000.0, 160_000.0));
+        let scale = Scale::new(clkdiv, &channel(32_000.0, 160_000.0), AmaxDivisor::By64);
         assert_eq!(scale.clock.div(), 0);
         assert_eq!(scale.vmax, 498); // 32000 / 64.25 = 498.05
         assert!(f64::from(scale.vmax) * scale.hz <= 32_000.0);
@@ -414,12 +424,12 @@ mod tests {
     #[test]
     fn slow_motors_get_a_larger_divider() {
         let clkdiv = 18;
-        let scale = Scale::new(clkdiv, &channel(1600.0, 6400.0));
+        let scale = Scale::new(clkdiv, &channel(1600.0, 6400.0), AmaxDivisor::By64);
         // div is at most 3: 1600 / (64.25 / 8) = 199.2, the finest the pack has.
         assert_eq!(scale.clock.div(), 3);
         assert_eq!(scale.vmax, 199);
         assert!(f64::from(scale.vmax) * scale.hz <= 1600.0);
-        let medium = Scale::new(clkdiv, &channel(12_000.0, 6400.0));
+        let medium = Scale::new(clkdiv, &channel(12_000.0, 6400.0), AmaxDivisor::By64);
         assert_eq!(medium.clock.div(), 1);
         assert!(medium.vmax >= 256, "vmax {}", medium.vmax);
     }
@@ -428,7 +438,7 @@ mod tests {
     fn the_200_khz_limit_caps_clkdiv_and_vmax() {
         let chans = [Some(channel(1e9, 1e6)), None, None, None, None, None];
         let clkdiv = clkdiv_for(&chans);
-        let scale = Scale::new(clkdiv, &channel(1e9, 1e6));
+        let scale = Scale::new(clkdiv, &channel(1e9, 1e6), AmaxDivisor::By64);
         assert!(f64::from(scale.vmax) * scale.hz <= MAX_MICROSTEP_HZ);
         assert!(scale.velocity(250_000.0).is_none());
         assert!(scale.velocity(f64::NAN).is_none());
@@ -441,7 +451,7 @@ mod tests {
 
     #[test]
     fn a_stop_decelerates_at_least_as_hard_as_asked() {
-        let scale = Scale::new(18, &channel(32_000.0, 160_000.0));
+        let scale = Scale::new(18, &channel(32_000.0, 160_000.0), AmaxDivisor::By64);
         // 160000 · 64 / 500 / 64.25 = 318.8: a move uses 318, a stop 319.
         assert_eq!(scale.amax(160_000.0), Some(318));
         assert_eq!(scale.stop_amax(160_000.0), Some(319));
@@ -468,6 +478,29 @@ mod tests {
     #[test]
     fn stop_time_counts_ticks_of_amax_over_64() {
         // 511 · 64 / 128 = 255.5 → 256 ticks + 2.
-        assert_eq!(Scale::stop_time(511, 128), Duration::from_millis(516));
+        let scale = Scale::new(18, &channel(32_000.0, 160_000.0), AmaxDivisor::By64);
+        assert_eq!(scale.stop_time(511, 128), Duration::from_millis(516));
+    }
+
+    /// Manual 7.1 "Default Values": "amax=128; // increments v by 128/16=8 each 2 ms". A
+    /// pack read that way gets a quarter of the amax for the same acceleration, a vstart
+    /// that keeps one tick's change within it, and stops in a quarter of the ticks.
+    #[test]
+    fn the_7_1_reading_divides_amax_by_16() {
+        let ch = channel(32_000.0, 160_000.0);
+        let by64 = Scale::new(18, &ch, AmaxDivisor::By64);
+        let by16 = Scale::new(18, &ch, AmaxDivisor::By16);
+        // 160000 · 16 / 500 / 64.25 = 79.7: a move uses 79, a stop 80.
+        assert_eq!(by16.amax, 79);
+        assert_eq!(by16.amax(160_000.0), Some(79));
+        assert_eq!(by16.stop_amax(160_000.0), Some(80));
+        // vstart: the smallest with 80 <= vstart · 16, as 319 <= 5 · 64 under $14's text.
+        assert_eq!((by64.vstart, by16.vstart), (5, 5));
+        let a = |amax: u16| f64::from(amax) / 16.0 * 500.0 * by16.hz;
+        assert!(a(80) >= 160_000.0 && a(79) <= 160_000.0);
+        // The smallest acceleration the pack represents is 4× coarser.
+        assert!((by16.floor().accel - 4.0 * by64.floor().accel).abs() < 1e-9);
+        // 511 · 16 / 128 = 63.9 → 64 ticks + 2.
+        assert_eq!(by16.stop_time(511, 128), Duration::from_millis(132));
     }
 }

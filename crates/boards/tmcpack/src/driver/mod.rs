@@ -66,6 +66,8 @@ mod tests_goals;
 mod tests_io;
 #[cfg(test)]
 mod tests_line;
+#[cfg(test)]
+mod tests_readings;
 
 use core::time::Duration;
 
@@ -168,7 +170,11 @@ impl TmcpackDriver {
             if motor < motors
                 && let Some(cfg) = cfg
             {
-                *slot = Some(Channel::new(motor as u8, cfg, Scale::new(clkdiv, &cfg)));
+                *slot = Some(Channel::new(
+                    motor as u8,
+                    cfg,
+                    Scale::new(clkdiv, &cfg, config.amax_divisor),
+                ));
             }
         }
         let io = IoState::new(config.variant, config.io);

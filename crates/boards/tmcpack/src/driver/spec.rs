@@ -7,7 +7,10 @@ use core::time::Duration;
 
 use motion_base::counts_to_i32_saturating;
 use tmcpack::convert::{byte_time, debounce_mask, debounce_ms, peak_percent, peak_value};
-use tmcpack::{CurrentLevel, FRAME_LEN, MotorMask, MotorOptions, MotorType, Variant};
+use tmcpack::{
+    AmaxDivisor, CurrentLevel, FRAME_LEN, MotorMask, MotorOptions, MotorType, OptionsLayout,
+    Variant,
+};
 
 use super::{
     Currents, DEFAULT_REPLY_ADDRESS, DEFAULT_SWITCHOVER_UNITS, PinSet, ReadyOutput, TmcpackChannel,
@@ -230,6 +233,22 @@ impl TmcpackDriverConfig {
         if let Some(baud) = spec.line_rate {
             driver.baud = baud;
         }
+        if let Some(d) = keys.amax_divisor {
+            driver.amax_divisor =
+                AmaxDivisor::from_divisor(u32::from(d)).ok_or_else(|| SpecError {
+                    channel: None,
+                    key: "amax_divisor",
+                    message: format!("{d} is not a reading of $14; allowed: 64, 16"),
+                })?;
+        }
+        if let Some(bit) = keys.stop_no_ref_bit {
+            driver.options_layout =
+                OptionsLayout::from_stop_no_ref_bit(bit).ok_or_else(|| SpecError {
+                    channel: None,
+                    key: "stop_no_ref_bit",
+                    message: format!("{bit} is not a reading of $15 P6; allowed: 5, 6"),
+                })?;
+        }
         driver.packet_timeout_units = Some(packet_timeout_units(&spec.machine, spec.line_rate));
         let axes: usize = spec.bus.iter().map(|peer| peer.axes).sum();
         let input_polls = spec
@@ -290,6 +309,24 @@ impl TmcpackDriverConfig {
                 ),
                 None => "off".into(),
             },
+        );
+        row(
+            dev,
+            "amax_divisor",
+            match self.amax_divisor {
+                AmaxDivisor::By64 => "64 ($14 text: amax/64 per 2 ms)",
+                AmaxDivisor::By16 => "16 (7.1 defaults: amax/16 per 2 ms)",
+            }
+            .into(),
+        );
+        row(
+            dev,
+            "stop_no_ref_bit",
+            match self.options_layout {
+                OptionsLayout::Table => "5 ($15 table: StopNoRef bit 5)",
+                OptionsLayout::Prose => "6 ($15 prose: StopNoRef bit 6)",
+            }
+            .into(),
         );
         let pack = Variant::from(device_keys(&spec.machine).variant);
         for (a, axis) in spec.axes.iter().enumerate() {

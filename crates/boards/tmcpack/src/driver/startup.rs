@@ -20,11 +20,11 @@ use motion_base::FixedQueue;
 use tmcpack::convert::{DEFAULT_SWITCHOVER_UNITS as FACTORY_SWITCHOVER, baud_divisor, units};
 use tmcpack::{
     Action, Command, DEFAULT_PACKET_TIMEOUT, MAX_VELOCITY, MotorMask, MotorOptions, MotorType,
-    Request,
+    OptionsLayout, Request,
 };
 
 use super::channel::Channel;
-use super::config::{REFERENCE_FLAGS, Scale, TmcpackDriverConfig};
+use super::config::{REFERENCE_FLAGS, TmcpackDriverConfig};
 use super::io::IoState;
 use super::wire::{Pick, Purpose};
 use super::{Phase, RESET_CHECK_PERIOD, TmcpackDriver};
@@ -45,9 +45,11 @@ pub(crate) fn motor_type(configured: MotorType) -> MotorType {
 /// The $15 options the driver writes: StopNoRef set, so that a stop condition (the switch
 /// outside its tolerance with StopNull, an analogue limit) just stops the motor and reports
 /// it ($20 P6) instead of starting a reference search the host did not ask for; the engine
-/// stops the axis and reports the limit.
-pub(crate) fn motor_options(configured: MotorOptions) -> MotorOptions {
-    configured.with(MotorOptions::STOP_NO_REF, true)
+/// stops the axis and reports the limit. `layout` puts StopNoRef and NullPositive where the
+/// pack's firmware reads them (bit 5 and 6 as the manual's table has them, or swapped as
+/// its prose says: key `stop_no_ref_bit`).
+pub(crate) fn motor_options(configured: MotorOptions, layout: OptionsLayout) -> MotorOptions {
+    layout.wire(configured.with(MotorOptions::STOP_NO_REF, true))
 }
 
 /// The configuration requests, in the order they are sent. The `$32` in it is a
@@ -120,7 +122,7 @@ impl StartupPlan {
                 motor,
                 poslimit: cfg.poslimit,
                 motor_type: motor_type(cfg.motor_type),
-                options: motor_options(cfg.options),
+                options: motor_options(cfg.options, config.options_layout),
             });
             push(Request::ReferenceParameters {
                 motor,
@@ -203,7 +205,7 @@ impl Quiesce {
             }
             moving = moving | MotorMask::single(motor);
             // From any velocity the pack allows (its divider may not be ours yet).
-            longest = longest.max(Scale::stop_time(MAX_VELOCITY, amax));
+            longest = longest.max(channel.scale.stop_time(MAX_VELOCITY, amax));
         }
         if moving.bits() == 0 {
             return None;

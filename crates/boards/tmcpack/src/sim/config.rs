@@ -3,7 +3,7 @@
 
 use core::time::Duration;
 
-use tmcpack::{CanBitrate, Variant};
+use tmcpack::{AmaxDivisor, CanBitrate, OptionsLayout, Variant};
 
 /// A reference switch in the motor's *physical* coordinates (microsteps of the rotor, which
 /// $27 and reference searches do not move).
@@ -104,6 +104,12 @@ pub struct TmcpackSimConfig {
     pub flash_magic: u32,
     /// "Magic Code 2" $F6/$F7 want (invented likewise).
     pub eeprom_magic: u16,
+    /// How this firmware reads `$14` amax: /64 per 2 ms tick (the `$14` text, default) or
+    /// /16 (manual 7.1's defaults).
+    pub amax_divisor: AmaxDivisor,
+    /// Where this firmware has StopNoRef in `$15` P6: bit 5 (the table, default) or bit 6
+    /// (the prose; NullPositive then bit 5).
+    pub options_layout: OptionsLayout,
 }
 
 impl Default for TmcpackSimConfig {
@@ -128,6 +134,8 @@ impl Default for TmcpackSimConfig {
             flash_size: 32 * 1024,
             flash_magic: 0x4641_4C53,
             eeprom_magic: 0xEE57,
+            amax_divisor: AmaxDivisor::By64,
+            options_layout: OptionsLayout::Table,
         }
     }
 }

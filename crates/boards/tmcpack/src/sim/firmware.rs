@@ -48,10 +48,12 @@ impl TmcpackSim {
                 options,
                 ..
             } => {
+                // P6 as this firmware reads it: StopNoRef bit 5 or 6.
+                let layout = self.cfg.options_layout;
                 self.with_motor(idx, |m| {
                     m.p.poslimit = poslimit;
                     m.p.motor_type = motor_type.with(MotorType::AUTO_NULL_CMD, false);
-                    m.p.options = options;
+                    m.p.options = layout.wire(options);
                     if motor_type.contains(MotorType::AUTO_NULL_CMD) && enabled {
                         m.start_reference();
                     }
@@ -539,7 +541,7 @@ impl TmcpackSim {
         self.st = PackState::new(self.cfg.address);
         // Parameters back to defaults; the rotors and what is wired to them stay.
         for m in &mut self.motors {
-            *m = Motor::new(m.hw, m.phys);
+            *m = Motor::new(m.hw, m.phys, m.divisor);
         }
         self.tx.clear();
         self.decoder.clear();

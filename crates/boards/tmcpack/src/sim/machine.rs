@@ -52,6 +52,9 @@ pub(crate) fn model(spec: &DriverSpec, seed: u64) -> TmcpackSim {
         variant: driver.variant,
         seed,
         motors,
+        // The firmware the machine's keys say it has.
+        amax_divisor: driver.amax_divisor,
+        options_layout: driver.options_layout,
         ..TmcpackSimConfig::default()
     })
 }

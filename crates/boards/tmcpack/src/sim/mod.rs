@@ -141,7 +141,9 @@ impl TmcpackSim {
     /// A pack as it is after power-on, already booted.
     pub fn new(config: TmcpackSimConfig) -> Self {
         let st = PackState::new(config.address);
-        let motors = config.motors.map(|hw| Motor::new(hw, 0));
+        let motors = config
+            .motors
+            .map(|hw| Motor::new(hw, 0, config.amax_divisor));
         let decoder =
             FrameDecoder::new(units(st.timeout_units), byte_time(nominal_baud(st.divisor)));
         Self {

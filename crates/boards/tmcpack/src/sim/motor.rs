@@ -1,7 +1,7 @@
 //! One motor channel: its firmware state (mode, position counter, velocity) and the rotor it
 //! drives (physical position, reference switch, end stops).
 
-use tmcpack::convert::StepClock;
+use tmcpack::convert::{AmaxDivisor, StepClock};
 use tmcpack::{Action, MotorOptions, MotorType};
 
 use super::config::MotorConfig;
@@ -113,10 +113,12 @@ pub(crate) struct Motor {
     pub hw: MotorConfig,
     /// Coil current in A after the last tick.
     pub current_amps: f64,
+    /// How the firmware reads `$14`: amax / divisor per 2 ms tick.
+    pub divisor: AmaxDivisor,
 }
 
 impl Motor {
-    pub fn new(hw: MotorConfig, phys: i64) -> Self {
+    pub fn new(hw: MotorConfig, phys: i64, divisor: AmaxDivisor) -> Self {
         let p = MotorParams::default();
         let mut m = Self {
             p,
@@ -137,6 +139,7 @@ impl Motor {
             testnull_timer: None,
             hw,
             current_amps: 0.0,
+            divisor,
         };
         let raw = m.raw_switch();
         m.hist = if raw { u16::MAX } else { 0 };
@@ -204,7 +207,8 @@ impl Motor {
         Limits {
             vs: i64::from(self.p.vstart).min(vmax) * Q,
             vmax: vmax * Q,
-            d: i64::from(self.p.amax.max(1)),
+            // amax / divisor per tick, in 1/64 units (Q): amax at /64, 4 · amax at /16.
+            d: i64::from(self.p.amax.max(1)) * (Q / i64::from(self.divisor.get())),
         }
     }
 

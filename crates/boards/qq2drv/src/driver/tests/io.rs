@@ -41,6 +41,7 @@ fn a_channel_without_an_axis_but_with_a_signal_streams_its_status() {
         status: Some(Status(Status::INPUT_ACTIVE | Status::GLITCH)),
     };
     let stream = encode_reply(&Reply::StreamData(StreamData {
+        code: None,
         timing: Some(25),
         periods_elapsed: None,
         data,

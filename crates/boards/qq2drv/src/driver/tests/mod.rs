@@ -85,6 +85,7 @@ fn ours_stream(positions: [i32; 3], velocities: [i32; 3], status: [u8; 3]) -> Ve
         };
     }
     encode_reply(&Reply::StreamData(StreamData {
+        code: None,
         timing: Some(25),
         periods_elapsed: None,
         data,
@@ -743,4 +744,5 @@ fn goals_every_tick_never_build_a_backlog_on_the_wire() {
 }
 
 mod io;
+mod readings;
 mod stops;
