@@ -334,7 +334,14 @@ struct Loop {
     estop_seen: bool,
     /// Says when the `estop` listener has something (`None`: ask it every tick).
     estop_watch: Option<EstopWatch>,
+    /// Ticks since the listener was last asked.
+    ticks_since_estop_look: u32,
 }
+
+/// The most ticks between two looks at the `estop` listener even when its watch saw
+/// nothing (64 ms at 1 kHz): the bound on an e-stop event's delay should the watch thread
+/// ever fail.
+const ESTOP_LOOK_EVERY: u32 = 64;
 
 impl Loop {
     /// Hands `report` to the main thread; a full queue drops it and counts it.
@@ -388,6 +395,7 @@ impl Loop {
             overrun_fault_latched: false,
             estop_seen: false,
             estop_watch,
+            ticks_since_estop_look: 0,
         }
     }
 
@@ -527,9 +535,16 @@ impl Loop {
     /// E-stops that did not come as commands: the `estop` event, SIGUSR1.
     fn take_estops(&mut self) {
         let mut notified = false;
-        // The listener is asked only when its watch saw a notification (crate::estop_watch),
-        // or every tick when the watch could not be started.
-        let look = self.estop_watch.as_ref().is_none_or(EstopWatch::pending);
+        // The listener is asked when its watch saw a notification (crate::estop_watch), and
+        // every ESTOP_LOOK_EVERY ticks whatever the watch says (a safety function must not
+        // rest on one helper thread alone), or every tick when the watch could not be
+        // started.
+        self.ticks_since_estop_look = self.ticks_since_estop_look.saturating_add(1);
+        let look = self.ticks_since_estop_look >= ESTOP_LOOK_EVERY
+            || self.estop_watch.as_ref().is_none_or(EstopWatch::pending);
+        if look {
+            self.ticks_since_estop_look = 0;
+        }
         if look {
             if let Some(watch) = &self.estop_watch {
                 watch.clear();
