@@ -540,19 +540,18 @@ impl Loop {
         // rest on one helper thread alone), or every tick when the watch could not be
         // started.
         self.ticks_since_estop_look = self.ticks_since_estop_look.saturating_add(1);
-        let look = self.ticks_since_estop_look >= ESTOP_LOOK_EVERY
-            || self.estop_watch.as_ref().is_none_or(EstopWatch::pending);
-        if look {
+        let announced = self.estop_watch.as_ref().is_none_or(EstopWatch::pending);
+        if announced || self.ticks_since_estop_look >= ESTOP_LOOK_EVERY {
             self.ticks_since_estop_look = 0;
-        }
-        if look {
-            if let Some(watch) = &self.estop_watch {
+            let watch = self.estop_watch.as_ref().filter(|_| announced);
+            if let Some(watch) = watch {
                 watch.clear();
             }
             if self.services.estop.try_wait(|_| notified = true).is_err() {
                 self.stats.events_dropped += 1;
             }
-            if let Some(watch) = &self.estop_watch {
+            // Only a watch that announced waits to be told it was taken.
+            if let Some(watch) = watch {
                 watch.resume();
             }
         }
