@@ -32,6 +32,7 @@ use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
 use crate::args::PeerMode;
 use crate::dist::Dist;
 use crate::peer::Peer;
+use crate::poller_boards::{PACK_BAUD, SPIM_ADDRESS};
 use crate::pty::{BAUD, PtyBoard, Wire, queued};
 use crate::report::{Row, Unit, write_dist};
 use crate::rt::now_ns;
@@ -41,8 +42,6 @@ use crate::sweep::{Server, ServerRt, last_line};
 
 /// CPU windows.
 pub const WINDOW: Duration = Duration::from_millis(500);
-/// The SIXpack's factory line rate.
-const PACK_BAUD: u32 = 19_200;
 /// Devices of the generated config.
 const DEVICES: [&str; 4] = ["feeder_qsb", "pack", "quad", "focus_drv"];
 
@@ -92,7 +91,7 @@ pub fn config_text(name: &str, tick_hz: u32, rt: ServerRt, links: &Links) -> Str
          variant = \"sixpack\"\n\n\
          [[device]]\nname = \"quad\"\nlink = \"quad\"\nmodel = \"qq2drv\"\n\n\
          [[device]]\nname = \"focus_drv\"\nlink = \"spim\"\nmodel = \"spimotor\"\n\
-         address = 0x90\ndrive = \"stepper\"\n\n\
+         address = {SPIM_ADDRESS:#04x}\ndrive = \"stepper\"\n\n\
          [[axis]]\nname = \"feeder\"\ndevice = \"feeder_qsb\"\nchannel = 0\nunit = \"mm\"\n\
          counts_per_unit = 100.0\nmin = -1000.0\nmax = 1000.0\nmax_velocity = 100.0\n\
          max_accel = 1000.0\n\n\
@@ -115,7 +114,7 @@ pub fn config_text(name: &str, tick_hz: u32, rt: ServerRt, links: &Links) -> Str
 }
 
 /// Where the four boards listen.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Links {
     /// The QSB's pty (a symlink).
     pub qsb: PathBuf,
@@ -152,7 +151,7 @@ impl Boards {
             quad: SpiBoard::start(&links.quad, spi_board(Model::QQ2DRV, None, None)?)?,
             spim: SpiBoard::start(
                 &links.spim,
-                spi_board(Model::SPIMOTOR, Some(0x90), Some("stepper"))?,
+                spi_board(Model::SPIMOTOR, Some(SPIM_ADDRESS), Some("stepper"))?,
             )?,
         })
     }

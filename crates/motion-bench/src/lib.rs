@@ -57,6 +57,8 @@ pub mod io_phase;
 pub mod ipc;
 pub mod peer;
 pub mod plots;
+pub mod poller;
+pub mod poller_boards;
 pub mod pty;
 pub mod python;
 pub mod python_stream;
