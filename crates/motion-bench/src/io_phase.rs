@@ -31,6 +31,7 @@ use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
 
 use crate::args::PeerMode;
 use crate::dist::Dist;
+use crate::io_poller::PollerRun;
 use crate::peer::Peer;
 use crate::poller_boards::{PACK_BAUD, SPIM_ADDRESS};
 use crate::pty::{BAUD, PtyBoard, Wire, queued};
@@ -39,6 +40,7 @@ use crate::rt::now_ns;
 use crate::sim_boards::{serial_board, spi_board};
 use crate::spi_board::SpiBoard;
 use crate::sweep::{Server, ServerRt, last_line};
+use crate::wire::WireRun;
 
 /// CPU windows.
 pub const WINDOW: Duration = Duration::from_millis(500);
@@ -67,6 +69,8 @@ pub struct IoRun {
     pub before: Option<Result<CpuRun, String>>,
     /// The plain peer's CPU, same windows.
     pub peer: Dist,
+    /// The bare poller's CPU, same windows, and its own write latency.
+    pub poller: Result<PollerRun, String>,
     /// Bytes queued at the QSB pty → queue empty again (motiond's I/O thread read them), ns.
     pub reply: Dist,
     /// The same on a pty read by a plain poll(2) + read(2) thread, ns.
@@ -404,10 +408,12 @@ pub fn run(
     let peer = Peer::start(PeerMode::Ticking, tick_hz, rt.priority, rt.cpu)?;
     let (peer_cpu, _) = measure_cpu(peer.pid(), duration);
     peer.stop()?;
+    let poller = crate::io_poller::run(tick_hz, rt, duration, span, dir);
     Ok(IoRun {
         ours,
         before,
         peer: peer_cpu,
+        poller,
         rt,
         reply,
         reply_baseline,
@@ -424,8 +430,16 @@ pub fn threads_line(threads: &BTreeMap<String, f64>) -> String {
         .join(", ")
 }
 
-/// The phase's rows (and its distribution files in `out`); notes for what failed.
-pub fn rows(run: &IoRun, hz: u32, out: Option<&Path>, notes: &mut Vec<String>) -> Vec<Row> {
+/// The phase's rows (and its distribution files in `out`); notes for what failed. The
+/// bare poller's rows set the command → wire rows of `wire` (that phase's run, if it ran)
+/// beside its own write latency.
+pub fn rows(
+    run: &IoRun,
+    hz: u32,
+    wire: Option<&WireRun>,
+    out: Option<&Path>,
+    notes: &mut Vec<String>,
+) -> Vec<Row> {
     let cpu_label = format!(
         "plain iceoryx2 peer ticking at {hz} Hz (answers requests, publishes a frame-sized \
          sample, notifies the tick event): its CPU in the same windows"
@@ -462,6 +476,16 @@ pub fn rows(run: &IoRun, hz: u32, out: Option<&Path>, notes: &mut Vec<String>) -
         }),
         Some(Err(e)) => notes.push(format!("--io-before: not measured: {e}")),
         None => {}
+    }
+    match &run.poller {
+        Ok(poller) => rows.extend(crate::io_poller::rows(
+            poller,
+            &run.ours.cpu,
+            &run.peer,
+            wire,
+            notes,
+        )),
+        Err(e) => notes.push(format!("the bare poller: not measured this run: {e}")),
     }
     rows.push(Row {
         figure: "reply bytes waiting in the tty until the I/O thread has read them (QSB pty: \
@@ -503,6 +527,16 @@ pub fn rows(run: &IoRun, hz: u32, out: Option<&Path>, notes: &mut Vec<String>) -
         if let Some(error) = write_dist(out, slug, title, dist) {
             notes.push(format!("could not write {error}"));
         }
+    }
+    if let Ok(poller) = &run.poller
+        && let Some(error) = write_dist(
+            out,
+            "io-cpu-poller",
+            "bare poller CPU per 500 ms window, 1/100 %",
+            &poller.cpu,
+        )
+    {
+        notes.push(format!("could not write {error}"));
     }
     rows
 }

@@ -54,6 +54,7 @@ pub mod dist;
 pub mod group_client;
 pub mod groups;
 pub mod io_phase;
+pub mod io_poller;
 pub mod ipc;
 pub mod peer;
 pub mod plots;

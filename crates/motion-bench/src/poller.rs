@@ -10,20 +10,20 @@
 //! [`crate::peer::run_if_requested`], so the cargo bench and motionctl both serve it):
 //! poll(2) on the links' descriptors until the next tick's absolute deadline, reading what
 //! arrives; at each tick, each board takes what its link delivered and writes what is due,
-//! then the frame is published. Each write of a board command (anything but a QSB's or
-//! pack's start-up, i.e. every poll) is stamped as it returns, with the tick's deadline
-//! beside it: `decided → written`, the poller's own write latency.
+//! then the frame is published.
 //!
-//! Protocol with the bench: `ready` once every board's start-up is done, then until its
-//! stdin closes; at the end `write <i> <summary>` per board (deadline → write returned,
-//! ns) and `sent <i> <count>` per board.
+//! Protocol with the bench: `ready` once every board's start-up is done; the line
+//! [`COMMANDS`] on its stdin starts board commands (each board's message of the command →
+//! wire phase, stamped just before its write: the poller's own write latency is that
+//! stamp → the first byte at the board); when its stdin closes, `sent <i> <count>` (messages
+//! after the start-up) and `decided <i> <stamps…>` per board, and it exits.
 //!
 //! Command line: `PROGRAM --motion-bench-poller NAME HZ QSB PACK QUAD SPIM
 //! [--rt-priority N] [--cpu N]` (the four link paths in the I/O phase's order).
 
 use core::time::Duration;
 use std::ffi::OsString;
-use std::io::{BufRead, BufReader, Read};
+use std::io::{BufRead, BufReader, Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Child, ChildStdin, ChildStdout, Command, ExitCode, Stdio};
 use std::sync::Arc;
@@ -36,16 +36,19 @@ use motion_link::spi_socket::{SpiSocketConfig, SpiSocketLink};
 use nix::poll::{PollFd, PollFlags};
 use nix::sys::time::TimeSpec;
 
-use crate::dist::{Dist, Summary};
 use crate::io_phase::Links;
 use crate::peer::{answer, create, publish, say};
 use crate::poller_boards::{Idle, PACK_BAUD};
 use crate::pty::BAUD;
-use crate::rt::{self, now_ns};
+use crate::rt::{self, XorShift, now_ns};
 use crate::sweep::ServerRt;
+use crate::wire_board::WireBoard;
 
 /// The first argument that makes a program the bare poller.
 pub const POLLER_FLAG: &str = "--motion-bench-poller";
+
+/// The line on the poller's stdin that starts the board commands.
+pub const COMMANDS: &str = "commands";
 
 /// How long the boards' start-up may take.
 const STARTUP_LIMIT: Duration = Duration::from_secs(10);
@@ -191,12 +194,21 @@ fn serve(args: &PollerArgs) -> Result<(), String> {
     let services = create(&args.name, false)?;
     let mut links = open(&args.links)?;
     let stop = Arc::new(AtomicBool::new(false));
-    let watcher = Arc::clone(&stop);
-    std::thread::spawn(move || {
-        let mut sink = Vec::new();
-        let _ = std::io::stdin().read_to_end(&mut sink);
-        watcher.store(true, Ordering::Relaxed);
-    });
+    let commanding = Arc::new(AtomicBool::new(false));
+    {
+        let stop = Arc::clone(&stop);
+        let commanding = Arc::clone(&commanding);
+        std::thread::spawn(move || {
+            for line in std::io::stdin().lines() {
+                match line.as_deref().map(str::trim) {
+                    Ok(COMMANDS) => commanding.store(true, Ordering::Relaxed),
+                    Ok(_) => {}
+                    Err(_) => break,
+                }
+            }
+            stop.store(true, Ordering::Relaxed);
+        });
+    }
     let _ = rt::set_up_thread(args.rt.priority, args.rt.cpu);
     let period = 1_000_000_000 / u64::from(args.hz);
     let epoch = now_ns();
@@ -205,8 +217,8 @@ fn serve(args: &PollerArgs) -> Result<(), String> {
     let mut idle = Idle::new();
     let mut ready = false;
     let mut buf = [0u8; 4096];
-    let mut writes: [Dist; 4] = core::array::from_fn(|_| Dist::new());
     let mut sent = [0u64; 4];
+    let mut commands = Commands::new();
     while !stop.load(Ordering::Relaxed) {
         let readable = wait(&links, deadline);
         for (index, link) in links.iter_mut().enumerate() {
@@ -229,11 +241,13 @@ fn serve(args: &PollerArgs) -> Result<(), String> {
         tick += 1;
         answer(&services, tick);
         let now = Duration::from_nanos(deadline - epoch);
+        if commanding.load(Ordering::Relaxed) {
+            commands.tick(now, &mut idle, &mut links)?;
+        }
         let started = ready;
         idle.tick(now, &mut links, |index, _| {
-            if started && let Some(dist) = writes.get_mut(index) {
-                dist.record(now_ns().saturating_sub(deadline));
-                sent[index] += 1;
+            if started && let Some(count) = sent.get_mut(index) {
+                *count += 1;
             }
         })
         .map_err(|e| e.to_string())?;
@@ -255,14 +269,68 @@ fn serve(args: &PollerArgs) -> Result<(), String> {
             tick += 1;
         }
     }
-    for (index, dist) in writes.iter().enumerate() {
-        say(&format!("write {index} {}", dist.summary().to_line()))?;
-        say(&format!(
-            "sent {index} {}",
-            sent.get(index).copied().unwrap_or(0)
-        ))?;
+    for (index, count) in sent.iter().enumerate() {
+        say(&format!("sent {index} {count}"))?;
+    }
+    for (index, stamps) in commands.decided.iter().enumerate() {
+        let words: Vec<String> = stamps.iter().map(u64::to_string).collect();
+        say(&format!("decided {index} {}", words.join(" ")))?;
     }
     Ok(())
+}
+
+/// Board commands, once the bench asks for them: each board gets its command message of
+/// the command → wire phase ([`WireBoard::fallback_message`], alternating signs) in the
+/// first tick its line is free after 1 ms + a random part of the board's pace, as the wire
+/// phase's client paces motiond's; each stamped (CLOCK_MONOTONIC) just before its write.
+struct Commands {
+    next_ns: [u64; 4],
+    positive: [bool; 4],
+    random: XorShift,
+    /// Per board: the stamps of the commands written.
+    decided: [Vec<u64>; 4],
+}
+
+impl Commands {
+    fn new() -> Self {
+        Self {
+            next_ns: [0; 4],
+            positive: [true; 4],
+            random: XorShift::new(u64::from(std::process::id()) ^ now_ns()),
+            decided: core::array::from_fn(|_| Vec::with_capacity(8192)),
+        }
+    }
+
+    fn tick(
+        &mut self,
+        now: Duration,
+        idle: &mut Idle,
+        links: &mut [Box<dyn Link>],
+    ) -> Result<(), String> {
+        for (index, (board, link)) in WireBoard::ALL.into_iter().zip(links.iter_mut()).enumerate() {
+            let (Some(next), Some(positive), Some(decided)) = (
+                self.next_ns.get_mut(index),
+                self.positive.get_mut(index),
+                self.decided.get_mut(index),
+            ) else {
+                continue;
+            };
+            if now_ns() < *next {
+                continue;
+            }
+            let message = board.on_the_wire(&board.fallback_message(*positive));
+            let stamp = now_ns();
+            if idle
+                .command(index, now, link.as_mut(), &message)
+                .map_err(|e| e.to_string())?
+            {
+                decided.push(stamp);
+                *positive = !*positive;
+                *next = stamp + 1_000_000 + self.random.below(board.pace_ns());
+            }
+        }
+        Ok(())
+    }
 }
 
 /// A running bare poller.
@@ -274,12 +342,13 @@ pub struct Poller {
 }
 
 /// What the poller reports when it stops.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Default)]
 pub struct PollerFigures {
-    /// Per board (I/O phase order): tick deadline → its write returned, ns.
-    pub write: [Summary; 4],
     /// Per board: messages written after the start-up.
     pub sent: [u64; 4],
+    /// Per board: the instants (CLOCK_MONOTONIC, ns) at which its board commands were
+    /// decided, in order ([`Poller::start_commands`]).
+    pub decided: [Vec<u64>; 4],
 }
 
 impl Poller {
@@ -336,6 +405,20 @@ impl Poller {
         self.child.id()
     }
 
+    /// From now on the poller also sends each board its command message.
+    ///
+    /// # Errors
+    /// Its stdin is closed.
+    pub fn start_commands(&mut self) -> Result<(), String> {
+        let stdin = self
+            .stdin
+            .as_mut()
+            .ok_or_else(|| "bare poller: stdin closed".to_owned())?;
+        writeln!(stdin, "{COMMANDS}")
+            .and_then(|()| stdin.flush())
+            .map_err(|e| format!("bare poller: {e}"))
+    }
+
     /// Stops it and collects its figures.
     ///
     /// # Errors
@@ -359,8 +442,13 @@ impl Poller {
                 continue;
             };
             match kind {
-                "write" => figures.write[index] = Summary::from_line(rest).unwrap_or_default(),
                 "sent" => figures.sent[index] = rest.trim().parse().unwrap_or(0),
+                "decided" => {
+                    figures.decided[index] = rest
+                        .split_whitespace()
+                        .filter_map(|w| w.parse().ok())
+                        .collect();
+                }
                 _ => {}
             }
         }

@@ -39,11 +39,8 @@ use spimotor::{Address, ReadPort, Reply, Transaction};
 use tmcpack::{FRAME_LEN, RequestFrame};
 
 use crate::pty::BAUD;
+pub use crate::wire_board::{PACK_BAUD, SPIM_ADDRESS};
 
-/// The SIXpack's line rate in the I/O phase (its factory setting).
-pub const PACK_BAUD: u32 = 19_200;
-/// The SPI_motor's address in the I/O phase.
-pub const SPIM_ADDRESS: u8 = 0x90;
 /// A QSB or pack request unanswered this long is sent again.
 const RETRY_AFTER: Duration = Duration::from_millis(100);
 
@@ -90,6 +87,31 @@ impl IdleBoard {
             Self::Pack(board) => board.transmit(now, buf),
             Self::Quad(board) => board.transmit(now, buf),
             Self::Spim(board) => board.transmit(now, buf),
+        }
+    }
+
+    /// Whether a board command may go out at `now` (as the drivers: after the exchange in
+    /// flight on the QSB and the pack's half-duplex line; at once on SPI).
+    pub fn line_free(&self, now: Duration) -> bool {
+        match self {
+            Self::Qsb(board) => board.awaiting.is_none(),
+            Self::Pack(board) => board.awaiting.is_none() && now >= board.quiet_until,
+            Self::Quad(_) | Self::Spim(_) => true,
+        }
+    }
+
+    /// A board command of `len` bytes went out at `now`: what its answer (or its silence)
+    /// means for the line.
+    pub fn commanded(&mut self, now: Duration, len: usize) {
+        match self {
+            // Its answer echoes the register written (`W12…` → `w 12 …`).
+            Self::Qsb(board) => board.awaiting = Some((Register::MdJogRate.number(), now)),
+            // No answer: the word's wire time and the pack's packet timeout.
+            Self::Pack(board) => {
+                board.quiet_until = now + word_time(PACK_BAUD) + tmcpack::DEFAULT_PACKET_TIMEOUT;
+            }
+            Self::Quad(_) => {}
+            Self::Spim(board) => board.pending.push_back((None, len)),
         }
     }
 
@@ -354,8 +376,9 @@ pub struct SpimIdle {
     in_poll: usize,
     /// The identification's length on the wire, once read.
     identification_len: Option<u16>,
-    /// The reads sent whose MISO bytes have not all come back: port and length.
-    pending: VecDeque<(ReadPort, usize)>,
+    /// The transactions sent whose MISO bytes have not all come back: the port read (none
+    /// for a write) and the length.
+    pending: VecDeque<(Option<ReadPort>, usize)>,
     miso: Vec<u8>,
 }
 
@@ -378,7 +401,9 @@ impl SpimIdle {
             let Some(transaction) = self.miso.get(..len) else {
                 return;
             };
-            if let Ok(Reply::Identification(id)) = Reply::decode(port, transaction) {
+            if let Some(port) = port
+                && let Ok(Reply::Identification(id)) = Reply::decode(port, transaction)
+            {
                 self.identification_len = u16::try_from(id.wire_len()).ok();
             }
             self.pending.pop_front();
@@ -425,7 +450,7 @@ impl SpimIdle {
             request: spimotor::Request::Read(read),
         };
         let len = transaction.encode(buf).ok()?;
-        self.pending.push_back((port, len));
+        self.pending.push_back((Some(port), len));
         self.in_poll += 1;
         if self.in_poll == reads.len() {
             self.in_poll = 0;
@@ -470,6 +495,29 @@ impl Idle {
     /// Whether every board's start-up is over.
     pub fn started(&self) -> bool {
         self.boards.iter().all(IdleBoard::started)
+    }
+
+    /// At tick `now`: board `index` gets `message` (a command, written whole) if its line
+    /// is free; whether it did.
+    ///
+    /// # Errors
+    /// The link refused the write.
+    pub fn command(
+        &mut self,
+        index: usize,
+        now: Duration,
+        link: &mut dyn motion_link::Link,
+        message: &[u8],
+    ) -> Result<bool, motion_link::LinkError> {
+        let Some(board) = self.boards.get_mut(index) else {
+            return Ok(false);
+        };
+        if !board.started() || !board.line_free(now) {
+            return Ok(false);
+        }
+        link.write(now, message)?;
+        board.commanded(now, message.len());
+        Ok(true)
     }
 
     /// One tick at `now`: each board takes what its link delivered, then its due messages
