@@ -11,7 +11,10 @@
 //!    thread of the bench watches the QSB pty's input queue (FIONREAD on a descriptor of
 //!    its own) and times each stretch from "bytes queued" to "queue empty again"; the
 //!    baseline is the same watch on a pty of the same kind whose only reader is a plain
-//!    thread blocked in poll(2) then read(2), the least any I/O thread can do.
+//!    thread blocked in poll(2) then read(2), the least any I/O thread can do;
+//! 3. the bare poller's CPU on a fresh set of the same boards, in the same windows, and its
+//!    own write latency per board ([`crate::io_poller`]): the baseline that tells the
+//!    links' own cost from motiond's.
 //!
 //! Idle: no axis moves, but the drivers keep their boards polled (the QSB streams its
 //! counter every 1.95 ms, the packs are queried in turn, the SPI boards polled each poll

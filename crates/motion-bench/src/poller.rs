@@ -464,3 +464,41 @@ impl Drop for Poller {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use std::ffi::OsString;
+
+    use super::PollerArgs;
+    use crate::io_phase::Links;
+    use crate::sweep::ServerRt;
+
+    #[test]
+    fn the_command_line_round_trips_and_refuses_garbage() {
+        let args = PollerArgs {
+            name: "bench-poller-1".to_owned(),
+            hz: 1000,
+            links: Links {
+                qsb: "/tmp/q.tty".into(),
+                pack: "/tmp/p.tty".into(),
+                quad: "/tmp/q.sock".into(),
+                spim: "/tmp/s.sock".into(),
+            },
+            rt: ServerRt {
+                priority: Some(80),
+                cpu: Some(1),
+            },
+        };
+        assert_eq!(PollerArgs::parse(&args.to_words()), Ok(args.clone()));
+        let words = |list: &[&str]| list.iter().map(OsString::from).collect::<Vec<_>>();
+        for bad in [
+            words(&["n", "1000", "a", "b", "c"]),
+            words(&["n", "0", "a", "b", "c", "d"]),
+            words(&["", "1000", "a", "b", "c", "d"]),
+            words(&["n", "1000", "a", "b", "c", "d", "--cpu"]),
+            words(&["n", "1000", "a", "b", "c", "d", "--nice", "3"]),
+        ] {
+            assert!(PollerArgs::parse(&bad).is_err(), "{bad:?}");
+        }
+    }
+}

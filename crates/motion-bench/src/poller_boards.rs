@@ -207,7 +207,14 @@ impl QsbIdle {
                 self.next += 1;
                 step
             }
-            // Unanswered: once more (the index already moved on).
+            // A command's answer lost after the start-up: the line is free again.
+            Some((_, sent))
+                if now.saturating_sub(sent) >= RETRY_AFTER && self.next >= QSB_STARTUP.len() =>
+            {
+                self.awaiting = None;
+                return None;
+            }
+            // A start-up step unanswered: once more (the index already moved on).
             Some((_, sent)) if now.saturating_sub(sent) >= RETRY_AFTER => {
                 QSB_STARTUP.get(self.next.checked_sub(1)?)?
             }
