@@ -32,7 +32,8 @@ pub struct PollerRun {
     pub write: [Dist; 4],
     /// Per board: commands whose first byte did not arrive.
     pub lost: [u64; 4],
-    /// Per board: messages the poller wrote after its start-up (polls and commands).
+    /// Per board: idle polls the poller wrote after its start-up (board commands not
+    /// counted).
     pub sent: [u64; 4],
 }
 
@@ -168,8 +169,8 @@ pub fn rows(
             baseline: Some(peer.summary()),
             baseline_label: "the plain peer ticking at the same rate (no links)".to_owned(),
             note: format!(
-                "the links' own cost; one thread: {}; messages written after the start-up \
-                 (whole phase, board commands included): {}",
+                "the links' own cost; one thread: {}; idle polls written after the start-up \
+                 (settling, CPU and command windows; the board commands not counted): {}",
                 threads_line(&run.threads),
                 sent.join(", ")
             ),

@@ -15,7 +15,7 @@
 //! Protocol with the bench: `ready` once every board's start-up is done; the line
 //! [`COMMANDS`] on its stdin starts board commands (each board's message of the command →
 //! wire phase, stamped just before its write: the poller's own write latency is that
-//! stamp → the first byte at the board); when its stdin closes, `sent <i> <count>` (messages
+//! stamp → the first byte at the board); when its stdin closes, `sent <i> <count>` (idle polls
 //! after the start-up) and `decided <i> <stamps…>` per board, and it exits.
 //!
 //! Command line: `PROGRAM --motion-bench-poller NAME HZ QSB PACK QUAD SPIM
@@ -344,7 +344,7 @@ pub struct Poller {
 /// What the poller reports when it stops.
 #[derive(Debug, Clone, Default)]
 pub struct PollerFigures {
-    /// Per board: messages written after the start-up.
+    /// Per board: idle polls written after the start-up (board commands not counted).
     pub sent: [u64; 4],
     /// Per board: the instants (CLOCK_MONOTONIC, ns) at which its board commands were
     /// decided, in order ([`Poller::start_commands`]).
