@@ -11,7 +11,10 @@
 //!    thread of the bench watches the QSB pty's input queue (FIONREAD on a descriptor of
 //!    its own) and times each stretch from "bytes queued" to "queue empty again"; the
 //!    baseline is the same watch on a pty of the same kind whose only reader is a plain
-//!    thread blocked in poll(2) then read(2), the least any I/O thread can do.
+//!    thread blocked in poll(2) then read(2), the least any I/O thread can do;
+//! 3. the bare poller's CPU on a fresh set of the same boards, in the same windows, and its
+//!    own write latency per board ([`crate::io_poller`]): the baseline that tells the
+//!    links' own cost from motiond's.
 //!
 //! Idle: no axis moves, but the drivers keep their boards polled (the QSB streams its
 //! counter every 1.95 ms, the packs are queried in turn, the SPI boards polled each poll
@@ -31,18 +34,19 @@ use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
 
 use crate::args::PeerMode;
 use crate::dist::Dist;
+use crate::io_poller::PollerRun;
 use crate::peer::Peer;
+use crate::poller_boards::{PACK_BAUD, SPIM_ADDRESS};
 use crate::pty::{BAUD, PtyBoard, Wire, queued};
 use crate::report::{Row, Unit, write_dist};
 use crate::rt::now_ns;
 use crate::sim_boards::{serial_board, spi_board};
 use crate::spi_board::SpiBoard;
 use crate::sweep::{Server, ServerRt, last_line};
+use crate::wire::WireRun;
 
 /// CPU windows.
 pub const WINDOW: Duration = Duration::from_millis(500);
-/// The SIXpack's factory line rate.
-const PACK_BAUD: u32 = 19_200;
 /// Devices of the generated config.
 const DEVICES: [&str; 4] = ["feeder_qsb", "pack", "quad", "focus_drv"];
 
@@ -68,6 +72,8 @@ pub struct IoRun {
     pub before: Option<Result<CpuRun, String>>,
     /// The plain peer's CPU, same windows.
     pub peer: Dist,
+    /// The bare poller's CPU, same windows, and its own write latency.
+    pub poller: Result<PollerRun, String>,
     /// Bytes queued at the QSB pty → queue empty again (motiond's I/O thread read them), ns.
     pub reply: Dist,
     /// The same on a pty read by a plain poll(2) + read(2) thread, ns.
@@ -92,7 +98,7 @@ pub fn config_text(name: &str, tick_hz: u32, rt: ServerRt, links: &Links) -> Str
          variant = \"sixpack\"\n\n\
          [[device]]\nname = \"quad\"\nlink = \"quad\"\nmodel = \"qq2drv\"\n\n\
          [[device]]\nname = \"focus_drv\"\nlink = \"spim\"\nmodel = \"spimotor\"\n\
-         address = 0x90\ndrive = \"stepper\"\n\n\
+         address = {SPIM_ADDRESS:#04x}\ndrive = \"stepper\"\n\n\
          [[axis]]\nname = \"feeder\"\ndevice = \"feeder_qsb\"\nchannel = 0\nunit = \"mm\"\n\
          counts_per_unit = 100.0\nmin = -1000.0\nmax = 1000.0\nmax_velocity = 100.0\n\
          max_accel = 1000.0\n\n\
@@ -115,7 +121,7 @@ pub fn config_text(name: &str, tick_hz: u32, rt: ServerRt, links: &Links) -> Str
 }
 
 /// Where the four boards listen.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Links {
     /// The QSB's pty (a symlink).
     pub qsb: PathBuf,
@@ -152,7 +158,7 @@ impl Boards {
             quad: SpiBoard::start(&links.quad, spi_board(Model::QQ2DRV, None, None)?)?,
             spim: SpiBoard::start(
                 &links.spim,
-                spi_board(Model::SPIMOTOR, Some(0x90), Some("stepper"))?,
+                spi_board(Model::SPIMOTOR, Some(SPIM_ADDRESS), Some("stepper"))?,
             )?,
         })
     }
@@ -405,10 +411,12 @@ pub fn run(
     let peer = Peer::start(PeerMode::Ticking, tick_hz, rt.priority, rt.cpu)?;
     let (peer_cpu, _) = measure_cpu(peer.pid(), duration);
     peer.stop()?;
+    let poller = crate::io_poller::run(tick_hz, rt, duration, span, dir);
     Ok(IoRun {
         ours,
         before,
         peer: peer_cpu,
+        poller,
         rt,
         reply,
         reply_baseline,
@@ -425,8 +433,16 @@ pub fn threads_line(threads: &BTreeMap<String, f64>) -> String {
         .join(", ")
 }
 
-/// The phase's rows (and its distribution files in `out`); notes for what failed.
-pub fn rows(run: &IoRun, hz: u32, out: Option<&Path>, notes: &mut Vec<String>) -> Vec<Row> {
+/// The phase's rows (and its distribution files in `out`); notes for what failed. The
+/// bare poller's rows set the command → wire rows of `wire` (that phase's run, if it ran)
+/// beside its own write latency.
+pub fn rows(
+    run: &IoRun,
+    hz: u32,
+    wire: Option<&WireRun>,
+    out: Option<&Path>,
+    notes: &mut Vec<String>,
+) -> Vec<Row> {
     let cpu_label = format!(
         "plain iceoryx2 peer ticking at {hz} Hz (answers requests, publishes a frame-sized \
          sample, notifies the tick event): its CPU in the same windows"
@@ -463,6 +479,16 @@ pub fn rows(run: &IoRun, hz: u32, out: Option<&Path>, notes: &mut Vec<String>) -
         }),
         Some(Err(e)) => notes.push(format!("--io-before: not measured: {e}")),
         None => {}
+    }
+    match &run.poller {
+        Ok(poller) => rows.extend(crate::io_poller::rows(
+            poller,
+            &run.ours.cpu,
+            &run.peer,
+            wire,
+            notes,
+        )),
+        Err(e) => notes.push(format!("the bare poller: not measured this run: {e}")),
     }
     rows.push(Row {
         figure: "reply bytes waiting in the tty until the I/O thread has read them (QSB pty: \
@@ -504,6 +530,16 @@ pub fn rows(run: &IoRun, hz: u32, out: Option<&Path>, notes: &mut Vec<String>) -
         if let Some(error) = write_dist(out, slug, title, dist) {
             notes.push(format!("could not write {error}"));
         }
+    }
+    if let Ok(poller) = &run.poller
+        && let Some(error) = write_dist(
+            out,
+            "io-cpu-poller",
+            "bare poller CPU per 500 ms window, 1/100 %",
+            &poller.cpu,
+        )
+    {
+        notes.push(format!("could not write {error}"));
     }
     rows
 }

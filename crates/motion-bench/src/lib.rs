@@ -8,7 +8,9 @@
 //! plain peer process that ticks, publishes a frame-sized sample and answers requests like
 //! motiond minus its engine. The peer is the running program re-executed with
 //! [`peer::PEER_FLAG`]: every program that calls [`run`] must call
-//! [`peer::run_if_requested`] first thing in its `main`. Command to wire is timed on a
+//! [`peer::run_if_requested`] first thing in its `main`, which also serves the bare poller
+//! ([`poller`]: the I/O phase's idle link traffic and nothing else, the baseline of motiond's
+//! CPU on those links, [`io_poller`]). Command to wire is timed on a
 //! motiond the bench starts itself, its four links to boards the bench simulates: a QSB and
 //! a SIXpack on ptys, a QuadQuad2Drv and an SPI_motor on SPI sockets ([`wire`],
 //! [`wire_board`], [`pty`], [`spi_board`]). The Python client's figures come from `python -m motiond.bench`
@@ -54,9 +56,12 @@ pub mod dist;
 pub mod group_client;
 pub mod groups;
 pub mod io_phase;
+pub mod io_poller;
 pub mod ipc;
 pub mod peer;
 pub mod plots;
+pub mod poller;
+pub mod poller_boards;
 pub mod pty;
 pub mod python;
 pub mod python_stream;

@@ -31,10 +31,14 @@ use crate::rt::{self, now_ns, sleep_until_ns};
 /// The first argument that makes a program the baseline peer.
 pub const PEER_FLAG: &str = "--motion-bench-peer";
 
-/// When this process was started as a baseline peer (its first argument is [`PEER_FLAG`]),
-/// serves as one and returns its exit status; `None` otherwise. Call it first in `main`.
+/// When this process was started as a baseline peer (its first argument is [`PEER_FLAG`])
+/// or as the bare poller ([`crate::poller::POLLER_FLAG`]), serves as one and returns its
+/// exit status; `None` otherwise. Call it first in `main`.
 pub fn run_if_requested() -> Option<ExitCode> {
     let args: Vec<OsString> = std::env::args_os().skip(1).collect();
+    if args.first().and_then(|a| a.to_str()) == Some(crate::poller::POLLER_FLAG) {
+        return Some(crate::poller::run(args.get(1..).unwrap_or(&[])));
+    }
     if args.first().and_then(|a| a.to_str()) != Some(PEER_FLAG) {
         return None;
     }
@@ -256,7 +260,7 @@ pub fn run(mode: PeerMode, name: &str, hz: u32, rt_priority: Option<u8>, cpu: Op
     }
 }
 
-struct PeerServices {
+pub(crate) struct PeerServices {
     _node: Node<Ipc>,
     frame: iceoryx2::port::publisher::Publisher<Ipc, MotionFrame, ()>,
     tick: iceoryx2::port::notifier::Notifier<Ipc>,
@@ -268,7 +272,7 @@ struct PeerServices {
 const SETPOINTS_BUFFER: usize = 16;
 
 /// motiond's service settings (crates/motiond/src/services.rs, setpoints.rs).
-fn create(name: &str, setpoints: bool) -> Result<PeerServices, String> {
+pub(crate) fn create(name: &str, setpoints: bool) -> Result<PeerServices, String> {
     let names = ServiceNames::new(name);
     let node = crate::ipc::node("peer")?;
     let service = |n: String| ServiceName::new(&n).map_err(|e| format!("{n:?}: {e:?}"));
@@ -398,18 +402,35 @@ struct TickFigures<'a> {
 /// Publish stamps of the peer's last frames, by tick modulo this.
 const PUBLISHED: usize = 64;
 
-fn say(line: &str) -> Result<(), String> {
+pub(crate) fn say(line: &str) -> Result<(), String> {
     let mut out = std::io::stdout().lock();
     writeln!(out, "{line}")
         .and_then(|()| out.flush())
         .map_err(|e| format!("stdout: {e}"))
 }
 
-fn answer(services: &PeerServices, tick: u64) {
+pub(crate) fn answer(services: &PeerServices, tick: u64) {
     while let Ok(Some(active)) = services.command.receive() {
         let reply = CommandReply::to(active.payload(), Reason::UnknownAxis, tick);
         let _ = active.send_copy(reply);
     }
+}
+
+/// Publishes tick `tick`'s frame-sized sample (deadline `deadline_ns`) and notifies the
+/// tick event: the instant it was published, if it was.
+pub(crate) fn publish(services: &PeerServices, tick: u64, deadline_ns: u64) -> Option<u64> {
+    let published = services.frame.loan_uninit().ok().map(|sample| {
+        let mut sample = sample.write_payload(MotionFrame::EMPTY);
+        let frame = sample.payload_mut();
+        frame.tick = tick;
+        frame.time_ns = deadline_ns;
+        frame.publish_ns = now_ns();
+        let publish_ns = frame.publish_ns;
+        let _ = sample.send();
+        publish_ns
+    });
+    let _ = services.tick.notify();
+    published
 }
 
 fn tick_loop(
@@ -443,16 +464,9 @@ fn tick_loop(
                 }
             }
         }
-        if let Ok(sample) = services.frame.loan_uninit() {
-            let mut sample = sample.write_payload(MotionFrame::EMPTY);
-            let frame = sample.payload_mut();
-            frame.tick = tick;
-            frame.time_ns = deadline;
-            frame.publish_ns = now_ns();
-            published[tick as usize % PUBLISHED] = (tick, frame.publish_ns);
-            let _ = sample.send();
+        if let Some(publish_ns) = publish(services, tick, deadline) {
+            published[tick as usize % PUBLISHED] = (tick, publish_ns);
         }
-        let _ = services.tick.notify();
         let done = now_ns();
         figures.work.record(done.saturating_sub(wake));
         deadline += period;

@@ -446,7 +446,7 @@ pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
         report.rows.extend(wire::rows(run, ticks_of(&base_rtt)));
     }
     if let Some(run) = &io_run {
-        let rows = io_phase::rows(run, hz, out, &mut report.notes);
+        let rows = io_phase::rows(run, hz, wire_run.as_ref(), out, &mut report.notes);
         report.rows.extend(rows);
     }
     if let Some(run) = &groups_run {

@@ -29,7 +29,7 @@ const PACK_ADDRESS: u8 = 1;
 /// starts with the address and the command byte, manual 6.1).
 const PACK_ROTATE: &[u8] = &[PACK_ADDRESS, tmcpack::Command::Rotate.code()];
 /// The SPI_motor's address (write transactions start with it; reads with it + 1).
-const SPIM_ADDRESS: u8 = 0x90;
+pub const SPIM_ADDRESS: u8 = 0x90;
 
 /// One board of figure 9.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -334,17 +334,23 @@ impl WireBoard {
         }
     }
 
+    /// The bytes a host writes for `message`: a QSB line with its CR LF, anything else as
+    /// it is (an SPI link frames its transactions itself).
+    pub fn on_the_wire(self, message: &[u8]) -> Vec<u8> {
+        if self == Self::Qsb {
+            [message, b"\r\n"].concat()
+        } else {
+            message.to_vec()
+        }
+    }
+
     /// Writes `message` through the host end as the driver's link would (a QSB line with
     /// its CR LF; an SPI transaction as its length and MOSI bytes, then its MISO bytes read
     /// back). Returns whether the transport took it whole.
     pub fn write(self, host: &mut Host, message: &[u8]) -> bool {
         match host {
             Host::Pty(tty) => {
-                let bytes = if self == Self::Qsb {
-                    [message, b"\r\n"].concat()
-                } else {
-                    message.to_vec()
-                };
+                let bytes = self.on_the_wire(message);
                 matches!(tty.write(&bytes), Ok(n) if n == bytes.len())
             }
             Host::Spi(stream) => {
