@@ -364,6 +364,28 @@ mod tests {
         (config, root)
     }
 
+    /// Another process that takes the POSIX write lock iceoryx2's live nodes hold on
+    /// `monitor`, and holds it until killed.
+    fn hold_lock(monitor: &Path) -> std::process::Child {
+        let mut holder = std::process::Command::new("python3")
+            .args([
+                "-c",
+                "import fcntl,sys,time\nf=open(sys.argv[1],'r+')\nfcntl.lockf(f,fcntl.LOCK_EX)\nprint('held',flush=True)\ntime.sleep(60)",
+            ])
+            .arg(monitor)
+            .stdout(std::process::Stdio::piped())
+            .spawn()
+            .expect("python3 (scripts/test installs it)");
+        let mut line = String::new();
+        std::io::BufRead::read_line(
+            &mut std::io::BufReader::new(holder.stdout.take().unwrap()),
+            &mut line,
+        )
+        .unwrap();
+        assert_eq!(line.trim(), "held");
+        holder
+    }
+
     #[test]
     fn record_names_map_to_node_ids() {
         let layout = Layout::of(&Config::default());
@@ -415,22 +437,7 @@ mod tests {
         let monitor = nodes.join("iox2_21.node_monitor");
         fs::write(&monitor, b"").unwrap();
         // Another process takes the POSIX write lock iceoryx2's live nodes hold.
-        let mut holder = std::process::Command::new("python3")
-            .args([
-                "-c",
-                "import fcntl,sys,time\nf=open(sys.argv[1],'r+')\nfcntl.lockf(f,fcntl.LOCK_EX)\nprint('held',flush=True)\ntime.sleep(60)",
-            ])
-            .arg(&monitor)
-            .stdout(std::process::Stdio::piped())
-            .spawn()
-            .expect("python3 (scripts/test installs it)");
-        let mut line = String::new();
-        std::io::BufRead::read_line(
-            &mut std::io::BufReader::new(holder.stdout.take().unwrap()),
-            &mut line,
-        )
-        .unwrap();
-        assert_eq!(line.trim(), "held");
+        let mut holder = hold_lock(&monitor);
         assert!(locked(&monitor));
         let mut sweeper = Sweeper::new(config);
         let swept = sweeper.sweep(0, Duration::ZERO, SWEEP_BUDGET);
@@ -451,22 +458,7 @@ mod tests {
         let nodes = root.join("nodes");
         let monitor = nodes.join("iox2_31.node_monitor");
         fs::write(&monitor, b"").unwrap();
-        let mut holder = std::process::Command::new("python3")
-            .args([
-                "-c",
-                "import fcntl,sys,time\nf=open(sys.argv[1],'r+')\nfcntl.lockf(f,fcntl.LOCK_EX)\nprint('held',flush=True)\ntime.sleep(60)",
-            ])
-            .arg(&monitor)
-            .stdout(std::process::Stdio::piped())
-            .spawn()
-            .expect("python3 (scripts/test installs it)");
-        let mut line = String::new();
-        std::io::BufRead::read_line(
-            &mut std::io::BufReader::new(holder.stdout.take().unwrap()),
-            &mut line,
-        )
-        .unwrap();
-        assert_eq!(line.trim(), "held");
+        let mut holder = hold_lock(&monitor);
         let quiet = |at| Quiet {
             modified: modified(&nodes).expect("a directory"),
             monitors: vec![monitor.clone()],

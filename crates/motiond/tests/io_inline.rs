@@ -2,11 +2,8 @@
 //! `transfer` writes what it queued within its wire-time budget and `look` takes what came
 //! back at the next tick; neither waits for a peer, a failed link is taken down and
 //! reopened with the I/O threads' backoff, and none of it allocates.
-#![allow(unsafe_code)] // the counting global allocator
 
-use core::cell::Cell;
 use core::time::Duration;
-use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::Ordering;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
@@ -14,55 +11,13 @@ use std::time::Instant;
 use motion_link::Link;
 use motion_link::sim::{SimLink, SpiDevice};
 use motion_link::spi_socket::{SpiSocketConfig, SpiSocketLink};
+use motion_testkit::counting_alloc::{CountingAllocator, counted};
 use motion_testkit::socket_board::SocketBoard;
 use motiond::io::inline::{self, wire_time};
 use motiond::io::{LinkEvent, LinkPort, PACKET_LEN, Packet};
 
-struct CountingAllocator;
-
-thread_local! {
-    static COUNTING: Cell<bool> = const { Cell::new(false) };
-    static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
-}
-
-fn note_allocation() {
-    let _ = COUNTING.try_with(|counting| {
-        if counting.get() {
-            let _ = ALLOCATIONS.try_with(|count| count.set(count.get() + 1));
-        }
-    });
-}
-
-// SAFETY: every call is forwarded unchanged to the system allocator; the only addition is
-// a thread-local counter that does not allocate.
-unsafe impl GlobalAlloc for CountingAllocator {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        note_allocation();
-        // SAFETY: same contract as our caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as our caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        note_allocation();
-        // SAFETY: same contract as our caller's.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
-
 #[global_allocator]
 static GLOBAL: CountingAllocator = CountingAllocator;
-
-/// Runs `work`, counting the allocations this thread makes in it.
-fn counted<T>(work: impl FnOnce() -> T) -> (T, u64) {
-    let before = ALLOCATIONS.with(Cell::get);
-    COUNTING.with(|c| c.set(true));
-    let result = work();
-    COUNTING.with(|c| c.set(false));
-    (result, ALLOCATIONS.with(Cell::get) - before)
-}
 
 /// How long a test waits for something that should come at once.
 const PATIENCE: Duration = Duration::from_secs(10);

@@ -1,11 +1,8 @@
 //! The default robot (`config/sim.toml`: all four boards, 18 axes) stepped in one process
 //! with a fake clock: the engine and the four drivers allocate nothing in steady state, and
 //! the same commands at the same ticks give byte-identical frames.
-#![allow(unsafe_code)] // the counting global allocator
 
 use core::time::Duration;
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 use std::path::PathBuf;
 
 use motion_engine::{CommandPort, Engine};
@@ -14,52 +11,16 @@ use motion_ipc::{
     GroupState, MAX_GROUP_AXES, MAX_PATH_POINTS, MotionFrame, PathKind, Target,
 };
 use motion_link::Link;
+use motion_testkit::counting_alloc::{CountingAllocator, allocations, counting};
 use motiond::blackbox::{Journal, Recording, ReplayError, Ring, replay};
 use motiond::config::ServerConfig;
-
-struct CountingAllocator;
-
-thread_local! {
-    static COUNTING: Cell<bool> = const { Cell::new(false) };
-    static ALLOCATIONS: Cell<u64> = const { Cell::new(0) };
-}
-
-fn note_allocation() {
-    let _ = COUNTING.try_with(|counting| {
-        if counting.get() {
-            let _ = ALLOCATIONS.try_with(|count| count.set(count.get() + 1));
-        }
-    });
-}
-
-// SAFETY: every call is forwarded unchanged to the system allocator; the only addition is
-// a thread-local counter that does not allocate.
-unsafe impl GlobalAlloc for CountingAllocator {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        note_allocation();
-        // SAFETY: same contract as our caller's.
-        unsafe { System.alloc(layout) }
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        // SAFETY: same contract as our caller's.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        note_allocation();
-        // SAFETY: same contract as our caller's.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
 
 #[global_allocator]
 static GLOBAL: CountingAllocator = CountingAllocator;
 
 /// Counts allocations of the engine (and its drivers) only, not of the simulated links.
 fn engine<T>(work: impl FnOnce() -> T) -> T {
-    COUNTING.with(|c| c.set(true));
-    let result = work();
-    COUNTING.with(|c| c.set(false));
-    result
+    counting(work)
 }
 
 struct Queue {
@@ -275,9 +236,9 @@ fn the_engine_and_all_four_drivers_allocate_nothing_in_steady_state() {
         .iter()
         .all(|a| !a.flags().contains(AxisFlags::STALE));
     assert!(online, "every board answers: {:?}", robot.frame.axes());
-    let before = ALLOCATIONS.with(Cell::get);
+    let before = allocations();
     run(&mut robot, 4000, 10_000, |_| {});
-    let allocations = ALLOCATIONS.with(Cell::get) - before;
+    let allocations = allocations() - before;
     assert_eq!(
         allocations, 0,
         "the engine allocated {allocations} times in 10 000 steps"
@@ -341,7 +302,7 @@ fn a_group_following_a_1024_point_trajectory_allocates_nothing() {
         .with_values([7.0, 0.0, 0.0]);
     run_request.target = Target::Group as u32;
     robot.port.requests.push_back(run_request);
-    let before = ALLOCATIONS.with(Cell::get);
+    let before = allocations();
     let mut done_at = None;
     for tick in 0..13_000 {
         robot.tick();
@@ -356,7 +317,7 @@ fn a_group_following_a_1024_point_trajectory_allocates_nothing() {
             break;
         }
     }
-    let allocations = ALLOCATIONS.with(Cell::get) - before;
+    let allocations = allocations() - before;
     assert_eq!(
         allocations, 0,
         "the engine allocated {allocations} times accepting and following a trajectory"
@@ -445,7 +406,7 @@ fn streaming_setpoints_allocates_nothing_and_applies_each_in_its_tick() {
         let reply = robot.port.replies.last().expect("answered");
         assert_eq!(reply.result(), Ok(()), "{reply:?}");
     }
-    let before = ALLOCATIONS.with(Cell::get);
+    let before = allocations();
     let mut setpoint = motion_ipc::Setpoint {
         group,
         mode: motion_ipc::StreamMode::Velocity as u32,
@@ -462,7 +423,7 @@ fn streaming_setpoints_allocates_nothing_and_applies_each_in_its_tick() {
         engine(|| robot.engine.handle_setpoint(client, &setpoint));
         robot.tick();
     }
-    let allocations = ALLOCATIONS.with(Cell::get) - before;
+    let allocations = allocations() - before;
     assert_eq!(
         allocations, 0,
         "the engine allocated {allocations} times streaming"
@@ -597,9 +558,9 @@ fn the_gantry_moves_a_line_on_three_boards() {
     let group = group_index(&robot, "gantry");
     let (path, targets) = line_by(&robot, group, &GANTRY, &[200.0, 100.0, 150.0], 3);
     start_path(&mut robot, path);
-    let before = ALLOCATIONS.with(Cell::get);
+    let before = allocations();
     let (state, worst) = watch_group(&mut robot, group, &GANTRY, 20_000, |_, _| {});
-    let allocations = ALLOCATIONS.with(Cell::get) - before;
+    let allocations = allocations() - before;
     eprintln!(
         "gantry line: max |desired - measured| x {:.3} mm, feeder {:.3} mm, lift {:.3} mm",
         worst[0], worst[1], worst[2]

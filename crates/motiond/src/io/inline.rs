@@ -12,11 +12,9 @@ use core::time::Duration;
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
 
+use super::worker::Worker;
+use super::{LinkPort, PACKET_LEN};
 use motion_link::Link;
-use rtrb::RingBuffer;
-
-use super::worker::{Rings, Worker};
-use super::{IoCounters, LinkPort, PACKET_LEN, QUEUE_PACKETS, WRITTEN_REPORTS, Waker};
 
 /// The tick's own I/O for one link.
 pub struct InlineIo {
@@ -85,26 +83,9 @@ pub fn start(
     budget: Duration,
     bit_rate: Option<u32>,
 ) -> std::io::Result<LinkPort> {
-    let (tx_producer, tx_consumer) = RingBuffer::new(QUEUE_PACKETS);
-    let (rx_producer, rx_consumer) = RingBuffer::new(QUEUE_PACKETS);
-    let (event_producer, event_consumer) = RingBuffer::new(16);
-    let (written_producer, written_consumer) = RingBuffer::new(WRITTEN_REPORTS);
-    let counters = Arc::new(IoCounters::default());
-    // Nobody sleeps on it: the port's type wants one, and a wake-up costs nothing here.
-    let waker = Arc::new(Waker::new()?);
-    let mut worker = Worker::new(
-        link,
-        Rings {
-            tx: tx_consumer,
-            rx: rx_producer,
-            events: event_producer,
-            written: written_producer,
-        },
-        Arc::clone(&counters),
-        Arc::clone(&waker),
-        Arc::new(AtomicBool::new(false)),
-        super::IDLE_WAIT,
-    );
+    // Nobody sleeps on the port's waker and nothing stops a thread: there is none.
+    let (mut port, mut worker) =
+        super::port_and_worker(link, Arc::new(AtomicBool::new(false)), super::IDLE_WAIT)?;
     worker.set_epoch(epoch);
     let mut inline = Box::new(InlineIo {
         worker,
@@ -113,14 +94,6 @@ pub fn start(
         buf: [0; PACKET_LEN],
     });
     inline.look();
-    Ok(LinkPort {
-        tx: tx_producer,
-        rx: rx_consumer,
-        events: event_consumer,
-        written: written_consumer,
-        generation: 0,
-        counters,
-        waker,
-        inline: Some(inline),
-    })
+    port.inline = Some(inline);
+    Ok(port)
 }

@@ -305,25 +305,7 @@ pub fn spawn(
     options: IoThreadOptions,
     stop: Arc<AtomicBool>,
 ) -> std::io::Result<(LinkPort, IoThread)> {
-    let (tx_producer, tx_consumer) = RingBuffer::new(QUEUE_PACKETS);
-    let (rx_producer, rx_consumer) = RingBuffer::new(QUEUE_PACKETS);
-    let (event_producer, event_consumer) = RingBuffer::new(16);
-    let (written_producer, written_consumer) = RingBuffer::new(WRITTEN_REPORTS);
-    let counters = Arc::new(IoCounters::default());
-    let waker = Arc::new(Waker::new()?);
-    let mut worker = Worker::new(
-        link,
-        worker::Rings {
-            tx: tx_consumer,
-            rx: rx_producer,
-            events: event_producer,
-            written: written_producer,
-        },
-        Arc::clone(&counters),
-        Arc::clone(&waker),
-        stop,
-        options.idle,
-    );
+    let (port, mut worker) = port_and_worker(link, stop, options.idle)?;
     let (rt_tx, rt_rx) = std::sync::mpsc::sync_channel(1);
     let priority = options.rt_priority;
     let cpu = options.cpu;
@@ -339,16 +321,7 @@ pub fn spawn(
         })?;
     // The thread sends before anything else; a thread that died first reports nothing.
     let rt = rt_rx.recv().unwrap_or_default();
-    let port = LinkPort {
-        tx: tx_producer,
-        rx: rx_consumer,
-        events: event_consumer,
-        written: written_consumer,
-        generation: 0,
-        counters,
-        waker: Arc::clone(&waker),
-        inline: None,
-    };
+    let waker = Arc::clone(&port.waker);
     Ok((
         port,
         IoThread {
@@ -357,6 +330,44 @@ pub fn spawn(
             rt: Some(rt),
         },
     ))
+}
+
+/// The tick's end of a new link and the [`Worker`] that serves it, joined by their rings.
+fn port_and_worker(
+    link: Box<dyn Link>,
+    stop: Arc<AtomicBool>,
+    idle: Duration,
+) -> std::io::Result<(LinkPort, Worker)> {
+    let (tx_producer, tx_consumer) = RingBuffer::new(QUEUE_PACKETS);
+    let (rx_producer, rx_consumer) = RingBuffer::new(QUEUE_PACKETS);
+    let (event_producer, event_consumer) = RingBuffer::new(16);
+    let (written_producer, written_consumer) = RingBuffer::new(WRITTEN_REPORTS);
+    let counters = Arc::new(IoCounters::default());
+    let waker = Arc::new(Waker::new()?);
+    let worker = Worker::new(
+        link,
+        worker::Rings {
+            tx: tx_consumer,
+            rx: rx_producer,
+            events: event_producer,
+            written: written_producer,
+        },
+        Arc::clone(&counters),
+        Arc::clone(&waker),
+        stop,
+        idle,
+    );
+    let port = LinkPort {
+        tx: tx_producer,
+        rx: rx_consumer,
+        events: event_consumer,
+        written: written_consumer,
+        generation: 0,
+        counters,
+        waker,
+        inline: None,
+    };
+    Ok((port, worker))
 }
 
 /// Nanoseconds of `duration`, saturating.

@@ -114,15 +114,8 @@ impl Worker {
     /// hands over what arrived and publishes the horizon. Never waits.
     pub(super) fn look(&mut self, buf: &mut [u8; PACKET_LEN]) {
         let now = self.now();
-        if self.down {
-            if now >= self.next_reopen {
-                self.try_reopen(now);
-            }
-            if self.down {
-                while self.rings.tx.pop().is_ok() {}
-                self.pending = None;
-                return;
-            }
+        if self.still_down(now) {
+            return;
         }
         self.failed = false;
         self.looked_at = now;
@@ -132,22 +125,30 @@ impl Worker {
         }
     }
 
+    /// A failed link is reopened when its backoff is over; while it stays down, what the
+    /// tick queued for it is dropped (stale by the time it could go). Whether it is down.
+    fn still_down(&mut self, now: Duration) -> bool {
+        if !self.down {
+            return false;
+        }
+        if now >= self.next_reopen {
+            self.try_reopen(now);
+        }
+        if self.down {
+            while self.rings.tx.pop().is_ok() {}
+            self.pending = None;
+        }
+        self.down
+    }
+
     pub(super) fn run(&mut self, epoch: Duration) {
         self.epoch = epoch;
         let mut buf = [0u8; PACKET_LEN];
         while !self.stop.load(Ordering::Relaxed) {
             let now = self.now();
-            if self.down {
-                if now >= self.next_reopen {
-                    self.try_reopen(now);
-                }
-                if self.down {
-                    // Drop what the tick queued for a dead link: it is stale by now.
-                    while self.rings.tx.pop().is_ok() {}
-                    self.pending = None;
-                    self.sleep(now, self.next_reopen.saturating_sub(now), false);
-                    continue;
-                }
+            if self.still_down(now) {
+                self.sleep(now, self.next_reopen.saturating_sub(now), false);
+                continue;
             }
             self.failed = false;
             let moved = self.bytes_moved();
