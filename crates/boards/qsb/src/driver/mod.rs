@@ -30,7 +30,8 @@
 //! 1. -M: MD ACCEL from the axis's acceleration, then COMMAND 4 (a motor left running by
 //!    a previous server stops, at that acceleration);
 //! 2. EOR 0x5 (LF and the time stamp: `s0E00001234000ABCDE!\n`), MODE (`input_mode`:
-//!    quadrature, PWM or analog), MDR0 0x43 (x4, free-running, index disabled,
+//!    quadrature, PWM or analog), DTR = `count_limit` in range-limit and modulo-n
+//!    modes, MDR0 ([`CounterSetup`]; by default 0x43: x4, free-running, index disabled,
 //!    synchronous index), MDR1 (counting up, no triggers; B3 = `invert_index`),
 //!    THRESHOLD 0 (a value at every tick), INTERVAL RATE (`stream_interval`, or from the
 //!    line rate: 1 tick = 1.95 ms at 230400 baud);
@@ -101,6 +102,7 @@
 #![allow(clippy::module_name_repetitions)]
 
 mod config;
+mod counter;
 mod encoder;
 mod goals;
 mod guard;
@@ -111,6 +113,8 @@ mod spec;
 mod startup;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_counter;
 #[cfg(test)]
 mod tests_in_flight;
 #[cfg(test)]
@@ -126,6 +130,7 @@ use core::time::Duration;
 use ::qsb::{MdStatus, ProductType, ResponseDecoder};
 
 pub use config::QsbDriverConfig;
+pub use counter::CounterSetup;
 pub use io::{CaptureInput, EnableOutput, MOTOR_DRIVE_BITS, PinRole, QsbIo, pins};
 pub use spec::{LONGEST_INTERVAL_TICKS, TICK, interval_ticks};
 
@@ -214,6 +219,7 @@ impl QsbDriver {
     /// [`poll_transmit`](Driver::poll_transmit).
     pub fn new(mut config: QsbDriverConfig) -> Self {
         io::sanitise(&mut config);
+        let wrap = config.counter.wrap();
         let mut driver = Self {
             config,
             decoder: ResponseDecoder::new(),
@@ -236,7 +242,7 @@ impl QsbDriver {
             stamps: StampGuard::default(),
             md_disabled_once: false,
             version_doubt: None,
-            encoder: EncoderTrack::new(),
+            encoder: EncoderTrack::with_wrap(wrap),
             rebase_pending: false,
             position: 0,
             last_sample_at: None,
