@@ -132,7 +132,7 @@ pub(crate) fn device_keys(
             v.issue(
                 value.span(),
                 &ctx.key("counts_per_step"),
-                format!("{c} is not allowed; encoder counts (x4 quadrature) per motor step: a finite number, not 0 (negative when the encoder counts down as the motor steps forward); default 10"),
+                format!("{c} is not allowed; counter counts (in count_mode, x4 by default) per motor step: a finite number, not 0 (negative when the encoder counts down as the motor steps forward); default 10"),
             );
         }
     }

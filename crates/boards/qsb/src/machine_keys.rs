@@ -59,7 +59,7 @@ impl QsbInputMode {
 pub struct QsbDeviceKeys {
     /// `variant`: the product (QSB-M by default).
     pub variant: QsbVariant,
-    /// `counts_per_step`: encoder counts (x4) per motor step, finite, not 0.
+    /// `counts_per_step`: counter counts (in `count_mode`) per motor step, finite, not 0.
     pub counts_per_step: Option<f64>,
     /// `index_polarity = "inverted"` (MDR1 B3).
     pub index_inverted: Option<bool>,
