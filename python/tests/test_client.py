@@ -219,6 +219,20 @@ def test_machine_params(client: motiond.Client) -> None:
     assert any(p.from_config for p in x_params.values())
 
 
+def test_qsb_counter_mode_in_params(client: motiond.Client) -> None:
+    """The QSB's counter mode (MDR0) as the driver writes it: sim.toml leaves the defaults."""
+    qsb = {
+        p.key: p
+        for p in client.params()
+        if p.owner == ipc.ParamOwner.DEVICE and p.owner_name == "feeder_qsb"
+    }
+    assert qsb["count_mode"].value == "x4"
+    assert qsb["count_range"].value == "free-running"
+    assert qsb["index_action"].value == "none"
+    assert qsb["index_sync"].value == "synchronous"
+    assert not qsb["count_mode"].from_config
+
+
 def test_stats(client: motiond.Client) -> None:
     deadline = time.monotonic() + 3.0
     stats = client.stats()

@@ -398,6 +398,10 @@ fn describe_lists_every_key_with_its_effective_value() {
             ("enable_output", "none"),
             ("enable_active", "low"),
             ("input_mode", "quadrature"),
+            ("count_mode", "x4"),
+            ("count_range", "free-running"),
+            ("index_action", "none"),
+            ("index_sync", "synchronous"),
             ("capture_input", "none"),
             ("capture_edge", "rising"),
         ])
@@ -420,6 +424,10 @@ fn describe_lists_every_key_with_its_effective_value() {
             ("enable_output", "3"),
             ("enable_active", "low"),
             ("input_mode", "quadrature"),
+            ("count_mode", "x4"),
+            ("count_range", "free-running"),
+            ("index_action", "none"),
+            ("index_sync", "synchronous"),
             ("capture_input", "0"),
             ("capture_edge", "falling"),
         ])
@@ -501,4 +509,181 @@ fn the_real_hardware_example_is_valid_and_means_what_its_comments_say() {
         );
     }
     assert_eq!(config.signals.len(), 2);
+}
+
+/// `GOOD` as a qsb-d measuring wheel (a 500-cycle encoder, degrees) with `lines` added to
+/// the device table: nothing is driven, so every counter mode is open to it.
+fn measuring(lines: &str) -> String {
+    GOOD.replace(
+        "variant = \"qsb-m\"",
+        &format!("variant = \"qsb-d\"\n{lines}"),
+    )
+    .replace(
+        "counts_per_unit = 100.0",
+        "counts_per_unit = 1.3888888888888888",
+    )
+    .replace("min = -1000.0", "min = 0.0")
+    .replace("max = 1000.0", "max = 360.0")
+}
+
+#[test]
+fn counter_modes_are_read_described_and_within_a_machine_param() {
+    let text = measuring(
+        "count_mode = \"x1\"\ncount_range = \"modulo-n\"\ncount_limit = 499\nindex_action = \"reset\"",
+    );
+    let config = parse(&text).expect("a modulo-n wheel");
+    assert!(config.warnings.is_empty(), "{:?}", config.warnings);
+    let described = rows(&config);
+    for (key, value) in [
+        ("count_mode", "x1"),
+        ("count_range", "modulo-n 0..=499"),
+        ("index_action", "reset"),
+        ("index_sync", "synchronous"),
+    ] {
+        assert!(
+            described.contains(&(key.to_owned(), value.to_owned())),
+            "{key} = {value} in {described:?}"
+        );
+    }
+    // The longest text a counter row can have fits whole in a MachineParam.
+    let widest = measuring("count_range = \"range-limit\"\ncount_limit = 2147483647");
+    let rows_widest = rows(&parse(&widest).expect("widest"));
+    let (_, range) = rows_widest
+        .iter()
+        .find(|(key, _)| key == "count_range")
+        .expect("count_range row");
+    assert_eq!(range, "range-limit 0..=2147483647");
+    assert!(range.len() <= motion_ipc::PARAM_TEXT_LEN);
+    // Step and direction: the index is asynchronous ("Asynchronous index mode is set in
+    // non-quadrature modes").
+    let steps = parse(&measuring("count_mode = \"step-direction\"")).expect("steps");
+    assert!(
+        rows(&steps).contains(&("index_sync".to_owned(), "asynchronous".to_owned())),
+        "{:?}",
+        rows(&steps)
+    );
+}
+
+#[test]
+fn malformed_counter_keys_are_refused_where_they_are() {
+    let cases = [
+        (
+            "count_mode = \"x3\"",
+            "count_mode",
+            "allowed: \"x4\", \"x2\", \"x1\", \"step-direction\"",
+        ),
+        (
+            "count_range = \"wrap\"",
+            "count_range",
+            "allowed: \"free-running\", \"single-cycle\", \"range-limit\", \"modulo-n\"",
+        ),
+        (
+            "count_range = \"modulo-n\"\ncount_limit = 0",
+            "count_limit",
+            "allowed: 1..=2147483647",
+        ),
+        (
+            "count_range = \"range-limit\"\ncount_limit = 4294967295",
+            "count_limit",
+            "out of range",
+        ),
+        (
+            "count_range = \"modulo-n\"\ncount_limit = 499\nindex_action = \"load-otr\"",
+            "index_action",
+            "allowed: \"none\", \"reset\", \"load\"",
+        ),
+        ("index_sync = \"maybe\"", "index_sync", "allowed"),
+    ];
+    for (lines, key, says) in cases {
+        refused(&measuring(lines), key, &format!("device[0].{key}"), says);
+    }
+}
+
+#[test]
+fn counter_modes_that_cannot_work_are_refused_at_their_line() {
+    // range-limit and modulo-n need their DTR value.
+    for range in ["range-limit", "modulo-n"] {
+        refused(
+            &measuring(&format!("count_range = \"{range}\"")),
+            "count_range",
+            "device[0].count_range",
+            "needs count_limit",
+        );
+    }
+    // An index that resets or loads a counter that does not wrap makes it jump back.
+    for action in ["reset", "load"] {
+        refused(
+            &measuring(&format!("index_action = \"{action}\"")),
+            "index_action",
+            "device[0].index_action",
+            "needs count_range = \"modulo-n\"",
+        );
+    }
+    // "Asynchronous index mode is set in non-quadrature modes".
+    refused(
+        &measuring("count_mode = \"step-direction\"\nindex_sync = \"synchronous\""),
+        "index_sync",
+        "device[0].index_sync",
+        "non-quadrature",
+    );
+    // A qsb-m whose axis drives its stepper plans moves from the count: it must measure
+    // the shaft, so only free-running.
+    for range in ["single-cycle", "range-limit", "modulo-n"] {
+        let text = with_device_keys(&format!("count_range = \"{range}\"\ncount_limit = 1999"));
+        refused(
+            &text,
+            "count_range",
+            "device[0].count_range",
+            "cannot count for an axis that drives",
+        );
+    }
+    // x1, x2 and step-direction are fine there (counts_per_step counts in that mode).
+    for mode in ["x1", "x2", "step-direction"] {
+        parse(&with_device_keys(&format!("count_mode = \"{mode}\""))).expect(mode);
+    }
+}
+
+#[test]
+fn counter_keys_without_effect_warn() {
+    let config = parse(&measuring("count_limit = 99")).expect("accepted");
+    let warning = config
+        .warnings
+        .iter()
+        .find(|w| w.key == "device[0].count_limit")
+        .expect("a warning");
+    assert!(warning.message.contains("no effect"), "{}", warning.message);
+    let no_axis = format!(
+        "{}input_mode = \"pwm\"\ncount_mode = \"x1\"\n{SIGNAL}kind = \"analog-in\"\npin = \"encoder\"\n",
+        &GOOD[..GOOD.find("[[axis]]").expect("axis")]
+    );
+    let config = parse(&no_axis).expect("accepted");
+    assert!(
+        config
+            .warnings
+            .iter()
+            .any(|w| w.key == "device[0].count_mode" && w.message.contains("input_mode")),
+        "{:?}",
+        config.warnings
+    );
+}
+
+#[test]
+fn the_built_driver_writes_the_counter_mode_to_the_simulated_board() {
+    let text = measuring(
+        "count_mode = \"x1\"\ncount_range = \"modulo-n\"\ncount_limit = 499\nindex_action = \"reset\"",
+    )
+    .replace(
+        "type = \"serial\"\npath = \"/dev/does-not-exist-motiond-qsb-test\"",
+        "type = \"sim\"",
+    );
+    let config = parse(&text).expect("sim config");
+    let lines = start_up(&config, 40);
+    // DTR 499 ("Write 499 decimal to DTR, W081F3"), then MDR0 0x6D: sync index, reset
+    // CNTR, modulo-n, x1.
+    let dtr = lines.iter().position(|l| l == "W081F3");
+    let mdr0 = lines.iter().position(|l| l == "W036D");
+    assert!(
+        matches!((dtr, mdr0), (Some(d), Some(m)) if d < m),
+        "{lines:?}"
+    );
 }

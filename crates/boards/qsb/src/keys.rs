@@ -38,6 +38,11 @@ pub(crate) struct RawDevice {
     input_mode: Option<Spanned<String>>,
     capture_input: Option<Spanned<Int>>,
     capture_edge: Option<Spanned<String>>,
+    pub(crate) count_mode: Option<Spanned<String>>,
+    pub(crate) count_range: Option<Spanned<String>>,
+    pub(crate) count_limit: Option<Spanned<Int>>,
+    pub(crate) index_action: Option<Spanned<String>>,
+    pub(crate) index_sync: Option<Spanned<String>>,
 }
 
 /// The product a `variant` names; an issue for any other value.
@@ -96,7 +101,7 @@ fn home_hints(v: &mut dyn KeyIssues, ctx: &DeviceContext, raw: &RawDevice) -> Op
 }
 
 /// One of `allowed` (name, value) for a string key; an issue naming them otherwise.
-fn choice<T: Copy>(
+pub(crate) fn choice<T: Copy>(
     v: &mut dyn KeyIssues,
     value: &Spanned<String>,
     key: &str,
@@ -127,7 +132,7 @@ pub(crate) fn device_keys(
             v.issue(
                 value.span(),
                 &ctx.key("counts_per_step"),
-                format!("{c} is not allowed; encoder counts (x4 quadrature) per motor step: a finite number, not 0 (negative when the encoder counts down as the motor steps forward); default 10"),
+                format!("{c} is not allowed; counter counts (in count_mode, x4 by default) per motor step: a finite number, not 0 (negative when the encoder counts down as the motor steps forward); default 10"),
             );
         }
     }
@@ -204,6 +209,7 @@ pub(crate) fn device_keys(
             );
         }
     }
+    crate::counter_keys::device_keys(v, ctx, &raw, &mut keys);
     // Keys in error stay unset here; the issues already refuse the file, and the other
     // tables are still checked against the rest (every issue at once).
     Some(DeviceKeys::new(keys, home?))
@@ -338,6 +344,7 @@ pub(crate) fn cross_check(v: &mut dyn KeyIssues, machine: &MachineView<'_>) {
             );
         }
         signal_checks(v, machine, index, keys, drive);
+        crate::counter_keys::cross_check(v, machine, index, &raw_device, keys, drive);
         line_budget(v, machine, &raw_device, device.index, device.link, keys);
     }
 }

@@ -14,6 +14,7 @@ mod standalone;
 
 use core::time::Duration;
 
+mod counter_keys;
 mod keys;
 
 use motion_board::keys::{DeviceContext, KeyIssues, KeyTable, key_names};
@@ -87,7 +88,8 @@ impl Board for QsbBoard {
         QsbDriverConfig::from_spec(spec).map(|config| config.params(spec))
     }
 
-    /// The variant, the encoder's counts per motor step, and the external stepper driver's
+    /// The variant, the encoder's counts per motor step (in the configured `count_mode`),
+    /// and the external stepper driver's
     /// enable line where `enable_output` says it is wired. (The index is the encoder's,
     /// once per revolution of the model's 500-cycle encoder: a home search finds it within
     /// 2000 counts.)
@@ -100,6 +102,16 @@ impl Board for QsbBoard {
         let counts_per_step = keys.counts_per_step;
         let counts_per_step =
             counts_per_step.unwrap_or_else(|| QsbDriverConfig::default().counts_per_step);
+        // counts_per_step is in the configured count mode's counts; the model's encoder
+        // turns in quadrature cycles.
+        let per_cycle = f64::from(
+            driver::CounterSetup {
+                count: keys.count_mode.unwrap_or_default(),
+                ..driver::CounterSetup::default()
+            }
+            .mdr0()
+            .counts_per_cycle(),
+        );
         SimBoard::Stream(Box::new(QsbSim::new(QsbSimConfig {
             variant: match keys.variant {
                 QsbVariant::M => Variant::M,
@@ -108,7 +120,8 @@ impl Board for QsbBoard {
             },
             seed,
             drive_enable,
-            ..QsbSimConfig::default().with_counts_per_step(counts_per_step)
+            cycles_per_step: counts_per_step / per_cycle,
+            ..QsbSimConfig::default()
         })))
     }
 

@@ -5,6 +5,8 @@
 
 use core::time::Duration;
 
+use qsb::{CountMode, CycleMode, IndexMode};
+
 /// QSB product variant (command list "QSB Variations").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum QsbVariant {
@@ -57,7 +59,7 @@ impl QsbInputMode {
 pub struct QsbDeviceKeys {
     /// `variant`: the product (QSB-M by default).
     pub variant: QsbVariant,
-    /// `counts_per_step`: encoder counts (x4) per motor step, finite, not 0.
+    /// `counts_per_step`: counter counts (in `count_mode`) per motor step, finite, not 0.
     pub counts_per_step: Option<f64>,
     /// `index_polarity = "inverted"` (MDR1 B3).
     pub index_inverted: Option<bool>,
@@ -75,4 +77,14 @@ pub struct QsbDeviceKeys {
     pub capture_input: Option<u8>,
     /// `capture_edge = "falling"`.
     pub capture_falling: Option<bool>,
+    /// `count_mode` (MDR0 B1 B0).
+    pub count_mode: Option<CountMode>,
+    /// `count_range` (MDR0 B3 B2).
+    pub count_range: Option<CycleMode>,
+    /// `count_limit`: DTR of range-limit and modulo-n (1..=0x7FFFFFFF).
+    pub count_limit: Option<u32>,
+    /// `index_action` (MDR0 B5 B4 in normal operation).
+    pub index_action: Option<IndexMode>,
+    /// `index_sync = "synchronous"` (MDR0 B6).
+    pub index_sync: Option<bool>,
 }

@@ -340,3 +340,168 @@ fn status_registers_decode_to_their_bits() {
         }
     }
 }
+
+#[test]
+fn mdr0_bit_table_each_row() {
+    // Command List, MDR0 03, "BITS: B7 B6 B5 B4 B3 B2 B1 B0", one row at a time.
+    let rows: [(u32, CountMode, CycleMode, IndexMode, bool, bool); 11] = [
+        // "B1 B0 = 00: non-quadrature count mode. (A = clock, B = direction)."
+        (
+            0x00,
+            CountMode::NonQuadrature,
+            CycleMode::FreeRunning,
+            IndexMode::Disabled,
+            false,
+            false,
+        ),
+        // "= 01: x1 quadrature count mode (one count per quadrature cycle)."
+        (
+            0x01,
+            CountMode::X1,
+            CycleMode::FreeRunning,
+            IndexMode::Disabled,
+            false,
+            false,
+        ),
+        // "= 10: x2 quadrature count mode (two counts per quadrature cycle)."
+        (
+            0x02,
+            CountMode::X2,
+            CycleMode::FreeRunning,
+            IndexMode::Disabled,
+            false,
+            false,
+        ),
+        // "= 11: x4 quadrature count mode (four counts per quadrature cycle)."
+        (
+            0x03,
+            CountMode::X4,
+            CycleMode::FreeRunning,
+            IndexMode::Disabled,
+            false,
+            false,
+        ),
+        // "B3 B2 = 01: single-cycle count mode."
+        (
+            0x04,
+            CountMode::NonQuadrature,
+            CycleMode::SingleCycle,
+            IndexMode::Disabled,
+            false,
+            false,
+        ),
+        // "= 10: range-limit count mode."
+        (
+            0x08,
+            CountMode::NonQuadrature,
+            CycleMode::RangeLimit,
+            IndexMode::Disabled,
+            false,
+            false,
+        ),
+        // "= 11: modulo-n count mode."
+        (
+            0x0C,
+            CountMode::NonQuadrature,
+            CycleMode::ModuloN,
+            IndexMode::Disabled,
+            false,
+            false,
+        ),
+        // "B5 B4 = 01: configure index as the "load CNTR" input (transfers DTR to CNTR)."
+        (
+            0x10,
+            CountMode::NonQuadrature,
+            CycleMode::FreeRunning,
+            IndexMode::LoadCntr,
+            false,
+            false,
+        ),
+        // "= 10: configure index as the "reset CNTR" input (clears CNTR to 0)."
+        (
+            0x20,
+            CountMode::NonQuadrature,
+            CycleMode::FreeRunning,
+            IndexMode::ResetCntr,
+            false,
+            false,
+        ),
+        // "= 11: configure index as the "load OTR" input (transfers CNTR to OTR)."
+        (
+            0x30,
+            CountMode::NonQuadrature,
+            CycleMode::FreeRunning,
+            IndexMode::LoadOtr,
+            false,
+            false,
+        ),
+        // "B6 = 1: Synchronous Index", "B7 = 1: Filter clock division factor = 2".
+        (
+            0xC0,
+            CountMode::NonQuadrature,
+            CycleMode::FreeRunning,
+            IndexMode::Disabled,
+            true,
+            true,
+        ),
+    ];
+    for (data, count, cycle, index, synchronous_index, filter_div2) in rows {
+        let m = Mdr0 {
+            count,
+            cycle,
+            index,
+            synchronous_index,
+            filter_div2,
+        };
+        assert_eq!(Mdr0::from_data(data), Ok(m), "{data:#04x}");
+        assert_eq!(m.data(), data);
+    }
+    // The counts each count mode makes per quadrature cycle.
+    let per_cycle = [(0x00, 1), (0x01, 1), (0x02, 2), (0x03, 4)];
+    for (data, counts) in per_cycle {
+        assert_eq!(Mdr0::from_data(data).unwrap().counts_per_cycle(), counts);
+    }
+    // "Data range: 00 – FF".
+    assert_eq!(Mdr0::from_data(0x100), Err(Error::OutOfRange));
+    // The modes motiond writes: x1 modulo-n with the index resetting CNTR, synchronous.
+    let Request::Write(Write::Mdr0(m)) = command("W036D") else {
+        panic!("not an MDR0 write")
+    };
+    assert_eq!(
+        (m.count, m.cycle, m.index, m.synchronous_index),
+        (
+            CountMode::X1,
+            CycleMode::ModuloN,
+            IndexMode::ResetCntr,
+            true
+        )
+    );
+}
+
+#[test]
+fn mdr1_bit_table_each_row_and_the_example_w04000() {
+    // Command List, MDR1 04: "Example: Count Up No Triggers, W04000" ("leading zeros are
+    // ignored": the host writes it as W040).
+    let Ok(Request::Write(Write::Mdr1(m))) = Request::decode(b"W04000") else {
+        panic!("not an MDR1 write")
+    };
+    assert_eq!(command("W040"), Request::Write(Write::Mdr1(m)));
+    assert_eq!(m, Mdr1::default());
+    let bit = |data: u32| Mdr1::from_data(data).unwrap();
+    // "B2 = 1: Disable counting", "B3 … = 1: Invert Index", "B4 Trigger/Capture on Index",
+    // "B5 Trigger on Match", "B6 Trigger on Underflow", "B7 Trigger on Overflow",
+    // "B8 Counter Direction =1: Count-down mode (quad encoder only)".
+    assert!(bit(0x004).disable_counting);
+    assert!(bit(0x008).invert_index);
+    assert!(bit(0x010).trigger_on_index);
+    assert!(bit(0x020).trigger_on_match);
+    assert!(bit(0x040).trigger_on_underflow);
+    assert!(bit(0x080).trigger_on_overflow);
+    assert!(bit(0x100).count_down);
+    // "B1 B0 = Reserved – always set to 00 (32-bit counter mode only)": no other width.
+    for reserved in [0x001, 0x002, 0x003] {
+        assert_eq!(Mdr1::from_data(reserved), Err(Error::OutOfRange));
+    }
+    // "Data range: 00 - 1FF".
+    assert_eq!(Mdr1::from_data(0x200), Err(Error::OutOfRange));
+}

@@ -8,6 +8,7 @@ use ::qsb::{
     PROCESSING_DELAY, ProductType, RATE_INCREMENT, STEP_RATE_RANGE, TICK, effective_rate,
 };
 
+use super::counter::CounterSetup;
 pub use super::io::{EnableOutput, QsbIo};
 
 /// Bits on the wire per byte (8N1).
@@ -46,7 +47,8 @@ pub struct QsbDriverConfig {
     /// Extra time the host side may take to deliver bytes (USB scheduling, the serial
     /// driver's latency timer), added to every reply timeout and to the refresh budget.
     pub latency: Duration,
-    /// Encoder counts (x4 quadrature) per motor step on the -M; negative when the encoder
+    /// Counter counts (in the [`CounterSetup::count`] mode: x4 by default) per motor step
+    /// on the -M; negative when the encoder
     /// counts down while the motor steps forward. Default 10: a 500-cycle encoder on the
     /// shaft of a 200-step motor driven in full steps.
     pub counts_per_step: f64,
@@ -82,6 +84,8 @@ pub struct QsbDriverConfig {
     pub input_mode: EncoderMode,
     /// The I/O pins signals read or drive.
     pub io: QsbIo,
+    /// The counter mode of normal operation (MDR0, DTR).
+    pub counter: CounterSetup,
 }
 
 impl Default for QsbDriverConfig {
@@ -102,6 +106,7 @@ impl Default for QsbDriverConfig {
             enable: None,
             input_mode: EncoderMode::Quadrature,
             io: QsbIo::default(),
+            counter: CounterSetup::default(),
         }
     }
 }

@@ -4,6 +4,8 @@
 use ::qsb::TICK;
 use motion_base::FixedQueue;
 
+use super::counter::Wrap;
+
 /// Samples the velocity is measured over (8 × 1.95 ms ≈ 16 ms at the fastest stream):
 /// long enough that one count of quantisation is small, short enough to follow a ramp.
 pub(crate) const VELOCITY_WINDOW: usize = 8;
@@ -38,16 +40,30 @@ pub(crate) struct EncoderTrack {
     held: Option<Sample>,
     /// Samples in a row that contradicted the track.
     held_in_row: u8,
+    /// How two counts are subtracted (the counter's wrap).
+    wrap: Wrap,
 }
 
 impl EncoderTrack {
+    #[cfg(test)]
     pub(crate) const fn new() -> Self {
+        Self::with_wrap(Wrap::Bits32)
+    }
+
+    /// A track of a counter that wraps as `wrap` says.
+    pub(crate) const fn with_wrap(wrap: Wrap) -> Self {
         Self {
             window: FixedQueue::new(),
             velocity: 0.0,
             held: None,
             held_in_row: 0,
+            wrap,
         }
+    }
+
+    /// Counts from `a` to `b`.
+    fn moved(&self, a: Sample, b: Sample) -> f64 {
+        self.wrap.diff(a.count, b.count) as f64
     }
 
     /// Offers a streamed sample through the line-noise guard (module `guard`). A sample
@@ -75,7 +91,7 @@ impl EncoderTrack {
             return true;
         }
         if let Some(held) = self.held.take()
-            && goes_on(last, held, sample, max_accel)
+            && goes_on(self.wrap, last, held, sample, max_accel)
         {
             self.held_in_row = 0;
             self.push(held);
@@ -107,7 +123,7 @@ impl EncoderTrack {
         };
         let quantisation = if still { STILL_SLACK } else { MOVING_SLACK };
         let allowed = max_accel.abs() * dt * (dt + lag) / 2.0 + quantisation;
-        let moved = f64::from(sample.count.wrapping_sub(from.count));
+        let moved = self.moved(from, sample);
         (moved - self.velocity * dt).abs() <= allowed
     }
 
@@ -125,7 +141,7 @@ impl EncoderTrack {
     /// Forgets everything (a new start-up, or the counter was loaded or reset: a jump,
     /// not a motion).
     pub(crate) fn clear(&mut self) {
-        *self = Self::new();
+        *self = Self::with_wrap(self.wrap);
     }
 
     /// Forgets the samples stamped after `time_stamp` (their stamp was corrupted).
@@ -157,7 +173,7 @@ impl EncoderTrack {
     fn update_velocity(&mut self, oldest: Sample, newest: Sample) {
         let ticks = newest.time_stamp.wrapping_sub(oldest.time_stamp);
         if self.window.len() >= 2 && ticks > 0 && ticks < u32::MAX / 2 {
-            let counts = f64::from(newest.count.wrapping_sub(oldest.count));
+            let counts = self.moved(oldest, newest);
             self.velocity = counts / (TICK.as_secs_f64() * f64::from(ticks));
         }
     }
@@ -172,17 +188,17 @@ fn seconds_between(a: Sample, b: Sample) -> Option<f64> {
 /// Whether `sample` goes on from `held` at the velocity `last` → `held` implies, within
 /// `max_accel` over the gaps and a count of quantisation on each of the three samples, or
 /// stays at `held` within a count: two independent corruptions of a line do neither.
-fn goes_on(last: Sample, held: Sample, sample: Sample, max_accel: f64) -> bool {
+fn goes_on(wrap: Wrap, last: Sample, held: Sample, sample: Sample, max_accel: f64) -> bool {
     let (Some(before), Some(dt)) = (seconds_between(last, held), seconds_between(held, sample))
     else {
         return false;
     };
-    let moved = f64::from(sample.count.wrapping_sub(held.count));
+    let moved = wrap.diff(held.count, sample.count) as f64;
     if before <= 0.0 {
         // The held sample replaced the last one's value at its own time stamp.
         return moved.abs() <= 1.0;
     }
-    let velocity = f64::from(held.count.wrapping_sub(last.count)) / before;
+    let velocity = wrap.diff(last.count, held.count) as f64 / before;
     let allowed = max_accel.abs() * dt * (dt + before) / 2.0 + 1.0 + 2.0 * dt / before;
     // Either the motion goes on, or it stopped at the held count (a step).
     (moved - velocity * dt).abs() <= allowed || moved.abs() <= 1.0
@@ -294,5 +310,33 @@ mod tests {
         track.forget_after(8);
         assert_eq!(track.latest(), Some(sample(500, 7)));
         assert!(track.offer(sample(500, 9), ACCEL));
+    }
+
+    #[test]
+    fn a_modulo_n_wrap_is_a_motion_for_the_guard_and_the_velocity() {
+        // Modulo 500 (DTR 499): 7 counts per tick forward, through 499 → 0 twice.
+        let mut track = EncoderTrack::with_wrap(Wrap::Modulo(500));
+        // (The start of the motion, from a still track, is taken one sample late.)
+        for k in 0..150u32 {
+            let count = (7 * k as i32 + 300) % 500;
+            assert_eq!(track.offer(sample(count, k), ACCEL), k != 1, "sample {k}");
+            if k != 1 {
+                assert_eq!(track.latest().map(|s| s.count), Some(count));
+            }
+        }
+        assert_eq!(track.velocity(), 7.0 / TICK.as_secs_f64());
+        // Backwards through 0 → 499.
+        let mut track = EncoderTrack::with_wrap(Wrap::Modulo(500));
+        for k in 0..20u32 {
+            let count = (500 + 20 - 3 * k as i32) % 500;
+            assert_eq!(track.offer(sample(count, k), ACCEL), k != 1, "sample {k}");
+        }
+        assert_eq!(track.velocity(), -3.0 / TICK.as_secs_f64());
+        // The same counts read as a free-running counter are jumps the guard holds.
+        let mut plain = EncoderTrack::new();
+        let taken = (0..150u32)
+            .filter(|k| plain.offer(sample((7 * *k as i32 + 300) % 500, *k), ACCEL))
+            .count();
+        assert!(taken < 150);
     }
 }

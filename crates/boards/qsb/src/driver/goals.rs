@@ -5,28 +5,13 @@ use core::time::Duration;
 use motion_base::counts_to_i32;
 
 use ::qsb::{
-    EncoderMode, IndexMode, LoadTarget, Mdr0, ProductType, QsbCommand, Register, Request, Write,
+    EncoderMode, IndexMode, LoadTarget, ProductType, QsbCommand, Register, Request, Write,
 };
 
 use super::QsbDriver;
 use super::program::Step;
-use super::startup::NORMAL_MDR0;
 use super::wire::Origin;
 use motion_drivers::{DeviceFault, Goal, GoalError, GoalKind, GoalKinds};
-
-/// MDR0 during a home search to counter value 0: the index resets CNTR (0x63, the
-/// command list's "Sync Index, Reset on Index, Free Running, X4 mode, W0363").
-const HOMING_MDR0: Mdr0 = Mdr0 {
-    index: IndexMode::ResetCntr,
-    ..NORMAL_MDR0
-};
-
-/// MDR0 during a home search to any other counter value: the index loads CNTR from DTR
-/// ("configure index as the "load CNTR" input (transfers DTR to CNTR)", 0x53).
-const HOMING_LOAD_MDR0: Mdr0 = Mdr0 {
-    index: IndexMode::LoadCntr,
-    ..NORMAL_MDR0
-};
 
 /// Moves one position goal may make: the move and two corrections (lost steps, a move
 /// whose answer was lost).
@@ -36,10 +21,6 @@ const fn command(command: QsbCommand) -> Step {
     Step::Send(Request::Write(Write::Command(command)))
 }
 
-/// The counter back in normal operation and no STR stream: the prefix of every plan that
-/// may replace a home search.
-const NORMAL_COUNTER: [Step; 2] = [Step::Ensure(Write::Mdr0(NORMAL_MDR0)), Step::EndStrStream];
-
 /// A home search that has not found its index after this many times the time its travel
 /// limit takes at the search velocity has failed (the encoder may not count at all).
 const HOME_TIME_FACTOR: f64 = 2.0;
@@ -48,6 +29,15 @@ const HOME_TIME_FACTOR: f64 = 2.0;
 const HOME_TIME_SLACK: Duration = Duration::from_millis(100);
 
 impl QsbDriver {
+    /// The counter back in normal operation and no STR stream: the prefix of every plan
+    /// that may replace a home search.
+    fn normal_counter(&self) -> [Step; 2] {
+        [
+            Step::Ensure(Write::Mdr0(self.config.counter.mdr0())),
+            Step::EndStrStream,
+        ]
+    }
+
     /// Whether channel 0 drives the -M's stepper: a -M (as reported), its motor drive
     /// configured, counting quadrature.
     pub(super) fn drive_active(&self) -> bool {
@@ -111,10 +101,23 @@ impl QsbDriver {
         match goal {
             Goal::SetPosition { counts } => {
                 let value = counts_to_i32(counts).ok_or(out_of_range)?;
-                self.preset.replace(&[
+                let load = [
                     Step::Ensure(Write::Dtr(value as u32)),
                     Step::Send(Request::Write(Write::Load(LoadTarget::DtrToCntr))),
-                ]);
+                ];
+                match self.config.counter.dtr() {
+                    // DTR is the range limit or the modulus: the value must be a count
+                    // the counter can hold, and DTR goes back to the limit after the load.
+                    Some(limit) => {
+                        if value < 0 || value as u32 > limit {
+                            return Err(out_of_range);
+                        }
+                        let [dtr, load] = load;
+                        self.preset
+                            .replace(&[dtr, load, Step::Ensure(Write::Dtr(limit))]);
+                    }
+                    None => self.preset.replace(&load),
+                }
                 if driven {
                     // The engine holds after a set-position: so does the motor.
                     self.replace_goal(kind, &[Step::StopIfMoving]);
@@ -124,7 +127,7 @@ impl QsbDriver {
             Goal::Stop { .. } if !driven => {}
             // (Only with an enable line: `kinds` refuses it otherwise.)
             Goal::Off => {
-                let [normal, end_str] = NORMAL_COUNTER;
+                let [normal, end_str] = self.normal_counter();
                 self.replace_goal(
                     kind,
                     &[
@@ -139,7 +142,7 @@ impl QsbDriver {
                 // Always on the wire, whatever the driver believes the motor does (a motor
                 // left jogging by someone else must stop), at the decel asked for.
                 let decel = self.config.stop_decel(decel);
-                let [normal, end_str] = NORMAL_COUNTER;
+                let [normal, end_str] = self.normal_counter();
                 self.replace_goal(
                     kind,
                     &[
@@ -167,7 +170,7 @@ impl QsbDriver {
             Goal::Velocity { velocity, accel } => {
                 let rate = self.config.jog_rate(velocity).ok_or(out_of_range)?;
                 let accel = self.config.accel(accel).ok_or(out_of_range)?;
-                let [normal, end_str] = NORMAL_COUNTER;
+                let [normal, end_str] = self.normal_counter();
                 let mut steps = [
                     energise,
                     normal,
@@ -202,11 +205,16 @@ impl QsbDriver {
                 self.home_deadline = None;
                 // The counter value at the index: 0 by "reset CNTR", anything else by
                 // "load CNTR" from DTR.
+                // MDR0 is the normal mode with the index acting: "configure index as the
+                // "reset CNTR" input" (W0363 in x4) or "load CNTR" (transfers DTR to CNTR).
                 let offset = self.config.home_position;
+                let counter = self.config.counter;
                 let (dtr, mdr0) = if offset == 0 {
-                    (Step::Ensure(Write::Mdr0(HOMING_MDR0)), HOMING_MDR0)
+                    let mdr0 = counter.homing_mdr0(IndexMode::ResetCntr);
+                    (Step::Ensure(Write::Mdr0(mdr0)), mdr0)
                 } else {
-                    (Step::Ensure(Write::Dtr(offset as u32)), HOMING_LOAD_MDR0)
+                    let mdr0 = counter.homing_mdr0(IndexMode::LoadCntr);
+                    (Step::Ensure(Write::Dtr(offset as u32)), mdr0)
                 };
                 self.replace_goal(
                     kind,
@@ -220,7 +228,7 @@ impl QsbDriver {
                         Step::Send(Request::Stream(Register::Str)),
                         command(QsbCommand::MotorJog),
                         Step::WaitIndex,
-                        Step::Ensure(Write::Mdr0(NORMAL_MDR0)),
+                        Step::Ensure(Write::Mdr0(counter.mdr0())),
                         command(QsbCommand::MotorStop),
                         Step::EndStrStream,
                     ],
@@ -258,7 +266,7 @@ impl QsbDriver {
         armed: bool,
     ) -> Result<(), GoalError> {
         let target = counts_to_i32(counts).ok_or(GoalError::OutOfBoardRange(kind))?;
-        let [normal, end_str] = NORMAL_COUNTER;
+        let [normal, end_str] = self.normal_counter();
         let move_to = Step::MoveTo {
             target: f64::from(target),
             attempt: 0,
@@ -330,7 +338,7 @@ impl QsbDriver {
                 if travel > self.config.home_max_travel || now >= deadline {
                     // No index within the travel allowed (or the time that takes): stop,
                     // not homed, and say so.
-                    let [normal, end_str] = NORMAL_COUNTER;
+                    let [normal, end_str] = self.normal_counter();
                     self.goal
                         .replace(&[command(QsbCommand::MotorStop), normal, end_str]);
                     self.index_armed = false;

@@ -30,7 +30,8 @@
 //! 1. -M: MD ACCEL from the axis's acceleration, then COMMAND 4 (a motor left running by
 //!    a previous server stops, at that acceleration);
 //! 2. EOR 0x5 (LF and the time stamp: `s0E00001234000ABCDE!\n`), MODE (`input_mode`:
-//!    quadrature, PWM or analog), MDR0 0x43 (x4, free-running, index disabled,
+//!    quadrature, PWM or analog), DTR = `count_limit` in range-limit and modulo-n
+//!    modes, MDR0 ([`CounterSetup`]; by default 0x43: x4, free-running, index disabled,
 //!    synchronous index), MDR1 (counting up, no triggers; B3 = `invert_index`),
 //!    THRESHOLD 0 (a value at every tick), INTERVAL RATE (`stream_interval`, or from the
 //!    line rate: 1 tick = 1.95 ms at 230400 baud);
@@ -56,8 +57,8 @@
 //! | `Stop{decel}` | MD ACCEL = decel (rounded *up* to 16, written when it differs), COMMAND 4 — always sent, even if the motor is believed idle —, then the enable line active (a stop holds) | accepted, nothing to do |
 //! | `Position`, `RampPosition` | enable line active, MD STEP RATE / MD ACCEL (axis limits, or the goal's), COMMAND 4 and wait if moving, then MD MOVE STEPS = the whole steps from the encoder reading to the target, COMMAND 8; after the drive reports done, up to two correcting moves | `Unsupported` |
 //! | `Velocity` | enable line active, MD ACCEL, MD JOG RATE, COMMAND 9 (0 = COMMAND 4) | `Unsupported` |
-//! | `Home{velocity}` | enable line active; MDR0 0x63 (index resets CNTR) for a home position of 0, else DTR = the home position and MDR0 0x53 (index loads CNTR from DTR); clear STR, stream STR, jog in the configured direction; the first index latch (STR IDX) is the reference: MDR0 back to 0x43, COMMAND 4. A search that travels `home_max_travel` (or runs twice the time that takes) without an index stops and reports [`DeviceFault::HomeFailed`] until its stop is complete | `Unsupported` (no drive to search with) |
-//! | `SetPosition` | DTR = counts, LOAD REG 0 (DTR → CNTR); then COMMAND 4 if the motor moves (the engine holds after a set-position) | DTR, LOAD REG 0 |
+//! | `Home{velocity}` | enable line active; MDR0 0x63 (index resets CNTR) for a home position of 0, else DTR = the home position and MDR0 0x53 (index loads CNTR from DTR); clear STR, stream STR, jog in the configured direction; the first index latch (STR IDX) is the reference: MDR0 back to 0x43, COMMAND 4 (in another `count_mode` its B1 B0 and B6 stay in all three). A search that travels `home_max_travel` (or runs twice the time that takes) without an index stops and reports [`DeviceFault::HomeFailed`] until its stop is complete | `Unsupported` (no drive to search with) |
+//! | `SetPosition` | DTR = counts, LOAD REG 0 (DTR → CNTR); then COMMAND 4 if the motor moves (the engine holds after a set-position) | DTR, LOAD REG 0; in range-limit and modulo-n only 0..=`count_limit`, and DTR = `count_limit` again after the load |
 //! | `Power` | `Unsupported` (step and direction only) | `Unsupported` |
 //!
 //! In PWM and analog input modes the channel takes no goal: it is not an axis.
@@ -101,6 +102,7 @@
 #![allow(clippy::module_name_repetitions)]
 
 mod config;
+mod counter;
 mod encoder;
 mod goals;
 mod guard;
@@ -111,6 +113,8 @@ mod spec;
 mod startup;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_counter;
 #[cfg(test)]
 mod tests_in_flight;
 #[cfg(test)]
@@ -126,6 +130,7 @@ use core::time::Duration;
 use ::qsb::{MdStatus, ProductType, ResponseDecoder};
 
 pub use config::QsbDriverConfig;
+pub use counter::CounterSetup;
 pub use io::{CaptureInput, EnableOutput, MOTOR_DRIVE_BITS, PinRole, QsbIo, pins};
 pub use spec::{LONGEST_INTERVAL_TICKS, TICK, interval_ticks};
 
@@ -214,6 +219,7 @@ impl QsbDriver {
     /// [`poll_transmit`](Driver::poll_transmit).
     pub fn new(mut config: QsbDriverConfig) -> Self {
         io::sanitise(&mut config);
+        let wrap = config.counter.wrap();
         let mut driver = Self {
             config,
             decoder: ResponseDecoder::new(),
@@ -236,7 +242,7 @@ impl QsbDriver {
             stamps: StampGuard::default(),
             md_disabled_once: false,
             version_doubt: None,
-            encoder: EncoderTrack::new(),
+            encoder: EncoderTrack::with_wrap(wrap),
             rebase_pending: false,
             position: 0,
             last_sample_at: None,

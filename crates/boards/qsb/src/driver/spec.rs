@@ -5,9 +5,9 @@
 
 use core::time::Duration;
 
-use ::qsb::{EncoderMode, IntervalRate, ProductType};
+use ::qsb::{CountMode, CycleMode, EncoderMode, IndexMode, IntervalRate, ProductType};
 
-use super::{CaptureInput, EnableOutput, PinRole, QsbDriverConfig, QsbIo};
+use super::{CaptureInput, CounterSetup, EnableOutput, PinRole, QsbDriverConfig, QsbIo};
 use crate::{QsbDeviceKeys, QsbInputMode, QsbVariant};
 use motion_drivers::Pin;
 use motion_drivers::spec::{Direction, DriverAxis, DriverSpec, Param, ParamOwner, SpecError};
@@ -106,6 +106,14 @@ impl QsbDriverConfig {
             driver.latency = latency;
         }
         driver.input_mode = keys.input_mode.unwrap_or_default().into();
+        let count = keys.count_mode.unwrap_or(CountMode::X4);
+        driver.counter = CounterSetup {
+            count,
+            cycle: keys.count_range.unwrap_or(CycleMode::FreeRunning),
+            limit: keys.count_limit.unwrap_or(0),
+            index: keys.index_action.unwrap_or(IndexMode::Disabled),
+            synchronous_index: keys.index_sync.unwrap_or(count != CountMode::NonQuadrature),
+        };
         driver.motor_drive = driver.input_mode == EncoderMode::Quadrature && axis.is_some();
         driver.enable = keys.enable_output.map(|bit| EnableOutput {
             bit,
@@ -183,6 +191,16 @@ impl QsbDriverConfig {
             EncoderMode::Analog => "analog",
         };
         row("input_mode", mode.to_owned());
+        let counter = self.counter;
+        row("count_mode", counter.count_text().to_owned());
+        row("count_range", counter.range_text());
+        row("index_action", counter.index_text().to_owned());
+        let sync = if counter.mdr0().synchronous_index {
+            "synchronous"
+        } else {
+            "asynchronous"
+        };
+        row("index_sync", sync.to_owned());
         let capture = self.io.capture;
         row(
             "capture_input",

@@ -7,25 +7,12 @@ use core::time::Duration;
 
 use motion_base::FixedQueue;
 
-use ::qsb::{
-    CountMode, CycleMode, IndexMode, Mdr0, Mdr1, Mode, ProductType, QsbCommand, Register, Request,
-    Write,
-};
+use ::qsb::{Mdr1, Mode, ProductType, QsbCommand, Register, Request, Write};
 
 use super::config::DRIVER_EOR;
 use super::program::{self, Step};
 use super::{QsbDriver, REGISTERS, RESTART_DELAY};
 use motion_drivers::{DeviceFault, FIRMWARE_LEN};
-
-/// MDR0 in normal operation: x4 quadrature, free-running, index disabled, synchronous
-/// index (0x43).
-pub(super) const NORMAL_MDR0: Mdr0 = Mdr0 {
-    count: CountMode::X4,
-    cycle: CycleMode::FreeRunning,
-    index: IndexMode::Disabled,
-    synchronous_index: true,
-    filter_div2: false,
-};
 
 impl QsbDriver {
     /// (Re)starts the start-up sequence; the last known position stays.
@@ -70,13 +57,18 @@ impl QsbDriver {
             invert_index: self.config.invert_index,
             ..Mdr1::default()
         };
+        // DTR before MDR0: a range-limit or modulo-n mode starts with its limit.
+        let counter = self.config.counter;
+        let dtr = counter.dtr().map(|limit| Step::Ensure(Write::Dtr(limit)));
         let common = [
             Step::Ensure(Write::Eor(DRIVER_EOR)),
             Step::Ensure(Write::Mode(Mode {
                 encoder: self.config.input_mode,
                 pwm_12bit: false,
             })),
-            Step::Ensure(Write::Mdr0(NORMAL_MDR0)),
+        ];
+        let counter_steps = [
+            Step::Ensure(Write::Mdr0(counter.mdr0())),
             Step::Ensure(Write::Mdr1(mdr1)),
             Step::Ensure(Write::Threshold(0)),
             Step::Ensure(Write::IntervalRate(self.config.interval())),
@@ -94,6 +86,8 @@ impl QsbDriver {
             ))));
         }
         common.into_iter().for_each(&mut push);
+        dtr.into_iter().for_each(&mut push);
+        counter_steps.into_iter().for_each(&mut push);
         if drive {
             push(Step::Ensure(Write::StepRate(rate)));
         }

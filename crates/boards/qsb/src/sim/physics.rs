@@ -180,3 +180,100 @@ impl QsbSim {
         code as u16
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use core::time::Duration;
+
+    use qsb::{CountMode, CycleMode, IndexMode, Mdr0};
+
+    use super::super::{EncoderMotion, QsbSim, QsbSimConfig, Variant};
+
+    /// A still -D (one index per 500 cycles, at multiples of 500) counting as `mdr0` with
+    /// DTR `dtr`, CNTR at `cntr`.
+    fn sim(mdr0: Mdr0, dtr: u32, cntr: u32) -> QsbSim {
+        let mut sim = QsbSim::new(QsbSimConfig {
+            variant: Variant::D,
+            motion: EncoderMotion {
+                velocity: 0.0,
+                amplitude: 0.0,
+                frequency_hz: 0.0,
+            },
+            ..QsbSimConfig::default()
+        });
+        // Powered up first (the power-up loads the factory MDR0 0x4F and DTR 0x1F3).
+        sim.nudge_encoder(Duration::ZERO, 0.0);
+        sim.counter.mdr0 = mdr0;
+        sim.counter.dtr = dtr;
+        sim.counter.cntr = cntr;
+        sim
+    }
+
+    fn modulo(index: IndexMode) -> Mdr0 {
+        Mdr0 {
+            count: CountMode::X1,
+            cycle: CycleMode::ModuloN,
+            index,
+            synchronous_index: true,
+            filter_div2: false,
+        }
+    }
+
+    #[test]
+    fn modulo_n_wraps_both_ways_one_count_per_cycle_in_x1() {
+        // "modulo-n count mode. The input clock is divided by a factor of (DTR + 1)".
+        let mut s = sim(modulo(IndexMode::Disabled), 499, 0);
+        s.nudge_encoder(Duration::ZERO, 1234.5);
+        assert_eq!(s.counter.cntr, 234);
+        s.nudge_encoder(Duration::ZERO, -240.0);
+        assert_eq!(s.counter.cntr, 494, "backwards through 0 to DTR");
+        assert!(s.counter.status().borrow);
+    }
+
+    #[test]
+    fn an_index_that_resets_cntr_synchronises_the_modulo_count() {
+        // Misaligned by 100 counts: without the index the count stays 100 off.
+        let mut plain = sim(modulo(IndexMode::Disabled), 499, 100);
+        plain.nudge_encoder(Duration::ZERO, 1234.5);
+        assert_eq!(plain.counter.cntr, 334);
+        // "configure index as the "reset CNTR" input (clears CNTR to 0)": from the first
+        // index (at 500 cycles) on, the count is the position within the revolution.
+        let mut synced = sim(modulo(IndexMode::ResetCntr), 499, 100);
+        synced.nudge_encoder(Duration::ZERO, 1234.5);
+        assert_eq!(synced.counter.cntr, 234);
+        assert!(synced.counter.status().index);
+        // "load CNTR" (transfers DTR to CNTR): the index is count 499, the next cycle 0.
+        let mut loaded = sim(modulo(IndexMode::LoadCntr), 499, 100);
+        loaded.nudge_encoder(Duration::ZERO, 1234.5);
+        assert_eq!(loaded.counter.cntr, 233);
+    }
+
+    #[test]
+    fn x2_and_step_direction_count_their_edges_and_range_limit_clamps() {
+        let x2 = Mdr0 {
+            count: CountMode::X2,
+            cycle: CycleMode::RangeLimit,
+            ..Mdr0::default()
+        };
+        // "two counts per quadrature cycle"; "counting freezes at these limits but
+        // resumes when direction reverses".
+        let mut s = sim(x2, 300, 0);
+        s.nudge_encoder(Duration::ZERO, 100.25);
+        assert_eq!(s.counter.cntr, 200);
+        s.nudge_encoder(Duration::ZERO, 100.0);
+        assert_eq!(s.counter.cntr, 300, "frozen at DTR");
+        s.nudge_encoder(Duration::ZERO, -10.0);
+        assert_eq!(s.counter.cntr, 280, "resumes when the direction reverses");
+        s.nudge_encoder(Duration::ZERO, -1000.0);
+        assert_eq!(s.counter.cntr, 0, "frozen at zero");
+        // "non-quadrature count mode. (A = clock, B = direction)": one count per clock.
+        let steps = Mdr0 {
+            count: CountMode::NonQuadrature,
+            ..Mdr0::default()
+        };
+        let mut s = sim(steps, 0, 0);
+        s.nudge_encoder(Duration::ZERO, 7.0);
+        s.nudge_encoder(Duration::ZERO, -3.0);
+        assert_eq!(s.counter.cntr, 4);
+    }
+}
