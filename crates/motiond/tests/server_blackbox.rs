@@ -13,17 +13,12 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use board_qsb::sim::{QsbSim, QsbSimConfig};
-use motion_ipc::{AxisFlags, CommandKind, CommandRequest, DeviceState, FaultCode, MotionFrame};
+use motion_ipc::{CommandKind, CommandRequest, FaultCode};
 use motiond::blackbox::record::Kind;
 use motiond::blackbox::{BlackboxFile, Recording};
 use nix::sys::signal::Signal;
 use support::pty_board::PtyBoard;
 use support::*;
-
-fn online(frame: &MotionFrame) -> bool {
-    let axis = frame.axes()[0];
-    axis.device_state() == Ok(DeviceState::Online) && !axis.flags().contains(AxisFlags::STALE)
-}
 
 /// The path of the first "black box saved (reasons): PATH (N ticks)" log line whose
 /// reasons include `why` (triggers within 300 ms make one save).
@@ -146,7 +141,7 @@ following_error = 1.0
     );
     let mut server = Server::start(&config);
     let mut client = RawClient::connect(&name, Duration::from_secs(10));
-    let (frame, ready) = client.wait_frame(Duration::from_secs(10), online);
+    let (frame, ready) = client.wait_frame(Duration::from_secs(10), axis0_online);
     assert!(ready, "{:?}", frame.axes()[0]);
 
     // A move, and its arrival.

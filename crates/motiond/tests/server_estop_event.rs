@@ -16,18 +16,6 @@ fn latched(frame: &MotionFrame) -> bool {
     frame.flags().contains(FrameFlags::ESTOP_LATCHED)
 }
 
-/// Threads of process `pid` named `comm`.
-fn has_thread(pid: u32, comm: &str) -> bool {
-    std::fs::read_dir(format!("/proc/{pid}/task"))
-        .map(|tasks| {
-            tasks.flatten().any(|task| {
-                std::fs::read_to_string(task.path().join("comm"))
-                    .is_ok_and(|name| name.trim() == comm)
-            })
-        })
-        .unwrap_or(false)
-}
-
 /// Jiffies of CPU (user + system) the thread `comm` of `pid` has used.
 fn thread_jiffies(pid: u32, comm: &str) -> Option<u64> {
     let tasks = std::fs::read_dir(format!("/proc/{pid}/task")).ok()?;
@@ -55,7 +43,9 @@ fn every_estop_notification_latches_again_after_each_reset() {
     });
     assert!(up);
     assert!(
-        has_thread(server.pid(), "estop-watch"),
+        thread_names(server.pid())
+            .iter()
+            .any(|t| t == "estop-watch"),
         "the listener's watch runs"
     );
     let node = NodeBuilder::new().create::<ipc::Service>().expect("a node");

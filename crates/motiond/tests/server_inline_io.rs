@@ -10,27 +10,9 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use board_qq2drv::sim::{Qq2drvSim, Qq2drvSimConfig};
-use motion_ipc::{AxisFlags, DeviceState, MotionFrame};
 use nix::sys::signal::Signal;
 use support::socket_board::SocketBoard;
 use support::*;
-
-fn online(frame: &MotionFrame) -> bool {
-    let axis = frame.axes()[0];
-    axis.device_state() == Ok(DeviceState::Online) && !axis.flags().contains(AxisFlags::STALE)
-}
-
-/// The names of the threads of process `pid`.
-fn thread_names(pid: u32) -> Vec<String> {
-    let Ok(tasks) = std::fs::read_dir(format!("/proc/{pid}/task")) else {
-        return Vec::new();
-    };
-    tasks
-        .flatten()
-        .filter_map(|task| std::fs::read_to_string(task.path().join("comm")).ok())
-        .map(|comm| comm.trim().to_owned())
-        .collect()
-}
 
 /// Distinct frames seen in `span`, looking every 5 ms.
 fn frames_seen(client: &RawClient, span: Duration) -> usize {
@@ -83,7 +65,7 @@ max_accel = 3.0
     );
     let mut server = Server::start(&config);
     let client = RawClient::connect(&name, Duration::from_secs(10));
-    let (frame, ready) = client.wait_frame(Duration::from_secs(10), online);
+    let (frame, ready) = client.wait_frame(Duration::from_secs(10), axis0_online);
     assert!(ready, "{:?}", frame.axes()[0]);
     let threads = thread_names(server.pid());
     assert!(
@@ -94,7 +76,7 @@ max_accel = 3.0
     // The board's thread blocks on its model: it reads and answers nothing, as a hung
     // bridge would.
     let hung = board.lock().expect("model");
-    let (frame, offline) = client.wait_frame(Duration::from_secs(10), |f| !online(f));
+    let (frame, offline) = client.wait_frame(Duration::from_secs(10), |f| !axis0_online(f));
     assert!(
         offline,
         "a silent board stayed online: {:?}",
@@ -104,7 +86,7 @@ max_accel = 3.0
     let seen = frames_seen(&client, Duration::from_secs(1));
     assert!(seen >= 20, "{seen} frames in a second with the peer hung");
     drop(hung);
-    let (frame, back) = client.wait_frame(Duration::from_secs(10), online);
+    let (frame, back) = client.wait_frame(Duration::from_secs(10), axis0_online);
     assert!(back, "the board did not come back: {:?}", frame.axes()[0]);
     assert_eq!(
         server.signal_and_wait(Signal::SIGTERM, Duration::from_secs(10)),

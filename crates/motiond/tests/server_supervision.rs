@@ -14,7 +14,7 @@ use std::time::Instant;
 
 use board_qsb::sim::{QsbSim, QsbSimConfig};
 use board_spimotor::sim::{SpimotorSim, SpimotorSimConfig};
-use motion_ipc::{AxisFlags, DeviceState, FaultCode, MotionFrame};
+use motion_ipc::{AxisFlags, FaultCode};
 use motion_link::sim::SpiDevice;
 use motion_link::sim::StreamDevice;
 use nix::sys::signal::Signal;
@@ -89,11 +89,6 @@ fn run_away_fast(board: &Board, now: Duration) {
     );
 }
 
-fn online(frame: &MotionFrame) -> bool {
-    let axis = frame.axes()[0];
-    axis.device_state() == Ok(DeviceState::Online) && !axis.flags().contains(AxisFlags::STALE)
-}
-
 fn wait_still(board: &Board, timeout: Duration) -> bool {
     let end = Instant::now() + timeout;
     while Instant::now() < end {
@@ -117,7 +112,7 @@ fn a_stepper_left_running_before_the_server_starts_is_stopped_at_start_up() {
     assert!(board.lock().expect("board").is_moving());
     let mut server = Server::start(&config(&name, &socket, ""));
     let client = RawClient::connect(&name, Duration::from_secs(10));
-    let (frame, ready) = client.wait_frame(Duration::from_secs(10), online);
+    let (frame, ready) = client.wait_frame(Duration::from_secs(10), axis0_online);
     assert!(ready, "{:?}", frame.axes()[0]);
     assert!(
         wait_still(&board, Duration::from_secs(2)),
@@ -172,7 +167,7 @@ max_accel = 1000.0
     );
     let server = Server::start(&config);
     let client = RawClient::connect(&name, Duration::from_secs(10));
-    let (frame, ready) = client.wait_frame(Duration::from_secs(10), online);
+    let (frame, ready) = client.wait_frame(Duration::from_secs(10), axis0_online);
     assert!(ready, "{:?}", frame.axes()[0]);
     (board, served, epoch, server, client)
 }

@@ -84,3 +84,22 @@ model = "qsb"
         ),
     )
 }
+
+/// Axis 0's board is online and its measurement fresh.
+pub fn axis0_online(frame: &motion_ipc::MotionFrame) -> bool {
+    let axis = frame.axes()[0];
+    axis.device_state() == Ok(motion_ipc::DeviceState::Online)
+        && !axis.flags().contains(motion_ipc::AxisFlags::STALE)
+}
+
+/// The names of the threads of process `pid` (`/proc/PID/task/*/comm`).
+pub fn thread_names(pid: u32) -> Vec<String> {
+    let Ok(tasks) = std::fs::read_dir(format!("/proc/{pid}/task")) else {
+        return Vec::new();
+    };
+    tasks
+        .flatten()
+        .filter_map(|task| std::fs::read_to_string(task.path().join("comm")).ok())
+        .map(|comm| comm.trim().to_owned())
+        .collect()
+}
