@@ -55,7 +55,7 @@ extern "C" {
 /* --- constants ---------------------------------------------------------------------------- */
 
 /** Version of the contract; every payload carries it. */
-#define MOTIOND_SCHEMA_VERSION 8u
+#define MOTIOND_SCHEMA_VERSION 9u
 /** Capacity of the axis arrays of the frame and the server info. */
 #define MOTIOND_MAX_AXES 128u
 /** Capacity of the device arrays of the frame and the server info. */
@@ -944,7 +944,7 @@ MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_link_io_t) == 8, "motiond_link_io_
 /**
  * Server figures, published about once a second on `motiond/<name>/stats`.
  *
- * 1992 bytes, alignment 8; iceoryx2 type name "motiond::ServerStats".
+ * 2000 bytes, alignment 8; iceoryx2 type name "motiond::ServerStats".
  */
 typedef struct motiond_server_stats {
     uint32_t schema_version; /**< MOTIOND_SCHEMA_VERSION of the server. (offset 0) */
@@ -998,8 +998,13 @@ typedef struct motiond_server_stats {
      * killed while they started), since start.
      */
     uint64_t nodes_cleaned; /* offset 1984 */
+    /**
+     * Black-box records the tick dropped because the recorder's queue was full, since start: a
+     * saved black box has a hole there, and a replay stops at it.
+     */
+    uint64_t blackbox_lost; /* offset 1992 */
 } motiond_server_stats_t;
-MOTIOND_STATIC_ASSERT(sizeof(motiond_server_stats_t) == 1992, "motiond_server_stats_t size");
+MOTIOND_STATIC_ASSERT(sizeof(motiond_server_stats_t) == 2000, "motiond_server_stats_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_server_stats_t) == 8, "motiond_server_stats_t alignment");
 
 /* --- texts -------------------------------------------------------------------------------- */

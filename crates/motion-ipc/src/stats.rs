@@ -150,6 +150,9 @@ payload! {
         /// Records of dead iceoryx2 nodes removed from the service root (crashed clients,
         /// clients killed while they started), since start.
         pub nodes_cleaned: u64,
+        /// Black-box records the tick dropped because the recorder's queue was full, since
+        /// start: a saved black box has a hole there, and a replay stops at it.
+        pub blackbox_lost: u64,
     }
 }
 
@@ -217,6 +220,7 @@ impl ServerStats {
         events_dropped: 0,
         link_io: [LinkIo::EMPTY; MAX_LINKS],
         nodes_cleaned: 0,
+        blackbox_lost: 0,
     };
 
     /// The valid link entries.

@@ -131,7 +131,7 @@ macro_rules! payloads {
 payloads!(
     MotionFrame = 20944,
     ServerInfo = 38864,
-    ServerStats = 1992,
+    ServerStats = 2000,
     MachineParams = 180_240,
     CommandRequest = 64,
     CommandReply = 72,

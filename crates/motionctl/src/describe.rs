@@ -167,6 +167,7 @@ pub fn stats_json(stats: &ServerStats) -> Value {
         "replies_lost": stats.replies_lost,
         "events_dropped": stats.events_dropped,
         "nodes_cleaned": stats.nodes_cleaned,
+        "blackbox_lost": stats.blackbox_lost,
         "links": links,
     })
 }

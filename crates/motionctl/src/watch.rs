@@ -139,7 +139,7 @@ fn draw(
     let figures = match stats {
         Some(stats) => format!(
             "wake-up p50 {} p99 {} p99.9 {} max {}   work p50 {} max {}   overruns {}   clients {}   \
-             lost: frames {} publishes {} replies {} events {}",
+             lost: frames {} publishes {} replies {} events {} black box {}",
             micros(stats.wakeup.p50_ns),
             micros(stats.wakeup.p99_ns),
             micros(stats.wakeup.p999_ns),
@@ -152,6 +152,7 @@ fn draw(
             stats.publish_failures,
             stats.replies_lost,
             stats.events_dropped,
+            stats.blackbox_lost,
         ),
         None => "tick statistics: none yet (published about once a second)".to_owned(),
     };

@@ -1,6 +1,7 @@
 //! `motionctl blackbox save FILE.mcap` against a real `motiond` on `config/sim.toml`: the
 //! server saves its black box, motionctl copies it and says where both are, and the copy
-//! replays frame for frame (`motiond --replay`).
+//! replays frame for frame (`motiond --replay`); the server's stats count no black-box
+//! record lost.
 
 mod common;
 
@@ -39,6 +40,11 @@ fn blackbox_save_copies_the_servers_file_and_the_copy_replays() -> Result {
     let said = String::from_utf8_lossy(&replay.stdout);
     assert!(replay.status.success(), "{said} {replay:?}");
     assert!(said.contains("frames identical"), "{said}");
+    // A replay that went through crossed no hole: the server says it dropped no record.
+    let status = poll_json(&server.name, &["status", "--json"], |status| {
+        status["stats"]["blackbox_lost"].as_u64().is_some()
+    })?;
+    assert_eq!(status["stats"]["blackbox_lost"], 0, "{status}");
     let _ = std::fs::remove_file(&out);
     Ok(())
 }

@@ -727,6 +727,7 @@ impl Loop {
         stats.faults = counters.faults;
         stats.clients = self.setup.clients_alive.load(Ordering::Relaxed);
         stats.nodes_cleaned = self.setup.nodes_cleaned.load(Ordering::Relaxed);
+        stats.blackbox_lost = self.setup.journal.lost_since_start();
         let config = engine.config();
         for (index, (port, out)) in self
             .setup

@@ -23,7 +23,7 @@ from ._mirror_base import (
 # --- constants ---------------------------------------------------------------------------
 
 #: Version of the contract; every payload carries it.
-SCHEMA_VERSION = 8
+SCHEMA_VERSION = 9
 #: Capacity of the axis arrays of the frame and the server info.
 MAX_AXES = 128
 #: Capacity of the device arrays of the frame and the server info.
@@ -561,7 +561,7 @@ class LinkIo(Payload):
 class ServerStats(Payload):
     """Server figures, published about once a second on ``motiond/<name>/stats``.
 
-    1992 bytes, alignment 8."""
+    2000 bytes, alignment 8."""
 
     _type_name_ = "motiond::ServerStats"
     _fields_ = [
@@ -602,6 +602,9 @@ class ServerStats(Payload):
         # Records of dead iceoryx2 nodes removed from the service root (crashed clients, clients
         # killed while they started), since start.
         ("nodes_cleaned", ctypes.c_uint64),
+        # Black-box records the tick dropped because the recorder's queue was full, since start: a
+        # saved black box has a hole there, and a replay stops at it.
+        ("blackbox_lost", ctypes.c_uint64),
     ]
 
 

@@ -270,3 +270,39 @@ impl Journal {
         });
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::blackbox::record::records;
+
+    #[test]
+    fn a_full_queue_drops_counts_and_marks_the_hole() {
+        // Room for two tick records (header + two words each) and a little more.
+        let (producer, mut consumer) = rtrb::RingBuffer::<u8>::new(2 * (HEADER_LEN + 16) + 4);
+        let mut journal = Journal::new(producer);
+        for n in 0..5u64 {
+            journal.tick(Duration::from_millis(n));
+        }
+        assert_eq!(journal.lost_since_start(), 3, "three ticks did not fit");
+        let drained = |consumer: &mut rtrb::Consumer<u8>| {
+            let chunk = consumer.read_chunk(consumer.slots()).unwrap();
+            let bytes: Vec<u8> = chunk.into_iter().collect();
+            records(&bytes)
+                .map(|record| record.map(|record| (record.kind, record.u64_at(8))))
+                .collect::<Result<Vec<_>, _>>()
+                .unwrap()
+        };
+        assert_eq!(drained(&mut consumer), [(Kind::Tick, 0), (Kind::Tick, 1)]);
+        // Room again: the hole is marked before the next record, and counted once.
+        journal.tick(Duration::from_millis(5));
+        let after = drained(&mut consumer);
+        assert_eq!(after[0].0, Kind::Lost);
+        assert_eq!(after[1], (Kind::Tick, 5));
+        assert_eq!(journal.lost_since_start(), 3);
+        // A disabled journal records and loses nothing.
+        let mut disabled = Journal::disabled();
+        disabled.tick(Duration::ZERO);
+        assert_eq!(disabled.lost_since_start(), 0);
+    }
+}
