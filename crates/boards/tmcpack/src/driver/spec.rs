@@ -230,8 +230,16 @@ impl TmcpackDriverConfig {
             io: io(&spec.signals, &spec.machine),
             ..Self::default()
         };
-        if let Some(baud) = spec.line_rate {
-            driver.baud = baud;
+        match spec.framing {
+            // The link's rate is the CAN bit rate; the pack's RS-232 side keeps its own.
+            motion_drivers::LinkFraming::Can => {
+                driver.can_bitrate = Some(spec.line_rate.unwrap_or(tmcpack::CAN_DEFAULT_BITRATE));
+            }
+            motion_drivers::LinkFraming::Bytes => {
+                if let Some(baud) = spec.line_rate {
+                    driver.baud = baud;
+                }
+            }
         }
         if let Some(d) = keys.amax_divisor {
             driver.amax_divisor =
