@@ -12,8 +12,11 @@
 //! and never block the caller except in [`Link::flush`] (and spidev transfers, which
 //! belong on their own I/O thread).
 //!
-//! Every implementation passes one conformance suite (`tests/conformance.rs`): serial over
-//! a pseudo-terminal pair, spi-socket against a test listener, and sim.
+//! Every byte transport passes one conformance suite (`tests/conformance.rs`): serial over
+//! a pseudo-terminal pair, spi-socket against a test listener, and sim. The CAN links move
+//! 16-byte frame records instead of free bytes and have their own tests: `tests/can_link.rs`
+//! (the simulated bus) and `tests/vcan.rs` (SocketCAN on a virtual interface, where the
+//! kernel has one).
 //!
 //! # Example: a simulated 19200-baud wire charges real wire time
 //!

@@ -252,3 +252,25 @@ fn bad_can_link_keys_are_refused_where_they_are_written() {
         "socketcan, sim-can",
     );
 }
+
+/// `motionctl list` shows a pack's identifiers on CAN: its commands on address << 3, its
+/// answers on reply address << 3; the serial line's `$40` / `$41` as not sent.
+#[test]
+fn the_parameters_name_the_can_identifiers() {
+    let config = motiond::config::ServerConfig::parse(std::path::Path::new("good.toml"), GOOD)
+        .expect("valid");
+    let rows = motiond::boards::describe(&config);
+    let value = |key: &str| {
+        rows.iter()
+            .find(|row| row.key == key)
+            .map(|row| row.value.clone())
+            .unwrap_or_else(|| panic!("no {key} row in {rows:?}"))
+    };
+    let reply = value("reply_address");
+    assert!(
+        reply.contains("CAN answers on $7F0") && reply.contains("commands on $010"),
+        "{reply}"
+    );
+    assert!(value("switchover_ms").contains("not sent on CAN"));
+    assert!(value("packet_timeout_ms").contains("not sent on CAN"));
+}

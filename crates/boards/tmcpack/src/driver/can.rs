@@ -260,3 +260,101 @@ mod tests {
         assert!(line.may_send(again));
     }
 }
+
+#[cfg(test)]
+mod driver_tests {
+    use super::*;
+    use crate::driver::{TmcpackChannel, TmcpackDriver, TmcpackDriverConfig};
+    use motion_drivers::Driver;
+    use tmcpack::{Action, Reply, ReplyFrame};
+
+    fn answer(reply: Reply) -> [u8; CAN_RECORD_LEN] {
+        let telegram = ReplyFrame::new(0xFE, reply).to_can().expect("valid");
+        CanRecord::standard(telegram.id, &telegram.data)
+            .expect("valid")
+            .to_bytes()
+    }
+
+    /// The request in a record the driver wrote.
+    fn request(bytes: &[u8]) -> Request {
+        let record = CanRecord::from_bytes(bytes.try_into().expect("one record")).expect("ok");
+        assert_eq!(record.standard_id(), Some(0x008), "to address 1 << 3");
+        let mut word = [0u8; FRAME_LEN];
+        word[0] = 1;
+        word[1..].copy_from_slice(record.payload());
+        RequestFrame::decode(&word).expect("a request").request
+    }
+
+    /// On the fake clock: `$43` and `$28` go out as telegrams and their answers come back as
+    /// telegrams; the configuration follows without `$40` and `$41`, never more than
+    /// [`CACHE_LIMIT`] commands ahead of the pack's processing.
+    #[test]
+    fn the_driver_starts_a_pack_over_can() {
+        let mut channels = [None; 6];
+        channels[0] = Some(TmcpackChannel::default());
+        let mut driver = TmcpackDriver::new(TmcpackDriverConfig {
+            channels,
+            can_bitrate: Some(250_000),
+            ..TmcpackDriverConfig::default()
+        });
+        let mut buf = [0u8; 64];
+        let mut now = Duration::ZERO;
+        let sent = driver.poll_transmit(now, &mut buf).expect("$43");
+        assert_eq!(sent.len, CAN_RECORD_LEN);
+        assert_eq!(request(&buf[..16]), Request::UnitInfo { reply_to: 0xFE });
+        assert!(
+            driver.poll_transmit(now, &mut buf).is_none(),
+            "one in flight"
+        );
+        now += Duration::from_millis(3);
+        driver.handle_rx(
+            now,
+            &answer(Reply::UnitInfo {
+                firmware: 149,
+                reset: true,
+                temperature: 30,
+                serial: 7,
+            }),
+        );
+        let sent = driver.poll_transmit(now, &mut buf).expect("$28");
+        assert_eq!(sent.len, CAN_RECORD_LEN);
+        assert!(matches!(
+            request(&buf[..16]),
+            Request::QueryActions { reply_to: 0xFE, .. }
+        ));
+        now += Duration::from_millis(3);
+        driver.handle_rx(
+            now,
+            &answer(Reply::Actions {
+                actions: [Action::Inactive; 6],
+            }),
+        );
+        let mut plan = Vec::new();
+        let mut times = Vec::new();
+        for _ in 0..2000 {
+            driver.handle_timeout(now);
+            if let Some(sent) = driver.poll_transmit(now, &mut buf) {
+                let r = request(&buf[..sent.len]);
+                if matches!(r, Request::QueryPosition { .. } | Request::UnitInfo { .. }) {
+                    break;
+                }
+                plan.push(r);
+                times.push(now);
+            }
+            now += Duration::from_micros(100);
+        }
+        assert!(plan.len() >= 8, "{plan:?}");
+        assert!(
+            !plan
+                .iter()
+                .any(|r| matches!(r, Request::SetBaud { .. } | Request::PacketTimeout { .. })),
+            "{plan:?}"
+        );
+        // At most CACHE_LIMIT commands within any 2 ms × CACHE_LIMIT window.
+        let window = tmcpack::CAN_COMMAND_TIME * CACHE_LIMIT as u32;
+        for (i, t) in times.iter().enumerate() {
+            let within = times[i..].iter().take_while(|u| **u < *t + window).count();
+            assert!(within <= CACHE_LIMIT + 1, "{within} commands from {t:?}");
+        }
+    }
+}

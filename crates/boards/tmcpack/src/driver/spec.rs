@@ -293,18 +293,31 @@ impl TmcpackDriverConfig {
         row(
             dev,
             "reply_address",
-            format!("{0} (0x{0:02X})", self.reply_address),
+            match self.can_bitrate {
+                // Manual 6.2: "For responding the address is shifted to the left by 3 bits".
+                Some(_) => format!(
+                    "{0} (0x{0:02X}; CAN answers on ${1:03X}, the pack's commands on ${2:03X})",
+                    self.reply_address,
+                    u16::from(self.reply_address) << 3,
+                    u16::from(self.address) << 3
+                ),
+                None => format!("{0} (0x{0:02X})", self.reply_address),
+            },
         );
         let switchover = self.switchover_units.unwrap_or(DEFAULT_SWITCHOVER_UNITS);
+        let serial_only = |value: String| match self.can_bitrate {
+            Some(_) => "not sent on CAN (the RS-232 / RS-485 line's)".to_owned(),
+            None => value,
+        };
         row(
             dev,
             "switchover_ms",
-            format!("{} ms ($40)", 2 * u32::from(switchover)),
+            serial_only(format!("{} ms ($40)", 2 * u32::from(switchover))),
         );
         row(
             dev,
             "packet_timeout_ms",
-            format!("{} ms ($41)", 2 * u32::from(self.packet_timeout())),
+            serial_only(format!("{} ms ($41)", 2 * u32::from(self.packet_timeout()))),
         );
         row(
             dev,
