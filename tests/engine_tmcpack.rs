@@ -6,6 +6,8 @@
 
 mod support;
 
+#[path = "engine_tmcpack/can.rs"]
+mod can;
 #[path = "engine_tmcpack/deadman.rs"]
 mod deadman;
 #[path = "engine_tmcpack/io.rs"]

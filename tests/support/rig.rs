@@ -22,7 +22,7 @@ use motion_ipc::{
     AxisFlags, AxisState, ClientId, CommandKind, CommandReply, CommandRequest, DeviceState,
     MotionFrame,
 };
-use motion_link::sim::{SpiDevice, StreamDevice};
+use motion_link::sim::{CanDevice, SpiDevice, StreamDevice};
 use motion_link::{Link, LinkErrorKind};
 
 /// How often the rig retries opening a disconnected link.
@@ -63,6 +63,18 @@ impl<T: StreamDevice> StreamDevice for Shared<T> {
     }
     fn baud(&self) -> Option<u32> {
         self.lock().baud()
+    }
+}
+
+impl<T: CanDevice> CanDevice for Shared<T> {
+    fn receive(&mut self, now: Duration, frame: &motion_drivers::CanRecord) {
+        self.lock().receive(now, frame);
+    }
+    fn transmit(&mut self, now: Duration) -> Option<(Duration, motion_drivers::CanRecord)> {
+        self.lock().transmit(now)
+    }
+    fn next_event(&self, now: Duration) -> Option<Duration> {
+        self.lock().next_event(now)
     }
 }
 

@@ -15,6 +15,8 @@
 //!   all mean.
 //! - [`Model`] / [`ModelFacts`]: a board model, with its config id, contract code and link
 //!   kind (an open set: board crates declare their own).
+//! - [`CanRecord`] / [`LinkFraming`]: a CAN frame as the fixed 16 bytes a CAN link moves,
+//!   and whether a link frames its boards' messages as bytes or as CAN frames.
 //!
 //! ```
 //! use motion_base::{FixedQueue, FixedText, counts_to_i32};
@@ -34,6 +36,7 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+mod can;
 mod counts;
 mod duration;
 mod kinds;
@@ -41,6 +44,7 @@ mod model;
 mod queue;
 mod text;
 
+pub use can::{CAN_RECORD_LEN, CAN_SFF_MAX, CanRecord, LinkFraming};
 pub use counts::{counts_to_i32, counts_to_i32_saturating};
 pub use duration::parse_duration;
 pub use kinds::{LinkKind, SignalKind, UnknownKind};

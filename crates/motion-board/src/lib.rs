@@ -28,7 +28,7 @@ use motion_drivers::spec::{
 use crate::keys::{AxisContext, DeviceContext, KeyIssues, KeyTable, Span};
 use crate::machine::MachineView;
 use motion_drivers::{Driver, Model, PinInfo};
-use motion_link::sim::{SpiDevice, StreamDevice};
+use motion_link::sim::{CanDevice, SpiDevice, StreamDevice};
 
 pub use standalone::{StandaloneError, StandaloneHelp, StandaloneSim};
 
@@ -47,6 +47,16 @@ impl fmt::Debug for SimBoard {
             Self::Spi(_) => "SimBoard::Spi",
         })
     }
+}
+
+/// What a board that also speaks CAN (a `socketcan` or `sim-can` link) says of its bus: the
+/// config validator checks a CAN link's `bitrate` against it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CanFacts {
+    /// The bit rates the board can be set to, bits per second.
+    pub bitrates: &'static [u32],
+    /// The bit rate a CAN link of these boards runs at unless given (the factory setting).
+    pub default_bitrate: u32,
 }
 
 /// How a board's link is laid out: the facts the config validator checks links against.
@@ -156,6 +166,21 @@ pub trait Board: Sync + fmt::Debug {
 
     /// How its link is laid out.
     fn link(&self) -> LinkFacts;
+
+    /// Whether the board also speaks CAN, and at which bit rates; `None` (the default):
+    /// a CAN link refuses it. A board that says so builds its driver for CAN frames when
+    /// its spec's `framing` is `LinkFraming::Can`, and simulates with
+    /// [`simulate_can`](Self::simulate_can).
+    fn can(&self) -> Option<CanFacts> {
+        None
+    }
+
+    /// The simulated board on a `type = "sim-can"` link (see
+    /// [`simulate`](Self::simulate)); `None` for a board without CAN.
+    fn simulate_can(&self, spec: &DriverSpec, seed: u64) -> Option<Box<dyn CanDevice>> {
+        let _ = (spec, seed);
+        None
+    }
 
     /// Channels (motors / encoders) a device of this model has, with its validated
     /// machine keys (which say its variant, where the model comes in several).

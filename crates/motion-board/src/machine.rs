@@ -3,7 +3,7 @@
 //! board can check what no single table shows (two packs answering to one address, motor
 //! pairs sharing a peak current, a pin used twice) and name the key at fault.
 
-use motion_base::{LinkKind, Model, SignalKind};
+use motion_base::{LinkFraming, LinkKind, Model, SignalKind};
 use motion_drivers::Pin;
 use motion_drivers::spec::MachineKeys;
 
@@ -18,8 +18,11 @@ pub struct LinkView<'a> {
     pub name: &'a str,
     /// Stream or SPI.
     pub kind: LinkKind,
+    /// Bytes, or CAN frames (a `socketcan` or `sim-can` link).
+    pub framing: LinkFraming,
     /// Its line rate: the baud of a serial or serial sim link, the clock of a spidev or SPI
-    /// sim link; `None` for an SPI socket (its peer sets the clock).
+    /// sim link, the bit rate of a CAN link; `None` for an SPI socket (its peer sets the
+    /// clock).
     pub line_rate: Option<u32>,
     /// Where the rate was written (`baud` or `speed_hz`), if it was.
     pub rate_span: Option<Span>,

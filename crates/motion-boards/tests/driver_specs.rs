@@ -43,6 +43,7 @@ fn device(model: Model, machine: DeviceMachine, axes: Vec<DriverAxis>) -> Driver
         name: "d".to_owned(),
         model,
         line_rate: Some(19_200),
+        framing: motion_drivers::LinkFraming::Bytes,
         address: 1,
         machine,
         axes,

@@ -41,6 +41,7 @@ pub use driver::{Driver, Follow, LINE_RATE_TOLERANCE, LineLeg, Model, Priority, 
 pub use goal::{Goal, GoalError, GoalKind, GoalKinds, RateFloor};
 /// Whether a link carries a byte stream or SPI transactions (one enum with `motion_link`).
 pub use motion_base::LinkKind;
+pub use motion_base::{CanRecord, LinkFraming};
 pub use pin::{Pin, PinInfo, PinReading, SignalKind, SignalKinds, find_pin};
 pub use stamps::IoStamps;
 pub use state::{ChannelState, DeviceFault, DeviceStatus, FIRMWARE_LEN};

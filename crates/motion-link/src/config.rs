@@ -3,11 +3,12 @@
 use crate::error::LinkError;
 use crate::link::Link;
 use crate::serial::{SerialConfig, SerialLink};
+use crate::socketcan::{SocketCanConfig, SocketCanLink};
 use crate::spi_socket::{SpiSocketConfig, SpiSocketLink};
 use crate::spidev::{SpidevConfig, SpidevLink};
 
-/// The configuration of one real transport (a `[[link]]` of type `serial`, `spidev` or
-/// `spi-socket`). Simulated links are built with [`SimLink`](crate::sim::SimLink) around
+/// The configuration of one real transport (a `[[link]]` of type `serial`, `spidev`,
+/// `spi-socket` or `socketcan`). Simulated links are built with [`SimLink`](crate::sim::SimLink) around
 /// their device models.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum LinkConfig {
@@ -17,6 +18,8 @@ pub enum LinkConfig {
     Spidev(SpidevConfig),
     /// An SPI-socket peer.
     SpiSocket(SpiSocketConfig),
+    /// A SocketCAN interface.
+    SocketCan(SocketCanConfig),
 }
 
 impl LinkConfig {
@@ -26,6 +29,7 @@ impl LinkConfig {
             Self::Serial(c) => Box::new(SerialLink::open(c.clone())?),
             Self::Spidev(c) => Box::new(SpidevLink::open(c.clone())?),
             Self::SpiSocket(c) => Box::new(SpiSocketLink::connect(c.clone())?),
+            Self::SocketCan(c) => Box::new(SocketCanLink::open(c.clone())?),
         })
     }
 
@@ -37,6 +41,7 @@ impl LinkConfig {
             Self::Serial(c) => Box::new(SerialLink::new(c.clone())?),
             Self::Spidev(c) => Box::new(SpidevLink::new(c.clone())?),
             Self::SpiSocket(c) => Box::new(SpiSocketLink::new(c.clone())?),
+            Self::SocketCan(c) => Box::new(SocketCanLink::new(c.clone())?),
         })
     }
 }
@@ -53,8 +58,14 @@ mod tests {
             LinkConfig::Serial(SerialConfig::new("/dev/motiond-absent", 19_200)),
             LinkConfig::Spidev(SpidevConfig::new("/dev/motiond-absent", 1, 500_000)),
             LinkConfig::SpiSocket(SpiSocketConfig::new("/tmp/motiond-absent.sock")),
+            LinkConfig::SocketCan(SocketCanConfig::new("motiondcan9", 250_000)),
         ];
-        let kinds = [LinkKind::Stream, LinkKind::Spi, LinkKind::Spi];
+        let kinds = [
+            LinkKind::Stream,
+            LinkKind::Spi,
+            LinkKind::Spi,
+            LinkKind::Stream,
+        ];
         for (config, kind) in configs.iter().zip(kinds) {
             let mut link = config.create().expect("valid");
             assert_eq!(link.kind(), kind);

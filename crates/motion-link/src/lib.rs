@@ -5,14 +5,18 @@
 //! | [`serial`] | a tty through `serialport` (RS-232, RS-485 adapters, USB CDC), 8N1 |
 //! | [`spidev`] | a Linux spidev device, full-duplex transactions |
 //! | [`spi_socket`] | SPI transactions over a Unix socket (docs/ARCHITECTURE.md "SPI socket contract") |
-//! | [`sim`] | an in-process wire to a device model, with wire time and fault injection |
+//! | [`socketcan`] | a Linux SocketCAN interface (raw `AF_CAN` socket), CAN frames as 16-byte records |
+//! | [`sim`] | an in-process wire to a device model, with wire time and fault injection (a serial line, an SPI bus, or a CAN bus: [`sim::SimCanLink`]) |
 //!
 //! Links know no protocol: they move bytes, report honest fault kinds ([`LinkErrorKind`])
 //! and never block the caller except in [`Link::flush`] (and spidev transfers, which
 //! belong on their own I/O thread).
 //!
-//! Every implementation passes one conformance suite (`tests/conformance.rs`): serial over
-//! a pseudo-terminal pair, spi-socket against a test listener, and sim.
+//! Every byte transport passes one conformance suite (`tests/conformance.rs`): serial over
+//! a pseudo-terminal pair, spi-socket against a test listener, and sim. The CAN links move
+//! 16-byte frame records instead of free bytes and have their own tests: `tests/can_link.rs`
+//! (the simulated bus) and `tests/vcan.rs` (SocketCAN on a virtual interface, where the
+//! kernel has one).
 //!
 //! # Example: a simulated 19200-baud wire charges real wire time
 //!
@@ -55,13 +59,16 @@
 //! # Ok::<(), motion_link::LinkError>(())
 //! ```
 #![warn(missing_docs)]
-#![deny(unsafe_code)] // one exception: SerialLink::poll_fd (a BorrowedFd of the port's own descriptor), with a SAFETY note
+// Two exceptions, each with a SAFETY note: SerialLink::poll_fd (a BorrowedFd of the port's
+// own descriptor) and socketcan's bind(2) (nix has no sockaddr_can).
+#![deny(unsafe_code)]
 
 mod config;
 mod error;
 mod link;
 pub mod serial;
 pub mod sim;
+pub mod socketcan;
 pub mod spi_socket;
 pub mod spidev;
 

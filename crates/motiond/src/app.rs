@@ -12,7 +12,7 @@ use motion_link::{Link, LinkConfig};
 use rtrb::RingBuffer;
 
 use crate::blackbox::{BlackboxFile, Journal, RecorderSetup};
-use crate::boards::sim_link;
+use crate::boards::{sim_can_link, sim_link};
 use crate::config::{IoMode, ServerConfig, Transport};
 use crate::error::ServerError;
 use crate::io::{self, IoThread, LinkPort};
@@ -56,6 +56,12 @@ fn open_links(config: &ServerConfig) -> Result<Vec<Box<dyn Link>>, ServerError> 
             )
             .create()
             .map_err(|source| link_error(&spec.name, source))?,
+            Transport::SocketCan { interface, bitrate } => LinkConfig::SocketCan(
+                motion_link::socketcan::SocketCanConfig::new(interface.as_str(), *bitrate),
+            )
+            .create()
+            .map_err(|source| link_error(&spec.name, source))?,
+            Transport::SimCan { .. } => Box::new(sim_can_link(config, index)),
         };
         links.push(link);
     }

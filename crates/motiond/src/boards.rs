@@ -1,6 +1,7 @@
 //! What motiond does with the boards of its config, through the board registry
 //! (`motion_boards`): [`build`] the drivers, [`describe`] their machine parameters, serve a
-//! `type = "sim"` link with simulated boards ([`sim_link`]). motiond names no board here:
+//! `type = "sim"` link with simulated boards ([`sim_link`]), a `type = "sim-can"` link
+//! ([`sim_can_link`]). motiond names no board here:
 //! each model's facts, driver, parameters and simulator are its board crate's
 //! (`crates/boards/<board>/`, trait `motion_board::Board`), its machine keys too (read
 //! and validated by the board through `config/validate/machine/`); each board's driver is
@@ -8,7 +9,7 @@
 
 pub use motion_boards::AnyDriver;
 use motion_boards::{Board, SimBoard};
-use motion_link::sim::{SimLink, SpiBus, StreamBus};
+use motion_link::sim::{CanBus, SimCanLink, SimLink, SpiBus, StreamBus};
 
 use crate::config::{DeviceSpec, ServerConfig, Transport};
 use crate::drivers::{self, ParamRow};
@@ -102,6 +103,30 @@ pub fn sim_link(config: &ServerConfig, link: usize) -> SimLink {
             }
         }
     }
+}
+
+/// The simulated CAN bus `link` of `config` (a `type = "sim-can"` link) with the CAN
+/// models of its devices, at its bit rate. A board without CAN is left off (validation
+/// refuses it on a CAN link).
+pub fn sim_can_link(config: &ServerConfig, link: usize) -> SimCanLink {
+    let spec = &config.links[link];
+    let bitrate = match spec.transport {
+        Transport::SimCan { bitrate } | Transport::SocketCan { bitrate, .. } => bitrate,
+        _ => 250_000,
+    };
+    let mut bus = CanBus::new();
+    for (index, device) in config.devices.iter().enumerate() {
+        if device.link != link {
+            continue;
+        }
+        if let Some(model) = board_of(device).simulate_can(
+            &drivers::driver_spec(config, index, device),
+            device.sim_seed,
+        ) {
+            bus.push(model);
+        }
+    }
+    SimCanLink::new(&spec.name, bitrate, Box::new(bus))
 }
 
 #[cfg(test)]

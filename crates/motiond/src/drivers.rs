@@ -11,7 +11,7 @@ use motion_drivers::spec::{
 use motion_engine::AxisConfig;
 
 use crate::boards::BuildError;
-use crate::config::{AxisSpec, DeviceSpec, Owner, ServerConfig, Transport};
+use crate::config::{AxisSpec, DeviceSpec, LinkSpec, Owner, ServerConfig};
 
 /// One effective machine parameter, as `motionctl list` shows it: the key as the config
 /// spells it (dotted for tables: `current.standstill`) on its device or axis, and the value
@@ -27,14 +27,10 @@ pub struct ParamRow {
     pub value: String,
 }
 
-/// The line rate of `device`'s link (baud or SPI clock), when the config gives one.
+/// The line rate of `device`'s link (baud, SPI clock or CAN bit rate), when the config
+/// gives one.
 fn line_rate(config: &ServerConfig, device: &DeviceSpec) -> Option<u32> {
-    match &config.links.get(device.link)?.transport {
-        Transport::Serial { baud, .. } => Some(*baud),
-        Transport::Spidev { speed_hz, .. } => Some(*speed_hz),
-        Transport::Sim { rate } => Some(*rate),
-        Transport::SpiSocket { .. } => None,
-    }
+    config.links.get(device.link)?.transport.rate()
 }
 
 /// Indexes (into [`ServerConfig::axes`]) of the axes on device `index`, in config order.
@@ -79,6 +75,10 @@ pub fn driver_spec(config: &ServerConfig, index: usize, device: &DeviceSpec) -> 
         name: device.name.clone(),
         model: device.model,
         line_rate: line_rate(config, device),
+        framing: config
+            .links
+            .get(device.link)
+            .map_or(motion_drivers::LinkFraming::Bytes, LinkSpec::framing),
         address: device.address,
         machine: device.machine.clone(),
         axes: axes_on(config, index)

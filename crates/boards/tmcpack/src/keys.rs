@@ -8,7 +8,7 @@ use motion_board::machine::MachineView;
 use motion_board::{AxisKeys, DeviceKeys, Given, HomeHints};
 use motion_drivers::spec::Direction;
 
-use motion_drivers::{Model, SignalKind};
+use motion_drivers::{LinkFraming, Model, SignalKind};
 use serde::Deserialize;
 
 use crate::driver::{MAX_DEBOUNCE_MS, is_current_level, is_weak_current, word_time};
@@ -583,6 +583,7 @@ fn poslimit_fits(
 /// Checks across tables for tmcpack devices (after everything else was validated).
 pub(crate) fn cross_check(v: &mut dyn KeyIssues, machine: &MachineView<'_>) {
     reply_addresses(v, machine);
+    can_ids(v, machine);
     peak_pairs(v, machine);
     ready_output_signals(v, machine);
     packet_timeouts(v, machine);
@@ -626,6 +627,93 @@ fn reply_addresses(v: &mut dyn KeyIssues, machine: &MachineView<'_>) {
             }
         }
     }
+}
+
+/// A pack on a CAN link (manual 6.2): its identifier is its address shifted left by 3,
+/// and its answers' the response address shifted the same way — "Take care: According to
+/// the CAN standard 0 is no valid address! Address range: $008 to $7F8 (in increments of
+/// 8)." — so neither may be 0. `$40` and `$41` set up the RS-232 / RS-485 line, which the
+/// driver does not send on CAN: their keys are refused there.
+fn can_ids(v: &mut dyn KeyIssues, machine: &MachineView<'_>) {
+    for (_, device) in machine.devices_of(Model::TMCPACK) {
+        let Some(link) = machine
+            .links
+            .get(device.link)
+            .filter(|l| l.framing == LinkFraming::Can)
+        else {
+            continue;
+        };
+        let raw = device.keys.parse_quiet::<RawDevice>();
+        let range = "Address range: $008 to $7F8 (in increments of 8)";
+        if device.address == 0 {
+            v.issue(
+                device
+                    .address_span
+                    .clone()
+                    .unwrap_or_else(|| device.table.clone()),
+                &format!("device[{}].address", device.index),
+                format!(
+                    "address 0 is CAN identifier $000 on the CAN link `{}`, and \"according to \
+                     the CAN standard 0 is no valid address! {range}\" (manual 6.2); set the \
+                     pack's rotary switches to 1..=255 (identifier = address × 8) and give that \
+                     address",
+                    link.name
+                ),
+            );
+        }
+        let reply = device_keys_of_view(device).and_then(|k| k.reply_address);
+        if reply == Some(0) {
+            v.issue(
+                raw.as_ref()
+                    .and_then(|r| r.reply_address.as_ref().map(Spanned::span))
+                    .unwrap_or_else(|| device.table.clone()),
+                &format!("device[{}].reply_address", device.index),
+                format!(
+                    "reply address 0 would have the pack answer with CAN identifier $000 on the \
+                     CAN link `{}` (\"For responding the address is shifted to the left by 3 \
+                     bits\"), which is no valid identifier ({range}); choose 1..=255 that no \
+                     pack on the link has (default {DEFAULT_REPLY_ADDRESS}, identifier ${:03X})",
+                    link.name,
+                    u16::from(DEFAULT_REPLY_ADDRESS) << 3
+                ),
+            );
+        }
+        let serial_keys = raw.as_ref().map(|r| {
+            [
+                (
+                    "switchover_ms",
+                    r.switchover_ms.as_ref().map(Spanned::span),
+                    "$40",
+                ),
+                (
+                    "packet_timeout_ms",
+                    r.packet_timeout_ms.as_ref().map(Spanned::span),
+                    "$41",
+                ),
+            ]
+        });
+        for (key, span, command) in serial_keys.into_iter().flatten() {
+            if let Some(span) = span {
+                v.issue(
+                    span,
+                    &format!("device[{}].{key}", device.index),
+                    format!(
+                        "{key} sets the pack's RS-232 / RS-485 line ({command}), and link `{}` is \
+                         a CAN link: remove it (on CAN a telegram arrives whole, and the pack \
+                         needs no line turn-around)",
+                        link.name
+                    ),
+                );
+            }
+        }
+    }
+}
+
+/// The tmcpack device keys of a device view.
+fn device_keys_of_view<'m>(
+    device: &'m motion_board::machine::DeviceView<'_>,
+) -> Option<&'m TmcpackDeviceKeys> {
+    device.machine.get::<TmcpackDeviceKeys>()
 }
 
 /// $10 "settings are done for pairs of motors, i.e. each two motors 0 + 1, 2 + 3
@@ -699,7 +787,12 @@ fn packet_timeouts(v: &mut dyn KeyIssues, machine: &MachineView<'_>) {
         let Some(ms) = device_keys_of(machine, d).and_then(|k| k.packet_timeout_ms) else {
             continue;
         };
-        let Some(baud) = machine.links.get(device.link).and_then(|l| l.line_rate) else {
+        let Some(baud) = machine
+            .links
+            .get(device.link)
+            .filter(|l| l.framing == LinkFraming::Bytes)
+            .and_then(|l| l.line_rate)
+        else {
             continue;
         };
         let word = word_time(baud);

@@ -1,8 +1,9 @@
 //! The Trinamic SIXpack / QUADpack as a motiond board ([`TmcpackBoard`]): a serial board
 //! (RS-232 or RS-485, manual 2) with six or four stepper channels; packs on one RS-485 bus
 //! share the link, told apart by their address (manual 6.1); they start at the factory
-//! 19200 baud (manual 7.2 `$40`). Its driver is [`driver`], its simulator [`sim`], its
-//! machine keys [`machine_keys`].
+//! 19200 baud (manual 7.2 `$40`). It speaks CAN 2.0A too (manual 6.2: a `socketcan` or
+//! `sim-can` link, identifier = address << 3, 125 k / 250 k / 500 k / 1 Mbit/s by jumper).
+//! Its driver is [`driver`], its simulator [`sim`], its machine keys [`machine_keys`].
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
@@ -16,8 +17,8 @@ mod standalone;
 use motion_board::keys::{AxisContext, DeviceContext, KeyIssues, KeyTable, key_names};
 use motion_board::machine::MachineView;
 use motion_board::{
-    AddressKey, AxisKeys, Board, DeviceKeys, LinkFacts, SimBoard, StandaloneError, StandaloneHelp,
-    StandaloneSim, TypedBoard,
+    AddressKey, AxisKeys, Board, CanFacts, DeviceKeys, LinkFacts, SimBoard, StandaloneError,
+    StandaloneHelp, StandaloneSim, TypedBoard,
 };
 use motion_drivers::spec::{DeviceMachine, DriverSpec, MachineKeys, Param, SpecError};
 use motion_drivers::{Driver, Model, PinInfo};
@@ -44,6 +45,22 @@ impl Board for TmcpackBoard {
             // RS-232 or RS-485 (manual 2): a UART, whatever adapter the host uses.
             host_frame: None,
         }
+    }
+
+    /// Manual 6.2: "The integrated CAN-Controller supports the full-CAN-specifications 2.0A
+    /// with 11 address bits", at the rate its jumpers JP1/JP2 select ("250 kbit/s
+    /// (default)").
+    fn can(&self) -> Option<CanFacts> {
+        const BITRATES: [u32; 4] = [
+            tmcpack::CanBitrate::ALL[0].bits_per_second(),
+            tmcpack::CanBitrate::ALL[1].bits_per_second(),
+            tmcpack::CanBitrate::ALL[2].bits_per_second(),
+            tmcpack::CanBitrate::ALL[3].bits_per_second(),
+        ];
+        Some(CanFacts {
+            bitrates: &BITRATES,
+            default_bitrate: tmcpack::CAN_DEFAULT_BITRATE,
+        })
     }
 
     fn channel_count(&self, machine: &DeviceMachine) -> usize {
@@ -105,6 +122,14 @@ impl Board for TmcpackBoard {
 
     fn simulate(&self, spec: &DriverSpec, seed: u64) -> SimBoard {
         SimBoard::Stream(Box::new(sim::machine::model(spec, seed)))
+    }
+
+    fn simulate_can(
+        &self,
+        spec: &DriverSpec,
+        seed: u64,
+    ) -> Option<Box<dyn motion_link::sim::CanDevice>> {
+        Some(Box::new(sim::machine::model(spec, seed)))
     }
 
     fn simulate_standalone(&self, options: &StandaloneSim) -> Result<SimBoard, StandaloneError> {

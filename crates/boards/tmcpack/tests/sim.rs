@@ -1,6 +1,8 @@
 //! The simulated SIXpack / QUADpack against the manual: golden exchanges, wire timing,
-//! ramp physics, every mode, and two packs on one RS-485 pair.
+//! ramp physics, every mode, two packs on one RS-485 pair, and the CAN interface.
 
+#[path = "sim/can.rs"]
+mod can;
 #[path = "sim/host.rs"]
 mod host;
 #[path = "sim/io.rs"]

@@ -152,9 +152,12 @@ pub struct DriverSpec {
     pub name: String,
     /// Board model.
     pub model: Model,
-    /// The line rate of its link: baud of a serial line, SPI clock; `None`: the link gives
-    /// none (the driver's default applies).
+    /// The line rate of its link: baud of a serial line, SPI clock, CAN bit rate; `None`:
+    /// the link gives none (the driver's default applies).
     pub line_rate: Option<u32>,
+    /// How its link frames messages: bytes, or CAN frames (`motion_base::CanRecord`, one
+    /// a frame) on a `socketcan` or `sim-can` link.
+    pub framing: motion_base::LinkFraming,
     /// Bus address (tmcpack 0..=255, spimotor even 2..=254; 0 for the others).
     pub address: u32,
     /// The model's device keys.

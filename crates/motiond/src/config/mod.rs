@@ -105,6 +105,37 @@ pub enum Transport {
         /// Line rate of a serial wire, or SPI clock of an SPI wire.
         rate: u32,
     },
+    /// A Linux SocketCAN interface (CAN 2.0A frames; `type = "socketcan"`).
+    SocketCan {
+        /// The network interface, e.g. `can0`.
+        interface: String,
+        /// The bus's bit rate (the interface's, set with `ip link`), bits per second.
+        bitrate: u32,
+    },
+    /// In-process simulated CAN bus to the devices' models (`type = "sim-can"`).
+    SimCan {
+        /// Bit rate, bits per second.
+        bitrate: u32,
+    },
+}
+
+impl Transport {
+    /// Whether the link carries CAN frames (`socketcan`, `sim-can`).
+    pub const fn is_can(&self) -> bool {
+        matches!(self, Self::SocketCan { .. } | Self::SimCan { .. })
+    }
+
+    /// The link's rate: baud of a serial line, SPI clock, CAN bit rate; `None` for an SPI
+    /// socket (its peer sets the clock).
+    pub const fn rate(&self) -> Option<u32> {
+        match *self {
+            Self::Serial { baud, .. } => Some(baud),
+            Self::Spidev { speed_hz, .. } => Some(speed_hz),
+            Self::Sim { rate } => Some(rate),
+            Self::SocketCan { bitrate, .. } | Self::SimCan { bitrate } => Some(bitrate),
+            Self::SpiSocket { .. } => None,
+        }
+    }
 }
 
 /// Who runs a link's transfers (`[[link]] io`).
@@ -146,6 +177,15 @@ pub struct LinkSpec {
 }
 
 impl LinkSpec {
+    /// Bytes, or CAN frames (`socketcan`, `sim-can`).
+    pub fn framing(&self) -> motion_drivers::LinkFraming {
+        if self.transport.is_can() {
+            motion_drivers::LinkFraming::Can
+        } else {
+            motion_drivers::LinkFraming::Bytes
+        }
+    }
+
     /// The SPI clock a transfer of this link holds its caller for, bits per second:
     /// spidev's `speed_hz`, an SPI sim link's rate; `None` where a write only queues (an
     /// SPI socket: its peer clocks the bus) or on a stream link.

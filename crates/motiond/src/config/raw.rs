@@ -64,6 +64,10 @@ pub(crate) struct RawLink {
     pub mode: Option<Spanned<Int>>,
     pub io: Option<Spanned<String>>,
     pub io_budget_us: Option<Spanned<Int>>,
+    /// `socketcan`: the network interface (`can0`).
+    pub interface: Option<Spanned<String>>,
+    /// `socketcan`, `sim-can`: the CAN bit rate.
+    pub bitrate: Option<Spanned<Int>>,
 }
 
 #[derive(Debug, Deserialize)]

@@ -78,6 +78,7 @@ impl Bound {
             Transport::Serial { baud, .. } => baud,
             Transport::Spidev { speed_hz, .. } => speed_hz,
             Transport::Sim { rate } => rate,
+            Transport::SocketCan { bitrate, .. } | Transport::SimCan { bitrate } => bitrate,
             Transport::SpiSocket { .. } => panic!("the bound needs the link's rate"),
         };
         let driver = driver_spec(config, spec.device, device);

@@ -30,8 +30,10 @@
 //!
 //! - 6.1 word format (address, command, P0..P6), packet timeout and break resync:
 //!   [`RequestFrame`], [`ReplyFrame`], [`FrameDecoder`].
-//! - 6.2 / 6.3 CAN telegrams (identifier = address << 3, RS-232 forwarding `…001`, CAN
-//!   bit-rate jumpers): [`CanFrame`], [`can_id`], [`CanBitrate`].
+//! - 6.2 / 6.3 CAN telegrams (identifier = address << 3, the response identifier = the
+//!   query's response address << 3, RS-232 forwarding `…001`, CAN bit-rate jumpers, the
+//!   16-command cache at about 2 ms a command): [`CanFrame`], [`can_id`],
+//!   [`can_command_id`], [`CanBitrate`], [`CAN_CACHE_COMMANDS`], [`CAN_COMMAND_TIME`].
 //! - 8.3–8.8 and the section 9 table, every instruction $10–$19, $20–$2A, $30–$33,
 //!   $40–$45, $50, $CC, $F2–$F7: [`Request`], [`Command`]; every tabled response ($20,
 //!   $21, $28, $30, $43, $44, $45, $F2, $F4, $F5, $F6, $F7): [`Reply`]; the $15 and $16
@@ -61,7 +63,7 @@
 //! # Fuzzing
 //!
 //! `fuzz/` is a standalone cargo-fuzz project with one target per decoder
-//! (`request`, `reply`, `stream`, `can`):
+//! (`request`, `reply`, `stream`, `can`) and one for the CAN command cache (`can_cache`):
 //!
 //! ```text
 //! cd crates/protocols/tmcpack/fuzz && cargo +nightly fuzz run stream
@@ -80,7 +82,10 @@ mod reply;
 mod request;
 mod types;
 
-pub use can::{CAN_LEN, CanChannel, CanFrame, can_id, split_can_id};
+pub use can::{
+    CAN_CACHE_COMMANDS, CAN_COMMAND_TIME, CAN_DEFAULT_BITRATE, CAN_ID_MAX, CAN_ID_MIN, CAN_LEN,
+    CanCache, CanChannel, CanFrame, can_command_id, can_id, split_can_id,
+};
 pub use command::Command;
 pub use convert::{AmaxDivisor, StepClock, Variant};
 pub use decoder::{DEFAULT_PACKET_TIMEOUT, DecoderStats, FrameDecoder, Words};

@@ -443,6 +443,20 @@ pub enum CanBitrate {
 }
 
 impl CanBitrate {
+    /// Every rate of the table, slowest first.
+    pub const ALL: [Self; 4] = [Self::Kbit125, Self::Kbit250, Self::Kbit500, Self::Mbit1];
+
+    /// The jumper setting for a rate in bits per second; `None` for a rate the table lacks.
+    pub const fn from_bits_per_second(rate: u32) -> Option<Self> {
+        match rate {
+            1_000_000 => Some(Self::Mbit1),
+            500_000 => Some(Self::Kbit500),
+            250_000 => Some(Self::Kbit250),
+            125_000 => Some(Self::Kbit125),
+            _ => None,
+        }
+    }
+
     /// The rate for the two jumpers.
     pub const fn from_jumpers(jp1: bool, jp2: bool) -> Self {
         match (jp1, jp2) {

@@ -184,6 +184,10 @@ pub struct TmcpackDriverConfig {
     /// Where the pack's firmware keeps StopNoRef in `$15` P6: bit 5 (the table, default)
     /// or bit 6 (the prose; NullPositive then bit 5); key `stop_no_ref_bit`.
     pub options_layout: OptionsLayout,
+    /// On a CAN link (manual 6.2): its bit rate, bits per second; `None` on RS-232 /
+    /// RS-485. The driver then frames CAN telegrams (`address << 3`) and times them by the
+    /// pack's command cache (the `can` module).
+    pub can_bitrate: Option<u32>,
 }
 
 impl TmcpackDriverConfig {
@@ -210,6 +214,7 @@ impl Default for TmcpackDriverConfig {
             io: TmcpackIo::default(),
             amax_divisor: AmaxDivisor::By64,
             options_layout: OptionsLayout::Table,
+            can_bitrate: None,
         }
     }
 }

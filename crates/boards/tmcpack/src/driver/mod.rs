@@ -45,7 +45,12 @@
 //! `$23`; Position/RampPosition with `$14`, `$26`, `$23`; Velocity with `$25`; Home with
 //! `$16`, `$22`; SetPosition with `$27`; Off with a stop, then `$11` at 0 %. Power is
 //! unsupported (a stepper has no open-loop power). I/O is described in the `io` module.
+//!
+//! On a CAN link (`socketcan`, `sim-can`; manual 6.2) the same driver frames its requests
+//! and answers as CAN telegrams and times them by the pack's command cache instead of the
+//! serial line: the `can` module.
 
+mod can;
 mod channel;
 mod config;
 mod goals;
@@ -157,6 +162,8 @@ pub struct TmcpackDriver {
     rest_polled: bool,
     budget: Duration,
     stamps: IoStamps,
+    /// On a CAN link: its framing and the pack's command cache (`None` on a serial line).
+    can: Option<can::CanLine>,
 }
 
 impl TmcpackDriver {
@@ -179,11 +186,18 @@ impl TmcpackDriver {
         }
         let io = IoState::new(config.variant, config.io);
         let plan = StartupPlan::new(&config, clkdiv, &channels, &io);
+        let can = config.can_bitrate.map(can::CanLine::new);
         let byte = byte_time(config.baud);
-        let word_time = byte.saturating_mul(FRAME_LEN as u32);
-        let configured = config
-            .switchover_units
-            .map_or(units(FACTORY_SWITCHOVER), units);
+        let word_time = can
+            .as_ref()
+            .map_or(byte.saturating_mul(FRAME_LEN as u32), |c| c.frame_time);
+        let configured = match &can {
+            // No switch-over on CAN; the cache's processing stands in the query below.
+            Some(_) => Duration::ZERO,
+            None => config
+                .switchover_units
+                .map_or(units(FACTORY_SWITCHOVER), units),
+        };
         let polled = channels.iter().flatten().count() + usize::from(io.polls());
         let round = usize::from(config.bus_motors).max(polled).max(1) as u32;
         let query = 2 * word_time + 2 * configured + Duration::from_millis(2);
@@ -224,6 +238,7 @@ impl TmcpackDriver {
             rest_polled: false,
             budget,
             stamps: IoStamps::default(),
+            can,
         }
     }
 
@@ -279,6 +294,7 @@ impl Driver for TmcpackDriver {
     }
 
     fn handle_timeout(&mut self, now: Duration) {
+        self.prune_can(now);
         match self.wire {
             Wire::Sending { until, .. } | Wire::Quiet { until } if now >= until => {
                 self.wire = Wire::Idle;
@@ -313,7 +329,7 @@ impl Driver for TmcpackDriver {
             .filter(|c| c.current() == Some(Step::AwaitRest))
             .filter_map(|c| c.rest_poll_at.or(c.rest_at))
             .min();
-        [self.wire.deadline(), phase, rest]
+        [self.wire.deadline(), phase, rest, self.can_held_until()]
             .into_iter()
             .flatten()
             .min()
@@ -376,6 +392,9 @@ impl Driver for TmcpackDriver {
 
     fn link_down(&mut self, _now: Duration) {
         self.stamps.link_reset();
+        if let Some(can) = self.can.as_mut() {
+            can.reset();
+        }
         self.phase = Phase::Down;
         self.wire = Wire::Idle;
         self.timeouts_in_row = 0;
@@ -384,6 +403,9 @@ impl Driver for TmcpackDriver {
 
     fn link_up(&mut self, now: Duration) {
         self.stamps.link_reset();
+        if let Some(can) = self.can.as_mut() {
+            can.reset();
+        }
         self.phase = Phase::Identify;
         self.wire = Wire::Idle;
         self.retry_at = now;

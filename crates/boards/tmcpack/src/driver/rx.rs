@@ -129,6 +129,10 @@ impl TmcpackDriver {
         if bytes.is_empty() {
             return;
         }
+        if self.can.is_some() {
+            self.receive_can(now, bytes);
+            return;
+        }
         let Wire::Awaiting {
             expect, sent_at, ..
         } = self.wire

@@ -230,8 +230,16 @@ impl TmcpackDriverConfig {
             io: io(&spec.signals, &spec.machine),
             ..Self::default()
         };
-        if let Some(baud) = spec.line_rate {
-            driver.baud = baud;
+        match spec.framing {
+            // The link's rate is the CAN bit rate; the pack's RS-232 side keeps its own.
+            motion_drivers::LinkFraming::Can => {
+                driver.can_bitrate = Some(spec.line_rate.unwrap_or(tmcpack::CAN_DEFAULT_BITRATE));
+            }
+            motion_drivers::LinkFraming::Bytes => {
+                if let Some(baud) = spec.line_rate {
+                    driver.baud = baud;
+                }
+            }
         }
         if let Some(d) = keys.amax_divisor {
             driver.amax_divisor =
@@ -285,18 +293,31 @@ impl TmcpackDriverConfig {
         row(
             dev,
             "reply_address",
-            format!("{0} (0x{0:02X})", self.reply_address),
+            match self.can_bitrate {
+                // Manual 6.2: "For responding the address is shifted to the left by 3 bits".
+                Some(_) => format!(
+                    "{0} (0x{0:02X}; CAN answers on ${1:03X}, the pack's commands on ${2:03X})",
+                    self.reply_address,
+                    u16::from(self.reply_address) << 3,
+                    u16::from(self.address) << 3
+                ),
+                None => format!("{0} (0x{0:02X})", self.reply_address),
+            },
         );
         let switchover = self.switchover_units.unwrap_or(DEFAULT_SWITCHOVER_UNITS);
+        let serial_only = |value: String| match self.can_bitrate {
+            Some(_) => "not sent on CAN (the RS-232 / RS-485 line's)".to_owned(),
+            None => value,
+        };
         row(
             dev,
             "switchover_ms",
-            format!("{} ms ($40)", 2 * u32::from(switchover)),
+            serial_only(format!("{} ms ($40)", 2 * u32::from(switchover))),
         );
         row(
             dev,
             "packet_timeout_ms",
-            format!("{} ms ($41)", 2 * u32::from(self.packet_timeout())),
+            serial_only(format!("{} ms ($41)", 2 * u32::from(self.packet_timeout()))),
         );
         row(
             dev,

@@ -68,6 +68,14 @@ impl StartupPlan {
     ) -> Self {
         let mut requests = FixedQueue::new();
         let mut push = |request: Request| {
+            // $40 and $41 set up the RS-232 / RS-485 line, which a CAN link does not use.
+            let serial_only = matches!(
+                request,
+                Request::SetBaud { .. } | Request::PacketTimeout { .. }
+            );
+            if serial_only && config.can_bitrate.is_some() {
+                return;
+            }
             if request.validate().is_ok() {
                 requests.push(request);
             }

@@ -191,6 +191,10 @@ impl TmcpackDriver {
     /// The smallest spacing between the starts of two words: their wire time, and the
     /// packet timeout of every pack on the bus.
     pub(super) fn spacing(&self) -> Duration {
+        if let Some(can) = &self.can {
+            // A CAN frame arrives whole or not at all: no packet timeout to wait out.
+            return can.frame_time;
+        }
         self.word_time.max(self.pack_timeout).max(self.bus_timeout)
     }
 
@@ -219,6 +223,10 @@ impl TmcpackDriver {
     /// What the driver would send now.
     pub(super) fn next_message(&self, now: Duration) -> Option<Priority> {
         if self.wire != Wire::Idle {
+            return None;
+        }
+        if self.can.as_ref().is_some_and(|can| !can.may_send(now)) {
+            // The pack's CAN cache has as many commands as the driver lets wait.
             return None;
         }
         match self.phase {
@@ -375,6 +383,9 @@ impl TmcpackDriver {
     /// The reply timeout of a query sent at `now`: request, switch-over (at least the
     /// factory delay), reply, margin.
     pub(super) fn reply_deadline(&self, now: Duration) -> Duration {
+        if let Some(can) = &self.can {
+            return can.reply_deadline(now);
+        }
         let switchover = self.switchover.max(units(FACTORY_SWITCHOVER));
         now + self.word_time * 2 + switchover + REPLY_MARGIN
     }
@@ -384,7 +395,10 @@ impl TmcpackDriver {
     pub(super) fn transmit(&mut self, now: Duration, buf: &mut [u8]) -> Option<Transmit> {
         let pick = self.pick(now)?;
         let request = pick.request;
-        let len = RequestFrame::new(self.address, request).encode(buf).ok()?;
+        let len = match self.can.as_mut() {
+            Some(can) => can.encode(now, self.address, request, buf)?,
+            None => RequestFrame::new(self.address, request).encode(buf).ok()?,
+        };
         self.seq += 1;
         let number = self.stamps.sent();
         let wire_end = now + self.word_time;

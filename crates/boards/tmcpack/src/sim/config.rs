@@ -83,6 +83,9 @@ pub struct TmcpackSimConfig {
     /// manual gives none for RS-232/RS-485 (2 ms for CAN); the default is zero, so a reply
     /// starts exactly the switch-over delay after the request.
     pub processing_time: Duration,
+    /// Processing time of one CAN command taken from the 16-command cache (manual 6.2:
+    /// "approx. 2 ms per command").
+    pub can_command_time: Duration,
     /// Start-up after $CC or a power cycle, during which the pack hears nothing
     /// ($CC: "This command needs about 1 second"; 5.1: "after a second").
     pub boot_time: Duration,
@@ -124,6 +127,7 @@ impl Default for TmcpackSimConfig {
             supply_volts: 24.0,
             power_down_volts: 13.0,
             processing_time: Duration::ZERO,
+            can_command_time: tmcpack::CAN_COMMAND_TIME,
             boot_time: Duration::from_secs(1),
             analog_noise_lsb: 1,
             external_analog: 0,

@@ -334,6 +334,11 @@ impl TmcpackSim {
 
     /// Queues `reply` to `reply_to`, `processing + switch-over` after `t`.
     pub(super) fn send(&mut self, t: Duration, reply_to: u8, reply: Reply, kind: Kind) {
+        if self.can.active {
+            // CAN has taken over: every answer goes out there (the `can` module).
+            self.send_can(t, reply_to, reply);
+            return;
+        }
         let Ok(word) = ReplyFrame::new(reply_to, reply).to_word() else {
             return;
         };
@@ -544,6 +549,7 @@ impl TmcpackSim {
             *m = Motor::new(m.hw, m.phys, m.divisor);
         }
         self.tx.clear();
+        self.can.reset();
         self.decoder.clear();
         self.decoder.set_timeout(units(self.st.timeout_units));
         self.decoder.set_byte_time(self.byte_time());

@@ -44,10 +44,14 @@
 //!   switch; zero lies `nulloffset` beyond the edge in the search direction; no switch within
 //!   5/4 · poslimit, or none again on the slow approach, restarts the search; afterwards
 //!   the motor resumes its previous action (an idle motor drives back to where it started).
-//! - Not modelled: the CAN interface (and RS-232 forwarding via CAN, $44 only stores its
-//!   settings), the microstep table's effect on the current ($17 is stored), thermal
+//! - CAN (6.2) is the `can` module: the pack is a
+//!   [`CanDevice`](motion_link::sim::CanDevice) too, with its 16-command cache at 2 ms a
+//!   command; the first valid CAN instruction ends RS-232 / RS-485 control until a reset.
+//! - Not modelled: RS-232 forwarding via CAN (6.3; `$44` only stores its settings), the
+//!   microstep table's effect on the current ($17 is stored), thermal
 //!   shutdown. The $F2/$F6 magic codes are not published; the config holds invented ones.
 
+mod can;
 mod config;
 mod firmware;
 pub(crate) mod machine;
@@ -66,6 +70,7 @@ use tmcpack::{Action, FrameDecoder, MotorMask, RequestFrame, Variant, Word};
 
 use motion_sim::rng::SimRng;
 
+pub use can::CanStats;
 pub use config::{MotorConfig, RefSwitch, TmcpackSimConfig};
 
 use motor::{Mode, Motor, TickCtx};
@@ -135,6 +140,8 @@ pub struct TmcpackSim {
     ttlio1_in: bool,
     ready: bool,
     stats: SimStats,
+    /// The CAN interface (manual 6.2).
+    can: can::CanSide,
 }
 
 impl TmcpackSim {
@@ -160,6 +167,7 @@ impl TmcpackSim {
             ttlio1_in: false,
             ready: true,
             stats: SimStats::default(),
+            can: can::CanSide::new(config.can_command_time),
             cfg: config,
         }
     }
@@ -499,6 +507,12 @@ impl TmcpackSim {
 
     fn on_word(&mut self, t: Duration, w: Word) {
         self.advance(t);
+        if self.can.active {
+            // "After receiving the first valid instruction via CAN, control via RS 232 or
+            // RS 485 will be terminated."
+            self.can.stats.serial_ignored += 1;
+            return;
+        }
         if w[0] != self.st.address {
             self.stats.foreign += 1;
             return;

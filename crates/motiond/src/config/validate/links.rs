@@ -3,6 +3,10 @@
 use core::time::Duration;
 use std::path::PathBuf;
 
+/// The bit rate of a CAN link without boards and without `bitrate`: a common factory
+/// setting (the Trinamic pack's with no jumper set, manual 6.2).
+const DEFAULT_CAN_BITRATE: u32 = 250_000;
+
 use motion_drivers::{LinkKind, Model};
 use toml::Spanned;
 
@@ -75,7 +79,7 @@ impl Validator<'_, '_> {
                 &l.kind,
                 &table,
                 &key("type"),
-                "one of serial, spidev, spi-socket, sim",
+                "one of serial, spidev, spi-socket, sim, socketcan, sim-can",
             ) else {
                 continue;
             };
@@ -237,18 +241,60 @@ impl Validator<'_, '_> {
                         baud.map(|rate| Transport::Sim { rate: rate as u32 })
                     }
                 }
+                "socketcan" | "sim-can" => {
+                    let sim = kind_name == "sim-can";
+                    let bitrate = self.can_link(index, name, l, sim, &on_link, raw_devices);
+                    let interface = if sim {
+                        let _ = path(self, false);
+                        if let Some(interface) = &l.interface {
+                            self.issue(
+                                interface.span(),
+                                &key("interface"),
+                                "a sim-can link is simulated in the server: it has no interface",
+                            );
+                        }
+                        None
+                    } else {
+                        Some(self.can_interface(index, l, &table))
+                    };
+                    match (interface, bitrate) {
+                        (None, Some(bitrate)) => Some(Transport::SimCan { bitrate }),
+                        (Some(Some(interface)), Some(bitrate)) => {
+                            Some(Transport::SocketCan { interface, bitrate })
+                        }
+                        _ => None,
+                    }
+                }
                 other => {
                     self.issue(
                         kind.span(),
                         &key("type"),
                         format!(
-                            "unknown link type {other:?}; allowed: serial, spidev, spi-socket, sim"
+                            "unknown link type {other:?}; allowed: serial, spidev, spi-socket, \
+                             sim, socketcan, sim-can"
                         ),
                     );
                     None
                 }
             };
-            if kind_name != "sim" {
+            if !matches!(kind_name, "socketcan" | "sim-can") {
+                if let Some(interface) = &l.interface {
+                    self.issue(
+                        interface.span(),
+                        &key("interface"),
+                        "interface is for socketcan links (a CAN network interface such as can0)",
+                    );
+                }
+                if let Some(bitrate) = &l.bitrate {
+                    self.issue(
+                        bitrate.span(),
+                        &key("bitrate"),
+                        "bitrate is for socketcan and sim-can links; a serial link has baud, \
+                         an SPI link speed_hz",
+                    );
+                }
+            }
+            if !matches!(kind_name, "sim" | "sim-can") {
                 for (i, _) in &on_link {
                     if let Some(sim) = &raw_devices[*i].get_ref().sim {
                         self.issue(
@@ -275,6 +321,131 @@ impl Validator<'_, '_> {
             }
         }
         specs
+    }
+
+    /// The checks of a CAN link (`socketcan`, `sim-can` when `sim`): every board on it
+    /// speaks CAN, no serial or SPI key, and its `bitrate` (default: the boards' factory
+    /// rate) is one the boards can be set to. Returns the bit rate.
+    fn can_link(
+        &mut self,
+        index: usize,
+        name: &str,
+        l: &RawLink,
+        sim: bool,
+        on_link: &[(usize, &DeviceSpec)],
+        raw_devices: &[Spanned<RawDevice>],
+    ) -> Option<u32> {
+        let key = |k: &str| format!("link[{index}].{k}");
+        let kind_name = if sim { "sim-can" } else { "socketcan" };
+        let can_board = |b: &dyn motion_boards::Board| b.can().is_some();
+        let mut facts = None;
+        for (i, device) in on_link {
+            match motion_boards::board(device.model).can() {
+                Some(can) => facts = facts.or(Some(can)),
+                None => {
+                    let span = raw_devices[*i]
+                        .get_ref()
+                        .link
+                        .as_ref()
+                        .map_or(raw_devices[*i].span(), Spanned::span);
+                    self.issue(
+                        span,
+                        &format!("device[{i}].link"),
+                        format!(
+                            "link `{name}` is a {kind_name} link, and a {} board has no CAN \
+                             interface; CAN links carry {} boards (give this one a serial, \
+                             spidev, spi-socket or sim link)",
+                            device.model,
+                            motion_boards::ids(can_board, "or"),
+                        ),
+                    );
+                }
+            }
+        }
+        for (k, value, why) in [
+            (
+                "baud",
+                &l.baud,
+                "a CAN link has bitrate, not baud (the serial line rate)",
+            ),
+            (
+                "speed_hz",
+                &l.speed_hz,
+                "a CAN link has bitrate, not speed_hz (the SPI clock)",
+            ),
+            ("mode", &l.mode, "mode is for spidev links"),
+        ] {
+            if let Some(v) = value {
+                self.issue(v.span(), &key(k), why.to_owned());
+            }
+        }
+        if !sim && let Some(p) = &l.path {
+            self.issue(
+                p.span(),
+                &key("path"),
+                "a socketcan link names its network interface with `interface`, not a path",
+            );
+        }
+        let Some(value) = &l.bitrate else {
+            return Some(facts.map_or(DEFAULT_CAN_BITRATE, |f| f.default_bitrate));
+        };
+        let rate = self.int_in(value, &key("bitrate"), 10_000..=1_000_000)? as u32;
+        if let Some(facts) = facts
+            && !facts.bitrates.contains(&rate)
+        {
+            let allowed = facts
+                .bitrates
+                .iter()
+                .map(u32::to_string)
+                .collect::<Vec<_>>()
+                .join(", ");
+            self.issue(
+                value.span(),
+                &key("bitrate"),
+                format!(
+                    "{rate} bit/s is not a rate the boards on link `{name}` can be set to; \
+                     allowed: {allowed} (default {})",
+                    facts.default_bitrate
+                ),
+            );
+            return None;
+        }
+        Some(rate)
+    }
+
+    /// `interface` of socketcan link `index`: a network interface name (1 to 15 characters,
+    /// no `/` or white space).
+    fn can_interface(
+        &mut self,
+        index: usize,
+        l: &RawLink,
+        table: &core::ops::Range<usize>,
+    ) -> Option<String> {
+        let key = format!("link[{index}].interface");
+        let value = self.required(
+            &l.interface,
+            table,
+            &key,
+            "a socketcan link needs its network interface, e.g. interface = \"can0\"",
+        )?;
+        let text = value.get_ref();
+        let valid = !text.is_empty()
+            && text.len() <= 15
+            && !text
+                .chars()
+                .any(|c| c == '/' || c == ':' || c.is_whitespace());
+        if !valid {
+            self.issue(
+                value.span(),
+                &key,
+                format!(
+                    "{text:?} is no network interface name; give 1 to 15 characters without \
+                     '/', ':' or spaces, as `ip link` lists them (can0, vcan0)"
+                ),
+            );
+            return None;
+        }
+        Some(text.clone())
     }
 
     /// `io` and `io_budget_us` of link `index`: "tick" by default on SPI socket links (a

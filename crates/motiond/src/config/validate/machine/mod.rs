@@ -16,8 +16,8 @@ pub use motion_drivers::spec::DeviceMachine;
 use toml::Spanned;
 
 use super::{Validator, plain_serde_message};
+use crate::config::ServerConfig;
 use crate::config::raw::RawConfig;
-use crate::config::{ServerConfig, Transport};
 
 impl KeyIssues for Validator<'_, '_> {
     fn report_issue(&mut self, span: Span, key: &str, message: String) {
@@ -247,16 +247,13 @@ fn view<'a>(
             index,
             name: &link.name,
             kind: link.kind,
-            line_rate: match link.transport {
-                Transport::Serial { baud, .. } => Some(baud),
-                Transport::Spidev { speed_hz, .. } => Some(speed_hz),
-                Transport::Sim { rate } => Some(rate),
-                Transport::SpiSocket { .. } => None,
-            },
+            framing: link.framing(),
+            line_rate: link.transport.rate(),
             rate_span: raw_link
                 .speed_hz
                 .as_ref()
                 .or(raw_link.baud.as_ref())
+                .or(raw_link.bitrate.as_ref())
                 .map(Spanned::span),
         });
     }
@@ -271,7 +268,13 @@ fn view<'a>(
         view.devices.push(DeviceView {
             index,
             name: &device.name,
-            link: device.link,
+            // `device.link` is the link's table index; the view holds the valid links only
+            // (one refused before this one would shift every later index).
+            link: view
+                .links
+                .iter()
+                .position(|link| link.index == device.link)
+                .unwrap_or(usize::MAX),
             model: device.model,
             address: device.address,
             address_span: raw_device.get_ref().address.as_ref().map(Spanned::span),
