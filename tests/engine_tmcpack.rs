@@ -8,6 +8,8 @@ mod support;
 
 #[path = "engine_tmcpack/deadman.rs"]
 mod deadman;
+#[path = "engine_tmcpack/drive.rs"]
+mod drive;
 #[path = "engine_tmcpack/io.rs"]
 mod io;
 #[path = "engine_tmcpack/lag.rs"]

@@ -1,6 +1,8 @@
 //! The simulated SIXpack / QUADpack against the manual: golden exchanges, wire timing,
 //! ramp physics, every mode, and two packs on one RS-485 pair.
 
+#[path = "sim/features.rs"]
+mod features;
 #[path = "sim/host.rs"]
 mod host;
 #[path = "sim/io.rs"]
