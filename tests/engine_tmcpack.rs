@@ -10,6 +10,8 @@ mod support;
 mod can;
 #[path = "engine_tmcpack/deadman.rs"]
 mod deadman;
+#[path = "engine_tmcpack/drive.rs"]
+mod drive;
 #[path = "engine_tmcpack/io.rs"]
 mod io;
 #[path = "engine_tmcpack/lag.rs"]

@@ -233,6 +233,33 @@ def test_qsb_counter_mode_in_params(client: motiond.Client) -> None:
     assert not qsb["count_mode"].from_config
 
 
+def test_tmcpack_power_down_and_pi_position_mode(client: motiond.Client) -> None:
+    """sim.toml's QUADpack has power_down = "restore": the key among its parameters, its state
+    in the description (armed, nothing loaded on a fresh start); camera_pan runs position
+    targets with the pack's PI controller ($24), which holds the target once there."""
+    params = {(p.owner_name, p.key): p for p in client.params()}
+    assert params[("pack_aux", "power_down")].value == "restore (save; loaded after a boot)"
+    assert params[("pack_aux", "power_down")].from_config
+    assert params[("pack_xyz", "power_down")].value == "off (no $45)"
+    assert params[("camera_pan", "position_mode")].value == "pi ($24 PI controller)"
+    assert params[("camera_tilt", "position_mode")].value == "ramp ($14, $26, $23)"
+    deadline = time.monotonic() + 5.0
+    firmware = ""
+    while time.monotonic() < deadline:
+        firmware = client.info.devices[2].text("firmware")
+        if firmware.endswith("PD armed"):
+            break
+        client.next_frame()
+    assert firmware == "QUADpack V1.4.9 #1001 PD armed"
+    assert client.info.devices[1].text("firmware") == "SIXpack V1.4.9 s/n 1001"
+    pan = client.axis("camera_pan")
+    pan.position(15.0)
+    status = pan.wait_until_arrived(timeout=10.0)
+    state = pan.state(status)
+    assert state.position == pytest.approx(15.0, abs=0.2)
+    assert not state.moving
+
+
 def test_stats(client: motiond.Client) -> None:
     deadline = time.monotonic() + 3.0
     stats = client.stats()

@@ -358,6 +358,10 @@ pub struct AxisContext<'a> {
     /// The axis's `home.position` (the position it takes at the switch), and where it was
     /// written.
     pub home_position: Option<(f64, Span)>,
+    /// The axis's `max_velocity`, units/s.
+    pub max_velocity: Option<f64>,
+    /// The axis's `max_accel`, units/s².
+    pub max_accel: Option<f64>,
 }
 
 impl AxisContext<'_> {

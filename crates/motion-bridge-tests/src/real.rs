@@ -73,16 +73,42 @@ pub fn binaries() -> Option<Binaries> {
 
 /// Waits for `child` up to `within`, killing it if it does not end; its output.
 pub fn finish(mut child: Child, within: Duration) -> Result<Output> {
+    // The output is read while the child runs: one that writes more than a pipe holds
+    // (`list --json` of the simulated robot is above 64 KiB) would block on its write.
+    fn drain(mut pipe: impl std::io::Read + Send + 'static) -> std::thread::JoinHandle<Vec<u8>> {
+        std::thread::spawn(move || {
+            let mut bytes = Vec::new();
+            let _ = pipe.read_to_end(&mut bytes);
+            bytes
+        })
+    }
+    let out = child.stdout.take().map(drain);
+    let err = child.stderr.take().map(drain);
+    let join = |reader: Option<std::thread::JoinHandle<Vec<u8>>>| {
+        reader.and_then(|r| r.join().ok()).unwrap_or_default()
+    };
     let until = Instant::now() + within;
-    while child.try_wait()?.is_none() {
+    let status = loop {
+        if let Some(status) = child.try_wait()? {
+            break status;
+        }
         if Instant::now() > until {
             let _ = child.kill();
-            let output = child.wait_with_output()?;
+            let status = child.wait()?;
+            let output = Output {
+                status,
+                stdout: join(out),
+                stderr: join(err),
+            };
             return Err(format!("did not end within {within:?}: {output:?}").into());
         }
         std::thread::sleep(Duration::from_millis(10));
-    }
-    Ok(child.wait_with_output()?)
+    };
+    Ok(Output {
+        status,
+        stdout: join(out),
+        stderr: join(err),
+    })
 }
 
 /// Two network namespaces joined by a veth pair: `server` (10.250.K.1) for motiond and

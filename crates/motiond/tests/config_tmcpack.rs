@@ -2,6 +2,8 @@
 //! with file:line:column, the key and what is allowed; a key on the wrong model names the
 //! models where it is valid. The mapping of every key to the wire is in `mapping`.
 
+#[path = "config_tmcpack/drive.rs"]
+mod drive;
 #[path = "config_tmcpack/mapping.rs"]
 mod mapping;
 

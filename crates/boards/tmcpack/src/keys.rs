@@ -26,6 +26,8 @@ pub(crate) struct RawDevice {
     ready_output: Option<Spanned<RawReadyOutput>>,
     amax_divisor: Option<Spanned<Int>>,
     stop_no_ref_bit: Option<Spanned<Int>>,
+    pub(crate) power_down: Option<Spanned<String>>,
+    pub(crate) microstep_table: Option<Spanned<Vec<Spanned<Int>>>>,
 }
 
 /// `ready_output = { motors = [0, 1], reference = [0] }`: TTLOUT1 as the ready output
@@ -43,10 +45,13 @@ struct RawReadyOutput {
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawAxis {
     current: Option<Spanned<RawCurrent>>,
-    reference: Option<Spanned<RawReference>>,
+    pub(crate) reference: Option<Spanned<RawReference>>,
     rotary: Option<Spanned<bool>>,
     revolution: Option<Spanned<f64>>,
     analog_stop: Option<Spanned<RawAnalogStop>>,
+    pub(crate) start_velocity: Option<Spanned<f64>>,
+    pub(crate) position_mode: Option<Spanned<String>>,
+    pub(crate) pi: Option<Spanned<crate::drive_keys::RawPi>>,
 }
 
 /// `current = { peak, standby, standstill, constant, accel, standby_delay_ms }` ($10, $11).
@@ -62,10 +67,10 @@ struct RawCurrent {
 }
 
 /// `reference = { side, active, center, stop_at_switch, soft_stop, debounce_ms,
-/// null_offset, test_range, fast, mechanical }` ($15, $16, $18).
+/// null_offset, test_range, fast, mechanical, restore }` ($15, $16, $18; `restore`: $45).
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
-struct RawReference {
+pub(crate) struct RawReference {
     side: Option<Spanned<String>>,
     active: Option<Spanned<String>>,
     center: Option<Spanned<bool>>,
@@ -76,6 +81,7 @@ struct RawReference {
     test_range: Option<Spanned<f64>>,
     fast: Option<Spanned<bool>>,
     mechanical: Option<Spanned<bool>>,
+    pub(crate) restore: Option<Spanned<bool>>,
 }
 
 /// `analog_stop = { left, right }` ($31), ADC counts 0..=1023.
@@ -225,6 +231,7 @@ pub(crate) fn device_keys(
         keys.stop_no_ref_bit = crate::readings::stop_no_ref_bit(v, ctx, value);
         ok &= keys.stop_no_ref_bit.is_some();
     }
+    ok &= crate::drive_keys::device_keys(v, ctx, raw, &mut keys);
     if let Some(ready) = &raw.ready_output {
         let motors: u8 = match variant {
             PackVariant::Quadpack => 4,
@@ -417,6 +424,7 @@ pub(crate) fn axis_keys(
         keys.reference.soft_stop = flag(&r.soft_stop);
         keys.reference.fast = flag(&r.fast);
         keys.reference.mechanical = flag(&r.mechanical);
+        keys.reference.restore = flag(&r.restore);
         if let Some(value) = &r.debounce_ms {
             let ms = value.get_ref().get();
             if (0..=i64::from(MAX_DEBOUNCE_MS)).contains(&ms) && ms % 2 == 0 {
@@ -464,6 +472,7 @@ pub(crate) fn axis_keys(
         }
     }
     ok &= home_position_fits_stop_null(v, ctx, &keys.reference);
+    ok &= crate::drive_keys::axis_keys(v, ctx, raw, &mut keys);
     keys.rotary = flag(&raw.rotary);
     let rotary = keys.rotary == Some(true);
     match (&raw.revolution, rotary) {
@@ -587,6 +596,7 @@ pub(crate) fn cross_check(v: &mut dyn KeyIssues, machine: &MachineView<'_>) {
     peak_pairs(v, machine);
     ready_output_signals(v, machine);
     packet_timeouts(v, machine);
+    crate::drive_keys::cross_check(v, machine);
 }
 
 /// The device keys of pack `d` (an index into the view's devices).

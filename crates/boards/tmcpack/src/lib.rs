@@ -7,6 +7,7 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+mod drive_keys;
 pub mod driver;
 mod keys;
 pub mod machine_keys;
@@ -25,7 +26,8 @@ use motion_drivers::{Driver, Model, PinInfo};
 
 use driver::{TmcpackDriver, TmcpackDriverConfig, pins};
 pub use machine_keys::{
-    CurrentKeys, PackVariant, ReadyOutputKeys, ReferenceKeys, TmcpackAxisKeys, TmcpackDeviceKeys,
+    CurrentKeys, PackVariant, PiKeys, PositionMode, PowerDownMode, ReadyOutputKeys, ReferenceKeys,
+    TmcpackAxisKeys, TmcpackDeviceKeys,
 };
 
 /// The Trinamic pack.

@@ -40,6 +40,50 @@ pub struct TmcpackDeviceKeys {
     pub amax_divisor: Option<u8>,
     /// `$15` P6 bit of StopNoRef in the pack's firmware: 5 (the table) or 6 (the prose).
     pub stop_no_ref_bit: Option<u8>,
+    /// `power_down`: the `$45` power-down mode.
+    pub power_down: Option<PowerDownMode>,
+    /// `microstep_table`: the 16 entries of the `$17` motor characteristics table.
+    pub microstep_table: Option<[u8; 16]>,
+}
+
+/// `power_down` (manual 8.6 `$45`): what the driver asks of the pack's power-down mode.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum PowerDownMode {
+    /// No `$45` at all (the default): the pack's own setting, off after a reset.
+    #[default]
+    Off,
+    /// Bit 2 at start-up: the pack stops its motors and saves their positions in EEPROM when
+    /// the supply falls below 13 V; the saved positions are invalidated at start-up (bit 1)
+    /// and never loaded.
+    Save,
+    /// As `Save`, and after the pack booted (`$43` reset flag) bit 0 loads the saved
+    /// positions first: an axis counts as referenced when the pack answers that it loaded
+    /// valid ones (and `reference.restore` is not false on it).
+    Restore,
+}
+
+/// `position_mode`: how a `position` goal (the board's own controller) is run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum PositionMode {
+    /// `$14`, `$26`, `$23`: the trapezoidal ramp at the axis limits (the default).
+    #[default]
+    Ramp,
+    /// `$24`: the pack's PI controller on the target, reprogrammed on the fly by every
+    /// new target; a group's path is followed with a target every exchange.
+    Pi,
+}
+
+/// `pi = { propdiv, intdiv, intclip, intinpclip }` (`$19`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct PiKeys {
+    /// propdiv 1..=255.
+    pub propdiv: Option<u8>,
+    /// intdiv 1..=32767.
+    pub intdiv: Option<u16>,
+    /// intclip 1..=32767.
+    pub intclip: Option<u16>,
+    /// intinpclip 0..=255.
+    pub intinpclip: Option<u8>,
 }
 
 /// `current = { … }` ($10, $11).
@@ -81,6 +125,9 @@ pub struct ReferenceKeys {
     pub fast: Option<bool>,
     /// MechRef.
     pub mechanical: Option<bool>,
+    /// Positions the pack restores from EEPROM count as referenced on this axis
+    /// (`power_down = "restore"`).
+    pub restore: Option<bool>,
 }
 
 /// The tmcpack keys of one `[[axis]]`; `None` fields were not set (the driver's default
@@ -99,4 +146,10 @@ pub struct TmcpackAxisKeys {
     pub analog_stop_left: Option<u16>,
     /// $31 right maximum, ADC counts.
     pub analog_stop_right: Option<u16>,
+    /// `$13` vstart as a speed, units/s.
+    pub start_velocity: Option<f64>,
+    /// How `position` goals are run.
+    pub position_mode: Option<PositionMode>,
+    /// `$19` PI parameters.
+    pub pi: PiKeys,
 }

@@ -3,6 +3,8 @@
 
 #[path = "sim/can.rs"]
 mod can;
+#[path = "sim/features.rs"]
+mod features;
 #[path = "sim/host.rs"]
 mod host;
 #[path = "sim/io.rs"]

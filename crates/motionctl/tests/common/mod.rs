@@ -77,18 +77,56 @@ pub fn command(server: &str, args: &[&str]) -> Command {
     command
 }
 
-/// Waits for `child` up to `deadline`, killing it past that.
+/// Waits for `child` up to `deadline`, killing it past that. Its output is read while it
+/// runs: a child that writes more than a pipe holds (`list --json` of the simulated robot
+/// is above 64 KiB) would otherwise block on its write and never finish.
 pub fn finish(mut child: Child, deadline: Duration) -> Result<Output> {
+    let readers = read_output(&mut child);
     let until = Instant::now() + deadline;
-    while child.try_wait()?.is_none() {
+    let status = loop {
+        if let Some(status) = child.try_wait()? {
+            break status;
+        }
         if Instant::now() > until {
             child.kill()?;
-            let output = child.wait_with_output()?;
+            let status = child.wait()?;
+            let output = collect_output(status, readers);
             return Err(format!("motionctl did not finish in {deadline:?}: {output:?}").into());
         }
         std::thread::sleep(Duration::from_millis(10));
+    };
+    Ok(collect_output(status, readers))
+}
+
+type Readers = (
+    Option<std::thread::JoinHandle<Vec<u8>>>,
+    Option<std::thread::JoinHandle<Vec<u8>>>,
+);
+
+/// Threads reading the child's stdout and stderr to their ends.
+fn read_output(child: &mut Child) -> Readers {
+    fn drain(mut pipe: impl std::io::Read + Send + 'static) -> std::thread::JoinHandle<Vec<u8>> {
+        std::thread::spawn(move || {
+            let mut bytes = Vec::new();
+            let _ = pipe.read_to_end(&mut bytes);
+            bytes
+        })
     }
-    Ok(child.wait_with_output()?)
+    (
+        child.stdout.take().map(drain),
+        child.stderr.take().map(drain),
+    )
+}
+
+fn collect_output(status: std::process::ExitStatus, (out, err): Readers) -> Output {
+    let join = |reader: Option<std::thread::JoinHandle<Vec<u8>>>| {
+        reader.and_then(|r| r.join().ok()).unwrap_or_default()
+    };
+    Output {
+        status,
+        stdout: join(out),
+        stderr: join(err),
+    }
 }
 
 pub fn run(server: &str, args: &[&str]) -> Result<Output> {

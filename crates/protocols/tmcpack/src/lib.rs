@@ -38,6 +38,9 @@
 //!   $40–$45, $50, $CC, $F2–$F7: [`Request`], [`Command`]; every tabled response ($20,
 //!   $21, $28, $30, $43, $44, $45, $F2, $F4, $F5, $F6, $F7): [`Reply`]; the $15 and $16
 //!   bitfields: [`MotorType`], [`MotorOptions`], [`ReferenceFlags`]; actions: [`Action`].
+//! - 8.3 `$17` motor characteristics table (the factory sine, four requests per table, the
+//!   coil currents a table gives): [`table`]; 8.6 `$45` power-down on the firmware
+//!   revisions that have it: [`power_down_supported`].
 //! - 8.2 microstep frequency and the $14 acceleration with the 200 kHz and ±511 limits,
 //!   $40 baud divisor, $10 current, channel 7 supply scale: [`StepClock`], [`convert`].
 //!
@@ -80,6 +83,7 @@ mod error;
 mod params;
 mod reply;
 mod request;
+pub mod table;
 mod types;
 
 pub use can::{
@@ -98,6 +102,7 @@ pub use request::{
 pub use types::{
     Action, CanBitrate, CurrentLevel, MAX_MOTOR, MotorMask, MotorOptions, MotorType, OptionsLayout,
     PowerDownRequest, PowerDownStatus, RefInputs, ReferenceFlags, check_motor,
+    power_down_supported,
 };
 
 /// Length of a word on RS-232 / RS-485, requests and replies alike.

@@ -515,3 +515,9 @@ flags! {
         DOWN_AFTER = 3;
     }
 }
+
+/// Whether firmware revision `revision` (as `$43` reports it, 149 = V1.4.9) has the `$45`
+/// power-down mode: "(Version 1.46 and since Version 1.49)" (manual 8.6).
+pub const fn power_down_supported(revision: u8) -> bool {
+    revision == 146 || revision >= 149
+}

@@ -32,6 +32,15 @@
 //!   procedure repeats by first stopping again"), a stop condition during the search
 //!   (`$20` P6), or a search that ends anywhere but inactive at the zero point is
 //!   [`DeviceFault::HomeFailed`]; the driver then stops the motor.
+//! - **Position** with `position_mode = "pi"`: `$24`, the PI controller on the target
+//!   (after `$14` with the axis limits when a ramp goal left others; a motor that
+//!   rotates, searches or runs a ramp is stopped first). A new target while the PI
+//!   controller runs is one more `$24`: "When the PI-controller was already active the
+//!   target position will be reprogrammed immediately". A `$24` waits for a query after
+//!   the previous one, so a path's stream of targets takes turns with the polls. The PI
+//!   controller holds the target (action 10): the axis counts as at rest when two polls
+//!   find it at the same position, as arrived when that is the target. Stop, Off, Home,
+//!   a ramp goal and a SetPosition leave it through a stop (`$25` 0, then `$23`).
 //! - **SetPosition**: `$27`; the axis counts as referenced from the first poll after it.
 //! - **Off**: stop as above, then `$11` with every current level at 0 %; the next motion
 //!   goal sends the configured `$11` first.
@@ -43,6 +52,7 @@ use motion_base::{FixedQueue, counts_to_i32};
 use tmcpack::{Action, CurrentLevel, MAX_VELOCITY, MotorOptions, Request};
 
 use super::config::{Currents, Scale, TmcpackChannel};
+use crate::PositionMode;
 use motion_drivers::{ChannelState, DeviceFault, Goal, GoalError, GoalKind};
 
 /// Longest script one goal needs.
@@ -69,6 +79,8 @@ pub(crate) enum Motion {
     Rotation(i16),
     /// Reference search ($22).
     Reference,
+    /// The PI controller ($24) on the target of [`Channel::target`].
+    Pi,
 }
 
 /// Progress of a reference search the driver started.
@@ -129,6 +141,15 @@ pub(crate) struct Channel {
     confirm_position: Option<u64>,
     /// No request of the goal set last has been sent yet.
     pub goal_unsent: bool,
+    /// A poll showed the motor moving since the last `$45` check (or since the start).
+    moved_since_check: bool,
+    /// The motor was moving (or told to move) when the driver lost the pack, or moved since
+    /// the last check before it saw the pack in its power-down state: a position restored
+    /// from EEPROM is not trusted as its reference.
+    pub lost_in_motion: bool,
+    /// The axis was referenced when the driver lost the pack (or saw it in its power-down
+    /// state): the one thing the pack does not save with the positions.
+    pub referenced_at_loss: bool,
 }
 
 impl Channel {
@@ -160,11 +181,21 @@ impl Channel {
             ref_phase: None,
             confirm_position: None,
             goal_unsent: false,
+            moved_since_check: false,
+            lost_in_motion: false,
+            referenced_at_loss: false,
         }
     }
 
     /// The board restarted or the link came back: what was commanded is void.
     pub fn restart(&mut self, fault: DeviceFault) {
+        // Moving at the last poll, or told to move after it: the pack may have been lost
+        // with the motor running.
+        let commanded = self.motion_seq > self.polled_seq
+            && !matches!(self.motion, Motion::Unknown | Motion::Rotation(0));
+        self.lost_in_motion |= self.state.moving || commanded;
+        self.referenced_at_loss |= self.state.homed;
+        self.moved_since_check = false;
         self.clear_script();
         self.action = None;
         self.motion = Motion::Unknown;
@@ -278,6 +309,13 @@ impl Channel {
                 self.power_on(&mut script, motor);
             }
             Goal::Power { .. } => return Err(GoalError::Unsupported(kind)),
+            Goal::Position { counts } if self.cfg.position_mode == PositionMode::Pi => {
+                let target = counts_to_i32(counts).ok_or(range)?;
+                if self.retarget_pi(target) {
+                    return Ok(());
+                }
+                self.plan_pi(&mut script, motor, target);
+            }
             Goal::Position { counts } => {
                 let target = counts_to_i32(counts).ok_or(range)?;
                 self.plan_ramp(&mut script, motor, target, self.scale.vmax, self.scale.amax);
@@ -337,6 +375,11 @@ impl Channel {
             }
             Goal::SetPosition { counts } => {
                 let position = counts_to_i32(counts).ok_or(range)?;
+                if self.in_pi() {
+                    // The PI controller would drive to its old target in the new
+                    // coordinates: it is stopped (and left) first.
+                    self.plan_stop(&mut script, motor, axis_decel);
+                }
                 script.send(Request::SetPosition { motor, position });
             }
         }
@@ -431,6 +474,89 @@ impl Channel {
         script.send(Request::StartRamp { motor, target });
     }
 
+    /// A `Position` goal in the PI position mode: `$24` ("Switching to PI-controller
+    /// happens immediately, even if the motor is inactive. When the PI-controller was
+    /// already active the target position will be reprogrammed immediately"), after `$14`
+    /// puts the axis limits back when a ramp goal left others (the PI output is read as
+    /// bounded by vmax and amax, as the ramps are: the manual states no bound of its own).
+    /// A motor that rotates, searches its reference or runs a ramp is stopped first (the
+    /// manual does not say how the PI controller takes over a moving motor).
+    fn plan_pi(&self, script: &mut Script, motor: u8, target: i32) {
+        if self.pi_needs_stop() {
+            self.plan_stop(script, motor, self.cfg.max_accel);
+        }
+        self.power_on(script, motor);
+        self.limits(script, motor, self.scale.vmax, self.scale.amax);
+        script.send(Request::PiTarget { motor, target });
+    }
+
+    /// A new PI target while the script of the last one still waits to send its `$24`
+    /// (the line busy, or a stop before it): only the target changes, so that a stream of
+    /// targets never restarts the stop before them.
+    fn retarget_pi(&mut self, target: i32) -> bool {
+        if self.urgent {
+            return false;
+        }
+        match self.steps.back_mut() {
+            Some(Step::Send(Request::PiTarget { target: t, .. })) => {
+                *t = target;
+                self.state.arrived = false;
+                true
+            }
+            _ => false,
+        }
+    }
+
+    /// Whether the PI controller cannot take the motor over as it is: anything but
+    /// inactive or the PI controller itself (what the last poll saw if it is newer than the
+    /// last motion command, else that command).
+    fn pi_needs_stop(&self) -> bool {
+        if self.polled_seq > self.motion_seq || self.motion == Motion::Unknown {
+            return !matches!(self.action, Some(Action::Inactive | Action::PiController));
+        }
+        self.motion != Motion::Pi
+    }
+
+    /// Whether the PI controller holds (or may hold) the motor.
+    fn in_pi(&self) -> bool {
+        self.motion == Motion::Pi || self.action == Some(Action::PiController)
+    }
+
+    /// `$45` bit 0 loaded valid positions with the request sent as `seq`: referenced from
+    /// the first poll after it if the axis was referenced when the pack was lost, its motor
+    /// was not moving then, and it is to be (`reference.restore`). The pack saves positions,
+    /// not references: an axis that had none before the outage has none after it.
+    pub fn restored(&mut self, seq: u64) {
+        if self.cfg.restore && self.referenced_at_loss && !self.lost_in_motion {
+            self.confirm_position = Some(seq);
+        }
+    }
+
+    /// The pack is in its power-down state: it stopped the motor at once. An axis that may
+    /// have moved then (since the last check), or whose position is not to be trusted after
+    /// one (`reference.restore = false`: the motors are held without current), loses its
+    /// reference.
+    pub fn power_went_down(&mut self) {
+        self.lost_in_motion |= self.moved_since_check || self.state.moving;
+        if self.lost_in_motion || !self.cfg.restore {
+            self.state.homed = false;
+            self.confirm_position = None;
+        }
+        self.referenced_at_loss |= self.state.homed;
+    }
+
+    /// The pack was configured (and any restore done): what was known at the loss is
+    /// spent.
+    pub fn loss_consumed(&mut self) {
+        self.lost_in_motion = false;
+        self.referenced_at_loss = false;
+    }
+
+    /// A `$45` check found the pack outside its power-down state.
+    pub fn checked(&mut self) {
+        self.moved_since_check = false;
+    }
+
     fn power_on(&self, script: &mut Script, motor: u8) {
         if !self.powered {
             script.send(self.cfg.currents.request(motor));
@@ -483,6 +609,11 @@ impl Channel {
             }
             Request::StartRamp { target, .. } => {
                 self.motion = Motion::Ramp;
+                self.motion_seq = seq;
+                self.target = Some((target, seq));
+            }
+            Request::PiTarget { target, .. } => {
+                self.motion = Motion::Pi;
                 self.motion_seq = seq;
                 self.target = Some((target, seq));
             }
@@ -560,10 +691,14 @@ impl Channel {
                 self.motion = Motion::Ramp;
             }
         }
-        let moving = action.is_active() && !(action == Action::Rotation && rotation_rest);
-        let arrived = self
-            .target
-            .is_some_and(|(t, sent)| seq > sent && t == position && !action.is_active());
+        // The PI controller stays active (action 10) while it holds its target.
+        let pi_rest = action == Action::PiController && still;
+        let moving =
+            action.is_active() && !(action == Action::Rotation && rotation_rest) && !pi_rest;
+        self.moved_since_check |= moving;
+        let arrived = self.target.is_some_and(|(t, sent)| {
+            seq > sent && t == position && (!action.is_active() || pi_rest)
+        });
         let restarted = core::mem::take(&mut self.stop_if_active);
         self.state = ChannelState {
             position: f64::from(position),

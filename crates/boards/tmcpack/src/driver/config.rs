@@ -10,6 +10,7 @@ use tmcpack::{
 };
 
 use super::io::TmcpackIo;
+use crate::{PositionMode, PowerDownMode};
 
 /// $16 P5 the driver always sets: "1=Stop after reference search", so that a `Home` goal
 /// ends at the new zero point with the motor inactive (0 would resume the previous action,
@@ -118,9 +119,69 @@ pub struct TmcpackChannel {
     /// The position the axis takes at the zero point a reference search found, microsteps
     /// (`$27` after the search when not 0).
     pub home_position: i32,
+    /// `$13` vstart asked for as a speed, microsteps/s (`start_velocity`): ramps start and
+    /// end there. `None`: the smallest vstart the axis's acceleration allows. Never below
+    /// that ("0 < amax <= vstart * 64") nor above vmax.
+    pub start_velocity: Option<f64>,
+    /// How `Position` goals are run: the trapezoidal ramp or the `$24` PI controller.
+    pub position_mode: PositionMode,
+    /// `$19` PI parameters written at start-up; `None` writes none unless the position
+    /// mode is the PI controller (which writes [`PiParams::default`], the manual's).
+    pub pi: Option<PiParams>,
+    /// Positions the pack loads from EEPROM (`$45` bit 0) count as referenced on this axis
+    /// (`reference.restore`).
+    pub restore: bool,
+}
+
+/// `$19` PI controller parameters (manual 8.3): "The proportional part is 64 * position
+/// difference / propdiv. The integral part integrates the part of the position difference
+/// clipped to a maximum limit by intinpclip. The influence of the integral part is
+/// determined by the divisor intdiv."
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PiParams {
+    /// propdiv 1..=255.
+    pub propdiv: u8,
+    /// intdiv 1..=32767.
+    pub intdiv: u16,
+    /// intclip 1..=32767.
+    pub intclip: u16,
+    /// intinpclip 0..=255.
+    pub intinpclip: u8,
+}
+
+impl Default for PiParams {
+    /// Manual 7.1 "Default Values": "propdiv=8; intdiv=129; intclip=129; intinpclip=1".
+    fn default() -> Self {
+        Self {
+            propdiv: 8,
+            intdiv: 129,
+            intclip: 129,
+            intinpclip: 1,
+        }
+    }
+}
+
+impl PiParams {
+    /// `$19` with these parameters for `motor`.
+    pub(crate) fn request(self, motor: u8) -> Request {
+        Request::PiParameters {
+            motor,
+            propdiv: self.propdiv,
+            intdiv: self.intdiv,
+            intclip: self.intclip,
+            intinpclip: self.intinpclip,
+        }
+    }
 }
 
 impl TmcpackChannel {
+    /// The `$19` the start-up writes: the configured parameters, or the manual's defaults
+    /// for a motor in the PI position mode; none otherwise (the pack keeps its own).
+    pub fn written_pi(&self) -> Option<PiParams> {
+        self.pi
+            .or((self.position_mode == PositionMode::Pi).then(PiParams::default))
+    }
+
     /// Whether the $15 type says rotary with a usable poslimit (the pack then reports the
     /// position modulo poslimit).
     pub fn cyclic(&self) -> bool {
@@ -146,6 +207,10 @@ impl Default for TmcpackChannel {
             peak_current: None,
             analog_stop: (0, MAX_ANALOG),
             home_position: 0,
+            start_velocity: None,
+            position_mode: PositionMode::Ramp,
+            pi: None,
+            restore: true,
         }
     }
 }
@@ -188,6 +253,11 @@ pub struct TmcpackDriverConfig {
     /// RS-485. The driver then frames CAN telegrams (`address << 3`) and times them by the
     /// pack's command cache (the `can` module).
     pub can_bitrate: Option<u32>,
+    /// The `$45` power-down mode (key `power_down`): off (no `$45`), save, or restore.
+    pub power_down: PowerDownMode,
+    /// The `$17` motor characteristics table to write at start-up (key
+    /// `microstep_table`); `None` leaves the pack's (the factory sine after a reset).
+    pub microstep_table: Option<[u8; 16]>,
 }
 
 impl TmcpackDriverConfig {
@@ -215,6 +285,8 @@ impl Default for TmcpackDriverConfig {
             amax_divisor: AmaxDivisor::By64,
             options_layout: OptionsLayout::Table,
             can_bitrate: None,
+            power_down: PowerDownMode::Off,
+            microstep_table: None,
         }
     }
 }
@@ -235,7 +307,8 @@ pub(crate) struct Scale {
     pub divisor: AmaxDivisor,
     /// vstart: the smallest value with amax <= vstart · divisor ($14: "vstart * 64" under
     /// its own reading), for the amax of a stop at the axis limit too (rounded up, see
-    /// [`Scale::stop_amax`]).
+    /// [`Scale::stop_amax`]); or the channel's `start_velocity` rounded down when that is
+    /// more; at most vmax.
     pub vstart: u16,
     /// vrefmax programmed at start-up: a quarter of vmax, at least vstart.
     pub vrefmax: u16,
@@ -294,6 +367,10 @@ impl Scale {
         let stop = amax_up(channel.max_accel, hz, divisor).clamp(1, MAX_AMAX);
         let per = divisor.get() as u16;
         let mut vstart = stop.max(amax).div_ceil(per).max(1);
+        if let Some(asked) = channel.start_velocity {
+            // `start_velocity`, rounded down, but never below one tick's change at amax.
+            vstart = vstart.max(units(reachable(asked), hz));
+        }
         if vstart > vmax {
             vstart = vmax;
             amax = amax.min(vmax.saturating_mul(per));

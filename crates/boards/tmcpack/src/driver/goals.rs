@@ -22,7 +22,17 @@ impl TmcpackDriver {
     pub(super) fn any_ready(&self) -> bool {
         self.io.outputs_pending
             || self.line_pick().is_some()
-            || self.channels.iter().flatten().any(Channel::ready)
+            || self.channels.iter().flatten().any(|c| self.may_send(c))
+    }
+
+    /// Whether `channel`'s next request may go now: a `$24` waits for a query after the
+    /// last `$24` (a path's targets would otherwise take the line from the polls).
+    fn may_send(&self, channel: &Channel) -> bool {
+        match channel.current() {
+            Some(Step::Send(tmcpack::Request::PiTarget { .. })) => !self.pi_since_poll,
+            Some(Step::Send(_)) => true,
+            _ => false,
+        }
     }
 
     /// Stops first, then output changes, then the other goals round-robin.
@@ -50,6 +60,7 @@ impl TmcpackDriver {
         for offset in 0..6 {
             let index = (self.next_command + offset) % 6;
             if let Some(Some(channel)) = self.channels.get(index)
+                && self.may_send(channel)
                 && let Some(Step::Send(request)) = channel.current()
             {
                 self.next_command = (index + 1) % 6;
@@ -79,7 +90,9 @@ impl TmcpackDriver {
                 self.cancel_line_of(channel);
                 Ok(())
             }
-            Phase::Survey | Phase::Quiesce | Phase::Configure(_) => Err(GoalError::Starting),
+            Phase::Survey | Phase::Quiesce | Phase::Configure(_) | Phase::PowerDown => {
+                Err(GoalError::Starting)
+            }
             Phase::Down | Phase::Identify => Err(GoalError::Offline),
         }
     }
@@ -91,7 +104,7 @@ impl TmcpackDriver {
         }
         match self.phase {
             Phase::Online => {}
-            Phase::Survey | Phase::Quiesce | Phase::Configure(_) => {
+            Phase::Survey | Phase::Quiesce | Phase::Configure(_) | Phase::PowerDown => {
                 return Err(GoalError::Starting);
             }
             Phase::Down | Phase::Identify => return Err(GoalError::Offline),

@@ -64,7 +64,7 @@ impl TmcpackDriver {
         }
         match self.phase {
             Phase::Online => {}
-            Phase::Survey | Phase::Quiesce | Phase::Configure(_) => {
+            Phase::Survey | Phase::Quiesce | Phase::Configure(_) | Phase::PowerDown => {
                 return Err(GoalError::Starting);
             }
             Phase::Down | Phase::Identify => return Err(GoalError::Offline),

@@ -49,6 +49,8 @@
 //! On a CAN link (`socketcan`, `sim-can`; manual 6.2) the same driver frames its requests
 //! and answers as CAN telegrams and times them by the pack's command cache instead of the
 //! serial line: the `can` module.
+//! With `position_mode = "pi"` a Position goal is a `$24` PI target (the `channel` module);
+//! the power-down mode (`$45`) is in the `power_down` module.
 
 mod can;
 mod channel;
@@ -56,8 +58,10 @@ mod config;
 mod goals;
 mod io;
 mod line;
+mod power_down;
 mod rx;
 mod spec;
+mod spec_drive;
 mod startup;
 mod wire;
 
@@ -66,11 +70,15 @@ mod bench;
 #[cfg(test)]
 mod tests;
 #[cfg(test)]
+mod tests_drive;
+#[cfg(test)]
 mod tests_goals;
 #[cfg(test)]
 mod tests_io;
 #[cfg(test)]
 mod tests_line;
+#[cfg(test)]
+mod tests_power_down;
 #[cfg(test)]
 mod tests_readings;
 
@@ -89,14 +97,16 @@ use config::{Scale, clkdiv_for};
 use goals::CAPABILITIES;
 use io::IoState;
 use line::PackLine;
+use power_down::PowerDown;
 use startup::{Quiesce, StartupPlan};
 use wire::{ReplyHunter, Wire};
 
 pub use config::{
     Currents, DEFAULT_REPLY_ADDRESS, DEFAULT_SWITCHOVER_UNITS, PACKET_TIMEOUT_SLACK_BYTES,
-    TmcpackChannel, TmcpackDriverConfig, default_packet_timeout_units,
+    PiParams, TmcpackChannel, TmcpackDriverConfig, default_packet_timeout_units,
 };
 pub use io::{MAX_PINS, PinSet, ReadyOutput, TmcpackIo, pins};
+pub use power_down::POWER_CHECK_PERIOD;
 pub use spec::{MAX_DEBOUNCE_MS, MAX_POSLIMIT, is_current_level, is_weak_current, word_time};
 
 /// Added to a query's wire and switch-over time before it counts as unanswered
@@ -122,6 +132,8 @@ enum Phase {
     Quiesce,
     /// Sending start-up request `n`.
     Configure(usize),
+    /// The `$45` power-down steps after the configuration (the `power_down` module).
+    PowerDown,
     /// Polling and driving.
     Online,
 }
@@ -164,6 +176,11 @@ pub struct TmcpackDriver {
     stamps: IoStamps,
     /// On a CAN link: its framing and the pack's command cache (`None` on a serial line).
     can: Option<can::CanLine>,
+    /// The `$45` power-down mode.
+    power: PowerDown,
+    /// A `$24` went out since the last query: the next `$24` waits for one (the PI
+    /// controller's targets take turns with the polls).
+    pi_since_poll: bool,
 }
 
 impl TmcpackDriver {
@@ -239,6 +256,8 @@ impl TmcpackDriver {
             budget,
             stamps: IoStamps::default(),
             can,
+            power: PowerDown::new(config.power_down),
+            pi_since_poll: false,
         }
     }
 
@@ -289,6 +308,18 @@ impl Driver for TmcpackDriver {
         self.budget
     }
 
+    /// A motor in the PI position mode follows a group's path with a `Position` goal per
+    /// change (`$24` reprograms the PI controller's target on the fly); the others with
+    /// `RampPosition` segments (`$26` moves a running ramp's target).
+    fn follow(&self, channel: usize) -> motion_drivers::Follow {
+        match self.channels.get(channel) {
+            Some(Some(c)) if c.cfg.position_mode == crate::PositionMode::Pi => {
+                motion_drivers::Follow::Setpoints
+            }
+            _ => motion_drivers::Follow::Segments,
+        }
+    }
+
     fn handle_rx(&mut self, now: Duration, bytes: &[u8]) {
         self.receive(now, bytes);
     }
@@ -318,9 +349,12 @@ impl Driver for TmcpackDriver {
     fn poll_timeout(&self) -> Option<Duration> {
         let phase = match self.phase {
             Phase::Identify => Some(self.retry_at),
-            Phase::Online => Some(self.reset_check_at),
+            Phase::Online => Some(
+                self.power_check_at()
+                    .map_or(self.reset_check_at, |at| at.min(self.reset_check_at)),
+            ),
             Phase::Quiesce => self.quiesce.as_ref().map(|q| q.deadline),
-            Phase::Down | Phase::Survey | Phase::Configure(_) => None,
+            Phase::Down | Phase::Survey | Phase::Configure(_) | Phase::PowerDown => None,
         };
         let rest = self
             .channels

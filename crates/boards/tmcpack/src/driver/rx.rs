@@ -1,14 +1,13 @@
 //! What the driver does with an answer, or with its absence.
 
-use core::fmt::Write as _;
 use core::time::Duration;
 
-use tmcpack::{DEFAULT_PACKET_TIMEOUT, Reply, Variant};
+use tmcpack::{DEFAULT_PACKET_TIMEOUT, Reply};
 
 use super::startup::Quiesce;
 use super::wire::{Expect, Purpose, Wire};
 use super::{MAX_TIMEOUTS, Phase, RESET_CHECK_PERIOD, RETRY_PERIOD, TmcpackDriver};
-use motion_drivers::{DeviceFault, FIRMWARE_LEN, Goal};
+use motion_drivers::{DeviceFault, Goal};
 
 impl TmcpackDriver {
     pub(super) fn on_timeout(&mut self, now: Duration) {
@@ -49,12 +48,13 @@ impl TmcpackDriver {
                 },
                 purpose,
             ) => {
-                self.set_firmware(firmware, serial);
+                self.on_unit_info(firmware, reset, serial);
                 let rebooted = reset && self.ever_online;
                 if rebooted {
                     self.status.resets = self.status.resets.saturating_add(1);
                     self.restart(DeviceFault::Reset);
                     self.assume_factory_line();
+                    self.describe();
                 }
                 match purpose {
                     Purpose::Startup => self.phase = Phase::Survey,
@@ -81,6 +81,7 @@ impl TmcpackDriver {
                 }
             }
             (reply @ Reply::Input { .. }, Purpose::Io) => self.io.on_input(now, reply),
+            (Reply::PowerDown { status }, Purpose::PowerDown) => self.on_power_down(now, status),
             (
                 Reply::Position {
                     motor,
@@ -105,23 +106,6 @@ impl TmcpackDriver {
                 self.status.bad_replies = self.status.bad_replies.saturating_add(1);
             }
         }
-    }
-
-    pub(super) fn set_firmware(&mut self, revision: u8, serial: u16) {
-        let mut text = motion_base::FixedText::<FIRMWARE_LEN>::new();
-        let name = match self.variant {
-            Variant::SixPack => "SIXpack",
-            Variant::QuadPack => "QUADpack",
-        };
-        // "firmware-revision (e.g. 148=V1.4.8)"
-        let _ = write!(
-            text,
-            "{name} V{}.{}.{} s/n {serial}",
-            revision / 100,
-            revision / 10 % 10,
-            revision % 10
-        );
-        self.status.set_firmware(text.as_str());
     }
 
     /// Bytes from the line: the answer to the query in flight, found among them.

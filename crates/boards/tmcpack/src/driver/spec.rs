@@ -152,7 +152,7 @@ fn channel_config(axis: &DriverAxis) -> Result<TmcpackChannel, SpecError> {
     let counts = |units: f64| (units * scale).round();
     let channel = axis.channel;
     let limits = axis.limits();
-    Ok(TmcpackChannel {
+    let mut config = TmcpackChannel {
         max_velocity: limits.max_velocity,
         max_accel: limits.max_accel,
         poslimit,
@@ -183,7 +183,10 @@ fn channel_config(axis: &DriverAxis) -> Result<TmcpackChannel, SpecError> {
             keys.analog_stop_right.unwrap_or(d.analog_stop.1),
         ),
         home_position: counts_to_i32_saturating(axis.home.position * cpu),
-    })
+        ..d
+    };
+    super::spec_drive::channel(axis, &keys, &mut config);
+    Ok(config)
 }
 
 fn level_text(l: CurrentLevel) -> String {
@@ -258,6 +261,7 @@ impl TmcpackDriverConfig {
                 })?;
         }
         driver.packet_timeout_units = Some(packet_timeout_units(&spec.machine, spec.line_rate));
+        super::spec_drive::device(&keys, &mut driver);
         let axes: usize = spec.bus.iter().map(|peer| peer.axes).sum();
         let input_polls = spec
             .bus
@@ -349,6 +353,7 @@ impl TmcpackDriverConfig {
             }
             .into(),
         );
+        self.drive_device_rows(&mut row);
         let pack = Variant::from(device_keys(&spec.machine).variant);
         for (a, axis) in spec.axes.iter().enumerate() {
             let Some(Some(ch)) = self.channels.get(axis.channel) else {
@@ -495,6 +500,7 @@ impl TmcpackDriverConfig {
                     right.to_string()
                 },
             );
+            self.drive_axis_rows(axis, ch, &mut |key, value| row(owner, key, value));
         }
         out
     }

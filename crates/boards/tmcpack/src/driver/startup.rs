@@ -2,7 +2,10 @@
 //! Parameter Setting"): switch-over delay, packet timeout, clkdiv, peak currents, and per
 //! motor current control, starting velocity/divider, vmax/amax, motor parameters, reference
 //! search parameters, null offset and analogue stop limits; then the ready output and the
-//! outputs. The same plan is sent again whenever the pack is seen to have reset.
+//! outputs. With `microstep_table` the four `$17` follow the peak currents, and a motor
+//! with `position_mode = "pi"` (or `pi` keys) gets its `$19` after its `$31`. The same plan
+//! is sent again whenever the pack is seen to have reset; the `$45` power-down steps
+//! follow it (the `power_down` module).
 //!
 //! Before it, the [`Quiesce`] step: `$12` ("change only with stopped motors!"), `$13` and
 //! `$16` ("change only with motors standing still") must not reach a motor that is still
@@ -30,9 +33,9 @@ use super::wire::{Pick, Purpose};
 use super::{Phase, RESET_CHECK_PERIOD, TmcpackDriver};
 use motion_drivers::DeviceFault;
 
-/// Most requests a start-up can need: $40, $41, $12, three $10, six motors × seven, $33,
-/// $32.
-pub(crate) const MAX_STARTUP: usize = 52;
+/// Most requests a start-up can need: $40, $41, $12, three $10, four $17, six motors ×
+/// eight ($19 with the PI controller), $33, $32; and room to spare.
+pub(crate) const MAX_STARTUP: usize = 64;
 
 /// The $15 motor type the driver writes: PiMode cleared (positions use the trapezoidal
 /// ramp), AutoNullCmd cleared (a search starts only with a `Home` goal).
@@ -109,6 +112,12 @@ impl StartupPlan {
                 });
             }
         }
+        if let Some(table) = &config.microstep_table {
+            // $17: "can be modified for all motors in common", four entries at a time.
+            for request in tmcpack::table::table_requests(table) {
+                push(request);
+            }
+        }
         for channel in channels.iter().flatten() {
             let motor = channel.motor;
             let (cfg, scale) = (channel.cfg, channel.scale);
@@ -148,6 +157,9 @@ impl StartupPlan {
                 left_min: cfg.analog_stop.0,
                 right_max: cfg.analog_stop.1,
             });
+            if let Some(pi) = cfg.written_pi() {
+                push(pi.request(motor));
+            }
         }
         if let Some(ready) = io.ready_request() {
             push(ready);
@@ -321,6 +333,7 @@ impl TmcpackDriver {
         self.status.fault = Some(fault);
         self.quiesce = None;
         self.line = None;
+        self.power.forget();
         for channel in self.channels.iter_mut().flatten() {
             channel.restart(fault);
         }

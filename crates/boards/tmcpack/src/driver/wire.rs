@@ -43,6 +43,8 @@ pub(crate) enum Purpose {
     Quiesce,
     /// $30 of the polling plan (inputs).
     Io,
+    /// $45: the power-down steps of the start-up, or the state check while online.
+    PowerDown,
 }
 
 /// Who may use the line.
@@ -232,7 +234,9 @@ impl TmcpackDriver {
         match self.phase {
             Phase::Down => None,
             Phase::Identify => (now >= self.retry_at).then_some(Priority::Setup),
-            Phase::Survey | Phase::Quiesce | Phase::Configure(_) => Some(Priority::Setup),
+            Phase::Survey | Phase::Quiesce | Phase::Configure(_) | Phase::PowerDown => {
+                Some(Priority::Setup)
+            }
             Phase::Online if self.channels.iter().flatten().any(Channel::urgent) => {
                 Some(Priority::Stop)
             }
@@ -245,7 +249,8 @@ impl TmcpackDriver {
             }
             Phase::Online => {
                 let polls = self.channels.iter().any(Option::is_some) || self.io.polls();
-                (polls || now >= self.reset_check_at).then_some(Priority::Poll)
+                (polls || now >= self.reset_check_at || self.power_check_due(now))
+                    .then_some(Priority::Poll)
             }
         }
     }
@@ -300,6 +305,7 @@ impl TmcpackDriver {
                 Purpose::Survey,
             )),
             Phase::Quiesce => self.pick_quiesce(now),
+            Phase::PowerDown => Some(self.pick_power_down()),
             Phase::Configure(index) => {
                 let request = self.resolve(self.plan.get(index)?);
                 Some(Pick {
@@ -350,6 +356,11 @@ impl TmcpackDriver {
                 None,
                 Purpose::ResetCheck,
             ));
+        }
+        if urgent.is_none()
+            && let Some(pick) = self.pick_power_check(now)
+        {
+            return Some(pick);
         }
         let slot = urgent.or_else(|| {
             (0..=IO_SLOT)
@@ -420,6 +431,11 @@ impl TmcpackDriver {
             }
             _ => {}
         }
+        match (pick.expect, request) {
+            (_, Request::PiTarget { .. }) => self.pi_since_poll = true,
+            (Some(_), _) => self.pi_since_poll = false,
+            _ => {}
+        }
         match pick.expect {
             Some(expect) => {
                 self.hunter.reset();
@@ -450,7 +466,7 @@ impl TmcpackDriver {
                 if self.plan.get(next).is_some() {
                     self.phase = Phase::Configure(next);
                 } else {
-                    self.go_online(now);
+                    self.configured(now);
                 }
             }
             _ => {}

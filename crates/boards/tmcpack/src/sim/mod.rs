@@ -47,8 +47,19 @@
 //! - CAN (6.2) is the `can` module: the pack is a
 //!   [`CanDevice`](motion_link::sim::CanDevice) too, with its 16-command cache at 2 ms a
 //!   command; the first valid CAN instruction ends RS-232 / RS-485 control until a reset.
-//! - Not modelled: RS-232 forwarding via CAN (6.3; `$44` only stores its settings), the
-//!   microstep table's effect on the current ($17 is stored), thermal
+//! - Power-down ($45, "Version 1.46 and since Version 1.49": a firmware revision without it
+//!   ignores the word): below [`TmcpackSimConfig::power_down_volts`] the pack enters its
+//!   power-down state whether or not bit 2 activated the mode ("The power down state is
+//!   independent of bit 2"); activated, it stops every motor at once, saves the positions
+//!   in EEPROM (they survive resets and power cycles) and holds the motors (no coil
+//!   current, motion commands ignored) until bit 3 resets the state above the level. The
+//!   bits of one `$45` are handled in the order load, invalidate, activate, reset (the
+//!   manual gives none). [`TmcpackSim::power_outage`] is a supply falling to nothing and
+//!   coming back.
+//! - `$17`: the table sets the coil currents ([`MotorView::coils`]): the lower 5 bits of
+//!   the position point into the 16 entries and their mirror, coil B 16 microsteps on
+//!   (`tmcpack::table`); the rotor's motion does not depend on it.
+//! - Not modelled: RS-232 forwarding via CAN (6.3; `$44` only stores its settings), thermal
 //!   shutdown. The $F2/$F6 magic codes are not published; the config holds invented ones.
 
 mod can;
@@ -121,6 +132,9 @@ pub struct MotorView {
     pub switch_active: bool,
     /// Coil current, A.
     pub coil_current_amps: f64,
+    /// Coil A's and coil B's share of that current as the `$17` table gives it at the
+    /// position (signed, −255..=255: `tmcpack::table::coil_currents`).
+    pub coils: (i16, i16),
 }
 
 /// The simulated pack.
@@ -224,6 +238,7 @@ impl TmcpackSim {
             stop_flag: m.stop_flag,
             switch_active: m.switch_active,
             coil_current_amps: m.current_amps,
+            coils: tmcpack::table::coil_currents(&self.st.table, m.pos),
         })
     }
 
@@ -269,6 +284,11 @@ impl TmcpackSim {
     /// Motor positions saved in EEPROM by the power-down mode, if valid.
     pub fn saved_positions(&self) -> Option<[i32; 6]> {
         self.nv.saved_positions
+    }
+
+    /// The `$17` motor characteristics table in use (the lower half, common to all motors).
+    pub fn microstep_table(&self) -> [u8; 16] {
+        self.st.table
     }
 
     /// `true` while undervoltage has put the pack in the power-down state.
@@ -339,6 +359,17 @@ impl TmcpackSim {
         self.hardware_reset(now);
     }
 
+    /// A power outage at `now`: the supply falls through the power-down level (with `$45`
+    /// bit 2 activated the pack stops its motors and saves their positions, manual 8.6),
+    /// goes off, and comes back at its former voltage: the pack boots as after
+    /// [`power_cycle`](Self::power_cycle), the rotors where the outage left them.
+    pub fn power_outage(&mut self, now: Duration) {
+        let volts = self.supply_volts;
+        self.set_supply_volts(now, 0.0);
+        self.supply_volts = volts;
+        self.power_cycle(now);
+    }
+
     /// Advances the motors to `now` (also done by every wire call).
     pub fn advance(&mut self, now: Duration) {
         let mut next = match self.next_tick {
@@ -382,9 +413,16 @@ impl TmcpackSim {
     fn ctx(&self, i: usize) -> TickCtx {
         let value = self.st.peak.get(i / 2).copied().unwrap_or(0);
         let dip = self.cfg.quadpack_dip_percent.get(i).copied().unwrap_or(100);
+        // The power-down state holds the motors ("re-enable the motors", $45 bit 3): no
+        // coil current until it is reset.
+        let enabled = self.motors_enabled();
         TickCtx {
             clkdiv: self.st.clkdiv,
-            peak_amps: self.cfg.variant.peak_current_amps(value, dip),
+            peak_amps: if enabled {
+                self.cfg.variant.peak_current_amps(value, dip)
+            } else {
+                0.0
+            },
         }
     }
 
@@ -518,6 +556,13 @@ impl TmcpackSim {
             return;
         }
         match RequestFrame::decode(&w) {
+            // "(Version 1.46 and since Version 1.49)": older firmware has no $45.
+            Ok(f)
+                if matches!(f.request, tmcpack::Request::PowerDown { .. })
+                    && !tmcpack::power_down_supported(self.cfg.firmware_revision) =>
+            {
+                self.stats.invalid += 1;
+            }
             Ok(f)
                 if f.request
                     .motor()

@@ -58,7 +58,7 @@ impl PackState {
             address,
             clkdiv: 5,
             peak: [128; 3],
-            table: default_table(),
+            table: tmcpack::table::SINE_TABLE,
             ttlout1: false,
             ttlio1_is_input: true,
             ttlio1_out: false,
@@ -79,16 +79,6 @@ impl PackState {
             delayed: None,
         }
     }
-}
-
-/// 8.3 $17: "Default-table: 255 * SIN([0.5..15.5]/32*PI)".
-fn default_table() -> [u8; 16] {
-    let mut t = [0u8; 16];
-    for (i, slot) in t.iter_mut().enumerate() {
-        let x = (i as f64 + 0.5) / 32.0 * core::f64::consts::PI;
-        *slot = (255.0 * x.sin()).round() as u8;
-    }
-    t
 }
 
 /// EEPROM and flash: they survive $CC and power cycles.

@@ -305,6 +305,8 @@ impl Validator<'_, '_> {
                 .as_ref()
                 .and_then(|home| home.get_ref().position.as_ref())
                 .map(|position| (*position.get_ref(), position.span())),
+            max_velocity,
+            max_accel,
         };
         let machine = match spec {
             Some(spec) if fits => self.axis_machine(&ctx, spec.model, &keys, &spec.machine),
