@@ -180,17 +180,32 @@ pub(crate) fn cross_check(
         return;
     };
     let dkey = |k: &str| format!("device[{}].{k}", device.index);
-    if let Some(value) = &raw.compare_position
-        && machine.axes_on(index).next().is_none()
-    {
-        v.issue(
-            value.span(),
-            &dkey("compare_position"),
-            format!(
-                "is in the units of the axis on device `{}` (its counts_per_unit converts it to DTR counts), and the device has no axis",
-                device.name
+    if let Some(value) = &raw.compare_position {
+        let position = *value.get_ref();
+        match machine.axes_on(index).next() {
+            None => v.issue(
+                value.span(),
+                &dkey("compare_position"),
+                format!(
+                    "is in the units of the axis on device `{}` (its counts_per_unit converts it to DTR counts), and the device has no axis",
+                    device.name
+                ),
             ),
-        );
+            Some(axis) if (position * axis.counts_per_unit).abs() > f64::from(i32::MAX) => {
+                v.issue(
+                    value.span(),
+                    &dkey("compare_position"),
+                    format!(
+                        "{position} {} is {} counts at counts_per_unit = {} of axis `{}`: beyond the 32-bit counter (DTR)",
+                        axis.unit,
+                        (position * axis.counts_per_unit).round(),
+                        axis.counts_per_unit,
+                        axis.name
+                    ),
+                );
+            }
+            Some(_) => {}
+        }
     }
     if keys.input_mode.unwrap_or_default() != QsbInputMode::Quadrature {
         let set = [

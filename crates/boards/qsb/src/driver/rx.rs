@@ -416,7 +416,10 @@ impl QsbDriver {
 
     /// Channel state of channel 0.
     pub(super) fn channel_state(&self) -> ChannelState {
+        // A move paused by COMMAND 6 waits for its resume: it moves only while the drive
+        // still decelerates.
         let motion_pending = !self.goal.is_empty()
+            && self.goal.front() != Some(Step::Paused)
             && matches!(
                 self.goal_kind,
                 Some(
