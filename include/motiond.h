@@ -1078,7 +1078,7 @@ static inline const char *motiond_reason_text(uint32_t value) {
     case MOTIOND_REASON_DEVICE_STARTING: return "the axis's board is starting: its link is not open yet, or it awaits its first answer and its start-up stop";
     case MOTIOND_REASON_DEVICE_OFFLINE: return "the axis's board is not answering";
     case MOTIOND_REASON_UNKNOWN_SIGNAL: return "no such signal on this server";
-    case MOTIOND_REASON_NOT_AN_OUTPUT: return "the signal is not a digital output";
+    case MOTIOND_REASON_NOT_AN_OUTPUT: return "the signal is not an output (a digital output, or a trigger's compare position)";
     case MOTIOND_REASON_UNKNOWN_TARGET: return "unknown target: 0 = axis, 1 = signal, 2 = group";
     case MOTIOND_REASON_UNKNOWN_GROUP: return "no such group on this server";
     case MOTIOND_REASON_NO_PATH: return "no path with this id for this group was published by this client on `paths` (publish it first; a path runs once)";

@@ -258,7 +258,8 @@ pub enum Reason {
     DeviceOffline = 20,
     /// `axis` is not a signal of this server (for a signal request).
     UnknownSignal = 21,
-    /// The signal is not a digital output.
+    /// The signal is not an output: neither a digital output nor a trigger (whose value
+    /// is its compare position).
     NotAnOutput = 22,
     /// `target` is not a known [`Target`].
     UnknownTarget = 23,
@@ -363,7 +364,9 @@ impl Reason {
             }
             Self::DeviceOffline => "the axis's board is not answering",
             Self::UnknownSignal => "no such signal on this server",
-            Self::NotAnOutput => "the signal is not a digital output",
+            Self::NotAnOutput => {
+                "the signal is not an output (a digital output, or a trigger's compare position)"
+            }
             Self::UnknownTarget => "unknown target: 0 = axis, 1 = signal, 2 = group",
             Self::UnknownGroup => "no such group on this server",
             Self::NoPath => {

@@ -718,7 +718,10 @@ class Reason(ReasonMethods, TextedEnum):
     )
     DEVICE_OFFLINE = 20, "the axis's board is not answering"
     UNKNOWN_SIGNAL = 21, "no such signal on this server"
-    NOT_AN_OUTPUT = 22, "the signal is not a digital output"
+    NOT_AN_OUTPUT = (
+        22,
+        "the signal is not an output (a digital output, or a trigger's compare position)",
+    )
     UNKNOWN_TARGET = 23, "unknown target: 0 = axis, 1 = signal, 2 = group"
     UNKNOWN_GROUP = 24, "no such group on this server"
     NO_PATH = (
