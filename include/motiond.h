@@ -249,7 +249,9 @@ enum motiond_fault_code {
 enum motiond_signal_kind {
     MOTIOND_SIGNAL_KIND_DIGITAL_IN = 1,
     MOTIOND_SIGNAL_KIND_DIGITAL_OUT = 2,
-    MOTIOND_SIGNAL_KIND_ANALOG_IN = 3
+    MOTIOND_SIGNAL_KIND_ANALOG_IN = 3,
+    MOTIOND_SIGNAL_KIND_CAPTURE = 4,
+    MOTIOND_SIGNAL_KIND_TRIGGER = 5
 };
 
 /**
@@ -343,7 +345,8 @@ enum motiond_axis_flags {
     MOTIOND_AXIS_FLAGS_CLAIMED = 1 << 5,
     MOTIOND_AXIS_FLAGS_ARRIVED = 1 << 6,
     MOTIOND_AXIS_FLAGS_ESTOPPED = 1 << 7,
-    MOTIOND_AXIS_FLAGS_DEADMAN_EXPIRED = 1 << 8
+    MOTIOND_AXIS_FLAGS_DEADMAN_EXPIRED = 1 << 8,
+    MOTIOND_AXIS_FLAGS_HELD = 1 << 9
 };
 
 /** Bits of motiond_motion_frame_t.flags. */
@@ -464,12 +467,23 @@ MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_axis_state_t) == 8, "motiond_axis_
 /**
  * One signal in a frame.
  *
- * 48 bytes, alignment 8; iceoryx2 type name "motiond::SignalState".
+ * A `capture` or `trigger` signal also carries events: every capture (every trigger pulse) the
+ * board reports adds one to `sequence`, and `event_tick` is the tick that took the newest one
+ * in. Two events taken in by the same tick show as a step of two (the value is the newer
+ * one's): a client that remembers the sequence it last saw knows how many it missed.
+ *
+ * 64 bytes, alignment 8; iceoryx2 type name "motiond::SignalState".
  */
 typedef struct motiond_signal_state {
-    /** Logical value: digital 0.0/1.0 after `invert`; analogue raw × scale + offset. */
+    /**
+     * Logical value: digital 0.0/1.0 after `invert`; analogue, capture and trigger raw × scale
+     * + offset (a capture: the captured position; a trigger: its compare position).
+     */
     double value; /* offset 0 */
-    /** Raw value as the board reports it: electrical level 0/1, or ADC counts. */
+    /**
+     * Raw value as the board reports it: electrical level 0/1, ADC counts, or counter counts
+     * (capture, trigger).
+     */
     double raw; /* offset 8 */
     /** Tick at which the board last reported it (outputs: acknowledged it). */
     uint64_t last_refresh_tick; /* offset 16 */
@@ -478,8 +492,16 @@ typedef struct motiond_signal_state {
     uint8_t reserved[3]; /**< Zero. (offset 29) */
     /** Claim holder of an output; zero when unclaimed. */
     motiond_client_id_t claimed_by; /* offset 32 */
+    /** Tick that took in the newest event (capture, trigger pulse); 0 before the first. */
+    uint64_t event_tick; /* offset 48 */
+    /**
+     * Events (captures, trigger pulses) the board reported since the server started, wrapping
+     * at 2³²; 0 for the other kinds.
+     */
+    uint32_t sequence; /* offset 56 */
+    uint32_t reserved2; /**< Zero. (offset 60) */
 } motiond_signal_state_t;
-MOTIOND_STATIC_ASSERT(sizeof(motiond_signal_state_t) == 48, "motiond_signal_state_t size");
+MOTIOND_STATIC_ASSERT(sizeof(motiond_signal_state_t) == 64, "motiond_signal_state_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_signal_state_t) == 8, "motiond_signal_state_t alignment");
 
 /**
@@ -567,7 +589,7 @@ MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_group_state_t) == 8, "motiond_grou
  * One consistent snapshot of every axis, board and signal, published once per tick on
  * `motiond/<name>/frame`.
  *
- * 20944 bytes, alignment 8; iceoryx2 type name "motiond::MotionFrame".
+ * 21968 bytes, alignment 8; iceoryx2 type name "motiond::MotionFrame".
  */
 typedef struct motiond_motion_frame {
     uint32_t schema_version; /**< MOTIOND_SCHEMA_VERSION of the writer. (offset 0) */
@@ -594,11 +616,11 @@ typedef struct motiond_motion_frame {
      * Per axis (same index as `axes`): when its current goal was set and when its first request
      * reached the wire.
      */
-    motiond_axis_wire_t wire[MOTIOND_MAX_AXES]; /* offset 15440 */
+    motiond_axis_wire_t wire[MOTIOND_MAX_AXES]; /* offset 16464 */
     /** Groups in config order; entries past `group_count` are motiond_group_state_t.IDLE. */
-    motiond_group_state_t groups[MOTIOND_MAX_GROUPS]; /* offset 18512 */
+    motiond_group_state_t groups[MOTIOND_MAX_GROUPS]; /* offset 19536 */
 } motiond_motion_frame_t;
-MOTIOND_STATIC_ASSERT(sizeof(motiond_motion_frame_t) == 20944, "motiond_motion_frame_t size");
+MOTIOND_STATIC_ASSERT(sizeof(motiond_motion_frame_t) == 21968, "motiond_motion_frame_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_motion_frame_t) == 8, "motiond_motion_frame_t alignment");
 
 /**
@@ -1061,7 +1083,7 @@ static inline const char *motiond_reason_text(uint32_t value) {
     case MOTIOND_REASON_DEVICE_STARTING: return "the axis's board is starting: its link is not open yet, or it awaits its first answer and its start-up stop";
     case MOTIOND_REASON_DEVICE_OFFLINE: return "the axis's board is not answering";
     case MOTIOND_REASON_UNKNOWN_SIGNAL: return "no such signal on this server";
-    case MOTIOND_REASON_NOT_AN_OUTPUT: return "the signal is not a digital output";
+    case MOTIOND_REASON_NOT_AN_OUTPUT: return "the signal is not an output (a digital output, or a trigger's compare position)";
     case MOTIOND_REASON_UNKNOWN_TARGET: return "unknown target: 0 = axis, 1 = signal, 2 = group";
     case MOTIOND_REASON_UNKNOWN_GROUP: return "no such group on this server";
     case MOTIOND_REASON_NO_PATH: return "no path with this id for this group was published by this client on `paths` (publish it first; a path runs once)";
@@ -1069,7 +1091,7 @@ static inline const char *motiond_reason_text(uint32_t value) {
     case MOTIOND_REASON_PATH_START: return "the path's first point has time 0 but is not where the group is";
     case MOTIOND_REASON_PATH_LAYOUT: return "malformed path: no points, too many, an axis count other than the group's, an unknown kind, or a scale outside (0, 1]";
     case MOTIOND_REASON_GROUP_BUSY: return "an axis of this request is moving (with a group, or on its own, still stopping): cancel that motion or wait for the axis to rest";
-    case MOTIOND_REASON_NOT_MOVING: return "the group has no motion running";
+    case MOTIOND_REASON_NOT_MOVING: return "the group has no motion running, or the axis no position move to hold or held move to resume";
     case MOTIOND_REASON_BLEND_TOLERANCE: return "positions alone cannot be blended at this point within the axis's path_tolerance at its max_accel: space the points further apart, or send velocities";
     default: return NULL;
     }
@@ -1112,6 +1134,8 @@ static inline const char *motiond_signal_kind_text(uint32_t value) {
     case MOTIOND_SIGNAL_KIND_DIGITAL_IN: return "digital-in";
     case MOTIOND_SIGNAL_KIND_DIGITAL_OUT: return "digital-out";
     case MOTIOND_SIGNAL_KIND_ANALOG_IN: return "analog-in";
+    case MOTIOND_SIGNAL_KIND_CAPTURE: return "capture";
+    case MOTIOND_SIGNAL_KIND_TRIGGER: return "trigger";
     default: return NULL;
     }
 }

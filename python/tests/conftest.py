@@ -18,7 +18,7 @@ import signal
 import subprocess
 import time
 from pathlib import Path
-from typing import Any, Dict, Iterator, List
+from typing import Any, Callable, Dict, Iterator, List
 
 import pytest
 
@@ -107,10 +107,11 @@ def sim_config(repo: Path, name: str) -> str:
     return text
 
 
-def start_server(tmp: Path, name: str) -> Server:
-    """Starts motiond on the simulated robot and waits until every device is online."""
+def start_server(tmp: Path, name: str, edit: Callable[[str], str] = lambda text: text) -> Server:
+    """Starts motiond on the simulated robot (its config changed by ``edit``) and waits
+    until every device is online."""
     config = tmp / f"{name}.toml"
-    config.write_text(sim_config(REPO, name))
+    config.write_text(edit(sim_config(REPO, name)))
     server = Server(name, config, tmp / f"{name}.log")
     deadline = time.monotonic() + 30.0
     while True:

@@ -39,11 +39,26 @@ pub enum SignalKind {
     /// An analogue input (ADC counts on the board): value = raw × scale + offset, in the
     /// signal's unit.
     AnalogIn = 3,
+    /// A position captured by the board on an event (an input edge, an index): value = the
+    /// captured count × scale + offset; every capture the board reports counts one in the
+    /// signal's `sequence`, with the tick that took it in.
+    Capture = 4,
+    /// A position-triggered output (the board pulses a line when its counter matches a
+    /// compare position, or at an index, an underflow, an overflow): value = the compare
+    /// position (counts × scale + offset), set with `SetOutput`; every pulse the board
+    /// reports counts one in the signal's `sequence`.
+    Trigger = 5,
 }
 
 impl SignalKind {
     /// Every kind.
-    pub const ALL: [Self; 3] = [Self::DigitalIn, Self::DigitalOut, Self::AnalogIn];
+    pub const ALL: [Self; 5] = [
+        Self::DigitalIn,
+        Self::DigitalOut,
+        Self::AnalogIn,
+        Self::Capture,
+        Self::Trigger,
+    ];
 
     /// The config and CLI name (`kind = "digital-in"`).
     #[must_use]
@@ -52,6 +67,8 @@ impl SignalKind {
             Self::DigitalIn => "digital-in",
             Self::DigitalOut => "digital-out",
             Self::AnalogIn => "analog-in",
+            Self::Capture => "capture",
+            Self::Trigger => "trigger",
         }
     }
 }
@@ -88,7 +105,8 @@ mod tests {
             assert_eq!(SignalKind::try_from(kind as u8), Ok(kind));
         }
         assert_eq!(SignalKind::try_from(0), Err(UnknownKind(0)));
-        assert_eq!(SignalKind::try_from(4), Err(UnknownKind(4)));
+        assert_eq!(SignalKind::try_from(6), Err(UnknownKind(6)));
+        assert_eq!(SignalKind::Capture.name(), "capture");
         assert_eq!(SignalKind::AnalogIn.name(), "analog-in");
         assert_eq!(LinkKind::Spi.to_string(), "spi");
     }

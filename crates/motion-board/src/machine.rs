@@ -62,6 +62,10 @@ pub struct AxisView<'a> {
     pub device: usize,
     /// The channel it drives.
     pub channel: usize,
+    /// Its `counts_per_unit` (board counts per unit of its positions).
+    pub counts_per_unit: f64,
+    /// Its unit.
+    pub unit: &'a str,
     /// The whole table.
     pub table: Span,
     /// Where its `device` key was written.

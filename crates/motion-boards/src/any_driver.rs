@@ -164,6 +164,14 @@ macro_rules! registry {
             ) -> Result<(), motion_drivers::GoalError> {
                 each_driver!(self, d => d.set_output(now, pin, high))
             }
+            fn set_pin_value(
+                &mut self,
+                now: core::time::Duration,
+                pin: motion_drivers::Pin,
+                value: f64,
+            ) -> Result<(), motion_drivers::GoalError> {
+                each_driver!(self, d => d.set_pin_value(now, pin, value))
+            }
         }
     };
 }

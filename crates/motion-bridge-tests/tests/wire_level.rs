@@ -65,7 +65,7 @@ fn frames_are_decimated_and_every_sample_says_which_server_wrote_it() -> Result 
     while ticks.len() < 12 {
         let sample = frames.recv_timeout(DEADLINE).z()?.ok_or("no frame")?;
         let bytes = sample.payload().to_bytes();
-        assert_eq!(bytes.len(), 20944, "the C layout of MotionFrame");
+        assert_eq!(bytes.len(), 21968, "the C layout of MotionFrame");
         let frame = wire::decode::<MotionFrame>(&bytes)?;
         assert_eq!(frame.axes().len(), 3);
         let origin = Origin::decode(&sample.attachment().ok_or("no origin")?.to_bytes());

@@ -110,6 +110,21 @@ impl<'c, S: Service> Axis<'c, S> {
         self.command(CommandKind::Home, [velocity, 0.0, 0.0])
     }
 
+    /// Brings the axis's position move (`position`, `ramp_to`) to rest and keeps it
+    /// (`Hold` with the axis as target): the QSB-M pauses its own move (COMMAND 6), any
+    /// other board stops at the move's acceleration. The frame flags the axis `HELD` until
+    /// [`resume`](Self::resume), a stop or another goal. Refused with `NotMoving` when the
+    /// axis has no position move on its way (a jog is stopped, not held).
+    pub fn hold(&self) -> Result<Accepted, ClientError> {
+        self.command(CommandKind::Hold, [0.0; 3])
+    }
+
+    /// Continues the move [`hold`](Self::hold) brought to rest, to its target with its
+    /// velocity and acceleration. Refused with `NotMoving` when nothing is held.
+    pub fn resume(&self) -> Result<Accepted, ClientError> {
+        self.command(CommandKind::Resume, [0.0; 3])
+    }
+
     /// Declares the current position to be `position` (no motion).
     pub fn set_position(&self, position: f64) -> Result<Accepted, ClientError> {
         self.command(CommandKind::SetPosition, [position, 0.0, 0.0])

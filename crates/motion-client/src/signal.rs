@@ -1,4 +1,5 @@
-//! [`Signal`]: one board I/O signal of the server (`[[signal]]` in its config), by handle.
+//! [`Signal`]: one board I/O signal of the server (`[[signal]]` in its config), by handle,
+//! and the events of capture and trigger signals ([`SignalEvent`]).
 
 use core::time::Duration;
 use std::time::Instant;
@@ -52,6 +53,23 @@ impl<S: Service> Client<S> {
             })
             .collect()
     }
+}
+
+/// A capture's or a trigger pulse's event, as [`Signal::wait_event`] found it in a frame.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SignalEvent {
+    /// The signal's sequence: events since the server started (wrapping at 2³²).
+    pub sequence: u32,
+    /// The tick that took the event in.
+    pub tick: u64,
+    /// The signal's value then: a capture's position, a trigger's compare position.
+    pub value: f64,
+    /// Its raw value (counter counts).
+    pub raw: f64,
+    /// Events between the sequence waited after and this one that no frame showed
+    /// apart (two taken in by one tick, or frames this client did not read): 0 when
+    /// this is the next one.
+    pub missed: u32,
 }
 
 /// A value as words: "on", "off", "1.25 bar".
@@ -123,6 +141,37 @@ impl<'c, S: Service> Signal<'c, S> {
     /// holds it, `EstopLatched` while the e-stop holds outputs in their safe state.
     pub fn set(&self, on: bool) -> Result<Accepted, ClientError> {
         self.command(CommandKind::SetOutput, if on { 1.0 } else { 0.0 })
+    }
+
+    /// Sets a trigger's compare position (`SetOutput` on a `trigger` signal), in the
+    /// signal's unit (by default the axis's): the board pulses its output when the count
+    /// matches it. Refused with `NotAnOutput` for any other kind, `OutOfRange` for a
+    /// position the board's counter cannot hold, `Unsupported` when the trigger does not
+    /// fire on "match".
+    pub fn set_value(&self, value: f64) -> Result<Accepted, ClientError> {
+        self.command(CommandKind::SetOutput, value)
+    }
+
+    /// The signal's sequence in the newest frame: captures or trigger pulses since the
+    /// server started (0 for other kinds). Pass it to [`wait_event`](Self::wait_event).
+    pub fn sequence(&self) -> Result<u32, ClientError> {
+        Ok(self.state()?.sequence)
+    }
+
+    /// Waits for the next event (a capture, a trigger pulse) after sequence `after`: the
+    /// first frame whose sequence differs from it. [`SignalEvent::missed`] counts the
+    /// events in between that no frame showed apart (only the newest value of a tick is
+    /// in the frame). Times out with `SignalTimeout`.
+    pub fn wait_event(&self, after: u32, timeout: Duration) -> Result<SignalEvent, ClientError> {
+        let wanted = format!("an event after sequence {after}");
+        let state = self.wait_described(&wanted, timeout, |state| state.sequence != after)?;
+        Ok(SignalEvent {
+            sequence: state.sequence,
+            tick: state.event_tick,
+            value: state.value,
+            raw: state.raw,
+            missed: state.events_since(after).saturating_sub(1),
+        })
     }
 
     /// Takes an exclusive claim on the output: other clients' `set` is then refused.

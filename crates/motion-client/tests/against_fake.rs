@@ -107,6 +107,32 @@ fn ramp_to_then_wait_until_arrived() -> Result {
 }
 
 #[test]
+fn a_move_held_stays_and_resumes_to_its_target() -> Result {
+    let (_server, client) = start::<local::Service>("hold")?;
+    let x = client.axis("x")?;
+    let error = x.hold().expect_err("nothing moves");
+    assert_eq!(error.reason(), Some(Reason::NotMoving));
+    x.ramp_to(90.0, 10.0, 0.0)?;
+    std::thread::sleep(Duration::from_millis(100));
+    x.hold()?;
+    let state = x.state()?;
+    assert!(state.flags().contains(AxisFlags::HELD), "{state:?}");
+    assert!(state.position < 90.0);
+    let error = x
+        .ramp_to(0.0, 0.0, 0.0)
+        .and_then(|_| x.resume())
+        .expect_err("forgotten");
+    assert_eq!(error.reason(), Some(Reason::NotMoving));
+    x.ramp_to(20.0, 50.0, 0.0)?;
+    std::thread::sleep(Duration::from_millis(20));
+    x.hold()?;
+    x.resume()?;
+    x.wait_until_arrived(WAIT)?;
+    assert_eq!(x.state()?.position, 20.0);
+    Ok(())
+}
+
+#[test]
 fn out_of_limit_is_refused_with_reason_and_nothing_moves() -> Result {
     let (server, client) = start::<local::Service>("limit")?;
     let x = client.axis("x")?;

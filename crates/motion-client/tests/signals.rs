@@ -124,3 +124,73 @@ fn a_claimed_output_refuses_other_clients_until_released() -> Result {
     second.signal("lamp")?.set(false)?;
     Ok(())
 }
+
+/// The demo machine with a probe (capture) and a camera trigger on `aux`, in mm.
+fn start_with_events() -> Result<(FakeServer, Client<local::Service>)> {
+    use motion_client::testing::FakeSignal;
+    let mut config = FakeConfig::demo(&unique_name("events"));
+    for (name, pin, kind) in [
+        ("probe", "capture", SignalKind::Capture),
+        ("camera", "trigger", SignalKind::Trigger),
+    ] {
+        let mut signal = FakeSignal::analog(name, 1, pin, "mm", 0.01, 0.0);
+        signal.kind = kind;
+        config.signals.push(signal);
+    }
+    let server = FakeServer::start::<local::Service>(config)?;
+    let client = Client::<local::Service>::connect(server.name())?;
+    Ok((server, client))
+}
+
+#[test]
+fn captures_are_waited_for_as_events_and_missed_ones_are_counted() -> Result {
+    let (server, client) = start_with_events()?;
+    let probe = client.signal("probe")?;
+    assert_eq!(probe.kind(), Some(SignalKind::Capture));
+    let seen = probe.sequence()?;
+    assert_eq!(seen, 0);
+    let quiet = probe
+        .wait_event(seen, Duration::from_millis(100))
+        .expect_err("no capture yet");
+    assert!(
+        quiet.to_string().contains("an event after sequence 0"),
+        "{quiet}"
+    );
+    server.capture(4, 1234.0);
+    let event = probe.wait_event(seen, WAIT)?;
+    assert_eq!((event.sequence, event.missed), (1, 0));
+    assert!((event.value - 12.34).abs() < 1e-9, "{event:?}");
+    assert!(event.tick > 0);
+    // Two before the client looks again: the second, and one missed.
+    server.capture(4, 100.0);
+    server.capture(4, 200.0);
+    let event = probe.wait_until(WAIT, |state| state.sequence == 3)?;
+    assert_eq!(event.events_since(1), 2);
+    let event = probe.wait_event(1, WAIT)?;
+    assert_eq!((event.sequence, event.missed, event.value), (3, 1, 2.0));
+    Ok(())
+}
+
+#[test]
+fn a_trigger_s_compare_position_is_set_and_a_capture_refuses_it() -> Result {
+    let (_server, client) = start_with_events()?;
+    let camera = client.signal("camera")?;
+    camera.set_value(62.5)?;
+    let state = camera.wait_within(62.5, 1e-9, WAIT)?;
+    assert_eq!(state.raw, 6250.0);
+    let refused = client
+        .signal("probe")?
+        .set_value(1.0)
+        .expect_err("an input");
+    assert!(
+        matches!(
+            refused,
+            ClientError::Refused {
+                reason: Reason::NotAnOutput,
+                ..
+            }
+        ),
+        "{refused:?}"
+    );
+    Ok(())
+}

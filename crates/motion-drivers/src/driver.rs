@@ -273,6 +273,16 @@ pub trait Driver: Send + fmt::Debug {
         let _ = (now, high);
         Err(GoalError::NoSuchPin(pin))
     }
+
+    /// Sets the value of a pin that holds a number rather than a level — the compare
+    /// position of a trigger pin, in counts (what [`read_pin`](Self::read_pin) reports
+    /// back once the board holds it). Errors: `NoSuchPin` for a pin without such a value,
+    /// `OutOfBoardRange` for a value the board cannot hold, `Offline` / `Starting` while
+    /// the board is not online.
+    fn set_pin_value(&mut self, now: Duration, pin: Pin, value: f64) -> Result<(), GoalError> {
+        let _ = (now, value);
+        Err(GoalError::NoSuchPin(pin))
+    }
 }
 
 /// A boxed driver is a driver: tests and tools hold drivers of any board as
@@ -361,5 +371,8 @@ impl<T: Driver + ?Sized> Driver for Box<T> {
     }
     fn set_output(&mut self, now: Duration, pin: Pin, high: bool) -> Result<(), GoalError> {
         (**self).set_output(now, pin, high)
+    }
+    fn set_pin_value(&mut self, now: Duration, pin: Pin, value: f64) -> Result<(), GoalError> {
+        (**self).set_pin_value(now, pin, value)
     }
 }

@@ -7,7 +7,8 @@
 //! config uses (`pin = "ttlio1"`). A [`Pin`] is the index into that table, so it means
 //! something only together with its board's model. Values are raw: 0.0 / 1.0 for a digital
 //! pin as the board reports its electrical level (no inversion), the ADC count for an
-//! analogue one. Scaling, offsets and inversion are the engine's business.
+//! analogue one, the counter's count for a capture or a trigger's compare position.
+//! Scaling, offsets and inversion are the engine's business.
 
 use core::time::Duration;
 
@@ -73,11 +74,16 @@ pub fn find_pin(table: &[PinInfo], name: &str) -> Option<Pin> {
 /// The last value a driver knows for a pin.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PinReading {
-    /// Raw value: 0.0 / 1.0 (electrical level) or ADC counts.
+    /// Raw value: 0.0 / 1.0 (electrical level), ADC counts, or counter counts (a capture,
+    /// a trigger's compare position).
     pub value: f64,
     /// When the board last reported it (`None`: never). For an output without a read-back,
     /// when the board acknowledged the last write.
     pub refreshed_at: Option<Duration>,
+    /// Events the board reported on the pin since the driver was made — captures of a
+    /// capture pin, pulses of a trigger pin —, wrapping at 2³²; 0 for other pins. Only
+    /// ever counts up: a board reset does not restart it.
+    pub events: u32,
 }
 
 impl PinReading {
@@ -85,7 +91,17 @@ impl PinReading {
     pub const UNKNOWN: Self = Self {
         value: 0.0,
         refreshed_at: None,
+        events: 0,
     };
+
+    /// A reading of `value` reported at `refreshed_at`, no events.
+    pub const fn at(value: f64, refreshed_at: Option<Duration>) -> Self {
+        Self {
+            value,
+            refreshed_at,
+            events: 0,
+        }
+    }
 }
 
 #[cfg(test)]

@@ -6,6 +6,7 @@ use motion_drivers::{ChannelState, DeviceFault, GoalKind, GoalKinds, RateFloor};
 use motion_ipc::{AxisMode, Capabilities, ClientId, CommandKind, FaultCode};
 
 use crate::config::{AxisConfig, EstopCategory};
+use crate::hold::HeldMove;
 
 /// A latched fault: its code, who raised it, and the figure and tolerance it broke.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -72,6 +73,11 @@ pub(crate) struct Axis {
     pub move_start: f64,
     /// The current position goal has been reached once (the hold rule applies from then on).
     pub arrived: bool,
+    /// Velocity (units/s) and acceleration (units/s²) of the last `RampPosition` goal.
+    pub move_velocity: f64,
+    pub move_accel: f64,
+    /// The position move `Hold` brought to rest, which `Resume` continues.
+    pub held: Option<HeldMove>,
     /// Fresh samples in a row above the overspeed limit.
     pub overspeed_samples: u8,
     /// Reference search: distance travelled so far, units; last position seen.
@@ -151,6 +157,9 @@ impl Axis {
             fault: None,
             move_start: 0.0,
             arrived: false,
+            move_velocity: 0.0,
+            move_accel: 0.0,
+            held: None,
             overspeed_samples: 0,
             home_travel: 0.0,
             home_last: 0.0,
@@ -252,6 +261,11 @@ pub(crate) fn capabilities_of(goals: GoalKinds) -> Capabilities {
         .with(CommandKind::Release)
         .with(CommandKind::EStop)
         .with(CommandKind::Reset);
+    if goals.contains(GoalKind::Position) || goals.contains(GoalKind::RampPosition) {
+        // A position move to hold and resume (`hold.rs`): by the board's own pause, or
+        // by a stop and the same goal again.
+        caps = caps.with(CommandKind::Hold).with(CommandKind::Resume);
+    }
     for (goal, kinds) in [
         (GoalKind::Off, &[CommandKind::Off][..]),
         (GoalKind::Power, &[CommandKind::Power][..]),

@@ -162,6 +162,9 @@ impl<D: Driver> Engine<D> {
                 Reason::Accepted
             }
             Verdict::SetOutput { signal, on } => self.set_output(signal, on),
+            Verdict::SetValue { signal, value } => self.set_value(signal, value),
+            Verdict::HoldAxis(index) => self.hold_axis(index),
+            Verdict::ResumeAxis(index) => self.resume_axis(index, client),
         }
     }
 
@@ -199,6 +202,14 @@ impl<D: Driver> Engine<D> {
         axis.arrived = false;
         axis.off_after_stop = false;
         axis.switched_off = false;
+        axis.held = None;
+        if let Motion::RampPosition {
+            velocity, accel, ..
+        } = motion
+        {
+            axis.move_velocity = velocity;
+            axis.move_accel = accel;
+        }
         axis.home_travel = 0.0;
         axis.home_last = position;
         axis.home_referenced = axis.referenced();
@@ -232,7 +243,7 @@ impl<D: Driver> Engine<D> {
     }
 
     /// The reason for a goal the driver refused.
-    fn goal_error_reason(&self, index: usize, error: GoalError) -> Reason {
+    pub(crate) fn goal_error_reason(&self, index: usize, error: GoalError) -> Reason {
         match error {
             GoalError::Unsupported(_) | GoalError::NoSuchPin(_) => Reason::Unsupported,
             GoalError::NoSuchChannel(_) => Reason::UnknownAxis,
@@ -312,7 +323,7 @@ impl<D: Driver> Engine<D> {
 }
 
 /// The driver goal, in device counts, of an accepted motion.
-fn goal_of(axis: &Axis, motion: Motion) -> Goal {
+pub(crate) fn goal_of(axis: &Axis, motion: Motion) -> Goal {
     match motion {
         Motion::Power { fraction } => Goal::Power { fraction },
         Motion::Position { target } => Goal::Position {

@@ -44,6 +44,9 @@ impl<D: Driver> Engine<D> {
                 kind: signal.config.kind as u8,
                 reserved: [0; 3],
                 claimed_by: signal.claimed_by,
+                event_tick: signal.event_tick,
+                sequence: signal.sequence,
+                reserved2: 0,
             };
         }
         frame.group_count = self.groups.len() as u32;
@@ -88,7 +91,8 @@ impl<D: Driver> Engine<D> {
                 .with(AxisFlags::CLAIMED, !axis.claimed_by.is_none())
                 .with(AxisFlags::ARRIVED, arrived)
                 .with(AxisFlags::ESTOPPED, axis.estopped)
-                .with(AxisFlags::DEADMAN_EXPIRED, axis.deadman_expired);
+                .with(AxisFlags::DEADMAN_EXPIRED, axis.deadman_expired)
+                .with(AxisFlags::HELD, axis.held.is_some());
             *out = AxisState {
                 position,
                 velocity: axis.velocity(),

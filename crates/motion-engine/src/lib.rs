@@ -49,6 +49,7 @@ mod config;
 mod device;
 mod frame;
 mod group;
+mod hold;
 mod io;
 mod safety;
 mod signal;
@@ -349,6 +350,7 @@ impl<D: Driver> Engine<D> {
         self.take_commands(port);
         self.run_safety();
         self.run_groups();
+        self.forget_stale_holds();
         self.write_frame(frame);
     }
 

@@ -156,6 +156,7 @@ impl<D: Driver> Engine<D> {
         axis.goal_owner = ClientId::NONE;
         axis.off_after_stop = false;
         axis.group = None;
+        axis.held = None;
         if stopped {
             axis.switched_off = false;
         }

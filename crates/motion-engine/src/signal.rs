@@ -1,5 +1,7 @@
 //! Named board I/O: inputs read from the drivers every step, digital outputs set by
-//! clients (claims apply, as for axes) and put into their safe state by an e-stop.
+//! clients (claims apply, as for axes) and put into their safe state by an e-stop; the
+//! events of capture and trigger signals (a sequence number and the tick that took the
+//! newest in); a trigger's compare position set by clients.
 
 use core::time::Duration;
 
@@ -28,6 +30,13 @@ pub(crate) struct Signal {
     pub commanded: Option<bool>,
     /// Output: the e-stop put it into its safe state (until the next command or reset).
     pub safe_applied: bool,
+    /// Trigger: the raw compare position last commanded, until the board reports it.
+    pub commanded_raw: Option<f64>,
+    /// Events seen (the driver's count of the last reading), the signal's sequence, and
+    /// the tick that took the newest in.
+    pub driver_events: u32,
+    pub sequence: u32,
+    pub event_tick: u64,
 }
 
 impl Signal {
@@ -44,13 +53,20 @@ impl Signal {
             claim_renewed_at: Duration::ZERO,
             commanded: None,
             safe_applied: false,
+            commanded_raw: None,
+            driver_events: 0,
+            sequence: 0,
+            event_tick: 0,
         }
     }
 
-    /// The logical value: digital 0/1 after `invert`, analogue raw × scale + offset.
+    /// The logical value: digital 0/1 after `invert`, analogue (capture, trigger) raw ×
+    /// scale + offset.
     pub fn value(&self) -> f64 {
         match self.config.kind {
-            SignalKind::AnalogIn => self.raw * self.config.scale + self.config.offset,
+            SignalKind::AnalogIn | SignalKind::Capture | SignalKind::Trigger => {
+                self.raw * self.config.scale + self.config.offset
+            }
             SignalKind::DigitalIn | SignalKind::DigitalOut => {
                 f64::from(u8::from((self.raw >= 0.5) != self.config.invert))
             }
@@ -59,6 +75,9 @@ impl Signal {
 
     /// An output whose commanded value the board has not confirmed yet.
     pub fn pending(&self) -> bool {
+        if let Some(raw) = self.commanded_raw {
+            return self.refreshed_at.is_none() || raw != self.raw;
+        }
         self.commanded.is_some_and(|on| {
             self.refreshed_at.is_none() || (self.raw >= 0.5) != (on != self.config.invert)
         })
@@ -83,10 +102,44 @@ impl<D: Driver> Engine<D> {
                 signal.refreshed_at = reading.refreshed_at;
                 signal.last_refresh_tick = tick;
             }
+            // Events the driver counted since the last step (only ever up, wrapping):
+            // several in one step are one step of several in the sequence.
+            let new_events = reading.events.wrapping_sub(signal.driver_events);
+            signal.driver_events = reading.events;
+            if new_events != 0 {
+                signal.sequence = signal.sequence.wrapping_add(new_events);
+                signal.event_tick = tick;
+            }
             let budget = driver.refresh_budget();
             signal.stale = signal
                 .refreshed_at
                 .is_none_or(|at| now.saturating_sub(at) > budget);
+        }
+    }
+
+    /// Sets the compare position of trigger `index` (accepted by the rulebook) to `value`,
+    /// in the signal's unit: raw = (value − offset) / scale, handed to the driver.
+    pub(crate) fn set_value(&mut self, index: usize, value: f64) -> Reason {
+        let now = self.now;
+        let signal = &self.signals[index];
+        let raw = (value - signal.config.offset) / signal.config.scale;
+        if !raw.is_finite() {
+            return Reason::OutOfRange;
+        }
+        let (bus, slot, pin) = (signal.bus, signal.slot, signal.config.pin);
+        let result = match self.buses[bus].driver_mut(slot) {
+            Some(driver) => driver.set_pin_value(now, pin, raw),
+            None => Err(GoalError::Offline),
+        };
+        match result {
+            Ok(()) => {
+                self.signals[index].commanded_raw = Some(raw.round());
+                Reason::Accepted
+            }
+            Err(GoalError::Starting) => Reason::DeviceStarting,
+            Err(GoalError::Offline) => Reason::DeviceOffline,
+            Err(GoalError::OutOfBoardRange(_)) => Reason::OutOfRange,
+            Err(_) => Reason::Unsupported,
         }
     }
 

@@ -73,8 +73,8 @@ impl ClientId {
 /// | `RampVelocity` | velocity, units/s | acceleration, units/s² | – |
 /// | `Home` | search velocity, units/s | – | – |
 /// | `SetPosition` | the position the axis is now at, units | – | – |
-/// | `SetOutput` | the output's logical value, 0.0 (off) or 1.0 (on) | – | – |
-/// | `Claim`, `Release`, `EStop`, `Reset`, `Off` | – | – | – |
+/// | `SetOutput` | the output's logical value, 0.0 (off) or 1.0 (on); a trigger's compare position, in the signal's unit | – | – |
+/// | `Claim`, `Release`, `EStop`, `Reset`, `Off`, `Hold`, `Resume` | – | – | – |
 ///
 /// `SetOutput`, and `Claim` / `Release` with [`Target::Signal`], address a signal:
 /// [`CommandRequest::axis`] is then a signal index (config order) and
@@ -111,7 +111,8 @@ pub enum CommandKind {
     /// [`CommandRequest::ALL_AXES`], every axis. A board that cannot de-energise refuses
     /// with [`Reason::Unsupported`].
     Off = 13,
-    /// Set a digital output signal (`axis` = signal index, `target` = [`Target::Signal`]).
+    /// Set a digital output signal (`axis` = signal index, `target` = [`Target::Signal`]),
+    /// or a trigger signal's compare position (`values[0]` in the signal's unit).
     SetOutput = 14,
     /// Run the group's path `values[0]` (the id of a [`GroupPath`](crate::GroupPath) the
     /// same node published on `paths`): `axis` = group index, `target` = [`Target::Group`].
@@ -119,8 +120,16 @@ pub enum CommandKind {
     /// [`CommandReply::at_axis`].
     Run = 15,
     /// Feed hold: bring the group to rest along its path at its axes' acceleration limits.
+    /// With [`Target::Axis`]: bring the axis's position move (`Position`, `RampPosition`)
+    /// to rest and keep it — on a QSB-M running the move itself, its COMMAND 6 ("Pause the
+    /// motor using the MD ACCEL rate"); on every other board a stop at the move's
+    /// acceleration (`max_accel` for `Position`) — flagged
+    /// [`AxisFlags::HELD`](crate::AxisFlags::HELD).
     Hold = 16,
-    /// Continue a held path at the set feed.
+    /// Continue a held path at the set feed. With [`Target::Axis`]: continue the held move
+    /// to its target with its velocity and acceleration (the QSB-M's COMMAND 7 "Resume
+    /// motor operation if previously stopped using the Motor Pause command", else the same
+    /// goal again from where the axis stands).
     Resume = 17,
     /// Set the group's feed override: `values[0]` = 0.0..=1.5 (1.0 = 100 %); time along the
     /// path runs at this rate, changed within the axes' acceleration limits.
@@ -249,7 +258,8 @@ pub enum Reason {
     DeviceOffline = 20,
     /// `axis` is not a signal of this server (for a signal request).
     UnknownSignal = 21,
-    /// The signal is not a digital output.
+    /// The signal is not an output: neither a digital output nor a trigger (whose value
+    /// is its compare position).
     NotAnOutput = 22,
     /// `target` is not a known [`Target`].
     UnknownTarget = 23,
@@ -271,7 +281,8 @@ pub enum Reason {
     /// its own, still stopping after one: cancel that motion or wait for the axis to rest
     /// ([`CommandReply::at_axis`]).
     GroupBusy = 29,
-    /// Hold, resume, feed or cancel of a group with no motion running.
+    /// Hold, resume, feed or cancel of a group with no motion running; hold of an axis with
+    /// no position move on its way, resume of an axis with no held move.
     NotMoving = 30,
     /// A trajectory of positions alone cannot be blended at a point within an axis's
     /// `path_tolerance` at its max_accel ([`CommandReply::at_point`],
@@ -353,7 +364,9 @@ impl Reason {
             }
             Self::DeviceOffline => "the axis's board is not answering",
             Self::UnknownSignal => "no such signal on this server",
-            Self::NotAnOutput => "the signal is not a digital output",
+            Self::NotAnOutput => {
+                "the signal is not an output (a digital output, or a trigger's compare position)"
+            }
             Self::UnknownTarget => "unknown target: 0 = axis, 1 = signal, 2 = group",
             Self::UnknownGroup => "no such group on this server",
             Self::NoPath => {
@@ -370,7 +383,10 @@ impl Reason {
                 "an axis of this request is moving (with a group, or on its own, still stopping): \
                  cancel that motion or wait for the axis to rest"
             }
-            Self::NotMoving => "the group has no motion running",
+            Self::NotMoving => {
+                "the group has no motion running, or the axis no position move to hold or \
+                 held move to resume"
+            }
             Self::BlendTolerance => {
                 "positions alone cannot be blended at this point within the axis's path_tolerance \
                  at its max_accel: space the points further apart, or send velocities"
@@ -400,7 +416,8 @@ impl TryFrom<u32> for Reason {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 #[repr(u32)]
 pub enum Target {
-    /// An axis (config order); every kind but `SetOutput`.
+    /// An axis (config order); every kind but `SetOutput`, `Run`, `Feed`, `Cancel` and
+    /// `Stream` (`Hold` and `Resume` act on the axis's own position move).
     #[default]
     Axis = 0,
     /// A signal (config order): `SetOutput`, `Claim`, `Release`.

@@ -275,9 +275,12 @@ impl AxisFlags {
     pub const ESTOPPED: Self = Self(1 << 7);
     /// The last velocity/power goal expired (deadman) and the axis was stopped.
     pub const DEADMAN_EXPIRED: Self = Self(1 << 8);
+    /// The axis's position move is held (`Hold` with `Target::Axis`): a `Resume` continues
+    /// it to its target.
+    pub const HELD: Self = Self(1 << 9);
 
     /// Every flag with the name clients print, in bit order.
-    pub const NAMED: [(Self, &'static str); 9] = [
+    pub const NAMED: [(Self, &'static str); 10] = [
         (Self::MOVING, "moving"),
         (Self::HOMED, "homed"),
         (Self::AT_LIMIT, "at-limit"),
@@ -287,6 +290,7 @@ impl AxisFlags {
         (Self::ARRIVED, "arrived"),
         (Self::ESTOPPED, "estopped"),
         (Self::DEADMAN_EXPIRED, "deadman-expired"),
+        (Self::HELD, "held"),
     ];
 
     /// The names of the set flags, in bit order.

@@ -261,6 +261,20 @@ pub enum Verdict {
         /// Logical level.
         on: bool,
     },
+    /// Set the value of signal `signal` (a trigger's compare position, in the signal's
+    /// unit).
+    SetValue {
+        /// Signal index.
+        signal: usize,
+        /// The value, in the signal's unit.
+        value: f64,
+    },
+    /// Bring the position move of axis `.0` to rest and keep it (`Hold` with
+    /// [`Target::Axis`]); whether it has one is the engine's to say
+    /// ([`Reason::NotMoving`]).
+    HoldAxis(usize),
+    /// Continue the held move of axis `.0` (`Resume` with [`Target::Axis`]).
+    ResumeAxis(usize),
 }
 
 /// Who sent `request`: the transport's identity `sender` when there is one (a payload
@@ -310,8 +324,6 @@ pub fn judge(request: &CommandRequest, client: ClientId, facts: &impl Facts) -> 
         CommandKind::Off if request.axis == CommandRequest::ALL_AXES => return Verdict::OffAll,
         CommandKind::SetOutput
         | CommandKind::Run
-        | CommandKind::Hold
-        | CommandKind::Resume
         | CommandKind::Feed
         | CommandKind::Cancel
         | CommandKind::Stream => return Refused(Reason::UnknownTarget),
@@ -362,10 +374,18 @@ pub fn judge(request: &CommandRequest, client: ClientId, facts: &impl Facts) -> 
     }
     let beyond_limit = match axis.fault {
         FaultCode::None => false,
+        FaultCode::LimitExceeded if kind == CommandKind::Hold => false,
         FaultCode::LimitExceeded => true,
         FaultCode::LinkDown => return Refused(Reason::LinkDown),
         _ => return Refused(Reason::AxisFaulted),
     };
+    match kind {
+        CommandKind::Hold => return Verdict::HoldAxis(index),
+        // A resumed move goes where it went: not out of a soft limit's fault.
+        CommandKind::Resume if beyond_limit => return Refused(Reason::AxisFaulted),
+        CommandKind::Resume => return Verdict::ResumeAxis(index),
+        _ => {}
+    }
     let motion = match motion_of(&axis, kind, request.values) {
         Ok(motion) => motion,
         Err(reason) => return Refused(reason),
@@ -413,7 +433,9 @@ fn judge_signal(
         CommandKind::Claim => Verdict::ClaimSignal(index),
         CommandKind::Release if signal.claimed_by != client => Refused(Reason::NotClaimed),
         CommandKind::Release => Verdict::ReleaseSignal(index),
-        CommandKind::SetOutput if signal.kind != SignalKind::DigitalOut => {
+        CommandKind::SetOutput
+            if !matches!(signal.kind, SignalKind::DigitalOut | SignalKind::Trigger) =>
+        {
             Refused(Reason::NotAnOutput)
         }
         CommandKind::SetOutput if facts.shutting_down() => Refused(Reason::ShuttingDown),
@@ -421,6 +443,12 @@ fn judge_signal(
         CommandKind::SetOutput if claimed_by_other => Refused(Reason::ClaimedByOther),
         CommandKind::SetOutput => match device_ready(signal.device, signal.link_up) {
             Err(reason) => Refused(reason),
+            // A trigger's compare position: any finite value (`identify` refused the
+            // others); whether its board can hold it is the board's to say.
+            Ok(()) if signal.kind == SignalKind::Trigger => Verdict::SetValue {
+                signal: index,
+                value,
+            },
             // A digital output is 0 or 1; anything else (0.5, 2, −1, 5e-324) is no level.
             Ok(()) if value != 0.0 && value != 1.0 => Refused(Reason::OutOfRange),
             Ok(()) => Verdict::SetOutput {

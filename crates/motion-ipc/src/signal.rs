@@ -22,7 +22,8 @@ impl SignalFlags {
     pub const CLAIMED: Self = Self(1 << 1);
     /// The e-stop put the output into its configured safe state.
     pub const SAFE_STATE: Self = Self(1 << 2);
-    /// An output value was commanded and the board has not acknowledged it yet.
+    /// An output value (a level, a trigger's compare position) was commanded and the board
+    /// has not acknowledged it yet.
     pub const PENDING: Self = Self(1 << 3);
 
     /// Every flag with the name clients print, in bit order.
@@ -60,12 +61,21 @@ impl SignalFlags {
 
 payload! {
     /// One signal in a frame.
+    ///
+    /// A `capture` or `trigger` signal also carries events: every capture (every trigger
+    /// pulse) the board reports adds one to `sequence`, and `event_tick` is the tick that
+    /// took the newest one in. Two events taken in by the same tick show as a step of two
+    /// (the value is the newer one's): a client that remembers the sequence it last saw
+    /// knows how many it missed.
     #[derive(Debug, Clone, Copy, PartialEq)]
     #[type_name("motiond::SignalState")]
     pub struct SignalState {
-        /// Logical value: digital 0.0/1.0 after `invert`; analogue raw × scale + offset.
+        /// Logical value: digital 0.0/1.0 after `invert`; analogue, capture and trigger
+        /// raw × scale + offset (a capture: the captured position; a trigger: its compare
+        /// position).
         pub value: f64,
-        /// Raw value as the board reports it: electrical level 0/1, or ADC counts.
+        /// Raw value as the board reports it: electrical level 0/1, ADC counts, or counter
+        /// counts (capture, trigger).
         pub raw: f64,
         /// Tick at which the board last reported it (outputs: acknowledged it).
         pub last_refresh_tick: u64,
@@ -77,6 +87,13 @@ payload! {
         pub reserved: [u8; 3],
         /// Claim holder of an output; zero when unclaimed.
         pub claimed_by: ClientId,
+        /// Tick that took in the newest event (capture, trigger pulse); 0 before the first.
+        pub event_tick: u64,
+        /// Events (captures, trigger pulses) the board reported since the server started,
+        /// wrapping at 2³²; 0 for the other kinds.
+        pub sequence: u32,
+        /// Zero.
+        pub reserved2: u32,
     }
 }
 
@@ -90,6 +107,9 @@ impl SignalState {
         kind: 0,
         reserved: [0; 3],
         claimed_by: ClientId::NONE,
+        event_tick: 0,
+        sequence: 0,
+        reserved2: 0,
     };
 
     /// The typed flags.
@@ -100,6 +120,13 @@ impl SignalState {
     /// A digital signal's logical value (`value >= 0.5`).
     pub fn is_on(&self) -> bool {
         self.value >= 0.5
+    }
+
+    /// Events (captures, trigger pulses) between a state with sequence `seen` and this
+    /// one: 1 for the next event, more when some were missed, 0 for none (through the
+    /// wrap at 2³²).
+    pub const fn events_since(&self, seen: u32) -> u32 {
+        self.sequence.wrapping_sub(seen)
     }
 }
 

@@ -20,9 +20,9 @@ pin!(AxisState, size 96, align 8, {
     flags @ 40, fault @ 44, mode @ 46, device_state @ 47, claimed_by @ 48,
     fault_value @ 64, fault_limit @ 72, desired_position @ 80, desired_velocity @ 88,
 });
-pin!(SignalState, size 48, align 8, {
+pin!(SignalState, size 64, align 8, {
     value @ 0, raw @ 8, last_refresh_tick @ 16, flags @ 24, kind @ 28, reserved @ 29,
-    claimed_by @ 32,
+    claimed_by @ 32, event_tick @ 48, sequence @ 56, reserved2 @ 60,
 });
 pin!(AxisWire, size 24, align 8, { goal_tick @ 0, wire_tick @ 8, wire_ns @ 16 });
 pin!(GroupState, size 152, align 8, {
@@ -32,10 +32,10 @@ pin!(GroupState, size 152, align 8, {
     applied @ 104, late @ 112, early @ 120, clamped @ 128, refused @ 136,
     last_received_ns @ 144,
 });
-pin!(MotionFrame, size 20944, align 8, {
+pin!(MotionFrame, size 21968, align 8, {
     schema_version @ 0, axis_count @ 4, tick @ 8, time_ns @ 16, publish_ns @ 24,
     flags @ 32, signal_count @ 36, device_count @ 40, group_count @ 44, devices @ 48,
-    axes @ 80, signals @ 12368, wire @ 15440, groups @ 18512,
+    axes @ 80, signals @ 12368, wire @ 16464, groups @ 19536,
 });
 pin!(CommandRequest, size 64, align 8, {
     schema_version @ 0, kind @ 4, client @ 8, sequence @ 24, axis @ 32, target @ 36,

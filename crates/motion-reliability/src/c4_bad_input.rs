@@ -365,8 +365,6 @@ fn oracle(request: &CommandRequest, sender: ClientId) -> Option<Reason> {
         CommandKind::Stop if request.axis == CommandRequest::ALL_AXES => Some(Reason::Accepted),
         CommandKind::SetOutput
         | CommandKind::Run
-        | CommandKind::Hold
-        | CommandKind::Resume
         | CommandKind::Feed
         | CommandKind::Cancel
         | CommandKind::Stream => Some(Reason::UnknownTarget),
@@ -401,12 +399,14 @@ mod tests {
         assert_eq!(oracle(&r, me), None, "depends on the state");
         let r = CommandRequest::new(me, 1, 0, CommandKind::EStop);
         assert_eq!(oracle(&r, me), Some(Reason::Accepted));
-        let r = CommandRequest::new(me, 1, 0, CommandKind::Hold);
+        let r = CommandRequest::new(me, 1, 0, CommandKind::Feed);
         assert_eq!(
             oracle(&r, me),
             Some(Reason::UnknownTarget),
             "a group kind to an axis"
         );
+        let r = CommandRequest::new(me, 1, 0, CommandKind::Hold);
+        assert_eq!(oracle(&r, me), None, "an axis's move: depends on the state");
         let mut r = CommandRequest::new(me, 1, 1, CommandKind::Run);
         r.target = motion_ipc::Target::Group as u32;
         assert_eq!(oracle(&r, me), Some(Reason::UnknownGroup));

@@ -95,6 +95,9 @@ pub fn signal_state(index: usize, info: &SignalInfo, state: &SignalState, tick: 
         info.kind(),
         Ok(SignalKind::DigitalIn | SignalKind::DigitalOut)
     );
+    // A capture's or a trigger's events: how many, and the tick that took the newest in.
+    let events = matches!(info.kind(), Ok(SignalKind::Capture | SignalKind::Trigger));
+    let event = |value: Value| if events { value } else { Value::Null };
     json!({
         "index": index,
         "name": info.name(),
@@ -109,6 +112,8 @@ pub fn signal_state(index: usize, info: &SignalInfo, state: &SignalState, tick: 
         "last_refresh_tick": state.last_refresh_tick,
         "age_ticks": tick.saturating_sub(state.last_refresh_tick),
         "claimed_by": claimant(state.claimed_by),
+        "sequence": event(json!(state.sequence)),
+        "event_tick": event(json!(state.event_tick)),
     })
 }
 
@@ -260,6 +265,22 @@ mod tests {
         assert_eq!(door["on"], true);
         assert_eq!(door["age_ticks"], 1);
         assert_eq!(door["claimed_by_remote"], Value::Null);
+        assert_eq!(door["sequence"], Value::Null, "an input has no events");
+    }
+
+    #[test]
+    fn a_capture_shows_its_sequence_and_the_tick_of_its_newest_event() {
+        let (mut info, mut frame) = one_axis_one_signal();
+        info.signals[0].kind = SignalKind::Capture as u8;
+        frame.signals[0].sequence = 7;
+        frame.signals[0].event_tick = 1180;
+        let probe = signal_state(0, &info.signals[0], &frame.signals[0], frame.tick);
+        assert_eq!(probe["kind"], "capture");
+        assert_eq!(
+            (probe["sequence"].clone(), probe["event_tick"].clone()),
+            (json!(7), json!(1180))
+        );
+        assert_eq!(probe["on"], Value::Null);
     }
 
     #[test]

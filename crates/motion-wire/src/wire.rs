@@ -129,7 +129,7 @@ macro_rules! payloads {
 }
 
 payloads!(
-    MotionFrame = 20944,
+    MotionFrame = 21968,
     ServerInfo = 38864,
     ServerStats = 2000,
     MachineParams = 180_240,

@@ -212,6 +212,19 @@ pub enum Command {
         #[arg(long, default_value = "120s", value_parser = parse_duration)]
         timeout: Duration,
     },
+    /// Bring the axis's position move (`move`, a position goal) to rest and keep it; `resume`
+    /// continues it to its target. A QSB-M pauses its own move (COMMAND 6); any other board
+    /// stops at the move's acceleration. A jog is stopped, not held.
+    Hold {
+        /// Axis name.
+        axis: String,
+    },
+    /// Continue the move `hold` brought to rest (COMMAND 7 on a QSB-M; on any other board
+    /// the same move again, from where the axis stands).
+    Resume {
+        /// Axis name.
+        axis: String,
+    },
     /// Declare the axis's current position to be POS (no motion).
     SetPosition {
         /// Axis name.
@@ -322,6 +335,30 @@ pub enum IoCommand {
         /// `on` or `off` (also 1/0, true/false, high/low).
         #[arg(value_parser = parse_on_off, action = clap::ArgAction::Set, value_name = "on|off")]
         value: bool,
+    },
+    /// Set a trigger's compare position (kind "trigger"), in its unit (the axis's by
+    /// default): the board pulses its output when the count matches it.
+    Compare {
+        /// Signal name.
+        name: String,
+        /// The compare position.
+        #[arg(allow_negative_numbers = true)]
+        position: f64,
+    },
+    /// Print every capture or trigger pulse of a signal as it comes (its value, sequence,
+    /// tick and how many were missed) until Ctrl-C, --count events or --timeout.
+    Events {
+        /// Signal name (kind "capture" or "trigger").
+        name: String,
+        /// Stop after this many events.
+        #[arg(long)]
+        count: Option<u32>,
+        /// Give up (exit 5) when no event came for this long.
+        #[arg(long, value_parser = parse_duration)]
+        timeout: Option<Duration>,
+        /// One JSON object per event.
+        #[arg(long)]
+        json: bool,
     },
     /// Live table of every signal; q or Ctrl-C exits.
     Watch {

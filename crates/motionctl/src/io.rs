@@ -1,5 +1,5 @@
-//! `motionctl io list|get|set|watch`, and the signal views shared with `list`, `status`,
-//! `watch` and `record`.
+//! `motionctl io list|get|set|compare|events|watch`, and the signal views shared with
+//! `list`, `status`, `watch` and `record`.
 
 use core::time::Duration;
 
@@ -28,6 +28,32 @@ fn is_digital(info: &SignalInfo) -> bool {
         info.kind(),
         Ok(SignalKind::DigitalIn | SignalKind::DigitalOut)
     )
+}
+
+/// Whether the signal has events (a capture, a trigger).
+fn has_events(info: &SignalInfo) -> bool {
+    matches!(info.kind(), Ok(SignalKind::Capture | SignalKind::Trigger))
+}
+
+/// A capture's or a trigger's events in words: "event 4 at tick 1234", "no event".
+fn events_text(info: &SignalInfo, state: &SignalState) -> Option<String> {
+    has_events(info).then(|| {
+        if state.sequence == 0 && state.event_tick == 0 {
+            "no event".to_owned()
+        } else {
+            format!("event {} at tick {}", state.sequence, state.event_tick)
+        }
+    })
+}
+
+/// The flags of a signal's state, with its events.
+fn flags_text(info: &SignalInfo, state: &SignalState) -> String {
+    let mut words: Vec<String> = signal_flag_names(state.flags())
+        .into_iter()
+        .map(str::to_owned)
+        .collect();
+    words.extend(events_text(info, state));
+    words.join(",")
 }
 
 /// The safe state of an output: "on", "off", or `None`.
@@ -102,7 +128,7 @@ pub fn signals_text(info: &ServerInfo, frame: Option<&MotionFrame>) -> Vec<Strin
                 } else {
                     format!("{:.4}", state.value)
                 };
-                (value, signal_flag_names(state.flags()).join(","))
+                (value, flags_text(signal, &state))
             }
             None => (
                 safe_name(signal).unwrap_or("-").to_owned(),
@@ -142,8 +168,78 @@ pub fn run(client: &Client<Service>, command: &IoCommand) -> anyhow::Result<()> 
             out!("{name}: set {word}");
             Ok(())
         }
+        IoCommand::Compare { name, position } => {
+            let signal = client.signal(name)?;
+            let unit = signal.info().unit().to_owned();
+            signal
+                .set_value(*position)
+                .with_context(|| format!("compare {name} at {position} {unit}"))?;
+            out!("{name}: fires at {position} {unit}");
+            Ok(())
+        }
+        IoCommand::Events {
+            name,
+            count,
+            timeout,
+            json,
+        } => events(client, name, *count, *timeout, *json),
         IoCommand::Watch { json, interval } => watch(client, *json, *interval),
     }
+}
+
+/// `io events`: each capture or pulse as it comes.
+fn events(
+    client: &Client<Service>,
+    name: &str,
+    count: Option<u32>,
+    timeout: Option<Duration>,
+    json: bool,
+) -> anyhow::Result<()> {
+    let signal = client.signal(name)?;
+    let info = signal.info();
+    if !has_events(&info) {
+        anyhow::bail!(
+            "{name} is a {} signal: only capture and trigger signals have events",
+            signal_kind_name(&info)
+        );
+    }
+    let mut seen = signal.sequence()?;
+    let mut printed = 0u32;
+    // Without --timeout: until Ctrl-C (a wait that long never ends by itself).
+    let wait = timeout.unwrap_or(Duration::from_secs(365 * 24 * 3600));
+    while count.is_none_or(|count| printed < count) {
+        let event = match signal.wait_event(seen, wait) {
+            Ok(event) => event,
+            Err(motion_client::ClientError::Interrupted) => return Ok(()),
+            Err(error) => return Err(error.into()),
+        };
+        seen = event.sequence;
+        printed += 1;
+        if json {
+            let value = json!({
+                "signal": name,
+                "value": event.value,
+                "raw": event.raw,
+                "unit": info.unit(),
+                "sequence": event.sequence,
+                "tick": event.tick,
+                "missed": event.missed,
+            });
+            out!("{value}");
+        } else {
+            let missed = match event.missed {
+                0 => String::new(),
+                n => format!(" ({n} missed)"),
+            };
+            out!(
+                "{name}: {} at tick {}, event {}{missed}",
+                signal_value_text(&info, event.value),
+                event.tick,
+                event.sequence
+            );
+        }
+    }
+    Ok(())
 }
 
 fn all_json(info: &ServerInfo, frame: &MotionFrame) -> Vec<Value> {
@@ -188,11 +284,11 @@ fn get(client: &Client<Service>, name: &str, json: bool) -> anyhow::Result<()> {
         out!("{}", serde_json::to_string_pretty(&value)?);
         return Ok(());
     }
-    let flags = signal_flag_names(state.flags());
+    let flags = flags_text(&info, &state);
     let flags = if flags.is_empty() {
         String::new()
     } else {
-        format!(" [{}]", flags.join(","))
+        format!(" [{flags}]")
     };
     out!("{name}: {}{flags}", signal_value_text(&info, state.value));
     Ok(())
@@ -245,7 +341,7 @@ pub fn signal_table<'a>(info: &'a ServerInfo, frame: &MotionFrame) -> Table<'a> 
             Cell::from(signal.unit().to_owned()),
             Cell::from(signal_kind_name(signal)),
             Cell::from(format!("{}/{}", signal.device(), signal.pin())),
-            Cell::from(signal_flag_names(state.flags()).join(",")),
+            Cell::from(flags_text(signal, &state)),
         ])
     });
     let widths = [

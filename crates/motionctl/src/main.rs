@@ -187,6 +187,19 @@ fn run(cli: &Cli) -> anyhow::Result<()> {
             wait,
             timeout,
         } => act::home(client, axis, *velocity, wait.then_some(*timeout)),
+        Command::Hold { axis } => {
+            let accepted = client.axis(axis)?.hold()?;
+            out!(
+                "{axis}: held (tick {}); `motionctl resume {axis}` continues",
+                accepted.tick
+            );
+            Ok(())
+        }
+        Command::Resume { axis } => {
+            let accepted = client.axis(axis)?.resume()?;
+            out!("{axis}: resumed (tick {})", accepted.tick);
+            Ok(())
+        }
         Command::SetPosition { axis, position } => {
             let handle = client.axis(axis)?;
             handle.set_position(*position)?;

@@ -320,7 +320,7 @@ fn signals_are_checked_against_the_board_s_pins() {
             "invert = true",
             "scale = 2.0",
             "signal[0].scale",
-            "applies only to analog-in signals",
+            "applies only to analog-in, capture and trigger signals",
         ),
         (
             "safe_in.toml",

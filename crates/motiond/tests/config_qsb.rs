@@ -404,6 +404,10 @@ fn describe_lists_every_key_with_its_effective_value() {
             ("index_sync", "synchronous"),
             ("capture_input", "none"),
             ("capture_edge", "rising"),
+            ("capture_index", "false"),
+            ("trigger_on", "none"),
+            ("compare_position", "none"),
+            ("trigger_active", "low"),
         ])
     );
     let set = parse(&with_device_keys(
@@ -430,6 +434,10 @@ fn describe_lists_every_key_with_its_effective_value() {
             ("index_sync", "synchronous"),
             ("capture_input", "0"),
             ("capture_edge", "falling"),
+            ("capture_index", "false"),
+            ("trigger_on", "none"),
+            ("compare_position", "none"),
+            ("trigger_active", "low"),
         ])
     );
 }
@@ -686,4 +694,252 @@ fn the_built_driver_writes_the_counter_mode_to_the_simulated_board() {
         matches!((dtr, mdr0), (Some(d), Some(m)) if d < m),
         "{lines:?}"
     );
+}
+
+/// `GOOD` with `lines` on the device and `signals` after the axis.
+fn with_signals(lines: &str, signals: &str) -> String {
+    format!("{}{signals}", with_device_keys(lines))
+}
+
+#[test]
+fn capture_and_trigger_keys_are_read_and_described_in_the_axis_s_units() {
+    let text = with_signals(
+        "capture_input = 3\ncapture_index = false\ntrigger_on = [\"match\", \"index\"]\ncompare_position = 12.5\ntrigger_active = \"high\"",
+        &format!(
+            "{SIGNAL}kind = \"capture\"\npin = \"capture\"\n\n[[signal]]\nname = \"camera\"\ndevice = \"feeder_qsb\"\nkind = \"trigger\"\npin = \"trigger\"\n"
+        ),
+    );
+    let config = parse(&text).expect("a camera trigger and a probe");
+    assert!(config.warnings.is_empty(), "{:?}", config.warnings);
+    let described = rows(&config);
+    for (key, value) in [
+        ("capture_input", "3"),
+        ("capture_index", "true"),
+        ("trigger_on", "match, index"),
+        ("compare_position", "12.5 mm (1250 counts)"),
+        ("trigger_active", "high"),
+        ("trigger_pulse_ms", "1.953125 ms (INTERVAL RATE)"),
+    ] {
+        assert!(
+            described.contains(&(key.to_owned(), value.to_owned())),
+            "{key} = {value} in {described:?}"
+        );
+    }
+    // A capture and a trigger read in the axis's units unless said otherwise: scale
+    // 1 / counts_per_unit, its unit.
+    for signal in &config.signals {
+        assert_eq!(
+            (signal.scale, signal.unit.as_str()),
+            (0.01, "mm"),
+            "{signal:?}"
+        );
+    }
+    let scaled = text.replace(
+        "kind = \"capture\"\n",
+        "kind = \"capture\"\nscale = 1.0\nunit = \"counts\"\n",
+    );
+    let config = parse(&scaled).expect("counts");
+    assert_eq!(
+        (config.signals[0].scale, config.signals[0].unit.as_str()),
+        (1.0, "counts")
+    );
+}
+
+#[test]
+fn malformed_capture_and_trigger_keys_are_refused_where_they_are() {
+    let cases = [
+        ("capture_index = 1", "capture_index", "invalid type"),
+        (
+            "trigger_on = [\"edge\"]",
+            "trigger_on",
+            "allowed: \"index\", \"match\", \"underflow\", \"overflow\"",
+        ),
+        ("trigger_on = \"match\"", "trigger_on", "invalid type"),
+        (
+            "trigger_on = [\"index\", \"index\"]",
+            "trigger_on",
+            "listed twice",
+        ),
+        (
+            "trigger_on = [\"match\"]\ncompare_position = nan",
+            "compare_position",
+            "not a position",
+        ),
+        (
+            "trigger_on = [\"index\"]\ntrigger_active = \"up\"",
+            "trigger_active",
+            "allowed: \"low\", \"high\"",
+        ),
+    ];
+    for (lines, key, says) in cases {
+        let needle = lines.lines().last().expect("a line");
+        let needle = &needle[..needle.find(' ').unwrap_or(needle.len())];
+        refused(
+            &with_device_keys(lines),
+            needle,
+            &format!("device[0].{key}"),
+            says,
+        );
+    }
+}
+
+#[test]
+fn triggers_that_cannot_work_are_refused_at_their_line() {
+    // "match" compares the counter with DTR: it needs the position.
+    refused(
+        &with_device_keys("trigger_on = [\"match\"]"),
+        "trigger_on",
+        "device[0].trigger_on",
+        "needs compare_position",
+    );
+    // In modulo-n and range-limit DTR is count_limit.
+    refused(
+        &measuring(
+            "count_range = \"modulo-n\"\ncount_limit = 499\ntrigger_on = [\"match\"]\ncompare_position = 90.0",
+        ),
+        "compare_position",
+        "device[0].compare_position",
+        "DTR is count_limit",
+    );
+    parse(&measuring(
+        "count_range = \"modulo-n\"\ncount_limit = 499\ntrigger_on = [\"match\"]",
+    ))
+    .expect("match at the wrap, once a revolution");
+    // The pulse is on DIG I/O bit 0: not on a qsb-s, not where io0 is something else.
+    refused(
+        &GOOD.replace(
+            "variant = \"qsb-m\"",
+            "variant = \"qsb-s\"\ntrigger_on = [\"index\"]",
+        ),
+        "trigger_on",
+        "device[0].trigger_on",
+        "a qsb-s has no digital I/O",
+    );
+    refused(
+        &with_device_keys("enable_output = 0\ntrigger_on = [\"index\"]"),
+        "trigger_on",
+        "device[0].trigger_on",
+        "io0 is the enable_output",
+    );
+    refused(
+        &with_device_keys("capture_input = 0\ntrigger_on = [\"index\"]"),
+        "trigger_on",
+        "device[0].trigger_on",
+        "io0 is the capture_input",
+    );
+    refused(
+        &with_signals(
+            "trigger_on = [\"index\"]",
+            &format!("{SIGNAL}kind = \"digital-in\"\npin = \"io0\"\n"),
+        ),
+        "pin = \"io0\"",
+        "signal[0].pin",
+        "io0 is the trigger output",
+    );
+    // MDR1 B4 is "Trigger/Capture on Index": one bit.
+    refused(
+        &with_device_keys("capture_index = true\ntrigger_on = [\"match\"]\ncompare_position = 1.0"),
+        "capture_index",
+        "device[0].capture_index",
+        "Trigger/Capture on Index",
+    );
+    // The pins need their keys.
+    refused(
+        &with_signals(
+            "",
+            &format!("{SIGNAL}kind = \"trigger\"\npin = \"trigger\"\n"),
+        ),
+        "pin = \"trigger\"",
+        "signal[0].pin",
+        "set trigger_on",
+    );
+    refused(
+        &with_signals(
+            "",
+            &format!("{SIGNAL}kind = \"capture\"\npin = \"capture\"\n"),
+        ),
+        "pin = \"capture\"",
+        "signal[0].pin",
+        "capture_index",
+    );
+    refused(
+        &with_signals(
+            "trigger_on = [\"index\"]",
+            &format!("{SIGNAL}kind = \"digital-out\"\npin = \"trigger\"\n"),
+        ),
+        "pin = \"trigger\"",
+        "signal[0].pin",
+        "cannot be digital-out",
+    );
+    // compare_position is in the units of the device's axis.
+    let no_axis = format!(
+        "{}trigger_on = [\"match\"]\ncompare_position = 5.0\n",
+        &GOOD[..GOOD.find("[[axis]]").expect("axis")]
+    );
+    refused(
+        &no_axis,
+        "compare_position",
+        "device[0].compare_position",
+        "has no axis",
+    );
+    // Beyond the 32-bit counter at 100 counts/mm.
+    refused(
+        &with_device_keys("trigger_on = [\"match\"]\ncompare_position = 3e7"),
+        "compare_position",
+        "device[0].compare_position",
+        "beyond the 32-bit counter",
+    );
+}
+
+#[test]
+fn capture_and_trigger_keys_without_effect_warn() {
+    let config = parse(&with_device_keys(
+        "trigger_on = [\"index\"]\ncompare_position = 2.0",
+    ))
+    .expect("accepted");
+    assert!(
+        config
+            .warnings
+            .iter()
+            .any(|w| w.key == "device[0].compare_position" && w.message.contains("\"match\"")),
+        "{:?}",
+        config.warnings
+    );
+    let config = parse(&with_device_keys("trigger_active = \"high\"")).expect("accepted");
+    assert!(
+        config
+            .warnings
+            .iter()
+            .any(|w| w.key == "device[0].trigger_active"),
+        "{:?}",
+        config.warnings
+    );
+}
+
+#[test]
+fn the_built_driver_writes_the_trigger_and_capture_to_the_simulated_board() {
+    let text =
+        with_device_keys("capture_input = 3\ntrigger_on = [\"match\"]\ncompare_position = 12.5")
+            .replace(
+                "type = \"serial\"\npath = \"/dev/does-not-exist-motiond-qsb-test\"",
+                "type = \"sim\"",
+            );
+    let config = parse(&text).expect("sim config");
+    let lines = start_up(&config, 40);
+    // DTR 1250 (12.5 mm × 100 counts/mm) before MDR0, MDR1 "B5 Trigger on Match", DIG I/O
+    // CONFIG 0x1180 (B12, bit 0 an output, the interrupt on io3), CAPTURE and STR
+    // streamed, and STR cleared once online.
+    let at = |line: &str| lines.iter().position(|l| l == line);
+    let order = [
+        at("W084E2"),
+        at("W0343"),
+        at("W0420"),
+        at("W021180"),
+        at("S05"),
+        at("S06"),
+        at("S0E"),
+        at("W093"),
+    ];
+    assert!(order.iter().all(Option::is_some), "{lines:?}");
+    assert!(order.windows(2).all(|w| w[0] < w[1]), "{lines:?}");
 }

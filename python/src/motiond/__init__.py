@@ -68,7 +68,7 @@ from .session import (  # noqa: E402
     Accepted,
     Param,
 )
-from .signal import Signal, SignalStatus  # noqa: E402
+from .signal import Signal, SignalEvent, SignalStatus  # noqa: E402
 from .stream import SetpointStream  # noqa: E402
 
 __version__ = "0.1.0"
@@ -82,6 +82,7 @@ __all__ = [
     "Axis",
     "AxisStatus",
     "Signal",
+    "SignalEvent",
     "SignalStatus",
     "Jog",
     "Group",

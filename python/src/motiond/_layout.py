@@ -118,13 +118,20 @@ class AxisState(Payload):
 class SignalState(Payload):
     """One signal in a frame.
 
-    48 bytes, alignment 8."""
+    A ``capture`` or ``trigger`` signal also carries events: every capture (every trigger pulse)
+    the board reports adds one to ``sequence``, and ``event_tick`` is the tick that took the
+    newest one in. Two events taken in by the same tick show as a step of two (the value is the
+    newer one's): a client that remembers the sequence it last saw knows how many it missed.
+
+    64 bytes, alignment 8."""
 
     _type_name_ = "motiond::SignalState"
     _fields_ = [
-        # Logical value: digital 0.0/1.0 after ``invert``; analogue raw × scale + offset.
+        # Logical value: digital 0.0/1.0 after ``invert``; analogue, capture and trigger raw × scale
+        # + offset (a capture: the captured position; a trigger: its compare position).
         ("value", ctypes.c_double),
-        # Raw value as the board reports it: electrical level 0/1, or ADC counts.
+        # Raw value as the board reports it: electrical level 0/1, ADC counts, or counter counts
+        # (capture, trigger).
         ("raw", ctypes.c_double),
         # Tick at which the board last reported it (outputs: acknowledged it).
         ("last_refresh_tick", ctypes.c_uint64),
@@ -132,6 +139,12 @@ class SignalState(Payload):
         ("kind", ctypes.c_uint8),  # ``SignalKind`` value.
         ("reserved", ctypes.c_uint8 * 3),  # Zero.
         ("claimed_by", ClientId),  # Claim holder of an output; zero when unclaimed.
+        # Tick that took in the newest event (capture, trigger pulse); 0 before the first.
+        ("event_tick", ctypes.c_uint64),
+        # Events (captures, trigger pulses) the board reported since the server started, wrapping at
+        # 2³²; 0 for the other kinds.
+        ("sequence", ctypes.c_uint32),
+        ("reserved2", ctypes.c_uint32),  # Zero.
     ]
 
 
@@ -208,7 +221,7 @@ class MotionFrame(Payload):
     """One consistent snapshot of every axis, board and signal, published once per tick on
     ``motiond/<name>/frame``.
 
-    20944 bytes, alignment 8."""
+    21968 bytes, alignment 8."""
 
     _type_name_ = "motiond::MotionFrame"
     _fields_ = [
@@ -708,7 +721,10 @@ class Reason(ReasonMethods, TextedEnum):
     )
     DEVICE_OFFLINE = 20, "the axis's board is not answering"
     UNKNOWN_SIGNAL = 21, "no such signal on this server"
-    NOT_AN_OUTPUT = 22, "the signal is not a digital output"
+    NOT_AN_OUTPUT = (
+        22,
+        "the signal is not an output (a digital output, or a trigger's compare position)",
+    )
     UNKNOWN_TARGET = 23, "unknown target: 0 = axis, 1 = signal, 2 = group"
     UNKNOWN_GROUP = 24, "no such group on this server"
     NO_PATH = (
@@ -725,7 +741,10 @@ class Reason(ReasonMethods, TextedEnum):
         29,
         "an axis of this request is moving (with a group, or on its own, still stopping): cancel that motion or wait for the axis to rest",
     )
-    NOT_MOVING = 30, "the group has no motion running"
+    NOT_MOVING = (
+        30,
+        "the group has no motion running, or the axis no position move to hold or held move to resume",
+    )
     BLEND_TOLERANCE = (
         31,
         "positions alone cannot be blended at this point within the axis's path_tolerance at its max_accel: space the points further apart, or send velocities",
@@ -789,6 +808,8 @@ class SignalKind(TextedEnum):
     DIGITAL_IN = 1, "digital-in"
     DIGITAL_OUT = 2, "digital-out"
     ANALOG_IN = 3, "analog-in"
+    CAPTURE = 4, "capture"
+    TRIGGER = 5, "trigger"
 
 
 class EstopCategory(TextedEnum):
@@ -886,6 +907,7 @@ class AxisFlags(enum.IntFlag):
     ARRIVED = 1 << 6
     ESTOPPED = 1 << 7
     DEADMAN_EXPIRED = 1 << 8
+    HELD = 1 << 9
 
 
 class FrameFlags(enum.IntFlag):

@@ -101,6 +101,11 @@ class AxisStatus:
         return AxisFlags.ARRIVED in self.flags
 
     @property
+    def held(self) -> bool:
+        """A position move is held (:meth:`Axis.hold`): :meth:`Axis.resume` continues it."""
+        return AxisFlags.HELD in self.flags
+
+    @property
     def homed(self) -> bool:
         """The axis has a valid reference."""
         return AxisFlags.HOMED in self.flags
@@ -219,6 +224,21 @@ class Axis(EntryHandle):
     def home(self, velocity: float = 0.0) -> "Accepted":
         """Reference search at ``velocity`` units/s (0.0: the server's default speed)."""
         return self._command(CommandKind.HOME, velocity)
+
+    def hold(self) -> "Accepted":
+        """Brings the axis's position move (:meth:`position`, :meth:`ramp_to`) to rest and
+        keeps it (``Hold`` with the axis as target): a QSB-M pauses its own move (COMMAND
+        6), any other board stops at the move's acceleration. The status shows
+        :attr:`AxisStatus.held` until :meth:`resume`, a stop or another goal. Raises
+        :class:`~motiond.errors.NotMoving` when no position move is on its way (a jog is
+        stopped, not held)."""
+        return self._command(CommandKind.HOLD)
+
+    def resume(self) -> "Accepted":
+        """Continues the move :meth:`hold` brought to rest, to its target with its
+        velocity and acceleration. Raises :class:`~motiond.errors.NotMoving` when nothing
+        is held."""
+        return self._command(CommandKind.RESUME)
 
     def set_position(self, position: float) -> "Accepted":
         """Declares the current position to be ``position`` (no motion)."""

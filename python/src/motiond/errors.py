@@ -317,7 +317,8 @@ class UnknownSignal(Refused, reason=Reason.UNKNOWN_SIGNAL):
 
 
 class NotAnOutput(Refused, reason=Reason.NOT_AN_OUTPUT):
-    """Refused: the signal is not a digital output (``Reason.NOT_AN_OUTPUT``)."""
+    """Refused: the signal is not an output: neither a digital output nor a trigger
+    (``Reason.NOT_AN_OUTPUT``)."""
 
 
 class UnknownTarget(Refused, reason=Reason.UNKNOWN_TARGET):

@@ -1,4 +1,5 @@
-"""Board I/O as named signals: :class:`Signal` and :class:`SignalStatus`."""
+"""Board I/O as named signals: :class:`Signal` and :class:`SignalStatus`, and the events
+of capture and trigger signals (:class:`SignalEvent`)."""
 
 from __future__ import annotations
 
@@ -21,7 +22,7 @@ from .session import EntryHandle
 if TYPE_CHECKING:  # pragma: no cover
     from .session import Accepted
 
-__all__ = ["Signal", "SignalStatus"]
+__all__ = ["Signal", "SignalEvent", "SignalStatus"]
 
 
 @dataclass(frozen=True)
@@ -44,6 +45,16 @@ class SignalStatus:
     kind: Union[SignalKind, int]
     #: Node id of the client holding a claim on an output, 0 when unclaimed.
     claimed_by: int
+    #: A capture's or a trigger's events since the server started (wrapping at 2**32);
+    #: 0 for the other kinds.
+    sequence: int = 0
+    #: The tick that took the newest event in; 0 before the first.
+    event_tick: int = 0
+
+    def events_since(self, seen: int) -> int:
+        """Events between a status with sequence ``seen`` and this one (1: the next one;
+        more: some were missed), through the wrap at 2**32."""
+        return (self.sequence - seen) % (1 << 32)
 
     @property
     def on(self) -> bool:
@@ -64,6 +75,23 @@ class SignalStatus:
     def safe_state(self) -> bool:
         """The e-stop put the output into its configured safe state."""
         return SignalFlags.SAFE_STATE in self.flags
+
+
+@dataclass(frozen=True)
+class SignalEvent:
+    """A capture or a trigger pulse, as :meth:`Signal.wait_event` found it in a frame."""
+
+    #: The signal's sequence: events since the server started.
+    sequence: int
+    #: The tick that took the event in.
+    tick: int
+    #: The signal's value then: a capture's position, a trigger's compare position.
+    value: float
+    #: Its raw value (counter counts).
+    raw: float
+    #: Events between the sequence waited after and this one that no frame showed apart
+    #: (two taken in by one tick, or frames not read): 0 when this is the next one.
+    missed: int
 
 
 class Signal(EntryHandle):
@@ -106,6 +134,8 @@ class Signal(EntryHandle):
             flags=SignalFlags(raw.flags),
             kind=to_enum(SignalKind, raw.kind),
             claimed_by=int(raw.claimed_by),
+            sequence=int(raw.sequence),
+            event_tick=int(raw.event_tick),
         )
 
     def value(self) -> float:
@@ -124,6 +154,39 @@ class Signal(EntryHandle):
     def set(self, on: bool) -> "Accepted":
         """Sets a digital output to its logical value ``on`` (``SetOutput``)."""
         return self._command(CommandKind.SET_OUTPUT, 1.0 if on else 0.0)
+
+    def set_value(self, value: float) -> "Accepted":
+        """Sets a trigger's compare position (``SetOutput`` on a ``trigger`` signal), in
+        the signal's unit (by default the axis's): the board pulses its output when the
+        count matches it. Raises :class:`~motiond.errors.NotAnOutput` for other kinds,
+        :class:`~motiond.errors.OutOfRange` for a position the counter cannot hold."""
+        return self._command(CommandKind.SET_OUTPUT, float(value))
+
+    def sequence(self) -> int:
+        """The sequence in the newest frame: captures or trigger pulses since the server
+        started (0 for other kinds). Pass it to :meth:`wait_event`."""
+        return self.state().sequence
+
+    def wait_event(self, after: int, timeout: float = 2.0) -> SignalEvent:
+        """Waits for the next capture or trigger pulse after sequence ``after``: the first
+        frame whose sequence differs. :attr:`SignalEvent.missed` counts the events in
+        between that no frame showed apart. Raises :class:`~motiond.errors.WaitTimeout`."""
+
+        def done(frame: Frame) -> bool:
+            status = self.state(frame)
+            return not status.stale and status.sequence != after
+
+        frame = self._client.wait_frames(
+            f"an event after sequence {after}", timeout, done, subject=f"signal {self.name}"
+        )
+        status = self.state(frame)
+        return SignalEvent(
+            sequence=status.sequence,
+            tick=status.event_tick,
+            value=status.value,
+            raw=status.raw,
+            missed=max(status.events_since(after) - 1, 0),
+        )
 
     def claim(self) -> "Accepted":
         """Takes an exclusive claim on the output."""

@@ -43,6 +43,10 @@ pub(crate) struct RawDevice {
     pub(crate) count_limit: Option<Spanned<Int>>,
     pub(crate) index_action: Option<Spanned<String>>,
     pub(crate) index_sync: Option<Spanned<String>>,
+    pub(crate) capture_index: Option<Spanned<bool>>,
+    pub(crate) trigger_on: Option<Spanned<Vec<Spanned<String>>>>,
+    pub(crate) compare_position: Option<Spanned<f64>>,
+    pub(crate) trigger_active: Option<Spanned<String>>,
 }
 
 /// The product a `variant` names; an issue for any other value.
@@ -210,6 +214,7 @@ pub(crate) fn device_keys(
         }
     }
     crate::counter_keys::device_keys(v, ctx, &raw, &mut keys);
+    crate::trigger_keys::device_keys(v, ctx, &raw, &mut keys);
     // Keys in error stay unset here; the issues already refuse the file, and the other
     // tables are still checked against the rest (every issue at once).
     Some(DeviceKeys::new(keys, home?))
@@ -345,6 +350,7 @@ pub(crate) fn cross_check(v: &mut dyn KeyIssues, machine: &MachineView<'_>) {
         }
         signal_checks(v, machine, index, keys, drive);
         crate::counter_keys::cross_check(v, machine, index, &raw_device, keys, drive);
+        crate::trigger_keys::cross_check(v, machine, index, &raw_device, keys);
         line_budget(v, machine, &raw_device, device.index, device.link, keys);
     }
 }
@@ -372,6 +378,10 @@ fn signal_checks(
                 "io{bit} is the enable_output of device `{}` (the stepper driver's enable line); it is not a signal",
                 device.name
             ),
+            Some(PinRole::Io(0)) if keys.trigger_on.is_some_and(|t| t.any()) => format!(
+                "io0 is the trigger output of device `{}` (trigger_on: \"Digital output, bit 0\" pulsed by the counter's events); read it as pin `trigger` with kind = \"trigger\"",
+                device.name
+            ),
             Some(PinRole::Io(bit))
                 if keys.capture_input == Some(bit) && signal.kind == SignalKind::DigitalOut =>
             {
@@ -384,8 +394,18 @@ fn signal_checks(
                 "pin `encoder` carries a PWM or analog value: set input_mode = \"pwm\" or \"analog\" on device `{}`",
                 device.name
             ),
-            Some(PinRole::Capture) if keys.capture_input.is_none() => format!(
-                "pin `capture` reads the count an edge on capture_input loads: set capture_input (and capture_edge) on device `{}`",
+            Some(PinRole::Capture)
+                if keys.capture_input.is_none()
+                    && keys.capture_index != Some(true)
+                    && !keys.trigger_on.is_some_and(|t| t.index) =>
+            {
+                format!(
+                    "pin `capture` reads the count an edge on capture_input (or the index, capture_index) loads: set capture_input (and capture_edge) or capture_index on device `{}`",
+                    device.name
+                )
+            }
+            Some(PinRole::Trigger) if !keys.trigger_on.is_some_and(|t| t.any()) => format!(
+                "pin `trigger` is DIG I/O bit 0 pulsed by the counter's events: set trigger_on (and compare_position for \"match\") on device `{}`",
                 device.name
             ),
             _ => continue,

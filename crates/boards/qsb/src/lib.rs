@@ -16,6 +16,7 @@ use core::time::Duration;
 
 mod counter_keys;
 mod keys;
+mod trigger_keys;
 
 use motion_board::keys::{DeviceContext, KeyIssues, KeyTable, key_names};
 use motion_board::machine::MachineView;
@@ -27,7 +28,7 @@ use motion_drivers::spec::{DeviceMachine, DriverSpec, Param, SpecError};
 use motion_drivers::{Driver, Model, PinInfo};
 
 use driver::{QsbDriver, QsbDriverConfig, pins};
-pub use machine_keys::{QsbDeviceKeys, QsbInputMode, QsbVariant};
+pub use machine_keys::{QsbDeviceKeys, QsbInputMode, QsbVariant, TriggerSources};
 use sim::{DriveEnable, QsbSim, QsbSimConfig, Variant};
 
 /// A full-speed USB device is polled once per 1 ms frame.

@@ -87,4 +87,33 @@ pub struct QsbDeviceKeys {
     pub index_action: Option<IndexMode>,
     /// `index_sync = "synchronous"` (MDR0 B6).
     pub index_sync: Option<bool>,
+    /// `capture_index = true` (MDR1 B4: the index loads CAPTURE).
+    pub capture_index: Option<bool>,
+    /// `trigger_on`: the counter events that pulse DIG I/O bit 0 (MDR1 B4–B7, DIG I/O
+    /// CONFIG B12); `None` or empty: no trigger output.
+    pub trigger_on: Option<TriggerSources>,
+    /// `compare_position`: the position (axis units) at which "match" fires (DTR).
+    pub compare_position: Option<f64>,
+    /// `trigger_active = "high"`.
+    pub trigger_active_high: Option<bool>,
+}
+
+/// The counter events of `trigger_on` (MDR1 B4–B7).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub struct TriggerSources {
+    /// `"index"`: B4 "Trigger/Capture on Index".
+    pub index: bool,
+    /// `"match"`: B5 "Trigger on Match" (CNTR = DTR).
+    pub on_match: bool,
+    /// `"underflow"`: B6 "Trigger on Underflow".
+    pub underflow: bool,
+    /// `"overflow"`: B7 "Trigger on Overflow".
+    pub overflow: bool,
+}
+
+impl TriggerSources {
+    /// Whether any source is set.
+    pub const fn any(self) -> bool {
+        self.index || self.on_match || self.underflow || self.overflow
+    }
 }

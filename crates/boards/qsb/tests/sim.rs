@@ -857,3 +857,101 @@ fn on_change_streams_report_only_changes() {
         .collect();
     assert_eq!(capture, vec![0, 12]); // 3 cycles at x4 (factory modulo 500)
 }
+
+#[test]
+fn every_trigger_source_pulses_bit0_and_latches_str() {
+    // MDR1: "B4 Trigger/Capture on Index … B5 Trigger on Match … B6 Trigger on Underflow
+    // … B7 Trigger on Overflow"; DIG I/O CONFIG B12 "a trigger event (see register MDR1)
+    // causes an output signal on digital I/O bit 0 for a duration specified by the
+    // INTERVAL RATE register."
+    let mut host = Host::still(Variant::D);
+    host.ask("W0303"); // free-running x4, index disabled
+    host.ask("W021100"); // B12, bit 0 an output
+    host.ask("W0C0A"); // 10 ticks: 19.5 ms
+    host.ask("W040"); // no trigger yet
+    let now = host.now;
+    host.sim.nudge_encoder(now, 600.0); // past the index at 500 cycles
+    assert_eq!(host.sim.trigger_pulses(), 0, "MDR1 without triggers");
+    host.ask("W093");
+    // Index: B4 (also captures the count at the index).
+    host.ask("W0410");
+    let now = host.now;
+    host.sim.nudge_encoder(now, 500.0); // the index at 1000 cycles
+    assert_eq!(host.sim.trigger_pulses(), 1);
+    assert_eq!(host.sim.digital_pins() & 1, 0, "pulse on bit 0");
+    assert_eq!(host.value("R05"), 4000, "captured at the index");
+    assert_eq!(host.value("R06") & 0x10, 0x10, "STR IDX latched");
+    host.run_for(TICK * 10);
+    assert_eq!(host.sim.digital_pins() & 1, 1, "back at rest");
+    // Underflow: B6, the free-running counter passing below zero.
+    host.ask("W093");
+    host.ask("W040");
+    host.ask("W092"); // CNTR 0
+    host.ask("W0440");
+    let now = host.now;
+    host.sim.nudge_encoder(now, -0.5);
+    assert_eq!(host.sim.trigger_pulses(), 2);
+    assert_eq!(host.value("R06") & 0x40, 0x40, "STR BW latched");
+    host.run_for(TICK * 10);
+    // Overflow: B7, passing above 0xFFFFFFFF.
+    host.ask("W093");
+    host.ask("W0480");
+    let now = host.now;
+    host.sim.nudge_encoder(now, 0.5);
+    assert_eq!(host.sim.trigger_pulses(), 3);
+    assert_eq!(host.value("R06") & 0x80, 0x80, "STR CY latched");
+}
+
+#[test]
+fn an_event_during_a_pulse_lengthens_it_and_the_line_rests_where_it_was() {
+    // "The output pulse polarity depends on the initial output state of digital I/O bit
+    // 0": written low, the pulse drives it high.
+    let mut host = Host::still(Variant::M);
+    host.ask("W0303");
+    host.ask("W021100");
+    host.ask("W01E"); // bit 0 low at rest
+    host.ask("W0C0A");
+    host.ask("W0864"); // DTR 100
+    host.ask("W0420"); // trigger on match
+    assert_eq!(host.sim.digital_pins() & 1, 0);
+    let now = host.now;
+    host.sim.nudge_encoder(now, 30.0); // 0 → 120: through 100
+    assert_eq!(host.sim.digital_pins() & 1, 1, "an active-high pulse");
+    host.run_for(TICK * 5);
+    let now = host.now;
+    host.sim.nudge_encoder(now, -10.0); // 120 → 80: through 100 again
+    assert_eq!(host.sim.trigger_pulses(), 2);
+    assert!(host.sim.trigger_pulse_active());
+    host.run_for(TICK * 10 - 10 * US);
+    assert_eq!(
+        host.sim.digital_pins() & 1,
+        1,
+        "lengthened by the second event"
+    );
+    host.run_for(20 * US);
+    assert_eq!(host.sim.digital_pins() & 1, 0, "at rest again, low");
+}
+
+#[test]
+fn a_capture_of_the_same_count_sends_no_line() {
+    // CAPTURE: "In streaming mode, a new value is output when the register value
+    // changes": two edges at the same count are one line.
+    let mut host = Host::still(Variant::M);
+    host.ask("W0C1");
+    host.ask("W02010"); // interrupt on bit 0, low-to-high
+    let since = host.log.len();
+    host.ask("S05");
+    host.sim.nudge_encoder(host.now, 5.0);
+    for levels in [0b1110, 0b1111, 0b1110, 0b1111] {
+        let now = host.now;
+        host.sim.set_digital_inputs(now, levels);
+        host.run_for(10 * MS);
+    }
+    assert_eq!(host.sim.captures(), 2);
+    let capture: Vec<u32> = host
+        .streamed(0x05, since)
+        .iter()
+        .map(|(_, r)| r.data)
+        .collect();
+    assert_eq!(capture, vec![0, 20], "the stream's start, then one capture");
+}

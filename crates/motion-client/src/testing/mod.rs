@@ -53,6 +53,14 @@ pub enum FakeControl {
         /// The raw value.
         raw: f64,
     },
+    /// A capture or trigger signal's event: its sequence counts one, in this tick, with
+    /// `raw` as its new raw value (a capture's count) when given.
+    Event {
+        /// Signal index.
+        signal: usize,
+        /// The new raw value, if any.
+        raw: Option<f64>,
+    },
     /// The board of axis `axis` no longer reports the fault it raised: as on the server, a
     /// fault a board raised ends when its cause is gone (the axis stays stopped); a fault the
     /// server raised (following error, overspeed, limits) waits for a reset either way.
@@ -217,6 +225,14 @@ impl FakeServer {
     /// Sets the raw value input `signal` reports.
     pub fn set_input(&self, signal: usize, raw: f64) {
         self.control(FakeControl::Input { signal, raw });
+    }
+
+    /// A capture of `raw` counts on capture signal `signal` (its sequence counts one).
+    pub fn capture(&self, signal: usize, raw: f64) {
+        self.control(FakeControl::Event {
+            signal,
+            raw: Some(raw),
+        });
     }
 
     /// Aborts group `group`'s running motion with `abort`, naming axis `axis` with its

@@ -27,6 +27,8 @@ struct SimAxis {
     speed: f64,
     /// Tick of the last velocity/power goal (deadman).
     goal_tick: u64,
+    /// The position move `Hold` stopped, which `Resume` continues.
+    held: Option<Motion>,
 }
 
 #[derive(Debug, Clone, Copy, Default)]
@@ -36,6 +38,9 @@ struct SimSignal {
     pending: bool,
     claimed_by: ClientId,
     safe_applied: bool,
+    /// Captures / trigger pulses, and the tick of the newest.
+    sequence: u32,
+    event_tick: u64,
 }
 
 pub(super) struct Model {
@@ -65,6 +70,7 @@ impl Model {
             },
             speed: 0.0,
             goal_tick: 0,
+            held: None,
         };
         Self {
             axes: config
@@ -205,6 +211,16 @@ impl Model {
                     sim.raw = raw;
                 }
             }
+            FakeControl::Event { signal, raw } => {
+                let tick = self.tick;
+                if let Some((_, sim)) = self.signals.get_mut(signal) {
+                    if let Some(raw) = raw {
+                        sim.raw = raw;
+                    }
+                    sim.sequence = sim.sequence.wrapping_add(1);
+                    sim.event_tick = tick;
+                }
+            }
             FakeControl::FaultGone { axis } => {
                 if let Some((_, sim)) = self.axes.get_mut(axis) {
                     let by_server = matches!(
@@ -271,6 +287,8 @@ impl Model {
     }
 
     fn stop(_axis: &FakeAxis, sim: &mut SimAxis) {
+        sim.held = None;
+        sim.state.flags = AxisFlags(sim.state.flags).with(AxisFlags::HELD, false).0;
         sim.state.mode = AxisMode::Hold as u8;
         sim.state.velocity = 0.0;
         sim.state.target = sim.state.position;
@@ -357,6 +375,41 @@ impl Model {
                 sim.pending = true;
                 sim.safe_applied = false;
             }
+            Verdict::SetValue { signal, value } => {
+                let (config, sim) = &mut self.signals[signal];
+                sim.raw = ((value - config.offset) / config.scale).round();
+                sim.pending = true;
+            }
+            Verdict::HoldAxis(index) => {
+                let (axis, sim) = &mut self.axes[index];
+                if sim.held.is_none() {
+                    let state = sim.state;
+                    let motion = match state.mode() {
+                        _ if state.position == state.target => return Reason::NotMoving,
+                        Ok(AxisMode::Position) => Motion::Position {
+                            target: state.target,
+                        },
+                        Ok(AxisMode::RampPosition) => Motion::RampPosition {
+                            target: state.target,
+                            velocity: sim.speed,
+                            accel: axis.max_accel,
+                        },
+                        _ => return Reason::NotMoving,
+                    };
+                    Self::stop(axis, sim);
+                    sim.held = Some(motion);
+                    sim.state.flags = AxisFlags(sim.state.flags).with(AxisFlags::HELD, true).0;
+                }
+            }
+            Verdict::ResumeAxis(index) => {
+                let tick = self.tick;
+                let (axis, sim) = &mut self.axes[index];
+                let Some(motion) = sim.held.take() else {
+                    return Reason::NotMoving;
+                };
+                sim.state.flags = AxisFlags(sim.state.flags).with(AxisFlags::HELD, false).0;
+                Self::start(axis, sim, motion, tick);
+            }
         }
         Reason::Accepted
     }
@@ -395,7 +448,9 @@ impl Model {
 
     /// Starts an accepted motion on the simulated axis.
     fn start(axis: &FakeAxis, sim: &mut SimAxis, motion: Motion, tick: u64) {
+        sim.held = None;
         let state = &mut sim.state;
+        state.flags = AxisFlags(state.flags).with(AxisFlags::HELD, false).0;
         state.mode = motion.mode() as u8;
         match motion {
             Motion::Position { target } => {
@@ -520,7 +575,9 @@ impl Model {
                     f64::from(u8::from(on != signal.invert)),
                 )
             }
-            SignalKind::AnalogIn => (sim.raw * signal.scale + signal.offset, sim.raw),
+            SignalKind::AnalogIn | SignalKind::Capture | SignalKind::Trigger => {
+                (sim.raw * signal.scale + signal.offset, sim.raw)
+            }
         };
         let flags = SignalFlags::default()
             .with(SignalFlags::STALE, !online)
@@ -535,6 +592,9 @@ impl Model {
             kind: signal.kind as u8,
             reserved: [0; 3],
             claimed_by: sim.claimed_by,
+            event_tick: sim.event_tick,
+            sequence: sim.sequence,
+            reserved2: 0,
         }
     }
 

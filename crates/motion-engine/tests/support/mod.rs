@@ -30,6 +30,11 @@ pub struct BoardControl {
     pub inputs: [f64; 8],
     /// Pins 0..8: the last level the driver wrote to an output (`None`: never).
     pub outputs: [Option<bool>; 8],
+    /// Pins 0..8: the last value `set_pin_value` gave (`None`: never; read back as the
+    /// pin's value).
+    pub values: [Option<f64>; 8],
+    /// Pins 0..8: events (captures, pulses) the board reported.
+    pub events: [u32; 8],
     /// The board still has its start-up to do: `status().online` is false while set.
     pub starting: bool,
     /// The smallest velocity and acceleration the board represents (read when the engine
@@ -351,14 +356,31 @@ impl Driver for IdealBoard {
     fn read_pin(&self, pin: Pin) -> Option<PinReading> {
         let control = self.control();
         let index = usize::from(pin.0);
-        let value = match control.outputs.get(index)? {
-            Some(level) => f64::from(u8::from(*level)),
-            None => control.inputs[index],
+        let value = match (control.outputs.get(index)?, control.values[index]) {
+            (_, Some(value)) => value,
+            (Some(level), None) => f64::from(u8::from(*level)),
+            (None, None) => control.inputs[index],
         };
         Some(PinReading {
             value,
             refreshed_at: self.last,
+            events: control.events[index],
         })
+    }
+    fn set_pin_value(&mut self, _: Duration, pin: Pin, value: f64) -> Result<(), GoalError> {
+        if !self.link_up {
+            return Err(GoalError::Offline);
+        }
+        if value.abs() > 1e9 {
+            return Err(GoalError::OutOfBoardRange(GoalKind::Position));
+        }
+        let mut control = self.control();
+        let slot = control
+            .values
+            .get_mut(usize::from(pin.0))
+            .ok_or(GoalError::NoSuchPin(pin))?;
+        *slot = Some(value.round());
+        Ok(())
     }
     fn set_output(&mut self, _: Duration, pin: Pin, high: bool) -> Result<(), GoalError> {
         if !self.link_up {

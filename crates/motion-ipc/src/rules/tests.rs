@@ -442,3 +442,106 @@ fn rates_below_the_board_s_smallest_step_are_refused() {
         Verdict::Move { .. }
     ));
 }
+
+#[test]
+fn a_trigger_takes_its_compare_position_and_a_capture_takes_nothing() {
+    let mut w = world();
+    for kind in [SignalKind::Trigger, SignalKind::Capture] {
+        w.signals.push(SignalFacts {
+            kind,
+            claimed_by: ClientId::NONE,
+            device: DeviceState::Online,
+            link_up: true,
+        });
+    }
+    let set = |index: u32, value: f64| {
+        CommandRequest::for_signal(ME, 1, index, CommandKind::SetOutput)
+            .with_values([value, 0.0, 0.0])
+    };
+    for value in [-12.5, 0.0, 0.5, 1e6] {
+        assert_eq!(
+            judge(&set(2, value), ME, &w),
+            Verdict::SetValue { signal: 2, value },
+            "any position: the board says what it can hold"
+        );
+    }
+    assert_eq!(
+        judge(&set(3, 1.0), ME, &w),
+        Verdict::Refused(Reason::NotAnOutput)
+    );
+    w.signals[2].claimed_by = OTHER;
+    assert_eq!(
+        judge(&set(2, 5.0), ME, &w),
+        Verdict::Refused(Reason::ClaimedByOther)
+    );
+    w.signals[2].claimed_by = ClientId::NONE;
+    w.estop = true;
+    assert_eq!(
+        judge(&set(2, 5.0), ME, &w),
+        Verdict::Refused(Reason::EstopLatched)
+    );
+}
+
+#[test]
+fn hold_and_resume_of_an_axis_follow_the_motion_rules() {
+    let mut w = world();
+    assert_eq!(
+        verdict(&w, CommandKind::Hold, [0.0; 3]),
+        Verdict::HoldAxis(0)
+    );
+    assert_eq!(
+        verdict(&w, CommandKind::Resume, [0.0; 3]),
+        Verdict::ResumeAxis(0)
+    );
+    w.axes[0].group_motion = true;
+    assert_eq!(refused(&w, CommandKind::Hold, [0.0; 3]), Reason::GroupBusy);
+    w.axes[0].group_motion = false;
+    w.axes[0].claimed_by = OTHER;
+    assert_eq!(
+        refused(&w, CommandKind::Resume, [0.0; 3]),
+        Reason::ClaimedByOther
+    );
+    w.axes[0].claimed_by = ClientId::NONE;
+    w.axes[0].capabilities = Capabilities::NONE.with(CommandKind::Stop);
+    assert_eq!(
+        refused(&w, CommandKind::Hold, [0.0; 3]),
+        Reason::Unsupported
+    );
+    w = world();
+    w.axes[0].fault = FaultCode::LimitExceeded;
+    assert_eq!(
+        verdict(&w, CommandKind::Hold, [0.0; 3]),
+        Verdict::HoldAxis(0),
+        "holding never leads further out"
+    );
+    assert_eq!(
+        refused(&w, CommandKind::Resume, [0.0; 3]),
+        Reason::AxisFaulted
+    );
+    w.axes[0].fault = FaultCode::FollowingError;
+    assert_eq!(
+        refused(&w, CommandKind::Hold, [0.0; 3]),
+        Reason::AxisFaulted
+    );
+    w = world();
+    w.estop = true;
+    assert_eq!(
+        refused(&w, CommandKind::Resume, [0.0; 3]),
+        Reason::EstopLatched
+    );
+    w.estop = false;
+    w.axes[0].device = DeviceState::Starting;
+    assert_eq!(
+        refused(&w, CommandKind::Hold, [0.0; 3]),
+        Reason::DeviceStarting
+    );
+    // Feed, cancel, run and stream stay a group's.
+    let w = world();
+    for kind in [CommandKind::Feed, CommandKind::Cancel, CommandKind::Stream] {
+        assert_eq!(
+            refused(&w, kind, [0.0; 3]),
+            Reason::UnknownTarget,
+            "{kind:?}"
+        );
+    }
+}

@@ -403,7 +403,7 @@ fn flag_sets() -> Vec<Enum> {
             "AxisFlags",
             Scalar::U32,
             "Bits of `AxisState.flags`.",
-            bits!(AxisFlags: MOVING, HOMED, AT_LIMIT, STALE, FAULT, CLAIMED, ARRIVED, ESTOPPED, DEADMAN_EXPIRED),
+            bits!(AxisFlags: MOVING, HOMED, AT_LIMIT, STALE, FAULT, CLAIMED, ARRIVED, ESTOPPED, DEADMAN_EXPIRED, HELD),
         ),
         flags(
             "FrameFlags",

@@ -76,8 +76,9 @@ fn command_reply_golden_bytes() {
 
 /// `MotionFrame`'s table: tick @ 8, group_count @ 44, devices @ 48, axes @ 80 (96 bytes each:
 /// position @ 0, flags @ 40, mode @ 46, claimed_by @ 48, desired_position @ 80), signals @
-/// 12368 (48 bytes each), wire @ 15440 (24 bytes each: goal_tick @ 0, wire_tick @ 8,
-/// wire_ns @ 16), groups @ 18512 (152 bytes each: path_id @ 16, motion @ 80); 20944 bytes.
+/// 12368 (64 bytes each: event_tick @ 48, sequence @ 56), wire @ 16464 (24 bytes each:
+/// goal_tick @ 0, wire_tick @ 8, wire_ns @ 16), groups @ 19536 (152 bytes each: path_id @
+/// 16, motion @ 80); 21968 bytes.
 #[test]
 fn frame_fields_sit_at_their_documented_offsets_and_padding_is_zero() {
     let mut frame = MotionFrame::EMPTY;
@@ -89,9 +90,11 @@ fn frame_fields_sit_at_their_documented_offsets_and_padding_is_zero() {
     frame.axes[1].flags = AxisFlags::MOVING.with(AxisFlags::HOMED, true).0;
     frame.axes[1].mode = 5;
     frame.axes[1].claimed_by = ClientId::from_u128(7);
-    frame.signal_count = 1;
+    frame.signal_count = 2;
     frame.signals[0].value = 1.0;
     frame.signals[0].kind = 2;
+    frame.signals[1].event_tick = 98;
+    frame.signals[1].sequence = 3;
     frame.wire[1] = AxisWire {
         goal_tick: 5,
         wire_tick: 6,
@@ -102,10 +105,10 @@ fn frame_fields_sit_at_their_documented_offsets_and_padding_is_zero() {
     frame.groups[0].path_id = 11;
     frame.groups[0].motion = 1;
     let bytes = encode(&frame);
-    assert_eq!(bytes.len(), 20944);
-    assert_eq!(le_u64(&bytes, 15440 + 24), 5);
-    assert_eq!(le_u64(&bytes, 15440 + 24 + 8), 6);
-    assert_eq!(le_u64(&bytes, 15440 + 24 + 16), 77);
+    assert_eq!(bytes.len(), 21968);
+    assert_eq!(le_u64(&bytes, 16464 + 24), 5);
+    assert_eq!(le_u64(&bytes, 16464 + 24 + 8), 6);
+    assert_eq!(le_u64(&bytes, 16464 + 24 + 16), 77);
     assert_eq!(le_u64(&bytes, 8), 99);
     assert_eq!(le_u32(&bytes, 44), 1);
     assert_eq!(bytes[48], 1);
@@ -117,8 +120,11 @@ fn frame_fields_sit_at_their_documented_offsets_and_padding_is_zero() {
     assert_eq!(le_f64(&bytes, axis1 + 80), 3.25);
     assert_eq!(le_f64(&bytes, 12368), 1.0);
     assert_eq!(bytes[12368 + 28], 2);
-    assert_eq!(le_u64(&bytes, 18512 + 16), 11);
-    assert_eq!(bytes[18512 + 80], 1);
+    assert_eq!(le_u64(&bytes, 12368 + 64 + 48), 98);
+    assert_eq!(le_u32(&bytes, 12368 + 64 + 56), 3);
+    assert_eq!(le_u32(&bytes, 12368 + 64 + 60), 0);
+    assert_eq!(le_u64(&bytes, 19536 + 16), 11);
+    assert_eq!(bytes[19536 + 80], 1);
     // `SignalState` has 3 reserved bytes at 29 and nothing after `kind`'s block but them:
     // they are zero, and so is everything of an unused axis but its STALE flag.
     assert_eq!(&bytes[12368 + 29..12368 + 32], &[0, 0, 0]);
@@ -134,7 +140,7 @@ fn wrong_sizes_are_refused_with_both_sizes() {
         decode::<MotionFrame>(&bytes[..100]),
         Err(WireError::Size {
             what: "MotionFrame",
-            expected: 20944,
+            expected: 21968,
             got: 100
         })
     );
@@ -249,9 +255,19 @@ fn signal_state() -> impl Strategy<Value = SignalState> {
         any::<u8>(),
         any::<[u8; 3]>(),
         any::<u128>(),
+        any::<(u64, u32, u32)>(),
     )
         .prop_map(
-            |(value, raw, last_refresh_tick, flags, kind, reserved, claimed_by)| SignalState {
+            |(
+                value,
+                raw,
+                last_refresh_tick,
+                flags,
+                kind,
+                reserved,
+                claimed_by,
+                (event_tick, sequence, reserved2),
+            )| SignalState {
                 value,
                 raw,
                 last_refresh_tick,
@@ -259,6 +275,9 @@ fn signal_state() -> impl Strategy<Value = SignalState> {
                 kind,
                 reserved,
                 claimed_by: ClientId::from_u128(claimed_by),
+                event_tick,
+                sequence,
+                reserved2,
             },
         )
 }

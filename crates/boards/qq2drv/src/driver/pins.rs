@@ -188,6 +188,7 @@ impl InputBits {
         PinReading {
             value: if bits & bit != 0 { 1.0 } else { 0.0 },
             refreshed_at: self.refreshed_at,
+            events: 0,
         }
     }
 

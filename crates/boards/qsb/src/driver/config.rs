@@ -10,6 +10,7 @@ use ::qsb::{
 
 use super::counter::CounterSetup;
 pub use super::io::{EnableOutput, QsbIo};
+use super::trigger::TriggerSetup;
 
 /// Bits on the wire per byte (8N1).
 const BITS_PER_BYTE: u64 = 10;
@@ -86,6 +87,9 @@ pub struct QsbDriverConfig {
     pub io: QsbIo,
     /// The counter mode of normal operation (MDR0, DTR).
     pub counter: CounterSetup,
+    /// Capture on index, the trigger output and its compare position (MDR1 B4–B7, DIG
+    /// I/O CONFIG B12, DTR).
+    pub trigger: TriggerSetup,
 }
 
 impl Default for QsbDriverConfig {
@@ -107,6 +111,7 @@ impl Default for QsbDriverConfig {
             input_mode: EncoderMode::Quadrature,
             io: QsbIo::default(),
             counter: CounterSetup::default(),
+            trigger: TriggerSetup::default(),
         }
     }
 }
@@ -143,13 +148,16 @@ impl QsbDriverConfig {
     }
 
     /// Streams that may each send a line at one data output tick: READ ENCODER, and (as
-    /// configured) MD STATUS and STR (home search) on a driving -M, DIG I/O, CAPTURE.
+    /// configured) MD STATUS and STR (home search) on a driving -M, STR (trigger pulses),
+    /// DIG I/O, CAPTURE.
     fn streams(&self) -> u64 {
         let drive = self.variant == ProductType::M
             && self.motor_drive
             && self.input_mode == EncoderMode::Quadrature;
         let dio = self.io.digital_in | self.io.digital_out != 0;
-        1 + 2 * u64::from(drive) + u64::from(dio) + u64::from(self.io.capture.is_some())
+        let capture = self.io.capture.is_some() || self.trigger.index;
+        let str_stream = drive || self.trigger.pulse;
+        1 + u64::from(drive) + u64::from(str_stream) + u64::from(dio) + u64::from(capture)
     }
 
     /// Stream lines that may be queued in the board's UART ahead of a reply: every

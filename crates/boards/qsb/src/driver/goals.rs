@@ -29,13 +29,10 @@ const HOME_TIME_FACTOR: f64 = 2.0;
 const HOME_TIME_SLACK: Duration = Duration::from_millis(100);
 
 impl QsbDriver {
-    /// The counter back in normal operation and no STR stream: the prefix of every plan
-    /// that may replace a home search.
+    /// The counter back in normal operation (MDR0, DTR, MDR1) and STR as normal
+    /// operation streams it: the prefix of every plan that may replace a home search.
     fn normal_counter(&self) -> [Step; 2] {
-        [
-            Step::Ensure(Write::Mdr0(self.config.counter.mdr0())),
-            Step::EndStrStream,
-        ]
+        [Step::NormalCounter, Step::EndStrStream]
     }
 
     /// Whether channel 0 drives the -M's stepper: a -M (as reported), its motor drive
@@ -101,23 +98,21 @@ impl QsbDriver {
         match goal {
             Goal::SetPosition { counts } => {
                 let value = counts_to_i32(counts).ok_or(out_of_range)?;
-                let load = [
+                // DTR is the range limit or the modulus: the value must be a count the
+                // counter can hold.
+                if let Some(limit) = self.config.counter.dtr()
+                    && (value < 0 || value as u32 > limit)
+                {
+                    return Err(out_of_range);
+                }
+                // No trigger while DTR holds the value (CNTR = DTR after the load); DTR
+                // goes back to the limit or the compare position after it.
+                self.preset.replace(&[
+                    Step::Ensure(Write::Mdr1(self.quiet_mdr1())),
                     Step::Ensure(Write::Dtr(value as u32)),
                     Step::Send(Request::Write(Write::Load(LoadTarget::DtrToCntr))),
-                ];
-                match self.config.counter.dtr() {
-                    // DTR is the range limit or the modulus: the value must be a count
-                    // the counter can hold, and DTR goes back to the limit after the load.
-                    Some(limit) => {
-                        if value < 0 || value as u32 > limit {
-                            return Err(out_of_range);
-                        }
-                        let [dtr, load] = load;
-                        self.preset
-                            .replace(&[dtr, load, Step::Ensure(Write::Dtr(limit))]);
-                    }
-                    None => self.preset.replace(&load),
-                }
+                    Step::NormalCounter,
+                ]);
                 if driven {
                     // The engine holds after a set-position: so does the motor.
                     self.replace_goal(kind, &[Step::StopIfMoving]);
@@ -216,10 +211,13 @@ impl QsbDriver {
                     let mdr0 = counter.homing_mdr0(IndexMode::LoadCntr);
                     (Step::Ensure(Write::Dtr(offset as u32)), mdr0)
                 };
+                // No trigger and no capture on index during the search: DTR and the index
+                // are the search's; normal operation's come back after it.
                 self.replace_goal(
                     kind,
                     &[
                         energise,
+                        Step::Ensure(Write::Mdr1(self.quiet_mdr1())),
                         Step::Ensure(Write::Accel(accel)),
                         Step::Ensure(Write::JogRate(rate)),
                         dtr,
@@ -230,6 +228,7 @@ impl QsbDriver {
                         Step::WaitIndex,
                         Step::Ensure(Write::Mdr0(counter.mdr0())),
                         command(QsbCommand::MotorStop),
+                        Step::NormalCounter,
                         Step::EndStrStream,
                     ],
                 );

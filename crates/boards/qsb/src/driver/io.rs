@@ -62,7 +62,8 @@ impl QsbIo {
             (Some(PinRole::Io(bit)), SignalKind::DigitalIn) => self.digital_in |= 1 << bit,
             (Some(PinRole::Io(bit)), SignalKind::DigitalOut) => self.digital_out |= 1 << bit,
             (Some(PinRole::Encoder), SignalKind::AnalogIn) => self.encoder = true,
-            (Some(PinRole::Capture), SignalKind::AnalogIn) => {}
+            (Some(PinRole::Capture), SignalKind::AnalogIn | SignalKind::Capture)
+            | (Some(PinRole::Trigger), SignalKind::Trigger) => {}
             _ => return false,
         }
         true
@@ -71,6 +72,7 @@ impl QsbIo {
 
 const DIGITAL: SignalKinds = SignalKinds::of(&[SignalKind::DigitalIn, SignalKind::DigitalOut]);
 const ANALOG: SignalKinds = SignalKinds::of(&[SignalKind::AnalogIn]);
+const CAPTURED: SignalKinds = SignalKinds::of(&[SignalKind::Capture, SignalKind::AnalogIn]);
 
 const fn io(name: &'static str, description: &'static str) -> PinInfo {
     PinInfo {
@@ -92,10 +94,20 @@ const ENCODER: PinInfo = PinInfo {
 
 const CAPTURE: PinInfo = PinInfo {
     name: "capture",
-    kinds: ANALOG,
+    kinds: CAPTURED,
     full_scale: 2_147_483_647.0,
     description: "CAPTURE (05): the encoder count loaded by the capture_input edge (DIG I/O \
-                  CONFIG B7-B0 interrupt), signed counts",
+                  CONFIG B7-B0 interrupt) or by the index (capture_index, MDR1 B4), signed \
+                  counts; each capture one event",
+};
+
+const TRIGGER: PinInfo = PinInfo {
+    name: "trigger",
+    kinds: SignalKinds::of(&[SignalKind::Trigger]),
+    full_scale: 2_147_483_647.0,
+    description: "DIG I/O bit 0 pulsed for INTERVAL RATE by the counter's events (trigger_on: \
+                  MDR1 B4-B7, DIG I/O CONFIG B12); value: the compare position (DTR, counts), \
+                  each pulse one event",
 };
 
 const IO0: PinInfo = io(
@@ -121,13 +133,15 @@ const M_PINS: &[PinInfo] = &[
     ),
     ENCODER,
     CAPTURE,
+    TRIGGER,
 ];
-const D_PINS: &[PinInfo] = &[IO0, CAPTURE];
-const S_PINS: &[PinInfo] = &[ENCODER];
+const D_PINS: &[PinInfo] = &[IO0, CAPTURE, TRIGGER];
+const S_PINS: &[PinInfo] = &[ENCODER, CAPTURE];
 
 /// The QSB's I/O pins for `product` (command list "QSB Variations", DIG I/O, READ ENCODER,
-/// CAPTURE): `io0`..`io3` on the -M, `io0` on the -D, `encoder` (PWM / analog input modes)
-/// on the -S and -M, `capture` on the -M and -D.
+/// CAPTURE, MDR1): `io0`..`io3` on the -M, `io0` on the -D, `encoder` (PWM / analog input
+/// modes) on the -S and -M, `capture` on all three (an input edge: -M, -D; the index:
+/// all), `trigger` (bit 0 pulsed) on the -M and -D.
 pub fn pins(product: ProductType) -> &'static [PinInfo] {
     match product {
         ProductType::M => M_PINS,
@@ -145,6 +159,8 @@ pub enum PinRole {
     Encoder,
     /// The CAPTURE register.
     Capture,
+    /// DIG I/O bit 0 as the trigger output; its value the compare position.
+    Trigger,
 }
 
 impl PinRole {
@@ -154,6 +170,7 @@ impl PinRole {
         Some(match info.name.as_bytes() {
             b"encoder" => Self::Encoder,
             b"capture" => Self::Capture,
+            b"trigger" => Self::Trigger,
             [b'i', b'o', digit] => Self::Io(digit.checked_sub(b'0')?),
             _ => return None,
         })
@@ -225,6 +242,12 @@ pub(crate) fn sanitise(config: &mut super::QsbDriverConfig) {
     if let Some(enable) = config.enable {
         allowed &= !(1 << enable.bit);
     }
+    // The trigger output is bit 0 of a product with digital I/O.
+    let trigger = &mut config.trigger;
+    trigger.pulse &= bits_of(product) & allowed & 1 != 0;
+    if trigger.pulse {
+        allowed &= !1;
+    }
     let io = &mut config.io;
     io.digital_in &= allowed;
     io.digital_out &= allowed & !io.digital_in;
@@ -239,7 +262,10 @@ impl QsbDriver {
     /// and 02).
     pub(super) fn dio_used(&self) -> bool {
         let io = self.config.io;
-        self.config.enable.is_some() || io.digital_in | io.digital_out != 0 || io.capture.is_some()
+        self.config.enable.is_some()
+            || io.digital_in | io.digital_out != 0
+            || io.capture.is_some()
+            || self.config.trigger.pulse
     }
 
     /// Whether the DIG I/O register is streamed (the levels of the digital signals; in
@@ -249,25 +275,31 @@ impl QsbDriver {
         io.digital_in | io.digital_out != 0 && self.config.input_mode != EncoderMode::Analog
     }
 
-    /// DIG I/O CONFIG as configured: outputs, the capture interrupt; the motor drive's
-    /// bits stay inputs ("Be careful if the motor drive is enabled, it uses I/O bits 1
-    /// and 2").
+    /// DIG I/O CONFIG as configured: outputs, the capture interrupt, the trigger pulse
+    /// on bit 0 (an output); the motor drive's bits stay inputs ("Be careful if the motor
+    /// drive is enabled, it uses I/O bits 1 and 2").
     pub(super) fn dio_config(&self) -> DigIoConfig {
         let io = self.config.io;
         let enable = self.config.enable.map_or(0, |e| 1 << e.bit);
         let capture = io.capture.map_or(0, |c| 1 << c.bit);
         let falling = io.capture.filter(|c| c.falling).map_or(0, |c| 1 << c.bit);
+        let pulse = self.config.trigger.pulse;
         DigIoConfig {
             falling_edge: falling,
             interrupt_enable: capture,
-            output: io.digital_out | enable,
-            trigger_pulse: false,
+            output: io.digital_out | enable | u8::from(pulse),
+            trigger_pulse: pulse,
         }
     }
 
-    /// The DIG I/O latch with the enable line for `energised`.
+    /// The DIG I/O latch with the enable line for `energised`, and the trigger output at
+    /// rest ("The output pulse polarity depends on the initial output state of digital
+    /// I/O bit 0").
     pub(super) fn latch_with(&self, energised: bool) -> u8 {
         let mut latch = self.io.outputs | !self.config.io.digital_out;
+        if self.config.trigger.pulse && self.config.trigger.active_high {
+            latch &= !1;
+        }
         if let Some(enable) = self.config.enable {
             let high = energised == enable.active_high;
             latch = if high {
@@ -334,10 +366,7 @@ impl QsbDriver {
     pub(super) fn pin_reading(&self, pin: Pin) -> Option<PinReading> {
         let io = self.config.io;
         let reading = |value: Option<f64>, at: Option<Duration>| match value {
-            Some(value) => PinReading {
-                value,
-                refreshed_at: at,
-            },
+            Some(value) => PinReading::at(value, at),
             None => PinReading::UNKNOWN,
         };
         match PinRole::of(self.config.variant, pin)? {
@@ -353,11 +382,30 @@ impl QsbDriver {
             PinRole::Encoder if io.encoder => {
                 Some(reading(self.io.encoder.map(f64::from), self.io.encoder_at))
             }
-            PinRole::Capture if io.capture.is_some() => Some(reading(
-                self.io.capture.map(f64::from),
-                self.on_change_at(self.io.capture_at, self.io.capture_streaming),
-            )),
-            PinRole::Io(_) | PinRole::Encoder | PinRole::Capture => None,
+            PinRole::Capture if io.capture.is_some() || self.config.trigger.index => {
+                Some(PinReading {
+                    events: self.events.captures,
+                    ..reading(
+                        self.io.capture.map(f64::from),
+                        self.on_change_at(self.io.capture_at, self.io.capture_streaming),
+                    )
+                })
+            }
+            PinRole::Trigger if self.config.trigger.pulse => {
+                // Known since the board took the compare position (or came online), and
+                // while STR streams: a pulse would have shown.
+                let since = self
+                    .status
+                    .online
+                    .then_some(self.online_at)
+                    .max(self.events.compare_at);
+                Some(PinReading {
+                    value: f64::from(self.events.compare_held.unwrap_or(0)),
+                    refreshed_at: self.on_change_at(since, self.str_streaming),
+                    events: self.events.pulses,
+                })
+            }
+            PinRole::Io(_) | PinRole::Encoder | PinRole::Capture | PinRole::Trigger => None,
         }
     }
 

@@ -75,7 +75,10 @@
 //! [`pins`]: `io0`..`io3` (-M), `io0` (-D): digital in or open-drain out (DIG I/O, set
 //! with [`Driver::set_output`], read back as the level measured at the pin from the `S01`
 //! stream, sent on change); `encoder` (-S, -M): the PWM or analog value of READ ENCODER;
-//! `capture` (-M, -D): CAPTURE, the count an edge of [`QsbIo::capture`]'s input loaded.
+//! `capture` (-M, -D, -S): CAPTURE, the count an edge of [`QsbIo::capture`]'s input (or
+//! an index, [`TriggerSetup::index`]) loaded, each capture one event; `trigger` (-M, -D):
+//! DIG I/O bit 0 pulsed by the counter's events ([`TriggerSetup`]), its value the compare
+//! position, each pulse one event (module `trigger`).
 //! While the -M drives its motor, io1 and io2 are its step and direction lines and are no
 //! signals; the enable line's bit is no signal either.
 //!
@@ -123,6 +126,9 @@ mod tests_line;
 mod tests_machine;
 #[cfg(test)]
 mod tests_noise;
+#[cfg(test)]
+mod tests_trigger;
+mod trigger;
 mod wire;
 
 use core::time::Duration;
@@ -133,6 +139,7 @@ pub use config::QsbDriverConfig;
 pub use counter::CounterSetup;
 pub use io::{CaptureInput, EnableOutput, MOTOR_DRIVE_BITS, PinRole, QsbIo, pins};
 pub use spec::{LONGEST_INTERVAL_TICKS, TICK, interval_ticks};
+pub use trigger::TriggerSetup;
 
 use encoder::EncoderTrack;
 use guard::StampGuard;
@@ -142,6 +149,7 @@ use motion_drivers::{
     IoStamps, Model, Pin, PinReading, Priority, RateFloor, Transmit,
 };
 use program::Program;
+use trigger::EventState;
 use wire::{InFlight, Origin};
 
 /// Tries of one request before the board is declared not responding.
@@ -208,6 +216,8 @@ pub struct QsbDriver {
     homed: bool,
     arrived: bool,
     io: IoState,
+    /// Captures, trigger pulses and the compare position.
+    events: EventState,
     /// The link's write reports and horizon.
     io_stamps: IoStamps,
     /// No request of the goal set last has been sent yet.
@@ -220,6 +230,10 @@ impl QsbDriver {
     pub fn new(mut config: QsbDriverConfig) -> Self {
         io::sanitise(&mut config);
         let wrap = config.counter.wrap();
+        let events = EventState {
+            compare: config.trigger.compare,
+            ..EventState::default()
+        };
         let mut driver = Self {
             config,
             decoder: ResponseDecoder::new(),
@@ -258,6 +272,7 @@ impl QsbDriver {
             homed: false,
             arrived: false,
             io: IoState::new(),
+            events,
             io_stamps: IoStamps::default(),
             goal_unsent: false,
         };
@@ -460,6 +475,17 @@ impl Driver for QsbDriver {
 
     fn set_output(&mut self, now: Duration, pin: Pin, high: bool) -> Result<(), GoalError> {
         let result = self.drive_output(pin, high);
+        self.settle(now);
+        result
+    }
+
+    /// The `trigger` pin's compare position (counts), with `trigger_on` "match" in
+    /// free-running or single-cycle counting.
+    fn set_pin_value(&mut self, now: Duration, pin: Pin, value: f64) -> Result<(), GoalError> {
+        if PinRole::of(self.config.variant, pin) != Some(PinRole::Trigger) {
+            return Err(GoalError::NoSuchPin(pin));
+        }
+        let result = self.set_compare(pin, value);
         self.settle(now);
         result
     }

@@ -12,8 +12,13 @@ pub(crate) enum Step {
     Send(Request),
     /// Write the register unless the board is known to hold the value already.
     Ensure(Write),
-    /// Cancel the STR stream (a read of STR) if it runs.
+    /// STR as normal operation has it: streamed when the trigger's pulses are counted,
+    /// else not (a read of STR cancels its stream).
     EndStrStream,
+    /// DTR, MDR0 and MDR1 of normal operation (count limit or compare position, counter
+    /// mode, triggers), each written unless the board holds it; the step stays at the
+    /// front until all three are held.
+    NormalCounter,
     /// Write DIG I/O with the signal outputs and the enable line, unless the board holds
     /// them already.
     Outputs,

@@ -10,6 +10,7 @@ use ::qsb::{
 
 use super::encoder::Sample;
 use super::guard::StampVerdict;
+use super::program::Step;
 use super::{InFlight, MAX_ATTEMPTS, Origin, QsbDriver};
 use motion_drivers::{ChannelState, DeviceFault, GoalKind};
 
@@ -80,7 +81,10 @@ impl QsbDriver {
             .filter(|flight| answers(flight.request, &response));
         if response.ty == ResponseType::Stream {
             self.status.replies = self.status.replies.saturating_add(1);
-            self.on_stream(now, &response);
+            // The `s` line answering a stream request is the register as it is; the
+            // lines after it are changes (a capture, a latch).
+            let starts = flight.is_some_and(|f| matches!(f.request, Request::Stream(_)));
+            self.on_stream(now, &response, starts);
         }
         match flight {
             Some(flight) => self.on_answer(now, flight, &response),
@@ -92,7 +96,7 @@ impl QsbDriver {
     }
 
     /// A streamed line (or the `s` answer that starts a stream).
-    fn on_stream(&mut self, now: Duration, response: &Response) {
+    fn on_stream(&mut self, now: Duration, response: &Response, starts: bool) {
         match Register::from_u8(response.register) {
             Some(Register::ReadEncoder) => {
                 let Some(time_stamp) = response.time_stamp else {
@@ -152,20 +156,24 @@ impl QsbDriver {
                 }
             }
             Some(Register::Str) => {
-                if let Ok(status) = Str::from_data(response.data)
-                    && status.index
-                    && self.index_armed
-                {
+                let Ok(status) = Str::from_data(response.data) else {
+                    return;
+                };
+                if status.index && self.index_armed {
                     // The index reset CNTR (MDR0 0x63); this tick's encoder line is the
                     // first after the jump.
                     self.index_seen = true;
                     self.index_armed = false;
                     self.rebase_pending = true;
                 }
+                self.trigger_status(status);
             }
             Some(register @ (Register::DigIo | Register::Capture))
                 if response.time_stamp.is_some() =>
             {
+                if register == Register::Capture && !starts {
+                    self.events.captures = self.events.captures.wrapping_add(1);
+                }
                 self.io_line(now, register, response.data);
             }
             _ => {}
@@ -188,7 +196,19 @@ impl QsbDriver {
             self.status.fault = None;
         }
         match flight.request {
-            Request::Write(write) => self.written(write, response.time_stamp),
+            // The pulse count's re-arming: the home search's index latch is none of its
+            // business.
+            Request::Write(Write::Clear(::qsb::ClearTarget::Str))
+                if flight.origin == Origin::Event =>
+            {
+                self.events.latched = false;
+            }
+            Request::Write(write) => {
+                if let Write::Dtr(value) = write {
+                    self.dtr_written(value, now);
+                }
+                self.written(write, response.time_stamp);
+            }
             Request::Read(Register::Version) => {
                 if !self.version_read(now, flight.origin, response.data) {
                     return;
@@ -218,9 +238,12 @@ impl QsbDriver {
             Origin::Setup => &mut self.setup,
             Origin::Preset => &mut self.preset,
             Origin::Goal => &mut self.goal,
-            Origin::Io | Origin::Probe => return,
+            Origin::Io | Origin::Event | Origin::Probe => return,
         };
-        if program.generation() == flight.generation {
+        // Normal operation's counter registers are several writes: the step goes once
+        // the board holds them all (`settle`).
+        if program.generation() == flight.generation && program.front() != Some(Step::NormalCounter)
+        {
             program.pop();
         }
     }
@@ -258,6 +281,7 @@ impl QsbDriver {
                 self.homed = true;
             }
             Write::Clear(::qsb::ClearTarget::Str) => {
+                self.events.latched = false;
                 // Armed when the index acts on the counter (a home search's MDR0).
                 self.index_armed = self
                     .board
@@ -269,6 +293,7 @@ impl QsbDriver {
                 self.index_seen = false;
             }
             Write::Mdr0(mdr0) if mdr0.index == IndexMode::Disabled => self.index_armed = false,
+            Write::Mdr1(mdr1) => self.mdr1_written(mdr1),
             Write::Eor(eor) => self.eor_configured = eor.time_stamp,
             _ => {}
         }
@@ -341,7 +366,7 @@ impl QsbDriver {
                     self.io.refused = Some(write.data() as u8);
                 }
             }
-            Origin::Preset | Origin::Goal | Origin::Probe => {}
+            Origin::Preset | Origin::Goal | Origin::Probe | Origin::Event => {}
         }
     }
 
@@ -391,7 +416,10 @@ impl QsbDriver {
 
     /// Channel state of channel 0.
     pub(super) fn channel_state(&self) -> ChannelState {
+        // A move paused by COMMAND 6 waits for its resume: it moves only while the drive
+        // still decelerates.
         let motion_pending = !self.goal.is_empty()
+            && self.goal.front() != Some(Step::Paused)
             && matches!(
                 self.goal_kind,
                 Some(

@@ -7,7 +7,9 @@ use core::time::Duration;
 
 use ::qsb::{CountMode, CycleMode, EncoderMode, IndexMode, IntervalRate, ProductType};
 
-use super::{CaptureInput, CounterSetup, EnableOutput, PinRole, QsbDriverConfig, QsbIo};
+use super::{
+    CaptureInput, CounterSetup, EnableOutput, PinRole, QsbDriverConfig, QsbIo, TriggerSetup,
+};
 use crate::{QsbDeviceKeys, QsbInputMode, QsbVariant};
 use motion_drivers::Pin;
 use motion_drivers::spec::{Direction, DriverAxis, DriverSpec, Param, ParamOwner, SpecError};
@@ -64,6 +66,36 @@ fn axis_of(spec: &DriverSpec) -> Option<(usize, &DriverAxis)> {
 /// The device's qsb keys (all `None` for a device without them).
 fn keys_of(spec: &DriverSpec) -> QsbDeviceKeys {
     spec.machine.get_or_default()
+}
+
+/// The trigger output and capture on index of the device's keys; the compare position in
+/// counts of the axis on channel 0 (`compare_position` × `counts_per_unit`, rounded).
+fn trigger_of(keys: &QsbDeviceKeys, axis: Option<&DriverAxis>) -> Result<TriggerSetup, SpecError> {
+    let sources = keys.trigger_on.unwrap_or_default();
+    let compare = match (keys.compare_position, axis) {
+        (Some(position), Some(axis)) => {
+            let counts = (position * axis.counts_per_unit).round();
+            let value = motion_base::counts_to_i32(counts).ok_or_else(|| SpecError {
+                channel: None,
+                key: "compare_position",
+                message: format!(
+                    "{position} {} is {counts} counts: beyond the 32-bit counter (DTR)",
+                    axis.unit
+                ),
+            })?;
+            Some(value)
+        }
+        _ => None,
+    };
+    Ok(TriggerSetup {
+        index: sources.index || keys.capture_index.unwrap_or(false),
+        on_match: sources.on_match,
+        underflow: sources.underflow,
+        overflow: sources.overflow,
+        pulse: sources.any(),
+        active_high: keys.trigger_active_high.unwrap_or(false),
+        compare: compare.filter(|_| sources.on_match),
+    })
 }
 
 /// A number as the config would write it (no trailing `.0` noise, full precision).
@@ -130,6 +162,7 @@ impl QsbDriverConfig {
             io.add(variant, signal.pin, signal.kind);
         }
         driver.io = io;
+        driver.trigger = trigger_of(&keys, axis.map(|(_, axis)| axis))?;
         Ok(driver)
     }
 
@@ -214,6 +247,30 @@ impl QsbDriverConfig {
             "capture_edge",
             if falling { "falling" } else { "rising" }.to_owned(),
         );
+        let trigger = self.trigger;
+        // MDR1 B4 "Trigger/Capture on Index": `capture_index`, or "index" in trigger_on.
+        row("capture_index", trigger.index.to_string());
+        row("trigger_on", trigger.sources_text());
+        let compare = match (trigger.compare, axis_of(spec)) {
+            (Some(counts), Some((_, axis))) => format!(
+                "{} {} ({counts} counts)",
+                number(f64::from(counts) / axis.counts_per_unit),
+                axis.unit
+            ),
+            _ => "none".to_owned(),
+        };
+        row("compare_position", compare);
+        row(
+            "trigger_active",
+            if trigger.active_high { "high" } else { "low" }.to_owned(),
+        );
+        if trigger.pulse {
+            // One register: the pulse is as long as the stream's data output interval.
+            row(
+                "trigger_pulse_ms",
+                format!("{} ms (INTERVAL RATE)", number(ms)),
+            );
+        }
         out
     }
 }

@@ -7,7 +7,7 @@ use core::time::Duration;
 
 use motion_base::FixedQueue;
 
-use ::qsb::{Mdr1, Mode, ProductType, QsbCommand, Register, Request, Write};
+use ::qsb::{Mode, ProductType, QsbCommand, Register, Request, Write};
 
 use super::config::DRIVER_EOR;
 use super::program::{self, Step};
@@ -47,19 +47,20 @@ impl QsbDriver {
         self.io.refused = None;
         self.io.dio_streaming = false;
         self.io.capture_streaming = false;
+        self.events.latched = false;
     }
 
     /// The configuration of the product VERSION reported (module docs, "Start-up").
     pub(super) fn configure(&mut self, product: ProductType) {
         let (rate, accel) = self.config.default_profile();
         let drive = self.drive_active();
-        let mdr1 = Mdr1 {
-            invert_index: self.config.invert_index,
-            ..Mdr1::default()
-        };
-        // DTR before MDR0: a range-limit or modulo-n mode starts with its limit.
+        let mdr1 = self.normal_mdr1();
+        // DTR before MDR0: a range-limit or modulo-n mode starts with its limit (the
+        // compare position, otherwise).
         let counter = self.config.counter;
-        let dtr = counter.dtr().map(|limit| Step::Ensure(Write::Dtr(limit)));
+        let dtr = self
+            .normal_dtr()
+            .map(|value| Step::Ensure(Write::Dtr(value)));
         let common = [
             Step::Ensure(Write::Eor(DRIVER_EOR)),
             Step::Ensure(Write::Mode(Mode {
@@ -107,8 +108,12 @@ impl QsbDriver {
         if has_dio && self.dio_streamed() {
             push(Step::Send(Request::Stream(Register::DigIo)));
         }
-        if self.config.io.capture.is_some() {
+        if self.config.io.capture.is_some() || self.config.trigger.index {
             push(Step::Send(Request::Stream(Register::Capture)));
+        }
+        if self.str_wanted() && has_dio {
+            // The trigger's pulses, as STR latches (cleared once the board is online).
+            push(Step::Send(Request::Stream(Register::Str)));
         }
         push(Step::Send(Request::Stream(Register::ReadEncoder)));
         push(Step::Online);

@@ -195,3 +195,44 @@ fn a_line_whose_rate_the_increments_miss_is_not_taken() {
         Ok(true)
     );
 }
+
+#[test]
+fn an_axis_s_own_move_is_held_with_command_6_and_rests_until_command_7() {
+    // `motionctl hold AXIS`: the engine asks the board to pause a plain position goal.
+    let mut bench = Bench::started(ProductType::M);
+    bench.tick(Some(MD_DONE));
+    bench
+        .driver
+        .set_goal(
+            bench.now,
+            0,
+            Goal::RampPosition {
+                counts: 2000.0,
+                velocity: 5_000.0,
+                accel: 20_000.0,
+            },
+        )
+        .expect("a move");
+    // MD ACCEL, MD STEP RATE, MD MOVE STEPS 200 (0xC8), COMMAND 8.
+    assert_eq!(bench.run(), ["W107D0", "W0F1F0", "W11C8", "W168"]);
+    bench.counter = 400;
+    bench.tick(Some(MD_MOVING));
+    assert!(bench.driver.channel(0).moving);
+    assert_eq!(bench.driver.pause_line(bench.now, 0), Ok(true));
+    assert_eq!(bench.run(), ["W166"]);
+    // At rest, paused: not moving (the engine's stop becomes its hold), not arrived.
+    for _ in 0..10 {
+        bench.tick(Some(MD_PAUSED));
+    }
+    let channel = bench.driver.channel(0);
+    assert!(!channel.moving && !channel.arrived, "{channel:?}");
+    assert_eq!(bench.driver.resume_line(bench.now, 0), Ok(true));
+    assert_eq!(bench.run(), ["W167"]);
+    bench.tick(Some(MD_MOVING));
+    assert!(bench.driver.channel(0).moving);
+    bench.counter = 2000;
+    bench.tick(Some(MD_DONE));
+    bench.tick(Some(MD_DONE));
+    assert_eq!(bench.run(), Vec::<String>::new());
+    assert!(bench.driver.channel(0).arrived);
+}

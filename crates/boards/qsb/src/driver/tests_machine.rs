@@ -271,7 +271,8 @@ fn digital_inputs_outputs_and_capture_are_read_and_driven() {
         bench.driver.read_pin(IO0),
         Some(PinReading {
             value: 1.0,
-            refreshed_at: Some(now)
+            refreshed_at: Some(now),
+            events: 0,
         })
     );
     assert_eq!(bench.driver.read_pin(IO3).map(|r| r.value), Some(1.0));

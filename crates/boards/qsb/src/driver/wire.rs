@@ -18,6 +18,8 @@ pub(super) enum Origin {
     Goal,
     /// A DIG I/O write of the signal outputs.
     Io,
+    /// A new compare position (DTR), or the STR clear that re-arms the pulse count.
+    Event,
     Probe,
 }
 
@@ -76,11 +78,17 @@ impl QsbDriver {
                 (self.config.enable.is_some() && !self.holds(write))
                     .then_some(Request::Write(write))
             }
+            Step::EndStrStream if self.str_wanted() => (!self.str_streaming
+                && !self
+                    .in_flight
+                    .is_some_and(|f| f.request == Request::Stream(Register::Str)))
+            .then_some(Request::Stream(Register::Str)),
             Step::EndStrStream => (self.str_streaming
                 || self
                     .in_flight
                     .is_some_and(|f| f.request == Request::Stream(Register::Str)))
             .then_some(Request::Read(Register::Str)),
+            Step::NormalCounter => self.normal_counter_write().map(Request::Write),
             // Unless the drive is known to be done (a motor command just sent may not show
             // in MD STATUS yet), stop it.
             Step::StopIfMoving => (!self.drive_done())
@@ -121,6 +129,9 @@ impl QsbDriver {
         }
         if let Some(write) = self.outputs_due() {
             return Some((Request::Write(write), Origin::Io, Priority::Command));
+        }
+        if let Some(write) = self.compare_due().or_else(|| self.trigger_clear_due()) {
+            return Some((Request::Write(write), Origin::Event, Priority::Command));
         }
         self.probe_due.then_some((
             Request::Read(Register::Version),
@@ -218,7 +229,7 @@ impl QsbDriver {
             Origin::Setup => self.setup.generation(),
             Origin::Preset => self.preset.generation(),
             Origin::Goal => self.goal.generation(),
-            Origin::Io => 0,
+            Origin::Io | Origin::Event => 0,
             Origin::Probe => {
                 self.probe_due = false;
                 self.samples_since_probe = false;

@@ -49,6 +49,8 @@ pub(crate) struct Counter {
     latches: Str,
     /// Single-cycle mode stopped at a carry or borrow.
     stopped: bool,
+    /// Captures made (an input edge, an index with MDR1 B4), for observation.
+    pub captures: u64,
 }
 
 impl Counter {
@@ -62,6 +64,7 @@ impl Counter {
             mdr1,
             latches: status,
             stopped: false,
+            captures: 0,
         }
     }
 
@@ -174,6 +177,7 @@ impl Counter {
         self.latches.index = true;
         if self.mdr1.trigger_on_index {
             self.capture = self.cntr;
+            self.captures += 1;
         }
         match self.mdr0.index {
             IndexMode::Disabled => {}
@@ -219,6 +223,7 @@ impl Counter {
     /// Loads CNTR into CAPTURE (a digital input interrupt).
     pub(crate) fn capture_now(&mut self) {
         self.capture = self.cntr;
+        self.captures += 1;
     }
 }
 

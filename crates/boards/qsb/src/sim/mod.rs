@@ -56,6 +56,10 @@
 //!   follows the step pulses only while its enable line (a DIG I/O bit) is active.
 //! - Index: one pulse per [`QsbSimConfig::cycles_per_rev`], a quarter cycle wide, acting
 //!   on its leading edge in the direction of motion (trailing edge with MDR1 B3).
+//! - Triggers: an index, a match (CNTR passing through DTR), an underflow or an overflow
+//!   enabled in MDR1 B4–B7 pulses DIG I/O bit 0 for INTERVAL RATE when DIG I/O CONFIG B12
+//!   is set (bit 0 toggles, and back; an event during a pulse lengthens it); MDR1 B4 also
+//!   captures at the index. STR latches CY, BW, CMP and IDX until CLEAR REG 3.
 //! - Digital I/O: open-drain outputs with pull-ups; [`QsbSim::set_digital_inputs`] pulls
 //!   pins low from outside. With the drive enabled, bit 1 is the step line (reads high)
 //!   and bit 2 the direction (1 = positive). The -D has bit 0 only, the -S none; missing
@@ -180,6 +184,8 @@ pub struct QsbSim {
     baud_change: Option<u32>,
     pending_baud: Option<(Duration, u32)>,
     pulse_end: Option<Duration>,
+    /// Trigger events that pulsed bit 0 since power-up (for observation).
+    trigger_pulses: u64,
     stats: QsbSimStats,
 }
 
@@ -206,6 +212,7 @@ impl QsbSim {
             baud_change: None,
             pending_baud: None,
             pulse_end: None,
+            trigger_pulses: 0,
             stats: QsbSimStats::default(),
             saved,
             config,
@@ -244,6 +251,7 @@ impl QsbSim {
         self.baud_change = None;
         self.pending_baud = None;
         self.pulse_end = None;
+        self.trigger_pulses = 0;
     }
 
     /// Power-cycles the board at `now` (USB unplugged and plugged back).
@@ -348,6 +356,28 @@ impl QsbSim {
     /// Levels at the digital I/O pins.
     pub fn digital_pins(&self) -> u8 {
         self.dio.pins()
+    }
+
+    /// Captures made since power-up (an enabled input edge, an index with MDR1 B4),
+    /// whether or not they changed CAPTURE.
+    pub fn captures(&self) -> u64 {
+        self.counter.captures
+    }
+
+    /// The CAPTURE register.
+    pub fn capture(&self) -> u32 {
+        self.counter.capture
+    }
+
+    /// Trigger events that pulsed DIG I/O bit 0 since power-up (MDR1 B4–B7 with DIG I/O
+    /// CONFIG B12; events during a pulse lengthen it and count too).
+    pub fn trigger_pulses(&self) -> u64 {
+        self.trigger_pulses
+    }
+
+    /// Whether the trigger pulse is on now (bit 0 away from its resting level).
+    pub fn trigger_pulse_active(&self) -> bool {
+        self.pulse_end.is_some()
     }
 
     /// DIG I/O bits configured as outputs (DIG I/O CONFIG B11–B8) and the output states

@@ -138,13 +138,21 @@ impl QsbSim {
         self.counter.count(n.min(u64::MAX as f64) as u64, up)
     }
 
-    /// A trigger event: pulse digital I/O bit 0 for INTERVAL RATE (DIG I/O CONFIG B12).
+    /// A trigger event: pulse digital I/O bit 0 for INTERVAL RATE (DIG I/O CONFIG B12):
+    /// bit 0 toggles and toggles back when the pulse ends ("The output pulse polarity
+    /// depends on the initial output state of digital I/O bit 0"); INTERVAL RATE 0 "only
+    /// toggles". The command list does not say what an event during a pulse does: here it
+    /// lengthens the pulse (the line stays at its active level), so that the line always
+    /// ends at its resting level.
     fn trigger_pulse(&mut self) {
         if !self.dio.config.trigger_pulse || self.config.variant.digital_io_bits() == 0 {
             return;
         }
-        self.toggle_bit0();
+        self.trigger_pulses += 1;
         let ticks = u32::from(self.regs.interval.0);
+        if self.pulse_end.is_none() || ticks == 0 {
+            self.toggle_bit0();
+        }
         self.pulse_end = (ticks > 0).then(|| self.t.saturating_add(qsb::TICK * ticks));
     }
 

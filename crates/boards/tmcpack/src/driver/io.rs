@@ -410,6 +410,7 @@ impl IoState {
                 *slot = PinReading {
                     value,
                     refreshed_at: Some(now),
+                    events: 0,
                 };
             }
         }
@@ -457,6 +458,7 @@ impl IoState {
                 *slot = PinReading {
                     value: bit(level),
                     refreshed_at: Some(now),
+                    events: 0,
                 };
             }
         }

@@ -79,6 +79,8 @@ fn io(signals: &[DriverSignal], machine: &DeviceMachine) -> TmcpackIo {
         match signal.kind {
             SignalKind::DigitalIn | SignalKind::AnalogIn => io.inputs = io.inputs.with(signal.pin),
             SignalKind::DigitalOut => io.outputs = io.outputs.with(signal.pin),
+            // No pin of the pack captures or triggers.
+            SignalKind::Capture | SignalKind::Trigger => {}
         }
     }
     io.ready = device_keys(machine).ready_output.map(|r| ReadyOutput {

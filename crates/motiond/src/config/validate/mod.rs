@@ -291,7 +291,7 @@ impl Validator<'_, '_> {
             .into_iter()
             .map(|axis| axis.map(|(axis, _)| axis))
             .collect();
-        let signals = self.signals(&raw.signal, &devices, &raw.device);
+        let signals = self.signals(&raw.signal, &devices, &raw.device, &axes);
         self.duplicates(
             "axis",
             axes.iter()

@@ -4,6 +4,8 @@ use motion_drivers::{SignalKind, find_pin};
 use motion_ipc::{MAX_SIGNALS, NAME_LEN, UNIT_LEN};
 use toml::Spanned;
 
+use motion_engine::AxisConfig;
+
 use super::Validator;
 use crate::config::raw::{RawDevice, RawSignal};
 use crate::config::{DeviceSpec, SignalSpec};
@@ -19,6 +21,7 @@ impl Validator<'_, '_> {
         raw: &[Spanned<RawSignal>],
         devices: &[Option<DeviceSpec>],
         raw_devices: &[Spanned<RawDevice>],
+        axes: &[Option<AxisConfig>],
     ) -> Vec<SignalSpec> {
         if raw.len() > MAX_SIGNALS {
             self.issue(
@@ -32,7 +35,7 @@ impl Validator<'_, '_> {
         }
         let mut specs: Vec<Option<SignalSpec>> = Vec::with_capacity(raw.len());
         for (index, signal) in raw.iter().enumerate() {
-            let spec = self.signal(index, signal, devices, raw_devices);
+            let spec = self.signal(index, signal, devices, raw_devices, axes);
             if let Some(spec) = &spec {
                 if let Some(first) = specs.iter().flatten().find(|s| s.name == spec.name) {
                     let span = signal
@@ -80,6 +83,7 @@ impl Validator<'_, '_> {
         raw: &Spanned<RawSignal>,
         devices: &[Option<DeviceSpec>],
         raw_devices: &[Spanned<RawDevice>],
+        axes: &[Option<AxisConfig>],
     ) -> Option<SignalSpec> {
         let table = raw.span();
         let s = raw.get_ref();
@@ -121,7 +125,7 @@ impl Validator<'_, '_> {
                 &s.kind,
                 &table,
                 &key("kind"),
-                "one of \"digital-in\", \"digital-out\", \"analog-in\"",
+                "one of \"digital-in\", \"digital-out\", \"analog-in\", \"capture\", \"trigger\"",
             )
             .and_then(|kind| {
                 let found = SignalKind::ALL
@@ -188,12 +192,14 @@ impl Validator<'_, '_> {
                 }
                 Some((found, name.to_owned()))
             });
-        let digital = kind.is_some_and(|k| k != SignalKind::AnalogIn);
+        let digital =
+            kind.is_some_and(|k| matches!(k, SignalKind::DigitalIn | SignalKind::DigitalOut));
         if kind.is_some() {
+            let numeric = "analog-in, capture and trigger";
             for (set, k, only) in [
-                (s.scale.as_ref().map(Spanned::span), "scale", "analog-in"),
-                (s.offset.as_ref().map(Spanned::span), "offset", "analog-in"),
-                (s.unit.as_ref().map(Spanned::span), "unit", "analog-in"),
+                (s.scale.as_ref().map(Spanned::span), "scale", numeric),
+                (s.offset.as_ref().map(Spanned::span), "offset", numeric),
+                (s.unit.as_ref().map(Spanned::span), "unit", numeric),
                 (
                     s.invert.as_ref().map(Spanned::span),
                     "invert",
@@ -224,9 +230,20 @@ impl Validator<'_, '_> {
                 }
                 None => Some(default),
             };
-        let scale = finite(self, &s.scale, "scale", 1.0);
+        // A capture or a trigger's compare position is a count of the device's counter:
+        // in the units of its axis (the one axis on the device), unless said otherwise.
+        let position_axis = kind
+            .filter(|k| matches!(k, SignalKind::Capture | SignalKind::Trigger))
+            .and(device)
+            .and_then(|d| {
+                let mut on = axes.iter().flatten().filter(|a| a.device == d);
+                on.next().filter(|_| on.next().is_none())
+            });
+        let default_scale = position_axis.map_or(1.0, |a| 1.0 / a.counts_per_unit);
+        let scale = finite(self, &s.scale, "scale", default_scale);
         let offset = finite(self, &s.offset, "offset", 0.0);
         let unit = match &s.unit {
+            None if position_axis.is_some() => position_axis.map(|a| a.unit.clone()),
             Some(u) if u.get_ref().len() <= UNIT_LEN => Some(u.get_ref().clone()),
             Some(u) => {
                 self.issue(

@@ -295,6 +295,8 @@ fn view<'a>(
             name: &axis.name,
             device: axis.device,
             channel: axis.channel,
+            counts_per_unit: axis.counts_per_unit,
+            unit: &axis.unit,
             table: raw_axis.span(),
             device_span: raw_axis
                 .get_ref()
