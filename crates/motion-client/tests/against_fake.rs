@@ -115,7 +115,15 @@ fn a_move_held_stays_and_resumes_to_its_target() -> Result {
     x.ramp_to(90.0, 10.0, 0.0)?;
     std::thread::sleep(Duration::from_millis(100));
     x.hold()?;
-    let state = x.state()?;
+    // The reply comes before the frame that shows it: wait for that frame.
+    let deadline = std::time::Instant::now() + WAIT;
+    let state = loop {
+        let state = x.state()?;
+        if state.flags().contains(AxisFlags::HELD) || std::time::Instant::now() > deadline {
+            break state;
+        }
+        client.next_frame(WAIT)?;
+    };
     assert!(state.flags().contains(AxisFlags::HELD), "{state:?}");
     assert!(state.position < 90.0);
     let error = x
