@@ -164,6 +164,16 @@ macro_rules! registry {
             ) -> Result<(), motion_drivers::GoalError> {
                 each_driver!(self, d => d.set_output(now, pin, high))
             }
+            fn line_rate(&self) -> Option<u32> {
+                each_driver!(self, d => d.line_rate())
+            }
+            fn commission(
+                &mut self,
+                now: core::time::Duration,
+                change: motion_drivers::Commission,
+            ) -> Result<(), motion_drivers::CommissionError> {
+                each_driver!(self, d => d.commission(now, change))
+            }
         }
     };
 }

@@ -55,7 +55,7 @@
 //! # Ok::<(), motion_link::LinkError>(())
 //! ```
 #![warn(missing_docs)]
-#![deny(unsafe_code)] // one exception: SerialLink::poll_fd (a BorrowedFd of the port's own descriptor), with a SAFETY note
+#![deny(unsafe_code)] // two exceptions, with SAFETY notes: SerialLink::poll_fd (a BorrowedFd of the port's own descriptor) and serial::tty_speed (one ioctl)
 
 mod config;
 mod error;

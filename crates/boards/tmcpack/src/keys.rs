@@ -26,6 +26,7 @@ pub(crate) struct RawDevice {
     ready_output: Option<Spanned<RawReadyOutput>>,
     amax_divisor: Option<Spanned<Int>>,
     stop_no_ref_bit: Option<Spanned<Int>>,
+    pub(crate) baud: Option<Spanned<Int>>,
 }
 
 /// `ready_output = { motors = [0, 1], reference = [0] }`: TTLOUT1 as the ready output
@@ -224,6 +225,10 @@ pub(crate) fn device_keys(
     if let Some(value) = &raw.stop_no_ref_bit {
         keys.stop_no_ref_bit = crate::readings::stop_no_ref_bit(v, ctx, value);
         ok &= keys.stop_no_ref_bit.is_some();
+    }
+    if let Some(value) = &raw.baud {
+        keys.baud = crate::baud_key::baud(v, ctx, value);
+        ok &= keys.baud.is_some();
     }
     if let Some(ready) = &raw.ready_output {
         let motors: u8 = match variant {
@@ -586,6 +591,7 @@ pub(crate) fn cross_check(v: &mut dyn KeyIssues, machine: &MachineView<'_>) {
     peak_pairs(v, machine);
     ready_output_signals(v, machine);
     packet_timeouts(v, machine);
+    crate::baud_key::one_rate_per_link(v, machine);
 }
 
 /// The device keys of pack `d` (an index into the view's devices).

@@ -6,6 +6,7 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+mod baud_key;
 pub mod driver;
 mod keys;
 pub mod machine_keys;

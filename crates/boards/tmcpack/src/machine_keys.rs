@@ -40,6 +40,8 @@ pub struct TmcpackDeviceKeys {
     pub amax_divisor: Option<u8>,
     /// `$15` P6 bit of StopNoRef in the pack's firmware: 5 (the table) or 6 (the prose).
     pub stop_no_ref_bit: Option<u8>,
+    /// `$40` rate the pack is switched to at start-up, baud (the link follows).
+    pub baud: Option<u32>,
 }
 
 /// `current = { … }` ($10, $11).

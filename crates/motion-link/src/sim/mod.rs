@@ -19,4 +19,5 @@ mod link;
 pub use bus::{SpiBus, StreamBus};
 pub use device::{SpiDevice, StreamDevice};
 pub use faults::{Direction, SimFaults};
+pub use line::garble;
 pub use link::{Duplex, SimLimits, SimLink, SimWire};

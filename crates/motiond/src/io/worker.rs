@@ -278,6 +278,8 @@ impl Worker {
         match self.link.reopen(now) {
             Ok(()) => {
                 self.down = false;
+                // Reopened at its configured rate.
+                self.counters.baud.store(0, Ordering::Relaxed);
                 self.counters.up.store(true, Ordering::Relaxed);
                 if self.opened {
                     self.counters.reconnects.fetch_add(1, Ordering::Relaxed);
@@ -360,6 +362,12 @@ impl Worker {
                     Err(_) => return,
                 },
             };
+            if let Some(baud) = packet.rate() {
+                if !self.change_rate(now, baud) {
+                    return;
+                }
+                continue;
+            }
             let bytes = &packet.bytes()[offset..];
             match self.link.write(now, bytes) {
                 Ok(written) => {
@@ -400,6 +408,43 @@ impl Worker {
                 }
             }
         }
+    }
+
+    /// A queued rate change: the messages before it leave the transmitter first
+    /// ([`Link::flush`], which waits until they did), then the link takes `baud`. Whether
+    /// the link is still up and the next packet may go.
+    fn change_rate(&mut self, now: Duration, baud: u32) -> bool {
+        if let Err(error) = self.link.batch(now, false) {
+            self.fail(now, error.kind());
+            return false;
+        }
+        let result = self
+            .link
+            .flush(now)
+            .and_then(|()| self.link.set_baud(now, baud));
+        match result {
+            Ok(()) => {
+                self.counters.baud.store(baud, Ordering::Relaxed);
+                // A thread of its own, not the tick: a rare line here costs the tick nothing
+                // (for a link the tick runs itself it is one line per rate change).
+                tracing::info!("link {}: line rate now {baud} baud", self.link.name());
+            }
+            Err(error) => {
+                tracing::warn!(
+                    "link {}: cannot change to {baud} baud: {error}",
+                    self.link.name()
+                );
+                self.fail(now, error.kind());
+                if self.down {
+                    return false;
+                }
+            }
+        }
+        if let Err(error) = self.link.batch(now, true) {
+            self.fail(now, error.kind());
+            return false;
+        }
+        true
     }
 
     pub(super) fn read_available(&mut self, now: Duration, buf: &mut [u8; PACKET_LEN]) {
