@@ -313,14 +313,14 @@ pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
             link_rate::FAST_BAUD,
             cli.duration
         );
-        match sweep::find_motiond(cli.motiond.as_deref()).and_then(|motiond| {
-            link_rate::run(&motiond, hz, server_rt, cli.duration, &scratch()?)
-        }) {
+        match sweep::find_motiond(cli.motiond.as_deref())
+            .and_then(|motiond| link_rate::run(&motiond, hz, server_rt, cli.duration, &scratch()?))
+        {
             Ok(run) => Some(run),
             Err(e) => {
-                report
-                    .notes
-                    .push(format!("SIXpack refresh at two baud rates: not measured this run: {e}"));
+                report.notes.push(format!(
+                    "SIXpack refresh at two baud rates: not measured this run: {e}"
+                ));
                 None
             }
         }

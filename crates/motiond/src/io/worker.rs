@@ -61,6 +61,8 @@ pub(super) struct Worker {
     idle_wakes: u32,
     /// When the last pass began to read.
     looked_at: Duration,
+    /// Line rates logged since the link was opened (0: free).
+    rates_said: [u32; 4],
 }
 
 impl Worker {
@@ -92,6 +94,7 @@ impl Worker {
             fd_ready: false,
             idle_wakes: 0,
             looked_at: Duration::ZERO,
+            rates_said: [0; 4],
         }
     }
 
@@ -280,6 +283,7 @@ impl Worker {
                 self.down = false;
                 // Reopened at its configured rate.
                 self.counters.baud.store(0, Ordering::Relaxed);
+                self.rates_said = [0; 4];
                 self.counters.up.store(true, Ordering::Relaxed);
                 if self.opened {
                     self.counters.reconnects.fetch_add(1, Ordering::Relaxed);
@@ -418,6 +422,8 @@ impl Worker {
             self.fail(now, error.kind());
             return false;
         }
+        // What the link runs at now, as its name says it (`serial /dev/ttyUSB0 @ 19200 8N1`).
+        let before = named_rate(self.link.name());
         let result = self
             .link
             .flush(now)
@@ -425,9 +431,20 @@ impl Worker {
         match result {
             Ok(()) => {
                 self.counters.baud.store(baud, Ordering::Relaxed);
-                // A thread of its own, not the tick: a rare line here costs the tick nothing
-                // (for a link the tick runs itself it is one line per rate change).
-                tracing::info!("link {}: line rate now {baud} baud", self.link.name());
+                // A driver says the rate its board listens at even when the link runs at it
+                // already (after every opening): only a change is worth a line. A thread of
+                // its own, not the tick: a rare line here costs the tick nothing (for a link
+                // the tick runs itself it is one line per rate change).
+                // On a bus whose boards talk at two rates (one pack switched, the other not
+                // yet) the rate changes before every other message: each rate is said once
+                // per opening.
+                let new_rate = !self.rates_said.contains(&baud);
+                if before != Some(baud) && new_rate {
+                    if let Some(slot) = self.rates_said.iter_mut().find(|slot| **slot == 0) {
+                        *slot = baud;
+                    }
+                    tracing::info!("link {}: line rate now {baud} baud", self.link.name());
+                }
             }
             Err(error) => {
                 tracing::warn!(
@@ -485,4 +502,11 @@ impl Worker {
             }
         }
     }
+}
+
+/// The rate a link's name gives after its ` @ ` (`serial /dev/ttyUSB0 @ 19200 8N1`).
+fn named_rate(name: &str) -> Option<u32> {
+    let (_, after) = name.rsplit_once(" @ ")?;
+    let digits = after.split(' ').next()?;
+    digits.parse().ok()
 }

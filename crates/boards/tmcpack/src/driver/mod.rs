@@ -431,7 +431,7 @@ impl Driver for TmcpackDriver {
         self.drive_output(pin, high)
     }
 
-    /// Said once the pack has a `baud` (or a commissioned rate): module `rate`.
+    /// The rate the pack listens at as far as the driver knows: module `rate`.
     fn line_rate(&self) -> Option<u32> {
         self.rate.wanted()
     }

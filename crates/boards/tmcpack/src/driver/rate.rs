@@ -16,8 +16,10 @@
 //!   link changed to it before that message (after the `$40`, which went at the old rate,
 //!   has left the transmitter).
 //!
-//! Without a `baud` nothing changes: the driver talks at the link's rate, says none, and
-//! writes the link's own divisor back with `$40`.
+//! Without a `baud` nothing changes: the driver talks at the link's rate and writes the
+//! link's own divisor back with `$40`. It still says that rate for every message, so that
+//! on a bus where another pack was switched (`motionctl commission --baud`) its own
+//! messages keep going at the rate its pack listens at.
 
 use core::time::Duration;
 
@@ -54,10 +56,10 @@ impl LineRate {
         self.now
     }
 
-    /// The rate the link must run at for the next message: said only once the driver
-    /// manages the rate (a `baud`, or one commissioned).
+    /// The rate the link must run at for the next message (always said: see the module
+    /// docs).
     pub fn wanted(&self) -> Option<u32> {
-        self.target.map(|_| self.now)
+        Some(self.now)
     }
 
     /// The rates tried in turn while the pack is silent: the link's, the target, the
@@ -185,7 +187,7 @@ mod tests {
         assert_eq!(seen, [19_200, 115_200, 19_200, 115_200]);
         let mut plain = LineRate::new(19_200, None);
         plain.probe_next();
-        assert_eq!((plain.now(), plain.wanted()), (19_200, None));
+        assert_eq!((plain.now(), plain.wanted()), (19_200, Some(19_200)));
     }
 
     #[test]

@@ -150,8 +150,12 @@ impl Rig {
 fn a_factory_pack_is_switched_to_its_baud_and_polled_faster() {
     let mut slow = Rig::new(19_200, None);
     slow.online_within(500);
-    assert_eq!(slow.driver().line_rate(), None);
-    assert!(slow.changes.is_empty());
+    // Said (the bus does not know the link's rate), and never changed.
+    assert_eq!(slow.driver().line_rate(), Some(19_200));
+    assert_eq!(
+        slow.changes.iter().map(|(_, r)| *r).collect::<Vec<_>>(),
+        [19_200]
+    );
     let slow_interval = slow.poll_interval(1000);
 
     let mut fast = Rig::new(19_200, Some(115_200));
@@ -293,7 +297,7 @@ fn commissioning_the_rate_switches_pack_and_link_and_a_refused_rate_changes_noth
         Err(CommissionError::OutOfRange),
         "divisor 5 is 250000 baud"
     );
-    assert_eq!(rig.driver().line_rate(), None);
+    assert_eq!(rig.driver().line_rate(), Some(19_200));
     rig.driver_mut()
         .commission(now, Commission::Baud(57_600))
         .expect("taken");
