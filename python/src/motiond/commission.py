@@ -17,14 +17,15 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, List, Optional
+from typing import Any, List, Optional
 
 from .errors import NoSuchDevice, NotClaimed, NotRecommissioned
 from .ipc import CommandKind, CommissionWhat, DeviceState, Target
+from .session import Accepted
 
-if TYPE_CHECKING:  # pragma: no cover
-    from .client import Client
-    from .session import Accepted
+#: The client these functions work through (a :class:`~motiond.Client`; not imported here:
+#: the client imports this module).
+Client = Any
 
 
 @dataclass(frozen=True)
@@ -47,7 +48,7 @@ class DeviceClaim:
     once (a claim another client holds raises :class:`~motiond.errors.ClaimedByOther`, and
     the ones taken are given back)."""
 
-    def __init__(self, client: "Client", device: str) -> None:
+    def __init__(self, client: Client, device: str) -> None:
         self._client = client
         self.device = device
         index = device_index(client, device)
@@ -92,7 +93,7 @@ class DeviceClaim:
         return f"DeviceClaim({self.device!r}, {state})"
 
 
-def device_index(client: "Client", name: str) -> int:
+def device_index(client: Client, name: str) -> int:
     """The index (config order) of device ``name``."""
     info = client.info
     for index in range(int(info.device_count)):
@@ -102,13 +103,13 @@ def device_index(client: "Client", name: str) -> int:
 
 
 def commission(
-    client: "Client",
+    client: Client,
     device: str,
     *,
     address: Optional[int] = None,
     baud: Optional[int] = None,
     factory_reset: bool = False,
-) -> "Accepted":
+) -> Accepted:
     """Sends the commission of ``device`` (exactly one of ``address``, ``baud``,
     ``factory_reset``)."""
     given = [address is not None, baud is not None, bool(factory_reset)]
@@ -133,7 +134,7 @@ def commission(
 
 
 def wait_commissioned(
-    client: "Client", device: str, accepted: "Accepted", timeout: float = 5.0
+    client: Client, device: str, accepted: Accepted, timeout: float = 5.0
 ) -> Commissioned:
     """Waits until ``device`` is online again after the commission ``accepted``; raises
     :class:`~motiond.errors.NotRecommissioned` when it is not by ``timeout``."""
