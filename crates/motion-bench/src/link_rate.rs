@@ -12,9 +12,10 @@
 //! The pack answers one request at a time (manual 7.1), so the driver polls its six motors
 //! with `$20` and the inputs with `$30` round-robin, each exchange a request word, the
 //! switch-over delay (2 ms, key `switchover_ms`), the answer word and the switch-over again
-//! — 13.4 ms at 19200, 5.6 ms at 115200, plus the tick that takes the answer in — so a
-//! round of seven polls refreshes each axis about every 94 ms at 19200 and every 40 ms at
-//! 115200: the delays, not the words, then dominate.
+//! — 13.4 ms at 19200, 5.6 ms at 115200, plus the tick that takes the answer in and the
+//! driver's own `$43` reset check every second — so a round of seven polls refreshes each
+//! axis about every 100 ms at 19200 and every 45 ms at 115200: the delays, not the words,
+//! then dominate.
 
 use core::time::Duration;
 use std::fmt::Write as _;
