@@ -129,7 +129,8 @@ extern "C" {
  * acceleration]; RAMP_VELOCITY [velocity, acceleration]; HOME [search velocity]; SET_POSITION
  * [position]; SET_OUTPUT [0.0 or 1.0] (`axis` = signal index, `target` = SIGNAL); CLAIM,
  * RELEASE, E_STOP, RESET, OFF -; with `target` = GROUP (`axis` = group index): CLAIM, RELEASE,
- * STOP, RUN [path id], HOLD, RESUME, FEED [0.0..1.5], CANCEL, STREAM [stream mode].
+ * STOP, RUN [path id], HOLD, RESUME, FEED [0.0..1.5], CANCEL, STREAM [stream mode]; with
+ * `target` = DEVICE (`axis` = device index): COMMISSION [what, new value].
  */
 enum motiond_command_kind {
     MOTIOND_COMMAND_KIND_STOP = 1,
@@ -151,7 +152,8 @@ enum motiond_command_kind {
     MOTIOND_COMMAND_KIND_RESUME = 17,
     MOTIOND_COMMAND_KIND_FEED = 18,
     MOTIOND_COMMAND_KIND_CANCEL = 19,
-    MOTIOND_COMMAND_KIND_STREAM = 20
+    MOTIOND_COMMAND_KIND_STREAM = 20,
+    MOTIOND_COMMAND_KIND_COMMISSION = 21
 };
 
 /**
@@ -190,14 +192,16 @@ enum motiond_reason {
     MOTIOND_REASON_PATH_LAYOUT = 28,
     MOTIOND_REASON_GROUP_BUSY = 29,
     MOTIOND_REASON_NOT_MOVING = 30,
-    MOTIOND_REASON_BLEND_TOLERANCE = 31
+    MOTIOND_REASON_BLEND_TOLERANCE = 31,
+    MOTIOND_REASON_UNKNOWN_DEVICE = 32
 };
 
 /** What motiond_command_request_t.axis indexes (motiond_command_request_t.target). */
 enum motiond_target {
     MOTIOND_TARGET_AXIS = 0,
     MOTIOND_TARGET_SIGNAL = 1,
-    MOTIOND_TARGET_GROUP = 2
+    MOTIOND_TARGET_GROUP = 2,
+    MOTIOND_TARGET_DEVICE = 3
 };
 
 /**
@@ -308,6 +312,15 @@ enum motiond_stream_state {
     MOTIOND_STREAM_STATE_STREAMING = 1,
     MOTIOND_STREAM_STATE_STALE = 2,
     MOTIOND_STREAM_STATE_ABORTED = 3
+};
+
+/**
+ * What a COMMISSION request changes (`values[0]`; `values[1]` is the new address or baud rate).
+ */
+enum motiond_commission_what {
+    MOTIOND_COMMISSION_WHAT_ADDRESS = 1,
+    MOTIOND_COMMISSION_WHAT_BAUD = 2,
+    MOTIOND_COMMISSION_WHAT_FACTORY_RESET = 3
 };
 
 /**
@@ -640,7 +653,8 @@ typedef struct motiond_command_request {
     uint64_t sequence; /**< The client's sequence number, echoed in the reply. (offset 24) */
     /** Axis (or signal) index, config order, or motiond_command_request_t.ALL_AXES. */
     uint32_t axis; /* offset 32 */
-    uint32_t target; /**< MOTIOND_TARGET_* value: 0 = axis, 1 = signal. (offset 36) */
+    /** MOTIOND_TARGET_* value: 0 = axis, 1 = signal, 2 = group, 3 = device. */
+    uint32_t target; /* offset 36 */
     double values[3]; /**< Arguments; see MOTIOND_COMMAND_KIND_*. (offset 40) */
 } motiond_command_request_t;
 MOTIOND_STATIC_ASSERT(sizeof(motiond_command_request_t) == 64, "motiond_command_request_t size");
@@ -1054,6 +1068,7 @@ static inline const char *motiond_command_kind_text(uint32_t value) {
     case MOTIOND_COMMAND_KIND_FEED: return "feed";
     case MOTIOND_COMMAND_KIND_CANCEL: return "cancel";
     case MOTIOND_COMMAND_KIND_STREAM: return "stream";
+    case MOTIOND_COMMAND_KIND_COMMISSION: return "commission";
     default: return NULL;
     }
 }
@@ -1084,7 +1099,7 @@ static inline const char *motiond_reason_text(uint32_t value) {
     case MOTIOND_REASON_DEVICE_OFFLINE: return "the axis's board is not answering";
     case MOTIOND_REASON_UNKNOWN_SIGNAL: return "no such signal on this server";
     case MOTIOND_REASON_NOT_AN_OUTPUT: return "the signal is not an output (a digital output, or a trigger's compare position)";
-    case MOTIOND_REASON_UNKNOWN_TARGET: return "unknown target: 0 = axis, 1 = signal, 2 = group";
+    case MOTIOND_REASON_UNKNOWN_TARGET: return "unknown target: 0 = axis, 1 = signal, 2 = group, 3 = device";
     case MOTIOND_REASON_UNKNOWN_GROUP: return "no such group on this server";
     case MOTIOND_REASON_NO_PATH: return "no path with this id for this group was published by this client on `paths` (publish it first; a path runs once)";
     case MOTIOND_REASON_PATH_TIMES: return "the path's point times must start at 0 or later and increase";
@@ -1093,6 +1108,7 @@ static inline const char *motiond_reason_text(uint32_t value) {
     case MOTIOND_REASON_GROUP_BUSY: return "an axis of this request is moving (with a group, or on its own, still stopping): cancel that motion or wait for the axis to rest";
     case MOTIOND_REASON_NOT_MOVING: return "the group has no motion running, or the axis no position move to hold or held move to resume";
     case MOTIOND_REASON_BLEND_TOLERANCE: return "positions alone cannot be blended at this point within the axis's path_tolerance at its max_accel: space the points further apart, or send velocities";
+    case MOTIOND_REASON_UNKNOWN_DEVICE: return "no such device on this server";
     default: return NULL;
     }
 }
@@ -1201,6 +1217,16 @@ static inline const char *motiond_stream_state_text(uint32_t value) {
     case MOTIOND_STREAM_STATE_STREAMING: return "streaming";
     case MOTIOND_STREAM_STATE_STALE: return "stale";
     case MOTIOND_STREAM_STATE_ABORTED: return "aborted";
+    default: return NULL;
+    }
+}
+
+/** The text of a MOTIOND_COMMISSION_WHAT_* value; NULL for a value unknown here. */
+static inline const char *motiond_commission_what_text(uint32_t value) {
+    switch (value) {
+    case MOTIOND_COMMISSION_WHAT_ADDRESS: return "address";
+    case MOTIOND_COMMISSION_WHAT_BAUD: return "baud";
+    case MOTIOND_COMMISSION_WHAT_FACTORY_RESET: return "factory-reset";
     default: return NULL;
     }
 }

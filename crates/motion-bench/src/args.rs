@@ -63,6 +63,13 @@ pub struct BenchArgs {
     #[arg(long, value_name = "BOOL", default_value_t = true, num_args = 0..=1,
           default_missing_value = "true", action = clap::ArgAction::Set)]
     pub groups: bool,
+    /// Measure the Trinamic pack's line rate: start a motiond of the bench's own with two
+    /// simulated SIXpacks, one at the factory 19200 baud and one switched to 115200 (its
+    /// `baud` key), and sample the refresh age of their axes (DURATION). On by default;
+    /// `--link-rate=false` skips it.
+    #[arg(long, value_name = "BOOL", default_value_t = true, num_args = 0..=1,
+          default_missing_value = "true", action = clap::ArgAction::Set)]
+    pub link_rate: bool,
     /// Also run the I/O phase's CPU measurement with this motiond binary (an older build:
     /// a before/after on the same machine in the same run).
     #[arg(long, value_name = "PATH")]

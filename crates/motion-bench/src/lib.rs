@@ -16,7 +16,9 @@
 //! [`wire_board`], [`pty`], [`spi_board`]). The Python client's figures come from `python -m motiond.bench`
 //! (the pip package in `python/`) run as a child process ([`python`]). Coordinated motion
 //! (trajectory tracking, arrival skew, streaming) is measured on a motiond the bench starts
-//! on `config/sim.toml` ([`groups`], [`stream`]).
+//! on `config/sim.toml` ([`groups`], [`stream`]). The Trinamic pack's refresh at the factory
+//! and a faster line rate is measured on a motiond the bench starts with two SIXpacks
+//! ([`link_rate`]).
 //!
 //! ```no_run
 //! use clap::Parser;
@@ -58,6 +60,7 @@ pub mod groups;
 pub mod io_phase;
 pub mod io_poller;
 pub mod ipc;
+pub mod link_rate;
 pub mod peer;
 pub mod plots;
 pub mod poller;

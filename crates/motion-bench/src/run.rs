@@ -8,8 +8,8 @@ use crate::delivery::{self, Waiting};
 use crate::dist::{self, Summary, format_ns};
 use crate::report::{Report, Row, Unit, write_dist};
 use crate::{
-    BenchError, groups, io_phase, ipc, peer, plots, python, roundtrip, rt, stream, sweep, wakeup,
-    wire,
+    BenchError, groups, io_phase, ipc, link_rate, peer, plots, python, roundtrip, rt, stream,
+    sweep, wakeup, wire,
 };
 
 /// The numbered progress lines: `[n/total] what (duration)` on stderr.
@@ -306,6 +306,31 @@ pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
         None
     };
 
+    let link_rate_run = if cli.link_rate {
+        eprintln!(
+            "[link-rate] own motiond with two simulated SIXpacks, at {} and {} baud ({:?})",
+            link_rate::FACTORY_BAUD,
+            link_rate::FAST_BAUD,
+            cli.duration
+        );
+        match sweep::find_motiond(cli.motiond.as_deref())
+            .and_then(|motiond| link_rate::run(&motiond, hz, server_rt, cli.duration, &scratch()?))
+        {
+            Ok(run) => Some(run),
+            Err(e) => {
+                report.notes.push(format!(
+                    "SIXpack refresh at two baud rates: not measured this run: {e}"
+                ));
+                None
+            }
+        }
+    } else {
+        report
+            .notes
+            .push("SIXpack refresh at two baud rates: skipped (--link-rate=false)".to_owned());
+        None
+    };
+
     if cli.axes_sweep {
         eprintln!(
             "[sweep] motiond at 4, 16, 64, 128 simulated axes ({:?} each)",
@@ -457,6 +482,14 @@ pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
             Err(e) => report.notes.push(format!(
                 "streaming setpoints: not measured this run, an error: {e}"
             )),
+        }
+    }
+    if let Some(run) = &link_rate_run {
+        report.rows.extend(link_rate::rows(run));
+        for (slug, title, dist) in link_rate::files(run) {
+            if let Some(error) = write_dist(out, &slug, &title, dist) {
+                report.notes.push(format!("could not write {error}"));
+            }
         }
     }
     if let Some((interpreter, run)) = &python_run {

@@ -172,6 +172,16 @@ macro_rules! registry {
             ) -> Result<(), motion_drivers::GoalError> {
                 each_driver!(self, d => d.set_pin_value(now, pin, value))
             }
+            fn line_rate(&self) -> Option<u32> {
+                each_driver!(self, d => d.line_rate())
+            }
+            fn commission(
+                &mut self,
+                now: core::time::Duration,
+                change: motion_drivers::Commission,
+            ) -> Result<(), motion_drivers::CommissionError> {
+                each_driver!(self, d => d.commission(now, change))
+            }
         }
     };
 }

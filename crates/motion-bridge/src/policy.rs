@@ -418,6 +418,14 @@ impl Policy {
                 .iter()
                 .any(|((t, _), holder)| *t == Target::Axis && holder != remote)
                 .then_some(Reason::ClaimedByOther),
+            // The server checks the device's claims against the bridge's node, which holds
+            // every remote's: while another remote holds any claim through the bridge, a
+            // remote may not commission (the bridge does not know which device it is on).
+            CommandKind::Commission => self
+                .claims
+                .values()
+                .any(|holder| holder != remote)
+                .then_some(Reason::ClaimedByOther),
             _ => held_by_other(target, index).then_some(Reason::ClaimedByOther),
         }
     }
@@ -439,7 +447,7 @@ impl Policy {
                 self.claims.remove(&key);
             }
             CommandKind::EStop => self.deadman.clear(),
-            _ if target == Target::Signal => {}
+            _ if target == Target::Signal || target == Target::Device => {}
             _ if request.axis == CommandRequest::ALL_AXES => self.deadman.clear(),
             kind if is_deadman(kind) => {
                 self.deadman.insert(request.axis, remote.clone());
@@ -537,6 +545,8 @@ impl Policy {
                     .groups()
                     .get(index)
                     .is_some_and(|group| group.owner == bridge),
+                // Nothing to claim on a device itself (its axes and signals are claimed).
+                Target::Device => false,
             }
         });
     }

@@ -602,11 +602,21 @@ impl<S: Service> Client<S> {
                         .map(|g| g.name().to_owned())
                 })
                 .unwrap_or_default(),
+            Target::Device => self
+                .info
+                .current()
+                .and_then(|info| {
+                    info.devices()
+                        .get(index as usize)
+                        .map(|d| d.name().to_owned())
+                })
+                .unwrap_or_default(),
         };
         let what = match target {
             Target::Axis => "axis",
             Target::Signal => "signal",
             Target::Group => "group",
+            Target::Device => "device",
         };
         match name.as_str() {
             "" => format!("{what} #{index}"),

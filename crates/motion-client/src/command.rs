@@ -228,6 +228,7 @@ impl<S: Service> Client<S> {
                 Some(self.axis_info(index as usize).device_index)
             }
             Target::Signal => Some(self.signal_info(index as usize).device_index),
+            Target::Device => u16::try_from(index).ok(),
             Target::Axis | Target::Group => None,
         };
         let device = || device.map(|d| self.device_name(usize::from(d)));

@@ -218,6 +218,9 @@ pub enum ClientError {
     /// No signal of that name on the server.
     #[error("no signal named \"{0}\" on this server (see `motionctl io list`)")]
     UnknownSignal(String),
+    /// No device of that name on the server.
+    #[error("no device named \"{0}\" on this server (see `motionctl list`)")]
+    UnknownDevice(String),
     /// No group of that name on the server.
     #[error("no group named \"{name}\" on this server; {}", known_groups(.known))]
     UnknownGroup {

@@ -106,6 +106,7 @@ mod axis;
 mod claim;
 mod client;
 mod command;
+mod commission;
 mod emergency;
 mod error;
 #[cfg(feature = "zenoh")]
@@ -140,6 +141,7 @@ pub use client::{
     Stats, TickListener,
 };
 pub use command::Accepted;
+pub use commission::Commissioned;
 pub use emergency::{Estop, EstopPath, estop, stop_all};
 pub use error::{ClientError, ConnectError, DeviceStatus, EstopError, Restart};
 pub use frames::{FIRST_FRAME_TIMEOUT, Frames};

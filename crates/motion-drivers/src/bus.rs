@@ -17,6 +17,12 @@
 //! the write, silence is judged up to the horizon). A shell that does not stamp leaves
 //! the bus unstamped: each message then counts as written when it is made.
 //!
+//! On a stream link it also keeps the line rate: a driver that changes its board's rate
+//! says at which rate its next message must go ([`Driver::line_rate`]); when that differs
+//! from the link's, the bus notes the change before it hands the message out, and the
+//! shell, asking [`LinkBus::take_rate_change`] after each message, changes the link's rate
+//! before that message is written (after the messages before it went out at the old one).
+//!
 //! No allocation after construction: the SPI ownership queue and the queue of messages
 //! not reported written have fixed capacities, and a full queue holds senders back.
 
@@ -78,6 +84,11 @@ pub struct LinkBus<D: Driver = Box<dyn Driver>> {
     /// Stamped SPI, per driver: the write stamp of its newest transaction whose MISO bytes
     /// all came back — how far the board's output has been clocked out and seen.
     clocked: Vec<Option<Duration>>,
+    /// Stream: the line rate the link runs at as far as the bus made it (`None`: as it was
+    /// opened).
+    rate: Option<u32>,
+    /// Stream: a rate the link must take before the last message handed out.
+    rate_change: Option<u32>,
 }
 
 impl<D: Driver> LinkBus<D> {
@@ -93,8 +104,23 @@ impl<D: Driver> LinkBus<D> {
             stamped: false,
             unwritten: FixedQueue::new(),
             clocked: vec![None; drivers.len()],
+            rate: None,
+            rate_change: None,
             drivers,
         }
+    }
+
+    /// The rate the link must take before the message [`poll_transmit`](Self::poll_transmit)
+    /// handed out last is written (a driver's [`Driver::line_rate`] differed from the
+    /// link's), taken: the shell changes the link's rate (after writing everything queued
+    /// before) and then writes the message. `None` (almost always): no change.
+    pub fn take_rate_change(&mut self) -> Option<u32> {
+        self.rate_change.take()
+    }
+
+    /// The line rate the bus last asked the link to take since it was (re)opened.
+    pub fn line_rate(&self) -> Option<u32> {
+        self.rate
     }
 
     /// Whether the shell reports writes ([`handle_written`](Self::handle_written)) and the
@@ -261,7 +287,16 @@ impl<D: Driver> LinkBus<D> {
             }
         }
         let (index, _) = best?;
+        let wanted = match self.kind {
+            LinkKind::Stream => self.drivers[index].line_rate(),
+            LinkKind::Spi => None,
+        };
         let transmit = self.drivers[index].poll_transmit(now, buf)?;
+        if let Some(rate) = wanted.filter(|rate| self.rate != Some(*rate)) {
+            // The message goes at the driver's rate: the shell changes the link's first.
+            self.rate = Some(rate);
+            self.rate_change = Some(rate);
+        }
         if transmit.len > buf.len() {
             // A driver bug; never put a truncated message on the wire.
             return None;
@@ -300,6 +335,8 @@ impl<D: Driver> LinkBus<D> {
 
     /// The link went down: every driver is told, outstanding routing is dropped.
     pub fn link_down(&mut self, now: Duration) {
+        self.rate = None;
+        self.rate_change = None;
         self.in_flight = None;
         self.pending.clear();
         self.unwritten.clear();
@@ -311,6 +348,9 @@ impl<D: Driver> LinkBus<D> {
 
     /// The link is open again: every driver restarts its board.
     pub fn link_up(&mut self, now: Duration) {
+        // Reopened at its configured rate.
+        self.rate = None;
+        self.rate_change = None;
         self.in_flight = None;
         self.pending.clear();
         self.unwritten.clear();
@@ -334,3 +374,5 @@ impl<D: Driver> LinkBus<D> {
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_rate;

@@ -3,6 +3,7 @@
 use core::fmt;
 use core::time::Duration;
 
+use crate::commission::{Commission, CommissionError};
 use crate::goal::{Goal, GoalError, GoalKinds, RateFloor};
 use crate::pin::{Pin, PinReading};
 use crate::state::{ChannelState, DeviceStatus};
@@ -283,6 +284,27 @@ pub trait Driver: Send + fmt::Debug {
         let _ = (now, value);
         Err(GoalError::NoSuchPin(pin))
     }
+
+    /// The line rate (baud) the link must run at when this driver's next message goes out,
+    /// for a board whose rate the driver changes (the Trinamic pack's `$40`): the driver
+    /// never touches the link — a [`LinkBus`](crate::LinkBus) sees the rate differ from
+    /// the link's before it lets the message go and asks its shell to change the link's
+    /// rate first ([`LinkBus::take_rate_change`](crate::LinkBus::take_rate_change)), in
+    /// order with the messages before (which go at the old rate). `None` (the default):
+    /// whatever rate the link runs at. A driver that returns `Some` assumes, after
+    /// [`link_up`](Self::link_up), that the link runs at its configured rate again.
+    fn line_rate(&self) -> Option<u32> {
+        None
+    }
+
+    /// Changes one of the board's own settings (module `commission`): the driver sends it
+    /// and finds the board again where it now answers; until then its status is not
+    /// online. The engine refuses it while an axis of the board moves. By default
+    /// [`CommissionError::Unsupported`].
+    fn commission(&mut self, now: Duration, change: Commission) -> Result<(), CommissionError> {
+        let _ = (now, change);
+        Err(CommissionError::Unsupported)
+    }
 }
 
 /// A boxed driver is a driver: tests and tools hold drivers of any board as
@@ -374,5 +396,11 @@ impl<T: Driver + ?Sized> Driver for Box<T> {
     }
     fn set_pin_value(&mut self, now: Duration, pin: Pin, value: f64) -> Result<(), GoalError> {
         (**self).set_pin_value(now, pin, value)
+    }
+    fn line_rate(&self) -> Option<u32> {
+        (**self).line_rate()
+    }
+    fn commission(&mut self, now: Duration, change: Commission) -> Result<(), CommissionError> {
+        (**self).commission(now, change)
     }
 }

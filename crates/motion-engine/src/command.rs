@@ -116,6 +116,9 @@ impl<D: Driver> Engine<D> {
         if request.target == Target::Group as u32 {
             return self.apply_group_command(request, client, port);
         }
+        if request.target == Target::Device as u32 {
+            return self.apply_device_command(request, client);
+        }
         match rules::judge(request, client, &*self) {
             Verdict::Refused(reason) => reason,
             Verdict::EStop => {

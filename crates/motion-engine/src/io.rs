@@ -52,6 +52,14 @@ impl<D: Driver> Engine<D> {
         }
     }
 
+    /// The line rate `link` must take before the message
+    /// [`poll_link_transmit`](Self::poll_link_transmit) returned last is written, taken
+    /// (`LinkBus::take_rate_change`: a driver changed its board's rate). The shell changes
+    /// the link's rate after writing the messages before, then writes that message.
+    pub fn take_link_rate(&mut self, link: usize) -> Option<u32> {
+        self.buses.get_mut(link)?.take_rate_change()
+    }
+
     /// The earliest instant a driver of `link` has timed work (a reply deadline, a poll
     /// period): the shell has the link looked at again by then, so that a silent board is
     /// seen to be silent.

@@ -45,6 +45,7 @@
 
 mod axis;
 mod command;
+mod commission;
 mod config;
 mod device;
 mod frame;
@@ -125,6 +126,9 @@ pub struct Engine<D: Driver = Box<dyn Driver>> {
     groups: Vec<Group>,
     /// What the answer to the request being applied names besides its reason.
     reply_detail: ReplyDetail,
+    /// Per device: the address its config gives (a factory reset brings it back; a
+    /// commissioned address replaces it in `config`).
+    config_addresses: Vec<u32>,
 }
 
 /// What an answer names besides its reason: the axis (config index) and the point at
@@ -239,6 +243,7 @@ impl<D: Driver> Engine<D> {
             departed: FixedQueue::new(),
             groups,
             reply_detail: ReplyDetail::NONE,
+            config_addresses: config.devices.iter().map(|d| d.address).collect(),
             config,
         })
     }

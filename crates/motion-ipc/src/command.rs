@@ -78,7 +78,9 @@ impl ClientId {
 ///
 /// `SetOutput`, and `Claim` / `Release` with [`Target::Signal`], address a signal:
 /// [`CommandRequest::axis`] is then a signal index (config order) and
-/// [`CommandRequest::target`] is [`Target::Signal`].
+/// [`CommandRequest::target`] is [`Target::Signal`]. `Commission` addresses a device
+/// ([`Target::Device`]): `values[0]` is a [`CommissionWhat`](crate::CommissionWhat) value,
+/// `values[1]` the new address or baud rate.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[repr(u32)]
 pub enum CommandKind {
@@ -140,11 +142,16 @@ pub enum CommandKind {
     /// Start streaming setpoints to the group (`values[0]` = [`StreamMode`](crate::StreamMode)
     /// value) on `setpoints`; needs the group's claim (every member claimed by the sender).
     Stream = 20,
+    /// Change a board's own settings (`axis` = device index, `target` = [`Target::Device`],
+    /// `values[0]` = [`CommissionWhat`](crate::CommissionWhat), `values[1]` = the new
+    /// address or baud rate): the board is told, then found again where it now answers.
+    /// Needs the claim of every axis and signal of the device, and no axis of it moving.
+    Commission = 21,
 }
 
 impl CommandKind {
     /// Every kind, in value order.
-    pub const ALL: [Self; 20] = [
+    pub const ALL: [Self; 21] = [
         Self::Stop,
         Self::Power,
         Self::Position,
@@ -165,6 +172,7 @@ impl CommandKind {
         Self::Feed,
         Self::Cancel,
         Self::Stream,
+        Self::Commission,
     ];
 
     /// The command's name as the CLI and logs spell it.
@@ -190,6 +198,7 @@ impl CommandKind {
             Self::Feed => "feed",
             Self::Cancel => "cancel",
             Self::Stream => "stream",
+            Self::Commission => "commission",
         }
     }
 }
@@ -289,11 +298,13 @@ pub enum Reason {
     /// [`CommandReply::at_axis`]; `value` the distance the blend would pass the point at,
     /// `limit` the tolerance).
     BlendTolerance = 31,
+    /// `axis` is not a device of this server (for a device request).
+    UnknownDevice = 32,
 }
 
 impl Reason {
     /// Every reason, in value order.
-    pub const ALL: [Self; 32] = [
+    pub const ALL: [Self; 33] = [
         Self::Accepted,
         Self::SchemaMismatch,
         Self::UnknownKind,
@@ -326,6 +337,7 @@ impl Reason {
         Self::GroupBusy,
         Self::NotMoving,
         Self::BlendTolerance,
+        Self::UnknownDevice,
     ];
 
     /// One line saying what is wrong and what to do.
@@ -367,7 +379,7 @@ impl Reason {
             Self::NotAnOutput => {
                 "the signal is not an output (a digital output, or a trigger's compare position)"
             }
-            Self::UnknownTarget => "unknown target: 0 = axis, 1 = signal, 2 = group",
+            Self::UnknownTarget => "unknown target: 0 = axis, 1 = signal, 2 = group, 3 = device",
             Self::UnknownGroup => "no such group on this server",
             Self::NoPath => {
                 "no path with this id for this group was published by this client on `paths` \
@@ -391,6 +403,7 @@ impl Reason {
                 "positions alone cannot be blended at this point within the axis's path_tolerance \
                  at its max_accel: space the points further apart, or send velocities"
             }
+            Self::UnknownDevice => "no such device on this server",
         }
     }
 }
@@ -425,6 +438,8 @@ pub enum Target {
     /// A group (config order): `Claim`, `Release` (every axis of it, all or none), `Stop`,
     /// `Run`, `Hold`, `Resume`, `Feed`, `Cancel`.
     Group = 2,
+    /// A device (config order): `Commission`.
+    Device = 3,
 }
 
 impl TryFrom<u32> for Target {
@@ -434,6 +449,7 @@ impl TryFrom<u32> for Target {
             0 => Ok(Self::Axis),
             1 => Ok(Self::Signal),
             2 => Ok(Self::Group),
+            3 => Ok(Self::Device),
             other => Err(UnknownValue(other)),
         }
     }
@@ -459,7 +475,7 @@ payload! {
         pub sequence: u64,
         /// Axis (or signal) index, config order, or [`CommandRequest::ALL_AXES`].
         pub axis: u32,
-        /// [`Target`] value: 0 = axis, 1 = signal.
+        /// [`Target`] value: 0 = axis, 1 = signal, 2 = group, 3 = device.
         pub target: u32,
         /// Arguments; see [`CommandKind`].
         pub values: [f64; 3],
@@ -608,9 +624,11 @@ mod tests {
             assert_eq!(CommandKind::try_from(kind as u32), Ok(kind));
         }
         assert_eq!(CommandKind::try_from(0), Err(UnknownValue(0)));
-        assert_eq!(CommandKind::try_from(21), Err(UnknownValue(21)));
+        assert_eq!(CommandKind::try_from(21), Ok(CommandKind::Commission));
+        assert_eq!(CommandKind::try_from(22), Err(UnknownValue(22)));
         assert_eq!(Target::try_from(2), Ok(Target::Group));
-        assert_eq!(Target::try_from(3), Err(UnknownValue(3)));
+        assert_eq!(Target::try_from(3), Ok(Target::Device));
+        assert_eq!(Target::try_from(4), Err(UnknownValue(4)));
         for (index, reason) in Reason::ALL.iter().enumerate() {
             assert_eq!(*reason as usize, index);
             assert_eq!(Reason::try_from(*reason as u32), Ok(*reason));

@@ -32,6 +32,7 @@
 mod payload;
 
 mod command;
+mod commission;
 mod frame;
 mod group;
 mod info;
@@ -46,6 +47,7 @@ mod stats;
 pub use command::{
     ClientId, CommandKind, CommandReply, CommandRequest, Reason, Target, UnknownValue,
 };
+pub use commission::CommissionWhat;
 pub use frame::{
     AxisFlags, AxisMode, AxisState, AxisWire, DeviceState, FaultCode, FrameFlags, MotionFrame,
 };

@@ -316,6 +316,12 @@ pub fn judge(request: &CommandRequest, client: ClientId, facts: &impl Facts) -> 
         // groups has none to find.
         return Refused(Reason::UnknownGroup);
     }
+    if target == Target::Device {
+        // Commissioning depends on the devices' boards, which only the engine holds
+        // (`motion-engine`'s `commission` module judges it); a server without devices has
+        // none to find.
+        return Refused(Reason::UnknownDevice);
+    }
     match kind {
         CommandKind::EStop => return Verdict::EStop,
         CommandKind::Reset if facts.shutting_down() => return Refused(Reason::ShuttingDown),
@@ -326,7 +332,8 @@ pub fn judge(request: &CommandRequest, client: ClientId, facts: &impl Facts) -> 
         | CommandKind::Run
         | CommandKind::Feed
         | CommandKind::Cancel
-        | CommandKind::Stream => return Refused(Reason::UnknownTarget),
+        | CommandKind::Stream
+        | CommandKind::Commission => return Refused(Reason::UnknownTarget),
         _ => {}
     }
     let Some(axis) = facts.axis(index) else {
@@ -547,7 +554,8 @@ fn motion_of(
         | CommandKind::Resume
         | CommandKind::Feed
         | CommandKind::Cancel
-        | CommandKind::Stream => return Err(Reason::UnknownKind),
+        | CommandKind::Stream
+        | CommandKind::Commission => return Err(Reason::UnknownKind),
     })
 }
 

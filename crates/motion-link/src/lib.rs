@@ -59,8 +59,9 @@
 //! # Ok::<(), motion_link::LinkError>(())
 //! ```
 #![warn(missing_docs)]
-// Two exceptions, each with a SAFETY note: SerialLink::poll_fd (a BorrowedFd of the port's
-// own descriptor) and socketcan's bind(2) (nix has no sockaddr_can).
+// Three exceptions, each with a SAFETY note: SerialLink::poll_fd (a BorrowedFd of the port's
+// own descriptor), socketcan's bind(2) (nix has no sockaddr_can) and serial::tty_speed (one
+// ioctl).
 #![deny(unsafe_code)]
 
 mod config;

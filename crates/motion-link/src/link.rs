@@ -114,6 +114,19 @@ pub trait Link: Send + fmt::Debug {
         Ok(())
     }
 
+    /// Changes the line rate of a serial link to `baud` for the bytes written from now on
+    /// (a board told to change its rate, e.g. the Trinamic pack's `$40`). Bytes queued
+    /// before go at whatever rate the transport has when they leave: call
+    /// [`flush`](Self::flush) first. [`reopen`](Self::reopen) goes back to the configured
+    /// rate. The default, and every SPI link: [`LinkError::Unsupported`].
+    fn set_baud(&mut self, now: Duration, baud: u32) -> Result<(), LinkError> {
+        let _ = (now, baud);
+        Err(LinkError::Unsupported {
+            link: self.name().into(),
+            what: "changing the line rate",
+        })
+    }
+
     /// Counters since creation.
     fn stats(&self) -> LinkStats;
 }
@@ -159,6 +172,9 @@ impl<L: Link + ?Sized> Link for Box<L> {
     }
     fn batch(&mut self, now: Duration, on: bool) -> Result<(), LinkError> {
         (**self).batch(now, on)
+    }
+    fn set_baud(&mut self, now: Duration, baud: u32) -> Result<(), LinkError> {
+        (**self).set_baud(now, baud)
     }
     fn stats(&self) -> LinkStats {
         (**self).stats()

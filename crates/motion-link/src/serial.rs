@@ -49,31 +49,39 @@ pub struct SerialLink {
     name: Arc<str>,
     port: Option<TTYPort>,
     stats: LinkStats,
+    /// The rate the port runs at now ([`Link::set_baud`]; the configured one after a reopen).
+    baud: u32,
 }
 
 impl SerialLink {
     /// Validates `config` without opening the port; the link is closed (every call returns
     /// `Disconnected`) until [`reopen`](Link::reopen) succeeds.
     pub fn new(config: SerialConfig) -> Result<Self, LinkError> {
-        let name: Arc<str> = format!("serial {} @ {} 8N1", config.path, config.baud).into();
+        let name = Self::name_at(&config, config.baud);
         if config.path.is_empty() {
             return Err(LinkError::Config {
                 link: name,
                 reason: "empty tty path; give the device path, e.g. /dev/ttyUSB0".into(),
             });
         }
-        if config.baud == 0 || config.baud > 4_000_000 {
-            return Err(LinkError::Config {
-                link: name,
-                reason: format!("baud {} out of range 1..=4000000", config.baud),
-            });
-        }
+        check_baud(&name, config.baud)?;
         Ok(Self {
+            baud: config.baud,
             config,
             name,
             port: None,
             stats: LinkStats::default(),
         })
+    }
+
+    fn name_at(config: &SerialConfig, baud: u32) -> Arc<str> {
+        format!("serial {} @ {baud} 8N1", config.path).into()
+    }
+
+    /// The rate the port runs at now: the configured one, or the last
+    /// [`set_baud`](Link::set_baud) since the port was opened.
+    pub fn baud(&self) -> u32 {
+        self.baud
     }
 
     /// Validates `config` and opens the port.
@@ -90,6 +98,9 @@ impl SerialLink {
 
     fn open_port(&mut self) -> Result<(), LinkError> {
         self.port = None;
+        // A (re)opened port runs at the configured rate again.
+        self.baud = self.config.baud;
+        self.name = Self::name_at(&self.config, self.baud);
         let opened = serialport::new(self.config.path.as_str(), self.config.baud)
             .data_bits(serialport::DataBits::Eight)
             .parity(serialport::Parity::None)
@@ -159,6 +170,40 @@ impl SerialLink {
         }
         err
     }
+}
+
+fn check_baud(name: &Arc<str>, baud: u32) -> Result<(), LinkError> {
+    if baud == 0 || baud > 4_000_000 {
+        return Err(LinkError::Config {
+            link: name.clone(),
+            reason: format!("baud {baud} out of range 1..=4000000"),
+        });
+    }
+    Ok(())
+}
+
+/// The output rate the tty behind `fd` is set to (termios2 `c_ospeed`, which holds any
+/// rate, standard or not, as `serialport` sets it). On the master side of a
+/// pseudo-terminal it reads the slave's settings: a simulator serving a pty learns the rate
+/// its client set ([`Link::set_baud`] on the other end) and can garble what crosses at
+/// another rate, as a real line would.
+///
+/// # Errors
+/// The `ioctl(TCGETS2)` error (not a tty).
+#[allow(unsafe_code)] // one ioctl filling a plain C struct we own
+pub fn tty_speed(fd: BorrowedFd<'_>) -> io::Result<u32> {
+    use nix::libc;
+    // SAFETY: `termios2` is a plain C struct for which all-zero bytes are a valid value;
+    // TCGETS2 writes at most `size_of::<termios2>()` bytes into the struct we pass by
+    // pointer, which lives until the call returns; `fd` is a valid open descriptor for the
+    // duration of the borrow.
+    let mut settings: libc::termios2 = unsafe { core::mem::zeroed() };
+    // SAFETY: see above.
+    let result = unsafe { libc::ioctl(fd.as_raw_fd(), libc::TCGETS2, &mut settings) };
+    if result < 0 {
+        return Err(io::Error::last_os_error());
+    }
+    Ok(settings.c_ospeed)
 }
 
 fn is_idle(err: &io::Error) -> bool {
@@ -263,6 +308,36 @@ impl Link for SerialLink {
         // at least as long as the returned borrow of `self` lives (closing it needs
         // `&mut self`: `reopen` or a failed call), so it stays valid for `'_`.
         Some(unsafe { BorrowedFd::borrow_raw(port.as_raw_fd()) })
+    }
+
+    /// Waits for nothing: the caller flushed (the I/O thread does before a rate change).
+    fn set_baud(&mut self, _now: Duration, baud: u32) -> Result<(), LinkError> {
+        check_baud(&self.name, baud)?;
+        let Some(port) = self.port.as_mut() else {
+            return Err(self.closed());
+        };
+        match port.set_baud_rate(baud) {
+            Ok(()) => {
+                self.baud = baud;
+                self.name = Self::name_at(&self.config, baud);
+                Ok(())
+            }
+            Err(e) => {
+                self.stats.errors += 1;
+                Err(match e.kind {
+                    serialport::ErrorKind::Io(kind) => LinkError::Io {
+                        link: self.name.clone(),
+                        op: "set the baud rate",
+                        kind,
+                        errno: None,
+                    },
+                    _ => LinkError::Config {
+                        link: self.name.clone(),
+                        reason: format!("cannot set {baud} baud: {}", e.description),
+                    },
+                })
+            }
+        }
     }
 
     fn reopen(&mut self, _now: Duration) -> Result<(), LinkError> {

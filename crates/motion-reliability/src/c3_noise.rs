@@ -47,6 +47,7 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
         PtyOptions {
             noise: Some(Arc::clone(&noise)),
             log_sent: true,
+            ..PtyOptions::default()
         },
     )?;
     let config = h.write(

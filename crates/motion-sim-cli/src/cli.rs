@@ -14,8 +14,10 @@ boards share one socket (one chip select: a board answers its own address, an un
 MISO reads 0xFF).";
 
 const AFTER_EXAMPLES: &str = "\
-A board told to change its rate (a baud-rate command of its protocol) then talks at the
-new rate while the pty stays at --baud: its bytes arrive garbled, as on a real line.
+The wire runs at --baud until the client sets another rate on its end of the pty (as
+motiond does after telling a Trinamic pack $40), then at the client's. A board told to
+change its rate (a baud-rate command of its protocol) talks at the new rate: between it and
+a wire at another rate the bytes arrive garbled, as on a real line.
 
 Runs until SIGINT or SIGTERM (exit status 0). Logs what it serves on stderr; --trace also
 logs every byte with its time.";

@@ -4,6 +4,12 @@
 //! the configured baud rate before the model sees them, and the model's replies reach the
 //! client only when their last bit would have arrived. The clock is the monotonic clock
 //! (this binary is the I/O shell; the models only ever see the `now` it passes).
+//!
+//! The wire runs at the rate the client set on its end of the pty (termios, read from the
+//! master side: [`motion_link::serial::tty_speed`]), starting at `--baud`: a client that
+//! switches its port to another rate (after telling its board so, e.g. the Trinamic pack's
+//! `$40`) moves the wire with it, and a board still at the old rate hears garbage, as on a
+//! real line.
 
 use std::os::fd::{AsFd, OwnedFd};
 use std::path::{Path, PathBuf};
@@ -95,9 +101,24 @@ pub fn serve(
     let mut inbound: Vec<u8> = Vec::new();
     let mut outbound: Vec<u8> = Vec::new();
     let mut buf = [0u8; 1024];
+    let mut client_rate = None;
     while !stop.load(Ordering::SeqCst) {
         let now = start.elapsed();
         plan.tick(now, &faults, 64);
+        // The rate the client's end runs at now (it may have changed it).
+        if let Ok(rate) = motion_link::serial::tty_speed(pty.master.as_fd())
+            && rate > 0
+            && client_rate != Some(rate)
+        {
+            // The first reading is the pty's own setting (the wire starts at --baud, which a
+            // pty may not spell); from then on the wire follows the client's changes.
+            if client_rate.is_some() {
+                trace.note(now, &format!("the client set {rate} baud"));
+                link.set_baud(now, rate)
+                    .context("moving the simulated wire to the client's rate")?;
+            }
+            client_rate = Some(rate);
+        }
         // Client to wire: what the wire accepts now; the rest waits in `inbound`.
         if !inbound.is_empty() {
             let n = link
@@ -202,6 +223,63 @@ mod tests {
         fn next_event(&self, now: Duration) -> Option<Duration> {
             (!self.0.is_empty()).then_some(now)
         }
+    }
+
+    /// [`Shout`] listening at a rate of its own.
+    struct ShoutAt(Shout, u32);
+
+    impl StreamDevice for ShoutAt {
+        fn receive(&mut self, now: Duration, bytes: &[u8]) {
+            self.0.receive(now, bytes);
+        }
+        fn transmit(&mut self, now: Duration, out: &mut [u8]) -> usize {
+            self.0.transmit(now, out)
+        }
+        fn next_event(&self, now: Duration) -> Option<Duration> {
+            self.0.next_event(now)
+        }
+        fn baud(&self) -> Option<u32> {
+            Some(self.1)
+        }
+    }
+
+    /// What `client` reads within 200 ms after writing `message`.
+    fn ask(client: &mut SerialLink, start: Instant, message: &[u8]) -> Vec<u8> {
+        client.write(start.elapsed(), message).expect("write");
+        let mut got = Vec::new();
+        let mut buf = [0u8; 64];
+        let until = start.elapsed() + Duration::from_millis(200);
+        while start.elapsed() < until {
+            if let Ok(n) = client.read(start.elapsed(), &mut buf) {
+                got.extend_from_slice(&buf[..n]);
+            }
+            std::thread::sleep(Duration::from_millis(1));
+        }
+        got
+    }
+
+    #[test]
+    fn the_wire_follows_the_rate_the_client_sets_and_garbles_across_rates() {
+        let pty = Pty::open(19_200).expect("pty");
+        let path = pty.path().to_string_lossy().into_owned();
+        let stop = AtomicBool::new(false);
+        std::thread::scope(|scope| {
+            let server = scope.spawn(|| {
+                let device = ShoutAt(Shout::default(), 115_200);
+                let mut link = SimLink::stream("test", 19_200, Box::new(device));
+                let mut trace = Trace::new("test", false);
+                let mut plan = FaultPlan::new(0.0, Duration::ZERO, Duration::ZERO);
+                serve(&pty, &mut link, &stop, &mut trace, &mut plan)
+            });
+            let mut client = SerialLink::open(SerialConfig::new(&path, 19_200)).expect("open");
+            let start = Instant::now();
+            let garbled = ask(&mut client, start, b"hello");
+            assert_ne!(garbled, b"HELLO", "at 19200 to a board at 115200");
+            client.set_baud(start.elapsed(), 115_200).expect("set_baud");
+            assert_eq!(ask(&mut client, start, b"hello"), b"HELLO");
+            stop.store(true, Ordering::SeqCst);
+            server.join().expect("server thread").expect("serve");
+        });
     }
 
     #[test]

@@ -129,6 +129,12 @@ pub struct PtyOptions {
     pub noise: Option<Arc<LineNoise>>,
     /// Log every byte the board sent (before the noise) in [`PtyBoard::sent`].
     pub log_sent: bool,
+    /// The line runs at the rate the server set on its end of the pty (read from the
+    /// master side, [`motion_link::serial::tty_speed`]) instead of the `baud` given, and
+    /// what crosses between it and a board listening at another rate
+    /// ([`StreamDevice::baud`]: a Trinamic pack after `$40`) is garbled
+    /// ([`motion_link::sim::garble`]), as on a real line.
+    pub follow_rate: bool,
 }
 
 /// A board model on a pty, reachable at `link` (a symlink to the pty's slave).
@@ -207,7 +213,11 @@ impl PtyBoard {
             std::thread::Builder::new()
                 .name("pty-board".to_owned())
                 .spawn(move || {
-                    serve(&master, &device, &stop, epoch, baud, &logs, channel);
+                    let line = Line {
+                        baud,
+                        follow_rate: options.follow_rate,
+                    };
+                    serve(&master, &device, &stop, epoch, line, &logs, channel);
                     drop(slave);
                 })
                 .map_err(KitError::io("spawn the pty thread"))?
@@ -264,16 +274,45 @@ struct Logs {
     sent: Option<ByteLog>,
 }
 
+/// The rate of the line a [`PtyBoard`] serves.
+#[derive(Clone, Copy)]
+struct Line {
+    baud: u32,
+    /// [`PtyOptions::follow_rate`].
+    follow_rate: bool,
+}
+
+impl Line {
+    /// The rate the server's end runs at now.
+    fn host(&self, master: &OwnedFd) -> u32 {
+        if !self.follow_rate {
+            return self.baud;
+        }
+        motion_link::serial::tty_speed(master.as_fd())
+            .ok()
+            .filter(|&rate| rate > 0)
+            .unwrap_or(self.baud)
+    }
+}
+
+/// `bytes` sent at `from` as a receiver at `to` takes them (`None`: the same rate).
+fn cross(bytes: &[u8], from: u32, to: Option<u32>) -> Vec<u8> {
+    match to {
+        Some(to) if to != from => motion_link::sim::garble(bytes, from, to),
+        _ => bytes.to_vec(),
+    }
+}
+
 fn serve<D: StreamDevice>(
     master: &OwnedFd,
     device: &Mutex<D>,
     stop: &AtomicBool,
     epoch: Instant,
-    baud: u32,
+    rate: Line,
     logs: &Logs,
     mut channel: Option<Channel>,
 ) {
-    let byte_time = Duration::from_nanos(10_000_000_000 / u64::from(baud.max(1)));
+    let byte_time_at = |baud: u32| Duration::from_nanos(10_000_000_000 / u64::from(baud.max(1)));
     let trace = std::env::var_os("PTY_TRACE").is_some();
     let mut buf = [0u8; 512];
     let mut line: VecDeque<(Duration, u8)> = VecDeque::new();
@@ -290,19 +329,23 @@ fn serve<D: StreamDevice>(
         };
         let ready = poll(&mut fds, PollTimeout::from(wait)).unwrap_or(0);
         let now = epoch.elapsed();
+        let host = rate.host(master);
+        let byte_time = byte_time_at(host);
+        let board_rate = if rate.follow_rate {
+            device.lock().ok().and_then(|d| d.baud())
+        } else {
+            None
+        };
         if ready > 0 {
             match nix::unistd::read(master, &mut buf) {
                 Ok(len) if len > 0 => {
+                    let heard = cross(&buf[..len], host, board_rate);
                     if trace {
-                        eprintln!(
-                            "{:>10.3} ms  in  {:02x?}",
-                            now.as_secs_f64() * 1e3,
-                            &buf[..len]
-                        );
+                        eprintln!("{:>10.3} ms  in  {:02x?}", now.as_secs_f64() * 1e3, &heard);
                     }
                     // The host wrote these at once; on the wire they arrive one byte time
                     // apart, which is what the model's receiver times.
-                    for &byte in &buf[..len] {
+                    for &byte in &heard {
                         incoming_free_at = incoming_free_at.max(now) + byte_time;
                         incoming.push_back((incoming_free_at, byte));
                     }
@@ -326,7 +369,11 @@ fn serve<D: StreamDevice>(
             .lock()
             .map(|mut device| device.transmit(now, &mut buf))
             .unwrap_or(0);
-        for &byte in &buf[..len] {
+        let sent = match board_rate {
+            Some(board) => cross(&buf[..len], board, Some(host)),
+            None => buf[..len].to_vec(),
+        };
+        for &byte in &sent {
             line_free_at = line_free_at.max(now) + byte_time;
             line.push_back((line_free_at, byte));
         }

@@ -53,6 +53,7 @@ Examples:
   motionctl bench --duration 5s --json
   motionctl bench --duration 2s --plot target/latency-plots
   motionctl doctor --config /etc/motiond/motiond.toml
+  motionctl commission pack_aux --address 5      (also --baud 115200, --factory-reset --yes)
   motionctl --remote tcp/cell4:7447 --identity panel status   (through motion-bridge)";
 
 /// Command-line client of motiond.
@@ -232,6 +233,37 @@ pub enum Command {
         /// The position the axis is at now, units.
         #[arg(allow_negative_numbers = true)]
         position: f64,
+    },
+    /// Change a device's own settings on the running server: its bus address (Trinamic
+    /// `$42`, SPI_motor 0xf1/0xf2/0xf0), its line rate (Trinamic `$40`, the link follows)
+    /// or its factory settings (Trinamic `$CC`, with --yes). Claims every axis and signal
+    /// of the device meanwhile (refused while another client holds one, or while one of
+    /// its axes moves); the server tells the board, finds it again where it now answers,
+    /// and this prints what to put in the config.
+    #[command(group(clap::ArgGroup::new("change").required(true).args(["address", "baud", "factory_reset"])))]
+    Commission {
+        /// Device name (`[[device]] name`).
+        device: String,
+        /// The new bus address: 0..=255 for a Trinamic pack, an even byte (0x92) for an
+        /// SPI_motor.
+        #[arg(long, value_parser = parse_address, value_name = "N")]
+        address: Option<u32>,
+        /// The new line rate, baud (a Trinamic pack: a rate its `$40` divisor reaches).
+        #[arg(long, value_name = "N")]
+        baud: Option<u32>,
+        /// Reset the pack to its factory settings (`$CC`: every parameter, the address from
+        /// its rotary switches, 19200 baud); the server configures it again from its config.
+        #[arg(long)]
+        factory_reset: bool,
+        /// Confirm --factory-reset.
+        #[arg(long, requires = "factory_reset")]
+        yes: bool,
+        /// How long to wait for the board to answer again.
+        #[arg(long, default_value = "5s", value_parser = parse_duration)]
+        timeout: Duration,
+        /// Print JSON.
+        #[arg(long)]
+        json: bool,
     },
     /// Claim axes for this process until Ctrl-C (or --duration), then release them.
     /// Claims die with the process that made them: other clients are refused meanwhile.
@@ -460,6 +492,16 @@ pub enum GroupCommand {
         #[arg(long, value_parser = parse_duration)]
         duration: Option<Duration>,
     },
+}
+
+/// An address in decimal or `0x` hex.
+pub fn parse_address(text: &str) -> Result<u32, String> {
+    let text = text.trim();
+    let parsed = match text.strip_prefix("0x").or_else(|| text.strip_prefix("0X")) {
+        Some(hex) => u32::from_str_radix(hex, 16),
+        None => text.parse(),
+    };
+    parsed.map_err(|_| format!("`{text}` is not an address (decimal, or hex as 0x92)"))
 }
 
 /// `AXIS=POSITION`.

@@ -19,6 +19,7 @@ mod act;
 mod bench;
 mod blackbox;
 mod cli;
+mod commission;
 mod describe;
 mod doctor;
 mod group;
@@ -209,6 +210,23 @@ fn run(cli: &Cli) -> anyhow::Result<()> {
             );
             Ok(())
         }
+        Command::Commission {
+            device,
+            address,
+            baud,
+            factory_reset,
+            yes,
+            timeout,
+            json,
+        } => commission::run(
+            client,
+            &commission::Request {
+                device,
+                change: commission::change(*address, *baud, *factory_reset, *yes)?,
+                timeout: *timeout,
+                json: *json,
+            },
+        ),
         Command::Claim { axes, duration } => act::claim(client, axes, *duration),
         Command::Release { axes } => act::release(client, axes),
         Command::Scope { axes, window } => scope::run(client, axes, *window),
@@ -281,6 +299,7 @@ fn exit_status(error: &anyhow::Error) -> u8 {
                 | ClientError::GroupRefused(_)
                 | ClientError::BridgeRefused { .. }
                 | ClientError::UnknownAxis(_)
+                | ClientError::UnknownDevice(_)
                 | ClientError::UnknownGroup { .. }
                 | ClientError::UnknownSignal(_) => exit::REFUSED,
                 ClientError::Trajectory(_) => exit::USAGE,

@@ -691,12 +691,18 @@ impl Loop {
     fn queue_link_output(&mut self, now: Duration, buf: &mut [u8; PACKET_LEN]) {
         for (index, port) in self.setup.ports.iter_mut().enumerate() {
             let mut queued = false;
-            while port.tx.slots() > 0 {
+            // Two slots: a message may need a change of the line rate before it.
+            while port.tx.slots() > 1 {
                 let Some(len) = self.setup.engine.poll_link_transmit(index, now, buf) else {
                     self.setup.journal.link_tx_none(index);
                     break;
                 };
                 self.setup.journal.link_tx(index, &buf[..len]);
+                if let Some(baud) = self.setup.engine.take_link_rate(index)
+                    && port.tx.push(Packet::rate_change(baud, now)).is_err()
+                {
+                    port.counters.dropped.fetch_add(1, Ordering::Relaxed);
+                }
                 // `slots() > 0` was checked: the push cannot fail, but a failure would
                 // still be counted rather than lost silently.
                 if port.tx.push(Packet::stamped(&buf[..len], now)).is_err() {

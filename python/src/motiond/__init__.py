@@ -40,6 +40,7 @@ _iox2.set_log_level_from_env_or(_iox2.LogLevel.Error)
 from . import ipc  # noqa: E402
 from .axis import Axis, AxisStatus  # noqa: E402
 from .client import Client  # noqa: E402
+from .commission import Commissioned, DeviceClaim  # noqa: E402
 from .errors import *  # noqa: E402,F401,F403
 from .errors import __all__ as _error_names  # noqa: E402
 from .frames import Frame, Received  # noqa: E402
@@ -49,6 +50,7 @@ from .ipc import (  # noqa: E402
     AxisFlags,
     AxisMode,
     CommandKind,
+    CommissionWhat,
     DeviceState,
     FaultCode,
     FrameFlags,
@@ -79,6 +81,8 @@ __all__ = [
     "RemoteClient",
     "Accepted",
     "Param",
+    "Commissioned",
+    "DeviceClaim",
     "Axis",
     "AxisStatus",
     "Signal",
@@ -95,6 +99,7 @@ __all__ = [
     "AxisFlags",
     "AxisMode",
     "CommandKind",
+    "CommissionWhat",
     "DeviceState",
     "FaultCode",
     "FrameFlags",

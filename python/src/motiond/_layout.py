@@ -267,7 +267,8 @@ class CommandRequest(Payload):
         ("sequence", ctypes.c_uint64),  # The client's sequence number, echoed in the reply.
         # Axis (or signal) index, config order, or ``CommandRequest.ALL_AXES``.
         ("axis", ctypes.c_uint32),
-        ("target", ctypes.c_uint32),  # ``Target`` value: 0 = axis, 1 = signal.
+        # ``Target`` value: 0 = axis, 1 = signal, 2 = group, 3 = device.
+        ("target", ctypes.c_uint32),
         ("values", ctypes.c_double * 3),  # Arguments; see ``CommandKind``.
     ]
 
@@ -656,7 +657,8 @@ class CommandKind(TextedEnum):
     RAMP_VELOCITY [velocity, acceleration]; HOME [search velocity]; SET_POSITION [position];
     SET_OUTPUT [0.0 or 1.0] (``axis`` = signal index, ``target`` = SIGNAL); CLAIM, RELEASE,
     E_STOP, RESET, OFF -; with ``target`` = GROUP (``axis`` = group index): CLAIM, RELEASE, STOP,
-    RUN [path id], HOLD, RESUME, FEED [0.0..1.5], CANCEL, STREAM [stream mode]."""
+    RUN [path id], HOLD, RESUME, FEED [0.0..1.5], CANCEL, STREAM [stream mode]; with ``target`` =
+    DEVICE (``axis`` = device index): COMMISSION [what, new value]."""
 
     STOP = 1, "stop"
     POWER = 2, "power"
@@ -678,6 +680,7 @@ class CommandKind(TextedEnum):
     FEED = 18, "feed"
     CANCEL = 19, "cancel"
     STREAM = 20, "stream"
+    COMMISSION = 21, "commission"
 
 
 class Reason(ReasonMethods, TextedEnum):
@@ -725,7 +728,7 @@ class Reason(ReasonMethods, TextedEnum):
         22,
         "the signal is not an output (a digital output, or a trigger's compare position)",
     )
-    UNKNOWN_TARGET = 23, "unknown target: 0 = axis, 1 = signal, 2 = group"
+    UNKNOWN_TARGET = 23, "unknown target: 0 = axis, 1 = signal, 2 = group, 3 = device"
     UNKNOWN_GROUP = 24, "no such group on this server"
     NO_PATH = (
         25,
@@ -749,6 +752,7 @@ class Reason(ReasonMethods, TextedEnum):
         31,
         "positions alone cannot be blended at this point within the axis's path_tolerance at its max_accel: space the points further apart, or send velocities",
     )
+    UNKNOWN_DEVICE = 32, "no such device on this server"
 
 
 class Target(TextedEnum):
@@ -757,6 +761,7 @@ class Target(TextedEnum):
     AXIS = 0
     SIGNAL = 1
     GROUP = 2
+    DEVICE = 3
 
 
 class DeviceState(TextedEnum):
@@ -867,6 +872,15 @@ class StreamState(TextedEnum):
     STREAMING = 1, "streaming"
     STALE = 2, "stale"
     ABORTED = 3, "aborted"
+
+
+class CommissionWhat(TextedEnum):
+    """What a COMMISSION request changes (``values[0]``; ``values[1]`` is the new address or baud
+    rate)."""
+
+    ADDRESS = 1, "address"
+    BAUD = 2, "baud"
+    FACTORY_RESET = 3, "factory-reset"
 
 
 class StreamMode(TextedEnum):
@@ -992,6 +1006,7 @@ ENUMS: Dict[str, type] = {
     "GroupMotion": GroupMotion,
     "GroupAbort": GroupAbort,
     "StreamState": StreamState,
+    "CommissionWhat": CommissionWhat,
     "StreamMode": StreamMode,
     "PathKind": PathKind,
     "ParamOwner": ParamOwner,

@@ -8,7 +8,7 @@ from typing import Any, Callable, ClassVar, Iterator, List, Optional, Sequence, 
 
 import iceoryx2 as iox2
 
-from . import errors
+from . import commission, errors
 from .axis import Axis
 from .errors import (
     EstopNotSeen,
@@ -651,6 +651,44 @@ class Client:
         if 0 <= index < len(self._goal_ticks):
             return self._goal_ticks[index]
         return 0
+
+    # --- commissioning (module :mod:`motiond.commission`) --------------------------------
+
+    def device_index(self, name: str) -> int:
+        """The index (config order) of device ``name``; raises
+        :class:`~motiond.errors.NoSuchDevice`."""
+        return commission.device_index(self, name)
+
+    def claim_device(self, name: str) -> "commission.DeviceClaim":
+        """Claims every axis and signal of device ``name`` (what a commission needs), for
+        a ``with`` block."""
+        return commission.DeviceClaim(self, name)
+
+    def commission(
+        self,
+        device: str,
+        *,
+        address: Optional[int] = None,
+        baud: Optional[int] = None,
+        factory_reset: bool = False,
+    ) -> Accepted:
+        """Changes one of ``device``'s own settings (exactly one of ``address``, ``baud``,
+        ``factory_reset=True``): the server tells the board and finds it again where it
+        now answers (:meth:`wait_commissioned`). Needs the device's claims
+        (:meth:`claim_device`); refused while one of its axes moves
+        (:class:`~motiond.errors.GroupBusy`), for a setting its board lacks
+        (:class:`~motiond.errors.Unsupported`) or a value it does not take
+        (:class:`~motiond.errors.OutOfRange`)."""
+        return commission.commission(
+            self, device, address=address, baud=baud, factory_reset=factory_reset
+        )
+
+    def wait_commissioned(
+        self, device: str, accepted: Accepted, timeout: float = 5.0
+    ) -> "commission.Commissioned":
+        """Waits until ``device`` answers again after the commission ``accepted``: its
+        address and firmware as found."""
+        return commission.wait_commissioned(self, device, accepted, timeout)
 
     def estop(self) -> Accepted:
         """Emergency stop: every axis stops (with its e-stop category); latched until

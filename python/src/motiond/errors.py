@@ -21,6 +21,7 @@ __all__ = [
     "NoSuchAxis",
     "NoSuchSignal",
     "NoSuchGroup",
+    "NoSuchDevice",
     "BadPath",
     "GroupAborted",
     "StreamClosed",
@@ -69,6 +70,8 @@ __all__ = [
     "GroupBusy",
     "NotMoving",
     "BlendTolerance",
+    "UnknownDevice",
+    "NotRecommissioned",
 ]
 
 
@@ -145,6 +148,14 @@ class NoSuchGroup(MotiondError, LookupError):
         super().__init__(f'no group named "{name}" on this server (its groups: {have})')
         self.name = name
         self.groups = list(groups)
+
+
+class NoSuchDevice(MotiondError, LookupError):
+    """No device of that name on the server."""
+
+    def __init__(self, name: str) -> None:
+        super().__init__(f'no device named "{name}" on this server (see `motionctl list`)')
+        self.name = name
 
 
 class BadPath(MotiondError, ValueError):
@@ -363,6 +374,26 @@ class BlendTolerance(Refused, reason=Reason.BLEND_TOLERANCE):
     """Refused: a trajectory of positions alone cannot be blended at a point within the
     axis's ``path_tolerance`` at its max_accel; ``at_point`` / ``at_axis`` name it, ``value``
     and ``limit`` give the distance and the tolerance (``Reason.BLEND_TOLERANCE``)."""
+
+
+class UnknownDevice(Refused, reason=Reason.UNKNOWN_DEVICE):
+    """Refused: no such device on this server (``Reason.UNKNOWN_DEVICE``)."""
+
+
+class NotRecommissioned(MotiondError, TimeoutError):
+    """A commissioned device did not answer again in time (not found at its new address
+    or rate, or after its factory reset); ``state`` is its
+    :class:`~motiond.ipc.DeviceState` then."""
+
+    def __init__(self, device: str, state: Any, waited: float) -> None:
+        text = getattr(state, "text", str(state))
+        super().__init__(
+            f"device `{device}` did not answer again within {waited:.3f} s (it is {text}); "
+            "the server keeps asking where it should now answer"
+        )
+        self.device = device
+        self.state = state
+        self.waited = waited
 
 
 def refused(

@@ -28,6 +28,7 @@ pub(crate) struct RawDevice {
     stop_no_ref_bit: Option<Spanned<Int>>,
     pub(crate) power_down: Option<Spanned<String>>,
     pub(crate) microstep_table: Option<Spanned<Vec<Spanned<Int>>>>,
+    pub(crate) baud: Option<Spanned<Int>>,
 }
 
 /// `ready_output = { motors = [0, 1], reference = [0] }`: TTLOUT1 as the ready output
@@ -232,6 +233,10 @@ pub(crate) fn device_keys(
         ok &= keys.stop_no_ref_bit.is_some();
     }
     ok &= crate::drive_keys::device_keys(v, ctx, raw, &mut keys);
+    if let Some(value) = &raw.baud {
+        keys.baud = crate::baud_key::baud(v, ctx, value);
+        ok &= keys.baud.is_some();
+    }
     if let Some(ready) = &raw.ready_output {
         let motors: u8 = match variant {
             PackVariant::Quadpack => 4,
@@ -597,6 +602,7 @@ pub(crate) fn cross_check(v: &mut dyn KeyIssues, machine: &MachineView<'_>) {
     ready_output_signals(v, machine);
     packet_timeouts(v, machine);
     crate::drive_keys::cross_check(v, machine);
+    crate::baud_key::one_rate_per_link(v, machine);
 }
 
 /// The device keys of pack `d` (an index into the view's devices).

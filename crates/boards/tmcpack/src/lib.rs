@@ -7,6 +7,7 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+mod baud_key;
 mod drive_keys;
 pub mod driver;
 mod keys;

@@ -44,6 +44,8 @@ pub struct TmcpackDeviceKeys {
     pub power_down: Option<PowerDownMode>,
     /// `microstep_table`: the 16 entries of the `$17` motor characteristics table.
     pub microstep_table: Option<[u8; 16]>,
+    /// `$40` rate the pack is switched to at start-up, baud (the link follows).
+    pub baud: Option<u32>,
 }
 
 /// `power_down` (manual 8.6 `$45`): what the driver asks of the pack's power-down mode.

@@ -4,13 +4,14 @@
 use super::{Constant, Contract, Enum, Scalar, Schema, Service, Struct, Variant};
 use crate::{
     AxisFlags, AxisInfo, AxisMode, AxisState, AxisWire, ClientId, CommandKind, CommandReply,
-    CommandRequest, DeviceInfo, DeviceModel, DeviceState, EstopCategory, FaultCode, FrameFlags,
-    GroupAbort, GroupInfo, GroupMotion, GroupPath, GroupState, LatencySummary, LinkIo, LinkStats,
-    MAX_AXES, MAX_DEVICES, MAX_GROUP_AXES, MAX_GROUPS, MAX_LINKS, MAX_PARAMS, MAX_PATH_POINTS,
-    MAX_SIGNALS, MODEL_ID_LEN, MachineParam, MachineParams, MotionFrame, NAME_LEN, PARAM_TEXT_LEN,
-    PATH_VALUES, ParamOwner, PathFlags, PathKind, Reason, SCHEMA_VERSION, ServerInfo, ServerStats,
-    ServiceNames, Setpoint, SetpointFlags, SignalFlags, SignalInfo, SignalInfoFlags, SignalKind,
-    SignalState, StreamFlags, StreamMode, StreamState, Target, UNIT_LEN,
+    CommandRequest, CommissionWhat, DeviceInfo, DeviceModel, DeviceState, EstopCategory, FaultCode,
+    FrameFlags, GroupAbort, GroupInfo, GroupMotion, GroupPath, GroupState, LatencySummary, LinkIo,
+    LinkStats, MAX_AXES, MAX_DEVICES, MAX_GROUP_AXES, MAX_GROUPS, MAX_LINKS, MAX_PARAMS,
+    MAX_PATH_POINTS, MAX_SIGNALS, MODEL_ID_LEN, MachineParam, MachineParams, MotionFrame, NAME_LEN,
+    PARAM_TEXT_LEN, PATH_VALUES, ParamOwner, PathFlags, PathKind, Reason, SCHEMA_VERSION,
+    ServerInfo, ServerStats, ServiceNames, Setpoint, SetpointFlags, SignalFlags, SignalInfo,
+    SignalInfoFlags, SignalKind, SignalState, StreamFlags, StreamMode, StreamState, Target,
+    UNIT_LEN,
 };
 
 /// The contract of this build of `motion-ipc`.
@@ -275,7 +276,8 @@ fn enums() -> Vec<Enum> {
              SET_POSITION [position]; SET_OUTPUT [0.0 or 1.0] (`axis` = signal index, \
              `target` = SIGNAL); CLAIM, RELEASE, E_STOP, RESET, OFF -;\n\
              with `target` = GROUP (`axis` = group index): CLAIM, RELEASE, STOP, RUN [path id], \
-             HOLD, RESUME, FEED [0.0..1.5], CANCEL, STREAM [stream mode].",
+             HOLD, RESUME, FEED [0.0..1.5], CANCEL, STREAM [stream mode];\n\
+             with `target` = DEVICE (`axis` = device index): COMMISSION [what, new value].",
             |value| raw::<u32>(value).and_then(|v| CommandKind::try_from(v).ok()),
             |kind| Some(kind.name()),
         ),
@@ -361,6 +363,14 @@ fn enums() -> Vec<Enum> {
             "Where a group's setpoint stream is (`GroupState.stream`).",
             |value| raw::<u8>(value).and_then(|v| StreamState::try_from(v).ok()),
             |state| Some(state.name()),
+        ),
+        scan(
+            "CommissionWhat",
+            Scalar::U32,
+            "What a COMMISSION request changes (`values[0]`; `values[1]` is the new address \
+             or baud rate).",
+            |value| raw::<u32>(value).and_then(|v| CommissionWhat::try_from(v).ok()),
+            |what| Some(what.name()),
         ),
         scan(
             "StreamMode",

@@ -9,6 +9,7 @@ use core::time::Duration;
 use std::collections::VecDeque;
 
 use super::device::{SpiDevice, StreamDevice};
+use super::line::garble;
 
 /// Largest chunk a bus pulls from one device per call to [`StreamDevice::transmit`].
 const CHUNK: usize = 256;
@@ -26,8 +27,16 @@ const CHUNK: usize = 256;
 /// [`collision`](Self::collisions) and delivers the bytes one device after the other (a
 /// real pair would garble them; the count lets a test assert that the driver never lets
 /// two boards talk at once).
+///
+/// Once told the rate the pair runs at ([`StreamDevice::line_rate`], as a
+/// [`SimLink`](crate::sim::SimLink) does), the bus reports that rate as its own and garbles
+/// ([`garble`](crate::sim::garble)) what crosses between the pair and a device listening at
+/// another rate ([`StreamDevice::baud`]): a board switched to a new rate hears only garbage
+/// from a host still at the old one, and the other way round.
 pub struct StreamBus {
     devices: Vec<Box<dyn StreamDevice>>,
+    /// The rate of the pair, once told.
+    line: Option<u32>,
     /// Bytes transmitted by the devices, not yet handed to the host.
     to_host: VecDeque<u8>,
     scratch: Vec<u8>,
@@ -39,6 +48,7 @@ impl StreamBus {
     pub fn new() -> Self {
         Self {
             devices: Vec::new(),
+            line: None,
             to_host: VecDeque::new(),
             scratch: vec![0; CHUNK],
             collisions: 0,
@@ -87,10 +97,16 @@ impl StreamBus {
                 }
                 talked = true;
                 let sent = self.scratch.get(..n).unwrap_or_default();
-                self.to_host.extend(sent.iter().copied());
+                let own = device.baud();
+                match (own, self.line) {
+                    (Some(own), Some(line)) if own != line => {
+                        self.to_host.extend(garble(sent, own, line));
+                    }
+                    _ => self.to_host.extend(sent.iter().copied()),
+                }
                 for (j, other) in self.devices.iter_mut().enumerate() {
                     if j != i {
-                        other.receive(now, sent);
+                        deliver(other.as_mut(), now, sent, own);
                     }
                 }
                 if n < self.scratch.len() {
@@ -121,13 +137,27 @@ impl fmt::Debug for StreamBus {
     }
 }
 
+/// Hands `device` the bytes sent at `rate` (`None`: at the device's own), garbled when it
+/// listens at another.
+fn deliver(device: &mut dyn StreamDevice, now: Duration, bytes: &[u8], rate: Option<u32>) {
+    match (rate, device.baud()) {
+        (Some(sent), Some(own)) if sent != own => {
+            let heard = garble(bytes, sent, own);
+            if !heard.is_empty() {
+                device.receive(now, &heard);
+            }
+        }
+        _ => device.receive(now, bytes),
+    }
+}
+
 impl StreamDevice for StreamBus {
     fn receive(&mut self, now: Duration, bytes: &[u8]) {
         // Replies already started before these bytes arrived must be seen first by the
         // other devices, in time order.
         self.poll_devices(now);
         for device in &mut self.devices {
-            device.receive(now, bytes);
+            deliver(device.as_mut(), now, bytes, self.line);
         }
     }
 
@@ -147,9 +177,18 @@ impl StreamDevice for StreamBus {
         self.devices.iter().filter_map(|d| d.next_event(now)).min()
     }
 
-    /// The rate of the first device that reports one (devices on one segment must agree).
+    /// The pair's rate once told ([`line_rate`](StreamDevice::line_rate)); before, the
+    /// rate of the first device that reports one.
     fn baud(&self) -> Option<u32> {
-        self.devices.iter().find_map(|d| d.baud())
+        self.line
+            .or_else(|| self.devices.iter().find_map(|d| d.baud()))
+    }
+
+    fn line_rate(&mut self, baud: u32) {
+        self.line = Some(baud);
+        for device in &mut self.devices {
+            device.line_rate(baud);
+        }
     }
 }
 

@@ -28,6 +28,15 @@ pub trait StreamDevice: Send {
     fn baud(&self) -> Option<u32> {
         None
     }
+
+    /// The host's side of the wire runs at `baud` from now on (said when a
+    /// [`SimLink`](crate::sim::SimLink) is made and at each of its
+    /// [`set_baud`](crate::Link::set_baud)). A bus uses it to garble what crosses between the
+    /// line and a device at another rate; a single device needs nothing (the link garbles
+    /// what crosses at another rate than [`baud`](Self::baud)). By default nothing.
+    fn line_rate(&mut self, baud: u32) {
+        let _ = baud;
+    }
 }
 
 /// A device model on an SPI bus. One call is one chip-select assertion.

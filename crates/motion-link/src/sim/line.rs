@@ -51,6 +51,14 @@ impl Line {
         (start, self.free)
     }
 
+    /// Carries the frames sent from now on at `rate` (a rate change after the line fell
+    /// silent: what was sent stays timed as it was).
+    pub(crate) fn retime(&mut self, rate: u64) {
+        self.origin = self.free;
+        self.bits = 0;
+        self.rate = rate.max(1);
+    }
+
     /// Forgets everything in flight (the wire was reset).
     pub(crate) fn reset(&mut self, now: Duration) {
         self.origin = now;
@@ -151,6 +159,30 @@ pub(crate) fn resample(
     }
 }
 
+/// The bytes an 8N1 receiver at `rx_baud` takes from `bytes` sent back to back at
+/// `tx_baud` ([`resample`]), without those it flags with a framing error (a UART's
+/// firmware drops them): the bytes themselves at equal rates, garbage or nothing at others.
+/// For device models that see a line at another rate than their own (a bus of boards
+/// where one was switched to a new rate, a pty whose client set another rate).
+pub fn garble(bytes: &[u8], tx_baud: u32, rx_baud: u32) -> Vec<u8> {
+    if tx_baud == rx_baud {
+        return bytes.to_vec();
+    }
+    let mut out = Vec::with_capacity(bytes.len() * 2);
+    resample(
+        bytes,
+        Duration::ZERO,
+        u64::from(tx_baud),
+        u64::from(rx_baud),
+        |r| {
+            if !r.framing_error {
+                out.push(r.byte);
+            }
+        },
+    );
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -190,6 +222,18 @@ mod tests {
         }
         let last = got.last().unwrap();
         assert_eq!(last.at, Duration::from_millis(1) + bits_time(2560, 19_200));
+    }
+
+    #[test]
+    fn garble_keeps_bytes_at_one_rate_and_loses_a_trinamic_word_at_another() {
+        let word = [0x01, 0x43, 0xFE, 0, 0, 0, 0, 0, 0];
+        assert_eq!(garble(&word, 19_200, 19_200), word);
+        for (tx, rx) in [(19_200, 115_200), (115_200, 19_200), (19_200, 57_600)] {
+            let got = garble(&word, tx, rx);
+            assert_ne!(got, word, "{tx} → {rx}: {got:02x?}");
+        }
+        // 2.5 % apart: a UART takes it.
+        assert_eq!(garble(&word, 115_200, 113_636), word);
     }
 
     #[test]

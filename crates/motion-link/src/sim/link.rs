@@ -116,6 +116,8 @@ pub struct SimLink {
     stats: LinkStats,
     /// [`SimLink::with_host_frames`].
     host_frame: Option<Duration>,
+    /// The rate a stream link was made with, which [`Link::reopen`] goes back to.
+    opening_baud: u32,
 }
 
 impl fmt::Debug for SimLink {
@@ -146,6 +148,8 @@ impl SimLink {
     ) -> Self {
         let baud = baud.max(1);
         let line = Line::new(u64::from(baud));
+        let mut device = device;
+        device.line_rate(baud);
         let model = Model::Stream {
             device,
             baud,
@@ -154,7 +158,9 @@ impl SimLink {
             duplex,
             to_device: VecDeque::new(),
         };
-        Self::with_model(format!("sim {name} @ {baud} 8N1"), model)
+        let mut link = Self::with_model(format!("sim {name} @ {baud} 8N1"), model);
+        link.opening_baud = baud;
+        link
     }
 
     /// An SPI wire clocked at `speed_hz` to an SPI device.
@@ -182,6 +188,7 @@ impl SimLink {
             overruns: 0,
             stats: LinkStats::default(),
             host_frame: None,
+            opening_baud: 0,
         }
     }
 
@@ -226,6 +233,31 @@ impl SimLink {
                 speed_hz: u32::try_from(line.rate()).unwrap_or(u32::MAX),
             },
         }
+    }
+
+    /// Moves the host's side of a stream wire to `baud` (after the line fell silent:
+    /// bytes in flight keep their timing), and tells the device ([`StreamDevice::line_rate`]).
+    fn retime(&mut self, baud: u32) {
+        let baud = baud.max(1);
+        let Model::Stream {
+            device,
+            baud: rate,
+            out_line,
+            in_line,
+            ..
+        } = &mut self.model
+        else {
+            return;
+        };
+        *rate = baud;
+        out_line.retime(u64::from(baud));
+        in_line.retime(u64::from(baud));
+        device.line_rate(baud);
+        let old = self.name.to_string();
+        let base = old
+            .rsplit_once(" @ ")
+            .map_or(old.as_str(), |(base, _)| base);
+        self.name = format!("{base} @ {baud} 8N1").into();
     }
 
     /// Device bytes lost because the host did not read in time.
@@ -652,8 +684,35 @@ impl Link for SimLink {
             });
         }
         self.drop_in_flight(now);
+        if matches!(self.model, Model::Stream { .. }) {
+            // A reopened port runs at its configured rate again, as a tty does.
+            self.retime(self.opening_baud);
+        }
         self.generation = Some(generation);
         self.stats.reconnects += 1;
+        Ok(())
+    }
+
+    /// A stream wire only; takes effect at once (the host's bytes queued for the device
+    /// keep the rate they were written at).
+    fn set_baud(&mut self, now: Duration, baud: u32) -> Result<(), LinkError> {
+        self.check_plug(now)?;
+        if !matches!(self.model, Model::Stream { .. }) {
+            self.stats.errors += 1;
+            return Err(LinkError::Unsupported {
+                link: self.name.clone(),
+                what: "a line rate on an SPI wire",
+            });
+        }
+        if baud == 0 {
+            self.stats.errors += 1;
+            return Err(LinkError::Config {
+                link: self.name.clone(),
+                reason: "baud 0".into(),
+            });
+        }
+        self.pump(now);
+        self.retime(baud);
         Ok(())
     }
 

@@ -25,4 +25,5 @@ pub use bus::{SpiBus, StreamBus};
 pub use can::{CanBus, CanDevice, RX_QUEUE_FRAMES, SimCanLink, TX_QUEUE_FRAMES};
 pub use device::{SpiDevice, StreamDevice};
 pub use faults::{Direction, SimFaults};
+pub use line::garble;
 pub use link::{Duplex, SimLimits, SimLink, SimWire};

@@ -33,7 +33,7 @@ mod worker;
 
 use core::time::Duration;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
 use std::thread::JoinHandle;
 
 use motion_link::Link;
@@ -61,11 +61,14 @@ pub const IDLE_WAIT: Duration = Duration::from_millis(100);
 pub const NEVER: u64 = u64::MAX;
 
 /// A message or a chunk of bytes, with its stamp: when the tick queued it (to send), or
-/// when the I/O thread read it (received).
+/// when the I/O thread read it (received). To send, it may instead be a change of the
+/// link's line rate ([`Packet::rate_change`]), taken in order with the messages.
 #[derive(Debug, Clone, Copy)]
 pub struct Packet {
     len: u16,
     at: Duration,
+    /// Not 0: no bytes; the link is to run at this rate from the next message on.
+    rate: u32,
     data: [u8; PACKET_LEN],
 }
 
@@ -83,8 +86,24 @@ impl Packet {
         Self {
             len: len as u16,
             at,
+            rate: 0,
             data,
         }
+    }
+
+    /// A change of the link's line rate to `baud` (a driver changed its board's rate, e.g.
+    /// the Trinamic pack's `$40`), queued at `at`: the I/O thread writes every message
+    /// before it, waits until they left ([`Link::flush`]), sets the rate
+    /// ([`Link::set_baud`]) and goes on with the messages after it. No write report.
+    pub fn rate_change(baud: u32, at: Duration) -> Self {
+        let mut packet = Self::stamped(&[], at);
+        packet.rate = baud.max(1);
+        packet
+    }
+
+    /// The rate of a [`rate_change`](Self::rate_change), `None` for bytes.
+    pub fn rate(&self) -> Option<u32> {
+        (self.rate != 0).then_some(self.rate)
     }
 
     /// The bytes.
@@ -153,6 +172,9 @@ pub struct IoCounters {
     /// Messages a link the tick runs itself (`io = "tick"`) put off to a later tick because
     /// the tick's wire-time budget was spent: each tick adds the messages left waiting.
     pub deferred: AtomicU64,
+    /// The line rate the I/O thread last set ([`Packet::rate_change`]); 0 while the link
+    /// runs at its configured rate (since it was last opened).
+    pub baud: AtomicU32,
 }
 
 impl Default for IoCounters {
@@ -172,6 +194,7 @@ impl Default for IoCounters {
             look_by_ns: AtomicU64::new(NEVER),
             sleep_until_ns: AtomicU64::new(0),
             deferred: AtomicU64::new(0),
+            baud: AtomicU32::new(0),
         }
     }
 }

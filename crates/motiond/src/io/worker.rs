@@ -61,6 +61,8 @@ pub(super) struct Worker {
     idle_wakes: u32,
     /// When the last pass began to read.
     looked_at: Duration,
+    /// Line rates logged since the link was opened (0: free).
+    rates_said: [u32; 4],
 }
 
 impl Worker {
@@ -92,6 +94,7 @@ impl Worker {
             fd_ready: false,
             idle_wakes: 0,
             looked_at: Duration::ZERO,
+            rates_said: [0; 4],
         }
     }
 
@@ -278,6 +281,9 @@ impl Worker {
         match self.link.reopen(now) {
             Ok(()) => {
                 self.down = false;
+                // Reopened at its configured rate.
+                self.counters.baud.store(0, Ordering::Relaxed);
+                self.rates_said = [0; 4];
                 self.counters.up.store(true, Ordering::Relaxed);
                 if self.opened {
                     self.counters.reconnects.fetch_add(1, Ordering::Relaxed);
@@ -360,6 +366,12 @@ impl Worker {
                     Err(_) => return,
                 },
             };
+            if let Some(baud) = packet.rate() {
+                if !self.change_rate(now, baud) {
+                    return;
+                }
+                continue;
+            }
             let bytes = &packet.bytes()[offset..];
             match self.link.write(now, bytes) {
                 Ok(written) => {
@@ -402,6 +414,56 @@ impl Worker {
         }
     }
 
+    /// A queued rate change: the messages before it leave the transmitter first
+    /// ([`Link::flush`], which waits until they did), then the link takes `baud`. Whether
+    /// the link is still up and the next packet may go.
+    fn change_rate(&mut self, now: Duration, baud: u32) -> bool {
+        if let Err(error) = self.link.batch(now, false) {
+            self.fail(now, error.kind());
+            return false;
+        }
+        // What the link runs at now, as its name says it (`serial /dev/ttyUSB0 @ 19200 8N1`).
+        let before = named_rate(self.link.name());
+        let result = self
+            .link
+            .flush(now)
+            .and_then(|()| self.link.set_baud(now, baud));
+        match result {
+            Ok(()) => {
+                self.counters.baud.store(baud, Ordering::Relaxed);
+                // A driver says the rate its board listens at even when the link runs at it
+                // already (after every opening): only a change is worth a line. A thread of
+                // its own, not the tick: a rare line here costs the tick nothing (for a link
+                // the tick runs itself it is one line per rate change).
+                // On a bus whose boards talk at two rates (one pack switched, the other not
+                // yet) the rate changes before every other message: each rate is said once
+                // per opening.
+                let new_rate = !self.rates_said.contains(&baud);
+                if before != Some(baud) && new_rate {
+                    if let Some(slot) = self.rates_said.iter_mut().find(|slot| **slot == 0) {
+                        *slot = baud;
+                    }
+                    tracing::info!("link {}: line rate now {baud} baud", self.link.name());
+                }
+            }
+            Err(error) => {
+                tracing::warn!(
+                    "link {}: cannot change to {baud} baud: {error}",
+                    self.link.name()
+                );
+                self.fail(now, error.kind());
+                if self.down {
+                    return false;
+                }
+            }
+        }
+        if let Err(error) = self.link.batch(now, true) {
+            self.fail(now, error.kind());
+            return false;
+        }
+        true
+    }
+
     pub(super) fn read_available(&mut self, now: Duration, buf: &mut [u8; PACKET_LEN]) {
         loop {
             match self.link.read(now, buf) {
@@ -440,4 +502,11 @@ impl Worker {
             }
         }
     }
+}
+
+/// The rate a link's name gives after its ` @ ` (`serial /dev/ttyUSB0 @ 19200 8N1`).
+fn named_rate(name: &str) -> Option<u32> {
+    let (_, after) = name.rsplit_once(" @ ")?;
+    let digits = after.split(' ').next()?;
+    digits.parse().ok()
 }

@@ -228,6 +228,27 @@ pub fn nominal_baud(divisor: u16) -> u32 {
         .unwrap_or(exact.round() as u32)
 }
 
+/// The rates a pack can be set to with `$40`: the standard rates ([`STANDARD_BAUDS`])
+/// whose divisor (`20 MHz / (16 · baud)`, rounded) gives the rate within 2.5 % — what a
+/// UART at the nominal rate takes. 230400, for one, is not among them: divisor 5 gives
+/// 250000, 8.5 % off. In increasing order.
+pub fn listed_bauds() -> impl Iterator<Item = u32> {
+    STANDARD_BAUDS
+        .iter()
+        .copied()
+        .filter(|&baud| baud_divisor(baud).is_ok_and(|d| nominal_baud(d) == baud))
+}
+
+/// The `$40` divisor of a rate [`listed_bauds`] has; [`Error::OutOfRange`] for any other.
+pub fn listed_baud_divisor(baud: u32) -> Result<u16, Error> {
+    match baud_divisor(baud) {
+        Ok(divisor) if STANDARD_BAUDS.contains(&baud) && nominal_baud(divisor) == baud => {
+            Ok(divisor)
+        }
+        _ => Err(Error::OutOfRange { field: "baud rate" }),
+    }
+}
+
 /// The wire time of one byte, 8N1 (10 bit times).
 pub fn byte_time(baud: u32) -> Duration {
     Duration::from_nanos(10_000_000_000 / u64::from(baud.max(1)))

@@ -323,6 +323,25 @@ fn manual_8_6_baud_divisor_40() {
     );
 }
 
+/// Manual 8.6 $40 gives the divisor formula, not a list: the rates a pack takes are the
+/// standard ones the formula reaches within a UART's 2.5 %.
+#[test]
+fn the_rates_40_reaches_are_the_standard_ones_within_two_and_a_half_percent() {
+    let listed: Vec<u32> = convert::listed_bauds().collect();
+    for baud in [9_600, 19_200, 38_400, 57_600, 115_200, 250_000, 1_250_000] {
+        assert!(listed.contains(&baud), "{baud}: {listed:?}");
+        let divisor = convert::listed_baud_divisor(baud).expect("listed");
+        let exact = convert::baud_of_divisor(divisor);
+        assert!((exact - f64::from(baud)).abs() <= f64::from(baud) * 0.025);
+    }
+    assert_eq!(convert::listed_baud_divisor(115_200), Ok(11));
+    // 230400: divisor 5 is 250000 baud, 8.5 % off; 100000 is no standard rate.
+    for baud in [230_400, 100_000, 0, 460_800] {
+        assert!(!listed.contains(&baud), "{baud}");
+        assert!(convert::listed_baud_divisor(baud).is_err(), "{baud}");
+    }
+}
+
 /// Manual 6.2: "The lower 3 address bits are fixed to 000 … Address range: $008 to $7F8";
 /// 6.3: forwarding to RS-232 uses lower bits 001.
 #[test]

@@ -105,6 +105,11 @@
 //! (configure brushed axes with `min < 0 < max`), `moving` means "the bridge is driven",
 //! and a channel is fresh when its board answered the last identification read.
 //!
+//! # Commissioning
+//!
+//! `motionctl commission DEVICE --address N` moves the board to a new address with the
+//! unlock sequence (module `commission`) and starts it there again.
+//!
 //! # Faults
 //!
 //! - Polls are checked against what the driver wrote: the step delay and target read back
@@ -124,6 +129,7 @@
 //! - After any of these the board is started again from step 1.
 
 mod brushed;
+mod commission;
 mod config;
 mod goals;
 pub mod ramp;
@@ -138,8 +144,8 @@ use core::time::Duration;
 use spimotor::Identification;
 
 use motion_drivers::{
-    ChannelState, DeviceFault, DeviceStatus, Driver, Goal, GoalError, GoalKind, GoalKinds,
-    IoStamps, Model, Priority, RateFloor, Transmit,
+    ChannelState, Commission, CommissionError, DeviceFault, DeviceStatus, Driver, Goal, GoalError,
+    GoalKind, GoalKinds, IoStamps, Model, Priority, RateFloor, Transmit,
 };
 
 pub use config::{AxisLimits, SpimotorDrive, SpimotorDriverConfig};
@@ -406,6 +412,11 @@ impl Driver for SpimotorDriver {
         self.in_flight.clear();
         self.restart(now, 0);
     }
+
+    /// The board's address (0xf1, 0xf2, 0xf0): module `commission`.
+    fn commission(&mut self, _now: Duration, change: Commission) -> Result<(), CommissionError> {
+        self.start_commission(change)
+    }
 }
 
 #[cfg(test)]
@@ -415,3 +426,6 @@ mod tests_late_replies;
 
 /// The SPI_motor protocol page defines no I/O port: no pins.
 pub const PINS: &[motion_drivers::PinInfo] = &[];
+
+#[cfg(test)]
+mod tests_commission;

@@ -340,6 +340,10 @@ impl SpimotorDriver {
             self.goal_unsent &= !bit;
             goal_starts = bit;
         }
+        if let Op::Write(Write::ChangeAddress(address)) = queued.op {
+            // Module `commission`: the board answers at its new address from now on.
+            self.address_written(now, address);
+        }
         Some(Transmit {
             len,
             expects_reply: matches!(queued.op, Op::Read(..)),

@@ -222,9 +222,13 @@ pub struct TmcpackDriverConfig {
     pub address: u8,
     /// SIXpack (6 motors) or QUADpack (4).
     pub variant: Variant,
-    /// The line rate of the link, baud (wire-time budgets; the driver writes this same rate
-    /// back with $40, so the pack's rate is never changed behind the link's back).
+    /// The line rate of the link, baud: the rate it opens at (wire-time budgets; without
+    /// `target_baud` the driver writes this same rate back with $40, so the pack's rate is
+    /// never changed behind the link's back).
     pub baud: u32,
+    /// The rate the pack is switched to with `$40` at start-up (key `baud`), the link
+    /// following; `None`: the pack stays at the link's rate (driver module `rate`).
+    pub target_baud: Option<u32>,
     /// Response address of the driver's queries (see [`DEFAULT_REPLY_ADDRESS`]).
     pub reply_address: u8,
     /// $40 transmitter switch-over delay to program at start-up, 2 ms units (1..=1000);
@@ -275,6 +279,7 @@ impl Default for TmcpackDriverConfig {
             address: 1,
             variant: Variant::SixPack,
             baud: DEFAULT_BAUD,
+            target_baud: None,
             reply_address: DEFAULT_REPLY_ADDRESS,
             switchover_units: Some(DEFAULT_SWITCHOVER_UNITS),
             packet_timeout_units: None,

@@ -4,9 +4,10 @@
 //! [`DeviceStatus::firmware`], the reset flag); `$28` to see whether a configured motor is
 //! still running (left so by a previous server: it is stopped with `$14`/`$25` and polled
 //! with `$21` until it stands, because `$12`, `$13` and `$16` may only change at
-//! standstill); then the configuration — `$40` with the link's own baud divisor and the
-//! configured switch-over delay (the baud rate is never changed: the link would have to
-//! follow), `$41` packet timeout, `$12` clkdiv chosen for the fastest motor, `$10` peak
+//! standstill); then the configuration — `$40` with the divisor of the rate the driver
+//! talks at and the configured switch-over delay (without a `baud` that is the link's own
+//! rate, never changed; with one the pack was switched to it first and the link followed:
+//! module `rate`), `$41` packet timeout, `$12` clkdiv chosen for the fastest motor, `$10` peak
 //! currents per motor pair, and per configured motor `$11`, `$13`, `$14`, `$15`, `$16`,
 //! `$18`, `$31` from its axis limits and machine keys, then `$33` and `$32` when I/O is
 //! configured. Motors found active afterwards are stopped: whatever they were doing was not
@@ -41,6 +42,9 @@
 //! Three timeouts in a row take the pack offline ([`DeviceFault::NotResponding`]); it is
 //! then asked for `$43` every [`RETRY_PERIOD`] and configured again when it answers.
 //!
+//! Commissioning (`$42` address, `$40` rate, `$CC` factory reset) is the `commission`
+//! module's.
+//!
 //! Goals are mapped as described in the `channel` module: Stop with `$25` velocity 0, then
 //! `$23`; Position/RampPosition with `$14`, `$26`, `$23`; Velocity with `$25`; Home with
 //! `$16`, `$22`; SetPosition with `$27`; Off with a stop, then `$11` at 0 %. Power is
@@ -54,11 +58,13 @@
 
 mod can;
 mod channel;
+mod commission;
 mod config;
 mod goals;
 mod io;
 mod line;
 mod power_down;
+mod rate;
 mod rx;
 mod spec;
 mod spec_drive;
@@ -69,6 +75,8 @@ mod wire;
 mod bench;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_baud;
 #[cfg(test)]
 mod tests_drive;
 #[cfg(test)]
@@ -88,19 +96,22 @@ use tmcpack::convert::{DEFAULT_SWITCHOVER_UNITS as FACTORY_SWITCHOVER, byte_time
 use tmcpack::{DEFAULT_PACKET_TIMEOUT, FRAME_LEN, Variant};
 
 use motion_drivers::{
-    ChannelState, DeviceFault, DeviceStatus, Driver, Goal, GoalError, GoalKinds, IoStamps, Model,
-    Pin, PinReading, Priority, RateFloor, Transmit,
+    ChannelState, Commission, CommissionError, DeviceFault, DeviceStatus, Driver, Goal, GoalError,
+    GoalKinds, IoStamps, Model, Pin, PinReading, Priority, RateFloor, Transmit,
 };
 
 use channel::{Channel, Step};
+use commission::Service;
 use config::{Scale, clkdiv_for};
 use goals::CAPABILITIES;
 use io::IoState;
 use line::PackLine;
 use power_down::PowerDown;
+use rate::LineRate;
 use startup::{Quiesce, StartupPlan};
 use wire::{ReplyHunter, Wire};
 
+pub use commission::RESET_WAIT;
 pub use config::{
     Currents, DEFAULT_REPLY_ADDRESS, DEFAULT_SWITCHOVER_UNITS, PACKET_TIMEOUT_SLACK_BYTES,
     PiParams, TmcpackChannel, TmcpackDriverConfig, default_packet_timeout_units,
@@ -181,6 +192,14 @@ pub struct TmcpackDriver {
     /// A `$24` went out since the last query: the next `$24` waits for one (the PI
     /// controller's targets take turns with the polls).
     pi_since_poll: bool,
+    /// The line rate: the link's, the `baud` the pack is switched to, the probing.
+    rate: LineRate,
+    /// A change of the pack's own settings waiting for the line (module `commission`).
+    service: Option<Service>,
+    /// The address the config gives (what the rotary switches are taken to say).
+    home_address: u8,
+    /// The configured `$40` switch-over delay, 2 ms units.
+    switchover_units: Option<u16>,
 }
 
 impl TmcpackDriver {
@@ -217,7 +236,12 @@ impl TmcpackDriver {
         };
         let polled = channels.iter().flatten().count() + usize::from(io.polls());
         let round = usize::from(config.bus_motors).max(polled).max(1) as u32;
-        let query = 2 * word_time + 2 * configured + Duration::from_millis(2);
+        // Polled at the slower of the link's rate and the one the pack is switched to.
+        let slowest = config
+            .target_baud
+            .map_or(config.baud, |t| t.min(config.baud));
+        let slow_word = byte_time(slowest).saturating_mul(FRAME_LEN as u32);
+        let query = 2 * slow_word + 2 * configured + Duration::from_millis(2);
         let budget = query * round * 2 + query * 4 + Duration::from_millis(50);
         let reply_address = if config.reply_address == config.address {
             if config.address == DEFAULT_REPLY_ADDRESS {
@@ -258,6 +282,10 @@ impl TmcpackDriver {
             can,
             power: PowerDown::new(config.power_down),
             pi_since_poll: false,
+            rate: LineRate::new(config.baud, config.target_baud),
+            service: None,
+            home_address: config.address,
+            switchover_units: config.switchover_units,
         }
     }
 
@@ -429,6 +457,7 @@ impl Driver for TmcpackDriver {
         if let Some(can) = self.can.as_mut() {
             can.reset();
         }
+        self.service = None;
         self.phase = Phase::Down;
         self.wire = Wire::Idle;
         self.timeouts_in_row = 0;
@@ -445,6 +474,9 @@ impl Driver for TmcpackDriver {
         self.retry_at = now;
         self.timeouts_in_row = 0;
         self.assume_factory_line();
+        self.service = None;
+        self.rate.link_up();
+        self.retime();
     }
 
     fn read_pin(&self, pin: Pin) -> Option<PinReading> {
@@ -453,5 +485,15 @@ impl Driver for TmcpackDriver {
 
     fn set_output(&mut self, _now: Duration, pin: Pin, high: bool) -> Result<(), GoalError> {
         self.drive_output(pin, high)
+    }
+
+    /// The rate the pack listens at as far as the driver knows: module `rate`.
+    fn line_rate(&self) -> Option<u32> {
+        self.rate.wanted()
+    }
+
+    /// `$42`, `$40`, `$CC`: module `commission`.
+    fn commission(&mut self, _now: Duration, change: Commission) -> Result<(), CommissionError> {
+        self.start_commission(change)
     }
 }

@@ -11,6 +11,17 @@ use motion_drivers::{DeviceFault, Goal};
 
 impl TmcpackDriver {
     pub(super) fn on_timeout(&mut self, now: Duration) {
+        // An unanswered `$43` of the start-up: the pack may answer at another rate.
+        let probing = matches!(
+            self.wire,
+            Wire::Awaiting {
+                expect: Expect {
+                    purpose: Purpose::Startup,
+                    ..
+                },
+                ..
+            }
+        );
         self.status.timeouts = self.status.timeouts.saturating_add(1);
         self.timeouts_in_row = self.timeouts_in_row.saturating_add(1);
         // Silence long enough for the pack to abort any partial word (6.1, $41), whatever
@@ -19,6 +30,9 @@ impl TmcpackDriver {
         self.wire = Wire::Quiet {
             until: now + abort + self.switchover,
         };
+        if probing {
+            self.probe_next_rate();
+        }
         if self.timeouts_in_row < MAX_TIMEOUTS {
             return;
         }
@@ -57,7 +71,7 @@ impl TmcpackDriver {
                     self.describe();
                 }
                 match purpose {
-                    Purpose::Startup => self.phase = Phase::Survey,
+                    Purpose::Startup => self.identified(),
                     _ if rebooted => self.phase = Phase::Survey,
                     _ => self.reset_check_at = now + RESET_CHECK_PERIOD,
                 }

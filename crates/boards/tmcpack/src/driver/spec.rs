@@ -246,6 +246,12 @@ impl TmcpackDriverConfig {
                 }
             }
         }
+        driver.target_baud = keys.baud;
+        // Packet timeouts cover a word at the slower of the link's rate and the `baud`.
+        let line_rate = match (spec.line_rate, keys.baud) {
+            (Some(link), Some(target)) => Some(link.min(target)),
+            (link, target) => link.or(target),
+        };
         if let Some(d) = keys.amax_divisor {
             driver.amax_divisor =
                 AmaxDivisor::from_divisor(u32::from(d)).ok_or_else(|| SpecError {
@@ -262,7 +268,7 @@ impl TmcpackDriverConfig {
                     message: format!("{bit} is not a reading of $15 P6; allowed: 5, 6"),
                 })?;
         }
-        driver.packet_timeout_units = Some(packet_timeout_units(&spec.machine, spec.line_rate));
+        driver.packet_timeout_units = Some(packet_timeout_units(&spec.machine, line_rate));
         super::spec_drive::device(&keys, &mut driver);
         let axes: usize = spec.bus.iter().map(|peer| peer.axes).sum();
         let input_polls = spec
@@ -278,7 +284,7 @@ impl TmcpackDriverConfig {
             .bus
             .iter()
             .filter(|peer| peer.model == Model::TMCPACK)
-            .map(|peer| packet_timeout_units(&peer.machine, spec.line_rate))
+            .map(|peer| packet_timeout_units(&peer.machine, line_rate))
             .max()
             .unwrap_or(0);
         for axis in &spec.axes {
@@ -319,6 +325,17 @@ impl TmcpackDriverConfig {
             dev,
             "switchover_ms",
             serial_only(format!("{} ms ($40)", 2 * u32::from(switchover))),
+        );
+        row(
+            dev,
+            "baud",
+            match self.target_baud {
+                Some(baud) => format!(
+                    "{baud} ($40 divisor {} at start-up; the link follows)",
+                    tmcpack::convert::baud_divisor(baud).unwrap_or(0)
+                ),
+                None => format!("{} (the link's rate, not changed)", self.baud),
+            },
         );
         row(
             dev,

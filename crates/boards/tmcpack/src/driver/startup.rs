@@ -286,6 +286,12 @@ impl TmcpackDriver {
     pub(super) fn resolve(&self, request: Request) -> Request {
         match request {
             Request::Outputs { .. } => self.io.outputs_request(),
+            // The divisor of the rate the driver talks at (module `rate`: the link's own
+            // without a `baud`).
+            Request::SetBaud { switchover, .. } => Request::SetBaud {
+                divisor: baud_divisor(self.rate.now()).unwrap_or(65),
+                switchover,
+            },
             other => other,
         }
     }
@@ -318,6 +324,7 @@ impl TmcpackDriver {
 
     pub(super) fn go_online(&mut self, now: Duration) {
         self.phase = Phase::Online;
+        self.rate.online();
         self.status.online = true;
         self.status.fault = None;
         self.ever_online = true;

@@ -231,6 +231,10 @@ impl TmcpackDriver {
             // The pack's CAN cache has as many commands as the driver lets wait.
             return None;
         }
+        if self.service.is_some() && self.phase != Phase::Down {
+            // A change of the pack's settings (module `commission`) goes first.
+            return Some(Priority::Setup);
+        }
         match self.phase {
             Phase::Down => None,
             Phase::Identify => (now >= self.retry_at).then_some(Priority::Setup),
@@ -287,6 +291,9 @@ impl TmcpackDriver {
     pub(super) fn pick(&mut self, now: Duration) -> Option<Pick> {
         let priority = self.next_message(now)?;
         let reply_to = self.reply_address;
+        if let Some(pick) = self.service_pick() {
+            return Some(pick);
+        }
         match self.phase {
             Phase::Down => None,
             Phase::Identify => Some(self.query(
@@ -420,6 +427,7 @@ impl TmcpackDriver {
         {
             self.on_line_sent(self.seq);
         }
+        self.on_service_sent(now, request);
         match request {
             Request::SetBaud { switchover, .. } => self.switchover = units(switchover),
             Request::PacketTimeout { timeout } => self.pack_timeout = units(timeout),
