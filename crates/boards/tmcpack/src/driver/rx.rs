@@ -68,7 +68,6 @@ impl TmcpackDriver {
                     self.status.resets = self.status.resets.saturating_add(1);
                     self.restart(DeviceFault::Reset);
                     self.assume_factory_line();
-                    self.describe();
                 }
                 match purpose {
                     Purpose::Startup => self.identified(),

@@ -341,6 +341,7 @@ impl TmcpackDriver {
         self.quiesce = None;
         self.line = None;
         self.power.forget();
+        self.describe();
         for channel in self.channels.iter_mut().flatten() {
             channel.restart(fault);
         }
