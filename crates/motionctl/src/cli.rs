@@ -44,6 +44,8 @@ Examples:
   motionctl move x 10 --velocity 5 --wait
   motionctl jog y -2.5          (Ctrl-C stops the axis)
   motionctl io set lamp on
+  motionctl io events probe --count 1   (each capture or trigger pulse as it comes)
+  motionctl hold feeder         (a position move to rest; resume feeder continues it)
   motionctl group move gantry x=200 feeder=100 lift=150 --wait
   motionctl group follow arm arm.csv --wait --json
   motionctl group feed arm 50%  (also hold, resume, cancel, stop, claim, list)
