@@ -18,6 +18,9 @@ use motiond::config::ServerConfig;
 #[global_allocator]
 static GLOBAL: CountingAllocator = CountingAllocator;
 
+#[path = "sim_robot/features.rs"]
+mod features;
+
 /// Counts allocations of the engine (and its drivers) only, not of the simulated links.
 fn engine<T>(work: impl FnOnce() -> T) -> T {
     counting(work)
@@ -66,7 +69,11 @@ struct Robot {
 impl Robot {
     fn new() -> Self {
         let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../config/sim.toml");
-        let config = ServerConfig::load(&path).expect("config/sim.toml is valid");
+        Self::with(ServerConfig::load(&path).expect("config/sim.toml is valid"))
+    }
+
+    /// The robot of `config` (all its links simulated).
+    fn with(config: ServerConfig) -> Self {
         let drivers = motiond::boards::build(&config).expect("drivers");
         let mut engine = Engine::new(config.engine_config(), drivers).expect("engine");
         // As motiond: every write and the links' horizons are reported.
