@@ -94,13 +94,15 @@ fn real_commission_moves_address_and_rate_and_refuses_what_it_must() -> Result {
     }
     let x = client.axis("x")?;
     let claims = client.claim_device("pack_xyz")?;
-    let _jog = x.jog(10.0, 0.0)?;
-    std::thread::sleep(Duration::from_millis(300));
+    // A slow move (5 mm at 1 mm/s: no deadman to expire under load, as a jog's would).
+    let from = x.state()?.position;
+    x.ramp_to(if from < 50.0 { from + 5.0 } else { from - 5.0 }, 1.0, 0.0)?;
+    std::thread::sleep(Duration::from_millis(100));
     match client.commission("pack_xyz", CommissionWhat::Address, 9) {
         Err(error) => assert_eq!(error.reason(), Some(Reason::GroupBusy), "{error}"),
         Ok(accepted) => panic!("accepted while x moves: {accepted:?}"),
     }
-    drop(_jog);
+    x.stop()?;
     x.wait_until_arrived(Duration::from_secs(5)).ok();
     std::thread::sleep(Duration::from_millis(500));
     let accepted = client.commission("pack_xyz", CommissionWhat::Address, 9)?;
