@@ -32,7 +32,7 @@ impl QsbDriver {
     /// The counter back in normal operation (MDR0, DTR, MDR1) and STR as normal
     /// operation streams it: the prefix of every plan that may replace a home search.
     fn normal_counter(&self) -> [Step; 2] {
-        [Step::NormalCounter, Step::EndStrStream]
+        [Step::NormalCounter, Step::NormalStrStream]
     }
 
     /// Whether channel 0 drives the -M's stepper: a -M (as reported), its motor drive
@@ -229,7 +229,7 @@ impl QsbDriver {
                         Step::Ensure(Write::Mdr0(counter.mdr0())),
                         command(QsbCommand::MotorStop),
                         Step::NormalCounter,
-                        Step::EndStrStream,
+                        Step::NormalStrStream,
                     ],
                 );
             }

@@ -14,7 +14,7 @@ pub(crate) enum Step {
     Ensure(Write),
     /// STR as normal operation has it: streamed when the trigger's pulses are counted,
     /// else not (a read of STR cancels its stream).
-    EndStrStream,
+    NormalStrStream,
     /// DTR, MDR0 and MDR1 of normal operation (count limit or compare position, counter
     /// mode, triggers), each written unless the board holds it; the step stays at the
     /// front until all three are held.
@@ -133,9 +133,9 @@ mod tests {
         program.replace(&[Step::Configure, Step::Online]);
         let generation = program.generation();
         let read = Step::Send(Request::Read(Register::Version));
-        program.expand_front([read, Step::EndStrStream]);
+        program.expand_front([read, Step::NormalStrStream]);
         let steps: Vec<Step> = program.iter().collect();
-        assert_eq!(steps, [read, Step::EndStrStream, Step::Online]);
+        assert_eq!(steps, [read, Step::NormalStrStream, Step::Online]);
         assert_eq!(program.generation(), generation);
         program.pop();
         program.pop();

@@ -78,12 +78,12 @@ impl QsbDriver {
                 (self.config.enable.is_some() && !self.holds(write))
                     .then_some(Request::Write(write))
             }
-            Step::EndStrStream if self.str_wanted() => (!self.str_streaming
+            Step::NormalStrStream if self.str_wanted() => (!self.str_streaming
                 && !self
                     .in_flight
                     .is_some_and(|f| f.request == Request::Stream(Register::Str)))
             .then_some(Request::Stream(Register::Str)),
-            Step::EndStrStream => (self.str_streaming
+            Step::NormalStrStream => (self.str_streaming
                 || self
                     .in_flight
                     .is_some_and(|f| f.request == Request::Stream(Register::Str)))
