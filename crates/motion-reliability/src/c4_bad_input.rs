@@ -360,10 +360,15 @@ fn oracle(request: &CommandRequest, sender: ClientId) -> Option<Reason> {
             _ => None,
         };
     }
+    if target == motion_ipc::Target::Device {
+        // Only `Commission` addresses a device; its own rules depend on claims and motion.
+        return (kind != CommandKind::Commission).then_some(Reason::UnknownTarget);
+    }
     match kind {
         CommandKind::EStop => Some(Reason::Accepted),
         CommandKind::Stop if request.axis == CommandRequest::ALL_AXES => Some(Reason::Accepted),
         CommandKind::SetOutput
+        | CommandKind::Commission
         | CommandKind::Run
         | CommandKind::Feed
         | CommandKind::Cancel
