@@ -180,3 +180,21 @@ impl<L: Link + ?Sized> Link for Box<L> {
         (**self).stats()
     }
 }
+
+/// `write_parts` for a link without a gather write: each part through
+/// [`Link::write`] in turn, stopping at the first one not taken whole; the bytes taken.
+pub(crate) fn write_in_turn<L: Link + ?Sized>(
+    link: &mut L,
+    now: Duration,
+    parts: &[&[u8]],
+) -> Result<usize, LinkError> {
+    let mut total = 0;
+    for part in parts {
+        let n = link.write(now, part)?;
+        total += n;
+        if n < part.len() {
+            break;
+        }
+    }
+    Ok(total)
+}

@@ -241,15 +241,7 @@ impl Link for SerialLink {
     }
 
     fn write_parts(&mut self, now: Duration, parts: &[&[u8]]) -> Result<usize, LinkError> {
-        let mut total = 0;
-        for part in parts {
-            let n = self.write(now, part)?;
-            total += n;
-            if n < part.len() {
-                break;
-            }
-        }
-        Ok(total)
+        crate::link::write_in_turn(self, now, parts)
     }
 
     fn read(&mut self, now: Duration, buf: &mut [u8]) -> Result<usize, LinkError> {
