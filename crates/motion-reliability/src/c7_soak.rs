@@ -52,6 +52,16 @@ fn minima(samples: &[Use]) -> (u64, u64, u64, usize) {
         })
 }
 
+/// The iceoryx2 files a leak would grow: every file of the run's root but the black box
+/// pointer (`<name>.blackbox`, one per server, written by the first save — a fault in the
+/// soak saves the black box — and removed on exit, which the clean-exit check sees).
+fn growing_files(h: &Harness) -> usize {
+    h.iox_listing()
+        .iter()
+        .filter(|f| !f.ends_with(".blackbox"))
+        .count()
+}
+
 /// Runs the campaign.
 pub fn run(h: &Harness) -> anyhow::Result<Row> {
     let (quiet_time, soak_time, window) = if h.quick {
@@ -97,6 +107,7 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
     let started = Instant::now();
     let mut next_sample = started;
     let mut next_reset = started + Duration::from_secs(10);
+    let files_at_start = h.iox_listing();
     while started.elapsed() < soak_time {
         // Reading a frame renews the jogs that are due.
         if let Err(e) = client.next_frame(Duration::from_secs(1)) {
@@ -152,7 +163,7 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
             if let Some(process) = process_use(pid) {
                 samples.push(Use {
                     process,
-                    files: h.iox_files(),
+                    files: growing_files(h),
                 });
             }
         }
@@ -180,6 +191,7 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
         std::thread::sleep(Duration::from_millis(50));
     }
     let alive = server.is_running();
+    let files_at_end = h.iox_listing();
 
     let window = window.min(samples.len() / 2).max(1);
     let first = maxima(&samples[..window.min(samples.len())]);
@@ -203,6 +215,20 @@ pub fn run(h: &Harness) -> anyhow::Result<Row> {
             first.0, last.0, first.1, last.1, first.2, last.2, first.3, last.3
         ),
     );
+    // Which files came and went: a leak names itself.
+    let appeared: Vec<&String> = files_at_end
+        .iter()
+        .filter(|f| !files_at_start.contains(f))
+        .collect();
+    let vanished: Vec<&String> = files_at_start
+        .iter()
+        .filter(|f| !files_at_end.contains(f))
+        .collect();
+    if !appeared.is_empty() || !vanished.is_empty() {
+        row.note(format!(
+            "iceoryx2 files during the soak: appeared {appeared:?}, vanished {vanished:?}"
+        ));
+    }
     let quiet_rate = quiet_overruns as f64 / quiet_time.as_secs_f64() * 60.0;
     let soak_rate = soak_overruns as f64 / soaked.as_secs_f64() * 60.0;
     row.figure(
