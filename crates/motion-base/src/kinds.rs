@@ -6,7 +6,7 @@
 use core::fmt;
 
 /// Whether a link carries a byte stream or SPI transactions.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum LinkKind {
     /// A byte stream (RS-232, RS-485, USB CDC): writes queue bytes, reads return whatever
     /// the device sent; one request in flight on a shared bus.
@@ -27,7 +27,7 @@ impl fmt::Display for LinkKind {
 
 /// What a pin can be used as, and the kind of a configured signal. Travels as its `u8`
 /// value in the shared-memory contract (`SignalState::kind`, `SignalInfo::kind`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[repr(u8)]
 pub enum SignalKind {
     /// A digital input (a switch, a jumper, a board status bit): value 0.0 or 1.0 after

@@ -3,8 +3,13 @@
 /// A first-in first-out queue of at most `N` `Copy` items, stored inline (a ring). A full
 /// queue refuses a [`push`](Self::push); [`push_overwrite`](Self::push_overwrite) drops the
 /// oldest instead (a sliding window).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[serde(bound(
+    serialize = "T: serde::Serialize",
+    deserialize = "T: serde::Deserialize<'de>"
+))]
 pub struct FixedQueue<T: Copy, const N: usize> {
+    #[serde(with = "serde_big_array::BigArray")]
     items: [Option<T>; N],
     head: usize,
     len: usize,

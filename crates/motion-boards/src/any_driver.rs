@@ -15,7 +15,7 @@ macro_rules! registry {
         // start-up); each lives once in its link's bus, built once, never moved per tick,
         // so the size of the largest costs a few kilobytes per device and nothing per tick.
         #[allow(clippy::large_enum_variant)]
-        #[derive(Debug)]
+        #[derive(serde::Serialize, serde::Deserialize, Debug)]
         pub enum AnyDriver {
             $(
                 #[allow(missing_docs)]

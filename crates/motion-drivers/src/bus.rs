@@ -42,7 +42,7 @@ pub const MAX_SENDS_PER_STEP: usize = 16;
 pub const UNWRITTEN_CAPACITY: usize = 64;
 
 /// A message made and not reported written yet.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct Unwritten {
     /// The driver that made it (index in config order).
     pub driver: usize,
@@ -52,7 +52,7 @@ pub struct Unwritten {
     pub queued_at: Duration,
 }
 
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, Default)]
 struct PendingMiso {
     driver: usize,
     remaining: usize,
@@ -63,7 +63,7 @@ struct PendingMiso {
 /// The drivers of one link and the arbitration between them. `D` is the driver type: the
 /// server's is an enum of every registered board's driver (static dispatch on the tick
 /// path); tests and tools use `Box<dyn Driver>`, the default.
-#[derive(Debug)]
+#[derive(serde::Serialize, serde::Deserialize, Debug)]
 pub struct LinkBus<D: Driver = Box<dyn Driver>> {
     kind: LinkKind,
     drivers: Vec<D>,

@@ -9,7 +9,7 @@
 use core::fmt;
 
 /// One channel's goal. All quantities in counts, counts/s, counts/s².
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq)]
 pub enum Goal {
     /// Stop driving: motor off / de-energised, free to turn.
     Off,
@@ -75,7 +75,7 @@ impl Goal {
 }
 
 /// The kinds of [`Goal`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[repr(u8)]
 pub enum GoalKind {
     /// [`Goal::Off`].

@@ -13,7 +13,7 @@
 use core::time::Duration;
 
 /// One pin of a board: the index into the board's pin table.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct Pin(pub u16);
 
 /// What a pin can be used as; also the kind of a configured signal (one enum with the
@@ -72,7 +72,7 @@ pub fn find_pin(table: &[PinInfo], name: &str) -> Option<Pin> {
 }
 
 /// The last value a driver knows for a pin.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq)]
 pub struct PinReading {
     /// Raw value: 0.0 / 1.0 (electrical level), ADC counts, or counter counts (a capture,
     /// a trigger's compare position).

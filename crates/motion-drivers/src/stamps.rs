@@ -11,7 +11,7 @@ use core::time::Duration;
 /// a reply missing only up to where the link has heard.
 ///
 /// [`Driver::handle_written`]: crate::Driver::handle_written
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct IoStamps {
     /// Messages made (the number of the newest).
     sent: u64,

@@ -3,7 +3,7 @@
 use core::time::Duration;
 
 /// A fault a driver reports for its board or one channel.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum DeviceFault {
     /// The link is down.
     LinkDown,
@@ -26,7 +26,7 @@ pub enum DeviceFault {
 }
 
 /// The state of one channel, in counts, as last reported by the board.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq)]
 pub struct ChannelState {
     /// Measured (or, for open-loop steppers, commanded) position, counts.
     pub position: f64,
@@ -73,7 +73,7 @@ impl Default for ChannelState {
 pub const FIRMWARE_LEN: usize = 32;
 
 /// What the driver knows about its board as a whole.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub struct DeviceStatus {
     /// The board answered its start-up sequence and has not been declared dead since.
     pub online: bool,

@@ -9,7 +9,7 @@ use crate::config::{AxisConfig, EstopCategory};
 use crate::hold::HeldMove;
 
 /// A latched fault: its code, who raised it, and the figure and tolerance it broke.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Fault {
     pub code: FaultCode,
     /// Raised by the engine's supervision (cleared only by a reset once its cause is
@@ -24,7 +24,7 @@ pub(crate) struct Fault {
 }
 
 /// Runtime state of one axis. Plain data; the engine drives it.
-#[derive(Debug, Clone)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
 pub(crate) struct Axis {
     /// Link (bus) index and driver index within that bus.
     pub bus: usize,

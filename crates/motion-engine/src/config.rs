@@ -11,7 +11,7 @@ use motion_ipc::{MAX_AXES, MAX_DEVICES, MAX_GROUP_AXES, MAX_GROUPS, MAX_LINKS, M
 
 /// One link as the engine sees it: a named bus of drivers, stream or SPI (the transport
 /// that carries it is `motion_link::LinkConfig`, opened by motiond).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, PartialEq)]
 pub struct BusConfig {
     /// Link name (config `[[link]] name`).
     pub name: String,
@@ -20,7 +20,7 @@ pub struct BusConfig {
 }
 
 /// One board on a link.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, PartialEq)]
 pub struct DeviceConfig {
     /// Device name.
     pub name: String,
@@ -31,7 +31,7 @@ pub struct DeviceConfig {
 }
 
 /// One axis: a channel of a device, with units and limits.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, PartialEq)]
 pub struct AxisConfig {
     /// Axis name.
     pub name: String,
@@ -93,7 +93,7 @@ impl Default for AxisConfig {
 }
 
 /// What an e-stop does to an axis: the stop categories of IEC 60204-1.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum EstopCategory {
     /// Category 2: decelerate and hold, energised (default; the right choice for an axis
     /// that gravity would move, e.g. a vertical axis).
@@ -117,7 +117,7 @@ impl EstopCategory {
 }
 
 /// One named board I/O pin.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, PartialEq)]
 pub struct SignalConfig {
     /// Signal name.
     pub name: String,
@@ -144,7 +144,7 @@ pub struct SignalConfig {
 }
 
 /// What a group does with a streamed setpoint beyond an axis's limits (`stream_limit`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum StreamLimit {
     /// Clamp it to the limit, count it and flag it in the frame.
     Clamp,
@@ -165,7 +165,7 @@ impl StreamLimit {
 }
 
 /// One axis group (`[[group]]`): axes of any boards and links that move together.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, PartialEq)]
 pub struct GroupConfig {
     /// Group name.
     pub name: String,
@@ -208,7 +208,7 @@ impl Default for GroupConfig {
 }
 
 /// Everything the engine needs to know.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, PartialEq)]
 pub struct EngineConfig {
     /// Instance name.
     pub name: String,

@@ -15,7 +15,7 @@ use motion_ipc::DeviceState;
 use crate::Engine;
 
 /// What the engine knows of one device beyond its driver.
-#[derive(Debug, Clone)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
 pub(crate) struct Device {
     /// Link (bus) index and driver index within that bus.
     pub bus: usize,

@@ -21,7 +21,7 @@ use motion_ipc::{AxisMode, ClientId, Reason};
 use crate::Engine;
 
 /// A position move held by `Hold`.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq)]
 pub(crate) struct HeldMove {
     /// The goal to continue (`Position` or `RampPosition`), in axis units.
     pub motion: Motion,

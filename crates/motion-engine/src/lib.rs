@@ -75,7 +75,7 @@ use crate::signal::Signal;
 pub use crate::supervision::OVERSPEED_SAMPLES;
 
 /// Counters since construction.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct EngineCounters {
     /// Requests answered.
     pub commands: u64,
@@ -93,7 +93,7 @@ pub struct EngineCounters {
 /// The deterministic motion engine, over drivers of type `D`: the server's enum of the
 /// registered boards' drivers (static dispatch, `motion_boards::AnyDriver`), or
 /// `Box<dyn Driver>` (the default) in tests and tools.
-#[derive(Debug)]
+#[derive(serde::Serialize, serde::Deserialize, Debug)]
 pub struct Engine<D: Driver = Box<dyn Driver>> {
     config: EngineConfig,
     buses: Vec<LinkBus<D>>,
@@ -133,7 +133,7 @@ pub struct Engine<D: Driver = Box<dyn Driver>> {
 
 /// What an answer names besides its reason: the axis (config index) and the point at
 /// fault, the claim holder, the figure and the limit ([`motion_ipc::CommandReply`]).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq)]
 pub(crate) struct ReplyDetail {
     pub at_point: Option<usize>,
     pub at_axis: Option<usize>,

@@ -13,7 +13,7 @@ use crate::Engine;
 use crate::config::SignalConfig;
 
 /// Runtime state of one signal.
-#[derive(Debug, Clone)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
 pub(crate) struct Signal {
     pub config: SignalConfig,
     /// Link (bus) and driver index of its device.

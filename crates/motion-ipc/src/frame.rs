@@ -10,7 +10,7 @@ use crate::{MAX_AXES, MAX_DEVICES, MAX_GROUPS, MAX_SIGNALS, SCHEMA_VERSION};
 /// Where a board is in its life, as the server sees it. Travels as `u8` in
 /// [`MotionFrame::devices`] and [`AxisState::device_state`], and as `u32` in
 /// [`DeviceInfo::state`](crate::DeviceInfo::state).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 #[repr(u8)]
 pub enum DeviceState {
     /// Not answering, or its link is down: goals are refused (`DeviceOffline` / `LinkDown`).
@@ -51,7 +51,7 @@ impl TryFrom<u8> for DeviceState {
 }
 
 /// What an axis is doing, as the server drives it. Travels as `u8` in [`AxisState::mode`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[repr(u8)]
 pub enum AxisMode {
     /// Not driven (motor off / unpowered, or never commanded).
@@ -134,7 +134,7 @@ impl TryFrom<u8> for AxisMode {
 /// | 10 | `LimitExceeded` | position beyond a soft limit by more than `following_error` | position / the limit passed, units | reset once back within the limits (moves back inside are accepted meanwhile) |
 /// | 11 | `HomeFailed` | a reference search travelled `home_max_travel` without its switch or index, or the board reported a search error | travel / `home_max_travel`, units | reset |
 /// | 12 | `GoalTolerance` | a group's path ended and the axis was not within its `goal_tolerance` `goal_time_tolerance` later | distance / `goal_tolerance`, units | reset |
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 #[repr(u16)]
 pub enum FaultCode {
     /// No fault.

@@ -66,6 +66,18 @@ macro_rules! payload {
             };
         }
 
+        impl ::serde::Serialize for $name {
+            fn serialize<S: ::serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+                $crate::schema::serde_sparse::serialize(self, serializer)
+            }
+        }
+
+        impl<'de> ::serde::Deserialize<'de> for $name {
+            fn deserialize<D: ::serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+                $crate::schema::serde_sparse::deserialize(deserializer)
+            }
+        }
+
         impl $crate::schema::Fields for $name {
             fn put<S: $crate::schema::ScalarSink>(&self, sink: &mut S, at: usize) {
                 $(

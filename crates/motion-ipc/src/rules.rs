@@ -137,7 +137,7 @@ pub trait Facts {
 }
 
 /// A motion goal in axis units, as the rules accepted it.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq)]
 pub enum Motion {
     /// Open-loop drive, fraction of full power −1..=1.
     Power {

@@ -61,6 +61,7 @@ mod blend;
 mod error;
 mod line;
 mod path;
+mod path_serde;
 mod points;
 mod polynomial;
 mod spline;
@@ -75,7 +76,7 @@ pub use time_scale::{MAX_FEED_OVERRIDE, TimeScale};
 pub const MAX_AXES: usize = 16;
 
 /// Limits of one axis, in its units.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq)]
 pub struct AxisLimits {
     /// The lowest position.
     pub min: f64,

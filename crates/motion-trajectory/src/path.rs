@@ -31,13 +31,13 @@ pub(crate) struct Segments {
     pub(crate) axes: usize,
     pub(crate) count: usize,
     /// Segment s, axis j at `s * axes + j`.
-    coeffs: Vec<Coeffs>,
+    pub(crate) coeffs: Vec<Coeffs>,
     /// Path time at which each segment starts.
-    starts: Vec<f64>,
+    pub(crate) starts: Vec<f64>,
     /// Each segment's duration.
-    lengths: Vec<f64>,
+    pub(crate) lengths: Vec<f64>,
     /// The point each segment heads to.
-    heads: Vec<usize>,
+    pub(crate) heads: Vec<usize>,
     pub(crate) end: Vec<f64>,
     pub(crate) duration: f64,
     pub(crate) max_feed: f64,
@@ -46,7 +46,7 @@ pub(crate) struct Segments {
 }
 
 impl Segments {
-    fn new(axes: usize, capacity: usize) -> Self {
+    pub(crate) fn new(axes: usize, capacity: usize) -> Self {
         Self {
             axes,
             count: 0,
@@ -324,11 +324,14 @@ impl<'a> Build<'a> {
 /// Every buffer is sized in [`Path::new`]; planning and sampling never allocate. A path is
 /// planned into a second set of buffers and swapped in only when it passed every check, so a
 /// refused plan leaves the previous path untouched.
+///
+/// Serialized (the engine's state snapshot, `path_serde.rs`) as its sizes and the segments
+/// in use; the planning scratch (the spline's solve, the checker's bounds) is not state.
 pub struct Path {
-    axes: usize,
-    max_points: usize,
-    active: Segments,
-    draft: Segments,
+    pub(crate) axes: usize,
+    pub(crate) max_points: usize,
+    pub(crate) active: Segments,
+    pub(crate) draft: Segments,
     spline: Spline,
     /// Bounds on each segment and axis's |velocity| and |acceleration| (`Checker`).
     bounds: Vec<[f64; 2]>,

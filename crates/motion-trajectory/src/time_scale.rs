@@ -33,7 +33,7 @@ const SEARCH_STEPS: usize = 60;
 const SEARCH_TOLERANCE: f64 = 1e-9;
 
 /// Feed override and hold: path time τ advances by feed·dt each tick.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq)]
 pub struct TimeScale {
     tau: f64,
     feed: f64,

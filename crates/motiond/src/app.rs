@@ -294,7 +294,10 @@ fn start_recorder(
         .name("blackbox".into())
         .spawn(move || crate::blackbox::recorder::run(setup))
         .map_err(ServerError::RecorderThread)?;
-    Ok((Journal::new(producer), Some((stop, thread))))
+    // A snapshot every quarter of the ring: a saved ring holds at least three quarters of
+    // its ticks after its first snapshot, replayable from there.
+    let snapshot_every = (server.blackbox_seconds as u64 * u64::from(server.tick_hz) / 4).max(1);
+    Ok((Journal::new(producer, snapshot_every), Some((stop, thread))))
 }
 
 /// The main thread's side of the systemd conversation (crate::systemd).

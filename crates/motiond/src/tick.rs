@@ -360,6 +360,7 @@ impl Loop {
         // opened it (an `Up` already queued is taken at the first tick). Until then the
         // link's boards are starting, not down.
         setup.journal.start(setup.epoch, setup.ports.len());
+        setup.journal.prepare_snapshots(&setup.engine);
         for link in 0..setup.ports.len() {
             setup.journal.link_opening(link);
             setup.engine.link_opening(link);
@@ -418,6 +419,9 @@ impl Loop {
             let now = deadline.saturating_sub(epoch);
             phases.begin(wake);
             self.setup.journal.tick(now);
+            if self.setup.journal.snapshot_due() {
+                self.setup.journal.snapshot(&self.setup.engine);
+            }
 
             self.take_link_input(now);
             phases.lap(Phase::Input);

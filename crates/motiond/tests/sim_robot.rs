@@ -13,6 +13,7 @@ use motion_ipc::{
 use motion_link::Link;
 use motion_testkit::counting_alloc::{CountingAllocator, allocations, counting};
 use motiond::blackbox::{Journal, Recording, ReplayError, Ring, replay};
+use motiond::blackbox::record::Kind;
 use motiond::config::ServerConfig;
 
 #[global_allocator]
@@ -66,6 +67,9 @@ struct Robot {
     config: ServerConfig,
 }
 
+/// Ticks between two snapshots of the engine's state in the journal.
+const SNAPSHOT_EVERY: u64 = 1000;
+
 impl Robot {
     fn new() -> Self {
         let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../config/sim.toml");
@@ -96,9 +100,12 @@ impl Robot {
             requests: std::collections::VecDeque::with_capacity(64),
             replies: Vec::with_capacity(100_000),
             path: None,
-            journal: Journal::new(producer),
+            // A snapshot of the engine's state every 1000 ticks, as motiond's every quarter
+            // of the ring.
+            journal: Journal::new(producer, SNAPSHOT_EVERY),
         };
         port.journal.start(Duration::ZERO, links.len());
+        port.journal.prepare_snapshots(&engine);
         Self {
             engine,
             links,
@@ -118,7 +125,13 @@ impl Robot {
         let now = self.now;
         let mut buf = [0u8; 512];
         let journal = &mut self.port.journal;
-        engine(|| journal.tick(now));
+        let state = &self.engine;
+        engine(|| {
+            journal.tick(now);
+            if journal.snapshot_due() {
+                journal.snapshot(state);
+            }
+        });
         for (index, link) in self.links.iter_mut().enumerate() {
             while let Ok(len) = link.read(now, &mut buf) {
                 if len == 0 {
@@ -747,12 +760,85 @@ fn the_robots_journal_replays_frame_for_frame_and_one_changed_byte_is_found() {
         other => panic!("a changed reply byte must diverge: {other:?}"),
     }
 
-    // A recording that does not start at the server's start is refused, not misread.
-    let mut late = recording.clone();
-    late.ticks.remove(0);
-    late.metadata.insert("dropped_ticks".into(), "1".into());
+    // A ring that wrapped: the first 1500 ticks gone, the replay starts from the snapshot
+    // journaled at tick 2000 and gives every later frame, byte and reply again.
+    let wrapped = dropped(&recording, 1500);
+    let replayed = replay(&robot.config, &wrapped).expect("the same frames from the snapshot");
+    assert_eq!((replayed.first, replayed.ticks), (2000, 4000));
+    // ... and finds a changed byte after it.
+    let mut changed = dropped(&recording, 1500);
+    let (at, len) = first_rx(&changed.ticks[3000 - 1500], 4).expect("a reply at tick 3000");
+    changed.ticks[3000 - 1500][at + len / 2] ^= 0x5a;
+    assert!(
+        matches!(
+            replay(&robot.config, &changed),
+            Err(ReplayError::Diverged { tick, .. }) if (2999..3200).contains(&tick)
+        ),
+        "a changed reply byte after the snapshot must diverge"
+    );
+
+    // A wrapped ring with no snapshot left (its last one was at tick 5000) is refused, not
+    // misread.
+    let late = dropped(&recording, 5001);
     assert!(matches!(
         replay(&robot.config, &late),
-        Err(ReplayError::NotFromStart { .. })
+        Err(ReplayError::NotFromStart { first: 5001 })
     ));
+
+    // A snapshot that does not decode is said to be one.
+    let mut damaged = dropped(&recording, 1500);
+    let snapshot_at = 2000 - 1500;
+    let (at, _) = first_of(&damaged.ticks[snapshot_at], Kind::Snapshot).expect("a snapshot");
+    damaged.ticks[snapshot_at].truncate(at + 8);
+    let len = damaged.ticks[snapshot_at].len();
+    let header = at - 6;
+    damaged.ticks[snapshot_at][header + 2..header + 6]
+        .copy_from_slice(&u32::try_from(len - at).unwrap().to_le_bytes());
+    assert!(matches!(
+        replay(&robot.config, &damaged),
+        Err(ReplayError::Snapshot { tick: 2000, .. })
+    ));
+}
+
+/// `recording` with its first `ticks` ticks gone, as a ring that wrapped saves it.
+fn dropped(recording: &Recording, ticks: usize) -> Recording {
+    let mut late = recording.clone();
+    late.ticks.drain(..ticks);
+    late.metadata
+        .insert("dropped_ticks".into(), ticks.to_string());
+    late
+}
+
+/// Offset of the payload of the first record of `kind` in `records`, and its length.
+fn first_of(records: &[u8], kind: Kind) -> Option<(usize, usize)> {
+    let mut at = 0;
+    while at + 6 <= records.len() {
+        let len = u32::from_le_bytes(records[at + 2..at + 6].try_into().ok()?) as usize;
+        if records[at] == kind as u8 {
+            return Some((at + 6, len));
+        }
+        at += 6 + len;
+    }
+    None
+}
+
+/// The journal's snapshots: one every 1000 ticks, each the state the replay reaches
+/// there (checked by the replay from the start above), small enough for the journal's
+/// queue many times over.
+#[test]
+fn the_journal_holds_a_snapshot_every_thousand_ticks() {
+    let mut robot = Robot::new();
+    run(&mut robot, 0, 3500, |_| {});
+    let recording = Recording::of(&robot.ring.ticks());
+    let with_snapshot: Vec<usize> = recording
+        .ticks
+        .iter()
+        .enumerate()
+        .filter_map(|(i, ticks)| first_of(ticks, Kind::Snapshot).map(|(_, len)| (i, len)))
+        .map(|(i, len)| {
+            assert!(len > 1000 && len < (1 << 20) / 4, "a snapshot of {len} bytes");
+            i
+        })
+        .collect();
+    assert_eq!(with_snapshot, [1000, 2000, 3000]);
 }

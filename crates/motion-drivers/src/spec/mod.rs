@@ -19,7 +19,7 @@ use crate::pin::{Pin, SignalKind};
 pub use keys::{AxisMachine, DeviceMachine, MachineKeys};
 
 /// What a qq2drv channel's IN pin is wired to (datasheet packet 14 Input Mode).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum HomeInputKind {
     /// A home switch: acts while active.
     Home,
@@ -30,7 +30,7 @@ pub enum HomeInputKind {
 }
 
 /// Which way a reference search runs, in axis units (after `counts_per_unit`'s sign).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum Direction {
     /// Towards decreasing positions (the default: the switch sits at `min`).
     #[default]
@@ -50,7 +50,7 @@ impl Direction {
 }
 
 /// A qq2drv channel's IN pin as a home input (`home = { input = "index", ... }`).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq)]
 pub struct HomeInput {
     /// What the pin is wired to.
     pub kind: HomeInputKind,
@@ -115,7 +115,7 @@ impl DriverAxis {
 
 /// An axis's limits in its board's counts (the board's own position unit: steps,
 /// quadrature transitions, microsteps), as a driver plans its moves with them.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq)]
 pub struct AxisLimits {
     /// Velocity limit, counts/s.
     pub max_velocity: f64,

@@ -9,8 +9,9 @@ use core::time::Duration;
 pub(crate) const HISTORY_TICKS: usize = 1024;
 
 /// A ring of (tick time, path time) pairs, newest last. Fixed size, no allocation.
-#[derive(Debug, Clone)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
 pub(crate) struct PathHistory {
+    #[serde(with = "motion_base::serde_boxed_array")]
     entries: Box<[(Duration, f64); HISTORY_TICKS]>,
     /// Index of the next entry written.
     next: usize,

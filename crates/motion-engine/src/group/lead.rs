@@ -33,7 +33,7 @@ pub(crate) const ARM_TIMEOUT: Duration = Duration::from_millis(500);
 pub(crate) const LEAD_DRIFT: f64 = 0.5;
 
 /// Where a line handed to boards is before its path's time moves.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub(crate) enum Arming {
     /// Not waiting: the path runs.
     #[default]
@@ -45,7 +45,7 @@ pub(crate) enum Arming {
 }
 
 /// Whether a member's board runs the group's line itself.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub(crate) enum Lead {
     /// The engine follows the path with goals.
     #[default]

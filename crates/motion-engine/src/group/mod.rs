@@ -39,7 +39,7 @@ use lead::{Arming, Lead};
 use stream::Stream;
 
 /// One member axis's following state.
-#[derive(Debug, Clone, Copy)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy)]
 pub(crate) struct Member {
     /// Index into the engine's axes.
     pub axis: usize,
@@ -67,7 +67,7 @@ pub(crate) struct Member {
 }
 
 /// One group and its motion.
-#[derive(Debug)]
+#[derive(serde::Serialize, serde::Deserialize, Debug)]
 pub(crate) struct Group {
     pub config: GroupConfig,
     pub members: Vec<Member>,

@@ -25,7 +25,7 @@ use crate::config::StreamLimit;
 pub(crate) const STREAM_QUEUE: usize = 32;
 
 /// A setpoint waiting for its tick (the values of a group's members).
-#[derive(Debug, Clone, Copy)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy)]
 pub(crate) struct Queued {
     pub sequence: u64,
     pub for_tick: u64,
@@ -48,7 +48,7 @@ impl Queued {
 }
 
 /// One group's stream.
-#[derive(Debug, Clone)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
 pub(crate) struct Stream {
     pub mode: StreamMode,
     pub state: StreamState,

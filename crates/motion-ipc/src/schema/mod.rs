@@ -37,6 +37,7 @@ mod docs;
 mod fields;
 mod json;
 mod python;
+pub mod serde_sparse;
 
 pub use c_header::{c_enum_value, c_struct};
 pub use contract::contract;
@@ -187,7 +188,7 @@ impl<T: FieldType, const N: usize> FieldType for [T; N] {
 }
 
 /// One value of an enumeration, or one bit of a flag set.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, PartialEq, Eq)]
 pub struct Variant {
     /// The Rust variant name (`RampPosition`) or flag constant name (`MOVING`).
     pub name: String,
@@ -224,7 +225,7 @@ pub struct Constant {
 }
 
 /// One iceoryx2 service (or the server's node name) of an instance.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, PartialEq, Eq)]
 pub struct Service {
     /// The leaf (`frame`), as [`ServiceNames`](crate::ServiceNames) names its method.
     pub leaf: &'static str,

@@ -8,6 +8,7 @@ use core::time::Duration;
 use motion_ipc::schema::Fields;
 use motion_ipc::{ClientId, CommandReply, CommandRequest, GroupPath, MotionFrame, Setpoint};
 use rtrb::Producer;
+use serde::Serialize;
 
 use super::digest::FrameDigest;
 use super::record::{
@@ -24,6 +25,14 @@ pub struct Journal {
     lost_total: u64,
     /// Ticks journaled (the next tick's number in the journal).
     ticks: u64,
+    /// Every this many ticks the engine's state is journaled ([`Kind::Snapshot`]); 0:
+    /// never.
+    snapshot_every: u64,
+    /// Where a snapshot is serialized before it is queued (sized at start-up by
+    /// [`Journal::prepare_snapshots`]).
+    snapshot_buf: Vec<u8>,
+    /// Snapshots that did not fit in `snapshot_buf` (counted as lost records too).
+    snapshots_failed: u64,
 }
 
 fn ns(duration: Duration) -> u64 {
@@ -38,17 +47,69 @@ impl Journal {
             lost: 0,
             lost_total: 0,
             ticks: 0,
+            snapshot_every: 0,
+            snapshot_buf: Vec::new(),
+            snapshots_failed: 0,
         }
     }
 
-    /// A journal writing into `queue`.
-    pub fn new(queue: Producer<u8>) -> Self {
+    /// A journal writing into `queue`, with a snapshot of the engine's state every
+    /// `snapshot_every` ticks (0: none).
+    pub fn new(queue: Producer<u8>, snapshot_every: u64) -> Self {
         Self {
             queue: Some(queue),
             lost: 0,
             lost_total: 0,
             ticks: 0,
+            snapshot_every,
+            snapshot_buf: Vec::new(),
+            snapshots_failed: 0,
         }
+    }
+
+    /// Sizes the snapshot buffer from `state` as it is at start-up (twice its size and
+    /// 64 KiB more: names, queues and paths are allocated at start, so the state's size
+    /// varies only with the numbers' varint lengths and the paths held). Start-up only:
+    /// it allocates.
+    pub fn prepare_snapshots<T: Serialize>(&mut self, state: &T) {
+        if self.queue.is_none() || self.snapshot_every == 0 {
+            return;
+        }
+        let len = postcard::to_allocvec(state).map_or(0, |bytes| bytes.len());
+        self.snapshot_buf = vec![0u8; 2 * len + (64 << 10)];
+    }
+
+    /// Whether the tick just begun journals a snapshot (every `snapshot_every` ticks,
+    /// never the first: a recording from the start needs none).
+    pub fn snapshot_due(&self) -> bool {
+        self.snapshot_every > 0
+            && !self.snapshot_buf.is_empty()
+            && self.ticks > 1
+            && (self.ticks - 1) % self.snapshot_every == 0
+    }
+
+    /// Journals `state` (the engine, drivers included) as it is between two ticks: the
+    /// point a replay of a wrapped ring starts from. Serialized into the buffer sized at
+    /// start-up, then queued: nothing allocates. A state that outgrew the buffer is
+    /// counted (snapshots failed, records lost) and the next one is tried as usual.
+    pub fn snapshot<T: Serialize>(&mut self, state: &T) {
+        let mut buf = core::mem::take(&mut self.snapshot_buf);
+        match postcard::to_slice(state, &mut buf) {
+            Ok(bytes) => {
+                let bytes: &[u8] = bytes;
+                self.record(Kind::Snapshot, 0, bytes.len(), |writer| writer.put(bytes));
+            }
+            Err(_) => {
+                self.snapshots_failed += 1;
+                self.lost_total += 1;
+            }
+        }
+        self.snapshot_buf = buf;
+    }
+
+    /// Snapshots that did not fit their buffer since start.
+    pub fn snapshots_failed(&self) -> u64 {
+        self.snapshots_failed
     }
 
     /// Whether it records.
@@ -280,7 +341,7 @@ mod tests {
     fn a_full_queue_drops_counts_and_marks_the_hole() {
         // Room for two tick records (header + two words each) and a little more.
         let (producer, mut consumer) = rtrb::RingBuffer::<u8>::new(2 * (HEADER_LEN + 16) + 4);
-        let mut journal = Journal::new(producer);
+        let mut journal = Journal::new(producer, 0);
         for n in 0..5u64 {
             journal.tick(Duration::from_millis(n));
         }

@@ -72,13 +72,16 @@ pub enum Kind {
     Trigger = 24,
     /// The link is handed to its I/O thread closed (its boards start once it is up).
     LinkOpening = 25,
+    /// The engine's state (drivers included) between the tick before and this one,
+    /// serialized with postcard: where a replay of a ring that wrapped begins.
+    Snapshot = 26,
 }
 
 impl Kind {
     /// The kind of byte `value`.
     pub fn from_u8(value: u8) -> Option<Self> {
         use Kind::*;
-        const ALL: [Kind; 25] = [
+        const ALL: [Kind; 26] = [
             Start,
             Tick,
             LinkDown,
@@ -104,6 +107,7 @@ impl Kind {
             Lost,
             Trigger,
             LinkOpening,
+            Snapshot,
         ];
         ALL.into_iter().find(|kind| *kind as u8 == value)
     }

@@ -55,6 +55,9 @@ pub enum Divergence {
     /// The engine asked for other inputs than the recorded ones.
     #[error("the engine took other inputs than recorded ({0})")]
     Inputs(&'static str),
+    /// The replayed engine's state (drivers included) differs from the recorded snapshot.
+    #[error("the engine's state differs from the snapshot recorded here")]
+    State,
 }
 
 /// Why a replay did not go through.
@@ -63,15 +66,27 @@ pub enum ReplayError {
     /// The drivers or the engine could not be built from the config.
     #[error("the config does not build: {0}")]
     Build(String),
-    /// The recording does not start at the server's start.
+    /// The recording does not start at the server's start and holds no snapshot of the
+    /// engine's state to start from.
     #[error(
         "the recording starts at tick {first} (the ring of [server] blackbox_seconds had \
-         wrapped): a replay needs the run from its start; raise blackbox_seconds, or save \
-         sooner"
+         wrapped) and holds no snapshot of the engine's state: a replay needs the run from \
+         its start or from a snapshot (one every quarter of blackbox_seconds)"
     )]
     NotFromStart {
         /// Its first tick.
         first: u64,
+    },
+    /// The snapshot a replay starts from does not decode with this build.
+    #[error(
+        "tick {tick}: the engine's state snapshot does not decode ({reason}): replay with \
+         the motiond build that recorded it (its version is in the file's metadata)"
+    )]
+    Snapshot {
+        /// The tick of the snapshot.
+        tick: u64,
+        /// What the decoder said.
+        reason: String,
     },
     /// The recorder lost records (its queue was full).
     #[error("tick {tick}: the recorder lost {count} records here: a replay cannot cross the hole")]
@@ -225,32 +240,49 @@ pub fn replay(config: &ServerConfig, recording: &Recording) -> Result<Replayed, 
 }
 
 fn replay_here(config: &ServerConfig, recording: &Recording) -> Result<Replayed, ReplayError> {
-    let first = recording
-        .ticks
-        .first()
-        .and_then(|bytes| records(bytes).next())
-        .and_then(Result::ok)
-        .map_or(0, |record| record.u64_at(8));
-    if first != 0 || recording.dropped() > 0 {
-        return Err(ReplayError::NotFromStart { first });
-    }
+    let tick_number = |bytes: &[u8]| {
+        records(bytes)
+            .next()
+            .and_then(Result::ok)
+            .map_or(0, |record| record.u64_at(8))
+    };
+    let first = recording.ticks.first().map_or(0, |bytes| tick_number(bytes));
+    let from_start = first == 0 && recording.dropped() == 0;
     let drivers = crate::boards::build(config).map_err(|e| ReplayError::Build(e.to_string()))?;
     let mut engine: Engine<AnyDriver> = Engine::new(config.engine_config(), drivers)
         .map_err(|e| ReplayError::Build(e.to_string()))?;
-    engine.stamp_links();
-    for record in records(&recording.head) {
-        let record = record.map_err(|source| ReplayError::Journal { tick: 0, source })?;
-        match record.kind {
-            Kind::Start => engine.set_clock_origin(at(record.u64_at(0))),
-            Kind::LinkOpening => engine.link_opening(usize::from(record.link)),
-            _ => {}
+    // From the start: the engine built from the config, as the server built it. Else from
+    // the first tick that holds a snapshot of the state the server's engine had then.
+    let begin = if from_start {
+        engine.stamp_links();
+        for record in records(&recording.head) {
+            let record = record.map_err(|source| ReplayError::Journal { tick: 0, source })?;
+            match record.kind {
+                Kind::Start => engine.set_clock_origin(at(record.u64_at(0))),
+                Kind::LinkOpening => engine.link_opening(usize::from(record.link)),
+                _ => {}
+            }
         }
-    }
+        0
+    } else {
+        recording
+            .ticks
+            .iter()
+            .position(|bytes| {
+                records(bytes)
+                    .filter_map(Result::ok)
+                    .any(|record| record.kind == Kind::Snapshot)
+            })
+            .ok_or(ReplayError::NotFromStart { first })?
+    };
+    let first = recording.ticks.get(begin).map_or(first, |bytes| tick_number(bytes));
+    // Until the snapshot is restored (a replay from the start has nothing to restore).
+    let mut restoring = !from_start;
     let mut frame = Box::new(MotionFrame::EMPTY);
     let mut path = Box::new(GroupPath::EMPTY);
     let mut buf = [0u8; crate::io::PACKET_LEN];
     let mut ticks = 0;
-    for bytes in &recording.ticks {
+    for bytes in &recording.ticks[begin..] {
         let mut now = Duration::ZERO;
         let mut iter = records(bytes).peekable();
         let diverged = |tick: u64, what: Divergence| ReplayError::Diverged { tick, what };
@@ -260,8 +292,34 @@ fn replay_here(config: &ServerConfig, recording: &Recording) -> Result<Replayed,
                 source,
             })?;
             let link = usize::from(record.link);
+            if restoring && !matches!(record.kind, Kind::Tick | Kind::Snapshot) {
+                // Before the snapshot in its tick (a `Lost` record): the state has it.
+                continue;
+            }
             match record.kind {
                 Kind::Tick => now = at(record.u64_at(0)),
+                Kind::Snapshot if restoring => {
+                    engine = postcard::from_bytes(record.payload).map_err(|error| {
+                        ReplayError::Snapshot {
+                            tick: first,
+                            reason: error.to_string(),
+                        }
+                    })?;
+                    restoring = false;
+                }
+                Kind::Snapshot => {
+                    // Replayed from an earlier point: the replayed state must be the
+                    // recorded one, number for number.
+                    let replayed = postcard::to_allocvec(&engine).map_err(|error| {
+                        ReplayError::Snapshot {
+                            tick: engine.tick(),
+                            reason: error.to_string(),
+                        }
+                    })?;
+                    if replayed != record.payload {
+                        return Err(diverged(engine.tick(), Divergence::State));
+                    }
+                }
                 Kind::LinkDown => engine.link_down(link, now),
                 Kind::LinkUp => engine.link_up(link, now),
                 Kind::LinkWritten => engine.link_written(link, at(record.u64_at(0))),

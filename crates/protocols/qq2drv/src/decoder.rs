@@ -10,7 +10,7 @@ use crate::frame::{MAX_PACKET_LEN, MIN_PACKET_LEN, PacketBuf, PacketId, STX, che
 const CAPACITY: usize = 2 * MAX_PACKET_LEN;
 
 /// Counters of what the decoder has seen.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct DecoderStats {
     /// Valid packets returned.
     pub packets: u64,
@@ -33,8 +33,9 @@ impl DecoderStats {
 }
 
 /// Push bytes in, take whole packets out. Fixed 510-byte buffer, no allocation.
-#[derive(Clone)]
+#[derive(serde::Serialize, serde::Deserialize, Clone)]
 pub struct StreamDecoder {
+    #[serde(with = "serde_big_array::BigArray")]
     buf: [u8; CAPACITY],
     start: usize,
     end: usize,

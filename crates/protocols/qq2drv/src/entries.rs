@@ -152,7 +152,7 @@ fn decode_with<T>(
 macro_rules! fixed_entry {
     ($(#[$doc:meta])* $name:ident { $($(#[$fdoc:meta])* $field:ident : $ty:ident),+ $(,)? }) => {
         $(#[$doc])*
-        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
         pub struct $name {
             /// Channels the entry applies to.
             pub channels: ChannelMask,

@@ -7,7 +7,7 @@ use crate::wire::{Reader, Writer};
 pub const CHANNELS: usize = 4;
 
 /// Channel Mask: bit 0 = channel 1 … bit 3 = channel 4; bits 7..4 unused (kept as sent).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct ChannelMask(pub u8);
 
 impl ChannelMask {
@@ -35,7 +35,7 @@ impl ChannelMask {
 }
 
 /// Position Size (packets 6, 10, 11): how many bits represent a position value.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 #[repr(u8)]
 pub enum PositionSize {
     /// 0x00: position omitted.
@@ -95,7 +95,7 @@ impl PositionSize {
 }
 
 /// A position as sent on the wire in one of its three sizes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum PositionValue {
     /// 8-bit signed.
     I8(i8),
@@ -156,7 +156,7 @@ pub const fn position_size_of(value: Option<PositionValue>) -> PositionSize {
 ///
 /// Bits: 5 Status, 4 Reserved, 3 Velocity, 2 Position Relative, 1..0 Position Size.
 /// Unused and reserved bits are kept as sent.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct DataMask(pub u8);
 
 impl DataMask {
@@ -219,7 +219,7 @@ impl Default for DataMask {
 }
 
 /// Stream Config Mask (packet 8): bit 0 Stream Period Timing, bit 1 Stream Periods Elapsed.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct StreamConfig(pub u8);
 
 impl StreamConfig {
@@ -252,7 +252,7 @@ impl StreamConfig {
 }
 
 /// Channel Status byte (packet 2).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct Status(pub u8);
 
 impl Status {
@@ -296,7 +296,7 @@ impl Status {
 }
 
 /// Input Mode (packet 14, bits 1..0 of Input Configuration).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 #[repr(u8)]
 pub enum InputMode {
     /// 0x00: signal on input has no effect.
@@ -326,7 +326,7 @@ pub enum EdgeAction {
 }
 
 /// Input Configuration (packet 14): bits 5..4 Edge, 3 Polarity, 2 Reserved, 1..0 Mode.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct InputConfig(pub u8);
 
 impl InputConfig {
@@ -365,7 +365,7 @@ impl InputConfig {
 }
 
 /// Control Mode (packet 16).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 #[repr(u8)]
 pub enum ControlMode {
     /// 0x00: motor output zero / off.
@@ -408,7 +408,7 @@ impl ReturnCode {
 }
 
 /// History Length and Maximum Averaging Time in Bits (packets 12 and 13).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct HistoryDimensions {
     /// Capture events averaged, 2..=127 (default 31).
     pub history_length: u8,

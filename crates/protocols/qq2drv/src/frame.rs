@@ -23,7 +23,7 @@ pub fn checksum(bytes: &[u8]) -> u8 {
 }
 
 /// Every Packet ID the datasheet documents (interface protocol v1).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 #[repr(u8)]
 pub enum PacketId {
     /// 1 - Get Version.
@@ -212,8 +212,9 @@ impl<'a> Frame<'a> {
 }
 
 /// An owned copy of one packet, as produced by the [`crate::StreamDecoder`].
-#[derive(Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Clone, Copy, PartialEq, Eq)]
 pub struct PacketBuf {
+    #[serde(with = "serde_big_array::BigArray")]
     bytes: [u8; MAX_PACKET_LEN],
     len: u8,
 }

@@ -14,7 +14,7 @@ use crate::motion::PositionLayout;
 use crate::wire::{Reader, Writer};
 
 /// Packet 11 - Get Position: the three request forms, told apart by payload size.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum GetPosition {
     /// Size 0: positions in the sizes configured by packet 6 (omitted where size is 0).
     Configured,

@@ -66,7 +66,7 @@ impl CommandLine {
 }
 
 /// A typed write: the register and its typed value.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Write {
     /// `W00`: encoder mode.
     Mode(Mode),
@@ -190,7 +190,7 @@ impl Write {
 }
 
 /// A typed command.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Request {
     /// `Rnn`: read a register once (cancels a stream of that register).
     Read(Register),

@@ -4,7 +4,7 @@
 use crate::Error;
 
 /// MDR0 B1 B0: count mode.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum CountMode {
     /// 00: non-quadrature (A = clock, B = direction).
     NonQuadrature,
@@ -18,7 +18,7 @@ pub enum CountMode {
 }
 
 /// MDR0 B3 B2: count cycle.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum CycleMode {
     /// 00: free-running 32-bit counter.
     #[default]
@@ -32,7 +32,7 @@ pub enum CycleMode {
 }
 
 /// MDR0 B5 B4: what the index input does.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum IndexMode {
     /// 00: index disabled.
     #[default]
@@ -46,7 +46,7 @@ pub enum IndexMode {
 }
 
 /// MDR0 register (03).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct Mdr0 {
     /// B1 B0.
     pub count: CountMode,
@@ -128,7 +128,7 @@ impl Mdr0 {
 }
 
 /// MDR1 register (04), appended to MDR0. B1 B0 are reserved and always 00.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct Mdr1 {
     /// B2: counting disabled.
     pub disable_counting: bool,
@@ -231,7 +231,7 @@ impl Str {
 }
 
 /// CLEAR REG (09) data: the register to clear to zero.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum ClearTarget {
     /// 0 = MDR0.
     Mdr0,
@@ -262,7 +262,7 @@ impl ClearTarget {
 }
 
 /// LOAD REG (0A) data: the transfer to perform.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum LoadTarget {
     /// 0 = transfer DTR to CNTR.
     DtrToCntr,

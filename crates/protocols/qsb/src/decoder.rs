@@ -124,7 +124,7 @@ impl CommandDecoder {
 /// Limitation: a response type `e` is also a hex digit, so garbage made of a type letter
 /// and hex digits can swallow the start of an `e` line that follows it with no byte in
 /// between; no decoder can tell those apart on the wire.
-#[derive(Debug, Clone)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
 pub struct ResponseDecoder {
     buf: [u8; MAX_RESPONSE_LEN],
     len: usize,

@@ -15,7 +15,7 @@ pub const JOG_RATE_RANGE: core::ops::RangeInclusive<i32> = -13000..=13000;
 pub const RATE_INCREMENT: u32 = 16;
 
 /// MD STATUS register (13).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct MdStatus {
     /// B0: done / ready.
     pub done: bool,
@@ -64,7 +64,7 @@ impl MdStatus {
 }
 
 /// The baud rates of the `X0A` selection command.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum BaudRate {
     /// X = 0.
     B9600,
@@ -126,7 +126,7 @@ impl BaudRate {
 }
 
 /// A function of the COMMAND register (16).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum QsbCommand {
     /// 0: stop the motor immediately, deactivate the encoder, digital I/O and MD STATUS
     /// streams, set the drive inactive and return the I/O port to its last saved state.

@@ -44,7 +44,7 @@ impl CommandType {
 }
 
 /// The three products of the QSB line (VERSION register product type code).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum ProductType {
     /// QSB-D: one differential encoder input, 1-bit digital I/O.
     D,
@@ -116,7 +116,7 @@ const ST: u8 = CommandType::Stream.bit();
 macro_rules! registers {
     ($( $(#[$doc:meta])* $name:ident = $num:literal, $types:expr, $products:expr, $default:expr, $nv:literal; )*) => {
         /// The registers 00–16 of the command list.
-        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+        #[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
         #[repr(u8)]
         pub enum Register {
             $( $(#[$doc])* $name = $num, )*

@@ -21,7 +21,7 @@ pub const PROCESSING_DELAY: Duration = Duration::from_micros(100);
 pub const ANALOG_PROCESSING_DELAY: Duration = Duration::from_micros(200);
 
 /// Encoder input type, MODE bits B1 B0.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum EncoderMode {
     /// 00: quadrature (or step/direction, see MDR0) counting.
     #[default]
@@ -33,7 +33,7 @@ pub enum EncoderMode {
 }
 
 /// MODE register (00).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct Mode {
     /// B1 B0: encoder type.
     pub encoder: EncoderMode,
@@ -76,7 +76,7 @@ impl Mode {
 
 /// DIG I/O register (01): bit n is I/O bit n; written 1 = open-drain output released high
 /// (internal pull-up), 0 = driven low; read = level measured at the pins.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct DigIo(pub u8);
 
 impl DigIo {
@@ -101,7 +101,7 @@ impl DigIo {
 }
 
 /// DIG I/O CONFIG register (02). Each nibble holds one bit per I/O bit 3–0.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct DigIoConfig {
     /// B3–B0 interrupt polarity: 1 = high-to-low edge, 0 = low-to-high edge.
     pub falling_edge: u8,
@@ -141,7 +141,7 @@ impl DigIoConfig {
 }
 
 /// INTERVAL RATE register (0C): the data output timer in [`TICK`] steps.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct IntervalRate(pub u16);
 
 impl IntervalRate {
@@ -188,7 +188,7 @@ impl Default for IntervalRate {
 }
 
 /// EOR register (15): end-of-response termination and formatting.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Eor {
     /// B0: line feed after `!`.
     pub line_feed: bool,

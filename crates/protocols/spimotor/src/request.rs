@@ -16,7 +16,7 @@ pub const IDENTIFICATION_READ_LEN: u16 = IDENTIFICATION_CAPACITY as u16 + 1;
 pub const MAX_DATA_LEN: usize = u16::MAX as usize;
 
 /// A write transaction's port and value ("write ports" table).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Write {
     /// 0x10: drive intensity for stepper mode.
     StepperIntensity(u8),
@@ -159,7 +159,7 @@ impl Write {
 }
 
 /// A read port ("read ports" table).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum ReadPort {
     /// 0x01: identification string, terminated with 0.
     Identification,
@@ -220,7 +220,7 @@ impl ReadPort {
 
 /// A read transaction: the port, and how many data bytes the host clocks after the header
 /// (each one a [`DUMMY`] on MOSI and a byte of the answer on MISO).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Read {
     /// The port read.
     pub port: ReadPort,
@@ -239,7 +239,7 @@ impl Read {
 }
 
 /// What a transaction does: write a port or read one.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Request {
     /// Address bit 0 cleared.
     Write(Write),

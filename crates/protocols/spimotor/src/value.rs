@@ -5,7 +5,7 @@ use core::time::Duration;
 use crate::Error;
 
 /// One of the two brushed motors ("two separate brushed motors section").
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Motor {
     /// Motor A: ports 0x20–0x22.
     A,
@@ -37,7 +37,7 @@ impl Motor {
 
 /// Spin direction of a brushed motor, named as in the datasheet ("direction A",
 /// "direction B"); which way that turns the shaft depends on the wiring.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Direction {
     /// Ports 0x20 / 0x30.
     A,
@@ -46,7 +46,7 @@ pub enum Direction {
 }
 
 /// Port 0x44: "Writing 0x00 means driving one coil, other values mean driving two coils".
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Coils {
     /// Wave drive: one coil energised at a time (written as 0x00).
     One,
@@ -71,7 +71,7 @@ impl Coils {
 
 /// Port 0x43: time between two steps, one byte in tenths of a millisecond both ways
 /// (docs/ARCHITECTURE.md: the read table's "microsecond" is a slip). Default 200 = 20 ms.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub struct StepDelay(u8);
 
 impl StepDelay {
@@ -119,7 +119,7 @@ pub const IDENTIFICATION_CAPACITY: usize = 32;
 
 /// Port 0x01: the identification string, "terminated with 0". Held in a fixed buffer so
 /// decoding never allocates.
-#[derive(Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, serde::Deserialize, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct Identification {
     bytes: [u8; IDENTIFICATION_CAPACITY],
     len: u8,

@@ -198,7 +198,7 @@ impl ReplyFrame {
 /// assert_eq!(cache.pop_done(t0 + Duration::from_millis(3)), None);
 /// assert_eq!(cache.waiting(t0 + Duration::from_millis(3)), 15);
 /// ```
-#[derive(Debug, Clone)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
 pub struct CanCache<T: Copy> {
     slots: [Option<(Duration, T)>; CAN_CACHE_COMMANDS],
     head: usize,

@@ -5,7 +5,7 @@ use crate::Error;
 macro_rules! commands {
     ($($(#[$doc:meta])* $name:ident = $code:literal, reply: $reply:literal;)*) => {
         /// An instruction code of the section 9 instruction table.
-        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        #[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
         #[repr(u8)]
         pub enum Command {
             $($(#[$doc])* $name = $code,)*

@@ -28,7 +28,7 @@ pub const AMAX_DIVISOR: u32 = 64;
 /// two readings ("SIXpack / QUADpack manual" V2.43, docs/ARCHITECTURE.md); nothing on the
 /// wire tells them apart before a ramp runs, so it is a per-device setting
 /// (`amax_divisor`, docs/keys/tmcpack.md).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum AmaxDivisor {
     /// amax / 64 per tick: 8.3 `$14`, "1/64 amax is accumulated with 500Hz during
     /// acceleration to vact", with "0 < amax <= vstart * 64". The default.
@@ -70,7 +70,7 @@ pub const DEFAULT_SWITCHOVER_UNITS: u16 = 3;
 pub const SUPPLY_COUNTS_PER_VOLT: f64 = 22.0;
 
 /// `clkdiv` and `div_i`: the two settings that turn a velocity into a step rate.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub struct StepClock {
     clkdiv: u8,
     div: u8,
@@ -312,7 +312,7 @@ pub const fn units_of_ms(ms: u32) -> Option<u32> {
 }
 
 /// The board variant: SIXpack drives six motors of up to 0.8 A, QUADpack four of 1.5 A.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum Variant {
     /// SIXpack, 6 channels, 800 mA peak.
     #[default]

@@ -27,7 +27,7 @@ use crate::{FRAME_LEN, Word};
 pub const DEFAULT_PACKET_TIMEOUT: Duration = Duration::from_millis(20);
 
 /// Counters of a [`FrameDecoder`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct DecoderStats {
     /// Complete 9-byte words.
     pub words: u64,

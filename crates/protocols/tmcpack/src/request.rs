@@ -27,7 +27,7 @@ message_table! {
 ///
 /// Field names follow the manual; `reply_to` is the "response address" a query carries.
 /// Unused parameter bytes are sent as zero and ignored when decoding.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
     pub enum Request {
     /// $10: peak current of the motor pair (only motors 0, 2, 4 are used by the pack).
     PeakCurrent {

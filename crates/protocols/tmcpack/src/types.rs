@@ -17,7 +17,7 @@ pub const fn check_motor(motor: u8) -> Result<u8, Error> {
 }
 
 /// What a motor is doing, as reported by $20, $21 and $28 (manual 8.4 "Current action").
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Action {
     /// 0: inactive.
     Inactive,
@@ -99,7 +99,7 @@ impl Action {
 }
 
 /// A current level of $11 (I0..I3): "(0=100%, 75, 50, 38, 25, 19, [13, 9,] 0%)".
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum CurrentLevel {
     /// Index 0: 100 %.
     P100,
@@ -202,7 +202,7 @@ impl CurrentLevel {
 macro_rules! flags {
     ($(#[$doc:meta])* $name:ident : $repr:ty { $($(#[$fdoc:meta])* $flag:ident = $bit:expr;)* }) => {
         $(#[$doc])*
-        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+        #[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
         pub struct $name($repr);
 
         impl $name {

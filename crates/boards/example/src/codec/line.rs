@@ -9,8 +9,9 @@ use super::{CodecError, END, MAX_LINE};
 /// [`MAX_LINE`] is reported once as [`CodecError::LineTooLong`] and dropped up to its
 /// terminator; `\n` and NUL before a line starts are skipped (a host that sends `\r\n`, a
 /// line that was idle), and an empty line is nothing.
-#[derive(Debug, Clone)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
 pub struct LineDecoder {
+    #[serde(with = "serde_big_array::BigArray")]
     buf: [u8; MAX_LINE],
     len: usize,
     overflow: bool,

@@ -48,7 +48,7 @@ impl core::fmt::Debug for Version {
 }
 
 /// What a channel does, as the status letter of a position reply says.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Motion {
     /// `I`: standing, coils energised (holding).
     Idle,
@@ -172,7 +172,7 @@ const REPLY_STARTS: &[u8] = b"AEOP";
 /// Replies out of a byte stream, in any chunking. A line that is no reply is tried again
 /// from each later byte a reply can start with (`A`, `E`, `O`, `P`), so noise in front of
 /// a reply costs nothing; a line with no reply in it is one [`CodecError`].
-#[derive(Debug, Clone, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Default)]
 pub struct ReplyDecoder {
     lines: LineDecoder,
 }

@@ -5,7 +5,7 @@ use super::{CHANNELS, CodecError, MAX_ACCEL, MAX_SPEED};
 
 /// One request of the host (README "Commands"). Positions in steps, speeds in steps/s,
 /// accelerations in steps/s².
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Request {
     /// `?` → `AS2 <version>`.
     Identify,

@@ -20,7 +20,7 @@ const DEFAULT_LIMITS: AxisLimits = AxisLimits {
 };
 
 /// Everything the driver needs to know about one AS-2.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, PartialEq)]
 pub struct ExampleDriverConfig {
     /// Baud of the serial link: sizes the reply timeout from the wire time.
     pub baud: u32,

@@ -96,7 +96,7 @@ pub const PROTOCOL_LIMIT: u32 = 10;
 pub const REPLY_MARGIN: Duration = Duration::from_millis(20);
 
 /// Start-up and running.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 enum Phase {
     /// Sending `?` at `next_at`.
     Identify { attempts: u32, next_at: Duration },
@@ -105,14 +105,14 @@ enum Phase {
 }
 
 /// The request on the wire, and when it went out whole.
-#[derive(Debug, Clone, Copy)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy)]
 struct InFlight {
     request: Request,
     written_at: Option<Duration>,
 }
 
 /// What the driver knows of one channel besides the board's last reply.
-#[derive(Debug, Clone, Copy)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy)]
 struct Channel {
     state: ChannelState,
     /// The target of the position goal set last (for `arrived`).
@@ -122,7 +122,7 @@ struct Channel {
 }
 
 /// Sans-I/O driver of one AS-2. See the module docs.
-#[derive(Debug, Clone)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
 pub struct ExampleDriver {
     config: ExampleDriverConfig,
     status: DeviceStatus,

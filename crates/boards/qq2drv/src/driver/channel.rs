@@ -28,7 +28,7 @@ pub const ARRIVED_WITHIN: i64 = 2;
 pub const LOOP_PERIOD: Duration = Duration::from_nanos(1_000_000_000 / LOOP_RATE_HZ as u64);
 
 /// One step of a goal on the board.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum Step {
     /// Nothing commanded since start-up or a board reset.
     Idle,
@@ -91,7 +91,7 @@ impl Step {
 }
 
 /// One channel of the board.
-#[derive(Debug, Clone, Copy)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy)]
 pub(super) struct Channel {
     pub(super) config: ChannelConfig,
     pub(super) step: Step,

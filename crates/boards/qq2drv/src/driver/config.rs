@@ -16,7 +16,7 @@ const DEFAULT_LIMITS: AxisLimits = AxisLimits {
 };
 
 /// How a channel's IN pin finds home (packet 14), when something is wired to it.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub struct HomeInput {
     /// Home (acts while active), Index (active and A = B = 0) or Edge (inactive → active).
     /// `Disabled` makes the channel unable to home.
@@ -37,7 +37,7 @@ pub struct HomeInput {
 
 /// Position PID constants of one channel (packet 30). The datasheet documents their
 /// defaults but not their units.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub struct PositionPid {
     /// Proportional constant ("Default: 100").
     pub p: u16,
@@ -58,7 +58,7 @@ impl Default for PositionPid {
 }
 
 /// Velocity PID constants of one channel (packet 32).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub struct VelocityPid {
     /// Proportional constant ("Default: 100").
     pub p: u16,
@@ -77,7 +77,7 @@ impl Default for VelocityPid {
 }
 
 /// One of the board's four channels.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq)]
 pub struct ChannelConfig {
     /// An axis is connected: the channel is streamed and takes goals. A disabled channel
     /// has no capabilities and is left out of the stream (its data mask is 0).
@@ -123,7 +123,7 @@ impl Default for ChannelConfig {
 
 /// Everything the driver needs to know about one QuadQuad2Drv board (it has no address:
 /// one board per chip select).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, PartialEq)]
 pub struct Qq2drvDriverConfig {
     /// SPI clock of the link, Hz (the datasheet recommends up to 500 kHz): sizes the wire
     /// budget and the reply timeout.

@@ -138,7 +138,7 @@ pub const STREAM_CONFIG: StreamConfig = StreamConfig::new(true, false);
 const CONFIGURE_REQUESTS: usize = 10;
 
 /// Start-up and running phases.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 enum Phase {
     /// Reading version and stream layout; the next probe at `next_at`.
     Probe { attempts: u32, next_at: Duration },
@@ -149,7 +149,7 @@ enum Phase {
 }
 
 /// Sans-I/O driver of one QuadQuad2Drv board. See the module docs.
-#[derive(Debug, Clone)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
 pub struct Qq2drvDriver {
     config: Qq2drvDriverConfig,
     status: DeviceStatus,

@@ -149,7 +149,7 @@ pub fn pin_of(channel: usize, index: usize) -> Option<Pin> {
 }
 
 /// The Status bits of one channel as the pins see them.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub(super) struct InputBits {
     /// The latest Status byte (Input Active is a level: the latest one counts).
     latest: u8,

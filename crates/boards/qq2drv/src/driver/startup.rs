@@ -31,7 +31,7 @@ pub(super) fn velocity_limit(max_velocity: f64) -> u32 {
 use motion_drivers::{DeviceFault, FIRMWARE_LEN};
 
 /// What the probe has learnt so far.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub(super) struct ProbeReplies {
     pub(super) version: Option<(u8, u8, u8)>,
     pub(super) masks: Option<[DataMask; CHANNELS]>,

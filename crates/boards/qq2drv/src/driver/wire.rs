@@ -23,7 +23,7 @@ use motion_drivers::{DeviceFault, Driver, Priority, Transmit};
 pub(super) const MAX_STEP_PACKETS: usize = 5;
 
 /// One packet for one channel (a one-entry payload).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum Packet {
     /// 16 - Set Control Mode.
     Mode(ControlMode),
@@ -158,7 +158,7 @@ pub(super) type Packets = FixedQueue<Packet, MAX_STEP_PACKETS>;
 pub const IN_FLIGHT_CAPACITY: usize = 48;
 
 /// What an answer is for.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum Tag {
     /// A start-up read (version, data masks, stream config, stream period).
     Probe,
@@ -173,7 +173,7 @@ pub(super) enum Tag {
 }
 
 /// One unanswered request.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) struct Sent {
     pub(super) id: PacketId,
     /// Queued at, then (once reported) written at: its reply timeout runs from here.

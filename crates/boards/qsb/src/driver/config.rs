@@ -34,7 +34,7 @@ pub(crate) const DRIVER_LINE_LEN: u64 = 1 + 2 + 8 + 8 + 1 + 1;
 
 /// Everything the driver needs to know about one QSB (the axis is channel 0: the encoder
 /// counter and, on the -M, the stepper drive that moves it).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, PartialEq)]
 pub struct QsbDriverConfig {
     /// The product the config expects (default -M). What VERSION reports wins: a -S or
     /// -D found where a -M was configured refuses drive goals with `Unsupported`.

@@ -10,7 +10,7 @@ use ::qsb::{CountMode, CycleMode, IndexMode, Mdr0};
 
 /// What the counter is set to in normal operation (`count_mode`, `count_range`,
 /// `count_limit`, `index_action`, `index_sync`; docs/keys/qsb.md).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub struct CounterSetup {
     /// MDR0 B1 B0: x4 (default), x2, x1 quadrature, or non-quadrature (A = clock, B =
     /// direction).
@@ -108,7 +108,7 @@ impl CounterSetup {
 }
 
 /// How the difference of two streamed counts is read.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Wrap {
     /// The 32-bit counter wraps through zero: the two's-complement difference.
     Bits32,

@@ -11,7 +11,7 @@ use super::counter::Wrap;
 pub(crate) const VELOCITY_WINDOW: usize = 8;
 
 /// One streamed READ ENCODER value.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub(crate) struct Sample {
     /// CNTR as a signed 32-bit count.
     pub count: i32,
@@ -32,7 +32,7 @@ const MOVING_SLACK: f64 = 2.0;
 const STILL_SLACK: f64 = 0.5;
 
 /// The latest samples.
-#[derive(Debug, Clone)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
 pub(crate) struct EncoderTrack {
     window: FixedQueue<Sample, VELOCITY_WINDOW>,
     velocity: f64,

@@ -47,14 +47,14 @@ pub(crate) enum StampVerdict {
 }
 
 /// A held line: its stamp, or none where one was due.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 enum Suspect {
     Missing,
     Stamp(u32),
 }
 
 /// The board's timeline as the lines tell it (see the module documentation).
-#[derive(Debug, Clone, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Default)]
 pub(crate) struct StampGuard {
     /// The newest accepted stamp and when its line arrived.
     last: Option<(u32, Duration)>,

@@ -21,7 +21,7 @@ pub const MOTOR_DRIVE_BITS: u8 = 0b0110;
 
 /// The external stepper driver's enable line on a -M: a DIG I/O bit driven as an
 /// open-drain output (`enable_output`, `enable_active`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub struct EnableOutput {
     /// DIG I/O bit: 0 or 3 (1 and 2 are the motor drive's step and direction).
     pub bit: u8,
@@ -33,7 +33,7 @@ pub struct EnableOutput {
 
 /// The capture-on-edge interrupt (DIG I/O CONFIG B7–B4 enable, B3–B0 polarity): an edge on
 /// `bit` loads the current count into CAPTURE (05), read as the `capture` pin.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub struct CaptureInput {
     /// DIG I/O bit (0–3 on the -M, 0 on the -D).
     pub bit: u8,
@@ -42,7 +42,7 @@ pub struct CaptureInput {
 }
 
 /// What the driver reads and drives on the I/O pins (from the configured signals).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct QsbIo {
     /// DIG I/O bits read as inputs (bit n = `ion`).
     pub digital_in: u8,
@@ -178,7 +178,7 @@ impl PinRole {
 }
 
 /// The driver's I/O state.
-#[derive(Debug, Clone, Copy)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy)]
 pub(crate) struct IoState {
     /// Output levels the signals asked for (bit n; 1 = released high). Bits that are not
     /// outputs stay 1.

@@ -162,7 +162,7 @@ pub const RESTART_DELAY: Duration = Duration::from_millis(100);
 const REGISTERS: usize = 0x17;
 
 /// A sans-I/O driver for one US Digital QSB (see the module docs).
-#[derive(Debug, Clone)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
 pub struct QsbDriver {
     config: QsbDriverConfig,
     decoder: ResponseDecoder,

@@ -6,7 +6,7 @@ use ::qsb::{Request, Write};
 use motion_base::FixedQueue;
 
 /// One step of a plan.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq)]
 pub(crate) enum Step {
     /// Send this request.
     Send(Request),
@@ -51,7 +51,7 @@ pub(crate) enum Step {
 pub(crate) const PROGRAM_CAPACITY: usize = 24;
 
 /// A fixed-capacity queue of steps.
-#[derive(Debug, Clone)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
 pub(crate) struct Program {
     steps: FixedQueue<Step, PROGRAM_CAPACITY>,
     /// Changes whenever the plan is replaced, so that the answer to a request of an old

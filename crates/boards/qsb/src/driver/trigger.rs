@@ -47,7 +47,7 @@ use motion_drivers::GoalError;
 
 /// The counter's events and what they do (`capture_index`, `trigger_on`,
 /// `compare_position`, `trigger_active`; docs/keys/qsb.md "Capture and trigger").
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct TriggerSetup {
     /// MDR1 B4 "Trigger/Capture on Index": the index loads CAPTURE (and pulses the output
     /// when `pulse`).
@@ -102,7 +102,7 @@ impl TriggerSetup {
 }
 
 /// The driver's capture and trigger state.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, Default)]
 pub(crate) struct EventState {
     /// Captures seen (CAPTURE stream lines after the one answering `S05`).
     pub captures: u32,

@@ -11,7 +11,7 @@ use super::program::{self, Step};
 use motion_drivers::{Priority, Transmit};
 
 /// Who sent the request in flight.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum Origin {
     Setup,
     Preset,
@@ -24,7 +24,7 @@ pub(super) enum Origin {
 }
 
 /// The request awaiting its answer.
-#[derive(Debug, Clone, Copy)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy)]
 pub(super) struct InFlight {
     pub(super) request: Request,
     pub(super) origin: Origin,

@@ -7,7 +7,7 @@ use super::wire::Op;
 use motion_drivers::{Goal, GoalError, GoalKind, Priority};
 
 /// What the driver last put on one motor's bridge.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub(super) struct BrushedMotor {
     /// Signed intensity last written: + direction A, − direction B, 0 stopped.
     power: i16,

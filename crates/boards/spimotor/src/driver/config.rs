@@ -5,7 +5,7 @@ use core::time::Duration;
 use spimotor::{Address, Coils};
 
 /// What is connected to the board's two H-bridges (config `drive = "stepper" | "brushed"`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum SpimotorDrive {
     /// One stepper motor: channel 0 (ports 0x10, 0x40–0x44).
     #[default]
@@ -34,7 +34,7 @@ const DEFAULT_LIMITS: AxisLimits = AxisLimits {
 };
 
 /// Everything the driver needs to know about one SPI_motor board.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, PartialEq)]
 pub struct SpimotorDriverConfig {
     /// The board's SPI address (even byte form, default 0x90).
     pub address: Address,

@@ -171,7 +171,7 @@ pub const PRESENCE_EVERY: u32 = 16;
 pub const REPLY_MARGIN: Duration = Duration::from_millis(100);
 
 /// Start-up and running phases.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 enum Phase {
     /// Reading the identification string.
     Identify { attempts: u32, next_at: Duration },
@@ -185,7 +185,7 @@ enum Phase {
 }
 
 /// Sans-I/O driver of one SPI_motor board. See the module docs.
-#[derive(Debug, Clone)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
 pub struct SpimotorDriver {
     config: SpimotorDriverConfig,
     status: DeviceStatus,

@@ -53,7 +53,7 @@ pub fn delay_for(rate: f64) -> StepDelay {
 }
 
 /// What the driver is doing with the stepper.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq)]
 pub enum Motion {
     /// Standing (or finishing a step the board already has), nothing to ramp.
     Hold,
@@ -83,7 +83,7 @@ pub enum Motion {
 }
 
 /// What one update asks of the board's target.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub enum TargetCommand {
     /// Leave the target as it is.
     Keep,
@@ -94,7 +94,7 @@ pub enum TargetCommand {
 }
 
 /// The outcome of one profile update.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Step {
     /// Step delay to be in force.
     pub delay: StepDelay,
@@ -116,7 +116,7 @@ pub struct Observed {
 }
 
 /// The signed step rate of the profile and when it was last integrated.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Default)]
 pub struct Ramp {
     /// Signed rate, steps/s.
     pub rate: f64,

@@ -20,7 +20,7 @@ pub const SURVEY_ATTEMPTS: u32 = 8;
 type Reading = ((i32, Duration), i32, StepDelay);
 
 /// The survey's readings so far.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub(super) struct Survey {
     /// The position read and when its transaction went out.
     position: Option<(i32, Duration)>,

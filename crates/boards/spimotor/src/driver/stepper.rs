@@ -20,7 +20,7 @@ const PLAUSIBILITY_STEPS: f64 = 2.0;
 pub(super) const ABSENT_READING: (i32, i32, u8) = (-1, -1, u8::MAX);
 
 /// One poll's readings, gathered as its reads complete.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, Default, PartialEq)]
 struct Cycle {
     /// The position read, what it should agree with, and when the board sampled it.
     position: Option<(i32, Expect, Duration)>,
@@ -28,7 +28,7 @@ struct Cycle {
 }
 
 /// The stepper's last known state and the driver's plan for it.
-#[derive(Debug, Clone)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
 pub(super) struct Stepper {
     /// Position counter read back, steps.
     position: i32,

@@ -12,7 +12,7 @@ use super::{PRESENCE_EVERY, Phase, REPLY_MARGIN, SpimotorDriver};
 use motion_drivers::{Priority, Transmit};
 
 /// One transaction the driver wants on the wire.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Op {
     /// A write port.
     Write(Write),
@@ -47,7 +47,7 @@ impl Op {
 }
 
 /// A queued op and who it belongs to.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Queued {
     /// The transaction.
     pub op: Op,
@@ -70,7 +70,7 @@ pub type OpQueue<const N: usize> = FixedQueue<Queued, N>;
 
 /// What the board should answer to a read, as the driver's writes left it when the read
 /// was sent.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Expect {
     /// Step delay in force.
     pub delay: StepDelay,
@@ -83,7 +83,7 @@ pub struct Expect {
 }
 
 /// A transaction on the wire whose MISO bytes are due.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Sent {
     /// What was sent.
     pub op: Op,
@@ -100,9 +100,10 @@ pub const MAX_TRANSACTION: usize = Header::LEN + spimotor::IDENTIFICATION_READ_L
 
 /// Transactions whose MISO bytes have not all come back, oldest first, and the bytes of
 /// the oldest received so far.
-#[derive(Debug, Clone)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
 pub struct InFlight<const N: usize> {
     sent: FixedQueue<Sent, N>,
+    #[serde(with = "serde_big_array::BigArray")]
     miso: [u8; MAX_TRANSACTION],
     received: usize,
 }
@@ -192,7 +193,7 @@ impl<const N: usize> InFlight<N> {
 }
 
 /// Board registers as the driver's writes leave them.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) struct Registers {
     pub(super) delay: spimotor::StepDelay,
     /// `None`: unknown (after 0x42 ← 0, until a poll reads it).

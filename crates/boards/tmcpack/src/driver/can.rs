@@ -32,7 +32,7 @@ use super::REPLY_MARGIN;
 pub const CACHE_LIMIT: usize = tmcpack::CAN_CACHE_COMMANDS / 2;
 
 /// The driver's end of a CAN link.
-#[derive(Debug, Clone)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
 pub(crate) struct CanLine {
     /// Bus time of one 8-byte telegram.
     pub frame_time: Duration,

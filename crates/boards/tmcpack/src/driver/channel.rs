@@ -59,7 +59,7 @@ use motion_drivers::{ChannelState, DeviceFault, Goal, GoalError, GoalKind};
 pub(crate) const MAX_STEPS: usize = 10;
 
 /// One step of a goal's script.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Step {
     /// Send this request (none of them is answered).
     Send(Request),
@@ -69,7 +69,7 @@ pub(crate) enum Step {
 }
 
 /// What the driver last told the motor to do.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Motion {
     /// Nothing since (re)start: the polled action tells.
     Unknown,
@@ -84,7 +84,7 @@ pub(crate) enum Motion {
 }
 
 /// Progress of a reference search the driver started.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Homing {
     Idle,
     /// `$22` sent with this sequence number; waiting to see the search.
@@ -94,7 +94,7 @@ pub(crate) enum Homing {
 }
 
 /// One configured motor.
-#[derive(Debug, Clone)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
 pub(crate) struct Channel {
     /// Motor number on the pack.
     pub motor: u8,

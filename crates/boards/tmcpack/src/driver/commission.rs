@@ -30,7 +30,7 @@ use motion_drivers::{Commission, CommissionError, DeviceFault};
 pub const RESET_WAIT: Duration = Duration::from_millis(1200);
 
 /// A change of the pack's own settings waiting for the line.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Service {
     /// `$40` to this rate (the start-up's switch, or commissioned).
     Baud(u32),

@@ -44,7 +44,7 @@ pub fn default_packet_timeout_units(baud: u32) -> u16 {
 }
 
 /// $11 current control of one motor (manual 8.3).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Currents {
     /// I0: power-down current after `t0` of standstill.
     pub i0: CurrentLevel,
@@ -88,7 +88,7 @@ impl Currents {
 }
 
 /// One configured motor: its axis limits in microsteps and its $15/$16/$18 settings.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq)]
 pub struct TmcpackChannel {
     /// Velocity limit, microsteps/s (> 0; at most 200 kHz, manual 8.2).
     pub max_velocity: f64,
@@ -137,7 +137,7 @@ pub struct TmcpackChannel {
 /// difference / propdiv. The integral part integrates the part of the position difference
 /// clipped to a maximum limit by intinpclip. The influence of the integral part is
 /// determined by the divisor intdiv."
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub struct PiParams {
     /// propdiv 1..=255.
     pub propdiv: u8,
@@ -299,7 +299,7 @@ impl Default for TmcpackDriverConfig {
 /// A motor's fixed scales: divider, microstep frequency per velocity unit and the ramp
 /// values its axis limits give (manual 7.1: "div_i should be set so, that the maximum
 /// velocity vmax could be set between 256 and 511").
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Scale {
     pub clock: StepClock,
     /// Microsteps/s of velocity 1.

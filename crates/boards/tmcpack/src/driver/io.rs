@@ -219,7 +219,7 @@ fn source(variant: Variant, pin: Pin) -> Option<Source> {
 }
 
 /// A set of pins of one variant's table.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct PinSet(u32);
 
 impl PinSet {
@@ -249,7 +249,7 @@ impl PinSet {
 
 /// TTLOUT1 as the ready output (manual 8.5 $32 P3, $33): "activated (low, open collector),
 /// whenever a motor is active … or search of reference".
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ReadyOutput {
     /// $33 P0: motors whose activity counts.
     pub motors: MotorMask,
@@ -258,7 +258,7 @@ pub struct ReadyOutput {
 }
 
 /// What the driver reads and drives besides the motors.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct TmcpackIo {
     /// Input pins to poll with `$30` (digital-in and analog-in signals; `ttlio1` here makes
     /// TTLIO1 an input).
@@ -270,7 +270,7 @@ pub struct TmcpackIo {
 }
 
 /// The driver's view of the pins.
-#[derive(Debug, Clone)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
 pub(crate) struct IoState {
     variant: Variant,
     cfg: TmcpackIo,

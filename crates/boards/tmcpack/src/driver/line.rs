@@ -31,7 +31,7 @@ use super::wire::Pick;
 use super::{Phase, TmcpackDriver};
 
 /// A line prepared: its legs' `$14` / `$26` go out, then it waits for the start.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct PackLine {
     pub mask: MotorMask,
     pub targets: [i32; 6],

@@ -131,7 +131,7 @@ pub const RETRY_PERIOD: Duration = Duration::from_millis(250);
 pub const RESET_CHECK_PERIOD: Duration = Duration::from_secs(1);
 
 /// Where the driver is with its pack.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 enum Phase {
     /// The link is down.
     Down,
@@ -150,7 +150,7 @@ enum Phase {
 }
 
 /// The sans-I/O driver of one SIXpack / QUADpack.
-#[derive(Debug)]
+#[derive(serde::Serialize, serde::Deserialize, Debug)]
 pub struct TmcpackDriver {
     address: u8,
     reply_address: u8,

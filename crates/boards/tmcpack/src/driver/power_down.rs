@@ -59,7 +59,7 @@ use motion_drivers::{DeviceFault, FIRMWARE_LEN};
 pub const POWER_CHECK_PERIOD: Duration = Duration::from_secs(1);
 
 /// The `$45` requests after the configuration, in order.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 enum Step {
     /// Bit 0: load the saved positions.
     Load,
@@ -70,7 +70,7 @@ enum Step {
 }
 
 /// What the driver knows of the pack's power-down mode.
-#[derive(Debug, Clone)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
 pub(crate) struct PowerDown {
     pub mode: PowerDownMode,
     /// Firmware revision and serial number from the last `$43`.

@@ -29,7 +29,7 @@ use super::spec::word_time;
 use super::{Phase, TmcpackDriver};
 
 /// The driver's view of the line rate.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct LineRate {
     /// The link's configured rate: it opens at it.
     link: u32,

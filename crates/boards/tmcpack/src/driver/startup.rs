@@ -57,7 +57,7 @@ pub(crate) fn motor_options(configured: MotorOptions, layout: OptionsLayout) -> 
 
 /// The configuration requests, in the order they are sent. The `$32` in it is a
 /// placeholder: the driver sends its current output levels in its place.
-#[derive(Debug, Clone)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
 pub(crate) struct StartupPlan {
     requests: FixedQueue<Request, MAX_STARTUP>,
 }
@@ -183,7 +183,7 @@ const MAX_QUIESCE: usize = 12;
 const QUIESCE_MARGIN: Duration = Duration::from_millis(250);
 
 /// Stopping the configured motors that the `$28` survey found active.
-#[derive(Debug, Clone)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
 pub(crate) struct Quiesce {
     requests: FixedQueue<Request, MAX_QUIESCE>,
     /// Motors not yet seen at rest.

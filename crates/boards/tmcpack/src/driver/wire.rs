@@ -19,7 +19,7 @@ use super::{Phase, REPLY_MARGIN, TmcpackDriver};
 use motion_drivers::{Priority, Transmit};
 
 /// What a query waits for.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct Expect {
     pub command: Command,
     /// The motor a $20 or $21 answer must name, the channel a $30 answer must name.
@@ -29,7 +29,7 @@ pub(crate) struct Expect {
 }
 
 /// Why a query was sent.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Purpose {
     /// $43 of the start-up sequence.
     Startup,
@@ -48,7 +48,7 @@ pub(crate) enum Purpose {
 }
 
 /// Who may use the line.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Wire {
     /// Free.
     Idle,
@@ -86,8 +86,9 @@ const WINDOW: usize = 4 * FRAME_LEN;
 /// response address and the query's command and decodes. Anything else before it is
 /// garbage and is skipped byte by byte, so a reply is found even right after a burst of
 /// noise (the pack's own resynchronisation, the packet timeout, needs a silent gap).
-#[derive(Debug, Clone)]
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
 pub(crate) struct ReplyHunter {
+    #[serde(with = "serde_big_array::BigArray")]
     buf: [u8; WINDOW],
     len: usize,
     /// Bytes skipped since the last [`reset`](Self::reset).
