@@ -42,8 +42,8 @@ mod duration;
 mod kinds;
 mod model;
 mod queue;
-mod text;
 pub mod serde_boxed_array;
+mod text;
 
 pub use can::{CAN_RECORD_LEN, CAN_SFF_MAX, CanRecord, LinkFraming};
 pub use counts::{counts_to_i32, counts_to_i32_saturating};

@@ -13,7 +13,9 @@ use crate::state::{ChannelState, DeviceStatus};
 pub use motion_base::Model;
 
 /// How urgent a driver's next message is; a shared bus serves higher priorities first.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash,
+)]
 pub enum Priority {
     /// Periodic status/position polling.
     Poll = 0,
@@ -30,7 +32,9 @@ pub enum Priority {
 
 /// How a board follows a moving target: what the engine sends it while an axis group's
 /// path moves one of its channels (docs/ARCHITECTURE.md "Coordinated motion").
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 pub enum Follow {
     /// A `Position` goal every tick, which the board's own controller tracks: for boards
     /// on links fast enough to take one every tick (SPI).

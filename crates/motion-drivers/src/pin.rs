@@ -13,7 +13,9 @@
 use core::time::Duration;
 
 /// One pin of a board: the index into the board's pin table.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord,
+)]
 pub struct Pin(pub u16);
 
 /// What a pin can be used as; also the kind of a configured signal (one enum with the

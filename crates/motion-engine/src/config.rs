@@ -93,7 +93,9 @@ impl Default for AxisConfig {
 }
 
 /// What an e-stop does to an axis: the stop categories of IEC 60204-1.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 pub enum EstopCategory {
     /// Category 2: decelerate and hold, energised (default; the right choice for an axis
     /// that gravity would move, e.g. a vertical axis).
@@ -144,7 +146,9 @@ pub struct SignalConfig {
 }
 
 /// What a group does with a streamed setpoint beyond an axis's limits (`stream_limit`).
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 pub enum StreamLimit {
     /// Clamp it to the limit, count it and flag it in the frame.
     Clamp,

@@ -248,6 +248,16 @@ impl<D: Driver> Engine<D> {
         })
     }
 
+    /// How many bytes more than now its serialized state (the black box's snapshot) may
+    /// take, at the most: the groups' paths at their longest trajectories. Everything else
+    /// is sized at start-up.
+    pub fn snapshot_growth(&self) -> usize {
+        self.groups
+            .iter()
+            .map(|group| group.path.serialized_bound() + group.spare.serialized_bound())
+            .sum()
+    }
+
     /// The description the engine was built from.
     pub fn config(&self) -> &EngineConfig {
         &self.config

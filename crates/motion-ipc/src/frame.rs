@@ -10,7 +10,9 @@ use crate::{MAX_AXES, MAX_DEVICES, MAX_GROUPS, MAX_SIGNALS, SCHEMA_VERSION};
 /// Where a board is in its life, as the server sees it. Travels as `u8` in
 /// [`MotionFrame::devices`] and [`AxisState::device_state`], and as `u32` in
 /// [`DeviceInfo::state`](crate::DeviceInfo::state).
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 #[repr(u8)]
 pub enum DeviceState {
     /// Not answering, or its link is down: goals are refused (`DeviceOffline` / `LinkDown`).

@@ -18,7 +18,9 @@ use crate::{MAX_GROUP_AXES, MAX_PATH_POINTS, NAME_LEN, SCHEMA_VERSION, read_text
 pub const PATH_VALUES: usize = MAX_PATH_POINTS * MAX_GROUP_AXES;
 
 /// Where a group's motion is. Travels as `u8` in [`GroupState::motion`].
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 #[repr(u8)]
 pub enum GroupMotion {
     /// No motion of the group runs (its axes may move on their own).
@@ -71,7 +73,9 @@ impl TryFrom<u8> for GroupMotion {
 }
 
 /// Why a group's motion ended before its end. Travels as `u8` in [`GroupState::abort`].
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 #[repr(u8)]
 pub enum GroupAbort {
     /// Not aborted.
@@ -150,7 +154,9 @@ impl TryFrom<u8> for GroupAbort {
 }
 
 /// Where a group's setpoint stream is. Travels as `u8` in [`GroupState::stream`].
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 #[repr(u8)]
 pub enum StreamState {
     /// No stream.
@@ -191,7 +197,9 @@ impl TryFrom<u8> for StreamState {
 
 /// What a group's streamed setpoints are. Travels as `u32` in [`Setpoint::mode`], as
 /// `values[0]` of a `Stream` command, and as `u8` in [`GroupState::stream_mode`].
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 #[repr(u32)]
 pub enum StreamMode {
     /// No stream.
@@ -232,7 +240,9 @@ impl TryFrom<u32> for StreamMode {
 }
 
 /// Bits of [`GroupState::stream_flags`]: what happened to the stream in this tick.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 pub struct StreamFlags(pub u8);
 
 impl StreamFlags {
@@ -325,7 +335,9 @@ impl Default for Setpoint {
 
 /// What a [`GroupPath`] holds. Travels as `u32` in [`GroupPath::kind`] and as `u8` in
 /// [`GroupState::kind`].
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 #[repr(u32)]
 pub enum PathKind {
     /// Nothing (a group that never moved).

@@ -14,7 +14,9 @@ use crate::{
 
 /// What an e-stop (and a fault) does to an axis: IEC 60204-1 stop categories. Travels as
 /// `u32` in [`AxisInfo::estop`].
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 #[repr(u32)]
 pub enum EstopCategory {
     /// Category 2: decelerate and hold, energised.
@@ -56,7 +58,9 @@ impl TryFrom<u32> for EstopCategory {
 pub use motion_base::Model as DeviceModel;
 
 /// Bit set of the [`CommandKind`]s an axis accepts: bit `kind as u32` is set.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 pub struct Capabilities(pub u32);
 
 impl Capabilities {

@@ -1,8 +1,8 @@
 //! Serde for [`Path`] (the engine's state snapshot, docs/ARCHITECTURE.md "The black box"):
-//! its sizes and, of both segment sets, the segments in use — `count` of them, not the
-//! buffers sized for the longest trajectory. The planning scratch (the spline's solve, the
-//! checker's bounds) is written and read within one plan, so it is not state: a path read
-//! back gets fresh scratch. Serializing allocates nothing (the snapshot is taken in the
+//! its sizes and the segments in use of the active set — `count` of them, not the buffers
+//! sized for the longest trajectory. The planning scratch (the draft set, cleared before
+//! every plan; the spline's solve; the checker's bounds) is written and read within one
+//! plan, so it is not state: a path read back gets fresh scratch. Serializing allocates nothing (the snapshot is taken in the
 //! tick); reading checks every size against the others, so a damaged snapshot is refused,
 //! never a panic.
 
@@ -95,7 +95,6 @@ struct PathOut<'a> {
     axes: usize,
     max_points: usize,
     active: SegmentsOut<'a>,
-    draft: SegmentsOut<'a>,
 }
 
 #[derive(Deserialize)]
@@ -103,7 +102,29 @@ struct PathIn {
     axes: usize,
     max_points: usize,
     active: SegmentsIn,
-    draft: SegmentsIn,
+}
+
+/// [`Path::serialized_bound`] of a path of `axes` axes and `max_points` points.
+pub(crate) fn serialized_bound_of(axes: usize, max_points: usize) -> usize {
+    let capacity = 2 * max_points + 3;
+    // varints of usize: 10 bytes; f64: 8; a slice: its length's varint and its items.
+    let slice = |items: usize, item: usize| 10 + items * item;
+    4 * 10
+        + slice(capacity * axes, 6 * 8)
+        + 2 * slice(capacity, 8)
+        + slice(capacity, 10)
+        + slice(axes, 8)
+        + 2 * 8
+        + 10
+        + 1
+}
+
+impl Path {
+    /// Bytes this path takes serialized at the most (its longest trajectory planned): what
+    /// a snapshot buffer must hold for it.
+    pub fn serialized_bound(&self) -> usize {
+        serialized_bound_of(self.axes, self.max_points)
+    }
 }
 
 impl Serialize for Path {
@@ -112,7 +133,6 @@ impl Serialize for Path {
             axes: self.axes,
             max_points: self.max_points,
             active: SegmentsOut::of(&self.active),
-            draft: SegmentsOut::of(&self.draft),
         }
         .serialize(serializer)
     }
@@ -130,9 +150,6 @@ impl<'de> Deserialize<'de> for Path {
         let mut path = Path::new(wire.axes, wire.max_points);
         wire.active
             .restore(&mut path.active)
-            .map_err(D::Error::custom)?;
-        wire.draft
-            .restore(&mut path.draft)
             .map_err(D::Error::custom)?;
         Ok(path)
     }
@@ -171,6 +188,40 @@ mod tests {
             back.sample(t, pb, vb, ab);
             assert_eq!(a, b, "at {t}");
         }
+    }
+
+    #[test]
+    fn the_bound_holds_the_longest_trajectory() {
+        let (axes, points) = (2, 40);
+        let mut path = Path::new(axes, points);
+        let times: Vec<f64> = (1..=points).map(|i| i as f64 * 0.5).collect();
+        let positions: Vec<f64> = (0..points * axes)
+            .map(|i| ((i * 7919) % 5) as f64 - 2.0)
+            .collect();
+        let zeros = vec![0.0; points * axes];
+        let trajectory = crate::Points {
+            times: &times,
+            positions: &positions,
+            velocities: Some(&zeros),
+            accelerations: Some(&zeros),
+            stride: axes,
+        };
+        let tolerances = crate::Tolerances {
+            start: &[1e-6; 2],
+            path: &[0.0; 2],
+        };
+        path.plan_points(
+            &[0.0; 2],
+            &[0.0; 2],
+            &[0.0; 2],
+            &trajectory,
+            &limits(),
+            &tolerances,
+        )
+        .expect("plans");
+        let len = postcard::to_allocvec(&path).expect("serializes").len();
+        assert!(len > 1000, "{len} bytes: the trajectory is planned");
+        assert!(len <= path.serialized_bound(), "{len} bytes");
     }
 
     #[test]

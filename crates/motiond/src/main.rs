@@ -122,6 +122,14 @@ fn replay(file: &std::path::Path, config: Option<&std::path::Path>) -> ExitCode 
         }
     };
     match motiond::blackbox::replay(&config, &recording) {
+        Ok(done) if done.first > 0 => {
+            println!(
+                "replayed {} ticks from the state snapshot at tick {} (the ring had wrapped): \
+                 frames identical",
+                done.ticks, done.first
+            );
+            ExitCode::SUCCESS
+        }
         Ok(done) => {
             println!("replayed {} ticks: frames identical", done.ticks);
             ExitCode::SUCCESS

@@ -2,7 +2,8 @@
 //! QSB-M on a pty driven through a move, a jog, an e-stop and a following-error fault; the
 //! e-stop and the fault each save the ring, SIGUSR2 saves the whole run; `motiond --replay`
 //! gives every frame again, and one byte changed in what the board said is found at the
-//! tick it was said.
+//! tick it was said. And the default simulated robot with a ring of 2 s that wraps: its
+//! save replays from the state snapshot in it.
 
 mod support;
 
@@ -227,24 +228,137 @@ following_error = 1.0
     let _ = std::fs::remove_dir_all(&dir);
 }
 
-/// Writes `recording` as a black box file with the same config.
+/// The simulated robot (`config/sim.toml`, all four boards) with a 2 s ring, moving for
+/// 4 s: SIGUSR2 saves a ring that wrapped, and `motiond --replay` starts from the snapshot
+/// of the engine's state in it (one every 0.5 s) and gives every later frame, byte and
+/// reply again; one byte changed after the snapshot is found.
+#[test]
+fn a_ring_that_wrapped_replays_from_its_state_snapshot() {
+    let name = unique_name("wrapped");
+    let dir = std::env::temp_dir().join(format!("{name}-blackbox"));
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../config/sim.toml");
+    let robot = std::fs::read_to_string(&path).expect("config/sim.toml");
+    let text = robot.replacen(
+        "[server]\nname = \"demo\"",
+        &format!(
+            "[server]\nname = \"{name}\"\nblackbox_seconds = 2\nblackbox_dir = \"{}\"",
+            dir.display()
+        ),
+        1,
+    );
+    assert_ne!(
+        text, robot,
+        "config/sim.toml starts with [server] name = \"demo\""
+    );
+    let config_path = write_config(&name, &text);
+    let config = motiond::config::ServerConfig::load(&config_path).expect("valid");
+    let axes = config.axes.len();
+    let mut server = Server::start(&config_path);
+    let mut client = RawClient::connect(&name, Duration::from_secs(10));
+    let (frame, ready) = client.wait_frame(Duration::from_secs(15), |f| {
+        f.axes()[..axes]
+            .iter()
+            .all(|a| a.device_state() == Ok(motion_ipc::DeviceState::Online))
+    });
+    assert!(ready, "every board online: {:?}", frame.axes());
+    // Every axis that can, on its way to the middle of its range; then 4 s of it.
+    let mut moving = 0;
+    for (index, axis) in config.axes.iter().enumerate() {
+        let target = (axis.min + axis.max) / 2.0;
+        let reply = client.command(index as u32, CommandKind::RampPosition, [target, 0.0, 0.0]);
+        moving += usize::from(reply.result().is_ok());
+    }
+    assert!(moving >= 4, "{moving} axes took a move");
+    std::thread::sleep(Duration::from_secs(4));
+    nix::sys::signal::kill(
+        nix::unistd::Pid::from_raw(server.pid() as i32),
+        Signal::SIGUSR2,
+    )
+    .expect("SIGUSR2");
+    let saved = saved_path(&mut server, "sigusr2");
+    assert_eq!(
+        server.signal_and_wait(Signal::SIGTERM, Duration::from_secs(10)),
+        Some(0)
+    );
+
+    let recording = motiond::blackbox::read(&saved).expect("the file reads back");
+    assert!(recording.dropped() > 0, "the ring wrapped");
+    let (status, text) = replay(&saved);
+    assert_eq!(status, Some(0), "{text}");
+    assert!(
+        text.contains("from the state snapshot at tick") && text.contains("frames identical"),
+        "{text}"
+    );
+
+    // A reply byte changed after the first snapshot is found where it was said.
+    let first_snapshot = recording
+        .ticks
+        .iter()
+        .position(|ticks| {
+            motiond::blackbox::record::records(ticks)
+                .filter_map(Result::ok)
+                .any(|record| record.kind == Kind::Snapshot)
+        })
+        .expect("a snapshot in the ring");
+    let (index, at) = recording.ticks[first_snapshot + 100..]
+        .iter()
+        .enumerate()
+        .find_map(|(i, ticks)| {
+            motiond::blackbox::record::records(ticks)
+                .filter_map(Result::ok)
+                .find(|record| record.kind == Kind::LinkRx && record.payload.len() > 12)
+                .map(|record| {
+                    let offset = record.payload.as_ptr() as usize - ticks.as_ptr() as usize;
+                    (
+                        first_snapshot + 100 + i,
+                        offset + 8 + (record.payload.len() - 8) / 2,
+                    )
+                })
+        })
+        .expect("a reply after the snapshot");
+    let mut changed = recording.clone();
+    changed.ticks[index][at] ^= 0x5a;
+    let copy = dir.join("changed.mcap");
+    write_recording_of(&changed, &copy, &config);
+    let (status, text) = replay(&copy);
+    assert_eq!(status, Some(1), "{text}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Writes `recording` as a black box file with the same config (one link, `usb`).
 fn write_recording(recording: &Recording, path: &Path) {
+    write_recording_with(recording, path, vec!["usb".into()]);
+}
+
+/// Writes `recording` as a black box file with the same config as `config`'s links.
+fn write_recording_of(recording: &Recording, path: &Path, config: &motiond::config::ServerConfig) {
+    let links = config.links.iter().map(|link| link.name.clone()).collect();
+    write_recording_with(recording, path, links);
+}
+
+fn write_recording_with(recording: &Recording, path: &Path, link_names: Vec<String>) {
     let file = BlackboxFile {
         server_name: recording.metadata["server"].clone(),
         tick_hz: 1000,
         config_path: recording.metadata["config_path"].clone().into(),
         config_text: recording.config_text().to_owned(),
-        link_names: vec!["usb".into()],
+        link_names,
     };
+    let first = recording.dropped();
     let ticks = motiond::blackbox::file::Ticks {
         head: &recording.head,
         ticks: recording
             .ticks
             .iter()
             .enumerate()
-            .map(|(n, bytes)| (n as u64, std::borrow::Cow::Borrowed(bytes.as_slice())))
+            .map(|(n, bytes)| {
+                (
+                    first + n as u64,
+                    std::borrow::Cow::Borrowed(bytes.as_slice()),
+                )
+            })
             .collect(),
-        dropped: 0,
+        dropped: first,
     };
     file.write(path, &ticks, "test").expect("written");
 }

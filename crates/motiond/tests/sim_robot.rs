@@ -12,8 +12,8 @@ use motion_ipc::{
 };
 use motion_link::Link;
 use motion_testkit::counting_alloc::{CountingAllocator, allocations, counting};
-use motiond::blackbox::{Journal, Recording, ReplayError, Ring, replay};
 use motiond::blackbox::record::Kind;
+use motiond::blackbox::{Journal, Recording, ReplayError, Ring, replay};
 use motiond::config::ServerConfig;
 
 #[global_allocator]
@@ -552,6 +552,7 @@ fn the_gantry_follows_a_trajectory_on_three_boards() {
     let mut robot = robot_at_rest();
     let path = gantry_trajectory(&robot, 9);
     let group = path.group as usize;
+    let started = robot.ring.len();
     start_path(&mut robot, path);
     let (state, worst) = watch_group(&mut robot, group, &GANTRY, 13_000, |_, _| {});
     eprintln!(
@@ -564,6 +565,19 @@ fn the_gantry_follows_a_trajectory_on_three_boards() {
         assert_eq!(a.mode(), Ok(motion_ipc::AxisMode::Hold), "{a:?}");
         assert_eq!(a.fault, 0, "{a:?}");
     }
+
+    // The black box of a ring that wrapped 2.5 s into the trajectory replays from the
+    // snapshot taken mid-trajectory (the path's segments, the group's history, the
+    // drivers' queues in it), every later snapshot equal to the replayed state.
+    let recording = Recording::of(&robot.ring.ticks());
+    let wrapped = dropped(&recording, started + 2500);
+    let replayed = replay(&robot.config, &wrapped).expect("the same frames from mid-trajectory");
+    let first_snapshot = (started as u64 + 2500).div_ceil(SNAPSHOT_EVERY) * SNAPSHOT_EVERY;
+    assert_eq!(replayed.first, first_snapshot);
+    assert_eq!(
+        replayed.ticks,
+        recording.ticks.len() as u64 - first_snapshot
+    );
 }
 
 /// The gantry's line of the README (x +200 mm, feeder +100 mm, lift +150 mm: the lift's
@@ -836,7 +850,10 @@ fn the_journal_holds_a_snapshot_every_thousand_ticks() {
         .enumerate()
         .filter_map(|(i, ticks)| first_of(ticks, Kind::Snapshot).map(|(_, len)| (i, len)))
         .map(|(i, len)| {
-            assert!(len > 1000 && len < (1 << 20) / 4, "a snapshot of {len} bytes");
+            assert!(
+                len > 1000 && len < (1 << 20) / 4,
+                "a snapshot of {len} bytes"
+            );
             i
         })
         .collect();

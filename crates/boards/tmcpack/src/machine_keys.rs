@@ -49,7 +49,9 @@ pub struct TmcpackDeviceKeys {
 }
 
 /// `power_down` (manual 8.6 `$45`): what the driver asks of the pack's power-down mode.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 pub enum PowerDownMode {
     /// No `$45` at all (the default): the pack's own setting, off after a reset.
     #[default]
@@ -65,7 +67,9 @@ pub enum PowerDownMode {
 }
 
 /// `position_mode`: how a `position` goal (the board's own controller) is run.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 pub enum PositionMode {
     /// `$14`, `$26`, `$23`: the trapezoidal ramp at the axis limits (the default).
     #[default]

@@ -30,7 +30,9 @@ pub enum HomeInputKind {
 }
 
 /// Which way a reference search runs, in axis units (after `counts_per_unit`'s sign).
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 pub enum Direction {
     /// Towards decreasing positions (the default: the switch sits at `min`).
     #[default]

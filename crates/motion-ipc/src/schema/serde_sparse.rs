@@ -180,8 +180,7 @@ mod tests {
         let mut buf = vec![0u8; 256];
         let len = postcard::to_slice(&*path, &mut buf).expect("fits").len();
         assert!(len < 40, "{len} bytes for two numbers");
-        let back: Box<GroupPath> =
-            Box::new(postcard::from_bytes(&buf[..len]).expect("decodes"));
+        let back: Box<GroupPath> = Box::new(postcard::from_bytes(&buf[..len]).expect("decodes"));
         assert_eq!(back.point_count, 2);
         assert_eq!(back.positions[3], -1.5);
         assert_eq!(back.positions[2], 0.0);

@@ -5,6 +5,8 @@
 
 use core::time::Duration;
 
+use motion_drivers::Driver;
+use motion_engine::Engine;
 use motion_ipc::schema::Fields;
 use motion_ipc::{ClientId, CommandReply, CommandRequest, GroupPath, MotionFrame, Setpoint};
 use rtrb::Producer;
@@ -67,16 +69,20 @@ impl Journal {
         }
     }
 
-    /// Sizes the snapshot buffer from `state` as it is at start-up (twice its size and
-    /// 64 KiB more: names, queues and paths are allocated at start, so the state's size
-    /// varies only with the numbers' varint lengths and the paths held). Start-up only:
-    /// it allocates.
-    pub fn prepare_snapshots<T: Serialize>(&mut self, state: &T) {
+    /// Sizes the snapshot buffer for `engine`: its state as it is at start-up, twice (the
+    /// numbers' varints and the drivers' queues vary), the most its paths may grow by
+    /// ([`Engine::snapshot_growth`]), and 64 KiB. Start-up only: it allocates.
+    pub fn prepare_snapshots<D: Driver + Serialize>(&mut self, engine: &Engine<D>) {
         if self.queue.is_none() || self.snapshot_every == 0 {
             return;
         }
-        let len = postcard::to_allocvec(state).map_or(0, |bytes| bytes.len());
-        self.snapshot_buf = vec![0u8; 2 * len + (64 << 10)];
+        let len = postcard::to_allocvec(engine).map_or(0, |bytes| bytes.len());
+        self.snapshot_buf = vec![0u8; 2 * len + engine.snapshot_growth() + (64 << 10)];
+    }
+
+    /// Bytes of the snapshot buffer.
+    pub fn snapshot_capacity(&self) -> usize {
+        self.snapshot_buf.len()
     }
 
     /// Whether the tick just begun journals a snapshot (every `snapshot_every` ticks,

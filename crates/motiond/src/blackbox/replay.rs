@@ -246,7 +246,10 @@ fn replay_here(config: &ServerConfig, recording: &Recording) -> Result<Replayed,
             .and_then(Result::ok)
             .map_or(0, |record| record.u64_at(8))
     };
-    let first = recording.ticks.first().map_or(0, |bytes| tick_number(bytes));
+    let first = recording
+        .ticks
+        .first()
+        .map_or(0, |bytes| tick_number(bytes));
     let from_start = first == 0 && recording.dropped() == 0;
     let drivers = crate::boards::build(config).map_err(|e| ReplayError::Build(e.to_string()))?;
     let mut engine: Engine<AnyDriver> = Engine::new(config.engine_config(), drivers)
@@ -275,7 +278,10 @@ fn replay_here(config: &ServerConfig, recording: &Recording) -> Result<Replayed,
             })
             .ok_or(ReplayError::NotFromStart { first })?
     };
-    let first = recording.ticks.get(begin).map_or(first, |bytes| tick_number(bytes));
+    let first = recording
+        .ticks
+        .get(begin)
+        .map_or(first, |bytes| tick_number(bytes));
     // Until the snapshot is restored (a replay from the start has nothing to restore).
     let mut restoring = !from_start;
     let mut frame = Box::new(MotionFrame::EMPTY);
@@ -310,12 +316,11 @@ fn replay_here(config: &ServerConfig, recording: &Recording) -> Result<Replayed,
                 Kind::Snapshot => {
                     // Replayed from an earlier point: the replayed state must be the
                     // recorded one, number for number.
-                    let replayed = postcard::to_allocvec(&engine).map_err(|error| {
-                        ReplayError::Snapshot {
+                    let replayed =
+                        postcard::to_allocvec(&engine).map_err(|error| ReplayError::Snapshot {
                             tick: engine.tick(),
                             reason: error.to_string(),
-                        }
-                    })?;
+                        })?;
                     if replayed != record.payload {
                         return Err(diverged(engine.tick(), Divergence::State));
                     }

@@ -10,7 +10,9 @@ use crate::frame::{MAX_PACKET_LEN, MIN_PACKET_LEN, PacketBuf, PacketId, STX, che
 const CAPACITY: usize = 2 * MAX_PACKET_LEN;
 
 /// Counters of what the decoder has seen.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 pub struct DecoderStats {
     /// Valid packets returned.
     pub packets: u64,

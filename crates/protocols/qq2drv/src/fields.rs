@@ -7,7 +7,9 @@ use crate::wire::{Reader, Writer};
 pub const CHANNELS: usize = 4;
 
 /// Channel Mask: bit 0 = channel 1 … bit 3 = channel 4; bits 7..4 unused (kept as sent).
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 pub struct ChannelMask(pub u8);
 
 impl ChannelMask {
@@ -35,7 +37,9 @@ impl ChannelMask {
 }
 
 /// Position Size (packets 6, 10, 11): how many bits represent a position value.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 #[repr(u8)]
 pub enum PositionSize {
     /// 0x00: position omitted.
@@ -219,7 +223,9 @@ impl Default for DataMask {
 }
 
 /// Stream Config Mask (packet 8): bit 0 Stream Period Timing, bit 1 Stream Periods Elapsed.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 pub struct StreamConfig(pub u8);
 
 impl StreamConfig {
@@ -252,7 +258,9 @@ impl StreamConfig {
 }
 
 /// Channel Status byte (packet 2).
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 pub struct Status(pub u8);
 
 impl Status {
@@ -296,7 +304,9 @@ impl Status {
 }
 
 /// Input Mode (packet 14, bits 1..0 of Input Configuration).
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 #[repr(u8)]
 pub enum InputMode {
     /// 0x00: signal on input has no effect.
@@ -326,7 +336,9 @@ pub enum EdgeAction {
 }
 
 /// Input Configuration (packet 14): bits 5..4 Edge, 3 Polarity, 2 Reserved, 1..0 Mode.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 pub struct InputConfig(pub u8);
 
 impl InputConfig {
@@ -365,7 +377,9 @@ impl InputConfig {
 }
 
 /// Control Mode (packet 16).
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 #[repr(u8)]
 pub enum ControlMode {
     /// 0x00: motor output zero / off.

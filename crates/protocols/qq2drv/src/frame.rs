@@ -23,7 +23,9 @@ pub fn checksum(bytes: &[u8]) -> u8 {
 }
 
 /// Every Packet ID the datasheet documents (interface protocol v1).
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord,
+)]
 #[repr(u8)]
 pub enum PacketId {
     /// 1 - Get Version.

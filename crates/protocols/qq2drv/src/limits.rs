@@ -73,7 +73,9 @@ pub fn duration_to_stream_units(d: core::time::Duration) -> u16 {
 /// negative value with an error, clamp it, or run forward at full speed: nothing on the
 /// wire tells the readings apart safely, so it is a per-device setting (`velocity_ramp`,
 /// docs/keys/qq2drv.md).
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 pub enum VelocityRampSign {
     /// A signed velocity, negative for reverse (the field's I32, packet 22's range). The
     /// default.

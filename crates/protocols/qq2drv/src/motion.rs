@@ -12,7 +12,9 @@ use crate::fields::{
 use crate::wire::{Reader, Writer};
 
 /// The configuration that decides the layout of packets 2 and 3.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 pub struct MotionLayout {
     /// Data Mask of channels 1..4 (packet 6/7).
     pub data_masks: [DataMask; CHANNELS],

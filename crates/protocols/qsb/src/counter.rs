@@ -4,7 +4,9 @@
 use crate::Error;
 
 /// MDR0 B1 B0: count mode.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 pub enum CountMode {
     /// 00: non-quadrature (A = clock, B = direction).
     NonQuadrature,
@@ -18,7 +20,9 @@ pub enum CountMode {
 }
 
 /// MDR0 B3 B2: count cycle.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 pub enum CycleMode {
     /// 00: free-running 32-bit counter.
     #[default]
@@ -32,7 +36,9 @@ pub enum CycleMode {
 }
 
 /// MDR0 B5 B4: what the index input does.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 pub enum IndexMode {
     /// 00: index disabled.
     #[default]
@@ -46,7 +52,9 @@ pub enum IndexMode {
 }
 
 /// MDR0 register (03).
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 pub struct Mdr0 {
     /// B1 B0.
     pub count: CountMode,
@@ -128,7 +136,9 @@ impl Mdr0 {
 }
 
 /// MDR1 register (04), appended to MDR0. B1 B0 are reserved and always 00.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 pub struct Mdr1 {
     /// B2: counting disabled.
     pub disable_counting: bool,

@@ -44,7 +44,9 @@ impl CommandType {
 }
 
 /// The three products of the QSB line (VERSION register product type code).
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 pub enum ProductType {
     /// QSB-D: one differential encoder input, 1-bit digital I/O.
     D,

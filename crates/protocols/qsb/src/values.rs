@@ -21,7 +21,9 @@ pub const PROCESSING_DELAY: Duration = Duration::from_micros(100);
 pub const ANALOG_PROCESSING_DELAY: Duration = Duration::from_micros(200);
 
 /// Encoder input type, MODE bits B1 B0.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 pub enum EncoderMode {
     /// 00: quadrature (or step/direction, see MDR0) counting.
     #[default]
@@ -33,7 +35,9 @@ pub enum EncoderMode {
 }
 
 /// MODE register (00).
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 pub struct Mode {
     /// B1 B0: encoder type.
     pub encoder: EncoderMode,
@@ -76,7 +80,9 @@ impl Mode {
 
 /// DIG I/O register (01): bit n is I/O bit n; written 1 = open-drain output released high
 /// (internal pull-up), 0 = driven low; read = level measured at the pins.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 pub struct DigIo(pub u8);
 
 impl DigIo {
@@ -101,7 +107,9 @@ impl DigIo {
 }
 
 /// DIG I/O CONFIG register (02). Each nibble holds one bit per I/O bit 3–0.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 pub struct DigIoConfig {
     /// B3–B0 interrupt polarity: 1 = high-to-low edge, 0 = low-to-high edge.
     pub falling_edge: u8,

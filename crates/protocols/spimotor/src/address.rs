@@ -24,7 +24,9 @@ impl Access {
 
 /// A board's SPI address: "7 bits wide", stored here as the even byte the board answers to
 /// (`0x90` answers to `0x90` for writes and `0x91` for reads).
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord,
+)]
 pub struct Address(u8);
 
 impl Address {

@@ -71,7 +71,9 @@ impl Coils {
 
 /// Port 0x43: time between two steps, one byte in tenths of a millisecond both ways
 /// (docs/ARCHITECTURE.md: the read table's "microsecond" is a slip). Default 200 = 20 ms.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord,
+)]
 pub struct StepDelay(u8);
 
 impl StepDelay {

@@ -28,7 +28,9 @@ pub const AMAX_DIVISOR: u32 = 64;
 /// two readings ("SIXpack / QUADpack manual" V2.43, docs/ARCHITECTURE.md); nothing on the
 /// wire tells them apart before a ramp runs, so it is a per-device setting
 /// (`amax_divisor`, docs/keys/tmcpack.md).
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 pub enum AmaxDivisor {
     /// amax / 64 per tick: 8.3 `$14`, "1/64 amax is accumulated with 500Hz during
     /// acceleration to vact", with "0 < amax <= vstart * 64". The default.
@@ -312,7 +314,9 @@ pub const fn units_of_ms(ms: u32) -> Option<u32> {
 }
 
 /// The board variant: SIXpack drives six motors of up to 0.8 A, QUADpack four of 1.5 A.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 pub enum Variant {
     /// SIXpack, 6 channels, 800 mA peak.
     #[default]

@@ -5,7 +5,9 @@ use core::time::Duration;
 use spimotor::{Address, Coils};
 
 /// What is connected to the board's two H-bridges (config `drive = "stepper" | "brushed"`).
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 pub enum SpimotorDrive {
     /// One stepper motor: channel 0 (ports 0x10, 0x40–0x44).
     #[default]

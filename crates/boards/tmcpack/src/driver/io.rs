@@ -219,7 +219,9 @@ fn source(variant: Variant, pin: Pin) -> Option<Source> {
 }
 
 /// A set of pins of one variant's table.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+#[derive(
+    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+)]
 pub struct PinSet(u32);
 
 impl PinSet {
