@@ -217,6 +217,13 @@ fn readable(record: &Record<'_>, links: &[String], tick: u64) -> Option<(usize, 
         ),
         Kind::OverrunFault => (3, format!(r#"{{"tick":{tick},"event":"overrun fault"}}"#)),
         Kind::Shutdown => (3, format!(r#"{{"tick":{tick},"event":"shutdown"}}"#)),
+        Kind::Snapshot => (
+            3,
+            format!(
+                r#"{{"tick":{tick},"event":"state snapshot","bytes":{}}}"#,
+                record.payload.len()
+            ),
+        ),
         _ => return None,
     })
 }
