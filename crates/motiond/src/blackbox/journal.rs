@@ -91,7 +91,7 @@ impl Journal {
         self.snapshot_every > 0
             && !self.snapshot_buf.is_empty()
             && self.ticks > 1
-            && (self.ticks - 1) % self.snapshot_every == 0
+            && (self.ticks - 1).is_multiple_of(self.snapshot_every)
     }
 
     /// Journals `state` (the engine, drivers included) as it is between two ticks: the
