@@ -174,16 +174,25 @@ mod tests {
 
     #[test]
     fn a_large_path_takes_the_numbers_it_uses() {
-        let mut path = Box::new(GroupPath::EMPTY);
-        path.point_count = 2;
-        path.positions[3] = -1.5;
-        let mut buf = vec![0u8; 256];
-        let len = postcard::to_slice(&*path, &mut buf).expect("fits").len();
-        assert!(len < 40, "{len} bytes for two numbers");
-        let back: Box<GroupPath> = Box::new(postcard::from_bytes(&buf[..len]).expect("decodes"));
-        assert_eq!(back.point_count, 2);
-        assert_eq!(back.positions[3], -1.5);
-        assert_eq!(back.positions[2], 0.0);
-        assert_eq!(back.schema_version, path.schema_version);
+        // A path (392 KiB) is built by value: a thread with room for it.
+        std::thread::Builder::new()
+            .stack_size(64 << 20)
+            .spawn(|| {
+                let mut path = Box::new(GroupPath::EMPTY);
+                path.point_count = 2;
+                path.positions[3] = -1.5;
+                let mut buf = vec![0u8; 256];
+                let len = postcard::to_slice(&*path, &mut buf).expect("fits").len();
+                assert!(len < 40, "{len} bytes for three numbers");
+                let back: Box<GroupPath> =
+                    Box::new(postcard::from_bytes(&buf[..len]).expect("decodes"));
+                assert_eq!(back.point_count, 2);
+                assert_eq!(back.positions[3], -1.5);
+                assert_eq!(back.positions[2], 0.0);
+                assert_eq!(back.schema_version, path.schema_version);
+            })
+            .expect("a thread")
+            .join()
+            .expect("the checks pass");
     }
 }
