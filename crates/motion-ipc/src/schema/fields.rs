@@ -100,6 +100,66 @@ impl<T: Fields, const N: usize> Fields for [T; N] {
     }
 }
 
+/// A sink handing each number to a closure as `(offset, bits)`.
+struct EachNumber<F>(F);
+
+impl<F: FnMut(usize, u64)> ScalarSink for EachNumber<F> {
+    fn u8(&mut self, at: usize, value: u8) {
+        (self.0)(at, u64::from(value));
+    }
+    fn u16(&mut self, at: usize, value: u16) {
+        (self.0)(at, u64::from(value));
+    }
+    fn u32(&mut self, at: usize, value: u32) {
+        (self.0)(at, u64::from(value));
+    }
+    fn u64(&mut self, at: usize, value: u64) {
+        (self.0)(at, value);
+    }
+    fn i64(&mut self, at: usize, value: i64) {
+        (self.0)(at, value as u64);
+    }
+    fn f64(&mut self, at: usize, value: f64) {
+        (self.0)(at, value.to_bits());
+    }
+}
+
+/// A source asking a closure for each number's bits at its offset.
+struct FromNumbers<F>(F);
+
+impl<F: FnMut(usize) -> u64> ScalarSource for FromNumbers<F> {
+    fn u8(&mut self, at: usize) -> u8 {
+        (self.0)(at) as u8
+    }
+    fn u16(&mut self, at: usize) -> u16 {
+        (self.0)(at) as u16
+    }
+    fn u32(&mut self, at: usize) -> u32 {
+        (self.0)(at) as u32
+    }
+    fn u64(&mut self, at: usize) -> u64 {
+        (self.0)(at)
+    }
+    fn i64(&mut self, at: usize) -> i64 {
+        (self.0)(at) as i64
+    }
+    fn f64(&mut self, at: usize) -> f64 {
+        f64::from_bits((self.0)(at))
+    }
+}
+
+/// Hands every number of `value` to `number` as `(offset, bits)`, in memory order: the bits
+/// widened to 64 (an `f64`'s exact bits: -0.0 and NaN payloads are kept). Allocates nothing.
+pub fn each_number<T: Fields>(value: &T, number: impl FnMut(usize, u64)) {
+    value.put(&mut EachNumber(number), 0);
+}
+
+/// Builds a `T` number by number, in memory order, from the bits `bits(offset)` gives (the
+/// inverse of [`each_number`]).
+pub fn from_numbers<T: Fields>(bits: impl FnMut(usize) -> u64) -> T {
+    T::get(&mut FromNumbers(bits), 0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -42,7 +42,7 @@ pub mod serde_sparse;
 pub use c_header::{c_enum_value, c_struct};
 pub use contract::contract;
 pub use docs::snake;
-pub use fields::{Fields, ScalarSink, ScalarSource};
+pub use fields::{Fields, ScalarSink, ScalarSource, each_number, from_numbers};
 
 /// A number type a payload field holds (the contract uses no others).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

@@ -9,90 +9,25 @@ use serde::de::{SeqAccess, Visitor};
 use serde::ser::SerializeSeq;
 use serde::{Deserializer, Serializer};
 
-use super::{Fields, ScalarSink, ScalarSource};
-
-/// Counts the numbers that are not all-zero bits.
-struct Count(usize);
-
-impl Count {
-    fn bits(&mut self, bits: u64) {
-        if bits != 0 {
-            self.0 += 1;
-        }
-    }
-}
-
-impl ScalarSink for Count {
-    fn u8(&mut self, _: usize, value: u8) {
-        self.bits(u64::from(value));
-    }
-    fn u16(&mut self, _: usize, value: u16) {
-        self.bits(u64::from(value));
-    }
-    fn u32(&mut self, _: usize, value: u32) {
-        self.bits(u64::from(value));
-    }
-    fn u64(&mut self, _: usize, value: u64) {
-        self.bits(value);
-    }
-    fn i64(&mut self, _: usize, value: i64) {
-        self.bits(value as u64);
-    }
-    fn f64(&mut self, _: usize, value: f64) {
-        self.bits(value.to_bits());
-    }
-}
-
-/// Emits the pairs into a serde sequence; the first error is kept.
-struct Emit<S: SerializeSeq> {
-    seq: S,
-    error: Option<S::Error>,
-}
-
-impl<S: SerializeSeq> Emit<S> {
-    fn bits(&mut self, at: usize, bits: u64) {
-        if bits != 0 && self.error.is_none() {
-            let at = u32::try_from(at).unwrap_or(u32::MAX);
-            if let Err(error) = self.seq.serialize_element(&(at, bits)) {
-                self.error = Some(error);
-            }
-        }
-    }
-}
-
-impl<S: SerializeSeq> ScalarSink for Emit<S> {
-    fn u8(&mut self, at: usize, value: u8) {
-        self.bits(at, u64::from(value));
-    }
-    fn u16(&mut self, at: usize, value: u16) {
-        self.bits(at, u64::from(value));
-    }
-    fn u32(&mut self, at: usize, value: u32) {
-        self.bits(at, u64::from(value));
-    }
-    fn u64(&mut self, at: usize, value: u64) {
-        self.bits(at, value);
-    }
-    fn i64(&mut self, at: usize, value: i64) {
-        self.bits(at, value as u64);
-    }
-    fn f64(&mut self, at: usize, value: f64) {
-        self.bits(at, value.to_bits());
-    }
-}
+use super::{Fields, each_number, from_numbers};
 
 /// Serializes `value` sparse (two walks: the count, then the pairs; no allocation).
 pub fn serialize<T: Fields, S: Serializer>(value: &T, serializer: S) -> Result<S::Ok, S::Error> {
-    let mut count = Count(0);
-    value.put(&mut count, 0);
-    let mut emit = Emit {
-        seq: serializer.serialize_seq(Some(count.0))?,
-        error: None,
-    };
-    value.put(&mut emit, 0);
-    match emit.error {
+    let mut count = 0;
+    each_number(value, |_, bits| count += usize::from(bits != 0));
+    let mut seq = serializer.serialize_seq(Some(count))?;
+    let mut error = None;
+    each_number(value, |at, bits| {
+        if bits != 0 && error.is_none() {
+            let at = u32::try_from(at).unwrap_or(u32::MAX);
+            if let Err(e) = seq.serialize_element(&(at, bits)) {
+                error = Some(e);
+            }
+        }
+    });
+    match error {
         Some(error) => Err(error),
-        None => emit.seq.end(),
+        None => seq.end(),
     }
 }
 
@@ -107,27 +42,6 @@ impl Pairs {
         self.0
             .binary_search_by_key(&at, |&(offset, _)| offset)
             .map_or(0, |i| self.0[i].1)
-    }
-}
-
-impl ScalarSource for Pairs {
-    fn u8(&mut self, at: usize) -> u8 {
-        self.bits(at) as u8
-    }
-    fn u16(&mut self, at: usize) -> u16 {
-        self.bits(at) as u16
-    }
-    fn u32(&mut self, at: usize) -> u32 {
-        self.bits(at) as u32
-    }
-    fn u64(&mut self, at: usize) -> u64 {
-        self.bits(at)
-    }
-    fn i64(&mut self, at: usize) -> i64 {
-        self.bits(at) as i64
-    }
-    fn f64(&mut self, at: usize) -> f64 {
-        f64::from_bits(self.bits(at))
     }
 }
 
@@ -153,8 +67,8 @@ impl<'de> Visitor<'de> for PairsVisitor {
 
 /// Deserializes a value written by [`serialize`].
 pub fn deserialize<'de, T: Fields, D: Deserializer<'de>>(deserializer: D) -> Result<T, D::Error> {
-    let mut pairs = deserializer.deserialize_seq(PairsVisitor)?;
-    Ok(T::get(&mut pairs, 0))
+    let pairs = deserializer.deserialize_seq(PairsVisitor)?;
+    Ok(from_numbers(|at| pairs.bits(at)))
 }
 
 #[cfg(test)]

@@ -3,7 +3,7 @@
 //! each group — so that a replay names the first region that differs, not only the tick.
 //! The tick's own stamps (`time_ns`, `publish_ns`, written after the step) are left out.
 
-use motion_ipc::schema::{Fields, ScalarSink};
+use motion_ipc::schema::{Fields, each_number};
 use motion_ipc::{MAX_AXES, MAX_GROUPS, MAX_SIGNALS, MotionFrame};
 
 /// The most regions a frame has.
@@ -56,30 +56,9 @@ impl Fnv {
     }
 }
 
-impl ScalarSink for Fnv {
-    fn u8(&mut self, at: usize, value: u8) {
-        self.number(at, u64::from(value));
-    }
-    fn u16(&mut self, at: usize, value: u16) {
-        self.number(at, u64::from(value));
-    }
-    fn u32(&mut self, at: usize, value: u32) {
-        self.number(at, u64::from(value));
-    }
-    fn u64(&mut self, at: usize, value: u64) {
-        self.number(at, value);
-    }
-    fn i64(&mut self, at: usize, value: i64) {
-        self.number(at, value as u64);
-    }
-    fn f64(&mut self, at: usize, value: f64) {
-        self.number(at, value.to_bits());
-    }
-}
-
 fn hash_of<T: Fields>(value: &T) -> u64 {
     let mut fnv = Fnv(Fnv::START);
-    value.put(&mut fnv, 0);
+    each_number(value, |at, bits| fnv.number(at, bits));
     fnv.0
 }
 

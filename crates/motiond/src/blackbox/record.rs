@@ -11,7 +11,7 @@
 //! here allocates, so the tick can record.
 
 use motion_ipc::ClientId;
-use motion_ipc::schema::{Fields, ScalarSink, ScalarSource};
+use motion_ipc::schema::{Fields, each_number, from_numbers};
 
 /// Bytes of a record's header.
 pub const HEADER_LEN: usize = 6;
@@ -163,123 +163,21 @@ impl<'a> SplitWriter<'a> {
     }
 }
 
-/// Counts the entries a sparse payload takes.
-struct SparseCount(usize);
-
-/// Writes a payload's non-zero numbers as `(offset, bits)` entries.
-struct SparseWrite<'w, 'a>(&'w mut SplitWriter<'a>);
-
-macro_rules! sparse_sinks {
-    ($($ty:ident),*) => {
-        impl ScalarSink for SparseCount {
-            $(fn $ty(&mut self, _at: usize, value: $ty) {
-                if bits_of(value) != 0 {
-                    self.0 += 1;
-                }
-            })*
-        }
-        impl ScalarSink for SparseWrite<'_, '_> {
-            $(fn $ty(&mut self, at: usize, value: $ty) {
-                let bits = bits_of(value);
-                if bits != 0 {
-                    self.0.put(&(at as u32).to_le_bytes());
-                    self.0.put(&bits.to_le_bytes());
-                }
-            })*
-        }
-    };
-}
-
-sparse_sinks!(u8, u16, u32, u64, i64, f64);
-
-/// A number's bits, widened (so that -0.0 and NaN payloads are kept exactly).
-trait Bits {
-    fn bits(self) -> u64;
-}
-macro_rules! bits_unsigned {
-    ($($ty:ty),*) => {$(impl Bits for $ty {
-        fn bits(self) -> u64 {
-            u64::from(self)
-        }
-    })*};
-}
-bits_unsigned!(u8, u16, u32, u64);
-impl Bits for i64 {
-    fn bits(self) -> u64 {
-        self as u64
-    }
-}
-impl Bits for f64 {
-    fn bits(self) -> u64 {
-        self.to_bits()
-    }
-}
-fn bits_of(value: impl Bits) -> u64 {
-    value.bits()
-}
-
 /// Bytes of `value` written sparse.
 pub fn sparse_len<T: Fields>(value: &T) -> usize {
-    let mut count = SparseCount(0);
-    value.put(&mut count, 0);
-    count.0 * 12
+    let mut entries = 0;
+    each_number(value, |_, bits| entries += usize::from(bits != 0));
+    entries * 12
 }
 
-/// Writes `value` sparse.
+/// Writes `value` sparse: an `(offset: u32, bits: u64)` entry for each non-zero number.
 pub fn put_sparse<T: Fields>(writer: &mut SplitWriter<'_>, value: &T) {
-    value.put(&mut SparseWrite(writer), 0);
-}
-
-/// Reads a sparse payload back: every number not listed is zero.
-struct SparseRead<'a> {
-    entries: &'a [u8],
-    malformed: bool,
-}
-
-impl SparseRead<'_> {
-    /// The bits at `at`, taking the entry if it is the next one.
-    fn take(&mut self, at: usize) -> u64 {
-        loop {
-            let Some((head, rest)) = self.entries.split_first_chunk::<12>() else {
-                return 0;
-            };
-            let offset = u32::from_le_bytes([head[0], head[1], head[2], head[3]]) as usize;
-            if offset < at {
-                // Entries are in memory order: one the walk went past is not a field's.
-                self.malformed = true;
-                self.entries = rest;
-                continue;
-            }
-            if offset != at {
-                return 0;
-            }
-            self.entries = rest;
-            let mut bits = [0u8; 8];
-            bits.copy_from_slice(&head[4..12]);
-            return u64::from_le_bytes(bits);
+    each_number(value, |at, bits| {
+        if bits != 0 {
+            writer.put(&(at as u32).to_le_bytes());
+            writer.put(&bits.to_le_bytes());
         }
-    }
-}
-
-impl ScalarSource for SparseRead<'_> {
-    fn u8(&mut self, at: usize) -> u8 {
-        self.take(at) as u8
-    }
-    fn u16(&mut self, at: usize) -> u16 {
-        self.take(at) as u16
-    }
-    fn u32(&mut self, at: usize) -> u32 {
-        self.take(at) as u32
-    }
-    fn u64(&mut self, at: usize) -> u64 {
-        self.take(at)
-    }
-    fn i64(&mut self, at: usize) -> i64 {
-        self.take(at) as i64
-    }
-    fn f64(&mut self, at: usize) -> f64 {
-        f64::from_bits(self.take(at))
-    }
+    });
 }
 
 /// A payload from its sparse bytes; `None` when they are not a sparse payload of `T`
@@ -288,12 +186,31 @@ pub fn get_sparse<T: Fields>(bytes: &[u8]) -> Option<T> {
     if !bytes.len().is_multiple_of(12) {
         return None;
     }
-    let mut source = SparseRead {
-        entries: bytes,
-        malformed: false,
-    };
-    let value = T::get(&mut source, 0);
-    (!source.malformed && source.entries.is_empty()).then_some(value)
+    let mut entries = bytes;
+    let mut malformed = false;
+    // The bits at `at`: the next entry's if it is at `at`, else zero.
+    let value = from_numbers(|at| {
+        loop {
+            let Some((head, rest)) = entries.split_first_chunk::<12>() else {
+                return 0;
+            };
+            let offset = u32::from_le_bytes([head[0], head[1], head[2], head[3]]) as usize;
+            if offset < at {
+                // Entries are in memory order: one the walk went past is not a field's.
+                malformed = true;
+                entries = rest;
+                continue;
+            }
+            if offset != at {
+                return 0;
+            }
+            entries = rest;
+            let mut bits = [0u8; 8];
+            bits.copy_from_slice(&head[4..12]);
+            return u64::from_le_bytes(bits);
+        }
+    });
+    (!malformed && entries.is_empty()).then_some(value)
 }
 
 /// A client id's 16 bytes.
