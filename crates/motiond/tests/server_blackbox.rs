@@ -44,6 +44,21 @@ fn saved_path(server: &mut Server, why: &str) -> PathBuf {
     }
 }
 
+/// SIGUSR2 (save the ring), the file saved, then SIGTERM and a clean exit.
+fn save_and_stop(server: &mut Server) -> PathBuf {
+    nix::sys::signal::kill(
+        nix::unistd::Pid::from_raw(server.pid() as i32),
+        Signal::SIGUSR2,
+    )
+    .expect("SIGUSR2");
+    let saved = saved_path(server, "sigusr2");
+    assert_eq!(
+        server.signal_and_wait(Signal::SIGTERM, Duration::from_secs(10)),
+        Some(0)
+    );
+    saved
+}
+
 fn replay(file: &Path) -> (Option<i32>, String) {
     let output = Command::new(env!("CARGO_BIN_EXE_motiond"))
         .arg("--replay")
@@ -177,16 +192,7 @@ following_error = 1.0
     assert!(faulted, "{:?}", frame.axes()[0]);
     let at_fault = saved_path(&mut server, "fault");
     // SIGUSR2 saves the whole run so far.
-    nix::sys::signal::kill(
-        nix::unistd::Pid::from_raw(server.pid() as i32),
-        Signal::SIGUSR2,
-    )
-    .expect("SIGUSR2");
-    let whole = saved_path(&mut server, "sigusr2");
-    assert_eq!(
-        server.signal_and_wait(Signal::SIGTERM, Duration::from_secs(10)),
-        Some(0)
-    );
+    let whole = save_and_stop(&mut server);
 
     for file in [&at_estop, &at_fault, &whole] {
         let (status, text) = replay(file);
@@ -270,16 +276,7 @@ fn a_ring_that_wrapped_replays_from_its_state_snapshot() {
     }
     assert!(moving >= 4, "{moving} axes took a move");
     std::thread::sleep(Duration::from_secs(4));
-    nix::sys::signal::kill(
-        nix::unistd::Pid::from_raw(server.pid() as i32),
-        Signal::SIGUSR2,
-    )
-    .expect("SIGUSR2");
-    let saved = saved_path(&mut server, "sigusr2");
-    assert_eq!(
-        server.signal_and_wait(Signal::SIGTERM, Duration::from_secs(10)),
-        Some(0)
-    );
+    let saved = save_and_stop(&mut server);
 
     let recording = motiond::blackbox::read(&saved).expect("the file reads back");
     assert!(recording.dropped() > 0, "the ring wrapped");

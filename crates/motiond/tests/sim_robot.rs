@@ -734,11 +734,20 @@ fn an_estop_stops_the_packs_interpolation() {
 /// Offset of the first byte after the stamp of the first `LinkRx` record in `records`
 /// with at least `min` bytes of data, and its data length.
 fn first_rx(records: &[u8], min: usize) -> Option<(usize, usize)> {
+    first_where(records, |kind, len| {
+        kind == Kind::LinkRx as u8 && len >= 8 + min
+    })
+    .map(|(at, len)| (at + 8, len - 8))
+}
+
+/// Offset of the payload of the first record in `records` whose kind byte and payload
+/// length pass `wanted`, and its length.
+fn first_where(records: &[u8], wanted: impl Fn(u8, usize) -> bool) -> Option<(usize, usize)> {
     let mut at = 0;
     while at + 6 <= records.len() {
         let len = u32::from_le_bytes(records[at + 2..at + 6].try_into().ok()?) as usize;
-        if records[at] == motiond::blackbox::record::Kind::LinkRx as u8 && len >= 8 + min {
-            return Some((at + 6 + 8, len - 8));
+        if wanted(records[at], len) {
+            return Some((at + 6, len));
         }
         at += 6 + len;
     }
@@ -825,15 +834,7 @@ fn dropped(recording: &Recording, ticks: usize) -> Recording {
 
 /// Offset of the payload of the first record of `kind` in `records`, and its length.
 fn first_of(records: &[u8], kind: Kind) -> Option<(usize, usize)> {
-    let mut at = 0;
-    while at + 6 <= records.len() {
-        let len = u32::from_le_bytes(records[at + 2..at + 6].try_into().ok()?) as usize;
-        if records[at] == kind as u8 {
-            return Some((at + 6, len));
-        }
-        at += 6 + len;
-    }
-    None
+    first_where(records, |byte, _| byte == kind as u8)
 }
 
 /// The journal's snapshots: one every 1000 ticks, each the state the replay reaches
