@@ -53,7 +53,7 @@ use tmcpack::{Command, PowerDownRequest, PowerDownStatus, Request, Variant, powe
 use super::wire::{Pick, Purpose};
 use super::{Phase, TmcpackDriver};
 use crate::PowerDownMode;
-use motion_drivers::{DeviceFault, FIRMWARE_LEN};
+use motion_drivers::{DeviceFault, Driver as _, FIRMWARE_LEN, SavedReference};
 
 /// How often an online pack's power-down state is read (`$45`, no bit set).
 pub const POWER_CHECK_PERIOD: Duration = Duration::from_secs(1);
@@ -179,6 +179,23 @@ impl TmcpackDriver {
         self.status.set_firmware(text.as_str());
     }
 
+    /// [`Driver::restore_references`](motion_drivers::Driver::restore_references): with
+    /// `power_down = "restore"`, the positions a previous run of the server saved, kept
+    /// for the first configuration (module `restore`).
+    pub(super) fn take_saved_references(&mut self, saved: &[SavedReference]) {
+        if self.power.mode != PowerDownMode::Restore {
+            return;
+        }
+        for record in saved {
+            if record.channel >= self.channel_count() {
+                continue;
+            }
+            if let Some(Some(channel)) = self.channels.get_mut(record.channel) {
+                channel.saved = i32::try_from(record.counts).ok();
+            }
+        }
+    }
+
     /// The configuration plan is out: the `$45` steps, or online.
     pub(super) fn configured(&mut self, now: Duration) {
         if self.power.mode == PowerDownMode::Off {
@@ -196,11 +213,21 @@ impl TmcpackDriver {
         }
         self.power.unsupported = false;
         self.power.loaded = false;
-        self.power.step = if self.power.mode == PowerDownMode::Restore && self.power.booted {
+        let restore = self.power.mode == PowerDownMode::Restore;
+        self.power.step = if restore && self.power.booted {
             Step::Load
         } else {
             Step::Arm
         };
+        if restore && !self.power.booted {
+            // The pack kept running since it was last asked: its registers are where the
+            // previous server left them, if nothing moved the motors since (module
+            // `restore`).
+            let seq = self.seq;
+            for channel in self.channels.iter_mut().flatten() {
+                channel.kept(seq);
+            }
+        }
         self.phase = Phase::PowerDown;
     }
 
