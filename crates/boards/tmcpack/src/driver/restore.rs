@@ -7,13 +7,15 @@
 //! ([`Driver::restore_references`](motion_drivers::Driver::restore_references)), which
 //! keeps them in [`Channel::saved`] until the pack's first configuration. An axis counts as
 //! referenced from such a record only when the first poll after that configuration finds
-//! the motor inactive at exactly the saved position, `reference.restore` is not false, and
+//! the motor at exactly the saved position, `reference.restore` is not false, and
 //! the pack either
 //! - booted since it was last asked (`$43` reset flag) and answered the bit-0 request with
 //!   "loaded valid position from EEprom" (P0 bit 0): the positions it saved at the
 //!   undervoltage are in its registers ([`Channel::restored`]); or
 //! - did not boot (no reset flag: "during first read out 1, afterwards 0", 8.6 `$43`): it
-//!   kept running, and its position registers with it ([`Channel::kept`]).
+//!   kept running, and its position registers with it ([`Channel::kept`]);
+//!
+//! and the start-up's `$28` survey found the motor inactive ([`Channel::surveyed`]).
 //!
 //! A pack that booted without loading valid positions (the mode was off, the EEPROM
 //! invalidated, a `$CC`) claims nothing, even when its position after the boot happens to
@@ -53,9 +55,19 @@ impl Channel {
         }
     }
 
+    /// The start-up's `$28` survey found the motor doing `action`: one found active (left
+    /// running by someone after the previous server stopped) gets nothing from its saved
+    /// record.
+    pub fn surveyed(&mut self, action: Option<Action>) {
+        if action.is_none_or(|a| a.is_active()) {
+            self.saved = None;
+        }
+    }
+
     /// A poll answer (request `seq`): the check [`restored`](Self::restored) or
-    /// [`kept`](Self::kept) asked for. A motor active, stopped by a switch, or anywhere
-    /// but the saved position stays unreferenced.
+    /// [`kept`](Self::kept) asked for. A motor stopped by a switch, or anywhere but the
+    /// saved position, stays unreferenced. (It may show the start-up stop's `$25` with
+    /// velocity 0 as its action: a motor the survey found active was refused there.)
     pub(super) fn confirm_saved_position(
         &mut self,
         seq: u64,
@@ -70,7 +82,7 @@ impl Channel {
             return;
         }
         self.confirm_saved = None;
-        if position == saved && action == Action::Inactive && !stopped {
+        if position == saved && !action.is_referencing() && !stopped {
             self.state.homed = true;
         }
     }

@@ -86,16 +86,36 @@ fn a_pack_that_kept_running_keeps_the_saved_axis_at_the_same_position() {
     assert!(!bench.driver.channel(2).homed);
 }
 
-/// The first poll finds the motor active (another master started it while the server was
-/// down): refused, even at the saved position.
+/// The start-up's `$28` survey finds motor 0 active (another master started it while the
+/// server was down): its saved record is dropped before anything else happens; motor 2,
+/// inactive, keeps its own.
 #[test]
-fn a_motor_found_active_is_refused() {
+fn a_motor_the_survey_finds_active_is_refused() {
+    let mut bench = restarted(with(PowerDownMode::Restore), &[(0, 1234), (2, 1234)]);
+    let (_, w) = bench.next(10).expect("$43");
+    assert_eq!(w[1], 0x43);
+    bench.now += 11 * MS;
+    bench.rx(&unit_info(149, false));
+    let saved =
+        |bench: &Bench, motor: usize| bench.driver.channels[motor].as_ref().and_then(|c| c.saved);
+    assert_eq!(saved(&bench, 0), Some(1234));
+    let mut actions = [Action::Inactive; 6];
+    actions[0] = Action::Ramp;
+    bench.survey(actions);
+    assert_eq!(saved(&bench, 0), None, "found running");
+    assert_eq!(saved(&bench, 2), Some(1234));
+}
+
+/// The first poll finds the motor in a reference search (never one the start-up stop
+/// leaves): refused, even at the saved position.
+#[test]
+fn a_motor_found_searching_is_refused() {
     let mut bench = restarted(with(PowerDownMode::Restore), &[(0, 1234)]);
     start(&mut bench, unit_info(149, false), &[NONE, NONE]);
     serve(
         &mut bench,
         30,
-        |m| position(m, 1234, Action::Ramp),
+        |m| position(m, 1234, Action::ReferenceSearch(1)),
         |_| NONE,
     );
     serve(&mut bench, 100, at_rest, |_| NONE);
