@@ -17,9 +17,10 @@
 //! only when all of these hold: the answer to the bit-0 request says "loaded valid position
 //! from EEprom" (P0 bit 0), and from the first poll after it; the driver knew the axis as
 //! referenced when it lost the pack (the server ran through the outage, on a UPS or another
-//! supply) — a server that starts afresh knows no reference of before, so its axes need a
-//! search or a set-position (`motionctl set-position AXIS <the restored position>` is the
-//! operator's word for it); the driver did not last see the motor moving (or command it to
+//! supply) — a server that starts afresh knows only what its previous run saved (module
+//! `restore`: an axis saved referenced and at rest whose position the pack reports
+//! unchanged), else its axes need a search or a set-position (`motionctl set-position AXIS
+//! <the restored position>` is the operator's word for it); the driver did not last see the motor moving (or command it to
 //! move) before it lost the pack, nor moving since the last check before it found the pack
 //! in its power-down state (the pack stops the motors at once at undervoltage; a motor
 //! stopped abruptly from speed may have lost steps, and its saved position with them); and
