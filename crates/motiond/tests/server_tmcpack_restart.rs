@@ -138,7 +138,7 @@ fn a_referenced_axis_stays_referenced_across_motiond_restarts_and_pack_outages()
     let cfg = config(&name, &tty, &state_dir, 50.0);
 
     // First run: no file (a log line says so); home x, move it to 20 mm.
-    let (mut server, client, _) = start(&cfg, &name);
+    let (mut server, mut client, _) = start(&cfg, &name);
     assert!(server.wait_for_log("no saved references", Duration::from_secs(2)));
     let reply = client.command(0, CommandKind::Home, [10.0, 0.0, 0.0]);
     assert_eq!(reply.result(), Ok(()));
@@ -228,7 +228,7 @@ fn a_referenced_axis_stays_referenced_across_motiond_restarts_and_pack_outages()
         pack.power_outage(now + Duration::from_secs(2));
         assert_eq!(pack.motor(0).expect("m0").position, 0, "booted");
     }
-    let (mut server, client, _) = start(&cfg, &name);
+    let (mut server, mut client, _) = start(&cfg, &name);
     let (frame, referenced) = x_referenced(&client);
     assert!(!referenced, "moved while down: {:?}", frame.axes()[0]);
     assert!(
