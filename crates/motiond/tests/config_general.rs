@@ -531,5 +531,11 @@ fn the_state_dir_has_a_documented_default_and_refuses_an_empty_path() {
     );
     let to = "state_dir = \"\"";
     let text = GOOD.replace("claim_lease_ms = 500", to);
-    fails("state_dir_empty.toml", &text, to, "server.state_dir", "an empty path");
+    fails(
+        "state_dir_empty.toml",
+        &text,
+        to,
+        "server.state_dir",
+        "an empty path",
+    );
 }
