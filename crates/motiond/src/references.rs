@@ -232,6 +232,17 @@ fn records(config: &ServerConfig, drivers: &[AnyDriver]) -> Vec<(usize, Record)>
 
 /// Why a saved record is not handed to the driver, if it is not.
 fn refusal(saved: &Record, now: &Record) -> Option<&'static str> {
+    if let Some(why) = identity_refusal(saved, now) {
+        Some(why)
+    } else if !saved.referenced {
+        Some("it was not referenced and at rest when last seen")
+    } else {
+        None
+    }
+}
+
+/// Why a saved record is not this config's axis, if it is not.
+fn identity_refusal(saved: &Record, now: &Record) -> Option<&'static str> {
     if saved.device != now.device
         || saved.model != now.model
         || saved.address != now.address
@@ -242,8 +253,6 @@ fn refusal(saved: &Record, now: &Record) -> Option<&'static str> {
         Some("it was saved for another channel")
     } else if saved.keys != now.keys {
         Some("the device's or the axis's keys changed since it was saved")
-    } else if !saved.referenced {
-        Some("it was not referenced and at rest when last seen")
     } else {
         None
     }
@@ -302,13 +311,20 @@ pub fn start(config: &ServerConfig, drivers: &mut [AnyDriver]) -> Option<(Watch,
     let path = file_path(&config.server.state_dir, &config.server.name);
     let saved = read(&path, &config.server.name);
     let mut given: Vec<Vec<SavedReference>> = vec![Vec::new(); drivers.len()];
-    for (index, record) in &now {
+    let mut now = now;
+    for (index, record) in &mut now {
         let Some(old) = saved
             .as_ref()
             .and_then(|f| f.axis.iter().find(|r| r.axis == record.axis))
         else {
             continue;
         };
+        if identity_refusal(old, record).is_none() {
+            // Kept as it was until the axis is seen again (its device online): a device
+            // that does not come back in this run keeps its record for the next.
+            record.referenced = old.referenced;
+            record.counts = old.counts;
+        }
         if let Some(why) = refusal(old, record) {
             tracing::info!(
                 "references: axis `{}` is not referenced from {}: {why}",
