@@ -445,6 +445,96 @@ mod tests {
         assert_eq!(read(&path, "demo"), None, "no file");
     }
 
+    /// A frame whose axis 1 is `mode` with `flags`, online, at `counts`.
+    fn frame(mode: AxisMode, flags: AxisFlags, counts: i64) -> Box<MotionFrame> {
+        let mut frame = Box::new(MotionFrame::EMPTY);
+        let axis = &mut frame.axes[1];
+        axis.mode = mode as u8;
+        axis.flags = flags.0;
+        axis.raw_counts = counts;
+        axis.device_state = DeviceState::Online as u8;
+        frame
+    }
+
+    /// What the tick sends for a watched axis (index 1): referenced only while HOMED, not
+    /// MOVING, no fault, holding (or arrived); nothing while the device is not online or
+    /// the data stale; a change of position while referenced; a full ring retried.
+    #[test]
+    fn the_watch_sends_referenced_only_at_rest_and_only_changes() {
+        let (tx, mut rx) = rtrb::RingBuffer::new(2);
+        let mut watch = Watch {
+            axes: vec![(1, None)],
+            tx,
+        };
+        let mut seen = |watch: &mut Watch, frame: &MotionFrame| {
+            watch.observe(frame);
+            let mut out = Vec::new();
+            while let Ok(s) = rx.pop() {
+                out.push((s.referenced, s.counts));
+            }
+            out
+        };
+        let homed = AxisFlags::HOMED;
+        let rest = frame(AxisMode::Hold, homed, 2000);
+        assert_eq!(seen(&mut watch, &rest), [(true, 2000)]);
+        assert_eq!(seen(&mut watch, &rest), [], "no change, nothing sent");
+        // A move taken: the mode changes before the board reports motion.
+        let taken = frame(AxisMode::RampPosition, homed, 2000);
+        assert_eq!(seen(&mut watch, &taken), [(false, 2000)]);
+        let moving = frame(
+            AxisMode::RampPosition,
+            homed.with(AxisFlags::MOVING, true),
+            2300,
+        );
+        assert_eq!(seen(&mut watch, &moving), [], "still not referenced");
+        let arrived = frame(
+            AxisMode::RampPosition,
+            homed.with(AxisFlags::ARRIVED, true),
+            2500,
+        );
+        assert_eq!(seen(&mut watch, &arrived), [(true, 2500)]);
+        // Moving in hold (pushed, a board's own motion), a fault, no reference: not.
+        for flags in [
+            homed.with(AxisFlags::MOVING, true),
+            homed.with(AxisFlags::FAULT, true),
+            AxisFlags::default(),
+        ] {
+            assert_eq!(
+                seen(&mut watch, &frame(AxisMode::Hold, flags, 2500)),
+                [(false, 2500)]
+            );
+            assert_eq!(seen(&mut watch, &arrived), [(true, 2500)]);
+        }
+        // Stopping, homing: not at rest.
+        for mode in [AxisMode::Stopping, AxisMode::Homing, AxisMode::Velocity] {
+            assert_eq!(seen(&mut watch, &frame(mode, homed, 2500)), [(false, 2500)]);
+            assert_eq!(seen(&mut watch, &arrived), [(true, 2500)]);
+        }
+        // The device not online, or the data stale: the record stays as it was.
+        let mut offline = frame(AxisMode::Stopping, AxisFlags::default(), 0);
+        offline.axes[1].device_state = DeviceState::Faulted as u8;
+        assert_eq!(seen(&mut watch, &offline), []);
+        let stale = frame(AxisMode::Off, AxisFlags::STALE, 0);
+        assert_eq!(seen(&mut watch, &stale), []);
+        // Referenced elsewhere (a set-position): sent.
+        assert_eq!(
+            seen(&mut watch, &frame(AxisMode::Hold, homed, 100)),
+            [(true, 100)]
+        );
+        // A full ring: the change is sent at the next frame that finds room.
+        let mut full = Watch {
+            axes: vec![(1, None)],
+            tx: rtrb::RingBuffer::new(1).0,
+        };
+        full.observe(&rest);
+        full.observe(&taken);
+        assert_eq!(
+            full.axes[0].1.map(|s| s.referenced),
+            Some(true),
+            "not sent: not taken"
+        );
+    }
+
     #[test]
     fn fingerprints_are_fnv1a_64() {
         // FNV-1a 64 of "" and "a" (the published test vectors).
