@@ -96,6 +96,7 @@ impl Channel {
         if self.lost_in_motion || !self.cfg.restore {
             self.state.homed = false;
             self.confirm_position = None;
+            self.confirm_saved = None;
         }
         self.referenced_at_loss |= self.state.homed;
     }
