@@ -182,6 +182,12 @@ macro_rules! registry {
             ) -> Result<(), motion_drivers::CommissionError> {
                 each_driver!(self, d => d.commission(now, change))
             }
+            fn keeps_references(&self) -> bool {
+                each_driver!(self, d => d.keeps_references())
+            }
+            fn restore_references(&mut self, saved: &[motion_drivers::SavedReference]) {
+                each_driver!(self, d => d.restore_references(saved))
+            }
         }
     };
 }

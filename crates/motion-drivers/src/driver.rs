@@ -309,6 +309,35 @@ pub trait Driver: Send + fmt::Debug {
         let _ = (now, change);
         Err(CommissionError::Unsupported)
     }
+
+    /// Whether the server should keep, across its own restarts, which axes of this board
+    /// are referenced and at rest (with their positions), and hand them back through
+    /// [`restore_references`](Self::restore_references) at its next start. `false` (the
+    /// default): the board cannot tell whether its positions survived (the Trinamic pack
+    /// can, with `power_down = "restore"`: its `$45`).
+    fn keeps_references(&self) -> bool {
+        false
+    }
+
+    /// Start-up hook, called once before the driver's first step (never on the tick): the
+    /// axes a previous run of the server last saw referenced and at rest, with their
+    /// positions in the board's counts; the server has already refused a record whose
+    /// identity (server, device, address, axis, channel, the axis's keys) does not match
+    /// this config. The driver decides from what the board says whether any of them is
+    /// referenced again; by default it ignores them (the axes need a new reference).
+    fn restore_references(&mut self, saved: &[SavedReference]) {
+        let _ = saved;
+    }
+}
+
+/// One axis a previous run of the server saw referenced and at rest
+/// ([`Driver::restore_references`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SavedReference {
+    /// The axis's channel on the board.
+    pub channel: usize,
+    /// Its position then, in the board's counts.
+    pub counts: i64,
 }
 
 /// A boxed driver is a driver: tests and tools hold drivers of any board as
@@ -406,5 +435,11 @@ impl<T: Driver + ?Sized> Driver for Box<T> {
     }
     fn commission(&mut self, now: Duration, change: Commission) -> Result<(), CommissionError> {
         (**self).commission(now, change)
+    }
+    fn keeps_references(&self) -> bool {
+        (**self).keeps_references()
+    }
+    fn restore_references(&mut self, saved: &[SavedReference]) {
+        (**self).restore_references(saved);
     }
 }

@@ -39,7 +39,9 @@ mod state;
 
 pub use bus::{LinkBus, MAX_SENDS_PER_STEP, SPI_PENDING_CAPACITY, UNWRITTEN_CAPACITY, Unwritten};
 pub use commission::{Commission, CommissionError};
-pub use driver::{Driver, Follow, LINE_RATE_TOLERANCE, LineLeg, Model, Priority, Transmit};
+pub use driver::{
+    Driver, Follow, LINE_RATE_TOLERANCE, LineLeg, Model, Priority, SavedReference, Transmit,
+};
 pub use goal::{Goal, GoalError, GoalKind, GoalKinds, RateFloor};
 /// Whether a link carries a byte stream or SPI transactions (one enum with `motion_link`).
 pub use motion_base::LinkKind;

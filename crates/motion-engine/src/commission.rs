@@ -146,7 +146,14 @@ impl<D: Driver> Engine<D> {
         let pending = match axis.mode {
             AxisMode::Stopping | AxisMode::Homing | AxisMode::Group => true,
             AxisMode::Power | AxisMode::Velocity | AxisMode::RampVelocity => true,
-            AxisMode::Position | AxisMode::RampPosition => !axis.arrived,
+            // Arrived as the frame says it (supervision's own `arrived` is only kept with
+            // a `following_error`: with 0 an axis at its target would count as moving for
+            // ever).
+            AxisMode::Position | AxisMode::RampPosition => {
+                let at_target =
+                    !axis.state.moving && (axis.position() - axis.target).abs() <= axis.tolerance;
+                !(axis.arrived || at_target)
+            }
             _ => false,
         };
         pending

@@ -106,7 +106,11 @@ impl<D: Driver> Engine<D> {
                 AxisMode::Stopping if still && axis.off_after_stop => {
                     let _ = self.off_axis(index);
                 }
-                AxisMode::Stopping if still => {
+                // Not before the board has reported the axis at all: a hold at the
+                // position of an axis never heard from (0) would be a following error at
+                // its first report (a Trinamic pack that restored its positions from
+                // EEPROM, or kept them while the server restarted).
+                AxisMode::Stopping if still && axis.refreshed_at.is_some() => {
                     axis.mode = AxisMode::Hold;
                     axis.target = axis.position();
                     axis.arrived = true;

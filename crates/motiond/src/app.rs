@@ -107,7 +107,9 @@ pub fn run(config: ServerConfig, options: RunOptions) -> Result<(), ServerError>
     }
 
     let params = crate::params::machine_params(&config);
-    let drivers = crate::boards::build(&config)?;
+    let mut drivers = crate::boards::build(&config)?;
+    // Before the drivers' first step: the references a previous run saved.
+    let (references, mut keeper) = crate::references::start(&config, &mut drivers).unzip();
     let engine = Engine::new(config.engine_config(), drivers).map_err(ServerError::Engine)?;
     let links = open_links(&config)?;
 
@@ -209,6 +211,7 @@ pub fn run(config: ServerConfig, options: RunOptions) -> Result<(), ServerError>
         estop_signal,
         health: Arc::clone(&health),
         journal,
+        references,
     };
     let tick_thread = std::thread::Builder::new()
         .name("tick".into())
@@ -224,10 +227,21 @@ pub fn run(config: ServerConfig, options: RunOptions) -> Result<(), ServerError>
         clients_alive: &clients_alive,
         nodes_cleaned: &nodes_cleaned,
     };
-    let result = housekeeping(&config, &mut report_rx, dead_tx, liveness, systemd);
+    let result = housekeeping(
+        &config,
+        &mut report_rx,
+        dead_tx,
+        liveness,
+        systemd,
+        keeper.as_mut(),
+    );
     io_stop.store(true, Ordering::Relaxed);
     if tick_thread.join().is_err() {
         tracing::error!("the tick thread panicked");
+    }
+    if let Some(keeper) = keeper.as_mut() {
+        // What the last frames said.
+        keeper.drain();
     }
     if let Some((stop, thread)) = recorder {
         stop.store(true, Ordering::Release);
@@ -375,6 +389,7 @@ fn housekeeping(
     mut dead_clients: rtrb::Producer<ClientId>,
     liveness: Liveness<'_>,
     mut systemd: Systemd<'_>,
+    mut references: Option<&mut crate::references::Keeper>,
 ) -> Result<(), ServerError> {
     let status_line = std::io::stderr().is_terminal();
     let mut server_node = 0u128;
@@ -500,6 +515,9 @@ fn housekeeping(
                     return Ok(());
                 }
             }
+        }
+        if let Some(keeper) = references.as_deref_mut() {
+            keeper.drain();
         }
         let now = monotonic_now();
         if now >= next_liveness && server_node != 0 {

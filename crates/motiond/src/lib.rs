@@ -16,6 +16,7 @@ pub mod node_records;
 pub mod params;
 pub mod paths;
 pub mod phases;
+pub mod references;
 pub mod rt;
 pub mod services;
 pub mod setpoints;

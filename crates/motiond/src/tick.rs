@@ -150,6 +150,8 @@ pub struct TickSetup {
     pub health: Arc<crate::systemd::TickHealth>,
     /// The black box's journal (disabled with `blackbox_seconds = 0`).
     pub journal: Journal,
+    /// The axes whose references outlive the server (crate::references), if any.
+    pub references: Option<crate::references::Watch>,
 }
 
 /// The command port over the iceoryx2 server: one active request at a time, answered
@@ -653,6 +655,9 @@ impl Loop {
                 commands
                     .journal
                     .frame_and_estop(frame, &mut self.estop_seen);
+                if let Some(watch) = self.setup.references.as_mut() {
+                    watch.observe(frame);
+                }
                 frame.time_ns = duration_ns(deadline);
                 frame.publish_ns = duration_ns(monotonic_now());
                 if sample.send().is_err() {
@@ -667,6 +672,9 @@ impl Loop {
                 commands
                     .journal
                     .frame_and_estop(&self.spare_frame, &mut self.estop_seen);
+                if let Some(watch) = self.setup.references.as_mut() {
+                    watch.observe(&self.spare_frame);
+                }
                 self.stats.frames_lost += 1;
             }
         }

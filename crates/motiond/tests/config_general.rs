@@ -515,3 +515,27 @@ fn spi_links_may_be_run_by_the_tick_and_serial_links_keep_their_threads() {
         fails(name, &text, needle, key, says);
     }
 }
+
+/// `[server] state_dir`: where the references of `power_down = "restore"` devices are kept;
+/// `/tmp/motiond-state` unless given, an empty path refused with the key.
+#[test]
+fn the_state_dir_has_a_documented_default_and_refuses_an_empty_path() {
+    assert_eq!(
+        server_with("claim_lease_ms = 500").state_dir,
+        PathBuf::from(motiond::config::DEFAULT_STATE_DIR)
+    );
+    assert_eq!(motiond::config::DEFAULT_STATE_DIR, "/tmp/motiond-state");
+    assert_eq!(
+        server_with("state_dir = \"/var/lib/motiond\"").state_dir,
+        PathBuf::from("/var/lib/motiond")
+    );
+    let to = "state_dir = \"\"";
+    let text = GOOD.replace("claim_lease_ms = 500", to);
+    fails(
+        "state_dir_empty.toml",
+        &text,
+        to,
+        "server.state_dir",
+        "an empty path",
+    );
+}

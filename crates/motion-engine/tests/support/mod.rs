@@ -8,8 +8,9 @@ use std::collections::VecDeque;
 use std::sync::{Arc, Mutex, MutexGuard};
 
 use motion_drivers::{
-    ChannelState, DeviceFault, DeviceStatus, Driver, Follow, Goal, GoalError, GoalKind, GoalKinds,
-    LineLeg, LinkKind, Model, Pin, PinReading, Priority, RateFloor, Transmit,
+    ChannelState, Commission, CommissionError, DeviceFault, DeviceStatus, Driver, Follow, Goal,
+    GoalError, GoalKind, GoalKinds, LineLeg, LinkKind, Model, Pin, PinReading, Priority, RateFloor,
+    Transmit,
 };
 use motion_engine::{AxisConfig, BusConfig, CommandPort, DeviceConfig, Engine, EngineConfig};
 use motion_ipc::{ClientId, CommandKind, CommandReply, CommandRequest, GroupPath, MotionFrame};
@@ -55,6 +56,8 @@ pub struct BoardControl {
     /// Pauses and resumes the board did.
     pub paused: u32,
     pub resumed: u32,
+    /// Every commission the driver took (`Driver::commission`, always accepted).
+    pub commissions: Vec<Commission>,
 }
 
 /// A board whose channels follow their goals with ideal trapezoidal physics, refreshing
@@ -404,6 +407,10 @@ impl Driver for IdealBoard {
             channel.goal = Goal::Off;
             channel.velocity = 0.0;
         }
+    }
+    fn commission(&mut self, _: Duration, change: Commission) -> Result<(), CommissionError> {
+        self.control().commissions.push(change);
+        Ok(())
     }
 }
 

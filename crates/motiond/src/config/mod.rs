@@ -71,10 +71,18 @@ pub struct ServerSettings {
     /// How many black box files `blackbox_dir` keeps (the newest; older ones are removed
     /// after each save).
     pub blackbox_keep: u32,
+    /// Where the server keeps what must survive its restart: the axes of devices with
+    /// `power_down = "restore"` it last saw referenced and at rest
+    /// (`<state_dir>/<name>.references.toml`, crate::references).
+    pub state_dir: PathBuf,
 }
 
 /// `[server] blackbox_dir`'s default.
 pub const DEFAULT_BLACKBOX_DIR: &str = "/tmp/motiond-blackbox";
+
+/// `[server] state_dir`'s default (a deployed server gives a directory that survives a
+/// reboot, e.g. `/var/lib/motiond`).
+pub const DEFAULT_STATE_DIR: &str = "/tmp/motiond-state";
 
 /// How a link reaches its devices.
 #[derive(Debug, Clone, PartialEq, Eq)]

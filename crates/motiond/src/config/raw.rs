@@ -50,6 +50,7 @@ pub(crate) struct RawServer {
     pub blackbox_on_exit: Option<Spanned<bool>>,
     pub blackbox_dir: Option<Spanned<String>>,
     pub blackbox_keep: Option<Spanned<Int>>,
+    pub state_dir: Option<Spanned<String>>,
 }
 
 #[derive(Debug, Deserialize)]

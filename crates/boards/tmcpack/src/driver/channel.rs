@@ -52,6 +52,7 @@ use motion_base::{FixedQueue, counts_to_i32};
 use tmcpack::{Action, CurrentLevel, MAX_VELOCITY, MotorOptions, Request};
 
 use super::config::{Currents, Scale, TmcpackChannel};
+use super::script::Script;
 use crate::PositionMode;
 use motion_drivers::{ChannelState, DeviceFault, Goal, GoalError, GoalKind};
 
@@ -138,11 +139,11 @@ pub(crate) struct Channel {
     /// The highest reference-search phase (action − 20) seen in the current search.
     ref_phase: Option<u8>,
     /// A `$27` was sent with this sequence number: referenced from the next poll on.
-    confirm_position: Option<u64>,
+    pub(super) confirm_position: Option<u64>,
     /// No request of the goal set last has been sent yet.
     pub goal_unsent: bool,
     /// A poll showed the motor moving since the last `$45` check (or since the start).
-    moved_since_check: bool,
+    pub(super) moved_since_check: bool,
     /// The motor was moving (or told to move) when the driver lost the pack, or moved since
     /// the last check before it saw the pack in its power-down state: a position restored
     /// from EEPROM is not trusted as its reference.
@@ -150,6 +151,12 @@ pub(crate) struct Channel {
     /// The axis was referenced when the driver lost the pack (or saw it in its power-down
     /// state): the one thing the pack does not save with the positions.
     pub referenced_at_loss: bool,
+    /// The position a previous run of the server saved for this axis, referenced and at
+    /// rest (module `restore`), until the first configuration after the start.
+    pub saved: Option<i32>,
+    /// A poll after the request sent with this sequence number confirms the saved position
+    /// (module `restore`).
+    pub(super) confirm_saved: Option<(u64, i32)>,
 }
 
 impl Channel {
@@ -184,6 +191,8 @@ impl Channel {
             moved_since_check: false,
             lost_in_motion: false,
             referenced_at_loss: false,
+            saved: None,
+            confirm_saved: None,
         }
     }
 
@@ -211,6 +220,7 @@ impl Channel {
         self.home_failed = false;
         self.ref_phase = None;
         self.confirm_position = None;
+        self.confirm_saved = None;
         self.state.fault = Some(fault);
         self.state.arrived = false;
         if fault == DeviceFault::Reset {
@@ -522,41 +532,6 @@ impl Channel {
         self.motion == Motion::Pi || self.action == Some(Action::PiController)
     }
 
-    /// `$45` bit 0 loaded valid positions with the request sent as `seq`: referenced from
-    /// the first poll after it if the axis was referenced when the pack was lost, its motor
-    /// was not moving then, and it is to be (`reference.restore`). The pack saves positions,
-    /// not references: an axis that had none before the outage has none after it.
-    pub fn restored(&mut self, seq: u64) {
-        if self.cfg.restore && self.referenced_at_loss && !self.lost_in_motion {
-            self.confirm_position = Some(seq);
-        }
-    }
-
-    /// The pack is in its power-down state: it stopped the motor at once. An axis that may
-    /// have moved then (since the last check), or whose position is not to be trusted after
-    /// one (`reference.restore = false`: the motors are held without current), loses its
-    /// reference.
-    pub fn power_went_down(&mut self) {
-        self.lost_in_motion |= self.moved_since_check || self.state.moving;
-        if self.lost_in_motion || !self.cfg.restore {
-            self.state.homed = false;
-            self.confirm_position = None;
-        }
-        self.referenced_at_loss |= self.state.homed;
-    }
-
-    /// The pack was configured (and any restore done): what was known at the loss is
-    /// spent.
-    pub fn loss_consumed(&mut self) {
-        self.lost_in_motion = false;
-        self.referenced_at_loss = false;
-    }
-
-    /// A `$45` check found the pack outside its power-down state.
-    pub fn checked(&mut self) {
-        self.moved_since_check = false;
-    }
-
     fn power_on(&self, script: &mut Script, motor: u8) {
         if !self.powered {
             script.send(self.cfg.currents.request(motor));
@@ -672,6 +647,7 @@ impl Channel {
             self.confirm_position = None;
             self.state.homed = true;
         }
+        self.confirm_saved_position(seq, position, action, stopped);
         if self.motion == Motion::Ramp && action == Action::Rotation {
             self.motion = Motion::Unknown;
         }
@@ -792,39 +768,5 @@ impl Channel {
     /// Puts `step` before the current one (the `$23` that ends a rotation at rest).
     fn insert_now(&mut self, step: Step) {
         self.steps.push_front(step);
-    }
-}
-
-/// A script being planned.
-#[derive(Debug, Default)]
-struct Script {
-    steps: FixedQueue<Step, MAX_STEPS>,
-    overflow: bool,
-    /// `$14` values the script has written so far.
-    limits: Option<(u16, u16)>,
-}
-
-impl Script {
-    fn push(&mut self, step: Step) {
-        if !self.steps.push(step) {
-            self.overflow = true;
-        }
-    }
-
-    fn send(&mut self, request: Request) {
-        self.push(Step::Send(request));
-    }
-
-    /// The steps, or `error` when the script overflowed or holds a request beyond the
-    /// pack's ranges.
-    fn finish(self, error: GoalError) -> Result<FixedQueue<Step, MAX_STEPS>, GoalError> {
-        let invalid = self
-            .steps
-            .iter()
-            .any(|step| matches!(step, Step::Send(request) if request.validate().is_err()));
-        if self.overflow || invalid {
-            return Err(error);
-        }
-        Ok(self.steps)
     }
 }

@@ -65,7 +65,9 @@ mod io;
 mod line;
 mod power_down;
 mod rate;
+mod restore;
 mod rx;
+mod script;
 mod spec;
 mod spec_drive;
 mod startup;
@@ -89,6 +91,8 @@ mod tests_line;
 mod tests_power_down;
 #[cfg(test)]
 mod tests_readings;
+#[cfg(test)]
+mod tests_restore;
 
 use core::time::Duration;
 
@@ -446,6 +450,14 @@ impl Driver for TmcpackDriver {
             Some(Some(c)) if channel < self.channel_count() => c.state,
             _ => ChannelState::UNKNOWN,
         }
+    }
+
+    fn keeps_references(&self) -> bool {
+        self.power.mode == crate::PowerDownMode::Restore
+    }
+
+    fn restore_references(&mut self, saved: &[motion_drivers::SavedReference]) {
+        self.take_saved_references(saved);
     }
 
     fn status(&self) -> DeviceStatus {

@@ -17,9 +17,10 @@
 //! only when all of these hold: the answer to the bit-0 request says "loaded valid position
 //! from EEprom" (P0 bit 0), and from the first poll after it; the driver knew the axis as
 //! referenced when it lost the pack (the server ran through the outage, on a UPS or another
-//! supply) — a server that starts afresh knows no reference of before, so its axes need a
-//! search or a set-position (`motionctl set-position AXIS <the restored position>` is the
-//! operator's word for it); the driver did not last see the motor moving (or command it to
+//! supply) — a server that starts afresh knows only what its previous run saved (module
+//! `restore`: an axis saved referenced and at rest whose position the pack reports
+//! unchanged), else its axes need a search or a set-position (`motionctl set-position AXIS
+//! <the restored position>` is the operator's word for it); the driver did not last see the motor moving (or command it to
 //! move) before it lost the pack, nor moving since the last check before it found the pack
 //! in its power-down state (the pack stops the motors at once at undervoltage; a motor
 //! stopped abruptly from speed may have lost steps, and its saved position with them); and
@@ -53,7 +54,7 @@ use tmcpack::{Command, PowerDownRequest, PowerDownStatus, Request, Variant, powe
 use super::wire::{Pick, Purpose};
 use super::{Phase, TmcpackDriver};
 use crate::PowerDownMode;
-use motion_drivers::{DeviceFault, FIRMWARE_LEN};
+use motion_drivers::{DeviceFault, Driver as _, FIRMWARE_LEN, SavedReference};
 
 /// How often an online pack's power-down state is read (`$45`, no bit set).
 pub const POWER_CHECK_PERIOD: Duration = Duration::from_secs(1);
@@ -179,6 +180,23 @@ impl TmcpackDriver {
         self.status.set_firmware(text.as_str());
     }
 
+    /// [`Driver::restore_references`](motion_drivers::Driver::restore_references): with
+    /// `power_down = "restore"`, the positions a previous run of the server saved, kept
+    /// for the first configuration (module `restore`).
+    pub(super) fn take_saved_references(&mut self, saved: &[SavedReference]) {
+        if self.power.mode != PowerDownMode::Restore {
+            return;
+        }
+        for record in saved {
+            if record.channel >= self.channel_count() {
+                continue;
+            }
+            if let Some(Some(channel)) = self.channels.get_mut(record.channel) {
+                channel.saved = i32::try_from(record.counts).ok();
+            }
+        }
+    }
+
     /// The configuration plan is out: the `$45` steps, or online.
     pub(super) fn configured(&mut self, now: Duration) {
         if self.power.mode == PowerDownMode::Off {
@@ -196,11 +214,21 @@ impl TmcpackDriver {
         }
         self.power.unsupported = false;
         self.power.loaded = false;
-        self.power.step = if self.power.mode == PowerDownMode::Restore && self.power.booted {
+        let restore = self.power.mode == PowerDownMode::Restore;
+        self.power.step = if restore && self.power.booted {
             Step::Load
         } else {
             Step::Arm
         };
+        if restore && !self.power.booted {
+            // The pack kept running since it was last asked: its registers are where the
+            // previous server left them, if nothing moved the motors since (module
+            // `restore`).
+            let seq = self.seq;
+            for channel in self.channels.iter_mut().flatten() {
+                channel.kept(seq);
+            }
+        }
         self.phase = Phase::PowerDown;
     }
 

@@ -76,6 +76,9 @@ impl TmcpackDriver {
                 }
             }
             (Reply::Actions { actions }, Purpose::Survey) => {
+                for channel in self.channels.iter_mut().flatten() {
+                    channel.surveyed(actions.get(usize::from(channel.motor)).copied());
+                }
                 self.quiesce = Quiesce::new(now, actions, &self.channels);
                 self.phase = if self.quiesce.is_some() {
                     Phase::Quiesce

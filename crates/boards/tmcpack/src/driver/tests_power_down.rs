@@ -10,7 +10,7 @@ use super::bench::*;
 use super::*;
 use crate::PowerDownMode;
 
-fn with(mode: PowerDownMode) -> TmcpackDriverConfig {
+pub(super) fn with(mode: PowerDownMode) -> TmcpackDriverConfig {
     TmcpackDriverConfig {
         power_down: mode,
         ..config()
@@ -18,7 +18,7 @@ fn with(mode: PowerDownMode) -> TmcpackDriverConfig {
 }
 
 /// `$43` with the reset flag `reset` and firmware `revision`.
-fn unit_info(revision: u8, reset: bool) -> [u8; 9] {
+pub(super) fn unit_info(revision: u8, reset: bool) -> [u8; 9] {
     word(Reply::UnitInfo {
         firmware: revision,
         reset,
@@ -29,7 +29,11 @@ fn unit_info(revision: u8, reset: bool) -> [u8; 9] {
 
 /// Answers `$43` and the survey, then runs the configuration, answering each `$45` with
 /// the next of `answers`; returns the bits of the `$45` requests, in order.
-fn start(bench: &mut Bench, info: [u8; 9], answers: &[PowerDownStatus]) -> Vec<PowerDownRequest> {
+pub(super) fn start(
+    bench: &mut Bench,
+    info: [u8; 9],
+    answers: &[PowerDownStatus],
+) -> Vec<PowerDownRequest> {
     let (_, w) = bench.next(10).expect("$43");
     assert_eq!(w[1], 0x43);
     bench.now += 11 * MS;
@@ -53,7 +57,7 @@ fn start(bench: &mut Bench, info: [u8; 9], answers: &[PowerDownStatus]) -> Vec<P
 
 /// Serves for `ms` milliseconds: `$20` with `poll(motor)`, `$43` without the reset flag,
 /// `$45` with `pd(flags)`; returns the `$45` bits asked.
-fn serve(
+pub(super) fn serve(
     bench: &mut Bench,
     ms: u32,
     mut poll: impl FnMut(u8) -> [u8; 9],
@@ -84,12 +88,12 @@ fn serve(
     asked
 }
 
-fn at_rest(motor: u8) -> [u8; 9] {
+pub(super) fn at_rest(motor: u8) -> [u8; 9] {
     position(motor, 1234, Action::Inactive)
 }
 
 /// References `motors` with a set-position each (`$27`, confirmed by the next poll).
-fn reference(bench: &mut Bench, motors: &[usize]) {
+pub(super) fn reference(bench: &mut Bench, motors: &[usize]) {
     for &motor in motors {
         bench
             .driver
@@ -104,7 +108,10 @@ fn reference(bench: &mut Bench, motors: &[usize]) {
 
 /// The pack goes silent until the driver declares it not responding, then answers again
 /// after its boot; the start-up's `$45` get `answers`.
-fn lose_and_boot(bench: &mut Bench, answers: &[PowerDownStatus]) -> Vec<PowerDownRequest> {
+pub(super) fn lose_and_boot(
+    bench: &mut Bench,
+    answers: &[PowerDownStatus],
+) -> Vec<PowerDownRequest> {
     for _ in 0..400 {
         bench.tick();
         if bench.driver.status().fault == Some(DeviceFault::NotResponding) {
@@ -119,10 +126,10 @@ fn lose_and_boot(bench: &mut Bench, answers: &[PowerDownStatus]) -> Vec<PowerDow
     start(bench, unit_info(149, true), answers)
 }
 
-const LOADED: PowerDownStatus =
+pub(super) const LOADED: PowerDownStatus =
     PowerDownStatus::LOADED.with(PowerDownStatus::VALID_IN_EEPROM, true);
-const VALID: PowerDownStatus = PowerDownStatus::VALID_IN_EEPROM;
-const NONE: PowerDownStatus = PowerDownStatus::EMPTY;
+pub(super) const VALID: PowerDownStatus = PowerDownStatus::VALID_IN_EEPROM;
+pub(super) const NONE: PowerDownStatus = PowerDownStatus::EMPTY;
 const DOWN: PowerDownStatus = PowerDownStatus::DOWN_BEFORE
     .with(PowerDownStatus::DOWN_AFTER, true)
     .with(PowerDownStatus::VALID_IN_EEPROM, true);

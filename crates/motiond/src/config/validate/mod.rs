@@ -376,6 +376,7 @@ impl Validator<'_, '_> {
             blackbox_on_exit: false,
             blackbox_dir: crate::config::DEFAULT_BLACKBOX_DIR.into(),
             blackbox_keep: 20,
+            state_dir: crate::config::DEFAULT_STATE_DIR.into(),
         };
         const NAME: &str =
             "the instance name: services are motiond/<name>/frame, …; e.g. name = \"demo\"";
@@ -471,6 +472,20 @@ impl Validator<'_, '_> {
                 );
             } else {
                 settings.blackbox_dir = v.get_ref().into();
+            }
+        }
+        if let Some(v) = &raw.state_dir {
+            if v.get_ref().is_empty() {
+                self.issue(
+                    v.span(),
+                    "server.state_dir",
+                    "an empty path; give the directory the server keeps its state in \
+                     (the references of power_down = \"restore\" devices), e.g. \
+                     state_dir = \"/var/lib/motiond\""
+                        .to_owned(),
+                );
+            } else {
+                settings.state_dir = v.get_ref().into();
             }
         }
         settings

@@ -1,0 +1,272 @@
+//! References across a restart of motiond (issue 29; docs/keys/tmcpack.md "References
+//! across a server restart"), run as a user would: motiond drives a simulated SIXpack on a
+//! pseudo-terminal (the pack lives in this test process, so its EEPROM and its position
+//! registers outlive each motiond) with `power_down = "restore"`. x is referenced and moved
+//! to 20 mm; motiond is stopped (SIGTERM, and SIGKILL), the pack's supply fails (it saves
+//! its positions, "SIXpack / QUADpack manual" V2.43 8.6 "Power-Down modus") and comes back,
+//! motiond starts again: x is referenced at 20 mm without a search. Refused: the motor moved
+//! while motiond was down, and a file whose axis keys no longer match the config, and a
+//! corrupt file (no panic, a log line).
+
+mod support;
+
+use core::time::Duration;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+use board_tmcpack::sim::{TmcpackSim, TmcpackSimConfig};
+use motion_ipc::{AxisFlags, AxisMode, CommandKind, DeviceState, MotionFrame};
+use nix::sys::signal::Signal;
+use support::pty_board::PtyBoard;
+use support::*;
+use tmcpack::Request;
+
+fn homed(frame: &MotionFrame, axis: usize) -> bool {
+    frame.axes[axis].flags & AxisFlags::HOMED.0 != 0
+}
+
+/// The config: x (channel 0, 100 µsteps/mm, its switch 32 mm to the right) and y (channel
+/// 1, never referenced); `max_velocity` of x as given.
+fn config(name: &str, tty: &Path, state_dir: &Path, x_max_velocity: f64) -> PathBuf {
+    write_config(
+        name,
+        &format!(
+            r#"[server]
+name = "{name}"
+state_dir = "{}"
+
+[[link]]
+name = "rs485"
+type = "serial"
+path = "{}"
+baud = 19200
+
+[[device]]
+name = "pack"
+link = "rs485"
+model = "tmcpack"
+address = 1
+power_down = "restore"
+
+[[axis]]
+name = "x"
+device = "pack"
+channel = 0
+unit = "mm"
+counts_per_unit = 100.0
+min = -100.0
+max = 100.0
+max_velocity = {x_max_velocity:.1}
+max_accel = 250.0
+reference = {{ side = "right" }}
+
+[[axis]]
+name = "y"
+device = "pack"
+channel = 1
+unit = "mm"
+counts_per_unit = 100.0
+min = -100.0
+max = 100.0
+max_velocity = 50.0
+max_accel = 250.0
+"#,
+            state_dir.display(),
+            tty.display()
+        ),
+    )
+}
+
+/// x's record in the references file: (referenced, counts), or `None` without one.
+fn saved_x(file: &Path) -> Option<(bool, i64)> {
+    let text = std::fs::read_to_string(file).ok()?;
+    let value: toml::Value = toml::from_str(&text).ok()?;
+    let x = value
+        .get("axis")?
+        .as_array()?
+        .iter()
+        .find(|a| a.get("axis").and_then(toml::Value::as_str) == Some("x"))?;
+    Some((
+        x.get("referenced")?.as_bool()?,
+        x.get("counts")?.as_integer()?,
+    ))
+}
+
+/// Waits up to 5 s for x's record to be `want`.
+fn saved_becomes(file: &Path, want: (bool, i64)) -> Option<(bool, i64)> {
+    let end = Instant::now() + Duration::from_secs(5);
+    let mut last = saved_x(file);
+    while Instant::now() < end && last != Some(want) {
+        std::thread::sleep(Duration::from_millis(20));
+        last = saved_x(file);
+    }
+    last
+}
+
+/// motiond started on `config`, with its client, once the pack is online and x's data
+/// fresh: the first such frame.
+fn start(config: &Path, name: &str) -> (Server, RawClient, MotionFrame) {
+    let server = Server::start(config);
+    let client = RawClient::connect(name, Duration::from_secs(10));
+    let (frame, ready) = client.wait_frame(Duration::from_secs(15), |f| {
+        f.device_state(0) == DeviceState::Online
+            && f.axes[0].flags & AxisFlags::STALE.0 == 0
+            && f.axes[0].last_refresh_tick > 0
+    });
+    assert!(ready, "{:?}", frame.axes()[0]);
+    (server, client, frame)
+}
+
+/// Waits up to 3 s after the pack came online for x to be referenced (a poll confirms
+/// the saved position); the last frame.
+fn x_referenced(client: &RawClient) -> (MotionFrame, bool) {
+    client.wait_frame(Duration::from_secs(3), |f| {
+        homed(f, 0) && f.axes[0].flags & AxisFlags::STALE.0 == 0
+    })
+}
+
+#[test]
+fn a_referenced_axis_stays_referenced_across_motiond_restarts_and_pack_outages() {
+    let name = unique_name("tmcrestart");
+    let epoch = Instant::now();
+    let pack = Arc::new(Mutex::new(TmcpackSim::new(TmcpackSimConfig::default())));
+    let tty = std::env::temp_dir().join(format!("{name}.tty"));
+    let state_dir = std::env::temp_dir().join(format!("{name}-state"));
+    let file = state_dir.join(format!("{name}.references.toml"));
+    let _served = PtyBoard::start(&tty, Arc::clone(&pack), epoch, 19_200);
+    let cfg = config(&name, &tty, &state_dir, 50.0);
+
+    // First run: no file (a log line says so); home x, move it to 20 mm.
+    let (mut server, mut client, _) = start(&cfg, &name);
+    assert!(server.wait_for_log("no saved references", Duration::from_secs(2)));
+    let reply = client.command(0, CommandKind::Home, [10.0, 0.0, 0.0]);
+    assert_eq!(reply.result(), Ok(()));
+    let (frame, done) = client.wait_frame(Duration::from_secs(15), |f| {
+        homed(f, 0) && f.axes[0].mode == AxisMode::Hold as u8
+    });
+    assert!(done, "homed: {:?}", frame.axes()[0]);
+    let reply = client.command(0, CommandKind::Position, [20.0, 0.0, 0.0]);
+    assert_eq!(reply.result(), Ok(()));
+    // Moving: written as not referenced.
+    assert_eq!(saved_becomes(&file, (false, 0)), Some((false, 0)));
+    let (frame, there) = client.wait_frame(Duration::from_secs(5), |f| {
+        f.axes[0].flags & AxisFlags::ARRIVED.0 != 0 && f.axes[0].flags & AxisFlags::MOVING.0 == 0
+    });
+    assert!(there, "{:?}", frame.axes()[0]);
+    assert_eq!(saved_becomes(&file, (true, 2000)), Some((true, 2000)));
+    drop(client);
+    assert_eq!(
+        server.signal_and_wait(Signal::SIGTERM, Duration::from_secs(10)),
+        Some(0)
+    );
+    assert_eq!(saved_x(&file), Some((true, 2000)), "after a clean stop");
+    let physical = pack.lock().expect("pack").motor(0).expect("m0").physical;
+
+    // The supply fails (the pack saves 2000) and comes back; motiond starts again.
+    pack.lock().expect("pack").power_outage(epoch.elapsed());
+    let (mut server, client, _) = start(&cfg, &name);
+    let (frame, referenced) = x_referenced(&client);
+    assert!(referenced, "no search needed: {:?}", frame.axes()[0]);
+    assert!(
+        (frame.axes[0].position - 20.0).abs() < 1e-9,
+        "{:?}",
+        frame.axes()[0]
+    );
+    assert!(!homed(&frame, 1), "y never had a reference");
+    assert_eq!(
+        pack.lock().expect("pack").motor(0).expect("m0").physical,
+        physical,
+        "no search: the rotor stayed"
+    );
+
+    // SIGKILL, the pack kept running (no boot): referenced from its registers.
+    assert_eq!(saved_becomes(&file, (true, 2000)), Some((true, 2000)));
+    drop(client);
+    server.signal_and_wait(Signal::SIGKILL, Duration::from_secs(5));
+    let (mut server, client, _) = start(&cfg, &name);
+    let (frame, referenced) = x_referenced(&client);
+    assert!(referenced, "kept: {:?}", frame.axes()[0]);
+    assert!((frame.axes[0].position - 20.0).abs() < 1e-9);
+
+    // SIGKILL, then an outage: referenced from the loaded positions.
+    assert_eq!(saved_becomes(&file, (true, 2000)), Some((true, 2000)));
+    drop(client);
+    server.signal_and_wait(Signal::SIGKILL, Duration::from_secs(5));
+    pack.lock().expect("pack").power_outage(epoch.elapsed());
+    let (mut server, client, _) = start(&cfg, &name);
+    let (frame, referenced) = x_referenced(&client);
+    assert!(referenced, "loaded: {:?}", frame.axes()[0]);
+    assert!((frame.axes[0].position - 20.0).abs() < 1e-9);
+
+    // Refused: the motor moved (another master ran it to 25 mm) while motiond was down;
+    // then the outage saved that position.
+    assert_eq!(saved_becomes(&file, (true, 2000)), Some((true, 2000)));
+    drop(client);
+    assert_eq!(
+        server.signal_and_wait(Signal::SIGTERM, Duration::from_secs(10)),
+        Some(0)
+    );
+    {
+        let mut pack = pack.lock().expect("pack");
+        let now = epoch.elapsed();
+        pack.act_behind_the_back(
+            now,
+            Request::SetTarget {
+                motor: 0,
+                target: 2500,
+            },
+        );
+        pack.act_behind_the_back(
+            now,
+            Request::StartRamp {
+                motor: 0,
+                target: 2500,
+            },
+        );
+        // Long enough for the ramp (5 mm at up to 50 mm/s).
+        pack.power_outage(now + Duration::from_secs(2));
+        assert_eq!(pack.motor(0).expect("m0").position, 0, "booted");
+    }
+    let (mut server, mut client, _) = start(&cfg, &name);
+    let (frame, referenced) = x_referenced(&client);
+    assert!(!referenced, "moved while down: {:?}", frame.axes()[0]);
+    assert!(
+        (frame.axes[0].position - 25.0).abs() < 1e-9,
+        "{:?}",
+        frame.axes()[0]
+    );
+
+    // Refused: the axis's keys changed (x's max_velocity), though the position matches.
+    let reply = client.command(0, CommandKind::SetPosition, [25.0, 0.0, 0.0]);
+    assert_eq!(reply.result(), Ok(()));
+    assert_eq!(saved_becomes(&file, (true, 2500)), Some((true, 2500)));
+    drop(client);
+    assert_eq!(
+        server.signal_and_wait(Signal::SIGTERM, Duration::from_secs(10)),
+        Some(0)
+    );
+    let changed = config(&name, &tty, &state_dir, 40.0);
+    let (mut server, client, _) = start(&changed, &name);
+    assert!(server.wait_for_log("keys changed", Duration::from_secs(2)));
+    let (frame, referenced) = x_referenced(&client);
+    assert!(!referenced, "another config: {:?}", frame.axes()[0]);
+    drop(client);
+    assert_eq!(
+        server.signal_and_wait(Signal::SIGTERM, Duration::from_secs(10)),
+        Some(0)
+    );
+
+    // Refused: a corrupt file. motiond starts, says so, references nothing.
+    std::fs::write(&file, "server = \"not toml").expect("corrupt");
+    let (mut server, client, _) = start(&cfg, &name);
+    assert!(server.wait_for_log("is not a references file", Duration::from_secs(2)));
+    let (frame, referenced) = x_referenced(&client);
+    assert!(!referenced, "corrupt file: {:?}", frame.axes()[0]);
+    drop(client);
+    assert_eq!(
+        server.signal_and_wait(Signal::SIGTERM, Duration::from_secs(10)),
+        Some(0)
+    );
+    let _ = std::fs::remove_dir_all(&state_dir);
+}
