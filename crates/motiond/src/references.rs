@@ -54,9 +54,17 @@ pub struct Watch {
     /// (axis index, last sample sent).
     axes: Vec<(usize, Option<Sample>)>,
     tx: rtrb::Producer<Sample>,
+    /// What start-up handed each driver (device index, reference): the black box journals
+    /// it, so that a replay hands its drivers the same.
+    restored: Vec<(usize, SavedReference)>,
 }
 
 impl Watch {
+    /// The references start-up handed the drivers: (device index, reference).
+    pub fn restored(&self) -> &[(usize, SavedReference)] {
+        &self.restored
+    }
+
     /// Looks at the frame the tick just wrote: a sample for every watched axis whose state
     /// changed (no allocation; a full ring is retried at the next tick).
     pub fn observe(&mut self, frame: &MotionFrame) {
@@ -354,6 +362,11 @@ pub fn start(config: &ServerConfig, drivers: &mut [AnyDriver]) -> Option<(Watch,
     let watch = Watch {
         axes: now.iter().map(|(index, _)| (*index, None)).collect(),
         tx,
+        restored: given
+            .iter()
+            .enumerate()
+            .flat_map(|(device, saved)| saved.iter().map(move |r| (device, *r)))
+            .collect(),
     };
     let file = File {
         server: config.server.name.clone(),
@@ -465,6 +478,7 @@ mod tests {
         let mut watch = Watch {
             axes: vec![(1, None)],
             tx,
+            restored: Vec::new(),
         };
         let mut seen = |watch: &mut Watch, frame: &MotionFrame| {
             watch.observe(frame);
@@ -525,6 +539,7 @@ mod tests {
         let mut full = Watch {
             axes: vec![(1, None)],
             tx: rtrb::RingBuffer::new(1).0,
+            restored: Vec::new(),
         };
         full.observe(&rest);
         full.observe(&taken);

@@ -362,6 +362,9 @@ impl Loop {
         // opened it (an `Up` already queued is taken at the first tick). Until then the
         // link's boards are starting, not down.
         setup.journal.start(setup.epoch, setup.ports.len());
+        for (device, reference) in setup.references.iter().flat_map(|watch| watch.restored()) {
+            setup.journal.restored_reference(*device, reference);
+        }
         setup.journal.prepare_snapshots(&setup.engine);
         for link in 0..setup.ports.len() {
             setup.journal.link_opening(link);
@@ -710,10 +713,11 @@ impl Loop {
                     break;
                 };
                 self.setup.journal.link_tx(index, &buf[..len]);
-                if let Some(baud) = self.setup.engine.take_link_rate(index)
-                    && port.tx.push(Packet::rate_change(baud, now)).is_err()
-                {
-                    port.counters.dropped.fetch_add(1, Ordering::Relaxed);
+                if let Some(baud) = self.setup.engine.take_link_rate(index) {
+                    self.setup.journal.link_rate(index, baud);
+                    if port.tx.push(Packet::rate_change(baud, now)).is_err() {
+                        port.counters.dropped.fetch_add(1, Ordering::Relaxed);
+                    }
                 }
                 // `slots() > 0` was checked: the push cannot fail, but a failure would
                 // still be counted rather than lost silently.

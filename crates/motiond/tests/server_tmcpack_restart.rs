@@ -35,6 +35,8 @@ fn config(name: &str, tty: &Path, state_dir: &Path, x_max_velocity: f64) -> Path
             r#"[server]
 name = "{name}"
 state_dir = "{}"
+blackbox_dir = "{}"
+blackbox_on_exit = true
 
 [[link]]
 name = "rs485"
@@ -73,6 +75,7 @@ max_velocity = 50.0
 max_accel = 250.0
 "#,
             state_dir.display(),
+            state_dir.join("blackbox").display(),
             tty.display()
         ),
     )
@@ -179,6 +182,14 @@ fn a_referenced_axis_stays_referenced_across_motiond_restarts_and_pack_outages()
         physical,
         "no search: the rotor stayed"
     );
+    // This run's black box (checked at the end: it replays with the reference start-up
+    // handed the driver, journaled).
+    nix::sys::signal::kill(
+        nix::unistd::Pid::from_raw(server.pid() as i32),
+        Signal::SIGUSR2,
+    )
+    .expect("SIGUSR2");
+    assert!(server.wait_for_log("black box saved (sigusr2)", Duration::from_secs(5)));
 
     // SIGKILL, the pack kept running (no boot): referenced from its registers.
     assert_eq!(saved_becomes(&file, (true, 2000)), Some((true, 2000)));
@@ -268,5 +279,28 @@ fn a_referenced_axis_stays_referenced_across_motiond_restarts_and_pack_outages()
         server.signal_and_wait(Signal::SIGTERM, Duration::from_secs(10)),
         Some(0)
     );
+    // Every run's black box replays frame for frame: the runs whose driver was handed a
+    // saved reference at start-up, and the others.
+    let saved: Vec<PathBuf> = std::fs::read_dir(state_dir.join("blackbox"))
+        .expect("the black box files")
+        .filter_map(Result::ok)
+        .map(|entry| entry.path())
+        .filter(|path| path.extension().is_some_and(|ext| ext == "mcap"))
+        .collect();
+    assert!(saved.len() >= 5, "{saved:?}");
+    for file in &saved {
+        let output = std::process::Command::new(env!("CARGO_BIN_EXE_motiond"))
+            .arg("--replay")
+            .arg(file)
+            .output()
+            .expect("motiond --replay runs");
+        let text = String::from_utf8_lossy(&output.stdout);
+        assert!(
+            output.status.success() && text.contains("frames identical"),
+            "{}: {text}{}",
+            file.display(),
+            String::from_utf8_lossy(&output.stderr)
+        );
+    }
     let _ = std::fs::remove_dir_all(&state_dir);
 }

@@ -154,15 +154,26 @@ impl Robot {
         });
         for (index, link) in self.links.iter_mut().enumerate() {
             loop {
-                let sent = engine(|| {
+                let (sent, rate) = engine(|| {
                     let sent = self.engine.poll_link_transmit(index, now, &mut buf);
+                    let mut rate = None;
                     match sent {
-                        Some(len) => self.port.journal.link_tx(index, &buf[..len]),
+                        Some(len) => {
+                            self.port.journal.link_tx(index, &buf[..len]);
+                            // As motiond: a change of the line rate before the message.
+                            rate = self.engine.take_link_rate(index);
+                            if let Some(baud) = rate {
+                                self.port.journal.link_rate(index, baud);
+                            }
+                        }
                         None => self.port.journal.link_tx_none(index),
                     }
-                    sent
+                    (sent, rate)
                 });
                 let Some(len) = sent else { break };
+                if let Some(baud) = rate {
+                    link.set_baud(now, baud).expect("sim link rate");
+                }
                 link.write(now, &buf[..len]).expect("sim link write");
                 engine(|| {
                     self.port.journal.link_written(index, now);

@@ -217,6 +217,14 @@ fn readable(record: &Record<'_>, links: &[String], tick: u64) -> Option<(usize, 
         ),
         Kind::OverrunFault => (3, format!(r#"{{"tick":{tick},"event":"overrun fault"}}"#)),
         Kind::Shutdown => (3, format!(r#"{{"tick":{tick},"event":"shutdown"}}"#)),
+        Kind::LinkRate => (
+            3,
+            format!(
+                r#"{{"tick":{tick},"event":"line rate","link":"{}","baud":{}}}"#,
+                json(link()),
+                record.u64_at(0)
+            ),
+        ),
         Kind::Snapshot => (
             3,
             format!(

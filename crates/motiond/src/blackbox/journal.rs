@@ -5,7 +5,7 @@
 
 use core::time::Duration;
 
-use motion_drivers::Driver;
+use motion_drivers::{Driver, SavedReference};
 use motion_engine::Engine;
 use motion_ipc::schema::Fields;
 use motion_ipc::{ClientId, CommandReply, CommandRequest, GroupPath, MotionFrame, Setpoint};
@@ -200,6 +200,24 @@ impl Journal {
         let number = self.ticks;
         self.ticks += 1;
         self.words(Kind::Tick, 0, &[ns(now), number]);
+    }
+
+    /// Start-up handed `device`'s driver `reference`.
+    pub fn restored_reference(&mut self, device: usize, reference: &SavedReference) {
+        self.words(
+            Kind::RestoredReference,
+            0,
+            &[
+                device as u64,
+                reference.channel as u64,
+                reference.counts as u64,
+            ],
+        );
+    }
+
+    /// `link`'s line rate changes to `baud` before the message just queued.
+    pub fn link_rate(&mut self, link: usize, baud: u32) {
+        self.words(Kind::LinkRate, link, &[u64::from(baud)]);
     }
 
     /// `link` is handed to its I/O thread closed.

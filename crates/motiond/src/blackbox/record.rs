@@ -75,13 +75,19 @@ pub enum Kind {
     /// The engine's state (drivers included) between the tick before and this one,
     /// serialized with postcard: where a replay of a ring that wrapped begins.
     Snapshot = 26,
+    /// Start-up handed a driver a reference a previous run saved: `device: u64`,
+    /// `channel: u64`, `counts: i64` (before the first tick; a replay hands it the same).
+    RestoredReference = 27,
+    /// The engine asked for the link's line rate to change before the message just
+    /// queued (`Engine::take_link_rate`): `baud: u64`.
+    LinkRate = 28,
 }
 
 impl Kind {
     /// The kind of byte `value`.
     pub fn from_u8(value: u8) -> Option<Self> {
         use Kind::*;
-        const ALL: [Kind; 26] = [
+        const ALL: [Kind; 28] = [
             Start,
             Tick,
             LinkDown,
@@ -108,6 +114,8 @@ impl Kind {
             Trigger,
             LinkOpening,
             Snapshot,
+            RestoredReference,
+            LinkRate,
         ];
         ALL.into_iter().find(|kind| *kind as u8 == value)
     }

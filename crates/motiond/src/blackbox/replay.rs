@@ -7,6 +7,7 @@ use core::time::Duration;
 use std::iter::Peekable;
 
 use motion_boards::AnyDriver;
+use motion_drivers::{Driver as _, SavedReference};
 use motion_engine::{CommandPort, Engine};
 use motion_ipc::{
     ClientId, CommandReply, CommandRequest, FaultCode, GroupPath, MotionFrame, Setpoint,
@@ -55,9 +56,22 @@ pub enum Divergence {
     /// The engine asked for other inputs than the recorded ones.
     #[error("the engine took other inputs than recorded ({0})")]
     Inputs(&'static str),
-    /// The replayed engine's state (drivers included) differs from the recorded snapshot.
-    #[error("the engine's state differs from the snapshot recorded here")]
-    State,
+    /// The line rate the engine asked a link to take.
+    #[error(
+        "link `{link}` was asked for another line rate (recorded {recorded:?}, replayed {replayed:?})"
+    )]
+    LinkRate {
+        /// The link.
+        link: String,
+        /// The recorded rate change, if any.
+        recorded: Option<u32>,
+        /// The replayed one, if any.
+        replayed: Option<u32>,
+    },
+    /// The replayed engine's state (drivers included) differs from the recorded snapshot:
+    /// the first line of its debug form that differs, replayed and recorded.
+    #[error("the engine's state differs from the snapshot recorded here: {0}")]
+    State(String),
 }
 
 /// Why a replay did not go through.
@@ -199,6 +213,40 @@ impl CommandPort for ReplayPort<'_, '_> {
     }
 }
 
+/// Where the replayed `engine` and the recorded snapshot differ: the first line of their
+/// debug forms that differs, with the lines that lead to it (the path to the field).
+fn state_difference(engine: &Engine<AnyDriver>, recorded: &[u8]) -> String {
+    let Ok(recorded) = postcard::from_bytes::<Engine<AnyDriver>>(recorded) else {
+        return "the recorded snapshot does not decode".to_owned();
+    };
+    let replayed = format!("{engine:#?}");
+    let recorded = format!("{recorded:#?}");
+    let mut path: Vec<&str> = Vec::new();
+    for (mine, theirs) in replayed.lines().zip(recorded.lines()) {
+        if mine != theirs {
+            let path = path.join(" ");
+            return format!(
+                "{path} … replayed `{}`, recorded `{}`",
+                mine.trim(),
+                theirs.trim()
+            );
+        }
+        let depth = mine.len() - mine.trim_start().len();
+        path.truncate(depth / 4);
+        if mine.trim_end().ends_with(['{', '[', '(']) {
+            path.push(mine.trim());
+        }
+    }
+    "the serialized bytes differ, not the debug forms".to_owned()
+}
+
+fn link_name(config: &ServerConfig, link: usize) -> String {
+    config
+        .links
+        .get(link)
+        .map_or_else(|| link.to_string(), |l| l.name.clone())
+}
+
 fn at(ns: u64) -> Duration {
     Duration::from_nanos(ns)
 }
@@ -251,7 +299,25 @@ fn replay_here(config: &ServerConfig, recording: &Recording) -> Result<Replayed,
         .first()
         .map_or(0, |bytes| tick_number(bytes));
     let from_start = first == 0 && recording.dropped() == 0;
-    let drivers = crate::boards::build(config).map_err(|e| ReplayError::Build(e.to_string()))?;
+    let mut drivers =
+        crate::boards::build(config).map_err(|e| ReplayError::Build(e.to_string()))?;
+    // What start-up handed the drivers (references a previous run saved), as it did.
+    let mut restored: Vec<Vec<SavedReference>> = vec![Vec::new(); drivers.len()];
+    for record in records(&recording.head).filter_map(Result::ok) {
+        if record.kind == Kind::RestoredReference
+            && let Some(list) = restored.get_mut(record.u64_at(0) as usize)
+        {
+            list.push(SavedReference {
+                channel: record.u64_at(8) as usize,
+                counts: record.u64_at(16) as i64,
+            });
+        }
+    }
+    for (driver, saved) in drivers.iter_mut().zip(&restored) {
+        if !saved.is_empty() {
+            driver.restore_references(saved);
+        }
+    }
     let mut engine: Engine<AnyDriver> = Engine::new(config.engine_config(), drivers)
         .map_err(|e| ReplayError::Build(e.to_string()))?;
     // From the start: the engine built from the config, as the server built it. Else from
@@ -322,7 +388,8 @@ fn replay_here(config: &ServerConfig, recording: &Recording) -> Result<Replayed,
                             reason: error.to_string(),
                         })?;
                     if replayed != record.payload {
-                        return Err(diverged(engine.tick(), Divergence::State));
+                        let what = state_difference(&engine, record.payload);
+                        return Err(diverged(engine.tick(), Divergence::State(what)));
                     }
                 }
                 Kind::LinkDown => engine.link_down(link, now),
@@ -379,6 +446,26 @@ fn replay_here(config: &ServerConfig, recording: &Recording) -> Result<Replayed,
                     } else {
                         None
                     };
+                    // A change of the line rate the engine asked for before this message.
+                    let rate = sent.and_then(|_| engine.take_link_rate(link));
+                    let recorded_rate = match iter.peek() {
+                        Some(Ok(next)) if next.kind == Kind::LinkRate => {
+                            let baud = u32::try_from(next.u64_at(0)).unwrap_or(u32::MAX);
+                            iter.next();
+                            Some(baud)
+                        }
+                        _ => None,
+                    };
+                    if rate != recorded_rate {
+                        return Err(diverged(
+                            engine.tick(),
+                            Divergence::LinkRate {
+                                link: link_name(config, link),
+                                recorded: recorded_rate,
+                                replayed: rate,
+                            },
+                        ));
+                    }
                     if recorded != sent.map(|_| replayed) {
                         let recorded = recorded.unwrap_or(&[]);
                         let differ = (0..recorded.len().max(replayed.len()))
@@ -392,10 +479,7 @@ fn replay_here(config: &ServerConfig, recording: &Recording) -> Result<Replayed,
                         return Err(diverged(
                             engine.tick(),
                             Divergence::LinkTx {
-                                link: config
-                                    .links
-                                    .get(link)
-                                    .map_or_else(|| link.to_string(), |l| l.name.clone()),
+                                link: link_name(config, link),
                                 at: differ,
                                 recorded: byte(recorded),
                                 replayed: byte(replayed),
@@ -411,13 +495,13 @@ fn replay_here(config: &ServerConfig, recording: &Recording) -> Result<Replayed,
                         count: record.u64_at(0),
                     });
                 }
-                Kind::Request | Kind::Path | Kind::NoPath | Kind::Reply => {
+                Kind::Request | Kind::Path | Kind::NoPath | Kind::Reply | Kind::LinkRate => {
                     return Err(diverged(
                         engine.tick(),
                         Divergence::Inputs("a command the engine did not ask for"),
                     ));
                 }
-                Kind::Start | Kind::Trigger | Kind::LinkOpening => {}
+                Kind::Start | Kind::Trigger | Kind::LinkOpening | Kind::RestoredReference => {}
             }
         }
         ticks += 1;
