@@ -6,6 +6,7 @@
 pub mod app;
 pub mod blackbox;
 pub mod boards;
+pub mod command_port;
 pub mod config;
 pub mod drivers;
 pub mod error;

@@ -13,7 +13,8 @@ use std::io::Write;
 use nix::sys::time::TimeSpec;
 use nix::time::{ClockId, ClockNanosleepFlags, clock_gettime, clock_nanosleep};
 
-use crate::error::RtError;
+use crate::config::ServerSettings;
+use crate::error::{RtError, StartError};
 
 /// CLOCK_MONOTONIC now, as a duration since the clock's own origin.
 pub fn monotonic_now() -> Duration {
@@ -178,6 +179,73 @@ pub fn prefault_stack() {
         page[0] = 1;
     }
     std::hint::black_box(&buffer);
+}
+
+/// The tick thread's real-time set-up as `settings` ask (each step's result in the
+/// status; with `require_rt`, a step that failed is an error).
+pub fn set_up(
+    settings: &ServerSettings,
+    require_rt: bool,
+    io_rt: IoRt,
+) -> Result<(RtStatus, Option<DmaLatencyGuard>), StartError> {
+    let mut status = RtStatus {
+        io_fifo: io_rt.fifo,
+        io_pinned: io_rt.pinned,
+        problems: io_rt.problems,
+        ..RtStatus::default()
+    };
+    let problem = |status: &mut RtStatus, error: RtError| status.problems.push(error);
+    if let Some(priority) = settings.rt_priority {
+        match set_fifo(priority) {
+            Ok(()) => status.fifo = Some(priority),
+            Err(e) => problem(&mut status, e),
+        }
+    }
+    if let Some(cpu) = settings.cpu {
+        match pin_to(cpu) {
+            Ok(()) => status.pinned = Some(cpu),
+            Err(e) => problem(&mut status, e),
+        }
+    }
+    match set_timer_slack() {
+        Ok(()) => status.timer_slack = true,
+        Err(e) => problem(&mut status, e),
+    }
+    let guard = match hold_cpu_dma_latency() {
+        Ok(guard) => {
+            status.dma_latency = true;
+            Some(guard)
+        }
+        Err(e) => {
+            problem(&mut status, e);
+            None
+        }
+    };
+    if settings.lock_memory {
+        match lock_memory() {
+            Ok(()) => status.locked = true,
+            Err(e) => problem(&mut status, e),
+        }
+    }
+    prefault_stack();
+    let wanted_fifo = (settings.rt_priority.is_some() && status.fifo.is_none())
+        || (settings.io_rt_priority.is_some() && status.io_fifo.is_none());
+    let wanted_pin = (settings.cpu.is_some() && status.pinned.is_none())
+        || (settings.io_cpu.is_some() && status.io_pinned.is_none());
+    let wanted_lock = settings.lock_memory && !status.locked;
+    if require_rt && (wanted_fifo || wanted_pin || wanted_lock || settings.rt_priority.is_none()) {
+        let missing = if settings.rt_priority.is_none() {
+            "set [server] rt_priority".to_owned()
+        } else {
+            let problems: Vec<String> = status.problems.iter().map(ToString::to_string).collect();
+            problems.join("; ")
+        };
+        return Err(StartError::RtIncomplete {
+            summary: status.summary(),
+            missing,
+        });
+    }
+    Ok((status, guard))
 }
 
 #[cfg(test)]

@@ -5,28 +5,26 @@ use core::time::Duration;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
 
-use crate::paths::{PathInbox, PathsFactory};
-use iceoryx2::active_request::ActiveRequest;
-use iceoryx2::port::server::Server;
 use iceoryx2::port::update_connections::UpdateConnections;
 use motion_boards::AnyDriver;
 use motion_drivers::Driver;
-use motion_engine::{CommandPort, Engine};
+use motion_engine::Engine;
 use motion_ipc::{
-    ClientId, CommandReply, CommandRequest, DeviceState, FaultCode, GroupPath, LinkIo,
-    MachineParams, MotionFrame, ServerInfo, ServerStats, write_text,
+    ClientId, DeviceState, FaultCode, LinkIo, MachineParams, MotionFrame, ServerInfo, ServerStats,
+    write_text,
 };
 use rtrb::{Consumer, Producer};
 
 use crate::blackbox::Journal;
 use crate::blackbox::record::Trigger;
+use crate::command_port::IpcCommands;
 use crate::config::ServerSettings;
-use crate::error::{RtError, StartError};
+use crate::error::StartError;
 use crate::estop_watch::EstopWatch;
 use crate::io::{LinkEvent, LinkPort, NEVER, PACKET_LEN, Packet};
 use crate::phases::{Phase, PhaseClock, PhaseMeans};
 use crate::rt::{self, IoRt, RtStatus, monotonic_now, sleep_until};
-use crate::services::{ClientDirectory, CommandFactory, Ipc, Services, SlotUse};
+use crate::services::{ClientDirectory, Services, SlotUse};
 use crate::stats::Latency;
 
 /// How long a shutdown waits for the boards to acknowledge their stop goals.
@@ -154,128 +152,6 @@ pub struct TickSetup {
     pub references: Option<crate::references::Watch>,
 }
 
-/// The command port over the iceoryx2 server: one active request at a time, answered
-/// exactly once. The sender is the node of the client port the request came through, as
-/// iceoryx2 knows it — never the payload's `client` field.
-struct IpcCommands<'a> {
-    server: &'a Server<Ipc, CommandRequest, (), CommandReply, ()>,
-    factory: &'a CommandFactory,
-    directory: &'a mut ClientDirectory,
-    current: Option<ActiveRequest<Ipc, CommandRequest, (), CommandReply, ()>>,
-    sender: ClientId,
-    /// Replies that could not be sent (counted into `ServerStats::replies_lost`).
-    replies_lost: u64,
-    /// The paths clients sent their groups.
-    paths: &'a mut PathInbox,
-    /// The paths service (the nodes of its publishers).
-    paths_factory: &'a PathsFactory,
-    /// The black box: every request, path and reply.
-    journal: &'a mut Journal,
-}
-
-impl CommandPort for IpcCommands<'_> {
-    fn next_request(&mut self) -> Option<CommandRequest> {
-        let active = self.server.receive().ok().flatten()?;
-        let request = *active.payload();
-        self.sender = self
-            .directory
-            .node_of(self.factory, active.origin().value());
-        self.journal.request(self.sender, &request);
-        self.current = Some(active);
-        Some(request)
-    }
-
-    fn sender(&self) -> Option<ClientId> {
-        Some(self.sender)
-    }
-
-    fn take_path(&mut self, client: ClientId, id: u64) -> Option<&GroupPath> {
-        if !self.paths.holds(client, id) {
-            // Published after this tick took in the paths, and run at once: take in what
-            // arrived since.
-            self.paths.receive(self.paths_factory);
-        }
-        let path = self.paths.take(client, id);
-        self.journal.path(client, id, path);
-        path
-    }
-
-    fn reply(&mut self, reply: CommandReply) {
-        self.journal.reply(&reply);
-        if let Some(active) = self.current.take()
-            && active.send_copy(reply).is_err()
-        {
-            // A client that vanished meanwhile cannot be answered: counted, nothing else.
-            self.replies_lost += 1;
-        }
-    }
-}
-
-fn set_up_rt(
-    settings: &ServerSettings,
-    require_rt: bool,
-    io_rt: IoRt,
-) -> Result<(RtStatus, Option<rt::DmaLatencyGuard>), StartError> {
-    let mut status = RtStatus {
-        io_fifo: io_rt.fifo,
-        io_pinned: io_rt.pinned,
-        problems: io_rt.problems,
-        ..RtStatus::default()
-    };
-    let problem = |status: &mut RtStatus, error: RtError| status.problems.push(error);
-    if let Some(priority) = settings.rt_priority {
-        match rt::set_fifo(priority) {
-            Ok(()) => status.fifo = Some(priority),
-            Err(e) => problem(&mut status, e),
-        }
-    }
-    if let Some(cpu) = settings.cpu {
-        match rt::pin_to(cpu) {
-            Ok(()) => status.pinned = Some(cpu),
-            Err(e) => problem(&mut status, e),
-        }
-    }
-    match rt::set_timer_slack() {
-        Ok(()) => status.timer_slack = true,
-        Err(e) => problem(&mut status, e),
-    }
-    let guard = match rt::hold_cpu_dma_latency() {
-        Ok(guard) => {
-            status.dma_latency = true;
-            Some(guard)
-        }
-        Err(e) => {
-            problem(&mut status, e);
-            None
-        }
-    };
-    if settings.lock_memory {
-        match rt::lock_memory() {
-            Ok(()) => status.locked = true,
-            Err(e) => problem(&mut status, e),
-        }
-    }
-    rt::prefault_stack();
-    let wanted_fifo = (settings.rt_priority.is_some() && status.fifo.is_none())
-        || (settings.io_rt_priority.is_some() && status.io_fifo.is_none());
-    let wanted_pin = (settings.cpu.is_some() && status.pinned.is_none())
-        || (settings.io_cpu.is_some() && status.io_pinned.is_none());
-    let wanted_lock = settings.lock_memory && !status.locked;
-    if require_rt && (wanted_fifo || wanted_pin || wanted_lock || settings.rt_priority.is_none()) {
-        let missing = if settings.rt_priority.is_none() {
-            "set [server] rt_priority".to_owned()
-        } else {
-            let problems: Vec<String> = status.problems.iter().map(ToString::to_string).collect();
-            problems.join("; ")
-        };
-        return Err(StartError::RtIncomplete {
-            summary: status.summary(),
-            missing,
-        });
-    }
-    Ok((status, guard))
-}
-
 /// Runs the tick loop until shutdown. Never returns early without a `Failed` or `Stopped`
 /// report.
 pub fn run(mut setup: TickSetup) {
@@ -287,7 +163,7 @@ pub fn run(mut setup: TickSetup) {
             return;
         }
     };
-    let (rt_status, _dma_guard) = match set_up_rt(
+    let (rt_status, _dma_guard) = match rt::set_up(
         &setup.settings,
         setup.require_rt,
         std::mem::take(&mut setup.io_rt),
