@@ -24,7 +24,7 @@ pub struct Points<'a> {
 }
 
 /// How the segments between points are made.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Kind {
     /// A C2 cubic spline through the positions.
     Positions,

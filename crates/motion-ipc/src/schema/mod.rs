@@ -188,7 +188,7 @@ impl<T: FieldType, const N: usize> FieldType for [T; N] {
 }
 
 /// One value of an enumeration, or one bit of a flag set.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Variant {
     /// The Rust variant name (`RampPosition`) or flag constant name (`MOVING`).
     pub name: String,
@@ -225,7 +225,7 @@ pub struct Constant {
 }
 
 /// One iceoryx2 service (or the server's node name) of an instance.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Service {
     /// The leaf (`frame`), as [`ServiceNames`](crate::ServiceNames) names its method.
     pub leaf: &'static str,

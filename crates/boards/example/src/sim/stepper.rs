@@ -7,7 +7,7 @@ use crate::codec::Motion;
 const DT: f64 = 100e-6;
 
 /// What the channel was told to do last.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 enum Mode {
     /// Standing, coils on.
     Hold,
@@ -23,7 +23,7 @@ enum Mode {
 
 /// One stepper channel of the simulated board. Steps are counted continuously and read
 /// rounded; a stop settles on a whole step.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy)]
 pub(super) struct Stepper {
     position: f64,
     velocity: f64,

@@ -9,7 +9,7 @@ use super::inputs::{Input, InputAction, pin_level};
 use super::physics::Motor;
 
 /// Channel state.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
+#[derive(Debug, Clone)]
 pub(crate) struct Channel {
     pub(crate) motor: Motor,
     pub(crate) control: Controller,

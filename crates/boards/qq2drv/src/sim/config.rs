@@ -6,7 +6,7 @@ use core::time::Duration;
 ///
 /// The speed follows a first-order lag towards `no_load_velocity × power / 8191` (less a
 /// static-friction dead band), the way a small brushed gearmotor under PWM behaves.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MotorConfig {
     /// Velocity at full power without load, quadrature transitions per second.
     pub no_load_velocity: f64,
@@ -37,7 +37,7 @@ impl Default for MotorConfig {
 }
 
 /// What drives a channel's IN pin (home / index / edge input).
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum InputSource {
     /// Nothing connected: the pin reads its idle level.
     #[default]
@@ -75,7 +75,7 @@ pub enum InputSource {
 }
 
 /// One channel's IN pin: what actuates it and which electrical level "actuated" is.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct InputPin {
     /// What actuates the pin.
     pub source: InputSource,

@@ -17,7 +17,7 @@ use super::ramp::{PositionProfile, VelocityRamp, min_limit};
 pub(crate) const DEFAULT_VELOCITY_LIMIT: u32 = qq2drv::limits::VELOCITY_LIMIT_MAX;
 
 /// Control state of one channel.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy)]
 pub(crate) struct Controller {
     pub(crate) mode: ControlMode,
     /// Packet 18 power, applied in Power mode.

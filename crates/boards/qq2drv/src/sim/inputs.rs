@@ -41,7 +41,7 @@ pub(crate) enum InputAction {
 }
 
 /// Configuration (packet 14) and accumulated state of one input.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct Input {
     pub(crate) config: InputConfig,
     pub(crate) spacing: u16,

@@ -63,7 +63,7 @@ const CONTROL_PERIOD: Duration = Duration::from_millis(2);
 const SUBSTEP: Duration = Duration::from_micros(100);
 
 /// Board registers that survive between packets.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy, Default)]
 struct Registers {
     /// Data masks (packet 6) and stream config (packet 8).
     layout: MotionLayout,

@@ -11,14 +11,14 @@ const EVENT_CAPACITY: usize = 128;
 
 /// One capture event: the instant (seconds since the model's epoch) a detent boundary was
 /// crossed, and the direction of the crossing.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy)]
 struct Capture {
     at: f64,
     forward: bool,
 }
 
 /// A DC motor under PWM with an incremental encoder on its shaft.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
+#[derive(Debug, Clone)]
 pub(crate) struct Motor {
     cfg: MotorConfig,
     /// Per-channel gain factor (drawn from the seeded generator).

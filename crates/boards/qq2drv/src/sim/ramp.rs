@@ -4,7 +4,7 @@
 //! Both step once per control period. An acceleration of 0 means "not limited".
 
 /// Trapezoidal position setpoint that decelerates in advance so it stops on the target.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub(crate) struct PositionProfile {
     /// Internal position target (setpoint), transitions.
     pub(crate) position: f64,
@@ -77,7 +77,7 @@ impl PositionProfile {
 }
 
 /// Velocity setpoint ramped towards a target at a bounded rate.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub(crate) struct VelocityRamp {
     /// Setpoint velocity, transitions/s.
     pub(crate) velocity: f64,

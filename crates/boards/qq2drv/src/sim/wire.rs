@@ -9,7 +9,7 @@ use std::collections::VecDeque;
 use qq2drv::{PacketBuf, StreamDecoder};
 
 /// A packet waiting for the master to clock it out.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy)]
 struct Outgoing {
     /// When the packet becomes available for transmission.
     ready_at: Duration,
@@ -20,7 +20,7 @@ struct Outgoing {
 }
 
 /// MISO queue, MOSI decoder and transaction counter.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
+#[derive(Debug, Clone)]
 pub(crate) struct Wire {
     pub(crate) rx: StreamDecoder,
     /// Number of the transaction under way (1 for the first).

@@ -665,7 +665,7 @@ mod random {
     use ::qsb::Request;
     use proptest::prelude::*;
 
-    #[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
+    #[derive(Debug, Clone)]
     enum Op {
         Noise(Vec<u8>),
         Line(u8, u8, u32, Option<u32>),

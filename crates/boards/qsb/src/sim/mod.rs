@@ -94,7 +94,7 @@ use ramp::Stepper;
 use stream::Streams;
 
 /// Registers that are neither the counter's nor the digital I/O's.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
+#[derive(Debug, Clone)]
 struct Registers {
     mode: Mode,
     threshold: u16,

@@ -6,7 +6,7 @@
 //! target step, whatever the time steps it is advanced by.
 
 /// What the drive is doing.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum Goal {
     /// Standing still.
     Idle,
@@ -19,7 +19,7 @@ pub(crate) enum Goal {
 }
 
 /// Stepper state, in steps and steps/s.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
+#[derive(Debug, Clone)]
 pub(crate) struct Stepper {
     pub position: f64,
     pub velocity: f64,

@@ -16,7 +16,7 @@ use spimotor::{Coils, StepDelay, port};
 pub const POWER_ON_COILS: Coils = Coils::One;
 
 /// Firmware registers of the stepper section and the true rotor position.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) struct Stepper {
     /// Port 0x10.
     pub intensity: u8,

@@ -7,7 +7,7 @@ use tmcpack::{AmaxDivisor, CanBitrate, OptionsLayout, Variant};
 
 /// A reference switch in the motor's *physical* coordinates (microsteps of the rotor, which
 /// $27 and reference searches do not move).
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct RefSwitch {
     /// First physical position at which the switch is actuated.
     pub from: i64,
@@ -32,7 +32,7 @@ impl RefSwitch {
 }
 
 /// What is connected to one motor connector.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MotorConfig {
     /// The reference switch, if any (none: Ref_In floats high).
     pub ref_switch: Option<RefSwitch>,

@@ -10,7 +10,7 @@ use super::ramp::{self, Limits, Q};
 use super::reference::{self, Outcome, RefSearch, Resume, SearchDrive};
 
 /// What a motor does.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Mode {
     Inactive,
     /// Trapezoidal ramp to an internal (unwrapped) target.
@@ -85,7 +85,7 @@ impl SearchDrive for Searching<'_> {
 }
 
 /// One motor channel.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
+#[derive(Debug, Clone)]
 pub(crate) struct Motor {
     pub p: MotorParams,
     pub mode: Mode,

@@ -3,7 +3,7 @@
 use tmcpack::{CurrentLevel, MotorOptions, MotorType, ReferenceFlags};
 
 /// Everything $11, $13–$16, $18, $19 and $31 set for one motor.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct MotorParams {
     pub i0: CurrentLevel,
     pub i1: CurrentLevel,

@@ -65,7 +65,7 @@ pub(crate) enum Outcome {
 }
 
 /// What the motor does after the search.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Resume {
     /// Drive to this (internal) position: the target of an interrupted ramp, or where the
     /// search started.
@@ -74,7 +74,7 @@ pub(crate) enum Resume {
     Pi(i64),
 }
 
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Phase {
     Stop,
     Seek,
@@ -86,7 +86,7 @@ pub(crate) enum Phase {
 }
 
 /// A running reference search.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct RefSearch {
     pub phase: Phase,
     pub resume: Resume,

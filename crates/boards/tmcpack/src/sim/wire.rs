@@ -12,7 +12,7 @@ use std::collections::VecDeque;
 use tmcpack::{FRAME_LEN, Word};
 
 /// Why something is on the transmit queue.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Kind {
     /// The answer to the request just received.
     Immediate,
@@ -22,7 +22,7 @@ pub(crate) enum Kind {
     Glitch,
 }
 
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
+#[derive(Debug, Clone)]
 struct Outgoing {
     start: Duration,
     bytes: Word,
