@@ -249,12 +249,13 @@ impl<D: Driver> Engine<D> {
     }
 
     /// How many bytes more than now its serialized state (the black box's snapshot) may
-    /// take, at the most: the groups' paths at their longest trajectories. Everything else
-    /// is sized at start-up.
+    /// take, at the most: the groups' running paths at their longest trajectories (a
+    /// group's spare path is scratch: its sizes only). Everything else is sized at
+    /// start-up.
     pub fn snapshot_growth(&self) -> usize {
         self.groups
             .iter()
-            .map(|group| group.path.serialized_bound() + group.spare.serialized_bound())
+            .map(|group| group.path.serialized_bound())
             .sum()
     }
 

@@ -69,6 +69,7 @@ mod time_scale;
 
 pub use error::PathError;
 pub use path::Path;
+pub use path_serde::scratch as serde_scratch_path;
 pub use points::{Points, Tolerances};
 pub use time_scale::{MAX_FEED_OVERRIDE, TimeScale};
 

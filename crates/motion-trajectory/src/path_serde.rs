@@ -155,6 +155,34 @@ impl<'de> Deserialize<'de> for Path {
     }
 }
 
+/// Serde for a path that is planning scratch only (`#[serde(with =
+/// "motion_trajectory::serde_scratch_path")]`: a group's spare path, planned into and
+/// swapped with the running one within one request, never read otherwise): its sizes
+/// alone, read back as an empty path of those sizes.
+pub mod scratch {
+    use serde::de::Error as _;
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    use super::MAX_POINTS_READ;
+    use crate::{MAX_AXES, Path};
+
+    /// Writes `path`'s axes and points.
+    pub fn serialize<S: Serializer>(path: &Path, serializer: S) -> Result<S::Ok, S::Error> {
+        (path.axes, path.max_points).serialize(serializer)
+    }
+
+    /// An empty path of the sizes written.
+    pub fn deserialize<'de, D: Deserializer<'de>>(deserializer: D) -> Result<Path, D::Error> {
+        let (axes, max_points) = <(usize, usize)>::deserialize(deserializer)?;
+        if !(1..=MAX_AXES).contains(&axes) || max_points > MAX_POINTS_READ {
+            return Err(D::Error::custom(format!(
+                "a path of {axes} axes and {max_points} points"
+            )));
+        }
+        Ok(Path::new(axes, max_points))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use crate::{AxisLimits, Path};
@@ -222,6 +250,27 @@ mod tests {
         let len = postcard::to_allocvec(&path).expect("serializes").len();
         assert!(len > 1000, "{len} bytes: the trajectory is planned");
         assert!(len <= path.serialized_bound(), "{len} bytes");
+    }
+
+    #[test]
+    fn a_scratch_path_is_its_sizes() {
+        #[derive(serde::Serialize, serde::Deserialize)]
+        struct Holder {
+            #[serde(with = "super::scratch")]
+            path: Path,
+        }
+        let mut holder = Holder {
+            path: Path::new(2, 64),
+        };
+        holder
+            .path
+            .plan_line(&[0.0, 0.0], &[10.0, -5.0], &limits(), 1.0, 1.0)
+            .expect("a line plans");
+        let bytes = postcard::to_allocvec(&holder).expect("serializes");
+        assert_eq!(bytes, [2, 64]);
+        let back: Holder = postcard::from_bytes(&bytes).expect("reads back");
+        assert_eq!((back.path.axes(), back.path.duration()), (2, 0.0));
+        assert!(postcard::from_bytes::<Holder>(&[0, 64]).is_err());
     }
 
     #[test]

@@ -75,6 +75,9 @@ pub(crate) struct Group {
     /// The path running (or last run), and a spare one a new path is planned into (a
     /// refused plan leaves the running one untouched).
     pub path: Path,
+    /// Scratch between requests (a plan writes it, then it is swapped with `path`): the
+    /// state snapshot keeps its sizes only.
+    #[serde(with = "motion_trajectory::serde_scratch_path")]
     pub spare: Path,
     pub scale: TimeScale,
     pub history: PathHistory,
