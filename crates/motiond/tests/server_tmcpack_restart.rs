@@ -96,9 +96,9 @@ fn saved_x(file: &Path) -> Option<(bool, i64)> {
     ))
 }
 
-/// Waits up to 5 s for x's record to be `want`.
+/// Waits up to 10 s for x's record to be `want` (a loaded machine writes it later).
 fn saved_becomes(file: &Path, want: (bool, i64)) -> Option<(bool, i64)> {
-    let end = Instant::now() + Duration::from_secs(5);
+    let end = Instant::now() + Duration::from_secs(10);
     let mut last = saved_x(file);
     while Instant::now() < end && last != Some(want) {
         std::thread::sleep(Duration::from_millis(20));
@@ -121,10 +121,10 @@ fn start(config: &Path, name: &str) -> (Server, RawClient, MotionFrame) {
     (server, client, frame)
 }
 
-/// Waits up to 3 s after the pack came online for x to be referenced (a poll confirms
+/// Waits up to 5 s after the pack came online for x to be referenced (a poll confirms
 /// the saved position); the last frame.
 fn x_referenced(client: &RawClient) -> (MotionFrame, bool) {
-    client.wait_frame(Duration::from_secs(3), |f| {
+    client.wait_frame(Duration::from_secs(5), |f| {
         homed(f, 0) && f.axes[0].flags & AxisFlags::STALE.0 == 0
     })
 }
@@ -153,7 +153,7 @@ fn a_referenced_axis_stays_referenced_across_motiond_restarts_and_pack_outages()
     assert_eq!(reply.result(), Ok(()));
     // Moving: written as not referenced.
     assert_eq!(saved_becomes(&file, (false, 0)), Some((false, 0)));
-    let (frame, there) = client.wait_frame(Duration::from_secs(5), |f| {
+    let (frame, there) = client.wait_frame(Duration::from_secs(10), |f| {
         f.axes[0].flags & AxisFlags::ARRIVED.0 != 0 && f.axes[0].flags & AxisFlags::MOVING.0 == 0
     });
     assert!(there, "{:?}", frame.axes()[0]);
