@@ -64,6 +64,7 @@
 // ioctl).
 #![deny(unsafe_code)]
 
+mod can_records;
 mod config;
 mod error;
 mod link;

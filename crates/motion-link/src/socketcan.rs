@@ -32,6 +32,7 @@ use nix::poll::{PollFd, PollFlags, ppoll};
 use nix::sys::socket::{AddressFamily, SockFlag, SockProtocol, SockType, socket};
 use nix::sys::time::TimeSpec;
 
+use crate::can_records::RecordSender;
 use crate::error::LinkError;
 use crate::link::{Link, LinkKind, LinkStats};
 
@@ -322,6 +323,18 @@ fn record_of_native(frame: &[u8; CAN_RECORD_LEN]) -> Option<CanRecord> {
     CanRecord::from_bytes(&bytes)
 }
 
+impl RecordSender for SocketCanLink {
+    fn pending(&mut self) -> (&mut [u8; CAN_RECORD_LEN], &mut usize) {
+        (&mut self.tx, &mut self.tx_len)
+    }
+    fn send_pending(&mut self, _now: Duration) -> Result<bool, LinkError> {
+        self.send_record()
+    }
+    fn count_out(&mut self, bytes: usize) {
+        self.stats.bytes_out += bytes as u64;
+    }
+}
+
 impl Link for SocketCanLink {
     fn kind(&self) -> LinkKind {
         LinkKind::Stream
@@ -334,45 +347,11 @@ impl Link for SocketCanLink {
     /// Takes bytes up to whole records, sending each as one frame; a record's first bytes
     /// may come in one call and the rest in the next. Stops (returning what it took) when
     /// the interface's transmit queue is full.
-    fn write(&mut self, _now: Duration, bytes: &[u8]) -> Result<usize, LinkError> {
+    fn write(&mut self, now: Duration, bytes: &[u8]) -> Result<usize, LinkError> {
         if self.socket.is_none() {
             return Err(self.closed());
         }
-        let mut taken = 0;
-        while taken < bytes.len() {
-            let want = CAN_RECORD_LEN - self.tx_len;
-            let rest = bytes.get(taken..).unwrap_or_default();
-            if rest.len() < want {
-                // Part of a record: keep it until the rest comes.
-                if let Some(slot) = self.tx.get_mut(self.tx_len..self.tx_len + rest.len()) {
-                    slot.copy_from_slice(rest);
-                }
-                self.tx_len += rest.len();
-                taken += rest.len();
-                break;
-            }
-            let saved = self.tx_len;
-            if let (Some(slot), Some(part)) =
-                (self.tx.get_mut(saved..CAN_RECORD_LEN), rest.get(..want))
-            {
-                slot.copy_from_slice(part);
-            }
-            self.tx_len = CAN_RECORD_LEN;
-            match self.send_record() {
-                Ok(true) => taken += want,
-                Ok(false) => {
-                    // Not sent: the bytes of this call are not taken.
-                    self.tx_len = saved;
-                    break;
-                }
-                Err(e) => {
-                    self.stats.bytes_out += taken as u64;
-                    return Err(e);
-                }
-            }
-        }
-        self.stats.bytes_out += taken as u64;
-        Ok(taken)
+        crate::can_records::write_records(self, now, bytes)
     }
 
     fn write_parts(&mut self, now: Duration, parts: &[&[u8]]) -> Result<usize, LinkError> {

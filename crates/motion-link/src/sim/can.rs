@@ -25,6 +25,7 @@ use motion_base::{CAN_RECORD_LEN, CanRecord};
 
 use super::faults::{Direction, SimFaults};
 use super::line::Line;
+use crate::can_records::RecordSender;
 use crate::error::LinkError;
 use crate::link::{Link, LinkKind, LinkStats};
 
@@ -349,6 +350,18 @@ impl SimCanLink {
     }
 }
 
+impl RecordSender for SimCanLink {
+    fn pending(&mut self) -> (&mut [u8; CAN_RECORD_LEN], &mut usize) {
+        (&mut self.tx, &mut self.tx_len)
+    }
+    fn send_pending(&mut self, now: Duration) -> Result<bool, LinkError> {
+        self.send_record(now)
+    }
+    fn count_out(&mut self, bytes: usize) {
+        self.stats.bytes_out += bytes as u64;
+    }
+}
+
 impl Link for SimCanLink {
     fn kind(&self) -> LinkKind {
         LinkKind::Stream
@@ -363,39 +376,7 @@ impl Link for SimCanLink {
     fn write(&mut self, now: Duration, bytes: &[u8]) -> Result<usize, LinkError> {
         self.check_plug(now)?;
         self.pump(now);
-        let mut taken = 0;
-        while taken < bytes.len() {
-            let want = CAN_RECORD_LEN - self.tx_len;
-            let rest = bytes.get(taken..).unwrap_or_default();
-            if rest.len() < want {
-                if let Some(slot) = self.tx.get_mut(self.tx_len..self.tx_len + rest.len()) {
-                    slot.copy_from_slice(rest);
-                }
-                self.tx_len += rest.len();
-                taken += rest.len();
-                break;
-            }
-            let saved = self.tx_len;
-            if let (Some(slot), Some(part)) =
-                (self.tx.get_mut(saved..CAN_RECORD_LEN), rest.get(..want))
-            {
-                slot.copy_from_slice(part);
-            }
-            self.tx_len = CAN_RECORD_LEN;
-            match self.send_record(now) {
-                Ok(true) => taken += want,
-                Ok(false) => {
-                    self.tx_len = saved;
-                    break;
-                }
-                Err(e) => {
-                    self.stats.bytes_out += taken as u64;
-                    return Err(e);
-                }
-            }
-        }
-        self.stats.bytes_out += taken as u64;
-        Ok(taken)
+        crate::can_records::write_records(self, now, bytes)
     }
 
     fn write_parts(&mut self, now: Duration, parts: &[&[u8]]) -> Result<usize, LinkError> {
