@@ -75,6 +75,32 @@ impl<const N: usize> FixedText<N> {
     }
 }
 
+/// Written as its text: a snapshot holds what was said, not the spare room.
+impl<const N: usize> serde::Serialize for FixedText<N> {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.serialize_str(self.as_str())
+    }
+}
+
+/// Read back from its text (cut to `N` bytes on a character boundary, as written).
+impl<'de, const N: usize> serde::Deserialize<'de> for FixedText<N> {
+    fn deserialize<D: serde::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct Visitor<const N: usize>;
+        impl<const N: usize> serde::de::Visitor<'_> for Visitor<N> {
+            type Value = FixedText<N>;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                write!(f, "a text of at most {N} bytes")
+            }
+            fn visit_str<E: serde::de::Error>(self, text: &str) -> Result<Self::Value, E> {
+                let mut out = FixedText::new();
+                let _ = fmt::Write::write_str(&mut out, text);
+                Ok(out)
+            }
+        }
+        deserializer.deserialize_str(Visitor::<N>)
+    }
+}
+
 impl<const N: usize> fmt::Write for FixedText<N> {
     fn write_str(&mut self, text: &str) -> fmt::Result {
         if self.truncated {
@@ -127,6 +153,14 @@ mod tests {
         assert_eq!(text.as_str(), "a"); // nothing after a cut
 
         assert_eq!(floor_char_boundary("aé", 2), 1);
+        let mut said = FixedText::<8>::new();
+        let _ = write!(said, "late é");
+        let bytes = postcard::to_allocvec(&said).expect("serializes");
+        let back: FixedText<8> = postcard::from_bytes(&bytes).expect("deserializes");
+        assert_eq!(back, said);
+        let wide = postcard::to_allocvec(&"0123456789").expect("serializes");
+        let cut: FixedText<4> = postcard::from_bytes(&wide).expect("deserializes");
+        assert_eq!(cut.as_str(), "0123");
         assert_eq!(floor_char_boundary("aé", 9), 3);
     }
 }

@@ -48,4 +48,6 @@ pub use motion_base::LinkKind;
 pub use motion_base::{CanRecord, LinkFraming};
 pub use pin::{Pin, PinInfo, PinReading, SignalKind, SignalKinds, find_pin};
 pub use stamps::IoStamps;
-pub use state::{ChannelState, DeviceFault, DeviceStatus, FIRMWARE_LEN};
+pub use state::{
+    ChannelState, DeviceFault, DeviceStatus, EVIDENCE_LEN, FIRMWARE_LEN, Seconds, Verdict,
+};

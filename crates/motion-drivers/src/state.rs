@@ -69,6 +69,49 @@ impl Default for ChannelState {
     }
 }
 
+/// Capacity of a verdict's evidence, bytes.
+pub const EVIDENCE_LEN: usize = 200;
+
+/// Why a driver declared its board not answering ([`DeviceFault::NotResponding`]) or reset
+/// ([`DeviceFault::Reset`]): the proof, in words, for the server's log. A verdict drops the
+/// board's goals and starts it again, so it is reached only on evidence a user can check —
+/// which request went unanswered, when it was written, when its answer was due and how far
+/// the link had been heard past that; or which field of which answer showed the reboot.
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Verdict {
+    /// `NotResponding` or `Reset`.
+    pub fault: DeviceFault,
+    /// When the driver reached it (the `now` it was given).
+    pub at: Duration,
+    /// The evidence, e.g. "3 requests unanswered in a row since 1.250 s; the last, `$20`
+    /// motor 2, written at 1.302 s, due by 1.323 s, the link heard until 1.341 s (18 ms past
+    /// due)". Formatted in place (no allocation).
+    pub evidence: motion_base::FixedText<EVIDENCE_LEN>,
+}
+
+impl Verdict {
+    /// A verdict reached at `at`, with its evidence formatted from `args`.
+    pub fn new(fault: DeviceFault, at: Duration, args: core::fmt::Arguments<'_>) -> Self {
+        let mut evidence = motion_base::FixedText::new();
+        let _ = core::fmt::Write::write_fmt(&mut evidence, args);
+        Self {
+            fault,
+            at,
+            evidence,
+        }
+    }
+}
+
+/// A duration as seconds with milliseconds (`1.302 s`), for verdicts' evidence.
+#[derive(Debug, Clone, Copy)]
+pub struct Seconds(pub Duration);
+
+impl core::fmt::Display for Seconds {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "{}.{:03} s", self.0.as_secs(), self.0.subsec_millis())
+    }
+}
+
 /// Capacity of a board's firmware description.
 pub const FIRMWARE_LEN: usize = 32;
 
@@ -91,6 +134,11 @@ pub struct DeviceStatus {
     pub bad_replies: u32,
     /// Times the board was seen to reboot, since creation.
     pub resets: u32,
+    /// Verdicts reached since creation (not answering, reset): the server logs each new
+    /// one with its evidence.
+    pub verdicts: u32,
+    /// The newest verdict and its evidence.
+    pub verdict: Option<Verdict>,
 }
 
 impl DeviceStatus {
@@ -104,7 +152,15 @@ impl DeviceStatus {
         timeouts: 0,
         bad_replies: 0,
         resets: 0,
+        verdicts: 0,
+        verdict: None,
     };
+
+    /// Records `verdict` (counted; the newest is kept for the log).
+    pub fn declare(&mut self, verdict: Verdict) {
+        self.verdicts = self.verdicts.saturating_add(1);
+        self.verdict = Some(verdict);
+    }
 
     /// The firmware description ("" until known).
     pub fn firmware(&self) -> &str {
@@ -129,7 +185,8 @@ impl Default for DeviceStatus {
 
 #[cfg(test)]
 mod tests {
-    use super::DeviceStatus;
+    use super::{DeviceFault, DeviceStatus, Seconds, Verdict};
+    use core::time::Duration;
 
     #[test]
     fn firmware_text_is_cut_on_char_boundaries() {
@@ -138,5 +195,23 @@ mod tests {
         assert_eq!(status.firmware(), "TMC v1.23");
         status.set_firmware(&"é".repeat(40));
         assert_eq!(status.firmware(), "é".repeat(16));
+    }
+
+    #[test]
+    fn a_verdict_carries_its_evidence_and_is_counted() {
+        let mut status = DeviceStatus::UNKNOWN;
+        let at = Duration::from_millis(1302);
+        status.declare(Verdict::new(
+            DeviceFault::NotResponding,
+            at,
+            format_args!("`$20` written at {}, due by {}", Seconds(at), Seconds(at * 2)),
+        ));
+        assert_eq!(status.verdicts, 1);
+        let verdict = status.verdict.expect("kept");
+        assert_eq!(
+            verdict.evidence.as_str(),
+            "`$20` written at 1.302 s, due by 2.604 s"
+        );
+        assert_eq!(verdict.fault, DeviceFault::NotResponding);
     }
 }

@@ -6,6 +6,7 @@ use std::io::{IsTerminal, Write};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
 
+use motion_drivers::{DeviceFault, Seconds};
 use motion_engine::Engine;
 use motion_ipc::{ClientId, DeviceState, ServerPidFile, read_text};
 use motion_link::{Link, LinkConfig};
@@ -455,6 +456,19 @@ fn housekeeping(
                         *slot = state;
                     }
                     systemd.devices(config, &device_states, false);
+                }
+                Report::Verdict { index, verdict } => {
+                    let name = config.devices.get(index).map_or("?", |d| d.name.as_str());
+                    let what = match verdict.fault {
+                        DeviceFault::Reset => "was reset",
+                        DeviceFault::NotResponding => "is not answering",
+                        _ => "faulted",
+                    };
+                    tracing::warn!(
+                        "device `{name}` {what} (at {}): {}",
+                        Seconds(verdict.at),
+                        verdict.evidence.as_str()
+                    );
                 }
                 Report::Fault {
                     axis,

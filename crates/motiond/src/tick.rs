@@ -7,7 +7,7 @@ use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
 
 use iceoryx2::port::update_connections::UpdateConnections;
 use motion_boards::AnyDriver;
-use motion_drivers::Driver;
+use motion_drivers::{Driver, Verdict};
 use motion_engine::Engine;
 use motion_ipc::{
     ClientId, DeviceState, FaultCode, LinkIo, MachineParams, MotionFrame, ServerInfo, ServerStats,
@@ -50,6 +50,13 @@ pub enum Report {
         state: DeviceState,
         /// Firmware string, zero padded.
         firmware: [u8; 32],
+    },
+    /// A driver reached a verdict on its board (not answering, reset), with its evidence.
+    Verdict {
+        /// Device index (config order).
+        index: usize,
+        /// The verdict.
+        verdict: Verdict,
     },
     /// An axis faulted.
     Fault {
@@ -203,6 +210,8 @@ struct Loop {
     stats: Box<ServerStats>,
     spare_frame: Box<MotionFrame>,
     device_seen: Vec<(DeviceState, [u8; 32])>,
+    /// Each driver's verdict count last reported (`DeviceStatus::verdicts`).
+    verdicts_seen: Vec<u32>,
     /// Per axis: the fault code in the last frame (to report new faults once).
     faults_seen: Vec<u16>,
     directory: ClientDirectory,
@@ -271,6 +280,7 @@ impl Loop {
             stats,
             spare_frame: Box::new(MotionFrame::EMPTY),
             device_seen: vec![(DeviceState::Offline, [0; 32]); devices],
+            verdicts_seen: vec![0; devices],
             faults_seen: vec![0; axes],
             directory,
             consecutive_overruns: 0,
@@ -687,6 +697,14 @@ impl Loop {
                 continue;
             };
             let status = driver.status();
+            if let Some(seen) = self.verdicts_seen.get_mut(index)
+                && *seen != status.verdicts
+            {
+                *seen = status.verdicts;
+                if let Some(verdict) = status.verdict {
+                    self.report(Report::Verdict { index, verdict });
+                }
+            }
             let state = self
                 .setup
                 .engine
