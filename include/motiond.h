@@ -55,7 +55,7 @@ extern "C" {
 /* --- constants ---------------------------------------------------------------------------- */
 
 /** Version of the contract; every payload carries it. */
-#define MOTIOND_SCHEMA_VERSION 9u
+#define MOTIOND_SCHEMA_VERSION 10u
 /** Capacity of the axis arrays of the frame and the server info. */
 #define MOTIOND_MAX_AXES 128u
 /** Capacity of the device arrays of the frame and the server info. */
@@ -574,7 +574,13 @@ typedef struct motiond_group_state {
     /** MOTIOND_STREAM_MODE_* value of the stream running or last run. */
     uint8_t stream_mode; /* offset 84 */
     uint8_t stream_flags; /**< MOTIOND_STREAM_FLAGS_* bits of this tick. (offset 85) */
-    uint16_t reserved; /**< Zero. (offset 86) */
+    /**
+     * Ticks the stream runs behind its setpoints' own ticks: a setpoint for tick `k` is applied
+     * in tick `k + stream_delay`. 0 at the start; grows to the lateness of a setpoint that
+     * arrived after its tick (at most `stream_buffer`), never shrinks while the stream runs
+     * (schema 10; saturates at 65535).
+     */
+    uint16_t stream_delay; /* offset 86 */
     uint64_t last_sequence; /**< Sequence of the last streamed setpoint applied. (offset 88) */
     uint64_t last_applied_tick; /**< Tick in which it was applied. (offset 96) */
     uint64_t applied; /**< Streamed setpoints applied. (offset 104) */

@@ -115,7 +115,9 @@ fn setpoints_apply_in_their_tick_at_most_once_and_in_order() {
     let state = h.frame.groups[0];
     assert_eq!((state.applied, state.late), (3, 1), "{state:?}");
     assert!((h.frame.axes[0].desired_position - 0.0003).abs() < 1e-12);
-    // Two due in one tick: the newest applies, the other is late.
+    // Two due in one tick (the first a tick late): each applies on its own time, the
+    // first now, the second in the next tick — the stream runs a tick behind from then on
+    // (`stream_delay`), nothing is skipped.
     let now = next_tick(&h);
     h.engine.handle_setpoint(
         CLIENT_A,
@@ -128,8 +130,61 @@ fn setpoints_apply_in_their_tick_at_most_once_and_in_order() {
     h.tick();
     let state = h.frame.groups[0];
     assert_eq!(
+        (
+            state.applied,
+            state.late,
+            state.last_sequence,
+            state.stream_delay
+        ),
+        (4, 1, 4, 1),
+        "{state:?}"
+    );
+    assert!((h.frame.axes[0].desired_position - 0.0004).abs() < 1e-12);
+    h.tick();
+    let state = h.frame.groups[0];
+    assert_eq!(
+        (
+            state.applied,
+            state.late,
+            state.last_sequence,
+            state.stream_delay
+        ),
+        (5, 1, 5, 1),
+        "{state:?}"
+    );
+    assert_eq!(state.last_applied_tick, now + 1);
+    assert!((h.frame.axes[0].desired_position - 0.0005).abs() < 1e-12);
+    // Two for the same tick: the newer sequence applies, the other is late.
+    let now = next_tick(&h);
+    for (sequence, value) in [(6, 0.00061), (7, 0.0006)] {
+        h.engine.handle_setpoint(
+            CLIENT_A,
+            &setpoint(StreamMode::Position, sequence, now - 1, [value, 0.0]),
+        );
+    }
+    h.tick();
+    let state = h.frame.groups[0];
+    assert_eq!(
         (state.applied, state.late, state.last_sequence),
-        (4, 2, 5),
+        (6, 2, 7),
+        "{state:?}"
+    );
+    assert!((h.frame.axes[0].desired_position - 0.0006).abs() < 1e-12);
+    // More than stream_buffer (3) ticks behind: late, never applied; the next on time is.
+    let now = next_tick(&h);
+    h.engine.handle_setpoint(
+        CLIENT_A,
+        &setpoint(StreamMode::Position, 8, now - 5, [0.0007, 0.0]),
+    );
+    h.engine.handle_setpoint(
+        CLIENT_A,
+        &setpoint(StreamMode::Position, 9, now - 1, [0.0007, 0.0]),
+    );
+    h.tick();
+    let state = h.frame.groups[0];
+    assert_eq!(
+        (state.applied, state.late, state.last_sequence),
+        (7, 3, 9),
         "{state:?}"
     );
     // Too far ahead: early, dropped.

@@ -420,8 +420,11 @@ payload! {
         pub stream_mode: u8,
         /// [`StreamFlags`] bits of this tick.
         pub stream_flags: u8,
-        /// Zero.
-        pub reserved: u16,
+        /// Ticks the stream runs behind its setpoints' own ticks: a setpoint for tick `k` is
+        /// applied in tick `k + stream_delay`. 0 at the start; grows to the lateness of a
+        /// setpoint that arrived after its tick (at most `stream_buffer`), never shrinks
+        /// while the stream runs (schema 10; saturates at 65535).
+        pub stream_delay: u16,
         /// Sequence of the last streamed setpoint applied.
         pub last_sequence: u64,
         /// Tick in which it was applied.
@@ -464,7 +467,7 @@ impl GroupState {
         stream: 0,
         stream_mode: 0,
         stream_flags: 0,
-        reserved: 0,
+        stream_delay: 0,
         last_sequence: 0,
         last_applied_tick: 0,
         applied: 0,

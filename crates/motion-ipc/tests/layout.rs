@@ -28,7 +28,7 @@ pin!(AxisWire, size 24, align 8, { goal_tick @ 0, wire_tick @ 8, wire_ns @ 16 })
 pin!(GroupState, size 152, align 8, {
     owner @ 0, path_id @ 16, time @ 24, duration @ 32, feed @ 40, feed_set @ 48,
     abort_value @ 56, abort_limit @ 64, point @ 72, abort_axis @ 76, motion @ 80, abort @ 81,
-    kind @ 82, stream @ 83, stream_mode @ 84, stream_flags @ 85, reserved @ 86, last_sequence @ 88, last_applied_tick @ 96,
+    kind @ 82, stream @ 83, stream_mode @ 84, stream_flags @ 85, stream_delay @ 86, last_sequence @ 88, last_applied_tick @ 96,
     applied @ 104, late @ 112, early @ 120, clamped @ 128, refused @ 136,
     last_received_ns @ 144,
 });
@@ -113,7 +113,7 @@ fn layout_is_pinned() {
         (NAME_LEN, UNIT_LEN, MODEL_ID_LEN, PARAM_TEXT_LEN),
         (32, 16, 16, 40)
     );
-    assert_eq!(SCHEMA_VERSION, 9);
+    assert_eq!(SCHEMA_VERSION, 10);
     assert_eq!(
         (MAX_GROUPS, MAX_GROUP_AXES, MAX_PATH_POINTS, PATH_VALUES),
         (16, 16, 1024, 16384)

@@ -413,7 +413,9 @@ fn same_commands_same_ticks_give_byte_identical_frames() {
 }
 
 /// A client streaming velocity setpoints to the base (both wheels of the QuadQuad2Drv)
-/// every tick for 3 s: nothing allocated, every setpoint applied in its tick.
+/// every tick for 3 s, every 11th a tick late (sent with the next, a burst of two):
+/// nothing allocated, every setpoint applied once, in order, on its own time — the stream
+/// a tick behind from the first late one on (issue 39).
 #[test]
 fn streaming_setpoints_allocates_nothing_and_applies_each_in_its_tick() {
     let mut robot = Robot::new();
@@ -444,6 +446,7 @@ fn streaming_setpoints_allocates_nothing_and_applies_each_in_its_tick() {
         mode: motion_ipc::StreamMode::Velocity as u32,
         ..motion_ipc::Setpoint::EMPTY
     };
+    let mut held = None;
     for tick in 0..3000_u64 {
         // A sine of ±20 °/s, period 1.5 s, for the next tick.
         let time = tick as f64 / 1000.0;
@@ -452,9 +455,18 @@ fn streaming_setpoints_allocates_nothing_and_applies_each_in_its_tick() {
         setpoint.for_tick = robot.frame.tick + 1;
         setpoint.values[0] = speed;
         setpoint.values[1] = -speed;
-        engine(|| robot.engine.handle_setpoint(client, &setpoint));
+        if let Some(late) = held.take() {
+            engine(|| robot.engine.handle_setpoint(client, &late));
+        }
+        if tick % 11 == 5 {
+            held = Some(setpoint);
+        } else {
+            engine(|| robot.engine.handle_setpoint(client, &setpoint));
+        }
         robot.tick();
     }
+    // The last one, applied a tick after its own.
+    robot.tick();
     let allocations = allocations() - before;
     assert_eq!(
         allocations, 0,
@@ -470,6 +482,7 @@ fn streaming_setpoints_allocates_nothing_and_applies_each_in_its_tick() {
         (state.applied, state.late, state.early, state.refused),
         (3000, 0, 0, 0)
     );
+    assert_eq!((state.clamped, state.stream_delay), (0, 1), "{state:?}");
     assert_eq!(state.last_applied_tick, robot.frame.tick);
 }
 

@@ -23,7 +23,7 @@ from ._mirror_base import (
 # --- constants ---------------------------------------------------------------------------
 
 #: Version of the contract; every payload carries it.
-SCHEMA_VERSION = 9
+SCHEMA_VERSION = 10
 #: Capacity of the axis arrays of the frame and the server info.
 MAX_AXES = 128
 #: Capacity of the device arrays of the frame and the server info.
@@ -198,7 +198,11 @@ class GroupState(Payload):
         ("stream", ctypes.c_uint8),  # ``StreamState`` value.
         ("stream_mode", ctypes.c_uint8),  # ``StreamMode`` value of the stream running or last run.
         ("stream_flags", ctypes.c_uint8),  # ``StreamFlags`` bits of this tick.
-        ("reserved", ctypes.c_uint16),  # Zero.
+        # Ticks the stream runs behind its setpoints' own ticks: a setpoint for tick ``k`` is
+        # applied in tick ``k + stream_delay``. 0 at the start; grows to the lateness of a setpoint
+        # that arrived after its tick (at most ``stream_buffer``), never shrinks while the stream
+        # runs (schema 10; saturates at 65535).
+        ("stream_delay", ctypes.c_uint16),
         ("last_sequence", ctypes.c_uint64),  # Sequence of the last streamed setpoint applied.
         ("last_applied_tick", ctypes.c_uint64),  # Tick in which it was applied.
         ("applied", ctypes.c_uint64),  # Streamed setpoints applied.

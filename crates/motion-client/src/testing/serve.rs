@@ -193,6 +193,11 @@ fn serve_inner<S: Service>(
 
     // The pid file, as motiond writes it once its services exist.
     let pid_file = PidFileGuard(motion_ipc::ServerPidFile::of(&config.name));
+    // iceoryx2's root directory: an ipc node makes it, a fake on the in-process service
+    // (the first of a fresh machine's tests, say) may find it missing.
+    if let Some(dir) = pid_file.0.path().parent() {
+        std::fs::create_dir_all(dir).map_err(|e| fail("iceoryx2 root directory")(&e))?;
+    }
     pid_file
         .0
         .write_for_this_process(node.id().value())

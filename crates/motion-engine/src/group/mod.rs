@@ -25,6 +25,7 @@ mod history;
 mod lead;
 mod request;
 mod run;
+mod setpoint_limits;
 mod stream;
 
 use core::time::Duration;
@@ -150,6 +151,7 @@ impl Group {
                     led: Lead::No,
                 })
                 .collect(),
+            stream: Stream::new(config.stream_buffer),
             config,
             path,
             spare,
@@ -177,7 +179,6 @@ impl Group {
             then_velocity: vec![0.0; count],
             then_acceleration: vec![0.0; count],
             pending: vec![false; count],
-            stream: Stream::IDLE,
             power: vec![0.0; count],
         }
     }
@@ -207,7 +208,7 @@ impl Group {
             stream: self.stream.state as u8,
             stream_mode: self.stream.mode as u32 as u8,
             stream_flags: self.stream.flags.0,
-            reserved: 0,
+            stream_delay: u16::try_from(self.stream.delay).unwrap_or(u16::MAX),
             last_sequence: self.stream.last_sequence,
             last_applied_tick: self.stream.last_applied_tick,
             last_received_ns: self.stream.last_received_ns,

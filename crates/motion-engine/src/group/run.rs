@@ -279,7 +279,7 @@ impl<D: Driver> Engine<D> {
         g.cancelling = false;
         if g.stream.state == StreamState::Streaming {
             g.stream.state = StreamState::Aborted;
-            g.stream.queued = 0;
+            g.stream.clear();
         }
         for slot in 0..self.groups[group].members.len() {
             let index = self.groups[group].members[slot].axis;

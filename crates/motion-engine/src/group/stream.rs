@@ -2,15 +2,27 @@
 //! velocities or powers for coming ticks on `motiond/<name>/setpoints`, and the engine
 //! applies them tick by tick (cyclic synchronous position / velocity).
 //!
+//! Each setpoint is applied on its own time: the setpoint for tick `k` is applied in tick
+//! `k + delay`, where the stream's `delay` starts at 0 and grows to the lateness of a
+//! setpoint that arrives after its tick (at most `stream_buffer`); it never shrinks while
+//! the stream runs (a shorter delay would skip a setpoint: a step in the path). So a client
+//! whose setpoints arrive a tick late now and then, or several in one tick, moves the group
+//! along exactly the path it sent, a few ticks behind, never with a spike; and the limits
+//! judge that path by the setpoints' own ticks (`setpoint_limits`), never by when they
+//! arrived or were applied.
+//!
 //! | rule | what happens |
 //! |---|---|
 //! | a setpoint from a node that does not hold the streaming group, of another mode, not finite, or for a group that does not stream | dropped, `refused` + 1; the stream is not disturbed |
 //! | `for_tick` more than `stream_buffer` ticks ahead | dropped, `early` + 1 |
-//! | tick `k` | the newest setpoint with `for_tick ≤ k` and a sequence above the last applied one is applied; the other due ones are dropped, `late` + 1 each |
-//! | a position outside `min..max`, or a step needing more than `max_velocity` / `max_accel` | `stream_limit = "clamp"`: clamped to the limit, `clamped` + 1 and flagged; `"abort"`: the group stops (`stream-limit`) |
+//! | tick `t` | the queued setpoint with the lowest `for_tick` (the newest sequence among equal ones) is applied when `for_tick + delay ≤ t`; if that is late (`t − for_tick > delay`) the delay grows to `t − for_tick`; one more than `stream_buffer` ticks behind is dropped, `late` + 1; one not above the last applied `for_tick` and sequence is dropped, `late` + 1 |
+//! | the first setpoint of a position stream within the member's `goal_tolerance` of where the axis stood | the stream starts there, at rest (a measured position a count off is not a step) |
+//! | a position outside `min..max`, or a step needing more than `max_velocity` / `max_accel` over the setpoints' own ticks | `stream_limit = "clamp"`: clamped to the limit, `clamped` + 1 and flagged; `"abort"`: the group stops (`stream-limit`) |
 //! | no setpoint received for `stream_timeout` ticks | every member stops from its measured speed at its `max_accel` (the deadman rule), stream `stale` |
 //!
-//! A new stream starts only with a new `Stream` command.
+//! A new stream starts only with a new `Stream` command (at delay 0).
+
+use core::cmp::Reverse;
 
 use motion_drivers::Driver;
 use motion_ipc::{
@@ -20,9 +32,7 @@ use motion_ipc::{
 
 use crate::Engine;
 use crate::config::StreamLimit;
-
-/// Setpoints waiting for their tick, per group (the oldest is dropped as late when full).
-pub(crate) const STREAM_QUEUE: usize = 32;
+use crate::group::setpoint_limits::{self, Breach, Previous};
 
 /// A setpoint waiting for its tick (the values of a group's members).
 #[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy)]
@@ -36,33 +46,33 @@ pub(crate) struct Queued {
     pub velocities: [f64; MAX_GROUP_AXES],
 }
 
-impl Queued {
-    const EMPTY: Self = Self {
-        sequence: 0,
-        for_tick: 0,
-        feed_forward: false,
-        received_ns: 0,
-        values: [0.0; MAX_GROUP_AXES],
-        velocities: [0.0; MAX_GROUP_AXES],
-    };
-}
-
 /// One group's stream.
 #[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
 pub(crate) struct Stream {
     pub mode: StreamMode,
     pub state: StreamState,
     pub flags: StreamFlags,
-    pub queue: [Queued; STREAM_QUEUE],
-    pub queued: usize,
+    /// Setpoints waiting for their tick, in arrival order. Never longer than `room`
+    /// (reserved when the group is built: nothing allocates while streaming).
+    pub queue: Vec<Queued>,
+    /// The queue's fixed capacity: a playout up to `stream_buffer` ticks behind and
+    /// setpoints up to `stream_buffer` ticks ahead (`2 · stream_buffer + 2`).
+    pub room: usize,
     /// The tick the last setpoint was received for (staleness counts from it).
     pub last_received: u64,
     pub last_sequence: u64,
     pub last_applied_tick: u64,
     /// When the shell received the last setpoint applied (its `received_ns`).
     pub last_received_ns: u64,
-    /// The tick the last setpoint was applied in, or the stream started in.
-    pub since_tick: u64,
+    /// The `for_tick` of the last setpoint applied; the tick the stream started in before
+    /// the first.
+    pub last_for_tick: u64,
+    /// Ticks the stream runs behind its setpoints' own ticks (see the module docs).
+    pub delay: u64,
+    /// Per member, the velocity the last applied setpoint asked for (units/s), and the
+    /// span it was judged over (s; 0 before the first): what the next one is judged from.
+    pub asked_velocity: [f64; MAX_GROUP_AXES],
+    pub asked_span: f64,
     pub applied: u64,
     pub late: u64,
     pub early: u64,
@@ -71,32 +81,98 @@ pub(crate) struct Stream {
 }
 
 impl Stream {
-    pub const IDLE: Self = Self {
-        mode: StreamMode::None,
-        state: StreamState::Idle,
-        flags: StreamFlags(0),
-        queue: [Queued::EMPTY; STREAM_QUEUE],
-        queued: 0,
-        last_received: 0,
-        last_sequence: 0,
-        last_applied_tick: 0,
-        last_received_ns: 0,
-        since_tick: 0,
-        applied: 0,
-        late: 0,
-        early: 0,
-        clamped: 0,
-        refused: 0,
-    };
+    /// An idle stream whose queue holds what `stream_buffer` allows.
+    pub fn new(stream_buffer: u32) -> Self {
+        let room = 2 * stream_buffer as usize + 2;
+        Self::idle(Vec::with_capacity(room), room)
+    }
+
+    /// An idle stream around `queue` (no allocation).
+    fn idle(queue: Vec<Queued>, room: usize) -> Self {
+        Self {
+            mode: StreamMode::None,
+            state: StreamState::Idle,
+            flags: StreamFlags(0),
+            queue,
+            room,
+            last_received: 0,
+            last_sequence: 0,
+            last_applied_tick: 0,
+            last_received_ns: 0,
+            last_for_tick: 0,
+            delay: 0,
+            asked_velocity: [0.0; MAX_GROUP_AXES],
+            asked_span: 0.0,
+            applied: 0,
+            late: 0,
+            early: 0,
+            clamped: 0,
+            refused: 0,
+        }
+    }
+
+    /// A new stream of `mode` from tick `tick`: counters, delay and queue start afresh
+    /// (the queue keeps its allocation).
+    fn begin(&mut self, mode: StreamMode, tick: u64) {
+        let mut queue = core::mem::take(&mut self.queue);
+        queue.clear();
+        *self = Self {
+            mode,
+            state: StreamState::Streaming,
+            last_received: tick,
+            last_for_tick: tick,
+            ..Self::idle(queue, self.room)
+        };
+    }
+
+    /// Drops every queued setpoint (the stream ended).
+    pub fn clear(&mut self) {
+        self.queue.clear();
+    }
 
     fn push(&mut self, setpoint: Queued) {
-        if self.queued == STREAM_QUEUE {
-            self.queue.copy_within(1.., 0);
-            self.queued -= 1;
+        if self.queue.len() >= self.room {
+            self.queue.remove(0);
             self.late += 1;
         }
-        self.queue[self.queued] = setpoint;
-        self.queued += 1;
+        self.queue.push(setpoint);
+    }
+
+    /// Drops (as late) what can no longer be applied: not above the last applied
+    /// `for_tick` and sequence.
+    fn drop_passed(&mut self) {
+        let (for_tick, sequence) = (self.last_for_tick, self.last_sequence);
+        let before = self.queue.len();
+        self.queue
+            .retain(|q| q.for_tick > for_tick && q.sequence > sequence);
+        self.late += (before - self.queue.len()) as u64;
+    }
+
+    /// The setpoint to apply in tick `tick`, if one is due, with its span in ticks from the
+    /// last one applied; the delay grows to a late one's lateness (at most `buffer`).
+    fn take_due(&mut self, tick: u64, buffer: u64) -> Option<(Queued, u64)> {
+        loop {
+            self.drop_passed();
+            let index = (0..self.queue.len())
+                .min_by_key(|&i| (self.queue[i].for_tick, Reverse(self.queue[i].sequence)))?;
+            let setpoint = self.queue[index];
+            if setpoint.for_tick.saturating_add(self.delay) > tick {
+                return None;
+            }
+            self.queue.remove(index);
+            let behind = tick - setpoint.for_tick;
+            if behind > buffer {
+                self.late += 1;
+                continue;
+            }
+            self.delay = self.delay.max(behind);
+            let span = setpoint.for_tick - self.last_for_tick;
+            self.last_for_tick = setpoint.for_tick;
+            self.last_sequence = setpoint.sequence;
+            // Others for the same tick, older sequences: late now, not next tick.
+            self.drop_passed();
+            return Some((setpoint, span));
+        }
     }
 }
 
@@ -129,7 +205,7 @@ impl<D: Driver> Engine<D> {
             return;
         }
         let buffer = u64::from(group.config.stream_buffer);
-        if setpoint.for_tick > next_tick + buffer {
+        if setpoint.for_tick > next_tick.saturating_add(buffer) {
             stream.early += 1;
             return;
         }
@@ -196,66 +272,36 @@ impl<D: Driver> Engine<D> {
         self.take_members(group, client, PathKind::Stream);
         let g = &mut self.groups[group];
         g.claimed = true;
-        g.stream = Stream {
-            mode,
-            state: StreamState::Streaming,
-            last_received: tick,
-            since_tick: tick,
-            ..Stream::IDLE
-        };
+        g.stream.begin(mode, tick);
         Reason::Accepted
     }
 
     /// One tick of a streaming group: staleness, the setpoint due, its limits.
     pub(crate) fn stream_tick(&mut self, group: usize) {
         let tick = self.tick;
-        let dt = self.config.period().as_secs_f64();
+        let period = self.config.period().as_secs_f64();
         let g = &mut self.groups[group];
         g.stream.flags = StreamFlags(0);
         if tick.saturating_sub(g.stream.last_received) >= u64::from(g.config.stream_timeout) {
             self.end_stream(group, StreamState::Stale, GroupAbort::StreamStale, None);
             return;
         }
-        // The newest due setpoint above the last applied sequence; the rest of the due
-        // ones are late.
+        let buffer = u64::from(g.config.stream_buffer);
         let stream = &mut g.stream;
-        let mut chosen: Option<Queued> = None;
-        let mut kept = 0;
-        for index in 0..stream.queued {
-            let entry = stream.queue[index];
-            if entry.for_tick > tick {
-                stream.queue[kept] = entry;
-                kept += 1;
-                continue;
-            }
-            let newer =
-                chosen.is_none_or(|c| (entry.for_tick, entry.sequence) > (c.for_tick, c.sequence));
-            if entry.sequence > stream.last_sequence && newer {
-                if chosen.is_some() {
-                    stream.late += 1;
-                }
-                chosen = Some(entry);
-            } else {
-                stream.late += 1;
-            }
-        }
-        stream.queued = kept;
         let mode = stream.mode;
-        if let Some(setpoint) = chosen {
-            let since = tick.saturating_sub(stream.since_tick).max(1) as f64 * dt;
-            stream.last_sequence = setpoint.sequence;
+        if let Some((setpoint, span)) = stream.take_due(tick, buffer) {
             stream.last_applied_tick = tick;
             stream.last_received_ns = setpoint.received_ns;
-            stream.since_tick = tick;
             stream.applied += 1;
             stream.flags = StreamFlags(stream.flags.0 | StreamFlags::APPLIED.0);
-            if let Err((slot, value, limit)) = self.apply_setpoint(group, &setpoint, since) {
+            let span = span as f64 * period;
+            if let Err((slot, breach)) = self.apply_setpoint(group, &setpoint, span) {
                 let axis = self.groups[group].members[slot].axis;
                 self.end_stream(
                     group,
                     StreamState::Aborted,
                     GroupAbort::StreamLimit,
-                    Some((axis, value, limit)),
+                    Some((axis, breach.figure, breach.limit)),
                 );
                 return;
             }
@@ -264,7 +310,7 @@ impl<D: Driver> Engine<D> {
             let g = &mut self.groups[group];
             for slot in 0..g.members.len() {
                 let limits = g.limits[slot];
-                let next = g.position[slot] + g.velocity[slot] * dt;
+                let next = g.position[slot] + g.velocity[slot] * period;
                 if next < limits.min || next > limits.max {
                     g.velocity[slot] = 0.0;
                 } else {
@@ -280,113 +326,79 @@ impl<D: Driver> Engine<D> {
         }
     }
 
-    /// Applies `setpoint` (`since`: seconds since the last one applied) within every
-    /// member's limits: clamped, or `Err` (slot, figure, limit) under `stream_limit =
-    /// "abort"`.
+    /// Applies `setpoint` (`span`: seconds of the setpoints' own ticks since the last one
+    /// applied) within every member's limits: clamped, or `Err` (slot, breach) under
+    /// `stream_limit = "abort"`. Every member is judged before any moves.
     fn apply_setpoint(
         &mut self,
         group: usize,
         setpoint: &Queued,
-        since: f64,
-    ) -> Result<(), (usize, f64, f64)> {
-        let dt = self.config.period().as_secs_f64();
+        span: f64,
+    ) -> Result<(), (usize, Breach)> {
+        let period = self.config.period().as_secs_f64();
         let g = &mut self.groups[group];
         let clamp = g.config.stream_limit == StreamLimit::Clamp;
-        let mut clamped = false;
+        let first = g.stream.asked_span == 0.0;
+        let mut steps = [setpoint_limits::Step {
+            position: 0.0,
+            velocity: 0.0,
+            clamped: false,
+        }; MAX_GROUP_AXES];
         for slot in 0..g.members.len() {
-            let limits = g.limits[slot];
-            let (p_prev, v_prev) = (g.position[slot], g.velocity[slot]);
+            let limits = &g.limits[slot];
             let value = setpoint.values[slot];
-            match g.stream.mode {
+            let previous = Previous {
+                position: g.position[slot],
+                velocity: g.stream.asked_velocity[slot],
+                span: g.stream.asked_span,
+            };
+            let step = match g.stream.mode {
+                StreamMode::Position
+                    if first
+                        && (value - previous.position).abs() <= g.config.goal_tolerance[slot]
+                        && (limits.min..=limits.max).contains(&value) =>
+                {
+                    // The stream starts where the client says the axis stands.
+                    Ok(setpoint_limits::Step {
+                        position: value,
+                        velocity: 0.0,
+                        clamped: false,
+                    })
+                }
                 StreamMode::Position => {
-                    let target = value.clamp(limits.min, limits.max);
-                    if target != value {
-                        if !clamp {
-                            let limit = if value < limits.min {
-                                limits.min
-                            } else {
-                                limits.max
-                            };
-                            return Err((slot, value, limit));
-                        }
-                        clamped = true;
-                    }
-                    let wanted = (target - p_prev) / since;
-                    let reach = limits.max_accel * since;
-                    let velocity = wanted
-                        .clamp(-limits.max_velocity, limits.max_velocity)
-                        .clamp(v_prev - reach, v_prev + reach);
-                    if velocity != wanted {
-                        if !clamp {
-                            let (figure, limit) = if wanted.abs() > limits.max_velocity {
-                                (wanted, limits.max_velocity)
-                            } else {
-                                ((wanted - v_prev) / since, limits.max_accel)
-                            };
-                            return Err((slot, figure, limit));
-                        }
-                        clamped = true;
-                    }
-                    g.position[slot] = p_prev + velocity * since;
-                    g.velocity[slot] = if setpoint.feed_forward {
-                        setpoint.velocities[slot].clamp(-limits.max_velocity, limits.max_velocity)
-                    } else {
-                        velocity
-                    };
+                    setpoint_limits::judge_position(&previous, value, span, limits, clamp)
                 }
                 StreamMode::Velocity => {
-                    let reach = limits.max_accel * since;
-                    let velocity = value
-                        .clamp(-limits.max_velocity, limits.max_velocity)
-                        .clamp(v_prev - reach, v_prev + reach);
-                    if velocity != value {
-                        if !clamp {
-                            let (figure, limit) = if value.abs() > limits.max_velocity {
-                                (value, limits.max_velocity)
-                            } else {
-                                ((value - v_prev) / since, limits.max_accel)
-                            };
-                            return Err((slot, figure, limit));
-                        }
-                        clamped = true;
-                    }
-                    let next = p_prev + velocity * dt;
-                    // A velocity that would carry the axis past a soft limit before it
-                    // could stop there.
-                    let stop = velocity * velocity / (2.0 * limits.max_accel);
-                    let beyond = (velocity > 0.0 && next + stop > limits.max)
-                        || (velocity < 0.0 && next - stop < limits.min);
-                    if beyond {
-                        if !clamp {
-                            return Err((
-                                slot,
-                                next,
-                                if velocity > 0.0 {
-                                    limits.max
-                                } else {
-                                    limits.min
-                                },
-                            ));
-                        }
-                        clamped = true;
-                        g.velocity[slot] = 0.0;
-                    } else {
-                        g.velocity[slot] = velocity;
-                        g.position[slot] = next;
-                    }
+                    setpoint_limits::judge_velocity(&previous, value, span, period, limits, clamp)
                 }
-                StreamMode::Power | StreamMode::None => {
-                    let power = value.clamp(-1.0, 1.0);
-                    if power != value {
-                        if !clamp {
-                            return Err((slot, value, 1.0));
-                        }
-                        clamped = true;
-                    }
-                    g.power[slot] = power;
+                StreamMode::Power | StreamMode::None => setpoint_limits::judge_power(value, clamp)
+                    .map(|power| setpoint_limits::Step {
+                        position: previous.position,
+                        velocity: power,
+                        clamped: power != value,
+                    }),
+            }
+            .map_err(|breach| (slot, breach))?;
+            steps[slot] = step;
+        }
+        let mut clamped = false;
+        for (slot, step) in steps.iter().enumerate().take(g.members.len()) {
+            clamped |= step.clamped;
+            match g.stream.mode {
+                StreamMode::Power | StreamMode::None => g.power[slot] = step.velocity,
+                mode => {
+                    g.position[slot] = step.position;
+                    g.stream.asked_velocity[slot] = step.velocity;
+                    g.velocity[slot] = if mode == StreamMode::Position && setpoint.feed_forward {
+                        let limit = g.limits[slot].max_velocity;
+                        setpoint.velocities[slot].clamp(-limit, limit)
+                    } else {
+                        step.velocity
+                    };
                 }
             }
         }
+        g.stream.asked_span = span;
         if clamped {
             g.stream.clamped += 1;
             g.stream.flags = StreamFlags(g.stream.flags.0 | StreamFlags::CLAMPED.0);
@@ -405,7 +417,7 @@ impl<D: Driver> Engine<D> {
     ) {
         let (axis, value, limit) = at.map_or((None, 0.0, 0.0), |(a, v, l)| (Some(a), v, l));
         self.groups[group].stream.state = state;
-        self.groups[group].stream.queued = 0;
+        self.groups[group].stream.clear();
         if reason == GroupAbort::None {
             let g = &mut self.groups[group];
             g.motion = GroupMotion::Done;

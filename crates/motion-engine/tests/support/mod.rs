@@ -20,6 +20,8 @@ use motion_ipc::{ClientId, CommandKind, CommandReply, CommandRequest, GroupPath,
 pub struct BoardControl {
     /// Every message the driver put on the wire: (channel, goal kind).
     pub wire: Vec<(u8, u8)>,
+    /// Every goal the driver accepted, in order: (channel, goal).
+    pub goals: Vec<(u8, Goal)>,
     /// The board stops answering (no refresh) while set.
     pub silent: bool,
     /// A channel fault the board reports.
@@ -307,6 +309,10 @@ impl Driver for IdealBoard {
         if !self.supports.contains(goal.kind()) && goal.kind() != GoalKind::Stop {
             return Err(GoalError::Unsupported(goal.kind()));
         }
+        if channel >= self.channels.len() {
+            return Err(GoalError::NoSuchChannel(channel));
+        }
+        self.control().goals.push((channel as u8, goal));
         let slot = self
             .channels
             .get_mut(channel)
