@@ -866,10 +866,11 @@ MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_group_path_t) == 8, "motiond_group
 /**
  * One setpoint of a group's stream, published on `motiond/<name>/setpoints` by the client that
  * holds the group's claim and started the stream (`Stream` command); from any other node it is
- * dropped and counted (motiond_group_state_t.refused). In tick `k` the server applies the
- * newest setpoint with `for_tick ≤ k` not applied yet, at most once and in sequence order; one
- * for a tick more than `stream_buffer` ahead is dropped (`early`), older ones not taken in time
- * are dropped (`late`).
+ * dropped and counted (motiond_group_state_t.refused). The server applies each setpoint on its
+ * own time, once and in order: the one for tick `k` in tick `k + stream_delay`
+ * (`crate::playout`); one for a tick more than `stream_buffer` ahead is dropped (`early`), one
+ * more than `stream_buffer` behind, superseded or out of sequence is dropped (`late`).
+ * Velocities and accelerations are judged over the setpoints' own ticks.
  *
  * 288 bytes, alignment 8; iceoryx2 type name "motiond::Setpoint".
  */
@@ -881,7 +882,9 @@ typedef struct motiond_setpoint {
      * late.
      */
     uint64_t sequence; /* offset 8 */
-    /** The tick this setpoint is for (a frame's `tick` + 1: the next tick). */
+    /**
+     * The tick this setpoint is for (a frame's `tick` + the client's lead: 1 is the next tick).
+     */
     uint64_t for_tick; /* offset 16 */
     uint32_t mode; /**< MOTIOND_STREAM_MODE_* value: must be the stream's. (offset 24) */
     uint32_t flags; /**< MOTIOND_SETPOINT_FLAGS_* bits. (offset 28) */

@@ -154,7 +154,7 @@ pub use motion_ipc as ipc;
 pub use received::Received;
 pub use remote_error::{RemoteError, RemoteSource};
 pub use signal::{Signal, SignalEvent, signal_value_text};
-pub use stream::{STREAM_FRAME_TIMEOUT, SetpointStream};
+pub use stream::{DEFAULT_STREAM_LEAD, STREAM_FRAME_TIMEOUT, SetpointStream};
 pub use stream_status::{StreamError, StreamRun, StreamStatus};
 pub use trajectory::{PointKind, Trajectory, TrajectoryError};
 pub use unanswered::Unanswered;

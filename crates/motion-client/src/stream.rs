@@ -1,8 +1,12 @@
 //! [`SetpointStream`]: a controller closes its loop through the server every tick. The
 //! client holds the group's claim, starts a stream (`Stream` command) and publishes a
 //! [`Setpoint`] per tick on `motiond/<name>/setpoints` from its own iceoryx2 node (the
-//! server knows the sender from the transport, never from the payload); the server applies
-//! in tick `k` the newest setpoint for `k` or earlier, at most once.
+//! server knows the sender from the transport, never from the payload). The server applies
+//! each setpoint on its own time, once and in order: the one for tick `k` in tick
+//! `k + delay`, where the stream's delay grows to the lateness of a setpoint that arrived
+//! after its tick and never shrinks while it runs (`motion_ipc::playout`). A client sends
+//! for `frame.tick + lead` after reading a frame: a lead larger than its scheduling jitter
+//! keeps the delay at 0 ([`DEFAULT_STREAM_LEAD`]).
 
 use core::fmt;
 use core::ops::ControlFlow;
@@ -25,6 +29,15 @@ use crate::{
 /// How long [`SetpointStream::run_each_tick`] waits for a frame before it gives up with
 /// [`ClientError::NoFrame`] (the server stops the group long before: `stream_timeout`).
 pub const STREAM_FRAME_TIMEOUT: Duration = Duration::from_secs(1);
+
+/// The lead [`SetpointStream::run_each_tick`] sends with unless told otherwise: the
+/// setpoint computed after reading frame `k` is for tick `k + 2`. Measured (README
+/// "Performance", `motionctl bench`'s stream phase): a Python client at 1 kHz on a 2-core
+/// machine with two busy loops beside it got its setpoint to the server before its tick for
+/// the share of ticks the README gives with lead 1 and with this lead; every setpoint that
+/// is late instead grows the stream's delay, so the lead is the latency a client chooses
+/// up front rather than one the stream picks up on its worst tick.
+pub const DEFAULT_STREAM_LEAD: u64 = 2;
 
 impl<S: Service> Client<S> {
     /// The publisher on `setpoints`, created on first use (one per client).
@@ -156,6 +169,7 @@ impl<'c, S: Service> Group<'c, S> {
             epoch: client.session.epoch(),
             sequence: 0,
             last_for_tick: None,
+            lead: DEFAULT_STREAM_LEAD,
             values: [0.0; MAX_GROUP_AXES],
             active: true,
         })
@@ -180,6 +194,8 @@ pub struct SetpointStream<'c, S: Service> {
     epoch: u64,
     sequence: u64,
     last_for_tick: Option<u64>,
+    /// Ticks ahead of the frame read that `run_each_tick` sends for.
+    lead: u64,
     /// What `run_each_tick` hands its closure: the values sent last.
     values: [f64; MAX_GROUP_AXES],
     active: bool,
@@ -220,6 +236,31 @@ impl<'c, S: Service> SetpointStream<'c, S> {
     /// The tick the last setpoint sent was for.
     pub fn last_for_tick(&self) -> Option<u64> {
         self.last_for_tick
+    }
+
+    /// How many ticks ahead of the frame it read [`run_each_tick`](Self::run_each_tick)
+    /// sends for ([`DEFAULT_STREAM_LEAD`] unless set).
+    pub fn lead(&self) -> u64 {
+        self.lead
+    }
+
+    /// Sets the lead: after reading frame `k`, [`run_each_tick`](Self::run_each_tick)
+    /// sends the setpoint for tick `k + lead`. 1 is the least latency and suits a client
+    /// that always answers within the tick (SCHED_FIFO); a larger lead absorbs that much
+    /// scheduling jitter before a setpoint arrives late (which grows the stream's delay for
+    /// the rest of the stream). At most the group's `stream_buffer` + 1 (further ahead the
+    /// server drops setpoints as early).
+    pub fn set_lead(&mut self, lead: u64) -> Result<(), StreamError> {
+        let buffer = u64::from(self.group.info().stream_buffer);
+        if lead == 0 || lead > buffer + 1 {
+            return Err(StreamError::Lead {
+                group: self.group.name(),
+                lead,
+                most: buffer + 1,
+            });
+        }
+        self.lead = lead;
+        Ok(())
     }
 
     /// Sends the setpoint `values` for tick `for_tick` (a frame's `tick` + 1 is the next
@@ -392,8 +433,9 @@ impl<'c, S: Service> SetpointStream<'c, S> {
     /// Closes a loop through the server every tick: waits for each frame on the tick
     /// event, calls `f` with the newest frame and the values to send (one per member axis,
     /// the group's order; holding what was sent last, at first the axes' positions for a
-    /// position stream and zeros otherwise), and sends them for the frame's tick + 1.
-    /// Stops when `f` breaks or after `duration` (`None`: until `f` breaks).
+    /// position stream and zeros otherwise), and sends them for the frame's tick +
+    /// [`lead`](Self::lead) — the values `f` computes are for that tick. Stops when `f`
+    /// breaks or after `duration` (`None`: until `f` breaks).
     ///
     /// A frame the client was too slow for gets no setpoint (the next frame's does;
     /// [`StreamRun::skipped`]). The stream allocates nothing per tick (receiving a frame
@@ -436,8 +478,11 @@ impl<'c, S: Service> SetpointStream<'c, S> {
                     abort: status.abort,
                 });
             }
-            // The setpoint sent last was due by this frame's tick but is not applied.
-            if self.last_for_tick.is_some_and(|last| last <= frame.tick)
+            // The setpoint sent last was due by this frame's tick (its own tick plus the
+            // stream's delay) but is not applied.
+            if self
+                .last_for_tick
+                .is_some_and(|last| last + status.delay <= frame.tick)
                 && status.last_sequence < self.sequence
             {
                 run.behind += 1;
@@ -454,8 +499,9 @@ impl<'c, S: Service> SetpointStream<'c, S> {
                 break;
             }
             drop(frame);
-            let sequence = self.publish(seen + 1, &values[..self.axes], None)?;
-            run.note(seen + 1, sequence);
+            let for_tick = seen + self.lead;
+            let sequence = self.publish(for_tick, &values[..self.axes], None)?;
+            run.note(for_tick, sequence);
         }
         Ok(run)
     }

@@ -47,6 +47,16 @@ pub enum StreamError {
         /// The stream's mode.
         mode: &'static str,
     },
+    /// A lead the group cannot take: 0, or more than its `stream_buffer` + 1 ticks.
+    #[error("group {group}: a lead of {lead} ticks is outside 1..={most} (its stream_buffer + 1)")]
+    Lead {
+        /// The group's name.
+        group: String,
+        /// The lead asked for.
+        lead: u64,
+        /// The largest it takes.
+        most: u64,
+    },
     /// The setpoint reached no server: nobody subscribes to the `setpoints` service.
     #[error("the setpoint for group {group} was not sent: {why}")]
     NotSent {
@@ -117,7 +127,15 @@ pub struct StreamStatus {
     pub last_received_ns: u64,
     /// Setpoints applied.
     pub applied: u64,
-    /// Setpoints dropped because their tick had passed (a newer one was due as well).
+    /// Ticks the stream runs behind its setpoints' own ticks: the server applies the
+    /// setpoint for tick `k` in tick `k + delay`. 0 while every setpoint arrived before its
+    /// tick; grows to the lateness of one that arrived after it (at most `stream_buffer`),
+    /// never shrinks while the stream runs. A larger [`lead`](crate::SetpointStream::lead)
+    /// keeps it at 0.
+    pub delay: u64,
+    /// Setpoints dropped because they could no longer apply: more than `stream_buffer`
+    /// ticks behind, superseded by a newer sequence for the same tick, or not above the
+    /// last applied tick and sequence.
     pub late: u64,
     /// Setpoints dropped because they were for more than `stream_buffer` ticks ahead.
     pub early: u64,
@@ -142,6 +160,7 @@ impl StreamStatus {
             last_sequence: raw.last_sequence,
             last_applied_tick: raw.last_applied_tick,
             last_received_ns: raw.last_received_ns,
+            delay: u64::from(raw.stream_delay),
             applied: raw.applied,
             late: raw.late,
             early: raw.early,
@@ -166,11 +185,12 @@ pub struct StreamRun {
     /// Ticks between the first and the last without a setpoint (frames the client did not
     /// read before the next one came).
     pub skipped: u64,
-    /// Setpoints a frame of their own tick or a later one did not show applied when the
-    /// client read it (published after the server had taken that tick's setpoints, the
-    /// client descheduled between reading a frame and publishing): the server applies each
-    /// in a later tick, or drops it as late when a newer one is due with it. A setpoint
-    /// whose late application no frame read showed is not counted.
+    /// Setpoints a frame of the tick they were due in (their own tick plus the stream's
+    /// delay) or a later one did not show applied when the client read it (published after
+    /// the server had taken that tick's setpoints, the client descheduled between reading a
+    /// frame and publishing): the server applies each in a later tick and the stream's
+    /// delay grows to match. A setpoint whose late application no frame read showed is not
+    /// counted.
     pub behind: u64,
 }
 
@@ -221,6 +241,7 @@ mod tests {
             last_sequence: 7,
             last_applied_tick: 99,
             last_received_ns: 123_456_789,
+            stream_delay: 2,
             ..GroupState::IDLE
         };
         let status = StreamStatus::from_state(150, &raw);
@@ -230,6 +251,7 @@ mod tests {
         assert_eq!((status.applied, status.refused), (7, 2));
         assert_eq!((status.last_sequence, status.last_applied_tick), (7, 99));
         assert_eq!(status.last_received_ns, 123_456_789);
+        assert_eq!(status.delay, 2);
         assert_eq!(status.owner, None);
     }
 

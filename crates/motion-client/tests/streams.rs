@@ -124,6 +124,38 @@ fn every_setpoint_is_applied_once_in_its_tick() -> Result {
     Ok(())
 }
 
+/// The lead: after reading frame `k` the stream sends for `k + lead` (the default unless
+/// set); 0 and more than `stream_buffer` + 1 are refused with the range; a setpoint sent a
+/// lead ahead applies in its own tick (no delay).
+#[test]
+fn run_each_tick_sends_a_lead_ahead_of_the_frame_it_read() -> Result {
+    let (_server, client) = start("stream-lead", 100_000)?;
+    let xy = client.group("xy")?;
+    let buffer = u64::from(xy.info().stream_buffer);
+    let mut stream = xy.stream(StreamMode::Velocity)?;
+    assert_eq!(stream.lead(), motion_client::DEFAULT_STREAM_LEAD);
+    for bad in [0, buffer + 2] {
+        let error = stream.set_lead(bad).expect_err("outside 1..=buffer+1");
+        assert!(
+            matches!(error, StreamError::Lead { lead, most, .. } if lead == bad && most == buffer + 1),
+            "{error}"
+        );
+    }
+    stream.set_lead(buffer + 1)?;
+    let mut first_frame = None;
+    let run = stream.run_each_tick(Some(Duration::from_millis(200)), |frame, out| {
+        first_frame.get_or_insert(frame.tick);
+        out.copy_from_slice(&[1.0, 1.0]);
+        ControlFlow::Continue(())
+    })?;
+    assert_eq!(run.first_tick, first_frame.map(|tick| tick + buffer + 1));
+    let status = stream.wait_caught_up(WAIT)?;
+    assert_eq!(status.applied + status.late, run.sent, "{status:?}");
+    assert_eq!((status.early, status.refused), (0, 0), "{status:?}");
+    stream.cancel()?;
+    Ok(())
+}
+
 #[test]
 fn the_client_checks_what_it_sends_and_counts_sequences() -> Result {
     let (_server, client) = start("stream-send", 100_000)?;

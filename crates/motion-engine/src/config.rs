@@ -145,6 +145,10 @@ pub struct SignalConfig {
     pub safe: Option<bool>,
 }
 
+/// The largest `stream_buffer`, ticks: a group's setpoint queue holds twice that (a
+/// playout that far behind, setpoints that far ahead), reserved when the engine is built.
+pub const MAX_STREAM_BUFFER: u32 = 1000;
+
 /// What a group does with a streamed setpoint beyond an axis's limits (`stream_limit`).
 #[derive(
     serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
@@ -502,6 +506,9 @@ fn validate_group(group: &GroupConfig, axis_count: usize) -> Result<(), EngineCo
     }
     if group.stream_timeout == 0 || group.stream_buffer == 0 {
         return Err(bad("stream_timeout and stream_buffer must be > 0 ticks"));
+    }
+    if group.stream_buffer > MAX_STREAM_BUFFER {
+        return Err(bad("stream_buffer must be at most 1000 ticks"));
     }
     Ok(())
 }

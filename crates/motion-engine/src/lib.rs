@@ -66,7 +66,7 @@ use crate::axis::Axis;
 pub use crate::command::{CommandPort, HOME_FRACTION_OF_MAX, MAX_COMMANDS_PER_STEP};
 pub use crate::config::{
     AxisConfig, BusConfig, DeviceConfig, EngineConfig, EngineConfigError, EstopCategory,
-    GroupConfig, SignalConfig, StreamLimit,
+    GroupConfig, MAX_STREAM_BUFFER, SignalConfig, StreamLimit,
 };
 use crate::device::Device;
 use crate::group::Group;

@@ -276,10 +276,12 @@ impl SetpointFlags {
 payload! {
     /// One setpoint of a group's stream, published on `motiond/<name>/setpoints` by the
     /// client that holds the group's claim and started the stream (`Stream` command); from
-    /// any other node it is dropped and counted ([`GroupState::refused`]). In tick `k` the
-    /// server applies the newest setpoint with `for_tick ≤ k` not applied yet, at most once
-    /// and in sequence order; one for a tick more than `stream_buffer` ahead is dropped
-    /// (`early`), older ones not taken in time are dropped (`late`).
+    /// any other node it is dropped and counted ([`GroupState::refused`]). The server
+    /// applies each setpoint on its own time, once and in order: the one for tick `k` in tick
+    /// `k + stream_delay` ([`crate::playout`]); one for a tick more than `stream_buffer`
+    /// ahead is dropped (`early`), one more than `stream_buffer` behind, superseded or out of
+    /// sequence is dropped (`late`). Velocities and accelerations are judged over the
+    /// setpoints' own ticks.
     #[derive(Debug, Clone, Copy, PartialEq)]
     #[type_name("motiond::Setpoint")]
     pub struct Setpoint {
@@ -290,7 +292,8 @@ payload! {
         /// The client's sequence number: increasing; a setpoint not above the last applied
         /// one is late.
         pub sequence: u64,
-        /// The tick this setpoint is for (a frame's `tick` + 1: the next tick).
+        /// The tick this setpoint is for (a frame's `tick` + the client's lead: 1 is the
+        /// next tick).
         pub for_tick: u64,
         /// [`StreamMode`] value: must be the stream's.
         pub mode: u32,

@@ -38,6 +38,7 @@ mod group;
 mod info;
 mod params;
 mod pid_file;
+pub mod playout;
 pub mod rules;
 pub mod schema;
 mod service;

@@ -464,10 +464,11 @@ class GroupPath(Payload):
 class Setpoint(Payload):
     """One setpoint of a group's stream, published on ``motiond/<name>/setpoints`` by the client
     that holds the group's claim and started the stream (``Stream`` command); from any other node
-    it is dropped and counted (``GroupState.refused``). In tick ``k`` the server applies the
-    newest setpoint with ``for_tick ≤ k`` not applied yet, at most once and in sequence order;
-    one for a tick more than ``stream_buffer`` ahead is dropped (``early``), older ones not taken
-    in time are dropped (``late``).
+    it is dropped and counted (``GroupState.refused``). The server applies each setpoint on its
+    own time, once and in order: the one for tick ``k`` in tick ``k + stream_delay``
+    (``crate.playout``); one for a tick more than ``stream_buffer`` ahead is dropped (``early``),
+    one more than ``stream_buffer`` behind, superseded or out of sequence is dropped (``late``).
+    Velocities and accelerations are judged over the setpoints' own ticks.
 
     288 bytes, alignment 8."""
 
@@ -478,7 +479,8 @@ class Setpoint(Payload):
         # The client's sequence number: increasing; a setpoint not above the last applied one is
         # late.
         ("sequence", ctypes.c_uint64),
-        # The tick this setpoint is for (a frame's ``tick`` + 1: the next tick).
+        # The tick this setpoint is for (a frame's ``tick`` + the client's lead: 1 is the next
+        # tick).
         ("for_tick", ctypes.c_uint64),
         ("mode", ctypes.c_uint32),  # ``StreamMode`` value: must be the stream's.
         ("flags", ctypes.c_uint32),  # ``SetpointFlags`` bits.

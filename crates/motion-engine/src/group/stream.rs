@@ -2,7 +2,8 @@
 //! velocities or powers for coming ticks on `motiond/<name>/setpoints`, and the engine
 //! applies them tick by tick (cyclic synchronous position / velocity).
 //!
-//! Each setpoint is applied on its own time: the setpoint for tick `k` is applied in tick
+//! Each setpoint is applied on its own time (`motion_ipc::playout`, the rule the fake
+//! server of `motion-client::testing` follows too): the setpoint for tick `k` is applied in tick
 //! `k + delay`, where the stream's `delay` starts at 0 and grows to the lateness of a
 //! setpoint that arrives after its tick (at most `stream_buffer`); it never shrinks while
 //! the stream runs (a shorter delay would skip a setpoint: a step in the path). So a client
@@ -22,9 +23,8 @@
 //!
 //! A new stream starts only with a new `Stream` command (at delay 0).
 
-use core::cmp::Reverse;
-
 use motion_drivers::Driver;
+use motion_ipc::playout::{Playout, Timed};
 use motion_ipc::{
     ClientId, GroupAbort, GroupMotion, MAX_GROUP_AXES, PathKind, Reason, SCHEMA_VERSION, Setpoint,
     SetpointFlags, StreamFlags, StreamMode, StreamState,
@@ -60,15 +60,12 @@ pub(crate) struct Stream {
     pub room: usize,
     /// The tick the last setpoint was received for (staleness counts from it).
     pub last_received: u64,
-    pub last_sequence: u64,
     pub last_applied_tick: u64,
     /// When the shell received the last setpoint applied (its `received_ns`).
     pub last_received_ns: u64,
-    /// The `for_tick` of the last setpoint applied; the tick the stream started in before
-    /// the first.
-    pub last_for_tick: u64,
-    /// Ticks the stream runs behind its setpoints' own ticks (see the module docs).
-    pub delay: u64,
+    /// When setpoints apply: the delay, the last applied `for_tick` and sequence
+    /// (`motion_ipc::playout`, the rule the fake server follows too).
+    pub playout: Playout,
     /// Per member, the velocity the last applied setpoint asked for (units/s), and the
     /// span it was judged over (s; 0 before the first): what the next one is judged from.
     pub asked_velocity: [f64; MAX_GROUP_AXES],
@@ -96,11 +93,9 @@ impl Stream {
             queue,
             room,
             last_received: 0,
-            last_sequence: 0,
             last_applied_tick: 0,
             last_received_ns: 0,
-            last_for_tick: 0,
-            delay: 0,
+            playout: Playout::starting_at(0),
             asked_velocity: [0.0; MAX_GROUP_AXES],
             asked_span: 0.0,
             applied: 0,
@@ -120,7 +115,7 @@ impl Stream {
             mode,
             state: StreamState::Streaming,
             last_received: tick,
-            last_for_tick: tick,
+            playout: Playout::starting_at(tick),
             ..Self::idle(queue, self.room)
         };
     }
@@ -137,42 +132,14 @@ impl Stream {
         }
         self.queue.push(setpoint);
     }
+}
 
-    /// Drops (as late) what can no longer be applied: not above the last applied
-    /// `for_tick` and sequence.
-    fn drop_passed(&mut self) {
-        let (for_tick, sequence) = (self.last_for_tick, self.last_sequence);
-        let before = self.queue.len();
-        self.queue
-            .retain(|q| q.for_tick > for_tick && q.sequence > sequence);
-        self.late += (before - self.queue.len()) as u64;
+impl Timed for Queued {
+    fn for_tick(&self) -> u64 {
+        self.for_tick
     }
-
-    /// The setpoint to apply in tick `tick`, if one is due, with its span in ticks from the
-    /// last one applied; the delay grows to a late one's lateness (at most `buffer`).
-    fn take_due(&mut self, tick: u64, buffer: u64) -> Option<(Queued, u64)> {
-        loop {
-            self.drop_passed();
-            let index = (0..self.queue.len())
-                .min_by_key(|&i| (self.queue[i].for_tick, Reverse(self.queue[i].sequence)))?;
-            let setpoint = self.queue[index];
-            if setpoint.for_tick.saturating_add(self.delay) > tick {
-                return None;
-            }
-            self.queue.remove(index);
-            let behind = tick - setpoint.for_tick;
-            if behind > buffer {
-                self.late += 1;
-                continue;
-            }
-            self.delay = self.delay.max(behind);
-            let span = setpoint.for_tick - self.last_for_tick;
-            self.last_for_tick = setpoint.for_tick;
-            self.last_sequence = setpoint.sequence;
-            // Others for the same tick, older sequences: late now, not next tick.
-            self.drop_passed();
-            return Some((setpoint, span));
-        }
+    fn sequence(&self) -> u64 {
+        self.sequence
     }
 }
 
@@ -289,7 +256,10 @@ impl<D: Driver> Engine<D> {
         let buffer = u64::from(g.config.stream_buffer);
         let stream = &mut g.stream;
         let mode = stream.mode;
-        if let Some((setpoint, span)) = stream.take_due(tick, buffer) {
+        let due = stream
+            .playout
+            .take_due(&mut stream.queue, tick, buffer, &mut stream.late);
+        if let Some((setpoint, span)) = due {
             stream.last_applied_tick = tick;
             stream.last_received_ns = setpoint.received_ns;
             stream.applied += 1;

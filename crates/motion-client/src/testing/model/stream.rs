@@ -1,14 +1,17 @@
 //! The fake's setpoint streams, minimal: `Stream` on a group every member of which the
 //! sender claimed; setpoints from the streaming node queued for their tick (from any other
-//! node, of another mode, not finite: `refused`; too far ahead: `early`); in each tick the
-//! newest due one above the last applied sequence is applied (the other due ones are
-//! `late`); no setpoint for `stream_timeout` ticks: `stale`, the group stops; `Cancel`
-//! ends the stream idle. Velocities are integrated, positions taken as they are; no limits.
+//! node, of another mode, not finite: `refused`; too far ahead: `early`); each applies on
+//! its own time, `motion_ipc::playout`'s rule as in the server (a late one grows the
+//! stream's delay, never skipping one); no setpoint for `stream_timeout` ticks: `stale`,
+//! the group stops; `Cancel` ends the stream idle. Velocities are integrated, positions
+//! taken as they are; no limits.
 
 use motion_ipc::{
     AxisMode, ClientId, GroupAbort, GroupMotion, GroupState, MAX_GROUP_AXES, PathKind, Reason,
     SCHEMA_VERSION, Setpoint, StreamFlags, StreamMode, StreamState,
 };
+
+use motion_ipc::playout::{Playout, Timed};
 
 use super::Model;
 use super::group::Judged;
@@ -21,11 +24,21 @@ struct Queued {
     values: [f64; MAX_GROUP_AXES],
 }
 
+impl Timed for Queued {
+    fn for_tick(&self) -> u64 {
+        self.for_tick
+    }
+    fn sequence(&self) -> u64 {
+        self.sequence
+    }
+}
+
 /// One group's stream (its counters live in the group's [`GroupState`]).
 #[derive(Debug, Clone, Default)]
 pub(in crate::testing) struct SimStream {
     mode: StreamMode,
     queue: Vec<Queued>,
+    playout: Playout,
     last_received: u64,
     /// Per member: the velocity streamed last (velocity mode).
     velocity: Vec<f64>,
@@ -91,6 +104,7 @@ impl Model {
         group.stream = SimStream {
             mode,
             queue: Vec::new(),
+            playout: Playout::starting_at(tick),
             last_received: tick,
             velocity: vec![0.0; members.len()],
         };
@@ -155,27 +169,15 @@ impl Model {
             self.groups[index].state.stream = StreamState::Stale as u8;
             return;
         }
-        let last = group.state.last_sequence;
-        let mut chosen: Option<Queued> = None;
         let mut late = 0;
-        group.stream.queue.retain(|entry| {
-            if entry.for_tick > tick {
-                return true;
-            }
-            if entry.sequence > last
-                && chosen
-                    .is_none_or(|c| (entry.for_tick, entry.sequence) > (c.for_tick, c.sequence))
-            {
-                if chosen.is_some() {
-                    late += 1;
-                }
-                chosen = Some(*entry);
-            } else {
-                late += 1;
-            }
-            false
-        });
+        let buffer = u64::from(group.config.stream_buffer);
+        let stream = &mut group.stream;
+        let chosen = stream
+            .playout
+            .take_due(&mut stream.queue, tick, buffer, &mut late)
+            .map(|(setpoint, _)| setpoint);
         group.state.late += late;
+        group.state.stream_delay = u16::try_from(stream.playout.delay).unwrap_or(u16::MAX);
         let members = group.config.axes.clone();
         if let Some(setpoint) = chosen {
             group.state.last_sequence = setpoint.sequence;

@@ -16,7 +16,8 @@ const GOAL_TIME_MS: (i64, core::ops::RangeInclusive<i64>) = (1000, 1..=60_000);
 /// `stream_timeout` default and range, ticks.
 const STREAM_TIMEOUT: (i64, core::ops::RangeInclusive<i64>) = (20, 1..=100_000);
 /// `stream_buffer` default and range, ticks.
-const STREAM_BUFFER: (i64, core::ops::RangeInclusive<i64>) = (3, 1..=1000);
+const STREAM_BUFFER: (i64, core::ops::RangeInclusive<i64>) =
+    (3, 1..=motion_engine::MAX_STREAM_BUFFER as i64);
 
 /// One listed member of a group: its name, and its index into the config's axes once every
 /// axis is valid (`None`: unknown, or an axis with issues of its own).
