@@ -128,8 +128,10 @@ def test_the_closed_loop_streams_to_base_and_prints_one_document(server: Server)
     )
     assert result.returncode == 0, result.stderr
     document = json.loads(result.stdout)
-    assert document["format"] == "motiond.bench_stream/1"
+    assert document["format"] == "motiond.bench_stream/2"
     stream = document["stream"]
+    assert stream["lead"] == motiond.DEFAULT_LEAD
+    assert 0 <= stream["stream_delay"] <= 3  # base's stream_buffer
     assert stream["sent"] > 0
     assert 0 < stream["before_deadline"] <= stream["sent"] <= stream["ticks"]
     assert stream["counters"]["refused"] == 0
@@ -137,3 +139,26 @@ def test_the_closed_loop_streams_to_base_and_prints_one_document(server: Server)
     received = values(stream["received_ns"])
     assert received and all(0 < v < _PLAUSIBLE_NS for v in received)
     assert stream["applied_in_tick"] + stream["applied_later"] == len(received)
+
+
+def test_the_closed_loop_takes_a_lead(server: Server) -> None:
+    argv = [sys.executable, "-m", "motiond.bench_stream", "--server", server.name]
+    result = subprocess.run(
+        argv + ["--group", "base", "--duration", "0.3", "--lead", "1"],
+        capture_output=True,
+        text=True,
+        timeout=60.0,
+        check=False,
+    )
+    assert result.returncode == 0, result.stderr
+    assert json.loads(result.stdout)["stream"]["lead"] == 1
+    # base's stream_buffer is 3: a lead of 5 is refused before anything is sent.
+    result = subprocess.run(
+        argv + ["--group", "base", "--duration", "0.3", "--lead", "5"],
+        capture_output=True,
+        text=True,
+        timeout=60.0,
+        check=False,
+    )
+    assert result.returncode != 0
+    assert "outside 1..=4" in result.stderr, result.stderr

@@ -75,7 +75,7 @@ def slow_trajectory(
 
 
 def test_groups_and_their_description(client: motiond.Client) -> None:
-    assert [group.name for group in client.groups] == ["arm", "gantry", "base"]
+    assert [group.name for group in client.groups] == ["arm", "gantry", "base", "aim"]
     arm, gantry, base = client.group("arm"), client.group("gantry"), client.group("base")
     assert arm.axes == ["x", "y", "z", "a", "b", "c"]
     assert gantry.axes == GANTRY
@@ -86,11 +86,11 @@ def test_groups_and_their_description(client: motiond.Client) -> None:
     assert arm.goal_time_tolerance == pytest.approx(1.0)
     assert (base.stream_limit, base.stream_timeout, base.stream_buffer) == ("clamp", 50, 3)
     assert gantry.info.text("name") == "gantry"
-    with pytest.raises(motiond.NoSuchGroup, match=r'no group named "legs".*arm, gantry, base'):
+    with pytest.raises(motiond.NoSuchGroup, match=r'no group named "legs".*arm, gantry, base, aim'):
         client.group("legs")
 
     frame = client.latest()
-    assert frame.group_count == 3
+    assert frame.group_count == 4
     state = base.state(frame)
     assert state.tick == frame.tick and state.name == "base"
     assert isinstance(state.motion, GroupMotion) and isinstance(state.stream, StreamState)
@@ -314,8 +314,11 @@ def test_a_velocity_stream_applies_every_setpoint_sent(client: motiond.Client) -
             sent = stream.run_each_tick(sine, duration=1.0)
             final = stream.wait_applied(timeout=5.0)
         assert sent == stream.sent > 0
-        assert final.applied == stream.sent, (final, stream.skipped)
-        assert (final.late, final.early, final.refused) == (0, 0, 0)
+        # Each applied on its own time; one that reached the server more than
+        # stream_buffer ticks after its tick (this client descheduled that long) is late.
+        assert final.applied + final.late == stream.sent, (final, stream.skipped)
+        assert (final.early, final.refused, final.clamped) == (0, 0, 0)
+        assert final.stream_delay <= base.stream_buffer
         assert final.last_sequence == stream.sequence
         assert stream.applied_before_tick == 0
         assert stream.observed > 0
@@ -368,7 +371,7 @@ def test_another_clients_setpoints_are_refused_and_do_not_disturb(
                 stream.run_each_tick(steady, duration=0.2)
                 final = stream.wait_applied(timeout=5.0)
             assert final.refused == 20
-            assert final.applied == stream.sent and final.late == 0
+            assert final.applied + final.late == stream.sent, final
             assert fastest[0] == pytest.approx(3.0)
 
         try:
@@ -392,5 +395,5 @@ def test_the_closed_loop_example_runs(server: Server) -> None:
             break
         time.sleep(0.5)
     assert result.returncode == 0, result.stdout + result.stderr
-    assert "every setpoint sent was applied, none before its tick" in result.stdout
-    assert "late 0, early 0" in result.stdout
+    assert "none before its tick, none clamped" in result.stdout
+    assert "early 0, clamped 0" in result.stdout

@@ -84,6 +84,11 @@ pub struct BenchArgs {
     /// creates; without one the phase is skipped with a note).
     #[arg(long, value_name = "PATH")]
     pub python: Option<PathBuf>,
+    /// Processes spinning `while True: pass` beside the Python streaming client of the
+    /// coordinated-motion phase (its runs with lead 1 and with the default lead), to measure
+    /// the share of ticks it meets on a loaded machine. 0 by default.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub busy_loops: u32,
 }
 
 /// The command whose round trip is timed.

@@ -113,7 +113,8 @@ pub fn config_text(name: &str, tick_hz: u32, rt: ServerRt) -> Result<String, Str
 
 /// Runs the phase: motiond `motiond` on `config/sim.toml` at `tick_hz` with `rt`, files in
 /// `dir`; `client_priority` for the streaming client (as the WaitSet clients get it);
-/// `python`, the interpreter of the Python closed-loop client, if any.
+/// `python`, the interpreter of the Python closed-loop client, if any, and how many busy
+/// loops spin beside it.
 pub fn run(
     motiond: &Path,
     tick_hz: u32,
@@ -121,11 +122,11 @@ pub fn run(
     client_priority: Option<u8>,
     duration: Duration,
     dir: &Path,
-    python: Option<&Path>,
+    python: Option<(&Path, u32)>,
 ) -> Result<GroupsRun, String> {
     let motiond = motiond.to_path_buf();
     let dir = dir.to_path_buf();
-    let python = python.map(Path::to_path_buf);
+    let python = python.map(|(path, loops)| (path.to_path_buf(), loops));
     // A path is a ≈400 KB sample written in place: room for an unoptimised build too.
     std::thread::Builder::new()
         .name("bench-groups".to_owned())
@@ -138,7 +139,9 @@ pub fn run(
                 client_priority,
                 duration,
                 &dir,
-                python.as_deref(),
+                python
+                    .as_ref()
+                    .map(|(path, loops)| (path.as_path(), *loops)),
             )
         })
         .map_err(|e| format!("group phase thread: {e}"))?
@@ -153,7 +156,7 @@ fn run_here(
     client_priority: Option<u8>,
     duration: Duration,
     dir: &Path,
-    python: Option<&Path>,
+    python: Option<(&Path, u32)>,
 ) -> Result<GroupsRun, String> {
     let name = format!("bench-groups-{}", std::process::id());
     let config = dir.join("groups-sim.toml");
@@ -199,11 +202,12 @@ fn run_here(
     let mut stream = crate::stream::run(&mut client, base, tick_hz, client_priority, duration)
         .map_err(|e| format!("{e} (motiond: {})", last_line(&log)));
     // The Python closed-loop client on the same group, once the Rust one let it go.
-    if let (Ok(streamed), Some(python)) = (&mut stream, python) {
-        streamed.python = Some(
-            crate::python_stream::measure(python, &name, "base", streamed.length)
-                .map_err(|e| format!("{e} (motiond: {})", last_line(&log))),
-        );
+    if let (Ok(streamed), Some((python, busy_loops))) = (&mut stream, python) {
+        streamed.python =
+            crate::python_stream::measure_leads(python, &name, "base", streamed.length, busy_loops)
+                .into_iter()
+                .map(|run| run.map_err(|e| format!("{e} (motiond: {})", last_line(&log))))
+                .collect();
     }
     drop(client);
     server.stop();

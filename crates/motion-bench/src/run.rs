@@ -286,7 +286,7 @@ pub fn run(server: &str, cli: &BenchArgs) -> Result<Report, BenchError> {
                 cli.rt_priority,
                 cli.duration,
                 &scratch()?,
-                python.as_deref(),
+                python.as_deref().map(|path| (path, cli.busy_loops)),
             )
         }) {
             Ok(run) => Some(run),

@@ -69,9 +69,9 @@ pub struct StreamRun {
     pub peer_counts: (u64, u64),
     /// The peer's frame `k` published → setpoint for `k + 1` taken, its own stamps.
     pub peer_received: Summary,
-    /// The Python closed-loop client on the same group, after ours
-    /// ([`crate::python_stream`]); `None` without an interpreter.
-    pub python: Option<Result<crate::python_stream::PythonStream, String>>,
+    /// The Python closed-loop client on the same group, after ours, with lead 1 and with
+    /// its default lead ([`crate::python_stream`]); empty without an interpreter.
+    pub python: Vec<Result<crate::python_stream::PythonStream, String>>,
     /// The client thread's set-up.
     pub thread: String,
     /// How long each side streamed.
@@ -126,7 +126,7 @@ pub fn run(
         baseline,
         peer_counts: (figures.setpoints_in_time, figures.setpoints_late),
         peer_received: figures.received,
-        python: None,
+        python: Vec::new(),
         thread,
         length,
     })
@@ -428,9 +428,9 @@ pub fn rows(run: &StreamRun) -> Vec<Row> {
             ),
         },
     ];
-    if let Some(python) = &run.python {
+    if !run.python.is_empty() {
         rows.extend(crate::python_stream::rows(
-            python,
+            &run.python,
             percent(ours.before_deadline, ours.ticks),
             ours.received.summary(),
         ));

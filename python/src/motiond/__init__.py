@@ -71,7 +71,7 @@ from .session import (  # noqa: E402
     Param,
 )
 from .signal import Signal, SignalEvent, SignalStatus  # noqa: E402
-from .stream import SetpointStream  # noqa: E402
+from .stream import DEFAULT_LEAD, SetpointStream  # noqa: E402
 
 __version__ = "0.1.0"
 
@@ -93,6 +93,7 @@ __all__ = [
     "GroupClaim",
     "GroupStatus",
     "PathStarted",
+    "DEFAULT_LEAD",
     "SetpointStream",
     "Frame",
     "Received",

@@ -4,17 +4,18 @@ a running motiond, timed, as one JSON document.
 The loop is this package's public one (the code a user's script runs, as
 ``examples/closed_loop.py``): ``client.group(name).stream("velocity")`` and
 :meth:`~motiond.stream.SetpointStream.run_each_tick`, answering every new frame ``k`` with
-the setpoint for ``k + 1`` (a velocity sine of ±20 units/s, period 1.5 s, every second
-axis the opposite), ``one_in_flight=False`` as the Rust bench client does. Measured:
+the setpoint for ``k + lead`` (``--lead``, default :data:`motiond.DEFAULT_LEAD`; a velocity
+sine of ±20 units/s, period 1.5 s, every second axis the opposite). Measured:
 
 - ``before_deadline``: the setpoints sent (``time.monotonic_ns()`` right after the send)
-  before the deadline of the tick they were for (the frame's ``time_ns`` + one period),
-  of the stream's ``ticks`` (first setpoint's tick to the last's);
+  before the deadline of the tick they were for (the frame's ``time_ns`` + ``lead``
+  periods: the server takes that tick's setpoints then), of the stream's ``ticks`` (first
+  setpoint's tick to the last's): the share of ticks the client met;
 - ``sent_ns``: frame ``publish_ns`` → that send;
 - ``received_ns``: frame ``publish_ns`` → the server took the setpoint from the service
   (``GroupStatus.last_received_ns`` of the frames that show it applied);
 - ``applied_in_tick`` / ``applied_later``: setpoints seen applied in the tick they were for,
-  or later; and the server's counters at the end.
+  or later; and the server's counters and the stream's delay at the end.
 
 ``cargo bench --bench latency`` and ``motionctl bench`` run it on the group ``base`` of the
 simulated robot their coordinated-motion phase starts (docs/PERFORMANCE.md). Exits 3 when
@@ -36,18 +37,22 @@ from .bench import _seconds, check_clock, distribution, exit_status
 from .client import Client
 from .errors import MotiondError
 from .frames import Frame
+from .stream import DEFAULT_LEAD
 
 __all__ = ["FORMAT", "measure_stream", "main"]
 
 #: The ``format`` field of the document (the Rust bench checks it).
-FORMAT = "motiond.bench_stream/1"
+FORMAT = "motiond.bench_stream/2"
 # The sine: amplitude (units/s) and period (s), as the Rust bench client's.
 _SPEED = 20.0
 _PERIOD = 1.5
 
 
-def measure_stream(client: Client, group_name: str, duration: float) -> Dict[str, Any]:
-    """Streams to ``group_name`` for ``duration`` s; the document's figures."""
+def measure_stream(
+    client: Client, group_name: str, duration: float, lead: int = DEFAULT_LEAD
+) -> Dict[str, Any]:
+    """Streams to ``group_name`` for ``duration`` s, ``lead`` ticks ahead; the document's
+    figures."""
     group = client.group(group_name)
     index = group.index
     count = len(group.axes)
@@ -82,13 +87,13 @@ def measure_stream(client: Client, group_name: str, duration: float) -> Dict[str
         if last_tick and frame.tick > last_tick[0] + 1:
             lost[0] += frame.tick - last_tick[0] - 1
         last_tick[:] = [frame.tick]
-        answered.append((frame.tick + 1, frame.publish_ns, frame.time_ns))
+        answered.append((frame.tick + lead, frame.publish_ns, frame.time_ns))
         t = len(answered) * period_ns / 1e9
         speed = _SPEED * math.sin(2.0 * math.pi * t / _PERIOD)
         return [sign * speed for sign in signs]
 
     group.wait_stopped(timeout=10.0)
-    with group.stream("velocity") as stream:
+    with group.stream("velocity", lead=lead) as stream:
         send = stream.send
 
         def timed_send(
@@ -100,13 +105,13 @@ def measure_stream(client: Client, group_name: str, duration: float) -> Dict[str
             now = time.monotonic_ns()
             _, publish_ns, time_ns = answered[-1]
             sent_ns.append(now - publish_ns)
-            if now < time_ns + period_ns:
+            if now < time_ns + lead * period_ns:
                 nonlocal before_deadline
                 before_deadline += 1
             return sequence
 
         stream.send = timed_send  # type: ignore[method-assign]
-        stream.run_each_tick(control, duration=duration, one_in_flight=False)
+        stream.run_each_tick(control, duration=duration)
         # The last setpoints' ticks pass: their outcome shows in the frames to come.
         final = stream.wait_applied(timeout=2.0)
         for _ in range(5):
@@ -117,6 +122,8 @@ def measure_stream(client: Client, group_name: str, duration: float) -> Dict[str
     ticks = answered[-1][0] - answered[0][0] + 1 if answered else 0
     return {
         "group": group_name,
+        "lead": lead,
+        "stream_delay": final.stream_delay,
         "sent": len(sent_ns),
         "ticks": ticks,
         "before_deadline": before_deadline,
@@ -146,6 +153,12 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     parser.add_argument("--group", default="base", help="the group (default: base)")
     parser.add_argument("--duration", type=_seconds, default=5.0, help="seconds (default: 5)")
     parser.add_argument(
+        "--lead",
+        type=int,
+        default=DEFAULT_LEAD,
+        help=f"ticks ahead of the frame read (default: {DEFAULT_LEAD})",
+    )
+    parser.add_argument(
         "--connect-timeout",
         type=_seconds,
         default=2.0,
@@ -157,7 +170,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         with Client(
             args.server, timeout=args.connect_timeout, node_name="motiond-py-bench-stream"
         ) as client:
-            figures = measure_stream(client, args.group, args.duration)
+            figures = measure_stream(client, args.group, args.duration, args.lead)
             tick_hz = int(client.tick_hz)
     except (MotiondError, KeyboardInterrupt) as error:
         return exit_status(error)

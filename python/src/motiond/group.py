@@ -497,12 +497,17 @@ class Group(EntryHandle):
 
     # --- streaming -------------------------------------------------------------------------
 
-    def stream(self, mode: Union[str, StreamMode] = "position") -> SetpointStream:
+    def stream(
+        self, mode: Union[str, StreamMode] = "position", *, lead: Optional[int] = None
+    ) -> SetpointStream:
         """Claims the group, starts a setpoint stream of ``mode`` (``"position"``,
         ``"velocity"`` or ``"power"``) and returns it; leaving its ``with`` block ends the
-        stream (cancel) and releases the claim. See
-        :class:`~motiond.stream.SetpointStream`."""
-        return SetpointStream(self._client, self._index, self.name, len(self.axis_indices), mode)
+        stream (cancel) and releases the claim. ``lead``: ticks ahead of the frame read that
+        :meth:`~motiond.stream.SetpointStream.run_each_tick` sends for (default
+        :data:`~motiond.stream.DEFAULT_LEAD`). See :class:`~motiond.stream.SetpointStream`."""
+        return SetpointStream(
+            self._client, self._index, self.name, len(self.axis_indices), mode, lead=lead
+        )
 
     def __repr__(self) -> str:
         return f"Group({self.name!r}, index={self._index}, axes={self.axes})"

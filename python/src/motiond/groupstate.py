@@ -88,9 +88,15 @@ class GroupStatus:
     #: When the server took it from the setpoints service (CLOCK_MONOTONIC ns, the clock of
     #: the frame's ``publish_ns`` and of ``time.monotonic_ns()``); 0 until one is applied.
     last_received_ns: int
+    #: Ticks the stream runs behind its setpoints' own ticks: the setpoint for tick ``k``
+    #: is applied in tick ``k + stream_delay``; grows to the lateness of one that arrived
+    #: after its tick (at most ``stream_buffer``), never shrinks while the stream runs.
+    stream_delay: int
     #: Streamed setpoints applied.
     applied: int
-    #: Streamed setpoints dropped because their tick had passed (a newer one was due).
+    #: Streamed setpoints dropped because they could no longer apply: more than
+    #: ``stream_buffer`` ticks behind, superseded by a newer sequence for the same tick, or
+    #: not above the last applied tick and sequence.
     late: int
     #: Streamed setpoints dropped because they were for a tick too far ahead.
     early: int
@@ -126,6 +132,7 @@ class GroupStatus:
             last_sequence=int(state.last_sequence),
             last_applied_tick=int(state.last_applied_tick),
             last_received_ns=int(state.last_received_ns),
+            stream_delay=int(state.stream_delay),
             applied=int(state.applied),
             late=int(state.late),
             early=int(state.early),

@@ -3,11 +3,18 @@
 :meth:`Group.stream <motiond.group.Group.stream>` claims the group, sends ``Stream`` and
 returns the stream; each :meth:`~SetpointStream.send` publishes one
 :class:`~motiond.ipc.Setpoint` on the server's ``setpoints`` service, addressed to a tick
-(``for_tick``: a frame's tick + 1 is the next tick). In tick ``k`` the server applies the
-newest setpoint with ``for_tick ≤ k`` not applied yet, at most once and in sequence order;
-older due ones are dropped (``late``), ones for a tick more than ``stream_buffer`` ahead
-too (``early``); when none arrives for ``stream_timeout`` ticks it stops the group (stream
-``stale``). Leaving the ``with`` block cancels the stream and releases the claim::
+(``for_tick``: a frame's tick + 1 is the next tick). The server applies each setpoint on
+its own time, once and in order: the one for tick ``k`` in tick ``k + stream_delay``, where
+the stream's delay grows to the lateness of a setpoint that arrived after its tick (at most
+``stream_buffer``; one later still is dropped, ``late``) and never shrinks while the stream
+runs; velocities and accelerations are judged over the setpoints' own ticks. One for a
+tick more than ``stream_buffer`` ahead is dropped (``early``); when none arrives for
+``stream_timeout`` ticks the server stops the group (stream ``stale``).
+
+:meth:`~SetpointStream.run_each_tick` answers frame ``k`` with the setpoint for
+``k + lead`` (:data:`DEFAULT_LEAD` unless set): a lead above the client's scheduling jitter
+keeps the delay at 0. Leaving the ``with`` block cancels the stream and releases the
+claim::
 
     with client.group("base").stream("velocity") as stream:
         stream.run_each_tick(lambda frame: [10.0, -10.0], duration=2.0)
@@ -47,7 +54,13 @@ from .ipc import (
 )
 from .session import Accepted, Session
 
-__all__ = ["SetpointStream"]
+__all__ = ["DEFAULT_LEAD", "SetpointStream"]
+
+#: Ticks ahead of the frame read that :meth:`SetpointStream.run_each_tick` sends for unless
+#: told otherwise (the same as the Rust client's ``DEFAULT_STREAM_LEAD``): a Python client
+#: at 1 kHz beside two busy loops got its setpoint in before its tick for the share of
+#: ticks the README's "Performance" gives with lead 1 and with this lead.
+DEFAULT_LEAD = 2
 
 _DOUBLE = ctypes.sizeof(ctypes.c_double)
 _SIZE = ctypes.sizeof(Setpoint)
@@ -86,7 +99,7 @@ class SetpointStream:
       ``for_tick`` (they reached the server late, the tick had passed) and
       :attr:`max_delay`, the most ticks after;
     - :attr:`skipped`: frames :meth:`run_each_tick` did not answer because the previous
-      setpoint was not applied yet (see its ``one_in_flight``).
+      setpoint was overdue and not applied yet (see its ``one_in_flight``).
 
     The server's own counters are in :meth:`state` (``applied``, ``late``, ``early``,
     ``clamped``, ``refused``).
@@ -99,6 +112,8 @@ class SetpointStream:
         name: str,
         axis_count: int,
         mode: Union[str, StreamMode, int],
+        *,
+        lead: Optional[int] = None,
     ) -> None:
         self._client = client
         self._index = index
@@ -110,6 +125,10 @@ class SetpointStream:
         # Before the claim: a client that cannot publish (remote) fails with nothing taken.
         self._publisher = client._setpoints_port()
         timeout = int(client.info.groups[index].stream_timeout)
+        self._buffer = int(client.info.groups[index].stream_buffer)
+        self._lead = DEFAULT_LEAD
+        if lead is not None:
+            self.lead = lead
         #: Ticks :meth:`run_each_tick` waits for the previous setpoint past its tick.
         self.patience = max(2, timeout // 4)
         #: Setpoints published.
@@ -147,6 +166,25 @@ class SetpointStream:
     def mode(self) -> StreamMode:
         """What the values are: positions, velocities or powers."""
         return self._mode
+
+    @property
+    def lead(self) -> int:
+        """Ticks ahead of the frame it read that :meth:`run_each_tick` sends for: after
+        frame ``k`` the setpoint for ``k + lead``. 1 is the least latency and suits a
+        client that always answers within the tick; a larger lead absorbs that much
+        scheduling jitter before a setpoint arrives late (which grows the stream's delay for
+        the rest of the stream). 1 to the group's ``stream_buffer`` + 1."""
+        return self._lead
+
+    @lead.setter
+    def lead(self, ticks: int) -> None:
+        most = self._buffer + 1
+        if isinstance(ticks, bool) or not isinstance(ticks, int) or not 1 <= ticks <= most:
+            raise BadPath(
+                f"group {self._name}: a lead of {ticks!r} ticks is outside 1..={most} "
+                "(its stream_buffer + 1)"
+            )
+        self._lead = ticks
 
     @property
     def active(self) -> bool:
@@ -266,31 +304,34 @@ class SetpointStream:
             self._client._wait_tick(deadline - now)
 
     def _pending(self, state: GroupState, tick: int) -> bool:
-        """Whether the last setpoint sent is not applied yet but may still be."""
+        """Whether the last setpoint sent is overdue (its tick plus the stream's delay has
+        passed) and not applied yet, but may still be."""
         if self.sequence == 0 or int(state.last_sequence) >= self.sequence:
             return False
-        return tick < self.last_for_tick + self.patience
+        due = self.last_for_tick + int(state.stream_delay)
+        return due <= tick < due + self.patience
 
     def run_each_tick(
         self,
         fn: Callable[[Frame], Optional[Sequence[float]]],
         duration: Optional[float] = None,
         *,
-        one_in_flight: bool = True,
+        one_in_flight: bool = False,
         timeout: float = 1.0,
     ) -> int:
         """The control loop: waits for each new frame (on the tick event), calls
         ``fn(frame)`` with the newest one and sends the values it returns for
-        ``frame.tick + 1``; for ``duration`` s, or until ``fn`` returns ``None``. Returns
-        how many setpoints it sent.
+        ``frame.tick + lead`` (:attr:`lead`: the values ``fn`` computes are for that
+        tick); for ``duration`` s, or until ``fn`` returns ``None``. Returns how many
+        setpoints it sent.
 
         A client that fell behind does not answer the frames it missed: it reads the
-        newest. With ``one_in_flight`` (the default), a frame that does not show the
-        previous setpoint applied yet is not answered (:attr:`skipped`) — for up to
-        :attr:`patience` ticks past that setpoint's tick: so no two setpoints become due in
-        the same tick, and every one sent is applied (none counted late). Without it,
-        ``fn`` answers every new frame and the server keeps the newest setpoint due (the
-        freshest values), counting the ones it drops as ``late``.
+        newest. Every setpoint sent is applied on its own time, late ones too (the stream's
+        delay grows to match), so the default answers every new frame. With
+        ``one_in_flight``, a frame that shows the previous setpoint overdue (its tick plus
+        the stream's delay passed) and not applied is not answered (:attr:`skipped`), for
+        up to :attr:`patience` ticks: the client waits for the server rather than queueing
+        more behind a setpoint that is stuck.
 
         Raises :class:`~motiond.errors.GroupAborted` when the stream stops (stale,
         a limit under ``stream_limit = "abort"``, a stop, the e-stop),
@@ -315,7 +356,7 @@ class SetpointStream:
             del frame
             if values is None:
                 break
-            self.send(last + 1, values)
+            self.send(last + self._lead, values)
             sent += 1
         return sent
 

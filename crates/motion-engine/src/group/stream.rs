@@ -314,7 +314,7 @@ impl<D: Driver> Engine<D> {
             velocity: 0.0,
             clamped: false,
         }; MAX_GROUP_AXES];
-        for slot in 0..g.members.len() {
+        for (slot, out) in steps.iter_mut().enumerate().take(g.members.len()) {
             let limits = &g.limits[slot];
             let value = setpoint.values[slot];
             let previous = Previous {
@@ -349,7 +349,7 @@ impl<D: Driver> Engine<D> {
                     }),
             }
             .map_err(|breach| (slot, breach))?;
-            steps[slot] = step;
+            *out = step;
         }
         let mut clamped = false;
         for (slot, step) in steps.iter().enumerate().take(g.members.len()) {
