@@ -48,7 +48,9 @@ fn run(ticks: u64, harness: &mut Harness) {
 fn step_allocates_nothing_in_steady_state() {
     let (engine, controls) = two_link_engine();
     for control in &controls {
-        control.lock().unwrap().wire.reserve(100_000);
+        let mut control = control.lock().unwrap();
+        control.wire.reserve(100_000);
+        control.goals.reserve(100_000);
     }
     let mut harness = Harness::new(engine);
     harness.port.replies.reserve(100_000);

@@ -157,8 +157,11 @@ fn next_goal(
     let measured = axis.position() + axis.velocity() * since;
     let feedback = (member.lead * 4).max(FEEDBACK_TIME).as_secs_f64();
     let floor = axis.min_profile_velocity.max(axis.max_velocity * END_SPEED);
-    let finished =
-        !stream && (g.scale.finished(&g.path) || (g.scale.at_rest() && g.scale.target() == 0.0));
+    let finished = if stream {
+        g.stream.finishing
+    } else {
+        g.scale.finished(&g.path) || (g.scale.at_rest() && g.scale.target() == 0.0)
+    };
     if finished {
         if member.end_sent && member.last_target == desired {
             return None;

@@ -61,7 +61,7 @@ impl<D: Driver> Engine<D> {
                 if let Some(refused) = self.claimed_by_other(index, client) {
                     return refused;
                 }
-                self.end_stream(index, StreamState::Idle, GroupAbort::None, None);
+                self.cancel_stream(index);
                 Reason::Accepted
             }
             CommandKind::Hold | CommandKind::Resume | CommandKind::Feed

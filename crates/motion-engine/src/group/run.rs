@@ -23,6 +23,9 @@ impl<D: Driver> Engine<D> {
                 if self.groups[group].motion.active() {
                     self.follow_group(group);
                 }
+                if self.groups[group].stream.finishing {
+                    self.end_of_path(group);
+                }
                 continue;
             }
             if self.line_started(group) {
@@ -144,7 +147,8 @@ impl<D: Driver> Engine<D> {
     fn end_of_path(&mut self, group: usize) {
         let now = self.now;
         let g = &mut self.groups[group];
-        if g.motion != GroupMotion::Moving || !g.scale.finished(&g.path) {
+        let finishing = g.kind == PathKind::Stream && g.stream.finishing;
+        if g.motion != GroupMotion::Moving || !(finishing || g.scale.finished(&g.path)) {
             return;
         }
         let ended_at = *g.ended_at.get_or_insert(now);
@@ -152,7 +156,12 @@ impl<D: Driver> Engine<D> {
         let mut missed = None;
         for (slot, member) in g.members.iter().enumerate() {
             let axis = &self.axes[member.axis];
-            let distance = (axis.position() - g.path.end()[slot]).abs();
+            let end = if finishing {
+                g.position[slot]
+            } else {
+                g.path.end()[slot]
+            };
+            let distance = (axis.position() - end).abs();
             let tolerance = g.config.goal_tolerance[slot];
             if axis.stale || distance > tolerance || axis.state.moving {
                 missed.get_or_insert((member.axis, distance, tolerance));
@@ -169,7 +178,11 @@ impl<D: Driver> Engine<D> {
         for slot in 0..count {
             let g = &self.groups[group];
             let member = g.members[slot];
-            let target = g.path.end()[slot];
+            let target = if finishing {
+                g.position[slot]
+            } else {
+                g.path.end()[slot]
+            };
             let goal = g.config.goal_tolerance[slot];
             let axis = &self.axes[member.axis];
             let distance = (axis.position() - target).abs();

@@ -70,6 +70,9 @@ pub(crate) struct Stream {
     /// span it was judged over (s; 0 before the first): what the next one is judged from.
     pub asked_velocity: [f64; MAX_GROUP_AXES],
     pub asked_span: f64,
+    /// Cancelled at rest: the stream takes no more setpoints and the group finishes on the
+    /// last one applied, as a path finishes on its end (`done` within `goal_tolerance`).
+    pub finishing: bool,
     pub applied: u64,
     pub late: u64,
     pub early: u64,
@@ -98,6 +101,7 @@ impl Stream {
             playout: Playout::starting_at(0),
             asked_velocity: [0.0; MAX_GROUP_AXES],
             asked_span: 0.0,
+            finishing: false,
             applied: 0,
             late: 0,
             early: 0,
@@ -243,12 +247,46 @@ impl<D: Driver> Engine<D> {
         Reason::Accepted
     }
 
+    /// `Cancel` of a stream: it takes no more setpoints. When every member's last asked
+    /// velocity lets it stop within its `goal_tolerance` (the client brought the stream to
+    /// rest), the group finishes on the last setpoint applied — every board handed it as its
+    /// final position, `done` once every axis is there within its `goal_tolerance`, faults
+    /// `goal-tolerance` after `goal_time_tolerance` — as a path finishes on its end; a
+    /// stream cancelled while its setpoints still move (or a velocity or power stream)
+    /// stops every member from its measured speed at its `max_accel` and ends `done`.
+    pub(crate) fn cancel_stream(&mut self, group: usize) {
+        let g = &mut self.groups[group];
+        let at_rest = g.stream.mode == StreamMode::Position
+            && g.stream.applied > 0
+            && (0..g.members.len()).all(|slot| {
+                let v = g.stream.asked_velocity[slot];
+                v * v / (2.0 * g.limits[slot].max_accel) <= g.config.goal_tolerance[slot]
+            });
+        if !at_rest {
+            self.end_stream(group, StreamState::Idle, GroupAbort::None, None);
+            return;
+        }
+        g.stream.state = StreamState::Idle;
+        g.stream.finishing = true;
+        g.stream.clear();
+        g.velocity.fill(0.0);
+        g.ended_at = None;
+    }
+
     /// One tick of a streaming group: staleness, the setpoint due, its limits.
     pub(crate) fn stream_tick(&mut self, group: usize) {
         let tick = self.tick;
         let period = self.config.period().as_secs_f64();
         let g = &mut self.groups[group];
         g.stream.flags = StreamFlags(0);
+        if g.stream.finishing {
+            for (slot, member) in g.members.iter().enumerate() {
+                let axis = &mut self.axes[member.axis];
+                axis.path_position = g.position[slot];
+                axis.path_velocity = 0.0;
+            }
+            return;
+        }
         if tick.saturating_sub(g.stream.last_received) >= u64::from(g.config.stream_timeout) {
             self.end_stream(group, StreamState::Stale, GroupAbort::StreamStale, None);
             return;
