@@ -6,7 +6,6 @@ use motion_drivers::{Driver, Follow};
 use motion_ipc::{
     ClientId, CommandKind, CommandRequest, DeviceState, FaultCode, GroupAbort, GroupMotion,
     GroupPath, MAX_GROUP_AXES, MAX_PATH_POINTS, PathFlags, PathKind, Reason, SCHEMA_VERSION,
-    StreamState,
 };
 use motion_trajectory::{PathError, Points, Tolerances};
 
