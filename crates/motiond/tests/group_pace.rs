@@ -505,8 +505,6 @@ fn every_group_feature_20_times_with_the_factory_switchover() {
 
 /// Holds and resumes, 20 times on each switch-over.
 #[test]
-#[ignore = "open (issue 39): the QSB-M resumes its paused line ~60 ms late and the feeder \
-            leaves its path_tolerance; being fixed"]
 fn holds_and_resumes_20_times_on_both_switchovers() {
     for switchover in [6, 2] {
         let mut gantry = Gantry::new(switchover);

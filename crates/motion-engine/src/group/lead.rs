@@ -20,7 +20,6 @@ use motion_drivers::{Driver, LINE_RATE_TOLERANCE, LineLeg};
 use motion_ipc::MAX_GROUP_AXES;
 
 use crate::Engine;
-use crate::group::Member;
 
 /// How long the boards of a line may take to prepare it before the engine follows it with
 /// goals instead (a pack's `$14` and `$26` per motor: a few words on its bus).
@@ -259,7 +258,7 @@ impl<D: Driver> Engine<D> {
             if member.led != Lead::No && (on.bus, on.slot) == board {
                 let m = &mut self.groups[group].members[slot];
                 m.led = Lead::No;
-                unlead(m, self.now);
+                m.restart(self.now);
             }
         }
     }
@@ -286,17 +285,8 @@ impl<D: Driver> Engine<D> {
             let m = &mut self.groups[group].members[slot];
             m.led = next;
             if next == Lead::No {
-                unlead(m, now);
+                m.restart(now);
             }
         }
     }
-}
-
-/// A member that a board no longer leads: its following starts afresh.
-fn unlead(member: &mut Member, now: Duration) {
-    member.sent_at = None;
-    member.acked_at = None;
-    member.end_sent = false;
-    member.next_at = now;
-    member.last_velocity = f64::NAN;
 }

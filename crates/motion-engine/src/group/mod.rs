@@ -67,6 +67,19 @@ pub(crate) struct Member {
     pub led: Lead,
 }
 
+impl Member {
+    /// Its following starts afresh at `now`: the next goal goes out at once (a motion
+    /// started, a board's own line handed back, a held path resumed — a goal that held the
+    /// axis on the path is superseded, not waited for).
+    pub(crate) fn restart(&mut self, now: Duration) {
+        self.sent_at = None;
+        self.acked_at = None;
+        self.end_sent = false;
+        self.next_at = now;
+        self.last_velocity = f64::NAN;
+    }
+}
+
 /// One group and its motion.
 #[derive(serde::Serialize, serde::Deserialize, Debug)]
 pub(crate) struct Group {

@@ -10,6 +10,7 @@ use motion_ipc::{
 use motion_trajectory::{PathError, Points, Tolerances};
 
 use crate::command::CommandPort;
+use crate::group::lead::Lead;
 use crate::{Engine, ReplyDetail};
 
 /// The largest path id a request carries exactly (`values[0]` is an f64).
@@ -508,6 +509,15 @@ impl<D: Driver> Engine<D> {
             self.resume_led(group);
         } else {
             self.follow_led(group);
+        }
+        // Members followed with goals get the moving path at once: the goal that held them
+        // on the path (a QSB's position move of a step or two) is superseded, never waited
+        // for while the path runs away.
+        let now = self.now;
+        for member in &mut self.groups[group].members {
+            if member.led == Lead::No {
+                member.restart(now);
+            }
         }
         Reason::Accepted
     }
