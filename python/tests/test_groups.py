@@ -380,6 +380,40 @@ def test_another_clients_setpoints_are_refused_and_do_not_disturb(
             intruder.delete()
 
 
+def test_a_setpoint_that_can_never_apply_does_not_keep_a_stream_alive(
+    client: motiond.Client,
+) -> None:
+    """Issue 40: the claimant sends its last applied sequence again every tick; the stream
+    goes stale after ``stream_timeout`` ticks and the wheels stop."""
+    base = client.group("base")
+    at_rest(client, base)
+    with base.stream("velocity") as stream:
+        tick = client.latest().tick
+        stream.send(tick + 2, [5.0, -5.0])
+        stream.wait_applied(timeout=5.0)
+        setpoint = ipc.Setpoint(
+            schema_version=ipc.SCHEMA_VERSION,
+            group=base.index,
+            sequence=stream.sequence,
+            for_tick=tick + 2,
+            mode=int(StreamMode.VELOCITY),
+        )
+        setpoint.values[0] = 5.0
+        setpoint.values[1] = -5.0
+        deadline = time.monotonic() + 2.0
+        state = base.state()
+        while time.monotonic() < deadline:
+            setpoint.for_tick = client.latest().tick + 1
+            stream._publisher.send_copy(setpoint)
+            state = base.state()
+            if state.stream is not StreamState.STREAMING:
+                break
+            time.sleep(0.001)
+        assert state.stream is StreamState.STALE, state
+        assert state.abort is GroupAbort.STREAM_STALE, state
+        assert state.applied == 1, state
+
+
 def test_the_closed_loop_example_runs(server: Server) -> None:
     example = REPO / "python" / "examples" / "closed_loop.py"
     for attempt in range(3):

@@ -339,6 +339,51 @@ fn a_stream_that_goes_quiet_stops_from_the_measured_speed() {
     }
 }
 
+/// Issue 40: a claimant sending a setpoint that can never apply (its last sequence again,
+/// or one far behind) every tick does not keep the stream alive: it goes stale after
+/// `stream_timeout` ticks and the group stops.
+#[test]
+fn setpoints_that_can_never_apply_do_not_keep_a_stream_alive() {
+    let mut h = rig(StreamLimit::Abort, Follow::Setpoints);
+    start(&mut h, StreamMode::Velocity);
+    let now = next_tick(&h);
+    h.engine.handle_setpoint(
+        CLIENT_A,
+        &setpoint(StreamMode::Velocity, 1, now, [0.4, -0.4]),
+    );
+    h.tick();
+    assert_eq!(h.frame.groups[0].applied, 1);
+    let mut stale_at = None;
+    for tick in 0..100_u64 {
+        let now = next_tick(&h);
+        // The applied sequence again, and a new sequence for a tick long gone.
+        h.engine.handle_setpoint(
+            CLIENT_A,
+            &setpoint(StreamMode::Velocity, 1, now, [0.4, -0.4]),
+        );
+        h.engine.handle_setpoint(
+            CLIENT_A,
+            &setpoint(
+                StreamMode::Velocity,
+                1000 + tick,
+                now.saturating_sub(10),
+                [0.4, -0.4],
+            ),
+        );
+        h.tick();
+        if h.frame.groups[0].stream() == Ok(StreamState::Stale) {
+            stale_at = Some(tick);
+            break;
+        }
+    }
+    let stale_at = stale_at.expect("the stream went stale");
+    assert!((18..=20).contains(&stale_at), "{stale_at}");
+    let state = h.frame.groups[0];
+    assert_eq!(state.abort(), Ok(GroupAbort::StreamStale), "{state:?}");
+    assert_eq!(state.applied, 1, "{state:?}");
+    assert!(state.late >= 2 * stale_at, "{state:?}");
+}
+
 #[test]
 fn cancel_ends_a_stream_and_a_velocity_stream_keeps_its_last_velocity_meanwhile() {
     let mut h = rig(StreamLimit::Abort, Follow::Setpoints);

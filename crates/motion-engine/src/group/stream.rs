@@ -19,7 +19,7 @@
 //! | tick `t` | the queued setpoint with the lowest `for_tick` (the newest sequence among equal ones) is applied when `for_tick + delay ≤ t`; if that is late (`t − for_tick > delay`) the delay grows to `t − for_tick`; one more than `stream_buffer` ticks behind is dropped, `late` + 1; one not above the last applied `for_tick` and sequence is dropped, `late` + 1 |
 //! | the first setpoint of a position stream within the member's `goal_tolerance` of where the axis stood | the stream starts there, at rest (a measured position a count off is not a step) |
 //! | a position outside `min..max`, or a step needing more than `max_velocity` / `max_accel` over the setpoints' own ticks | `stream_limit = "clamp"`: clamped to the limit, `clamped` + 1 and flagged; `"abort"`: the group stops (`stream-limit`) |
-//! | no setpoint received for `stream_timeout` ticks | every member stops from its measured speed at its `max_accel` (the deadman rule), stream `stale` |
+//! | no setpoint that can still apply (a sequence and a tick above the last applied, at most `stream_buffer` behind) received for `stream_timeout` ticks | every member stops from its measured speed at its `max_accel` (the deadman rule), stream `stale` |
 //!
 //! A new stream starts only with a new `Stream` command (at delay 0).
 
@@ -58,7 +58,8 @@ pub(crate) struct Stream {
     /// The queue's fixed capacity: a playout up to `stream_buffer` ticks behind and
     /// setpoints up to `stream_buffer` ticks ahead (`2 · stream_buffer + 2`).
     pub room: usize,
-    /// The tick the last setpoint was received for (staleness counts from it).
+    /// The tick the last setpoint that could still apply was received for (staleness
+    /// counts from it).
     pub last_received: u64,
     pub last_applied_tick: u64,
     /// When the shell received the last setpoint applied (its `received_ns`).
@@ -180,7 +181,15 @@ impl<D: Driver> Engine<D> {
             stream.early += 1;
             return;
         }
-        stream.last_received = next_tick;
+        // Staleness counts setpoints that can still apply: one already applied (its
+        // sequence again, say, every tick) or too far behind keeps no stream alive.
+        let playout = &stream.playout;
+        let can_apply = setpoint.sequence > playout.last_sequence
+            && setpoint.for_tick > playout.last_for_tick
+            && setpoint.for_tick.saturating_add(buffer) >= next_tick;
+        if can_apply {
+            stream.last_received = next_tick;
+        }
         stream.push(Queued {
             sequence: setpoint.sequence,
             for_tick: setpoint.for_tick,

@@ -133,7 +133,15 @@ impl Model {
             group.state.early += 1;
             return;
         }
-        group.stream.last_received = tick;
+        // As the server: only a setpoint that can still apply keeps the stream alive.
+        let playout = &group.stream.playout;
+        let buffer = u64::from(group.config.stream_buffer);
+        if setpoint.sequence > playout.last_sequence
+            && setpoint.for_tick > playout.last_for_tick
+            && setpoint.for_tick.saturating_add(buffer) >= tick
+        {
+            group.stream.last_received = tick;
+        }
         group.stream.queue.push(Queued {
             sequence: setpoint.sequence,
             for_tick: setpoint.for_tick,
