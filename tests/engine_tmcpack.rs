@@ -197,6 +197,7 @@ fn the_pack_starts_reports_its_firmware_and_gets_configured() {
         "nothing sent while the pack drove the pair"
     );
     assert_eq!(stats.replaced_replies, 0, "never two requests in flight");
+    assert_eq!(stats.interlaced, 0, "manual 7.1: never interlaced");
 }
 
 #[test]
@@ -546,6 +547,8 @@ fn two_packs_on_one_bus_never_have_two_requests_in_flight() {
             "nothing sent while a pack drove the pair"
         );
         assert_eq!(stats.replaced_replies, 0, "never two requests in flight");
+        assert_eq!(stats.interlaced, 0, "manual 7.1: never interlaced");
+        assert_eq!(stats.interlaced, 0, "manual 7.1: never interlaced");
         assert_eq!(stats.invalid, 0);
         assert!(stats.foreign > 0, "each pack heard the other's traffic");
     }

@@ -204,7 +204,11 @@ mod tests {
         status.declare(Verdict::new(
             DeviceFault::NotResponding,
             at,
-            format_args!("`$20` written at {}, due by {}", Seconds(at), Seconds(at * 2)),
+            format_args!(
+                "`$20` written at {}, due by {}",
+                Seconds(at),
+                Seconds(at * 2)
+            ),
         ));
         assert_eq!(status.verdicts, 1);
         let verdict = status.verdict.expect("kept");

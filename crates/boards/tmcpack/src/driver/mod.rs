@@ -61,7 +61,9 @@ mod channel;
 mod commission;
 mod config;
 mod goals;
+mod hunter;
 mod io;
+mod late;
 mod line;
 mod power_down;
 mod rate;
@@ -101,33 +103,41 @@ use tmcpack::{DEFAULT_PACKET_TIMEOUT, FRAME_LEN, Variant};
 
 use motion_drivers::{
     ChannelState, Commission, CommissionError, DeviceFault, DeviceStatus, Driver, Goal, GoalError,
-    GoalKinds, IoStamps, Model, Pin, PinReading, Priority, RateFloor, Transmit,
+    GoalKinds, IoStamps, LateAnswer, Model, Pin, PinReading, Priority, RateFloor, Transmit,
 };
 
 use channel::{Channel, Step};
 use commission::Service;
 use config::{Scale, clkdiv_for};
 use goals::CAPABILITIES;
+use hunter::ReplyHunter;
 use io::IoState;
+use late::LateSet;
 use line::PackLine;
 use power_down::PowerDown;
 use rate::LineRate;
 use startup::{Quiesce, StartupPlan};
-use wire::{ReplyHunter, Wire};
+use wire::Wire;
 
 pub use commission::RESET_WAIT;
 pub use config::{
-    Currents, DEFAULT_REPLY_ADDRESS, DEFAULT_SWITCHOVER_UNITS, PACKET_TIMEOUT_SLACK_BYTES,
-    PiParams, TmcpackChannel, TmcpackDriverConfig, default_packet_timeout_units,
+    Currents, DEFAULT_HOST_LATENCY, DEFAULT_NOT_ANSWERING, DEFAULT_REPLY_ADDRESS,
+    DEFAULT_SWITCHOVER_UNITS, PACKET_TIMEOUT_SLACK_BYTES, PiParams, TmcpackChannel,
+    TmcpackDriverConfig, default_packet_timeout_units,
 };
 pub use io::{MAX_PINS, PinSet, ReadyOutput, TmcpackIo, pins};
 pub use power_down::POWER_CHECK_PERIOD;
 pub use spec::{MAX_DEBOUNCE_MS, MAX_POSLIMIT, is_current_level, is_weak_current, word_time};
 
-/// Added to a query's wire and switch-over time before it counts as unanswered
-/// (processing in the pack, and the host's tick granularity).
-pub const REPLY_MARGIN: Duration = Duration::from_millis(6);
-/// Timeouts in a row after which the pack is declared not responding.
+/// The longest the pack takes from a request's last byte to the start of its switch-over
+/// delay. The manual gives it for CAN only (6.2, "internal processing time is approx. 2 ms
+/// per command"); the firmware works in 2 ms cycles on RS-232 / RS-485 too (the ramps'
+/// "accumulated with 500Hz", "The controller works at 500Hz", the ready output "switched
+/// within 2 ms"), so a word is read as taken in within one cycle (docs/ARCHITECTURE.md,
+/// "How the datasheets are read"). Part of every reply window.
+pub const PACK_PROCESSING: Duration = Duration::from_millis(2);
+/// Requests unanswered in a row (spanning at least `not_answering_ms`) after which the pack
+/// is declared not answering.
 pub const MAX_TIMEOUTS: u32 = 3;
 /// How often an offline pack is asked again.
 pub const RETRY_PERIOD: Duration = Duration::from_millis(250);
@@ -204,6 +214,23 @@ pub struct TmcpackDriver {
     home_address: u8,
     /// The configured `$40` switch-over delay, 2 ms units.
     switchover_units: Option<u16>,
+    /// The `$41` packet timeout the start-up programs.
+    configured_timeout: Duration,
+    /// Key `host_latency_ms`: part of every reply window.
+    host_latency: Duration,
+    /// Key `not_answering_ms`: the silence before a verdict, and how long an unanswered
+    /// query's answer is taken for late.
+    not_answering: Duration,
+    /// Answers that may still come late (module `late`).
+    late: LateSet,
+    /// Words recognised as late answers and dropped.
+    late_replies: u32,
+    /// When the first request of the current run of unanswered ones was written.
+    silent_since: Duration,
+    /// The last request that went unanswered.
+    unanswered: Option<rx::Unanswered>,
+    /// When the last answer was paired.
+    last_answer_at: Option<Duration>,
 }
 
 impl TmcpackDriver {
@@ -256,7 +283,7 @@ impl TmcpackDriver {
         } else {
             config.reply_address
         };
-        Self {
+        let mut driver = Self {
             address: config.address,
             reply_address,
             variant: config.variant,
@@ -290,7 +317,23 @@ impl TmcpackDriver {
             service: None,
             home_address: config.address,
             switchover_units: config.switchover_units,
-        }
+            configured_timeout: units(config.packet_timeout()),
+            host_latency: config.host_latency,
+            not_answering: config.not_answering,
+            late: LateSet::new(),
+            late_replies: 0,
+            silent_since: Duration::ZERO,
+            unanswered: None,
+            last_answer_at: None,
+        };
+        driver.assume_unknown_line();
+        driver
+    }
+
+    /// Words recognised as late answers (to a query that had timed out, this pack's or,
+    /// on a shared bus, another's) and dropped, never paired (module `late`).
+    pub fn late_replies(&self) -> u32 {
+        self.late_replies
     }
 
     /// The response address the driver's queries carry.
@@ -358,6 +401,7 @@ impl Driver for TmcpackDriver {
 
     fn handle_timeout(&mut self, now: Duration) {
         self.prune_can(now);
+        self.late.expire(now);
         match self.wire {
             Wire::Sending { until, .. } | Wire::Quiet { until } if now >= until => {
                 self.wire = Wire::Idle;
@@ -368,6 +412,7 @@ impl Driver for TmcpackDriver {
             }
             _ => {}
         }
+        self.judge_silence(now);
     }
 
     fn handle_written(&mut self, at: Duration) {
@@ -376,6 +421,14 @@ impl Driver for TmcpackDriver {
 
     fn handle_heard(&mut self, until: Duration) {
         self.stamps.heard(until);
+    }
+
+    fn late_answers(&self) -> &[LateAnswer] {
+        self.late.own()
+    }
+
+    fn handle_late_answers(&mut self, others: &[LateAnswer]) {
+        self.late.set_others(others);
     }
 
     fn poll_timeout(&self) -> Option<Duration> {
@@ -395,10 +448,16 @@ impl Driver for TmcpackDriver {
             .filter(|c| c.current() == Some(Step::AwaitRest))
             .filter_map(|c| c.rest_poll_at.or(c.rest_at))
             .min();
-        [self.wire.deadline(), phase, rest, self.can_held_until()]
-            .into_iter()
-            .flatten()
-            .min()
+        [
+            self.wire.deadline(),
+            phase,
+            rest,
+            self.can_held_until(),
+            self.late.next_expiry(),
+        ]
+        .into_iter()
+        .flatten()
+        .min()
     }
 
     fn wants_transmit(&self, now: Duration) -> Option<Priority> {
@@ -466,6 +525,7 @@ impl Driver for TmcpackDriver {
 
     fn link_down(&mut self, _now: Duration) {
         self.stamps.link_reset();
+        self.late.clear();
         if let Some(can) = self.can.as_mut() {
             can.reset();
         }
@@ -478,6 +538,7 @@ impl Driver for TmcpackDriver {
 
     fn link_up(&mut self, now: Duration) {
         self.stamps.link_reset();
+        self.late.clear();
         if let Some(can) = self.can.as_mut() {
             can.reset();
         }
@@ -485,7 +546,7 @@ impl Driver for TmcpackDriver {
         self.wire = Wire::Idle;
         self.retry_at = now;
         self.timeouts_in_row = 0;
-        self.assume_factory_line();
+        self.assume_unknown_line();
         self.service = None;
         self.rate.link_up();
         self.retime();

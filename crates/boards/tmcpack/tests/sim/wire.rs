@@ -96,6 +96,11 @@ fn manual_7_1_interlaced_requests() {
     assert_eq!(bytes[1], 0x43);
     assert_eq!(got[0].0, end + 6 * MS);
     assert_eq!(h.dev.stats().replaced_replies, 1);
+    assert_eq!(
+        h.dev.stats().interlaced,
+        1,
+        "the $43 began while $21's answer was due"
+    );
     // A request sent into the answer: the pack does not hear it.
     let end = h.send(1, Request::UnitInfo { reply_to: HOST });
     h.now = end + 6 * MS + 2 * bt();
@@ -120,6 +125,11 @@ fn manual_7_1_interlaced_requests() {
         )
         .expect("in step again");
     assert!(matches!(f.reply, Reply::Velocity { .. }));
+    assert_eq!(
+        h.dev.stats().interlaced,
+        2,
+        "the $23 began inside the answer"
+    );
 }
 
 /// Manual 6.1: an incomplete word is aborted after the packet timeout, so garbage followed
