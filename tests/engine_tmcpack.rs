@@ -18,6 +18,8 @@ mod io;
 mod lag;
 #[path = "engine_tmcpack/off.rs"]
 mod off;
+#[path = "engine_tmcpack/silence.rs"]
+mod silence;
 #[path = "engine_tmcpack/stops.rs"]
 mod stops;
 #[path = "engine_tmcpack/wire.rs"]

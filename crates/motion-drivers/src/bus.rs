@@ -281,7 +281,11 @@ impl<D: Driver> LinkBus<D> {
     #[must_use]
     pub fn poll_transmit(&mut self, now: Duration, buf: &mut [u8]) -> Option<(usize, Transmit)> {
         self.release_if_answered();
-        if self.kind == LinkKind::Stream && self.in_flight.is_some() {
+        if self.kind == LinkKind::Stream
+            && (self.in_flight.is_some() || self.drivers.iter().any(Driver::awaiting_reply))
+        {
+            // One request in flight; and a driver that holds the line without one (bytes
+            // it did not ask for are still coming: a late answer) holds it for everyone.
             return None;
         }
         if self.kind == LinkKind::Spi && self.pending.is_full() {

@@ -53,6 +53,11 @@ impl ReplyHunter {
         }
     }
 
+    /// Bytes held that may still become a word (the rest of it has not arrived).
+    pub fn pending(&self) -> usize {
+        self.len
+    }
+
     /// Forgets everything (a new request was sent).
     pub fn reset(&mut self) {
         self.len = 0;

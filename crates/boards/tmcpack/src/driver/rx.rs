@@ -15,7 +15,7 @@
 
 use core::time::Duration;
 
-use tmcpack::{Command, Reply, ReplyFrame};
+use tmcpack::{Command, FRAME_LEN, Reply, ReplyFrame};
 
 use super::hunter::{Found, Want};
 use super::startup::Quiesce;
@@ -275,6 +275,30 @@ impl TmcpackDriver {
             // Noise, an echo, or a word nobody asked for.
             self.status.bad_replies = self.status.bad_replies.saturating_add(1);
         }
+        self.hold_line_after_bytes(now);
+    }
+
+    /// Bytes came while no answer was awaited (a late answer, noise): someone drives the
+    /// line. Nothing goes out before the word they belong to can have ended and the pack's
+    /// switch-over hold after it has passed (manual 6.1: "The PACK continues to drive the
+    /// line for a pre-set time after transmitting a message"), so that a request never
+    /// meets a late answer on the pair.
+    fn hold_line_after_bytes(&mut self, now: Duration) {
+        let rest = FRAME_LEN.saturating_sub(self.hunter.pending()) % FRAME_LEN;
+        let byte = self.word_time / FRAME_LEN as u32;
+        let free = now + byte * rest as u32 + self.switchover;
+        self.wire = match self.wire {
+            Wire::Idle => Wire::Quiet { until: free },
+            Wire::Quiet { until } => Wire::Quiet {
+                until: until.max(free),
+            },
+            Wire::Sending { until, number } => Wire::Sending {
+                until: until.max(free),
+                number,
+            },
+            // The query in flight: its own answer (or its window) decides.
+            awaiting @ Wire::Awaiting { .. } => awaiting,
+        };
     }
 
     /// A word that begins like a late answer came at `now`: counted and dropped. The

@@ -1,0 +1,212 @@
+//! The pack's reply window on the fake clock (manual 6.1, 7.1 "Interlacing of Requests":
+//! "Requests must not be interlaced. Each request should wait for the response of the
+//! PACK before transmitting a new command."), per kind of request, at 19200 baud with the
+//! factory 6 ms switch-over and with 2 ms, with one pack and with two on one RS-485 bus.
+//!
+//! For a query in flight while some other request waits (a stop `$25`, a `$50` line start,
+//! the `$14`/`$26`/`$23` of a goal, a `$20` poll, a `$43`, a start-up configuration word),
+//! its answer is replayed just inside its window — request on the wire, 2 ms of the pack's
+//! processing, the switch-over, answer on the wire, the 5 ms host latency — and just
+//! outside it:
+//! - inside: the answer is paired (a `$20`'s position reaches the channel) and nothing is
+//!   sent before it and the pack's switch-over hold after it;
+//! - outside: the query counts as a timeout, the late answer is recognised and dropped (a
+//!   `$20`'s position never reaches the channel) and nothing is sent before the window and
+//!   the `$41` packet timeout have passed.
+//!
+//! And a pack silent for 50, 100, 200 ms with a goal in progress is neither declared
+//! reset nor not answering, and keeps its goal.
+
+#[path = "window/line.rs"]
+mod line;
+
+use core::time::Duration;
+
+use line::*;
+use motion_drivers::{Driver, Goal, LINE_RATE_TOLERANCE, LineLeg};
+use tmcpack::Request;
+
+/// Just inside or just outside the window.
+const EDGE: Duration = Duration::from_micros(500);
+
+/// What waits while the held query is in flight.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Next {
+    /// A stop: `$25` velocity 0 ([`motion_drivers::Priority::Stop`]).
+    Stop,
+    /// A position goal: `$14`, `$26`, `$23`.
+    Goal,
+    /// A prepared `$50` line, started.
+    Line,
+    /// The next `$20` poll.
+    Poll,
+    /// The held query is the `$43` reset check; the next poll waits.
+    ResetCheck,
+}
+
+fn switchover(units: Option<u16>) -> Duration {
+    units.map_or(FACTORY_SWITCHOVER, |u| u32::from(u) * 2 * MS)
+}
+
+/// The first request of `next`'s kind among `sent`.
+fn is_next(next: Next, request: &Request) -> bool {
+    match next {
+        Next::Stop => matches!(request, Request::Rotate { velocity: 0, .. }),
+        Next::Goal => matches!(
+            request,
+            Request::VelocityAcceleration { .. }
+                | Request::SetTarget { .. }
+                | Request::StartRamp { .. }
+        ),
+        Next::Line => matches!(request, Request::Interpolate { .. }),
+        Next::Poll | Next::ResetCheck => matches!(request, Request::QueryPosition { .. }),
+    }
+}
+
+/// Sets up `next` on `driver` of `line` (the line prepared before the query is held).
+fn prepare(line: &mut Line, driver: usize, next: Next) {
+    if next == Next::Line {
+        let legs = [leg(0, 3000.0), leg(2, 1500.0)];
+        let now = line.now;
+        let d = line.bus.driver_mut(driver).expect("driver");
+        assert_eq!(d.lead_line(now, &legs), Ok(true));
+        assert!(line.run_until(500 * MS, |l| l.driver(driver).line_ready()));
+    }
+    if next == Next::ResetCheck {
+        // The `$43` reset check is due once a second.
+        line.run_for(1100 * MS);
+    }
+}
+
+fn leg(channel: usize, counts: f64) -> LineLeg {
+    LineLeg {
+        channel,
+        counts,
+        velocity: 6425.0,
+        accel: 64_250.0,
+        rate_tolerance: LINE_RATE_TOLERANCE,
+    }
+}
+
+/// Right after the held query went out: what must wait is asked for.
+fn trigger(line: &mut Line, driver: usize, next: Next) {
+    let now = line.now;
+    let d = line.bus.driver_mut(driver).expect("driver");
+    match next {
+        Next::Stop => d
+            .set_goal(now, 0, Goal::Stop { decel: 160_000.0 })
+            .expect("stop"),
+        Next::Goal => d
+            .set_goal(now, 2, Goal::Position { counts: 4000.0 })
+            .expect("goal"),
+        Next::Line => d.start_line(now),
+        Next::Poll | Next::ResetCheck => {}
+    }
+}
+
+/// The held query's command and its answer's window on `packs` packs; `waiter` is the
+/// driver whose request waits (the held pack is 0).
+fn case(next: Next, units: Option<u16>, packs: usize, inside: bool) {
+    let switchovers = vec![units; packs];
+    let mut line = Line::online(&switchovers);
+    line.run_for(100 * MS);
+    let waiter = packs - 1;
+    prepare(&mut line, waiter, next);
+    let command = if next == Next::ResetCheck { 0x43 } else { 0x20 };
+    let s = switchover(units);
+    let window = window_end(Duration::ZERO, s);
+    let delay = if inside { window - EDGE } else { window + EDGE };
+    let before = line.driver(0).status();
+    let late_before: u32 = line.bus.drivers().iter().map(|d| d.late_replies()).sum();
+    let written = line.hold_next(0, command, delay);
+    // In the step that wrote the held query (the clock has moved one step past it).
+    trigger(&mut line, waiter, next);
+    let arrives = written + delay;
+    // Just after the held answer arrived: paired or not.
+    line.run_until(window + MS, |l| l.now > arrives + STEP);
+    let held = line
+        .bus
+        .drivers()
+        .iter()
+        .flat_map(|d| [d.channel(0), d.channel(2)])
+        .any(|c| c.raw_counts == i64::from(HELD_POSITION));
+    line.run_for(window + 40 * MS);
+    let label = format!("{next:?} {units:?} {packs} pack(s) inside {inside}");
+    let after = line.driver(0).status();
+    let late: u32 = line.bus.drivers().iter().map(|d| d.late_replies()).sum();
+    let first = line.sent_after(written);
+    let first = first.first().expect("something was sent after");
+    if inside {
+        assert_eq!(after.timeouts, before.timeouts, "{label}: no timeout");
+        assert_eq!(late, late_before, "{label}: not late");
+        assert!(
+            first.at >= arrives + s,
+            "{label}: {:?} at {:?}, before the answer at {arrives:?} and the hold",
+            first.request,
+            first.at
+        );
+        if command == 0x20 {
+            assert!(held, "{label}: the answer was paired");
+        }
+    } else {
+        assert_eq!(after.timeouts, before.timeouts + 1, "{label}: a timeout");
+        assert_eq!(late, late_before + 1, "{label}: recognised as late");
+        let free = written + window + PACKET_TIMEOUT.max(s);
+        assert!(
+            first.at >= free,
+            "{label}: {:?} at {:?}, before the window and the packet timeout ended at {free:?}",
+            first.request,
+            first.at
+        );
+        assert!(!held, "{label}: the late answer was paired");
+    }
+    // What waited went out after all, first of its driver's words (a stop before polls).
+    let waited = line
+        .sent_after(written)
+        .into_iter()
+        .find(|s| s.driver == waiter && is_next(next, &s.request));
+    assert!(waited.is_some(), "{label}: {next:?} went out");
+    assert!(
+        line.bus
+            .drivers()
+            .iter()
+            .all(|d| d.status().online && d.status().verdicts == 0),
+        "{label}: no verdict"
+    );
+    line.check_never_interlaced();
+}
+
+fn all_cases(next: Next) {
+    for units in [None, Some(1)] {
+        for packs in [1, 2] {
+            for inside in [true, false] {
+                case(next, units, packs, inside);
+            }
+        }
+    }
+}
+
+#[test]
+fn a_stop_waits_for_the_answer_or_the_end_of_its_window() {
+    all_cases(Next::Stop);
+}
+
+#[test]
+fn a_goal_waits_for_the_answer_or_the_end_of_its_window() {
+    all_cases(Next::Goal);
+}
+
+#[test]
+fn a_50_line_start_waits_for_the_answer_or_the_end_of_its_window() {
+    all_cases(Next::Line);
+}
+
+#[test]
+fn a_20_poll_waits_for_the_answer_or_the_end_of_its_window() {
+    all_cases(Next::Poll);
+}
+
+#[test]
+fn the_43_reset_check_is_answered_inside_its_window_or_counted_late() {
+    all_cases(Next::ResetCheck);
+}
