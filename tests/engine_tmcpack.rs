@@ -550,7 +550,6 @@ fn two_packs_on_one_bus_never_have_two_requests_in_flight() {
         );
         assert_eq!(stats.replaced_replies, 0, "never two requests in flight");
         assert_eq!(stats.interlaced, 0, "manual 7.1: never interlaced");
-        assert_eq!(stats.interlaced, 0, "manual 7.1: never interlaced");
         assert_eq!(stats.invalid, 0);
         assert!(stats.foreign > 0, "each pack heard the other's traffic");
     }

@@ -210,3 +210,106 @@ fn a_20_poll_waits_for_the_answer_or_the_end_of_its_window() {
 fn the_43_reset_check_is_answered_inside_its_window_or_counted_late() {
     all_cases(Next::ResetCheck);
 }
+
+/// Start-up (manual 7.1 "Strategy for Parameter Setting"): the `$28` survey's answer just
+/// inside its window is paired and the configuration's first word (`$40`) waits for it and
+/// the hold; just outside, the configuration waits for the window and the packet timeout
+/// (the pack has its factory settings: 6 ms switch-over, our reading of its packet timeout
+/// 20 ms), the late answer is dropped, and the survey is asked again.
+#[test]
+fn the_start_up_survey_is_answered_inside_its_window_or_counted_late() {
+    for inside in [true, false] {
+        let mut line = Line::new(vec![config(1, Some(1), 1)]);
+        let window = window_end(Duration::ZERO, FACTORY_SWITCHOVER);
+        let delay = if inside { window - EDGE } else { window + EDGE };
+        let written = line.hold_next(0, 0x28, delay);
+        assert!(line.run_until(2000 * MS, |l| l.driver(0).status().online));
+        let after = line.sent_after(written);
+        let first = after.first().expect("the start-up went on");
+        let d = line.driver(0);
+        if inside {
+            assert_eq!(d.status().timeouts, 0);
+            assert_eq!(d.late_replies(), 0);
+            assert!(
+                matches!(first.request, Request::SetBaud { .. }),
+                "{first:?}"
+            );
+            assert!(first.at >= written + delay + FACTORY_SWITCHOVER);
+        } else {
+            assert_eq!(d.status().timeouts, 1);
+            assert_eq!(d.late_replies(), 1);
+            // The factory packet timeout the driver assumes (20 ms) until it programs $41.
+            assert!(first.at >= written + window + 20 * MS, "{first:?}");
+            // Its late answer came (and went) during the quiet time: asked again.
+            assert!(
+                matches!(first.request, Request::QueryActions { .. }),
+                "{first:?}"
+            );
+        }
+        assert_eq!(line.driver(0).status().verdicts, 0);
+        line.check_never_interlaced();
+    }
+}
+
+/// A pack whose configs have motor 0 only: every poll is `$20` motor 0.
+fn one_motor(address: u8, packs: u8) -> board_tmcpack::driver::TmcpackDriverConfig {
+    let mut c = config(address, Some(1), packs);
+    c.channels[2] = None;
+    c
+}
+
+/// The late answer of a `$20` comes after the next query went out (its host held it that
+/// long): never paired. With one pack, the driver asks nothing whose answer begins like it
+/// (its poll of the same motor waits, a probe goes); with two packs on one bus the other
+/// pack's driver, whose only poll would look the same, is told by the bus and probes too;
+/// the late word is recognised wherever it lands.
+#[test]
+fn a_late_answer_after_the_next_query_is_never_paired() {
+    for packs in [1u8, 2] {
+        let configs = (1..=packs).map(|a| one_motor(a, packs)).collect();
+        let mut line = Line::online_with(configs);
+        line.run_for(100 * MS);
+        let window = window_end(Duration::ZERO, 2 * MS);
+        // The next query goes at the window + the packet timeout; the late answer comes
+        // 3 ms into it.
+        let delay = window + PACKET_TIMEOUT + 3 * MS + 2 * STEP;
+        let written = line.hold_next(0, 0x20, delay);
+        let arrives = written + delay;
+        let mut paired = false;
+        while line.now < arrives + 30 * MS {
+            line.step();
+            paired |= line
+                .bus
+                .drivers()
+                .iter()
+                .any(|d| d.channel(0).raw_counts == i64::from(HELD_POSITION));
+        }
+        assert!(!paired, "{packs} pack(s): the late answer was paired");
+        let in_flight = line
+            .sent
+            .iter()
+            .rev()
+            .find(|s| s.at <= arrives && s.request.command().has_reply())
+            .expect("a query in flight when the late answer came");
+        assert!(in_flight.at > written, "the next query was out");
+        assert!(
+            !matches!(in_flight.request, Request::QueryPosition { motor: 0, .. }),
+            "{packs} pack(s): asked what the late answer looks like: {:?}",
+            in_flight.request
+        );
+        let late: u32 = line.bus.drivers().iter().map(|d| d.late_replies()).sum();
+        assert_eq!(late, 1, "{packs} pack(s)");
+        // The pack answers again: its late answers are forgotten, the polls go on.
+        line.run_for(200 * MS);
+        let polled = line
+            .sent_after(arrives + 30 * MS)
+            .iter()
+            .filter(|s| {
+                s.driver == 0 && matches!(s.request, Request::QueryPosition { motor: 0, .. })
+            })
+            .count();
+        assert!(polled > 0, "{packs} pack(s): motor 0 polled again");
+        assert!(line.bus.drivers().iter().all(|d| d.status().verdicts == 0));
+        line.check_never_interlaced();
+    }
+}

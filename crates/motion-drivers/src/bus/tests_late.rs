@@ -16,6 +16,9 @@ struct Late {
     sends: bool,
     /// Wants to send but has nothing after all (its question must wait).
     holds: bool,
+    /// Holds the line without a request of its own in flight (bytes it did not ask for
+    /// are coming).
+    busy: bool,
     priority: Option<Priority>,
 }
 
@@ -59,7 +62,7 @@ impl Driver for Late {
         })
     }
     fn awaiting_reply(&self) -> bool {
-        false
+        self.busy
     }
     fn goals_pending(&self) -> bool {
         false
@@ -187,4 +190,21 @@ fn a_driver_whose_question_must_wait_gives_way_to_the_next() {
     }
     bus.driver_mut(2).expect("driver").sends = false;
     assert!(bus.poll_transmit(5 * MS, &mut buf).is_none());
+}
+
+#[test]
+fn a_driver_that_holds_the_line_without_a_request_holds_it_for_everyone() {
+    let quiet = Late {
+        busy: true,
+        ..Late::default()
+    };
+    let willing = Late {
+        sends: true,
+        ..Late::default()
+    };
+    let mut bus: LinkBus<Late> = LinkBus::new(LinkKind::Stream, vec![quiet, willing]);
+    let mut buf = [0u8; 16];
+    assert!(bus.poll_transmit(MS, &mut buf).is_none());
+    bus.driver_mut(0).expect("driver").busy = false;
+    assert_eq!(bus.poll_transmit(2 * MS, &mut buf).map(|(i, _)| i), Some(1));
 }

@@ -242,6 +242,7 @@ impl TmcpackDriver {
             return;
         }
         let skipped = self.hunter.skipped;
+        let unsolicited = !matches!(self.wire, Wire::Awaiting { .. });
         let mut rest = bytes;
         while !rest.is_empty() {
             let (expect, sent_at) = match self.wire {
@@ -275,16 +276,23 @@ impl TmcpackDriver {
             // Noise, an echo, or a word nobody asked for.
             self.status.bad_replies = self.status.bad_replies.saturating_add(1);
         }
-        self.hold_line_after_bytes(now);
+        if unsolicited {
+            self.hold_line_after_bytes(now, bytes.len());
+        }
     }
 
-    /// Bytes came while no answer was awaited (a late answer, noise): someone drives the
-    /// line. Nothing goes out before the word they belong to can have ended and the pack's
-    /// switch-over hold after it has passed (manual 6.1: "The PACK continues to drive the
+    /// `received` bytes came while no answer was awaited (a late answer, noise): someone
+    /// drives the line. Nothing goes out before the word they belong to can have ended and
+    /// the pack's switch-over hold after it has passed (manual 6.1: "The PACK continues to drive the
     /// line for a pre-set time after transmitting a message"), so that a request never
     /// meets a late answer on the pair.
-    fn hold_line_after_bytes(&mut self, now: Duration) {
-        let rest = FRAME_LEN.saturating_sub(self.hunter.pending()) % FRAME_LEN;
+    fn hold_line_after_bytes(&mut self, now: Duration, received: usize) {
+        // The rest of the word the hunter holds a part of; else the rest of a word the
+        // bytes just received may have begun.
+        let rest = match self.hunter.pending() {
+            0 => (FRAME_LEN - received % FRAME_LEN) % FRAME_LEN,
+            held => FRAME_LEN.saturating_sub(held),
+        };
         let byte = self.word_time / FRAME_LEN as u32;
         let free = now + byte * rest as u32 + self.switchover;
         self.wire = match self.wire {

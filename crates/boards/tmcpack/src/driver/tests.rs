@@ -581,3 +581,33 @@ fn a_position_goal_on_a_rotating_motor_stops_the_rotation_first() {
         target: 10
     }));
 }
+
+/// Bytes that come while nothing is awaited (a late answer, noise) are someone driving the
+/// line (manual 6.1): nothing goes out before the word they belong to can have ended and
+/// the pack's switch-over hold after it has passed.
+#[test]
+fn bytes_nobody_asked_for_hold_the_line_until_their_word_and_the_hold_passed() {
+    let mut bench = Bench::new(config());
+    bench.online();
+    bench.serve(60, |motor| position(motor, 0, Action::Inactive));
+    // Let the last exchange end.
+    for _ in 0..30 {
+        bench.driver.handle_timeout(bench.now);
+        if !bench.driver.awaiting_reply() {
+            break;
+        }
+        bench.now += MS;
+    }
+    assert!(!bench.driver.awaiting_reply());
+    // Three bytes of a word: six more to come (6 × 0.52 ms), then the 2 ms hold.
+    let at = bench.now;
+    bench.rx(&[0xFE, 0x20, 0x00]);
+    assert!(bench.driver.awaiting_reply());
+    let byte = word_time(19_200) / 9;
+    let free = at + byte * 6 + 2 * MS;
+    bench.driver.handle_timeout(free - Duration::from_micros(1));
+    assert!(bench.driver.awaiting_reply());
+    bench.driver.handle_timeout(free);
+    assert!(!bench.driver.awaiting_reply());
+    assert!(bench.driver.status().bad_replies >= 1);
+}

@@ -111,26 +111,41 @@ impl Line {
     /// Packs at addresses 1, 2, … with the given switch-over each, online.
     pub fn online(switchovers: &[Option<u16>]) -> Self {
         let packs = switchovers.len() as u8;
-        let drivers = switchovers
+        Self::online_with(
+            switchovers
+                .iter()
+                .enumerate()
+                .map(|(i, s)| config(i as u8 + 1, *s, packs))
+                .collect(),
+        )
+    }
+
+    /// Packs of these driver configs (at their addresses), just powered on: nothing sent
+    /// yet.
+    pub fn new(configs: Vec<TmcpackDriverConfig>) -> Self {
+        let packs = configs
             .iter()
-            .enumerate()
-            .map(|(i, s)| TmcpackDriver::new(config(i as u8 + 1, *s, packs)))
+            .map(|c| Pack {
+                address: c.address,
+                switchover: FACTORY_SWITCHOVER,
+                reset_flag: true,
+            })
             .collect();
-        let mut line = Self {
+        let drivers = configs.into_iter().map(TmcpackDriver::new).collect();
+        Self {
             bus: LinkBus::new(LinkKind::Stream, drivers),
             now: Duration::ZERO,
             sent: Vec::new(),
-            packs: (0..packs)
-                .map(|i| Pack {
-                    address: i + 1,
-                    switchover: FACTORY_SWITCHOVER,
-                    reset_flag: true,
-                })
-                .collect(),
+            packs,
             due: Vec::new(),
             hold: None,
             held: None,
-        };
+        }
+    }
+
+    /// Packs of these driver configs, online.
+    pub fn online_with(configs: Vec<TmcpackDriverConfig>) -> Self {
+        let mut line = Self::new(configs);
         line.run_until(2000 * MS, |l| {
             l.bus.drivers().iter().all(|d| d.status().online)
         });
