@@ -14,16 +14,34 @@
 //! commanded by this run. The whole configuration goes out again whenever the pack is seen
 //! to have reset (`$43` reset flag, or after it stopped answering).
 //!
-//! The wire (manual 6.1, 7.1): one request in flight. A query waits for its answer until
-//! `request + switch-over (at least the factory 6 ms, in case the pack rebooted) + answer +`
-//! [`REPLY_MARGIN`]; after an answer the line stays reserved for the switch-over time, in
-//! which the pack still drives it; after a timeout it stays silent for the pack's packet
-//! timeout so that a partial word on its side is aborted. A request without an answer
-//! reserves the line for its own wire time and at least the packet timeout of every pack on
-//! the bus ($41: "The command word always has to be completely transmitted during a
-//! parameterized timeout"), so that a word torn by noise is aborted before the next one
-//! starts instead of taking its first bytes. Queries carry the response address of
+//! The wire (manual 6.1, 7.1 "Requests must not be interlaced. Each request should wait for
+//! the response of the PACK before transmitting a new command."): one request in flight on
+//! the whole bus, and the next one only once the answer arrived or can no longer arrive.
+//! A query's window runs from its write stamp (when the link took its last byte: a serial
+//! port's `write` returns before the UART has clocked the word out, so the request's own
+//! wire time counts in the window): the request on the wire, the pack's processing
+//! ([`PACK_PROCESSING`], 2 ms: the manual gives it for CAN only, read for the serial line
+//! too), the switch-over delay the pack has (the one the driver programmed with `$40`; the
+//! longer of the factory 6 ms and the configured one until it has), the answer on the
+//! wire at the rate the driver talks at, and the host's latency (`host_latency_ms`, default
+//! [`DEFAULT_HOST_LATENCY`]). The window is judged only up to the link's horizon
+//! (`handle_heard`), so a starved I/O thread never makes the pack look silent. After an
+//! answer the line stays reserved for the switch-over time, in which the pack still drives
+//! it; after a missing answer it stays silent for the `$41` packet timeout (the longest of
+//! every pack on the bus, and at least the switch-over), so that a word torn on the line is
+//! aborted before the next one starts. A request without an answer reserves the line for
+//! its own wire time and the packet timeout ($41: "The command word always has to be
+//! completely transmitted during a parameterized timeout"). Bytes that come while nothing
+//! is awaited (a late answer, noise) hold the line until their word can have ended and the
+//! switch-over after it passed. Queries carry the response address of
 //! [`TmcpackDriverConfig::reply_address`], which no pack on the bus may have.
+//!
+//! Late answers (module `late`): an answer that still comes after its window (the pack or
+//! its host process was starved) is told by its response address, command and motor or
+//! channel, counted ([`TmcpackDriver::late_replies`]) and dropped, never paired with the
+//! next request; the driver asks nothing whose answer would look like one (another motor's
+//! poll, or a `$21`/`$30` probe), and on a shared bus every driver learns the others' late
+//! answers from the link bus (every pack answers to the same response address).
 //!
 //! Command → wire: a goal's first request goes out in the tick that set it when the line is
 //! free; otherwise it waits for the one exchange in flight — at most a query, the
@@ -39,8 +57,17 @@
 //! same priority (the two take turns); then `$20` position/action polls round-robin over the configured motors
 //! with one `$30` input poll per round when inputs are configured ([`Priority::Poll`]),
 //! and a `$43` every [`RESET_CHECK_PERIOD`] to notice a pack that rebooted (reset flag).
-//! Three timeouts in a row take the pack offline ([`DeviceFault::NotResponding`]); it is
-//! then asked for `$43` every [`RETRY_PERIOD`] and configured again when it answers.
+//!
+//! Verdicts, each declared with its evidence ([`DeviceStatus::declare`], module `rx`): not
+//! answering ([`DeviceFault::NotResponding`]) only when at least [`MAX_TIMEOUTS`] requests
+//! went unanswered in a row *and* the first of them was written `not_answering_ms` (default
+//! [`DEFAULT_NOT_ANSWERING`], 500 ms) or more before; the pack is then asked for `$43` every
+//! [`RETRY_PERIOD`] and configured again when it answers. A pack silent for less — its
+//! answers held 50, 100, 200 ms by a starved host — keeps its configuration and its goals
+//! (stops still go out meanwhile: they need no answer; the engine marks the axes stale after
+//! the refresh budget). Reset ([`DeviceFault::Reset`]) only on a `$43` answer with the reset
+//! flag set (manual 8.6: "during first read out 1, afterwards 0") from a pack that had been
+//! online.
 //!
 //! Commissioning (`$42` address, `$40` rate, `$CC` factory reset) is the `commission`
 //! module's.
