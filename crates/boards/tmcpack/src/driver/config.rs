@@ -27,10 +27,10 @@ pub const DEFAULT_REPLY_ADDRESS: u8 = 0xFE;
 /// 2 ms hold ≈ 13.4 ms at 19200 baud instead of ≈ 21.4 ms.
 pub const DEFAULT_SWITCHOVER_UNITS: u16 = 1;
 
-/// How much later than on the wire an answer may reach the driver by default (key
-/// `host_latency_ms`): a USB serial adapter hands received bytes over in 1 ms frames (and
-/// holds them up to its latency timer, 1 ms when set low, FTDI's factory 16 ms), the link's
-/// I/O thread wakes for them, the tick takes them in. The same figure as the QSB's.
+/// What the host adds to an exchange by default, both ways (key `host_latency_ms`): a USB
+/// serial adapter takes a request to the wire and hands received bytes over in 1 ms frames
+/// (and holds them up to its latency timer, 1 ms when set low, FTDI's factory 16 ms), the
+/// link's I/O thread wakes for them, the tick takes them in. The same figure as the QSB's.
 pub const DEFAULT_HOST_LATENCY: Duration = Duration::from_millis(5);
 
 /// How long a pack must have been silent, with at least

@@ -125,14 +125,14 @@ impl LateSet {
     }
 
     /// A late word of the driver's own that begins with `head` came: it and every one asked
-    /// before it are done with (the pack answers in order). Whether it was the driver's.
-    pub fn answered_own(&mut self, head: &[u8]) -> bool {
-        let Some(i) = self.own().iter().rposition(|l| l.overlaps(head)) else {
-            return false;
-        };
+    /// before it are done with (the pack answers in order). The driver's late answer it
+    /// was, if any.
+    pub fn answered_own(&mut self, head: &[u8]) -> Option<LateAnswer> {
+        let i = self.own().iter().rposition(|l| l.overlaps(head))?;
+        let found = self.own.get(i).copied();
         self.own.copy_within(i + 1..self.own_len, 0);
         self.own_len -= i + 1;
-        true
+        found
     }
 
     /// Whether a word beginning with `head` may be a late answer (own or another pack's)
@@ -241,10 +241,13 @@ mod tests {
         assert!(!set.matches(&[0xFE, 0x20, 2], 50 * MS));
         assert!(!set.matches(&[0xFE, 0x20, 1], 110 * MS), "expired");
         // The late answer of the second came: the first never will.
-        assert!(set.answered_own(&[0xFE, 0x20, 1, 0, 0]));
+        assert_eq!(
+            set.answered_own(&[0xFE, 0x20, 1, 0, 0]).map(|l| l.until()),
+            Some(110 * MS)
+        );
         assert_eq!(set.own().len(), 1);
         assert!(set.matches(&[0xFE, 0x43], 50 * MS));
-        assert!(!set.answered_own(&[0xFE, 0x21, 0]));
+        assert_eq!(set.answered_own(&[0xFE, 0x21, 0]), None);
         set.expire(120 * MS);
         assert!(set.own().is_empty());
         assert_eq!(set.next_expiry(), None);
@@ -256,7 +259,7 @@ mod tests {
         set.set_others(&[LateAnswer::new(&[0xFE, 0x43], 100 * MS)]);
         assert!(set.matches(&[0xFE, 0x43, 149], 10 * MS));
         assert!(set.matches_other(&[0xFE, 0x43], 10 * MS));
-        assert!(!set.answered_own(&[0xFE, 0x43, 149]));
+        assert_eq!(set.answered_own(&[0xFE, 0x43, 149]), None);
         set.clear_own();
         assert!(
             set.matches(&[0xFE, 0x43], 10 * MS),

@@ -125,17 +125,21 @@ impl TmcpackDriver {
         self.retry_at = now + RETRY_PERIOD;
     }
 
-    /// A `$43` answer at `now` to the query written at `asked` says the pack booted:
-    /// `late` when it came after its window (module `late`).
+    /// A `$43` answer at `now` says the pack booted: the answer to the query written at
+    /// `asked`, or — `late` — to the one that went unanswered at `asked` (module `late`).
     fn on_reset_flag(&mut self, now: Duration, asked: Duration, late: bool) {
         self.status.resets = self.status.resets.saturating_add(1);
         let last = self.last_answer_at.unwrap_or_default();
+        let (which, query) = if late {
+            ("late ", "that had gone unanswered at")
+        } else {
+            ("", "written at")
+        };
         self.status.declare(Verdict::new(
             DeviceFault::Reset,
             now,
             format_args!(
-                "the {}`$43` answer at {} to the query written at {} has the reset flag set (manual 8.6: \"during first read out 1, afterwards 0\"): the pack booted since its answer at {}",
-                if late { "late " } else { "" },
+                "the {which}`$43` answer at {} to the query {query} {} has the reset flag set (manual 8.6: \"during first read out 1, afterwards 0\"): the pack booted since its answer at {}",
                 Seconds(now),
                 Seconds(asked),
                 Seconds(last),
@@ -316,7 +320,10 @@ impl TmcpackDriver {
         self.late_replies = self.late_replies.saturating_add(1);
         let head = word.get(..3).unwrap_or_default();
         let others = self.late.matches_other(head, now);
-        if !self.late.answered_own(head) || others {
+        let Some(own) = self.late.answered_own(head) else {
+            return;
+        };
+        if others {
             return;
         }
         if let Ok(frame) = ReplyFrame::decode(&word)
@@ -329,8 +336,9 @@ impl TmcpackDriver {
         {
             self.on_unit_info(firmware, true, serial);
             if self.ever_online && !self.declared_not_answering() {
-                let asked = self.silent_since;
-                self.on_reset_flag(now, asked, true);
+                // It was kept from its timeout on for `not_answering`.
+                let unanswered = own.until().saturating_sub(self.not_answering);
+                self.on_reset_flag(now, unanswered, true);
                 self.phase = Phase::Survey;
             }
         }

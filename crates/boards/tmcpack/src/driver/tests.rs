@@ -611,3 +611,90 @@ fn bytes_nobody_asked_for_hold_the_line_until_their_word_and_the_hold_passed() {
     assert!(!bench.driver.awaiting_reply());
     assert!(bench.driver.status().bad_replies >= 1);
 }
+
+/// Ticks, answering `$20` polls at rest, until the `$43` reset check goes out; returns
+/// when it was written.
+fn until_reset_check(bench: &mut Bench) -> Duration {
+    for _ in 0..3000 {
+        let at = bench.now;
+        if let Some(w) = bench.tick() {
+            match RequestFrame::decode(&w).expect("decodes").request {
+                Request::UnitInfo { .. } => return at,
+                Request::QueryPosition { motor, .. } => {
+                    bench.now += 10 * MS;
+                    bench.rx(&position(motor, 0, Action::Inactive));
+                }
+                _ => {}
+            }
+        }
+    }
+    panic!("no $43 reset check");
+}
+
+/// Manual 8.6 `$43`: "reset flag: during first read out 1, afterwards 0". An online pack
+/// whose `$43` answers with the flag set rebooted: a reset verdict naming that answer.
+#[test]
+fn a_reset_flag_is_a_reset_verdict_naming_its_answer() {
+    let mut bench = Bench::new(config());
+    bench.online();
+    let asked = until_reset_check(&mut bench);
+    bench.now += 11 * MS;
+    let mut rebooted = UNIT_INFO;
+    rebooted[3] = 1;
+    bench.rx(&rebooted);
+    let status = bench.driver.status();
+    assert_eq!(status.resets, 1);
+    assert_eq!(status.fault, Some(DeviceFault::Reset));
+    assert_eq!(status.verdicts, 1);
+    let verdict = status.verdict.expect("a verdict");
+    assert_eq!(verdict.fault, DeviceFault::Reset);
+    let evidence = verdict.evidence.as_str();
+    let written = format!("written at {}", motion_drivers::Seconds(asked));
+    assert!(
+        evidence.contains("the `$43` answer at")
+            && evidence.contains(&written)
+            && evidence.contains("reset flag set"),
+        "{evidence}"
+    );
+}
+
+/// A `$43` answer that comes after its window is dropped and never paired — but a reset
+/// flag in it is still the reboot it proves (the flag reads 0 from then on): a reset.
+#[test]
+fn a_late_43_with_the_reset_flag_set_is_still_a_reset() {
+    let mut bench = Bench::new(config());
+    bench.online();
+    until_reset_check(&mut bench);
+    // Unanswered: its window ends, the driver counts a timeout.
+    for _ in 0..25 {
+        bench.driver.handle_timeout(bench.now);
+        bench.now += MS;
+    }
+    assert_eq!(bench.driver.status().timeouts, 1);
+    let mut rebooted = UNIT_INFO;
+    rebooted[3] = 1;
+    bench.rx(&rebooted);
+    assert_eq!(bench.driver.late_replies(), 1);
+    let status = bench.driver.status();
+    assert_eq!(status.resets, 1);
+    assert_eq!(status.fault, Some(DeviceFault::Reset));
+    let evidence = status.verdict.expect("a verdict").evidence;
+    assert!(
+        evidence.as_str().contains("the late `$43` answer"),
+        "{}",
+        evidence.as_str()
+    );
+    // A late `$43` without the flag is just dropped.
+    let mut bench = Bench::new(config());
+    bench.online();
+    until_reset_check(&mut bench);
+    for _ in 0..25 {
+        bench.driver.handle_timeout(bench.now);
+        bench.now += MS;
+    }
+    bench.rx(&UNIT_INFO.map(|b| if b == 1 { 0 } else { b }));
+    assert_eq!(bench.driver.late_replies(), 1);
+    let status = bench.driver.status();
+    assert_eq!((status.resets, status.verdicts), (0, 0));
+    assert!(status.online);
+}
