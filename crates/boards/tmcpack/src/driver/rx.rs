@@ -75,6 +75,10 @@ impl TmcpackDriver {
         if probing {
             self.probe_next_rate();
         }
+        if self.declared_not_answering() {
+            // Asked again every retry period.
+            self.retry_at = now + RETRY_PERIOD;
+        }
         self.unanswered = Some(Unanswered {
             expect,
             written: sent_at,
