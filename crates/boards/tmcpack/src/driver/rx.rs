@@ -143,7 +143,7 @@ impl TmcpackDriver {
             DeviceFault::Reset,
             now,
             format_args!(
-                "the {which}`$43` answer at {} to the query {query} {} has the reset flag set (manual 8.6: \"during first read out 1, afterwards 0\"): the pack booted since its answer at {}",
+                "the {which}`$43` answer at {} to the query {query} {} has the reset flag set (manual 8.6 \"during first read out 1\"): the pack booted after its answer at {}",
                 Seconds(now),
                 Seconds(asked),
                 Seconds(last),
