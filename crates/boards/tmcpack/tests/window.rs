@@ -313,3 +313,23 @@ fn a_late_answer_after_the_next_query_is_never_paired() {
         line.check_never_interlaced();
     }
 }
+
+/// Start-up: before the driver has programmed `$40` in this run, the pack has either the
+/// factory 6 ms (it rebooted) or the configured switch-over (a previous run programmed it,
+/// and a pack keeps it until a reset): the first `$43` waits for the longer. A pack left at
+/// 20 ms answers at the end of that window and is paired, not counted unanswered; with the
+/// factory delay the window is 6 ms shorter than that and the answer just inside it pairs.
+#[test]
+fn before_40_the_window_holds_the_longer_of_the_factory_and_the_configured_switch_over() {
+    for (units, left_at) in [(10u16, 20 * MS), (1, FACTORY_SWITCHOVER)] {
+        let mut line = Line::new(vec![config(1, Some(units), 1)]);
+        line.set_switchover(0, left_at);
+        let window = window_end(Duration::ZERO, left_at.max(FACTORY_SWITCHOVER));
+        line.hold_next(0, 0x43, window - EDGE);
+        assert!(line.run_until(2000 * MS, |l| l.driver(0).status().online));
+        let d = line.driver(0);
+        assert_eq!(d.status().timeouts, 0, "{units} units");
+        assert_eq!(d.late_replies(), 0, "{units} units");
+        line.check_never_interlaced();
+    }
+}

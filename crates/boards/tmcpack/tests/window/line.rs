@@ -297,6 +297,13 @@ impl Line {
         self.due.push((arrives, index, word));
     }
 
+    /// The pack at `index` has this switch-over already (a previous run programmed it).
+    pub fn set_switchover(&mut self, index: usize, switchover: Duration) {
+        if let Some(pack) = self.packs.get_mut(index) {
+            pack.switchover = switchover;
+        }
+    }
+
     /// Holds the next answer of `pack` to `command` for `delay` after its query's write,
     /// and steps until that query is written; returns its write time.
     pub fn hold_next(&mut self, pack: usize, command: u8, delay: Duration) -> Duration {
