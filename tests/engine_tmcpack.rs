@@ -18,6 +18,8 @@ mod io;
 mod lag;
 #[path = "engine_tmcpack/off.rs"]
 mod off;
+#[path = "engine_tmcpack/silence.rs"]
+mod silence;
 #[path = "engine_tmcpack/stops.rs"]
 mod stops;
 #[path = "engine_tmcpack/wire.rs"]
@@ -197,6 +199,7 @@ fn the_pack_starts_reports_its_firmware_and_gets_configured() {
         "nothing sent while the pack drove the pair"
     );
     assert_eq!(stats.replaced_replies, 0, "never two requests in flight");
+    assert_eq!(stats.interlaced, 0, "manual 7.1: never interlaced");
 }
 
 #[test]
@@ -546,6 +549,7 @@ fn two_packs_on_one_bus_never_have_two_requests_in_flight() {
             "nothing sent while a pack drove the pair"
         );
         assert_eq!(stats.replaced_replies, 0, "never two requests in flight");
+        assert_eq!(stats.interlaced, 0, "manual 7.1: never interlaced");
         assert_eq!(stats.invalid, 0);
         assert!(stats.foreign > 0, "each pack heard the other's traffic");
     }
@@ -567,13 +571,27 @@ fn the_driver_allocates_nothing_after_construction() {
         Duplex::Half,
         Box::new(pack(1, Variant::SixPack)),
     );
+    let faults = link.faults();
     let mut buf = [0u8; 256];
     let mut rx = [0u8; 256];
     let mut in_driver = 0;
     let mut online = false;
+    // Another pack's late answer, as a link bus hands it over.
+    let other = [motion_drivers::LateAnswer::new(
+        &[0xFE, 0x20, 1],
+        Duration::from_secs(3600),
+    )];
     let period = Duration::from_millis(1);
     for tick in 0..10_000u32 {
         let now = period * tick;
+        // Answers held 150 ms (late answers, probes), and once 900 ms (a not-answering
+        // verdict with its evidence, then the start-up again).
+        match tick {
+            2_500 | 7_000 => faults.set_reply_delay(Duration::from_millis(150)),
+            5_000 => faults.set_reply_delay(Duration::from_millis(900)),
+            2_650 | 5_900 | 7_150 => faults.set_reply_delay(Duration::ZERO),
+            _ => {}
+        }
         let goal = match tick % 2_500 {
             400 => Some(Goal::Position { counts: 400.0 }),
             900 => Some(Goal::Velocity {
@@ -588,6 +606,8 @@ fn the_driver_allocates_nothing_after_construction() {
         };
         let len = link.read(now, &mut rx).expect("sim link");
         let before = allocations();
+        driver.handle_late_answers(&other);
+        let _ = driver.late_answers();
         driver.handle_rx(now, &rx[..len]);
         driver.handle_timeout(now);
         if let Some(goal) = goal {
@@ -607,6 +627,9 @@ fn the_driver_allocates_nothing_after_construction() {
     }
     assert!(online);
     assert_eq!(in_driver, 0, "allocations inside the driver");
+    let status = driver.status();
+    assert!(driver.late_replies() > 0, "late answers were handled");
+    assert!(status.verdicts >= 1, "a verdict was formatted");
 }
 
 /// The sim.toml bus: a SIXpack and a QUADpack, ten motors polled on one 19200-baud pair.

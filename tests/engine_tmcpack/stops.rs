@@ -119,6 +119,7 @@ fn a_motor_left_running_before_the_driver_started_is_stopped() {
     let stats = board.lock().unwrap().stats();
     assert_eq!(stats.invalid, 0);
     assert_eq!(stats.replaced_replies, 0);
+    assert_eq!(stats.interlaced, 0, "manual 7.1: never interlaced");
 }
 
 /// Task: a Stop of a motor the driver believes idle still goes on the wire, with an amax

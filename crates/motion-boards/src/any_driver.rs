@@ -111,6 +111,12 @@ macro_rules! registry {
             fn handle_heard(&mut self, until: core::time::Duration) {
                 each_driver!(self, d => d.handle_heard(until))
             }
+            fn late_answers(&self) -> &[motion_drivers::LateAnswer] {
+                each_driver!(self, d => d.late_answers())
+            }
+            fn handle_late_answers(&mut self, others: &[motion_drivers::LateAnswer]) {
+                each_driver!(self, d => d.handle_late_answers(others))
+            }
             fn poll_timeout(&self) -> Option<core::time::Duration> {
                 each_driver!(self, d => d.poll_timeout())
             }

@@ -17,6 +17,14 @@
 //! the write, silence is judged up to the horizon). A shell that does not stamp leaves
 //! the bus unstamped: each message then counts as written when it is made.
 //!
+//! On a stream link with several drivers it also shares the answers each driver's board
+//! may still send late ([`Driver::late_answers`], module `late`): before it picks the next
+//! sender and before it routes received bytes, every driver learns the others'
+//! ([`Driver::handle_late_answers`]), so that no driver asks a question whose answer would
+//! look like another board's late one, and none pairs another board's late answer with its
+//! own request (the Trinamic packs of one RS-485 bus all answer to the same response
+//! address, and an answer does not say which pack sent it).
+//!
 //! On a stream link it also keeps the line rate: a driver that changes its board's rate
 //! says at which rate its next message must go ([`Driver::line_rate`]); when that differs
 //! from the link's, the bus notes the change before it hands the message out, and the
@@ -31,6 +39,7 @@ use core::time::Duration;
 use motion_base::{FixedQueue, LinkKind};
 
 use crate::driver::{Driver, Priority, Transmit};
+use crate::late::{LATE_ANSWERS, LateAnswer};
 
 /// Transactions whose MISO bytes may be outstanding at once on an SPI bus.
 pub const SPI_PENDING_CAPACITY: usize = 64;
@@ -89,6 +98,9 @@ pub struct LinkBus<D: Driver = Box<dyn Driver>> {
     rate: Option<u32>,
     /// Stream: a rate the link must take before the last message handed out.
     rate_change: Option<u32>,
+    /// Stream with several drivers: some driver was last handed late answers of others
+    /// (so an empty set must be handed once when they are gone).
+    late_shared: bool,
 }
 
 impl<D: Driver> LinkBus<D> {
@@ -106,6 +118,7 @@ impl<D: Driver> LinkBus<D> {
             clocked: vec![None; drivers.len()],
             rate: None,
             rate_change: None,
+            late_shared: false,
             drivers,
         }
     }
@@ -211,6 +224,7 @@ impl<D: Driver> LinkBus<D> {
     pub fn handle_rx(&mut self, now: Duration, mut bytes: &[u8]) {
         match self.kind {
             LinkKind::Stream => {
+                self.share_late_answers();
                 let owner = self.in_flight.unwrap_or(self.last_sender);
                 if let Some(driver) = self.drivers.get_mut(owner) {
                     driver.handle_rx(now, bytes);
@@ -267,7 +281,11 @@ impl<D: Driver> LinkBus<D> {
     #[must_use]
     pub fn poll_transmit(&mut self, now: Duration, buf: &mut [u8]) -> Option<(usize, Transmit)> {
         self.release_if_answered();
-        if self.kind == LinkKind::Stream && self.in_flight.is_some() {
+        if self.kind == LinkKind::Stream
+            && (self.in_flight.is_some() || self.drivers.iter().any(Driver::awaiting_reply))
+        {
+            // One request in flight; and a driver that holds the line without one (bytes
+            // it did not ask for are still coming: a late answer) holds it for everyone.
             return None;
         }
         if self.kind == LinkKind::Spi && self.pending.is_full() {
@@ -276,22 +294,37 @@ impl<D: Driver> LinkBus<D> {
         if self.stamped && self.unwritten.is_full() {
             return None;
         }
-        let count = self.drivers.len();
-        let mut best: Option<(usize, Priority)> = None;
-        for offset in 0..count {
-            let index = (self.next_turn + offset) % count;
-            if let Some(priority) = self.drivers[index].wants_transmit(now)
-                && best.is_none_or(|(_, best_priority)| priority > best_priority)
-            {
-                best = Some((index, priority));
-            }
+        if self.kind == LinkKind::Stream {
+            self.share_late_answers();
         }
-        let (index, _) = best?;
-        let wanted = match self.kind {
-            LinkKind::Stream => self.drivers[index].line_rate(),
-            LinkKind::Spi => None,
+        let count = self.drivers.len();
+        // The most urgent first, round-robin among equals; a driver that wanted to send but
+        // has nothing after all (its question must wait) gives way to the next.
+        let mut tried: Option<(Priority, usize)> = None;
+        let (index, wanted, transmit) = loop {
+            let mut best: Option<(usize, Priority, usize)> = None;
+            for offset in 0..count {
+                let index = (self.next_turn + offset) % count;
+                let Some(priority) = self.drivers[index].wants_transmit(now) else {
+                    continue;
+                };
+                let after_tried =
+                    tried.is_none_or(|(p, o)| priority < p || (priority == p && offset > o));
+                if after_tried && best.is_none_or(|(_, best_priority, _)| priority > best_priority)
+                {
+                    best = Some((index, priority, offset));
+                }
+            }
+            let (index, priority, offset) = best?;
+            tried = Some((priority, offset));
+            let wanted = match self.kind {
+                LinkKind::Stream => self.drivers[index].line_rate(),
+                LinkKind::Spi => None,
+            };
+            if let Some(transmit) = self.drivers[index].poll_transmit(now, buf) {
+                break (index, wanted, transmit);
+            }
         };
-        let transmit = self.drivers[index].poll_transmit(now, buf)?;
         if let Some(rate) = wanted.filter(|rate| self.rate != Some(*rate)) {
             // The message goes at the driver's rate: the shell changes the link's first.
             self.rate = Some(rate);
@@ -360,6 +393,37 @@ impl<D: Driver> LinkBus<D> {
         }
     }
 
+    /// Stream with several drivers: hands every driver the late answers of the others (at
+    /// most [`LATE_ANSWERS`]; more are handed once there is room). Nothing allocates.
+    fn share_late_answers(&mut self) {
+        if self.drivers.len() < 2 {
+            return;
+        }
+        let any = self.drivers.iter().any(|d| !d.late_answers().is_empty());
+        if !any && !self.late_shared {
+            return;
+        }
+        self.late_shared = any;
+        for index in 0..self.drivers.len() {
+            let mut others = [LateAnswer::EMPTY; LATE_ANSWERS];
+            let mut count = 0;
+            for (other, driver) in self.drivers.iter().enumerate() {
+                if other == index {
+                    continue;
+                }
+                for late in driver.late_answers() {
+                    if let Some(slot) = others.get_mut(count) {
+                        *slot = *late;
+                        count += 1;
+                    }
+                }
+            }
+            if let Some(driver) = self.drivers.get_mut(index) {
+                driver.handle_late_answers(&others[..count]);
+            }
+        }
+    }
+
     fn release_if_answered(&mut self) {
         if let Some(index) = self.in_flight
             && !self
@@ -374,5 +438,7 @@ impl<D: Driver> LinkBus<D> {
 
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_late;
 #[cfg(test)]
 mod tests_rate;

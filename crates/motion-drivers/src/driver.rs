@@ -5,6 +5,7 @@ use core::time::Duration;
 
 use crate::commission::{Commission, CommissionError};
 use crate::goal::{Goal, GoalError, GoalKinds, RateFloor};
+use crate::late::LateAnswer;
 use crate::pin::{Pin, PinReading};
 use crate::state::{ChannelState, DeviceStatus};
 
@@ -225,6 +226,26 @@ pub trait Driver: Send + fmt::Debug {
         let _ = until;
     }
 
+    /// Answers this driver's board may still send although their reply window ended
+    /// ([`LateAnswer`]: a board or its host process that was starved): the driver takes a
+    /// word that begins with one for late, never for an answer, and asks no question whose
+    /// answer would begin with one. A [`LinkBus`](crate::LinkBus) hands them to the other
+    /// drivers on the same stream link ([`handle_late_answers`](Self::handle_late_answers)).
+    /// None by default.
+    fn late_answers(&self) -> &[LateAnswer] {
+        &[]
+    }
+
+    /// The answers the *other* boards on this stream link may still send late (their
+    /// drivers' [`late_answers`](Self::late_answers)), each kept until its
+    /// [`LateAnswer::until`]: this driver asks no question whose answer would begin like one,
+    /// and takes a word that begins like one for late. Given by a bus with several drivers
+    /// before it picks the next sender and before it routes received bytes. Ignored by
+    /// default.
+    fn handle_late_answers(&mut self, others: &[LateAnswer]) {
+        let _ = others;
+    }
+
     /// The earliest instant at which [`handle_timeout`](Self::handle_timeout) has work.
     #[must_use]
     fn poll_timeout(&self) -> Option<Duration>;
@@ -390,6 +411,12 @@ impl<T: Driver + ?Sized> Driver for Box<T> {
     }
     fn handle_heard(&mut self, until: Duration) {
         (**self).handle_heard(until);
+    }
+    fn late_answers(&self) -> &[LateAnswer] {
+        (**self).late_answers()
+    }
+    fn handle_late_answers(&mut self, others: &[LateAnswer]) {
+        (**self).handle_late_answers(others);
     }
     fn poll_timeout(&self) -> Option<Duration> {
         (**self).poll_timeout()

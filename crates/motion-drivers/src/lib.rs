@@ -32,6 +32,7 @@ mod bus;
 mod commission;
 mod driver;
 mod goal;
+mod late;
 mod pin;
 pub mod spec;
 mod stamps;
@@ -43,6 +44,7 @@ pub use driver::{
     Driver, Follow, LINE_RATE_TOLERANCE, LineLeg, Model, Priority, SavedReference, Transmit,
 };
 pub use goal::{Goal, GoalError, GoalKind, GoalKinds, RateFloor};
+pub use late::{LATE_ANSWERS, LATE_PREFIX_LEN, LateAnswer};
 /// Whether a link carries a byte stream or SPI transactions (one enum with `motion_link`).
 pub use motion_base::LinkKind;
 pub use motion_base::{CanRecord, LinkFraming};

@@ -457,6 +457,54 @@ fn line_timing_keys_are_in_2_ms_units_and_fit_a_word() {
     }
 }
 
+/// `host_latency_ms` (part of every reply window) and `not_answering_ms` (the silence
+/// before the verdict): in range, a short silence warned about.
+#[test]
+fn host_latency_and_not_answering_are_checked() {
+    for good in [
+        "host_latency_ms = 0",
+        "host_latency_ms = 16.5",
+        "not_answering_ms = 500",
+        "not_answering_ms = 60000",
+    ] {
+        let (code, stderr) = check("answering.toml", &on_device(good));
+        assert_eq!(code, Some(0), "{good}: {stderr}");
+    }
+    let (code, stderr) = check("short.toml", &on_device("not_answering_ms = 100"));
+    assert_eq!(code, Some(0), "{stderr}");
+    assert!(
+        stderr.contains("not_answering_ms") && stderr.contains("200 ms"),
+        "{stderr}"
+    );
+    let cases = [
+        (
+            "host_latency_ms = -1",
+            "device[0].host_latency_ms",
+            "0..=1000",
+        ),
+        (
+            "host_latency_ms = 1001",
+            "device[0].host_latency_ms",
+            "0..=1000",
+        ),
+        (
+            "not_answering_ms = 49",
+            "device[0].not_answering_ms",
+            "50..=60000",
+        ),
+        (
+            "not_answering_ms = 60001",
+            "device[0].not_answering_ms",
+            "50..=60000",
+        ),
+    ];
+    for (value, key, says) in cases {
+        let text = on_device(value);
+        let needle = value.split(' ').next().unwrap_or(value);
+        fails_at("answering.toml", &text, needle, 0, key, says);
+    }
+}
+
 /// The two readings of `$14` ("1/64 amax is accumulated with 500Hz" against 7.1's
 /// "increments v by 128/16=8 each 2 ms") and of `$15` P6 ("Bit 5: StopNoRef" against
 /// "StopNoRef(P6, Bit 6)") are the only values; anything else is refused at its line.

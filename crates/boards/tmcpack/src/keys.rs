@@ -29,6 +29,8 @@ pub(crate) struct RawDevice {
     pub(crate) power_down: Option<Spanned<String>>,
     pub(crate) microstep_table: Option<Spanned<Vec<Spanned<Int>>>>,
     pub(crate) baud: Option<Spanned<Int>>,
+    pub(crate) host_latency_ms: Option<Spanned<f64>>,
+    pub(crate) not_answering_ms: Option<Spanned<Int>>,
 }
 
 /// `ready_output = { motors = [0, 1], reference = [0] }`: TTLOUT1 as the ready output
@@ -233,6 +235,7 @@ pub(crate) fn device_keys(
         ok &= keys.stop_no_ref_bit.is_some();
     }
     ok &= crate::drive_keys::device_keys(v, ctx, raw, &mut keys);
+    ok &= crate::timing_keys::device_keys(v, ctx, raw, &mut keys);
     if let Some(value) = &raw.baud {
         keys.baud = crate::baud_key::baud(v, ctx, value);
         ok &= keys.baud.is_some();

@@ -15,6 +15,7 @@ pub mod machine_keys;
 mod readings;
 pub mod sim;
 mod standalone;
+mod timing_keys;
 
 use motion_board::keys::{AxisContext, DeviceContext, KeyIssues, KeyTable, key_names};
 use motion_board::machine::MachineView;

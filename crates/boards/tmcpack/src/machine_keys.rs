@@ -46,6 +46,10 @@ pub struct TmcpackDeviceKeys {
     pub microstep_table: Option<[u8; 16]>,
     /// `$40` rate the pack is switched to at start-up, baud (the link follows).
     pub baud: Option<u32>,
+    /// `host_latency_ms`: how much later than on the wire an answer may reach the driver.
+    pub host_latency_ms: Option<f64>,
+    /// `not_answering_ms`: the silence before the pack is declared not answering.
+    pub not_answering_ms: Option<u32>,
 }
 
 /// `power_down` (manual 8.6 `$45`): what the driver asks of the pack's power-down mode.

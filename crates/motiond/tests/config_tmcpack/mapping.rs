@@ -39,6 +39,8 @@ packet_timeout_ms = 10
 ready_output = { motors = [0, 1], reference = [0] }
 amax_divisor = 16
 stop_no_ref_bit = 6
+host_latency_ms = 16.5
+not_answering_ms = 800
 
 [[axis]]
 name = "x"
@@ -297,13 +299,15 @@ fn value<'r>(rows: &'r [ParamRow], owner: Owner, key: &str) -> &'r str {
         .unwrap_or_else(|| panic!("no row {owner:?} {key}"))
 }
 
-const DEVICE_KEYS: [&str; 6] = [
+const DEVICE_KEYS: [&str; 8] = [
     "reply_address",
     "switchover_ms",
     "packet_timeout_ms",
     "ready_output",
     "amax_divisor",
     "stop_no_ref_bit",
+    "host_latency_ms",
+    "not_answering_ms",
 ];
 const AXIS_KEYS: [&str; 20] = [
     "current.peak",
@@ -350,8 +354,21 @@ fn describe_lists_every_key_with_the_value_in_effect() {
     assert!(value(&rows, dev, "ready_output").starts_with("motors [0, 1], reference [0]"));
     assert!(value(&rows, dev, "amax_divisor").starts_with("16 (7.1 defaults"));
     assert!(value(&rows, dev, "stop_no_ref_bit").starts_with("6 ($15 prose"));
+    assert_eq!(
+        value(&rows, dev, "host_latency_ms"),
+        "16.5 ms (in every reply window)"
+    );
+    assert_eq!(
+        value(&rows, dev, "not_answering_ms"),
+        "800 ms (silence before the verdict)"
+    );
     // Whole in `MachineParam`'s 40 bytes, as `motionctl list` shows them.
-    for key in ["amax_divisor", "stop_no_ref_bit"] {
+    for key in [
+        "amax_divisor",
+        "stop_no_ref_bit",
+        "host_latency_ms",
+        "not_answering_ms",
+    ] {
         assert!(
             value(&rows, dev, key).len() <= motion_ipc::PARAM_TEXT_LEN,
             "{key}"

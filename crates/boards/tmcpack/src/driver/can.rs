@@ -13,8 +13,9 @@
 //!   all): a request occupies the bus for its frame time; the pack processes each command
 //!   in about 2 ms from its 16-command cache. The driver mirrors that cache
 //!   ([`tmcpack::CanCache`]) to know when an answer can come (the end of the query's
-//!   processing behind the commands before it, plus the answer's frame time and
-//!   [`REPLY_MARGIN`](super::REPLY_MARGIN)), and keeps at most [`CACHE_LIMIT`] commands in
+//!   processing behind the commands before it, plus the answer's frame time, one more
+//!   [`PACK_PROCESSING`](super::PACK_PROCESSING) for the "approx." and the host's latency),
+//!   and keeps at most [`CACHE_LIMIT`] commands in
 //!   it — half the cache, as the manual's "approx. 2 ms" may be longer on a busy pack — so
 //!   a burst (the start-up's forty-odd commands, a coordinated move's goals) never loses a
 //!   command to a full cache.
@@ -25,8 +26,6 @@ use core::time::Duration;
 
 use motion_base::{CAN_RECORD_LEN, CanRecord};
 use tmcpack::{CAN_LEN, CanCache, FRAME_LEN, Request, RequestFrame, Word, can_command_id};
-
-use super::REPLY_MARGIN;
 
 /// Commands the driver lets wait in the pack's cache at once (of its 16).
 pub const CACHE_LIMIT: usize = tmcpack::CAN_CACHE_COMMANDS / 2;
@@ -95,13 +94,13 @@ impl CanLine {
 
     /// The reply deadline of a query written at `now` (after [`encode`](Self::encode)
     /// counted it): the end of its processing behind the commands before it, its answer's
-    /// frame, and the margin.
-    pub fn reply_deadline(&self, now: Duration) -> Duration {
+    /// frame, and `slack` (the "approx." of the 2 ms, the host's latency).
+    pub fn reply_deadline(&self, now: Duration, slack: Duration) -> Duration {
         let done = self
             .cache
             .idle_at(now)
             .max(now + self.frame_time + self.cache.command_time());
-        done + self.frame_time + REPLY_MARGIN
+        done + self.frame_time + slack
     }
 
     /// Takes received bytes (whole records, possibly cut anywhere) and hands each complete
@@ -150,23 +149,30 @@ impl super::TmcpackDriver {
 
     /// One telegram for the reply identifier, as its RS-232 word.
     fn on_can_answer(&mut self, now: Duration, word: Word) {
-        let super::wire::Wire::Awaiting {
-            expect, sent_at, ..
-        } = self.wire
-        else {
-            // A late answer: nobody asked.
-            self.status.bad_replies = self.status.bad_replies.saturating_add(1);
-            return;
+        let (expect, sent_at) = match self.wire {
+            super::wire::Wire::Awaiting {
+                expect, sent_at, ..
+            } => (Some(expect), sent_at),
+            _ => (None, Duration::ZERO),
         };
-        // A telegram is whole: it is the answer or it is not.
+        // A telegram is whole: it is the answer, a late one, or neither.
         self.hunter.reset();
-        let Some(reply) = self.hunter.push(self.reply_address, expect, &word) else {
-            self.status.bad_replies = self.status.bad_replies.saturating_add(1);
-            return;
+        let want = super::hunter::Want {
+            reply_address: self.reply_address,
+            expect,
+            late: &self.late,
+            now,
         };
-        // No line to turn around on CAN: the bus is free for the next request at once.
-        self.wire = super::wire::Wire::Idle;
-        self.on_reply(now, expect, sent_at, reply);
+        match (self.hunter.push(&want, &word).0, expect) {
+            (Some(super::hunter::Found::Late(word)), _) => self.on_late_word(now, word),
+            (Some(super::hunter::Found::Answer(reply)), Some(expect)) => {
+                // No line to turn around on CAN: the bus is free for the next request at
+                // once.
+                self.wire = super::wire::Wire::Idle;
+                self.on_reply(now, expect, sent_at, reply);
+            }
+            _ => self.status.bad_replies = self.status.bad_replies.saturating_add(1),
+        }
     }
 
     /// Forgets what the cache mirror knows is done by `now`.
@@ -214,9 +220,10 @@ mod tests {
         );
         // Processing ends 2 ms after the frame crossed the bus; the answer's frame and the
         // margin follow.
+        let slack = Duration::from_millis(7);
         assert_eq!(
-            line.reply_deadline(Duration::ZERO),
-            Duration::from_micros(444 + 2000 + 444) + REPLY_MARGIN
+            line.reply_deadline(Duration::ZERO, slack),
+            Duration::from_micros(444 + 2000 + 444) + slack
         );
     }
 

@@ -115,7 +115,7 @@ impl TmcpackDriver {
                 self.address = self.home_address;
                 self.rate.factory();
                 self.retime();
-                self.assume_factory_line();
+                self.assume_unknown_line();
                 self.reprobe(now + RESET_WAIT);
             }
             _ => {}

@@ -27,6 +27,20 @@ pub const DEFAULT_REPLY_ADDRESS: u8 = 0xFE;
 /// 2 ms hold ≈ 13.4 ms at 19200 baud instead of ≈ 21.4 ms.
 pub const DEFAULT_SWITCHOVER_UNITS: u16 = 1;
 
+/// What the host adds to an exchange by default, both ways (key `host_latency_ms`): a USB
+/// serial adapter takes a request to the wire and hands received bytes over in 1 ms frames
+/// (and holds them up to its latency timer, 1 ms when set low, FTDI's factory 16 ms), the
+/// link's I/O thread wakes for them, the tick takes them in. The same figure as the QSB's.
+pub const DEFAULT_HOST_LATENCY: Duration = Duration::from_millis(5);
+
+/// How long a pack must have been silent, with at least
+/// [`MAX_TIMEOUTS`](super::MAX_TIMEOUTS) requests unanswered in a row, before it is declared
+/// not answering by default (key `not_answering_ms`): 2.5 × the 200 ms a starved host (the
+/// server's or an emulated pack's process on a loaded machine) was seen to hold answers,
+/// which must never drop a pack's goals (issue 39). Meanwhile stops still go out (they need
+/// no answer) and the engine marks the axes stale after the refresh budget.
+pub const DEFAULT_NOT_ANSWERING: Duration = Duration::from_millis(500);
+
 /// Slack of the default $41 packet timeout beyond one word's wire time: two byte times (a
 /// host or adapter may pause between the bytes of one write).
 pub const PACKET_TIMEOUT_SLACK_BYTES: u32 = 2;
@@ -262,6 +276,14 @@ pub struct TmcpackDriverConfig {
     /// The `$17` motor characteristics table to write at start-up (key
     /// `microstep_table`); `None` leaves the pack's (the factory sine after a reset).
     pub microstep_table: Option<[u8; 16]>,
+    /// How much later than on the wire an answer may reach the driver (key
+    /// `host_latency_ms`, [`DEFAULT_HOST_LATENCY`]): part of every reply window.
+    pub host_latency: Duration,
+    /// How long the pack must have been silent (with [`MAX_TIMEOUTS`](super::MAX_TIMEOUTS)
+    /// requests unanswered in a row) before it is declared not answering, and how long an
+    /// unanswered query's answer is taken for late (key `not_answering_ms`,
+    /// [`DEFAULT_NOT_ANSWERING`]).
+    pub not_answering: Duration,
 }
 
 impl TmcpackDriverConfig {
@@ -292,6 +314,8 @@ impl Default for TmcpackDriverConfig {
             can_bitrate: None,
             power_down: PowerDownMode::Off,
             microstep_table: None,
+            host_latency: DEFAULT_HOST_LATENCY,
+            not_answering: DEFAULT_NOT_ANSWERING,
         }
     }
 }

@@ -14,16 +14,34 @@
 //! commanded by this run. The whole configuration goes out again whenever the pack is seen
 //! to have reset (`$43` reset flag, or after it stopped answering).
 //!
-//! The wire (manual 6.1, 7.1): one request in flight. A query waits for its answer until
-//! `request + switch-over (at least the factory 6 ms, in case the pack rebooted) + answer +`
-//! [`REPLY_MARGIN`]; after an answer the line stays reserved for the switch-over time, in
-//! which the pack still drives it; after a timeout it stays silent for the pack's packet
-//! timeout so that a partial word on its side is aborted. A request without an answer
-//! reserves the line for its own wire time and at least the packet timeout of every pack on
-//! the bus ($41: "The command word always has to be completely transmitted during a
-//! parameterized timeout"), so that a word torn by noise is aborted before the next one
-//! starts instead of taking its first bytes. Queries carry the response address of
+//! The wire (manual 6.1, 7.1 "Requests must not be interlaced. Each request should wait for
+//! the response of the PACK before transmitting a new command."): one request in flight on
+//! the whole bus, and the next one only once the answer arrived or can no longer arrive.
+//! A query's window runs from its write stamp (when the link took its last byte: a serial
+//! port's `write` returns before the UART has clocked the word out, so the request's own
+//! wire time counts in the window): the request on the wire, the pack's processing
+//! ([`PACK_PROCESSING`], 2 ms: the manual gives it for CAN only, read for the serial line
+//! too), the switch-over delay the pack has (the one the driver programmed with `$40`; the
+//! longer of the factory 6 ms and the configured one until it has), the answer on the
+//! wire at the rate the driver talks at, and the host's latency (`host_latency_ms`, default
+//! [`DEFAULT_HOST_LATENCY`]). The window is judged only up to the link's horizon
+//! (`handle_heard`), so a starved I/O thread never makes the pack look silent. After an
+//! answer the line stays reserved for the switch-over time, in which the pack still drives
+//! it; after a missing answer it stays silent for the `$41` packet timeout (the longest of
+//! every pack on the bus, and at least the switch-over), so that a word torn on the line is
+//! aborted before the next one starts. A request without an answer reserves the line for
+//! its own wire time and the packet timeout ($41: "The command word always has to be
+//! completely transmitted during a parameterized timeout"). Bytes that come while nothing
+//! is awaited (a late answer, noise) hold the line until their word can have ended and the
+//! switch-over after it passed. Queries carry the response address of
 //! [`TmcpackDriverConfig::reply_address`], which no pack on the bus may have.
+//!
+//! Late answers (module `late`): an answer that still comes after its window (the pack or
+//! its host process was starved) is told by its response address, command and motor or
+//! channel, counted ([`TmcpackDriver::late_replies`]) and dropped, never paired with the
+//! next request; the driver asks nothing whose answer would look like one (another motor's
+//! poll, or a `$21`/`$30` probe), and on a shared bus every driver learns the others' late
+//! answers from the link bus (every pack answers to the same response address).
 //!
 //! Command → wire: a goal's first request goes out in the tick that set it when the line is
 //! free; otherwise it waits for the one exchange in flight — at most a query, the
@@ -39,8 +57,17 @@
 //! same priority (the two take turns); then `$20` position/action polls round-robin over the configured motors
 //! with one `$30` input poll per round when inputs are configured ([`Priority::Poll`]),
 //! and a `$43` every [`RESET_CHECK_PERIOD`] to notice a pack that rebooted (reset flag).
-//! Three timeouts in a row take the pack offline ([`DeviceFault::NotResponding`]); it is
-//! then asked for `$43` every [`RETRY_PERIOD`] and configured again when it answers.
+//!
+//! Verdicts, each declared with its evidence ([`DeviceStatus::declare`], module `rx`): not
+//! answering ([`DeviceFault::NotResponding`]) only when at least [`MAX_TIMEOUTS`] requests
+//! went unanswered in a row *and* the first of them was written `not_answering_ms` (default
+//! [`DEFAULT_NOT_ANSWERING`], 500 ms) or more before; the pack is then asked for `$43` every
+//! [`RETRY_PERIOD`] and configured again when it answers. A pack silent for less — its
+//! answers held 50, 100, 200 ms by a starved host — keeps its configuration and its goals
+//! (stops still go out meanwhile: they need no answer; the engine marks the axes stale after
+//! the refresh budget). Reset ([`DeviceFault::Reset`]) only on a `$43` answer with the reset
+//! flag set (manual 8.6: "during first read out 1, afterwards 0") from a pack that had been
+//! online.
 //!
 //! Commissioning (`$42` address, `$40` rate, `$CC` factory reset) is the `commission`
 //! module's.
@@ -61,7 +88,9 @@ mod channel;
 mod commission;
 mod config;
 mod goals;
+mod hunter;
 mod io;
+mod late;
 mod line;
 mod power_down;
 mod rate;
@@ -101,33 +130,41 @@ use tmcpack::{DEFAULT_PACKET_TIMEOUT, FRAME_LEN, Variant};
 
 use motion_drivers::{
     ChannelState, Commission, CommissionError, DeviceFault, DeviceStatus, Driver, Goal, GoalError,
-    GoalKinds, IoStamps, Model, Pin, PinReading, Priority, RateFloor, Transmit,
+    GoalKinds, IoStamps, LateAnswer, Model, Pin, PinReading, Priority, RateFloor, Transmit,
 };
 
 use channel::{Channel, Step};
 use commission::Service;
 use config::{Scale, clkdiv_for};
 use goals::CAPABILITIES;
+use hunter::ReplyHunter;
 use io::IoState;
+use late::LateSet;
 use line::PackLine;
 use power_down::PowerDown;
 use rate::LineRate;
 use startup::{Quiesce, StartupPlan};
-use wire::{ReplyHunter, Wire};
+use wire::Wire;
 
 pub use commission::RESET_WAIT;
 pub use config::{
-    Currents, DEFAULT_REPLY_ADDRESS, DEFAULT_SWITCHOVER_UNITS, PACKET_TIMEOUT_SLACK_BYTES,
-    PiParams, TmcpackChannel, TmcpackDriverConfig, default_packet_timeout_units,
+    Currents, DEFAULT_HOST_LATENCY, DEFAULT_NOT_ANSWERING, DEFAULT_REPLY_ADDRESS,
+    DEFAULT_SWITCHOVER_UNITS, PACKET_TIMEOUT_SLACK_BYTES, PiParams, TmcpackChannel,
+    TmcpackDriverConfig, default_packet_timeout_units,
 };
 pub use io::{MAX_PINS, PinSet, ReadyOutput, TmcpackIo, pins};
 pub use power_down::POWER_CHECK_PERIOD;
 pub use spec::{MAX_DEBOUNCE_MS, MAX_POSLIMIT, is_current_level, is_weak_current, word_time};
 
-/// Added to a query's wire and switch-over time before it counts as unanswered
-/// (processing in the pack, and the host's tick granularity).
-pub const REPLY_MARGIN: Duration = Duration::from_millis(6);
-/// Timeouts in a row after which the pack is declared not responding.
+/// The longest the pack takes from a request's last byte to the start of its switch-over
+/// delay. The manual gives it for CAN only (6.2, "internal processing time is approx. 2 ms
+/// per command"); the firmware works in 2 ms cycles on RS-232 / RS-485 too (the ramps'
+/// "accumulated with 500Hz", "The controller works at 500Hz", the ready output "switched
+/// within 2 ms"), so a word is read as taken in within one cycle (docs/ARCHITECTURE.md,
+/// "How the datasheets are read"). Part of every reply window.
+pub const PACK_PROCESSING: Duration = Duration::from_millis(2);
+/// Requests unanswered in a row (spanning at least `not_answering_ms`) after which the pack
+/// is declared not answering.
 pub const MAX_TIMEOUTS: u32 = 3;
 /// How often an offline pack is asked again.
 pub const RETRY_PERIOD: Duration = Duration::from_millis(250);
@@ -204,6 +241,23 @@ pub struct TmcpackDriver {
     home_address: u8,
     /// The configured `$40` switch-over delay, 2 ms units.
     switchover_units: Option<u16>,
+    /// The `$41` packet timeout the start-up programs.
+    configured_timeout: Duration,
+    /// Key `host_latency_ms`: part of every reply window.
+    host_latency: Duration,
+    /// Key `not_answering_ms`: the silence before a verdict, and how long an unanswered
+    /// query's answer is taken for late.
+    not_answering: Duration,
+    /// Answers that may still come late (module `late`).
+    late: LateSet,
+    /// Words recognised as late answers and dropped.
+    late_replies: u32,
+    /// When the first request of the current run of unanswered ones was written.
+    silent_since: Duration,
+    /// The last request that went unanswered.
+    unanswered: Option<rx::Unanswered>,
+    /// When the last answer was paired.
+    last_answer_at: Option<Duration>,
 }
 
 impl TmcpackDriver {
@@ -256,7 +310,7 @@ impl TmcpackDriver {
         } else {
             config.reply_address
         };
-        Self {
+        let mut driver = Self {
             address: config.address,
             reply_address,
             variant: config.variant,
@@ -290,7 +344,23 @@ impl TmcpackDriver {
             service: None,
             home_address: config.address,
             switchover_units: config.switchover_units,
-        }
+            configured_timeout: units(config.packet_timeout()),
+            host_latency: config.host_latency,
+            not_answering: config.not_answering,
+            late: LateSet::new(),
+            late_replies: 0,
+            silent_since: Duration::ZERO,
+            unanswered: None,
+            last_answer_at: None,
+        };
+        driver.assume_unknown_line();
+        driver
+    }
+
+    /// Words recognised as late answers (to a query that had timed out, this pack's or,
+    /// on a shared bus, another's) and dropped, never paired (module `late`).
+    pub fn late_replies(&self) -> u32 {
+        self.late_replies
     }
 
     /// The response address the driver's queries carry.
@@ -358,6 +428,7 @@ impl Driver for TmcpackDriver {
 
     fn handle_timeout(&mut self, now: Duration) {
         self.prune_can(now);
+        self.late.expire(now);
         match self.wire {
             Wire::Sending { until, .. } | Wire::Quiet { until } if now >= until => {
                 self.wire = Wire::Idle;
@@ -368,6 +439,7 @@ impl Driver for TmcpackDriver {
             }
             _ => {}
         }
+        self.judge_silence(now);
     }
 
     fn handle_written(&mut self, at: Duration) {
@@ -376,6 +448,14 @@ impl Driver for TmcpackDriver {
 
     fn handle_heard(&mut self, until: Duration) {
         self.stamps.heard(until);
+    }
+
+    fn late_answers(&self) -> &[LateAnswer] {
+        self.late.own()
+    }
+
+    fn handle_late_answers(&mut self, others: &[LateAnswer]) {
+        self.late.set_others(others);
     }
 
     fn poll_timeout(&self) -> Option<Duration> {
@@ -395,10 +475,16 @@ impl Driver for TmcpackDriver {
             .filter(|c| c.current() == Some(Step::AwaitRest))
             .filter_map(|c| c.rest_poll_at.or(c.rest_at))
             .min();
-        [self.wire.deadline(), phase, rest, self.can_held_until()]
-            .into_iter()
-            .flatten()
-            .min()
+        [
+            self.wire.deadline(),
+            phase,
+            rest,
+            self.can_held_until(),
+            self.late.next_expiry(),
+        ]
+        .into_iter()
+        .flatten()
+        .min()
     }
 
     fn wants_transmit(&self, now: Duration) -> Option<Priority> {
@@ -466,6 +552,7 @@ impl Driver for TmcpackDriver {
 
     fn link_down(&mut self, _now: Duration) {
         self.stamps.link_reset();
+        self.late.clear();
         if let Some(can) = self.can.as_mut() {
             can.reset();
         }
@@ -478,6 +565,7 @@ impl Driver for TmcpackDriver {
 
     fn link_up(&mut self, now: Duration) {
         self.stamps.link_reset();
+        self.late.clear();
         if let Some(can) = self.can.as_mut() {
             can.reset();
         }
@@ -485,7 +573,7 @@ impl Driver for TmcpackDriver {
         self.wire = Wire::Idle;
         self.retry_at = now;
         self.timeouts_in_row = 0;
-        self.assume_factory_line();
+        self.assume_unknown_line();
         self.service = None;
         self.rate.link_up();
         self.retime();

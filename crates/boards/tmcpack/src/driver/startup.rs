@@ -347,9 +347,16 @@ impl TmcpackDriver {
         }
     }
 
-    /// Whatever the pack has now (it may have rebooted to the factory settings).
-    pub(super) fn assume_factory_line(&mut self) {
-        self.switchover = units(FACTORY_SWITCHOVER);
-        self.pack_timeout = DEFAULT_PACKET_TIMEOUT;
+    /// Whatever the pack may have now, before this start-up programs it: the factory
+    /// settings (after a reboot, manual 6.1 "pre-set to 6ms") or the configured ones (a
+    /// previous run programmed them) — the longer of each, so that no answer is cut short
+    /// and no torn word outlives the quiet time. No switch-over on CAN.
+    pub(super) fn assume_unknown_line(&mut self) {
+        let configured = self.switchover_units.map_or(Duration::ZERO, units);
+        self.switchover = match self.can {
+            Some(_) => Duration::ZERO,
+            None => units(FACTORY_SWITCHOVER).max(configured),
+        };
+        self.pack_timeout = DEFAULT_PACKET_TIMEOUT.max(self.configured_timeout);
     }
 }

@@ -101,22 +101,54 @@ fn a_request_without_answer_reserves_the_line_for_the_packet_timeout() {
     assert_eq!(t10 - t12, 6 * MS);
 }
 
+/// A pack that never answers is declared not answering once at least `MAX_TIMEOUTS`
+/// requests went unanswered in a row and the first was written `not_answering_ms` before
+/// (default 500 ms), not at its third timeout; the verdict names its evidence.
 #[test]
-fn a_silent_pack_is_reported_not_responding_after_three_timeouts() {
+fn a_silent_pack_is_declared_not_answering_after_the_silence_with_its_evidence() {
     let mut bench = Bench::new(config());
     let mut asked = Vec::new();
-    for _ in 0..400 {
+    let mut declared = None;
+    for _ in 0..1200 {
         let at = bench.now;
         if let Some(w) = bench.tick() {
             asked.push((at, w));
         }
+        let status = bench.driver.status();
+        if declared.is_none() && status.fault == Some(DeviceFault::NotResponding) {
+            declared = Some(at);
+            assert!(status.timeouts >= MAX_TIMEOUTS);
+        }
     }
+    let declared = declared.expect("declared");
+    assert!(declared >= DEFAULT_NOT_ANSWERING, "{declared:?}");
+    assert!(declared < DEFAULT_NOT_ANSWERING + 60 * MS, "{declared:?}");
     assert!(asked.len() >= 3);
-    assert!(asked.iter().all(|(_, w)| w[1] == 0x43));
+    // `$43`, and while an unanswered `$43` may still be answered late, probes whose answer
+    // cannot be taken for it (module `late`): `$21` / `$30`, nothing that changes the pack.
+    assert_eq!(asked[0].1[1], 0x43);
+    assert!(
+        asked
+            .iter()
+            .all(|(_, w)| matches!(w[1], 0x43 | 0x21 | 0x30)),
+        "{asked:?}"
+    );
     let status = bench.driver.status();
     assert!(!status.online);
     assert_eq!(status.fault, Some(DeviceFault::NotResponding));
-    assert!(status.timeouts >= 3);
+    assert_eq!(status.verdicts, 1, "declared once, not at every retry");
+    let verdict = status.verdict.expect("a verdict");
+    assert_eq!(verdict.fault, DeviceFault::NotResponding);
+    assert_eq!(verdict.at, declared);
+    let evidence = verdict.evidence.as_str();
+    assert!(
+        evidence.contains("requests unanswered in a row since 0.000 s")
+            && evidence.contains("the last, `$")
+            && evidence.contains("written at")
+            && evidence.contains("due by")
+            && evidence.contains("the link heard until"),
+        "{evidence}"
+    );
     assert_eq!(
         bench.driver.channel(0).fault,
         Some(DeviceFault::NotResponding)
@@ -128,8 +160,17 @@ fn a_silent_pack_is_reported_not_responding_after_three_timeouts() {
         Err(GoalError::Offline)
     );
     // Retries keep coming, spaced by the retry period once declared dead.
-    let gaps: Vec<Duration> = asked.windows(2).map(|w| w[1].0 - w[0].0).collect();
-    assert!(gaps.iter().any(|&g| g >= RETRY_PERIOD));
+    let after: Vec<Duration> = asked
+        .iter()
+        .filter(|(at, _)| *at > declared)
+        .map(|(at, _)| *at)
+        .collect();
+    assert!(after.len() >= 2, "{after:?}");
+    assert!(after[0] >= declared + RETRY_PERIOD);
+    assert!(
+        after.windows(2).all(|w| w[1] - w[0] >= RETRY_PERIOD),
+        "{after:?}"
+    );
 }
 
 #[test]
@@ -548,4 +589,121 @@ fn a_position_goal_on_a_rotating_motor_stops_the_rotation_first() {
         motor: 0,
         target: 10
     }));
+}
+
+/// Bytes that come while nothing is awaited (a late answer, noise) are someone driving the
+/// line (manual 6.1): nothing goes out before the word they belong to can have ended and
+/// the pack's switch-over hold after it has passed.
+#[test]
+fn bytes_nobody_asked_for_hold_the_line_until_their_word_and_the_hold_passed() {
+    let mut bench = Bench::new(config());
+    bench.online();
+    bench.serve(60, |motor| position(motor, 0, Action::Inactive));
+    // Let the last exchange end.
+    for _ in 0..30 {
+        bench.driver.handle_timeout(bench.now);
+        if !bench.driver.awaiting_reply() {
+            break;
+        }
+        bench.now += MS;
+    }
+    assert!(!bench.driver.awaiting_reply());
+    // Three bytes of a word: six more to come (6 × 0.52 ms), then the 2 ms hold.
+    let at = bench.now;
+    bench.rx(&[0xFE, 0x20, 0x00]);
+    assert!(bench.driver.awaiting_reply());
+    let byte = word_time(19_200) / 9;
+    let free = at + byte * 6 + 2 * MS;
+    bench.driver.handle_timeout(free - Duration::from_micros(1));
+    assert!(bench.driver.awaiting_reply());
+    bench.driver.handle_timeout(free);
+    assert!(!bench.driver.awaiting_reply());
+    assert!(bench.driver.status().bad_replies >= 1);
+}
+
+/// Ticks, answering `$20` polls at rest, until the `$43` reset check goes out; returns
+/// when it was written.
+fn until_reset_check(bench: &mut Bench) -> Duration {
+    for _ in 0..3000 {
+        let at = bench.now;
+        if let Some(w) = bench.tick() {
+            match RequestFrame::decode(&w).expect("decodes").request {
+                Request::UnitInfo { .. } => return at,
+                Request::QueryPosition { motor, .. } => {
+                    bench.now += 10 * MS;
+                    bench.rx(&position(motor, 0, Action::Inactive));
+                }
+                _ => {}
+            }
+        }
+    }
+    panic!("no $43 reset check");
+}
+
+/// Manual 8.6 `$43`: "reset flag: during first read out 1, afterwards 0". An online pack
+/// whose `$43` answers with the flag set rebooted: a reset verdict naming that answer.
+#[test]
+fn a_reset_flag_is_a_reset_verdict_naming_its_answer() {
+    let mut bench = Bench::new(config());
+    bench.online();
+    let asked = until_reset_check(&mut bench);
+    bench.now += 11 * MS;
+    let mut rebooted = UNIT_INFO;
+    rebooted[3] = 1;
+    bench.rx(&rebooted);
+    let status = bench.driver.status();
+    assert_eq!(status.resets, 1);
+    assert_eq!(status.fault, Some(DeviceFault::Reset));
+    assert_eq!(status.verdicts, 1);
+    let verdict = status.verdict.expect("a verdict");
+    assert_eq!(verdict.fault, DeviceFault::Reset);
+    let evidence = verdict.evidence.as_str();
+    let written = format!("written at {}", motion_drivers::Seconds(asked));
+    assert!(
+        evidence.contains("the `$43` answer at")
+            && evidence.contains(&written)
+            && evidence.contains("reset flag set"),
+        "{evidence}"
+    );
+}
+
+/// A `$43` answer that comes after its window is dropped and never paired — but a reset
+/// flag in it is still the reboot it proves (the flag reads 0 from then on): a reset.
+#[test]
+fn a_late_43_with_the_reset_flag_set_is_still_a_reset() {
+    let mut bench = Bench::new(config());
+    bench.online();
+    until_reset_check(&mut bench);
+    // Unanswered: its window ends, the driver counts a timeout.
+    for _ in 0..25 {
+        bench.driver.handle_timeout(bench.now);
+        bench.now += MS;
+    }
+    assert_eq!(bench.driver.status().timeouts, 1);
+    let mut rebooted = UNIT_INFO;
+    rebooted[3] = 1;
+    bench.rx(&rebooted);
+    assert_eq!(bench.driver.late_replies(), 1);
+    let status = bench.driver.status();
+    assert_eq!(status.resets, 1);
+    assert_eq!(status.fault, Some(DeviceFault::Reset));
+    let evidence = status.verdict.expect("a verdict").evidence;
+    assert!(
+        evidence.as_str().contains("the late `$43` answer"),
+        "{}",
+        evidence.as_str()
+    );
+    // A late `$43` without the flag is just dropped.
+    let mut bench = Bench::new(config());
+    bench.online();
+    until_reset_check(&mut bench);
+    for _ in 0..25 {
+        bench.driver.handle_timeout(bench.now);
+        bench.now += MS;
+    }
+    bench.rx(&UNIT_INFO.map(|b| if b == 1 { 0 } else { b }));
+    assert_eq!(bench.driver.late_replies(), 1);
+    let status = bench.driver.status();
+    assert_eq!((status.resets, status.verdicts), (0, 0));
+    assert!(status.online);
 }

@@ -112,7 +112,7 @@ pub(super) fn lose_and_boot(
     bench: &mut Bench,
     answers: &[PowerDownStatus],
 ) -> Vec<PowerDownRequest> {
-    for _ in 0..400 {
+    for _ in 0..2000 {
         bench.tick();
         if bench.driver.status().fault == Some(DeviceFault::NotResponding) {
             break;

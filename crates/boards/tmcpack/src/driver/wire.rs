@@ -11,11 +11,11 @@
 
 use core::time::Duration;
 
-use tmcpack::convert::{DEFAULT_SWITCHOVER_UNITS as FACTORY_SWITCHOVER, units};
-use tmcpack::{Command, FRAME_LEN, MotorMask, Reply, ReplyFrame, Request, RequestFrame};
+use tmcpack::convert::units;
+use tmcpack::{Command, MotorMask, Request, RequestFrame};
 
 use super::channel::Channel;
-use super::{Phase, REPLY_MARGIN, TmcpackDriver};
+use super::{PACK_PROCESSING, Phase, TmcpackDriver};
 use motion_drivers::{Priority, Transmit};
 
 /// What a query waits for.
@@ -45,6 +45,9 @@ pub(crate) enum Purpose {
     Io,
     /// $45: the power-down steps of the start-up, or the state check while online.
     PowerDown,
+    /// `$21` or `$30` in place of a query whose answer could be taken for a late one
+    /// (module `late`): its answer only shows that the pack answers.
+    Probe,
 }
 
 /// Who may use the line.
@@ -75,99 +78,6 @@ impl Wire {
             Self::Sending { until, .. } | Self::Quiet { until } => Some(until),
             Self::Awaiting { deadline, .. } => Some(deadline),
         }
-    }
-}
-
-/// Capacity of the hunting window: a reply plus garbage before it.
-const WINDOW: usize = 4 * FRAME_LEN;
-
-/// Finds the expected answer in the received bytes. The line has no start byte and no
-/// checksum (6.1), but the host knows what it waits for: a word that starts with its
-/// response address and the query's command and decodes. Anything else before it is
-/// garbage and is skipped byte by byte, so a reply is found even right after a burst of
-/// noise (the pack's own resynchronisation, the packet timeout, needs a silent gap).
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone)]
-pub(crate) struct ReplyHunter {
-    #[serde(with = "serde_big_array::BigArray")]
-    buf: [u8; WINDOW],
-    len: usize,
-    /// Bytes skipped since the last [`reset`](Self::reset).
-    pub skipped: u32,
-}
-
-impl ReplyHunter {
-    pub const fn new() -> Self {
-        Self {
-            buf: [0; WINDOW],
-            len: 0,
-            skipped: 0,
-        }
-    }
-
-    /// Forgets everything (a new request was sent).
-    pub fn reset(&mut self) {
-        self.len = 0;
-        self.skipped = 0;
-    }
-
-    /// Takes `bytes`; returns the expected answer once it is complete. Bytes after it are
-    /// left in the window (and dropped by the next reset).
-    pub fn push(&mut self, reply_address: u8, expect: Expect, bytes: &[u8]) -> Option<Reply> {
-        for &byte in bytes {
-            if self.len == WINDOW {
-                self.shift(1);
-            }
-            if let Some(slot) = self.buf.get_mut(self.len) {
-                *slot = byte;
-                self.len += 1;
-            }
-            if let Some(reply) = self.scan(reply_address, expect) {
-                return Some(reply);
-            }
-        }
-        None
-    }
-
-    fn scan(&mut self, reply_address: u8, expect: Expect) -> Option<Reply> {
-        loop {
-            let head = self.buf.get(..self.len)?;
-            match head {
-                [] => return None,
-                [first, ..] if *first != reply_address => {}
-                [_, command, ..] if *command != expect.command.code() => {}
-                _ if self.len < FRAME_LEN => return None,
-                _ => {
-                    if let Some(reply) = self
-                        .buf
-                        .get(..FRAME_LEN)
-                        .and_then(|word| ReplyFrame::decode(word).ok())
-                        .map(|frame| frame.reply)
-                        .filter(|reply| matches(reply, expect))
-                    {
-                        self.shift(FRAME_LEN);
-                        return Some(reply);
-                    }
-                }
-            }
-            self.shift(1);
-            self.skipped += 1;
-        }
-    }
-
-    fn shift(&mut self, n: usize) {
-        let n = n.min(self.len);
-        self.buf.copy_within(n..self.len, 0);
-        self.len -= n;
-    }
-}
-
-fn matches(reply: &Reply, expect: Expect) -> bool {
-    match (reply, expect.motor) {
-        (Reply::Position { motor, .. } | Reply::Velocity { motor, .. }, Some(want)) => {
-            *motor == want
-        }
-        (Reply::Input { channel, .. }, Some(want)) => *channel == want,
-        _ => true,
     }
 }
 
@@ -357,7 +267,10 @@ impl TmcpackDriver {
             // Several motors stopping at once (an e-stop): the one polled longest ago.
             .min_by_key(|c| c.state.refreshed_at)
             .map(|c| usize::from(c.motor));
-        if urgent.is_none() && now >= self.reset_check_at {
+        if urgent.is_none()
+            && now >= self.reset_check_at
+            && self.free_query(now, Command::UnitInfo, None)
+        {
             return Some(self.query(
                 Request::UnitInfo { reply_to },
                 Command::UnitInfo,
@@ -366,6 +279,7 @@ impl TmcpackDriver {
             ));
         }
         if urgent.is_none()
+            && self.free_query(now, Command::PowerDown, None)
             && let Some(pick) = self.pick_power_check(now)
         {
             return Some(pick);
@@ -374,10 +288,26 @@ impl TmcpackDriver {
             (0..=IO_SLOT)
                 .map(|offset| (self.next_poll + offset) % (IO_SLOT + 1))
                 .find(|&i| match i {
-                    IO_SLOT => self.io.polls(),
-                    _ => matches!(self.channels.get(i), Some(Some(_))),
+                    IO_SLOT => {
+                        self.io.polls()
+                            && self.free_query(
+                                now,
+                                Command::ReadInput,
+                                Some(self.io.next_channel()),
+                            )
+                    }
+                    _ => {
+                        matches!(self.channels.get(i), Some(Some(_)))
+                            && self.free_query(now, Command::QueryPosition, Some(i as u8))
+                    }
                 })
-        })?;
+        });
+        let Some(slot) = slot else {
+            // Every poll's answer could be taken for a late one: a probe, whose answer
+            // ends the driver's own (module `late`).
+            let polls = self.channels.iter().any(Option::is_some) || self.io.polls();
+            return if polls { self.probe(now) } else { None };
+        };
         if urgent.is_none() {
             self.next_poll = (slot + 1) % (IO_SLOT + 1);
         }
@@ -399,20 +329,40 @@ impl TmcpackDriver {
         ))
     }
 
-    /// The reply timeout of a query sent at `now`: request, switch-over (at least the
-    /// factory delay), reply, margin.
-    pub(super) fn reply_deadline(&self, now: Duration) -> Duration {
+    /// Until when the answer to a query written at `written` can arrive (manual 6.1): the
+    /// request on the wire (the write stamp is when the link took its last byte, which
+    /// a UART or a USB adapter then clocks out), the pack's processing
+    /// ([`PACK_PROCESSING`]), its switch-over delay ("an instruction will be transmitted
+    /// only after an adjustable transmitter switchover time … has passed": the one the
+    /// driver programmed, or the longer of the factory and the configured one while it does
+    /// not know), the answer on the wire, and the host's latency (`host_latency_ms`). On
+    /// CAN: the end of its processing behind the commands in the pack's cache, its answer's
+    /// frame, and the same processing and latency as slack (6.2 "approx. 2 ms").
+    pub(super) fn reply_deadline(&self, written: Duration) -> Duration {
         if let Some(can) = &self.can {
-            return can.reply_deadline(now);
+            return can.reply_deadline(written, PACK_PROCESSING + self.host_latency);
         }
-        let switchover = self.switchover.max(units(FACTORY_SWITCHOVER));
-        now + self.word_time * 2 + switchover + REPLY_MARGIN
+        written + self.word_time * 2 + PACK_PROCESSING + self.switchover + self.host_latency
+    }
+
+    /// Whether a query of `command` for `selector` (motor or channel) may go at `now`: its
+    /// answer could not be taken for a late one (module `late`).
+    fn free_query(&self, now: Duration, command: Command, selector: Option<u8>) -> bool {
+        self.free(
+            now,
+            &Expect {
+                command,
+                motor: selector,
+                purpose: Purpose::Poll,
+            },
+        )
     }
 
     /// Writes the request `pick` chose into `buf`; the line, the start-up and the channel
     /// move on.
     pub(super) fn transmit(&mut self, now: Duration, buf: &mut [u8]) -> Option<Transmit> {
         let pick = self.pick(now)?;
+        let pick = self.avoid_late(now, pick)?;
         let request = pick.request;
         let len = match self.can.as_mut() {
             Some(can) => can.encode(now, self.address, request, buf)?,
@@ -528,73 +478,5 @@ impl TmcpackDriver {
             Wire::Sending { until, number: n } if *n == number => *until = at + spacing,
             _ => {}
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    const POLL: Expect = Expect {
-        command: Command::QueryPosition,
-        motor: Some(1),
-        purpose: Purpose::Poll,
-    };
-
-    // Manual 8.4 $20 response: CMD $20, P0 motnr, P1..4 posact LSB first, P5 action, P6 stop.
-    const ANSWER: [u8; 9] = [0xFE, 0x20, 0x01, 0xD0, 0x07, 0x00, 0x00, 0x05, 0x00];
-
-    #[test]
-    fn finds_the_answer_in_any_chunking() {
-        for chunk in 1..=FRAME_LEN {
-            let mut hunter = ReplyHunter::new();
-            let mut found = None;
-            for part in ANSWER.chunks(chunk) {
-                if let Some(reply) = hunter.push(0xFE, POLL, part) {
-                    found = Some(reply);
-                }
-            }
-            assert!(matches!(
-                found,
-                Some(Reply::Position {
-                    motor: 1,
-                    position: 2000,
-                    ..
-                })
-            ));
-        }
-    }
-
-    #[test]
-    fn skips_garbage_before_the_answer_even_if_it_looks_like_a_header() {
-        let mut hunter = ReplyHunter::new();
-        let mut bytes = vec![0x13, 0xFE, 0x20, 0x07, 0xFE, 0xFE];
-        bytes.extend_from_slice(&ANSWER);
-        let reply = hunter.push(0xFE, POLL, &bytes);
-        assert!(matches!(
-            reply,
-            Some(Reply::Position { position: 2000, .. })
-        ));
-        assert_eq!(hunter.skipped, 6);
-    }
-
-    #[test]
-    fn ignores_another_motor_and_another_address() {
-        let mut hunter = ReplyHunter::new();
-        let mut other_motor = ANSWER;
-        other_motor[2] = 2;
-        let mut other_address = ANSWER;
-        other_address[0] = 0x01;
-        assert_eq!(hunter.push(0xFE, POLL, &other_motor), None);
-        assert_eq!(hunter.push(0xFE, POLL, &other_address), None);
-        assert!(hunter.push(0xFE, POLL, &ANSWER).is_some());
-    }
-
-    #[test]
-    fn endless_noise_never_overflows() {
-        let mut hunter = ReplyHunter::new();
-        let noise: Vec<u8> = (0..1000u32).map(|i| (i * 37 % 251) as u8).collect();
-        assert_eq!(hunter.push(0xFE, POLL, &noise), None);
-        assert!(hunter.push(0xFE, POLL, &ANSWER).is_some());
     }
 }

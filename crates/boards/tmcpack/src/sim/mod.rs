@@ -103,6 +103,11 @@ pub struct SimStats {
     pub lost_bytes: u64,
     /// Answers replaced by a later request's answer before they were sent (7.1 violated).
     pub replaced_replies: u64,
+    /// Requests that began while the answer to an earlier one was still due or the pack
+    /// still drove the pair (its answer, or the switch-over hold after it): manual 7.1
+    /// "Requests must not be interlaced". A real pack garbles them (bytes lost while it
+    /// transmits, its one answer buffer overwritten); a host that keeps the rules makes 0.
+    pub interlaced: u64,
     /// Answers sent (words put on the transmit queue).
     pub replies: u64,
 }
@@ -156,6 +161,10 @@ pub struct TmcpackSim {
     stats: SimStats,
     /// The CAN interface (manual 6.2).
     can: can::CanSide,
+    /// The end of the last byte received, and how many came back to back up to it: words
+    /// are told apart by the pauses between them (a request is 9 bytes back to back).
+    last_rx: Option<Duration>,
+    burst: u32,
 }
 
 impl TmcpackSim {
@@ -182,6 +191,8 @@ impl TmcpackSim {
             ready: true,
             stats: SimStats::default(),
             can: can::CanSide::new(config.can_command_time),
+            last_rx: None,
+            burst: 0,
             cfg: config,
         }
     }
@@ -575,6 +586,30 @@ impl TmcpackSim {
         }
     }
 
+    /// A byte ending at `at` reached the pack: when it begins a request (after a pause,
+    /// or nine bytes after the last one that did) while an answer is still due or the pack
+    /// drives the pair, the request is interlaced ([`SimStats::interlaced`]).
+    fn watch_interlace(&mut self, at: Duration) {
+        let bt = self.byte_time();
+        let back_to_back = self
+            .last_rx
+            .is_some_and(|last| at.saturating_sub(last) < bt + bt / 2);
+        if !back_to_back {
+            self.burst = 0;
+        }
+        // The byte began a byte time before it ended.
+        let began = at.saturating_sub(bt);
+        let booting = self.deaf_until.is_some_and(|d| at < d);
+        if self.burst.is_multiple_of(tmcpack::FRAME_LEN as u32)
+            && !booting
+            && self.tx.answer_due(began)
+        {
+            self.stats.interlaced += 1;
+        }
+        self.burst = self.burst.wrapping_add(1);
+        self.last_rx = Some(at);
+    }
+
     /// Draws the noise of one analogue read.
     fn noise(&mut self) -> i32 {
         let n = i32::from(self.cfg.analog_noise_lsb);
@@ -598,6 +633,7 @@ impl StreamDevice for TmcpackSim {
         let n = bytes.len();
         for (j, &b) in bytes.iter().enumerate() {
             let at = now.saturating_sub(self.byte_time().saturating_mul((n - 1 - j) as u32));
+            self.watch_interlace(at);
             if self.deaf_until.is_some_and(|d| at < d) || self.tx.driving(at) {
                 self.stats.lost_bytes += 1;
                 continue;

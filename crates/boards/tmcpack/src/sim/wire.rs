@@ -63,6 +63,21 @@ impl Transmitter {
             || self.queue.iter().any(|o| inside(o.start, o.window_end()))
     }
 
+    /// `true` while an answer to a request is still due at `t` — queued for after its
+    /// switch-over delay, on the line, or in the hold after it — or the pack drives the
+    /// pair with any other message: a request that begins then is interlaced (manual 7.1
+    /// "Requests must not be interlaced. Each request should wait for the response of the
+    /// PACK before transmitting a new command."). A delayed `$28` answer that has not
+    /// started is not due ("a delayed response with RS 232 may be outstanding in
+    /// parallel").
+    pub fn answer_due(&self, t: Duration) -> bool {
+        self.driving(t)
+            || self
+                .queue
+                .iter()
+                .any(|o| o.kind == Kind::Immediate && t < o.window_end())
+    }
+
     /// Queues `bytes` to start at `ready` (or after what is already queued). An immediate
     /// answer replaces one that has not started yet; returns `true` if it did.
     pub fn schedule(
@@ -165,6 +180,26 @@ mod tests {
         assert!(!tx.driving(t - Duration::from_nanos(1)));
         assert_eq!(tx.transmit(t + BT * 4 + HOLD, &mut out), 0);
         assert!(tx.driving(t + BT), "remembered after it left the queue");
+    }
+
+    #[test]
+    fn an_answer_is_due_from_its_request_to_the_end_of_its_hold() {
+        let mut tx = Transmitter::default();
+        let t = Duration::from_millis(10);
+        assert!(!tx.answer_due(t));
+        tx.schedule(t + HOLD, &[1; 9], BT, HOLD, Kind::Immediate);
+        assert!(tx.answer_due(t), "waiting for its switch-over");
+        let end = t + HOLD + BT * 9 + HOLD;
+        assert!(tx.answer_due(end - Duration::from_nanos(1)));
+        assert!(!tx.answer_due(end));
+        let mut out = [0u8; 16];
+        tx.transmit(end, &mut out);
+        assert!(!tx.answer_due(end));
+        // A delayed $28 answer may be outstanding: not due until it goes out.
+        let later = end + HOLD;
+        tx.schedule(later, &[2; 9], BT, HOLD, Kind::Delayed);
+        assert!(!tx.answer_due(later - Duration::from_nanos(1)));
+        assert!(tx.answer_due(later));
     }
 
     #[test]

@@ -96,6 +96,11 @@ fn manual_7_1_interlaced_requests() {
     assert_eq!(bytes[1], 0x43);
     assert_eq!(got[0].0, end + 6 * MS);
     assert_eq!(h.dev.stats().replaced_replies, 1);
+    assert_eq!(
+        h.dev.stats().interlaced,
+        1,
+        "the $43 began while $21's answer was due"
+    );
     // A request sent into the answer: the pack does not hear it.
     let end = h.send(1, Request::UnitInfo { reply_to: HOST });
     h.now = end + 6 * MS + 2 * bt();
@@ -120,6 +125,11 @@ fn manual_7_1_interlaced_requests() {
         )
         .expect("in step again");
     assert!(matches!(f.reply, Reply::Velocity { .. }));
+    assert_eq!(
+        h.dev.stats().interlaced,
+        2,
+        "the $23 began inside the answer"
+    );
 }
 
 /// Manual 6.1: an incomplete word is aborted after the packet timeout, so garbage followed
@@ -279,4 +289,71 @@ fn round_trip_through_a_half_duplex_sim_link() {
         rtt >= expected && rtt < expected + Duration::from_micros(20),
         "{rtt:?}"
     );
+}
+
+/// Manual 6.1 "The PACK continues to drive the line for a pre-set time after transmitting
+/// a message" and 7.1 "Requests must not be interlaced": a request that begins before the
+/// answer and that hold are over is counted as interlaced; one that begins as the hold
+/// ends is not. A delayed `$28` answer may be outstanding in parallel ("However a delayed
+/// response with RS 232 may be outstanding in parallel"): a request meanwhile is not.
+#[test]
+fn manual_7_1_a_request_inside_the_answer_or_its_hold_is_interlaced() {
+    let mut h = pack();
+    // Factory switch-over 6 ms, before and after the 9-byte answer.
+    let end = h.send(1, Request::UnitInfo { reply_to: HOST });
+    let free = end + 6 * MS + bt() * 9 + 6 * MS;
+    h.collect_until(free);
+    assert_eq!(h.now, free);
+    h.send(
+        1,
+        Request::QueryVelocity {
+            motor: 0,
+            reply_to: HOST,
+        },
+    );
+    assert_eq!(h.dev.stats().interlaced, 0, "began as the hold ended");
+    let end = h.now;
+    let free = end + 6 * MS + bt() * 9 + 6 * MS;
+    h.collect_until(free - bt());
+    h.send(
+        1,
+        Request::QueryVelocity {
+            motor: 1,
+            reply_to: HOST,
+        },
+    );
+    assert_eq!(
+        h.dev.stats().interlaced,
+        1,
+        "began a byte before the hold ended"
+    );
+    h.wait(40 * MS);
+    // A delayed $28 of a running motor, then a query: not interlaced, both answered.
+    h.send(
+        1,
+        Request::StartRamp {
+            motor: 0,
+            target: 200_000,
+        },
+    );
+    h.wait(10 * MS);
+    h.send(
+        1,
+        Request::QueryActions {
+            reply_to: HOST,
+            delay_mask: MotorMask::M0,
+        },
+    );
+    assert!(h.wait(10 * MS).is_empty(), "the $28 answer is delayed");
+    let (_, f) = h
+        .query(
+            1,
+            Request::QueryVelocity {
+                motor: 0,
+                reply_to: HOST,
+            },
+        )
+        .expect("answered");
+    assert!(matches!(f.reply, Reply::Velocity { .. }));
+    assert_eq!(h.dev.stats().interlaced, 1, "none more");
 }

@@ -1,0 +1,102 @@
+//! The keys of the pack's line timing that depend on the host and on how long a silence
+//! is tolerated, not on the manual: `host_latency_ms` (part of every reply window) and
+//! `not_answering_ms` (the silence before the not-answering verdict, and how long an
+//! unanswered query's answer is taken for late). Driver module docs, docs/keys/tmcpack.md
+//! "Timing".
+
+use core::time::Duration;
+
+use motion_board::keys::{DeviceContext, KeyIssues};
+use motion_drivers::spec::ParamOwner;
+
+use crate::TmcpackDeviceKeys;
+use crate::driver::{DEFAULT_HOST_LATENCY, DEFAULT_NOT_ANSWERING, TmcpackDriverConfig};
+use crate::keys::RawDevice;
+
+/// `host_latency_ms`: 0..=1000 ms.
+const HOST_LATENCY_MS: core::ops::RangeInclusive<f64> = 0.0..=1000.0;
+/// `not_answering_ms`: 50..=60000 ms.
+const NOT_ANSWERING_MS: core::ops::RangeInclusive<i64> = 50..=60_000;
+/// Below this a `not_answering_ms` is warned about: a host starved that long (seen up to
+/// 200 ms on a loaded machine) would take the pack offline and drop its goals.
+const NOT_ANSWERING_WARN_MS: i64 = 250;
+
+/// Validates `host_latency_ms` and `not_answering_ms` into `keys`; `false` on an issue.
+pub(crate) fn device_keys(
+    v: &mut dyn KeyIssues,
+    ctx: &DeviceContext,
+    raw: &RawDevice,
+    keys: &mut TmcpackDeviceKeys,
+) -> bool {
+    let mut ok = true;
+    if let Some(value) = &raw.host_latency_ms {
+        let ms = *value.get_ref();
+        if ms.is_finite() && HOST_LATENCY_MS.contains(&ms) {
+            keys.host_latency_ms = Some(ms);
+        } else {
+            v.issue(
+                value.span(),
+                &ctx.key("host_latency_ms"),
+                format!(
+                    "{ms} is out of range; allowed: 0..=1000 ms (how much later than on the wire an answer may reach the driver: the serial adapter and the I/O thread; default {})",
+                    DEFAULT_HOST_LATENCY.as_millis()
+                ),
+            );
+            ok = false;
+        }
+    }
+    if let Some(value) = &raw.not_answering_ms {
+        let key = ctx.key("not_answering_ms");
+        match v.int_in(value, &key, NOT_ANSWERING_MS) {
+            Some(ms) => {
+                if ms < NOT_ANSWERING_WARN_MS {
+                    v.warn(
+                        value.span(),
+                        &key,
+                        format!(
+                            "{ms} ms: a host or pack held up for longer (a loaded machine holds answers up to 200 ms) takes the pack offline and drops its goals; default {}",
+                            DEFAULT_NOT_ANSWERING.as_millis()
+                        ),
+                    );
+                }
+                keys.not_answering_ms = Some(ms as u32);
+            }
+            None => ok = false,
+        }
+    }
+    ok
+}
+
+/// The driver config's `host_latency` and `not_answering` from the keys.
+pub(crate) fn config(keys: &TmcpackDeviceKeys, driver: &mut TmcpackDriverConfig) {
+    if let Some(ms) = keys.host_latency_ms {
+        driver.host_latency = Duration::from_secs_f64(ms / 1000.0);
+    }
+    if let Some(ms) = keys.not_answering_ms {
+        driver.not_answering = Duration::from_millis(u64::from(ms));
+    }
+}
+
+/// The parameter rows of both keys (each value within `MachineParam`'s 40 bytes).
+pub(crate) fn rows(
+    config: &TmcpackDriverConfig,
+    row: &mut dyn FnMut(ParamOwner, &'static str, String),
+) {
+    let ms = |d: Duration| {
+        let text = format!("{:.3}", d.as_secs_f64() * 1000.0);
+        text.trim_end_matches('0').trim_end_matches('.').to_owned()
+    };
+    row(
+        ParamOwner::Device,
+        "host_latency_ms",
+        format!("{} ms (in every reply window)", ms(config.host_latency)),
+    );
+    row(
+        ParamOwner::Device,
+        "not_answering_ms",
+        format!(
+            "{} ms (silence before the verdict)",
+            ms(config.not_answering)
+        ),
+    );
+}
