@@ -98,7 +98,9 @@ impl Bound {
                         .unwrap_or(tmcpack::convert::DEFAULT_SWITCHOVER_UNITS),
                 );
                 let cycle = Duration::from_millis(2);
-                let query = 2 * word + 2 * switchover;
+                // 6.2 "internal processing time is approx. 2 ms per command", read for the
+                // serial line too: the word is acted on in the pack's next 2 ms cycle.
+                let query = 2 * word + 2 * switchover + cycle;
                 // The query in flight, the tick that takes its answer in, the `$25` word,
                 // and two of the pack's 2 ms cycles (acted on at the next one; its ramp
                 // ends rounded up to one).

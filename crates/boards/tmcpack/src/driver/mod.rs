@@ -45,7 +45,7 @@
 //!
 //! Command → wire: a goal's first request goes out in the tick that set it when the line is
 //! free; otherwise it waits for the one exchange in flight — at most a query, the
-//! switch-over, the answer and the switch-over again (13.4 ms at 19200 baud with `$40` =
+//! switch-over, the answer and the switch-over again (15.4 ms with the processing at 19200 baud with `$40` =
 //! 2 ms) — and the tick that takes the answer in. The manual allows nothing shorter ("Each
 //! request should wait for the response of the PACK", 7.1); the engine test
 //! `tests/engine_tmcpack/wire.rs` checks the bound.

@@ -79,9 +79,10 @@ pub struct TmcpackSimConfig {
     pub supply_volts: f64,
     /// Undervoltage level of the power-down mode ($45: "below 13V").
     pub power_down_volts: f64,
-    /// Time from the last byte of a request to the start of the switch-over delay. The
-    /// manual gives none for RS-232/RS-485 (2 ms for CAN); the default is zero, so a reply
-    /// starts exactly the switch-over delay after the request.
+    /// Extra time from the firmware's cycle that takes a request to the start of the
+    /// switch-over delay. The firmware acts on a word in its next 2 ms cycle (up to 2 ms:
+    /// the manual's "approx. 2 ms per command" for CAN, read for the serial line too);
+    /// the default adds nothing to that.
     pub processing_time: Duration,
     /// Processing time of one CAN command taken from the 16-command cache (manual 6.2:
     /// "approx. 2 ms per command").

@@ -2,7 +2,7 @@
 
 use core::time::Duration;
 
-use tmcpack::convert::{byte_time, nominal_baud, units};
+use tmcpack::convert::{TICK, byte_time, nominal_baud, units};
 use tmcpack::{
     Action, MotorMask, MotorOptions, MotorType, PowerDownRequest, PowerDownStatus, RefInputs,
     Reply, ReplyFrame, Request,
@@ -332,7 +332,10 @@ impl TmcpackSim {
         }
     }
 
-    /// Queues `reply` to `reply_to`, `processing + switch-over` after `t`.
+    /// Queues `reply` to `reply_to`: the firmware acts on a word in its next 2 ms cycle
+    /// (the driver's reading of "internal processing time is approx. 2 ms per command",
+    /// manual 6.2, for the serial line too), then `processing_time` more, then the
+    /// switch-over delay (6.1).
     pub(super) fn send(&mut self, t: Duration, reply_to: u8, reply: Reply, kind: Kind) {
         if self.can.active {
             // CAN has taken over: every answer goes out there (the `can` module).
@@ -342,7 +345,7 @@ impl TmcpackSim {
         let Ok(word) = ReplyFrame::new(reply_to, reply).to_word() else {
             return;
         };
-        let ready = t
+        let ready = next_cycle(t)
             .saturating_add(self.cfg.processing_time)
             .saturating_add(self.switchover());
         let replaced = self
@@ -560,4 +563,12 @@ impl TmcpackSim {
         self.deaf_until = Some(t.saturating_add(self.cfg.boot_time));
         self.check_supply();
     }
+}
+
+/// The firmware's first 2 ms cycle at or after `t` (cycles fall on multiples of [`TICK`],
+/// as the motors' ticks do).
+fn next_cycle(t: Duration) -> Duration {
+    let tick = TICK.as_nanos();
+    let cycles = t.as_nanos().div_ceil(tick);
+    u64::try_from(cycles.saturating_mul(tick)).map_or(t, Duration::from_nanos)
 }

@@ -13,6 +13,13 @@ pub use tmcpack::{
 pub const HOST: u8 = 0xFE;
 pub const MS: Duration = Duration::from_millis(1);
 
+/// The pack's first 2 ms firmware cycle at or after `t`: it acts on a word there (its
+/// answer starts the switch-over after it).
+pub fn cycle(t: Duration) -> Duration {
+    let tick = Duration::from_millis(2).as_nanos();
+    Duration::from_nanos((t.as_nanos().div_ceil(tick) * tick) as u64)
+}
+
 pub fn bt() -> Duration {
     byte_time(19_200)
 }

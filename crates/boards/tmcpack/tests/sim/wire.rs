@@ -5,7 +5,8 @@ use std::sync::{Arc, Mutex};
 use super::host::*;
 
 /// Manual 6.1: "an instruction will be transmitted only after an adjustable transmitter
-/// switchover time (s. CMD $40; pre-set to 6ms) has passed"; bytes follow back to back.
+/// switchover time (s. CMD $40; pre-set to 6ms) has passed"; bytes follow back to back. The
+/// firmware acts on the word in its next 2 ms cycle (6.2's "approx. 2 ms per command").
 #[test]
 fn manual_6_1_reply_starts_after_switchover_delay() {
     let mut h = pack();
@@ -13,7 +14,7 @@ fn manual_6_1_reply_starts_after_switchover_delay() {
     let got = h.wait(40 * MS);
     assert_eq!(got.len(), 9);
     for (k, (t, _)) in got.iter().enumerate() {
-        assert_eq!(*t, end + 6 * MS + bt() * k as u32, "byte {k}");
+        assert_eq!(*t, cycle(end) + 6 * MS + bt() * k as u32, "byte {k}");
     }
     let bytes: Vec<u8> = got.iter().map(|(_, b)| *b).collect();
     assert_eq!(
@@ -51,7 +52,7 @@ fn manual_6_1_reply_starts_after_switchover_delay() {
         },
     );
     let got = h.wait(60 * MS);
-    assert_eq!(got.first().map(|g| g.0), Some(end + 20 * MS));
+    assert_eq!(got.first().map(|g| g.0), Some(cycle(end) + 20 * MS));
 }
 
 /// Manual 8.6 $40: "baud rate divisor=20MHz/(16*baud rate)": the pack listens at the new
@@ -72,7 +73,7 @@ fn manual_8_6_baud_change_40() {
     let end = h.send(1, Request::UnitInfo { reply_to: HOST });
     let got = h.wait(20 * MS);
     assert_eq!(got.len(), 9);
-    assert_eq!(got[0].0, end + 2 * MS);
+    assert_eq!(got[0].0, cycle(end) + 2 * MS);
     assert_eq!(got[8].0 - got[0].0, byte_time(115_200) * 8);
 }
 
@@ -94,7 +95,7 @@ fn manual_7_1_interlaced_requests() {
     let bytes: Vec<u8> = got.iter().map(|(_, b)| *b).collect();
     assert_eq!(bytes.len(), 9, "one answer");
     assert_eq!(bytes[1], 0x43);
-    assert_eq!(got[0].0, end + 6 * MS);
+    assert_eq!(got[0].0, cycle(end) + 6 * MS);
     assert_eq!(h.dev.stats().replaced_replies, 1);
     assert_eq!(
         h.dev.stats().interlaced,
@@ -103,7 +104,7 @@ fn manual_7_1_interlaced_requests() {
     );
     // A request sent into the answer: the pack does not hear it.
     let end = h.send(1, Request::UnitInfo { reply_to: HOST });
-    h.now = end + 6 * MS + 2 * bt();
+    h.now = cycle(end) + 6 * MS + 2 * bt();
     h.send(
         1,
         Request::StartRamp {
@@ -284,7 +285,7 @@ fn round_trip_through_a_half_duplex_sim_link() {
     let f = ReplyFrame::decode(&got).expect("reply");
     assert!(matches!(f.reply, Reply::UnitInfo { firmware: 149, .. }));
     let rtt = t - t0;
-    let expected = bt() * 18 + 6 * MS;
+    let expected = (cycle(t0 + bt() * 9) - t0) + bt() * 9 + 6 * MS;
     assert!(
         rtt >= expected && rtt < expected + Duration::from_micros(20),
         "{rtt:?}"
@@ -301,7 +302,7 @@ fn manual_7_1_a_request_inside_the_answer_or_its_hold_is_interlaced() {
     let mut h = pack();
     // Factory switch-over 6 ms, before and after the 9-byte answer.
     let end = h.send(1, Request::UnitInfo { reply_to: HOST });
-    let free = end + 6 * MS + bt() * 9 + 6 * MS;
+    let free = cycle(end) + 6 * MS + bt() * 9 + 6 * MS;
     h.collect_until(free);
     assert_eq!(h.now, free);
     h.send(
@@ -313,7 +314,7 @@ fn manual_7_1_a_request_inside_the_answer_or_its_hold_is_interlaced() {
     );
     assert_eq!(h.dev.stats().interlaced, 0, "began as the hold ended");
     let end = h.now;
-    let free = end + 6 * MS + bt() * 9 + 6 * MS;
+    let free = cycle(end) + 6 * MS + bt() * 9 + 6 * MS;
     h.collect_until(free - bt());
     h.send(
         1,
