@@ -5,20 +5,30 @@
 //! sample the node of the publisher that sent it — from the service's dynamic config,
 //! written by iceoryx2 when the port connected, never from the payload. The engine then
 //! asks for the newest path of an id from the node that sent the `Run`
-//! (`CommandPort::take_path`). At most [`PATHS_HELD`] samples are held (the oldest goes);
-//! nothing is copied and nothing allocated after start-up.
+//! (`CommandPort::take_path`). Nothing is copied and nothing allocated after start-up.
+//!
+//! Any node may publish on the service, so the room is shared by rule (issue 40): at most
+//! [`PATHS_HELD`] samples in all and [`PATHS_PER_NODE`] per node (a node's own oldest goes
+//! first). A path is privileged when its sender is its group's claimant — the node whose
+//! motion runs on the group or that holds the claim on every member, as the last frame
+//! said (`GroupState::owner`). When the room is full, an unprivileged path goes first; a new
+//! unprivileged path finds no room among privileged ones and is dropped. So no node without
+//! a claim can evict a claimant's path, however fast it publishes.
 
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use iceoryx2::sample::Sample;
 use iceoryx2::service::port_factory::publish_subscribe::PortFactory;
-use motion_ipc::{ClientId, GroupPath};
+use motion_ipc::{ClientId, GroupPath, MAX_GROUPS, MotionFrame};
 
 use crate::error::ServiceError;
 use crate::services::Ipc;
 
-/// Paths held between their arrival and their `Run` (newest kept).
-pub const PATHS_HELD: usize = 3;
+/// Paths held between their arrival and their `Run`, all nodes together.
+pub const PATHS_HELD: usize = 6;
+
+/// Paths held per publishing node (its newest).
+pub const PATHS_PER_NODE: usize = 2;
 
 /// Paths a publisher may have queued for the server before it takes them (each tick).
 pub const PATHS_BUFFER: usize = 2;
@@ -36,6 +46,8 @@ pub struct PathInbox {
     held: Vec<(ClientId, PathSample)>,
     /// The path the engine took last (alive until the next take).
     taken: Option<PathSample>,
+    /// Per group, its claimant as the last frame said (`GroupState::owner`).
+    claimants: [ClientId; MAX_GROUPS],
     /// Samples dropped: no room, or their publisher's node unknown.
     pub dropped: u64,
 }
@@ -53,12 +65,25 @@ pub fn create(
         subscriber,
         held: Vec::with_capacity(PATHS_HELD),
         taken: None,
+        claimants: [ClientId::NONE; MAX_GROUPS],
         dropped: 0,
     };
     Ok((inbox, factory))
 }
 
 impl PathInbox {
+    /// Notes each group's claimant from `frame` (the last one published).
+    pub fn note_claimants(&mut self, frame: &MotionFrame) {
+        for (slot, group) in self.claimants.iter_mut().zip(frame.groups.iter()) {
+            *slot = group.owner;
+        }
+    }
+
+    /// Whether a path of `node` for group `group` is its claimant's.
+    fn privileged(&self, node: ClientId, group: u32) -> bool {
+        !node.is_none() && self.claimants.get(group as usize) == Some(&node)
+    }
+
     /// Takes every path that arrived since the last tick, each with its sender's node.
     pub fn receive(&mut self, factory: &PathsFactory) {
         while let Ok(Some(sample)) = self.subscriber.receive() {
@@ -68,11 +93,39 @@ impl PathInbox {
                 self.dropped += 1;
                 continue;
             };
-            if self.held.len() == PATHS_HELD {
-                self.held.remove(0);
+            let privileged = self.privileged(node, sample.payload().group);
+            if let Some(index) = self.room_for(node, privileged) {
+                self.held.remove(index);
                 self.dropped += 1;
+            } else if self.held.len() == PATHS_HELD {
+                // Full of claimants' paths, and this one is not: it goes.
+                self.dropped += 1;
+                continue;
             }
             self.held.push((node, sample));
+        }
+    }
+
+    /// The held path to give up for a new one from `node`: its own oldest when it holds
+    /// [`PATHS_PER_NODE`]; else, when the room is full, the oldest unprivileged one, or the
+    /// oldest of all when the new one is privileged. `None`: nothing needs to go (room
+    /// left), or nothing may (full of privileged paths, the new one is not).
+    fn room_for(&self, node: ClientId, privileged: bool) -> Option<usize> {
+        let own = self.held.iter().filter(|(from, _)| *from == node).count();
+        if own >= PATHS_PER_NODE {
+            return self.held.iter().position(|(from, _)| *from == node);
+        }
+        if self.held.len() < PATHS_HELD {
+            return None;
+        }
+        let unprivileged = self
+            .held
+            .iter()
+            .position(|(from, sample)| !self.privileged(*from, sample.payload().group));
+        match unprivileged {
+            Some(index) => Some(index),
+            None if privileged => Some(0),
+            None => None,
         }
     }
 

@@ -4,12 +4,21 @@
 //! payload — and the instant the tick took each from the service (CLOCK_MONOTONIC, the
 //! clock of the frame's `publish_ns`: the frame's `GroupState::last_received_ns`). Nothing
 //! is allocated after start-up.
+//!
+//! Any node may publish on the service, so each publishing node gets a budget per tick
+//! (issue 40): at most [`SETPOINTS_PER_NODE`] of its setpoints reach the engine (and the
+//! black box) in one tick, the rest are taken from the service and dropped unread, counted
+//! in `over_budget`. A claimant sends one setpoint a tick, a few after a stall; a flood from
+//! another process costs the tick only the receive of what its queue holds
+//! ([`SETPOINTS_BUFFER`] per publisher), never the engine's or the journal's work for it.
+//! The node of a publisher is read once from the service's dynamic config and kept by its
+//! publisher id (ids are never reused).
 
 use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use iceoryx2::service::port_factory::publish_subscribe::PortFactory;
 use motion_engine::Engine;
-use motion_ipc::Setpoint;
+use motion_ipc::{ClientId, Setpoint};
 
 use crate::boards::AnyDriver;
 use crate::error::ServiceError;
@@ -23,6 +32,10 @@ pub const SETPOINTS_BUFFER: usize = 16;
 /// Setpoints taken from the service in one tick at most (the rest wait for the next).
 pub const SETPOINTS_PER_TICK: usize = 256;
 
+/// Setpoints of one node handed to the engine in one tick at most: a client that streams
+/// one a tick catching up after a stall of a few ticks.
+pub const SETPOINTS_PER_NODE: u32 = 8;
+
 /// The `setpoints` service's port factory.
 pub type SetpointsFactory = PortFactory<Ipc, Setpoint, ()>;
 
@@ -30,8 +43,15 @@ pub type SetpointsFactory = PortFactory<Ipc, Setpoint, ()>;
 #[derive(Debug)]
 pub struct SetpointInbox {
     subscriber: Subscriber<Ipc, Setpoint, ()>,
+    /// Publisher id → its node, as the service's dynamic config said (capacity reserved:
+    /// cleared when full, never grown).
+    nodes: Vec<(u128, ClientId)>,
+    /// This tick's setpoints per node.
+    spent: Vec<(ClientId, u32)>,
     /// Samples whose publisher had left before the tick looked (dropped).
     pub orphans: u64,
+    /// Samples beyond their node's budget of the tick (dropped unread).
+    pub over_budget: u64,
 }
 
 /// Creates (or opens) `name` with room for `max_clients` publishers and the server.
@@ -43,7 +63,10 @@ pub fn create(
     let (subscriber, factory) = crate::inbox::create(node, name, max_clients, SETPOINTS_BUFFER, 2)?;
     let inbox = SetpointInbox {
         subscriber,
+        nodes: Vec::with_capacity(max_clients + 2),
+        spent: Vec::with_capacity(max_clients + 2),
         orphans: 0,
+        over_budget: 0,
     };
     Ok((inbox, factory))
 }
@@ -57,19 +80,50 @@ impl SetpointInbox {
         engine: &mut Engine<AnyDriver>,
         journal: &mut crate::blackbox::Journal,
     ) {
+        self.spent.clear();
         for _ in 0..SETPOINTS_PER_TICK {
             let Ok(Some(sample)) = self.subscriber.receive() else {
                 return;
             };
             let received_ns = crate::io::duration_ns(monotonic_now());
             let publisher = sample.header().publisher_id().value();
-            match crate::inbox::publisher_node(factory, publisher) {
-                Some(node) => {
-                    journal.setpoint(node, received_ns, sample.payload());
-                    engine.handle_setpoint_at(node, sample.payload(), received_ns);
-                }
-                None => self.orphans += 1,
+            let Some(node) = self.node_of(factory, publisher) else {
+                self.orphans += 1;
+                continue;
+            };
+            if !self.spend(node) {
+                self.over_budget += 1;
+                continue;
             }
+            journal.setpoint(node, received_ns, sample.payload());
+            engine.handle_setpoint_at(node, sample.payload(), received_ns);
         }
+    }
+
+    /// The node of `publisher`, from the cache or the service's dynamic config.
+    fn node_of(&mut self, factory: &SetpointsFactory, publisher: u128) -> Option<ClientId> {
+        if let Some((_, node)) = self.nodes.iter().find(|(id, _)| *id == publisher) {
+            return Some(*node);
+        }
+        let node = crate::inbox::publisher_node(factory, publisher)?;
+        if self.nodes.len() == self.nodes.capacity() {
+            self.nodes.clear();
+        }
+        self.nodes.push((publisher, node));
+        Some(node)
+    }
+
+    /// Counts one setpoint of `node` in this tick; `false` when its budget is spent (or
+    /// more nodes published this tick than there are slots: the extra ones wait).
+    fn spend(&mut self, node: ClientId) -> bool {
+        if let Some((_, spent)) = self.spent.iter_mut().find(|(n, _)| *n == node) {
+            *spent += 1;
+            return *spent <= SETPOINTS_PER_NODE;
+        }
+        if self.spent.len() == self.spent.capacity() {
+            return false;
+        }
+        self.spent.push((node, 1));
+        true
     }
 }

@@ -541,6 +541,7 @@ impl Loop {
                 let mut sample = sample.write_payload(MotionFrame::EMPTY);
                 let frame = sample.payload_mut();
                 self.setup.engine.step(now, &mut commands, frame);
+                commands.paths.note_claimants(frame);
                 commands
                     .journal
                     .frame_and_estop(frame, &mut self.estop_seen);
@@ -558,6 +559,7 @@ impl Loop {
                 self.setup
                     .engine
                     .step(now, &mut commands, &mut self.spare_frame);
+                commands.paths.note_claimants(&self.spare_frame);
                 commands
                     .journal
                     .frame_and_estop(&self.spare_frame, &mut self.estop_seen);
