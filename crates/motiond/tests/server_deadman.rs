@@ -10,8 +10,11 @@
 //!
 //! after the tick that applied the last renewal, every term computed from the config the
 //! server runs (`deadman/bound.rs`) the way the document derives it, and `|v|` the fastest
-//! speed the frames showed between that tick and the stop. Times are the server's own: the
-//! frames' tick deadlines, so the test process's scheduling does not count.
+//! speed the axis had between that tick and the stop: the frames' speed, or the speed its
+//! ramp had reached when the lease ran out if faster (a jog sent once and never renewed
+//! expires while still accelerating, and a board's frames lag its real speed — issue 40's
+//! `conveyor`). Times are the server's own: the frames' tick deadlines, so the test
+//! process's scheduling does not count.
 
 mod support;
 
@@ -76,13 +79,24 @@ struct Stop {
     refreshed: Vec<u64>,
 }
 
-/// Jogs axis `index` at `fraction` of its velocity limit, renewing every `lease / 4`
-/// until the frames show it at speed, then lets the deadman end it.
+/// How a deadman test jogs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Jog {
+    /// Renewed every `lease / 4` until the frames show it at speed, then once more.
+    AtSpeed,
+    /// Sent once from rest and never renewed: the lease runs out while the axis still
+    /// accelerates.
+    Once,
+}
+
+/// Jogs axis `index` at `fraction` of its velocity limit as `how` says, then lets the
+/// deadman end it.
 fn deadman_stop(
     client: &mut RawClient,
     config: &ServerConfig,
     index: usize,
     fraction: f64,
+    how: Jog,
 ) -> Stop {
     let axis = &config.axes[index];
     let lease = config.server.command_timeout;
@@ -91,6 +105,11 @@ fn deadman_stop(
     let axis_no = u32::try_from(index).expect("axis index");
     let started = std::time::Instant::now();
     let renewal = loop {
+        if how == Jog::Once {
+            let reply = client.command(axis_no, CommandKind::Velocity, [jog, 0.0, 0.0]);
+            assert_eq!(reply.result(), Ok(()), "jog of {}: {reply:?}", axis.name);
+            break reply.tick_applied;
+        }
         let reply = client.command(axis_no, CommandKind::Velocity, [jog, 0.0, 0.0]);
         assert_eq!(
             reply.result(),
@@ -166,6 +185,12 @@ fn deadman_stop(
         }
         std::thread::sleep(Duration::from_millis(1));
     }
+    // The speed its ramp had reached when the lease ran out (lease + the tick that saw
+    // it), were the frames behind it: from rest at max_accel, never beyond the jog.
+    if how == Jog::Once {
+        let expiry = (lease + Duration::from_nanos(period_ns)).as_secs_f64();
+        speed = speed.max((axis.max_accel * expiry).min(jog.abs()));
+    }
     Stop {
         to_goal: goal.expect("the deadman set a stop"),
         to_wire: wire_ns.expect("the stop was written"),
@@ -180,6 +205,11 @@ fn deadman_stop(
 /// bound at each of `fractions` of its velocity limit (a quarter and four fifths: the
 /// deceleration term small, then large; a sign keeps the axis inside its soft limits).
 fn holds_its_bound(test: &str, axis: &str, fractions: &[f64]) {
+    holds_its_bound_jogged(test, axis, fractions, Jog::AtSpeed);
+}
+
+/// [`holds_its_bound`] with jogs sent as `how` says.
+fn holds_its_bound_jogged(test: &str, axis: &str, fractions: &[f64], how: Jog) {
     // One server at a time: four robots at 1 kHz on a loaded 2-core machine would measure
     // each other.
     let _one = ONE_AT_A_TIME
@@ -205,7 +235,11 @@ fn holds_its_bound(test: &str, axis: &str, fractions: &[f64]) {
         let mut attempts = 0;
         let (stop, bound) = loop {
             attempts += 1;
-            let stop = deadman_stop(&mut client, &config, index, fraction);
+            let stop = deadman_stop(&mut client, &config, index, fraction, how);
+            // At rest before the next jog.
+            let _ = client.wait_frame(Duration::from_secs(5), |f| {
+                f.axes()[index].mode() == Ok(AxisMode::Hold)
+            });
             let bound = Bound::new(&config, index, board, stop.speed);
             eprintln!(
                 "{axis} ({board:?}) at {fraction} of its limit: measured {:.2} {}/s; stop set \
@@ -255,6 +289,14 @@ fn holds_its_bound(test: &str, axis: &str, fractions: &[f64]) {
 #[test]
 fn a_sixpack_axis_on_the_shared_rs485_bus_stops_within_its_bound() {
     holds_its_bound("dm_tmcpack", "x", &[0.25, 0.8]);
+}
+
+/// Issue 40: a jog of the QUADpack's `conveyor` sent once and never renewed expires while
+/// the pack still accelerates, faster than its frames show; the bound takes the ramp's
+/// speed at expiry (before, the frames' speed gave 577–607 ms, and the stop took 663–676).
+#[test]
+fn a_quadpack_jog_sent_once_stops_within_its_bound_from_its_ramp_speed() {
+    holds_its_bound_jogged("dm_conveyor", "conveyor", &[0.8, -0.8], Jog::Once);
 }
 
 #[test]

@@ -125,6 +125,9 @@ pub(crate) struct Channel {
     pub rest_poll_at: Option<Duration>,
     /// The speed (velocity units) the current stop started from.
     stop_speed: u16,
+    /// When the rotation running now went out and the speed it started from (velocity
+    /// units): its ramp's speed at any later instant is bounded from these.
+    rotation_from: Option<(Duration, u16)>,
     /// Sequence number and send time of the request behind the last poll answer.
     pub polled_seq: u64,
     pub polled_sent_at: Duration,
@@ -179,6 +182,7 @@ impl Channel {
             rest_at: None,
             rest_poll_at: None,
             stop_speed: 0,
+            rotation_from: None,
             polled_seq: 0,
             polled_sent_at: Duration::ZERO,
             prev: None,
@@ -272,20 +276,39 @@ impl Channel {
         self.current() == Some(Step::AwaitRest) && self.rest_poll_at.is_some_and(|at| now >= at)
     }
 
-    /// The speed (velocity units) a stop starts from: the measured one rounded up, or the
-    /// rotation commanded last if that is faster (a jog still accelerating).
-    fn speed_now(&self) -> u16 {
+    /// The speed (velocity units) a stop at `at` starts from: the measured one rounded up,
+    /// or the speed the rotation's ramp has reached by `at` if that is faster (a jog still
+    /// accelerating, or the frames behind the pack's real speed): from the speed it started
+    /// at, amax / divisor more every 2 ms cycle since it went out (8.3 `$14`: "1/64 amax is
+    /// accumulated with 500Hz"), never beyond the rotation commanded.
+    fn speed_now(&self, at: Duration) -> u16 {
+        let measured = self.measured_speed();
+        let Motion::Rotation(v) = self.motion else {
+            return measured;
+        };
+        let commanded = v.unsigned_abs();
+        let ramp = match self.rotation_from {
+            Some((from, start)) => {
+                let cycles = at.saturating_sub(from).as_millis() / 2 + 1;
+                let gained = cycles.saturating_mul(u128::from(self.board_amax))
+                    / u128::from(self.scale.divisor.get());
+                u128::from(start)
+                    .saturating_add(gained)
+                    .min(u128::from(commanded)) as u16
+            }
+            None => commanded,
+        };
+        measured.max(ramp)
+    }
+
+    /// The measured speed, velocity units, rounded up.
+    fn measured_speed(&self) -> u16 {
         let measured = (self.state.velocity.abs() / self.scale.hz).ceil();
-        let measured = if measured.is_finite() {
+        if measured.is_finite() {
             measured.min(f64::from(MAX_VELOCITY)) as u16
         } else {
             MAX_VELOCITY
-        };
-        let commanded = match self.motion {
-            Motion::Rotation(v) => v.unsigned_abs(),
-            _ => 0,
-        };
-        measured.max(commanded)
+        }
     }
 
     /// Replaces the script with the one for `goal`.
@@ -570,10 +593,13 @@ impl Channel {
             }
             Request::Rotate { velocity, .. } => {
                 if velocity == 0 {
-                    self.stop_speed = self.speed_now();
+                    self.stop_speed = self.speed_now(wire_end);
                     let expected = self.scale.stop_time(self.stop_speed, self.board_amax);
                     self.rest_poll_at = Some(wire_end + expected);
                 }
+                // A new rotation ramps from where the last one's ramp (or the motor) is.
+                let start = self.speed_now(wire_end);
+                self.rotation_from = Some((wire_end, start));
                 self.motion = Motion::Rotation(velocity);
                 self.motion_seq = seq;
                 self.target = None;
