@@ -88,7 +88,7 @@ impl<'de, const N: usize> serde::Deserialize<'de> for FixedText<N> {
         struct Visitor<const N: usize>;
         impl<const N: usize> serde::de::Visitor<'_> for Visitor<N> {
             type Value = FixedText<N>;
-            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+            fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
                 write!(f, "a text of at most {N} bytes")
             }
             fn visit_str<E: serde::de::Error>(self, text: &str) -> Result<Self::Value, E> {
