@@ -33,6 +33,7 @@ mod commission;
 mod driver;
 mod goal;
 mod pin;
+mod silence;
 pub mod spec;
 mod stamps;
 mod state;
@@ -47,6 +48,7 @@ pub use goal::{Goal, GoalError, GoalKind, GoalKinds, RateFloor};
 pub use motion_base::LinkKind;
 pub use motion_base::{CanRecord, LinkFraming};
 pub use pin::{Pin, PinInfo, PinReading, SignalKind, SignalKinds, find_pin};
+pub use silence::{DEFAULT_SILENCE, SILENCE_RANGE_MS};
 pub use stamps::IoStamps;
 pub use state::{
     ChannelState, DeviceFault, DeviceStatus, EVIDENCE_LEN, FIRMWARE_LEN, Seconds, Verdict,
