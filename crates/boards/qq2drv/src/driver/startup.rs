@@ -55,14 +55,18 @@ pub(super) struct ProbeReplies {
 impl Qq2drvDriver {
     /// Writes the probe requests.
     pub(super) fn write_probe(&mut self, now: Duration, buf: &mut [u8]) -> Option<usize> {
-        let mut len = 0;
-        for request in [
+        let requests = [
             Request::GetVersion,
             Request::GetDataMask,
             Request::GetStreamConfig,
             Request::GetStreamPeriod,
-        ] {
+        ];
+        // All of it fits, or nothing is in flight.
+        let mut len = 0;
+        for request in &requests {
             len += request.encode(buf.get_mut(len..)?).ok()?;
+        }
+        for request in requests {
             self.in_flight.push(Sent {
                 id: request.id(),
                 at: now,

@@ -292,19 +292,27 @@ impl Qq2drvDriver {
             Next::Poll => 0,
             _ => self.decoder.missing().unwrap_or(0),
         };
-        buf.get_mut(..prefix)?.fill(FILLER);
-        let rest = buf.get_mut(prefix..)?;
-        let len = prefix
-            + match next {
-                Next::Probe => self.write_probe(now, rest)?,
-                Next::Configure => self.write_configure(now, rest)?,
-                Next::Goals => self.write_goals(now, rest, &mut goal_starts),
-                Next::Check => self.write_check(now, rest)?,
-                Next::Poll => self.write_poll(now, buf)?,
-            };
-        if len == prefix {
-            return None;
-        }
+        let written = match buf.get_mut(prefix..) {
+            Some(rest) => match next {
+                Next::Probe => self.write_probe(now, rest),
+                Next::Configure => self.write_configure(now, rest),
+                Next::Goals => Some(self.write_goals(now, rest, &mut goal_starts)),
+                Next::Check => self.write_check(now, rest),
+                Next::Poll => self.write_poll(now, buf),
+            },
+            None => None,
+        };
+        let (len, next) = match written {
+            Some(len) if len > 0 && next == Next::Poll => (len, next),
+            Some(len) if len > 0 => {
+                buf.get_mut(..prefix)?.fill(FILLER);
+                (prefix + len, next)
+            }
+            // The request does not fit behind the rest of the packet: that rest alone
+            // first, the request at the next call.
+            _ if prefix > 0 => (self.write_poll(now, buf)?, Next::Poll),
+            _ => return None,
+        };
         let _number = self.io_stamps.sent();
         self.line_free_at = self
             .line_free_at

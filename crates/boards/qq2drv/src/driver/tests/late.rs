@@ -128,3 +128,31 @@ fn a_packet_partly_read_is_read_out_before_a_request() {
     let sent = drain(&mut driver, now + 2 * MS);
     assert_eq!(sent[0].first(), Some(&2), "then the goal");
 }
+
+#[test]
+fn a_request_that_does_not_fit_behind_the_rest_waits_for_a_poll() {
+    // A caller's buffer too small for the rest of the packet and the request: the rest
+    // alone first (motiond's messages are 256 bytes; a configuration is ~200).
+    let (mut driver, now) = running();
+    let stream = ours_stream([0; 3], [0; 3], [0; 3]);
+    driver.handle_rx(now, &stream[..2]);
+    // 31 bytes of the 33-byte stream packet to come; the goal's packets are 15.
+    assert_eq!(driver.decoder.missing(), Some(stream.len() - 2));
+    driver
+        .set_goal(now, 0, Goal::Position { counts: 5.0 })
+        .expect("goal");
+    let mut buf = [0u8; 40];
+    let sent = driver.poll_transmit(now, &mut buf).expect("a transaction");
+    assert!(
+        buf[..sent.len].iter().all(|b| *b == FILLER),
+        "the rest, as a poll"
+    );
+    assert!(!sent.expects_reply);
+    assert!(driver.goals_pending(), "the goal still waits");
+    driver.handle_rx(now + MS, &stream[2..]);
+    let later = now + 2 * MS;
+    driver.handle_timeout(later);
+    let sent = driver.poll_transmit(later, &mut buf).expect("the goal");
+    assert_eq!(buf[0], 2, "the goal's request, from its first byte");
+    assert_eq!(packets(&buf[..sent.len]).len(), 2);
+}
