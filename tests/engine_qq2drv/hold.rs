@@ -5,7 +5,7 @@
 
 use core::time::Duration;
 
-use crate::support::hold::{HOLDS, PROMPT, move_survives_hold};
+use crate::support::hold::{HOLDS, HeldMove, PROMPT, move_survives_hold};
 use crate::{COUNTS_PER_MM, TOLERANCE_MM, rig, wait_online};
 
 #[test]
@@ -17,16 +17,14 @@ fn a_held_link_during_a_move_is_no_verdict_and_the_move_arrives() {
                 rig.stamp_io(PROMPT);
             }
             wait_online(&mut rig);
-            move_survives_hold(
-                &mut rig,
-                &faults,
-                0,
-                20.0,
-                TOLERANCE_MM,
-                Duration::from_millis(300),
-                hold,
-                Duration::from_secs(3),
-            );
+            let run = HeldMove {
+                axis: 0,
+                target: 20.0,
+                tolerance: TOLERANCE_MM,
+                before: Duration::from_millis(300),
+                within: Duration::from_secs(3),
+            };
+            move_survives_hold(&mut rig, &faults, run, hold);
             let sim = board.lock().expect("board");
             let counter = sim.counter(0).expect("channel");
             assert!((f64::from(counter) / COUNTS_PER_MM - 20.0).abs() <= TOLERANCE_MM);

@@ -5,7 +5,7 @@
 
 use core::time::Duration;
 
-use crate::support::hold::{HOLDS, PROMPT, move_survives_hold};
+use crate::support::hold::{HOLDS, HeldMove, PROMPT, move_survives_hold};
 use crate::{STEPS_PER_MM, stepper_rig, wait_online};
 
 #[test]
@@ -17,16 +17,14 @@ fn a_held_link_during_a_move_is_no_verdict_and_the_move_arrives() {
                 rig.stamp_io(PROMPT);
             }
             wait_online(&mut rig, 1);
-            move_survives_hold(
-                &mut rig,
-                &faults,
-                0,
-                20.0,
-                0.01,
-                Duration::from_millis(300),
-                hold,
-                Duration::from_secs(3),
-            );
+            let run = HeldMove {
+                axis: 0,
+                target: 20.0,
+                tolerance: 0.01,
+                before: Duration::from_millis(300),
+                within: Duration::from_secs(3),
+            };
+            move_survives_hold(&mut rig, &faults, run, hold);
             let rotor = board.lock().expect("board").rotor_steps();
             assert_eq!(rotor, (20.0 * STEPS_PER_MM) as i64, "hold {hold:?}");
             let status = rig.engine.driver(0).expect("driver").status();

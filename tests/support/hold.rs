@@ -23,20 +23,33 @@ pub const PROMPT: IoLag = IoLag {
     report: true,
 };
 
-/// Sends axis `axis` to `target` (units), lets it run `before`, holds the board's link
-/// for `hold`, and runs until the axis arrived (at most `within`): in every frame the
-/// axis has no fault and its board stays online; the driver reaches no verdict, sees no
-/// reset, and the axis ends within `tolerance` of the target.
-pub fn move_survives_hold(
-    rig: &mut Rig,
-    faults: &SimFaults,
-    axis: usize,
-    target: f64,
-    tolerance: f64,
-    before: Duration,
-    hold: Duration,
-    within: Duration,
-) {
+/// A move a held link must not disturb.
+#[derive(Debug, Clone, Copy)]
+pub struct HeldMove {
+    /// The axis (index) that moves, on device 0.
+    pub axis: usize,
+    /// Where to, in its units.
+    pub target: f64,
+    /// How close it must end.
+    pub tolerance: f64,
+    /// How long it runs before the hold begins.
+    pub before: Duration,
+    /// How long it may take after that to arrive.
+    pub within: Duration,
+}
+
+/// Sends the axis of `run` to its target, lets it run `before`, holds the board's link for
+/// `hold`, and runs until the axis arrived (at most `within`): in every frame the axis has
+/// no fault and its board stays online; the driver reaches no verdict, sees no reset, and
+/// the axis ends within `tolerance` of the target.
+pub fn move_survives_hold(rig: &mut Rig, faults: &SimFaults, run: HeldMove, hold: Duration) {
+    let HeldMove {
+        axis,
+        target,
+        tolerance,
+        before,
+        within,
+    } = run;
     accepted(
         rig,
         u32::try_from(axis).expect("axis"),
