@@ -143,6 +143,8 @@ mod tests_late;
 #[cfg(test)]
 mod tests_line;
 #[cfg(test)]
+mod tests_liveness;
+#[cfg(test)]
 mod tests_machine;
 #[cfg(test)]
 mod tests_noise;
