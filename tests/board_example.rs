@@ -9,6 +9,7 @@ use core::time::Duration;
 use std::cell::Cell;
 use std::path::Path;
 
+use motion_drivers::Driver as _;
 use motion_engine::{CommandPort, Engine};
 use motion_ipc::{
     AxisFlags, ClientId, CommandKind, CommandReply, CommandRequest, DeviceModel, MotionFrame,
@@ -224,6 +225,39 @@ fn the_example_board_runs_end_to_end_on_its_simulator() {
     let home = server.axis();
     assert!(home.position.abs() <= 0.02, "{home:?}");
     assert!(!home.flags().contains(AxisFlags::FAULT), "{home:?}");
+}
+
+/// Issue 39 item 4: the board's replies held up on the host (`SimFaults::hold`: a
+/// starved server or board process) for 50, 100, 200 ms during a move are waited for — no
+/// verdict, no timeout, no fault — and the move arrives.
+#[test]
+fn a_held_link_during_a_move_is_no_verdict_and_the_move_arrives() {
+    for hold in [50, 100, 200] {
+        let mut server = Server::start();
+        server.run_for(Duration::from_millis(100));
+        let reply = server.command(CommandKind::RampPosition, [20.0, 0.0, 0.0]);
+        assert_eq!(reply.result(), Ok(()));
+        server.run_for(Duration::from_millis(150));
+        server.faults.hold(server.now, Duration::from_millis(hold));
+        let end = server.now + Duration::from_secs(2);
+        while !server.axis().flags().contains(AxisFlags::ARRIVED) {
+            assert!(server.now < end, "hold {hold} ms: {:?}", server.axis());
+            server.tick();
+            assert!(
+                !server.axis().flags().contains(AxisFlags::FAULT),
+                "hold {hold} ms: {:?}",
+                server.axis()
+            );
+        }
+        assert!((server.axis().position - 20.0).abs() <= 0.02);
+        let status = server.engine.driver(0).expect("driver").status();
+        assert_eq!(
+            (status.verdicts, status.timeouts, status.resets),
+            (0, 0, 0),
+            "hold {hold} ms: {:?}",
+            status.verdict
+        );
+    }
 }
 
 #[test]

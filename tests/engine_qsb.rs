@@ -3,6 +3,8 @@
 
 mod support;
 
+#[path = "engine_qsb/hold.rs"]
+mod hold;
 #[path = "engine_qsb/io.rs"]
 mod io;
 #[path = "engine_qsb/lag.rs"]
@@ -61,7 +63,8 @@ fn rig(variant: Variant, motion: EncoderMotion, command_timeout: Duration) -> Qs
 /// a driver of `driver`.
 fn rig_with(sim: QsbSimConfig, driver: QsbDriverConfig, command_timeout: Duration) -> Qsb {
     let (device, sim) = Shared::new(QsbSim::new(sim));
-    let link = SimLink::stream("usb0", 230_400, device);
+    // Behind USB: the host gets the board's bytes at the end of each 1 ms frame.
+    let link = SimLink::stream("usb0", 230_400, device).with_host_frames(board_qsb::USB_FRAME);
     let faults = link.faults();
     let config = EngineConfig {
         name: "qsb".into(),
@@ -322,6 +325,7 @@ fn every_byte_on_the_wire_is_a_command_line_of_the_codec() {
     assert!(streams.contains(&Register::MdStatus));
     let sim = qsb.sim.lock().expect("sim");
     assert_eq!(sim.stats().errors + sim.stats().unsupported, 0, "no e or x");
+    assert_eq!(sim.stats().interlaced, 0, "one command at a time");
 }
 
 #[test]
@@ -392,25 +396,45 @@ fn unplug_and_replug_fault_the_axis_then_it_needs_a_new_command() {
 fn a_board_that_stops_answering_is_not_responding_then_comes_back() {
     let mut qsb = Qsb::m();
     qsb.faults.set_drop_probability(Direction::ToHost, 1.0);
-    qsb.rig.run(150);
+    // Stale after its refresh budget; not answering once its probe went `silence_ms`
+    // (500 ms) without a word.
+    qsb.rig.run(20);
+    assert!(flags(&qsb.axis()).contains(AxisFlags::STALE));
+    assert_eq!(qsb.axis().fault, 0, "silence is not a verdict yet");
+    qsb.rig.run(600);
     let axis = qsb.axis();
     assert!(flags(&axis).contains(AxisFlags::STALE));
     assert_eq!(axis.fault().expect("fault"), FaultCode::BoardNotResponding);
     let status = qsb.rig.engine.driver(0).expect("driver").status();
     assert!(!status.online);
-    assert!(status.timeouts >= 3);
+    assert!(status.timeouts >= 1);
+    let verdict = status.verdict.expect("the evidence");
+    assert!(
+        verdict.evidence.as_str().starts_with("`R0D` written at ")
+            && verdict
+                .evidence
+                .as_str()
+                .ends_with("ms of silence (silence_ms 500)"),
+        "{}",
+        verdict.evidence.as_str()
+    );
     assert_eq!(
         qsb.command(CommandKind::Position, [1.0, 0.0, 0.0]),
         Reason::DeviceOffline,
         "a board that stopped answering is offline"
     );
     qsb.faults.set_drop_probability(Direction::ToHost, 0.0);
+    // The start-up tried again 100 ms after the verdict, while the answers were still
+    // lost: its COMMAND 1 stopped the stream, so that answer is waited for through
+    // another silence (it may be held up on the host) before the next try.
     assert!(
         qsb.rig
-            .run_until(Duration::from_millis(500), |frame| healthy(&frame.axes[0])),
+            .run_until(Duration::from_millis(1200), |frame| healthy(&frame.axes[0])),
         "{:?}",
         qsb.axis()
     );
+    let status = qsb.rig.engine.driver(0).expect("driver").status();
+    assert_eq!(status.verdicts, 1, "one verdict while it stayed silent");
     assert_eq!(
         qsb.command(CommandKind::Position, [1.0, 0.0, 0.0]),
         Reason::Accepted

@@ -715,6 +715,8 @@ fn random_goal_sequences_never_step_too_fast_nor_raise_false_faults() {
 }
 
 // Stops ramped down from the rate the board steps at.
+#[path = "engine_spimotor/hold.rs"]
+mod hold;
 #[path = "engine_spimotor/lag.rs"]
 mod lag;
 #[path = "engine_spimotor/off.rs"]

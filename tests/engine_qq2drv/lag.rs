@@ -20,11 +20,18 @@ fn late_writes_or_a_starved_io_side_make_no_healthy_board_look_dead() {
 }
 
 #[test]
-fn unreported_the_same_lag_made_the_board_look_dead() {
+fn unreported_the_same_lag_no_longer_makes_the_board_look_dead() {
+    // Issue 39: the board streams; a stream that comes late, or in bursts, is never
+    // `silence_ms` without a valid packet, so even an engine that is not told reaches no
+    // verdict (unreported late writes still make requests look lost: their replies come
+    // 100 ms after the driver believes they were written).
     for lag in [LATE_WRITES, STARVED] {
         let (mut rig, _, _) = rig();
         rig.stamp_io(unreported(lag));
-        assert!(not_responding_after(&mut rig, Duration::from_secs(5)).is_some());
+        assert_eq!(not_responding_after(&mut rig, Duration::from_secs(5)), None);
+        let status = rig.engine.driver(0).expect("driver").status();
+        assert_eq!(status.verdicts, 0, "{lag:?}: {:?}", status.verdict);
+        assert!(status.online);
     }
 }
 

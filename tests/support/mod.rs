@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 pub mod counting_alloc;
+pub mod hold;
 pub mod lag;
 pub mod rig;
 pub mod wire;

@@ -134,6 +134,26 @@ impl dyn KeyIssues + '_ {
         }
     }
 
+    /// `silence_ms` (every board that has it: how long the board may say nothing while it
+    /// owes an answer before it is declared not answering), checked against
+    /// [`SILENCE_RANGE_MS`](motion_drivers::SILENCE_RANGE_MS).
+    pub fn silence_ms(&mut self, value: &Spanned<Int>, key: &str) -> Option<core::time::Duration> {
+        let ms = self.int_in(value, key, motion_drivers::SILENCE_RANGE_MS)?;
+        let ms = u64::try_from(ms).ok()?;
+        if ms < 250 {
+            self.warn(
+                value.span(),
+                key,
+                format!(
+                    "{ms} ms: a host that stalls longer (a loaded machine, a board's process \
+                     without CPU) makes a healthy board look dead; default {} ms",
+                    motion_drivers::DEFAULT_SILENCE.as_millis()
+                ),
+            );
+        }
+        Some(core::time::Duration::from_millis(ms))
+    }
+
     /// What `allowed` pairs with the name `value` gives; otherwise an issue
     /// `unknown {what} "…"; allowed: {listed}` (`listed`: the names, and what each means).
     pub fn one_of<T: Copy>(

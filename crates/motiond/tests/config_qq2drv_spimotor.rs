@@ -665,12 +665,51 @@ fn spimotor_describe_lists_the_stepper_keys() {
         "32 (0x20 of 0xff)"
     );
     assert_eq!(described(&config, stepper, "coils"), "2 (port 0x44 ← 0x01)");
-    assert!(
-        motiond::boards::describe(&config)
-            .iter()
-            .all(|row| row.owner != Owner::Device(1)),
-        "a brushed board has no machine keys"
+    let brushed: Vec<String> = motiond::boards::describe(&config)
+        .into_iter()
+        .filter(|row| row.owner == Owner::Device(1))
+        .map(|row| row.key)
+        .collect();
+    assert_eq!(
+        brushed,
+        ["silence_ms"],
+        "a brushed board has no stepper keys"
     );
+}
+
+/// `silence_ms` (qq2drv, spimotor): how long the board may say nothing before it is
+/// declared not answering; 500 ms by default, 100..=60000, below 250 a warning.
+#[test]
+fn silence_ms_is_described_checked_and_warned_about() {
+    for (text, model) in [(QQ2DRV, "qq2drv"), (SPIMOTOR, "spimotor")] {
+        let device = Owner::Device(0);
+        assert_eq!(described(&parse(text), device, "silence_ms"), "500 ms");
+        let with = |value: &str| {
+            text.replacen(
+                &format!("model = \"{model}\""),
+                &format!("model = \"{model}\"\nsilence_ms = {value}"),
+                1,
+            )
+        };
+        assert_eq!(
+            described(&parse(&with("800")), device, "silence_ms"),
+            "800 ms"
+        );
+        assert_fails(
+            "silence.toml",
+            &with("50"),
+            "silence_ms",
+            "device[0].silence_ms",
+            "allowed: 100..=60000",
+        );
+        let (code, stderr) = check("silence.toml", &with("150"));
+        assert_eq!(code, Some(0), "{stderr}");
+        assert!(
+            stderr.contains("warning: `device[0].silence_ms`")
+                && stderr.contains("makes a healthy board look dead"),
+            "{stderr}"
+        );
+    }
 }
 
 // --- the example configs and the I/O ----------------------------------------------------

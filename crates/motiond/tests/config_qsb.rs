@@ -78,7 +78,7 @@ fn the_good_config_and_every_key_set_well_pass() {
     let config = parse(GOOD).expect("good");
     assert!(config.warnings.is_empty());
     let all = with_device_keys(
-        "counts_per_step = -4.0\nindex_polarity = \"inverted\"\nstream_interval_ms = 3.90625\nhost_latency_ms = 20.0\nenable_output = 3\nenable_active = \"high\"\ninput_mode = \"quadrature\"\ncapture_input = 0\ncapture_edge = \"falling\"\nhome_direction = \"positive\"\nhome_max_travel = 50.0\nhome_offset = 1.5",
+        "counts_per_step = -4.0\nindex_polarity = \"inverted\"\nstream_interval_ms = 3.90625\nhost_latency_ms = 20.0\nsilence_ms = 300\nenable_output = 3\nenable_active = \"high\"\ninput_mode = \"quadrature\"\ncapture_input = 0\ncapture_edge = \"falling\"\nhome_direction = \"positive\"\nhome_max_travel = 50.0\nhome_offset = 1.5",
     );
     let config = parse(&all).expect("every key");
     assert!(config.warnings.is_empty(), "{:?}", config.warnings);
@@ -86,7 +86,7 @@ fn the_good_config_and_every_key_set_well_pass() {
 
 #[test]
 fn malformed_values_of_every_key_are_refused_where_they_are() {
-    let cases: [(&str, &str, &str, &str); 21] = [
+    let cases: [(&str, &str, &str, &str); 23] = [
         (
             "counts_per_step = 0.0",
             "counts_per_step",
@@ -140,6 +140,18 @@ fn malformed_values_of_every_key_are_refused_where_they_are() {
             "host_latency_ms",
             "device[0].host_latency_ms",
             "0..=1000 ms",
+        ),
+        (
+            "silence_ms = 50",
+            "silence_ms",
+            "device[0].silence_ms",
+            "allowed: 100..=60000",
+        ),
+        (
+            "silence_ms = 0.5",
+            "silence_ms",
+            "silence_ms",
+            "invalid type",
         ),
         (
             "enable_output = 1",
@@ -352,6 +364,11 @@ fn warnings_for_keys_without_effect_and_a_stream_the_line_cannot_carry() {
         "without enable_output",
     );
     warned(
+        &with_device_keys("silence_ms = 150"),
+        "device[0].silence_ms",
+        "makes a healthy board look dead",
+    );
+    warned(
         &with_device_keys("capture_edge = \"falling\""),
         "device[0].capture_edge",
         "without capture_input",
@@ -395,6 +412,7 @@ fn describe_lists_every_key_with_its_effective_value() {
             ("index_polarity", "normal"),
             ("stream_interval_ms", "1.953125 ms (1 tick)"),
             ("host_latency_ms", "5 ms"),
+            ("silence_ms", "500 ms"),
             ("enable_output", "none"),
             ("enable_active", "low"),
             ("input_mode", "quadrature"),
@@ -411,7 +429,7 @@ fn describe_lists_every_key_with_its_effective_value() {
         ])
     );
     let set = parse(&with_device_keys(
-        "counts_per_step = -4.0\nindex_polarity = \"inverted\"\nstream_interval_ms = 10.0\nhost_latency_ms = 20.0\nenable_output = 3\ninput_mode = \"quadrature\"\ncapture_input = 0\ncapture_edge = \"falling\"\nhome_direction = \"positive\"\nhome_max_travel = 50.0\nhome_offset = 1.5",
+        "counts_per_step = -4.0\nindex_polarity = \"inverted\"\nstream_interval_ms = 10.0\nhost_latency_ms = 20.0\nsilence_ms = 250\nenable_output = 3\ninput_mode = \"quadrature\"\ncapture_input = 0\ncapture_edge = \"falling\"\nhome_direction = \"positive\"\nhome_max_travel = 50.0\nhome_offset = 1.5",
     ))
     .expect("set");
     assert_eq!(
@@ -425,6 +443,7 @@ fn describe_lists_every_key_with_its_effective_value() {
             // 10 ms is nearest to 5 ticks of 1/512 s.
             ("stream_interval_ms", "9.765625 ms (5 ticks)"),
             ("host_latency_ms", "20 ms"),
+            ("silence_ms", "250 ms"),
             ("enable_output", "3"),
             ("enable_active", "low"),
             ("input_mode", "quadrature"),

@@ -12,7 +12,9 @@
 //!
 //! Per `[[device]]`:
 //! - `velocity_ramp = "signed" | "unsigned"`: how the board reads packet 36's Velocity
-//!   (an I32 with "Range: 0 - 100,000"; docs/ARCHITECTURE.md), default `"signed"`.
+//!   (an I32 with "Range: 0 - 100,000"; docs/ARCHITECTURE.md), default `"signed"`;
+//! - `silence_ms`: how long the board may say nothing on MISO before it is declared not
+//!   answering (100..=60000, default 500: `motion_drivers::DEFAULT_SILENCE`).
 //!
 //! Across tables: a link clocked above the datasheet's recommended 500 kHz ("We recommend
 //! clocking SPI up to 500kHz") gets a warning on its `speed_hz`.
@@ -33,6 +35,7 @@ use crate::{PidKeys, Qq2drvAxisKeys, Qq2drvDeviceKeys};
 #[serde(deny_unknown_fields)]
 pub(crate) struct RawDevice {
     velocity_ramp: Option<Spanned<String>>,
+    silence_ms: Option<Spanned<Int>>,
 }
 
 /// Validates the qq2drv keys of a `[[device]]` table.
@@ -56,6 +59,9 @@ pub(crate) fn device_keys(
              100,000 shl 12\": reverse is negative; the default), \"unsigned\" (its \
              \"Range: 0 - 100,000\": reverse goes out as packets 28 and 22)",
         )?);
+    }
+    if let Some(value) = &raw.silence_ms {
+        out.silence = Some(v.silence_ms(value, &ctx.key("silence_ms"))?);
     }
     Some(DeviceKeys::new(out, HomeHints::default()))
 }

@@ -12,6 +12,9 @@ pub struct Qq2drvDeviceKeys {
     /// `velocity_ramp`: how the board reads packet 36's Velocity, `"signed"` (default) or
     /// `"unsigned"` ("Range: 0 - 100,000").
     pub velocity_ramp: Option<VelocityRampSign>,
+    /// `silence_ms`: how long the board may say nothing before it is declared not
+    /// answering.
+    pub silence: Option<core::time::Duration>,
 }
 
 /// One PID table as given; `None` fields were not set (the datasheet default applies).

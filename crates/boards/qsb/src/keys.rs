@@ -33,6 +33,7 @@ pub(crate) struct RawDevice {
     index_polarity: Option<Spanned<String>>,
     stream_interval_ms: Option<Spanned<f64>>,
     host_latency_ms: Option<Spanned<f64>>,
+    silence_ms: Option<Spanned<Int>>,
     enable_output: Option<Spanned<Int>>,
     enable_active: Option<Spanned<String>>,
     input_mode: Option<Spanned<String>>,
@@ -158,6 +159,9 @@ pub(crate) fn device_keys(
                 format!("{ms} is out of range; allowed: 0..=1000 ms (the USB/serial latency the driver allows on top of the wire time; default 5)"),
             );
         }
+    }
+    if let Some(value) = &raw.silence_ms {
+        keys.silence = v.silence_ms(value, &ctx.key("silence_ms"));
     }
     if let Some(value) = &raw.enable_output {
         keys.enable_output = enable_output(v, value, &ctx.key("enable_output"), product);

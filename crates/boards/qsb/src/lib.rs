@@ -32,7 +32,7 @@ pub use machine_keys::{QsbDeviceKeys, QsbInputMode, QsbVariant, TriggerSources};
 use sim::{DriveEnable, QsbSim, QsbSimConfig, Variant};
 
 /// A full-speed USB device is polled once per 1 ms frame.
-const USB_FRAME: Duration = Duration::from_millis(1);
+pub const USB_FRAME: Duration = Duration::from_millis(1);
 
 /// The QSB.
 #[derive(Debug, Clone, Copy)]

@@ -67,6 +67,8 @@ pub struct QsbDeviceKeys {
     pub stream_interval_ticks: Option<u16>,
     /// `host_latency_ms`.
     pub host_latency: Option<Duration>,
+    /// `silence_ms`: how long the board may say nothing while it owes an answer.
+    pub silence: Option<Duration>,
     /// `enable_output`: the DIG I/O bit (0 or 3) of the stepper driver's enable line.
     pub enable_output: Option<u8>,
     /// `enable_active = "high"`.

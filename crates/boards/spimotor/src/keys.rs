@@ -14,6 +14,10 @@
 //!
 //! Both are stepper settings: on a `drive = "brushed"` board they would do nothing (the
 //! brushed section's intensity is each spin command's byte), so they are an error there.
+//!
+//! - `silence_ms` (either drive): how long a transaction's MISO may stay away before the
+//!   board is declared not answering (100..=60000, default 500:
+//!   `motion_drivers::DEFAULT_SILENCE`).
 
 use motion_board::keys::{DeviceContext, Int, KeyIssues, KeyTable, Spanned};
 use motion_board::{DeviceKeys, HomeHints};
@@ -29,6 +33,7 @@ pub(crate) struct RawDevice {
     drive: Option<Spanned<String>>,
     intensity: Option<Spanned<Int>>,
     coils: Option<Spanned<Int>>,
+    silence_ms: Option<Spanned<Int>>,
 }
 
 /// `address`: "an even number 2..=254 (bit 0 is the read flag)".
@@ -106,8 +111,17 @@ pub(crate) fn device_keys(
             }
         },
     };
+    let silence = match &raw.silence_ms {
+        None => None,
+        Some(value) => {
+            let checked = v.silence_ms(value, &ctx.key("silence_ms"));
+            ok &= checked.is_some();
+            checked
+        }
+    };
     ok.then_some(DeviceKeys::new(
         SpimotorDeviceKeys {
+            silence,
             drive: if brushed {
                 SpiDrive::Brushed
             } else {

@@ -23,4 +23,7 @@ pub struct SpimotorDeviceKeys {
     pub intensity: Option<u8>,
     /// `coils`: coils driven at a time, 1 or 2 (port 0x44).
     pub coils: Option<u8>,
+    /// `silence_ms`: how long a transaction's MISO may stay away before the board is
+    /// declared not answering.
+    pub silence: Option<core::time::Duration>,
 }

@@ -48,6 +48,9 @@ pub(crate) struct FaultState {
     /// Incremented by every unplug: a link opened before it is dead until reopened.
     pub(crate) generation: u64,
     pub(crate) device_baud: Option<u32>,
+    /// Holds ([`SimFaults::hold`]): `(from, until)`, bytes due at the host in between wait
+    /// until `until`.
+    pub(crate) holds: Vec<(Duration, Duration)>,
 }
 
 impl FaultState {
@@ -69,6 +72,24 @@ impl FaultState {
         }
         lost
     }
+
+    /// When a byte due at the host at `at` reaches it: at the end of every hold whose
+    /// window `at` falls in (holds that follow one another chain).
+    pub(crate) fn held(&self, mut at: Duration) -> Duration {
+        for _ in 0..=self.holds.len() {
+            let Some(until) = self
+                .holds
+                .iter()
+                .filter(|(from, until)| *from <= at && at < *until)
+                .map(|(_, until)| *until)
+                .max()
+            else {
+                break;
+            };
+            at = until;
+        }
+        at
+    }
 }
 
 /// A handle on the faults of one [`SimLink`](crate::sim::SimLink). Clone it, keep it in the
@@ -89,6 +110,7 @@ impl SimFaults {
             unplugged: false,
             generation: 0,
             device_baud: None,
+            holds: Vec::new(),
         })))
     }
 
@@ -138,6 +160,20 @@ impl SimFaults {
     /// (stream links; an SPI device answers within its own transactions).
     pub fn set_reply_delay(&self, delay: Duration) {
         self.lock().reply_delay = delay;
+    }
+
+    /// Holds the host's side of the wire: every byte from the device (a reply, a streamed
+    /// line, MISO) that would reach the host at or after `from` and before `from + length`
+    /// reaches it at `from + length` instead, in order, together with those held with it;
+    /// bytes due earlier or later are not touched. What a host (or a board's process
+    /// serving a pty or an SPI socket) that got no CPU for `length` does to the bytes: the
+    /// board's side of the wire keeps its own timing, the host sees nothing, then
+    /// everything at once. Several holds may be set; one ending inside another extends it.
+    pub fn hold(&self, from: Duration, length: Duration) {
+        if length.is_zero() {
+            return;
+        }
+        self.lock().holds.push((from, from.saturating_add(length)));
     }
 
     /// Pulls the plug: every call on the link returns `Disconnected`, bytes in flight are

@@ -308,6 +308,7 @@ impl SimLink {
 
     /// Queues a byte for the host, or counts an overrun when the host is too far behind.
     fn push_to_host(&mut self, mut received: Received) {
+        received.at = self.faults.lock().held(received.at);
         if let Some(frame) = self.host_frame {
             let frame_ns = frame.as_nanos().max(1);
             let at_ns = received.at.as_nanos();
@@ -583,6 +584,7 @@ impl SimLink {
         // byte's 8th clock woke the link's I/O thread once per byte for nothing: no driver
         // can use half a transaction.)
         let mut faults = self.faults.lock();
+        let at = faults.held(end);
         let mut arrivals = Vec::with_capacity(len);
         for byte in miso.iter().copied() {
             let byte = if let Some(g) = faults.garbage.pop_front() {
@@ -593,7 +595,7 @@ impl SimLink {
                 byte
             };
             arrivals.push(Received {
-                at: end,
+                at,
                 byte,
                 framing_error: false,
             });

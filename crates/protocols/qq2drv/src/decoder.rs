@@ -165,6 +165,21 @@ impl StreamDecoder {
         self.end - self.start
     }
 
+    /// When the bytes pushed so far (with every complete packet taken out by
+    /// [`next_packet`](Self::next_packet)) end inside a packet: how many more bytes it
+    /// needs at least — its exact rest once its Packet Size arrived, else the rest of the
+    /// longest packet. `None` between packets.
+    pub fn missing(&self) -> Option<usize> {
+        let pending = self.buf.get(self.start..self.end).unwrap_or_default();
+        if pending.first() != Some(&STX) {
+            return None;
+        }
+        let size = pending
+            .get(1)
+            .map_or(MAX_PACKET_LEN, |size| usize::from(*size));
+        Some(size.saturating_sub(pending.len()).max(1))
+    }
+
     /// Counters so far.
     pub const fn stats(&self) -> DecoderStats {
         self.stats
@@ -212,12 +227,22 @@ mod tests {
     #[test]
     fn waits_for_the_rest_of_a_packet() {
         let mut d = StreamDecoder::new();
-        d.push(&[2, 8, 1, 0]);
+        assert_eq!(d.missing(), None);
+        d.push(&[0, 0, 2]);
+        assert!(d.next_packet().is_none());
+        assert_eq!(
+            d.missing(),
+            Some(254),
+            "size not known yet: up to the longest"
+        );
+        d.push(&[8, 1, 0]);
         assert!(d.next_packet().is_none());
         assert_eq!(d.buffered(), 4);
+        assert_eq!(d.missing(), Some(4));
         d.push(&[0, 1, 0, 244]);
         assert!(d.next_packet().is_some());
         assert_eq!(d.buffered(), 0);
+        assert_eq!(d.missing(), None);
     }
 
     #[test]

@@ -58,6 +58,13 @@ impl LineDecoder {
         None
     }
 
+    /// Whether no line is under way (the next byte that is not `\n`, NUL or the end
+    /// begins one).
+    #[must_use]
+    pub const fn is_idle(&self) -> bool {
+        self.len == 0 && !self.overflow
+    }
+
     /// Forgets a partial line (the link went down).
     pub fn clear(&mut self) {
         self.len = 0;

@@ -31,6 +31,11 @@ pub struct ExampleDriverConfig {
     /// Per channel the axis limits in steps: the speed (1..=50 000 steps/s) and the ramp
     /// (1..=1 000 000 steps/s²) of a `Position` goal's move.
     pub limits: [AxisLimits; CHANNELS],
+    /// How long the board may say nothing while a reply is due before it is declared not
+    /// answering: a reply held up on the host comes later and is waited for. The AS-2 has
+    /// no machine keys; every board's `silence_ms` default,
+    /// [`DEFAULT_SILENCE`](motion_drivers::DEFAULT_SILENCE).
+    pub silence: Duration,
 }
 
 impl Default for ExampleDriverConfig {
@@ -40,6 +45,7 @@ impl Default for ExampleDriverConfig {
             poll_period: Duration::from_millis(10),
             polled: [true; CHANNELS],
             limits: [DEFAULT_LIMITS; CHANNELS],
+            silence: motion_drivers::DEFAULT_SILENCE,
         }
     }
 }

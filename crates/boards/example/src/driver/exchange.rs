@@ -4,7 +4,7 @@
 
 use core::time::Duration;
 
-use motion_drivers::{DeviceFault, Priority, Transmit};
+use motion_drivers::{DeviceFault, Priority, Seconds, Transmit, Verdict};
 
 use super::{
     ExampleDriver, InFlight, MISS_LIMIT, OFFLINE_RETRY_PERIOD, PROTOCOL_LIMIT, Phase, RETRY_PERIOD,
@@ -15,6 +15,29 @@ use crate::codec::{CHANNELS, Motion, Reply, Request};
 /// Whether `request` carries a goal (not a poll, not the identify).
 pub(super) fn is_command(request: &Request) -> bool {
     !matches!(request, Request::Identify | Request::Position { .. })
+}
+
+/// Whether `reply` is of the kind `request` gets (a position reply names its channel).
+fn answers(request: Request, reply: Reply) -> bool {
+    match (request, reply) {
+        (Request::Identify, Reply::Identity(_)) => true,
+        (Request::Position { channel }, Reply::Position { channel: c, .. }) => channel == c,
+        (_, Reply::Done | Reply::Error(_)) => is_command(&request),
+        _ => false,
+    }
+}
+
+/// A request as its line, without the `\r` (`P0?`, `M0 10 1000 10000`).
+pub(super) struct Line(pub(super) Request);
+
+impl core::fmt::Display for Line {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let mut buf = [0u8; crate::codec::MAX_LINE];
+        let len = self.0.encode(&mut buf).unwrap_or(0);
+        let text = buf.get(..len).unwrap_or_default();
+        let text = text.strip_suffix(b"\r").unwrap_or(text);
+        f.write_str(core::str::from_utf8(text).unwrap_or("?"))
+    }
 }
 
 /// How urgent a request is on the bus.
@@ -88,6 +111,7 @@ impl ExampleDriver {
         self.in_flight = Some(InFlight {
             request,
             written_at: None,
+            garbled: false,
         });
         Some(Transmit {
             len,
@@ -102,14 +126,15 @@ impl ExampleDriver {
         Some(written.saturating_add(self.config.reply_timeout()))
     }
 
-    /// Lets time pass: a reply timeout (judged up to the link's horizon) and poll rounds.
+    /// Lets time pass: the request in flight (judged up to the link's horizon) and poll
+    /// rounds.
     pub(super) fn pass_time(&mut self, now: Duration) {
         let judged = self.heard.map_or(now, |heard| heard.min(now));
         if self
             .reply_deadline()
             .is_some_and(|deadline| deadline <= judged)
         {
-            self.timed_out(now);
+            self.overdue(now, judged);
         }
         if self.phase == Phase::Running && self.link_up && now >= self.next_poll_at {
             for (due, polled) in self.poll_due.iter_mut().zip(self.config.polled) {
@@ -122,29 +147,79 @@ impl ExampleDriver {
         }
     }
 
-    /// The request in flight got no reply.
+    /// The request in flight is past its reply timeout. The board answers each request
+    /// once, in order, and sends nothing unasked (README "Commands"): a reply held up on
+    /// the host comes later and is waited for — nothing else is sent meanwhile, one
+    /// request at a time. It is lost only when a line that may have been it could not be
+    /// taken; the board is not answering when it said nothing for `silence`.
+    fn overdue(&mut self, now: Duration, judged: Duration) {
+        let Some(in_flight) = self.in_flight else {
+            return;
+        };
+        if in_flight.garbled {
+            self.timed_out(now);
+            return;
+        }
+        let written = in_flight.written_at.unwrap_or(now);
+        let since = self.heard_at.map_or(written, |heard| heard.max(written));
+        let silent = judged.saturating_sub(since);
+        if silent < self.config.silence {
+            return;
+        }
+        self.in_flight = None;
+        self.status.timeouts = self.status.timeouts.saturating_add(1);
+        if self.status.fault != Some(DeviceFault::NotResponding) {
+            self.status.declare(Verdict::new(
+                DeviceFault::NotResponding,
+                now,
+                format_args!(
+                    "`{}` written at {}, due by {}; nothing heard since {}, the link heard \
+                     until {}: {} ms of silence (silence {} ms)",
+                    Line(in_flight.request),
+                    Seconds(written),
+                    Seconds(written.saturating_add(self.config.reply_timeout())),
+                    Seconds(since),
+                    Seconds(judged),
+                    silent.as_millis(),
+                    self.config.silence.as_millis(),
+                ),
+            ));
+        }
+        self.raise(DeviceFault::NotResponding);
+        self.restart(now.saturating_add(OFFLINE_RETRY_PERIOD), START_ATTEMPTS);
+    }
+
+    /// The reply of the request in flight is lost (a line where it was due could not be
+    /// taken): counted, and sent again.
     fn timed_out(&mut self, now: Duration) {
         let Some(in_flight) = self.in_flight.take() else {
             return;
         };
+        self.lost = Some(in_flight.request);
         self.status.timeouts = self.status.timeouts.saturating_add(1);
         match self.phase {
             Phase::Identify { attempts, .. } => {
-                let attempts = attempts.saturating_add(1);
-                let wait = if attempts >= START_ATTEMPTS {
-                    self.raise(DeviceFault::NotResponding);
-                    OFFLINE_RETRY_PERIOD
-                } else {
-                    RETRY_PERIOD
-                };
                 self.phase = Phase::Identify {
-                    attempts,
-                    next_at: now.saturating_add(wait),
+                    attempts: attempts.saturating_add(1),
+                    next_at: now.saturating_add(RETRY_PERIOD),
                 };
             }
             Phase::Running => {
                 self.misses += 1;
                 if self.misses >= MISS_LIMIT {
+                    if self.status.fault != Some(DeviceFault::NotResponding) {
+                        self.status.declare(Verdict::new(
+                            DeviceFault::NotResponding,
+                            now,
+                            format_args!(
+                                "{MISS_LIMIT} replies in a row lost: where each was due came \
+                                 a line that answers nothing in flight; the last for `{}`, \
+                                 written at {}",
+                                Line(in_flight.request),
+                                Seconds(in_flight.written_at.unwrap_or(now)),
+                            ),
+                        ));
+                    }
                     self.raise(DeviceFault::NotResponding);
                     self.restart(now, START_ATTEMPTS);
                     return;
@@ -165,14 +240,24 @@ impl ExampleDriver {
         for &byte in bytes {
             match self.decoder.push(byte) {
                 None => {}
-                Some(Ok(reply)) => self.reply(now, reply),
-                Some(Err(_)) => self.bad_reply(),
+                Some(Ok(reply)) => {
+                    self.heard_at = Some(now);
+                    self.reply(now, reply);
+                }
+                Some(Err(_)) => {
+                    self.heard_at = Some(now);
+                    self.bad_reply();
+                }
             }
         }
     }
 
-    /// A line that is no reply, or no reply to what is in flight.
+    /// A line that is no reply, or no reply to what is in flight: if a request is in
+    /// flight, this may have been its reply.
     fn bad_reply(&mut self) {
+        if let Some(in_flight) = self.in_flight.as_mut() {
+            in_flight.garbled = true;
+        }
         self.status.bad_replies = self.status.bad_replies.saturating_add(1);
         self.bad_in_row = self.bad_in_row.saturating_add(1);
         if self.bad_in_row >= PROTOCOL_LIMIT {
@@ -182,6 +267,12 @@ impl ExampleDriver {
 
     fn reply(&mut self, now: Duration, reply: Reply) {
         let Some(in_flight) = self.in_flight else {
+            if self.lost.is_some_and(|lost| answers(lost, reply)) {
+                // The reply of a request declared lost, after all: recognised, dropped.
+                self.lost = None;
+                self.late_replies = self.late_replies.saturating_add(1);
+                return;
+            }
             return self.bad_reply();
         };
         let request = in_flight.request;

@@ -28,9 +28,11 @@
 //! # Start-up
 //!
 //! `?` until the board answers `AS2 <version>` (the firmware text becomes `AS2
-//! <version>`): every [`RETRY_PERIOD`], after [`START_ATTEMPTS`] silent tries every
-//! [`OFFLINE_RETRY_PERIOD`] with the board [`DeviceFault::NotResponding`]. Then the board
-//! is online and polled; a fault from before clears with the first position reply.
+//! <version>`): one at a time, its reply waited for (below); a reply lost to a line that
+//! could not be taken is asked again after [`RETRY_PERIOD`], a board silent for
+//! [`ExampleDriverConfig::silence`] is [`DeviceFault::NotResponding`] and asked every
+//! [`OFFLINE_RETRY_PERIOD`]. Then the board is online and polled; a fault from before
+//! clears with the first position reply.
 //!
 //! # Polling
 //!
@@ -56,10 +58,16 @@
 //!
 //! # Faults
 //!
-//! - A request unanswered [`ExampleDriverConfig::reply_timeout`] after it was written
-//!   (judged only up to the link's horizon) counts in [`DeviceStatus::timeouts`]; a goal's
-//!   request is sent again. [`MISS_LIMIT`] in a row: [`DeviceFault::NotResponding`], the
-//!   board offline, goals dropped, start-up again.
+//! - One request at a time (README "Commands"): a request unanswered
+//!   [`ExampleDriverConfig::reply_timeout`] after it was written (judged only up to the
+//!   link's horizon) is waited for while the link is silent — a reply held up on the host
+//!   comes later, in order — and nothing else is sent. It is lost when a line that could
+//!   not be taken came where its reply was due: counted in [`DeviceStatus::timeouts`], a
+//!   goal's request sent again; a reply to it that still comes is recognised
+//!   ([`ExampleDriver::late_replies`]), never paired. [`MISS_LIMIT`] lost in a row, or
+//!   [`ExampleDriverConfig::silence`] (500 ms) without a word while a reply is due:
+//!   [`DeviceFault::NotResponding`], declared with its evidence (`DeviceStatus::verdict`),
+//!   the board offline, goals dropped, start-up again.
 //! - A line that is no reply, or a reply that does not answer the request in flight,
 //!   counts in [`DeviceStatus::bad_replies`] and is dropped; [`PROTOCOL_LIMIT`] in a row
 //!   raise [`DeviceFault::Protocol`] until a good reply arrives.
@@ -70,6 +78,8 @@ mod exchange;
 mod goals;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_late;
 
 use core::time::Duration;
 
@@ -109,6 +119,9 @@ enum Phase {
 struct InFlight {
     request: Request,
     written_at: Option<Duration>,
+    /// A line that may have been its reply could not be taken (no reply, or not one to
+    /// this request): once due, its reply is lost rather than late.
+    garbled: bool,
 }
 
 /// What the driver knows of one channel besides the board's last reply.
@@ -144,6 +157,13 @@ pub struct ExampleDriver {
     channels: [Channel; CHANNELS],
     /// Bit `c`: no request of channel `c`'s goal set last has been sent yet.
     goal_unsent: u8,
+    /// When the last line (of any kind) arrived: the board talks.
+    heard_at: Option<Duration>,
+    /// The request whose reply was declared lost last: a reply to it that comes later is
+    /// late.
+    lost: Option<Request>,
+    /// Late replies recognised.
+    late_replies: u64,
 }
 
 impl ExampleDriver {
@@ -173,7 +193,16 @@ impl ExampleDriver {
                 fault: None,
             }; CHANNELS],
             goal_unsent: 0,
+            heard_at: None,
+            lost: None,
+            late_replies: 0,
         }
+    }
+
+    /// Replies that came for a request already declared lost (never paired).
+    #[must_use]
+    pub fn late_replies(&self) -> u64 {
+        self.late_replies
     }
 
     /// The configuration the driver was built from.

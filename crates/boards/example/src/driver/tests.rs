@@ -5,35 +5,44 @@ use core::time::Duration;
 use motion_drivers::{DeviceFault, Driver, Goal, GoalError, GoalKind};
 use motion_link::sim::StreamDevice;
 
-use super::{ExampleDriver, ExampleDriverConfig, MISS_LIMIT, OFFLINE_RETRY_PERIOD, PROTOCOL_LIMIT};
+use super::{ExampleDriver, ExampleDriverConfig, OFFLINE_RETRY_PERIOD, PROTOCOL_LIMIT};
 use crate::sim::{ExampleSim, ExampleSimConfig};
 
 /// A driver wired to a simulated board; bytes cross at once, `silent` drops the board's.
-struct Bench {
-    driver: ExampleDriver,
-    board: ExampleSim,
-    now: Duration,
-    silent: bool,
+pub(super) struct Bench {
+    pub(super) driver: ExampleDriver,
+    pub(super) board: ExampleSim,
+    pub(super) now: Duration,
+    pub(super) silent: bool,
     goal_starts: u8,
+    /// While set, the board's bytes are held (the host starved) until this instant.
+    pub(super) hold_until: Option<Duration>,
+    held: Vec<u8>,
 }
 
 impl Bench {
-    fn new() -> Self {
+    pub(super) fn new() -> Self {
         Self {
             driver: ExampleDriver::new(ExampleDriverConfig::default()),
             board: ExampleSim::new(ExampleSimConfig::default()),
             now: Duration::ZERO,
             silent: false,
             goal_starts: 0,
+            hold_until: None,
+            held: Vec::new(),
         }
     }
 
     /// One millisecond, in the engine's call order.
-    fn tick(&mut self) {
+    pub(super) fn tick(&mut self) {
         let now = self.now;
         let mut buf = [0u8; 256];
         let len = self.board.transmit(now, &mut buf);
-        if !self.silent {
+        if self.hold_until.is_some_and(|until| now < until) {
+            self.held.extend(&buf[..len]);
+        } else if !self.silent {
+            let held = core::mem::take(&mut self.held);
+            self.driver.handle_rx(now, &held);
             self.driver.handle_rx(now, &buf[..len]);
         }
         self.driver.handle_heard(now);
@@ -46,19 +55,19 @@ impl Bench {
         self.now += Duration::from_millis(1);
     }
 
-    fn run(&mut self, ms: u64) {
+    pub(super) fn run(&mut self, ms: u64) {
         for _ in 0..ms {
             self.tick();
         }
     }
 
-    fn online(mut self) -> Self {
+    pub(super) fn online(mut self) -> Self {
         self.run(20);
         assert!(self.driver.status().online, "{:?}", self.driver.status());
         self
     }
 
-    fn goal(&mut self, channel: usize, goal: Goal) {
+    pub(super) fn goal(&mut self, channel: usize, goal: Goal) {
         let now = self.now;
         self.driver
             .set_goal(now, channel, goal)
@@ -170,10 +179,21 @@ fn garbage_on_the_wire_is_counted_and_dropped_never_believed() {
 fn a_silent_board_is_not_responding_and_comes_back() {
     let mut bench = Bench::new();
     bench.silent = true;
-    bench.run(500);
+    let silence = bench.driver.config().silence;
+    // The identify waits for its reply (it may be held up on the host) for `silence`.
+    bench.run(silence.as_millis() as u64 - 10);
+    assert_eq!(bench.driver.status().fault, None, "not before the silence");
+    bench.run(20);
     let status = bench.driver.status();
     assert_eq!(status.fault, Some(DeviceFault::NotResponding));
-    assert!(!status.online && status.timeouts >= 3, "{status:?}");
+    assert!(!status.online && status.timeouts == 1, "{status:?}");
+    let evidence = status.verdict.expect("verdict").evidence;
+    assert!(
+        evidence.as_str().starts_with("`?` written at 0.000 s")
+            && evidence.as_str().contains("ms of silence (silence 500 ms)"),
+        "{}",
+        evidence.as_str()
+    );
     assert_eq!(
         bench.driver.set_goal(bench.now, 0, Goal::Off),
         Err(GoalError::Offline)
@@ -183,7 +203,7 @@ fn a_silent_board_is_not_responding_and_comes_back() {
     assert!(bench.driver.status().online);
     assert_eq!(bench.driver.channel(0).fault, None);
 
-    // Online, then silent: MISS_LIMIT timeouts drop the goal and go back to start-up.
+    // Online, then silent: not answering after `silence`, the goal dropped, start-up again.
     bench.goal(
         0,
         Goal::Velocity {
@@ -192,12 +212,12 @@ fn a_silent_board_is_not_responding_and_comes_back() {
         },
     );
     bench.silent = true;
-    bench.run(200);
+    bench.run(silence.as_millis() as u64 + 30);
     assert_eq!(
         bench.driver.channel(0).fault,
         Some(DeviceFault::NotResponding)
     );
-    assert!(bench.driver.status().timeouts >= 3 + MISS_LIMIT);
+    assert_eq!(bench.driver.status().verdicts, 2);
     assert!(!bench.driver.goals_pending(), "goals are void");
 }
 

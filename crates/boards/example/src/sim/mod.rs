@@ -20,8 +20,10 @@
 //!
 //! A request is executed when its `\r` arrives; its reply starts
 //! [`ExampleSimConfig::processing_delay`] later (plus up to
-//! [`ExampleSimConfig::jitter`], drawn from the seed). A line that is no request answers
-//! `E1`, a channel other than 0 and 1 `E2`, a value out of range `E3`.
+//! [`ExampleSimConfig::jitter`], drawn from the seed), after the previous reply has left.
+//! A line that is no request answers `E1`, a channel other than 0 and 1 `E2`, a value out
+//! of range `E3`. A request begun before the previous reply had left the board ("One
+//! request at a time") is counted ([`ExampleSimStats::interlaced`]).
 
 mod stepper;
 
@@ -67,6 +69,10 @@ pub struct ExampleSimStats {
     pub lines: u64,
     /// `E<n>` answers.
     pub errors: u64,
+    /// Requests whose first byte began before the reply to the previous one had left the
+    /// board: "One request at a time: the host waits for the reply before it sends the
+    /// next" (README "Commands"). Counted, and executed in turn.
+    pub interlaced: u64,
 }
 
 /// A reply waiting for its processing time.
@@ -90,6 +96,10 @@ pub struct ExampleSim {
     scheduled: VecDeque<Scheduled>,
     /// Bytes of replies whose transmission has started, not yet handed to the link.
     started: VecDeque<u8>,
+    /// The line's rate, as the link says ([`StreamDevice::line_rate`]).
+    baud: u32,
+    /// When the last reply will have left the board.
+    reply_end: Duration,
     stats: ExampleSimStats,
 }
 
@@ -111,6 +121,8 @@ impl ExampleSim {
             steppers: [Stepper::new(); CHANNELS],
             scheduled: VecDeque::new(),
             started: VecDeque::new(),
+            baud: crate::driver::DEFAULT_BAUD,
+            reply_end: Duration::ZERO,
             stats: ExampleSimStats::default(),
         }
     }
@@ -125,6 +137,11 @@ impl ExampleSim {
     #[must_use]
     pub fn position(&self, channel: usize) -> Option<i32> {
         self.steppers.get(channel).map(|s| s.position())
+    }
+
+    /// One 8N1 byte at the line's rate.
+    fn byte_time(&self) -> Duration {
+        Duration::from_nanos(10_000_000_000 / u64::from(self.baud.max(1)))
     }
 
     fn advance(&mut self, now: Duration) {
@@ -207,6 +224,11 @@ impl StreamDevice for ExampleSim {
     fn receive(&mut self, now: Duration, bytes: &[u8]) {
         self.advance(now);
         for &byte in bytes {
+            let starts = self.lines.is_idle() && !matches!(byte, b'\n' | 0 | crate::codec::END);
+            // The byte began one byte time (10 bits) before it arrived.
+            if starts && now.saturating_sub(self.byte_time()) < self.reply_end {
+                self.stats.interlaced += 1;
+            }
             let parsed = match self.lines.push(byte) {
                 None => continue,
                 Some(line) => line.and_then(Request::parse),
@@ -222,6 +244,9 @@ impl StreamDevice for ExampleSim {
             // Replies leave in request order, whatever the jitter drew.
             let earliest = self.scheduled.back().map_or(Duration::ZERO, |s| s.at);
             let at = (now + self.config.processing_delay + self.jitter()).max(earliest);
+            // Its bytes leave after the previous reply's (the link charges the wire time).
+            self.reply_end =
+                at.max(self.reply_end) + self.byte_time() * u32::try_from(len).unwrap_or(u32::MAX);
             self.scheduled.push_back(Scheduled { at, bytes, len });
         }
     }
@@ -245,6 +270,10 @@ impl StreamDevice for ExampleSim {
         } else {
             Some(now)
         }
+    }
+
+    fn line_rate(&mut self, baud: u32) {
+        self.baud = baud.max(1);
     }
 }
 

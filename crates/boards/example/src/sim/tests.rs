@@ -76,3 +76,23 @@ fn replies_wait_for_the_processing_time_and_keep_their_order_under_jitter() {
     assert_eq!(&out[..len], b"P0 0 0 I\rP1 0 0 I\rAS2 1.4\r");
     assert_eq!(board.next_event(ms(1)), None);
 }
+
+#[test]
+fn a_request_before_the_previous_reply_left_is_counted() {
+    // README "Commands": "One request at a time: the host waits for the reply before it
+    // sends the next." At 115200 baud a byte takes 86.8 µs; `AS2 1.4\r` (8 bytes) leaves
+    // 200 µs + 694 µs after the `?`'s `\r`.
+    let mut board = ExampleSim::new(ExampleSimConfig::default());
+    board.line_rate(115_200);
+    board.receive(ms(0), b"?\r");
+    // A request whose first byte arrives 0.5 ms later: the reply is still leaving.
+    board.receive(ms(0) + Duration::from_micros(500), b"P0?\r");
+    assert_eq!(board.stats().interlaced, 1);
+    // One that begins after both replies left is not.
+    board.receive(ms(5), b"P1?\r");
+    assert_eq!(board.stats().interlaced, 1);
+    // Both were answered in turn all the same.
+    let mut out = [0u8; 64];
+    let len = board.transmit(ms(6), &mut out);
+    assert_eq!(&out[..len], b"AS2 1.4\rP0 0 0 I\rP1 0 0 I\r");
+}

@@ -137,6 +137,11 @@ pub struct Qq2drvDriverConfig {
     pub history: HistoryDimensions,
     /// The board's request processing time budget (the datasheet gives none).
     pub processing_time: Duration,
+    /// How long the board may put no valid packet on MISO before it is declared not
+    /// answering (`silence_ms`, default [`DEFAULT_SILENCE`](motion_drivers::DEFAULT_SILENCE)):
+    /// MISO held back on the host (an SPI socket peer or the server without CPU) comes
+    /// later, in order, and is waited for.
+    pub silence: Duration,
     /// Channels 1..4 (index 0..3).
     pub channels: [ChannelConfig; CHANNELS],
 }
@@ -151,6 +156,7 @@ impl Default for Qq2drvDriverConfig {
                 averaging_bits: 16,
             },
             processing_time: Duration::from_millis(1),
+            silence: motion_drivers::DEFAULT_SILENCE,
             channels: [ChannelConfig::default(); CHANNELS],
         }
     }

@@ -243,6 +243,7 @@ impl Qq2drvDriver {
                         seq: channel.seq,
                         packet,
                     },
+                    heard_after: None,
                 });
             }
             channel.sent(&packets);

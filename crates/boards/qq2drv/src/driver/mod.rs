@@ -21,20 +21,24 @@
 //! sending goals every tick cannot build an ever-growing backlog on the bus. Requests go
 //! out as their own transactions, before polls ([`Priority::Setup`] / [`Priority::Command`]); the board
 //! answers requests in order, each with its packet id, so answers are matched to the
-//! oldest unanswered request with that id (skipped ones are lost). A goal's transaction
-//! therefore goes out in the tick that set it, behind at most the link's transaction in
-//! progress (`tests/engine_qq2drv/wire.rs`).
+//! oldest unanswered request with that id (skipped ones are lost). A packet a transaction
+//! ended in the middle of is read out entirely before the next request ("Master reads out
+//! one entire packet", SPI Interface): its rest is clocked with filler at the start of the
+//! request's own transaction (a packet whose size has not come yet: a poll first). A
+//! goal's transaction therefore goes out in the tick that set it, behind at most the
+//! link's transaction in progress (`tests/engine_qq2drv/wire.rs`).
 //!
 //! # Start-up
 //!
 //! 1. Probe: Get Version (1), Get Data Mask (7), Get Stream Config (9), Get Stream Period
 //!    (5) in one transaction. The firmware text becomes `"fw <major>.<minor> protocol <p>"`.
-//!    No complete answer after [`START_ATTEMPTS`] tries (each one reply timeout apart) is
-//!    [`DeviceFault::NotResponding`]; the probe then repeats every
-//!    [`OFFLINE_RETRY_PERIOD`]. The answers give the layout the board streams in now.
+//!    Without a complete answer it is sent again every reply timeout, after
+//!    [`START_ATTEMPTS`] tries every [`OFFLINE_RETRY_PERIOD`]. The answers give the layout
+//!    the board streams in now.
 //! 2. If the board had been configured by this driver before and the masks, stream config
 //!    or stream period are no longer ours (power-up defaults: period 0), the board has
-//!    reset: [`DeviceFault::Reset`], every channel's goal is gone (the motors are Off).
+//!    reset: [`DeviceFault::Reset`], declared with what the probe read (the verdict's
+//!    evidence), every channel's goal is gone (the motors are Off).
 //! 3. Configure, in one transaction: history dimensions (12), data masks (6: 32-bit
 //!    absolute position, velocity and status for channels with an axis, the Status byte
 //!    alone for a channel whose pins a signal reads, nothing for the others), stream
@@ -78,21 +82,31 @@
 //! # Faults
 //!
 //! - No stream packet for the stall time (4 stream periods + 3 × the cadence + 2 ms): the
-//!   driver probes again (start-up step 1) — a board that reset is found in step 2. The
+//!   driver checks the stream with Get Stream Period (5), nothing voided, at most once a
+//!   stall time; an answer other than the period start-up wrote (0 at power-up) sends it
+//!   back to its probe (start-up step 1), which finds a board that reset in step 2. The
 //!   cadence is the poll period, or the interval between the caller's last two
 //!   `handle_timeout` calls when that is longer: a slow or late tick leaves data as old as
 //!   the tick, which is not the board's fault.
-//! - No valid packet at all for [`Driver::refresh_budget`]: [`DeviceFault::NotResponding`].
+//! - No valid packet at all for [`Qq2drvDriverConfig::silence`] (`silence_ms`, 500 ms by
+//!   default), judged up to the link's horizon: [`DeviceFault::NotResponding`], declared
+//!   with the evidence (since when, how long, the oldest request unanswered). MISO held
+//!   back on the host comes later, in order, and is waited for (module `liveness`); the
+//!   axes show stale data meanwhile.
 //! - A goal answered with a non-zero return code: [`DeviceFault::BoardError`] on that
 //!   channel; a status with the glitch or overspeed bit: [`DeviceFault::Overspeed`]. Both
 //!   stay until the channel's next goal.
-//! - A request unanswered within its reply timeout is lost: a goal's packets are sent
-//!   again, a start-up is restarted.
+//! - A request past its reply timeout is lost once the board was heard for a whole reply
+//!   window after that (packets it made after the reply), or when a later request's reply
+//!   came first: a goal's packets are sent again, a start-up is restarted. A reply that
+//!   comes for a request already lost is recognised ([`Qq2drvDriver::late_replies`]),
+//!   never paired.
 //! - Garbage on MISO costs the packets it hides; the channels keep their last state.
 
 mod channel;
 mod config;
 mod goals;
+mod liveness;
 mod pins;
 mod rx;
 mod spec;
@@ -181,7 +195,22 @@ pub struct Qq2drvDriver {
     io_stamps: IoStamps,
     /// The message the last probe went out in.
     probe_number: u64,
+    /// Since when the driver listens (its first `handle_timeout`, or the link's coming
+    /// up): silence before any valid packet counts from here.
+    listening_since: Option<Duration>,
+    /// The stream stalls: a Get Stream Period is due (module `liveness`).
+    check_due: bool,
+    /// No stream check before this instant.
+    check_after: Duration,
+    /// Packet ids of the requests declared lost last: a reply with one of them that
+    /// matches nothing in flight is late, not bad.
+    lost_ids: motion_base::FixedQueue<qq2drv::PacketId, LOST_IDS>,
+    /// Late replies recognised (module `liveness`).
+    late_replies: u64,
 }
+
+/// Lost requests whose late replies are recognised.
+const LOST_IDS: usize = 16;
 
 impl Qq2drvDriver {
     /// A driver for the board `config` describes; it starts the board on its first
@@ -215,6 +244,11 @@ impl Qq2drvDriver {
             call_interval: Duration::ZERO,
             io_stamps: IoStamps::default(),
             probe_number: 0,
+            listening_since: None,
+            check_due: false,
+            check_after: Duration::ZERO,
+            lost_ids: motion_base::FixedQueue::new(),
+            late_replies: 0,
         }
     }
 
@@ -374,6 +408,7 @@ impl Driver for Qq2drvDriver {
     fn link_up(&mut self, now: Duration) {
         self.io_stamps.link_reset();
         self.link_up = true;
+        self.listening_since = None;
         self.line_free_at = now;
         self.next_poll_at = now;
         self.last_valid_at = None;

@@ -29,7 +29,7 @@ impl Qq2drvDriver {
     }
 
     pub(super) fn on_packet(&mut self, now: Duration, packet: &PacketBuf) {
-        self.last_valid_at = Some(now);
+        self.heard_packet(now);
         let frame = packet.frame();
         if frame.id == PacketId::StreamData.as_u8() && self.phase != Phase::Running {
             return; // Its layout is not known yet.
@@ -54,7 +54,14 @@ impl Qq2drvDriver {
             return;
         }
         let Some(index) = self.in_flight.position(|sent| sent.id == reply.id()) else {
-            self.status.bad_replies = self.status.bad_replies.saturating_add(1);
+            // The reply to a request declared lost, after all: recognised, never paired.
+            match self.lost_ids.position(|id| *id == reply.id()) {
+                Some(at) => {
+                    self.lost_ids.remove(at);
+                    self.late_replies = self.late_replies.saturating_add(1);
+                }
+                None => self.status.bad_replies = self.status.bad_replies.saturating_add(1),
+            }
             return;
         };
         for _ in 0..index {
@@ -164,12 +171,20 @@ impl Qq2drvDriver {
                     channel.answered(now, seq, packet, code);
                 }
             }
+            Tag::Check => {
+                let period = match reply {
+                    Reply::StreamPeriod { code, period } if code.is_success() => Some(period),
+                    _ => None,
+                };
+                self.checked(now, period);
+            }
         }
     }
 
     pub(super) fn on_lost(&mut self, now: Duration, sent: Sent) {
+        self.lost_ids.push_overwrite(sent.id);
         match sent.tag {
-            Tag::Probe => {}
+            Tag::Probe | Tag::Check => {}
             Tag::Setup => {
                 if self.phase == Phase::Configure {
                     self.restart(now);

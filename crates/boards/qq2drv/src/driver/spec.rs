@@ -37,11 +37,11 @@ impl Qq2drvDriverConfig {
         if let Some(speed) = spec.line_rate {
             driver.speed_hz = speed;
         }
-        let velocity_ramp = spec
-            .machine
-            .get_or_default::<Qq2drvDeviceKeys>()
-            .velocity_ramp
-            .unwrap_or_default();
+        let device_keys = spec.machine.get_or_default::<Qq2drvDeviceKeys>();
+        let velocity_ramp = device_keys.velocity_ramp.unwrap_or_default();
+        if let Some(silence) = device_keys.silence {
+            driver.silence = silence;
+        }
         for (channel, slot) in driver.channels.iter_mut().enumerate() {
             match spec.channel_limits(channel) {
                 Some(limits) => {
@@ -119,6 +119,11 @@ impl Qq2drvDriverConfig {
                 VelocityRampSign::Unsigned => "unsigned (reverse by packets 28, 22)",
             }
             .to_owned(),
+        });
+        out.push(Param {
+            owner: ParamOwner::Device,
+            key: "silence_ms",
+            value: format!("{} ms", self.silence.as_millis()),
         });
         for (channel, slot) in self.channels.iter().enumerate() {
             let Some((axis, _)) = axis_of(spec, channel) else {

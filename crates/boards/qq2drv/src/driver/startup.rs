@@ -28,7 +28,20 @@ pub(super) fn velocity_limit(max_velocity: f64) -> u32 {
         .unwrap_or(VELOCITY_LIMIT_MAX)
         .clamp(1, VELOCITY_LIMIT_MAX)
 }
-use motion_drivers::{DeviceFault, FIRMWARE_LEN};
+use motion_drivers::{DeviceFault, FIRMWARE_LEN, Seconds, Verdict};
+
+/// Four data masks as hex bytes (`23 23 00 00`).
+struct Masks([DataMask; CHANNELS]);
+
+impl core::fmt::Display for Masks {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        for (i, mask) in self.0.iter().enumerate() {
+            let sep = if i == 0 { "" } else { " " };
+            write!(f, "{sep}{:02X}", mask.0)?;
+        }
+        Ok(())
+    }
+}
 
 /// What the probe has learnt so far.
 #[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -42,19 +55,24 @@ pub(super) struct ProbeReplies {
 impl Qq2drvDriver {
     /// Writes the probe requests.
     pub(super) fn write_probe(&mut self, now: Duration, buf: &mut [u8]) -> Option<usize> {
-        let mut len = 0;
-        for request in [
+        let requests = [
             Request::GetVersion,
             Request::GetDataMask,
             Request::GetStreamConfig,
             Request::GetStreamPeriod,
-        ] {
+        ];
+        // All of it fits, or nothing is in flight.
+        let mut len = 0;
+        for request in &requests {
             len += request.encode(buf.get_mut(len..)?).ok()?;
+        }
+        for request in requests {
             self.in_flight.push(Sent {
                 id: request.id(),
                 at: now,
                 number: self.io_stamps.next_number(),
                 tag: Tag::Probe,
+                heard_after: None,
             });
         }
         self.probe_number = self.io_stamps.next_number();
@@ -206,6 +224,7 @@ impl Qq2drvDriver {
                 at: now,
                 number: self.io_stamps.next_number(),
                 tag: Tag::Setup,
+                heard_after: None,
             });
             count += 1;
         }
@@ -235,6 +254,22 @@ impl Qq2drvDriver {
             && config == STREAM_CONFIG
             && period == self.config.stream_period_units();
         if self.configured_once && !ours {
+            let ours_masks = self.stream_masks();
+            self.status.declare(Verdict::new(
+                DeviceFault::Reset,
+                now,
+                format_args!(
+                    "the probe at {} read stream period {period}, stream config {:02X}, data \
+                     masks {}; start-up wrote {}, {:02X}, {}: the board lost its \
+                     configuration (at power-up the period is 0)",
+                    Seconds(now),
+                    config.0,
+                    Masks(masks),
+                    self.config.stream_period_units(),
+                    STREAM_CONFIG.0,
+                    Masks(ours_masks),
+                ),
+            ));
             self.status.resets = self.status.resets.saturating_add(1);
             self.raise(DeviceFault::Reset);
             for channel in &mut self.channels {
@@ -283,16 +318,9 @@ impl Qq2drvDriver {
         }
         self.probe = ProbeReplies::default();
         self.probe_due = false;
+        self.check_due = false;
         self.configure_due = false;
         self.setup_unanswered = 0;
         self.decoder.clear();
-    }
-
-    pub(super) fn not_responding(&mut self) {
-        if self.status.fault != Some(DeviceFault::NotResponding) {
-            self.status.timeouts = self.status.timeouts.saturating_add(1);
-        }
-        self.raise(DeviceFault::NotResponding);
-        self.status.online = false;
     }
 }

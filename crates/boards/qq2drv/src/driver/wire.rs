@@ -17,7 +17,11 @@ use super::{
     CONFIGURE_REQUESTS, FILLER, OFFLINE_RETRY_PERIOD, POLL_SLACK, Phase, Qq2drvDriver,
     START_ATTEMPTS, STREAM_CONFIG,
 };
-use motion_drivers::{DeviceFault, Driver, Priority, Transmit};
+use motion_drivers::{Priority, Transmit};
+
+/// What [`StreamDecoder::missing`](qq2drv::StreamDecoder::missing) says of a packet whose
+/// size has not arrived: the rest of the longest.
+const UNKNOWN_REST: usize = qq2drv::MAX_PACKET_LEN - 1;
 
 /// Most packets one goal step sends in its transaction.
 pub(super) const MAX_STEP_PACKETS: usize = 5;
@@ -170,6 +174,8 @@ pub(super) enum Tag {
         seq: u32,
         packet: Packet,
     },
+    /// The stream check: Get Stream Period while the stream stalls (module `liveness`).
+    Check,
 }
 
 /// One unanswered request.
@@ -181,6 +187,8 @@ pub(super) struct Sent {
     /// The message (transaction) it went out in (`IoStamps::sent`).
     pub(super) number: u64,
     pub(super) tag: Tag,
+    /// When the first valid packet after its reply timeout arrived (module `liveness`).
+    pub(super) heard_after: Option<Duration>,
 }
 
 /// Requests in flight, oldest first.
@@ -192,6 +200,7 @@ pub(super) enum Next {
     Probe,
     Configure,
     Goals,
+    Check,
     Poll,
 }
 
@@ -235,6 +244,13 @@ impl Qq2drvDriver {
         if !self.link_up {
             return None;
         }
+        let backlog = self.line_free_at.saturating_sub(now);
+        if self.decoder.missing() == Some(UNKNOWN_REST) {
+            // A packet begun whose size has not come yet: read by a poll before anything
+            // else ("Master reads out one entire packet", SPI Interface).
+            return (backlog <= self.config.poll_period / 2)
+                .then_some((Next::Poll, Priority::Poll));
+        }
         if self.probe_due && self.in_flight.has_room(4) {
             return Some((Next::Probe, Priority::Setup));
         }
@@ -244,7 +260,6 @@ impl Qq2drvDriver {
         // Goals wait while a whole poll period of earlier bytes is still on the wire (a
         // newer goal of the same channel replaces an unsent one meanwhile), polls while
         // half of one is.
-        let backlog = self.line_free_at.saturating_sub(now);
         let goals = self.phase == Phase::Running
             && backlog <= self.config.poll_period
             && self.in_flight.has_room(MAX_STEP_PACKETS)
@@ -254,6 +269,9 @@ impl Qq2drvDriver {
                 .any(|c| c.config.enabled && c.unsent && c.ready());
         if goals {
             return Some((Next::Goals, Priority::Command));
+        }
+        if self.check_due && self.phase == Phase::Running && self.in_flight.has_room(1) {
+            return Some((Next::Check, Priority::Poll));
         }
         let reading = self.phase == Phase::Running || !self.in_flight.is_empty();
         let bus_free = backlog <= self.config.poll_period / 2;
@@ -267,22 +285,34 @@ impl Qq2drvDriver {
     pub(super) fn transmit(&mut self, now: Duration, buf: &mut [u8]) -> Option<Transmit> {
         let (next, _) = self.next(now)?;
         let mut goal_starts = 0;
-        let len = match next {
-            Next::Probe => self.write_probe(now, buf)?,
-            Next::Configure => self.write_configure(now, buf)?,
-            Next::Goals => self.write_goals(now, buf, &mut goal_starts),
-            Next::Poll => {
-                let len = self.poll_len();
-                buf.get_mut(..len)?.fill(FILLER);
-                // Three quarters: a tick at exactly the poll period always polls.
-                let period = self.config.poll_period;
-                self.next_poll_at = now.saturating_add(period - period / 4);
-                len
-            }
+        // A packet partly read is read out entirely before a request ("Master reads out
+        // one entire packet", SPI Interface): its rest is clocked with filler first, in
+        // the request's own transaction.
+        let prefix = match next {
+            Next::Poll => 0,
+            _ => self.decoder.missing().unwrap_or(0),
         };
-        if len == 0 {
-            return None;
-        }
+        let written = match buf.get_mut(prefix..) {
+            Some(rest) => match next {
+                Next::Probe => self.write_probe(now, rest),
+                Next::Configure => self.write_configure(now, rest),
+                Next::Goals => Some(self.write_goals(now, rest, &mut goal_starts)),
+                Next::Check => self.write_check(now, rest),
+                Next::Poll => self.write_poll(now, buf),
+            },
+            None => None,
+        };
+        let (len, next) = match written {
+            Some(len) if len > 0 && next == Next::Poll => (len, next),
+            Some(len) if len > 0 => {
+                buf.get_mut(..prefix)?.fill(FILLER);
+                (prefix + len, next)
+            }
+            // The request does not fit behind the rest of the packet: that rest alone
+            // first, the request at the next call.
+            _ if prefix > 0 => (self.write_poll(now, buf)?, Next::Poll),
+            _ => return None,
+        };
         let _number = self.io_stamps.sent();
         self.line_free_at = self
             .line_free_at
@@ -293,6 +323,24 @@ impl Qq2drvDriver {
             expects_reply: next != Next::Poll,
             goal_starts,
         })
+    }
+
+    /// Writes a poll: filler for one stream packet and a reply, or for the rest of a
+    /// packet partly read.
+    fn write_poll(&mut self, now: Duration, buf: &mut [u8]) -> Option<usize> {
+        // (A packet whose size has not come yet is read on by an ordinary poll: then its
+        // rest is known.)
+        let rest = self
+            .decoder
+            .missing()
+            .filter(|missing| *missing != UNKNOWN_REST)
+            .map_or(0, |missing| missing + POLL_SLACK);
+        let len = self.poll_len().max(rest).min(qq2drv::MAX_PACKET_LEN);
+        buf.get_mut(..len)?.fill(FILLER);
+        // Three quarters: a tick at exactly the poll period always polls.
+        let period = self.config.poll_period;
+        self.next_poll_at = now.saturating_add(period - period / 4);
+        Some(len)
     }
 
     /// A transaction went out at `at`: the reply timeouts of its requests run from there,
@@ -333,28 +381,13 @@ impl Qq2drvDriver {
         let timeout = self.reply_timeout();
         // Unanswered, silent, stalled: only as far as the link was looked at.
         let judged = self.io_stamps.judged(now);
-        while let Some(oldest) = self.in_flight.front()
-            && judged.saturating_sub(oldest.at) > timeout
-        {
-            self.in_flight.pop();
-            self.status.timeouts = self.status.timeouts.saturating_add(1);
-            self.on_lost(now, oldest);
-        }
-        let silent = self
-            .last_valid_at
-            .is_some_and(|at| judged.saturating_sub(at) > self.refresh_budget());
-        if silent && self.status.fault != Some(DeviceFault::NotResponding) {
-            self.not_responding();
-            // Probe again; a probe already under way keeps its pace.
-            if self.phase == Phase::Running {
-                self.restart(now);
-            }
-        }
+        self.listening_since.get_or_insert(judged);
+        self.judge_requests(now, judged);
+        self.judge_silence(now, judged);
         match self.phase {
             Phase::Probe { attempts, next_at } if judged >= next_at => {
-                if attempts >= START_ATTEMPTS {
-                    self.not_responding();
-                }
+                // Probes are reads: one more while an earlier one's answers may still come
+                // is harmless. Not answering is the silence's verdict alone.
                 self.probe_due = true;
                 let attempts = attempts.saturating_add(1);
                 let wait = if attempts >= START_ATTEMPTS {
@@ -368,12 +401,9 @@ impl Qq2drvDriver {
                 };
             }
             Phase::Running => {
-                if judged.saturating_sub(self.last_stream_at) > self.stall_timeout() {
-                    self.restart(now);
-                } else {
-                    for channel in &mut self.channels {
-                        channel.progress(now);
-                    }
+                self.judge_stream(judged);
+                for channel in &mut self.channels {
+                    channel.progress(now);
                 }
             }
             Phase::Probe { .. } | Phase::Configure => {}

@@ -85,6 +85,10 @@ pub struct Qq2drvSimStats {
     pub stream_missed: u64,
     /// Bad MOSI packets (wrong checksum, size or id).
     pub bad_packets: u64,
+    /// Requests that began while a packet begun in an earlier transaction was still being
+    /// clocked out: the master had not read out that packet entirely ("Master reads out
+    /// one entire packet", SPI Interface). A master that keeps to it never makes one.
+    pub interlaced: u64,
 }
 
 /// The simulated board.
@@ -101,6 +105,7 @@ pub struct Qq2drvSim {
     stream: StreamClock,
     requests: u64,
     rejected: u64,
+    interlaced: u64,
 }
 
 impl Qq2drvSim {
@@ -125,6 +130,7 @@ impl Qq2drvSim {
             stream: StreamClock::default(),
             requests: 0,
             rejected: 0,
+            interlaced: 0,
         }
     }
 
@@ -259,6 +265,7 @@ impl Qq2drvSim {
             stream_packets: self.stream.produced,
             stream_missed: self.stream.missed,
             bad_packets: self.wire.rx.stats().bad_packets(),
+            interlaced: self.interlaced,
         }
     }
 
@@ -375,6 +382,10 @@ impl SpiDevice for Qq2drvSim {
             }
             t = (t + byte).min(now.max(start));
             if let Some(&b) = mosi.get(i) {
+                let request_starts = b == qq2drv::STX && self.wire.rx.missing().is_none();
+                if request_starts && self.wire.reading_older_packet() {
+                    self.interlaced += 1;
+                }
                 self.receive_byte(t, b);
             }
         }

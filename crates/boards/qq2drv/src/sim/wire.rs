@@ -28,6 +28,8 @@ pub(crate) struct Wire {
     queue: VecDeque<Outgoing>,
     /// Packet being clocked out and the index of its next byte.
     current: Option<(PacketBuf, usize, bool)>,
+    /// The transaction the packet being clocked out began in.
+    current_txn: u64,
     /// A stream packet is queued or being clocked out.
     stream_in_flight: bool,
     /// The request processor is busy until then.
@@ -44,6 +46,7 @@ impl Wire {
             txn: 0,
             queue: VecDeque::with_capacity(capacity + 1),
             current: None,
+            current_txn: 0,
             stream_in_flight: false,
             busy_until: Duration::ZERO,
             capacity: capacity.max(1),
@@ -104,6 +107,7 @@ impl Wire {
                 && let Some(o) = self.queue.remove(i)
             {
                 self.current = Some((o.packet, 0, o.stream));
+                self.current_txn = txn;
             }
         }
         let Some((packet, index, stream)) = self.current.as_mut() else {
@@ -119,6 +123,12 @@ impl Wire {
             self.current = None;
         }
         byte
+    }
+
+    /// A packet begun in an earlier transaction is partly clocked out: the master has not
+    /// read it out entirely.
+    pub(crate) fn reading_older_packet(&self) -> bool {
+        self.current.is_some() && self.current_txn < self.txn
     }
 
     /// SRDY: a packet is available (or partly clocked out) at `now`.

@@ -11,6 +11,7 @@ use ::qsb::{
 use super::counter::CounterSetup;
 pub use super::io::{EnableOutput, QsbIo};
 use super::trigger::TriggerSetup;
+use motion_drivers::DEFAULT_SILENCE;
 
 /// Bits on the wire per byte (8N1).
 const BITS_PER_BYTE: u64 = 10;
@@ -48,6 +49,11 @@ pub struct QsbDriverConfig {
     /// Extra time the host side may take to deliver bytes (USB scheduling, the serial
     /// driver's latency timer), added to every reply timeout and to the refresh budget.
     pub latency: Duration,
+    /// How long the board may say nothing while it owes an answer before it is declared
+    /// not answering (`silence_ms`, default [`DEFAULT_SILENCE`]): a reply delayed on the
+    /// host (a stalled server, a board's process without CPU) arrives later, in order, and
+    /// is waited for; nothing else is sent meanwhile (one command at a time).
+    pub silence: Duration,
     /// Counter counts (in the [`CounterSetup::count`] mode: x4 by default) per motor step
     /// on the -M; negative when the encoder
     /// counts down while the motor steps forward. Default 10: a 500-cycle encoder on the
@@ -99,6 +105,7 @@ impl Default for QsbDriverConfig {
             baud: 230_400,
             stream_interval: None,
             latency: Duration::from_millis(5),
+            silence: DEFAULT_SILENCE,
             counts_per_step: 10.0,
             max_velocity: 10_000.0,
             max_accel: 100_000.0,

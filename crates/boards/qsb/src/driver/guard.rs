@@ -43,7 +43,18 @@ pub(crate) enum StampVerdict {
     Hold,
     /// Two lines in a row say the board restarted (the stamp went backwards, or the lines
     /// lost their time stamps although EOR asks for them).
-    Reset,
+    Reset(StampReset),
+}
+
+/// What two lines showed of a restart (the evidence of the reset verdict).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum StampReset {
+    /// The time stamp went back from `last` to `held`, then `stamp` went on from there:
+    /// "This counter is cleared on a power-cycle".
+    Backwards { last: u32, held: u32, stamp: u32 },
+    /// Two read or stream lines in a row without the time stamp EOR asks for: the board
+    /// answers in its saved EOR again (the driver never saves).
+    Unstamped,
 }
 
 /// A held line: its stamp, or none where one was due.
@@ -89,7 +100,7 @@ impl StampGuard {
             }
             if self.suspect == Some(Suspect::Missing) {
                 self.clear();
-                return StampVerdict::Reset;
+                return StampVerdict::Reset(StampReset::Unstamped);
             }
             self.suspect = Some(Suspect::Missing);
             return StampVerdict::Hold;
@@ -122,7 +133,11 @@ impl StampGuard {
         }
         if held.wrapping_sub(last.0) > HALF {
             self.clear();
-            return StampVerdict::Reset;
+            return StampVerdict::Reset(StampReset::Backwards {
+                last: last.0,
+                held,
+                stamp,
+            });
         }
         self.accept(now, stamp);
         StampVerdict::NewTimeline
@@ -238,7 +253,11 @@ mod tests {
         now += TICK;
         assert_eq!(
             guard.check(now, Some(4), true, LATENCY),
-            StampVerdict::Reset
+            StampVerdict::Reset(StampReset::Backwards {
+                last: 50_009,
+                held: 3,
+                stamp: 4
+            })
         );
         // The new timeline is taken from its next line on.
         now += TICK;
@@ -284,7 +303,10 @@ mod tests {
         now += TICK;
         assert_eq!(guard.check(now, None, true, LATENCY), StampVerdict::Hold);
         now += TICK;
-        assert_eq!(guard.check(now, None, true, LATENCY), StampVerdict::Reset);
+        assert_eq!(
+            guard.check(now, None, true, LATENCY),
+            StampVerdict::Reset(StampReset::Unstamped)
+        );
         // Without EOR time stamps configured, no stamp is no news.
         assert_eq!(guard.check(now, None, false, LATENCY), StampVerdict::Accept);
     }

@@ -84,24 +84,41 @@
 //!
 //! # Wire, liveness and resets
 //!
-//! One request in flight; its answer is matched by type and register among the streamed
-//! lines. The board takes one command at a time ("At the conclusion of the command
-//! response, the QSB is ready to accept another command", QSB command list, Command
-//! Acknowledgement Format), so a new goal's first request waits for the answer in flight
-//! (one reply line, behind at most the streamed line being sent): command → wire is at
-//! most 1 tick + that line + the tick that takes it in. While a write awaits its answer
-//! the driver does not count on the register's value, and while a motor command does, on
-//! the drive being done: a step of a new plan is never skipped on what an unanswered
-//! request may still change. Position is the streamed counter, velocity the count difference over the last
-//! 8 samples (`VELOCITY_WINDOW`) divided by their time-stamp difference. A board
-//! reset shows as a line without the time stamp (EOR lost), a time stamp going backwards,
-//! a -M drive found disabled, or the stream gone silent while the board still answers
-//! `R14`; it is reported as [`DeviceFault::Reset`] and the start-up runs again. A board
-//! that does not answer three times in a row is [`DeviceFault::NotResponding`]; the
-//! driver retries its start-up every [`RESTART_DELAY`]. Garbage is skipped by the
-//! response decoder; a request whose answer it swallowed times out and is sent again —
-//! except COMMAND 8 (a move must never run twice): the driver measures instead and
-//! corrects.
+//! One request in flight; its answer is matched by type and register (and data, for a
+//! write) among the streamed lines. The board takes one command at a time ("At the
+//! conclusion of the command response, the QSB is ready to accept another command", QSB
+//! command list, Command Acknowledgement Format), so a new goal's first request waits for
+//! the answer in flight and its EOR (one reply line, behind at most the streamed line
+//! being sent): command → wire is at most 1 tick + that line + the USB frame + the tick
+//! that takes it in. While a write awaits its answer the driver does not count on the
+//! register's value, and while a motor command does, on the drive being done: a step of a
+//! new plan is never skipped on what an unanswered request may still change. Position is
+//! the streamed counter, velocity the count difference over the last 8 samples
+//! (`VELOCITY_WINDOW`) divided by their time-stamp difference.
+//!
+//! An answer past its deadline is waited for while the link is silent (a host or a board's
+//! process without CPU delivers everything later, in order) and declared lost once the
+//! board is heard streaming past it for a reply window, or once a line where it was due
+//! could not be decoded (module `liveness`): a lost request counts in `timeouts` and is
+//! sent again — except COMMAND 8 (a move must never run twice): the driver measures
+//! instead and corrects. A late answer is recognised (it answers the request declared
+//! lost, or its time stamp is older than the lines seen before the request in flight) and
+//! never paired ([`QsbDriver::late_answers`]).
+//!
+//! Verdicts, each declared with its evidence (`DeviceStatus::verdict`):
+//! - [`DeviceFault::NotResponding`]: the board owes an answer and said nothing for
+//!   [`QsbDriverConfig::silence`] (`silence_ms`, 500 ms by default), or [`MAX_ATTEMPTS`]
+//!   answers in a row were lost; the driver retries its start-up every [`RESTART_DELAY`].
+//! - [`DeviceFault::Reset`], the start-up runs again: two read or stream lines in a row
+//!   without the time stamp EOR 5 asks for (the board is back at its saved EOR), a time
+//!   stamp that went backwards over two lines ("cleared on a power-cycle"), a -M drive
+//!   found disabled on two MD STATUS lines, the liveness probe's TIME STAMP below the
+//!   newest stamp seen before it was sent, or VERSION naming another serial number twice.
+//!
+//! A stream gone quiet is not a reset: after a refresh budget without a sample the driver
+//! probes `R0D`; an answer whose TIME STAMP went on says the board did not restart, and a
+//! stream still quiet over two such probes is asked for again (nothing else: the board
+//! holds its configuration). Garbage is skipped by the response decoder.
 #![allow(clippy::module_name_repetitions)]
 
 mod config;
@@ -110,6 +127,7 @@ mod encoder;
 mod goals;
 mod guard;
 mod io;
+mod liveness;
 mod program;
 mod rx;
 mod spec;
@@ -121,7 +139,11 @@ mod tests_counter;
 #[cfg(test)]
 mod tests_in_flight;
 #[cfg(test)]
+mod tests_late;
+#[cfg(test)]
 mod tests_line;
+#[cfg(test)]
+mod tests_liveness;
 #[cfg(test)]
 mod tests_machine;
 #[cfg(test)]
@@ -222,6 +244,17 @@ pub struct QsbDriver {
     io_stamps: IoStamps,
     /// No request of the goal set last has been sent yet.
     goal_unsent: bool,
+    /// When the last line (of any kind) arrived: the board talks (module `liveness`).
+    heard_at: Option<Duration>,
+    /// The request whose answer was declared lost last: a line answering it is late.
+    late: Option<::qsb::Request>,
+    /// Late lines recognised (module `liveness`).
+    late_answers: u64,
+    /// Probes answered in a row with the stream quiet between them.
+    quiet_probes: u8,
+    /// An answer was decoded at its `!` and its EOR has not arrived yet: no command
+    /// before it has (or before this instant).
+    eor_until: Option<Duration>,
 }
 
 impl QsbDriver {
@@ -275,6 +308,11 @@ impl QsbDriver {
             events,
             io_stamps: IoStamps::default(),
             goal_unsent: false,
+            heard_at: None,
+            late: None,
+            late_answers: 0,
+            quiet_probes: 0,
+            eor_until: None,
         };
         driver.begin_startup();
         driver
@@ -378,10 +416,15 @@ impl Driver for QsbDriver {
                     .map_or(self.online_at, |at| at.max(self.online_at))
                     .saturating_add(self.config.refresh_budget())
             });
-        [self.in_flight.map(|f| f.deadline), self.restart_at, probe]
-            .into_iter()
-            .flatten()
-            .min()
+        [
+            self.in_flight_look_by(),
+            self.restart_at,
+            probe,
+            self.eor_until,
+        ]
+        .into_iter()
+        .flatten()
+        .min()
     }
 
     fn wants_transmit(&self, _now: Duration) -> Option<Priority> {

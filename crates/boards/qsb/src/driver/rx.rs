@@ -9,29 +9,21 @@ use ::qsb::{
 };
 
 use super::encoder::Sample;
-use super::guard::StampVerdict;
+use super::guard::{StampReset, StampVerdict};
+use super::liveness::{Answer, Line, answers, before};
 use super::program::Step;
-use super::{InFlight, MAX_ATTEMPTS, Origin, QsbDriver};
-use motion_drivers::{ChannelState, DeviceFault, GoalKind};
+use super::wire::PROBE;
+use super::{InFlight, Origin, QsbDriver};
+use motion_drivers::{ChannelState, DeviceFault, GoalKind, Seconds, Verdict};
+
+/// Probes answered in a row with no streamed sample between them before the streams are
+/// asked for again.
+const QUIET_PROBES: u8 = 2;
 
 /// Data output ticks after a motor command before MD STATUS is trusted: the first tick
 /// after the command may report the drive before it started, its MD STATUS line follows
 /// the encoder line of that tick.
 const DONE_AFTER_TICKS: u32 = 2;
-
-/// Whether `response` answers `request`: same register, and the matching lower-case type
-/// (a write echoes its data), or an `e`/`x` refusal.
-fn answers(request: Request, response: &Response) -> bool {
-    if response.register != request.register().number() {
-        return false;
-    }
-    match (request, response.ty) {
-        (_, ResponseType::Error | ResponseType::Unsupported) => true,
-        (Request::Read(_), ResponseType::Read) | (Request::Stream(_), ResponseType::Stream) => true,
-        (Request::Write(write), ResponseType::Write) => response.data == write.data(),
-        _ => false,
-    }
-}
 
 /// Whether a write only changes a register (the driver may remember its value), rather
 /// than doing something.
@@ -45,12 +37,22 @@ fn is_setting(write: Write) -> bool {
 impl QsbDriver {
     /// One decoded line.
     pub(super) fn on_response(&mut self, now: Duration, response: Response) {
-        let verdict = self.stamps.check(
-            now,
-            response.time_stamp,
-            self.eor_configured,
-            self.config.latency,
-        );
+        self.heard(now);
+        // Only a line that carries a value read from the board ("the time stamp value
+        // recorded at the time the data was read") is judged by its stamp: a write's echo
+        // without one says nothing about EOR.
+        let stamped = response.time_stamp.is_some()
+            || matches!(response.ty, ResponseType::Read | ResponseType::Stream);
+        let verdict = if stamped {
+            self.stamps.check(
+                now,
+                response.time_stamp,
+                self.eor_configured,
+                self.config.latency,
+            )
+        } else {
+            StampVerdict::Accept
+        };
         match verdict {
             StampVerdict::Accept => {}
             StampVerdict::Rewound => {
@@ -66,19 +68,45 @@ impl QsbDriver {
             }
             StampVerdict::Hold => {
                 // Corrupted on the line, or the first line of a change the next confirms.
+                // If it was the answer in flight, that answer is lost (asked again once
+                // due): the next line decides.
                 self.status.bad_replies = self.status.bad_replies.saturating_add(1);
+                if let Some(flight) = self.in_flight.as_mut()
+                    && answers(flight.request, &response)
+                {
+                    flight.garbled = true;
+                }
                 return;
             }
-            StampVerdict::Reset => {
-                // The time stamp went backwards (it restarts at power-up), or the lines
-                // lost their time stamps (the board lost its EOR setting): two lines say so.
-                self.board_reset();
+            StampVerdict::Reset(reset) => {
+                let verdict = match reset {
+                    StampReset::Backwards { last, held, stamp } => Verdict::new(
+                        DeviceFault::Reset,
+                        now,
+                        format_args!(
+                            "time stamp back from {last:08X} to {held:08X}, then `{}` at {} \
+                             with {stamp:08X}: the counter restarted (\"cleared on a \
+                             power-cycle\")",
+                            Answer(&response),
+                            Seconds(now),
+                        ),
+                    ),
+                    StampReset::Unstamped => Verdict::new(
+                        DeviceFault::Reset,
+                        now,
+                        format_args!(
+                            "two lines in a row without the time stamp EOR 5 asks for, the \
+                             last `{}` at {}: the board answers in its saved EOR again",
+                            Answer(&response),
+                            Seconds(now),
+                        ),
+                    ),
+                };
+                self.board_reset(verdict);
                 return;
             }
         }
-        let flight = self
-            .in_flight
-            .filter(|flight| answers(flight.request, &response));
+        let flight = self.answered(&response);
         if response.ty == ResponseType::Stream {
             self.status.replies = self.status.replies.saturating_add(1);
             // The `s` line answering a stream request is the register as it is; the
@@ -88,9 +116,7 @@ impl QsbDriver {
         }
         match flight {
             Some(flight) => self.on_answer(now, flight, &response),
-            None if response.ty != ResponseType::Stream => {
-                self.status.bad_replies = self.status.bad_replies.saturating_add(1);
-            }
+            None if response.ty != ResponseType::Stream => self.unanswered_line(&response),
             None => {}
         }
     }
@@ -123,6 +149,9 @@ impl QsbDriver {
                 }
                 self.last_sample_at = Some(now);
                 self.samples_since_probe = true;
+                self.quiet_probes = 0;
+                // A probe not sent yet is no longer needed.
+                self.probe_due = false;
                 if self.status.online
                     && matches!(
                         self.status.fault,
@@ -148,7 +177,16 @@ impl QsbDriver {
                             self.status.bad_replies = self.status.bad_replies.saturating_add(1);
                             return;
                         }
-                        self.board_reset();
+                        self.board_reset(Verdict::new(
+                            DeviceFault::Reset,
+                            now,
+                            format_args!(
+                                "MD STATUS {:02X} on two lines in a row, the last at {}: the \
+                                 drive enabled at start-up (COMMAND 2) is disabled (B4)",
+                                response.data,
+                                Seconds(now),
+                            ),
+                        ));
                         return;
                     }
                     self.md_disabled_once = false;
@@ -183,6 +221,9 @@ impl QsbDriver {
     /// The answer to the request in flight.
     fn on_answer(&mut self, now: Duration, flight: InFlight, response: &Response) {
         self.in_flight = None;
+        // The response ends with its EOR, after the `!` the line was decoded at: the next
+        // command waits for it (module `liveness`).
+        self.eor_until = Some(now.saturating_add(self.config.reply_timeout()));
         if matches!(response.ty, ResponseType::Error | ResponseType::Unsupported) {
             self.refused(now, flight);
             return;
@@ -210,7 +251,12 @@ impl QsbDriver {
                 self.written(write, response.time_stamp);
             }
             Request::Read(Register::Version) => {
-                if !self.version_read(now, flight.origin, response.data) {
+                if !self.version_read(now, response.data) {
+                    return;
+                }
+            }
+            PROBE if flight.origin == Origin::Probe => {
+                if !self.probe_answered(now, flight, response.data) {
                     return;
                 }
             }
@@ -233,7 +279,7 @@ impl QsbDriver {
     }
 
     /// Pops the step whose request was answered, if its plan is still the same.
-    fn advance(&mut self, flight: InFlight) {
+    pub(super) fn advance(&mut self, flight: InFlight) {
         let program = match flight.origin {
             Origin::Setup => &mut self.setup,
             Origin::Preset => &mut self.preset,
@@ -300,7 +346,7 @@ impl QsbDriver {
     }
 
     /// A motor command was executed at `time_stamp`: MD STATUS counts from two ticks on.
-    fn motor_commanded(&mut self, time_stamp: Option<u32>) {
+    pub(super) fn motor_commanded(&mut self, time_stamp: Option<u32>) {
         let base = time_stamp
             .or(self.stamps.last())
             .or(self.encoder.latest().map(|s| s.time_stamp))
@@ -308,9 +354,8 @@ impl QsbDriver {
         self.done_after = base.wrapping_add(DONE_AFTER_TICKS);
     }
 
-    /// The VERSION answer (start-up or liveness probe). Returns whether the request's plan
-    /// goes on.
-    fn version_read(&mut self, now: Duration, origin: Origin, data: u32) -> bool {
+    /// The VERSION answer of the start-up. Returns whether the request's plan goes on.
+    fn version_read(&mut self, now: Duration, data: u32) -> bool {
         let anomalous = Version::from_data(data).map_or(true, |version| {
             self.serial.is_some_and(|s| s != version.serial)
         });
@@ -319,29 +364,65 @@ impl QsbDriver {
             // may be a corrupted one. Ask again; the same answer twice counts.
             self.version_doubt = Some(data);
             self.status.bad_replies = self.status.bad_replies.saturating_add(1);
-            if origin == Origin::Probe {
-                self.probe_due = true;
-            }
             return false;
         }
         self.version_doubt = None;
         let Ok(version) = Version::from_data(data) else {
             // Not a product type of the command list: not a QSB we know.
-            self.declare_dead(now);
+            self.restart_later(now);
             self.status.fault = Some(DeviceFault::Protocol);
             return false;
         };
-        if self.serial.is_some_and(|serial| serial != version.serial) {
+        if let Some(serial) = self.serial.filter(|serial| *serial != version.serial) {
             // Another board on this port: whatever the old one was told is lost.
             self.record_version(version);
-            self.board_reset();
+            self.board_reset(Verdict::new(
+                DeviceFault::Reset,
+                now,
+                format_args!(
+                    "VERSION {data:08X} at {} names serial {:05X} twice, the board was \
+                     {serial:05X}: another board on this port",
+                    Seconds(now),
+                    version.serial,
+                ),
+            ));
             return false;
         }
         self.record_version(version);
-        if origin == Origin::Probe && !self.samples_since_probe {
-            // The board answers but no longer streams: it lost its settings.
-            self.board_reset();
+        true
+    }
+
+    /// The liveness probe's answer: TIME STAMP now. Below the newest stamp seen before the
+    /// probe was sent, the counter restarted (a reset); else the board is there, and a
+    /// stream that stayed quiet over two probes is asked for again. Returns whether the
+    /// request's plan goes on.
+    fn probe_answered(&mut self, now: Duration, flight: InFlight, data: u32) -> bool {
+        if let Some(floor) = flight.floor.filter(|floor| before(data, *floor)) {
+            self.board_reset(Verdict::new(
+                DeviceFault::Reset,
+                now,
+                format_args!(
+                    "`{}` written at {} read TIME STAMP {data:08X} at {}, below {floor:08X} \
+                     seen before it was sent: the counter restarted (\"cleared on a \
+                     power-cycle\")",
+                    Line(flight.request),
+                    Seconds(flight.written),
+                    Seconds(now),
+                ),
+            ));
             return false;
+        }
+        if self.samples_since_probe {
+            self.quiet_probes = 0;
+        } else {
+            // Alive and not restarted, but its stream is quiet: held up on the host (the
+            // lines come), starved by commands (they come when the commands slow), or
+            // stopped without a reset (nobody else writes this port; asked for again).
+            self.quiet_probes = self.quiet_probes.saturating_add(1);
+            if self.quiet_probes >= QUIET_PROBES {
+                self.quiet_probes = 0;
+                self.restream();
+            }
         }
         true
     }
@@ -354,7 +435,7 @@ impl QsbDriver {
             Origin::Setup => {
                 // A board that refuses its configuration is not usable as configured;
                 // try again later rather than run half configured.
-                self.declare_dead(now);
+                self.restart_later(now);
                 self.status.fault = Some(DeviceFault::BoardError);
             }
             Origin::Preset if self.preset.generation() == flight.generation => {
@@ -370,27 +451,6 @@ impl QsbDriver {
         }
     }
 
-    /// No answer in time.
-    pub(super) fn timed_out(&mut self, now: Duration, flight: InFlight) {
-        self.in_flight = None;
-        self.status.timeouts = self.status.timeouts.saturating_add(1);
-        self.attempts = self.attempts.saturating_add(1);
-        if self.attempts >= MAX_ATTEMPTS {
-            self.declare_dead(now);
-            return;
-        }
-        match (flight.origin, flight.request) {
-            (Origin::Goal, Request::Write(Write::Command(QsbCommand::MotorMove))) => {
-                // The answer may be what was lost, not the command: a move must never run
-                // twice. Carry on; the encoder tells what happened and the plan corrects.
-                self.motor_commanded(None);
-                self.advance(flight);
-            }
-            (Origin::Probe, _) => self.probe_due = true,
-            _ => {}
-        }
-    }
-
     /// Everything received: each decoded line, the decoder's bad frames, then the plans
     /// move on.
     pub(super) fn receive(&mut self, now: Duration, mut bytes: &[u8]) {
@@ -398,6 +458,7 @@ impl QsbDriver {
             return;
         }
         while !bytes.is_empty() {
+            self.eor_seen(bytes);
             let (used, response) = self.decoder.decode(bytes);
             bytes = bytes.get(used..).unwrap_or_default();
             if let Some(response) = response {
@@ -407,6 +468,12 @@ impl QsbDriver {
         let bad = self.decoder.bad_frames();
         let new_bad = bad.saturating_sub(self.decoder_bad_seen);
         self.decoder_bad_seen = bad;
+        if new_bad > 0
+            && let Some(flight) = self.in_flight.as_mut()
+        {
+            // It may have been the answer: once due, it is lost rather than late.
+            flight.garbled = true;
+        }
         self.status.bad_replies = self
             .status
             .bad_replies

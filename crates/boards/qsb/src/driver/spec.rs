@@ -137,6 +137,9 @@ impl QsbDriverConfig {
         if let Some(latency) = keys.host_latency {
             driver.latency = latency;
         }
+        if let Some(silence) = keys.silence {
+            driver.silence = silence;
+        }
         driver.input_mode = keys.input_mode.unwrap_or_default().into();
         let count = keys.count_mode.unwrap_or(CountMode::X4);
         driver.counter = CounterSetup {
@@ -204,6 +207,10 @@ impl QsbDriverConfig {
         row(
             "host_latency_ms",
             format!("{} ms", number(self.latency.as_secs_f64() * 1000.0)),
+        );
+        row(
+            "silence_ms",
+            format!("{} ms", number(self.silence.as_secs_f64() * 1000.0)),
         );
         let enable = self.enable;
         row(

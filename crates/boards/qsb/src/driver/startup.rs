@@ -3,16 +3,14 @@
 //! 13"), and what happens when the board stops answering or resets.
 
 use core::fmt::Write as _;
-use core::time::Duration;
-
 use motion_base::FixedQueue;
 
 use ::qsb::{Mode, ProductType, QsbCommand, Register, Request, Write};
 
 use super::config::DRIVER_EOR;
 use super::program::{self, Step};
-use super::{QsbDriver, REGISTERS, RESTART_DELAY};
-use motion_drivers::{DeviceFault, FIRMWARE_LEN};
+use super::{QsbDriver, REGISTERS};
+use motion_drivers::FIRMWARE_LEN;
 
 impl QsbDriver {
     /// (Re)starts the start-up sequence; the last known position stays.
@@ -26,6 +24,7 @@ impl QsbDriver {
         self.goal.clear();
         self.goal_kind = None;
         self.in_flight = None;
+        self.eor_until = None;
         self.attempts = 0;
         self.restart_at = None;
         self.probe_due = false;
@@ -103,6 +102,16 @@ impl QsbDriver {
             push(Step::Send(Request::Write(Write::Command(
                 QsbCommand::EnableMotorDrive,
             ))));
+        }
+        self.stream_steps(product, &mut push);
+        push(Step::Online);
+        self.setup.expand_front(steps.iter());
+    }
+
+    /// The stream requests of the configuration, READ ENCODER last.
+    fn stream_steps(&self, product: ProductType, push: &mut impl FnMut(Step)) {
+        let has_dio = product.digital_io_bits() > 0;
+        if product == ProductType::M && self.drive_active() {
             push(Step::Send(Request::Stream(Register::MdStatus)));
         }
         if has_dio && self.dio_streamed() {
@@ -116,25 +125,22 @@ impl QsbDriver {
             push(Step::Send(Request::Stream(Register::Str)));
         }
         push(Step::Send(Request::Stream(Register::ReadEncoder)));
-        push(Step::Online);
+    }
+
+    /// Asks for the streams again, ahead of any goal: the board answers without having
+    /// restarted (its TIME STAMP went on), so the rest of its configuration holds, but its
+    /// stream stayed quiet over two probes.
+    pub(super) fn restream(&mut self) {
+        let Some(product) = self.product else {
+            return;
+        };
+        let mut steps = FixedQueue::<Step, { program::PROGRAM_CAPACITY }>::new();
+        self.stream_steps(product, &mut |step| {
+            steps.push(step);
+        });
+        // A placeholder at the front for `expand_front` to replace.
+        self.setup.replace(&[Step::Online]);
         self.setup.expand_front(steps.iter());
-    }
-
-    /// The board stopped answering: everything in progress is void; try again later.
-    pub(super) fn declare_dead(&mut self, now: Duration) {
-        self.begin_startup();
-        self.setup.clear();
-        self.status.fault = Some(DeviceFault::NotResponding);
-        self.restart_at = Some(now.saturating_add(RESTART_DELAY));
-    }
-
-    /// The board rebooted (or another board answers): goals are lost, start again.
-    pub(super) fn board_reset(&mut self) {
-        self.status.resets = self.status.resets.saturating_add(1);
-        self.status.fault = Some(DeviceFault::Reset);
-        self.homed = false;
-        self.stamps.clear();
-        self.begin_startup();
     }
 
     /// Records the VERSION answer as the firmware description.

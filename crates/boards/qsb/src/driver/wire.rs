@@ -10,6 +10,10 @@ use super::QsbDriver;
 use super::program::{self, Step};
 use motion_drivers::{Priority, Transmit};
 
+/// The liveness probe: TIME STAMP, "a 32-bit counter incremented every 1.95ms … cleared
+/// on a power-cycle": its answer says the board is there, and whether it restarted.
+pub(super) const PROBE: Request = Request::Read(Register::TimeStamp);
+
 /// Who sent the request in flight.
 #[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) enum Origin {
@@ -32,6 +36,20 @@ pub(super) struct InFlight {
     pub(super) deadline: Duration,
     /// Its message number (`IoStamps::sent`).
     pub(super) number: u64,
+    /// When it was written (queued, until the link reports the write).
+    pub(super) written: Duration,
+    /// The newest time stamp accepted before it was sent. The board executes a command
+    /// after it received it, and every line the host had before it wrote the command was
+    /// made before: its answer carries no older stamp ("recorded at the time the data was
+    /// read"), so a line with an older one answers an earlier request.
+    pub(super) floor: Option<u32>,
+    /// A line that may have been its answer could not be decoded, or was held by the
+    /// stamp guard: once it is due, it is lost rather than late.
+    pub(super) garbled: bool,
+    /// Its deadline has been judged passed (the link was heard up to it).
+    pub(super) overdue: bool,
+    /// When the first line after its deadline arrived.
+    pub(super) heard_after_deadline: Option<Duration>,
 }
 
 impl QsbDriver {
@@ -111,7 +129,7 @@ impl QsbDriver {
 
     /// The next request to send, who sends it and how urgent it is.
     pub(super) fn next_request(&self) -> Option<(Request, Origin, Priority)> {
-        if !self.link_up || self.in_flight.is_some() {
+        if !self.link_up || self.in_flight.is_some() || self.eor_until.is_some() {
             return None;
         }
         if let Some(step) = self.setup.front() {
@@ -133,11 +151,8 @@ impl QsbDriver {
         if let Some(write) = self.compare_due().or_else(|| self.trigger_clear_due()) {
             return Some((Request::Write(write), Origin::Event, Priority::Command));
         }
-        self.probe_due.then_some((
-            Request::Read(Register::Version),
-            Origin::Probe,
-            Priority::Poll,
-        ))
+        self.probe_due
+            .then_some((PROBE, Origin::Probe, Priority::Poll))
     }
 
     /// Lets every plan move on as far as it can without the board.
@@ -154,7 +169,7 @@ impl QsbDriver {
                 Some(Step::Configure) => match self.product {
                     Some(product) => self.configure(product),
                     // (Cannot happen: VERSION is read first.) Never sit offline for good.
-                    None => self.declare_dead(now),
+                    None => self.restart_later(now),
                 },
                 Some(Step::Online) => {
                     self.setup.pop();
@@ -184,8 +199,8 @@ impl QsbDriver {
         }
     }
 
-    /// Lets time pass: the restart after silence, the reply deadline, the liveness probe
-    /// when the stream went quiet.
+    /// Lets time pass: the restart after silence, the request in flight (module
+    /// `liveness`), the liveness probe when the stream went quiet.
     pub(super) fn pass_time(&mut self, now: Duration) {
         if !self.link_up {
             return;
@@ -193,12 +208,13 @@ impl QsbDriver {
         if self.restart_at.is_some_and(|at| now >= at) {
             self.begin_startup();
         }
-        // Unanswered only if the link was looked at after the deadline.
-        if let Some(flight) = self.in_flight
-            && self.io_stamps.judged(now) >= flight.deadline
+        if self
+            .eor_until
+            .is_some_and(|until| self.io_stamps.judged(now) >= until)
         {
-            self.timed_out(now, flight);
+            self.eor_until = None;
         }
+        self.judge_in_flight(now);
         let quiet_since = self
             .last_sample_at
             .map_or(self.online_at, |at| at.max(self.online_at));
@@ -242,6 +258,11 @@ impl QsbDriver {
             generation,
             deadline: now.saturating_add(self.config.reply_timeout()),
             number: self.io_stamps.sent(),
+            written: now,
+            floor: self.stamps.last(),
+            garbled: false,
+            overdue: false,
+            heard_after_deadline: None,
         });
         let mut goal_starts = 0;
         if matches!(origin, Origin::Goal | Origin::Preset) && self.goal_unsent {
@@ -263,6 +284,7 @@ impl QsbDriver {
         if let Some(flight) = self.in_flight.as_mut()
             && flight.number == number
         {
+            flight.written = at;
             flight.deadline = at.saturating_add(timeout);
         }
     }

@@ -32,6 +32,9 @@ impl QsbSim {
         };
         self.cpu_free = start.saturating_add(delay);
         let end = self.send(response, self.cpu_free);
+        if let Some(end) = end {
+            self.answer_end = end;
+        }
         if let (Some(rate), Some(end)) = (self.baud_change.take(), end) {
             self.pending_baud = Some((end, rate));
         }

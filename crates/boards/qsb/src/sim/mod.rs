@@ -26,7 +26,15 @@
 //! - A command is executed when its end-of-command byte arrives; its answer starts
 //!   [`QsbSimConfig::processing_delay`] (100 µs) later, after the previous answer's
 //!   processing (200 µs for READ ENCODER in analog mode). Lines are handed out whole when
-//!   they start; the link charges their wire time.
+//!   they start; the link charges their wire time. A command whose first byte begins
+//!   before the previous command's answer has left the UART ("At the conclusion of the
+//!   command response, the QSB is ready to accept another command") is counted
+//!   ([`QsbSimStats::interlaced`]) and executed in turn.
+//! - The time stamp counts 1/512 s ticks (1.953125 ms) from power-up; the data output timer
+//!   runs in the same ticks (INTERVAL RATE, "1.95ms steps (1/512 Hz clock)"; the command
+//!   list's "1.95ms (1/256 Hz)" under Time Stamp names the same 1.95 ms period with another
+//!   frequency, read as a slip). Behind USB the host gets the bytes at the end of each 1 ms
+//!   frame (`Board::link`'s `host_frame`, `SimLink::with_host_frames`).
 //! - Streams (`S01`, `S05`, `S06`, `S0E`, `S13`) are answered at once with an `s` line,
 //!   then paced by the data output timer: every INTERVAL RATE × 1/512 s (never faster than
 //!   the processing delay; 0xFFFF, the factory value, disables output). The timer starts
@@ -78,8 +86,8 @@ use core::time::Duration;
 
 use motion_link::sim::StreamDevice;
 use qsb::{
-    BaudRate, CommandDecoder, DigIo, DigIoConfig, Eor, IntervalRate, Mdr0, Mdr1, Mode, Str,
-    defaults,
+    BACKSPACE, BaudRate, CommandDecoder, DigIo, DigIoConfig, Eor, IntervalRate, Mdr0, Mdr1, Mode,
+    Str, defaults,
 };
 
 use motion_sim::rng::SimRng;
@@ -158,6 +166,11 @@ pub struct QsbSimStats {
     pub lines: u64,
     /// Lines lost because the transmit queue was full.
     pub dropped_lines: u64,
+    /// Commands whose first byte began before the answer to the previous command had left
+    /// the UART: "At the conclusion of the command response, the QSB is ready to accept
+    /// another command" (Command Acknowledgement Format). A host that keeps one command at
+    /// a time never makes one.
+    pub interlaced: u64,
 }
 
 /// A simulated QSB-S, -D or -M.
@@ -184,6 +197,8 @@ pub struct QsbSim {
     baud_change: Option<u32>,
     pending_baud: Option<(Duration, u32)>,
     pulse_end: Option<Duration>,
+    /// When the answer to the last command will have left the UART.
+    answer_end: Duration,
     /// Trigger events that pulsed bit 0 since power-up (for observation).
     trigger_pulses: u64,
     stats: QsbSimStats,
@@ -212,6 +227,7 @@ impl QsbSim {
             baud_change: None,
             pending_baud: None,
             pulse_end: None,
+            answer_end: Duration::ZERO,
             trigger_pulses: 0,
             stats: QsbSimStats::default(),
             saved,
@@ -251,6 +267,7 @@ impl QsbSim {
         self.baud_change = None;
         self.pending_baud = None;
         self.pulse_end = None;
+        self.answer_end = now;
         self.trigger_pulses = 0;
     }
 
@@ -437,6 +454,12 @@ impl StreamDevice for QsbSim {
     fn receive(&mut self, now: Duration, bytes: &[u8]) {
         self.advance(now);
         for &b in bytes {
+            let starts_command = self.rx.is_idle() && !matches!(b, b'\r' | b'\n' | BACKSPACE);
+            // The byte began one byte time before it arrived.
+            let began = now.saturating_sub(output::byte_time(self.baud));
+            if starts_command && began < self.answer_end {
+                self.stats.interlaced += 1;
+            }
             if let Some(line) = self.rx.push(b) {
                 self.execute(line, now);
             }

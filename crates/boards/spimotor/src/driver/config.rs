@@ -56,6 +56,11 @@ pub struct SpimotorDriverConfig {
     pub stepper_intensity: u8,
     /// Coils driven by the stepper (port 0x44), written at start-up.
     pub coils: Coils,
+    /// How long a transaction's MISO may stay away before the board is declared not
+    /// answering (`silence_ms`, default [`DEFAULT_SILENCE`](motion_drivers::DEFAULT_SILENCE)):
+    /// MISO held back on the host (an SPI socket peer or the server without CPU) comes
+    /// later, every byte in order, and is waited for.
+    pub silence: Duration,
 }
 
 impl Default for SpimotorDriverConfig {
@@ -68,6 +73,7 @@ impl Default for SpimotorDriverConfig {
             limits: [DEFAULT_LIMITS; 2],
             stepper_intensity: spimotor::port::DEFAULT_STEPPER_INTENSITY,
             coils: Coils::Two,
+            silence: motion_drivers::DEFAULT_SILENCE,
         }
     }
 }

@@ -125,13 +125,24 @@
 //!   ([`DeviceFault::Protocol`]). [`PROTOCOL_LIMIT`] disagreeing polls in a row without a
 //!   repeat raise [`DeviceFault::Protocol`] too, until a good poll arrives.
 //! - [`CONFIRMATIONS`] failed identification reads in a row (periodic presence check)
-//!   raise `NotResponding`; MISO bytes that never come back within the reply timeout too.
+//!   raise `NotResponding`. MISO that has not come back (an SPI socket peer or the server
+//!   without CPU holds it; a spidev transfer returns it at once) is waited for up to
+//!   [`SpimotorDriverConfig::silence`] (`silence_ms`, 500 ms by default), judged up to the
+//!   link's horizon; then `NotResponding`, and the bytes still owed by the transactions
+//!   given up on are dropped when they come ([`SpimotorDriver::late_miso`]), never taken
+//!   for a later transaction's (module `liveness`).
+//! - Each `NotResponding` and `Reset` is declared with its evidence (`DeviceStatus::verdict`:
+//!   which reads, what they showed, how long).
 //! - After any of these the board is started again from step 1.
+//!
+//! Every transaction carries its own answer (a read's at MISO offset 2), so no request can
+//! meet the answer of an earlier one, and MISO is attributed by transaction order alone.
 
 mod brushed;
 mod commission;
 mod config;
 mod goals;
+mod liveness;
 pub mod ramp;
 mod rx;
 mod spec;
@@ -216,6 +227,10 @@ pub struct SpimotorDriver {
     io_stamps: IoStamps,
     /// Bit `c`: no transaction of channel `c`'s goal set last has been sent yet.
     goal_unsent: u8,
+    /// MISO bytes still owed by transactions given up on (module `liveness`).
+    discard_miso: usize,
+    /// Late MISO bytes recognised and dropped.
+    late_miso: u64,
 }
 
 impl SpimotorDriver {
@@ -247,6 +262,8 @@ impl SpimotorDriver {
             survey: startup::Survey::default(),
             io_stamps: IoStamps::default(),
             goal_unsent: 0,
+            discard_miso: 0,
+            late_miso: 0,
         }
     }
 
@@ -402,6 +419,7 @@ impl Driver for SpimotorDriver {
         self.io_stamps.link_reset();
         self.link_up = false;
         self.in_flight.clear();
+        self.discard_miso = 0;
         self.raise(DeviceFault::LinkDown);
         self.restart(now, 0);
     }
@@ -410,6 +428,7 @@ impl Driver for SpimotorDriver {
         self.io_stamps.link_reset();
         self.link_up = true;
         self.in_flight.clear();
+        self.discard_miso = 0;
         self.restart(now, 0);
     }
 

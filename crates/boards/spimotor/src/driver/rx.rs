@@ -10,11 +10,26 @@ use super::wire::{self, Op, Sent};
 use super::{
     CONFIRMATIONS, OFFLINE_RETRY_PERIOD, Phase, RETRY_PERIOD, START_ATTEMPTS, SpimotorDriver,
 };
-use motion_drivers::DeviceFault;
+use motion_drivers::{DeviceFault, Seconds, Verdict};
+
+/// What a read's MISO shows: nobody driving it (all 0xFF), or something else.
+struct Undriven<'a>(&'a [u8]);
+
+impl core::fmt::Display for Undriven<'_> {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        let data = self.0.get(spimotor::REPLY_OFFSET..).unwrap_or_default();
+        if data.iter().all(|b| *b == 0xFF) {
+            f.write_str("MISO all 0xFF, nobody drives it")
+        } else {
+            f.write_str("not the identification the board gave at start-up")
+        }
+    }
+}
 
 impl SpimotorDriver {
     /// MISO bytes: reassembled per transaction, each completed one handled.
     pub(super) fn receive(&mut self, now: Duration, mut bytes: &[u8]) {
+        bytes = self.drop_late(bytes);
         while !bytes.is_empty() {
             let (taken, complete) = self.in_flight.take(bytes);
             if taken == 0 {
@@ -67,6 +82,20 @@ impl SpimotorDriver {
                     None => {
                         let attempts = attempts.saturating_add(1);
                         let retry = if attempts >= START_ATTEMPTS {
+                            if self.status.fault != Some(DeviceFault::NotResponding) {
+                                let address = self.config.address.get();
+                                self.status.declare(Verdict::new(
+                                    DeviceFault::NotResponding,
+                                    now,
+                                    format_args!(
+                                        "the identification (read port 0x01) at address \
+                                         0x{address:02x} read {attempts} times without a valid \
+                                         string, the last at {}: {}",
+                                        Seconds(now),
+                                        Undriven(miso),
+                                    ),
+                                ));
+                            }
                             self.status.timeouts = self.status.timeouts.saturating_add(1);
                             self.raise(DeviceFault::NotResponding);
                             self.status.online = false;
@@ -119,7 +148,18 @@ impl SpimotorDriver {
                     self.bad_reply();
                     self.presence_misses = self.presence_misses.saturating_add(1);
                     if self.presence_misses >= CONFIRMATIONS {
-                        self.absent(now);
+                        let address = self.config.address.get();
+                        let verdict = Verdict::new(
+                            DeviceFault::NotResponding,
+                            now,
+                            format_args!(
+                                "the presence read (port 0x01) at address 0x{address:02x} \
+                                 failed {CONFIRMATIONS} times in a row, the last at {}: {}",
+                                Seconds(now),
+                                Undriven(miso),
+                            ),
+                        );
+                        self.absent(now, verdict);
                     }
                 }
             }

@@ -52,17 +52,26 @@ impl SpimotorDriverConfig {
                 Some(_) => driver.coils = Coils::Two,
                 None => {}
             }
+            if let Some(silence) = keys.silence {
+                driver.silence = silence;
+            }
         }
         Ok(driver)
     }
 
-    /// The machine parameters of the device, as the driver uses them: a stepper board's
-    /// `intensity` (port 0x10) and `coils` (port 0x44). A brushed board has none.
+    /// The machine parameters of the device, as the driver uses them: `silence_ms`, and a
+    /// stepper board's `intensity` (port 0x10) and `coils` (port 0x44).
     pub fn params(&self, spec: &DriverSpec) -> Vec<Param> {
+        let silence = Param {
+            owner: ParamOwner::Device,
+            key: "silence_ms",
+            value: format!("{} ms", self.silence.as_millis()),
+        };
         if spec.machine.get_or_default::<SpimotorDeviceKeys>().drive != SpiDrive::Stepper {
-            return Vec::new();
+            return vec![silence];
         }
         vec![
+            silence,
             Param {
                 owner: ParamOwner::Device,
                 key: "intensity",

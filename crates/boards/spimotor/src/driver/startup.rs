@@ -10,8 +10,8 @@ use spimotor::{Identification, ReadPort, Reply, SerialNumber, StepDelay, Write};
 use super::ramp::Motion;
 use super::stepper::ABSENT_READING;
 use super::wire::Op;
-use super::{Phase, START_ATTEMPTS, SpimotorDriver};
-use motion_drivers::{DeviceFault, FIRMWARE_LEN, Priority};
+use super::{Phase, SpimotorDriver};
+use motion_drivers::{DeviceFault, FIRMWARE_LEN, Priority, Seconds, Verdict};
 
 /// Survey readings that disagree in a row before the board is started over.
 pub const SURVEY_ATTEMPTS: u32 = 8;
@@ -105,7 +105,19 @@ impl SpimotorDriver {
     ) {
         if (position.0, target, delay.tenths_ms()) == ABSENT_READING {
             // Undriven MISO after all: nobody is there.
-            self.absent(now);
+            let address = self.config.address.get();
+            self.absent(
+                now,
+                Verdict::new(
+                    DeviceFault::NotResponding,
+                    now,
+                    format_args!(
+                        "the survey at address 0x{address:02x} read position -1, target -1, \
+                         step delay 255 twice, the last at {}: MISO all 0xFF, nobody drives it",
+                        Seconds(now),
+                    ),
+                ),
+            );
             return;
         }
         self.good_reply();
@@ -186,21 +198,6 @@ impl SpimotorDriver {
         self.planned = self.written;
         self.presence_misses = 0;
         self.stepper.forget(now);
-    }
-
-    /// The board does not answer.
-    pub(super) fn absent(&mut self, now: Duration) {
-        self.status.timeouts = self.status.timeouts.saturating_add(1);
-        self.raise(DeviceFault::NotResponding);
-        self.restart(now, START_ATTEMPTS);
-    }
-
-    /// The board lost its registers (power cycle).
-    pub(super) fn board_reset(&mut self, now: Duration) {
-        self.status.resets = self.status.resets.saturating_add(1);
-        self.raise(DeviceFault::Reset);
-        self.stepper.homed = false;
-        self.restart(now, 0);
     }
 
     pub(super) fn set_firmware(&mut self, serial: SerialNumber) {

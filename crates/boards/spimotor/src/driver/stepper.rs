@@ -10,7 +10,21 @@ use super::config::SpimotorDriverConfig;
 use super::ramp::{self, Motion, Observed, Ramp, TargetCommand};
 use super::wire::{Expect, Op, Sent};
 use super::{CONFIRMATIONS, PROTOCOL_LIMIT, SpimotorDriver};
-use motion_drivers::{ChannelState, DeviceFault, Goal, GoalError, GoalKind, Priority};
+use motion_drivers::{
+    ChannelState, DeviceFault, Goal, GoalError, GoalKind, Priority, Seconds, Verdict,
+};
+
+/// A target as the driver knows it (`unknown` after a stop, until read).
+struct Target(Option<i32>);
+
+impl core::fmt::Display for Target {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self.0 {
+            Some(target) => write!(f, "{target}"),
+            None => f.write_str("unknown"),
+        }
+    }
+}
 
 /// Slack of the position plausibility check: time (for reads in flight) and steps.
 const PLAUSIBILITY_SLACK: Duration = Duration::from_millis(5);
@@ -476,12 +490,35 @@ impl SpimotorDriver {
             stepper.repeats = 1;
         }
         if stepper.repeats >= CONFIRMATIONS {
+            let (tenths, written) = (delay.tenths_ms(), self.written);
             if reading == ABSENT_READING {
-                self.absent(now);
+                let verdict = Verdict::new(
+                    DeviceFault::NotResponding,
+                    now,
+                    format_args!(
+                        "{CONFIRMATIONS} polls in a row read position -1, target -1, step \
+                         delay 255, the last at {}: MISO all 0xFF, nobody drives it",
+                        Seconds(now),
+                    ),
+                );
+                self.absent(now, verdict);
             } else if (position == 0 && target == 0) || delay == StepDelay::DEFAULT {
                 // Power-on registers (counter and target 0, "default 200" step delay):
                 // the board lost its registers.
-                self.board_reset(now);
+                let verdict = Verdict::new(
+                    DeviceFault::Reset,
+                    now,
+                    format_args!(
+                        "{CONFIRMATIONS} polls in a row read position {position}, target \
+                         {target}, step delay {tenths} (power-on registers: counter and target \
+                         0, or \"default 200\"), the last at {}; written were target {}, step \
+                         delay {}: the board lost its registers",
+                        Seconds(now),
+                        Target(written.target),
+                        written.delay.tenths_ms(),
+                    ),
+                );
+                self.board_reset(now, verdict);
             } else {
                 // Somebody else writes the board, or MISO is stuck: start it over.
                 self.raise(DeviceFault::Protocol);

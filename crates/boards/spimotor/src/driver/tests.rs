@@ -123,7 +123,7 @@ impl Bench {
         out
     }
 
-    fn steps(&mut self, count: usize) {
+    pub(super) fn steps(&mut self, count: usize) {
         for _ in 0..count {
             self.step();
         }

@@ -10,7 +10,7 @@
 use core::time::Duration;
 
 use super::tests::{Bench, stepper};
-use motion_drivers::{Driver, Goal};
+use motion_drivers::{DeviceFault, Driver, Goal};
 
 const MS: Duration = Duration::from_millis(1);
 
@@ -93,4 +93,96 @@ fn a_reply_taken_in_late_does_not_make_the_polls_after_it_implausible() {
         "the channel follows: {seen} vs {}",
         bench.board.position
     );
+}
+
+/// Ticks the driver while the host holds every MISO byte back (a starved SPI socket peer
+/// or server: the transactions run, their MISO waits); returns the bytes held.
+fn hold_miso_until(bench: &mut Bench, until: Duration) -> Vec<u8> {
+    let mut held = Vec::new();
+    let mut buf = [0u8; 256];
+    while bench.now < until {
+        bench.driver.handle_timeout(bench.now);
+        while bench.driver.wants_transmit(bench.now).is_some() {
+            let transmit = bench
+                .driver
+                .poll_transmit(bench.now, &mut buf)
+                .expect("sends");
+            held.extend(bench.board.transfer(&buf[..transmit.len]));
+        }
+        bench.now += MS;
+    }
+    held
+}
+
+#[test]
+fn miso_held_just_inside_silence_ms_is_taken() {
+    let mut bench = Bench::started(stepper());
+    let from = bench.now;
+    let silence = bench.driver.config().silence;
+    // The oldest transaction held goes out at `from`: its MISO may stay away until
+    // `from + silence`.
+    let held = hold_miso_until(&mut bench, from + silence - MS);
+    assert!(!held.is_empty());
+    bench.driver.handle_timeout(bench.now);
+    let status = bench.driver.status();
+    assert_eq!((status.verdicts, status.timeouts), (0, 0));
+    assert!(status.online);
+    for chunk in held.chunks(7) {
+        bench.driver.handle_rx(bench.now, chunk);
+    }
+    assert_eq!(bench.driver.late_miso(), 0);
+    assert!(
+        bench
+            .driver
+            .channel(0)
+            .refreshed_at
+            .is_some_and(|at| at == bench.now)
+    );
+    assert_eq!(bench.driver.channel(0).fault, None);
+    bench.steps(10);
+    assert_eq!(bench.driver.status().verdicts, 0);
+}
+
+#[test]
+fn miso_held_past_silence_ms_is_not_answering_and_comes_late_never_misread() {
+    let mut bench = Bench::started(stepper());
+    let from = bench.now;
+    let silence = bench.driver.config().silence;
+    let held = hold_miso_until(&mut bench, from + silence + MS);
+    bench.driver.handle_timeout(bench.now);
+    let status = bench.driver.status();
+    assert_eq!(status.fault, Some(DeviceFault::NotResponding));
+    assert_eq!(status.timeouts, 1, "counted as a timeout");
+    let evidence = status.verdict.expect("verdict").evidence;
+    assert!(
+        evidence.as_str().starts_with("MISO of ")
+            && evidence
+                .as_str()
+                .contains("transactions not back; the oldest (read port 0x")
+            && evidence.as_str().ends_with("(silence_ms 500)"),
+        "{}",
+        evidence.as_str()
+    );
+    // The start-up begins again (its identification read goes out), then the held bytes
+    // come, before that read's own: recognised as late, not taken for its answer.
+    let mut buf = [0u8; 256];
+    let transmit = bench
+        .driver
+        .poll_transmit(bench.now, &mut buf)
+        .expect("the identification read");
+    assert_eq!(&buf[..2], &[0x91, 0x01]);
+    let own = bench.board.transfer(&buf[..transmit.len]);
+    let mut late_and_own = held.clone();
+    late_and_own.extend(own);
+    bench.now += MS;
+    for chunk in late_and_own.chunks(7) {
+        bench.driver.handle_rx(bench.now, chunk);
+    }
+    assert_eq!(bench.driver.late_miso(), held.len() as u64);
+    // The identification was read from its own bytes: the start-up goes on and the board
+    // is back.
+    bench.steps(20);
+    assert!(bench.driver.status().online);
+    assert_eq!(bench.driver.channel(0).fault, None);
+    assert_eq!(bench.driver.status().verdicts, 1);
 }

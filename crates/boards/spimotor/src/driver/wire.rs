@@ -159,7 +159,16 @@ impl<const N: usize> InFlight<N> {
             .any(|sent| matches!(sent.op, Op::Read(p, _) if p == port))
     }
 
-    /// Forgets everything in flight (link down, reply timeout).
+    /// MISO bytes still owed by the transactions in flight.
+    pub fn owed(&self) -> usize {
+        self.sent
+            .iter()
+            .map(|sent| sent.op.len())
+            .sum::<usize>()
+            .saturating_sub(self.received)
+    }
+
+    /// Forgets everything in flight (link down, the board given up on).
     pub fn clear(&mut self) {
         self.sent.clear();
         self.received = 0;
@@ -358,13 +367,9 @@ impl SpimotorDriver {
         if !self.link_up {
             return;
         }
-        // MISO that never came back: only as far as the link was looked at.
-        if let Some(oldest) = self.in_flight.oldest()
-            && self.io_stamps.judged(now).saturating_sub(oldest.at) > self.reply_timeout()
-        {
-            self.in_flight.clear();
-            self.absent(now);
-        }
+        // MISO that never came back: only as far as the link was looked at (module
+        // `liveness`).
+        self.judge_miso(now);
         if self.phase == Phase::Running {
             if self.is_stepper() {
                 self.drive_stepper(now, false);

@@ -545,57 +545,6 @@ fn a_lost_answer_sends_the_goal_again() {
 }
 
 #[test]
-fn a_stalled_stream_probes_and_finds_a_reset_board() {
-    let (mut driver, mut now) = running();
-    let stall = driver.stall_timeout();
-    let end = now + stall + 2 * MS;
-    let mut probe = None;
-    while now < end {
-        now += MS;
-        for transaction in drain(&mut driver, now) {
-            if transaction.starts_with(&[2, 4, 1, 249]) {
-                probe = Some(transaction);
-            }
-        }
-    }
-    assert!(probe.is_some(), "the driver probes the board again");
-    assert_eq!(driver.status().fault, None, "not declared dead yet");
-    // Power-up defaults: the stream is off and the masks are the defaults.
-    driver.handle_rx(
-        now,
-        &probe_answers([DataMask::DEFAULT; 4], StreamConfig(0), 0),
-    );
-    assert_eq!(driver.status().fault, Some(DeviceFault::Reset));
-    assert_eq!(driver.status().resets, 1);
-    assert_eq!(driver.channel(0).fault, Some(DeviceFault::Reset));
-    let sent = drain(&mut driver, now);
-    assert_eq!(packets(&sent[0]).len(), 10, "configured again");
-    driver.handle_rx(now + MS, &acks(&sent[0], 0));
-    driver.handle_rx(now + MS, &ours_stream([1, 2, 3], [0; 3], [0; 3]));
-    assert_eq!(driver.status().fault, None);
-}
-
-#[test]
-fn a_silent_board_is_not_responding() {
-    let mut driver = Qq2drvDriver::new(config());
-    let mut now = Duration::ZERO;
-    let mut probes = 0;
-    while now < Duration::from_millis(200) {
-        for transaction in drain(&mut driver, now) {
-            driver.handle_rx(now, &vec![0xFF; transaction.len()]);
-            probes += usize::from(transaction.starts_with(&[2, 4, 1, 249]));
-        }
-        now += MS;
-    }
-    assert_eq!(driver.status().fault, Some(DeviceFault::NotResponding));
-    assert!(!driver.status().online);
-    assert!(probes >= START_ATTEMPTS as usize);
-    assert_eq!(driver.channel(0).fault, Some(DeviceFault::NotResponding));
-    // Goals wait for the board; a stop is still accepted.
-    driver.set_goal(now, 0, Goal::Stop { decel: 1.0 }).unwrap();
-}
-
-#[test]
 fn link_down_faults_and_stops_what_was_moving_once_back() {
     let (mut driver, now) = running();
     let mosi = goal_packets(
@@ -744,5 +693,7 @@ fn goals_every_tick_never_build_a_backlog_on_the_wire() {
 }
 
 mod io;
+mod late;
+mod liveness;
 mod readings;
 mod stops;
