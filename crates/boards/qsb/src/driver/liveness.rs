@@ -86,7 +86,7 @@ pub(super) fn answers(request: Request, response: &Response) -> bool {
 impl QsbDriver {
     /// Lines that answered a request declared lost, or an earlier request than the one in
     /// flight (module docs): recognised, counted, never paired.
-    pub fn late_answers(&self) -> u64 {
+    pub fn late_answers_seen(&self) -> u64 {
         self.late_answers
     }
 

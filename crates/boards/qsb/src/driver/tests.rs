@@ -605,10 +605,10 @@ fn a_move_whose_answer_is_lost_is_never_sent_twice() {
     assert_eq!(bench.sent(), None);
     assert!(bench.driver.channel(0).arrived);
     // Its late answer, should it come after all, is recognised and changes nothing.
-    let late = bench.driver.late_answers();
+    let late = bench.driver.late_answers_seen();
     let bytes = bench.line(ResponseType::Write, 0x16, 8);
     bench.rx(&bytes);
-    assert_eq!(bench.driver.late_answers(), late + 1);
+    assert_eq!(bench.driver.late_answers_seen(), late + 1);
     assert_eq!(bench.sent(), None);
 }
 

@@ -51,7 +51,7 @@ fn an_answer_just_inside_its_window_is_paired() {
     bench.rx(&line);
     assert!(!bench.driver.awaiting_reply());
     assert_eq!(bench.driver.status().timeouts, 0);
-    assert_eq!(bench.driver.late_answers(), 0);
+    assert_eq!(bench.driver.late_answers_seen(), 0);
     bench.expect(b"W169\r\n");
 }
 
@@ -92,7 +92,7 @@ fn an_answer_the_board_streamed_past_is_lost_and_a_late_copy_is_never_paired() {
     let ts = bench.ts;
     let line = echo(&mut bench, ts);
     bench.rx(&line);
-    assert_eq!(bench.driver.late_answers(), 1);
+    assert_eq!(bench.driver.late_answers_seen(), 1);
     assert!(bench.driver.awaiting_reply());
     assert_eq!(bench.sent(), None);
     bench.advance(Duration::from_micros(500));
@@ -116,7 +116,7 @@ fn a_retry_takes_the_first_equal_echo_and_counts_the_second_late() {
         let line = echo(&mut bench, ts);
         bench.rx(&line);
     }
-    assert_eq!(bench.driver.late_answers(), 1);
+    assert_eq!(bench.driver.late_answers_seen(), 1);
     bench.expect(b"W169\r\n");
     let status = bench.driver.status();
     assert_eq!((status.verdicts, status.resets), (0, 0));
@@ -167,7 +167,7 @@ fn an_answer_held_up_on_the_host_is_waited_for_and_paired() {
         assert_eq!(status.timeouts, 0, "hold {hold_ms} ms");
         assert_eq!((status.verdicts, status.resets), (0, 0));
         assert!(status.online);
-        assert_eq!(bench.driver.late_answers(), 0);
+        assert_eq!(bench.driver.late_answers_seen(), 0);
         bench.expect(b"W169\r\n");
     }
 }
