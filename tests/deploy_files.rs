@@ -1,6 +1,6 @@
 //! The files of `deploy/`: the systemd unit passes `systemd-analyze verify` (where systemd is
-//! installed) and says what issue 14 asks of it; the udev rules and the tmpfiles.d line
-//! parse.
+//! installed) and says what issues 14 and 40 ask of it; the udev rules and the tmpfiles.d
+//! lines parse.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -57,6 +57,9 @@ fn the_unit_runs_motiond_as_issue_14_asks() {
         ("AmbientCapabilities", "CAP_SYS_NICE CAP_IPC_LOCK"),
         ("CapabilityBoundingSet", "CAP_SYS_NICE CAP_IPC_LOCK"),
         ("NoNewPrivileges", "yes"),
+        // Issue 40: the server's state and black box in a directory only its user writes.
+        ("StateDirectory", "motiond"),
+        ("StateDirectoryMode", "0750"),
     ] {
         assert_eq!(value(key), [expected], "{key}");
     }
@@ -195,7 +198,7 @@ fn the_udev_rules_parse_and_give_the_devices_to_group_motion() {
 }
 
 #[test]
-fn the_tmpfiles_line_creates_iceoryx2_s_directory_for_motion() {
+fn the_tmpfiles_lines_create_iceoryx2_s_and_the_state_directory_for_motion() {
     let text = read("tmpfiles.d/motiond.conf");
     let lines: Vec<Vec<&str>> = text
         .lines()
@@ -208,6 +211,7 @@ fn the_tmpfiles_line_creates_iceoryx2_s_directory_for_motion() {
         [
             vec!["d", "/tmp/iceoryx2", "0750", "motion", "motion", "-"],
             vec!["x", "/tmp/iceoryx2"],
+            vec!["d", "/var/lib/motiond", "0750", "motion", "motion", "-"],
         ]
     );
 }

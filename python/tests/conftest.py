@@ -18,7 +18,7 @@ import signal
 import subprocess
 import time
 from pathlib import Path
-from typing import Any, Callable, Dict, Iterator, List
+from typing import Any, Callable, Dict, Iterator, List, Optional
 
 import pytest
 
@@ -65,11 +65,15 @@ def motiond_binary() -> Path:
 class Process:
     """A child process whose output goes to a log file; stopped with SIGTERM."""
 
-    def __init__(self, argv: List[str], log: Path) -> None:
+    def __init__(self, argv: List[str], log: Path, env: Optional[Dict[str, str]] = None) -> None:
         self.log = log
         self._log_file = open(log, "wb")
         self.process = subprocess.Popen(
-            argv, stdin=subprocess.DEVNULL, stdout=self._log_file, stderr=subprocess.STDOUT
+            argv,
+            stdin=subprocess.DEVNULL,
+            stdout=self._log_file,
+            stderr=subprocess.STDOUT,
+            env=env,
         )
 
     def log_text(self) -> str:
@@ -96,7 +100,11 @@ class Server(Process):
     def __init__(self, name: str, config: Path, log: Path) -> None:
         self.name = name
         self.config = config
-        super().__init__([str(motiond_binary()), "--config", str(config)], log)
+        # Its state directory and black box in the test's temporary directory, as systemd's
+        # StateDirectory= would give it, not the machine's /var/lib/motiond.
+        env = dict(os.environ)
+        env.setdefault("STATE_DIRECTORY", str(config.parent / "state"))
+        super().__init__([str(motiond_binary()), "--config", str(config)], log, env)
 
 
 def sim_config(repo: Path, name: str) -> str:

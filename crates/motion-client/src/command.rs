@@ -7,6 +7,7 @@ use iceoryx2::prelude::PayloadHeader as _;
 use iceoryx2::service::Service;
 use motion_ipc::{
     AxisFlags, CommandKind, CommandReply, CommandRequest, FaultCode, FrameFlags, Reason, Target,
+    read_text,
 };
 
 use crate::session::Seen;
@@ -206,7 +207,7 @@ impl<S: Service> Client<S> {
                 self.target_label(target, index),
                 reason,
                 reply.tick_applied,
-                self.refusal_detail(target, index, reason),
+                self.refusal_detail(target, index, reason, &reply),
             )),
         }
     }
@@ -222,7 +223,13 @@ impl<S: Service> Client<S> {
     }
 
     /// The refusal in the words of this case, where the reason code alone says too little.
-    fn refusal_detail(&self, target: Target, index: u32, reason: Reason) -> Option<String> {
+    fn refusal_detail(
+        &self,
+        target: Target,
+        index: u32,
+        reason: Reason,
+        reply: &CommandReply,
+    ) -> Option<String> {
         let device = match target {
             Target::Axis if index != CommandRequest::ALL_AXES => {
                 Some(self.axis_info(index as usize).device_index)
@@ -242,8 +249,50 @@ impl<S: Service> Client<S> {
             Reason::DeviceOffline => device()
                 .map(|name| format!("device `{name}` is offline: its board is not answering")),
             Reason::AxisFaulted if target == Target::Axis => self.fault_text(index),
+            Reason::GroupBusy | Reason::ClaimedByOther if target == Target::Device => {
+                self.neighbour_in_use(index, reason, reply)
+            }
             _ => None,
         }
+    }
+
+    /// A commission refused for the sake of another device on the link (the engine's
+    /// `commission` module, rule 6: a line-rate change while a neighbour is in use; the
+    /// reply's `value` names that device, `at_axis` its axis, `holder` the claimant), in
+    /// words; `None` when the device at fault is the one commissioned.
+    fn neighbour_in_use(&self, index: u32, reason: Reason, reply: &CommandReply) -> Option<String> {
+        let at_fault = reply.value;
+        if !(at_fault.fract() == 0.0 && at_fault >= 0.0 && at_fault != f64::from(index)) {
+            return None;
+        }
+        let device = at_fault as usize;
+        let info = self.info.current()?;
+        let link = info
+            .devices()
+            .get(device)
+            .map(|d| read_text(&d.link).to_owned())?;
+        let name = self.device_name(device);
+        let what = if reply.at_axis == u32::MAX {
+            "one of its signals".to_owned()
+        } else {
+            format!(
+                "its axis `{}`",
+                self.axis_info(reply.at_axis as usize).name()
+            )
+        };
+        let state = match reason {
+            Reason::GroupBusy => {
+                format!("{what} moves or has a goal (a move not done, a jog, a held move)")
+            }
+            _ => format!(
+                "client {:#x} holds a claim on {what}",
+                reply.holder.as_u128()
+            ),
+        };
+        Some(format!(
+            "device `{name}` shares link `{link}` and {state}: a new line rate would leave it \
+             unreachable at the old one; commission once nothing on the link is in use"
+        ))
     }
 
     /// The fault sentence of axis `index` from the newest frame, if it is faulted and a

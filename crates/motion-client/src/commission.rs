@@ -84,10 +84,13 @@ impl<S: Service> Client<S> {
     /// Asks the server to change `what` of device `device` to `value` (the new address or
     /// baud rate; ignored for [`CommissionWhat::FactoryReset`]). Accepted, the board is
     /// being found again: [`wait_commissioned`](Self::wait_commissioned). Refused with the
-    /// server's reason: `NotClaimed` / `ClaimedByOther` (claim the device first),
-    /// `GroupBusy` (an axis of it moves), `Unsupported` (its board has no such setting),
-    /// `OutOfRange` (a value it does not take, or another device's address on its link),
-    /// `DeviceStarting` / `DeviceOffline` / `LinkDown`.
+    /// server's reason: `EstopLatched` (reset the e-stop first), `NotClaimed` /
+    /// `ClaimedByOther` (claim the device first), `GroupBusy` (an axis of it moves), for a
+    /// baud rate on a link other devices share `GroupBusy` / `ClaimedByOther` while one of
+    /// them is in use (another client's claim, a goal, a moving axis: the error's detail
+    /// names the device), `Unsupported` (its board has no such setting), `OutOfRange` (a
+    /// value it does not take, or another device's address on its link), `DeviceStarting` /
+    /// `DeviceOffline` / `LinkDown`.
     pub fn commission(
         &self,
         device: &str,

@@ -6,16 +6,29 @@
 //! The rules, in the order a client sees them:
 //! 1. `UnknownTarget` for any other kind with `target` = device; `ShuttingDown`;
 //!    `UnknownDevice`;
-//! 2. `OutOfRange` for a `values[0]` that is no [`CommissionWhat`], a value that is no
+//! 2. `EstopLatched` while the e-stop is latched: a commission re-parameterises the board
+//!    (a Trinamic pack's `$CC` sets every parameter back to the factory's, its `$40` and
+//!    `$42` have it answer elsewhere) while it is meant to hold — reset the e-stop first;
+//! 3. `OutOfRange` for a `values[0]` that is no [`CommissionWhat`], a value that is no
 //!    whole number in `u32`, or a new address another device on the same link has;
-//! 3. authorisation: `NoClientId` without a client, then every axis and every signal of
+//! 4. authorisation: `NoClientId` without a client, then every axis and every signal of
 //!    the device must be claimed by the sender (`ClaimedByOther` with the holder, or
 //!    `NotClaimed`, naming the axis) — the client that commissions holds the whole board;
-//! 4. `GroupBusy` (naming the axis) while an axis of the device moves: a goal that is not
+//! 5. `GroupBusy` (naming the axis) while an axis of the device moves: a goal that is not
 //!    done, a stop or search in progress, a group's motion, or the board reporting motion;
-//! 5. the device must be online (`DeviceStarting`, `DeviceOffline`, `LinkDown`);
-//! 6. the driver's own refusal: `Unsupported` (a board without the setting), `OutOfRange`
+//! 6. a line rate (`CommissionWhat::Baud`) on a link other devices share: until a rate
+//!    change keeps the neighbours reachable (they stay at the old rate), it is refused while
+//!    another device on the link is in use — `GroupBusy` while one of its axes moves or has
+//!    a goal (one not done, or a held move to resume), `ClaimedByOther` while another
+//!    client holds a claim on one of its axes or signals (the sender's own claims there do
+//!    not count: nobody else relies on that device). The reply names the axis (`at_axis`,
+//!    for a signal none) and the claimant (`holder`);
+//! 7. the device must be online (`DeviceStarting`, `DeviceOffline`, `LinkDown`);
+//! 8. the driver's own refusal: `Unsupported` (a board without the setting), `OutOfRange`
 //!    (a value the board does not take), `DeviceStarting` (busy with an earlier change).
+//!
+//! A refusal of rules 4 to 6 also names the device at fault: `value` is its index (the
+//! device commissioned, or the neighbour on its link).
 //!
 //! Accepted, the device is `Starting` in the frame of this very tick (the board is being
 //! found again); `Online` again once found, `Offline` when it does not answer. After a new
@@ -50,6 +63,9 @@ impl<D: Driver> Engine<D> {
             return Reason::UnknownDevice;
         };
         let (bus, slot) = (device.bus, device.slot);
+        if self.estop {
+            return Reason::EstopLatched;
+        }
         let Some(change) = change_of(request.values) else {
             return Reason::OutOfRange;
         };
@@ -67,6 +83,7 @@ impl<D: Driver> Engine<D> {
         if client.is_none() {
             return Reason::NoClientId;
         }
+        self.reply_detail.value = index as f64;
         if let Err(reason) = self.holds_device(index, client) {
             return reason;
         }
@@ -76,6 +93,12 @@ impl<D: Driver> Engine<D> {
             self.reply_detail.at_axis = Some(axis);
             return Reason::GroupBusy;
         }
+        if let Commission::Baud(_) = change
+            && let Err(reason) = self.link_in_use(index, bus, client)
+        {
+            return reason;
+        }
+        self.reply_detail.value = 0.0;
         match self.devices[index].state {
             DeviceState::Online | DeviceState::Faulted => {}
             DeviceState::Starting => return Reason::DeviceStarting,
@@ -134,6 +157,44 @@ impl<D: Driver> Engine<D> {
                 return Err(Reason::NotClaimed);
             }
             self.reply_detail.holder = signal.claimed_by;
+            return Err(Reason::ClaimedByOther);
+        }
+        Ok(())
+    }
+
+    /// For a line-rate change of device `index` on link `bus`: whether another device on the
+    /// link is in use (rule 6 of the module docs), named in the reply.
+    fn link_in_use(&mut self, index: usize, bus: usize, client: ClientId) -> Result<(), Reason> {
+        let neighbour = |devices: &[crate::device::Device], d: usize| {
+            d != index && devices.get(d).is_some_and(|device| device.bus == bus)
+        };
+        for a in 0..self.axes.len() {
+            let device = self.axes[a].device;
+            if !neighbour(&self.devices, device) {
+                continue;
+            }
+            let holder = self.axes[a].claimed_by;
+            let claimed = !holder.is_none() && holder != client;
+            let busy = self.moves(a) || self.axes[a].held.is_some();
+            if busy || claimed {
+                self.reply_detail.at_axis = Some(a);
+                self.reply_detail.holder = holder;
+                self.reply_detail.value = device as f64;
+                return Err(if busy {
+                    Reason::GroupBusy
+                } else {
+                    Reason::ClaimedByOther
+                });
+            }
+        }
+        let claimed_signal = self.signals.iter().find(|signal| {
+            neighbour(&self.devices, signal.config.device)
+                && !signal.claimed_by.is_none()
+                && signal.claimed_by != client
+        });
+        if let Some(signal) = claimed_signal {
+            self.reply_detail.holder = signal.claimed_by;
+            self.reply_detail.value = signal.config.device as f64;
             return Err(Reason::ClaimedByOther);
         }
         Ok(())

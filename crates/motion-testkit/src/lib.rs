@@ -64,9 +64,15 @@ pub fn unique_name(test: &str) -> String {
     format!("t{}-{test}", std::process::id())
 }
 
+/// This test process's scratch directory, `<tmp>/motiond-e2e-<pid>`: the configs it
+/// writes, and the state directory of the servers it starts.
+pub fn scratch_dir() -> PathBuf {
+    std::env::temp_dir().join(format!("motiond-e2e-{}", std::process::id()))
+}
+
 /// Writes `text` to a temp config file `<tmp>/motiond-e2e-<pid>/<name>.toml`.
 pub fn try_write_config(name: &str, text: &str) -> Result<PathBuf, KitError> {
-    let dir = std::env::temp_dir().join(format!("motiond-e2e-{}", std::process::id()));
+    let dir = scratch_dir();
     std::fs::create_dir_all(&dir).map_err(KitError::io(format!("create {}", dir.display())))?;
     let path = dir.join(format!("{name}.toml"));
     std::fs::write(&path, text).map_err(KitError::io(format!("write {}", path.display())))?;

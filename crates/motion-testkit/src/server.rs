@@ -60,6 +60,13 @@ impl<B> Server<B> {
     fn spawn_binary(bin: &Path, path: &Path) -> Result<Self, KitError> {
         let mut command = Command::new(bin);
         command.arg("--config").arg(path);
+        if std::env::var_os("STATE_DIRECTORY").is_none() {
+            // The default state directory (and the black box's under it) of a server the
+            // tests start, as systemd's `StateDirectory=` would give it: this run's scratch
+            // directory, not the machine's /var/lib/motiond (each test's server has a name
+            // of its own, and a server prunes only its own black box files).
+            command.env("STATE_DIRECTORY", crate::scratch_dir().join("state"));
+        }
         Self::spawn_with(command)
     }
 

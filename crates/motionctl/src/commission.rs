@@ -143,6 +143,14 @@ pub fn run(client: &Client<Service>, request: &Request<'_>) -> anyhow::Result<()
                 detail: Some(why),
             }));
         }
+        // Another device on the link in use (a line rate): the client names it.
+        Err(
+            error @ ClientError::Refused {
+                reason: Reason::GroupBusy | Reason::ClaimedByOther,
+                detail: Some(_),
+                ..
+            },
+        ) => return Err(error.into()),
         Err(ClientError::Refused {
             reason: Reason::GroupBusy,
             ..
@@ -156,6 +164,23 @@ pub fn run(client: &Client<Service>, request: &Request<'_>) -> anyhow::Result<()
                     "an axis of device `{device}` moves: stop it (`motionctl stop`) and \
                      commission once it rests"
                 )),
+            }));
+        }
+        Err(ClientError::Refused {
+            reason: Reason::EstopLatched,
+            ..
+        }) => {
+            return Err(anyhow::Error::new(ClientError::Refused {
+                kind: "commission",
+                target: format!("device {device}"),
+                reason: Reason::EstopLatched,
+                tick: 0,
+                detail: Some(
+                    "the e-stop is latched: a commission re-parameterises the board while it \
+                     is meant to hold (a factory reset sets every parameter back); find why it \
+                     was pressed, `motionctl reset`, and commission again"
+                        .to_owned(),
+                ),
             }));
         }
         Err(error) => return Err(error.into()),

@@ -3,8 +3,10 @@
 //! `motionctl commission` moves the QUADpack to address 5 and the SIXpack to 115200 baud
 //! and prints the config line; refuses an address another device has, a rate the pack's
 //! `$40` does not reach, a factory reset without --yes, a board without the setting, an
-//! unknown device, and — through the Rust client — a client without the device's claims
-//! and a device whose axis moves; an SPI_motor moves to a new even address.
+//! unknown device, a commission while the e-stop is latched, a rate while another client
+//! holds a claim on the neighbour pack, and — through the Rust client — a client without
+//! the device's claims and a device whose axis moves; an SPI_motor moves to a new even
+//! address.
 
 mod common;
 
@@ -55,6 +57,35 @@ fn real_commission_moves_address_and_rate_and_refuses_what_it_must() -> Result {
         4,
         "no device named \"no_such\"",
     );
+
+    // Issue 40 item 8: refused while the e-stop is latched, said so; and a rate while
+    // another client holds a claim on the neighbour pack's `gripper` (it would be left at
+    // 19200), the device named.
+    let estop = run(&name, &["estop"])?;
+    assert!(estop.status.success(), "{estop:?}");
+    assert_fails(
+        &run(&name, &["commission", "pack_xyz", "--baud", "115200"])?,
+        4,
+        "the e-stop is latched",
+    );
+    let reset = run(&name, &["reset"])?;
+    assert!(reset.status.success(), "{reset:?}");
+    {
+        let other = Client::<ipc::Service>::connect(&name)?;
+        let gripper = other.axis("gripper")?;
+        gripper.claim()?;
+        assert_fails(
+            &run(&name, &["commission", "pack_xyz", "--baud", "115200"])?,
+            4,
+            "device `pack_aux` shares link `rs485` and client 0x",
+        );
+        let output = run(&name, &["commission", "pack_xyz", "--baud", "115200"])?;
+        assert!(
+            stderr(&output).contains("holds a claim on its axis `gripper`"),
+            "{output:?}"
+        );
+        gripper.release()?;
+    }
 
     // The SIXpack to 115200; its neighbour on the bus keeps 19200 (said so).
     let output = run(

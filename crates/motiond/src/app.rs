@@ -12,7 +12,7 @@ use motion_ipc::{ClientId, DeviceState, ServerPidFile, read_text};
 use motion_link::{Link, LinkConfig};
 use rtrb::RingBuffer;
 
-use crate::blackbox::{BlackboxFile, Journal, RecorderSetup};
+use crate::blackbox::{BlackboxFile, Journal, RecorderSetup, directory};
 use crate::boards::{sim_can_link, sim_link};
 use crate::config::{IoMode, ServerConfig, Transport};
 use crate::error::ServerError;
@@ -109,8 +109,16 @@ pub fn run(config: ServerConfig, options: RunOptions) -> Result<(), ServerError>
 
     let params = crate::params::machine_params(&config);
     let mut drivers = crate::boards::build(&config)?;
-    // Before the drivers' first step: the references a previous run saved.
-    let (references, mut keeper) = crate::references::start(&config, &mut drivers).unzip();
+    // Before the drivers' first step: the references a previous run saved (the state
+    // directory checked first: the server does not start with one that is not its own).
+    let (references, mut keeper) = crate::references::start(&config, &mut drivers)?.unzip();
+    // The black box's directory, checked (and made) before any link opens: one that is not
+    // the server's own is refused now, not at the first fault.
+    if config.server.blackbox_seconds > 0 {
+        let dir = &config.server.blackbox_dir;
+        crate::private_dir::PrivateDir::open(dir, directory::KEY, directory::DIR_MODE)?;
+        tracing::info!("black box: {}", dir.display());
+    }
     let engine = Engine::new(config.engine_config(), drivers).map_err(ServerError::Engine)?;
     let links = open_links(&config)?;
 

@@ -23,6 +23,7 @@ use motion_ipc::PidFileError;
 use motion_link::LinkError;
 
 use crate::boards::BuildError;
+use crate::private_dir::PrivateDirError;
 
 /// A real-time set-up step that could not be done (the server may go on without it).
 #[derive(Debug, thiserror::Error)]
@@ -318,6 +319,10 @@ pub enum ServerError {
     /// The pid file could not be written; every axis was stopped before exiting.
     #[error(transparent)]
     PidFile(#[from] PidFileError),
+    /// `state_dir` or `blackbox_dir` (or the server's key in it) is not the server's own,
+    /// or could not be made (crate::private_dir: what was found and what to do).
+    #[error(transparent)]
+    PrivateDir(#[from] PrivateDirError),
 }
 
 #[cfg(test)]

@@ -9,6 +9,14 @@
 //! ([`Driver::restore_references`]) before the driver's first step; the driver decides
 //! from what the board says whether the axis is referenced again.
 //!
+//! The file is the server's own (docs/ARCHITECTURE.md "Files the server trusts"): the state
+//! directory must pass [`PrivateDir`]'s checks (the server refuses to start otherwise), the
+//! file is read only when it is a regular file of the server's user that no one else may
+//! write, and written through a temporary file created `O_EXCL | O_NOFOLLOW`, mode 0600.
+//! Each record carries a MAC (HMAC-SHA256 with the server's key, crate::secret) of the
+//! server's name and every field: a record edited or planted by anyone without the key is
+//! refused, with the reason in the log, and its axis needs a reference.
+//!
 //! The tick only looks at the frame it just wrote ([`Watch::observe`]: a comparison per
 //! watched axis, and a push into a bounded ring when something changed — no allocation, no
 //! file, no lock); the main thread drains the ring and writes the file ([`Keeper`]), a
@@ -33,6 +41,24 @@ use motion_ipc::{AxisFlags, AxisMode, DeviceState, MotionFrame};
 use serde::{Deserialize, Serialize};
 
 use crate::config::ServerConfig;
+use crate::private_dir::{Privacy, PrivateDir, PrivateDirError};
+use crate::secret::ServerKey;
+
+/// The state directory's mode when the server makes it.
+pub const STATE_DIR_MODE: u32 = 0o700;
+
+/// The references file's mode.
+const FILE_MODE: u32 = 0o600;
+
+/// The largest references file read (1024 axes' records are ~400 KiB).
+const MAX_FILE_BYTES: u64 = 1 << 20;
+
+/// The config key naming the state directory, for messages.
+const KEY: &str = "[server] state_dir";
+
+/// What each record's MAC starts with (a tag made for one purpose is never taken for
+/// another's).
+const DOMAIN: &[u8] = b"motiond references record v1";
 
 /// Samples the ring holds between two passes of the main thread (10 ms apart).
 const RING: usize = 256;
@@ -120,6 +146,44 @@ struct Record {
     keys: String,
     referenced: bool,
     counts: i64,
+    /// HMAC-SHA256 of the server's name and the fields above, with the server's key
+    /// (crate::secret), in hex; empty in a file written before records were authenticated.
+    #[serde(default)]
+    mac: String,
+}
+
+impl Record {
+    /// Hands `f` the record's fields, framed for its MAC: the domain, server `server`, then
+    /// every field but the MAC.
+    fn with_parts<T>(&self, server: &str, f: impl FnOnce(&[&[u8]]) -> T) -> T {
+        let address = self.address.to_le_bytes();
+        let channel = (self.channel as u64).to_le_bytes();
+        let referenced = [u8::from(self.referenced)];
+        let counts = self.counts.to_le_bytes();
+        f(&[
+            DOMAIN,
+            server.as_bytes(),
+            self.axis.as_bytes(),
+            self.device.as_bytes(),
+            self.model.as_bytes(),
+            &address,
+            self.link.as_bytes(),
+            &channel,
+            self.keys.as_bytes(),
+            &referenced,
+            &counts,
+        ])
+    }
+
+    /// Sets the record's MAC (server `server`, key `key`).
+    fn sign(&mut self, server: &str, key: &ServerKey) {
+        self.mac = self.with_parts(server, |parts| key.sign(parts));
+    }
+
+    /// Whether the record's MAC is server `server`'s with `key`.
+    fn authentic(&self, server: &str, key: &ServerKey) -> bool {
+        self.with_parts(server, |parts| key.verify(parts, &self.mac))
+    }
 }
 
 /// The file.
@@ -134,7 +198,12 @@ struct File {
 /// The main thread's side: the records, the file, the tick's samples.
 #[derive(Debug)]
 pub struct Keeper {
-    path: PathBuf,
+    /// The state directory (opened and checked again at every write: one made again after
+    /// a clean-up is checked as the first was).
+    dir: PathBuf,
+    /// The file's name in it.
+    name: String,
+    key: ServerKey,
     file: File,
     rx: rtrb::Consumer<Sample>,
     /// The last write failed (logged once until one succeeds).
@@ -161,13 +230,26 @@ impl Keeper {
     }
 
     fn write(&mut self) {
-        match write_atomically(&self.path, &self.file) {
+        let server = self.file.server.clone();
+        for record in &mut self.file.axis {
+            record.sign(&server, &self.key);
+        }
+        let written = PrivateDir::open(&self.dir, KEY, STATE_DIR_MODE)
+            .map_err(|error| error.to_string())
+            .and_then(|dir| {
+                write_atomically(&dir, &self.name, &self.file).map_err(|error| {
+                    format!(
+                        "cannot write {}: {error}",
+                        dir.file_path(&self.name).display()
+                    )
+                })
+            });
+        match written {
             Ok(()) => self.failing = false,
             Err(error) => {
                 if !self.failing {
                     tracing::warn!(
-                        "references: cannot write {}: {error}; the axes will need a new reference after a restart",
-                        self.path.display()
+                        "references: {error}; the axes will need a new reference after a restart"
                     );
                 }
                 self.failing = true;
@@ -178,7 +260,12 @@ impl Keeper {
 
 /// The file of server `name` in `dir`.
 pub fn file_path(dir: &Path, name: &str) -> PathBuf {
-    dir.join(format!("{name}.references.toml"))
+    dir.join(file_name(name))
+}
+
+/// The file's name for server `name`.
+fn file_name(name: &str) -> String {
+    format!("{name}.references.toml")
 }
 
 /// FNV-1a 64 of `text`, as 16 hex digits (stable across builds and platforms).
@@ -232,6 +319,7 @@ fn records(config: &ServerConfig, drivers: &[AnyDriver]) -> Vec<(usize, Record)>
                 keys: fingerprint(&keys),
                 referenced: false,
                 counts: 0,
+                mac: String::new(),
             },
         ));
     }
@@ -266,12 +354,13 @@ fn identity_refusal(saved: &Record, now: &Record) -> Option<&'static str> {
     }
 }
 
-/// Reads `path`: `None` (logged) when missing, unreadable, not a references file or of
-/// another server.
-fn read(path: &Path, server: &str) -> Option<File> {
-    let text = match std::fs::read_to_string(path) {
-        Ok(text) => text,
-        Err(error) if error.kind() == std::io::ErrorKind::NotFound => {
+/// Reads file `name` of `dir`: `None` (logged) when missing, not the server's own (see the
+/// module docs), unreadable, not a references file or of another server.
+fn read(dir: &PrivateDir, name: &str, server: &str) -> Option<File> {
+    let path = dir.file_path(name);
+    let bytes = match dir.read_own(name, Privacy::Unwritable, MAX_FILE_BYTES) {
+        Ok(Some(bytes)) => bytes,
+        Ok(None) => {
             tracing::info!(
                 "references: no saved references ({} does not exist): every axis needs a reference",
                 path.display()
@@ -279,12 +368,16 @@ fn read(path: &Path, server: &str) -> Option<File> {
             return None;
         }
         Err(error) => {
-            tracing::warn!(
-                "references: cannot read {}: {error}; no axis is referenced from it",
-                path.display()
-            );
+            tracing::warn!("references: {error}; no axis is referenced from it");
             return None;
         }
+    };
+    let Ok(text) = String::from_utf8(bytes) else {
+        tracing::warn!(
+            "references: {} is not a references file (not UTF-8); no axis is referenced from it",
+            path.display()
+        );
+        return None;
     };
     let file: File = match toml::from_str(&text) {
         Ok(file) => file,
@@ -308,16 +401,24 @@ fn read(path: &Path, server: &str) -> Option<File> {
     Some(file)
 }
 
-/// Start-up: reads the saved references of `config`'s server, hands each matching one to
-/// its driver ([`Driver::restore_references`]), and returns the tick's watch and the main
+/// Start-up: checks the state directory (refused: the server does not start), reads the
+/// saved references of `config`'s server, hands each authentic and matching one to its
+/// driver ([`Driver::restore_references`]), and returns the tick's watch and the main
 /// thread's keeper (`None` when no driver keeps references: no file is touched).
-pub fn start(config: &ServerConfig, drivers: &mut [AnyDriver]) -> Option<(Watch, Keeper)> {
+pub fn start(
+    config: &ServerConfig,
+    drivers: &mut [AnyDriver],
+) -> Result<Option<(Watch, Keeper)>, PrivateDirError> {
     let now = records(config, drivers);
     if now.is_empty() {
-        return None;
+        return Ok(None);
     }
-    let path = file_path(&config.server.state_dir, &config.server.name);
-    let saved = read(&path, &config.server.name);
+    let server = &config.server.name;
+    let dir = PrivateDir::open(&config.server.state_dir, KEY, STATE_DIR_MODE)?;
+    let key = ServerKey::load_or_create(&dir)?;
+    let name = file_name(server);
+    let path = dir.file_path(&name);
+    let saved = read(&dir, &name, server);
     let mut given: Vec<Vec<SavedReference>> = vec![Vec::new(); drivers.len()];
     let mut now = now;
     for (index, record) in &mut now {
@@ -327,6 +428,17 @@ pub fn start(config: &ServerConfig, drivers: &mut [AnyDriver]) -> Option<(Watch,
         else {
             continue;
         };
+        if !old.authentic(server, &key) {
+            tracing::warn!(
+                "references: axis `{}` is not referenced from {}: its record is not \
+                 authenticated by the server's key ({}: edited, planted, or saved with another \
+                 key); it needs a reference",
+                record.axis,
+                path.display(),
+                dir.file_path(crate::secret::KEY_FILE).display()
+            );
+            continue;
+        }
         if identity_refusal(old, record).is_none() {
             // Kept as it was until the axis is seen again (its device online): a device
             // that does not come back in this run keeps its record for the next.
@@ -369,191 +481,31 @@ pub fn start(config: &ServerConfig, drivers: &mut [AnyDriver]) -> Option<(Watch,
             .collect(),
     };
     let file = File {
-        server: config.server.name.clone(),
+        server: server.clone(),
         axis: now.into_iter().map(|(_, record)| record).collect(),
     };
     let keeper = Keeper {
-        path,
+        dir: config.server.state_dir.clone(),
+        name,
+        key,
         file,
         rx,
         failing: false,
     };
-    Some((watch, keeper))
+    Ok(Some((watch, keeper)))
 }
 
-/// Writes `file` to `path` through a temporary file in the same directory (created if
-/// missing), synced, then renamed over `path`.
-fn write_atomically(path: &Path, file: &File) -> std::io::Result<()> {
-    use std::io::Write as _;
-    let dir = path.parent().unwrap_or(Path::new("."));
-    std::fs::create_dir_all(dir)?;
+/// Writes `file` as file `name` of `dir` ([`PrivateDir::replace`]: a temporary file made
+/// `O_EXCL | O_NOFOLLOW`, mode 0600, synced, renamed over the old one).
+fn write_atomically(dir: &PrivateDir, name: &str, file: &File) -> std::io::Result<()> {
     let text = toml::to_string(file).map_err(std::io::Error::other)?;
-    let mut tmp = path.as_os_str().to_owned();
-    tmp.push(".tmp");
-    let tmp = PathBuf::from(tmp);
-    {
-        let mut out = std::fs::File::create(&tmp)?;
-        out.write_all(b"# motiond: axes referenced and at rest (docs/keys/tmcpack.md); written by the server\n")?;
-        out.write_all(text.as_bytes())?;
-        out.sync_all()?;
-    }
-    std::fs::rename(&tmp, path)?;
-    if let Ok(dir) = std::fs::File::open(dir) {
-        let _ = dir.sync_all();
-    }
-    Ok(())
+    let mut bytes =
+        b"# motiond: axes referenced and at rest (docs/keys/tmcpack.md); written by the server, \
+each record authenticated with its key (motiond.key): an edited record is refused\n"
+            .to_vec();
+    bytes.extend_from_slice(text.as_bytes());
+    dir.replace(name, &bytes, FILE_MODE)
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn record(axis: &str) -> Record {
-        Record {
-            axis: axis.into(),
-            device: "pack".into(),
-            model: "tmcpack".into(),
-            address: 1,
-            link: "rs485".into(),
-            channel: 0,
-            keys: fingerprint("x"),
-            referenced: true,
-            counts: 1234,
-        }
-    }
-
-    #[test]
-    fn a_record_is_refused_for_any_identity_change_or_when_not_referenced() {
-        let now = record("x");
-        assert_eq!(refusal(&record("x"), &now), None);
-        for change in [
-            |r: &mut Record| r.device = "other".into(),
-            |r: &mut Record| r.address = 2,
-            |r: &mut Record| r.model = "qsb".into(),
-            |r: &mut Record| r.link = "bus".into(),
-            |r: &mut Record| r.channel = 1,
-            |r: &mut Record| r.keys = fingerprint("y"),
-            |r: &mut Record| r.referenced = false,
-        ] {
-            let mut saved = record("x");
-            change(&mut saved);
-            assert!(refusal(&saved, &now).is_some(), "{saved:?}");
-        }
-    }
-
-    #[test]
-    fn the_file_is_written_atomically_and_read_back() {
-        let dir = std::env::temp_dir().join(format!("motiond-refs-{}", std::process::id()));
-        let path = file_path(&dir, "demo");
-        let file = File {
-            server: "demo".into(),
-            axis: vec![record("x")],
-        };
-        write_atomically(&path, &file).expect("written");
-        assert_eq!(read(&path, "demo"), Some(file));
-        assert_eq!(read(&path, "other"), None, "another server's file");
-        std::fs::write(&path, "server = \"demo\"\n[[axis]]\naxis = 3\n").expect("garbage");
-        assert_eq!(read(&path, "demo"), None, "a corrupt file");
-        let _ = std::fs::remove_dir_all(&dir);
-        assert_eq!(read(&path, "demo"), None, "no file");
-    }
-
-    /// A frame whose axis 1 is `mode` with `flags`, online, at `counts`.
-    fn frame(mode: AxisMode, flags: AxisFlags, counts: i64) -> Box<MotionFrame> {
-        let mut frame = Box::new(MotionFrame::EMPTY);
-        let axis = &mut frame.axes[1];
-        axis.mode = mode as u8;
-        axis.flags = flags.0;
-        axis.raw_counts = counts;
-        axis.device_state = DeviceState::Online as u8;
-        frame
-    }
-
-    /// What the tick sends for a watched axis (index 1): referenced only while HOMED, not
-    /// MOVING, no fault, holding (or arrived); nothing while the device is not online or
-    /// the data stale; a change of position while referenced; a full ring retried.
-    #[test]
-    fn the_watch_sends_referenced_only_at_rest_and_only_changes() {
-        let (tx, mut rx) = rtrb::RingBuffer::new(2);
-        let mut watch = Watch {
-            axes: vec![(1, None)],
-            tx,
-            restored: Vec::new(),
-        };
-        let mut seen = |watch: &mut Watch, frame: &MotionFrame| {
-            watch.observe(frame);
-            let mut out = Vec::new();
-            while let Ok(s) = rx.pop() {
-                out.push((s.referenced, s.counts));
-            }
-            out
-        };
-        let homed = AxisFlags::HOMED;
-        let rest = frame(AxisMode::Hold, homed, 2000);
-        assert_eq!(seen(&mut watch, &rest), [(true, 2000)]);
-        assert_eq!(seen(&mut watch, &rest), [], "no change, nothing sent");
-        // A move taken: the mode changes before the board reports motion.
-        let taken = frame(AxisMode::RampPosition, homed, 2000);
-        assert_eq!(seen(&mut watch, &taken), [(false, 2000)]);
-        let moving = frame(
-            AxisMode::RampPosition,
-            homed.with(AxisFlags::MOVING, true),
-            2300,
-        );
-        assert_eq!(seen(&mut watch, &moving), [], "still not referenced");
-        let arrived = frame(
-            AxisMode::RampPosition,
-            homed.with(AxisFlags::ARRIVED, true),
-            2500,
-        );
-        assert_eq!(seen(&mut watch, &arrived), [(true, 2500)]);
-        // Moving in hold (pushed, a board's own motion), a fault, no reference: not.
-        for flags in [
-            homed.with(AxisFlags::MOVING, true),
-            homed.with(AxisFlags::FAULT, true),
-            AxisFlags::default(),
-        ] {
-            assert_eq!(
-                seen(&mut watch, &frame(AxisMode::Hold, flags, 2500)),
-                [(false, 2500)]
-            );
-            assert_eq!(seen(&mut watch, &arrived), [(true, 2500)]);
-        }
-        // Stopping, homing: not at rest.
-        for mode in [AxisMode::Stopping, AxisMode::Homing, AxisMode::Velocity] {
-            assert_eq!(seen(&mut watch, &frame(mode, homed, 2500)), [(false, 2500)]);
-            assert_eq!(seen(&mut watch, &arrived), [(true, 2500)]);
-        }
-        // The device not online, or the data stale: the record stays as it was.
-        let mut offline = frame(AxisMode::Stopping, AxisFlags::default(), 0);
-        offline.axes[1].device_state = DeviceState::Faulted as u8;
-        assert_eq!(seen(&mut watch, &offline), []);
-        let stale = frame(AxisMode::Off, AxisFlags::STALE, 0);
-        assert_eq!(seen(&mut watch, &stale), []);
-        // Referenced elsewhere (a set-position): sent.
-        assert_eq!(
-            seen(&mut watch, &frame(AxisMode::Hold, homed, 100)),
-            [(true, 100)]
-        );
-        // A full ring: the change is sent at the next frame that finds room.
-        let mut full = Watch {
-            axes: vec![(1, None)],
-            tx: rtrb::RingBuffer::new(1).0,
-            restored: Vec::new(),
-        };
-        full.observe(&rest);
-        full.observe(&taken);
-        assert_eq!(
-            full.axes[0].1.map(|s| s.referenced),
-            Some(true),
-            "not sent: not taken"
-        );
-    }
-
-    #[test]
-    fn fingerprints_are_fnv1a_64() {
-        // FNV-1a 64 of "" and "a" (the published test vectors).
-        assert_eq!(fingerprint(""), "cbf29ce484222325");
-        assert_eq!(fingerprint("a"), "af63dc4c8601ec8c");
-    }
-}
+mod tests;

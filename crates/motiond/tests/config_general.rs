@@ -516,19 +516,23 @@ fn spi_links_may_be_run_by_the_tick_and_serial_links_keep_their_threads() {
     }
 }
 
-/// `[server] state_dir`: where the references of `power_down = "restore"` devices are kept;
-/// `/tmp/motiond-state` unless given, an empty path refused with the key.
+/// `[server] state_dir`: where the references of `power_down = "restore"` devices and the
+/// server's key are kept; unless given, the documented default for this process
+/// (`motiond::private_dir::default_state_dir`: root's is `/var/lib/motiond`), and
+/// `blackbox_dir` under it unless given; an empty path refused with the key.
 #[test]
 fn the_state_dir_has_a_documented_default_and_refuses_an_empty_path() {
-    assert_eq!(
-        server_with("claim_lease_ms = 500").state_dir,
-        PathBuf::from(motiond::config::DEFAULT_STATE_DIR)
-    );
-    assert_eq!(motiond::config::DEFAULT_STATE_DIR, "/tmp/motiond-state");
-    assert_eq!(
-        server_with("state_dir = \"/var/lib/motiond\"").state_dir,
-        PathBuf::from("/var/lib/motiond")
-    );
+    let default = server_with("claim_lease_ms = 500");
+    assert_eq!(default.state_dir, motiond::config::default_state_dir());
+    assert_eq!(default.blackbox_dir, default.state_dir.join("blackbox"));
+    if nix::unistd::geteuid().is_root() && std::env::var_os("STATE_DIRECTORY").is_none() {
+        assert_eq!(default.state_dir, PathBuf::from("/var/lib/motiond"));
+    }
+    let given = server_with("state_dir = \"/srv/motiond\"");
+    assert_eq!(given.state_dir, PathBuf::from("/srv/motiond"));
+    assert_eq!(given.blackbox_dir, PathBuf::from("/srv/motiond/blackbox"));
+    let both = server_with("state_dir = \"/srv/motiond\"\nblackbox_dir = \"/srv/bb\"");
+    assert_eq!(both.blackbox_dir, PathBuf::from("/srv/bb"));
     let to = "state_dir = \"\"";
     let text = GOOD.replace("claim_lease_ms = 500", to);
     fails(

@@ -675,8 +675,12 @@ class Client:
         """Changes one of ``device``'s own settings (exactly one of ``address``, ``baud``,
         ``factory_reset=True``): the server tells the board and finds it again where it
         now answers (:meth:`wait_commissioned`). Needs the device's claims
-        (:meth:`claim_device`); refused while one of its axes moves
-        (:class:`~motiond.errors.GroupBusy`), for a setting its board lacks
+        (:meth:`claim_device`); refused while the e-stop is latched
+        (:class:`~motiond.errors.EstopLatched`), while one of its axes moves
+        (:class:`~motiond.errors.GroupBusy`), for a ``baud`` on a link other devices share
+        while one of them is in use (:class:`~motiond.errors.GroupBusy` for a goal or a
+        moving axis, :class:`~motiond.errors.ClaimedByOther` for another client's claim; the
+        reply's ``value`` is that device's index), for a setting its board lacks
         (:class:`~motiond.errors.Unsupported`) or a value it does not take
         (:class:`~motiond.errors.OutOfRange`)."""
         return commission.commission(

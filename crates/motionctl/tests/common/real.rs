@@ -155,6 +155,9 @@ impl RealServer {
         Ok(Command::new(motiond_binary()?)
             .arg("--config")
             .arg(self.dir.join("sim.toml"))
+            // Its state directory and black box in this server's directory (removed with
+            // it), as systemd's StateDirectory= would give it: not the machine's.
+            .env("STATE_DIRECTORY", self.dir.join("state"))
             .stdin(Stdio::null())
             .stdout(
                 std::fs::File::options()

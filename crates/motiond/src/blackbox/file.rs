@@ -67,6 +67,9 @@ pub enum SaveError {
         /// The library's error.
         source: mcap::McapError,
     },
+    /// `blackbox_dir` is not the server's own, or could not be made (crate::private_dir).
+    #[error(transparent)]
+    Dir(#[from] crate::private_dir::PrivateDirError),
     /// The file is MCAP but holds no black box.
     #[error("{}: {what}", path.display())]
     NotABlackbox {
@@ -246,8 +249,24 @@ fn finite(value: f64) -> String {
 }
 
 impl BlackboxFile {
-    /// Writes `ticks` to `path`, saved for `reason`.
+    /// Writes `ticks` to `path` (created, or truncated), saved for `reason`.
     pub fn write(&self, path: &Path, ticks: &Ticks<'_>, reason: &str) -> Result<(), SaveError> {
+        let file = File::create(path).map_err(|source| SaveError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        self.write_to(file, path, ticks, reason)
+    }
+
+    /// [`write`](Self::write) into `file`, already created at `path` (the recorder's, made
+    /// `O_EXCL | O_NOFOLLOW` in the black box's directory), synced before it returns.
+    pub fn write_to(
+        &self,
+        file: File,
+        path: &Path,
+        ticks: &Ticks<'_>,
+        reason: &str,
+    ) -> Result<(), SaveError> {
         let io = |source| SaveError::Io {
             path: path.to_owned(),
             source,
@@ -256,7 +275,6 @@ impl BlackboxFile {
             path: path.to_owned(),
             source,
         };
-        let file = File::create(path).map_err(io)?;
         let mut writer = mcap::WriteOptions::new()
             .compression(None)
             .library(format!("motiond {}", env!("CARGO_PKG_VERSION")))
@@ -348,7 +366,11 @@ impl BlackboxFile {
             })
             .map_err(mcap)?;
         writer.finish().map_err(mcap)?;
-        Ok(())
+        let file = writer
+            .into_inner()
+            .into_inner()
+            .map_err(|error| io(error.into_error()))?;
+        file.sync_all().map_err(io)
     }
 }
 

@@ -6,6 +6,7 @@
 //! and compares every output ([`replay`]).
 
 pub mod digest;
+pub mod directory;
 pub mod file;
 pub mod journal;
 pub mod record;

@@ -12,6 +12,9 @@ use std::time::{Instant, SystemTime, UNIX_EPOCH};
 
 use rtrb::Consumer;
 
+use crate::private_dir::PrivateDir;
+
+use super::directory;
 use super::file::{BlackboxFile, SaveError};
 use super::record::Trigger;
 use super::ring::Ring;
@@ -33,11 +36,11 @@ pub struct RecorderSetup {
     pub ring_bytes: usize,
     /// What a saved file says about the server (name, config, versions).
     pub file: BlackboxFile,
-    /// Where files go.
+    /// Where files go (`blackbox_dir`: crate::blackbox::directory).
     pub dir: PathBuf,
     /// Save on a clean exit.
     pub on_exit: bool,
-    /// How many `.mcap` files `dir` keeps.
+    /// How many of this server's saves `dir` keeps (crate::blackbox::directory).
     pub keep_files: usize,
     /// The file naming the newest save (`ServerPidFile::blackbox_pointer`).
     pub pointer: PathBuf,
@@ -155,56 +158,59 @@ fn save_to_dir(
     ring: &Ring,
     reason: SaveReason,
 ) -> Result<PathBuf, SaveError> {
-    std::fs::create_dir_all(&setup.dir).map_err(|source| SaveError::Io {
-        path: setup.dir.clone(),
-        source,
-    })?;
+    // Opened and checked at every save: one removed meanwhile is made again, and one
+    // replaced by another user's (or a link) is refused.
+    let dir = PrivateDir::open(&setup.dir, directory::KEY, directory::DIR_MODE)?;
     let millis = SystemTime::now()
         .duration_since(UNIX_EPOCH)
-        .map_or(0, |since| since.as_millis());
-    let path = setup.dir.join(format!(
-        "{}-{millis}-{}.mcap",
-        setup.file.server_name,
-        reason.word()
-    ));
-    setup.file.write(&path, &ring.ticks(), reason.word())?;
-    remove_oldest(&setup.dir, setup.keep_files);
+        .map_or(0, |since| since.as_millis() as u64);
+    let server = &setup.file.server_name;
+    let (name, file) =
+        directory::create(&dir, server, millis, reason.word()).map_err(|source| SaveError::Io {
+            path: dir.file_path(&directory::file_name(server, millis, reason.word())),
+            source,
+        })?;
+    let path = dir.file_path(&name);
+    if let Err(error) = setup
+        .file
+        .write_to(file, &path, &ring.ticks(), reason.word())
+    {
+        let _ = dir.remove(&name);
+        return Err(error);
+    }
+    dir.sync();
+    for removed in directory::remove_oldest(&dir, server, setup.keep_files, &name) {
+        tracing::info!(
+            "black box {} removed (blackbox_keep)",
+            dir.file_path(&removed).display()
+        );
+    }
     point_to(&setup.pointer, &path);
     Ok(path)
 }
 
 /// Rewrites the pointer file (`motionctl blackbox save` reads it) to name `saved`: a
-/// temporary file renamed over it, so a reader sees the old name or the new one.
+/// temporary file made `O_EXCL` (never through a link planted at its name) renamed over
+/// it, so a reader sees the old name or the new one.
 fn point_to(pointer: &std::path::Path, saved: &std::path::Path) {
+    use std::io::Write as _;
+    use std::os::unix::fs::OpenOptionsExt as _;
     let absolute = std::path::absolute(saved).unwrap_or_else(|_| saved.to_owned());
-    let temporary = pointer.with_extension("blackbox.new");
-    let written = std::fs::write(&temporary, format!("{}\n", absolute.display()))
+    let temporary = pointer.with_extension(format!("blackbox.{}.new", std::process::id()));
+    let _ = std::fs::remove_file(&temporary);
+    let written = std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .custom_flags(libc::O_NOFOLLOW)
+        .mode(0o644)
+        .open(&temporary)
+        .and_then(|mut file| file.write_all(format!("{}\n", absolute.display()).as_bytes()))
         .and_then(|()| std::fs::rename(&temporary, pointer));
     if let Err(error) = written {
+        let _ = std::fs::remove_file(&temporary);
         tracing::warn!(
             "black box pointer {} not written: {error}",
             pointer.display()
         );
-    }
-}
-
-/// Removes the oldest `.mcap` files of `dir` beyond the newest `keep` (a file another
-/// process removed meanwhile is no error).
-fn remove_oldest(dir: &std::path::Path, keep: usize) {
-    let Ok(entries) = std::fs::read_dir(dir) else {
-        return;
-    };
-    let mut files: Vec<(SystemTime, PathBuf)> = entries
-        .filter_map(Result::ok)
-        .map(|entry| entry.path())
-        .filter(|path| path.extension().is_some_and(|ext| ext == "mcap"))
-        .filter_map(|path| Some((path.metadata().ok()?.modified().ok()?, path)))
-        .collect();
-    files.sort();
-    let excess = files.len().saturating_sub(keep);
-    for (_, path) in files.into_iter().take(excess) {
-        if std::fs::remove_file(&path).is_ok() {
-            tracing::info!("black box {} removed (blackbox_keep)", path.display());
-        }
     }
 }

@@ -66,23 +66,32 @@ pub struct ServerSettings {
     pub blackbox_seconds: u32,
     /// Save the black box on a clean exit too.
     pub blackbox_on_exit: bool,
-    /// Where black box files are written.
+    /// Where black box files are written (`<state_dir>/blackbox` unless given); a
+    /// directory of the server's user that no one else may write (crate::private_dir).
     pub blackbox_dir: PathBuf,
-    /// How many black box files `blackbox_dir` keeps (the newest; older ones are removed
-    /// after each save).
+    /// How many of this server's black box files (`<name>-<ms>-<reason>.mcap`, of the
+    /// server's user) `blackbox_dir` keeps: the newest by the time in their name; older
+    /// ones are removed after each save, never the file just saved nor another server's.
     pub blackbox_keep: u32,
     /// Where the server keeps what must survive its restart: the axes of devices with
     /// `power_down = "restore"` it last saw referenced and at rest
-    /// (`<state_dir>/<name>.references.toml`, crate::references).
+    /// (`<state_dir>/<name>.references.toml`, crate::references) and the key that
+    /// authenticates them (`motiond.key`, crate::secret). Unless given,
+    /// [`default_state_dir`]; a directory of the server's user that no one else may write
+    /// (crate::private_dir).
     pub state_dir: PathBuf,
 }
 
-/// `[server] blackbox_dir`'s default.
-pub const DEFAULT_BLACKBOX_DIR: &str = "/tmp/motiond-blackbox";
+/// `[server] blackbox_dir`'s default under the state directory.
+pub const BLACKBOX_SUBDIR: &str = "blackbox";
 
-/// `[server] state_dir`'s default (a deployed server gives a directory that survives a
-/// reboot, e.g. `/var/lib/motiond`).
-pub const DEFAULT_STATE_DIR: &str = "/tmp/motiond-state";
+/// `[server] state_dir`'s default, from the process's environment:
+/// [`crate::private_dir::default_state_dir`] (`$STATE_DIRECTORY`, `/var/lib/motiond` for
+/// root or its owner, the user's `$XDG_STATE_HOME/motiond` or `~/.local/state/motiond`,
+/// `/tmp/motiond-state-<uid>`).
+pub fn default_state_dir() -> PathBuf {
+    crate::private_dir::default_state_dir()
+}
 
 /// How a link reaches its devices.
 #[derive(Debug, Clone, PartialEq, Eq)]

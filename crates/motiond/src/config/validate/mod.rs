@@ -374,9 +374,10 @@ impl Validator<'_, '_> {
             claim_lease: Duration::ZERO,
             blackbox_seconds: 10,
             blackbox_on_exit: false,
-            blackbox_dir: crate::config::DEFAULT_BLACKBOX_DIR.into(),
+            // Unless given, under the state directory (below).
+            blackbox_dir: PathBuf::new(),
             blackbox_keep: 20,
-            state_dir: crate::config::DEFAULT_STATE_DIR.into(),
+            state_dir: crate::config::default_state_dir(),
         };
         const NAME: &str =
             "the instance name: services are motiond/<name>/frame, …; e.g. name = \"demo\"";
@@ -487,6 +488,9 @@ impl Validator<'_, '_> {
             } else {
                 settings.state_dir = v.get_ref().into();
             }
+        }
+        if settings.blackbox_dir.as_os_str().is_empty() {
+            settings.blackbox_dir = settings.state_dir.join(crate::config::BLACKBOX_SUBDIR);
         }
         settings
     }
