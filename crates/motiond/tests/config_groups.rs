@@ -472,9 +472,10 @@ fn more_than_sixteen_groups_are_refused() {
 }
 
 /// `config/sim.toml`'s groups: the SIXpack's six axes, a gantry of three boards on three
-/// links, the base's wheels; the engine takes them.
+/// links, the base's wheels, the sight of two SPI boards (a tracker's stream); the engine
+/// takes them.
 #[test]
-fn the_default_config_has_the_arm_the_gantry_and_the_base() {
+fn the_default_config_has_the_arm_the_gantry_the_base_and_the_sight() {
     let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../config/sim.toml");
     let config = ServerConfig::load(&path).unwrap_or_else(|error| panic!("{error}"));
     let named = |group: &GroupConfig| -> Vec<&str> {
@@ -495,8 +496,20 @@ fn the_default_config_has_the_arm_the_gantry_and_the_base() {
             ("arm", vec!["x", "y", "z", "a", "b", "c"]),
             ("gantry", vec!["x", "feeder", "lift"]),
             ("base", vec!["wheel_left", "wheel_right"]),
+            ("aim", vec!["turret", "focus"]),
         ]
     );
+    // The sight spans two boards (the QuadQuad2Drv and an SPI_motor), streams with the
+    // default `abort` and 20 ticks of buffer.
+    let aim = &config.groups[3];
+    let models: Vec<&str> = aim
+        .axes
+        .iter()
+        .map(|&axis| config.devices[config.axes[axis].device].model.id())
+        .collect();
+    assert_eq!(models, ["qq2drv", "spimotor"]);
+    assert_eq!(aim.stream_limit, motion_engine::StreamLimit::Abort);
+    assert_eq!((aim.stream_buffer, aim.stream_timeout), (20, 100));
     let device_of = |axis: usize| &config.devices[config.axes[axis].device];
     // The arm is one SIXpack.
     let arm = &config.groups[0];
