@@ -30,7 +30,7 @@ pub(crate) struct RawDevice {
     pub(crate) microstep_table: Option<Spanned<Vec<Spanned<Int>>>>,
     pub(crate) baud: Option<Spanned<Int>>,
     pub(crate) host_latency_ms: Option<Spanned<f64>>,
-    pub(crate) not_answering_ms: Option<Spanned<Int>>,
+    pub(crate) silence_ms: Option<Spanned<Int>>,
 }
 
 /// `ready_output = { motors = [0, 1], reference = [0] }`: TTLOUT1 as the ready output

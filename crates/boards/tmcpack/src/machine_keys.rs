@@ -48,8 +48,8 @@ pub struct TmcpackDeviceKeys {
     pub baud: Option<u32>,
     /// `host_latency_ms`: how much later than on the wire an answer may reach the driver.
     pub host_latency_ms: Option<f64>,
-    /// `not_answering_ms`: the silence before the pack is declared not answering.
-    pub not_answering_ms: Option<u32>,
+    /// `silence_ms`: the silence before the pack is declared not answering.
+    pub silence_ms: Option<u32>,
 }
 
 /// `power_down` (manual 8.6 `$45`): what the driver asks of the pack's power-down mode.

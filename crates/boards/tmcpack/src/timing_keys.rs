@@ -1,7 +1,7 @@
 //! The keys of the pack's line timing that depend on the host and on how long a silence
 //! is tolerated, not on the manual: `host_latency_ms` (part of every reply window) and
-//! `not_answering_ms` (the silence before the not-answering verdict, and how long an
-//! unanswered query's answer is taken for late). Driver module docs, docs/keys/tmcpack.md
+//! `silence_ms` (the silence before the not-answering verdict, and how long an
+//! unanswered query's answer is taken for late: the key every board has). Driver module docs, docs/keys/tmcpack.md
 //! "Timing".
 
 use core::time::Duration;
@@ -10,18 +10,13 @@ use motion_board::keys::{DeviceContext, KeyIssues};
 use motion_drivers::spec::ParamOwner;
 
 use crate::TmcpackDeviceKeys;
-use crate::driver::{DEFAULT_HOST_LATENCY, DEFAULT_NOT_ANSWERING, TmcpackDriverConfig};
+use crate::driver::{DEFAULT_HOST_LATENCY, TmcpackDriverConfig};
 use crate::keys::RawDevice;
 
 /// `host_latency_ms`: 0..=1000 ms.
 const HOST_LATENCY_MS: core::ops::RangeInclusive<f64> = 0.0..=1000.0;
-/// `not_answering_ms`: 50..=60000 ms.
-const NOT_ANSWERING_MS: core::ops::RangeInclusive<i64> = 50..=60_000;
-/// Below this a `not_answering_ms` is warned about: a host starved that long (seen up to
-/// 200 ms on a loaded machine) would take the pack offline and drop its goals.
-const NOT_ANSWERING_WARN_MS: i64 = 250;
 
-/// Validates `host_latency_ms` and `not_answering_ms` into `keys`; `false` on an issue.
+/// Validates `host_latency_ms` and `silence_ms` into `keys`; `false` on an issue.
 pub(crate) fn device_keys(
     v: &mut dyn KeyIssues,
     ctx: &DeviceContext,
@@ -45,22 +40,10 @@ pub(crate) fn device_keys(
             ok = false;
         }
     }
-    if let Some(value) = &raw.not_answering_ms {
-        let key = ctx.key("not_answering_ms");
-        match v.int_in(value, &key, NOT_ANSWERING_MS) {
-            Some(ms) => {
-                if ms < NOT_ANSWERING_WARN_MS {
-                    v.warn(
-                        value.span(),
-                        &key,
-                        format!(
-                            "{ms} ms: a host or pack held up for longer (a loaded machine holds answers up to 200 ms) takes the pack offline and drops its goals; default {}",
-                            DEFAULT_NOT_ANSWERING.as_millis()
-                        ),
-                    );
-                }
-                keys.not_answering_ms = Some(ms as u32);
-            }
+    if let Some(value) = &raw.silence_ms {
+        // The same key, range and warning as every board's (`motion_drivers::SILENCE_RANGE_MS`).
+        match v.silence_ms(value, &ctx.key("silence_ms")) {
+            Some(silence) => keys.silence_ms = Some(silence.as_millis() as u32),
             None => ok = false,
         }
     }
@@ -72,7 +55,7 @@ pub(crate) fn config(keys: &TmcpackDeviceKeys, driver: &mut TmcpackDriverConfig)
     if let Some(ms) = keys.host_latency_ms {
         driver.host_latency = Duration::from_secs_f64(ms / 1000.0);
     }
-    if let Some(ms) = keys.not_answering_ms {
+    if let Some(ms) = keys.silence_ms {
         driver.not_answering = Duration::from_millis(u64::from(ms));
     }
 }
@@ -93,7 +76,7 @@ pub(crate) fn rows(
     );
     row(
         ParamOwner::Device,
-        "not_answering_ms",
+        "silence_ms",
         format!(
             "{} ms (silence before the verdict)",
             ms(config.not_answering)

@@ -40,7 +40,7 @@ ready_output = { motors = [0, 1], reference = [0] }
 amax_divisor = 16
 stop_no_ref_bit = 6
 host_latency_ms = 16.5
-not_answering_ms = 800
+silence_ms = 800
 
 [[axis]]
 name = "x"
@@ -307,7 +307,7 @@ const DEVICE_KEYS: [&str; 8] = [
     "amax_divisor",
     "stop_no_ref_bit",
     "host_latency_ms",
-    "not_answering_ms",
+    "silence_ms",
 ];
 const AXIS_KEYS: [&str; 20] = [
     "current.peak",
@@ -359,7 +359,7 @@ fn describe_lists_every_key_with_the_value_in_effect() {
         "16.5 ms (in every reply window)"
     );
     assert_eq!(
-        value(&rows, dev, "not_answering_ms"),
+        value(&rows, dev, "silence_ms"),
         "800 ms (silence before the verdict)"
     );
     // Whole in `MachineParam`'s 40 bytes, as `motionctl list` shows them.
@@ -367,7 +367,7 @@ fn describe_lists_every_key_with_the_value_in_effect() {
         "amax_divisor",
         "stop_no_ref_bit",
         "host_latency_ms",
-        "not_answering_ms",
+        "silence_ms",
     ] {
         assert!(
             value(&rows, dev, key).len() <= motion_ipc::PARAM_TEXT_LEN,

@@ -33,14 +33,6 @@ pub const DEFAULT_SWITCHOVER_UNITS: u16 = 1;
 /// link's I/O thread wakes for them, the tick takes them in. The same figure as the QSB's.
 pub const DEFAULT_HOST_LATENCY: Duration = Duration::from_millis(5);
 
-/// How long a pack must have been silent, with at least
-/// [`MAX_TIMEOUTS`](super::MAX_TIMEOUTS) requests unanswered in a row, before it is declared
-/// not answering by default (key `not_answering_ms`): 2.5 × the 200 ms a starved host (the
-/// server's or an emulated pack's process on a loaded machine) was seen to hold answers,
-/// which must never drop a pack's goals (issue 39). Meanwhile stops still go out (they need
-/// no answer) and the engine marks the axes stale after the refresh budget.
-pub const DEFAULT_NOT_ANSWERING: Duration = Duration::from_millis(500);
-
 /// Slack of the default $41 packet timeout beyond one word's wire time: two byte times (a
 /// host or adapter may pause between the bytes of one write).
 pub const PACKET_TIMEOUT_SLACK_BYTES: u32 = 2;
@@ -281,8 +273,8 @@ pub struct TmcpackDriverConfig {
     pub host_latency: Duration,
     /// How long the pack must have been silent (with [`MAX_TIMEOUTS`](super::MAX_TIMEOUTS)
     /// requests unanswered in a row) before it is declared not answering, and how long an
-    /// unanswered query's answer is taken for late (key `not_answering_ms`,
-    /// [`DEFAULT_NOT_ANSWERING`]).
+    /// unanswered query's answer is taken for late (key `silence_ms`,
+    /// [`motion_drivers::DEFAULT_SILENCE`]).
     pub not_answering: Duration,
 }
 
@@ -315,7 +307,7 @@ impl Default for TmcpackDriverConfig {
             power_down: PowerDownMode::Off,
             microstep_table: None,
             host_latency: DEFAULT_HOST_LATENCY,
-            not_answering: DEFAULT_NOT_ANSWERING,
+            not_answering: motion_drivers::DEFAULT_SILENCE,
         }
     }
 }

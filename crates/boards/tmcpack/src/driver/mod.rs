@@ -60,8 +60,8 @@
 //!
 //! Verdicts, each declared with its evidence ([`DeviceStatus::declare`], module `rx`): not
 //! answering ([`DeviceFault::NotResponding`]) only when at least [`MAX_TIMEOUTS`] requests
-//! went unanswered in a row *and* the first of them was written `not_answering_ms` (default
-//! [`DEFAULT_NOT_ANSWERING`], 500 ms) or more before; the pack is then asked for `$43` every
+//! went unanswered in a row *and* the first of them was written `silence_ms` (default
+//! [`motion_drivers::DEFAULT_SILENCE`], 500 ms: every board's) or more before; the pack is then asked for `$43` every
 //! [`RETRY_PERIOD`] and configured again when it answers. A pack silent for less — its
 //! answers held 50, 100, 200 ms by a starved host — keeps its configuration and its goals
 //! (stops still go out meanwhile: they need no answer; the engine marks the axes stale after
@@ -148,9 +148,9 @@ use wire::Wire;
 
 pub use commission::RESET_WAIT;
 pub use config::{
-    Currents, DEFAULT_HOST_LATENCY, DEFAULT_NOT_ANSWERING, DEFAULT_REPLY_ADDRESS,
-    DEFAULT_SWITCHOVER_UNITS, PACKET_TIMEOUT_SLACK_BYTES, PiParams, TmcpackChannel,
-    TmcpackDriverConfig, default_packet_timeout_units,
+    Currents, DEFAULT_HOST_LATENCY, DEFAULT_REPLY_ADDRESS, DEFAULT_SWITCHOVER_UNITS,
+    PACKET_TIMEOUT_SLACK_BYTES, PiParams, TmcpackChannel, TmcpackDriverConfig,
+    default_packet_timeout_units,
 };
 pub use io::{MAX_PINS, PinSet, ReadyOutput, TmcpackIo, pins};
 pub use power_down::POWER_CHECK_PERIOD;
@@ -163,7 +163,7 @@ pub use spec::{MAX_DEBOUNCE_MS, MAX_POSLIMIT, is_current_level, is_weak_current,
 /// within 2 ms"), so a word is read as taken in within one cycle (docs/ARCHITECTURE.md,
 /// "How the datasheets are read"). Part of every reply window.
 pub const PACK_PROCESSING: Duration = Duration::from_millis(2);
-/// Requests unanswered in a row (spanning at least `not_answering_ms`) after which the pack
+/// Requests unanswered in a row (spanning at least `silence_ms`) after which the pack
 /// is declared not answering.
 pub const MAX_TIMEOUTS: u32 = 3;
 /// How often an offline pack is asked again.
@@ -245,7 +245,7 @@ pub struct TmcpackDriver {
     configured_timeout: Duration,
     /// Key `host_latency_ms`: part of every reply window.
     host_latency: Duration,
-    /// Key `not_answering_ms`: the silence before a verdict, and how long an unanswered
+    /// Key `silence_ms`: the silence before a verdict, and how long an unanswered
     /// query's answer is taken for late.
     not_answering: Duration,
     /// Answers that may still come late (module `late`).

@@ -2,7 +2,7 @@
 //!
 //! **Not answering** (a verdict, [`DeviceFault::NotResponding`]): only when at least
 //! [`MAX_TIMEOUTS`] requests in a row went unanswered *and* the first of them was written
-//! at least `not_answering_ms` before (module docs). A pack that is silent for less — its
+//! at least `silence_ms` before (module docs). A pack that is silent for less — its
 //! host or its firmware held the answers for 50, 100 or 200 ms and then answered again —
 //! keeps its configuration and its goals: its late answers are dropped (module `late`) and
 //! the next one it gives ends the silence. The verdict names the evidence: how many
@@ -88,7 +88,7 @@ impl TmcpackDriver {
     }
 
     /// Declares the pack not answering when at least [`MAX_TIMEOUTS`] requests went
-    /// unanswered in a row and the first was written `not_answering_ms` ago or more, with no
+    /// unanswered in a row and the first was written `silence_ms` ago or more, with no
     /// query awaited now (also when no query could go: every answer could have been taken
     /// for a late one). Once per silence.
     pub(super) fn judge_silence(&mut self, now: Duration) {

@@ -102,7 +102,7 @@ fn a_request_without_answer_reserves_the_line_for_the_packet_timeout() {
 }
 
 /// A pack that never answers is declared not answering once at least `MAX_TIMEOUTS`
-/// requests went unanswered in a row and the first was written `not_answering_ms` before
+/// requests went unanswered in a row and the first was written `silence_ms` before
 /// (default 500 ms), not at its third timeout; the verdict names its evidence.
 #[test]
 fn a_silent_pack_is_declared_not_answering_after_the_silence_with_its_evidence() {
@@ -121,8 +121,11 @@ fn a_silent_pack_is_declared_not_answering_after_the_silence_with_its_evidence()
         }
     }
     let declared = declared.expect("declared");
-    assert!(declared >= DEFAULT_NOT_ANSWERING, "{declared:?}");
-    assert!(declared < DEFAULT_NOT_ANSWERING + 60 * MS, "{declared:?}");
+    assert!(declared >= motion_drivers::DEFAULT_SILENCE, "{declared:?}");
+    assert!(
+        declared < motion_drivers::DEFAULT_SILENCE + 60 * MS,
+        "{declared:?}"
+    );
     assert!(asked.len() >= 3);
     // `$43`, and while an unanswered `$43` may still be answered late, probes whose answer
     // cannot be taken for it (module `late`): `$21` / `$30`, nothing that changes the pack.
