@@ -16,6 +16,7 @@
 //! allow = ["stop", "estop", "move", "jog"]
 //! rate = 200                       # requests per second, sustained
 //! burst = 100                      # requests at once above that
+//! stop_burst = 1000                # stops at once above `rate` (their own bucket)
 //! ```
 
 use core::time::Duration;
@@ -24,7 +25,7 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-use crate::policy::{DEFAULT_BURST, DEFAULT_RATE, KindSet, RemoteRule};
+use crate::policy::{DEFAULT_BURST, DEFAULT_RATE, DEFAULT_STOP_BURST, KindSet, RemoteRule};
 use motion_wire::keys::{DEFAULT_PORT, check_chunk};
 
 /// Default frames per second.
@@ -61,6 +62,7 @@ struct RawRemote {
     allow: Vec<String>,
     rate: Option<f64>,
     burst: Option<f64>,
+    stop_burst: Option<f64>,
 }
 
 /// What the command line gives (each `None` / empty: the file's value, else the default).
@@ -297,11 +299,13 @@ fn remotes(raw: Vec<RawRemote>, issues: &mut Vec<String>) -> Vec<RemoteRule> {
         };
         let rate = positive("rate", remote.rate, DEFAULT_RATE, f64::MIN_POSITIVE);
         let burst = positive("burst", remote.burst, DEFAULT_BURST, 1.0);
+        let stop_burst = positive("stop_burst", remote.stop_burst, DEFAULT_STOP_BURST, 1.0);
         rules.push(RemoteRule {
             identity: remote.identity,
             allow,
             rate,
             burst,
+            stop_burst,
         });
     }
     rules
@@ -331,6 +335,7 @@ mod tests {
             allow = ["stop", "estop", "move"]
             rate = 20
             burst = 5
+            stop_burst = 50
 
             [[remote]]
             identity = "*"
@@ -350,8 +355,12 @@ mod tests {
         assert!(panel.allow.contains(CommandKind::EStop));
         assert!(panel.allow.contains(CommandKind::RampPosition));
         assert!(!panel.allow.contains(CommandKind::Velocity));
-        assert_eq!((panel.rate, panel.burst), (20.0, 5.0));
+        assert_eq!(
+            (panel.rate, panel.burst, panel.stop_burst),
+            (20.0, 5.0, 50.0)
+        );
         assert_eq!(config.remotes[1].rate, DEFAULT_RATE);
+        assert_eq!(config.remotes[1].stop_burst, DEFAULT_STOP_BURST);
 
         let defaults = BridgeConfig::load(None, Overrides::default())?;
         assert_eq!(defaults.server, "demo");
@@ -399,6 +408,7 @@ mod tests {
             identity = "pa*nel"
             allow = []
             burst = 0.5
+            stop_burst = 0
             "#,
         )
         .expect_err("invalid");
@@ -413,6 +423,7 @@ mod tests {
             "remote[0].rate",
             "remote[1].identity: `pa*nel` has a [[remote]] entry already",
             "remote[1].burst",
+            "remote[1].stop_burst",
         ] {
             assert!(text.contains(part), "missing {part:?} in {text}");
         }

@@ -2,8 +2,10 @@
 //! of each remote identity, its rate limit, the sessions the bridge opened and the lateness
 //! of their requests, and claims per remote.
 //!
-//! Stop and e-stop need nothing but the allow-list: no session, no state of their own, no
-//! lateness or rate check — they are forwarded however many sessions are open. Every other
+//! Stop and e-stop need nothing but the allow-list here: no session, no lateness check —
+//! they are forwarded however many sessions are open. Where a query arrives, before it waits
+//! anywhere, the [`Gate`] sends an e-stop on its own path and holds stops to a rate of their
+//! own per entry (`stop_burst`). Every other
 //! command needs a session the bridge opened for the identity it is sent under (its secret
 //! token in the attachment), arrives within the window on that session's clock, and fits
 //! the rate of its `[[remote]]` entry: one bucket per entry, so every identity that falls
@@ -27,8 +29,10 @@ use motion_ipc::{
 
 use motion_wire::keys::{Refusal, RequestMeta, SessionId, SessionOpen, SessionToken};
 
+mod gate;
 mod session;
 
+pub use gate::{Early, Gate};
 pub use session::MAX_SESSIONS;
 use session::{Lookup, Sessions, Timing};
 
@@ -98,9 +102,10 @@ impl KindSet {
     }
 }
 
-/// Kinds that only ever make a machine safer (stop, e-stop): never refused as late or over
-/// the rate limit (they still need the allow-list), never held back by claims. `off` is not
-/// one of them: a de-energised vertical axis falls.
+/// Kinds that only ever make a machine safer (stop, e-stop): never refused as late or for
+/// want of a session, never held back by claims (they still need the allow-list; stops have
+/// a rate of their own, the [`Gate`]'s). `off` is not one of them: a de-energised vertical
+/// axis falls.
 pub const fn is_safety(kind: CommandKind) -> bool {
     matches!(kind, CommandKind::Stop | CommandKind::EStop)
 }
@@ -127,12 +132,17 @@ pub struct RemoteRule {
     pub rate: f64,
     /// Requests it may send at once above the sustained rate.
     pub burst: f64,
+    /// Stops it may send at once above `rate`: stops have a bucket of their own per entry
+    /// (a remote that spent its requests on goals may still stop), refilled at `rate`.
+    pub stop_burst: f64,
 }
 
 /// Default `rate`: requests per second a remote may sustain.
 pub const DEFAULT_RATE: f64 = 200.0;
 /// Default `burst`.
 pub const DEFAULT_BURST: f64 = 100.0;
+/// Default `stop_burst`: generous, a panel stopping every axis many times over.
+pub const DEFAULT_STOP_BURST: f64 = 1000.0;
 
 /// The lateness window when neither the config nor the server gives one (a server without
 /// a deadman).
@@ -205,10 +215,7 @@ impl Policy {
 
     /// The rule of `identity`: its own, else the `*` rule.
     pub fn rule(&self, identity: &str) -> Option<&RemoteRule> {
-        self.rules
-            .iter()
-            .find(|rule| rule.identity == identity)
-            .or_else(|| self.rules.iter().find(|rule| rule.identity == "*"))
+        rule_of(&self.rules, identity)
     }
 
     /// Opens a session for `identity` as `open` asks, received at `now`, under the id and
@@ -291,20 +298,8 @@ impl Policy {
             return Verdict::Refuse(refusal, text);
         };
         if !rule.allow.contains(kind) {
-            let allowed = rule.allow.names();
-            return Verdict::Refuse(
-                Refusal::NotAllowed,
-                format!(
-                    "`{}` is not allowed for remote `{identity}` by the bridge's config \
-                     (allowed: {})",
-                    kind.name(),
-                    if allowed.is_empty() {
-                        "nothing".to_owned()
-                    } else {
-                        allowed.join(", ")
-                    }
-                ),
-            );
+            let (refusal, text) = not_allowed(kind, identity, rule);
+            return Verdict::Refuse(refusal, text);
         }
         let (key, rate, burst) = (rule.identity.clone(), rule.rate, rule.burst);
         let window = match self.max_delay.unwrap_or(deadman) {
@@ -561,6 +556,30 @@ impl Policy {
         self.claims.clear();
         self.deadman.clear();
     }
+}
+
+/// The rule of `identity` among `rules`: its own, else the `*` rule.
+fn rule_of<'r>(rules: &'r [RemoteRule], identity: &str) -> Option<&'r RemoteRule> {
+    rules
+        .iter()
+        .find(|rule| rule.identity == identity)
+        .or_else(|| rules.iter().find(|rule| rule.identity == "*"))
+}
+
+fn not_allowed(kind: CommandKind, identity: &str, rule: &RemoteRule) -> (Refusal, String) {
+    let allowed = rule.allow.names();
+    (
+        Refusal::NotAllowed,
+        format!(
+            "`{}` is not allowed for remote `{identity}` by the bridge's config (allowed: {})",
+            kind.name(),
+            if allowed.is_empty() {
+                "nothing".to_owned()
+            } else {
+                allowed.join(", ")
+            }
+        ),
+    )
 }
 
 /// `request` as the bridge forwards it: its `client` cleared (the server takes the

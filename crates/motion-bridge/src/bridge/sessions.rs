@@ -29,11 +29,11 @@ fn draw() -> std::io::Result<(SessionId, SessionToken)> {
 
 impl Bridge {
     /// Answers a session-opening query with a grant, or refuses it.
-    pub(super) fn on_open(&mut self, query: &Query, received: Instant) {
+    pub(super) fn on_open(&mut self, query: Query, received: Instant) {
         let key = query.key_expr().as_str();
         let Some(identity) = self.keys.identity_of_session(key).map(str::to_owned) else {
             refuse(
-                Some(query),
+                Some(&query),
                 Refusal::BadRequest,
                 "not a session key of this bridge",
             );
@@ -44,7 +44,7 @@ impl Bridge {
             .and_then(|bytes| SessionOpen::decode(&bytes.to_bytes()))
         else {
             refuse(
-                Some(query),
+                Some(&query),
                 Refusal::BadRequest,
                 "opening a session needs its 9-byte payload (version 2, send time)",
             );
@@ -87,8 +87,7 @@ impl Bridge {
             }
             Err((refusal, text)) => {
                 self.counters.refused += 1;
-                tracing::info!(remote = %identity, %refusal, %text, "session refused");
-                refuse(Some(query), refusal, &text);
+                self.intake.refuse(query, &identity, refusal, &text);
             }
         }
     }

@@ -20,6 +20,7 @@ fn rule(identity: &str, allow: &[&str], rate: f64, burst: f64) -> RemoteRule {
         }),
         rate,
         burst,
+        stop_burst: super::DEFAULT_STOP_BURST,
     }
 }
 
