@@ -418,3 +418,137 @@ fn the_binary_needs_insecure(binary: &Path, wide: &Path, endpoint: &str) -> Resu
     assert!(still_running && stderr.contains("--insecure"), "{stderr}");
     Ok(())
 }
+
+/// The `motion-bridge` binary under 8 000 commands a second with tokens nobody was given,
+/// for 3 s: its log gets the first refusal whole and one summary with the count (at the end
+/// of each 10 s period, or at exit), not a line per refusal.
+#[test]
+fn a_flood_of_bad_tokens_writes_a_bounded_log() -> Result {
+    let Some(binary) = real::binary("motion-bridge", "MOTION_BRIDGE_BIN") else {
+        eprintln!(
+            "SKIPPED a_flood_of_bad_tokens_writes_a_bounded_log: no motion-bridge beside this \
+             test (`cargo build -p motion-bridge`, or ./scripts/test, builds it; or set \
+             MOTION_BRIDGE_BIN)"
+        );
+        return Ok(());
+    };
+    let server = fake("hard-log")?;
+    let dir = scratch("hard-log")?;
+    let rules = dir.join("rules.toml");
+    std::fs::write(
+        &rules,
+        "[[remote]]\nidentity = \"panel\"\nallow = [\"all\"]\nrate = 1000000\nburst = 1000000\n",
+    )?;
+    let endpoint = format!("tcp/127.0.0.1:{}", free_port()?);
+    let child = Command::new(binary)
+        .args([
+            "--server",
+            server.name(),
+            "--listen",
+            &endpoint,
+            "--insecure",
+            "--config",
+        ])
+        .arg(&rules)
+        .env("RUST_LOG", "info,zenoh=warn")
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()?;
+    let pid = nix::unistd::Pid::from_raw(i32::try_from(child.id())?);
+    let keys = Keys::new(server.name())?;
+    let until = Instant::now() + DEADLINE;
+    let zenoh = loop {
+        match session(&endpoint) {
+            Ok(zenoh) => break zenoh,
+            Err(_) if Instant::now() < until => std::thread::sleep(Duration::from_millis(100)),
+            Err(error) => return Err(format!("the bridge never listened: {error}").into()),
+        }
+    };
+    wait_for_server(&zenoh, &keys)?;
+    let no_session = std::sync::Arc::new(std::sync::atomic::AtomicU64::new(0));
+    let jog = CommandRequest::new(ClientId::NONE, 1, 0, CommandKind::Velocity)
+        .with_values([1.0, 0.0, 0.0]);
+    let start = Instant::now();
+    let mut sent = 0u64;
+    for period in 0..300u32 {
+        for n in 0..80u32 {
+            let meta = RequestMeta {
+                token: made_up(u128::from(period * 80 + n)),
+                sent_ns: clock_ns(start, Duration::ZERO),
+            };
+            let counted = std::sync::Arc::clone(&no_session);
+            zenoh
+                .get(keys.command("panel"))
+                .payload(wire::encode(&jog))
+                .attachment(meta.encode())
+                .timeout(Duration::from_secs(10))
+                .callback(move |reply| {
+                    if let Err(error) = reply.result()
+                        && error.payload().to_bytes().starts_with(b"no-session: ")
+                    {
+                        counted.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    }
+                })
+                .wait()
+                .z()?;
+            sent += 1;
+        }
+        let next = Duration::from_millis(10) * (period + 1);
+        if let Some(left) = next.checked_sub(start.elapsed()) {
+            std::thread::sleep(left);
+        }
+    }
+    let rate = sent as f64 / start.elapsed().as_secs_f64();
+    // Until the answers stop coming (past its queue, the bridge drops a refused query
+    // unanswered; zenoh ends it without a reply).
+    let mut last = u64::MAX;
+    let until = Instant::now() + DEADLINE;
+    while Instant::now() < until {
+        let now = no_session.load(std::sync::atomic::Ordering::Relaxed);
+        if now == last {
+            break;
+        }
+        last = now;
+        std::thread::sleep(Duration::from_millis(500));
+    }
+    nix::sys::signal::kill(pid, nix::sys::signal::Signal::SIGTERM)?;
+    let output = real::finish(child, DEADLINE)?;
+    let log = String::from_utf8_lossy(&output.stderr);
+    let refused: Vec<&str> = log
+        .lines()
+        .filter(|line| line.contains(": refused "))
+        .collect();
+    let answered = no_session.load(std::sync::atomic::Ordering::Relaxed);
+    let summed: u64 = refused
+        .iter()
+        .filter_map(|line| {
+            line.split("refused ")
+                .nth(1)?
+                .split(" more")
+                .next()?
+                .parse::<u64>()
+                .ok()
+        })
+        .sum();
+    eprintln!(
+        "{sent} jogs with made-up tokens at {rate:.0}/s, {answered} answered `no-session`: {} \
+         log lines about refusals, {} bytes of log in all:\n{}",
+        refused.len(),
+        log.len(),
+        refused.join("\n")
+    );
+    // The first whole, one summary at exit (another if the flood straddled the end of a
+    // 10 s period).
+    assert!(
+        (2..=3).contains(&refused.len()),
+        "{} lines about refusals:\n{log}",
+        refused.len()
+    );
+    assert!(
+        summed + 1 >= answered,
+        "the summaries count {summed} refusals beside the first, {answered} were answered"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+    Ok(())
+}

@@ -231,14 +231,17 @@ impl Intake {
         lines.into_iter().for_each(write);
     }
 
-    /// Writes the refusal log's summary if its period ended.
-    pub(crate) fn flush_log(&self) {
+    /// Writes the refusal log's summary if its period ended (`at_exit`: whether it did or
+    /// not).
+    pub(crate) fn flush_log(&self, at_exit: bool) {
         let now = self.started.elapsed();
-        let line = self
-            .log
-            .lock()
-            .unwrap_or_else(PoisonError::into_inner)
-            .flush(now);
+        let mut log = self.log.lock().unwrap_or_else(PoisonError::into_inner);
+        let line = if at_exit {
+            log.summary(now)
+        } else {
+            log.flush(now)
+        };
+        drop(log);
         line.into_iter().for_each(write);
     }
 }

@@ -288,7 +288,7 @@ impl Bridge {
         self.publish_json(now);
         self.pump();
         self.collect_replies(now);
-        self.intake.flush_log();
+        self.intake.flush_log(false);
     }
 
     fn take_samples(&mut self, now: Instant) {
@@ -541,6 +541,7 @@ impl Bridge {
             self.collect_replies(Instant::now());
             std::thread::sleep(Duration::from_millis(1));
         }
+        self.intake.flush_log(true);
         tracing::info!(
             forwarded = self.counters.forwarded,
             refused = self.counters.refused,

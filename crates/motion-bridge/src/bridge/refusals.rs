@@ -93,10 +93,15 @@ impl RefusalLog {
     /// next period starts with the next refusal.
     pub(crate) fn flush(&mut self, now: Duration) -> Option<Line> {
         let started = self.started?;
-        let period = now.saturating_sub(started);
-        if period < PERIOD {
+        if now.saturating_sub(started) < PERIOD {
             return None;
         }
+        self.summary(now)
+    }
+
+    /// The summary of the period so far, whether it ended or not (the bridge is exiting).
+    pub(crate) fn summary(&mut self, now: Duration) -> Option<Line> {
+        let period = now.saturating_sub(self.started?);
         let counted: u64 = self.counted.values().sum();
         let summary = (counted > 0).then(|| {
             let mut by_code = String::new();
@@ -204,6 +209,16 @@ mod tests {
             }]
         );
         assert_eq!(log.flush(s(30.0)), None);
+        // Counted ones are summed up at exit before the period ends.
+        let _ = log.note(s(31.0), "panel", Refusal::Late, "late");
+        let _ = log.note(s(31.5), "other", Refusal::Late, "late");
+        assert_eq!(log.flush(s(32.0)), None, "the period has not ended");
+        match log.summary(s(32.0)) {
+            Some(Line::Summary {
+                counted, by_code, ..
+            }) => assert_eq!((counted, by_code.as_str()), (1, "late 1")),
+            other => panic!("a summary at exit: {other:?}"),
+        }
         // A new period: logged whole again.
         assert_eq!(
             log.note(s(31.0), "panel", Refusal::NotAllowed, "again")
