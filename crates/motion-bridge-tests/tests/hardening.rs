@@ -17,7 +17,6 @@ use motion_bridge_tests::real;
 use motion_bridge_tests::{
     BridgeThread, DEADLINE, Result, eventually, fake, free_port, remote, scratch,
 };
-use motion_client::ClientError;
 use motion_client::ipc::{ClientId, CommandKind, CommandRequest};
 use motion_wire::keys::{Keys, Refusal, RequestMeta, SessionToken};
 use motion_wire::wire;
@@ -66,7 +65,7 @@ fn made_up(n: u128) -> SessionToken {
 }
 
 #[test]
-fn after_a_flood_of_new_sessions_a_new_sessions_estop_latches() -> Result {
+fn one_identity_cannot_pin_the_session_table_and_an_estop_latches() -> Result {
     let server = fake("hard-flood")?;
     let rules = r#"
 [[remote]]
@@ -105,7 +104,8 @@ allow = ["all"]
         &refused[..refused.len().min(3)]
     );
 
-    // Then 1100 sessions really opened: the table fills, the rest are told `busy`.
+    // Then 1100 sessions really opened: `flood` fills its share of the table (half of it:
+    // two entries get sessions), the rest are told `busy`.
     let mut opened = 0;
     let mut busy = 0;
     for _ in 0..1100 {
@@ -116,15 +116,13 @@ allow = ["all"]
         }
     }
     eprintln!("1100 stops under made-up sessions forwarded; {opened} sessions opened, {busy} busy");
-    assert_eq!((opened, busy), (MAX_SESSIONS, 1100 - MAX_SESSIONS));
+    let share = MAX_SESSIONS / 2;
+    assert_eq!((opened, busy), (share, 1100 - share));
 
-    // A new remote now gets no session, so a goal is refused as busy — but its e-stop is
+    // Another identity still gets a session of its own share, and commands; its e-stop is
     // accepted and latches.
     let operator = remote(server.name(), &bridge.endpoint, "operator")?;
-    match operator.axis("x")?.velocity(1.0) {
-        Err(ClientError::BridgeRefused { code: "busy", .. }) => {}
-        other => return Err(format!("a jog without a session: {other:?}").into()),
-    }
+    operator.axis("x")?.velocity(1.0)?;
     assert!(!server.estop_latched());
     operator.estop()?;
     eventually("the e-stop latched", || Ok(server.estop_latched()))?;
@@ -538,16 +536,22 @@ fn a_flood_of_bad_tokens_writes_a_bounded_log() -> Result {
         log.len(),
         refused.join("\n")
     );
-    // The first whole, one summary at exit (another if the flood straddled the end of a
-    // 10 s period).
+    // Per 10 s period the flood (and the wait for its answers) lasted, the first refusal
+    // whole and one summary; however many refusals.
+    let periods = start.elapsed().as_secs() / 10 + 1;
     assert!(
-        (2..=3).contains(&refused.len()),
-        "{} lines about refusals:\n{log}",
+        refused.len() >= 2 && refused.len() as u64 <= 2 * periods,
+        "{} lines about refusals in {periods} periods:\n{log}",
         refused.len()
     );
+    let firsts = refused
+        .iter()
+        .filter(|line| line.contains("the first"))
+        .count() as u64;
     assert!(
-        summed + 1 >= answered,
-        "the summaries count {summed} refusals beside the first, {answered} were answered"
+        summed + firsts >= answered,
+        "the summaries count {summed} refusals beside {firsts} logged whole, {answered} were \
+         answered"
     );
     let _ = std::fs::remove_dir_all(&dir);
     Ok(())

@@ -34,7 +34,7 @@ mod session;
 
 pub use gate::{Early, Gate};
 pub use session::MAX_SESSIONS;
-use session::{Lookup, Sessions, Timing};
+use session::{Full, Lookup, Sessions, Timing};
 
 /// A set of command kinds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -135,6 +135,9 @@ pub struct RemoteRule {
     /// Stops it may send at once above `rate`: stops have a bucket of their own per entry
     /// (a remote that spent its requests on goals may still stop), refilled at `rate`.
     pub stop_burst: f64,
+    /// Sessions the entry may hold open at once (all its identities together, for `*`):
+    /// its share of the bridge's [`MAX_SESSIONS`].
+    pub sessions: usize,
 }
 
 /// Default `rate`: requests per second a remote may sustain.
@@ -238,22 +241,37 @@ impl Policy {
                 format!("remote `{identity}` may send only stop and e-stop, which need no session"),
             ));
         }
-        let (key, rate, burst) = (rule.identity.clone(), rule.rate, rule.burst);
+        let (key, rate, burst, share) =
+            (rule.identity.clone(), rule.rate, rule.burst, rule.sessions);
         if !self.take_token(now, &key, rate, burst) {
             return Err(rate_limited(identity, &key, rate, burst));
         }
-        if self.sessions.open(now, identity, open.sent_ns, id, token) {
-            Ok(())
-        } else if self.sessions.len() >= MAX_SESSIONS {
-            Err((
+        match self
+            .sessions
+            .open(now, identity, &key, share, open.sent_ns, id, token)
+        {
+            Ok(()) => Ok(()),
+            Err(Full::Share) => Err((
+                Refusal::Busy,
+                format!(
+                    "{} {share} sessions open already, its share of the bridge's \
+                     {MAX_SESSIONS} (`sessions` of its [[remote]] entry; stop and e-stop still \
+                     pass without one)",
+                    if key == identity {
+                        format!("remote `{identity}` has its")
+                    } else {
+                        format!("the identities under `{key}` (here `{identity}`) have their")
+                    }
+                ),
+            )),
+            Err(Full::Table) => Err((
                 Refusal::Busy,
                 format!(
                     "the bridge has {MAX_SESSIONS} remote sessions open already (stop and \
                      e-stop still pass without one)"
                 ),
-            ))
-        } else {
-            Err((Refusal::Busy, "the session id drawn is taken".to_owned()))
+            )),
+            Err(Full::Taken) => Err((Refusal::Busy, "the session id drawn is taken".to_owned())),
         }
     }
 
@@ -271,6 +289,11 @@ impl Policy {
     /// Sessions open now.
     pub fn session_count(&self) -> usize {
         self.sessions.len()
+    }
+
+    /// Sessions open now under the `[[remote]]` entry `entry` (its `identity`, or `*`).
+    pub fn sessions_of_entry(&self, entry: &str) -> usize {
+        self.sessions.of_entry(entry)
     }
 
     /// Judges `request` sent under `identity` with `meta` (`None`: no readable attachment),

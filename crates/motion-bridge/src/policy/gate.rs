@@ -112,6 +112,7 @@ mod tests {
             rate,
             burst: 1.0,
             stop_burst,
+            sessions: 1,
         }
     }
 

@@ -1,7 +1,9 @@
 //! Remote sessions: opened by the bridge (a public [`SessionId`] and a secret
 //! [`SessionToken`] only the querier receives), bound to the identity they were opened for,
 //! their time stamps judged against the bridge's clock from the moment they opened. At most
-//! [`MAX_SESSIONS`]; stop and e-stop need none, so a full table never holds them back.
+//! [`MAX_SESSIONS`], and at most its share for each `[[remote]]` entry (its `sessions`): one
+//! identity cannot pin every slot. Stop and e-stop need none, so a full table never holds
+//! them back.
 
 use core::time::Duration;
 use std::collections::HashMap;
@@ -29,6 +31,8 @@ pub(super) const AHEAD_SLACK: Duration = Duration::from_secs(2);
 pub(super) struct SessionState {
     /// The identity it was opened for: its token is good for this identity only.
     pub(super) identity: String,
+    /// The `[[remote]]` entry whose share it takes (the identity's, or `*`).
+    entry: String,
     /// Its public id.
     pub(super) id: SessionId,
     /// Smallest (bridge time − send time) seen, ns, rising by at most `FLOOR_CREEP`, and
@@ -86,40 +90,64 @@ pub(super) enum Lookup<'s> {
     OtherIdentity,
 }
 
+/// Why a session was not opened.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Full {
+    /// The entry has its share open (none idle enough to forget).
+    Share,
+    /// The whole table is full.
+    Table,
+    /// The id or token drawn is taken (or zero): draw again.
+    Taken,
+}
+
 /// Every open session.
 #[derive(Debug, Default)]
 pub(super) struct Sessions {
     by_token: HashMap<SessionToken, SessionState>,
     by_id: HashMap<SessionId, SessionToken>,
+    /// Sessions open per entry.
+    per_entry: HashMap<String, usize>,
 }
 
 impl Sessions {
-    /// Opens session `id` with secret `token` for `identity`, whose opening query was sent
-    /// at `sent_ns` (its clock) and received at `now`. False when the table is full (or
-    /// the id or token is taken, or the token is zero: the caller draws them again).
+    /// Opens session `id` with secret `token` for `identity` under the entry `entry` (of
+    /// `share` sessions at most), whose opening query was sent at `sent_ns` (its clock) and
+    /// received at `now`.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn open(
         &mut self,
         now: Duration,
         identity: &str,
+        entry: &str,
+        share: usize,
         sent_ns: u64,
         id: SessionId,
         token: SessionToken,
-    ) -> bool {
-        if self.taken(id, token) || !self.make_room(now) {
-            return false;
+    ) -> Result<(), Full> {
+        if self.taken(id, token) {
+            return Err(Full::Taken);
         }
+        self.make_room(now, entry, share)?;
         self.by_id.insert(id, token);
+        *self.per_entry.entry(entry.to_owned()).or_default() += 1;
         self.by_token.insert(
             token,
             SessionState {
                 identity: identity.to_owned(),
+                entry: entry.to_owned(),
                 id,
                 floor: (now.as_nanos() as i128 - i128::from(sent_ns), now),
                 seen: now,
                 live: false,
             },
         );
-        true
+        Ok(())
+    }
+
+    /// Sessions open under `entry`.
+    pub(super) fn of_entry(&self, entry: &str) -> usize {
+        self.per_entry.get(entry).copied().unwrap_or(0)
     }
 
     /// Whether `id` or `token` is taken, or the token is zero.
@@ -127,20 +155,32 @@ impl Sessions {
         token.is_none() || self.by_token.contains_key(&token) || self.by_id.contains_key(&id)
     }
 
-    /// Whether a new session fits, forgetting idle ones without liveliness if needed.
-    fn make_room(&mut self, now: Duration) -> bool {
-        if self.by_token.len() < MAX_SESSIONS {
-            return true;
+    /// Whether a new session of `entry` fits (its share, the table), forgetting idle ones
+    /// without liveliness if needed (of the entry when its share is full).
+    fn make_room(&mut self, now: Duration, entry: &str, share: usize) -> Result<(), Full> {
+        let entry_full = self.of_entry(entry) >= share;
+        if !entry_full && self.by_token.len() < MAX_SESSIONS {
+            return Ok(());
         }
-        let by_id = &mut self.by_id;
+        let (by_id, per_entry) = (&mut self.by_id, &mut self.per_entry);
         self.by_token.retain(|_, state| {
-            let keep = state.live || now.saturating_sub(state.seen) < SESSION_IDLE;
-            if !keep {
+            let idle = !state.live && now.saturating_sub(state.seen) >= SESSION_IDLE;
+            let forget = idle && (!entry_full || state.entry == entry);
+            if forget {
                 by_id.remove(&state.id);
+                if let Some(count) = per_entry.get_mut(&state.entry) {
+                    *count = count.saturating_sub(1);
+                }
             }
-            keep
+            !forget
         });
-        self.by_token.len() < MAX_SESSIONS
+        if self.of_entry(entry) >= share {
+            Err(Full::Share)
+        } else if self.by_token.len() >= MAX_SESSIONS {
+            Err(Full::Table)
+        } else {
+            Ok(())
+        }
     }
 
     /// The session `token` names for `identity`.
@@ -177,7 +217,11 @@ impl Sessions {
             return false;
         }
         self.by_id.remove(&id);
-        self.by_token.remove(&token);
+        if let Some(state) = self.by_token.remove(&token)
+            && let Some(count) = self.per_entry.get_mut(&state.entry)
+        {
+            *count = count.saturating_sub(1);
+        }
         true
     }
 
@@ -185,6 +229,7 @@ impl Sessions {
     pub(super) fn clear(&mut self) {
         self.by_id.clear();
         self.by_token.clear();
+        self.per_entry.clear();
     }
 
     /// Sessions open.

@@ -21,6 +21,7 @@ fn rule(identity: &str, allow: &[&str], rate: f64, burst: f64) -> RemoteRule {
         rate,
         burst,
         stop_burst: super::DEFAULT_STOP_BURST,
+        sessions: MAX_SESSIONS,
     }
 }
 
@@ -653,4 +654,52 @@ fn on_its_exit_the_bridge_stops_every_remote_jog() {
     );
     assert_eq!(policy.holder(Target::Axis, 1), None);
     assert!(policy.shutdown().is_empty());
+}
+
+#[test]
+fn each_entry_has_its_share_of_the_session_table() {
+    let mut flood = rule("flood", &["all"], 1e9, 1e9);
+    flood.sessions = 3;
+    let mut wildcard = rule("*", &["all"], 1e9, 1e9);
+    wildcard.sessions = 2;
+    let mut policy = Policy::new(
+        vec![flood, wildcard, rule("panel", &["all"], 1e9, 1e9)],
+        None,
+    );
+    for n in 0..3 {
+        open(&mut policy, &remote("flood", n), ms(0), ms(0)).expect("its share");
+    }
+    match open(&mut policy, &remote("flood", 3), ms(0), ms(0)) {
+        Err((Refusal::Busy, text)) => assert!(
+            text.contains("remote `flood` has its 3 sessions open") && text.contains("`sessions`"),
+            "{text}"
+        ),
+        other => panic!("a fourth session of `flood`: {other:?}"),
+    }
+    // Made-up names under `*` share the wildcard's two.
+    open(&mut policy, &remote("anon-1", 10), ms(0), ms(0)).expect("room");
+    open(&mut policy, &remote("anon-2", 11), ms(0), ms(0)).expect("room");
+    match open(&mut policy, &remote("anon-3", 12), ms(0), ms(0)) {
+        Err((Refusal::Busy, text)) => assert!(text.contains("under `*`"), "{text}"),
+        other => panic!("a third session under `*`: {other:?}"),
+    }
+    // The panel's own share is untouched.
+    open(&mut policy, &remote("panel", 20), ms(0), ms(0)).expect("the panel's share");
+    assert_eq!(
+        (
+            policy.sessions_of_entry("flood"),
+            policy.sessions_of_entry("*")
+        ),
+        (3, 2)
+    );
+    // A session that ends frees its slot; idle ones of the entry make room after a minute.
+    assert!(policy.session_gone("flood", SessionId(0)).is_empty());
+    open(&mut policy, &remote("flood", 4), ms(10), ms(10)).expect("a freed slot");
+    policy.session_live("flood", SessionId(1));
+    let later = Duration::from_secs(61);
+    open(&mut policy, &remote("flood", 5), later, later).expect("idle ones forgotten");
+    // The live one and the new one; the wildcard's idle sessions were not the flood's to
+    // forget.
+    assert_eq!(policy.sessions_of_entry("flood"), 2);
+    assert_eq!(policy.session_count(), 5);
 }
