@@ -259,3 +259,17 @@ def test_groups_say_they_need_shared_memory(panel: RemoteClient) -> None:
     # The frames a remote client reads carry the groups' states all the same.
     frame = panel.latest()
     assert frame.group_count == len(panel.info.groups[: panel.info.group_count])
+
+
+def test_request_meta_is_the_documented_mac() -> None:
+    # The same bytes motion-wire's keys::tests pins (GOLDEN_MAC): HMAC-SHA3-256 keyed by the
+    # session's secret, the first 16 bytes.
+    from motiond.remote import request_meta
+
+    meta = request_meta(bytes([7] * 16), "panel", bytes(range(64)), 0x0102, 5, 1000)
+    assert len(meta) == 49 and meta[0] == 3
+    assert meta[1:3] == b"\x02\x01" and meta[17:25] == (5).to_bytes(8, "little")
+    assert meta[33:].hex() == "e761b1d15721ac41efb5c765052e2456"
+    # The secret itself is nowhere in it.
+    assert bytes([7] * 16) not in meta
+    assert request_meta(None, "panel", bytes(64), 0, 0, 9)[33:] == bytes(16)

@@ -3,7 +3,9 @@
 use core::time::Duration;
 
 use motion_client::ipc::{CommandReply, CommandRequest};
-use motion_wire::keys::{Keys, Origin, RequestMeta, SessionGrant, SessionOpen};
+use motion_wire::keys::{
+    Keys, Origin, RequestMeta, SessionGrant, SessionId, SessionOpen, SessionToken,
+};
 use motion_wire::wire;
 use zenoh::Wait as _;
 
@@ -17,6 +19,43 @@ pub trait Z<T> {
 impl<T> Z<T> for zenoh::Result<T> {
     fn z(self) -> Result<T> {
         self.map_err(|error| error.to_string().into())
+    }
+}
+
+/// What a request's attachment is made of: a session's secret and id (made up, or a
+/// grant's) and the send time; [`Sign::meta`] makes the MAC for the request it goes with,
+/// as a client does (a fresh counter each time).
+#[derive(Debug, Clone, Copy)]
+pub struct Sign {
+    pub token: SessionToken,
+    pub session: SessionId,
+    pub sent_ns: u64,
+}
+
+/// The tests' request counters: rising, never one twice.
+static COUNTER: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+
+impl Sign {
+    /// Requests of the session `grant` opened, sent at `sent_ns`.
+    pub fn of(grant: &SessionGrant, sent_ns: u64) -> Self {
+        Self {
+            token: grant.token,
+            session: grant.session,
+            sent_ns,
+        }
+    }
+
+    /// The attachment of `payload` sent under `identity`.
+    pub fn meta(&self, identity: &str, payload: &[u8]) -> RequestMeta {
+        let counter = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        RequestMeta::sign(
+            self.token,
+            identity,
+            payload,
+            self.session,
+            counter,
+            self.sent_ns,
+        )
     }
 }
 
@@ -57,21 +96,22 @@ pub fn open_session(
     })
 }
 
-/// Sends `request` as `identity` with `meta` (none: no attachment); the reply's payload or
-/// the refusal's text.
+/// Sends `request` as `identity` with an attachment signed as `sign` says (none: no
+/// attachment); the reply's payload or the refusal's text.
 pub fn command(
     session: &zenoh::Session,
     keys: &Keys,
     identity: &str,
     request: &CommandRequest,
-    meta: Option<RequestMeta>,
+    sign: Option<Sign>,
 ) -> Result<core::result::Result<(CommandReply, Origin), String>> {
+    let payload = wire::encode(request);
     let mut get = session
         .get(keys.command(identity))
-        .payload(wire::encode(request))
+        .payload(payload.clone())
         .timeout(Duration::from_secs(5));
-    if let Some(meta) = meta {
-        get = get.attachment(meta.encode());
+    if let Some(sign) = sign {
+        get = get.attachment(sign.meta(identity, &payload).encode());
     }
     let replies = get.wait().z()?;
     let reply = replies

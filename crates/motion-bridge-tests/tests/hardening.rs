@@ -12,13 +12,13 @@ use std::time::Instant;
 use motion_bridge::Bridge;
 use motion_bridge::config::{BridgeConfig, Overrides};
 use motion_bridge::policy::MAX_SESSIONS;
-use motion_bridge_tests::raw::{Z as _, command, open_session, session, wait_for_server};
+use motion_bridge_tests::raw::{Sign, Z as _, command, open_session, session, wait_for_server};
 use motion_bridge_tests::real;
 use motion_bridge_tests::{
     BridgeThread, DEADLINE, Result, eventually, fake, free_port, remote, scratch,
 };
 use motion_client::ipc::{ClientId, CommandKind, CommandRequest};
-use motion_wire::keys::{Keys, Refusal, RequestMeta, SessionToken};
+use motion_wire::keys::{Keys, Refusal, RequestMeta, SessionId, SessionToken};
 use motion_wire::wire;
 use zenoh::Wait as _;
 
@@ -33,7 +33,7 @@ fn clock_ns(start: Instant, shift: Duration) -> u64 {
 fn send_all(
     session: &zenoh::Session,
     keys: &Keys,
-    requests: &[(String, CommandRequest, Option<RequestMeta>)],
+    requests: &[(String, CommandRequest, Option<Sign>)],
 ) -> Result<Vec<core::result::Result<(), String>>> {
     let mut answers = Vec::with_capacity(requests.len());
     for wave in requests.chunks(128) {
@@ -44,7 +44,7 @@ fn send_all(
                 .payload(wire::encode(request))
                 .timeout(DEADLINE);
             if let Some(meta) = meta {
-                get = get.attachment(meta.encode());
+                get = get.attachment(meta.meta(identity, &wire::encode(request)).encode());
             }
             pending.push(get.wait().z()?);
         }
@@ -89,8 +89,9 @@ allow = ["all"]
     let stops: Vec<_> = (0..1100u128)
         .map(|n| {
             let stop = CommandRequest::new(ClientId::NONE, n as u64, 0, CommandKind::Stop);
-            let meta = RequestMeta {
+            let meta = Sign {
                 token: made_up(n),
+                session: SessionId(n + 1),
                 sent_ns: clock_ns(start, Duration::ZERO),
             };
             ("flood".to_owned(), stop, Some(meta))
@@ -173,10 +174,7 @@ burst = {burst}
             }
             Err(text) => return Err(format!("unexpected refusal: {text}").into()),
         };
-        let meta = RequestMeta {
-            token: grant.token,
-            sent_ns: clock_ns(start, Duration::ZERO),
-        };
+        let meta = Sign::of(&grant, clock_ns(start, Duration::ZERO));
         match command(&zenoh, &keys, &identity, &jog, Some(meta))? {
             Ok(_) => forwarded += 1,
             Err(text) if text.starts_with("rate-limited: ") => {
@@ -209,10 +207,7 @@ burst = {burst}
     );
     // A named identity keeps its own bucket.
     let panel = open_session(&zenoh, &keys, "panel", clock_ns(start, Duration::ZERO))??;
-    let meta = RequestMeta {
-        token: panel.token,
-        sent_ns: clock_ns(start, Duration::ZERO),
-    };
+    let meta = Sign::of(&panel, clock_ns(start, Duration::ZERO));
     command(&zenoh, &keys, "panel", &jog, Some(meta))?
         .map_err(|text| format!("panel's own bucket: {text}"))?;
     Ok(())
@@ -269,9 +264,10 @@ allow = ["all"]
             other => Err(format!("{what}: {other:?}").into()),
         }
     };
-    // The public id as the token, under the victim's identity: no session.
-    let from_key = RequestMeta {
+    // The public id as the secret, under the victim's identity: no session.
+    let from_key = Sign {
         token: SessionToken(public_id.0.to_le_bytes()),
+        session: *public_id,
         sent_ns: now(),
     };
     no_session(
@@ -282,11 +278,8 @@ allow = ["all"]
     // identity — and a session of `operator` (opened by the attacker) sent under `intruder`.
     let own = open_session(&attacker, &keys, "intruder", now())??;
     let other = open_session(&attacker, &keys, "operator", now())??;
-    for (identity, token) in [("operator", own.token), ("intruder", other.token)] {
-        let meta = RequestMeta {
-            token,
-            sent_ns: now(),
-        };
+    for (identity, grant) in [("operator", own), ("intruder", other)] {
+        let meta = Sign::of(&grant, now());
         match command(&attacker, &keys, identity, &jog, Some(meta))? {
             Err(text) => assert!(
                 text.starts_with("no-session: ") && text.contains("another identity"),
@@ -300,10 +293,7 @@ allow = ["all"]
     for (shift, what) in [(-2.0, "an old stamp"), (10.0, "a stamp from the future")] {
         let opened = open_session(&attacker, &keys, "intruder", now())??;
         let sent = (now() as f64 + shift * 1e9) as u64;
-        let meta = RequestMeta {
-            token: opened.token,
-            sent_ns: sent,
-        };
+        let meta = Sign::of(&opened, sent);
         match command(&attacker, &keys, "intruder", &jog, Some(meta))? {
             Err(text) if text.starts_with("late: ") => {}
             other => return Err(format!("{what}: {other:?}").into()),
@@ -471,10 +461,13 @@ fn a_flood_of_bad_tokens_writes_a_bounded_log() -> Result {
     let mut sent = 0u64;
     for period in 0..300u32 {
         for n in 0..80u32 {
-            let meta = RequestMeta {
-                token: made_up(u128::from(period * 80 + n)),
+            let made = u128::from(period * 80 + n);
+            let meta = Sign {
+                token: made_up(made),
+                session: SessionId(made + 1),
                 sent_ns: clock_ns(start, Duration::ZERO),
-            };
+            }
+            .meta("panel", &wire::encode(&jog));
             let counted = std::sync::Arc::clone(&no_session);
             zenoh
                 .get(keys.command("panel"))
@@ -554,5 +547,117 @@ fn a_flood_of_bad_tokens_writes_a_bounded_log() -> Result {
          answered"
     );
     let _ = std::fs::remove_dir_all(&dir);
+    Ok(())
+}
+
+/// Under `--insecure` any peer may declare a queryable on the command keys and see every
+/// command a remote sends. What it sees is a MAC, never the session's secret: the command
+/// replayed is refused as a replay, its attachment on another request does not fit, and
+/// no 16 bytes of it sign a request of the victim's session.
+#[test]
+fn a_peer_that_sees_a_command_cannot_command_with_it() -> Result {
+    let server = fake("hard-mac")?;
+    let rules = "[[remote]]\nidentity = \"operator\"\nallow = [\"all\"]\n";
+    let bridge = BridgeThread::start(server.name(), rules)?;
+    let keys = Keys::new(server.name())?;
+    // The eavesdropper: a queryable of its own on every command key.
+    let attacker = session(&bridge.endpoint)?;
+    wait_for_server(&attacker, &keys)?;
+    let seen = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+    let kept = std::sync::Arc::clone(&seen);
+    let _eavesdropper = attacker
+        .declare_queryable(format!("motiond/{}/command/**", server.name()))
+        .callback(move |query| {
+            if let (Some(payload), Some(attachment)) = (query.payload(), query.attachment()) {
+                kept.lock()
+                    .unwrap_or_else(std::sync::PoisonError::into_inner)
+                    .push((
+                        payload.to_bytes().into_owned(),
+                        attachment.to_bytes().into_owned(),
+                    ));
+            }
+        })
+        .wait()
+        .z()?;
+    // The victim jogs x through the bridge.
+    let victim = remote(server.name(), &bridge.endpoint, "operator")?;
+    victim.wait_ready(DEADLINE)?;
+    victim.axis("x")?.velocity(1.0)?;
+    let velocities = |server: &motion_client::testing::FakeServer| {
+        server
+            .requests()
+            .iter()
+            .filter(|r| r.kind == CommandKind::Velocity as u32)
+            .count()
+    };
+    assert_eq!(velocities(&server), 1);
+    let (payload, attachment) = seen
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+        .iter()
+        .find(|(payload, _)| {
+            wire::decode::<CommandRequest>(payload)
+                .is_ok_and(|request| request.kind == CommandKind::Velocity as u32)
+        })
+        .cloned()
+        .ok_or("the eavesdropper saw no jog")?;
+    let meta = RequestMeta::decode(&attachment).ok_or("a 49-byte attachment")?;
+    let ask = |payload: Vec<u8>, attachment: Vec<u8>| -> Result<String> {
+        let reply = attacker
+            .get(keys.command("operator"))
+            .payload(payload)
+            .attachment(attachment)
+            .timeout(DEADLINE)
+            .wait()
+            .z()?
+            .recv_timeout(DEADLINE)
+            .z()?
+            .ok_or("no answer")?;
+        Ok(match reply.result() {
+            Ok(_) => "accepted".to_owned(),
+            Err(error) => error.payload().try_to_string()?.into_owned(),
+        })
+    };
+    // 1. The same bytes again.
+    let replayed = ask(payload.clone(), attachment.clone())?;
+    assert!(
+        replayed.starts_with("late: ") && replayed.contains("replay"),
+        "{replayed}"
+    );
+    // 2. Its attachment on a faster jog.
+    let faster = CommandRequest::new(ClientId::NONE, 9, 0, CommandKind::Velocity)
+        .with_values([100.0, 0.0, 0.0]);
+    let altered = ask(wire::encode(&faster), attachment.clone())?;
+    assert!(
+        altered.starts_with("no-session: ") && altered.contains("MAC"),
+        "{altered}"
+    );
+    // 3. Every 16 bytes of what it saw, taken for the secret.
+    let mut tried = 0;
+    for window in attachment.windows(16).chain(payload.windows(16)) {
+        let guess = SessionToken(window.try_into()?);
+        let signed = RequestMeta::sign(
+            guess,
+            "operator",
+            &wire::encode(&faster),
+            meta.session,
+            meta.counter + 1000 + tried,
+            meta.sent_ns,
+        );
+        let answer = ask(wire::encode(&faster), signed.encode().to_vec())?;
+        assert!(answer.starts_with("no-session: "), "{answer}");
+        tried += 1;
+    }
+    eprintln!(
+        "the eavesdropper's replay: {replayed}\nits attachment on another jog: {altered}\n{tried} \
+         windows of what it saw tried as the secret: all refused"
+    );
+    assert_eq!(
+        velocities(&server),
+        1,
+        "the server saw only the victim's jog"
+    );
+    victim.axis("x")?.velocity(2.0)?;
+    assert_eq!(velocities(&server), 2, "the victim goes on");
     Ok(())
 }

@@ -296,8 +296,9 @@ impl Policy {
         self.sessions.of_entry(entry)
     }
 
-    /// Judges `request` sent under `identity` with `meta` (`None`: no readable attachment),
-    /// received at `now` (the bridge's monotonic clock). `deadman` is the server's
+    /// Judges `request` (`signed`: its payload's bytes as received, which the MAC of `meta`
+    /// covers) sent under `identity` with `meta` (`None`: no readable attachment), received
+    /// at `now` (the bridge's monotonic clock). `deadman` is the server's
     /// `command_timeout_ms` (the lateness window when the config sets none).
     pub fn admit(
         &mut self,
@@ -305,6 +306,7 @@ impl Policy {
         identity: &str,
         meta: Option<RequestMeta>,
         request: &CommandRequest,
+        signed: &[u8],
         deadman: Duration,
     ) -> Verdict {
         if request.schema_version != SCHEMA_VERSION {
@@ -329,9 +331,26 @@ impl Policy {
             Duration::ZERO => FALLBACK_MAX_DELAY,
             window => window,
         };
-        let token = meta.map_or(SessionToken::NONE, |meta| meta.token);
-        let session = match self.sessions.find(identity, token) {
-            Lookup::Found(state) => state,
+        let id = meta.map_or(SessionId(0), |meta| meta.session);
+        let session = match self.sessions.find(identity, id) {
+            Lookup::Found(state)
+                if meta.is_some_and(|meta| meta.verify(state.token, identity, signed)) =>
+            {
+                state
+            }
+            // Stop and e-stop: nothing more to judge and nothing to keep — never late,
+            // never held back by claims.
+            _ if is_safety(kind) => return Verdict::Forward(cleared(request), None),
+            Lookup::Found(_) => {
+                return Verdict::Refuse(
+                    Refusal::NoSession,
+                    format!(
+                        "the attachment's MAC is not that of `{}` under `{identity}` with the \
+                         secret of the session it names: not sent by that session's client",
+                        kind.name()
+                    ),
+                );
+            }
             // Stop and e-stop: nothing more to judge and nothing to keep — never late,
             // never over the rate, never held back by claims.
             _ if is_safety(kind) => return Verdict::Forward(cleared(request), None),
@@ -360,6 +379,20 @@ impl Policy {
             identity: identity.to_owned(),
             session: session.id,
         };
+        let counter = meta.map_or(0, |meta| meta.counter);
+        if !session.fresh(counter) {
+            if is_safety(kind) {
+                return Verdict::Forward(cleared(request), None);
+            }
+            return Verdict::Refuse(
+                Refusal::Late,
+                format!(
+                    "{} carries request counter {counter} of its session, seen already (or \
+                     far below the newest): a replay, not applied",
+                    kind.name()
+                ),
+            );
+        }
         if is_safety(kind) {
             return Verdict::Forward(cleared(request), Some(remote));
         }

@@ -9,9 +9,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use motion_ipc::{CommandKind, CommandReply, CommandRequest};
-use motion_wire::keys::{
-    Keys, Origin, Refusal, RequestMeta, SessionGrant, SessionOpen, SessionToken,
-};
+use motion_wire::keys::{Keys, Origin, Refusal, RequestMeta, SessionGrant, SessionOpen};
 use motion_wire::wire::{self, Payload};
 use zenoh::Wait as _;
 use zenoh::handlers::RingChannel;
@@ -87,6 +85,8 @@ pub(crate) struct Link {
     /// `None` until the bridge opened a session (it may refuse: an identity allowed only
     /// stop and e-stop, a full table); stop and e-stop go without one.
     granted: RefCell<Option<Granted>>,
+    /// The last request counter used (every request of a session a new one).
+    counter: core::cell::Cell<u64>,
 }
 
 impl fmt::Debug for Link {
@@ -170,6 +170,7 @@ impl Link {
             server: server.to_owned(),
             epoch: Instant::now(),
             granted: RefCell::new(None),
+            counter: core::cell::Cell::new(0),
         };
         let wait = deadline
             .saturating_duration_since(Instant::now())
@@ -367,20 +368,29 @@ impl Link {
         timeout: Duration,
     ) -> Result<(CommandReply, u128), ClientError> {
         let kind = request.kind().map_or("command", CommandKind::name);
-        let token = self
-            .granted
-            .borrow()
-            .as_ref()
-            .map_or(SessionToken::NONE, |granted| granted.grant.token);
-        let meta = RequestMeta {
-            token,
-            sent_ns: self.clock_ns(),
+        // The session's secret never travels: a MAC made with it over the request does.
+        let payload = wire::encode(request);
+        let sent_ns = self.clock_ns();
+        let meta = match self.granted.borrow().as_ref() {
+            Some(granted) => {
+                let counter = self.counter.get() + 1;
+                self.counter.set(counter);
+                RequestMeta::sign(
+                    granted.grant.token,
+                    &self.identity,
+                    &payload,
+                    granted.grant.session,
+                    counter,
+                    sent_ns,
+                )
+            }
+            None => RequestMeta::sessionless(sent_ns),
         };
         let key = self.keys.command(&self.identity);
         let replies = self
             .session
             .get(&key)
-            .payload(wire::encode(request))
+            .payload(payload)
             .attachment(meta.encode())
             .timeout(timeout)
             .express(true)

@@ -17,9 +17,13 @@
 //!
 //! A remote's session is the bridge's to give: a client asks `session/<identity>` once and
 //! gets a public [`SessionId`] (for its liveliness token) and a secret [`SessionToken`] that
-//! only the querier receives; every command carries the token. The token is bound to the
-//! identity it was opened for, so a session id read from a liveliness key, or a token sent
-//! under another identity, names no session. Stop and e-stop need no session.
+//! only the querier receives. The token itself never travels again: every command carries
+//! the session id, a counter and a MAC made with the token over the identity, the request's
+//! bytes and the rest of the attachment ([`RequestMeta`]), so a peer that sees a command
+//! (a queryable of its own on the command keys, a log) learns nothing it can command with,
+//! and a command replayed is refused. The session is bound to the identity it was opened
+//! for, so a session id read from a liveliness key, or a MAC sent under another identity,
+//! commands nothing. Stop and e-stop need no session.
 
 use core::fmt;
 
@@ -218,7 +222,8 @@ impl Origin {
 }
 
 /// The secret of a session: 16 random bytes the bridge hands only to the querier that opened
-/// the session, checked on every command. All zero: no session (stop and e-stop only).
+/// the session; every command of the session carries a MAC made with it, never the secret
+/// itself ([`RequestMeta`]). All zero: no session.
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct SessionToken(pub [u8; 16]);
 
@@ -243,11 +248,12 @@ impl fmt::Debug for SessionToken {
     }
 }
 
-/// Version byte of [`SessionOpen`], [`SessionGrant`] and [`RequestMeta`].
-const CONTRACT_VERSION: u8 = 2;
+/// Version byte of [`SessionOpen`], [`SessionGrant`] and [`RequestMeta`] (3: requests carry
+/// a MAC instead of the session's secret).
+pub const CONTRACT_VERSION: u8 = 3;
 
 /// The payload of a session-opening query on `motiond/<name>/session/<identity>`: version
-/// (u8, 2) and the client's CLOCK_MONOTONIC when it sent the query (u64 LE, ns). 9 bytes.
+/// (u8, 3) and the client's CLOCK_MONOTONIC when it sent the query (u64 LE, ns). 9 bytes.
 /// The bridge judges the session's later time stamps against its own clock from here on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct SessionOpen {
@@ -279,7 +285,7 @@ impl SessionOpen {
     }
 }
 
-/// The bridge's answer to [`SessionOpen`]: version (u8, 2), the public [`SessionId`] (u128
+/// The bridge's answer to [`SessionOpen`]: version (u8, 3), the public [`SessionId`] (u128
 /// LE) and the secret [`SessionToken`] (16 bytes). 33 bytes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct SessionGrant {
@@ -316,45 +322,118 @@ impl SessionGrant {
     }
 }
 
-/// The attachment of a command query: version (u8, 2), the session's [`SessionToken`] (16
-/// bytes; zero without a session) and the client's CLOCK_MONOTONIC when it sent the request
-/// (u64 LE, ns). 25 bytes.
+/// The attachment of a command query, 49 bytes: version (u8, 3), the public [`SessionId`]
+/// (u128 LE; zero without a session: stop and e-stop only), a counter (u64 LE, rising with
+/// every request of the session), the client's CLOCK_MONOTONIC when it sent the request (u64
+/// LE, ns), and a MAC (16 bytes): the first 16 bytes of HMAC-SHA3-256 keyed by the
+/// session's [`SessionToken`] over `"motiond-request-v3"`, the identity the request is sent
+/// under (its UTF-8 bytes, then a zero byte), the request's payload as sent (the
+/// `CommandRequest`'s 64 bytes) and bytes 1 to 32 of this attachment (id, counter, time).
 ///
-/// The send time is compared with the session's own clock as the bridge learnt it when the
-/// session opened: a request that arrives more than the bridge's `max_delay` later than the
-/// session's fastest (a renewal held up in a network buffer must not restart a jog after the
-/// network came back), or that says it was sent that much (at least 2 s) later than it could
-/// have been, is refused.
+/// The secret never travels with a command: a peer that sees one cannot make another. The
+/// bridge refuses a counter it has seen (or one more than 1024 below the highest it has
+/// seen) — a command replayed is not applied twice — and judges the send time against the
+/// session's own clock as it learnt it when the session opened: a request that arrives more
+/// than the bridge's `max_delay` later than the session's fastest (a renewal held up in a
+/// network buffer must not restart a jog after the network came back), or that says it was
+/// sent that much (at least 2 s) later than it could have been, is refused.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct RequestMeta {
-    /// The session's secret ([`SessionToken::NONE`]: no session).
-    pub token: SessionToken,
+    /// The session ([`SessionId`] zero: none).
+    pub session: SessionId,
+    /// The session's request counter.
+    pub counter: u64,
     /// The client's monotonic clock at sending, ns.
     pub sent_ns: u64,
+    /// The MAC ([`RequestMeta::sign`]).
+    pub mac: [u8; 16],
 }
+
+/// The domain of the request MAC (so it is never the MAC of anything else).
+const MAC_DOMAIN: &[u8] = b"motiond-request-v3";
 
 impl RequestMeta {
     /// Bytes on the wire.
-    pub const SIZE: usize = 25;
+    pub const SIZE: usize = 49;
 
-    /// The 25 bytes.
-    pub fn encode(self) -> [u8; 25] {
-        let mut out = [0; 25];
+    /// The attachment of a request without a session (stop and e-stop).
+    pub const fn sessionless(sent_ns: u64) -> Self {
+        Self {
+            session: SessionId(0),
+            counter: 0,
+            sent_ns,
+            mac: [0; 16],
+        }
+    }
+
+    /// The attachment of `request` (its payload's bytes as sent) under `identity`, signed
+    /// with `token`.
+    pub fn sign(
+        token: SessionToken,
+        identity: &str,
+        request: &[u8],
+        session: SessionId,
+        counter: u64,
+        sent_ns: u64,
+    ) -> Self {
+        let mut meta = Self {
+            session,
+            counter,
+            sent_ns,
+            mac: [0; 16],
+        };
+        meta.mac = meta.mac_with(token, identity, request);
+        meta
+    }
+
+    /// Whether the MAC is that of `request` under `identity` with `token` (compared in
+    /// constant time).
+    pub fn verify(&self, token: SessionToken, identity: &str, request: &[u8]) -> bool {
+        let expected = self.mac_with(token, identity, request);
+        expected
+            .iter()
+            .zip(self.mac)
+            .fold(0u8, |acc, (a, b)| acc | (a ^ b))
+            == 0
+    }
+
+    fn mac_with(&self, token: SessionToken, identity: &str, request: &[u8]) -> [u8; 16] {
+        use hmac::{Mac as _, SimpleHmac};
+        let mut mac = SimpleHmac::<sha3::Sha3_256>::new_from_slice(&token.0)
+            .expect("HMAC takes a key of any length");
+        mac.update(MAC_DOMAIN);
+        mac.update(identity.as_bytes());
+        mac.update(&[0]);
+        mac.update(request);
+        mac.update(&self.encode()[1..33]);
+        let full = mac.finalize().into_bytes();
+        let mut out = [0; 16];
+        out.copy_from_slice(&full[..16]);
+        out
+    }
+
+    /// The 49 bytes.
+    pub fn encode(&self) -> [u8; 49] {
+        let mut out = [0; 49];
         out[0] = CONTRACT_VERSION;
-        out[1..17].copy_from_slice(&self.token.0);
-        out[17..25].copy_from_slice(&self.sent_ns.to_le_bytes());
+        out[1..17].copy_from_slice(&self.session.0.to_le_bytes());
+        out[17..25].copy_from_slice(&self.counter.to_le_bytes());
+        out[25..33].copy_from_slice(&self.sent_ns.to_le_bytes());
+        out[33..49].copy_from_slice(&self.mac);
         out
     }
 
     /// From the attachment's bytes; `None` for another size or version.
     pub fn decode(bytes: &[u8]) -> Option<Self> {
-        let bytes = <&[u8; 25]>::try_from(bytes).ok()?;
+        let bytes = <&[u8; 49]>::try_from(bytes).ok()?;
         if bytes[0] != CONTRACT_VERSION {
             return None;
         }
         Some(Self {
-            token: SessionToken(bytes[1..17].try_into().ok()?),
-            sent_ns: u64::from_le_bytes(bytes[17..25].try_into().ok()?),
+            session: SessionId(u128::from_le_bytes(bytes[1..17].try_into().ok()?)),
+            counter: u64::from_le_bytes(bytes[17..25].try_into().ok()?),
+            sent_ns: u64::from_le_bytes(bytes[25..33].try_into().ok()?),
+            mac: bytes[33..49].try_into().ok()?,
         })
     }
 }
@@ -475,19 +554,82 @@ mod tests {
         Ok(())
     }
 
+    /// The MAC of a known request, worked out independently of [`RequestMeta::sign`] (HMAC
+    /// from its definition over SHA3-256, block 136 bytes): Python's
+    /// `hmac.new(bytes([7]*16), msg, "sha3_256")` gives the same (python/tests/test_remote.py
+    /// pins the same bytes).
+    #[test]
+    fn the_request_mac_is_hmac_sha3_256_of_the_documented_bytes() {
+        use sha3::Digest as _;
+        let token = SessionToken([7; 16]);
+        let request: Vec<u8> = (0u8..64).collect();
+        let meta = RequestMeta::sign(token, "panel", &request, SessionId(0x0102), 5, 1_000);
+        let bytes = meta.encode();
+        assert_eq!(bytes.len(), RequestMeta::SIZE);
+        assert_eq!(bytes[0], 3);
+        assert_eq!(&bytes[1..3], &[0x02, 0x01]);
+        assert_eq!(&bytes[17..25], &5u64.to_le_bytes());
+        assert_eq!(&bytes[25..33], &1_000u64.to_le_bytes());
+        // HMAC by hand.
+        let mut key = [0u8; 136];
+        key[..16].copy_from_slice(&token.0);
+        let pad = |byte: u8| key.iter().map(|k| k ^ byte).collect::<Vec<u8>>();
+        let mut message = b"motiond-request-v3panel\0".to_vec();
+        message.extend_from_slice(&request);
+        message.extend_from_slice(&bytes[1..33]);
+        let inner = sha3::Sha3_256::new()
+            .chain_update(pad(0x36))
+            .chain_update(&message)
+            .finalize();
+        let outer = sha3::Sha3_256::new()
+            .chain_update(pad(0x5c))
+            .chain_update(inner)
+            .finalize();
+        assert_eq!(&bytes[33..49], &outer[..16]);
+        assert_eq!(
+            hex(&bytes[33..49]),
+            GOLDEN_MAC,
+            "the golden MAC Python's test pins"
+        );
+        assert!(meta.verify(token, "panel", &request));
+        // Another identity, request, counter or token: not the MAC.
+        assert!(!meta.verify(token, "other", &request));
+        let mut changed = request.clone();
+        changed[8] ^= 1;
+        assert!(!meta.verify(token, "panel", &changed));
+        assert!(!meta.verify(SessionToken([8; 16]), "panel", &request));
+        let replayed_later = RequestMeta { counter: 6, ..meta };
+        assert!(!replayed_later.verify(token, "panel", &request));
+        assert!(
+            !format!("{meta:?}").contains("7, 7, 7"),
+            "the secret is nowhere in it"
+        );
+    }
+
+    /// The MAC of the test above, in hex (python/tests/test_remote.py has the same).
+    const GOLDEN_MAC: &str = "e761b1d15721ac41efb5c765052e2456";
+
+    fn hex(bytes: &[u8]) -> String {
+        bytes.iter().map(|b| format!("{b:02x}")).collect()
+    }
+
     #[test]
     fn attachments_round_trip_and_refuse_other_sizes() {
-        let meta = RequestMeta {
-            token: SessionToken([7; 16]),
-            sent_ns: 123_456_789,
-        };
+        let meta = RequestMeta::sign(SessionToken([7; 16]), "panel", &[1; 64], SessionId(9), 1, 2);
         let bytes = meta.encode();
-        assert_eq!(bytes[0], 2);
+        assert_eq!(bytes[0], 3);
         assert_eq!(RequestMeta::decode(&bytes), Some(meta));
-        assert_eq!(RequestMeta::decode(&bytes[..24]), None);
+        assert_eq!(RequestMeta::decode(&bytes[..48]), None);
         let mut other = bytes;
-        other[0] = 1;
+        other[0] = 2;
         assert_eq!(RequestMeta::decode(&other), None, "the old attachment");
+        assert_eq!(
+            RequestMeta::decode(&[2; 25]),
+            None,
+            "the old 25-byte attachment"
+        );
+        let none = RequestMeta::sessionless(77);
+        assert_eq!(RequestMeta::decode(&none.encode()), Some(none));
         assert_eq!(Origin::decode(&Origin(77).encode()), Some(Origin(77)));
         assert_eq!(Origin::decode(&[1, 2, 3]), None);
 

@@ -21,7 +21,10 @@ their deadman, parameters, statistics), with these differences:
 
 A remote's session is the bridge's to give: on connecting the client asks
 ``motiond/<name>/session/<identity>`` and gets a public session id (named by its liveliness
-token) and a secret token only it receives; every command carries the token. Stop and e-stop
+token) and a secret token only it receives. The token never travels again: every command
+carries the session id, a counter and a MAC made with the token (HMAC-SHA3-256) over the
+identity, the request and the rest of the attachment, so a peer that sees a command cannot
+make another, and a command replayed is refused. Stop and e-stop
 need none (an identity that may only stop gets none; a bridge with 1024 sessions open
 refuses new ones, and stop and e-stop still pass); other commands ask again when the client
 has none or the bridge forgot it (it restarted).
@@ -35,15 +38,19 @@ own key (see ``crates/motion-bridge/README.md``); give this client its credentia
 The wire contract (``crates/motion-bridge/README.md``, "The network contract"): payloads are
 the ``motion-ipc`` structs in their C layout, little-endian, ``sizeof`` bytes; published
 samples and replies carry a 16-byte attachment, the server's node id; a session opening sends
-9 bytes (version 2, CLOCK_MONOTONIC at sending, u64 ns) and gets 33 (version 2, the session id
-u128, the 16-byte token); a command query carries 25 bytes: version 2, the token (zero without
-a session), its CLOCK_MONOTONIC at sending (u64 ns).
+9 bytes (version 3, CLOCK_MONOTONIC at sending, u64 ns) and gets 33 (version 3, the session id
+u128, the 16-byte token); a command query carries 49 bytes (:func:`request_meta`): version 3,
+the session id (u128, zero without a session), a counter (u64, rising), its CLOCK_MONOTONIC at
+sending (u64 ns) and the MAC: the first 16 bytes of HMAC-SHA3-256 keyed by the token over
+``b"motiond-request-v3"``, the identity's UTF-8 bytes and a zero byte, the request's 64 bytes
+and bytes 1 to 32 of the attachment.
 """
 
 from __future__ import annotations
 
 import collections
 import ctypes
+import hmac
 import json
 import secrets
 import struct
@@ -80,7 +87,15 @@ from .ipc import (
     to_enum,
 )
 
-__all__ = ["RemoteClient", "ANONYMOUS", "DEFAULT_PORT", "REFUSAL_CODES", "make_zenoh_config", "check_chunk"]
+__all__ = [
+    "RemoteClient",
+    "ANONYMOUS",
+    "DEFAULT_PORT",
+    "REFUSAL_CODES",
+    "make_zenoh_config",
+    "check_chunk",
+    "request_meta",
+]
 
 #: The identity of a client that names none (the bridge's ``motiond/<name>/command``).
 ANONYMOUS = "anonymous"
@@ -100,7 +115,8 @@ REFUSAL_CODES = (
 # Samples a feed keeps when the program does not read them (the oldest go first, as the
 # 32-frame buffer over shared memory).
 _FEED_DEPTH = 32
-_CONTRACT_VERSION = 2
+_CONTRACT_VERSION = 3
+_MAC_DOMAIN = b"motiond-request-v3"
 _NO_GROUPS = (
     "groups work over shared memory only for now: a remote client (motion-bridge) cannot "
     "send paths or setpoints; connect with motiond.Client(name) on the server's host"
@@ -147,6 +163,27 @@ def make_zenoh_config(endpoint: str, base: Optional[Union[str, Path]] = None) ->
     except Exception as error:  # zenoh raises its own ZError
         raise errors.ConnectError(f"zenoh config ({base or 'default'}): {error}") from None
     return config
+
+
+def request_meta(
+    token: Optional[bytes], identity: str, request: bytes, session: int, counter: int, sent_ns: int
+) -> bytes:
+    """The 49-byte attachment of a command: version 3, ``session`` (u128), ``counter``
+    (u64), ``sent_ns`` (u64), and the MAC made with the session's ``token`` over the identity,
+    the ``request``'s bytes and the rest of the attachment (all zero without a session:
+    ``token`` ``None``, stop and e-stop only)."""
+    head = struct.pack(
+        "<BQQQQ",
+        _CONTRACT_VERSION,
+        session & 0xFFFF_FFFF_FFFF_FFFF,
+        session >> 64,
+        counter,
+        sent_ns,
+    )
+    if token is None:
+        return head + bytes(16)
+    message = _MAC_DOMAIN + identity.encode() + b"\0" + request + head[1:]
+    return head + hmac.new(token, message, "sha3_256").digest()[:16]
 
 
 def _origin(sample: Any) -> int:
@@ -294,6 +331,7 @@ class RemoteClient(Client, transport="remote"):
         self._feeds: List[_Feed] = []
         self._grant: Optional[Tuple[int, bytes]] = None
         self._token: Any = None
+        self._counter = 0
         try:
             # Refused (an identity that may only stop, a full table) or unanswered, the
             # client goes on without a session: stop and e-stop need none, and the
@@ -498,14 +536,22 @@ class RemoteClient(Client, transport="remote"):
         typed_kind = to_enum(CommandKind, int(kind))
         request = self._request(index, kind, values, target)
         sequence = int(request.sequence)
-        token = self._grant[1] if self._grant is not None else _NO_TOKEN
-        meta = struct.pack("<B16sQ", _CONTRACT_VERSION, token, time.monotonic_ns())
+        payload = bytes(request)
+        # The session's secret never travels: a MAC made with it over the request does.
+        if self._grant is not None:
+            self._counter += 1
+            session_id, token = self._grant
+            meta = request_meta(
+                token, self._identity, payload, session_id, self._counter, time.monotonic_ns()
+            )
+        else:
+            meta = request_meta(None, self._identity, payload, 0, 0, time.monotonic_ns())
         key = f"{self._prefix}/command/{self._identity}"
         started = time.monotonic()
         try:
             replies = self._session.get(
                 key,
-                payload=bytes(request),
+                payload=payload,
                 attachment=meta,
                 timeout=self._reply_timeout,
                 express=True,

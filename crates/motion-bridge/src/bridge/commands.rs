@@ -45,8 +45,8 @@ impl Bridge {
             );
             return;
         };
-        let request = match query.payload().map(|bytes| bytes.to_bytes()) {
-            Some(bytes) => motion_wire::wire::decode::<CommandRequest>(&bytes),
+        let signed = match query.payload().map(|bytes| bytes.to_bytes().into_owned()) {
+            Some(bytes) => bytes,
             None => {
                 self.intake.refuse(
                     query,
@@ -57,7 +57,7 @@ impl Bridge {
                 return;
             }
         };
-        let request = match request {
+        let request = match motion_wire::wire::decode::<CommandRequest>(&signed) {
             Ok(request) => request,
             Err(error) => {
                 self.intake
@@ -75,6 +75,7 @@ impl Bridge {
                 query,
                 identity,
                 request,
+                signed,
                 meta,
                 received,
             }]);
@@ -83,7 +84,7 @@ impl Bridge {
         let now = received.saturating_duration_since(self.started);
         match self
             .policy
-            .admit(now, &identity, meta, &request, self.deadman())
+            .admit(now, &identity, meta, &request, &signed, self.deadman())
         {
             Verdict::Forward(forwarded, remote) => {
                 if self.server.is_none() {
@@ -137,10 +138,14 @@ impl Bridge {
         let mut forwarded = None;
         for call in calls {
             let now = call.received.saturating_duration_since(self.started);
-            match self
-                .policy
-                .admit(now, &call.identity, call.meta, &call.request, deadman)
-            {
+            match self.policy.admit(
+                now,
+                &call.identity,
+                call.meta,
+                &call.request,
+                &call.signed,
+                deadman,
+            ) {
                 Verdict::Forward(_, _) if self.server.is_none() => {
                     refuse(Some(&call.query), Refusal::NoServer, &self.no_server());
                 }

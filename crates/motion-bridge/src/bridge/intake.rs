@@ -43,6 +43,8 @@ pub(crate) struct EstopCall {
     pub(crate) query: Query,
     pub(crate) identity: String,
     pub(crate) request: CommandRequest,
+    /// The request's bytes as received (what the attachment's MAC covers).
+    pub(crate) signed: Vec<u8>,
     pub(crate) meta: Option<RequestMeta>,
     pub(crate) received: Instant,
 }
@@ -117,8 +119,8 @@ impl Intake {
             );
             return;
         };
-        let decoded = match query.payload() {
-            Some(bytes) => wire::decode::<CommandRequest>(&bytes.to_bytes()),
+        let signed = match query.payload() {
+            Some(bytes) => bytes.to_bytes().into_owned(),
             None => {
                 self.refuse(
                     query,
@@ -129,7 +131,7 @@ impl Intake {
                 return;
             }
         };
-        let request = match decoded {
+        let request = match wire::decode::<CommandRequest>(&signed) {
             Ok(request) => request,
             Err(error) => {
                 self.refuse(query, &identity, Refusal::BadRequest, &error.to_string());
@@ -151,6 +153,7 @@ impl Intake {
                     query,
                     identity,
                     request,
+                    signed,
                     meta,
                     received,
                 });

@@ -9,6 +9,7 @@ use motion_ipc::{
 
 use super::{KindSet, MAX_SESSIONS, Policy, Remote, RemoteRule, Verdict};
 use motion_wire::keys::{Refusal, RequestMeta, SessionId, SessionOpen, SessionToken};
+use motion_wire::wire;
 
 const DEADMAN: Duration = Duration::from_millis(200);
 
@@ -28,7 +29,7 @@ fn rule(identity: &str, allow: &[&str], rate: f64, burst: f64) -> RemoteRule {
 fn remote(identity: &str, session: u128) -> Remote {
     Remote {
         identity: identity.to_owned(),
-        session: SessionId(session),
+        session: SessionId(session + 1),
     }
 }
 
@@ -54,12 +55,53 @@ fn open(
     policy.open_session(now, &remote.identity, open, remote.session, token(remote))
 }
 
+/// What a test's request carries before it is signed: the session it names, the key its
+/// MAC is made with, its send time.
+#[derive(Debug, Clone, Copy)]
+struct Unsigned {
+    session: SessionId,
+    key: SessionToken,
+    sent: Duration,
+}
+
 /// A request of `remote`'s session sent at `sent` on the remote's clock.
-fn meta(remote: &Remote, sent: Duration) -> Option<RequestMeta> {
-    Some(RequestMeta {
-        token: token(remote),
-        sent_ns: sent.as_nanos() as u64,
+fn meta(remote: &Remote, sent: Duration) -> Option<Unsigned> {
+    Some(Unsigned {
+        session: remote.session,
+        key: token(remote),
+        sent,
     })
+}
+
+/// Counters of the tests' requests: rising, never one twice.
+static COUNTER: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+
+/// `meta` signed for `request` under `identity` with a fresh counter.
+fn signed(identity: &str, meta: Option<Unsigned>, request: &CommandRequest) -> Option<RequestMeta> {
+    meta.map(|meta| {
+        RequestMeta::sign(
+            meta.key,
+            identity,
+            &wire::encode(request),
+            meta.session,
+            COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
+            meta.sent.as_nanos() as u64,
+        )
+    })
+}
+
+/// [`Policy::admit`] of `request` under `identity`, `meta` signed as a client signs it.
+fn judge(
+    policy: &mut Policy,
+    now: Duration,
+    identity: &str,
+    meta: Option<Unsigned>,
+    request: &CommandRequest,
+    deadman: Duration,
+) -> Verdict {
+    let bytes = wire::encode(request);
+    let meta = signed(identity, meta, request);
+    policy.admit(now, identity, meta, request, &bytes, deadman)
 }
 
 fn request(kind: CommandKind, axis: u32) -> CommandRequest {
@@ -72,7 +114,14 @@ fn admit(policy: &mut Policy, remote: &Remote, now: Duration, request: &CommandR
     if !policy.session_taken(remote.session, token(remote)) {
         let _may_only_stop = open(policy, remote, now, now);
     }
-    policy.admit(now, &remote.identity, meta(remote, now), request, DEADMAN)
+    judge(
+        policy,
+        now,
+        &remote.identity,
+        meta(remote, now),
+        request,
+        DEADMAN,
+    )
 }
 
 fn accept(policy: &mut Policy, remote: &Remote, request: &CommandRequest) {
@@ -262,7 +311,14 @@ fn made_up_sessions_never_grow_the_table_and_never_hold_back_a_stop() {
     // Stops under made-up tokens keep nothing.
     for n in 0..2 * MAX_SESSIONS as u128 {
         let made_up = remote("x", n);
-        match policy.admit(ms(0), "x", meta(&made_up, ms(0)), &stop, DEADMAN) {
+        match judge(
+            &mut policy,
+            ms(0),
+            "x",
+            meta(&made_up, ms(0)),
+            &stop,
+            DEADMAN,
+        ) {
             Verdict::Forward(_, None) => {}
             other => panic!("{other:?}"),
         }
@@ -272,7 +328,7 @@ fn made_up_sessions_never_grow_the_table_and_never_hold_back_a_stop() {
         open(&mut policy, &remote("x", n), ms(0), ms(0)).expect("room");
     }
     // The session of the first one's liveliness token is there: never forgotten for room.
-    policy.session_live("x", SessionId(0));
+    policy.session_live("x", SessionId(1));
     // Full, and every session opened recently: a new one is refused...
     let late_comer = remote("x", 1 << 100);
     match open(&mut policy, &late_comer, ms(1000), ms(1000)) {
@@ -281,21 +337,36 @@ fn made_up_sessions_never_grow_the_table_and_never_hold_back_a_stop() {
     }
     // ... and needs one for a jog, but its stop and e-stop pass, sessionless.
     assert!(matches!(
-        policy.admit(ms(1000), "x", meta(&late_comer, ms(1000)), &jog, DEADMAN),
+        judge(
+            &mut policy,
+            ms(1000),
+            "x",
+            meta(&late_comer, ms(1000)),
+            &jog,
+            DEADMAN
+        ),
         Verdict::Refuse(Refusal::NoSession, _)
     ));
     for request in [&stop, &estop] {
         assert!(matches!(
-            policy.admit(ms(1000), "x", meta(&late_comer, ms(1000)), request, DEADMAN),
+            judge(
+                &mut policy,
+                ms(1000),
+                "x",
+                meta(&late_comer, ms(1000)),
+                request,
+                DEADMAN
+            ),
             Verdict::Forward(_, None)
         ));
         assert!(matches!(
-            policy.admit(ms(1000), "x", None, request, DEADMAN),
+            judge(&mut policy, ms(1000), "x", None, request, DEADMAN),
             Verdict::Forward(_, None)
         ));
     }
     // A known session still passes; after a minute of silence the others make room.
-    assert!(forwarded(&policy.admit(
+    assert!(forwarded(&judge(
+        &mut policy,
         ms(30_000),
         "x",
         meta(&remote("x", 5), ms(30_000)),
@@ -323,29 +394,38 @@ fn a_session_is_good_for_its_own_identity_only_and_a_public_id_is_no_token() {
     accept(&mut policy, &alice, &claim);
     let jog = request(CommandKind::Velocity, 0);
     // Bob sends Alice's token under his own identity: refused.
-    match policy.admit(ms(2), "bob", meta(&alice, ms(2)), &jog, DEADMAN) {
+    match judge(
+        &mut policy,
+        ms(2),
+        "bob",
+        meta(&alice, ms(2)),
+        &jog,
+        DEADMAN,
+    ) {
         Verdict::Refuse(Refusal::NoSession, text) => {
             assert!(text.contains("another identity"), "{text}");
         }
         other => panic!("{other:?}"),
     }
     // Alice's public session id (her liveliness key shows it) is not her token.
-    let public = Some(RequestMeta {
-        token: SessionToken(alice.session.0.to_le_bytes()),
-        sent_ns: ms(2).as_nanos() as u64,
+    let public = Some(Unsigned {
+        session: alice.session,
+        key: SessionToken(alice.session.0.to_le_bytes()),
+        sent: ms(2),
     });
     assert!(matches!(
-        policy.admit(ms(2), "alice", public, &jog, DEADMAN),
+        judge(&mut policy, ms(2), "alice", public, &jog, DEADMAN),
         Verdict::Refuse(Refusal::NoSession, _)
     ));
     // Without an attachment: no session either.
     assert!(matches!(
-        policy.admit(ms(2), "alice", None, &jog, DEADMAN),
+        judge(&mut policy, ms(2), "alice", None, &jog, DEADMAN),
         Verdict::Refuse(Refusal::NoSession, _)
     ));
     // A stop under a copied token passes, as nobody's.
     assert!(matches!(
-        policy.admit(
+        judge(
+            &mut policy,
             ms(2),
             "bob",
             meta(&alice, ms(2)),
@@ -356,7 +436,14 @@ fn a_session_is_good_for_its_own_identity_only_and_a_public_id_is_no_token() {
     ));
     // Alice herself goes on.
     assert!(matches!(
-        policy.admit(ms(3), "alice", meta(&alice, ms(3)), &jog, DEADMAN),
+        judge(
+            &mut policy,
+            ms(3),
+            "alice",
+            meta(&alice, ms(3)),
+            &jog,
+            DEADMAN
+        ),
         Verdict::Forward(_, Some(_))
     ));
     // An identity that may only stop gets no session (it needs none).
@@ -377,18 +464,33 @@ fn a_request_held_up_in_the_network_is_refused_but_a_stop_is_not() {
     let mut at = ms(1000);
     open(&mut policy, &panel, at, clock(at)).expect("opened");
     for _ in 0..10 {
-        let verdict = policy.admit(at, "panel", meta(&panel, clock(at)), &jog, DEADMAN);
+        let verdict = judge(
+            &mut policy,
+            at,
+            "panel",
+            meta(&panel, clock(at)),
+            &jog,
+            DEADMAN,
+        );
         assert!(forwarded(&verdict), "{verdict:?}");
         at += ms(33);
     }
     // A renewal sent 1 s ago arrives now (a network buffer let go).
     let late_sent = clock(at) - Duration::from_secs(1);
-    match policy.admit(at, "panel", meta(&panel, late_sent), &jog, DEADMAN) {
+    match judge(
+        &mut policy,
+        at,
+        "panel",
+        meta(&panel, late_sent),
+        &jog,
+        DEADMAN,
+    ) {
         Verdict::Refuse(Refusal::Late, text) => assert!(text.contains("200ms"), "{text}"),
         other => panic!("{other:?}"),
     }
     let stop = request(CommandKind::Stop, 0);
-    assert!(forwarded(&policy.admit(
+    assert!(forwarded(&judge(
+        &mut policy,
         at,
         "panel",
         meta(&panel, late_sent),
@@ -397,7 +499,8 @@ fn a_request_held_up_in_the_network_is_refused_but_a_stop_is_not() {
     )));
     // Later than usual but within the deadman: passes.
     let slow = clock(at) - ms(150);
-    assert!(forwarded(&policy.admit(
+    assert!(forwarded(&judge(
+        &mut policy,
         at,
         "panel",
         meta(&panel, slow),
@@ -406,7 +509,8 @@ fn a_request_held_up_in_the_network_is_refused_but_a_stop_is_not() {
     )));
     // One that says it was sent later than it could have been (a clock from the future)
     // is not applied either.
-    match policy.admit(
+    match judge(
+        &mut policy,
         at,
         "panel",
         meta(&panel, clock(at) + ms(5000)),
@@ -419,7 +523,8 @@ fn a_request_held_up_in_the_network_is_refused_but_a_stop_is_not() {
         other => panic!("{other:?}"),
     }
     // Up to 2 s ahead passes, though: a prompt request after a slow opening looks so.
-    assert!(forwarded(&policy.admit(
+    assert!(forwarded(&judge(
+        &mut policy,
         at,
         "panel",
         meta(&panel, clock(at) + ms(1500)),
@@ -429,14 +534,16 @@ fn a_request_held_up_in_the_network_is_refused_but_a_stop_is_not() {
     // A configured max_delay wins over the deadman; zero deadman and no config: 1 s.
     let mut strict = Policy::new(vec![rule("*", &["all"], 1000.0, 1000.0)], Some(ms(50)));
     open(&mut strict, &panel, at, clock(at)).expect("opened");
-    assert!(forwarded(&strict.admit(
+    assert!(forwarded(&judge(
+        &mut strict,
         at,
         "panel",
         meta(&panel, clock(at)),
         &jog,
         DEADMAN
     )));
-    assert!(!forwarded(&strict.admit(
+    assert!(!forwarded(&judge(
+        &mut strict,
         at,
         "panel",
         meta(&panel, slow),
@@ -445,14 +552,16 @@ fn a_request_held_up_in_the_network_is_refused_but_a_stop_is_not() {
     )));
     let mut fallback = Policy::new(vec![rule("*", &["all"], 1000.0, 1000.0)], None);
     open(&mut fallback, &panel, at, clock(at)).expect("opened");
-    assert!(forwarded(&fallback.admit(
+    assert!(forwarded(&judge(
+        &mut fallback,
         at,
         "panel",
         meta(&panel, clock(at) - ms(900)),
         &jog,
         Duration::ZERO
     )));
-    assert!(!forwarded(&fallback.admit(
+    assert!(!forwarded(&judge(
+        &mut fallback,
         at,
         "panel",
         meta(&panel, clock(at) - ms(2000)),
@@ -472,7 +581,14 @@ fn clocks_drifting_apart_slowly_are_not_late() {
     for step in 0..=1000u64 {
         let bridge = Duration::from_secs(step);
         let client = Duration::from_secs_f64(step as f64 * (1.0 - 500e-6));
-        let verdict = policy.admit(bridge, "panel", meta(&panel, client), &jog, DEADMAN);
+        let verdict = judge(
+            &mut policy,
+            bridge,
+            "panel",
+            meta(&panel, client),
+            &jog,
+            DEADMAN,
+        );
         assert!(forwarded(&verdict), "step {step}: {verdict:?}");
     }
 }
@@ -588,8 +704,8 @@ fn a_vanished_session_has_its_jogs_stopped_and_claims_released() {
     accept(&mut policy, &b, &request(CommandKind::Velocity, 5));
 
     // A token declared under Alice's id by Bob's identity ends nothing.
-    assert!(policy.session_gone("bob", SessionId(1)).is_empty());
-    let sent = policy.session_gone("alice", SessionId(1));
+    assert!(policy.session_gone("bob", SessionId(2)).is_empty());
+    let sent = policy.session_gone("alice", SessionId(2));
     let summary: Vec<(u32, u32, u32)> = sent.iter().map(|r| (r.kind, r.axis, r.target)).collect();
     assert_eq!(
         summary,
@@ -601,14 +717,14 @@ fn a_vanished_session_has_its_jogs_stopped_and_claims_released() {
     );
     assert!(sent.iter().all(|r| r.client.is_none()));
     assert!(
-        policy.session_gone("alice", SessionId(1)).is_empty(),
+        policy.session_gone("alice", SessionId(2)).is_empty(),
         "once"
     );
     // An e-stop ends every jog, even one sent without a session: nothing left to stop for
     // Bob.
     let estop = request(CommandKind::EStop, CommandRequest::ALL_AXES);
     policy.on_sessionless_reply(&estop, &CommandReply::to(&estop, Reason::Accepted, 1));
-    assert!(policy.session_gone("bob", SessionId(2)).is_empty());
+    assert!(policy.session_gone("bob", SessionId(3)).is_empty());
 }
 
 #[test]
@@ -693,13 +809,64 @@ fn each_entry_has_its_share_of_the_session_table() {
         (3, 2)
     );
     // A session that ends frees its slot; idle ones of the entry make room after a minute.
-    assert!(policy.session_gone("flood", SessionId(0)).is_empty());
+    assert!(policy.session_gone("flood", SessionId(1)).is_empty());
     open(&mut policy, &remote("flood", 4), ms(10), ms(10)).expect("a freed slot");
-    policy.session_live("flood", SessionId(1));
+    policy.session_live("flood", SessionId(2));
     let later = Duration::from_secs(61);
     open(&mut policy, &remote("flood", 5), later, later).expect("idle ones forgotten");
     // The live one and the new one; the wildcard's idle sessions were not the flood's to
     // forget.
     assert_eq!(policy.sessions_of_entry("flood"), 2);
     assert_eq!(policy.session_count(), 5);
+}
+
+#[test]
+fn a_command_someone_else_saw_cannot_be_replayed_or_altered() {
+    let mut policy = Policy::new(vec![rule("*", &["all"], 1000.0, 1000.0)], None);
+    let alice = remote("alice", 1);
+    open(&mut policy, &alice, ms(0), ms(0)).expect("opened");
+    let jog = request(CommandKind::Velocity, 0).with_values([5.0, 0.0, 0.0]);
+    let bytes = wire::encode(&jog);
+    let seen = signed("alice", meta(&alice, ms(1)), &jog);
+    assert!(forwarded(&policy.admit(
+        ms(1),
+        "alice",
+        seen,
+        &jog,
+        &bytes,
+        DEADMAN
+    )));
+    // The same bytes again (a peer with a queryable on the command keys kept them).
+    match policy.admit(ms(2), "alice", seen, &jog, &bytes, DEADMAN) {
+        Verdict::Refuse(Refusal::Late, text) => assert!(text.contains("replay"), "{text}"),
+        other => panic!("a replay: {other:?}"),
+    }
+    // Its attachment on another request: the MAC does not fit.
+    let faster = request(CommandKind::Velocity, 0).with_values([500.0, 0.0, 0.0]);
+    match policy.admit(
+        ms(2),
+        "alice",
+        seen,
+        &faster,
+        &wire::encode(&faster),
+        DEADMAN,
+    ) {
+        Verdict::Refuse(Refusal::NoSession, text) => assert!(text.contains("MAC"), "{text}"),
+        other => panic!("an altered request: {other:?}"),
+    }
+    // A stop with a copied attachment passes, as nobody's (a stop needs no session).
+    let stop = request(CommandKind::Stop, 0);
+    assert!(matches!(
+        policy.admit(ms(3), "alice", seen, &stop, &wire::encode(&stop), DEADMAN),
+        Verdict::Forward(_, None)
+    ));
+    // Alice's own next request goes on.
+    assert!(forwarded(&judge(
+        &mut policy,
+        ms(4),
+        "alice",
+        meta(&alice, ms(4)),
+        &jog,
+        DEADMAN
+    )));
 }
