@@ -273,3 +273,25 @@ def test_request_meta_is_the_documented_mac() -> None:
     # The secret itself is nowhere in it.
     assert bytes([7] * 16) not in meta
     assert request_meta(None, "panel", bytes(64), 0, 0, 9)[33:] == bytes(16)
+
+
+def test_session_secret_is_agreed_not_sent() -> None:
+    # motion-wire's keys::tests (GOLDEN_SECRET): the client's key of bytes 1..32, the bridge's
+    # of 33..64, session 0x0102.
+    from cryptography.hazmat.primitives import serialization
+    from cryptography.hazmat.primitives.asymmetric import x25519
+
+    from motiond.remote import session_secret
+
+    def public(private: bytes) -> bytes:
+        key = x25519.X25519PrivateKey.from_private_bytes(private)
+        return key.public_key().public_bytes(
+            serialization.Encoding.Raw, serialization.PublicFormat.Raw
+        )
+
+    client, bridge = bytes(range(1, 33)), bytes(range(33, 65))
+    secret = session_secret(client, public(client), public(bridge), 0x0102)
+    assert secret.hex() == "8b426f0d029361820a9f12a653f823b0"
+    assert session_secret(bridge, public(client), public(bridge), 0x0102) == secret
+    with pytest.raises(ValueError):
+        session_secret(bridge, bytes(32), public(bridge), 0x0102)

@@ -4,7 +4,7 @@ use core::time::Duration;
 
 use motion_client::ipc::{CommandReply, CommandRequest};
 use motion_wire::keys::{
-    Keys, Origin, RequestMeta, SessionGrant, SessionId, SessionOpen, SessionToken,
+    KeyPair, Keys, Origin, RequestMeta, SessionGrant, SessionId, SessionOpen, SessionToken,
 };
 use motion_wire::wire;
 use zenoh::Wait as _;
@@ -37,7 +37,7 @@ static COUNTER: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new
 
 impl Sign {
     /// Requests of the session `grant` opened, sent at `sent_ns`.
-    pub fn of(grant: &SessionGrant, sent_ns: u64) -> Self {
+    pub fn of(grant: &Granted, sent_ns: u64) -> Self {
         Self {
             token: grant.token,
             session: grant.session,
@@ -71,17 +71,37 @@ pub fn session(endpoint: &str) -> Result<zenoh::Session> {
     zenoh::open(config).wait().z()
 }
 
+/// A session the bridge opened: its public id and the secret both sides agreed on.
+#[derive(Debug, Clone, Copy)]
+pub struct Granted {
+    pub session: SessionId,
+    pub token: SessionToken,
+}
+
+/// The tests' session keys: a new one for every opening (not random: a counter, hashed by
+/// X25519 itself; these are tests).
+static KEYS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+
 /// Opens a session as `identity`, its query sent at `sent_ns` on the remote's clock: the
-/// grant, or the refusal's text.
+/// session, or the refusal's text.
 pub fn open_session(
     session: &zenoh::Session,
     keys: &Keys,
     identity: &str,
     sent_ns: u64,
-) -> Result<core::result::Result<SessionGrant, String>> {
+) -> Result<core::result::Result<Granted, String>> {
+    let mut random = [0x5a; 32];
+    let n = KEYS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    random[..8].copy_from_slice(&n.to_le_bytes());
+    random[8..16].copy_from_slice(&u64::from(std::process::id()).to_le_bytes());
+    let pair = KeyPair::from_random(random);
+    let open = SessionOpen {
+        sent_ns,
+        public: pair.public(),
+    };
     let replies = session
         .get(keys.session(identity))
-        .payload(SessionOpen { sent_ns }.encode().to_vec())
+        .payload(open.encode().to_vec())
         .timeout(Duration::from_secs(5))
         .wait()
         .z()?;
@@ -90,8 +110,17 @@ pub fn open_session(
         .z()?
         .ok_or("no answer to a session opening")?;
     Ok(match reply.result() {
-        Ok(sample) => Ok(SessionGrant::decode(&sample.payload().to_bytes())
-            .ok_or("a session grant of the wrong size")?),
+        Ok(sample) => {
+            let grant = SessionGrant::decode(&sample.payload().to_bytes())
+                .ok_or("a session grant of the wrong size")?;
+            let token = pair
+                .agree(open.public, grant.public, grant.session)
+                .ok_or("no secret agreed")?;
+            Ok(Granted {
+                session: grant.session,
+                token,
+            })
+        }
         Err(error) => Err(error.payload().try_to_string()?.into_owned()),
     })
 }

@@ -661,3 +661,141 @@ fn a_peer_that_sees_a_command_cannot_command_with_it() -> Result {
     assert_eq!(velocities(&server), 2, "the victim goes on");
     Ok(())
 }
+/// The `motion-bridge` binary with zenoh's trace log on: a session opened and commands sent
+/// with it, and the session's secret appears nowhere in the log, in any of the forms a
+/// log prints bytes in.
+#[test]
+fn the_secret_is_never_in_zenohs_trace_log() -> Result {
+    let Some(binary) = real::binary("motion-bridge", "MOTION_BRIDGE_BIN") else {
+        eprintln!(
+            "SKIPPED the_secret_is_never_in_zenohs_trace_log: no motion-bridge beside this test \
+             (`cargo build -p motion-bridge`, or ./scripts/test, builds it; or set \
+             MOTION_BRIDGE_BIN)"
+        );
+        return Ok(());
+    };
+    let server = fake("hard-trace")?;
+    let dir = scratch("hard-trace")?;
+    let rules = dir.join("rules.toml");
+    std::fs::write(
+        &rules,
+        "[[remote]]\nidentity = \"panel\"\nallow = [\"all\"]\n",
+    )?;
+    let endpoint = format!("tcp/127.0.0.1:{}", free_port()?);
+    let mut child = Command::new(binary)
+        .args([
+            "--server",
+            server.name(),
+            "--listen",
+            &endpoint,
+            "--insecure",
+            "--config",
+        ])
+        .arg(&rules)
+        .env("RUST_LOG", "info,zenoh=trace")
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()?;
+    let pid = nix::unistd::Pid::from_raw(i32::try_from(child.id())?);
+    // Read as it is written: a trace log fills a pipe at once.
+    let mut stderr = child.stderr.take().ok_or("the bridge's stderr")?;
+    let reader = std::thread::spawn(move || {
+        let mut bytes = Vec::new();
+        let _ = std::io::Read::read_to_end(&mut stderr, &mut bytes);
+        bytes
+    });
+    let keys = Keys::new(server.name())?;
+    let until = Instant::now() + DEADLINE;
+    let zenoh = loop {
+        match session(&endpoint) {
+            Ok(zenoh) => break zenoh,
+            Err(_) if Instant::now() < until => std::thread::sleep(Duration::from_millis(100)),
+            Err(error) => return Err(format!("the bridge never listened: {error}").into()),
+        }
+    };
+    wait_for_server(&zenoh, &keys)?;
+    let start = Instant::now();
+    let grant = open_session(&zenoh, &keys, "panel", clock_ns(start, Duration::ZERO))??;
+    let jog = CommandRequest::new(ClientId::NONE, 1, 0, CommandKind::Velocity)
+        .with_values([1.0, 0.0, 0.0]);
+    let mut attachments = Vec::new();
+    for _ in 0..5 {
+        let meta = Sign::of(&grant, clock_ns(start, Duration::ZERO))
+            .meta("panel", &wire::encode(&jog))
+            .encode();
+        attachments.push(meta);
+        let reply = zenoh
+            .get(keys.command("panel"))
+            .payload(wire::encode(&jog))
+            .attachment(meta.to_vec())
+            .timeout(DEADLINE)
+            .wait()
+            .z()?
+            .recv_timeout(DEADLINE)
+            .z()?
+            .ok_or("no answer")?;
+        reply
+            .result()
+            .map_err(|error| format!("refused: {error:?}"))?;
+    }
+    nix::sys::signal::kill(pid, nix::sys::signal::Signal::SIGTERM)?;
+    real::finish(child, DEADLINE)?;
+    let bytes = reader.join().map_err(|_| "the log's reader")?;
+    let log = String::from_utf8_lossy(&bytes);
+    let forms = |secret: &[u8]| {
+        [
+            secret
+                .iter()
+                .map(|b| format!("{b:02x}"))
+                .collect::<String>(),
+            secret
+                .iter()
+                .map(|b| format!("{b:02X}"))
+                .collect::<String>(),
+            format!("{secret:?}"),
+            format!("{secret:02x?}"),
+            joined(secret, |b| format!("{b:02x}"), " "),
+            // Inside a longer slice, as zenoh's trace prints a message's bytes.
+            joined(secret, |b| format!("{b:02x}"), ", "),
+            joined(secret, |b| b.to_string(), ", "),
+            String::from_utf8_lossy(secret).into_owned(),
+        ]
+    };
+    // What the commands carried is in the log (so the search would find a secret that
+    // travelled with them, as the secret itself did before version 3 of the contract) ...
+    let carried = attachments
+        .iter()
+        .filter(|meta| {
+            forms(&meta[33..49])
+                .iter()
+                .any(|form| log.contains(form.as_str()))
+        })
+        .count();
+    eprintln!(
+        "{} lines of trace log, {} bytes; the MACs of {carried} of the 5 commands in it; the \
+         secret searched for as {:?}",
+        log.lines().count(),
+        log.len(),
+        forms(&grant.token.0)
+    );
+    std::fs::write("/tmp/trace-log.txt", log.as_bytes())?;
+    assert!(
+        carried > 0,
+        "zenoh's trace log shows what a command carries"
+    );
+    // ... and the secret is not.
+    for form in forms(&grant.token.0) {
+        assert!(
+            !log.contains(form.as_str()),
+            "the secret is in the log as {form}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    Ok(())
+}
+
+/// `bytes`, each as `each` makes it, joined by `separator`.
+fn joined(bytes: &[u8], each: impl Fn(&u8) -> String, separator: &str) -> String {
+    bytes.iter().map(each).collect::<Vec<_>>().join(separator)
+}

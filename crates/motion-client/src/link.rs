@@ -9,7 +9,9 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use motion_ipc::{CommandKind, CommandReply, CommandRequest};
-use motion_wire::keys::{Keys, Origin, Refusal, RequestMeta, SessionGrant, SessionOpen};
+use motion_wire::keys::{
+    KeyPair, Keys, Origin, Refusal, RequestMeta, SessionGrant, SessionId, SessionOpen, SessionToken,
+};
 use motion_wire::wire::{self, Payload};
 use zenoh::Wait as _;
 use zenoh::handlers::RingChannel;
@@ -68,9 +70,11 @@ fn owned_remote<T: Payload>(sample: &Sample, server: &str) -> Result<Owned<T>, R
     })
 }
 
-/// The session the bridge opened for this client, and the liveliness token that names it.
+/// The session the bridge opened for this client (its public id, the secret both sides
+/// agreed on), and the liveliness token that names it.
 struct Granted {
-    grant: SessionGrant,
+    session: SessionId,
+    secret: SessionToken,
     _token: LivelinessToken,
 }
 
@@ -96,7 +100,7 @@ impl fmt::Debug for Link {
             .field("identity", &self.identity)
             .field(
                 "session",
-                &self.granted.borrow().as_ref().map(|g| g.grant.session),
+                &self.granted.borrow().as_ref().map(|g| g.session),
             )
             .finish_non_exhaustive()
     }
@@ -184,8 +188,18 @@ impl Link {
     /// Asks the bridge for a session (waiting up to `timeout`) and declares this client's
     /// liveliness under its public id.
     fn open_session(&self, timeout: Duration) -> Result<(), ClientError> {
+        let mut random = [0u8; 32];
+        std::io::Read::read_exact(
+            &mut std::fs::File::open("/dev/urandom").map_err(|error| {
+                RemoteError::zenoh("read /dev/urandom for a session key", error)
+            })?,
+            &mut random,
+        )
+        .map_err(|error| RemoteError::zenoh("read /dev/urandom for a session key", error))?;
+        let keys = KeyPair::from_random(random);
         let open = SessionOpen {
             sent_ns: self.clock_ns(),
+            public: keys.public(),
         };
         let key = self.keys.session(&self.identity);
         let replies = self
@@ -227,6 +241,15 @@ impl Link {
                 return Err(refusal("session", &text, timeout));
             }
         };
+        let secret = keys
+            .agree(open.public, grant.public, grant.session)
+            .ok_or_else(|| ClientError::Network {
+                what: "open a session",
+                why: Unanswered::NotA {
+                    key: key.clone(),
+                    payload: "session grant with a usable X25519 key",
+                },
+            })?;
         let token = self
             .session
             .liveliness()
@@ -234,7 +257,8 @@ impl Link {
             .wait()
             .map_err(|error| RemoteError::zenoh("declare this client's liveliness", error))?;
         *self.granted.borrow_mut() = Some(Granted {
-            grant,
+            session: grant.session,
+            secret,
             _token: token,
         });
         Ok(())
@@ -376,10 +400,10 @@ impl Link {
                 let counter = self.counter.get() + 1;
                 self.counter.set(counter);
                 RequestMeta::sign(
-                    granted.grant.token,
+                    granted.secret,
                     &self.identity,
                     &payload,
-                    granted.grant.session,
+                    granted.session,
                     counter,
                     sent_ns,
                 )

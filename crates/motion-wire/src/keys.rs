@@ -15,10 +15,12 @@
 //!
 //! Binary payloads are the `motion-ipc` C layouts, little-endian ([`crate::wire`]).
 //!
-//! A remote's session is the bridge's to give: a client asks `session/<identity>` once and
-//! gets a public [`SessionId`] (for its liveliness token) and a secret [`SessionToken`] that
-//! only the querier receives. The token itself never travels again: every command carries
-//! the session id, a counter and a MAC made with the token over the identity, the request's
+//! A remote's session is the bridge's to give: a client asks `session/<identity>` once with
+//! an X25519 public key of its own ([`SessionOpen`]) and gets a public [`SessionId`] (for its
+//! liveliness token) and the bridge's public key ([`SessionGrant`]); both sides derive the
+//! session's secret [`SessionToken`] from the two keys ([`KeyPair::agree`]), so it is in no
+//! message. Every command carries the session id, a counter and a MAC made with the secret
+//! over the identity, the request's
 //! bytes and the rest of the attachment ([`RequestMeta`]), so a peer that sees a command
 //! (a queryable of its own on the command keys, a log) learns nothing it can command with,
 //! and a command replayed is refused. The session is bound to the identity it was opened
@@ -221,9 +223,9 @@ impl Origin {
     }
 }
 
-/// The secret of a session: 16 random bytes the bridge hands only to the querier that opened
-/// the session; every command of the session carries a MAC made with it, never the secret
-/// itself ([`RequestMeta`]). All zero: no session.
+/// The secret of a session: 16 bytes both sides derive from the opening's X25519 keys
+/// ([`KeyPair::agree`]), never sent; every command of the session carries a MAC made with it
+/// ([`RequestMeta`]). All zero: no session.
 #[derive(Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub struct SessionToken(pub [u8; 16]);
 
@@ -253,72 +255,150 @@ impl fmt::Debug for SessionToken {
 pub const CONTRACT_VERSION: u8 = 3;
 
 /// The payload of a session-opening query on `motiond/<name>/session/<identity>`: version
-/// (u8, 3) and the client's CLOCK_MONOTONIC when it sent the query (u64 LE, ns). 9 bytes.
-/// The bridge judges the session's later time stamps against its own clock from here on.
+/// (u8, 3), the client's CLOCK_MONOTONIC when it sent the query (u64 LE, ns) and the
+/// client's X25519 public key for this opening (32 bytes). 41 bytes. The bridge judges the
+/// session's later time stamps against its own clock from here on.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct SessionOpen {
     /// The client's monotonic clock at sending, ns.
     pub sent_ns: u64,
+    /// The client's X25519 public key ([`KeyPair`]).
+    pub public: [u8; 32],
 }
 
 impl SessionOpen {
     /// Bytes on the wire.
-    pub const SIZE: usize = 9;
+    pub const SIZE: usize = 41;
 
-    /// The 9 bytes.
-    pub fn encode(self) -> [u8; 9] {
-        let mut out = [0; 9];
+    /// The 41 bytes.
+    pub fn encode(self) -> [u8; 41] {
+        let mut out = [0; 41];
         out[0] = CONTRACT_VERSION;
         out[1..9].copy_from_slice(&self.sent_ns.to_le_bytes());
+        out[9..41].copy_from_slice(&self.public);
         out
     }
 
     /// From the payload; `None` for another size or version.
     pub fn decode(bytes: &[u8]) -> Option<Self> {
-        let bytes = <&[u8; 9]>::try_from(bytes).ok()?;
+        let bytes = <&[u8; 41]>::try_from(bytes).ok()?;
         if bytes[0] != CONTRACT_VERSION {
             return None;
         }
         Some(Self {
             sent_ns: u64::from_le_bytes(bytes[1..9].try_into().ok()?),
+            public: bytes[9..41].try_into().ok()?,
         })
     }
 }
 
 /// The bridge's answer to [`SessionOpen`]: version (u8, 3), the public [`SessionId`] (u128
-/// LE) and the secret [`SessionToken`] (16 bytes). 33 bytes.
+/// LE, never zero) and the bridge's X25519 public key for this opening (32 bytes). 49
+/// bytes. The session's secret is agreed from the two keys ([`KeyPair::agree`]); it never
+/// travels, not even here.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct SessionGrant {
     /// The session's public id (the client's liveliness token names it).
     pub session: SessionId,
-    /// The secret every command of the session carries.
-    pub token: SessionToken,
+    /// The bridge's X25519 public key.
+    pub public: [u8; 32],
 }
 
 impl SessionGrant {
     /// Bytes on the wire.
-    pub const SIZE: usize = 33;
+    pub const SIZE: usize = 49;
 
-    /// The 33 bytes.
-    pub fn encode(self) -> [u8; 33] {
-        let mut out = [0; 33];
+    /// The 49 bytes.
+    pub fn encode(self) -> [u8; 49] {
+        let mut out = [0; 49];
         out[0] = CONTRACT_VERSION;
         out[1..17].copy_from_slice(&self.session.0.to_le_bytes());
-        out[17..33].copy_from_slice(&self.token.0);
+        out[17..49].copy_from_slice(&self.public);
         out
     }
 
-    /// From the reply's payload; `None` for another size or version, or a zero token.
+    /// From the reply's payload; `None` for another size or version, or a zero id.
     pub fn decode(bytes: &[u8]) -> Option<Self> {
-        let bytes = <&[u8; 33]>::try_from(bytes).ok()?;
+        let bytes = <&[u8; 49]>::try_from(bytes).ok()?;
         if bytes[0] != CONTRACT_VERSION {
             return None;
         }
         let grant = Self {
             session: SessionId(u128::from_le_bytes(bytes[1..17].try_into().ok()?)),
-            token: SessionToken(bytes[17..33].try_into().ok()?),
+            public: bytes[17..49].try_into().ok()?,
         };
-        (!grant.token.is_none()).then_some(grant)
+        (grant.session.0 != 0).then_some(grant)
+    }
+}
+
+/// One side's X25519 key pair for one session opening, made from 32 random bytes the caller
+/// draws (this crate does no I/O). The session's secret ([`SessionToken`]) is agreed from
+/// both sides' keys: anyone who sees the opening (a log, a peer on the path) sees the public
+/// keys only. An active peer that answers the opening in the bridge's place is not kept out
+/// by this (zenoh authentication and access control are: README, "Who is who").
+pub struct KeyPair {
+    secret: x25519_dalek::StaticSecret,
+    public: [u8; 32],
+}
+
+impl fmt::Debug for KeyPair {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("KeyPair")
+            .field("public", &self.public)
+            .finish_non_exhaustive()
+    }
+}
+
+/// The domain of the session's secret (so it is never the hash of anything else).
+const SESSION_DOMAIN: &[u8] = b"motiond-session-v3";
+
+impl KeyPair {
+    /// The key pair of the 32 random bytes `random`.
+    pub fn from_random(random: [u8; 32]) -> Self {
+        let secret = x25519_dalek::StaticSecret::from(random);
+        let public = x25519_dalek::PublicKey::from(&secret).to_bytes();
+        Self { secret, public }
+    }
+
+    /// This side's public key.
+    pub fn public(&self) -> [u8; 32] {
+        self.public
+    }
+
+    /// The secret of session `session` opened with the client's key `client` and the
+    /// bridge's key `bridge` (one of them this pair's): the first 16 bytes of SHA3-256 over
+    /// `"motiond-session-v3"`, the X25519 shared secret, `client`, `bridge` and the session
+    /// id (u128 LE). `None` when the other key is no usable public key (the shared secret
+    /// is all zero) or the result is zero.
+    pub fn agree(
+        &self,
+        client: [u8; 32],
+        bridge: [u8; 32],
+        session: SessionId,
+    ) -> Option<SessionToken> {
+        use sha3::Digest as _;
+        let theirs = if client == self.public {
+            bridge
+        } else {
+            client
+        };
+        let shared = self
+            .secret
+            .diffie_hellman(&x25519_dalek::PublicKey::from(theirs));
+        if !shared.was_contributory() {
+            return None;
+        }
+        let digest = sha3::Sha3_256::new()
+            .chain_update(SESSION_DOMAIN)
+            .chain_update(shared.as_bytes())
+            .chain_update(client)
+            .chain_update(bridge)
+            .chain_update(session.0.to_le_bytes())
+            .finalize();
+        let mut token = [0; 16];
+        token.copy_from_slice(&digest[..16]);
+        let token = SessionToken(token);
+        (!token.is_none()).then_some(token)
     }
 }
 
@@ -633,27 +713,70 @@ mod tests {
         assert_eq!(Origin::decode(&Origin(77).encode()), Some(Origin(77)));
         assert_eq!(Origin::decode(&[1, 2, 3]), None);
 
-        let open = SessionOpen { sent_ns: 99 };
+        let open = SessionOpen {
+            sent_ns: 99,
+            public: [3; 32],
+        };
         assert_eq!(SessionOpen::decode(&open.encode()), Some(open));
-        assert_eq!(SessionOpen::decode(&open.encode()[..8]), None);
+        assert_eq!(SessionOpen::decode(&open.encode()[..40]), None);
+        assert_eq!(SessionOpen::decode(&[2; 9]), None, "the old opening");
         let grant = SessionGrant {
             session: SessionId(u128::MAX - 1),
-            token: SessionToken([0xa5; 16]),
+            public: [0xa5; 32],
         };
         let bytes = grant.encode();
         assert_eq!(bytes.len(), SessionGrant::SIZE);
         assert_eq!(SessionGrant::decode(&bytes), Some(grant));
         let zero = SessionGrant {
-            token: SessionToken::NONE,
+            session: SessionId(0),
             ..grant
         };
-        assert_eq!(SessionGrant::decode(&zero.encode()), None, "no zero token");
+        assert_eq!(SessionGrant::decode(&zero.encode()), None, "no zero id");
         assert_eq!(
-            format!("{:?}", grant.token),
+            format!("{:?}", SessionToken([1; 16])),
             "SessionToken(…)",
             "never logged"
         );
     }
+
+    /// Both sides agree on the session's secret from the two public keys; it is in neither
+    /// message. Golden: the bridge's and the client's keys of bytes 1..=32 and 33..=64
+    /// (python/tests/test_remote.py derives the same secret with `cryptography`'s X25519).
+    #[test]
+    fn both_sides_agree_on_a_secret_that_never_travels() {
+        let client = KeyPair::from_random(core::array::from_fn(|i| i as u8 + 1));
+        let bridge = KeyPair::from_random(core::array::from_fn(|i| i as u8 + 33));
+        let session = SessionId(0x0102);
+        let open = SessionOpen {
+            sent_ns: 5,
+            public: client.public(),
+        };
+        let grant = SessionGrant {
+            session,
+            public: bridge.public(),
+        };
+        let on_client = client.agree(client.public(), grant.public, session);
+        let on_bridge = bridge.agree(open.public, bridge.public(), session);
+        assert!(on_client.is_some());
+        assert_eq!(on_client, on_bridge);
+        let token = on_client.expect("agreed");
+        assert_eq!(hex(&token.0), GOLDEN_SECRET);
+        for message in [&open.encode()[..], &grant.encode()[..]] {
+            assert!(
+                !message.windows(16).any(|window| window == token.0),
+                "the secret is in a message"
+            );
+        }
+        // Another session id: another secret; a key of all zeros (a low-order point): none.
+        assert_ne!(
+            client.agree(client.public(), grant.public, SessionId(3)),
+            on_client
+        );
+        assert_eq!(bridge.agree([0; 32], bridge.public(), session), None);
+    }
+
+    /// The secret of the test above, in hex.
+    const GOLDEN_SECRET: &str = "8b426f0d029361820a9f12a653f823b0";
 
     #[test]
     fn refusals_parse_back() {

@@ -20,8 +20,10 @@ their deadman, parameters, statistics), with these differences:
   :attr:`~RemoteClient.id` is a random id of this client.
 
 A remote's session is the bridge's to give: on connecting the client asks
-``motiond/<name>/session/<identity>`` and gets a public session id (named by its liveliness
-token) and a secret token only it receives. The token never travels again: every command
+``motiond/<name>/session/<identity>`` with an X25519 public key of its own and gets a public
+session id (named by its liveliness token) and the bridge's public key; both sides agree on the
+session's secret from the two keys, so it never travels (needs the ``cryptography`` package,
+part of ``motiond[remote]``). Every command
 carries the session id, a counter and a MAC made with the token (HMAC-SHA3-256) over the
 identity, the request and the rest of the attachment, so a peer that sees a command cannot
 make another, and a command replayed is refused. Stop and e-stop
@@ -38,8 +40,11 @@ own key (see ``crates/motion-bridge/README.md``); give this client its credentia
 The wire contract (``crates/motion-bridge/README.md``, "The network contract"): payloads are
 the ``motion-ipc`` structs in their C layout, little-endian, ``sizeof`` bytes; published
 samples and replies carry a 16-byte attachment, the server's node id; a session opening sends
-9 bytes (version 3, CLOCK_MONOTONIC at sending, u64 ns) and gets 33 (version 3, the session id
-u128, the 16-byte token); a command query carries 49 bytes (:func:`request_meta`): version 3,
+41 bytes (version 3, CLOCK_MONOTONIC at sending, u64 ns, the client's X25519 public key) and
+gets 49 (version 3, the session id u128, the bridge's X25519 public key); the secret is the
+first 16 bytes of SHA3-256 over ``b"motiond-session-v3"``, the X25519 shared secret, the
+client's key, the bridge's key and the session id (:func:`session_secret`); a command query
+carries 49 bytes (:func:`request_meta`): version 3,
 the session id (u128, zero without a session), a counter (u64, rising), its CLOCK_MONOTONIC at
 sending (u64 ns) and the MAC: the first 16 bytes of HMAC-SHA3-256 keyed by the token over
 ``b"motiond-request-v3"``, the identity's UTF-8 bytes and a zero byte, the request's 64 bytes
@@ -50,6 +55,7 @@ from __future__ import annotations
 
 import collections
 import ctypes
+import hashlib
 import hmac
 import json
 import secrets
@@ -95,6 +101,7 @@ __all__ = [
     "make_zenoh_config",
     "check_chunk",
     "request_meta",
+    "session_secret",
 ]
 
 #: The identity of a client that names none (the bridge's ``motiond/<name>/command``).
@@ -117,6 +124,7 @@ REFUSAL_CODES = (
 _FEED_DEPTH = 32
 _CONTRACT_VERSION = 3
 _MAC_DOMAIN = b"motiond-request-v3"
+_SESSION_DOMAIN = b"motiond-session-v3"
 _NO_GROUPS = (
     "groups work over shared memory only for now: a remote client (motion-bridge) cannot "
     "send paths or setpoints; connect with motiond.Client(name) on the server's host"
@@ -184,6 +192,44 @@ def request_meta(
         return head + bytes(16)
     message = _MAC_DOMAIN + identity.encode() + b"\0" + request + head[1:]
     return head + hmac.new(token, message, "sha3_256").digest()[:16]
+
+
+def _x25519() -> Any:
+    try:
+        from cryptography.hazmat.primitives.asymmetric import x25519
+    except ImportError as error:
+        raise errors.ConnectError(
+            "a remote client's session needs the cryptography package (X25519): "
+            "pip install 'motiond[remote]'"
+        ) from error
+    return x25519
+
+
+def session_secret(private: bytes, client: bytes, bridge: bytes, session: int) -> bytes:
+    """The session's 16-byte secret, agreed from this side's X25519 ``private`` key (32 raw
+    bytes) and the two public keys, ``client`` and ``bridge`` (one of them this side's):
+    SHA3-256 over ``b"motiond-session-v3"``, the shared secret, ``client``, ``bridge`` and
+    the ``session`` id (u128 LE), its first 16 bytes. Raises ``ValueError`` when the other key
+    is no usable public key."""
+    x25519 = _x25519()
+    key = x25519.X25519PrivateKey.from_private_bytes(private)
+    own = _raw_public(key)
+    theirs = bridge if client == own else client
+    shared = key.exchange(x25519.X25519PublicKey.from_public_bytes(theirs))
+    if shared == bytes(32):
+        raise ValueError("not a usable X25519 public key")
+    digest = hashlib.sha3_256(
+        _SESSION_DOMAIN + shared + client + bridge + session.to_bytes(16, "little")
+    ).digest()
+    return digest[:16]
+
+
+def _raw_public(key: Any) -> bytes:
+    from cryptography.hazmat.primitives import serialization
+
+    return bytes(
+        key.public_key().public_bytes(serialization.Encoding.Raw, serialization.PublicFormat.Raw)
+    )
 
 
 def _origin(sample: Any) -> int:
@@ -455,7 +501,10 @@ class RemoteClient(Client, transport="remote"):
         client's liveliness under its public id; raises
         :class:`~motiond.errors.BridgeRefused` or :class:`~motiond.errors.RemoteError`."""
         key = f"{self._prefix}/session/{self._identity}"
-        payload = struct.pack("<BQ", _CONTRACT_VERSION, time.monotonic_ns())
+        private = secrets.token_bytes(32)
+        x25519 = _x25519()
+        public = _raw_public(x25519.X25519PrivateKey.from_private_bytes(private))
+        payload = struct.pack("<BQ", _CONTRACT_VERSION, time.monotonic_ns()) + public
         try:
             replies = self._session.get(key, payload=payload, timeout=timeout, express=True)
             answer = next(iter(replies), None)
@@ -468,13 +517,16 @@ class RemoteClient(Client, transport="remote"):
         if answer.ok is None:
             raise _refusal(kind, _error_text(answer.err), timeout)
         data = answer.ok.payload.to_bytes()
-        if len(data) != 33 or data[0] != _CONTRACT_VERSION or data[17:] == _NO_TOKEN:
+        if len(data) != 49 or data[0] != _CONTRACT_VERSION or data[1:17] == _NO_TOKEN:
             raise RemoteError(
                 "open a session", ValueError(f"a {len(data)}-byte answer is not a session grant")
             )
         low, high = struct.unpack_from("<QQ", data, 1)
         session_id = low | (high << 64)
-        token = bytes(data[17:33])
+        try:
+            token = session_secret(private, public, bytes(data[17:49]), session_id)
+        except ValueError as error:
+            raise RemoteError("open a session", error) from None
         try:
             liveliness = self._session.liveliness().declare_token(
                 f"{self._prefix}/remote/{self._identity}/{session_id:032x}"

@@ -51,6 +51,7 @@ fn open(
 ) -> Result<(), (Refusal, String)> {
     let open = SessionOpen {
         sent_ns: sent.as_nanos() as u64,
+        public: [9; 32],
     };
     policy.open_session(now, &remote.identity, open, remote.session, token(remote))
 }
