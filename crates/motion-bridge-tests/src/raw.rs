@@ -95,10 +95,7 @@ pub fn open_session(
     random[..8].copy_from_slice(&n.to_le_bytes());
     random[8..16].copy_from_slice(&u64::from(std::process::id()).to_le_bytes());
     let pair = KeyPair::from_random(random);
-    let open = SessionOpen {
-        sent_ns,
-        public: pair.public(),
-    };
+    let open = SessionOpen::new(sent_ns, pair.public(), &session.zid().to_string());
     let replies = session
         .get(keys.session(identity))
         .payload(open.encode().to_vec())

@@ -799,3 +799,56 @@ fn the_secret_is_never_in_zenohs_trace_log() -> Result {
 fn joined(bytes: &[u8], each: impl Fn(&u8) -> String, separator: &str) -> String {
     bytes.iter().map(each).collect::<Vec<_>>().join(separator)
 }
+
+/// A remote's session ends with its own transport: another peer that declares a copy of the
+/// departed remote's liveliness key (anyone may read it) does not keep its claim.
+#[test]
+fn a_copied_liveliness_key_does_not_keep_a_departed_remotes_claim() -> Result {
+    let server = fake("hard-copy")?;
+    let rules = "[[remote]]\nidentity = \"*\"\nallow = [\"all\"]\n";
+    let bridge = BridgeThread::start(server.name(), rules)?;
+    let keys = Keys::new(server.name())?;
+    let victim = remote(server.name(), &bridge.endpoint, "operator")?;
+    victim.wait_ready(DEADLINE)?;
+    victim.axis("x")?.claim()?;
+    // The copy: the victim's liveliness key, read and declared by another peer.
+    let attacker = session(&bridge.endpoint)?;
+    let replies = attacker
+        .liveliness()
+        .get(keys.remote_tokens())
+        .timeout(Duration::from_secs(5))
+        .wait()
+        .z()?;
+    let mut copied = Vec::new();
+    while let Ok(reply) = replies.recv() {
+        if let Ok(sample) = reply.result() {
+            copied.push(
+                attacker
+                    .liveliness()
+                    .declare_token(sample.key_expr().clone())
+                    .wait()
+                    .z()?,
+            );
+        }
+    }
+    assert_eq!(copied.len(), 1, "the victim's one liveliness key");
+    let releases = |server: &motion_client::testing::FakeServer| {
+        server
+            .requests()
+            .iter()
+            .filter(|r| r.kind == CommandKind::Release as u32 && r.axis == 0)
+            .count()
+    };
+    assert_eq!(releases(&server), 0);
+    // The victim's process ends without releasing (its client is dropped; the claim was
+    // not a guard): its transport closes, its liveliness key stays (the copy).
+    drop(victim);
+    eventually("the bridge released the departed remote's claim", || {
+        Ok(releases(&server) == 1)
+    })?;
+    // Another remote claims x.
+    let other = remote(server.name(), &bridge.endpoint, "other")?;
+    other.axis("x")?.claim()?;
+    drop(copied);
+    Ok(())
+}

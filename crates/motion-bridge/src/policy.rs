@@ -527,6 +527,24 @@ impl Policy {
         }
     }
 
+    /// Session `id` was opened through the transport of zenoh id `zid` (a remote connected
+    /// to the bridge directly): it ends when that transport closes
+    /// ([`Policy::transport_gone`]), whatever liveliness tokens name it — a copy of its key
+    /// declared by another peer does not keep it.
+    pub fn bind_transport(&mut self, id: SessionId, zid: &str) {
+        self.sessions.bind(id, zid);
+    }
+
+    /// The transport of zenoh id `zid` closed: every session bound to it ends, as in
+    /// [`Policy::session_gone`]; what the bridge sends for them.
+    pub fn transport_gone(&mut self, zid: &str) -> Vec<CommandRequest> {
+        let mut requests = Vec::new();
+        for (identity, id) in self.sessions.bound_to(zid) {
+            requests.extend(self.session_gone(&identity, id));
+        }
+        requests
+    }
+
     /// A remote session ended (its liveliness token went away): what the bridge sends for
     /// it — a stop of every axis whose deadman goal it started and nobody replaced, and a
     /// release of every claim it held. Returns them as requests (client zero).

@@ -197,10 +197,11 @@ impl Link {
         )
         .map_err(|error| RemoteError::zenoh("read /dev/urandom for a session key", error))?;
         let keys = KeyPair::from_random(random);
-        let open = SessionOpen {
-            sent_ns: self.clock_ns(),
-            public: keys.public(),
-        };
+        let open = SessionOpen::new(
+            self.clock_ns(),
+            keys.public(),
+            &self.session.zid().to_string(),
+        );
         let key = self.keys.session(&self.identity);
         let replies = self
             .session

@@ -255,39 +255,65 @@ impl fmt::Debug for SessionToken {
 pub const CONTRACT_VERSION: u8 = 3;
 
 /// The payload of a session-opening query on `motiond/<name>/session/<identity>`: version
-/// (u8, 3), the client's CLOCK_MONOTONIC when it sent the query (u64 LE, ns) and the
-/// client's X25519 public key for this opening (32 bytes). 41 bytes. The bridge judges the
-/// session's later time stamps against its own clock from here on.
+/// (u8, 3), the client's CLOCK_MONOTONIC when it sent the query (u64 LE, ns), the client's
+/// X25519 public key for this opening (32 bytes) and the client's zenoh id as zenoh prints
+/// it (ASCII hex, zero-padded to 32 bytes). 73 bytes. The bridge judges the session's later
+/// time stamps against its own clock from here on, and ends the session when the transport
+/// of that zenoh id closes (when the client is connected to it directly).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct SessionOpen {
     /// The client's monotonic clock at sending, ns.
     pub sent_ns: u64,
     /// The client's X25519 public key ([`KeyPair`]).
     pub public: [u8; 32],
+    /// The client's zenoh id as zenoh prints it, zero-padded ([`SessionOpen::zid`]).
+    pub zid: [u8; 32],
 }
 
 impl SessionOpen {
     /// Bytes on the wire.
-    pub const SIZE: usize = 41;
+    pub const SIZE: usize = 73;
 
-    /// The 41 bytes.
-    pub fn encode(self) -> [u8; 41] {
-        let mut out = [0; 41];
+    /// An opening sent at `sent_ns` with the key `public` by the zenoh session `zid` (as
+    /// zenoh prints it; more than 32 bytes are cut).
+    pub fn new(sent_ns: u64, public: [u8; 32], zid: &str) -> Self {
+        let mut padded = [0; 32];
+        let len = zid.len().min(32);
+        padded[..len].copy_from_slice(&zid.as_bytes()[..len]);
+        Self {
+            sent_ns,
+            public,
+            zid: padded,
+        }
+    }
+
+    /// The client's zenoh id; `None` when the field holds none (or no ASCII).
+    pub fn zid(&self) -> Option<&str> {
+        let len = self.zid.iter().position(|&b| b == 0).unwrap_or(32);
+        let zid = core::str::from_utf8(&self.zid[..len]).ok()?;
+        (!zid.is_empty() && zid.is_ascii()).then_some(zid)
+    }
+
+    /// The 73 bytes.
+    pub fn encode(self) -> [u8; 73] {
+        let mut out = [0; 73];
         out[0] = CONTRACT_VERSION;
         out[1..9].copy_from_slice(&self.sent_ns.to_le_bytes());
         out[9..41].copy_from_slice(&self.public);
+        out[41..73].copy_from_slice(&self.zid);
         out
     }
 
     /// From the payload; `None` for another size or version.
     pub fn decode(bytes: &[u8]) -> Option<Self> {
-        let bytes = <&[u8; 41]>::try_from(bytes).ok()?;
+        let bytes = <&[u8; 73]>::try_from(bytes).ok()?;
         if bytes[0] != CONTRACT_VERSION {
             return None;
         }
         Some(Self {
             sent_ns: u64::from_le_bytes(bytes[1..9].try_into().ok()?),
             public: bytes[9..41].try_into().ok()?,
+            zid: bytes[41..73].try_into().ok()?,
         })
     }
 }
@@ -713,12 +739,11 @@ mod tests {
         assert_eq!(Origin::decode(&Origin(77).encode()), Some(Origin(77)));
         assert_eq!(Origin::decode(&[1, 2, 3]), None);
 
-        let open = SessionOpen {
-            sent_ns: 99,
-            public: [3; 32],
-        };
+        let open = SessionOpen::new(99, [3; 32], "a1b2c3");
+        assert_eq!(open.zid(), Some("a1b2c3"));
         assert_eq!(SessionOpen::decode(&open.encode()), Some(open));
-        assert_eq!(SessionOpen::decode(&open.encode()[..40]), None);
+        assert_eq!(SessionOpen::decode(&open.encode()[..72]), None);
+        assert_eq!(SessionOpen::new(1, [3; 32], "").zid(), None);
         assert_eq!(SessionOpen::decode(&[2; 9]), None, "the old opening");
         let grant = SessionGrant {
             session: SessionId(u128::MAX - 1),
@@ -747,10 +772,7 @@ mod tests {
         let client = KeyPair::from_random(core::array::from_fn(|i| i as u8 + 1));
         let bridge = KeyPair::from_random(core::array::from_fn(|i| i as u8 + 33));
         let session = SessionId(0x0102);
-        let open = SessionOpen {
-            sent_ns: 5,
-            public: client.public(),
-        };
+        let open = SessionOpen::new(5, client.public(), "c0ffee");
         let grant = SessionGrant {
             session,
             public: bridge.public(),

@@ -40,7 +40,8 @@ own key (see ``crates/motion-bridge/README.md``); give this client its credentia
 The wire contract (``crates/motion-bridge/README.md``, "The network contract"): payloads are
 the ``motion-ipc`` structs in their C layout, little-endian, ``sizeof`` bytes; published
 samples and replies carry a 16-byte attachment, the server's node id; a session opening sends
-41 bytes (version 3, CLOCK_MONOTONIC at sending, u64 ns, the client's X25519 public key) and
+73 bytes (version 3, CLOCK_MONOTONIC at sending, u64 ns, the client's X25519 public key, its
+zenoh id as zenoh prints it, zero-padded to 32 bytes: the session ends with that transport) and
 gets 49 (version 3, the session id u128, the bridge's X25519 public key); the secret is the
 first 16 bytes of SHA3-256 over ``b"motiond-session-v3"``, the X25519 shared secret, the
 client's key, the bridge's key and the session id (:func:`session_secret`); a command query
@@ -504,7 +505,9 @@ class RemoteClient(Client, transport="remote"):
         private = secrets.token_bytes(32)
         x25519 = _x25519()
         public = _raw_public(x25519.X25519PrivateKey.from_private_bytes(private))
-        payload = struct.pack("<BQ", _CONTRACT_VERSION, time.monotonic_ns()) + public
+        # The zenoh id as zenoh prints it: the bridge ends the session with this transport.
+        zid = str(self._session.zid()).encode("ascii")[:32].ljust(32, b"\0")
+        payload = struct.pack("<BQ", _CONTRACT_VERSION, time.monotonic_ns()) + public + zid
         try:
             replies = self._session.get(key, payload=payload, timeout=timeout, express=True)
             answer = next(iter(replies), None)

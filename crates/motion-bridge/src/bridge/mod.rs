@@ -83,6 +83,8 @@ pub(crate) enum Event {
     Remote { key: String, alive: bool },
     /// An e-stop waits on its own path (`intake.rs`).
     Estop,
+    /// A transport to a remote peer (its zenoh id) opened or closed.
+    Transport { zid: String, alive: bool },
 }
 
 /// The newest sample of a service, as received and as bytes for the network.
@@ -123,6 +125,8 @@ pub struct Bridge {
     net: Net,
     events: Receiver<Event>,
     intake: Arc<Intake>,
+    /// The zenoh ids of the remotes connected to the bridge itself.
+    transports: std::collections::HashSet<String>,
     tick_pending: Arc<AtomicBool>,
     ticker_stop: Arc<AtomicBool>,
     ticker: Option<std::thread::JoinHandle<()>>,
@@ -204,6 +208,7 @@ impl Bridge {
             net,
             events,
             intake,
+            transports: std::collections::HashSet::new(),
             tick_pending,
             ticker_stop,
             ticker: Some(ticker),
@@ -265,6 +270,7 @@ impl Bridge {
             }
             Event::Remote { key, alive } => self.on_remote(&key, alive),
             Event::Estop => self.take_estops(),
+            Event::Transport { zid, alive } => self.on_transport(zid, alive),
         }
     }
 
@@ -502,6 +508,27 @@ impl Bridge {
                     }
                 ),
             ),
+        }
+    }
+
+    /// A transport to the remote `zid` opened or closed: the sessions opened through it end
+    /// with it (a copy of their liveliness keys does not keep them).
+    fn on_transport(&mut self, zid: String, alive: bool) {
+        if alive {
+            self.transports.insert(zid);
+            return;
+        }
+        self.transports.remove(&zid);
+        let requests = self.policy.transport_gone(&zid);
+        if !requests.is_empty() {
+            tracing::info!(
+                %zid,
+                stops_and_releases = requests.len(),
+                "a remote's transport closed: its sessions end"
+            );
+        }
+        for request in requests {
+            self.queue.push_own(request);
         }
     }
 

@@ -137,6 +137,7 @@ pub(crate) struct Net {
     pub(crate) json: Publisher<'static>,
     _queryables: Vec<Queryable<()>>,
     _remotes: Subscriber<()>,
+    _transports: zenoh::session::TransportEventsListener<()>,
     _token: LivelinessToken,
 }
 
@@ -227,6 +228,21 @@ impl Net {
             })
             .wait()
             .map_err(|error| BridgeError::zenoh("watch remote clients' liveliness", error))?;
+        // Which remotes are connected to the bridge itself: a session opened through one of
+        // these transports ends when it closes.
+        let transport_events = events.clone();
+        let transports = session
+            .info()
+            .transport_events_listener()
+            .history(true)
+            .callback(move |event| {
+                let _ = transport_events.send(Event::Transport {
+                    zid: event.transport().zid().to_string(),
+                    alive: event.kind() == SampleKind::Put,
+                });
+            })
+            .wait()
+            .map_err(|error| BridgeError::zenoh("watch the transports of remotes", error))?;
         let token = session
             .liveliness()
             .declare_token(keys.bridge_token())
@@ -240,6 +256,7 @@ impl Net {
             json,
             _queryables: queryables,
             _remotes: remotes,
+            _transports: transports,
             _token: token,
         })
     }

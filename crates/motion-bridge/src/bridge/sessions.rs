@@ -96,6 +96,14 @@ impl Bridge {
         };
         match outcome {
             Ok(grant) => {
+                // Bound to the client's own transport when it is connected to the bridge
+                // directly (behind a router, its liveliness token alone says it is there).
+                if let Some(zid) = open.zid()
+                    && self.transports.contains(zid)
+                {
+                    self.policy.bind_transport(grant.session, zid);
+                    tracing::debug!(%identity, session = %grant.session, %zid, "session bound to its transport");
+                }
                 tracing::debug!(%identity, session = %grant.session, "session opened");
                 if let Err(error) = query
                     .reply(query.key_expr().clone(), grant.encode().to_vec())

@@ -39,6 +39,9 @@ pub(super) struct SessionState {
     entry: String,
     /// Its secret: the key of its requests' MACs.
     pub(super) token: SessionToken,
+    /// The zenoh id of the transport it was opened through, when the bridge saw that
+    /// transport: the session ends when it closes.
+    transport: Option<String>,
     /// The highest request counter seen, and which of the [`REPLAY_WINDOW`] below it were.
     highest: Option<u64>,
     window: Vec<u64>,
@@ -186,6 +189,7 @@ impl Sessions {
                 identity: identity.to_owned(),
                 entry: entry.to_owned(),
                 token,
+                transport: None,
                 highest: None,
                 window: Vec::new(),
                 id,
@@ -242,6 +246,25 @@ impl Sessions {
             Some(_) => Lookup::OtherIdentity,
             None => Lookup::Unknown,
         }
+    }
+
+    /// Binds session `id` to the transport of zenoh id `zid`.
+    pub(super) fn bind(&mut self, id: SessionId, zid: &str) {
+        if let Some(state) = self.by_id.get_mut(&id) {
+            state.transport = Some(zid.to_owned());
+        }
+    }
+
+    /// The sessions (identity, id) bound to the transport of `zid`.
+    pub(super) fn bound_to(&self, zid: &str) -> Vec<(String, SessionId)> {
+        let mut sessions: Vec<(String, SessionId)> = self
+            .by_id
+            .values()
+            .filter(|state| state.transport.as_deref() == Some(zid))
+            .map(|state| (state.identity.clone(), state.id))
+            .collect();
+        sessions.sort_unstable_by_key(|(_, id)| *id);
+        sessions
     }
 
     /// The liveliness token of `identity`'s session `id` appeared.

@@ -49,10 +49,7 @@ fn open(
     now: Duration,
     sent: Duration,
 ) -> Result<(), (Refusal, String)> {
-    let open = SessionOpen {
-        sent_ns: sent.as_nanos() as u64,
-        public: [9; 32],
-    };
+    let open = SessionOpen::new(sent.as_nanos() as u64, [9; 32], "");
     policy.open_session(now, &remote.identity, open, remote.session, token(remote))
 }
 
@@ -870,4 +867,45 @@ fn a_command_someone_else_saw_cannot_be_replayed_or_altered() {
         &jog,
         DEADMAN
     )));
+}
+
+#[test]
+fn a_session_bound_to_its_transport_ends_with_it() {
+    let mut policy = Policy::new(vec![rule("*", &["all"], 1000.0, 1000.0)], None);
+    let alice = remote("alice", 1);
+    let bob = remote("bob", 2);
+    open(&mut policy, &alice, ms(0), ms(0)).expect("opened");
+    open(&mut policy, &bob, ms(0), ms(0)).expect("opened");
+    policy.bind_transport(alice.session, "a1");
+    policy.bind_transport(bob.session, "b2");
+    let claim = request(CommandKind::Claim, 0);
+    assert!(forwarded(&admit(&mut policy, &alice, ms(1), &claim)));
+    accept(&mut policy, &alice, &claim);
+    let jog = request(CommandKind::Velocity, 1);
+    assert!(forwarded(&admit(&mut policy, &alice, ms(1), &jog)));
+    accept(&mut policy, &alice, &jog);
+    // Alice's liveliness key stays declared (a copy of another peer's); her transport closes.
+    policy.session_live("alice", alice.session);
+    assert!(policy.transport_gone("zz").is_empty(), "nobody's transport");
+    let sent = policy.transport_gone("a1");
+    let kinds: Vec<_> = sent
+        .iter()
+        .map(|r| (r.kind().expect("a kind"), r.axis))
+        .collect();
+    assert_eq!(kinds, [(CommandKind::Stop, 1), (CommandKind::Release, 0)]);
+    assert_eq!(policy.holder(motion_ipc::Target::Axis, 0), None);
+    // Her session is gone (a request of it names none); Bob's goes on.
+    assert_eq!(policy.session_count(), 1);
+    assert!(matches!(
+        judge(
+            &mut policy,
+            ms(2),
+            "alice",
+            meta(&alice, ms(2)),
+            &jog,
+            DEADMAN
+        ),
+        Verdict::Refuse(Refusal::NoSession, _)
+    ));
+    assert!(forwarded(&admit(&mut policy, &bob, ms(2), &jog)));
 }
