@@ -702,4 +702,8 @@ impl Bucket {
 }
 
 #[cfg(test)]
+mod test_support;
+#[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_sessions;
