@@ -259,3 +259,39 @@ def test_groups_say_they_need_shared_memory(panel: RemoteClient) -> None:
     # The frames a remote client reads carry the groups' states all the same.
     frame = panel.latest()
     assert frame.group_count == len(panel.info.groups[: panel.info.group_count])
+
+
+def test_request_meta_is_the_documented_mac() -> None:
+    # The same bytes motion-wire's keys::tests pins (GOLDEN_MAC): HMAC-SHA3-256 keyed by the
+    # session's secret, the first 16 bytes.
+    from motiond.remote import request_meta
+
+    meta = request_meta(bytes([7] * 16), "panel", bytes(range(64)), 0x0102, 5, 1000)
+    assert len(meta) == 49 and meta[0] == 3
+    assert meta[1:3] == b"\x02\x01" and meta[17:25] == (5).to_bytes(8, "little")
+    assert meta[33:].hex() == "e761b1d15721ac41efb5c765052e2456"
+    # The secret itself is nowhere in it.
+    assert bytes([7] * 16) not in meta
+    assert request_meta(None, "panel", bytes(64), 0, 0, 9)[33:] == bytes(16)
+
+
+def test_session_secret_is_agreed_not_sent() -> None:
+    # motion-wire's keys::tests (GOLDEN_SECRET): the client's key of bytes 1..32, the bridge's
+    # of 33..64, session 0x0102.
+    from cryptography.hazmat.primitives import serialization
+    from cryptography.hazmat.primitives.asymmetric import x25519
+
+    from motiond.remote import session_secret
+
+    def public(private: bytes) -> bytes:
+        key = x25519.X25519PrivateKey.from_private_bytes(private)
+        return key.public_key().public_bytes(
+            serialization.Encoding.Raw, serialization.PublicFormat.Raw
+        )
+
+    client, bridge = bytes(range(1, 33)), bytes(range(33, 65))
+    secret = session_secret(client, public(client), public(bridge), 0x0102)
+    assert secret.hex() == "8b426f0d029361820a9f12a653f823b0"
+    assert session_secret(bridge, public(client), public(bridge), 0x0102) == secret
+    with pytest.raises(ValueError):
+        session_secret(bridge, bytes(32), public(bridge), 0x0102)

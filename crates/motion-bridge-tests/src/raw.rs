@@ -3,7 +3,9 @@
 use core::time::Duration;
 
 use motion_client::ipc::{CommandReply, CommandRequest};
-use motion_wire::keys::{Keys, Origin, RequestMeta, SessionGrant, SessionOpen};
+use motion_wire::keys::{
+    KeyPair, Keys, Origin, RequestMeta, SessionGrant, SessionId, SessionOpen, SessionToken,
+};
 use motion_wire::wire;
 use zenoh::Wait as _;
 
@@ -20,6 +22,43 @@ impl<T> Z<T> for zenoh::Result<T> {
     }
 }
 
+/// What a request's attachment is made of: a session's secret and id (made up, or a
+/// grant's) and the send time; [`Sign::meta`] makes the MAC for the request it goes with,
+/// as a client does (a fresh counter each time).
+#[derive(Debug, Clone, Copy)]
+pub struct Sign {
+    pub token: SessionToken,
+    pub session: SessionId,
+    pub sent_ns: u64,
+}
+
+/// The tests' request counters: rising, never one twice.
+static COUNTER: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+
+impl Sign {
+    /// Requests of the session `grant` opened, sent at `sent_ns`.
+    pub fn of(grant: &Granted, sent_ns: u64) -> Self {
+        Self {
+            token: grant.token,
+            session: grant.session,
+            sent_ns,
+        }
+    }
+
+    /// The attachment of `payload` sent under `identity`.
+    pub fn meta(&self, identity: &str, payload: &[u8]) -> RequestMeta {
+        let counter = COUNTER.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        RequestMeta::sign(
+            self.token,
+            identity,
+            payload,
+            self.session,
+            counter,
+            self.sent_ns,
+        )
+    }
+}
+
 pub fn session(endpoint: &str) -> Result<zenoh::Session> {
     let mut config = zenoh::Config::default();
     config.insert_json5("mode", "\"client\"").z()?;
@@ -32,17 +71,34 @@ pub fn session(endpoint: &str) -> Result<zenoh::Session> {
     zenoh::open(config).wait().z()
 }
 
+/// A session the bridge opened: its public id and the secret both sides agreed on.
+#[derive(Debug, Clone, Copy)]
+pub struct Granted {
+    pub session: SessionId,
+    pub token: SessionToken,
+}
+
+/// The tests' session keys: a new one for every opening (not random: a counter, hashed by
+/// X25519 itself; these are tests).
+static KEYS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+
 /// Opens a session as `identity`, its query sent at `sent_ns` on the remote's clock: the
-/// grant, or the refusal's text.
+/// session, or the refusal's text.
 pub fn open_session(
     session: &zenoh::Session,
     keys: &Keys,
     identity: &str,
     sent_ns: u64,
-) -> Result<core::result::Result<SessionGrant, String>> {
+) -> Result<core::result::Result<Granted, String>> {
+    let mut random = [0x5a; 32];
+    let n = KEYS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    random[..8].copy_from_slice(&n.to_le_bytes());
+    random[8..16].copy_from_slice(&u64::from(std::process::id()).to_le_bytes());
+    let pair = KeyPair::from_random(random);
+    let open = SessionOpen::new(sent_ns, pair.public(), &session.zid().to_string());
     let replies = session
         .get(keys.session(identity))
-        .payload(SessionOpen { sent_ns }.encode().to_vec())
+        .payload(open.encode().to_vec())
         .timeout(Duration::from_secs(5))
         .wait()
         .z()?;
@@ -51,27 +107,37 @@ pub fn open_session(
         .z()?
         .ok_or("no answer to a session opening")?;
     Ok(match reply.result() {
-        Ok(sample) => Ok(SessionGrant::decode(&sample.payload().to_bytes())
-            .ok_or("a session grant of the wrong size")?),
+        Ok(sample) => {
+            let grant = SessionGrant::decode(&sample.payload().to_bytes())
+                .ok_or("a session grant of the wrong size")?;
+            let token = pair
+                .agree(open.public, grant.public, grant.session)
+                .ok_or("no secret agreed")?;
+            Ok(Granted {
+                session: grant.session,
+                token,
+            })
+        }
         Err(error) => Err(error.payload().try_to_string()?.into_owned()),
     })
 }
 
-/// Sends `request` as `identity` with `meta` (none: no attachment); the reply's payload or
-/// the refusal's text.
+/// Sends `request` as `identity` with an attachment signed as `sign` says (none: no
+/// attachment); the reply's payload or the refusal's text.
 pub fn command(
     session: &zenoh::Session,
     keys: &Keys,
     identity: &str,
     request: &CommandRequest,
-    meta: Option<RequestMeta>,
+    sign: Option<Sign>,
 ) -> Result<core::result::Result<(CommandReply, Origin), String>> {
+    let payload = wire::encode(request);
     let mut get = session
         .get(keys.command(identity))
-        .payload(wire::encode(request))
+        .payload(payload.clone())
         .timeout(Duration::from_secs(5));
-    if let Some(meta) = meta {
-        get = get.attachment(meta.encode());
+    if let Some(sign) = sign {
+        get = get.attachment(sign.meta(identity, &payload).encode());
     }
     let replies = get.wait().z()?;
     let reply = replies

@@ -250,6 +250,17 @@ impl Rig {
     /// `netns.server` when given (the remote then reaches the bridge across the veth pair),
     /// else on this host, listening on loopback.
     pub fn start(binaries: &Binaries, netns: Option<&Netns>) -> Result<Self> {
+        Self::start_with(binaries, netns, RULES, "operator")
+    }
+
+    /// [`Rig::start`] with the bridge's `rules` (a `bridge.toml`); `identity` is one the
+    /// rules let read and list (the rig waits until it can).
+    pub fn start_with(
+        binaries: &Binaries,
+        netns: Option<&Netns>,
+        rules: &str,
+        identity: &str,
+    ) -> Result<Self> {
         let turn = ONE_AT_A_TIME
             .lock()
             .unwrap_or_else(std::sync::PoisonError::into_inner);
@@ -261,7 +272,7 @@ impl Rig {
         ))?;
         let config = sim.replacen("name = \"demo\"", &format!("name = \"{name}\""), 1);
         std::fs::write(dir.join("sim.toml"), config)?;
-        std::fs::write(dir.join("bridge.toml"), RULES)?;
+        std::fs::write(dir.join("bridge.toml"), rules)?;
         let server_ns = netns.map(|ns| ns.server.as_str());
         let logs = dir.clone();
         let log = move |file: &str| -> Result<Stdio> {
@@ -310,7 +321,7 @@ impl Rig {
         rig.bridge = Some(bridge);
         let until = Instant::now() + DEADLINE;
         loop {
-            let output = rig.remote("operator", &["list", "--json"])?;
+            let output = rig.remote(identity, &["list", "--json"])?;
             if output.status.success() {
                 break;
             }

@@ -11,6 +11,7 @@ use iceoryx2::prelude::ipc;
 use motion_bridge_tests::{BridgeThread, DEADLINE, Result, fake, scratch};
 use motion_client::ipc::CommandKind;
 use motion_client::{Client, ClientBuilder, ClientError, ConnectError};
+use zenoh::Wait as _;
 
 /// The bridge's allow-list: both identities may move; zenoh decides who may use which.
 const RULES: &str = r#"
@@ -24,7 +25,8 @@ allow = ["all"]
 "#;
 
 /// The bridge's zenoh config: users from `credentials.txt`, and rules that let each user
-/// read everything and command only as itself.
+/// read (subscribe and query: never put, never answer queries) and command only as itself;
+/// `reader` may only read.
 fn bridge_zenoh_config(server: &str, dir: &Path) -> String {
     let credentials = dir.join("credentials.txt");
     format!(
@@ -41,9 +43,18 @@ fn bridge_zenoh_config(server: &str, dir: &Path) -> String {
       {{
         id: "read",
         permission: "allow",
-        flows: ["ingress", "egress"],
-        messages: ["put", "declare_subscriber", "query", "reply", "declare_queryable",
-                   "liveliness_token", "declare_liveliness_subscriber", "liveliness_query"],
+        flows: ["ingress"],
+        messages: ["declare_subscriber", "query", "declare_liveliness_subscriber",
+                   "liveliness_query"],
+        key_exprs: ["motiond/{server}/frame", "motiond/{server}/info", "motiond/{server}/stats",
+                    "motiond/{server}/params", "motiond/{server}/state/json",
+                    "motiond/{server}/bridge"],
+      }},
+      {{
+        id: "read-delivered",
+        permission: "allow",
+        flows: ["egress"],
+        messages: ["put", "reply", "liveliness_token"],
         key_exprs: ["motiond/{server}/frame", "motiond/{server}/info", "motiond/{server}/stats",
                     "motiond/{server}/params", "motiond/{server}/state/json",
                     "motiond/{server}/bridge"],
@@ -51,27 +62,36 @@ fn bridge_zenoh_config(server: &str, dir: &Path) -> String {
       {{
         id: "as-panel",
         permission: "allow",
-        flows: ["ingress", "egress"],
-        messages: ["query", "reply", "liveliness_token"],
+        flows: ["ingress"],
+        messages: ["query", "liveliness_token"],
         key_exprs: ["motiond/{server}/command/panel", "motiond/{server}/session/panel",
                     "motiond/{server}/remote/panel/*"],
       }},
       {{
         id: "as-visitor",
         permission: "allow",
-        flows: ["ingress", "egress"],
-        messages: ["query", "reply", "liveliness_token"],
+        flows: ["ingress"],
+        messages: ["query", "liveliness_token"],
         key_exprs: ["motiond/{server}/command/visitor", "motiond/{server}/session/visitor",
                     "motiond/{server}/remote/visitor/*"],
+      }},
+      {{
+        id: "answers",
+        permission: "allow",
+        flows: ["egress"],
+        messages: ["reply"],
+        key_exprs: ["motiond/{server}/command/*", "motiond/{server}/session/*"],
       }},
     ],
     subjects: [
       {{ id: "panel", usernames: ["panel"] }},
       {{ id: "visitor", usernames: ["visitor"] }},
+      {{ id: "reader", usernames: ["reader"] }},
     ],
     policies: [
-      {{ rules: ["read", "as-panel"], subjects: ["panel"] }},
-      {{ rules: ["read", "as-visitor"], subjects: ["visitor"] }},
+      {{ rules: ["read", "read-delivered", "as-panel", "answers"], subjects: ["panel"] }},
+      {{ rules: ["read", "read-delivered", "as-visitor", "answers"], subjects: ["visitor"] }},
+      {{ rules: ["read", "read-delivered"], subjects: ["reader"] }},
     ],
   }},
 }}"#,
@@ -177,6 +197,112 @@ fn only_the_authenticated_user_commands_under_its_identity() -> Result {
             Ok(_) => return Err(format!("connected with {login:?}").into()),
         }
     }
+    drop(bridge);
+    let _ = std::fs::remove_dir_all(&dir);
+    Ok(())
+}
+
+/// A raw zenoh session logged in as `user` (a foreign peer), connected to `endpoint`.
+fn raw_session(dir: &Path, endpoint: &str, user: &str, password: &str) -> Result<zenoh::Session> {
+    let login = client_zenoh_config(dir, user, password)?;
+    let mut config = zenoh::Config::from_file(&login).map_err(|error| error.to_string())?;
+    for (key, value) in [
+        ("mode", "\"client\"".to_owned()),
+        ("scouting/multicast/enabled", "false".to_owned()),
+        ("connect/endpoints", format!("[\"{endpoint}\"]")),
+    ] {
+        config
+            .insert_json5(key, &value)
+            .map_err(|error| error.to_string())?;
+    }
+    Ok(zenoh::open(config)
+        .wait()
+        .map_err(|error| error.to_string())?)
+}
+
+/// The README's access control for a user who may only read: it subscribes and queries,
+/// but a frame it puts on the frame key, or an answer it offers on the description's key,
+/// never reaches another remote (zenoh's access control drops them at the bridge).
+#[test]
+fn a_reader_may_subscribe_and_query_but_not_put_or_answer() -> Result {
+    let server = fake("bridge-acl-reader")?;
+    let dir = scratch("bridge-acl-reader")?;
+    std::fs::write(
+        dir.join("credentials.txt"),
+        "panel:panel-secret\nvisitor:visitor-secret\nreader:reader-secret\n",
+    )?;
+    let zenoh = dir.join("bridge-zenoh.json5");
+    std::fs::write(&zenoh, bridge_zenoh_config(server.name(), &dir))?;
+    let bridge = BridgeThread::start_with(server.name(), RULES, Some(zenoh))?;
+    let endpoint = bridge.endpoint.as_str();
+    let keys = motion_wire::keys::Keys::new(server.name())?;
+
+    // The panel, reading frames as a foreign peer would.
+    let panel = raw_session(&dir, endpoint, "panel", "panel-secret")?;
+    let frames = panel
+        .declare_subscriber(keys.frame())
+        .with(zenoh::handlers::FifoChannel::new(4096))
+        .wait()
+        .map_err(|error| error.to_string())?;
+
+    // The reader reads: the description through the bridge.
+    let reader = raw_session(&dir, endpoint, "reader", "reader-secret")?;
+    motion_bridge_tests::raw::wait_for_server(&reader, &keys)?;
+    // ... and tries to write: a forged frame on the frame key, an answer on the
+    // description's key.
+    let forged = b"forged: estop latched".to_vec();
+    let forged_reply = forged.clone();
+    let info_key = keys.info();
+    let _queryable = reader
+        .declare_queryable(&info_key)
+        .callback(move |query| {
+            let _ = query
+                .reply(query.key_expr().clone(), forged_reply.clone())
+                .wait();
+        })
+        .wait()
+        .map_err(|error| error.to_string())?;
+    for _ in 0..20 {
+        reader
+            .put(keys.frame(), forged.clone())
+            .wait()
+            .map_err(|error| error.to_string())?;
+        std::thread::sleep(Duration::from_millis(25));
+    }
+    std::thread::sleep(Duration::from_millis(300));
+    let mut real = 0;
+    let mut fakes = 0;
+    while let Ok(Some(sample)) = frames.try_recv() {
+        if sample.payload().to_bytes() == forged.as_slice() {
+            fakes += 1;
+        } else {
+            real += 1;
+        }
+    }
+    let replies = panel
+        .get(&info_key)
+        .timeout(Duration::from_secs(2))
+        .wait()
+        .map_err(|error| error.to_string())?;
+    let mut answers = Vec::new();
+    while let Ok(reply) = replies.recv() {
+        if let Ok(sample) = reply.result() {
+            answers.push(sample.payload().to_bytes().into_owned());
+        }
+    }
+    eprintln!(
+        "the panel got {real} frames of the bridge and {fakes} of the reader's 20 puts; {} \
+         answers on the description's key, {} of them the reader's",
+        answers.len(),
+        answers.iter().filter(|answer| **answer == forged).count()
+    );
+    assert!(real > 0, "the panel reads the bridge's frames");
+    assert_eq!(fakes, 0, "a reader's put reached another remote");
+    assert!(!answers.is_empty(), "the bridge answers the description");
+    assert!(
+        answers.iter().all(|answer| *answer != forged),
+        "a reader's queryable answered another remote"
+    );
     drop(bridge);
     let _ = std::fs::remove_dir_all(&dir);
     Ok(())

@@ -1,8 +1,8 @@
-//! The bridge under abuse, as a process sees it through zenoh: a flood of new sessions does
-//! not lock out an e-stop, identities made up under `*` share the wildcard's rate, a
-//! session is the bridge's to give (an id read from a liveliness key, or a token sent under
-//! another identity, commands nothing), time stamps are judged for every session, and a
-//! wide allow-list without zenoh authentication needs `--insecure`.
+//! The bridge under abuse, as a process sees it through zenoh: one identity's flood of new
+//! sessions takes only its share of the table and does not lock out an e-stop, identities
+//! made up under `*` share the wildcard's rate, a flood of bad tokens writes a bounded log,
+//! and a wide allow-list without zenoh authentication needs `--insecure`. (Sessions that
+//! cannot be taken over: `sessions.rs`.)
 
 use core::time::Duration;
 use std::path::Path;
@@ -12,14 +12,13 @@ use std::time::Instant;
 use motion_bridge::Bridge;
 use motion_bridge::config::{BridgeConfig, Overrides};
 use motion_bridge::policy::MAX_SESSIONS;
-use motion_bridge_tests::raw::{Z as _, command, open_session, session, wait_for_server};
+use motion_bridge_tests::raw::{Sign, Z as _, command, open_session, session, wait_for_server};
 use motion_bridge_tests::real;
 use motion_bridge_tests::{
     BridgeThread, DEADLINE, Result, eventually, fake, free_port, remote, scratch,
 };
-use motion_client::ClientError;
 use motion_client::ipc::{ClientId, CommandKind, CommandRequest};
-use motion_wire::keys::{Keys, Refusal, RequestMeta, SessionToken};
+use motion_wire::keys::{Keys, SessionId, SessionToken};
 use motion_wire::wire;
 use zenoh::Wait as _;
 
@@ -34,7 +33,7 @@ fn clock_ns(start: Instant, shift: Duration) -> u64 {
 fn send_all(
     session: &zenoh::Session,
     keys: &Keys,
-    requests: &[(String, CommandRequest, Option<RequestMeta>)],
+    requests: &[(String, CommandRequest, Option<Sign>)],
 ) -> Result<Vec<core::result::Result<(), String>>> {
     let mut answers = Vec::with_capacity(requests.len());
     for wave in requests.chunks(128) {
@@ -45,7 +44,7 @@ fn send_all(
                 .payload(wire::encode(request))
                 .timeout(DEADLINE);
             if let Some(meta) = meta {
-                get = get.attachment(meta.encode());
+                get = get.attachment(meta.meta(identity, &wire::encode(request)).encode());
             }
             pending.push(get.wait().z()?);
         }
@@ -66,7 +65,7 @@ fn made_up(n: u128) -> SessionToken {
 }
 
 #[test]
-fn after_a_flood_of_new_sessions_a_new_sessions_estop_latches() -> Result {
+fn one_identity_cannot_pin_the_session_table_and_an_estop_latches() -> Result {
     let server = fake("hard-flood")?;
     let rules = r#"
 [[remote]]
@@ -90,8 +89,9 @@ allow = ["all"]
     let stops: Vec<_> = (0..1100u128)
         .map(|n| {
             let stop = CommandRequest::new(ClientId::NONE, n as u64, 0, CommandKind::Stop);
-            let meta = RequestMeta {
+            let meta = Sign {
                 token: made_up(n),
+                session: SessionId(n + 1),
                 sent_ns: clock_ns(start, Duration::ZERO),
             };
             ("flood".to_owned(), stop, Some(meta))
@@ -105,7 +105,8 @@ allow = ["all"]
         &refused[..refused.len().min(3)]
     );
 
-    // Then 1100 sessions really opened: the table fills, the rest are told `busy`.
+    // Then 1100 sessions really opened: `flood` fills its share of the table (half of it:
+    // two entries get sessions), the rest are told `busy`.
     let mut opened = 0;
     let mut busy = 0;
     for _ in 0..1100 {
@@ -116,15 +117,13 @@ allow = ["all"]
         }
     }
     eprintln!("1100 stops under made-up sessions forwarded; {opened} sessions opened, {busy} busy");
-    assert_eq!((opened, busy), (MAX_SESSIONS, 1100 - MAX_SESSIONS));
+    let share = MAX_SESSIONS / 2;
+    assert_eq!((opened, busy), (share, 1100 - share));
 
-    // A new remote now gets no session, so a goal is refused as busy — but its e-stop is
+    // Another identity still gets a session of its own share, and commands; its e-stop is
     // accepted and latches.
     let operator = remote(server.name(), &bridge.endpoint, "operator")?;
-    match operator.axis("x")?.velocity(1.0) {
-        Err(ClientError::BridgeRefused { code: "busy", .. }) => {}
-        other => return Err(format!("a jog without a session: {other:?}").into()),
-    }
+    operator.axis("x")?.velocity(1.0)?;
     assert!(!server.estop_latched());
     operator.estop()?;
     eventually("the e-stop latched", || Ok(server.estop_latched()))?;
@@ -175,10 +174,7 @@ burst = {burst}
             }
             Err(text) => return Err(format!("unexpected refusal: {text}").into()),
         };
-        let meta = RequestMeta {
-            token: grant.token,
-            sent_ns: clock_ns(start, Duration::ZERO),
-        };
+        let meta = Sign::of(&grant, clock_ns(start, Duration::ZERO));
         match command(&zenoh, &keys, &identity, &jog, Some(meta))? {
             Ok(_) => forwarded += 1,
             Err(text) if text.starts_with("rate-limited: ") => {
@@ -211,121 +207,9 @@ burst = {burst}
     );
     // A named identity keeps its own bucket.
     let panel = open_session(&zenoh, &keys, "panel", clock_ns(start, Duration::ZERO))??;
-    let meta = RequestMeta {
-        token: panel.token,
-        sent_ns: clock_ns(start, Duration::ZERO),
-    };
+    let meta = Sign::of(&panel, clock_ns(start, Duration::ZERO));
     command(&zenoh, &keys, "panel", &jog, Some(meta))?
         .map_err(|text| format!("panel's own bucket: {text}"))?;
-    Ok(())
-}
-
-#[test]
-fn a_session_read_from_a_liveliness_key_or_copied_from_another_remote_is_refused() -> Result {
-    let server = fake("hard-session")?;
-    let rules = r#"
-[[remote]]
-identity = "operator"
-allow = ["all"]
-
-[[remote]]
-identity = "intruder"
-allow = ["all"]
-"#;
-    let bridge = BridgeThread::start(server.name(), rules)?;
-    let keys = Keys::new(server.name())?;
-    // The victim: a client that claims axis x.
-    let victim = remote(server.name(), &bridge.endpoint, "operator")?;
-    victim.wait_ready(DEADLINE)?;
-    let _claim = victim.axis("x")?.claim_guard()?;
-
-    // The attacker reads the victim's liveliness key, as anyone may.
-    let attacker = session(&bridge.endpoint)?;
-    let tokens = attacker
-        .liveliness()
-        .get(keys.remote_tokens())
-        .timeout(Duration::from_secs(5))
-        .wait()
-        .z()?;
-    let mut seen = Vec::new();
-    while let Ok(reply) = tokens.recv() {
-        if let Ok(sample) = reply.result()
-            && let Some((identity, id)) = keys.remote_of(sample.key_expr().as_str())
-        {
-            seen.push((identity, id));
-        }
-    }
-    let [(identity, public_id)] = &seen[..] else {
-        return Err(format!("one remote token expected: {seen:?}").into());
-    };
-    assert_eq!(identity, "operator");
-
-    let start = Instant::now();
-    // The attacker's clock: 100 s since it booted.
-    let now = || clock_ns(start, Duration::from_secs(100));
-    let jog = CommandRequest::new(ClientId::NONE, 7, 0, CommandKind::Velocity)
-        .with_values([5.0, 0.0, 0.0]);
-    let no_session = |answer: core::result::Result<_, String>, what: &str| -> Result {
-        match answer {
-            Err(text) if Refusal::parse(&text).map(|r| r.0) == Some(Refusal::NoSession) => Ok(()),
-            other => Err(format!("{what}: {other:?}").into()),
-        }
-    };
-    // The public id as the token, under the victim's identity: no session.
-    let from_key = RequestMeta {
-        token: SessionToken(public_id.0.to_le_bytes()),
-        sent_ns: now(),
-    };
-    no_session(
-        command(&attacker, &keys, "operator", &jog, Some(from_key))?,
-        "the id of a liveliness key",
-    )?;
-    // A session of the attacker's own identity, its attachment sent under the victim's
-    // identity — and a session of `operator` (opened by the attacker) sent under `intruder`.
-    let own = open_session(&attacker, &keys, "intruder", now())??;
-    let other = open_session(&attacker, &keys, "operator", now())??;
-    for (identity, token) in [("operator", own.token), ("intruder", other.token)] {
-        let meta = RequestMeta {
-            token,
-            sent_ns: now(),
-        };
-        match command(&attacker, &keys, identity, &jog, Some(meta))? {
-            Err(text) => assert!(
-                text.starts_with("no-session: ") && text.contains("another identity"),
-                "{text}"
-            ),
-            Ok(reply) => return Err(format!("a copied session commanded: {reply:?}").into()),
-        }
-    }
-    // A session's own first request, stamped 2 s before it opened, or 10 s ahead of its
-    // clock: judged against the bridge's clock, not taken as the session's new normal.
-    for (shift, what) in [(-2.0, "an old stamp"), (10.0, "a stamp from the future")] {
-        let opened = open_session(&attacker, &keys, "intruder", now())??;
-        let sent = (now() as f64 + shift * 1e9) as u64;
-        let meta = RequestMeta {
-            token: opened.token,
-            sent_ns: sent,
-        };
-        match command(&attacker, &keys, "intruder", &jog, Some(meta))? {
-            Err(text) if text.starts_with("late: ") => {}
-            other => return Err(format!("{what}: {other:?}").into()),
-        }
-    }
-    let velocities = |server: &motion_client::testing::FakeServer| {
-        server
-            .requests()
-            .iter()
-            .filter(|r| r.kind == CommandKind::Velocity as u32)
-            .count()
-    };
-    assert_eq!(
-        velocities(&server),
-        0,
-        "the server never saw the attacker's jogs"
-    );
-    // The victim's own session goes on commanding its axis.
-    victim.axis("x")?.velocity(1.0)?;
-    assert_eq!(velocities(&server), 1);
     Ok(())
 }
 
@@ -416,5 +300,148 @@ fn the_binary_needs_insecure(binary: &Path, wide: &Path, endpoint: &str) -> Resu
     let output = real::finish(child, DEADLINE)?;
     let stderr = String::from_utf8_lossy(&output.stderr);
     assert!(still_running && stderr.contains("--insecure"), "{stderr}");
+    Ok(())
+}
+
+/// The `motion-bridge` binary under 8 000 commands a second with tokens nobody was given,
+/// for 3 s: its log gets the first refusal whole and one summary with the count (at the end
+/// of each 10 s period, or at exit), not a line per refusal.
+#[test]
+fn a_flood_of_bad_tokens_writes_a_bounded_log() -> Result {
+    let Some(binary) = real::binary("motion-bridge", "MOTION_BRIDGE_BIN") else {
+        eprintln!(
+            "SKIPPED a_flood_of_bad_tokens_writes_a_bounded_log: no motion-bridge beside this \
+             test (`cargo build -p motion-bridge`, or ./scripts/test, builds it; or set \
+             MOTION_BRIDGE_BIN)"
+        );
+        return Ok(());
+    };
+    let server = fake("hard-log")?;
+    let dir = scratch("hard-log")?;
+    let rules = dir.join("rules.toml");
+    std::fs::write(
+        &rules,
+        "[[remote]]\nidentity = \"panel\"\nallow = [\"all\"]\nrate = 1000000\nburst = 1000000\n",
+    )?;
+    let endpoint = format!("tcp/127.0.0.1:{}", free_port()?);
+    let child = Command::new(binary)
+        .args([
+            "--server",
+            server.name(),
+            "--listen",
+            &endpoint,
+            "--insecure",
+            "--config",
+        ])
+        .arg(&rules)
+        .env("RUST_LOG", "info,zenoh=warn")
+        .stdin(Stdio::null())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()?;
+    let pid = nix::unistd::Pid::from_raw(i32::try_from(child.id())?);
+    let keys = Keys::new(server.name())?;
+    let until = Instant::now() + DEADLINE;
+    let zenoh = loop {
+        match session(&endpoint) {
+            Ok(zenoh) => break zenoh,
+            Err(_) if Instant::now() < until => std::thread::sleep(Duration::from_millis(100)),
+            Err(error) => return Err(format!("the bridge never listened: {error}").into()),
+        }
+    };
+    wait_for_server(&zenoh, &keys)?;
+    let no_session = std::sync::Arc::new(std::sync::atomic::AtomicU64::new(0));
+    let jog = CommandRequest::new(ClientId::NONE, 1, 0, CommandKind::Velocity)
+        .with_values([1.0, 0.0, 0.0]);
+    let start = Instant::now();
+    let mut sent = 0u64;
+    for period in 0..300u32 {
+        for n in 0..80u32 {
+            let made = u128::from(period * 80 + n);
+            let meta = Sign {
+                token: made_up(made),
+                session: SessionId(made + 1),
+                sent_ns: clock_ns(start, Duration::ZERO),
+            }
+            .meta("panel", &wire::encode(&jog));
+            let counted = std::sync::Arc::clone(&no_session);
+            zenoh
+                .get(keys.command("panel"))
+                .payload(wire::encode(&jog))
+                .attachment(meta.encode())
+                .timeout(Duration::from_secs(10))
+                .callback(move |reply| {
+                    if let Err(error) = reply.result()
+                        && error.payload().to_bytes().starts_with(b"no-session: ")
+                    {
+                        counted.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    }
+                })
+                .wait()
+                .z()?;
+            sent += 1;
+        }
+        let next = Duration::from_millis(10) * (period + 1);
+        if let Some(left) = next.checked_sub(start.elapsed()) {
+            std::thread::sleep(left);
+        }
+    }
+    let rate = sent as f64 / start.elapsed().as_secs_f64();
+    // Until the answers stop coming (past its queue, the bridge drops a refused query
+    // unanswered; zenoh ends it without a reply).
+    let mut last = u64::MAX;
+    let until = Instant::now() + DEADLINE;
+    while Instant::now() < until {
+        let now = no_session.load(std::sync::atomic::Ordering::Relaxed);
+        if now == last {
+            break;
+        }
+        last = now;
+        std::thread::sleep(Duration::from_millis(500));
+    }
+    nix::sys::signal::kill(pid, nix::sys::signal::Signal::SIGTERM)?;
+    let output = real::finish(child, DEADLINE)?;
+    let log = String::from_utf8_lossy(&output.stderr);
+    let refused: Vec<&str> = log
+        .lines()
+        .filter(|line| line.contains(": refused "))
+        .collect();
+    let answered = no_session.load(std::sync::atomic::Ordering::Relaxed);
+    let summed: u64 = refused
+        .iter()
+        .filter_map(|line| {
+            line.split("refused ")
+                .nth(1)?
+                .split(" more")
+                .next()?
+                .parse::<u64>()
+                .ok()
+        })
+        .sum();
+    eprintln!(
+        "{sent} jogs with made-up tokens at {rate:.0}/s, {answered} answered `no-session`: {} \
+         log lines about refusals, {} bytes of log in all:\n{}",
+        refused.len(),
+        log.len(),
+        refused.join("\n")
+    );
+    // Per 10 s period the flood (and the wait for its answers) lasted, the first refusal
+    // whole and one summary; however many refusals.
+    let periods = start.elapsed().as_secs() / 10 + 1;
+    assert!(
+        refused.len() >= 2 && refused.len() as u64 <= 2 * periods,
+        "{} lines about refusals in {periods} periods:\n{log}",
+        refused.len()
+    );
+    let firsts = refused
+        .iter()
+        .filter(|line| line.contains("the first"))
+        .count() as u64;
+    assert!(
+        summed + firsts >= answered,
+        "the summaries count {summed} refusals beside {firsts} logged whole, {answered} were \
+         answered"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
     Ok(())
 }

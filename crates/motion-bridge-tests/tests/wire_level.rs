@@ -5,10 +5,10 @@
 use core::time::Duration;
 use std::time::Instant;
 
-use motion_bridge_tests::raw::{Z as _, command, open_session, session};
+use motion_bridge_tests::raw::{Granted, Sign, Z as _, command, open_session, session};
 use motion_bridge_tests::{BridgeThread, DEADLINE, Result, fake};
 use motion_client::ipc::{ClientId, CommandKind, CommandRequest, MotionFrame, Reason, ServerInfo};
-use motion_wire::keys::{Keys, Origin, Refusal, RequestMeta, SessionGrant};
+use motion_wire::keys::{Keys, Origin, Refusal};
 use motion_wire::wire;
 use zenoh::Wait as _;
 
@@ -105,10 +105,7 @@ fn malformed_late_and_too_frequent_requests_are_refused_by_the_bridge() -> Resul
     let tool_again = open_session(&session, &keys, "tool", ns(clock()))??;
     let slow = open_session(&session, &keys, "slow", ns(clock()))??;
     assert_ne!(tool.token, tool_again.token, "every opening its own secret");
-    let meta = |grant: &SessionGrant, sent: Duration| RequestMeta {
-        token: grant.token,
-        sent_ns: ns(sent),
-    };
+    let meta = |grant: &Granted, sent: Duration| Sign::of(grant, ns(sent));
     let stop = CommandRequest::new(ClientId::NONE, 1, 0, CommandKind::Stop);
     let position = CommandRequest::new(ClientId::NONE, 1, 0, CommandKind::Position)
         .with_values([1.0, 0.0, 0.0]);
@@ -127,7 +124,7 @@ fn malformed_late_and_too_frequent_requests_are_refused_by_the_bridge() -> Resul
     let replies = session
         .get(keys.command("tool"))
         .payload(vec![1u8, 2, 3])
-        .attachment(meta(&tool, clock()).encode())
+        .attachment(meta(&tool, clock()).meta("tool", &[1, 2, 3]).encode())
         .wait()
         .z()?;
     let reply = replies.recv_timeout(DEADLINE).z()?.ok_or("no reply")?;
@@ -147,7 +144,11 @@ fn malformed_late_and_too_frequent_requests_are_refused_by_the_bridge() -> Resul
     let replies = session
         .get(format!("motiond/{}/command", server.name()))
         .payload(wire::encode(&stop))
-        .attachment(meta(&tool, clock()).encode())
+        .attachment(
+            meta(&tool, clock())
+                .meta("anonymous", &wire::encode(&stop))
+                .encode(),
+        )
         .wait()
         .z()?;
     let reply = replies.recv_timeout(DEADLINE).z()?.ok_or("no reply")?;

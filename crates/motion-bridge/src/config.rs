@@ -16,6 +16,8 @@
 //! allow = ["stop", "estop", "move", "jog"]
 //! rate = 200                       # requests per second, sustained
 //! burst = 100                      # requests at once above that
+//! stop_burst = 1000                # stops at once above `rate` (their own bucket)
+//! # sessions = 512                 # sessions open at once (default: an equal share of 1024)
 //! ```
 
 use core::time::Duration;
@@ -24,7 +26,9 @@ use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
-use crate::policy::{DEFAULT_BURST, DEFAULT_RATE, KindSet, RemoteRule};
+use crate::policy::{
+    DEFAULT_BURST, DEFAULT_RATE, DEFAULT_STOP_BURST, KindSet, MAX_SESSIONS, RemoteRule,
+};
 use motion_wire::keys::{DEFAULT_PORT, check_chunk};
 
 /// Default frames per second.
@@ -61,6 +65,8 @@ struct RawRemote {
     allow: Vec<String>,
     rate: Option<f64>,
     burst: Option<f64>,
+    stop_burst: Option<f64>,
+    sessions: Option<usize>,
 }
 
 /// What the command line gives (each `None` / empty: the file's value, else the default).
@@ -262,6 +268,7 @@ impl BridgeConfig {
 fn remotes(raw: Vec<RawRemote>, issues: &mut Vec<String>) -> Vec<RemoteRule> {
     let mut seen = HashSet::new();
     let mut rules = Vec::new();
+    let mut shares = Vec::new();
     for (index, remote) in raw.into_iter().enumerate() {
         let at = format!("remote[{index}]");
         if remote.identity != "*"
@@ -297,14 +304,59 @@ fn remotes(raw: Vec<RawRemote>, issues: &mut Vec<String>) -> Vec<RemoteRule> {
         };
         let rate = positive("rate", remote.rate, DEFAULT_RATE, f64::MIN_POSITIVE);
         let burst = positive("burst", remote.burst, DEFAULT_BURST, 1.0);
+        let stop_burst = positive("stop_burst", remote.stop_burst, DEFAULT_STOP_BURST, 1.0);
+        if let Some(sessions) = remote.sessions
+            && !(1..=MAX_SESSIONS).contains(&sessions)
+        {
+            issues.push(format!(
+                "{at}.sessions: {sessions} must be 1 to {MAX_SESSIONS} (the bridge's table)"
+            ));
+        }
+        shares.push(remote.sessions);
         rules.push(RemoteRule {
             identity: remote.identity,
             allow,
             rate,
             burst,
+            stop_burst,
+            sessions: 0,
         });
     }
+    share_sessions(&mut rules, &shares, issues);
     rules
+}
+
+/// Each entry's share of the session table: its `sessions`, or an equal part of what the
+/// others leave among the entries that get sessions (those that allow more than stop and
+/// e-stop) and name none. The shares together fit in [`MAX_SESSIONS`].
+fn share_sessions(rules: &mut [RemoteRule], shares: &[Option<usize>], issues: &mut Vec<String>) {
+    let given: usize = shares.iter().flatten().sum();
+    if given > MAX_SESSIONS {
+        issues.push(format!(
+            "remote[].sessions: together {given}, more than the bridge's {MAX_SESSIONS}"
+        ));
+        return;
+    }
+    let open = rules
+        .iter()
+        .zip(shares)
+        .filter(|(rule, share)| share.is_none() && rule.allows_more_than_safety())
+        .count();
+    let each = (MAX_SESSIONS - given).checked_div(open).unwrap_or(0);
+    if open > 0 && each == 0 {
+        issues.push(format!(
+            "remote[].sessions: the entries that name one take all {MAX_SESSIONS}, none is left \
+             for the {open} that do not"
+        ));
+    }
+    for (rule, share) in rules.iter_mut().zip(shares) {
+        rule.sessions = match share {
+            Some(share) => *share,
+            None if rule.allows_more_than_safety() => each,
+            // Stop and e-stop only: no session (it needs none).
+            None => 0,
+        };
+    }
 }
 
 #[cfg(test)]
@@ -331,6 +383,7 @@ mod tests {
             allow = ["stop", "estop", "move"]
             rate = 20
             burst = 5
+            stop_burst = 50
 
             [[remote]]
             identity = "*"
@@ -350,8 +403,18 @@ mod tests {
         assert!(panel.allow.contains(CommandKind::EStop));
         assert!(panel.allow.contains(CommandKind::RampPosition));
         assert!(!panel.allow.contains(CommandKind::Velocity));
-        assert_eq!((panel.rate, panel.burst), (20.0, 5.0));
+        assert_eq!(
+            (panel.rate, panel.burst, panel.stop_burst),
+            (20.0, 5.0, 50.0)
+        );
         assert_eq!(config.remotes[1].rate, DEFAULT_RATE);
+        assert_eq!(config.remotes[1].stop_burst, DEFAULT_STOP_BURST);
+        // The panel, the only entry that gets sessions, has the whole table; `*` (stop
+        // only) none.
+        assert_eq!(
+            (panel.sessions, config.remotes[1].sessions),
+            (MAX_SESSIONS, 0)
+        );
 
         let defaults = BridgeConfig::load(None, Overrides::default())?;
         assert_eq!(defaults.server, "demo");
@@ -399,6 +462,7 @@ mod tests {
             identity = "pa*nel"
             allow = []
             burst = 0.5
+            stop_burst = 0
             "#,
         )
         .expect_err("invalid");
@@ -413,6 +477,7 @@ mod tests {
             "remote[0].rate",
             "remote[1].identity: `pa*nel` has a [[remote]] entry already",
             "remote[1].burst",
+            "remote[1].stop_burst",
         ] {
             assert!(text.contains(part), "missing {part:?} in {text}");
         }
@@ -431,5 +496,51 @@ mod tests {
             .expect_err("allow missing")
             .to_string();
         assert!(text.contains("allow"), "{text}");
+    }
+
+    #[test]
+    fn the_session_table_is_shared_between_entries() -> Result<(), ConfigError> {
+        let config = parse(
+            r#"
+            [[remote]]
+            identity = "panel"
+            allow = ["all"]
+            sessions = 24
+            [[remote]]
+            identity = "tablet"
+            allow = ["move"]
+            [[remote]]
+            identity = "*"
+            allow = ["jog"]
+            [[remote]]
+            identity = "viewer"
+            allow = ["stop"]
+            "#,
+        )?;
+        let shares: Vec<usize> = config.remotes.iter().map(|rule| rule.sessions).collect();
+        assert_eq!(shares, [24, 500, 500, 0]);
+        let error = parse(
+            r#"
+            [[remote]]
+            identity = "a"
+            allow = ["all"]
+            sessions = 1000
+            [[remote]]
+            identity = "b"
+            allow = ["all"]
+            sessions = 100
+            "#,
+        )
+        .expect_err("more than the table")
+        .to_string();
+        assert!(error.contains("together 1100"), "{error}");
+        let error = parse("[[remote]]\nidentity = \"a\"\nallow = [\"all\"]\nsessions = 0\n")
+            .expect_err("no session")
+            .to_string();
+        assert!(
+            error.contains("remote[0].sessions: 0 must be 1 to 1024"),
+            "{error}"
+        );
+        Ok(())
     }
 }

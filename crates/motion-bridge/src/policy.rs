@@ -2,8 +2,10 @@
 //! of each remote identity, its rate limit, the sessions the bridge opened and the lateness
 //! of their requests, and claims per remote.
 //!
-//! Stop and e-stop need nothing but the allow-list: no session, no state of their own, no
-//! lateness or rate check — they are forwarded however many sessions are open. Every other
+//! Stop and e-stop need nothing but the allow-list here: no session, no lateness check —
+//! they are forwarded however many sessions are open. Where a query arrives, before it waits
+//! anywhere, the [`Gate`] sends an e-stop on its own path and holds stops to a rate of their
+//! own per entry (`stop_burst`). Every other
 //! command needs a session the bridge opened for the identity it is sent under (its secret
 //! token in the attachment), arrives within the window on that session's clock, and fits
 //! the rate of its `[[remote]]` entry: one bucket per entry, so every identity that falls
@@ -27,10 +29,12 @@ use motion_ipc::{
 
 use motion_wire::keys::{Refusal, RequestMeta, SessionId, SessionOpen, SessionToken};
 
+mod gate;
 mod session;
 
+pub use gate::{Early, Gate};
 pub use session::MAX_SESSIONS;
-use session::{Lookup, Sessions, Timing};
+use session::{Full, Lookup, Sessions, Timing};
 
 /// A set of command kinds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -98,9 +102,10 @@ impl KindSet {
     }
 }
 
-/// Kinds that only ever make a machine safer (stop, e-stop): never refused as late or over
-/// the rate limit (they still need the allow-list), never held back by claims. `off` is not
-/// one of them: a de-energised vertical axis falls.
+/// Kinds that only ever make a machine safer (stop, e-stop): never refused as late or for
+/// want of a session, never held back by claims (they still need the allow-list; stops have
+/// a rate of their own, the [`Gate`]'s). `off` is not one of them: a de-energised vertical
+/// axis falls.
 pub const fn is_safety(kind: CommandKind) -> bool {
     matches!(kind, CommandKind::Stop | CommandKind::EStop)
 }
@@ -127,12 +132,20 @@ pub struct RemoteRule {
     pub rate: f64,
     /// Requests it may send at once above the sustained rate.
     pub burst: f64,
+    /// Stops it may send at once above `rate`: stops have a bucket of their own per entry
+    /// (a remote that spent its requests on goals may still stop), refilled at `rate`.
+    pub stop_burst: f64,
+    /// Sessions the entry may hold open at once (all its identities together, for `*`):
+    /// its share of the bridge's [`MAX_SESSIONS`].
+    pub sessions: usize,
 }
 
 /// Default `rate`: requests per second a remote may sustain.
 pub const DEFAULT_RATE: f64 = 200.0;
 /// Default `burst`.
 pub const DEFAULT_BURST: f64 = 100.0;
+/// Default `stop_burst`: generous, a panel stopping every axis many times over.
+pub const DEFAULT_STOP_BURST: f64 = 1000.0;
 
 /// The lateness window when neither the config nor the server gives one (a server without
 /// a deadman).
@@ -205,10 +218,7 @@ impl Policy {
 
     /// The rule of `identity`: its own, else the `*` rule.
     pub fn rule(&self, identity: &str) -> Option<&RemoteRule> {
-        self.rules
-            .iter()
-            .find(|rule| rule.identity == identity)
-            .or_else(|| self.rules.iter().find(|rule| rule.identity == "*"))
+        rule_of(&self.rules, identity)
     }
 
     /// Opens a session for `identity` as `open` asks, received at `now`, under the id and
@@ -231,22 +241,37 @@ impl Policy {
                 format!("remote `{identity}` may send only stop and e-stop, which need no session"),
             ));
         }
-        let (key, rate, burst) = (rule.identity.clone(), rule.rate, rule.burst);
+        let (key, rate, burst, share) =
+            (rule.identity.clone(), rule.rate, rule.burst, rule.sessions);
         if !self.take_token(now, &key, rate, burst) {
             return Err(rate_limited(identity, &key, rate, burst));
         }
-        if self.sessions.open(now, identity, open.sent_ns, id, token) {
-            Ok(())
-        } else if self.sessions.len() >= MAX_SESSIONS {
-            Err((
+        match self
+            .sessions
+            .open(now, identity, &key, share, open.sent_ns, id, token)
+        {
+            Ok(()) => Ok(()),
+            Err(Full::Share) => Err((
+                Refusal::Busy,
+                format!(
+                    "{} {share} sessions open already, its share of the bridge's \
+                     {MAX_SESSIONS} (`sessions` of its [[remote]] entry; stop and e-stop still \
+                     pass without one)",
+                    if key == identity {
+                        format!("remote `{identity}` has its")
+                    } else {
+                        format!("the identities under `{key}` (here `{identity}`) have their")
+                    }
+                ),
+            )),
+            Err(Full::Table) => Err((
                 Refusal::Busy,
                 format!(
                     "the bridge has {MAX_SESSIONS} remote sessions open already (stop and \
                      e-stop still pass without one)"
                 ),
-            ))
-        } else {
-            Err((Refusal::Busy, "the session id drawn is taken".to_owned()))
+            )),
+            Err(Full::Taken) => Err((Refusal::Busy, "the session id drawn is taken".to_owned())),
         }
     }
 
@@ -266,8 +291,14 @@ impl Policy {
         self.sessions.len()
     }
 
-    /// Judges `request` sent under `identity` with `meta` (`None`: no readable attachment),
-    /// received at `now` (the bridge's monotonic clock). `deadman` is the server's
+    /// Sessions open now under the `[[remote]]` entry `entry` (its `identity`, or `*`).
+    pub fn sessions_of_entry(&self, entry: &str) -> usize {
+        self.sessions.of_entry(entry)
+    }
+
+    /// Judges `request` (`signed`: its payload's bytes as received, which the MAC of `meta`
+    /// covers) sent under `identity` with `meta` (`None`: no readable attachment), received
+    /// at `now` (the bridge's monotonic clock). `deadman` is the server's
     /// `command_timeout_ms` (the lateness window when the config sets none).
     pub fn admit(
         &mut self,
@@ -275,6 +306,7 @@ impl Policy {
         identity: &str,
         meta: Option<RequestMeta>,
         request: &CommandRequest,
+        signed: &[u8],
         deadman: Duration,
     ) -> Verdict {
         if request.schema_version != SCHEMA_VERSION {
@@ -291,29 +323,34 @@ impl Policy {
             return Verdict::Refuse(refusal, text);
         };
         if !rule.allow.contains(kind) {
-            let allowed = rule.allow.names();
-            return Verdict::Refuse(
-                Refusal::NotAllowed,
-                format!(
-                    "`{}` is not allowed for remote `{identity}` by the bridge's config \
-                     (allowed: {})",
-                    kind.name(),
-                    if allowed.is_empty() {
-                        "nothing".to_owned()
-                    } else {
-                        allowed.join(", ")
-                    }
-                ),
-            );
+            let (refusal, text) = not_allowed(kind, identity, rule);
+            return Verdict::Refuse(refusal, text);
         }
         let (key, rate, burst) = (rule.identity.clone(), rule.rate, rule.burst);
         let window = match self.max_delay.unwrap_or(deadman) {
             Duration::ZERO => FALLBACK_MAX_DELAY,
             window => window,
         };
-        let token = meta.map_or(SessionToken::NONE, |meta| meta.token);
-        let session = match self.sessions.find(identity, token) {
-            Lookup::Found(state) => state,
+        let id = meta.map_or(SessionId(0), |meta| meta.session);
+        let session = match self.sessions.find(identity, id) {
+            Lookup::Found(state)
+                if meta.is_some_and(|meta| meta.verify(state.token, identity, signed)) =>
+            {
+                state
+            }
+            // Stop and e-stop: nothing more to judge and nothing to keep — never late,
+            // never held back by claims.
+            _ if is_safety(kind) => return Verdict::Forward(cleared(request), None),
+            Lookup::Found(_) => {
+                return Verdict::Refuse(
+                    Refusal::NoSession,
+                    format!(
+                        "the attachment's MAC is not that of `{}` under `{identity}` with the \
+                         secret of the session it names: not sent by that session's client",
+                        kind.name()
+                    ),
+                );
+            }
             // Stop and e-stop: nothing more to judge and nothing to keep — never late,
             // never over the rate, never held back by claims.
             _ if is_safety(kind) => return Verdict::Forward(cleared(request), None),
@@ -342,6 +379,20 @@ impl Policy {
             identity: identity.to_owned(),
             session: session.id,
         };
+        let counter = meta.map_or(0, |meta| meta.counter);
+        if !session.fresh(counter) {
+            if is_safety(kind) {
+                return Verdict::Forward(cleared(request), None);
+            }
+            return Verdict::Refuse(
+                Refusal::Late,
+                format!(
+                    "{} carries request counter {counter} of its session, seen already (or \
+                     far below the newest): a replay, not applied",
+                    kind.name()
+                ),
+            );
+        }
         if is_safety(kind) {
             return Verdict::Forward(cleared(request), Some(remote));
         }
@@ -476,6 +527,24 @@ impl Policy {
         }
     }
 
+    /// Session `id` was opened through the transport of zenoh id `zid` (a remote connected
+    /// to the bridge directly): it ends when that transport closes
+    /// ([`Policy::transport_gone`]), whatever liveliness tokens name it — a copy of its key
+    /// declared by another peer does not keep it.
+    pub fn bind_transport(&mut self, id: SessionId, zid: &str) {
+        self.sessions.bind(id, zid);
+    }
+
+    /// The transport of zenoh id `zid` closed: every session bound to it ends, as in
+    /// [`Policy::session_gone`]; what the bridge sends for them.
+    pub fn transport_gone(&mut self, zid: &str) -> Vec<CommandRequest> {
+        let mut requests = Vec::new();
+        for (identity, id) in self.sessions.bound_to(zid) {
+            requests.extend(self.session_gone(&identity, id));
+        }
+        requests
+    }
+
     /// A remote session ended (its liveliness token went away): what the bridge sends for
     /// it — a stop of every axis whose deadman goal it started and nobody replaced, and a
     /// release of every claim it held. Returns them as requests (client zero).
@@ -563,6 +632,30 @@ impl Policy {
     }
 }
 
+/// The rule of `identity` among `rules`: its own, else the `*` rule.
+fn rule_of<'r>(rules: &'r [RemoteRule], identity: &str) -> Option<&'r RemoteRule> {
+    rules
+        .iter()
+        .find(|rule| rule.identity == identity)
+        .or_else(|| rules.iter().find(|rule| rule.identity == "*"))
+}
+
+fn not_allowed(kind: CommandKind, identity: &str, rule: &RemoteRule) -> (Refusal, String) {
+    let allowed = rule.allow.names();
+    (
+        Refusal::NotAllowed,
+        format!(
+            "`{}` is not allowed for remote `{identity}` by the bridge's config (allowed: {})",
+            kind.name(),
+            if allowed.is_empty() {
+                "nothing".to_owned()
+            } else {
+                allowed.join(", ")
+            }
+        ),
+    )
+}
+
 /// `request` as the bridge forwards it: its `client` cleared (the server takes the
 /// bridge's node).
 fn cleared(request: &CommandRequest) -> CommandRequest {
@@ -609,4 +702,8 @@ impl Bucket {
 }
 
 #[cfg(test)]
+mod test_support;
+#[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_sessions;

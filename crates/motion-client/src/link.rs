@@ -10,7 +10,7 @@ use std::time::Instant;
 
 use motion_ipc::{CommandKind, CommandReply, CommandRequest};
 use motion_wire::keys::{
-    Keys, Origin, Refusal, RequestMeta, SessionGrant, SessionOpen, SessionToken,
+    KeyPair, Keys, Origin, Refusal, RequestMeta, SessionGrant, SessionId, SessionOpen, SessionToken,
 };
 use motion_wire::wire::{self, Payload};
 use zenoh::Wait as _;
@@ -70,9 +70,11 @@ fn owned_remote<T: Payload>(sample: &Sample, server: &str) -> Result<Owned<T>, R
     })
 }
 
-/// The session the bridge opened for this client, and the liveliness token that names it.
+/// The session the bridge opened for this client (its public id, the secret both sides
+/// agreed on), and the liveliness token that names it.
 struct Granted {
-    grant: SessionGrant,
+    session: SessionId,
+    secret: SessionToken,
     _token: LivelinessToken,
 }
 
@@ -87,6 +89,8 @@ pub(crate) struct Link {
     /// `None` until the bridge opened a session (it may refuse: an identity allowed only
     /// stop and e-stop, a full table); stop and e-stop go without one.
     granted: RefCell<Option<Granted>>,
+    /// The last request counter used (every request of a session a new one).
+    counter: core::cell::Cell<u64>,
 }
 
 impl fmt::Debug for Link {
@@ -96,7 +100,7 @@ impl fmt::Debug for Link {
             .field("identity", &self.identity)
             .field(
                 "session",
-                &self.granted.borrow().as_ref().map(|g| g.grant.session),
+                &self.granted.borrow().as_ref().map(|g| g.session),
             )
             .finish_non_exhaustive()
     }
@@ -170,6 +174,7 @@ impl Link {
             server: server.to_owned(),
             epoch: Instant::now(),
             granted: RefCell::new(None),
+            counter: core::cell::Cell::new(0),
         };
         let wait = deadline
             .saturating_duration_since(Instant::now())
@@ -183,9 +188,20 @@ impl Link {
     /// Asks the bridge for a session (waiting up to `timeout`) and declares this client's
     /// liveliness under its public id.
     fn open_session(&self, timeout: Duration) -> Result<(), ClientError> {
-        let open = SessionOpen {
-            sent_ns: self.clock_ns(),
-        };
+        let mut random = [0u8; 32];
+        std::io::Read::read_exact(
+            &mut std::fs::File::open("/dev/urandom").map_err(|error| {
+                RemoteError::zenoh("read /dev/urandom for a session key", error)
+            })?,
+            &mut random,
+        )
+        .map_err(|error| RemoteError::zenoh("read /dev/urandom for a session key", error))?;
+        let keys = KeyPair::from_random(random);
+        let open = SessionOpen::new(
+            self.clock_ns(),
+            keys.public(),
+            &self.session.zid().to_string(),
+        );
         let key = self.keys.session(&self.identity);
         let replies = self
             .session
@@ -226,6 +242,15 @@ impl Link {
                 return Err(refusal("session", &text, timeout));
             }
         };
+        let secret = keys
+            .agree(open.public, grant.public, grant.session)
+            .ok_or_else(|| ClientError::Network {
+                what: "open a session",
+                why: Unanswered::NotA {
+                    key: key.clone(),
+                    payload: "session grant with a usable X25519 key",
+                },
+            })?;
         let token = self
             .session
             .liveliness()
@@ -233,7 +258,8 @@ impl Link {
             .wait()
             .map_err(|error| RemoteError::zenoh("declare this client's liveliness", error))?;
         *self.granted.borrow_mut() = Some(Granted {
-            grant,
+            session: grant.session,
+            secret,
             _token: token,
         });
         Ok(())
@@ -367,20 +393,29 @@ impl Link {
         timeout: Duration,
     ) -> Result<(CommandReply, u128), ClientError> {
         let kind = request.kind().map_or("command", CommandKind::name);
-        let token = self
-            .granted
-            .borrow()
-            .as_ref()
-            .map_or(SessionToken::NONE, |granted| granted.grant.token);
-        let meta = RequestMeta {
-            token,
-            sent_ns: self.clock_ns(),
+        // The session's secret never travels: a MAC made with it over the request does.
+        let payload = wire::encode(request);
+        let sent_ns = self.clock_ns();
+        let meta = match self.granted.borrow().as_ref() {
+            Some(granted) => {
+                let counter = self.counter.get() + 1;
+                self.counter.set(counter);
+                RequestMeta::sign(
+                    granted.secret,
+                    &self.identity,
+                    &payload,
+                    granted.session,
+                    counter,
+                    sent_ns,
+                )
+            }
+            None => RequestMeta::sessionless(sent_ns),
         };
         let key = self.keys.command(&self.identity);
         let replies = self
             .session
             .get(&key)
-            .payload(wire::encode(request))
+            .payload(payload)
             .attachment(meta.encode())
             .timeout(timeout)
             .express(true)

@@ -11,8 +11,10 @@
 //! node id along with every sample and reply) — behaves as over shared memory.
 //!
 //! Session: on connecting the client asks the bridge for a session (`motiond/<name>/session/
-//! <identity>`): a public id, named by this client's zenoh liveliness token, and a secret
-//! token only this client receives, sent with every command. Stop and e-stop go without
+//! <identity>`) with an X25519 key of its own: a public id, named by this client's zenoh
+//! liveliness token, and the bridge's key; both derive the session's secret, which never
+//! travels — every command carries a MAC made with it and a counter
+//! (`motion_wire::keys::RequestMeta`). Stop and e-stop go without
 //! one (an identity allowed only those gets none; a bridge with its session table full
 //! answers `busy` to other commands and still takes them); another command asks again when
 //! the client has none, or once more when the bridge answers `no-session` (it restarted).

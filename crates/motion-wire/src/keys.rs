@@ -15,15 +15,27 @@
 //!
 //! Binary payloads are the `motion-ipc` C layouts, little-endian ([`crate::wire`]).
 //!
-//! A remote's session is the bridge's to give: a client asks `session/<identity>` once and
-//! gets a public [`SessionId`] (for its liveliness token) and a secret [`SessionToken`] that
-//! only the querier receives; every command carries the token. The token is bound to the
-//! identity it was opened for, so a session id read from a liveliness key, or a token sent
-//! under another identity, names no session. Stop and e-stop need no session.
+//! A remote's session is the bridge's to give: a client asks `session/<identity>` once with
+//! an X25519 public key of its own ([`SessionOpen`]) and gets a public [`SessionId`] (for its
+//! liveliness token) and the bridge's public key ([`SessionGrant`]); both sides derive the
+//! session's secret [`SessionToken`] from the two keys ([`KeyPair::agree`]), so it is in no
+//! message. Every command carries the session id, a counter and a MAC made with the secret
+//! over the identity, the request's
+//! bytes and the rest of the attachment ([`RequestMeta`]), so a peer that sees a command
+//! (a queryable of its own on the command keys, a log) learns nothing it can command with,
+//! and a command replayed is refused. The session is bound to the identity it was opened
+//! for, so a session id read from a liveliness key, or a MAC sent under another identity,
+//! commands nothing. Stop and e-stop need no session.
 
 use core::fmt;
 
 use motion_ipc::ServiceNames;
+
+mod session;
+
+pub use session::{
+    CONTRACT_VERSION, KeyPair, RequestMeta, SessionGrant, SessionOpen, SessionToken,
+};
 
 /// The port a bridge listens on by default (zenoh's own).
 pub const DEFAULT_PORT: u16 = 7447;
@@ -217,148 +229,6 @@ impl Origin {
     }
 }
 
-/// The secret of a session: 16 random bytes the bridge hands only to the querier that opened
-/// the session, checked on every command. All zero: no session (stop and e-stop only).
-#[derive(Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub struct SessionToken(pub [u8; 16]);
-
-impl SessionToken {
-    /// No session.
-    pub const NONE: Self = Self([0; 16]);
-
-    /// Whether this is [`SessionToken::NONE`].
-    pub fn is_none(self) -> bool {
-        self == Self::NONE
-    }
-}
-
-impl fmt::Debug for SessionToken {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        // A secret: never in a log.
-        f.write_str(if self.is_none() {
-            "SessionToken(none)"
-        } else {
-            "SessionToken(…)"
-        })
-    }
-}
-
-/// Version byte of [`SessionOpen`], [`SessionGrant`] and [`RequestMeta`].
-const CONTRACT_VERSION: u8 = 2;
-
-/// The payload of a session-opening query on `motiond/<name>/session/<identity>`: version
-/// (u8, 2) and the client's CLOCK_MONOTONIC when it sent the query (u64 LE, ns). 9 bytes.
-/// The bridge judges the session's later time stamps against its own clock from here on.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct SessionOpen {
-    /// The client's monotonic clock at sending, ns.
-    pub sent_ns: u64,
-}
-
-impl SessionOpen {
-    /// Bytes on the wire.
-    pub const SIZE: usize = 9;
-
-    /// The 9 bytes.
-    pub fn encode(self) -> [u8; 9] {
-        let mut out = [0; 9];
-        out[0] = CONTRACT_VERSION;
-        out[1..9].copy_from_slice(&self.sent_ns.to_le_bytes());
-        out
-    }
-
-    /// From the payload; `None` for another size or version.
-    pub fn decode(bytes: &[u8]) -> Option<Self> {
-        let bytes = <&[u8; 9]>::try_from(bytes).ok()?;
-        if bytes[0] != CONTRACT_VERSION {
-            return None;
-        }
-        Some(Self {
-            sent_ns: u64::from_le_bytes(bytes[1..9].try_into().ok()?),
-        })
-    }
-}
-
-/// The bridge's answer to [`SessionOpen`]: version (u8, 2), the public [`SessionId`] (u128
-/// LE) and the secret [`SessionToken`] (16 bytes). 33 bytes.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct SessionGrant {
-    /// The session's public id (the client's liveliness token names it).
-    pub session: SessionId,
-    /// The secret every command of the session carries.
-    pub token: SessionToken,
-}
-
-impl SessionGrant {
-    /// Bytes on the wire.
-    pub const SIZE: usize = 33;
-
-    /// The 33 bytes.
-    pub fn encode(self) -> [u8; 33] {
-        let mut out = [0; 33];
-        out[0] = CONTRACT_VERSION;
-        out[1..17].copy_from_slice(&self.session.0.to_le_bytes());
-        out[17..33].copy_from_slice(&self.token.0);
-        out
-    }
-
-    /// From the reply's payload; `None` for another size or version, or a zero token.
-    pub fn decode(bytes: &[u8]) -> Option<Self> {
-        let bytes = <&[u8; 33]>::try_from(bytes).ok()?;
-        if bytes[0] != CONTRACT_VERSION {
-            return None;
-        }
-        let grant = Self {
-            session: SessionId(u128::from_le_bytes(bytes[1..17].try_into().ok()?)),
-            token: SessionToken(bytes[17..33].try_into().ok()?),
-        };
-        (!grant.token.is_none()).then_some(grant)
-    }
-}
-
-/// The attachment of a command query: version (u8, 2), the session's [`SessionToken`] (16
-/// bytes; zero without a session) and the client's CLOCK_MONOTONIC when it sent the request
-/// (u64 LE, ns). 25 bytes.
-///
-/// The send time is compared with the session's own clock as the bridge learnt it when the
-/// session opened: a request that arrives more than the bridge's `max_delay` later than the
-/// session's fastest (a renewal held up in a network buffer must not restart a jog after the
-/// network came back), or that says it was sent that much (at least 2 s) later than it could
-/// have been, is refused.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct RequestMeta {
-    /// The session's secret ([`SessionToken::NONE`]: no session).
-    pub token: SessionToken,
-    /// The client's monotonic clock at sending, ns.
-    pub sent_ns: u64,
-}
-
-impl RequestMeta {
-    /// Bytes on the wire.
-    pub const SIZE: usize = 25;
-
-    /// The 25 bytes.
-    pub fn encode(self) -> [u8; 25] {
-        let mut out = [0; 25];
-        out[0] = CONTRACT_VERSION;
-        out[1..17].copy_from_slice(&self.token.0);
-        out[17..25].copy_from_slice(&self.sent_ns.to_le_bytes());
-        out
-    }
-
-    /// From the attachment's bytes; `None` for another size or version.
-    pub fn decode(bytes: &[u8]) -> Option<Self> {
-        let bytes = <&[u8; 25]>::try_from(bytes).ok()?;
-        if bytes[0] != CONTRACT_VERSION {
-            return None;
-        }
-        Some(Self {
-            token: SessionToken(bytes[1..17].try_into().ok()?),
-            sent_ns: u64::from_le_bytes(bytes[17..25].try_into().ok()?),
-        })
-    }
-}
-
 /// Why the bridge itself refused a command (the server never saw it). Travels as the error
 /// reply `"<code>: <text>"`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -476,41 +346,9 @@ mod tests {
     }
 
     #[test]
-    fn attachments_round_trip_and_refuse_other_sizes() {
-        let meta = RequestMeta {
-            token: SessionToken([7; 16]),
-            sent_ns: 123_456_789,
-        };
-        let bytes = meta.encode();
-        assert_eq!(bytes[0], 2);
-        assert_eq!(RequestMeta::decode(&bytes), Some(meta));
-        assert_eq!(RequestMeta::decode(&bytes[..24]), None);
-        let mut other = bytes;
-        other[0] = 1;
-        assert_eq!(RequestMeta::decode(&other), None, "the old attachment");
+    fn the_origin_is_16_bytes() {
         assert_eq!(Origin::decode(&Origin(77).encode()), Some(Origin(77)));
         assert_eq!(Origin::decode(&[1, 2, 3]), None);
-
-        let open = SessionOpen { sent_ns: 99 };
-        assert_eq!(SessionOpen::decode(&open.encode()), Some(open));
-        assert_eq!(SessionOpen::decode(&open.encode()[..8]), None);
-        let grant = SessionGrant {
-            session: SessionId(u128::MAX - 1),
-            token: SessionToken([0xa5; 16]),
-        };
-        let bytes = grant.encode();
-        assert_eq!(bytes.len(), SessionGrant::SIZE);
-        assert_eq!(SessionGrant::decode(&bytes), Some(grant));
-        let zero = SessionGrant {
-            token: SessionToken::NONE,
-            ..grant
-        };
-        assert_eq!(SessionGrant::decode(&zero.encode()), None, "no zero token");
-        assert_eq!(
-            format!("{:?}", grant.token),
-            "SessionToken(…)",
-            "never logged"
-        );
     }
 
     #[test]

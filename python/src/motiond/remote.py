@@ -20,8 +20,13 @@ their deadman, parameters, statistics), with these differences:
   :attr:`~RemoteClient.id` is a random id of this client.
 
 A remote's session is the bridge's to give: on connecting the client asks
-``motiond/<name>/session/<identity>`` and gets a public session id (named by its liveliness
-token) and a secret token only it receives; every command carries the token. Stop and e-stop
+``motiond/<name>/session/<identity>`` with an X25519 public key of its own and gets a public
+session id (named by its liveliness token) and the bridge's public key; both sides agree on the
+session's secret from the two keys, so it never travels (needs the ``cryptography`` package,
+part of ``motiond[remote]``). Every command
+carries the session id, a counter and a MAC made with the token (HMAC-SHA3-256) over the
+identity, the request and the rest of the attachment, so a peer that sees a command cannot
+make another, and a command replayed is refused. Stop and e-stop
 need none (an identity that may only stop gets none; a bridge with 1024 sessions open
 refuses new ones, and stop and e-stop still pass); other commands ask again when the client
 has none or the bridge forgot it (it restarted).
@@ -35,15 +40,24 @@ own key (see ``crates/motion-bridge/README.md``); give this client its credentia
 The wire contract (``crates/motion-bridge/README.md``, "The network contract"): payloads are
 the ``motion-ipc`` structs in their C layout, little-endian, ``sizeof`` bytes; published
 samples and replies carry a 16-byte attachment, the server's node id; a session opening sends
-9 bytes (version 2, CLOCK_MONOTONIC at sending, u64 ns) and gets 33 (version 2, the session id
-u128, the 16-byte token); a command query carries 25 bytes: version 2, the token (zero without
-a session), its CLOCK_MONOTONIC at sending (u64 ns).
+73 bytes (version 3, CLOCK_MONOTONIC at sending, u64 ns, the client's X25519 public key, its
+zenoh id as zenoh prints it, zero-padded to 32 bytes: the session ends with that transport) and
+gets 49 (version 3, the session id u128, the bridge's X25519 public key); the secret is the
+first 16 bytes of SHA3-256 over ``b"motiond-session-v3"``, the X25519 shared secret, the
+client's key, the bridge's key and the session id (:func:`session_secret`); a command query
+carries 49 bytes (:func:`request_meta`): version 3,
+the session id (u128, zero without a session), a counter (u64, rising), its CLOCK_MONOTONIC at
+sending (u64 ns) and the MAC: the first 16 bytes of HMAC-SHA3-256 keyed by the token over
+``b"motiond-request-v3"``, the identity's UTF-8 bytes and a zero byte, the request's 64 bytes
+and bytes 1 to 32 of the attachment.
 """
 
 from __future__ import annotations
 
 import collections
 import ctypes
+import hashlib
+import hmac
 import json
 import secrets
 import struct
@@ -80,7 +94,16 @@ from .ipc import (
     to_enum,
 )
 
-__all__ = ["RemoteClient", "ANONYMOUS", "DEFAULT_PORT", "REFUSAL_CODES", "make_zenoh_config", "check_chunk"]
+__all__ = [
+    "RemoteClient",
+    "ANONYMOUS",
+    "DEFAULT_PORT",
+    "REFUSAL_CODES",
+    "make_zenoh_config",
+    "check_chunk",
+    "request_meta",
+    "session_secret",
+]
 
 #: The identity of a client that names none (the bridge's ``motiond/<name>/command``).
 ANONYMOUS = "anonymous"
@@ -100,7 +123,9 @@ REFUSAL_CODES = (
 # Samples a feed keeps when the program does not read them (the oldest go first, as the
 # 32-frame buffer over shared memory).
 _FEED_DEPTH = 32
-_CONTRACT_VERSION = 2
+_CONTRACT_VERSION = 3
+_MAC_DOMAIN = b"motiond-request-v3"
+_SESSION_DOMAIN = b"motiond-session-v3"
 _NO_GROUPS = (
     "groups work over shared memory only for now: a remote client (motion-bridge) cannot "
     "send paths or setpoints; connect with motiond.Client(name) on the server's host"
@@ -147,6 +172,65 @@ def make_zenoh_config(endpoint: str, base: Optional[Union[str, Path]] = None) ->
     except Exception as error:  # zenoh raises its own ZError
         raise errors.ConnectError(f"zenoh config ({base or 'default'}): {error}") from None
     return config
+
+
+def request_meta(
+    token: Optional[bytes], identity: str, request: bytes, session: int, counter: int, sent_ns: int
+) -> bytes:
+    """The 49-byte attachment of a command: version 3, ``session`` (u128), ``counter``
+    (u64), ``sent_ns`` (u64), and the MAC made with the session's ``token`` over the identity,
+    the ``request``'s bytes and the rest of the attachment (all zero without a session:
+    ``token`` ``None``, stop and e-stop only)."""
+    head = struct.pack(
+        "<BQQQQ",
+        _CONTRACT_VERSION,
+        session & 0xFFFF_FFFF_FFFF_FFFF,
+        session >> 64,
+        counter,
+        sent_ns,
+    )
+    if token is None:
+        return head + bytes(16)
+    message = _MAC_DOMAIN + identity.encode() + b"\0" + request + head[1:]
+    return head + hmac.new(token, message, "sha3_256").digest()[:16]
+
+
+def _x25519() -> Any:
+    try:
+        from cryptography.hazmat.primitives.asymmetric import x25519
+    except ImportError as error:
+        raise errors.ConnectError(
+            "a remote client's session needs the cryptography package (X25519): "
+            "pip install 'motiond[remote]'"
+        ) from error
+    return x25519
+
+
+def session_secret(private: bytes, client: bytes, bridge: bytes, session: int) -> bytes:
+    """The session's 16-byte secret, agreed from this side's X25519 ``private`` key (32 raw
+    bytes) and the two public keys, ``client`` and ``bridge`` (one of them this side's):
+    SHA3-256 over ``b"motiond-session-v3"``, the shared secret, ``client``, ``bridge`` and
+    the ``session`` id (u128 LE), its first 16 bytes. Raises ``ValueError`` when the other key
+    is no usable public key."""
+    x25519 = _x25519()
+    key = x25519.X25519PrivateKey.from_private_bytes(private)
+    own = _raw_public(key)
+    theirs = bridge if client == own else client
+    shared = key.exchange(x25519.X25519PublicKey.from_public_bytes(theirs))
+    if shared == bytes(32):
+        raise ValueError("not a usable X25519 public key")
+    digest = hashlib.sha3_256(
+        _SESSION_DOMAIN + shared + client + bridge + session.to_bytes(16, "little")
+    ).digest()
+    return digest[:16]
+
+
+def _raw_public(key: Any) -> bytes:
+    from cryptography.hazmat.primitives import serialization
+
+    return bytes(
+        key.public_key().public_bytes(serialization.Encoding.Raw, serialization.PublicFormat.Raw)
+    )
 
 
 def _origin(sample: Any) -> int:
@@ -294,6 +378,7 @@ class RemoteClient(Client, transport="remote"):
         self._feeds: List[_Feed] = []
         self._grant: Optional[Tuple[int, bytes]] = None
         self._token: Any = None
+        self._counter = 0
         try:
             # Refused (an identity that may only stop, a full table) or unanswered, the
             # client goes on without a session: stop and e-stop need none, and the
@@ -417,7 +502,12 @@ class RemoteClient(Client, transport="remote"):
         client's liveliness under its public id; raises
         :class:`~motiond.errors.BridgeRefused` or :class:`~motiond.errors.RemoteError`."""
         key = f"{self._prefix}/session/{self._identity}"
-        payload = struct.pack("<BQ", _CONTRACT_VERSION, time.monotonic_ns())
+        private = secrets.token_bytes(32)
+        x25519 = _x25519()
+        public = _raw_public(x25519.X25519PrivateKey.from_private_bytes(private))
+        # The zenoh id as zenoh prints it: the bridge ends the session with this transport.
+        zid = str(self._session.zid()).encode("ascii")[:32].ljust(32, b"\0")
+        payload = struct.pack("<BQ", _CONTRACT_VERSION, time.monotonic_ns()) + public + zid
         try:
             replies = self._session.get(key, payload=payload, timeout=timeout, express=True)
             answer = next(iter(replies), None)
@@ -430,13 +520,16 @@ class RemoteClient(Client, transport="remote"):
         if answer.ok is None:
             raise _refusal(kind, _error_text(answer.err), timeout)
         data = answer.ok.payload.to_bytes()
-        if len(data) != 33 or data[0] != _CONTRACT_VERSION or data[17:] == _NO_TOKEN:
+        if len(data) != 49 or data[0] != _CONTRACT_VERSION or data[1:17] == _NO_TOKEN:
             raise RemoteError(
                 "open a session", ValueError(f"a {len(data)}-byte answer is not a session grant")
             )
         low, high = struct.unpack_from("<QQ", data, 1)
         session_id = low | (high << 64)
-        token = bytes(data[17:33])
+        try:
+            token = session_secret(private, public, bytes(data[17:49]), session_id)
+        except ValueError as error:
+            raise RemoteError("open a session", error) from None
         try:
             liveliness = self._session.liveliness().declare_token(
                 f"{self._prefix}/remote/{self._identity}/{session_id:032x}"
@@ -498,14 +591,22 @@ class RemoteClient(Client, transport="remote"):
         typed_kind = to_enum(CommandKind, int(kind))
         request = self._request(index, kind, values, target)
         sequence = int(request.sequence)
-        token = self._grant[1] if self._grant is not None else _NO_TOKEN
-        meta = struct.pack("<B16sQ", _CONTRACT_VERSION, token, time.monotonic_ns())
+        payload = bytes(request)
+        # The session's secret never travels: a MAC made with it over the request does.
+        if self._grant is not None:
+            self._counter += 1
+            session_id, token = self._grant
+            meta = request_meta(
+                token, self._identity, payload, session_id, self._counter, time.monotonic_ns()
+            )
+        else:
+            meta = request_meta(None, self._identity, payload, 0, 0, time.monotonic_ns())
         key = f"{self._prefix}/command/{self._identity}"
         started = time.monotonic()
         try:
             replies = self._session.get(
                 key,
-                payload=bytes(request),
+                payload=payload,
                 attachment=meta,
                 timeout=self._reply_timeout,
                 express=True,

@@ -9,23 +9,25 @@
 //! for every axis still running that remote's jog and releases its claims; on its own exit
 //! it stops every remote jog.
 
+mod commands;
 mod error;
+mod intake;
+mod jobs;
 mod net;
+mod refusals;
 mod server;
 mod sessions;
 
 use core::time::Duration;
-use std::collections::VecDeque;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{Receiver, RecvTimeoutError};
 use std::time::Instant;
 
 use iceoryx2::node::Node;
 use iceoryx2::prelude::SignalHandlingMode;
 use motion_ipc::{
-    ClientId, CommandReply, CommandRequest, MachineParams, MotionFrame, ServerInfo, ServerStats,
-    ServiceNames,
+    ClientId, CommandReply, MachineParams, MotionFrame, ServerInfo, ServerStats, ServiceNames,
 };
 use zenoh::Wait as _;
 use zenoh::query::Query;
@@ -33,11 +35,14 @@ use zenoh::query::Query;
 pub use error::BridgeError;
 pub use net::zenoh_config;
 
+use self::commands::InFlight;
+use self::intake::Intake;
+use self::jobs::Queue;
 use self::net::Net;
-use self::server::{Ipc, Pending, ServerPorts};
+use self::server::{Ipc, ServerPorts};
 use crate::config::BridgeConfig;
-use crate::policy::{Policy, Remote, Verdict, is_safety};
-use motion_wire::keys::{Keys, Origin, Refusal, RequestMeta};
+use crate::policy::Policy;
+use motion_wire::keys::{Keys, Origin, Refusal};
 use motion_wire::wire::{self, Payload};
 
 /// How long the loop sleeps at most between looks at the server.
@@ -46,14 +51,12 @@ const POLL: Duration = Duration::from_millis(5);
 const SILENCE: Duration = Duration::from_secs(1);
 /// How often a missing server is looked for.
 const REOPEN: Duration = Duration::from_millis(250);
-/// Commands waiting for a free request slot of the server; more are refused as busy.
-const MAX_QUEUED: usize = 256;
-/// Stop and e-stop still queue up to here (in order, behind what came before them: a stop
-/// never overtakes the goal it stops).
-const MAX_QUEUED_SAFETY: usize = 4 * MAX_QUEUED;
 /// Remote queries waiting in the loop's channel; more are answered `busy` on zenoh's
-/// thread (a flood never grows the bridge's memory).
+/// thread (a flood never grows the bridge's memory). E-stops do not wait there.
 const MAX_WAITING_QUERIES: usize = 1024;
+/// Events the loop handles between two looks at the server (its samples, replies and
+/// request slots): a flood of queries never keeps it from them.
+const EVENTS_PER_TURN: usize = 64;
 /// How long the bridge's own stops wait for the server when it exits.
 const SHUTDOWN_WAIT: Duration = Duration::from_millis(500);
 
@@ -78,6 +81,10 @@ pub(crate) enum Event {
     Read(Read, Query),
     /// A remote client's liveliness token appeared or went.
     Remote { key: String, alive: bool },
+    /// An e-stop waits on its own path (`intake.rs`).
+    Estop,
+    /// A transport to a remote peer (its zenoh id) opened or closed.
+    Transport { zid: String, alive: bool },
 }
 
 /// The newest sample of a service, as received and as bytes for the network.
@@ -95,21 +102,6 @@ impl<T: Payload + Copy> Cached<T> {
             bytes: wire::encode(value),
         }
     }
-}
-
-/// A command waiting for a request slot, or in flight.
-struct Job {
-    /// The remote's query; `None` for the bridge's own stops and releases.
-    query: Option<Query>,
-    /// Who sent it (`None` for the bridge's own).
-    remote: Option<Remote>,
-    request: CommandRequest,
-}
-
-struct InFlight {
-    job: Job,
-    pending: Pending,
-    deadline: Instant,
 }
 
 /// Counters for the log.
@@ -132,7 +124,9 @@ pub struct Bridge {
     last_frame_at: Instant,
     net: Net,
     events: Receiver<Event>,
-    queued_queries: Arc<AtomicUsize>,
+    intake: Arc<Intake>,
+    /// The zenoh ids of the remotes connected to the bridge itself.
+    transports: std::collections::HashSet<String>,
     tick_pending: Arc<AtomicBool>,
     ticker_stop: Arc<AtomicBool>,
     ticker: Option<std::thread::JoinHandle<()>>,
@@ -144,7 +138,7 @@ pub struct Bridge {
     frame: Option<(Box<MotionFrame>, u128)>,
     next_frame_tick: u64,
     next_json: Instant,
-    queue: VecDeque<Job>,
+    queue: Queue,
     in_flight: Vec<InFlight>,
     counters: Counters,
 }
@@ -170,7 +164,11 @@ impl Bridge {
             SignalHandlingMode::HandleTerminationRequests,
         )?;
         let (sender, events) = std::sync::mpsc::channel();
-        let queued_queries = Arc::new(AtomicUsize::new(0));
+        let now = Instant::now();
+        let intake = Arc::new(
+            Intake::new(keys.clone(), config.remotes.clone(), sender.clone(), now)
+                .map_err(BridgeError::Thread)?,
+        );
         let zenoh = zenoh_config(
             config.zenoh_config.as_deref(),
             "peer",
@@ -178,7 +176,7 @@ impl Bridge {
             &config.connect,
         )?;
         net::check_exposure(&config, &zenoh)?;
-        let net = Net::open(zenoh, &keys, &sender, &queued_queries)?;
+        let net = Net::open(zenoh, &keys, &sender, &intake)?;
         let tick_pending = Arc::new(AtomicBool::new(false));
         let ticker_stop = Arc::new(AtomicBool::new(false));
         let ticker = server::spawn_ticker(
@@ -189,7 +187,6 @@ impl Bridge {
         )
         .map_err(BridgeError::Thread)?;
         let bridge_id = ClientId::from_u128(node.id().value());
-        let now = Instant::now();
         let policy = Policy::new(config.remotes.clone(), config.max_delay);
         tracing::info!(
             server = %config.server,
@@ -210,7 +207,8 @@ impl Bridge {
             last_frame_at: now,
             net,
             events,
-            queued_queries,
+            intake,
+            transports: std::collections::HashSet::new(),
             tick_pending,
             ticker_stop,
             ticker: Some(ticker),
@@ -222,7 +220,7 @@ impl Bridge {
             frame: None,
             next_frame_tick: 0,
             next_json: now,
-            queue: VecDeque::new(),
+            queue: Queue::default(),
             in_flight: Vec::new(),
             counters: Counters::default(),
         })
@@ -241,7 +239,13 @@ impl Bridge {
                 Err(RecvTimeoutError::Timeout) => {}
                 Err(RecvTimeoutError::Disconnected) => break,
             }
-            while let Ok(event) = self.events.try_recv() {
+            for _ in 0..EVENTS_PER_TURN {
+                if self.intake.estop_waiting() {
+                    self.take_estops();
+                }
+                let Ok(event) = self.events.try_recv() else {
+                    break;
+                };
                 self.handle(event);
             }
             self.service();
@@ -253,24 +257,27 @@ impl Bridge {
         match event {
             Event::Tick => self.tick_pending.store(false, Ordering::Release),
             Event::Command(query, received) => {
-                self.queued_queries.fetch_sub(1, Ordering::AcqRel);
+                self.intake.took_one();
                 self.on_command(query, received);
             }
             Event::Open(query, received) => {
-                self.queued_queries.fetch_sub(1, Ordering::AcqRel);
-                self.on_open(&query, received);
+                self.intake.took_one();
+                self.on_open(query, received);
             }
             Event::Read(read, query) => {
-                self.queued_queries.fetch_sub(1, Ordering::AcqRel);
+                self.intake.took_one();
                 self.on_read(read, &query);
             }
             Event::Remote { key, alive } => self.on_remote(&key, alive),
+            Event::Estop => self.take_estops(),
+            Event::Transport { zid, alive } => self.on_transport(zid, alive),
         }
     }
 
     /// Everything that does not wait for an event: the server's samples, publishing,
     /// sending queued commands and passing replies back.
     fn service(&mut self) {
+        self.take_estops();
         let now = Instant::now();
         if self.server.is_none() && now >= self.next_open {
             self.next_open = now + REOPEN;
@@ -287,6 +294,7 @@ impl Bridge {
         self.publish_json(now);
         self.pump();
         self.collect_replies(now);
+        self.intake.flush_log(false);
     }
 
     fn take_samples(&mut self, now: Instant) {
@@ -453,20 +461,7 @@ impl Bridge {
 
     /// Forgets the server's ports; what waited for it is answered `no-server`.
     fn drop_server(&mut self) {
-        for flight in std::mem::take(&mut self.in_flight) {
-            refuse(
-                flight.job.query.as_ref(),
-                Refusal::NoServer,
-                "motiond went away before it answered",
-            );
-        }
-        for job in std::mem::take(&mut self.queue) {
-            refuse(
-                job.query.as_ref(),
-                Refusal::NoServer,
-                "motiond went away before the request was sent",
-            );
-        }
+        self.refuse_all(Refusal::NoServer, "motiond went away before it answered");
         self.server = None;
         self.next_open = Instant::now() + REOPEN;
     }
@@ -477,87 +472,6 @@ impl Bridge {
 
     fn server_node(&self) -> u128 {
         self.info.as_ref().map_or(0, |info| info.origin)
-    }
-
-    fn on_command(&mut self, query: Query, received: Instant) {
-        let key = query.key_expr().as_str().to_owned();
-        let Some(identity) = self.keys.identity_of(&key).map(str::to_owned) else {
-            refuse(
-                Some(&query),
-                Refusal::BadRequest,
-                "not a command key of this bridge",
-            );
-            return;
-        };
-        let request = match query.payload().map(|bytes| bytes.to_bytes()) {
-            Some(bytes) => wire::decode::<CommandRequest>(&bytes),
-            None => {
-                refuse(
-                    Some(&query),
-                    Refusal::BadRequest,
-                    "a command needs a CommandRequest",
-                );
-                return;
-            }
-        };
-        let request = match request {
-            Ok(request) => request,
-            Err(error) => {
-                refuse(Some(&query), Refusal::BadRequest, &error.to_string());
-                return;
-            }
-        };
-        // Stop and e-stop pass without a readable attachment; everything else is refused by
-        // the policy for want of a session.
-        let meta = query
-            .attachment()
-            .and_then(|bytes| RequestMeta::decode(&bytes.to_bytes()));
-        let deadman = self.info.as_ref().map_or(Duration::ZERO, |info| {
-            Duration::from_millis(u64::from(info.value.command_timeout_ms))
-        });
-        let now = received.saturating_duration_since(self.started);
-        match self.policy.admit(now, &identity, meta, &request, deadman) {
-            Verdict::Forward(forwarded, remote) => {
-                if self.server.is_none() {
-                    refuse(
-                        Some(&query),
-                        Refusal::NoServer,
-                        &format!(
-                            "motiond `{}` is not running behind this bridge",
-                            self.config.server
-                        ),
-                    );
-                } else if self.queue.len()
-                    >= if request.kind().is_ok_and(is_safety) {
-                        MAX_QUEUED_SAFETY
-                    } else {
-                        MAX_QUEUED
-                    }
-                {
-                    refuse(
-                        Some(&query),
-                        Refusal::Busy,
-                        "too many commands wait for the server",
-                    );
-                } else {
-                    self.counters.forwarded += 1;
-                    self.queue.push_back(Job {
-                        query: Some(query),
-                        remote,
-                        request: forwarded,
-                    });
-                }
-            }
-            Verdict::Answer(reason) => {
-                let reply = CommandReply::to(&request, reason, self.latest_tick());
-                answer(&query, &reply, self.server_node());
-            }
-            Verdict::Refuse(refusal, text) => {
-                self.counters.refused += 1;
-                tracing::info!(remote = %identity, %refusal, %text, "refused");
-                refuse(Some(&query), refusal, &text);
-            }
-        }
     }
 
     fn on_read(&self, read: Read, query: &Query) {
@@ -597,6 +511,27 @@ impl Bridge {
         }
     }
 
+    /// A transport to the remote `zid` opened or closed: the sessions opened through it end
+    /// with it (a copy of their liveliness keys does not keep them).
+    fn on_transport(&mut self, zid: String, alive: bool) {
+        if alive {
+            self.transports.insert(zid);
+            return;
+        }
+        self.transports.remove(&zid);
+        let requests = self.policy.transport_gone(&zid);
+        if !requests.is_empty() {
+            tracing::info!(
+                %zid,
+                stops_and_releases = requests.len(),
+                "a remote's transport closed: its sessions end"
+            );
+        }
+        for request in requests {
+            self.queue.push_own(request);
+        }
+    }
+
     fn on_remote(&mut self, key: &str, alive: bool) {
         let Some((identity, session)) = self.keys.remote_of(key) else {
             return;
@@ -614,90 +549,7 @@ impl Bridge {
             "remote client gone"
         );
         for request in requests {
-            self.queue.push_back(Job {
-                query: None,
-                remote: None,
-                request,
-            });
-        }
-    }
-
-    /// Sends queued commands while the server has request slots for the bridge.
-    fn pump(&mut self) {
-        let Some(ports) = self.server.as_ref() else {
-            return;
-        };
-        let timeout = self.config.reply_timeout;
-        while self.in_flight.len() < ports.max_in_flight {
-            let Some(job) = self.queue.pop_front() else {
-                break;
-            };
-            match ports.send(job.request) {
-                Ok(Some(pending)) => self.in_flight.push(InFlight {
-                    job,
-                    pending,
-                    deadline: Instant::now() + timeout,
-                }),
-                Ok(None) => refuse(
-                    job.query.as_ref(),
-                    Refusal::NoServer,
-                    "no motiond serves the command service",
-                ),
-                Err(error) => refuse(job.query.as_ref(), Refusal::NoServer, &error.to_string()),
-            }
-        }
-    }
-
-    fn collect_replies(&mut self, now: Instant) {
-        let mut index = 0;
-        while index < self.in_flight.len() {
-            let flight = &self.in_flight[index];
-            let outcome = server::take_reply(&flight.pending);
-            let done = match outcome {
-                Ok(Some((reply, node))) => {
-                    match (&flight.job.remote, &flight.job.query) {
-                        (Some(remote), _) => {
-                            self.policy.on_reply(remote, &flight.job.request, &reply);
-                        }
-                        (None, Some(_)) => {
-                            self.policy
-                                .on_sessionless_reply(&flight.job.request, &reply);
-                        }
-                        (None, None) => {}
-                    }
-                    if let Some(query) = &flight.job.query {
-                        answer(query, &reply, node);
-                    } else if reply.result().is_err() {
-                        tracing::warn!(?reply, "the bridge's own request was refused");
-                    }
-                    true
-                }
-                Ok(None) if now >= flight.deadline => {
-                    refuse(
-                        flight.job.query.as_ref(),
-                        Refusal::NoReply,
-                        &format!(
-                            "motiond did not answer within {:?}",
-                            self.config.reply_timeout
-                        ),
-                    );
-                    true
-                }
-                Ok(None) => false,
-                Err(error) => {
-                    refuse(
-                        flight.job.query.as_ref(),
-                        Refusal::NoServer,
-                        &error.to_string(),
-                    );
-                    true
-                }
-            };
-            if done {
-                self.in_flight.swap_remove(index);
-            } else {
-                index += 1;
-            }
+            self.queue.push_own(request);
         }
     }
 
@@ -708,11 +560,7 @@ impl Bridge {
             tracing::info!(axes = stops.len(), "stopping remote jogs before exiting");
         }
         for request in stops {
-            self.queue.push_back(Job {
-                query: None,
-                remote: None,
-                request,
-            });
+            self.queue.push_own(request);
         }
         let until = Instant::now() + SHUTDOWN_WAIT;
         while (!self.queue.is_empty() || !self.in_flight.is_empty()) && Instant::now() < until {
@@ -720,6 +568,7 @@ impl Bridge {
             self.collect_replies(Instant::now());
             std::thread::sleep(Duration::from_millis(1));
         }
+        self.intake.flush_log(true);
         tracing::info!(
             forwarded = self.counters.forwarded,
             refused = self.counters.refused,

@@ -4,7 +4,6 @@
 
 use std::path::Path;
 use std::sync::Arc;
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::mpsc::Sender;
 use std::time::Instant;
 
@@ -15,31 +14,11 @@ use zenoh::qos::CongestionControl;
 use zenoh::query::Queryable;
 use zenoh::sample::SampleKind;
 
-use super::{BridgeError, Event, MAX_WAITING_QUERIES, Read, refuse};
+use super::intake::Intake;
+use super::{BridgeError, Event, Read};
 use crate::config::BridgeConfig;
 use crate::policy::RemoteRule;
-use motion_wire::keys::{Keys, Refusal};
-
-/// Hands `event` (a query) to the loop, unless too many queries wait already.
-fn hand_over(events: &Sender<Event>, waiting: &AtomicUsize, event: Event) {
-    if waiting.fetch_add(1, Ordering::AcqRel) >= MAX_WAITING_QUERIES {
-        waiting.fetch_sub(1, Ordering::AcqRel);
-        match event {
-            Event::Command(query, _) | Event::Open(query, _) | Event::Read(_, query) => {
-                refuse(
-                    Some(&query),
-                    Refusal::Busy,
-                    "the bridge is overloaded: retry",
-                );
-            }
-            _ => {}
-        }
-        return;
-    }
-    if events.send(event).is_err() {
-        waiting.fetch_sub(1, Ordering::AcqRel);
-    }
-}
+use motion_wire::keys::Keys;
 
 /// zenoh's config for a bridge: the file `base` (TLS, authentication, access control…) if
 /// given, with `mode`, `listen` and `connect` set over it and multicast scouting off (peers
@@ -158,6 +137,7 @@ pub(crate) struct Net {
     pub(crate) json: Publisher<'static>,
     _queryables: Vec<Queryable<()>>,
     _remotes: Subscriber<()>,
+    _transports: zenoh::session::TransportEventsListener<()>,
     _token: LivelinessToken,
 }
 
@@ -170,13 +150,13 @@ impl core::fmt::Debug for Net {
 }
 
 impl Net {
-    /// Opens the session with `config` and declares the bridge's keys; queries and remote
-    /// liveliness go to `events` (`waiting` counts the queries in it).
+    /// Opens the session with `config` and declares the bridge's keys; queries go to
+    /// `intake`, remote liveliness to `events`.
     pub(crate) fn open(
         config: zenoh::Config,
         keys: &Keys,
         events: &Sender<Event>,
-        waiting: &Arc<AtomicUsize>,
+        intake: &Arc<Intake>,
     ) -> Result<Self, BridgeError> {
         let session = zenoh::open(config)
             .wait()
@@ -199,26 +179,21 @@ impl Net {
         let stats = publisher(keys.stats(), false)?;
 
         let mut queryables = Vec::new();
-        let commands = events.clone();
-        let count = Arc::clone(waiting);
+        let commands = Arc::clone(intake);
         queryables.push(
             session
                 .declare_queryable(keys.command_any())
-                .callback(move |query| {
-                    let received = Instant::now();
-                    hand_over(&commands, &count, Event::Command(query, received));
-                })
+                .callback(move |query| commands.command(query))
                 .wait()
                 .map_err(|error| BridgeError::zenoh("declare the command queryable", error))?,
         );
-        let opens = events.clone();
-        let count = Arc::clone(waiting);
+        let opens = Arc::clone(intake);
         queryables.push(
             session
                 .declare_queryable(keys.session_any())
                 .callback(move |query| {
                     let received = Instant::now();
-                    hand_over(&opens, &count, Event::Open(query, received));
+                    opens.hand_over(Event::Open(query, received));
                 })
                 .wait()
                 .map_err(|error| BridgeError::zenoh("declare the session queryable", error))?,
@@ -229,14 +204,11 @@ impl Net {
             (keys.params(), Read::Params),
             (keys.frame(), Read::Frame),
         ] {
-            let reads = events.clone();
-            let count = Arc::clone(waiting);
+            let reads = Arc::clone(intake);
             queryables.push(
                 session
                     .declare_queryable(key.clone())
-                    .callback(move |query| {
-                        hand_over(&reads, &count, Event::Read(read, query));
-                    })
+                    .callback(move |query| reads.hand_over(Event::Read(read, query)))
                     .wait()
                     .map_err(|error| {
                         BridgeError::zenoh(format!("declare a queryable on {key}"), error)
@@ -256,6 +228,21 @@ impl Net {
             })
             .wait()
             .map_err(|error| BridgeError::zenoh("watch remote clients' liveliness", error))?;
+        // Which remotes are connected to the bridge itself: a session opened through one of
+        // these transports ends when it closes.
+        let transport_events = events.clone();
+        let transports = session
+            .info()
+            .transport_events_listener()
+            .history(true)
+            .callback(move |event| {
+                let _ = transport_events.send(Event::Transport {
+                    zid: event.transport().zid().to_string(),
+                    alive: event.kind() == SampleKind::Put,
+                });
+            })
+            .wait()
+            .map_err(|error| BridgeError::zenoh("watch the transports of remotes", error))?;
         let token = session
             .liveliness()
             .declare_token(keys.bridge_token())
@@ -269,6 +256,7 @@ impl Net {
             json,
             _queryables: queryables,
             _remotes: remotes,
+            _transports: transports,
             _token: token,
         })
     }

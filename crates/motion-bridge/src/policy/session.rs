@@ -1,10 +1,12 @@
 //! Remote sessions: opened by the bridge (a public [`SessionId`] and a secret
 //! [`SessionToken`] only the querier receives), bound to the identity they were opened for,
 //! their time stamps judged against the bridge's clock from the moment they opened. At most
-//! [`MAX_SESSIONS`]; stop and e-stop need none, so a full table never holds them back.
+//! [`MAX_SESSIONS`], and at most its share for each `[[remote]]` entry (its `sessions`): one
+//! identity cannot pin every slot. Stop and e-stop need none, so a full table never holds
+//! them back.
 
 use core::time::Duration;
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 use motion_wire::keys::{SessionId, SessionToken};
 
@@ -18,6 +20,10 @@ pub(super) const SESSION_IDLE: Duration = Duration::from_secs(60);
 /// How fast the floor of a session's clock offset may rise, s per s: room for clock drift
 /// between the hosts (1000 ppm, far above what NTP lets a clock drift).
 const FLOOR_CREEP: f64 = 1e-3;
+/// Counters a session's requests may arrive out of order by (the e-stop takes a path of its
+/// own through the bridge, so a session's requests are not judged in the order sent): one
+/// seen already, or more than this below the highest seen, is a replay.
+pub(super) const REPLAY_WINDOW: u64 = 1024;
 /// How much earlier than the session's floor a request may say it was sent, at least: the
 /// floor starts from the session's opening, which may itself have been slow (a loaded
 /// host, a new link), so a prompt request may look that much "ahead". A stamp further
@@ -29,6 +35,16 @@ pub(super) const AHEAD_SLACK: Duration = Duration::from_secs(2);
 pub(super) struct SessionState {
     /// The identity it was opened for: its token is good for this identity only.
     pub(super) identity: String,
+    /// The `[[remote]]` entry whose share it takes (the identity's, or `*`).
+    entry: String,
+    /// Its secret: the key of its requests' MACs.
+    pub(super) token: SessionToken,
+    /// The zenoh id of the transport it was opened through, when the bridge saw that
+    /// transport: the session ends when it closes.
+    transport: Option<String>,
+    /// The highest request counter seen, and which of the [`REPLAY_WINDOW`] below it were.
+    highest: Option<u64>,
+    window: Vec<u64>,
     /// Its public id.
     pub(super) id: SessionId,
     /// Smallest (bridge time − send time) seen, ns, rising by at most `FLOOR_CREEP`, and
@@ -53,6 +69,45 @@ pub(super) enum Timing {
 }
 
 impl SessionState {
+    /// Whether `counter` was not seen before (and is within [`REPLAY_WINDOW`] of the
+    /// highest); notes it as seen.
+    pub(super) fn fresh(&mut self, counter: u64) -> bool {
+        let words = (REPLAY_WINDOW / 64) as usize;
+        if self.window.len() != words {
+            self.window = vec![0; words];
+        }
+        let bit = |counter: u64| ((counter / 64) as usize % words, 1u64 << (counter % 64));
+        match self.highest {
+            Some(highest) if counter <= highest => {
+                if highest - counter >= REPLAY_WINDOW {
+                    return false;
+                }
+                let (word, mask) = bit(counter);
+                if self.window[word] & mask != 0 {
+                    return false;
+                }
+                self.window[word] |= mask;
+                true
+            }
+            _ => {
+                // Clear what slides out of the window between the old highest and this one.
+                let from = self.highest.map_or(counter, |h| h + 1);
+                if counter - from >= REPLAY_WINDOW {
+                    self.window.iter_mut().for_each(|word| *word = 0);
+                } else {
+                    for cleared in from..counter {
+                        let (word, mask) = bit(cleared);
+                        self.window[word] &= !mask;
+                    }
+                }
+                let (word, mask) = bit(counter);
+                self.window[word] |= mask;
+                self.highest = Some(counter);
+                true
+            }
+        }
+    }
+
     /// Judges a request sent at `sent_ns` (the session's clock) and received at `now` (the
     /// bridge's): at most `window` later than the session's fastest, at most `window` (or
     /// [`AHEAD_SLACK`], if more) earlier; a request on time moves the floor.
@@ -75,89 +130,146 @@ impl SessionState {
     }
 }
 
-/// What a token names for an identity.
+/// What a session id names for an identity.
 #[derive(Debug)]
 pub(super) enum Lookup<'s> {
     /// A session of this identity.
     Found(&'s mut SessionState),
-    /// No token, or one this bridge did not give out (or forgot).
+    /// No session, or one this bridge did not open (or forgot).
     Unknown,
-    /// A session of another identity: the token was copied.
+    /// A session of another identity.
     OtherIdentity,
+}
+
+/// Why a session was not opened.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Full {
+    /// The entry has its share open (none idle enough to forget).
+    Share,
+    /// The whole table is full.
+    Table,
+    /// The id or token drawn is taken (or zero): draw again.
+    Taken,
 }
 
 /// Every open session.
 #[derive(Debug, Default)]
 pub(super) struct Sessions {
-    by_token: HashMap<SessionToken, SessionState>,
-    by_id: HashMap<SessionId, SessionToken>,
+    by_id: HashMap<SessionId, SessionState>,
+    /// The secrets given out (each once).
+    tokens: HashSet<SessionToken>,
+    /// Sessions open per entry.
+    per_entry: HashMap<String, usize>,
 }
 
 impl Sessions {
-    /// Opens session `id` with secret `token` for `identity`, whose opening query was sent
-    /// at `sent_ns` (its clock) and received at `now`. False when the table is full (or
-    /// the id or token is taken, or the token is zero: the caller draws them again).
+    /// Opens session `id` with secret `token` for `identity` under the entry `entry` (of
+    /// `share` sessions at most), whose opening query was sent at `sent_ns` (its clock) and
+    /// received at `now`.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn open(
         &mut self,
         now: Duration,
         identity: &str,
+        entry: &str,
+        share: usize,
         sent_ns: u64,
         id: SessionId,
         token: SessionToken,
-    ) -> bool {
-        if self.taken(id, token) || !self.make_room(now) {
-            return false;
+    ) -> Result<(), Full> {
+        if self.taken(id, token) {
+            return Err(Full::Taken);
         }
-        self.by_id.insert(id, token);
-        self.by_token.insert(
-            token,
+        self.make_room(now, entry, share)?;
+        self.tokens.insert(token);
+        *self.per_entry.entry(entry.to_owned()).or_default() += 1;
+        self.by_id.insert(
+            id,
             SessionState {
                 identity: identity.to_owned(),
+                entry: entry.to_owned(),
+                token,
+                transport: None,
+                highest: None,
+                window: Vec::new(),
                 id,
                 floor: (now.as_nanos() as i128 - i128::from(sent_ns), now),
                 seen: now,
                 live: false,
             },
         );
-        true
+        Ok(())
     }
 
-    /// Whether `id` or `token` is taken, or the token is zero.
+    /// Sessions open under `entry`.
+    pub(super) fn of_entry(&self, entry: &str) -> usize {
+        self.per_entry.get(entry).copied().unwrap_or(0)
+    }
+
+    /// Whether `id` or `token` is taken, or either is zero.
     pub(super) fn taken(&self, id: SessionId, token: SessionToken) -> bool {
-        token.is_none() || self.by_token.contains_key(&token) || self.by_id.contains_key(&id)
+        token.is_none() || id.0 == 0 || self.tokens.contains(&token) || self.by_id.contains_key(&id)
     }
 
-    /// Whether a new session fits, forgetting idle ones without liveliness if needed.
-    fn make_room(&mut self, now: Duration) -> bool {
-        if self.by_token.len() < MAX_SESSIONS {
-            return true;
+    /// Whether a new session of `entry` fits (its share, the table), forgetting idle ones
+    /// without liveliness if needed (of the entry when its share is full).
+    fn make_room(&mut self, now: Duration, entry: &str, share: usize) -> Result<(), Full> {
+        let entry_full = self.of_entry(entry) >= share;
+        if !entry_full && self.by_id.len() < MAX_SESSIONS {
+            return Ok(());
         }
-        let by_id = &mut self.by_id;
-        self.by_token.retain(|_, state| {
-            let keep = state.live || now.saturating_sub(state.seen) < SESSION_IDLE;
-            if !keep {
-                by_id.remove(&state.id);
+        let (tokens, per_entry) = (&mut self.tokens, &mut self.per_entry);
+        self.by_id.retain(|_, state| {
+            let idle = !state.live && now.saturating_sub(state.seen) >= SESSION_IDLE;
+            let forget = idle && (!entry_full || state.entry == entry);
+            if forget {
+                tokens.remove(&state.token);
+                if let Some(count) = per_entry.get_mut(&state.entry) {
+                    *count = count.saturating_sub(1);
+                }
             }
-            keep
+            !forget
         });
-        self.by_token.len() < MAX_SESSIONS
+        if self.of_entry(entry) >= share {
+            Err(Full::Share)
+        } else if self.by_id.len() >= MAX_SESSIONS {
+            Err(Full::Table)
+        } else {
+            Ok(())
+        }
     }
 
-    /// The session `token` names for `identity`.
-    pub(super) fn find(&mut self, identity: &str, token: SessionToken) -> Lookup<'_> {
-        match self.by_token.get_mut(&token) {
+    /// The session `id` names for `identity`.
+    pub(super) fn find(&mut self, identity: &str, id: SessionId) -> Lookup<'_> {
+        match self.by_id.get_mut(&id) {
             Some(state) if state.identity == identity => Lookup::Found(state),
             Some(_) => Lookup::OtherIdentity,
             None => Lookup::Unknown,
         }
     }
 
+    /// Binds session `id` to the transport of zenoh id `zid`.
+    pub(super) fn bind(&mut self, id: SessionId, zid: &str) {
+        if let Some(state) = self.by_id.get_mut(&id) {
+            state.transport = Some(zid.to_owned());
+        }
+    }
+
+    /// The sessions (identity, id) bound to the transport of `zid`.
+    pub(super) fn bound_to(&self, zid: &str) -> Vec<(String, SessionId)> {
+        let mut sessions: Vec<(String, SessionId)> = self
+            .by_id
+            .values()
+            .filter(|state| state.transport.as_deref() == Some(zid))
+            .map(|state| (state.identity.clone(), state.id))
+            .collect();
+        sessions.sort_unstable_by_key(|(_, id)| *id);
+        sessions
+    }
+
     /// The liveliness token of `identity`'s session `id` appeared.
     pub(super) fn live(&mut self, identity: &str, id: SessionId) {
-        if let Some(state) = self
-            .by_id
-            .get(&id)
-            .and_then(|token| self.by_token.get_mut(token))
+        if let Some(state) = self.by_id.get_mut(&id)
             && state.identity == identity
         {
             state.live = true;
@@ -166,29 +278,63 @@ impl Sessions {
 
     /// Ends `identity`'s session `id`; whether it was open.
     pub(super) fn close(&mut self, identity: &str, id: SessionId) -> bool {
-        let Some(token) = self.by_id.get(&id).copied() else {
-            return false;
-        };
         if self
-            .by_token
-            .get(&token)
+            .by_id
+            .get(&id)
             .is_none_or(|state| state.identity != identity)
         {
             return false;
         }
-        self.by_id.remove(&id);
-        self.by_token.remove(&token);
+        if let Some(state) = self.by_id.remove(&id) {
+            self.tokens.remove(&state.token);
+            if let Some(count) = self.per_entry.get_mut(&state.entry) {
+                *count = count.saturating_sub(1);
+            }
+        }
         true
     }
 
     /// Ends every session.
     pub(super) fn clear(&mut self) {
         self.by_id.clear();
-        self.by_token.clear();
+        self.tokens.clear();
+        self.per_entry.clear();
     }
 
     /// Sessions open.
     pub(super) fn len(&self) -> usize {
-        self.by_token.len()
+        self.by_id.len()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_counter_counts_once_within_the_window() {
+        let mut sessions = Sessions::default();
+        let id = SessionId(1);
+        sessions
+            .open(Duration::ZERO, "a", "a", 4, 0, id, SessionToken([1; 16]))
+            .expect("room");
+        let Lookup::Found(state) = sessions.find("a", id) else {
+            panic!("opened");
+        };
+        assert!(state.fresh(1));
+        assert!(!state.fresh(1), "a replay");
+        assert!(state.fresh(3));
+        assert!(state.fresh(2), "out of order, not seen");
+        assert!(!state.fresh(2));
+        assert!(state.fresh(3 + REPLAY_WINDOW));
+        assert!(!state.fresh(3), "below the window");
+        assert!(
+            state.fresh(4 + REPLAY_WINDOW / 2),
+            "in the window, not seen"
+        );
+        assert!(!state.fresh(4 + REPLAY_WINDOW / 2));
+        assert!(state.fresh(10 * REPLAY_WINDOW));
+        assert!(state.fresh(10 * REPLAY_WINDOW - 5));
+        assert!(!state.fresh(3 + REPLAY_WINDOW), "slid out");
     }
 }

@@ -1,86 +1,15 @@
-//! The policy on fake time.
+//! The policy on fake time: allow-lists, rates, lateness, claims (sessions:
+//! `tests_sessions.rs`).
 
 use core::time::Duration;
 
+use super::test_support::*;
+use super::{KindSet, Policy, Verdict};
 use motion_ipc::{
     AxisFlags, ClientId, CommandKind, CommandReply, CommandRequest, MotionFrame, Reason,
     SignalFlags, Target,
 };
-
-use super::{KindSet, MAX_SESSIONS, Policy, Remote, RemoteRule, Verdict};
-use motion_wire::keys::{Refusal, RequestMeta, SessionId, SessionOpen, SessionToken};
-
-const DEADMAN: Duration = Duration::from_millis(200);
-
-fn rule(identity: &str, allow: &[&str], rate: f64, burst: f64) -> RemoteRule {
-    RemoteRule {
-        identity: identity.to_owned(),
-        allow: allow.iter().fold(KindSet::NONE, |set, name| {
-            set.union(KindSet::from_name(name).expect("known name"))
-        }),
-        rate,
-        burst,
-    }
-}
-
-fn remote(identity: &str, session: u128) -> Remote {
-    Remote {
-        identity: identity.to_owned(),
-        session: SessionId(session),
-    }
-}
-
-fn ms(ms: u64) -> Duration {
-    Duration::from_millis(ms)
-}
-
-/// The secret the tests' bridge gave `remote`'s session.
-fn token(remote: &Remote) -> SessionToken {
-    SessionToken((remote.session.0 ^ 0x5eed_5eed).to_le_bytes())
-}
-
-/// Opens `remote`'s session at `now`, its opening query sent at `sent` on its clock.
-fn open(
-    policy: &mut Policy,
-    remote: &Remote,
-    now: Duration,
-    sent: Duration,
-) -> Result<(), (Refusal, String)> {
-    let open = SessionOpen {
-        sent_ns: sent.as_nanos() as u64,
-    };
-    policy.open_session(now, &remote.identity, open, remote.session, token(remote))
-}
-
-/// A request of `remote`'s session sent at `sent` on the remote's clock.
-fn meta(remote: &Remote, sent: Duration) -> Option<RequestMeta> {
-    Some(RequestMeta {
-        token: token(remote),
-        sent_ns: sent.as_nanos() as u64,
-    })
-}
-
-fn request(kind: CommandKind, axis: u32) -> CommandRequest {
-    CommandRequest::new(ClientId::from_u128(99), 1, axis, kind)
-}
-
-/// Admits `request` from `remote`, sent and received at `now` (no network delay), opening
-/// its session first if the policy lets it.
-fn admit(policy: &mut Policy, remote: &Remote, now: Duration, request: &CommandRequest) -> Verdict {
-    if !policy.session_taken(remote.session, token(remote)) {
-        let _may_only_stop = open(policy, remote, now, now);
-    }
-    policy.admit(now, &remote.identity, meta(remote, now), request, DEADMAN)
-}
-
-fn accept(policy: &mut Policy, remote: &Remote, request: &CommandRequest) {
-    let reply = CommandReply::to(request, Reason::Accepted, 1);
-    policy.on_reply(remote, request, &reply);
-}
-
-fn forwarded(verdict: &Verdict) -> bool {
-    matches!(verdict, Verdict::Forward(..))
-}
+use motion_wire::keys::{Refusal, SessionId};
 
 #[test]
 fn names_and_groups_of_the_allow_list() {
@@ -252,120 +181,6 @@ fn the_rate_limit_refuses_above_the_burst_refills_and_never_holds_back_a_stop() 
 }
 
 #[test]
-fn made_up_sessions_never_grow_the_table_and_never_hold_back_a_stop() {
-    let mut policy = Policy::new(vec![rule("*", &["all"], 1e9, 1e9)], None);
-    let stop = request(CommandKind::Stop, 0);
-    let estop = request(CommandKind::EStop, CommandRequest::ALL_AXES);
-    let jog = request(CommandKind::Velocity, 0);
-    // Stops under made-up tokens keep nothing.
-    for n in 0..2 * MAX_SESSIONS as u128 {
-        let made_up = remote("x", n);
-        match policy.admit(ms(0), "x", meta(&made_up, ms(0)), &stop, DEADMAN) {
-            Verdict::Forward(_, None) => {}
-            other => panic!("{other:?}"),
-        }
-    }
-    assert_eq!(policy.session_count(), 0);
-    for n in 0..MAX_SESSIONS as u128 {
-        open(&mut policy, &remote("x", n), ms(0), ms(0)).expect("room");
-    }
-    // The session of the first one's liveliness token is there: never forgotten for room.
-    policy.session_live("x", SessionId(0));
-    // Full, and every session opened recently: a new one is refused...
-    let late_comer = remote("x", 1 << 100);
-    match open(&mut policy, &late_comer, ms(1000), ms(1000)) {
-        Err((Refusal::Busy, text)) => assert!(text.contains("stop and e-stop"), "{text}"),
-        other => panic!("{other:?}"),
-    }
-    // ... and needs one for a jog, but its stop and e-stop pass, sessionless.
-    assert!(matches!(
-        policy.admit(ms(1000), "x", meta(&late_comer, ms(1000)), &jog, DEADMAN),
-        Verdict::Refuse(Refusal::NoSession, _)
-    ));
-    for request in [&stop, &estop] {
-        assert!(matches!(
-            policy.admit(ms(1000), "x", meta(&late_comer, ms(1000)), request, DEADMAN),
-            Verdict::Forward(_, None)
-        ));
-        assert!(matches!(
-            policy.admit(ms(1000), "x", None, request, DEADMAN),
-            Verdict::Forward(_, None)
-        ));
-    }
-    // A known session still passes; after a minute of silence the others make room.
-    assert!(forwarded(&policy.admit(
-        ms(30_000),
-        "x",
-        meta(&remote("x", 5), ms(30_000)),
-        &jog,
-        DEADMAN
-    )));
-    let later = Duration::from_secs(61);
-    open(&mut policy, &late_comer, later, later).expect("room now");
-    assert_eq!(
-        policy.session_count(),
-        3,
-        "the live session 0, session 5 heard 31 s ago, and the new one"
-    );
-}
-
-#[test]
-fn a_session_is_good_for_its_own_identity_only_and_a_public_id_is_no_token() {
-    let mut policy = Policy::new(vec![rule("*", &["all"], 1000.0, 1000.0)], None);
-    let alice = remote("alice", 1);
-    let bob = remote("bob", 2);
-    open(&mut policy, &alice, ms(0), ms(0)).expect("opened");
-    open(&mut policy, &bob, ms(0), ms(0)).expect("opened");
-    let claim = request(CommandKind::Claim, 0);
-    assert!(forwarded(&admit(&mut policy, &alice, ms(1), &claim)));
-    accept(&mut policy, &alice, &claim);
-    let jog = request(CommandKind::Velocity, 0);
-    // Bob sends Alice's token under his own identity: refused.
-    match policy.admit(ms(2), "bob", meta(&alice, ms(2)), &jog, DEADMAN) {
-        Verdict::Refuse(Refusal::NoSession, text) => {
-            assert!(text.contains("another identity"), "{text}");
-        }
-        other => panic!("{other:?}"),
-    }
-    // Alice's public session id (her liveliness key shows it) is not her token.
-    let public = Some(RequestMeta {
-        token: SessionToken(alice.session.0.to_le_bytes()),
-        sent_ns: ms(2).as_nanos() as u64,
-    });
-    assert!(matches!(
-        policy.admit(ms(2), "alice", public, &jog, DEADMAN),
-        Verdict::Refuse(Refusal::NoSession, _)
-    ));
-    // Without an attachment: no session either.
-    assert!(matches!(
-        policy.admit(ms(2), "alice", None, &jog, DEADMAN),
-        Verdict::Refuse(Refusal::NoSession, _)
-    ));
-    // A stop under a copied token passes, as nobody's.
-    assert!(matches!(
-        policy.admit(
-            ms(2),
-            "bob",
-            meta(&alice, ms(2)),
-            &request(CommandKind::Stop, 0),
-            DEADMAN
-        ),
-        Verdict::Forward(_, None)
-    ));
-    // Alice herself goes on.
-    assert!(matches!(
-        policy.admit(ms(3), "alice", meta(&alice, ms(3)), &jog, DEADMAN),
-        Verdict::Forward(_, Some(_))
-    ));
-    // An identity that may only stop gets no session (it needs none).
-    let mut viewer = Policy::new(vec![rule("*", &["stop", "estop"], 1000.0, 1000.0)], None);
-    match open(&mut viewer, &alice, ms(0), ms(0)) {
-        Err((Refusal::NotAllowed, text)) => assert!(text.contains("need no session"), "{text}"),
-        other => panic!("{other:?}"),
-    }
-}
-
-#[test]
 fn a_request_held_up_in_the_network_is_refused_but_a_stop_is_not() {
     let mut policy = Policy::new(vec![rule("*", &["all"], 1000.0, 1000.0)], None);
     let panel = remote("panel", 1);
@@ -375,18 +190,33 @@ fn a_request_held_up_in_the_network_is_refused_but_a_stop_is_not() {
     let mut at = ms(1000);
     open(&mut policy, &panel, at, clock(at)).expect("opened");
     for _ in 0..10 {
-        let verdict = policy.admit(at, "panel", meta(&panel, clock(at)), &jog, DEADMAN);
+        let verdict = judge(
+            &mut policy,
+            at,
+            "panel",
+            meta(&panel, clock(at)),
+            &jog,
+            DEADMAN,
+        );
         assert!(forwarded(&verdict), "{verdict:?}");
         at += ms(33);
     }
     // A renewal sent 1 s ago arrives now (a network buffer let go).
     let late_sent = clock(at) - Duration::from_secs(1);
-    match policy.admit(at, "panel", meta(&panel, late_sent), &jog, DEADMAN) {
+    match judge(
+        &mut policy,
+        at,
+        "panel",
+        meta(&panel, late_sent),
+        &jog,
+        DEADMAN,
+    ) {
         Verdict::Refuse(Refusal::Late, text) => assert!(text.contains("200ms"), "{text}"),
         other => panic!("{other:?}"),
     }
     let stop = request(CommandKind::Stop, 0);
-    assert!(forwarded(&policy.admit(
+    assert!(forwarded(&judge(
+        &mut policy,
         at,
         "panel",
         meta(&panel, late_sent),
@@ -395,7 +225,8 @@ fn a_request_held_up_in_the_network_is_refused_but_a_stop_is_not() {
     )));
     // Later than usual but within the deadman: passes.
     let slow = clock(at) - ms(150);
-    assert!(forwarded(&policy.admit(
+    assert!(forwarded(&judge(
+        &mut policy,
         at,
         "panel",
         meta(&panel, slow),
@@ -404,7 +235,8 @@ fn a_request_held_up_in_the_network_is_refused_but_a_stop_is_not() {
     )));
     // One that says it was sent later than it could have been (a clock from the future)
     // is not applied either.
-    match policy.admit(
+    match judge(
+        &mut policy,
         at,
         "panel",
         meta(&panel, clock(at) + ms(5000)),
@@ -417,7 +249,8 @@ fn a_request_held_up_in_the_network_is_refused_but_a_stop_is_not() {
         other => panic!("{other:?}"),
     }
     // Up to 2 s ahead passes, though: a prompt request after a slow opening looks so.
-    assert!(forwarded(&policy.admit(
+    assert!(forwarded(&judge(
+        &mut policy,
         at,
         "panel",
         meta(&panel, clock(at) + ms(1500)),
@@ -427,14 +260,16 @@ fn a_request_held_up_in_the_network_is_refused_but_a_stop_is_not() {
     // A configured max_delay wins over the deadman; zero deadman and no config: 1 s.
     let mut strict = Policy::new(vec![rule("*", &["all"], 1000.0, 1000.0)], Some(ms(50)));
     open(&mut strict, &panel, at, clock(at)).expect("opened");
-    assert!(forwarded(&strict.admit(
+    assert!(forwarded(&judge(
+        &mut strict,
         at,
         "panel",
         meta(&panel, clock(at)),
         &jog,
         DEADMAN
     )));
-    assert!(!forwarded(&strict.admit(
+    assert!(!forwarded(&judge(
+        &mut strict,
         at,
         "panel",
         meta(&panel, slow),
@@ -443,14 +278,16 @@ fn a_request_held_up_in_the_network_is_refused_but_a_stop_is_not() {
     )));
     let mut fallback = Policy::new(vec![rule("*", &["all"], 1000.0, 1000.0)], None);
     open(&mut fallback, &panel, at, clock(at)).expect("opened");
-    assert!(forwarded(&fallback.admit(
+    assert!(forwarded(&judge(
+        &mut fallback,
         at,
         "panel",
         meta(&panel, clock(at) - ms(900)),
         &jog,
         Duration::ZERO
     )));
-    assert!(!forwarded(&fallback.admit(
+    assert!(!forwarded(&judge(
+        &mut fallback,
         at,
         "panel",
         meta(&panel, clock(at) - ms(2000)),
@@ -470,7 +307,14 @@ fn clocks_drifting_apart_slowly_are_not_late() {
     for step in 0..=1000u64 {
         let bridge = Duration::from_secs(step);
         let client = Duration::from_secs_f64(step as f64 * (1.0 - 500e-6));
-        let verdict = policy.admit(bridge, "panel", meta(&panel, client), &jog, DEADMAN);
+        let verdict = judge(
+            &mut policy,
+            bridge,
+            "panel",
+            meta(&panel, client),
+            &jog,
+            DEADMAN,
+        );
         assert!(forwarded(&verdict), "step {step}: {verdict:?}");
     }
 }
@@ -586,8 +430,8 @@ fn a_vanished_session_has_its_jogs_stopped_and_claims_released() {
     accept(&mut policy, &b, &request(CommandKind::Velocity, 5));
 
     // A token declared under Alice's id by Bob's identity ends nothing.
-    assert!(policy.session_gone("bob", SessionId(1)).is_empty());
-    let sent = policy.session_gone("alice", SessionId(1));
+    assert!(policy.session_gone("bob", SessionId(2)).is_empty());
+    let sent = policy.session_gone("alice", SessionId(2));
     let summary: Vec<(u32, u32, u32)> = sent.iter().map(|r| (r.kind, r.axis, r.target)).collect();
     assert_eq!(
         summary,
@@ -599,14 +443,14 @@ fn a_vanished_session_has_its_jogs_stopped_and_claims_released() {
     );
     assert!(sent.iter().all(|r| r.client.is_none()));
     assert!(
-        policy.session_gone("alice", SessionId(1)).is_empty(),
+        policy.session_gone("alice", SessionId(2)).is_empty(),
         "once"
     );
     // An e-stop ends every jog, even one sent without a session: nothing left to stop for
     // Bob.
     let estop = request(CommandKind::EStop, CommandRequest::ALL_AXES);
     policy.on_sessionless_reply(&estop, &CommandReply::to(&estop, Reason::Accepted, 1));
-    assert!(policy.session_gone("bob", SessionId(2)).is_empty());
+    assert!(policy.session_gone("bob", SessionId(3)).is_empty());
 }
 
 #[test]
