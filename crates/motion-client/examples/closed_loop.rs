@@ -3,10 +3,10 @@
 //! the right wheel mirrored, so the base turns on the spot), reading each frame and sending
 //! the setpoint for the tick the stream's lead ahead (`DEFAULT_STREAM_LEAD`). At the end it
 //! compares what it sent with what the server counted, and exits non-zero unless every
-//! setpoint was applied exactly once and none before its tick (a setpoint the server
-//! dropped as `late` is accepted only when the client saw it miss its tick: published after
-//! the server had taken that tick's); one applied after its tick made the stream run that
-//! much behind (`delay`), which the check reports.
+//! setpoint was applied exactly once or dropped as `late` (it reached the server more than
+//! `stream_buffer` ticks after its tick: this client was descheduled that long), none before
+//! its tick, none clamped; one applied after its tick made the stream run that much behind
+//! (`delay`), which the check reports.
 //!
 //! Run the server first (`cargo run --release`: config/sim.toml, server name `demo`), then
 //! `cargo run --release -p motion-client --example closed_loop -- [SERVER] [SECONDS]`
@@ -159,12 +159,6 @@ fn run() -> Result<bool, Box<dyn std::error::Error>> {
             status.applied, status.late, run.sent
         ));
     }
-    if status.late > run.behind {
-        failures.push(format!(
-            "{} dropped as late, but only {} were seen to miss their tick",
-            status.late, run.behind
-        ));
-    }
     if status.early + status.refused + status.clamped > 0 {
         failures.push(format!(
             "early {}, refused {}, clamped {}: none expected",
@@ -196,8 +190,8 @@ fn run() -> Result<bool, Box<dyn std::error::Error>> {
             println!("ok: every setpoint sent was applied exactly once, none before its tick");
         } else {
             println!(
-                "ok: every setpoint was applied once or dropped as late after missing its tick, \
-                 none before its tick"
+                "ok: every setpoint was applied once or dropped as late (more than stream_buffer \
+                 ticks after its tick), none before its tick"
             );
         }
         Ok(true)

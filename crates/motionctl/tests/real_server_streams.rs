@@ -174,15 +174,15 @@ fn real_closed_loop_every_setpoint_applied_once_never_early() -> Result {
             return Err(format!("closed_loop failed ({}):\n{text}", output.status).into());
         }
         let sent = figure(&text, "sent").ok_or("sent")?;
-        let behind = figure(&text, "skipped by the client,").ok_or("behind")?;
         let applied = figure(&text, "server: applied").ok_or("applied")?;
         let late = figure(&text, "late").ok_or("late")?;
         let last_tick = figure(&text, "..=").ok_or("last tick")?;
         let before = figure(&text, "before it").ok_or("before")?;
         // 5 s at 1 kHz: a setpoint per frame read, a frame missed now and then.
         assert!(sent > 2500, "{text}");
+        // Each applied on its own time, or dropped as late when it reached the server more
+        // than stream_buffer ticks after its tick (the client descheduled that long).
         assert_eq!(applied + late, sent, "{text}");
-        assert!(late <= behind, "late only after missing its tick: {text}");
         assert_eq!(before, 0, "{text}");
         // The frames say the same after the client cancelled its stream.
         let status = base_stream(&client)?;

@@ -171,7 +171,9 @@ fn e_stop_gets_through_with_every_slot_taken_and_exhausted_slots_are_logged() {
     let id = ClientId::from_u128(node.id().value());
     let estop = CommandRequest::new(id, 1, CommandRequest::ALL_AXES, CommandKind::EStop);
     assert_eq!(ask(&client, estop), Ok(()));
-    assert!(estop_latched(&watcher.frame()));
+    // The reply is sent within the tick; that tick's frame is published right after it.
+    let (_, latched) = watcher.wait_frame(Duration::from_secs(1), estop_latched);
+    assert!(latched, "the e-stop's frame shows the latch");
     let reset = CommandRequest::new(id, 2, CommandRequest::ALL_AXES, CommandKind::Reset);
     assert_eq!(ask(&client, reset), Ok(()));
     // Every command client slot taken too (the watcher and `client` hold two): the e-stop
