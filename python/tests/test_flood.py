@@ -16,6 +16,7 @@ they can:
 from __future__ import annotations
 
 import ctypes
+import os
 import subprocess
 import sys
 import time
@@ -77,11 +78,18 @@ with motiond.Client(sys.argv[1], timeout=10.0, node_name=sys.argv[2]) as client:
 
 
 def _flood(server: Server, program: str) -> Iterator[List[subprocess.Popen]]:
+    # The flooders run at nice 19: this checks the server's budgets, not the kernel's
+    # scheduler. On a 2-core machine two busy loops at the claimant's own priority take its
+    # process off the CPU for longer than ``stream_timeout`` now and then, and its stream
+    # ends stale without the server ever seeing it fall behind (a real claimant runs with a
+    # real-time priority). At nice 19 they still send whenever a core is free: thousands of
+    # paths and setpoints a second.
     processes = [
         subprocess.Popen(
             [sys.executable, "-c", program, server.name, f"flood{n}"],
             stdout=subprocess.PIPE,
             text=True,
+            preexec_fn=lambda: os.nice(19),
         )
         for n in range(2)
     ]

@@ -414,6 +414,32 @@ def test_a_setpoint_that_can_never_apply_does_not_keep_a_stream_alive(
         assert state.applied == 1, state
 
 
+def test_wait_applied_returns_when_the_last_setpoint_was_dropped_late(
+    client: motiond.Client,
+) -> None:
+    """A client descheduled for more than ``stream_buffer`` ticks sends its last setpoint
+    after its tick: the server drops it (``late``). ``wait_applied`` returns with the
+    counters (every setpoint sent accounted for) instead of waiting until the stream goes
+    stale and the group stops."""
+    base = client.group("base")
+    at_rest(client, base)
+    with base.stream("velocity") as stream:
+        tick = client.latest().tick
+        stream.send(tick + 2, [2.0, -2.0])
+        stream.wait_applied(timeout=5.0)
+        # Its tick passed more than stream_buffer (3) ticks ago.
+        stream.send(client.latest().tick - 10, [2.0, -2.0])
+        started = time.monotonic()
+        final = stream.wait_applied(timeout=5.0)
+        waited = time.monotonic() - started
+        assert final.stream is StreamState.STREAMING, final
+        assert (final.applied, final.late) == (1, 1), final
+        assert final.last_sequence == 1 and stream.sequence == 2
+        # Returned with the frame that showed it dropped, long before stream_timeout
+        # (50 ticks) would have ended the stream.
+        assert base.state().stream is StreamState.STREAMING, waited
+
+
 def test_the_closed_loop_example_runs(server: Server) -> None:
     example = REPO / "python" / "examples" / "closed_loop.py"
     for attempt in range(3):

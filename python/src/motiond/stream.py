@@ -361,11 +361,12 @@ class SetpointStream:
         return sent
 
     def wait_applied(self, timeout: float = 1.0) -> GroupStatus:
-        """Waits until a frame shows the last setpoint sent applied, and returns the
-        group's state in it (the server's counters); raises
-        :class:`~motiond.errors.WaitTimeout` when none does within ``timeout`` s (it was
-        dropped: see the counters), :class:`~motiond.errors.GroupAborted` when the stream
-        stopped."""
+        """Waits until a frame shows the last setpoint sent applied — or every setpoint
+        sent accounted for by the server's counters (``applied + late + early``: the last
+        ones reached it more than ``stream_buffer`` ticks after their tick and were
+        dropped) — and returns the group's state in it (the counters); raises
+        :class:`~motiond.errors.WaitTimeout` when none does within ``timeout`` s,
+        :class:`~motiond.errors.GroupAborted` when the stream stopped."""
         what = f"apply setpoint {self.sequence}"
         deadline = time.monotonic() + timeout
         last = -1
@@ -377,7 +378,10 @@ class SetpointStream:
             last = frame.tick
             state = frame.group(self._index)
             self._observe(state, last)
-            if last >= self.started.tick and int(state.last_sequence) >= self.sequence:
+            if last >= self.started.tick and (
+                int(state.last_sequence) >= self.sequence
+                or int(state.applied) + int(state.late) + int(state.early) >= self.sent
+            ):
                 return GroupStatus.of(self._client.info, self._index, last, state)
             self._check_running(state, last, what)
             del state, frame
