@@ -36,7 +36,7 @@ fn documented_invocation_parses() {
         "--python",
         "target/py-venv/bin/python",
     ])
-    .expect("the README's command line parses");
+    .expect("the command line of docs/PERFORMANCE.md parses");
     assert_eq!(cli.server, "demo");
     assert!(cli.cargo_bench);
     let bench = &cli.bench;

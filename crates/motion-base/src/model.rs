@@ -2,9 +2,12 @@
 //! id, code in the shared-memory contract, the kind of link it sits on). The set of models
 //! is open: a board crate declares its own facts (`static FACTS: ModelFacts`) and the
 //! server learns every model from its registry (crate `motion-boards`, docs/ARCHITECTURE.md
-//! "How to add a board"). The four boards whose drivers still live in `motion-drivers` have
-//! their facts here ([`Model::QQ2DRV`], [`Model::TMCPACK`], [`Model::SPIMOTOR`],
-//! [`Model::QSB`]), below the drivers that name them.
+//! "How to add a board"). The four built-in boards keep their facts here
+//! ([`Model::QQ2DRV`], [`Model::TMCPACK`], [`Model::SPIMOTOR`], [`Model::QSB`]; their drivers
+//! are in their own board crates, `crates/boards/<board>`, which name these constants): their
+//! codes are the shared-memory contract's `MOTIOND_DEVICE_MODEL_*`, which a client names
+//! without the registry ([`Model::BUILT_IN`]); any other board, like the worked example,
+//! declares its facts in its crate.
 
 use core::fmt;
 

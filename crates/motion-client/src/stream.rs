@@ -31,12 +31,12 @@ use crate::{
 pub const STREAM_FRAME_TIMEOUT: Duration = Duration::from_secs(1);
 
 /// The lead [`SetpointStream::run_each_tick`] sends with unless told otherwise: the
-/// setpoint computed after reading frame `k` is for tick `k + 2`. Measured (README
-/// "Performance", `motionctl bench`'s stream phase): a Python client at 1 kHz on a 2-core
-/// machine with two busy loops beside it got its setpoint to the server before its tick for
-/// the share of ticks the README gives with lead 1 and with this lead; every setpoint that
-/// is late instead grows the stream's delay, so the lead is the latency a client chooses
-/// up front rather than one the stream picks up on its worst tick.
+/// setpoint computed after reading frame `k` is for tick `k + 2`. A setpoint that arrives
+/// late grows the stream's delay for the rest of the stream, so the lead is the latency a
+/// client chooses up front rather than one the stream picks up on its worst tick.
+/// `motionctl bench`'s stream phase measures the share of ticks a Python client meets with
+/// lead 1 and with this lead, beside `--busy-loops N` spinning processes
+/// (docs/PERFORMANCE.md "Coordinated motion and streams").
 pub const DEFAULT_STREAM_LEAD: u64 = 2;
 
 impl<S: Service> Client<S> {

@@ -137,7 +137,7 @@ fn claims_are_exclusive_and_die_with_their_client() {
 
 #[test]
 fn a_request_a_client_sent_just_before_it_died_starts_nothing() {
-    // Campaign 1 of README "Reliability": a client SIGKILLed right after it renewed its
+    // Campaign 1 of docs/RELIABILITY.md: a client SIGKILLed right after it renewed its
     // jog leaves that renewal queued; the server finds the client dead first, then reads
     // the renewal. It must not restart the jog (nobody would renew or stop it but the
     // deadman); a stop it sent still counts.

@@ -1,5 +1,5 @@
 //! When a streamed setpoint applies: the one rule the server's engine and the fake server of
-//! `motion-client::testing` both follow (README "Streaming setpoints").
+//! `motion-client::testing` both follow (docs/GROUPS.md "Streaming setpoints").
 //!
 //! A setpoint for tick `k` applies in tick `k + delay`. The stream's `delay` starts at 0 and
 //! grows to the lateness of a setpoint that arrives after its tick — at most

@@ -26,7 +26,7 @@ use crate::report::Row;
 
 const RATES: [f64; 6] = [0.0, 1e-6, 1e-5, 1e-4, 1e-3, 1e-2];
 
-/// Up to this bit-error rate the line-noise guard of the QSB driver (README "Reliability")
+/// Up to this bit-error rate the line-noise guard of the QSB driver (docs/RELIABILITY.md)
 /// must show no count the board did not send and fault nothing.
 const GUARDED_BER: f64 = 1e-4;
 

@@ -132,7 +132,7 @@ fn wrong_type(value: &str) -> &'static str {
     }
 }
 
-/// Out-of-range values per key (the README's ranges and rules).
+/// Out-of-range values per key (docs/CONFIG.md's ranges and rules).
 const OUT_OF_RANGE: [(&str, &str, &[&str]); 14] = [
     ("server", "tick_hz", &["0", "20001", "-5"]),
     ("server", "command_timeout_ms", &["60001", "-1"]),

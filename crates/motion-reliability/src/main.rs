@@ -1,4 +1,4 @@
-//! `reliability`: the reliability campaigns of README "Reliability" against a release
+//! `reliability`: the reliability campaigns of docs/RELIABILITY.md against a release
 //! motiond on simulated boards, one table row per campaign (`--json` for the rows as JSON).
 //! `--quick` is the short version `./scripts/test` runs: it asserts the invariants (0 axes
 //! left moving, 0 out-of-limit bytes, 0 stale shared-memory files, the server alive, every

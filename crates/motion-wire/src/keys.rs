@@ -7,7 +7,7 @@
 //! | `motiond/<name>/info` | put on change; queryable (the newest) | [`ServerInfo`](motion_ipc::ServerInfo) | [`Origin`] |
 //! | `motiond/<name>/stats` | put about 1 Hz; queryable | [`ServerStats`](motion_ipc::ServerStats) | [`Origin`] |
 //! | `motiond/<name>/params` | queryable only (176 KiB) | [`MachineParams`](motion_ipc::MachineParams) | [`Origin`] |
-//! | `motiond/<name>/state/json` | put at `json_rate` Hz | UTF-8 JSON (see the README) | – |
+//! | `motiond/<name>/state/json` | put at `json_rate` Hz | UTF-8 JSON (`crates/motion-bridge/README.md`, "The network contract") | – |
 //! | `motiond/<name>/session/<identity>` (or `…/session`: identity `anonymous`) | queryable: opens a session | [`SessionOpen`] → [`SessionGrant`], or an error reply | – |
 //! | `motiond/<name>/command/<identity>` (or `…/command`: identity `anonymous`) | queryable | [`CommandRequest`](motion_ipc::CommandRequest) → [`CommandReply`](motion_ipc::CommandReply), or an error reply `"<code>: <text>"` ([`Refusal`]) | request: [`RequestMeta`]; reply: [`Origin`] |
 //! | `motiond/<name>/remote/<identity>/<session>` | liveliness token of a remote client (the public [`SessionId`] of its grant) | – | – |

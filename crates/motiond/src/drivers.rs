@@ -1,9 +1,10 @@
 //! The driver of each configured device starts from its [`DriverSpec`]: the device, its axes,
 //! its signals and the devices sharing its link, in the drivers' neutral terms
-//! (`motion_drivers::spec`), filled here from the validated config. Each board's
-//! `<Board>DriverConfig::from_spec` (in motion-drivers) does the unit conversions and
-//! protocol encodings; the board registry (`motion_boards`, through boards.rs) says which
-//! one a model uses.
+//! (`motion_drivers::spec`), filled here from the validated config. Each board's crate
+//! (`crates/boards/<board>`, its `<Board>DriverConfig::from_spec`) does the unit conversions
+//! and protocol encodings, reached through the board registry (`motion_boards`: `boards.rs`
+//! builds each device's driver from [`driver_spec`], names the config key of a refusal with
+//! [`spec_error`], and places the parameters a board reports with [`param_rows`]).
 
 use motion_drivers::spec::{
     BusPeer, DriverAxis, DriverSignal, DriverSpec, Param, ParamOwner, SpecError,

@@ -8,7 +8,7 @@
 //! 0600) and linked to its name (never replacing one), and is read only when it is a
 //! regular file of the server's user that its group and others may neither read nor write
 //! ([`crate::private_dir`]). A process of the server's own user can read it: that user is
-//! trusted as it is for the server's shared memory (README "Security and robustness").
+//! trusted as it is for the server's shared memory (docs/SECURITY.md).
 
 use core::fmt::Write as _;
 

@@ -1,5 +1,5 @@
 //! Every black box in `tests/recordings/` replays frame for frame on today's drivers and
-//! engine (README "The black box"; `scripts/record-fixture` records them): a change that
+//! engine (docs/BLACKBOX.md; `scripts/record-fixture` records them): a change that
 //! makes the server answer the same inputs differently fails here, with the first tick
 //! and region or byte that differs. Re-record only for a change meant to do that.
 

@@ -57,9 +57,10 @@ from .session import Accepted, Session
 __all__ = ["DEFAULT_LEAD", "SetpointStream"]
 
 #: Ticks ahead of the frame read that :meth:`SetpointStream.run_each_tick` sends for unless
-#: told otherwise (the same as the Rust client's ``DEFAULT_STREAM_LEAD``): a Python client
-#: at 1 kHz beside two busy loops got its setpoint in before its tick for the share of
-#: ticks the README's "Performance" gives with lead 1 and with this lead.
+#: told otherwise (the same as the Rust client's ``DEFAULT_STREAM_LEAD``).
+#: ``motionctl bench``'s stream phase measures the share of ticks a Python client meets with
+#: lead 1 and with this lead, beside ``--busy-loops N`` spinning processes
+#: (docs/PERFORMANCE.md "Coordinated motion and streams").
 DEFAULT_LEAD = 2
 
 _DOUBLE = ctypes.sizeof(ctypes.c_double)

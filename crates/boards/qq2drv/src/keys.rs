@@ -1,4 +1,4 @@
-//! qq2drv machine keys (README "Config"): validated here into
+//! qq2drv machine keys (docs/CONFIG.md, docs/keys/qq2drv.md): validated here into
 //! `Qq2drvAxisKeys` (machine_keys.rs), turned into the driver's config by
 //! `Qq2drvDriverConfig::from_spec`.
 //!

@@ -1,4 +1,4 @@
-//! qsb machine keys (README "Config", `docs/keys/qsb.md`): validated here into
+//! qsb machine keys (docs/CONFIG.md, `docs/keys/qsb.md`): validated here into
 //! `crate::QsbDeviceKeys`, turned into the driver's config by
 //! `QsbDriverConfig::from_spec`.
 //!

@@ -1,4 +1,4 @@
-//! spimotor machine keys (README "Config"): validated here into
+//! spimotor machine keys (docs/CONFIG.md, docs/keys/spimotor.md): validated here into
 //! `crate::SpimotorDeviceKeys`, turned into the driver's config by
 //! `SpimotorDriverConfig::from_spec`.
 //!

@@ -1,4 +1,4 @@
-//! tmcpack machine keys (README "Config", docs/keys/tmcpack.md): validated here into
+//! tmcpack machine keys (docs/CONFIG.md, docs/keys/tmcpack.md): validated here into
 //! `board_tmcpack::{TmcpackDeviceKeys, TmcpackAxisKeys}`, turned into the driver's
 //! config by `TmcpackDriverConfig::from_spec`. Every value is checked against the range the
 //! Trinamic SIXpack/QUADpack manual (V2.43) gives for the instruction it becomes.

@@ -99,7 +99,7 @@ pub(super) fn check_exposure(
             tracing::warn!(
                 how,
                 "zenoh authenticates users but has no access control: any user may send \
-                 under any identity (README: \"Who is who\")"
+                 under any identity (crates/motion-bridge/README.md, \"Who is who\")"
             );
         }
         return Ok(());
@@ -122,8 +122,9 @@ pub(super) fn check_exposure(
         "the config lets remotes do more than stop and e-stop ({names}), but zenoh \
          authenticates nobody (no transport/auth/usrpwd dictionary_file, no TLS client \
          certificates in --zenoh-config): anyone who reaches {} could command as these \
-         identities. Configure zenoh authentication and access control (README, \"Who is \
-         who\"), or pass --insecure on a network you trust",
+         identities. Configure zenoh authentication and access control \
+         (crates/motion-bridge/README.md, \"Who is who\"), or pass --insecure on a network \
+         you trust",
         config.listen.join(", ")
     )))
 }

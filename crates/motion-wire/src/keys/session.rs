@@ -144,7 +144,8 @@ impl SessionGrant {
 /// draws (this crate does no I/O). The session's secret ([`SessionToken`]) is agreed from
 /// both sides' keys: anyone who sees the opening (a log, a peer on the path) sees the public
 /// keys only. An active peer that answers the opening in the bridge's place is not kept out
-/// by this (zenoh authentication and access control are: README, "Who is who").
+/// by this (zenoh authentication and access control are: `crates/motion-bridge/README.md`, "Who is
+/// who").
 pub struct KeyPair {
     secret: x25519_dalek::StaticSecret,
     public: [u8; 32],

@@ -150,7 +150,7 @@ impl Validator<'_, '_> {
                 &s.pin,
                 &table,
                 &key("pin"),
-                "the board's pin name (README \"I/O\" lists each board's pins)",
+                "the board's pin name (docs/IO.md lists each board's pins)",
             )
             .and_then(|pin| {
                 let spec = spec?;
