@@ -12,10 +12,11 @@
 //!   it makes exists, down to the anchor and to the section a link names in quotes.
 //!
 //! motionctl is this package's binary; the other binaries are looked for beside it in the
-//! same target directory and must be newer than their package's sources: `cargo test
-//! --workspace` (`./scripts/test`) builds them all first; alone, run `cargo build -p motiond
-//! -p motion-bridge -p motion-sim-cli` before `cargo test -p motionctl --test
-//! readme_commands`. The test names what to build when one is missing or stale.
+//! same target directory and must be newer than every source file cargo built them from
+//! (their `<bin>.d`): `cargo test --workspace` (`./scripts/test`) builds them all first;
+//! alone, run `cargo build -p motiond -p motion-bridge -p motion-sim-cli` before `cargo test
+//! -p motionctl --test readme_commands`. The test names what to build when one is missing
+//! or stale.
 
 mod readme;
 

@@ -128,7 +128,7 @@ impl<'a> Checker<'a> {
             return vec![format!("no package of the workspace has a binary `{bin}`")];
         };
         let package = package.to_owned();
-        let path = match built_binary(self.workspace, &package, bin) {
+        let path = match built_binary(&package, bin) {
             Ok(path) => path,
             Err(problem) => return vec![problem],
         };

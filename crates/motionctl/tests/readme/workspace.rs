@@ -1,7 +1,8 @@
 //! The workspace as the README's commands name it: its packages with their binaries,
 //! examples, benches and features (read from the `Cargo.toml` files), the package
 //! `cargo run` runs without `-p`, the top-level directories paths start with, and where
-//! the binaries cargo built for this test are.
+//! the binaries cargo built for this test are (and whether they are older than their
+//! sources).
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -10,7 +11,6 @@ use std::time::SystemTime;
 /// One package of the workspace.
 #[derive(Debug, Clone, Default)]
 pub struct Package {
-    pub dir: PathBuf,
     pub bins: BTreeSet<String>,
     pub examples: BTreeSet<String>,
     pub benches: BTreeSet<String>,
@@ -126,7 +126,6 @@ fn package(dir: &Path) -> Result<(String, Package)> {
         .map(|features| features.keys().cloned().collect())
         .unwrap_or_default();
     let package = Package {
-        dir: dir.to_owned(),
         bins,
         examples,
         benches,
@@ -171,9 +170,10 @@ fn strings(value: Option<&toml::Value>) -> Vec<String> {
 
 /// The binary `bin` of package `package` as cargo built it for this test: motionctl is
 /// this package's own (`CARGO_BIN_EXE_motionctl`); another package's is looked for beside
-/// it, and must be newer than its package's sources (`src/`, `Cargo.toml`), or its help
-/// could describe a command line the sources no longer have.
-pub fn built_binary(workspace: &Workspace, package: &str, bin: &str) -> Result<PathBuf> {
+/// it, and must be newer than every source file it was built from (the files cargo lists
+/// in the `<bin>.d` beside it, its path dependencies' included), or its help could
+/// describe a command line the sources no longer have.
+pub fn built_binary(package: &str, bin: &str) -> Result<PathBuf> {
     let own = PathBuf::from(env!("CARGO_BIN_EXE_motionctl"));
     if bin == "motionctl" {
         return Ok(own);
@@ -182,15 +182,45 @@ pub fn built_binary(workspace: &Workspace, package: &str, bin: &str) -> Result<P
     let build = format!("build it first: `cargo build -p {package}` (same target directory)");
     let built =
         modified(&path).map_err(|_| format!("no `{bin}` at {}: {build}", path.display()))?;
-    let dir = &workspace.packages[package].dir;
-    let newest = newest(&dir.join("src"))?.max(modified(&dir.join("Cargo.toml"))?);
-    if built < newest {
-        return Err(format!(
-            "`{}` is older than the sources of {package}: {build}",
-            path.display()
-        ));
+    let Ok(dep_info) = std::fs::read_to_string(path.with_extension("d")) else {
+        return Ok(path); // nothing says what it was built from
+    };
+    for source in sources(&dep_info) {
+        if modified(Path::new(&source)).is_ok_and(|changed| changed > built) {
+            return Err(format!(
+                "`{}` is older than {source}, one of its sources: {build}",
+                path.display()
+            ));
+        }
     }
     Ok(path)
+}
+
+/// The files a cargo dep-info file (`target: source source …`, spaces in names escaped)
+/// lists.
+fn sources(dep_info: &str) -> Vec<String> {
+    let Some((_, list)) = dep_info
+        .lines()
+        .next()
+        .and_then(|line| line.split_once(": "))
+    else {
+        return Vec::new();
+    };
+    let mut sources = Vec::new();
+    let mut current = String::new();
+    let mut chars = list.chars();
+    while let Some(c) = chars.next() {
+        match c {
+            '\\' => current.extend(chars.next()),
+            ' ' if !current.is_empty() => sources.push(core::mem::take(&mut current)),
+            ' ' => {}
+            c => current.push(c),
+        }
+    }
+    if !current.is_empty() {
+        sources.push(current);
+    }
+    sources
 }
 
 fn modified(path: &Path) -> Result<SystemTime> {
@@ -199,20 +229,16 @@ fn modified(path: &Path) -> Result<SystemTime> {
         .map_err(|e| format!("{}: {e}", path.display()))
 }
 
-/// The newest modification time of the files under `dir`.
-fn newest(dir: &Path) -> Result<SystemTime> {
-    let mut newest = SystemTime::UNIX_EPOCH;
-    let mut pending = vec![dir.to_owned()];
-    while let Some(dir) = pending.pop() {
-        let entries = std::fs::read_dir(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
-        for entry in entries.filter_map(core::result::Result::ok) {
-            let path = entry.path();
-            if path.is_dir() {
-                pending.push(path);
-            } else {
-                newest = newest.max(modified(&path)?);
-            }
-        }
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn dep_info_lists_its_sources() {
+        let dep_info = "/t/debug/motiond: /r/a.rs /r/with\\ space.rs  /r/b.rs\n";
+        assert_eq!(
+            sources(dep_info),
+            ["/r/a.rs", "/r/with space.rs", "/r/b.rs"]
+        );
     }
-    Ok(newest)
 }
