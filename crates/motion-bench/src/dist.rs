@@ -137,6 +137,23 @@ impl Summary {
     }
 }
 
+/// `part` of `whole` in hundredths of a percent, as the summary of one figure (every
+/// percentile that value, `whole` its samples).
+pub(crate) fn percent(part: u64, whole: u64) -> Summary {
+    let value = if whole == 0 {
+        0
+    } else {
+        (part as f64 * 10_000.0 / whole as f64).round() as u64
+    };
+    Summary {
+        samples: whole,
+        p50: value,
+        p99: value,
+        p999: value,
+        max: value,
+    }
+}
+
 /// `12.3µs` / `123µs` / `1.23ms` style, for the table.
 pub fn format_ns(ns: u64) -> String {
     match ns {

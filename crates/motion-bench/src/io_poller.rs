@@ -9,8 +9,9 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::mpsc::{Receiver, channel};
 
+use crate::cpu::{WINDOW, measure_cpu, threads_line};
 use crate::dist::Dist;
-use crate::io_phase::{Links, WINDOW, measure_cpu, threads_line};
+use crate::io_links::Links;
 use crate::poller::Poller;
 use crate::pty::LineSeen;
 use crate::report::{Row, Unit};

@@ -53,15 +53,18 @@
 
 pub mod args;
 pub mod arrival;
+pub mod cpu;
 pub mod delivery;
 pub mod dist;
 pub mod group_client;
 pub mod groups;
+pub mod io_links;
 pub mod io_phase;
 pub mod io_poller;
 pub mod ipc;
 pub mod link_rate;
 pub mod peer;
+mod peer_services;
 pub mod plots;
 pub mod poller;
 pub mod poller_boards;

@@ -15,17 +15,17 @@
 //! arguments, so the cargo bench and motionctl both serve as their own peer.
 
 use std::ffi::OsString;
-use std::io::{BufRead, BufReader, Read, Write};
+use std::io::{BufRead, BufReader, Read};
 use std::process::{Child, ChildStdin, ChildStdout, Command, ExitCode, Stdio};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use iceoryx2::prelude::*;
-use motion_ipc::{CommandReply, CommandRequest, MotionFrame, Reason, ServiceNames, Setpoint};
+use motion_ipc::{CommandReply, Reason, ServiceNames};
 
 use crate::args::PeerMode;
 use crate::dist::{Dist, Summary};
-use crate::ipc::Ipc;
+use crate::peer_services::{PeerServices, answer, create, publish, say};
 use crate::rt::{self, now_ns, sleep_until_ns};
 
 /// The first argument that makes a program the baseline peer.
@@ -125,9 +125,6 @@ impl PeerArgs {
         Ok(peer)
     }
 }
-
-/// Clients the peer's services admit (as motiond's default).
-const MAX_CLIENTS: usize = 32;
 
 /// A running peer process.
 #[derive(Debug)]
@@ -260,91 +257,6 @@ pub fn run(mode: PeerMode, name: &str, hz: u32, rt_priority: Option<u8>, cpu: Op
     }
 }
 
-pub(crate) struct PeerServices {
-    _node: Node<Ipc>,
-    frame: iceoryx2::port::publisher::Publisher<Ipc, MotionFrame, ()>,
-    tick: iceoryx2::port::notifier::Notifier<Ipc>,
-    command: iceoryx2::port::server::Server<Ipc, CommandRequest, (), CommandReply, ()>,
-    setpoints: Option<iceoryx2::port::subscriber::Subscriber<Ipc, Setpoint, ()>>,
-}
-
-/// Setpoints waiting before a tick takes them (motiond's `SETPOINTS_BUFFER`).
-const SETPOINTS_BUFFER: usize = 16;
-
-/// motiond's service settings (crates/motiond/src/services.rs, setpoints.rs).
-pub(crate) fn create(name: &str, setpoints: bool) -> Result<PeerServices, String> {
-    let names = ServiceNames::new(name);
-    let node = crate::ipc::node("peer")?;
-    let service = |n: String| ServiceName::new(&n).map_err(|e| format!("{n:?}: {e:?}"));
-    let max_nodes = MAX_CLIENTS + 2;
-    let frame = node
-        .service_builder(&service(names.frame())?)
-        .publish_subscribe::<MotionFrame>()
-        .history_size(1)
-        .subscriber_max_buffer_size(32) // motiond's FRAME_BUFFER
-        .max_subscribers(MAX_CLIENTS)
-        .max_publishers(1)
-        .max_nodes(max_nodes)
-        .enable_safe_overflow(true)
-        .create()
-        .map_err(|e| format!("{}: {e:?}", names.frame()))?
-        .publisher_builder()
-        .create()
-        .map_err(|e| format!("frame publisher: {e:?}"))?;
-    let tick = node
-        .service_builder(&service(names.tick())?)
-        .event()
-        .max_notifiers(1)
-        .max_listeners(MAX_CLIENTS)
-        .max_nodes(max_nodes)
-        .create()
-        .map_err(|e| format!("{}: {e:?}", names.tick()))?
-        .notifier_builder()
-        .create()
-        .map_err(|e| format!("tick notifier: {e:?}"))?;
-    let command = node
-        .service_builder(&service(names.command())?)
-        .request_response::<CommandRequest, CommandReply>()
-        .max_servers(1)
-        .max_clients(MAX_CLIENTS)
-        .max_nodes(max_nodes)
-        .max_active_requests_per_client(8)
-        .max_response_buffer_size(8)
-        .enable_safe_overflow_for_responses(true)
-        .create()
-        .map_err(|e| format!("{}: {e:?}", names.command()))?
-        .server_builder()
-        .create()
-        .map_err(|e| format!("command server: {e:?}"))?;
-    let setpoints = if setpoints {
-        Some(
-            node.service_builder(&service(names.setpoints())?)
-                .publish_subscribe::<Setpoint>()
-                .history_size(0)
-                .subscriber_max_buffer_size(SETPOINTS_BUFFER)
-                .subscriber_max_borrowed_samples(2)
-                .max_subscribers(1)
-                .max_publishers(MAX_CLIENTS)
-                .max_nodes(max_nodes)
-                .enable_safe_overflow(true)
-                .create()
-                .map_err(|e| format!("{}: {e:?}", names.setpoints()))?
-                .subscriber_builder()
-                .create()
-                .map_err(|e| format!("setpoints subscriber: {e:?}"))?,
-        )
-    } else {
-        None
-    };
-    Ok(PeerServices {
-        _node: node,
-        frame,
-        tick,
-        command,
-        setpoints,
-    })
-}
-
 fn serve(
     mode: PeerMode,
     name: &str,
@@ -401,37 +313,6 @@ struct TickFigures<'a> {
 
 /// Publish stamps of the peer's last frames, by tick modulo this.
 const PUBLISHED: usize = 64;
-
-pub(crate) fn say(line: &str) -> Result<(), String> {
-    let mut out = std::io::stdout().lock();
-    writeln!(out, "{line}")
-        .and_then(|()| out.flush())
-        .map_err(|e| format!("stdout: {e}"))
-}
-
-pub(crate) fn answer(services: &PeerServices, tick: u64) {
-    while let Ok(Some(active)) = services.command.receive() {
-        let reply = CommandReply::to(active.payload(), Reason::UnknownAxis, tick);
-        let _ = active.send_copy(reply);
-    }
-}
-
-/// Publishes tick `tick`'s frame-sized sample (deadline `deadline_ns`) and notifies the
-/// tick event: the instant it was published, if it was.
-pub(crate) fn publish(services: &PeerServices, tick: u64, deadline_ns: u64) -> Option<u64> {
-    let published = services.frame.loan_uninit().ok().map(|sample| {
-        let mut sample = sample.write_payload(MotionFrame::EMPTY);
-        let frame = sample.payload_mut();
-        frame.tick = tick;
-        frame.time_ns = deadline_ns;
-        frame.publish_ns = now_ns();
-        let publish_ns = frame.publish_ns;
-        let _ = sample.send();
-        publish_ns
-    });
-    let _ = services.tick.notify();
-    published
-}
 
 fn tick_loop(
     services: &PeerServices,

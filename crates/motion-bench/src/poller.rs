@@ -36,8 +36,8 @@ use motion_link::spi_socket::{SpiSocketConfig, SpiSocketLink};
 use nix::poll::{PollFd, PollFlags};
 use nix::sys::time::TimeSpec;
 
-use crate::io_phase::Links;
-use crate::peer::{answer, create, publish, say};
+use crate::io_links::Links;
+use crate::peer_services::{answer, create, publish, say};
 use crate::poller_boards::{Idle, PACK_BAUD};
 use crate::pty::BAUD;
 use crate::rt::{self, XorShift, now_ns};
@@ -470,7 +470,7 @@ mod tests {
     use std::ffi::OsString;
 
     use super::PollerArgs;
-    use crate::io_phase::Links;
+    use crate::io_links::Links;
     use crate::sweep::ServerRt;
 
     #[test]

@@ -213,7 +213,7 @@ pub fn rows(
             }
         };
         let [applied, late, early, clamped, refused] = run.counters;
-        let met = crate::stream::percent(run.before_deadline, run.ticks);
+        let met = crate::dist::percent(run.before_deadline, run.ticks);
         let beside = match run.busy_loops {
             0 => String::new(),
             n => format!(", {n} busy loops beside"),

@@ -23,7 +23,7 @@ use motion_ipc::{CommandKind, GroupMotion, GroupState, Setpoint, StreamMode, Str
 
 use crate::args::PeerMode;
 use crate::delivery::duration_ns;
-use crate::dist::{Dist, Summary};
+use crate::dist::{Dist, Summary, percent};
 use crate::group_client::{GroupClient, GroupDesc, Watch};
 use crate::ipc::{self, Frames, Ipc};
 use crate::peer::Peer;
@@ -318,21 +318,6 @@ fn exchange(
         run.ticks = for_tick - first_for.unwrap_or(for_tick) + 1;
     }
     Ok(run)
-}
-
-pub(crate) fn percent(part: u64, whole: u64) -> Summary {
-    let value = if whole == 0 {
-        0
-    } else {
-        (part as f64 * 10_000.0 / whole as f64).round() as u64
-    };
-    Summary {
-        samples: whole,
-        p50: value,
-        p99: value,
-        p999: value,
-        max: value,
-    }
 }
 
 /// The streaming rows.

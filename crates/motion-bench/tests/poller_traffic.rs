@@ -10,7 +10,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use motion_base::Model;
-use motion_bench::io_phase::{Links, config_text};
+use motion_bench::io_links::{Links, config_text};
 use motion_bench::poller_boards::{Idle, PACK_BAUD, SPIM_ADDRESS};
 use motion_bench::pty::BAUD;
 use motion_bench::sim_boards::{serial_board, spi_board};

@@ -1,19 +1,11 @@
-//! A group's state, typed ([`GroupStatus`]), and the wait for its motion to end
-//! ([`Group::wait_done`]).
+//! A group's state in one frame, typed ([`GroupStatus`]), and how its motion ended
+//! ([`GroupOutcome`], what [`Group::wait_done`](crate::Group::wait_done) returns).
 
-use core::time::Duration;
-use std::time::Instant;
-
-use iceoryx2::service::Service;
 use motion_ipc::{
     ClientId, GroupAbort, GroupMotion, GroupState, MotionFrame, PathKind, ServerInfo, StreamState,
 };
 
-use crate::{Client, ClientError, Frame, Group, GroupAborted};
-
-/// Ticks after a `Run` was accepted in which a frame may still show the group's previous
-/// motion (a server that starts a path in the tick after accepting it).
-const START_GRACE_TICKS: u64 = 2;
+use crate::{ClientError, GroupAborted};
 
 /// A group's state in one frame, typed, with the abort's axis named.
 #[derive(Debug, Clone, PartialEq)]
@@ -140,7 +132,7 @@ impl GroupStatus {
     }
 }
 
-/// A group's motion that ended at its end ([`Group::wait_done`]).
+/// A group's motion that ended at its end ([`Group::wait_done`](crate::Group::wait_done)).
 #[derive(Debug, Clone, PartialEq)]
 pub struct GroupOutcome {
     /// The group's name.
@@ -155,122 +147,4 @@ pub struct GroupOutcome {
     pub time: f64,
     /// The path's length at feed 1, seconds.
     pub duration: f64,
-}
-
-/// What one frame says about the wait.
-enum Step {
-    Wait,
-    Done(GroupOutcome),
-    Failed(ClientError),
-}
-
-impl<S: Service> Group<'_, S> {
-    /// Waits until the motion this client last ran on the group (or, when it ran none, the
-    /// motion running now) ends: `Ok` when it reached its end (`done`: every axis within its
-    /// goal tolerance), [`ClientError::GroupAborted`] naming the reason, the axis and the
-    /// figures when it was aborted, [`ClientError::GroupTimeout`] when `timeout` passes.
-    pub fn wait_done(&self, timeout: Duration) -> Result<GroupOutcome, ClientError> {
-        self.wait_done_observing(timeout, |_| {})
-    }
-
-    /// [`Group::wait_done`], calling `observe` with every frame it reads (in order; frames
-    /// the client was too slow for are lost: compare ticks).
-    pub fn wait_done_observing(
-        &self,
-        timeout: Duration,
-        mut observe: impl FnMut(&MotionFrame),
-    ) -> Result<GroupOutcome, ClientError> {
-        let client = self.client();
-        let deadline = Instant::now() + timeout;
-        let mark = client.run_mark(self.index());
-        let info = client.info()?;
-        let mut frame: Frame<S> = client.latest()?;
-        let mut motion = GroupMotion::Idle;
-        loop {
-            if let Some(mark) = mark
-                && client.session.epoch() != mark.epoch
-                && let Some(restart) = client.session.last_restart()
-            {
-                return Err(ClientError::ServerRestarted(restart));
-            }
-            if mark.is_none_or(|mark| frame.tick >= mark.tick) {
-                observe(&frame);
-                let status = GroupStatus::read(&info, &frame, self.index() as usize)?;
-                motion = status.motion;
-                match judge(client, mark, &status) {
-                    Step::Wait => {}
-                    Step::Done(outcome) => return Ok(outcome),
-                    Step::Failed(error) => return Err(error),
-                }
-            }
-            let now = Instant::now();
-            let timed_out = || ClientError::GroupTimeout {
-                group: self.name(),
-                waited: timeout,
-                motion: motion.name(),
-            };
-            if now >= deadline {
-                return Err(timed_out());
-            }
-            drop(frame);
-            frame = match client.next_frame(deadline - now) {
-                Ok(next) => next,
-                Err(ClientError::NoFrame(_)) => return Err(timed_out()),
-                Err(error) => return Err(error),
-            };
-        }
-    }
-}
-
-fn outcome(status: &GroupStatus) -> GroupOutcome {
-    GroupOutcome {
-        group: status.name.clone(),
-        motion: status.motion,
-        path_id: status.path_id,
-        tick: status.tick,
-        time: status.time,
-        duration: status.duration,
-    }
-}
-
-/// What `status` means for a wait about `mark` (the client's last run on the group).
-fn judge<S: Service>(
-    client: &Client<S>,
-    mark: Option<crate::group::RunMark>,
-    status: &GroupStatus,
-) -> Step {
-    let ended = |status: &GroupStatus| match status.motion {
-        GroupMotion::Done | GroupMotion::Idle => Step::Done(outcome(status)),
-        GroupMotion::Aborted => Step::Failed(ClientError::GroupAborted(Box::new(status.aborted()))),
-        GroupMotion::Moving | GroupMotion::Holding | GroupMotion::Held => Step::Wait,
-    };
-    let Some(mark) = mark else {
-        return ended(status);
-    };
-    let theirs = status.owner.is_some_and(|owner| owner != client.id());
-    if status.path_id == mark.path_id && !(theirs && status.motion.active()) {
-        return match status.motion {
-            GroupMotion::Idle => Step::Failed(ClientError::GroupWaitAborted {
-                group: status.name.clone(),
-                why: format!(
-                    "it went idle without ending path {} (the server restarted it?)",
-                    mark.path_id
-                ),
-            }),
-            _ => ended(status),
-        };
-    }
-    if status.tick <= mark.tick + START_GRACE_TICKS && !status.motion.active() {
-        // The frame may not show the new path yet.
-        return Step::Wait;
-    }
-    Step::Failed(ClientError::GroupWaitAborted {
-        group: status.name.clone(),
-        why: format!(
-            "another motion (path {}, {}) replaced path {} that this client ran",
-            status.path_id,
-            status.motion.name(),
-            mark.path_id
-        ),
-    })
 }

@@ -3,10 +3,10 @@
 use core::time::Duration;
 
 use motion_drivers::{ChannelState, DeviceFault, GoalKind, GoalKinds, RateFloor};
+use motion_ipc::rules::Motion;
 use motion_ipc::{AxisMode, Capabilities, ClientId, CommandKind, FaultCode};
 
 use crate::config::{AxisConfig, EstopCategory};
-use crate::hold::HeldMove;
 
 /// A latched fault: its code, who raised it, and the figure and tolerance it broke.
 #[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq)]
@@ -21,6 +21,16 @@ pub(crate) struct Fault {
     pub limit: f64,
     /// When it was latched.
     pub at: Duration,
+}
+
+/// A position move held by `Hold`.
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq)]
+pub(crate) struct HeldMove {
+    /// The goal to continue (`Position` or `RampPosition`), in axis units.
+    pub motion: Motion,
+    /// The board paused the move itself: [`Driver::resume_line`](motion_drivers::Driver::resume_line)
+    /// continues it.
+    pub by_board: bool,
 }
 
 /// Runtime state of one axis. Plain data; the engine drives it.

@@ -12,22 +12,14 @@
 //! `HELD`; its following-error rule is the hold's. Anything else given to the axis — a
 //! stop, a goal, an e-stop, a fault, its group — forgets the held move; a `Resume` without
 //! one is refused with `NotMoving`. The resumed move belongs to the client that resumed
-//! it.
+//! it. The held move is the axis's own state (`axis::HeldMove`).
 
 use motion_drivers::{Driver, Goal};
 use motion_ipc::rules::Motion;
 use motion_ipc::{AxisMode, ClientId, Reason};
 
 use crate::Engine;
-
-/// A position move held by `Hold`.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq)]
-pub(crate) struct HeldMove {
-    /// The goal to continue (`Position` or `RampPosition`), in axis units.
-    pub motion: Motion,
-    /// The board paused the move itself: [`Driver::resume_line`] continues it.
-    pub by_board: bool,
-}
+use crate::axis::HeldMove;
 
 impl<D: Driver> Engine<D> {
     /// `Hold` of axis `index` (accepted by the rulebook).

@@ -24,9 +24,9 @@
 //! lead-in: one duration at both ends, found by bisection). Every segment is then checked
 //! exactly like any other path (`Checker`): velocities, accelerations, positions.
 
-use crate::path::{Checker, SLACK, Segments};
 use crate::points::{Points, Start};
 use crate::polynomial::{Span, quintic_hermite};
+use crate::segments::{Checker, SLACK, Segments};
 use crate::{AxisLimits, PathError, at_most};
 
 /// The blend durations at the ends and the anchors the straight segments go through.

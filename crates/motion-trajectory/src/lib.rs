@@ -64,6 +64,7 @@ mod path;
 mod path_serde;
 mod points;
 mod polynomial;
+mod segments;
 mod spline;
 mod time_scale;
 

@@ -10,8 +10,9 @@ use serde::de::Error as _;
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use crate::MAX_AXES;
-use crate::path::{Path, Segments};
+use crate::path::Path;
 use crate::polynomial::Coeffs;
+use crate::segments::Segments;
 
 /// The most points a path read back may be sized for (a damaged size must not allocate
 /// gigabytes).

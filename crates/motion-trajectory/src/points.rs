@@ -167,7 +167,7 @@ impl Points<'_> {
                 if !finite {
                     return Err(PathError::NotFinite { point, axis });
                 }
-                let slack = crate::path::range_slack(limit);
+                let slack = crate::segments::range_slack(limit);
                 if !(value >= limit.min - slack && value <= limit.max + slack) {
                     return Err(PathError::OutOfRange {
                         point,
@@ -183,7 +183,7 @@ impl Points<'_> {
         let last = count - 1;
         for (axis, limit) in limits.iter().enumerate().take(axes) {
             let value = self.velocity(last, axis);
-            if value.abs() > crate::path::SLACK * limit.max_velocity {
+            if value.abs() > crate::segments::SLACK * limit.max_velocity {
                 return Err(PathError::VelocityLimit {
                     point: last,
                     axis,
@@ -192,7 +192,7 @@ impl Points<'_> {
                 });
             }
             let value = self.acceleration(last, axis);
-            if value.abs() > crate::path::SLACK * limit.max_accel {
+            if value.abs() > crate::segments::SLACK * limit.max_accel {
                 return Err(PathError::AccelLimit {
                     point: last,
                     axis,

@@ -19,7 +19,7 @@
 //! those instants the polynomials are smooth, so what is left is a discretisation error of the
 //! order of the change over one tick.
 
-use crate::path::SLACK;
+use crate::segments::SLACK;
 use crate::{AxisLimits, Path};
 
 /// The largest feed override: 150 %.

@@ -324,7 +324,7 @@ pub enum Command {
         out: Vec<PathBuf>,
         /// The format of every --out file, whatever its extension.
         #[arg(long, value_enum)]
-        format: Option<crate::record::RecordFormat>,
+        format: Option<crate::record_output::RecordFormat>,
         /// Also plot desired and measured position and velocity per axis into this SVG.
         #[arg(long, value_name = "FILE.svg")]
         plot: Option<PathBuf>,

@@ -31,6 +31,7 @@ mod machine;
 mod record;
 mod record_csv;
 mod record_mcap;
+mod record_output;
 mod record_plot;
 mod scope;
 mod terminal;

@@ -9,7 +9,6 @@ use std::path::{Path, PathBuf};
 use std::sync::mpsc;
 
 use anyhow::{Context as _, bail};
-use clap::ValueEnum;
 use motion_client::ipc::MotionFrame;
 use motion_client::{Client, ClientError};
 
@@ -17,32 +16,11 @@ use crate::Service;
 use crate::describe::select_axes;
 use crate::record_csv::CsvRecording;
 use crate::record_mcap::McapRecording;
+use crate::record_output::{RecordFormat, Recording};
 use crate::record_plot::PlotRecording;
 
 /// How long to wait for a frame before calling the server silent.
 const FRAME_TIMEOUT: Duration = Duration::from_secs(2);
-
-/// A recording's file format.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum RecordFormat {
-    /// One CSV row per tick.
-    Csv,
-    /// MCAP: ROS 2 `sensor_msgs/msg/JointState` (CDR) and JSON channels, for Foxglove and
-    /// PlotJuggler.
-    Mcap,
-}
-
-impl RecordFormat {
-    /// The format the file's extension names (`.csv`, `.mcap`, any case).
-    pub fn from_extension(path: &Path) -> Option<Self> {
-        let extension = path.extension()?.to_str()?.to_ascii_lowercase();
-        match extension.as_str() {
-            "csv" => Some(Self::Csv),
-            "mcap" => Some(Self::Mcap),
-            _ => None,
-        }
-    }
-}
 
 /// What `motionctl record` was asked for.
 #[derive(Debug)]
@@ -57,17 +35,6 @@ pub struct RecordRequest<'a> {
     pub plot: Option<&'a Path>,
     /// The axes to record (all when empty).
     pub axes: &'a [String],
-}
-
-/// One output of a recording: told every recorded frame, in tick order, then finished (on
-/// the recording's writer thread).
-pub trait Recording: Send {
-    /// Writes one tick.
-    fn frame(&mut self, frame: &MotionFrame) -> anyhow::Result<()>;
-    /// Completes the file.
-    fn finish(self: Box<Self>) -> anyhow::Result<()>;
-    /// The file written.
-    fn path(&self) -> &Path;
 }
 
 fn format_of(path: &Path, forced: Option<RecordFormat>) -> anyhow::Result<RecordFormat> {

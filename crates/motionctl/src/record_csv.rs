@@ -12,7 +12,7 @@ use motion_client::ipc::{MotionFrame, SignalKind};
 use crate::Service;
 use crate::describe::{flag_names, mode_name};
 use crate::io::signal_flag_names;
-use crate::record::Recording;
+use crate::record_output::Recording;
 
 /// The CSV header: tick and time, then per axis position, velocity, target (with units),
 /// mode and flags, then per signal its value (with its unit; `0/1` for digital) and flags.

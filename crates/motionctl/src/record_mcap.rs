@@ -40,7 +40,7 @@ use crate::group::groups_json;
 use crate::io::signal_states_json;
 use crate::joint_state_cdr::{JOINT_STATE_DEFINITION, JOINT_STATE_SCHEMA_NAME, JointState, Stamp};
 use crate::machine::{ParamTable, params_lines};
-use crate::record::Recording;
+use crate::record_output::Recording;
 
 /// A JSON schema for an object with a tick and the named array or fields.
 fn object_schema(title: &str, properties: Value) -> String {

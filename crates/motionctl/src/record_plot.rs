@@ -10,7 +10,7 @@ use motion_client::Client;
 use motion_client::ipc::{MotionFrame, read_text};
 
 use crate::Service;
-use crate::record::Recording;
+use crate::record_output::Recording;
 
 /// Points kept per line: a longer recording keeps every n-th tick (the picture is at most
 /// 800 px wide), so a long run still makes a file a browser opens quickly.

@@ -19,7 +19,7 @@ use iceoryx2::prelude::FileDescriptorBased;
 use nix::poll::{PollFd, PollFlags, PollTimeout, poll};
 use nix::sys::eventfd::{EfdFlags, EventFd};
 
-use crate::services::Ipc;
+use crate::Ipc;
 
 /// The flag the tick looks at, and the thread that raises it.
 #[derive(Debug)]

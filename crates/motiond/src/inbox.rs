@@ -11,8 +11,8 @@ use iceoryx2::service::port_factory::PortFactory as _;
 use iceoryx2::service::port_factory::publish_subscribe::PortFactory;
 use motion_ipc::ClientId;
 
+use crate::Ipc;
 use crate::error::ServiceError;
-use crate::services::Ipc;
 
 /// The server's end of an inbox service: its subscriber and the service's port factory.
 pub type Inbox<T> = (Subscriber<Ipc, T, ()>, PortFactory<Ipc, T, ()>);

@@ -8,7 +8,6 @@ pub mod blackbox;
 pub mod boards;
 pub mod command_port;
 pub mod config;
-pub mod drivers;
 pub mod error;
 pub mod estop_watch;
 pub mod inbox;
@@ -26,3 +25,7 @@ pub mod setpoints;
 pub mod stats;
 pub mod systemd;
 pub mod tick;
+
+/// The service type motiond runs on: inter-process shared memory, single-threaded ports
+/// (every port lives on the tick thread).
+pub type Ipc = iceoryx2::prelude::ipc::Service;

@@ -4,8 +4,8 @@
 
 use motion_ipc::{MAX_PARAMS, MachineParam, MachineParams, ParamOwner, write_text};
 
+use crate::boards::ParamRow;
 use crate::config::{Owner, ServerConfig};
-use crate::drivers::ParamRow;
 
 /// Keys that have another spelling in the config file (one fact, two names): a row under
 /// the first counts as configured when the second was set on the related table.

@@ -21,8 +21,8 @@ use iceoryx2::sample::Sample;
 use iceoryx2::service::port_factory::publish_subscribe::PortFactory;
 use motion_ipc::{ClientId, GroupPath, MAX_GROUPS, MotionFrame};
 
+use crate::Ipc;
 use crate::error::ServiceError;
-use crate::services::Ipc;
 
 /// Paths held between their arrival and their `Run`, all nodes together.
 pub const PATHS_HELD: usize = 6;

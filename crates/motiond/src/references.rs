@@ -291,7 +291,7 @@ fn records(config: &ServerConfig, drivers: &[AnyDriver]) -> Vec<(usize, Record)>
         {
             continue;
         }
-        let spec = crate::drivers::driver_spec(config, axis.device, device);
+        let spec = crate::boards::driver_spec(config, axis.device, device);
         let Some(driver_axis) = spec.axes.iter().find(|a| a.channel == axis.channel) else {
             continue;
         };

@@ -2,6 +2,7 @@
 //! creating them, taking them over after a crashed server, watching their port slots, and
 //! telling the tick which node sent a request.
 
+use crate::Ipc;
 use crate::error::ServiceError;
 use crate::paths::{PathInbox, PathsFactory};
 use crate::setpoints::{SetpointInbox, SetpointsFactory};
@@ -18,10 +19,6 @@ use motion_ipc::{
     ClientId, CommandReply, CommandRequest, MachineParams, MotionFrame, ServerInfo, ServerStats,
     ServiceNames,
 };
-
-/// The service type motiond runs on: inter-process shared memory, single-threaded ports
-/// (every port lives on the tick thread).
-pub type Ipc = ipc::Service;
 
 /// The command service's port factory.
 pub type CommandFactory = RequestResponseFactory<Ipc, CommandRequest, (), CommandReply, ()>;

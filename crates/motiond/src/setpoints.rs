@@ -20,10 +20,10 @@ use iceoryx2::service::port_factory::publish_subscribe::PortFactory;
 use motion_engine::Engine;
 use motion_ipc::{ClientId, Setpoint};
 
+use crate::Ipc;
 use crate::boards::AnyDriver;
 use crate::error::ServiceError;
 use crate::rt::monotonic_now;
-use crate::services::Ipc;
 
 /// Setpoints a publisher may have queued before the tick takes them: enough for a client
 /// that streams for several ticks ahead, and for one tick the server was late.

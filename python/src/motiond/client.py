@@ -1,4 +1,5 @@
-"""Connecting to a motiond instance: :class:`Client`."""
+"""Connecting to a motiond instance: :class:`Client` (its answers named from the server's
+description by :mod:`motiond.answers`)."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ from typing import Any, Callable, ClassVar, Iterator, List, Optional, Sequence, 
 
 import iceoryx2 as iox2
 
-from . import commission, errors
+from . import answers, commission, errors
 from .axis import Axis
 from .errors import (
     EstopNotSeen,
@@ -38,7 +39,6 @@ from .ipc import (
     GroupPath,
     MachineParams,
     MotionFrame,
-    ParamOwner,
     Reason,
     ServerInfo,
     ServerStats,
@@ -59,8 +59,6 @@ from .signal import Signal
 
 __all__ = ["Client", "Accepted", "Param", "DEFAULT_CONNECT_TIMEOUT", "DEFAULT_REPLY_TIMEOUT"]
 
-# ``CommandReply.at_point`` / ``at_axis`` when the server named none.
-NO_INDEX = 0xFFFF_FFFF
 # Longest single sleep of any wait: bounds a missed wake-up and how late Ctrl-C is seen.
 _WAIT_CAP = 0.05
 # Longest single sleep while waiting for a command reply.
@@ -393,30 +391,8 @@ class Client:
 
     def _params_of(self, received: Any) -> List[Param]:
         """The entries of a received :class:`~motiond.ipc.MachineParams`, named."""
-        info = self.info
-        params = []
         with received:
-            table = received.payload
-            for index in range(min(int(table.count), len(table.entries))):
-                entry = table.entries[index]
-                owner = to_enum(ParamOwner, entry.owner_kind)
-                if owner == ParamOwner.DEVICE and entry.owner_index < info.device_count:
-                    owner_name = info.devices[entry.owner_index].text("name")
-                elif owner == ParamOwner.AXIS and entry.owner_index < info.axis_count:
-                    owner_name = info.axes[entry.owner_index].text("name")
-                else:
-                    owner_name = ""
-                params.append(
-                    Param(
-                        owner=owner,
-                        owner_index=int(entry.owner_index),
-                        owner_name=owner_name,
-                        key=entry.text("key"),
-                        value=entry.text("value"),
-                        from_config=bool(entry.from_config),
-                    )
-                )
-        return params
+            return answers.params_of(self.info, received.payload)
 
     # --- frames ----------------------------------------------------------------------------
 
@@ -589,56 +565,9 @@ class Client:
             if target == Target.AXIS:
                 self._note_goal(index, int(reply.tick_applied))
             return Accepted(sequence=int(reply.sequence), tick=int(reply.tick_applied))
-        raise self._refusal(reply, label if label is not None else self._label(index, target))
-
-    def _refusal(self, reply: CommandReply, target: str) -> errors.Refused:
-        """The exception of a refused ``reply``, naming the point, the axis (by name), the
-        figures and the claim holder the server named."""
-        info = self.info
-        point = None if reply.at_point == NO_INDEX else int(reply.at_point)
-        axis: Optional[str] = None
-        unit = ""
-        if reply.at_axis != NO_INDEX:
-            if reply.at_axis < min(int(info.axis_count), len(info.axes)):
-                entry = info.axes[reply.at_axis]
-                axis, unit = entry.text("name"), entry.text("unit")
-            else:
-                axis = f"#{reply.at_axis}"
-        reason = int(reply.reason)
-        if unit and reason == Reason.VELOCITY_LIMIT:
-            unit += "/s"
-        elif unit and reason == Reason.ACCEL_LIMIT:
-            unit += "/s²"
-        figures = reply.value != 0.0 or reply.limit != 0.0
-        holder = int(reply.holder)
-        return errors.refused(
-            reason,
-            int(reply.kind),
-            target,
-            int(reply.tick_applied),
-            point=point,
-            axis=axis,
-            value=float(reply.value) if figures else None,
-            limit=float(reply.limit) if figures else None,
-            unit=unit,
-            holder=holder if holder else None,
-        )
-
-    def _label(self, index: int, target: Union[Target, int]) -> str:
-        if index == ALL_AXES:
-            return "all axes"
-        info = self.info
-        if target == Target.SIGNAL:
-            if index < info.signal_count:
-                return f"signal {info.signals[index].text('name')}"
-            return f"signal #{index}"
-        if target == Target.GROUP:
-            if index < self._group_count():
-                return f"group {info.groups[index].text('name')}"
-            return f"group #{index}"
-        if index < info.axis_count:
-            return f"axis {info.axes[index].text('name')}"
-        return f"axis #{index}"
+        if label is None:
+            label = answers.label(self.info, index, target)
+        raise answers.refusal(self.info, reply, label)
 
     def _note_goal(self, index: int, tick: int) -> None:
         if index == ALL_AXES:

@@ -9,8 +9,8 @@
 - :class:`EntryHandle`, what an axis and a signal handle have in common.
 
 None of them imports :mod:`motiond.client`: the package's imports run one way (``ipc`` ←
-``errors`` ← ``frames`` ← ``session`` ← ``jog``, ``axis``, ``signal``, ``groupstate`` ←
-``stream`` ← ``group`` ← ``client`` ← ``remote``).
+``errors`` ← ``frames`` ← ``session`` ← ``answers``, ``jog``, ``axis``, ``signal``,
+``groupstate`` ← ``stream`` ← ``group`` ← ``client`` ← ``remote``).
 """
 
 from __future__ import annotations

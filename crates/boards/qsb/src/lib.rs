@@ -14,9 +14,7 @@ mod standalone;
 
 use core::time::Duration;
 
-mod counter_keys;
 mod keys;
-mod trigger_keys;
 
 use motion_board::keys::{DeviceContext, KeyIssues, KeyTable, key_names};
 use motion_board::machine::MachineView;

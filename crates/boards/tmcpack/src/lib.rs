@@ -7,15 +7,12 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
-mod baud_key;
-mod drive_keys;
 pub mod driver;
 mod keys;
 pub mod machine_keys;
 mod readings;
 pub mod sim;
 mod standalone;
-mod timing_keys;
 
 use motion_board::keys::{AxisContext, DeviceContext, KeyIssues, KeyTable, key_names};
 use motion_board::machine::MachineView;

@@ -15,10 +15,12 @@ use super::FakeControl;
 use super::config::{FakeAxis, FakeConfig, FakeSignal};
 
 mod group;
+mod judged;
 mod stream;
 
 use group::SimGroup;
-pub(super) use group::{Judged, StoredPath};
+pub(super) use group::StoredPath;
+pub(super) use judged::Judged;
 
 #[derive(Debug, Clone, Copy)]
 struct SimAxis {

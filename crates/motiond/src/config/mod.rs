@@ -238,12 +238,12 @@ pub struct DeviceSpec {
 impl DeviceSpec {
     /// Channels the device has as configured (its board's count for its variant).
     pub fn channel_count(&self) -> usize {
-        crate::boards::board_of(self).channel_count(&self.machine)
+        motion_boards::board(self.model).channel_count(&self.machine)
     }
 
     /// The device's I/O pins (its board's pin table for its variant).
     pub fn pins(&self) -> &'static [PinInfo] {
-        crate::boards::board_of(self).pins(&self.machine)
+        motion_boards::board(self.model).pins(&self.machine)
     }
 }
 

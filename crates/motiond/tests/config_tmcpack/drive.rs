@@ -183,7 +183,7 @@ fn keys_without_effect_warn() {
     );
 }
 
-fn value<'r>(rows: &'r [motiond::drivers::ParamRow], owner: Owner, key: &str) -> &'r str {
+fn value<'r>(rows: &'r [motiond::boards::ParamRow], owner: Owner, key: &str) -> &'r str {
     rows.iter()
         .find(|r| r.owner == owner && r.key == key)
         .map(|r| r.value.as_str())

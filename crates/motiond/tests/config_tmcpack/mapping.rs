@@ -12,8 +12,8 @@ use motion_drivers::{Driver, Goal};
 use motion_link::Link;
 use motion_link::sim::{Duplex, SimLink, StreamDevice};
 use motiond::boards::describe;
+use motiond::boards::{ParamRow, driver_spec};
 use motiond::config::{Owner, ServerConfig};
-use motiond::drivers::{ParamRow, driver_spec};
 use tmcpack::{
     CurrentLevel, MotorMask, MotorOptions, MotorType, ReferenceFlags, Request, RequestFrame,
 };

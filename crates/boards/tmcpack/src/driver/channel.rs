@@ -52,22 +52,9 @@ use motion_base::{FixedQueue, counts_to_i32};
 use tmcpack::{Action, CurrentLevel, MAX_VELOCITY, MotorOptions, Request};
 
 use super::config::{Currents, Scale, TmcpackChannel};
-use super::script::Script;
+use super::script::{MAX_STEPS, Script, Step};
 use crate::PositionMode;
 use motion_drivers::{ChannelState, DeviceFault, Goal, GoalError, GoalKind};
-
-/// Longest script one goal needs.
-pub(crate) const MAX_STEPS: usize = 10;
-
-/// One step of a goal's script.
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum Step {
-    /// Send this request (none of them is answered).
-    Send(Request),
-    /// Wait until the rotation stop sent before has come to rest, then end the rotation
-    /// with `$23` if a fresh poll still shows it.
-    AwaitRest,
-}
 
 /// What the driver last told the motor to do.
 #[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]

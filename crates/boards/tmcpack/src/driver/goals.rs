@@ -2,7 +2,8 @@
 //! (the `channel` module), and which script's request goes next (stops first, then output
 //! changes, then a `$50` line whose legs are out, then the other goals round-robin).
 
-use super::channel::{Channel, Step};
+use super::channel::Channel;
+use super::script::Step;
 use super::wire::Pick;
 use super::{Phase, TmcpackDriver};
 use motion_drivers::{Driver, Goal, GoalError, GoalKind, GoalKinds, Pin};

@@ -99,6 +99,7 @@ mod rx;
 mod script;
 mod spec;
 mod spec_drive;
+mod spec_timing;
 mod startup;
 mod wire;
 
@@ -133,7 +134,7 @@ use motion_drivers::{
     GoalKinds, IoStamps, LateAnswer, Model, Pin, PinReading, Priority, RateFloor, Transmit,
 };
 
-use channel::{Channel, Step};
+use channel::Channel;
 use commission::Service;
 use config::{Scale, clkdiv_for};
 use goals::CAPABILITIES;
@@ -143,6 +144,7 @@ use late::LateSet;
 use line::PackLine;
 use power_down::PowerDown;
 use rate::LineRate;
+use script::Step;
 use startup::{Quiesce, StartupPlan};
 use wire::Wire;
 

@@ -1,10 +1,23 @@
-//! A goal's script while it is planned (module `channel`).
+//! A goal's script: its steps ([`Step`], at most [`MAX_STEPS`]) and the script while it
+//! is planned ([`Script`]; module `channel` plans and runs it).
 
 use motion_base::FixedQueue;
 use tmcpack::Request;
 
-use super::channel::{MAX_STEPS, Step};
 use motion_drivers::GoalError;
+
+/// Longest script one goal needs.
+pub(crate) const MAX_STEPS: usize = 10;
+
+/// One step of a goal's script.
+#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Step {
+    /// Send this request (none of them is answered).
+    Send(Request),
+    /// Wait until the rotation stop sent before has come to rest, then end the rotation
+    /// with `$23` if a fresh poll still shows it.
+    AwaitRest,
+}
 
 /// A script being planned.
 #[derive(Debug, Default)]

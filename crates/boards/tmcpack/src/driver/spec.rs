@@ -270,7 +270,7 @@ impl TmcpackDriverConfig {
         }
         driver.packet_timeout_units = Some(packet_timeout_units(&spec.machine, line_rate));
         super::spec_drive::device(&keys, &mut driver);
-        crate::timing_keys::config(&keys, &mut driver);
+        super::spec_timing::config(&keys, &mut driver);
         let axes: usize = spec.bus.iter().map(|peer| peer.axes).sum();
         let input_polls = spec
             .bus
@@ -374,7 +374,7 @@ impl TmcpackDriverConfig {
             .into(),
         );
         self.drive_device_rows(&mut row);
-        crate::timing_keys::rows(self, &mut row);
+        super::spec_timing::rows(self, &mut row);
         let pack = Variant::from(device_keys(&spec.machine).variant);
         for (a, axis) in spec.axes.iter().enumerate() {
             let Some(Some(ch)) = self.channels.get(axis.channel) else {

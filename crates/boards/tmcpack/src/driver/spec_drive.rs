@@ -1,5 +1,5 @@
 //! The driver config and the parameter rows of the pack's drive functions beyond the ramp
-//! (the `drive_keys` module's keys): `power_down`, `microstep_table`, `start_velocity`,
+//! (the `keys::drive` module's keys): `power_down`, `microstep_table`, `start_velocity`,
 //! `position_mode`, `pi`, `reference.restore`. Every row's value fits `MachineParam`'s 40
 //! bytes.
 

@@ -14,7 +14,7 @@ use motion_ipc::{
 use motion_ipc::playout::{Playout, Timed};
 
 use super::Model;
-use super::group::Judged;
+use super::judged::Judged;
 
 /// A setpoint waiting for its tick.
 #[derive(Debug, Clone, Copy)]

@@ -158,7 +158,7 @@ impl Validator<'_, '_> {
                 let name = pin.get_ref().as_str();
                 let Some(found) = find_pin(pins, name) else {
                     let known: Vec<&str> = pins.iter().map(|p| p.name).collect();
-                    let model = crate::boards::board_of(spec).product_name(&spec.machine);
+                    let model = motion_boards::board(spec.model).product_name(&spec.machine);
                     let allowed = if known.is_empty() {
                         format!("a {model} board has no I/O pins")
                     } else {

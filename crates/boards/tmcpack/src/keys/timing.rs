@@ -2,16 +2,14 @@
 //! is tolerated, not on the manual: `host_latency_ms` (part of every reply window) and
 //! `silence_ms` (the silence before the not-answering verdict, and how long an
 //! unanswered query's answer is taken for late: the key every board has). Driver module docs, docs/keys/tmcpack.md
-//! "Timing".
-
-use core::time::Duration;
+//! "Timing"; the driver's config and parameter rows from them are the driver's
+//! `spec_timing` module's.
 
 use motion_board::keys::{DeviceContext, KeyIssues};
-use motion_drivers::spec::ParamOwner;
 
+use super::raw::RawDevice;
 use crate::TmcpackDeviceKeys;
-use crate::driver::{DEFAULT_HOST_LATENCY, TmcpackDriverConfig};
-use crate::keys::RawDevice;
+use crate::driver::DEFAULT_HOST_LATENCY;
 
 /// `host_latency_ms`: 0..=1000 ms.
 const HOST_LATENCY_MS: core::ops::RangeInclusive<f64> = 0.0..=1000.0;
@@ -48,38 +46,4 @@ pub(crate) fn device_keys(
         }
     }
     ok
-}
-
-/// The driver config's `host_latency` and `not_answering` from the keys.
-pub(crate) fn config(keys: &TmcpackDeviceKeys, driver: &mut TmcpackDriverConfig) {
-    if let Some(ms) = keys.host_latency_ms {
-        driver.host_latency = Duration::from_secs_f64(ms / 1000.0);
-    }
-    if let Some(ms) = keys.silence_ms {
-        driver.not_answering = Duration::from_millis(u64::from(ms));
-    }
-}
-
-/// The parameter rows of both keys (each value within `MachineParam`'s 40 bytes).
-pub(crate) fn rows(
-    config: &TmcpackDriverConfig,
-    row: &mut dyn FnMut(ParamOwner, &'static str, String),
-) {
-    let ms = |d: Duration| {
-        let text = format!("{:.3}", d.as_secs_f64() * 1000.0);
-        text.trim_end_matches('0').trim_end_matches('.').to_owned()
-    };
-    row(
-        ParamOwner::Device,
-        "host_latency_ms",
-        format!("{} ms (in every reply window)", ms(config.host_latency)),
-    );
-    row(
-        ParamOwner::Device,
-        "silence_ms",
-        format!(
-            "{} ms (silence before the verdict)",
-            ms(config.not_answering)
-        ),
-    );
 }

@@ -9,20 +9,9 @@
 use motion_board::keys::{AxisContext, DeviceContext, Int, KeyIssues, Spanned};
 use motion_board::machine::MachineView;
 use motion_drivers::Model;
-use serde::Deserialize;
 
-use crate::keys::{RawAxis, RawDevice};
+use super::raw::{RawAxis, RawDevice, RawPi};
 use crate::{PiKeys, PositionMode, PowerDownMode, TmcpackAxisKeys, TmcpackDeviceKeys};
-
-/// `pi = { propdiv, intdiv, intclip, intinpclip }` (`$19`) as written.
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct RawPi {
-    propdiv: Option<Spanned<Int>>,
-    intdiv: Option<Spanned<Int>>,
-    intclip: Option<Spanned<Int>>,
-    intinpclip: Option<Spanned<Int>>,
-}
 
 /// The `$45` power-down keys and the `$17` table of a `[[device]]`; `false` when one is
 /// refused.

@@ -22,7 +22,7 @@ use motion_board::keys::{DeviceContext, KeyIssues};
 use motion_board::machine::MachineView;
 use qsb::{CountMode, CycleMode, IndexMode};
 
-use crate::keys::{RawDevice, choice};
+use super::raw::{RawDevice, choice};
 use crate::{QsbDeviceKeys, QsbInputMode};
 
 /// Largest `count_limit`: counts stay positive signed 32-bit values.

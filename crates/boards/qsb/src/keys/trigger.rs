@@ -20,7 +20,7 @@ use motion_board::keys::{DeviceContext, KeyIssues};
 use motion_board::machine::MachineView;
 use qsb::CycleMode;
 
-use crate::keys::{RawDevice, choice};
+use super::raw::{RawDevice, choice};
 use crate::{QsbDeviceKeys, QsbInputMode, QsbVariant, TriggerSources};
 
 /// Validates the capture and trigger keys of one device into `keys` (after the counter

@@ -1,10 +1,16 @@
 //! qsb machine keys (docs/CONFIG.md, `docs/keys/qsb.md`): validated here into
 //! `crate::QsbDeviceKeys`, turned into the driver's config by
-//! `QsbDriverConfig::from_spec`.
+//! `QsbDriverConfig::from_spec`. The keys as written and the string-choice check are in
+//! `raw`; the counter-mode keys in `counter`, the capture and trigger keys in `trigger`
+//! (both called from here, in that order).
 //!
 //! The home keys (`home_direction`, `home_max_travel`, `home_offset`) are handed to the
 //! server as `HomeHints`: it resolves them with the general `home` table into the axis's
 //! `HomeSpec` and refuses a disagreement.
+
+mod counter;
+mod raw;
+mod trigger;
 
 use core::time::Duration;
 
@@ -18,37 +24,8 @@ use crate::driver::{
 };
 use crate::{QsbDeviceKeys, QsbInputMode, QsbVariant};
 use motion_drivers::{Model, SignalKind};
-use serde::Deserialize;
-
-/// The qsb keys of a `[[device]]` as written; its fields name the keys the board has
-/// (`key_names`, for the server's key check).
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct RawDevice {
-    variant: Option<Spanned<String>>,
-    counts_per_step: Option<Spanned<f64>>,
-    home_direction: Option<Spanned<String>>,
-    home_max_travel: Option<Spanned<f64>>,
-    home_offset: Option<Spanned<f64>>,
-    index_polarity: Option<Spanned<String>>,
-    stream_interval_ms: Option<Spanned<f64>>,
-    host_latency_ms: Option<Spanned<f64>>,
-    silence_ms: Option<Spanned<Int>>,
-    enable_output: Option<Spanned<Int>>,
-    enable_active: Option<Spanned<String>>,
-    input_mode: Option<Spanned<String>>,
-    capture_input: Option<Spanned<Int>>,
-    capture_edge: Option<Spanned<String>>,
-    pub(crate) count_mode: Option<Spanned<String>>,
-    pub(crate) count_range: Option<Spanned<String>>,
-    pub(crate) count_limit: Option<Spanned<Int>>,
-    pub(crate) index_action: Option<Spanned<String>>,
-    pub(crate) index_sync: Option<Spanned<String>>,
-    pub(crate) capture_index: Option<Spanned<bool>>,
-    pub(crate) trigger_on: Option<Spanned<Vec<Spanned<String>>>>,
-    pub(crate) compare_position: Option<Spanned<f64>>,
-    pub(crate) trigger_active: Option<Spanned<String>>,
-}
+pub(crate) use raw::RawDevice;
+use raw::choice;
 
 /// The product a `variant` names; an issue for any other value.
 fn variant(v: &mut dyn KeyIssues, ctx: &DeviceContext, raw: &RawDevice) -> Option<QsbVariant> {
@@ -103,17 +80,6 @@ fn home_hints(v: &mut dyn KeyIssues, ctx: &DeviceContext, raw: &RawDevice) -> Op
         });
     }
     Some(hints)
-}
-
-/// One of `allowed` (name, value) for a string key; an issue naming them otherwise.
-pub(crate) fn choice<T: Copy>(
-    v: &mut dyn KeyIssues,
-    value: &Spanned<String>,
-    key: &str,
-    allowed: &[(&str, T)],
-) -> Option<T> {
-    let names: Vec<String> = allowed.iter().map(|(n, _)| format!("{n:?}")).collect();
-    v.one_of(value, key, allowed, "value", &names.join(", "))
 }
 
 /// Validates the qsb keys of a `[[device]]` table.
@@ -217,8 +183,8 @@ pub(crate) fn device_keys(
             );
         }
     }
-    crate::counter_keys::device_keys(v, ctx, &raw, &mut keys);
-    crate::trigger_keys::device_keys(v, ctx, &raw, &mut keys);
+    counter::device_keys(v, ctx, &raw, &mut keys);
+    trigger::device_keys(v, ctx, &raw, &mut keys);
     // Keys in error stay unset here; the issues already refuse the file, and the other
     // tables are still checked against the rest (every issue at once).
     Some(DeviceKeys::new(keys, home?))
@@ -353,8 +319,8 @@ pub(crate) fn cross_check(v: &mut dyn KeyIssues, machine: &MachineView<'_>) {
             );
         }
         signal_checks(v, machine, index, keys, drive);
-        crate::counter_keys::cross_check(v, machine, index, &raw_device, keys, drive);
-        crate::trigger_keys::cross_check(v, machine, index, &raw_device, keys);
+        counter::cross_check(v, machine, index, &raw_device, keys, drive);
+        trigger::cross_check(v, machine, index, &raw_device, keys);
         line_budget(v, machine, &raw_device, device.index, device.link, keys);
     }
 }

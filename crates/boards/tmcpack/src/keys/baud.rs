@@ -14,8 +14,8 @@ use motion_board::machine::MachineView;
 use motion_drivers::Model;
 use tmcpack::convert::{baud_divisor, baud_of_divisor, listed_baud_divisor, listed_bauds};
 
+use super::raw::RawDevice;
 use crate::TmcpackDeviceKeys;
-use crate::keys::RawDevice;
 
 /// The rates `baud` takes, for messages.
 pub(crate) fn listed() -> String {
