@@ -188,7 +188,14 @@ fn a_line_arrives_on_both_boards_body() {
     assert_eq!(state.motion(), Ok(GroupMotion::Done), "{state:?}");
     assert!((frame.axes[FEEDER].position - targets[0]).abs() <= 0.1);
     assert!((frame.axes[LIFT].position - targets[1]).abs() <= 0.05);
-    // A path published by one node cannot be run by another.
+    // A path published by one node cannot be run by another. Asked once the axes are at
+    // rest: the board may still report the lift settling after the group is done, and a
+    // member still moving is refused `GroupBusy` before any path is looked up.
+    wait_group(&client, Duration::from_secs(20), |frame| {
+        frame.axes()[..2]
+            .iter()
+            .all(|axis| !axis.flags().contains(AxisFlags::MOVING))
+    });
     let mut other = RawClient::connect(&name, Duration::from_secs(5));
     publish(&publisher, |path| {
         path.set_line(0, 2, &start_positions(&start), (0.0, 0.0))
