@@ -290,10 +290,16 @@ impl<D: Driver> Engine<D> {
         self.buses.get(link).map(LinkBus::kind)
     }
 
-    /// Bytes received on `link` since the last tick (call before [`step`](Self::step)).
-    pub fn handle_link_rx(&mut self, link: usize, now: Duration, bytes: &[u8]) {
+    /// Bytes received on `link` since the last tick (call before [`step`](Self::step)),
+    /// read by the link's I/O side at `arrived`. The drivers get them at the tick's `now`
+    /// or at `arrived` if that is later: a tick that woke late (its `now` is its deadline)
+    /// takes bytes that came after that deadline, and a driver told they came earlier than
+    /// they did would time what follows them — a board's switch-over hold after its answer,
+    /// the next request — from an instant before the answer ended, and talk over the board
+    /// (docs/ARCHITECTURE.md "The tick's time and the wire's").
+    pub fn handle_link_rx(&mut self, link: usize, now: Duration, arrived: Duration, bytes: &[u8]) {
         if let Some(bus) = self.buses.get_mut(link) {
-            bus.handle_rx(now, bytes);
+            bus.handle_rx(now.max(arrived), bytes);
         }
     }
 

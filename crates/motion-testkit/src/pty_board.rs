@@ -213,6 +213,8 @@ impl PtyBoard {
             std::thread::Builder::new()
                 .name("pty-board".to_owned())
                 .spawn(move || {
+                    // A board answers on its own clock, never starved (module board_priority).
+                    let _ = crate::board_priority::raise();
                     let line = Line {
                         baud,
                         follow_rate: options.follow_rate,

@@ -64,7 +64,11 @@ impl SocketBoard {
             let (stop, transactions) = (Arc::clone(&stop), Arc::clone(&transactions));
             std::thread::Builder::new()
                 .name("spi-board".to_owned())
-                .spawn(move || serve(&listener, &device, &stop, &transactions, epoch))
+                .spawn(move || {
+                    // A board answers on its own clock, never starved (module board_priority).
+                    let _ = crate::board_priority::raise();
+                    serve(&listener, &device, &stop, &transactions, epoch)
+                })
                 .map_err(KitError::io("spawn the SPI socket thread"))?
         };
         Ok(Self {

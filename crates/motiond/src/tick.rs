@@ -420,7 +420,7 @@ impl Loop {
             }
             while let Ok(packet) = port.rx.pop() {
                 journal.link_rx(index, packet.at(), packet.bytes());
-                engine.handle_link_rx(index, now, packet.bytes());
+                engine.handle_link_rx(index, now, packet.at(), packet.bytes());
             }
             journal.link_heard(index, heard);
             engine.link_heard(index, heard);

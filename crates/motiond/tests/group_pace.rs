@@ -204,7 +204,7 @@ impl Gantry {
                 if len == 0 {
                     break;
                 }
-                self.engine.handle_link_rx(index, now, &buf[..len]);
+                self.engine.handle_link_rx(index, now, now, &buf[..len]);
             }
             self.engine.link_heard(index, now);
         }

@@ -232,6 +232,10 @@ fn sigterm_mid_move_stops_every_board_then_exits_zero() {
         pack.lock().unwrap().motor(0).unwrap().velocity != 0,
         "the pack's motor turns"
     );
+    // Manual 7.1 "Requests must not be interlaced": however late the server's ticks woke
+    // (every test of this file runs at once), no request began while an answer was due or
+    // the pack drove the line after one.
+    assert_eq!(stats.interlaced, 0, "{stats:?}");
 
     assert_eq!(
         server.signal_and_wait(Signal::SIGTERM, Duration::from_secs(10)),
@@ -259,7 +263,18 @@ fn an_unplugged_serial_adapter_recovers_without_a_restart() {
     let mut server = Server::start(&config(&name, &body));
     let mut client = RawClient::connect(&name, Duration::from_secs(10));
     let (frame, online) = client.wait_frame(Duration::from_secs(10), ready);
-    assert!(online, "{:?}", frame.axes());
+    assert!(
+        online,
+        "{:?}\npack: {:?}\n{}",
+        frame.axes(),
+        pack.lock().unwrap().stats(),
+        server.log_text()
+    );
+    let stats = pack.lock().unwrap().stats();
+    assert_eq!(
+        stats.interlaced, 0,
+        "manual 7.1: no request interlaced: {stats:?}"
+    );
     assert_eq!(
         client
             .command(1, CommandKind::Velocity, [2.0, 0.0, 0.0])

@@ -140,7 +140,7 @@ impl Robot {
                 }
                 engine(|| {
                     self.port.journal.link_rx(index, now, &buf[..len]);
-                    self.engine.handle_link_rx(index, now, &buf[..len]);
+                    self.engine.handle_link_rx(index, now, now, &buf[..len]);
                 });
             }
             engine(|| {

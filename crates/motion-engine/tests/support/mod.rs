@@ -60,6 +60,8 @@ pub struct BoardControl {
     pub resumed: u32,
     /// Every commission the driver took (`Driver::commission`, always accepted).
     pub commissions: Vec<Commission>,
+    /// Every `handle_rx`: the instant the driver was given, the bytes.
+    pub received: Vec<(Duration, Vec<u8>)>,
 }
 
 /// A board whose channels follow their goals with ideal trapezoidal physics, refreshing
@@ -158,7 +160,9 @@ impl Driver for IdealBoard {
     fn refresh_budget(&self) -> Duration {
         Duration::from_millis(20)
     }
-    fn handle_rx(&mut self, _: Duration, _: &[u8]) {}
+    fn handle_rx(&mut self, now: Duration, bytes: &[u8]) {
+        self.control().received.push((now, bytes.to_vec()));
+    }
     fn lead_line(&mut self, _: Duration, legs: &[LineLeg]) -> Result<bool, GoalError> {
         let mut control = self.control.lock().expect("control lock");
         let at_rest = legs.iter().all(|leg| {

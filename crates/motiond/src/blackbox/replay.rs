@@ -395,7 +395,9 @@ fn replay_here(config: &ServerConfig, recording: &Recording) -> Result<Replayed,
                 Kind::LinkDown => engine.link_down(link, now),
                 Kind::LinkUp => engine.link_up(link, now),
                 Kind::LinkWritten => engine.link_written(link, at(record.u64_at(0))),
-                Kind::LinkRx => engine.handle_link_rx(link, now, record.rest(8)),
+                Kind::LinkRx => {
+                    engine.handle_link_rx(link, now, at(record.u64_at(0)), record.rest(8))
+                }
                 Kind::LinkHeard => engine.link_heard(link, at(record.u64_at(0))),
                 Kind::ClientDead => engine.client_dead(record.client_at(0)),
                 Kind::Estop => engine.estop(),

@@ -1,0 +1,69 @@
+//! The priority of the threads that play boards ([`crate::pty_board`],
+//! [`crate::socket_board`]). A real board has a processor of its own: it takes a request
+//! as its bytes arrive and answers on its own clock, however busy the host is. A thread
+//! of the test process that plays it is not so lucky: starved for a few milliseconds on a
+//! loaded machine (a CI runner, every test of a binary at once), it reads a request late,
+//! answers it late, and then takes the host's next request for one that interlaced with
+//! its answer — a fault of the harness that the server under test never made. So the board
+//! threads ask for SCHED_FIFO (as `motionctl bench --rt-priority` does for its boards),
+//! or failing that the highest nice value allowed; each sleeps between bytes, so the CPU
+//! they take is small.
+#![allow(unsafe_code)] // sched_setscheduler and setpriority have no safe wrapper in nix; see the SAFETY notes
+
+/// The SCHED_FIFO priority asked for: above every normal thread, below anything a
+/// real-time configuration of the server would use.
+const FIFO_PRIORITY: i32 = 10;
+
+/// The nice value asked for when SCHED_FIFO is refused.
+const NICE: i32 = -10;
+
+/// What the calling thread got.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BoardPriority {
+    /// SCHED_FIFO at this priority.
+    Fifo(i32),
+    /// The normal policy at this nice value.
+    Nice(i32),
+    /// Neither was allowed (no CAP_SYS_NICE, no rtprio or nice limit): the normal policy.
+    Normal,
+}
+
+/// Raises the calling thread's priority as far as allowed; says how far.
+pub fn raise() -> BoardPriority {
+    let param = libc::sched_param {
+        sched_priority: FIFO_PRIORITY,
+    };
+    // SAFETY: `param` is a valid, initialised sched_param that outlives the call; pid 0 is
+    // the calling thread; the call only reads `param`.
+    if unsafe { libc::sched_setscheduler(0, libc::SCHED_FIFO, &param) } == 0 {
+        return BoardPriority::Fifo(FIFO_PRIORITY);
+    }
+    // SAFETY: gettid has no arguments and cannot fail.
+    let tid = unsafe { libc::gettid() };
+    // SAFETY: plain integer arguments; PRIO_PROCESS with a thread id sets that thread's
+    // nice value on Linux.
+    if unsafe { libc::setpriority(libc::PRIO_PROCESS, tid as libc::id_t, NICE) } == 0 {
+        return BoardPriority::Nice(NICE);
+    }
+    BoardPriority::Normal
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_board_thread_gets_what_the_system_allows() {
+        let got = std::thread::spawn(raise).join().expect("the thread ran");
+        // SAFETY: geteuid has no arguments and cannot fail.
+        if unsafe { libc::geteuid() } == 0 {
+            // Root (CAP_SYS_NICE): the first choice.
+            assert_eq!(got, BoardPriority::Fifo(FIFO_PRIORITY));
+        } else {
+            assert!(matches!(
+                got,
+                BoardPriority::Fifo(_) | BoardPriority::Nice(_) | BoardPriority::Normal
+            ));
+        }
+    }
+}
