@@ -125,7 +125,7 @@ impl Server {
             if len == 0 {
                 break;
             }
-            counted(|| self.engine.handle_link_rx(0, now, &buf[..len]));
+            counted(|| self.engine.handle_link_rx(0, now, now, &buf[..len]));
         }
         counted(|| self.engine.link_heard(0, now));
         counted(|| self.engine.step(now, &mut self.port, &mut self.frame));

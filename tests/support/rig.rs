@@ -251,7 +251,7 @@ impl Rig {
                     if self.engine.link_kind(index) == Some(LinkKind::Spi) {
                         let floating = [0xFFu8; 4096];
                         self.engine
-                            .handle_link_rx(index, now, &floating[..bytes.len()]);
+                            .handle_link_rx(index, now, now, &floating[..bytes.len()]);
                     }
                     if lag.report {
                         self.engine.link_written(index, now);
@@ -291,7 +291,7 @@ impl Rig {
                     Ok(0) => break,
                     Ok(len) => {
                         scope(self.engine_scope, true);
-                        self.engine.handle_link_rx(index, now, &buf[..len]);
+                        self.engine.handle_link_rx(index, now, now, &buf[..len]);
                         scope(self.engine_scope, false);
                     }
                     Err(error) => {
@@ -352,7 +352,8 @@ impl Rig {
                             // As motiond's I/O thread: a failed transaction reads as a
                             // floating bus, so MISO routing stays aligned.
                             let floating = [0xFFu8; 4096];
-                            self.engine.handle_link_rx(index, now, &floating[..len]);
+                            self.engine
+                                .handle_link_rx(index, now, now, &floating[..len]);
                         }
                     }
                 }
