@@ -52,18 +52,36 @@ pub fn raise() -> BoardPriority {
 mod tests {
     use super::*;
 
+    /// The calling thread's policy and nice value, as the kernel has them.
+    fn policy_and_nice() -> (i32, i32) {
+        // SAFETY: pid 0 is the calling thread; no pointer is passed.
+        let policy = unsafe { libc::sched_getscheduler(0) };
+        // SAFETY: gettid has no arguments and cannot fail.
+        let tid = unsafe { libc::gettid() };
+        // SAFETY: plain integer arguments (getpriority's -1 is also a valid nice value, so
+        // errno is not consulted: the thread exists).
+        let nice = unsafe { libc::getpriority(libc::PRIO_PROCESS, tid as libc::id_t) };
+        (policy, nice)
+    }
+
     #[test]
-    fn a_board_thread_gets_what_the_system_allows() {
-        let got = std::thread::spawn(raise).join().expect("the thread ran");
+    fn a_board_thread_gets_what_it_says_it_got() {
+        let (got, (policy, nice)) = std::thread::spawn(|| (raise(), policy_and_nice()))
+            .join()
+            .expect("the thread ran");
+        match got {
+            BoardPriority::Fifo(_) => assert_eq!(policy, libc::SCHED_FIFO),
+            BoardPriority::Nice(value) => {
+                assert_eq!((policy, nice), (libc::SCHED_OTHER, value));
+            }
+            BoardPriority::Normal => assert_eq!(policy, libc::SCHED_OTHER),
+        }
         // SAFETY: geteuid has no arguments and cannot fail.
         if unsafe { libc::geteuid() } == 0 {
             // Root (CAP_SYS_NICE): the first choice.
             assert_eq!(got, BoardPriority::Fifo(FIFO_PRIORITY));
-        } else {
-            assert!(matches!(
-                got,
-                BoardPriority::Fifo(_) | BoardPriority::Nice(_) | BoardPriority::Normal
-            ));
         }
+        // The thread that asked, not the process: the test thread keeps its policy.
+        assert_eq!(policy_and_nice().0, libc::SCHED_OTHER);
     }
 }
