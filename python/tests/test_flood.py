@@ -10,7 +10,11 @@ they can:
   its path evicted (``NoPath``) most of the time;
 - setpoints for ``base``: the claimant's stream goes on whole, and the server takes at
   most ``SETPOINTS_PER_NODE`` (8) setpoints of a node into a tick — the flood's refusals
-  are bounded by it (before: every setpoint its queue held, 16 a publisher a tick).
+  are bounded by it (before: every setpoint its queue held, 16 a publisher a tick);
+- the setpoints service's publisher slots: another process takes every slot it can get;
+  a client that connected before it streams all the same (a client takes its slot with its
+  command port); one that connects after is told which slots ran out and which key raises
+  them (before: the claimant's ``stream()`` failed with an iceoryx2 error).
 """
 
 from __future__ import annotations
@@ -74,6 +78,32 @@ with motiond.Client(sys.argv[1], timeout=10.0, node_name=sys.argv[2]) as client:
         setpoint.sequence += 1
         setpoint.for_tick = client.latest().tick + 1
         publisher.send_copy(setpoint)
+"""
+
+
+_SLOT_HOLDER = r"""
+import sys, time
+import iceoryx2 as iox2
+from motiond import ipc
+node = (
+    iox2.NodeBuilder.new()
+    .name(iox2.NodeName.new(sys.argv[2]))
+    .create(iox2.ServiceType.Ipc)
+)
+service = (
+    node.service_builder(iox2.ServiceName.new(ipc.service_name(sys.argv[1], "setpoints")))
+    .publish_subscribe(ipc.Setpoint)
+    .open()
+)
+held = []
+while True:
+    try:
+        held.append(service.publisher_builder().create())
+    except Exception as error:
+        why = repr(error)
+        break
+sys.stdout.write(f"{len(held)} {why}\n"); sys.stdout.flush()
+time.sleep(3600)
 """
 
 
@@ -175,3 +205,36 @@ def test_a_setpoint_flood_from_two_other_nodes_is_held_to_its_budget(
     assert final.refused <= 8 * 2 * (ticks + 1), (final.refused, ticks)
     for process in setpoint_flooders:
         assert process.poll() is None, "a flooder stopped early: the flood was not kept up"
+
+
+def test_setpoint_slots_taken_by_another_process_do_not_starve_a_connected_claimant(
+    client: motiond.Client, server: Server
+) -> None:
+    base = client.group("base")
+    base.wait_stopped(timeout=20.0)
+    holder = subprocess.Popen(
+        [sys.executable, "-c", _SLOT_HOLDER, server.name, "slot-holder"],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        assert holder.stdout is not None
+        held, why = holder.stdout.readline().strip().split(" ", 1)
+        # It took every slot left: the next publisher was refused for want of one.
+        assert int(held) > 0 and "ExceedsMaxSupportedPublishers" in why, (held, why)
+        with base.stream("velocity") as stream:
+            stream.run_each_tick(lambda frame: [3.0, -3.0], duration=0.5)
+            final = stream.wait_applied(timeout=5.0)
+        assert final.stream is motiond.StreamState.STREAMING, final
+        assert final.applied > 0 and final.applied + final.late == stream.sent, final
+        # A client that connects now finds no slot: its stream says which and why.
+        with motiond.Client(server.name, timeout=5.0) as late:
+            with pytest.raises(motiond.PortsExhausted) as refused:
+                late.group("base").stream("velocity")
+            assert "setpoints" in str(refused.value), refused.value
+            assert "max_clients" in str(refused.value), refused.value
+        assert holder.poll() is None, "the holder let its slots go early"
+    finally:
+        holder.kill()
+        holder.wait()
+    base.wait_stopped(timeout=20.0)

@@ -161,7 +161,8 @@ pub struct Client<S: Service> {
     pub(crate) jogs: RefCell<JogTable>,
     /// The publisher on the `paths` service, created by the first path sent.
     pub(crate) paths: RefCell<Option<Rc<PathPorts<S>>>>,
-    /// The publisher on the `setpoints` service, created by the first stream.
+    /// The publisher on the `setpoints` service, taken with the command port (or by the
+    /// first stream when no slot was free then).
     pub(crate) setpoints: RefCell<Option<Rc<SetpointPorts<S>>>>,
     /// The id of the last path this client sent (ids count up from 1).
     pub(crate) path_ids: Cell<u64>,
@@ -379,6 +380,7 @@ impl<S: Service> Client<S> {
             &self.names.command(),
         )?);
         *self.commands.borrow_mut() = Some(Rc::clone(&ports));
+        self.reserve_setpoint_port();
         Ok(ports)
     }
 

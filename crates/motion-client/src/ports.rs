@@ -66,7 +66,7 @@ impl<S: Service> fmt::Debug for PathPorts<S> {
 }
 
 /// A publisher on the `setpoints` service (a group's streamed setpoints, 288 bytes each;
-/// created by the first stream of a client).
+/// taken with a client's command port).
 pub(crate) struct SetpointPorts<S: Service> {
     pub(crate) publisher: Publisher<S, Setpoint, ()>,
     pub(crate) service_id: UniqueServiceId,

@@ -40,7 +40,23 @@ pub const STREAM_FRAME_TIMEOUT: Duration = Duration::from_secs(1);
 pub const DEFAULT_STREAM_LEAD: u64 = 2;
 
 impl<S: Service> Client<S> {
-    /// The publisher on `setpoints`, created on first use (one per client).
+    /// Takes this client's publisher slot on `setpoints` together with its command port
+    /// (one try, never waiting): a claimant's stream then cannot be starved by another
+    /// process that takes every publisher slot after the client first commanded
+    /// (docs/SECURITY.md "Paths and setpoints no other process can starve"). A slot that
+    /// cannot be had now is tried again by the first stream, whose error then says why.
+    pub(crate) fn reserve_setpoint_port(&self) {
+        if self.is_remote() || self.setpoints.borrow().is_some() {
+            return;
+        }
+        let opening = Opening::once(&self.server);
+        if let Ok(ports) = ports::open_setpoints(&self.node, &opening, &self.names.setpoints()) {
+            *self.setpoints.borrow_mut() = Some(Rc::new(ports));
+        }
+    }
+
+    /// The publisher on `setpoints`, taken with the command port or else on first use (one
+    /// per client).
     fn setpoint_ports(&self) -> Result<Rc<SetpointPorts<S>>, ClientError> {
         if let Some(ports) = self.setpoints.borrow().as_ref() {
             return Ok(Rc::clone(ports));
@@ -378,9 +394,11 @@ impl<'c, S: Service> SetpointStream<'c, S> {
     }
 
     /// Waits until a frame shows the last setpoint sent applied (every earlier one was
-    /// applied or dropped by then, so the counters are final for what was sent), or the
-    /// stream no longer streaming, and returns the stream's state in it; when `timeout`
-    /// passes first, the state in the newest frame.
+    /// applied or dropped by then, so the counters are final for what was sent) — or every
+    /// setpoint sent accounted for by the server's counters (`applied + late + early`: the
+    /// last ones were dropped, reaching it too late or too early to apply), as Python's
+    /// `wait_applied` — or the stream no longer streaming, and returns the stream's state
+    /// in it; when `timeout` passes first, the state in the newest frame.
     pub fn wait_caught_up(&self, timeout: Duration) -> Result<StreamStatus, ClientError> {
         let client = self.group.client();
         let deadline = Instant::now() + timeout;
@@ -390,7 +408,8 @@ impl<'c, S: Service> SetpointStream<'c, S> {
             // A frame of the stream (not one from before it started) in which the last
             // setpoint sent was applied (never before its tick), or the stream ended.
             let current = frame.tick >= self.started.tick;
-            let taken = status.last_sequence >= self.sequence;
+            let taken = status.last_sequence >= self.sequence
+                || status.applied + status.late + status.early >= self.sequence;
             if current && (taken || status.state != StreamState::Streaming) {
                 return Ok(status);
             }

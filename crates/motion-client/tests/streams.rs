@@ -370,3 +370,84 @@ fn a_setpoint_no_server_takes_is_not_sent() -> Result {
     drop(stream); // its Cancel finds no server: nothing to do
     Ok(())
 }
+
+/// Opens publishers on `server`'s `setpoints` service from a node of its own until the
+/// service refuses one: every slot left (docs/SECURITY.md "Paths and setpoints no other
+/// process can starve").
+fn take_every_setpoint_slot(
+    server: &FakeServer,
+) -> Result<(
+    iceoryx2::node::Node<local::Service>,
+    Vec<iceoryx2::port::publisher::Publisher<local::Service, Setpoint, ()>>,
+)> {
+    let node = NodeBuilder::new().create::<local::Service>()?;
+    let name = ServiceName::new(&format!("motiond/{}/setpoints", server.name()))?;
+    let service = node
+        .service_builder(&name)
+        .publish_subscribe::<Setpoint>()
+        .open()?;
+    let mut held = Vec::new();
+    while let Ok(publisher) = service.publisher_builder().create() {
+        held.push(publisher);
+        if held.len() > 1024 {
+            return Err("the setpoints service never ran out of publisher slots".into());
+        }
+    }
+    Ok((node, held))
+}
+
+#[test]
+fn a_client_that_commanded_keeps_its_setpoint_slot_when_another_takes_the_rest() -> Result {
+    let (server, client) = start("stream-slots", 100_000)?;
+    let xy = client.group("xy")?;
+    // Its first command takes its setpoint publisher with its command port.
+    drop(xy.claim()?);
+    let (_node, held) = take_every_setpoint_slot(&server)?;
+    assert!(!held.is_empty(), "slots were left for another process");
+    let mut stream = xy.stream(StreamMode::Velocity)?;
+    let tick = client.latest()?.tick;
+    stream.send(tick + 2, &[1.0, -1.0])?;
+    wait_for(&client, "xy", |s| s.raw.applied >= 1)?;
+    stream.cancel()?;
+
+    // A client that first commands now finds no slot: its stream says which and why, and
+    // takes no claim.
+    let late = Client::<local::Service>::connect(server.name())?;
+    let error = late
+        .group("xy")?
+        .stream(StreamMode::Velocity)
+        .expect_err("no setpoint slot is free");
+    let text = error.to_string();
+    assert!(
+        text.contains("setpoints") && text.contains("no free publisher slot"),
+        "{text}"
+    );
+    assert!(text.contains("max_clients"), "{text}");
+    assert!(!claimed_by(&late, 0)?, "the failed stream left no claim");
+    Ok(())
+}
+
+#[test]
+fn waiting_for_the_stream_ends_when_the_last_setpoint_was_dropped_late() -> Result {
+    let (_server, client) = start("stream-dropped", 100_000)?;
+    let mut stream = client.group("xy")?.stream(StreamMode::Velocity)?;
+    let tick = client.latest()?.tick;
+    stream.send(tick + 2, &[1.0, 1.0])?;
+    wait_for(&client, "xy", |s| s.raw.applied >= 1)?;
+    // For a tick long gone, far more than `stream_buffer` behind: dropped, counted late,
+    // never applied; the last sequence applied stays the first one.
+    let long_gone = client.latest()?.tick.saturating_sub(1_000).max(1);
+    stream.send(long_gone, &[2.0, 2.0])?;
+    let timeout = Duration::from_secs(30);
+    let asked = Instant::now();
+    let status = stream.wait_caught_up(timeout)?;
+    assert!(
+        asked.elapsed() < timeout / 2,
+        "waited {:?} for a setpoint that can never apply",
+        asked.elapsed()
+    );
+    assert_eq!((status.applied, status.late), (1, 1), "{status:?}");
+    assert!(status.last_sequence < stream.last_sequence(), "{status:?}");
+    stream.cancel()?;
+    Ok(())
+}

@@ -179,6 +179,7 @@ class Client:
         self._commands = self._create(
             lambda: command.client_builder().create(), "create a command client"
         )
+        self._reserve_setpoints_port()
         info = self._open(
             deadline,
             "info",
@@ -214,7 +215,8 @@ class Client:
         self._closed = False
         self._jogs = JogRegistry()
         self._estop_notifier: Any = None
-        # The groups' publishers, made by their first path or stream.
+        # The groups' publishers: paths' made by the first path, setpoints' at connect (or
+        # by the first stream when no slot was free then).
         self._paths_publisher: Any = None
         self._setpoints_publisher: Any = None
         self._path_id = 0
@@ -715,6 +717,10 @@ class Client:
             )
             return service.publisher_builder().create()
         except Exception as error:
+            if "ExceedsMaxSupportedPublishers" in repr(error):
+                raise errors.PortsExhausted(
+                    service_name(self._name, leaf), "publisher slot", error
+                ) from error
             raise IpcError(f"publish on the {leaf} service", error) from error
 
     def _paths_port(self) -> Any:
@@ -725,8 +731,18 @@ class Client:
             self._paths_publisher = self._publisher("paths", GroupPath)
         return self._paths_publisher
 
+    def _reserve_setpoints_port(self) -> None:
+        """Takes this client's publisher slot on ``setpoints`` with its command port (one
+        try): a claimant's stream then cannot be starved by another process that takes every
+        slot after this client connected (docs/SECURITY.md). A slot not free now is tried
+        again by the first stream, whose error then says why."""
+        try:
+            self._setpoints_publisher = self._publisher("setpoints", Setpoint)
+        except IpcError:
+            self._setpoints_publisher = None
+
     def _setpoints_port(self) -> Any:
-        """The publisher of streamed setpoints (made on first use)."""
+        """The publisher of streamed setpoints (taken at connect, else on first use)."""
         self._check_open()
         if self._setpoints_publisher is None:
             self._setpoints_publisher = self._publisher("setpoints", Setpoint)

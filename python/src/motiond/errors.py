@@ -34,6 +34,7 @@ __all__ = [
     "WaitAborted",
     "FramesHeld",
     "IpcError",
+    "PortsExhausted",
     "NoBridge",
     "BridgeRefused",
     "RemoteError",
@@ -570,6 +571,20 @@ class IpcError(MotiondError):
         super().__init__(f"iceoryx2 could not {what}: {error!r}")
         self.what = what
         self.error = error
+
+
+class PortsExhausted(IpcError):
+    """Every port of a kind that a service of the server allows is taken (by other clients,
+    or by another process of the server's user holding them)."""
+
+    def __init__(self, service: str, port: str, error: BaseException) -> None:
+        super().__init__(f"take a {port} on {service}", error)
+        self.args = (
+            f"the server's service {service} has no free {port} ([server] max_clients is "
+            "reached): end another client or raise max_clients",
+        )
+        self.service = service
+        self.port = port
 
 
 class NoBridge(ConnectError):
