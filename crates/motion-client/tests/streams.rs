@@ -371,15 +371,16 @@ fn a_setpoint_no_server_takes_is_not_sent() -> Result {
     Ok(())
 }
 
+/// A node of another process and the setpoint publishers it holds.
+type SlotHolder = (
+    iceoryx2::node::Node<local::Service>,
+    Vec<iceoryx2::port::publisher::Publisher<local::Service, Setpoint, ()>>,
+);
+
 /// Opens publishers on `server`'s `setpoints` service from a node of its own until the
 /// service refuses one: every slot left (docs/SECURITY.md "Paths and setpoints no other
 /// process can starve").
-fn take_every_setpoint_slot(
-    server: &FakeServer,
-) -> Result<(
-    iceoryx2::node::Node<local::Service>,
-    Vec<iceoryx2::port::publisher::Publisher<local::Service, Setpoint, ()>>,
-)> {
+fn take_every_setpoint_slot(server: &FakeServer) -> Result<SlotHolder> {
     let node = NodeBuilder::new().create::<local::Service>()?;
     let name = ServiceName::new(&format!("motiond/{}/setpoints", server.name()))?;
     let service = node
