@@ -254,69 +254,31 @@ impl TryFrom<u16> for FaultCode {
     }
 }
 
-/// Bit set of an axis's state flags ([`AxisState::flags`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub struct AxisFlags(pub u32);
-
-impl AxisFlags {
-    /// The axis is moving (commanded or measured velocity not zero).
-    pub const MOVING: Self = Self(1 << 0);
-    /// The axis has a valid reference (homed, or its position was set).
-    pub const HOMED: Self = Self(1 << 1);
-    /// The axis sits at a soft or hard limit.
-    pub const AT_LIMIT: Self = Self(1 << 2);
-    /// The axis's data is older than its board's refresh budget.
-    pub const STALE: Self = Self(1 << 3);
-    /// The axis is faulted; see [`AxisState::fault`].
-    pub const FAULT: Self = Self(1 << 4);
-    /// A client holds an exclusive claim on the axis ([`AxisState::claimed_by`]).
-    pub const CLAIMED: Self = Self(1 << 5);
-    /// The last position goal has been reached within tolerance.
-    pub const ARRIVED: Self = Self(1 << 6);
-    /// Stopped by the latched e-stop.
-    pub const ESTOPPED: Self = Self(1 << 7);
-    /// The last velocity/power goal expired (deadman) and the axis was stopped.
-    pub const DEADMAN_EXPIRED: Self = Self(1 << 8);
-    /// The axis's position move is held (`Hold` with `Target::Axis`): a `Resume` continues
-    /// it to its target.
-    pub const HELD: Self = Self(1 << 9);
-
-    /// Every flag with the name clients print, in bit order.
-    pub const NAMED: [(Self, &'static str); 10] = [
-        (Self::MOVING, "moving"),
-        (Self::HOMED, "homed"),
-        (Self::AT_LIMIT, "at-limit"),
-        (Self::STALE, "stale"),
-        (Self::FAULT, "fault"),
-        (Self::CLAIMED, "claimed"),
-        (Self::ARRIVED, "arrived"),
-        (Self::ESTOPPED, "estopped"),
-        (Self::DEADMAN_EXPIRED, "deadman-expired"),
-        (Self::HELD, "held"),
-    ];
-
-    /// The names of the set flags, in bit order.
-    pub fn names(self) -> Vec<&'static str> {
-        Self::NAMED
-            .iter()
-            .filter(|(flag, _)| self.contains(*flag))
-            .map(|(_, name)| *name)
-            .collect()
-    }
-
-    /// Whether every bit of `other` is set.
-    pub const fn contains(self, other: Self) -> bool {
-        self.0 & other.0 == other.0
-    }
-
-    /// `self` with the bits of `other` set (`on`) or cleared.
-    #[must_use]
-    pub const fn with(self, other: Self, on: bool) -> Self {
-        if on {
-            Self(self.0 | other.0)
-        } else {
-            Self(self.0 & !other.0)
-        }
+flag_set! {
+    /// Bit set of an axis's state flags ([`AxisState::flags`]).
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+    pub struct AxisFlags(u32) {
+        /// The axis is moving (commanded or measured velocity not zero).
+        MOVING = 0, "moving";
+        /// The axis has a valid reference (homed, or its position was set).
+        HOMED = 1, "homed";
+        /// The axis sits at a soft or hard limit.
+        AT_LIMIT = 2, "at-limit";
+        /// The axis's data is older than its board's refresh budget.
+        STALE = 3, "stale";
+        /// The axis is faulted; see [`AxisState::fault`].
+        FAULT = 4, "fault";
+        /// A client holds an exclusive claim on the axis ([`AxisState::claimed_by`]).
+        CLAIMED = 5, "claimed";
+        /// The last position goal has been reached within tolerance.
+        ARRIVED = 6, "arrived";
+        /// Stopped by the latched e-stop.
+        ESTOPPED = 7, "estopped";
+        /// The last velocity/power goal expired (deadman) and the axis was stopped.
+        DEADMAN_EXPIRED = 8, "deadman-expired";
+        /// The axis's position move is held (`Hold` with `Target::Axis`): a `Resume` continues
+        /// it to its target.
+        HELD = 9, "held";
     }
 }
 
@@ -425,21 +387,16 @@ impl Default for AxisState {
     }
 }
 
-/// Bit set of server-wide state in [`MotionFrame::flags`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub struct FrameFlags(pub u32);
-
-impl FrameFlags {
-    /// The e-stop is latched: every axis is stopped until a `reset`.
-    pub const ESTOP_LATCHED: Self = Self(1 << 0);
-    /// This tick started after its deadline plus one period (an overrun).
-    pub const OVERRUN: Self = Self(1 << 1);
-    /// The server is shutting down: axes are being stopped.
-    pub const SHUTTING_DOWN: Self = Self(1 << 2);
-
-    /// Whether every bit of `other` is set.
-    pub const fn contains(self, other: Self) -> bool {
-        self.0 & other.0 == other.0
+flag_set! {
+    /// Bit set of server-wide state in [`MotionFrame::flags`].
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+    pub struct FrameFlags(u32) {
+        /// The e-stop is latched: every axis is stopped until a `reset`.
+        ESTOP_LATCHED = 0, "estop-latched";
+        /// This tick started after its deadline plus one period (an overrun).
+        OVERRUN = 1, "overrun";
+        /// The server is shutting down: axes are being stopped.
+        SHUTTING_DOWN = 2, "shutting-down";
     }
 }
 

@@ -239,37 +239,27 @@ impl TryFrom<u32> for StreamMode {
     }
 }
 
-/// Bits of [`GroupState::stream_flags`]: what happened to the stream in this tick.
-#[derive(
-    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
-)]
-pub struct StreamFlags(pub u8);
-
-impl StreamFlags {
-    /// A setpoint was applied in this tick.
-    pub const APPLIED: Self = Self(1 << 0);
-    /// The setpoint applied in this tick was clamped to a limit.
-    pub const CLAMPED: Self = Self(1 << 1);
-
-    /// Whether every bit of `other` is set.
-    pub const fn contains(self, other: Self) -> bool {
-        self.0 & other.0 == other.0
+flag_set! {
+    /// Bits of [`GroupState::stream_flags`]: what happened to the stream in this tick.
+    #[derive(
+        serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+    )]
+    pub struct StreamFlags(u8) {
+        /// A setpoint was applied in this tick.
+        APPLIED = 0, "applied";
+        /// The setpoint applied in this tick was clamped to a limit.
+        CLAMPED = 1, "clamped";
     }
 }
 
-/// Bits of [`Setpoint::flags`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub struct SetpointFlags(pub u32);
-
-impl SetpointFlags {
-    /// `velocities` holds a velocity feed-forward per axis (position streams): the boards
-    /// that follow by segments or velocities are given it instead of the difference of the
-    /// last two setpoints.
-    pub const FEED_FORWARD: Self = Self(1 << 0);
-
-    /// Whether every bit of `other` is set.
-    pub const fn contains(self, other: Self) -> bool {
-        self.0 & other.0 == other.0
+flag_set! {
+    /// Bits of [`Setpoint::flags`].
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+    pub struct SetpointFlags(u32) {
+        /// `velocities` holds a velocity feed-forward per axis (position streams): the boards
+        /// that follow by segments or velocities are given it instead of the difference of the
+        /// last two setpoints.
+        FEED_FORWARD = 0, "feed-forward";
     }
 }
 
@@ -579,19 +569,14 @@ impl Default for GroupInfo {
     }
 }
 
-/// Bits of [`GroupPath::flags`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub struct PathFlags(pub u32);
-
-impl PathFlags {
-    /// `velocities` holds a velocity per point and axis.
-    pub const VELOCITIES: Self = Self(1 << 0);
-    /// `accelerations` holds an acceleration per point and axis (needs `VELOCITIES`).
-    pub const ACCELERATIONS: Self = Self(1 << 1);
-
-    /// Whether every bit of `other` is set.
-    pub const fn contains(self, other: Self) -> bool {
-        self.0 & other.0 == other.0
+flag_set! {
+    /// Bits of [`GroupPath::flags`].
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+    pub struct PathFlags(u32) {
+        /// `velocities` holds a velocity per point and axis.
+        VELOCITIES = 0, "velocities";
+        /// `accelerations` holds an acceleration per point and axis (needs `VELOCITIES`).
+        ACCELERATIONS = 1, "accelerations";
     }
 }
 

@@ -27,9 +27,11 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
-// `payload!` first: the payload modules below use it.
+// `payload!` and `flag_set!` first: the payload modules below use them.
 #[macro_use]
 mod payload;
+#[macro_use]
+mod flag_set;
 
 mod command;
 mod commission;

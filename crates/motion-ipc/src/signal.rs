@@ -11,51 +11,19 @@ use crate::{NAME_LEN, UNIT_LEN};
 /// Travels as `u8` in [`SignalState::kind`] and [`SignalInfo::kind`].
 pub use motion_base::SignalKind;
 
-/// Bit set of a signal's state flags ([`SignalState::flags`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub struct SignalFlags(pub u32);
-
-impl SignalFlags {
-    /// The value is older than its board's refresh budget (or was never read).
-    pub const STALE: Self = Self(1 << 0);
-    /// A client holds an exclusive claim on the output ([`SignalState::claimed_by`]).
-    pub const CLAIMED: Self = Self(1 << 1);
-    /// The e-stop put the output into its configured safe state.
-    pub const SAFE_STATE: Self = Self(1 << 2);
-    /// An output value (a level, a trigger's compare position) was commanded and the board
-    /// has not acknowledged it yet.
-    pub const PENDING: Self = Self(1 << 3);
-
-    /// Every flag with the name clients print, in bit order.
-    pub const NAMED: [(Self, &'static str); 4] = [
-        (Self::STALE, "stale"),
-        (Self::CLAIMED, "claimed"),
-        (Self::SAFE_STATE, "safe-state"),
-        (Self::PENDING, "pending"),
-    ];
-
-    /// The names of the set flags, in bit order.
-    pub fn names(self) -> Vec<&'static str> {
-        Self::NAMED
-            .iter()
-            .filter(|(flag, _)| self.contains(*flag))
-            .map(|(_, name)| *name)
-            .collect()
-    }
-
-    /// Whether every bit of `other` is set.
-    pub const fn contains(self, other: Self) -> bool {
-        self.0 & other.0 == other.0
-    }
-
-    /// `self` with the bits of `other` set (`on`) or cleared.
-    #[must_use]
-    pub const fn with(self, other: Self, on: bool) -> Self {
-        if on {
-            Self(self.0 | other.0)
-        } else {
-            Self(self.0 & !other.0)
-        }
+flag_set! {
+    /// Bit set of a signal's state flags ([`SignalState::flags`]).
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+    pub struct SignalFlags(u32) {
+        /// The value is older than its board's refresh budget (or was never read).
+        STALE = 0, "stale";
+        /// A client holds an exclusive claim on the output ([`SignalState::claimed_by`]).
+        CLAIMED = 1, "claimed";
+        /// The e-stop put the output into its configured safe state.
+        SAFE_STATE = 2, "safe-state";
+        /// An output value (a level, a trigger's compare position) was commanded and the board
+        /// has not acknowledged it yet.
+        PENDING = 3, "pending";
     }
 }
 
@@ -136,21 +104,16 @@ impl Default for SignalState {
     }
 }
 
-/// Bit set of a signal's configuration ([`SignalInfo::flags`]).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-pub struct SignalInfoFlags(pub u8);
-
-impl SignalInfoFlags {
-    /// Digital: the logical value is the inverse of the electrical level.
-    pub const INVERT: Self = Self(1 << 0);
-    /// Digital output: the e-stop puts it into [`SignalInfoFlags::SAFE_ON`] (set) or off.
-    pub const HAS_SAFE_STATE: Self = Self(1 << 1);
-    /// Digital output: the safe state is on.
-    pub const SAFE_ON: Self = Self(1 << 2);
-
-    /// Whether every bit of `other` is set.
-    pub const fn contains(self, other: Self) -> bool {
-        self.0 & other.0 == other.0
+flag_set! {
+    /// Bit set of a signal's configuration ([`SignalInfo::flags`]).
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+    pub struct SignalInfoFlags(u8) {
+        /// Digital: the logical value is the inverse of the electrical level.
+        INVERT = 0, "invert";
+        /// Digital output: the e-stop puts it into [`SignalInfoFlags::SAFE_ON`] (set) or off.
+        HAS_SAFE_STATE = 1, "has-safe-state";
+        /// Digital output: the safe state is on.
+        SAFE_ON = 2, "safe-on";
     }
 }
 

@@ -399,57 +399,50 @@ fn enums() -> Vec<Enum> {
     all
 }
 
-/// `(name, value)` of flag constants of a newtype bit set (`AxisFlags::MOVING`).
-macro_rules! bits {
-    ($set:ident: $($bit:ident),* $(,)?) => {
-        &[$((stringify!($bit), u64::from($set::$bit.0))),*]
-    };
-}
-
-/// The flag sets. Their bits are associated constants, listed here by name.
+/// The flag sets (`flag_set!`: each lists its own bits).
 fn flag_sets() -> Vec<Enum> {
     vec![
         flags(
             "AxisFlags",
             Scalar::U32,
             "Bits of `AxisState.flags`.",
-            bits!(AxisFlags: MOVING, HOMED, AT_LIMIT, STALE, FAULT, CLAIMED, ARRIVED, ESTOPPED, DEADMAN_EXPIRED, HELD),
+            &AxisFlags::BITS,
         ),
         flags(
             "FrameFlags",
             Scalar::U32,
             "Bits of `MotionFrame.flags`.",
-            bits!(FrameFlags: ESTOP_LATCHED, OVERRUN, SHUTTING_DOWN),
+            &FrameFlags::BITS,
         ),
         flags(
             "SignalFlags",
             Scalar::U32,
             "Bits of `SignalState.flags`.",
-            bits!(SignalFlags: STALE, CLAIMED, SAFE_STATE, PENDING),
+            &SignalFlags::BITS,
         ),
         flags(
             "PathFlags",
             Scalar::U32,
             "Bits of `GroupPath.flags`.",
-            bits!(PathFlags: VELOCITIES, ACCELERATIONS),
+            &PathFlags::BITS,
         ),
         flags(
             "StreamFlags",
             Scalar::U8,
             "Bits of `GroupState.stream_flags`.",
-            bits!(StreamFlags: APPLIED, CLAMPED),
+            &StreamFlags::BITS,
         ),
         flags(
             "SetpointFlags",
             Scalar::U32,
             "Bits of `Setpoint.flags`.",
-            bits!(SetpointFlags: FEED_FORWARD),
+            &SetpointFlags::BITS,
         ),
         flags(
             "SignalInfoFlags",
             Scalar::U8,
             "Bits of `SignalInfo.flags`.",
-            bits!(SignalInfoFlags: INVERT, HAS_SAFE_STATE, SAFE_ON),
+            &SignalInfoFlags::BITS,
         ),
         flags(
             "RtFlags",
