@@ -58,353 +58,190 @@ impl ClientId {
     }
 }
 
-/// What a request asks for. Travels as `u32` in [`CommandRequest::kind`].
-///
-/// Meaning of `values` per kind (0.0 in a velocity/acceleration slot means "the axis's
-/// configured maximum"):
-///
-/// | kind | values[0] | values[1] | values[2] |
-/// |---|---|---|---|
-/// | `Stop` | – | – | – |
-/// | `Power` | power, −1.0..=1.0 of full scale | – | – |
-/// | `Position` | position, units | – | – |
-/// | `Velocity` | velocity, units/s | – | – |
-/// | `RampPosition` | position, units | max velocity, units/s | acceleration, units/s² |
-/// | `RampVelocity` | velocity, units/s | acceleration, units/s² | – |
-/// | `Home` | search velocity, units/s | – | – |
-/// | `SetPosition` | the position the axis is now at, units | – | – |
-/// | `SetOutput` | the output's logical value, 0.0 (off) or 1.0 (on); a trigger's compare position, in the signal's unit | – | – |
-/// | `Claim`, `Release`, `EStop`, `Reset`, `Off`, `Hold`, `Resume` | – | – | – |
-///
-/// `SetOutput`, and `Claim` / `Release` with [`Target::Signal`], address a signal:
-/// [`CommandRequest::axis`] is then a signal index (config order) and
-/// [`CommandRequest::target`] is [`Target::Signal`]. `Commission` addresses a device
-/// ([`Target::Device`]): `values[0]` is a [`CommissionWhat`](crate::CommissionWhat) value,
-/// `values[1]` the new address or baud rate.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[repr(u32)]
-pub enum CommandKind {
-    /// Decelerate to a stop and hold. With [`CommandRequest::ALL_AXES`], every axis.
-    Stop = 1,
-    /// Open-loop power (deadman applies).
-    Power = 2,
-    /// Position target for the board's own controller.
-    Position = 3,
-    /// Velocity (deadman applies).
-    Velocity = 4,
-    /// Position along a velocity- and acceleration-limited profile.
-    RampPosition = 5,
-    /// Velocity along an acceleration-limited profile (deadman applies).
-    RampVelocity = 6,
-    /// Reference search.
-    Home = 7,
-    /// Declare the current position to be `values[0]` (no motion).
-    SetPosition = 8,
-    /// Take an exclusive claim on the axis for the requesting client.
-    Claim = 9,
-    /// Give a claim back.
-    Release = 10,
-    /// Emergency stop: every axis stops and holds, latched until `Reset`.
-    EStop = 11,
-    /// Clear a latched e-stop, deadman expiries and faults whose cause is gone; targets of
-    /// axes without a running goal become their current positions. Claims are kept.
-    Reset = 12,
-    /// De-energise the motor (it coasts; no holding torque). With
-    /// [`CommandRequest::ALL_AXES`], every axis. A board that cannot de-energise refuses
-    /// with [`Reason::Unsupported`].
-    Off = 13,
-    /// Set a digital output signal (`axis` = signal index, `target` = [`Target::Signal`]),
-    /// or a trigger signal's compare position (`values[0]` in the signal's unit).
-    SetOutput = 14,
-    /// Run the group's path `values[0]` (the id of a [`GroupPath`](crate::GroupPath) the
-    /// same node published on `paths`): `axis` = group index, `target` = [`Target::Group`].
-    /// A path refused names its point and axis in [`CommandReply::at_point`] /
-    /// [`CommandReply::at_axis`].
-    Run = 15,
-    /// Feed hold: bring the group to rest along its path at its axes' acceleration limits.
-    /// With [`Target::Axis`]: bring the axis's position move (`Position`, `RampPosition`)
-    /// to rest and keep it — on a QSB-M running the move itself, its COMMAND 6 ("Pause the
-    /// motor using the MD ACCEL rate"); on every other board a stop at the move's
-    /// acceleration (`max_accel` for `Position`) — flagged
-    /// [`AxisFlags::HELD`](crate::AxisFlags::HELD).
-    Hold = 16,
-    /// Continue a held path at the set feed. With [`Target::Axis`]: continue the held move
-    /// to its target with its velocity and acceleration (the QSB-M's COMMAND 7 "Resume
-    /// motor operation if previously stopped using the Motor Pause command", else the same
-    /// goal again from where the axis stands).
-    Resume = 17,
-    /// Set the group's feed override: `values[0]` = 0.0..=1.5 (1.0 = 100 %); time along the
-    /// path runs at this rate, changed within the axes' acceleration limits.
-    Feed = 18,
-    /// Bring the group to rest along its path, then end its motion (`aborted`, `cancelled`);
-    /// for a stream: end it, every axis stops and holds.
-    Cancel = 19,
-    /// Start streaming setpoints to the group (`values[0]` = [`StreamMode`](crate::StreamMode)
-    /// value) on `setpoints`; needs the group's claim (every member claimed by the sender).
-    Stream = 20,
-    /// Change a board's own settings (`axis` = device index, `target` = [`Target::Device`],
-    /// `values[0]` = [`CommissionWhat`](crate::CommissionWhat), `values[1]` = the new
-    /// address or baud rate): the board is told, then found again where it now answers.
-    /// Needs the claim of every axis and signal of the device, and no axis of it moving.
-    Commission = 21,
-}
-
-impl CommandKind {
-    /// Every kind, in value order.
-    pub const ALL: [Self; 21] = [
-        Self::Stop,
-        Self::Power,
-        Self::Position,
-        Self::Velocity,
-        Self::RampPosition,
-        Self::RampVelocity,
-        Self::Home,
-        Self::SetPosition,
-        Self::Claim,
-        Self::Release,
-        Self::EStop,
-        Self::Reset,
-        Self::Off,
-        Self::SetOutput,
-        Self::Run,
-        Self::Hold,
-        Self::Resume,
-        Self::Feed,
-        Self::Cancel,
-        Self::Stream,
-        Self::Commission,
-    ];
-
-    /// The command's name as the CLI and logs spell it.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Self::Stop => "stop",
-            Self::Power => "power",
-            Self::Position => "position",
-            Self::Velocity => "velocity",
-            Self::RampPosition => "ramp-position",
-            Self::RampVelocity => "ramp-velocity",
-            Self::Home => "home",
-            Self::SetPosition => "set-position",
-            Self::Claim => "claim",
-            Self::Release => "release",
-            Self::EStop => "e-stop",
-            Self::Reset => "reset",
-            Self::Off => "off",
-            Self::SetOutput => "set-output",
-            Self::Run => "run",
-            Self::Hold => "hold",
-            Self::Resume => "resume",
-            Self::Feed => "feed",
-            Self::Cancel => "cancel",
-            Self::Stream => "stream",
-            Self::Commission => "commission",
-        }
+enumeration! {
+    /// What a request asks for. Travels as `u32` in [`CommandRequest::kind`].
+    ///
+    /// Meaning of `values` per kind (0.0 in a velocity/acceleration slot means "the axis's
+    /// configured maximum"):
+    ///
+    /// | kind | values[0] | values[1] | values[2] |
+    /// |---|---|---|---|
+    /// | `Stop` | – | – | – |
+    /// | `Power` | power, −1.0..=1.0 of full scale | – | – |
+    /// | `Position` | position, units | – | – |
+    /// | `Velocity` | velocity, units/s | – | – |
+    /// | `RampPosition` | position, units | max velocity, units/s | acceleration, units/s² |
+    /// | `RampVelocity` | velocity, units/s | acceleration, units/s² | – |
+    /// | `Home` | search velocity, units/s | – | – |
+    /// | `SetPosition` | the position the axis is now at, units | – | – |
+    /// | `SetOutput` | the output's logical value, 0.0 (off) or 1.0 (on); a trigger's compare position, in the signal's unit | – | – |
+    /// | `Claim`, `Release`, `EStop`, `Reset`, `Off`, `Hold`, `Resume` | – | – | – |
+    ///
+    /// `SetOutput`, and `Claim` / `Release` with [`Target::Signal`], address a signal:
+    /// [`CommandRequest::axis`] is then a signal index (config order) and
+    /// [`CommandRequest::target`] is [`Target::Signal`]. `Commission` addresses a device
+    /// ([`Target::Device`]): `values[0]` is a [`CommissionWhat`](crate::CommissionWhat) value,
+    /// `values[1]` the new address or baud rate.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+    pub enum CommandKind(u32) -> name {
+        /// Decelerate to a stop and hold. With [`CommandRequest::ALL_AXES`], every axis.
+        Stop = 1 => "stop",
+        /// Open-loop power (deadman applies).
+        Power = 2 => "power",
+        /// Position target for the board's own controller.
+        Position = 3 => "position",
+        /// Velocity (deadman applies).
+        Velocity = 4 => "velocity",
+        /// Position along a velocity- and acceleration-limited profile.
+        RampPosition = 5 => "ramp-position",
+        /// Velocity along an acceleration-limited profile (deadman applies).
+        RampVelocity = 6 => "ramp-velocity",
+        /// Reference search.
+        Home = 7 => "home",
+        /// Declare the current position to be `values[0]` (no motion).
+        SetPosition = 8 => "set-position",
+        /// Take an exclusive claim on the axis for the requesting client.
+        Claim = 9 => "claim",
+        /// Give a claim back.
+        Release = 10 => "release",
+        /// Emergency stop: every axis stops and holds, latched until `Reset`.
+        EStop = 11 => "e-stop",
+        /// Clear a latched e-stop, deadman expiries and faults whose cause is gone; targets of
+        /// axes without a running goal become their current positions. Claims are kept.
+        Reset = 12 => "reset",
+        /// De-energise the motor (it coasts; no holding torque). With
+        /// [`CommandRequest::ALL_AXES`], every axis. A board that cannot de-energise refuses
+        /// with [`Reason::Unsupported`].
+        Off = 13 => "off",
+        /// Set a digital output signal (`axis` = signal index, `target` = [`Target::Signal`]),
+        /// or a trigger signal's compare position (`values[0]` in the signal's unit).
+        SetOutput = 14 => "set-output",
+        /// Run the group's path `values[0]` (the id of a [`GroupPath`](crate::GroupPath) the
+        /// same node published on `paths`): `axis` = group index, `target` = [`Target::Group`].
+        /// A path refused names its point and axis in [`CommandReply::at_point`] /
+        /// [`CommandReply::at_axis`].
+        Run = 15 => "run",
+        /// Feed hold: bring the group to rest along its path at its axes' acceleration limits.
+        /// With [`Target::Axis`]: bring the axis's position move (`Position`, `RampPosition`)
+        /// to rest and keep it — on a QSB-M running the move itself, its COMMAND 6 ("Pause the
+        /// motor using the MD ACCEL rate"); on every other board a stop at the move's
+        /// acceleration (`max_accel` for `Position`) — flagged
+        /// [`AxisFlags::HELD`](crate::AxisFlags::HELD).
+        Hold = 16 => "hold",
+        /// Continue a held path at the set feed. With [`Target::Axis`]: continue the held move
+        /// to its target with its velocity and acceleration (the QSB-M's COMMAND 7 "Resume
+        /// motor operation if previously stopped using the Motor Pause command", else the same
+        /// goal again from where the axis stands).
+        Resume = 17 => "resume",
+        /// Set the group's feed override: `values[0]` = 0.0..=1.5 (1.0 = 100 %); time along the
+        /// path runs at this rate, changed within the axes' acceleration limits.
+        Feed = 18 => "feed",
+        /// Bring the group to rest along its path, then end its motion (`aborted`, `cancelled`);
+        /// for a stream: end it, every axis stops and holds.
+        Cancel = 19 => "cancel",
+        /// Start streaming setpoints to the group (`values[0]` = [`StreamMode`](crate::StreamMode)
+        /// value) on `setpoints`; needs the group's claim (every member claimed by the sender).
+        Stream = 20 => "stream",
+        /// Change a board's own settings (`axis` = device index, `target` = [`Target::Device`],
+        /// `values[0]` = [`CommissionWhat`](crate::CommissionWhat), `values[1]` = the new
+        /// address or baud rate): the board is told, then found again where it now answers.
+        /// Needs the claim of every axis and signal of the device, and no axis of it moving.
+        Commission = 21 => "commission",
     }
 }
 
-impl TryFrom<u32> for CommandKind {
-    type Error = UnknownValue;
-    fn try_from(value: u32) -> Result<Self, Self::Error> {
-        Self::ALL
-            .iter()
-            .copied()
-            .find(|kind| *kind as u32 == value)
-            .ok_or(UnknownValue(value))
-    }
-}
-
-/// Why a request was refused. Travels as `u32` in [`CommandReply::reason`]; 0 = accepted.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[repr(u32)]
-pub enum Reason {
-    /// Accepted.
-    Accepted = 0,
-    /// The request's `schema_version` differs from the server's.
-    SchemaMismatch = 1,
-    /// `kind` is not a known [`CommandKind`].
-    UnknownKind = 2,
-    /// `axis` is not an axis of this server.
-    UnknownAxis = 3,
-    /// The axis's board cannot do this kind of goal.
-    Unsupported = 4,
-    /// A value is NaN or infinite.
-    NotFinite = 5,
-    /// The position is outside the axis's `min..=max`, or a digital output's level is
-    /// neither 0 nor 1.
-    OutOfRange = 6,
-    /// The velocity exceeds the axis's `max_velocity`, or is below the smallest step its
-    /// board represents (a slower velocity would be rounded to nothing or up).
-    VelocityLimit = 7,
-    /// The acceleration exceeds the axis's `max_accel`, is not positive, or is below the
-    /// smallest step its board represents (it would be rounded up: harder than asked).
-    AccelLimit = 8,
-    /// The power is outside −1.0..=1.0.
-    PowerLimit = 9,
-    /// Another client holds a claim on the axis.
-    ClaimedByOther = 10,
-    /// A release from a client that does not hold the claim.
-    NotClaimed = 11,
-    /// The e-stop is latched; only `Reset`, `EStop`, `Stop` and claims are taken.
-    EstopLatched = 12,
-    /// The axis is faulted; a `Reset` (after the cause is gone) is needed.
-    AxisFaulted = 13,
-    /// The axis's link is down.
-    LinkDown = 14,
-    /// The server's command queue is full this tick; send again.
-    Busy = 15,
-    /// The server is shutting down.
-    ShuttingDown = 16,
-    /// A claim or release without a client id.
-    NoClientId = 17,
-    /// The request's `client` is not the node the server received it from, or that node
-    /// was already found dead (a request it sent just before it died; stops still count).
-    IdentityMismatch = 18,
-    /// The axis's board is still starting (its link not open for the first time yet, or its
-    /// first answer, configuration, start-up stop).
-    DeviceStarting = 19,
-    /// The axis's board is not answering.
-    DeviceOffline = 20,
-    /// `axis` is not a signal of this server (for a signal request).
-    UnknownSignal = 21,
-    /// The signal is not an output: neither a digital output nor a trigger (whose value
-    /// is its compare position).
-    NotAnOutput = 22,
-    /// `target` is not a known [`Target`].
-    UnknownTarget = 23,
-    /// `axis` is not a group of this server (for a group request).
-    UnknownGroup = 24,
-    /// No path with the request's id (`values[0]`) for this group was published by the
-    /// sender's node on `paths`, or it was already run.
-    NoPath = 25,
-    /// A path's point times do not start at ≥ 0 and increase
-    /// ([`CommandReply::at_point`]).
-    PathTimes = 26,
-    /// A path's first point has time 0 but is not where the group is
-    /// ([`CommandReply::at_axis`]).
-    PathStart = 27,
-    /// A path is malformed: no points, more than the contract holds, an axis count other
-    /// than the group's, an unknown kind, a scale outside (0, 1].
-    PathLayout = 28,
-    /// An axis of the request is moving with a group, or (for a group's motion) moving on
-    /// its own, still stopping after one: cancel that motion or wait for the axis to rest
-    /// ([`CommandReply::at_axis`]).
-    GroupBusy = 29,
-    /// Hold, resume, feed or cancel of a group with no motion running; hold of an axis with
-    /// no position move on its way, resume of an axis with no held move.
-    NotMoving = 30,
-    /// A trajectory of positions alone cannot be blended at a point within an axis's
-    /// `path_tolerance` at its max_accel ([`CommandReply::at_point`],
-    /// [`CommandReply::at_axis`]; `value` the distance the blend would pass the point at,
-    /// `limit` the tolerance).
-    BlendTolerance = 31,
-    /// `axis` is not a device of this server (for a device request).
-    UnknownDevice = 32,
-}
-
-impl Reason {
-    /// Every reason, in value order.
-    pub const ALL: [Self; 33] = [
-        Self::Accepted,
-        Self::SchemaMismatch,
-        Self::UnknownKind,
-        Self::UnknownAxis,
-        Self::Unsupported,
-        Self::NotFinite,
-        Self::OutOfRange,
-        Self::VelocityLimit,
-        Self::AccelLimit,
-        Self::PowerLimit,
-        Self::ClaimedByOther,
-        Self::NotClaimed,
-        Self::EstopLatched,
-        Self::AxisFaulted,
-        Self::LinkDown,
-        Self::Busy,
-        Self::ShuttingDown,
-        Self::NoClientId,
-        Self::IdentityMismatch,
-        Self::DeviceStarting,
-        Self::DeviceOffline,
-        Self::UnknownSignal,
-        Self::NotAnOutput,
-        Self::UnknownTarget,
-        Self::UnknownGroup,
-        Self::NoPath,
-        Self::PathTimes,
-        Self::PathStart,
-        Self::PathLayout,
-        Self::GroupBusy,
-        Self::NotMoving,
-        Self::BlendTolerance,
-        Self::UnknownDevice,
-    ];
-
-    /// One line saying what is wrong and what to do.
-    pub const fn message(self) -> &'static str {
-        match self {
-            Self::Accepted => "accepted",
-            Self::SchemaMismatch => "client and server use different motion-ipc schema versions",
-            Self::UnknownKind => "unknown command kind",
-            Self::UnknownAxis => "no such axis on this server",
-            Self::Unsupported => "the axis's board cannot do this command",
-            Self::NotFinite => "a value is NaN or infinite",
-            Self::OutOfRange => {
-                "position outside the axis's min..max soft limits, or an output level other than 0 or 1"
-            }
-            Self::VelocityLimit => {
-                "velocity above the axis's max_velocity, or below the smallest step its board represents"
-            }
-            Self::AccelLimit => {
-                "acceleration above the axis's max_accel or not positive, or below the smallest step its board represents"
-            }
-            Self::PowerLimit => "power outside -1.0..1.0",
-            Self::ClaimedByOther => "the axis is claimed by another client",
-            Self::NotClaimed => "this client holds no claim on the axis",
-            Self::EstopLatched => "e-stop is latched: send reset first",
-            Self::AxisFaulted => "the axis is faulted: clear the cause, then reset",
-            Self::LinkDown => "the axis's link is down",
-            Self::Busy => "the server's command queue is full: retry",
-            Self::ShuttingDown => "the server is shutting down",
-            Self::NoClientId => "claim and release need a client id",
-            Self::IdentityMismatch => {
-                "the request's client id is not the sender's iceoryx2 node: ids cannot be borrowed"
-            }
-            Self::DeviceStarting => {
-                "the axis's board is starting: its link is not open yet, or it awaits its first \
-                 answer and its start-up stop"
-            }
-            Self::DeviceOffline => "the axis's board is not answering",
-            Self::UnknownSignal => "no such signal on this server",
-            Self::NotAnOutput => {
-                "the signal is not an output (a digital output, or a trigger's compare position)"
-            }
-            Self::UnknownTarget => "unknown target: 0 = axis, 1 = signal, 2 = group, 3 = device",
-            Self::UnknownGroup => "no such group on this server",
-            Self::NoPath => {
-                "no path with this id for this group was published by this client on `paths` \
-                 (publish it first; a path runs once)"
-            }
-            Self::PathTimes => "the path's point times must start at 0 or later and increase",
-            Self::PathStart => "the path's first point has time 0 but is not where the group is",
-            Self::PathLayout => {
-                "malformed path: no points, too many, an axis count other than the group's, \
-                 an unknown kind, or a scale outside (0, 1]"
-            }
-            Self::GroupBusy => {
-                "an axis of this request is moving (with a group, or on its own, still stopping): \
-                 cancel that motion or wait for the axis to rest"
-            }
-            Self::NotMoving => {
-                "the group has no motion running, or the axis no position move to hold or \
-                 held move to resume"
-            }
-            Self::BlendTolerance => {
-                "positions alone cannot be blended at this point within the axis's path_tolerance \
-                 at its max_accel: space the points further apart, or send velocities"
-            }
-            Self::UnknownDevice => "no such device on this server",
-        }
+enumeration! {
+    /// Why a request was refused. Travels as `u32` in [`CommandReply::reason`]; 0 = accepted.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+    pub enum Reason(u32) -> message {
+        /// Accepted.
+        Accepted = 0 => "accepted",
+        /// The request's `schema_version` differs from the server's.
+        SchemaMismatch = 1 => "client and server use different motion-ipc schema versions",
+        /// `kind` is not a known [`CommandKind`].
+        UnknownKind = 2 => "unknown command kind",
+        /// `axis` is not an axis of this server.
+        UnknownAxis = 3 => "no such axis on this server",
+        /// The axis's board cannot do this kind of goal.
+        Unsupported = 4 => "the axis's board cannot do this command",
+        /// A value is NaN or infinite.
+        NotFinite = 5 => "a value is NaN or infinite",
+        /// The position is outside the axis's `min..=max`, or a digital output's level is
+        /// neither 0 nor 1.
+        OutOfRange = 6 => "position outside the axis's min..max soft limits, or an output level other than 0 or 1",
+        /// The velocity exceeds the axis's `max_velocity`, or is below the smallest step its
+        /// board represents (a slower velocity would be rounded to nothing or up).
+        VelocityLimit = 7 => "velocity above the axis's max_velocity, or below the smallest step its board represents",
+        /// The acceleration exceeds the axis's `max_accel`, is not positive, or is below the
+        /// smallest step its board represents (it would be rounded up: harder than asked).
+        AccelLimit = 8 => "acceleration above the axis's max_accel or not positive, or below the smallest step its board represents",
+        /// The power is outside −1.0..=1.0.
+        PowerLimit = 9 => "power outside -1.0..1.0",
+        /// Another client holds a claim on the axis.
+        ClaimedByOther = 10 => "the axis is claimed by another client",
+        /// A release from a client that does not hold the claim.
+        NotClaimed = 11 => "this client holds no claim on the axis",
+        /// The e-stop is latched; only `Reset`, `EStop`, `Stop` and claims are taken.
+        EstopLatched = 12 => "e-stop is latched: send reset first",
+        /// The axis is faulted; a `Reset` (after the cause is gone) is needed.
+        AxisFaulted = 13 => "the axis is faulted: clear the cause, then reset",
+        /// The axis's link is down.
+        LinkDown = 14 => "the axis's link is down",
+        /// The server's command queue is full this tick; send again.
+        Busy = 15 => "the server's command queue is full: retry",
+        /// The server is shutting down.
+        ShuttingDown = 16 => "the server is shutting down",
+        /// A claim or release without a client id.
+        NoClientId = 17 => "claim and release need a client id",
+        /// The request's `client` is not the node the server received it from, or that node
+        /// was already found dead (a request it sent just before it died; stops still count).
+        IdentityMismatch = 18 => "the request's client id is not the sender's iceoryx2 node: ids cannot be borrowed",
+        /// The axis's board is still starting (its link not open for the first time yet, or its
+        /// first answer, configuration, start-up stop).
+        DeviceStarting = 19 => "the axis's board is starting: its link is not open yet, or it awaits its first \
+                 answer and its start-up stop",
+        /// The axis's board is not answering.
+        DeviceOffline = 20 => "the axis's board is not answering",
+        /// `axis` is not a signal of this server (for a signal request).
+        UnknownSignal = 21 => "no such signal on this server",
+        /// The signal is not an output: neither a digital output nor a trigger (whose value
+        /// is its compare position).
+        NotAnOutput = 22 => "the signal is not an output (a digital output, or a trigger's compare position)",
+        /// `target` is not a known [`Target`].
+        UnknownTarget = 23 => "unknown target: 0 = axis, 1 = signal, 2 = group, 3 = device",
+        /// `axis` is not a group of this server (for a group request).
+        UnknownGroup = 24 => "no such group on this server",
+        /// No path with the request's id (`values[0]`) for this group was published by the
+        /// sender's node on `paths`, or it was already run.
+        NoPath = 25 => "no path with this id for this group was published by this client on `paths` \
+                 (publish it first; a path runs once)",
+        /// A path's point times do not start at ≥ 0 and increase
+        /// ([`CommandReply::at_point`]).
+        PathTimes = 26 => "the path's point times must start at 0 or later and increase",
+        /// A path's first point has time 0 but is not where the group is
+        /// ([`CommandReply::at_axis`]).
+        PathStart = 27 => "the path's first point has time 0 but is not where the group is",
+        /// A path is malformed: no points, more than the contract holds, an axis count other
+        /// than the group's, an unknown kind, a scale outside (0, 1].
+        PathLayout = 28 => "malformed path: no points, too many, an axis count other than the group's, \
+                 an unknown kind, or a scale outside (0, 1]",
+        /// An axis of the request is moving with a group, or (for a group's motion) moving on
+        /// its own, still stopping after one: cancel that motion or wait for the axis to rest
+        /// ([`CommandReply::at_axis`]).
+        GroupBusy = 29 => "an axis of this request is moving (with a group, or on its own, still stopping): \
+                 cancel that motion or wait for the axis to rest",
+        /// Hold, resume, feed or cancel of a group with no motion running; hold of an axis with
+        /// no position move on its way, resume of an axis with no held move.
+        NotMoving = 30 => "the group has no motion running, or the axis no position move to hold or \
+                 held move to resume",
+        /// A trajectory of positions alone cannot be blended at a point within an axis's
+        /// `path_tolerance` at its max_accel ([`CommandReply::at_point`],
+        /// [`CommandReply::at_axis`]; `value` the distance the blend would pass the point at,
+        /// `limit` the tolerance).
+        BlendTolerance = 31 => "positions alone cannot be blended at this point within the axis's path_tolerance \
+                 at its max_accel: space the points further apart, or send velocities",
+        /// `axis` is not a device of this server (for a device request).
+        UnknownDevice = 32 => "no such device on this server",
     }
 }
 
@@ -414,44 +251,21 @@ impl fmt::Display for Reason {
     }
 }
 
-impl TryFrom<u32> for Reason {
-    type Error = UnknownValue;
-    fn try_from(value: u32) -> Result<Self, Self::Error> {
-        Self::ALL
-            .iter()
-            .copied()
-            .find(|reason| *reason as u32 == value)
-            .ok_or(UnknownValue(value))
-    }
-}
-
-/// What [`CommandRequest::axis`] indexes. Travels as `u32` in [`CommandRequest::target`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
-#[repr(u32)]
-pub enum Target {
-    /// An axis (config order); every kind but `SetOutput`, `Run`, `Feed`, `Cancel` and
-    /// `Stream` (`Hold` and `Resume` act on the axis's own position move).
-    #[default]
-    Axis = 0,
-    /// A signal (config order): `SetOutput`, `Claim`, `Release`.
-    Signal = 1,
-    /// A group (config order): `Claim`, `Release` (every axis of it, all or none), `Stop`,
-    /// `Run`, `Hold`, `Resume`, `Feed`, `Cancel`.
-    Group = 2,
-    /// A device (config order): `Commission`.
-    Device = 3,
-}
-
-impl TryFrom<u32> for Target {
-    type Error = UnknownValue;
-    fn try_from(value: u32) -> Result<Self, Self::Error> {
-        match value {
-            0 => Ok(Self::Axis),
-            1 => Ok(Self::Signal),
-            2 => Ok(Self::Group),
-            3 => Ok(Self::Device),
-            other => Err(UnknownValue(other)),
-        }
+enumeration! {
+    /// What [`CommandRequest::axis`] indexes. Travels as `u32` in [`CommandRequest::target`].
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+    pub enum Target(u32) -> name {
+        /// An axis (config order); every kind but `SetOutput`, `Run`, `Feed`, `Cancel` and
+        /// `Stream` (`Hold` and `Resume` act on the axis's own position move).
+        #[default]
+        Axis = 0 => "axis",
+        /// A signal (config order): `SetOutput`, `Claim`, `Release`.
+        Signal = 1 => "signal",
+        /// A group (config order): `Claim`, `Release` (every axis of it, all or none), `Stop`,
+        /// `Run`, `Hold`, `Resume`, `Feed`, `Cancel`.
+        Group = 2 => "group",
+        /// A device (config order): `Commission`.
+        Device = 3 => "device",
     }
 }
 

@@ -3,51 +3,29 @@
 
 use crate::{ClientId, CommandKind, CommandRequest, Target, UnknownValue};
 
-/// What a [`CommandKind::Commission`] request changes. Travels as `values[0]` of the
-/// request (`1.0`, `2.0`, `3.0`); `values[1]` carries the new value.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[repr(u32)]
-pub enum CommissionWhat {
-    /// The device's bus address (`values[1]`, as the config's `address` takes it): the
-    /// Trinamic pack's `$42`, the SPI_motor's 0xf1/0xf2/0xf0 sequence.
-    Address = 1,
-    /// The device's line rate in baud (`values[1]`): the Trinamic pack's `$40`; the link
-    /// follows.
-    Baud = 2,
-    /// Back to the factory settings (`values[1]` unused): the Trinamic pack's `$CC`.
-    FactoryReset = 3,
+enumeration! {
+    /// What a [`CommandKind::Commission`] request changes. Travels as `values[0]` of the
+    /// request (`1.0`, `2.0`, `3.0`); `values[1]` carries the new value.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+    pub enum CommissionWhat(u32) -> name {
+        /// The device's bus address (`values[1]`, as the config's `address` takes it): the
+        /// Trinamic pack's `$42`, the SPI_motor's 0xf1/0xf2/0xf0 sequence.
+        Address = 1 => "address",
+        /// The device's line rate in baud (`values[1]`): the Trinamic pack's `$40`; the link
+        /// follows.
+        Baud = 2 => "baud",
+        /// Back to the factory settings (`values[1]` unused): the Trinamic pack's `$CC`.
+        FactoryReset = 3 => "factory-reset",
+    }
 }
 
 impl CommissionWhat {
-    /// Every value, in value order.
-    pub const ALL: [Self; 3] = [Self::Address, Self::Baud, Self::FactoryReset];
-
-    /// The name clients print.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Self::Address => "address",
-            Self::Baud => "baud",
-            Self::FactoryReset => "factory-reset",
-        }
-    }
-
     /// From `values[0]` of a request: an exact small integer.
     pub fn from_value(value: f64) -> Result<Self, UnknownValue> {
         if value.fract() != 0.0 || !(0.0..=f64::from(u32::MAX)).contains(&value) {
             return Err(UnknownValue(u32::MAX));
         }
         Self::try_from(value as u32)
-    }
-}
-
-impl TryFrom<u32> for CommissionWhat {
-    type Error = UnknownValue;
-    fn try_from(value: u32) -> Result<Self, Self::Error> {
-        Self::ALL
-            .iter()
-            .copied()
-            .find(|what| *what as u32 == value)
-            .ok_or(UnknownValue(value))
     }
 }
 

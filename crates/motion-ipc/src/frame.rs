@@ -7,189 +7,111 @@ use crate::group::GroupState;
 use crate::signal::SignalState;
 use crate::{MAX_AXES, MAX_DEVICES, MAX_GROUPS, MAX_SIGNALS, SCHEMA_VERSION};
 
-/// Where a board is in its life, as the server sees it. Travels as `u8` in
-/// [`MotionFrame::devices`] and [`AxisState::device_state`], and as `u32` in
-/// [`DeviceInfo::state`](crate::DeviceInfo::state).
-#[derive(
-    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
-)]
-#[repr(u8)]
-pub enum DeviceState {
-    /// Not answering, or its link is down: goals are refused (`DeviceOffline` / `LinkDown`).
-    #[default]
-    Offline = 0,
-    /// Answering, configured, start-up stop acknowledged: takes goals.
-    Online = 1,
-    /// Link up, the board is being probed and configured, or its start-up stop is not yet
-    /// acknowledged: goals are refused with `DeviceStarting`.
-    Starting = 2,
-    /// Answering, but a board-level fault is latched (it rebooted, reported an error).
-    Faulted = 3,
-}
-
-impl DeviceState {
-    /// The name the CLI prints.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Self::Offline => "offline",
-            Self::Online => "online",
-            Self::Starting => "starting",
-            Self::Faulted => "faulted",
-        }
+enumeration! {
+    /// Where a board is in its life, as the server sees it. Travels as `u8` in
+    /// [`MotionFrame::devices`] and [`AxisState::device_state`], and as `u32` in
+    /// [`DeviceInfo::state`](crate::DeviceInfo::state).
+    #[derive(
+        serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+    )]
+    pub enum DeviceState(u8) -> name {
+        /// Not answering, or its link is down: goals are refused (`DeviceOffline` / `LinkDown`).
+        #[default]
+        Offline = 0 => "offline",
+        /// Answering, configured, start-up stop acknowledged: takes goals.
+        Online = 1 => "online",
+        /// Link up, the board is being probed and configured, or its start-up stop is not yet
+        /// acknowledged: goals are refused with `DeviceStarting`.
+        Starting = 2 => "starting",
+        /// Answering, but a board-level fault is latched (it rebooted, reported an error).
+        Faulted = 3 => "faulted",
     }
 }
 
-impl TryFrom<u8> for DeviceState {
-    type Error = UnknownValue;
-    fn try_from(value: u8) -> Result<Self, Self::Error> {
-        Ok(match value {
-            0 => Self::Offline,
-            1 => Self::Online,
-            2 => Self::Starting,
-            3 => Self::Faulted,
-            other => return Err(UnknownValue(u32::from(other))),
-        })
+enumeration! {
+    /// What an axis is doing, as the server drives it. Travels as `u8` in [`AxisState::mode`].
+    #[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+    pub enum AxisMode(u8) -> name {
+        /// Not driven (motor off / unpowered, or never commanded).
+        Off = 0 => "off",
+        /// Actively holding its position.
+        Hold = 1 => "hold",
+        /// Open-loop power (duty) command.
+        Power = 2 => "power",
+        /// Position target handed straight to the board's controller.
+        Position = 3 => "position",
+        /// Velocity command (deadman applies).
+        Velocity = 4 => "velocity",
+        /// Position reached along a velocity/acceleration-limited profile.
+        RampPosition = 5 => "ramp-position",
+        /// Velocity reached along an acceleration-limited profile (deadman applies).
+        RampVelocity = 6 => "ramp-velocity",
+        /// Reference search in progress.
+        Homing = 7 => "homing",
+        /// Decelerating to a stop (stop, deadman expiry, e-stop, fault).
+        Stopping = 8 => "stopping",
+        /// Following its group's path or stream ([`AxisState::desired_position`]).
+        Group = 9 => "group",
     }
 }
 
-/// What an axis is doing, as the server drives it. Travels as `u8` in [`AxisState::mode`].
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[repr(u8)]
-pub enum AxisMode {
-    /// Not driven (motor off / unpowered, or never commanded).
-    Off = 0,
-    /// Actively holding its position.
-    Hold = 1,
-    /// Open-loop power (duty) command.
-    Power = 2,
-    /// Position target handed straight to the board's controller.
-    Position = 3,
-    /// Velocity command (deadman applies).
-    Velocity = 4,
-    /// Position reached along a velocity/acceleration-limited profile.
-    RampPosition = 5,
-    /// Velocity reached along an acceleration-limited profile (deadman applies).
-    RampVelocity = 6,
-    /// Reference search in progress.
-    Homing = 7,
-    /// Decelerating to a stop (stop, deadman expiry, e-stop, fault).
-    Stopping = 8,
-    /// Following its group's path or stream ([`AxisState::desired_position`]).
-    Group = 9,
-}
-
-impl AxisMode {
-    /// The name clients print (`ramp-position`).
-    pub const fn name(self) -> &'static str {
-        match self {
-            Self::Off => "off",
-            Self::Hold => "hold",
-            Self::Power => "power",
-            Self::Position => "position",
-            Self::Velocity => "velocity",
-            Self::RampPosition => "ramp-position",
-            Self::RampVelocity => "ramp-velocity",
-            Self::Homing => "homing",
-            Self::Stopping => "stopping",
-            Self::Group => "group",
-        }
+enumeration! {
+    /// Why an axis is faulted. Travels as `u16` in [`AxisState::fault`]; 0 means no fault.
+    ///
+    /// Every fault stops the axis at once with its e-stop category (hold, stop-off or off) and
+    /// stays latched until a `Reset` that finds its cause gone. [`AxisState::fault_value`] and
+    /// [`AxisState::fault_limit`] carry the measured figure and the tolerance where the fault
+    /// has one ([`FaultCode::explain`] turns them into a sentence).
+    ///
+    /// | code | name | raised by | figure / tolerance | cleared when |
+    /// |---|---|---|---|---|
+    /// | 1 | `LinkDown` | the link failed (unplugged, I/O error) | – | link up and fresh data |
+    /// | 2 | `BoardNotResponding` | the board missed its reply budget repeatedly | – | fresh data |
+    /// | 3 | `BoardReset` | the board rebooted (goals lost) | – | fresh data, then reset |
+    /// | 4 | `BoardError` | the board answered with an error status | – | fresh data |
+    /// | 5 | `Protocol` | undecodable replies for too long | – | fresh data |
+    /// | 6 | `Overspeed` | board overspeed flag, or measured \|v\| > `overspeed_factor` × `max_velocity` for 3 fresh samples | \|v\| / limit, units/s | reset with \|v\| within the limit |
+    /// | 7 | `LimitSwitch` | a limit or reference switch stopped the axis | – | switch released |
+    /// | 8 | `Overrun` | the server overran `max_consecutive_overruns` ticks in a row | – | reset |
+    /// | 9 | `FollowingError` | holding: \|position − target\| > `following_error`; moving: position left the segment [start, target] widened by `following_error` | distance / `following_error`, units | reset (the target becomes the position) |
+    /// | 10 | `LimitExceeded` | position beyond a soft limit by more than `following_error` | position / the limit passed, units | reset once back within the limits (moves back inside are accepted meanwhile) |
+    /// | 11 | `HomeFailed` | a reference search travelled `home_max_travel` without its switch or index, or the board reported a search error | travel / `home_max_travel`, units | reset |
+    /// | 12 | `GoalTolerance` | a group's path ended and the axis was not within its `goal_tolerance` `goal_time_tolerance` later | distance / `goal_tolerance`, units | reset |
+    #[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+    pub enum FaultCode(u16) -> name {
+        /// No fault.
+        None = 0 => "none",
+        /// The link to the board is down (unplugged, closed, I/O error).
+        LinkDown = 1 => "link-down",
+        /// The board stopped answering within its reply budget.
+        BoardNotResponding = 2 => "board-not-responding",
+        /// The board rebooted (version/reset flag seen): its goals were lost.
+        BoardReset = 3 => "board-reset",
+        /// The board reported an error for a request.
+        BoardError = 4 => "board-error",
+        /// Replies could not be decoded (garbage, wrong answers) for too long.
+        Protocol = 5 => "protocol",
+        /// The board reported overspeed, or the encoder glitched.
+        Overspeed = 6 => "overspeed",
+        /// A hard limit or reference switch stopped the axis.
+        LimitSwitch = 7 => "limit-switch",
+        /// Stopped because the server overran its tick too many times in a row.
+        Overrun = 8 => "overrun",
+        /// The measured position left where the axis should be by more than its
+        /// `following_error`: away from the held target, or out of the segment of a move.
+        FollowingError = 9 => "following-error",
+        /// The measured position is beyond a soft limit by more than `following_error`.
+        LimitExceeded = 10 => "limit-exceeded",
+        /// A reference search ended without finding its switch or index (travel limit
+        /// reached, or the board reported a search error).
+        HomeFailed = 11 => "home-failed",
+        /// A group's path ended and the axis did not come within its `goal_tolerance` within the
+        /// group's `goal_time_tolerance`.
+        GoalTolerance = 12 => "goal-tolerance",
     }
-}
-
-impl TryFrom<u8> for AxisMode {
-    type Error = UnknownValue;
-    fn try_from(value: u8) -> Result<Self, Self::Error> {
-        Ok(match value {
-            0 => Self::Off,
-            1 => Self::Hold,
-            2 => Self::Power,
-            3 => Self::Position,
-            4 => Self::Velocity,
-            5 => Self::RampPosition,
-            6 => Self::RampVelocity,
-            7 => Self::Homing,
-            8 => Self::Stopping,
-            9 => Self::Group,
-            other => return Err(UnknownValue(u32::from(other))),
-        })
-    }
-}
-
-/// Why an axis is faulted. Travels as `u16` in [`AxisState::fault`]; 0 means no fault.
-///
-/// Every fault stops the axis at once with its e-stop category (hold, stop-off or off) and
-/// stays latched until a `Reset` that finds its cause gone. [`AxisState::fault_value`] and
-/// [`AxisState::fault_limit`] carry the measured figure and the tolerance where the fault
-/// has one ([`FaultCode::explain`] turns them into a sentence).
-///
-/// | code | name | raised by | figure / tolerance | cleared when |
-/// |---|---|---|---|---|
-/// | 1 | `LinkDown` | the link failed (unplugged, I/O error) | – | link up and fresh data |
-/// | 2 | `BoardNotResponding` | the board missed its reply budget repeatedly | – | fresh data |
-/// | 3 | `BoardReset` | the board rebooted (goals lost) | – | fresh data, then reset |
-/// | 4 | `BoardError` | the board answered with an error status | – | fresh data |
-/// | 5 | `Protocol` | undecodable replies for too long | – | fresh data |
-/// | 6 | `Overspeed` | board overspeed flag, or measured \|v\| > `overspeed_factor` × `max_velocity` for 3 fresh samples | \|v\| / limit, units/s | reset with \|v\| within the limit |
-/// | 7 | `LimitSwitch` | a limit or reference switch stopped the axis | – | switch released |
-/// | 8 | `Overrun` | the server overran `max_consecutive_overruns` ticks in a row | – | reset |
-/// | 9 | `FollowingError` | holding: \|position − target\| > `following_error`; moving: position left the segment [start, target] widened by `following_error` | distance / `following_error`, units | reset (the target becomes the position) |
-/// | 10 | `LimitExceeded` | position beyond a soft limit by more than `following_error` | position / the limit passed, units | reset once back within the limits (moves back inside are accepted meanwhile) |
-/// | 11 | `HomeFailed` | a reference search travelled `home_max_travel` without its switch or index, or the board reported a search error | travel / `home_max_travel`, units | reset |
-/// | 12 | `GoalTolerance` | a group's path ended and the axis was not within its `goal_tolerance` `goal_time_tolerance` later | distance / `goal_tolerance`, units | reset |
-#[derive(serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[repr(u16)]
-pub enum FaultCode {
-    /// No fault.
-    None = 0,
-    /// The link to the board is down (unplugged, closed, I/O error).
-    LinkDown = 1,
-    /// The board stopped answering within its reply budget.
-    BoardNotResponding = 2,
-    /// The board rebooted (version/reset flag seen): its goals were lost.
-    BoardReset = 3,
-    /// The board reported an error for a request.
-    BoardError = 4,
-    /// Replies could not be decoded (garbage, wrong answers) for too long.
-    Protocol = 5,
-    /// The board reported overspeed, or the encoder glitched.
-    Overspeed = 6,
-    /// A hard limit or reference switch stopped the axis.
-    LimitSwitch = 7,
-    /// Stopped because the server overran its tick too many times in a row.
-    Overrun = 8,
-    /// The measured position left where the axis should be by more than its
-    /// `following_error`: away from the held target, or out of the segment of a move.
-    FollowingError = 9,
-    /// The measured position is beyond a soft limit by more than `following_error`.
-    LimitExceeded = 10,
-    /// A reference search ended without finding its switch or index (travel limit
-    /// reached, or the board reported a search error).
-    HomeFailed = 11,
-    /// A group's path ended and the axis did not come within its `goal_tolerance` within the
-    /// group's `goal_time_tolerance`.
-    GoalTolerance = 12,
 }
 
 impl FaultCode {
-    /// The name the CLI and logs print.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Self::None => "none",
-            Self::LinkDown => "link-down",
-            Self::BoardNotResponding => "board-not-responding",
-            Self::BoardReset => "board-reset",
-            Self::BoardError => "board-error",
-            Self::Protocol => "protocol",
-            Self::Overspeed => "overspeed",
-            Self::LimitSwitch => "limit-switch",
-            Self::Overrun => "overrun",
-            Self::FollowingError => "following-error",
-            Self::LimitExceeded => "limit-exceeded",
-            Self::HomeFailed => "home-failed",
-            Self::GoalTolerance => "goal-tolerance",
-        }
-    }
-
     /// One sentence about axis `axis` with this fault, the measured `value` and the
     /// `limit` it broke (as in [`AxisState::fault_value`] / [`AxisState::fault_limit`]),
     /// in `unit`.
@@ -229,28 +151,6 @@ impl FaultCode {
                 "axis `{axis}`: its group's path ended and it stayed {value:.4} {unit} from its goal, tolerance {limit:.4} {unit}"
             ),
         }
-    }
-}
-
-impl TryFrom<u16> for FaultCode {
-    type Error = UnknownValue;
-    fn try_from(value: u16) -> Result<Self, Self::Error> {
-        Ok(match value {
-            0 => Self::None,
-            1 => Self::LinkDown,
-            2 => Self::BoardNotResponding,
-            3 => Self::BoardReset,
-            4 => Self::BoardError,
-            5 => Self::Protocol,
-            6 => Self::Overspeed,
-            7 => Self::LimitSwitch,
-            8 => Self::Overrun,
-            9 => Self::FollowingError,
-            10 => Self::LimitExceeded,
-            11 => Self::HomeFailed,
-            12 => Self::GoalTolerance,
-            other => return Err(UnknownValue(u32::from(other))),
-        })
     }
 }
 

@@ -17,225 +17,109 @@ use crate::{MAX_GROUP_AXES, MAX_PATH_POINTS, NAME_LEN, SCHEMA_VERSION, read_text
 /// Values of one quantity of a path: point `i`, axis `j` at `i * MAX_GROUP_AXES + j`.
 pub const PATH_VALUES: usize = MAX_PATH_POINTS * MAX_GROUP_AXES;
 
-/// Where a group's motion is. Travels as `u8` in [`GroupState::motion`].
-#[derive(
-    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
-)]
-#[repr(u8)]
-pub enum GroupMotion {
-    /// No motion of the group runs (its axes may move on their own).
-    #[default]
-    Idle = 0,
-    /// Following its path (or a stream).
-    Moving = 1,
-    /// A feed hold is bringing it to rest along its path.
-    Holding = 2,
-    /// At rest on its path after a hold; `Resume` continues.
-    Held = 3,
-    /// The path ended and every axis came within its goal tolerance.
-    Done = 4,
-    /// Stopped before its end; [`GroupState::abort`] says why.
-    Aborted = 5,
+enumeration! {
+    /// Where a group's motion is. Travels as `u8` in [`GroupState::motion`].
+    #[derive(
+        serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+    )]
+    pub enum GroupMotion(u8) -> name {
+        /// No motion of the group runs (its axes may move on their own).
+        #[default]
+        Idle = 0 => "idle",
+        /// Following its path (or a stream).
+        Moving = 1 => "moving",
+        /// A feed hold is bringing it to rest along its path.
+        Holding = 2 => "holding",
+        /// At rest on its path after a hold; `Resume` continues.
+        Held = 3 => "held",
+        /// The path ended and every axis came within its goal tolerance.
+        Done = 4 => "done",
+        /// Stopped before its end; [`GroupState::abort`] says why.
+        Aborted = 5 => "aborted",
+    }
 }
 
 impl GroupMotion {
-    /// The name clients print.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Self::Idle => "idle",
-            Self::Moving => "moving",
-            Self::Holding => "holding",
-            Self::Held => "held",
-            Self::Done => "done",
-            Self::Aborted => "aborted",
-        }
-    }
-
     /// Whether the group's axes are owned by its motion (moving, holding or held).
     pub const fn active(self) -> bool {
         matches!(self, Self::Moving | Self::Holding | Self::Held)
     }
 }
 
-impl TryFrom<u8> for GroupMotion {
-    type Error = UnknownValue;
-    fn try_from(value: u8) -> Result<Self, Self::Error> {
-        Ok(match value {
-            0 => Self::Idle,
-            1 => Self::Moving,
-            2 => Self::Holding,
-            3 => Self::Held,
-            4 => Self::Done,
-            5 => Self::Aborted,
-            other => return Err(UnknownValue(u32::from(other))),
-        })
+enumeration! {
+    /// Why a group's motion ended before its end. Travels as `u8` in [`GroupState::abort`].
+    #[derive(
+        serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+    )]
+    pub enum GroupAbort(u8) -> name {
+        /// Not aborted.
+        #[default]
+        None = 0 => "none",
+        /// An axis was farther than its `path_tolerance` from where the path had it when its
+        /// board measured ([`GroupState::abort_axis`], `abort_value` / `abort_limit`).
+        PathTolerance = 1 => "path-tolerance",
+        /// An axis was not within its `goal_tolerance` `goal_time_tolerance` after the path's
+        /// end; that axis faults with `GoalTolerance`.
+        GoalTolerance = 2 => "goal-tolerance",
+        /// An axis of the group faulted (its board, its link, its supervision).
+        AxisFault = 3 => "axis-fault",
+        /// The e-stop was latched.
+        EStop = 4 => "e-stop",
+        /// The client that ran the motion lost its claim on an axis of the group.
+        ClaimLost = 5 => "claim-lost",
+        /// The client that ran the motion died.
+        ClientDead = 6 => "client-dead",
+        /// A stop command (to the group or one of its axes) stopped it.
+        Stopped = 7 => "stopped",
+        /// `Cancel`: brought to rest along its path, then ended.
+        Cancelled = 8 => "cancelled",
+        /// The stream's setpoints stopped coming (`stream_timeout`).
+        StreamStale = 9 => "stream-stale",
+        /// A streamed setpoint broke a limit under `stream_limit = "abort"`.
+        StreamLimit = 10 => "stream-limit",
+        /// The server is shutting down.
+        ShuttingDown = 11 => "shutting-down",
+        /// An axis's board refused the goal that would follow the path (beyond what the board
+        /// represents), or is not online ([`GroupState::abort_axis`]).
+        GoalRefused = 12 => "goal-refused",
     }
 }
 
-/// Why a group's motion ended before its end. Travels as `u8` in [`GroupState::abort`].
-#[derive(
-    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
-)]
-#[repr(u8)]
-pub enum GroupAbort {
-    /// Not aborted.
-    #[default]
-    None = 0,
-    /// An axis was farther than its `path_tolerance` from where the path had it when its
-    /// board measured ([`GroupState::abort_axis`], `abort_value` / `abort_limit`).
-    PathTolerance = 1,
-    /// An axis was not within its `goal_tolerance` `goal_time_tolerance` after the path's
-    /// end; that axis faults with `GoalTolerance`.
-    GoalTolerance = 2,
-    /// An axis of the group faulted (its board, its link, its supervision).
-    AxisFault = 3,
-    /// The e-stop was latched.
-    EStop = 4,
-    /// The client that ran the motion lost its claim on an axis of the group.
-    ClaimLost = 5,
-    /// The client that ran the motion died.
-    ClientDead = 6,
-    /// A stop command (to the group or one of its axes) stopped it.
-    Stopped = 7,
-    /// `Cancel`: brought to rest along its path, then ended.
-    Cancelled = 8,
-    /// The stream's setpoints stopped coming (`stream_timeout`).
-    StreamStale = 9,
-    /// A streamed setpoint broke a limit under `stream_limit = "abort"`.
-    StreamLimit = 10,
-    /// The server is shutting down.
-    ShuttingDown = 11,
-    /// An axis's board refused the goal that would follow the path (beyond what the board
-    /// represents), or is not online ([`GroupState::abort_axis`]).
-    GoalRefused = 12,
-}
-
-impl GroupAbort {
-    /// The name clients print.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Self::None => "none",
-            Self::PathTolerance => "path-tolerance",
-            Self::GoalTolerance => "goal-tolerance",
-            Self::AxisFault => "axis-fault",
-            Self::EStop => "e-stop",
-            Self::ClaimLost => "claim-lost",
-            Self::ClientDead => "client-dead",
-            Self::Stopped => "stopped",
-            Self::Cancelled => "cancelled",
-            Self::StreamStale => "stream-stale",
-            Self::StreamLimit => "stream-limit",
-            Self::ShuttingDown => "shutting-down",
-            Self::GoalRefused => "goal-refused",
-        }
+enumeration! {
+    /// Where a group's setpoint stream is. Travels as `u8` in [`GroupState::stream`].
+    #[derive(
+        serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+    )]
+    pub enum StreamState(u8) -> name {
+        /// No stream.
+        #[default]
+        Idle = 0 => "idle",
+        /// Setpoints are being applied.
+        Streaming = 1 => "streaming",
+        /// Setpoints stopped coming: the group was stopped.
+        Stale = 2 => "stale",
+        /// A setpoint broke a limit (`stream_limit = "abort"`), or the stream was stopped.
+        Aborted = 3 => "aborted",
     }
 }
 
-impl TryFrom<u8> for GroupAbort {
-    type Error = UnknownValue;
-    fn try_from(value: u8) -> Result<Self, Self::Error> {
-        Ok(match value {
-            0 => Self::None,
-            1 => Self::PathTolerance,
-            2 => Self::GoalTolerance,
-            3 => Self::AxisFault,
-            4 => Self::EStop,
-            5 => Self::ClaimLost,
-            6 => Self::ClientDead,
-            7 => Self::Stopped,
-            8 => Self::Cancelled,
-            9 => Self::StreamStale,
-            10 => Self::StreamLimit,
-            11 => Self::ShuttingDown,
-            12 => Self::GoalRefused,
-            other => return Err(UnknownValue(u32::from(other))),
-        })
-    }
-}
-
-/// Where a group's setpoint stream is. Travels as `u8` in [`GroupState::stream`].
-#[derive(
-    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
-)]
-#[repr(u8)]
-pub enum StreamState {
-    /// No stream.
-    #[default]
-    Idle = 0,
-    /// Setpoints are being applied.
-    Streaming = 1,
-    /// Setpoints stopped coming: the group was stopped.
-    Stale = 2,
-    /// A setpoint broke a limit (`stream_limit = "abort"`), or the stream was stopped.
-    Aborted = 3,
-}
-
-impl StreamState {
-    /// The name clients print.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Self::Idle => "idle",
-            Self::Streaming => "streaming",
-            Self::Stale => "stale",
-            Self::Aborted => "aborted",
-        }
-    }
-}
-
-impl TryFrom<u8> for StreamState {
-    type Error = UnknownValue;
-    fn try_from(value: u8) -> Result<Self, Self::Error> {
-        Ok(match value {
-            0 => Self::Idle,
-            1 => Self::Streaming,
-            2 => Self::Stale,
-            3 => Self::Aborted,
-            other => return Err(UnknownValue(u32::from(other))),
-        })
-    }
-}
-
-/// What a group's streamed setpoints are. Travels as `u32` in [`Setpoint::mode`], as
-/// `values[0]` of a `Stream` command, and as `u8` in [`GroupState::stream_mode`].
-#[derive(
-    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
-)]
-#[repr(u32)]
-pub enum StreamMode {
-    /// No stream.
-    #[default]
-    None = 0,
-    /// Positions, each axis's unit (cyclic synchronous position).
-    Position = 1,
-    /// Velocities, unit/s (cyclic synchronous velocity); the desired position integrates
-    /// them.
-    Velocity = 2,
-    /// Open-loop power, −1.0..=1.0 of full scale (boards that take power goals).
-    Power = 3,
-}
-
-impl StreamMode {
-    /// The name clients print.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Self::None => "none",
-            Self::Position => "position",
-            Self::Velocity => "velocity",
-            Self::Power => "power",
-        }
-    }
-}
-
-impl TryFrom<u32> for StreamMode {
-    type Error = UnknownValue;
-    fn try_from(value: u32) -> Result<Self, Self::Error> {
-        Ok(match value {
-            0 => Self::None,
-            1 => Self::Position,
-            2 => Self::Velocity,
-            3 => Self::Power,
-            other => return Err(UnknownValue(other)),
-        })
+enumeration! {
+    /// What a group's streamed setpoints are. Travels as `u32` in [`Setpoint::mode`], as
+    /// `values[0]` of a `Stream` command, and as `u8` in [`GroupState::stream_mode`].
+    #[derive(
+        serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+    )]
+    pub enum StreamMode(u32) -> name {
+        /// No stream.
+        #[default]
+        None = 0 => "none",
+        /// Positions, each axis's unit (cyclic synchronous position).
+        Position = 1 => "position",
+        /// Velocities, unit/s (cyclic synchronous velocity); the desired position integrates
+        /// them.
+        Velocity = 2 => "velocity",
+        /// Open-loop power, −1.0..=1.0 of full scale (boards that take power goals).
+        Power = 3 => "power",
     }
 }
 
@@ -326,51 +210,27 @@ impl Default for Setpoint {
     }
 }
 
-/// What a [`GroupPath`] holds. Travels as `u32` in [`GroupPath::kind`] and as `u8` in
-/// [`GroupState::kind`].
-#[derive(
-    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
-)]
-#[repr(u32)]
-pub enum PathKind {
-    /// Nothing (a group that never moved).
-    #[default]
-    None = 0,
-    /// A synchronized straight line in joint space from where the group is to point 0's
-    /// positions: every axis starts and arrives in the same tick, the slowest sets the
-    /// time; `velocity_scale` and `accel_scale` scale every axis's limits.
-    Line = 1,
-    /// A trajectory: `point_count` points at `times` (seconds from the start), positions,
-    /// optional velocities and accelerations (cubic with velocities, quintic with
-    /// accelerations, a C2 spline through positions alone, or straight segments blended at
-    /// the points within `path_tolerance` when that spline exceeds a limit); it ends at rest.
-    Trajectory = 2,
-    /// Setpoints streamed every tick (`motiond/<name>/setpoints`).
-    Stream = 3,
-}
-
-impl PathKind {
-    /// The name clients print.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Self::None => "none",
-            Self::Line => "line",
-            Self::Trajectory => "trajectory",
-            Self::Stream => "stream",
-        }
-    }
-}
-
-impl TryFrom<u32> for PathKind {
-    type Error = UnknownValue;
-    fn try_from(value: u32) -> Result<Self, Self::Error> {
-        Ok(match value {
-            0 => Self::None,
-            1 => Self::Line,
-            2 => Self::Trajectory,
-            3 => Self::Stream,
-            other => return Err(UnknownValue(other)),
-        })
+enumeration! {
+    /// What a [`GroupPath`] holds. Travels as `u32` in [`GroupPath::kind`] and as `u8` in
+    /// [`GroupState::kind`].
+    #[derive(
+        serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+    )]
+    pub enum PathKind(u32) -> name {
+        /// Nothing (a group that never moved).
+        #[default]
+        None = 0 => "none",
+        /// A synchronized straight line in joint space from where the group is to point 0's
+        /// positions: every axis starts and arrives in the same tick, the slowest sets the
+        /// time; `velocity_scale` and `accel_scale` scale every axis's limits.
+        Line = 1 => "line",
+        /// A trajectory: `point_count` points at `times` (seconds from the start), positions,
+        /// optional velocities and accelerations (cubic with velocities, quintic with
+        /// accelerations, a C2 spline through positions alone, or straight segments blended at
+        /// the points within `path_tolerance` when that spline exceeds a limit); it ends at rest.
+        Trajectory = 2 => "trajectory",
+        /// Setpoints streamed every tick (`motiond/<name>/setpoints`).
+        Stream = 3 => "stream",
     }
 }
 

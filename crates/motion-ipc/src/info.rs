@@ -12,42 +12,20 @@ use crate::{
     UNIT_LEN,
 };
 
-/// What an e-stop (and a fault) does to an axis: IEC 60204-1 stop categories. Travels as
-/// `u32` in [`AxisInfo::estop`].
-#[derive(
-    serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
-)]
-#[repr(u32)]
-pub enum EstopCategory {
-    /// Category 2: decelerate and hold, energised.
-    #[default]
-    Hold = 0,
-    /// Category 1: decelerate, then de-energise.
-    StopOff = 1,
-    /// Category 0: de-energise at once.
-    Off = 2,
-}
-
-impl EstopCategory {
-    /// The config name.
-    pub const fn name(self) -> &'static str {
-        match self {
-            Self::Hold => "hold",
-            Self::StopOff => "stop-off",
-            Self::Off => "off",
-        }
-    }
-}
-
-impl TryFrom<u32> for EstopCategory {
-    type Error = UnknownValue;
-    fn try_from(value: u32) -> Result<Self, Self::Error> {
-        Ok(match value {
-            0 => Self::Hold,
-            1 => Self::StopOff,
-            2 => Self::Off,
-            other => return Err(UnknownValue(other)),
-        })
+enumeration! {
+    /// What an e-stop (and a fault) does to an axis: IEC 60204-1 stop categories. Travels as
+    /// `u32` in [`AxisInfo::estop`].
+    #[derive(
+        serde::Serialize, serde::Deserialize, Debug, Clone, Copy, PartialEq, Eq, Hash, Default,
+    )]
+    pub enum EstopCategory(u32) -> name {
+        /// Category 2: decelerate and hold, energised.
+        #[default]
+        Hold = 0 => "hold",
+        /// Category 1: decelerate, then de-energise.
+        StopOff = 1 => "stop-off",
+        /// Category 0: de-energise at once.
+        Off = 2 => "off",
     }
 }
 

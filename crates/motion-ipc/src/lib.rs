@@ -27,11 +27,13 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
-// `payload!` and `flag_set!` first: the payload modules below use them.
+// `payload!`, `flag_set!` and `enumeration!` first: the modules below use them.
 #[macro_use]
 mod payload;
 #[macro_use]
 mod flag_set;
+#[macro_use]
+mod enumeration;
 
 mod command;
 mod commission;

@@ -12,24 +12,14 @@ pub const MAX_PARAMS: usize = 2048;
 /// Bytes of a parameter key or value text.
 pub const PARAM_TEXT_LEN: usize = 40;
 
-/// What a parameter belongs to. Travels as `u8` in [`MachineParam::owner_kind`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-#[repr(u8)]
-pub enum ParamOwner {
-    /// A device (`owner_index` into `ServerInfo::devices`).
-    Device = 1,
-    /// An axis (`owner_index` into `ServerInfo::axes`).
-    Axis = 2,
-}
-
-impl TryFrom<u8> for ParamOwner {
-    type Error = UnknownValue;
-    fn try_from(value: u8) -> Result<Self, Self::Error> {
-        match value {
-            1 => Ok(Self::Device),
-            2 => Ok(Self::Axis),
-            other => Err(UnknownValue(u32::from(other))),
-        }
+enumeration! {
+    /// What a parameter belongs to. Travels as `u8` in [`MachineParam::owner_kind`].
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+    pub enum ParamOwner(u8) -> name {
+        /// A device (`owner_index` into `ServerInfo::devices`).
+        Device = 1 => "device",
+        /// An axis (`owner_index` into `ServerInfo::axes`).
+        Axis = 2 => "axis",
     }
 }
 
