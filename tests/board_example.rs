@@ -1,7 +1,7 @@
 //! The AS-2 end to end through motiond, in one process with a fake clock: a config with an
 //! `example` device on a `type = "sim"` link is validated by motiond's validator, its
 //! driver is built and its simulated link served through the board registry
-//! (`motiond::boards`), and commands go through the engine as a client's would. A
+//! (`motion_config::boards`), and commands go through the engine as a client's would. A
 //! counting allocator checks that the engine and the AS-2 driver allocate nothing once
 //! running.
 
@@ -9,6 +9,7 @@ use core::time::Duration;
 use std::cell::Cell;
 use std::path::Path;
 
+use motion_config::ServerConfig;
 use motion_drivers::Driver as _;
 use motion_engine::{CommandPort, Engine};
 use motion_ipc::{
@@ -17,7 +18,6 @@ use motion_ipc::{
 };
 use motion_link::Link;
 use motion_link::sim::SimFaults;
-use motiond::config::ServerConfig;
 
 const CONFIG: &str = r#"
 [server]
@@ -86,7 +86,7 @@ impl CommandPort for Queue {
 
 /// motiond's loop, minus the threads: links read, the engine stepped, links written.
 struct Server {
-    engine: Engine<motiond::boards::AnyDriver>,
+    engine: Engine<motion_config::boards::AnyDriver>,
     link: Box<dyn Link>,
     faults: SimFaults,
     frame: Box<MotionFrame>,
@@ -100,10 +100,10 @@ impl Server {
     fn start() -> Self {
         let config = ServerConfig::parse(Path::new("example.toml"), CONFIG)
             .unwrap_or_else(|error| panic!("the example config validates: {error}"));
-        let drivers = motiond::boards::build(&config).expect("the example driver builds");
+        let drivers = motion_config::boards::build(&config).expect("the example driver builds");
         let mut engine = Engine::new(config.engine_config(), drivers).expect("engine");
         engine.stamp_links();
-        let link = motiond::boards::sim_link(&config, 0);
+        let link = motion_config::boards::sim_link(&config, 0);
         let faults = link.faults();
         let period = engine.config().period();
         Self {
@@ -289,7 +289,7 @@ fn the_engine_and_the_example_driver_allocate_nothing_once_running() {
 #[test]
 fn motiond_describes_the_example_axis_with_its_limits_in_steps() {
     let config = ServerConfig::parse(Path::new("example.toml"), CONFIG).expect("valid");
-    let rows = motiond::boards::describe(&config);
+    let rows = motion_config::boards::describe(&config);
     let values: Vec<(&str, &str)> = rows
         .iter()
         .map(|row| (row.key.as_str(), row.value.as_str()))
@@ -305,7 +305,7 @@ fn motiond_describes_the_example_axis_with_its_limits_in_steps() {
     // A limit the board cannot run is refused with the axis's key.
     let fast = CONFIG.replace("max_velocity = 50.0", "max_velocity = 600.0");
     let config = ServerConfig::parse(Path::new("example.toml"), &fast).expect("valid");
-    let error = motiond::boards::build(&config).expect_err("60 000 steps/s is too fast");
+    let error = motion_config::boards::build(&config).expect_err("60 000 steps/s is too fast");
     assert!(error.key.contains("max_velocity"), "{error}");
 }
 

@@ -84,9 +84,9 @@ fn drivers() -> Vec<Traffic> {
         spim: "/dev/null".into(),
     };
     let text = config_text("poller-traffic", 1000, ServerRt::default(), &paths);
-    let config = motiond::config::ServerConfig::parse(Path::new("io.toml"), &text)
+    let config = motion_config::ServerConfig::parse(Path::new("io.toml"), &text)
         .expect("the I/O phase's config is valid");
-    let mut drivers = motiond::boards::build(&config).expect("drivers");
+    let mut drivers = motion_config::boards::build(&config).expect("drivers");
     let mut links = sim_links();
     let mut traffic = vec![Traffic::default(); 4];
     let mut buf = [0u8; 4096];

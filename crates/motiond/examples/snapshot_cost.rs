@@ -7,9 +7,9 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
+use motion_config::ServerConfig;
 use motion_engine::Engine;
 use motion_trajectory::{AxisLimits, Path, Points, Tolerances};
-use motiond::config::ServerConfig;
 
 fn figures(label: &str, bytes: usize, mut ns: Vec<u64>) {
     ns.sort_unstable();
@@ -40,7 +40,7 @@ fn main() -> anyhow::Result<()> {
         PathBuf::from,
     );
     let config = ServerConfig::load(&path)?;
-    let drivers = motiond::boards::build(&config)?;
+    let drivers = motion_config::boards::build(&config)?;
     let engine = Engine::new(config.engine_config(), drivers)?;
     let at_rest = postcard::to_allocvec(&engine)?.len();
     let mut buf = vec![0u8; 2 * at_rest + engine.snapshot_growth() + (64 << 10)];

@@ -13,8 +13,6 @@ use motion_link::{Link, LinkConfig};
 use rtrb::RingBuffer;
 
 use crate::blackbox::{BlackboxFile, Journal, RecorderSetup, directory};
-use crate::boards::{sim_can_link, sim_link};
-use crate::config::{IoMode, ServerConfig, Transport};
 use crate::error::ServerError;
 use crate::io::{self, IoThread, LinkPort};
 use crate::rt::{IoRt, monotonic_now};
@@ -22,6 +20,8 @@ use crate::stats::format_ns;
 use crate::systemd::{Supervisor, TickHealth};
 use crate::tick::{self, Report, StatusLine, TickSetup};
 use crate::{node_records, services};
+use motion_config::boards::{sim_can_link, sim_link};
+use motion_config::{IoMode, ServerConfig, Transport};
 
 /// How the server was asked to run.
 #[derive(Debug, Clone, Copy, Default)]
@@ -108,7 +108,7 @@ pub fn run(config: ServerConfig, options: RunOptions) -> Result<(), ServerError>
     }
 
     let params = crate::params::machine_params(&config);
-    let mut drivers = crate::boards::build(&config)?;
+    let mut drivers = motion_config::boards::build(&config)?;
     // Before the drivers' first step: the references a previous run saved (the state
     // directory checked first: the server does not start with one that is not its own).
     let (references, mut keeper) = crate::references::start(&config, &mut drivers)?.unzip();
@@ -116,7 +116,7 @@ pub fn run(config: ServerConfig, options: RunOptions) -> Result<(), ServerError>
     // the server's own is refused now, not at the first fault.
     if config.server.blackbox_seconds > 0 {
         let dir = &config.server.blackbox_dir;
-        crate::private_dir::PrivateDir::open(dir, directory::KEY, directory::DIR_MODE)?;
+        motion_config::private_dir::PrivateDir::open(dir, directory::KEY, directory::DIR_MODE)?;
         tracing::info!("black box: {}", dir.display());
     }
     let engine = Engine::new(config.engine_config(), drivers).map_err(ServerError::Engine)?;

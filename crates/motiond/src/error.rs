@@ -22,8 +22,8 @@ use motion_engine::EngineConfigError;
 use motion_ipc::PidFileError;
 use motion_link::LinkError;
 
-use crate::boards::BuildError;
-use crate::private_dir::PrivateDirError;
+use motion_config::boards::BuildError;
+use motion_config::private_dir::PrivateDirError;
 
 /// A real-time set-up step that could not be done (the server may go on without it).
 #[derive(Debug, thiserror::Error)]
@@ -282,7 +282,7 @@ pub enum ServerError {
     /// A signal handler could not be installed.
     #[error("installing signal handlers")]
     SignalHandlers(#[source] io::Error),
-    /// A device's board refused its config ([`boards::build`](crate::boards::build): which
+    /// A device's board refused its config ([`boards::build`](motion_config::boards::build): which
     /// device, which key, why).
     #[error(transparent)]
     Drivers(#[from] BuildError),
@@ -320,7 +320,7 @@ pub enum ServerError {
     #[error(transparent)]
     PidFile(#[from] PidFileError),
     /// `state_dir` or `blackbox_dir` (or the server's key in it) is not the server's own,
-    /// or could not be made (crate::private_dir: what was found and what to do).
+    /// or could not be made (motion_config::private_dir: what was found and what to do).
     #[error(transparent)]
     PrivateDir(#[from] PrivateDirError),
 }

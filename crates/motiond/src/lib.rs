@@ -5,9 +5,7 @@
 
 pub mod app;
 pub mod blackbox;
-pub mod boards;
 pub mod command_port;
-pub mod config;
 pub mod error;
 pub mod estop_watch;
 pub mod inbox;
@@ -16,7 +14,6 @@ pub mod node_records;
 pub mod params;
 pub mod paths;
 pub mod phases;
-pub mod private_dir;
 pub mod references;
 pub mod rt;
 pub mod secret;

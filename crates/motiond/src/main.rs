@@ -5,8 +5,8 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::Parser;
-use motiond::config::ServerConfig;
-use motiond::config::locate::{Places, locate};
+use motion_config::ServerConfig;
+use motion_config::locate::{Places, locate};
 
 /// The motiond real-time motion server.
 ///

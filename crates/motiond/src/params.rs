@@ -4,8 +4,8 @@
 
 use motion_ipc::{MAX_PARAMS, MachineParam, MachineParams, ParamOwner, write_text};
 
-use crate::boards::ParamRow;
-use crate::config::{Owner, ServerConfig};
+use motion_config::boards::ParamRow;
+use motion_config::{Owner, ServerConfig};
 
 /// Keys that have another spelling in the config file (one fact, two names): a row under
 /// the first counts as configured when the second was set on the related table.
@@ -107,7 +107,7 @@ fn axis_rows(config: &ServerConfig, out: &mut Vec<ParamRow>) {
 
 /// The parameters of `config`, ready to publish.
 pub fn machine_params(config: &ServerConfig) -> Box<MachineParams> {
-    let mut rows = crate::boards::describe(config);
+    let mut rows = motion_config::boards::describe(config);
     axis_rows(config, &mut rows);
     rows.sort_by_key(|row| row.owner);
     let mut params = Box::new(MachineParams::EMPTY);

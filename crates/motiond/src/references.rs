@@ -40,9 +40,9 @@ use motion_drivers::{Driver, SavedReference};
 use motion_ipc::{AxisFlags, AxisMode, DeviceState, MotionFrame};
 use serde::{Deserialize, Serialize};
 
-use crate::config::ServerConfig;
-use crate::private_dir::{Privacy, PrivateDir, PrivateDirError};
 use crate::secret::ServerKey;
+use motion_config::ServerConfig;
+use motion_config::private_dir::{Privacy, PrivateDir, PrivateDirError};
 
 /// The state directory's mode when the server makes it.
 pub const STATE_DIR_MODE: u32 = 0o700;
@@ -291,7 +291,7 @@ fn records(config: &ServerConfig, drivers: &[AnyDriver]) -> Vec<(usize, Record)>
         {
             continue;
         }
-        let spec = crate::boards::driver_spec(config, axis.device, device);
+        let spec = motion_config::boards::driver_spec(config, axis.device, device);
         let Some(driver_axis) = spec.axes.iter().find(|a| a.channel == axis.channel) else {
             continue;
         };

@@ -13,8 +13,8 @@ use std::io::Write;
 use nix::sys::time::TimeSpec;
 use nix::time::{ClockId, ClockNanosleepFlags, clock_gettime, clock_nanosleep};
 
-use crate::config::ServerSettings;
 use crate::error::{RtError, StartError};
+use motion_config::ServerSettings;
 
 /// CLOCK_MONOTONIC now, as a duration since the clock's own origin.
 pub fn monotonic_now() -> Duration {

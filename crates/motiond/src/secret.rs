@@ -7,7 +7,7 @@
 //! The key file is made whole under a temporary name (`O_CREAT | O_EXCL | O_NOFOLLOW`, mode
 //! 0600) and linked to its name (never replacing one), and is read only when it is a
 //! regular file of the server's user that its group and others may neither read nor write
-//! ([`crate::private_dir`]). A process of the server's own user can read it: that user is
+//! ([`motion_config::private_dir`]). A process of the server's own user can read it: that user is
 //! trusted as it is for the server's shared memory (docs/SECURITY.md).
 
 use core::fmt::Write as _;
@@ -15,7 +15,7 @@ use core::fmt::Write as _;
 use hmac::{Hmac, Mac as _};
 use sha2::Sha256;
 
-use crate::private_dir::{Privacy, PrivateDir, PrivateDirError};
+use motion_config::private_dir::{Privacy, PrivateDir, PrivateDirError};
 
 /// The key file's name in the state directory.
 pub const KEY_FILE: &str = "motiond.key";

@@ -21,9 +21,9 @@ use motion_engine::Engine;
 use motion_ipc::{ClientId, Setpoint};
 
 use crate::Ipc;
-use crate::boards::AnyDriver;
 use crate::error::ServiceError;
 use crate::rt::monotonic_now;
+use motion_config::boards::AnyDriver;
 
 /// Setpoints a publisher may have queued before the tick takes them: enough for a client
 /// that streams for several ticks ahead, and for one tick the server was late.

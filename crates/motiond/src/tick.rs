@@ -18,7 +18,6 @@ use rtrb::{Consumer, Producer};
 use crate::blackbox::Journal;
 use crate::blackbox::record::Trigger;
 use crate::command_port::IpcCommands;
-use crate::config::ServerSettings;
 use crate::error::StartError;
 use crate::estop_watch::EstopWatch;
 use crate::io::{LinkEvent, LinkPort, NEVER, PACKET_LEN, Packet};
@@ -26,6 +25,7 @@ use crate::phases::{Phase, PhaseClock, PhaseMeans};
 use crate::rt::{self, IoRt, RtStatus, monotonic_now, sleep_until};
 use crate::services::{ClientDirectory, Services, SlotUse};
 use crate::stats::Latency;
+use motion_config::ServerSettings;
 
 /// How long a shutdown waits for the boards to acknowledge their stop goals.
 pub const SHUTDOWN_TIMEOUT: Duration = Duration::from_secs(2);

@@ -257,9 +257,9 @@ fn bad_can_link_keys_are_refused_where_they_are_written() {
 /// answers on reply address << 3; the serial line's `$40` / `$41` as not sent.
 #[test]
 fn the_parameters_name_the_can_identifiers() {
-    let config = motiond::config::ServerConfig::parse(std::path::Path::new("good.toml"), GOOD)
-        .expect("valid");
-    let rows = motiond::boards::describe(&config);
+    let config =
+        motion_config::ServerConfig::parse(std::path::Path::new("good.toml"), GOOD).expect("valid");
+    let rows = motion_config::boards::describe(&config);
     let value = |key: &str| {
         rows.iter()
             .find(|row| row.key == key)

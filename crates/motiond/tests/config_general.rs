@@ -426,16 +426,16 @@ fn io_threads_are_pinned_only_when_told() {
 }
 
 /// The `[server]` settings of [`GOOD`] with `server_keys` in place of its claim lease.
-fn server_with(server_keys: &str) -> motiond::config::ServerSettings {
+fn server_with(server_keys: &str) -> motion_config::ServerSettings {
     let text = GOOD.replace("claim_lease_ms = 500", server_keys);
-    motiond::config::ServerConfig::parse(std::path::Path::new("io.toml"), &text)
+    motion_config::ServerConfig::parse(std::path::Path::new("io.toml"), &text)
         .unwrap_or_else(|e| panic!("{server_keys}: {e}"))
         .server
 }
 
 /// The links of [`GOOD`] with `spi_keys` added to its SPI sim link and `usb_keys` to its
 /// serial sim link.
-fn links_with(spi_keys: &str, usb_keys: &str) -> Vec<motiond::config::LinkSpec> {
+fn links_with(spi_keys: &str, usb_keys: &str) -> Vec<motion_config::LinkSpec> {
     let text = GOOD
         .replace(
             "name = \"spi\"\ntype = \"sim\"",
@@ -445,7 +445,7 @@ fn links_with(spi_keys: &str, usb_keys: &str) -> Vec<motiond::config::LinkSpec> 
             "name = \"usb\"\ntype = \"sim\"",
             &format!("name = \"usb\"\ntype = \"sim\"\n{usb_keys}"),
         );
-    motiond::config::ServerConfig::parse(std::path::Path::new("io.toml"), &text)
+    motion_config::ServerConfig::parse(std::path::Path::new("io.toml"), &text)
         .unwrap_or_else(|e| panic!("{spi_keys} / {usb_keys}: {e}"))
         .links
 }
@@ -457,7 +457,7 @@ fn links_with(spi_keys: &str, usb_keys: &str) -> Vec<motiond::config::LinkSpec> 
 #[test]
 fn spi_links_may_be_run_by_the_tick_and_serial_links_keep_their_threads() {
     use core::time::Duration;
-    use motiond::config::IoMode;
+    use motion_config::IoMode;
     let links = links_with("", "");
     assert_eq!((links[0].io, links[1].io), (IoMode::Thread, IoMode::Thread));
     let quarter = IoMode::Tick {
@@ -518,12 +518,12 @@ fn spi_links_may_be_run_by_the_tick_and_serial_links_keep_their_threads() {
 
 /// `[server] state_dir`: where the references of `power_down = "restore"` devices and the
 /// server's key are kept; unless given, the documented default for this process
-/// (`motiond::private_dir::default_state_dir`: root's is `/var/lib/motiond`), and
+/// (`motion_config::private_dir::default_state_dir`: root's is `/var/lib/motiond`), and
 /// `blackbox_dir` under it unless given; an empty path refused with the key.
 #[test]
 fn the_state_dir_has_a_documented_default_and_refuses_an_empty_path() {
     let default = server_with("claim_lease_ms = 500");
-    assert_eq!(default.state_dir, motiond::config::default_state_dir());
+    assert_eq!(default.state_dir, motion_config::default_state_dir());
     assert_eq!(default.blackbox_dir, default.state_dir.join("blackbox"));
     if nix::unistd::geteuid().is_root() && std::env::var_os("STATE_DIRECTORY").is_none() {
         assert_eq!(default.state_dir, PathBuf::from("/var/lib/motiond"));

@@ -7,8 +7,8 @@ use core::time::Duration;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use motion_config::ServerConfig;
 use motion_engine::{Engine, GroupConfig, StreamLimit};
-use motiond::config::ServerConfig;
 
 /// A QuadQuad2Drv with two axes (`a` in mm, `b` in degrees) and a QSB-M with one
 /// (`feeder`), on two sim links; groups are appended.
@@ -554,7 +554,7 @@ fn the_default_config_has_the_arm_the_gantry_the_base_and_the_sight() {
         }
     }
     assert!(config.warnings.is_empty(), "{:?}", config.warnings);
-    let drivers = motiond::boards::build(&config).expect("drivers");
+    let drivers = motion_config::boards::build(&config).expect("drivers");
     let engine = Engine::new(config.engine_config(), drivers).expect("the engine takes them");
     assert_eq!(engine.config().groups, config.groups);
 }

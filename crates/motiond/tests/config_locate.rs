@@ -8,7 +8,7 @@ use std::io::{BufRead as _, BufReader};
 use std::path::Path;
 use std::process::{Command, Stdio};
 
-use motiond::config::locate::INSTALLED_CONFIG;
+use motion_config::locate::INSTALLED_CONFIG;
 use nix::sys::signal::{Signal, kill};
 use nix::unistd::Pid;
 

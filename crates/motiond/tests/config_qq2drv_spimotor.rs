@@ -8,9 +8,9 @@ use core::time::Duration;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use motion_config::{Owner, ServerConfig};
 use motion_drivers::Driver;
 use motion_link::sim::SpiDevice;
-use motiond::config::{Owner, ServerConfig};
 
 const QQ2DRV: &str = r#"
 [server]
@@ -107,7 +107,7 @@ fn parse(text: &str) -> ServerConfig {
 
 /// The value `describe` gives for `key` of `owner`.
 fn described(config: &ServerConfig, owner: Owner, key: &str) -> String {
-    motiond::boards::describe(config)
+    motion_config::boards::describe(config)
         .into_iter()
         .find(|row| row.owner == owner && row.key == key)
         .unwrap_or_else(|| panic!("no row {key} for {owner:?}"))
@@ -335,7 +335,7 @@ fn assert_qq2drv_keys(requests: &[qq2drv::Request<'_>]) {
 #[test]
 fn qq2drv_keys_are_written_at_start_up_and_again_after_a_reset() {
     let config = parse(QQ2DRV);
-    let mut drivers = motiond::boards::build(&config).expect("drivers");
+    let mut drivers = motion_config::boards::build(&config).expect("drivers");
     let driver = &mut drivers[0];
     let mut board = board_qq2drv::sim::Qq2drvSim::default();
     let packets = run_qq2drv(driver, &mut board, Duration::ZERO, 50);
@@ -357,7 +357,7 @@ fn qq2drv_keys_are_written_at_start_up_and_again_after_a_reset() {
 fn qq2drv_a_home_search_runs_the_configured_way_in_board_counts() {
     use motion_drivers::Goal;
     let config = parse(QQ2DRV);
-    let mut drivers = motiond::boards::build(&config).expect("drivers");
+    let mut drivers = motion_config::boards::build(&config).expect("drivers");
     let driver = &mut drivers[0];
     let mut board = board_qq2drv::sim::Qq2drvSim::default();
     run_qq2drv(driver, &mut board, Duration::ZERO, 50);
@@ -540,7 +540,7 @@ fn qq2drv_velocity_ramp_names_a_reading_of_packet_36() {
         text.len() <= motion_ipc::PARAM_TEXT_LEN,
         "whole in a MachineParam: {text}"
     );
-    let drivers = motiond::boards::build(&unsigned).expect("drivers");
+    let drivers = motion_config::boards::build(&unsigned).expect("drivers");
     assert_eq!(drivers.len(), 1);
     for bad in ["\"reverse\"", "\"Signed\""] {
         assert_fails(
@@ -628,7 +628,7 @@ fn run_spimotor(
 fn spimotor_keys_are_written_at_start_up_and_again_after_a_power_cycle() {
     use spimotor::{Coils, Write};
     let config = parse(SPIMOTOR);
-    let mut drivers = motiond::boards::build(&config).expect("drivers");
+    let mut drivers = motion_config::boards::build(&config).expect("drivers");
     let driver = &mut drivers[0];
     let mut board = board_spimotor::sim::SpimotorSim::default();
     let writes = run_spimotor(driver, &mut board, Duration::ZERO, 30);
@@ -665,7 +665,7 @@ fn spimotor_describe_lists_the_stepper_keys() {
         "32 (0x20 of 0xff)"
     );
     assert_eq!(described(&config, stepper, "coils"), "2 (port 0x44 ← 0x01)");
-    let brushed: Vec<String> = motiond::boards::describe(&config)
+    let brushed: Vec<String> = motion_config::boards::describe(&config)
         .into_iter()
         .filter(|row| row.owner == Owner::Device(1))
         .map(|row| row.key)
@@ -741,8 +741,8 @@ fn the_real_machine_examples_are_valid_and_warning_free() {
         described(&spi, Owner::Device(0), "intensity"),
         "64 (0x40 of 0xff)"
     );
-    motiond::boards::build(&qq).expect("qq2drv drivers");
-    motiond::boards::build(&spi).expect("spimotor drivers");
+    motion_config::boards::build(&qq).expect("qq2drv drivers");
+    motion_config::boards::build(&spi).expect("spimotor drivers");
 }
 
 #[test]
@@ -762,7 +762,7 @@ fn a_signal_on_an_spi_motor_is_refused_and_on_a_qq2drv_streams_its_channel() {
         "{QQ2DRV}\n[[signal]]\nname = \"door\"\ndevice = \"quad\"\nkind = \"digital-in\"\npin = \"in2\"\ninvert = true\n"
     );
     let config = parse(&text);
-    let mut drivers = motiond::boards::build(&config).expect("drivers");
+    let mut drivers = motion_config::boards::build(&config).expect("drivers");
     let driver = &mut drivers[0];
     let mut board = board_qq2drv::sim::Qq2drvSim::default();
     run_qq2drv(driver, &mut board, Duration::ZERO, 50);

@@ -11,6 +11,7 @@
 
 use core::time::Duration;
 
+use motion_config::ServerConfig;
 use motion_drivers::Driver;
 use motion_engine::{CommandPort, Engine};
 use motion_ipc::{
@@ -19,7 +20,6 @@ use motion_ipc::{
     Setpoint, StreamMode, StreamState, Target,
 };
 use motion_link::Link;
-use motiond::config::ServerConfig;
 
 const CLIENT: ClientId = ClientId::from_u128(42);
 /// Repetitions of each feature.
@@ -149,7 +149,7 @@ impl CommandPort for Port {
 
 /// The engine, its drivers and the simulated links, stepped as motiond's loop does.
 struct Gantry {
-    engine: Engine<motiond::boards::AnyDriver>,
+    engine: Engine<motion_config::boards::AnyDriver>,
     links: Vec<Box<dyn Link>>,
     frame: Box<MotionFrame>,
     port: Port,
@@ -162,11 +162,11 @@ struct Gantry {
 impl Gantry {
     fn new(switchover_ms: u32) -> Self {
         let config = config(switchover_ms);
-        let drivers = motiond::boards::build(&config).expect("drivers");
+        let drivers = motion_config::boards::build(&config).expect("drivers");
         let mut engine = Engine::new(config.engine_config(), drivers).expect("engine");
         engine.stamp_links();
         let links = (0..config.links.len())
-            .map(|index| Box::new(motiond::boards::sim_link(&config, index)) as Box<dyn Link>)
+            .map(|index| Box::new(motion_config::boards::sim_link(&config, index)) as Box<dyn Link>)
             .collect();
         let axes = AXES.map(|name| {
             config

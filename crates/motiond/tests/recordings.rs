@@ -18,7 +18,7 @@ fn every_recording_in_tests_recordings_replays_frame_for_frame() {
     assert!(!files.is_empty(), "no recordings in {}", dir.display());
     for file in files {
         let recording = motiond::blackbox::read(&file).expect("a black box");
-        let config = motiond::config::ServerConfig::parse(&file, recording.config_text())
+        let config = motion_config::ServerConfig::parse(&file, recording.config_text())
             .expect("its recorded config is valid");
         let replayed = motiond::blackbox::replay(&config, &recording)
             .unwrap_or_else(|error| panic!("{}: {error}", file.display()));

@@ -275,7 +275,7 @@ fn a_ring_that_wrapped_replays_from_its_state_snapshot() {
         "config/sim.toml starts with [server] name = \"demo\""
     );
     let config_path = write_config(&name, &text);
-    let config = motiond::config::ServerConfig::load(&config_path).expect("valid");
+    let config = motion_config::ServerConfig::load(&config_path).expect("valid");
     let axes = config.axes.len();
     let mut server = Server::start(&config_path);
     let mut client = RawClient::connect(&name, Duration::from_secs(10));
@@ -352,7 +352,7 @@ fn write_recording(recording: &Recording, path: &Path) {
 }
 
 /// Writes `recording` as a black box file with the same config as `config`'s links.
-fn write_recording_of(recording: &Recording, path: &Path, config: &motiond::config::ServerConfig) {
+fn write_recording_of(recording: &Recording, path: &Path, config: &motion_config::ServerConfig) {
     let links = config.links.iter().map(|link| link.name.clone()).collect();
     write_recording_with(recording, path, links);
 }

@@ -105,7 +105,7 @@ fn the_default_robot_runs_its_trinamic_packs_over_the_in_process_can_bus() {
         )
         .replacen("name = \"demo\"", &format!("name = \"{name}\""), 1);
     let config_path = write_config(&name, &text);
-    let config = motiond::config::ServerConfig::load(&config_path).expect("valid");
+    let config = motion_config::ServerConfig::load(&config_path).expect("valid");
     let axes = config.axes.len();
     let on_packs: Vec<usize> = config
         .axes

@@ -24,8 +24,8 @@ mod bound;
 use core::time::Duration;
 use std::path::PathBuf;
 
+use motion_config::ServerConfig;
 use motion_ipc::{AxisFlags, AxisMode, CommandKind, DeviceState, MotionFrame};
-use motiond::config::ServerConfig;
 use nix::sys::signal::Signal;
 use support::*;
 

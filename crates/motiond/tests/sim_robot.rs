@@ -5,6 +5,7 @@
 use core::time::Duration;
 use std::path::PathBuf;
 
+use motion_config::ServerConfig;
 use motion_engine::{CommandPort, Engine};
 use motion_ipc::{
     AxisFlags, ClientId, CommandKind, CommandReply, CommandRequest, GroupMotion, GroupPath,
@@ -13,7 +14,6 @@ use motion_ipc::{
 use motion_link::Link;
 use motion_testkit::counting_alloc::{CountingAllocator, allocations, counting};
 use motiond::blackbox::{Journal, Recording, Ring, replay};
-use motiond::config::ServerConfig;
 
 #[global_allocator]
 static GLOBAL: CountingAllocator = CountingAllocator;
@@ -56,7 +56,7 @@ impl CommandPort for Queue {
 }
 
 struct Robot {
-    engine: Engine<motiond::boards::AnyDriver>,
+    engine: Engine<motion_config::boards::AnyDriver>,
     links: Vec<Box<dyn Link>>,
     frame: Box<MotionFrame>,
     port: Queue,
@@ -79,7 +79,7 @@ impl Robot {
 
     /// The robot of `config` (all its links simulated).
     fn with(config: ServerConfig) -> Self {
-        let drivers = motiond::boards::build(&config).expect("drivers");
+        let drivers = motion_config::boards::build(&config).expect("drivers");
         let mut engine = Engine::new(config.engine_config(), drivers).expect("engine");
         // As motiond: every write and the links' horizons are reported.
         engine.stamp_links();
@@ -90,9 +90,9 @@ impl Robot {
             .map(|(index, spec)| {
                 assert!(matches!(
                     spec.transport,
-                    motiond::config::Transport::Sim { .. }
+                    motion_config::Transport::Sim { .. }
                 ));
-                Box::new(motiond::boards::sim_link(&config, index)) as Box<dyn Link>
+                Box::new(motion_config::boards::sim_link(&config, index)) as Box<dyn Link>
             })
             .collect();
         let period = engine.config().period();

@@ -1,5 +1,5 @@
 //! The black box's directory (`[server] blackbox_dir`): a directory of the server's own
-//! (crate::private_dir, checked at start-up and at every save), the files this server saves
+//! (motion_config::private_dir, checked at start-up and at every save), the files this server saves
 //! in it, and which of them a save removes (`blackbox_keep`).
 //!
 //! A save is `<server>-<ms since 1970>-<reason>.mcap`, created `O_CREAT | O_EXCL |
@@ -13,7 +13,7 @@
 use std::fs::File;
 use std::io;
 
-use crate::private_dir::PrivateDir;
+use motion_config::private_dir::PrivateDir;
 
 /// The config key naming the directory, for messages.
 pub const KEY: &str = "[server] blackbox_dir";

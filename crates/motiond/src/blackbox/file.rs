@@ -67,9 +67,9 @@ pub enum SaveError {
         /// The library's error.
         source: mcap::McapError,
     },
-    /// `blackbox_dir` is not the server's own, or could not be made (crate::private_dir).
+    /// `blackbox_dir` is not the server's own, or could not be made (motion_config::private_dir).
     #[error(transparent)]
-    Dir(#[from] crate::private_dir::PrivateDirError),
+    Dir(#[from] motion_config::private_dir::PrivateDirError),
     /// The file is MCAP but holds no black box.
     #[error("{}: {what}", path.display())]
     NotABlackbox {

@@ -12,7 +12,7 @@ use std::time::{Instant, SystemTime, UNIX_EPOCH};
 
 use rtrb::Consumer;
 
-use crate::private_dir::PrivateDir;
+use motion_config::private_dir::PrivateDir;
 
 use super::directory;
 use super::file::{BlackboxFile, SaveError};

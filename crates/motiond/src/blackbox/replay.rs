@@ -16,7 +16,7 @@ use motion_ipc::{
 use super::digest::{FrameDigest, Region};
 use super::file::Recording;
 use super::record::{JournalError, Kind, Record, Records, get_sparse, records};
-use crate::config::ServerConfig;
+use motion_config::ServerConfig;
 
 /// A replay that went through.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -300,7 +300,7 @@ fn replay_here(config: &ServerConfig, recording: &Recording) -> Result<Replayed,
         .map_or(0, |bytes| tick_number(bytes));
     let from_start = first == 0 && recording.dropped() == 0;
     let mut drivers =
-        crate::boards::build(config).map_err(|e| ReplayError::Build(e.to_string()))?;
+        motion_config::boards::build(config).map_err(|e| ReplayError::Build(e.to_string()))?;
     // What start-up handed the drivers (references a previous run saved), as it did.
     let mut restored: Vec<Vec<SavedReference>> = vec![Vec::new(); drivers.len()];
     for record in records(&recording.head).filter_map(Result::ok) {

@@ -9,11 +9,11 @@ use std::path::Path;
 use std::sync::{Arc, Mutex};
 
 use board_tmcpack::sim::{TmcpackSim, TmcpackSimConfig};
+use motion_config::boards::describe;
+use motion_config::{Owner, ServerConfig};
 use motion_drivers::{Driver, Goal};
 use motion_link::Link;
 use motion_link::sim::{Duplex, SimLink, StreamDevice};
-use motiond::boards::describe;
-use motiond::config::{Owner, ServerConfig};
 use tmcpack::{PowerDownRequest, Request, RequestFrame};
 
 use super::{GOOD, check, fails_at, on_device, on_x};
@@ -183,7 +183,7 @@ fn keys_without_effect_warn() {
     );
 }
 
-fn value<'r>(rows: &'r [motiond::boards::ParamRow], owner: Owner, key: &str) -> &'r str {
+fn value<'r>(rows: &'r [motion_config::boards::ParamRow], owner: Owner, key: &str) -> &'r str {
     rows.iter()
         .find(|r| r.owner == owner && r.key == key)
         .map(|r| r.value.as_str())
@@ -320,7 +320,7 @@ fn power_down_steps(sent: &[Request]) -> Vec<PowerDownRequest> {
 #[test]
 fn the_drive_keys_reach_the_wire_and_the_pack_keeps_turns_reference() {
     let config = parse(DRIVE_KEYS);
-    let mut drivers = motiond::boards::build(&config).expect("drivers");
+    let mut drivers = motion_config::boards::build(&config).expect("drivers");
     let driver = drivers.get_mut(0).expect("the pack's driver");
     let sim = Arc::new(Mutex::new(TmcpackSim::new(TmcpackSimConfig::default())));
     let mut link = SimLink::stream_with(

@@ -8,12 +8,12 @@ use std::sync::{Arc, Mutex};
 
 use board_tmcpack::driver::{Currents, TmcpackChannel};
 use board_tmcpack::sim::{TmcpackSim, TmcpackSimConfig};
+use motion_config::boards::describe;
+use motion_config::boards::{ParamRow, driver_spec};
+use motion_config::{Owner, ServerConfig};
 use motion_drivers::{Driver, Goal};
 use motion_link::Link;
 use motion_link::sim::{Duplex, SimLink, StreamDevice};
-use motiond::boards::describe;
-use motiond::boards::{ParamRow, driver_spec};
-use motiond::config::{Owner, ServerConfig};
 use tmcpack::{
     CurrentLevel, MotorMask, MotorOptions, MotorType, ReferenceFlags, Request, RequestFrame,
 };
@@ -232,7 +232,7 @@ fn has(sent: &[Request], want: &Request) -> bool {
 #[test]
 fn every_key_reaches_the_wire_at_start_up_and_again_after_a_power_cycle() {
     let config = parse(ALL_KEYS);
-    let mut drivers = motiond::boards::build(&config).expect("drivers");
+    let mut drivers = motion_config::boards::build(&config).expect("drivers");
     let driver = drivers.get_mut(0).expect("the pack's driver");
     let sim = Arc::new(Mutex::new(TmcpackSim::new(TmcpackSimConfig::default())));
     let mut link = SimLink::stream_with(
@@ -464,9 +464,9 @@ fn the_simulated_pack_has_the_switch_on_the_configured_side() {
             1,
         );
         let config = parse(&text);
-        let mut drivers = motiond::boards::build(&config).expect("drivers");
+        let mut drivers = motion_config::boards::build(&config).expect("drivers");
         let driver = drivers.get_mut(0).expect("driver");
-        let mut link = motiond::boards::sim_link(&config, 0);
+        let mut link = motion_config::boards::sim_link(&config, 0);
         let mut homing = false;
         let mut done = None;
         run(&mut *driver, &mut link, Duration::ZERO, 15_000, |now, d| {
@@ -512,9 +512,9 @@ fn the_simulated_pack_has_the_firmware_readings_of_its_device() {
         1,
     );
     let config = parse(&text);
-    let mut drivers = motiond::boards::build(&config).expect("drivers");
+    let mut drivers = motion_config::boards::build(&config).expect("drivers");
     let driver = drivers.get_mut(0).expect("driver");
-    let mut link = motiond::boards::sim_link(&config, 0);
+    let mut link = motion_config::boards::sim_link(&config, 0);
     let mut homing = false;
     let mut done = None;
     let sent = run(&mut *driver, &mut link, Duration::ZERO, 15_000, |now, d| {

@@ -13,9 +13,9 @@ use board_qq2drv::driver::Qq2drvDriverConfig;
 use board_qsb::driver::QsbDriverConfig;
 use board_spimotor::driver::SpimotorDriverConfig;
 use board_tmcpack::driver::TmcpackDriverConfig;
+use motion_config::boards::driver_spec;
+use motion_config::{ServerConfig, Transport};
 use motion_drivers::Model;
-use motiond::boards::driver_spec;
-use motiond::config::{ServerConfig, Transport};
 
 /// The margin for scheduling on a loaded machine: the tick, the link's I/O thread and the
 /// simulated board each woken late by a few milliseconds (cyclictest on the 2-vCPU

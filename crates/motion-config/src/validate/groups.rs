@@ -9,7 +9,7 @@ use motion_ipc::{MAX_GROUP_AXES, MAX_GROUPS, NAME_LEN};
 use toml::Spanned;
 
 use super::{Validator, name_span};
-use crate::config::raw::{RawAxis, RawGroup, RawNumber, RawTolerance};
+use crate::raw::{RawAxis, RawGroup, RawNumber, RawTolerance};
 
 /// `goal_time_tolerance_ms` default and range.
 const GOAL_TIME_MS: (i64, core::ops::RangeInclusive<i64>) = (1000, 1..=60_000);

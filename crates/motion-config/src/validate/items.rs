@@ -7,8 +7,8 @@ use toml::Spanned;
 use super::Validator;
 use super::machine::{AxisContext, DeviceContext};
 
-use crate::config::raw::{RawAxis, RawDevice};
-use crate::config::{AxisSpec, DeviceSpec};
+use crate::raw::{RawAxis, RawDevice};
+use crate::{AxisSpec, DeviceSpec};
 
 impl Validator<'_, '_> {
     pub(super) fn device(

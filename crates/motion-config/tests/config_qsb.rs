@@ -6,8 +6,8 @@ use core::time::Duration;
 use motion_drivers::Driver;
 use std::path::Path;
 
+use motion_config::{Owner, ServerConfig};
 use motion_link::Link;
-use motiond::config::{Owner, ServerConfig};
 use qsb::{CommandDecoder, Request};
 
 const GOOD: &str = r#"
@@ -385,7 +385,7 @@ fn warnings_for_keys_without_effect_and_a_stream_the_line_cannot_carry() {
 
 /// The effective parameters of device 0.
 fn rows(config: &ServerConfig) -> Vec<(String, String)> {
-    motiond::boards::describe(config)
+    motion_config::boards::describe(config)
         .into_iter()
         .filter(|row| row.owner == Owner::Device(0))
         .map(|row| (row.key, row.value))
@@ -464,9 +464,9 @@ fn describe_lists_every_key_with_its_effective_value() {
 /// Runs the built driver against the simulated board of `config`'s sim link 0 for `ms`
 /// and returns the command lines it sent, decoded with the protocol crate.
 fn start_up(config: &ServerConfig, ms: u64) -> Vec<String> {
-    let mut drivers = motiond::boards::build(config).expect("drivers");
+    let mut drivers = motion_config::boards::build(config).expect("drivers");
     let driver = &mut drivers[0];
-    let mut link = motiond::boards::sim_link(config, 0);
+    let mut link = motion_config::boards::sim_link(config, 0);
     let mut lines = Vec::new();
     let mut buf = [0u8; 512];
     let mut commands = CommandDecoder::new();

@@ -21,7 +21,7 @@ use motion_drivers::spec::{
 use motion_engine::AxisConfig;
 use motion_link::sim::{CanBus, SimCanLink, SimLink, SpiBus, StreamBus};
 
-use crate::config::{AxisSpec, DeviceSpec, LinkSpec, Owner, ServerConfig, Transport};
+use crate::{AxisSpec, DeviceSpec, LinkSpec, Owner, ServerConfig, Transport};
 
 /// A device whose driver cannot be built from its validated config: the key and why.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]

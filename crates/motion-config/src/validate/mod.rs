@@ -377,7 +377,7 @@ impl Validator<'_, '_> {
             // Unless given, under the state directory (below).
             blackbox_dir: PathBuf::new(),
             blackbox_keep: 20,
-            state_dir: crate::config::default_state_dir(),
+            state_dir: crate::default_state_dir(),
         };
         const NAME: &str =
             "the instance name: services are motiond/<name>/frame, …; e.g. name = \"demo\"";
@@ -490,7 +490,7 @@ impl Validator<'_, '_> {
             }
         }
         if settings.blackbox_dir.as_os_str().is_empty() {
-            settings.blackbox_dir = settings.state_dir.join(crate::config::BLACKBOX_SUBDIR);
+            settings.blackbox_dir = settings.state_dir.join(crate::BLACKBOX_SUBDIR);
         }
         settings
     }

@@ -16,8 +16,8 @@ pub use motion_drivers::spec::DeviceMachine;
 use toml::Spanned;
 
 use super::{Validator, plain_serde_message};
-use crate::config::ServerConfig;
-use crate::config::raw::RawConfig;
+use crate::ServerConfig;
+use crate::raw::RawConfig;
 
 impl KeyIssues for Validator<'_, '_> {
     fn report_issue(&mut self, span: Span, key: &str, message: String) {

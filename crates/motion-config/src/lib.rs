@@ -1,14 +1,20 @@
-//! The config file (docs/ARCHITECTURE.md "Config contract"): loading, validation, and the validated
-//! description the server is built from.
+//! motiond's config (docs/ARCHITECTURE.md "Config contract"): finding the file, loading and
+//! validating it, the validated description the server is built from, the drivers and
+//! simulated links its boards become ([`boards`]), and the directories it names that must
+//! be the server's own ([`private_dir`]). Used by motiond, its black box replay, the bench
+//! and the tests alike: no server in it.
 //!
 //! Every mistake — unknown key, wrong type, missing key, duplicate name, unknown link or
 //! device, a channel the model does not have, a value out of range, a link type the model
 //! cannot use — is reported with file, line, column and key, all of them at once, and
 //! nothing is opened.
+#![warn(missing_docs)]
 
+pub mod boards;
 mod error;
 mod given;
 pub mod locate;
+pub mod private_dir;
 mod raw;
 mod validate;
 
@@ -75,8 +81,8 @@ pub struct ServerSettings {
     pub blackbox_keep: u32,
     /// Where the server keeps what must survive its restart: the axes of devices with
     /// `power_down = "restore"` it last saw referenced and at rest
-    /// (`<state_dir>/<name>.references.toml`, crate::references) and the key that
-    /// authenticates them (`motiond.key`, crate::secret). Unless given,
+    /// (`<state_dir>/<name>.references.toml`, motiond's `references`) and the key that
+    /// authenticates them (`motiond.key`, motiond's `secret`). Unless given,
     /// [`default_state_dir`]; a directory of the server's user that no one else may write
     /// (crate::private_dir).
     pub state_dir: PathBuf,

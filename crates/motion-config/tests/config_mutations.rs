@@ -7,7 +7,7 @@
 
 use std::path::{Path, PathBuf};
 
-use motiond::config::ServerConfig;
+use motion_config::ServerConfig;
 
 /// The configs the project ships.
 fn shipped() -> Vec<PathBuf> {

@@ -7,8 +7,8 @@ use motion_board::HomeHints;
 use toml::Spanned;
 
 use super::{TableSpan, Validator};
-use crate::config::raw::RawAxis;
-use crate::config::{DeviceSpec, Direction, HomeSpec};
+use crate::raw::RawAxis;
+use crate::{DeviceSpec, Direction, HomeSpec};
 
 /// Default `max_travel` as a multiple of the axis's travel (the Trinamic manual's 5/4 rule).
 pub(crate) const DEFAULT_MAX_TRAVEL_OF_RANGE: f64 = 1.25;

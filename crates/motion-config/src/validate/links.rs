@@ -11,8 +11,8 @@ use motion_drivers::{LinkKind, Model};
 use toml::Spanned;
 
 use super::Validator;
-use crate::config::raw::{Int, RawDevice, RawLink};
-use crate::config::{DeviceSpec, IoMode, LinkSpec, Transport};
+use crate::raw::{Int, RawDevice, RawLink};
+use crate::{DeviceSpec, IoMode, LinkSpec, Transport};
 
 impl Validator<'_, '_> {
     /// Links, checked against the devices on them (transport fits the model, sharing rules,

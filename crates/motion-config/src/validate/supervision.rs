@@ -5,7 +5,7 @@ use motion_engine::EstopCategory;
 use toml::Spanned;
 
 use super::Validator;
-use crate::config::raw::RawAxis;
+use crate::raw::RawAxis;
 
 /// `following_error` default: 1 % of the travel, but at least 50 and at most 1000 board
 /// counts (and never below 5 × `position_tolerance`).

@@ -7,8 +7,8 @@ use toml::Spanned;
 use motion_engine::AxisConfig;
 
 use super::Validator;
-use crate::config::raw::{RawDevice, RawSignal};
-use crate::config::{DeviceSpec, SignalSpec};
+use crate::raw::{RawDevice, RawSignal};
+use crate::{DeviceSpec, SignalSpec};
 
 fn kind_list(kinds: impl Iterator<Item = SignalKind>) -> String {
     kinds.map(SignalKind::name).collect::<Vec<_>>().join(", ")
