@@ -102,6 +102,11 @@ pub struct Transmit {
     pub goal_starts: u8,
 }
 
+/// The size of the buffer a driver's message is written into
+/// ([`Driver::poll_transmit`]), and of the chunks received bytes are handed over in: every
+/// board's longest message fits.
+pub const MESSAGE_LEN: usize = 256;
+
 /// A sans-I/O board driver: axis goals, received bytes and `now` in; bytes to send and
 /// channel state out. It never reads a clock and never touches a file descriptor: the
 /// engine (or a test) moves the bytes and passes the time. The shape follows quinn-proto:
@@ -253,7 +258,7 @@ pub trait Driver: Send + fmt::Debug {
     /// The priority of the message the driver would send now, or `None`.
     fn wants_transmit(&self, now: Duration) -> Option<Priority>;
 
-    /// Writes the next message into `buf` (which holds at least 256 bytes).
+    /// Writes the next message into `buf` (which holds at least [`MESSAGE_LEN`] bytes).
     #[must_use]
     fn poll_transmit(&mut self, now: Duration, buf: &mut [u8]) -> Option<Transmit>;
 

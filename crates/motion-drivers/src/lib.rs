@@ -42,7 +42,8 @@ mod state;
 pub use bus::{LinkBus, MAX_SENDS_PER_STEP, SPI_PENDING_CAPACITY, UNWRITTEN_CAPACITY, Unwritten};
 pub use commission::{Commission, CommissionError};
 pub use driver::{
-    Driver, Follow, LINE_RATE_TOLERANCE, LineLeg, Model, Priority, SavedReference, Transmit,
+    Driver, Follow, LINE_RATE_TOLERANCE, LineLeg, MESSAGE_LEN, Model, Priority, SavedReference,
+    Transmit,
 };
 pub use goal::{Goal, GoalError, GoalKind, GoalKinds, RateFloor};
 pub use late::{LATE_ANSWERS, LATE_PREFIX_LEN, LateAnswer};

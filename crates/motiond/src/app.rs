@@ -12,7 +12,6 @@ use motion_ipc::{ClientId, DeviceState, ServerPidFile, read_text};
 use motion_link::{Link, LinkConfig};
 use rtrb::RingBuffer;
 
-use crate::blackbox::{BlackboxFile, Journal, RecorderSetup, directory};
 use crate::error::ServerError;
 use crate::io::{self, IoThread, LinkPort};
 use crate::rt::{IoRt, monotonic_now};
@@ -20,6 +19,7 @@ use crate::stats::format_ns;
 use crate::systemd::{Supervisor, TickHealth};
 use crate::tick::{self, Report, StatusLine, TickSetup};
 use crate::{node_records, services};
+use motion_blackbox::{BlackboxFile, Journal, RecorderSetup, directory};
 use motion_config::boards::{sim_can_link, sim_link};
 use motion_config::{IoMode, ServerConfig, Transport};
 
@@ -315,7 +315,7 @@ fn start_recorder(
     };
     let thread = std::thread::Builder::new()
         .name("blackbox".into())
-        .spawn(move || crate::blackbox::recorder::run(setup))
+        .spawn(move || motion_blackbox::recorder::run(setup))
         .map_err(ServerError::RecorderThread)?;
     // A snapshot every quarter of the ring: a saved ring holds at least three quarters of
     // its ticks after its first snapshot, replayable from there.

@@ -7,9 +7,9 @@ use motion_engine::CommandPort;
 use motion_ipc::{ClientId, CommandReply, CommandRequest, GroupPath};
 
 use crate::Ipc;
-use crate::blackbox::Journal;
 use crate::paths::{PathInbox, PathsFactory};
 use crate::services::{ClientDirectory, CommandFactory};
+use motion_blackbox::Journal;
 
 /// The command port over the iceoryx2 server: one active request at a time, answered
 /// exactly once. The sender is the node of the client port the request came through, as

@@ -4,7 +4,6 @@
 #![deny(unsafe_code)] // one exception: rt.rs (sched_setscheduler), with SAFETY notes
 
 pub mod app;
-pub mod blackbox;
 pub mod command_port;
 pub mod error;
 pub mod estop_watch;

@@ -88,7 +88,7 @@ fn main() -> ExitCode {
 
 /// `motiond --replay FILE.mcap [--config FILE]`.
 fn replay(file: &std::path::Path, config: Option<&std::path::Path>) -> ExitCode {
-    let recording = match motiond::blackbox::read(file) {
+    let recording = match motion_blackbox::read(file) {
         Ok(recording) => recording,
         Err(error) => {
             eprintln!("motiond: {error}");
@@ -121,7 +121,7 @@ fn replay(file: &std::path::Path, config: Option<&std::path::Path>) -> ExitCode 
             return ExitCode::from(1);
         }
     };
-    match motiond::blackbox::replay(&config, &recording) {
+    match motion_blackbox::replay(&config, &recording) {
         Ok(done) if done.first > 0 => {
             println!(
                 "replayed {} ticks from the state snapshot at tick {} (the ring had wrapped): \

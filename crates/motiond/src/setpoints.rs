@@ -78,7 +78,7 @@ impl SetpointInbox {
         &mut self,
         factory: &SetpointsFactory,
         engine: &mut Engine<AnyDriver>,
-        journal: &mut crate::blackbox::Journal,
+        journal: &mut motion_blackbox::Journal,
     ) {
         self.spent.clear();
         for _ in 0..SETPOINTS_PER_TICK {

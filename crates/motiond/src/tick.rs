@@ -15,8 +15,6 @@ use motion_ipc::{
 };
 use rtrb::{Consumer, Producer};
 
-use crate::blackbox::Journal;
-use crate::blackbox::record::Trigger;
 use crate::command_port::IpcCommands;
 use crate::error::StartError;
 use crate::estop_watch::EstopWatch;
@@ -25,6 +23,8 @@ use crate::phases::{Phase, PhaseClock, PhaseMeans};
 use crate::rt::{self, IoRt, RtStatus, monotonic_now, sleep_until};
 use crate::services::{ClientDirectory, Services, SlotUse};
 use crate::stats::Latency;
+use motion_blackbox::Journal;
+use motion_blackbox::record::Trigger;
 use motion_config::ServerSettings;
 
 /// How long a shutdown waits for the boards to acknowledge their stop goals.

@@ -14,9 +14,9 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
 use board_qsb::sim::{QsbSim, QsbSimConfig};
+use motion_blackbox::record::Kind;
+use motion_blackbox::{BlackboxFile, Recording};
 use motion_ipc::{CommandKind, CommandRequest, FaultCode};
-use motiond::blackbox::record::Kind;
-use motiond::blackbox::{BlackboxFile, Recording};
 use nix::sys::signal::Signal;
 use support::pty_board::PtyBoard;
 use support::*;
@@ -213,7 +213,7 @@ following_error = 1.0
         assert_eq!(status, Some(0), "{}: {text}", file.display());
         assert!(text.contains("frames identical"), "{text}");
     }
-    let recording = motiond::blackbox::read(&whole).expect("the file reads back");
+    let recording = motion_blackbox::read(&whole).expect("the file reads back");
     assert!(
         recording.ticks.len() > 1000,
         "{} ticks",
@@ -296,7 +296,7 @@ fn a_ring_that_wrapped_replays_from_its_state_snapshot() {
     std::thread::sleep(Duration::from_secs(4));
     let saved = save_and_stop(&mut server);
 
-    let recording = motiond::blackbox::read(&saved).expect("the file reads back");
+    let recording = motion_blackbox::read(&saved).expect("the file reads back");
     assert!(recording.dropped() > 0, "the ring wrapped");
     let (status, text) = replay(&saved);
     assert_eq!(status, Some(0), "{text}");
@@ -310,7 +310,7 @@ fn a_ring_that_wrapped_replays_from_its_state_snapshot() {
         .ticks
         .iter()
         .position(|ticks| {
-            motiond::blackbox::record::records(ticks)
+            motion_blackbox::record::records(ticks)
                 .filter_map(Result::ok)
                 .any(|record| record.kind == Kind::Snapshot)
         })
@@ -321,7 +321,7 @@ fn a_ring_that_wrapped_replays_from_its_state_snapshot() {
         .iter()
         .enumerate()
         .filter_map(|(i, ticks)| {
-            motiond::blackbox::record::records(ticks)
+            motion_blackbox::record::records(ticks)
                 .filter_map(Result::ok)
                 .find(|record| record.kind == Kind::LinkRx && record.payload.len() > 12)
                 .map(|record| {
@@ -366,7 +366,7 @@ fn write_recording_with(recording: &Recording, path: &Path, link_names: Vec<Stri
         link_names,
     };
     let first = recording.dropped();
-    let ticks = motiond::blackbox::file::Ticks {
+    let ticks = motion_blackbox::file::Ticks {
         head: &recording.head,
         ticks: recording
             .ticks

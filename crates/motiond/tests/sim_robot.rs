@@ -5,6 +5,7 @@
 use core::time::Duration;
 use std::path::PathBuf;
 
+use motion_blackbox::{Journal, Recording, Ring, replay};
 use motion_config::ServerConfig;
 use motion_engine::{CommandPort, Engine};
 use motion_ipc::{
@@ -13,7 +14,6 @@ use motion_ipc::{
 };
 use motion_link::Link;
 use motion_testkit::counting_alloc::{CountingAllocator, allocations, counting};
-use motiond::blackbox::{Journal, Recording, Ring, replay};
 
 #[global_allocator]
 static GLOBAL: CountingAllocator = CountingAllocator;

@@ -45,7 +45,7 @@ use worker::Worker;
 use crate::error::RtError;
 
 /// Bytes one packet carries (a driver message, or a chunk of received bytes).
-pub const PACKET_LEN: usize = 256;
+pub const PACKET_LEN: usize = motion_drivers::MESSAGE_LEN;
 /// Packets each queue holds.
 pub const QUEUE_PACKETS: usize = 256;
 /// Write reports the ring back to the tick holds (more than the transmit queue: the tick

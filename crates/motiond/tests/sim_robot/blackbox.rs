@@ -1,8 +1,8 @@
 //! The robot's black box: its journal replayed from the start and, from the snapshots of
 //! the engine's state in it, from the middle of a ring that wrapped.
 
-use motiond::blackbox::ReplayError;
-use motiond::blackbox::record::Kind;
+use motion_blackbox::ReplayError;
+use motion_blackbox::record::Kind;
 
 use super::*;
 

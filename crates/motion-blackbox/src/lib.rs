@@ -4,6 +4,7 @@
 //! ([`recorder`]) and writes it to MCAP ([`file`]) on a fault, an e-stop, SIGUSR2 or a
 //! clean exit; `motiond --replay` feeds a saved journal through the same drivers and engine
 //! and compares every output ([`replay`]).
+#![warn(missing_docs)]
 
 pub mod digest;
 pub mod directory;

@@ -17,10 +17,10 @@ fn every_recording_in_tests_recordings_replays_frame_for_frame() {
     files.sort();
     assert!(!files.is_empty(), "no recordings in {}", dir.display());
     for file in files {
-        let recording = motiond::blackbox::read(&file).expect("a black box");
+        let recording = motion_blackbox::read(&file).expect("a black box");
         let config = motion_config::ServerConfig::parse(&file, recording.config_text())
             .expect("its recorded config is valid");
-        let replayed = motiond::blackbox::replay(&config, &recording)
+        let replayed = motion_blackbox::replay(&config, &recording)
             .unwrap_or_else(|error| panic!("{}: {error}", file.display()));
         assert_eq!(replayed.ticks as usize, recording.ticks.len());
         assert!(

@@ -359,7 +359,7 @@ impl Journal {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::blackbox::record::records;
+    use crate::record::records;
 
     #[test]
     fn a_full_queue_drops_counts_and_marks_the_hole() {

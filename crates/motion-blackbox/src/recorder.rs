@@ -36,11 +36,11 @@ pub struct RecorderSetup {
     pub ring_bytes: usize,
     /// What a saved file says about the server (name, config, versions).
     pub file: BlackboxFile,
-    /// Where files go (`blackbox_dir`: crate::blackbox::directory).
+    /// Where files go (`blackbox_dir`: crate::directory).
     pub dir: PathBuf,
     /// Save on a clean exit.
     pub on_exit: bool,
-    /// How many of this server's saves `dir` keeps (crate::blackbox::directory).
+    /// How many of this server's saves `dir` keeps (crate::directory).
     pub keep_files: usize,
     /// The file naming the newest save (`ServerPidFile::blackbox_pointer`).
     pub pointer: PathBuf,

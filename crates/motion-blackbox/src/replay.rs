@@ -352,7 +352,7 @@ fn replay_here(config: &ServerConfig, recording: &Recording) -> Result<Replayed,
     let mut restoring = !from_start;
     let mut frame = Box::new(MotionFrame::EMPTY);
     let mut path = Box::new(GroupPath::EMPTY);
-    let mut buf = [0u8; crate::io::PACKET_LEN];
+    let mut buf = [0u8; motion_drivers::MESSAGE_LEN];
     let mut ticks = 0;
     for bytes in &recording.ticks[begin..] {
         let mut now = Duration::ZERO;
