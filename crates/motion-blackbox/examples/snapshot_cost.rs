@@ -1,5 +1,5 @@
 //! What a black box snapshot of the engine's state costs the tick (docs/BLACKBOX.md):
-//! `cargo run --release -p motiond --example snapshot_cost [CONFIG]`. Serializes the
+//! `cargo run --release -p motion-blackbox --example snapshot_cost [CONFIG]`. Serializes the
 //! engine built from `config/sim.toml` (or CONFIG) into a buffer sized as motiond sizes it,
 //! 2000 times, and a group path holding the longest trajectory (1024 points on 3 axes, the
 //! gantry's), and prints the bytes and the time per snapshot (p50, p99, max).
