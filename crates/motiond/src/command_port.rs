@@ -7,7 +7,7 @@ use motion_engine::CommandPort;
 use motion_ipc::{ClientId, CommandReply, CommandRequest, GroupPath};
 
 use crate::Ipc;
-use crate::paths::{PathInbox, PathsFactory};
+use crate::paths::PathInbox;
 use crate::services::{ClientDirectory, CommandFactory};
 use motion_blackbox::Journal;
 
@@ -24,8 +24,6 @@ pub(crate) struct IpcCommands<'a> {
     pub replies_lost: u64,
     /// The paths clients sent their groups.
     pub paths: &'a mut PathInbox,
-    /// The paths service (the nodes of its publishers).
-    pub paths_factory: &'a PathsFactory,
     /// The black box: every request, path and reply.
     pub journal: &'a mut Journal,
 }
@@ -50,7 +48,7 @@ impl CommandPort for IpcCommands<'_> {
         if !self.paths.holds(client, id) {
             // Published after this tick took in the paths, and run at once: take in what
             // arrived since.
-            self.paths.receive(self.paths_factory);
+            self.paths.receive();
         }
         let path = self.paths.take(client, id);
         self.journal.path(client, id, path);

@@ -15,14 +15,13 @@
 //! unprivileged path finds no room among privileged ones and is dropped. So no node without
 //! a claim can evict a claimant's path, however fast it publishes.
 
-use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
 use iceoryx2::sample::Sample;
-use iceoryx2::service::port_factory::publish_subscribe::PortFactory;
 use motion_ipc::{ClientId, GroupPath, MAX_GROUPS, MotionFrame};
 
 use crate::Ipc;
 use crate::error::ServiceError;
+use crate::inbox::Inbox;
 
 /// Paths held between their arrival and their `Run`, all nodes together.
 pub const PATHS_HELD: usize = 6;
@@ -35,40 +34,33 @@ pub const PATHS_BUFFER: usize = 2;
 
 type PathSample = Sample<Ipc, GroupPath, ()>;
 
-/// The `paths` service's port factory.
-pub type PathsFactory = PortFactory<Ipc, GroupPath, ()>;
-
-/// The server's subscriber to `paths` and the samples it holds.
+/// The server's end of `paths` and the samples it holds.
 #[derive(Debug)]
 pub struct PathInbox {
-    subscriber: Subscriber<Ipc, GroupPath, ()>,
+    /// The service, and each sample's node.
+    pub inbox: Inbox<GroupPath>,
     /// (sender's node, sample), oldest first.
     held: Vec<(ClientId, PathSample)>,
     /// The path the engine took last (alive until the next take).
     taken: Option<PathSample>,
     /// Per group, its claimant as the last frame said (`GroupState::owner`).
     claimants: [ClientId; MAX_GROUPS],
-    /// Samples dropped: no room, or their publisher's node unknown.
+    /// Samples dropped for want of room (those whose publisher had left are the inbox's
+    /// `orphans`).
     pub dropped: u64,
 }
 
 /// Creates (or opens) `name` with room for `max_clients` publishers and the server.
-pub fn create(
-    node: &Node<Ipc>,
-    name: &str,
-    max_clients: usize,
-) -> Result<(PathInbox, PathsFactory), ServiceError> {
+pub fn create(node: &Node<Ipc>, name: &str, max_clients: usize) -> Result<PathInbox, ServiceError> {
     // The samples held, the one taken, and one being received.
-    let (subscriber, factory) =
-        crate::inbox::create(node, name, max_clients, PATHS_BUFFER, PATHS_HELD + 2)?;
-    let inbox = PathInbox {
-        subscriber,
+    let inbox = Inbox::create(node, name, max_clients, PATHS_BUFFER, PATHS_HELD + 2)?;
+    Ok(PathInbox {
+        inbox,
         held: Vec::with_capacity(PATHS_HELD),
         taken: None,
         claimants: [ClientId::NONE; MAX_GROUPS],
         dropped: 0,
-    };
-    Ok((inbox, factory))
+    })
 }
 
 impl PathInbox {
@@ -85,14 +77,8 @@ impl PathInbox {
     }
 
     /// Takes every path that arrived since the last tick, each with its sender's node.
-    pub fn receive(&mut self, factory: &PathsFactory) {
-        while let Ok(Some(sample)) = self.subscriber.receive() {
-            let publisher = sample.header().publisher_id().value();
-            let Some(node) = crate::inbox::publisher_node(factory, publisher) else {
-                // Its publisher left before we looked: nobody may run it.
-                self.dropped += 1;
-                continue;
-            };
+    pub fn receive(&mut self) {
+        while let Some((node, sample)) = self.inbox.take() {
             let privileged = self.privileged(node, sample.payload().group);
             if let Some(index) = self.room_for(node, privileged) {
                 self.held.remove(index);

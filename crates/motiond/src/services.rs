@@ -4,8 +4,8 @@
 
 use crate::Ipc;
 use crate::error::ServiceError;
-use crate::paths::{PathInbox, PathsFactory};
-use crate::setpoints::{SetpointInbox, SetpointsFactory};
+use crate::paths::PathInbox;
+use crate::setpoints::SetpointInbox;
 use iceoryx2::node::NodeView;
 use iceoryx2::port::listener::Listener;
 use iceoryx2::port::notifier::Notifier;
@@ -63,10 +63,6 @@ pub struct Factories {
     estop: EventFactory<Ipc>,
     /// The command service.
     pub command: CommandFactory,
-    /// The paths service (its publishers' nodes).
-    pub paths: PathsFactory,
-    /// The setpoints service (its publishers' nodes).
-    pub setpoints: SetpointsFactory,
 }
 
 /// Frames a subscriber can fall behind before the oldest is dropped (safe overflow).
@@ -95,8 +91,9 @@ pub struct SlotUse {
 }
 
 impl Factories {
-    /// Port use of every service that clients connect to.
-    pub fn slot_use(&self, max_clients: usize) -> [SlotUse; 9] {
+    /// Port use of every service that clients connect to (`inboxes`: the publishers of
+    /// `paths` and of `setpoints`, which their inboxes own).
+    pub fn slot_use(&self, max_clients: usize, inboxes: [usize; 2]) -> [SlotUse; 9] {
         let sub = |bit, service, used| SlotUse {
             bit,
             service,
@@ -150,14 +147,14 @@ impl Factories {
                 bit: ServerStats::FULL_PATHS,
                 service: "paths",
                 slot: "publisher",
-                used: self.paths.dynamic_config().number_of_publishers(),
+                used: inboxes[0],
                 limit: max_clients,
             },
             SlotUse {
                 bit: ServerStats::FULL_SETPOINTS,
                 service: "setpoints",
                 slot: "publisher",
-                used: self.setpoints.dynamic_config().number_of_publishers(),
+                used: inboxes[1],
                 limit: max_clients,
             },
         ]
@@ -173,6 +170,15 @@ fn service_name(name: String) -> Result<ServiceName, ServiceError> {
 }
 
 impl Services {
+    /// Port use of every service that clients connect to.
+    pub fn slot_use(&self) -> [SlotUse; 9] {
+        let inboxes = [
+            self.paths.inbox.publishers(),
+            self.setpoints.inbox.publishers(),
+        ];
+        self.factories.slot_use(self.max_clients, inboxes)
+    }
+
     /// Creates the instance's services, or takes them over from a server that crashed while
     /// clients kept them open. Fails when another live motiond serves `name` (its node is
     /// alive), naming its process.
@@ -250,9 +256,8 @@ impl Services {
             state_publisher::<ServerStats>(&node, &service_name(names.stats())?, max_clients)?;
         let (params, params_factory) =
             state_publisher::<MachineParams>(&node, &service_name(names.params())?, max_clients)?;
-        let (paths, paths_factory) = crate::paths::create(&node, &names.paths(), max_clients)?;
-        let (setpoints, setpoints_factory) =
-            crate::setpoints::create(&node, &names.setpoints(), max_clients)?;
+        let paths = crate::paths::create(&node, &names.paths(), max_clients)?;
+        let setpoints = crate::setpoints::create(&node, &names.setpoints(), max_clients)?;
         // The frame service comes last: a client that sees it can open every other one.
         let frame = node
             .service_builder(&service_name(names.frame())?)
@@ -289,8 +294,6 @@ impl Services {
                 tick,
                 estop,
                 command,
-                paths: paths_factory,
-                setpoints: setpoints_factory,
             },
             max_clients,
         })

@@ -11,19 +11,16 @@
 //! in `over_budget`. A claimant sends one setpoint a tick, a few after a stall; a flood from
 //! another process costs the tick only the receive of what its queue holds
 //! ([`SETPOINTS_BUFFER`] per publisher), never the engine's or the journal's work for it.
-//! The node of a publisher is read once from the service's dynamic config and kept by its
-//! publisher id (ids are never reused).
 
-use iceoryx2::port::subscriber::Subscriber;
 use iceoryx2::prelude::*;
-use iceoryx2::service::port_factory::publish_subscribe::PortFactory;
+use motion_config::boards::AnyDriver;
 use motion_engine::Engine;
 use motion_ipc::{ClientId, Setpoint};
 
 use crate::Ipc;
 use crate::error::ServiceError;
+use crate::inbox::Inbox;
 use crate::rt::monotonic_now;
-use motion_config::boards::AnyDriver;
 
 /// Setpoints a publisher may have queued before the tick takes them: enough for a client
 /// that streams for several ticks ahead, and for one tick the server was late.
@@ -36,20 +33,13 @@ pub const SETPOINTS_PER_TICK: usize = 256;
 /// one a tick catching up after a stall of a few ticks.
 pub const SETPOINTS_PER_NODE: u32 = 8;
 
-/// The `setpoints` service's port factory.
-pub type SetpointsFactory = PortFactory<Ipc, Setpoint, ()>;
-
-/// The server's subscriber to `setpoints`.
+/// The server's end of `setpoints`.
 #[derive(Debug)]
 pub struct SetpointInbox {
-    subscriber: Subscriber<Ipc, Setpoint, ()>,
-    /// Publisher id → its node, as the service's dynamic config said (capacity reserved:
-    /// cleared when full, never grown).
-    nodes: Vec<(u128, ClientId)>,
+    /// The service, and each sample's node.
+    pub inbox: Inbox<Setpoint>,
     /// This tick's setpoints per node.
     spent: Vec<(ClientId, u32)>,
-    /// Samples whose publisher had left before the tick looked (dropped).
-    pub orphans: u64,
     /// Samples beyond their node's budget of the tick (dropped unread).
     pub over_budget: u64,
 }
@@ -59,16 +49,12 @@ pub fn create(
     node: &Node<Ipc>,
     name: &str,
     max_clients: usize,
-) -> Result<(SetpointInbox, SetpointsFactory), ServiceError> {
-    let (subscriber, factory) = crate::inbox::create(node, name, max_clients, SETPOINTS_BUFFER, 2)?;
-    let inbox = SetpointInbox {
-        subscriber,
-        nodes: Vec::with_capacity(max_clients + 2),
+) -> Result<SetpointInbox, ServiceError> {
+    Ok(SetpointInbox {
+        inbox: Inbox::create(node, name, max_clients, SETPOINTS_BUFFER, 2)?,
         spent: Vec::with_capacity(max_clients + 2),
-        orphans: 0,
         over_budget: 0,
-    };
-    Ok((inbox, factory))
+    })
 }
 
 impl SetpointInbox {
@@ -76,21 +62,15 @@ impl SetpointInbox {
     /// sender's node and the instant it was taken from the service.
     pub fn deliver(
         &mut self,
-        factory: &SetpointsFactory,
         engine: &mut Engine<AnyDriver>,
         journal: &mut motion_blackbox::Journal,
     ) {
         self.spent.clear();
         for _ in 0..SETPOINTS_PER_TICK {
-            let Ok(Some(sample)) = self.subscriber.receive() else {
+            let Some((node, sample)) = self.inbox.take() else {
                 return;
             };
             let received_ns = crate::io::duration_ns(monotonic_now());
-            let publisher = sample.header().publisher_id().value();
-            let Some(node) = self.node_of(factory, publisher) else {
-                self.orphans += 1;
-                continue;
-            };
             if !self.spend(node) {
                 self.over_budget += 1;
                 continue;
@@ -98,19 +78,6 @@ impl SetpointInbox {
             journal.setpoint(node, received_ns, sample.payload());
             engine.handle_setpoint_at(node, sample.payload(), received_ns);
         }
-    }
-
-    /// The node of `publisher`, from the cache or the service's dynamic config.
-    fn node_of(&mut self, factory: &SetpointsFactory, publisher: u128) -> Option<ClientId> {
-        if let Some((_, node)) = self.nodes.iter().find(|(id, _)| *id == publisher) {
-            return Some(*node);
-        }
-        let node = crate::inbox::publisher_node(factory, publisher)?;
-        if self.nodes.len() == self.nodes.capacity() {
-            self.nodes.clear();
-        }
-        self.nodes.push((publisher, node));
-        Some(node)
     }
 
     /// Counts one setpoint of `node` in this tick; `false` when its budget is spent (or

@@ -483,7 +483,7 @@ impl Loop {
     /// some free up, and counts it in the stats.
     fn check_slots(&mut self) {
         let mut full = 0;
-        for slots in self.services.factories.slot_use(self.services.max_clients) {
+        for slots in self.services.slot_use() {
             if slots.used >= slots.limit {
                 full |= slots.bit;
                 if self.stats.full_services & slots.bit == 0 {
@@ -518,12 +518,10 @@ impl Loop {
     }
 
     fn step_and_publish(&mut self, now: Duration, deadline: Duration) {
-        self.services.paths.receive(&self.services.factories.paths);
-        self.services.setpoints.deliver(
-            &self.services.factories.setpoints,
-            &mut self.setup.engine,
-            &mut self.setup.journal,
-        );
+        self.services.paths.receive();
+        self.services
+            .setpoints
+            .deliver(&mut self.setup.engine, &mut self.setup.journal);
         self.setup.journal.step();
         let mut commands = IpcCommands {
             server: &self.services.command,
@@ -533,7 +531,6 @@ impl Loop {
             sender: ClientId::NONE,
             replies_lost: 0,
             paths: &mut self.services.paths,
-            paths_factory: &self.services.factories.paths,
             journal: &mut self.setup.journal,
         };
         match self.services.frame.loan_uninit() {
