@@ -24,6 +24,9 @@ fn motionctl(args: &[&str]) -> Result<std::process::Output> {
     finish(child, Duration::from_secs(60))
 }
 
+/// A QSB and its axis on the link `bus`: what makes a config one motiond would run.
+const QSB_ON_BUS: &str = "\n[[device]]\nname = \"qsb\"\nlink = \"bus\"\nmodel = \"qsb\"\n\n[[axis]]\nname = \"x\"\ndevice = \"qsb\"\nchannel = 0\nunit = \"mm\"\ncounts_per_unit = 100.0\nmin = -100.0\nmax = 100.0\nmax_velocity = 50.0\nmax_accel = 500.0\n";
+
 #[test]
 fn bench_help_lists_the_suite_s_options_and_hides_the_peer() -> Result {
     let output = motionctl(&["bench", "--help"])?;
@@ -293,7 +296,9 @@ fn doctor_json_on_a_fake_root_gives_every_check_a_status_value_and_fix() -> Resu
     let config = root.join("motiond.toml");
     std::fs::write(
         &config,
-        "[server]\nname = \"cell\"\nrt_priority = 80\ncpu = 3\nlock_memory = true\n\n[[link]]\nname = \"bus\"\ntype = \"serial\"\npath = \"/dev/ttyUSB0\"\n",
+        format!(
+            "[server]\nname = \"cell\"\nrt_priority = 80\ncpu = 3\nlock_memory = true\n\n[[link]]\nname = \"bus\"\ntype = \"serial\"\npath = \"/dev/ttyUSB0\"\nbaud = 230400\n{QSB_ON_BUS}"
+        ),
     )?;
     let output = motionctl(&[
         "doctor",
@@ -360,7 +365,14 @@ fn doctor_json_on_a_fake_root_gives_every_check_a_status_value_and_fix() -> Resu
 fn doctor_refuses_a_bad_config_with_its_path() -> Result {
     let path =
         std::env::temp_dir().join(format!("motionctl-doctor-bad-{}.toml", std::process::id()));
-    std::fs::write(&path, "[server]\nrt_priority = 0\n")?;
+    // Valid but for the priority: the doctor reads the config as motiond does and says
+    // what motiond would refuse.
+    std::fs::write(
+        &path,
+        format!(
+            "[server]\nname = \"cell\"\nrt_priority = 0\n\n[[link]]\nname = \"bus\"\ntype = \"serial\"\npath = \"/dev/ttyUSB0\"\nbaud = 230400\n{QSB_ON_BUS}"
+        ),
+    )?;
     let output = motionctl(&[
         "doctor",
         "--config",

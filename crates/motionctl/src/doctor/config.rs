@@ -1,18 +1,21 @@
 //! The few keys of a motiond config the doctor needs: the tick rate and real-time settings
-//! of `[server]` and the links' types and paths. motionctl does not depend on motiond, so
-//! this is a small read of its own: other keys are ignored, and motiond itself validates the
-//! file (`motiond --check-config FILE`).
+//! of `[server]` and the links' types and paths, read from the config motiond itself would
+//! run (`motion_config`: the same validation, every mistake located), so the doctor never
+//! checks a machine against a config the server would refuse.
 
 use std::path::{Path, PathBuf};
 
+use motion_config::{ServerConfig, Transport};
+#[cfg(test)]
 use serde::Deserialize;
 
-/// Where the deployed server's config lives (deploy/README.md).
-pub const DEPLOYED_CONFIG: &str = "/etc/motiond/motiond.toml";
+/// Where the deployed server's config lives (deploy/README.md): the one motiond runs
+/// without `--config`.
+pub const DEPLOYED_CONFIG: &str = motion_config::locate::INSTALLED_CONFIG;
 
 /// What the doctor reads of a config.
-#[derive(Debug, Clone, Default, PartialEq, Eq, Deserialize)]
-#[serde(default)]
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+#[cfg_attr(test, derive(Deserialize), serde(default))]
 pub struct DoctorConfig {
     /// `[server]`.
     pub server: ServerKeys,
@@ -21,8 +24,8 @@ pub struct DoctorConfig {
 }
 
 /// `[server]` keys of interest.
-#[derive(Debug, Clone, PartialEq, Eq, Deserialize)]
-#[serde(default)]
+#[derive(Debug, Clone, PartialEq, Eq)]
+#[cfg_attr(test, derive(Deserialize), serde(default))]
 pub struct ServerKeys {
     /// Instance name.
     pub name: String,
@@ -49,13 +52,13 @@ impl Default for ServerKeys {
 }
 
 /// `[[link]]` keys of interest.
-#[derive(Debug, Clone, Default, PartialEq, Eq, Deserialize)]
-#[serde(default)]
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+#[cfg_attr(test, derive(Deserialize), serde(default))]
 pub struct LinkKeys {
     /// Link name.
     pub name: String,
-    /// `serial`, `spidev`, `spi-socket`, `sim`.
-    #[serde(rename = "type")]
+    /// Its config `type`: `serial`, `spidev`, `spi-socket`, `sim`, `socketcan`, `sim-can`.
+    #[cfg_attr(test, serde(rename = "type"))]
     pub kind: String,
     /// Device path.
     pub path: Option<PathBuf>,
@@ -74,26 +77,57 @@ impl LinkKeys {
 }
 
 impl DoctorConfig {
-    /// Parses config text.
-    pub fn parse(text: &str) -> Result<Self, String> {
-        let config: Self = toml::from_str(text).map_err(|e| e.to_string())?;
-        if config.server.tick_hz == 0 {
-            return Err("`server.tick_hz` must be at least 1".to_owned());
+    /// What the doctor needs of a validated config.
+    pub fn of(config: &ServerConfig) -> Self {
+        let server = &config.server;
+        Self {
+            server: ServerKeys {
+                name: server.name.clone(),
+                tick_hz: server.tick_hz,
+                rt_priority: server.rt_priority,
+                cpu: server.cpu,
+                lock_memory: server.lock_memory,
+            },
+            link: config
+                .links
+                .iter()
+                .map(|link| {
+                    let (kind, path) = match &link.transport {
+                        Transport::Serial { path, .. } => ("serial", Some(path.clone())),
+                        Transport::Spidev { path, .. } => ("spidev", Some(path.clone())),
+                        Transport::SpiSocket { path } => ("spi-socket", Some(path.clone())),
+                        Transport::Sim { .. } => ("sim", None),
+                        Transport::SocketCan { .. } => ("socketcan", None),
+                        Transport::SimCan { .. } => ("sim-can", None),
+                    };
+                    LinkKeys {
+                        name: link.name.clone(),
+                        kind: kind.to_owned(),
+                        path,
+                    }
+                })
+                .collect(),
         }
-        if config
-            .server
-            .rt_priority
-            .is_some_and(|p| !(1..=99).contains(&p))
-        {
-            return Err("`server.rt_priority` must be within 1..=99".to_owned());
-        }
-        Ok(config)
     }
 
-    /// Reads and parses `path`.
+    /// Reads and validates `path` as motiond does (`motion_config::ServerConfig::load`):
+    /// a config the server would refuse is refused with the same located reasons.
     pub fn load(path: &Path) -> Result<Self, String> {
-        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-        Self::parse(&text).map_err(|e| format!("{}: {e}", path.display()))
+        ServerConfig::load(path)
+            .map(|config| Self::of(&config))
+            .map_err(|error| {
+                format!(
+                    "{error}\n{}: not a config motiond would run",
+                    path.display()
+                )
+            })
+    }
+
+    /// The doctor's keys read straight from `text` (the unit tests' fake hosts: a few
+    /// keys, no machine).
+    #[cfg(test)]
+    pub fn parse(text: &str) -> Result<Self, String> {
+        toml::from_str(text).map_err(|e| e.to_string())
     }
 
     /// The serial and spidev links with their paths.
@@ -109,49 +143,68 @@ impl DoctorConfig {
 mod tests {
     use super::*;
 
+    fn write(name: &str, text: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("motionctl-doctor-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("a temporary directory");
+        let path = dir.join(name);
+        std::fs::write(&path, text).expect("write the config");
+        path
+    }
+
     #[test]
-    fn reads_the_keys_it_needs_and_ignores_the_rest() {
-        let config = DoctorConfig::parse(
-            r#"
-            [server]
-            name = "cell"
-            tick_hz = 500
-            rt_priority = 80
-            cpu = 3
-            lock_memory = true
-            command_timeout_ms = 250
+    fn the_shipped_config_reads_as_motiond_reads_it() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../config/sim.toml");
+        let server = ServerConfig::load(&path).expect("config/sim.toml is valid");
+        let config = DoctorConfig::load(&path).expect("the doctor reads it");
+        assert_eq!(config.server.name, server.server.name);
+        assert_eq!(config.server.tick_hz, server.server.tick_hz);
+        assert_eq!(config.link.len(), server.links.len());
+        assert!(
+            config.link.iter().all(|link| link.kind == "sim"),
+            "{config:?}"
+        );
+        assert_eq!(
+            config.device_links().count(),
+            0,
+            "simulated links have no device node"
+        );
+    }
 
-            [[link]]
-            name = "rs485"
-            type = "serial"
-            path = "/dev/serial/by-id/usb-FTDI-if00-port0"
-            baud = 19200
+    #[test]
+    fn serial_and_spidev_links_are_the_device_links() {
+        let example = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../config/examples");
+        let mut seen = Vec::new();
+        for entry in std::fs::read_dir(&example).expect("config/examples") {
+            let path = entry.expect("an entry").path();
+            if path.extension().is_none_or(|e| e != "toml") {
+                continue;
+            }
+            let Ok(server) = ServerConfig::load(&path) else {
+                continue;
+            };
+            let config = DoctorConfig::of(&server);
+            for (link, device) in config.device_links() {
+                assert!(link.is_serial() || link.is_spidev(), "{link:?}");
+                seen.push((link.kind.clone(), device.to_path_buf()));
+            }
+        }
+        assert!(seen.iter().any(|(kind, _)| kind == "serial"), "{seen:?}");
+    }
 
-            [[link]]
-            name = "spi"
-            type = "spidev"
-            path = "/dev/spidev0.0"
-
-            [[link]]
-            name = "sim"
-            type = "sim"
-
-            [[device]]
-            name = "pack"
-            link = "rs485"
-            model = "tmcpack"
-            "#,
+    #[test]
+    fn a_config_motiond_would_refuse_is_refused_with_its_reasons() {
+        let shipped = std::fs::read_to_string(
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../../config/sim.toml"),
         )
-        .expect("parses");
-        assert_eq!(config.server.tick_hz, 500);
-        assert_eq!(config.server.rt_priority, Some(80));
-        assert_eq!(config.server.cpu, Some(3));
-        assert!(config.server.lock_memory);
-        let links: Vec<&str> = config
-            .device_links()
-            .map(|(l, _)| l.name.as_str())
-            .collect();
-        assert_eq!(links, ["rs485", "spi"]);
+        .expect("config/sim.toml");
+        let bad = shipped.replacen("[server]", "[server]\ntick_hz = 0", 1);
+        let path = write("tick0.toml", &bad);
+        let why = DoctorConfig::load(&path).expect_err("tick_hz = 0 is refused");
+        assert!(why.contains("tick0.toml:"), "{why}");
+        assert!(why.contains("`server.tick_hz`"), "{why}");
+        assert!(why.contains("not a config motiond would run"), "{why}");
+        let why = DoctorConfig::load(&write("syntax.toml", "[server\n")).expect_err("syntax");
+        assert!(why.contains("syntax.toml:1:"), "{why}");
     }
 
     #[test]
@@ -160,14 +213,5 @@ mod tests {
         assert_eq!(config.server.tick_hz, 1000);
         assert_eq!(config.server.rt_priority, None);
         assert!(!config.server.lock_memory);
-    }
-
-    #[test]
-    fn bad_values_are_errors() {
-        assert!(DoctorConfig::parse("[server]\ntick_hz = 0\n").is_err());
-        assert!(DoctorConfig::parse("[server]\nrt_priority = 0\n").is_err());
-        assert!(DoctorConfig::parse("[server]\nrt_priority = 300\n").is_err());
-        assert!(DoctorConfig::parse("[server]\ncpu = \"one\"\n").is_err());
-        assert!(DoctorConfig::parse("[server\n").is_err());
     }
 }
