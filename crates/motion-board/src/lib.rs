@@ -22,7 +22,7 @@ use core::fmt;
 use core::time::Duration;
 
 use motion_drivers::spec::{
-    DeviceMachine, Direction, DriverSpec, HomeInput, MachineKeys, Param, SpecError,
+    DeviceMachine, Direction, DriverSpec, FromSpec, HomeInput, MachineKeys, Param, SpecError,
 };
 
 use crate::keys::{AxisContext, DeviceContext, KeyIssues, KeyTable, Span};
@@ -76,19 +76,72 @@ pub struct LinkFacts {
     pub host_frame: Option<Duration>,
 }
 
-/// A [`Board`] whose driver type is known statically: the registry builds its driver enum
-/// (`motion_boards::AnyDriver`, what the server's tick holds: static dispatch, no box)
-/// from it. Every board crate implements both traits; its `Board::build` boxes what
-/// [`driver`](Self::driver) builds.
+/// A [`Board`]'s typed parts: its driver's configuration and driver, and its part of the
+/// `motion-sim` tool. The registry builds its driver enum (`motion_boards::AnyDriver`, what
+/// the server's tick holds: static dispatch, no box) from [`driver`](Self::driver), and
+/// every board gets [`BoardParts`] — its parameters, its standalone simulator and help —
+/// from these declarations: a board crate declares them, none writes the glue.
 pub trait TypedBoard: Board {
+    /// The driver's configuration (`<Board>DriverConfig`).
+    type Config: FromSpec;
+
     /// The board's driver.
     type Driver: Driver + 'static;
 
-    /// The driver of the device `spec` describes.
+    /// The driver made of its configuration (`<Board>Driver::new`).
+    const NEW_DRIVER: fn(Self::Config) -> Self::Driver;
+
+    /// Its part of `motion-sim --help`.
+    const STANDALONE_HELP: StandaloneHelp;
+
+    /// The simulated board the `motion-sim` tool serves alone, from its command-line
+    /// options (no config file); an option the board does not have, or a value of one it
+    /// cannot take, is refused.
+    const SIMULATE_STANDALONE: fn(&StandaloneSim) -> Result<SimBoard, StandaloneError>;
+
+    /// The driver of the device `spec` describes (spec → driver config → driver).
     ///
     /// # Errors
-    /// As [`Board::build`].
-    fn driver(&self, spec: &DriverSpec) -> Result<Self::Driver, SpecError>;
+    /// A value of the spec the board cannot take (the config validator refuses such
+    /// values first, with file, line and column).
+    fn driver(&self, spec: &DriverSpec) -> Result<Self::Driver, SpecError> {
+        Ok(Self::NEW_DRIVER(Self::Config::from_spec(spec)?))
+    }
+}
+
+/// What every board has through its [`TypedBoard`] declarations (a blanket
+/// implementation): callable on a `dyn Board`.
+pub trait BoardParts {
+    /// One [`Param`] per machine parameter of the device `spec` describes and of its axes,
+    /// with the value in effect.
+    ///
+    /// # Errors
+    /// As [`TypedBoard::driver`].
+    fn params(&self, spec: &DriverSpec) -> Result<Vec<Param>, SpecError>;
+
+    /// The simulated board the `motion-sim` tool serves alone, from its command-line
+    /// `options` (no config file).
+    ///
+    /// # Errors
+    /// An option the board does not have, or a value of one it cannot take.
+    fn simulate_standalone(&self, options: &StandaloneSim) -> Result<SimBoard, StandaloneError>;
+
+    /// Its part of `motion-sim --help`.
+    fn standalone_help(&self) -> StandaloneHelp;
+}
+
+impl<B: TypedBoard> BoardParts for B {
+    fn params(&self, spec: &DriverSpec) -> Result<Vec<Param>, SpecError> {
+        B::Config::from_spec(spec).map(|config| config.params(spec))
+    }
+
+    fn simulate_standalone(&self, options: &StandaloneSim) -> Result<SimBoard, StandaloneError> {
+        B::SIMULATE_STANDALONE(options)
+    }
+
+    fn standalone_help(&self) -> StandaloneHelp {
+        B::STANDALONE_HELP
+    }
 }
 
 /// A value a board's key gives for a general fact, with where it was written (a board key
@@ -160,7 +213,7 @@ pub struct AddressKey {
 
 /// One board model, as the server knows it. Implemented once per board crate; the
 /// registry (`motion_boards::BOARDS`) lists every implementation.
-pub trait Board: Sync + fmt::Debug {
+pub trait Board: BoardParts + Sync + fmt::Debug {
     /// The model (its id, contract code and link kind).
     fn model(&self) -> Model;
 
@@ -195,20 +248,6 @@ pub trait Board: Sync + fmt::Debug {
         let _ = machine;
         self.model().id()
     }
-
-    /// The driver of the device `spec` describes (spec → driver config → driver).
-    ///
-    /// # Errors
-    /// A value of the spec the board cannot take (the config validator refuses such
-    /// values first, with file, line and column).
-    fn build(&self, spec: &DriverSpec) -> Result<Box<dyn Driver>, SpecError>;
-
-    /// One [`Param`] per machine parameter of the device `spec` describes and of its axes,
-    /// with the value in effect.
-    ///
-    /// # Errors
-    /// As [`build`](Self::build).
-    fn params(&self, spec: &DriverSpec) -> Result<Vec<Param>, SpecError>;
 
     /// The simulated board of the device `spec` describes, configured like the machine
     /// (switches where its axes search, the variant, the address), seeded with `seed`.
@@ -269,14 +308,4 @@ pub trait Board: Sync + fmt::Debug {
     fn cross_check(&self, machine: &MachineView<'_>, issues: &mut dyn KeyIssues) {
         let _ = (machine, issues);
     }
-
-    /// The simulated board the `motion-sim` tool serves alone, from its command-line
-    /// `options` (no config file).
-    ///
-    /// # Errors
-    /// An option the board does not have, or a value of one it cannot take.
-    fn simulate_standalone(&self, options: &StandaloneSim) -> Result<SimBoard, StandaloneError>;
-
-    /// Its part of `motion-sim --help`.
-    fn standalone_help(&self) -> StandaloneHelp;
 }

@@ -7,6 +7,7 @@ use board_spimotor::SpimotorDeviceKeys;
 use board_spimotor::driver::SpimotorDriverConfig;
 use board_tmcpack::driver::TmcpackDriverConfig;
 use board_tmcpack::{TmcpackAxisKeys, TmcpackDeviceKeys};
+use motion_drivers::spec::FromSpec as _;
 use motion_drivers::spec::{
     AxisMachine, BusPeer, DeviceMachine, Direction, DriverAxis, DriverSignal, DriverSpec, HomeSpec,
     MachineKeys,

@@ -264,6 +264,7 @@ mod tests {
 
     use board_qsb::driver::{CaptureInput, EnableOutput, QsbDriverConfig};
     use motion_drivers::Pin;
+    use motion_drivers::spec::FromSpec as _;
     use motion_ipc::{DeviceInfo, write_text};
 
     use super::*;

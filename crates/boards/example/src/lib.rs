@@ -32,8 +32,8 @@ use motion_base::{LinkKind, Model, ModelFacts};
 use motion_board::{
     Board, LinkFacts, SimBoard, StandaloneError, StandaloneHelp, StandaloneSim, TypedBoard,
 };
-use motion_drivers::spec::{DeviceMachine, DriverSpec, Param, SpecError};
-use motion_drivers::{Driver, PinInfo};
+use motion_drivers::PinInfo;
+use motion_drivers::spec::{DeviceMachine, DriverSpec};
 
 use driver::{DEFAULT_BAUD, ExampleDriver, ExampleDriverConfig};
 use sim::{ExampleSim, ExampleSimConfig};
@@ -81,14 +81,6 @@ impl Board for ExampleBoard {
         Some("the AS-2 has no reference input (README: no home command), so its axes cannot home")
     }
 
-    fn build(&self, spec: &DriverSpec) -> Result<Box<dyn Driver>, SpecError> {
-        Ok(Box::new(self.driver(spec)?))
-    }
-
-    fn params(&self, spec: &DriverSpec) -> Result<Vec<Param>, SpecError> {
-        ExampleDriverConfig::from_spec(spec).map(|config| config.params(spec))
-    }
-
     fn simulate(&self, _spec: &DriverSpec, seed: u64) -> SimBoard {
         SimBoard::Stream(Box::new(ExampleSim::new(ExampleSimConfig {
             jitter: core::time::Duration::from_micros(100),
@@ -96,20 +88,13 @@ impl Board for ExampleBoard {
             ..ExampleSimConfig::default()
         })))
     }
-
-    fn simulate_standalone(&self, options: &StandaloneSim) -> Result<SimBoard, StandaloneError> {
-        standalone::simulate(options)
-    }
-
-    fn standalone_help(&self) -> StandaloneHelp {
-        standalone::HELP
-    }
 }
 
 impl TypedBoard for ExampleBoard {
+    type Config = ExampleDriverConfig;
     type Driver = ExampleDriver;
-
-    fn driver(&self, spec: &DriverSpec) -> Result<ExampleDriver, SpecError> {
-        Ok(ExampleDriver::new(ExampleDriverConfig::from_spec(spec)?))
-    }
+    const NEW_DRIVER: fn(ExampleDriverConfig) -> ExampleDriver = ExampleDriver::new;
+    const STANDALONE_HELP: StandaloneHelp = standalone::HELP;
+    const SIMULATE_STANDALONE: fn(&StandaloneSim) -> Result<SimBoard, StandaloneError> =
+        standalone::simulate;
 }

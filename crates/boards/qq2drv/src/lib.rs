@@ -18,8 +18,8 @@ use motion_board::{
     AxisKeys, Board, DeviceKeys, LinkFacts, SimBoard, StandaloneError, StandaloneHelp,
     StandaloneSim, TypedBoard,
 };
-use motion_drivers::spec::{DeviceMachine, DriverSpec, MachineKeys, Param, SpecError};
-use motion_drivers::{Driver, Model, PinInfo};
+use motion_drivers::spec::{DeviceMachine, DriverSpec, MachineKeys};
+use motion_drivers::{Model, PinInfo};
 
 use driver::{PINS, Qq2drvDriver, Qq2drvDriverConfig};
 pub use machine_keys::{PidKeys, Qq2drvAxisKeys, Qq2drvDeviceKeys};
@@ -48,14 +48,6 @@ impl Board for Qq2drvBoard {
 
     fn pins(&self, _machine: &DeviceMachine) -> &'static [PinInfo] {
         PINS
-    }
-
-    fn build(&self, spec: &DriverSpec) -> Result<Box<dyn Driver>, SpecError> {
-        Ok(Box::new(self.driver(spec)?))
-    }
-
-    fn params(&self, spec: &DriverSpec) -> Result<Vec<Param>, SpecError> {
-        Qq2drvDriverConfig::from_spec(spec).map(|config| config.params(spec))
     }
 
     fn device_key_names(&self) -> &'static [&'static str] {
@@ -92,20 +84,13 @@ impl Board for Qq2drvBoard {
     fn simulate(&self, spec: &DriverSpec, seed: u64) -> SimBoard {
         SimBoard::Spi(Box::new(sim::machine::model(spec, seed)))
     }
-
-    fn simulate_standalone(&self, options: &StandaloneSim) -> Result<SimBoard, StandaloneError> {
-        standalone::simulate(options)
-    }
-
-    fn standalone_help(&self) -> StandaloneHelp {
-        standalone::HELP
-    }
 }
 
 impl TypedBoard for Qq2drvBoard {
+    type Config = Qq2drvDriverConfig;
     type Driver = Qq2drvDriver;
-
-    fn driver(&self, spec: &DriverSpec) -> Result<Qq2drvDriver, SpecError> {
-        Ok(Qq2drvDriver::new(Qq2drvDriverConfig::from_spec(spec)?))
-    }
+    const NEW_DRIVER: fn(Qq2drvDriverConfig) -> Qq2drvDriver = Qq2drvDriver::new;
+    const STANDALONE_HELP: StandaloneHelp = standalone::HELP;
+    const SIMULATE_STANDALONE: fn(&StandaloneSim) -> Result<SimBoard, StandaloneError> =
+        standalone::simulate;
 }

@@ -22,8 +22,8 @@ use motion_board::{
     Board, DeviceKeys, LinkFacts, SimBoard, StandaloneError, StandaloneHelp, StandaloneSim,
     TypedBoard,
 };
-use motion_drivers::spec::{DeviceMachine, DriverSpec, Param, SpecError};
-use motion_drivers::{Driver, Model, PinInfo};
+use motion_drivers::spec::{DeviceMachine, DriverSpec};
+use motion_drivers::{Model, PinInfo};
 
 use driver::{QsbDriver, QsbDriverConfig, pins};
 pub use machine_keys::{QsbDeviceKeys, QsbInputMode, QsbVariant, TriggerSources};
@@ -79,14 +79,6 @@ impl Board for QsbBoard {
         keys::cross_check(issues, machine);
     }
 
-    fn build(&self, spec: &DriverSpec) -> Result<Box<dyn Driver>, SpecError> {
-        Ok(Box::new(self.driver(spec)?))
-    }
-
-    fn params(&self, spec: &DriverSpec) -> Result<Vec<Param>, SpecError> {
-        QsbDriverConfig::from_spec(spec).map(|config| config.params(spec))
-    }
-
     /// The variant, the encoder's counts per motor step (in the configured `count_mode`),
     /// and the external stepper driver's
     /// enable line where `enable_output` says it is wired. (The index is the encoder's,
@@ -123,20 +115,13 @@ impl Board for QsbBoard {
             ..QsbSimConfig::default()
         })))
     }
-
-    fn simulate_standalone(&self, options: &StandaloneSim) -> Result<SimBoard, StandaloneError> {
-        standalone::simulate(options)
-    }
-
-    fn standalone_help(&self) -> StandaloneHelp {
-        standalone::HELP
-    }
 }
 
 impl TypedBoard for QsbBoard {
+    type Config = QsbDriverConfig;
     type Driver = QsbDriver;
-
-    fn driver(&self, spec: &DriverSpec) -> Result<QsbDriver, SpecError> {
-        Ok(QsbDriver::new(QsbDriverConfig::from_spec(spec)?))
-    }
+    const NEW_DRIVER: fn(QsbDriverConfig) -> QsbDriver = QsbDriver::new;
+    const STANDALONE_HELP: StandaloneHelp = standalone::HELP;
+    const SIMULATE_STANDALONE: fn(&StandaloneSim) -> Result<SimBoard, StandaloneError> =
+        standalone::simulate;
 }

@@ -17,8 +17,8 @@ use motion_board::{
     AddressKey, Board, DeviceKeys, LinkFacts, SimBoard, StandaloneError, StandaloneHelp,
     StandaloneSim, TypedBoard,
 };
-use motion_drivers::spec::{DeviceMachine, DriverSpec, Param, SpecError};
-use motion_drivers::{Driver, Model, PinInfo};
+use motion_drivers::spec::{DeviceMachine, DriverSpec};
+use motion_drivers::{Model, PinInfo};
 
 use driver::{PINS, SpimotorDriver, SpimotorDriverConfig};
 pub use machine_keys::{SpiDrive, SpimotorDeviceKeys};
@@ -51,14 +51,6 @@ impl Board for SpimotorBoard {
 
     fn pins(&self, _machine: &DeviceMachine) -> &'static [PinInfo] {
         PINS
-    }
-
-    fn build(&self, spec: &DriverSpec) -> Result<Box<dyn Driver>, SpecError> {
-        Ok(Box::new(self.driver(spec)?))
-    }
-
-    fn params(&self, spec: &DriverSpec) -> Result<Vec<Param>, SpecError> {
-        SpimotorDriverConfig::from_spec(spec).map(|config| config.params(spec))
     }
 
     fn device_key_names(&self) -> &'static [&'static str] {
@@ -96,20 +88,13 @@ impl Board for SpimotorBoard {
             ..SpimotorSimConfig::default()
         })))
     }
-
-    fn simulate_standalone(&self, options: &StandaloneSim) -> Result<SimBoard, StandaloneError> {
-        standalone::simulate(options)
-    }
-
-    fn standalone_help(&self) -> StandaloneHelp {
-        standalone::HELP
-    }
 }
 
 impl TypedBoard for SpimotorBoard {
+    type Config = SpimotorDriverConfig;
     type Driver = SpimotorDriver;
-
-    fn driver(&self, spec: &DriverSpec) -> Result<SpimotorDriver, SpecError> {
-        Ok(SpimotorDriver::new(SpimotorDriverConfig::from_spec(spec)?))
-    }
+    const NEW_DRIVER: fn(SpimotorDriverConfig) -> SpimotorDriver = SpimotorDriver::new;
+    const STANDALONE_HELP: StandaloneHelp = standalone::HELP;
+    const SIMULATE_STANDALONE: fn(&StandaloneSim) -> Result<SimBoard, StandaloneError> =
+        standalone::simulate;
 }

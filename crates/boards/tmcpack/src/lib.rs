@@ -20,8 +20,8 @@ use motion_board::{
     AddressKey, AxisKeys, Board, CanFacts, DeviceKeys, LinkFacts, SimBoard, StandaloneError,
     StandaloneHelp, StandaloneSim, TypedBoard,
 };
-use motion_drivers::spec::{DeviceMachine, DriverSpec, MachineKeys, Param, SpecError};
-use motion_drivers::{Driver, Model, PinInfo};
+use motion_drivers::spec::{DeviceMachine, DriverSpec, MachineKeys};
+use motion_drivers::{Model, PinInfo};
 
 use driver::{TmcpackDriver, TmcpackDriverConfig, pins};
 pub use machine_keys::{
@@ -113,14 +113,6 @@ impl Board for TmcpackBoard {
         keys::cross_check(issues, machine);
     }
 
-    fn build(&self, spec: &DriverSpec) -> Result<Box<dyn Driver>, SpecError> {
-        Ok(Box::new(self.driver(spec)?))
-    }
-
-    fn params(&self, spec: &DriverSpec) -> Result<Vec<Param>, SpecError> {
-        TmcpackDriverConfig::from_spec(spec).map(|config| config.params(spec))
-    }
-
     fn simulate(&self, spec: &DriverSpec, seed: u64) -> SimBoard {
         SimBoard::Stream(Box::new(sim::machine::model(spec, seed)))
     }
@@ -132,20 +124,13 @@ impl Board for TmcpackBoard {
     ) -> Option<Box<dyn motion_link::sim::CanDevice>> {
         Some(Box::new(sim::machine::model(spec, seed)))
     }
-
-    fn simulate_standalone(&self, options: &StandaloneSim) -> Result<SimBoard, StandaloneError> {
-        standalone::simulate(options)
-    }
-
-    fn standalone_help(&self) -> StandaloneHelp {
-        standalone::HELP
-    }
 }
 
 impl TypedBoard for TmcpackBoard {
+    type Config = TmcpackDriverConfig;
     type Driver = TmcpackDriver;
-
-    fn driver(&self, spec: &DriverSpec) -> Result<TmcpackDriver, SpecError> {
-        Ok(TmcpackDriver::new(TmcpackDriverConfig::from_spec(spec)?))
-    }
+    const NEW_DRIVER: fn(TmcpackDriverConfig) -> TmcpackDriver = TmcpackDriver::new;
+    const STANDALONE_HELP: StandaloneHelp = standalone::HELP;
+    const SIMULATE_STANDALONE: fn(&StandaloneSim) -> Result<SimBoard, StandaloneError> =
+        standalone::simulate;
 }

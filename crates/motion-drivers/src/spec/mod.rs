@@ -147,6 +147,23 @@ pub struct BusPeer {
     pub machine: DeviceMachine,
 }
 
+/// A board driver's configuration made from the neutral description: one per board crate
+/// (`<Board>DriverConfig`), where every driver starts — its unit conversions and protocol
+/// encodings, and the machine parameters it reports.
+pub trait FromSpec: Sized {
+    /// The configuration of the device `spec` describes.
+    ///
+    /// # Errors
+    /// A value of the spec the board cannot take (the config validator refuses such values
+    /// first, with file, line and column), naming its key.
+    fn from_spec(spec: &DriverSpec) -> Result<Self, SpecError>;
+
+    /// One [`Param`] per machine parameter of the device and of its axes, with the value
+    /// in effect.
+    #[must_use]
+    fn params(&self, spec: &DriverSpec) -> Vec<Param>;
+}
+
 /// One `[[device]]` as a driver needs it (see the module docs).
 #[derive(Debug, Clone, PartialEq)]
 pub struct DriverSpec {

@@ -3,6 +3,7 @@
 //! and a simulated pack built from the config that has its switch where the config says.
 
 use core::time::Duration;
+use motion_drivers::spec::FromSpec as _;
 use std::path::Path;
 use std::sync::{Arc, Mutex};
 

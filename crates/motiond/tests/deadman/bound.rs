@@ -8,6 +8,7 @@
 
 use core::fmt;
 use core::time::Duration;
+use motion_drivers::spec::FromSpec as _;
 
 use board_qq2drv::driver::Qq2drvDriverConfig;
 use board_qsb::driver::QsbDriverConfig;

@@ -6,7 +6,7 @@
 use core::time::Duration;
 
 pub use motion_drivers::spec::AxisLimits;
-use motion_drivers::spec::{DriverSpec, Param, ParamOwner, SpecError};
+use motion_drivers::spec::{DriverSpec, FromSpec, Param, ParamOwner, SpecError};
 
 use crate::codec::{CHANNELS, MAX_ACCEL, MAX_SPEED};
 
@@ -71,13 +71,24 @@ fn board_rate(
 }
 
 impl ExampleDriverConfig {
+    /// How long a reply may take: the wire time of the longest request and reply at the
+    /// link's baud (10 bits a byte), and a margin for the board and the host.
+    #[must_use]
+    pub fn reply_timeout(&self) -> Duration {
+        let bits = 2 * crate::codec::MAX_LINE as u64 * 10;
+        let wire = Duration::from_micros(bits * 1_000_000 / u64::from(self.baud.max(1)));
+        wire + super::REPLY_MARGIN
+    }
+}
+
+impl FromSpec for ExampleDriverConfig {
     /// The driver configuration of the AS-2 `spec` describes.
     ///
     /// # Errors
     /// An axis on a channel other than 0 and 1, or whose `max_velocity` or `max_accel`
     /// (times `|counts_per_unit|`) is outside what the board runs (1..=50 000 steps/s,
     /// 1..=1 000 000 steps/s²).
-    pub fn from_spec(spec: &DriverSpec) -> Result<Self, SpecError> {
+    fn from_spec(spec: &DriverSpec) -> Result<Self, SpecError> {
         let mut config = Self {
             baud: spec.line_rate.unwrap_or(DEFAULT_BAUD),
             polled: [false; CHANNELS],
@@ -116,8 +127,7 @@ impl ExampleDriverConfig {
 
     /// What the driver makes of each axis's limits: the speed and acceleration of its
     /// `Position` moves (`M<ch> <target> <speed> <accel>`), in steps.
-    #[must_use]
-    pub fn params(&self, spec: &DriverSpec) -> Vec<Param> {
+    fn params(&self, spec: &DriverSpec) -> Vec<Param> {
         let mut params = Vec::new();
         for (index, axis) in spec.axes.iter().enumerate() {
             let Some(limits) = self.limits.get(axis.channel) else {
@@ -135,14 +145,5 @@ impl ExampleDriverConfig {
             });
         }
         params
-    }
-
-    /// How long a reply may take: the wire time of the longest request and reply at the
-    /// link's baud (10 bits a byte), and a margin for the board and the host.
-    #[must_use]
-    pub fn reply_timeout(&self) -> Duration {
-        let bits = 2 * crate::codec::MAX_LINE as u64 * 10;
-        let wire = Duration::from_micros(bits * 1_000_000 / u64::from(self.baud.max(1)));
-        wire + super::REPLY_MARGIN
     }
 }

@@ -8,7 +8,9 @@ use qq2drv::limits::POWER_LIMIT_MAX;
 
 use super::{HomeInput, PINS_PER_CHANNEL, PositionPid, Qq2drvDriverConfig, VelocityPid};
 use crate::{Qq2drvAxisKeys, Qq2drvDeviceKeys};
-use motion_drivers::spec::{Direction, DriverSpec, HomeInputKind, Param, ParamOwner, SpecError};
+use motion_drivers::spec::{
+    Direction, DriverSpec, FromSpec, HomeInputKind, Param, ParamOwner, SpecError,
+};
 use qq2drv::limits::VelocityRampSign;
 
 /// The machine keys of the axis on `channel`, if one drives it, with its index in
@@ -28,11 +30,11 @@ pub(crate) fn power_limit_counts(fraction: f64) -> u16 {
     counts as u16
 }
 
-impl Qq2drvDriverConfig {
+impl FromSpec for Qq2drvDriverConfig {
     /// The driver configuration of the qq2drv device `spec` describes: its link's clock,
     /// each channel's axis limits, PID constants, power limit and home input, and the pins
     /// its signals read.
-    pub fn from_spec(spec: &DriverSpec) -> Result<Self, SpecError> {
+    fn from_spec(spec: &DriverSpec) -> Result<Self, SpecError> {
         let mut driver = Self::default();
         if let Some(speed) = spec.line_rate {
             driver.speed_hz = speed;
@@ -104,7 +106,7 @@ impl Qq2drvDriverConfig {
     /// The machine parameters of the device's axes, as the driver uses them: per axis the
     /// PID constants (packets 30, 32), the power limit (packet 24) and the home input
     /// (packet 14); for the device, how it reads packet 36 (`velocity_ramp`).
-    pub fn params(&self, spec: &DriverSpec) -> Vec<Param> {
+    fn params(&self, spec: &DriverSpec) -> Vec<Param> {
         let mut out = Vec::new();
         let reading = self
             .channels

@@ -12,7 +12,9 @@ use super::{
 };
 use crate::{QsbDeviceKeys, QsbInputMode, QsbVariant};
 use motion_drivers::Pin;
-use motion_drivers::spec::{Direction, DriverAxis, DriverSpec, Param, ParamOwner, SpecError};
+use motion_drivers::spec::{
+    Direction, DriverAxis, DriverSpec, FromSpec, Param, ParamOwner, SpecError,
+};
 
 /// One data output tick (INTERVAL RATE's unit): 1/512 s.
 pub const TICK: Duration = ::qsb::TICK;
@@ -103,10 +105,10 @@ fn number(value: f64) -> String {
     format!("{value}")
 }
 
-impl QsbDriverConfig {
+impl FromSpec for QsbDriverConfig {
     /// The driver config of the qsb device `spec` describes: the link's baud, the axis's
     /// limits and home, the machine keys, the signals.
-    pub fn from_spec(spec: &DriverSpec) -> Result<Self, SpecError> {
+    fn from_spec(spec: &DriverSpec) -> Result<Self, SpecError> {
         let keys = keys_of(spec);
         let variant = ProductType::from(keys.variant);
         let mut driver = Self {
@@ -170,7 +172,7 @@ impl QsbDriverConfig {
     }
 
     /// The machine parameters of the device, as the driver uses them.
-    pub fn params(&self, spec: &DriverSpec) -> Vec<Param> {
+    fn params(&self, spec: &DriverSpec) -> Vec<Param> {
         let mut out = Vec::new();
         let mut row = |key: &'static str, value: String| {
             out.push(Param {

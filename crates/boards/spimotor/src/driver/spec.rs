@@ -6,7 +6,7 @@ use spimotor::{Address, Coils};
 
 use super::{SpimotorDrive, SpimotorDriverConfig};
 use crate::{SpiDrive, SpimotorDeviceKeys};
-use motion_drivers::spec::{DriverSpec, Param, ParamOwner, SpecError};
+use motion_drivers::spec::{DriverSpec, FromSpec, Param, ParamOwner, SpecError};
 
 impl From<SpiDrive> for SpimotorDrive {
     fn from(drive: SpiDrive) -> Self {
@@ -17,10 +17,10 @@ impl From<SpiDrive> for SpimotorDrive {
     }
 }
 
-impl SpimotorDriverConfig {
+impl FromSpec for SpimotorDriverConfig {
     /// The driver configuration of the spimotor device `spec` describes: address, drive,
     /// its link's clock, the axis limits and (stepper) the drive intensity and coils.
-    pub fn from_spec(spec: &DriverSpec) -> Result<Self, SpecError> {
+    fn from_spec(spec: &DriverSpec) -> Result<Self, SpecError> {
         let address = Address::new(spec.address as u8).map_err(|_| SpecError {
             channel: None,
             key: "address",
@@ -61,7 +61,7 @@ impl SpimotorDriverConfig {
 
     /// The machine parameters of the device, as the driver uses them: `silence_ms`, and a
     /// stepper board's `intensity` (port 0x10) and `coils` (port 0x44).
-    pub fn params(&self, spec: &DriverSpec) -> Vec<Param> {
+    fn params(&self, spec: &DriverSpec) -> Vec<Param> {
         let silence = Param {
             owner: ParamOwner::Device,
             key: "silence_ms",

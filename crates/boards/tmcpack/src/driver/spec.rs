@@ -18,7 +18,8 @@ use super::{
 };
 use crate::{PackVariant, TmcpackAxisKeys, TmcpackDeviceKeys};
 use motion_drivers::spec::{
-    DeviceMachine, Direction, DriverAxis, DriverSignal, DriverSpec, Param, ParamOwner, SpecError,
+    DeviceMachine, Direction, DriverAxis, DriverSignal, DriverSpec, FromSpec, Param, ParamOwner,
+    SpecError,
 };
 use motion_drivers::{Model, SignalKind};
 
@@ -218,11 +219,11 @@ fn mask_list(mask: MotorMask) -> String {
     format!("[{}]", motors.join(", "))
 }
 
-impl TmcpackDriverConfig {
+impl FromSpec for TmcpackDriverConfig {
     /// The driver config of the tmcpack device `spec` describes, and of the packs sharing
     /// its link: every pack on a link shares its polling budget (axes and input polls) and
     /// frames every word on it (the longest packet timeout spaces the words).
-    pub fn from_spec(spec: &DriverSpec) -> Result<Self, SpecError> {
+    fn from_spec(spec: &DriverSpec) -> Result<Self, SpecError> {
         let keys = device_keys(&spec.machine);
         let mut driver = Self {
             address: spec.address as u8,
@@ -297,7 +298,7 @@ impl TmcpackDriverConfig {
     }
 
     /// The machine parameters of the pack and its axes, as the driver uses them.
-    pub fn params(&self, spec: &DriverSpec) -> Vec<Param> {
+    fn params(&self, spec: &DriverSpec) -> Vec<Param> {
         let mut out = Vec::new();
         let mut row = |owner: ParamOwner, key: &'static str, value: String| {
             out.push(Param { owner, key, value });

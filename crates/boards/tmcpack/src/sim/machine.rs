@@ -6,6 +6,7 @@
 use super::{MotorConfig, RefSwitch, TmcpackSim, TmcpackSimConfig};
 use crate::driver::TmcpackDriverConfig;
 use motion_drivers::spec::DriverSpec;
+use motion_drivers::spec::FromSpec as _;
 
 /// Width of a simulated reference switch: one unit, at least 64 microsteps (4 full steps).
 fn switch_width(counts_per_unit: f64) -> i64 {
