@@ -154,6 +154,29 @@ impl dyn KeyIssues + '_ {
         Some(core::time::Duration::from_millis(ms))
     }
 
+    /// `host_latency_ms` (every board that has it: how much later than on the wire an
+    /// answer may reach the driver), checked against
+    /// [`HOST_LATENCY_RANGE_MS`](motion_drivers::HOST_LATENCY_RANGE_MS); milliseconds.
+    pub fn host_latency_ms(&mut self, value: &Spanned<f64>, key: &str) -> Option<f64> {
+        let ms = *value.get_ref();
+        if ms.is_finite() && motion_drivers::HOST_LATENCY_RANGE_MS.contains(&ms) {
+            return Some(ms);
+        }
+        let range = motion_drivers::HOST_LATENCY_RANGE_MS;
+        self.issue(
+            value.span(),
+            key,
+            format!(
+                "{ms} is out of range; allowed: {}..={} ms (how much later than on the wire an \
+                 answer may reach the driver: the serial adapter and the I/O thread; default {})",
+                range.start(),
+                range.end(),
+                motion_drivers::DEFAULT_HOST_LATENCY.as_millis()
+            ),
+        );
+        None
+    }
+
     /// What `allowed` pairs with the name `value` gives; otherwise an issue
     /// `unknown {what} "…"; allowed: {listed}` (`listed`: the names, and what each means).
     pub fn one_of<T: Copy>(

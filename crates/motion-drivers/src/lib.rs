@@ -51,7 +51,7 @@ pub use late::{LATE_ANSWERS, LATE_PREFIX_LEN, LateAnswer};
 pub use motion_base::LinkKind;
 pub use motion_base::{CanRecord, LinkFraming};
 pub use pin::{Pin, PinInfo, PinReading, SignalKind, SignalKinds, find_pin};
-pub use silence::{DEFAULT_SILENCE, SILENCE_RANGE_MS};
+pub use silence::{DEFAULT_HOST_LATENCY, DEFAULT_SILENCE, HOST_LATENCY_RANGE_MS, SILENCE_RANGE_MS};
 pub use stamps::IoStamps;
 pub use state::{
     ChannelState, DeviceFault, DeviceStatus, EVIDENCE_LEN, FIRMWARE_LEN, Seconds, Verdict,

@@ -104,7 +104,7 @@ impl Default for QsbDriverConfig {
             variant: ProductType::M,
             baud: 230_400,
             stream_interval: None,
-            latency: Duration::from_millis(5),
+            latency: motion_drivers::DEFAULT_HOST_LATENCY,
             silence: DEFAULT_SILENCE,
             counts_per_step: 10.0,
             max_velocity: 10_000.0,

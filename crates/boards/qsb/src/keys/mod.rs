@@ -115,16 +115,9 @@ pub(crate) fn device_keys(
         keys.stream_interval_ticks = stream_interval(v, value, &ctx.key("stream_interval_ms"));
     }
     if let Some(value) = &raw.host_latency_ms {
-        let ms = *value.get_ref();
-        if ms.is_finite() && (0.0..=1000.0).contains(&ms) {
-            keys.host_latency = Some(Duration::from_secs_f64(ms / 1000.0));
-        } else {
-            v.issue(
-                value.span(),
-                &ctx.key("host_latency_ms"),
-                format!("{ms} is out of range; allowed: 0..=1000 ms (the USB/serial latency the driver allows on top of the wire time; default 5)"),
-            );
-        }
+        keys.host_latency = v
+            .host_latency_ms(value, &ctx.key("host_latency_ms"))
+            .map(|ms| Duration::from_secs_f64(ms / 1000.0));
     }
     if let Some(value) = &raw.silence_ms {
         keys.silence = v.silence_ms(value, &ctx.key("silence_ms"));

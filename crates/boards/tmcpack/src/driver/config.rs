@@ -30,8 +30,9 @@ pub const DEFAULT_SWITCHOVER_UNITS: u16 = 1;
 /// What the host adds to an exchange by default, both ways (key `host_latency_ms`): a USB
 /// serial adapter takes a request to the wire and hands received bytes over in 1 ms frames
 /// (and holds them up to its latency timer, 1 ms when set low, FTDI's factory 16 ms), the
-/// link's I/O thread wakes for them, the tick takes them in. The same figure as the QSB's.
-pub const DEFAULT_HOST_LATENCY: Duration = Duration::from_millis(5);
+/// link's I/O thread wakes for them, the tick takes them in. The same figure as the QSB's: one fact,
+/// `motion_drivers::DEFAULT_HOST_LATENCY`.
+pub const DEFAULT_HOST_LATENCY: Duration = motion_drivers::DEFAULT_HOST_LATENCY;
 
 /// Slack of the default $41 packet timeout beyond one word's wire time: two byte times (a
 /// host or adapter may pause between the bytes of one write).

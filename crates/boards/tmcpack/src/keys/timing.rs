@@ -9,10 +9,6 @@ use motion_board::keys::{DeviceContext, KeyIssues};
 
 use super::raw::RawDevice;
 use crate::TmcpackDeviceKeys;
-use crate::driver::DEFAULT_HOST_LATENCY;
-
-/// `host_latency_ms`: 0..=1000 ms.
-const HOST_LATENCY_MS: core::ops::RangeInclusive<f64> = 0.0..=1000.0;
 
 /// Validates `host_latency_ms` and `silence_ms` into `keys`; `false` on an issue.
 pub(crate) fn device_keys(
@@ -23,19 +19,9 @@ pub(crate) fn device_keys(
 ) -> bool {
     let mut ok = true;
     if let Some(value) = &raw.host_latency_ms {
-        let ms = *value.get_ref();
-        if ms.is_finite() && HOST_LATENCY_MS.contains(&ms) {
-            keys.host_latency_ms = Some(ms);
-        } else {
-            v.issue(
-                value.span(),
-                &ctx.key("host_latency_ms"),
-                format!(
-                    "{ms} is out of range; allowed: 0..=1000 ms (how much later than on the wire an answer may reach the driver: the serial adapter and the I/O thread; default {})",
-                    DEFAULT_HOST_LATENCY.as_millis()
-                ),
-            );
-            ok = false;
+        match v.host_latency_ms(value, &ctx.key("host_latency_ms")) {
+            Some(ms) => keys.host_latency_ms = Some(ms),
+            None => ok = false,
         }
     }
     if let Some(value) = &raw.silence_ms {
