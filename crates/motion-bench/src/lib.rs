@@ -49,7 +49,7 @@
 //! }
 //! ```
 #![warn(missing_docs)]
-#![deny(unsafe_code)] // one exception: rt.rs (sched_setscheduler), with a SAFETY note
+#![deny(unsafe_code)] // one exception: pty.rs (the FIONREAD ioctl), with a SAFETY note
 
 pub mod args;
 pub mod arrival;

@@ -1,33 +1,18 @@
 //! The monotonic clock and the real-time knobs the bench applies to its own threads, the
-//! same ones motiond applies to its tick thread (crates/motiond/src/rt.rs).
-#![allow(unsafe_code)] // sched_setscheduler has no safe wrapper in nix; see the SAFETY note
+//! same ones motiond applies to its tick thread (crate motion-rt).
 
-use std::fs::File;
-use std::io::Write;
+use core::time::Duration;
 
-use nix::sys::time::TimeSpec;
-use nix::time::{ClockId, ClockNanosleepFlags, clock_gettime, clock_nanosleep};
+use motion_rt::{monotonic_now, pin_to, set_fifo, set_timer_slack, sleep_until};
 
 /// CLOCK_MONOTONIC now, in ns (the clock of `MotionFrame::publish_ns` and `time_ns`).
 pub fn now_ns() -> u64 {
-    clock_gettime(ClockId::CLOCK_MONOTONIC).map_or(0, |t| {
-        (t.tv_sec() as u64)
-            .saturating_mul(1_000_000_000)
-            .saturating_add(t.tv_nsec() as u64)
-    })
+    u64::try_from(monotonic_now().as_nanos()).unwrap_or(u64::MAX)
 }
 
 /// Sleeps until the absolute CLOCK_MONOTONIC instant `deadline_ns` (TIMER_ABSTIME).
 pub fn sleep_until_ns(deadline_ns: u64) {
-    let target = TimeSpec::new(
-        (deadline_ns / 1_000_000_000) as libc::time_t,
-        (deadline_ns % 1_000_000_000) as libc::c_long,
-    );
-    while let Err(nix::errno::Errno::EINTR) = clock_nanosleep(
-        ClockId::CLOCK_MONOTONIC,
-        ClockNanosleepFlags::TIMER_ABSTIME,
-        &target,
-    ) {}
+    sleep_until(Duration::from_nanos(deadline_ns));
 }
 
 /// What a thread's set-up achieved, one line for the report.
@@ -76,65 +61,37 @@ pub fn board_priority() -> Option<u8> {
 /// to the calling thread.
 pub fn set_up_thread(priority: Option<u8>, cpu: Option<usize>) -> ThreadSetup {
     let mut setup = ThreadSetup::default();
-    match nix::sys::prctl::set_timerslack(1) {
+    match set_timer_slack() {
         Ok(()) => setup.applied.push("slack 1ns".to_owned()),
-        Err(e) => setup.problems.push(format!("PR_SET_TIMERSLACK: {e}")),
+        Err(e) => setup.problems.push(e.to_string()),
     }
     if let Some(priority) = priority {
         match set_fifo(priority) {
             Ok(()) => setup.applied.insert(0, format!("SCHED_FIFO {priority}")),
-            Err(e) => setup.problems.push(e),
+            Err(e) => setup.problems.push(e.to_string()),
         }
     }
     if let Some(cpu) = cpu {
         match pin_to(cpu) {
             Ok(()) => setup.applied.push(format!("cpu {cpu}")),
-            Err(e) => setup.problems.push(e),
+            Err(e) => setup.problems.push(e.to_string()),
         }
     }
     setup
 }
 
-fn set_fifo(priority: u8) -> Result<(), String> {
-    let param = libc::sched_param {
-        sched_priority: i32::from(priority),
-    };
-    // SAFETY: `param` is a valid, initialised sched_param that outlives the call; pid 0 is
-    // the calling thread; the call only reads `param`.
-    let result = unsafe { libc::sched_setscheduler(0, libc::SCHED_FIFO, &param) };
-    if result == 0 {
-        Ok(())
-    } else {
-        Err(format!(
-            "SCHED_FIFO {priority}: {} (needs CAP_SYS_NICE or an rtprio limit)",
-            std::io::Error::last_os_error()
-        ))
-    }
-}
-
-fn pin_to(cpu: usize) -> Result<(), String> {
-    let mut set = nix::sched::CpuSet::new();
-    set.set(cpu).map_err(|e| format!("cpu {cpu}: {e}"))?;
-    nix::sched::sched_setaffinity(nix::unistd::Pid::from_raw(0), &set)
-        .map_err(|e| format!("cpu {cpu}: sched_setaffinity: {e}"))
-}
-
 /// Holds `/dev/cpu_dma_latency` at 0 while alive, as motiond and cyclictest do.
 #[derive(Debug)]
 pub struct DmaLatency {
-    _file: File,
+    _guard: motion_rt::DmaLatencyGuard,
 }
 
 impl DmaLatency {
     /// Asks for 0 µs exit latency; the error says why not (usually: not root).
     pub fn hold() -> Result<Self, String> {
-        let mut file = File::options()
-            .write(true)
-            .open("/dev/cpu_dma_latency")
-            .map_err(|e| format!("/dev/cpu_dma_latency: {e}"))?;
-        file.write_all(&0i32.to_ne_bytes())
-            .map_err(|e| format!("/dev/cpu_dma_latency: write: {e}"))?;
-        Ok(Self { _file: file })
+        motion_rt::DmaLatencyGuard::hold()
+            .map(|guard| Self { _guard: guard })
+            .map_err(|e| e.to_string())
     }
 }
 

@@ -8,11 +8,11 @@
 //! threads ask for SCHED_FIFO (as `motionctl bench --rt-priority` does for its boards),
 //! or failing that the highest nice value allowed; each sleeps between bytes, so the CPU
 //! they take is small.
-#![allow(unsafe_code)] // sched_setscheduler and setpriority have no safe wrapper in nix; see the SAFETY notes
+#![allow(unsafe_code)] // the test reads the policy back: sched_getscheduler and getpriority have no safe wrapper in nix; see the SAFETY notes
 
 /// The SCHED_FIFO priority asked for: above every normal thread, below anything a
 /// real-time configuration of the server would use.
-const FIFO_PRIORITY: i32 = 10;
+const FIFO_PRIORITY: u8 = 10;
 
 /// The nice value asked for when SCHED_FIFO is refused.
 const NICE: i32 = -10;
@@ -30,19 +30,10 @@ pub enum BoardPriority {
 
 /// Raises the calling thread's priority as far as allowed; says how far.
 pub fn raise() -> BoardPriority {
-    let param = libc::sched_param {
-        sched_priority: FIFO_PRIORITY,
-    };
-    // SAFETY: `param` is a valid, initialised sched_param that outlives the call; pid 0 is
-    // the calling thread; the call only reads `param`.
-    if unsafe { libc::sched_setscheduler(0, libc::SCHED_FIFO, &param) } == 0 {
-        return BoardPriority::Fifo(FIFO_PRIORITY);
+    if motion_rt::set_fifo(FIFO_PRIORITY).is_ok() {
+        return BoardPriority::Fifo(i32::from(FIFO_PRIORITY));
     }
-    // SAFETY: gettid has no arguments and cannot fail.
-    let tid = unsafe { libc::gettid() };
-    // SAFETY: plain integer arguments; PRIO_PROCESS with a thread id sets that thread's
-    // nice value on Linux.
-    if unsafe { libc::setpriority(libc::PRIO_PROCESS, tid as libc::id_t, NICE) } == 0 {
+    if motion_rt::set_nice(NICE).is_ok() {
         return BoardPriority::Nice(NICE);
     }
     BoardPriority::Normal
@@ -79,7 +70,7 @@ mod tests {
         // SAFETY: geteuid has no arguments and cannot fail.
         if unsafe { libc::geteuid() } == 0 {
             // Root (CAP_SYS_NICE): the first choice.
-            assert_eq!(got, BoardPriority::Fifo(FIFO_PRIORITY));
+            assert_eq!(got, BoardPriority::Fifo(i32::from(FIFO_PRIORITY)));
         }
         // The thread that asked, not the process: the test thread keeps its policy.
         assert_eq!(policy_and_nice().0, libc::SCHED_OTHER);

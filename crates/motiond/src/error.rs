@@ -26,38 +26,7 @@ use motion_config::boards::BuildError;
 use motion_config::private_dir::PrivateDirError;
 
 /// A real-time set-up step that could not be done (the server may go on without it).
-#[derive(Debug, thiserror::Error)]
-pub enum RtError {
-    /// `/dev/cpu_dma_latency` could not be opened.
-    #[error("/dev/cpu_dma_latency: {0} (needs root or a udev rule)")]
-    DmaLatencyOpen(#[source] io::Error),
-    /// `/dev/cpu_dma_latency` could not be written.
-    #[error("/dev/cpu_dma_latency: write: {0}")]
-    DmaLatencyWrite(#[source] io::Error),
-    /// `PR_SET_TIMERSLACK` failed.
-    #[error("PR_SET_TIMERSLACK: {0}")]
-    TimerSlack(#[source] nix::Error),
-    /// `sched_setscheduler(SCHED_FIFO)` failed.
-    #[error(
-        "SCHED_FIFO priority {priority}: {source} (needs CAP_SYS_NICE or `ulimit -r {priority}`)"
-    )]
-    Fifo {
-        /// The priority asked for.
-        priority: u8,
-        /// The system's answer.
-        #[source]
-        source: io::Error,
-    },
-    /// The configured core is not available to this process.
-    #[error("cpu {0}: no such core available to this process")]
-    NoSuchCpu(usize),
-    /// `sched_setaffinity` failed.
-    #[error("cpu {0}: sched_setaffinity failed")]
-    Affinity(usize),
-    /// `mlockall` failed.
-    #[error("mlockall: {0} (raise RLIMIT_MEMLOCK, e.g. `ulimit -l unlimited`, or run as root)")]
-    LockMemory(#[source] nix::Error),
-}
+pub use motion_rt::RtError;
 
 /// The iceoryx2 services of an instance could not be set up.
 #[derive(Debug, thiserror::Error)]

@@ -1,7 +1,7 @@
 //! motiond, the real-time motion server: config, links, the timed loop around
 //! `motion_engine::Engine::step`, iceoryx2 services.
 #![warn(missing_docs)]
-#![deny(unsafe_code)] // one exception: rt.rs (sched_setscheduler), with SAFETY notes
+#![deny(unsafe_code)] // one exception: estop_watch.rs (borrowing the listener's descriptor), with a SAFETY note
 
 pub mod app;
 pub mod command_port;

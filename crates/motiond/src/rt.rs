@@ -4,33 +4,12 @@
 //! pinning, `mlockall` (after the shared memory exists), `/dev/cpu_dma_latency` held at 0,
 //! and a 1 ns timer slack. Every step reports what it achieved; a missing privilege is a
 //! warning unless the operator asked for `--require-rt`.
-#![allow(unsafe_code)] // sched_setscheduler has no safe wrapper in nix; see the SAFETY notes
-
-use core::time::Duration;
-use std::fs::File;
-use std::io::Write;
-
-use nix::sys::time::TimeSpec;
-use nix::time::{ClockId, ClockNanosleepFlags, clock_gettime, clock_nanosleep};
 
 use crate::error::{RtError, StartError};
 use motion_config::ServerSettings;
-
-/// CLOCK_MONOTONIC now, as a duration since the clock's own origin.
-pub fn monotonic_now() -> Duration {
-    clock_gettime(ClockId::CLOCK_MONOTONIC).map_or(Duration::ZERO, Duration::from)
-}
-
-/// Sleeps until the absolute CLOCK_MONOTONIC instant `deadline` (TIMER_ABSTIME: no drift),
-/// resuming after signals.
-pub fn sleep_until(deadline: Duration) {
-    let target = TimeSpec::from_duration(deadline);
-    while let Err(nix::errno::Errno::EINTR) = clock_nanosleep(
-        ClockId::CLOCK_MONOTONIC,
-        ClockNanosleepFlags::TIMER_ABSTIME,
-        &target,
-    ) {}
-}
+pub use motion_rt::{
+    DmaLatencyGuard, lock_memory, monotonic_now, pin_to, set_fifo, set_timer_slack, sleep_until,
+};
 
 /// What the real-time set-up achieved.
 #[derive(Debug, Default)]
@@ -111,64 +90,9 @@ pub struct IoRt {
     pub problems: Vec<RtError>,
 }
 
-/// Keeps `/dev/cpu_dma_latency` at 0 while it lives (the kernel honours the request only as
-/// long as the file stays open).
-#[derive(Debug)]
-pub struct DmaLatencyGuard {
-    _file: File,
-}
-
-/// Asks the kernel for 0 µs wake-up latency from deep C-states.
+/// Asks the kernel for 0 µs wake-up latency from deep C-states while the guard lives.
 pub fn hold_cpu_dma_latency() -> Result<DmaLatencyGuard, RtError> {
-    let mut file = File::options()
-        .write(true)
-        .open("/dev/cpu_dma_latency")
-        .map_err(RtError::DmaLatencyOpen)?;
-    file.write_all(&0i32.to_ne_bytes())
-        .map_err(RtError::DmaLatencyWrite)?;
-    Ok(DmaLatencyGuard { _file: file })
-}
-
-/// Sets the calling thread's timer slack to 1 ns.
-pub fn set_timer_slack() -> Result<(), RtError> {
-    nix::sys::prctl::set_timerslack(1).map_err(RtError::TimerSlack)
-}
-
-/// Switches the calling thread to SCHED_FIFO at `priority`.
-pub fn set_fifo(priority: u8) -> Result<(), RtError> {
-    let param = libc::sched_param {
-        sched_priority: i32::from(priority),
-    };
-    // SAFETY: `param` is a valid, initialised sched_param that lives across the call; pid 0
-    // means the calling thread; the call only reads `param`.
-    let result = unsafe { libc::sched_setscheduler(0, libc::SCHED_FIFO, &param) };
-    if result == 0 {
-        Ok(())
-    } else {
-        Err(RtError::Fifo {
-            priority,
-            source: std::io::Error::last_os_error(),
-        })
-    }
-}
-
-/// Pins the calling thread to `cpu`.
-pub fn pin_to(cpu: usize) -> Result<(), RtError> {
-    let cores = core_affinity::get_core_ids().unwrap_or_default();
-    let Some(core) = cores.into_iter().find(|core| core.id == cpu) else {
-        return Err(RtError::NoSuchCpu(cpu));
-    };
-    if core_affinity::set_for_current(core) {
-        Ok(())
-    } else {
-        Err(RtError::Affinity(cpu))
-    }
-}
-
-/// Locks current and future memory.
-pub fn lock_memory() -> Result<(), RtError> {
-    use nix::sys::mman::{MlockAllFlags, mlockall};
-    mlockall(MlockAllFlags::MCL_CURRENT | MlockAllFlags::MCL_FUTURE).map_err(RtError::LockMemory)
+    DmaLatencyGuard::hold()
 }
 
 /// Touches `bytes` of stack so its pages are faulted in (and locked) before the loop.
@@ -251,16 +175,6 @@ pub fn set_up(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn sleep_until_an_absolute_deadline_does_not_return_early() {
-        let start = monotonic_now();
-        let deadline = start + Duration::from_millis(3);
-        sleep_until(deadline);
-        assert!(monotonic_now() >= deadline);
-        // A deadline in the past returns at once.
-        sleep_until(start);
-    }
 
     #[test]
     fn status_flags_follow_what_was_achieved() {
