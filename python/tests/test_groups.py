@@ -34,9 +34,25 @@ def positions(client: motiond.Client, group: motiond.Group) -> List[float]:
     return [frame.axis(index).position for index in group.axis_indices]
 
 
+#: Ticks the axes must stay at rest before a test starts a motion or a stream: a wheel's
+#: board PID still settling after a stop moves again for a moment (its measured speed above
+#: the QuadQuad2Drv's standstill step), and the server rightly refuses with ``GroupBusy``.
+SETTLED_TICKS = 100
+
+
 def at_rest(client: motiond.Client, group: motiond.Group) -> List[float]:
-    """Waits until the group's axes are at rest; their positions."""
+    """Waits until the group's axes are at rest and stay so for :data:`SETTLED_TICKS`;
+    their positions."""
     group.wait_stopped(timeout=20.0)
+    indices = group.axis_indices
+    since = [client.latest().tick]
+
+    def settled(frame: motiond.Frame) -> bool:
+        if any(frame.axis(i).flags & motiond.AxisFlags.MOVING for i in indices):
+            since[0] = frame.tick
+        return frame.tick - since[0] >= SETTLED_TICKS
+
+    client.wait_frames("stay at rest", 20.0, settled, subject=f"the axes of group {group.name}")
     return positions(client, group)
 
 
