@@ -55,7 +55,7 @@ extern "C" {
 /* --- constants ---------------------------------------------------------------------------- */
 
 /** Version of the contract; every payload carries it. */
-#define MOTIOND_SCHEMA_VERSION 10u
+#define MOTIOND_SCHEMA_VERSION 11u
 /** Capacity of the axis arrays of the frame and the server info. */
 #define MOTIOND_MAX_AXES 128u
 /** Capacity of the device arrays of the frame and the server info. */
@@ -989,7 +989,7 @@ MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_link_io_t) == 8, "motiond_link_io_
 /**
  * Server figures, published about once a second on `motiond/<name>/stats`.
  *
- * 2000 bytes, alignment 8; iceoryx2 type name "motiond::ServerStats".
+ * 2016 bytes, alignment 8; iceoryx2 type name "motiond::ServerStats".
  */
 typedef struct motiond_server_stats {
     uint32_t schema_version; /**< MOTIOND_SCHEMA_VERSION of the server. (offset 0) */
@@ -1048,8 +1048,20 @@ typedef struct motiond_server_stats {
      * saved black box has a hole there, and a replay stops at it.
      */
     uint64_t blackbox_lost; /* offset 1992 */
+    /**
+     * Paths taken from the `paths` service and dropped, since start: no room left for their
+     * node or among the claimants' paths, or their publisher gone before the tick looked
+     * (docs/SECURITY.md "Paths and setpoints no other process can starve").
+     */
+    uint64_t paths_dropped; /* offset 2000 */
+    /**
+     * Setpoints taken from the `setpoints` service and dropped unread, since start: beyond
+     * their node's budget of the tick, or their publisher gone before the tick looked (the
+     * engine's own refusals count in motiond_group_state_t.refused).
+     */
+    uint64_t setpoints_dropped; /* offset 2008 */
 } motiond_server_stats_t;
-MOTIOND_STATIC_ASSERT(sizeof(motiond_server_stats_t) == 2000, "motiond_server_stats_t size");
+MOTIOND_STATIC_ASSERT(sizeof(motiond_server_stats_t) == 2016, "motiond_server_stats_t size");
 MOTIOND_STATIC_ASSERT(MOTIOND_ALIGNOF(motiond_server_stats_t) == 8, "motiond_server_stats_t alignment");
 
 /* --- texts -------------------------------------------------------------------------------- */

@@ -165,6 +165,18 @@ def _publish_line(client: motiond.Client, group: motiond.Group, targets: List[fl
     return path_id
 
 
+def _stats_show(client: motiond.Client, field: str) -> int:
+    """Waits for a stats sample (published about once a second) whose ``field`` counts
+    something; its value."""
+    deadline = time.monotonic() + 5.0
+    while True:
+        stats = client.stats()
+        value = 0 if stats is None else int(getattr(stats, field))
+        if value > 0 or time.monotonic() >= deadline:
+            return value
+        time.sleep(0.1)
+
+
 def test_junk_paths_from_two_other_nodes_never_evict_the_claimants(
     client: motiond.Client, path_flooders: List[subprocess.Popen]
 ) -> None:
@@ -184,6 +196,8 @@ def test_junk_paths_from_two_other_nodes_never_evict_the_claimants(
             base.wait_done(timeout=20.0)
     for process in path_flooders:
         assert process.poll() is None, "a flooder stopped early: the flood was not kept up"
+    # Nothing is dropped silently: the flood's paths the server had no room for are counted.
+    assert _stats_show(client, "paths_dropped") > 0
 
 
 def test_a_setpoint_flood_from_two_other_nodes_is_held_to_its_budget(
@@ -205,6 +219,8 @@ def test_a_setpoint_flood_from_two_other_nodes_is_held_to_its_budget(
     assert final.refused <= 8 * 2 * (ticks + 1), (final.refused, ticks)
     for process in setpoint_flooders:
         assert process.poll() is None, "a flooder stopped early: the flood was not kept up"
+    # What the budget held back is counted, not dropped silently.
+    assert _stats_show(client, "setpoints_dropped") > 0
 
 
 def test_setpoint_slots_taken_by_another_process_do_not_starve_a_connected_claimant(

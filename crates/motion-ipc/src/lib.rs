@@ -71,7 +71,7 @@ pub use stats::{LatencySummary, LinkIo, LinkStats, ServerStats};
 
 /// Version of this contract. Bumped on every layout or meaning change; every payload
 /// carries it so that a client built against another version can refuse politely.
-pub const SCHEMA_VERSION: u32 = 10;
+pub const SCHEMA_VERSION: u32 = 11;
 
 /// Capacity of the axis arrays in [`MotionFrame`] and [`ServerInfo`].
 pub const MAX_AXES: usize = 128;

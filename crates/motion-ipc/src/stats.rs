@@ -153,6 +153,14 @@ payload! {
         /// Black-box records the tick dropped because the recorder's queue was full, since
         /// start: a saved black box has a hole there, and a replay stops at it.
         pub blackbox_lost: u64,
+        /// Paths taken from the `paths` service and dropped, since start: no room left for
+        /// their node or among the claimants' paths, or their publisher gone before the
+        /// tick looked (docs/SECURITY.md "Paths and setpoints no other process can starve").
+        pub paths_dropped: u64,
+        /// Setpoints taken from the `setpoints` service and dropped unread, since start:
+        /// beyond their node's budget of the tick, or their publisher gone before the tick
+        /// looked (the engine's own refusals count in `GroupState::refused`).
+        pub setpoints_dropped: u64,
     }
 }
 
@@ -221,6 +229,8 @@ impl ServerStats {
         link_io: [LinkIo::EMPTY; MAX_LINKS],
         nodes_cleaned: 0,
         blackbox_lost: 0,
+        paths_dropped: 0,
+        setpoints_dropped: 0,
     };
 
     /// The valid link entries.

@@ -94,12 +94,13 @@ pin!(LinkStats, size 80, align 8, {
 pin!(LinkIo, size 32, align 8, {
     last_write_ns @ 0, last_read_ns @ 8, transactions @ 16, reads @ 24,
 });
-pin!(ServerStats, size 2000, align 8, {
+pin!(ServerStats, size 2016, align 8, {
     schema_version @ 0, link_count @ 4, tick @ 8, time_ns @ 16, wakeup @ 24, work @ 64,
     overruns @ 104, max_consecutive_overruns @ 112, commands @ 120, rejected @ 128,
     clients @ 136, rt_flags @ 140, links @ 144, faults @ 1424, frames_lost @ 1432,
     full_services @ 1440, full_events @ 1444, publish_failures @ 1448, replies_lost @ 1456,
     events_dropped @ 1464, link_io @ 1472, nodes_cleaned @ 1984, blackbox_lost @ 1992,
+    paths_dropped @ 2000, setpoints_dropped @ 2008,
 });
 
 #[test]
@@ -113,7 +114,7 @@ fn layout_is_pinned() {
         (NAME_LEN, UNIT_LEN, MODEL_ID_LEN, PARAM_TEXT_LEN),
         (32, 16, 16, 40)
     );
-    assert_eq!(SCHEMA_VERSION, 10);
+    assert_eq!(SCHEMA_VERSION, 11);
     assert_eq!(
         (MAX_GROUPS, MAX_GROUP_AXES, MAX_PATH_POINTS, PATH_VALUES),
         (16, 16, 1024, 16384)

@@ -131,7 +131,7 @@ macro_rules! payloads {
 payloads!(
     MotionFrame = 21968,
     ServerInfo = 38864,
-    ServerStats = 2000,
+    ServerStats = 2016,
     MachineParams = 180_240,
     CommandRequest = 64,
     CommandReply = 72,

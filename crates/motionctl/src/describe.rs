@@ -168,6 +168,8 @@ pub fn stats_json(stats: &ServerStats) -> Value {
         "events_dropped": stats.events_dropped,
         "nodes_cleaned": stats.nodes_cleaned,
         "blackbox_lost": stats.blackbox_lost,
+        "paths_dropped": stats.paths_dropped,
+        "setpoints_dropped": stats.setpoints_dropped,
         "links": links,
     })
 }

@@ -139,7 +139,7 @@ fn draw(
     let figures = match stats {
         Some(stats) => format!(
             "wake-up p50 {} p99 {} p99.9 {} max {}   work p50 {} max {}   overruns {}   clients {}   \
-             lost: frames {} publishes {} replies {} events {} black box {}",
+             lost: frames {} publishes {} replies {} events {} black box {} paths {} setpoints {}",
             micros(stats.wakeup.p50_ns),
             micros(stats.wakeup.p99_ns),
             micros(stats.wakeup.p999_ns),
@@ -153,6 +153,8 @@ fn draw(
             stats.replies_lost,
             stats.events_dropped,
             stats.blackbox_lost,
+            stats.paths_dropped,
+            stats.setpoints_dropped,
         ),
         None => "tick statistics: none yet (published about once a second)".to_owned(),
     };

@@ -635,6 +635,10 @@ impl Loop {
         stats.clients = self.setup.clients_alive.load(Ordering::Relaxed);
         stats.nodes_cleaned = self.setup.nodes_cleaned.load(Ordering::Relaxed);
         stats.blackbox_lost = self.setup.journal.lost_since_start();
+        let paths = &self.services.paths;
+        stats.paths_dropped = paths.dropped + paths.inbox.orphans;
+        let setpoints = &self.services.setpoints;
+        stats.setpoints_dropped = setpoints.over_budget + setpoints.inbox.orphans;
         let config = engine.config();
         for (index, (port, out)) in self
             .setup

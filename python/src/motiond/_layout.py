@@ -23,7 +23,7 @@ from ._mirror_base import (
 # --- constants ---------------------------------------------------------------------------
 
 #: Version of the contract; every payload carries it.
-SCHEMA_VERSION = 10
+SCHEMA_VERSION = 11
 #: Capacity of the axis arrays of the frame and the server info.
 MAX_AXES = 128
 #: Capacity of the device arrays of the frame and the server info.
@@ -581,7 +581,7 @@ class LinkIo(Payload):
 class ServerStats(Payload):
     """Server figures, published about once a second on ``motiond/<name>/stats``.
 
-    2000 bytes, alignment 8."""
+    2016 bytes, alignment 8."""
 
     _type_name_ = "motiond::ServerStats"
     _fields_ = [
@@ -625,6 +625,14 @@ class ServerStats(Payload):
         # Black-box records the tick dropped because the recorder's queue was full, since start: a
         # saved black box has a hole there, and a replay stops at it.
         ("blackbox_lost", ctypes.c_uint64),
+        # Paths taken from the ``paths`` service and dropped, since start: no room left for their
+        # node or among the claimants' paths, or their publisher gone before the tick looked
+        # (docs/SECURITY.md "Paths and setpoints no other process can starve").
+        ("paths_dropped", ctypes.c_uint64),
+        # Setpoints taken from the ``setpoints`` service and dropped unread, since start: beyond
+        # their node's budget of the tick, or their publisher gone before the tick looked (the
+        # engine's own refusals count in ``GroupState.refused``).
+        ("setpoints_dropped", ctypes.c_uint64),
     ]
 
 
