@@ -23,7 +23,7 @@ use std::sync::Arc;
 
 use motion_base::{CAN_RECORD_LEN, CanRecord};
 
-use super::faults::{Direction, SimFaults};
+use super::faults::{Direction, Plug, SimFaults, Unplugged};
 use super::line::Line;
 use crate::can_records::RecordSender;
 use crate::error::LinkError;
@@ -162,7 +162,8 @@ pub struct SimCanLink {
     /// Device frames on their way to the host or not read yet: (arrival, frame).
     to_host: VecDeque<(Duration, CanRecord)>,
     device_time: Duration,
-    generation: Option<u64>,
+    /// Connected, or why not.
+    plug: Plug,
     tx: [u8; CAN_RECORD_LEN],
     tx_len: usize,
     rx: [u8; CAN_RECORD_LEN],
@@ -179,7 +180,7 @@ impl fmt::Debug for SimCanLink {
             .field("name", &self.name)
             .field("to_device", &self.to_device.len())
             .field("to_host", &self.to_host.len())
-            .field("connected", &self.generation.is_some())
+            .field("connected", &self.plug.connected())
             .field("stats", &self.stats)
             .finish_non_exhaustive()
     }
@@ -198,7 +199,7 @@ impl SimCanLink {
             to_device: VecDeque::new(),
             to_host: VecDeque::new(),
             device_time: Duration::ZERO,
-            generation: Some(0),
+            plug: Plug::OPEN,
             tx: [0; CAN_RECORD_LEN],
             tx_len: 0,
             rx: [0; CAN_RECORD_LEN],
@@ -214,7 +215,7 @@ impl SimCanLink {
     #[must_use]
     pub fn with_seed(mut self, seed: u64) -> Self {
         self.faults = SimFaults::new(seed);
-        self.generation = Some(0);
+        self.plug = Plug::OPEN;
         self
     }
 
@@ -239,23 +240,20 @@ impl SimCanLink {
     }
 
     fn check_plug(&mut self, now: Duration) -> Result<(), LinkError> {
-        let (unplugged, generation) = {
-            let state = self.faults.lock();
-            (state.unplugged, state.generation)
-        };
-        if !unplugged && self.generation == Some(generation) {
+        let Err((why, was_connected)) = self.plug.check(&self.faults) else {
             return Ok(());
-        }
-        if self.generation.take().is_some() {
+        };
+        if was_connected {
             self.drop_in_flight(now);
         }
         self.stats.errors += 1;
         Err(LinkError::Disconnected {
             link: self.name.clone(),
-            detail: if unplugged {
-                "the simulated CAN bus is unplugged"
-            } else {
-                "the simulated CAN bus was unplugged since the link was opened; reopen it"
+            detail: match why {
+                Unplugged::Now => "the simulated CAN bus is unplugged",
+                Unplugged::Since => {
+                    "the simulated CAN bus was unplugged since the link was opened; reopen it"
+                }
             },
         })
     }
@@ -423,11 +421,7 @@ impl Link for SimCanLink {
     }
 
     fn reopen(&mut self, now: Duration) -> Result<(), LinkError> {
-        let (unplugged, generation) = {
-            let state = self.faults.lock();
-            (state.unplugged, state.generation)
-        };
-        if unplugged {
+        if self.plug.reconnect(&self.faults).is_err() {
             self.stats.errors += 1;
             return Err(LinkError::Disconnected {
                 link: self.name.clone(),
@@ -435,7 +429,6 @@ impl Link for SimCanLink {
             });
         }
         self.drop_in_flight(now);
-        self.generation = Some(generation);
         self.stats.reconnects += 1;
         Ok(())
     }
@@ -443,7 +436,7 @@ impl Link for SimCanLink {
     fn next_event(&self, now: Duration) -> Option<Duration> {
         let plug_changed = {
             let state = self.faults.lock();
-            state.unplugged || self.generation != Some(state.generation)
+            self.plug.changed(&state)
         };
         if plug_changed || self.rx_from != self.rx_to {
             return Some(now);

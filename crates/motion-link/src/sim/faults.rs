@@ -201,3 +201,99 @@ impl SimFaults {
         self.lock().device_baud = baud;
     }
 }
+
+/// What a simulated link knows of its plug, and the one rule every simulated link keeps:
+/// connected while the plug is in and was not pulled since the link was (re)opened; after a
+/// pull every operation fails until the link is reopened, and reopening fails while the plug
+/// is out — as a USB adapter's tty does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Plug {
+    /// The fault generation the link was opened in; `None` once it saw a disconnection.
+    generation: Option<u64>,
+}
+
+/// Why a simulated link is not connected.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Unplugged {
+    /// The plug is out now.
+    Now,
+    /// The plug was pulled (and maybe put back) since the link was opened: reopen it.
+    Since,
+}
+
+impl Plug {
+    /// Opened with fresh faults.
+    pub(crate) const OPEN: Self = Self {
+        generation: Some(0),
+    };
+
+    /// Whether the link has not seen a disconnection since it was opened.
+    pub(crate) fn connected(self) -> bool {
+        self.generation.is_some()
+    }
+
+    /// Whether the plug is out or was pulled since the link was opened (the link has
+    /// something to report now).
+    pub(crate) fn changed(self, state: &FaultState) -> bool {
+        state.unplugged || self.generation != Some(state.generation)
+    }
+
+    /// `Ok` while connected; otherwise why, and whether the link was connected until now
+    /// (then the bytes it had in flight are lost).
+    pub(crate) fn check(&mut self, faults: &SimFaults) -> Result<(), (Unplugged, bool)> {
+        let (unplugged, generation) = {
+            let state = faults.lock();
+            (state.unplugged, state.generation)
+        };
+        if !unplugged && self.generation == Some(generation) {
+            return Ok(());
+        }
+        let was_connected = self.generation.take().is_some();
+        let why = if unplugged {
+            Unplugged::Now
+        } else {
+            Unplugged::Since
+        };
+        Err((why, was_connected))
+    }
+
+    /// Connects again in the current generation; `Err` while the plug is out.
+    pub(crate) fn reconnect(&mut self, faults: &SimFaults) -> Result<(), Unplugged> {
+        let state = faults.lock();
+        if state.unplugged {
+            return Err(Unplugged::Now);
+        }
+        self.generation = Some(state.generation);
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_pulled_plug_needs_a_replug_and_a_reopen() {
+        let faults = SimFaults::new(1);
+        let mut plug = Plug::OPEN;
+        assert_eq!(plug.check(&faults), Ok(()));
+        faults.unplug();
+        // The first look loses what was in flight; later ones only fail.
+        assert_eq!(plug.check(&faults), Err((Unplugged::Now, true)));
+        assert_eq!(plug.check(&faults), Err((Unplugged::Now, false)));
+        assert!(!plug.connected());
+        assert_eq!(plug.reconnect(&faults), Err(Unplugged::Now));
+        faults.replug();
+        // Plugged back in, but not reopened: the link must not carry on as if nothing
+        // happened.
+        assert_eq!(plug.check(&faults), Err((Unplugged::Since, false)));
+        assert_eq!(plug.reconnect(&faults), Ok(()));
+        assert_eq!(plug.check(&faults), Ok(()));
+        assert!(plug.connected());
+        // A pull and a replug while the link was not looking: it notices.
+        faults.unplug();
+        faults.replug();
+        assert!(plug.changed(&faults.lock()));
+        assert_eq!(plug.check(&faults), Err((Unplugged::Since, true)));
+    }
+}

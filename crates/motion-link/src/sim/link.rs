@@ -6,7 +6,7 @@ use std::collections::VecDeque;
 use std::sync::Arc;
 
 use super::device::{SpiDevice, StreamDevice};
-use super::faults::{Direction, SimFaults};
+use super::faults::{Direction, Plug, SimFaults, Unplugged};
 use super::line::{Line, Received, resample};
 use crate::error::LinkError;
 use crate::link::{Link, LinkKind, LinkStats};
@@ -109,8 +109,8 @@ pub struct SimLink {
     to_host: VecDeque<Received>,
     /// The latest instant handed to the device: its clock never goes back.
     device_time: Duration,
-    /// The fault generation this link was opened in; `None` once it saw a disconnection.
-    generation: Option<u64>,
+    /// Connected, or why not.
+    plug: Plug,
     scratch: Vec<u8>,
     overruns: u64,
     stats: LinkStats,
@@ -127,7 +127,7 @@ impl fmt::Debug for SimLink {
             .field("kind", &self.kind())
             .field("to_host", &self.to_host.len())
             .field("device_time", &self.device_time)
-            .field("connected", &self.generation.is_some())
+            .field("connected", &self.plug.connected())
             .field("stats", &self.stats)
             .finish_non_exhaustive()
     }
@@ -183,7 +183,7 @@ impl SimLink {
             limits: SimLimits::default(),
             to_host: VecDeque::new(),
             device_time: Duration::ZERO,
-            generation: Some(0),
+            plug: Plug::OPEN,
             scratch: vec![0; 256],
             overruns: 0,
             stats: LinkStats::default(),
@@ -196,7 +196,7 @@ impl SimLink {
     #[must_use]
     pub fn with_seed(mut self, seed: u64) -> Self {
         self.faults = SimFaults::new(seed);
-        self.generation = Some(0);
+        self.plug = Plug::OPEN;
         self
     }
 
@@ -267,24 +267,20 @@ impl SimLink {
 
     /// Fails with `Disconnected` when the plug is out or was out since the last open.
     fn check_plug(&mut self, now: Duration) -> Result<(), LinkError> {
-        let (unplugged, generation) = {
-            let state = self.faults.lock();
-            (state.unplugged, state.generation)
-        };
-        if !unplugged && self.generation == Some(generation) {
+        let Err((why, was_connected)) = self.plug.check(&self.faults) else {
             return Ok(());
-        }
-        let was_connected = self.generation.take().is_some();
+        };
         if was_connected {
             self.drop_in_flight(now);
         }
         self.stats.errors += 1;
         Err(LinkError::Disconnected {
             link: self.name.clone(),
-            detail: if unplugged {
-                "the simulated device is unplugged"
-            } else {
-                "the simulated device was unplugged since the link was opened; reopen it"
+            detail: match why {
+                Unplugged::Now => "the simulated device is unplugged",
+                Unplugged::Since => {
+                    "the simulated device was unplugged since the link was opened; reopen it"
+                }
             },
         })
     }
@@ -674,11 +670,7 @@ impl Link for SimLink {
 
     /// Discards everything in flight and reconnects, unless the plug is still out.
     fn reopen(&mut self, now: Duration) -> Result<(), LinkError> {
-        let (unplugged, generation) = {
-            let state = self.faults.lock();
-            (state.unplugged, state.generation)
-        };
-        if unplugged {
+        if self.plug.reconnect(&self.faults).is_err() {
             self.stats.errors += 1;
             return Err(LinkError::Disconnected {
                 link: self.name.clone(),
@@ -690,7 +682,6 @@ impl Link for SimLink {
             // A reopened port runs at its configured rate again, as a tty does.
             self.retime(self.opening_baud);
         }
-        self.generation = Some(generation);
         self.stats.reconnects += 1;
         Ok(())
     }
@@ -721,9 +712,7 @@ impl Link for SimLink {
     fn next_event(&self, now: Duration) -> Option<Duration> {
         let plug_changed = {
             let state = self.faults.lock();
-            state.unplugged
-                || self.generation != Some(state.generation)
-                || !state.garbage.is_empty()
+            self.plug.changed(&state) || !state.garbage.is_empty()
         };
         if plug_changed {
             return Some(now);
