@@ -16,15 +16,16 @@ use std::time::Instant;
 
 use iceoryx2::prelude::*;
 use motion_client::testing::{
-    FakeAxis, FakeConfig, FakeDevice, FakeServer, FakeSignal, unique_name,
+    FakeAxis, FakeConfig, FakeDevice, FakeGroup, FakeServer, FakeSignal, unique_name,
 };
 use motion_drivers::{DeviceFault, GoalKind, LinkKind, Pin, RateFloor, SignalKind as PinKind};
 use motion_engine::{
-    AxisConfig, BusConfig, CommandPort, DeviceConfig, Engine, EngineConfig, SignalConfig,
+    AxisConfig, BusConfig, CommandPort, DeviceConfig, Engine, EngineConfig, GroupConfig,
+    SignalConfig, StreamLimit,
 };
 use motion_ipc::{
     ClientId, CommandKind, CommandReply, CommandRequest, DeviceModel, DeviceState, FaultCode,
-    MotionFrame, Reason, ServerInfo, ServiceNames, SignalKind,
+    MotionFrame, Reason, ServerInfo, ServiceNames, SignalKind, StreamMode, Target,
 };
 use support::{BoardControl, IdealBoard};
 
@@ -159,6 +160,11 @@ fn signal(name: &str, pin: u16, kind: PinKind) -> SignalConfig {
 /// `x` on a board that does everything, `y` on one that can neither de-energise nor home;
 /// an output `lamp` and an input `door` on the first board.
 fn engine_side() -> EngineSide {
+    engine_side_with(Vec::new())
+}
+
+/// [`engine_side`] with `groups` of its axes.
+fn engine_side_with(groups: Vec<GroupConfig>) -> EngineSide {
     let link = |name: &str| BusConfig {
         name: name.into(),
         kind: LinkKind::Stream,
@@ -185,6 +191,7 @@ fn engine_side() -> EngineSide {
             signal("lamp", 1, PinKind::DigitalOut),
             signal("door", 0, PinKind::DigitalIn),
         ],
+        groups,
         ..EngineConfig::default()
     };
     let (full, full_control) = IdealBoard::boxed(1, &GoalKind::ALL);
@@ -249,6 +256,20 @@ fn fake_config(engine: &Engine) -> FakeConfig {
         FakeSignal::digital("door", 0, "p0", SignalKind::DigitalIn),
     ];
     config.params = Vec::new();
+    config.groups = engine
+        .config()
+        .groups
+        .iter()
+        .map(|group| {
+            let mut fake = FakeGroup::new(&group.name, &group.axes);
+            fake.path_tolerance.clone_from(&group.path_tolerance);
+            fake.goal_tolerance.clone_from(&group.goal_tolerance);
+            fake.goal_time_tolerance = group.goal_time_tolerance.as_secs_f64();
+            fake.stream_timeout = group.stream_timeout;
+            fake.stream_buffer = group.stream_buffer;
+            fake
+        })
+        .collect();
     config
 }
 
@@ -266,6 +287,8 @@ enum Step {
     FaultGone(usize),
     /// The server begins its shutdown.
     ShutDown,
+    /// Both sides carry out what was asked (a stop comes to rest).
+    Settle,
 }
 
 fn axis_request(axis: u32, kind: CommandKind, values: [f64; 3]) -> CommandRequest {
@@ -404,25 +427,177 @@ fn table() -> Vec<Step> {
 fn the_engine_and_the_fake_server_give_the_same_answer_to_every_request() {
     let mut engine = engine_side();
     let fake = FakeServer::start::<local::Service>(fake_config(&engine.engine)).expect("fake");
+    let (answered, differences) = run(&mut engine, &fake, table());
+    assert!(answered > 60, "{answered} requests");
+    assert!(
+        differences.is_empty(),
+        "{} of {answered} answers differ:\n{}",
+        differences.len(),
+        differences.join("\n")
+    );
+    fake.shutdown().expect("fake shutdown");
+}
+
+/// The group rules (issue 41): the same machine with the group `xy` (x on the full board,
+/// y on the plain one), and every group and stream request — form, claims, each motion
+/// command with no motion, a stream started, busy, cancelled, in each mode, and refused
+/// under the e-stop, a starting board, a faulted axis and the shutdown — answered alike.
+#[test]
+fn the_engine_and_the_fake_server_judge_group_and_stream_requests_alike() {
+    let xy = GroupConfig {
+        name: "xy".into(),
+        axes: vec![0, 1],
+        path_tolerance: vec![0.5, 0.5],
+        goal_tolerance: vec![0.05, 0.05],
+        goal_time_tolerance: Duration::from_millis(500),
+        stream_limit: StreamLimit::Clamp,
+        // A stream the table leaves alone must not go stale on either side's clock.
+        stream_timeout: 1_000_000,
+        stream_buffer: 3,
+    };
+    let mut engine = engine_side_with(vec![xy]);
+    let fake = FakeServer::start::<local::Service>(fake_config(&engine.engine)).expect("fake");
+    let (answered, differences) = run(&mut engine, &fake, group_table());
+    assert!(answered > 40, "{answered} requests");
+    assert!(
+        differences.is_empty(),
+        "{} of {answered} answers differ:\n{}",
+        differences.len(),
+        differences.join("\n")
+    );
+    fake.shutdown().expect("fake shutdown");
+}
+
+fn group_request(group: u32, kind: CommandKind, value: f64) -> CommandRequest {
+    let mut request =
+        CommandRequest::new(ClientId::NONE, 0, group, kind).with_values([value, 0.0, 0.0]);
+    request.target = Target::Group as u32;
+    request
+}
+
+fn group_table() -> Vec<Step> {
+    use CommandKind::*;
+    use Step::{Device, Fault, FaultGone, Send, Settle, ShutDown};
+    let all = CommandRequest::ALL_AXES;
+    let velocity = f64::from(StreamMode::Velocity as u32);
+    let position = f64::from(StreamMode::Position as u32);
+    let power = f64::from(StreamMode::Power as u32);
+    let g = group_request;
+    let mut steps = vec![
+        // Form: the group, the kind, the values.
+        Send(0, g(5, Claim, 0.0)),
+        Send(0, g(0, Position, 1.0)),
+        Send(0, g(0, Home, 0.0)),
+        Send(0, g(0, Feed, f64::NAN)),
+        Send(0, g(0, Feed, 2.0)),
+        Send(0, g(0, Feed, -0.5)),
+        Send(0, g(0, Stream, 99.0)),
+        Send(0, g(0, Stream, 0.0)),
+        Send(0, g(0, Stream, f64::INFINITY)),
+        // Claims: a member held by another client.
+        Send(1, axis_request(1, Claim, [0.0; 3])),
+        Send(0, g(0, Claim, 0.0)),
+        Send(0, g(0, Stream, velocity)),
+        Send(0, g(0, Run, 7.0)),
+        Send(1, g(0, Release, 0.0)),
+        Send(0, g(0, Claim, 0.0)),
+        Send(1, g(0, Claim, 0.0)),
+        Send(1, g(0, Stream, velocity)),
+        Send(1, g(0, Cancel, 0.0)),
+        Send(1, g(0, Hold, 0.0)),
+        Send(1, g(0, Feed, 0.5)),
+        // No motion yet.
+        Send(0, g(0, Hold, 0.0)),
+        Send(0, g(0, Resume, 0.0)),
+        Send(0, g(0, Cancel, 0.0)),
+        Send(0, g(0, Feed, 0.5)),
+        Send(0, g(0, Stop, 0.0)),
+        Send(0, g(0, Run, 7.0)),
+        Send(0, g(0, Run, -1.0)),
+        Send(0, g(0, Run, 0.5)),
+    ];
+    // A stream in each mode: started, busy, the members' own goals refused, cancelled.
+    for mode in [velocity, position, power] {
+        steps.extend([
+            Send(0, g(0, Stream, mode)),
+            Send(0, g(0, Stream, mode)),
+            Send(0, g(0, Run, 7.0)),
+            Send(0, axis_request(0, Position, [5.0, 0.0, 0.0])),
+            Send(0, axis_request(1, Velocity, [5.0, 0.0, 0.0])),
+            Send(1, g(0, Stop, 0.0)),
+            Send(0, g(0, Feed, 0.5)),
+            Send(0, g(0, Hold, 0.0)),
+            Send(0, g(0, Resume, 0.0)),
+            Send(0, g(0, Cancel, 0.0)),
+            Settle,
+            Send(0, g(0, Cancel, 0.0)),
+        ]);
+    }
+    steps.extend([
+        // A stop ends a stream as well.
+        Send(0, g(0, Stream, velocity)),
+        Send(0, g(0, Stop, 0.0)),
+        Settle,
+        Send(0, g(0, Release, 0.0)),
+        Send(0, g(0, Stream, velocity)),
+        Send(0, g(0, Release, 0.0)),
+        // The e-stop.
+        Send(0, g(0, Claim, 0.0)),
+        Send(1, axis_request(all, EStop, [0.0; 3])),
+        Settle,
+        Send(0, g(0, Stream, velocity)),
+        Send(0, g(0, Run, 7.0)),
+        Send(0, g(0, Claim, 0.0)),
+        Send(0, g(0, Release, 0.0)),
+        Send(0, g(0, Claim, 0.0)),
+        Send(1, axis_request(all, Reset, [0.0; 3])),
+        Settle,
+        // A board starting, then an axis faulted.
+        Device(1, DeviceState::Starting),
+        Send(0, g(0, Stream, velocity)),
+        Send(0, g(0, Run, 7.0)),
+        Device(1, DeviceState::Online),
+        Fault(0),
+        Send(0, g(0, Stream, velocity)),
+        Send(0, g(0, Run, 7.0)),
+        FaultGone(0),
+        Send(0, axis_request(all, Reset, [0.0; 3])),
+        Settle,
+        Send(0, g(0, Stream, velocity)),
+        Send(0, g(0, Cancel, 0.0)),
+        Settle,
+        // The shutdown.
+        ShutDown,
+        Send(0, g(0, Stream, velocity)),
+        Send(0, g(0, Run, 7.0)),
+        Send(0, g(0, Claim, 0.0)),
+        Send(0, g(0, Release, 0.0)),
+    ]);
+    steps
+}
+
+/// Sends every row of `steps` to both sides; how many requests were answered, and a line
+/// per answer that differs.
+fn run(engine: &mut EngineSide, fake: &FakeServer, steps: Vec<Step>) -> (usize, Vec<String>) {
     let clients = [Raw::connect(fake.name()), Raw::connect(fake.name())];
     let ids = [clients[0].id(), clients[1].id()];
     let mut sequence = 0;
     let mut differences = Vec::new();
     let mut answered = 0;
-    for (row, step) in table().into_iter().enumerate() {
+    for (row, step) in steps.into_iter().enumerate() {
         let (client, mut request, forged) = match step {
             Step::Send(client, request) => (client, request, false),
             Step::Forge(client, request) => (client, request, true),
             Step::Device(device, state) => {
                 engine.boards[device].lock().unwrap().starting = state == DeviceState::Starting;
                 fake.set_device_state(device, state);
-                settle(&mut engine);
+                settle(engine);
                 continue;
             }
             Step::Fault(axis) => {
                 engine.boards[axis].lock().unwrap().fault = Some(DeviceFault::BoardError);
                 fake.fault_axis(axis, FaultCode::BoardError, 0.0, 0.0);
-                settle(&mut engine);
+                settle(engine);
                 assert!(
                     engine.engine.axis_fault(axis).is_some(),
                     "the engine latched it"
@@ -432,13 +607,17 @@ fn the_engine_and_the_fake_server_give_the_same_answer_to_every_request() {
             Step::FaultGone(axis) => {
                 engine.boards[axis].lock().unwrap().fault = None;
                 fake.control(motion_client::testing::FakeControl::FaultGone { axis });
-                settle(&mut engine);
+                settle(engine);
                 continue;
             }
             Step::ShutDown => {
                 engine.engine.begin_shutdown();
                 fake.control(motion_client::testing::FakeControl::ShutDown);
-                settle(&mut engine);
+                settle(engine);
+                continue;
+            }
+            Step::Settle => {
+                settle(engine);
                 continue;
             }
         };
@@ -450,8 +629,9 @@ fn the_engine_and_the_fake_server_give_the_same_answer_to_every_request() {
         answered += 1;
         if by_engine != by_fake {
             differences.push(format!(
-                "row {row}: {:?} axis {} values {:?} from {}: engine {by_engine:?}, fake {by_fake:?}",
+                "row {row}: {:?} target {} index {} values {:?} from {}: engine {by_engine:?}, fake {by_fake:?}",
                 request.kind(),
+                request.target,
                 request.axis,
                 request.values,
                 ["A", "B"][client],
@@ -462,14 +642,7 @@ fn the_engine_and_the_fake_server_give_the_same_answer_to_every_request() {
             engine.tick();
         }
     }
-    assert!(answered > 60, "{answered} requests");
-    assert!(
-        differences.is_empty(),
-        "{} of {answered} answers differ:\n{}",
-        differences.len(),
-        differences.join("\n")
-    );
-    fake.shutdown().expect("fake shutdown");
+    (answered, differences)
 }
 
 /// Lets the engine see a board change and the fake (ticking at 1 kHz on its own thread)

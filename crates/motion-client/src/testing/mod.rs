@@ -4,9 +4,10 @@
 //!
 //! It judges every request with the server's own rulebook ([`motion_ipc::rules`]: schema,
 //! kind, finite values, identity from the transport, targets, claims, e-stop, shutdown,
-//! capabilities, device readiness, faults, limits and rates), and
-//! `crates/motion-engine/tests/rulebook_parity.rs` runs one table of requests through the
-//! engine and this fake and demands the same answers; client and CLI behaviour can so be
+//! capabilities, device readiness, faults, limits and rates), group and stream requests in
+//! the engine's order, and `crates/motion-engine/tests/rulebook_parity.rs` runs one table of
+//! axis and signal requests and one of group and stream requests through the engine and
+//! this fake and demands the same answers; client and CLI behaviour can so be
 //! tested without the real server. Positions move at the commanded speed without
 //! acceleration; nothing here models a board. Every request it receives is logged for
 //! assertions; tests change device states, inputs and faults with [`FakeServer`]'s

@@ -3,9 +3,9 @@
 
 use motion_ipc::rules::{self, Facts, Verdict};
 use motion_ipc::{
-    AxisMode, ClientId, CommandKind, CommandRequest, GroupAbort, GroupInfo, GroupMotion, GroupPath,
-    GroupState, MAX_GROUP_AXES, MAX_PATH_POINTS, PathFlags, PathKind, Reason, SCHEMA_VERSION,
-    ServerInfo, Target, write_text,
+    AxisFlags, AxisMode, ClientId, CommandKind, CommandRequest, DeviceState, FaultCode, GroupAbort,
+    GroupInfo, GroupMotion, GroupPath, GroupState, MAX_GROUP_AXES, MAX_PATH_POINTS, PathFlags,
+    PathKind, Reason, SCHEMA_VERSION, ServerInfo, Target, write_text,
 };
 
 use super::Model;
@@ -207,42 +207,29 @@ impl Model {
         }
     }
 
-    /// A group request (`target` = group), from `client`.
+    /// A group request (`target` = group), from `client`, judged in the engine's order
+    /// (`motion-engine`'s `group/request.rs`; `rulebook_parity.rs` in that crate sends both
+    /// the same table).
     pub(super) fn apply_group(&mut self, request: &CommandRequest, client: ClientId) -> Judged {
         let Ok(kind) = request.kind() else {
             return Reason::UnknownKind.into();
         };
+        if matches!(kind, CommandKind::EStop | CommandKind::Reset) {
+            // As on an axis: every axis, whatever the group.
+            let mut every = *request;
+            every.target = Target::Axis as u32;
+            every.axis = CommandRequest::ALL_AXES;
+            return self.validate_and_apply(&every, client).into();
+        }
         let index = request.axis as usize;
         let Some(group) = self.groups.get(index) else {
             return Reason::UnknownGroup.into();
         };
         let members = group.config.axes.clone();
-        let active = group.motion().active();
+        let value = request.values[0];
         match kind {
-            CommandKind::Claim | CommandKind::Release if client.is_none() => {
-                Reason::NoClientId.into()
-            }
-            CommandKind::Claim | CommandKind::Release => {
-                for &member in &members {
-                    let request = axis_request(client, member, kind, 0.0);
-                    if let Verdict::Refused(reason) = rules::judge(&request, client, &*self) {
-                        let mut judged = Judged::at(reason, None, member, 0.0, 0.0);
-                        if reason == Reason::ClaimedByOther {
-                            judged.holder = self.axes[member].1.state.claimed_by;
-                        }
-                        return judged;
-                    }
-                }
-                let holder = if kind == CommandKind::Claim {
-                    client
-                } else {
-                    ClientId::NONE
-                };
-                for member in members {
-                    self.axes[member].1.state.claimed_by = holder;
-                }
-                Reason::Accepted.into()
-            }
+            CommandKind::Claim => self.claim_group(index, client),
+            CommandKind::Release => self.release_group(index, client),
             CommandKind::Stop => {
                 self.abort_group(index, GroupAbort::Stopped, None, (0.0, 0.0));
                 for member in members {
@@ -251,58 +238,132 @@ impl Model {
                 }
                 Reason::Accepted.into()
             }
-            CommandKind::Run => self.run(index, request.values[0], client),
-            CommandKind::Stream => self.start_stream(index, request.values[0], client),
+            CommandKind::Run => self.run(index, value, client),
+            CommandKind::Stream => self.start_stream(index, value, client),
             CommandKind::Cancel if self.streaming(index) => {
-                if let Some(&member) = members.iter().find(|&&m| {
-                    let owner = self.axes[m].1.state.claimed_by;
-                    !owner.is_none() && owner != client
-                }) {
-                    let mut judged = Judged::at(Reason::ClaimedByOther, None, member, 0.0, 0.0);
-                    judged.holder = self.axes[member].1.state.claimed_by;
-                    return judged;
+                if let Some(refused) = self.claimed_by_other(index, client) {
+                    return refused;
                 }
                 self.cancel_stream(index)
             }
+            CommandKind::Hold | CommandKind::Resume | CommandKind::Feed
+                if self.streaming(index) =>
+            {
+                Reason::Unsupported.into()
+            }
             CommandKind::Hold | CommandKind::Resume | CommandKind::Feed | CommandKind::Cancel => {
-                self.steer(index, kind, request.values[0], client, &members, active)
+                self.steer(index, kind, value, client)
             }
             _ => Reason::UnknownTarget.into(),
         }
     }
 
-    /// Hold, resume, feed, cancel.
-    fn steer(
-        &mut self,
-        index: usize,
-        kind: CommandKind,
-        value: f64,
-        client: ClientId,
-        members: &[usize],
-        active: bool,
-    ) -> Judged {
-        if kind == CommandKind::Feed && !value.is_finite() {
-            return Reason::NotFinite.into();
+    /// `ClaimedByOther`, naming the member and its holder, when a member of group `index`
+    /// is claimed by a client other than `client`.
+    pub(super) fn claimed_by_other(&self, index: usize, client: ClientId) -> Option<Judged> {
+        self.groups[index].config.axes.iter().find_map(|&member| {
+            let holder = self.axes[member].1.state.claimed_by;
+            (!holder.is_none() && holder != client).then(|| {
+                let mut judged = Judged::at(Reason::ClaimedByOther, None, member, 0.0, 0.0);
+                judged.holder = holder;
+                judged
+            })
+        })
+    }
+
+    /// Claims every member for `client`, or none.
+    fn claim_group(&mut self, index: usize, client: ClientId) -> Judged {
+        if client.is_none() {
+            return Reason::NoClientId.into();
         }
+        if let Some(refused) = self.claimed_by_other(index, client) {
+            return refused;
+        }
+        for member in self.groups[index].config.axes.clone() {
+            self.axes[member].1.state.claimed_by = client;
+        }
+        Reason::Accepted.into()
+    }
+
+    /// Gives back `client`'s claims on the members; `NotClaimed` when it held none.
+    fn release_group(&mut self, index: usize, client: ClientId) -> Judged {
+        if client.is_none() {
+            return Reason::NoClientId.into();
+        }
+        let mut released = false;
+        for member in self.groups[index].config.axes.clone() {
+            let state = &mut self.axes[member].1.state;
+            if state.claimed_by == client {
+                state.claimed_by = ClientId::NONE;
+                released = true;
+            }
+        }
+        if released {
+            Reason::Accepted.into()
+        } else {
+            Reason::NotClaimed.into()
+        }
+    }
+
+    /// Why the members of group `index` cannot start a motion of `client` now, as the
+    /// engine's `members_refuse`: shutdown, e-stop, another client's claim, then per member
+    /// its board's state, its fault, stale data, or a motion of its own.
+    pub(super) fn members_refuse(&self, index: usize, client: ClientId) -> Option<Judged> {
+        if self.shutting_down() {
+            return Some(Reason::ShuttingDown.into());
+        }
+        if self.estop() {
+            return Some(Reason::EstopLatched.into());
+        }
+        if let Some(refused) = self.claimed_by_other(index, client) {
+            return Some(refused);
+        }
+        for &member in &self.groups[index].config.axes {
+            let facts = self.axis(member)?;
+            let other_group = self.groups.iter().enumerate().any(|(other, g)| {
+                other != index && g.motion().active() && g.config.axes.contains(&member)
+            });
+            let moving = self.axes[member].1.state.flags & AxisFlags::MOVING.0 != 0;
+            let reason = match facts.device {
+                DeviceState::Starting => Some(Reason::DeviceStarting),
+                DeviceState::Offline if !facts.link_up => Some(Reason::LinkDown),
+                DeviceState::Offline => Some(Reason::DeviceOffline),
+                _ if facts.fault == FaultCode::LinkDown => Some(Reason::LinkDown),
+                _ if facts.fault != FaultCode::None => Some(Reason::AxisFaulted),
+                _ if !facts.position_fresh => Some(Reason::DeviceOffline),
+                _ if other_group || (!facts.group_motion && moving) => Some(Reason::GroupBusy),
+                _ => None,
+            };
+            if let Some(reason) = reason {
+                return Some(Judged::at(reason, None, member, 0.0, 0.0));
+            }
+        }
+        None
+    }
+
+    /// Hold, resume, feed, cancel of a path (a stream's are handled before).
+    fn steer(&mut self, index: usize, kind: CommandKind, value: f64, client: ClientId) -> Judged {
+        let members = self.groups[index].config.axes.clone();
         if kind == CommandKind::Feed && !(0.0..=1.5).contains(&value) {
             return Judged::at(Reason::OutOfRange, None, members[0], value, 1.5);
         }
-        if let Some(&member) = members.iter().find(|&&m| {
-            let owner = self.axes[m].1.state.claimed_by;
-            !owner.is_none() && owner != client
-        }) {
-            let mut judged = Judged::at(Reason::ClaimedByOther, None, member, 0.0, 0.0);
-            judged.holder = self.axes[member].1.state.claimed_by;
-            return judged;
+        if let Some(refused) = self.claimed_by_other(index, client) {
+            return refused;
         }
-        if !active {
-            return Reason::NotMoving.into();
+        if kind == CommandKind::Resume && self.estop() {
+            return Reason::EstopLatched.into();
         }
+        let active = self.groups[index].motion().active();
         let state = &mut self.groups[index].state;
         match kind {
+            CommandKind::Feed => {
+                // For the running path and the next, moving or not.
+                state.feed_set = value;
+                return Reason::Accepted.into();
+            }
+            _ if !active => return Reason::NotMoving.into(),
             CommandKind::Hold => state.motion = GroupMotion::Holding as u8,
             CommandKind::Resume => state.motion = GroupMotion::Moving as u8,
-            CommandKind::Feed => state.feed_set = value,
             _ => self.abort_group(index, GroupAbort::Cancelled, None, (0.0, 0.0)),
         }
         Reason::Accepted.into()
@@ -310,11 +371,19 @@ impl Model {
 
     /// `Run` of path `id` from `client` on group `index`.
     fn run(&mut self, index: usize, id: f64, client: ClientId) -> Judged {
-        if self.shutting_down() {
-            return Reason::ShuttingDown.into();
+        if client.is_none() {
+            return Reason::NoClientId.into();
         }
-        if self.estop() {
-            return Reason::EstopLatched.into();
+        // An exact path id (values[0] is an f64: integers up to 2^53).
+        if !((0.0..=9_007_199_254_740_992.0).contains(&id) && id.fract() == 0.0) {
+            return Reason::PathLayout.into();
+        }
+        if let Some(refused) = self.members_refuse(index, client) {
+            return refused;
+        }
+        if self.streaming(index) {
+            let first = self.groups[index].config.axes[0];
+            return Judged::at(Reason::GroupBusy, None, first, 0.0, 0.0);
         }
         let found = self
             .paths

@@ -68,26 +68,29 @@ impl Model {
         if client.is_none() {
             return Reason::NoClientId.into();
         }
-        if self.estop {
-            return Reason::EstopLatched.into();
-        }
         let members = self.groups[index].config.axes.clone();
-        for &member in &members {
-            let holder = self.axes[member].1.state.claimed_by;
-            if holder.is_none() {
-                return Reason::NotClaimed.into();
-            }
-            if holder != client {
-                let mut judged = Judged::at(Reason::ClaimedByOther, None, member, 0.0, 0.0);
-                judged.holder = holder;
-                return judged;
-            }
+        if members
+            .iter()
+            .any(|&member| self.axes[member].1.state.claimed_by.is_none())
+        {
+            return Reason::NotClaimed.into();
+        }
+        if let Some(refused) = self.members_refuse(index, client) {
+            return refused;
         }
         if self.groups[index].motion().active() {
             return Judged::at(Reason::GroupBusy, None, members[0], 0.0, 0.0);
         }
-        if let Some(&busy) = members.iter().find(|&&m| self.in_group_motion(m)) {
-            return Judged::at(Reason::GroupBusy, None, busy, 0.0, 0.0);
+        let powerless = |member: &&usize| {
+            !self.axes[**member]
+                .0
+                .capabilities
+                .supports(motion_ipc::CommandKind::Power)
+        };
+        if mode == StreamMode::Power
+            && let Some(&member) = members.iter().find(powerless)
+        {
+            return Judged::at(Reason::Unsupported, None, member, 0.0, 0.0);
         }
         let tick = self.tick;
         let group = &mut self.groups[index];
