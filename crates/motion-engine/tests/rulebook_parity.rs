@@ -547,6 +547,13 @@ fn group_table() -> Vec<Step> {
         Send(0, g(0, Claim, 0.0)),
         Send(1, axis_request(all, Reset, [0.0; 3])),
         Settle,
+        // The e-stop and the reset addressed to the group: every axis, as on an axis.
+        Send(1, g(0, EStop, 0.0)),
+        Settle,
+        Send(0, g(0, Stream, velocity)),
+        Send(0, axis_request(0, Position, [5.0, 0.0, 0.0])),
+        Send(1, g(3, Reset, 0.0)),
+        Settle,
         // A board starting, then an axis faulted.
         Device(1, DeviceState::Starting),
         Send(0, g(0, Stream, velocity)),
