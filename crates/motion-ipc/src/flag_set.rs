@@ -16,7 +16,7 @@
 //! ```
 //!
 //! emits the newtype (`pub struct ExampleFlags(pub u32)`) with the given attributes, a
-//! constant per bit (`ExampleFlags::FIRST`, `1 << 0`), [`NAMED`](#) (every bit with the name
+//! constant per bit (`ExampleFlags::FIRST`, `1 << 0`), `NAMED` (every bit with the name
 //! clients print, in bit order), `BITS` (every bit's constant name and value, as
 //! `schema::contract` lists them), `names`, `contains` and `with`.
 

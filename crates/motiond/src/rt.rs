@@ -90,11 +90,6 @@ pub struct IoRt {
     pub problems: Vec<RtError>,
 }
 
-/// Asks the kernel for 0 µs wake-up latency from deep C-states while the guard lives.
-pub fn hold_cpu_dma_latency() -> Result<DmaLatencyGuard, RtError> {
-    DmaLatencyGuard::hold()
-}
-
 /// Touches `bytes` of stack so its pages are faulted in (and locked) before the loop.
 pub fn prefault_stack() {
     const STACK_PREFAULT: usize = 256 * 1024;
@@ -135,7 +130,7 @@ pub fn set_up(
         Ok(()) => status.timer_slack = true,
         Err(e) => problem(&mut status, e),
     }
-    let guard = match hold_cpu_dma_latency() {
+    let guard = match DmaLatencyGuard::hold() {
         Ok(guard) => {
             status.dma_latency = true;
             Some(guard)

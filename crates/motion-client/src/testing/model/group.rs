@@ -319,7 +319,9 @@ impl Model {
             return Some(refused);
         }
         for &member in &self.groups[index].config.axes {
-            let facts = self.axis(member)?;
+            let Some(facts) = self.axis(member) else {
+                continue; // not an axis of this machine: the group's config never names one
+            };
             let other_group = self.groups.iter().enumerate().any(|(other, g)| {
                 other != index && g.motion().active() && g.config.axes.contains(&member)
             });
